@@ -1,0 +1,293 @@
+"""In-process ROS-like bus on simulation time: topics, services, taps and a tf buffer.
+
+Topics
+    :meth:`Bus.publish` hands the message to every tap, then to each subscriber.
+    A subscription with ``latency_us == 0`` runs its callback immediately, in
+    subscription order, inside ``publish``. A subscription with a latency
+    schedules the delivery on the shared :class:`~amr_twin.clock.VirtualClock`,
+    so the callback runs with ``clock.now_us`` equal to the delivery time; at
+    most ``queue_size`` messages can be in flight to it (the oldest is dropped
+    beyond that, as a roscpp subscriber queue; ``queue_size=0`` is unbounded).
+    A latched topic keeps its last message and delivers it to late subscribers
+    through a clock event at ``now + latency_us``.
+Services
+    :meth:`Bus.call_service` is synchronous (zero simulated time) and raises
+    :class:`ServiceCallError` when no server is advertised or the handler fails;
+    the thesis client maps that to code -1.
+tf
+    :attr:`Bus.tf` (:class:`TfBuffer`) keeps the latest transform of each
+    child frame (REP-105 tree ``odom -> base_link -> {laser, imu_link}``);
+    :meth:`Bus.send_transform` updates it and publishes ``tf2_msgs/TFMessage``
+    on ``tf`` (or ``tf_static``, latched), so recorders see it through the taps.
+
+Topic and service names are stored without a leading ``/``.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Any, Callable
+
+from amr_twin.clock import EventHandle, VirtualClock
+from amr_twin.messages import Quaternion, TFMessage, Transform, TransformStamped, Vector3
+
+ODOM_FRAME = "odom"
+BASE_FRAME = "base_link"
+LASER_FRAME = "laser"
+IMU_FRAME = "imu_link"
+
+Tap = Callable[[str, Any, int], None]
+
+
+class ServiceCallError(RuntimeError):
+    """A service call failed: no server advertised, or the server raised."""
+
+
+class TransformError(LookupError):
+    """Two frames are not connected in the tf buffer."""
+
+
+def _name(name: str) -> str:
+    return name.lstrip("/")
+
+
+class Subscription:
+    """One subscriber of a topic; created by :meth:`Bus.subscribe`."""
+
+    def __init__(self, bus: Bus, topic: str, callback: Callable[[Any], None],
+                 queue_size: int, latency_us: int):
+        self.bus, self.topic, self.callback = bus, topic, callback
+        self.queue_size, self.latency_us = int(queue_size), int(latency_us)
+        self.dropped = 0
+        """Messages dropped because ``queue_size`` were already in flight."""
+        self._pending: deque[tuple[Any, EventHandle]] = deque()
+        self.active = True
+
+    def _enqueue(self, msg: Any) -> None:
+        if self.latency_us <= 0:
+            self.callback(msg)
+            return
+        if self.queue_size > 0 and len(self._pending) >= self.queue_size:
+            self._pending.popleft()[1].cancel()
+            self.dropped += 1
+        handle = self.bus.clock.schedule_in(self.latency_us, self._deliver)
+        self._pending.append((msg, handle))
+
+    def _deliver(self) -> None:
+        msg, _ = self._pending.popleft()
+        if self.active:
+            self.callback(msg)
+
+    def unregister(self) -> None:
+        """Stop receiving; messages in flight are discarded."""
+        self.active = False
+        for _, handle in self._pending:
+            handle.cancel()
+        self._pending.clear()
+        subs = self.bus._subs.get(self.topic, [])
+        if self in subs:
+            subs.remove(self)
+
+
+class Publisher:
+    """Handle returned by :meth:`Bus.advertise`."""
+
+    def __init__(self, bus: Bus, topic: str, msg_type: type | None, queue_size: int):
+        self.bus, self.topic, self.msg_type, self.queue_size = bus, topic, msg_type, queue_size
+
+    def publish(self, msg: Any) -> None:
+        """Publish ``msg`` on this publisher's topic."""
+        self.bus.publish(self.topic, msg)
+
+
+class Bus:
+    """Topics, services, taps and tf for all the twin's nodes, on one clock.
+
+    Parameters
+    ----------
+    clock : VirtualClock
+        The shared simulation clock; delayed deliveries are events on it.
+    """
+
+    def __init__(self, clock: VirtualClock):
+        self.clock = clock
+        self._subs: dict[str, list[Subscription]] = {}
+        self._types: dict[str, type] = {}
+        self._latched: dict[str, Any] = {}
+        self._services: dict[str, Callable[[Any], Any]] = {}
+        self._taps: list[Tap] = []
+        self.tf = TfBuffer()
+
+    # -- topics -----------------------------------------------------------------
+    def advertise(self, topic: str, msg_type: type | None = None, queue_size: int = 10,
+                  latch: bool = False) -> Publisher:
+        """Declare a topic; with ``msg_type`` set, later publishes are type-checked."""
+        topic = _name(topic)
+        if msg_type is not None:
+            known = self._types.setdefault(topic, msg_type)
+            if known is not msg_type:
+                raise TypeError(f"topic {topic!r} carries {known.__name__}, not {msg_type.__name__}")
+        if latch:
+            self._latched.setdefault(topic, None)
+        return Publisher(self, topic, msg_type, queue_size)
+
+    def subscribe(self, topic: str, callback: Callable[[Any], None], queue_size: int = 10,
+                  latency_us: int = 0) -> Subscription:
+        """Call ``callback(msg)`` for each message on ``topic``, ``latency_us`` after publication."""
+        topic = _name(topic)
+        sub = Subscription(self, topic, callback, queue_size, latency_us)
+        self._subs.setdefault(topic, []).append(sub)
+        latched = self._latched.get(topic)
+        if latched is not None:
+            def deliver_latched() -> None:
+                if sub.active:
+                    sub.callback(latched)
+            self.clock.schedule_in(max(sub.latency_us, 0), deliver_latched)
+        return sub
+
+    def publish(self, topic: str, msg: Any) -> None:
+        """Hand ``msg`` to the taps, then to the subscribers of ``topic``."""
+        topic = _name(topic)
+        known = self._types.get(topic)
+        if known is not None and not isinstance(msg, known):
+            raise TypeError(f"topic {topic!r} carries {known.__name__}, got {type(msg).__name__}")
+        if topic in self._latched:
+            self._latched[topic] = msg
+        now_us = self.clock.now_us
+        for tap in list(self._taps):
+            tap(topic, msg, now_us)
+        for sub in list(self._subs.get(topic, ())):
+            sub._enqueue(msg)
+
+    def add_tap(self, tap: Tap) -> None:
+        """Register ``tap(topic, msg, t_us)``, called for every published message."""
+        self._taps.append(tap)
+
+    def remove_tap(self, tap: Tap) -> None:
+        """Unregister a tap added with :meth:`add_tap`."""
+        self._taps.remove(tap)
+
+    def topics(self) -> list[str]:
+        """Names of the topics advertised or subscribed so far."""
+        return sorted(set(self._subs) | set(self._types) | set(self._latched))
+
+    # -- services ---------------------------------------------------------------
+    def advertise_service(self, name: str, handler: Callable[[Any], Any]) -> None:
+        """Serve ``name``: ``handler(request)`` returns the response."""
+        name = _name(name)
+        if name in self._services:
+            raise ValueError(f"service {name!r} is already advertised")
+        self._services[name] = handler
+
+    def unadvertise_service(self, name: str) -> None:
+        """Withdraw a service (later calls fail with :class:`ServiceCallError`)."""
+        self._services.pop(_name(name), None)
+
+    def has_service(self, name: str) -> bool:
+        """True if a server is advertised under ``name``."""
+        return _name(name) in self._services
+
+    def call_service(self, name: str, request: Any) -> Any:
+        """Call a service synchronously and return its response.
+
+        Raises
+        ------
+        ServiceCallError
+            No server, or the server raised (the cause is chained).
+        """
+        handler = self._services.get(_name(name))
+        if handler is None:
+            raise ServiceCallError(f"service {_name(name)!r} is not advertised")
+        try:
+            return handler(request)
+        except Exception as exc:  # a failing server is a failed call, as in roscpp
+            raise ServiceCallError(f"service {_name(name)!r} failed: {exc}") from exc
+
+    # -- tf ---------------------------------------------------------------------
+    def send_transform(self, transforms: TransformStamped | list[TransformStamped],
+                       static: bool = False) -> None:
+        """Store transforms in :attr:`tf` and publish them on ``tf`` (``tf_static`` if static)."""
+        if isinstance(transforms, TransformStamped):
+            transforms = [transforms]
+        for ts in transforms:
+            self.tf.set_transform(ts)
+        topic = "tf_static" if static else "tf"
+        if static and topic not in self._latched:
+            self.advertise(topic, TFMessage, latch=True)
+        self.publish(topic, TFMessage(list(transforms)))
+
+
+# -- tf buffer ----------------------------------------------------------------------
+def _qmul(a: Quaternion, b: Quaternion) -> Quaternion:
+    return Quaternion(a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+                      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+                      a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
+                      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z)
+
+
+def _rotate(q: Quaternion, v: Vector3) -> Vector3:
+    p = _qmul(_qmul(q, Quaternion(v.x, v.y, v.z, 0.0)), Quaternion(-q.x, -q.y, -q.z, q.w))
+    return Vector3(p.x, p.y, p.z)
+
+
+def _compose(a: Transform, b: Transform) -> Transform:
+    """Transform ``a * b`` (apply ``b`` first, then ``a``)."""
+    t = _rotate(a.rotation, b.translation)
+    return Transform(Vector3(a.translation.x + t.x, a.translation.y + t.y, a.translation.z + t.z),
+                     _qmul(a.rotation, b.rotation))
+
+
+def _inverse(a: Transform) -> Transform:
+    qi = Quaternion(-a.rotation.x, -a.rotation.y, -a.rotation.z, a.rotation.w)
+    t = _rotate(qi, a.translation)
+    return Transform(Vector3(-t.x, -t.y, -t.z), qi)
+
+
+class TfBuffer:
+    """The latest transform of each child frame, and lookups along the tree."""
+
+    def __init__(self) -> None:
+        self._edges: dict[str, TransformStamped] = {}
+
+    def set_transform(self, ts: TransformStamped) -> None:
+        """Store ``ts`` as the current pose of ``ts.child_frame_id`` in its parent."""
+        self._edges[ts.child_frame_id] = ts
+
+    def frames(self) -> set[str]:
+        """Every frame named by a stored transform."""
+        return set(self._edges) | {ts.header.frame_id for ts in self._edges.values()}
+
+    def _chain(self, frame: str) -> list[str]:
+        chain = [frame]
+        while chain[-1] in self._edges and len(chain) <= len(self._edges):
+            chain.append(self._edges[chain[-1]].header.frame_id)
+        return chain
+
+    def _to_ancestor(self, frame: str, ancestor: str) -> Transform:
+        result = Transform()
+        while frame != ancestor:
+            edge = self._edges[frame]
+            result = _compose(edge.transform, result)
+            frame = edge.header.frame_id
+        return result
+
+    def lookup_transform(self, target_frame: str, source_frame: str) -> Transform:
+        """Pose of ``source_frame`` expressed in ``target_frame`` (tf2 convention).
+
+        Raises
+        ------
+        TransformError
+            The frames are not connected.
+        """
+        up_source = self._chain(source_frame)
+        up_target = self._chain(target_frame)
+        common = next((f for f in up_source if f in up_target), None)
+        if common is None:
+            raise TransformError(f"no transform between {target_frame!r} and {source_frame!r}")
+        source_in_common = self._to_ancestor(source_frame, common)
+        target_in_common = self._to_ancestor(target_frame, common)
+        return _compose(_inverse(target_in_common), source_in_common)
+
+    def yaw_rad(self, target_frame: str, source_frame: str) -> float:
+        """Heading of ``source_frame`` in ``target_frame``, radians."""
+        return self.lookup_transform(target_frame, source_frame).rotation.yaw_rad()

@@ -1,0 +1,259 @@
+"""Model build: parameters -> xacro -> URDF (checked by yourdfpy) -> MjSpec -> MJCF.
+
+The URDF carries the geometry, the links, joints and inertias. What URDF cannot
+carry is added on the MjSpec: the free joint, the wheel collision ellipsoids, the
+caster springs (stiffness, damping, preload), contact parameters, the motor
+actuators, sensor sites, the payload, geom groups, and the world it stands in.
+
+Geom groups (``geomgroup`` masks): 0 world, 1 robot visuals, 2 robot collision,
+4 payload. A LiDAR casts against groups 0 and 4 so that it never sees the robot's
+own wheels and casters but does see a payload in its scan plane.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import yaml
+
+from . import mass
+from .config import TwinConfig
+from .paths import MODEL_DIR, ROOT
+
+XACRO_FILE = MODEL_DIR / "amr.urdf.xacro"
+WORLD_DIR = ROOT / "models" / "worlds"
+GROUP_WORLD, GROUP_VISUAL, GROUP_COLLISION, GROUP_PAYLOAD = 0, 1, 2, 4
+WHEELS = ("left", "right")
+CASTERS = ("front_left", "front_right", "rear_left", "rear_right")
+ROBOT_PREFIX = "amr/"
+
+
+class BuildError(RuntimeError):
+    """The model could not be built; the message is one line."""
+
+
+def derived_params(cfg: TwinConfig) -> dict:
+    """The flat parameter set the xacro reads (geometry, inertias, limits)."""
+    c, w, k = cfg.chassis, cfg.wheel, cfg.caster
+    p = {
+        "chassis_length_m": c.length_m, "chassis_width_m": c.width_m,
+        "floor_a_z_m": c.floor_a_z_m, "floor_b_z_m": c.floor_b_z_m, "floor_c_z_m": c.floor_c_z_m,
+        "tube_outer_m": c.tube_outer_m, "sheet_thickness_m": c.sheet_thickness_m,
+        "deck_thickness_m": cfg.deck.thickness_m,
+        "wheel_radius_m": w.radius_m, "wheel_width_m": w.width_m, "wheel_separation_m": w.separation_m,
+        "wheel_torque_limit_nm": max(m.ke_v_s_rad * m.current_limit_a for m in (cfg.motor_left, cfg.motor_right)),
+        "wheel_speed_limit_rad_s": cfg.battery.v_full_v / min(cfg.motor_left.ke_v_s_rad, cfg.motor_right.ke_v_s_rad),
+        "caster_ball_diameter_m": k.ball_diameter_m, "caster_x_m": k.x_m, "caster_y_m": k.y_m,
+        "caster_travel_m": k.travel_m,
+    }
+    for name, comp in cfg.components.items():
+        p[f"{name}_size_m"] = list(comp.size_m)
+        p[f"{name}_pos_m"] = list(comp.pos_m)
+    for prefix, inertial in (("chassis", mass.chassis_inertial(cfg)), ("wheel", mass.wheel_inertial(cfg)),
+                             ("caster", mass.caster_inertial(cfg))):
+        p[f"{prefix}_mass_kg"] = inertial.mass_kg
+        p[f"{prefix}_com_m"] = [float(v) for v in inertial.com_m]
+        p[f"{prefix}_inertia"] = [float(v) for v in inertial.diag()]
+    return {key: (float(v) if isinstance(v, (int, float, np.floating)) else v) for key, v in p.items()}
+
+
+def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
+    """Run xacro on the robot description with the resolved parameters."""
+    import xacro  # imported here: slow, and only needed to build
+
+    with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as fh:
+        yaml.safe_dump(derived_params(cfg), fh)
+        params_path = fh.name
+    try:
+        doc = xacro.process_file(str(xacro_file), mappings={"params": params_path})
+    except Exception as exc:  # XacroException, XML parse errors, missing file
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise BuildError(f"xacro {xacro_file.name}: {first}") from None
+    finally:
+        Path(params_path).unlink(missing_ok=True)
+    return doc.toprettyxml(indent="  ")
+
+
+def check_urdf(urdf: str) -> None:
+    """Load and validate the URDF with yourdfpy; raise BuildError if it is invalid."""
+    import yourdfpy
+
+    try:
+        robot = yourdfpy.URDF.load(io.StringIO(urdf), load_meshes=False, build_scene_graph=True)
+    except Exception as exc:
+        raise BuildError(f"URDF: {str(exc).splitlines()[0]}") from None
+    if not robot.validate():
+        raise BuildError("URDF: yourdfpy validation failed")
+    if robot.base_link != "base_link":
+        raise BuildError(f"URDF: root link is {robot.base_link!r}, expected 'base_link'")
+
+
+def _robot_spec(cfg: TwinConfig, urdf: str) -> mujoco.MjSpec:
+    """The robot alone: URDF import plus everything URDF cannot carry."""
+    spec = mujoco.MjSpec.from_string(urdf)
+    spec.modelname = "amr"
+    spec.compiler.fusestatic = False
+    spec.compiler.discardvisual = False
+    spec.compiler.balanceinertia = False
+    _tag_geoms(spec, cfg)
+    base = spec.body("base_link")
+    base.add_freejoint(name="root")
+    _add_casters(spec, cfg)
+    _add_wheels(spec, cfg)
+    _add_payload(spec, base, cfg)
+    imu = spec.body("imu_link")
+    imu.add_site(name="imu", size=[0.01, 0.01, 0.002], type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_VISUAL)
+    spec.body("laser").add_site(name="laser", size=[0.01, 0, 0], group=GROUP_VISUAL)
+    base.add_site(name="base", size=[0.01, 0, 0], group=GROUP_VISUAL)
+    _add_sensors(spec)
+    return spec
+
+
+def _tag_geoms(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
+    """Visual geoms collide with nothing (group 1); collision geoms go to group 2."""
+    for geom in spec.geoms:
+        if geom.contype == 0 and geom.conaffinity == 0:
+            geom.group = GROUP_VISUAL
+        else:
+            geom.group = GROUP_COLLISION
+            geom.rgba = [0.5, 0.5, 0.5, 0.0]
+
+
+def _collision_geom(body: mujoco.MjsBody) -> mujoco.MjsGeom:
+    geoms = [g for g in body.geoms if g.group == GROUP_COLLISION]
+    if len(geoms) != 1:
+        raise BuildError(f"body {body.name}: expected one collision geom, found {len(geoms)}")
+    return geoms[0]
+
+
+def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
+    w = cfg.wheel
+    for side, motor in zip(WHEELS, (cfg.motor_left, cfg.motor_right)):
+        body = spec.body(f"wheel_{side}_link")
+        geom = _collision_geom(body)
+        # An ellipsoid keeps a single contact point under the hub while spinning in
+        # place (a cylinder micro-hops, stack-notes.md); its local z is the axle.
+        geom.type = mujoco.mjtGeom.mjGEOM_ELLIPSOID
+        geom.size = [w.radius_m, w.radius_m, w.width_m / 2]
+        geom.friction = [w.friction, 0.005, 0.0001]
+        geom.condim = 3
+        geom.name = f"wheel_{side}_collision"
+        joint = spec.joint(f"wheel_{side}_joint")
+        joint.damping[0] = motor.damping_nm_s_rad
+        joint.frictionloss = motor.friction_nm
+        kt_over_r = motor.ke_v_s_rad / motor.resistance_ohm  # Kt = Ke in SI units
+        act = spec.add_actuator(name=f"motor_{side}", target=joint.name,
+                                trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        # Quasi-static DC motor in C: torque = Kt/R * v - Kt*Ke/R * omega (ctrl = phase voltage, V)
+        act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        act.gainprm[0] = kt_over_r
+        act.biasprm[2] = -kt_over_r * motor.ke_v_s_rad
+        act.ctrllimited = 1
+        act.ctrlrange = [-cfg.battery.v_full_v, cfg.battery.v_full_v]
+        act.forcelimited = 1
+        limit = motor.ke_v_s_rad * motor.current_limit_a
+        act.forcerange = [-limit, limit]
+
+
+def _add_casters(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
+    k = cfg.caster
+    for name in CASTERS:
+        body = spec.body(f"caster_{name}_link")
+        ball = _collision_geom(body)
+        ball.name = f"caster_{name}_ball"
+        # frictionless ball: priority makes its friction and condim win the contact mix
+        ball.priority = 1
+        ball.condim = 1
+        ball.friction = [0.0, 0.0, 0.0]
+        joint = spec.joint(f"caster_{name}_joint")
+        joint.stiffness[0] = k.stiffness_n_m
+        joint.damping[0] = k.damping_n_s_m
+        joint.springref = -k.preload_n / k.stiffness_n_m  # preload against the lower stop
+
+
+def _add_payload(spec: mujoco.MjSpec, base: mujoco.MjsBody, cfg: TwinConfig) -> None:
+    p = cfg.payload
+    if p.mass_kg <= 0:
+        return
+    z = cfg.chassis.floor_c_z_m + cfg.chassis.sheet_thickness_m + p.size_m[2] / 2
+    body = base.add_body(name="payload", pos=[p.xy_m[0], p.xy_m[1], z])
+    body.add_geom(name="payload_box", type=mujoco.mjtGeom.mjGEOM_BOX, size=[s / 2 for s in p.size_m],
+                  mass=p.mass_kg, group=GROUP_PAYLOAD, rgba=[0.80, 0.55, 0.25, 1.0],
+                  contype=0, conaffinity=0)
+
+
+def _add_sensors(spec: mujoco.MjSpec) -> None:
+    for side in WHEELS:
+        spec.add_sensor(name=f"wheel_{side}_angle", type=mujoco.mjtSensor.mjSENS_JOINTPOS,
+                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"wheel_{side}_joint")
+    for name, kind in (("imu_accel", mujoco.mjtSensor.mjSENS_ACCELEROMETER),
+                       ("imu_gyro", mujoco.mjtSensor.mjSENS_GYRO),
+                       ("imu_mag", mujoco.mjtSensor.mjSENS_MAGNETOMETER)):
+        spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="imu")
+
+
+def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
+    path = Path(world)
+    if not path.suffix:
+        path = WORLD_DIR / f"{world}.xml"
+    if not path.exists():
+        names = sorted(p.stem for p in WORLD_DIR.glob("*.xml"))
+        raise BuildError(f"--world {world}: no such world (available: {', '.join(names)})")
+    spec = mujoco.MjSpec.from_file(str(path))
+    spec.option.timestep = cfg.sim.timestep_s
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.gravity = [0.0, 0.0, -cfg.sim.gravity_m_s2]
+    spec.option.magnetic = [0.0, 2.2e-5, -4.3e-5]  # ~48 uT, northern-Italy inclination (WMM estimate)
+    for geom in spec.geoms:
+        geom.group = GROUP_WORLD
+        if geom.type == mujoco.mjtGeom.mjGEOM_PLANE:
+            geom.friction = [cfg.sim.floor_friction, 0.005, 0.0001]
+    return spec
+
+
+@dataclass
+class Build:
+    """Result of :func:`build`: the compiled model and the specs it came from."""
+
+    model: mujoco.MjModel
+    spec: mujoco.MjSpec
+    robot_spec: mujoco.MjSpec
+    urdf: str
+
+
+def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
+          xacro_file: Path = XACRO_FILE) -> Build:
+    """Build the robot in a world and compile it."""
+    urdf = urdf_string(cfg, xacro_file)
+    check_urdf(urdf)
+    robot = _robot_spec(cfg, urdf)
+    robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
+    scene = _world_spec(cfg, world)
+    x, y, yaw = start_xy_yaw
+    frame = scene.worldbody.add_frame(pos=[x, y, 0.0], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
+    scene.attach(mujoco.MjSpec.from_string(robot_xml), prefix=ROBOT_PREFIX, frame=frame)
+    try:
+        model = scene.compile()
+    except Exception as exc:
+        raise BuildError(f"MuJoCo compile: {str(exc).splitlines()[0]}") from None
+    return Build(model=model, spec=scene, robot_spec=robot, urdf=urdf)
+
+
+def export(cfg: TwinConfig, urdf_path: Path | None = None, mjcf_path: Path | None = None) -> Build:
+    """Write the URDF and the robot MJCF (the committed files are made this way)."""
+    result = build(cfg)
+    for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
+        if path is None:
+            continue
+        path = Path(path)
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        tmp.write_text(text)
+        tmp.replace(path)  # never leave a half-written file
+    return result

@@ -1,0 +1,138 @@
+"""Mass properties of the robot's links from its parametric geometry (trimesh).
+
+The AISI304 frame is built of square tubes (four corner posts and, on each of the
+three floors, a perimeter of four rails plus one cross rail over the axle); each
+tube is an outer box minus its bore. Floors (a) and (c) carry a steel sheet, floor
+(b) the aluminium deck. Components are solid boxes of their estimated mass. The
+hub motors' stators (the non-rotating share of their mass) ride on the chassis.
+Everything is summed into the chassis link's mass, centre of mass and inertia
+(parallel-axis theorem); the xacro draws the same members from
+:func:`frame_members`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from .config import TwinConfig
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """Mass properties of one link: mass (kg), centre of mass (m, (3,)), inertia about it (kg m^2, (3, 3))."""
+
+    mass_kg: float
+    com_m: np.ndarray
+    inertia_kg_m2: np.ndarray
+
+    def diag(self) -> tuple[float, float, float, float, float, float]:
+        """(ixx, iyy, izz, ixy, ixz, iyz)."""
+        i = self.inertia_kg_m2
+        return (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
+
+
+def _box(extents, center, mass_kg: float | None = None, density: float | None = None) -> Inertial:
+    mesh = trimesh.creation.box(extents=extents)
+    mesh.density = density if density is not None else mass_kg / mesh.volume
+    return Inertial(float(mesh.mass), np.asarray(center, float), np.asarray(mesh.moment_inertia))
+
+
+def _tube(extents, center, axis: int, wall_m: float, density: float) -> Inertial:
+    """A square tube along ``axis``: outer box minus the bore."""
+    outer = _box(extents, center, density=density)
+    bore_extents = [e - 2 * wall_m if k != axis else e for k, e in enumerate(extents)]
+    bore = _box(bore_extents, center, density=density)
+    return Inertial(outer.mass_kg - bore.mass_kg, outer.com_m, outer.inertia_kg_m2 - bore.inertia_kg_m2)
+
+
+def combine(parts: list[Inertial]) -> Inertial:
+    """Sum of several rigid parts (parallel-axis theorem)."""
+    mass = sum(p.mass_kg for p in parts)
+    com = sum(p.mass_kg * p.com_m for p in parts) / mass
+    inertia = np.zeros((3, 3))
+    for p in parts:
+        d = p.com_m - com
+        inertia += p.inertia_kg_m2 + p.mass_kg * (d @ d * np.eye(3) - np.outer(d, d))
+    return Inertial(mass, com, inertia)
+
+
+def frame_members(cfg: TwinConfig) -> list[tuple[str, tuple[float, float, float], tuple[float, float, float], int]]:
+    """The frame's tubes as ``(name, center_m, extents_m, axis)`` in base_link.
+
+    Rails sit under their floor (top face at the floor height); posts join the
+    corners from the bottom of floor (a)'s rails to the top of floor (c)'s.
+    """
+    c = cfg.chassis
+    t, L, W = c.tube_outer_m, c.length_m, c.width_m
+    members = []
+    for tag, z_top in (("a", c.floor_a_z_m), ("b", c.floor_b_z_m), ("c", c.floor_c_z_m)):
+        z = z_top - t / 2
+        for side, y in (("left", W / 2 - t / 2), ("right", -(W / 2 - t / 2))):
+            members.append((f"rail_{tag}_{side}", (0.0, y, z), (L, t, t), 0))
+        for end, x in (("front", L / 2 - t / 2), ("rear", -(L / 2 - t / 2)), ("mid", 0.0)):
+            members.append((f"rail_{tag}_{end}", (x, 0.0, z), (t, W - 2 * t, t), 1))
+    z0, z1 = c.floor_a_z_m - t, c.floor_c_z_m
+    for name, x, y in (("fl", 1, 1), ("fr", 1, -1), ("rl", -1, 1), ("rr", -1, -1)):
+        members.append((f"post_{name}", (x * (L / 2 - t / 2), y * (W / 2 - t / 2), (z0 + z1) / 2),
+                        (t, t, z1 - z0), 2))
+    return members
+
+
+def frame_inertial(cfg: TwinConfig) -> Inertial:
+    """The bare AISI304 tube frame."""
+    c = cfg.chassis
+    return combine([_tube(ext, ctr, axis, c.tube_wall_m, c.steel_density_kg_m3)
+                    for _, ctr, ext, axis in frame_members(cfg)])
+
+
+def plates(cfg: TwinConfig) -> list[tuple[str, tuple[float, float, float], tuple[float, float, float], float]]:
+    """Floor plates as ``(name, center_m, extents_m, density_kg_m3)``."""
+    c, d = cfg.chassis, cfg.deck
+    L, W, s = c.length_m, c.width_m, c.sheet_thickness_m
+    return [
+        ("floor_a", (0.0, 0.0, c.floor_a_z_m + s / 2), (L, W, s), c.steel_density_kg_m3),
+        ("floor_b", (0.0, 0.0, c.floor_b_z_m + d.thickness_m / 2), (L, W, d.thickness_m), d.density_kg_m3),
+        ("floor_c", (0.0, 0.0, c.floor_c_z_m + s / 2), (L, W, s), c.steel_density_kg_m3),
+    ]
+
+
+def chassis_inertial(cfg: TwinConfig) -> Inertial:
+    """Chassis link: frame, plates, components and the two stators."""
+    parts = [frame_inertial(cfg)]
+    parts += [_box(ext, ctr, density=rho) for _, ctr, ext, rho in plates(cfg)]
+    parts += [_box(comp.size_m, comp.pos_m, mass_kg=comp.mass_kg)
+              for _, comp in cfg.components.items() if comp.mass_kg > 0]
+    w = cfg.wheel
+    stator_kg = w.mass_kg * (1 - w.rotor_fraction)
+    for sign in (1, -1):
+        parts.append(_box((0.8 * w.radius_m,) * 3, (0.0, sign * w.separation_m / 2, w.radius_m),
+                          mass_kg=stator_kg))
+    return combine(parts)
+
+
+def wheel_inertial(cfg: TwinConfig) -> Inertial:
+    """Rotating share of a hub motor (rotor, magnets, tyre) as a solid cylinder, axis along y."""
+    w = cfg.wheel
+    mesh = trimesh.creation.cylinder(radius=w.radius_m, height=w.width_m)
+    mass = w.mass_kg * w.rotor_fraction
+    mesh.density = mass / mesh.volume
+    i = np.asarray(mesh.moment_inertia)  # cylinder axis is the mesh z axis
+    perm = [0, 2, 1]  # mesh z -> link y
+    return Inertial(mass, np.zeros(3), i[np.ix_(perm, perm)])
+
+
+def caster_inertial(cfg: TwinConfig) -> Inertial:
+    """Caster ball unit (housing, spring, ball) as a solid sphere."""
+    k = cfg.caster
+    mesh = trimesh.creation.icosphere(subdivisions=3, radius=k.ball_diameter_m / 2)
+    mesh.density = k.mass_kg / mesh.volume
+    return Inertial(k.mass_kg, np.zeros(3), np.asarray(mesh.moment_inertia))
+
+
+def robot_mass_kg(cfg: TwinConfig) -> float:
+    """Total mass without payload."""
+    return (chassis_inertial(cfg).mass_kg + 2 * wheel_inertial(cfg).mass_kg
+            + 4 * caster_inertial(cfg).mass_kg)

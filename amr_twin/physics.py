@@ -1,0 +1,176 @@
+"""Physics wrapper: the only code that touches ``MjData``, always by name.
+
+It owns the compiled model and its data, resolves the robot's joints, actuators,
+geoms and sensors by name once, and offers what the rest of the twin needs:
+stepping in C, wheel angles and speeds, the base pose, contact loads per named
+geom, and the three motor modes (drive, coast, brake) set on the actuators'
+parameters between steps (the per-step torque stays in C).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from .build import CASTERS, ROBOT_PREFIX, WHEELS
+
+
+class DivergenceError(RuntimeError):
+    """The simulation produced NaN/inf or MuJoCo warned; carries the sim time."""
+
+    def __init__(self, t_s: float, what: str):
+        super().__init__(f"simulation diverged at t = {t_s:.4f} s: {what}")
+        self.t_s = t_s
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """Planar pose in the world (REP-103): x_m, y_m, yaw_rad."""
+
+    x_m: float
+    y_m: float
+    yaw_rad: float
+
+
+def _id(m: mujoco.MjModel, kind: mujoco.mjtObj, name: str) -> int:
+    i = mujoco.mj_name2id(m, kind, ROBOT_PREFIX + name)
+    if i < 0:
+        raise KeyError(f"model has no {kind.name[6:].lower()} named {ROBOT_PREFIX + name}")
+    return i
+
+
+class Physics:
+    """A compiled model with its data, addressed by the robot's names."""
+
+    def __init__(self, model: mujoco.MjModel):
+        m = self.model = model
+        self.data = mujoco.MjData(m)
+        J = mujoco.mjtObj.mjOBJ_JOINT
+        self.root_qpos = m.jnt_qposadr[_id(m, J, "root")]
+        self.root_dof = m.jnt_dofadr[_id(m, J, "root")]
+        self.wheel_qpos = np.array([m.jnt_qposadr[_id(m, J, f"wheel_{s}_joint")] for s in WHEELS])
+        self.wheel_dof = np.array([m.jnt_dofadr[_id(m, J, f"wheel_{s}_joint")] for s in WHEELS])
+        self.caster_qpos = np.array([m.jnt_qposadr[_id(m, J, f"caster_{c}_joint")] for c in CASTERS])
+        self.actuator = np.array([_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"motor_{s}") for s in WHEELS])
+        self.base_body = _id(m, mujoco.mjtObj.mjOBJ_BODY, "base_link")
+        G = mujoco.mjtObj.mjOBJ_GEOM
+        self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
+        self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
+        self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
+        self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
+        mujoco.mj_forward(m, self.data)
+
+    # -- time and stepping ----------------------------------------------------------
+    @property
+    def timestep_s(self) -> float:
+        return float(self.model.opt.timestep)
+
+    @property
+    def time_s(self) -> float:
+        return float(self.data.time)
+
+    def step(self, nstep: int = 1) -> None:
+        """Advance ``nstep`` physics steps in C with the actuation held."""
+        mujoco.mj_step(self.model, self.data, nstep)
+
+    def check(self) -> None:
+        """Raise :class:`DivergenceError` on NaN/inf state or any MuJoCo warning."""
+        d = self.data
+        if not (np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all()):
+            raise DivergenceError(self.time_s, "non-finite state")
+        for i, w in enumerate(d.warning):
+            if w.number > 0:
+                raise DivergenceError(self.time_s, f"MuJoCo warning {mujoco.mjtWarning(i).name}")
+
+    # -- readings -------------------------------------------------------------------
+    def wheel_angles_rad(self) -> np.ndarray:
+        """(2,) wheel angles [left, right], rad, positive rolling forward."""
+        return self.data.qpos[self.wheel_qpos]
+
+    def wheel_speeds_rad_s(self) -> np.ndarray:
+        """(2,) wheel angular speeds [left, right], rad/s."""
+        return self.data.qvel[self.wheel_dof]
+
+    def caster_compression_m(self) -> np.ndarray:
+        """(4,) caster spring compressions [fl, fr, rl, rr], m."""
+        return self.data.qpos[self.caster_qpos]
+
+    def pose(self) -> Pose2D:
+        """Base pose in the world plane."""
+        q = self.data.qpos[self.root_qpos:self.root_qpos + 7]
+        w, x, y, z = q[3:7]
+        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return Pose2D(float(q[0]), float(q[1]), yaw)
+
+    def base_velocity(self) -> np.ndarray:
+        """(6,) free-joint velocity: linear (world, m/s), angular (body, rad/s)."""
+        return self.data.qvel[self.root_dof:self.root_dof + 6].copy()
+
+    def base_tilt_rad(self) -> float:
+        """Angle between the base z axis and the world vertical."""
+        zz = self.data.xmat[self.base_body].reshape(3, 3)[2, 2]
+        return math.acos(max(-1.0, min(1.0, zz)))
+
+    def robot_mass_kg(self) -> float:
+        return float(self.model.body_subtreemass[self.base_body])
+
+    def com_world_m(self) -> np.ndarray:
+        """(3,) centre of mass of the robot (with payload), world frame."""
+        return self.data.subtree_com[self.base_body].copy()
+
+    def support_loads_n(self) -> dict[str, float]:
+        """Normal contact force on each wheel and caster ball, N (0 when lifted)."""
+        m, d = self.model, self.data
+        loads = dict.fromkeys(self.support_geoms, 0.0)
+        by_geom = {g: name for name, g in self.support_geoms.items()}
+        force = np.zeros(6)
+        for i in range(d.ncon):
+            con = d.contact[i]
+            name = by_geom.get(con.geom1, by_geom.get(con.geom2))
+            if name is None:
+                continue
+            mujoco.mj_contactForce(m, d, i, force)
+            loads[name] += float(force[0])
+        return loads
+
+    def support_points_xy(self) -> dict[str, np.ndarray]:
+        """World xy of the lowest point of each wheel and caster ball, m."""
+        out = {}
+        for name, g in self.support_geoms.items():
+            pos = self.data.geom_xpos[g]
+            out[name] = pos[:2].copy()
+        return out
+
+    # -- actuation --------------------------------------------------------------------
+    def set_motor(self, wheel: int, mode: str, voltage_v: float = 0.0, brake_damping: float = 0.0) -> None:
+        """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``."""
+        m, a = self.model, self.actuator[wheel]
+        if mode == "drive":
+            m.actuator_gainprm[a, 0] = self._drive_gain[wheel]
+            m.actuator_biasprm[a, 2] = self._drive_bias[wheel]
+            self.data.ctrl[a] = voltage_v
+        elif mode == "coast":  # phases open: no current, no torque
+            m.actuator_gainprm[a, 0] = 0.0
+            m.actuator_biasprm[a, 2] = 0.0
+            self.data.ctrl[a] = 0.0
+        elif mode == "brake":  # phases shorted and held: strong damping
+            m.actuator_gainprm[a, 0] = 0.0
+            m.actuator_biasprm[a, 2] = -brake_damping
+            self.data.ctrl[a] = 0.0
+        else:
+            raise ValueError(f"mode must be drive, coast or brake, got {mode!r}")
+
+    def motor_current_a(self, wheel: int, voltage_v: float, ke: float, r_ohm: float, limit_a: float) -> float:
+        """Phase current of a driven motor from its voltage and the wheel speed."""
+        i = (voltage_v - ke * self.wheel_speeds_rad_s()[wheel]) / r_ohm
+        return max(-limit_a, min(limit_a, i))
+
+    def settle(self, duration_s: float = 1.0) -> None:
+        """Let the robot come to rest on its wheels and casters (motors braked)."""
+        for w in range(2):
+            self.set_motor(w, "brake", brake_damping=50.0)
+        self.step(int(round(duration_s / self.timestep_s)))
+        self.check()

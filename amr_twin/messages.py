@@ -1,19 +1,13 @@
 """ROS 1 message types used by the twin, as plain slotted dataclasses.
 
-Names, field names and field order follow the ROS message definitions
-(``std_msgs``, ``geometry_msgs``, ``sensor_msgs``, ``nav_msgs``, ``tf2_msgs``).
-Every message class has a ``_type`` (``"package/Name"``) and a
-``serialized_size()`` giving the number of bytes of its ROS 1 serialisation
-(little-endian, strings and variable arrays prefixed by a uint32 length); the
-rosserial link uses it to compute the time a frame occupies the UART.
-
-Time stamps are :class:`Time` pairs ``(sec, nanosec)`` of *simulation* time,
-built exactly from the clock's integer microseconds with :meth:`Time.from_us`.
-(ROS 1 calls the fields ``secs``/``nsecs``; the twin uses the ROS 2 names.)
-
-Arrays: covariances are ``numpy`` float64 arrays (row-major 6x6 = 36 or
-3x3 = 9 values), ``LaserScan.ranges``/``intensities`` are float32 arrays.
-Classes holding arrays compare by identity (``eq=False``).
+Names, field names and field order follow the ROS message definitions. Each class
+has a ``_type`` (``"package/Name"``) and ``serialized_size()``, the byte count of
+its ROS 1 serialisation (strings and variable arrays prefixed by a uint32 length),
+which the rosserial link turns into UART time. Stamps are :class:`Time`
+``(sec, nanosec)`` of simulation time, exact from the clock's microseconds
+(:meth:`Time.from_us`; ROS 1 names the fields ``secs``/``nsecs``). Covariances are
+float64 arrays (row-major 6x6 or 3x3), ``LaserScan`` ranges/intensities float32
+arrays; classes holding arrays compare by identity (``eq=False``).
 """
 
 from __future__ import annotations
@@ -28,6 +22,16 @@ import numpy as np
 def _string_size(text: str) -> int:
     """Serialised size of a ROS string: uint32 length + UTF-8 bytes."""
     return 4 + len(text.encode("utf-8"))
+
+
+class _Fixed:
+    """Base of the message types whose serialisation has a fixed size ``_SIZE``."""
+
+    __slots__ = ()
+    _SIZE: ClassVar[int] = 0
+
+    def serialized_size(self) -> int:
+        return self._SIZE
 
 
 def _zeros(n: int):
@@ -77,14 +81,12 @@ class Header:
 
 
 @dataclass(slots=True)
-class Float64:
+class Float64(_Fixed):
     """std_msgs/Float64."""
 
     _type: ClassVar[str] = "std_msgs/Float64"
+    _SIZE: ClassVar[int] = 8
     data: float = 0.0
-
-    def serialized_size(self) -> int:
-        return 8
 
 
 @dataclass(slots=True)
@@ -126,36 +128,33 @@ class Float64MultiArray:
 
 # -- geometry_msgs --------------------------------------------------------------
 @dataclass(slots=True)
-class Vector3:
+class Vector3(_Fixed):
     """geometry_msgs/Vector3."""
 
     _type: ClassVar[str] = "geometry_msgs/Vector3"
+    _SIZE: ClassVar[int] = 24
     x: float = 0.0
     y: float = 0.0
     z: float = 0.0
 
-    def serialized_size(self) -> int:
-        return 24
-
 
 @dataclass(slots=True)
-class Point:
+class Point(_Fixed):
     """geometry_msgs/Point, metres."""
 
     _type: ClassVar[str] = "geometry_msgs/Point"
+    _SIZE: ClassVar[int] = 24
     x: float = 0.0
     y: float = 0.0
     z: float = 0.0
 
-    def serialized_size(self) -> int:
-        return 24
-
 
 @dataclass(slots=True)
-class Quaternion:
+class Quaternion(_Fixed):
     """geometry_msgs/Quaternion (x, y, z, w); the default is the identity."""
 
     _type: ClassVar[str] = "geometry_msgs/Quaternion"
+    _SIZE: ClassVar[int] = 32
     x: float = 0.0
     y: float = 0.0
     z: float = 0.0
@@ -171,68 +170,55 @@ class Quaternion:
         return math.atan2(2.0 * (self.w * self.z + self.x * self.y),
                           1.0 - 2.0 * (self.y * self.y + self.z * self.z))
 
-    def serialized_size(self) -> int:
-        return 32
-
 
 @dataclass(slots=True)
-class Pose:
+class Pose(_Fixed):
     """geometry_msgs/Pose."""
 
     _type: ClassVar[str] = "geometry_msgs/Pose"
+    _SIZE: ClassVar[int] = 56
     position: Point = field(default_factory=Point)
     orientation: Quaternion = field(default_factory=Quaternion)
 
-    def serialized_size(self) -> int:
-        return 56
-
 
 @dataclass(slots=True, eq=False)
-class PoseWithCovariance:
+class PoseWithCovariance(_Fixed):
     """geometry_msgs/PoseWithCovariance; covariance of (x, y, z, rx, ry, rz), 36 values."""
 
     _type: ClassVar[str] = "geometry_msgs/PoseWithCovariance"
+    _SIZE: ClassVar[int] = 56 + 36 * 8
     pose: Pose = field(default_factory=Pose)
     covariance: np.ndarray = field(default_factory=_zeros(36))
 
-    def serialized_size(self) -> int:
-        return 56 + 36 * 8
-
 
 @dataclass(slots=True)
-class Twist:
+class Twist(_Fixed):
     """geometry_msgs/Twist: linear (m/s) and angular (rad/s) velocity."""
 
     _type: ClassVar[str] = "geometry_msgs/Twist"
+    _SIZE: ClassVar[int] = 48
     linear: Vector3 = field(default_factory=Vector3)
     angular: Vector3 = field(default_factory=Vector3)
 
-    def serialized_size(self) -> int:
-        return 48
-
 
 @dataclass(slots=True, eq=False)
-class TwistWithCovariance:
+class TwistWithCovariance(_Fixed):
     """geometry_msgs/TwistWithCovariance; 36 covariance values."""
 
     _type: ClassVar[str] = "geometry_msgs/TwistWithCovariance"
+    _SIZE: ClassVar[int] = 48 + 36 * 8
     twist: Twist = field(default_factory=Twist)
     covariance: np.ndarray = field(default_factory=_zeros(36))
 
-    def serialized_size(self) -> int:
-        return 48 + 36 * 8
-
 
 @dataclass(slots=True)
-class Transform:
+class Transform(_Fixed):
     """geometry_msgs/Transform: translation (m) and rotation."""
 
     _type: ClassVar[str] = "geometry_msgs/Transform"
+    _SIZE: ClassVar[int] = 56
     translation: Vector3 = field(default_factory=Vector3)
     rotation: Quaternion = field(default_factory=Quaternion)
-
-    def serialized_size(self) -> int:
-        return 56
 
 
 @dataclass(slots=True)

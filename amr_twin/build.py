@@ -96,11 +96,11 @@ def check_urdf(urdf: str) -> None:
 
 def _robot_spec(cfg: TwinConfig, urdf: str) -> mujoco.MjSpec:
     """The robot alone: URDF import plus everything URDF cannot carry."""
-    spec = mujoco.MjSpec.from_string(urdf)
+    # MuJoCo's URDF parser reads its options from a <mujoco> element in the URDF:
+    # keep the visuals (it discards them by default) and every link as a body.
+    options = '<mujoco><compiler discardvisual="false" fusestatic="false" strippath="true"/></mujoco>'
+    spec = mujoco.MjSpec.from_string(urdf.replace("</robot>", options + "</robot>", 1))
     spec.modelname = "amr"
-    spec.compiler.fusestatic = False
-    spec.compiler.discardvisual = False
-    spec.compiler.balanceinertia = False
     _tag_geoms(spec, cfg)
     base = spec.body("base_link")
     base.add_freejoint(name="root")

@@ -116,7 +116,7 @@ def chassis_inertial(cfg: TwinConfig) -> Inertial:
 def wheel_inertial(cfg: TwinConfig) -> Inertial:
     """Rotating share of a hub motor (rotor, magnets, tyre) as a solid cylinder, axis along y."""
     w = cfg.wheel
-    mesh = trimesh.creation.cylinder(radius=w.radius_m, height=w.width_m)
+    mesh = trimesh.creation.cylinder(radius=w.radius_m, height=w.width_m, sections=256)
     mass = w.mass_kg * w.rotor_fraction
     mesh.density = mass / mesh.volume
     i = np.asarray(mesh.moment_inertia)  # cylinder axis is the mesh z axis

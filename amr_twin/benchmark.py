@@ -1,0 +1,56 @@
+"""Benchmarks printed by ``amr-twin bench``: each figure against bare physics in the same run.
+
+Wall-clock figures are taken as the best of a few repeats (the machine is shared
+and noisy; the minimum is the least disturbed measurement).
+"""
+
+from __future__ import annotations
+
+import time
+
+from .build import build
+from .config import TwinConfig
+from .physics import Physics
+from .pins import DriverPins
+from .plant import Plant
+
+REPEATS = 3
+
+
+def _best(func, repeats: int = REPEATS) -> float:
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        func()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def bare_physics(cfg: TwinConfig, sim_s: float) -> dict:
+    """A settled robot driving straight at a constant duty: mj_step only."""
+    physics = Physics(build(cfg, world="warehouse").model)
+    physics.settle(0.5)
+    plant = Plant(cfg, physics)
+    pins = (DriverPins(16, 1, 0, 1), DriverPins(16, 1, 0, 1))
+    plant.apply(pins)
+    physics.step(1000)
+    nstep = int(round(sim_s / physics.timestep_s))
+    wall = _best(lambda: physics.step(nstep))
+    physics.check()
+    return {
+        "physics_us_per_step": round(wall / nstep * 1e6, 2),
+        "bare_physics_s_per_sim_s": round(wall / sim_s, 5),
+        "realtime_factor_physics": round(sim_s / wall, 1),
+        "timestep_s": physics.timestep_s,
+    }
+
+
+def run_benchmarks(cfg: TwinConfig, sim_s: float = 5.0) -> dict:
+    """All benchmark figures of the twin, measured in one run."""
+    result = bare_physics(cfg, sim_s)
+    try:
+        from .twin_benchmark import twin_figures
+    except ImportError:  # the firmware loop is not part of this build
+        return result
+    result.update(twin_figures(cfg, sim_s, result["bare_physics_s_per_sim_s"]))
+    return result

@@ -1,0 +1,126 @@
+"""The ``amr-twin`` command line (typer).
+
+Every command takes the parameter file, an override YAML and ``--set key=value``.
+Bad input ends with one line on stderr naming the field and its range, exit code 2,
+and no output file written.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .config import ConfigError, load_config
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="amr-twin: headless MuJoCo digital twin of the thesis AMR.")
+
+ConfigOpt = typer.Option(None, "--config", help="Parameter file (default models/amr/amr.yaml).")
+ParamsOpt = typer.Option(None, "--params", help="Second YAML overriding values of the parameter file.")
+SetOpt = typer.Option(None, "--set", help="Override one value: key=value (repeatable).")
+
+
+def fail(message: str, code: int = 2) -> None:
+    """Print a one-line error and exit non-zero."""
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code)
+
+
+def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
+    try:
+        return load_config(config, override_file=params, sets=sets or [], overrides=extra)
+    except ConfigError as exc:
+        fail(str(exc))
+
+
+def _guard(func):
+    """Turn the twin's own errors into one-line messages."""
+    from .build import BuildError
+    from .physics import DivergenceError
+
+    try:
+        return func()
+    except (ConfigError, BuildError, ValueError) as exc:
+        fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    except DivergenceError as exc:
+        fail(str(exc), code=3)
+
+
+def _parse_xy(text: Optional[str]) -> Optional[list[float]]:
+    if text is None:
+        return None
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        fail(f"--payload-xy {text!r}: expected X,Y in metres, e.g. 0.1,-0.05")
+    if not (math.isfinite(x) and math.isfinite(y)):
+        fail(f"--payload-xy {text!r}: must be finite numbers")
+    return [x, y]
+
+
+@app.command()
+def model(
+    payload_kg: Optional[float] = typer.Option(None, help="Payload mass, kg (0: none)."),
+    payload_xy: Optional[str] = typer.Option(None, help="Payload centre on the deck, X,Y in metres."),
+    export_urdf: Optional[Path] = typer.Option(None, help="Write the generated URDF here."),
+    export_mjcf: Optional[Path] = typer.Option(None, help="Write the generated robot MJCF here."),
+    as_json: bool = typer.Option(False, "--json", help="Print the model summary as one JSON object."),
+    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+) -> None:
+    """Build the robot model; export URDF/MJCF; print mass, static loads and tip margin."""
+    from . import build as build_mod
+    from .statics import describe
+
+    extra = {}
+    if payload_kg is not None:
+        if not math.isfinite(payload_kg):
+            fail(f"--payload-kg {payload_kg}: must be a finite number")
+        extra["payload.mass_kg"] = payload_kg
+    xy = _parse_xy(payload_xy)
+    if xy is not None:
+        extra["payload.xy_m"] = xy
+    cfg = _config(config, params, set_, extra)
+
+    def work():
+        if export_urdf or export_mjcf:
+            build_mod.export(cfg, export_urdf, export_mjcf)
+        info = describe(cfg)
+        if as_json:
+            typer.echo(json.dumps(info))
+        else:
+            typer.echo(f"total mass {info['total_mass_kg']:.2f} kg, tip margin {info['tip_margin_m']:.3f} m")
+            for name, load in info["static_load_n"].items():
+                typer.echo(f"  {name:20s} {load:8.2f} N")
+
+    _guard(work)
+
+
+@app.command()
+def bench(
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    sim_s: float = typer.Option(5.0, help="Simulated seconds per measurement."),
+    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+) -> None:
+    """Measure the cost of the physics (and of the whole twin) per simulated second."""
+    from .benchmark import run_benchmarks
+
+    cfg = _config(config, params, set_)
+    result = _guard(lambda: run_benchmarks(cfg, sim_s=sim_s))
+    if as_json:
+        typer.echo(json.dumps(result))
+    else:
+        for key, value in result.items():
+            typer.echo(f"{key:32s} {value}")
+
+
+def main() -> None:  # pragma: no cover - console entry
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(app())

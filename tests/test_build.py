@@ -1,0 +1,82 @@
+"""Model build: xacro -> URDF -> MjSpec -> MJCF."""
+
+import io
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import yourdfpy
+
+from amr_twin import build as build_mod
+from amr_twin.build import GROUP_COLLISION, GROUP_PAYLOAD, GROUP_VISUAL, BuildError, build, urdf_string
+from amr_twin.config import load_config
+from amr_twin.mass import frame_members
+from amr_twin.paths import MODEL_DIR
+
+
+def test_committed_files_are_not_stale(tmp_path):
+    """The committed URDF/MJCF equal what the build makes now (regenerate with amr-twin model --export-*)."""
+    urdf, mjcf = tmp_path / "amr.urdf", tmp_path / "amr.xml"
+    build_mod.export(load_config(), urdf, mjcf)
+    assert (MODEL_DIR / "amr.urdf").read_text() == urdf.read_text(), \
+        "models/amr/amr.urdf is stale: run amr-twin model --export-urdf models/amr/amr.urdf --export-mjcf models/amr/amr.xml"
+    assert (MODEL_DIR / "amr.xml").read_text() == mjcf.read_text(), "models/amr/amr.xml is stale"
+
+
+def test_urdf_is_valid_and_has_the_robot_structure():
+    robot = yourdfpy.URDF.load(io.StringIO(urdf_string(load_config())), load_meshes=False)
+    assert robot.validate()
+    joints = {j.name: j for j in robot.robot.joints}
+    assert joints["wheel_left_joint"].type == "continuous"
+    assert joints["wheel_left_joint"].origin[1, 3] == pytest.approx(0.24)
+    assert joints["wheel_right_joint"].origin[1, 3] == pytest.approx(-0.24)
+    assert sum(j.type == "prismatic" for j in joints.values()) == 4
+    assert {"laser", "imu_link"} <= {link.name for link in robot.robot.links}
+
+
+def test_urdf_frame_tubes_match_the_mass_model():
+    """The xacro draws the same tubes whose mass mass.py computes."""
+    cfg = load_config()
+    robot = yourdfpy.URDF.load(io.StringIO(urdf_string(cfg)), load_meshes=False)
+    base = robot.link_map["base_link"]
+    t = cfg.chassis.tube_outer_m
+    tubes = sorted(tuple(np.round(v.geometry.box.size, 6)) for v in base.visuals
+                   if v.geometry.box is not None and min(v.geometry.box.size) == pytest.approx(t))
+    expected = sorted(tuple(np.round(ext, 6)) for _, _, ext, _ in frame_members(cfg))
+    assert tubes == expected
+
+
+def test_broken_xacro_gives_one_line_error(tmp_path):
+    bad = tmp_path / "bad.urdf.xacro"
+    bad.write_text((MODEL_DIR / "amr.urdf.xacro").read_text().replace("${p['wheel_radius_m']}", "${p['no_such']}"))
+    with pytest.raises(BuildError) as info:
+        build(load_config(), xacro_file=bad)
+    assert "\n" not in str(info.value) and "xacro" in str(info.value)
+
+
+def test_spec_adds_what_urdf_cannot_carry():
+    cfg = load_config(sets=["payload.mass_kg=20"])
+    m = build(cfg).model
+    import mujoco
+    names = lambda kind, n: [mujoco.mj_id2name(m, kind, i) for i in range(n)]
+    assert m.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
+    assert names(mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu) == ["amr/motor_left", "amr/motor_right"]
+    casters = [i for i, n in enumerate(names(mujoco.mjtObj.mjOBJ_JOINT, m.njnt)) if "caster" in n]
+    assert all(m.jnt_stiffness[i] == cfg.caster.stiffness_n_m for i in casters)
+    assert all(m.qpos_spring[m.jnt_qposadr[i]] < 0 for i in casters)  # preload
+    ball = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "amr/caster_front_left_ball")
+    assert m.geom_priority[ball] >= 1 and m.geom_condim[ball] == 1
+    wheel = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "amr/wheel_left_collision")
+    assert m.geom_type[wheel] == mujoco.mjtGeom.mjGEOM_ELLIPSOID
+    payload = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "amr/payload_box")
+    assert m.geom_group[payload] == GROUP_PAYLOAD
+    robot_geoms = m.geom_bodyid > 0
+    assert set(m.geom_group[robot_geoms]) <= {GROUP_VISUAL, GROUP_COLLISION, GROUP_PAYLOAD}
+    base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link")
+    assert m.body_subtreemass[base] == pytest.approx(30.33 + 20, abs=0.05)
+
+
+def test_unknown_world_is_refused():
+    with pytest.raises(BuildError, match="no such world"):
+        build(load_config(), world="moon")

@@ -1,0 +1,82 @@
+"""Parameter file: validation, overrides, one-line errors (no mujoco)."""
+
+import math
+
+import pytest
+import yaml
+
+from amr_twin.config import DEFAULT_CONFIG, ConfigError, load_config, parameter_table
+
+
+def test_every_parameter_has_unit_and_source():
+    rows = parameter_table()
+    assert len(rows) > 50
+    for key, _value, unit, source in rows:
+        assert unit, key
+        assert len(source) > 8, f"{key}: source too short"
+        assert any(w in source for w in ("thesis", "estimate", "datasheet", "calibrated", "robot-facts", "set per run", "standard")), key
+
+
+def test_thesis_geometry_loaded():
+    cfg = load_config()
+    assert cfg.wheel.radius_m == 0.125
+    assert cfg.wheel.separation_m == 0.48
+    assert cfg.caster.ball_diameter_m == 0.030
+
+
+def test_config_is_frozen():
+    cfg = load_config()
+    with pytest.raises(Exception):
+        cfg.wheel.radius_m = 0.2
+
+
+@pytest.mark.parametrize("assignment, field, words", [
+    ("payload.mass_kg=-1", "payload.mass_kg", "[0.0, 200.0]"),
+    ("wheel.foo=1", "wheel.foo", "unknown key"),
+    ("wheel.radius_m=.nan", "wheel.radius_m", "finite"),
+    ("chassis.width_m=0.9", "chassis.width_m", "[0.25, 0.46]"),
+    ("payload.xy_m=[0.3,0.0]", "payload.xy_m", "outside the deck"),
+])
+def test_bad_values_give_one_line_naming_the_field(assignment, field, words):
+    sets = [assignment]
+    if assignment.startswith("payload.xy"):
+        sets.insert(0, "payload.mass_kg=20")
+    with pytest.raises(ConfigError) as info:
+        load_config(sets=sets)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith(field)
+    assert words in message
+
+
+def test_override_file_and_set(tmp_path):
+    extra = tmp_path / "mine.yaml"
+    extra.write_text(yaml.safe_dump({"payload": {"mass_kg": 12.5}, "wheel": {"radius_m": {"value": 0.13}}}))
+    cfg = load_config(override_file=extra, sets=["payload.xy_m=[0.05,0.0]"])
+    assert cfg.payload.mass_kg == 12.5
+    assert cfg.wheel.radius_m == 0.13
+    assert cfg.payload.xy_m == (0.05, 0.0)
+
+
+def test_unit_mismatch_is_refused(tmp_path):
+    tree = yaml.safe_load(DEFAULT_CONFIG.read_text())
+    tree["wheel"]["radius_m"]["unit"] = "mm"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(tree))
+    with pytest.raises(ConfigError, match=r"wheel.radius_m: unit 'mm'"):
+        load_config(bad)
+
+
+def test_unknown_section_in_file(tmp_path):
+    tree = yaml.safe_load(DEFAULT_CONFIG.read_text())
+    tree["warp_drive"] = {"value": 1, "unit": "1", "source": "estimate"}
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(tree))
+    with pytest.raises(ConfigError, match="warp_drive: unknown key"):
+        load_config(bad)
+
+
+def test_battery_voltages_must_be_ordered():
+    with pytest.raises(ConfigError, match="battery"):
+        load_config(sets=["battery.v_full_v=35"])
+    assert math.isfinite(load_config().battery.v_full_v)

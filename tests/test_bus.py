@@ -1,18 +1,13 @@
 """Topics, latency, queues, latching, services, taps and tf of amr_twin.bus."""
 
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = str(Path(__file__).resolve().parents[1])
-if ROOT not in sys.path:  # repo root, until the package is installed or a conftest adds it
-    sys.path.insert(0, ROOT)
 
-from amr_twin.bus import Bus, ServiceCallError, TransformError  # noqa: E402
-from amr_twin.clock import VirtualClock  # noqa: E402
-from amr_twin.messages import (Float64, Header, Quaternion, TFMessage, Transform,  # noqa: E402
+from amr_twin.bus import Bus, ServiceCallError, TransformError
+from amr_twin.clock import VirtualClock
+from amr_twin.messages import (Float64, Header, Quaternion, TFMessage, Transform,
                                TransformStamped, Twist, Vector3)
 
 

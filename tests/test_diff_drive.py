@@ -1,20 +1,15 @@
 """cmd_vel to wheel commands, saturation and the clock-driven command timeout."""
 
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = str(Path(__file__).resolve().parents[1])
-if ROOT not in sys.path:  # repo root, until the package is installed or a conftest adds it
-    sys.path.insert(0, ROOT)
 
-from amr_twin.bus import Bus  # noqa: E402
-from amr_twin.clock import VirtualClock  # noqa: E402
-from amr_twin.messages import Twist, Vector3  # noqa: E402
-from controllers.diff_drive import DiffDriveNode  # noqa: E402
-from controllers.wheel_command import WheelCommandService  # noqa: E402
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.messages import Twist, Vector3
+from amr_twin.controllers.diff_drive import DiffDriveNode
+from amr_twin.controllers.wheel_command import WheelCommandService
 
 
 @pytest.fixture

@@ -1,17 +1,12 @@
 """ROS 1 serialised sizes, type names and stamp helpers of amr_twin.messages."""
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = str(Path(__file__).resolve().parents[1])
-if ROOT not in sys.path:  # repo root, until the package is installed or a conftest adds it
-    sys.path.insert(0, ROOT)
 
-from amr_twin import messages as m  # noqa: E402
+from amr_twin import messages as m
 
 
 def test_type_names_are_ros_names():

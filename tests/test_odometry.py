@@ -1,20 +1,15 @@
 """Wheel odometry: exact arcs, motion signs from wheel_Command, signed input, rate, tf."""
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = str(Path(__file__).resolve().parents[1])
-if ROOT not in sys.path:  # repo root, until the package is installed or a conftest adds it
-    sys.path.insert(0, ROOT)
 
-from amr_twin.bus import Bus  # noqa: E402
-from amr_twin.clock import VirtualClock  # noqa: E402
-from amr_twin.messages import Float64, Float64MultiArray  # noqa: E402
-from controllers.odometry import WheelOdometry  # noqa: E402
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.messages import Float64, Float64MultiArray
+from amr_twin.controllers.odometry import WheelOdometry
 
 RPM_PER_M_S = 60.0 / (math.pi * 0.25)
 

@@ -1,18 +1,13 @@
 """Frame timing, serialisation on the wire, extra latency and loss of amr_twin.rosserial."""
 
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = str(Path(__file__).resolve().parents[1])
-if ROOT not in sys.path:  # repo root, until the package is installed or a conftest adds it
-    sys.path.insert(0, ROOT)
 
-from amr_twin.bus import Bus  # noqa: E402
-from amr_twin.clock import VirtualClock  # noqa: E402
-from amr_twin.messages import Float64, Float64MultiArray  # noqa: E402
-from amr_twin.rosserial import (ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink,  # noqa: E402
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.messages import Float64, Float64MultiArray
+from amr_twin.rosserial import (ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink,
                                 frame_bytes, frame_time_us)
 
 WHEEL_COMMAND = Float64MultiArray(data=[1.0, 38.19718551635742, 1.0, 38.19718551635742])

@@ -2,18 +2,13 @@
 
 import logging
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = str(Path(__file__).resolve().parents[1])
-if ROOT not in sys.path:  # repo root, until the package is installed or a conftest adds it
-    sys.path.insert(0, ROOT)
 
-from amr_twin.bus import Bus  # noqa: E402
-from amr_twin.clock import VirtualClock  # noqa: E402
-from controllers.wheel_command import (MAX_RPM, MIN_RPM, WheelCommandClient,  # noqa: E402
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.controllers.wheel_command import (MAX_RPM, MIN_RPM, WheelCommandClient,
                                        WheelCommandRequest, WheelCommandService,
                                        wheel_Command_Client, wheel_Command_Service)
 

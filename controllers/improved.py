@@ -1,0 +1,178 @@
+"""Improved wheel firmware, same interface and pin semantics as the thesis port.
+
+Differences from the faithful port (see docs/firmware.md):
+
+- Speed from every SC edge: the period over a sliding window of the latest edges
+  (at most ``window_edges`` intervals, none older than ``window_us``, a multiple
+  of 3 intervals so hall-sensor misalignment cancels), bounded above by the time
+  since the last edge and forced to 0 after ``zero_speed_timeout_us``.
+- PI at a fixed rate (Timer1 at 50 Hz) with feed-forward from the reference,
+  conditional-integration anti-windup (no integration while saturated against
+  the error, while the reference is still ramping, nor outside an error band:
+  the ramp's tracking lag would otherwise wind the integral up), no dead band, sigma-delta PWM dithering.
+- The reference is slew-limited in both directions (decelerations ramp too), by
+  the timer, so ``loop()`` never blocks in ``delay()``; a change of direction ramps
+  through zero and flips DIR there.
+- wheel0_Vel / wheel1_Vel published at a fixed rate (RPM, magnitude).
+- Same semantics: motion 0 brakes (BRAKE high), motion +-1 at speed 0 coasts
+  (STOP low) and the PI leaves that wheel alone.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Sequence
+
+from amr_twin.clock import VirtualClock
+from amr_twin.pins import HIGH, LOW
+
+from .arduino import ArduinoRuntime
+from .firmware import ImprovedParams, Publish
+
+FORWARD, BACKWARD, STOP = 1, -1, 0
+
+
+class ImprovedFirmware:
+    """Per-edge speed sensing and a 50 Hz anti-windup PI on the emulated Arduino.
+
+    Parameters
+    ----------
+    clock : VirtualClock
+        Shared clock.
+    publish : callable
+        ``publish(topic, rpm)``; ``wheel0_Vel``/``wheel1_Vel``, RPM >= 0.
+    params : ImprovedParams
+        Gains, rates and windows.
+    """
+
+    def __init__(self, clock: VirtualClock, publish: Publish, params: ImprovedParams | None = None):
+        self.p = p = params or ImprovedParams()
+        self.clock, self._publish = clock, publish
+        self.rt = ArduinoRuntime(clock, p.board)
+        self.pins = self.rt.pins
+        self._edges = (deque(maxlen=p.window_edges + 1), deque(maxlen=p.window_edges + 1))
+        self._isr = (lambda: self._edges[0].append(self.rt.micros()),
+                     lambda: self._edges[1].append(self.rt.micros()))
+        self.motion = [STOP, STOP]
+        self.setpoint_rpm = [0.0, 0.0]  # commanded magnitude
+        self.reference_rpm = [0.0, 0.0]  # ramped, signed (+ = forward)
+        self.integral_rpm = [0.0, 0.0]
+        self.speed_rpm = [0.0, 0.0]  # measured magnitude
+        self._residual = [0.0, 0.0]
+        self._ticks = 0
+        self._dt_s = p.pi_period_us * 1e-6
+
+    # -- Firmware protocol ---------------------------------------------------------
+    def start(self) -> None:
+        """setup(): wheels braked, SC interrupts attached for good, Timer1 at the PI rate."""
+        b = self.p.board
+        for i in range(2):
+            self._brake(i)
+            self.rt.digitalWrite(b.stop_pins[i], HIGH)
+            self.rt.digitalWrite(b.dir_pins[i], HIGH)
+            self.rt.attachInterrupt(self.rt.digitalPinToInterrupt(b.speed_pins[i]), self._isr[i])
+        self.rt.timer_initialize(self.p.pi_period_us, self._tick)
+
+    def on_wheel_command(self, data: Sequence[float]) -> None:
+        """wheel_Command ``[motionL, speedL, motionR, speedR]``; handled at once (no delay())."""
+        values = tuple(float(x) for x in data)
+        self.rt.post_main(lambda: self._command(values))
+
+    def on_sc_edge(self, wheel: int) -> None:
+        """SC change of ``wheel``: timestamped by its ISR."""
+        self.rt.external_edge(wheel)
+
+    # -- main context ----------------------------------------------------------------
+    def _command(self, data: Sequence[float]) -> None:
+        b = self.p.board
+        for i in range(2):
+            motion, speed = int(data[2 * i]), abs(data[2 * i + 1])
+            driving = self.motion[i] != STOP and self.setpoint_rpm[i] > 0
+            self.motion[i] = motion
+            self.setpoint_rpm[i] = speed if motion != STOP else 0.0
+            if motion == STOP:
+                self._brake(i)
+            elif speed == 0:
+                self.rt.analogWrite(b.pwm_pins[i], 0)
+                self.rt.digitalWrite(b.brake_pins[i], LOW)
+                self.rt.digitalWrite(b.stop_pins[i], LOW)
+                self._reset(i)
+            else:
+                if not driving:  # ramp from where the wheel is, in the DIR direction
+                    self._reset(i)
+                    self.reference_rpm[i] = self._dir(i) * self.speed_rpm[i]
+                self.rt.digitalWrite(b.brake_pins[i], LOW)
+                self.rt.digitalWrite(b.stop_pins[i], HIGH)
+
+    def _brake(self, i: int) -> None:
+        b = self.p.board
+        self.rt.analogWrite(b.pwm_pins[i], 0)
+        self.rt.digitalWrite(b.brake_pins[i], HIGH)
+        self._reset(i)
+
+    def _reset(self, i: int) -> None:
+        self.reference_rpm[i] = 0.0
+        self.integral_rpm[i] = 0.0
+        self._residual[i] = 0.0
+
+    def _dir(self, i: int) -> int:
+        return 1 if self.pins[i].dir_level == HIGH else -1
+
+    # -- speed -------------------------------------------------------------------------
+    def measured_rpm(self, i: int) -> float:
+        """Speed magnitude of wheel ``i`` from its recent SC edges, RPM."""
+        p, edges = self.p, self._edges[i]
+        if len(edges) < 2:
+            return 0.0
+        now = self.rt.micros()
+        last = edges[-1]
+        since_us = (now - last) & 0xFFFFFFFF
+        if since_us > p.zero_speed_timeout_us:
+            edges.clear()
+            return 0.0
+        n = 0
+        for k in range(len(edges) - 2, -1, -1):
+            if (last - edges[k]) & 0xFFFFFFFF > p.window_us and n >= 1:
+                break
+            n += 1
+        if n >= 3:
+            n -= n % 3
+        span_us = (last - edges[-1 - n]) & 0xFFFFFFFF
+        rpm = 60e6 * n / (p.edges_per_rev * max(span_us, 1))
+        if since_us > 0:
+            rpm = min(rpm, 60e6 / (p.edges_per_rev * since_us))
+        return rpm
+
+    # -- Timer1 ISR --------------------------------------------------------------------
+    def _tick(self) -> None:
+        p, b, dt = self.p, self.p.board, self._dt_s
+        for i in range(2):
+            speed = self.speed_rpm[i] = self.measured_rpm(i)
+            if self.motion[i] == STOP or self.setpoint_rpm[i] == 0:
+                continue
+            target = self.motion[i] * self.setpoint_rpm[i]
+            step = p.ramp_rate_rpm_per_s * dt
+            ref = self.reference_rpm[i] + min(max(target - self.reference_rpm[i], -step), step)
+            self.reference_rpm[i] = ref
+            if ref != 0 and (ref > 0) != (self._dir(i) > 0):
+                self.rt.digitalWrite(b.dir_pins[i], HIGH if ref > 0 else LOW)
+                self.integral_rpm[i] = 0.0
+            r = abs(ref)
+            error = r - speed
+            raw = p.feedforward_gain * r + p.kp * error + self.integral_rpm[i]
+            u = min(max(raw, p.min_control_rpm), p.max_control_rpm)
+            hold = ref != target or abs(error) > p.integral_band_rpm
+            if not hold and (u == raw or (raw > u and error < 0) or (raw < u and error > 0)):
+                self.integral_rpm[i] += p.ki * error * dt
+            counts = u / p.max_vel_rpm * 255.0
+            if p.dither_pwm:
+                out = math.floor(counts + self._residual[i])
+                self._residual[i] += counts - out
+            else:
+                out = round(counts)
+            self.rt.analogWrite(b.pwm_pins[i], out)
+        self._ticks += 1
+        if self._ticks % p.publish_every_ticks == 0:
+            self._publish("wheel0_Vel", self.speed_rpm[0])
+            self._publish("wheel1_Vel", self.speed_rpm[1])

@@ -1,0 +1,154 @@
+"""Improved firmware: per-edge speed, 50 Hz PI with anti-windup, two-way ramp; vs faithful."""
+
+import math
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from amr_twin.clock import VirtualClock  # noqa: E402
+from amr_twin.pins import HIGH, LOW  # noqa: E402
+from controllers.firmware import BoardParams, ImprovedParams, make_firmware  # noqa: E402
+from sensors.hall import HallSensors  # noqa: E402
+
+LOG = ImprovedParams(board=BoardParams(record_pin_log=True))
+K_RPM = 1054.0 / 0.9  # wheel model: duty 0.9*sp/1054 -> sp
+TAU_S = 0.25  # wheel model time constant, s
+
+
+def make(kind="improved", params=LOG):
+    clock = VirtualClock()
+    pubs = []
+    fw = make_firmware(kind, clock, lambda topic, v: pubs.append((clock.now_us, topic, v)), params)
+    fw.start()
+    return clock, fw, pubs
+
+
+def feed_edges(clock, fw, rpm, t_end_us, wheels=(0,), phase_us=137):
+    """Synthetic SC edges at a steady ``rpm`` on ``wheels`` until ``t_end_us``."""
+    period_us = 60e6 / (90 * rpm)
+    k = math.ceil((clock.now_us - phase_us) / period_us) + 1
+    while phase_us + k * period_us <= t_end_us:
+        t = int(round(phase_us + k * period_us))
+        clock.run_until(t - 1)
+        clock.set_time(t)
+        for w in wheels:
+            fw.on_sc_edge(w)
+        k += 1
+    clock.run_until(t_end_us)
+
+
+def simulate(fw, clock, t_end_us, state=None):
+    """First-order wheel model (speed' = (k*duty*dir - speed)/tau) with hall edges."""
+    hall, speed, angle = state or (HallSensors(), np.zeros(2), np.zeros(2))
+    while clock.now_us < t_end_us:
+        t0 = clock.now_us
+        t1 = min(t0 - t0 % 1000 + 1000, clock.next_event_us(), t_end_us)
+        dt = (t1 - t0) * 1e-6
+        drive = [p.enabled and not p.braking for p in fw.pins]
+        tgt = np.array([K_RPM * p.duty * p.direction if d else 0.0 for p, d in zip(fw.pins, drive)])
+        tau = np.array([0.02 if p.braking else (TAU_S if p.enabled else 2.0) for p in fw.pins])
+        e = np.exp(-dt / tau)
+        new_angle = angle + (tgt * dt + (speed - tgt) * tau * (1 - e)) * 2 * math.pi / 60
+        speed = tgt + (speed - tgt) * e
+        for t, w in zip(*hall.edges(np.array([t0, t1]), np.vstack([angle, new_angle]))):
+            clock.set_time(int(t))
+            fw.on_sc_edge(int(w))
+        angle = new_angle
+        clock.run_until(t1)
+    return hall, speed, angle
+
+
+def published(pubs, topic="wheel0_Vel"):
+    return [(t, v) for t, topic_, v in pubs if topic_ == topic]
+
+
+def settling_s(samples, sp, band, t_cmd_us):
+    outside = [t for t, v in samples if abs(v - sp) > band]
+    return (max(outside) - t_cmd_us) / 1e6 if outside else 0.0
+
+
+@pytest.mark.parametrize("rpm", [10.0, 76.39, 200.0])
+def test_per_edge_speed_within_half_a_percent(rpm):
+    clock, fw, pubs = make()
+    feed_edges(clock, fw, rpm, 3_000_000, wheels=(0, 1))
+    late = [v for t, v in published(pubs) if t > 1_500_000]
+    assert late and max(abs(v / rpm - 1) for v in late) < 0.005
+
+
+def test_zero_speed_timeout_and_fixed_publish_rate():
+    clock, fw, pubs = make()
+    feed_edges(clock, fw, 60.0, 1_000_000)
+    clock.run_until(1_500_000)  # edges stop at 1 s
+    samples = published(pubs)
+    assert [t for t, _ in samples] == [100_000 * k for k in range(1, 16)]
+    assert samples[-1][1] == 0.0 and samples[9][1] == pytest.approx(60.0, rel=0.005)
+    decay = [v for t, v in samples if 1_000_000 < t < 1_200_000]
+    assert all(0 < v < 60.0 for v in decay)  # bounded by the time since the last edge
+
+
+def test_deceleration_ramps_in_both_directions():
+    clock, fw, pubs = make()
+    clock.schedule(100_000, lambda: fw.on_wheel_command([1, 150.0, 1, 0]))
+    state = simulate(fw, clock, 4_000_000)
+    start = len(fw.rt.pin_log)
+    fw.on_wheel_command([1, 20.0, 1, 0])
+    simulate(fw, clock, 6_000_000, state)
+    counts = [c for t, w, c in fw.rt.pin_log[start:] if w == 0 and t < 4_400_000]
+    assert counts[0] > 30 and len(set(counts)) > 10  # no jump to the 20 RPM duty (4-5 counts)
+    assert np.mean(counts[-5:]) < np.mean(counts[:5])
+
+
+def test_direction_change_ramps_through_zero_then_flips_dir():
+    clock, fw, pubs = make()
+    fw.on_wheel_command([1, 60.0, 1, 0])
+    state = simulate(fw, clock, 2_000_000)
+    fw.on_wheel_command([-1, 60.0, 1, 0])
+    simulate(fw, clock, 2_200_000, state)
+    assert fw.pins[0].dir_level == HIGH  # still slowing down
+    hall, speed, angle = simulate(fw, clock, 4_000_000, state)
+    assert fw.pins[0].dir_level == LOW and speed[0] == pytest.approx(-60.0, abs=4)
+
+
+def test_free_spin_and_brake_semantics():
+    clock, fw, pubs = make()
+    fw.on_wheel_command([1, 0, -1, 0])
+    start = len(fw.rt.pin_log)
+    feed_edges(clock, fw, 30.0, 2_000_000, wheels=(0, 1))
+    for p in fw.pins:
+        assert p.stop_level == LOW and p.brake_level == LOW and p.pwm_counts == 0
+    assert len(fw.rt.pin_log) == start  # the PI leaves free-spinning wheels alone
+    assert published(pubs)[-1][1] == pytest.approx(30.0, rel=0.005)
+    fw.on_wheel_command([0, 0, 0, 0])
+    for p in fw.pins:
+        assert p.brake_level == HIGH and p.pwm_counts == 0
+
+
+def test_anti_windup_keeps_the_integral_bounded_when_saturated():
+    clock, fw, pubs = make(params=replace(LOG, max_control_rpm=60.0))
+    fw.on_wheel_command([1, 100.0, 1, 0])
+    feed_edges(clock, fw, 50.0, 5_000_000)  # the wheel cannot follow
+    assert fw.integral_rpm[0] <= 60.0 and fw.pins[0].pwm_counts <= int(60 / 1054 * 255) + 1
+
+
+def test_left_wheel_76_rpm_both_modes_settle_and_improved_is_faster():
+    sp, band, t_cmd = 76.39, 4.0, 100_000
+    result = {}
+    for kind in ("faithful", "improved"):
+        clock, fw, pubs = make(kind, params=None)
+        clock.schedule(t_cmd, lambda fw=fw: fw.on_wheel_command([1, sp, 1, 0]))
+        _, speed, _ = simulate(fw, clock, 18_000_000)
+        samples = published(pubs)
+        late = [v for t, v in samples if t > 4_000_000]
+        assert all(abs(v - sp) <= band for v in late)
+        result[kind] = (settling_s(samples, sp, band, t_cmd), settling_s(samples, sp, 1.0, t_cmd),
+                        late[-1], speed[0], len(samples))
+    for kind, (s4, s1, last, true, n) in result.items():
+        print(f"\n{kind}: settle +-4 RPM {s4:.2f} s, +-1 RPM {s1:.2f} s, "
+              f"last published {last:.2f} RPM, true {true:.2f} RPM, {n} samples")
+    assert result["improved"][0] < result["faithful"][0]
+    assert abs(result["improved"][3] - sp) < 0.5 < abs(result["faithful"][3] - sp)

@@ -5,6 +5,10 @@ carry is added on the MjSpec: the free joint, the wheel collision ellipsoids, th
 caster springs (stiffness, damping, preload), contact parameters, the motor
 actuators, sensor sites, the payload, geom groups, and the world it stands in.
 
+The first eleven sensor values are read by the loop every step
+(:data:`LOOP_SENSOR_DIM`): wheel angles L, R; wheel speeds L, R; base position;
+base quaternion.
+
 Geom groups (``geomgroup`` masks): 0 world, 1 robot visuals, 2 robot collision,
 4 payload. A LiDAR casts against groups 0 and 4 so that it never sees the robot's
 own wheels and casters but does see a payload in its scan plane.
@@ -32,6 +36,7 @@ GROUP_WORLD, GROUP_VISUAL, GROUP_COLLISION, GROUP_PAYLOAD = 0, 1, 2, 4
 WHEELS = ("left", "right")
 CASTERS = ("front_left", "front_right", "rear_left", "rear_right")
 ROBOT_PREFIX = "amr/"
+LOOP_SENSOR_DIM = 11
 
 
 class BuildError(RuntimeError):
@@ -190,9 +195,16 @@ def _add_payload(spec: mujoco.MjSpec, base: mujoco.MjsBody, cfg: TwinConfig) -> 
 
 
 def _add_sensors(spec: mujoco.MjSpec) -> None:
-    for side in WHEELS:
-        spec.add_sensor(name=f"wheel_{side}_angle", type=mujoco.mjtSensor.mjSENS_JOINTPOS,
-                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"wheel_{side}_joint")
+    # the first four sensor values are read every step by the loop: angle L, R, speed L, R
+    for kind, suffix in ((mujoco.mjtSensor.mjSENS_JOINTPOS, "angle"), (mujoco.mjtSensor.mjSENS_JOINTVEL, "speed")):
+        for side in WHEELS:
+            spec.add_sensor(name=f"wheel_{side}_{suffix}", type=kind,
+                            objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"wheel_{side}_joint")
+    # then the base pose (world): position (3) and orientation quaternion w, x, y, z (4)
+    spec.add_sensor(name="base_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
+                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname="base")
+    spec.add_sensor(name="base_quat", type=mujoco.mjtSensor.mjSENS_FRAMEQUAT,
+                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname="base")
     for name, kind in (("imu_accel", mujoco.mjtSensor.mjSENS_ACCELEROMETER),
                        ("imu_gyro", mujoco.mjtSensor.mjSENS_GYRO),
                        ("imu_mag", mujoco.mjtSensor.mjSENS_MAGNETOMETER)):

@@ -1,14 +1,11 @@
 """Emulated Arduino runtime: pins, timer, interrupt flags and masking, delay() in main context."""
 
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from amr_twin.clock import VirtualClock  # noqa: E402
-from amr_twin.pins import HIGH, LOW  # noqa: E402
-from controllers.arduino import ArduinoRuntime  # noqa: E402
-from controllers.firmware import BoardParams  # noqa: E402
+from amr_twin.clock import VirtualClock
+from amr_twin.pins import HIGH, LOW
+from amr_twin.controllers.arduino import ArduinoRuntime
+from amr_twin.controllers.firmware import BoardParams
 
 BOARD = BoardParams(record_pin_log=True)
 

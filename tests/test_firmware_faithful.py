@@ -1,19 +1,16 @@
 """Port of the thesis firmware: sensing, ramps, PI, free spin/brake, and each quirk switch."""
 
 import math
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from amr_twin.clock import VirtualClock  # noqa: E402
-from amr_twin.pins import HIGH, LOW  # noqa: E402
-from controllers.firmware import BoardParams, FaithfulParams, make_firmware  # noqa: E402
-from sensors.hall import HallSensors  # noqa: E402
+from amr_twin.clock import VirtualClock
+from amr_twin.pins import HIGH, LOW
+from amr_twin.controllers.firmware import BoardParams, FaithfulParams, make_firmware
+from amr_twin.sensors.hall import HallSensors
 
 LOG = FaithfulParams(board=BoardParams(record_pin_log=True))
 K_RPM = 1054.0 / 0.9  # wheel model: duty 0.9*sp/1054 -> sp

@@ -1,19 +1,16 @@
 """Improved firmware: per-edge speed, 50 Hz PI with anti-windup, two-way ramp; vs faithful."""
 
 import math
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from amr_twin.clock import VirtualClock  # noqa: E402
-from amr_twin.pins import HIGH, LOW  # noqa: E402
-from controllers.firmware import BoardParams, ImprovedParams, make_firmware  # noqa: E402
-from sensors.hall import HallSensors  # noqa: E402
+from amr_twin.clock import VirtualClock
+from amr_twin.pins import HIGH, LOW
+from amr_twin.controllers.firmware import BoardParams, ImprovedParams, make_firmware
+from amr_twin.sensors.hall import HallSensors
 
 LOG = ImprovedParams(board=BoardParams(record_pin_log=True))
 K_RPM = 1054.0 / 0.9  # wheel model: duty 0.9*sp/1054 -> sp

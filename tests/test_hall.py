@@ -1,14 +1,11 @@
 """Hall sensors and SC output: 90 changes per revolution, both directions, vectorised."""
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from sensors.hall import HallSensors  # noqa: E402
+from amr_twin.sensors.hall import HallSensors
 
 A0_RAD = 0.123  # start angle off the sensor lattices
 

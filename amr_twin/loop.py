@@ -1,0 +1,161 @@
+"""The simulation loop: physics, plant, hall sensors, firmware and PC-side nodes on one clock.
+
+Roles (after dm_control's physics / task / loop): :class:`~amr_twin.physics.Physics`
+owns MjData, the firmware and the nodes own their logic, and :class:`Twin` only
+orders events in time:
+
+1. ask the clock for the next event (a timer tick, the end of a ``delay()``, a
+   rosserial frame arriving, a sensor sample);
+2. step the physics in C up to that instant with the actuation held, keeping the
+   wheel angles of every step;
+3. turn the angles into SC edges (interpolated to the microsecond) and deliver
+   them to the firmware's pin-change interrupt in time order, each at its time;
+4. run the clock's events; apply the pins to the plant.
+
+The physics runs at most one step ahead of the clock: an event at ``t`` acts from
+the first physics step that starts at or after ``t``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from .build import LOOP_SENSOR_DIM, build
+from .bus import Bus
+from .clock import VirtualClock
+from .config import TwinConfig
+from .controllers.firmware import make_firmware
+from .controllers.odometry import WheelOdometry
+from .controllers.wheel_command import WheelCommandClient, WheelCommandService
+from .messages import Float64
+from .physics import Physics
+from .plant import Plant
+from .recorder import Recorder
+from .rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
+from .sensors.hall import HallSensors
+
+US = 1_000_000
+
+
+@dataclass(frozen=True)
+class TwinOptions:
+    """Run options that are not physical parameters."""
+
+    firmware: str = "faithful"
+    world: str = "warehouse"
+    seed: int = 0
+    start_xy_yaw: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    settle_s: float = 0.5
+    record_every_steps: int = 10  # time series at 100 Hz with 1 ms steps
+    hall_jitter_us: float = 0.0
+    hall_misalignment_deg: float = 0.0
+    rosserial_extra_latency_us: int = 0
+    rosserial_loss_prob: float = 0.0
+    check_every_s: float = 0.5  # divergence check period
+    firmware_params: object = field(default=None, compare=False)
+
+
+class Twin:
+    """The whole robot: build it, then :meth:`advance` it in simulated time."""
+
+    def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
+        self.cfg, self.options = cfg, options
+        self.physics = Physics(build(cfg, options.world, options.start_xy_yaw).model)
+        self.physics.settle(options.settle_s)
+        self.physics.data.time = 0.0
+        self.dt_us = int(round(self.physics.timestep_s * US))
+        self.t_phys_us = 0
+        self.clock = VirtualClock()
+        self.bus = Bus(self.clock)
+        self.link = RosserialLink(self.clock, extra_latency_us=options.rosserial_extra_latency_us,
+                                  loss_prob=options.rosserial_loss_prob, seed=options.seed)
+        self.plant = Plant(cfg, self.physics)
+        self.hall = HallSensors(2, misalignment_deg=options.hall_misalignment_deg,
+                                jitter_us=options.hall_jitter_us, seed=options.seed)
+        self.hall.reset(self.physics.wheel_angles_rad())
+        self.firmware = make_firmware(options.firmware, self.clock, self._arduino_publish,
+                                      options.firmware_params)
+        # PC side (the mini PC): service, client, odometry; rosserial bridges to the Arduino
+        self.service = WheelCommandService(self.bus)
+        self.client = WheelCommandClient(self.bus, wheel_radius_m=cfg.wheel.radius_m,
+                                         half_separation_m=cfg.wheel.separation_m / 2)
+        self.bus.subscribe("wheel_Command", self._to_arduino)
+        self.odometry = WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
+                                      wheel_separation_m=cfg.wheel.separation_m)
+        self.recorder = Recorder(self)
+        self._pending_t = np.empty(0, np.int64)
+        self._pending_w = np.empty(0, np.int64)
+        self._next_check_us = int(options.check_every_s * US)
+        self.firmware.start()
+        self.plant.apply(self.firmware.pins)
+        self.recorder.sample()
+
+    # -- rosserial bridge ---------------------------------------------------------
+    def _to_arduino(self, msg) -> None:
+        self.link.send(PC_TO_ARDUINO, "wheel_Command", msg,
+                       lambda _topic, m: self.firmware.on_wheel_command(list(m.data)))
+
+    def _arduino_publish(self, topic: str, value: float) -> None:
+        self.link.send(ARDUINO_TO_PC, topic, Float64(data=float(value)), self.bus.publish)
+
+    # -- time -----------------------------------------------------------------------
+    @property
+    def t_s(self) -> float:
+        return self.clock.now_us / US
+
+    def advance(self, duration_s: float) -> None:
+        """Run the twin for ``duration_s`` simulated seconds."""
+        if not (math.isfinite(duration_s) and duration_s >= 0):
+            raise ValueError(f"duration_s: {duration_s} must be a finite number >= 0")
+        self.advance_to_us(self.clock.now_us + int(round(duration_s * US)))
+
+    def advance_to_us(self, t_end_us: int) -> None:
+        clock, fw, plant = self.clock, self.firmware, self.plant
+        while clock.now_us < t_end_us:
+            t_evt = min(clock.next_event_us(), t_end_us)
+            if self.t_phys_us < t_evt:
+                nstep = -(-(t_evt - self.t_phys_us) // self.dt_us)
+                self._step_physics(nstep)
+            self._deliver_edges(t_evt)
+            clock.run_until(t_evt)
+            plant.apply(fw.pins)
+            if t_evt >= self._next_check_us:
+                self.physics.check()
+                self._next_check_us += int(self.options.check_every_s * US)
+
+    def _step_physics(self, nstep: int) -> None:
+        """Step ``nstep`` times, keeping the wheel angles and speeds of every step."""
+        m, d = self.physics.model, self.physics.data
+        buf = np.empty((nstep + 1, LOOP_SENSOR_DIM))
+        sensordata = d.sensordata
+        buf[0] = sensordata[:LOOP_SENSOR_DIM]
+        step = mujoco.mj_step
+        for k in range(1, nstep + 1):
+            step(m, d)
+            buf[k] = sensordata[:LOOP_SENSOR_DIM]
+        t0 = self.t_phys_us
+        t_us = t0 + self.dt_us * np.arange(nstep + 1, dtype=np.int64)
+        self.t_phys_us = int(t_us[-1])
+        self.recorder.extend(t_us[1:], buf[1:])
+        edge_t, edge_w = self.hall.edges(t_us, buf[:, :2])
+        if len(edge_t):
+            self._pending_t = np.concatenate([self._pending_t, edge_t])
+            self._pending_w = np.concatenate([self._pending_w, edge_w])
+
+    def _deliver_edges(self, t_until_us: int) -> None:
+        """Deliver the pending SC edges up to ``t_until_us`` to the firmware's ISR."""
+        if not len(self._pending_t):
+            return
+        n = int(np.searchsorted(self._pending_t, t_until_us, side="right"))
+        if n == 0:
+            return
+        clock, isr = self.clock, self.firmware.on_sc_edge
+        for t_e, w in zip(self._pending_t[:n].tolist(), self._pending_w[:n].tolist()):
+            clock.run_until(max(t_e, clock.now_us))
+            isr(w)
+        self._pending_t = self._pending_t[n:]
+        self._pending_w = self._pending_w[n:]

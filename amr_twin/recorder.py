@@ -1,0 +1,105 @@
+"""Time series of a run: what the loop sees every step, and what the bus carries.
+
+Per physics step the loop hands over the first :data:`~amr_twin.build.LOOP_SENSOR_DIM`
+sensor values (wheel angles and speeds, base pose); the recorder keeps one row in
+``record_every_steps`` together with the pins and the battery voltage, which only
+change at events. A bus tap keeps every published wheel speed, wheel command and
+odometry message with its delivery time.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .build import LOOP_SENSOR_DIM
+
+RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
+
+
+@dataclass
+class RunSeries:
+    """Arrays of one run. Shapes: n recorded rows; k published samples."""
+
+    t_s: np.ndarray              # (n,)
+    wheel_angle_rad: np.ndarray  # (n, 2) left, right
+    true_rpm: np.ndarray         # (n, 2) signed, + rolling forward
+    pose: np.ndarray             # (n, 3) x_m, y_m, yaw_rad (world)
+    pwm_counts: np.ndarray       # (n, 2) analogWrite value on the driver's PWM pin
+    direction: np.ndarray        # (n, 2) +1 DIR high (forward), -1 low
+    mode: np.ndarray             # (n, 2) 0 drive, 1 coast, 2 brake
+    battery_v: np.ndarray        # (n,)
+    published: dict[int, np.ndarray]  # wheel -> (k, 2) rows t_s, rpm (as received on the PC)
+    odom: np.ndarray             # (k, 4) t_s, x_m, y_m, yaw_rad (odom frame)
+    commands: list[tuple[float, list[float]]] = field(default_factory=list)
+
+
+_MODES = {"drive": 0, "coast": 1, "brake": 2}
+
+
+def yaw_from_quat(q: np.ndarray) -> np.ndarray:
+    """Yaw of (n, 4) quaternions w, x, y, z, rad."""
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+class Recorder:
+    """Collects a run's time series from the loop and the bus."""
+
+    def __init__(self, twin) -> None:
+        self.twin = twin
+        self.every = max(1, int(twin.options.record_every_steps))
+        self._t: list[np.ndarray] = []
+        self._rows: list[np.ndarray] = []
+        self._pins: list[np.ndarray] = []
+        self._published: dict[int, list[tuple[float, float]]] = {0: [], 1: []}
+        self._odom: list[tuple[float, float, float, float]] = []
+        self.commands: list[tuple[float, list[float]]] = []
+        twin.bus.add_tap(self._tap)
+
+    def _tap(self, topic: str, msg, t_us: int) -> None:
+        t_s = t_us * 1e-6
+        if topic == "wheel0_Vel":
+            self._published[0].append((t_s, msg.data))
+        elif topic == "wheel1_Vel":
+            self._published[1].append((t_s, msg.data))
+        elif topic == "wheel_Command":
+            self.commands.append((t_s, [float(v) for v in msg.data]))
+        elif topic == "odom":
+            q = msg.pose.pose.orientation
+            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+            self._odom.append((t_s, msg.pose.pose.position.x, msg.pose.pose.position.y, yaw))
+
+    def _pin_row(self) -> np.ndarray:
+        pins, plant = self.twin.firmware.pins, self.twin.plant
+        return np.array([pins[0].pwm_counts, pins[1].pwm_counts, pins[0].direction, pins[1].direction,
+                         _MODES[plant.mode[0]], _MODES[plant.mode[1]], plant.battery.terminal_v()])
+
+    def sample(self) -> None:
+        """Record the present state as one row (at the start of a run)."""
+        d = self.twin.physics.data
+        self.extend(np.array([self.twin.t_phys_us]), d.sensordata[None, :LOOP_SENSOR_DIM].copy(), force=True)
+
+    def extend(self, t_us: np.ndarray, rows: np.ndarray, force: bool = False) -> None:
+        """Keep every ``every``-th step of a chunk (t_us: (n,), rows: (n, LOOP_SENSOR_DIM))."""
+        dt = self.twin.dt_us
+        keep = np.ones(len(t_us), bool) if force else (t_us // dt) % self.every == 0
+        if not keep.any():
+            return
+        self._t.append(t_us[keep])
+        self._rows.append(rows[keep])
+        self._pins.append(np.repeat(self._pin_row()[None], int(keep.sum()), axis=0))
+
+    def series(self) -> RunSeries:
+        t = np.concatenate(self._t) * 1e-6
+        rows = np.concatenate(self._rows)
+        pins = np.concatenate(self._pins)
+        pose = np.column_stack([rows[:, 4], rows[:, 5], yaw_from_quat(rows[:, 7:11])])
+        published = {w: np.array(v, float).reshape(-1, 2) for w, v in self._published.items()}
+        return RunSeries(
+            t_s=t, wheel_angle_rad=rows[:, 0:2], true_rpm=rows[:, 2:4] * RAD_S_TO_RPM, pose=pose,
+            pwm_counts=pins[:, 0:2].astype(int), direction=pins[:, 2:4].astype(int),
+            mode=pins[:, 4:6].astype(int), battery_v=pins[:, 6], published=published,
+            odom=np.array(self._odom, float).reshape(-1, 4), commands=list(self.commands))

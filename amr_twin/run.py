@@ -1,0 +1,114 @@
+"""Python API: run one wheel command (or a timed list of them) and get the time series.
+
+>>> from amr_twin.config import load_config
+>>> from amr_twin.run import Command, run_command
+>>> result = run_command(load_config(), Command("motor", wheel="left", direction="forward", speed_m_s=1.0), 18.0)
+>>> result.series.published[0]  # (k, 2): t_s, rpm as published on wheel0_Vel
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+from .config import TwinConfig
+from .loop import Twin, TwinOptions
+from .recorder import RunSeries
+
+KINDS = ("linear", "angular", "motor", "stop")
+
+
+@dataclass(frozen=True)
+class Command:
+    """One wheel_Command_Client call, as in the terminal menu of fig. 3.2.
+
+    kind : "linear" (speed_m_s, negative = backward), "angular" (speed_deg_s,
+        icc_m; REP-103: ICC positive to the left), "motor" (wheel, direction,
+        speed_m_s) or "stop".
+    """
+
+    kind: str
+    speed_m_s: float = 0.0
+    speed_deg_s: float = 0.0
+    icc_m: float = 0.0
+    wheel: str = "left"
+    direction: str = "forward"
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"command kind: {self.kind!r} is not one of {', '.join(KINDS)}")
+        for name in ("speed_m_s", "speed_deg_s", "icc_m"):
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise ValueError(f"{name}: {value} must be a finite number")
+        if self.wheel not in ("left", "right"):
+            raise ValueError(f"wheel: {self.wheel!r} must be left or right")
+        if self.direction not in ("forward", "backward"):
+            raise ValueError(f"direction: {self.direction!r} must be forward or backward")
+
+    def send(self, twin: Twin) -> int:
+        """Call the client as the menu would; return its code (0 ok, 1 value error, -1 failed)."""
+        client = twin.client
+        if self.kind == "linear":
+            return client.linear(self.speed_m_s)
+        if self.kind == "angular":
+            return client.angular(self.speed_deg_s, self.icc_m)
+        if self.kind == "motor":
+            return client.motor(self.wheel, self.direction, self.speed_m_s)
+        return client.stop()
+
+    def describe(self) -> dict:
+        """The command as a JSON-ready dict."""
+        out = {"kind": self.kind}
+        if self.kind == "linear":
+            out["speed_m_s"] = self.speed_m_s
+        elif self.kind == "angular":
+            out.update(speed_deg_s=self.speed_deg_s, icc_m=self.icc_m)
+        elif self.kind == "motor":
+            out.update(wheel=self.wheel, direction=self.direction, speed_m_s=self.speed_m_s)
+        return out
+
+
+@dataclass
+class RunResult:
+    """What :func:`run_command` returns."""
+
+    commands: list[tuple[float, Command]]
+    codes: list[int]
+    wheel_command: list[float] | None  # the last [motionL, speedL, motionR, speedR] sent
+    series: RunSeries
+    sim_s: float
+    wall_s: float
+    errors: list[str] = field(default_factory=list)
+
+
+def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s: float,
+                options: TwinOptions = TwinOptions(), twin: Twin | None = None) -> RunResult:
+    """Send each command at its time (s from the start) and run for ``duration_s``."""
+    if not (math.isfinite(duration_s) and duration_s > 0):
+        raise ValueError(f"duration_s: {duration_s} must be a finite number > 0")
+    steps = sorted(steps, key=lambda s: s[0])
+    if any(t < 0 or t > duration_s for t, _ in steps):
+        raise ValueError(f"mission: command times must lie in [0, {duration_s}] s")
+    wall0 = time.perf_counter()
+    twin = twin or Twin(cfg, options)
+    codes, errors, last = [], [], None
+    for t_s, command in steps:
+        twin.advance_to_us(int(round(t_s * 1e6)))
+        code = command.send(twin)
+        codes.append(code)
+        if code != 0:
+            errors.append(twin.client.last_error or f"code {code}")
+        elif twin.client.last_request is not None:
+            r = twin.client.last_request
+            last = [r.motionL, r.speedL, r.motionR, r.speedR]
+    twin.advance_to_us(int(round(duration_s * 1e6)))
+    return RunResult(commands=steps, codes=codes, wheel_command=last, series=twin.recorder.series(),
+                     sim_s=duration_s, wall_s=time.perf_counter() - wall0, errors=errors)
+
+
+def run_command(cfg: TwinConfig, command: Command, duration_s: float,
+                options: TwinOptions = TwinOptions()) -> RunResult:
+    """Send one command at t = 0 and run for ``duration_s`` simulated seconds."""
+    return run_mission(cfg, [(0.0, command)], duration_s, options)

@@ -1,0 +1,98 @@
+"""step_info on analytic signals (no simulation)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from amr_twin.metrics import step_info
+
+T = np.linspace(0.0, 10.0, 100_001)  # 0.1 ms: interpolation error far below the tolerances
+
+
+def first_order(t, k=50.0, tau=0.4):
+    return k * (1.0 - np.exp(-t / tau))
+
+
+def second_order(t, zeta=0.3, wn=6.0):
+    wd = wn * math.sqrt(1 - zeta**2)
+    phi = math.acos(zeta)
+    return 1.0 - np.exp(-zeta * wn * t) / math.sqrt(1 - zeta**2) * np.sin(wd * t + phi)
+
+
+def test_first_order_times():
+    tau = 0.4
+    info = step_info(T, first_order(T, tau=tau), 50.0)
+    assert info.delay_s == pytest.approx(tau * math.log(2), abs=1e-3)
+    assert info.rise_s == pytest.approx(tau * math.log(9), abs=1e-3)
+    assert info.overshoot == 0.0 and info.overshoot_pct == 0.0
+    assert info.settling_band == pytest.approx(2.5)  # 5 % of the step by default
+    assert info.settling_s == pytest.approx(tau * math.log(20), abs=1e-3)
+    assert info.steady_error == pytest.approx(0.0, abs=1e-6)
+    assert info.oscillation == pytest.approx(0.0, abs=1e-9)
+
+
+def test_second_order_overshoot_and_peak():
+    zeta, wn = 0.3, 6.0
+    y = 80.0 * second_order(T, zeta, wn)
+    info = step_info(T, y, 80.0, settling_band=0.02 * 80.0)
+    expected_pct = 100 * math.exp(-zeta * math.pi / math.sqrt(1 - zeta**2))
+    assert info.overshoot_pct == pytest.approx(expected_pct, abs=1e-3)
+    assert info.overshoot == pytest.approx(0.8 * expected_pct, abs=1e-3)
+    assert info.peak_s == pytest.approx(math.pi / (wn * math.sqrt(1 - zeta**2)), abs=1e-3)
+    assert info.peak_value == pytest.approx(80.0 + info.overshoot)
+    # settling: last time |y - 80| > 1.6, found by brute force on the dense signal
+    last_out = T[np.nonzero(np.abs(y - 80.0) > 1.6)[0][-1]]
+    assert info.settling_s == pytest.approx(last_out, abs=1e-3)
+    assert info.oscillation > 2 * info.overshoot  # up and down at least once
+
+
+def test_oscillation_grows_as_damping_falls():
+    lightly = step_info(T, second_order(T, 0.15), 1.0).oscillation
+    damped = step_info(T, second_order(T, 0.5), 1.0).oscillation
+    assert lightly > damped > 0.0
+
+
+def test_sign_normalised_and_t0():
+    t0 = 2.0
+    y = np.where(T < t0, 0.0, -first_order(T - t0, k=91.67))
+    info = step_info(T, y, -91.67, t0_s=t0)
+    assert info.reference == 91.67
+    assert info.delay_s == pytest.approx(0.4 * math.log(2), abs=1e-3)
+    assert info.final_value > 0
+
+
+def test_sparse_samples_interpolate_from_rest():
+    # samples at 1, 2, 3 s of a signal that is at rest at t0 = 0: linear interpolation
+    t = np.array([1.0, 2.0, 3.0, 4.0])
+    y = np.array([40.0, 52.0, 50.0, 50.0])
+    info = step_info(t, y, 50.0, settling_band=1.0)
+    assert info.delay_s == pytest.approx(25.0 / 40.0)  # 0 -> 40 between 0 and 1 s
+    assert info.rise_s == pytest.approx((1.0 + 5.0 / 12.0) - 5.0 / 40.0)  # 45 between 1 and 2 s
+    assert info.peak_s == 2.0 and info.overshoot == pytest.approx(2.0)
+    # leaves the band at 2 s (52), back in at 51 between 2 and 3 s
+    assert info.settling_s == pytest.approx(2.5)
+    # window from t90 = 1.417 s (45): up 52 - 45, down 2: excess variation = 9 - 5 = 4
+    assert info.oscillation == pytest.approx(4.0)
+
+
+def test_never_reaching_gives_nan():
+    t = np.linspace(0, 5, 51)
+    info = step_info(t, 0.3 * np.ones_like(t) * np.minimum(t, 1.0), 1.0)
+    assert math.isnan(info.delay_s) and math.isnan(info.rise_s) and math.isnan(info.settling_s)
+    assert info.as_dict()["delay_s"] is None
+    assert info.steady_error == pytest.approx(-0.7)
+
+
+def test_steady_error_from_the_tail():
+    y = first_order(T, k=48.0)
+    info = step_info(T, y, 50.0, settling_band=4.0)
+    assert info.steady_error == pytest.approx(-2.0, abs=1e-3)
+    assert math.isfinite(info.settling_s)
+
+
+def test_bad_input():
+    with pytest.raises(ValueError):
+        step_info([0, 1], [0, 1], 0.0)
+    with pytest.raises(ValueError):
+        step_info([0, 1, 2], [0, 1], 1.0)

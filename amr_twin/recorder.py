@@ -53,6 +53,7 @@ class Recorder:
         self.every = max(1, int(twin.options.record_every_steps))
         self._t: list[np.ndarray] = []
         self._rows: list[np.ndarray] = []
+        self._pin_t: list[int] = []
         self._pins: list[np.ndarray] = []
         self._published: dict[int, list[tuple[float, float]]] = {0: [], 1: []}
         self._odom: list[tuple[float, float, float, float]] = []
@@ -77,25 +78,37 @@ class Recorder:
         return np.array([pins[0].pwm_counts, pins[1].pwm_counts, pins[0].direction, pins[1].direction,
                          _MODES[plant.mode[0]], _MODES[plant.mode[1]], plant.battery.terminal_v()])
 
+    def pins_changed(self, t_us: int) -> None:
+        """The plant was updated at physics time ``t_us``: keep the new pin levels."""
+        if self._pin_t and self._pin_t[-1] == t_us:
+            self._pins[-1] = self._pin_row()
+        else:
+            self._pin_t.append(t_us)
+            self._pins.append(self._pin_row())
+
     def sample(self) -> None:
         """Record the present state as one row (at the start of a run)."""
         d = self.twin.physics.data
-        self.extend(np.array([self.twin.t_phys_us]), d.sensordata[None, :LOOP_SENSOR_DIM].copy(), force=True)
+        self._t.append(np.array([self.twin.t_phys_us]))
+        self._rows.append(d.sensordata[None, :LOOP_SENSOR_DIM].copy())
 
-    def extend(self, t_us: np.ndarray, rows: np.ndarray, force: bool = False) -> None:
-        """Keep every ``every``-th step of a chunk (t_us: (n,), rows: (n, LOOP_SENSOR_DIM))."""
-        dt = self.twin.dt_us
-        keep = np.ones(len(t_us), bool) if force else (t_us // dt) % self.every == 0
-        if not keep.any():
-            return
-        self._t.append(t_us[keep])
-        self._rows.append(rows[keep])
-        self._pins.append(np.repeat(self._pin_row()[None], int(keep.sum()), axis=0))
+    def extend(self, t_us: np.ndarray, rows: np.ndarray) -> None:
+        """Keep the rows of a chunk that fall on the record grid (t_us: (n,), rows: (n, LOOP_SENSOR_DIM))."""
+        keep = (t_us // self.twin.dt_us) % self.every == 0
+        if keep.all():
+            self._t.append(t_us)
+            self._rows.append(rows)
+        elif keep.any():
+            self._t.append(t_us[keep])
+            self._rows.append(rows[keep])
 
     def series(self) -> RunSeries:
-        t = np.concatenate(self._t) * 1e-6
+        t_us = np.concatenate(self._t)
+        t = t_us * 1e-6
         rows = np.concatenate(self._rows)
-        pins = np.concatenate(self._pins)
+        # pins in force during the step that ends at each row: the last change before it
+        idx = np.searchsorted(np.array(self._pin_t), t_us, side="left") - 1
+        pins = np.array(self._pins)[np.clip(idx, 0, None)]
         pose = np.column_stack([rows[:, 4], rows[:, 5], yaw_from_quat(rows[:, 7:11])])
         published = {w: np.array(v, float).reshape(-1, 2) for w, v in self._published.items()}
         return RunSeries(

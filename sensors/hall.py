@@ -11,6 +11,8 @@ the physics step times) into the SC edges inside it, vectorised with numpy.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 SENSOR_PITCH_DEG = 12.0
@@ -92,12 +94,25 @@ class HallSensors:
         angle = np.asarray(angle_rad, dtype=float).reshape(len(t_us), self.n_wheels)
         count = self._lattice_index(angle)                 # (n+1, W, 3)
         self._count = count[-1].copy()
+        found = self._crossings(count)
+        if found is None:
+            return np.empty(0, np.int64), np.empty(0, np.int64)
+        step, wheel, theta = found
+        a0, a1 = angle[step, wheel], angle[step + 1, wheel]
+        frac = (theta - a0) / (a1 - a0)
+        return self._stamp(t_us, step, wheel, frac)
+
+    def _crossings(self, count: np.ndarray):
+        """Lattice crossings between consecutive rows of ``count`` (n+1, W, 3).
+
+        Returns ``(step, wheel, theta_rad)`` of every crossing, or None.
+        """
         n0, n1 = count[:-1], count[1:]                      # (n, W, 3)
         crossings = np.abs(n1 - n0).ravel()
         total = int(crossings.sum())
         if total == 0:
-            return np.empty(0, np.int64), np.empty(0, np.int64)
-        n_steps = len(t_us) - 1
+            return None
+        n_steps = len(count) - 1
         step, wheel, sensor = np.unravel_index(np.repeat(np.arange(crossings.size), crossings),
                                                (n_steps, self.n_wheels, N_SENSORS))
         first = np.repeat(np.cumsum(crossings) - crossings, crossings)
@@ -106,13 +121,99 @@ class HallSensors:
         forward = n1[step, wheel, sensor] > start
         lattice = np.where(forward, start + 1 + k, start - k)
         theta = self.offset_rad[wheel, sensor] + self.pitch_rad * lattice
-        a0, a1 = angle[step, wheel], angle[step + 1, wheel]
+        return step, wheel, theta
+
+    def _stamp(self, t_us: np.ndarray, step: np.ndarray, wheel: np.ndarray, frac: np.ndarray):
+        """Edge times from the fraction of each crossing's interval; sorted."""
         t0, t1 = t_us[step], t_us[step + 1]
-        frac = (theta - a0) / (a1 - a0)
         t_edge = t0 + frac * (t1 - t0)
+        total = len(t_edge)
         if self.jitter_us > 0.0:
             t_edge = t_edge + self._rng.normal(0.0, self.jitter_us, total)
         edge_t = np.clip(np.rint(t_edge).astype(np.int64), t_us[0] + 1, t_us[-1])
         edge_t = np.maximum(edge_t, t0 + 1) if self.jitter_us == 0.0 else edge_t
         order = np.argsort(edge_t, kind="stable")
         return edge_t[order], wheel[order].astype(np.int64)
+
+    def edges_hermite(self, t_us, angle_rad, speed_rad_s) -> tuple[np.ndarray, np.ndarray]:
+        """SC edges from sparse samples of angle and speed (cubic Hermite in between).
+
+        Same edges as :meth:`edges` on the densely interpolated trajectory, but each
+        crossing time is solved on the cubic directly (Newton), so the cost grows
+        with the number of edges, not of physics steps. Plain Python on purpose:
+        a chunk holds a few samples and a few edges, where numpy's per-call cost
+        dominates. Intervals where a wheel's speed changes sign (it may cross a
+        boundary twice) are first split into 8 sub-intervals.
+
+        Parameters
+        ----------
+        t_us : (n+1,) int64 sample times, microseconds.
+        angle_rad, speed_rad_s : (n+1, n_wheels) wheel angles (rad) and speeds (rad/s).
+        """
+        t_us = np.asarray(t_us, dtype=np.int64)
+        q = np.asarray(angle_rad, dtype=float).reshape(len(t_us), self.n_wheels)
+        v = np.asarray(speed_rad_s, dtype=float).reshape(len(t_us), self.n_wheels)
+        if (v[:-1] * v[1:] < 0).any():
+            t_us, q, v = _split(t_us, q, v, 8)
+        ts, qs, vs = t_us.tolist(), q.tolist(), v.tolist()
+        pitch, offsets = self.pitch_rad, self.offset_rad.tolist()
+        floor = math.floor
+        edge_t: list[float] = []
+        edge_w: list[int] = []
+        for w in range(self.n_wheels):
+            for k, off in enumerate(offsets[w]):
+                count = floor((qs[0][w] - off) / pitch)
+                for i in range(len(ts) - 1):
+                    q0, q1 = qs[i][w], qs[i + 1][w]
+                    c1 = floor((q1 - off) / pitch)
+                    if c1 == count:
+                        continue
+                    h = (ts[i + 1] - ts[i]) * 1e-6
+                    m0, m1 = vs[i][w] * h, vs[i + 1][w] * h
+                    step = 1 if c1 > count else -1
+                    for lattice in range(count + (step > 0), c1 + (step > 0), step):
+                        theta = off + pitch * lattice
+                        s = _solve_hermite(q0, q1, m0, m1, theta)
+                        edge_t.append(ts[i] + s * (ts[i + 1] - ts[i]))
+                        edge_w.append(w)
+                    count = c1
+                self._count[w, k] = count
+        if not edge_t:
+            return np.empty(0, np.int64), np.empty(0, np.int64)
+        t_edge = np.array(edge_t)
+        if self.jitter_us > 0.0:
+            t_edge = t_edge + self._rng.normal(0.0, self.jitter_us, len(t_edge))
+        out_t = np.clip(np.rint(t_edge).astype(np.int64), ts[0] + 1, ts[-1])
+        order = np.argsort(out_t, kind="stable")
+        return out_t[order], np.array(edge_w, np.int64)[order]
+
+
+def _solve_hermite(q0: float, q1: float, m0: float, m1: float, theta: float) -> float:
+    """Fraction s in [0, 1] where the Hermite cubic through (q0, m0), (q1, m1) equals theta."""
+    s = (theta - q0) / (q1 - q0) if q1 != q0 else 0.5
+    s = min(1.0, max(0.0, s))
+    for _ in range(4):
+        s2 = s * s
+        s3 = s2 * s
+        f = (2 * s3 - 3 * s2 + 1) * q0 + (s3 - 2 * s2 + s) * m0 + (3 * s2 - 2 * s3) * q1 + (s3 - s2) * m1 - theta
+        df = (6 * s2 - 6 * s) * (q0 - q1) + (3 * s2 - 4 * s + 1) * m0 + (3 * s2 - 2 * s) * m1
+        if abs(df) < 1e-12:
+            break
+        s = min(1.0, max(0.0, s - f / df))
+    return s
+
+
+def _split(t_us: np.ndarray, q: np.ndarray, v: np.ndarray, parts: int):
+    """Resample a Hermite trajectory with ``parts`` sub-intervals per interval."""
+    frac = np.arange(parts) / parts
+    t_new = (t_us[:-1, None] + frac * np.diff(t_us)[:, None]).ravel()
+    t_new = np.append(np.rint(t_new).astype(np.int64), t_us[-1])
+    i = np.clip(np.searchsorted(t_us, t_new, side="right") - 1, 0, len(t_us) - 2)
+    h = ((t_us[i + 1] - t_us[i]) * 1e-6)[:, None]
+    s = ((t_new - t_us[i]) * 1e-6)[:, None] / h
+    s2, s3 = s * s, s * s * s
+    q_new = ((2 * s3 - 3 * s2 + 1) * q[i] + (s3 - 2 * s2 + s) * h * v[i]
+             + (-2 * s3 + 3 * s2) * q[i + 1] + (s3 - s2) * h * v[i + 1])
+    v_new = ((6 * s2 - 6 * s) * q[i] / h + (3 * s2 - 4 * s + 1) * v[i]
+             + (-6 * s2 + 6 * s) * q[i + 1] / h + (3 * s2 - 2 * s) * v[i + 1])
+    return t_new, q_new, v_new

@@ -1,0 +1,52 @@
+"""The whole twin against bare physics, on the same scenario in the same run.
+
+Scenario: chapter 5 run 3 (linear 0.7 m/s, 16 s, faithful firmware). The twin
+figure is the wall time of :meth:`Twin.advance` (physics, plant, hall edges,
+firmware, rosserial, PC nodes, recorder). The bare figure steps the same model
+from the state the twin reached, for as many steps, with the actuation held, in
+one ``mj_step(m, d, n)`` call: the cost of the physics alone.
+"""
+
+from __future__ import annotations
+
+import time
+
+import mujoco
+
+from .config import TwinConfig
+from .loop import Twin, TwinOptions
+
+REPEATS = 3
+
+
+def _twin_once(cfg: TwinConfig, sim_s: float, firmware: str) -> tuple[float, Twin]:
+    twin = Twin(cfg, TwinOptions(firmware=firmware))
+    twin.client.linear(0.7)
+    t0 = time.perf_counter()
+    twin.advance(sim_s)
+    return time.perf_counter() - t0, twin
+
+
+def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
+                 firmware: str = "faithful") -> dict:
+    """``twin_s_per_sim_s``, ``bare_physics_s_per_sim_s`` (same scenario) and their ``ratio``.
+
+    Repeats are interleaved (twin, bare, twin, bare, ...) so that a disturbance of
+    the machine hits both; each figure is the best of its repeats.
+    """
+    twin_best = bare_best = float("inf")
+    for _ in range(REPEATS):
+        wall, twin = _twin_once(cfg, sim_s, firmware)
+        twin_best = min(twin_best, wall)
+        m, d = twin.physics.model, twin.physics.data
+        nstep = int(round(sim_s / m.opt.timestep))
+        t0 = time.perf_counter()
+        mujoco.mj_step(m, d, nstep)
+        bare_best = min(bare_best, time.perf_counter() - t0)
+    return {
+        "twin_scenario": "chapter 5 run 3: linear 0.7 m/s, 16 s, " + firmware,
+        "twin_s_per_sim_s": round(twin_best / sim_s, 5),
+        "bare_physics_s_per_sim_s": round(bare_best / sim_s, 5),
+        "ratio": round(twin_best / bare_best, 3),
+        "realtime_factor_twin": round(sim_s / twin_best, 1),
+    }

@@ -103,7 +103,7 @@ def model(
 @app.command()
 def bench(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
-    sim_s: float = typer.Option(5.0, help="Simulated seconds per measurement."),
+    sim_s: float = typer.Option(16.0, help="Simulated seconds per measurement."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Measure the cost of the physics (and of the whole twin) per simulated second."""

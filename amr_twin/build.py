@@ -150,6 +150,10 @@ def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         geom.condim = 3
         geom.name = f"wheel_{side}_collision"
         joint = spec.joint(f"wheel_{side}_joint")
+        # The URDF effort limit becomes a joint-level clamp of all actuator torque in
+        # MuJoCo; the driver's current limit is the actuator's forcerange instead, so
+        # that a shorted (braking) motor is not held to the driving limit.
+        joint.actfrclimited = 0
         joint.damping[0] = motor.damping_nm_s_rad
         joint.frictionloss = motor.friction_nm
         kt_over_r = motor.ke_v_s_rad / motor.resistance_ohm  # Kt = Ke in SI units

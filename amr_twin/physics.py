@@ -18,6 +18,10 @@ import numpy as np
 from .build import CASTERS, ROBOT_PREFIX, WHEELS
 
 
+BRAKE_TORQUE_MAX_NM = 500.0
+"""Torque bound of a braked wheel, N m (far above what the tyre can transmit)."""
+
+
 class DivergenceError(RuntimeError):
     """The simulation produced NaN/inf or MuJoCo warned; carries the sim time."""
 
@@ -59,6 +63,7 @@ class Physics:
         G = mujoco.mjtObj.mjOBJ_GEOM
         self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
         self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
+        self._drive_range = m.actuator_forcerange[self.actuator].copy()
         self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
         self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
         mujoco.mj_forward(m, self.data)
@@ -148,6 +153,9 @@ class Physics:
     def set_motor(self, wheel: int, mode: str, voltage_v: float = 0.0, brake_damping: float = 0.0) -> None:
         """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``."""
         m, a = self.model, self.actuator[wheel]
+        # the current limit is the driver's; shorted phases (brake) are not limited by it
+        m.actuator_forcerange[a] = self._drive_range[wheel] if mode != "brake" else (-BRAKE_TORQUE_MAX_NM,
+                                                                                     BRAKE_TORQUE_MAX_NM)
         if mode == "drive":
             m.actuator_gainprm[a, 0] = self._drive_gain[wheel]
             m.actuator_biasprm[a, 2] = self._drive_bias[wheel]

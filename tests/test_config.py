@@ -80,3 +80,10 @@ def test_battery_voltages_must_be_ordered():
     with pytest.raises(ConfigError, match="battery"):
         load_config(sets=["battery.v_full_v=35"])
     assert math.isfinite(load_config().battery.v_full_v)
+
+
+def test_model_readme_lists_every_parameter():
+    from amr_twin.paths import MODEL_DIR
+    readme = (MODEL_DIR / "README.md").read_text()
+    missing = [key for key, *_ in parameter_table() if f"`{key}`" not in readme]
+    assert not missing, f"models/amr/README.md lacks {missing}"

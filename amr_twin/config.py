@@ -149,6 +149,47 @@ class BatteryCfg(_Section):
         return self
 
 
+class ImuCfg(_Section):
+    """Adafruit 9-DOF IMU: LSM303DLHC accelerometer/magnetometer + L3GD20 gyroscope (SI units)."""
+
+    rate_hz: float = P(unit="Hz", ge=1.0, le=1000.0)
+    accel_range_m_s2: float = P(unit="m/s^2", gt=0.0, le=200.0)
+    accel_resolution_m_s2: float = P(unit="m/s^2", ge=0.0, le=1.0)
+    accel_noise_density_m_s2_sqrt_hz: float = P(unit="m/s^2/sqrt(Hz)", ge=0.0, le=0.1)
+    accel_bias_sigma_m_s2: float = P(unit="m/s^2", ge=0.0, le=5.0)
+    accel_bias_walk_m_s2_sqrt_s: float = P(unit="m/s^2/sqrt(s)", ge=0.0, le=0.1)
+    accel_scale_sigma: float = P(unit="1", ge=0.0, le=0.1)
+    gyro_range_rad_s: float = P(unit="rad/s", gt=0.0, le=100.0)
+    gyro_resolution_rad_s: float = P(unit="rad/s", ge=0.0, le=0.1)
+    gyro_noise_density_rad_s_sqrt_hz: float = P(unit="rad/s/sqrt(Hz)", ge=0.0, le=0.1)
+    gyro_bias_sigma_rad_s: float = P(unit="rad/s", ge=0.0, le=1.0)
+    gyro_bias_walk_rad_s_sqrt_s: float = P(unit="rad/s/sqrt(s)", ge=0.0, le=0.01)
+    gyro_scale_sigma: float = P(unit="1", ge=0.0, le=0.1)
+    mag_range_t: float = P(unit="T", gt=0.0, le=1e-2)
+    mag_resolution_xy_t: float = P(unit="T", ge=0.0, le=1e-5)
+    mag_resolution_z_t: float = P(unit="T", ge=0.0, le=1e-5)
+    mag_noise_t: float = P(unit="T", ge=0.0, le=1e-4)
+    mag_bias_sigma_t: float = P(unit="T", ge=0.0, le=1e-3)
+
+
+class LidarCfg(_Section):
+    """Slamtec RPLIDAR A1 (A1M8) 2D scanner."""
+
+    scan_rate_hz: float = P(unit="Hz", ge=1.0, le=10.0)
+    sample_rate_hz: int = P(unit="Hz", ge=2000, le=8000)
+    range_min_m: float = P(unit="m", gt=0.0, le=1.0)
+    range_max_m: float = P(unit="m", gt=1.0, le=40.0)
+    range_noise_frac: float = P(unit="1", ge=0.0, le=0.1)
+    range_noise_floor_m: float = P(unit="m", ge=0.0, le=0.1)
+    range_resolution_m: float = P(unit="m", ge=0.0, le=0.01)
+
+    @model_validator(mode="after")
+    def _sample_rate_is_a_mode(self) -> "LidarCfg":
+        if self.sample_rate_hz not in (2000, 4000, 8000):
+            raise ValueError("lidar.sample_rate_hz: must be 2000, 4000 or 8000 (A1 standard/express/boost)")
+        return self
+
+
 class TwinConfig(_Section):
     """Every physical parameter of the twin, validated and frozen."""
 
@@ -163,6 +204,8 @@ class TwinConfig(_Section):
     motor_right: MotorCfg
     driver: DriverCfg
     battery: BatteryCfg
+    imu: ImuCfg
+    lidar: LidarCfg
 
     @model_validator(mode="after")
     def _geometry_consistent(self) -> "TwinConfig":

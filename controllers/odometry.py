@@ -2,26 +2,46 @@
 
 The firmware publishes each wheel's speed in RPM as measured on the driver's SC
 output, which has no direction (§3.2.3). The sign is taken from the last
-``wheel_Command`` motion code of that wheel (1 forward, -1 backward, 0 brake:
-speed taken as 0). With ``signed_input=True`` the wheel topics are read as
-signed RPM and ``wheel_Command`` is ignored; :meth:`WheelOdometry.set_wheel_speeds_rpm`
+``wheel_Command`` motion code of that wheel (1 forward, -1 backward); under a
+brake (0) the wheel keeps its last direction and its speed falls linearly to 0
+over ``brake_stop_s`` (a braked hub wheel stops in about 0.1 s from 30 RPM). With ``signed_input=True`` the wheel topics are read
+as signed RPM and ``wheel_Command`` is ignored; :meth:`WheelOdometry.set_wheel_speeds_rpm`
 feeds signed speeds directly.
 
-Wheel speeds are held constant between messages and the pose is integrated
-exactly along the arc they define (no Euler error), each time a speed changes and
-at each publication. ``odom`` (frame ``odom``, child ``base_link``, REP-105) and
-the ``odom -> base_link`` transform are published at ``publish_rate_hz`` on clock
-events.
+What a speed sample means (``speed_samples``)
+---------------------------------------------
+``"window"`` (default)
+    A sample of ``rpm`` received at ``t`` is the *mean* speed over its
+    measurement window ``[t - revolutions_per_sample * 60 / rpm, t]``: the thesis
+    firmware times exactly one revolution (90 SC changes) and publishes at its
+    end. The window is clipped at the previous knowledge of that wheel (its
+    previous sample, a brake, the node start), so a firmware that publishes
+    faster than one revolution (the improved one, 10 Hz) gets the mean over the
+    time since its previous sample. Between windows the speed is interpolated
+    linearly; after the newest one it is held. The pose is re-integrated from
+    the last instant known for both wheels whenever a sample arrives, so a
+    sample corrects the past it describes (the published pose is a causal
+    estimate, the stored one converges to the smoothed one).
+``"hold"``
+    Zero-order hold from the receipt of each sample (what a naive node does).
+    With one sample per revolution it lags: the first sample of a start arrives
+    about a revolution after the wheel started.
 
-Known limits, inherited from the hardware: the firmware publishes a speed only
-after a full wheel revolution, so a wheel that stops without a brake command
-keeps its last speed; a motion sign change is applied at command time while the
-wheel is still spinning the old way.
+The estimate of each wheel is a list of knots (time, signed RPM), linear between
+knots and held after the last. The pose is integrated exactly along arcs where
+both speeds are constant and with arcs of at most ``max_substep_s`` at the mean
+speeds where one varies. ``odom`` (frame ``odom``, child ``base_link``, REP-105)
+and the ``odom -> base_link`` transform are published at ``publish_rate_hz``.
+
+Known limits, inherited from the hardware: a wheel that stops without a brake
+command keeps its last speed until a new sample; a motion sign change is applied
+at command time while the wheel is still spinning the old way.
 """
 
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from typing import Sequence
 
 import numpy as np
@@ -38,12 +58,76 @@ WHEEL_SEPARATION_M = 0.48
 """``L`` of listing 4.2."""
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
+SPEED_SAMPLES = ("window", "hold")
 
 
 def _covariance(diagonal: Sequence[float]) -> np.ndarray:
     if len(diagonal) != 6:
         raise ValueError(f"a covariance diagonal has 6 values, got {len(diagonal)}")
     return np.diag(np.asarray(diagonal, dtype=np.float64)).ravel()
+
+
+class SpeedProfile:
+    """Estimated signed speed of one wheel: knots (t_us, rpm), linear between, held after."""
+
+    def __init__(self, t_us: int, rpm: float = 0.0):
+        self.t_us: list[int] = [int(t_us)]
+        self.rpm: list[float] = [float(rpm)]
+
+    @property
+    def last_us(self) -> int:
+        return self.t_us[-1]
+
+    @property
+    def last_rpm(self) -> float:
+        return self.rpm[-1]
+
+    def known_us(self, t_us: int) -> int:
+        """Time of the last knot at or before ``t_us``."""
+        return self.t_us[max(bisect_right(self.t_us, t_us) - 1, 0)]
+
+    def step(self, t_us: int, rpm: float) -> None:
+        """The speed becomes ``rpm`` at ``t_us`` (held value until then)."""
+        t_us = max(int(t_us), self.last_us)
+        self.t_us += [t_us, t_us]
+        self.rpm += [self.last_rpm, float(rpm)]
+
+    def window(self, t0_us: int, t1_us: int, rpm: float) -> None:
+        """Mean speed ``rpm`` over ``[t0_us, t1_us]`` (t0 clipped at the last knot)."""
+        t1_us = max(int(t1_us), self.last_us)
+        t0_us = min(max(int(t0_us), self.last_us), t1_us)
+        self.t_us += [t0_us, t1_us]
+        self.rpm += [float(rpm), float(rpm)]
+
+    def segment(self, t_us: int) -> tuple[int, float, int, float]:
+        """The linear piece (t0, r0, t1, r1) in force just after ``t_us``."""
+        i = max(bisect_right(self.t_us, t_us) - 1, 0)
+        if i + 1 >= len(self.t_us):
+            return self.t_us[i], self.rpm[i], self.t_us[i], self.rpm[i]
+        return self.t_us[i], self.rpm[i], self.t_us[i + 1], self.rpm[i + 1]
+
+    def at(self, t_us: float, seg: tuple[int, float, int, float]) -> float:
+        """Speed at ``t_us`` on the piece ``seg``, RPM."""
+        t0, r0, t1, r1 = seg
+        if t1 <= t0:
+            return r0
+        return r0 + (r1 - r0) * (t_us - t0) / (t1 - t0)
+
+    def cut(self, t_us: int) -> None:
+        """Forget the knots after ``t_us`` (assumptions about the future)."""
+        if self.last_us <= t_us:
+            return
+        i = bisect_right(self.t_us, t_us)
+        value = self.at(t_us, self.segment(t_us))
+        self.t_us = self.t_us[:i] + [int(t_us)]
+        self.rpm = self.rpm[:i] + [value]
+
+    def trim(self, t_us: int) -> None:
+        """Forget the knots before ``t_us``, keeping the speed in force from it."""
+        i = max(bisect_right(self.t_us, t_us) - 1, 0)
+        value = self.at(t_us, self.segment(t_us))
+        self.t_us = [int(t_us)] + self.t_us[i + 1:]
+        self.rpm = [value] + self.rpm[i + 1:]
 
 
 class WheelOdometry:
@@ -67,6 +151,16 @@ class WheelOdometry:
         Read the wheel topics as signed RPM (a firmware that knows the sign).
     publish_tf : bool
         Also broadcast ``odom -> base_link``.
+    speed_samples : {"window", "hold"}
+        Meaning of a speed sample (module docstring).
+    revolutions_per_sample : float
+        Wheel revolutions one sample measures in ``"window"`` mode (thesis: 1).
+    sample_latency_s : float
+        Delay from the end of a measurement to its receipt, s (rosserial: ~1.4 ms).
+    max_substep_s : float
+        Longest arc while a speed varies, s.
+    brake_stop_s : float
+        Time a braked wheel takes to stop, s (the speed falls linearly).
     """
 
     def __init__(self, bus: Bus, clock: VirtualClock, wheel_radius_m: float = WHEEL_RADIUS_M,
@@ -77,9 +171,14 @@ class WheelOdometry:
                  pose_covariance_diagonal: Sequence[float] = DEFAULT_COVARIANCE_DIAGONAL,
                  twist_covariance_diagonal: Sequence[float] = DEFAULT_COVARIANCE_DIAGONAL,
                  signed_input: bool = False, publish_tf: bool = True,
-                 frame_id: str = ODOM_FRAME, child_frame_id: str = BASE_FRAME):
+                 frame_id: str = ODOM_FRAME, child_frame_id: str = BASE_FRAME,
+                 speed_samples: str = "window", revolutions_per_sample: float = 1.0,
+                 sample_latency_s: float = 0.0, max_substep_s: float = 0.01,
+                 brake_stop_s: float = 0.1):
         if publish_rate_hz <= 0:
             raise ValueError(f"publish_rate_hz must be positive, got {publish_rate_hz}")
+        if speed_samples not in SPEED_SAMPLES:
+            raise ValueError(f"speed_samples: {speed_samples!r} is not one of {SPEED_SAMPLES}")
         self.bus, self.clock = bus, clock
         radius_m = wheel_radius_m * wheel_radius_multiplier
         self.left_radius_m = radius_m * left_radius_multiplier
@@ -90,12 +189,16 @@ class WheelOdometry:
         self.twist_covariance = _covariance(twist_covariance_diagonal)
         self.signed_input, self.publish_tf = signed_input, publish_tf
         self.frame_id, self.child_frame_id = frame_id, child_frame_id
+        self.speed_samples = speed_samples
+        self.revolutions_per_sample = float(revolutions_per_sample)
+        self.sample_latency_us = int(round(sample_latency_s * 1e6))
+        self.max_substep_us = max(1, int(round(max_substep_s * 1e6)))
+        self.brake_stop_us = max(0, int(round(brake_stop_s * 1e6)))
+        self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
         self.x_m = self.y_m = self.yaw_rad = 0.0
-        self._rpm_magnitude = [0.0, 0.0]
         self._motion = [0, 0]
-        self._signed_rpm = [0.0, 0.0]
-        self._last_us = clock.now_us
         self._seq = 0
+        self._restart(clock.now_us, (0.0, 0.0, 0.0), (0.0, 0.0))
         self._pub = bus.advertise("odom", Odometry)
         self._subs = [bus.subscribe("wheel0_Vel", lambda m: self._on_speed(0, m)),
                       bus.subscribe("wheel1_Vel", lambda m: self._on_speed(1, m))]
@@ -103,59 +206,125 @@ class WheelOdometry:
             self._subs.append(bus.subscribe("wheel_Command", self._on_command))
         self._timer = clock.schedule_in(self.period_us, self._on_timer)
 
+    def _restart(self, t_us: int, pose: tuple[float, float, float], rpm: Sequence[float]) -> None:
+        self._profiles = [SpeedProfile(t_us, rpm[0]), SpeedProfile(t_us, rpm[1])]
+        self._anchor = (t_us, *pose)  # final: no sample can change the pose before it
+        self._cache = self._anchor  # pose at the newest knot of either wheel
+        self._dirty = False
+
     # -- inputs -----------------------------------------------------------------
     def _on_speed(self, wheel: int, msg: Float64) -> None:
         if self.signed_input:
-            speeds = list(self._signed_rpm)
-            speeds[wheel] = msg.data
-            self.set_wheel_speeds_rpm(*speeds)
+            rpm = float(msg.data)
         else:
-            self._rpm_magnitude[wheel] = abs(msg.data)
-            self._apply_signs()
+            rpm = self._direction[wheel] * abs(float(msg.data))
+        now = self.clock.now_us
+        profile = self._profiles[wheel]
+        known_us = profile.known_us(now)
+        if self.speed_samples == "hold":
+            profile.cut(now)  # a measurement supersedes an assumed brake ramp
+            profile.step(now, rpm)
+        else:
+            t1 = now - self.sample_latency_us
+            length_us = (self.revolutions_per_sample * 60e6 / abs(rpm)) if rpm else 1e15
+            profile.cut(max(t1 - length_us, known_us))
+            profile.window(t1 - length_us, t1, rpm)
+        self._dirty = True
+        self.update()
 
     def _on_command(self, msg: Float64MultiArray) -> None:
-        self._motion = [int(msg.data[0]), int(msg.data[2])]
-        self._apply_signs()
-
-    def _apply_signs(self) -> None:
-        rpm = [float(np.sign(m)) * s for m, s in zip(self._motion, self._rpm_magnitude)]
-        self.set_wheel_speeds_rpm(*rpm)
+        now = self.clock.now_us
+        for wheel, motion in enumerate((int(msg.data[0]), int(msg.data[2]))):
+            if motion == self._motion[wheel]:
+                continue
+            self._motion[wheel] = motion
+            profile = self._profiles[wheel]
+            profile.cut(now)
+            if motion == 0:
+                profile.step(now, profile.last_rpm)
+                profile.window(now + self.brake_stop_us, now + self.brake_stop_us, 0.0)
+            else:
+                self._direction[wheel] = 1 if motion > 0 else -1
+                profile.step(now, self._direction[wheel] * abs(profile.last_rpm))
+            self._dirty = True
+        for profile in self._profiles:
+            if profile.last_rpm == 0.0 and profile.last_us < now:
+                profile.step(now, 0.0)  # at rest until this command: no motion before it
+                self._dirty = True
+        self.update()
 
     def set_wheel_speeds_rpm(self, left_rpm: float, right_rpm: float) -> None:
         """Signed wheel speeds from now on (forward positive), RPM."""
+        now = self.clock.now_us
+        for profile, rpm in zip(self._profiles, (left_rpm, right_rpm)):
+            profile.step(now, rpm)
+        self._dirty = True
         self.update()
-        self._signed_rpm = [float(left_rpm), float(right_rpm)]
 
     # -- state ------------------------------------------------------------------
-    def body_velocity(self) -> tuple[float, float]:
-        """Current forward speed (m/s) and yaw rate (rad/s, CCW +) of ``base_link``."""
-        v_left = self._signed_rpm[0] * 2.0 * math.pi / 60.0 * self.left_radius_m
-        v_right = self._signed_rpm[1] * 2.0 * math.pi / 60.0 * self.right_radius_m
+    def _body(self, left_rpm: float, right_rpm: float) -> tuple[float, float]:
+        v_left = left_rpm * 2.0 * math.pi / 60.0 * self.left_radius_m
+        v_right = right_rpm * 2.0 * math.pi / 60.0 * self.right_radius_m
         return 0.5 * (v_left + v_right), (v_right - v_left) / self.separation_m
 
+    def body_velocity(self) -> tuple[float, float]:
+        """Current forward speed (m/s) and yaw rate (rad/s, CCW +) of ``base_link``."""
+        now = self.clock.now_us
+        return self._body(*(p.at(now, p.segment(now)) for p in self._profiles))
+
+    @staticmethod
+    def _arc(pose: tuple[float, float, float], v_m_s: float, w_rad_s: float, dt_s: float):
+        x, y, yaw0 = pose
+        dyaw = w_rad_s * dt_s
+        if abs(dyaw) < 1e-9:
+            mid = yaw0 + 0.5 * dyaw
+            return x + v_m_s * dt_s * math.cos(mid), y + v_m_s * dt_s * math.sin(mid), yaw0 + dyaw
+        radius_m = v_m_s / w_rad_s
+        return (x + radius_m * (math.sin(yaw0 + dyaw) - math.sin(yaw0)),
+                y - radius_m * (math.cos(yaw0 + dyaw) - math.cos(yaw0)), yaw0 + dyaw)
+
+    def _integrate(self, start: tuple, t_end_us: int) -> tuple:
+        """Pose (t_us, x, y, yaw) at ``t_end_us`` from ``start`` along the speed profiles."""
+        t, pose = start[0], start[1:]
+        knots = sorted({k for p in self._profiles for k in p.t_us if t < k < t_end_us})
+        for t_next in knots + [t_end_us]:
+            if t_next <= t:
+                continue
+            segs = [p.segment(t) for p in self._profiles]
+            ends = [p.at(t_next, s) for p, s in zip(self._profiles, segs)]
+            starts = [p.at(t, s) for p, s in zip(self._profiles, segs)]
+            n = 1 if starts == ends else -(-(t_next - t) // self.max_substep_us)
+            dt_us = (t_next - t) / n
+            for k in range(n):
+                mid = t + (k + 0.5) * dt_us
+                rpm = [p.at(mid, s) for p, s in zip(self._profiles, segs)]
+                pose = self._arc(pose, *self._body(*rpm), dt_us * 1e-6)
+            t = t_next
+        return (t_end_us, *pose)
+
     def update(self) -> None:
-        """Integrate the pose from the last update to ``clock.now_us`` along the arc."""
-        dt_s = (self.clock.now_us - self._last_us) * 1e-6
-        self._last_us = self.clock.now_us
-        if dt_s <= 0.0:
-            return
-        v_m_s, w_rad_s = self.body_velocity()
-        dyaw_rad = w_rad_s * dt_s
-        yaw0 = self.yaw_rad
-        if abs(dyaw_rad) < 1e-9:
-            mid = yaw0 + 0.5 * dyaw_rad
-            self.x_m += v_m_s * dt_s * math.cos(mid)
-            self.y_m += v_m_s * dt_s * math.sin(mid)
-        else:
-            radius_m = v_m_s / w_rad_s
-            self.x_m += radius_m * (math.sin(yaw0 + dyaw_rad) - math.sin(yaw0))
-            self.y_m -= radius_m * (math.cos(yaw0 + dyaw_rad) - math.cos(yaw0))
-        self.yaw_rad = math.atan2(math.sin(yaw0 + dyaw_rad), math.cos(yaw0 + dyaw_rad))
+        """Bring the pose up to ``clock.now_us`` (re-integrating after new samples)."""
+        now = self.clock.now_us
+        if self._dirty:
+            # final up to the last knot at or before now of each wheel: later samples are
+            # clipped there (knots after now are assumptions, e.g. a brake ramp)
+            horizon = min(p.known_us(now) for p in self._profiles)
+            if horizon > self._anchor[0]:
+                self._anchor = self._integrate(self._anchor, horizon)
+                for p in self._profiles:
+                    p.trim(horizon)
+            newest = min(max(p.last_us for p in self._profiles), now)
+            self._cache = self._integrate(self._anchor, max(newest, self._anchor[0]))
+            self._dirty = False
+        _, *pose = self._integrate(self._cache, now) if now > self._cache[0] else self._cache
+        self.x_m, self.y_m = pose[0], pose[1]
+        self.yaw_rad = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
 
     def reset(self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0) -> None:
-        """Set the pose in ``odom``."""
+        """Set the pose in ``odom`` (the speeds in force are kept)."""
+        rpm = [p.last_rpm for p in self._profiles]
+        self._restart(self.clock.now_us, (float(x_m), float(y_m), float(yaw_rad)), rpm)
         self.update()
-        self.x_m, self.y_m, self.yaw_rad = float(x_m), float(y_m), float(yaw_rad)
 
     # -- output -----------------------------------------------------------------
     def _on_timer(self) -> None:

@@ -1,4 +1,5 @@
-"""Wheel odometry: exact arcs, motion signs from wheel_Command, signed input, rate, tf."""
+"""Wheel odometry: exact arcs, motion signs from wheel_Command, signed input, rate, tf,
+measurement windows of one revolution, brake ramp."""
 
 import math
 
@@ -56,7 +57,7 @@ def test_constant_arc_matches_the_analytic_pose(rig):
 
 def test_arc_with_speed_changes_between_publications(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, publish_rate_hz=7.0)
+    odo = WheelOdometry(bus, clock, publish_rate_hz=7.0, speed_samples="hold")
     _firmware(bus, 1, 60.8, 1, 99.2)
     clock.run_until(370_123)  # not a publication instant
     _firmware(bus, 1, 0.5 * RPM_PER_M_S, 1, 0.5 * RPM_PER_M_S)  # then straight at 0.5 m/s
@@ -81,14 +82,18 @@ def test_clockwise_about_icc_right_and_backward(rig):
     assert (odo.x_m, odo.y_m, odo.yaw_rad) == pytest.approx((-1.2, 0.0, 0.0), abs=1e-9)
 
 
-def test_brake_command_zeroes_a_stale_speed(rig):
+def test_brake_command_zeroes_a_stale_speed_after_the_brake_ramp(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock)
+    odo = WheelOdometry(bus, clock, brake_stop_s=0.1)
     _firmware(bus, 1, RPM_PER_M_S, 1, RPM_PER_M_S)
     clock.run_until(1_000_000)
     bus.publish("wheel_Command", Float64MultiArray(data=[0.0, 0.0, 0.0, 0.0]))
+    clock.run_until(1_050_000)
+    odo.update()
+    assert odo.x_m == pytest.approx(1.0 + 0.05 * 0.75)  # half-way down the linear ramp
+    assert odo.body_velocity()[0] == pytest.approx(0.5)
     clock.run_until(3_000_000)  # the firmware published nothing new: the speed is stale
-    assert odo.x_m == pytest.approx(1.0)
+    assert odo.x_m == pytest.approx(1.0 + 0.5 * 0.1)
 
 
 def test_signed_input(rig):
@@ -136,3 +141,52 @@ def test_shutdown_stops_publishing(rig):
     odo.shutdown()
     clock.run_until(1_000_000)
     assert len(odom_msgs) == 5
+
+
+def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
+    """Faithful firmware: one sample per revolution, stamped at its end."""
+    clock, bus, odom_msgs = rig
+    odo = WheelOdometry(bus, clock)
+    clock.run_until(1_000_000)  # at rest
+    bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 60.0, 1.0, 60.0]))
+    clock.run_until(1_200_000)
+    assert odo.x_m == 0.0  # nothing measured yet
+    clock.run_until(2_500_000)  # one revolution (1 s at 60 RPM) ended now
+    bus.publish("wheel0_Vel", Float64(60.0))
+    bus.publish("wheel1_Vel", Float64(60.0))
+    circumference_m = 2 * math.pi * 0.125
+    # gap 1.0-1.5 s interpolated 0 -> 60 RPM, then the window 1.5-2.5 s at 60 RPM
+    assert odo.x_m == pytest.approx(1.25 * circumference_m, rel=1e-9)
+    clock.run_until(3_000_000)  # held after the newest window
+    assert odo.x_m == pytest.approx(1.75 * circumference_m, rel=1e-9)
+    assert odom_msgs[-1].pose.pose.position.x == pytest.approx(odo.x_m)
+    hold = WheelOdometry(bus, clock, speed_samples="hold")
+    assert hold.speed_samples == "hold"
+
+
+def test_windows_are_clipped_at_the_previous_sample(rig):
+    """Improved firmware: samples faster than a revolution cover the time since the previous."""
+    clock, bus, _ = rig
+    odo = WheelOdometry(bus, clock)
+    bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 30.0, -1.0, 30.0]))
+    for k in range(1, 11):
+        clock.run_until(k * 100_000)
+        bus.publish("wheel0_Vel", Float64(30.0))
+        bus.publish("wheel1_Vel", Float64(30.0))
+    yaw_rate = 2 * (30 * 2 * math.pi / 60 * 0.125) / 0.48
+    assert odo.yaw_rad == pytest.approx(-yaw_rate * 1.0, rel=1e-9)
+    with pytest.raises(ValueError):
+        WheelOdometry(bus, clock, speed_samples="guess")
+
+
+def test_a_sample_supersedes_the_assumed_brake_ramp(rig):
+    clock, bus, _ = rig
+    odo = WheelOdometry(bus, clock, brake_stop_s=0.5, signed_input=False)
+    _firmware(bus, 1, RPM_PER_M_S, 1, RPM_PER_M_S)
+    clock.run_until(1_000_000)
+    bus.publish("wheel_Command", Float64MultiArray(data=[0.0, 0.0, 0.0, 0.0]))
+    clock.run_until(1_100_000)
+    bus.publish("wheel0_Vel", Float64(0.0))  # measured: stopped since the brake
+    bus.publish("wheel1_Vel", Float64(0.0))
+    clock.run_until(2_000_000)
+    assert odo.x_m == pytest.approx(1.0)

@@ -118,6 +118,9 @@ def bench(
             typer.echo(f"{key:32s} {value}")
 
 
+from .cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
+
+
 def main() -> None:  # pragma: no cover - console entry
     app()
 

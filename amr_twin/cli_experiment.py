@@ -1,0 +1,126 @@
+"""``amr-twin experiment chapter5`` and ``amr-twin sweep payload`` (typer sub-apps).
+
+Both simulate first and write afterwards, every file through a temporary file and a
+rename: an interrupted command leaves no half-written output (the sweep keeps the
+per-point files already finished, and a rerun only simulates the missing ones).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+FIRMWARES = ("faithful", "improved")
+
+
+def _check_common(jobs: int, firmware: str, fail) -> None:
+    if jobs < 1:
+        fail(f"--jobs {jobs}: must be >= 1")
+    if firmware not in FIRMWARES:
+        fail(f"--firmware {firmware!r}: must be one of {', '.join(FIRMWARES)}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``experiment`` and ``sweep`` command groups to ``app``."""
+    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+
+    experiment = typer.Typer(no_args_is_help=True, help="Reproduce the thesis experiments.")
+    sweep = typer.Typer(no_args_is_help=True, help="Parameter sweeps over many simulations.")
+    app.add_typer(experiment, name="experiment")
+    app.add_typer(sweep, name="sweep")
+
+    @experiment.command("chapter5")
+    def chapter5_cmd(
+        out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, run<N>.png."),
+        jobs: int = typer.Option(1, "--jobs", help="Worker processes."),
+        firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
+        runs: Optional[str] = typer.Option(None, "--runs", help="Run numbers to do, e.g. 1,3 (default all)."),
+        duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Override every run's duration, s."),
+        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    ) -> None:
+        """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time."""
+        from .experiments import chapter5
+
+        _check_common(jobs, firmware, fail)
+        if duration_s is not None and not (duration_s > 0 and duration_s < 1e4):
+            fail(f"--duration-s {duration_s}: must be in (0, 10000) s")
+        try:
+            numbers = None if runs is None else [int(v) for v in runs.split(",")]
+        except ValueError:
+            fail(f"--runs {runs!r}: expected run numbers 1..8 separated by commas")
+        if numbers is not None and not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
+            fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
+        cfg = _config(config, params, set_)
+
+        def work():
+            results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
+                                   progress=progress)
+            chapter5.plot(results, out)
+            return chapter5.report(results, out)
+
+        data = _guard(work)
+        for r in data["runs"]:
+            for wheel, w in r["wheels"].items():
+                verdicts = " ".join(f"{k}={'ok' if c['verdict'] == 'pass' else 'MISS'}" for k, c in w["checks"].items())
+                typer.echo(f"run {r['run']} {wheel:5s} {w['reference_rpm']:8.2f} RPM  {verdicts}")
+        s = data["summary"]
+        typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
+        typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
+                   f"(jobs {jobs}, firmware {firmware})")
+
+    @sweep.command("payload")
+    def payload_cmd(
+        out: Path = typer.Option(..., "--out", help="Output folder: runs/, sweep.csv, summary.md/json, PNGs."),
+        masses: str = typer.Option("0:60:5", "--masses", help="START:STOP:STEP or M1,M2,... kg."),
+        positions: str = typer.Option("center,front,rear,left,right", "--positions",
+                                      help="Named positions (box flush with the deck edges) or X:Y in metres."),
+        commands: str = typer.Option("linear:0.7,angular:60:-1", "--commands",
+                                     help="linear:V, angular:DEG_S:ICC_M, motor:left|right:V (comma separated)."),
+        duration_s: float = typer.Option(8.0, "--duration-s", help="Simulated seconds per point."),
+        jobs: int = typer.Option(1, "--jobs", help="Worker processes."),
+        firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
+        executor: str = typer.Option("local", "--executor", help="local (process pool) or dask."),
+        scheduler: Optional[str] = typer.Option(None, "--scheduler", help="dask scheduler address."),
+        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    ) -> None:
+        """Sweep payload mass x position x command; resume by skipping the points already done."""
+        from .experiments import payload_sweep, payload_sweep_report
+
+        _check_common(jobs, firmware, fail)
+        if executor == "dask":
+            fail("--executor dask: not available in this build (dask is not installed); use --executor local")
+        if executor != "local":
+            fail(f"--executor {executor!r}: must be local or dask")
+        if not (duration_s > 0 and duration_s < 1e4):
+            fail(f"--duration-s {duration_s}: must be in (0, 10000) s")
+        cfg = _config(config, params, set_)
+        try:
+            mass_list = payload_sweep.parse_masses(masses)
+            position_list = [p.strip() for p in positions.split(",") if p.strip()]
+            for p in position_list:
+                payload_sweep.position_xy_m(cfg, p)
+            command_list = [c.strip() for c in commands.split(",") if c.strip()]
+            for c in command_list:
+                payload_sweep.parse_command(c)
+        except ValueError as exc:
+            fail(str(exc))
+        if not position_list or not command_list:
+            fail("--positions and --commands must name at least one item each")
+
+        def work():
+            results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
+                                        jobs=jobs, firmware=firmware, progress=progress)
+            payload_sweep_report.plot(results, out)
+            return results, payload_sweep_report.report(results, out)
+
+        results, summary = _guard(work)
+        for position, s in summary.items():
+            typer.echo(f"{position:20s} highest safe {s['highest_safe_kg']} kg"
+                       + (f"  (unsafe at {s['first_unsafe_kg']} kg: {s['reason']})" if s["first_unsafe_kg"] is not None
+                          else ""))
+        typer.echo(f"{len(results['rows'])} points: {results['simulated']} simulated, {results['reused']} reused; "
+                   f"wall time {results['wall_s']:.2f} s (jobs {jobs}); wrote {out}/sweep.csv, summary.md")

@@ -1,0 +1,269 @@
+"""The eight step experiments of thesis chapter 5, measured and judged against the thesis.
+
+:func:`run` simulates the runs (§5.1.1-5.1.4), :func:`plot` draws one figure per run
+as in chapter 5, :func:`report` writes ``metrics.json`` and ``report.md``.
+
+The metrics (:mod:`amr_twin.metrics`) are judged on the **published** samples
+(``wheel0_Vel``/``wheel1_Vel``, what the thesis plotted), joined by straight lines
+and starting from rest at the command; the true wheel speed is measured too, for
+reference. Settling band: ``max(5 % of the step, 4 RPM)`` around the reference;
+4 RPM is the firmware's THRESHOLD_CONTROL, inside which the PI does not act.
+The runs use the empty world (the warehouse walls would stop a 16 s straight run).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..config import TwinConfig
+from ..loop import TwinOptions
+from ..metrics import step_info
+from ..run import Command, run_command
+
+WHEELS = ("left", "right")
+STEP_SPLIT_RPM = 75.0  # the thesis' split: "steps valued at maximum 75 RPM" and higher
+THRESHOLD_CONTROL_RPM = 4.0
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One chapter 5 experiment."""
+
+    number: int
+    title: str
+    command: Command
+    duration_s: float
+    payload_kg: float = 0.0
+
+
+RUNS = (
+    RunSpec(1, "left wheel forward 1 m/s (76.39 RPM)", Command("motor", wheel="left", speed_m_s=1.0), 18.0),
+    RunSpec(2, "right wheel forward 1 m/s (76.39 RPM)", Command("motor", wheel="right", speed_m_s=1.0), 18.0),
+    RunSpec(3, "linear forward 0.7 m/s (53.47 RPM)", Command("linear", speed_m_s=0.7), 16.0),
+    RunSpec(4, "linear backward 1.2 m/s (91.67 RPM)", Command("linear", speed_m_s=-1.2), 16.0),
+    RunSpec(5, "rotation 60 deg/s, ICC 1 m right", Command("angular", speed_deg_s=-60.0, icc_m=-1.0), 16.0),
+    RunSpec(6, "rotation 60 deg/s, ICC 1 m left", Command("angular", speed_deg_s=60.0, icc_m=1.0), 16.0),
+    RunSpec(7, "linear forward 0.7 m/s, 20 kg", Command("linear", speed_m_s=0.7), 16.0, 20.0),
+    RunSpec(8, "rotation 60 deg/s, ICC 1 m right, 20 kg", Command("angular", speed_deg_s=-60.0, icc_m=-1.0),
+            16.0, 20.0),
+)
+
+
+@dataclass(frozen=True)
+class Band:
+    """An accepted range for one metric of the published samples (§5.1.3)."""
+
+    metric: str
+    step_class: str  # "small" (<= 75 RPM), "large" (> 75 RPM) or "any"
+    wheel: str       # "left", "right" or "any"
+    low: float
+    high: float
+    thesis: float    # the value the thesis reports
+
+
+BANDS = (
+    Band("delay_s", "small", "any", 0.1, 0.3, 0.2),
+    Band("rise_s", "small", "any", 0.3, 0.7, 0.5),
+    Band("peak_s", "small", "any", 0.4, 0.8, 0.6),
+    Band("delay_s", "large", "any", 0.3, 0.7, 0.5),
+    Band("rise_s", "large", "any", 0.7, 1.3, 1.0),
+    Band("peak_s", "large", "any", 0.8, 1.4, 1.1),
+    Band("settling_s", "any", "any", 0.0, 1.6, 1.3),
+    Band("overshoot", "any", "right", 2.0, 6.0, 4.0),
+    Band("overshoot", "any", "left", 0.0, 3.0, 2.0),
+)
+OSCILLATION_PAIRS = ((7, 3), (8, 5))  # (loaded, unloaded): "more oscillation" with 20 kg (§5.1.4)
+
+
+def step_class(step_rpm: float) -> str:
+    """"small" for steps of at most 75 RPM, "large" above."""
+    return "small" if abs(step_rpm) <= STEP_SPLIT_RPM else "large"
+
+
+def settling_band_rpm(step_rpm: float) -> float:
+    """Half-width of the settling band: 5 % of the step, at least the PI's 4 RPM dead zone."""
+    return max(0.05 * abs(step_rpm), THRESHOLD_CONTROL_RPM)
+
+
+def judge(wheel: str, step_rpm: float, metrics: dict) -> dict:
+    """Verdict of each banded metric: ``{metric: {twin, thesis, band, verdict}}``.
+
+    A metric that could not be measured (None/NaN) fails.
+    """
+    out = {}
+    cls = step_class(step_rpm)
+    for band in BANDS:
+        if band.step_class not in ("any", cls) or band.wheel not in ("any", wheel):
+            continue
+        value = metrics.get(band.metric)
+        ok = value is not None and math.isfinite(value) and band.low <= value <= band.high
+        out[band.metric] = {"twin": value, "thesis": band.thesis, "band": [band.low, band.high],
+                            "verdict": "pass" if ok else "fail"}
+    return out
+
+
+def compare_oscillation(results: list[dict]) -> list[dict]:
+    """Loaded vs unloaded oscillation (published samples), per driven wheel."""
+    by_number = {r["run"]: r for r in results}
+    out = []
+    for loaded, unloaded in OSCILLATION_PAIRS:
+        if loaded not in by_number or unloaded not in by_number:
+            continue
+        for wheel in WHEELS:
+            a = by_number[loaded]["wheels"].get(wheel)
+            b = by_number[unloaded]["wheels"].get(wheel)
+            if a is None or b is None:
+                continue
+            va, vb = a["published"]["oscillation"], b["published"]["oscillation"]
+            ok = va is not None and vb is not None and va > vb
+            out.append({"loaded_run": loaded, "unloaded_run": unloaded, "wheel": wheel, "measure": "oscillation",
+                        "loaded": va, "unloaded": vb, "verdict": "pass" if ok else "fail"})
+    return out
+
+
+@dataclass
+class _Job:
+    spec: RunSpec
+    cfg: TwinConfig
+    firmware: str
+    duration_s: float
+    seed: int = 0
+    extra: dict = field(default_factory=dict)
+
+
+def _with_payload(cfg: TwinConfig, mass_kg: float) -> TwinConfig:
+    if mass_kg == cfg.payload.mass_kg:
+        return cfg
+    data = cfg.model_dump()
+    data["payload"]["mass_kg"] = mass_kg
+    return TwinConfig.model_validate(data)
+
+
+def simulate(job: _Job) -> dict:
+    """Run one experiment; return its raw series (picklable, for worker processes)."""
+    options = TwinOptions(firmware=job.firmware, world="empty", seed=job.seed)
+    result = run_command(_with_payload(job.cfg, job.spec.payload_kg), job.spec.command, job.duration_s, options)
+    s = result.series
+    return {"run": job.spec.number, "codes": result.codes, "errors": result.errors,
+            "wheel_command": result.wheel_command, "t_command_s": s.commands[0][0] if s.commands else 0.0,
+            "t_s": s.t_s, "true_rpm": s.true_rpm, "published": s.published, "pwm_counts": s.pwm_counts,
+            "sim_s": result.sim_s, "wall_s": result.wall_s}
+
+
+def analyse(spec: RunSpec, raw: dict) -> dict:
+    """Metrics and verdicts of one run, per driven wheel."""
+    wheels = {}
+    cmd = raw["wheel_command"] or [0, 0, 0, 0]
+    for w, name in enumerate(WHEELS):
+        reference = float(cmd[2 * w]) * float(cmd[2 * w + 1])
+        if reference == 0.0:
+            continue
+        band = settling_band_rpm(reference)
+        t0 = raw["t_command_s"]
+        pub = raw["published"][w]
+        published = (step_info(pub[:, 0], pub[:, 1], abs(reference), t0_s=t0, settling_band=band).as_dict()
+                     if len(pub) else None)
+        true = step_info(raw["t_s"], raw["true_rpm"][:, w], reference, t0_s=t0, settling_band=band).as_dict()
+        checks = judge(name, reference, published or {})
+        wheels[name] = {"reference_rpm": reference, "step_class": step_class(reference),
+                        "samples": len(pub), "published": published, "true": true, "checks": checks}
+    return {"run": spec.number, "title": spec.title, "command": spec.command.describe(),
+            "payload_kg": spec.payload_kg, "duration_s": raw["sim_s"], "wheel_command": raw["wheel_command"],
+            "codes": raw["codes"], "errors": raw["errors"], "wall_s": raw["wall_s"], "wheels": wheels, "raw": raw}
+
+
+def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,
+        duration_s: float | None = None, progress: bool = True) -> dict:
+    """Simulate the chapter 5 runs and measure them.
+
+    Parameters
+    ----------
+    cfg : the twin's parameters (payload as in the file; runs 7-8 set 20 kg).
+    jobs : worker processes (1: in this process).
+    firmware : "faithful" or "improved".
+    runs : run numbers to do (default all eight).
+    duration_s : override every run's duration, s (tests).
+    progress : show a progress bar.
+
+    Returns
+    -------
+    dict : ``{"firmware", "wall_s", "sim_s", "runs": [per run], "comparisons": [...]}``.
+    """
+    from .executor import run_all
+
+    specs = [s for s in RUNS if runs is None or s.number in runs]
+    if not specs:
+        raise ValueError(f"runs: {runs} selects none of 1..{len(RUNS)}")
+    wall0 = time.perf_counter()
+    todo = [_Job(s, cfg, firmware, duration_s or s.duration_s) for s in specs]
+    done = {job.spec.number: analyse(job.spec, raw)
+            for job, raw in run_all(simulate, todo, jobs, "chapter 5 runs", progress)}
+    results = [done[s.number] for s in specs]
+    return {"firmware": firmware, "jobs": jobs, "wall_s": time.perf_counter() - wall0,
+            "sim_s": sum(r["duration_s"] for r in results), "runs": results,
+            "comparisons": compare_oscillation(results)}
+
+
+def plot(results: dict, out_dir: Path) -> list[Path]:
+    """One PNG per run (``run<N>.png``): RPM against time, each driven wheel and its reference."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .executor import save_figure
+
+    paths = []
+    colours = {"left": "tab:blue", "right": "tab:red"}
+    for r in results["runs"]:
+        raw = r["raw"]
+        fig, ax = plt.subplots(figsize=(7.5, 4.0))
+        for w, name in enumerate(WHEELS):
+            info = r["wheels"].get(name)
+            if info is None:
+                continue
+            c, ref = colours[name], abs(info["reference_rpm"])
+            t0 = raw["t_command_s"]
+            ax.step([0.0, t0, r["duration_s"]], [0.0, ref, ref], where="post", color=c, ls="--", lw=1,
+                    label=f"{name} reference {ref:.2f} RPM")
+            pub = raw["published"][w]
+            ax.plot(np.r_[t0, pub[:, 0]], np.r_[0.0, pub[:, 1]], "o-", color=c, ms=4, lw=1.2,
+                    label=f"wheel{w}_Vel (published)")
+            ax.plot(raw["t_s"], np.abs(raw["true_rpm"][:, w]), color=c, lw=0.6, alpha=0.6,
+                    label=f"{name} true |speed|")
+        ax.set(xlabel="time (s)", ylabel="wheel speed (RPM)", title=f"Run {r['run']}: {r['title']}",
+               xlim=(0, r["duration_s"]))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower right")
+        fig.tight_layout()
+        path = Path(out_dir) / f"run{r['run']}.png"
+        save_figure(fig, path)
+        paths.append(path)
+    return paths
+
+
+def _public(results: dict) -> dict:
+    runs = [{k: v for k, v in r.items() if k != "raw"} for r in results["runs"]]
+    checks = [c for r in runs for w in r["wheels"].values() for c in w["checks"].values()]
+    checks += results["comparisons"]
+    return {"firmware": results["firmware"], "jobs": results["jobs"], "wall_s": round(results["wall_s"], 3),
+            "sim_s": results["sim_s"], "judged_on": "published samples, linear interpolation from rest at the command",
+            "settling_band": "max(5 % of the step, 4 RPM) around the reference",
+            "bands": [vars(b) for b in BANDS], "runs": runs, "comparisons": results["comparisons"],
+            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)}}
+
+
+def report(results: dict, out_dir: Path) -> dict:
+    """Write ``metrics.json`` and ``report.md`` (run :func:`plot` for the figures); return the JSON."""
+    from .chapter5_report import markdown
+    from .executor import write_json, write_text
+
+    data = _public(results)
+    write_json(Path(out_dir) / "metrics.json", data)
+    write_text(Path(out_dir) / "report.md", markdown(data))
+    return data

@@ -1,0 +1,80 @@
+"""Chapter 5 experiment machinery: one short run end to end, and the verdict logic on synthetic metrics."""
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli import app
+from amr_twin.config import load_config
+from amr_twin.experiments import chapter5
+from amr_twin.run import run_command
+
+CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot"}
+
+
+@pytest.fixture(scope="module")
+def short_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ch5")
+    results = chapter5.run(load_config(), runs=[3], duration_s=4.0, progress=False)
+    chapter5.plot(results, out)
+    data = chapter5.report(results, out)
+    return out, results, data
+
+
+def test_metrics_json_structure(short_run):
+    out, results, data = short_run
+    on_disk = json.loads((out / "metrics.json").read_text())
+    assert on_disk == json.loads(json.dumps(data))
+    assert {"firmware", "wall_s", "sim_s", "bands", "runs", "comparisons", "summary"} <= set(on_disk)
+    (run,) = on_disk["runs"]
+    assert run["run"] == 3 and run["duration_s"] == 4.0 and "raw" not in run
+    assert run["wheel_command"] == pytest.approx([1, 53.47, 1, 53.47], abs=0.01)
+    assert set(run["wheels"]) == {"left", "right"}
+    for wheel in run["wheels"].values():
+        assert wheel["step_class"] == "small" and wheel["samples"] >= 1
+        assert set(wheel["checks"]) == CHECKED
+        for check in wheel["checks"].values():
+            assert set(check) == {"twin", "thesis", "band", "verdict"}
+            assert check["verdict"] in ("pass", "fail")
+        assert set(wheel["published"]) >= {"delay_s", "rise_s", "peak_s", "overshoot", "settling_s", "oscillation"}
+        assert wheel["true"]["reference"] == pytest.approx(53.47, abs=0.01)
+    assert (out / "run3.png").stat().st_size > 1000
+    assert "| 3 | left |" in (out / "report.md").read_text()
+    assert not list(out.glob(".*.tmp"))
+
+
+def test_rotation_commands_give_the_thesis_wheel_speeds():
+    cfg = load_config()
+    right = run_command(cfg, chapter5.RUNS[4].command, 0.05).wheel_command
+    left = run_command(cfg, chapter5.RUNS[5].command, 0.05).wheel_command
+    assert right == pytest.approx([1, 99.20, 1, 60.80], abs=0.01)
+    assert left == pytest.approx([1, 60.80, 1, 99.20], abs=0.01)
+
+
+def test_judge_uses_each_wheels_own_step_size():
+    good_small = {"delay_s": 0.2, "rise_s": 0.5, "peak_s": 0.6, "settling_s": 1.3, "overshoot": 4.0}
+    checks = chapter5.judge("right", 60.8, good_small)
+    assert {k: c["verdict"] for k, c in checks.items()} == dict.fromkeys(CHECKED, "pass")
+    assert checks["delay_s"]["band"] == [0.1, 0.3]
+    large = chapter5.judge("left", 99.2, good_small)  # same numbers, > 75 RPM bands
+    assert large["delay_s"]["band"] == [0.3, 0.7] and large["delay_s"]["verdict"] == "fail"
+    assert large["overshoot"]["band"] == [0.0, 3.0] and large["overshoot"]["verdict"] == "fail"
+    assert chapter5.judge("left", -91.67, {})["rise_s"]["verdict"] == "fail"  # unmeasured fails
+    assert chapter5.judge("left", 75.0, {})["rise_s"]["band"] == [0.3, 0.7]  # 75 RPM is still small
+
+
+def test_oscillation_comparison():
+    def run(number, left, right):
+        return {"run": number, "wheels": {"left": {"published": {"oscillation": left}},
+                                          "right": {"published": {"oscillation": right}}}}
+
+    out = chapter5.compare_oscillation([run(3, 1.0, 2.0), run(7, 3.0, 1.0), run(5, 1.0, None), run(8, 2.0, 4.0)])
+    verdicts = {(c["loaded_run"], c["wheel"]): c["verdict"] for c in out}
+    assert verdicts == {(7, "left"): "pass", (7, "right"): "fail", (8, "left"): "pass", (8, "right"): "fail"}
+
+
+def test_cli_rejects_bad_jobs_and_writes_nothing(tmp_path):
+    result = CliRunner().invoke(app, ["experiment", "chapter5", "--out", str(tmp_path / "x"), "--jobs", "0"])
+    assert result.exit_code == 2 and "--jobs" in result.output
+    assert not (tmp_path / "x").exists()

@@ -1,0 +1,253 @@
+"""Payload sweep: step response, duty, support loads, tilt and slip against payload mass and position.
+
+One simulation per (mass, position, command) point, in the empty world; each
+point's result is one JSON file ``runs/<key>.json`` written atomically, so a rerun
+after an interruption only simulates the missing points (a file made with other
+parameters, firmware or duration is redone). A position that puts the payload off
+the deck fails the configuration check and is recorded as invalid.
+
+Named positions put the payload box **flush with the deck's edges** (``front``:
+against the front edge, ``front-left-corner``: in that corner...), the worst
+placements that still lie on the deck; ``X:Y`` gives the box centre in metres.
+
+A point is **safe** when its position is valid, the simulation ran, the static
+tip margin is at least :data:`TIP_MARGIN_MIN_M`, no drive wheel ever lost
+contact (:data:`~amr_twin.statics.CONTACT_MIN_N`) and the base tilted at most
+:data:`TILT_LIMIT_DEG`. The highest safe payload of a position is the largest
+mass whose every lighter point (all commands) is safe.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..config import ConfigError, TwinConfig, load_config
+from ..metrics import step_info
+from ..run import Command
+from .chapter5 import WHEELS, settling_band_rpm
+
+POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
+             "front-left-corner": (1, 1), "front-right-corner": (1, -1),
+             "rear-left-corner": (-1, 1), "rear-right-corner": (-1, -1)}
+SAMPLE_S = 0.02           # period of the support-load and tilt samples, s
+TIP_MARGIN_MIN_M = 0.02   # static tip margin below which a point is unsafe, m
+TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
+MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
+TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
+
+
+def parse_masses(text: str) -> list[float]:
+    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg."""
+    try:
+        if ":" in text:
+            start, stop, step = (float(v) for v in text.split(":"))
+            if step <= 0 or stop < start:
+                raise ValueError
+            return [round(start + i * step, 6) for i in range(int(math.floor((stop - start) / step + 1e-9)) + 1)]
+        masses = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ValueError(f"--masses {text!r}: expected START:STOP:STEP or M1,M2,... in kg") from None
+    if not masses or any(not math.isfinite(m) or m < 0 for m in masses):
+        raise ValueError(f"--masses {text!r}: masses must be finite and >= 0 kg")
+    return masses
+
+
+def parse_command(text: str) -> Command:
+    """``linear:V``, ``angular:DEG_S:ICC_M`` or ``motor:left|right:V`` (m/s, deg/s, m)."""
+    parts = text.split(":")
+    try:
+        if parts[0] == "linear" and len(parts) == 2:
+            return Command("linear", speed_m_s=float(parts[1]))
+        if parts[0] == "angular" and len(parts) == 3:
+            return Command("angular", speed_deg_s=float(parts[1]), icc_m=float(parts[2]))
+        if parts[0] == "motor" and len(parts) == 3:
+            v = float(parts[2])
+            return Command("motor", wheel=parts[1], direction="forward" if v >= 0 else "backward", speed_m_s=abs(v))
+    except ValueError as exc:
+        raise ValueError(f"--commands {text!r}: {exc}") from None
+    raise ValueError(f"--commands {text!r}: expected linear:V, angular:DEG_S:ICC_M or motor:left|right:V")
+
+
+def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:
+    """Payload centre of a named position (box flush with the deck edges) or of ``X:Y``, m."""
+    if name in POSITIONS:
+        dx, dy = POSITIONS[name]
+        sx, sy = cfg.payload.size_m[0] / 2, cfg.payload.size_m[1] / 2
+        return (round(dx * (cfg.chassis.length_m / 2 - sx), 6), round(dy * (cfg.chassis.width_m / 2 - sy), 6))
+    try:
+        x, y = (float(v) for v in name.split(":"))
+    except ValueError:
+        raise ValueError(f"--positions {name!r}: not one of {', '.join(POSITIONS)} nor X:Y in metres") from None
+    return x, y
+
+
+def with_payload(cfg: TwinConfig, mass_kg: float, xy_m: tuple[float, float]) -> TwinConfig:
+    """``cfg`` with another payload, validated again (raises :class:`ConfigError`)."""
+    flat: dict = {}
+
+    def walk(node: dict, prefix: str) -> None:
+        for key, value in node.items():
+            if isinstance(value, dict):
+                walk(value, f"{prefix}{key}.")
+            else:
+                flat[prefix + key] = list(value) if isinstance(value, tuple) else value
+
+    walk(cfg.model_dump(), "")
+    flat.update({"payload.mass_kg": mass_kg, "payload.xy_m": list(xy_m)})
+    return load_config(overrides=flat)
+
+
+@dataclass(frozen=True)
+class Point:
+    """One sweep point (picklable work item)."""
+
+    mass_kg: float
+    position: str
+    command: str
+    duration_s: float
+    firmware: str
+    cfg: TwinConfig
+
+    @property
+    def key(self) -> str:
+        return f"m{self.mass_kg:g}kg_{self.position}_{self.command}".replace(":", "_").replace("/", "_")
+
+    @property
+    def fingerprint(self) -> str:
+        text = self.cfg.model_dump_json() + f"|{self.firmware}|{self.duration_s}"
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _slip(series, cfg: TwinConfig) -> np.ndarray:
+    """(n, 2) wheel surface speed minus the ground speed of the wheel centre, m/s."""
+    t, pose = series.t_s, series.pose
+    if len(t) < 3:
+        return np.zeros((len(t), 2))
+    vx, vy = np.gradient(pose[:, 0], t), np.gradient(pose[:, 1], t)
+    yaw = np.unwrap(pose[:, 2])
+    v = vx * np.cos(yaw) + vy * np.sin(yaw)
+    omega = np.gradient(yaw, t)
+    half = cfg.wheel.separation_m / 2
+    ground = np.column_stack([v - omega * half, v + omega * half])
+    surface = series.true_rpm * (2 * math.pi / 60) * cfg.wheel.radius_m
+    return surface - ground
+
+
+def _dynamics(point: Point, cfg: TwinConfig) -> dict:
+    from ..loop import Twin, TwinOptions
+    from ..statics import CONTACT_MIN_N
+
+    twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty"))
+    twin.advance_to_us(0)
+    code = parse_command(point.command).send(twin)
+    if code != 0:
+        return {"error": f"command refused (code {code}): {twin.client.last_error}"}
+    req = twin.client.last_request
+    loads, tilt = [], []
+    for t_s in np.arange(SAMPLE_S, point.duration_s + 1e-9, SAMPLE_S):
+        twin.advance_to_us(int(round(t_s * 1e6)))
+        loads.append(twin.physics.support_loads_n())
+        tilt.append(twin.physics.base_tilt_rad())
+    s = twin.recorder.series()
+    names = list(loads[0])
+    min_load = {n: min(row[n] for row in loads) for n in names}
+    out = {"max_tilt_deg": math.degrees(max(tilt)),
+           "dyn_min_wheel_n": min(v for n, v in min_load.items() if n.startswith("wheel")),
+           "dyn_min_caster_n": min(v for n, v in min_load.items() if n.startswith("caster")),
+           "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N)}
+    out["wheel_lift_off"] = out["dyn_min_wheel_n"] < CONTACT_MIN_N
+    slip = _slip(s, cfg)
+    tail = s.t_s >= 0.75 * point.duration_s
+    cmd = [req.motionL, req.speedL, req.motionR, req.speedR]
+    for w, name in enumerate(WHEELS):
+        ref = float(cmd[2 * w]) * float(cmd[2 * w + 1])
+        out[f"{name}_reference_rpm"] = ref
+        out[f"{name}_max_slip_m_s"] = float(np.max(np.abs(slip[:, w])))
+        if ref == 0.0:
+            continue
+        pub = s.published[w]
+        if len(pub) >= 1:
+            info = step_info(pub[:, 0], pub[:, 1], abs(ref), settling_band=settling_band_rpm(ref)).as_dict()
+            for k in ("delay_s", "rise_s", "peak_s", "settling_s"):
+                out[f"{name}_{k}"] = info[k]
+            for k in ("overshoot", "steady_error", "oscillation"):
+                out[f"{name}_{k}_rpm"] = info[k]
+        out[f"{name}_steady_duty"] = float(np.mean(s.pwm_counts[tail, w]) / 255.0)
+        out[f"{name}_open_loop_duty"] = abs(ref) / MAX_VEL_RPM
+        surface = np.abs(s.true_rpm[tail, w]) * (2 * math.pi / 60) * cfg.wheel.radius_m
+        out[f"{name}_steady_slip_ratio"] = float(np.mean(np.abs(slip[tail, w])) / max(np.mean(surface), 1e-6))
+    errors = [out.get(f"{n}_steady_error_rpm") for n in WHEELS if out.get(f"{n}_reference_rpm")]
+    out["tracks"] = all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors)
+    return out
+
+
+def simulate_point(point: Point) -> dict:
+    """Statics and one run of a sweep point, as one flat JSON-ready row."""
+    from ..build import BuildError
+    from ..physics import DivergenceError
+    from ..statics import CONTACT_MIN_N, describe
+
+    wall0 = time.perf_counter()
+    row = {"key": point.key, "fingerprint": point.fingerprint, "mass_kg": point.mass_kg,
+           "position": point.position, "command": point.command, "valid": True, "error": ""}
+    try:
+        xy = position_xy_m(point.cfg, point.position)
+        row.update(x_m=xy[0], y_m=xy[1])
+        cfg = with_payload(point.cfg, point.mass_kg, xy)
+    except (ConfigError, ValueError) as exc:
+        row.update(valid=False, error=str(exc), safe=False)
+        return row
+    try:
+        static = describe(cfg)
+        loads = static["static_load_n"]
+        row.update(total_mass_kg=static["total_mass_kg"], static_tip_margin_m=static["tip_margin_m"],
+                   static_min_caster_n=min(v for k, v in loads.items() if k.startswith("caster")),
+                   static_lifted=";".join(k for k, v in loads.items() if v < CONTACT_MIN_N),
+                   **{f"static_{k}_n": v for k, v in loads.items()})
+        row.update(_dynamics(point, cfg))
+    except (BuildError, DivergenceError) as exc:
+        row["error"] = str(exc).splitlines()[0]
+    row["safe"] = (not row["error"] and row.get("static_tip_margin_m", -1) >= TIP_MARGIN_MIN_M
+                   and not row.get("wheel_lift_off", True) and row.get("max_tilt_deg", 90) <= TILT_LIMIT_DEG)
+    row["wall_s"] = round(time.perf_counter() - wall0, 3)
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+
+
+def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str], commands: list[str],
+        duration_s: float = 8.0, jobs: int = 1, firmware: str = "faithful", progress: bool = True) -> dict:
+    """Simulate the missing points of the sweep (one file each) and return all rows.
+
+    Returns
+    -------
+    dict : ``{"rows": [...], "simulated": n, "reused": n, "wall_s": s}``.
+    """
+    from .executor import run_all, write_json
+
+    for c in commands:
+        parse_command(c)
+    runs_dir = Path(out_dir) / "runs"
+    points = [Point(m, p, c, duration_s, firmware, cfg) for m in masses for p in positions for c in commands]
+    rows, todo = {}, []
+    for point in points:
+        path = runs_dir / f"{point.key}.json"
+        try:
+            row = json.loads(path.read_text())
+        except (OSError, ValueError):
+            row = None
+        if row is not None and row.get("fingerprint") == point.fingerprint:
+            rows[point.key] = row
+        else:
+            todo.append(point)
+    wall0 = time.perf_counter()
+    for point, row in run_all(simulate_point, todo, jobs, "payload sweep", progress):
+        write_json(runs_dir / f"{point.key}.json", row)
+        rows[point.key] = row
+    return {"rows": [rows[p.key] for p in points], "simulated": len(todo), "reused": len(points) - len(todo),
+            "wall_s": time.perf_counter() - wall0, "duration_s": duration_s, "firmware": firmware}

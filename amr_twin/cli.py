@@ -118,6 +118,31 @@ def bench(
             typer.echo(f"{key:32s} {value}")
 
 
+@app.command()
+def calibrate(
+    target: str = typer.Option("thesis", help="'thesis' (chapter 5) or a CSV log with columns t_s, wheel, rpm, command."),
+    out: Path = typer.Option(Path("params.yaml"), help="Override file to write (use it with --params)."),
+    max_evaluations: int = typer.Option(60, min=2, max=2000, help="Twin evaluations of the fit."),
+    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+) -> None:
+    """Fit the plant's unknowns (driver gain, motor Ke and drag per wheel) to the thesis or a log."""
+    from rich.progress import Progress
+
+    from .calibration import calibrate as fit_plant
+    from .calibration import write_params
+
+    _config(config, params, set_)  # validate the starting point first
+    if target != "thesis" and not Path(target).is_file():
+        fail(f"--target {target!r}: neither 'thesis' nor an existing CSV file")
+    with Progress(transient=True) as bar:
+        task = bar.add_task("calibrating", total=max_evaluations)
+        fit = _guard(lambda: fit_plant(target, base_sets=list(set_ or []), max_evaluations=max_evaluations,
+                                       progress=lambda i, n: bar.update(task, completed=i)))
+    write_params(fit, out)
+    typer.echo(json.dumps({"target": fit.target, "residual": fit.residual, "evaluations": fit.evaluations,
+                           "values": fit.values, "out": str(out)}))
+
+
 from .cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
 
 

@@ -146,6 +146,9 @@ def calibrate(
 from .cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
 
 
+from .cli_run import register as _register_run; _register_run(app)  # noqa: E402,E702 - run, client
+
+
 def main() -> None:  # pragma: no cover - console entry
     app()
 

@@ -1,0 +1,126 @@
+"""Mission files: a timed list of wheel_Command_Client calls, run in one go.
+
+Format (YAML)::
+
+    duration_s: 14          # simulated seconds, > 0
+    steps:                  # sent in time order; t_s in [0, duration_s]
+      - t_s: 0
+        linear: {speed_m_s: 0.5}              # negative: backward
+      - t_s: 2
+        angular: {speed_deg_s: 90, icc_m: 0}  # REP-103: CCW +, ICC + to the left
+      - t_s: 3
+        motor: {wheel: left, direction: forward, speed_m_s: 0.3}
+      - t_s: 4
+        stop: {}
+
+Each step has ``t_s`` and exactly one command key. Unknown keys, missing or
+non-finite numbers raise :class:`MissionError` with a one-line message naming
+the step and the field. Speeds outside the thesis range are not checked here:
+the client refuses them at run time (code 1), as on the robot.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import yaml
+
+from .run import KINDS, Command
+
+FIELDS = {
+    "linear": {"speed_m_s": True},
+    "angular": {"speed_deg_s": True, "icc_m": False},
+    "motor": {"wheel": True, "direction": True, "speed_m_s": True},
+    "stop": {},
+}
+"""Per command kind: its fields and whether each is required."""
+
+
+class MissionError(ValueError):
+    """A mission file is invalid; the message is one line."""
+
+
+def _number(where: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise MissionError(f"{where}: {value!r} is not a number")
+    if not math.isfinite(value):
+        raise MissionError(f"{where}: {value} must be a finite number")
+    return float(value)
+
+
+def parse_step(index: int, step) -> tuple[float, Command]:
+    """One step ``{t_s: ..., <kind>: {...}}`` to ``(t_s, Command)``."""
+    where = f"steps[{index}]"
+    if not isinstance(step, dict):
+        raise MissionError(f"{where}: expected a mapping with t_s and one of {', '.join(KINDS)}")
+    if "t_s" not in step:
+        raise MissionError(f"{where}: t_s is missing")
+    t_s = _number(f"{where}.t_s", step["t_s"])
+    kinds = [k for k in step if k != "t_s"]
+    unknown = [k for k in kinds if k not in FIELDS]
+    if unknown:
+        raise MissionError(f"{where}: unknown key {unknown[0]!r} (expected t_s and one of {', '.join(KINDS)})")
+    if len(kinds) != 1:
+        raise MissionError(f"{where}: needs exactly one of {', '.join(KINDS)}, got {len(kinds)}")
+    kind = kinds[0]
+    args = step[kind] if step[kind] is not None else {}
+    if not isinstance(args, dict):
+        raise MissionError(f"{where}.{kind}: expected a mapping of {', '.join(FIELDS[kind]) or 'nothing'}")
+    for name in args:
+        if name not in FIELDS[kind]:
+            raise MissionError(f"{where}.{kind}: unknown field {name!r} "
+                               f"(expected {', '.join(FIELDS[kind]) or 'none'})")
+    values = {}
+    for name, required in FIELDS[kind].items():
+        if name not in args:
+            if required:
+                raise MissionError(f"{where}.{kind}.{name} is missing")
+            continue
+        if name in ("wheel", "direction"):
+            values[name] = str(args[name])
+        else:
+            values[name] = _number(f"{where}.{kind}.{name}", args[name])
+    try:
+        return t_s, Command(kind, **values)
+    except ValueError as exc:
+        raise MissionError(f"{where}.{kind}: {exc}") from None
+
+
+def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
+    """A loaded mission mapping to ``(duration_s, [(t_s, Command), ...])``."""
+    if not isinstance(tree, dict):
+        raise MissionError("mission: expected a mapping with duration_s and steps")
+    unknown = [k for k in tree if k not in ("duration_s", "steps")]
+    if unknown:
+        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps)")
+    if "duration_s" not in tree:
+        raise MissionError("mission: duration_s is missing")
+    duration_s = _number("duration_s", tree["duration_s"])
+    if duration_s <= 0:
+        raise MissionError(f"duration_s: {duration_s} must be > 0")
+    steps = tree.get("steps")
+    if not isinstance(steps, list) or not steps:
+        raise MissionError("mission: steps must be a non-empty list")
+    parsed = [parse_step(i, s) for i, s in enumerate(steps)]
+    for i, (t_s, _) in enumerate(parsed):
+        if not 0.0 <= t_s <= duration_s:
+            raise MissionError(f"steps[{i}].t_s: {t_s} must lie in [0, {duration_s}] s")
+    return duration_s, sorted(parsed, key=lambda s: s[0])
+
+
+def load_mission(path: str | Path) -> tuple[float, list[tuple[float, Command]]]:
+    """Read and validate a mission YAML file."""
+    path = Path(path)
+    try:
+        tree = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise MissionError(f"mission {path}: {exc.strerror or exc}") from None
+    except yaml.YAMLError as exc:
+        line = getattr(getattr(exc, "problem_mark", None), "line", None)
+        at = f" (line {line + 1})" if line is not None else ""
+        raise MissionError(f"mission {path}: not valid YAML{at}") from None
+    try:
+        return parse_mission(tree)
+    except MissionError as exc:
+        raise MissionError(f"mission {path.name}: {exc}") from None

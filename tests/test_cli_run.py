@@ -1,0 +1,122 @@
+"""amr-twin run: the thesis conversions through the CLI JSON, refusals, --csv/--json, missions."""
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli import app
+from amr_twin.cli_run import CSV_COLUMNS
+from amr_twin.mission import MissionError, parse_mission
+
+ROOT = Path(__file__).resolve().parents[1]
+runner = CliRunner()
+
+
+def _run(*args):
+    return runner.invoke(app, ["run", *args])
+
+
+def _json(*args):
+    result = _run(*args, "--json")
+    assert result.exit_code == 0, result.output
+    return json.loads(result.stdout)
+
+
+def test_linear_conversion_printed_by_the_thesis():
+    info = _json("linear", "--speed-m-s", "0.5", "--duration-s", "0.2")
+    assert info["code"] == 0
+    assert info["wheel_command"] == pytest.approx([1, 38.197, 1, 38.197], abs=1e-3)
+    assert info["command"] == {"kind": "linear", "speed_m_s": 0.5, "t_s": 0.0}
+    back = _json("linear", "--speed-m-s", "-1.2", "--duration-s", "0.2")
+    assert back["wheel_command"] == pytest.approx([-1, 91.67, -1, 91.67], abs=1e-2)
+
+
+def test_angular_conversion_rep103():
+    # the thesis' numbers: 60 deg/s about an ICC 1 m to the right -> left 99.20, right 60.80
+    info = _json("angular", "--speed-deg-s", "60", "--icc-m", "-1", "--duration-s", "0.2")
+    assert info["wheel_command"][1::2] == pytest.approx([99.20, 60.80], abs=1e-4)
+    assert info["wheels"]["left"]["reference_rpm"] == pytest.approx(99.20, abs=1e-4)
+    # REP-103: +60 deg/s is counter-clockwise, so about an ICC on the right both wheels go
+    # backward; the chapter-5 clockwise run (both forward) is -60 deg/s
+    assert info["wheel_command"][0::2] == [-1, -1]
+    cw = _json("angular", "--speed-deg-s", "-60", "--icc-m", "-1", "--duration-s", "0.2")
+    assert cw["wheel_command"] == pytest.approx([1, 99.20, 1, 60.80], abs=1e-4)
+
+
+def test_out_of_range_speed_is_code_1_with_the_thesis_message(tmp_path):
+    out = tmp_path / "never.csv"
+    result = _run("linear", "--speed-m-s", "20", "--duration-s", "0.2", "--csv", str(out), "--json")
+    assert result.exit_code == 1
+    assert "ERROR: linear velocity not valid" in result.stderr
+    assert json.loads(result.stdout)["code"] == 1
+
+
+@pytest.mark.parametrize("args, text", [
+    (["linear", "--speed-m-s", "nan"], "--speed-m-s nan: must be a finite number"),
+    (["angular", "--speed-deg-s", "inf", "--icc-m", "0"], "--speed-deg-s inf: must be a finite number"),
+    (["linear"], "--speed-m-s is required"),
+    (["angular", "--speed-deg-s", "60"], "--icc-m is required"),
+    (["motor", "--wheel", "left", "--speed-m-s", "1"], "--direction is required"),
+    (["motor", "--wheel", "middle", "--direction", "forward", "--speed-m-s", "1"], "wheel"),
+    ([], "give a command"),
+])
+def test_bad_input_is_refused_in_one_line(args, text, tmp_path):
+    out = tmp_path / "never.csv"
+    result = _run(*args, "--csv", str(out)) if args else _run()
+    assert result.exit_code == 2
+    assert text in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_csv_and_json_agree_with_the_simulation(tmp_path):
+    out = tmp_path / "run.csv"
+    info = _json("motor", "--wheel", "left", "--direction", "forward", "--speed-m-s", "1",
+                 "--duration-s", "4", "--csv", str(out))
+    assert set(info) >= {"command", "wheel_command", "code", "wheels", "final_pose", "sim_s", "wall_s"}
+    assert info["wheel_command"] == pytest.approx([1, 76.394, 1, 0.0], abs=1e-3)
+    left = info["wheels"]["left"]
+    assert {"reference_rpm", "final_rpm"} <= set(left) and left["samples"] >= 2
+    with out.open() as f:
+        rows = list(csv.DictReader(f))
+    assert tuple(rows[0]) == CSV_COLUMNS
+    last = {k: float(v) for k, v in rows[-1].items()}
+    assert last["t_s"] == pytest.approx(info["sim_s"])
+    pose = info["final_pose"]
+    assert (last["x_m"], last["y_m"], last["yaw_rad"]) == pytest.approx(
+        (pose["x_m"], pose["y_m"], pose["yaw_rad"]), rel=1e-6, abs=1e-9)
+    assert last["pub_rpm_left"] == pytest.approx(left["final_rpm"], rel=1e-6)
+    assert last["ref_rpm_left"] == pytest.approx(76.394, abs=1e-3) and last["ref_rpm_right"] == 0.0
+    assert last["true_rpm_left"] > 60 and last["pwm_counts_left"] > 0
+    assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
+
+
+def test_square_mission_runs(tmp_path):
+    out = tmp_path / "square.csv"
+    info = _json("--mission", str(ROOT / "experiments/missions/square.yaml"), "--csv", str(out))
+    assert info["codes"] == [0] * 9 and info["sim_s"] == 14
+    assert [c["kind"] for c in info["command"]][-1] == "stop"
+    assert out.exists()
+
+
+def test_mission_errors_are_one_line(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("duration_s: 5\nsteps:\n  - {t_s: 1, lineer: {speed_m_s: 0.5}}\n")
+    result = _run("--mission", str(bad))
+    assert result.exit_code == 2 and "steps[0]: unknown key 'lineer'" in result.stderr
+    for tree, text in [
+        ({"duration_s": 5, "steps": [{"t_s": 6, "stop": {}}]}, "must lie in [0, 5.0]"),
+        ({"duration_s": 5, "steps": [{"t_s": 0, "linear": {}}]}, "linear.speed_m_s is missing"),
+        ({"duration_s": 5, "steps": [{"t_s": 0, "linear": {"speed_m_s": math.nan}}]}, "finite"),
+        ({"duration_s": 5, "steps": [{"t_s": 0, "stop": {}, "linear": {"speed_m_s": 1}}]}, "exactly one"),
+        ({"steps": []}, "duration_s is missing"),
+    ]:
+        with pytest.raises(MissionError, match=None) as exc:
+            parse_mission(tree)
+        assert text in str(exc.value)
+    duration_s, steps = parse_mission({"duration_s": 3, "steps": [
+        {"t_s": 2, "stop": None}, {"t_s": 0, "angular": {"speed_deg_s": 30}}]})
+    assert duration_s == 3 and [t for t, _ in steps] == [0, 2] and steps[0][1].icc_m == 0.0

@@ -1,0 +1,175 @@
+"""``amr-twin client``: the terminal menu of wheel_Command_Client (§3.2.2, fig. 3.2).
+
+The twin runs in a background thread, paced to ``rate`` simulated seconds per
+wall-clock second, while the main thread reads the menu from the terminal. The
+options are the thesis' (the figure's text is not printed, so the wording is
+ours): linear motion in m/s, rotation in deg/s about an ICC (REP-103: positive
+ICC to the left, positive speed counter-clockwise; the thesis' menu text says
+the opposite, its code and chapter 5 agree with REP-103), stop, single motor
+(0 left / 1 right, sense 1 forward / -1 backward, m/s) and exit. Every speed the
+firmware publishes on ``wheel0_Vel``/``wheel1_Vel`` is printed as it arrives.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from pathlib import Path
+from typing import Callable, Optional
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+
+from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, fail
+
+MENU = """
+[bold]wheel_Command_Client[/bold]
+  1) Linear motion            (speed, m/s; negative: backward)
+  2) Rotation about an ICC    (speed, deg/s; ICC distance, m, positive to the left)
+  3) Stop                     (brake both wheels)
+  4) Motor motion             (motor 0 left / 1 right; sense 1 / -1; speed, m/s)
+  0) Exit"""
+
+
+class RealTimeTwin:
+    """A :class:`~amr_twin.loop.Twin` advanced in a thread at ``rate`` x real time.
+
+    Parameters
+    ----------
+    twin : Twin
+        The twin to run.
+    rate : float
+        Simulated seconds per wall-clock second (> 0).
+    chunk_s : float
+        Longest simulated time advanced per lock hold, s.
+    """
+
+    def __init__(self, twin, rate: float = 1.0, chunk_s: float = 0.05):
+        self.twin, self.rate, self.chunk_s = twin, float(rate), float(chunk_s)
+        self.lock = threading.Lock()
+        self.error: Optional[BaseException] = None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="twin", daemon=True)
+
+    def start(self) -> "RealTimeTwin":
+        self._thread.start()
+        return self
+
+    def _run(self) -> None:
+        wall0, sim0 = time.perf_counter(), self.twin.t_s
+        try:
+            while not self._stop.is_set():
+                behind_s = sim0 + (time.perf_counter() - wall0) * self.rate - self.twin.t_s
+                if behind_s > 1e-4:
+                    with self.lock:
+                        self.twin.advance(min(behind_s, self.chunk_s))
+                else:
+                    time.sleep(0.002)
+        except Exception as exc:  # noqa: BLE001 - reported to the user by the menu
+            self.error = exc
+
+    def call(self, func: Callable[[], int]) -> int:
+        """Run ``func`` (a client call) between two simulation chunks."""
+        with self.lock:
+            return func()
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+
+
+def _ask(console: Console, prompt: str) -> Optional[float]:
+    text = console.input(prompt, markup=False).strip()
+    try:
+        value = float(text)
+    except ValueError:
+        console.print(f"[red]not a number: {escape(repr(text))}[/red]")
+        return None
+    if not math.isfinite(value):
+        console.print(f"[red]{escape(text)}: must be a finite number[/red]")
+        return None
+    return value
+
+
+def _choice(console: Console, rt: RealTimeTwin, choice: str) -> bool:
+    """Act on one menu choice; False to exit."""
+    client = rt.twin.client
+    if choice == "0":
+        return False
+    if choice == "1":
+        v = _ask(console, "linear speed [m/s]: ")
+        call = None if v is None else (lambda: client.linear(v))
+    elif choice == "2":
+        w = _ask(console, "angular speed [deg/s]: ")
+        icc = None if w is None else _ask(console, "ICC distance [m]: ")
+        call = None if icc is None else (lambda: client.angular(w, icc))
+    elif choice == "3":
+        call = client.stop
+    elif choice == "4":
+        motor = _ask(console, "motor (0 left, 1 right): ")
+        sense = _ask(console, "sense (1 forward, -1 backward): ") if motor in (0.0, 1.0) else None
+        v = _ask(console, "speed [m/s]: ") if sense in (1.0, -1.0) else None
+        if motor not in (0.0, 1.0) or sense not in (1.0, -1.0):
+            console.print("[red]motor must be 0 or 1 and sense 1 or -1[/red]")
+        call = None if v is None else (lambda: client.motor(int(motor), int(sense), v))
+    else:
+        console.print(f"[red]unknown choice {escape(repr(choice))}[/red]")
+        return True
+    if call is None:
+        return True
+    code = rt.call(call)
+    if code == 0:
+        r = client.last_request
+        console.print(escape(f"sent wheel_Command [{r.motionL}, {r.speedL:.5f}, {r.motionR}, {r.speedR:.5f}]"
+                             " (code 0)"))
+    else:
+        console.print(f"[red]{escape(client.last_error or '')}[/red] (code {code})")
+    return True
+
+
+def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per wall second."),
+           firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
+           payload_kg: Optional[float] = typer.Option(None, "--payload-kg", help="Payload mass, kg."),
+           seed: int = typer.Option(0, "--seed", help="Seed of the random parts."),
+           config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt,
+           set_: Optional[list[str]] = SetOpt) -> None:
+    """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time."""
+    from .loop import Twin, TwinOptions
+
+    if not (math.isfinite(rate) and rate > 0):
+        fail(f"--rate {rate}: must be a finite number > 0")
+    if firmware not in ("faithful", "improved"):
+        fail(f"--firmware {firmware!r}: must be faithful or improved")
+    extra = {}
+    if payload_kg is not None:
+        if not math.isfinite(payload_kg):
+            fail(f"--payload-kg {payload_kg}: must be a finite number")
+        extra["payload.mass_kg"] = payload_kg
+    cfg = _config(config, params, set_, extra)
+    console = Console(highlight=False)
+    logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
+    twin = Twin(cfg, TwinOptions(firmware=firmware, seed=seed))
+
+    def show(topic: str, msg, t_us: int) -> None:
+        if topic in ("wheel0_Vel", "wheel1_Vel"):
+            side = "left " if topic == "wheel0_Vel" else "right"
+            console.print(f"[dim]t={t_us * 1e-6:8.3f} s[/dim]  {topic} ({side}) {msg.data:8.3f} RPM")
+
+    twin.bus.add_tap(show)
+    rt = RealTimeTwin(twin, rate).start()
+    console.print(f"twin running at {rate:g}x real time, firmware {firmware}")
+    try:
+        while rt.error is None:
+            console.print(MENU)
+            if not _choice(console, rt, console.input("choice: ", markup=False).strip()):
+                break
+    except (EOFError, KeyboardInterrupt):
+        pass
+    finally:
+        rt.close()
+    if rt.error is not None:
+        fail(f"the twin stopped: {str(rt.error).splitlines()[0]}", code=3)
+    console.print(f"exit at t={twin.t_s:.3f} s simulated")

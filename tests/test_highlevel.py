@@ -1,0 +1,61 @@
+"""High-level control on the whole twin: odometry against the truth, cmd_vel timeout.
+
+The faithful firmware publishes a wheel speed once per revolution; the odometry
+node integrates each sample over its measurement window (controllers/odometry.py).
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from amr_twin.config import load_config
+from amr_twin.controllers.diff_drive import DiffDriveNode
+from amr_twin.loop import Twin, TwinOptions
+from amr_twin.messages import Twist, Vector3
+from amr_twin.run import Command, run_command, run_mission
+
+FIRMWARES = ("faithful", "improved")
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return load_config()
+
+
+@pytest.mark.parametrize("firmware", FIRMWARES)
+def test_linear_20_s_odometry_distance_within_2_percent(cfg, firmware):
+    result = run_command(cfg, Command("linear", speed_m_s=0.5), 20.0, TwinOptions(firmware=firmware))
+    s = result.series
+    # distance from the start at the end (the published odometry jumps when a sample
+    # corrects the past, so the length of its path is not a distance travelled)
+    true_m = float(np.hypot(*(s.pose[-1, :2] - s.pose[0, :2])))
+    odom_m = float(np.hypot(*s.odom[-1, 1:3]))
+    assert true_m > 8.0  # it did drive about 0.5 m/s x 20 s
+    assert odom_m == pytest.approx(true_m, rel=0.02)
+
+
+@pytest.mark.parametrize("firmware", FIRMWARES)
+def test_full_turn_in_place_odometry_yaw_within_3_deg(cfg, firmware):
+    # 60 deg/s for 6 s (one turn as commanded), then brake and let it settle
+    steps = [(0.0, Command("angular", speed_deg_s=60.0, icc_m=0.0)), (6.0, Command("stop"))]
+    s = run_mission(cfg, steps, 8.0, TwinOptions(firmware=firmware)).series
+    true_deg = math.degrees(np.unwrap(s.pose[:, 2])[-1] - s.pose[0, 2])
+    odom_deg = math.degrees(np.unwrap(s.odom[:, 3])[-1])
+    assert true_deg > 300.0  # about one full turn
+    assert odom_deg == pytest.approx(true_deg, abs=3.0)
+
+
+def test_cmd_vel_timeout_stops_the_wheels_in_the_twin(cfg):
+    twin = Twin(cfg, TwinOptions(firmware="improved"))
+    node = DiffDriveNode(twin.bus, twin.clock, client=twin.client, cmd_timeout_s=0.5)
+    twin.bus.publish("cmd_vel", Twist(Vector3(0.5, 0.0, 0.0), Vector3(0.0, 0.0, 0.0)))
+    twin.advance(2.0)
+    s = twin.recorder.series()
+    assert node.timed_out
+    (t0, first), (t1, last) = s.commands[0], s.commands[-1]
+    assert first[0] == 1.0 and first[1] == pytest.approx(38.197, abs=1e-3)
+    assert last == [0.0, 0.0, 0.0, 0.0] and t1 == pytest.approx(t0 + 0.5, abs=1e-3)
+    assert np.abs(s.true_rpm[s.t_s < t1 - 0.05]).max() > 5.0  # it had started
+    late = s.t_s > t1 + 1.0  # 0.5 s timeout + braking
+    assert np.all(s.mode[late] == 2) and np.abs(s.true_rpm[late]).max() < 0.5

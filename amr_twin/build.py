@@ -222,7 +222,11 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
     if not path.exists():
         names = sorted(p.stem for p in WORLD_DIR.glob("*.xml"))
         raise BuildError(f"--world {world}: no such world (available: {', '.join(names)})")
-    spec = mujoco.MjSpec.from_file(str(path))
+    if path.suffix in (".yaml", ".yml"):  # a ROS map_server map: walls extruded from the image
+        from .worlds import world_xml
+        spec = mujoco.MjSpec.from_string(world_xml(path))
+    else:
+        spec = mujoco.MjSpec.from_file(str(path))
     spec.option.timestep = cfg.sim.timestep_s
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.gravity = [0.0, 0.0, -cfg.sim.gravity_m_s2]

@@ -1,0 +1,71 @@
+"""Map worlds: PGM reading, run merging, world boxes (pure logic, no mujoco), and a build from a map."""
+
+import numpy as np
+import pytest
+
+from amr_twin.worlds import load_map, merge_boxes, read_pgm, wall_boxes, world_xml, write_pgm
+
+
+def _map(tmp_path, image, origin=(-1.0, -2.0, 0.0), negate=0, res=0.1):
+    write_pgm(tmp_path / "m.pgm", image)
+    (tmp_path / "m.yaml").write_text(
+        f"image: m.pgm\nresolution: {res}\norigin: {list(origin)}\nnegate: {negate}\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    return tmp_path / "m.yaml"
+
+
+def test_pgm_round_trip_and_ascii(tmp_path):
+    img = np.arange(12, dtype=np.uint8).reshape(3, 4) * 20
+    write_pgm(tmp_path / "a.pgm", img)
+    assert np.array_equal(read_pgm(tmp_path / "a.pgm"), img)
+    (tmp_path / "b.pgm").write_text("P2\n# comment\n2 2\n255\n0 254\n100 7\n")
+    assert read_pgm(tmp_path / "b.pgm").tolist() == [[0, 254], [100, 7]]
+
+
+def test_merged_boxes_cover_exactly_the_occupied_cells():
+    rng = np.random.default_rng(3)
+    occ = rng.random((40, 50)) < 0.3
+    occ[5:15, 10:30] = True  # a big block must become few boxes
+    cover = np.zeros(occ.shape, int)
+    boxes = merge_boxes(occ)
+    for r, c, nr, nc in boxes:
+        cover[r:r + nr, c:c + nc] += 1
+    assert np.array_equal(cover, occ.astype(int))  # exact cover, no overlap
+    assert len(boxes) < occ.sum() / 2
+    block = np.zeros((20, 20), bool)
+    block[2:12, 3:9] = True
+    assert merge_boxes(block) == [(2, 3, 10, 6)]
+
+
+def test_thresholds_negate_and_world_coordinates(tmp_path):
+    img = np.full((10, 20), 254, np.uint8)
+    img[0, :] = 0      # top row: y from 0.9 to 1.0 above the origin
+    img[5:7, 2] = 100  # p = 0.61 < 0.65: free
+    grid = load_map(_map(tmp_path, img))
+    assert grid.occupied.sum() == 20
+    (centre, half, yaw), = wall_boxes(grid, wall_height_m=2.0)
+    assert centre == pytest.approx([-1.0 + 1.0, -2.0 + 0.95, 1.0])
+    assert half == pytest.approx([1.0, 0.05, 1.0]) and yaw == 0.0
+    negated = load_map(_map(tmp_path, 255 - img, negate=1))
+    assert np.array_equal(negated.occupied, grid.occupied)
+
+
+def test_rotated_origin_rotates_the_boxes(tmp_path):
+    img = np.full((10, 10), 254, np.uint8)
+    img[9, 0] = 0  # lower-left pixel: centre at (0.05, 0.05) in the map frame
+    grid = load_map(_map(tmp_path, img, origin=(1.0, 0.0, np.pi / 2)))
+    (centre, _, yaw), = wall_boxes(grid)
+    assert centre[:2] == pytest.approx([1.0 - 0.05, 0.05]) and yaw == pytest.approx(np.pi / 2)
+    assert 'euler="0 0 90"' in world_xml(tmp_path / "m.yaml")
+
+
+def test_shipped_example_map_builds():
+    from amr_twin.build import build
+    from amr_twin.config import load_config
+    from amr_twin.paths import ROOT
+
+    path = ROOT / "models" / "worlds" / "room_map.yaml"
+    assert len(merge_boxes(load_map(path).occupied)) < 20
+    model = build(load_config(), world=path).model
+    names = [model.geom(i).name for i in range(model.ngeom)]
+    assert sum(n.startswith("wall_") for n in names) == len(merge_boxes(load_map(path).occupied))

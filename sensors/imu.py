@@ -1,0 +1,197 @@
+"""Adafruit 9-DOF IMU: LSM303DLHC accelerometer/magnetometer and L3GD20 gyroscope.
+
+The thesis (§2.2.2, App. D) names the board, not its chips; the Adafruit 9-DOF
+breakout carries an ST LSM303DLHC (3-axis accelerometer and magnetometer) and an
+ST L3GD20 (3-axis gyroscope), which is what is modelled here. The true signals
+come from MuJoCo's ``accelerometer``, ``gyro`` and ``magnetometer`` sensors on the
+``amr/imu`` site (frame ``imu_link``, REP-103 axes): specific force (m/s^2, +9.81
+on z at rest), body rate (rad/s) and the world field ``opt.magnetic`` (T).
+
+Each axis of each sensor is corrupted as (see :func:`corrupt`)::
+
+    y = quantise(clip((1 + s) * x + b0 + b_walk(t) + n, +-range), resolution)
+
+with a turn-on bias ``b0 ~ N(0, bias_sigma)`` and a scale error ``s ~ N(0,
+scale_sigma)`` drawn once, a bias random walk ``b_walk`` with increments
+``N(0, walk * sqrt(dt))``, and white noise ``n ~ N(0, density * sqrt(rate))``
+(the discrete-time convention of Kalibr's IMU noise model). The parameters and
+their datasheet sources are in the ``imu:`` section of ``models/amr/amr.yaml``.
+
+Published on the bus at ``rate_hz`` by clock events: ``sensor_msgs/Imu`` on
+``imu/data_raw`` (no orientation: ``orientation_covariance[0] = -1``) and
+``sensor_msgs/MagneticField`` on ``imu/mag``, both stamped with the sample time.
+This module does not import mujoco: it reads ``MjData.sensordata`` by address.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from amr_twin.bus import IMU_FRAME, Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.config import ImuCfg
+from amr_twin.messages import Header, Imu, MagneticField, Time, Vector3
+
+US = 1_000_000
+SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")
+"""MuJoCo sensors read by the IMU: accelerometer, gyro, magnetometer (3 values each)."""
+
+
+@dataclass
+class AxisModel:
+    """Error model of one 3-axis sensor; all arrays shape (3,), in the sensor's SI unit."""
+
+    bias: np.ndarray
+    scale: np.ndarray
+    noise_sigma: float
+    walk_sigma: float
+    range_max: float
+    resolution: np.ndarray
+
+
+def corrupt(true: np.ndarray, model: AxisModel, rng: np.random.Generator, dt_s: float) -> np.ndarray:
+    """Advance the bias random walk by ``dt_s`` and return one corrupted sample.
+
+    Parameters
+    ----------
+    true : ndarray, shape (3,)
+        True value in the sensor frame (m/s^2, rad/s or T).
+    model : AxisModel
+        Error state; ``model.bias`` is updated in place by the random walk.
+    rng : numpy.random.Generator
+        Source of the noise (three normals for the walk, three for the noise).
+    dt_s : float
+        Time since the previous sample, s.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        Scaled, biased, noisy, saturated and quantised reading.
+    """
+    if model.walk_sigma > 0:
+        model.bias += rng.normal(0.0, model.walk_sigma * np.sqrt(dt_s), 3)
+    noise = rng.normal(0.0, model.noise_sigma, 3) if model.noise_sigma > 0 else 0.0
+    y = np.clip((1.0 + model.scale) * true + model.bias + noise, -model.range_max, model.range_max)
+    res = model.resolution
+    return np.where(res > 0, np.round(y / np.where(res > 0, res, 1.0)) * res, y)
+
+
+def axis_models(cfg: ImuCfg, rng: np.random.Generator) -> dict[str, AxisModel]:
+    """Draw the turn-on biases and scale errors of accel, gyro and mag (in that order)."""
+    rate = cfg.rate_hz
+    return {
+        "accel": AxisModel(rng.normal(0.0, cfg.accel_bias_sigma_m_s2, 3), rng.normal(0.0, cfg.accel_scale_sigma, 3),
+                           cfg.accel_noise_density_m_s2_sqrt_hz * np.sqrt(rate), cfg.accel_bias_walk_m_s2_sqrt_s,
+                           cfg.accel_range_m_s2, np.full(3, cfg.accel_resolution_m_s2)),
+        "gyro": AxisModel(rng.normal(0.0, cfg.gyro_bias_sigma_rad_s, 3), rng.normal(0.0, cfg.gyro_scale_sigma, 3),
+                          cfg.gyro_noise_density_rad_s_sqrt_hz * np.sqrt(rate), cfg.gyro_bias_walk_rad_s_sqrt_s,
+                          cfg.gyro_range_rad_s, np.full(3, cfg.gyro_resolution_rad_s)),
+        "mag": AxisModel(rng.normal(0.0, cfg.mag_bias_sigma_t, 3), np.zeros(3), cfg.mag_noise_t, 0.0,
+                         cfg.mag_range_t,
+                         np.array([cfg.mag_resolution_xy_t, cfg.mag_resolution_xy_t, cfg.mag_resolution_z_t])),
+    }
+
+
+def _diag(sigma: float) -> np.ndarray:
+    return np.diag(np.full(3, sigma * sigma)).ravel()
+
+
+class ImuSensor:
+    """The Adafruit 9-DOF on floor (b), sampled by clock events and published on the bus.
+
+    Parameters
+    ----------
+    model, data : mujoco.MjModel, mujoco.MjData
+        The compiled twin (sensors named as in :data:`SENSOR_NAMES`).
+    clock : VirtualClock
+        Shared clock; one event per sample.
+    bus : Bus
+        Publishes ``imu/data_raw`` and ``imu/mag``.
+    cfg : ImuCfg
+        Noise parameters (``imu:`` section of the parameter file).
+    seed : int or None
+        Seed of the ``numpy.random.Generator`` (biases, scale errors, noise).
+    autostart : bool
+        Schedule the first sample at the current clock time.
+    """
+
+    def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: ImuCfg, seed: int | None = 0,
+                 frame_id: str = IMU_FRAME, autostart: bool = True):
+        self.data, self.clock, self.bus, self.cfg, self.frame_id = data, clock, bus, cfg, frame_id
+        self._adr = [int(model.sensor(name).adr[0]) for name in SENSOR_NAMES]
+        self.rng = np.random.default_rng(seed)
+        self.models = axis_models(cfg, self.rng)
+        self.period_us = int(round(US / cfg.rate_hz))
+        self.dt_s = self.period_us / US
+        self.pub_imu = bus.advertise("imu/data_raw", Imu)
+        self.pub_mag = bus.advertise("imu/mag", MagneticField)
+        self._cov = {k: _diag(m.noise_sigma) for k, m in self.models.items()}
+        self._orientation_cov = np.zeros(9)
+        self._orientation_cov[0] = -1.0  # orientation not provided (data_raw)
+        ms = [self.models[k] for k in ("accel", "gyro", "mag")]
+        self._bias = np.concatenate([m.bias for m in ms])  # (9,) evolving biases
+        for i, m in enumerate(ms):
+            m.bias = self._bias[3 * i:3 * i + 3]  # views: the models show the current bias
+        self._scale = np.concatenate([m.scale for m in ms])
+        self._noise = np.repeat([m.noise_sigma for m in ms], 3)
+        self._walk = np.repeat([m.walk_sigma * np.sqrt(self.dt_s) for m in ms], 3)
+        self._range = np.repeat([m.range_max for m in ms], 3)
+        self._res = np.concatenate([m.resolution for m in ms])
+        self._quantised = self._res > 0  # axes with a resolution of 0 are not quantised
+        self._res = np.where(self._quantised, self._res, 1.0)
+        self._inv_res = 1.0 / self._res
+        self.seq = 0
+        self._handle = None
+        if autostart:
+            self.start()
+
+    def start(self) -> None:
+        """Start sampling at the next multiple of ``period_us`` (absolute time), then every period.
+
+        Samples on the absolute grid share their clock events with the other
+        periodic nodes (LiDAR casts, firmware timer), which keeps the loop cheap.
+        """
+        if self._handle is None:
+            self._handle = self.clock.schedule(-(-self.clock.now_us // self.period_us) * self.period_us, self._tick)
+
+    def stop(self) -> None:
+        """Stop sampling."""
+        if self._handle is not None:
+            self._handle.cancel()
+            self._handle = None
+
+    def true_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(accel m/s^2, gyro rad/s, mag T), each shape (3,), without errors."""
+        sd = self.data.sensordata
+        return tuple(sd[a:a + 3].copy() for a in self._adr)
+
+    def sample(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One corrupted sample (accel, gyro, mag), advancing the error state by one period.
+
+        Same arithmetic as :func:`corrupt` on the nine axes at once (the twin calls
+        this at 100 Hz): the random walk, then noise, scale, clip and quantisation.
+        """
+        sd, a = self.data.sensordata, self._adr
+        x = np.concatenate((sd[a[0]:a[0] + 3], sd[a[1]:a[1] + 3], sd[a[2]:a[2] + 3]))
+        self._bias += self._walk * self.rng.standard_normal(9)
+        y = (1.0 + self._scale) * x + self._bias + self._noise * self.rng.standard_normal(9)
+        y = np.minimum(np.maximum(y, -self._range), self._range)
+        y = np.where(self._quantised, np.round(y * self._inv_res) * self._res, y)
+        return y[0:3], y[3:6], y[6:9]
+
+    def _tick(self) -> None:
+        self._handle = self.clock.schedule(self.clock.now_us + self.period_us, self._tick)
+        accel, gyro, mag = self.sample()
+        stamp = Time.from_us(self.clock.now_us)
+        self.seq += 1
+        self.pub_imu.publish(Imu(
+            header=Header(self.seq, stamp, self.frame_id),
+            orientation_covariance=self._orientation_cov.copy(),
+            angular_velocity=Vector3(*gyro.tolist()), angular_velocity_covariance=self._cov["gyro"].copy(),
+            linear_acceleration=Vector3(*accel.tolist()),
+            linear_acceleration_covariance=self._cov["accel"].copy()))
+        self.pub_mag.publish(MagneticField(
+            header=Header(self.seq, stamp, self.frame_id), magnetic_field=Vector3(*mag.tolist()),
+            magnetic_field_covariance=self._cov["mag"].copy()))

@@ -1,0 +1,171 @@
+"""RPLIDAR A1: ranges in a known room, payload, motion distortion, own-geom masking, seeds, services."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from amr_twin.build import build
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.config import load_config
+from amr_twin.sensors.lidar import Lidar
+
+ROOM = (-2.0, 3.0, -1.5, 2.5)  # inner faces x_min, x_max, y_min, y_max, m
+ROOM_XML = """<mujoco model="room"><worldbody>
+  <geom name="floor" type="plane" size="10 10 0.1"/>
+  <geom name="w_xmin" type="box" pos="-2.1 0.5 1" size="0.1 2.2 1"/>
+  <geom name="w_xmax" type="box" pos="3.1 0.5 1" size="0.1 2.2 1"/>
+  <geom name="w_ymin" type="box" pos="0.5 -1.6 1" size="2.7 0.1 1"/>
+  <geom name="w_ymax" type="box" pos="0.5 2.6 1" size="2.7 0.1 1"/>
+</worldbody></mujoco>"""
+POSE = (0.4, 0.3, 0.5)  # base x, y, yaw
+
+
+def room_ranges(p_xy, world_angle):
+    """Analytic distance from p to the room's walls along each world angle, m."""
+    c, s = np.cos(world_angle), np.sin(world_angle)
+    x0, x1, y0, y1 = ROOM
+    with np.errstate(divide="ignore"):
+        tx = np.where(c > 0, (x1 - p_xy[0]) / c, (x0 - p_xy[0]) / c)
+        ty = np.where(s > 0, (y1 - p_xy[1]) / s, (y0 - p_xy[1]) / s)
+    return np.minimum(np.where(tx > 0, tx, np.inf), np.where(ty > 0, ty, np.inf))
+
+
+@pytest.fixture(scope="module")
+def room(tmp_path_factory):
+    path = tmp_path_factory.mktemp("room") / "room.xml"
+    path.write_text(ROOM_XML)
+    return path
+
+
+class Rig:
+    """A compiled robot posed kinematically (no dynamics) with a LiDAR on its own clock."""
+
+    def __init__(self, world, cfg=None, seed=0):
+        self.cfg = cfg or load_config()
+        self.m = build(self.cfg, world=world).model
+        self.d = mujoco.MjData(self.m)
+        self.adr = self.m.jnt_qposadr[self.m.joint("amr/root").id]
+        self.dof = self.m.jnt_dofadr[self.m.joint("amr/root").id]
+        self.clock = VirtualClock()
+        self.bus = Bus(self.clock)
+        self.scans = []
+        self.bus.subscribe("scan", self.scans.append)
+        self.lidar = Lidar(self.m, self.d, self.clock, self.bus, self.cfg.lidar, seed=seed, autostart=False)
+
+    def pose(self, x, y, yaw, yaw_rate=0.0):
+        q = self.d.qpos
+        q[self.adr:self.adr + 3] = [x, y, self.m.qpos0[self.adr + 2]]
+        q[self.adr + 3:self.adr + 7] = [math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
+        self.d.qvel[:] = 0
+        self.d.qvel[self.dof + 5] = yaw_rate  # body-frame angular velocity about z
+        mujoco.mj_forward(self.m, self.d)
+
+    def run(self, t_end_us, yaw_rate=0.0):
+        """Run the clock, posing the robot at every event (rotating about the base origin)."""
+        while self.clock.next_event_us() <= t_end_us:
+            t = self.clock.next_event_us()
+            self.pose(POSE[0], POSE[1], POSE[2] + yaw_rate * t * 1e-6, yaw_rate)
+            self.clock.run_until(t)
+
+    def laser_offset(self):
+        """Laser position in the base frame (xy), m."""
+        self.pose(0.0, 0.0, 0.0)
+        return self.d.site_xpos[self.lidar.site_id][:2].copy()
+
+
+def sigma(cfg, r):
+    return np.maximum(cfg.lidar.range_noise_floor_m, cfg.lidar.range_noise_frac * r) + cfg.lidar.range_resolution_m
+
+
+def assert_matches(cfg, ranges, expected):
+    z = np.abs(ranges - expected) / sigma(cfg, expected)
+    assert np.all(np.isfinite(ranges))
+    assert np.mean(z < 3) > 0.98 and z.max() < 5, (np.mean(z < 3), z.max())
+
+
+def test_static_scan_matches_the_room(room):
+    rig = Rig(room)
+    off = rig.laser_offset()
+    rig.lidar.start_motor()
+    rig.run(rig.lidar.scan_us + 25_000)
+    scan = rig.scans[0]
+    lid = rig.lidar
+    assert lid.n_beams == 364 and scan.header.frame_id == "laser" and scan.header.stamp.to_us() == 0
+    assert scan.angle_min == -math.pi and scan.angle_increment == pytest.approx(2 * math.pi / 364)
+    assert scan.time_increment == pytest.approx(5e-4) and scan.scan_time == pytest.approx(0.182)
+    assert (scan.range_min, scan.range_max) == (0.15, 12.0)
+    x, y, yaw = POSE
+    p = np.array([x, y]) + np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]) @ off
+    assert_matches(rig.cfg, scan.ranges, room_ranges(p, yaw + lid.angles_rad))
+    assert np.array_equal(lid.last_beam_t_us, 500 * np.arange(364))
+
+
+def test_scan_while_turning_is_distorted_as_computed(room):
+    omega = math.radians(60.0)
+    static, moving = Rig(room), Rig(room)
+    off = static.laser_offset()
+    moving.laser_offset()
+    for rig, w in ((static, 0.0), (moving, omega)):
+        rig.lidar.start_motor()
+        rig.run(rig.lidar.scan_us + 25_000, yaw_rate=w)
+    lid = moving.lidar
+    t_s = moving.lidar.last_beam_t_us * 1e-6
+    yaw = POSE[2] + omega * t_s  # base yaw at each beam's own instant
+    rot = np.stack([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])  # (2, 2, n)
+    p = np.array(POSE[:2])[:, None] + np.einsum("ijn,j->in", rot, off)
+    expected = np.array([room_ranges(p[:, i], yaw[i] + lid.angles_rad[i]) for i in range(lid.n_beams)])
+    assert_matches(moving.cfg, moving.scans[0].ranges, expected)
+    # the distortion is real: much larger than the noise on many beams, and as predicted
+    expected_static = room_ranges(np.array(POSE[:2]) + rot[:, :, 0] @ off, POSE[2] + lid.angles_rad)
+    distortion = expected - expected_static
+    big = np.abs(distortion) > 10 * sigma(moving.cfg, expected_static)
+    assert big.sum() > 50
+    measured = moving.scans[0].ranges - static.scans[0].ranges
+    assert np.median(np.abs(measured[big] - distortion[big]) / np.abs(distortion[big])) < 0.1
+
+
+def test_payload_in_the_scan_plane_is_seen(room):
+    cfg = load_config(overrides={"payload.mass_kg": 20.0, "payload.xy_m": [-0.15, 0.0]})
+    rig = Rig(room, cfg)
+    rig.pose(*POSE)
+    ranges = rig.lidar.scan_now()
+    back = 0  # angle -pi: straight back over the deck; box front face at x = 0, laser at x = 0.30
+    assert rig.m.geom(rig.lidar.hit_geom[back]).name == "amr/payload_box"
+    off = rig.laser_offset()
+    assert ranges[back] == pytest.approx(off[0], abs=3 * sigma(cfg, off[0]))
+
+
+@pytest.mark.parametrize("world", ["room", "warehouse"])
+def test_own_wheels_and_casters_never_seen(room, world):
+    rig = Rig(room if world == "room" else world)
+    for yaw in np.linspace(0, 2 * math.pi, 7):
+        rig.pose(POSE[0], POSE[1], yaw)
+        rig.lidar.scan_now()
+        hit = rig.lidar.hit_geom[rig.lidar.hit_geom >= 0]
+        assert len(hit) > 300
+        assert np.all(rig.m.geom_bodyid[hit] == 0), [rig.m.geom(g).name for g in hit if rig.m.geom_bodyid[g]]
+
+
+def test_same_seed_same_scans_other_seed_different(room):
+    out = []
+    for seed in (7, 7, 8):
+        rig = Rig(room, seed=seed)
+        rig.lidar.start_motor()
+        rig.run(2 * rig.lidar.scan_us + 25_000)
+        out.append(np.concatenate([s.ranges for s in rig.scans]).tobytes())
+    assert out[0] == out[1] and out[0] != out[2]
+
+
+def test_motor_services_and_out_of_range(room):
+    rig = Rig(room)
+    rig.bus.call_service("start_motor", None)
+    rig.run(400_000)
+    assert len(rig.scans) == 2 and rig.scans[1].header.stamp.to_us() == rig.lidar.scan_us
+    rig.bus.call_service("stop_motor", None)
+    rig.run(1_000_000)
+    assert len(rig.scans) == 2
+    r = rig.lidar.noisy_ranges(np.array([20.0, 0.05, 2.0, 5.0]), np.array([1, 1, -1, 1], np.int32))
+    assert np.isinf(r[:3]).all() and r[3] == pytest.approx(5.0, abs=0.15)

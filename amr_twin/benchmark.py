@@ -57,4 +57,6 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result = bare_physics(cfg, sim_s)
     result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
     result.update(twin_figures(cfg, sim_s))
+    from .sensor_benchmark import sensor_figures  # IMU + LiDAR against the same bare figure
+    result.update(sensor_figures(cfg, sim_s, result["bare_physics_s_per_sim_s"]))
     return result

@@ -56,6 +56,7 @@ class TwinOptions:
     rosserial_extra_latency_us: int = 0
     rosserial_loss_prob: float = 0.0
     check_every_s: float = 0.5  # divergence check period
+    sensors: bool = False  # IMU (imu/data_raw, imu/mag) and LiDAR (scan) on the clock
     firmware_params: object = field(default=None, compare=False)
 
 
@@ -86,6 +87,12 @@ class Twin:
         self.bus.subscribe("wheel_Command", self._to_arduino)
         self.odometry = WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
                                       wheel_separation_m=cfg.wheel.separation_m)
+        if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
+            from .sensors.imu import ImuSensor
+            from .sensors.lidar import Lidar
+            m, d = self.physics.model, self.physics.data
+            self.imu = ImuSensor(m, d, self.clock, self.bus, cfg.imu, seed=[options.seed, 1])
+            self.lidar = Lidar(m, d, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2])
         self.recorder = Recorder(self)
         self._pending_t = np.empty(0, np.int64)
         self._pending_w = np.empty(0, np.int64)

@@ -87,3 +87,10 @@ def test_model_readme_lists_every_parameter():
     readme = (MODEL_DIR / "README.md").read_text()
     missing = [key for key, *_ in parameter_table() if f"`{key}`" not in readme]
     assert not missing, f"models/amr/README.md lacks {missing}"
+
+
+def test_model_readme_is_current():
+    from amr_twin.parameter_doc import readme_text
+    from amr_twin.paths import MODEL_DIR
+    assert (MODEL_DIR / "README.md").read_text() == readme_text(), \
+        "models/amr/README.md is stale: run python -m amr_twin.parameter_doc"

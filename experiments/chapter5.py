@@ -8,6 +8,8 @@ The metrics (:mod:`amr_twin.metrics`) are judged on the **published** samples
 and starting from rest at the command; the true wheel speed is measured too, for
 reference. Settling band: ``max(5 % of the step, 4 RPM)`` around the reference;
 4 RPM is the firmware's THRESHOLD_CONTROL, inside which the PI does not act.
+Oscillation (the 20 kg runs' "more oscillation", §5.1.4): excess total variation
+of the speed from its first 90 % crossing to 5 s after the command.
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
 """
 
@@ -28,6 +30,7 @@ from ..run import Command, run_command
 WHEELS = ("left", "right")
 STEP_SPLIT_RPM = 75.0  # the thesis' split: "steps valued at maximum 75 RPM" and higher
 THRESHOLD_CONTROL_RPM = 4.0
+TRANSIENT_WINDOW_S = 5.0  # oscillation is measured from the 90 % crossing to 5 s after the command
 
 
 @dataclass(frozen=True)
@@ -166,9 +169,9 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
         band = settling_band_rpm(reference)
         t0 = raw["t_command_s"]
         pub = raw["published"][w]
-        published = (step_info(pub[:, 0], pub[:, 1], abs(reference), t0_s=t0, settling_band=band).as_dict()
-                     if len(pub) else None)
-        true = step_info(raw["t_s"], raw["true_rpm"][:, w], reference, t0_s=t0, settling_band=band).as_dict()
+        kw = dict(t0_s=t0, settling_band=band, oscillation_window_s=TRANSIENT_WINDOW_S)
+        published = step_info(pub[:, 0], pub[:, 1], abs(reference), **kw).as_dict() if len(pub) else None
+        true = step_info(raw["t_s"], raw["true_rpm"][:, w], reference, **kw).as_dict()
         checks = judge(name, reference, published or {})
         wheels[name] = {"reference_rpm": reference, "step_class": step_class(reference),
                         "samples": len(pub), "published": published, "true": true, "checks": checks}
@@ -254,6 +257,7 @@ def _public(results: dict) -> dict:
     return {"firmware": results["firmware"], "jobs": results["jobs"], "wall_s": round(results["wall_s"], 3),
             "sim_s": results["sim_s"], "judged_on": "published samples, linear interpolation from rest at the command",
             "settling_band": "max(5 % of the step, 4 RPM) around the reference",
+            "oscillation": f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S} s",
             "bands": [vars(b) for b in BANDS], "runs": runs, "comparisons": results["comparisons"],
             "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)}}
 

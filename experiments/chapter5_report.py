@@ -65,8 +65,8 @@ def markdown(data: dict) -> str:
         f"Checks passed: **{s['passed']} / {s['checks']}**.", "",
         f"Judged on the {data['judged_on']}; settling band: {data['settling_band']}. Delay = 50 %, rise = "
         "10 → 90 % of the reference, peak = first maximum, overshoot = peak − reference (0 if below), "
-        "oscillation = excess total variation of the speed from the first 90 % crossing to the end of the run "
-        "(0 for a monotone approach). ✓ inside the band, ✗ outside.", "",
+        f"oscillation = {data['oscillation']} after the command (0 for a monotone approach). "
+        "✓ inside the band, ✗ outside.", "",
         "## Bands (§5.1.3, §5.1.4)", "", *_band_table(data), "",
         "## Published samples (wheel0_Vel / wheel1_Vel), judged", "", *_table(data, "published", True), "",
         "## True wheel speed (100 Hz), for reference", "", *_table(data, "true", False), "",

@@ -31,7 +31,7 @@ import numpy as np
 from ..config import ConfigError, TwinConfig, load_config
 from ..metrics import step_info
 from ..run import Command
-from .chapter5 import WHEELS, settling_band_rpm
+from .chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
 
 POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
              "front-left-corner": (1, 1), "front-right-corner": (1, -1),
@@ -174,7 +174,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
             continue
         pub = s.published[w]
         if len(pub) >= 1:
-            info = step_info(pub[:, 0], pub[:, 1], abs(ref), settling_band=settling_band_rpm(ref)).as_dict()
+            info = step_info(pub[:, 0], pub[:, 1], abs(ref), settling_band=settling_band_rpm(ref),
+                             oscillation_window_s=TRANSIENT_WINDOW_S).as_dict()
             for k in ("delay_s", "rise_s", "peak_s", "settling_s"):
                 out[f"{name}_{k}"] = info[k]
             for k in ("overshoot", "steady_error", "oscillation"):

@@ -38,6 +38,8 @@ FirmwareOpt = typer.Option("faithful", "--firmware", help="faithful (thesis list
 SeedOpt = typer.Option(0, "--seed", help="Seed of the random parts (rosserial loss, hall jitter).")
 CsvOpt = typer.Option(None, "--csv", help="Write the time series here (CSV).")
 JsonOpt = typer.Option(False, "--json", help="Print one JSON object.")
+RecordOpt = typer.Option(None, "--record", help="Write a Rerun recording here (.rrd; open with `rerun FILE`).")
+McapOpt = typer.Option(None, "--mcap", help="Write the ROS 2 topics here (.mcap; Foxglove, ros2 bag).")
 
 
 def _finite(name: str, value: Optional[float], required: bool = True) -> Optional[float]:
@@ -136,7 +138,8 @@ def summary(result, single: bool) -> dict:
 
 
 def execute(steps, duration_s: float, single: bool, payload_kg, firmware: str, seed: int,
-            csv: Optional[Path], as_json: bool, config, params, sets) -> None:
+            csv: Optional[Path], as_json: bool, config, params, sets, record: Optional[Path] = None,
+            mcap: Optional[Path] = None) -> None:
     """Run ``steps`` and report; exits non-zero if the client refused a command."""
     from .loop import TwinOptions
     from .run import run_mission
@@ -150,7 +153,20 @@ def execute(steps, duration_s: float, single: bool, payload_kg, firmware: str, s
     options = TwinOptions(firmware=firmware, seed=seed)
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
-    result = _guard(lambda: run_mission(cfg, steps, duration_s, options))
+    if record is None and mcap is None:
+        result = _guard(lambda: run_mission(cfg, steps, duration_s, options))
+    else:
+        from .loop import Twin
+        from .rerun_log import attach, record_run
+
+        def recorded():
+            twin = Twin(cfg, options)
+            attach(twin)
+            res = run_mission(cfg, steps, duration_s, options, twin=twin)
+            record_run(twin, rrd_path=record, mcap_path=mcap, result=res)
+            return res
+
+        result = _guard(recorded)
     if csv is not None:
         write_atomic(csv, _csv_text(result.series))
     info = summary(result, single)
@@ -182,21 +198,23 @@ def register(app: typer.Typer) -> None:
     app.add_typer(run_app, name="run")
     app.command(name="client")(client)
 
-    def one(command_factory, duration_s, payload_kg, firmware, seed, csv, as_json, config, params, set_):
+    def one(command_factory, duration_s, payload_kg, firmware, seed, csv, as_json, config, params, set_,
+            record=None, mcap=None):
         duration_s = _finite("--duration-s", duration_s, required=False)
         try:
             command = command_factory()
         except ValueError as exc:
             fail(str(exc))
         execute([(0.0, command)], 10.0 if duration_s is None else duration_s, True, payload_kg,
-                firmware, seed, csv, as_json, config, params, set_)
+                firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap)
 
     @run_app.callback(invoke_without_command=True)
     def run(ctx: typer.Context,
             mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/mission.py)."),
             duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
             firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
-            as_json: bool = JsonOpt, config: Optional[Path] = ConfigOpt,
+            as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
+            mcap: Optional[Path] = McapOpt, config: Optional[Path] = ConfigOpt,
             params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Run a command kind (linear, angular, motor, stop) or a --mission file."""
         if ctx.invoked_subcommand is not None:
@@ -213,30 +231,32 @@ def register(app: typer.Typer) -> None:
             fail(str(exc))
         duration_s = _finite("--duration-s", duration_s, required=False)
         execute(steps, mission_s if duration_s is None else duration_s, False, payload_kg, firmware,
-                seed, csv, as_json, config, params, set_)
+                seed, csv, as_json, config, params, set_, record=record, mcap=mcap)
 
     @run_app.command()
     def linear(speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="m/s; negative: backward."),
                duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
                firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
-               as_json: bool = JsonOpt, config: Optional[Path] = ConfigOpt,
+               as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
+            mcap: Optional[Path] = McapOpt, config: Optional[Path] = ConfigOpt,
                params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Linear motion: both wheels at the same speed (listing 4.4)."""
         speed = _finite("--speed-m-s", speed_m_s)
         one(lambda: Command("linear", speed_m_s=speed), duration_s, payload_kg, firmware, seed, csv,
-            as_json, config, params, set_)
+            as_json, config, params, set_, record=record, mcap=mcap)
 
     @run_app.command()
     def angular(speed_deg_s: Optional[float] = typer.Option(None, "--speed-deg-s", help="deg/s, CCW +."),
                 icc_m: Optional[float] = typer.Option(None, "--icc-m", help="ICC distance, m, + to the left."),
                 duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
                 firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
-                as_json: bool = JsonOpt, config: Optional[Path] = ConfigOpt,
+                as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
+            mcap: Optional[Path] = McapOpt, config: Optional[Path] = ConfigOpt,
                 params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Rotation about an ICC (listing 4.5; REP-103 signs)."""
         speed, icc = _finite("--speed-deg-s", speed_deg_s), _finite("--icc-m", icc_m)
         one(lambda: Command("angular", speed_deg_s=speed, icc_m=icc), duration_s, payload_kg, firmware,
-            seed, csv, as_json, config, params, set_)
+            seed, csv, as_json, config, params, set_, record=record, mcap=mcap)
 
     @run_app.command()
     def motor(wheel: Optional[str] = typer.Option(None, "--wheel", help="left or right."),
@@ -244,7 +264,8 @@ def register(app: typer.Typer) -> None:
               speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="Rim speed, m/s, >= 0."),
               duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
               firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
-              as_json: bool = JsonOpt, config: Optional[Path] = ConfigOpt,
+              as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
+            mcap: Optional[Path] = McapOpt, config: Optional[Path] = ConfigOpt,
               params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """One wheel driven, the other free-spinning (fig. 3.6)."""
         if wheel is None:
@@ -253,13 +274,14 @@ def register(app: typer.Typer) -> None:
             fail("--direction is required (forward or backward)")
         speed = _finite("--speed-m-s", speed_m_s)
         one(lambda: Command("motor", wheel=wheel, direction=direction, speed_m_s=speed), duration_s,
-            payload_kg, firmware, seed, csv, as_json, config, params, set_)
+            payload_kg, firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap)
 
     @run_app.command()
     def stop(duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
              firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
-             as_json: bool = JsonOpt, config: Optional[Path] = ConfigOpt,
+             as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
+            mcap: Optional[Path] = McapOpt, config: Optional[Path] = ConfigOpt,
              params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Brake both wheels (fig. 3.7)."""
         one(lambda: Command("stop"), duration_s, payload_kg, firmware, seed, csv, as_json, config,
-            params, set_)
+            params, set_, record=record, mcap=mcap)

@@ -94,8 +94,8 @@ class Twin:
             self.imu = ImuSensor(m, d, self.clock, self.bus, cfg.imu, seed=[options.seed, 1])
             self.lidar = Lidar(m, d, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2])
         self.recorder = Recorder(self)
-        self._pending_t = np.empty(0, np.int64)
-        self._pending_w = np.empty(0, np.int64)
+        self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
+        self._last_row = self.physics.data.sensordata[:LOOP_SENSOR_DIM].copy()
         self._next_check_us = int(options.check_every_s * US)
         self.firmware.start()
         self.plant.apply(self.firmware.pins)
@@ -147,38 +147,47 @@ class Twin:
 
         Hall edge times come from a cubic Hermite interpolation of the sampled
         wheel angles and speeds (exact for constant acceleration; the actuation
-        is constant inside a chunk), solved per edge to the microsecond.
+        is constant inside a chunk), solved per edge to the microsecond. Plain
+        Python lists: a chunk is a handful of samples.
         """
         m, d, dt, every = self.physics.model, self.physics.data, self.dt_us, self.recorder.every
         sensordata, step = d.sensordata, mujoco.mj_step
-        t0 = self.t_phys_us
-        k0 = t0 // dt
-        marks = list(range((k0 // every + 1) * every, k0 + nstep, every)) + [k0 + nstep]
-        rows = np.empty((len(marks) + 1, LOOP_SENSOR_DIM))
-        rows[0] = sensordata[:LOOP_SENSOR_DIM]
-        k = k0
-        for i, mark in enumerate(marks, 1):
+        k = k0 = self.t_phys_us // dt
+        k_end = k0 + nstep
+        ts, rows = [k0 * dt], [self._last_row]
+        grid_t, grid_rows = [], []
+        for mark in range((k0 // every + 1) * every, k_end + 1, every):
             step(m, d, mark - k)
-            rows[i] = sensordata[:LOOP_SENSOR_DIM]
             k = mark
+            row = sensordata[:LOOP_SENSOR_DIM].copy()
+            ts.append(k * dt)
+            rows.append(row)
+            grid_t.append(k * dt)
+            grid_rows.append(row)
+        if k < k_end:
+            step(m, d, k_end - k)
+            k = k_end
+            ts.append(k * dt)
+            rows.append(sensordata[:LOOP_SENSOR_DIM].copy())
         self.t_phys_us = k * dt
-        t_marks = np.array([k0] + marks, dtype=np.int64) * dt
-        self.recorder.extend(t_marks[1:], rows[1:])
-        edge_t, edge_w = self.hall.edges_hermite(t_marks, rows[:, 0:2], rows[:, 2:4])
-        if len(edge_t):
-            self._pending_t = np.concatenate([self._pending_t, edge_t])
-            self._pending_w = np.concatenate([self._pending_w, edge_w])
+        self._last_row = rows[-1]
+        if grid_t:
+            self.recorder.extend_grid(grid_t, grid_rows)
+        edges = self.hall.edges_from_samples(ts, [r[:4].tolist() for r in rows])
+        if edges:
+            self._pending.extend(edges)
 
     def _deliver_edges(self, t_until_us: int) -> None:
-        """Deliver the pending SC edges up to ``t_until_us`` to the firmware's ISR."""
-        if not len(self._pending_t):
-            return
-        n = int(np.searchsorted(self._pending_t, t_until_us, side="right"))
-        if n == 0:
+        """Deliver the pending SC edges up to ``t_until_us`` to the firmware's ISR, in time order."""
+        pending = self._pending
+        if not pending or pending[0][0] > t_until_us:
             return
         clock, isr = self.clock, self.firmware.on_sc_edge
-        for t_e, w in zip(self._pending_t[:n].tolist(), self._pending_w[:n].tolist()):
+        n = 0
+        for t_e, w in pending:
+            if t_e > t_until_us:
+                break
             clock.run_until(max(t_e, clock.now_us))
             isr(w)
-        self._pending_t = self._pending_t[n:]
-        self._pending_w = self._pending_w[n:]
+            n += 1
+        del pending[:n]

@@ -18,8 +18,10 @@ import numpy as np
 from .build import CASTERS, ROBOT_PREFIX, WHEELS
 
 
-BRAKE_TORQUE_MAX_NM = 500.0
-"""Torque bound of a braked wheel, N m (far above what the tyre can transmit)."""
+BRAKE_TORQUE_MAX_NM = 1e6
+"""Torque bound of a braked wheel, N m: in effect none. A braked wheel is held by a
+strong damping that the implicit integrator treats exactly; clipping that force
+while its velocity derivative stays in the implicit step made the wheel chatter."""
 
 
 class DivergenceError(RuntimeError):

@@ -102,10 +102,15 @@ class Recorder:
             self._t.append(t_us[keep])
             self._rows.append(rows[keep])
 
+    def extend_grid(self, t_us: list[int], rows: list[np.ndarray]) -> None:
+        """Keep rows already on the record grid (lists from the loop; stacked lazily)."""
+        self._t.append(t_us)
+        self._rows.append(rows)
+
     def series(self) -> RunSeries:
-        t_us = np.concatenate(self._t)
+        t_us = np.concatenate([np.asarray(t, np.int64) for t in self._t])
         t = t_us * 1e-6
-        rows = np.concatenate(self._rows)
+        rows = np.vstack([np.asarray(r) for r in self._rows])
         # pins in force during the step that ends at each row: the last change before it
         idx = np.searchsorted(np.array(self._pin_t), t_us, side="left") - 1
         pins = np.array(self._pins)[np.clip(idx, 0, None)]

@@ -139,53 +139,60 @@ class HallSensors:
         """SC edges from sparse samples of angle and speed (cubic Hermite in between).
 
         Same edges as :meth:`edges` on the densely interpolated trajectory, but each
-        crossing time is solved on the cubic directly (Newton), so the cost grows
-        with the number of edges, not of physics steps. Plain Python on purpose:
-        a chunk holds a few samples and a few edges, where numpy's per-call cost
-        dominates. Intervals where a wheel's speed changes sign (it may cross a
-        boundary twice) are first split into 8 sub-intervals.
+        crossing time is solved on the cubic directly, so the cost grows with the
+        number of edges, not of physics steps.
 
         Parameters
         ----------
-        t_us : (n+1,) int64 sample times, microseconds.
+        t_us : (n+1,) int sample times, microseconds.
         angle_rad, speed_rad_s : (n+1, n_wheels) wheel angles (rad) and speeds (rad/s).
         """
-        t_us = np.asarray(t_us, dtype=np.int64)
         q = np.asarray(angle_rad, dtype=float).reshape(len(t_us), self.n_wheels)
         v = np.asarray(speed_rad_s, dtype=float).reshape(len(t_us), self.n_wheels)
-        if (v[:-1] * v[1:] < 0).any():
-            t_us, q, v = _split(t_us, q, v, 8)
-        ts, qs, vs = t_us.tolist(), q.tolist(), v.tolist()
-        pitch, offsets = self.pitch_rad, self.offset_rad.tolist()
-        floor = math.floor
-        edge_t: list[float] = []
-        edge_w: list[int] = []
-        for w in range(self.n_wheels):
+        edges = self.edges_from_samples([int(t) for t in t_us], np.hstack([q, v]).tolist())
+        return (np.array([e[0] for e in edges], np.int64).reshape(-1),
+                np.array([e[1] for e in edges], np.int64).reshape(-1))
+
+    def edges_from_samples(self, ts: list[int], rows: list[list[float]]) -> list[tuple[int, int]]:
+        """Plain-Python core of :meth:`edges_hermite`: sorted ``(t_us, wheel)`` edges.
+
+        ``rows[i]`` holds the angles of all wheels then their speeds at ``ts[i]``.
+        A chunk holds a few samples and a few edges, where numpy's per-call cost
+        would dominate. Intervals where a wheel's speed changes sign (it may cross
+        a boundary twice) are first split into 8 sub-intervals.
+        """
+        nw = self.n_wheels
+        for i in range(len(ts) - 1):
+            if any(rows[i][nw + w] * rows[i + 1][nw + w] < 0 for w in range(nw)):
+                t_arr, q, v = _split(np.array(ts, np.int64), np.array(rows)[:, :nw], np.array(rows)[:, nw:], 8)
+                ts, rows = t_arr.tolist(), np.hstack([q, v]).tolist()
+                break
+        pitch, offsets, floor = self.pitch_rad, self.offset_rad.tolist(), math.floor
+        jitter = self.jitter_us > 0.0
+        t_first, t_last = ts[0] + 1, ts[-1]
+        edges: list[tuple[int, int]] = []
+        for w in range(nw):
             for k, off in enumerate(offsets[w]):
-                count = floor((qs[0][w] - off) / pitch)
+                count = floor((rows[0][w] - off) / pitch)
                 for i in range(len(ts) - 1):
-                    q0, q1 = qs[i][w], qs[i + 1][w]
+                    q1 = rows[i + 1][w]
                     c1 = floor((q1 - off) / pitch)
                     if c1 == count:
                         continue
-                    h = (ts[i + 1] - ts[i]) * 1e-6
-                    m0, m1 = vs[i][w] * h, vs[i + 1][w] * h
-                    step = 1 if c1 > count else -1
-                    for lattice in range(count + (step > 0), c1 + (step > 0), step):
-                        theta = off + pitch * lattice
-                        s = _solve_hermite(q0, q1, m0, m1, theta)
-                        edge_t.append(ts[i] + s * (ts[i + 1] - ts[i]))
-                        edge_w.append(w)
+                    q0, t0, span = rows[i][w], ts[i], ts[i + 1] - ts[i]
+                    h = span * 1e-6
+                    m0, m1 = rows[i][nw + w] * h, rows[i + 1][nw + w] * h
+                    up = c1 > count
+                    for lattice in (range(count + 1, c1 + 1) if up else range(count, c1, -1)):
+                        s = _solve_hermite(q0, q1, m0, m1, off + pitch * lattice)
+                        t = t0 + s * span
+                        if jitter:
+                            t += float(self._rng.normal(0.0, self.jitter_us))
+                        edges.append((min(t_last, max(t_first, int(round(t)))), w))
                     count = c1
                 self._count[w, k] = count
-        if not edge_t:
-            return np.empty(0, np.int64), np.empty(0, np.int64)
-        t_edge = np.array(edge_t)
-        if self.jitter_us > 0.0:
-            t_edge = t_edge + self._rng.normal(0.0, self.jitter_us, len(t_edge))
-        out_t = np.clip(np.rint(t_edge).astype(np.int64), ts[0] + 1, ts[-1])
-        order = np.argsort(out_t, kind="stable")
-        return out_t[order], np.array(edge_w, np.int64)[order]
+        edges.sort(key=lambda e: e[0])
+        return edges
 
 
 def _solve_hermite(q0: float, q1: float, m0: float, m1: float, theta: float) -> float:

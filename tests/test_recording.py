@@ -1,0 +1,148 @@
+"""Issue 7: .rrd (Rerun) and .mcap (ROS 2) recordings, read back with the formats' own readers."""
+
+import collections
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli import app
+from amr_twin.config import load_config
+from amr_twin.loop import Twin, TwinOptions
+from amr_twin.rerun_log import attach, record_run
+from amr_twin.run import Command, run_mission
+
+DURATION_S = 4.0
+STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))]
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    cfg = load_config()
+    options = TwinOptions(sensors=True)
+    twin = Twin(cfg, options)
+    capture = attach(twin)
+    result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)
+    out = tmp_path_factory.mktemp("rec")
+    paths = record_run(twin, rrd_path=out / "run.rrd", mcap_path=out / "run.mcap", result=result)
+    plain = run_mission(cfg, STEPS, DURATION_S, options)
+    return cfg, capture, result, plain, paths
+
+
+def _rrd_chunks(path):
+    from rerun.chunk import RrdReader
+
+    rows = collections.Counter()
+    batches = collections.defaultdict(list)
+    for chunk in RrdReader(str(path)).stream().to_chunks():
+        rows[str(chunk.entity_path)] += chunk.num_rows
+        batches[str(chunk.entity_path)].append(chunk.to_record_batch())
+    return rows, batches
+
+
+def _mcap_messages(path):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    out = collections.defaultdict(list)
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for schema, channel, message, decoded in reader.iter_decoded_messages():
+            out[channel.topic].append((message.log_time, schema.name, schema.encoding,
+                                       channel.message_encoding, decoded))
+    return out
+
+
+def test_recording_does_not_change_the_run(recorded):
+    _cfg, _capture, result, plain, _paths = recorded
+    assert np.array_equal(result.series.true_rpm, plain.series.true_rpm)
+    assert np.array_equal(result.series.odom, plain.series.odom)
+    assert np.array_equal(result.series.pose, plain.series.pose)
+
+
+def test_files_written_atomically(recorded):
+    paths = recorded[4]
+    for path in paths.values():
+        assert path.exists() and path.stat().st_size > 10_000
+        assert not list(path.parent.glob(".*.tmp"))
+
+
+def test_rrd_entities_and_rates(recorded):
+    _cfg, capture, result, _plain, paths = recorded
+    rows, batches = _rrd_chunks(paths["rrd"])
+    entities = set(rows)
+    for entity in ("/world/bodies/amr/base_link", "/world/bodies/amr/wheel_left_link",
+                   "/world/bodies/amr/caster_rear_right_link", "/world/bodies/world/geoms/boxes",
+                   "/world/bodies/amr/base_link/geoms/boxes", "/world/bodies/amr/wheel_left_link/geoms/cylinders",
+                   "/world/scan", "/world/bodies/amr/laser/scan", "/world/trajectory/true",
+                   "/world/trajectory/odom", "/wheels/left/true_rpm", "/wheels/right/published_rpm",
+                   "/wheels/left/reference_rpm", "/duty/left", "/imu/accel", "/imu/gyro", "/commands"):
+        assert entity in entities, entity
+    # body transforms at ~30 Hz (33.3 Hz on the 10 ms grid) over the run
+    n_tf = rows["/world/bodies/amr/wheel_left_link"]
+    assert abs(n_tf - DURATION_S * 1e6 / capture.period_us) <= 2
+    assert rows["/wheels/left/true_rpm"] == len(result.series.t_s)
+    n_scans = len(capture.messages["scan"])
+    assert abs(n_scans - DURATION_S * 5.5) <= 2
+    assert rows["/world/scan"] == n_scans
+    assert rows["/commands"] == len(STEPS) * 2  # client call + wheel_Command
+    # one value back: the last true RPM of the left wheel
+    last = batches["/wheels/left/true_rpm"][-1]
+    values = last.column("Scalars:scalars").to_pylist()
+    assert values[-1][0] == pytest.approx(result.series.true_rpm[-1, 0])
+    # the wheel turns: its transform's rotation changes over the run
+    quats = np.concatenate([np.array(b.column("Transform3D:quaternion").to_pylist(), dtype=object).ravel()
+                            for b in batches["/world/bodies/amr/wheel_left_link"]])
+    assert len({tuple(np.round(np.ravel(q), 3)) for q in quats}) > 10
+
+
+def test_mcap_topics_rates_and_values(recorded):
+    _cfg, capture, result, _plain, paths = recorded
+    msgs = _mcap_messages(paths["mcap"])
+    expect = {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
+              "/tf_static": "tf2_msgs/msg/TFMessage", "/scan": "sensor_msgs/msg/LaserScan",
+              "/imu/data_raw": "sensor_msgs/msg/Imu", "/imu/mag": "sensor_msgs/msg/MagneticField",
+              "/wheel_Command": "std_msgs/msg/Float64MultiArray", "/wheel0_Vel": "std_msgs/msg/Float64",
+              "/twin/true_rpm": "std_msgs/msg/Float64MultiArray", "/twin/ground_truth": "nav_msgs/msg/Odometry"}
+    for topic, schema in expect.items():
+        assert topic in msgs, topic
+        assert {(m[1], m[2], m[3]) for m in msgs[topic]} == {(schema, "ros2msg", "cdr")}
+    # rates: odom and tf at 50 Hz, IMU at its configured rate, scans at 5.5 Hz
+    assert abs(len(msgs["/odom"]) - 50 * DURATION_S) <= 2
+    assert abs(len(msgs["/tf"]) - 50 * DURATION_S) <= 2
+    cfg = recorded[0]
+    assert abs(len(msgs["/imu/data_raw"]) - cfg.imu.rate_hz * DURATION_S) <= 2
+    assert abs(len(msgs["/scan"]) - cfg.lidar.scan_rate_hz * DURATION_S) <= 2
+    assert len(msgs["/twin/true_rpm"]) == len(result.series.t_s)
+    assert len(msgs["/wheel_Command"]) == len(STEPS)
+    # log times in order, in simulation time
+    times = [m[0] for topic in msgs for m in msgs[topic]]
+    assert max(times) <= DURATION_S * 1e9
+    # values against the simulation
+    odom = msgs["/odom"][-1][4]
+    assert odom.header.frame_id == "odom" and odom.child_frame_id == "base_link"
+    assert odom.pose.pose.position.x == pytest.approx(result.series.odom[-1, 1], abs=1e-12)
+    assert odom.pose.pose.position.y == pytest.approx(result.series.odom[-1, 2], abs=1e-12)
+    scan = msgs["/scan"][-1][4]
+    src = capture.messages["scan"][-1][1]
+    assert np.allclose(np.asarray(scan.ranges, np.float32), np.asarray(src.ranges, np.float32), equal_nan=True)
+    truth = msgs["/twin/ground_truth"][-1][4]
+    assert truth.pose.pose.position.x == pytest.approx(result.series.pose[-1, 0])
+    assert list(msgs["/wheel_Command"][0][4].data) == pytest.approx(result.series.commands[0][1])
+    frames = {t.child_frame_id for t in msgs["/tf_static"][0][4].transforms}
+    assert frames == {"odom", "laser", "imu_link"}
+
+
+def test_cli_record_and_mcap(tmp_path):
+    rrd, mcap = tmp_path / "cli.rrd", tmp_path / "cli.mcap"
+    res = CliRunner().invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--duration-s", "1",
+                                   "--record", str(rrd), "--mcap", str(mcap), "--json"])
+    assert res.exit_code == 0, res.output
+    info = json.loads(res.stdout)
+    msgs = _mcap_messages(mcap)
+    assert abs(len(msgs["/odom"]) - 50) <= 1
+    assert msgs["/odom"][-1][4].pose.pose.position.x == pytest.approx(info["final_odom_pose"]["x_m"])
+    rows, _ = _rrd_chunks(rrd)
+    assert "/world/bodies/amr/base_link" in rows and "/wheels/right/true_rpm" in rows

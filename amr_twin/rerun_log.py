@@ -119,7 +119,7 @@ def _log_geoms(rec, m: mujoco.MjModel) -> None:
         for g in range(m.body_geomadr[b], m.body_geomadr[b] + m.body_geomnum[b]):
             if m.geom_group[g] not in VISUAL_GROUPS or m.geom_rgba[g][3] == 0:
                 continue
-            typ, size = m.geom_type[g], m.geom_size[g]
+            typ, size = int(m.geom_type[g]), m.geom_size[g]
             pos, q = m.geom_pos[g], m.geom_quat[g]
             xyzw = [q[1], q[2], q[3], q[0]]
             if typ == T.mjGEOM_BOX:
@@ -132,7 +132,7 @@ def _log_geoms(rec, m: mujoco.MjModel) -> None:
                 kinds["ellipsoids"].append((pos, xyzw, [size[0]] * 3, _rgba(m, g)))
             elif typ == T.mjGEOM_ELLIPSOID:
                 kinds["ellipsoids"].append((pos, xyzw, size[:3], _rgba(m, g)))
-            elif typ in (T.mjGEOM_CYLINDER, T.mjGEOM_CAPSULE):
+            elif typ in (int(T.mjGEOM_CYLINDER), int(T.mjGEOM_CAPSULE)):
                 kinds["cylinders"].append((pos, xyzw, (size[0], 2 * size[1]), _rgba(m, g)))
         base = body_entity(m, b) + "/geoms/"
         for kind, items in kinds.items():

@@ -24,7 +24,7 @@ def _value(row: dict, column: str) -> float:
     if not column.startswith("~"):
         v = row.get(column)
         return np.nan if v is None or isinstance(v, str) else float(v)
-    values = [row.get(f"{w}{column[1:]}") for w in WHEELS if row.get(f"{w}_reference_rpm")]
+    values = [row.get(f"{w}_{column[1:]}") for w in WHEELS if row.get(f"{w}_reference_rpm")]
     values = [abs(v) if "error" in column else v for v in values if v is not None]
     return float(max(values)) if values else np.nan
 

@@ -82,3 +82,11 @@ def test_cli_dask_not_available(tmp_path):
     result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--executor", "dask"])
     assert result.exit_code == 2 and "dask" in result.output
     assert not (tmp_path / "s").exists()
+
+
+def test_per_wheel_panels_read_the_wheel_columns():
+    from amr_twin.experiments.payload_sweep_report import _value
+    row = {"left_reference_rpm": 53.5, "right_reference_rpm": 53.5, "left_delay_s": 0.9, "right_delay_s": 1.2,
+           "left_steady_error_rpm": -3.0, "right_steady_error_rpm": 1.0}
+    assert _value(row, "~delay_s") == 1.2
+    assert _value(row, "~steady_error_rpm") == 3.0

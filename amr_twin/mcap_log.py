@@ -2,7 +2,9 @@
 
 The same streams as :mod:`amr_twin.rerun_log`, CDR-encoded with ROS 2 message
 definitions (schema encoding ``ros2msg``), so ``ros2 bag info/play`` (rosbag2 MCAP
-storage) and Foxglove read the file. Log and publish times are the simulation
+storage) and Foxglove read the file. The CDR payloads are encoded here with
+:mod:`struct` (the generic encoder of ``mcap-ros2-support`` costs ~3x more); the
+tests decode them with ``mcap_ros2.decoder`` against the same definitions. Log and publish times are the simulation
 time (ns) at which the bus delivered the message; header stamps are the
 messages' own.
 
@@ -23,14 +25,14 @@ Topics (frames as in REP-105; ``world`` is the simulation's world frame)::
 
 from __future__ import annotations
 
+import collections
 import math
 import os
+import struct
 from pathlib import Path
 
 import mujoco
 import numpy as np
-
-from .messages import Time
 
 SEP = "=" * 80
 
@@ -86,76 +88,142 @@ def ros2_type(name: str) -> str:
     return f"{pkg}/msg/{typ}"
 
 
-# -- conversion of the twin's (ROS 1 shaped) messages to ROS 2 dicts ----------------
-def _stamp(t: Time) -> dict:
-    return {"sec": int(t.sec), "nanosec": int(t.nanosec)}
+# -- CDR encoding (XCDR1 little endian, as rmw / rosbag2 write it) ------------------
+class _Cdr:
+    """Builds one CDR payload: primitives aligned to their size from after the 4-byte header."""
+
+    __slots__ = ("b",)
+
+    def __init__(self):
+        self.b = bytearray(b"\x00\x01\x00\x00")
+
+    def _align(self, n: int) -> None:
+        pad = -(len(self.b) - 4) % n
+        if pad:
+            self.b += bytes(pad)
+
+    def u32(self, v: int) -> None:
+        self._align(4)
+        self.b += _U32.pack(v)
+
+    def stamp(self, sec: int, nanosec: int) -> None:
+        self._align(4)
+        self.b += _STAMP.pack(sec, nanosec)
+
+    def string(self, text: str) -> None:
+        data = text.encode("utf-8") + b"\x00"
+        self.u32(len(data))
+        self.b += data
+
+    def f64(self, *values: float) -> None:
+        self._align(8)
+        self.b += struct.pack(f"<{len(values)}d", *values)
+
+    def f64_array(self, values) -> None:  # fixed-size float64[N]
+        self._align(8)
+        self.b += np.asarray(values, "<f8").tobytes()
+
+    def f64_seq(self, values) -> None:  # float64[]
+        a = np.asarray(values, "<f8")
+        self.u32(len(a))
+        if len(a):
+            self._align(8)
+            self.b += a.tobytes()
+
+    def f32(self, *values: float) -> None:
+        self._align(4)
+        self.b += struct.pack(f"<{len(values)}f", *values)
+
+    def f32_seq(self, values) -> None:  # float32[]
+        a = np.asarray(values, "<f4")
+        self.u32(len(a))
+        self.b += a.tobytes()
+
+    def header(self, sec: int, nanosec: int, frame_id: str) -> None:
+        self.stamp(sec, nanosec)
+        self.string(frame_id)
 
 
-def _header(h) -> dict:
-    return {"stamp": _stamp(h.stamp), "frame_id": h.frame_id}
+_U32 = struct.Struct("<I")
+_STAMP = struct.Struct("<iI")
+_ZERO36 = np.zeros(36)
 
 
-def _v3(v) -> dict:
-    return {"x": float(v.x), "y": float(v.y), "z": float(v.z)}
+def _hdr(c: _Cdr, h) -> None:
+    c.header(h.stamp.sec, h.stamp.nanosec, h.frame_id)
 
 
-def _q(q) -> dict:
-    return {"x": float(q.x), "y": float(q.y), "z": float(q.z), "w": float(q.w)}
+def _odometry(msg) -> bytes:
+    c = _Cdr()
+    _hdr(c, msg.header)
+    c.string(msg.child_frame_id)
+    p, o = msg.pose.pose.position, msg.pose.pose.orientation
+    c.f64(p.x, p.y, p.z, o.x, o.y, o.z, o.w)
+    c.f64_array(msg.pose.covariance)
+    lin, ang = msg.twist.twist.linear, msg.twist.twist.angular
+    c.f64(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+    c.f64_array(msg.twist.covariance)
+    return bytes(c.b)
 
 
-def _cov(a) -> list[float]:
-    return np.asarray(a, float).tolist()
+def _tf(msg) -> bytes:
+    c = _Cdr()
+    c.u32(len(msg.transforms))
+    for ts in msg.transforms:
+        _hdr(c, ts.header)
+        c.string(ts.child_frame_id)
+        t, r = ts.transform.translation, ts.transform.rotation
+        c.f64(t.x, t.y, t.z, r.x, r.y, r.z, r.w)
+    return bytes(c.b)
 
 
-def _odometry(msg) -> dict:
-    p, tw = msg.pose, msg.twist
-    return {"header": _header(msg.header), "child_frame_id": msg.child_frame_id,
-            "pose": {"pose": {"position": _v3(p.pose.position), "orientation": _q(p.pose.orientation)},
-                     "covariance": _cov(p.covariance)},
-            "twist": {"twist": {"linear": _v3(tw.twist.linear), "angular": _v3(tw.twist.angular)},
-                      "covariance": _cov(tw.covariance)}}
+def _imu(msg) -> bytes:
+    c = _Cdr()
+    _hdr(c, msg.header)
+    o, w, a = msg.orientation, msg.angular_velocity, msg.linear_acceleration
+    c.f64(o.x, o.y, o.z, o.w)
+    c.f64_array(msg.orientation_covariance)
+    c.f64(w.x, w.y, w.z)
+    c.f64_array(msg.angular_velocity_covariance)
+    c.f64(a.x, a.y, a.z)
+    c.f64_array(msg.linear_acceleration_covariance)
+    return bytes(c.b)
 
 
-def _transform_stamped(ts) -> dict:
-    return {"header": _header(ts.header), "child_frame_id": ts.child_frame_id,
-            "transform": {"translation": _v3(ts.transform.translation), "rotation": _q(ts.transform.rotation)}}
+def _mag(msg) -> bytes:
+    c = _Cdr()
+    _hdr(c, msg.header)
+    f = msg.magnetic_field
+    c.f64(f.x, f.y, f.z)
+    c.f64_array(msg.magnetic_field_covariance)
+    return bytes(c.b)
 
 
-def _tf(msg) -> dict:
-    return {"transforms": [_transform_stamped(ts) for ts in msg.transforms]}
+def _scan(msg) -> bytes:
+    c = _Cdr()
+    _hdr(c, msg.header)
+    c.f32(msg.angle_min, msg.angle_max, msg.angle_increment, msg.time_increment, msg.scan_time,
+          msg.range_min, msg.range_max)
+    c.f32_seq(msg.ranges)
+    c.f32_seq(msg.intensities)
+    return bytes(c.b)
 
 
-def _imu(msg) -> dict:
-    return {"header": _header(msg.header), "orientation": _q(msg.orientation),
-            "orientation_covariance": _cov(msg.orientation_covariance),
-            "angular_velocity": _v3(msg.angular_velocity),
-            "angular_velocity_covariance": _cov(msg.angular_velocity_covariance),
-            "linear_acceleration": _v3(msg.linear_acceleration),
-            "linear_acceleration_covariance": _cov(msg.linear_acceleration_covariance)}
+def _float64(msg) -> bytes:
+    c = _Cdr()
+    c.f64(float(msg.data))
+    return bytes(c.b)
 
 
-def _mag(msg) -> dict:
-    return {"header": _header(msg.header), "magnetic_field": _v3(msg.magnetic_field),
-            "magnetic_field_covariance": _cov(msg.magnetic_field_covariance)}
+def _multi(values) -> bytes:
+    c = _Cdr()
+    c.u32(0)  # layout.dim: empty
+    c.u32(0)  # layout.data_offset
+    c.f64_seq(values)
+    return bytes(c.b)
 
 
-def _scan(msg) -> dict:
-    return {"header": _header(msg.header), "angle_min": msg.angle_min, "angle_max": msg.angle_max,
-            "angle_increment": msg.angle_increment, "time_increment": msg.time_increment,
-            "scan_time": msg.scan_time, "range_min": msg.range_min, "range_max": msg.range_max,
-            "ranges": np.asarray(msg.ranges, np.float32).tolist(),
-            "intensities": np.asarray(msg.intensities, np.float32).tolist()}
-
-
-def _float64(msg) -> dict:
-    return {"data": float(msg.data)}
-
-
-def _multi(values) -> dict:
-    return {"layout": {"dim": [], "data_offset": 0}, "data": [float(v) for v in values]}
-
-
-# bus topic -> (ROS 2 topic, type, converter)
+# bus topic -> (ROS 2 topic, type, encoder)
 BUS_TOPICS = {
     "odom": ("/odom", "nav_msgs/Odometry", _odometry),
     "tf": ("/tf", "tf2_msgs/TFMessage", _tf),
@@ -168,69 +236,76 @@ BUS_TOPICS = {
 }
 
 
-def _tf_entry(stamp: dict, parent: str, child: str, xyz, quat_wxyz) -> dict:
-    w, x, y, z = (float(v) for v in quat_wxyz)
-    return {"header": {"stamp": stamp, "frame_id": parent}, "child_frame_id": child,
-            "transform": {"translation": dict(zip("xyz", (float(v) for v in xyz))),
-                          "rotation": {"x": x, "y": y, "z": z, "w": w}}}
-
-
-def _static_tf(capture, series) -> dict:
+def _static_tf(capture, series) -> bytes:
     """world -> odom (the start pose), base_link -> laser and imu_link (from the model)."""
     m = capture.twin.physics.model
-    stamp = {"sec": 0, "nanosec": 0}
     x0, y0, yaw0 = (float(v) for v in series.pose[0])
-    out = [_tf_entry(stamp, "world", "odom", (x0, y0, 0.0), (math.cos(yaw0 / 2), 0, 0, math.sin(yaw0 / 2)))]
+    entries = [("world", "odom", (x0, y0, 0.0), (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)))]
+    base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link")
     for body, frame in (("amr/laser", "laser"), ("amr/imu_link", "imu_link")):
         b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
-        if b >= 0 and m.body_parentid[b] == mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link"):
-            out.append(_tf_entry(stamp, "base_link", frame, m.body_pos[b], m.body_quat[b]))
-    return {"transforms": out}
+        if b >= 0 and m.body_parentid[b] == base:
+            entries.append(("base_link", frame, m.body_pos[b], m.body_quat[b]))
+    c = _Cdr()
+    c.u32(len(entries))
+    for parent, child, xyz, (w, x, y, z) in entries:
+        c.header(0, 0, parent)
+        c.string(child)
+        c.f64(*(float(v) for v in xyz), float(x), float(y), float(z), float(w))
+    return bytes(c.b)
 
 
-def _ground_truth(t_s: float, pose, stamp: dict) -> dict:
+def _ground_truth(t_ns: int, pose) -> bytes:
     x, y, yaw = (float(v) for v in pose)
-    zero = [0.0] * 36
-    return {"header": {"stamp": stamp, "frame_id": "world"}, "child_frame_id": "base_link",
-            "pose": {"pose": {"position": {"x": x, "y": y, "z": 0.0},
-                              "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)}},
-                     "covariance": zero},
-            "twist": {"twist": {"linear": {"x": 0.0, "y": 0.0, "z": 0.0},
-                                "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}, "covariance": zero}}
+    c = _Cdr()
+    c.header(t_ns // 1_000_000_000, t_ns % 1_000_000_000, "world")
+    c.string("base_link")
+    c.f64(x, y, 0.0, 0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+    c.f64_array(_ZERO36)
+    c.f64(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    c.f64_array(_ZERO36)
+    return bytes(c.b)
 
 
 def write_mcap(capture, series, path: Path) -> Path:
     """Write the capture's bus messages and ``series`` to ``path`` (.mcap), through a temporary file."""
-    from mcap_ros2.writer import Writer
+    from mcap.writer import Writer
 
     from .rerun_log import atomic_target
 
     path = Path(path)
     tmp = atomic_target(path)
-    items: list[tuple[int, int, str, str, dict]] = []  # t_ns, order, topic, type, message
+    items: list[tuple[int, int, str, str, bytes]] = []  # t_ns, order, topic, type, CDR payload
     k = 0
-    for bus_topic, (topic, typ, conv) in BUS_TOPICS.items():
+    for bus_topic, (topic, typ, encode) in BUS_TOPICS.items():
         for t_us, msg in capture.messages.get(bus_topic, []):
-            items.append((int(t_us) * 1000, k, topic, typ, conv(msg)))
+            items.append((int(t_us) * 1000, k, topic, typ, encode(msg)))
             k += 1
     t_ns = np.round(series.t_s * 1e9).astype(np.int64).tolist()
+    true_rpm, pwm, pose = series.true_rpm.tolist(), series.pwm_counts.tolist(), series.pose
     for i, t in enumerate(t_ns):
-        stamp = {"sec": t // 1_000_000_000, "nanosec": t % 1_000_000_000}
-        items.append((t, k, "/twin/true_rpm", "std_msgs/Float64MultiArray", _multi(series.true_rpm[i])))
-        items.append((t, k + 1, "/twin/pwm_counts", "std_msgs/Float64MultiArray", _multi(series.pwm_counts[i])))
-        items.append((t, k + 2, "/twin/ground_truth", "nav_msgs/Odometry",
-                      _ground_truth(series.t_s[i], series.pose[i], stamp)))
+        items.append((t, k, "/twin/true_rpm", "std_msgs/Float64MultiArray", _multi(true_rpm[i])))
+        items.append((t, k + 1, "/twin/pwm_counts", "std_msgs/Float64MultiArray", _multi(pwm[i])))
+        items.append((t, k + 2, "/twin/ground_truth", "nav_msgs/Odometry", _ground_truth(t, pose[i])))
         k += 3
     items.append((0, -1, "/tf_static", "tf2_msgs/TFMessage", _static_tf(capture, series)))
     items.sort(key=lambda it: (it[0], it[1]))
     try:
         with open(tmp, "wb") as f:
             writer = Writer(f)
-            schemas = {}
-            for typ in {it[3] for it in items}:
-                schemas[typ] = writer.register_msgdef(ros2_type(typ), msgdef(typ))
-            for t, _k, topic, typ, message in items:
-                writer.write_message(topic, schemas[typ], message, log_time=t, publish_time=t)
+            writer.start(profile="ros2", library="amr_twin")
+            schemas, channels, seq = {}, {}, collections.Counter()
+            for _t, _k, topic, typ, _data in items:
+                if typ not in schemas:
+                    schemas[typ] = writer.register_schema(name=ros2_type(typ), encoding="ros2msg",
+                                                          data=msgdef(typ).encode())
+                if topic not in channels:
+                    channels[topic] = writer.register_channel(topic=topic, message_encoding="cdr",
+                                                              schema_id=schemas[typ])
+            for t, _k, topic, _typ, data in items:
+                seq[topic] += 1
+                writer.add_message(channels[topic], log_time=t, data=data, publish_time=t,
+                                   sequence=seq[topic])
             writer.finish()
         os.replace(tmp, path)
     finally:

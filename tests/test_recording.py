@@ -128,6 +128,10 @@ def test_mcap_topics_rates_and_values(recorded):
     scan = msgs["/scan"][-1][4]
     src = capture.messages["scan"][-1][1]
     assert np.allclose(np.asarray(scan.ranges, np.float32), np.asarray(src.ranges, np.float32), equal_nan=True)
+    imu, imu_src = msgs["/imu/data_raw"][-1][4], capture.messages["imu/data_raw"][-1][1]
+    assert imu.linear_acceleration.z == imu_src.linear_acceleration.z
+    assert imu.angular_velocity.z == imu_src.angular_velocity.z
+    assert list(imu.orientation_covariance) == list(imu_src.orientation_covariance)
     truth = msgs["/twin/ground_truth"][-1][4]
     assert truth.pose.pose.position.x == pytest.approx(result.series.pose[-1, 0])
     assert list(msgs["/wheel_Command"][0][4].data) == pytest.approx(result.series.commands[0][1])

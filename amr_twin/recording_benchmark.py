@@ -1,0 +1,57 @@
+"""Cost of recording (issue 7): a chapter 5 run (16 s, linear 0.7 m/s) with and without ``--record``.
+
+``run_record_s`` is the run with the capture attached plus writing the ``.rrd``;
+``run_record_mcap_s`` also writes the ``.mcap``. Each figure is the best of
+``repeats`` (the machine is noisy); imports (rerun takes ~1 s) are done before timing.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+from .config import TwinConfig
+from .loop import Twin, TwinOptions
+from .run import Command, run_mission
+
+DURATION_S = 16.0
+STEPS = [(0.0, Command("linear", speed_m_s=0.7))]
+
+
+def _timed(cfg: TwinConfig, rrd: Path | None = None, mcap: Path | None = None) -> float:
+    from .rerun_log import attach, record_run
+
+    options = TwinOptions()
+    t0 = time.perf_counter()
+    twin = Twin(cfg, options)
+    if rrd is None and mcap is None:
+        run_mission(cfg, STEPS, DURATION_S, options, twin=twin)
+    else:
+        attach(twin)
+        result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)
+        record_run(twin, rrd_path=rrd, mcap_path=mcap, result=result)
+    return time.perf_counter() - t0
+
+
+def recording_figures(cfg: TwinConfig, repeats: int = 3) -> dict:
+    """{"run_s", "run_record_s", "record_ratio", "run_record_mcap_s", "record_mcap_ratio", sizes}."""
+    import mcap.writer  # noqa: F401 - imports outside the timing
+    import rerun  # noqa: F401
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rrd, mcap = Path(tmp) / "run.rrd", Path(tmp) / "run.mcap"
+        run_s = min(_timed(cfg) for _ in range(repeats))
+        rec_s = min(_timed(cfg, rrd) for _ in range(repeats))
+        both_s = min(_timed(cfg, rrd, mcap) for _ in range(repeats))
+        sizes = {"rrd_bytes": rrd.stat().st_size, "mcap_bytes": mcap.stat().st_size}
+    return {"run_s": run_s, "run_record_s": rec_s, "record_ratio": rec_s / run_s,
+            "run_record_mcap_s": both_s, "record_mcap_ratio": both_s / run_s, **sizes}
+
+
+if __name__ == "__main__":  # python -m amr_twin.recording_benchmark
+    import json
+
+    from .config import load_config
+
+    print(json.dumps(recording_figures(load_config()), indent=1))

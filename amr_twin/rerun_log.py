@@ -306,8 +306,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     m = capture.twin.physics.model
     rec = rr.RecordingStream(application_id)
     try:
-        rec.save(tmp)
-        rec.send_blueprint(_blueprint(bool(capture.messages.get("imu/data_raw"))))
+        rec.save(tmp, default_blueprint=_blueprint(bool(capture.messages.get("imu/data_raw"))))
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_geoms(rec, m)
         _log_body_transforms(rec, m, capture)

@@ -88,6 +88,13 @@ def test_rrd_entities_and_rates(recorded):
     assert abs(n_scans - DURATION_S * 5.5) <= 2
     assert rows["/world/scan"] == n_scans
     assert rows["/commands"] == len(STEPS) * 2  # client call + wheel_Command
+    # the default blueprint travels in the file
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(str(paths["rrd"]))
+    assert len(reader.recordings()) == 1 and len(reader.blueprints()) == 1
+    views = {str(c.entity_path) for c in reader.stream(store=reader.blueprints()[0]).to_chunks()}
+    assert sum(v.startswith("/view/") and v.count("/") == 2 for v in views) >= 5  # 3D, text, 3-4 plots
     # one value back: the last true RPM of the left wheel
     last = batches["/wheels/left/true_rpm"][-1]
     values = last.column("Scalars:scalars").to_pylist()

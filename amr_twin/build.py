@@ -82,7 +82,11 @@ def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
         raise BuildError(f"xacro {xacro_file.name}: {first}") from None
     finally:
         Path(params_path).unlink(missing_ok=True)
-    return doc.toprettyxml(indent="  ")
+    text = doc.toprettyxml(indent="  ")
+    # xacro names its absolute source path in a header comment: keep the file portable
+    source = Path(xacro_file).resolve()
+    shown = source.relative_to(ROOT).as_posix() if source.is_relative_to(ROOT) else source.name
+    return text.replace(str(xacro_file), shown).replace(str(source), shown)
 
 
 def check_urdf(urdf: str) -> None:

@@ -46,7 +46,7 @@ class BoardParams:
     dir_pins: tuple[int, int] = (26, 27)  # DIR outputs; assumed
     brake_pins: tuple[int, int] = (24, 25)  # BRAKE outputs; assumed
     stop_pins: tuple[int, int] = (22, 23)  # STOP outputs; assumed
-    latch_int_flag_while_detached: bool = True  # AVR sets INTFn on an edge even when EIMSK masks it,
+    latch_int_flag_while_detached: bool = False  # True: AVR sets INTFn on an edge even when EIMSK masks it,
     # and attachInterrupt() does not clear it: a stale edge fires on attach (ArduinoCore-avr #244)
     record_pin_log: bool = False  # keep (t_us, wheel, counts) of every analogWrite, for tests
 

@@ -12,7 +12,8 @@ from amr_twin.pins import HIGH, LOW
 from amr_twin.controllers.firmware import BoardParams, FaithfulParams, make_firmware
 from amr_twin.sensors.hall import HallSensors
 
-LOG = FaithfulParams(board=BoardParams(record_pin_log=True))
+# as on the real board (stale INT flag latched), the case these unit tests were written for
+LOG = FaithfulParams(board=BoardParams(record_pin_log=True, latch_int_flag_while_detached=True))
 K_RPM = 1054.0 / 0.9  # wheel model: duty 0.9*sp/1054 -> sp
 TAU_S = 0.25  # wheel model time constant, s
 

@@ -4,6 +4,8 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import wheel_model
+from wheel_model import K_RPM, TAU_S  # noqa: F401
 import pytest
 
 
@@ -14,8 +16,6 @@ from amr_twin.sensors.hall import HallSensors
 
 # as on the real board (stale INT flag latched), the case these unit tests were written for
 LOG = FaithfulParams(board=BoardParams(record_pin_log=True, latch_int_flag_while_detached=True))
-K_RPM = 1054.0 / 0.9  # wheel model: duty 0.9*sp/1054 -> sp
-TAU_S = 0.25  # wheel model time constant, s
 
 
 def make(params=LOG):
@@ -44,25 +44,8 @@ def feed_edges(clock, fw, rpm, t_end_us, wheels=(0,), phase_us=137):
 
 
 def simulate(fw, clock, t_end_us):
-    """First-order wheel model (speed' = (k*duty*dir - speed)/tau) with hall edges."""
-    hall = HallSensors()
-    speed, angle = np.zeros(2), np.zeros(2)
-    while clock.now_us < t_end_us:
-        t0 = clock.now_us
-        t1 = min(t0 - t0 % 1000 + 1000, clock.next_event_us(), t_end_us)
-        dt = (t1 - t0) * 1e-6
-        drive = [p.enabled and not p.braking for p in fw.pins]
-        tgt = np.array([K_RPM * p.duty * p.direction if d else 0.0 for p, d in zip(fw.pins, drive)])
-        tau = np.array([0.02 if p.braking else (TAU_S if p.enabled else 2.0) for p in fw.pins])
-        e = np.exp(-dt / tau)
-        new_angle = angle + (tgt * dt + (speed - tgt) * tau * (1 - e)) * 2 * math.pi / 60
-        speed = tgt + (speed - tgt) * e
-        for t, w in zip(*hall.edges(np.array([t0, t1]), np.vstack([angle, new_angle]))):
-            clock.set_time(int(t))
-            fw.on_sc_edge(int(w))
-        angle = new_angle
-        clock.run_until(t1)
-    return speed
+    """Run the shared first-order wheel model; return the final wheel speeds (RPM)."""
+    return wheel_model.simulate(fw, clock, t_end_us)[1]
 
 
 def published(pubs, topic="wheel0_Vel"):

@@ -4,6 +4,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+from wheel_model import K_RPM, TAU_S, simulate  # noqa: F401
 import pytest
 
 
@@ -13,8 +14,6 @@ from amr_twin.controllers.firmware import BoardParams, ImprovedParams, make_firm
 from amr_twin.sensors.hall import HallSensors
 
 LOG = ImprovedParams(board=BoardParams(record_pin_log=True))
-K_RPM = 1054.0 / 0.9  # wheel model: duty 0.9*sp/1054 -> sp
-TAU_S = 0.25  # wheel model time constant, s
 
 
 def make(kind="improved", params=LOG):
@@ -39,25 +38,6 @@ def feed_edges(clock, fw, rpm, t_end_us, wheels=(0,), phase_us=137):
     clock.run_until(t_end_us)
 
 
-def simulate(fw, clock, t_end_us, state=None):
-    """First-order wheel model (speed' = (k*duty*dir - speed)/tau) with hall edges."""
-    hall, speed, angle = state or (HallSensors(), np.zeros(2), np.zeros(2))
-    while clock.now_us < t_end_us:
-        t0 = clock.now_us
-        t1 = min(t0 - t0 % 1000 + 1000, clock.next_event_us(), t_end_us)
-        dt = (t1 - t0) * 1e-6
-        drive = [p.enabled and not p.braking for p in fw.pins]
-        tgt = np.array([K_RPM * p.duty * p.direction if d else 0.0 for p, d in zip(fw.pins, drive)])
-        tau = np.array([0.02 if p.braking else (TAU_S if p.enabled else 2.0) for p in fw.pins])
-        e = np.exp(-dt / tau)
-        new_angle = angle + (tgt * dt + (speed - tgt) * tau * (1 - e)) * 2 * math.pi / 60
-        speed = tgt + (speed - tgt) * e
-        for t, w in zip(*hall.edges(np.array([t0, t1]), np.vstack([angle, new_angle]))):
-            clock.set_time(int(t))
-            fw.on_sc_edge(int(w))
-        angle = new_angle
-        clock.run_until(t1)
-    return hall, speed, angle
 
 
 def published(pubs, topic="wheel0_Vel"):

@@ -10,7 +10,7 @@ left/right difference of §5.1.3). Two targets:
   the left by about 1.5 RPM (§5.1.3).
 - a log ``LOG.csv`` of real wheel speeds (columns ``t_s, wheel, rpm, command``;
   ``command`` as in ``amr-twin sweep``: ``linear:0.7``, ``angular:-60:-1``,
-  ``motor:left:forward:1.0``): each command's run is simulated for the log's
+  ``motor:left:1.0`` or ``motor:left:forward:1.0``): each command's run is simulated for the log's
   duration and the published speeds are compared with the log at the log's times.
 
 The fit is a bounded Nelder-Mead search (scipy) on a few parameters; each
@@ -73,20 +73,8 @@ class Fit:
 
 
 def parse_command(text: str) -> Command:
-    """``linear:V``, ``angular:W:ICC`` or ``motor:WHEEL:DIRECTION:V`` -> Command."""
-    parts = text.strip().split(":")
-    try:
-        if parts[0] == "linear" and len(parts) == 2:
-            return Command("linear", speed_m_s=float(parts[1]))
-        if parts[0] == "angular" and len(parts) == 3:
-            return Command("angular", speed_deg_s=float(parts[1]), icc_m=float(parts[2]))
-        if parts[0] == "motor" and len(parts) == 4:
-            return Command("motor", wheel=parts[1], direction=parts[2], speed_m_s=float(parts[3]))
-        if parts[0] == "stop" and len(parts) == 1:
-            return Command("stop")
-    except ValueError as exc:
-        raise ValueError(f"command {text!r}: {exc}") from None
-    raise ValueError(f"command {text!r}: expected linear:V, angular:W:ICC, motor:WHEEL:DIR:V or stop")
+    """A log's ``command`` column -> Command (see :meth:`Command.parse`)."""
+    return Command.parse(text)
 
 
 def read_log(path: Path) -> dict[str, dict[int, np.ndarray]]:

@@ -47,6 +47,31 @@ class Command:
         if self.direction not in ("forward", "backward"):
             raise ValueError(f"direction: {self.direction!r} must be forward or backward")
 
+    @classmethod
+    def parse(cls, text: str, what: str = "command") -> "Command":
+        """``linear:V``, ``angular:DEG_S:ICC_M``, ``motor:WHEEL:V`` (signed), ``motor:WHEEL:DIR:V`` or ``stop``.
+
+        The form used by ``amr-twin sweep --commands`` and the ``command`` column of a
+        calibration log (m/s, deg/s, m). ``what`` names the input in the error message.
+        """
+        parts = text.strip().split(":")
+        try:
+            if parts[0] == "linear" and len(parts) == 2:
+                return cls("linear", speed_m_s=float(parts[1]))
+            if parts[0] == "angular" and len(parts) == 3:
+                return cls("angular", speed_deg_s=float(parts[1]), icc_m=float(parts[2]))
+            if parts[0] == "motor" and len(parts) == 3:
+                v = float(parts[2])
+                return cls("motor", wheel=parts[1], direction="forward" if v >= 0 else "backward", speed_m_s=abs(v))
+            if parts[0] == "motor" and len(parts) == 4:
+                return cls("motor", wheel=parts[1], direction=parts[2], speed_m_s=float(parts[3]))
+            if parts[0] == "stop" and len(parts) == 1:
+                return cls("stop")
+        except ValueError as exc:
+            raise ValueError(f"{what} {text!r}: {exc}") from None
+        raise ValueError(f"{what} {text!r}: expected linear:V, angular:DEG_S:ICC_M, motor:WHEEL:V, "
+                         "motor:WHEEL:DIR:V or stop")
+
     def send(self, twin: Twin) -> int:
         """Call the client as the menu would; return its code (0 ok, 1 value error, -1 failed)."""
         client = twin.client

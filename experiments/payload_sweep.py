@@ -60,19 +60,8 @@ def parse_masses(text: str) -> list[float]:
 
 
 def parse_command(text: str) -> Command:
-    """``linear:V``, ``angular:DEG_S:ICC_M`` or ``motor:left|right:V`` (m/s, deg/s, m)."""
-    parts = text.split(":")
-    try:
-        if parts[0] == "linear" and len(parts) == 2:
-            return Command("linear", speed_m_s=float(parts[1]))
-        if parts[0] == "angular" and len(parts) == 3:
-            return Command("angular", speed_deg_s=float(parts[1]), icc_m=float(parts[2]))
-        if parts[0] == "motor" and len(parts) == 3:
-            v = float(parts[2])
-            return Command("motor", wheel=parts[1], direction="forward" if v >= 0 else "backward", speed_m_s=abs(v))
-    except ValueError as exc:
-        raise ValueError(f"--commands {text!r}: {exc}") from None
-    raise ValueError(f"--commands {text!r}: expected linear:V, angular:DEG_S:ICC_M or motor:left|right:V")
+    """One ``--commands`` entry -> Command (see :meth:`Command.parse`)."""
+    return Command.parse(text, what="--commands")
 
 
 def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:

@@ -13,18 +13,11 @@ import time
 import mujoco
 
 from .config import TwinConfig
-from .loop import Twin, TwinOptions
+from .loop import Twin
+from .twin_benchmark import twin_wall_s
 
 REPEATS = 3
 SCAN_REPEATS = 200
-
-
-def _twin_wall_s(cfg: TwinConfig, sim_s: float, sensors: bool) -> tuple[float, Twin]:
-    twin = Twin(cfg, TwinOptions(sensors=sensors))
-    twin.client.linear(0.7)
-    t0 = time.perf_counter()
-    twin.advance(sim_s)
-    return time.perf_counter() - t0, twin
 
 
 def lidar_scan_cost_us(twin: Twin) -> tuple[float, float]:
@@ -68,9 +61,9 @@ def sensor_figures(cfg: TwinConfig, sim_s: float, bare_physics_s_per_sim_s: floa
     with_best = without_best = float("inf")
     twin = None
     for _ in range(REPEATS):  # interleaved so that a disturbance hits both
-        wall, twin = _twin_wall_s(cfg, sim_s, sensors=True)
+        wall, twin = twin_wall_s(cfg, sim_s, sensors=True)
         with_best = min(with_best, wall)
-        without_best = min(without_best, _twin_wall_s(cfg, sim_s, sensors=False)[0])
+        without_best = min(without_best, twin_wall_s(cfg, sim_s, sensors=False)[0])
     mujoco.mj_forward(twin.physics.model, twin.physics.data)
     scan_groups_us, scan_one_us = lidar_scan_cost_us(twin)
     bare = bare_physics_s_per_sim_s

@@ -14,6 +14,7 @@ import math
 from pathlib import Path
 from typing import Annotated, Any, Iterator
 
+import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -190,6 +191,88 @@ class LidarCfg(_Section):
         return self
 
 
+_Coord = Annotated[float, Field(ge=-1000.0, le=1000.0)]
+
+
+class UwbCfg(_Section):
+    """UWB two-way ranging (Decawave DW1000 / DWM1000 tag and anchors), SI units.
+
+    The anchors stand in the world (``map``) frame at ``(anchors_x_m[i], anchors_y_m[i],
+    anchor_z_m)``; the tag is at ``tag_pos_m`` in ``base_link``.
+    """
+
+    rate_hz: float = P(unit="Hz", ge=0.5, le=100.0)
+    range_noise_sigma_m: float = P(unit="m", ge=0.0, le=1.0)
+    dropout_prob: float = P(unit="1", ge=0.0, le=0.9)
+    nlos_prob: float = P(unit="1", ge=0.0, le=1.0)
+    nlos_bias_m: float = P(unit="m", ge=0.0, le=10.0)
+    max_range_m: float = P(unit="m", ge=1.0, le=300.0)
+    anchors_x_m: tuple[_Coord, ...] = P(unit="m")
+    anchors_y_m: tuple[_Coord, ...] = P(unit="m")
+    anchor_z_m: float = P(unit="m", ge=0.0, le=30.0)
+    tag_pos_m: Vec3 = P(unit="m")
+
+    @model_validator(mode="after")
+    def _anchors_paired(self) -> "UwbCfg":
+        n = len(self.anchors_x_m)
+        if n != len(self.anchors_y_m):
+            raise ValueError(f"uwb.anchors_y_m: must have as many values as anchors_x_m ({n})")
+        if not 3 <= n <= 16:
+            raise ValueError(f"uwb.anchors_x_m: {n} anchors, allowed [3, 16] (2D position needs 3)")
+        return self
+
+    @property
+    def anchors_xy_m(self):
+        """Anchor positions in the world frame, ndarray shape (n_anchors, 2), m."""
+        return np.column_stack((self.anchors_x_m, self.anchors_y_m)).astype(np.float64)
+
+
+class EkfCfg(_Section):
+    """EKF of ``controllers/ekf.py`` (robot_localization ``ekf_node`` in two_d_mode), SI units.
+
+    Process noise is white acceleration; measurement sigmas are those the filter
+    assumes (not the simulated sensors' own), the Mahalanobis gate is in sigmas.
+    """
+
+    accel_sigma_m_s2: float = P(unit="m/s^2", gt=0.0, le=20.0)
+    alpha_sigma_rad_s2: float = P(unit="rad/s^2", gt=0.0, le=50.0)
+    gyro_bias_walk_rad_s_sqrt_s: float = P(unit="rad/s/sqrt(s)", ge=0.0, le=0.1)
+    odom_v_sigma_m_s: float = P(unit="m/s", gt=0.0, le=5.0)
+    odom_w_sigma_rad_s: float = P(unit="rad/s", gt=0.0, le=10.0)
+    gyro_w_sigma_rad_s: float = P(unit="rad/s", gt=0.0, le=10.0)
+    uwb_range_sigma_m: float = P(unit="m", gt=0.0, le=10.0)
+    initial_xy_sigma_m: float = P(unit="m", gt=0.0, le=100.0)
+    initial_yaw_sigma_rad: float = P(unit="rad", gt=0.0, le=10.0)
+    initial_v_sigma_m_s: float = P(unit="m/s", gt=0.0, le=10.0)
+    initial_w_sigma_rad_s: float = P(unit="rad/s", gt=0.0, le=10.0)
+    initial_gyro_bias_sigma_rad_s: float = P(unit="rad/s", gt=0.0, le=5.0)
+    mahalanobis_gate: float = P(unit="1", gt=0.0, le=1000.0)
+    imu_rest_calibration_s: float = P(unit="s", ge=0.0, le=60.0)
+    rest_speed_m_s: float = P(unit="m/s", ge=0.0, le=0.5)
+
+
+class LidarOdometryCfg(_Section):
+    """kiss-icp settings of ``controllers/lidar_odometry.py`` (plain keyword arguments)."""
+
+    voxel_size_m: float = P(unit="m", ge=0.02, le=2.0)
+    max_range_m: float = P(unit="m", gt=0.5, le=100.0)
+    min_range_m: float = P(unit="m", ge=0.0, le=5.0)
+    deskew: bool = P(unit="bool")
+
+    @model_validator(mode="after")
+    def _ranges_ordered(self) -> "LidarOdometryCfg":
+        if self.min_range_m >= self.max_range_m:
+            raise ValueError("lidar_odometry.min_range_m: must be less than max_range_m")
+        return self
+
+
+class MappingCfg(_Section):
+    """Occupancy grid of ``controllers/occupancy_grid.py``."""
+
+    resolution_m: float = P(unit="m", ge=0.01, le=1.0)
+    margin_m: float = P(unit="m", ge=0.0, le=20.0)
+
+
 class TwinConfig(_Section):
     """Every physical parameter of the twin, validated and frozen."""
 
@@ -206,6 +289,10 @@ class TwinConfig(_Section):
     battery: BatteryCfg
     imu: ImuCfg
     lidar: LidarCfg
+    uwb: UwbCfg
+    ekf: EkfCfg
+    lidar_odometry: LidarOdometryCfg
+    mapping: MappingCfg
 
     @model_validator(mode="after")
     def _geometry_consistent(self) -> "TwinConfig":

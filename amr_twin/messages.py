@@ -311,3 +311,27 @@ class Odometry:
     def serialized_size(self) -> int:
         return (self.header.serialized_size() + _string_size(self.child_frame_id)
                 + self.pose.serialized_size() + self.twist.serialized_size())
+
+
+@dataclass(slots=True)
+class Range:
+    """sensor_msgs/Range: one distance reading, m; angles in rad.
+
+    ROS defines only ``ULTRASOUND`` (0) and ``INFRARED`` (1) radiation types and has no
+    UWB type: the twin's UWB ranges use ``INFRARED`` (1), the nearest (an
+    electromagnetic time of flight), with ``field_of_view`` 2 pi (omnidirectional).
+    A reading outside ``[min_range, max_range]`` is invalid, as in ROS.
+    """
+
+    _type: ClassVar[str] = "sensor_msgs/Range"
+    ULTRASOUND: ClassVar[int] = 0
+    INFRARED: ClassVar[int] = 1
+    header: Header = field(default_factory=Header)
+    radiation_type: int = 0
+    field_of_view: float = 0.0
+    min_range: float = 0.0
+    max_range: float = 0.0
+    range: float = 0.0
+
+    def serialized_size(self) -> int:
+        return self.header.serialized_size() + 1 + 4 * 4

@@ -112,6 +112,10 @@ class Physics:
         yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
         return Pose2D(float(q[0]), float(q[1]), yaw)
 
+    def site_position_m(self, name: str) -> np.ndarray:
+        """(3,) world position of the site ``name`` (e.g. ``amr/laser``), m."""
+        return self.data.site(name).xpos.copy()
+
     def base_velocity(self) -> np.ndarray:
         """(6,) free-joint velocity: linear (world, m/s), angular (body, rad/s)."""
         return self.data.qvel[self.root_dof:self.root_dof + 6].copy()

@@ -22,14 +22,33 @@ def _check_common(jobs: int, firmware: str, fail) -> None:
         fail(f"--firmware {firmware!r}: must be one of {', '.join(FIRMWARES)}")
 
 
-def register(app: typer.Typer) -> None:
-    """Add the ``experiment`` and ``sweep`` command groups to ``app``."""
-    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+def _dask_client(scheduler: str, timeout_s: float, fail):
+    """A connected ``distributed.Client``, or a one-line error and exit 2."""
+    from .experiments.executor import ExecutorError, connect_dask
 
+    try:
+        return connect_dask(scheduler, timeout_s)
+    except ExecutorError as exc:
+        fail(str(exc))
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``experiment`` and ``sweep`` command groups to ``app``.
+
+    Each command is added by its own ``_add_<name>(group)`` function; a new
+    experiment adds one such function and one call here.
+    """
     experiment = typer.Typer(no_args_is_help=True, help="Reproduce the thesis experiments.")
     sweep = typer.Typer(no_args_is_help=True, help="Parameter sweeps over many simulations.")
     app.add_typer(experiment, name="experiment")
     app.add_typer(sweep, name="sweep")
+    _add_chapter5(experiment)
+    _add_payload_sweep(sweep)
+
+
+def _add_chapter5(experiment: typer.Typer) -> None:
+    """``amr-twin experiment chapter5``."""
+    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @experiment.command("chapter5")
     def chapter5_cmd(
@@ -71,6 +90,11 @@ def register(app: typer.Typer) -> None:
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
                    f"(jobs {jobs}, firmware {firmware})")
 
+
+def _add_payload_sweep(sweep: typer.Typer) -> None:
+    """``amr-twin sweep payload``."""
+    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+
     @sweep.command("payload")
     def payload_cmd(
         out: Path = typer.Option(..., "--out", help="Output folder: runs/, sweep.csv, summary.md/json, PNGs."),
@@ -82,19 +106,26 @@ def register(app: typer.Typer) -> None:
         duration_s: float = typer.Option(8.0, "--duration-s", help="Simulated seconds per point."),
         jobs: int = typer.Option(1, "--jobs", help="Worker processes."),
         firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
-        executor: str = typer.Option("local", "--executor", help="local (process pool) or dask."),
-        scheduler: Optional[str] = typer.Option(None, "--scheduler", help="dask scheduler address."),
+        executor: str = typer.Option("local", "--executor", help="local (process pool of --jobs) or dask."),
+        scheduler: Optional[str] = typer.Option(None, "--scheduler",
+                                                help="Dask scheduler address, e.g. tcp://127.0.0.1:8786."),
+        scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s",
+                                                  help="Give up reaching the Dask scheduler after this long, s."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Sweep payload mass x position x command; resume by skipping the points already done."""
         from .experiments import payload_sweep, payload_sweep_report
 
+        from .experiments.executor import EXECUTORS
+
         _check_common(jobs, firmware, fail)
-        if executor == "dask":
-            fail("--executor dask: not available in this build (dask is not installed); use --executor local")
-        if executor != "local":
-            fail(f"--executor {executor!r}: must be local or dask")
+        if executor not in EXECUTORS:
+            fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
+        if executor == "dask" and not scheduler:
+            fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
+        if executor == "local" and scheduler:
+            fail("--scheduler is only used with --executor dask")
         if not (duration_s > 0 and duration_s < 1e4):
             fail(f"--duration-s {duration_s}: must be in (0, 10000) s")
         cfg = _config(config, params, set_)
@@ -111,16 +142,23 @@ def register(app: typer.Typer) -> None:
         if not position_list or not command_list:
             fail("--positions and --commands must name at least one item each")
 
+        client = _dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+
         def work():
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
-                                        jobs=jobs, firmware=firmware, progress=progress)
+                                        jobs=jobs, firmware=firmware, progress=progress, client=client)
             payload_sweep_report.plot(results, out)
             return results, payload_sweep_report.report(results, out)
 
-        results, summary = _guard(work)
+        try:
+            results, summary = _guard(work)
+        finally:
+            if client is not None:
+                client.close()
         for position, s in summary.items():
             typer.echo(f"{position:20s} highest safe {s['highest_safe_kg']} kg"
                        + (f"  (unsafe at {s['first_unsafe_kg']} kg: {s['reason']})" if s["first_unsafe_kg"] is not None
                           else ""))
+        where = f"dask {scheduler}" if client is not None else f"jobs {jobs}"
         typer.echo(f"{len(results['rows'])} points: {results['simulated']} simulated, {results['reused']} reused; "
-                   f"wall time {results['wall_s']:.2f} s (jobs {jobs}); wrote {out}/sweep.csv, summary.md")
+                   f"wall time {results['wall_s']:.2f} s ({where}); wrote {out}/sweep.csv, summary.md")

@@ -211,8 +211,14 @@ def simulate_point(point: Point) -> dict:
 
 
 def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str], commands: list[str],
-        duration_s: float = 8.0, jobs: int = 1, firmware: str = "faithful", progress: bool = True) -> dict:
+        duration_s: float = 8.0, jobs: int = 1, firmware: str = "faithful", progress: bool = True,
+        client=None) -> dict:
     """Simulate the missing points of the sweep (one file each) and return all rows.
+
+    The points run in this process (``jobs=1``), in ``jobs`` local worker
+    processes, or on the Dask cluster of ``client`` (a ``distributed.Client``,
+    see :func:`~amr_twin.experiments.executor.connect_dask`); either way each
+    result comes back here and is written atomically as it arrives.
 
     Returns
     -------
@@ -236,7 +242,7 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
         else:
             todo.append(point)
     wall0 = time.perf_counter()
-    for point, row in run_all(simulate_point, todo, jobs, "payload sweep", progress):
+    for point, row in run_all(simulate_point, todo, jobs, "payload sweep", progress, client=client):
         write_json(runs_dir / f"{point.key}.json", row)
         rows[point.key] = row
     return {"rows": [rows[p.key] for p in points], "simulated": len(todo), "reused": len(points) - len(todo),

@@ -1,0 +1,119 @@
+"""Executors: the payload sweep on a Dask LocalCluster gives the local numbers and resumes; clear errors.
+
+The cluster runs its two workers as processes (``processes=True``), so the work
+items and the function really travel by pickle to other interpreters, as on a
+remote cluster; one cluster serves the whole module.
+"""
+
+import json
+import math
+import socket
+import sys
+
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli import app
+from amr_twin.config import load_config
+from amr_twin.experiments import executor
+from amr_twin.experiments import payload_sweep as ps
+
+DURATION_S = 1.5
+SWEEP = dict(positions=["center"], commands=["linear:0.7"], duration_s=DURATION_S, progress=False)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as local_cluster:
+        yield local_cluster
+
+
+@pytest.fixture(scope="module")
+def client(cluster):
+    c = executor.connect_dask(cluster.scheduler_address, timeout_s=10.0)
+    yield c
+    c.close()
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _numbers(row: dict) -> dict:
+    return {k: v for k, v in row.items() if k != "wall_s"}  # wall time is the only non-simulated field
+
+
+def test_dask_sweep_equals_local_and_rerun_skips_finished(client, tmp_path):
+    cfg = load_config()
+    local = ps.run(cfg, tmp_path / "local", masses=[0.0, 20.0], jobs=1, **SWEEP)
+    on_dask = ps.run(cfg, tmp_path / "dask", masses=[0.0, 20.0], client=client, **SWEEP)
+    assert (on_dask["simulated"], on_dask["reused"]) == (2, 0)
+    assert [_numbers(r) for r in on_dask["rows"]] == [_numbers(r) for r in local["rows"]]
+    light, heavy = on_dask["rows"]
+    assert heavy["total_mass_kg"] == pytest.approx(light["total_mass_kg"] + 20.0)
+    assert heavy["dyn_min_wheel_n"] > light["dyn_min_wheel_n"]  # the points really differ
+    files = sorted(p.name for p in (tmp_path / "dask" / "runs").iterdir())
+    assert files == sorted(f"{ps.Point(m, 'center', 'linear:0.7', DURATION_S, 'faithful', cfg).key}.json"
+                           for m in (0.0, 20.0))  # one whole file per point, no temporary left
+    again = ps.run(cfg, tmp_path / "dask", masses=[0.0, 20.0], client=client, **SWEEP)
+    assert (again["simulated"], again["reused"]) == (0, 2)
+
+
+def test_cli_dask_does_only_the_missing_points(cluster, tmp_path):
+    cfg = load_config()
+    done = ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)
+    (tmp_path / "runs").mkdir()
+    marker = {"key": done.key, "fingerprint": done.fingerprint, "mass_kg": 0.0, "position": "center",
+              "command": "linear:0.7", "valid": True, "error": "", "safe": True}
+    (tmp_path / "runs" / f"{done.key}.json").write_text(json.dumps(marker))
+    result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path), "--masses", "0,10",
+                                      "--positions", "center", "--commands", "linear:0.7",
+                                      "--duration-s", str(DURATION_S), "--executor", "dask",
+                                      "--scheduler", cluster.scheduler_address])
+    assert result.exit_code == 0, result.output
+    assert "1 simulated, 1 reused" in result.output and "dask tcp://" in result.output
+    row = json.loads((tmp_path / "runs" / "m10kg_center_linear_0.7.json").read_text())
+    assert row["mass_kg"] == 10.0 and row["valid"] and not row["error"]
+    assert (tmp_path / "sweep.csv").exists() and not list(tmp_path.rglob(".*.tmp"))
+
+
+def test_a_failing_run_on_dask_raises_here(client):
+    with pytest.raises(ValueError, match="math domain error"):
+        list(executor.run_all(math.sqrt, [4.0, -1.0, 9.0], description="sqrt", progress=False, client=client))
+    got = dict(executor.run_all(math.sqrt, [4.0, 9.0], progress=False, client=client))
+    assert got == {4.0: 2.0, 9.0: 3.0}
+
+
+def test_unreachable_scheduler_is_one_line_error(tmp_path):
+    pytest.importorskip("distributed")
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    with pytest.raises(executor.ExecutorError, match="cannot reach the Dask scheduler within 0.5 s"):
+        executor.connect_dask(address, timeout_s=0.5)
+    result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--executor", "dask",
+                                      "--scheduler", address, "--scheduler-timeout-s", "0.5"])
+    assert result.exit_code == 2 and "cannot reach the Dask scheduler" in result.output
+    assert len(result.output.strip().splitlines()) == 1
+    assert not (tmp_path / "s").exists()
+
+
+def test_dask_not_installed(monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    with pytest.raises(executor.ExecutorError, match="not installed"):
+        executor.connect_dask("tcp://127.0.0.1:8786")
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--executor", "dask"], "--scheduler"),
+    (["--executor", "ray"], "--executor 'ray'"),
+    (["--scheduler", "tcp://127.0.0.1:8786"], "only used with --executor dask"),
+    (["--executor", "dask", "--scheduler", "tcp://127.0.0.1:8786", "--scheduler-timeout-s", "0"],
+     "(0, 3600)"),
+])
+def test_cli_rejects_bad_executor_options(tmp_path, args, needle):
+    result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), *args])
+    assert result.exit_code == 2 and needle in result.output
+    assert not (tmp_path / "s").exists()

@@ -59,14 +59,14 @@ def connect_dask(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S):
 
 
 def _dask_results(client, func: Callable[[Any], Any], items: list) -> Iterator[tuple[Any, Any]]:
-    from distributed import as_completed
+    from distributed import as_completed as dask_as_completed
 
     if not items:
         return
     futures = client.map(func, items, pure=False)
     item_of = {future.key: item for future, item in zip(futures, items)}
     try:
-        for future in as_completed(futures, loop=client.loop):
+        for future in dask_as_completed(futures, loop=client.loop):
             yield item_of[future.key], future.result()
     finally:  # interrupted, or a run raised: the cluster drops what is left
         client.cancel([f for f in futures if not f.done()])
@@ -112,7 +112,7 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
         with ProcessPoolExecutor(max_workers=min(jobs, len(items)), mp_context=context) as pool:
             futures = {pool.submit(func, item): item for item in items}
             try:
-                for future in as_completed(futures, loop=client.loop):
+                for future in as_completed(futures):
                     bar.advance(task)
                     yield futures[future], future.result()
             except BaseException:

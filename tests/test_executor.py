@@ -88,6 +88,14 @@ def test_a_failing_run_on_dask_raises_here(client):
     assert got == {4.0: 2.0, 9.0: 3.0}
 
 
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_local_executor_same_contract(jobs):
+    with pytest.raises(ValueError, match="math domain error"):
+        list(executor.run_all(math.sqrt, [4.0, -1.0, 9.0], jobs=jobs, progress=False))
+    assert dict(executor.run_all(math.sqrt, [4.0, 9.0, 16.0], jobs=jobs, progress=False)) == {
+        4.0: 2.0, 9.0: 3.0, 16.0: 4.0}
+
+
 def test_unreachable_scheduler_is_one_line_error(tmp_path):
     pytest.importorskip("distributed")
     address = f"tcp://127.0.0.1:{_free_port()}"

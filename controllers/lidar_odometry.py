@@ -1,0 +1,278 @@
+"""LiDAR odometry: KISS-ICP (1.3) on ``sensor_msgs/LaserScan`` with a wheel-odometry prior.
+
+Each scan becomes an (N, 3) cloud with z = 0 in the ``laser`` frame (beam ``i``
+at ``angle_min + i * angle_increment``; inf, NaN and out-of-range beams dropped)
+and is registered with :class:`kiss_icp.kiss_icp.KissICP` (its preprocessing,
+deskew, voxel map, adaptive threshold and point-to-point ICP, nothing
+re-implemented here).
+
+Time
+    Beam ``i`` was acquired at ``header.stamp + i * time_increment`` (the twin's
+    RPLIDAR, sensors/lidar.py, and ``rplidar_ros`` stamp the first beam). KISS-ICP
+    1.3 deskews to the end of its timestamp span, so every estimate is the pose
+    at the scan's last beam, ``t_end = stamp + (n - 1) * time_increment``
+    (:func:`scan_end_time_s`). Two sentinel points far beyond ``max_range_m``
+    (dropped by KISS-ICP's range filter after the deskew) carry the stamps
+    ``t_end`` of the previous scan and of this one, so that KISS-ICP's min-max
+    normalised time spans exactly the interval over which the motion prior is
+    given: the deskew is then constant-velocity motion along the prior.
+Motion prior
+    ``prior_base_delta`` is the motion of ``base_link`` from the previous scan's
+    ``t_end`` to this one's (e.g. wheel odometry interpolated at both stamps,
+    :func:`relative_pose` of :func:`interpolate_pose`), expressed in the earlier
+    ``base_link`` frame. It is moved to the laser frame, ``L^-1 D L`` with ``L``
+    the laser pose in ``base_link``, and written into ``KissICP.last_delta``,
+    which KISS-ICP uses both to deskew and as the ICP initial guess. Without a
+    prior KISS-ICP's own constant-velocity model is used.
+Output
+    ``base_link`` poses ``(x_m, y_m, yaw_rad)`` in the odometry frame of the first
+    scan: ``base_link`` at the first scan's ``t_end`` is the origin. A scan with
+    fewer than :data:`MIN_POINTS` valid beams is not registered; the pose is
+    carried forward by the prior (or KISS-ICP's last delta).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from kiss_icp.config import KISSConfig
+from kiss_icp.kiss_icp import KissICP
+
+from amr_twin.messages import LaserScan
+
+MIN_POINTS = 20
+"""Fewest valid beams a scan needs to be registered."""
+SENTINEL_RANGE_M = 1.0e6
+"""Range of the two timing sentinel points (beyond any max range: never registered)."""
+
+
+def se2_matrix(x_m: float, y_m: float, yaw_rad: float) -> np.ndarray:
+    """Homogeneous 4x4 transform of a planar pose (rotation about z)."""
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    t = np.eye(4)
+    t[:2, :2] = [[c, -s], [s, c]]
+    t[0, 3], t[1, 3] = x_m, y_m
+    return t
+
+
+def matrix_se2(t: np.ndarray) -> tuple[float, float, float]:
+    """Planar pose ``(x_m, y_m, yaw_rad)`` of a 4x4 transform (yaw in (-pi, pi])."""
+    return float(t[0, 3]), float(t[1, 3]), math.atan2(t[1, 0], t[0, 0])
+
+
+def _wrap_rad(a):
+    return np.arctan2(np.sin(a), np.cos(a))
+
+
+def compose(a, b) -> np.ndarray:
+    """Pose(s) ``a * b``: ``b`` given in the frame of ``a``, returned in ``a``'s parent frame.
+
+    ``a`` and ``b`` are ``(x_m, y_m, yaw_rad)`` arrays of shape (3,) or (N, 3) (broadcast);
+    the yaw is wrapped to (-pi, pi].
+    """
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
+    return np.stack([a[..., 0] + c * b[..., 0] - s * b[..., 1], a[..., 1] + s * b[..., 0] + c * b[..., 1],
+                     _wrap_rad(a[..., 2] + b[..., 2])], axis=-1)
+
+
+def relative_pose(a, b) -> np.ndarray:
+    """Pose(s) of ``b`` in the frame of ``a`` (``a^-1 * b``): the motion from ``a`` to ``b``. Shapes as :func:`compose`."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
+    dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, _wrap_rad(b[..., 2] - a[..., 2])], axis=-1)
+
+
+def interpolate_pose(t_s: np.ndarray, pose: np.ndarray, t_query_s) -> np.ndarray:
+    """Poses at ``t_query_s`` by linear interpolation (yaw unwrapped), held beyond the ends.
+
+    Parameters
+    ----------
+    t_s : ndarray, shape (N,)
+        Increasing stamps, s.
+    pose : ndarray, shape (N, 3)
+        ``x_m, y_m, yaw_rad``.
+    t_query_s : float or ndarray, shape (M,)
+        Query stamps, s.
+
+    Returns
+    -------
+    ndarray, shape (M, 3) (or (3,) for a scalar query); yaw wrapped to (-pi, pi].
+    """
+    t_s, pose = np.asarray(t_s, float), np.asarray(pose, float)
+    q = np.atleast_1d(np.asarray(t_query_s, float))
+    yaw = np.interp(q, t_s, np.unwrap(pose[:, 2]))
+    out = np.column_stack([np.interp(q, t_s, pose[:, 0]), np.interp(q, t_s, pose[:, 1]),
+                           np.arctan2(np.sin(yaw), np.cos(yaw))])
+    return out[0] if np.ndim(t_query_s) == 0 else out
+
+
+def beam_times_s(scan: LaserScan) -> np.ndarray:
+    """Acquisition time of every beam, s, shape (n,): ``stamp + i * time_increment``."""
+    return scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(scan.ranges))
+
+
+def scan_end_time_s(scan: LaserScan) -> float:
+    """Time of the scan's last beam, s: the stamp of the pose KISS-ICP estimates for it."""
+    return scan.header.stamp.to_sec() + scan.time_increment * max(len(scan.ranges) - 1, 0)
+
+
+def scan_points(scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
+    """Valid beams as points in the laser frame and their beam indices.
+
+    Returns
+    -------
+    points : ndarray, shape (k, 3)
+        ``x, y, 0`` in metres, laser frame (REP-103).
+    index : ndarray, shape (k,), int
+        Beam index of each point (finite range within ``[range_min, range_max]``).
+    """
+    r = np.asarray(scan.ranges, np.float64)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(r) & (r >= scan.range_min) & (r <= scan.range_max)
+    index = np.flatnonzero(ok)
+    angle = scan.angle_min + scan.angle_increment * index
+    points = np.column_stack([r[index] * np.cos(angle), r[index] * np.sin(angle), np.zeros(len(index))])
+    return points, index
+
+
+class LidarOdometry:
+    """KISS-ICP scan-to-map odometry of ``base_link`` from 2D laser scans.
+
+    Parameters
+    ----------
+    voxel_size_m : float
+        KISS-ICP map voxel size, m, in (0, 1] (0.1 to 0.25 works for a 12 m 2D scanner;
+        0.05 diverged, stack-notes.md).
+    max_range_m, min_range_m : float
+        Points outside ``(min_range_m, max_range_m)`` are dropped, m.
+    laser_in_base_xy_yaw : tuple of 3 float
+        Pose of ``laser`` in ``base_link`` (m, m, rad); the twin's is (0.30, 0, 0).
+    deskew : bool
+        Motion-compensate each scan with its per-beam timestamps.
+    max_threads : int
+        KISS-ICP worker threads (0: as many as cores).
+    """
+
+    def __init__(self, *, voxel_size_m: float = 0.15, max_range_m: float = 12.0, min_range_m: float = 0.15,
+                 laser_in_base_xy_yaw: tuple[float, float, float] = (0.30, 0.0, 0.0), deskew: bool = True,
+                 max_threads: int = 1):
+        if not (math.isfinite(voxel_size_m) and 0.0 < voxel_size_m <= 1.0):
+            raise ValueError(f"voxel_size_m: {voxel_size_m} must lie in (0, 1] m")
+        if not (math.isfinite(max_range_m) and 0.0 <= min_range_m < max_range_m):
+            raise ValueError(f"min_range_m, max_range_m: ({min_range_m}, {max_range_m}) must satisfy "
+                             "0 <= min_range_m < max_range_m < inf")
+        if len(laser_in_base_xy_yaw) != 3 or not all(math.isfinite(v) for v in laser_in_base_xy_yaw):
+            raise ValueError(f"laser_in_base_xy_yaw: {laser_in_base_xy_yaw} must be 3 finite numbers")
+        if int(max_threads) < 0:
+            raise ValueError(f"max_threads: {max_threads} must be >= 0")
+        config = KISSConfig()
+        config.mapping.voxel_size = float(voxel_size_m)
+        config.data.max_range, config.data.min_range = float(max_range_m), float(min_range_m)
+        config.data.deskew = bool(deskew)
+        config.registration.max_num_threads = int(max_threads)
+        self.config = config
+        self.kiss = KissICP(config)
+        self.laser_in_base_xy_yaw = tuple(float(v) for v in laser_in_base_xy_yaw)
+        self._laser = se2_matrix(*self.laser_in_base_xy_yaw)
+        self._laser_inv = np.linalg.inv(self._laser)
+        self._t_s: list[float] = []
+        self._poses: list[tuple[float, float, float]] = []
+        self.register_wall_s: list[float] = []
+        """Wall time of each :meth:`register` call, s."""
+        self.skipped = 0
+        """Scans with fewer than :data:`MIN_POINTS` valid beams (not registered)."""
+
+    @property
+    def last_stamp_s(self) -> float | None:
+        """``t_end`` of the last registered scan, s (None before the first)."""
+        return self._t_s[-1] if self._t_s else None
+
+    def register(self, scan: LaserScan,
+                 prior_base_delta: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
+        """Register one scan; return the ``base_link`` pose at its last beam.
+
+        Parameters
+        ----------
+        scan : LaserScan
+            Scan in the ``laser`` frame; scans must come in time order.
+        prior_base_delta : tuple (dx_m, dy_m, dyaw_rad) or None
+            Motion of ``base_link`` from the previous scan's ``t_end`` to this scan's
+            (:func:`scan_end_time_s`), in the earlier ``base_link`` frame. Ignored for
+            the first scan.
+
+        Returns
+        -------
+        tuple (x_m, y_m, yaw_rad)
+            ``base_link`` pose in the odometry frame of the first scan.
+        """
+        wall0 = time.perf_counter()
+        t_end = scan_end_time_s(scan)
+        t_prev = self.last_stamp_s
+        if t_prev is not None and t_end <= t_prev:
+            raise ValueError(f"scan stamp: t_end {t_end:.6f} s must be after the previous {t_prev:.6f} s")
+        first = t_prev is None
+        if not first and prior_base_delta is not None:
+            if len(prior_base_delta) != 3 or not all(math.isfinite(v) for v in prior_base_delta):
+                raise ValueError(f"prior_base_delta: {prior_base_delta} must be 3 finite numbers (m, m, rad)")
+            delta = se2_matrix(*(float(v) for v in prior_base_delta))
+            self.kiss.last_delta = self._laser_inv @ delta @ self._laser
+        points, index = scan_points(scan)
+        if first:
+            self.kiss.last_delta = np.eye(4)
+        if len(index) >= MIN_POINTS:
+            t_start = t_prev if t_prev is not None else min(scan.header.stamp.to_sec(), t_end - 1e-3)
+            stamps = scan.header.stamp.to_sec() + scan.time_increment * index
+            sentinel = np.array([[SENTINEL_RANGE_M, 0.0, 0.0]] * 2)
+            self.kiss.register_frame(np.vstack([points, sentinel]),
+                                     np.concatenate([stamps, [t_start, t_end]]))
+        else:  # too few points: carry the pose forward along the prior
+            self.skipped += 1
+            self.kiss.last_pose = self.kiss.last_pose @ self.kiss.last_delta
+        pose = matrix_se2(self._laser @ self.kiss.last_pose @ self._laser_inv)
+        self._t_s.append(t_end)
+        self._poses.append(pose)
+        self.register_wall_s.append(time.perf_counter() - wall0)
+        return pose
+
+    def poses(self, origin_xy_yaw: tuple[float, float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """History of the estimates.
+
+        Parameters
+        ----------
+        origin_xy_yaw : tuple of 3 float, optional
+            Pose of the first estimate in another frame (e.g. the true pose at the first
+            scan's ``t_end`` in the world); every pose is then returned in that frame.
+
+        Returns
+        -------
+        t_s : ndarray, shape (N,)
+            ``t_end`` of each registered scan, s (the stamp each pose holds at).
+        pose : ndarray, shape (N, 3)
+            ``base_link`` ``x_m, y_m, yaw_rad``.
+        """
+        pose = np.array(self._poses, float).reshape(-1, 3)
+        if origin_xy_yaw is not None:
+            pose = compose(np.asarray(origin_xy_yaw, float), pose).reshape(-1, 3)
+        return np.array(self._t_s, float), pose
+
+    def beam_laser_poses(self, scan: LaserScan,
+                         origin_xy_yaw: tuple[float, float, float] | None = None) -> np.ndarray:
+        """``laser`` pose at every beam of a registered scan, for mapping a moving scan.
+
+        The ``base_link`` poses of :meth:`poses` are interpolated (linearly, yaw unwrapped)
+        at :func:`beam_times_s` (held before the first estimate), then moved to the laser.
+
+        Returns
+        -------
+        ndarray, shape (n_beams, 3)
+            ``x_m, y_m, yaw_rad`` of the laser, in the frame of :meth:`poses`.
+        """
+        t_s, pose = self.poses(origin_xy_yaw)
+        if len(t_s) == 0:
+            raise ValueError("beam_laser_poses: no scan registered yet")
+        base = interpolate_pose(t_s, pose, beam_times_s(scan)).reshape(-1, 3)
+        return compose(base, np.asarray(self.laser_in_base_xy_yaw))

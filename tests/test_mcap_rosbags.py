@@ -1,0 +1,187 @@
+"""Issue 7: the ``--mcap`` recording read back with the ``rosbags`` library.
+
+``rosbags`` is a reader independent of the ``mcap`` package that wrote the file: its
+rosbag2 ``Reader`` opens a bare ``.mcap`` (rosbag2 MCAP storage, profile ``ros2``), and
+its own CDR deserializer decodes every message against the ROS 2 Humble message
+definitions it ships, not against the definitions embedded in the file.
+"""
+
+import collections
+import math
+
+import numpy as np
+import pytest
+
+from amr_twin.config import load_config
+from amr_twin.loop import Twin, TwinOptions
+from amr_twin.rerun_log import attach, record_run
+from amr_twin.run import Command, run_mission
+
+DURATION_S = 4.0
+STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
+TOPIC_TYPES = {
+    "/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage", "/tf_static": "tf2_msgs/msg/TFMessage",
+    "/scan": "sensor_msgs/msg/LaserScan", "/imu/data_raw": "sensor_msgs/msg/Imu",
+    "/imu/mag": "sensor_msgs/msg/MagneticField", "/wheel0_Vel": "std_msgs/msg/Float64",
+    "/wheel1_Vel": "std_msgs/msg/Float64", "/wheel_Command": "std_msgs/msg/Float64MultiArray",
+    "/twin/true_rpm": "std_msgs/msg/Float64MultiArray", "/twin/pwm_counts": "std_msgs/msg/Float64MultiArray",
+    "/twin/ground_truth": "nav_msgs/msg/Odometry",
+}
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    """One 4 s run with IMU and LiDAR, its capture, and the ``.mcap`` file it wrote."""
+    cfg = load_config()
+    options = TwinOptions(sensors=True)
+    twin = Twin(cfg, options)
+    capture = attach(twin)
+    result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)
+    path = tmp_path_factory.mktemp("rosbags") / "run.mcap"
+    record_run(twin, mcap_path=path, result=result)
+    return cfg, capture, result, path
+
+
+@pytest.fixture(scope="module")
+def bag(recorded):
+    """Connections, bag-level figures and every raw message, as rosbags' rosbag2 Reader gives them."""
+    from rosbags.rosbag2 import Reader
+
+    with Reader(recorded[3]) as reader:
+        info = {"message_count": reader.message_count, "start_ns": reader.start_time,
+                "end_ns": reader.end_time}
+        connections = list(reader.connections)
+        raw = [(con.topic, con.msgtype, t_ns, data) for con, t_ns, data in reader.messages()]
+    return info, connections, raw
+
+
+@pytest.fixture(scope="module")
+def decoded(bag):
+    """topic -> [(log time ns, message)], decoded by rosbags' CDR deserializer with ROS 2 Humble types."""
+    from rosbags.typesys import Stores, get_typestore
+
+    humble = get_typestore(Stores.ROS2_HUMBLE)
+    out = collections.defaultdict(list)
+    for topic, msgtype, t_ns, data in bag[2]:
+        out[topic].append((t_ns, humble.deserialize_cdr(data, msgtype)))
+    return out
+
+
+def _yaw_rad(q) -> float:
+    return 2.0 * math.atan2(q.z, q.w)
+
+
+def test_bare_mcap_opens_as_rosbag2_storage(bag):
+    from rosbags.interfaces import MessageDefinitionFormat
+
+    info, connections, raw = bag
+    assert {c.topic: c.msgtype for c in connections} == TOPIC_TYPES
+    for con in connections:
+        assert con.ext.serialization_format == "cdr", con.topic
+        assert con.msgdef.format == MessageDefinitionFormat.MSG, con.topic  # schema encoding ros2msg
+    counts = collections.Counter(topic for topic, *_ in raw)
+    assert {c.topic: c.msgcount for c in connections} == dict(counts)  # summary statistics agree
+    assert info["message_count"] == len(raw)
+    assert info["start_ns"] == 0 and info["end_ns"] <= DURATION_S * 1e9 + 1
+    times = [t_ns for _topic, _type, t_ns, _data in raw]
+    assert times == sorted(times)
+
+
+def test_embedded_definitions_are_the_ros2_humble_ones(bag):
+    """The ros2msg schemas describe exactly the standard types (same fields, same RIHS01 hash)."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    humble = get_typestore(Stores.ROS2_HUMBLE)
+    embedded = get_typestore(Stores.EMPTY)
+    for con in bag[1]:
+        types = get_types_from_msg(con.msgdef.data, con.msgtype)
+        assert con.msgtype in types
+        for name, fields in types.items():
+            assert fields == humble.fielddefs[name], (con.topic, name)
+        embedded.register(types)
+    for con in bag[1]:
+        assert embedded.hash_rihs01(con.msgtype) == humble.hash_rihs01(con.msgtype), con.topic
+
+
+def test_every_payload_is_byte_exact_cdr(bag):
+    """rosbags decodes each message and encodes it back to the very same bytes (alignment, padding)."""
+    from rosbags.typesys import Stores, get_typestore
+
+    humble = get_typestore(Stores.ROS2_HUMBLE)
+    bad = collections.Counter()
+    for topic, msgtype, _t_ns, data in bag[2]:
+        if bytes(humble.serialize_cdr(humble.deserialize_cdr(data, msgtype), msgtype)) != data:
+            bad[topic] += 1
+    assert not bad
+
+
+def test_anyreader_with_the_embedded_definitions(recorded, bag):
+    from rosbags.highlevel import AnyReader
+
+    counts = collections.Counter()
+    with AnyReader([recorded[3]]) as reader:
+        for con, _t_ns, data in reader.messages(connections=reader.connections):
+            msg = reader.deserialize(data, con.msgtype)
+            assert msg.__msgtype__ == TOPIC_TYPES[con.topic]
+            counts[con.topic] += 1
+    assert counts == collections.Counter(topic for topic, *_ in bag[2])
+
+
+def test_counts_for_the_duration_and_rates(recorded, decoded):
+    cfg, capture, result, _path = recorded
+    n = {topic: len(msgs) for topic, msgs in decoded.items()}
+    assert n["/odom"] == n["/tf"] == len(capture.messages["odom"])
+    assert abs(n["/odom"] - 50 * DURATION_S) <= 2
+    assert n["/scan"] == len(capture.messages["scan"])
+    assert abs(n["/scan"] - cfg.lidar.scan_rate_hz * DURATION_S) <= 2
+    assert n["/imu/data_raw"] == n["/imu/mag"] == len(capture.messages["imu/data_raw"])
+    assert abs(n["/imu/data_raw"] - cfg.imu.rate_hz * DURATION_S) <= 2
+    for wheel in (0, 1):
+        assert n[f"/wheel{wheel}_Vel"] == len(result.series.published[wheel]) >= 2
+    assert n["/wheel_Command"] == len(STEPS)
+    assert n["/twin/true_rpm"] == n["/twin/pwm_counts"] == n["/twin/ground_truth"] == len(result.series.t_s)
+    assert n["/tf_static"] == 1
+
+
+def test_values_against_the_simulation(recorded, decoded):
+    _cfg, capture, result, _path = recorded
+    series = result.series
+    # odometry: last pose as the recorder saw it; stamp = log time = bus time
+    t_ns, odom = decoded["/odom"][-1]
+    assert (odom.header.frame_id, odom.child_frame_id) == ("odom", "base_link")
+    assert odom.header.stamp.sec * 10**9 + odom.header.stamp.nanosec == t_ns
+    p = odom.pose.pose.position
+    assert (p.x, p.y) == pytest.approx(tuple(series.odom[-1, 1:3]), abs=1e-12)
+    assert _yaw_rad(odom.pose.pose.orientation) == pytest.approx(series.odom[-1, 3], abs=1e-9)
+    # /tf carries the same transform
+    tf = decoded["/tf"][-1][1].transforms[0]
+    assert (tf.header.frame_id, tf.child_frame_id) == ("odom", "base_link")
+    assert tf.transform.translation.x == p.x
+    # ground truth and true wheel speeds at every recorded row
+    truth = np.array([(m.pose.pose.position.x, m.pose.pose.position.y, _yaw_rad(m.pose.pose.orientation))
+                      for _t, m in decoded["/twin/ground_truth"]])
+    assert np.allclose(truth[:, :2], series.pose[:, :2], atol=1e-12)
+    assert np.allclose(np.angle(np.exp(1j * (truth[:, 2] - series.pose[:, 2]))), 0.0, atol=1e-9)
+    true_rpm = np.array([m.data for _t, m in decoded["/twin/true_rpm"]])
+    assert np.array_equal(true_rpm, series.true_rpm)
+    assert [t for t, _m in decoded["/twin/true_rpm"]] == np.round(series.t_s * 1e9).astype(np.int64).tolist()
+    pwm = np.array([m.data for _t, m in decoded["/twin/pwm_counts"]])
+    assert np.array_equal(pwm, series.pwm_counts)
+    # firmware topics: published RPM and the wheel commands
+    for wheel in (0, 1):
+        rpm = [m.data for _t, m in decoded[f"/wheel{wheel}_Vel"]]
+        assert rpm == pytest.approx(series.published[wheel][:, 1].tolist())
+    commands = np.array([m.data for _t, m in decoded["/wheel_Command"]])
+    assert np.array_equal(commands, np.array([c for _t, c in series.commands]))
+    assert np.allclose(commands[-1], [1, 99.2, 1, 60.8], rtol=1e-6)  # the chapter 5 clockwise turn (float32)
+    # sensors: the last scan and IMU sample as published on the bus
+    scan, src = decoded["/scan"][-1][1], capture.messages["scan"][-1][1]
+    assert scan.header.frame_id == "laser"
+    assert np.array_equal(scan.ranges, np.asarray(src.ranges, np.float32), equal_nan=True)
+    assert scan.angle_increment == pytest.approx(src.angle_increment, rel=1e-6)
+    imu, imu_src = decoded["/imu/data_raw"][-1][1], capture.messages["imu/data_raw"][-1][1]
+    assert imu.angular_velocity.z == imu_src.angular_velocity.z < 0  # turning clockwise
+    assert imu.linear_acceleration.z == imu_src.linear_acceleration.z
+    # static frames (REP-105)
+    static = {(t.header.frame_id, t.child_frame_id) for t in decoded["/tf_static"][0][1].transforms}
+    assert static == {("world", "odom"), ("base_link", "laser"), ("base_link", "imu_link")}

@@ -1,0 +1,311 @@
+"""Routes and a pure-pursuit path follower publishing ``geometry_msgs/Twist`` on ``cmd_vel``.
+
+A route is a polyline in the ``map`` frame: the start pose's position, then the
+waypoints. Route files (YAML)::
+
+    name: warehouse_60m
+    start_xy_yaw: [-7.5, 0.0, 0.0]      # x_m, y_m, yaw_rad of base_link at the start
+    waypoints_xy_m: [[6.2, 0.0], [6.2, 5.5]]
+    max_speed_m_s: 1.0                   # (0, 1]
+    max_angular_rad_s: 1.0               # > 0
+    lookahead_m: 0.8                     # > 0
+    goal_tolerance_m: 0.2                # > 0
+
+Pure pursuit (Coulter, CMU-RI-TR-92-01), with two additions that a crossing
+route needs:
+
+- *Progress along the path.* The follower keeps the arc length ``progress_m``
+  of its projection on the polyline and only searches ahead of it (at most
+  ``2 * lookahead_m + 1 m``), never behind: where the route crosses itself the
+  projection cannot jump to the other branch.
+- The lookahead point is the path point ``lookahead_m`` of arc length ahead of
+  the projection (clamped at the goal). With ``alpha`` its bearing in
+  ``base_link`` and ``d`` its distance, the curvature is ``2 sin(alpha) / d``.
+
+The linear speed is the least of ``max_speed_m_s``, ``max_angular_rad_s / |curvature|``
+and ``sqrt(2 * decel * remaining path)`` (a stop at the goal), and at least
+``min_speed_m_s``. If ``|alpha|`` exceeds ``turn_in_place_rad`` (60 deg) the
+robot turns in place (angular ``gain * alpha`` clipped to the limit) until
+``|alpha|`` falls under ``turn_in_place_exit_rad``. The follower is done when it
+is within ``goal_tolerance_m`` of the last waypoint after having made progress
+to within ``lookahead_m + goal_tolerance_m`` of the path's end; from then on it
+commands zero.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import yaml
+
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.messages import Twist, Vector3
+
+MAX_ROUTE_SPEED_M_S = 1.0
+"""Highest route speed accepted, m/s (issue #8: 'at up to 1 m/s')."""
+ROUTE_FIELDS = ("name", "start_xy_yaw", "waypoints_xy_m", "max_speed_m_s", "max_angular_rad_s",
+                "lookahead_m", "goal_tolerance_m")
+
+
+class RouteError(ValueError):
+    """A route is invalid; the message is one line naming the field."""
+
+
+@dataclass(frozen=True)
+class Route:
+    """A route: start pose, waypoints (the path is start -> waypoints) and follower limits.
+
+    Attributes
+    ----------
+    name : str
+    start_xy_yaw : tuple of 3 float
+        Start pose of ``base_link`` in ``map``: x_m, y_m, yaw_rad.
+    waypoints_xy_m : np.ndarray, shape (N, 2)
+        Waypoints in ``map``, m; the last one is the goal.
+    max_speed_m_s : float
+        Linear speed limit, m/s, in (0, 1].
+    max_angular_rad_s : float
+        Yaw rate limit, rad/s, > 0.
+    lookahead_m : float
+        Pure-pursuit lookahead along the path, m, > 0.
+    goal_tolerance_m : float
+        Distance to the goal at which the route is done, m, > 0.
+    """
+
+    name: str
+    start_xy_yaw: tuple[float, float, float]
+    waypoints_xy_m: np.ndarray
+    max_speed_m_s: float = MAX_ROUTE_SPEED_M_S
+    max_angular_rad_s: float = 1.0
+    lookahead_m: float = 0.8
+    goal_tolerance_m: float = 0.2
+
+    def __post_init__(self) -> None:
+        start = tuple(float(v) for v in np.asarray(self.start_xy_yaw, dtype=float).ravel())
+        if len(start) != 3 or not all(math.isfinite(v) for v in start):
+            raise RouteError(f"start_xy_yaw: {self.start_xy_yaw!r} must be 3 finite numbers [x_m, y_m, yaw_rad]")
+        object.__setattr__(self, "start_xy_yaw", start)
+        try:
+            pts = np.array(self.waypoints_xy_m, dtype=float)
+        except (TypeError, ValueError):
+            raise RouteError("waypoints_xy_m: must be a list of [x_m, y_m] pairs") from None
+        if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 1:
+            raise RouteError(f"waypoints_xy_m: shape {pts.shape} must be (N, 2) with N >= 1")
+        if not np.isfinite(pts).all():
+            raise RouteError("waypoints_xy_m: all coordinates must be finite")
+        path = np.vstack([np.array(start[:2])[None], pts])
+        if np.any(np.hypot(*np.diff(path, axis=0).T) < 1e-6):
+            raise RouteError("waypoints_xy_m: consecutive points (start included) must differ")
+        pts.setflags(write=False)
+        object.__setattr__(self, "waypoints_xy_m", pts)
+        limits = (("max_speed_m_s", 0.0, MAX_ROUTE_SPEED_M_S), ("max_angular_rad_s", 0.0, math.inf),
+                  ("lookahead_m", 0.0, math.inf), ("goal_tolerance_m", 0.0, math.inf))
+        for name, low, high in limits:
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                    or not low < value <= high:
+                allowed = f"({low:g}, {high:g}]" if math.isfinite(high) else f"> {low:g}"
+                raise RouteError(f"{name}: {value!r} must be a finite number in {allowed}")
+            object.__setattr__(self, name, float(value))
+
+    def path_xy_m(self) -> np.ndarray:
+        """The polyline ``(N + 1, 2)``: the start position, then the waypoints, m."""
+        return np.vstack([np.array(self.start_xy_yaw[:2])[None], self.waypoints_xy_m])
+
+
+def load_route(path: str | Path) -> Route:
+    """Read and validate a route YAML file (module docstring); raises :class:`RouteError`."""
+    path = Path(path)
+    try:
+        tree = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise RouteError(f"route {path}: {exc.strerror or exc}") from None
+    except yaml.YAMLError as exc:
+        line = getattr(getattr(exc, "problem_mark", None), "line", None)
+        raise RouteError(f"route {path}: not valid YAML" + (f" (line {line + 1})" if line is not None else "")) from None
+    if not isinstance(tree, dict):
+        raise RouteError(f"route {path.name}: expected a mapping with {', '.join(ROUTE_FIELDS)}")
+    unknown = [k for k in tree if k not in ROUTE_FIELDS]
+    if unknown:
+        raise RouteError(f"route {path.name}: unknown key {unknown[0]!r} (expected {', '.join(ROUTE_FIELDS)})")
+    for key in ("start_xy_yaw", "waypoints_xy_m"):
+        if key not in tree:
+            raise RouteError(f"route {path.name}: {key} is missing")
+    try:
+        return Route(**{"name": path.stem, **tree})
+    except RouteError as exc:
+        raise RouteError(f"route {path.name}: {exc}") from None
+
+
+def route_length_m(route: Route) -> float:
+    """Length of the route's polyline from the start through every waypoint, m."""
+    return float(np.sum(np.hypot(*np.diff(route.path_xy_m(), axis=0).T)))
+
+
+def distance_to_path_m(route: Route, xy_m: np.ndarray) -> np.ndarray:
+    """Distance ``(K,)`` from each point of ``xy_m (K, 2)`` to the nearest point of the route polyline, m."""
+    xy = np.atleast_2d(np.asarray(xy_m, dtype=float))
+    path = route.path_xy_m()
+    a, ab = path[:-1], np.diff(path, axis=0)
+    out = np.full(len(xy), np.inf)
+    for start in range(0, len(xy), 4096):  # bounded memory for long recordings
+        p = xy[start:start + 4096, None, :]
+        u = np.clip(((p - a) * ab).sum(2) / (ab * ab).sum(1), 0.0, 1.0)
+        out[start:start + 4096] = np.linalg.norm(p - (a + u[..., None] * ab), axis=2).min(1)
+    return out
+
+
+class PurePursuit:
+    """Pure-pursuit follower of a :class:`Route` (pure logic, no clock, no bus).
+
+    Parameters
+    ----------
+    route : Route
+    min_speed_m_s : float
+        Floor of the linear speed while driving, m/s (the firmware cannot hold a crawl).
+    decel_m_s2 : float
+        Deceleration of the stop at the goal, m/s^2.
+    turn_in_place_rad, turn_in_place_exit_rad : float
+        Bearing of the lookahead point above which the robot turns in place, and
+        below which it drives again, rad.
+    turn_gain_per_s : float
+        Yaw rate per rad of bearing in a turn in place, 1/s (clipped to the route's limit).
+    """
+
+    def __init__(self, route: Route, *, min_speed_m_s: float = 0.1, decel_m_s2: float = 0.5,
+                 turn_in_place_rad: float = math.radians(60.0), turn_in_place_exit_rad: float = math.radians(20.0),
+                 turn_gain_per_s: float = 1.5):
+        self.route = route
+        self.path = route.path_xy_m()
+        seg = np.diff(self.path, axis=0)
+        self._seg = seg
+        self._seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        self._s0 = np.concatenate([[0.0], np.cumsum(self._seg_len)])  # arc length at each vertex
+        self.length_m = float(self._s0[-1])
+        self.min_speed_m_s = min(float(min_speed_m_s), route.max_speed_m_s)
+        self.decel_m_s2 = float(decel_m_s2)
+        self.turn_in_place_rad, self.turn_in_place_exit_rad = float(turn_in_place_rad), float(turn_in_place_exit_rad)
+        self.turn_gain_per_s = float(turn_gain_per_s)
+        self.search_m = 2.0 * route.lookahead_m + 1.0
+        self.progress_m = 0.0
+        """Arc length of the robot's projection on the path, m (never decreases)."""
+        self.cross_track_m = 0.0
+        """Distance from the robot to its projection at the last command, m."""
+        self.lookahead_xy_m = self.path[min(1, len(self.path) - 1)].copy()
+        self.turning_in_place = False
+        self.done = False
+
+    def point_at(self, s_m: float) -> np.ndarray:
+        """Path point ``(2,)`` at arc length ``s_m`` (clamped to the path), m."""
+        s = min(max(s_m, 0.0), self.length_m)
+        i = min(int(np.searchsorted(self._s0, s, side="right")) - 1, len(self._seg) - 1)
+        return self.path[i] + self._seg[i] * ((s - self._s0[i]) / self._seg_len[i])
+
+    def _project(self, xy: np.ndarray) -> tuple[float, float]:
+        """Arc length and distance of the nearest path point in ``[progress, progress + search]``."""
+        lo, hi = self.progress_m, self.progress_m + self.search_m
+        n = len(self._seg)
+        first = min(max(int(np.searchsorted(self._s0, lo, side="right")) - 1, 0), n - 1)
+        last = max(min(int(np.searchsorted(self._s0, hi, side="right")), n), first + 1)
+        a, ab, s0, length = self.path[first:last], self._seg[first:last], self._s0[first:last], self._seg_len[first:last]
+        u = ((xy - a) * ab).sum(1) / (length * length)
+        u = np.minimum(np.maximum(u, np.maximum((lo - s0) / length, 0.0)), np.minimum((hi - s0) / length, 1.0))
+        dist = np.hypot(*(a + u[:, None] * ab - xy).T)
+        k = int(np.argmin(dist))
+        s = s0 + u * length
+        return float(s[k]), float(dist[k])
+
+    def command(self, x_m: float, y_m: float, yaw_rad: float) -> tuple[float, float, bool]:
+        """Twist for the robot at ``(x_m, y_m, yaw_rad)`` in ``map``: ``(linear_m_s, angular_rad_s, done)``."""
+        if self.done:
+            return 0.0, 0.0, True
+        r = self.route
+        xy = np.array([x_m, y_m], dtype=float)
+        s, self.cross_track_m = self._project(xy)
+        self.progress_m = max(self.progress_m, s)
+        goal = self.path[-1]
+        remaining_m = self.length_m - self.progress_m
+        if (math.hypot(*(goal - xy)) <= r.goal_tolerance_m
+                and remaining_m <= r.lookahead_m + r.goal_tolerance_m):
+            self.done = True
+            return 0.0, 0.0, True
+        target = self.point_at(self.progress_m + r.lookahead_m)
+        self.lookahead_xy_m = target
+        dx, dy = target - xy
+        c, s_ = math.cos(yaw_rad), math.sin(yaw_rad)
+        lx, ly = c * dx + s_ * dy, -s_ * dx + c * dy  # lookahead point in base_link
+        alpha = math.atan2(ly, lx)
+        dist = max(math.hypot(lx, ly), 1e-6)
+        threshold = self.turn_in_place_exit_rad if self.turning_in_place else self.turn_in_place_rad
+        self.turning_in_place = abs(alpha) > threshold
+        if self.turning_in_place:
+            w = max(-r.max_angular_rad_s, min(r.max_angular_rad_s, self.turn_gain_per_s * alpha))
+            return 0.0, w, False
+        curvature = 2.0 * math.sin(alpha) / dist
+        v = min(r.max_speed_m_s, math.sqrt(2.0 * self.decel_m_s2 * max(remaining_m, 0.0)))
+        if abs(curvature) > 1e-9:
+            v = min(v, r.max_angular_rad_s / abs(curvature))
+        v = max(v, self.min_speed_m_s)
+        w = max(-r.max_angular_rad_s, min(r.max_angular_rad_s, v * curvature))
+        return v, w, False
+
+
+class PathFollowerNode:
+    """Publish the pure-pursuit twist of a route on ``cmd_vel`` at ``rate_hz`` on the clock.
+
+    Parameters
+    ----------
+    bus, clock : Bus, VirtualClock
+    route : Route
+    pose_source : callable
+        ``pose_source() -> (x_m, y_m, yaw_rad)`` of ``base_link`` in ``map`` (e.g. the true pose).
+    rate_hz : float
+        Command rate, Hz (> 0).
+    topic : str
+        Output topic.
+    **pursuit
+        Keyword arguments of :class:`PurePursuit`.
+
+    Once the route is done the node keeps publishing a zero twist (the diff-drive
+    node brakes once and is kept from timing out) until :meth:`shutdown`.
+    ``history()`` returns what was commanded.
+    """
+
+    def __init__(self, bus: Bus, clock: VirtualClock, route: Route,
+                 pose_source: Callable[[], tuple[float, float, float]], rate_hz: float = 20.0,
+                 topic: str = "cmd_vel", **pursuit):
+        if not (math.isfinite(rate_hz) and rate_hz > 0):
+            raise ValueError(f"rate_hz: {rate_hz} must be a finite number > 0")
+        self.bus, self.clock, self.route = bus, clock, route
+        self.pursuit = PurePursuit(route, **pursuit)
+        self.pose_source = pose_source
+        self.period_us = max(1, int(round(1e6 / rate_hz)))
+        self._pub = bus.advertise(topic, Twist)
+        self._rows: list[tuple[float, float, float, float, float]] = []
+        self._timer = clock.schedule_in(0, self._on_timer)
+
+    @property
+    def done(self) -> bool:
+        """True once the goal is reached."""
+        return self.pursuit.done
+
+    def _on_timer(self) -> None:
+        self._timer = self.clock.schedule_in(self.period_us, self._on_timer)
+        x_m, y_m, yaw_rad = self.pose_source()
+        v, w, _ = self.pursuit.command(x_m, y_m, yaw_rad)
+        self._rows.append((self.clock.now_us * 1e-6, v, w, self.pursuit.cross_track_m, self.pursuit.progress_m))
+        self._pub.publish(Twist(Vector3(v, 0.0, 0.0), Vector3(0.0, 0.0, w)))
+
+    def history(self) -> dict[str, np.ndarray]:
+        """Commands so far: ``t_s``, ``linear_m_s``, ``angular_rad_s``, ``cross_track_m``, ``progress_m`` (each (K,))."""
+        rows = np.array(self._rows, dtype=float).reshape(-1, 5)
+        return dict(zip(("t_s", "linear_m_s", "angular_rad_s", "cross_track_m", "progress_m"), rows.T))
+
+    def shutdown(self) -> None:
+        """Stop publishing."""
+        self._timer.cancel()

@@ -17,13 +17,16 @@ Time
     normalised time spans exactly the interval over which the motion prior is
     given: the deskew is then constant-velocity motion along the prior.
 Motion prior
-    ``prior_base_delta`` is the motion of ``base_link`` from the previous scan's
-    ``t_end`` to this one's (e.g. wheel odometry interpolated at both stamps,
-    :func:`relative_pose` of :func:`interpolate_pose`), expressed in the earlier
-    ``base_link`` frame. It is moved to the laser frame, ``L^-1 D L`` with ``L``
-    the laser pose in ``base_link``, and written into ``KissICP.last_delta``,
-    which KISS-ICP uses both to deskew and as the ICP initial guess. Without a
-    prior KISS-ICP's own constant-velocity model is used.
+    ``prior_base_delta`` is the motion of ``base_link`` over
+    :meth:`LidarOdometry.prior_interval_s`, from the previous scan's ``t_end`` to
+    this one's (e.g. wheel odometry interpolated at both stamps, :func:`relative_pose`
+    of :func:`interpolate_pose`), expressed in the earlier ``base_link`` frame. For
+    the first scan it covers the rotation before its ``t_end`` and only deskews it
+    (the map starts from that scan: a distorted first scan biases every later
+    pose). It is moved to the laser frame, ``L^-1 D L`` with ``L`` the laser pose
+    in ``base_link``, and written into ``KissICP.last_delta``, which KISS-ICP uses
+    both to deskew and as the ICP initial guess. Without a prior KISS-ICP's own
+    constant-velocity model is used.
 Output
     ``base_link`` poses ``(x_m, y_m, yaw_rad)`` in the odometry frame of the first
     scan: ``base_link`` at the first scan's ``t_end`` is the origin. A scan with
@@ -191,6 +194,19 @@ class LidarOdometry:
         """``t_end`` of the last registered scan, s (None before the first)."""
         return self._t_s[-1] if self._t_s else None
 
+    def prior_interval_s(self, scan: LaserScan) -> tuple[float, float]:
+        """Interval ``(t0_s, t1_s)`` over which :meth:`register` wants the motion prior of ``scan``.
+
+        ``t1_s`` is the scan's ``t_end``; ``t0_s`` the previous scan's ``t_end``, or, for the
+        first scan, ``t_end - scan_time`` (one rotation: the first scan is deskewed too).
+        """
+        t_end = scan_end_time_s(scan)
+        if self._t_s:
+            return self._t_s[-1], t_end
+        period_s = scan.scan_time if scan.scan_time > 0 else len(scan.ranges) * scan.time_increment
+        t0 = min(t_end - period_s, scan.header.stamp.to_sec())
+        return (t0 if t0 < t_end else t_end - 1e-3), t_end
+
     def register(self, scan: LaserScan,
                  prior_base_delta: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
         """Register one scan; return the ``base_link`` pose at its last beam.
@@ -200,9 +216,9 @@ class LidarOdometry:
         scan : LaserScan
             Scan in the ``laser`` frame; scans must come in time order.
         prior_base_delta : tuple (dx_m, dy_m, dyaw_rad) or None
-            Motion of ``base_link`` from the previous scan's ``t_end`` to this scan's
-            (:func:`scan_end_time_s`), in the earlier ``base_link`` frame. Ignored for
-            the first scan.
+            Motion of ``base_link`` over :meth:`prior_interval_s` (from the previous scan's
+            ``t_end`` to this scan's), in the earlier ``base_link`` frame. For the first scan
+            it only deskews it (the first pose is the origin); None there: not deskewed.
 
         Returns
         -------
@@ -210,21 +226,22 @@ class LidarOdometry:
             ``base_link`` pose in the odometry frame of the first scan.
         """
         wall0 = time.perf_counter()
-        t_end = scan_end_time_s(scan)
-        t_prev = self.last_stamp_s
-        if t_prev is not None and t_end <= t_prev:
-            raise ValueError(f"scan stamp: t_end {t_end:.6f} s must be after the previous {t_prev:.6f} s")
-        first = t_prev is None
-        if not first and prior_base_delta is not None:
+        t_start, t_end = self.prior_interval_s(scan)
+        first = not self._t_s
+        if not first and t_end <= t_start:
+            raise ValueError(f"scan stamp: t_end {t_end:.6f} s must be after the previous {t_start:.6f} s")
+        delta = None
+        if prior_base_delta is not None:
             if len(prior_base_delta) != 3 or not all(math.isfinite(v) for v in prior_base_delta):
                 raise ValueError(f"prior_base_delta: {prior_base_delta} must be 3 finite numbers (m, m, rad)")
-            delta = se2_matrix(*(float(v) for v in prior_base_delta))
-            self.kiss.last_delta = self._laser_inv @ delta @ self._laser
+            delta = self._laser_inv @ se2_matrix(*(float(v) for v in prior_base_delta)) @ self._laser
+        if first:  # deskew along the prior, but start at the origin: initial guess inv(D) @ D = I
+            self.kiss.last_delta = delta if delta is not None else np.eye(4)
+            self.kiss.last_pose = np.linalg.inv(self.kiss.last_delta)
+        elif delta is not None:
+            self.kiss.last_delta = delta
         points, index = scan_points(scan)
-        if first:
-            self.kiss.last_delta = np.eye(4)
         if len(index) >= MIN_POINTS:
-            t_start = t_prev if t_prev is not None else min(scan.header.stamp.to_sec(), t_end - 1e-3)
             stamps = scan.header.stamp.to_sec() + scan.time_increment * index
             sentinel = np.array([[SENTINEL_RANGE_M, 0.0, 0.0]] * 2)
             self.kiss.register_frame(np.vstack([points, sentinel]),

@@ -1,0 +1,324 @@
+"""EKF fusing wheel odometry, the gyro and UWB ranges, after robot_localization's ekf_node.
+
+The thesis (§6.2.1, figs. 6.5 to 6.7) fuses odometry with the IMU and UWB in an
+extended Kalman filter; this node does it as robot_localization's ``ekf_node`` in
+``two_d_mode`` with filterpy's :class:`~filterpy.kalman.ExtendedKalmanFilter`.
+
+State (6,)
+    ``[x_m, y_m, yaw_rad, v_m_s, w_rad_s, gyro_bias_rad_s]``: the planar pose in
+    the world frame (``odom``, or ``map`` when UWB is fused), the forward speed and
+    yaw rate of ``base_link``, and the gyro's z bias.
+Prediction
+    Constant velocity on a unicycle, predicted to each measurement's stamp:
+    ``x += v dt cos(yaw + w dt / 2)``, ``y += v dt sin(yaw + w dt / 2)``,
+    ``yaw += w dt``; process noise from white linear and angular accelerations
+    (``accel_sigma_m_s2``, ``alpha_sigma_rad_s2``) and a bias random walk.
+Measurements (sigmas from the ``ekf:`` config, not from the messages)
+    ``odom`` twist: ``v`` and ``w`` (robot_localization's ``odom0_config`` with
+    vx and vyaw); ``imu/data_raw``: ``gyro_z = w + b``; ``uwb/range``: ``r =
+    sqrt(|p_tag - p_anchor|^2 + dz^2)`` with the tag ``p_tag = p + R(yaw) t``,
+    Jacobian in x, y, yaw; a range whose innovation exceeds ``mahalanobis_gate``
+    sigmas is rejected (robot_localization's ``*_rejection_threshold``).
+Gyro bias
+    The L3GD20's turn-on bias (10 deg/s) is removed by a rest calibration: the
+    gyro is averaged over its first ``imu_rest_calibration_s`` seconds while the
+    odometry says the robot stands (``|v|``, ``0.24 m * |w|`` at most
+    ``rest_speed_m_s``; at rest when no odometry has arrived), and the mean
+    initialises the bias state with variance ``gyro_w_sigma^2 / n``. The bias stays
+    a state, observable against the odometry's yaw rate. Gyro samples of the
+    calibration are not fused.
+
+Messages are handled in the order given; one older than the filter time is fused
+at the filter time (counted in :attr:`EkfNode.late_messages`). With a bus the node
+subscribes to ``odom``, ``imu/data_raw`` and ``uwb/range`` (those in use) and
+publishes ``nav_msgs/Odometry`` on ``odometry/filtered`` after every odometry
+update (after every update when odometry is not fused).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter
+
+from amr_twin.bus import BASE_FRAME, ODOM_FRAME, Bus
+from amr_twin.config import EkfCfg, UwbCfg
+from amr_twin.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion,
+                               Range, Twist, TwistWithCovariance, Vector3)
+from amr_twin.sensors.uwb import anchor_index
+
+MAP_FRAME = "map"
+TOPIC = "odometry/filtered"
+X, Y, YAW, V, W, BG = range(6)
+HALF_TRACK_M = 0.24
+"""Half the wheel separation (listing 4.2): turns a yaw rate into a wheel speed for the rest test."""
+
+
+class _UnicycleEkf(ExtendedKalmanFilter):
+    """filterpy's EKF with the nonlinear constant-velocity prediction of the state."""
+
+    dt_s = 0.0
+
+    def predict_x(self, u=0) -> None:
+        x, dt = self.x, self.dt_s
+        heading = x[YAW, 0] + 0.5 * x[W, 0] * dt
+        x[X, 0] += x[V, 0] * dt * math.cos(heading)
+        x[Y, 0] += x[V, 0] * dt * math.sin(heading)
+        x[YAW, 0] += x[W, 0] * dt
+
+
+def _linear(rows: list[int], n: int = 6):
+    """(HJacobian, Hx) of a measurement that picks (sums of) state entries."""
+    H = np.zeros((len(rows), n))
+    for i, r in enumerate(rows):
+        H[i, r] = 1.0
+    return (lambda x: H), (lambda x: H @ x), H
+
+
+class EkfNode:
+    """Planar EKF over odometry twist, gyro z rate and UWB ranges.
+
+    Parameters
+    ----------
+    cfg : EkfCfg
+        Noise, gate and calibration settings (``ekf:`` section).
+    use_odom, use_imu, use_uwb : bool
+        Which measurements are fused (the others are ignored).
+    anchors_xy_m : ndarray, shape (M, 2), optional
+        Anchor positions in the world frame, m (default: ``uwb``'s).
+    initial_pose : (x_m, y_m, yaw_rad)
+        Start pose in the output frame.
+    bus : Bus, optional
+        Subscribe to the inputs and publish ``odometry/filtered``.
+    uwb : UwbCfg, optional
+        Anchors, anchor height and tag position in one (``uwb:`` section).
+    anchor_z_m : float, optional
+        Anchor height, m (default: ``uwb``'s, else the tag height: 2D ranges).
+    tag_pos_m : sequence of 3 float, optional
+        Tag position in ``base_link``, m (default: ``uwb``'s, else the origin).
+    """
+
+    def __init__(self, cfg: EkfCfg, *, use_odom: bool = True, use_imu: bool, use_uwb: bool,
+                 anchors_xy_m: np.ndarray | None = None, initial_pose=(0.0, 0.0, 0.0),
+                 bus: Bus | None = None, uwb: UwbCfg | None = None,
+                 anchor_z_m: float | None = None, tag_pos_m=None):
+        if not (use_odom or use_imu or use_uwb):
+            raise ValueError("use_odom, use_imu, use_uwb: at least one must be True")
+        pose = np.asarray(initial_pose, dtype=np.float64).ravel()
+        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+            raise ValueError(f"initial_pose: expected 3 finite numbers (x_m, y_m, yaw_rad), got {initial_pose!r}")
+        self.cfg, self.use_odom, self.use_imu, self.use_uwb = cfg, use_odom, use_imu, use_uwb
+        if anchors_xy_m is None and uwb is not None:
+            anchors_xy_m = uwb.anchors_xy_m
+        tag = tag_pos_m if tag_pos_m is not None else (uwb.tag_pos_m if uwb is not None else (0.0, 0.0, 0.0))
+        self.tag_xy_m = np.asarray(tag, dtype=np.float64)[:2]
+        z_anchor = anchor_z_m if anchor_z_m is not None else (uwb.anchor_z_m if uwb is not None else tag[2])
+        self.dz_m = float(z_anchor) - float(tag[2])
+        self.anchors_xy_m = None
+        if use_uwb:
+            if anchors_xy_m is None:
+                raise ValueError("anchors_xy_m: needed when use_uwb is True (or pass uwb=cfg.uwb)")
+            self.anchors_xy_m = np.asarray(anchors_xy_m, dtype=np.float64).reshape(-1, 2)
+        self.frame_id = MAP_FRAME if use_uwb else ODOM_FRAME
+
+        f = self.filter = _UnicycleEkf(dim_x=6, dim_z=1)
+        f.x = np.array([[pose[0]], [pose[1]], [pose[2]], [0.0], [0.0], [0.0]])
+        f.P = np.diag([cfg.initial_xy_sigma_m ** 2, cfg.initial_xy_sigma_m ** 2, cfg.initial_yaw_sigma_rad ** 2,
+                       cfg.initial_v_sigma_m_s ** 2, cfg.initial_w_sigma_rad_s ** 2,
+                       cfg.initial_gyro_bias_sigma_rad_s ** 2])
+        self._odom_h = _linear([V, W])
+        self._odom_R = np.diag([cfg.odom_v_sigma_m_s ** 2, cfg.odom_w_sigma_rad_s ** 2])
+        H_gyro = np.zeros((1, 6))
+        H_gyro[0, W] = H_gyro[0, BG] = 1.0
+        self._gyro_h = ((lambda x: H_gyro), (lambda x: H_gyro @ x))
+        self._gyro_R = np.array([[cfg.gyro_w_sigma_rad_s ** 2]])
+        self._uwb_R = np.array([[cfg.uwb_range_sigma_m ** 2]])
+
+        self.t_s: float | None = None
+        self._t_hist: list[float] = []
+        self._pose_hist: list[tuple[float, float, float]] = []
+        self._last_twist = (0.0, 0.0)
+        self._odom_seen = False
+        self._calib_t0_s: float | None = None
+        self._calib: list[float] = []
+        self.calibrated = cfg.imu_rest_calibration_s <= 0.0
+        self.late_messages = 0
+        self.rejected_ranges = 0
+        self.fused = {"odom": 0, "imu": 0, "uwb": 0}
+        self._seq = 0
+        self._pub = None
+        if bus is not None:
+            self._pub = bus.advertise(TOPIC, Odometry)
+            if use_odom:
+                bus.subscribe("odom", self.on_odom)
+            if use_imu:
+                bus.subscribe("imu/data_raw", self.on_imu)
+            if use_uwb:
+                bus.subscribe("uwb/range", self.on_range)
+
+    # -- filter steps ---------------------------------------------------------------
+    def _predict_to(self, t_s: float) -> None:
+        if self.t_s is None:
+            self.t_s = t_s
+            return
+        dt = t_s - self.t_s
+        if dt < 0.0:
+            self.late_messages += 1
+            return
+        if dt == 0.0:
+            return
+        f, cfg = self.filter, self.cfg
+        x = f.x[:, 0]
+        c = math.cos(x[YAW] + 0.5 * x[W] * dt)
+        s = math.sin(x[YAW] + 0.5 * x[W] * dt)
+        vdt = x[V] * dt
+        F = np.eye(6)
+        F[X, YAW], F[X, V], F[X, W] = -vdt * s, dt * c, -vdt * s * 0.5 * dt
+        F[Y, YAW], F[Y, V], F[Y, W] = vdt * c, dt * s, vdt * c * 0.5 * dt
+        F[YAW, W] = dt
+        qa, qw = cfg.accel_sigma_m_s2 ** 2, cfg.alpha_sigma_rad_s2 ** 2
+        d2, d3 = dt * dt / 2.0, dt ** 3 / 3.0
+        Q = np.zeros((6, 6))
+        Q[X, X], Q[X, Y], Q[Y, Y] = qa * d3 * c * c, qa * d3 * c * s, qa * d3 * s * s
+        Q[Y, X] = Q[X, Y]
+        Q[X, V] = Q[V, X] = qa * d2 * c
+        Q[Y, V] = Q[V, Y] = qa * d2 * s
+        Q[V, V] = qa * dt
+        Q[YAW, YAW], Q[YAW, W], Q[W, W] = qw * d3, qw * d2, qw * dt
+        Q[W, YAW] = Q[YAW, W]
+        Q[BG, BG] = cfg.gyro_bias_walk_rad_s_sqrt_s ** 2 * dt
+        Q[X, X] += 1e-12 * dt  # keep P positive definite across the heading
+        Q[Y, Y] += 1e-12 * dt
+        f.F, f.Q, f.dt_s = F, Q, dt
+        f.predict()
+        self.t_s = t_s
+
+    def _record(self) -> None:
+        x = self.filter.x[:, 0]
+        self._t_hist.append(self.t_s)
+        self._pose_hist.append((float(x[X]), float(x[Y]), float(x[YAW])))
+
+    # -- inputs -------------------------------------------------------------------------
+    def on_odom(self, msg: Odometry) -> None:
+        """Fuse the forward speed and yaw rate of a wheel odometry message."""
+        v, w = float(msg.twist.twist.linear.x), float(msg.twist.twist.angular.z)
+        self._last_twist, self._odom_seen = (v, w), True
+        if not self.use_odom:
+            return
+        self._predict_to(msg.header.stamp.to_sec())
+        HJ, Hx, _ = self._odom_h
+        self.filter.update(np.array([[v], [w]]), HJ, Hx, R=self._odom_R)
+        self.fused["odom"] += 1
+        self._record()
+        self._publish(msg.header.stamp)
+
+    def _at_rest(self) -> bool:
+        v, w = self._last_twist
+        return abs(v) <= self.cfg.rest_speed_m_s and abs(w) * HALF_TRACK_M <= self.cfg.rest_speed_m_s
+
+    def _finish_calibration(self) -> None:
+        f = self.filter
+        if self._calib:
+            f.x[BG, 0] = float(np.mean(self._calib))
+            f.P[BG, :] = 0.0
+            f.P[:, BG] = 0.0
+            f.P[BG, BG] = self.cfg.gyro_w_sigma_rad_s ** 2 / len(self._calib)
+        self.calibrated = True
+
+    def on_imu(self, msg: Imu) -> None:
+        """Fuse the gyro's z rate (after the rest calibration of its bias)."""
+        if not self.use_imu:
+            return
+        t_s, gz = msg.header.stamp.to_sec(), float(msg.angular_velocity.z)
+        if not self.calibrated:
+            if self._calib_t0_s is None:
+                self._calib_t0_s = t_s
+            if t_s - self._calib_t0_s < self.cfg.imu_rest_calibration_s and self._at_rest():
+                self._calib.append(gz)
+                return
+            self._finish_calibration()
+        self._predict_to(t_s)
+        HJ, Hx = self._gyro_h
+        self.filter.update(np.array([[gz]]), HJ, Hx, R=self._gyro_R)
+        self.fused["imu"] += 1
+        self._record()
+        if not self.use_odom:
+            self._publish(msg.header.stamp)
+
+    def range_model(self, x: np.ndarray, index: int) -> tuple[float, np.ndarray]:
+        """Predicted range to anchor ``index`` (m) and its Jacobian, shape (1, 6)."""
+        yaw = x[YAW]
+        c, s = math.cos(yaw), math.sin(yaw)
+        tx, ty = self.tag_xy_m
+        ax, ay = self.anchors_xy_m[index]
+        ex, ey = x[X] + c * tx - s * ty - ax, x[Y] + s * tx + c * ty - ay
+        r = math.sqrt(ex * ex + ey * ey + self.dz_m * self.dz_m)
+        H = np.zeros((1, 6))
+        if r > 1e-9:
+            H[0, X], H[0, Y] = ex / r, ey / r
+            H[0, YAW] = (ex * (-s * tx - c * ty) + ey * (c * tx - s * ty)) / r
+        return r, H
+
+    def on_range(self, msg: Range) -> None:
+        """Fuse one UWB range, unless its Mahalanobis distance exceeds the gate."""
+        if not self.use_uwb:
+            return
+        index = anchor_index(msg.header.frame_id)
+        if index >= self.anchors_xy_m.shape[0]:
+            raise ValueError(f"header.frame_id: anchor {index} not in [0, {self.anchors_xy_m.shape[0] - 1}]")
+        z = float(msg.range)
+        if not (msg.min_range <= z <= msg.max_range) or not math.isfinite(z):
+            return
+        self._predict_to(msg.header.stamp.to_sec())
+        f = self.filter
+        r, H = self.range_model(f.x[:, 0], index)
+        S = float((H @ f.P @ H.T)[0, 0]) + self._uwb_R[0, 0]
+        if abs(z - r) > self.cfg.mahalanobis_gate * math.sqrt(S):
+            self.rejected_ranges += 1
+            return
+        f.update(np.array([[z]]), lambda x: self.range_model(x[:, 0], index)[1],
+                 lambda x: np.array([[self.range_model(x[:, 0], index)[0]]]), R=self._uwb_R)
+        self.fused["uwb"] += 1
+        self._record()
+        if not self.use_odom:
+            self._publish(msg.header.stamp)
+
+    # -- outputs ------------------------------------------------------------------------
+    @property
+    def state(self) -> np.ndarray:
+        """Current state ``[x_m, y_m, yaw_rad, v_m_s, w_rad_s, gyro_bias_rad_s]``, shape (6,)."""
+        return self.filter.x[:, 0].copy()
+
+    def history(self) -> tuple[np.ndarray, np.ndarray]:
+        """Stamps ``t_s`` (N,) and poses (N, 3) ``[x_m, y_m, yaw_rad]`` after every update.
+
+        The yaw is wrapped to (-pi, pi].
+        """
+        t = np.asarray(self._t_hist, dtype=np.float64)
+        pose = np.asarray(self._pose_hist, dtype=np.float64).reshape(-1, 3)
+        pose[:, 2] = np.arctan2(np.sin(pose[:, 2]), np.cos(pose[:, 2]))
+        return t, pose
+
+    def message(self, stamp) -> Odometry:
+        """The current estimate as ``nav_msgs/Odometry`` (frame ``odom`` or ``map``, child ``base_link``)."""
+        x, P = self.filter.x[:, 0], self.filter.P
+        pose_cov = np.zeros((6, 6))
+        idx = (X, Y, None, None, None, YAW)
+        for i, a in enumerate(idx):
+            for j, b in enumerate(idx):
+                if a is not None and b is not None:
+                    pose_cov[i, j] = P[a, b]
+        twist_cov = np.zeros((6, 6))
+        twist_cov[0, 0], twist_cov[0, 5], twist_cov[5, 0], twist_cov[5, 5] = P[V, V], P[V, W], P[W, V], P[W, W]
+        self._seq += 1
+        return Odometry(
+            header=Header(self._seq, stamp, self.frame_id), child_frame_id=BASE_FRAME,
+            pose=PoseWithCovariance(Pose(Point(float(x[X]), float(x[Y]), 0.0), Quaternion.from_yaw(float(x[YAW]))),
+                                    pose_cov.ravel()),
+            twist=TwistWithCovariance(Twist(Vector3(float(x[V]), 0.0, 0.0), Vector3(0.0, 0.0, float(x[W]))),
+                                      twist_cov.ravel()))
+
+    def _publish(self, stamp) -> None:
+        if self._pub is not None:
+            self._pub.publish(self.message(stamp))

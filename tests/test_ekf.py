@@ -1,0 +1,200 @@
+"""EKF on synthetic data: heading with the gyro, UWB bounding the drift, gating, seeds, bus (no mujoco)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.config import load_config
+from amr_twin.controllers.ekf import EkfNode
+from amr_twin.messages import Header, Imu, Odometry, Range, Time, Twist, TwistWithCovariance, Vector3
+from amr_twin.sensors.uwb import simulate_ranges, tag_positions_m
+
+CFG = load_config()
+DT_S = 0.01
+
+
+def _route():
+    """Truth at 100 Hz: stand 2 s, then a 36 m loop of straights and 90 deg turns."""
+    segments = [(2.0, 0.0, 0.0)]
+    for length_m in (10.0, 5.0, 10.0, 5.0):
+        segments += [(1.0, 0.5, 0.0), (length_m - 1.0, 1.0, 0.0), (math.pi / 2 / 0.8, 0.3, 0.8)]
+    t, pose, vw = [0.0], [(0.0, 0.0, 0.0)], []
+    for duration_s, v, w in segments:
+        for _ in range(int(round(duration_s / DT_S))):
+            x, y, yaw = pose[-1]
+            mid = yaw + 0.5 * w * DT_S
+            pose.append((x + v * DT_S * math.cos(mid), y + v * DT_S * math.sin(mid), yaw + w * DT_S))
+            t.append(t[-1] + DT_S)
+            vw.append((v, w))
+    vw.append(vw[-1])
+    return np.array(t), np.array(pose), np.array(vw)
+
+
+T_S, POSE, VW = _route()
+
+
+def _messages(seed: int, yaw_rate_scale: float = 1.05, gyro_bias_rad_s: float = 0.1, uwb: bool = True):
+    """(stamp, kind, msg) in stamp order: odom 50 Hz with a yaw-rate scale error (slip), gyro 100 Hz
+    with a turn-on bias, walk, scale error and noise, UWB round-robin at 33 Hz."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(0, len(T_S), 2):
+        v, w = VW[k]
+        moving = v != 0.0
+        twist = Twist(Vector3(v * 1.01 + moving * rng.normal(0, 0.01), 0.0, 0.0),
+                      Vector3(0.0, 0.0, w * yaw_rate_scale + moving * rng.normal(0, 0.01)))
+        out.append((T_S[k], 0, Odometry(header=Header(k, Time.from_sec(T_S[k]), "odom"),
+                                         twist=TwistWithCovariance(twist))))
+    bias = gyro_bias_rad_s
+    for k in range(len(T_S)):
+        bias += rng.normal(0.0, 5e-5 * math.sqrt(DT_S))
+        gz = VW[k][1] * 1.003 + bias + rng.normal(0.0, 0.0052)
+        out.append((T_S[k], 1, Imu(header=Header(k, Time.from_sec(T_S[k]), "imu_link"),
+                                   angular_velocity=Vector3(0.0, 0.0, gz))))
+    if uwb:
+        k = np.arange(0, len(T_S), 3)
+        tag = tag_positions_m(POSE[k], CFG.uwb.tag_pos_m)
+        for m in simulate_ranges(T_S[k], tag, CFG.uwb.anchors_xy_m, CFG.uwb, rng, anchor=np.arange(len(k)) % 4):
+            out.append((m.header.stamp.to_sec(), 2, m))
+    out.sort(key=lambda item: (item[0], item[1]))
+    return out
+
+
+def _run(msgs, **kwargs) -> EkfNode:
+    node = EkfNode(CFG.ekf, uwb=CFG.uwb, **kwargs)
+    for _, kind, msg in msgs:
+        (node.on_odom, node.on_imu, node.on_range)[kind](msg)
+    return node
+
+
+def _errors(node):
+    """(position errors (N,), yaw errors (N,) rad) against the truth at the history's stamps."""
+    t, pose = node.history()
+    true = np.column_stack([np.interp(t, T_S, POSE[:, i]) for i in range(3)])
+    dyaw = np.angle(np.exp(1j * (pose[:, 2] - true[:, 2])))
+    return np.hypot(pose[:, 0] - true[:, 0], pose[:, 1] - true[:, 1]), dyaw
+
+
+@pytest.fixture(scope="module")
+def runs():
+    msgs = _messages(0)
+    return {name: _run(msgs, use_imu=imu, use_uwb=uwb)
+            for name, imu, uwb in (("odom", False, False), ("imu", True, False), ("uwb", False, True),
+                                   ("uwb_imu", True, True))}
+
+
+def test_odom_plus_imu_beats_odometry_on_heading(runs):
+    _, yaw_odom = _errors(runs["odom"])
+    _, yaw_imu = _errors(runs["imu"])
+    rms_odom, rms_imu = (np.sqrt(np.mean(e ** 2)) for e in (yaw_odom, yaw_imu))
+    assert math.degrees(abs(yaw_odom[-1])) > 10.0  # 5 % yaw-rate error over 360 deg of turns
+    assert abs(yaw_imu[-1]) < 0.4 * abs(yaw_odom[-1])
+    assert rms_imu < 0.4 * rms_odom
+
+
+def test_rest_calibration_removes_the_gyro_bias(runs):
+    node = runs["imu"]
+    assert node.calibrated
+    assert node.state[5] == pytest.approx(0.1, abs=0.003)  # the 0.1 rad/s turn-on bias
+    n_gyro = sum(1 for _, kind, _ in _messages(0, uwb=False) if kind == 1)
+    assert node.fused["imu"] == n_gyro - 150  # 1.5 s at 100 Hz went into the calibration
+
+
+def test_without_rest_calibration_the_bias_is_learnt_worse_from_the_odometry(runs):
+    cfg = load_config(overrides={"ekf.imu_rest_calibration_s": 0.0})
+    node = EkfNode(cfg.ekf, use_imu=True, use_uwb=False)
+    for _, kind, msg in _messages(0, uwb=False):
+        (node.on_odom, node.on_imu)[kind](msg)
+    _, yaw = _errors(node)
+    _, yaw_calibrated = _errors(runs["imu"])
+    assert abs(node.state[5] - 0.1) < 0.02  # the bias state still converges (the robot stands 2 s)
+    assert np.sqrt(np.mean(yaw ** 2)) > 1.5 * np.sqrt(np.mean(yaw_calibrated ** 2))
+
+
+def test_uwb_bounds_the_position_error(runs):
+    pos_odom, _ = _errors(runs["odom"])
+    assert pos_odom.max() > 0.8  # dead reckoning drifts
+    for name in ("uwb", "uwb_imu"):
+        pos, _ = _errors(runs[name])
+        assert pos.max() < 0.15 and np.sqrt(np.mean(pos ** 2)) < 0.06, name
+        assert runs[name].frame_id == "map"
+    assert runs["odom"].frame_id == "odom"
+
+
+def test_nlos_ranges_are_gated(runs):
+    node = runs["uwb"]
+    assert 0 < node.rejected_ranges < 0.1 * node.fused["uwb"]
+
+
+def _converged_uwb_node():
+    node = EkfNode(CFG.ekf, use_imu=False, use_uwb=True, uwb=CFG.uwb, initial_pose=(1.0, 2.0, 0.3))
+    for _, kind, msg in _messages(1)[:600]:
+        if kind != 1:
+            (node.on_odom, None, node.on_range)[kind](msg)
+    return node
+
+
+def test_gating_rejects_an_outlier_and_accepts_a_consistent_range():
+    node = _converged_uwb_node()
+    x = node.state
+    r, _ = node.range_model(x, 2)
+    stamp = Time.from_sec(node.t_s)
+    before = node.rejected_ranges, node.fused["uwb"]
+    node.on_range(Range(Header(0, stamp, "uwb_anchor_2"), Range.INFRARED, 2 * math.pi, 0.0, 40.0, r + 3.0))
+    assert node.rejected_ranges == before[0] + 1 and node.fused["uwb"] == before[1]
+    assert np.array_equal(node.state, x)
+    node.on_range(Range(Header(0, stamp, "uwb_anchor_2"), Range.INFRARED, 2 * math.pi, 0.0, 40.0, r + 0.02))
+    assert node.fused["uwb"] == before[1] + 1 and not np.array_equal(node.state, x)
+
+
+def test_range_jacobian_matches_finite_differences():
+    node = EkfNode(CFG.ekf, use_imu=False, use_uwb=True, uwb=CFG.uwb)
+    x = np.array([1.0, -2.0, 0.7, 0.5, 0.1, 0.0])
+    r, H = node.range_model(x, 1)
+    for i in range(3):
+        dx = np.zeros(6)
+        dx[i] = 1e-6
+        assert (node.range_model(x + dx, 1)[0] - r) / 1e-6 == pytest.approx(H[0, i], abs=1e-5)
+    assert np.all(H[0, 3:] == 0.0)
+
+
+def test_same_seed_same_output():
+    a, b, c = (_run(_messages(s)[:3000], use_imu=True, use_uwb=True) for s in (4, 4, 5))
+    (ta, pa), (tb, pb), (_, pc) = a.history(), b.history(), c.history()
+    assert np.array_equal(ta, tb) and np.array_equal(pa, pb)
+    assert not np.array_equal(pa[-10:], pc[-10:])
+
+
+def test_bus_node_publishes_filtered_odometry():
+    clock = VirtualClock()
+    bus = Bus(clock)
+    out = []
+    bus.subscribe("odometry/filtered", out.append)
+    node = EkfNode(CFG.ekf, use_imu=True, use_uwb=False, bus=bus, initial_pose=(1.0, 0.0, 0.0))
+    for k in range(10):
+        stamp = Time.from_us(k * 20_000)
+        bus.publish("imu/data_raw", Imu(header=Header(k, stamp, "imu_link"), angular_velocity=Vector3(0, 0, 0.05)))
+        bus.publish("odom", Odometry(header=Header(k, stamp, "odom"),
+                                     twist=TwistWithCovariance(Twist(Vector3(0.0, 0, 0), Vector3(0, 0, 0)))))
+    assert len(out) == 10 and node.fused["odom"] == 10
+    msg = out[-1]
+    assert msg.header.frame_id == "odom" and msg.child_frame_id == "base_link"
+    assert msg.pose.pose.position.x == pytest.approx(1.0, abs=1e-3)
+    assert msg.header.stamp == Time.from_us(180_000)
+    cov = msg.pose.covariance.reshape(6, 6)
+    assert cov[0, 0] > 0 and cov[5, 5] > 0 and cov[2, 2] == 0.0
+
+
+def test_bad_arguments_name_the_field():
+    with pytest.raises(ValueError, match="anchors_xy_m"):
+        EkfNode(CFG.ekf, use_imu=False, use_uwb=True)
+    with pytest.raises(ValueError, match="initial_pose"):
+        EkfNode(CFG.ekf, use_imu=False, use_uwb=False, initial_pose=(0.0, 1.0))
+    with pytest.raises(ValueError, match="use_odom"):
+        EkfNode(CFG.ekf, use_odom=False, use_imu=False, use_uwb=False)
+    node = EkfNode(CFG.ekf, use_imu=False, use_uwb=True, uwb=CFG.uwb)
+    with pytest.raises(ValueError, match="header.frame_id"):
+        node.on_range(Range(Header(0, Time(), "uwb_anchor_9"), Range.INFRARED, 1.0, 0.0, 40.0, 3.0))

@@ -86,7 +86,10 @@ class Route:
     goal_tolerance_m: float = 0.2
 
     def __post_init__(self) -> None:
-        start = tuple(float(v) for v in np.asarray(self.start_xy_yaw, dtype=float).ravel())
+        try:
+            start = tuple(float(v) for v in np.asarray(self.start_xy_yaw, dtype=float).ravel())
+        except (TypeError, ValueError):
+            start = ()
         if len(start) != 3 or not all(math.isfinite(v) for v in start):
             raise RouteError(f"start_xy_yaw: {self.start_xy_yaw!r} must be 3 finite numbers [x_m, y_m, yaw_rad]")
         object.__setattr__(self, "start_xy_yaw", start)
@@ -149,15 +152,11 @@ def route_length_m(route: Route) -> float:
 
 def distance_to_path_m(route: Route, xy_m: np.ndarray) -> np.ndarray:
     """Distance ``(K,)`` from each point of ``xy_m (K, 2)`` to the nearest point of the route polyline, m."""
-    xy = np.atleast_2d(np.asarray(xy_m, dtype=float))
+    p = np.atleast_2d(np.asarray(xy_m, dtype=float))[:, None, :]
     path = route.path_xy_m()
     a, ab = path[:-1], np.diff(path, axis=0)
-    out = np.full(len(xy), np.inf)
-    for start in range(0, len(xy), 4096):  # bounded memory for long recordings
-        p = xy[start:start + 4096, None, :]
-        u = np.clip(((p - a) * ab).sum(2) / (ab * ab).sum(1), 0.0, 1.0)
-        out[start:start + 4096] = np.linalg.norm(p - (a + u[..., None] * ab), axis=2).min(1)
-    return out
+    u = np.clip(((p - a) * ab).sum(2) / (ab * ab).sum(1), 0.0, 1.0)  # (K, segments)
+    return np.linalg.norm(p - (a + u[..., None] * ab), axis=2).min(1)
 
 
 class PurePursuit:
@@ -182,8 +181,7 @@ class PurePursuit:
                  turn_gain_per_s: float = 1.5):
         self.route = route
         self.path = route.path_xy_m()
-        seg = np.diff(self.path, axis=0)
-        self._seg = seg
+        self._seg = seg = np.diff(self.path, axis=0)
         self._seg_len = np.hypot(seg[:, 0], seg[:, 1])
         self._s0 = np.concatenate([[0.0], np.cumsum(self._seg_len)])  # arc length at each vertex
         self.length_m = float(self._s0[-1])
@@ -217,11 +215,12 @@ class PurePursuit:
         u = np.minimum(np.maximum(u, np.maximum((lo - s0) / length, 0.0)), np.minimum((hi - s0) / length, 1.0))
         dist = np.hypot(*(a + u[:, None] * ab - xy).T)
         k = int(np.argmin(dist))
-        s = s0 + u * length
-        return float(s[k]), float(dist[k])
+        return float(s0[k] + u[k] * length[k]), float(dist[k])
 
     def command(self, x_m: float, y_m: float, yaw_rad: float) -> tuple[float, float, bool]:
         """Twist for the robot at ``(x_m, y_m, yaw_rad)`` in ``map``: ``(linear_m_s, angular_rad_s, done)``."""
+        if not all(math.isfinite(v) for v in (x_m, y_m, yaw_rad)):
+            raise ValueError(f"pose: ({x_m}, {y_m}, {yaw_rad}) must be finite (x_m, y_m, yaw_rad)")
         if self.done:
             return 0.0, 0.0, True
         r = self.route
@@ -230,8 +229,7 @@ class PurePursuit:
         self.progress_m = max(self.progress_m, s)
         goal = self.path[-1]
         remaining_m = self.length_m - self.progress_m
-        if (math.hypot(*(goal - xy)) <= r.goal_tolerance_m
-                and remaining_m <= r.lookahead_m + r.goal_tolerance_m):
+        if math.hypot(*(goal - xy)) <= r.goal_tolerance_m and remaining_m <= r.lookahead_m + r.goal_tolerance_m:
             self.done = True
             return 0.0, 0.0, True
         target = self.point_at(self.progress_m + r.lookahead_m)

@@ -105,6 +105,7 @@ def test_route_length_counts_the_start():
     ({"goal_tolerance_m": ".nan"}, "goal_tolerance_m"),
     ({"max_angular_rad_s": "fast"}, "max_angular_rad_s"),
     ({"start_xy_yaw": [0.0, 1.0]}, "start_xy_yaw"),
+    ({"start_xy_yaw": "home"}, "start_xy_yaw"),
     ({"waypoints_xy_m": [[1.0, 2.0, 3.0]]}, "waypoints_xy_m"),
     ({"waypoints_xy_m": [[0.0, 0.0]]}, "waypoints_xy_m"),  # same as the start
     ({"speed": 1.0}, "unknown key 'speed'"),
@@ -143,6 +144,11 @@ def test_left_of_the_path_it_steers_right_with_pure_pursuit_curvature():
     alpha, d = math.atan2(-0.3, 0.8), math.hypot(0.8, 0.3)
     assert w / v == pytest.approx(2 * math.sin(alpha) / d)
     assert w < 0 and pp.cross_track_m == pytest.approx(0.3)
+
+
+def test_non_finite_pose_is_refused():
+    with pytest.raises(ValueError, match="^pose"):
+        PurePursuit(STRAIGHT).command(0.0, math.nan, 0.0)
 
 
 def test_facing_away_it_turns_in_place_toward_the_path():

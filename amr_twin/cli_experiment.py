@@ -22,6 +22,10 @@ def _check_common(jobs: int, firmware: str, fail) -> None:
         fail(f"--firmware {firmware!r}: must be one of {', '.join(FIRMWARES)}")
 
 
+def _rpm(value) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
 def _dask_client(scheduler: str, timeout_s: float, fail):
     """A connected ``distributed.Client``, or a one-line error and exit 2."""
     from .experiments.executor import ExecutorError, connect_dask
@@ -85,6 +89,10 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             for wheel, w in r["wheels"].items():
                 verdicts = " ".join(f"{k}={'ok' if c['verdict'] == 'pass' else 'MISS'}" for k, c in w["checks"].items())
                 typer.echo(f"run {r['run']} {wheel:5s} {w['reference_rpm']:8.2f} RPM  {verdicts}")
+        for c in data["comparisons"]:
+            typer.echo(f"run {c['loaded_run']} (20 kg) against run {c['unloaded_run']} {c['wheel']:5s} "
+                       f"{c['measure']} {_rpm(c['loaded'])} / {_rpm(c['unloaded'])} RPM: {c['verdict']} "
+                       f"(true speed {_rpm(c['true_loaded'])} / {_rpm(c['true_unloaded'])}: {c['true_verdict']})")
         s = data["summary"]
         typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "

@@ -8,8 +8,11 @@ The metrics (:mod:`amr_twin.metrics`) are judged on the **published** samples
 and starting from rest at the command; the true wheel speed is measured too, for
 reference. Settling band: ``max(5 % of the step, 4 RPM)`` around the reference;
 4 RPM is the firmware's THRESHOLD_CONTROL, inside which the PI does not act.
-Oscillation (the 20 kg runs' "more oscillation", §5.1.4): excess total variation
-of the speed from its first 90 % crossing to 5 s after the command.
+Oscillation (the 20 kg runs' "more oscillation", §5.1.4): the named measure
+:data:`OSCILLATION_MEASURE`, the excess total variation of the speed from its
+first 90 % crossing to 5 s after the command (:func:`amr_twin.metrics.step_info`),
+compared per wheel between each 20 kg run and the same command unloaded; the
+verdict is judged on the published samples, the true speed's is reported too.
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
 """
 
@@ -20,7 +23,6 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 
 from ..config import TwinConfig
 from ..loop import TwinOptions
@@ -81,6 +83,11 @@ BANDS = (
     Band("overshoot", "any", "left", 0.0, 3.0, 2.0),
 )
 OSCILLATION_PAIRS = ((7, 3), (8, 5))  # (loaded, unloaded): "more oscillation" with 20 kg (§5.1.4)
+OSCILLATION_MEASURE = "excess total variation"
+OSCILLATION_DEFINITION = (f"excess total variation of the wheel speed from its first 90 % crossing to "
+                          f"{TRANSIENT_WINDOW_S:g} s after the command: sum |y[i+1] - y[i]| - |y_end - y_start| "
+                          "on the linearly interpolated signal, RPM (0 for a monotone approach, twice the summed "
+                          "swing amplitudes otherwise)")
 
 
 def step_class(step_rpm: float) -> str:
@@ -110,8 +117,21 @@ def judge(wheel: str, step_rpm: float, metrics: dict) -> dict:
     return out
 
 
+def _more(loaded: float | None, unloaded: float | None) -> str:
+    ok = loaded is not None and unloaded is not None and loaded > unloaded
+    return "pass" if ok else "fail"
+
+
 def compare_oscillation(results: list[dict]) -> list[dict]:
-    """Loaded vs unloaded oscillation (published samples), per driven wheel."""
+    """Loaded against unloaded oscillation, per driven wheel of each pair of :data:`OSCILLATION_PAIRS`.
+
+    Returns
+    -------
+    list of dict : ``loaded_run, unloaded_run, wheel, measure``; ``loaded``,
+    ``unloaded`` and ``verdict`` on the published samples (the judged values);
+    ``true_loaded``, ``true_unloaded`` and ``true_verdict`` on the true speed.
+    A value that could not be measured (None) fails.
+    """
     by_number = {r["run"]: r for r in results}
     out = []
     for loaded, unloaded in OSCILLATION_PAIRS:
@@ -122,11 +142,27 @@ def compare_oscillation(results: list[dict]) -> list[dict]:
             b = by_number[unloaded]["wheels"].get(wheel)
             if a is None or b is None:
                 continue
-            va, vb = a["published"]["oscillation"], b["published"]["oscillation"]
-            ok = va is not None and vb is not None and va > vb
-            out.append({"loaded_run": loaded, "unloaded_run": unloaded, "wheel": wheel, "measure": "oscillation",
-                        "loaded": va, "unloaded": vb, "verdict": "pass" if ok else "fail"})
+            va, vb = ((w.get("published") or {}).get("oscillation") for w in (a, b))
+            ta, tb = ((w.get("true") or {}).get("oscillation") for w in (a, b))
+            out.append({"loaded_run": loaded, "unloaded_run": unloaded, "wheel": wheel,
+                        "measure": OSCILLATION_MEASURE, "loaded": va, "unloaded": vb, "verdict": _more(va, vb),
+                        "true_loaded": ta, "true_unloaded": tb, "true_verdict": _more(ta, tb)})
     return out
+
+
+def oscillation_verdict(comparisons: list[dict]) -> dict:
+    """Overall "the 20 kg runs oscillate more" verdict: it holds only if every comparison passes.
+
+    Returns
+    -------
+    dict : ``{"measure", "definition", "published_passed", "true_passed", "comparisons", "verdict"}``
+    with ``verdict`` "pass" or "fail" (judged on the published samples; "fail" when there is no pair).
+    """
+    n = len(comparisons)
+    passed = sum(c["verdict"] == "pass" for c in comparisons)
+    return {"measure": OSCILLATION_MEASURE, "definition": OSCILLATION_DEFINITION, "comparisons": n,
+            "published_passed": passed, "true_passed": sum(c.get("true_verdict") == "pass" for c in comparisons),
+            "verdict": "pass" if n and passed == n else "fail"}
 
 
 @dataclass
@@ -213,41 +249,10 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
 
 
 def plot(results: dict, out_dir: Path) -> list[Path]:
-    """One PNG per run (``run<N>.png``): RPM against time, each driven wheel and its reference."""
-    import matplotlib
+    """One PNG per run (``run<N>.png``), see :func:`.chapter5_report.plot`."""
+    from .chapter5_report import plot as plot_runs
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .executor import save_figure
-
-    paths = []
-    colours = {"left": "tab:blue", "right": "tab:red"}
-    for r in results["runs"]:
-        raw = r["raw"]
-        fig, ax = plt.subplots(figsize=(7.5, 4.0))
-        for w, name in enumerate(WHEELS):
-            info = r["wheels"].get(name)
-            if info is None:
-                continue
-            c, ref = colours[name], abs(info["reference_rpm"])
-            t0 = raw["t_command_s"]
-            ax.step([0.0, t0, r["duration_s"]], [0.0, ref, ref], where="post", color=c, ls="--", lw=1,
-                    label=f"{name} reference {ref:.2f} RPM")
-            pub = raw["published"][w]
-            ax.plot(np.r_[t0, pub[:, 0]], np.r_[0.0, pub[:, 1]], "o-", color=c, ms=4, lw=1.2,
-                    label=f"wheel{w}_Vel (published)")
-            ax.plot(raw["t_s"], np.abs(raw["true_rpm"][:, w]), color=c, lw=0.6, alpha=0.6,
-                    label=f"{name} true |speed|")
-        ax.set(xlabel="time (s)", ylabel="wheel speed (RPM)", title=f"Run {r['run']}: {r['title']}",
-               xlim=(0, r["duration_s"]))
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="lower right")
-        fig.tight_layout()
-        path = Path(out_dir) / f"run{r['run']}.png"
-        save_figure(fig, path)
-        paths.append(path)
-    return paths
+    return plot_runs(results, out_dir)
 
 
 def _public(results: dict) -> dict:
@@ -257,7 +262,8 @@ def _public(results: dict) -> dict:
     return {"firmware": results["firmware"], "jobs": results["jobs"], "wall_s": round(results["wall_s"], 3),
             "sim_s": results["sim_s"], "judged_on": "published samples, linear interpolation from rest at the command",
             "settling_band": "max(5 % of the step, 4 RPM) around the reference",
-            "oscillation": f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S} s",
+            "oscillation": f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S:g} s",
+            "oscillation_verdict": oscillation_verdict(results["comparisons"]),
             "bands": [vars(b) for b in BANDS], "runs": runs, "comparisons": results["comparisons"],
             "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)}}
 

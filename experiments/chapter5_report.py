@@ -1,6 +1,8 @@
-"""The markdown report of the chapter 5 experiments (built from the ``metrics.json`` object)."""
+"""The chapter 5 report: one figure per run, and the markdown built from the ``metrics.json`` object."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 COLUMNS = (("delay_s", "delay s"), ("rise_s", "rise s"), ("peak_s", "peak s"), ("settling_s", "settling s"),
            ("overshoot", "overshoot RPM"), ("steady_error", "steady err RPM"), ("oscillation", "oscillation RPM"))
@@ -55,6 +57,34 @@ def _misses(data: dict) -> list[str]:
     return lines or ["- none"]
 
 
+def _oscillation(data: dict) -> list[str]:
+    """The oscillation section: the measure, its value per run and wheel, the 20 kg comparisons, the verdict."""
+    v = data.get("oscillation_verdict")
+    if v is None:
+        return []
+    lines = [f"Named measure: **{v['measure']}**, the {v['definition']}. Judged on the published samples; "
+             "the true wheel speed is shown for reference. The analysis is in `docs/validation.md`.", "",
+             "| run | payload kg | wheel | ref RPM | published RPM | true RPM |", "|---|---|---|---|---|---|"]
+    for r in data["runs"]:
+        for wheel, w in r["wheels"].items():
+            pub = (w["published"] or {}).get("oscillation")
+            lines.append(f"| {r['run']} | {r['payload_kg']:g} | {wheel} | {w['reference_rpm']:.2f} | {_num(pub)} | "
+                         f"{_num(w['true'].get('oscillation'))} |")
+    lines += ["", "| 20 kg run | unloaded run | wheel | published 20 kg / unloaded | verdict | "
+                  "true 20 kg / unloaded | true verdict |", "|---|---|---|---|---|---|---|"]
+    for c in data["comparisons"]:
+        lines.append(f"| {c['loaded_run']} | {c['unloaded_run']} | {c['wheel']} | {_num(c['loaded'])} / "
+                     f"{_num(c['unloaded'])} | {c['verdict']} | {_num(c.get('true_loaded'))} / "
+                     f"{_num(c.get('true_unloaded'))} | {c.get('true_verdict', '—')} |")
+    if not v["comparisons"]:
+        return lines + ["", "**Verdict:** not judged (the runs do not include a 20 kg run and its unloaded twin)."]
+    holds = "holds" if v["verdict"] == "pass" else "does not hold"
+    lines += ["", f"**Verdict: \"the 20 kg runs oscillate more\" {holds}** — the 20 kg wheel oscillates more in "
+                  f"{v['published_passed']} of {v['comparisons']} comparisons on the published samples "
+                  f"({v['true_passed']} of {v['comparisons']} on the true speed); the claim needs all of them."]
+    return lines
+
+
 def markdown(data: dict) -> str:
     """The whole ``report.md``."""
     s = data["summary"]
@@ -70,12 +100,48 @@ def markdown(data: dict) -> str:
         "## Bands (§5.1.3, §5.1.4)", "", *_band_table(data), "",
         "## Published samples (wheel0_Vel / wheel1_Vel), judged", "", *_table(data, "published", True), "",
         "## True wheel speed (100 Hz), for reference", "", *_table(data, "true", False), "",
-        "## 20 kg against unloaded: oscillation", "",
-        "| loaded run | unloaded run | wheel | loaded RPM | unloaded RPM | verdict |", "|---|---|---|---|---|---|",
-        *[f"| {c['loaded_run']} | {c['unloaded_run']} | {c['wheel']} | {_num(c['loaded'])} | "
-          f"{_num(c['unloaded'])} | {c['verdict']} |" for c in data["comparisons"]], "",
+        "## Oscillation during the transient: 20 kg against unloaded (§5.1.4)", "", *_oscillation(data), "",
         "## Bands missed", "", *_misses(data), "",
         "## Figures", "",
         *[f"![run {r['run']}: {r['title']}](run{r['run']}.png)\n" for r in data["runs"]],
     ]
     return "\n".join(out) + "\n"
+
+
+def plot(results: dict, out_dir: Path) -> list[Path]:
+    """One PNG per run (``run<N>.png``): RPM against time, each driven wheel and its reference."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from .executor import save_figure
+
+    paths = []
+    colours = {"left": "tab:blue", "right": "tab:red"}
+    for r in results["runs"]:
+        raw = r["raw"]
+        fig, ax = plt.subplots(figsize=(7.5, 4.0))
+        for w, name in enumerate(("left", "right")):
+            info = r["wheels"].get(name)
+            if info is None:
+                continue
+            c, ref = colours[name], abs(info["reference_rpm"])
+            t0 = raw["t_command_s"]
+            ax.step([0.0, t0, r["duration_s"]], [0.0, ref, ref], where="post", color=c, ls="--", lw=1,
+                    label=f"{name} reference {ref:.2f} RPM")
+            pub = raw["published"][w]
+            ax.plot(np.r_[t0, pub[:, 0]], np.r_[0.0, pub[:, 1]], "o-", color=c, ms=4, lw=1.2,
+                    label=f"wheel{w}_Vel (published)")
+            ax.plot(raw["t_s"], np.abs(raw["true_rpm"][:, w]), color=c, lw=0.6, alpha=0.6,
+                    label=f"{name} true |speed|")
+        ax.set(xlabel="time (s)", ylabel="wheel speed (RPM)", title=f"Run {r['run']}: {r['title']}",
+               xlim=(0, r["duration_s"]))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower right")
+        fig.tight_layout()
+        path = Path(out_dir) / f"run{r['run']}.png"
+        save_figure(fig, path)
+        paths.append(path)
+    return paths

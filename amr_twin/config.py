@@ -239,6 +239,7 @@ class EkfCfg(_Section):
     gyro_bias_walk_rad_s_sqrt_s: float = P(unit="rad/s/sqrt(s)", ge=0.0, le=0.1)
     odom_v_sigma_m_s: float = P(unit="m/s", gt=0.0, le=5.0)
     odom_w_sigma_rad_s: float = P(unit="rad/s", gt=0.0, le=10.0)
+    odom_differential: bool = P(unit="bool")
     gyro_w_sigma_rad_s: float = P(unit="rad/s", gt=0.0, le=10.0)
     uwb_range_sigma_m: float = P(unit="m", gt=0.0, le=10.0)
     initial_xy_sigma_m: float = P(unit="m", gt=0.0, le=100.0)

@@ -139,7 +139,7 @@ class EkfNode:
         self._t_hist: list[float] = []
         self._pose_hist: list[tuple[float, float, float]] = []
         self._last_twist = (0.0, 0.0)
-        self._odom_seen = False
+        self._prev_odom: tuple[float, float, float, float] | None = None
         self._calib_t0_s: float | None = None
         self._calib: list[float] = []
         self.calibrated = cfg.imu_rest_calibration_s <= 0.0
@@ -200,10 +200,30 @@ class EkfNode:
         self._pose_hist.append((float(x[X]), float(x[Y]), float(x[YAW])))
 
     # -- inputs -------------------------------------------------------------------------
+    def odom_twist(self, msg: Odometry) -> tuple[float, float] | None:
+        """(v_m_s, w_rad_s) that an odometry message gives: its twist, or, with
+        ``odom_differential``, its pose differentiated against the previous message's
+        (None for the first message and for a repeated stamp)."""
+        if not self.cfg.odom_differential:
+            return float(msg.twist.twist.linear.x), float(msg.twist.twist.angular.z)
+        t_s, p = msg.header.stamp.to_sec(), msg.pose.pose
+        now = (t_s, p.position.x, p.position.y, p.orientation.yaw_rad())
+        prev, self._prev_odom = self._prev_odom, now
+        if prev is None or now[0] <= prev[0]:
+            return None
+        dt = now[0] - prev[0]
+        dyaw = math.atan2(math.sin(now[3] - prev[3]), math.cos(now[3] - prev[3]))
+        mid = prev[3] + 0.5 * dyaw
+        v = ((now[1] - prev[1]) * math.cos(mid) + (now[2] - prev[2]) * math.sin(mid)) / dt
+        return v, dyaw / dt
+
     def on_odom(self, msg: Odometry) -> None:
         """Fuse the forward speed and yaw rate of a wheel odometry message."""
-        v, w = float(msg.twist.twist.linear.x), float(msg.twist.twist.angular.z)
-        self._last_twist, self._odom_seen = (v, w), True
+        twist = self.odom_twist(msg)
+        if twist is None:
+            return
+        v, w = twist
+        self._last_twist = (v, w)
         if not self.use_odom:
             return
         self._predict_to(msg.header.stamp.to_sec())

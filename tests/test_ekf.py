@@ -9,7 +9,8 @@ from amr_twin.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.config import load_config
 from amr_twin.controllers.ekf import EkfNode
-from amr_twin.messages import Header, Imu, Odometry, Range, Time, Twist, TwistWithCovariance, Vector3
+from amr_twin.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Range, Time,
+                               Twist, TwistWithCovariance, Vector3)
 from amr_twin.sensors.uwb import simulate_ranges, tag_positions_m
 
 CFG = load_config()
@@ -41,13 +42,20 @@ def _messages(seed: int, yaw_rate_scale: float = 1.05, gyro_bias_rad_s: float = 
     with a turn-on bias, walk, scale error and noise, UWB round-robin at 33 Hz."""
     rng = np.random.default_rng(seed)
     out = []
-    for k in range(0, len(T_S), 2):
+    x = y = yaw = 0.0
+    for k in range(0, len(T_S), 2):  # dead reckoning of the erroneous wheel speeds, as WheelOdometry
         v, w = VW[k]
         moving = v != 0.0
-        twist = Twist(Vector3(v * 1.01 + moving * rng.normal(0, 0.01), 0.0, 0.0),
-                      Vector3(0.0, 0.0, w * yaw_rate_scale + moving * rng.normal(0, 0.01)))
+        v_odom = v * 1.01 + moving * rng.normal(0, 0.01)
+        w_odom = w * yaw_rate_scale + moving * rng.normal(0, 0.01)
+        pose = Pose(Point(x, y, 0.0), Quaternion.from_yaw(yaw))
+        twist = Twist(Vector3(v_odom, 0.0, 0.0), Vector3(0.0, 0.0, w_odom))
         out.append((T_S[k], 0, Odometry(header=Header(k, Time.from_sec(T_S[k]), "odom"),
-                                         twist=TwistWithCovariance(twist))))
+                                         pose=PoseWithCovariance(pose), twist=TwistWithCovariance(twist))))
+        dt = 2 * DT_S
+        x += v_odom * dt * math.cos(yaw + 0.5 * w_odom * dt)
+        y += v_odom * dt * math.sin(yaw + 0.5 * w_odom * dt)
+        yaw += w_odom * dt
     bias = gyro_bias_rad_s
     for k in range(len(T_S)):
         bias += rng.normal(0.0, 5e-5 * math.sqrt(DT_S))
@@ -168,6 +176,25 @@ def test_same_seed_same_output():
     assert not np.array_equal(pa[-10:], pc[-10:])
 
 
+def test_odometry_poses_differentiated_or_twist():
+    """Differential mode follows the odometry's poses (which the node re-integrates after each
+    speed window); twist mode follows its twists. Here the twists claim twice the speed."""
+    results = {}
+    for differential in (True, False):
+        cfg = load_config(overrides={"ekf.odom_differential": differential})
+        node = EkfNode(cfg.ekf, use_imu=False, use_uwb=False)
+        for k in range(101):
+            t = 0.02 * k
+            msg = Odometry(header=Header(k, Time.from_sec(t), "odom"),
+                           pose=PoseWithCovariance(Pose(Point(0.5 * t, 0.0, 0.0), Quaternion.from_yaw(0.1 * t))),
+                           twist=TwistWithCovariance(Twist(Vector3(1.0, 0, 0), Vector3(0, 0, 0.2))))
+            node.on_odom(msg)
+        results[differential] = node.state
+    assert results[True][3] == pytest.approx(0.5, abs=0.01) and results[True][4] == pytest.approx(0.1, abs=0.01)
+    assert results[True][2] == pytest.approx(0.2, abs=0.01)
+    assert results[False][3] == pytest.approx(1.0, abs=0.01) and results[False][4] == pytest.approx(0.2, abs=0.01)
+
+
 def test_bus_node_publishes_filtered_odometry():
     clock = VirtualClock()
     bus = Bus(clock)
@@ -179,7 +206,7 @@ def test_bus_node_publishes_filtered_odometry():
         bus.publish("imu/data_raw", Imu(header=Header(k, stamp, "imu_link"), angular_velocity=Vector3(0, 0, 0.05)))
         bus.publish("odom", Odometry(header=Header(k, stamp, "odom"),
                                      twist=TwistWithCovariance(Twist(Vector3(0.0, 0, 0), Vector3(0, 0, 0)))))
-    assert len(out) == 10 and node.fused["odom"] == 10
+    assert len(out) == 9 and node.fused["odom"] == 9  # the first pose only primes the differentiation
     msg = out[-1]
     assert msg.header.frame_id == "odom" and msg.child_frame_id == "base_link"
     assert msg.pose.pose.position.x == pytest.approx(1.0, abs=1e-3)

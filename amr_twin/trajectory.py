@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import se2
+
 
 @dataclass(frozen=True)
 class TrajectoryErrors:
@@ -66,11 +68,6 @@ class TrajectoryErrors:
     length_m: float
 
 
-def wrap_angle_rad(angle_rad: np.ndarray | float) -> np.ndarray:
-    """Angles wrapped to ``[-pi, pi)``, rad (same shape as the input)."""
-    return (np.asarray(angle_rad, dtype=float) + math.pi) % (2.0 * math.pi) - math.pi
-
-
 def _checked(name_t: str, t_s, name_pose: str, pose) -> tuple[np.ndarray, np.ndarray]:
     t = np.asarray(t_s, dtype=float)
     p = np.asarray(pose, dtype=float)
@@ -85,17 +82,6 @@ def _checked(name_t: str, t_s, name_pose: str, pose) -> tuple[np.ndarray, np.nda
     if np.any(np.diff(t) < 0):
         raise ValueError(f"{name_t}: stamps must be non-decreasing")
     return t, p
-
-
-def interpolate_poses(t_s: np.ndarray, t_ref_s: np.ndarray, pose_ref: np.ndarray) -> np.ndarray:
-    """Poses ``(len(t_s), 3)`` of the trajectory ``(t_ref_s, pose_ref)`` at the stamps ``t_s``.
-
-    x and y are linear in time; the yaw is interpolated unwrapped, then wrapped to [-pi, pi).
-    Stamps outside ``t_ref_s`` get the end values.
-    """
-    yaw = np.unwrap(pose_ref[:, 2])
-    return np.column_stack([np.interp(t_s, t_ref_s, pose_ref[:, 0]), np.interp(t_s, t_ref_s, pose_ref[:, 1]),
-                            wrap_angle_rad(np.interp(t_s, t_ref_s, yaw))])
 
 
 def align_se2(xy_est_m: np.ndarray, xy_true_m: np.ndarray) -> tuple[float, np.ndarray]:
@@ -131,7 +117,7 @@ def rpe(pose_est: np.ndarray, pose_true: np.ndarray, rpe_delta_m: float) -> tupl
     t_est, r_est = _relative(pose_est, i, j)
     # E = rel_true^-1 rel_est has translation R_true^T (t_est - t_true): its norm is |t_est - t_true|
     err_t = np.hypot(*(t_est - t_true).T)
-    err_r = np.abs(wrap_angle_rad(r_est - r_true))
+    err_r = np.abs(se2.wrap_rad(r_est - r_true))
     return float(np.sqrt(np.mean(err_t ** 2))), float(np.degrees(np.sqrt(np.mean(err_r ** 2))))
 
 
@@ -174,14 +160,14 @@ def errors(t_est_s, pose_est, t_true_s, pose_true, rpe_delta_m: float = 1.0,
         raise ValueError(f"t_est_s: only {int(inside.sum())} stamps lie inside the truth's span "
                          f"[{t_true[0]:g}, {t_true[-1]:g}] s; need >= 2")
     t_est, p_est = t_est[inside], p_est[inside].copy()
-    q = interpolate_poses(t_est, t_true, p_true)
+    q = se2.interpolate(t_true, p_true, t_est)
     if align:
         theta, shift = align_se2(p_est[:, :2], q[:, :2])
         c, s = math.cos(theta), math.sin(theta)
         p_est[:, :2] = p_est[:, :2] @ np.array([[c, s], [-s, c]]) + shift
         p_est[:, 2] = p_est[:, 2] + theta
     pos_err = np.hypot(*(p_est[:, :2] - q[:, :2]).T)
-    yaw_err = np.abs(wrap_angle_rad(p_est[:, 2] - q[:, 2]))
+    yaw_err = np.abs(se2.wrap_rad(p_est[:, 2] - q[:, 2]))
     rpe_t, rpe_r = rpe(p_est, q, rpe_delta_m)
     return TrajectoryErrors(
         ate_m=float(np.sqrt(np.mean(pos_err ** 2))), rpe_trans_m=rpe_t, rpe_rot_deg=rpe_r,

@@ -19,8 +19,8 @@ Time
 Motion prior
     ``prior_base_delta`` is the motion of ``base_link`` over
     :meth:`LidarOdometry.prior_interval_s`, from the previous scan's ``t_end`` to
-    this one's (e.g. wheel odometry interpolated at both stamps, :func:`relative_pose`
-    of :func:`interpolate_pose`), expressed in the earlier ``base_link`` frame. For
+    this one's (e.g. wheel odometry interpolated at both stamps, :func:`amr_twin.se2.between`
+    of :func:`amr_twin.se2.interpolate`), expressed in the earlier ``base_link`` frame. For
     the first scan it covers the rotation before its ``t_end`` and only deskews it
     (the map starts from that scan: a distorted first scan biases every later
     pose). It is moved to the laser frame, ``L^-1 D L`` with ``L`` the laser pose
@@ -44,73 +44,12 @@ from kiss_icp.config import KISSConfig
 from kiss_icp.kiss_icp import KissICP
 
 from amr_twin.messages import LaserScan
+from amr_twin import se2
 
 MIN_POINTS = 20
 """Fewest valid beams a scan needs to be registered."""
 SENTINEL_RANGE_M = 1.0e6
 """Range of the two timing sentinel points (beyond any max range: never registered)."""
-
-
-def se2_matrix(x_m: float, y_m: float, yaw_rad: float) -> np.ndarray:
-    """Homogeneous 4x4 transform of a planar pose (rotation about z)."""
-    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-    t = np.eye(4)
-    t[:2, :2] = [[c, -s], [s, c]]
-    t[0, 3], t[1, 3] = x_m, y_m
-    return t
-
-
-def matrix_se2(t: np.ndarray) -> tuple[float, float, float]:
-    """Planar pose ``(x_m, y_m, yaw_rad)`` of a 4x4 transform (yaw in (-pi, pi])."""
-    return float(t[0, 3]), float(t[1, 3]), math.atan2(t[1, 0], t[0, 0])
-
-
-def _wrap_rad(a):
-    return np.arctan2(np.sin(a), np.cos(a))
-
-
-def compose(a, b) -> np.ndarray:
-    """Pose(s) ``a * b``: ``b`` given in the frame of ``a``, returned in ``a``'s parent frame.
-
-    ``a`` and ``b`` are ``(x_m, y_m, yaw_rad)`` arrays of shape (3,) or (N, 3) (broadcast);
-    the yaw is wrapped to (-pi, pi].
-    """
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([a[..., 0] + c * b[..., 0] - s * b[..., 1], a[..., 1] + s * b[..., 0] + c * b[..., 1],
-                     _wrap_rad(a[..., 2] + b[..., 2])], axis=-1)
-
-
-def relative_pose(a, b) -> np.ndarray:
-    """Pose(s) of ``b`` in the frame of ``a`` (``a^-1 * b``): the motion from ``a`` to ``b``. Shapes as :func:`compose`."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
-    return np.stack([c * dx + s * dy, -s * dx + c * dy, _wrap_rad(b[..., 2] - a[..., 2])], axis=-1)
-
-
-def interpolate_pose(t_s: np.ndarray, pose: np.ndarray, t_query_s) -> np.ndarray:
-    """Poses at ``t_query_s`` by linear interpolation (yaw unwrapped), held beyond the ends.
-
-    Parameters
-    ----------
-    t_s : ndarray, shape (N,)
-        Increasing stamps, s.
-    pose : ndarray, shape (N, 3)
-        ``x_m, y_m, yaw_rad``.
-    t_query_s : float or ndarray, shape (M,)
-        Query stamps, s.
-
-    Returns
-    -------
-    ndarray, shape (M, 3) (or (3,) for a scalar query); yaw wrapped to (-pi, pi].
-    """
-    t_s, pose = np.asarray(t_s, float), np.asarray(pose, float)
-    q = np.atleast_1d(np.asarray(t_query_s, float))
-    yaw = np.interp(q, t_s, np.unwrap(pose[:, 2]))
-    out = np.column_stack([np.interp(q, t_s, pose[:, 0]), np.interp(q, t_s, pose[:, 1]),
-                           np.arctan2(np.sin(yaw), np.cos(yaw))])
-    return out[0] if np.ndim(t_query_s) == 0 else out
 
 
 def beam_times_s(scan: LaserScan) -> np.ndarray:
@@ -180,7 +119,7 @@ class LidarOdometry:
         self.config = config
         self.kiss = KissICP(config)
         self.laser_in_base_xy_yaw = tuple(float(v) for v in laser_in_base_xy_yaw)
-        self._laser = se2_matrix(*self.laser_in_base_xy_yaw)
+        self._laser = se2.matrix(*self.laser_in_base_xy_yaw)
         self._laser_inv = np.linalg.inv(self._laser)
         self._t_s: list[float] = []
         self._poses: list[tuple[float, float, float]] = []
@@ -234,7 +173,7 @@ class LidarOdometry:
         if prior_base_delta is not None:
             if len(prior_base_delta) != 3 or not all(math.isfinite(v) for v in prior_base_delta):
                 raise ValueError(f"prior_base_delta: {prior_base_delta} must be 3 finite numbers (m, m, rad)")
-            delta = self._laser_inv @ se2_matrix(*(float(v) for v in prior_base_delta)) @ self._laser
+            delta = self._laser_inv @ se2.matrix(*(float(v) for v in prior_base_delta)) @ self._laser
         if first:  # deskew along the prior, but start at the origin: initial guess inv(D) @ D = I
             self.kiss.last_delta = delta if delta is not None else np.eye(4)
             self.kiss.last_pose = np.linalg.inv(self.kiss.last_delta)
@@ -249,7 +188,7 @@ class LidarOdometry:
         else:  # too few points: carry the pose forward along the prior
             self.skipped += 1
             self.kiss.last_pose = self.kiss.last_pose @ self.kiss.last_delta
-        pose = matrix_se2(self._laser @ self.kiss.last_pose @ self._laser_inv)
+        pose = se2.from_matrix(self._laser @ self.kiss.last_pose @ self._laser_inv)
         self._t_s.append(t_end)
         self._poses.append(pose)
         self.register_wall_s.append(time.perf_counter() - wall0)
@@ -273,7 +212,7 @@ class LidarOdometry:
         """
         pose = np.array(self._poses, float).reshape(-1, 3)
         if origin_xy_yaw is not None:
-            pose = compose(np.asarray(origin_xy_yaw, float), pose).reshape(-1, 3)
+            pose = se2.compose(np.asarray(origin_xy_yaw, float), pose).reshape(-1, 3)
         return np.array(self._t_s, float), pose
 
     def beam_laser_poses(self, scan: LaserScan,
@@ -291,5 +230,5 @@ class LidarOdometry:
         t_s, pose = self.poses(origin_xy_yaw)
         if len(t_s) == 0:
             raise ValueError("beam_laser_poses: no scan registered yet")
-        base = interpolate_pose(t_s, pose, beam_times_s(scan)).reshape(-1, 3)
-        return compose(base, np.asarray(self.laser_in_base_xy_yaw))
+        base = se2.interpolate(t_s, pose, beam_times_s(scan)).reshape(-1, 3)
+        return se2.compose(base, np.asarray(self.laser_in_base_xy_yaw))

@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.controllers.lidar_odometry import (LidarOdometry, beam_times_s, compose, interpolate_pose,
-                                                 relative_pose, scan_end_time_s, scan_points)
+from amr_twin import se2
+from amr_twin.controllers.lidar_odometry import LidarOdometry, beam_times_s, scan_end_time_s, scan_points
 from amr_twin.messages import Header, LaserScan, Time
 
 ROOM = (-4.0, 6.0, -3.0, 2.5)  # inner faces x_min, x_max, y_min, y_max, m
@@ -22,7 +22,7 @@ N_BEAMS, BEAM_DT_S = 364, 0.0005
 def room_scan(base_pose_at, t0_s: float, rng: np.random.Generator, noise_m: float = 0.005) -> LaserScan:
     """A scan of ROOM whose beam i is cast at t0 + i * BEAM_DT_S from the laser pose then."""
     t = t0_s + BEAM_DT_S * np.arange(N_BEAMS)
-    laser = compose(np.array([base_pose_at(ti) for ti in t]), np.array(LASER))
+    laser = se2.compose(np.array([base_pose_at(ti) for ti in t]), np.array(LASER))
     inc = 2 * math.pi / N_BEAMS
     ang = laser[:, 2] - math.pi + inc * np.arange(N_BEAMS)
     c, s = np.cos(ang), np.sin(ang)
@@ -54,7 +54,7 @@ def run_synthetic(deskew: bool, prior: bool, duration_s: float = 5.0, seed: int 
     while t0 + N_BEAMS * BEAM_DT_S < duration_s:
         scan = room_scan(drive_pose, t0, rng)
         t_a, t_b = lo.prior_interval_s(scan)
-        lo.register(scan, tuple(relative_pose(drive_pose(t_a), drive_pose(t_b))) if prior else None)
+        lo.register(scan, tuple(se2.between(drive_pose(t_a), drive_pose(t_b))) if prior else None)
         t0 += N_BEAMS * BEAM_DT_S
     t_s, pose = lo.poses(origin_xy_yaw=tuple(drive_pose(lo.poses()[0][0])))
     truth = np.array([drive_pose(t) for t in t_s])
@@ -64,25 +64,6 @@ def run_synthetic(deskew: bool, prior: bool, duration_s: float = 5.0, seed: int 
 
 
 # -- pure helpers ---------------------------------------------------------------------
-def test_compose_and_relative_pose_are_inverse():
-    a = np.array([1.0, -2.0, 3.0])          # near +pi: the yaw sum must wrap
-    b = np.array([[0.5, 0.25, 0.5], [-1.0, 2.0, -2.0]])
-    ab = compose(a, b)
-    assert np.all(np.abs(ab[:, 2]) <= math.pi)
-    np.testing.assert_allclose(relative_pose(a, ab), b, atol=1e-12)
-    # 0.30 m ahead of a base turned 90 deg left is 0.30 m along +y
-    np.testing.assert_allclose(compose([0.0, 0.0, math.pi / 2], LASER), [0.0, 0.30, math.pi / 2], atol=1e-12)
-
-
-def test_interpolate_pose_across_the_yaw_wrap():
-    t = np.array([0.0, 1.0])
-    pose = np.array([[0.0, 0.0, math.pi - 0.1], [1.0, 2.0, -math.pi + 0.1]])  # +0.2 rad through pi
-    mid = interpolate_pose(t, pose, 0.5)
-    np.testing.assert_allclose(mid[:2], [0.5, 1.0])
-    assert abs(abs(mid[2]) - math.pi) < 1e-9
-    np.testing.assert_allclose(interpolate_pose(t, pose, [-1.0, 2.0]), pose)  # held beyond the ends
-
-
 def test_scan_points_drop_invalid_beams_and_times_follow_the_beams():
     r = np.array([1.0, np.inf, 0.1, 2.0, np.nan, 13.0], np.float32)
     scan = LaserScan(header=Header(0, Time.from_us(2_000_000), "laser"), angle_min=0.0, angle_increment=math.pi / 2,
@@ -142,7 +123,7 @@ def test_spin_in_place_keeps_base_link_still_not_the_laser():
     for k in range(12):
         scan = room_scan(spin, 0.182 * k, rng)
         t_a, t_b = lo.prior_interval_s(scan)
-        pose = lo.register(scan, tuple(relative_pose(spin(t_a), spin(t_b))))
+        pose = lo.register(scan, tuple(se2.between(spin(t_a), spin(t_b))))
         if k == 0:
             assert pose == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)
     t_s, pose = lo.poses()
@@ -191,11 +172,11 @@ def test_twin_drive_lidar_odometry_ate_well_under_10_cm(warehouse_drive):
     lo = LidarOdometry(voxel_size_m=0.15, max_range_m=12.0, min_range_m=0.15, laser_in_base_xy_yaw=LASER)
     for scan in scans:
         t_a, t_b = lo.prior_interval_s(scan)
-        prior = relative_pose(interpolate_pose(t_odom, pose_odom, t_a), interpolate_pose(t_odom, pose_odom, t_b))
+        prior = se2.between(se2.interpolate(t_odom, pose_odom, t_a), se2.interpolate(t_odom, pose_odom, t_b))
         lo.register(scan, tuple(prior))
     t_s, _ = lo.poses()
-    _, pose = lo.poses(origin_xy_yaw=tuple(interpolate_pose(t_true, pose_true, t_s[0])))
-    truth = interpolate_pose(t_true, pose_true, t_s)
+    _, pose = lo.poses(origin_xy_yaw=tuple(se2.interpolate(t_true, pose_true, t_s[0])))
+    truth = se2.interpolate(t_true, pose_true, t_s)
     err = np.hypot(*(pose[:, :2] - truth[:, :2]).T)
     yaw_err = np.abs(np.angle(np.exp(1j * (pose[:, 2] - truth[:, 2]))))
     assert len(scans) >= 95 and lo.skipped == 0

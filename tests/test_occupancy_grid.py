@@ -164,14 +164,15 @@ def warehouse_scans():
 
 
 def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_path):
-    from amr_twin.controllers.lidar_odometry import beam_times_s, compose, interpolate_pose
+    from amr_twin import se2
+    from amr_twin.controllers.lidar_odometry import beam_times_s
     from amr_twin.world_geometry import distance_to_boxes_m
 
     scans, t_true, pose_true, boxes, laser_xy_yaw = warehouse_scans
     grid = OccupancyGrid(RES_M, 21.0, 15.0, (-10.5, -7.5))
     ends = []
     for scan in scans:
-        beams = compose(interpolate_pose(t_true, pose_true, beam_times_s(scan)), np.array(laser_xy_yaw))
+        beams = se2.compose(se2.interpolate(t_true, pose_true, beam_times_s(scan)), np.array(laser_xy_yaw))
         grid.insert_scan(None, scan, beam_poses=beams)
         r = np.asarray(scan.ranges, float)
         ok = np.isfinite(r)

@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.trajectory import TrajectoryErrors, align_se2, errors, interpolate_poses, wrap_angle_rad
+from amr_twin import se2
+from amr_twin.trajectory import TrajectoryErrors, align_se2, errors
 
 
 def _straight(n=201, speed_m_s=1.0, dt_s=0.1, yaw_rad=0.0):
@@ -18,7 +19,7 @@ def _straight(n=201, speed_m_s=1.0, dt_s=0.1, yaw_rad=0.0):
 def _circle(n=400, radius_m=3.0, dt_s=0.05, rate_rad_s=0.3):
     t = np.arange(n) * dt_s
     a = rate_rad_s * t
-    return t, np.column_stack([radius_m * np.sin(a), radius_m * (1 - np.cos(a)), wrap_angle_rad(a)])
+    return t, np.column_stack([radius_m * np.sin(a), radius_m * (1 - np.cos(a)), se2.wrap_rad(a)])
 
 
 def test_identical_trajectories_have_zero_errors():
@@ -46,7 +47,7 @@ def test_rigidly_moved_trajectory_aligns_back_and_rpe_ignores_the_move():
     t, pose = _circle()
     theta, shift = 0.7, np.array([2.0, -1.0])
     c, s = math.cos(theta), math.sin(theta)
-    est = np.column_stack([pose[:, :2] @ np.array([[c, s], [-s, c]]) + shift, wrap_angle_rad(pose[:, 2] + theta)])
+    est = np.column_stack([pose[:, :2] @ np.array([[c, s], [-s, c]]) + shift, se2.wrap_rad(pose[:, 2] + theta)])
     raw = errors(t, est, t, pose)
     assert raw.ate_m > 1.0 and raw.rms_yaw_err_deg == pytest.approx(math.degrees(theta))
     assert raw.rpe_trans_m == pytest.approx(0.0, abs=1e-9) and raw.rpe_rot_deg == pytest.approx(0.0, abs=1e-9)
@@ -92,8 +93,8 @@ def test_heading_error_across_plus_minus_pi_is_small():
 def test_truth_yaw_is_interpolated_through_the_wrap():
     t_ref = np.array([0.0, 1.0])
     ref = np.array([[0.0, 0.0, math.pi - 0.1], [1.0, 0.0, -math.pi + 0.1]])  # turning +0.2 rad through pi
-    mid = interpolate_poses(np.array([0.5]), t_ref, ref)
-    assert abs(wrap_angle_rad(mid[0, 2] - math.pi)) == pytest.approx(0.0, abs=1e-12)
+    mid = se2.interpolate(t_ref, ref, np.array([0.5]))
+    assert abs(se2.wrap_rad(mid[0, 2] - math.pi)) == pytest.approx(0.0, abs=1e-12)
     assert mid[0, 0] == pytest.approx(0.5)
 
 

@@ -1,0 +1,56 @@
+"""Planar pose algebra (amr_twin.se2), no mujoco."""
+
+import math
+
+import numpy as np
+import pytest
+
+from amr_twin import se2
+
+
+def test_compose_then_between_is_identity():
+    rng = np.random.default_rng(1)
+    a = rng.uniform([-5, -5, -math.pi], [5, 5, math.pi], size=(50, 3))
+    b = rng.uniform([-5, -5, -math.pi], [5, 5, math.pi], size=(50, 3))
+    np.testing.assert_allclose(se2.between(a, se2.compose(a, b)), b, atol=1e-12)
+
+
+def test_compose_known_case():
+    # a point 1 m ahead of a robot at (2, 3) facing +y is at (2, 4)
+    np.testing.assert_allclose(se2.compose([2.0, 3.0, math.pi / 2], [1.0, 0.0, 0.0]), [2.0, 4.0, math.pi / 2],
+                               atol=1e-12)
+
+
+def test_wrap_and_interpolation_across_pi():
+    assert se2.wrap_rad(3 * math.pi / 2) == pytest.approx(-math.pi / 2)
+    t = np.array([0.0, 1.0])
+    pose = np.array([[0.0, 0.0, math.pi - 0.1], [1.0, 0.0, -math.pi + 0.1]])
+    mid = se2.interpolate(t, pose, 0.5)
+    assert abs(abs(mid[2]) - math.pi) < 1e-9  # through pi, not through 0
+    assert mid[0] == pytest.approx(0.5)
+
+
+def test_compose_and_relative_pose_are_inverse():
+    a = np.array([1.0, -2.0, 3.0])          # near +pi: the yaw sum must wrap
+    b = np.array([[0.5, 0.25, 0.5], [-1.0, 2.0, -2.0]])
+    ab = se2.compose(a, b)
+    assert np.all(np.abs(ab[:, 2]) <= math.pi)
+    np.testing.assert_allclose(se2.between(a, ab), b, atol=1e-12)
+    # 0.30 m ahead of a base turned 90 deg left is 0.30 m along +y
+    np.testing.assert_allclose(se2.compose([0.0, 0.0, math.pi / 2], (0.30, 0.0, 0.0)), [0.0, 0.30, math.pi / 2], atol=1e-12)
+
+
+def test_interpolate_pose_across_the_yaw_wrap():
+    t = np.array([0.0, 1.0])
+    pose = np.array([[0.0, 0.0, math.pi - 0.1], [1.0, 2.0, -math.pi + 0.1]])  # +0.2 rad through pi
+    mid = se2.interpolate(t, pose, 0.5)
+    np.testing.assert_allclose(mid[:2], [0.5, 1.0])
+    assert abs(abs(mid[2]) - math.pi) < 1e-9
+    np.testing.assert_allclose(se2.interpolate(t, pose, [-1.0, 2.0]), pose)  # held beyond the ends
+
+
+def test_matrix_round_trip():
+    pose = (1.5, -0.25, 2.9)
+    assert se2.from_matrix(se2.matrix(*pose)) == pytest.approx(pose)
+    np.testing.assert_allclose(se2.matrix(*pose) @ se2.matrix(*pose)[:, [3]],
+                               se2.matrix(*se2.compose(pose, pose))[:, [3]], atol=1e-12)

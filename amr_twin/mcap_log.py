@@ -267,6 +267,24 @@ def _ground_truth(t_ns: int, pose) -> bytes:
     return bytes(c.b)
 
 
+_QOS = ("- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n"
+        "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n"
+        "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n  avoid_ros_namespace_conventions: false")
+
+
+def qos_profile(topic: str) -> str:
+    """``offered_qos_profiles`` channel metadata, required by the MCAP ``ros2`` profile.
+
+    rosbag2's pre-Jazzy YAML form (integers: history 1 keep-last, reliability 1
+    reliable, durability 1 transient-local / 2 volatile). ``/tf_static`` is
+    transient-local with depth 1, as tf2's static broadcaster offers it, so that
+    ``ros2 bag play`` re-publishes it in a way tf2's static listener accepts.
+    """
+    if topic == "/tf_static":
+        return _QOS.format(depth=1, durability=1)
+    return _QOS.format(depth=10, durability=2)
+
+
 def write_mcap(capture, series, path: Path) -> Path:
     """Write the capture's bus messages and ``series`` to ``path`` (.mcap), through a temporary file."""
     from mcap.writer import Writer
@@ -294,6 +312,7 @@ def write_mcap(capture, series, path: Path) -> Path:
         with open(tmp, "wb") as f:
             writer = Writer(f)
             writer.start(profile="ros2", library="amr_twin")
+            writer.add_metadata("rosbag2", {"ROS_DISTRO": "humble"})
             schemas, channels, seq = {}, {}, collections.Counter()
             for _t, _k, topic, typ, _data in items:
                 if typ not in schemas:
@@ -301,7 +320,8 @@ def write_mcap(capture, series, path: Path) -> Path:
                                                           data=msgdef(typ).encode())
                 if topic not in channels:
                     channels[topic] = writer.register_channel(topic=topic, message_encoding="cdr",
-                                                              schema_id=schemas[typ])
+                                                              schema_id=schemas[typ],
+                                                              metadata={"offered_qos_profiles": qos_profile(topic)})
             for t, _k, topic, _typ, data in items:
                 seq[topic] += 1
                 writer.add_message(channels[topic], log_time=t, data=data, publish_time=t,

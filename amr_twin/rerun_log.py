@@ -257,6 +257,7 @@ def _log_scan(rec, m, capture: Capture) -> None:
         r = np.asarray(msg.ranges, float)
         ang = msg.angle_min + msg.angle_increment * np.arange(len(r))
         ok = np.isfinite(r)
+        r = np.where(ok, r, 0.0)  # no return: inf; dropped below, kept out of the products
         local = np.column_stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(r)])[ok]
         t_beam = msg.header.stamp.to_sec() + msg.time_increment * np.arange(len(r))[ok]
         p, yaw = _laser_pose_at(capture, m, t_beam)

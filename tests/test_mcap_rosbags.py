@@ -185,3 +185,15 @@ def test_values_against_the_simulation(recorded, decoded):
     # static frames (REP-105)
     static = {(t.header.frame_id, t.child_frame_id) for t in decoded["/tf_static"][0][1].transforms}
     assert static == {("world", "odom"), ("base_link", "laser"), ("base_link", "imu_link")}
+
+
+def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
+    """The MCAP ros2 profile requires offered_qos_profiles; /tf_static must be transient-local for tf2."""
+    from rosbags.rosbag2 import Reader
+
+    with Reader(recorded[3]) as reader:
+        qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
+    assert set(qos) and all(len(profiles) == 1 for profiles in qos.values())
+    durability = {topic: str(profiles[0].durability) for topic, profiles in qos.items()}
+    assert "TRANSIENT_LOCAL" in durability["/tf_static"].upper()
+    assert all("VOLATILE" in d.upper() for t, d in durability.items() if t != "/tf_static")

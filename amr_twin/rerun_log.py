@@ -97,6 +97,10 @@ def atomic_target(path: Path) -> Path:
     return path.with_name(f".{path.name}.{os.getpid()}.tmp")
 
 
+TRACKED = "world/bodies/amr/base_link"
+"""The 3D view's camera follows the robot's base."""
+
+
 # -- geoms -----------------------------------------------------------------------
 def body_entity(m: mujoco.MjModel, b: int) -> str:
     name = m.body(b).name or f"body{b}"
@@ -292,7 +296,8 @@ def _blueprint(has_imu: bool):
     if has_imu:
         plots.append(rrb.TimeSeriesView(origin="imu", name="IMU"))
     return rrb.Blueprint(
-        rrb.Horizontal(rrb.Vertical(rrb.Spatial3DView(origin="world", name="twin"),
+        rrb.Horizontal(rrb.Vertical(rrb.Spatial3DView(origin="world", name="twin",
+                                                      eye_controls=rrb.EyeControls3D(tracking_entity=TRACKED)),
                                     rrb.TextLogView(origin="commands", name="commands"), row_shares=[4, 1]),
                        rrb.Vertical(*plots), column_shares=[3, 2]),
         collapse_panels=True)

@@ -1,0 +1,232 @@
+"""Thesis chapter 6 in the twin: one warehouse drive, five localisation estimates.
+
+§6.2.2 compares four architectures it could only cite (figs. 6.4 to 6.8). Here the
+twin drives a route once and every architecture is fed the same recorded streams:
+
+* ``odom``: raw wheel odometry (the firmware's published wheel speeds, dead-reckoned);
+* ``odom+lidar``: LiDAR odometry (kiss-icp) with wheel odometry as the motion prior,
+  the scan-matching front end of fig. 6.4's SLAM, and the map built from its poses;
+* ``odom+imu``: EKF fusing the wheel twist with the gyro's yaw rate (fig. 6.5);
+* ``odom+uwb``: EKF fusing the wheel twist with UWB ranges (fig. 6.6);
+* ``odom+uwb+imu``: EKF fusing all three (fig. 6.7).
+
+The route is followed by a pure-pursuit node on ``cmd_vel`` fed with the **true**
+pose (a perfect localiser, as Gazebo's ``p3d`` plugin gives), so that the drive does
+not depend on any estimator and all five see one trajectory. The estimators then
+run offline on the recorded messages, replayed in stamp order: the numbers are
+those an online run would give, and one drive serves all five.
+
+:func:`run` drives and estimates, :func:`plot` and :func:`report` (in
+:mod:`.fusion_report`) write the twin's own fig. 6.8, the map and the tables.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..config import TwinConfig
+from ..controllers.diff_drive import DiffDriveNode
+from ..controllers.ekf import EkfNode
+from ..controllers.lidar_odometry import LidarOdometry
+from ..controllers.path_follower import PathFollowerNode, Route, distance_to_path_m, load_route, route_length_m
+from ..loop import Twin, TwinOptions
+from ..trajectory import TrajectoryErrors, errors
+from ..world_geometry import Footprints, scan_plane_boxes
+from .fusion_map import build_map
+from .. import se2
+from .fusion_streams import Streams, odom_poses, relative_motion
+
+DEFAULT_ROUTE = Path(__file__).resolve().parent / "routes" / "warehouse_60m.yaml"
+ARCHITECTURES = ("odom", "odom+lidar", "odom+imu", "odom+uwb", "odom+uwb+imu")
+REST_S = 2.0           # standing still before the route: the IMU's rest calibration
+TAIL_S = 1.0           # standing still after the goal
+TIMEOUT_FACTOR = 3.0   # give up after this many times the route's length / max speed
+RPE_DELTA_M = 1.0
+
+
+@dataclass
+class Estimate:
+    """One architecture's trajectory: stamps (N,) s and poses (N, 3) x_m, y_m, yaw_rad in the map frame."""
+
+    name: str
+    t_s: np.ndarray
+    pose: np.ndarray
+    errors: TrajectoryErrors | None = None
+    wall_s: float = 0.0
+
+
+@dataclass
+class FusionResults:
+    """What :func:`run` returns: the drive, the estimates and their errors."""
+
+    route: Route
+    seed: int
+    firmware: str
+    t_true_s: np.ndarray
+    pose_true: np.ndarray
+    streams: Streams
+    estimates: dict[str, Estimate] = field(default_factory=dict)
+    sim_s: float = 0.0
+    drive_wall_s: float = 0.0
+    wall_s: float = 0.0                 # drive, estimators and map
+    reached_goal: bool = False
+    cross_track_rms_m: float = 0.0
+    boxes: Footprints | None = None     # the world at the LiDAR's height
+    grid: object = None                 # OccupancyGrid from the LiDAR odometry's poses
+    laser_in_base: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    anchors_xy_m: np.ndarray | None = None  # UWB anchors (K, 2), map frame
+    lidar_beam_poses: list = field(default_factory=list)  # per scan (n_beams, 3) laser poses, map frame
+
+
+def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "improved", progress: bool = True,
+          rrd_path: Path | None = None, mcap_path: Path | None = None) -> tuple[Twin, Streams, bool]:
+    """Drive ``route`` in the warehouse with IMU, LiDAR and UWB on; return the twin and the recorded streams.
+
+    ``rrd_path`` / ``mcap_path``: also write the drive as a Rerun / MCAP recording.
+    """
+    from ..sensors.uwb import UwbSensor
+
+    twin = Twin(cfg, TwinOptions(firmware=firmware, world="warehouse", seed=seed,
+                                 start_xy_yaw=route.start_xy_yaw, sensors=True))
+    m, d = twin.physics.model, twin.physics.data
+    twin.uwb = UwbSensor(m, d, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
+    streams = Streams()
+    twin.bus.add_tap(streams.tap)
+    if rrd_path is not None or mcap_path is not None:
+        from ..rerun_log import attach
+        attach(twin)
+    DiffDriveNode(twin.bus, twin.clock, twin.client)
+    twin.advance(REST_S)
+
+    def true_pose() -> tuple[float, float, float]:
+        p = twin.physics.pose()
+        return p.x_m, p.y_m, p.yaw_rad
+
+    follower = PathFollowerNode(twin.bus, twin.clock, route, pose_source=true_pose)
+    length_m = route_length_m(route)
+    timeout_s = REST_S + TIMEOUT_FACTOR * length_m / route.max_speed_m_s
+    bar = _progress_bar(progress, length_m)
+    travelled_m, last = 0.0, true_pose()
+    while not follower.done and twin.t_s < timeout_s:
+        twin.advance(0.5)
+        now = true_pose()
+        travelled_m += math.hypot(now[0] - last[0], now[1] - last[1])
+        last = now
+        if bar is not None:
+            bar[0].update(bar[1], completed=min(travelled_m, length_m))
+    twin.advance(TAIL_S)
+    if bar is not None:
+        bar[0].stop()
+    if rrd_path is not None or mcap_path is not None:
+        from ..rerun_log import record_run
+        record_run(twin, rrd_path=rrd_path, mcap_path=mcap_path)
+    return twin, streams, bool(follower.done)
+
+
+def _progress_bar(enabled: bool, total_m: float):
+    if not enabled:
+        return None
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    bar = Progress(TextColumn("fusion drive"), BarColumn(), TextColumn("{task.completed:.0f}/{task.total:.0f} m"),
+                   TimeElapsedColumn(), console=Console(stderr=True))
+    bar.start()
+    return bar, bar.add_task("drive", total=total_m)
+
+
+def estimate_odom(streams: Streams, start: tuple[float, float, float]) -> Estimate:
+    """Raw wheel odometry, moved from the ``odom`` frame into the map by the start pose."""
+    t_s, pose = odom_poses(streams.odom)
+    return Estimate("odom", t_s, se2.compose(np.asarray(start), pose))
+
+
+def estimate_ekf(cfg: TwinConfig, streams: Streams, start: tuple[float, float, float], *,
+                 use_imu: bool, use_uwb: bool) -> Estimate:
+    """Replay the streams in stamp order into an :class:`EkfNode`."""
+    node = EkfNode(cfg.ekf, use_odom=True, use_imu=use_imu, use_uwb=use_uwb, uwb=cfg.uwb, initial_pose=start)
+    handlers = {"odom": node.on_odom, "imu": node.on_imu, "uwb": node.on_range}
+    kinds = ("odom",) + (("imu",) if use_imu else ()) + (("uwb",) if use_uwb else ())
+    for kind, msg in streams.merged(kinds):
+        handlers[kind](msg)
+    t_s, pose = node.history()
+    name = "odom+" + "+".join(k for k in ("uwb", "imu") if k in kinds)
+    return Estimate(name, np.asarray(t_s, float), np.asarray(pose, float))
+
+
+def estimate_lidar(cfg: TwinConfig, streams: Streams,
+                   start: tuple[float, float, float]) -> tuple[Estimate, list[np.ndarray]]:
+    """kiss-icp on every scan, with the wheel odometry's motion over each scan as the prior.
+
+    kiss-icp deskews a scan to its last beam, so each pose holds at the scan's end
+    (``t_end``) and the prior covers the interval between two scan ends
+    (:meth:`LidarOdometry.prior_interval_s`). Returns the estimate in the map frame
+    and, per scan, the laser pose at each beam's instant (for the map).
+    """
+    lc = cfg.lidar_odometry
+    lo = LidarOdometry(voxel_size_m=lc.voxel_size_m, max_range_m=lc.max_range_m, min_range_m=lc.min_range_m,
+                       laser_in_base_xy_yaw=laser_in_base(cfg), deskew=lc.deskew)
+    t_odom, pose_odom = odom_poses(streams.odom)
+    for scan in streams.scan:
+        t0, t1 = lo.prior_interval_s(scan)
+        lo.register(scan, relative_motion(t_odom, pose_odom, t0, t1))
+    t_s, _ = lo.poses()
+    if len(t_s) == 0:
+        return Estimate("odom+lidar", np.zeros(0), np.zeros((0, 3))), []
+    # the first pose is the origin of kiss-icp's frame: the start moved by the (rest) odometry up to it
+    origin = se2.compose(np.asarray(start, float), np.asarray(relative_motion(t_odom, pose_odom, 0.0, t_s[0])))
+    origin = tuple(float(v) for v in origin)
+    _, pose = lo.poses(origin_xy_yaw=origin)
+    beam_poses = [lo.beam_laser_poses(scan, origin_xy_yaw=origin) for scan in streams.scan]
+    return Estimate("odom+lidar", t_s, pose), beam_poses
+
+
+def laser_in_base(cfg: TwinConfig) -> tuple[float, float, float]:
+    """The ``laser`` frame in ``base_link``: x_m, y_m, yaw_rad (the mount of components.lidar)."""
+    pos_m = cfg.components.lidar.pos_m
+    return float(pos_m[0]), float(pos_m[1]), 0.0
+
+
+def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 0, firmware: str = "improved",
+        progress: bool = True, rrd_path: Path | None = None, mcap_path: Path | None = None) -> FusionResults:
+    """Drive the route, run the five architectures and score them against the truth."""
+    route = load_route(route_path)
+    t0 = time.perf_counter()
+    twin, streams, reached = drive(cfg, route, seed=seed, firmware=firmware, progress=progress,
+                                   rrd_path=rrd_path, mcap_path=mcap_path)
+    series = twin.recorder.series()
+    res = FusionResults(route=route, seed=seed, firmware=firmware, t_true_s=series.t_s, pose_true=series.pose,
+                        streams=streams, sim_s=twin.t_s, drive_wall_s=time.perf_counter() - t0,
+                        reached_goal=reached)
+    res.cross_track_rms_m = float(np.sqrt(np.mean(distance_to_path_m(route, series.pose[:, :2]) ** 2)))
+    start = route.start_xy_yaw
+    jobs = {
+        "odom": lambda: estimate_odom(streams, start),
+        "odom+lidar": lambda: _keep_beams(res, *estimate_lidar(cfg, streams, start)),
+        "odom+imu": lambda: estimate_ekf(cfg, streams, start, use_imu=True, use_uwb=False),
+        "odom+uwb": lambda: estimate_ekf(cfg, streams, start, use_imu=False, use_uwb=True),
+        "odom+uwb+imu": lambda: estimate_ekf(cfg, streams, start, use_imu=True, use_uwb=True),
+    }
+    for name, job in jobs.items():
+        t1 = time.perf_counter()
+        est = job()
+        est.name, est.wall_s = name, time.perf_counter() - t1
+        est.errors = errors(est.t_s, est.pose, series.t_s, series.pose, rpe_delta_m=RPE_DELTA_M)
+        res.estimates[name] = est
+    res.laser_in_base = laser_in_base(cfg)
+    res.anchors_xy_m = np.asarray(cfg.uwb.anchors_xy_m, float).reshape(-1, 2)
+    res.boxes = scan_plane_boxes(twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2]))
+    res.grid = build_map(streams.scan, res.lidar_beam_poses, res.boxes, cfg.mapping.resolution_m,
+                         cfg.mapping.margin_m)
+    res.wall_s = time.perf_counter() - t0
+    return res
+
+
+def _keep_beams(res: FusionResults, est: Estimate, beam_poses: list) -> Estimate:
+    res.lidar_beam_poses = beam_poses
+    return est

@@ -28,7 +28,7 @@ from __future__ import annotations
 from collections import deque
 from typing import Any, Callable
 
-from amr_twin.clock import EventHandle, VirtualClock
+from amr_twin.clock import NEVER_US, EventHandle, VirtualClock
 from amr_twin.messages import Quaternion, TFMessage, Transform, TransformStamped, Vector3
 
 ODOM_FRAME = "odom"
@@ -147,20 +147,45 @@ class Bus:
 
     def publish(self, topic: str, msg: Any) -> None:
         """Hand ``msg`` to the taps, then to the subscribers of ``topic``."""
-        topic = _name(topic)
+        if topic[:1] == "/":
+            topic = topic.lstrip("/")
         known = self._types.get(topic)
-        if known is not None and not isinstance(msg, known):
+        if known is not None and type(msg) is not known and not isinstance(msg, known):
             raise TypeError(f"topic {topic!r} carries {known.__name__}, got {type(msg).__name__}")
         if topic in self._latched:
             self._latched[topic] = msg
-        now_us = self.clock.now_us
-        for tap in list(self._taps):
-            tap(topic, msg, now_us)
-        for sub in list(self._subs.get(topic, ())):
-            sub._enqueue(msg)
+        if self._taps:
+            now_us = self.clock.now_us
+            for tap in tuple(self._taps):
+                tap(topic, msg, now_us)
+        subs = self._subs.get(topic)
+        if subs:
+            for sub in tuple(subs):
+                sub._enqueue(msg)
+
+    def lookahead_us(self, topics: tuple[str, ...]) -> int:
+        """Earliest delay after which a message published on ``topics`` reaches a subscriber, us.
+
+        The smallest ``latency_us`` of the topics' subscribers,
+        :data:`~amr_twin.clock.NEVER_US` when none subscribes: taps are observers
+        and never act on the twin. The loop lets the physics run this far ahead of
+        a publishing clock event (:mod:`amr_twin.clock`). Readers of :attr:`tf` pull
+        it in their own events, which run after the publishing event in time order.
+        """
+        best = NEVER_US
+        subs = self._subs
+        for topic in topics:
+            for sub in subs.get(topic, ()):
+                if sub.latency_us < best:
+                    best = max(sub.latency_us, 0)
+        return best
 
     def add_tap(self, tap: Tap) -> None:
-        """Register ``tap(topic, msg, t_us)``, called for every published message."""
+        """Register ``tap(topic, msg, t_us)``, called for every published message.
+
+        A tap observes: it must not publish, schedule or read the physics (the
+        loop may run publishing events while the physics is ahead of them).
+        """
         self._taps.append(tap)
 
     def remove_tap(self, tap: Tap) -> None:

@@ -2,10 +2,20 @@
 
 Every component that acts at its own instants (the Arduino's timer interrupt, the
 end of a ``delay()``, a rosserial frame arriving, a LiDAR beam) schedules a
-callback on one :class:`VirtualClock`. The simulation loop asks for
-:meth:`VirtualClock.next_event_us`, advances the physics in C up to that instant,
-then calls :meth:`VirtualClock.run_until` which fires the callbacks in time order
-with :attr:`VirtualClock.now_us` set to each callback's own time.
+callback on one :class:`VirtualClock`. The simulation loop asks for the next
+event, advances the physics in C up to that instant, then calls
+:meth:`VirtualClock.run_until` which fires the callbacks in time order with
+:attr:`VirtualClock.now_us` set to each callback's own time.
+
+Two kinds of event share one time order (ties: the order of scheduling):
+
+- a *synced* event (the default) may read or write the physics, so the loop
+  brings the physics up to its instant before it runs;
+- a *publishing* event (``schedule(..., publishes=topics)``) reads no physics
+  state and acts on the rest of the twin only by publishing on ``topics``
+  (odometry, a sensor message sampled earlier). The loop may run it while the
+  physics is ahead of it, as far as the bus' lookahead for those topics allows
+  (:meth:`amr_twin.bus.Bus.lookahead_us`): no subscriber, no limit.
 
 Time is an integer number of microseconds (``t_us``), like the Arduino's
 ``micros()``, so that event times are exact and ordering is deterministic.
@@ -15,19 +25,17 @@ from __future__ import annotations
 
 import heapq
 import itertools
-from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Sequence
 
 NEVER_US = 2**62
 """Sentinel time of an empty queue (about 146 000 years)."""
 
 
-@dataclass(order=True)
 class _Event:
-    t_us: int
-    seq: int
-    callback: Callable[[], None] = field(compare=False)
-    cancelled: bool = field(default=False, compare=False)
+    __slots__ = ("t_us", "callback", "publishes", "cancelled")
+
+    def __init__(self, t_us: int, callback: Callable[[], None], publishes: tuple[str, ...] | None):
+        self.t_us, self.callback, self.publishes, self.cancelled = t_us, callback, publishes, False
 
 
 class EventHandle:
@@ -43,6 +51,11 @@ class EventHandle:
         """Time at which the event fires, microseconds."""
         return self._event.t_us
 
+    @property
+    def publishes(self) -> tuple[str, ...] | None:
+        """Topics of a publishing event, ``None`` for a synced one."""
+        return self._event.publishes
+
     def cancel(self) -> None:
         """Prevent the callback from running (no effect if it already ran)."""
         self._event.cancelled = True
@@ -51,12 +64,15 @@ class EventHandle:
 class VirtualClock:
     """A simulated microsecond clock with a time-ordered queue of callbacks.
 
-    Events scheduled for the same instant run in the order they were scheduled.
+    Events scheduled for the same instant run in the order they were scheduled,
+    whatever their kind. The queues hold ``(t_us, seq, event)`` tuples (compared
+    in C); synced and publishing events are kept in two heaps.
     """
 
     def __init__(self, start_us: int = 0):
         self.now_us: int = int(start_us)
-        self._queue: list[_Event] = []
+        self._queue: list[tuple[int, int, _Event]] = []  # synced events
+        self._free: list[tuple[int, int, _Event]] = []  # publishing events
         self._seq = itertools.count()
 
     # -- Arduino-style readings -------------------------------------------------
@@ -74,25 +90,73 @@ class VirtualClock:
         return self.now_us * 1e-6
 
     # -- scheduling ---------------------------------------------------------------
-    def schedule(self, t_us: int, callback: Callable[[], None]) -> EventHandle:
-        """Run ``callback`` at absolute time ``t_us`` (not before ``now_us``)."""
+    def schedule(self, t_us: int, callback: Callable[[], None],
+                 publishes: Sequence[str] | None = None) -> EventHandle:
+        """Run ``callback`` at absolute time ``t_us`` (not before ``now_us``).
+
+        Parameters
+        ----------
+        t_us : int
+            Absolute time, microseconds.
+        callback : callable
+            Called with no argument, with ``now_us == t_us``.
+        publishes : sequence of str, optional
+            Declares a publishing event: the callback reads no physics state and
+            only publishes on these topics (a tuple of names without a leading
+            ``/``, other sequences are normalised; ``()``: nothing that any other
+            node sees). ``None``: a synced event.
+        """
         t_us = int(t_us)
         if t_us < self.now_us:
             raise ValueError(f"t_us={t_us} is in the past (now_us={self.now_us})")
-        event = _Event(t_us, next(self._seq), callback)
-        heapq.heappush(self._queue, event)
+        topics = publishes
+        if topics is not None and type(topics) is not tuple:
+            topics = tuple(p.lstrip("/") for p in topics)
+        event = _Event(t_us, callback, topics)
+        heapq.heappush(self._queue if topics is None else self._free, (t_us, next(self._seq), event))
         return EventHandle(event)
 
-    def schedule_in(self, delay_us: int, callback: Callable[[], None]) -> EventHandle:
-        """Run ``callback`` ``delay_us`` microseconds from now."""
-        return self.schedule(self.now_us + int(delay_us), callback)
+    def schedule_in(self, delay_us: int, callback: Callable[[], None],
+                    publishes: Sequence[str] | None = None) -> EventHandle:
+        """Run ``callback`` ``delay_us`` microseconds from now (see :meth:`schedule`)."""
+        return self.schedule(self.now_us + int(delay_us), callback, publishes)
+
+    @staticmethod
+    def _top(queue: list) -> int:
+        while queue and queue[0][2].cancelled:
+            heapq.heappop(queue)
+        return queue[0][0] if queue else NEVER_US
 
     def next_event_us(self) -> int:
-        """Time of the earliest pending event, or :data:`NEVER_US` if none."""
-        queue = self._queue
-        while queue and queue[0].cancelled:
-            heapq.heappop(queue)
-        return queue[0].t_us if queue else NEVER_US
+        """Time of the earliest pending event of either kind, or :data:`NEVER_US` if none."""
+        return min(self._top(self._queue), self._top(self._free))
+
+    def next_synced_event_us(self) -> int:
+        """Time of the earliest pending synced event, or :data:`NEVER_US` if none."""
+        return self._top(self._queue)
+
+    def physics_horizon_us(self, t_us: int, lookahead_us: Callable[[tuple[str, ...]], int]) -> int:
+        """How far the physics may run ahead of the pending publishing events.
+
+        Parameters
+        ----------
+        t_us : int
+            The loop's target (the next synced event, the end of the run), us.
+        lookahead_us : callable
+            ``lookahead_us(topics)``: the earliest delay after which a message on
+            ``topics`` can act on anything that reads the physics, us
+            (:meth:`amr_twin.bus.Bus.lookahead_us`).
+
+        Returns
+        -------
+        int
+            ``min(t_us, t_e + lookahead_us(topics_e))`` over the publishing events
+            ``e`` due at or before the result, us.
+        """
+        for t_e, _seq, event in self._free:  # a handful: one per periodic publisher
+            if t_e <= t_us and not event.cancelled:
+                t_us = min(t_us, t_e + lookahead_us(event.publishes))
+        return t_us
 
     def run_until(self, t_us: int) -> int:
         """Fire every event with time <= ``t_us`` in order; leave ``now_us = t_us``.
@@ -103,13 +167,19 @@ class VirtualClock:
         t_us = int(t_us)
         if t_us < self.now_us:
             raise ValueError(f"cannot run backwards to {t_us} (now_us={self.now_us})")
-        queue = self._queue
+        synced, free, pop = self._queue, self._free, heapq.heappop
         fired = 0
-        while queue and queue[0].t_us <= t_us:
-            event = heapq.heappop(queue)
+        while True:
+            if synced and synced[0][0] <= t_us:
+                queue = free if free and free[0] < synced[0] else synced
+            elif free and free[0][0] <= t_us:
+                queue = free
+            else:
+                break
+            t_e, _seq, event = pop(queue)
             if event.cancelled:
                 continue
-            self.now_us = event.t_us
+            self.now_us = t_e
             event.callback()
             fired += 1
         self.now_us = t_us

@@ -4,18 +4,23 @@ Roles (after dm_control's physics / task / loop): :class:`~amr_twin.physics.Phys
 owns MjData, the firmware and the nodes own their logic, and :class:`Twin` only
 orders events in time:
 
-1. ask the clock for the next event (a timer tick, the end of a ``delay()``, a
-   rosserial frame arriving, a sensor sample);
+1. find the next *synced* clock event (a timer tick, the end of a ``delay()``, a
+   rosserial frame arriving, a sensor reading the physics), the divergence check
+   or the end of the run; *publishing* events (odometry, IMU and LiDAR messages,
+   :mod:`amr_twin.clock`) do not stop the physics unless a subscriber could act on
+   what they publish before it (:meth:`amr_twin.bus.Bus.lookahead_us`);
 2. step the physics in C up to that instant with the actuation held, keeping the
-   wheel angles of every step;
+   wheel angles on the record grid (every ``record_every_steps``) and handing the
+   grid instants to the grid samplers (the IMU's true values, the LiDAR's poses
+   and casts);
 3. turn the angles into SC edges (interpolated to the microsecond) and deliver
-   them to the firmware's pin-change interrupt in time order, each at its time;
+   them to the firmware's pin-change interrupt in time order, each at its time,
+   interleaved with the publishing events that fall in the chunk;
 4. run the clock's events; apply the pins to the plant.
 
-The physics runs at most one step ahead of the clock: an event at ``t`` acts from
-the first physics step that starts at or after ``t``.
+A synced event at ``t`` acts from the first physics step that starts at or after
+``t``; a publishing event runs at its own time, possibly with the physics ahead.
 """
-
 from __future__ import annotations
 
 import math
@@ -87,16 +92,25 @@ class Twin:
         self.bus.subscribe("wheel_Command", self._to_arduino)
         self.odometry = WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
                                       wheel_separation_m=cfg.wheel.separation_m)
+        self.recorder = Recorder(self)
+        self.grid_us = self.dt_us * self.recorder.every
+        self.samplers: list = []
+        """Callables ``f(t_us)`` run on the record grid while the physics steps (physics at ``t_us``)."""
         if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
             from .sensors.imu import ImuSensor
             from .sensors.lidar import Lidar
             m, d = self.physics.model, self.physics.data
-            self.imu = ImuSensor(m, d, self.clock, self.bus, cfg.imu, seed=[options.seed, 1])
-            self.lidar = Lidar(m, d, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2])
-        self.recorder = Recorder(self)
+            self.imu = ImuSensor(m, d, self.clock, self.bus, cfg.imu, seed=[options.seed, 1],
+                                 autostart=False)
+            self.imu.start(grid_us=self.grid_us, samplers=self.samplers)
+            self.lidar = Lidar(m, d, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2],
+                               autostart=False)
+            self.lidar.start_motor(grid_us=self.grid_us, samplers=self.samplers)
         self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
         self._last_row = self.physics.data.sensordata[:LOOP_SENSOR_DIM].copy()
         self._next_check_us = int(options.check_every_s * US)
+        for sampler in self.samplers:
+            sampler(0)
         self.firmware.start()
         self.plant.apply(self.firmware.pins)
         self.recorder.pins_changed(0)
@@ -123,9 +137,11 @@ class Twin:
 
     def advance_to_us(self, t_end_us: int) -> None:
         clock, fw, plant = self.clock, self.firmware, self.plant
+        lookahead = self.bus.lookahead_us
         last_pins = None
         while clock.now_us < t_end_us:
-            t_evt = min(clock.next_event_us(), t_end_us)
+            t_evt = min(clock.next_synced_event_us(), t_end_us, self._next_check_us)
+            t_evt = clock.physics_horizon_us(t_evt, lookahead)
             if self.t_phys_us < t_evt:
                 nstep = -(-(t_evt - self.t_phys_us) // self.dt_us)
                 self._step_physics(nstep)
@@ -151,7 +167,7 @@ class Twin:
         Python lists: a chunk is a handful of samples.
         """
         m, d, dt, every = self.physics.model, self.physics.data, self.dt_us, self.recorder.every
-        sensordata, step = d.sensordata, mujoco.mj_step
+        sensordata, step, samplers = d.sensordata, mujoco.mj_step, self.samplers
         k = k0 = self.t_phys_us // dt
         k_end = k0 + nstep
         ts, rows = [k0 * dt], [self._last_row]
@@ -159,11 +175,14 @@ class Twin:
         for mark in range((k0 // every + 1) * every, k_end + 1, every):
             step(m, d, mark - k)
             k = mark
+            t = k * dt
             row = sensordata[:LOOP_SENSOR_DIM].copy()
-            ts.append(k * dt)
+            ts.append(t)
             rows.append(row)
-            grid_t.append(k * dt)
+            grid_t.append(t)
             grid_rows.append(row)
+            for sampler in samplers:
+                sampler(t)
         if k < k_end:
             step(m, d, k_end - k)
             k = k_end

@@ -204,7 +204,8 @@ class WheelOdometry:
                       bus.subscribe("wheel1_Vel", lambda m: self._on_speed(1, m))]
         if not signed_input:
             self._subs.append(bus.subscribe("wheel_Command", self._on_command))
-        self._timer = clock.schedule_in(self.period_us, self._on_timer)
+        self._topics = ("odom", "tf") if publish_tf else ("odom",)
+        self._timer = clock.schedule_in(self.period_us, self._on_timer, publishes=self._topics)
 
     def _restart(self, t_us: int, pose: tuple[float, float, float], rpm: Sequence[float]) -> None:
         self._profiles = [SpeedProfile(t_us, rpm[0]), SpeedProfile(t_us, rpm[1])]
@@ -328,7 +329,7 @@ class WheelOdometry:
 
     # -- output -----------------------------------------------------------------
     def _on_timer(self) -> None:
-        self._timer = self.clock.schedule_in(self.period_us, self._on_timer)
+        self._timer = self.clock.schedule_in(self.period_us, self._on_timer, publishes=self._topics)
         self.publish()
 
     def publish(self) -> Odometry:

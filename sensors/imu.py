@@ -19,12 +19,22 @@ their datasheet sources are in the ``imu:`` section of ``models/amr/amr.yaml``.
 
 Published on the bus at ``rate_hz`` by clock events: ``sensor_msgs/Imu`` on
 ``imu/data_raw`` (no orientation: ``orientation_covariance[0] = -1``) and
-``sensor_msgs/MagneticField`` on ``imu/mag``, both stamped with the sample time.
+``sensor_msgs/MagneticField`` on ``imu/mag``, both stamped with the sample time
+and delivered at that time (no latency is modelled: the sample instant, the stamp
+and the delivery coincide). Standalone, each sample is a clock event that reads
+``MjData`` at its instant. In the twin (:meth:`ImuSensor.start` with the loop's
+grid) the loop copies the true values on its record grid while the physics steps,
+the errors of the samples taken so far are drawn in one batch (same numbers as
+one by one), and each message goes out from a publishing clock event at its
+sample instant, which does not stop the physics unless a subscriber could act on
+it sooner (:meth:`amr_twin.bus.Bus.lookahead_us`). The covariance arrays of the
+messages are shared and read-only.
 This module does not import mujoco: it reads ``MjData.sensordata`` by address.
 """
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -144,54 +154,134 @@ class ImuSensor:
         self._inv_res = 1.0 / self._res
         self.seq = 0
         self._handle = None
+        self._samplers: list | None = None  # the loop's grid samplers while fed by the loop
+        self._start_us = 0
+        self._true: list[tuple[int, np.ndarray]] = []  # (t_us, (9,) true values) captured on the grid
+        self._ready: deque[tuple[int, np.ndarray]] = deque()  # (t_us, (9,) corrupted) to publish
+        a = self._adr
+        self._sd9 = data.sensordata[a[0]:a[0] + 9] if a[1] == a[0] + 3 and a[2] == a[0] + 6 else None
+        for cov in (*self._cov.values(), self._orientation_cov):
+            cov.flags.writeable = False  # shared by every message: read-only
         if autostart:
             self.start()
 
-    def start(self) -> None:
+    def start(self, grid_us: int | None = None, samplers: list | None = None) -> None:
         """Start sampling at the next multiple of ``period_us`` (absolute time), then every period.
 
-        Samples on the absolute grid share their clock events with the other
-        periodic nodes (LiDAR casts, firmware timer), which keeps the loop cheap.
+        Parameters
+        ----------
+        grid_us : int, optional
+            The simulation loop's sampling grid, us. With ``samplers``, when
+            ``period_us`` is a multiple of it, the loop samples the true values
+            on its grid while it steps (:meth:`on_grid`) and the messages go out
+            from *publishing* clock events at the sample instants: the physics
+            is not stopped for them (:mod:`amr_twin.clock`). Otherwise each
+            sample is a clock event that reads ``MjData`` at its instant.
+        samplers : list, optional
+            The loop's list of grid samplers; :meth:`on_grid` is appended to it.
         """
-        if self._handle is None:
-            self._handle = self.clock.schedule(-(-self.clock.now_us // self.period_us) * self.period_us, self._tick)
+        if self._handle is not None:
+            return
+        first_us = self._start_us = -(-self.clock.now_us // self.period_us) * self.period_us
+        if grid_us and samplers is not None and self.period_us % int(grid_us) == 0:
+            self._samplers = samplers
+            samplers.append(self.on_grid)
+            self._handle = self.clock.schedule(first_us, self._publish_next,
+                                               publishes=("imu/data_raw", "imu/mag"))
+        else:
+            self._handle = self.clock.schedule(first_us, self._tick)
 
     def stop(self) -> None:
-        """Stop sampling."""
+        """Stop sampling (samples taken and not yet published are discarded)."""
         if self._handle is not None:
             self._handle.cancel()
             self._handle = None
+        if self._samplers is not None:
+            self._samplers.remove(self.on_grid)
+            self._samplers = None
+        self._true.clear()
+        self._ready.clear()
 
     def true_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(accel m/s^2, gyro rad/s, mag T), each shape (3,), without errors."""
         sd = self.data.sensordata
         return tuple(sd[a:a + 3].copy() for a in self._adr)
 
-    def sample(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One corrupted sample (accel, gyro, mag), advancing the error state by one period.
-
-        Same arithmetic as :func:`corrupt` on the nine axes at once (the twin calls
-        this at 100 Hz): the random walk, then noise, scale, clip and quantisation.
-        """
+    def _true9(self) -> np.ndarray:
+        if self._sd9 is not None:
+            return self._sd9.copy()
         sd, a = self.data.sensordata, self._adr
-        x = np.concatenate((sd[a[0]:a[0] + 3], sd[a[1]:a[1] + 3], sd[a[2]:a[2] + 3]))
-        self._bias += self._walk * self.rng.standard_normal(9)
-        y = (1.0 + self._scale) * x + self._bias + self._noise * self.rng.standard_normal(9)
+        return np.concatenate((sd[a[0]:a[0] + 3], sd[a[1]:a[1] + 3], sd[a[2]:a[2] + 3]))
+
+    def corrupt_batch(self, true: np.ndarray) -> np.ndarray:
+        """Corrupt ``n`` consecutive samples, advancing the error state by ``n`` periods.
+
+        Same arithmetic as :func:`corrupt` on the nine axes at once: per sample the
+        random walk, then noise, scale, clip and quantisation; the generator draws
+        9 walk normals then 9 noise normals per sample, so a batch gives the same
+        numbers as ``n`` calls of :meth:`sample`.
+
+        Parameters
+        ----------
+        true : ndarray, shape (n, 9)
+            True accel (m/s^2), gyro (rad/s) and mag (T) values, sensor frame.
+
+        Returns
+        -------
+        ndarray, shape (n, 9)
+            Readings in the same units.
+        """
+        n = len(true)
+        z = self.rng.standard_normal((n, 18))
+        steps = np.empty((n + 1, 9))
+        steps[0] = self._bias
+        steps[1:] = self._walk * z[:, :9]
+        bias = np.cumsum(steps, axis=0)[1:]  # sequential: bias_k = bias_(k-1) + walk_k
+        self._bias[:] = bias[-1]
+        y = (1.0 + self._scale) * true + bias + self._noise * z[:, 9:]
         y = np.minimum(np.maximum(y, -self._range), self._range)
-        y = np.where(self._quantised, np.round(y * self._inv_res) * self._res, y)
+        return np.where(self._quantised, np.round(y * self._inv_res) * self._res, y)
+
+    def sample(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One corrupted sample (accel, gyro, mag) of ``MjData`` now, advancing the error state by one period."""
+        y = self.corrupt_batch(self._true9()[None, :])[0]
         return y[0:3], y[3:6], y[6:9]
+
+    def on_grid(self, t_us: int) -> None:
+        """The loop's grid sampler: keep the true values at the sample instants (physics at ``t_us``)."""
+        if t_us % self.period_us == 0 and t_us >= self._start_us:
+            self._true.append((t_us, self._true9()))
+
+    def _publish_next(self) -> None:
+        """Publishing event: the sample taken on the grid at this instant goes out."""
+        now = self.clock.now_us
+        self._handle = self.clock.schedule(now + self.period_us, self._publish_next,
+                                           publishes=("imu/data_raw", "imu/mag"))
+        if not self._ready:
+            if not self._true:
+                raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid")
+            y = self.corrupt_batch(np.array([x for _, x in self._true]))
+            self._ready.extend(zip([t for t, _ in self._true], y))
+            self._true.clear()
+        t_us, y = self._ready.popleft()
+        if t_us != now:
+            raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid (got {t_us})")
+        self._publish(y)
 
     def _tick(self) -> None:
         self._handle = self.clock.schedule(self.clock.now_us + self.period_us, self._tick)
-        accel, gyro, mag = self.sample()
+        self._publish(self.corrupt_batch(self._true9()[None, :])[0])
+
+    def _publish(self, y: np.ndarray) -> None:
         stamp = Time.from_us(self.clock.now_us)
         self.seq += 1
+        header = Header(self.seq, stamp, self.frame_id)
+        a = y.tolist()
+        cov = self._cov
         self.pub_imu.publish(Imu(
-            header=Header(self.seq, stamp, self.frame_id),
-            orientation_covariance=self._orientation_cov.copy(),
-            angular_velocity=Vector3(*gyro.tolist()), angular_velocity_covariance=self._cov["gyro"].copy(),
-            linear_acceleration=Vector3(*accel.tolist()),
-            linear_acceleration_covariance=self._cov["accel"].copy()))
+            header=header, orientation_covariance=self._orientation_cov,
+            angular_velocity=Vector3(a[3], a[4], a[5]), angular_velocity_covariance=cov["gyro"],
+            linear_acceleration=Vector3(a[0], a[1], a[2]), linear_acceleration_covariance=cov["accel"]))
         self.pub_mag.publish(MagneticField(
-            header=Header(self.seq, stamp, self.frame_id), magnetic_field=Vector3(*mag.tolist()),
-            magnetic_field_covariance=self._cov["mag"].copy()))
+            header=Header(self.seq, stamp, self.frame_id), magnetic_field=Vector3(a[6], a[7], a[8]),
+            magnetic_field_covariance=cov["mag"]))

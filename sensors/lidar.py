@@ -4,15 +4,32 @@ One rotation takes ``n = round(sample_rate / scan_rate)`` samples, one every
 ``1 / sample_rate`` s (2000 Hz at 5.5 Hz: 364 beams, 1 deg apart, 182 ms per scan;
 RPLIDAR A1M8 datasheet v2.x). Beam ``i`` points at ``angle_min + i * increment``
 in the ``laser`` frame (REP-103, counter-clockwise from x, ``angle_min = -pi``) and
-is acquired at ``t0 + i / sample_rate``. Beams are cast in groups: a clock event
-at every multiple of ``group_us`` (default 20 ms, 40 beams at 2000 Hz; on the
-same instants as other periodic events, which makes it nearly free in the loop)
-casts the beams acquired since the previous event with one ``mujoco.mj_multiRay``
-call, each beam from
-the laser pose at its own instant (the site pose now, moved back along the
-site's velocity: first order over at most ``group_us``), so that a scan taken
-while the robot moves is distorted as a real one. The beam instants are kept in
-:attr:`Lidar.beam_t_us` and :attr:`Lidar.last_beam_t_us` (for deskew).
+is acquired at ``t0 + i / sample_rate``; each beam is cast from the laser pose at
+its own instant, so a scan taken while the robot moves is distorted as a real
+one. The beam instants are kept in :attr:`Lidar.beam_t_us` and
+:attr:`Lidar.last_beam_t_us` (for deskew).
+
+How beams are cast. The laser pose is sampled at regular instants (the pose
+samples); beams are cast in groups with one ``mujoco.mj_multiRay`` call from the
+present laser position, each along its own direction at its own instant (linear
+interpolation between the rotations of the two pose samples around it, then
+normalised) and its range corrected for the motion of the origin between its
+instant and now, exactly for the plane of the surface hit (through the hit
+normal: ``r_i = r + n.(o_now - o_i) / n.u_i``, ``o_i`` interpolated between the
+samples). Geoms that move with the robot (a payload, group 4) are cast in a
+second call in the present laser frame (their pose relative to the laser does
+not change), and the nearer hit wins. Two ways to drive it:
+
+- standalone (:meth:`Lidar.start_motor` without arguments): a clock event at
+  every multiple of ``group_us`` (default 20 ms) samples the pose, casts the
+  beams acquired since the previous event and publishes a completed rotation;
+- in the twin (``start_motor(grid_us, samplers)``): the simulation loop samples
+  the pose on its record grid while the physics steps (:meth:`Lidar.on_sample`,
+  no clock event), beams are cast every ``loop_cast_us`` (default 91 ms, two
+  calls per rotation) and when a rotation is complete (at the first grid instant
+  after its last beam), and the scan goes out from a publishing clock event at
+  that instant (:mod:`amr_twin.clock`: it stops the physics only if a
+  subscriber of ``scan`` could act sooner).
 
 Rays see geom groups 0 (world) and 4 (payload) only, never the robot's own
 wheels, casters or frame (groups 1, 2). The cutoff is large and ranges are
@@ -21,15 +38,16 @@ noise is Gaussian with sigma ``max(floor, frac * r)``, then quantised to the
 1/4 mm of the A1 protocol. No hit, or a range outside ``[range_min, range_max]``,
 is ``inf`` as ``rplidar_ros`` publishes it.
 
-When a rotation is complete, a ``sensor_msgs/LaserScan`` goes out on ``scan``
-at the next cast event (at most ``group_us`` after its last beam; frame
-``laser``, stamp = first beam, as ``rplidar_ros``). ``start_motor`` / ``stop_motor`` services
-start and stop the rotation (the motor spin-up time is not modelled).
+A ``sensor_msgs/LaserScan`` goes out on ``scan`` at the first pose sample at or
+after the last beam of its rotation (frame ``laser``, stamp = first beam, as
+``rplidar_ros``). ``start_motor`` / ``stop_motor`` services start and stop the
+rotation (the motor spin-up time is not modelled).
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import mujoco
 import numpy as np
@@ -54,7 +72,7 @@ class Lidar:
     model, data : mujoco.MjModel, mujoco.MjData
         The compiled twin, with a site ``amr/laser``.
     clock : VirtualClock
-        Shared clock; one event per beam group and one per rotation.
+        Shared clock.
     bus : Bus
         Publishes ``scan``; serves ``start_motor`` and ``stop_motor``.
     cfg : LidarCfg
@@ -62,19 +80,23 @@ class Lidar:
     seed : int or None
         Seed of the ``numpy.random.Generator`` drawing the range noise.
     group_us : int
-        Period of the casts, us: every multiple of it in absolute time (so that the
-        clock events coincide with the IMU's and the firmware's), one
-        ``mj_multiRay`` call casts the beams acquired since the previous one.
+        Standalone: period of the pose samples and casts, us (every multiple of
+        it in absolute time).
+    loop_cast_us : int
+        In the twin: longest time between two casts, us.
     autostart : bool
-        Start rotating at the current clock time.
+        Start rotating (standalone) at the current clock time.
     """
 
     def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: LidarCfg, seed: int | None = 0,
                  group_us: int = 20000, frame_id: str = LASER_FRAME, site: str = "amr/laser",
-                 autostart: bool = True):
+                 autostart: bool = True, loop_cast_us: int = 200000):
+        if group_us <= 0 or loop_cast_us <= 0:
+            raise ValueError(f"group_us {group_us}, loop_cast_us {loop_cast_us}: must be > 0")
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
         self.frame_id = frame_id
         self.site_id = int(model.site(site).id)
+        self._site_pos, self._site_mat = data.site_xpos[self.site_id], data.site_xmat[self.site_id]  # views
         self.rng = np.random.default_rng(seed)
         self.n_beams = int(round(cfg.sample_rate_hz / cfg.scan_rate_hz))
         self.beam_dt_us = US // cfg.sample_rate_hz
@@ -84,16 +106,24 @@ class Lidar:
         self.angles_rad = self.angle_min + self.angle_increment * np.arange(self.n_beams)
         self.local_dirs = np.stack([np.cos(self.angles_rad), np.sin(self.angles_rad),
                                     np.zeros(self.n_beams)], axis=1)  # (n, 3) in the laser frame
-        self.cast_period_us = int(group_us)
-        per = max(1, self.cast_period_us // self.beam_dt_us)
-        self.groups = [(i, min(i + per, self.n_beams)) for i in range(0, self.n_beams, per)]
-        """Beam ranges of about ``group_us`` each (the typical casts of one rotation)."""
+        self.group_us, self.loop_cast_us = int(group_us), int(loop_cast_us)
+        self.cast_period_us = self.group_us  # pose sample period (the loop's grid in the twin)
+        self.cast_every_us = self.group_us  # longest time between casts
         self.geomgroup = np.zeros(6, np.uint8)
         self.geomgroup[list(SEEN_GROUPS)] = 1
+        moving = model.body_rootid[model.geom_bodyid] != 0
+        payload = (model.geom_group == SEEN_GROUPS[1]) & moving
+        self._world_groups, self._payload_groups = None, None
+        if payload.any():  # cast what moves with the robot in the present laser frame
+            self._world_groups = np.zeros(6, np.uint8)
+            self._world_groups[SEEN_GROUPS[0]] = 1
+            self._payload_groups = np.zeros(6, np.uint8)
+            self._payload_groups[SEEN_GROUPS[1]] = 1
         self.dist_m = np.full(self.n_beams, -1.0)
         """True distances of the rotation in progress, m (-1: no hit)."""
-        self._vel = np.zeros(6)
         self._normal = np.zeros(3 * self.n_beams)
+        self._pdist = np.zeros(self.n_beams)
+        self._pgeom = np.zeros(self.n_beams, np.int32)
         self.hit_geom = np.full(self.n_beams, -1, np.int32)
         """Geom id hit by each beam of the rotation in progress (-1: none)."""
         self.beam_t_us = np.zeros(self.n_beams, np.int64)
@@ -106,26 +136,53 @@ class Lidar:
         bus.advertise_service("stop_motor", self.stop_motor)
         self.seq = 0
         self._handle = None
+        self._samplers: list | None = None  # the loop's grid samplers (in the twin)
+        self._grid: tuple[int, list] | None = None
+        self._poses = np.zeros((32, 10))  # pose samples: t_us, site position (3), xmat columns 0, 1 (3 + 3)
+        self._npose = 0
+        self._lx, self._ly = self.local_dirs[:, 0:1].copy(), self.local_dirs[:, 1:2].copy()
+        self._done: deque = deque()  # (t_us, scan, beam_t_us, hit_geom) cast, not yet published
         self.running = False
         self._new_rotation(clock.now_us)
         if autostart:
             self.start_motor()
 
     # -- services ------------------------------------------------------------------
-    def start_motor(self, request=None) -> None:
-        """Start rotating: the first beam of a new scan is acquired now."""
-        if not self.running:
-            self.running = True
-            self._new_rotation(self.clock.now_us)
-            grid = self.cast_period_us
-            self._handle = self.clock.schedule(-(-self.clock.now_us // grid) * grid, self._on_cast)
+    def start_motor(self, request=None, grid_us: int | None = None, samplers: list | None = None) -> None:
+        """Start rotating: the first beam of a new scan is acquired now.
+
+        With ``grid_us`` and ``samplers`` (the simulation loop's record grid and
+        its list of grid samplers, remembered for later service calls) the loop
+        samples the pose; otherwise clock events every ``group_us`` do.
+        """
+        if grid_us is not None and samplers is not None:
+            self._grid = (int(grid_us), samplers)
+        if self.running:
+            return
+        self.running = True
+        now = self.clock.now_us
+        self._new_rotation(now)
+        self._npose = 0
+        if self._grid is not None:
+            self.cast_period_us, self._samplers = self._grid
+            self.cast_every_us = self.loop_cast_us
+            self._samplers.append(self.on_sample)
+            self._schedule_publish()
+        else:
+            self.cast_period_us = self.cast_every_us = self.group_us
+            grid = self.group_us
+            self._handle = self.clock.schedule(-(-now // grid) * grid, self._on_cast)
 
     def stop_motor(self, request=None) -> None:
-        """Stop rotating; the scan in progress is discarded."""
+        """Stop rotating; the scan in progress and scans not yet published are discarded."""
         self.running = False
         if self._handle is not None:
             self._handle.cancel()
             self._handle = None
+        if self._samplers is not None:
+            self._samplers.remove(self.on_sample)
+            self._samplers = None
+        self._done.clear()
 
     # -- scanning ------------------------------------------------------------------
     def _new_rotation(self, t0_us: int) -> None:
@@ -134,56 +191,108 @@ class Lidar:
         self.hit_geom = np.full(self.n_beams, -1, np.int32)
         self.beam_t_us = t0_us + self.beam_dt_us * np.arange(self.n_beams, dtype=np.int64)
         self._next = 0  # first beam not cast yet
+        self._last_cast_us = t0_us
+        self._last_beam_us = int(self.beam_t_us[-1])
+        self._next_cast_us = min(self._last_beam_us, t0_us + self.cast_every_us)
 
     def _on_cast(self) -> None:
-        """Cast every beam acquired since the last cast; publish each completed rotation."""
+        """Standalone clock event: sample the pose, cast, publish a completed rotation."""
         now = self.clock.now_us
         self._handle = self.clock.schedule(now + self.cast_period_us, self._on_cast)
-        while True:
-            stop = int(np.searchsorted(self.beam_t_us, now, side="right"))
-            if stop > self._next:
-                self.cast(self._next, stop)
-                self._next = stop
-            if self._next < self.n_beams:
-                return
-            self._publish()
-            self._new_rotation(self.t0_us + self.scan_us)
+        self.on_sample(now)
+
+    def on_sample(self, t_us: int) -> None:
+        """Keep the laser pose at ``t_us`` (``MjData`` is there) and cast the beams due.
+
+        Casts when the rotation in progress is complete or ``cast_every_us``
+        after the previous cast. Called by the loop on its record grid (twin) or
+        by this sensor's clock events (standalone).
+        """
+        n, poses = self._npose, self._poses
+        if n == len(poses):
+            poses = self._poses = np.concatenate([poses, np.zeros_like(poses)])
+        row = poses[n]
+        row[0] = t_us
+        row[1:4] = self._site_pos
+        row[4:7] = self._site_mat[0::3]  # laser x axis in the world
+        row[7:10] = self._site_mat[1::3]  # laser y axis
+        self._npose = n + 1
+        if t_us < self._next_cast_us and self.running:
+            return
+        cast = False
+        while self.running:
+            if self._last_beam_us <= t_us:
+                self.cast(self._next, self.n_beams)
+                cast = True
+                self._finish(t_us)
+                self._new_rotation(self.t0_us + self.scan_us)
+                self._last_cast_us = t_us
+                continue
+            if t_us - self._last_cast_us >= self.cast_every_us:
+                stop = int(np.searchsorted(self.beam_t_us, t_us, side="right"))
+                if stop > self._next:
+                    self.cast(self._next, stop)
+                    cast = True
+                    self._next = stop
+                self._last_cast_us = t_us
+            break
+        self._next_cast_us = min(self._last_beam_us, self._last_cast_us + self.cast_every_us)
+        if cast or not self.running:  # later beams only need the samples from now on
+            self._poses[0] = self._poses[self._npose - 1]
+            self._npose = 1
+
+    def _poses_at(self, t_us: np.ndarray) -> np.ndarray:
+        """Laser poses at the instants ``t_us`` (k,), linear between the pose samples.
+
+        Returns (k, 9): position (m), then the laser x and y axes in the world.
+        """
+        n, poses = self._npose, self._poses
+        if n < 2:
+            return np.repeat(poses[0:1, 1:], len(t_us), axis=0)
+        ts = poses[:n, 0]
+        j = np.minimum(np.maximum(ts.searchsorted(t_us, side="right") - 1, 0), n - 2)
+        t0 = ts[j]
+        a = np.minimum(np.maximum((t_us - t0) / (ts[j + 1] - t0), 0.0), 1.0)[:, None]
+        p0 = poses[j, 1:]
+        return p0 + a * (poses[j + 1, 1:] - p0)
 
     def cast(self, start: int, stop: int, at_own_instants: bool = True) -> None:
-        """Cast beams ``start:stop`` with one ``mj_multiRay`` call.
+        """Cast beams ``start:stop`` (one ``mj_multiRay`` call, two with a payload).
 
-        With ``at_own_instants`` each beam is cast from the laser pose at its own
-        instant ``beam_t_us[i]`` (at or before now): the current site pose moved back
-        along the site's velocity (first order in ``w * dt``: rotation of the
-        direction about ``w``; translation of the origin, applied exactly for the
-        plane of the surface hit through its normal). Otherwise all from the pose now.
+        With ``at_own_instants`` each beam is cast along its direction at its own
+        instant ``beam_t_us[i]``, with the range corrected for the origin's motion
+        since then (module docstring; needs the pose samples around the beams,
+        the last one being the present pose). Otherwise all from the pose now.
         Stores the true distances (m, -1 for no hit) in :attr:`dist_m` and the hit
         geoms in :attr:`hit_geom`; noise is added for the whole rotation at its end.
         """
         m, d, s, k = self.model, self.data, self.site_id, stop - start
-        rot = d.site_xmat[s].reshape(3, 3)
-        local = self.local_dirs[start:stop]
-        if at_own_instants:
-            vel = self._vel
-            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, s, vel, 0)
-            w = vel[:3]
-            skew = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-            dt_s = (self.beam_t_us[start:stop] - self.clock.now_us) * 1e-6  # (k,) <= 0
-            # u(t) = (I + dt [w]x) R u_local: the direction rotated back about w by w dt
-            u = local @ rot.T + dt_s[:, None] * (local @ (skew @ rot).T)
-            u /= np.sqrt((u * u).sum(axis=1))[:, None]
+        if k <= 0:
+            return
+        origin = d.site_xpos[s]
+        lx, ly = self._lx[start:stop], self._ly[start:stop]
+        if at_own_instants and self._npose > 0:
+            pose = self._poses_at(self.beam_t_us[start:stop])  # (k, 9)
+            u = pose[:, 3:6] * lx + pose[:, 6:9] * ly  # R l with l_z = 0
+            u /= np.sqrt(np.einsum("ij,ij->i", u, u))[:, None]
+            shift = origin - pose[:, 0:3]  # (k, 3) o_now - o_i
         else:
-            u = local @ rot.T
+            u, shift = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T, None
         normal = self._normal[:3 * k]
         geomid, dist = self.hit_geom[start:stop], self.dist_m[start:stop]
-        mujoco.mj_multiRay(m, d, d.site_xpos[s], u.ravel(), self.geomgroup, 1, -1,
-                           geomid, dist, normal, k, CUTOFF_M)
-        if at_own_instants:
-            # origin moved by v dt: exact for the plane of the surface hit, n.(h - p) = r n.u
-            n = normal.reshape(k, 3)
-            nu = (n * u).sum(axis=1)
-            ok = (geomid >= 0) & (np.abs(nu) > 1e-3)
-            dist -= np.where(ok, dt_s * (n @ vel[3:]) / np.where(ok, nu, 1.0), 0.0)
+        groups = self.geomgroup if self._world_groups is None else self._world_groups
+        mujoco.mj_multiRay(m, d, origin, u.ravel(), groups, 1, -1, geomid, dist, normal, k, CUTOFF_M)
+        if shift is not None:  # r_i = r + n.(o_now - o_i) / n.u_i (0 where no hit: n = 0)
+            nrm = normal.reshape(k, 3)
+            nu = np.einsum("ij,ij->i", nrm, u)
+            dist += np.divide(np.einsum("ij,ij->i", nrm, shift), nu, out=np.zeros(k), where=np.abs(nu) > 1e-3)
+        if self._payload_groups is not None:  # what moves with the robot: the present frame
+            u_now = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
+            pgeom, pdist = self._pgeom[:k], self._pdist[:k]
+            mujoco.mj_multiRay(m, d, origin, u_now.ravel(), self._payload_groups, 1, -1, pgeom, pdist,
+                               None, k, CUTOFF_M)
+            near = (pgeom >= 0) & ((geomid < 0) | (pdist < dist))
+            geomid[near], dist[near] = pgeom[near], pdist[near]
 
     def noisy_ranges(self, dist: np.ndarray, geomid: np.ndarray) -> np.ndarray:
         """Range noise, 1/4 mm quantisation and validity of true distances.
@@ -208,16 +317,42 @@ class Lidar:
         valid = (geomid >= 0) & (r >= cfg.range_min_m) & (r <= cfg.range_max_m)
         return np.where(valid, r, np.inf).astype(np.float32)
 
-    def _publish(self) -> None:
+    def _finish(self, t_us: int) -> None:
+        """The rotation in progress is cast: add the noise and publish it (or queue it)."""
         self.seq += 1
-        self.last_scan = LaserScan(
+        scan = LaserScan(
             header=Header(self.seq, Time.from_us(self.t0_us), self.frame_id),
             angle_min=self.angle_min, angle_max=float(self.angles_rad[-1]),
             angle_increment=self.angle_increment, time_increment=self.beam_dt_us / US,
             scan_time=self.scan_us / US, range_min=self.cfg.range_min_m, range_max=self.cfg.range_max_m,
             ranges=self.noisy_ranges(self.dist_m, self.hit_geom), intensities=np.zeros(0, np.float32))
-        self.last_beam_t_us, self.last_hit_geom = self.beam_t_us, self.hit_geom
-        self.pub.publish(self.last_scan)
+        if self._samplers is None:  # standalone: this is the clock event at t_us
+            self._publish(scan, self.beam_t_us, self.hit_geom)
+        else:
+            self._done.append((t_us, scan, self.beam_t_us, self.hit_geom))
+
+    def _publish_time_us(self, t0_us: int) -> int:
+        """First pose sample at or after the last beam of the rotation started at ``t0_us``."""
+        last = t0_us + self.scan_us - self.beam_dt_us
+        return -(-last // self.cast_period_us) * self.cast_period_us
+
+    def _schedule_publish(self) -> None:
+        t0 = self._done[0][2][0] if self._done else self.t0_us
+        self._handle = self.clock.schedule(self._publish_time_us(t0), self._publish_next, publishes=("scan",))
+
+    def _publish_next(self) -> None:
+        """Publishing event (twin): the rotation cast on the grid at this instant goes out."""
+        now = self.clock.now_us
+        if not self._done or self._done[0][0] != now:
+            raise RuntimeError(f"LiDAR scan due at t_us={now} was not cast on the loop's grid")
+        _t, scan, beam_t_us, hit_geom = self._done.popleft()
+        t0 = beam_t_us[0] + self.scan_us
+        self._handle = self.clock.schedule(self._publish_time_us(t0), self._publish_next, publishes=("scan",))
+        self._publish(scan, beam_t_us, hit_geom)
+
+    def _publish(self, scan: LaserScan, beam_t_us: np.ndarray, hit_geom: np.ndarray) -> None:
+        self.last_scan, self.last_beam_t_us, self.last_hit_geom = scan, beam_t_us, hit_geom
+        self.pub.publish(scan)
 
     def scan_now(self) -> np.ndarray:
         """Cast a whole rotation in one call from the current pose (no clock, no publish).

@@ -150,3 +150,16 @@ def test_static_tf_is_latched(bus, clock):
     bus.subscribe("tf_static", seen.append)
     clock.run_until(0)
     assert len(seen) == 1 and seen[0].transforms[0].child_frame_id == "laser"
+
+
+def test_lookahead_is_the_smallest_subscriber_latency_and_taps_do_not_count(bus):
+    from amr_twin.clock import NEVER_US
+
+    bus.add_tap(lambda topic, msg, t_us: None)
+    assert bus.lookahead_us(("odom", "tf")) == NEVER_US
+    bus.subscribe("tf", lambda msg: None, latency_us=3000)
+    assert bus.lookahead_us(("odom", "tf")) == 3000
+    sub = bus.subscribe("odom", lambda msg: None)
+    assert bus.lookahead_us(("odom", "tf")) == 0 and bus.lookahead_us(("scan",)) == NEVER_US
+    sub.unregister()
+    assert bus.lookahead_us(("odom", "tf")) == 3000

@@ -119,3 +119,35 @@ def test_messages_frames_and_covariances():
     assert imu.angular_velocity_covariance[0] == pytest.approx(rig.imu.models["gyro"].noise_sigma ** 2)
     field = np.array([mag.magnetic_field.x, mag.magnetic_field.y, mag.magnetic_field.z])
     assert 20e-6 < np.linalg.norm(field) < 80e-6  # the earth's field, T
+
+
+def test_a_batch_of_samples_draws_the_same_numbers_as_one_by_one():
+    one, batch = Rig(seed=5), Rig(seed=5)
+    true = np.random.default_rng(0).normal(0.0, 1.0, (40, 9)) * [1, 1, 10, .1, .1, .1, 4e-5, 4e-5, 4e-5]
+    single = np.array([one.imu.corrupt_batch(x[None, :])[0] for x in true])
+    many = np.concatenate([batch.imu.corrupt_batch(true[:7]), batch.imu.corrupt_batch(true[7:])])
+    assert single.tobytes() == many.tobytes()
+    assert np.array_equal(one.imu.models["gyro"].bias, batch.imu.models["gyro"].bias)
+    assert not np.array_equal(one.imu.models["gyro"].bias, Rig(seed=5).imu.models["gyro"].bias)  # it walked
+
+
+def test_fed_by_a_grid_the_messages_match_the_clock_event_ones():
+    """The twin's way (true values taken on the loop's grid, publishing events) against reading MjData."""
+    evented, fed = Rig(seed=2), Rig(seed=2)
+    samplers = []
+    fed.imu.stop()
+    fed.imu.start(grid_us=10_000, samplers=samplers)
+    for rig in (evented, fed):
+        rig.physics.set_motor(0, "drive", -2.0)
+        rig.physics.set_motor(1, "drive", 2.0)
+    evented.run(0.3)
+    samplers[0](0)
+    for k in range(1, 30):  # the physics runs ahead; the messages go out at their instants afterwards
+        fed.physics.step(10)
+        samplers[0](k * 10_000)
+    fed.clock.run_until(290_000)
+    assert len(fed.imu_msgs) == len(evented.imu_msgs) == 30
+    for a, b in zip(fed.imu_msgs, evented.imu_msgs):
+        assert a.header.stamp == b.header.stamp and a.angular_velocity == b.angular_velocity
+        assert a.linear_acceleration == b.linear_acceleration
+    assert abs(fed.imu_msgs[-1].angular_velocity.z) > 0.1

@@ -169,3 +169,48 @@ def test_motor_services_and_out_of_range(room):
     assert len(rig.scans) == 2
     r = rig.lidar.noisy_ranges(np.array([20.0, 0.05, 2.0, 5.0]), np.array([1, 1, -1, 1], np.int32))
     assert np.isinf(r[:3]).all() and r[3] == pytest.approx(5.0, abs=0.15)
+
+
+def _run_on_grid(rig, t_end_us, yaw_rate, grid_us=10_000):
+    """The twin's way: the loop samples the pose on its grid (no clock event); scans go out by publishing events."""
+    samplers = []
+    rig.lidar.start_motor(grid_us=grid_us, samplers=samplers)
+    for t in range(0, t_end_us + 1, grid_us):
+        rig.pose(POSE[0], POSE[1], POSE[2] + yaw_rate * t * 1e-6, yaw_rate)
+        for sampler in samplers:
+            sampler(t)
+        rig.clock.run_until(t)
+
+
+@pytest.mark.parametrize("speed_m_s", [0.0, 0.7])
+def test_twin_mode_scan_while_turning_and_driving_is_distorted_as_computed(room, speed_m_s):
+    """One cast per rotation (the twin's default): beam directions and origins at their own instants."""
+    omega = math.radians(60.0)
+    rig = Rig(room)
+    off = rig.laser_offset()
+    base_pose = rig.pose
+
+    def moving_pose(x, y, yaw, yaw_rate=0.0):  # drive along x while turning
+        t_s = (yaw - POSE[2]) / omega
+        base_pose(x + speed_m_s * t_s, y, yaw, yaw_rate)
+        rig.d.qvel[rig.dof] = speed_m_s
+    rig.pose = moving_pose
+    _run_on_grid(rig, rig.lidar.scan_us + 20_000, omega)
+    lid = rig.lidar
+    assert lid.cast_every_us >= lid.scan_us and len(rig.scans) == 1
+    assert rig.scans[0].header.stamp.to_us() == 0 and np.array_equal(lid.last_beam_t_us, 500 * np.arange(364))
+    t_s = lid.last_beam_t_us * 1e-6
+    yaw = POSE[2] + omega * t_s
+    rot = np.stack([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+    p = np.array(POSE[:2])[:, None] + np.array([speed_m_s, 0.0])[:, None] * t_s + np.einsum("ijn,j->in", rot, off)
+    expected = np.array([room_ranges(p[:, i], yaw[i] + lid.angles_rad[i]) for i in range(lid.n_beams)])
+    assert_matches(rig.cfg, rig.scans[0].ranges, expected)
+
+
+def test_twin_mode_payload_moves_with_the_laser(room):
+    cfg = load_config(overrides={"payload.mass_kg": 20.0, "payload.xy_m": [-0.15, 0.0]})
+    rig = Rig(room, cfg)
+    off = rig.laser_offset()
+    _run_on_grid(rig, rig.lidar.scan_us + 20_000, math.radians(90.0))
+    assert rig.m.geom(rig.lidar.last_hit_geom[0]).name == "amr/payload_box"
+    assert rig.scans[0].ranges[0] == pytest.approx(off[0], abs=3 * sigma(cfg, off[0]))

@@ -1,0 +1,86 @@
+"""The loop: publishing events run while the physics is ahead, without changing the run."""
+
+import numpy as np
+import pytest
+
+from amr_twin.config import load_config
+from amr_twin.loop import Twin, TwinOptions
+
+SENSOR_TOPICS = ("odom", "tf", "imu/data_raw", "imu/mag", "scan")
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return load_config()
+
+
+def _run(cfg, subscribe: bool, duration_s: float = 1.5):
+    twin = Twin(cfg, TwinOptions(sensors=True, world="empty"))
+    taps = []
+    twin.bus.add_tap(lambda topic, msg, t_us: taps.append((topic, t_us, msg)))
+    if subscribe:  # zero-latency subscribers: every publishing event becomes a sync point
+        for topic in SENSOR_TOPICS:
+            twin.bus.subscribe(topic, lambda msg: None)
+    chunks = []
+    step = twin._step_physics
+    twin._step_physics = lambda n: (chunks.append(n), step(n))
+    twin.client.angular(45.0, 0.5)
+    twin.advance(duration_s)
+    return twin, taps, chunks
+
+
+def test_subscribers_force_sync_points_but_the_run_is_bit_identical(cfg):
+    free, free_taps, free_chunks = _run(cfg, subscribe=False)
+    synced, synced_taps, synced_chunks = _run(cfg, subscribe=True)
+    assert len(free_chunks) < len(synced_chunks) / 3  # odometry, IMU, LiDAR did not stop the physics
+    a, b = free.recorder.series(), synced.recorder.series()
+    for name in ("t_s", "true_rpm", "pose", "pwm_counts", "odom"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert [(t, u) for t, u, _ in free_taps] == [(t, u) for t, u, _ in synced_taps]
+    scans = [(m.ranges.tobytes(), m.header.stamp.to_us()) for t, _, m in free_taps if t == "scan"]
+    assert scans == [(m.ranges.tobytes(), m.header.stamp.to_us()) for t, _, m in synced_taps if t == "scan"]
+    imu = [m.angular_velocity.z for t, _, m in free_taps if t == "imu/data_raw"]
+    assert imu == [m.angular_velocity.z for t, _, m in synced_taps if t == "imu/data_raw"]
+
+
+def test_sensor_messages_are_delivered_at_their_instants(cfg):
+    twin, taps, _ = _run(cfg, subscribe=False, duration_s=0.5)
+    imu = [(t_us, m.header.stamp.to_us()) for topic, t_us, m in taps if topic == "imu/data_raw"]
+    assert [t for t, _ in imu] == [s for _, s in imu] == list(range(0, 500_001, 10_000))
+    scans = [(t_us, m.header.stamp.to_us()) for topic, t_us, m in taps if topic == "scan"]
+    lidar = twin.lidar
+    # stamp = first beam; delivered at the first grid instant at or after the last beam
+    assert scans == [(190_000, 0), (370_000, lidar.scan_us)]
+
+
+def test_a_subscriber_acting_on_odometry_acts_at_its_time(cfg):
+    def reacting():
+        twin = Twin(cfg, TwinOptions(world="empty"))
+        def on_odom(msg):
+            if msg.header.stamp.to_us() == 1_060_000:  # between firmware timer ticks
+                twin.client.linear(0.3)
+        twin.bus.subscribe("odom", on_odom)
+        twin.advance(2.0)
+        return twin.recorder.series()
+
+    def by_hand():
+        twin = Twin(cfg, TwinOptions(world="empty"))
+        twin.bus.subscribe("odom", lambda msg: None)
+        twin.advance(1.06)
+        twin.client.linear(0.3)
+        twin.advance(0.94)
+        return twin.recorder.series()
+
+    a, b = reacting(), by_hand()
+    assert a.commands == b.commands and a.commands[0][0] == pytest.approx(1.06)
+    assert np.array_equal(a.true_rpm, b.true_rpm) and np.abs(a.true_rpm[-1]).min() > 10
+
+
+def test_a_synced_event_sees_the_physics_at_its_instant(cfg):
+    twin = Twin(cfg, TwinOptions(world="empty"))
+    seen = []
+    for t_us in (123_456, 400_000, 777_001):
+        twin.clock.schedule(t_us, lambda t_us=t_us: seen.append((t_us, twin.t_phys_us)))
+    twin.client.linear(0.5)
+    twin.advance(1.0)
+    assert [t_phys - t for t, t_phys in seen] == [544, 0, 999]  # the first step at or after t

@@ -120,3 +120,26 @@ def test_mission_errors_are_one_line(tmp_path):
     duration_s, steps = parse_mission({"duration_s": 3, "steps": [
         {"t_s": 2, "stop": None}, {"t_s": 0, "angular": {"speed_deg_s": 30}}]})
     assert duration_s == 3 and [t for t, _ in steps] == [0, 2] and steps[0][1].icc_m == 0.0
+
+
+def test_sensors_switch_records_scan_and_imu(tmp_path):
+    from mcap.reader import make_reader
+
+    def topics(path):
+        with open(path, "rb") as f:
+            counts = {}
+            for _schema, channel, _message in make_reader(f).iter_messages():
+                counts[channel.topic] = counts.get(channel.topic, 0) + 1
+        return counts
+
+    with_sensors, without = tmp_path / "s.mcap", tmp_path / "n.mcap"
+    args = ("linear", "--speed-m-s", "0.3", "--duration-s", "0.5")
+    info = _json(*args, "--sensors", "--mcap", str(with_sensors))
+    plain = _json(*args, "--mcap", str(without))
+    counts = topics(with_sensors)
+    # 0.5 s: IMU at 100 Hz from t = 0 (51 samples), LiDAR scans of 182 ms (2 complete)
+    assert counts["/imu/data_raw"] == counts["/imu/mag"] == 51
+    assert counts["/scan"] == 2
+    assert "/scan" not in topics(without) and "/imu/data_raw" not in topics(without)
+    # the sensors only observe: the run is the same
+    assert info["final_pose"] == plain["final_pose"] and info["wheels"] == plain["wheels"]

@@ -1,7 +1,7 @@
 """The whole twin against bare physics, on the same scenario in the same run.
 
 Scenario: chapter 5 run 3 (linear 0.7 m/s, 16 s, faithful firmware). The twin
-figure is the wall time of :meth:`Twin.advance` (physics, plant, hall edges,
+figure is the CPU time of :meth:`Twin.advance` (physics, plant, hall edges,
 firmware, rosserial, PC nodes, recorder). The bare figure steps the same model
 from the state the twin reached, for as many steps, with the actuation held, in
 one ``mj_step(m, d, n)`` call: the cost of the physics alone.
@@ -9,24 +9,23 @@ one ``mj_step(m, d, n)`` call: the cost of the physics alone.
 
 from __future__ import annotations
 
-import time
-
 import mujoco
 
+from .benchmark import timer
 from .config import TwinConfig
 from .loop import Twin, TwinOptions
 
 REPEATS = 3
 
 
-def twin_wall_s(cfg: TwinConfig, sim_s: float, firmware: str = "faithful",
-                sensors: bool = False) -> tuple[float, Twin]:
-    """Wall time of ``sim_s`` of the benchmark scenario (linear 0.7 m/s), and the twin."""
+def twin_run_s(cfg: TwinConfig, sim_s: float, firmware: str = "faithful",
+               sensors: bool = False) -> tuple[float, Twin]:
+    """CPU time (:data:`~amr_twin.benchmark.timer`) of ``sim_s`` of the scenario (linear 0.7 m/s), and the twin."""
     twin = Twin(cfg, TwinOptions(firmware=firmware, sensors=sensors))
     twin.client.linear(0.7)
-    t0 = time.perf_counter()
+    t0 = timer()
     twin.advance(sim_s)
-    return time.perf_counter() - t0, twin
+    return timer() - t0, twin
 
 
 def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
@@ -38,13 +37,13 @@ def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
     """
     twin_best = bare_best = float("inf")
     for _ in range(REPEATS):
-        wall, twin = twin_wall_s(cfg, sim_s, firmware)
-        twin_best = min(twin_best, wall)
+        cpu_s, twin = twin_run_s(cfg, sim_s, firmware)
+        twin_best = min(twin_best, cpu_s)
         m, d = twin.physics.model, twin.physics.data
         nstep = int(round(sim_s / m.opt.timestep))
-        t0 = time.perf_counter()
+        t0 = timer()
         mujoco.mj_step(m, d, nstep)
-        bare_best = min(bare_best, time.perf_counter() - t0)
+        bare_best = min(bare_best, timer() - t0)
     return {
         "twin_scenario": f"chapter 5 run 3: linear 0.7 m/s, {sim_s:g} s, {firmware}",
         "twin_s_per_sim_s": round(twin_best / sim_s, 5),

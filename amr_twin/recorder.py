@@ -58,20 +58,28 @@ class Recorder:
         self._published: dict[int, list[tuple[float, float]]] = {0: [], 1: []}
         self._odom: list[tuple[float, float, float, float]] = []
         self.commands: list[tuple[float, list[float]]] = []
+        self._handlers = {"wheel0_Vel": self._on_wheel0, "wheel1_Vel": self._on_wheel1,
+                          "wheel_Command": self._on_command, "odom": self._on_odom}
         twin.bus.add_tap(self._tap)
 
     def _tap(self, topic: str, msg, t_us: int) -> None:
-        t_s = t_us * 1e-6
-        if topic == "wheel0_Vel":
-            self._published[0].append((t_s, msg.data))
-        elif topic == "wheel1_Vel":
-            self._published[1].append((t_s, msg.data))
-        elif topic == "wheel_Command":
-            self.commands.append((t_s, [float(v) for v in msg.data]))
-        elif topic == "odom":
-            q = msg.pose.pose.orientation
-            yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-            self._odom.append((t_s, msg.pose.pose.position.x, msg.pose.pose.position.y, yaw))
+        handler = self._handlers.get(topic)  # one lookup: most messages (IMU, scan, tf) are not kept
+        if handler is not None:
+            handler(msg, t_us * 1e-6)
+
+    def _on_wheel0(self, msg, t_s: float) -> None:
+        self._published[0].append((t_s, msg.data))
+
+    def _on_wheel1(self, msg, t_s: float) -> None:
+        self._published[1].append((t_s, msg.data))
+
+    def _on_command(self, msg, t_s: float) -> None:
+        self.commands.append((t_s, [float(v) for v in msg.data]))
+
+    def _on_odom(self, msg, t_s: float) -> None:
+        q = msg.pose.pose.orientation
+        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        self._odom.append((t_s, msg.pose.pose.position.x, msg.pose.pose.position.y, yaw))
 
     def _pin_row(self) -> np.ndarray:
         pins, plant = self.twin.firmware.pins, self.twin.plant

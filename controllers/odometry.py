@@ -187,6 +187,7 @@ class WheelOdometry:
         self.period_us = int(round(1e6 / publish_rate_hz))
         self.pose_covariance = _covariance(pose_covariance_diagonal)
         self.twist_covariance = _covariance(twist_covariance_diagonal)
+        self.pose_covariance.flags.writeable = self.twist_covariance.flags.writeable = False  # shared by messages
         self.signed_input, self.publish_tf = signed_input, publish_tf
         self.frame_id, self.child_frame_id = frame_id, child_frame_id
         self.speed_samples = speed_samples
@@ -211,6 +212,7 @@ class WheelOdometry:
         self._profiles = [SpeedProfile(t_us, rpm[0]), SpeedProfile(t_us, rpm[1])]
         self._anchor = (t_us, *pose)  # final: no sample can change the pose before it
         self._cache = self._anchor  # pose at the newest knot of either wheel
+        self._hold = None  # (v, w) when both speeds are held from the cache on
         self._dirty = False
 
     # -- inputs -----------------------------------------------------------------
@@ -271,6 +273,8 @@ class WheelOdometry:
     def body_velocity(self) -> tuple[float, float]:
         """Current forward speed (m/s) and yaw rate (rad/s, CCW +) of ``base_link``."""
         now = self.clock.now_us
+        if self._hold is not None and not self._dirty and now >= self._cache[0]:
+            return self._hold
         return self._body(*(p.at(now, p.segment(now)) for p in self._profiles))
 
     @staticmethod
@@ -317,7 +321,16 @@ class WheelOdometry:
             newest = min(max(p.last_us for p in self._profiles), now)
             self._cache = self._integrate(self._anchor, max(newest, self._anchor[0]))
             self._dirty = False
-        _, *pose = self._integrate(self._cache, now) if now > self._cache[0] else self._cache
+            self._hold = None
+            if all(p.last_us <= self._cache[0] for p in self._profiles):  # speeds held after the cache
+                self._hold = self._body(self._profiles[0].last_rpm, self._profiles[1].last_rpm)
+        cache, hold = self._cache, self._hold
+        if now <= cache[0]:
+            pose = cache[1:]
+        elif hold is not None:  # one arc at the held speeds: what _integrate computes, cheaper
+            pose = self._arc(cache[1:], hold[0], hold[1], float(now - cache[0]) * 1e-6)
+        else:
+            _, *pose = self._integrate(cache, now)
         self.x_m, self.y_m = pose[0], pose[1]
         self.yaw_rad = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
 
@@ -341,9 +354,9 @@ class WheelOdometry:
         msg = Odometry(
             header=Header(self._seq, stamp, self.frame_id), child_frame_id=self.child_frame_id,
             pose=PoseWithCovariance(Pose(Point(self.x_m, self.y_m, 0.0), orientation),
-                                    self.pose_covariance.copy()),
+                                    self.pose_covariance),
             twist=TwistWithCovariance(Twist(Vector3(v_m_s, 0.0, 0.0), Vector3(0.0, 0.0, w_rad_s)),
-                                      self.twist_covariance.copy()))
+                                      self.twist_covariance))
         self._seq += 1
         self._pub.publish(msg)
         if self.publish_tf:

@@ -42,7 +42,7 @@ import numpy as np
 from amr_twin.bus import IMU_FRAME, Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.config import ImuCfg
-from amr_twin.messages import Header, Imu, MagneticField, Time, Vector3
+from amr_twin.messages import Header, Imu, MagneticField, Quaternion, Time, Vector3
 
 US = 1_000_000
 SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")
@@ -156,8 +156,9 @@ class ImuSensor:
         self._handle = None
         self._samplers: list | None = None  # the loop's grid samplers while fed by the loop
         self._start_us = 0
-        self._true: list[tuple[int, np.ndarray]] = []  # (t_us, (9,) true values) captured on the grid
-        self._ready: deque[tuple[int, np.ndarray]] = deque()  # (t_us, (9,) corrupted) to publish
+        self._true_t: list[int] = []  # instants of the true values taken on the grid, us
+        self._true = np.zeros((64, 9))  # the true values, first len(_true_t) rows
+        self._ready: deque[tuple[int, list[float]]] = deque()  # (t_us, 9 readings) to publish
         a = self._adr
         self._sd9 = data.sensordata[a[0]:a[0] + 9] if a[1] == a[0] + 3 and a[2] == a[0] + 6 else None
         for cov in (*self._cov.values(), self._orientation_cov):
@@ -199,7 +200,7 @@ class ImuSensor:
         if self._samplers is not None:
             self._samplers.remove(self.on_grid)
             self._samplers = None
-        self._true.clear()
+        self._true_t.clear()
         self._ready.clear()
 
     def true_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -250,7 +251,14 @@ class ImuSensor:
     def on_grid(self, t_us: int) -> None:
         """The loop's grid sampler: keep the true values at the sample instants (physics at ``t_us``)."""
         if t_us % self.period_us == 0 and t_us >= self._start_us:
-            self._true.append((t_us, self._true9()))
+            n = len(self._true_t)
+            if n == len(self._true):
+                self._true = np.concatenate([self._true, np.zeros_like(self._true)])
+            if self._sd9 is not None:
+                self._true[n] = self._sd9
+            else:
+                self._true[n] = self._true9()
+            self._true_t.append(t_us)
 
     def _publish_next(self) -> None:
         """Publishing event: the sample taken on the grid at this instant goes out."""
@@ -258,11 +266,11 @@ class ImuSensor:
         self._handle = self.clock.schedule(now + self.period_us, self._publish_next,
                                            publishes=("imu/data_raw", "imu/mag"))
         if not self._ready:
-            if not self._true:
+            if not self._true_t:
                 raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid")
-            y = self.corrupt_batch(np.array([x for _, x in self._true]))
-            self._ready.extend(zip([t for t, _ in self._true], y))
-            self._true.clear()
+            y = self.corrupt_batch(self._true[:len(self._true_t)])
+            self._ready.extend(zip(self._true_t, y.tolist()))
+            self._true_t.clear()
         t_us, y = self._ready.popleft()
         if t_us != now:
             raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid (got {t_us})")
@@ -270,18 +278,15 @@ class ImuSensor:
 
     def _tick(self) -> None:
         self._handle = self.clock.schedule(self.clock.now_us + self.period_us, self._tick)
-        self._publish(self.corrupt_batch(self._true9()[None, :])[0])
+        self._publish(self.corrupt_batch(self._true9()[None, :])[0].tolist())
 
-    def _publish(self, y: np.ndarray) -> None:
+    def _publish(self, a: list[float]) -> None:
+        """Publish the readings ``a`` (accel, gyro, mag: 9 values) stamped now."""
         stamp = Time.from_us(self.clock.now_us)
         self.seq += 1
         header = Header(self.seq, stamp, self.frame_id)
-        a = y.tolist()
-        cov = self._cov
-        self.pub_imu.publish(Imu(
-            header=header, orientation_covariance=self._orientation_cov,
-            angular_velocity=Vector3(a[3], a[4], a[5]), angular_velocity_covariance=cov["gyro"],
-            linear_acceleration=Vector3(a[0], a[1], a[2]), linear_acceleration_covariance=cov["accel"]))
-        self.pub_mag.publish(MagneticField(
-            header=Header(self.seq, stamp, self.frame_id), magnetic_field=Vector3(a[6], a[7], a[8]),
-            magnetic_field_covariance=cov["mag"]))
+        cov = self._cov  # positional fields (ROS order): header, orientation, covariances and vectors
+        self.pub_imu.publish(Imu(header, Quaternion(), self._orientation_cov, Vector3(a[3], a[4], a[5]),
+                                 cov["gyro"], Vector3(a[0], a[1], a[2]), cov["accel"]))
+        self.pub_mag.publish(MagneticField(Header(self.seq, stamp, self.frame_id), Vector3(a[6], a[7], a[8]),
+                                           cov["mag"]))

@@ -23,13 +23,14 @@ not change), and the nearer hit wins. Two ways to drive it:
 - standalone (:meth:`Lidar.start_motor` without arguments): a clock event at
   every multiple of ``group_us`` (default 20 ms) samples the pose, casts the
   beams acquired since the previous event and publishes a completed rotation;
-- in the twin (``start_motor(grid_us, samplers)``): the simulation loop samples
-  the pose on its record grid while the physics steps (:meth:`Lidar.on_sample`,
-  no clock event), beams are cast every ``loop_cast_us`` (default 91 ms, two
-  calls per rotation) and when a rotation is complete (at the first grid instant
-  after its last beam), and the scan goes out from a publishing clock event at
-  that instant (:mod:`amr_twin.clock`: it stops the physics only if a
-  subscriber of ``scan`` could act sooner).
+- in the twin (``start_motor(grid_us, samplers)``): the simulation loop calls
+  :meth:`Lidar.on_sample` on its record grid while the physics steps (no clock
+  event); the pose is sampled every ``group_us`` (rounded up to the grid), the
+  beams are cast when a rotation is complete (at the first pose sample after its
+  last beam; also every ``loop_cast_us`` if shorter than a rotation), and the
+  scan goes out from a publishing clock event at that instant
+  (:mod:`amr_twin.clock`: it stops the physics only if a subscriber of ``scan``
+  could act sooner).
 
 Rays see geom groups 0 (world) and 4 (payload) only, never the robot's own
 wheels, casters or frame (groups 1, 2). The cutoff is large and ranges are
@@ -163,11 +164,12 @@ class Lidar:
         now = self.clock.now_us
         self._new_rotation(now)
         self._npose = 0
-        if self._grid is not None:
-            self.cast_period_us, self._samplers = self._grid
+        if self._grid is not None:  # pose samples on the multiples of the grid that are >= group_us
+            grid, self._samplers = self._grid
+            self.cast_period_us = -(-self.group_us // grid) * grid
             self.cast_every_us = self.loop_cast_us
             self._samplers.append(self.on_sample)
-            self._schedule_publish()
+            self._handle = self.clock.schedule(self._publish_time_us(now), self._publish_next, publishes=("scan",))
         else:
             self.cast_period_us = self.cast_every_us = self.group_us
             grid = self.group_us
@@ -208,6 +210,8 @@ class Lidar:
         after the previous cast. Called by the loop on its record grid (twin) or
         by this sensor's clock events (standalone).
         """
+        if t_us % self.cast_period_us:
+            return
         n, poses = self._npose, self._poses
         if n == len(poses):
             poses = self._poses = np.concatenate([poses, np.zeros_like(poses)])
@@ -335,10 +339,6 @@ class Lidar:
         """First pose sample at or after the last beam of the rotation started at ``t0_us``."""
         last = t0_us + self.scan_us - self.beam_dt_us
         return -(-last // self.cast_period_us) * self.cast_period_us
-
-    def _schedule_publish(self) -> None:
-        t0 = self._done[0][2][0] if self._done else self.t0_us
-        self._handle = self.clock.schedule(self._publish_time_us(t0), self._publish_next, publishes=("scan",))
 
     def _publish_next(self) -> None:
         """Publishing event (twin): the rotation cast on the grid at this instant goes out."""

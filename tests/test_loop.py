@@ -49,8 +49,8 @@ def test_sensor_messages_are_delivered_at_their_instants(cfg):
     assert [t for t, _ in imu] == [s for _, s in imu] == list(range(0, 500_001, 10_000))
     scans = [(t_us, m.header.stamp.to_us()) for topic, t_us, m in taps if topic == "scan"]
     lidar = twin.lidar
-    # stamp = first beam; delivered at the first grid instant at or after the last beam
-    assert scans == [(190_000, 0), (370_000, lidar.scan_us)]
+    # stamp = first beam; delivered at the first 20 ms pose sample at or after the last beam
+    assert scans == [(200_000, 0), (380_000, lidar.scan_us)]
 
 
 def test_a_subscriber_acting_on_odometry_acts_at_its_time(cfg):

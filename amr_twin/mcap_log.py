@@ -16,6 +16,8 @@ Topics (frames as in REP-105; ``world`` is the simulation's world frame)::
     /scan              sensor_msgs/msg/LaserScan      (with TwinOptions(sensors=True))
     /imu/data_raw      sensor_msgs/msg/Imu            (idem)
     /imu/mag           sensor_msgs/msg/MagneticField  (idem)
+    /uwb/range         sensor_msgs/msg/Range          one per anchor exchange, frame uwb_anchor_<i>
+                                                      (only when a UwbSensor publishes, e.g. the fusion drive)
     /wheel0_Vel, /wheel1_Vel   std_msgs/msg/Float64   RPM as published by the firmware
     /wheel_Command     std_msgs/msg/Float64MultiArray [motionL, speedL, motionR, speedR]
     /twin/true_rpm     std_msgs/msg/Float64MultiArray [left, right], signed, record rate (100 Hz)
@@ -65,6 +67,8 @@ _DEFS = {
                               "float32 range_min\nfloat32 range_max\nfloat32[] ranges\nfloat32[] intensities"),
     "nav_msgs/Odometry": ("std_msgs/Header header\nstring child_frame_id\n"
                           "geometry_msgs/PoseWithCovariance pose\ngeometry_msgs/TwistWithCovariance twist"),
+    "sensor_msgs/Range": ("uint8 ULTRASOUND=0\nuint8 INFRARED=1\nstd_msgs/Header header\nuint8 radiation_type\n"
+                          "float32 field_of_view\nfloat32 min_range\nfloat32 max_range\nfloat32 range"),
 }
 
 
@@ -105,6 +109,9 @@ class _Cdr:
     def u32(self, v: int) -> None:
         self._align(4)
         self.b += _U32.pack(v)
+
+    def u8(self, v: int) -> None:
+        self.b.append(v & 0xFF)
 
     def stamp(self, sec: int, nanosec: int) -> None:
         self._align(4)
@@ -209,6 +216,14 @@ def _scan(msg) -> bytes:
     return bytes(c.b)
 
 
+def _range(msg) -> bytes:
+    c = _Cdr()
+    _hdr(c, msg.header)
+    c.u8(int(msg.radiation_type))
+    c.f32(msg.field_of_view, msg.min_range, msg.max_range, msg.range)
+    return bytes(c.b)
+
+
 def _float64(msg) -> bytes:
     c = _Cdr()
     c.f64(float(msg.data))
@@ -230,6 +245,7 @@ BUS_TOPICS = {
     "scan": ("/scan", "sensor_msgs/LaserScan", _scan),
     "imu/data_raw": ("/imu/data_raw", "sensor_msgs/Imu", _imu),
     "imu/mag": ("/imu/mag", "sensor_msgs/MagneticField", _mag),
+    "uwb/range": ("/uwb/range", "sensor_msgs/Range", _range),
     "wheel0_Vel": ("/wheel0_Vel", "std_msgs/Float64", _float64),
     "wheel1_Vel": ("/wheel1_Vel", "std_msgs/Float64", _float64),
     "wheel_Command": ("/wheel_Command", "std_msgs/Float64MultiArray", lambda m: _multi(m.data)),

@@ -4,9 +4,9 @@ Two stages, so that a recorded run costs little while it runs:
 
 1. :class:`Capture` is attached to a :class:`~amr_twin.loop.Twin` before it runs.
    It taps the bus (keeps every published message with its time) and samples the
-   world pose of each robot body by a clock event (default ~30 Hz, put on the
-   recorder's 10 ms grid so the physics chunks, hence the run, are unchanged).
-   It only reads ``data.xpos`` / ``data.xquat``.
+   world pose of each robot body as a grid sampler of the loop (default ~30 Hz on
+   the recorder's 10 ms grid; no clock event, so the physics chunks, hence the
+   run, are unchanged). It only reads ``data.xpos`` / ``data.xquat``.
 2. After the run :func:`write_rrd` (or :func:`record_run`, which also writes the
    MCAP file of :mod:`amr_twin.mcap_log`) turns the capture plus the finished
    :class:`~amr_twin.recorder.RunSeries` into Rerun columns, one ``_log_<stream>``
@@ -23,6 +23,9 @@ Entities::
     wheels/{left,right}/{reference,published,true}_rpm   Scalars
     duty/{left,right}                   analogWrite counts
     imu/{accel,gyro,mag}                Scalars (x, y, z)
+    uwb/anchor_<i>/range_m              Scalars, one per received range (only with a UWB tag)
+    world/uwb/anchors                   static Points3D of the anchors
+    world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
     commands                            TextLog of wheel_Command and the client calls
 
 A default blueprint (3D view + time-series plots) is sent with the recording.
@@ -47,7 +50,13 @@ _captures: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 class Capture:
-    """Bus messages and body poses of a running twin (attach before running)."""
+    """Bus messages and body poses of a running twin (attach before running).
+
+    The body poses are taken by a grid sampler of the loop (``twin.samplers``,
+    called on the record grid while the physics steps), not by a clock event: the
+    capture adds no boundary to the physics chunks, so a recorded run is the same
+    run whatever the caller's ``advance`` pattern (a sweep's 20 ms loop included).
+    """
 
     def __init__(self, twin, body_hz: float = 30.0):
         self.twin = twin
@@ -60,7 +69,8 @@ class Capture:
         self._pos: list[np.ndarray] = []
         self._quat: list[np.ndarray] = []
         twin.bus.add_tap(self._tap)
-        self._sample()
+        self._sample(twin.t_phys_us)
+        twin.samplers.append(self._on_grid)
         _captures[twin] = self
 
     def _tap(self, topic: str, msg, t_us: int) -> None:
@@ -69,12 +79,16 @@ class Capture:
             lst = self.messages[topic] = []
         lst.append((t_us, msg))
 
-    def _sample(self) -> None:
+    def _sample(self, t_us: int) -> None:
         d, ids = self.twin.physics.data, self.body_ids
-        self._t.append(self.twin.clock.now_us)
+        self._t.append(int(t_us))
         self._pos.append(d.xpos[ids].copy())
         self._quat.append(d.xquat[ids].copy())
-        self.twin.clock.schedule(self.twin.clock.now_us + self.period_us, self._sample)
+
+    def _on_grid(self, t_us: int) -> None:
+        """Grid sampler: the physics is at ``t_us``; keep the poses every ``period_us``."""
+        if t_us % self.period_us == 0 and t_us > self._t[-1]:
+            self._sample(t_us)
 
     def body_poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """t_s (n,), positions (n, nb, 3), quaternions w x y z (n, nb, 4)."""
@@ -95,6 +109,41 @@ def atomic_target(path: Path) -> Path:
     """A temporary name next to ``path`` (written, then renamed by the caller)."""
     path = Path(path)
     return path.with_name(f".{path.name}.{os.getpid()}.tmp")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: Path) -> list[Path]:
+    """Delete the half-written recordings a killed writer left in ``folder``; return them.
+
+    A writer that is interrupted normally removes its temporary file itself; one
+    killed outright (SIGKILL, a crashed worker) leaves ``.<name>.rrd.<pid>.tmp`` or
+    ``.<name>.mcap.<pid>.tmp`` behind. Only those of processes no longer running
+    are deleted, so a concurrent writer's file is left alone.
+    """
+    removed = []
+    for tmp in Path(folder).glob(".*.tmp"):
+        stem, _, pid = tmp.name[:-len(".tmp")].rpartition(".")
+        if stem.endswith((".rrd", ".mcap")) and pid.isdigit() and not _alive(int(pid)):
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
+
+def recording_folder(folder: Path) -> Path:
+    """``folder`` made absolute (worker processes may run elsewhere), created, stale temporaries removed."""
+    folder = Path(folder).resolve()
+    folder.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(folder)
+    return folder
 
 
 TRACKED = "world/bodies/amr/base_link"
@@ -241,14 +290,19 @@ def _log_trajectory(rec, series, rate_hz: float = 2.0) -> None:
                 rec.log(f"world/trajectory/{name}", rr.LineStrips3D([pts], colors=[color], radii=[0.01]))
 
 
-def _laser_pose_at(capture: Capture, m, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Laser position (n, 3) and yaw (n,) at ``t_s``, interpolated from the body samples."""
-    j = int(np.nonzero(capture.body_ids == mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/laser"))[0][0])
+def _body_pose_at(capture: Capture, m, body: str, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (n, 3), m, and yaw (n,), rad, of ``body`` at ``t_s``, interpolated from the body samples."""
+    j = int(np.nonzero(capture.body_ids == mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body))[0][0])
     t, pos, quat = capture.body_poses()
     q = quat[:, j]
     yaw = np.unwrap(np.arctan2(2 * (q[:, 0] * q[:, 3] + q[:, 1] * q[:, 2]), 1 - 2 * (q[:, 2] ** 2 + q[:, 3] ** 2)))
     p = np.column_stack([np.interp(t_s, t, pos[:, j, k]) for k in range(3)])
     return p, np.interp(t_s, t, yaw)
+
+
+def _laser_pose_at(capture: Capture, m, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Laser position (n, 3) and yaw (n,) at ``t_s``, interpolated from the body samples."""
+    return _body_pose_at(capture, m, "amr/laser", t_s)
 
 
 def _log_scan(rec, m, capture: Capture) -> None:
@@ -288,13 +342,69 @@ def _log_imu(rec, capture: Capture) -> None:
                                      for _, m in mag])
 
 
-def _blueprint(has_imu: bool):
+def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:
+    """Anchor positions (K, 3) in the world and the tag position (3,) in ``base_link``, m.
+
+    From the twin's ``UwbSensor`` (``twin.uwb``) when it has one, else from ``twin.cfg.uwb``.
+    """
+    sensor = getattr(twin, "uwb", None)
+    if sensor is not None:
+        return np.asarray(sensor.anchors_xyz_m, float), np.asarray(sensor.tag_pos_m, float)
+    u = twin.cfg.uwb
+    anchors = np.column_stack([np.asarray(u.anchors_xy_m, float), np.full(len(u.anchors_x_m), u.anchor_z_m)])
+    return anchors, np.asarray(u.tag_pos_m, float)
+
+
+def uwb_ranges(capture: Capture) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """The captured ``uwb/range`` messages per anchor: ``{i: (stamp t_s (n,), range_m (n,))}``."""
+    from .sensors.uwb import anchor_index
+
+    per: dict[int, tuple[list, list]] = {}
+    for _t_us, msg in capture.messages.get("uwb/range", []):
+        t, r = per.setdefault(anchor_index(msg.header.frame_id), ([], []))
+        t.append(msg.header.stamp.to_sec())
+        r.append(float(msg.range))
+    return {i: (np.array(t), np.array(r)) for i, (t, r) in sorted(per.items())}
+
+
+def _log_uwb(rec, m, capture: Capture) -> None:
+    """Ranges per anchor as scalars, the anchors, and a line from the tag to each anchor ranged.
+
+    The tag's world position at a range's stamp uses the base's interpolated
+    position and yaw (the base's small tilt is left out of the line).
+    """
+    import rerun as rr
+
+    ranges = uwb_ranges(capture)
+    if not ranges:
+        return
+    anchors, tag = uwb_geometry(capture.twin)
+    rec.log("world/uwb/anchors", rr.Points3D(anchors, radii=[0.08], colors=[(200, 60, 200)],
+                                             labels=[f"anchor_{i}" for i in range(len(anchors))]), static=True)
+    for i, (t_s, range_m) in ranges.items():
+        _scalars(rec, f"uwb/anchor_{i}/range_m", t_s, range_m)
+        if i >= len(anchors):
+            continue
+        p, yaw = _body_pose_at(capture, m, "amr/base_link", t_s)
+        c, s = np.cos(yaw), np.sin(yaw)
+        tag_w = np.column_stack([p[:, 0] + c * tag[0] - s * tag[1], p[:, 1] + s * tag[0] + c * tag[1],
+                                 p[:, 2] + tag[2]])
+        strips = np.stack([tag_w, np.broadcast_to(anchors[i], tag_w.shape)], axis=1)  # (n, 2, 3)
+        rec.send_columns(f"world/uwb/anchor_{i}/ray", indexes=_time(t_s),
+                         columns=rr.LineStrips3D.columns(strips=strips))
+        rec.log(f"world/uwb/anchor_{i}/ray", rr.LineStrips3D.from_fields(colors=[(200, 60, 200)], radii=[0.005]),
+                static=True)
+
+
+def _blueprint(has_imu: bool, has_uwb: bool = False):
     import rerun.blueprint as rrb
 
     plots = [rrb.TimeSeriesView(origin=f"wheels/{w}", name=f"{w} wheel RPM") for w in WHEELS]
     plots.append(rrb.TimeSeriesView(origin="duty", name="PWM counts"))
     if has_imu:
         plots.append(rrb.TimeSeriesView(origin="imu", name="IMU"))
+    if has_uwb:
+        plots.append(rrb.TimeSeriesView(origin="uwb", name="UWB ranges, m"))
     return rrb.Blueprint(
         rrb.Horizontal(rrb.Vertical(rrb.Spatial3DView(origin="world", name="twin",
                                                       eye_controls=rrb.EyeControls3D(tracking_entity=TRACKED)),
@@ -312,12 +422,14 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     m = capture.twin.physics.model
     rec = rr.RecordingStream(application_id)
     try:
-        rec.save(tmp, default_blueprint=_blueprint(bool(capture.messages.get("imu/data_raw"))))
+        rec.save(tmp, default_blueprint=_blueprint(bool(capture.messages.get("imu/data_raw")),
+                                                   bool(capture.messages.get("uwb/range"))))
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_geoms(rec, m)
         _log_body_transforms(rec, m, capture)
         _log_scan(rec, m, capture)
         _log_imu(rec, capture)
+        _log_uwb(rec, m, capture)
         _log_wheel_speeds(rec, series)
         _log_duty(rec, series)
         _log_commands(rec, series, result)

@@ -197,3 +197,64 @@ def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
     durability = {topic: str(profiles[0].durability) for topic, profiles in qos.items()}
     assert "TRANSIENT_LOCAL" in durability["/tf_static"].upper()
     assert all("VOLATILE" in d.upper() for t, d in durability.items() if t != "/tf_static")
+
+
+UWB_S = 2.0
+
+
+@pytest.fixture(scope="module")
+def uwb_bag(tmp_path_factory):
+    """A 2 s run with the UWB tag only; its capture and its /uwb/range messages as rosbags reads them."""
+    from rosbags.rosbag2 import Reader
+
+    from amr_twin.sensors.uwb import UwbSensor
+
+    cfg = load_config()
+    options = TwinOptions(world="empty")
+    twin = Twin(cfg, options)
+    twin.uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
+    capture = attach(twin)
+    result = run_mission(cfg, [(0.0, Command("linear", speed_m_s=0.5))], UWB_S, options, twin=twin)
+    path = tmp_path_factory.mktemp("rosbags_uwb") / "uwb.mcap"
+    record_run(twin, mcap_path=path, result=result)
+    with Reader(path) as reader:
+        connections = {c.topic: c for c in reader.connections}
+        raw = [(con.topic, con.msgtype, t_ns, data) for con, t_ns, data in reader.messages()]
+    return cfg, capture, connections, raw
+
+
+def test_uwb_range_topic_and_definition(uwb_bag):
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    _cfg, _capture, connections, _raw = uwb_bag
+    humble = get_typestore(Stores.ROS2_HUMBLE)
+    con = connections["/uwb/range"]
+    assert con.msgtype == "sensor_msgs/msg/Range" and con.ext.serialization_format == "cdr"
+    assert set(connections) == (set(TOPIC_TYPES) - {"/scan", "/imu/data_raw", "/imu/mag"}) | {"/uwb/range"}
+    types = get_types_from_msg(con.msgdef.data, con.msgtype)
+    assert types["sensor_msgs/msg/Range"] == humble.fielddefs["sensor_msgs/msg/Range"]  # constants included
+    embedded = get_typestore(Stores.EMPTY)
+    embedded.register(types)
+    assert embedded.hash_rihs01("sensor_msgs/msg/Range") == humble.hash_rihs01("sensor_msgs/msg/Range")
+
+
+def test_uwb_ranges_decode_byte_exact_with_the_simulated_values(uwb_bag):
+    from rosbags.typesys import Stores, get_typestore
+
+    cfg, capture, _connections, raw = uwb_bag
+    humble = get_typestore(Stores.ROS2_HUMBLE)
+    ranges = [(t_ns, data) for topic, _type, t_ns, data in raw if topic == "/uwb/range"]
+    src = capture.messages["uwb/range"]
+    assert len(ranges) == len(src) >= 0.8 * cfg.uwb.rate_hz * len(cfg.uwb.anchors_x_m) * UWB_S
+    frames = set()
+    for (t_ns, data), (t_us, want) in zip(ranges, src):
+        msg = humble.deserialize_cdr(data, "sensor_msgs/msg/Range")
+        assert bytes(humble.serialize_cdr(msg, "sensor_msgs/msg/Range")) == data
+        assert t_ns == t_us * 1000 == msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        assert msg.header.frame_id == want.header.frame_id
+        assert msg.radiation_type == msg.INFRARED == want.radiation_type
+        assert msg.range == np.float32(want.range)
+        assert (msg.min_range, msg.max_range) == (np.float32(want.min_range), np.float32(want.max_range))
+        assert msg.field_of_view == pytest.approx(2 * math.pi, rel=1e-6)
+        frames.add(msg.header.frame_id)
+    assert frames == {f"uwb_anchor_{i}" for i in range(len(cfg.uwb.anchors_x_m))}

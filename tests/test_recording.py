@@ -103,6 +103,7 @@ def test_rrd_entities_and_rates(recorded):
     quats = np.concatenate([np.array(b.column("Transform3D:quaternion").to_pylist(), dtype=object).ravel()
                             for b in batches["/world/bodies/amr/wheel_left_link"]])
     assert len({tuple(np.round(np.ravel(q), 3)) for q in quats}) > 10
+    assert not any("uwb" in entity for entity in entities)  # no UWB tag in this run: no UWB entities
 
 
 def test_mcap_topics_rates_and_values(recorded):
@@ -157,3 +158,108 @@ def test_cli_record_and_mcap(tmp_path):
     assert msgs["/odom"][-1][4].pose.pose.position.x == pytest.approx(info["final_odom_pose"]["x_m"])
     rows, _ = _rrd_chunks(rrd)
     assert "/world/bodies/amr/base_link" in rows and "/wheels/right/true_rpm" in rows
+
+
+def test_recording_does_not_change_a_run_advanced_in_small_steps():
+    """The capture samples on the loop's grid, not by clock events: a 20 ms advance loop is unchanged too."""
+    cfg = load_config()
+
+    def drive(record: bool):
+        twin = Twin(cfg, TwinOptions(world="empty"))
+        capture = attach(twin) if record else None
+        twin.advance_to_us(0)
+        Command("linear", speed_m_s=0.7).send(twin)
+        for k in range(1, 51):
+            twin.advance_to_us(k * 20_000)
+        return twin.recorder.series(), capture
+
+    plain, _ = drive(False)
+    recorded, capture = drive(True)
+    assert np.array_equal(plain.true_rpm, recorded.true_rpm) and np.array_equal(plain.pose, recorded.pose)
+    t_s, pos, _quat = capture.body_poses()
+    assert np.allclose(np.diff(t_s), capture.period_us / 1e6) and t_s[-1] > 0.95
+    base = int(np.nonzero(capture.body_ids == capture.twin.physics.model.body("amr/base_link").id)[0][0])
+    assert pos[-1, base, 0] > pos[0, base, 0] + 0.1  # the robot drove forward
+
+
+def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
+    import os
+    import subprocess
+
+    from amr_twin.rerun_log import recording_folder, remove_stale_temporaries
+
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    stale = [tmp_path / f".run1.rrd.{dead.pid}.tmp", tmp_path / f".p.mcap.{dead.pid}.tmp"]
+    keep = [tmp_path / f".run2.rrd.{os.getpid()}.tmp",   # a live writer's
+            tmp_path / ".sweep.csv.abc123.tmp",          # not a recording
+            tmp_path / "run3.rrd"]
+    for path in stale + keep:
+        path.write_bytes(b"x")
+    assert sorted(remove_stale_temporaries(tmp_path)) == sorted(stale)
+    assert sorted(tmp_path.iterdir()) == sorted(keep)
+    assert recording_folder(tmp_path / "new" / "rec") == (tmp_path / "new" / "rec").resolve()
+    assert (tmp_path / "new" / "rec").is_dir()
+
+
+UWB_S = 2.0
+
+
+@pytest.fixture(scope="module")
+def uwb_recorded(tmp_path_factory):
+    """A 2 s run with the UWB tag (no IMU/LiDAR), recorded to .rrd and .mcap."""
+    from amr_twin.sensors.uwb import UwbSensor
+
+    cfg = load_config()
+    options = TwinOptions(world="empty")
+    twin = Twin(cfg, options)
+    twin.uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
+    capture = attach(twin)
+    result = run_mission(cfg, [(0.0, Command("linear", speed_m_s=0.5))], UWB_S, options, twin=twin)
+    out = tmp_path_factory.mktemp("uwb")
+    paths = record_run(twin, rrd_path=out / "uwb.rrd", mcap_path=out / "uwb.mcap", result=result)
+    return cfg, capture, paths
+
+
+def test_rrd_uwb_ranges_per_anchor(uwb_recorded):
+    from amr_twin.rerun_log import uwb_ranges
+
+    cfg, capture, paths = uwb_recorded
+    msgs = capture.messages["uwb/range"]
+    n_anchors = len(cfg.uwb.anchors_x_m)
+    assert 0.8 * cfg.uwb.rate_hz * n_anchors * UWB_S <= len(msgs) <= cfg.uwb.rate_hz * n_anchors * UWB_S + 1
+    rows, batches = _rrd_chunks(paths["rrd"])
+    per_anchor = uwb_ranges(capture)
+    assert sorted(per_anchor) == list(range(n_anchors))
+    for i, (t_s, range_m) in per_anchor.items():
+        assert rows[f"/uwb/anchor_{i}/range_m"] == len(t_s) >= 0.8 * cfg.uwb.rate_hz * UWB_S
+        assert rows[f"/world/uwb/anchor_{i}/ray"] == len(t_s) + 1  # one line per range + static style
+        last = batches[f"/uwb/anchor_{i}/range_m"][-1].column("Scalars:scalars").to_pylist()[-1][0]
+        assert last == pytest.approx(range_m[-1])
+    # the last range to anchor 0 is the one published on the bus, and about the true distance
+    last0 = [m for _t, m in msgs if m.header.frame_id == "uwb_anchor_0"][-1]
+    assert per_anchor[0][1][-1] == last0.range
+    assert abs(last0.range - capture.twin.uwb.true_ranges_m()[0]) < 1.0
+    assert rows["/world/uwb/anchors"] == 1
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(str(paths["rrd"]))
+    origins = set()
+    for chunk in reader.stream(store=reader.blueprints()[0]).to_chunks():
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:space_origin" in batch.schema.names:
+            origins.update(v[0] for v in batch.column("ViewBlueprint:space_origin").to_pylist())
+    assert "uwb" in origins and "imu" not in origins  # a UWB plot in the default layout, no IMU one
+
+
+def test_mcap_uwb_range_decoded_by_mcap_ros2(uwb_recorded):
+    _cfg, capture, paths = uwb_recorded
+    msgs = _mcap_messages(paths["mcap"])
+    src = capture.messages["uwb/range"]
+    assert len(msgs["/uwb/range"]) == len(src)
+    assert {(m[1], m[2], m[3]) for m in msgs["/uwb/range"]} == {("sensor_msgs/msg/Range", "ros2msg", "cdr")}
+    (t_ns, *_rest, got), (t_us, want) = msgs["/uwb/range"][-1], src[-1]
+    assert t_ns == t_us * 1000
+    assert got.header.frame_id == want.header.frame_id and got.radiation_type == 1
+    assert got.range == pytest.approx(want.range, rel=1e-6)
+    assert "/scan" not in msgs and "/imu/data_raw" not in msgs

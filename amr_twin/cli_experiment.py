@@ -3,6 +3,10 @@
 Both simulate first and write afterwards, every file through a temporary file and a
 rename: an interrupted command leaves no half-written output (the sweep keeps the
 per-point files already finished, and a rerun only simulates the missing ones).
+
+``--record DIR`` / ``--mcap DIR`` take a folder: one recording per run
+(``run<N>.rrd``) or per sweep point (``<key>.rrd``), written by the worker that
+simulates it. A resumed sweep records only the points it simulates.
 """
 
 from __future__ import annotations
@@ -20,6 +24,16 @@ def _check_common(jobs: int, firmware: str, fail) -> None:
         fail(f"--jobs {jobs}: must be >= 1")
     if firmware not in FIRMWARES:
         fail(f"--firmware {firmware!r}: must be one of {', '.join(FIRMWARES)}")
+
+
+def _check_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
+    """A recording option of a multi-run command takes a folder (one file per run), not a file name."""
+    if folder is None or folder.is_dir():
+        return
+    if folder.exists():
+        fail(f"{option} {folder}: exists and is not a folder (one {name} per run is written inside)")
+    if folder.suffix.lower() in (".rrd", ".mcap"):
+        fail(f"{option} {folder}: give a folder, not a file name (one {name} per run is written inside)")
 
 
 def _rpm(value) -> str:
@@ -110,6 +124,11 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
         runs: Optional[str] = typer.Option(None, "--runs", help="Run numbers to do, e.g. 1,3 (default all)."),
         duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Override every run's duration, s."),
+        record: Optional[Path] = typer.Option(
+            None, "--record", metavar="DIR",
+            help="Folder: one Rerun recording per run, DIR/run<N>.rrd (open with `rerun DIR/run1.rrd`)."),
+        mcap: Optional[Path] = typer.Option(
+            None, "--mcap", metavar="DIR", help="Folder: one ROS 2 recording per run, DIR/run<N>.mcap."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
@@ -125,11 +144,13 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             fail(f"--runs {runs!r}: expected run numbers 1..8 separated by commas")
         if numbers is not None and not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
             fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
+        _check_folder("--record", record, fail, "run<N>.rrd")
+        _check_folder("--mcap", mcap, fail, "run<N>.mcap")
         cfg = _config(config, params, set_)
 
         def work():
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
-                                   progress=progress)
+                                   progress=progress, record_dir=record, mcap_dir=mcap)
             chapter5.plot(results, out)
             return chapter5.report(results, out)
 
@@ -146,6 +167,10 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
                    f"(jobs {jobs}, firmware {firmware})")
+        for folder, ext in ((record, "rrd"), (mcap, "mcap")):
+            if folder is not None:
+                typer.echo(f"recordings: {folder}/run<N>.{ext} for runs "
+                           + ",".join(str(r["run"]) for r in data["runs"]))
 
 
 def _add_payload_sweep(sweep: typer.Typer) -> None:
@@ -168,6 +193,14 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
                                                 help="Dask scheduler address, e.g. tcp://127.0.0.1:8786."),
         scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s",
                                                   help="Give up reaching the Dask scheduler after this long, s."),
+        record: Optional[Path] = typer.Option(
+            None, "--record", metavar="DIR",
+            help="Folder: one Rerun recording per point simulated now, DIR/<key>.rrd (key as in runs/<key>.json). "
+                 "A resumed sweep does not redo finished points to record them: delete runs/<key>.json for that. "
+                 "With --executor dask the workers write it: DIR must be on shared storage."),
+        mcap: Optional[Path] = typer.Option(
+            None, "--mcap", metavar="DIR",
+            help="Folder: one ROS 2 recording per point simulated now, DIR/<key>.mcap."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
@@ -198,12 +231,15 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
             fail(str(exc))
         if not position_list or not command_list:
             fail("--positions and --commands must name at least one item each")
+        _check_folder("--record", record, fail, "<key>.rrd")
+        _check_folder("--mcap", mcap, fail, "<key>.mcap")
 
         client = _dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
 
         def work():
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
-                                        jobs=jobs, firmware=firmware, progress=progress, client=client)
+                                        jobs=jobs, firmware=firmware, progress=progress, client=client,
+                                        record_dir=record, mcap_dir=mcap)
             payload_sweep_report.plot(results, out)
             return results, payload_sweep_report.report(results, out)
 
@@ -219,3 +255,8 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         where = f"dask {scheduler}" if client is not None else f"jobs {jobs}"
         typer.echo(f"{len(results['rows'])} points: {results['simulated']} simulated, {results['reused']} reused; "
                    f"wall time {results['wall_s']:.2f} s ({where}); wrote {out}/sweep.csv, summary.md")
+        if record is not None or mcap is not None:
+            typer.echo(f"recordings: {results['recorded']} points recorded in "
+                       + ", ".join(str(f) for f in (record, mcap) if f is not None)
+                       + (f"; {results['reused']} points reused from {out}/runs are not re-simulated to be recorded "
+                          "(delete runs/<key>.json to record one)" if results["reused"] else ""))

@@ -14,6 +14,11 @@ first 90 % crossing to 5 s after the command (:func:`amr_twin.metrics.step_info`
 compared per wheel between each 20 kg run and the same command unloaded; the
 verdict is judged on the published samples, the true speed's is reported too.
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
+
+Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``run<N>.rrd`` /
+``run<N>.mcap`` per run (:mod:`amr_twin.rerun_log`, :mod:`amr_twin.mcap_log`),
+written by the process that simulates the run, through a temporary name and a
+rename. Recording does not change the results.
 """
 
 from __future__ import annotations
@@ -173,6 +178,8 @@ class _Job:
     duration_s: float
     seed: int = 0
     extra: dict = field(default_factory=dict)
+    rrd_path: str | None = None   # write the run's Rerun recording here
+    mcap_path: str | None = None  # write the run's ROS 2 topics here
 
 
 def _with_payload(cfg: TwinConfig, mass_kg: float) -> TwinConfig:
@@ -186,7 +193,18 @@ def _with_payload(cfg: TwinConfig, mass_kg: float) -> TwinConfig:
 def simulate(job: _Job) -> dict:
     """Run one experiment; return its raw series (picklable, for worker processes)."""
     options = TwinOptions(firmware=job.firmware, world="empty", seed=job.seed)
-    result = run_command(_with_payload(job.cfg, job.spec.payload_kg), job.spec.command, job.duration_s, options)
+    cfg = _with_payload(job.cfg, job.spec.payload_kg)
+    if job.rrd_path is None and job.mcap_path is None:
+        result = run_command(cfg, job.spec.command, job.duration_s, options)
+    else:
+        from ..loop import Twin
+        from ..rerun_log import attach, record_run
+        from ..run import run_mission
+
+        twin = Twin(cfg, options)
+        attach(twin)
+        result = run_mission(cfg, [(0.0, job.spec.command)], job.duration_s, options, twin=twin)
+        record_run(twin, rrd_path=job.rrd_path, mcap_path=job.mcap_path, result=result)
     s = result.series
     return {"run": job.spec.number, "codes": result.codes, "errors": result.errors,
             "wheel_command": result.wheel_command, "t_command_s": s.commands[0][0] if s.commands else 0.0,
@@ -217,7 +235,8 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
 
 
 def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,
-        duration_s: float | None = None, progress: bool = True) -> dict:
+        duration_s: float | None = None, progress: bool = True, record_dir: Path | None = None,
+        mcap_dir: Path | None = None) -> dict:
     """Simulate the chapter 5 runs and measure them.
 
     Parameters
@@ -228,6 +247,8 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     runs : run numbers to do (default all eight).
     duration_s : override every run's duration, s (tests).
     progress : show a progress bar.
+    record_dir : folder for one Rerun recording per run, ``run<N>.rrd`` (created; None: none).
+    mcap_dir : folder for one MCAP file per run, ``run<N>.mcap`` (may be ``record_dir``).
 
     Returns
     -------
@@ -239,7 +260,16 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     if not specs:
         raise ValueError(f"runs: {runs} selects none of 1..{len(RUNS)}")
     wall0 = time.perf_counter()
-    todo = [_Job(s, cfg, firmware, duration_s or s.duration_s) for s in specs]
+    from ..rerun_log import recording_folder
+
+    folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
+               if folder is not None}
+
+    def target(kind: str, spec: RunSpec) -> str | None:
+        return str(folders[kind] / f"run{spec.number}.{kind}") if kind in folders else None
+
+    todo = [_Job(s, cfg, firmware, duration_s or s.duration_s, rrd_path=target("rrd", s),
+                 mcap_path=target("mcap", s)) for s in specs]
     done = {job.spec.number: analyse(job.spec, raw)
             for job, raw in run_all(simulate, todo, jobs, "chapter 5 runs", progress)}
     results = [done[s.number] for s in specs]

@@ -15,6 +15,14 @@ tip margin is at least :data:`TIP_MARGIN_MIN_M`, no drive wheel ever lost
 contact (:data:`~amr_twin.statics.CONTACT_MIN_N`) and the base tilted at most
 :data:`TILT_LIMIT_DEG`. The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
+
+Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``<key>.rrd`` /
+``<key>.mcap`` per point **simulated by this call**, written by the process that
+simulates it (the Dask workers with a cluster: the folder must be on storage they
+share with this machine), through a temporary name and a rename, before the
+point's JSON. A resumed sweep does not re-simulate a point that is already done
+only because its recording is missing: delete ``runs/<key>.json`` to record it
+again. Recording does not change the rows. Invalid positions are not recorded.
 """
 
 from __future__ import annotations
@@ -103,6 +111,8 @@ class Point:
     duration_s: float
     firmware: str
     cfg: TwinConfig
+    rrd_path: str | None = None   # write the point's Rerun recording here (not part of the fingerprint)
+    mcap_path: str | None = None  # write the point's ROS 2 topics here
 
     @property
     def key(self) -> str:
@@ -133,9 +143,15 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     from ..loop import Twin, TwinOptions
     from ..statics import CONTACT_MIN_N
 
+    recording = point.rrd_path is not None or point.mcap_path is not None
     twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty"))
+    if recording:
+        from ..rerun_log import attach
+
+        attach(twin)
     twin.advance_to_us(0)
-    code = parse_command(point.command).send(twin)
+    command = parse_command(point.command)
+    code = command.send(twin)
     if code != 0:
         return {"error": f"command refused (code {code}): {twin.client.last_error}"}
     req = twin.client.last_request
@@ -145,6 +161,13 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
         loads.append(twin.physics.support_loads_n())
         tilt.append(twin.physics.base_tilt_rad())
     s = twin.recorder.series()
+    if recording:
+        from ..rerun_log import record_run
+        from ..run import RunResult
+
+        result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
+                           sim_s=point.duration_s, wall_s=0.0)
+        record_run(twin, rrd_path=point.rrd_path, mcap_path=point.mcap_path, result=result)
     names = list(loads[0])
     min_load = {n: min(row[n] for row in loads) for n in names}
     out = {"max_tilt_deg": math.degrees(max(tilt)),
@@ -212,7 +235,7 @@ def simulate_point(point: Point) -> dict:
 
 def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str], commands: list[str],
         duration_s: float = 8.0, jobs: int = 1, firmware: str = "faithful", progress: bool = True,
-        client=None) -> dict:
+        client=None, record_dir: Path | None = None, mcap_dir: Path | None = None) -> dict:
     """Simulate the missing points of the sweep (one file each) and return all rows.
 
     The points run in this process (``jobs=1``), in ``jobs`` local worker
@@ -220,16 +243,30 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     see :func:`~amr_twin.experiments.executor.connect_dask`); either way each
     result comes back here and is written atomically as it arrives.
 
+    ``record_dir`` / ``mcap_dir``: folders for one ``<key>.rrd`` / ``<key>.mcap``
+    recording per point simulated now (points reused from ``runs/`` are not
+    re-simulated for a missing recording; see the module notes).
+
     Returns
     -------
-    dict : ``{"rows": [...], "simulated": n, "reused": n, "wall_s": s}``.
+    dict : ``{"rows": [...], "simulated": n, "reused": n, "recorded": n, "wall_s": s}``.
     """
     from .executor import run_all, write_json
 
     for c in commands:
         parse_command(c)
     runs_dir = Path(out_dir) / "runs"
-    points = [Point(m, p, c, duration_s, firmware, cfg) for m in masses for p in positions for c in commands]
+    from ..rerun_log import recording_folder
+
+    folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
+               if folder is not None}
+
+    def make_point(m: float, p: str, c: str) -> Point:
+        key = Point(m, p, c, duration_s, firmware, cfg).key
+        paths = {f"{kind}_path": str(folder / f"{key}.{kind}") for kind, folder in folders.items()}
+        return Point(m, p, c, duration_s, firmware, cfg, **paths)
+
+    points = [make_point(m, p, c) for m in masses for p in positions for c in commands]
     rows, todo = {}, []
     for point in points:
         path = runs_dir / f"{point.key}.json"
@@ -242,8 +279,12 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
         else:
             todo.append(point)
     wall0 = time.perf_counter()
-    for point, row in run_all(simulate_point, todo, jobs, "payload sweep", progress, client=client):
-        write_json(runs_dir / f"{point.key}.json", row)
-        rows[point.key] = row
+    done = set()
+    for item, row in run_all(simulate_point, todo, jobs, "payload sweep", progress, client=client):
+        write_json(runs_dir / f"{item.key}.json", row)
+        rows[item.key] = row
+        done.add(item.key)
+    recorded = sum(any((folder / f"{key}.{kind}").exists() for kind, folder in folders.items()) for key in done)
     return {"rows": [rows[p.key] for p in points], "simulated": len(todo), "reused": len(points) - len(todo),
-            "wall_s": time.perf_counter() - wall0, "duration_s": duration_s, "firmware": firmware}
+            "recorded": recorded, "wall_s": time.perf_counter() - wall0, "duration_s": duration_s,
+            "firmware": firmware}

@@ -1,0 +1,154 @@
+"""``--record DIR`` / ``--mcap DIR`` on ``experiment chapter5`` and ``sweep payload``: one recording per run.
+
+The recordings are read back with the formats' own readers (rerun's ``RrdReader``,
+``mcap``); the results must be the same with and without recording.
+"""
+
+import collections
+import json
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli import app
+from amr_twin.config import load_config
+from amr_twin.experiments import chapter5
+from amr_twin.experiments import payload_sweep as ps
+
+CH5_RUNS, CH5_DURATION_S = [1, 3], 2.0
+SWEEP = dict(masses=[0.0, 20.0], positions=["center"], commands=["linear:0.7"], duration_s=1.0)
+SWEEP_ARGS = ["--masses", "0,20", "--positions", "center", "--commands", "linear:0.7", "--duration-s", "1",
+              "--no-progress"]
+
+
+def rrd_summary(path):
+    """Rows per entity and the last ``sim_time`` in the file, ns."""
+    from rerun.chunk import RrdReader
+
+    rows, last_ns = collections.Counter(), 0
+    for chunk in RrdReader(str(path)).stream().to_chunks():
+        rows[str(chunk.entity_path)] += chunk.num_rows
+        batch = chunk.to_record_batch()
+        if "sim_time" in batch.schema.names and batch.num_rows:
+            last_ns = max(last_ns, max(batch.column("sim_time").cast(pa.int64()).to_pylist()))
+    return rows, last_ns
+
+
+def mcap_counts(path):
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    topics = {c.id: c.topic for c in summary.channels.values()}
+    return {topics[cid]: n for cid, n in summary.statistics.channel_message_counts.items()}
+
+
+def _without_wall(obj):
+    if isinstance(obj, dict):
+        return {k: _without_wall(v) for k, v in obj.items() if k != "wall_s"}
+    if isinstance(obj, list):
+        return [_without_wall(v) for v in obj]
+    return obj
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return load_config()
+
+
+@pytest.fixture(scope="module")
+def chapter5_cli(tmp_path_factory):
+    """Chapter 5 runs 1 and 3 through the CLI, two worker processes, both recordings into one folder."""
+    base = tmp_path_factory.mktemp("ch5rec")
+    res = CliRunner().invoke(app, ["experiment", "chapter5", "--out", str(base / "out"), "--runs", "1,3",
+                                   "--duration-s", str(CH5_DURATION_S), "--jobs", "2", "--record",
+                                   str(base / "rec"), "--mcap", str(base / "rec"), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    return base, res
+
+
+def test_chapter5_one_recording_per_run(chapter5_cli):
+    base, res = chapter5_cli
+    rec = base / "rec"
+    assert sorted(p.name for p in rec.iterdir()) == ["run1.mcap", "run1.rrd", "run3.mcap", "run3.rrd"]
+    for n in CH5_RUNS:
+        rows, last_ns = rrd_summary(rec / f"run{n}.rrd")
+        assert last_ns == pytest.approx(CH5_DURATION_S * 1e9, abs=1e6)  # the whole run on the timeline
+        assert rows["/wheels/left/true_rpm"] == CH5_DURATION_S * 100 + 1  # 100 Hz recorder rows, t = 0 included
+        assert "/world/bodies/amr/base_link" in rows and "/commands" in rows
+        counts = mcap_counts(rec / f"run{n}.mcap")
+        assert abs(counts["/odom"] - 50 * CH5_DURATION_S) <= 1
+        assert counts["/wheel_Command"] == 1
+    assert "run<N>.rrd for runs 1,3" in res.output
+
+
+def test_chapter5_results_identical_with_and_without_recording(cfg, chapter5_cli):
+    base, _res = chapter5_cli
+    plain = chapter5.report(chapter5.run(cfg, runs=CH5_RUNS, duration_s=CH5_DURATION_S, progress=False),
+                            base / "plain")
+    recorded = json.loads((base / "out" / "metrics.json").read_text())
+    assert _without_wall(recorded["runs"]) == _without_wall(json.loads(json.dumps(plain["runs"])))
+    assert recorded["summary"] == plain["summary"]
+
+
+def test_chapter5_recording_in_process_same_series(cfg, tmp_path):
+    plain = chapter5.run(cfg, runs=[3], duration_s=2.0, progress=False)["runs"][0]["raw"]
+    recorded = chapter5.run(cfg, runs=[3], duration_s=2.0, progress=False, record_dir=tmp_path)["runs"][0]["raw"]
+    for key in ("t_s", "true_rpm", "pwm_counts"):
+        assert np.array_equal(plain[key], recorded[key]), key
+    assert len(plain["published"][0]) >= 1
+    assert all(np.array_equal(a, b) for a, b in zip(plain["published"], recorded["published"]))
+    assert [p.name for p in tmp_path.iterdir()] == ["run3.rrd"]
+
+
+def test_record_option_takes_a_folder(tmp_path):
+    res = CliRunner().invoke(app, ["experiment", "chapter5", "--out", str(tmp_path / "o"), "--record",
+                                   str(tmp_path / "run.rrd")])
+    assert res.exit_code == 2 and "--record" in res.output and "folder" in res.output
+    (tmp_path / "file").write_text("x")
+    res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--mcap",
+                                   str(tmp_path / "file")])
+    assert res.exit_code == 2 and "--mcap" in res.output and "not a folder" in res.output
+    assert not (tmp_path / "o").exists() and not (tmp_path / "s").exists()
+
+
+def test_sweep_records_each_point_and_resume_does_not_redo(cfg, tmp_path):
+    rec, out = tmp_path / "rec", tmp_path / "out"
+    res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(out), "--jobs", "2", "--record", str(rec),
+                                   *SWEEP_ARGS])
+    assert res.exit_code == 0, res.output
+    keys = sorted(ps.Point(m, "center", "linear:0.7", 1.0, "faithful", cfg).key for m in SWEEP["masses"])
+    assert sorted(p.name for p in rec.iterdir()) == [f"{k}.rrd" for k in keys]
+    for key in keys:
+        rows, last_ns = rrd_summary(rec / f"{key}.rrd")
+        assert last_ns == pytest.approx(1e9, abs=1e6)
+        assert rows["/wheels/right/true_rpm"] == 101 and rows["/commands"] == 2  # client call + wheel_Command
+    assert "2 points recorded" in res.output
+    # the rows are those of a sweep without recording
+    plain = ps.run(cfg, tmp_path / "plain", progress=False, **SWEEP)
+    recorded = [json.loads((out / "runs" / f"{k}.json").read_text()) for k in keys]
+    assert _without_wall(recorded) == _without_wall(sorted(plain["rows"], key=lambda r: r["key"]))
+    # resumed: a missing recording does not make a finished point simulate again
+    (rec / f"{keys[0]}.rrd").unlink()
+    kept = (rec / f"{keys[1]}.rrd").stat().st_mtime_ns
+    res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(out), "--record", str(rec), *SWEEP_ARGS])
+    assert res.exit_code == 0, res.output
+    assert "0 simulated, 2 reused" in res.output and "not re-simulated" in res.output
+    assert [p.name for p in rec.iterdir()] == [f"{keys[1]}.rrd"]
+    assert (rec / f"{keys[1]}.rrd").stat().st_mtime_ns == kept
+
+
+def test_sweep_interrupted_while_recording_leaves_nothing_half_written(cfg, tmp_path, monkeypatch):
+    import amr_twin.rerun_log as rerun_log
+
+    def interrupt(*_args, **_kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(rerun_log, "_log_trajectory", interrupt)  # the last stream of the .rrd
+    with pytest.raises(KeyboardInterrupt):
+        ps.run(cfg, tmp_path / "out", progress=False, record_dir=tmp_path / "rec", mcap_dir=tmp_path / "rec",
+               **dict(SWEEP, masses=[0.0]))
+    assert list((tmp_path / "rec").iterdir()) == []  # neither the recording nor its temporary
+    assert not (tmp_path / "out" / "runs").exists() or not list((tmp_path / "out" / "runs").iterdir())

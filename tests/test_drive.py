@@ -103,3 +103,13 @@ def test_divergence_is_reported_with_sim_time():
     physics.data.qvel[0] = float("nan")
     with pytest.raises(DivergenceError, match=r"t = \d+\.\d+ s"):
         physics.check()
+
+
+def test_a_mujoco_warning_is_reported_by_name():
+    import mujoco
+
+    _, physics, _ = _robot()
+    physics.check()  # a settled robot: no warning
+    physics.data.warning[int(mujoco.mjtWarning.mjWARN_BADQACC)].number = 1
+    with pytest.raises(DivergenceError, match="mjWARN_BADQACC"):
+        physics.check()

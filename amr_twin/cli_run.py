@@ -40,6 +40,9 @@ CsvOpt = typer.Option(None, "--csv", help="Write the time series here (CSV).")
 JsonOpt = typer.Option(False, "--json", help="Print one JSON object.")
 RecordOpt = typer.Option(None, "--record", help="Write a Rerun recording here (.rrd; open with `rerun FILE`).")
 McapOpt = typer.Option(None, "--mcap", help="Write the ROS 2 topics here (.mcap; Foxglove, ros2 bag).")
+WorldOpt = typer.Option("warehouse", "--world", help="World: warehouse, empty (models/worlds/), an MJCF file, "
+                        "or a ROS map (map_server YAML + PGM, walls extruded).")
+StartOpt = typer.Option("0,0,0", "--start", help="Start pose in the world: X_M,Y_M,YAW_DEG.")
 SensorsOpt = typer.Option(False, "--sensors", help="Run the IMU (imu/data_raw, imu/mag, 100 Hz) and the LiDAR "
                           "(scan, 5.5 Hz); recorded with --record/--mcap.")
 
@@ -139,9 +142,21 @@ def summary(result, single: bool) -> dict:
         "sim_s": result.sim_s, "wall_s": result.wall_s})
 
 
+def _start_pose(text: str) -> tuple[float, float, float]:
+    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; a one-line error otherwise."""
+    try:
+        x_m, y_m, yaw_deg = (float(v) for v in text.split(","))
+    except ValueError:
+        fail(f"--start {text!r}: expected X_M,Y_M,YAW_DEG, e.g. -7.5,0,0")
+    if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x_m, y_m, yaw_deg)):
+        fail(f"--start {text!r}: each value must be finite and within +-10000")
+    return x_m, y_m, math.radians(yaw_deg)
+
+
 def execute(steps, duration_s: float, single: bool, payload_kg, firmware: str, seed: int,
             csv: Optional[Path], as_json: bool, config, params, sets, record: Optional[Path] = None,
-            mcap: Optional[Path] = None, sensors: bool = False) -> None:
+            mcap: Optional[Path] = None, sensors: bool = False, world: str = "warehouse",
+            start: str = "0,0,0") -> None:
     """Run ``steps`` and report; exits non-zero if the client refused a command."""
     from .loop import TwinOptions
     from .run import run_mission
@@ -152,7 +167,8 @@ def execute(steps, duration_s: float, single: bool, payload_kg, firmware: str, s
     if _finite("--payload-kg", payload_kg, required=False) is not None:
         extra["payload.mass_kg"] = payload_kg
     cfg = _config(config, params, sets, extra)
-    options = TwinOptions(firmware=firmware, seed=seed, sensors=sensors)
+    options = TwinOptions(firmware=firmware, seed=seed, sensors=sensors, world=world,
+                          start_xy_yaw=_start_pose(start))
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
     if record is None and mcap is None:
@@ -201,14 +217,14 @@ def register(app: typer.Typer) -> None:
     app.command(name="client")(client)
 
     def one(command_factory, duration_s, payload_kg, firmware, seed, csv, as_json, config, params, set_,
-            record=None, mcap=None, sensors=False):
+            record=None, mcap=None, sensors=False, world="warehouse", start="0,0,0"):
         duration_s = _finite("--duration-s", duration_s, required=False)
         try:
             command = command_factory()
         except ValueError as exc:
             fail(str(exc))
         execute([(0.0, command)], 10.0 if duration_s is None else duration_s, True, payload_kg,
-                firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors)
+                firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
 
     @run_app.callback(invoke_without_command=True)
     def run(ctx: typer.Context,
@@ -216,7 +232,8 @@ def register(app: typer.Typer) -> None:
             duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
             firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
             as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
-            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, config: Optional[Path] = ConfigOpt,
+            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
+            config: Optional[Path] = ConfigOpt,
             params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Run a command kind (linear, angular, motor, stop) or a --mission file."""
         if ctx.invoked_subcommand is not None:
@@ -233,19 +250,20 @@ def register(app: typer.Typer) -> None:
             fail(str(exc))
         duration_s = _finite("--duration-s", duration_s, required=False)
         execute(steps, mission_s if duration_s is None else duration_s, False, payload_kg, firmware,
-                seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors)
+                seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
 
     @run_app.command()
     def linear(speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="m/s; negative: backward."),
                duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
                firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
                as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
-            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, config: Optional[Path] = ConfigOpt,
+            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
+            config: Optional[Path] = ConfigOpt,
                params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Linear motion: both wheels at the same speed (listing 4.4)."""
         speed = _finite("--speed-m-s", speed_m_s)
         one(lambda: Command("linear", speed_m_s=speed), duration_s, payload_kg, firmware, seed, csv,
-            as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors)
+            as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
 
     @run_app.command()
     def angular(speed_deg_s: Optional[float] = typer.Option(None, "--speed-deg-s", help="deg/s, CCW +."),
@@ -253,12 +271,13 @@ def register(app: typer.Typer) -> None:
                 duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
                 firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
                 as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
-            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, config: Optional[Path] = ConfigOpt,
+            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
+            config: Optional[Path] = ConfigOpt,
                 params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Rotation about an ICC (listing 4.5; REP-103 signs)."""
         speed, icc = _finite("--speed-deg-s", speed_deg_s), _finite("--icc-m", icc_m)
         one(lambda: Command("angular", speed_deg_s=speed, icc_m=icc), duration_s, payload_kg, firmware,
-            seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors)
+            seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
 
     @run_app.command()
     def motor(wheel: Optional[str] = typer.Option(None, "--wheel", help="left or right."),
@@ -267,7 +286,8 @@ def register(app: typer.Typer) -> None:
               duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
               firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
               as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
-            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, config: Optional[Path] = ConfigOpt,
+            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
+            config: Optional[Path] = ConfigOpt,
               params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """One wheel driven, the other free-spinning (fig. 3.6)."""
         if wheel is None:
@@ -276,14 +296,15 @@ def register(app: typer.Typer) -> None:
             fail("--direction is required (forward or backward)")
         speed = _finite("--speed-m-s", speed_m_s)
         one(lambda: Command("motor", wheel=wheel, direction=direction, speed_m_s=speed), duration_s,
-            payload_kg, firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors)
+            payload_kg, firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
 
     @run_app.command()
     def stop(duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
              firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
              as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
-            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, config: Optional[Path] = ConfigOpt,
+            mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
+            config: Optional[Path] = ConfigOpt,
              params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Brake both wheels (fig. 3.7)."""
         one(lambda: Command("stop"), duration_s, payload_kg, firmware, seed, csv, as_json, config,
-            params, set_, record=record, mcap=mcap, sensors=sensors)
+            params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)

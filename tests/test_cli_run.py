@@ -143,3 +143,31 @@ def test_sensors_switch_records_scan_and_imu(tmp_path):
     assert "/scan" not in topics(without) and "/imu/data_raw" not in topics(without)
     # the sensors only observe: the run is the same
     assert info["final_pose"] == plain["final_pose"] and info["wheels"] == plain["wheels"]
+
+
+def test_world_and_start_pose(tmp_path):
+    data = _json("linear", "--speed-m-s", "0.5", "--duration-s", "2", "--world", "empty", "--start=2,1,90")
+    pose = data["final_pose"]
+    assert pose["x_m"] == pytest.approx(2.0, abs=0.05)        # facing +y: x unchanged
+    assert 1.6 < pose["y_m"] < 2.1                           # ~0.7 m driven along +y
+    assert pose["yaw_rad"] == pytest.approx(math.pi / 2, abs=0.05)
+    assert data["final_odom_pose"]["x_m"] > 0.6              # odometry starts at its own origin (REP-105)
+
+
+def test_a_saved_ros_map_is_a_world(tmp_path):
+    from amr_twin.worlds import write_pgm
+    import numpy as np
+
+    image = np.full((60, 60), 254, np.uint8)                 # 3 m x 3 m room at 0.05 m, walls all round
+    image[:2, :] = image[-2:, :] = image[:, :2] = image[:, -2:] = 0
+    write_pgm(tmp_path / "room.pgm", image)
+    (tmp_path / "room.yaml").write_text("image: room.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\n"
+                                        "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    data = _json("linear", "--speed-m-s", "0.5", "--duration-s", "6", "--world", str(tmp_path / "room.yaml"),
+                 "--start=1.5,1.5,0")
+    assert data["final_pose"]["x_m"] < 2.9 - 0.25             # stopped by the east wall, not through it
+
+
+def test_unknown_world_is_one_line():
+    res = _run("linear", "--speed-m-s", "0.5", "--world", "nowhere")
+    assert res.exit_code == 2 and "--world nowhere" in res.output and len(res.output.strip().splitlines()) == 1

@@ -20,7 +20,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .config import BatteryCfg, DriverCfg, MotorCfg, TwinConfig
+from .config import TwinConfig
+from .config_sections import BatteryCfg, DriverCfg, MotorCfg
 from .physics import Physics
 from .pins import DriverPins
 

@@ -55,7 +55,7 @@ import numpy as np
 
 from amr_twin.bus import LASER_FRAME, Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.config import LidarCfg
+from amr_twin.config_sections import LidarCfg
 from amr_twin.messages import Header, LaserScan, Time
 
 US = 1_000_000

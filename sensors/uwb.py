@@ -37,7 +37,7 @@ import numpy as np
 
 from amr_twin.bus import Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.config import UwbCfg
+from amr_twin.config_sections import UwbCfg
 from amr_twin.messages import Header, Range, Time
 
 US = 1_000_000

@@ -104,13 +104,28 @@ def model(
 def bench(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     sim_s: float = typer.Option(16.0, help="Simulated seconds per measurement."),
+    suites: bool = typer.Option(False, "--suites", help="Also time the chapter 5 suite, a 100-run sweep and the "
+                                "fusion experiment (wall time, about a minute)."),
+    jobs: int = typer.Option(2, "--jobs", help="Worker processes for --suites."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Measure the cost of the physics (and of the whole twin) per simulated second."""
     from .benchmark import run_benchmarks
 
+    if jobs < 1:
+        fail(f"--jobs {jobs}: must be >= 1")
+    if not (0 < sim_s <= 1000):
+        fail(f"--sim-s {sim_s}: must be in (0, 1000] s")
     cfg = _config(config, params, set_)
-    result = _guard(lambda: run_benchmarks(cfg, sim_s=sim_s))
+
+    def measure() -> dict:
+        figures = run_benchmarks(cfg, sim_s=sim_s)
+        if suites:
+            from .suite_benchmark import suite_figures
+            figures.update(suite_figures(cfg, jobs=jobs))
+        return figures
+
+    result = _guard(measure)
     if as_json:
         typer.echo(json.dumps(result))
     else:

@@ -14,3 +14,13 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert all(r[k] > 0 for k in README_KEYS), r
     assert r["ratio"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.02)
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
+
+
+@pytest.mark.parametrize("args, text", [(["--jobs", "0"], "--jobs 0"), (["--sim-s", "-1"], "--sim-s -1")])
+def test_bench_refuses_bad_options_in_one_line(args, text):
+    from typer.testing import CliRunner
+
+    from amr_twin.cli import app
+
+    res = CliRunner().invoke(app, ["bench", *args])
+    assert res.exit_code == 2 and text in res.output and len(res.output.strip().splitlines()) == 1

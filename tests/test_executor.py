@@ -26,7 +26,7 @@ SWEEP = dict(positions=["center"], commands=["linear:0.7"], duration_s=DURATION_
 def cluster():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as local_cluster:
+                                  dashboard_address=":0") as local_cluster:
         yield local_cluster
 
 

@@ -30,7 +30,7 @@ What a speed sample means (``speed_samples``)
 The estimate of each wheel is a list of knots (time, signed RPM), linear between
 knots and held after the last. The pose is integrated exactly along arcs where
 both speeds are constant and with arcs of at most ``max_substep_s`` at the mean
-speeds where one varies. ``odom`` (frame ``odom``, child ``base_link``, REP-105)
+speeds where one varies (:mod:`amr_twin.controllers.dead_reckoning`). ``odom`` (frame ``odom``, child ``base_link``, REP-105)
 and the ``odom -> base_link`` transform are published at ``publish_rate_hz``.
 
 Known limits, inherited from the hardware: a wheel that stops without a brake
@@ -41,7 +41,6 @@ at command time while the wheel is still spinning the old way.
 from __future__ import annotations
 
 import math
-from bisect import bisect_right
 from typing import Sequence
 
 import numpy as np
@@ -52,6 +51,7 @@ from amr_twin.messages import (Float64, Float64MultiArray, Header, Odometry, Poi
                                PoseWithCovariance, Quaternion, Time, Transform,
                                TransformStamped, Twist, TwistWithCovariance, Vector3)
 
+from .dead_reckoning import SpeedProfile, arc, integrate
 from .wheel_command import WHEEL_RADIUS_M
 
 WHEEL_SEPARATION_M = 0.48
@@ -65,69 +65,6 @@ def _covariance(diagonal: Sequence[float]) -> np.ndarray:
     if len(diagonal) != 6:
         raise ValueError(f"a covariance diagonal has 6 values, got {len(diagonal)}")
     return np.diag(np.asarray(diagonal, dtype=np.float64)).ravel()
-
-
-class SpeedProfile:
-    """Estimated signed speed of one wheel: knots (t_us, rpm), linear between, held after."""
-
-    def __init__(self, t_us: int, rpm: float = 0.0):
-        self.t_us: list[int] = [int(t_us)]
-        self.rpm: list[float] = [float(rpm)]
-
-    @property
-    def last_us(self) -> int:
-        return self.t_us[-1]
-
-    @property
-    def last_rpm(self) -> float:
-        return self.rpm[-1]
-
-    def known_us(self, t_us: int) -> int:
-        """Time of the last knot at or before ``t_us``."""
-        return self.t_us[max(bisect_right(self.t_us, t_us) - 1, 0)]
-
-    def step(self, t_us: int, rpm: float) -> None:
-        """The speed becomes ``rpm`` at ``t_us`` (held value until then)."""
-        t_us = max(int(t_us), self.last_us)
-        self.t_us += [t_us, t_us]
-        self.rpm += [self.last_rpm, float(rpm)]
-
-    def window(self, t0_us: int, t1_us: int, rpm: float) -> None:
-        """Mean speed ``rpm`` over ``[t0_us, t1_us]`` (t0 clipped at the last knot)."""
-        t1_us = max(int(t1_us), self.last_us)
-        t0_us = min(max(int(t0_us), self.last_us), t1_us)
-        self.t_us += [t0_us, t1_us]
-        self.rpm += [float(rpm), float(rpm)]
-
-    def segment(self, t_us: int) -> tuple[int, float, int, float]:
-        """The linear piece (t0, r0, t1, r1) in force just after ``t_us``."""
-        i = max(bisect_right(self.t_us, t_us) - 1, 0)
-        if i + 1 >= len(self.t_us):
-            return self.t_us[i], self.rpm[i], self.t_us[i], self.rpm[i]
-        return self.t_us[i], self.rpm[i], self.t_us[i + 1], self.rpm[i + 1]
-
-    def at(self, t_us: float, seg: tuple[int, float, int, float]) -> float:
-        """Speed at ``t_us`` on the piece ``seg``, RPM."""
-        t0, r0, t1, r1 = seg
-        if t1 <= t0:
-            return r0
-        return r0 + (r1 - r0) * (t_us - t0) / (t1 - t0)
-
-    def cut(self, t_us: int) -> None:
-        """Forget the knots after ``t_us`` (assumptions about the future)."""
-        if self.last_us <= t_us:
-            return
-        i = bisect_right(self.t_us, t_us)
-        value = self.at(t_us, self.segment(t_us))
-        self.t_us = self.t_us[:i] + [int(t_us)]
-        self.rpm = self.rpm[:i] + [value]
-
-    def trim(self, t_us: int) -> None:
-        """Forget the knots before ``t_us``, keeping the speed in force from it."""
-        i = max(bisect_right(self.t_us, t_us) - 1, 0)
-        value = self.at(t_us, self.segment(t_us))
-        self.t_us = [int(t_us)] + self.t_us[i + 1:]
-        self.rpm = [value] + self.rpm[i + 1:]
 
 
 class WheelOdometry:
@@ -277,36 +214,6 @@ class WheelOdometry:
             return self._hold
         return self._body(*(p.at(now, p.segment(now)) for p in self._profiles))
 
-    @staticmethod
-    def _arc(pose: tuple[float, float, float], v_m_s: float, w_rad_s: float, dt_s: float):
-        x, y, yaw0 = pose
-        dyaw = w_rad_s * dt_s
-        if abs(dyaw) < 1e-9:
-            mid = yaw0 + 0.5 * dyaw
-            return x + v_m_s * dt_s * math.cos(mid), y + v_m_s * dt_s * math.sin(mid), yaw0 + dyaw
-        radius_m = v_m_s / w_rad_s
-        return (x + radius_m * (math.sin(yaw0 + dyaw) - math.sin(yaw0)),
-                y - radius_m * (math.cos(yaw0 + dyaw) - math.cos(yaw0)), yaw0 + dyaw)
-
-    def _integrate(self, start: tuple, t_end_us: int) -> tuple:
-        """Pose (t_us, x, y, yaw) at ``t_end_us`` from ``start`` along the speed profiles."""
-        t, pose = start[0], start[1:]
-        knots = sorted({k for p in self._profiles for k in p.t_us if t < k < t_end_us})
-        for t_next in knots + [t_end_us]:
-            if t_next <= t:
-                continue
-            segs = [p.segment(t) for p in self._profiles]
-            ends = [p.at(t_next, s) for p, s in zip(self._profiles, segs)]
-            starts = [p.at(t, s) for p, s in zip(self._profiles, segs)]
-            n = 1 if starts == ends else -(-(t_next - t) // self.max_substep_us)
-            dt_us = (t_next - t) / n
-            for k in range(n):
-                mid = t + (k + 0.5) * dt_us
-                rpm = [p.at(mid, s) for p, s in zip(self._profiles, segs)]
-                pose = self._arc(pose, *self._body(*rpm), dt_us * 1e-6)
-            t = t_next
-        return (t_end_us, *pose)
-
     def update(self) -> None:
         """Bring the pose up to ``clock.now_us`` (re-integrating after new samples)."""
         now = self.clock.now_us
@@ -315,11 +222,13 @@ class WheelOdometry:
             # clipped there (knots after now are assumptions, e.g. a brake ramp)
             horizon = min(p.known_us(now) for p in self._profiles)
             if horizon > self._anchor[0]:
-                self._anchor = self._integrate(self._anchor, horizon)
+                self._anchor = integrate(self._profiles, self._anchor, horizon, self.max_substep_us,
+                                         self._body)
                 for p in self._profiles:
                     p.trim(horizon)
             newest = min(max(p.last_us for p in self._profiles), now)
-            self._cache = self._integrate(self._anchor, max(newest, self._anchor[0]))
+            self._cache = integrate(self._profiles, self._anchor, max(newest, self._anchor[0]),
+                                    self.max_substep_us, self._body)
             self._dirty = False
             self._hold = None
             if all(p.last_us <= self._cache[0] for p in self._profiles):  # speeds held after the cache
@@ -327,10 +236,10 @@ class WheelOdometry:
         cache, hold = self._cache, self._hold
         if now <= cache[0]:
             pose = cache[1:]
-        elif hold is not None:  # one arc at the held speeds: what _integrate computes, cheaper
-            pose = self._arc(cache[1:], hold[0], hold[1], float(now - cache[0]) * 1e-6)
+        elif hold is not None:  # one arc at the held speeds: what integrate computes, cheaper
+            pose = arc(cache[1:], hold[0], hold[1], float(now - cache[0]) * 1e-6)
         else:
-            _, *pose = self._integrate(cache, now)
+            _, *pose = integrate(self._profiles, cache, now, self.max_substep_us, self._body)
         self.x_m, self.y_m = pose[0], pose[1]
         self.yaw_rad = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
 

@@ -1,0 +1,148 @@
+"""Dead reckoning of a differential drive from wheel speed estimates (pure, no bus or clock).
+
+The estimate of each wheel is a :class:`SpeedProfile`: a list of knots
+``(t_us, rpm)``, linear between knots and held after the last. :func:`integrate`
+carries a planar pose ``(x_m, y_m, yaw_rad)`` along two such profiles: exactly along
+arcs (:func:`arc`) where both speeds are constant, and with arcs of at most
+``max_substep_us`` at the mid-step speeds where one varies. The wheel odometry node
+(:mod:`amr_twin.controllers.odometry`) builds the profiles from the firmware's
+speed samples and publishes the pose.
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from typing import Callable, Sequence
+
+Pose2 = tuple[float, float, float]
+"""Planar pose ``(x_m, y_m, yaw_rad)`` in ``odom`` (REP-105); yaw not wrapped."""
+
+
+class SpeedProfile:
+    """Estimated signed speed of one wheel: knots (t_us, rpm), linear between, held after."""
+
+    def __init__(self, t_us: int, rpm: float = 0.0):
+        self.t_us: list[int] = [int(t_us)]
+        self.rpm: list[float] = [float(rpm)]
+
+    @property
+    def last_us(self) -> int:
+        return self.t_us[-1]
+
+    @property
+    def last_rpm(self) -> float:
+        return self.rpm[-1]
+
+    def known_us(self, t_us: int) -> int:
+        """Time of the last knot at or before ``t_us``."""
+        return self.t_us[max(bisect_right(self.t_us, t_us) - 1, 0)]
+
+    def step(self, t_us: int, rpm: float) -> None:
+        """The speed becomes ``rpm`` at ``t_us`` (held value until then)."""
+        t_us = max(int(t_us), self.last_us)
+        self.t_us += [t_us, t_us]
+        self.rpm += [self.last_rpm, float(rpm)]
+
+    def window(self, t0_us: int, t1_us: int, rpm: float) -> None:
+        """Mean speed ``rpm`` over ``[t0_us, t1_us]`` (t0 clipped at the last knot)."""
+        t1_us = max(int(t1_us), self.last_us)
+        t0_us = min(max(int(t0_us), self.last_us), t1_us)
+        self.t_us += [t0_us, t1_us]
+        self.rpm += [float(rpm), float(rpm)]
+
+    def segment(self, t_us: int) -> tuple[int, float, int, float]:
+        """The linear piece (t0, r0, t1, r1) in force just after ``t_us``."""
+        i = max(bisect_right(self.t_us, t_us) - 1, 0)
+        if i + 1 >= len(self.t_us):
+            return self.t_us[i], self.rpm[i], self.t_us[i], self.rpm[i]
+        return self.t_us[i], self.rpm[i], self.t_us[i + 1], self.rpm[i + 1]
+
+    def at(self, t_us: float, seg: tuple[int, float, int, float]) -> float:
+        """Speed at ``t_us`` on the piece ``seg``, RPM."""
+        t0, r0, t1, r1 = seg
+        if t1 <= t0:
+            return r0
+        return r0 + (r1 - r0) * (t_us - t0) / (t1 - t0)
+
+    def cut(self, t_us: int) -> None:
+        """Forget the knots after ``t_us`` (assumptions about the future)."""
+        if self.last_us <= t_us:
+            return
+        i = bisect_right(self.t_us, t_us)
+        value = self.at(t_us, self.segment(t_us))
+        self.t_us = self.t_us[:i] + [int(t_us)]
+        self.rpm = self.rpm[:i] + [value]
+
+    def trim(self, t_us: int) -> None:
+        """Forget the knots before ``t_us``, keeping the speed in force from it."""
+        i = max(bisect_right(self.t_us, t_us) - 1, 0)
+        value = self.at(t_us, self.segment(t_us))
+        self.t_us = [int(t_us)] + self.t_us[i + 1:]
+        self.rpm = [value] + self.rpm[i + 1:]
+
+
+def arc(pose: Pose2, v_m_s: float, w_rad_s: float, dt_s: float) -> Pose2:
+    """Pose after ``dt_s`` s at constant forward speed ``v_m_s`` and yaw rate ``w_rad_s``.
+
+    Parameters
+    ----------
+    pose : (x_m, y_m, yaw_rad)
+        Start pose.
+    v_m_s, w_rad_s : float
+        Forward speed of ``base_link``, m/s, and yaw rate, rad/s (CCW +).
+    dt_s : float
+        Duration, s.
+
+    Returns
+    -------
+    (x_m, y_m, yaw_rad)
+        End pose, exact on the circle (a midpoint step below 1e-9 rad of turn).
+    """
+    x, y, yaw0 = pose
+    dyaw = w_rad_s * dt_s
+    if abs(dyaw) < 1e-9:
+        mid = yaw0 + 0.5 * dyaw
+        return x + v_m_s * dt_s * math.cos(mid), y + v_m_s * dt_s * math.sin(mid), yaw0 + dyaw
+    radius_m = v_m_s / w_rad_s
+    return (x + radius_m * (math.sin(yaw0 + dyaw) - math.sin(yaw0)),
+            y - radius_m * (math.cos(yaw0 + dyaw) - math.cos(yaw0)), yaw0 + dyaw)
+
+
+def integrate(profiles: Sequence[SpeedProfile], start: tuple, t_end_us: int, max_substep_us: int,
+              body: Callable[[float, float], tuple[float, float]]) -> tuple:
+    """Pose ``(t_us, x_m, y_m, yaw_rad)`` at ``t_end_us`` from ``start`` along the speed profiles.
+
+    Parameters
+    ----------
+    profiles : sequence of 2 SpeedProfile
+        Left and right wheel speed estimates, RPM.
+    start : (t_us, x_m, y_m, yaw_rad)
+        Start instant, us, and pose.
+    t_end_us : int
+        End instant, us (at or after ``start[0]``).
+    max_substep_us : int
+        Longest arc while a speed varies, us (> 0).
+    body : callable ``(left_rpm, right_rpm) -> (v_m_s, w_rad_s)``
+        Wheel speeds to the body twist (the drive geometry).
+
+    Returns
+    -------
+    (t_end_us, x_m, y_m, yaw_rad)
+    """
+    t, pose = start[0], start[1:]
+    knots = sorted({k for p in profiles for k in p.t_us if t < k < t_end_us})
+    for t_next in knots + [t_end_us]:
+        if t_next <= t:
+            continue
+        segs = [p.segment(t) for p in profiles]
+        ends = [p.at(t_next, s) for p, s in zip(profiles, segs)]
+        starts = [p.at(t, s) for p, s in zip(profiles, segs)]
+        n = 1 if starts == ends else -(-(t_next - t) // max_substep_us)
+        dt_us = (t_next - t) / n
+        for k in range(n):
+            mid = t + (k + 0.5) * dt_us
+            rpm = [p.at(mid, s) for p, s in zip(profiles, segs)]
+            pose = arc(pose, *body(*rpm), dt_us * 1e-6)
+        t = t_next
+    return (t_end_us, *pose)

@@ -4,21 +4,15 @@ The thesis (§6.2.1, figs. 6.5 to 6.7) fuses odometry with the IMU and UWB in an
 extended Kalman filter; this node does it as robot_localization's ``ekf_node`` in
 ``two_d_mode`` with filterpy's :class:`~filterpy.kalman.ExtendedKalmanFilter`.
 
-State (6,)
-    ``[x_m, y_m, yaw_rad, v_m_s, w_rad_s, gyro_bias_rad_s]``: the planar pose in
-    the world frame (``odom``, or ``map`` when UWB is fused), the forward speed and
-    yaw rate of ``base_link``, and the gyro's z bias.
-Prediction
-    Constant velocity on a unicycle, predicted to each measurement's stamp:
-    ``x += v dt cos(yaw + w dt / 2)``, ``y += v dt sin(yaw + w dt / 2)``,
-    ``yaw += w dt``; process noise from white linear and angular accelerations
-    (``accel_sigma_m_s2``, ``alpha_sigma_rad_s2``) and a bias random walk.
+State, prediction and measurement models
+    :mod:`amr_twin.controllers.ekf_model`: the state ``[x_m, y_m, yaw_rad, v_m_s,
+    w_rad_s, gyro_bias_rad_s]`` in the world frame (``odom``, or ``map`` when UWB is
+    fused), constant velocity on a unicycle predicted to each measurement's stamp.
 Measurements (sigmas from the ``ekf:`` config, not from the messages)
-    ``odom`` twist: ``v`` and ``w`` (robot_localization's ``odom0_config`` with
-    vx and vyaw); ``imu/data_raw``: ``gyro_z = w + b``; ``uwb/range``: ``r =
-    sqrt(|p_tag - p_anchor|^2 + dz^2)`` with the tag ``p_tag = p + R(yaw) t``,
-    Jacobian in x, y, yaw; a range whose innovation exceeds ``mahalanobis_gate``
-    sigmas is rejected (robot_localization's ``*_rejection_threshold``).
+    ``odom`` twist ``v`` and ``w`` (robot_localization's ``odom0_config`` with vx
+    and vyaw); ``imu/data_raw`` gyro z rate; ``uwb/range`` ranges, of which one
+    whose innovation exceeds ``mahalanobis_gate`` sigmas is rejected
+    (robot_localization's ``*_rejection_threshold``).
 Gyro bias
     The L3GD20's turn-on bias (10 deg/s) is removed by a rest calibration: the
     gyro is averaged over its first ``imu_rest_calibration_s`` seconds while the
@@ -48,9 +42,12 @@ from amr_twin.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovar
                                Range, Twist, TwistWithCovariance, Vector3)
 from amr_twin.sensors.uwb import anchor_index
 
+from .ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
+                        pose_difference_twist, predict_mean, process_noise, range_model,
+                        transition_jacobian)
+
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
-X, Y, YAW, V, W, BG = range(6)
 HALF_TRACK_M = 0.24
 """Half the wheel separation (listing 4.2): turns a yaw rate into a wheel speed for the rest test."""
 
@@ -61,19 +58,7 @@ class _UnicycleEkf(ExtendedKalmanFilter):
     dt_s = 0.0
 
     def predict_x(self, u=0) -> None:
-        x, dt = self.x, self.dt_s
-        heading = x[YAW, 0] + 0.5 * x[W, 0] * dt
-        x[X, 0] += x[V, 0] * dt * math.cos(heading)
-        x[Y, 0] += x[V, 0] * dt * math.sin(heading)
-        x[YAW, 0] += x[W, 0] * dt
-
-
-def _linear(rows: list[int], n: int = 6):
-    """(HJacobian, Hx) of a measurement that picks (sums of) state entries."""
-    H = np.zeros((len(rows), n))
-    for i, r in enumerate(rows):
-        H[i, r] = 1.0
-    return (lambda x: H), (lambda x: H @ x), H
+        predict_mean(self.x, self.dt_s)
 
 
 class EkfNode:
@@ -127,11 +112,9 @@ class EkfNode:
         f.P = np.diag([cfg.initial_xy_sigma_m ** 2, cfg.initial_xy_sigma_m ** 2, cfg.initial_yaw_sigma_rad ** 2,
                        cfg.initial_v_sigma_m_s ** 2, cfg.initial_w_sigma_rad_s ** 2,
                        cfg.initial_gyro_bias_sigma_rad_s ** 2])
-        self._odom_h = _linear([V, W])
+        self._odom_h = linear_model([V, W])
         self._odom_R = np.diag([cfg.odom_v_sigma_m_s ** 2, cfg.odom_w_sigma_rad_s ** 2])
-        H_gyro = np.zeros((1, 6))
-        H_gyro[0, W] = H_gyro[0, BG] = 1.0
-        self._gyro_h = ((lambda x: H_gyro), (lambda x: H_gyro @ x))
+        self._gyro_h = gyro_model()
         self._gyro_R = np.array([[cfg.gyro_w_sigma_rad_s ** 2]])
         self._uwb_R = np.array([[cfg.uwb_range_sigma_m ** 2]])
 
@@ -168,29 +151,9 @@ class EkfNode:
             return
         if dt == 0.0:
             return
-        f, cfg = self.filter, self.cfg
+        f = self.filter
         x = f.x[:, 0]
-        c = math.cos(x[YAW] + 0.5 * x[W] * dt)
-        s = math.sin(x[YAW] + 0.5 * x[W] * dt)
-        vdt = x[V] * dt
-        F = np.eye(6)
-        F[X, YAW], F[X, V], F[X, W] = -vdt * s, dt * c, -vdt * s * 0.5 * dt
-        F[Y, YAW], F[Y, V], F[Y, W] = vdt * c, dt * s, vdt * c * 0.5 * dt
-        F[YAW, W] = dt
-        qa, qw = cfg.accel_sigma_m_s2 ** 2, cfg.alpha_sigma_rad_s2 ** 2
-        d2, d3 = dt * dt / 2.0, dt ** 3 / 3.0
-        Q = np.zeros((6, 6))
-        Q[X, X], Q[X, Y], Q[Y, Y] = qa * d3 * c * c, qa * d3 * c * s, qa * d3 * s * s
-        Q[Y, X] = Q[X, Y]
-        Q[X, V] = Q[V, X] = qa * d2 * c
-        Q[Y, V] = Q[V, Y] = qa * d2 * s
-        Q[V, V] = qa * dt
-        Q[YAW, YAW], Q[YAW, W], Q[W, W] = qw * d3, qw * d2, qw * dt
-        Q[W, YAW] = Q[YAW, W]
-        Q[BG, BG] = cfg.gyro_bias_walk_rad_s_sqrt_s ** 2 * dt
-        Q[X, X] += 1e-12 * dt  # keep P positive definite across the heading
-        Q[Y, Y] += 1e-12 * dt
-        f.F, f.Q, f.dt_s = F, Q, dt
+        f.F, f.Q, f.dt_s = transition_jacobian(x, dt), process_noise(x, dt, self.cfg), dt
         f.predict()
         self.t_s = t_s
 
@@ -211,11 +174,7 @@ class EkfNode:
         prev, self._prev_odom = self._prev_odom, now
         if prev is None or now[0] <= prev[0]:
             return None
-        dt = now[0] - prev[0]
-        dyaw = math.atan2(math.sin(now[3] - prev[3]), math.cos(now[3] - prev[3]))
-        mid = prev[3] + 0.5 * dyaw
-        v = ((now[1] - prev[1]) * math.cos(mid) + (now[2] - prev[2]) * math.sin(mid)) / dt
-        return v, dyaw / dt
+        return pose_difference_twist(prev, now)
 
     def on_odom(self, msg: Odometry) -> None:
         """Fuse the forward speed and yaw rate of a wheel odometry message."""
@@ -267,18 +226,8 @@ class EkfNode:
             self._publish(msg.header.stamp)
 
     def range_model(self, x: np.ndarray, index: int) -> tuple[float, np.ndarray]:
-        """Predicted range to anchor ``index`` (m) and its Jacobian, shape (1, 6)."""
-        yaw = x[YAW]
-        c, s = math.cos(yaw), math.sin(yaw)
-        tx, ty = self.tag_xy_m
-        ax, ay = self.anchors_xy_m[index]
-        ex, ey = x[X] + c * tx - s * ty - ax, x[Y] + s * tx + c * ty - ay
-        r = math.sqrt(ex * ex + ey * ey + self.dz_m * self.dz_m)
-        H = np.zeros((1, 6))
-        if r > 1e-9:
-            H[0, X], H[0, Y] = ex / r, ey / r
-            H[0, YAW] = (ex * (-s * tx - c * ty) + ey * (c * tx - s * ty)) / r
-        return r, H
+        """Predicted range to anchor ``index`` (m) and its Jacobian, shape (1, 6) (:func:`range_model`)."""
+        return range_model(x, self.anchors_xy_m[index], self.tag_xy_m, self.dz_m)
 
     def on_range(self, msg: Range) -> None:
         """Fuse one UWB range, unless its Mahalanobis distance exceeds the gate."""
@@ -322,22 +271,15 @@ class EkfNode:
 
     def message(self, stamp) -> Odometry:
         """The current estimate as ``nav_msgs/Odometry`` (frame ``odom`` or ``map``, child ``base_link``)."""
-        x, P = self.filter.x[:, 0], self.filter.P
-        pose_cov = np.zeros((6, 6))
-        idx = (X, Y, None, None, None, YAW)
-        for i, a in enumerate(idx):
-            for j, b in enumerate(idx):
-                if a is not None and b is not None:
-                    pose_cov[i, j] = P[a, b]
-        twist_cov = np.zeros((6, 6))
-        twist_cov[0, 0], twist_cov[0, 5], twist_cov[5, 0], twist_cov[5, 5] = P[V, V], P[V, W], P[W, V], P[W, W]
+        x = self.filter.x[:, 0]
+        pose_cov, twist_cov = odometry_covariances(self.filter.P)
         self._seq += 1
         return Odometry(
             header=Header(self._seq, stamp, self.frame_id), child_frame_id=BASE_FRAME,
             pose=PoseWithCovariance(Pose(Point(float(x[X]), float(x[Y]), 0.0), Quaternion.from_yaw(float(x[YAW]))),
-                                    pose_cov.ravel()),
+                                    pose_cov),
             twist=TwistWithCovariance(Twist(Vector3(float(x[V]), 0.0, 0.0), Vector3(0.0, 0.0, float(x[W]))),
-                                      twist_cov.ravel()))
+                                      twist_cov))
 
     def _publish(self, stamp) -> None:
         if self._pub is not None:

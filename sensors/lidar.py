@@ -1,24 +1,13 @@
 """Slamtec RPLIDAR A1 on the ``amr/laser`` site: rotating 2D scans cast in MuJoCo.
 
-One rotation takes ``n = round(sample_rate / scan_rate)`` samples, one every
-``1 / sample_rate`` s (2000 Hz at 5.5 Hz: 364 beams, 1 deg apart, 182 ms per scan;
-RPLIDAR A1M8 datasheet v2.x). Beam ``i`` points at ``angle_min + i * increment``
-in the ``laser`` frame (REP-103, counter-clockwise from x, ``angle_min = -pi``) and
-is acquired at ``t0 + i / sample_rate``; each beam is cast from the laser pose at
-its own instant, so a scan taken while the robot moves is distorted as a real
-one. The beam instants are kept in :attr:`Lidar.beam_t_us` and
-:attr:`Lidar.last_beam_t_us` (for deskew).
-
-How beams are cast. The laser pose is sampled at regular instants (the pose
-samples); beams are cast in groups with one ``mujoco.mj_multiRay`` call from the
-present laser position, each along its own direction at its own instant (linear
-interpolation between the rotations of the two pose samples around it, then
-normalised) and its range corrected for the motion of the origin between its
-instant and now, exactly for the plane of the surface hit (through the hit
-normal: ``r_i = r + n.(o_now - o_i) / n.u_i``, ``o_i`` interpolated between the
-samples). Geoms that move with the robot (a payload, group 4) are cast in a
-second call in the present laser frame (their pose relative to the laser does
-not change), and the nearer hit wins. Two ways to drive it:
+Beam ``i`` is acquired at ``t0 + i / sample_rate`` and cast from the laser pose at
+its own instant, so a scan taken while the robot moves is distorted as a real one
+(beam instants in :attr:`Lidar.beam_t_us` and :attr:`Lidar.last_beam_t_us`, for
+deskew). The laser pose is sampled at regular instants; beams are cast in groups,
+one ``mujoco.mj_multiRay`` call from the present laser position, with the beam
+geometry, motion correction and range noise of :mod:`amr_twin.sensors.lidar_beams`.
+Geoms that move with the robot (a payload, group 4) are cast in a second call in
+the present laser frame, and the nearer hit wins. Two ways to drive it:
 
 - standalone (:meth:`Lidar.start_motor` without arguments): a clock event at
   every multiple of ``group_us`` (default 20 ms) samples the pose, casts the
@@ -32,12 +21,9 @@ not change), and the nearer hit wins. Two ways to drive it:
   (:mod:`amr_twin.clock`: it stops the physics only if a subscriber of ``scan``
   could act sooner).
 
-Rays see geom groups 0 (world) and 4 (payload) only, never the robot's own
-wheels, casters or frame (groups 1, 2). The cutoff is large and ranges are
-clamped here (``mj_multiRay`` culls by bounding volume, stack-notes.md). Range
-noise is Gaussian with sigma ``max(floor, frac * r)``, then quantised to the
-1/4 mm of the A1 protocol. No hit, or a range outside ``[range_min, range_max]``,
-is ``inf`` as ``rplidar_ros`` publishes it.
+Rays see the world and a payload only (``SEEN_GROUPS``). The cutoff is large and
+ranges are clamped here (``mj_multiRay`` culls by bounding volume, stack-notes.md),
+then noised (``inf`` where invalid, as ``rplidar_ros`` publishes it).
 
 A ``sensor_msgs/LaserScan`` goes out on ``scan`` at the first pose sample at or
 after the last beam of its rotation (frame ``laser``, stamp = first beam, as
@@ -47,7 +33,6 @@ rotation (the motor spin-up time is not modelled).
 
 from __future__ import annotations
 
-import math
 from collections import deque
 
 import mujoco
@@ -58,9 +43,9 @@ from amr_twin.clock import VirtualClock
 from amr_twin.config_sections import LidarCfg
 from amr_twin.messages import Header, LaserScan, Time
 
-US = 1_000_000
-SEEN_GROUPS = (0, 4)
-"""Geom groups a beam can hit: world and payload (build.py)."""
+from .lidar_beams import (SEEN_GROUPS, US, PoseSamples, beam_angles_rad, beam_directions, group_masks,
+                          motion_correction_m, noisy_ranges, scan_timing, world_directions)
+
 CUTOFF_M = 1e6
 """Culling distance passed to ``mj_multiRay``: effectively none."""
 
@@ -99,27 +84,14 @@ class Lidar:
         self.site_id = int(model.site(site).id)
         self._site_pos, self._site_mat = data.site_xpos[self.site_id], data.site_xmat[self.site_id]  # views
         self.rng = np.random.default_rng(seed)
-        self.n_beams = int(round(cfg.sample_rate_hz / cfg.scan_rate_hz))
-        self.beam_dt_us = US // cfg.sample_rate_hz
-        self.scan_us = self.n_beams * self.beam_dt_us
-        self.angle_increment = 2 * math.pi / self.n_beams
-        self.angle_min = -math.pi
-        self.angles_rad = self.angle_min + self.angle_increment * np.arange(self.n_beams)
-        self.local_dirs = np.stack([np.cos(self.angles_rad), np.sin(self.angles_rad),
-                                    np.zeros(self.n_beams)], axis=1)  # (n, 3) in the laser frame
+        self.n_beams, self.beam_dt_us, self.scan_us = scan_timing(cfg)
+        self.angle_min, self.angle_increment, self.angles_rad = beam_angles_rad(self.n_beams)
+        self.local_dirs = beam_directions(self.angles_rad)  # (n, 3) in the laser frame
         self.group_us, self.loop_cast_us = int(group_us), int(loop_cast_us)
         self.cast_period_us = self.group_us  # pose sample period (the loop's grid in the twin)
         self.cast_every_us = self.group_us  # longest time between casts
-        self.geomgroup = np.zeros(6, np.uint8)
-        self.geomgroup[list(SEEN_GROUPS)] = 1
-        moving = model.body_rootid[model.geom_bodyid] != 0
-        payload = (model.geom_group == SEEN_GROUPS[1]) & moving
-        self._world_groups, self._payload_groups = None, None
-        if payload.any():  # cast what moves with the robot in the present laser frame
-            self._world_groups = np.zeros(6, np.uint8)
-            self._world_groups[SEEN_GROUPS[0]] = 1
-            self._payload_groups = np.zeros(6, np.uint8)
-            self._payload_groups[SEEN_GROUPS[1]] = 1
+        moving = model.body_rootid[model.geom_bodyid] != 0  # cast what moves with the robot apart
+        self.geomgroup, self._world_groups, self._payload_groups = group_masks(model.geom_group, moving)
         self.dist_m = np.full(self.n_beams, -1.0)
         """True distances of the rotation in progress, m (-1: no hit)."""
         self._normal = np.zeros(3 * self.n_beams)
@@ -139,8 +111,7 @@ class Lidar:
         self._handle = None
         self._samplers: list | None = None  # the loop's grid samplers (in the twin)
         self._grid: tuple[int, list] | None = None
-        self._poses = np.zeros((32, 10))  # pose samples: t_us, site position (3), xmat columns 0, 1 (3 + 3)
-        self._npose = 0
+        self._poses = PoseSamples()
         self._lx, self._ly = self.local_dirs[:, 0:1].copy(), self.local_dirs[:, 1:2].copy()
         self._done: deque = deque()  # (t_us, scan, beam_t_us, hit_geom) cast, not yet published
         self.running = False
@@ -163,7 +134,7 @@ class Lidar:
         self.running = True
         now = self.clock.now_us
         self._new_rotation(now)
-        self._npose = 0
+        self._poses.clear()
         if self._grid is not None:  # pose samples on the multiples of the grid that are >= group_us
             grid, self._samplers = self._grid
             self.cast_period_us = -(-self.group_us // grid) * grid
@@ -212,15 +183,7 @@ class Lidar:
         """
         if t_us % self.cast_period_us:
             return
-        n, poses = self._npose, self._poses
-        if n == len(poses):
-            poses = self._poses = np.concatenate([poses, np.zeros_like(poses)])
-        row = poses[n]
-        row[0] = t_us
-        row[1:4] = self._site_pos
-        row[4:7] = self._site_mat[0::3]  # laser x axis in the world
-        row[7:10] = self._site_mat[1::3]  # laser y axis
-        self._npose = n + 1
+        self._poses.append(t_us, self._site_pos, self._site_mat)
         if t_us < self._next_cast_us and self.running:
             return
         cast = False
@@ -242,23 +205,7 @@ class Lidar:
             break
         self._next_cast_us = min(self._last_beam_us, self._last_cast_us + self.cast_every_us)
         if cast or not self.running:  # later beams only need the samples from now on
-            self._poses[0] = self._poses[self._npose - 1]
-            self._npose = 1
-
-    def _poses_at(self, t_us: np.ndarray) -> np.ndarray:
-        """Laser poses at the instants ``t_us`` (k,), linear between the pose samples.
-
-        Returns (k, 9): position (m), then the laser x and y axes in the world.
-        """
-        n, poses = self._npose, self._poses
-        if n < 2:
-            return np.repeat(poses[0:1, 1:], len(t_us), axis=0)
-        ts = poses[:n, 0]
-        j = np.minimum(np.maximum(ts.searchsorted(t_us, side="right") - 1, 0), n - 2)
-        t0 = ts[j]
-        a = np.minimum(np.maximum((t_us - t0) / (ts[j + 1] - t0), 0.0), 1.0)[:, None]
-        p0 = poses[j, 1:]
-        return p0 + a * (poses[j + 1, 1:] - p0)
+            self._poses.keep_last()
 
     def cast(self, start: int, stop: int, at_own_instants: bool = True) -> None:
         """Cast beams ``start:stop`` (one ``mj_multiRay`` call, two with a payload).
@@ -275,10 +222,9 @@ class Lidar:
             return
         origin = d.site_xpos[s]
         lx, ly = self._lx[start:stop], self._ly[start:stop]
-        if at_own_instants and self._npose > 0:
-            pose = self._poses_at(self.beam_t_us[start:stop])  # (k, 9)
-            u = pose[:, 3:6] * lx + pose[:, 6:9] * ly  # R l with l_z = 0
-            u /= np.sqrt(np.einsum("ij,ij->i", u, u))[:, None]
+        if at_own_instants and self._poses.n > 0:
+            pose = self._poses.at(self.beam_t_us[start:stop])  # (k, 9)
+            u = world_directions(pose, lx, ly)
             shift = origin - pose[:, 0:3]  # (k, 3) o_now - o_i
         else:
             u, shift = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T, None
@@ -287,9 +233,7 @@ class Lidar:
         groups = self.geomgroup if self._world_groups is None else self._world_groups
         mujoco.mj_multiRay(m, d, origin, u.ravel(), groups, 1, -1, geomid, dist, normal, k, CUTOFF_M)
         if shift is not None:  # r_i = r + n.(o_now - o_i) / n.u_i (0 where no hit: n = 0)
-            nrm = normal.reshape(k, 3)
-            nu = np.einsum("ij,ij->i", nrm, u)
-            dist += np.divide(np.einsum("ij,ij->i", nrm, shift), nu, out=np.zeros(k), where=np.abs(nu) > 1e-3)
+            dist += motion_correction_m(normal.reshape(k, 3), u, shift)
         if self._payload_groups is not None:  # what moves with the robot: the present frame
             u_now = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
             pgeom, pdist = self._pgeom[:k], self._pdist[:k]
@@ -299,27 +243,10 @@ class Lidar:
             geomid[near], dist[near] = pgeom[near], pdist[near]
 
     def noisy_ranges(self, dist: np.ndarray, geomid: np.ndarray) -> np.ndarray:
-        """Range noise, 1/4 mm quantisation and validity of true distances.
-
-        Parameters
-        ----------
-        dist : ndarray, shape (n,)
-            True distances, m (any value where ``geomid < 0``).
-        geomid : ndarray, shape (n,), int
-            Geom hit by each beam, -1 for none.
-
-        Returns
-        -------
-        ndarray, shape (n,), float32
-            Ranges, m; inf where nothing was hit or out of ``[range_min, range_max]``.
-        """
-        cfg = self.cfg
-        sigma = np.maximum(cfg.range_noise_floor_m, cfg.range_noise_frac * dist)
-        r = dist + sigma * self.rng.standard_normal(len(dist))
-        if cfg.range_resolution_m > 0:
-            r = np.round(r / cfg.range_resolution_m) * cfg.range_resolution_m
-        valid = (geomid >= 0) & (r >= cfg.range_min_m) & (r <= cfg.range_max_m)
-        return np.where(valid, r, np.inf).astype(np.float32)
+        """Noisy ranges (n,) float32, m, inf where invalid, of true distances ``dist`` (n,) and hit
+        geoms ``geomid`` (n,), -1 for none (:func:`~amr_twin.sensors.lidar_beams.noisy_ranges` with
+        this sensor's config and generator)."""
+        return noisy_ranges(dist, geomid, self.cfg, self.rng)
 
     def _finish(self, t_us: int) -> None:
         """The rotation in progress is cast: add the noise and publish it (or queue it)."""

@@ -1,0 +1,188 @@
+"""Beams of the RPLIDAR A1: timing, directions, laser pose samples, motion correction, range noise.
+
+Pure numpy (no MuJoCo, no clock): the clock-driven sensor that casts the beams is
+:class:`amr_twin.sensors.lidar.Lidar`.
+
+Timing (:func:`scan_timing`)
+    One rotation takes ``n = round(sample_rate / scan_rate)`` samples, one every
+    ``1 / sample_rate`` s (2000 Hz at 5.5 Hz: 364 beams, 1 deg apart, 182 ms per
+    scan; RPLIDAR A1M8 datasheet v2.x).
+Directions (:func:`beam_angles_rad`, :func:`beam_directions`)
+    Beam ``i`` points at ``angle_min + i * increment`` in the ``laser`` frame
+    (REP-103, counter-clockwise from x, ``angle_min = -pi``).
+Motion during a rotation (:class:`PoseSamples`, :func:`world_directions`, :func:`motion_correction_m`)
+    The laser pose is sampled at regular instants. A beam acquired between two
+    samples points along its own direction at its instant (linear interpolation
+    of the laser axes of the two samples around it, then normalised); it is cast
+    from the present laser origin ``o_now`` and its range corrected for the
+    motion of the origin since its instant, exactly for the plane of the surface
+    hit (through the hit normal ``n``): ``r_i = r + n.(o_now - o_i) / n.u_i``,
+    ``o_i`` interpolated between the samples.
+Geom groups (:data:`SEEN_GROUPS`, :func:`group_masks`)
+    Rays see geom groups 0 (world) and 4 (payload) only, never the robot's own
+    wheels, casters or frame (groups 1, 2).
+Range noise (:func:`noisy_ranges`)
+    Gaussian with sigma ``max(floor, frac * r)``, then quantised to the 1/4 mm of
+    the A1 protocol. No hit, or a range outside ``[range_min, range_max]``, is
+    ``inf`` as ``rplidar_ros`` publishes it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from amr_twin.config_sections import LidarCfg
+
+US = 1_000_000
+SEEN_GROUPS = (0, 4)
+"""Geom groups a beam can hit: world and payload (build.py)."""
+
+
+def scan_timing(cfg: LidarCfg) -> tuple[int, int, int]:
+    """``(n_beams, beam_dt_us, scan_us)``: beams per rotation, time between beams and per rotation, us."""
+    n_beams = int(round(cfg.sample_rate_hz / cfg.scan_rate_hz))
+    beam_dt_us = US // cfg.sample_rate_hz
+    return n_beams, beam_dt_us, n_beams * beam_dt_us
+
+
+def beam_angles_rad(n_beams: int) -> tuple[float, float, np.ndarray]:
+    """``(angle_min, angle_increment, angles)`` of ``n_beams`` beams over a turn, rad; angles shape (n_beams,)."""
+    angle_increment = 2 * math.pi / n_beams
+    angle_min = -math.pi
+    return angle_min, angle_increment, angle_min + angle_increment * np.arange(n_beams)
+
+
+def beam_directions(angles_rad: np.ndarray) -> np.ndarray:
+    """Unit directions of beams at ``angles_rad`` (n,) in the laser frame, shape (n, 3) (z = 0)."""
+    return np.stack([np.cos(angles_rad), np.sin(angles_rad), np.zeros(len(angles_rad))], axis=1)
+
+
+def group_masks(geom_group: np.ndarray, geom_moving: np.ndarray) -> tuple[np.ndarray, np.ndarray | None,
+                                                                          np.ndarray | None]:
+    """``mj_multiRay`` geom group masks (6,) uint8: ``(seen, world, payload)``.
+
+    Parameters
+    ----------
+    geom_group : ndarray, shape (ngeom,), int
+        Group of each geom (``MjModel.geom_group``).
+    geom_moving : ndarray, shape (ngeom,), bool
+        Whether each geom moves with a free body (the robot).
+
+    Returns
+    -------
+    seen : ndarray, shape (6,)
+        Every group of :data:`SEEN_GROUPS`.
+    world, payload : ndarray, shape (6,), or None
+        With a payload geom that moves with the robot: the world group alone and the
+        payload group alone (cast apart, the payload in the present laser frame);
+        otherwise None.
+    """
+    seen = np.zeros(6, np.uint8)
+    seen[list(SEEN_GROUPS)] = 1
+    payload = (geom_group == SEEN_GROUPS[1]) & geom_moving
+    if not payload.any():
+        return seen, None, None
+    world = np.zeros(6, np.uint8)
+    world[SEEN_GROUPS[0]] = 1
+    payload_groups = np.zeros(6, np.uint8)
+    payload_groups[SEEN_GROUPS[1]] = 1
+    return seen, world, payload_groups
+
+
+class PoseSamples:
+    """Laser pose samples: rows of ``t_us``, position (3, m), laser x axis and y axis in the world (3 + 3).
+
+    The buffer grows by doubling; :attr:`n` rows are valid.
+    """
+
+    def __init__(self, capacity: int = 32):
+        self.rows = np.zeros((capacity, 10))
+        self.n = 0
+
+    def append(self, t_us: int, position_m: np.ndarray, xmat: np.ndarray) -> None:
+        """Add the sample at ``t_us``: ``position_m`` (3,) and the rotation matrix ``xmat`` (9,), row-major."""
+        n, rows = self.n, self.rows
+        if n == len(rows):
+            rows = self.rows = np.concatenate([rows, np.zeros_like(rows)])
+        row = rows[n]
+        row[0] = t_us
+        row[1:4] = position_m
+        row[4:7] = xmat[0::3]  # laser x axis in the world
+        row[7:10] = xmat[1::3]  # laser y axis
+        self.n = n + 1
+
+    def keep_last(self) -> None:
+        """Forget all samples but the newest."""
+        self.rows[0] = self.rows[self.n - 1]
+        self.n = 1
+
+    def clear(self) -> None:
+        """Forget all samples."""
+        self.n = 0
+
+    def at(self, t_us: np.ndarray) -> np.ndarray:
+        """Laser poses at the instants ``t_us`` (k,), linear between the samples (held outside them).
+
+        Returns (k, 9): position (m), then the laser x and y axes in the world.
+        """
+        n, poses = self.n, self.rows
+        if n < 2:
+            return np.repeat(poses[0:1, 1:], len(t_us), axis=0)
+        ts = poses[:n, 0]
+        j = np.minimum(np.maximum(ts.searchsorted(t_us, side="right") - 1, 0), n - 2)
+        t0 = ts[j]
+        a = np.minimum(np.maximum((t_us - t0) / (ts[j + 1] - t0), 0.0), 1.0)[:, None]
+        p0 = poses[j, 1:]
+        return p0 + a * (poses[j + 1, 1:] - p0)
+
+
+def world_directions(pose: np.ndarray, lx: np.ndarray, ly: np.ndarray) -> np.ndarray:
+    """Unit beam directions in the world (k, 3) from laser poses (k, 9) and laser-frame components (k, 1) x 2."""
+    u = pose[:, 3:6] * lx + pose[:, 6:9] * ly  # R l with l_z = 0
+    u /= np.sqrt(np.einsum("ij,ij->i", u, u))[:, None]
+    return u
+
+
+def motion_correction_m(normal: np.ndarray, u: np.ndarray, shift_m: np.ndarray) -> np.ndarray:
+    """Range correction ``n.(o_now - o_i) / n.u_i`` (k,), m; 0 where no hit (``n = 0``) or grazing.
+
+    Parameters
+    ----------
+    normal : ndarray, shape (k, 3)
+        Surface normals at the hits (zero where none).
+    u : ndarray, shape (k, 3)
+        Unit beam directions.
+    shift_m : ndarray, shape (k, 3)
+        ``o_now - o_i``: origin now minus origin at each beam's instant, m.
+    """
+    nu = np.einsum("ij,ij->i", normal, u)
+    return np.divide(np.einsum("ij,ij->i", normal, shift_m), nu, out=np.zeros(len(u)), where=np.abs(nu) > 1e-3)
+
+
+def noisy_ranges(dist: np.ndarray, geomid: np.ndarray, cfg: LidarCfg, rng: np.random.Generator) -> np.ndarray:
+    """Range noise, 1/4 mm quantisation and validity of true distances.
+
+    Parameters
+    ----------
+    dist : ndarray, shape (n,)
+        True distances, m (any value where ``geomid < 0``).
+    geomid : ndarray, shape (n,), int
+        Geom hit by each beam, -1 for none.
+    cfg : LidarCfg
+        Noise, resolution and range limits.
+    rng : numpy.random.Generator
+        Draws the noise (n standard normals).
+
+    Returns
+    -------
+    ndarray, shape (n,), float32
+        Ranges, m; inf where nothing was hit or out of ``[range_min, range_max]``.
+    """
+    sigma = np.maximum(cfg.range_noise_floor_m, cfg.range_noise_frac * dist)
+    r = dist + sigma * rng.standard_normal(len(dist))
+    if cfg.range_resolution_m > 0:
+        r = np.round(r / cfg.range_resolution_m) * cfg.range_resolution_m
+    valid = (geomid >= 0) & (r >= cfg.range_min_m) & (r <= cfg.range_max_m)
+    return np.where(valid, r, np.inf).astype(np.float32)

@@ -260,7 +260,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     if not specs:
         raise ValueError(f"runs: {runs} selects none of 1..{len(RUNS)}")
     wall0 = time.perf_counter()
-    from ..rerun_log import recording_folder
+    from ..rerun_capture import recording_folder
 
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}

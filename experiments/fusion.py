@@ -98,7 +98,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     streams = Streams()
     twin.bus.add_tap(streams.tap)
     if rrd_path is not None or mcap_path is not None:
-        from ..rerun_log import attach
+        from ..rerun_capture import attach
         attach(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)
     twin.advance(REST_S)

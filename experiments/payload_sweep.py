@@ -146,7 +146,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     recording = point.rrd_path is not None or point.mcap_path is not None
     twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty"))
     if recording:
-        from ..rerun_log import attach
+        from ..rerun_capture import attach
 
         attach(twin)
     twin.advance_to_us(0)
@@ -256,7 +256,7 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     for c in commands:
         parse_command(c)
     runs_dir = Path(out_dir) / "runs"
-    from ..rerun_log import recording_folder
+    from ..rerun_capture import recording_folder
 
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}

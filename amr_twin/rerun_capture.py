@@ -1,0 +1,124 @@
+"""The capture of a running twin, and the file names recordings are written through.
+
+Stage 1 of a recording (stage 2, writing the files, is :mod:`amr_twin.rerun_log` and
+:mod:`amr_twin.mcap_log`): a :class:`Capture` is attached to a
+:class:`~amr_twin.loop.Twin` before it runs. It taps the bus (keeps every published
+message with its time, us) and samples the world pose of each robot body as a grid
+sampler of the loop (default ~30 Hz on the recorder's 10 ms grid; no clock event, so
+the physics chunks, hence the run, are unchanged). It only reads ``data.xpos`` /
+``data.xquat``.
+
+Both writers write a temporary file next to the target (:func:`atomic_target`) and
+rename it when complete; :func:`recording_folder` prepares a folder of per-run
+recordings and removes the temporaries that killed writers left there.
+"""
+
+from __future__ import annotations
+
+import os
+import weakref
+from pathlib import Path
+
+import numpy as np
+
+US = 1_000_000
+
+_captures: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+class Capture:
+    """Bus messages and body poses of a running twin (attach before running).
+
+    The body poses are taken by a grid sampler of the loop (``twin.samplers``,
+    called on the record grid while the physics steps), not by a clock event: the
+    capture adds no boundary to the physics chunks, so a recorded run is the same
+    run whatever the caller's ``advance`` pattern (a sweep's 20 ms loop included).
+    """
+
+    def __init__(self, twin, body_hz: float = 30.0):
+        self.twin = twin
+        self.messages: dict[str, list[tuple[int, object]]] = {}
+        m = twin.physics.model
+        self.body_ids = np.array([b for b in range(1, m.nbody)], dtype=int)
+        grid_us = twin.dt_us * twin.recorder.every
+        self.period_us = max(grid_us, int(round(US / body_hz / grid_us)) * grid_us)
+        self._t: list[int] = []
+        self._pos: list[np.ndarray] = []
+        self._quat: list[np.ndarray] = []
+        twin.bus.add_tap(self._tap)
+        self._sample(twin.t_phys_us)
+        twin.samplers.append(self._on_grid)
+        _captures[twin] = self
+
+    def _tap(self, topic: str, msg, t_us: int) -> None:
+        lst = self.messages.get(topic)
+        if lst is None:
+            lst = self.messages[topic] = []
+        lst.append((t_us, msg))
+
+    def _sample(self, t_us: int) -> None:
+        d, ids = self.twin.physics.data, self.body_ids
+        self._t.append(int(t_us))
+        self._pos.append(d.xpos[ids].copy())
+        self._quat.append(d.xquat[ids].copy())
+
+    def _on_grid(self, t_us: int) -> None:
+        """Grid sampler: the physics is at ``t_us``; keep the poses every ``period_us``."""
+        if t_us % self.period_us == 0 and t_us > self._t[-1]:
+            self._sample(t_us)
+
+    def body_poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """t_s (n,), positions (n, nb, 3), quaternions w x y z (n, nb, 4)."""
+        return (np.array(self._t, float) / US, np.array(self._pos).reshape(-1, len(self.body_ids), 3),
+                np.array(self._quat).reshape(-1, len(self.body_ids), 4))
+
+
+def attach(twin, body_hz: float = 30.0) -> Capture:
+    """Start capturing ``twin`` (before it runs); returns the :class:`Capture`."""
+    return _captures.get(twin) or Capture(twin, body_hz)
+
+
+def capture_of(twin) -> Capture | None:
+    """The :class:`Capture` attached to ``twin``, or None if it was not attached."""
+    return _captures.get(twin)
+
+
+def atomic_target(path: Path) -> Path:
+    """A temporary name next to ``path`` (written, then renamed by the caller)."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: Path) -> list[Path]:
+    """Delete the half-written recordings a killed writer left in ``folder``; return them.
+
+    A writer that is interrupted normally removes its temporary file itself; one
+    killed outright (SIGKILL, a crashed worker) leaves ``.<name>.rrd.<pid>.tmp`` or
+    ``.<name>.mcap.<pid>.tmp`` behind. Only those of processes no longer running
+    are deleted, so a concurrent writer's file is left alone.
+    """
+    removed = []
+    for tmp in Path(folder).glob(".*.tmp"):
+        stem, _, pid = tmp.name[:-len(".tmp")].rpartition(".")
+        if stem.endswith((".rrd", ".mcap")) and pid.isdigit() and not _alive(int(pid)):
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
+
+def recording_folder(folder: Path) -> Path:
+    """``folder`` made absolute (worker processes may run elsewhere), created, stale temporaries removed."""
+    folder = Path(folder).resolve()
+    folder.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(folder)
+    return folder

@@ -1,0 +1,208 @@
+"""The 3D entities of a ``.rrd`` recording, under ``world``, one ``_log_<stream>`` function per stream.
+
+Positions in m in the simulation's world frame (Z up), on the ``sim_time`` timeline::
+
+    world/bodies/<body>                 Transform3D over time (robot bodies)
+    world/bodies/<body>/geoms/<kind>    static Boxes3D / Ellipsoids3D / Cylinders3D
+    world/bodies/amr/laser/scan         LaserScan points in the laser frame
+    world/scan                          the same points in the world (deskewed per beam)
+    world/trajectory/{true,odom}        LineStrips3D, growing at 2 Hz
+    uwb/anchor_<i>/range_m              Scalars, one per received range (only with a UWB tag)
+    world/uwb/anchors                   static Points3D of the anchors
+    world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
+
+The plots' streams are in :mod:`amr_twin.rerun_streams`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from .rerun_capture import Capture
+from .rerun_streams import TIMELINE, _scalars, _time
+
+VISUAL_GROUPS = (0, 1, 4)  # world, robot visuals, payload (2 is robot collision)
+
+
+def body_entity(m: mujoco.MjModel, b: int) -> str:
+    """The entity path of body ``b``: ``world/bodies/<body name>`` (``world/bodies/world`` for body 0)."""
+    name = m.body(b).name or f"body{b}"
+    return "world/bodies/" + ("world" if b == 0 else name)
+
+
+def _rgba(m: mujoco.MjModel, g: int) -> np.ndarray:
+    mat = m.geom_matid[g]
+    rgba = m.mat_rgba[mat] if mat >= 0 else m.geom_rgba[g]
+    return (np.clip(rgba, 0, 1) * 255).astype(np.uint8)
+
+
+def _log_geoms(rec, m: mujoco.MjModel) -> None:
+    """Each body's visual geoms, once, static, in the body frame."""
+    import rerun as rr
+
+    T = mujoco.mjtGeom
+    for b in range(m.nbody):
+        kinds: dict[str, list] = {"boxes": [], "ellipsoids": [], "cylinders": []}
+        for g in range(m.body_geomadr[b], m.body_geomadr[b] + m.body_geomnum[b]):
+            if m.geom_group[g] not in VISUAL_GROUPS or m.geom_rgba[g][3] == 0:
+                continue
+            typ, size = int(m.geom_type[g]), m.geom_size[g]
+            pos, q = m.geom_pos[g], m.geom_quat[g]
+            xyzw = [q[1], q[2], q[3], q[0]]
+            if typ == T.mjGEOM_BOX:
+                kinds["boxes"].append((pos, xyzw, 2 * size, _rgba(m, g)))
+            elif typ == T.mjGEOM_PLANE:
+                half = [s if s > 0 else 15.0 for s in size[:2]]
+                kinds["boxes"].append((pos - [0, 0, 0.001], xyzw, [2 * half[0], 2 * half[1], 0.002],
+                                       _rgba(m, g)))
+            elif typ == T.mjGEOM_SPHERE:
+                kinds["ellipsoids"].append((pos, xyzw, [size[0]] * 3, _rgba(m, g)))
+            elif typ == T.mjGEOM_ELLIPSOID:
+                kinds["ellipsoids"].append((pos, xyzw, size[:3], _rgba(m, g)))
+            elif typ in (int(T.mjGEOM_CYLINDER), int(T.mjGEOM_CAPSULE)):
+                kinds["cylinders"].append((pos, xyzw, (size[0], 2 * size[1]), _rgba(m, g)))
+        base = body_entity(m, b) + "/geoms/"
+        for kind, items in kinds.items():
+            if not items:
+                continue
+            centers = np.array([i[0] for i in items])
+            quats = np.array([i[1] for i in items])
+            colors = np.array([i[3] for i in items])
+            if kind == "boxes":
+                arch = rr.Boxes3D(centers=centers, quaternions=quats, sizes=np.array([i[2] for i in items]),
+                                  colors=colors, fill_mode="solid")
+            elif kind == "ellipsoids":
+                arch = rr.Ellipsoids3D(centers=centers, quaternions=quats,
+                                       half_sizes=np.array([i[2] for i in items]), colors=colors,
+                                       fill_mode="solid")
+            else:
+                rl = np.array([i[2] for i in items])
+                arch = rr.Cylinders3D(centers=centers, quaternions=quats, radii=rl[:, 0], lengths=rl[:, 1],
+                                      colors=colors, fill_mode="solid")
+            rec.log(base + kind, arch, static=True)
+
+
+def _log_body_transforms(rec, m, capture: Capture) -> None:
+    import rerun as rr
+
+    t, pos, quat = capture.body_poses()
+    for j, b in enumerate(capture.body_ids):
+        q = quat[:, j]
+        rec.send_columns(body_entity(m, b), indexes=_time(t),
+                         columns=rr.Transform3D.columns(translation=pos[:, j],
+                                                        quaternion=q[:, [1, 2, 3, 0]]))
+
+
+def _log_trajectory(rec, series, rate_hz: float = 2.0) -> None:
+    """True (world) and odometry (odom frame put on the start pose) paths, growing."""
+    import rerun as rr
+
+    true_xy = series.pose[:, :2]
+    x0, y0, yaw0 = series.pose[0]
+    c, s = math.cos(yaw0), math.sin(yaw0)
+    odom = series.odom
+    odom_xy = np.column_stack([x0 + c * odom[:, 1] - s * odom[:, 2], y0 + s * odom[:, 1] + c * odom[:, 2]])
+    end = float(series.t_s[-1]) if len(series.t_s) else 0.0
+    for t in np.append(np.arange(0.0, end, 1.0 / rate_hz), end):
+        rec.set_time(TIMELINE, duration=float(t))
+        for name, tt, xy, color in (("true", series.t_s, true_xy, (40, 160, 40)),
+                                    ("odom", odom[:, 0], odom_xy, (220, 60, 60))):
+            n = int(np.searchsorted(tt, t, side="right"))
+            if n >= 2:
+                pts = np.vstack([xy[:n:5], xy[n - 1:n]])
+                pts = np.column_stack([pts, np.full(len(pts), 0.01)])
+                rec.log(f"world/trajectory/{name}", rr.LineStrips3D([pts], colors=[color], radii=[0.01]))
+
+
+def _body_pose_at(capture: Capture, m, body: str, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (n, 3), m, and yaw (n,), rad, of ``body`` at ``t_s``, interpolated from the body samples."""
+    j = int(np.nonzero(capture.body_ids == mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body))[0][0])
+    t, pos, quat = capture.body_poses()
+    q = quat[:, j]
+    yaw = np.unwrap(np.arctan2(2 * (q[:, 0] * q[:, 3] + q[:, 1] * q[:, 2]), 1 - 2 * (q[:, 2] ** 2 + q[:, 3] ** 2)))
+    p = np.column_stack([np.interp(t_s, t, pos[:, j, k]) for k in range(3)])
+    return p, np.interp(t_s, t, yaw)
+
+
+def _laser_pose_at(capture: Capture, m, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Laser position (n, 3) and yaw (n,) at ``t_s``, interpolated from the body samples."""
+    return _body_pose_at(capture, m, "amr/laser", t_s)
+
+
+def _log_scan(rec, m, capture: Capture) -> None:
+    import rerun as rr
+
+    scans = capture.messages.get("scan", [])
+    if not scans:
+        return
+    for _t_us, msg in scans:
+        r = np.asarray(msg.ranges, float)
+        ang = msg.angle_min + msg.angle_increment * np.arange(len(r))
+        ok = np.isfinite(r)
+        r = np.where(ok, r, 0.0)  # no return: inf; dropped below, kept out of the products
+        local = np.column_stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(r)])[ok]
+        t_beam = msg.header.stamp.to_sec() + msg.time_increment * np.arange(len(r))[ok]
+        p, yaw = _laser_pose_at(capture, m, t_beam)
+        c, s = np.cos(yaw), np.sin(yaw)
+        world = np.column_stack([p[:, 0] + c * local[:, 0] - s * local[:, 1],
+                                 p[:, 1] + s * local[:, 0] + c * local[:, 1], p[:, 2]])
+        rec.set_time(TIMELINE, duration=msg.header.stamp.to_sec() + msg.scan_time)
+        rec.log("world/bodies/amr/laser/scan", rr.Points3D(local, colors=[(250, 200, 40)], radii=[0.01]))
+        rec.log("world/scan", rr.Points3D(world, colors=[(40, 120, 250)], radii=[0.015]))
+
+
+def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:
+    """Anchor positions (K, 3) in the world and the tag position (3,) in ``base_link``, m.
+
+    From the twin's ``UwbSensor`` (``twin.uwb``) when it has one, else from ``twin.cfg.uwb``.
+    """
+    sensor = getattr(twin, "uwb", None)
+    if sensor is not None:
+        return np.asarray(sensor.anchors_xyz_m, float), np.asarray(sensor.tag_pos_m, float)
+    u = twin.cfg.uwb
+    anchors = np.column_stack([np.asarray(u.anchors_xy_m, float), np.full(len(u.anchors_x_m), u.anchor_z_m)])
+    return anchors, np.asarray(u.tag_pos_m, float)
+
+
+def uwb_ranges(capture: Capture) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """The captured ``uwb/range`` messages per anchor: ``{i: (stamp t_s (n,), range_m (n,))}``."""
+    from .sensors.uwb import anchor_index
+
+    per: dict[int, tuple[list, list]] = {}
+    for _t_us, msg in capture.messages.get("uwb/range", []):
+        t, r = per.setdefault(anchor_index(msg.header.frame_id), ([], []))
+        t.append(msg.header.stamp.to_sec())
+        r.append(float(msg.range))
+    return {i: (np.array(t), np.array(r)) for i, (t, r) in sorted(per.items())}
+
+
+def _log_uwb(rec, m, capture: Capture) -> None:
+    """Ranges per anchor as scalars, the anchors, and a line from the tag to each anchor ranged.
+
+    The tag's world position at a range's stamp uses the base's interpolated
+    position and yaw (the base's small tilt is left out of the line).
+    """
+    import rerun as rr
+
+    ranges = uwb_ranges(capture)
+    if not ranges:
+        return
+    anchors, tag = uwb_geometry(capture.twin)
+    rec.log("world/uwb/anchors", rr.Points3D(anchors, radii=[0.08], colors=[(200, 60, 200)],
+                                             labels=[f"anchor_{i}" for i in range(len(anchors))]), static=True)
+    for i, (t_s, range_m) in ranges.items():
+        _scalars(rec, f"uwb/anchor_{i}/range_m", t_s, range_m)
+        if i >= len(anchors):
+            continue
+        p, yaw = _body_pose_at(capture, m, "amr/base_link", t_s)
+        c, s = np.cos(yaw), np.sin(yaw)
+        tag_w = np.column_stack([p[:, 0] + c * tag[0] - s * tag[1], p[:, 1] + s * tag[0] + c * tag[1],
+                                 p[:, 2] + tag[2]])
+        strips = np.stack([tag_w, np.broadcast_to(anchors[i], tag_w.shape)], axis=1)  # (n, 2, 3)
+        rec.send_columns(f"world/uwb/anchor_{i}/ray", indexes=_time(t_s),
+                         columns=rr.LineStrips3D.columns(strips=strips))
+        rec.log(f"world/uwb/anchor_{i}/ray", rr.LineStrips3D.from_fields(colors=[(200, 60, 200)], radii=[0.005]),
+                static=True)

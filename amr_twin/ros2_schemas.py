@@ -1,0 +1,66 @@
+"""ROS 2 message definitions (``.msg`` text) of the messages the twin records.
+
+The schemas of an MCAP file in the ``ros2`` profile (schema encoding ``ros2msg``):
+:func:`msgdef` gives a type's definition followed by those of the types it uses,
+as rosbag2 stores them; :func:`ros2_type` its full name (``pkg/msg/Name``). The
+definitions follow ROS 2 Humble's (constants and default values included); the
+payloads are encoded by :mod:`amr_twin.ros2_cdr`.
+"""
+
+from __future__ import annotations
+
+SEP = "=" * 80
+
+_DEFS = {
+    "builtin_interfaces/Time": "int32 sec\nuint32 nanosec",
+    "std_msgs/Header": "builtin_interfaces/Time stamp\nstring frame_id",
+    "std_msgs/Float64": "float64 data",
+    "std_msgs/MultiArrayDimension": "string label\nuint32 size\nuint32 stride",
+    "std_msgs/MultiArrayLayout": "std_msgs/MultiArrayDimension[] dim\nuint32 data_offset",
+    "std_msgs/Float64MultiArray": "std_msgs/MultiArrayLayout layout\nfloat64[] data",
+    "geometry_msgs/Vector3": "float64 x\nfloat64 y\nfloat64 z",
+    "geometry_msgs/Point": "float64 x\nfloat64 y\nfloat64 z",
+    "geometry_msgs/Quaternion": "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1",
+    "geometry_msgs/Pose": "geometry_msgs/Point position\ngeometry_msgs/Quaternion orientation",
+    "geometry_msgs/PoseWithCovariance": "geometry_msgs/Pose pose\nfloat64[36] covariance",
+    "geometry_msgs/Twist": "geometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular",
+    "geometry_msgs/TwistWithCovariance": "geometry_msgs/Twist twist\nfloat64[36] covariance",
+    "geometry_msgs/Transform": "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation",
+    "geometry_msgs/TransformStamped": ("std_msgs/Header header\nstring child_frame_id\n"
+                                       "geometry_msgs/Transform transform"),
+    "tf2_msgs/TFMessage": "geometry_msgs/TransformStamped[] transforms",
+    "sensor_msgs/Imu": ("std_msgs/Header header\ngeometry_msgs/Quaternion orientation\n"
+                        "float64[9] orientation_covariance\ngeometry_msgs/Vector3 angular_velocity\n"
+                        "float64[9] angular_velocity_covariance\ngeometry_msgs/Vector3 linear_acceleration\n"
+                        "float64[9] linear_acceleration_covariance"),
+    "sensor_msgs/MagneticField": ("std_msgs/Header header\ngeometry_msgs/Vector3 magnetic_field\n"
+                                  "float64[9] magnetic_field_covariance"),
+    "sensor_msgs/LaserScan": ("std_msgs/Header header\nfloat32 angle_min\nfloat32 angle_max\n"
+                              "float32 angle_increment\nfloat32 time_increment\nfloat32 scan_time\n"
+                              "float32 range_min\nfloat32 range_max\nfloat32[] ranges\nfloat32[] intensities"),
+    "nav_msgs/Odometry": ("std_msgs/Header header\nstring child_frame_id\n"
+                          "geometry_msgs/PoseWithCovariance pose\ngeometry_msgs/TwistWithCovariance twist"),
+    "sensor_msgs/Range": ("uint8 ULTRASOUND=0\nuint8 INFRARED=1\nstd_msgs/Header header\nuint8 radiation_type\n"
+                          "float32 field_of_view\nfloat32 min_range\nfloat32 max_range\nfloat32 range"),
+}
+
+
+def _deps(name: str, seen: list[str]) -> list[str]:
+    for line in _DEFS[name].splitlines():
+        typ = line.split()[0].split("[")[0]
+        if "/" in typ and typ not in seen:
+            seen.append(typ)
+            _deps(typ, seen)
+    return seen
+
+
+def msgdef(name: str) -> str:
+    """The ROS 2 ``.msg`` text of ``pkg/Name`` followed by its dependencies (ros2msg schema)."""
+    parts = [_DEFS[name]] + [f"{SEP}\nMSG: {dep}\n{_DEFS[dep]}" for dep in _deps(name, [])]
+    return "\n".join(parts) + "\n"
+
+
+def ros2_type(name: str) -> str:
+    """The full ROS 2 name of ``pkg/Name``: ``pkg/msg/Name``."""
+    pkg, typ = name.split("/")
+    return f"{pkg}/msg/{typ}"

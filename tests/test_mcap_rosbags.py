@@ -17,6 +17,8 @@ from amr_twin.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach, record_run
 from amr_twin.run import Command, run_mission
 
+from uwb_run import UWB_S, record_uwb_run
+
 DURATION_S = 4.0
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
 TOPIC_TYPES = {
@@ -199,25 +201,13 @@ def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
     assert all("VOLATILE" in d.upper() for t, d in durability.items() if t != "/tf_static")
 
 
-UWB_S = 2.0
-
-
 @pytest.fixture(scope="module")
 def uwb_bag(tmp_path_factory):
     """A 2 s run with the UWB tag only; its capture and its /uwb/range messages as rosbags reads them."""
     from rosbags.rosbag2 import Reader
 
-    from amr_twin.sensors.uwb import UwbSensor
-
-    cfg = load_config()
-    options = TwinOptions(world="empty")
-    twin = Twin(cfg, options)
-    twin.uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
-    capture = attach(twin)
-    result = run_mission(cfg, [(0.0, Command("linear", speed_m_s=0.5))], UWB_S, options, twin=twin)
-    path = tmp_path_factory.mktemp("rosbags_uwb") / "uwb.mcap"
-    record_run(twin, mcap_path=path, result=result)
-    with Reader(path) as reader:
+    cfg, capture, paths = record_uwb_run(tmp_path_factory.mktemp("rosbags_uwb"), rrd=False)
+    with Reader(paths["mcap"]) as reader:
         connections = {c.topic: c for c in reader.connections}
         raw = [(con.topic, con.msgtype, t_ns, data) for con, t_ns, data in reader.messages()]
     return cfg, capture, connections, raw

@@ -14,6 +14,8 @@ from amr_twin.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach, record_run
 from amr_twin.run import Command, run_mission
 
+from uwb_run import UWB_S, record_uwb_run
+
 DURATION_S = 4.0
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))]
 
@@ -186,7 +188,7 @@ def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
     import os
     import subprocess
 
-    from amr_twin.rerun_log import recording_folder, remove_stale_temporaries
+    from amr_twin.rerun_capture import recording_folder, remove_stale_temporaries
 
     dead = subprocess.Popen(["true"])
     dead.wait()
@@ -202,27 +204,14 @@ def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
     assert (tmp_path / "new" / "rec").is_dir()
 
 
-UWB_S = 2.0
-
-
 @pytest.fixture(scope="module")
 def uwb_recorded(tmp_path_factory):
     """A 2 s run with the UWB tag (no IMU/LiDAR), recorded to .rrd and .mcap."""
-    from amr_twin.sensors.uwb import UwbSensor
-
-    cfg = load_config()
-    options = TwinOptions(world="empty")
-    twin = Twin(cfg, options)
-    twin.uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
-    capture = attach(twin)
-    result = run_mission(cfg, [(0.0, Command("linear", speed_m_s=0.5))], UWB_S, options, twin=twin)
-    out = tmp_path_factory.mktemp("uwb")
-    paths = record_run(twin, rrd_path=out / "uwb.rrd", mcap_path=out / "uwb.mcap", result=result)
-    return cfg, capture, paths
+    return record_uwb_run(tmp_path_factory.mktemp("uwb"))
 
 
 def test_rrd_uwb_ranges_per_anchor(uwb_recorded):
-    from amr_twin.rerun_log import uwb_ranges
+    from amr_twin.rerun_world import uwb_ranges
 
     cfg, capture, paths = uwb_recorded
     msgs = capture.messages["uwb/range"]

@@ -28,6 +28,7 @@ import numpy as np
 import yaml
 from scipy.optimize import minimize
 
+from .atomic_file import write_text
 from .config import TwinConfig, load_config
 from .loop import TwinOptions
 from .metrics import step_info
@@ -190,7 +191,5 @@ def _get(cfg: TwinConfig, key: str) -> float:
 
 def write_params(fit: Fit, path: Path) -> None:
     """Write the fitted values as an override file, atomically."""
-    path = Path(path)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text("# amr-twin calibration result: use with --params\n" + yaml.safe_dump(fit.override_tree(), sort_keys=False))
-    tmp.replace(path)
+    write_text(path, "# amr-twin calibration result: use with --params\n"
+               + yaml.safe_dump(fit.override_tree(), sort_keys=False))

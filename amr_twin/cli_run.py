@@ -15,13 +15,13 @@ import dataclasses
 import json
 import logging
 import math
-import os
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 import typer
 
+from .atomic_file import write_text
 from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 from .recorder import RunSeries
 
@@ -73,18 +73,6 @@ def series_table(series: RunSeries) -> np.ndarray:
     pub = [_held(t, series.published[w][:, 0], series.published[w][:, 1]) for w in (0, 1)]
     odom = [_held(t, series.odom[:, 0], series.odom[:, k]) for k in (1, 2, 3)]
     return np.column_stack([t, *ref, *pub, series.true_rpm, series.pwm_counts, series.pose, *odom])
-
-
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file next to ``path`` and rename it over ``path``."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def _csv_text(series: RunSeries) -> str:
@@ -186,7 +174,7 @@ def execute(steps, duration_s: float, single: bool, payload_kg, firmware: str, s
 
         result = _guard(recorded)
     if csv is not None:
-        write_atomic(csv, _csv_text(result.series))
+        write_text(csv, _csv_text(result.series))
     info = summary(result, single)
     if as_json:
         typer.echo(json.dumps(info))

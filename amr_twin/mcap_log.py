@@ -27,13 +27,12 @@ from __future__ import annotations
 
 import collections
 import math
-import os
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from .rerun_capture import atomic_target
+from .atomic_file import replacing
 from .ros2_cdr import (Cdr, encode_float64, encode_float64_multi_array, encode_imu, encode_laser_scan,
                        encode_magnetic_field, encode_odometry, encode_range, encode_tf_message)
 from .ros2_schemas import msgdef, ros2_type
@@ -109,7 +108,6 @@ def write_mcap(capture, series, path: Path) -> Path:
     from mcap.writer import Writer
 
     path = Path(path)
-    tmp = atomic_target(path)
     items: list[tuple[int, int, str, str, bytes]] = []  # t_ns, order, topic, type, CDR payload
     k = 0
     for bus_topic, (topic, typ, encode) in BUS_TOPICS.items():
@@ -127,7 +125,7 @@ def write_mcap(capture, series, path: Path) -> Path:
         k += 3
     items.append((0, -1, "/tf_static", "tf2_msgs/TFMessage", _static_tf(capture, series)))
     items.sort(key=lambda it: (it[0], it[1]))
-    try:
+    with replacing(path) as tmp:
         with open(tmp, "wb") as f:
             writer = Writer(f)
             writer.start(profile="ros2", library="amr_twin")
@@ -146,8 +144,4 @@ def write_mcap(capture, series, path: Path) -> Path:
                 writer.add_message(channels[topic], log_time=t, data=data, publish_time=t,
                                    sequence=seq[topic])
             writer.finish()
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path

@@ -8,8 +8,8 @@ sampler of the loop (default ~30 Hz on the recorder's 10 ms grid; no clock event
 the physics chunks, hence the run, are unchanged). It only reads ``data.xpos`` /
 ``data.xquat``.
 
-Both writers write a temporary file next to the target (:func:`atomic_target`) and
-rename it when complete; :func:`recording_folder` prepares a folder of per-run
+Both writers write a temporary file next to the target and rename it when complete
+(:mod:`amr_twin.atomic_file`); :func:`recording_folder` prepares a folder of per-run
 recordings and removes the temporaries that killed writers left there.
 """
 
@@ -81,12 +81,6 @@ def attach(twin, body_hz: float = 30.0) -> Capture:
 def capture_of(twin) -> Capture | None:
     """The :class:`Capture` attached to ``twin``, or None if it was not attached."""
     return _captures.get(twin)
-
-
-def atomic_target(path: Path) -> Path:
-    """A temporary name next to ``path`` (written, then renamed by the caller)."""
-    path = Path(path)
-    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
 
 
 def _alive(pid: int) -> bool:

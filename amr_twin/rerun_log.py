@@ -33,10 +33,10 @@ A default blueprint (3D view + time-series plots) is sent with the recording.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
-from .rerun_capture import (US, Capture, atomic_target, attach, capture_of, recording_folder,  # noqa: F401
+from .atomic_file import replacing
+from .rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
 from .rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_imu,  # noqa: F401
                             _log_wheel_speeds, reference_rpm)
@@ -69,10 +69,9 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     import rerun as rr
 
     path = Path(path)
-    tmp = atomic_target(path)
     m = capture.twin.physics.model
     rec = rr.RecordingStream(application_id)
-    try:
+    with replacing(path) as tmp:
         rec.save(tmp, default_blueprint=_blueprint(bool(capture.messages.get("imu/data_raw")),
                                                    bool(capture.messages.get("uwb/range"))))
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
@@ -87,10 +86,6 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
         _log_trajectory(rec, series)
         rec.flush()
         rec.disconnect()
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path
 
 

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import json
 import multiprocessing
-import os
-import tempfile
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
+
+from .. import atomic_file
 
 EXECUTORS = ("local", "dask")
 SCHEDULER_TIMEOUT_S = 5.0  # default time to reach a Dask scheduler, s
@@ -121,22 +121,9 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
                 raise
 
 
-def _write_bytes_atomic(path: Path, data: bytes) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def write_text(path: Path, text: str) -> None:
     """Write a text file atomically (temporary file in the same folder, then rename)."""
-    _write_bytes_atomic(path, text.encode())
+    atomic_file.write_text(path, text)
 
 
 def write_json(path: Path, obj: Any) -> None:
@@ -153,4 +140,4 @@ def save_figure(fig, path: Path, dpi: int = 110) -> None:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=dpi)
     plt.close(fig)
-    _write_bytes_atomic(path, buffer.getvalue())
+    atomic_file.write_bytes(path, buffer.getvalue())

@@ -1,0 +1,25 @@
+"""Whole-or-nothing files (no mujoco)."""
+
+import pytest
+
+from amr_twin.atomic_file import replacing, temporary_name, write_text
+
+
+def test_write_replaces_and_leaves_no_temporary(tmp_path):
+    target = tmp_path / "sub" / "a.csv"
+    write_text(target, "one\n")
+    write_text(target, "two\n")
+    assert target.read_text() == "two\n"
+    assert [p.name for p in target.parent.iterdir()] == ["a.csv"]
+
+
+def test_an_error_keeps_the_old_file_and_removes_the_temporary(tmp_path):
+    target = tmp_path / "a.json"
+    target.write_text("old")
+    with pytest.raises(RuntimeError):
+        with replacing(target) as tmp:
+            tmp.write_text("half")
+            assert tmp == temporary_name(target) and tmp.name.startswith(".a.json.")
+            raise RuntimeError("interrupted")
+    assert target.read_text() == "old"
+    assert not temporary_name(target).exists()

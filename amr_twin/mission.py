@@ -24,9 +24,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import yaml
-
 from .run import KINDS, Command
+from .yaml_file import read_yaml
 
 FIELDS = {
     "linear": {"speed_m_s": True},
@@ -112,14 +111,7 @@ def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
 def load_mission(path: str | Path) -> tuple[float, list[tuple[float, Command]]]:
     """Read and validate a mission YAML file."""
     path = Path(path)
-    try:
-        tree = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise MissionError(f"mission {path}: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        line = getattr(getattr(exc, "problem_mark", None), "line", None)
-        at = f" (line {line + 1})" if line is not None else ""
-        raise MissionError(f"mission {path}: not valid YAML{at}") from None
+    tree = read_yaml(path, "mission", MissionError)
     try:
         return parse_mission(tree)
     except MissionError as exc:

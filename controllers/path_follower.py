@@ -40,11 +40,11 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
-import yaml
 
 from amr_twin.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.messages import Twist, Vector3
+from amr_twin.yaml_file import read_yaml
 
 MAX_ROUTE_SPEED_M_S = 1.0
 """Highest route speed accepted, m/s (issue #8: 'at up to 1 m/s')."""
@@ -124,13 +124,7 @@ class Route:
 def load_route(path: str | Path) -> Route:
     """Read and validate a route YAML file (module docstring); raises :class:`RouteError`."""
     path = Path(path)
-    try:
-        tree = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise RouteError(f"route {path}: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        line = getattr(getattr(exc, "problem_mark", None), "line", None)
-        raise RouteError(f"route {path}: not valid YAML" + (f" (line {line + 1})" if line is not None else "")) from None
+    tree = read_yaml(path, "route", RouteError)
     if not isinstance(tree, dict):
         raise RouteError(f"route {path.name}: expected a mapping with {', '.join(ROUTE_FIELDS)}")
     unknown = [k for k in tree if k not in ROUTE_FIELDS]

@@ -58,6 +58,7 @@ class Estimate:
     pose: np.ndarray
     errors: TrajectoryErrors | None = None
     wall_s: float = 0.0
+    beam_poses: list | None = None  # LiDAR odometry only: per scan, (n_beams, 3) laser poses in the map
 
 
 @dataclass
@@ -78,9 +79,7 @@ class FusionResults:
     cross_track_rms_m: float = 0.0
     boxes: Footprints | None = None     # the world at the LiDAR's height
     grid: object = None                 # OccupancyGrid from the LiDAR odometry's poses
-    laser_in_base: tuple[float, float, float] = (0.0, 0.0, 0.0)
     anchors_xy_m: np.ndarray | None = None  # UWB anchors (K, 2), map frame
-    lidar_beam_poses: list = field(default_factory=list)  # per scan (n_beams, 3) laser poses, map frame
 
 
 def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "improved", progress: bool = True,
@@ -160,13 +159,13 @@ def estimate_ekf(cfg: TwinConfig, streams: Streams, start: tuple[float, float, f
 
 
 def estimate_lidar(cfg: TwinConfig, streams: Streams,
-                   start: tuple[float, float, float]) -> tuple[Estimate, list[np.ndarray]]:
+                   start: tuple[float, float, float]) -> Estimate:
     """kiss-icp on every scan, with the wheel odometry's motion over each scan as the prior.
 
     kiss-icp deskews a scan to its last beam, so each pose holds at the scan's end
     (``t_end``) and the prior covers the interval between two scan ends
-    (:meth:`LidarOdometry.prior_interval_s`). Returns the estimate in the map frame
-    and, per scan, the laser pose at each beam's instant (for the map).
+    (:meth:`LidarOdometry.prior_interval_s`). Returns the estimate in the map frame,
+    with the laser pose at each beam's instant, per scan, in ``beam_poses`` (for the map).
     """
     lc = cfg.lidar_odometry
     lo = LidarOdometry(voxel_size_m=lc.voxel_size_m, max_range_m=lc.max_range_m, min_range_m=lc.min_range_m,
@@ -177,13 +176,13 @@ def estimate_lidar(cfg: TwinConfig, streams: Streams,
         lo.register(scan, relative_motion(t_odom, pose_odom, t0, t1))
     t_s, _ = lo.poses()
     if len(t_s) == 0:
-        return Estimate("odom+lidar", np.zeros(0), np.zeros((0, 3))), []
+        return Estimate("odom+lidar", np.zeros(0), np.zeros((0, 3)), beam_poses=[])
     # the first pose is the origin of kiss-icp's frame: the start moved by the (rest) odometry up to it
     origin = se2.compose(np.asarray(start, float), np.asarray(relative_motion(t_odom, pose_odom, 0.0, t_s[0])))
     origin = tuple(float(v) for v in origin)
     _, pose = lo.poses(origin_xy_yaw=origin)
     beam_poses = [lo.beam_laser_poses(scan, origin_xy_yaw=origin) for scan in streams.scan]
-    return Estimate("odom+lidar", t_s, pose), beam_poses
+    return Estimate("odom+lidar", t_s, pose, beam_poses=beam_poses)
 
 
 def laser_in_base(cfg: TwinConfig) -> tuple[float, float, float]:
@@ -205,28 +204,22 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
                         reached_goal=reached)
     res.cross_track_rms_m = float(np.sqrt(np.mean(distance_to_path_m(route, series.pose[:, :2]) ** 2)))
     start = route.start_xy_yaw
-    jobs = {
-        "odom": lambda: estimate_odom(streams, start),
-        "odom+lidar": lambda: _keep_beams(res, *estimate_lidar(cfg, streams, start)),
-        "odom+imu": lambda: estimate_ekf(cfg, streams, start, use_imu=True, use_uwb=False),
-        "odom+uwb": lambda: estimate_ekf(cfg, streams, start, use_imu=False, use_uwb=True),
-        "odom+uwb+imu": lambda: estimate_ekf(cfg, streams, start, use_imu=True, use_uwb=True),
-    }
-    for name, job in jobs.items():
+    jobs = (  # in the order of ARCHITECTURES
+        lambda: estimate_odom(streams, start),
+        lambda: estimate_lidar(cfg, streams, start),
+        lambda: estimate_ekf(cfg, streams, start, use_imu=True, use_uwb=False),
+        lambda: estimate_ekf(cfg, streams, start, use_imu=False, use_uwb=True),
+        lambda: estimate_ekf(cfg, streams, start, use_imu=True, use_uwb=True),
+    )
+    for job in jobs:
         t1 = time.perf_counter()
         est = job()
-        est.name, est.wall_s = name, time.perf_counter() - t1
+        est.wall_s = time.perf_counter() - t1
         est.errors = errors(est.t_s, est.pose, series.t_s, series.pose, rpe_delta_m=RPE_DELTA_M)
-        res.estimates[name] = est
-    res.laser_in_base = laser_in_base(cfg)
+        res.estimates[est.name] = est
     res.anchors_xy_m = np.asarray(cfg.uwb.anchors_xy_m, float).reshape(-1, 2)
     res.boxes = scan_plane_boxes(twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2]))
-    res.grid = build_map(streams.scan, res.lidar_beam_poses, res.boxes, cfg.mapping.resolution_m,
+    res.grid = build_map(streams.scan, res.estimates["odom+lidar"].beam_poses, res.boxes, cfg.mapping.resolution_m,
                          cfg.mapping.margin_m)
     res.wall_s = time.perf_counter() - t0
     return res
-
-
-def _keep_beams(res: FusionResults, est: Estimate, beam_poses: list) -> Estimate:
-    res.lidar_beam_poses = beam_poses
-    return est

@@ -21,6 +21,7 @@ orders events in time:
 A synced event at ``t`` acts from the first physics step that starts at or after
 ``t``; a publishing event runs at its own time, possibly with the physics ahead.
 """
+
 from __future__ import annotations
 
 import math

@@ -85,11 +85,9 @@ def plot(results: FusionResults, out: Path) -> list[Path]:
 
 
 def _errors_in_time(results: FusionResults, est) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    t_true, pose_true = results.t_true_s, results.pose_true
-    x = np.interp(est.t_s, t_true, pose_true[:, 0])
-    y = np.interp(est.t_s, t_true, pose_true[:, 1])
-    yaw = np.interp(est.t_s, t_true, np.unwrap(pose_true[:, 2]))
-    return est.t_s, np.hypot(est.pose[:, 0] - x, est.pose[:, 1] - y), se2.wrap_rad(est.pose[:, 2] - yaw)
+    truth = se2.interpolate(results.t_true_s, results.pose_true, est.t_s).reshape(-1, 3)
+    return (est.t_s, np.hypot(*(est.pose[:, :2] - truth[:, :2]).T),
+            se2.wrap_rad(est.pose[:, 2] - truth[:, 2]))
 
 
 def _save_map(results: FusionResults, out: Path) -> Path:

@@ -37,6 +37,8 @@ WHEELS = ("left", "right")
 CASTERS = ("front_left", "front_right", "rear_left", "rear_right")
 ROBOT_PREFIX = "amr/"
 LOOP_SENSOR_DIM = 11
+STAND_HEIGHT_M = 0.10
+"""How high the ``stand`` world holds the chassis: wheels and casters clear of the floor."""
 
 
 class BuildError(RuntimeError):
@@ -55,7 +57,7 @@ def derived_params(cfg: TwinConfig) -> dict:
         "wheel_torque_limit_nm": max(m.ke_v_s_rad * m.current_limit_a for m in (cfg.motor_left, cfg.motor_right)),
         "wheel_speed_limit_rad_s": cfg.battery.v_full_v / min(cfg.motor_left.ke_v_s_rad, cfg.motor_right.ke_v_s_rad),
         "caster_ball_diameter_m": k.ball_diameter_m, "caster_x_m": k.x_m, "caster_y_m": k.y_m,
-        "caster_travel_m": k.travel_m,
+        "caster_travel_m": k.travel_m, "caster_drop_m": k.drop_m,
     }
     for name, comp in cfg.components.items():
         p[f"{name}_size_m"] = list(comp.size_m)
@@ -110,6 +112,9 @@ def _robot_spec(cfg: TwinConfig, urdf: str) -> mujoco.MjSpec:
     options = '<mujoco><compiler discardvisual="false" fusestatic="false" strippath="true"/></mujoco>'
     spec = mujoco.MjSpec.from_string(urdf.replace("</robot>", options + "</robot>", 1))
     spec.modelname = "amr"
+    # Elliptic friction cones: the contact's first constraint row is its normal force
+    # (read by Physics.support_normal_forces_n); exported with the robot.
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     _tag_geoms(spec, cfg)
     base = spec.body("base_link")
     base.add_freejoint(name="root")
@@ -141,8 +146,20 @@ def _collision_geom(body: mujoco.MjsBody) -> mujoco.MjsGeom:
     return geoms[0]
 
 
+CONTACT_SOLREF = (0.002, 1.0)
+CONTACT_SOLIMP = (0.97, 0.97, 0.001, 0.5, 2.0)
+"""solref (time constant s, damping ratio) and solimp of the wheel and caster contacts:
+as stiff as the 1 ms step allows (MuJoCo recommends a time constant of at least twice
+the timestep; an impedance of 0.98 made the caster balls chatter). A support then
+sinks a few micrometres into the floor, so the load split follows the physical
+springs (tyres, caster springs) within 0.4 % of the hand calculation of
+:mod:`amr_twin.statics`, not the solver's softness (default solref/solimp: 1.4 %)."""
+
+
 def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
     w = cfg.wheel
+    g = cfg.sim.gravity_m_s2
+    rotor_kg = mass.wheel_inertial(cfg).mass_kg
     for side, motor in zip(WHEELS, (cfg.motor_left, cfg.motor_right)):
         body = spec.body(f"wheel_{side}_link")
         geom = _collision_geom(body)
@@ -150,13 +167,28 @@ def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         # place (a cylinder micro-hops, stack-notes.md); its local z is the axle.
         geom.type = mujoco.mjtGeom.mjGEOM_ELLIPSOID
         geom.size = [w.radius_m, w.radius_m, w.width_m / 2]
-        geom.friction = [w.friction, 0.005, 0.0001]
+        # sliding friction only; the tyre's rolling resistance is a load-dependent
+        # torque (amr_twin.rolling_resistance): MuJoCo's rolling friction (condim 6)
+        # made these stiff contacts chatter
         geom.condim = 3
+        geom.friction = [w.friction, 0.0, 0.0]
+        geom.priority = 1  # the tyre's contact parameters win over the floor's
+        geom.solref, geom.solimp = list(CONTACT_SOLREF), list(CONTACT_SOLIMP)
         geom.name = f"wheel_{side}_collision"
-        joint = spec.joint(f"wheel_{side}_joint")
-        # The URDF effort limit becomes a joint-level clamp of all actuator torque in
+        # The tyre's radial compliance: a vertical slide between hub and chassis, before
+        # the axle hinge so that it does not turn with the wheel; q > 0 = tyre compressed.
+        # springref = m_rotor g / k: the spring then carries the tyre's whole load, so the
+        # compression is N / k as for a real tyre, and a lifted wheel hangs at q = 0.
+        hinge = spec.joint(f"wheel_{side}_joint")
+        spec.delete(hinge)
+        tyre = body.add_joint(name=f"wheel_{side}_tyre", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
+        tyre.stiffness[0] = w.tyre_stiffness_n_m
+        tyre.damping[0] = w.tyre_damping_n_s_m
+        tyre.springref = rotor_kg * g / w.tyre_stiffness_n_m
+        joint = body.add_joint(name=f"wheel_{side}_joint", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0])
+        # The URDF effort limit would become a joint-level clamp of all actuator torque in
         # MuJoCo; the driver's current limit is the actuator's forcerange instead, so
-        # that a shorted (braking) motor is not held to the driving limit.
+        # that a shorted (braking) motor is limited by its own current, not the driver's.
         joint.actfrclimited = 0
         joint.damping[0] = motor.damping_nm_s_rad
         joint.frictionloss = motor.friction_nm
@@ -181,14 +213,18 @@ def _add_casters(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         body = spec.body(f"caster_{name}_link")
         ball = _collision_geom(body)
         ball.name = f"caster_{name}_ball"
-        # frictionless ball: priority makes its friction and condim win the contact mix
+        # A frictionless ball: its rolling resistance (a force Crr * N against its
+        # velocity) is applied by amr_twin.rolling_resistance. Priority makes the
+        # ball's friction, condim and solver parameters win the contact mix.
         ball.priority = 1
         ball.condim = 1
         ball.friction = [0.0, 0.0, 0.0]
+        ball.solref, ball.solimp = list(CONTACT_SOLREF), list(CONTACT_SOLIMP)
         joint = spec.joint(f"caster_{name}_joint")
         joint.stiffness[0] = k.stiffness_n_m
         joint.damping[0] = k.damping_n_s_m
         joint.springref = -k.preload_n / k.stiffness_n_m  # preload against the lower stop
+        joint.solref_limit = list(CONTACT_SOLREF)
 
 
 def _add_payload(spec: mujoco.MjSpec, base: mujoco.MjsBody, cfg: TwinConfig) -> None:
@@ -233,6 +269,7 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
         spec = mujoco.MjSpec.from_file(str(path))
     spec.option.timestep = cfg.sim.timestep_s
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC  # see _robot_spec
     spec.option.gravity = [0.0, 0.0, -cfg.sim.gravity_m_s2]
     spec.option.magnetic = [0.0, 2.2e-5, -4.3e-5]  # ~48 uT, northern-Italy inclination (WMM estimate)
     for geom in spec.geoms:
@@ -261,8 +298,13 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
     robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
     scene = _world_spec(cfg, world)
     x, y, yaw = start_xy_yaw
-    frame = scene.worldbody.add_frame(pos=[x, y, 0.0], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
+    held = Path(world).stem == "stand"
+    z = STAND_HEIGHT_M if held else 0.0
+    frame = scene.worldbody.add_frame(pos=[x, y, z], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
     scene.attach(mujoco.MjSpec.from_string(robot_xml), prefix=ROBOT_PREFIX, frame=frame)
+    if held:  # the work station of fig. 5.1: the chassis welded where it stands
+        scene.add_equality(type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
+                           name1=ROBOT_PREFIX + "base_link", name="stand")
     try:
         model = scene.compile()
     except Exception as exc:

@@ -135,27 +135,31 @@ def bench(
 
 @app.command()
 def calibrate(
-    target: str = typer.Option("thesis", help="'thesis' (chapter 5) or a CSV log with columns t_s, wheel, rpm, command."),
+    target: str = typer.Option("thesis", help="'thesis' (bench point and chapter 5) or a CSV log with columns "
+                               "t_s, wheel, rpm, command."),
     out: Path = typer.Option(Path("params.yaml"), help="Override file to write (use it with --params)."),
-    max_evaluations: int = typer.Option(60, min=2, max=2000, help="Twin evaluations of the fit."),
+    max_evaluations: int = typer.Option(90, min=2, max=2000, help="Twin evaluations of the fit (about; each "
+                                        "step costs one per parameter and one more)."),
+    jobs: int = typer.Option(2, min=1, max=64, help="Worker processes for a thesis evaluation's runs."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Fit the plant's unknowns (driver gain, motor Ke and drag per wheel) to the thesis or a log."""
+    """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
     from rich.progress import Progress
 
     from .calibration import calibrate as fit_plant
-    from .calibration import write_params
+    from .calibration import read_log, write_params
 
-    _config(config, params, set_)  # validate the starting point first
-    if target != "thesis" and not Path(target).is_file():
-        fail(f"--target {target!r}: neither 'thesis' nor an existing CSV file")
+    base = _config(config, params, set_)  # the starting point, with the user's overrides
+    if target != "thesis":
+        if not Path(target).is_file():
+            fail(f"--target {target!r}: neither 'thesis' nor an existing CSV file")
+        _guard(lambda: read_log(Path(target)))  # a malformed log is refused before any simulation
     with Progress(transient=True) as bar:
         task = bar.add_task("calibrating", total=max_evaluations)
-        fit = _guard(lambda: fit_plant(target, base_sets=list(set_ or []), max_evaluations=max_evaluations,
-                                       progress=lambda i, n: bar.update(task, completed=i)))
+        fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
+                                       progress=lambda i, n: bar.update(task, completed=min(i, n))))
     write_params(fit, out)
-    typer.echo(json.dumps({"target": fit.target, "residual": fit.residual, "evaluations": fit.evaluations,
-                           "values": fit.values, "out": str(out)}))
+    typer.echo(json.dumps({**fit.report(), "out": str(out)}))
 
 
 from .cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702

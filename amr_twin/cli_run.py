@@ -27,10 +27,12 @@ from .recorder import RunSeries
 
 CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_right",
                "true_rpm_left", "true_rpm_right", "pwm_counts_left", "pwm_counts_right",
-               "x_m", "y_m", "yaw_rad", "odom_x_m", "odom_y_m", "odom_yaw_rad")
+               "x_m", "y_m", "yaw_rad", "odom_x_m", "odom_y_m", "odom_yaw_rad",
+               "current_a_left", "current_a_right", "battery_a", "battery_v")
 """Columns of ``--csv``: references signed (motion x speed), published RPM as on
 wheelN_Vel (magnitude, held between samples, 0 before the first), true signed RPM,
-analogWrite counts, true pose (world) and odometry pose (odom frame, held)."""
+analogWrite counts, true pose (world) and odometry pose (odom frame, held), each
+motor's (phase) current (+ driving forward), the battery's current and voltage."""
 
 DurationOpt = typer.Option(None, "--duration-s", help="Simulated seconds (default 10; a mission's own).")
 PayloadOpt = typer.Option(None, "--payload-kg", help="Payload mass, kg.")
@@ -72,7 +74,8 @@ def series_table(series: RunSeries) -> np.ndarray:
     ref = [_held(t, cmd_t, cmd[:, 0] * cmd[:, 1]), _held(t, cmd_t, cmd[:, 2] * cmd[:, 3])]
     pub = [_held(t, series.published[w][:, 0], series.published[w][:, 1]) for w in (0, 1)]
     odom = [_held(t, series.odom[:, 0], series.odom[:, k]) for k in (1, 2, 3)]
-    return np.column_stack([t, *ref, *pub, series.true_rpm, series.pwm_counts, series.pose, *odom])
+    return np.column_stack([t, *ref, *pub, series.true_rpm, series.pwm_counts, series.pose, *odom,
+                            series.current_a, series.battery_a, series.battery_v])
 
 
 def _csv_text(series: RunSeries) -> str:

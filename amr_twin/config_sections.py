@@ -97,6 +97,9 @@ class WheelCfg(Section):
     mass_kg: float = P(unit="kg", gt=0.1, le=20.0)
     rotor_fraction: float = P(unit="1", ge=0.1, le=1.0)
     friction: float = P(unit="1", ge=0.1, le=2.0)
+    tyre_stiffness_n_m: float = P(unit="N/m", ge=1e4, le=1e6)
+    tyre_damping_n_s_m: float = P(unit="N*s/m", ge=0.0, le=1e4)
+    rolling_resistance: float = P(unit="1", ge=0.0, le=0.1)
 
 
 class CasterCfg(Section):
@@ -108,6 +111,8 @@ class CasterCfg(Section):
     preload_n: float = P(unit="N", ge=0.0, le=500.0)
     travel_m: float = P(unit="m", ge=0.001, le=0.05)
     mass_kg: float = P(unit="kg", gt=0.0, le=2.0)
+    drop_m: float = P(unit="m", ge=-0.01, le=0.01)
+    rolling_resistance: float = P(unit="1", ge=0.0, le=0.1)
 
 
 class PayloadCfg(Section):
@@ -127,7 +132,8 @@ class MotorCfg(Section):
 class DriverCfg(Section):
     gain: float = P(unit="1", gt=0.1, le=20.0)
     deadband_duty: float = P(unit="1", ge=0.0, le=0.5)
-    brake_damping_nm_s_rad: float = P(unit="N*m*s/rad", gt=0.0, le=1e4)
+    brake_current_limit_a: float = P(unit="A", gt=0.5, le=500.0)
+    quiescent_current_a: float = P(unit="A", ge=0.0, le=1.0)
 
 
 class BatteryCfg(Section):
@@ -137,6 +143,7 @@ class BatteryCfg(Section):
     v_empty_v: float = P(unit="V", gt=1.0, le=100.0)
     internal_resistance_ohm: float = P(unit="ohm", ge=0.0, le=2.0)
     soc_initial: float = P(unit="1", ge=0.0, le=1.0)
+    auxiliary_power_w: float = P(unit="W", ge=0.0, le=500.0)
 
     @model_validator(mode="after")
     def _voltages_ordered(self) -> "BatteryCfg":

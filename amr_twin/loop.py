@@ -11,8 +11,8 @@ orders events in time:
    what they publish before it (:meth:`amr_twin.bus.Bus.lookahead_us`);
 2. step the physics in C up to that instant with the actuation held, keeping the
    wheel angles on the record grid (every ``record_every_steps``) and handing the
-   grid instants to the grid samplers (the IMU's true values, the LiDAR's poses
-   and casts);
+   grid instants to the grid samplers (the rolling resistance from the present
+   contact loads, the IMU's true values, the LiDAR's poses and casts);
 3. turn the angles into SC edges (interpolated to the microsecond) and deliver
    them to the firmware's pin-change interrupt in time order, each at its time,
    interleaved with the publishing events that fall in the chunk;
@@ -41,6 +41,7 @@ from .messages import Float64
 from .physics import Physics
 from .plant import Plant
 from .recorder import Recorder
+from .rolling_resistance import RollingResistance
 from .rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
 from .sensors.hall import HallSensors
 
@@ -95,8 +96,10 @@ class Twin:
                                       wheel_separation_m=cfg.wheel.separation_m)
         self.recorder = Recorder(self)
         self.grid_us = self.dt_us * self.recorder.every
-        self.samplers: list = []
-        """Callables ``f(t_us)`` run on the record grid while the physics steps (physics at ``t_us``)."""
+        self.rolling = RollingResistance(self.physics, cfg)
+        self.samplers: list = [self.rolling, self.plant.account_battery]
+        """Callables ``f(t_us)`` run on the record grid while the physics steps (physics at ``t_us``):
+        the rolling resistance from the present loads, the battery, the sensors' samplers."""
         if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
             from .sensors.imu import ImuSensor
             from .sensors.lidar import Lidar
@@ -152,7 +155,7 @@ class Twin:
             key = (pins[0].pwm_counts, pins[0].dir_level, pins[0].brake_level, pins[0].stop_level,
                    pins[1].pwm_counts, pins[1].dir_level, pins[1].brake_level, pins[1].stop_level)
             if key != last_pins or t_evt >= self._next_check_us:
-                plant.apply(pins)  # also accounts the battery since the last change
+                plant.apply(pins)
                 self.recorder.pins_changed(self.t_phys_us)
                 last_pins = key
             if t_evt >= self._next_check_us:

@@ -4,7 +4,9 @@ It owns the compiled model and its data, resolves the robot's joints, actuators,
 geoms and sensors by name once, and offers what the rest of the twin needs:
 stepping in C, wheel angles and speeds, the base pose, contact loads per named
 geom, and the three motor modes (drive, coast, brake) set on the actuators'
-parameters between steps (the per-step torque stays in C).
+parameters between steps (the per-step torque stays in C). A braked motor is a
+motor at zero phase voltage (phases shorted): torque ``-Kt Ke / R * omega``, within
+the brake's own current limit.
 """
 
 from __future__ import annotations
@@ -16,12 +18,6 @@ import mujoco
 import numpy as np
 
 from .build import CASTERS, ROBOT_PREFIX, WHEELS
-
-
-BRAKE_TORQUE_MAX_NM = 1e6
-"""Torque bound of a braked wheel, N m: in effect none. A braked wheel is held by a
-strong damping that the implicit integrator treats exactly; clipping that force
-while its velocity derivative stays in the implicit step made the wheel chatter."""
 
 
 class DivergenceError(RuntimeError):
@@ -59,12 +55,15 @@ class Physics:
         self.root_dof = m.jnt_dofadr[_id(m, J, "root")]
         self.wheel_qpos = np.array([m.jnt_qposadr[_id(m, J, f"wheel_{s}_joint")] for s in WHEELS])
         self.wheel_dof = np.array([m.jnt_dofadr[_id(m, J, f"wheel_{s}_joint")] for s in WHEELS])
+        self._wheel_dof_l, self._wheel_dof_r = (int(v) for v in self.wheel_dof)
         self.caster_qpos = np.array([m.jnt_qposadr[_id(m, J, f"caster_{c}_joint")] for c in CASTERS])
         self.actuator = np.array([_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"motor_{s}") for s in WHEELS])
         self.base_body = _id(m, mujoco.mjtObj.mjOBJ_BODY, "base_link")
         G = mujoco.mjtObj.mjOBJ_GEOM
         self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
         self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
+        self._support_lut = np.full(m.ngeom, -1, dtype=np.int64)
+        self._support_lut[list(self.support_geoms.values())] = np.arange(len(self.support_geoms))
         self._drive_range = m.actuator_forcerange[self.actuator].copy()
         self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
         self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
@@ -102,6 +101,11 @@ class Physics:
         """(2,) wheel angular speeds [left, right], rad/s."""
         return self.data.qvel[self.wheel_dof]
 
+    def wheel_speeds_list(self) -> list[float]:
+        """[left, right] wheel angular speeds, rad/s, as plain floats (cheap in scalar code)."""
+        qvel = self.data.qvel
+        return [qvel.item(self._wheel_dof_l), qvel.item(self._wheel_dof_r)]
+
     def caster_compression_m(self) -> np.ndarray:
         """(4,) caster spring compressions [fl, fr, rl, rr], m."""
         return self.data.qpos[self.caster_qpos]
@@ -133,20 +137,25 @@ class Physics:
         """(3,) centre of mass of the robot (with payload), world frame."""
         return self.data.subtree_com[self.base_body].copy()
 
+    def support_normal_forces_n(self) -> np.ndarray:
+        """(6,) normal contact force on the wheels L, R and casters fl, fr, rl, rr, N (0 when lifted).
+
+        From the constraint forces of the last step (the first row of each contact is its
+        normal force, for pyramidal-free elliptic cones and for frictionless contacts).
+        """
+        d = self.data
+        out = np.zeros(len(self.support_geoms))
+        if d.ncon:
+            con = d.contact
+            geom = con.geom
+            k = np.maximum(self._support_lut[geom[:, 0]], self._support_lut[geom[:, 1]])
+            hit = k >= 0
+            np.add.at(out, k[hit], d.efc_force[con.efc_address[hit]])
+        return out
+
     def support_loads_n(self) -> dict[str, float]:
         """Normal contact force on each wheel and caster ball, N (0 when lifted)."""
-        m, d = self.model, self.data
-        loads = dict.fromkeys(self.support_geoms, 0.0)
-        by_geom = {g: name for name, g in self.support_geoms.items()}
-        force = np.zeros(6)
-        for i in range(d.ncon):
-            con = d.contact[i]
-            name = by_geom.get(con.geom1, by_geom.get(con.geom2))
-            if name is None:
-                continue
-            mujoco.mj_contactForce(m, d, i, force)
-            loads[name] += float(force[0])
-        return loads
+        return dict(zip(self.support_geoms, self.support_normal_forces_n().tolist()))
 
     def support_points_xy(self) -> dict[str, np.ndarray]:
         """World xy of the lowest point of each wheel and caster ball, m."""
@@ -157,35 +166,29 @@ class Physics:
         return out
 
     # -- actuation --------------------------------------------------------------------
-    def set_motor(self, wheel: int, mode: str, voltage_v: float = 0.0, brake_damping: float = 0.0) -> None:
-        """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``."""
+    def set_motor(self, wheel: int, mode: str, voltage_v: float = 0.0, torque_limit_nm: float | None = None) -> None:
+        """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``.
+
+        ``torque_limit_nm`` bounds the torque (the driver's current limit times Kt; for
+        ``"brake"``, the shorted phases' own limit); default: the drive limit.
+        """
         m, a = self.model, self.actuator[wheel]
-        # the current limit is the driver's; shorted phases (brake) are not limited by it
-        m.actuator_forcerange[a] = self._drive_range[wheel] if mode != "brake" else (-BRAKE_TORQUE_MAX_NM,
-                                                                                     BRAKE_TORQUE_MAX_NM)
-        if mode == "drive":
+        limit = self._drive_range[wheel] if torque_limit_nm is None else (-torque_limit_nm, torque_limit_nm)
+        m.actuator_forcerange[a] = limit
+        if mode in ("drive", "brake"):  # brake: phases shorted, i.e. zero phase voltage
             m.actuator_gainprm[a, 0] = self._drive_gain[wheel]
             m.actuator_biasprm[a, 2] = self._drive_bias[wheel]
-            self.data.ctrl[a] = voltage_v
+            self.data.ctrl[a] = voltage_v if mode == "drive" else 0.0
         elif mode == "coast":  # phases open: no current, no torque
             m.actuator_gainprm[a, 0] = 0.0
             m.actuator_biasprm[a, 2] = 0.0
             self.data.ctrl[a] = 0.0
-        elif mode == "brake":  # phases shorted and held: strong damping
-            m.actuator_gainprm[a, 0] = 0.0
-            m.actuator_biasprm[a, 2] = -brake_damping
-            self.data.ctrl[a] = 0.0
         else:
             raise ValueError(f"mode must be drive, coast or brake, got {mode!r}")
-
-    def motor_current_a(self, wheel: int, voltage_v: float, ke: float, r_ohm: float, limit_a: float) -> float:
-        """Phase current of a driven motor from its voltage and the wheel speed."""
-        i = (voltage_v - ke * self.wheel_speeds_rad_s()[wheel]) / r_ohm
-        return max(-limit_a, min(limit_a, i))
 
     def settle(self, duration_s: float = 1.0) -> None:
         """Let the robot come to rest on its wheels and casters (motors braked)."""
         for w in range(2):
-            self.set_motor(w, "brake", brake_damping=50.0)
+            self.set_motor(w, "brake")
         self.step(int(round(duration_s / self.timestep_s)))
         self.check()

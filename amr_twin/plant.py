@@ -5,20 +5,32 @@ and powers a BLDC hub motor from the battery:
 
 - STOP low (disabled) or the e-stop relays open: phases open, zero current, the
   wheel coasts.
-- BRAKE high: phases shorted and held, the wheel cannot turn (strong damping).
+- BRAKE high: phases shorted through the low-side switches: zero phase voltage, so
+  the motor brakes with ``-Kt Ke / R * omega``, its current ``Ke omega / R`` bounded by
+  the switches' rating (``driver.brake_current_limit_a``); no torque at standstill
+  beyond the motor's own friction.
 - otherwise: phase voltage ``v = dir * V_batt * clip(gain * (duty - deadband) / (1 - deadband), 0, 1)``.
   The driver treats the PWM input as a speed demand, hence a gain (calibrated).
 
 The motor is the quasi-static DC model of MuJoCo's documentation, evaluated in C
 by an affine actuator: ``torque = Kt/R * v - Kt*Ke/R * omega``, clipped at
 ``Kt * I_max`` (current limit). The battery (open-circuit voltage from state of
-charge, internal resistance) is updated at every event of the loop, i.e. each time
-the pins may change, from the currents drawn since the previous update.
+charge, internal resistance) is updated on the loop's record grid (every 10 ms,
+whatever the events in between, so that a run does not depend on how the loop
+splits it), from the currents drawn at that instant: each
+driver's input current (``v_phase * i_phase / V_batt``, a lossless power stage, plus
+its quiescent current) and the auxiliary load (mini PC, electronics) at constant power.
+
+Currents, as the CSV and recordings name them: ``current_a_left``/``right`` is each
+motor's (DC-equivalent phase) current, the one that makes torque (``Kt * I``);
+``battery_a`` the pack's current; ``supply_a`` one driver's input current.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from .config import TwinConfig
 from .config_sections import BatteryCfg, DriverCfg, MotorCfg
@@ -54,11 +66,44 @@ class Battery:
         self.soc -= current_a * duration_s / (self.cfg.capacity_ah * 3600.0)
 
 
+MODE_CODES = {"drive": 0, "coast": 1, "brake": 2}
+"""Motor modes as recorded (:attr:`amr_twin.recorder.RunSeries.mode`)."""
+
+
+def motor_currents_a(cfg: TwinConfig, voltage_v: np.ndarray, speed_rad_s: np.ndarray,
+                     mode: np.ndarray) -> np.ndarray:
+    """Phase currents of both motors from recorded states, A.
+
+    Parameters
+    ----------
+    voltage_v, speed_rad_s, mode : (n, 2) phase voltage, wheel speed and mode code
+        (:data:`MODE_CODES`) of the left and right motor.
+
+    Returns
+    -------
+    (n, 2) current, + driving forward torque; 0 when coasting, ``-Ke w / R`` braking.
+    """
+    out = np.zeros(np.shape(speed_rad_s))
+    for w, m in enumerate((cfg.motor_left, cfg.motor_right)):
+        i = (voltage_v[:, w] - m.ke_v_s_rad * speed_rad_s[:, w]) / m.resistance_ohm
+        limit = np.where(mode[:, w] == MODE_CODES["brake"], cfg.driver.brake_current_limit_a, m.current_limit_a)
+        out[:, w] = np.where(mode[:, w] == MODE_CODES["coast"], 0.0, np.clip(i, -limit, limit))
+    return out
+
+
+def battery_current_a(cfg: TwinConfig, voltage_v: np.ndarray, current_a: np.ndarray,
+                      battery_v: np.ndarray) -> np.ndarray:
+    """(n,) the pack's current from (n, 2) phase voltages and currents and (n,) its voltage, A."""
+    v_batt = np.maximum(1.0, battery_v)
+    supply = (voltage_v * current_a).sum(axis=1) / v_batt + 2 * cfg.driver.quiescent_current_a
+    return supply + cfg.battery.auxiliary_power_w / v_batt
+
+
 class Plant:
     """Drivers, motors and battery of both wheels, applied to a :class:`Physics`."""
 
     def __init__(self, cfg: TwinConfig, physics: Physics):
-        self.physics = physics
+        self.cfg, self.physics = cfg, physics
         self.driver: DriverCfg = cfg.driver
         self.motors: tuple[MotorCfg, MotorCfg] = (cfg.motor_left, cfg.motor_right)
         self.battery = Battery(cfg.battery)
@@ -74,8 +119,8 @@ class Plant:
         return pins.direction * level * self.battery.terminal_v()
 
     def apply(self, pins: tuple[DriverPins, DriverPins]) -> None:
-        """Account the battery since the last call, then set both motors from the pins."""
-        self._account_battery()
+        """Set both motors from the pins (phase voltage from the battery's present terminal voltage)."""
+        brake_limit_a = self.driver.brake_current_limit_a
         for w, p in enumerate(pins):
             if self.estop or not p.enabled:
                 mode, volt = "coast", 0.0
@@ -84,7 +129,8 @@ class Plant:
             else:
                 mode, volt = "drive", self.phase_voltage_v(p)
             self.mode[w], self.voltage_v[w] = mode, volt
-            self.physics.set_motor(w, mode, volt, self.driver.brake_damping_nm_s_rad)
+            limit = self.motors[w].ke_v_s_rad * brake_limit_a if mode == "brake" else None
+            self.physics.set_motor(w, mode, volt, limit)
 
     def set_estop(self, pressed: bool, pins: tuple[DriverPins, DriverPins]) -> None:
         """The mushroom button: relays cut both motors' phases while pressed."""
@@ -92,21 +138,33 @@ class Plant:
         self.apply(pins)
 
     def motor_currents_a(self) -> list[float]:
-        """Phase current of each motor now, A (0 when coasting or braking)."""
+        """(2,) phase current of each motor now, A: + driving forward torque; 0 when coasting.
+
+        The scalar form of :func:`motor_currents_a` (plain floats: called every 10 ms)."""
+        speeds = self.physics.wheel_speeds_list()
         out = []
         for w, m in enumerate(self.motors):
-            if self.mode[w] != "drive":
+            mode = self.mode[w]
+            if mode == "coast":
                 out.append(0.0)
                 continue
-            out.append(self.physics.motor_current_a(w, self.voltage_v[w], m.ke_v_s_rad, m.resistance_ohm,
-                                                    m.current_limit_a))
+            limit = self.driver.brake_current_limit_a if mode == "brake" else m.current_limit_a
+            i = (self.voltage_v[w] - m.ke_v_s_rad * speeds[w]) / m.resistance_ohm
+            out.append(max(-limit, min(limit, i)))
         return out
 
-    def _account_battery(self) -> None:
+    def battery_current_a(self) -> float:
+        """The pack's current now, A: both drivers (quiescent included) plus the auxiliary load.
+
+        The scalar form of :func:`battery_current_a`."""
+        v_batt = max(1.0, self.battery.terminal_v())
+        motor = self.motor_currents_a()
+        supply = (self.voltage_v[0] * motor[0] + self.voltage_v[1] * motor[1]) / v_batt
+        return supply + 2 * self.driver.quiescent_current_a + self.cfg.battery.auxiliary_power_w / v_batt
+
+    def account_battery(self, t_us: int = 0) -> None:
+        """Drain the battery by the present current since the last call (a grid sampler of the loop)."""
         t = self.physics.time_s
         dt = t - self._t_last_s
         self._t_last_s = t
-        v_batt = max(1.0, self.battery.terminal_v())
-        # power balance through the drivers: I_batt = sum(v_phase * i_phase) / V_batt
-        i_batt = sum(v * i for v, i in zip(self.voltage_v, self.motor_currents_a())) / v_batt
-        self.battery.draw(i_batt, dt)
+        self.battery.draw(self.battery_current_a(), dt)

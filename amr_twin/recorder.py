@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .build import LOOP_SENSOR_DIM
+from .plant import MODE_CODES, battery_current_a, motor_currents_a
 
 RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
 
@@ -30,13 +31,15 @@ class RunSeries:
     pwm_counts: np.ndarray       # (n, 2) analogWrite value on the driver's PWM pin
     direction: np.ndarray        # (n, 2) +1 DIR high (forward), -1 low
     mode: np.ndarray             # (n, 2) 0 drive, 1 coast, 2 brake
-    battery_v: np.ndarray        # (n,)
+    battery_v: np.ndarray        # (n,) terminal voltage
+    voltage_v: np.ndarray        # (n, 2) phase voltage the driver applies (0 braking or coasting)
+    current_a: np.ndarray        # (n, 2) motor (phase) current, + driving forward
+    battery_a: np.ndarray        # (n,) the pack's current: drivers and auxiliary load
     published: dict[int, np.ndarray]  # wheel -> (k, 2) rows t_s, rpm (as received on the PC)
     odom: np.ndarray             # (k, 4) t_s, x_m, y_m, yaw_rad (odom frame)
     commands: list[tuple[float, list[float]]] = field(default_factory=list)
 
 
-_MODES = {"drive": 0, "coast": 1, "brake": 2}
 
 
 def yaw_from_quat(q: np.ndarray) -> np.ndarray:
@@ -84,7 +87,8 @@ class Recorder:
     def _pin_row(self) -> np.ndarray:
         pins, plant = self.twin.firmware.pins, self.twin.plant
         return np.array([pins[0].pwm_counts, pins[1].pwm_counts, pins[0].direction, pins[1].direction,
-                         _MODES[plant.mode[0]], _MODES[plant.mode[1]], plant.battery.terminal_v()])
+                         MODE_CODES[plant.mode[0]], MODE_CODES[plant.mode[1]], plant.battery.terminal_v(),
+                         plant.voltage_v[0], plant.voltage_v[1]])
 
     def pins_changed(self, t_us: int) -> None:
         """The plant was updated at physics time ``t_us``: keep the new pin levels."""
@@ -124,8 +128,11 @@ class Recorder:
         pins = np.array(self._pins)[np.clip(idx, 0, None)]
         pose = np.column_stack([rows[:, 4], rows[:, 5], yaw_from_quat(rows[:, 7:11])])
         published = {w: np.array(v, float).reshape(-1, 2) for w, v in self._published.items()}
+        cfg, mode, voltage = self.twin.cfg, pins[:, 4:6].astype(int), pins[:, 7:9]
+        current = motor_currents_a(cfg, voltage, rows[:, 2:4], mode)
         return RunSeries(
             t_s=t, wheel_angle_rad=rows[:, 0:2], true_rpm=rows[:, 2:4] * RAD_S_TO_RPM, pose=pose,
             pwm_counts=pins[:, 0:2].astype(int), direction=pins[:, 2:4].astype(int),
-            mode=pins[:, 4:6].astype(int), battery_v=pins[:, 6], published=published,
+            mode=mode, battery_v=pins[:, 6], voltage_v=voltage, current_a=current,
+            battery_a=battery_current_a(cfg, voltage, current, pins[:, 6]), published=published,
             odom=np.array(self._odom, float).reshape(-1, 4), commands=list(self.commands))

@@ -1,20 +1,229 @@
-"""Static description of a built robot: mass, support loads, tip margin.
+"""Statics of the robot standing on a level floor: support loads from its compliances.
 
-The loads are measured in the settled simulation (motors braked, 1.5 s), not
-computed from a formula: they are what the contact solver gives.
+A hand calculation, independent of MuJoCo (the tests check it against a free
+settle of the exported MJCF). The chassis is rigid; it stands on six supports:
+
+- two tyres, radial springs ``k_t`` under the axle (``wheel.tyre_stiffness_n_m``):
+  load ``k_t s`` for an overlap ``s > 0`` of the undeformed tyre with the floor, 0 when
+  lifted;
+- four spring-loaded ball casters at the deck corners: the ball at its lower stop
+  reaches ``caster.drop_m`` below the unloaded tyres' plane. Pushed up by ``s > 0`` the
+  spring gives ``P + k_c s`` (preload ``P``), plus the ball's weight; at ``s = 0`` the
+  stop takes any load between 0 and that; at ``s = travel`` the spring is solid.
+
+The chassis sinks by ``u`` and pitches and rolls by small angles, so support ``i`` at
+``(x_i, y_i)`` overlaps the floor by ``s_i = d_i + u + theta x_i + phi y_i``. Vertical
+force and the two moments balance the weight at the centre of mass, which the tilt
+moves sideways by its height times the angle. The energy is
+convex, so the solution is unique; each support's regime (lifted, at its stop,
+sprung, solid) is found by trying the regimes until they are consistent.
 """
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.spatial import ConvexHull
+import itertools
+import math
+from dataclasses import dataclass
 
-from .build import build
+import numpy as np
+
 from .config import TwinConfig
-from .physics import Physics
 
 CONTACT_MIN_N = 0.5
 """A support carrying less than this is counted as lifted off."""
+
+LIFTED, STOP, SPRUNG, SOLID = "lifted", "at stop", "sprung", "solid"
+WHEEL_NAMES = ("wheel_left", "wheel_right")
+CASTER_NAMES = ("caster_front_left", "caster_front_right", "caster_rear_left", "caster_rear_right")
+
+
+@dataclass(frozen=True)
+class Statics:
+    """Solution of :func:`solve`. Loads in N, compressions in m, angles in rad."""
+
+    loads_n: dict[str, float]          # floor reaction on each support
+    regimes: dict[str, str]            # lifted, at stop, sprung or solid
+    compression_m: dict[str, float]    # tyre deflection or caster spring travel from its stop
+    points_xy_m: dict[str, np.ndarray]  # (2,) contact point in base_link
+    sink_m: float                      # chassis sink at the base_link origin
+    pitch_rad: float                   # nose down positive
+    roll_rad: float                    # left side down positive
+    mass_kg: float
+    com_m: np.ndarray                  # (3,) robot with payload, base_link (standing unloaded)
+
+
+def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
+    """Total mass (kg) and centre of mass ((3,), m, base_link) with the payload."""
+    from . import mass
+
+    c, w, k, p = cfg.chassis, cfg.wheel, cfg.caster, cfg.payload
+    parts = [mass.chassis_inertial(cfg)]
+    rotor = mass.wheel_inertial(cfg)
+    parts += [mass.Inertial(rotor.mass_kg, np.array([0.0, s * w.separation_m / 2, w.radius_m]), rotor.inertia_kg_m2)
+              for s in (1, -1)]
+    ball = mass.caster_inertial(cfg)
+    r_ball = k.ball_diameter_m / 2
+    parts += [mass.Inertial(ball.mass_kg, np.array([sx * k.x_m, sy * k.y_m, r_ball - k.drop_m]), ball.inertia_kg_m2)
+              for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    if p.mass_kg > 0:
+        z = c.floor_c_z_m + c.sheet_thickness_m + p.size_m[2] / 2
+        parts.append(mass.Inertial(p.mass_kg, np.array([p.xy_m[0], p.xy_m[1], z]), np.zeros((3, 3))))
+    total = mass.combine(parts)
+    return total.mass_kg, total.com_m
+
+
+def support_points_xy(cfg: TwinConfig) -> dict[str, np.ndarray]:
+    """Contact point of each support with the floor, base_link xy, m."""
+    half = cfg.wheel.separation_m / 2
+    k = cfg.caster
+    points = {"wheel_left": np.array([0.0, half]), "wheel_right": np.array([0.0, -half])}
+    for name, (sx, sy) in zip(CASTER_NAMES, ((1, 1), (1, -1), (-1, 1), (-1, -1))):
+        points[name] = np.array([sx * k.x_m, sy * k.y_m])
+    return points
+
+
+def solve(cfg: TwinConfig) -> Statics:
+    """Support loads of the robot at rest on a level floor (see the module docstring)."""
+    from . import mass
+
+    g = cfg.sim.gravity_m_s2
+    m_kg, com = robot_mass_com(cfg)
+    weight = m_kg * g
+    points = support_points_xy(cfg)
+    k_t, k = cfg.wheel.tyre_stiffness_n_m, cfg.caster
+    ball_n = mass.caster_inertial(cfg).mass_kg * g
+    # per support: offset d (overlap at u = 0), stiffness, force at s = 0+ and travel
+    spec = {name: (0.0, k_t, 0.0, math.inf) for name in WHEEL_NAMES}
+    spec.update({name: (k.drop_m, k.stiffness_n_m, k.preload_n + ball_n, k.travel_m) for name in CASTER_NAMES})
+    names = list(points)
+    # the likely regimes first; a support exactly at its stop before a lifted one, so that a
+    # degenerate case (several balls just touching) shares the load (least-norm forces)
+    options = {name: ((SPRUNG, LIFTED) if name in WHEEL_NAMES else (SPRUNG, STOP, LIFTED, SOLID)) for name in names}
+    guesses = _active_set_guesses(names, points, spec, weight, com)
+    for combo in itertools.chain(guesses, itertools.product(*(options[n] for n in names))):
+        result = _try(dict(zip(names, combo)), names, points, spec, weight, com)
+        if result is not None:
+            x, forces, overlaps = result
+            regimes = dict(zip(names, combo))
+            compression = {n: max(0.0, overlaps[n]) for n in names}
+            return Statics(loads_n=forces, regimes=regimes, compression_m=compression, points_xy_m=points,
+                           sink_m=float(x[0]), pitch_rad=float(x[1]), roll_rad=float(x[2]),
+                           mass_kg=m_kg, com_m=com)
+    raise ValueError("statics: the robot has no equilibrium on its supports (it tips over)")
+
+
+def _active_set_guesses(names, points, spec, weight, com, iterations: int = 12):
+    """Regime assignments from a few rounds of "solve, then move each support to the regime
+    its overlap and force call for" (usually the answer; the caller checks it)."""
+    regime = {n: SPRUNG for n in names}
+    seen = []
+    for _ in range(iterations):
+        combo = tuple(regime[n] for n in names)
+        if combo in seen:
+            return
+        seen.append(combo)
+        yield combo
+        x = _solve_unchecked(regime, names, points, spec, weight, com)
+        if x is None:
+            return
+        for n in names:
+            d, stiff, f0, travel = spec[n]
+            s_n = d + x[0] + x[1] * points[n][0] + x[2] * points[n][1]
+            r = regime[n]
+            if r in (STOP, SOLID):
+                f = float(x[3 + [m for m in names if regime[m] in (STOP, SOLID)].index(n)])
+                if r == STOP:
+                    regime[n] = LIFTED if f < 0 else SPRUNG if f > f0 else STOP
+                else:
+                    regime[n] = SPRUNG if f < f0 + stiff * travel else SOLID
+            elif s_n > travel:
+                regime[n] = SOLID
+            elif s_n > 0:
+                regime[n] = SPRUNG if (r != LIFTED or n in WHEEL_NAMES) else STOP
+            else:
+                regime[n] = LIFTED if n in WHEEL_NAMES or f0 == 0 or r == LIFTED else STOP
+
+
+def _solve_unchecked(regime, names, points, spec, weight, com):
+    a, b = _system(regime, names, points, spec, weight, com)
+    x = np.linalg.lstsq(a, b, rcond=None)[0]
+    return x if np.all(np.isfinite(x)) else None
+
+
+def _system(regime, names, points, spec, weight, com):
+    """The linear system of one regime assignment: unknowns u, theta, phi, then one
+    force per support held at a stop or solid."""
+    fixed = [n for n in names if regime[n] in (STOP, SOLID)]
+    size = 3 + len(fixed)
+    a = np.zeros((size, size))
+    b = np.zeros(size)
+    b[:3] = weight * np.array([1.0, com[0], com[1]])
+    # tilting moves the centre of mass sideways by its height times the angle
+    a[1, 1] -= weight * com[2]
+    a[2, 2] -= weight * com[2]
+    for n in names:
+        x, y = points[n]
+        arm = np.array([1.0, x, y])  # force, moment about y (x F), moment about x (y F)
+        d, stiff, f0, travel = spec[n]
+        if regime[n] == SPRUNG:   # F = f0 + stiff (d + u + theta x + phi y)
+            a[:3, :3] += np.outer(arm, stiff * arm)
+            b[:3] -= arm * (f0 + stiff * d)
+        elif regime[n] in (STOP, SOLID):
+            j = 3 + fixed.index(n)
+            a[:3, j] += arm       # unknown force
+            a[j, :3] = arm        # overlap fixed: d + u + theta x + phi y = s_fixed
+            b[j] = (0.0 if regime[n] == STOP else travel) - d
+    return a, b
+
+
+def _try(regime: dict[str, str], names, points, spec, weight: float, com: np.ndarray):
+    """Solve the linear system of one regime assignment; None if it is inconsistent."""
+    fixed = [n for n in names if regime[n] in (STOP, SOLID)]
+    a, b = _system(regime, names, points, spec, weight, com)
+    x = np.linalg.lstsq(a, b, rcond=None)[0]  # least-norm forces where the stops are redundant
+    if not np.all(np.isfinite(x)) or not np.allclose(a @ x, b, rtol=1e-9, atol=1e-9 * max(1.0, weight)):
+        return None
+    if not _stable(a[:3, :3], a[3:, :3]):
+        return None
+    forces, overlaps = {}, {}
+    tol = 1e-12
+    for n in names:
+        px, py = points[n]
+        d, stiff, f0, travel = spec[n]
+        s = d + x[0] + x[1] * px + x[2] * py
+        overlaps[n] = s
+        r = regime[n]
+        if r == LIFTED:
+            if s > tol:
+                return None
+            forces[n] = 0.0
+        elif r == SPRUNG:
+            if s < -tol or s > travel + tol:
+                return None
+            forces[n] = f0 + stiff * s
+        else:
+            f = float(x[3 + fixed.index(n)])
+            limit_lo = 0.0 if r == STOP else f0 + stiff * travel
+            limit_hi = f0 if r == STOP else math.inf
+            if f < limit_lo - 1e-9 or f > limit_hi + 1e-9:
+                return None
+            forces[n] = f
+    return x, forces, overlaps
+
+
+def _stable(stiffness: np.ndarray, fixed_arms: np.ndarray) -> bool:
+    """Is the equilibrium a minimum of the energy? (3, 3) stiffness of the sprung supports
+    and the weight's tilt term, restricted to the motions the fixed supports allow."""
+    if len(fixed_arms):
+        _, sv, vt = np.linalg.svd(fixed_arms)
+        rank = int(np.sum(sv > 1e-9 * max(1.0, sv.max())))
+        free = vt[rank:].T
+    else:
+        free = np.eye(3)
+    if free.shape[1] == 0:
+        return True
+    reduced = free.T @ (0.5 * (stiffness + stiffness.T)) @ free
+    return bool(np.all(np.linalg.eigvalsh(reduced) > 0))
 
 
 def tip_margin_m(points_xy: np.ndarray, com_xy: np.ndarray) -> float:
@@ -29,6 +238,8 @@ def tip_margin_m(points_xy: np.ndarray, com_xy: np.ndarray) -> float:
     -------
     float : positive inside the polygon, negative outside, m.
     """
+    from scipy.spatial import ConvexHull
+
     points_xy = np.asarray(points_xy, float)
     if len(points_xy) < 3:
         return -float("inf")
@@ -37,32 +248,58 @@ def tip_margin_m(points_xy: np.ndarray, com_xy: np.ndarray) -> float:
     return float(np.min(-(hull.equations[:, :2] @ com_xy + hull.equations[:, 2])))
 
 
-def settled_physics(cfg: TwinConfig, settle_s: float = 1.5) -> Physics:
-    """Build the robot in an empty world and let it settle."""
-    physics = Physics(build(cfg, world="empty").model)
-    physics.settle(settle_s)
-    return physics
-
-
 def describe(cfg: TwinConfig) -> dict:
     """The ``amr-twin model --json`` object."""
-    physics = settled_physics(cfg)
-    loads = physics.support_loads_n()
-    points = physics.support_points_xy()
-    in_contact = np.array([points[k] for k, f in loads.items() if f > CONTACT_MIN_N])
-    com = physics.com_world_m()
-    total = physics.robot_mass_kg()
+    st = solve(cfg)
+    in_contact = np.array([st.points_xy_m[n] for n, f in st.loads_n.items() if f > CONTACT_MIN_N])
     return {
-        "total_mass_kg": round(total, 4),
+        "total_mass_kg": round(st.mass_kg, 4),
         "payload_kg": cfg.payload.mass_kg,
         "payload_xy_m": list(cfg.payload.xy_m),
         "wheel_radius_m": cfg.wheel.radius_m,
         "wheel_separation_m": cfg.wheel.separation_m,
         "caster_count": 4,
-        "static_load_n": {k: round(v, 3) for k, v in loads.items()},
-        "static_load_sum_n": round(sum(loads.values()), 3),
-        "weight_n": round(total * cfg.sim.gravity_m_s2, 3),
-        "com_m": [round(float(v), 5) for v in com],
-        "tip_margin_m": round(tip_margin_m(in_contact, com[:2]), 5),
+        "static_load_n": {k: round(v, 3) for k, v in st.loads_n.items()},
+        "static_load_sum_n": round(sum(st.loads_n.values()), 3),
+        "support_regime": dict(st.regimes),
+        "support_compression_mm": {k: round(v * 1e3, 4) for k, v in st.compression_m.items()},
+        "weight_n": round(st.mass_kg * cfg.sim.gravity_m_s2, 3),
+        "com_m": [round(float(v), 5) for v in st.com_m],
+        "tip_margin_m": round(tip_margin_m(in_contact, st.com_m[:2]), 5),
         "timestep_s": cfg.sim.timestep_s,
     }
+
+
+SENSITIVITY_CASES = (("no payload", {}), ("20 kg at the deck's rear edge", {"payload.mass_kg": 20.0,
+                                                                        "payload.xy_m": [-0.2, 0.0]}))
+SENSITIVITY_VARIANTS = (
+    ("as in amr.yaml", {}),
+    ("wheel radius +2 mm (same chassis: casters 2 mm higher)", {"caster.drop_m": -0.002}),
+    ("wheel radius -2 mm (casters 2 mm lower)", {"caster.drop_m": 0.002}),
+    ("caster springs -30 %", {"caster.stiffness_n_m": 0.7}),
+    ("caster springs +30 %", {"caster.stiffness_n_m": 1.3}),
+)
+
+
+def sensitivity(cfg: TwinConfig) -> list[dict]:
+    """Static loads for :data:`SENSITIVITY_CASES` x :data:`SENSITIVITY_VARIANTS`.
+
+    A larger tyre on the same chassis lifts the casters' mounts: its radius change is
+    taken as the opposite change of ``caster.drop_m`` (``base_link`` stays on the floor).
+    Spring variants scale the stiffness. Returns one dict per case and variant: the
+    loads (N) of the left wheel and the left front and rear casters, and the regimes.
+    """
+    rows = []
+    for case, payload in SENSITIVITY_CASES:
+        for variant, change in SENSITIVITY_VARIANTS:
+            data = cfg.model_dump()
+            for key, value in {**payload, **change}.items():
+                section, name = key.split(".")
+                base = data[section][name]
+                data[section][name] = (base + value if key == "caster.drop_m"
+                                       else base * value if key == "caster.stiffness_n_m" else value)
+            st = solve(TwinConfig.model_validate(data))
+            rows.append({"case": case, "variant": variant,
+                         **{k: st.loads_n[k] for k in ("wheel_left", "caster_front_left", "caster_rear_left")},
+                         "lifted": [k for k, r in st.regimes.items() if r == LIFTED]})
+    return rows

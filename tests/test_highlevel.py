@@ -43,7 +43,7 @@ def test_full_turn_in_place_odometry_yaw_within_3_deg(cfg, firmware):
     s = run_mission(cfg, steps, 8.0, TwinOptions(firmware=firmware)).series
     true_deg = math.degrees(np.unwrap(s.pose[:, 2])[-1] - s.pose[0, 2])
     odom_deg = math.degrees(np.unwrap(s.odom[:, 3])[-1])
-    assert true_deg > 300.0  # about one full turn
+    assert true_deg > 250.0  # most of a turn (23 RPM wheels: the faithful PI leaves up to 4 RPM)
     assert odom_deg == pytest.approx(true_deg, abs=3.0)
 
 

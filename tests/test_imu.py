@@ -91,10 +91,10 @@ def test_gyro_integrated_over_a_90_degree_turn():
     while abs(math.remainder(rig.physics.pose().yaw_rad - yaw0, 2 * math.pi)) < math.radians(85):
         rig.run(0.01)
     for w in range(2):
-        rig.physics.set_motor(w, "brake", brake_damping=50.0)
+        rig.physics.set_motor(w, "brake")
     rig.run(1.0)
     turned = math.remainder(rig.physics.pose().yaw_rad - yaw0, 2 * math.pi)
-    assert 80 < math.degrees(turned) < 100
+    assert 80 < math.degrees(turned) < 120  # the shorted motors stop it in about 0.3 s
     rate = rig.gyro()[n_rest:, 2] - bias[2]
     assert rate.max() > math.radians(30)
     integrated = rate.sum() * rig.imu.dt_s

@@ -1,0 +1,111 @@
+"""Load-dependent rolling resistance of the tyres and the ball casters.
+
+Each support resists rolling in proportion to its contact normal force ``N``:
+
+- a tyre: a torque ``Crr N r`` against the wheel's rotation (``wheel.rolling_resistance``),
+  the moment of the normal force shifted ahead in the contact patch. It is set as the
+  wheel hinge's dry friction (``dof_frictionloss``, on top of the motor's own friction),
+  so MuJoCo's constraint solver applies it in C every step, holds a wheel at rest
+  without jitter, and drops it when the wheel lifts (``N = 0``);
+- a ball transfer unit: a force ``Crr_ball N`` against the ball's velocity over the
+  floor, in any direction (``caster.rolling_resistance``), applied to the ball
+  (``xfrc_applied``). Below 5 mm/s it fades linearly to 0, so that a robot at rest is
+  not pushed about by a force held between updates.
+
+Why not MuJoCo's contact friction: rolling friction (condim 6) on the tyres and
+sliding friction on the balls made the stiff contacts of :mod:`amr_twin.build` chatter
+(normal loads swinging 0-200 N at 100-250 Hz while driving, with elliptic cones as
+with pyramidal ones); the frictionless balls and condim 3 tyres do not.
+
+The normal loads come from the springs that carry them: a tyre's ``k_t q + c_t q'``
+(its compression ``q``), a caster's preload, spring and damping plus the ball's
+weight while the spring is off its stop; a caster resting on its stop is read from
+the contact force of the last step. The resistances are updated on the loop's record
+grid (every 10 ms), where the loads change little; the tyre friction acts in C at
+every step in between. Plain Python floats: a call costs a few microseconds.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .config import TwinConfig
+
+BALL_SPEED_EPS_M_S = 0.005
+"""Ball speed below which the caster resistance fades linearly to zero, m/s."""
+
+
+class RollingResistance:
+    """Updates the tyres' and casters' rolling resistance from the present loads.
+
+    Call it (``rr(t_us)``) on the record grid; :attr:`loads` holds the normal loads
+    it used, N: wheel left, right, casters fl, fr, rl, rr.
+    """
+
+    def __init__(self, physics, cfg: TwinConfig):
+        import mujoco
+
+        self.physics = physics
+        m, d = physics.model, physics.data
+        self._qpos, self._qvel, self._xmat, self._xpos = d.qpos, d.qvel, d.xmat, d.xpos
+        self._friction, self._xfrc = m.dof_frictionloss, d.xfrc_applied
+        w, k, g = cfg.wheel, cfg.caster, cfg.sim.gravity_m_s2
+
+        def joint(name):
+            j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "amr/" + name)
+            return int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+
+        self._tyres = [joint(f"wheel_{s}_tyre") for s in ("left", "right")]
+        self._k_t, self._c_t = w.tyre_stiffness_n_m, w.tyre_damping_n_s_m
+        self._wheel_dof = [int(v) for v in physics.wheel_dof]
+        self._motor_friction = [float(m.dof_frictionloss[v]) for v in self._wheel_dof]
+        self._tyre_arm_m = w.rolling_resistance * w.radius_m
+        casters = [name for name in physics.support_geoms if name.startswith("caster_")]
+        self._casters = [joint(f"{name}_joint") for name in casters]
+        self._ball_body = [int(m.geom_bodyid[physics.support_geoms[name]]) for name in casters]
+        first = self._ball_body[0]  # consecutive bodies: one slice assignment (fancy indexing costs 15 us)
+        consecutive = self._ball_body == list(range(first, first + len(casters)))
+        self._balls = slice(first, first + len(casters)) if consecutive else self._ball_body
+        ball_kg = float(m.body_mass[self._ball_body[0]])
+        self._k_c, self._c_c = k.stiffness_n_m, k.damping_n_s_m
+        self._f0_c = k.preload_n + ball_kg * g
+        self._ball_crr = k.rolling_resistance
+        self._base = physics.base_body
+        self._root_dof = int(physics.root_dof)
+        self.loads = [0.0] * 6
+
+    def __call__(self, t_us: int = 0) -> None:
+        # plain floats: indexing them is cheap (array views cached: each attribute access
+        # of MjData makes a new view, ~0.3 us)
+        qpos, qvel = self._qpos.tolist(), self._qvel.tolist()
+        loads = self.loads
+        for i, (qa, va) in enumerate(self._tyres):
+            loads[i] = max(0.0, self._k_t * qpos[qa] + self._c_t * qvel[va])
+        contact = None
+        for i, (qa, va) in enumerate(self._casters):
+            q = qpos[qa]
+            if q > 1e-6:  # off its stop: the spring carries the load
+                loads[2 + i] = max(0.0, self._f0_c + self._k_c * q + self._c_c * qvel[va])
+            else:  # on its stop (or lifted): the contact force tells
+                if contact is None:
+                    contact = self.physics.support_normal_forces_n()
+                loads[2 + i] = float(contact[2 + i])
+        arm, fl = self._tyre_arm_m, self._friction
+        for i, dof in enumerate(self._wheel_dof):
+            fl[dof] = self._motor_friction[i] + arm * loads[i]
+        if self._ball_crr == 0.0:
+            return
+        # ball velocity over the floor: the base's (world) velocity plus its yaw rate
+        # (world z of the body-frame angular velocity) times the ball's lever arm
+        r0 = self._root_dof
+        vx, vy = qvel[r0], qvel[r0 + 1]
+        xm = self._xmat[self._base].tolist()
+        wz = xm[6] * qvel[r0 + 3] + xm[7] * qvel[r0 + 4] + xm[8] * qvel[r0 + 5]
+        xpos = self._xpos.tolist()
+        bx, by = xpos[self._base][0], xpos[self._base][1]
+        crr, forces = self._ball_crr, []
+        for i, body in enumerate(self._ball_body):
+            ux, uy = vx - wz * (xpos[body][1] - by), vy + wz * (xpos[body][0] - bx)
+            scale = crr * loads[2 + i] / max(math.hypot(ux, uy), BALL_SPEED_EPS_M_S)
+            forces.append((-scale * ux, -scale * uy))
+        self._xfrc[self._balls, :2] = forces

@@ -112,13 +112,16 @@ def summary(result, single: bool) -> dict:
     """The ``--json`` object of a run."""
     series, wc = result.series, result.wheel_command
     code = next((c for c in result.codes if c != 0), 0)
+    last_s = series.t_s >= series.t_s[-1] - 1.0  # "final" electrical values: the last second
     wheels = {}
     for w, name in enumerate(("left", "right")):
         reference = wc[2 * w + 1] if wc else 0.0
         pub = series.published[w]
         entry = {"motion": int(wc[2 * w]) if wc else 0, "reference_rpm": reference,
                  "final_rpm": float(pub[-1, 1]) if len(pub) else 0.0,
-                 "true_final_rpm": float(series.true_rpm[-1, w]), "samples": int(len(pub))}
+                 "true_final_rpm": float(series.true_rpm[-1, w]), "samples": int(len(pub)),
+                 "current_a_final": float(series.current_a[last_s, w].mean()),
+                 "current_a_peak": float(np.abs(series.current_a[:, w]).max())}
         if single:
             entry.update(_step_metrics(series, w, reference))
         wheels[name] = entry
@@ -130,7 +133,18 @@ def summary(result, single: bool) -> dict:
         "codes": result.codes, "errors": result.errors, "wheels": wheels,
         "final_pose": {"x_m": x, "y_m": y, "yaw_rad": yaw},
         "final_odom_pose": {"x_m": float(odom[0]), "y_m": float(odom[1]), "yaw_rad": float(odom[2])},
+        "battery": _battery_summary(series),
         "sim_s": result.sim_s, "wall_s": result.wall_s})
+
+
+def _battery_summary(series: RunSeries) -> dict:
+    """The pack over the run: mean current, final voltage, energy drawn and per metre driven."""
+    power = series.battery_v * series.battery_a
+    energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(series.t_s)))
+    distance = float(np.sum(np.hypot(*np.diff(series.pose[:, :2], axis=0).T)))
+    return {"battery_a_mean": float(series.battery_a.mean()), "battery_v_final": float(series.battery_v[-1]),
+            "energy_j": energy, "distance_m": distance,
+            "energy_j_per_m": energy / distance if distance > 0.05 else None}
 
 
 def _start_pose(text: str) -> tuple[float, float, float]:

@@ -82,12 +82,19 @@ def support_points_xy(cfg: TwinConfig) -> dict[str, np.ndarray]:
     return points
 
 
-def solve(cfg: TwinConfig) -> Statics:
-    """Support loads of the robot at rest on a level floor (see the module docstring)."""
+def solve(cfg: TwinConfig, accel_m_s2: tuple[float, float] = (0.0, 0.0)) -> Statics:
+    """Support loads of the robot on a level floor (see the module docstring).
+
+    ``accel_m_s2``: the robot's acceleration (x forward, y left, base_link), for the
+    quasi-static loads of a robot that accelerates or turns: d'Alembert's force ``-m a``
+    at the centre of mass moves the weight's line of action by ``-a z_com / g``.
+    """
     from . import mass
 
     g = cfg.sim.gravity_m_s2
     m_kg, com = robot_mass_com(cfg)
+    com = com.copy()
+    com[:2] -= np.asarray(accel_m_s2, float) * com[2] / g
     weight = m_kg * g
     points = support_points_xy(cfg)
     k_t, k = cfg.wheel.tyre_stiffness_n_m, cfg.caster

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
+from . import chapter5_payload as payload
 from ..config import TwinConfig
 from ..loop import TwinOptions
 from ..metrics import step_info
@@ -209,6 +210,7 @@ def simulate(job: _Job) -> dict:
     return {"run": job.spec.number, "codes": result.codes, "errors": result.errors,
             "wheel_command": result.wheel_command, "t_command_s": s.commands[0][0] if s.commands else 0.0,
             "t_s": s.t_s, "true_rpm": s.true_rpm, "published": s.published, "pwm_counts": s.pwm_counts,
+            "current_a": s.current_a, "battery_a": s.battery_a,
             "sim_s": result.sim_s, "wall_s": result.wall_s}
 
 
@@ -236,7 +238,7 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
 
 def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,
         duration_s: float | None = None, progress: bool = True, record_dir: Path | None = None,
-        mcap_dir: Path | None = None) -> dict:
+        mcap_dir: Path | None = None, study: bool = True) -> dict:
     """Simulate the chapter 5 runs and measure them.
 
     Parameters
@@ -249,6 +251,8 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     progress : show a progress bar.
     record_dir : folder for one Rerun recording per run, ``run<N>.rrd`` (created; None: none).
     mcap_dir : folder for one MCAP file per run, ``run<N>.mcap`` (may be ``record_dir``).
+    study : with the whole suite, also run §5.1.4's rolling-resistance study
+        (:mod:`.chapter5_payload`, 8 more runs).
 
     Returns
     -------
@@ -270,12 +274,23 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
 
     todo = [_Job(s, cfg, firmware, duration_s or s.duration_s, rrd_path=target("rrd", s),
                  mcap_path=target("mcap", s)) for s in specs]
-    done = {job.spec.number: analyse(job.spec, raw)
-            for job, raw in run_all(simulate, todo, jobs, "chapter 5 runs", progress)}
+    # §5.1.4's rolling-resistance study runs in the same pool, with the whole suite only
+    study = [(crr, _Job(s, c, firmware, s.duration_s)) for crr, c in payload.study_configs(cfg)
+             for s in RUNS if s.number in payload.STUDY_RUNS] if study and runs is None and duration_s is None else []
+    crr_of = {id(job): crr for crr, job in study}
+    done, analysed = {}, []
+    for job, raw in run_all(simulate, todo + [job for _, job in study], jobs, "chapter 5 runs", progress):
+        if id(job) in crr_of:
+            analysed.append((crr_of[id(job)], analyse(job.spec, raw)))
+        else:
+            done[job.spec.number] = analyse(job.spec, raw)
     results = [done[s.number] for s in specs]
     return {"firmware": firmware, "jobs": jobs, "wall_s": time.perf_counter() - wall0,
             "sim_s": sum(r["duration_s"] for r in results), "runs": results,
-            "comparisons": compare_oscillation(results)}
+            "comparisons": compare_oscillation(results),
+            "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
+            "payload_duty": payload.duty_comparison(results),
+            "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
 
 
 def plot(results: dict, out_dir: Path) -> list[Path]:
@@ -295,6 +310,10 @@ def _public(results: dict) -> dict:
             "oscillation": f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S:g} s",
             "oscillation_verdict": oscillation_verdict(results["comparisons"]),
             "bands": [vars(b) for b in BANDS], "runs": runs, "comparisons": results["comparisons"],
+            "crr": results["crr"], "payload_duty": results["payload_duty"],
+            "rolling_resistance_study": results["rolling_resistance_study"],
+            "threshold_crr": payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
+                                                   results["crr"]["tyres"]),
             "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)}}
 
 

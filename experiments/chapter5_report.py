@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .chapter5_payload import markdown as payload_markdown
+
 COLUMNS = (("delay_s", "delay s"), ("rise_s", "rise s"), ("peak_s", "peak s"), ("settling_s", "settling s"),
            ("overshoot", "overshoot RPM"), ("steady_error", "steady err RPM"), ("oscillation", "oscillation RPM"))
 
@@ -100,6 +102,7 @@ def markdown(data: dict) -> str:
         "## Bands (§5.1.3, §5.1.4)", "", *_band_table(data), "",
         "## Published samples (wheel0_Vel / wheel1_Vel), judged", "", *_table(data, "published", True), "",
         "## True wheel speed (100 Hz), for reference", "", *_table(data, "true", False), "",
+        "## The PI's duty with 20 kg (§5.1.4)", "", *payload_markdown(data), "",
         "## Oscillation during the transient: 20 kg against unloaded (§5.1.4)", "", *_oscillation(data), "",
         "## Bands missed", "", *_misses(data), "",
         "## Figures", "",

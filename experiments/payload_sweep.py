@@ -139,6 +139,48 @@ def _slip(series, cfg: TwinConfig) -> np.ndarray:
     return surface - ground
 
 
+def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s) -> dict:
+    """When and why a drive wheel is least loaded: the accelerations at that instant and the
+    quasi-static loads they give (:func:`amr_twin.statics.solve` with d'Alembert's force).
+
+    ``loads`` (k, 6) support loads and ``vel`` (k, 6) base velocities (world linear, body
+    angular) every :data:`SAMPLE_S`; ``s`` the run's series (for the yaw).
+    """
+    from ..statics import solve
+
+    i, w = np.unravel_index(np.argmin(loads[:, :2]), loads[:, :2].shape)
+    t = SAMPLE_S * (np.arange(len(loads)) + 1)
+    yaw = np.interp(t, s.t_s, np.unwrap(s.pose[:, 2]))
+    acc_world = np.gradient(vel[:, :2], SAMPLE_S, axis=0)
+    c, sn = np.cos(yaw[i]), np.sin(yaw[i])
+    ax, ay = c * acc_world[i, 0] + sn * acc_world[i, 1], -sn * acc_world[i, 0] + c * acc_world[i, 1]
+    wheel = WHEELS[w]
+    static = solve(cfg).loads_n[f"wheel_{wheel}"]
+    both = solve(cfg, (ax, ay)).loads_n[f"wheel_{wheel}"]
+    lateral = solve(cfg, (0.0, ay)).loads_n[f"wheel_{wheel}"] - static
+    longitudinal = solve(cfg, (ax, 0.0)).loads_n[f"wheel_{wheel}"] - static
+    if max(abs(lateral), abs(longitudinal)) < 0.05 * static:
+        mechanism = "static load split"
+    elif abs(lateral) >= abs(longitudinal):
+        mechanism = f"lateral load transfer, {ay:+.2f} m/s^2 (turning)"
+    else:
+        mechanism = f"longitudinal load transfer, {ax:+.2f} m/s^2 ({'braking' if ax * vel[i, 0] < 0 else 'accelerating'})"
+    return {"dyn_min_wheel": wheel, "dyn_min_wheel_t_s": float(t[i]), "dyn_min_wheel_accel_m_s2": [ax, ay],
+            "dyn_min_wheel_quasi_static_n": both, "dyn_min_wheel_mechanism": mechanism}
+
+
+def _electrics(s, duration_s: float) -> dict:
+    """Steady motor currents, the battery's current and the energy per metre driven."""
+    tail = s.t_s >= 0.75 * duration_s
+    power = s.battery_v * s.battery_a
+    energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(s.t_s)))
+    distance = float(np.sum(np.hypot(*np.diff(s.pose[:, :2], axis=0).T)))
+    out = {f"{name}_steady_current_a": float(np.mean(np.abs(s.current_a[tail, w]))) for w, name in enumerate(WHEELS)}
+    out.update(battery_steady_a=float(np.mean(s.battery_a[tail])), energy_j=energy, distance_m=distance,
+               energy_j_per_m=energy / distance if distance > 0.05 else None)
+    return out
+
+
 def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     from ..loop import Twin, TwinOptions
     from ..statics import CONTACT_MIN_N
@@ -155,11 +197,12 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     if code != 0:
         return {"error": f"command refused (code {code}): {twin.client.last_error}"}
     req = twin.client.last_request
-    loads, tilt = [], []
+    loads, tilt, vel = [], [], []
     for t_s in np.arange(SAMPLE_S, point.duration_s + 1e-9, SAMPLE_S):
         twin.advance_to_us(int(round(t_s * 1e6)))
-        loads.append(twin.physics.support_loads_n())
+        loads.append(twin.physics.support_normal_forces_n())
         tilt.append(twin.physics.base_tilt_rad())
+        vel.append(twin.physics.base_velocity())
     s = twin.recorder.series()
     if recording:
         from ..rerun_log import record_run
@@ -168,12 +211,15 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
         result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
                            sim_s=point.duration_s, wall_s=0.0)
         record_run(twin, rrd_path=point.rrd_path, mcap_path=point.mcap_path, result=result)
-    names = list(loads[0])
-    min_load = {n: min(row[n] for row in loads) for n in names}
+    names = list(twin.physics.support_geoms)
+    loads = np.array(loads)
+    min_load = dict(zip(names, loads.min(axis=0).tolist()))
     out = {"max_tilt_deg": math.degrees(max(tilt)),
            "dyn_min_wheel_n": min(v for n, v in min_load.items() if n.startswith("wheel")),
            "dyn_min_caster_n": min(v for n, v in min_load.items() if n.startswith("caster")),
            "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N)}
+    out.update(_min_wheel_mechanism(cfg, loads, np.array(vel), s))
+    out.update(_electrics(s, point.duration_s))
     out["wheel_lift_off"] = out["dyn_min_wheel_n"] < CONTACT_MIN_N
     slip = _slip(s, cfg)
     tail = s.t_s >= 0.75 * point.duration_s

@@ -16,8 +16,10 @@ PANELS = (  # (column or per-wheel suffix, label); per-wheel ones plot the worse
     ("~steady_duty", "steady duty (-)"), ("dyn_min_wheel_n", "min wheel load (N)"),
     ("dyn_min_caster_n", "min caster load (N)"), ("max_tilt_deg", "max tilt (deg)"),
     ("static_tip_margin_m", "static tip margin (m)"), ("~max_slip_m_s", "max slip (m/s)"),
-    ("~steady_slip_ratio", "steady slip ratio (-)"),
+    ("~steady_slip_ratio", "steady slip ratio (-)"), ("~steady_current_a", "motor current (A)"),
+    ("battery_steady_a", "battery current (A)"), ("energy_j_per_m", "energy per metre (J/m)"),
 )
+LOWEST_ROWS = 10  # rows of the lowest drive-wheel loads in summary.md
 
 
 def _value(row: dict, column: str) -> float:
@@ -79,7 +81,7 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
 
     rows, paths = results["rows"], []
     for command in dict.fromkeys(r["command"] for r in rows):
-        fig, axes = plt.subplots(3, 4, figsize=(15, 9), sharex=True)
+        fig, axes = plt.subplots(3, 5, figsize=(18, 9), sharex=True)
         for ax, (column, label) in zip(axes.flat, PANELS):
             for position in dict.fromkeys(r["position"] for r in rows):
                 pts = sorted((r["mass_kg"], _value(r, column)) for r in rows
@@ -108,6 +110,23 @@ def _csv(rows: list[dict]) -> str:
     return buffer.getvalue()
 
 
+def _lowest_wheel_loads(rows: list[dict]) -> list[str]:
+    """The points whose drive wheel came closest to lifting, with the mechanism and the
+    quasi-static load of the accelerations at that instant (a hand check of the dynamics)."""
+    done = sorted((r for r in rows if r.get("dyn_min_wheel_n") is not None), key=lambda r: r["dyn_min_wheel_n"])
+    if not done:
+        return []
+    lines = ["## Lowest drive-wheel loads", "",
+             "| mass kg | position | command | wheel | min load N | at s | quasi-static N | mechanism |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in done[:LOWEST_ROWS]:
+        q = r.get("dyn_min_wheel_quasi_static_n")
+        lines.append(f"| {r['mass_kg']:g} | {r['position']} | {r['command']} | {r.get('dyn_min_wheel', '—')} | "
+                     f"{r['dyn_min_wheel_n']:.1f} | {r.get('dyn_min_wheel_t_s', float('nan')):.2f} | "
+                     f"{'—' if q is None else f'{q:.1f}'} | {r.get('dyn_min_wheel_mechanism', '—')} |")
+    return lines
+
+
 def report(results: dict, out_dir: Path) -> dict:
     """Write ``sweep.csv``, ``summary.json`` and ``summary.md``; return the summary."""
     from .executor import write_json, write_text
@@ -129,6 +148,7 @@ def report(results: dict, out_dir: Path) -> dict:
     for position, s in summary.items():
         lines.append(f"| {position} | {s['highest_safe_kg']} | {s['first_unsafe_kg'] or '—'} | {s['reason'] or '—'} "
                      f"| {s['heaviest_tracking_kg']} | {', '.join(f'{m:g}' for m in s['invalid_kg']) or '—'} |")
+    lines += ["", *_lowest_wheel_loads(results["rows"])]
     lines += ["", *[f"![{p.name}]({p.name})" for p in sorted(out_dir.glob("sweep_*.png"))]]
     write_text(out_dir / "summary.md", "\n".join(lines) + "\n")
     return summary

@@ -36,15 +36,18 @@ def test_linear_20_s_odometry_distance_within_2_percent(cfg, firmware):
     assert odom_m == pytest.approx(true_m, rel=0.02)
 
 
-@pytest.mark.parametrize("firmware", FIRMWARES)
-def test_full_turn_in_place_odometry_yaw_within_3_deg(cfg, firmware):
+@pytest.mark.parametrize("firmware, tolerance_deg", [("faithful", 12.0), ("improved", 3.0)])
+def test_full_turn_in_place_odometry_yaw(cfg, firmware, tolerance_deg):
+    """The improved firmware publishes at 10 Hz: within 3 deg. The faithful one publishes one
+    speed per wheel revolution (2.6 s at 23 RPM, listing 4.12): the last, partial revolution
+    and the shorted motors' stop after the brake (about 0.3 s) are never published."""
     # 60 deg/s for 6 s (one turn as commanded), then brake and let it settle
     steps = [(0.0, Command("angular", speed_deg_s=60.0, icc_m=0.0)), (6.0, Command("stop"))]
     s = run_mission(cfg, steps, 8.0, TwinOptions(firmware=firmware)).series
     true_deg = math.degrees(np.unwrap(s.pose[:, 2])[-1] - s.pose[0, 2])
     odom_deg = math.degrees(np.unwrap(s.odom[:, 3])[-1])
     assert true_deg > 250.0  # most of a turn (23 RPM wheels: the faithful PI leaves up to 4 RPM)
-    assert odom_deg == pytest.approx(true_deg, abs=3.0)
+    assert odom_deg == pytest.approx(true_deg, abs=tolerance_deg)
 
 
 def test_cmd_vel_timeout_stops_the_wheels_in_the_twin(cfg):

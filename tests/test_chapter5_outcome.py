@@ -1,0 +1,67 @@
+"""The main outcome under test (issue 12): the eight chapter 5 runs may not get worse against
+the thesis than the committed scorecard; the right wheel overshoots more than the left
+(§5.1.3); a payload loads the motors (§5.1.4)."""
+
+import json
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from amr_twin.config import load_config
+from amr_twin.experiments import chapter5
+from amr_twin.experiments.chapter5_scorecard import SCORECARD, scorecard, worse
+from amr_twin.loop import TwinOptions
+from amr_twin.run import Command, run_command
+
+
+@pytest.fixture(scope="module")
+def suite():
+    results = chapter5.run(load_config(), jobs=2, progress=False, study=False)
+    return chapter5.report(results, Path(tempfile.mkdtemp()))
+
+
+def test_no_check_worse_than_the_committed_scorecard(suite):
+    """To accept a change that moves the twin away from the thesis, rewrite the scorecard on
+    purpose: python -m amr_twin.experiments.chapter5_scorecard (and say why in the commit)."""
+    committed = json.loads(SCORECARD.read_text())
+    now = scorecard(suite)
+    assert worse(committed, now) == []
+    assert set(now["checks"]) == set(committed["checks"])
+
+
+def test_worse_finds_a_check_that_leaves_its_band():
+    committed = {"passed": 2, "checks": {"a": {"twin": 0.5, "band": [0.3, 0.7], "unit": "s"},
+                                         "b": {"twin": 9.0, "band": [0.0, 3.0], "unit": "RPM"}}}
+    better = {"passed": 2, "checks": {"a": {"twin": 0.6, "band": [0.3, 0.7]}, "b": {"twin": 3.2, "band": [0.0, 3.0]}}}
+    assert worse(committed, better) == []
+    left_band = {"passed": 1, "checks": {"a": {"twin": 0.8, "band": [0.3, 0.7]}, "b": {"twin": 9.2, "band": [0.0, 3.0]}}}
+    found = worse(committed, left_band)
+    assert len(found) == 2 and found[0].startswith("a:") and "passed" in found[1]
+    assert worse(committed, {"passed": 2, "checks": {"a": {"twin": None, "band": [0.3, 0.7]},
+                                                     "b": {"twin": 9.0, "band": [0.0, 3.0]}}})
+
+
+def test_right_wheel_overshoots_more_than_the_left(suite):
+    """§5.1.3: the right wheel overshoots about 4 RPM, the left 0-2 RPM (runs 1 and 2, the same
+    76.39 RPM step on each wheel alone)."""
+    by_run = {r["run"]: r for r in suite["runs"]}
+    left = by_run[1]["wheels"]["left"]["published"]["overshoot"]
+    right = by_run[2]["wheels"]["right"]["published"]["overshoot"]
+    assert right > left + 0.5
+
+
+def test_motor_current_rises_with_payload():
+    """Acceptance (issue 12): empty world, improved firmware, 0.7 m/s for 16 s; the motor
+    current over the last 4 s, both wheels, rises 0 < 20 < 40 kg, by at least 0.3 A."""
+    current = []
+    for mass_kg in (0.0, 20.0, 40.0):
+        cfg = load_config(sets=[f"payload.mass_kg={mass_kg}"])
+        s = run_command(cfg, Command("linear", speed_m_s=0.7), 16.0,
+                        TwinOptions(firmware="improved", world="empty")).series
+        tail = s.t_s >= 12.0
+        assert np.abs(s.true_rpm[tail].mean(axis=0) - 53.48).max() < 2.0  # it does track
+        current.append(float(s.current_a[tail].mean()))
+    assert current[0] < current[1] < current[2]
+    assert current[2] - current[0] >= 0.3

@@ -7,22 +7,28 @@ from amr_twin import mass
 from amr_twin.config import load_config
 
 
-def test_frame_mass_matches_tube_formula():
-    cfg = load_config()
-    c = cfg.chassis
-    area = c.tube_outer_m ** 2 - (c.tube_outer_m - 2 * c.tube_wall_m) ** 2
-    length = sum(max(ext) for _, _, ext, _ in mass.frame_members(cfg))
-    expected = area * length * c.steel_density_kg_m3
-    assert mass.frame_inertial(cfg).mass_kg == pytest.approx(expected, rel=1e-9)
+# Hand figures from amr.yaml (chassis 0.70 x 0.40 m, floors at 0.10 / 0.27 / 0.42 m,
+# 20 x 20 x 1.5 mm AISI304 tube at 7930 kg/m^3):
+#   rails: 3 floors x (2 sides x 0.70 + 3 cross rails x (0.40 - 2 x 0.02)) = 3 x 2.48 = 7.44 m
+#   posts: 4 x (0.42 - (0.10 - 0.02)) = 1.36 m; tube section 0.02^2 - 0.017^2 = 1.11e-4 m^2
+FRAME_KG = (7.44 + 1.36) * (0.02 ** 2 - 0.017 ** 2) * 7930  # 7.746 kg
+PLATES_KG = 2 * 0.70 * 0.40 * 0.001 * 7930 + 0.70 * 0.40 * 0.003 * 2700  # steel (a), (c); aluminium deck (b)
+COMPONENTS_KG = 5.0 + 0.6 + 1.2 + 0.9 + 0.4 + 0.17 + 0.01  # battery ... imu
+STATORS_KG = 2 * 3.5 * (1 - 0.6)  # non-rotating share of the two hub motors
+ROBOT_KG = FRAME_KG + PLATES_KG + COMPONENTS_KG + STATORS_KG + 2 * 3.5 * 0.6 + 4 * 0.15  # + rotors, casters
 
 
-def test_chassis_mass_is_sum_of_parts():
+def test_frame_mass_is_the_hand_figure():
+    assert mass.frame_inertial(load_config()).mass_kg == pytest.approx(FRAME_KG, rel=1e-9)
+    assert FRAME_KG == pytest.approx(7.746, abs=1e-3)
+
+
+def test_chassis_and_robot_masses_are_the_hand_figures():
     cfg = load_config()
-    parts = mass.frame_inertial(cfg).mass_kg
-    parts += sum(np.prod(ext) * rho for _, _, ext, rho in mass.plates(cfg))
-    parts += sum(comp.mass_kg for _, comp in cfg.components.items())
-    parts += 2 * cfg.wheel.mass_kg * (1 - cfg.wheel.rotor_fraction)
-    assert mass.chassis_inertial(cfg).mass_kg == pytest.approx(parts, rel=1e-9)
+    assert mass.chassis_inertial(cfg).mass_kg == pytest.approx(FRAME_KG + PLATES_KG + COMPONENTS_KG + STATORS_KG,
+                                                             rel=1e-9)
+    assert mass.robot_mass_kg(cfg) == pytest.approx(ROBOT_KG, rel=1e-9)
+    assert ROBOT_KG == pytest.approx(30.335, abs=1e-3)
 
 
 def test_combine_parallel_axis():

@@ -96,6 +96,18 @@ class RosserialLink:
         """Time at which the wire of ``direction`` becomes free, microseconds."""
         return max(self._busy_until_us[direction], self.clock.now_us)
 
+    def draw_loss(self, direction: str, n_bytes: int) -> bool:
+        """Account a frame of ``n_bytes`` that another model times (an emulated UART); True if lost.
+
+        Same counters and seeded draws as :meth:`send`.
+        """
+        self.frames_sent[direction] += 1
+        self.bytes_sent[direction] += n_bytes
+        if self.loss_prob > 0.0 and self._rng.random() < self.loss_prob:
+            self.frames_lost[direction] += 1
+            return True
+        return False
+
     def send(self, direction: str, topic: str, msg: Any, deliver: Deliver) -> int | None:
         """Queue ``msg`` on the wire of ``direction``; call ``deliver(topic, msg)`` on arrival.
 

@@ -238,14 +238,14 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
 
 def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,
         duration_s: float | None = None, progress: bool = True, record_dir: Path | None = None,
-        mcap_dir: Path | None = None, study: bool = True) -> dict:
+        mcap_dir: Path | None = None, study: bool = True, reference_firmware: str | None = None) -> dict:
     """Simulate the chapter 5 runs and measure them.
 
     Parameters
     ----------
     cfg : the twin's parameters (payload as in the file; runs 7-8 set 20 kg).
     jobs : worker processes (1: in this process).
-    firmware : "faithful" or "improved".
+    firmware : "faithful", "improved", "avr" or "avr:SKETCH_DIR".
     runs : run numbers to do (default all eight).
     duration_s : override every run's duration, s (tests).
     progress : show a progress bar.
@@ -253,6 +253,8 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     mcap_dir : folder for one MCAP file per run, ``run<N>.mcap`` (may be ``record_dir``).
     study : with the whole suite, also run §5.1.4's rolling-resistance study
         (:mod:`.chapter5_payload`, 8 more runs).
+    reference_firmware : also run this firmware (not recorded) and tabulate the differences
+        sample by sample in ``"firmware_comparison"`` (:mod:`.firmware_comparison`).
 
     Returns
     -------
@@ -285,12 +287,20 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
         else:
             done[job.spec.number] = analyse(job.spec, raw)
     results = [done[s.number] for s in specs]
-    return {"firmware": firmware, "jobs": jobs, "wall_s": time.perf_counter() - wall0,
-            "sim_s": sum(r["duration_s"] for r in results), "runs": results,
-            "comparisons": compare_oscillation(results),
-            "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
-            "payload_duty": payload.duty_comparison(results),
-            "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
+    out = {"firmware": firmware, "jobs": jobs, "sim_s": sum(r["duration_s"] for r in results), "runs": results,
+           "comparisons": compare_oscillation(results),
+           "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
+           "payload_duty": payload.duty_comparison(results),
+           "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
+    if reference_firmware is not None:
+        from .firmware_comparison import compare
+
+        ref = [_Job(s, cfg, reference_firmware, duration_s or s.duration_s) for s in specs]
+        ref_done = [analyse(job.spec, raw) for job, raw in
+                    run_all(simulate, ref, jobs, f"chapter 5 runs, {reference_firmware}", progress)]
+        out["firmware_comparison"] = compare(results, ref_done, firmware, reference_firmware)
+    out["wall_s"] = time.perf_counter() - wall0
+    return out
 
 
 def plot(results: dict, out_dir: Path) -> list[Path]:
@@ -314,7 +324,8 @@ def _public(results: dict) -> dict:
             "rolling_resistance_study": results["rolling_resistance_study"],
             "threshold_crr": payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
                                                    results["crr"]["tyres"]),
-            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)}}
+            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)},
+            **({"firmware_comparison": results["firmware_comparison"]} if "firmware_comparison" in results else {})}
 
 
 def report(results: dict, out_dir: Path) -> dict:

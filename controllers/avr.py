@@ -162,6 +162,13 @@ class AvrFirmware:
             self.board.run_to(now * CYCLES_PER_US + self.lead_cycles)
         except BoardError as exc:
             raise BoardError(f"{exc} (sketch {self.p.sketch_dir or DEFAULT_SKETCH})") from None
+        self._sync_pins()
+        tx = self.board.take_tx()
+        if tx:
+            self._receive(tx)
+
+    def _sync_pins(self) -> None:
+        """Read the driver pins off the board (PWM: OCR or port; DIR, BRAKE, STOP: port bits)."""
         key = self.board.outputs()
         if key != self._key:
             self._key = key
@@ -171,9 +178,6 @@ class AvrFirmware:
                 pins.dir_level = 1 if v >> 8 & 0xFF else 0
                 pins.brake_level = 1 if v >> 16 & 0xFF else 0
                 pins.stop_level = 1 if v >> 24 & 0xFF else 0
-        tx = self.board.take_tx()
-        if tx:
-            self._receive(tx)
 
     def _receive(self, tx: list[tuple[int, int]]) -> None:
         """Board bytes written to UDR0: their time on the wire, then the frames they complete."""

@@ -114,6 +114,7 @@ def _library() -> ctypes.CDLL:
         "cosim_queue_rx": (ctypes.c_int, [p, u64, ctypes.c_char_p, ctypes.c_int, u32]),
         "cosim_run": (ctypes.c_int, [p, u64]),
         "cosim_run_to_pc": (ctypes.c_int, [p, u32, u64]),
+        "cosim_run_until_change": (ctypes.c_int, [p, u64]),
         "cosim_cycle": (u64, [p]),
         "cosim_outputs": (u64, [p]),
         "cosim_peek": (u8, [p, u16]),
@@ -194,6 +195,13 @@ class AvrBoard:
             log = self._lib.cosim_last_log().decode(errors="replace").strip()
             raise BoardError(f"the AVR {what} at {self.cycle / (self.cycles_per_us * 1e6):.6f} s"
                              + (f": {log}" if log else ""))
+
+    def run_until_change(self, cycle: int) -> bool:
+        """Execute until an output pin changes (True) or the count reaches ``cycle`` (False)."""
+        before = self.outputs()
+        if self._lib.cosim_run_until_change(self._s, cycle):
+            raise BoardError(f"the AVR stopped at {self.cycle / (self.cycles_per_us * 1e6):.6f} s")
+        return self.outputs() != before
 
     def run_to_symbol(self, address: int, max_cycle: int) -> bool:
         """Execute until the program counter reaches ``address`` (bytes); False if not by ``max_cycle``."""

@@ -195,17 +195,23 @@ def simulate(job: _Job) -> dict:
     """Run one experiment; return its raw series (picklable, for worker processes)."""
     options = TwinOptions(firmware=job.firmware, world="empty", seed=job.seed)
     cfg = _with_payload(job.cfg, job.spec.payload_kg)
-    if job.rrd_path is None and job.mcap_path is None:
+    pace_us = job.extra.get("pace_us")
+    if job.rrd_path is None and job.mcap_path is None and pace_us is None:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
         from ..loop import Twin
         from ..rerun_log import attach, record_run
         from ..run import run_mission
+        from .firmware_comparison import pace
 
         twin = Twin(cfg, options)
-        attach(twin)
+        if pace_us is not None:
+            pace(twin, pace_us)
+        if job.rrd_path is not None or job.mcap_path is not None:
+            attach(twin)
         result = run_mission(cfg, [(0.0, job.spec.command)], job.duration_s, options, twin=twin)
-        record_run(twin, rrd_path=job.rrd_path, mcap_path=job.mcap_path, result=result)
+        if job.rrd_path is not None or job.mcap_path is not None:
+            record_run(twin, rrd_path=job.rrd_path, mcap_path=job.mcap_path, result=result)
     s = result.series
     return {"run": job.spec.number, "codes": result.codes, "errors": result.errors,
             "wheel_command": result.wheel_command, "t_command_s": s.commands[0][0] if s.commands else 0.0,
@@ -254,7 +260,10 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     study : with the whole suite, also run §5.1.4's rolling-resistance study
         (:mod:`.chapter5_payload`, 8 more runs).
     reference_firmware : also run this firmware (not recorded) and tabulate the differences
-        sample by sample in ``"firmware_comparison"`` (:mod:`.firmware_comparison`).
+        sample by sample in ``"firmware_comparison"`` (:mod:`.firmware_comparison`); it is run
+        twice: as is, and with the physics sampled every millisecond as the emulated board's
+        loop samples it (:data:`~.firmware_comparison.PACE_US`), which separates the firmware's
+        differences from the loop's.
 
     Returns
     -------
@@ -293,12 +302,17 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
            "payload_duty": payload.duty_comparison(results),
            "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
     if reference_firmware is not None:
-        from .firmware_comparison import compare
+        from .firmware_comparison import PACE_US, command_timeline, compare, timeline_table
 
-        ref = [_Job(s, cfg, reference_firmware, duration_s or s.duration_s) for s in specs]
+        ref = [_Job(s, cfg, reference_firmware, duration_s or s.duration_s, extra=extra)
+               for extra in ({}, {"pace_us": PACE_US}) for s in specs]
         ref_done = [analyse(job.spec, raw) for job, raw in
                     run_all(simulate, ref, jobs, f"chapter 5 runs, {reference_firmware}", progress)]
-        out["firmware_comparison"] = compare(results, ref_done, firmware, reference_firmware)
+        out["firmware_comparison"] = compare(results, ref_done[:len(specs)], firmware, reference_firmware,
+                                             paced=ref_done[len(specs):])
+        if firmware.startswith("avr"):
+            out["firmware_comparison"]["timeline"] = timeline_table(command_timeline(reference_firmware),
+                                                                    command_timeline(firmware))
     out["wall_s"] = time.perf_counter() - wall0
     return out
 

@@ -330,6 +330,22 @@ int cosim_run_to_pc(cosim_t *s, uint32_t pc, uint64_t max_cycle) {
     return 0;
 }
 
+uint64_t cosim_outputs(cosim_t *s);
+
+/* Run until the output pins change (checked after every instruction) or the cycle count
+ * reaches `until`. Returns 0 (changed or reached: see cosim_cycle), or the simavr state that
+ * ended the run. For timing measurements: slower than cosim_run. */
+int cosim_run_until_change(cosim_t *s, uint64_t until) {
+    avr_t *avr = s->avr;
+    uint64_t start = cosim_outputs(s);
+    while (avr->cycle < until) {
+        int state = avr_run(avr);
+        if (state == cpu_Done || state == cpu_Crashed) return state;
+        if (cosim_outputs(s) != start) break;
+    }
+    return 0;
+}
+
 uint64_t cosim_cycle(cosim_t *s) { return s->avr->cycle; }
 
 /* One byte per output pin, packed little-endian (pin 0 in the low byte); at most 8 pins. */

@@ -3,7 +3,8 @@
  * On the AVR `double` is a 32-bit float, while ROS float64 fields are 8 bytes on the wire:
  * serializeAvrFloat64 widens a float to an IEEE 754 double (exact), deserializeAvrFloat64
  * narrows a double to a float by truncating the mantissa (as rosserial_arduino does);
- * out-of-range magnitudes become infinity or zero. */
+ * out-of-range magnitudes become infinity or zero. The AVR is little-endian like the wire, so
+ * words are copied with memcpy (no variable shifts, which the AVR does bit by bit). */
 #ifndef AMR_TWIN_ROS_MSG_H
 #define AMR_TWIN_ROS_MSG_H
 
@@ -32,15 +33,15 @@ public:
       hi = ((exp + 1023 - 127) << 20) | (mant >> 3); lo = mant << 29;
     }
     hi |= sign << 31;
-    for (int i = 0; i < 4; i++) out[i] = (lo >> (8 * i)) & 0xFF;
-    for (int i = 0; i < 4; i++) out[4 + i] = (hi >> (8 * i)) & 0xFF;
+    memcpy(out, &lo, 4);
+    memcpy(out + 4, &hi, 4);
     return 8;
   }
 
   static int deserializeAvrFloat64(const unsigned char *in, float *f) {
-    uint32_t lo = 0, hi = 0;
-    for (int i = 0; i < 4; i++) lo |= ((uint32_t)in[i]) << (8 * i);
-    for (int i = 0; i < 4; i++) hi |= ((uint32_t)in[4 + i]) << (8 * i);
+    uint32_t lo, hi;
+    memcpy(&lo, in, 4);
+    memcpy(&hi, in + 4, 4);
     uint32_t sign = hi >> 31, exp = (hi >> 20) & 0x7FF;
     uint32_t mant = ((hi & 0xFFFFF) << 3) | (lo >> 29);   /* top 23 bits, truncated */
     uint32_t bits;
@@ -59,19 +60,19 @@ public:
 
   static int serializeString(unsigned char *out, const char *s) {
     uint32_t n = strlen(s);
-    for (int i = 0; i < 4; i++) out[i] = (n >> (8 * i)) & 0xFF;
+    memcpy(out, &n, 4);
     memcpy(out + 4, s, n);
     return 4 + n;
   }
 
   static uint32_t readUint32(const unsigned char *in) {
-    uint32_t v = 0;
-    for (int i = 0; i < 4; i++) v |= ((uint32_t)in[i]) << (8 * i);
+    uint32_t v;
+    memcpy(&v, in, 4);
     return v;
   }
 
   static int writeUint32(unsigned char *out, uint32_t v) {
-    for (int i = 0; i < 4; i++) out[i] = (v >> (8 * i)) & 0xFF;
+    memcpy(out, &v, 4);
     return 4;
   }
 };

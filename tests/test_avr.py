@@ -170,3 +170,44 @@ def test_cli_run_with_the_emulated_board(cfg):
     for w, name in enumerate(("left", "right")):
         assert info["wheels"][name]["samples"] == len(faithful.published[w]) >= 1
         assert info["wheels"][name]["final_rpm"] == pytest.approx(faithful.published[w][-1, 1], abs=0.05)
+
+
+def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
+    """Left PWM counts, on a bare clock: left wheel at 20 RPM of SC edges; commands at 0, 1.0, 1.1 s."""
+    from amr_twin.clock import VirtualClock
+    from amr_twin.controllers.firmware import make_firmware
+
+    clock = VirtualClock()
+    fw = make_firmware(kind, clock, lambda topic, value: None)
+    fw.start()
+    period = int(60e6 / (90 * 20))
+
+    def edge(t):
+        fw.on_sc_edge(0)
+        clock.schedule(t + period, lambda: edge(t + period))
+
+    clock.schedule(period, lambda: edge(period))
+    for t, cmd in ((0, [1, 20, 1, 0]), (1_000_000, [1, 150, 1, 0]), (1_100_000, [1, 300, 1, 0])):
+        clock.schedule(t, lambda cmd=cmd: fw.on_wheel_command(cmd))
+    log, last = [], None
+    while clock.now_us < until_us:
+        clock.run_until(clock.now_us + 1000)
+        if fw.pins[0].pwm_counts != last:
+            last = fw.pins[0].pwm_counts
+            log.append((clock.now_us, last))
+    return log
+
+
+@needs_avr
+def test_a_command_queued_during_a_ramp_runs_inside_the_speed_isr_on_the_board():
+    # listing 4.12 calls node.spinOnce() inside speedChangeInt: on the board the third command, waiting
+    # in the serial buffer while loop() sits in the second's ramp, runs in the ISR when the sample
+    # completes (~3.2 s); there delay() cannot wait (interrupts are off), so its 10-step ramp to
+    # 300 RPM (72 counts) collapses into milliseconds. The port runs it in main context after the
+    # second ramp (docs/firmware.md).
+    board, port = _pwm_log("avr", 3_600_000), _pwm_log("faithful", 3_600_000)
+    t72 = next(t for t, c in board if c == 72)
+    burst = [t for t, c in board if 3_200_000 <= t <= t72]
+    assert 3_200_000 < t72 < 3_300_000 and len(burst) >= 9 and t72 - burst[0] < 30_000
+    assert all(c < 60 for _, c in port)  # the port has not reached it by 3.6 s: 250 ms steps
+    assert any(3_450_000 < t < 3_600_000 and c < 20 for t, c in port)  # its ramp for 300 starts at 3.5 s

@@ -189,12 +189,18 @@ def markdown(comp: dict) -> list[str]:
     lines += ["", f"**Verdict: {comp['verdict']}** — worst first-sample Δt {_n(w['first_dt_ms'], 1)} ms, worst "
                   f"last-sample Δ {_n(w['final_drpm'], 3)} RPM, worst sample Δ {_n(w['max_abs_drpm'], 3)} RPM, "
                   f"worst sample Δt {_n(w['max_abs_dt_ms'], 1)} ms."]
-    paced = [r for r in comp["rows"] if "paced" in r]
+    paced = [r["paced"] for r in comp["rows"] if "paced" in r]
     if paced:
-        lines += ["", f"Against `{comp['reference']}` *paced* (its loop samples the physics every "
-                      f"{PACE_US} us, as with the emulated board), which leaves the firmwares' own differences:", "",
-                  *head]
-        lines += [f"| {r['run']} | {r['wheel']} | {r['reference_rpm']:.2f} | " + _row(r["paced"]) for r in paced]
+        def worst(key):
+            return max((abs(p[key]) for p in paced if key in p), default=None)
+
+        same = sum(p.get("samples", [0])[0] == p.get("samples", [0, 1])[1] for p in paced)
+        lines += ["", f"Against `{comp['reference']}` *paced* (its loop stops the physics every {PACE_US} us, as "
+                      "the emulated board's does, so both sample the physics at the same instants): worst "
+                      f"first-sample Δt {_n(worst('first_dt_ms'), 1)} ms, worst last-sample Δ "
+                      f"{_n(worst('final_drpm'), 3)} RPM, worst sample Δ {_n(worst('max_abs_drpm'), 3)} RPM, worst "
+                      f"true-speed RMS Δ {_n(worst('true_rms_drpm'), 3)} RPM, equal sample counts in {same} of "
+                      f"{len(paced)} rows: what is left is the firmwares' own difference."]
     if "timeline" in comp:
         tl = comp["timeline"]
         lines += ["", f"One wheel_Command {tl['command']} with the wheels at rest (no physics, so no sample and no "

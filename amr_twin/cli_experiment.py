@@ -170,6 +170,10 @@ def _add_chapter5(experiment: typer.Typer) -> None:
                        f"{c['measure']} {_rpm(c['loaded'])} / {_rpm(c['unloaded'])} RPM: {c['verdict']} "
                        f"(true speed {_rpm(c['true_loaded'])} / {_rpm(c['true_unloaded'])}: {c['true_verdict']})")
         s = data["summary"]
+        if "firmware_comparison" in data:
+            fc, w = data["firmware_comparison"], data["firmware_comparison"]["worst"]
+            typer.echo(f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample difference "
+                       f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: {fc['verdict']}")
         typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
                    f"(jobs {jobs}, firmware {firmware})")

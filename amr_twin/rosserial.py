@@ -20,7 +20,10 @@ from a generator seeded with ``seed`` so runs are reproducible.
 
 Not modelled: rosserial's time-sync and parameter traffic, the Arduino's
 finite in/out buffers (512 bytes on the Mega), and ``spinOnce`` polling delays
-on the Arduino (the firmware model decides when it reads its input).
+on the Arduino (the firmware model decides when it reads its input). With
+``--firmware avr`` the emulated board's UART carries the frames byte by byte
+instead (:mod:`amr_twin.controllers.avr`); this link then only accounts and draws
+the losses (:meth:`RosserialLink.draw_loss`).
 """
 
 from __future__ import annotations

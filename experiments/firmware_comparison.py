@@ -182,7 +182,6 @@ def markdown(comp: dict) -> list[str]:
              "| run | wheel | ref RPM | samples | first sample Δt ms | first Δ RPM | max \\|Δt\\| ms | "
              "max \\|Δ\\| RPM | last RPM | last Δ RPM | true RMS Δ RPM | PWM differs % | verdict |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    head = lines[-2:]
     for r in comp["rows"]:
         lines.append(f"| {r['run']} | {r['wheel']} | {r['reference_rpm']:.2f} | " + _row(r))
     w = comp["worst"]

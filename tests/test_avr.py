@@ -53,6 +53,8 @@ def test_sketch_option_needs_the_avr_firmware():
                                  "--sketch", str(DEFAULT_SKETCH)])
     assert result.exit_code == 2
     assert "--sketch is used with --firmware avr only" in result.output
+    result = runner.invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--firmware", "avr", "--sketch", "/no/such"])
+    assert result.exit_code == 2 and result.output.count("\n") == 1 and "--sketch /no/such: not a folder" in result.output
 
 
 @needs_avr

@@ -101,6 +101,9 @@ class AvrFirmware:
     def __init__(self, clock: VirtualClock, publish: Publish, params: AvrParams | None = None):
         self.p = p = params or AvrParams()
         b = p.board
+        if b.latch_int_flag_while_detached or b.record_pin_log:
+            raise ValueError("AvrParams.board: latch_int_flag_while_detached and record_pin_log belong to the "
+                             "Python ports' board; simavr decides the first, and the emulated board keeps no pin log")
         sketch = DEFAULT_SKETCH if p.sketch_dir is None else p.sketch_dir
         defines = () if p.idle_sleep else ("AMR_TWIN_ROS_BUSY_SPIN",)
         self.elf = str(build_sketch(sketch, defines))

@@ -16,14 +16,17 @@ from typing import Optional
 
 import typer
 
-FIRMWARES = ("faithful", "improved")
+SketchOpt = typer.Option(None, "--sketch", metavar="DIR",
+                         help="With --firmware avr: your Arduino sketch folder (DIR/DIR.ino).")
 
 
-def _check_common(jobs: int, firmware: str, fail) -> None:
+def _check_common(jobs: int, firmware: str, fail, sketch: Optional[Path] = None) -> str:
+    """Check --jobs and --firmware/--sketch (for avr the sketch is built now); return the firmware string."""
     if jobs < 1:
         fail(f"--jobs {jobs}: must be >= 1")
-    if firmware not in FIRMWARES:
-        fail(f"--firmware {firmware!r}: must be one of {', '.join(FIRMWARES)}")
+    from .cli_run import checked_firmware
+
+    return checked_firmware(firmware, sketch)
 
 
 def _check_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
@@ -74,7 +77,7 @@ def _add_fusion(experiment: typer.Typer) -> None:
         out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, PNGs, map.yaml/.pgm/.png."),
         route: Optional[Path] = typer.Option(None, "--route", help="Route YAML (default: the 60 m warehouse route)."),
         seed: int = typer.Option(0, "--seed", help="Seed of the sensor noise."),
-        firmware: str = typer.Option("improved", "--firmware", help="faithful or improved."),
+        firmware: str = typer.Option("improved", "--firmware", help="faithful, improved or avr."),
         record: Optional[Path] = typer.Option(None, "--record", help="Also write the drive as a Rerun recording (.rrd)."),
         mcap: Optional[Path] = typer.Option(None, "--mcap", help="Also write the drive as ROS 2 messages (.mcap)."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
@@ -121,7 +124,9 @@ def _add_chapter5(experiment: typer.Typer) -> None:
     def chapter5_cmd(
         out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, run<N>.png."),
         jobs: int = typer.Option(1, "--jobs", help="Worker processes."),
-        firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
+        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr (the runs are "
+                                     "then also done with faithful and the differences tabulated)."),
+        sketch: Optional[Path] = SketchOpt,
         runs: Optional[str] = typer.Option(None, "--runs", help="Run numbers to do, e.g. 1,3 (default all)."),
         duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Override every run's duration, s."),
         record: Optional[Path] = typer.Option(
@@ -135,7 +140,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time."""
         from .experiments import chapter5
 
-        _check_common(jobs, firmware, fail)
+        firmware = _check_common(jobs, firmware, fail, sketch)
         if duration_s is not None and not (duration_s > 0 and duration_s < 1e4):
             fail(f"--duration-s {duration_s}: must be in (0, 10000) s")
         try:
@@ -150,7 +155,8 @@ def _add_chapter5(experiment: typer.Typer) -> None:
 
         def work():
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
-                                   progress=progress, record_dir=record, mcap_dir=mcap)
+                                   progress=progress, record_dir=record, mcap_dir=mcap,
+                                   reference_firmware="faithful" if firmware.startswith("avr") else None)
             chapter5.plot(results, out)
             return chapter5.report(results, out)
 
@@ -164,6 +170,10 @@ def _add_chapter5(experiment: typer.Typer) -> None:
                        f"{c['measure']} {_rpm(c['loaded'])} / {_rpm(c['unloaded'])} RPM: {c['verdict']} "
                        f"(true speed {_rpm(c['true_loaded'])} / {_rpm(c['true_unloaded'])}: {c['true_verdict']})")
         s = data["summary"]
+        if "firmware_comparison" in data:
+            fc, w = data["firmware_comparison"], data["firmware_comparison"]["worst"]
+            typer.echo(f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample difference "
+                       f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: {fc['verdict']}")
         typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
                    f"(jobs {jobs}, firmware {firmware})")
@@ -187,7 +197,8 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
                                      help="linear:V, angular:DEG_S:ICC_M, motor:left|right:V (comma separated)."),
         duration_s: float = typer.Option(8.0, "--duration-s", help="Simulated seconds per point."),
         jobs: int = typer.Option(1, "--jobs", help="Worker processes."),
-        firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
+        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr."),
+        sketch: Optional[Path] = SketchOpt,
         executor: str = typer.Option("local", "--executor", help="local (process pool of --jobs) or dask."),
         scheduler: Optional[str] = typer.Option(None, "--scheduler",
                                                 help="Dask scheduler address, e.g. tcp://127.0.0.1:8786."),
@@ -209,7 +220,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
 
         from .experiments.executor import EXECUTORS
 
-        _check_common(jobs, firmware, fail)
+        firmware = _check_common(jobs, firmware, fail, sketch)
         if executor not in EXECUTORS:
             fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
         if executor == "dask" and not scheduler:

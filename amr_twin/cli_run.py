@@ -36,7 +36,10 @@ motor's (phase) current (+ driving forward), the battery's current and voltage."
 
 DurationOpt = typer.Option(None, "--duration-s", help="Simulated seconds (default 10; a mission's own).")
 PayloadOpt = typer.Option(None, "--payload-kg", help="Payload mass, kg.")
-FirmwareOpt = typer.Option("faithful", "--firmware", help="faithful (thesis listings) or improved.")
+FirmwareOpt = typer.Option("faithful", "--firmware", help="faithful (thesis listings), improved, or avr (the "
+                           "sketch compiled with avr-gcc on an emulated ATmega2560; Debian packages in the README).")
+SketchOpt = typer.Option(None, "--sketch", help="With --firmware avr: your Arduino sketch folder (FOLDER/FOLDER.ino) "
+                         "instead of controllers/arduino/motor_control.")
 SeedOpt = typer.Option(0, "--seed", help="Seed of the random parts (rosserial loss, hall jitter).")
 CsvOpt = typer.Option(None, "--csv", help="Write the time series here (CSV).")
 JsonOpt = typer.Option(False, "--json", help="Print one JSON object.")
@@ -47,6 +50,18 @@ WorldOpt = typer.Option("warehouse", "--world", help="World: warehouse, empty (m
 StartOpt = typer.Option("0,0,0", "--start", help="Start pose in the world: X_M,Y_M,YAW_DEG.")
 SensorsOpt = typer.Option(False, "--sensors", help="Run the IMU (imu/data_raw, imu/mag, 100 Hz) and the LiDAR "
                           "(scan, 5.5 Hz); recorded with --record/--mcap.")
+
+
+def checked_firmware(firmware: str, sketch: Optional[Path]) -> str:
+    """``--firmware`` and ``--sketch`` as the firmware string; for avr, the sketch built now (one-line error)."""
+    from .controllers.firmware import check_avr, firmware_kind
+
+    try:
+        kind = firmware_kind(firmware, None if sketch is None else str(sketch))
+        check_avr(kind)
+    except ValueError as exc:
+        fail(str(exc))
+    return kind
 
 
 def _finite(name: str, value: Optional[float], required: bool = True) -> Optional[float]:
@@ -161,13 +176,12 @@ def _start_pose(text: str) -> tuple[float, float, float]:
 def execute(steps, duration_s: float, single: bool, payload_kg, firmware: str, seed: int,
             csv: Optional[Path], as_json: bool, config, params, sets, record: Optional[Path] = None,
             mcap: Optional[Path] = None, sensors: bool = False, world: str = "warehouse",
-            start: str = "0,0,0") -> None:
+            start: str = "0,0,0", sketch: Optional[Path] = None) -> None:
     """Run ``steps`` and report; exits non-zero if the client refused a command."""
     from .loop import TwinOptions
     from .run import run_mission
 
-    if firmware not in ("faithful", "improved"):
-        fail(f"--firmware {firmware!r}: must be faithful or improved")
+    firmware = checked_firmware(firmware, sketch)
     extra = {}
     if _finite("--payload-kg", payload_kg, required=False) is not None:
         extra["payload.mass_kg"] = payload_kg
@@ -222,20 +236,21 @@ def register(app: typer.Typer) -> None:
     app.command(name="client")(client)
 
     def one(command_factory, duration_s, payload_kg, firmware, seed, csv, as_json, config, params, set_,
-            record=None, mcap=None, sensors=False, world="warehouse", start="0,0,0"):
+            record=None, mcap=None, sensors=False, world="warehouse", start="0,0,0", sketch=None):
         duration_s = _finite("--duration-s", duration_s, required=False)
         try:
             command = command_factory()
         except ValueError as exc:
             fail(str(exc))
         execute([(0.0, command)], 10.0 if duration_s is None else duration_s, True, payload_kg,
-                firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
+                firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start,
+                sketch=sketch)
 
     @run_app.callback(invoke_without_command=True)
     def run(ctx: typer.Context,
             mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/mission.py)."),
             duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
-            firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
+            firmware: str = FirmwareOpt, sketch: Optional[Path] = SketchOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
             as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
             mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
             config: Optional[Path] = ConfigOpt,
@@ -255,12 +270,13 @@ def register(app: typer.Typer) -> None:
             fail(str(exc))
         duration_s = _finite("--duration-s", duration_s, required=False)
         execute(steps, mission_s if duration_s is None else duration_s, False, payload_kg, firmware,
-                seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
+                seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start,
+                sketch=sketch)
 
     @run_app.command()
     def linear(speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="m/s; negative: backward."),
                duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
-               firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
+               firmware: str = FirmwareOpt, sketch: Optional[Path] = SketchOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
                as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
             mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
             config: Optional[Path] = ConfigOpt,
@@ -268,13 +284,13 @@ def register(app: typer.Typer) -> None:
         """Linear motion: both wheels at the same speed (listing 4.4)."""
         speed = _finite("--speed-m-s", speed_m_s)
         one(lambda: Command("linear", speed_m_s=speed), duration_s, payload_kg, firmware, seed, csv,
-            as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
+            as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start, sketch=sketch)
 
     @run_app.command()
     def angular(speed_deg_s: Optional[float] = typer.Option(None, "--speed-deg-s", help="deg/s, CCW +."),
                 icc_m: Optional[float] = typer.Option(None, "--icc-m", help="ICC distance, m, + to the left."),
                 duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
-                firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
+                firmware: str = FirmwareOpt, sketch: Optional[Path] = SketchOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
                 as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
             mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
             config: Optional[Path] = ConfigOpt,
@@ -282,14 +298,14 @@ def register(app: typer.Typer) -> None:
         """Rotation about an ICC (listing 4.5; REP-103 signs)."""
         speed, icc = _finite("--speed-deg-s", speed_deg_s), _finite("--icc-m", icc_m)
         one(lambda: Command("angular", speed_deg_s=speed, icc_m=icc), duration_s, payload_kg, firmware,
-            seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
+            seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start, sketch=sketch)
 
     @run_app.command()
     def motor(wheel: Optional[str] = typer.Option(None, "--wheel", help="left or right."),
               direction: Optional[str] = typer.Option(None, "--direction", help="forward or backward."),
               speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="Rim speed, m/s, >= 0."),
               duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
-              firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
+              firmware: str = FirmwareOpt, sketch: Optional[Path] = SketchOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
               as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
             mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
             config: Optional[Path] = ConfigOpt,
@@ -301,15 +317,15 @@ def register(app: typer.Typer) -> None:
             fail("--direction is required (forward or backward)")
         speed = _finite("--speed-m-s", speed_m_s)
         one(lambda: Command("motor", wheel=wheel, direction=direction, speed_m_s=speed), duration_s,
-            payload_kg, firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
+            payload_kg, firmware, seed, csv, as_json, config, params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start, sketch=sketch)
 
     @run_app.command()
     def stop(duration_s: Optional[float] = DurationOpt, payload_kg: Optional[float] = PayloadOpt,
-             firmware: str = FirmwareOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
+             firmware: str = FirmwareOpt, sketch: Optional[Path] = SketchOpt, seed: int = SeedOpt, csv: Optional[Path] = CsvOpt,
              as_json: bool = JsonOpt, record: Optional[Path] = RecordOpt,
             mcap: Optional[Path] = McapOpt, sensors: bool = SensorsOpt, world: str = WorldOpt, start: str = StartOpt,
             config: Optional[Path] = ConfigOpt,
              params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt) -> None:
         """Brake both wheels (fig. 3.7)."""
         one(lambda: Command("stop"), duration_s, payload_kg, firmware, seed, csv, as_json, config,
-            params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start)
+            params, set_, record=record, mcap=mcap, sensors=sensors, world=world, start=start, sketch=sketch)

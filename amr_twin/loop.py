@@ -91,7 +91,10 @@ class Twin:
         self.service = WheelCommandService(self.bus)
         self.client = WheelCommandClient(self.bus, wheel_radius_m=cfg.wheel.radius_m,
                                          half_separation_m=cfg.wheel.separation_m / 2)
-        self.bus.subscribe("wheel_Command", self._to_arduino)
+        if hasattr(self.firmware, "connect"):  # it speaks rosserial on its own (emulated) UART
+            self.firmware.connect(self.bus, self.link)
+        else:
+            self.bus.subscribe("wheel_Command", self._to_arduino)
         self.odometry = WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
                                       wheel_separation_m=cfg.wheel.separation_m)
         self.recorder = Recorder(self)

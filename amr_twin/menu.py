@@ -131,7 +131,8 @@ def _choice(console: Console, rt: RealTimeTwin, choice: str) -> bool:
 
 
 def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per wall second."),
-           firmware: str = typer.Option("faithful", "--firmware", help="faithful or improved."),
+           firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr."),
+           sketch: Optional[Path] = typer.Option(None, "--sketch", help="With --firmware avr: a sketch folder."),
            payload_kg: Optional[float] = typer.Option(None, "--payload-kg", help="Payload mass, kg."),
            seed: int = typer.Option(0, "--seed", help="Seed of the random parts."),
            config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt,
@@ -141,8 +142,9 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
 
     if not (math.isfinite(rate) and rate > 0):
         fail(f"--rate {rate}: must be a finite number > 0")
-    if firmware not in ("faithful", "improved"):
-        fail(f"--firmware {firmware!r}: must be faithful or improved")
+    from .cli_run import checked_firmware
+
+    firmware = checked_firmware(firmware, sketch)
     extra = {}
     if payload_kg is not None:
         if not math.isfinite(payload_kg):

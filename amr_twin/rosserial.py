@@ -20,7 +20,10 @@ from a generator seeded with ``seed`` so runs are reproducible.
 
 Not modelled: rosserial's time-sync and parameter traffic, the Arduino's
 finite in/out buffers (512 bytes on the Mega), and ``spinOnce`` polling delays
-on the Arduino (the firmware model decides when it reads its input).
+on the Arduino (the firmware model decides when it reads its input). With
+``--firmware avr`` the emulated board's UART carries the frames byte by byte
+instead (:mod:`amr_twin.controllers.avr`); this link then only accounts and draws
+the losses (:meth:`RosserialLink.draw_loss`).
 """
 
 from __future__ import annotations
@@ -95,6 +98,18 @@ class RosserialLink:
     def busy_until_us(self, direction: str) -> int:
         """Time at which the wire of ``direction`` becomes free, microseconds."""
         return max(self._busy_until_us[direction], self.clock.now_us)
+
+    def draw_loss(self, direction: str, n_bytes: int) -> bool:
+        """Account a frame of ``n_bytes`` that another model times (an emulated UART); True if lost.
+
+        Same counters and seeded draws as :meth:`send`.
+        """
+        self.frames_sent[direction] += 1
+        self.bytes_sent[direction] += n_bytes
+        if self.loss_prob > 0.0 and self._rng.random() < self.loss_prob:
+            self.frames_lost[direction] += 1
+            return True
+        return False
 
     def send(self, direction: str, topic: str, msg: Any, deliver: Deliver) -> int | None:
         """Queue ``msg`` on the wire of ``direction``; call ``deliver(topic, msg)`` on arrival.

@@ -1,9 +1,14 @@
 """The firmware interface seen by the simulation loop, its parameters and factory.
 
-Two firmwares implement :class:`Firmware`: ``faithful`` (a port of the thesis
-listings 4.7-4.12, quirks included behind named switches) and ``improved``.
-Both run on :class:`~amr_twin.controllers.arduino.ArduinoRuntime`, which
-emulates the Arduino Mega 2560 on the shared :class:`~amr_twin.clock.VirtualClock`.
+Three firmwares implement :class:`Firmware`: ``faithful`` (a port of the thesis
+listings 4.7-4.12, quirks included behind named switches) and ``improved`` run on
+:class:`~amr_twin.controllers.arduino.ArduinoRuntime`, which emulates the Arduino
+Mega 2560 on the shared :class:`~amr_twin.clock.VirtualClock`; ``avr`` is the
+same firmware as an Arduino sketch (``controllers/arduino/motor_control``, or a
+user's sketch folder) compiled with avr-gcc and run on an emulated ATmega2560
+(:mod:`~amr_twin.controllers.avr`). A firmware that speaks rosserial on its own
+UART has ``connect(bus, link)``; the loop then hands it the bus instead of
+bridging ``wheel_Command`` and ``wheelN_Vel`` itself.
 
 Published speeds (``wheel0_Vel``, ``wheel1_Vel``) are RPM as a positive
 magnitude: the SC output carries no direction, and the thesis firmware publishes
@@ -13,7 +18,7 @@ magnitude: the SC output carries no direction, and the thesis firmware publishes
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Literal, Protocol, Sequence
+from typing import Callable, Protocol, Sequence
 
 from amr_twin.clock import VirtualClock
 from amr_twin.pins import DriverPins
@@ -103,20 +108,90 @@ class ImprovedParams:
     board: BoardParams = field(default_factory=BoardParams)
 
 
-def make_firmware(kind: Literal["faithful", "improved"], clock: VirtualClock, publish: Publish,
-                  params: FaithfulParams | ImprovedParams | None = None) -> Firmware:
+@dataclass(frozen=True)
+class AvrParams:
+    """The firmware as a sketch on an emulated ATmega2560 (controllers/avr.py)."""
+
+    sketch_dir: str | None = None  # sketch folder (FOLDER/FOLDER.ino); None: controllers/arduino/motor_control
+    idle_sleep: bool = True  # rosserial spinOnce() sleeps until the next interrupt when it finds nothing
+    # to read (ros_lib/ArduinoHardware.h); False: busy loop as rosserial_arduino (same results, ~3x slower)
+    sync_period_us: int = 1000  # the board is brought up to the loop's time at least this often, us
+    board: BoardParams = field(default_factory=BoardParams)  # pins the sketch must use (its wiring)
+
+
+FIRMWARES = ("faithful", "improved", "avr")
+"""Firmware kinds; ``avr:DIR`` names a sketch folder for ``avr`` (see :func:`firmware_kind`)."""
+
+
+def firmware_kind(firmware: str, sketch: str | None = None) -> str:
+    """The firmware string of ``--firmware KIND [--sketch DIR]``; ValueError naming the option.
+
+    ``avr`` with a sketch becomes ``avr:/absolute/DIR``, a string that travels to worker
+    processes and into reports like the other kinds.
+    """
+    if firmware not in FIRMWARES:
+        raise ValueError(f"--firmware {firmware!r}: must be one of {', '.join(FIRMWARES)}")
+    if sketch is None:
+        return firmware
+    if firmware != "avr":
+        raise ValueError(f"--sketch is used with --firmware avr only (got --firmware {firmware})")
+    from pathlib import Path
+
+    from .avr_build import check_sketch
+
+    check_sketch(Path(sketch))
+    return f"avr:{Path(sketch).resolve()}"
+
+
+def firmware_identity(firmware: str) -> str:
+    """What identifies the firmware's behaviour: the kind, plus the sources' hash for ``avr``."""
+    if not firmware.startswith("avr"):
+        return firmware
+    from .avr_build import DEFAULT_SKETCH, source_hash
+
+    sketch = firmware.partition(":")[2] or DEFAULT_SKETCH
+    return f"{firmware}@{source_hash(sketch)}"
+
+
+def check_avr(firmware: str) -> None:
+    """For an ``avr`` firmware: the toolchain is there and the sketch builds (else ValueError, one line)."""
+    if not firmware.startswith("avr"):
+        return
+    from .avr import topic_table
+    from .avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
+
+    problem = missing_tools()
+    if problem:
+        raise ValueError(f"--firmware avr: {problem}")
+    try:
+        topic_table(str(build_sketch(firmware.partition(":")[2] or DEFAULT_SKETCH)))
+    except SketchError as exc:
+        raise ValueError(f"--firmware {firmware}: {exc}") from None
+
+
+def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
+                  params: FaithfulParams | ImprovedParams | AvrParams | None = None) -> Firmware:
     """Build a firmware of ``kind`` on ``clock`` publishing through ``publish``.
 
     Parameters
     ----------
-    kind : {"faithful", "improved"}
+    kind : {"faithful", "improved", "avr", "avr:SKETCH_DIR"}
     clock : VirtualClock
         Shared simulation clock (microseconds).
     publish : callable
         ``publish(topic, rpm)``, topics ``wheel0_Vel`` / ``wheel1_Vel``.
-    params : FaithfulParams or ImprovedParams, optional
-        Defaults to the thesis values.
+    params : FaithfulParams, ImprovedParams or AvrParams, optional
+        Defaults to the thesis values (``avr:DIR`` sets ``AvrParams.sketch_dir``).
     """
+    if kind == "avr" or kind.startswith("avr:"):
+        from .avr import AvrFirmware
+        sketch = kind.partition(":")[2] or None
+        if params is None:
+            params = AvrParams(sketch_dir=sketch)
+        elif sketch is not None:
+            from dataclasses import replace
+            params = replace(params, sketch_dir=sketch)
+        return AvrFirmware(clock, publish, params)
     if kind == "faithful":
         from .faithful import FaithfulFirmware
         return FaithfulFirmware(clock, publish, params or FaithfulParams())

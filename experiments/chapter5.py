@@ -195,17 +195,23 @@ def simulate(job: _Job) -> dict:
     """Run one experiment; return its raw series (picklable, for worker processes)."""
     options = TwinOptions(firmware=job.firmware, world="empty", seed=job.seed)
     cfg = _with_payload(job.cfg, job.spec.payload_kg)
-    if job.rrd_path is None and job.mcap_path is None:
+    pace_us = job.extra.get("pace_us")
+    if job.rrd_path is None and job.mcap_path is None and pace_us is None:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
         from ..loop import Twin
         from ..rerun_log import attach, record_run
         from ..run import run_mission
+        from .firmware_comparison import pace
 
         twin = Twin(cfg, options)
-        attach(twin)
+        if pace_us is not None:
+            pace(twin, pace_us)
+        if job.rrd_path is not None or job.mcap_path is not None:
+            attach(twin)
         result = run_mission(cfg, [(0.0, job.spec.command)], job.duration_s, options, twin=twin)
-        record_run(twin, rrd_path=job.rrd_path, mcap_path=job.mcap_path, result=result)
+        if job.rrd_path is not None or job.mcap_path is not None:
+            record_run(twin, rrd_path=job.rrd_path, mcap_path=job.mcap_path, result=result)
     s = result.series
     return {"run": job.spec.number, "codes": result.codes, "errors": result.errors,
             "wheel_command": result.wheel_command, "t_command_s": s.commands[0][0] if s.commands else 0.0,
@@ -238,14 +244,14 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
 
 def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,
         duration_s: float | None = None, progress: bool = True, record_dir: Path | None = None,
-        mcap_dir: Path | None = None, study: bool = True) -> dict:
+        mcap_dir: Path | None = None, study: bool = True, reference_firmware: str | None = None) -> dict:
     """Simulate the chapter 5 runs and measure them.
 
     Parameters
     ----------
     cfg : the twin's parameters (payload as in the file; runs 7-8 set 20 kg).
     jobs : worker processes (1: in this process).
-    firmware : "faithful" or "improved".
+    firmware : "faithful", "improved", "avr" or "avr:SKETCH_DIR".
     runs : run numbers to do (default all eight).
     duration_s : override every run's duration, s (tests).
     progress : show a progress bar.
@@ -253,6 +259,11 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     mcap_dir : folder for one MCAP file per run, ``run<N>.mcap`` (may be ``record_dir``).
     study : with the whole suite, also run §5.1.4's rolling-resistance study
         (:mod:`.chapter5_payload`, 8 more runs).
+    reference_firmware : also run this firmware (not recorded) and tabulate the differences
+        sample by sample in ``"firmware_comparison"`` (:mod:`.firmware_comparison`); it is run
+        twice: as is, and with the physics sampled every millisecond as the emulated board's
+        loop samples it (:data:`~.firmware_comparison.PACE_US`), which separates the firmware's
+        differences from the loop's.
 
     Returns
     -------
@@ -285,12 +296,25 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
         else:
             done[job.spec.number] = analyse(job.spec, raw)
     results = [done[s.number] for s in specs]
-    return {"firmware": firmware, "jobs": jobs, "wall_s": time.perf_counter() - wall0,
-            "sim_s": sum(r["duration_s"] for r in results), "runs": results,
-            "comparisons": compare_oscillation(results),
-            "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
-            "payload_duty": payload.duty_comparison(results),
-            "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
+    out = {"firmware": firmware, "jobs": jobs, "sim_s": sum(r["duration_s"] for r in results), "runs": results,
+           "comparisons": compare_oscillation(results),
+           "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
+           "payload_duty": payload.duty_comparison(results),
+           "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
+    if reference_firmware is not None:
+        from .firmware_comparison import PACE_US, command_timeline, compare, timeline_table
+
+        ref = [_Job(s, cfg, reference_firmware, duration_s or s.duration_s, extra=extra)
+               for extra in ({}, {"pace_us": PACE_US}) for s in specs]
+        ref_done = [analyse(job.spec, raw) for job, raw in
+                    run_all(simulate, ref, jobs, f"chapter 5 runs, {reference_firmware}", progress)]
+        out["firmware_comparison"] = compare(results, ref_done[:len(specs)], firmware, reference_firmware,
+                                             paced=ref_done[len(specs):])
+        if firmware.startswith("avr"):
+            out["firmware_comparison"]["timeline"] = timeline_table(command_timeline(reference_firmware),
+                                                                    command_timeline(firmware))
+    out["wall_s"] = time.perf_counter() - wall0
+    return out
 
 
 def plot(results: dict, out_dir: Path) -> list[Path]:
@@ -314,7 +338,8 @@ def _public(results: dict) -> dict:
             "rolling_resistance_study": results["rolling_resistance_study"],
             "threshold_crr": payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
                                                    results["crr"]["tyres"]),
-            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)}}
+            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)},
+            **({"firmware_comparison": results["firmware_comparison"]} if "firmware_comparison" in results else {})}
 
 
 def report(results: dict, out_dir: Path) -> dict:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .chapter5_payload import markdown as payload_markdown
+from .firmware_comparison import markdown as comparison_markdown
 
 COLUMNS = (("delay_s", "delay s"), ("rise_s", "rise s"), ("peak_s", "peak s"), ("settling_s", "settling s"),
            ("overshoot", "overshoot RPM"), ("steady_error", "steady err RPM"), ("oscillation", "oscillation RPM"))
@@ -105,6 +106,8 @@ def markdown(data: dict) -> str:
         "## The PI's duty with 20 kg (§5.1.4)", "", *payload_markdown(data), "",
         "## Oscillation during the transient: 20 kg against unloaded (§5.1.4)", "", *_oscillation(data), "",
         "## Bands missed", "", *_misses(data), "",
+        *(["## Firmware against firmware, sample by sample", "", *comparison_markdown(data["firmware_comparison"]), ""]
+          if "firmware_comparison" in data else []),
         "## Figures", "",
         *[f"![run {r['run']}: {r['title']}](run{r['run']}.png)\n" for r in data["runs"]],
     ]

@@ -120,7 +120,9 @@ class Point:
 
     @property
     def fingerprint(self) -> str:
-        text = self.cfg.model_dump_json() + f"|{self.firmware}|{self.duration_s}"
+        from ..controllers.firmware import firmware_identity  # avr: the sketch's sources count too
+
+        text = self.cfg.model_dump_json() + f"|{firmware_identity(self.firmware)}|{self.duration_s}"
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 

@@ -14,6 +14,7 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert all(r[k] > 0 for k in README_KEYS), r
     assert r["ratio"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.02)
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
+    assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
 
 
 @pytest.mark.parametrize("args, text", [(["--jobs", "0"], "--jobs 0"), (["--sim-s", "-1"], "--sim-s -1")])

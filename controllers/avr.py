@@ -1,0 +1,247 @@
+"""The firmware as the board runs it: an Arduino sketch compiled with avr-gcc on an emulated ATmega2560.
+
+:class:`AvrFirmware` implements :class:`~amr_twin.controllers.firmware.Firmware` with the
+sketch's ELF running on :class:`~amr_twin.controllers.avr_board.AvrBoard` (libsimavr):
+
+- time: the board is reset, runs its setup(), and t = 0 is the first call of loop() (the Python
+  ports run setup() at t = 0 in zero time): CPU cycle ``16 * t_us + lead`` with ``lead`` the
+  cycles setup() took (about 0.1 ms);
+- the board is run, cycle-accurately, up to each instant the loop stops the physics at, and at
+  least every ``sync_period_us`` (one physics step): a pin written at ``t`` acts from the first
+  physics step that starts at or after ``t``, as with the Python ports;
+- pins: PWM duty from the Timer4 compare registers (OCR4A/B when the output is connected by
+  ``analogWrite``, else 0 or 255 from the port), DIR/BRAKE/STOP from PORTA;
+- SC edges: each edge toggles pin 2 or 3 (INT4/INT5) at its microsecond;
+- rosserial: real frames (:mod:`amr_twin.rosserial_frame`) over USART0 at the baud the sketch
+  set (115200 -> UBRR 16 with U2X: 117647 bit/s, 85 us a byte, both ways, since the Mega's
+  USB-serial chip runs the same divider). A frame from the PC enters the receiver byte by
+  byte from the instant it is published (plus the link's extra latency); a frame from the board
+  is delivered on the bus when its last byte has left the wire (write time, queued behind the
+  previous byte, plus 10 bit times, plus the extra latency). Lost frames (the link's
+  ``loss_prob``) are corrupted (PC -> board: the board's checksum test drops them) or dropped.
+
+Topic ids and types come from the sketch itself: before the run, the ELF is started on a second
+board and asked for its topics as rosserial_python does (:func:`topic_table`).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Sequence
+
+from amr_twin.clock import VirtualClock
+from amr_twin.messages import Float64, Float64MultiArray
+from amr_twin.pins import DriverPins
+from amr_twin.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
+from amr_twin.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, FrameParser, TopicInfo,
+                                      deserialize_float64, frame, serialize_float64,
+                                      serialize_float64_multiarray, topic_request)
+
+from .avr_board import AvrBoard, BoardError, symbol_address
+from .avr_build import DEFAULT_SKETCH, SketchError, build_sketch
+from .firmware import AvrParams, Publish
+
+CYCLES_PER_US = 16
+UBRR0L, UBRR0H, UCSR0A = 0xC4, 0xC5, 0xC0
+"""USART0 baud registers (data-space addresses)."""
+
+KNOWN_TYPES = ("std_msgs/Float64", "std_msgs/Float64MultiArray")
+
+
+def byte_cycles(board: AvrBoard) -> int:
+    """CPU cycles of one 8N1 byte at the baud the firmware set on USART0."""
+    ubrr = board.peek(UBRR0L) | (board.peek(UBRR0H) & 0x0F) << 8
+    u2x = board.peek(UCSR0A) & 0x02
+    return 10 * (ubrr + 1) * (8 if u2x else 16)
+
+
+@lru_cache(maxsize=16)
+def topic_table(elf: str) -> tuple[tuple[TopicInfo, ...], tuple[TopicInfo, ...]]:
+    """``(publishers, subscribers)`` of a sketch, from its answer to a topic request.
+
+    The ELF runs on its own board for up to 0.5 s: 5 ms to set up, then the request frame.
+    """
+    board = AvrBoard(elf, [], {})
+    try:
+        start = 5_000 * CYCLES_PER_US
+        board.run_to(start)
+        board.queue_rx(start, topic_request(), byte_cycles(board))
+        parser, pubs, subs = FrameParser(), [], []
+        for ms in range(10, 500, 5):
+            board.run_to(ms * 1000 * CYCLES_PER_US)
+            for f in parser.feed(bytes(b for _, b in board.take_tx())):
+                if f.topic_id in (ID_PUBLISHER, ID_SUBSCRIBER):
+                    (pubs if f.topic_id == ID_PUBLISHER else subs).append(TopicInfo.deserialize(f.message))
+            if (pubs or subs) and parser.pending[0] == 0 and ms >= 50:
+                break
+    finally:
+        board.close()
+    if not pubs and not subs:
+        raise SketchError(f"{elf}: the sketch did not answer rosserial's topic request within 0.5 s "
+                          "(does setup() call node.initNode() and loop() node.spinOnce()?)")
+    for info in pubs + subs:
+        if info.message_type not in KNOWN_TYPES:
+            raise SketchError(f"topic {info.topic_name}: type {info.message_type} is not carried by the "
+                              f"twin's rosserial bridge ({', '.join(KNOWN_TYPES)})")
+    return tuple(pubs), tuple(subs)
+
+
+class AvrFirmware:
+    """The sketch of ``params.sketch_dir`` on an emulated Mega; see the module docstring.
+
+    Parameters
+    ----------
+    clock : VirtualClock
+    publish : callable
+        ``publish(topic, value)`` for the board's Float64 topics when no bus is connected
+        (:meth:`connect`), called at the frame's arrival.
+    params : AvrParams
+    """
+
+    def __init__(self, clock: VirtualClock, publish: Publish, params: AvrParams | None = None):
+        self.p = p = params or AvrParams()
+        b = p.board
+        if b.latch_int_flag_while_detached or b.record_pin_log:
+            raise ValueError("AvrParams.board: latch_int_flag_while_detached and record_pin_log belong to the "
+                             "Python ports' board; simavr decides the first, and the emulated board keeps no pin log")
+        sketch = DEFAULT_SKETCH if p.sketch_dir is None else p.sketch_dir
+        defines = () if p.idle_sleep else ("AMR_TWIN_ROS_BUSY_SPIN",)
+        self.elf = str(build_sketch(sketch, defines))
+        publishers, subscribers = topic_table(self.elf)
+        self.publishers = {info.topic_id: info for info in publishers}
+        self.subscribers = {info.topic_name: info for info in subscribers}
+        outputs = [pin for w in range(2) for pin in (b.pwm_pins[w], b.dir_pins[w], b.brake_pins[w], b.stop_pins[w])]
+        self.board = AvrBoard(self.elf, outputs, {b.speed_pins[0]: 0, b.speed_pins[1]: 0})
+        if not self.board.run_to_symbol(symbol_address(self.elf, "loop"), 16_000_000):
+            raise SketchError(f"{sketch}: setup() did not return within 1 s")
+        self.lead_cycles = self.board.cycle
+        """CPU cycles from reset to the first loop(): the board's cycle at t = 0."""
+        self.clock, self._publish = clock, publish
+        self.pins = (DriverPins(), DriverPins())
+        self._speed_pins = b.speed_pins
+        self._key = -1
+        self._parser = FrameParser()
+        self._wire_end: list[int] = []   # end cycle of each received board byte, by stream index
+        self._wire_base = 0              # stream index of _wire_end[0]
+        self._tx_free = 0                # cycle at which the board's TX wire is free
+        self._rx_free = 0                # cycle at which the PC -> board wire is free
+        self._bus = self._link = None
+        self._extra_sync: int | None = None
+        self.frames_dropped = 0
+        """Frames from the board that failed their checksum (none expected)."""
+
+    # -- wiring into the twin ---------------------------------------------------------
+    def connect(self, bus, link) -> None:
+        """Carry the sketch's topics between ``bus`` and the UART, with ``link``'s latency and loss."""
+        self._bus, self._link = bus, link
+        for name, info in self.subscribers.items():
+            bus.subscribe(name, lambda msg, info=info: self._send(info, msg))
+
+    # -- Firmware protocol --------------------------------------------------------------
+    def start(self) -> None:
+        """Power up: run the board to now (setup() runs in its first microseconds) and keep it in step."""
+        self._sync()
+        self.clock.schedule_in(self.p.sync_period_us, self._tick)
+
+    def on_wheel_command(self, data: Sequence[float]) -> None:
+        """A wheel_Command published now: its frame starts on the board's RX wire now."""
+        info = self.subscribers.get("wheel_Command")
+        if info is None:
+            raise SketchError("the sketch does not subscribe to wheel_Command")
+        self._send(info, Float64MultiArray(data=[float(x) for x in data]))
+
+    def on_sc_edge(self, wheel: int) -> None:
+        """An SC change of ``wheel`` now: toggle its pin at this microsecond."""
+        self.board.queue_edge(self.clock.now_us * CYCLES_PER_US + self.lead_cycles, self._speed_pins[wheel])
+
+    # -- board in step with the clock ---------------------------------------------------
+    def _tick(self) -> None:
+        self.clock.schedule_in(self.p.sync_period_us, self._tick)
+        self._sync()
+
+    def _sync(self) -> None:
+        now = self.clock.now_us
+        try:
+            self.board.run_to(now * CYCLES_PER_US + self.lead_cycles)
+        except BoardError as exc:
+            raise BoardError(f"{exc} (sketch {self.p.sketch_dir or DEFAULT_SKETCH})") from None
+        self._sync_pins()
+        tx = self.board.take_tx()
+        if tx:
+            self._receive(tx)
+
+    def _sync_pins(self) -> None:
+        """Read the driver pins off the board (PWM: OCR or port; DIR, BRAKE, STOP: port bits)."""
+        key = self.board.outputs()
+        if key != self._key:
+            self._key = key
+            for w, pins in enumerate(self.pins):
+                v = key >> (32 * w)
+                pins.pwm_counts = v & 0xFF
+                pins.dir_level = 1 if v >> 8 & 0xFF else 0
+                pins.brake_level = 1 if v >> 16 & 0xFF else 0
+                pins.stop_level = 1 if v >> 24 & 0xFF else 0
+
+    def _receive(self, tx: list[tuple[int, int]]) -> None:
+        """Board bytes written to UDR0: their time on the wire, then the frames they complete."""
+        per_byte = byte_cycles(self.board)
+        for cycle, _ in tx:
+            self._tx_free = max(cycle, self._tx_free) + per_byte
+            self._wire_end.append(self._tx_free)
+        for f in self._parser.feed(bytes(b for _, b in tx)):
+            arrival = -(-(self._wire_end[f.last - self._wire_base] - self.lead_cycles) // CYCLES_PER_US)
+            self._deliver(f.topic_id, f.message, arrival)
+        self.frames_dropped = self._parser.dropped
+        got, total = self._parser.pending
+        keep = len(self._wire_end) - got
+        self._wire_base += keep
+        del self._wire_end[:keep]
+        if total is not None:  # a frame is on its way: be there when its last byte arrives
+            end = self._tx_free + (total - got) * per_byte
+            self._schedule_sync(-(-(end - self.lead_cycles) // CYCLES_PER_US))
+
+    def _schedule_sync(self, t_us: int) -> None:
+        if t_us <= self.clock.now_us or (self._extra_sync is not None and self._extra_sync == t_us):
+            return
+        self._extra_sync = t_us
+        self.clock.schedule(t_us, self._sync)
+
+    def _deliver(self, topic_id: int, message: bytes, arrival_us: int) -> None:
+        info = self.publishers.get(topic_id)
+        if info is None or info.message_type != "std_msgs/Float64":
+            return
+        value = deserialize_float64(message)
+        link = self._link
+        if link is not None:
+            if link.draw_loss(ARDUINO_TO_PC, 8 + len(message)):
+                return
+            arrival_us += link.extra_latency_us
+        at = max(arrival_us, self.clock.now_us)
+        if self._bus is not None:
+            bus, topic = self._bus, info.topic_name
+            self.clock.schedule(at, lambda: bus.publish(topic, Float64(data=value)))
+        else:
+            publish, topic = self._publish, info.topic_name
+            self.clock.schedule(at, lambda: publish(topic, value))
+
+    def _send(self, info: TopicInfo, msg) -> None:
+        """Put ``msg`` on the PC -> board wire as a rosserial frame on the sketch's topic id."""
+        if info.message_type == "std_msgs/Float64MultiArray":
+            payload = serialize_float64_multiarray([float(x) for x in msg.data])
+        else:
+            payload = serialize_float64(float(msg.data))
+        data = frame(info.topic_id, payload)
+        start_us = self.clock.now_us
+        if self._link is not None:
+            start_us += self._link.extra_latency_us
+            if self._link.draw_loss(PC_TO_ARDUINO, len(data)):
+                data = data[:-1] + bytes(((data[-1] + 1) & 0xFF,))  # the checksum fails on the board
+        per_byte = byte_cycles(self.board)
+        start = max(start_us * CYCLES_PER_US + self.lead_cycles, self._rx_free, self.board.cycle)
+        self.board.queue_rx(start, data, per_byte)
+        self._rx_free = start + len(data) * per_byte
+
+    def close(self) -> None:
+        """Free the emulator."""
+        self.board.close()
+

@@ -8,9 +8,12 @@ Each support resists rolling in proportion to its contact normal force ``N``:
   so MuJoCo's constraint solver applies it in C every step, holds a wheel at rest
   without jitter, and drops it when the wheel lifts (``N = 0``);
 - a ball transfer unit: a force ``Crr_ball N`` against the ball's velocity over the
-  floor, in any direction (``caster.rolling_resistance``), applied to the ball
-  (``xfrc_applied``). Below 5 mm/s it fades linearly to 0, so that a robot at rest is
-  not pushed about by a force held between updates.
+  floor, in any direction (``caster.rolling_resistance``), at the ball's contact point.
+  The four forces go to the chassis as one generalized force on its free joint
+  (``qfrc_applied``: their sum, and their moment about the base in the body frame);
+  body forces (``xfrc_applied``) would cost MuJoCo a Jacobian per ball and step, about
+  7 us a step. Below 5 mm/s a ball's force fades linearly to 0, so that a robot at rest
+  is not pushed about by a force held between updates.
 
 Why not MuJoCo's contact friction: rolling friction (condim 6) on the tyres and
 sliding friction on the balls made the stiff contacts of :mod:`amr_twin.build` chatter
@@ -48,7 +51,7 @@ class RollingResistance:
         self.physics = physics
         m, d = physics.model, physics.data
         self._qpos, self._qvel, self._xmat, self._xpos = d.qpos, d.qvel, d.xmat, d.xpos
-        self._friction, self._xfrc = m.dof_frictionloss, d.xfrc_applied
+        self._friction, self._qfrc = m.dof_frictionloss, d.qfrc_applied
         w, k, g = cfg.wheel, cfg.caster, cfg.sim.gravity_m_s2
 
         def joint(name):
@@ -63,9 +66,6 @@ class RollingResistance:
         casters = [name for name in physics.support_geoms if name.startswith("caster_")]
         self._casters = [joint(f"{name}_joint") for name in casters]
         self._ball_body = [int(m.geom_bodyid[physics.support_geoms[name]]) for name in casters]
-        first = self._ball_body[0]  # consecutive bodies: one slice assignment (fancy indexing costs 15 us)
-        consecutive = self._ball_body == list(range(first, first + len(casters)))
-        self._balls = slice(first, first + len(casters)) if consecutive else self._ball_body
         ball_kg = float(m.body_mass[self._ball_body[0]])
         self._k_c, self._c_c = k.stiffness_n_m, k.damping_n_s_m
         self._f0_c = k.preload_n + ball_kg * g
@@ -103,9 +103,13 @@ class RollingResistance:
         wz = xm[6] * qvel[r0 + 3] + xm[7] * qvel[r0 + 4] + xm[8] * qvel[r0 + 5]
         xpos = self._xpos.tolist()
         bx, by = xpos[self._base][0], xpos[self._base][1]
-        crr, forces = self._ball_crr, []
+        crr, fx, fy, tz = self._ball_crr, 0.0, 0.0, 0.0
         for i, body in enumerate(self._ball_body):
-            ux, uy = vx - wz * (xpos[body][1] - by), vy + wz * (xpos[body][0] - bx)
+            rx, ry = xpos[body][0] - bx, xpos[body][1] - by  # contact point, on the floor under the ball
+            ux, uy = vx - wz * ry, vy + wz * rx
             scale = crr * loads[2 + i] / max(math.hypot(ux, uy), BALL_SPEED_EPS_M_S)
-            forces.append((-scale * ux, -scale * uy))
-        self._xfrc[self._balls, :2] = forces
+            fx_i, fy_i = -scale * ux, -scale * uy
+            fx, fy, tz = fx + fx_i, fy + fy_i, tz + rx * fy_i - ry * fx_i
+        # the free joint's generalized force: world force, then the moment in the body frame
+        # (R^T (0, 0, tz): the third column of the rotation's transpose is its third row)
+        self._qfrc[r0:r0 + 6] = (fx, fy, 0.0, xm[6] * tz, xm[7] * tz, xm[8] * tz)

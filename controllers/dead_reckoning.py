@@ -4,9 +4,12 @@ The estimate of each wheel is a :class:`SpeedProfile`: a list of knots
 ``(t_us, rpm)``, linear between knots and held after the last. :func:`integrate`
 carries a planar pose ``(x_m, y_m, yaw_rad)`` along two such profiles: exactly along
 arcs (:func:`arc`) where both speeds are constant, and with arcs of at most
-``max_substep_us`` at the mid-step speeds where one varies. The wheel odometry node
-(:mod:`amr_twin.controllers.odometry`) builds the profiles from the firmware's
-speed samples and publishes the pose.
+``max_substep_us`` at the mid-step speeds where one varies. :class:`SmoothedPose`
+keeps the two profiles and the pose they imply, revised as samples arrive (the
+hindsight estimate); :func:`twist_step` moves a pose by a planar twist. The wheel
+odometry node (:mod:`amr_twin.controllers.odometry`) builds the profiles from the
+firmware's speed samples and publishes a pose that tracks the smoothed one forward
+in time.
 """
 
 from __future__ import annotations
@@ -73,6 +76,22 @@ class SpeedProfile:
         value = self.at(t_us, self.segment(t_us))
         self.t_us = self.t_us[:i] + [int(t_us)]
         self.rpm = self.rpm[:i] + [value]
+
+    def integral(self, t0_us: int, t1_us: int) -> float:
+        """Integral of the speed over ``[t0_us, t1_us]`` (exact on the linear pieces), RPM * us."""
+        if t1_us <= t0_us:
+            return 0.0
+        total, t = 0.0, t0_us
+        i = bisect_right(self.t_us, t0_us)
+        for k in self.t_us[i:]:
+            if k >= t1_us:
+                break
+            if k > t:
+                seg = self.segment(t)
+                total += 0.5 * (self.at(t, seg) + self.at(k, seg)) * (k - t)
+                t = k
+        seg = self.segment(t)
+        return total + 0.5 * (self.at(t, seg) + self.at(t1_us, seg)) * (t1_us - t)
 
     def trim(self, t_us: int) -> None:
         """Forget the knots before ``t_us``, keeping the speed in force from it."""
@@ -146,3 +165,81 @@ def integrate(profiles: Sequence[SpeedProfile], start: tuple, t_end_us: int, max
             pose = arc(pose, *body(*rpm), dt_us * 1e-6)
         t = t_next
     return (t_end_us, *pose)
+
+
+def twist_step(pose: Pose2, vx_m_s: float, vy_m_s: float, w_rad_s: float, dt_s: float) -> Pose2:
+    """Pose after ``dt_s`` s at the constant body twist ``(vx, vy, w)`` (SE(2) exponential)."""
+    x, y, yaw = pose
+    th = w_rad_s * dt_s
+    if abs(th) < 1e-9:
+        a, b = dt_s, 0.5 * th * dt_s
+    else:
+        a, b = math.sin(th) / w_rad_s, (1.0 - math.cos(th)) / w_rad_s
+    dx, dy = a * vx_m_s - b * vy_m_s, b * vx_m_s + a * vy_m_s  # body frame at the start
+    c, s = math.cos(yaw), math.sin(yaw)
+    return x + c * dx - s * dy, y + s * dx + c * dy, yaw + th
+
+
+class SmoothedPose:
+    """Both wheels' speed profiles and the pose they imply, revised when samples arrive.
+
+    The profiles are changed by the caller (samples, brake ramps); :meth:`changed`
+    marks them so. :meth:`pose_at` integrates from an *anchor*, the pose at the
+    last instant no later sample can change (the last knot at or before now of
+    each wheel), so a sample that describes the past moves the pose after it: the
+    best estimate in hindsight, not a continuous one.
+
+    Parameters
+    ----------
+    t_us : int
+        Start instant, us.
+    pose : (x_m, y_m, yaw_rad)
+        Start pose.
+    rpm : (left, right)
+        Speeds in force at the start, RPM.
+    body : callable ``(left_rpm, right_rpm) -> (v_m_s, w_rad_s)``
+        The drive geometry.
+    max_substep_us : int
+        Longest arc while a speed varies, us.
+    """
+
+    def __init__(self, t_us: int, pose: Pose2, rpm: Sequence[float],
+                 body: Callable[[float, float], tuple[float, float]], max_substep_us: int):
+        self.profiles = [SpeedProfile(t_us, rpm[0]), SpeedProfile(t_us, rpm[1])]
+        self.body, self.max_substep_us = body, max_substep_us
+        self._anchor = (t_us, *pose)  # final: no sample can change the pose before it
+        self._cache = self._anchor  # pose at the newest knot of either wheel (up to now)
+        self._hold = None  # (v, w) when both speeds are held from the cache on
+        self._dirty = False
+
+    def changed(self) -> None:
+        """The profiles were changed: recompute the pose at the next :meth:`pose_at`."""
+        self._dirty = True
+
+    def speeds_rpm(self, t_us: float) -> list[float]:
+        """Both wheels' estimated speeds at ``t_us``, RPM."""
+        return [p.at(t_us, p.segment(t_us)) for p in self.profiles]
+
+    def pose_at(self, now_us: int) -> Pose2:
+        """The pose at ``now_us`` (not before the previous call's instant), yaw unwrapped."""
+        if self._dirty:
+            # final up to the last knot at or before now of each wheel: later samples are
+            # clipped there (knots after now are assumptions, e.g. a brake ramp)
+            horizon = min(p.known_us(now_us) for p in self.profiles)
+            if horizon > self._anchor[0]:
+                self._anchor = integrate(self.profiles, self._anchor, horizon, self.max_substep_us, self.body)
+                for p in self.profiles:
+                    p.trim(horizon)
+            newest = min(max(p.last_us for p in self.profiles), now_us)
+            self._cache = integrate(self.profiles, self._anchor, max(newest, self._anchor[0]),
+                                    self.max_substep_us, self.body)
+            self._dirty = False
+            self._hold = None
+            if all(p.last_us <= self._cache[0] for p in self.profiles):  # speeds held after the cache
+                self._hold = self.body(self.profiles[0].last_rpm, self.profiles[1].last_rpm)
+        cache, hold = self._cache, self._hold
+        if now_us <= cache[0]:
+            return cache[1:]
+        if hold is not None:  # one arc at the held speeds: what integrate computes, cheaper
+            return arc(cache[1:], hold[0], hold[1], float(now_us - cache[0]) * 1e-6)
+        return tuple(integrate(self.profiles, cache, now_us, self.max_substep_us, self.body)[1:])

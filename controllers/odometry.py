@@ -4,9 +4,9 @@ The firmware publishes each wheel's speed in RPM as measured on the driver's SC
 output, which has no direction (§3.2.3). The sign is taken from the last
 ``wheel_Command`` motion code of that wheel (1 forward, -1 backward); under a
 brake (0) the wheel keeps its last direction and its speed falls linearly to 0
-over ``brake_stop_s`` (a braked hub wheel stops in about 0.1 s from 30 RPM). With ``signed_input=True`` the wheel topics are read
-as signed RPM and ``wheel_Command`` is ignored; :meth:`WheelOdometry.set_wheel_speeds_rpm`
-feeds signed speeds directly.
+over ``brake_stop_s`` (a braked hub wheel stops in about 0.1 s from 30 RPM). With
+``signed_input=True`` the wheel topics are read as signed RPM and ``wheel_Command``
+is ignored; :meth:`WheelOdometry.set_wheel_speeds_rpm` feeds signed speeds directly.
 
 What a speed sample means (``speed_samples``)
 ---------------------------------------------
@@ -18,24 +18,38 @@ What a speed sample means (``speed_samples``)
     previous sample, a brake, the node start), so a firmware that publishes
     faster than one revolution (the improved one, 10 Hz) gets the mean over the
     time since its previous sample. Between windows the speed is interpolated
-    linearly; after the newest one it is held. The pose is re-integrated from
-    the last instant known for both wheels whenever a sample arrives, so a
-    sample corrects the past it describes (the published pose is a causal
-    estimate, the stored one converges to the smoothed one).
+    linearly (a wheel that stood before a window stood until the window began);
+    after the newest one it is held.
 ``"hold"``
     Zero-order hold from the receipt of each sample (what a naive node does).
     With one sample per revolution it lags: the first sample of a start arrives
     about a revolution after the wheel started.
 
-The estimate of each wheel is a list of knots (time, signed RPM), linear between
-knots and held after the last. The pose is integrated exactly along arcs where
-both speeds are constant and with arcs of at most ``max_substep_s`` at the mean
-speeds where one varies (:mod:`amr_twin.controllers.dead_reckoning`). ``odom`` (frame ``odom``, child ``base_link``, REP-105)
-and the ``odom -> base_link`` transform are published at ``publish_rate_hz``.
+Two poses (REP-105: ``odom -> base_link`` must be continuous)
+-------------------------------------------------------------
+The *smoothed* pose (:class:`~amr_twin.controllers.dead_reckoning.SmoothedPose`)
+integrates these speed estimates, and a window that arrives corrects the past it
+describes: the best estimate in hindsight, which jumps when a sample arrives
+(0.7 m after the first revolution of a start). The *published* pose is integrated
+forward only, as a ROS diff-drive controller does, and never revised: it moves
+with the wheel speeds in force (each following its estimate at most at
+``max_wheel_accel_m_s2``: the two wheels' samples arrive at different instants),
+plus a correction twist that makes up its difference to the smoothed pose, in the
+body frame, over one time ``T >= catchup_time_s`` for x, y and yaw together,
+stretched so that the correction stays within ``catchup_max_fraction`` of the
+motion the wheels give (of the speed for x and y, of the yaw rate for yaw) plus :data:`CATCHUP_FLOOR_M_S` and :data:`CATCHUP_FLOOR_RAD_S`
+(what is left at a stop settles at those rates). The published twist is the one the
+published pose moves with, correction included (``linear.y`` is non-zero only
+while a sideways difference is made up), so integrating it gives the pose.
+
+``odom`` (frame ``odom``, child ``base_link``) and the ``odom -> base_link``
+transform are published at ``publish_rate_hz``, the first at the node's start.
 
 Known limits, inherited from the hardware: a wheel that stops without a brake
 command keeps its last speed until a new sample; a motion sign change is applied
-at command time while the wheel is still spinning the old way.
+at command time while the wheel is still spinning the old way; until a wheel's
+first sample after a start, the published pose moves as if it stood (one
+revolution, 0.6 to 1.8 s with the thesis firmware), and makes that up afterwards.
 """
 
 from __future__ import annotations
@@ -51,7 +65,7 @@ from amr_twin.messages import (Float64, Float64MultiArray, Header, Odometry, Poi
                                PoseWithCovariance, Quaternion, Time, Transform,
                                TransformStamped, Twist, TwistWithCovariance, Vector3)
 
-from .dead_reckoning import SpeedProfile, arc, integrate
+from .dead_reckoning import SmoothedPose, arc, twist_step
 from .wheel_command import WHEEL_RADIUS_M
 
 WHEEL_SEPARATION_M = 0.48
@@ -59,6 +73,10 @@ WHEEL_SEPARATION_M = 0.48
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
 SPEED_SAMPLES = ("window", "hold")
+DEADBAND_M, DEADBAND_RAD = 5e-4, 5e-4
+"""A difference to the smoothed pose below both is left alone, m and rad (the correction ends)."""
+CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S = 0.05, 0.1
+"""Correction allowed beyond ``catchup_max_fraction`` of the wheels' motion (the rest after a stop), m/s, rad/s."""
 
 
 def _covariance(diagonal: Sequence[float]) -> np.ndarray:
@@ -98,6 +116,13 @@ class WheelOdometry:
         Longest arc while a speed varies, s.
     brake_stop_s : float
         Time a braked wheel takes to stop, s (the speed falls linearly).
+    catchup_time_s : float
+        Shortest time over which the difference to the smoothed pose is made up, s (> 0).
+    catchup_max_fraction : float
+        Largest correction as a fraction of the wheels' speed and yaw rate (>= 0), beyond the floors.
+    max_wheel_accel_m_s2 : float
+        Fastest change of each wheel's speed the published pose moves with, m/s^2 at
+        the rim (``inf``: none); what this costs is made up by the correction.
     """
 
     def __init__(self, bus: Bus, clock: VirtualClock, wheel_radius_m: float = WHEEL_RADIUS_M,
@@ -111,11 +136,18 @@ class WheelOdometry:
                  frame_id: str = ODOM_FRAME, child_frame_id: str = BASE_FRAME,
                  speed_samples: str = "window", revolutions_per_sample: float = 1.0,
                  sample_latency_s: float = 0.0, max_substep_s: float = 0.01,
-                 brake_stop_s: float = 0.1):
+                 brake_stop_s: float = 0.1, catchup_time_s: float = 0.1,
+                 catchup_max_fraction: float = 0.4, max_wheel_accel_m_s2: float = 4.0):
         if publish_rate_hz <= 0:
             raise ValueError(f"publish_rate_hz must be positive, got {publish_rate_hz}")
         if speed_samples not in SPEED_SAMPLES:
             raise ValueError(f"speed_samples: {speed_samples!r} is not one of {SPEED_SAMPLES}")
+        if not (catchup_time_s > 0 and math.isfinite(catchup_time_s)):
+            raise ValueError(f"catchup_time_s: {catchup_time_s} must be a finite number > 0")
+        if not (catchup_max_fraction >= 0 and math.isfinite(catchup_max_fraction)):
+            raise ValueError(f"catchup_max_fraction: {catchup_max_fraction} must be a finite number >= 0")
+        if not max_wheel_accel_m_s2 > 0:
+            raise ValueError(f"max_wheel_accel_m_s2: {max_wheel_accel_m_s2} must be > 0 (inf: no limit)")
         self.bus, self.clock = bus, clock
         radius_m = wheel_radius_m * wheel_radius_multiplier
         self.left_radius_m = radius_m * left_radius_multiplier
@@ -132,8 +164,11 @@ class WheelOdometry:
         self.sample_latency_us = int(round(sample_latency_s * 1e6))
         self.max_substep_us = max(1, int(round(max_substep_s * 1e6)))
         self.brake_stop_us = max(0, int(round(brake_stop_s * 1e6)))
+        self.catchup_s = float(catchup_time_s)
+        self.catchup_max_fraction = float(catchup_max_fraction)
+        self._rim = tuple(2.0 * math.pi / 60.0 * r for r in (self.left_radius_m, self.right_radius_m))  # m/s per RPM
+        self._accel_rpm_per_us = tuple(max_wheel_accel_m_s2 * 1e-6 / k for k in self._rim)
         self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
-        self.x_m = self.y_m = self.yaw_rad = 0.0
         self._motion = [0, 0]
         self._seq = 0
         self._restart(clock.now_us, (0.0, 0.0, 0.0), (0.0, 0.0))
@@ -143,14 +178,17 @@ class WheelOdometry:
         if not signed_input:
             self._subs.append(bus.subscribe("wheel_Command", self._on_command))
         self._topics = ("odom", "tf") if publish_tf else ("odom",)
-        self._timer = clock.schedule_in(self.period_us, self._on_timer, publishes=self._topics)
+        self._timer = clock.schedule(clock.now_us, self._on_timer, publishes=self._topics)
 
     def _restart(self, t_us: int, pose: tuple[float, float, float], rpm: Sequence[float]) -> None:
-        self._profiles = [SpeedProfile(t_us, rpm[0]), SpeedProfile(t_us, rpm[1])]
-        self._anchor = (t_us, *pose)  # final: no sample can change the pose before it
-        self._cache = self._anchor  # pose at the newest knot of either wheel
-        self._hold = None  # (v, w) when both speeds are held from the cache on
-        self._dirty = False
+        self.smoothed = SmoothedPose(t_us, pose, rpm, self._body, self.max_substep_us)
+        self._profiles = self.smoothed.profiles
+        self._t_us = t_us  # the published pose is integrated up to here; never revised
+        self._pose = tuple(float(v) for v in pose)  # yaw not wrapped
+        self.x_m, self.y_m = self._pose[0], self._pose[1]
+        self.yaw_rad = math.atan2(math.sin(self._pose[2]), math.cos(self._pose[2]))
+        self._used = [float(rpm[0]), float(rpm[1])]  # RPM the pose moves with at self._t_us
+        self._correction = (0.0, 0.0, 0.0)  # body twist toward the smoothed pose: m/s, m/s, rad/s
 
     # -- inputs -----------------------------------------------------------------
     def _on_speed(self, wheel: int, msg: Float64) -> None:
@@ -158,6 +196,7 @@ class WheelOdometry:
             rpm = float(msg.data)
         else:
             rpm = self._direction[wheel] * abs(float(msg.data))
+        self.update()
         now = self.clock.now_us
         profile = self._profiles[wheel]
         known_us = profile.known_us(now)
@@ -168,11 +207,13 @@ class WheelOdometry:
             t1 = now - self.sample_latency_us
             length_us = (self.revolutions_per_sample * 60e6 / abs(rpm)) if rpm else 1e15
             profile.cut(max(t1 - length_us, known_us))
+            if profile.last_rpm == 0.0:  # it stood before: it started with this window, not before
+                profile.step(t1 - length_us, 0.0)
             profile.window(t1 - length_us, t1, rpm)
-        self._dirty = True
-        self.update()
+        self._changed()
 
     def _on_command(self, msg: Float64MultiArray) -> None:
+        self.update()
         now = self.clock.now_us
         for wheel, motion in enumerate((int(msg.data[0]), int(msg.data[2]))):
             if motion == self._motion[wheel]:
@@ -186,20 +227,19 @@ class WheelOdometry:
             else:
                 self._direction[wheel] = 1 if motion > 0 else -1
                 profile.step(now, self._direction[wheel] * abs(profile.last_rpm))
-            self._dirty = True
         for profile in self._profiles:
             if profile.last_rpm == 0.0 and profile.last_us < now:
                 profile.step(now, 0.0)  # at rest until this command: no motion before it
-                self._dirty = True
-        self.update()
+        self._changed()
 
     def set_wheel_speeds_rpm(self, left_rpm: float, right_rpm: float) -> None:
         """Signed wheel speeds from now on (forward positive), RPM."""
+        self.update()
         now = self.clock.now_us
         for profile, rpm in zip(self._profiles, (left_rpm, right_rpm)):
+            profile.cut(now)
             profile.step(now, rpm)
-        self._dirty = True
-        self.update()
+        self._changed()
 
     # -- state ------------------------------------------------------------------
     def _body(self, left_rpm: float, right_rpm: float) -> tuple[float, float]:
@@ -207,47 +247,94 @@ class WheelOdometry:
         v_right = right_rpm * 2.0 * math.pi / 60.0 * self.right_radius_m
         return 0.5 * (v_left + v_right), (v_right - v_left) / self.separation_m
 
+    def _changed(self) -> None:
+        self.smoothed.changed()
+        if self._accel_rpm_per_us[0] == math.inf:  # no limit: a new speed is in force at once
+            self._used = self.smoothed.speeds_rpm(self._t_us)
+        self._retarget()
+
+    def _retarget(self) -> None:
+        """The correction twist from the difference between the smoothed and the published pose now."""
+        x, y, yaw = self._pose
+        hx, hy, hyaw = self.smoothed.pose_at(self._t_us)
+        c, s = math.cos(yaw), math.sin(yaw)
+        ex, ey = c * (hx - x) + s * (hy - y), -s * (hx - x) + c * (hy - y)
+        eyaw = hyaw - yaw  # both unwrapped from the same start: no wrapping (a spin can lag > pi)
+        e_xy = math.hypot(ex, ey)
+        if e_xy <= DEADBAND_M and abs(eyaw) <= DEADBAND_RAD:
+            self._correction = (0.0, 0.0, 0.0)
+            return
+        v, w = self._body(*self._used)
+        k = self.catchup_max_fraction
+        t_s = max(self.catchup_s, e_xy / (k * abs(v) + CATCHUP_FLOOR_M_S),
+                  abs(eyaw) / (k * abs(w) + CATCHUP_FLOOR_RAD_S))
+        self._correction = (ex / t_s, ey / t_s, eyaw / t_s)
+
+    def body_twist(self) -> tuple[float, float, float]:
+        """Body twist the published pose moves with now: ``vx_m_s, vy_m_s, w_rad_s`` (CCW +)."""
+        self.update()
+        v, w = self._body(*self._used)
+        cx, cy, cw = self._correction
+        return v + cx, cy, w + cw
+
     def body_velocity(self) -> tuple[float, float]:
-        """Current forward speed (m/s) and yaw rate (rad/s, CCW +) of ``base_link``."""
-        now = self.clock.now_us
-        if self._hold is not None and not self._dirty and now >= self._cache[0]:
-            return self._hold
-        return self._body(*(p.at(now, p.segment(now)) for p in self._profiles))
+        """Forward speed (m/s) and yaw rate (rad/s, CCW +) the published pose moves with now."""
+        vx, _vy, w = self.body_twist()
+        return vx, w
 
     def update(self) -> None:
-        """Bring the pose up to ``clock.now_us`` (re-integrating after new samples)."""
+        """Integrate the published pose forward from the last update to ``clock.now_us``.
+
+        Pieces between the speed profiles' knots; within a piece steps of at most
+        ``max_substep_s`` while a speed varies (one exact arc when none does and no
+        correction runs). The correction twist stays as computed at the previous
+        update; it is recomputed at the end.
+        """
         now = self.clock.now_us
-        if self._dirty:
-            # final up to the last knot at or before now of each wheel: later samples are
-            # clipped there (knots after now are assumptions, e.g. a brake ramp)
-            horizon = min(p.known_us(now) for p in self._profiles)
-            if horizon > self._anchor[0]:
-                self._anchor = integrate(self._profiles, self._anchor, horizon, self.max_substep_us,
-                                         self._body)
-                for p in self._profiles:
-                    p.trim(horizon)
-            newest = min(max(p.last_us for p in self._profiles), now)
-            self._cache = integrate(self._profiles, self._anchor, max(newest, self._anchor[0]),
-                                    self.max_substep_us, self._body)
-            self._dirty = False
-            self._hold = None
-            if all(p.last_us <= self._cache[0] for p in self._profiles):  # speeds held after the cache
-                self._hold = self._body(self._profiles[0].last_rpm, self._profiles[1].last_rpm)
-        cache, hold = self._cache, self._hold
-        if now <= cache[0]:
-            pose = cache[1:]
-        elif hold is not None:  # one arc at the held speeds: what integrate computes, cheaper
-            pose = arc(cache[1:], hold[0], hold[1], float(now - cache[0]) * 1e-6)
-        else:
-            _, *pose = integrate(self._profiles, cache, now, self.max_substep_us, self._body)
+        t = self._t_us
+        if now <= t:
+            return
+        profiles, used, accel = self._profiles, self._used, self._accel_rpm_per_us
+        cx, cy, cw = self._correction
+        steady = cx == cy == cw == 0.0
+        pose = self._pose
+        knots = sorted({k for p in profiles for k in p.t_us if t < k < now})
+        for t_next in knots + [now]:
+            segs = [p.segment(t) for p in profiles]
+            while t < t_next:
+                rpm0 = [p.at(t, sg) for p, sg in zip(profiles, segs)]
+                if steady and rpm0 == used and [p.at(t_next, sg) for p, sg in zip(profiles, segs)] == rpm0:
+                    pose = arc(pose, *self._body(*used), (t_next - t) * 1e-6)  # exact
+                    t = t_next
+                    continue
+                t1 = min(t_next, t + self.max_substep_us)
+                dt = t1 - t
+                mean = [0.0, 0.0]
+                for w, (p, sg) in enumerate(zip(profiles, segs)):
+                    goal = p.at(t1, sg)
+                    step = accel[w] * dt
+                    new = min(max(goal, used[w] - step), used[w] + step)
+                    mean[w] = 0.5 * (used[w] + new)
+                    used[w] = new
+                v, w_rad_s = self._body(*mean)
+                pose = twist_step(pose, v + cx, cy, w_rad_s + cw, dt * 1e-6)
+                t = t1
+        self._t_us, self._pose = now, pose
         self.x_m, self.y_m = pose[0], pose[1]
         self.yaw_rad = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
+        self._retarget()
+
+    def smoothed_pose(self) -> tuple[float, float, float]:
+        """The smoothed (hindsight) pose now: ``x_m, y_m, yaw_rad`` in ``odom``, yaw wrapped."""
+        self.update()
+        x, y, yaw = self.smoothed.pose_at(self._t_us)
+        return x, y, math.atan2(math.sin(yaw), math.cos(yaw))
 
     def reset(self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0) -> None:
         """Set the pose in ``odom`` (the speeds in force are kept)."""
-        rpm = [p.last_rpm for p in self._profiles]
-        self._restart(self.clock.now_us, (float(x_m), float(y_m), float(yaw_rad)), rpm)
         self.update()
+        rpm = self.smoothed.speeds_rpm(self.clock.now_us)
+        self._restart(self.clock.now_us, (float(x_m), float(y_m), float(yaw_rad)), rpm)
 
     # -- output -----------------------------------------------------------------
     def _on_timer(self) -> None:
@@ -258,13 +345,13 @@ class WheelOdometry:
         """Integrate to now, publish ``odom`` (and tf) and return the message."""
         self.update()
         stamp = Time.from_us(self.clock.now_us)
-        v_m_s, w_rad_s = self.body_velocity()
+        vx_m_s, vy_m_s, w_rad_s = self.body_twist()
         orientation = Quaternion.from_yaw(self.yaw_rad)
         msg = Odometry(
             header=Header(self._seq, stamp, self.frame_id), child_frame_id=self.child_frame_id,
             pose=PoseWithCovariance(Pose(Point(self.x_m, self.y_m, 0.0), orientation),
                                     self.pose_covariance),
-            twist=TwistWithCovariance(Twist(Vector3(v_m_s, 0.0, 0.0), Vector3(0.0, 0.0, w_rad_s)),
+            twist=TwistWithCovariance(Twist(Vector3(vx_m_s, vy_m_s, 0.0), Vector3(0.0, 0.0, w_rad_s)),
                                       self.twist_covariance))
         self._seq += 1
         self._pub.publish(msg)

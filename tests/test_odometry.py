@@ -1,5 +1,6 @@
 """Wheel odometry: exact arcs, motion signs from wheel_Command, signed input, rate, tf,
-measurement windows of one revolution, brake ramp."""
+measurement windows of one revolution, brake ramp, and a published pose that is
+integrated forward only (REP-105: continuous) while it makes up the smoothed pose."""
 
 import math
 
@@ -10,9 +11,11 @@ import pytest
 from amr_twin.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.messages import Float64, Float64MultiArray
-from amr_twin.controllers.odometry import WheelOdometry
+from amr_twin.controllers.odometry import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S, WheelOdometry
 
 RPM_PER_M_S = 60.0 / (math.pi * 0.25)
+CIRCUMFERENCE_M = 2 * math.pi * 0.125
+EXACT = {"max_wheel_accel_m_s2": math.inf}  # speeds in force at once: analytic arcs
 
 
 @pytest.fixture
@@ -31,9 +34,16 @@ def _firmware(bus, motion_l, rpm_l, motion_r, rpm_r):
     bus.publish("wheel1_Vel", Float64(rpm_r))
 
 
+def _poses(msgs):
+    """(n, 7): t_s, x, y, yaw, vx, vy, w of odometry messages."""
+    return np.array([(m.header.stamp.to_sec(), m.pose.pose.position.x, m.pose.pose.position.y,
+                      m.pose.pose.orientation.yaw_rad(), m.twist.twist.linear.x, m.twist.twist.linear.y,
+                      m.twist.twist.angular.z) for m in msgs])
+
+
 def test_constant_arc_matches_the_analytic_pose(rig):
     clock, bus, odom_msgs = rig
-    odo = WheelOdometry(bus, clock)
+    odo = WheelOdometry(bus, clock, **EXACT)
     _firmware(bus, 1, 60.8, 1, 99.2)  # 60 deg/s about an ICC 1 m to the left
     clock.run_until(2_000_000)
     w = math.pi / 3
@@ -45,6 +55,7 @@ def test_constant_arc_matches_the_analytic_pose(rig):
     assert pose.position.y == pytest.approx(1 - math.cos(2 * w), abs=1e-9)
     assert pose.orientation.yaw_rad() == pytest.approx(2 * w, abs=1e-9)
     assert last.twist.twist.linear.x == pytest.approx(w)
+    assert last.twist.twist.linear.y == 0.0
     assert last.twist.twist.angular.z == pytest.approx(w)
     tf = bus.tf.lookup_transform("odom", "base_link")
     assert (tf.translation.x, tf.translation.y) == pytest.approx((odo.x_m, odo.y_m))
@@ -57,7 +68,7 @@ def test_constant_arc_matches_the_analytic_pose(rig):
 
 def test_arc_with_speed_changes_between_publications(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, publish_rate_hz=7.0, speed_samples="hold")
+    odo = WheelOdometry(bus, clock, publish_rate_hz=7.0, speed_samples="hold", **EXACT)
     _firmware(bus, 1, 60.8, 1, 99.2)
     clock.run_until(370_123)  # not a publication instant
     _firmware(bus, 1, 0.5 * RPM_PER_M_S, 1, 0.5 * RPM_PER_M_S)  # then straight at 0.5 m/s
@@ -71,7 +82,7 @@ def test_arc_with_speed_changes_between_publications(rig):
 
 def test_clockwise_about_icc_right_and_backward(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock)
+    odo = WheelOdometry(bus, clock, **EXACT)
     _firmware(bus, 1, 99.2, 1, 60.8)  # ch. 5: clockwise, ICC 1 m right
     clock.run_until(1_000_000)
     w = -math.pi / 3
@@ -84,7 +95,7 @@ def test_clockwise_about_icc_right_and_backward(rig):
 
 def test_brake_command_zeroes_a_stale_speed_after_the_brake_ramp(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, brake_stop_s=0.1)
+    odo = WheelOdometry(bus, clock, brake_stop_s=0.1, **EXACT)
     _firmware(bus, 1, RPM_PER_M_S, 1, RPM_PER_M_S)
     clock.run_until(1_000_000)
     bus.publish("wheel_Command", Float64MultiArray(data=[0.0, 0.0, 0.0, 0.0]))
@@ -94,11 +105,12 @@ def test_brake_command_zeroes_a_stale_speed_after_the_brake_ramp(rig):
     assert odo.body_velocity()[0] == pytest.approx(0.5)
     clock.run_until(3_000_000)  # the firmware published nothing new: the speed is stale
     assert odo.x_m == pytest.approx(1.0 + 0.5 * 0.1)
+    assert odo.body_velocity() == (0.0, 0.0)
 
 
 def test_signed_input(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, signed_input=True)
+    odo = WheelOdometry(bus, clock, signed_input=True, **EXACT)
     bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 50.0, 1.0, 50.0]))  # ignored
     bus.publish("wheel0_Vel", Float64(-RPM_PER_M_S))
     bus.publish("wheel1_Vel", Float64(RPM_PER_M_S))
@@ -112,7 +124,7 @@ def test_signed_input(rig):
 def test_calibration_multipliers(rig):
     clock, bus, _ = rig
     odo = WheelOdometry(bus, clock, wheel_radius_multiplier=1.1, right_radius_multiplier=1.02,
-                        wheel_separation_multiplier=1.05)
+                        wheel_separation_multiplier=1.05, **EXACT)
     odo.set_wheel_speeds_rpm(RPM_PER_M_S, RPM_PER_M_S)
     v, w = odo.body_velocity()
     assert v == pytest.approx(1.1 * (1 + 1.02) / 2)
@@ -124,8 +136,8 @@ def test_rate_covariances_and_sequence(rig):
     WheelOdometry(bus, clock, publish_rate_hz=20.0, pose_covariance_diagonal=[1, 2, 3, 4, 5, 6],
                   twist_covariance_diagonal=[0.1] * 6)
     clock.run_until(1_000_000)
-    assert len(odom_msgs) == 20
-    assert [m.header.stamp.to_us() for m in odom_msgs[:3]] == [50_000, 100_000, 150_000]
+    assert len(odom_msgs) == 21  # the first at the start: tf covers the sensors' first stamps
+    assert [m.header.stamp.to_us() for m in odom_msgs[:3]] == [0, 50_000, 100_000]
     assert [m.header.seq for m in odom_msgs[:3]] == [0, 1, 2]
     cov = odom_msgs[0].pose.covariance.reshape(6, 6)
     assert np.array_equal(np.diag(cov), [1, 2, 3, 4, 5, 6]) and cov[0, 1] == 0
@@ -140,28 +152,74 @@ def test_shutdown_stops_publishing(rig):
     clock.run_until(100_000)
     odo.shutdown()
     clock.run_until(1_000_000)
-    assert len(odom_msgs) == 5
+    assert len(odom_msgs) == 6
+
+
+def _start_one_revolution_late(rig, **options):
+    """At rest 1 s, start at 60 RPM; the first sample (mean of that revolution) arrives at 2.5 s."""
+    clock, bus, odom_msgs = rig
+    odo = WheelOdometry(bus, clock, **options)
+    clock.run_until(1_000_000)
+    bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 60.0, 1.0, 60.0]))
+    clock.run_until(1_500_000)  # the wheels turn from here on (true motion)
+    clock.run_until(2_500_000)  # one revolution (1 s at 60 RPM) ended now
+    return clock, bus, odom_msgs, odo
 
 
 def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
-    """Faithful firmware: one sample per revolution, stamped at its end."""
-    clock, bus, odom_msgs = rig
-    odo = WheelOdometry(bus, clock)
-    clock.run_until(1_000_000)  # at rest
-    bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 60.0, 1.0, 60.0]))
-    clock.run_until(1_200_000)
-    assert odo.x_m == 0.0  # nothing measured yet
-    clock.run_until(2_500_000)  # one revolution (1 s at 60 RPM) ended now
+    """Faithful firmware: one sample per revolution, stamped at its end; the smoothed pose has it."""
+    clock, bus, odom_msgs, odo = _start_one_revolution_late(rig)
+    assert odo.x_m == 0.0 and odo.smoothed_pose()[0] == 0.0  # nothing measured yet
     bus.publish("wheel0_Vel", Float64(60.0))
     bus.publish("wheel1_Vel", Float64(60.0))
-    circumference_m = 2 * math.pi * 0.125
-    # gap 1.0-1.5 s interpolated 0 -> 60 RPM, then the window 1.5-2.5 s at 60 RPM
-    assert odo.x_m == pytest.approx(1.25 * circumference_m, rel=1e-9)
-    clock.run_until(3_000_000)  # held after the newest window
-    assert odo.x_m == pytest.approx(1.75 * circumference_m, rel=1e-9)
+    # the wheels stood until the window 1.5-2.5 s at 60 RPM: one revolution, in hindsight
+    assert odo.smoothed_pose()[0] == pytest.approx(CIRCUMFERENCE_M, rel=1e-9)
+    assert odo.x_m == 0.0  # the published pose does not jump
+    clock.run_until(3_000_000)
+    assert odo.smoothed_pose()[0] == pytest.approx(1.5 * CIRCUMFERENCE_M, rel=1e-9)  # held after it
+    assert 0.5 * CIRCUMFERENCE_M < odo.x_m < odo.smoothed_pose()[0]
+    clock.run_until(6_000_000)  # made up by then, no overshoot
+    assert odo.x_m == pytest.approx(odo.smoothed_pose()[0], abs=1e-3)
+    assert odo.x_m == pytest.approx(4.5 * CIRCUMFERENCE_M, abs=1e-3)
     assert odom_msgs[-1].pose.pose.position.x == pytest.approx(odo.x_m)
-    hold = WheelOdometry(bus, clock, speed_samples="hold")
+    hold = WheelOdometry(rig[1], rig[0], speed_samples="hold")
     assert hold.speed_samples == "hold"
+
+
+def test_published_pose_is_continuous_and_its_twist_integrates_to_it(rig):
+    """REP-105: no step larger than the wheels' motion allows (plus the bounded correction),
+    and the published twist is the one the pose moves with."""
+    clock, bus, odom_msgs, odo = _start_one_revolution_late(rig)
+    bus.publish("wheel0_Vel", Float64(60.0))
+    bus.publish("wheel1_Vel", Float64(62.0))  # the right wheel a little faster: a turn to make up
+    clock.run_until(7_000_000)
+    a = _poses(odom_msgs)
+    assert np.all(np.diff(a[:, 0]) == pytest.approx(0.02))
+    step_m = np.hypot(np.diff(a[:, 1]), np.diff(a[:, 2]))
+    rim_m = 62.0 / RPM_PER_M_S * 0.02  # the faster wheel's travel in one period
+    assert step_m.max() <= (1 + odo.catchup_max_fraction) * rim_m + CATCHUP_FLOOR_M_S * 0.02 + 1e-9
+    assert (np.abs(np.diff(a[:, 3])).max()
+            <= (1 + odo.catchup_max_fraction) * 2 * rim_m / 0.48 + CATCHUP_FLOOR_RAD_S * 0.02 + 1e-9)
+    assert step_m.max() > rim_m  # it did make up something
+    # integrate the published twists (held over each period) with the SE(2) exponential
+    from amr_twin.controllers.dead_reckoning import twist_step
+
+    pose = tuple(a[0, 1:4])
+    for k in range(len(a) - 1):
+        pose = twist_step(pose, a[k + 1, 4], a[k + 1, 5], a[k + 1, 6], a[k + 1, 0] - a[k, 0])
+    assert pose[:2] == pytest.approx(tuple(a[-1, 1:3]), abs=0.02)
+    assert pose[2] == pytest.approx(a[-1, 3], abs=0.002)
+    # the smoothed pose jumped at the sample instead
+    smoothed = odo.smoothed_pose()
+    assert smoothed[2] > 0 and odo.yaw_rad == pytest.approx(smoothed[2], abs=1e-3)
+
+
+def test_hold_mode_lags_and_never_makes_up(rig):
+    clock, bus, _, odo = _start_one_revolution_late(rig, speed_samples="hold")
+    bus.publish("wheel0_Vel", Float64(60.0))
+    bus.publish("wheel1_Vel", Float64(60.0))
+    clock.run_until(6_000_000)
+    assert odo.x_m == pytest.approx(3.5 * CIRCUMFERENCE_M, abs=0.02)  # the first revolution is lost
 
 
 def test_windows_are_clipped_at_the_previous_sample(rig):
@@ -174,19 +232,36 @@ def test_windows_are_clipped_at_the_previous_sample(rig):
         bus.publish("wheel0_Vel", Float64(30.0))
         bus.publish("wheel1_Vel", Float64(30.0))
     yaw_rate = 2 * (30 * 2 * math.pi / 60 * 0.125) / 0.48
-    assert odo.yaw_rad == pytest.approx(-yaw_rate * 1.0, rel=1e-9)
+    assert odo.smoothed_pose()[2] == pytest.approx(-yaw_rate * 1.0, rel=1e-9)
+    clock.run_until(2_000_000)
+    assert math.remainder(odo.yaw_rad + yaw_rate * 2.0, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
     with pytest.raises(ValueError):
         WheelOdometry(bus, clock, speed_samples="guess")
 
 
 def test_a_sample_supersedes_the_assumed_brake_ramp(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, brake_stop_s=0.5, signed_input=False)
+    odo = WheelOdometry(bus, clock, brake_stop_s=0.5, signed_input=False, **EXACT)
     _firmware(bus, 1, RPM_PER_M_S, 1, RPM_PER_M_S)
     clock.run_until(1_000_000)
     bus.publish("wheel_Command", Float64MultiArray(data=[0.0, 0.0, 0.0, 0.0]))
     clock.run_until(1_100_000)
+    ramp_m = 0.1 * (1.0 + 0.8) / 2  # travelled on the assumed ramp
+    assert odo.x_m == pytest.approx(1.0 + ramp_m)
     bus.publish("wheel0_Vel", Float64(0.0))  # measured: stopped since the brake
     bus.publish("wheel1_Vel", Float64(0.0))
-    clock.run_until(2_000_000)
-    assert odo.x_m == pytest.approx(1.0)
+    assert odo.smoothed_pose()[0] == pytest.approx(1.0)
+    xs = []
+    for k in range(1, 101):  # standing wheels: the published pose settles at the floor rate, no jump
+        clock.run_until(1_100_000 + 20_000 * k)
+        xs.append(odo.x_m)
+    assert np.all(np.diff(xs) <= 0) and -np.diff(xs).max() <= CATCHUP_FLOOR_M_S * 0.02 + 1e-12
+    assert xs[0] > 1.0 + ramp_m - 0.002 and xs[-1] == pytest.approx(1.0, abs=1e-3)
+
+
+def test_bad_options_are_refused(rig):
+    clock, bus, _ = rig
+    for bad in ({"catchup_time_s": 0.0}, {"catchup_max_fraction": -0.1}, {"max_wheel_accel_m_s2": 0.0},
+                {"publish_rate_hz": 0.0}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            WheelOdometry(bus, clock, **bad)

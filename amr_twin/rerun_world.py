@@ -23,6 +23,7 @@ import numpy as np
 
 from .rerun_capture import Capture
 from .rerun_streams import TIMELINE, _scalars, _time
+from .sensors.lidar_beams import scan_end_time_s
 
 VISUAL_GROUPS = (0, 1, 4)  # world, robot visuals, payload (2 is robot collision)
 
@@ -149,7 +150,7 @@ def _log_scan(rec, m, capture: Capture) -> None:
         c, s = np.cos(yaw), np.sin(yaw)
         world = np.column_stack([p[:, 0] + c * local[:, 0] - s * local[:, 1],
                                  p[:, 1] + s * local[:, 0] + c * local[:, 1], p[:, 2]])
-        rec.set_time(TIMELINE, duration=msg.header.stamp.to_sec() + msg.scan_time)
+        rec.set_time(TIMELINE, duration=scan_end_time_s(msg))  # the rotation is complete
         rec.log("world/bodies/amr/laser/scan", rr.Points3D(local, colors=[(250, 200, 40)], radii=[0.01]))
         rec.log("world/scan", rr.Points3D(world, colors=[(40, 120, 250)], radii=[0.015]))
 

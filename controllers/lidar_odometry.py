@@ -8,10 +8,10 @@ re-implemented here).
 
 Time
     Beam ``i`` was acquired at ``header.stamp + i * time_increment`` (the twin's
-    RPLIDAR, sensors/lidar.py, and ``rplidar_ros`` stamp the first beam). KISS-ICP
-    1.3 deskews to the end of its timestamp span, so every estimate is the pose
-    at the scan's last beam, ``t_end = stamp + (n - 1) * time_increment``
-    (:func:`scan_end_time_s`). Two sentinel points far beyond ``max_range_m``
+    RPLIDAR spins clockwise as the A1 does: its ``time_increment`` is negative and
+    its stamp is the last beam, sensors/lidar.py). KISS-ICP 1.3 deskews to the end
+    of its timestamp span, so every estimate is the pose at the scan's last
+    acquired beam, ``t_end`` (:func:`scan_end_time_s`). Two sentinel points far beyond ``max_range_m``
     (dropped by KISS-ICP's range filter after the deskew) carry the stamps
     ``t_end`` of the previous scan and of this one, so that KISS-ICP's min-max
     normalised time spans exactly the interval over which the motion prior is
@@ -45,21 +45,12 @@ from kiss_icp.kiss_icp import KissICP
 
 from amr_twin.messages import LaserScan
 from amr_twin import se2
+from amr_twin.sensors.lidar_beams import beam_times_s, scan_end_time_s  # noqa: F401 (part of this API)
 
 MIN_POINTS = 20
 """Fewest valid beams a scan needs to be registered."""
 SENTINEL_RANGE_M = 1.0e6
 """Range of the two timing sentinel points (beyond any max range: never registered)."""
-
-
-def beam_times_s(scan: LaserScan) -> np.ndarray:
-    """Acquisition time of every beam, s, shape (n,): ``stamp + i * time_increment``."""
-    return scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(scan.ranges))
-
-
-def scan_end_time_s(scan: LaserScan) -> float:
-    """Time of the scan's last beam, s: the stamp of the pose KISS-ICP estimates for it."""
-    return scan.header.stamp.to_sec() + scan.time_increment * max(len(scan.ranges) - 1, 0)
 
 
 def scan_points(scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
@@ -142,8 +133,8 @@ class LidarOdometry:
         t_end = scan_end_time_s(scan)
         if self._t_s:
             return self._t_s[-1], t_end
-        period_s = scan.scan_time if scan.scan_time > 0 else len(scan.ranges) * scan.time_increment
-        t0 = min(t_end - period_s, scan.header.stamp.to_sec())
+        period_s = scan.scan_time if scan.scan_time > 0 else len(scan.ranges) * abs(scan.time_increment)
+        t0 = min(t_end - period_s, float(beam_times_s(scan).min()) if len(scan.ranges) else t_end)
         return (t0 if t0 < t_end else t_end - 1e-3), t_end
 
     def register(self, scan: LaserScan,

@@ -1,9 +1,20 @@
 """Slamtec RPLIDAR A1 on the ``amr/laser`` site: rotating 2D scans cast in MuJoCo.
 
-Beam ``i`` is acquired at ``t0 + i / sample_rate`` and cast from the laser pose at
-its own instant, so a scan taken while the robot moves is distorted as a real one
-(beam instants in :attr:`Lidar.beam_t_us` and :attr:`Lidar.last_beam_t_us`, for
-deskew). The laser pose is sampled at regular instants; beams are cast in groups,
+The A1's head spins clockwise seen from above (datasheet: the scan angle grows
+clockwise), while ROS wants a ``LaserScan`` counter-clockwise (REP-103). Beam ``i``
+of the message points at ``angle_min + i * angle_increment`` (counter-clockwise from
+``-pi``) and is acquired in the real order: a rotation starts at the last index,
+just clockwise of the back, and ends at index 0, so beam ``i`` is acquired at
+``t0 + (n - 1 - i) / sample_rate``. Each beam is cast from the laser pose at its
+own instant, so a scan taken while the robot moves is distorted as a real one
+(beam instants in :attr:`Lidar.beam_t_us` and :attr:`Lidar.last_beam_t_us`, in
+message order, for deskew). The message says so with the standard fields: its
+stamp is the instant of beam 0 (the last acquired, the end of the rotation) and
+``time_increment`` is negative (``-1 / sample_rate``), so that beam ``i`` was
+acquired at ``stamp + i * time_increment`` as ``laser_geometry`` and the twin's
+LiDAR odometry compute it. (``rplidar_ros`` reverses the array the same way but
+keeps a positive ``time_increment`` with the stamp at the rotation's start,
+which times every beam but the middle one wrongly.) The laser pose is sampled at regular instants; beams are cast in groups,
 one ``mujoco.mj_multiRay`` call from the present laser position, with the beam
 geometry, motion correction and range noise of :mod:`amr_twin.sensors.lidar_beams`.
 Geoms that move with the robot (a payload, group 4) are cast in a second call in
@@ -26,8 +37,7 @@ ranges are clamped here (``mj_multiRay`` culls by bounding volume, stack-notes.m
 then noised (``inf`` where invalid, as ``rplidar_ros`` publishes it).
 
 A ``sensor_msgs/LaserScan`` goes out on ``scan`` at the first pose sample at or
-after the last beam of its rotation (frame ``laser``, stamp = first beam, as
-``rplidar_ros``). ``start_motor`` / ``stop_motor`` services start and stop the
+after the last beam of its rotation (frame ``laser``, stamp = the last beam). ``start_motor`` / ``stop_motor`` services start and stop the
 rotation (the motor spin-up time is not modelled).
 """
 
@@ -100,7 +110,7 @@ class Lidar:
         self.hit_geom = np.full(self.n_beams, -1, np.int32)
         """Geom id hit by each beam of the rotation in progress (-1: none)."""
         self.beam_t_us = np.zeros(self.n_beams, np.int64)
-        """Instant of each beam of the rotation in progress, us (t0 + i / sample_rate)."""
+        """Instant of each beam of the rotation in progress, us (t0 + (n - 1 - i) / sample_rate)."""
         self.last_scan: LaserScan | None = None
         self.last_beam_t_us = self.beam_t_us.copy()
         self.last_hit_geom = self.hit_geom.copy()
@@ -162,10 +172,10 @@ class Lidar:
         self.t0_us = t0_us
         self.dist_m = np.full(self.n_beams, -1.0)
         self.hit_geom = np.full(self.n_beams, -1, np.int32)
-        self.beam_t_us = t0_us + self.beam_dt_us * np.arange(self.n_beams, dtype=np.int64)
-        self._next = 0  # first beam not cast yet
+        self.beam_t_us = t0_us + self.beam_dt_us * np.arange(self.n_beams - 1, -1, -1, dtype=np.int64)
+        self._next = 0  # beams cast so far, in acquisition order (indices n - 1 down to n - _next)
         self._last_cast_us = t0_us
-        self._last_beam_us = int(self.beam_t_us[-1])
+        self._last_beam_us = int(self.beam_t_us[0])
         self._next_cast_us = min(self._last_beam_us, t0_us + self.cast_every_us)
 
     def _on_cast(self) -> None:
@@ -188,19 +198,20 @@ class Lidar:
             return
         cast = False
         while self.running:
+            n = self.n_beams
             if self._last_beam_us <= t_us:
-                self.cast(self._next, self.n_beams)
+                self.cast(0, n - self._next)
                 cast = True
                 self._finish(t_us)
                 self._new_rotation(self.t0_us + self.scan_us)
                 self._last_cast_us = t_us
                 continue
             if t_us - self._last_cast_us >= self.cast_every_us:
-                stop = int(np.searchsorted(self.beam_t_us, t_us, side="right"))
-                if stop > self._next:
-                    self.cast(self._next, stop)
+                due = min(n, max(0, (t_us - self.t0_us) // self.beam_dt_us + 1))  # acquired by t_us
+                if due > self._next:
+                    self.cast(n - due, n - self._next)
                     cast = True
-                    self._next = stop
+                    self._next = due
                 self._last_cast_us = t_us
             break
         self._next_cast_us = min(self._last_beam_us, self._last_cast_us + self.cast_every_us)
@@ -252,9 +263,9 @@ class Lidar:
         """The rotation in progress is cast: add the noise and publish it (or queue it)."""
         self.seq += 1
         scan = LaserScan(
-            header=Header(self.seq, Time.from_us(self.t0_us), self.frame_id),
+            header=Header(self.seq, Time.from_us(int(self.beam_t_us[0])), self.frame_id),
             angle_min=self.angle_min, angle_max=float(self.angles_rad[-1]),
-            angle_increment=self.angle_increment, time_increment=self.beam_dt_us / US,
+            angle_increment=self.angle_increment, time_increment=-self.beam_dt_us / US,
             scan_time=self.scan_us / US, range_min=self.cfg.range_min_m, range_max=self.cfg.range_max_m,
             ranges=self.noisy_ranges(self.dist_m, self.hit_geom), intensities=np.zeros(0, np.float32))
         if self._samplers is None:  # standalone: this is the clock event at t_us
@@ -273,7 +284,7 @@ class Lidar:
         if not self._done or self._done[0][0] != now:
             raise RuntimeError(f"LiDAR scan due at t_us={now} was not cast on the loop's grid")
         _t, scan, beam_t_us, hit_geom = self._done.popleft()
-        t0 = beam_t_us[0] + self.scan_us
+        t0 = beam_t_us[-1] + self.scan_us  # the next rotation starts one rotation after this one
         self._handle = self.clock.schedule(self._publish_time_us(t0), self._publish_next, publishes=("scan",))
         self._publish(scan, beam_t_us, hit_geom)
 

@@ -10,6 +10,10 @@ Timing (:func:`scan_timing`)
 Directions (:func:`beam_angles_rad`, :func:`beam_directions`)
     Beam ``i`` points at ``angle_min + i * increment`` in the ``laser`` frame
     (REP-103, counter-clockwise from x, ``angle_min = -pi``).
+Beam instants of a message (:func:`beam_times_s`, :func:`scan_end_time_s`)
+    Beam ``i`` was acquired at ``stamp + i * time_increment``; ``time_increment``
+    is negative for a scanner that spins clockwise (the A1), whose stamp is then
+    the end of the rotation.
 Motion during a rotation (:class:`PoseSamples`, :func:`world_directions`, :func:`motion_correction_m`)
     The laser pose is sampled at regular instants. A beam acquired between two
     samples points along its own direction at its instant (linear interpolation
@@ -52,6 +56,16 @@ def beam_angles_rad(n_beams: int) -> tuple[float, float, np.ndarray]:
     angle_increment = 2 * math.pi / n_beams
     angle_min = -math.pi
     return angle_min, angle_increment, angle_min + angle_increment * np.arange(n_beams)
+
+
+def beam_times_s(scan) -> np.ndarray:
+    """Acquisition time of every beam of a ``LaserScan``, s, shape (n,): ``stamp + i * time_increment``."""
+    return scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(scan.ranges))
+
+
+def scan_end_time_s(scan) -> float:
+    """Time of a ``LaserScan``'s last acquired beam, s (its stamp when ``time_increment <= 0``)."""
+    return scan.header.stamp.to_sec() + max(scan.time_increment * max(len(scan.ranges) - 1, 0), 0.0)
 
 
 def beam_directions(angles_rad: np.ndarray) -> np.ndarray:

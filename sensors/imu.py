@@ -29,6 +29,14 @@ one by one), and each message goes out from a publishing clock event at its
 sample instant, which does not stop the physics unless a subscriber could act on
 it sooner (:meth:`amr_twin.bus.Bus.lookahead_us`). The covariance arrays of the
 messages are shared and read-only.
+
+Covariances say what a reading's error is on the *raw* topic (:func:`covariances`):
+per axis the white noise, the turn-on bias (the datasheet's zero-rate / zero-g
+level, uncalibrated: 10 deg/s on the gyro) and the quantisation, ``noise^2 +
+bias_sigma^2 + resolution^2 / 12``. A node that fuses ``imu/data_raw`` as it is
+thus trusts the gyro to 10 deg/s, not to its 0.05 deg/s noise; the calibration
+step that earns the noise level is the rest mean of the first seconds (the twin's
+EKF does it, ``ekf.imu_rest_calibration_s``, :mod:`amr_twin.controllers.ekf`).
 This module does not import mujoco: it reads ``MjData.sensordata`` by address.
 """
 
@@ -104,8 +112,18 @@ def axis_models(cfg: ImuCfg, rng: np.random.Generator) -> dict[str, AxisModel]:
     }
 
 
-def _diag(sigma: float) -> np.ndarray:
-    return np.diag(np.full(3, sigma * sigma)).ravel()
+def covariances(models: dict[str, AxisModel], cfg: ImuCfg) -> dict[str, np.ndarray]:
+    """Row-major 3x3 covariances (9,) of the raw readings of ``accel``, ``gyro`` and ``mag``.
+
+    Diagonal: ``noise_sigma^2 + bias_sigma^2 + resolution^2 / 12`` per axis (SI units
+    squared), the error of one uncalibrated reading (module docstring).
+    """
+    bias = {"accel": cfg.accel_bias_sigma_m_s2, "gyro": cfg.gyro_bias_sigma_rad_s, "mag": cfg.mag_bias_sigma_t}
+    out = {}
+    for name, m in models.items():
+        variance = m.noise_sigma ** 2 + bias[name] ** 2 + np.asarray(m.resolution, float) ** 2 / 12.0
+        out[name] = np.diag(np.broadcast_to(variance, (3,))).ravel()
+    return out
 
 
 class ImuSensor:
@@ -137,7 +155,7 @@ class ImuSensor:
         self.dt_s = self.period_us / US
         self.pub_imu = bus.advertise("imu/data_raw", Imu)
         self.pub_mag = bus.advertise("imu/mag", MagneticField)
-        self._cov = {k: _diag(m.noise_sigma) for k, m in self.models.items()}
+        self._cov = covariances(self.models, cfg)
         self._orientation_cov = np.zeros(9)
         self._orientation_cov[0] = -1.0  # orientation not provided (data_raw)
         ms = [self.models[k] for k in ("accel", "gyro", "mag")]

@@ -58,12 +58,19 @@ def derived_params(cfg: TwinConfig) -> dict:
         "wheel_speed_limit_rad_s": cfg.battery.v_full_v / min(cfg.motor_left.ke_v_s_rad, cfg.motor_right.ke_v_s_rad),
         "caster_ball_diameter_m": k.ball_diameter_m, "caster_x_m": k.x_m, "caster_y_m": k.y_m,
         "caster_travel_m": k.travel_m, "caster_drop_m": k.drop_m,
+        # what URDF can say of the MJCF's joint dynamics (<dynamics>, <limit>): set again on the MjSpec below
+        "wheel_left_damping": cfg.motor_left.damping_nm_s_rad, "wheel_left_friction": cfg.motor_left.friction_nm,
+        "wheel_right_damping": cfg.motor_right.damping_nm_s_rad, "wheel_right_friction": cfg.motor_right.friction_nm,
+        "caster_damping_n_s_m": k.damping_n_s_m, "caster_effort_n": k.preload_n + k.stiffness_n_m * k.travel_m,
+        "uwb_tag_pos_m": list(cfg.uwb.tag_pos_m), "uwb_tag_size_m": list(cfg.uwb.tag_size_m),
     }
     for name, comp in cfg.components.items():
         p[f"{name}_size_m"] = list(comp.size_m)
         p[f"{name}_pos_m"] = list(comp.pos_m)
+    sensors = mass.sensor_link_inertials(cfg)
     for prefix, inertial in (("chassis", mass.chassis_inertial(cfg)), ("wheel", mass.wheel_inertial(cfg)),
-                             ("caster", mass.caster_inertial(cfg))):
+                             ("caster", mass.caster_inertial(cfg)), ("laser", sensors["laser"]),
+                             ("imu_link", sensors["imu_link"]), ("uwb_tag", sensors["uwb_tag"])):
         p[f"{prefix}_mass_kg"] = inertial.mass_kg
         p[f"{prefix}_com_m"] = [float(v) for v in inertial.com_m]
         p[f"{prefix}_inertia"] = [float(v) for v in inertial.diag()]

@@ -213,6 +213,8 @@ class UwbCfg(Section):
     anchors_y_m: tuple[_Coord, ...] = P(unit="m")
     anchor_z_m: float = P(unit="m", ge=0.0, le=30.0)
     tag_pos_m: Vec3 = P(unit="m")
+    tag_mass_kg: float = P(unit="kg", gt=0.0, le=1.0)
+    tag_size_m: PosVec3 = P(unit="m")
 
     @model_validator(mode="after")
     def _anchors_paired(self) -> "UwbCfg":

@@ -6,7 +6,9 @@ tube is an outer box minus its bore. Floors (a) and (c) carry a steel sheet, flo
 (b) the aluminium deck. Components are solid boxes of their estimated mass. The
 hub motors' stators (the non-rotating share of their mass) ride on the chassis.
 Everything is summed into the chassis link's mass, centre of mass and inertia
-(parallel-axis theorem); the xacro draws the same members from
+(parallel-axis theorem), but the sensors that have a link of their own (the
+LiDAR on ``laser``, the IMU board on ``imu_link``, the UWB tag on ``uwb_tag``:
+:func:`sensor_link_inertials`); the xacro draws the same members from
 :func:`frame_members`.
 """
 
@@ -99,12 +101,34 @@ def plates(cfg: TwinConfig) -> list[tuple[str, tuple[float, float, float], tuple
     ]
 
 
+SENSOR_LINKS = {"laser": "lidar", "imu_link": "imu"}
+"""URDF link -> the component whose mass it carries (the UWB tag is not a component)."""
+LIDAR_BASE_BELOW_OPTICS_M = 0.04
+"""RPLIDAR A1: the ``laser`` frame (optical centre) is about 4 cm above the unit's base (datasheet drawing)."""
+
+
+def sensor_link_inertials(cfg: TwinConfig) -> dict[str, Inertial]:
+    """Mass properties of the sensor links, each in its own link frame (solid boxes).
+
+    ``laser``: the A1 (its box's base 4 cm below the optical centre), ``imu_link``: the
+    IMU breakout centred on its frame, ``uwb_tag``: the tag board centred on its frame.
+    """
+    lidar, imu, uwb = cfg.components.lidar, cfg.components.imu, cfg.uwb
+    return {
+        "laser": _box(lidar.size_m, (0.0, 0.0, lidar.size_m[2] / 2 - LIDAR_BASE_BELOW_OPTICS_M),
+                      mass_kg=lidar.mass_kg),
+        "imu_link": _box(imu.size_m, (0.0, 0.0, 0.0), mass_kg=imu.mass_kg),
+        "uwb_tag": _box(uwb.tag_size_m, (0.0, 0.0, 0.0), mass_kg=uwb.tag_mass_kg),
+    }
+
+
 def chassis_inertial(cfg: TwinConfig) -> Inertial:
-    """Chassis link: frame, plates, components and the two stators."""
+    """Chassis link: frame, plates, the components without a link of their own and the two stators."""
     parts = [frame_inertial(cfg)]
     parts += [_box(ext, ctr, density=rho) for _, ctr, ext, rho in plates(cfg)]
+    on_links = set(SENSOR_LINKS.values())
     parts += [_box(comp.size_m, comp.pos_m, mass_kg=comp.mass_kg)
-              for _, comp in cfg.components.items() if comp.mass_kg > 0]
+              for name, comp in cfg.components.items() if comp.mass_kg > 0 and name not in on_links]
     w = cfg.wheel
     stator_kg = w.mass_kg * (1 - w.rotor_fraction)
     for sign in (1, -1):
@@ -135,4 +159,4 @@ def caster_inertial(cfg: TwinConfig) -> Inertial:
 def robot_mass_kg(cfg: TwinConfig) -> float:
     """Total mass without payload."""
     return (chassis_inertial(cfg).mass_kg + 2 * wheel_inertial(cfg).mass_kg
-            + 4 * caster_inertial(cfg).mass_kg)
+            + 4 * caster_inertial(cfg).mass_kg + sum(i.mass_kg for i in sensor_link_inertials(cfg).values()))

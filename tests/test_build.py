@@ -32,7 +32,37 @@ def test_urdf_is_valid_and_has_the_robot_structure():
     assert joints["wheel_left_joint"].origin[1, 3] == pytest.approx(0.24)
     assert joints["wheel_right_joint"].origin[1, 3] == pytest.approx(-0.24)
     assert sum(j.type == "prismatic" for j in joints.values()) == 4
-    assert {"laser", "imu_link"} <= {link.name for link in robot.robot.links}
+    assert {"laser", "imu_link", "uwb_tag"} <= {link.name for link in robot.robot.links}
+
+
+def test_urdf_says_what_the_mjcf_has_as_far_as_urdf_can():
+    """Every link has an inertial (no defaults for other tools to invent, e.g. PyBullet's 1 kg); wheel
+    and caster joints carry the MJCF's damping, friction and limits in <dynamics> and <limit>."""
+    import mujoco
+
+    cfg = load_config()
+    robot = yourdfpy.URDF.load(io.StringIO(urdf_string(cfg)), load_meshes=False)
+    m = build(cfg, world="empty").model
+    for link in robot.robot.links:
+        assert link.inertial is not None and link.inertial.mass > 0, link.name
+        body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/" + link.name)
+        assert m.body_mass[body] == pytest.approx(link.inertial.mass, rel=1e-6), link.name
+    assert sum(link.inertial.mass for link in robot.robot.links) == pytest.approx(
+        m.body_subtreemass[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link")], rel=1e-5)
+    moving = [j for j in robot.robot.joints if j.type != "fixed"]
+    assert len(moving) == 6
+    for j in moving:
+        k = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "amr/" + j.name)
+        assert j.dynamics is not None and j.limit is not None and j.limit.effort > 0, j.name
+        assert j.dynamics.damping == pytest.approx(m.dof_damping[m.jnt_dofadr[k]]), j.name
+        assert j.dynamics.friction == pytest.approx(m.dof_frictionloss[m.jnt_dofadr[k]]), j.name
+        if j.type == "prismatic":
+            assert (j.limit.lower, j.limit.upper) == pytest.approx(tuple(m.jnt_range[k]))
+            assert j.limit.effort == pytest.approx(cfg.caster.preload_n + cfg.caster.stiffness_n_m * cfg.caster.travel_m)
+    left = robot.joint_map["wheel_left_joint"].dynamics
+    assert (left.damping, left.friction) == (cfg.motor_left.damping_nm_s_rad, cfg.motor_left.friction_nm)
+    tag = robot.joint_map["uwb_tag_joint"]
+    assert tuple(tag.origin[:3, 3]) == pytest.approx(cfg.uwb.tag_pos_m)
 
 
 def test_urdf_frame_tubes_match_the_mass_model():
@@ -74,7 +104,7 @@ def test_spec_adds_what_urdf_cannot_carry():
     robot_geoms = m.geom_bodyid > 0
     assert set(m.geom_group[robot_geoms]) <= {GROUP_VISUAL, GROUP_COLLISION, GROUP_PAYLOAD}
     base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link")
-    assert m.body_subtreemass[base] == pytest.approx(30.33 + 20, abs=0.05)
+    assert m.body_subtreemass[base] == pytest.approx(30.35 + 20, abs=0.05)
 
 
 def test_unknown_world_is_refused():

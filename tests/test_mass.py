@@ -15,6 +15,7 @@ FRAME_KG = (7.44 + 1.36) * (0.02 ** 2 - 0.017 ** 2) * 7930  # 7.746 kg
 PLATES_KG = 2 * 0.70 * 0.40 * 0.001 * 7930 + 0.70 * 0.40 * 0.003 * 2700  # steel (a), (c); aluminium deck (b)
 COMPONENTS_KG = 5.0 + 0.6 + 1.2 + 0.9 + 0.4 + 0.17 + 0.01  # battery ... imu
 STATORS_KG = 2 * 3.5 * (1 - 0.6)  # non-rotating share of the two hub motors
+UWB_TAG_KG = 0.02  # the DWM1000 tag board on its own link (uwb_tag)
 ROBOT_KG = FRAME_KG + PLATES_KG + COMPONENTS_KG + STATORS_KG + 2 * 3.5 * 0.6 + 4 * 0.15  # + rotors, casters
 
 
@@ -25,10 +26,21 @@ def test_frame_mass_is_the_hand_figure():
 
 def test_chassis_and_robot_masses_are_the_hand_figures():
     cfg = load_config()
-    assert mass.chassis_inertial(cfg).mass_kg == pytest.approx(FRAME_KG + PLATES_KG + COMPONENTS_KG + STATORS_KG,
-                                                             rel=1e-9)
-    assert mass.robot_mass_kg(cfg) == pytest.approx(ROBOT_KG, rel=1e-9)
-    assert ROBOT_KG == pytest.approx(30.335, abs=1e-3)
+    on_links_kg = 0.17 + 0.01  # the LiDAR and the IMU board ride on their own links (laser, imu_link)
+    assert mass.chassis_inertial(cfg).mass_kg == pytest.approx(
+        FRAME_KG + PLATES_KG + COMPONENTS_KG - on_links_kg + STATORS_KG, rel=1e-9)
+    assert mass.robot_mass_kg(cfg) == pytest.approx(ROBOT_KG + UWB_TAG_KG, rel=1e-9)
+    assert ROBOT_KG + UWB_TAG_KG == pytest.approx(30.355, abs=1e-3)
+
+
+def test_sensor_links_carry_their_own_mass():
+    cfg = load_config()
+    links = mass.sensor_link_inertials(cfg)
+    assert links["laser"].mass_kg == cfg.components.lidar.mass_kg
+    assert links["imu_link"].mass_kg == cfg.components.imu.mass_kg
+    assert links["uwb_tag"].mass_kg == cfg.uwb.tag_mass_kg
+    lidar = cfg.components.lidar
+    assert links["laser"].com_m[2] == pytest.approx(lidar.size_m[2] / 2 - 0.04)  # base 4 cm below the optics
 
 
 def test_combine_parallel_axis():

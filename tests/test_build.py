@@ -53,14 +53,14 @@ def test_urdf_says_what_the_mjcf_has_as_far_as_urdf_can():
     assert len(moving) == 6
     for j in moving:
         k = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "amr/" + j.name)
-        assert j.dynamics is not None and j.limit is not None and j.limit.effort > 0, j.name
-        assert j.dynamics.damping == pytest.approx(m.dof_damping[m.jnt_dofadr[k]]), j.name
-        assert j.dynamics.friction == pytest.approx(m.dof_frictionloss[m.jnt_dofadr[k]]), j.name
+        assert j.dynamics is not None and j.limit is not None and float(j.limit.effort) > 0, j.name
+        assert float(j.dynamics.damping) == pytest.approx(m.dof_damping[m.jnt_dofadr[k]]), j.name
+        assert float(j.dynamics.friction) == pytest.approx(m.dof_frictionloss[m.jnt_dofadr[k]]), j.name
         if j.type == "prismatic":
-            assert (j.limit.lower, j.limit.upper) == pytest.approx(tuple(m.jnt_range[k]))
-            assert j.limit.effort == pytest.approx(cfg.caster.preload_n + cfg.caster.stiffness_n_m * cfg.caster.travel_m)
+            assert (float(j.limit.lower), float(j.limit.upper)) == pytest.approx(tuple(m.jnt_range[k]))
+            assert float(j.limit.effort) == pytest.approx(cfg.caster.preload_n + cfg.caster.stiffness_n_m * cfg.caster.travel_m)
     left = robot.joint_map["wheel_left_joint"].dynamics
-    assert (left.damping, left.friction) == (cfg.motor_left.damping_nm_s_rad, cfg.motor_left.friction_nm)
+    assert (float(left.damping), float(left.friction)) == (cfg.motor_left.damping_nm_s_rad, cfg.motor_left.friction_nm)
     tag = robot.joint_map["uwb_tag_joint"]
     assert tuple(tag.origin[:3, 3]) == pytest.approx(cfg.uwb.tag_pos_m)
 

@@ -13,12 +13,16 @@ Topics
 Services
     :meth:`Bus.call_service` is synchronous (zero simulated time) and raises
     :class:`ServiceCallError` when no server is advertised or the handler fails;
-    the thesis client maps that to code -1.
+    the thesis client maps that to code -1. Each request is handed to the taps as
+    a message on ``<service>/request`` first (as ROS 2's service introspection
+    does), so recorders keep the calls, failed ones included.
 tf
     :attr:`Bus.tf` (:class:`TfBuffer`) keeps the latest transform of each
-    child frame (REP-105 tree ``odom -> base_link -> {laser, imu_link}``);
-    :meth:`Bus.send_transform` updates it and publishes ``tf2_msgs/TFMessage``
-    on ``tf`` (or ``tf_static``, latched), so recorders see it through the taps.
+    child frame (REP-105 tree ``odom -> base_link -> {laser, imu_link, uwb_tag}``;
+    ``map -> uwb_anchor_<i>``); :meth:`Bus.send_transform` updates it and publishes
+    ``tf2_msgs/TFMessage`` on ``tf``, or on ``tf_static`` (latched) the whole set of
+    static transforms sent so far, as tf2's static broadcaster does, so recorders
+    see it through the taps (or :meth:`Bus.static_transforms`).
 
 Topic and service names are stored without a leading ``/``.
 """
@@ -116,6 +120,7 @@ class Bus:
         self._latched: dict[str, Any] = {}
         self._services: dict[str, Callable[[Any], Any]] = {}
         self._taps: list[Tap] = []
+        self._static: dict[str, TransformStamped] = {}
         self.tf = TfBuffer()
 
     # -- topics -----------------------------------------------------------------
@@ -220,6 +225,10 @@ class Bus:
         ServiceCallError
             No server, or the server raised (the cause is chained).
         """
+        if self._taps:
+            now_us = self.clock.now_us
+            for tap in tuple(self._taps):
+                tap(_name(name) + "/request", request, now_us)
         handler = self._services.get(_name(name))
         if handler is None:
             raise ServiceCallError(f"service {_name(name)!r} is not advertised")
@@ -231,15 +240,26 @@ class Bus:
     # -- tf ---------------------------------------------------------------------
     def send_transform(self, transforms: TransformStamped | list[TransformStamped],
                        static: bool = False) -> None:
-        """Store transforms in :attr:`tf` and publish them on ``tf`` (``tf_static`` if static)."""
+        """Store transforms in :attr:`tf` and publish them on ``tf`` (``tf_static`` if static).
+
+        Static: the message carries every static transform sent so far (one per child frame).
+        """
         if isinstance(transforms, TransformStamped):
             transforms = [transforms]
         for ts in transforms:
             self.tf.set_transform(ts)
+        if static:
+            for ts in transforms:
+                self._static[ts.child_frame_id] = ts
+            transforms = list(self._static.values())
         topic = "tf_static" if static else "tf"
         if static and topic not in self._latched:
             self.advertise(topic, TFMessage, latch=True)
         self.publish(topic, TFMessage(list(transforms)))
+
+    def static_transforms(self) -> list[TransformStamped]:
+        """Every static transform sent so far, one per child frame, in the order first sent."""
+        return list(self._static.values())
 
 
 # -- tf buffer ----------------------------------------------------------------------

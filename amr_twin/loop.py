@@ -42,6 +42,7 @@ from .physics import Physics
 from .plant import Plant
 from .recorder import Recorder
 from .rolling_resistance import RollingResistance
+from .ros_state import robot_static_transforms
 from .rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
 from .sensors.hall import HallSensors
 
@@ -72,13 +73,17 @@ class Twin:
 
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
         self.cfg, self.options = cfg, options
-        self.physics = Physics(build(cfg, options.world, options.start_xy_yaw).model)
+        built = build(cfg, options.world, options.start_xy_yaw)
+        self.urdf = built.urdf
+        """The robot description as built (``/robot_description`` of a recording)."""
+        self.physics = Physics(built.model)
         self.physics.settle(options.settle_s)
         self.physics.data.time = 0.0
         self.dt_us = int(round(self.physics.timestep_s * US))
         self.t_phys_us = 0
         self.clock = VirtualClock()
         self.bus = Bus(self.clock)
+        self.bus.send_transform(robot_static_transforms(self.physics.model), static=True)  # laser, imu_link, uwb_tag
         self.link = RosserialLink(self.clock, extra_latency_us=options.rosserial_extra_latency_us,
                                   loss_prob=options.rosserial_loss_prob, seed=options.seed)
         self.plant = Plant(cfg, self.physics)

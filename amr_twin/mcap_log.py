@@ -1,88 +1,105 @@
-"""Record a run as ROS 2 messages in an ``.mcap`` file (issue 7).
+"""Record a run as ROS 2 messages in an ``.mcap`` file (issue 7, issue 13).
 
 The same streams as :mod:`amr_twin.rerun_log`, CDR-encoded (:mod:`amr_twin.ros2_cdr`)
 with ROS 2 message definitions (schema encoding ``ros2msg``, :mod:`amr_twin.ros2_schemas`),
 so ``ros2 bag info/play`` (rosbag2 MCAP storage) and Foxglove read the file. Log and
 publish times are the simulation time (ns) at which the bus delivered the message;
-header stamps are the messages' own.
+header stamps are the messages' own. Bus topics are the messages the nodes published
+(as they were); the robot's state (joint states, link transforms, ground truth,
+clock) is built by :mod:`amr_twin.ros_state` from the capture's samples.
 
-Topics (frames as in REP-105; ``world`` is the simulation's world frame)::
+The bag holds what a ROS 2 graph of the robot would have recorded, so ``ros2 bag play
+--clock`` into nav2, slam_toolbox, robot_localization or RViz needs no other node
+(do not run a second robot_state_publisher: /tf already has the joints' links).
+Frames (REP-105, :mod:`amr_twin.ros_state`): ``odom -> base_link -> laser, imu_link,
+uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has no parent
+(``map -> odom`` is a localiser's). Topics::
 
-    /odom              nav_msgs/msg/Odometry          odom -> base_link, 50 Hz
-    /tf                tf2_msgs/msg/TFMessage         odom -> base_link, 50 Hz
-    /tf_static         tf2_msgs/msg/TFMessage         world -> odom, base_link -> laser, imu_link
+    /clock             rosgraph_msgs/msg/Clock        simulation time, 100 Hz (record grid)
+    /robot_description std_msgs/msg/String            the URDF as built (transient local)
+    /tf_static         tf2_msgs/msg/TFMessage         base_link -> laser, imu_link, uwb_tag;
+                                                      map -> uwb_anchor_<i> (with a UWB tag)
+    /tf                tf2_msgs/msg/TFMessage         odom -> base_link, 50 Hz (the odometry node);
+                                                      base_link -> wheel and caster links, 50 Hz
+    /joint_states      sensor_msgs/msg/JointState     the 6 moving joints (wheels rad, casters m), 50 Hz
+    /odom              nav_msgs/msg/Odometry          odom -> base_link, 50 Hz, continuous
     /scan              sensor_msgs/msg/LaserScan      (with TwinOptions(sensors=True))
     /imu/data_raw      sensor_msgs/msg/Imu            (idem)
     /imu/mag           sensor_msgs/msg/MagneticField  (idem)
     /uwb/range         sensor_msgs/msg/Range          one per anchor exchange, frame uwb_anchor_<i>
                                                       (only when a UwbSensor publishes, e.g. the fusion drive)
-    /wheel0_Vel, /wheel1_Vel   std_msgs/msg/Float64   RPM as published by the firmware
+    /cmd_vel           geometry_msgs/msg/Twist        when a node drives on cmd_vel (path follower)
+    /wheel_Command_Service/request  std_msgs/msg/Float64MultiArray  every service call
+                                                      [motionL, speedL, motionR, speedR] (labelled)
     /wheel_Command     std_msgs/msg/Float64MultiArray [motionL, speedL, motionR, speedR]
-    /twin/true_rpm     std_msgs/msg/Float64MultiArray [left, right], signed, record rate (100 Hz)
+    /wheel0_Vel, /wheel1_Vel   std_msgs/msg/Float64   |RPM| as published by the firmware (no sign)
+    /twin/true_rpm     std_msgs/msg/Float64MultiArray [left, right], signed (+ rolling forward), 100 Hz
     /twin/pwm_counts   std_msgs/msg/Float64MultiArray [left, right] analogWrite counts, 100 Hz
-    /twin/ground_truth nav_msgs/msg/Odometry          world -> base_link (true pose), 100 Hz
+    /twin/ground_truth nav_msgs/msg/Odometry          world -> base_link: true pose, twist in base_link, 100 Hz
 """
 
 from __future__ import annotations
 
 import collections
-import math
 from pathlib import Path
 
-import mujoco
 import numpy as np
 
+from . import ros_state
 from .atomic_file import replacing
-from .ros2_cdr import (Cdr, encode_float64, encode_float64_multi_array, encode_imu, encode_laser_scan,
-                       encode_magnetic_field, encode_odometry, encode_range, encode_tf_message)
+from .messages import String, TFMessage
+from .ros2_cdr import (encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
+                       encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
+                       encode_range, encode_string, encode_tf_message, encode_twist)
 from .ros2_schemas import msgdef, ros2_type
 
-_ZERO36 = np.zeros(36)
+REQUEST_FIELDS = "motionL,speedL,motionR,speedR"
+"""Label of the one dimension of a recorded ``wheel_Command_Service`` request."""
+JOINT_STATE_PERIOD_US = 20_000
+"""Period of /joint_states and of the joints' links on /tf, us (50 Hz)."""
+LATCHED = ("/tf_static", "/robot_description")
+"""Topics offered transient-local (a late subscriber gets the last message)."""
 
-# bus topic -> (ROS 2 topic, type, encoder)
+
+def _encode_request(req) -> bytes:
+    return encode_float64_multi_array([float(req.motionL), float(req.speedL), float(req.motionR),
+                                       float(req.speedR)], REQUEST_FIELDS)
+
+
+# bus topic -> (ROS 2 topic, type, encoder); the order breaks ties of equal log times
 BUS_TOPICS = {
     "odom": ("/odom", "nav_msgs/Odometry", encode_odometry),
     "tf": ("/tf", "tf2_msgs/TFMessage", encode_tf_message),
+    "cmd_vel": ("/cmd_vel", "geometry_msgs/Twist", encode_twist),
+    "wheel_Command_Service/request": ("/wheel_Command_Service/request", "std_msgs/Float64MultiArray",
+                                      _encode_request),
+    "wheel_Command": ("/wheel_Command", "std_msgs/Float64MultiArray", encode_float64_multi_array_msg),
+    "wheel0_Vel": ("/wheel0_Vel", "std_msgs/Float64", encode_float64),
+    "wheel1_Vel": ("/wheel1_Vel", "std_msgs/Float64", encode_float64),
     "scan": ("/scan", "sensor_msgs/LaserScan", encode_laser_scan),
     "imu/data_raw": ("/imu/data_raw", "sensor_msgs/Imu", encode_imu),
     "imu/mag": ("/imu/mag", "sensor_msgs/MagneticField", encode_magnetic_field),
     "uwb/range": ("/uwb/range", "sensor_msgs/Range", encode_range),
-    "wheel0_Vel": ("/wheel0_Vel", "std_msgs/Float64", encode_float64),
-    "wheel1_Vel": ("/wheel1_Vel", "std_msgs/Float64", encode_float64),
-    "wheel_Command": ("/wheel_Command", "std_msgs/Float64MultiArray",
-                      lambda m: encode_float64_multi_array(m.data)),
 }
 
 
-def _static_tf(capture, series) -> bytes:
-    """world -> odom (the start pose), base_link -> laser and imu_link (from the model)."""
-    m = capture.twin.physics.model
-    x0, y0, yaw0 = (float(v) for v in series.pose[0])
-    entries = [("world", "odom", (x0, y0, 0.0), (math.cos(yaw0 / 2), 0.0, 0.0, math.sin(yaw0 / 2)))]
-    base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link")
-    for body, frame in (("amr/laser", "laser"), ("amr/imu_link", "imu_link")):
-        b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
-        if b >= 0 and m.body_parentid[b] == base:
-            entries.append(("base_link", frame, m.body_pos[b], m.body_quat[b]))
-    c = Cdr()
-    c.u32(len(entries))
-    for parent, child, xyz, (w, x, y, z) in entries:
-        c.header(0, 0, parent)
-        c.string(child)
-        c.f64(*(float(v) for v in xyz), float(x), float(y), float(z), float(w))
-    return bytes(c.b)
-
-
-def _ground_truth(t_ns: int, pose) -> bytes:
-    x, y, yaw = (float(v) for v in pose)
-    c = Cdr()
-    c.header(t_ns // 1_000_000_000, t_ns % 1_000_000_000, "world")
-    c.string("base_link")
-    c.f64(x, y, 0.0, 0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
-    c.f64_array(_ZERO36)
-    c.f64(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    c.f64_array(_ZERO36)
-    return bytes(c.b)
+def _state_items(capture, k0: int) -> list[tuple[int, int, str, str, bytes]]:
+    """/clock, /twin/ground_truth, /joint_states and the joints' links on /tf from the capture's state samples."""
+    st = capture.state
+    a = st.arrays()
+    items, k = [], k0
+    for i, t_us in enumerate(a["t_us"].tolist()):
+        t = t_us * 1000
+        items.append((t, k, "/clock", "rosgraph_msgs/Clock", encode_clock(ros_state.clock(t_us))))
+        items.append((t, k + 1, "/twin/ground_truth", "nav_msgs/Odometry", encode_odometry(
+            ros_state.ground_truth(t_us, a["pos"][i], a["quat"][i], a["v_world"][i], a["w_body"][i]))))
+        if t_us % JOINT_STATE_PERIOD_US == 0:
+            items.append((t, k + 2, "/joint_states", "sensor_msgs/JointState", encode_joint_state(
+                ros_state.joint_state(t_us, st.joint_names, a["q"][i], a["qd"][i]))))
+            items.append((t, k + 3, "/tf", "tf2_msgs/TFMessage", encode_tf_message(
+                ros_state.link_transforms(t_us, st.child_frames, a["link_pos"][i], a["link_quat"][i]))))
+        k += 4
+    return items
 
 
 _QOS = ("- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n"
@@ -94,11 +111,12 @@ def qos_profile(topic: str) -> str:
     """``offered_qos_profiles`` channel metadata, required by the MCAP ``ros2`` profile.
 
     rosbag2's pre-Jazzy YAML form (integers: history 1 keep-last, reliability 1
-    reliable, durability 1 transient-local / 2 volatile). ``/tf_static`` is
-    transient-local with depth 1, as tf2's static broadcaster offers it, so that
-    ``ros2 bag play`` re-publishes it in a way tf2's static listener accepts.
+    reliable, durability 1 transient-local / 2 volatile). ``/tf_static`` and
+    ``/robot_description`` are transient-local with depth 1, as tf2's static
+    broadcaster and robot_state_publisher offer them, so that ``ros2 bag play``
+    re-publishes them in a way tf2's static listener and RViz accept.
     """
-    if topic == "/tf_static":
+    if topic in LATCHED:
         return _QOS.format(depth=1, durability=1)
     return _QOS.format(depth=10, durability=2)
 
@@ -115,15 +133,17 @@ def write_mcap(capture, series, path: Path) -> Path:
             items.append((int(t_us) * 1000, k, topic, typ, encode(msg)))
             k += 1
     t_ns = np.round(series.t_s * 1e9).astype(np.int64).tolist()
-    true_rpm, pwm, pose = series.true_rpm.tolist(), series.pwm_counts.tolist(), series.pose
+    true_rpm, pwm = series.true_rpm.tolist(), series.pwm_counts.tolist()
     for i, t in enumerate(t_ns):
         items.append((t, k, "/twin/true_rpm", "std_msgs/Float64MultiArray",
                       encode_float64_multi_array(true_rpm[i])))
         items.append((t, k + 1, "/twin/pwm_counts", "std_msgs/Float64MultiArray",
                       encode_float64_multi_array(pwm[i])))
-        items.append((t, k + 2, "/twin/ground_truth", "nav_msgs/Odometry", _ground_truth(t, pose[i])))
-        k += 3
-    items.append((0, -1, "/tf_static", "tf2_msgs/TFMessage", _static_tf(capture, series)))
+        k += 2
+    items += _state_items(capture, k)
+    bus = capture.twin.bus
+    items.append((0, -2, "/robot_description", "std_msgs/String", encode_string(String(capture.twin.urdf))))
+    items.append((0, -1, "/tf_static", "tf2_msgs/TFMessage", encode_tf_message(TFMessage(bus.static_transforms()))))
     items.sort(key=lambda it: (it[0], it[1]))
     with replacing(path) as tmp:
         with open(tmp, "wb") as f:

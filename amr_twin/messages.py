@@ -126,6 +126,26 @@ class Float64MultiArray:
         return self.layout.serialized_size() + 4 + 8 * len(self.data)
 
 
+@dataclass(slots=True)
+class String:
+    """std_msgs/String."""
+
+    _type: ClassVar[str] = "std_msgs/String"
+    data: str = ""
+
+    def serialized_size(self) -> int:
+        return _string_size(self.data)
+
+
+@dataclass(slots=True)
+class Clock(_Fixed):
+    """rosgraph_msgs/Clock: the simulation time (``/clock``, ``use_sim_time``)."""
+
+    _type: ClassVar[str] = "rosgraph_msgs/Clock"
+    _SIZE: ClassVar[int] = 8
+    clock: Time = field(default_factory=Time)
+
+
 # -- geometry_msgs --------------------------------------------------------------
 @dataclass(slots=True)
 class Vector3(_Fixed):
@@ -295,6 +315,25 @@ class LaserScan:
     def serialized_size(self) -> int:
         return (self.header.serialized_size() + 7 * 4
                 + 4 + 4 * len(self.ranges) + 4 + 4 * len(self.intensities))
+
+
+@dataclass(slots=True, eq=False)
+class JointState:
+    """sensor_msgs/JointState: per named joint, position (rad or m), velocity (rad/s or m/s), effort.
+
+    The arrays are float64, as long as ``name`` or empty.
+    """
+
+    _type: ClassVar[str] = "sensor_msgs/JointState"
+    header: Header = field(default_factory=Header)
+    name: list[str] = field(default_factory=list)
+    position: np.ndarray = field(default_factory=_zeros(0))
+    velocity: np.ndarray = field(default_factory=_zeros(0))
+    effort: np.ndarray = field(default_factory=_zeros(0))
+
+    def serialized_size(self) -> int:
+        return (self.header.serialized_size() + 4 + sum(_string_size(n) for n in self.name)
+                + 12 + 8 * (len(self.position) + len(self.velocity) + len(self.effort)))
 
 
 # -- nav_msgs -------------------------------------------------------------------

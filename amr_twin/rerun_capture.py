@@ -5,8 +5,9 @@ Stage 1 of a recording (stage 2, writing the files, is :mod:`amr_twin.rerun_log`
 :class:`~amr_twin.loop.Twin` before it runs. It taps the bus (keeps every published
 message with its time, us) and samples the world pose of each robot body as a grid
 sampler of the loop (default ~30 Hz on the recorder's 10 ms grid; no clock event, so
-the physics chunks, hence the run, are unchanged). It only reads ``data.xpos`` /
-``data.xquat``.
+the physics chunks, hence the run, are unchanged), and the joint and base state on
+every grid instant for the ROS messages of :mod:`amr_twin.ros_state` (joint states,
+link transforms, ground truth). It only reads ``MjData``.
 
 Both writers write a temporary file next to the target and rename it when complete
 (:mod:`amr_twin.atomic_file`); :func:`recording_folder` prepares a folder of per-run
@@ -45,8 +46,12 @@ class Capture:
         self._t: list[int] = []
         self._pos: list[np.ndarray] = []
         self._quat: list[np.ndarray] = []
+        from .ros_state import StateSampler
+        self.state = StateSampler(m, twin.physics.data)
+        """Joint and base state on every grid instant (:mod:`amr_twin.ros_state`)."""
         twin.bus.add_tap(self._tap)
         self._sample(twin.t_phys_us)
+        self.state.sample(twin.t_phys_us)
         twin.samplers.append(self._on_grid)
         _captures[twin] = self
 
@@ -63,7 +68,8 @@ class Capture:
         self._quat.append(d.xquat[ids].copy())
 
     def _on_grid(self, t_us: int) -> None:
-        """Grid sampler: the physics is at ``t_us``; keep the poses every ``period_us``."""
+        """Grid sampler: the physics is at ``t_us``; keep the poses every ``period_us``, the state always."""
+        self.state.sample(t_us)
         if t_us % self.period_us == 0 and t_us > self._t[-1]:
             self._sample(t_us)
 

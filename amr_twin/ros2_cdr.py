@@ -158,10 +158,59 @@ def encode_float64(msg) -> bytes:
     return bytes(c.b)
 
 
-def encode_float64_multi_array(values) -> bytes:
-    """The CDR payload of a ``std_msgs/Float64MultiArray`` of ``values`` (n,), empty layout."""
+def encode_float64_multi_array(values, labels: str | None = None) -> bytes:
+    """The CDR payload of a ``std_msgs/Float64MultiArray`` of ``values`` (n,).
+
+    Empty layout, or with ``labels`` one dimension of that label, size and stride n.
+    """
     c = Cdr()
-    c.u32(0)  # layout.dim: empty
+    if labels is None:
+        c.u32(0)  # layout.dim: empty
+    else:
+        c.u32(1)
+        c.string(labels)
+        c.u32(len(values))
+        c.u32(len(values))
     c.u32(0)  # layout.data_offset
     c.f64_seq(values)
+    return bytes(c.b)
+
+
+def encode_float64_multi_array_msg(msg) -> bytes:
+    """The CDR payload of a ``std_msgs/Float64MultiArray`` message (its first dimension's label kept)."""
+    dim = msg.layout.dim
+    return encode_float64_multi_array(msg.data, dim[0].label if dim else None)
+
+
+def encode_string(msg) -> bytes:
+    """The CDR payload of a ``std_msgs/String`` message."""
+    c = Cdr()
+    c.string(msg.data)
+    return bytes(c.b)
+
+
+def encode_clock(msg) -> bytes:
+    """The CDR payload of a ``rosgraph_msgs/Clock`` message."""
+    c = Cdr()
+    c.stamp(msg.clock.sec, msg.clock.nanosec)
+    return bytes(c.b)
+
+
+def encode_twist(msg) -> bytes:
+    """The CDR payload of a ``geometry_msgs/Twist`` message."""
+    c = Cdr()
+    c.f64(msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.x, msg.angular.y, msg.angular.z)
+    return bytes(c.b)
+
+
+def encode_joint_state(msg) -> bytes:
+    """The CDR payload of a ``sensor_msgs/JointState`` message."""
+    c = Cdr()
+    _hdr(c, msg.header)
+    c.u32(len(msg.name))
+    for name in msg.name:
+        c.string(name)
+    c.f64_seq(msg.position)
+    c.f64_seq(msg.velocity)
+    c.f64_seq(msg.effort)
     return bytes(c.b)

@@ -22,7 +22,10 @@ Errors (:func:`corrupt_ranges`), per exchange
 Messages
     ``sensor_msgs/Range`` on ``uwb/range``, one per successful exchange, stamped at
     the exchange, ``header.frame_id = "uwb_anchor_<i>"``, ``radiation_type =
-    Range.INFRARED`` (ROS has no UWB type), ``field_of_view = 2 pi``.
+    Range.INFRARED`` (ROS has no UWB type), ``field_of_view = 2 pi``: the range is
+    measured from that anchor to the tag (frame ``uwb_tag`` of the URDF). A
+    :class:`UwbSensor` sends the anchors as static frames ``map -> uwb_anchor_<i>``
+    (:mod:`amr_twin.ros_state`).
 
 :func:`simulate_ranges` makes the same messages offline from tag positions (tests,
 replays); :class:`UwbSensor` samples the twin on the clock. This module does not
@@ -39,6 +42,7 @@ from amr_twin.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.config_sections import UwbCfg
 from amr_twin.messages import Header, Range, Time
+from amr_twin.ros_state import anchor_transforms
 
 US = 1_000_000
 TOPIC = "uwb/range"
@@ -191,6 +195,7 @@ class UwbSensor:
         self.n_anchors = self.anchors_xyz_m.shape[0]
         self.slot_us = int(round(US / (cfg.rate_hz * self.n_anchors)))
         self.pub = bus.advertise(TOPIC, Range)
+        bus.send_transform(anchor_transforms(self.anchors_xyz_m, FRAME_PREFIX + "{}"), static=True)
         self.seq = 0
         self.exchanges = 0
         self._handle = None

@@ -22,6 +22,9 @@ from uwb_run import UWB_S, record_uwb_run
 DURATION_S = 4.0
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
 TOPIC_TYPES = {
+    "/clock": "rosgraph_msgs/msg/Clock", "/robot_description": "std_msgs/msg/String",
+    "/joint_states": "sensor_msgs/msg/JointState",
+    "/wheel_Command_Service/request": "std_msgs/msg/Float64MultiArray",
     "/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage", "/tf_static": "tf2_msgs/msg/TFMessage",
     "/scan": "sensor_msgs/msg/LaserScan", "/imu/data_raw": "sensor_msgs/msg/Imu",
     "/imu/mag": "sensor_msgs/msg/MagneticField", "/wheel0_Vel": "std_msgs/msg/Float64",
@@ -70,7 +73,7 @@ def decoded(bag):
 
 
 def _yaw_rad(q) -> float:
-    return 2.0 * math.atan2(q.z, q.w)
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 def test_bare_mcap_opens_as_rosbag2_storage(bag):
@@ -132,17 +135,20 @@ def test_anyreader_with_the_embedded_definitions(recorded, bag):
 def test_counts_for_the_duration_and_rates(recorded, decoded):
     cfg, capture, result, _path = recorded
     n = {topic: len(msgs) for topic, msgs in decoded.items()}
-    assert n["/odom"] == n["/tf"] == len(capture.messages["odom"])
+    assert n["/odom"] == len(capture.messages["odom"]) == len(capture.messages["tf"])
     assert abs(n["/odom"] - 50 * DURATION_S) <= 2
+    assert n["/tf"] == n["/odom"] + n["/joint_states"]  # odometry + the joints' links (robot_state_publisher)
+    assert abs(n["/joint_states"] - 50 * DURATION_S) <= 2
     assert n["/scan"] == len(capture.messages["scan"])
     assert abs(n["/scan"] - cfg.lidar.scan_rate_hz * DURATION_S) <= 2
     assert n["/imu/data_raw"] == n["/imu/mag"] == len(capture.messages["imu/data_raw"])
     assert abs(n["/imu/data_raw"] - cfg.imu.rate_hz * DURATION_S) <= 2
     for wheel in (0, 1):
         assert n[f"/wheel{wheel}_Vel"] == len(result.series.published[wheel]) >= 2
-    assert n["/wheel_Command"] == len(STEPS)
-    assert n["/twin/true_rpm"] == n["/twin/pwm_counts"] == n["/twin/ground_truth"] == len(result.series.t_s)
-    assert n["/tf_static"] == 1
+    assert n["/wheel_Command"] == n["/wheel_Command_Service/request"] == len(STEPS)
+    assert n["/twin/true_rpm"] == n["/twin/pwm_counts"] == len(result.series.t_s)
+    assert n["/twin/ground_truth"] == n["/clock"] == len(capture.state.t_us) == len(result.series.t_s)
+    assert n["/tf_static"] == n["/robot_description"] == 1
 
 
 def test_values_against_the_simulation(recorded, decoded):
@@ -156,7 +162,7 @@ def test_values_against_the_simulation(recorded, decoded):
     assert (p.x, p.y) == pytest.approx(tuple(series.odom[-1, 1:3]), abs=1e-12)
     assert _yaw_rad(odom.pose.pose.orientation) == pytest.approx(series.odom[-1, 3], abs=1e-9)
     # /tf carries the same transform
-    tf = decoded["/tf"][-1][1].transforms[0]
+    tf = [m.transforms[0] for _t, m in decoded["/tf"] if m.transforms[0].child_frame_id == "base_link"][-1]
     assert (tf.header.frame_id, tf.child_frame_id) == ("odom", "base_link")
     assert tf.transform.translation.x == p.x
     # ground truth and true wheel speeds at every recorded row
@@ -175,6 +181,9 @@ def test_values_against_the_simulation(recorded, decoded):
         assert rpm == pytest.approx(series.published[wheel][:, 1].tolist())
     commands = np.array([m.data for _t, m in decoded["/wheel_Command"]])
     assert np.array_equal(commands, np.array([c for _t, c in series.commands]))
+    requests = [m for _t, m in decoded["/wheel_Command_Service/request"]]
+    assert np.array_equal([m.data for m in requests], commands)  # the calls, as the service got them
+    assert requests[0].layout.dim[0].label == "motionL,speedL,motionR,speedR"
     assert np.allclose(commands[-1], [1, 99.2, 1, 60.8], rtol=1e-6)  # the chapter 5 clockwise turn (float32)
     # sensors: the last scan and IMU sample as published on the bus
     scan, src = decoded["/scan"][-1][1], capture.messages["scan"][-1][1]
@@ -184,9 +193,9 @@ def test_values_against_the_simulation(recorded, decoded):
     imu, imu_src = decoded["/imu/data_raw"][-1][1], capture.messages["imu/data_raw"][-1][1]
     assert imu.angular_velocity.z == imu_src.angular_velocity.z < 0  # turning clockwise
     assert imu.linear_acceleration.z == imu_src.linear_acceleration.z
-    # static frames (REP-105)
+    # static frames (REP-105): the URDF's fixed joints, no parent for odom
     static = {(t.header.frame_id, t.child_frame_id) for t in decoded["/tf_static"][0][1].transforms}
-    assert static == {("world", "odom"), ("base_link", "laser"), ("base_link", "imu_link")}
+    assert static == {("base_link", "laser"), ("base_link", "imu_link"), ("base_link", "uwb_tag")}
 
 
 def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
@@ -197,8 +206,9 @@ def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
         qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
     assert set(qos) and all(len(profiles) == 1 for profiles in qos.values())
     durability = {topic: str(profiles[0].durability) for topic, profiles in qos.items()}
-    assert "TRANSIENT_LOCAL" in durability["/tf_static"].upper()
-    assert all("VOLATILE" in d.upper() for t, d in durability.items() if t != "/tf_static")
+    latched = {"/tf_static", "/robot_description"}
+    assert all("TRANSIENT_LOCAL" in durability[t].upper() for t in latched)
+    assert all("VOLATILE" in d.upper() for t, d in durability.items() if t not in latched)
 
 
 @pytest.fixture(scope="module")

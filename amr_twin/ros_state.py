@@ -1,0 +1,168 @@
+"""The robot's state as ROS messages: static frames, joint states, link transforms, ground truth, clock.
+
+What ``robot_state_publisher``, a ``joint_state_broadcaster``, Gazebo's ``p3d``
+plugin and ``/clock`` would give a ROS user of the twin, built from MuJoCo's state
+into the message types of :mod:`amr_twin.messages` (one source for the bus and the
+recordings; :mod:`amr_twin.ros2_cdr` encodes them).
+
+Frames (REP-105). One tree per root, every frame with one parent::
+
+    odom -> base_link                       wheel odometry (controllers/odometry.py), /tf
+    base_link -> laser, imu_link, uwb_tag   fixed joints of the URDF, /tf_static
+    base_link -> wheel_*_link, caster_*_link   moving joints of the URDF, /tf (joint states)
+    map -> uwb_anchor_<i>                   the UWB anchors, surveyed in the map, /tf_static
+
+``odom`` has no parent in the twin's own messages: ``map -> odom`` is a localiser's
+(slam_toolbox, AMCL, robot_localization with UWB). The twin's ``map`` is its world
+frame, in which the anchors and the warehouse map are given. The true pose is not
+a tf frame: it goes on ``twin/ground_truth`` (``nav_msgs/Odometry`` in ``world``,
+which no transform names).
+
+:class:`StateSampler` keeps the raw state on the loop's grid (a grid sampler: no
+clock event, the run is unchanged); the functions turn one sample into messages.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .bus import BASE_FRAME
+from .messages import (Clock, Header, JointState, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Time,
+                       TFMessage, Transform, TransformStamped, Twist, TwistWithCovariance, Vector3)
+
+ROBOT = "amr/"
+"""Prefix of the robot's MuJoCo names (build.py)."""
+WORLD_FRAME = "world"
+MAP_FRAME = "map"
+FIXED_LINKS = ("laser", "imu_link", "uwb_tag")
+"""Links on fixed joints of base_link (static transforms)."""
+MOVING_JOINTS = ("wheel_left_joint", "wheel_right_joint", "caster_front_left_joint", "caster_front_right_joint",
+                 "caster_rear_left_joint", "caster_rear_right_joint")
+"""The URDF's non-fixed joints, in ``sensor_msgs/JointState`` order."""
+_ZERO36 = np.zeros(36)
+_ZERO36.flags.writeable = False
+
+
+def _quat(wxyz) -> Quaternion:
+    w, x, y, z = (float(v) for v in wxyz)
+    return Quaternion(x, y, z, w)
+
+
+def _stamped(parent: str, child: str, xyz, wxyz, stamp: Time = Time()) -> TransformStamped:
+    return TransformStamped(Header(0, stamp, parent), child,
+                            Transform(Vector3(*(float(v) for v in xyz)), _quat(wxyz)))
+
+
+def robot_static_transforms(model) -> list[TransformStamped]:
+    """``base_link -> laser, imu_link, uwb_tag`` from the compiled model (the URDF's fixed joints)."""
+    import mujoco
+
+    base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + BASE_FRAME)
+    out = []
+    for link in FIXED_LINKS:
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + link)
+        if b >= 0 and model.body_parentid[b] == base:
+            out.append(_stamped(BASE_FRAME, link, model.body_pos[b], model.body_quat[b]))
+    return out
+
+
+def anchor_transforms(anchors_xyz_m: np.ndarray, frame: str = "uwb_anchor_{}") -> list[TransformStamped]:
+    """``map -> uwb_anchor_<i>`` at the anchors' positions (K, 3), m, axes as the map's."""
+    return [_stamped(MAP_FRAME, frame.format(i), xyz, (1.0, 0.0, 0.0, 0.0))
+            for i, xyz in enumerate(np.asarray(anchors_xyz_m, float).reshape(-1, 3))]
+
+
+def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Quaternion products (..., 4) w, x, y, z."""
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack([aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw], axis=-1)
+
+
+def _rotate_inv(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``R(q)^T v`` for unit quaternions q (..., 4) w, x, y, z and vectors v (..., 3)."""
+    w, u = q[..., :1], -q[..., 1:]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+class StateSampler:
+    """The robot's joint, link and base state on the loop's record grid.
+
+    Parameters
+    ----------
+    model, data : mujoco.MjModel, mujoco.MjData
+        The compiled twin (robot names prefixed ``amr/``).
+    """
+
+    def __init__(self, model, data):
+        import mujoco
+
+        self.data = data
+        self.joint_names = MOVING_JOINTS
+        joints = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + j) for j in MOVING_JOINTS]
+        self.child_frames = tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])[len(ROBOT):]
+                                  for j in joints)
+        self._qadr = model.jnt_qposadr[joints]
+        self._dadr = model.jnt_dofadr[joints]
+        self._bodies = np.concatenate([[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + BASE_FRAME)],
+                                       model.jnt_bodyid[joints]])
+        root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + "root")
+        self._root_dof = int(model.jnt_dofadr[root])
+        self.t_us: list[int] = []
+        self._rows: list[np.ndarray] = []
+
+    def sample(self, t_us: int) -> None:
+        """Keep the state now (``MjData`` at ``t_us``); a second sample at the same instant is ignored."""
+        if self.t_us and t_us <= self.t_us[-1]:
+            return
+        d = self.data
+        dof = self._root_dof
+        self.t_us.append(int(t_us))
+        self._rows.append(np.concatenate([d.qpos[self._qadr], d.qvel[self._dadr], d.qvel[dof:dof + 6],
+                                          d.xpos[self._bodies].ravel(), d.xquat[self._bodies].ravel()]))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """``t_us`` (n,); joint ``q``, ``qd`` (n, 6); base ``v_world``, ``w_body`` (n, 3), ``pos`` (n, 3),
+        ``quat`` (n, 4) w, x, y, z in the world; links' ``link_pos`` (n, 6, 3) and ``link_quat`` (n, 6, 4)
+        relative to ``base_link``."""
+        rows = np.array(self._rows).reshape(len(self._rows), -1)
+        nj, nb = len(self.joint_names), len(self._bodies)
+        q, qd, vel = rows[:, :nj], rows[:, nj:2 * nj], rows[:, 2 * nj:2 * nj + 6]
+        k = 2 * nj + 6
+        pos = rows[:, k:k + 3 * nb].reshape(-1, nb, 3)
+        quat = rows[:, k + 3 * nb:].reshape(-1, nb, 4)
+        base_q = quat[:, :1]
+        inv = base_q * np.array([1.0, -1.0, -1.0, -1.0])
+        link_pos = _rotate_inv(np.broadcast_to(base_q, quat[:, 1:].shape), pos[:, 1:] - pos[:, :1])
+        link_quat = _qmul(np.broadcast_to(inv, quat[:, 1:].shape), quat[:, 1:])
+        return {"t_us": np.array(self.t_us, np.int64), "q": q, "qd": qd, "v_world": vel[:, :3],
+                "w_body": vel[:, 3:], "pos": pos[:, 0], "quat": quat[:, 0], "link_pos": link_pos,
+                "link_quat": link_quat}
+
+
+def joint_state(t_us: int, names, q, qd) -> JointState:
+    """``sensor_msgs/JointState`` of the moving joints: positions (rad, m) and velocities (rad/s, m/s)."""
+    return JointState(Header(0, Time.from_us(t_us), ""), list(names), np.asarray(q, float),
+                      np.asarray(qd, float), np.zeros(0))
+
+
+def link_transforms(t_us: int, children, link_pos, link_quat) -> TFMessage:
+    """``base_link -> <child>`` of the moving joints' links (what robot_state_publisher sends on /tf)."""
+    stamp = Time.from_us(t_us)
+    return TFMessage([_stamped(BASE_FRAME, c, p, q, stamp) for c, p, q in zip(children, link_pos, link_quat)])
+
+
+def ground_truth(t_us: int, pos, quat, v_world, w_body) -> Odometry:
+    """The true pose of ``base_link`` in ``world`` and its twist in ``base_link`` (``nav_msgs/Odometry``)."""
+    v_body = _rotate_inv(np.asarray(quat, float), np.asarray(v_world, float))
+    return Odometry(Header(0, Time.from_us(t_us), WORLD_FRAME), BASE_FRAME,
+                    PoseWithCovariance(Pose(Point(*(float(v) for v in pos)), _quat(quat)), _ZERO36),
+                    TwistWithCovariance(Twist(Vector3(*(float(v) for v in v_body)),
+                                              Vector3(*(float(v) for v in w_body))), _ZERO36))
+
+
+def clock(t_us: int) -> Clock:
+    """``rosgraph_msgs/Clock`` at ``t_us``."""
+    return Clock(Time.from_us(t_us))

@@ -152,6 +152,29 @@ def test_static_tf_is_latched(bus, clock):
     assert len(seen) == 1 and seen[0].transforms[0].child_frame_id == "laser"
 
 
+def test_static_tf_carries_every_static_frame_sent_so_far(bus, clock):
+    bus.send_transform(_ts("base_link", "laser", 0.2, 0.0, 0.0), static=True)
+    bus.send_transform(_ts("map", "uwb_anchor_0", 9.5, 6.5, 0.0), static=True)
+    bus.send_transform(_ts("base_link", "laser", 0.3, 0.0, 0.0), static=True)  # replaces, as tf2 does
+    seen = []
+    bus.subscribe("tf_static", seen.append)
+    clock.run_until(0)
+    assert [t.child_frame_id for t in seen[0].transforms] == ["laser", "uwb_anchor_0"]
+    assert seen[0].transforms[0].transform.translation.x == 0.3
+    assert bus.static_transforms() == seen[0].transforms
+
+
+def test_taps_see_service_requests_failed_calls_included(bus, clock):
+    seen = []
+    bus.add_tap(lambda topic, msg, t_us: seen.append((topic, msg, t_us)))
+    with pytest.raises(ServiceCallError):
+        bus.call_service("/add", (1, 2))
+    bus.advertise_service("add", lambda req: req[0] + req[1])
+    clock.run_until(5)
+    assert bus.call_service("add", (3, 4)) == 7
+    assert seen == [("add/request", (1, 2), 0), ("add/request", (3, 4), 5)]
+
+
 def test_lookahead_is_the_smallest_subscriber_latency_and_taps_do_not_count(bus):
     from amr_twin.clock import NEVER_US
 

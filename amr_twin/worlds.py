@@ -2,9 +2,10 @@
 
 A map_server map is a YAML file (``image``, ``resolution`` m/pixel, ``origin``
 ``[x, y, yaw]`` of the lower-left pixel, ``occupied_thresh``, ``free_thresh``,
-``negate``) next to a greyscale image. A pixel is occupied when its occupancy
-``p = (255 - v) / 255`` (``v / 255`` with ``negate: 1``) exceeds
-``occupied_thresh``, as map_server's trinary mode reads it.
+``negate``, ``mode``) next to a greyscale image. A pixel is occupied when its
+occupancy ``p = (255 - v) / 255`` (``v / 255`` with ``negate: 1``) exceeds
+``occupied_thresh``, as map_server's ``trinary`` (the default) and ``scale`` modes
+read it; in ``raw`` mode the pixel is the occupancy in percent (255 unknown).
 
 Occupied cells become boxes of height ``wall_height_m`` standing on the floor:
 runs of occupied cells along each image row are merged, then identical runs in
@@ -68,11 +69,21 @@ def write_pgm(path: str | Path, image: np.ndarray) -> None:
     Path(path).write_bytes(b"P5\n%d %d\n255\n" % (image.shape[1], image.shape[0]) + image.tobytes())
 
 
+MAP_MODES = ("trinary", "scale", "raw")
+"""map_server's ``mode`` values (trinary when absent); trinary and scale give the same walls."""
+
+
 def load_map(yaml_path: str | Path) -> OccupancyMap:
     """Load a map_server YAML and its image into an :class:`OccupancyMap`."""
     yaml_path = Path(yaml_path)
     meta = yaml.safe_load(yaml_path.read_text())
+    mode = meta.get("mode", "trinary")
+    if mode not in MAP_MODES:
+        raise ValueError(f"{yaml_path}: mode {mode!r} is not one of {', '.join(MAP_MODES)} (map_server)")
     image = read_pgm(yaml_path.parent / meta["image"])
+    if mode == "raw":  # the pixel is the occupancy in percent (255 unknown)
+        return OccupancyMap((image != 255) & (image / 100.0 > float(meta.get("occupied_thresh", 0.65))),
+                            float(meta["resolution"]), tuple(float(v) for v in meta.get("origin", (0.0, 0.0, 0.0))))
     p = image / 255.0 if int(meta.get("negate", 0)) else (255 - image.astype(float)) / 255.0
     origin = tuple(float(v) for v in meta.get("origin", (0.0, 0.0, 0.0)))
     return OccupancyMap(p > float(meta.get("occupied_thresh", 0.65)), float(meta["resolution"]),

@@ -19,7 +19,7 @@ the cells up to ``range_max`` free (right for a scanner whose no-return means
 ``range_min`` marks nothing.
 
 :meth:`OccupancyGrid.save` writes ``<stem>.yaml`` + ``<stem>.pgm`` as ROS
-map_saver does (P5, 254 free, 0 occupied, 205 unknown; ``negate: 0``,
+map_saver does (P5, 254 free, 0 occupied, 205 unknown; ``mode: trinary``, ``negate: 0``,
 ``occupied_thresh: 0.65``, ``free_thresh: 0.196``; ``origin`` the lower-left
 corner), which :func:`amr_twin.worlds.load_map` and map_server read, and
 ``<stem>.png``, the same image (black occupied, white free, grey unknown).
@@ -210,7 +210,7 @@ class OccupancyGrid:
         image = self.image()
         write_pgm(pgm_path, image)
         meta = {"image": pgm_path.name, "resolution": self.resolution_m,
-                "origin": [self.origin_xy_m[0], self.origin_xy_m[1], 0.0], "negate": 0,
+                "origin": [self.origin_xy_m[0], self.origin_xy_m[1], 0.0], "mode": "trinary", "negate": 0,
                 "occupied_thresh": OCCUPIED_THRESH, "free_thresh": FREE_THRESH}
         yaml_path.write_text(yaml.safe_dump(meta, sort_keys=False))
         import matplotlib.image

@@ -128,7 +128,8 @@ def test_save_writes_map_server_files_that_the_world_loader_reads(tmp_path):
     yaml_path, pgm_path, png_path = grid.save(tmp_path / "maps" / "room.v1")
     assert (yaml_path.name, pgm_path.name, png_path.name) == ("room.v1.yaml", "room.v1.pgm", "room.v1.png")
     meta = yaml.safe_load(yaml_path.read_text())
-    assert meta == {"image": "room.v1.pgm", "resolution": RES_M, "origin": [-3.0, -3.0, 0.0], "negate": 0,
+    assert meta == {"image": "room.v1.pgm", "resolution": RES_M, "origin": [-3.0, -3.0, 0.0],
+                    "mode": "trinary", "negate": 0,
                     "occupied_thresh": 0.65, "free_thresh": 0.196}
     image = read_pgm(pgm_path)
     assert set(np.unique(image).tolist()) == {0, 205, 254}

@@ -50,6 +50,21 @@ def test_thresholds_negate_and_world_coordinates(tmp_path):
     assert np.array_equal(negated.occupied, grid.occupied)
 
 
+def test_map_modes(tmp_path):
+    image = np.full((4, 4), 0, np.uint8)
+    image[0, :] = 100  # raw: 100 % occupied
+    image[1, :] = 255  # raw: unknown
+    write_pgm(tmp_path / "m.pgm", image)
+    base = "image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    (tmp_path / "raw.yaml").write_text(base + "mode: raw\n")
+    assert load_map(tmp_path / "raw.yaml").occupied.sum(axis=1).tolist() == [4, 0, 0, 0]  # image rows
+    (tmp_path / "scale.yaml").write_text(base + "mode: scale\nnegate: 0\n")
+    assert load_map(tmp_path / "scale.yaml").occupied.sum() == 8  # the black rows 2 and 3
+    (tmp_path / "bad.yaml").write_text(base + "mode: fancy\n")
+    with pytest.raises(ValueError, match="mode 'fancy'"):
+        load_map(tmp_path / "bad.yaml")
+
+
 def test_rotated_origin_rotates_the_boxes(tmp_path):
     img = np.full((10, 10), 254, np.uint8)
     img[9, 0] = 0  # lower-left pixel: centre at (0.05, 0.05) in the map frame

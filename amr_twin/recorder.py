@@ -35,11 +35,26 @@ class RunSeries:
     voltage_v: np.ndarray        # (n, 2) phase voltage the driver applies (0 braking or coasting)
     current_a: np.ndarray        # (n, 2) motor (phase) current, + driving forward
     battery_a: np.ndarray        # (n,) the pack's current: drivers and auxiliary load
-    published: dict[int, np.ndarray]  # wheel -> (k, 2) rows t_s, rpm (as received on the PC)
+    published: dict[int, np.ndarray]  # wheel -> (k, 2) rows t_s, |rpm| as received on the PC (signed_published)
     odom: np.ndarray             # (k, 4) t_s, x_m, y_m, yaw_rad (odom frame)
     commands: list[tuple[float, list[float]]] = field(default_factory=list)
 
 
+def signed_published(series: RunSeries, wheel: int) -> np.ndarray:
+    """(k, 2) t_s, published RPM signed by the wheel's commanded direction (the last non-zero
+    motion code of wheel_Command at or before the sample, forward before any): the SC output
+    the firmware times has no direction, the wheel odometry node signs it the same way."""
+    pub = series.published[wheel]
+    direction = 1.0
+    cmds = [(t, c[2 * wheel]) for t, c in series.commands]
+    signs, i = np.empty(len(pub)), 0
+    for k, t in enumerate(pub[:, 0]):
+        while i < len(cmds) and cmds[i][0] <= t:
+            if cmds[i][1]:
+                direction = 1.0 if cmds[i][1] > 0 else -1.0
+            i += 1
+        signs[k] = direction
+    return np.column_stack([pub[:, 0], signs * np.abs(pub[:, 1])]) if len(pub) else pub
 
 
 def yaw_from_quat(q: np.ndarray) -> np.ndarray:

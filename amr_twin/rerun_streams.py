@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .recorder import signed_published
 from .rerun_capture import Capture
 
 TIMELINE = "sim_time"
@@ -48,7 +49,7 @@ def _log_wheel_speeds(rec, series) -> None:
     ref = reference_rpm(series)
     for w, name in enumerate(WHEELS):
         _scalars(rec, f"wheels/{name}/reference_rpm", series.t_s, ref[:, w])
-        pub = series.published[w]
+        pub = signed_published(series, w)  # signed like the reference and the true speed
         _scalars(rec, f"wheels/{name}/published_rpm", pub[:, 0], pub[:, 1])
         _scalars(rec, f"wheels/{name}/true_rpm", series.t_s, series.true_rpm[:, w])
 

@@ -5,11 +5,12 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli import app
-from amr_twin.cli_run import CSV_COLUMNS
+from amr_twin.cli_run import CSV_COLUMNS, CSV_COMMENT
 from amr_twin.mission import MissionError, parse_mission
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,7 +40,7 @@ def test_angular_conversion_rep103():
     # the thesis' numbers: 60 deg/s about an ICC 1 m to the right -> left 99.20, right 60.80
     info = _json("angular", "--speed-deg-s", "60", "--icc-m", "-1", "--duration-s", "0.2")
     assert info["wheel_command"][1::2] == pytest.approx([99.20, 60.80], abs=1e-4)
-    assert info["wheels"]["left"]["reference_rpm"] == pytest.approx(99.20, abs=1e-4)
+    assert info["wheels"]["left"]["reference_rpm"] == pytest.approx(-99.20, abs=1e-4)  # signed: backward
     # REP-103: +60 deg/s is counter-clockwise, so about an ICC on the right both wheels go
     # backward; the chapter-5 clockwise run (both forward) is -60 deg/s
     assert info["wheel_command"][0::2] == [-1, -1]
@@ -81,6 +82,7 @@ def test_csv_and_json_agree_with_the_simulation(tmp_path):
     left = info["wheels"]["left"]
     assert {"reference_rpm", "final_rpm"} <= set(left) and left["samples"] >= 2
     with out.open() as f:
+        assert f.readline().startswith("# ") and "signed" in CSV_COMMENT  # the convention, first line
         rows = list(csv.DictReader(f))
     assert tuple(rows[0]) == CSV_COLUMNS
     last = {k: float(v) for k, v in rows[-1].items()}
@@ -92,6 +94,22 @@ def test_csv_and_json_agree_with_the_simulation(tmp_path):
     assert last["ref_rpm_left"] == pytest.approx(76.394, abs=1e-3) and last["ref_rpm_right"] == 0.0
     assert last["true_rpm_left"] > 60 and last["pwm_counts_left"] > 0
     assert not any(p.name.endswith(".tmp") for p in tmp_path.iterdir())
+
+
+def test_one_sign_convention_in_json_and_csv(tmp_path):
+    """Backward at 1.2 m/s (ch. 5 run 4): every RPM negative in --json and --csv, as the true speed is."""
+    out = tmp_path / "back.csv"
+    info = _json("linear", "--speed-m-s", "-1.2", "--duration-s", "4", "--world", "empty", "--csv", str(out))
+    assert info["wheel_command"][:2] == pytest.approx([-1, 91.67], abs=0.01)  # the message: code and |speed|
+    table = np.genfromtxt(out, delimiter=",", names=True, skip_header=1)  # after the "# ..." line
+    for name in ("left", "right"):
+        w = info["wheels"][name]
+        assert w["reference_rpm"] == pytest.approx(-91.67, abs=0.01) and w["true_final_rpm"] < -80
+        assert w["final_rpm"] < -80 and w["reference"] == pytest.approx(w["reference_rpm"])
+        assert w["final_value"] < -80 and w["peak_value"] <= w["final_value"] and w["overshoot"] >= 0
+        assert table[f"ref_rpm_{name}"][-1] == pytest.approx(w["reference_rpm"], rel=1e-6)
+        assert table[f"pub_rpm_{name}"][-1] == pytest.approx(w["final_rpm"], rel=1e-6)
+        assert table[f"true_rpm_{name}"][-1] == pytest.approx(w["true_final_rpm"], rel=1e-6)
 
 
 def test_square_mission_runs(tmp_path):

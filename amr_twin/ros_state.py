@@ -44,13 +44,14 @@ _ZERO36.flags.writeable = False
 
 
 def _quat(wxyz) -> Quaternion:
-    w, x, y, z = (float(v) for v in wxyz)
-    return Quaternion(x, y, z, w)
+    w, x, y, z = wxyz
+    return Quaternion(float(x), float(y), float(z), float(w))
 
 
 def _stamped(parent: str, child: str, xyz, wxyz, stamp: Time = Time()) -> TransformStamped:
-    return TransformStamped(Header(0, stamp, parent), child,
-                            Transform(Vector3(*(float(v) for v in xyz)), _quat(wxyz)))
+    x, y, z = xyz
+    return TransformStamped(Header(0, stamp, parent), child, Transform(Vector3(float(x), float(y), float(z)),
+                                                                       _quat(wxyz)))
 
 
 def robot_static_transforms(model) -> list[TransformStamped]:
@@ -124,9 +125,9 @@ class StateSampler:
                                           d.xpos[self._bodies].ravel(), d.xquat[self._bodies].ravel()]))
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """``t_us`` (n,); joint ``q``, ``qd`` (n, 6); base ``v_world``, ``w_body`` (n, 3), ``pos`` (n, 3),
-        ``quat`` (n, 4) w, x, y, z in the world; links' ``link_pos`` (n, 6, 3) and ``link_quat`` (n, 6, 4)
-        relative to ``base_link``."""
+        """``t_us`` (n,); joint ``q``, ``qd`` (n, 6); base ``v_world``, ``v_body``, ``w_body`` (n, 3),
+        ``pos`` (n, 3), ``quat`` (n, 4) w, x, y, z in the world; links' ``link_pos`` (n, 6, 3) and
+        ``link_quat`` (n, 6, 4) relative to ``base_link``."""
         rows = np.array(self._rows).reshape(len(self._rows), -1)
         nj, nb = len(self.joint_names), len(self._bodies)
         q, qd, vel = rows[:, :nj], rows[:, nj:2 * nj], rows[:, 2 * nj:2 * nj + 6]
@@ -138,7 +139,7 @@ class StateSampler:
         link_pos = _rotate_inv(np.broadcast_to(base_q, quat[:, 1:].shape), pos[:, 1:] - pos[:, :1])
         link_quat = _qmul(np.broadcast_to(inv, quat[:, 1:].shape), quat[:, 1:])
         return {"t_us": np.array(self.t_us, np.int64), "q": q, "qd": qd, "v_world": vel[:, :3],
-                "w_body": vel[:, 3:], "pos": pos[:, 0], "quat": quat[:, 0], "link_pos": link_pos,
+                "v_body": _rotate_inv(quat[:, 0], vel[:, :3]), "w_body": vel[:, 3:], "pos": pos[:, 0], "quat": quat[:, 0], "link_pos": link_pos,
                 "link_quat": link_quat}
 
 
@@ -154,13 +155,11 @@ def link_transforms(t_us: int, children, link_pos, link_quat) -> TFMessage:
     return TFMessage([_stamped(BASE_FRAME, c, p, q, stamp) for c, p, q in zip(children, link_pos, link_quat)])
 
 
-def ground_truth(t_us: int, pos, quat, v_world, w_body) -> Odometry:
+def ground_truth(t_us: int, pos, quat, v_body, w_body) -> Odometry:
     """The true pose of ``base_link`` in ``world`` and its twist in ``base_link`` (``nav_msgs/Odometry``)."""
-    v_body = _rotate_inv(np.asarray(quat, float), np.asarray(v_world, float))
     return Odometry(Header(0, Time.from_us(t_us), WORLD_FRAME), BASE_FRAME,
-                    PoseWithCovariance(Pose(Point(*(float(v) for v in pos)), _quat(quat)), _ZERO36),
-                    TwistWithCovariance(Twist(Vector3(*(float(v) for v in v_body)),
-                                              Vector3(*(float(v) for v in w_body))), _ZERO36))
+                    PoseWithCovariance(Pose(Point(*pos), _quat(quat)), _ZERO36),
+                    TwistWithCovariance(Twist(Vector3(*v_body), Vector3(*w_body)), _ZERO36))
 
 
 def clock(t_us: int) -> Clock:

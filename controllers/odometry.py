@@ -4,7 +4,8 @@ The firmware publishes each wheel's speed in RPM as measured on the driver's SC
 output, which has no direction (§3.2.3). The sign is taken from the last
 ``wheel_Command`` motion code of that wheel (1 forward, -1 backward); under a
 brake (0) the wheel keeps its last direction and its speed falls linearly to 0
-over ``brake_stop_s`` (a braked hub wheel stops in about 0.1 s from 30 RPM). With
+over ``brake_stop_s`` (0.5 s: with its phases shorted a hub wheel of the twin covers, from 15
+to 80 RPM, the distance of a linear ramp to rest of 0.42 to 0.62 s). With
 ``signed_input=True`` the wheel topics are read as signed RPM and ``wheel_Command``
 is ignored; :meth:`WheelOdometry.set_wheel_speeds_rpm` feeds signed speeds directly.
 
@@ -136,7 +137,7 @@ class WheelOdometry:
                  frame_id: str = ODOM_FRAME, child_frame_id: str = BASE_FRAME,
                  speed_samples: str = "window", revolutions_per_sample: float = 1.0,
                  sample_latency_s: float = 0.0, max_substep_s: float = 0.01,
-                 brake_stop_s: float = 0.1, catchup_time_s: float = 0.1,
+                 brake_stop_s: float = 0.5, catchup_time_s: float = 0.1,
                  catchup_max_fraction: float = 0.4, max_wheel_accel_m_s2: float = 4.0):
         if publish_rate_hz <= 0:
             raise ValueError(f"publish_rate_hz must be positive, got {publish_rate_hz}")

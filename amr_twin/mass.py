@@ -122,6 +122,14 @@ def sensor_link_inertials(cfg: TwinConfig) -> dict[str, Inertial]:
     }
 
 
+def sensor_inertials_in_base(cfg: TwinConfig) -> list[Inertial]:
+    """:func:`sensor_link_inertials` moved into ``base_link`` (the links' fixed joints: LiDAR,
+    IMU and UWB tag positions)."""
+    at = {"laser": cfg.components.lidar.pos_m, "imu_link": cfg.components.imu.pos_m, "uwb_tag": cfg.uwb.tag_pos_m}
+    return [Inertial(i.mass_kg, i.com_m + np.asarray(at[name], float), i.inertia_kg_m2)
+            for name, i in sensor_link_inertials(cfg).items()]
+
+
 def chassis_inertial(cfg: TwinConfig) -> Inertial:
     """Chassis link: frame, plates, the components without a link of their own and the two stators."""
     parts = [frame_inertial(cfg)]

@@ -57,7 +57,7 @@ def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
     from . import mass
 
     c, w, k, p = cfg.chassis, cfg.wheel, cfg.caster, cfg.payload
-    parts = [mass.chassis_inertial(cfg)]
+    parts = [mass.chassis_inertial(cfg), *mass.sensor_inertials_in_base(cfg)]
     rotor = mass.wheel_inertial(cfg)
     parts += [mass.Inertial(rotor.mass_kg, np.array([0.0, s * w.separation_m / 2, w.radius_m]), rotor.inertia_kg_m2)
               for s in (1, -1)]

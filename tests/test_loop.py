@@ -50,7 +50,8 @@ def test_sensor_messages_are_delivered_at_their_instants(cfg):
     scans = [(t_us, m.header.stamp.to_us()) for topic, t_us, m in taps if topic == "scan"]
     lidar = twin.lidar
     # stamp = first beam; delivered at the first 20 ms pose sample at or after the last beam
-    assert scans == [(200_000, 0), (380_000, lidar.scan_us)]
+    last_beam = lidar.scan_us - lidar.beam_dt_us  # stamped at the rotation's last beam (the A1 spins clockwise)
+    assert scans == [(200_000, last_beam), (380_000, lidar.scan_us + last_beam)]
 
 
 def test_a_subscriber_acting_on_odometry_acts_at_its_time(cfg):

@@ -97,6 +97,9 @@ class Lidar:
         self.n_beams, self.beam_dt_us, self.scan_us = scan_timing(cfg)
         self.angle_min, self.angle_increment, self.angles_rad = beam_angles_rad(self.n_beams)
         self.local_dirs = beam_directions(self.angles_rad)  # (n, 3) in the laser frame
+        # negative (clockwise); float32 on the wire: the float32 next to -1/sample_rate toward 0, so
+        # that stamp + i * time_increment never falls before the beam's true instant (by ~10 ns)
+        self._time_increment = float(np.nextafter(np.float32(-self.beam_dt_us / US), np.float32(0.0)))
         self.group_us, self.loop_cast_us = int(group_us), int(loop_cast_us)
         self.cast_period_us = self.group_us  # pose sample period (the loop's grid in the twin)
         self.cast_every_us = self.group_us  # longest time between casts
@@ -265,7 +268,7 @@ class Lidar:
         scan = LaserScan(
             header=Header(self.seq, Time.from_us(int(self.beam_t_us[0])), self.frame_id),
             angle_min=self.angle_min, angle_max=float(self.angles_rad[-1]),
-            angle_increment=self.angle_increment, time_increment=-self.beam_dt_us / US,
+            angle_increment=self.angle_increment, time_increment=self._time_increment,
             scan_time=self.scan_us / US, range_min=self.cfg.range_min_m, range_max=self.cfg.range_max_m,
             ranges=self.noisy_ranges(self.dist_m, self.hit_geom), intensities=np.zeros(0, np.float32))
         if self._samplers is None:  # standalone: this is the clock event at t_us

@@ -189,11 +189,12 @@ def _run_on_grid(rig, t_end_us, yaw_rate, grid_us=10_000):
         rig.clock.run_until(t)
 
 
-@pytest.mark.parametrize("speed_m_s", [0.0, 0.7])
-def test_twin_mode_scan_while_turning_and_driving_is_distorted_as_computed(room, speed_m_s):
-    """One cast per rotation (the twin's default): beam directions and origins at their own instants."""
+@pytest.mark.parametrize("speed_m_s, seed", [(0.0, 0)] + [(0.7, seed) for seed in range(20)])
+def test_twin_mode_scan_while_turning_and_driving_is_distorted_as_computed(room, speed_m_s, seed):
+    """One cast per rotation (the twin's default): beam directions and origins at their own
+    instants. Driving, on 20 seeds of the range noise (issue 12: it held on seed 0 only)."""
     omega = math.radians(60.0)
-    rig = Rig(room)
+    rig = Rig(room, seed=seed)
     off = rig.laser_offset()
     base_pose = rig.pose
 
@@ -213,12 +214,24 @@ def test_twin_mode_scan_while_turning_and_driving_is_distorted_as_computed(room,
     p = np.array(POSE[:2])[:, None] + np.array([speed_m_s, 0.0])[:, None] * t_s + np.einsum("ijn,j->in", rot, off)
     expected = np.array([room_ranges(p[:, i], yaw[i] + lid.angles_rad[i]) for i in range(lid.n_beams)])
     # the range is corrected for the origin's motion on the plane hit from the present origin
-    # (sensors/lidar_beams.py): exact unless the beam from there hits another wall (corners)
+    # (sensors/lidar_beams.py): exact unless the beam from there hits another wall (corners;
+    # within 3 cm of a corner the cast may graze either wall)
     o_now = p[:, 0]  # beam 0 is the last acquired: the present laser origin
     same = np.array([_wall(p[:, i], yaw[i] + lid.angles_rad[i]) == _wall(o_now, yaw[i] + lid.angles_rad[i])
+                     and min(_corner_gap(p[:, i], yaw[i] + lid.angles_rad[i]),
+                             _corner_gap(o_now, yaw[i] + lid.angles_rad[i])) > 0.03
                      for i in range(lid.n_beams)])
-    assert (~same).sum() <= 4
+    assert (~same).sum() <= 6
     assert_matches(rig.cfg, rig.scans[0].ranges[same], expected[same])
+
+
+def _corner_gap(p_xy, angle):
+    """How far apart along the ray the two walls' planes are, m (small near a corner)."""
+    c, s = math.cos(angle), math.sin(angle)
+    x0, x1, y0, y1 = ROOM
+    tx = ((x1 if c > 0 else x0) - p_xy[0]) / c if c else math.inf
+    ty = ((y1 if s > 0 else y0) - p_xy[1]) / s if s else math.inf
+    return abs(tx - ty)
 
 
 def _wall(p_xy, angle):

@@ -4,17 +4,27 @@ Every writer of the project (CSV and JSON results, plots, parameter files, the
 ``.rrd`` and ``.mcap`` recordings) goes through :func:`replacing`: the data is
 written to ``.<name>.<pid>.tmp`` in the target's folder and moved over the target
 with one ``os.replace`` (atomic on POSIX within a file system), so a reader or an
-interrupted run never sees half a file. On any error the temporary is removed; a
-process killed outright leaves it behind, and the pid in its name tells whether
-its writer is still running (see :func:`amr_twin.rerun_capture.remove_stale_temporaries`).
+interrupted run never sees half a file. On any error the temporary is removed and
+the error (an ``OSError``) names the target, not the temporary.
+
+Several files that belong together (a report and its plots) are written inside
+:func:`all_or_nothing`: every temporary is written first, and the renames happen
+only when all of them succeeded; a full disk half-way leaves none of the new files.
+
+A process killed outright leaves its temporary behind; the pid in the name tells
+whether its writer still runs, and :func:`remove_stale_temporaries` deletes those
+of dead writers (the CLI does it for each output before a run).
 """
 
 from __future__ import annotations
 
 import os
+import shutil
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
+
+_batch: list[list] = []  # stack of open all_or_nothing() batches: [(tmp, target) renames, cleanups]
 
 
 def temporary_name(path: str | Path) -> Path:
@@ -23,20 +33,69 @@ def temporary_name(path: str | Path) -> Path:
     return path.with_name(f".{path.name}.{os.getpid()}.tmp")
 
 
+class WriteError(OSError):
+    """Writing an output failed (disk full, read-only); ``filename`` is the target, not the temporary."""
+
+
+def _named(exc: OSError, path: Path) -> WriteError:
+    """The same error as a :class:`WriteError` naming ``path`` (the target)."""
+    return WriteError(exc.errno, exc.strerror or str(exc), str(path))
+
+
 @contextmanager
 def replacing(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path to write; on success it replaces ``path``, on error it is removed.
 
-    The parent folder is created if needed.
+    The parent folder is created if needed. Inside :func:`all_or_nothing` the rename
+    waits for the end of the batch.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temporary_name(path)
+    deferred = False
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         yield tmp
-        os.replace(tmp, path)
+        if _batch:
+            _batch[-1].append((tmp, path))
+            deferred = True
+        else:
+            os.replace(tmp, path)
+    except WriteError:
+        raise
+    except OSError as exc:
+        raise _named(exc, path) from None
     finally:
-        tmp.unlink(missing_ok=True)
+        if not deferred:
+            tmp.unlink(missing_ok=True)
+
+
+def place(written: str | Path, path: str | Path) -> None:
+    """Move an already written file ``written`` (same folder tree) onto ``path``, with the batch."""
+    written, path = Path(written), Path(path)
+    if _batch:
+        _batch[-1].append((written, path))
+    else:
+        os.replace(written, path)
+
+
+@contextmanager
+def all_or_nothing() -> Iterator[None]:
+    """Files written inside appear together at the end, or none of them if anything fails."""
+    renames: list = []
+    _batch.append(renames)
+    try:
+        yield
+    except BaseException:
+        _batch.pop()
+        for tmp, _path in renames:
+            _remove(tmp)
+        raise
+    _batch.pop()
+    for tmp, path in renames:
+        try:
+            os.replace(tmp, path)
+        except OSError as exc:
+            raise _named(exc, path) from None
 
 
 def write_bytes(path: str | Path, data: bytes) -> None:
@@ -48,3 +107,39 @@ def write_bytes(path: str | Path, data: bytes) -> None:
 def write_text(path: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
     write_bytes(path, text.encode())
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder: str | Path, name: str | None = None) -> list[Path]:
+    """Delete the temporaries that killed writers left in ``folder``; return them.
+
+    ``name``: only those of that target (``.<name>.<pid>.tmp``); default: all. A
+    temporary whose writer still runs (its pid is alive) is left alone.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return []
+    removed = []
+    for tmp in folder.glob(f".{name}.*.tmp" if name else ".*.tmp"):
+        stem, _, pid = tmp.name[1:-len(".tmp")].rpartition(".")
+        if stem and (name is None or stem == name) and pid.isdigit() and int(pid) != os.getpid() \
+                and not _alive(int(pid)):
+            _remove(tmp)
+            removed.append(tmp)
+    return removed

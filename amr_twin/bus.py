@@ -121,6 +121,7 @@ class Bus:
         self._services: dict[str, Callable[[Any], Any]] = {}
         self._taps: list[Tap] = []
         self._static: dict[str, TransformStamped] = {}
+        self._intercepts: dict[str, Callable[[Any], Any]] = {}
         self.tf = TfBuffer()
 
     # -- topics -----------------------------------------------------------------
@@ -157,6 +158,12 @@ class Bus:
         known = self._types.get(topic)
         if known is not None and type(msg) is not known and not isinstance(msg, known):
             raise TypeError(f"topic {topic!r} carries {known.__name__}, got {type(msg).__name__}")
+        if self._intercepts:
+            intercept = self._intercepts.get(topic)
+            if intercept is not None:
+                msg = intercept(msg)
+                if msg is None:
+                    return
         if topic in self._latched:
             self._latched[topic] = msg
         if self._taps:
@@ -192,6 +199,18 @@ class Bus:
         loop may run publishing events while the physics is ahead of them).
         """
         self._taps.append(tap)
+
+    def intercept(self, topic: str, func: Callable[[Any], Any] | None) -> None:
+        """Pass every message on ``topic`` through ``func(msg)`` before taps and subscribers.
+
+        ``func`` returns the message to deliver (the same or another) or None to drop
+        it: a node that stops publishing or publishes wrong values (fault injection,
+        :mod:`amr_twin.fault_injector`). ``None`` removes the interception.
+        """
+        if func is None:
+            self._intercepts.pop(_name(topic), None)
+        else:
+            self._intercepts[_name(topic)] = func
 
     def remove_tap(self, tap: Tap) -> None:
         """Unregister a tap added with :meth:`add_tap`."""

@@ -1,8 +1,11 @@
 """The ``amr-twin`` command line (typer).
 
 Every command takes the parameter file, an override YAML and ``--set key=value``.
-Bad input ends with one line on stderr naming the field and its range, exit code 2,
-and no output file written.
+Bad input ends with one line on stderr naming the field (or the file, or the
+option) and what is allowed, exit code 2, checked before the work starts, and no
+output file written; a usage error of the parser (an unknown option, a value that
+is not a number) is one line too. A file that cannot be written at the end (a full
+disk) is one line and exit code 1, with none of the command's files left half-made.
 """
 
 from __future__ import annotations
@@ -15,14 +18,39 @@ from typing import Optional
 
 import typer
 
+try:  # typer >= 0.20 carries its own copy of click
+    from typer._click import exceptions as _click_errors
+except ImportError:  # pragma: no cover - older typer on click
+    from click import exceptions as _click_errors
+
+from .cli_options import ConfigOpt, ParamsOpt, SetOpt  # noqa: F401 - used by the command modules
 from .config import ConfigError, load_config
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="amr-twin: headless MuJoCo digital twin of the thesis AMR.")
 
-ConfigOpt = typer.Option(None, "--config", help="Parameter file (default models/amr/amr.yaml).")
-ParamsOpt = typer.Option(None, "--params", help="Second YAML overriding values of the parameter file.")
-SetOpt = typer.Option(None, "--set", help="Override one value: key=value (repeatable).")
+class _App(typer.Typer):
+    """The typer app, with the parser's usage errors printed as one line (exit 2)."""
+
+    def __call__(self, *args, **kwargs):
+        if "standalone_mode" in kwargs:
+            return super().__call__(*args, **kwargs)
+        try:
+            code = super().__call__(*args, standalone_mode=False, **kwargs)
+        except _click_errors.UsageError as exc:
+            where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
+            hint = f" (see {where} --help)"
+            typer.echo(f"error: {where}: {' '.join(exc.format_message().split())}{hint}", err=True)
+            sys.exit(2)
+        except _click_errors.ClickException as exc:
+            typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            typer.echo("aborted", err=True)
+            sys.exit(130)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+app = _App(add_completion=False, no_args_is_help=True,
+           help="amr-twin: headless MuJoCo digital twin of the thesis AMR.")
 
 
 def fail(message: str, code: int = 2) -> None:
@@ -39,7 +67,13 @@ def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[
 
 
 def _guard(func):
-    """Turn the twin's own errors into one-line messages."""
+    """Turn the twin's own errors into one-line messages.
+
+    Bad input found while building (a world file, a start pose): exit 2. The
+    simulation diverged: exit 3. A file could not be written (disk full, read-only):
+    exit 1, naming the file.
+    """
+    from .atomic_file import WriteError
     from .build import BuildError
     from .physics import DivergenceError
 
@@ -49,6 +83,10 @@ def _guard(func):
         fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
     except DivergenceError as exc:
         fail(str(exc), code=3)
+    except WriteError as exc:
+        fail(f"cannot write {exc.filename}: {exc.strerror}", code=1)
+    except OSError as exc:
+        fail(f"{exc.filename + ': ' if exc.filename else ''}{exc.strerror or exc}", code=1)
 
 
 def _parse_xy(text: Optional[str]) -> Optional[list[float]]:

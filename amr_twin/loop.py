@@ -18,6 +18,10 @@ orders events in time:
    interleaved with the publishing events that fall in the chunk;
 4. run the clock's events; apply the pins to the plant.
 
+A grid sampler that returns True (the collision monitor with ``stop_on_collision``)
+ends the chunk at that grid instant and halts the twin: :meth:`Twin.advance` does
+nothing more (:attr:`Twin.halted`).
+
 A synced event at ``t`` acts from the first physics step that starts at or after
 ``t``; a publishing event runs at its own time, possibly with the physics ahead.
 """
@@ -33,6 +37,7 @@ import numpy as np
 from .build import LOOP_SENSOR_DIM, build
 from .bus import Bus
 from .clock import VirtualClock
+from .collisions import CollisionMonitor, check_start, check_supported
 from .config import TwinConfig
 from .controllers.firmware import make_firmware
 from .controllers.odometry import WheelOdometry
@@ -56,7 +61,8 @@ class TwinOptions:
     firmware: str = "faithful"
     world: str = "warehouse"
     seed: int = 0
-    start_xy_yaw: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    start_xy_yaw: tuple[float, float, float] | None = None  # x_m, y_m, yaw_rad; None: the world's own
+    # (amr_twin.worlds.default_start: the warehouse's is the west end of its central aisle, others the origin)
     settle_s: float = 0.5
     record_every_steps: int = 10  # time series at 100 Hz with 1 ms steps
     hall_jitter_us: float = 0.0
@@ -65,6 +71,8 @@ class TwinOptions:
     rosserial_loss_prob: float = 0.0
     check_every_s: float = 0.5  # divergence check period
     sensors: bool = False  # IMU (imu/data_raw, imu/mag) and LiDAR (scan) on the clock
+    stop_on_collision: bool = False  # halt the twin at the first collision (amr_twin.collisions)
+    faults: tuple = ()  # amr_twin.faults.Fault items, injected at their times
     firmware_params: object = field(default=None, compare=False)
 
 
@@ -72,12 +80,20 @@ class Twin:
     """The whole robot: build it, then :meth:`advance` it in simulated time."""
 
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
+        from .worlds import default_start
+
         self.cfg, self.options = cfg, options
-        built = build(cfg, options.world, options.start_xy_yaw)
+        start = options.start_xy_yaw if options.start_xy_yaw is not None else default_start(options.world)
+        self.start_xy_yaw = tuple(float(v) for v in start)
+        built = build(cfg, options.world, self.start_xy_yaw)
         self.urdf = built.urdf
         """The robot description as built (``/robot_description`` of a recording)."""
         self.physics = Physics(built.model)
+        where = (f"world {options.world}, start ({start[0]:g}, {start[1]:g}) m, "
+                 f"yaw {math.degrees(start[2]):g} deg")
+        check_start(self.physics, where)
         self.physics.settle(options.settle_s)
+        check_supported(self.physics, where)
         self.physics.data.time = 0.0
         self.dt_us = int(round(self.physics.timestep_s * US))
         self.t_phys_us = 0
@@ -107,7 +123,11 @@ class Twin:
         self.rolling = RollingResistance(self.physics, cfg)
         self.samplers: list = [self.rolling, self.plant.account_battery]
         """Callables ``f(t_us)`` run on the record grid while the physics steps (physics at ``t_us``):
-        the rolling resistance from the present loads, the battery, the sensors' samplers."""
+        the rolling resistance from the present loads, the battery, the collision monitor, the
+        sensors' samplers. One that returns True halts the twin there."""
+        self.halted = False
+        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision)
+        self.samplers.append(self.collisions)
         if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
             from .sensors.imu import ImuSensor
             from .sensors.lidar import Lidar
@@ -123,6 +143,10 @@ class Twin:
         self._next_check_us = int(options.check_every_s * US)
         for sampler in self.samplers:
             sampler(0)
+        self.faults = None
+        if options.faults:
+            from .fault_injector import FaultInjector
+            self.faults = FaultInjector(self, options.faults)
         self.firmware.start()
         self.plant.apply(self.firmware.pins)
         self.recorder.pins_changed(0)
@@ -151,12 +175,14 @@ class Twin:
         clock, fw, plant = self.clock, self.firmware, self.plant
         lookahead = self.bus.lookahead_us
         last_pins = None
-        while clock.now_us < t_end_us:
+        while clock.now_us < t_end_us and not self.halted:
             t_evt = min(clock.next_synced_event_us(), t_end_us, self._next_check_us)
             t_evt = clock.physics_horizon_us(t_evt, lookahead)
             if self.t_phys_us < t_evt:
                 nstep = -(-(t_evt - self.t_phys_us) // self.dt_us)
                 self._step_physics(nstep)
+                if self.halted:  # a sampler stopped the physics early
+                    t_evt = max(clock.now_us, min(t_evt, self.t_phys_us))
             self._deliver_edges(t_evt)
             clock.run_until(t_evt)
             pins = fw.pins
@@ -193,8 +219,14 @@ class Twin:
             rows.append(row)
             grid_t.append(t)
             grid_rows.append(row)
+            stop = False
             for sampler in samplers:
-                sampler(t)
+                if sampler(t):
+                    stop = True
+            if stop:
+                self.halted = True
+                k_end = k
+                break
         if k < k_end:
             step(m, d, k_end - k)
             k = k_end

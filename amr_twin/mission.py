@@ -12,6 +12,9 @@ Format (YAML)::
         motor: {wheel: left, direction: forward, speed_m_s: 0.3}
       - t_s: 4
         stop: {}
+    faults:                 # optional: KIND@T[:ARGS] as --fault (amr_twin/faults.py)
+      - hall-left-dead@3
+      - rosserial-loss@5:0.5,for=2
 
 Each step has ``t_s`` and exactly one command key. Unknown keys, missing or
 non-finite numbers raise :class:`MissionError` with a one-line message naming
@@ -22,6 +25,7 @@ the client refuses them at run time (code 1), as on the robot.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 from .run import KINDS, Command
@@ -86,13 +90,41 @@ def parse_step(index: int, step) -> tuple[float, Command]:
         raise MissionError(f"{where}.{kind}: {exc}") from None
 
 
+@dataclass(frozen=True)
+class Mission:
+    """A validated mission: its length, its timed commands and its fault specifications."""
+
+    duration_s: float
+    steps: list[tuple[float, Command]]
+    faults: tuple[str, ...] = ()
+
+
 def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
-    """A loaded mission mapping to ``(duration_s, [(t_s, Command), ...])``."""
+    """A loaded mission mapping to ``(duration_s, [(t_s, Command), ...])`` (see :func:`parse_mission_plan`)."""
+    plan = parse_mission_plan(tree)
+    return plan.duration_s, plan.steps
+
+
+def _faults(tree) -> tuple[str, ...]:
+    from .faults import FaultError, parse_faults
+
+    faults = tree.get("faults") or []
+    if not isinstance(faults, list) or not all(isinstance(f, str) for f in faults):
+        raise MissionError("faults: expected a list of KIND@T[:ARGS] strings, e.g. [hall-left-dead@3]")
+    try:
+        parse_faults(faults, where="faults")  # the run checks them again against its duration and sensors
+    except FaultError as exc:
+        raise MissionError(str(exc)) from None
+    return tuple(faults)
+
+
+def parse_mission_plan(tree) -> Mission:
+    """A loaded mission mapping to a :class:`Mission`."""
     if not isinstance(tree, dict):
         raise MissionError("mission: expected a mapping with duration_s and steps")
-    unknown = [k for k in tree if k not in ("duration_s", "steps")]
+    unknown = [k for k in tree if k not in ("duration_s", "steps", "faults")]
     if unknown:
-        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps)")
+        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps, faults)")
     if "duration_s" not in tree:
         raise MissionError("mission: duration_s is missing")
     duration_s = _number("duration_s", tree["duration_s"])
@@ -105,14 +137,20 @@ def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
     for i, (t_s, _) in enumerate(parsed):
         if not 0.0 <= t_s <= duration_s:
             raise MissionError(f"steps[{i}].t_s: {t_s} must lie in [0, {duration_s}] s")
-    return duration_s, sorted(parsed, key=lambda s: s[0])
+    return Mission(duration_s, sorted(parsed, key=lambda s: s[0]), _faults(tree))
 
 
-def load_mission(path: str | Path) -> tuple[float, list[tuple[float, Command]]]:
+def load_mission_file(path: str | Path) -> Mission:
     """Read and validate a mission YAML file."""
     path = Path(path)
     tree = read_yaml(path, "mission", MissionError)
     try:
-        return parse_mission(tree)
+        return parse_mission_plan(tree)
     except MissionError as exc:
-        raise MissionError(f"mission {path.name}: {exc}") from None
+        raise MissionError(f"mission {path}: {exc}") from None
+
+
+def load_mission(path: str | Path) -> tuple[float, list[tuple[float, Command]]]:
+    """Read and validate a mission YAML file: ``(duration_s, steps)``."""
+    plan = load_mission_file(path)
+    return plan.duration_s, plan.steps

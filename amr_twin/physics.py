@@ -55,6 +55,9 @@ class Physics:
         self.root_dof = m.jnt_dofadr[_id(m, J, "root")]
         self.wheel_qpos = np.array([m.jnt_qposadr[_id(m, J, f"wheel_{s}_joint")] for s in WHEELS])
         self.wheel_dof = np.array([m.jnt_dofadr[_id(m, J, f"wheel_{s}_joint")] for s in WHEELS])
+        self.wheel_joint = [_id(m, J, f"wheel_{s}_joint") for s in WHEELS]
+        self._wheel_limited = [int(m.jnt_limited[j]) for j in self.wheel_joint]
+        self._wheel_range = [m.jnt_range[j].copy() for j in self.wheel_joint]
         self._wheel_dof_l, self._wheel_dof_r = (int(v) for v in self.wheel_dof)
         self.caster_qpos = np.array([m.jnt_qposadr[_id(m, J, f"caster_{c}_joint")] for c in CASTERS])
         self.actuator = np.array([_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"motor_{s}") for s in WHEELS])
@@ -64,6 +67,8 @@ class Physics:
         self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
         self._support_lut = np.full(m.ngeom, -1, dtype=np.int64)
         self._support_lut[list(self.support_geoms.values())] = np.arange(len(self.support_geoms))
+        self._support_contype = {g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
+                                 for g in self.support_geoms.values()}
         self._drive_range = m.actuator_forcerange[self.actuator].copy()
         self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
         self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
@@ -185,6 +190,27 @@ class Physics:
             self.data.ctrl[a] = 0.0
         else:
             raise ValueError(f"mode must be drive, coast or brake, got {mode!r}")
+
+    # -- faults (amr_twin/fault_injector.py) --------------------------------------------
+    def jam_wheel(self, wheel: int, jammed: bool) -> None:
+        """Block ``wheel`` where it is (a joint limit of +-1 mrad around its angle), or free it.
+
+        A jammed hub or a stone in the wheel: it turns no further whatever the motor
+        or the ground do, until it is freed.
+        """
+        j = self.wheel_joint[wheel]
+        if jammed:
+            q = float(self.data.qpos[self.wheel_qpos[wheel]])
+            self.model.jnt_range[j] = (q - 1e-3, q + 1e-3)
+        self.model.jnt_limited[j] = 1 if jammed else self._wheel_limited[wheel]
+        if not jammed:
+            self.model.jnt_range[j] = self._wheel_range[wheel]
+
+    def lift_wheel(self, wheel: int, lifted: bool) -> None:
+        """Take ``wheel`` off the ground (its tyre touches nothing), or put it back."""
+        g = self.support_geoms[f"wheel_{WHEELS[wheel]}"]
+        contype, conaffinity = (0, 0) if lifted else self._support_contype[g]
+        self.model.geom_contype[g], self.model.geom_conaffinity[g] = contype, conaffinity
 
     def settle(self, duration_s: float = 1.0) -> None:
         """Let the robot come to rest on its wheels and casters (motors braked)."""

@@ -45,6 +45,7 @@ class Battery:
     cfg: BatteryCfg
     soc: float = field(init=False)
     current_a: float = 0.0
+    sag_v: float = 0.0  # fault injection (amr_twin/fault_injector.py): extra terminal-voltage drop, V
 
     def __post_init__(self) -> None:
         self.soc = self.cfg.soc_initial
@@ -58,7 +59,7 @@ class Battery:
 
     def terminal_v(self) -> float:
         """Terminal voltage under the present current, V."""
-        return self.ocv_v() - self.cfg.internal_resistance_ohm * self.current_a
+        return self.ocv_v() - self.cfg.internal_resistance_ohm * self.current_a - self.sag_v
 
     def draw(self, current_a: float, duration_s: float) -> None:
         """Drain ``current_a`` (negative: charge, regenerative braking) for ``duration_s``."""
@@ -108,6 +109,7 @@ class Plant:
         self.motors: tuple[MotorCfg, MotorCfg] = (cfg.motor_left, cfg.motor_right)
         self.battery = Battery(cfg.battery)
         self.estop = False
+        self.supply_cut = False  # fault injection (amr_twin/fault_injector.py): drivers unpowered, coast
         self.voltage_v = [0.0, 0.0]
         self.mode = ["coast", "coast"]
         self._t_last_s = physics.time_s
@@ -122,7 +124,7 @@ class Plant:
         """Set both motors from the pins (phase voltage from the battery's present terminal voltage)."""
         brake_limit_a = self.driver.brake_current_limit_a
         for w, p in enumerate(pins):
-            if self.estop or not p.enabled:
+            if self.estop or self.supply_cut or not p.enabled:
                 mode, volt = "coast", 0.0
             elif p.braking:
                 mode, volt = "brake", 0.0

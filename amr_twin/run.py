@@ -106,6 +106,9 @@ class RunResult:
     sim_s: float
     wall_s: float
     errors: list[str] = field(default_factory=list)
+    collisions: list[dict] = field(default_factory=list)  # amr_twin.collisions.Collision.as_dict()
+    halted: bool = False  # stopped at the first collision (TwinOptions.stop_on_collision)
+    faults: list[dict] = field(default_factory=list)  # injected faults and their effect
 
 
 def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s: float,
@@ -121,6 +124,8 @@ def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s:
     codes, errors, last = [], [], None
     for t_s, command in steps:
         twin.advance_to_us(int(round(t_s * 1e6)))
+        if twin.halted:  # stopped by a collision: the later commands are not sent
+            break
         code = command.send(twin)
         codes.append(code)
         if code != 0:
@@ -129,8 +134,11 @@ def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s:
             r = twin.client.last_request
             last = [r.motionL, r.speedL, r.motionR, r.speedR]
     twin.advance_to_us(int(round(duration_s * 1e6)))
-    return RunResult(commands=steps, codes=codes, wheel_command=last, series=twin.recorder.series(),
-                     sim_s=duration_s, wall_s=time.perf_counter() - wall0, errors=errors)
+    series = twin.recorder.series()
+    return RunResult(commands=steps[:len(codes)], codes=codes, wheel_command=last, series=series,
+                     sim_s=twin.t_s if twin.halted else duration_s, wall_s=time.perf_counter() - wall0,
+                     errors=errors, collisions=twin.collisions.as_dicts(), halted=twin.halted,
+                     faults=twin.faults.report(series) if twin.faults is not None else [])
 
 
 def run_command(cfg: TwinConfig, command: Command, duration_s: float,

@@ -17,13 +17,48 @@ consecutive rows are merged into one rectangle (never one geom per cell).
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import yaml
 
+from .paths import ROOT
+
 WALL_HEIGHT_M = 2.0
+WORLD_DIR = ROOT / "models" / "worlds"
+START_NUMERIC = "start_xy_yaw"
+"""Name of an MJCF ``<custom><numeric>`` holding a world's default start pose: x_m y_m yaw_rad."""
+
+
+def world_path(world: str | Path) -> Path:
+    """The file of ``world``: a name of ``models/worlds/`` (``warehouse``, ``empty``) or a path."""
+    path = Path(world)
+    return WORLD_DIR / f"{world}.xml" if not path.suffix else path
+
+
+def default_start(world: str | Path) -> tuple[float, float, float]:
+    """The world's start pose ``(x_m, y_m, yaw_rad)``: its ``start_xy_yaw`` numeric, else the origin.
+
+    Only MJCF worlds can declare one (``<custom><numeric name="start_xy_yaw" data="x y yaw"/>``);
+    a file that cannot be read gives the origin (the model build reports the error).
+    """
+    path = world_path(world)
+    if path.suffix.lower() != ".xml":
+        return (0.0, 0.0, 0.0)
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        return (0.0, 0.0, 0.0)
+    for numeric in root.iter("numeric"):
+        if numeric.get("name") == START_NUMERIC:
+            try:
+                x, y, yaw = (float(v) for v in (numeric.get("data") or "").split())
+            except ValueError:
+                break
+            return (x, y, yaw)
+    return (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
@@ -21,6 +22,56 @@ from .. import atomic_file
 
 EXECUTORS = ("local", "dask")
 SCHEDULER_TIMEOUT_S = 5.0  # default time to reach a Dask scheduler, s
+
+
+def usable_cores() -> int:
+    """CPU cores this process may run on (its affinity mask), >= 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def check_jobs(jobs: int | None) -> int:
+    """``--jobs``: None -> one worker per usable core; otherwise 1 .. usable cores, or ValueError.
+
+    Each worker is a process of its own (about 170 MB with MuJoCo loaded) that keeps
+    one core busy: more workers than cores only add memory and switching.
+    """
+    cores = usable_cores()
+    if jobs is None:
+        return cores
+    if not 1 <= jobs <= cores:
+        raise ValueError(f"--jobs {jobs}: must be in 1..{cores} on this machine ({cores} usable cores; each "
+                         "worker is a ~170 MB process simulating on one core, more only add memory)")
+    return jobs
+
+
+def _watch_parent(parent_pid: int) -> None:
+    """Pool worker start-up: die with the parent, even when it is killed outright (SIGKILL).
+
+    Linux: the kernel signals the worker when its parent dies (``PR_SET_PDEATHSIG``);
+    elsewhere a daemon thread polls the parent pid once a second.
+    """
+    import signal
+    import threading
+    import time
+
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        armed = libc.prctl(1, int(signal.SIGKILL), 0, 0, 0) == 0  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        armed = False
+    if os.getppid() != parent_pid:  # the parent died before the signal was armed
+        os._exit(1)
+    if not armed:
+        def poll() -> None:
+            while os.getppid() == parent_pid:
+                time.sleep(1.0)
+            os._exit(1)
+        threading.Thread(target=poll, name="parent-watch", daemon=True).start()
 
 
 class ExecutorError(RuntimeError):
@@ -50,12 +101,53 @@ def connect_dask(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S):
     except ImportError:
         raise ExecutorError("--executor dask: dask.distributed is not installed "
                             "(pip install 'amr-twin[dask]'), or use --executor local") from None
+    _probe_scheduler(address, timeout_s)
+    client = Client.__new__(Client)
     try:
-        return Client(address, timeout=f"{timeout_s}s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        client.__init__(address, timeout=f"{timeout_s}s", set_as_default=False)
+    except Exception as exc:  # noqa: BLE001 - whatever the far end did, one line
+        _discard(client)
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ExecutorError(f"--scheduler {address!r}: no Dask scheduler answered there within "
+                            f"{timeout_s:g} s ({type(exc).__name__}: {detail[:100]})") from None
+    return client
+
+
+def _discard(client) -> None:
+    """Stop a Client whose constructor failed, so that its finaliser does not block for 10 s."""
+    import contextlib
+
+    with contextlib.suppress(Exception):
+        client.status = "closed"
+    with contextlib.suppress(Exception):
+        client._loop_runner.stop()
+
+
+def _probe_scheduler(address: str, timeout_s: float) -> None:
+    """Open (and close) a TCP connection to a ``tcp://`` scheduler before Dask does.
+
+    A refused, unresolvable or malformed address is reported in one line at once,
+    before Dask's own retries.
+    """
+    import socket
+
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme not in ("tcp", "tls"):
+            return
+        host, port = parse_host_port(location)
+    except (ValueError, TypeError) as exc:
+        raise ExecutorError(f"--scheduler {address!r}: not a scheduler address, e.g. tcp://10.0.0.5:8786 "
+                            f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout_s).close()
+    except OSError as exc:
+        reason = "timed out" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc) or type(exc).__name__)
         raise ExecutorError(f"--scheduler {address!r}: cannot reach the Dask scheduler within "
-                            f"{timeout_s:g} s ({detail})") from None
+                            f"{timeout_s:g} s ({reason})") from None
 
 
 def _dask_results(client, func: Callable[[Any], Any], items: list) -> Iterator[tuple[Any, Any]]:
@@ -109,7 +201,8 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
                 yield item, result
             return
         context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=min(jobs, len(items)), mp_context=context) as pool:
+        with ProcessPoolExecutor(max_workers=min(jobs, len(items)), mp_context=context,
+                                 initializer=_watch_parent, initargs=(os.getpid(),)) as pool:
             futures = {pool.submit(func, item): item for item in items}
             try:
                 for future in as_completed(futures):

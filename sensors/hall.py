@@ -24,6 +24,9 @@ SENSOR_SPACING_DEG = 4.0
 N_SENSORS = 3
 """Ha, Hb, Hc."""
 
+GLITCH_WIDTH_US = 20
+"""Width of a spurious pulse on the SC line (a chattering hall sensor), microseconds."""
+
 
 class HallSensors:
     """Hall sensors Ha/Hb/Hc and the SC output of every wheel's driver.
@@ -53,6 +56,10 @@ class HallSensors:
         self.jitter_us = float(jitter_us)
         self._rng = np.random.default_rng(seed)
         self._count = np.zeros((self.n_wheels, N_SENSORS), dtype=np.int64)
+        # fault injection (amr_twin/fault_injector.py): stuck sensors, glitches on the SC line
+        self.stuck = [[False] * N_SENSORS for _ in range(self.n_wheels)]
+        self.glitch_rate_hz = [0.0] * self.n_wheels
+        self._glitch_rng = np.random.default_rng([0 if seed is None else seed, 3])
 
     def _lattice_index(self, angle_rad: np.ndarray) -> np.ndarray:
         """Toggle count of every sensor, shape ``angle_rad.shape + (3,)``."""
@@ -173,6 +180,8 @@ class HallSensors:
         edges: list[tuple[int, int]] = []
         for w in range(nw):
             for k, off in enumerate(offsets[w]):
+                if self.stuck[w][k]:
+                    continue
                 count = floor((rows[0][w] - off) / pitch)
                 for i in range(len(ts) - 1):
                     q1 = rows[i + 1][w]
@@ -191,8 +200,36 @@ class HallSensors:
                         edges.append((min(t_last, max(t_first, int(round(t)))), w))
                     count = c1
                 self._count[w, k] = count
+            if self.glitch_rate_hz[w] > 0.0:
+                edges.extend(self._glitches(w, t_first, t_last))
         edges.sort(key=lambda e: e[0])
         return edges
+
+    def set_stuck(self, wheel: int, sensor: int, stuck: bool, angle_rad: float) -> None:
+        """Freeze hall ``sensor`` (0 Ha, 1 Hb, 2 Hc) of ``wheel``, or free it again.
+
+        A stuck sensor never toggles: the SC line loses its changes. Freed, it takes
+        the level of the present wheel angle ``angle_rad`` without an edge.
+        """
+        self.stuck[wheel][sensor] = bool(stuck)
+        if not stuck:
+            self._count[wheel, sensor] = math.floor((angle_rad - self.offset_rad[wheel, sensor]) / self.pitch_rad)
+
+    def _glitches(self, wheel: int, t_first: int, t_last: int) -> list[tuple[int, int]]:
+        """Spurious SC pulses of ``wheel`` in [t_first, t_last] us: Poisson at ``glitch_rate_hz``.
+
+        Each glitch is a pulse, two changes :data:`GLITCH_WIDTH_US` apart (EMI on the line).
+        """
+        span_us = t_last - t_first
+        if span_us <= 0:
+            return []
+        rng = self._glitch_rng
+        n = int(rng.poisson(self.glitch_rate_hz[wheel] * span_us * 1e-6))
+        out = []
+        for t in sorted(rng.integers(t_first, t_last + 1, n).tolist()):
+            out.append((t, wheel))
+            out.append((min(t_last, t + GLITCH_WIDTH_US), wheel))
+        return out
 
 
 def _solve_hermite(q0: float, q1: float, m0: float, m1: float, theta: float) -> float:

@@ -1,0 +1,245 @@
+"""Contacts of the robot with the world: detected, reported, and checked before a run.
+
+A *collision* is any contact between a geom of the robot and a geom of the world
+other than a wheel or a caster ball standing on the floor (a plane or height
+field, or an upward-facing surface: contact normal within :data:`SUPPORT_TILT_DEG`
+of vertical). The chassis touching a rack, a wheel rubbing a wall and the robot
+lying on the floor after tipping over are collisions.
+
+:class:`CollisionMonitor` is a grid sampler of the loop (:attr:`amr_twin.loop.Twin.samplers`):
+on every record-grid instant (10 ms) it reads MuJoCo's contact list of the last
+physics step. The pairs in contact rarely change, so the common case costs one
+read of the geom pairs and a list comparison (about 3 us); the pairs are only
+classified when the set changes. Contact with one world geom is one
+:class:`Collision` episode, from the first instant it is seen to the last, with
+the robot parts involved and the peak normal force; a contact lost for less than
+:data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
+the loop to stop at the first collision.
+
+:func:`check_start` refuses a start pose where the robot overlaps the world, and
+:func:`check_supported` one where nothing holds it up (a world without a floor).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+SUPPORT_TILT_DEG = 30.0
+"""A wheel or caster contact whose normal is within this angle of vertical is standing, deg."""
+
+MERGE_GAP_S = 0.1
+"""Contact with the same world geom lost for less than this continues the episode, s."""
+
+_FLOOR_TYPES = (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD)
+_IGNORE, _COLLIDE, _BY_NORMAL = 0, 1, 2
+
+
+class StartPoseError(ValueError):
+    """The robot cannot start where asked (inside an obstacle, nothing under it); one line."""
+
+
+@dataclass
+class Collision:
+    """One contact episode between the robot and a world geom.
+
+    ``t_s``/``x_m``/``y_m``/``z_m``: time and world position of the first contact
+    point; ``until_s``: last instant it was seen; ``hit``: the world geom's name;
+    ``robot_parts``: the robot bodies that touched it; ``robot_pose``: base pose
+    (x_m, y_m, yaw_rad) at the first contact; ``peak_force_n``: largest normal
+    contact force seen, N.
+    """
+
+    t_s: float
+    x_m: float
+    y_m: float
+    z_m: float
+    hit: str
+    robot_parts: list[str]
+    robot_pose: tuple[float, float, float]
+    until_s: float = 0.0
+    peak_force_n: float = 0.0
+    _last_us: int = field(default=0, repr=False)
+
+    def as_dict(self) -> dict:
+        """JSON-ready form (times s, positions m, force N)."""
+        x, y, yaw = self.robot_pose
+        return {"t_s": round(self.t_s, 4), "until_s": round(self.until_s, 4), "hit": self.hit,
+                "robot_parts": list(self.robot_parts),
+                "x_m": round(self.x_m, 4), "y_m": round(self.y_m, 4), "z_m": round(self.z_m, 4),
+                "robot_pose": {"x_m": round(x, 4), "y_m": round(y, 4), "yaw_rad": round(yaw, 4)},
+                "peak_force_n": round(self.peak_force_n, 2)}
+
+    def describe(self) -> str:
+        """One line: when, what hit what, where."""
+        parts = ", ".join(self.robot_parts)
+        return (f"collision at t = {self.t_s:.2f} s: {parts} hit {self.hit} at ({self.x_m:.2f}, {self.y_m:.2f}) m, "
+                f"robot at ({self.robot_pose[0]:.2f}, {self.robot_pose[1]:.2f}) m, "
+                f"until {self.until_s:.2f} s, peak force {self.peak_force_n:.0f} N")
+
+
+def _name(m: mujoco.MjModel, kind: mujoco.mjtObj, i: int, fallback: str) -> str:
+    return mujoco.mj_id2name(m, kind, i) or fallback
+
+
+class GeomRoles:
+    """Which geoms are the robot's, which support it, which are floors; names for reports."""
+
+    def __init__(self, physics):
+        m = self.model = physics.model
+        root = m.body_rootid[physics.base_body]
+        self.robot = m.body_rootid[m.geom_bodyid] == root          # (ngeom,) bool
+        self.support = np.zeros(m.ngeom, bool)
+        self.support[list(physics.support_geoms.values())] = True
+        self.floor = np.isin(m.geom_type, _FLOOR_TYPES) & ~self.robot
+        self._pair: dict[tuple[int, int], int] = {}
+
+    def kind(self, g1: int, g2: int) -> int:
+        """_IGNORE, _COLLIDE or _BY_NORMAL (a support geom on a non-floor world geom)."""
+        key = (g1, g2)
+        k = self._pair.get(key)
+        if k is None:
+            r1, r2 = bool(self.robot[g1]), bool(self.robot[g2])
+            if r1 == r2:
+                k = _IGNORE  # world-world, or the robot with itself
+            else:
+                part, other = (g1, g2) if r1 else (g2, g1)
+                if self.support[part]:
+                    k = _IGNORE if self.floor[other] else _BY_NORMAL
+                else:
+                    k = _COLLIDE
+            self._pair[key] = k
+        return k
+
+    def robot_part(self, g: int) -> str:
+        """The robot body of geom ``g``, without the ``amr/`` prefix (``base_link``, ``wheel_left_link``)."""
+        m = self.model
+        return _name(m, mujoco.mjtObj.mjOBJ_BODY, m.geom_bodyid[g], f"body {m.geom_bodyid[g]}").removeprefix("amr/")
+
+    def world_name(self, g: int) -> str:
+        """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed."""
+        m = self.model
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)
+        if name:
+            return name
+        body = m.geom_bodyid[g]
+        return f"geom {g}" + (f" of body {_name(m, mujoco.mjtObj.mjOBJ_BODY, body, str(body))}" if body else "")
+
+
+_COS_SUPPORT = math.cos(math.radians(SUPPORT_TILT_DEG))
+
+
+def collision_contacts(roles: GeomRoles, data: mujoco.MjData, pairs: list | None = None):
+    """Contacts of the last step that are collisions.
+
+    Returns ``(hits, by_normal)``: ``hits`` lists ``(contact index, robot geom, world
+    geom)``; ``by_normal`` is True when a wheel or caster stands on a world geom other
+    than a floor (its verdict depends on the contact normal, so it may change while
+    the pairs stay the same).
+    """
+    out, by_normal = [], False
+    if data.ncon == 0:
+        return out, by_normal
+    if pairs is None:
+        pairs = data.contact.geom.tolist()
+    for i, (g1, g2) in enumerate(pairs):
+        k = roles.kind(g1, g2)
+        if k == _IGNORE:
+            continue
+        if k == _BY_NORMAL:
+            by_normal = True
+            if abs(float(data.contact.frame[i][2])) >= _COS_SUPPORT:
+                continue
+        robot_g, world_g = (g1, g2) if roles.robot[g1] else (g2, g1)
+        out.append((i, robot_g, world_g))
+    return out, by_normal
+
+
+class CollisionMonitor:
+    """Grid sampler that records the robot's collisions (see the module notes).
+
+    Parameters
+    ----------
+    physics : amr_twin.physics.Physics
+    stop : bool
+        Ask the loop to stop at the first collision (the sampler returns True).
+    """
+
+    def __init__(self, physics, stop: bool = False):
+        self.physics, self.stop = physics, stop
+        self.roles = GeomRoles(physics)
+        self.collisions: list[Collision] = []
+        self._open: dict[int, Collision] = {}  # world geom -> its episode
+        self._last_pairs: list | None = None
+        self._force = np.zeros(6)
+
+    def __call__(self, t_us: int) -> bool:
+        """Grid instant ``t_us``: physics is there. True asks the loop to stop."""
+        d = self.physics.data
+        pairs = d.contact.geom.tolist() if d.ncon else []
+        if pairs == self._last_pairs:
+            return False  # the same contacts as last time, none of them a collision
+        hits, by_normal = collision_contacts(self.roles, d, pairs)
+        for i, robot_g, world_g in hits:
+            self._touch(t_us, i, robot_g, world_g)
+        self._close_stale(t_us)
+        # cache only a verdict that cannot change while the pairs stay the same
+        self._last_pairs = pairs if not (hits or by_normal or self._open) else None
+        return bool(hits) and self.stop
+
+    def _touch(self, t_us: int, i: int, robot_g: int, world_g: int) -> None:
+        m, d = self.physics.model, self.physics.data
+        mujoco.mj_contactForce(m, d, i, self._force)
+        force = abs(float(self._force[0]))
+        part = self.roles.robot_part(robot_g)
+        ep = self._open.get(world_g)
+        if ep is None:
+            pos = d.contact.pos[i]
+            pose = self.physics.pose()
+            ep = Collision(t_us * 1e-6, float(pos[0]), float(pos[1]), float(pos[2]),
+                           self.roles.world_name(world_g), [part], (pose.x_m, pose.y_m, pose.yaw_rad),
+                           until_s=t_us * 1e-6)
+            self._open[world_g] = ep
+            self.collisions.append(ep)
+        elif part not in ep.robot_parts:
+            ep.robot_parts.append(part)
+        ep._last_us = t_us
+        ep.until_s = t_us * 1e-6
+        ep.peak_force_n = max(ep.peak_force_n, force)
+
+    def _close_stale(self, t_us: int) -> None:
+        gap_us = int(MERGE_GAP_S * 1e6)
+        for g in [g for g, ep in self._open.items() if t_us - ep._last_us > gap_us]:
+            del self._open[g]
+
+    def as_dicts(self) -> list[dict]:
+        return [c.as_dict() for c in self.collisions]
+
+
+def check_start(physics, where: str) -> None:
+    """Raise :class:`StartPoseError` if the robot overlaps the world where it was placed.
+
+    ``physics`` has just been built (``mj_forward`` ran: the contacts are those of
+    the start pose); ``where`` names the pose for the message.
+    """
+    roles = GeomRoles(physics)
+    mujoco.mj_forward(physics.model, physics.data)
+    hits, _ = collision_contacts(roles, physics.data)
+    if hits:
+        names = sorted({roles.world_name(w) for _i, _r, w in hits})
+        raise StartPoseError(f"{where}: the robot overlaps {', '.join(names)} there; "
+                             "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
+
+
+def check_supported(physics, where: str) -> None:
+    """Raise :class:`StartPoseError` if no wheel or caster touches anything after settling."""
+    d = physics.data
+    support = set(physics.support_geoms.values())
+    touching = any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist()) if d.ncon else False
+    if not touching:
+        z = float(physics.data.qpos[physics.root_qpos + 2])
+        raise StartPoseError(f"{where}: nothing holds the robot up (no wheel or caster touches the ground "
+                             f"after settling, base at z = {z:.2f} m): the world has no floor there")

@@ -1,0 +1,151 @@
+"""Inject parsed faults (:mod:`amr_twin.faults`) into a running :class:`~amr_twin.loop.Twin`.
+
+Each fault is a synced clock event at its time (the physics is brought to that
+instant first) and, with ``for=S``, another that clears it. The effects go
+through small hooks of the components, so that no component knows about faults:
+
+=================  ================================================================
+hall-dead          ``HallSensors.set_stuck`` (sensors/hall.py): no SC changes
+hall-chatter       ``HallSensors.glitch_rate_hz``: spurious SC pulses
+motor-stall        ``Physics.jam_wheel``: a dry-friction torque on the axle
+wheel-lifted       ``Physics.lift_wheel``: the tyre's contacts switched off
+rosserial-*        ``RosserialLink.loss_prob`` / ``extra_latency_us``
+lidar-dead         ``Bus.intercept("scan")``: every scan dropped
+imu-stuck          ``Bus.intercept("imu/...")``: the last sample repeated, new stamps
+battery-sag        ``Battery.sag_v`` (plant.py): the terminal voltage lowered
+battery-cut        ``Plant.supply_cut``: the drivers unpowered, the wheels coast
+estop              ``Plant.set_estop``: the relays open the phases
+=================  ================================================================
+
+:meth:`FaultInjector.report` measures what each fault did from the run's series.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .faults import WHEEL_NAMES, Fault
+
+US = 1_000_000
+WINDOW_S = 0.5
+"""Averaging window of the speeds before a fault and at the end of the run, s."""
+
+
+class FaultInjector:
+    """Schedules and applies ``faults`` on ``twin`` (built by the twin when ``TwinOptions.faults`` is set)."""
+
+    def __init__(self, twin, faults: tuple[Fault, ...]):
+        self.twin = twin
+        self.faults = tuple(faults)
+        self._saved: dict[int, object] = {}
+        self._last: dict[str, object] = {}        # last IMU messages published (imu-stuck)
+        self._times: dict[str, list[int]] = {}     # publication times of the sensor topics
+        if any(f.kind in ("imu-stuck", "lidar-dead") for f in self.faults):
+            twin.bus.add_tap(self._tap)
+        for i, fault in enumerate(self.faults):
+            twin.clock.schedule(int(round(fault.t_s * US)), lambda i=i: self._set(i, True))
+            if fault.until_s is not None:
+                twin.clock.schedule(int(round(fault.until_s * US)), lambda i=i: self._set(i, False))
+
+    def _tap(self, topic: str, msg, t_us: int) -> None:
+        if topic in ("imu/data_raw", "imu/mag", "scan"):
+            self._times.setdefault(topic, []).append(t_us)
+            self._last[topic] = msg
+
+    # -- apply / clear ------------------------------------------------------------------
+    def _set(self, i: int, on: bool) -> None:
+        fault, twin = self.faults[i], self.twin
+        w = fault.wheel
+        if fault.kind == "hall-dead":
+            sensors = range(3) if fault.value == "all" else ["abc".index(fault.value)]
+            angle = float(twin.physics.wheel_angles_rad()[w])
+            for k in sensors:
+                twin.hall.set_stuck(w, k, on, angle)
+        elif fault.kind == "hall-chatter":
+            twin.hall.glitch_rate_hz[w] = float(fault.value) if on else 0.0
+        elif fault.kind == "motor-stall":
+            twin.physics.jam_wheel(w, float(fault.value) if on else None)
+        elif fault.kind == "wheel-lifted":
+            twin.physics.lift_wheel(w, on)
+        elif fault.kind == "rosserial-loss":
+            self._swap(i, on, twin.link, "loss_prob", float(fault.value))
+        elif fault.kind == "rosserial-latency":
+            self._swap(i, on, twin.link, "extra_latency_us", int(round(float(fault.value) * 1000)))
+        elif fault.kind == "lidar-dead":
+            twin.bus.intercept("scan", (lambda msg: None) if on else None)
+        elif fault.kind == "imu-stuck":
+            for topic in ("imu/data_raw", "imu/mag"):
+                held = self._last.get(topic)
+                twin.bus.intercept(topic, _repeat(held) if on and held is not None else None)
+        elif fault.kind in ("battery-sag", "battery-cut", "estop"):
+            plant = twin.plant
+            if fault.kind == "battery-sag":
+                headroom = plant.battery.ocv_v() - 1.0  # the drivers never see a negative supply
+                plant.battery.sag_v = min(float(fault.value), headroom) if on else 0.0
+                plant.apply(twin.firmware.pins)
+            elif fault.kind == "battery-cut":
+                plant.supply_cut = on
+                plant.apply(twin.firmware.pins)
+            else:
+                plant.set_estop(on, twin.firmware.pins)
+            twin.recorder.pins_changed(twin.t_phys_us)
+
+    def _swap(self, i: int, on: bool, obj, attr: str, value) -> None:
+        if on:
+            self._saved[i] = getattr(obj, attr)
+            setattr(obj, attr, value)
+        else:
+            setattr(obj, attr, self._saved.pop(i))
+
+    # -- report ---------------------------------------------------------------------------
+    def report(self, series) -> list[dict]:
+        """Each fault (:meth:`Fault.describe`) with ``effect``: what the wheels and sensors did.
+
+        Per wheel: mean true speed in the :data:`WINDOW_S` before the fault and at the
+        end of the run, the largest true speed after the fault (RPM, signed +
+        forward), the wheel speeds the firmware published after the fault (count and
+        last value) and the PWM counts at the end. For the robot: the distance it
+        travelled after the fault, m. For sensor faults: the messages published after it.
+        """
+        t = series.t_s
+        out = []
+        for fault in self.faults:
+            after = t >= fault.t_s
+            before = (t < fault.t_s) & (t >= fault.t_s - WINDOW_S)
+            end = t >= t[-1] - WINDOW_S
+            wheels = {}
+            for w, name in enumerate(WHEEL_NAMES):
+                rpm = series.true_rpm[:, w]
+                pub = series.published[w]
+                pub_after = pub[pub[:, 0] >= fault.t_s] if len(pub) else pub
+                peak = rpm[after][np.argmax(np.abs(rpm[after]))] if after.any() else float("nan")
+                wheels[name] = {
+                    "true_rpm_before": _mean(rpm[before]), "true_rpm_end": _mean(rpm[end]),
+                    "true_rpm_peak_after": round(float(peak), 3),
+                    "published_after": int(len(pub_after)),
+                    "last_published_rpm": round(float(pub[-1, 1]), 3) if len(pub) else None,
+                    "last_published_t_s": round(float(pub[-1, 0]), 4) if len(pub) else None,
+                    "pwm_counts_end": int(series.pwm_counts[-1, w]),
+                }
+            xy = series.pose[after, :2]
+            effect = {"wheels": wheels,
+                      "moved_after_m": round(float(np.sum(np.hypot(*np.diff(xy, axis=0).T))), 4) if len(xy) > 1 else 0.0}
+            for topic in ("scan", "imu/data_raw"):
+                if topic in self._times:
+                    times = np.array(self._times[topic]) * 1e-6
+                    effect[f"{topic}_published_after"] = int(np.sum(times >= fault.t_s))
+            out.append(dict(fault.describe(), effect=effect))
+        return out
+
+
+def _mean(values: np.ndarray):
+    return round(float(np.mean(values)), 3) if len(values) else None
+
+
+def _repeat(held):
+    """An interception that publishes ``held``'s values under each new message's header."""
+    def stuck(msg):
+        return dataclasses.replace(held, header=msg.header)
+    return stuck

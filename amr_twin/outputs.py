@@ -1,0 +1,105 @@
+"""Output paths checked before any simulation: a bad path costs one line, not the run.
+
+Each command checks every file and folder it will write before it builds the
+model: the target is not a folder (for a file) or a file (for a folder), no file
+stands where a folder of its path should be, the nearest existing folder accepts
+a new file (probed by creating and deleting one: read-only mounts and permissions
+are caught, whatever ``os.access`` says), and no two outputs name the same path.
+The temporaries that killed runs left for the same targets are removed
+(:func:`amr_twin.atomic_file.remove_stale_temporaries`). Nothing is created: the
+folders are made when the files are written.
+
+Failures raise :class:`OutputError` (a ``ValueError``) with one line naming the
+option and the path; the CLI prints it and exits 2.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from .atomic_file import remove_stale_temporaries
+
+
+class OutputError(ValueError):
+    """An output path cannot be written; one line naming the option and the path."""
+
+
+def _nearest_existing(path: Path) -> Path:
+    for parent in [path, *path.parents]:
+        if parent.exists():
+            return parent
+    return Path(".")
+
+
+def _probe(option: str, path: Path, folder: Path) -> None:
+    """Create and delete a file in ``folder``, or raise OutputError."""
+    try:
+        fd, name = tempfile.mkstemp(prefix=".amr-twin-probe.", dir=folder)
+        os.close(fd)
+        os.unlink(name)
+    except OSError as exc:
+        raise OutputError(f"{option} {path}: cannot write in {folder} ({exc.strerror or exc})") from None
+
+
+def _parent_folder(option: str, path: Path) -> Path:
+    """The nearest existing ancestor folder of ``path`` (a file in the way is an error)."""
+    existing = _nearest_existing(path.parent)
+    if not existing.is_dir():
+        raise OutputError(f"{option} {path}: {existing} is a file, not a folder")
+    return existing
+
+
+def check_file(option: str, path: Path | str) -> Path:
+    """A file output: writable, not a folder, not a device; its stale temporaries removed."""
+    path = Path(path)
+    if path.name in ("", ".", ".."):
+        raise OutputError(f"{option} {path}: give a file name")
+    if path.is_dir():
+        raise OutputError(f"{option} {path}: is a folder; give a file name")
+    if path.exists() and not path.is_file():
+        raise OutputError(f"{option} {path}: exists and is not a regular file")
+    folder = _parent_folder(option, path)
+    _probe(option, path, folder)
+    if folder == path.parent:
+        remove_stale_temporaries(folder, path.name)
+    return path
+
+
+def check_folder(option: str, path: Path | str) -> Path:
+    """A folder output (files written inside): writable, not a file; stale temporaries inside removed."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputError(f"{option} {path}: exists and is not a folder")
+    folder = path if path.is_dir() else _parent_folder(option, path)
+    _probe(option, path, folder)
+    if folder == path:
+        remove_stale_temporaries(path)
+    return path
+
+
+def check_distinct(outputs: dict[str, Path | str | None]) -> None:
+    """Refuse two options naming the same path (or one inside the other's folder)."""
+    seen: dict[Path, str] = {}
+    for option, path in outputs.items():
+        if path is None:
+            continue
+        resolved = Path(path).resolve()
+        for other_path, other in seen.items():
+            if resolved == other_path:
+                raise OutputError(f"{other} and {option} both name {path}: give each output its own path")
+        seen[resolved] = option
+
+
+def check_outputs(files: dict[str, Path | str | None] | None = None,
+                  folders: dict[str, Path | str | None] | None = None) -> None:
+    """Check file and folder outputs (option -> path, None = not given) and that they differ."""
+    files, folders = files or {}, folders or {}
+    for option, path in files.items():
+        if path is not None:
+            check_file(option, path)
+    for option, path in folders.items():
+        if path is not None:
+            check_folder(option, path)
+    check_distinct({**files, **folders})

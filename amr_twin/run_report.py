@@ -1,0 +1,169 @@
+"""What ``amr-twin run`` prints and writes: the ``--json`` summary, the text lines, the ``--csv`` table."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .recorder import RunSeries
+
+CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_right",
+               "true_rpm_left", "true_rpm_right", "pwm_counts_left", "pwm_counts_right",
+               "x_m", "y_m", "yaw_rad", "odom_x_m", "odom_y_m", "odom_yaw_rad",
+               "current_a_left", "current_a_right", "battery_a", "battery_v")
+"""Columns of ``--csv``: references signed (motion x speed), published RPM as on
+wheelN_Vel (magnitude, held between samples, 0 before the first), true signed RPM,
+analogWrite counts, true pose (world) and odometry pose (odom frame, held), each
+motor's (phase) current (+ driving forward), the battery's current and voltage."""
+
+
+def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before: float = 0.0) -> np.ndarray:
+    """Zero-order hold of samples (t_sample, values) at ``t_query``."""
+    idx = np.searchsorted(t_sample, t_query, side="right") - 1
+    out = np.where(idx >= 0, values[np.clip(idx, 0, None)] if len(values) else before, before)
+    return out.astype(float)
+
+
+def series_table(series: RunSeries) -> np.ndarray:
+    """The ``--csv`` table, shape (n, len(CSV_COLUMNS))."""
+    t = series.t_s
+    cmd_t = np.array([c[0] for c in series.commands], float)
+    cmd = np.array([c[1] for c in series.commands], float).reshape(-1, 4)
+    ref = [_held(t, cmd_t, cmd[:, 0] * cmd[:, 1]), _held(t, cmd_t, cmd[:, 2] * cmd[:, 3])]
+    pub = [_held(t, series.published[w][:, 0], series.published[w][:, 1]) for w in (0, 1)]
+    odom = [_held(t, series.odom[:, 0], series.odom[:, k]) for k in (1, 2, 3)]
+    return np.column_stack([t, *ref, *pub, series.true_rpm, series.pwm_counts, series.pose, *odom,
+                            series.current_a, series.battery_a, series.battery_v])
+
+
+def csv_text(series: RunSeries) -> str:
+    """The ``--csv`` file: a header of :data:`CSV_COLUMNS`, one row per 10 ms."""
+    rows = series_table(series)
+    lines = [",".join(CSV_COLUMNS)]
+    lines += [",".join(f"{v:.9g}" for v in row) for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def _clean(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
+def _step_metrics(series: RunSeries, wheel: int, reference_rpm: float) -> dict:
+    """Step metrics of a wheel's published speed."""
+    from .metrics import step_info
+
+    pub = series.published[wheel]
+    if reference_rpm == 0.0 or len(pub) < 2:
+        return {}
+    info = step_info(pub[:, 0], pub[:, 1], reference_rpm)
+    return info.as_dict() if hasattr(info, "as_dict") else dataclasses.asdict(info)
+
+
+def summary(result, single: bool, start_xy_yaw=None) -> dict:
+    """The ``--json`` object of a run.
+
+    ``collisions``: every contact episode of the robot's body with the world
+    (:meth:`amr_twin.collisions.Collision.as_dict`); ``stopped_by_collision``: the run
+    ended at the first one (``--stop-on-collision``); ``faults``: each injected fault
+    with its effect (:meth:`amr_twin.fault_injector.FaultInjector.report`).
+    """
+    series, wc = result.series, result.wheel_command
+    code = next((c for c in result.codes if c != 0), 0)
+    last_s = series.t_s >= series.t_s[-1] - 1.0  # "final" electrical values: the last second
+    wheels = {}
+    for w, name in enumerate(("left", "right")):
+        reference = wc[2 * w + 1] if wc else 0.0
+        pub = series.published[w]
+        entry = {"motion": int(wc[2 * w]) if wc else 0, "reference_rpm": reference,
+                 "final_rpm": float(pub[-1, 1]) if len(pub) else 0.0,
+                 "true_final_rpm": float(series.true_rpm[-1, w]), "samples": int(len(pub)),
+                 "current_a_final": float(series.current_a[last_s, w].mean()),
+                 "current_a_peak": float(np.abs(series.current_a[:, w]).max())}
+        if single:
+            entry.update(_step_metrics(series, w, reference))
+        wheels[name] = entry
+    commands = [dict(c.describe(), t_s=t) for t, c in result.commands]
+    x, y, yaw = (float(v) for v in series.pose[-1])
+    odom = series.odom[-1, 1:] if len(series.odom) else np.zeros(3)
+    out = {
+        "command": (commands[0] if commands else None) if single else commands, "wheel_command": wc,
+        "code": code, "codes": result.codes, "errors": result.errors, "wheels": wheels,
+        "final_pose": {"x_m": x, "y_m": y, "yaw_rad": yaw},
+        "final_odom_pose": {"x_m": float(odom[0]), "y_m": float(odom[1]), "yaw_rad": float(odom[2])},
+        "battery": _battery_summary(series),
+        "collisions": result.collisions, "stopped_by_collision": result.halted,
+        "faults": result.faults, "sim_s": result.sim_s, "wall_s": result.wall_s}
+    if start_xy_yaw is not None:
+        sx, sy, syaw = start_xy_yaw
+        out["start_pose"] = {"x_m": sx, "y_m": sy, "yaw_rad": syaw}
+    return _clean(out)
+
+
+def _battery_summary(series: RunSeries) -> dict:
+    """The pack over the run: mean current, final voltage, energy drawn and per metre driven."""
+    power = series.battery_v * series.battery_a
+    energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(series.t_s)))
+    distance = float(np.sum(np.hypot(*np.diff(series.pose[:, :2], axis=0).T)))
+    return {"battery_a_mean": float(series.battery_a.mean()), "battery_v_final": float(series.battery_v[-1]),
+            "energy_j": energy, "distance_m": distance,
+            "energy_j_per_m": energy / distance if distance > 0.05 else None}
+
+
+def text_lines(result, info: dict) -> list[str]:
+    """The plain-text report of a run (stdout without ``--json``)."""
+    lines = []
+    wc = result.wheel_command
+    if wc:
+        lines.append(f"wheel_Command [{wc[0]:g}, {wc[1]:.5f}, {wc[2]:g}, {wc[3]:.5f}]")
+    for name, entry in info["wheels"].items():
+        lines.append(f"{name:5s} reference {entry['reference_rpm']:8.3f} RPM, published {entry['final_rpm']:8.3f} RPM, "
+                     f"true {entry['true_final_rpm']:8.3f} RPM")
+    for fault in info["faults"]:
+        until = f" until {fault['until_s']:g} s" if fault["until_s"] is not None else ""
+        lines.append(f"fault {fault['kind']} at {fault['t_s']:g} s{until}: " + _fault_effect(fault))
+    for c in info["collisions"]:
+        lines.append(_collision_line(c))
+    if not info["collisions"]:
+        lines.append("no collision")
+    pose = info["final_pose"]
+    lines.append(f"pose x {pose['x_m']:.3f} m, y {pose['y_m']:.3f} m, yaw {pose['yaw_rad']:.3f} rad "
+                 f"after {result.sim_s:g} s simulated ({result.wall_s:.2f} s wall)"
+                 + (", stopped by the collision" if result.halted else ""))
+    return lines
+
+
+def _fault_effect(fault: dict) -> str:
+    wheels = fault["effect"]["wheels"]
+    parts = []
+    for name, w in wheels.items():
+        parts.append(f"{name} true {w['true_rpm_before'] if w['true_rpm_before'] is not None else float('nan'):.1f} -> "
+                     f"{w['true_rpm_end'] if w['true_rpm_end'] is not None else float('nan'):.1f} RPM, "
+                     f"{w['published_after']} published after")
+    return "; ".join(parts) + f"; moved {fault['effect']['moved_after_m']:.2f} m after"
+
+
+def _collision_line(c: dict) -> str:
+    pose = c["robot_pose"]
+    return (f"collision at t = {c['t_s']:.2f} s: {', '.join(c['robot_parts'])} hit {c['hit']} at "
+            f"({c['x_m']:.2f}, {c['y_m']:.2f}) m, robot at ({pose['x_m']:.2f}, {pose['y_m']:.2f}) m; "
+            f"in contact until {c['until_s']:.2f} s, peak force {c['peak_force_n']:.0f} N")
+
+
+def collision_warning(info: dict) -> str | None:
+    """One stderr line when the run had collisions (also with ``--json``)."""
+    hits = info["collisions"]
+    if not hits:
+        return None
+    first = hits[0]
+    more = f" and {len(hits) - 1} more" if len(hits) > 1 else ""
+    return (f"warning: collision at t = {first['t_s']:.2f} s with {first['hit']} at "
+            f"({first['x_m']:.2f}, {first['y_m']:.2f}) m{more}" + (" (run stopped)" if info["stopped_by_collision"]
+                                                                  else ""))

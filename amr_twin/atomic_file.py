@@ -70,12 +70,24 @@ def replacing(path: str | Path) -> Iterator[Path]:
 
 
 def place(written: str | Path, path: str | Path) -> None:
-    """Move an already written file ``written`` (same folder tree) onto ``path``, with the batch."""
+    """Move an already written file ``written`` (same file system) onto ``path``, with the batch."""
     written, path = Path(written), Path(path)
     if _batch:
         _batch[-1].append((written, path))
     else:
-        os.replace(written, path)
+        try:
+            os.replace(written, path)
+        except OSError as exc:
+            raise _named(exc, path) from None
+
+
+def discard_after(path: str | Path) -> None:
+    """Remove the staging file or folder ``path`` once the batch is over (now, outside one)."""
+    path = Path(path)
+    if _batch:
+        _batch[-1].append((path, None))
+    else:
+        _remove(path)
 
 
 @contextmanager
@@ -91,11 +103,17 @@ def all_or_nothing() -> Iterator[None]:
             _remove(tmp)
         raise
     _batch.pop()
-    for tmp, path in renames:
-        try:
-            os.replace(tmp, path)
-        except OSError as exc:
-            raise _named(exc, path) from None
+    try:
+        for tmp, path in renames:
+            if path is not None:
+                try:
+                    os.replace(tmp, path)
+                except OSError as exc:
+                    raise _named(exc, path) from None
+    finally:
+        for tmp, path in renames:
+            if path is None or tmp.exists():
+                _remove(tmp)
 
 
 def write_bytes(path: str | Path, data: bytes) -> None:

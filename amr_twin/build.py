@@ -273,7 +273,11 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
         from .worlds import world_xml
         spec = mujoco.MjSpec.from_string(world_xml(path))
     else:
-        spec = mujoco.MjSpec.from_file(str(path))
+        try:
+            spec = mujoco.MjSpec.from_file(str(path))
+        except Exception as exc:  # XML parse errors name neither the file nor the problem's context
+            first = " ".join(str(exc).split())[:200] or type(exc).__name__
+            raise BuildError(f"--world {path}: not a valid MJCF world ({first})") from None
     spec.option.timestep = cfg.sim.timestep_s
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC  # see _robot_spec

@@ -63,7 +63,12 @@ def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[
     try:
         return load_config(config, override_file=params, sets=sets or [], overrides=extra)
     except ConfigError as exc:
-        fail(str(exc))
+        text = str(exc)
+        for option, path in (("--params", params), ("--config", config)):
+            if path is not None and text.startswith(f"{path}:"):
+                text = f"{option} {text}"
+                break
+        fail(text)
 
 
 def _guard(func):
@@ -187,17 +192,43 @@ def calibrate(
     from .calibration import calibrate as fit_plant
     from .calibration import read_log, write_params
 
+    from .outputs import OutputError, check_file
+
     base = _config(config, params, set_)  # the starting point, with the user's overrides
     if target != "thesis":
         if not Path(target).is_file():
             fail(f"--target {target!r}: neither 'thesis' nor an existing CSV file")
-        _guard(lambda: read_log(Path(target)))  # a malformed log is refused before any simulation
+        log = _guard(lambda: read_log(Path(target)))  # a malformed log is refused before any simulation
+        _guard(lambda: _check_log_comparable(base, log, target))
+    try:
+        check_file("--out", out)
+    except OutputError as exc:
+        fail(str(exc))
     with Progress(transient=True) as bar:
         task = bar.add_task("calibrating", total=max_evaluations)
         fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
                                        progress=lambda i, n: bar.update(task, completed=min(i, n))))
-    write_params(fit, out)
+    _guard(lambda: write_params(fit, out))
     typer.echo(json.dumps({**fit.report(), "out": str(out)}))
+
+
+def _check_log_comparable(base, log: dict, target: str) -> None:
+    """Refuse a log the twin cannot be compared with: it must publish two speeds per logged wheel.
+
+    The fit compares the twin's published speeds with the log's over the log's span (plus
+    0.5 s); a shorter log would only be scored by a fixed penalty, not fitted.
+    """
+    from .loop import TwinOptions
+    from .run import Command, run_command
+
+    for text, wheels in log.items():
+        duration = max(float(v[:, 0].max()) for v in wheels.values()) + 0.5
+        series = run_command(base, Command.parse(text), duration, TwinOptions(world="empty")).series
+        for w, samples in wheels.items():
+            if len(series.published[w]) < 2:
+                raise ValueError(f"--target {target}: command {text}: in the log's {duration:g} s the twin publishes "
+                                 f"{len(series.published[w])} speed(s) of the {('left', 'right')[w]} wheel, 2 are "
+                                 "needed to compare: the log must be longer")
 
 
 from .cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702

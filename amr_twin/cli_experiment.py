@@ -2,7 +2,10 @@
 
 Both simulate first and write afterwards, every file through a temporary file and a
 rename: an interrupted command leaves no half-written output (the sweep keeps the
-per-point files already finished, and a rerun only simulates the missing ones).
+per-point files already finished, and a rerun only simulates the missing ones). The
+report and its plots are written together (:func:`amr_twin.atomic_file.all_or_nothing`):
+a full disk leaves the previous report, not half of a new one. Every output folder is
+checked before the first simulation (:mod:`amr_twin.outputs`).
 
 ``--record DIR`` / ``--mcap DIR`` take a folder: one recording per run
 (``run<N>.rrd``) or per sweep point (``<key>.rrd``), written by the worker that
@@ -11,22 +14,38 @@ simulates it. A resumed sweep records only the points it simulates.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Optional
 
 import typer
 
-SketchOpt = typer.Option(None, "--sketch", metavar="DIR",
-                         help="With --firmware avr: your Arduino sketch folder (DIR/DIR.ino).")
+from .cli_options import check_firmware, firmware_option
+
+MAX_DURATION_S = 3600.0
+"""Longest simulated run of an experiment, s (see amr_twin.cli_run.MAX_RUN_S)."""
+
+MAX_SWEEP_POINTS = 10_000
+"""Most points of one sweep: each is a simulation (~0.5 s of CPU for 8 s) and a file in runs/."""
+
+JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per usable core; at most that).")
 
 
-def _check_common(jobs: int, firmware: str, fail, sketch: Optional[Path] = None) -> str:
-    """Check --jobs and --firmware/--sketch (for avr the sketch is built now); return the firmware string."""
-    if jobs < 1:
-        fail(f"--jobs {jobs}: must be >= 1")
-    from .cli_run import checked_firmware
+def _check_common(jobs: Optional[int], firmware: str, fail) -> int:
+    """Firmware and --jobs (None -> the usable cores); returns the jobs to use."""
+    from .experiments.executor import check_jobs
 
-    return checked_firmware(firmware, sketch)
+    check_firmware(firmware, fail)
+    try:
+        return check_jobs(jobs)
+    except ValueError as exc:
+        fail(str(exc))
+
+
+def _check_duration(duration_s: Optional[float], fail) -> None:
+    if duration_s is not None and not (0 < duration_s <= MAX_DURATION_S):
+        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_DURATION_S:g}] s (each run keeps its 100 Hz "
+             "series in memory)")
 
 
 def _check_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
@@ -37,6 +56,25 @@ def _check_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
         fail(f"{option} {folder}: exists and is not a folder (one {name} per run is written inside)")
     if folder.suffix.lower() in (".rrd", ".mcap"):
         fail(f"{option} {folder}: give a folder, not a file name (one {name} per run is written inside)")
+
+
+def _check_outputs(fail, files: dict | None = None, folders: dict | None = None) -> None:
+    from .outputs import OutputError, check_outputs
+
+    try:
+        check_outputs(files=files, folders=folders)
+    except OutputError as exc:
+        fail(str(exc))
+
+
+def _unique(items: list, key) -> tuple[list, list]:
+    """``items`` without repeats (by ``key``), in order; and the repeats dropped."""
+    seen, kept, dropped = set(), [], []
+    for item in items:
+        k = key(item)
+        (dropped if k in seen else kept).append(item)
+        seen.add(k)
+    return kept, dropped
 
 
 def _rpm(value) -> str:
@@ -76,8 +114,8 @@ def _add_fusion(experiment: typer.Typer) -> None:
     def fusion_cmd(
         out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, PNGs, map.yaml/.pgm/.png."),
         route: Optional[Path] = typer.Option(None, "--route", help="Route YAML (default: the 60 m warehouse route)."),
-        seed: int = typer.Option(0, "--seed", help="Seed of the sensor noise."),
-        firmware: str = typer.Option("improved", "--firmware", help="faithful, improved or avr."),
+        seed: int = typer.Option(0, "--seed", help="Seed of the sensor noise (IMU, LiDAR, UWB)."),
+        firmware: str = firmware_option("improved"),
         record: Optional[Path] = typer.Option(None, "--record", help="Also write the drive as a Rerun recording (.rrd)."),
         mcap: Optional[Path] = typer.Option(None, "--mcap", help="Also write the drive as ROS 2 messages (.mcap)."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
@@ -87,7 +125,7 @@ def _add_fusion(experiment: typer.Typer) -> None:
         from .controllers.path_follower import RouteError, load_route
         from .experiments import fusion, fusion_report
 
-        _check_common(1, firmware, fail)
+        check_firmware(firmware, fail)
         route_path = fusion.DEFAULT_ROUTE if route is None else route
         try:
             load_route(route_path)
@@ -95,13 +133,17 @@ def _add_fusion(experiment: typer.Typer) -> None:
             fail(f"--route {route_path}: {exc}")
         if not 0 <= seed < 2 ** 32:
             fail(f"--seed {seed}: must be in [0, 2^32)")
+        _check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
         cfg = _config(config, params, set_)
 
         def work():
+            from .atomic_file import all_or_nothing
+
             results = fusion.run(cfg, route_path, seed=seed, firmware=firmware, progress=progress,
                                  rrd_path=record, mcap_path=mcap)
-            fusion_report.plot(results, out)
-            return fusion_report.report(results, out)
+            with all_or_nothing():
+                fusion_report.plot(results, out)
+                return fusion_report.report(results, out)
 
         data = _guard(work)
         typer.echo(f"{'architecture':14s} {'ATE m':>7s} {'RPE m/m':>8s} {'RPE deg/m':>9s} {'final m':>8s} "
@@ -123,10 +165,8 @@ def _add_chapter5(experiment: typer.Typer) -> None:
     @experiment.command("chapter5")
     def chapter5_cmd(
         out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, run<N>.png."),
-        jobs: int = typer.Option(1, "--jobs", help="Worker processes."),
-        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr (the runs are "
-                                     "then also done with faithful and the differences tabulated)."),
-        sketch: Optional[Path] = SketchOpt,
+        jobs: Optional[int] = JobsOpt,
+        firmware: str = firmware_option(),
         runs: Optional[str] = typer.Option(None, "--runs", help="Run numbers to do, e.g. 1,3 (default all)."),
         duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Override every run's duration, s."),
         record: Optional[Path] = typer.Option(
@@ -140,9 +180,8 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time."""
         from .experiments import chapter5
 
-        firmware = _check_common(jobs, firmware, fail, sketch)
-        if duration_s is not None and not (duration_s > 0 and duration_s < 1e4):
-            fail(f"--duration-s {duration_s}: must be in (0, 10000) s")
+        jobs = _check_common(jobs, firmware, fail)
+        _check_duration(duration_s, fail)
         try:
             numbers = None if runs is None else [int(v) for v in runs.split(",")]
         except ValueError:
@@ -151,14 +190,17 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
         _check_folder("--record", record, fail, "run<N>.rrd")
         _check_folder("--mcap", mcap, fail, "run<N>.mcap")
+        _check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
 
         def work():
+            from .atomic_file import all_or_nothing
+
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
-                                   progress=progress, record_dir=record, mcap_dir=mcap,
-                                   reference_firmware="faithful" if firmware.startswith("avr") else None)
-            chapter5.plot(results, out)
-            return chapter5.report(results, out)
+                                   progress=progress, record_dir=record, mcap_dir=mcap)
+            with all_or_nothing():
+                chapter5.plot(results, out)
+                return chapter5.report(results, out)
 
         data = _guard(work)
         for r in data["runs"]:
@@ -170,10 +212,6 @@ def _add_chapter5(experiment: typer.Typer) -> None:
                        f"{c['measure']} {_rpm(c['loaded'])} / {_rpm(c['unloaded'])} RPM: {c['verdict']} "
                        f"(true speed {_rpm(c['true_loaded'])} / {_rpm(c['true_unloaded'])}: {c['true_verdict']})")
         s = data["summary"]
-        if "firmware_comparison" in data:
-            fc, w = data["firmware_comparison"], data["firmware_comparison"]["worst"]
-            typer.echo(f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample difference "
-                       f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: {fc['verdict']}")
         typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
                    f"(jobs {jobs}, firmware {firmware})")
@@ -195,10 +233,9 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
                                       help="Named positions (box flush with the deck edges) or X:Y in metres."),
         commands: str = typer.Option("linear:0.7,angular:60:-1", "--commands",
                                      help="linear:V, angular:DEG_S:ICC_M, motor:left|right:V (comma separated)."),
-        duration_s: float = typer.Option(8.0, "--duration-s", help="Simulated seconds per point."),
-        jobs: int = typer.Option(1, "--jobs", help="Worker processes."),
-        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr."),
-        sketch: Optional[Path] = SketchOpt,
+        duration_s: float = typer.Option(8.0, "--duration-s", help="Simulated seconds per point (at most 3600)."),
+        jobs: Optional[int] = JobsOpt,
+        firmware: str = firmware_option(),
         executor: str = typer.Option("local", "--executor", help="local (process pool of --jobs) or dask."),
         scheduler: Optional[str] = typer.Option(None, "--scheduler",
                                                 help="Dask scheduler address, e.g. tcp://127.0.0.1:8786."),
@@ -220,15 +257,16 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
 
         from .experiments.executor import EXECUTORS
 
-        firmware = _check_common(jobs, firmware, fail, sketch)
+        jobs = _check_common(jobs, firmware, fail)
         if executor not in EXECUTORS:
             fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
         if executor == "dask" and not scheduler:
             fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
         if executor == "local" and scheduler:
             fail("--scheduler is only used with --executor dask")
-        if not (duration_s > 0 and duration_s < 1e4):
-            fail(f"--duration-s {duration_s}: must be in (0, 10000) s")
+        if not math.isfinite(duration_s):
+            fail(f"--duration-s {duration_s}: must be a finite number")
+        _check_duration(duration_s, fail)
         cfg = _config(config, params, set_)
         try:
             mass_list = payload_sweep.parse_masses(masses)
@@ -242,17 +280,31 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
             fail(str(exc))
         if not position_list or not command_list:
             fail("--positions and --commands must name at least one item each")
+        mass_list, dup_m = _unique(mass_list, float)
+        position_list, dup_p = _unique(position_list, lambda p: payload_sweep.position_xy_m(cfg, p))
+        command_list, dup_c = _unique(command_list, payload_sweep.parse_command)
+        if dup_m or dup_p or dup_c:
+            typer.echo("note: repeated sweep values are simulated once: "
+                       + ", ".join(str(v) for v in dup_m + dup_p + dup_c), err=True)
+        n_points = len(mass_list) * len(position_list) * len(command_list)
+        if n_points > MAX_SWEEP_POINTS:
+            fail(f"--masses x --positions x --commands: {n_points} points; at most {MAX_SWEEP_POINTS} per sweep "
+                 f"(each is a simulation of {duration_s:g} s and a file in runs/): split the sweep")
         _check_folder("--record", record, fail, "<key>.rrd")
         _check_folder("--mcap", mcap, fail, "<key>.mcap")
+        _check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
 
         client = _dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
 
         def work():
+            from .atomic_file import all_or_nothing
+
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
                                         jobs=jobs, firmware=firmware, progress=progress, client=client,
                                         record_dir=record, mcap_dir=mcap)
-            payload_sweep_report.plot(results, out)
-            return results, payload_sweep_report.report(results, out)
+            with all_or_nothing():
+                payload_sweep_report.plot(results, out)
+                return results, payload_sweep_report.report(results, out)
 
         try:
             results, summary = _guard(work)

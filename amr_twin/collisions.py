@@ -73,13 +73,6 @@ class Collision:
                 "robot_pose": {"x_m": round(x, 4), "y_m": round(y, 4), "yaw_rad": round(yaw, 4)},
                 "peak_force_n": round(self.peak_force_n, 2)}
 
-    def describe(self) -> str:
-        """One line: when, what hit what, where."""
-        parts = ", ".join(self.robot_parts)
-        return (f"collision at t = {self.t_s:.2f} s: {parts} hit {self.hit} at ({self.x_m:.2f}, {self.y_m:.2f}) m, "
-                f"robot at ({self.robot_pose[0]:.2f}, {self.robot_pose[1]:.2f}) m, "
-                f"until {self.until_s:.2f} s, peak force {self.peak_force_n:.0f} N")
-
 
 def _name(m: mujoco.MjModel, kind: mujoco.mjtObj, i: int, fallback: str) -> str:
     return mujoco.mj_id2name(m, kind, i) or fallback
@@ -172,6 +165,8 @@ class CollisionMonitor:
         self.physics, self.stop = physics, stop
         self.roles = GeomRoles(physics)
         self.collisions: list[Collision] = []
+        self.listeners: list = []
+        """Callables ``f(collision)`` told of each new episode as it begins (the terminal menu prints it)."""
         self._open: dict[int, Collision] = {}  # world geom -> its episode
         self._last_pairs: list | None = None
         self._force = np.zeros(6)
@@ -204,6 +199,8 @@ class CollisionMonitor:
                            until_s=t_us * 1e-6)
             self._open[world_g] = ep
             self.collisions.append(ep)
+            for listener in self.listeners:
+                listener(ep)
         elif part not in ep.robot_parts:
             ep.robot_parts.append(part)
         ep._last_us = t_us

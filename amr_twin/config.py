@@ -201,11 +201,17 @@ def load_config(path: str | Path | None = None, *, override_file: str | Path | N
     """
     tree = read_tree(path)
     meta: dict[str, dict] = {}
-    plain = _strip(tree, TwinConfig, "", meta)
+    try:
+        plain = _strip(tree, TwinConfig, "", meta)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}" if path is not None else str(exc)) from None
     if override_file is not None:
         extra = _read_yaml(Path(override_file))
-        for key, value in _flatten(extra):
-            _set_path(plain, key, value)
+        try:
+            for key, value in _flatten(extra):
+                _set_path(plain, key, value)
+        except ConfigError as exc:
+            raise ConfigError(f"{override_file}: {exc}") from None
     for text in sets:
         _set_path(plain, *parse_assignment(text))
     for key, value in (overrides or {}).items():
@@ -233,6 +239,12 @@ def _read_yaml(path: Path) -> dict:
         data = yaml.safe_load(path.read_text())
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such parameter file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a folder, not a parameter file (YAML)") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a text file (a YAML parameter file is expected)") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     except yaml.YAMLError as exc:
         raise ConfigError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from None
     if not isinstance(data, dict):

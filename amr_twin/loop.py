@@ -89,8 +89,9 @@ class Twin:
         self.urdf = built.urdf
         """The robot description as built (``/robot_description`` of a recording)."""
         self.physics = Physics(built.model)
-        where = (f"world {options.world}, start ({start[0]:g}, {start[1]:g}) m, "
-                 f"yaw {math.degrees(start[2]):g} deg")
+        pose = f"{start[0]:g},{start[1]:g},{math.degrees(start[2]):g}"
+        where = (f"--start {pose} in world {options.world}" if options.start_xy_yaw is not None
+                 else f"the start pose {pose} of world {options.world}")
         check_start(self.physics, where)
         self.physics.settle(options.settle_s)
         check_supported(self.physics, where)

@@ -23,7 +23,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, fail
+from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+from .cli_options import checked_firmware, firmware_option, sketch_option
 
 MENU = """
 [bold]wheel_Command_Client[/bold]
@@ -131,20 +132,27 @@ def _choice(console: Console, rt: RealTimeTwin, choice: str) -> bool:
 
 
 def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per wall second."),
-           firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr."),
-           sketch: Optional[Path] = typer.Option(None, "--sketch", help="With --firmware avr: a sketch folder."),
+           firmware: str = firmware_option(),
+           sketch: Optional[Path] = sketch_option(),
            payload_kg: Optional[float] = typer.Option(None, "--payload-kg", help="Payload mass, kg."),
-           seed: int = typer.Option(0, "--seed", help="Seed of the random parts."),
+           seed: int = typer.Option(0, "--seed", help="Seed of the random draws (rosserial loss and hall chatter "
+                                    "of --fault)."),
+           fault: Optional[list[str]] = typer.Option(None, "--fault", metavar="KIND@T[:ARGS]",
+                                                     help="Inject a fault T s after the start (repeatable; "
+                                                          "docs/faults.md)."),
            config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt,
            set_: Optional[list[str]] = SetOpt) -> None:
     """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time."""
+    from .faults import FaultError, parse_faults
     from .loop import Twin, TwinOptions
 
-    if not (math.isfinite(rate) and rate > 0):
-        fail(f"--rate {rate}: must be a finite number > 0")
-    from .cli_run import checked_firmware
-
-    firmware = checked_firmware(firmware, sketch)
+    if not (math.isfinite(rate) and 0 < rate <= 1000):
+        fail(f"--rate {rate}: must be a finite number in (0, 1000]")
+    firmware = checked_firmware(firmware, sketch, fail)
+    try:
+        faults = parse_faults(fault or [], sensors=False)
+    except FaultError as exc:
+        fail(str(exc))
     extra = {}
     if payload_kg is not None:
         if not math.isfinite(payload_kg):
@@ -153,7 +161,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
     cfg = _config(config, params, set_, extra)
     console = Console(highlight=False)
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
-    twin = Twin(cfg, TwinOptions(firmware=firmware, seed=seed))
+    twin = _guard(lambda: Twin(cfg, TwinOptions(firmware=firmware, seed=seed, faults=faults)))
 
     def show(topic: str, msg, t_us: int) -> None:
         if topic in ("wheel0_Vel", "wheel1_Vel"):
@@ -161,8 +169,12 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
             console.print(f"[dim]t={t_us * 1e-6:8.3f} s[/dim]  {topic} ({side}) {msg.data:8.3f} RPM")
 
     twin.bus.add_tap(show)
+    twin.collisions.listeners.append(lambda c: console.print(escape(
+        f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m")))
     rt = RealTimeTwin(twin, rate).start()
     console.print(f"twin running at {rate:g}x real time, firmware {firmware}")
+    for f in faults:
+        console.print(escape(f"fault {f.name} at {f.t_s:g} s: {f.describe()['description']}"))
     try:
         while rt.error is None:
             console.print(MENU)

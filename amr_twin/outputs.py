@@ -80,7 +80,7 @@ def check_folder(option: str, path: Path | str) -> Path:
 
 
 def check_distinct(outputs: dict[str, Path | str | None]) -> None:
-    """Refuse two options naming the same path (or one inside the other's folder)."""
+    """Refuse two options naming the same path."""
     seen: dict[Path, str] = {}
     for option, path in outputs.items():
         if path is None:
@@ -102,4 +102,8 @@ def check_outputs(files: dict[str, Path | str | None] | None = None,
     for option, path in folders.items():
         if path is not None:
             check_folder(option, path)
-    check_distinct({**files, **folders})
+    check_distinct(files)  # two files on one path: the last write would win
+    for f_option, f_path in files.items():  # a file where a folder output goes
+        for d_option, d_path in folders.items():
+            if f_path is not None and d_path is not None and Path(f_path).resolve() == Path(d_path).resolve():
+                raise OutputError(f"{f_option} and {d_option} both name {f_path}: give each output its own path")

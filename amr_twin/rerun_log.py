@@ -27,6 +27,7 @@ Entities::
     world/uwb/anchors                   static Points3D of the anchors
     world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
     commands                            TextLog of wheel_Command and the client calls
+    events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/event_log.py)
 
 A default blueprint (3D view + time-series plots) is sent with the recording.
 """
@@ -36,6 +37,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .atomic_file import replacing
+from .event_log import has_events, log_events
 from .rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
 from .rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_imu,  # noqa: F401
@@ -47,7 +49,7 @@ TRACKED = "world/bodies/amr/base_link"
 """The 3D view's camera follows the robot's base."""
 
 
-def _blueprint(has_imu: bool, has_uwb: bool = False):
+def _blueprint(has_imu: bool, has_uwb: bool = False, has_events: bool = False):
     import rerun.blueprint as rrb
 
     plots = [rrb.TimeSeriesView(origin=f"wheels/{w}", name=f"{w} wheel RPM") for w in WHEELS]
@@ -59,7 +61,10 @@ def _blueprint(has_imu: bool, has_uwb: bool = False):
     return rrb.Blueprint(
         rrb.Horizontal(rrb.Vertical(rrb.Spatial3DView(origin="world", name="twin",
                                                       eye_controls=rrb.EyeControls3D(tracking_entity=TRACKED)),
-                                    rrb.TextLogView(origin="commands", name="commands"), row_shares=[4, 1]),
+                                    rrb.TextLogView(origin="commands", name="commands"),
+                                    *([rrb.TextLogView(origin="events", name="collisions and faults")]
+                                      if has_events else []),
+                                    row_shares=[4, 1, 1] if has_events else [4, 1]),
                        rrb.Vertical(*plots), column_shares=[3, 2]),
         collapse_panels=True)
 
@@ -73,7 +78,8 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     rec = rr.RecordingStream(application_id)
     with replacing(path) as tmp:
         rec.save(tmp, default_blueprint=_blueprint(bool(capture.messages.get("imu/data_raw")),
-                                                   bool(capture.messages.get("uwb/range"))))
+                                                   bool(capture.messages.get("uwb/range")),
+                                                   has_events(capture.twin)))
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_geoms(rec, m)
         _log_body_transforms(rec, m, capture)
@@ -84,6 +90,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
         _log_duty(rec, series)
         _log_commands(rec, series, result)
         _log_trajectory(rec, series)
+        log_events(rec, capture.twin)  # collisions and faults (amr_twin/event_log.py)
         rec.flush()
         rec.disconnect()
     return path

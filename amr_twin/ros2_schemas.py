@@ -44,6 +44,11 @@ _DEFS = {
                               "float32 range_min\nfloat32 range_max\nfloat32[] ranges\nfloat32[] intensities"),
     "nav_msgs/Odometry": ("std_msgs/Header header\nstring child_frame_id\n"
                           "geometry_msgs/PoseWithCovariance pose\ngeometry_msgs/TwistWithCovariance twist"),
+    "diagnostic_msgs/KeyValue": "string key\nstring value",
+    "diagnostic_msgs/DiagnosticStatus": ("byte OK=0\nbyte WARN=1\nbyte ERROR=2\nbyte STALE=3\nbyte level\n"
+                                         "string name\nstring message\nstring hardware_id\n"
+                                         "diagnostic_msgs/KeyValue[] values"),
+    "diagnostic_msgs/DiagnosticArray": "std_msgs/Header header\ndiagnostic_msgs/DiagnosticStatus[] status",
     "sensor_msgs/Range": ("uint8 ULTRASOUND=0\nuint8 INFRARED=1\nstd_msgs/Header header\nuint8 radiation_type\n"
                           "float32 field_of_view\nfloat32 min_range\nfloat32 max_range\nfloat32 range"),
 }

@@ -70,31 +70,71 @@ class OccupancyMap:
     origin_xyyaw: tuple[float, float, float]
 
 
-def read_pgm(path: str | Path) -> np.ndarray:
-    """Read a binary (P5) or ASCII (P2) 8-bit PGM image as a (rows, cols) uint8 array."""
-    data = Path(path).read_bytes()
+class MapError(ValueError):
+    """A map file (YAML or PGM) is invalid; the message is one line naming the file."""
+
+
+MAX_MAP_PIXELS = 25_000_000
+"""Largest map image, pixels (5000 x 5000): every occupied run becomes a MuJoCo geom."""
+
+
+def _pgm_tokens(data: bytes, path) -> tuple[list[bytes], int]:
+    """The four header tokens (magic, width, height, maxval) and the offset after them."""
     tokens: list[bytes] = []
-    pos = 0
+    pos, n = 0, len(data)
     while len(tokens) < 4:  # magic, width, height, maxval (comments start with #)
-        while data[pos:pos + 1].isspace():
+        while pos < n and data[pos:pos + 1].isspace():
             pos += 1
+        if pos >= n:
+            raise MapError(f"{path}: not a PGM image (header ends after {len(tokens)} of 4 fields)")
         if data[pos:pos + 1] == b"#":
-            pos = data.index(b"\n", pos) + 1
+            newline = data.find(b"\n", pos)
+            if newline < 0:
+                raise MapError(f"{path}: not a PGM image (unterminated comment in the header)")
+            pos = newline + 1
             continue
         end = pos
-        while not data[end:end + 1].isspace():
+        while end < n and not data[end:end + 1].isspace():
             end += 1
         tokens.append(data[pos:end])
         pos = end
-    magic, width, height, maxval = tokens[0], int(tokens[1]), int(tokens[2]), int(tokens[3])
-    if maxval > 255:
-        raise ValueError(f"{path}: only 8-bit PGM is supported (maxval {maxval})")
+    return tokens, pos
+
+
+def read_pgm(path: str | Path) -> np.ndarray:
+    """Read a binary (P5) or ASCII (P2) 8-bit PGM image as a (rows, cols) uint8 array.
+
+    Raises :class:`MapError` (one line naming the file) for anything else.
+    """
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise MapError(f"{path}: cannot read the map image ({exc.strerror or exc})") from None
+    tokens, pos = _pgm_tokens(data, path)
+    magic = tokens[0]
+    if magic not in (b"P5", b"P2"):
+        raise MapError(f"{path}: not a PGM image (magic {magic[:8]!r}, expected P5 or P2)")
+    try:
+        width, height, maxval = (int(t) for t in tokens[1:])
+    except ValueError:
+        raise MapError(f"{path}: not a PGM image (width, height and maxval must be integers)") from None
+    if width <= 0 or height <= 0 or not 0 < maxval <= 255:
+        raise MapError(f"{path}: only 8-bit PGM images with a positive size are supported "
+                       f"({width} x {height}, maxval {maxval})")
+    if width * height > MAX_MAP_PIXELS:
+        raise MapError(f"{path}: {width} x {height} pixels; at most {MAX_MAP_PIXELS:,} (each wall run is a geom)")
     if magic == b"P5":
+        if len(data) < pos + 1 + width * height:
+            raise MapError(f"{path}: truncated PGM ({len(data) - pos - 1} of {width * height} pixel bytes)")
         pixels = np.frombuffer(data, np.uint8, width * height, pos + 1)
-    elif magic == b"P2":
-        pixels = np.array(data[pos:].split(), dtype=np.uint8)[:width * height]
     else:
-        raise ValueError(f"{path}: not a PGM image (magic {magic!r})")
+        try:
+            values = np.array(data[pos:].split(), dtype=np.int64)
+        except ValueError:
+            raise MapError(f"{path}: ASCII PGM pixels must be integers") from None
+        if len(values) < width * height or (values < 0).any() or (values > maxval).any():
+            raise MapError(f"{path}: ASCII PGM needs {width * height} pixels in 0..{maxval}")
+        pixels = values[:width * height].astype(np.uint8)
     return pixels.reshape(height, width).copy()
 
 
@@ -108,21 +148,55 @@ MAP_MODES = ("trinary", "scale", "raw")
 """map_server's ``mode`` values (trinary when absent); trinary and scale give the same walls."""
 
 
+def _map_number(path, meta: dict, key: str, default=None, low: float | None = None, high: float | None = None,
+                open_low: bool = False) -> float:
+    value = meta.get(key, default)
+    if value is None:
+        raise MapError(f"{path}: {key} is missing (map_server YAML: image, resolution, origin, ...)")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise MapError(f"{path}: {key}: {value!r} must be a finite number")
+    if (low is not None and (value <= low if open_low else value < low)) or (high is not None and value > high):
+        bound = f"{'(' if open_low else '['}{low:g}, {high:g}]" if high is not None else f"> {low:g}"
+        raise MapError(f"{path}: {key}: {value} must be in {bound}")
+    return float(value)
+
+
 def load_map(yaml_path: str | Path) -> OccupancyMap:
-    """Load a map_server YAML and its image into an :class:`OccupancyMap`."""
+    """Load a map_server YAML and its image into an :class:`OccupancyMap`.
+
+    Raises :class:`MapError` (one line naming the YAML or the image) when a field is
+    missing or out of range, or the image cannot be read.
+    """
+    from .yaml_file import read_yaml
+
     yaml_path = Path(yaml_path)
-    meta = yaml.safe_load(yaml_path.read_text())
+    meta = read_yaml(yaml_path, "map", MapError)
+    if not isinstance(meta, dict):
+        raise MapError(f"{yaml_path}: expected a map_server mapping (image, resolution, origin, ...)")
     mode = meta.get("mode", "trinary")
     if mode not in MAP_MODES:
-        raise ValueError(f"{yaml_path}: mode {mode!r} is not one of {', '.join(MAP_MODES)} (map_server)")
-    image = read_pgm(yaml_path.parent / meta["image"])
+        raise MapError(f"{yaml_path}: mode {mode!r} is not one of {', '.join(MAP_MODES)} (map_server)")
+    image_name = meta.get("image")
+    if not isinstance(image_name, str) or not image_name:
+        raise MapError(f"{yaml_path}: image is missing (the PGM file name, relative to the YAML)")
+    resolution = _map_number(yaml_path, meta, "resolution", low=0.0, high=100.0, open_low=True)
+    origin = meta.get("origin", [0.0, 0.0, 0.0])
+    if not isinstance(origin, (list, tuple)) or len(origin) != 3 or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in origin):
+        raise MapError(f"{yaml_path}: origin: {origin!r} must be [x_m, y_m, yaw_rad], three finite numbers")
+    origin = tuple(float(v) for v in origin)
+    occupied = _map_number(yaml_path, meta, "occupied_thresh", 0.65, 0.0, 1.0)
+    negate = meta.get("negate", 0)
+    if negate not in (0, 1, True, False):
+        raise MapError(f"{yaml_path}: negate: {negate!r} must be 0 or 1")
+    try:
+        image = read_pgm(yaml_path.parent / image_name)
+    except MapError as exc:
+        raise MapError(f"{yaml_path}: image {exc}") from None
     if mode == "raw":  # the pixel is the occupancy in percent (255 unknown)
-        return OccupancyMap((image != 255) & (image / 100.0 > float(meta.get("occupied_thresh", 0.65))),
-                            float(meta["resolution"]), tuple(float(v) for v in meta.get("origin", (0.0, 0.0, 0.0))))
-    p = image / 255.0 if int(meta.get("negate", 0)) else (255 - image.astype(float)) / 255.0
-    origin = tuple(float(v) for v in meta.get("origin", (0.0, 0.0, 0.0)))
-    return OccupancyMap(p > float(meta.get("occupied_thresh", 0.65)), float(meta["resolution"]),
-                        origin)
+        return OccupancyMap((image != 255) & (image / 100.0 > occupied), resolution, origin)
+    p = image / 255.0 if int(negate) else (255 - image.astype(float)) / 255.0
+    return OccupancyMap(p > occupied, resolution, origin)
 
 
 def merge_boxes(occupied: np.ndarray) -> list[tuple[int, int, int, int]]:

@@ -10,8 +10,6 @@ file goes through a temporary file and a rename.
 from __future__ import annotations
 
 import dataclasses
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +17,7 @@ import numpy as np
 from .executor import save_figure, write_json, write_text
 from .fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
 from .fusion_map import TOLERANCE_CELLS, agreement
-from .. import se2
+from .. import atomic_file, se2
 
 LIDAR_ATE_MAX_M = 0.10   # issue #8 acceptance
 COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",
@@ -90,13 +88,22 @@ def _errors_in_time(results: FusionResults, est) -> tuple[np.ndarray, np.ndarray
             se2.wrap_rad(est.pose[:, 2] - truth[:, 2]))
 
 
-def _save_map(results: FusionResults, out: Path) -> Path:
-    """Save the grid as map.yaml/.pgm/.png in ``out`` via a temporary folder (no half-written map)."""
-    with tempfile.TemporaryDirectory(dir=out, prefix=".map-") as tmp:
-        written = results.grid.save(Path(tmp) / "map")
+def _save_map(results: FusionResults, out: Path):
+    """Save the grid as map.yaml/.pgm/.png in ``out`` via a staging folder; return its check.
+
+    The map is judged as saved (read back from the staging folder) and then moved
+    into ``out`` with the other outputs (:func:`amr_twin.atomic_file.all_or_nothing`).
+    """
+    staging = atomic_file.temporary_name(out / "map")
+    staging.mkdir(parents=True, exist_ok=True)
+    try:
+        written = results.grid.save(staging / "map")
+        map_check = agreement(staging / "map.yaml", results.boxes)
         for path in written:
-            shutil.move(str(path), out / Path(path).name)
-    return out / "map.yaml"
+            atomic_file.place(path, out / Path(path).name)
+    finally:
+        atomic_file.discard_after(staging)
+    return map_check
 
 
 def summary(results: FusionResults, map_check) -> dict:
@@ -116,8 +123,7 @@ def report(results: FusionResults, out: Path) -> dict:
     """Save the map, write ``metrics.json`` and ``report.md``; return the metrics."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    map_yaml = _save_map(results, out)
-    map_check = agreement(map_yaml, results.boxes)
+    map_check = _save_map(results, out)
     data = {
         "route": {"name": results.route.name, "length_m": results.estimates["odom"].errors.length_m,
                   "max_speed_m_s": results.route.max_speed_m_s, "reached_goal": results.reached_goal,

@@ -49,6 +49,7 @@ TIP_MARGIN_MIN_M = 0.02   # static tip margin below which a point is unsafe, m
 TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
 MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
+MAX_MASSES = 1000          # masses per sweep: each is a simulation per position and command
 
 
 def parse_masses(text: str) -> list[float]:
@@ -56,14 +57,22 @@ def parse_masses(text: str) -> list[float]:
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
-            if step <= 0 or stop < start:
+            if not (step > 0 and stop >= start and math.isfinite(stop - start)):
                 raise ValueError
-            return [round(start + i * step, 6) for i in range(int(math.floor((stop - start) / step + 1e-9)) + 1)]
+            count = math.floor((stop - start) / step + 1e-9) + 1
+            if count > MAX_MASSES:
+                raise OverflowError(count)
+            return [round(start + i * step, 6) for i in range(count)]
         masses = [float(v) for v in text.split(",") if v.strip()]
+    except OverflowError as exc:
+        raise ValueError(f"--masses {text!r}: {exc.args[0]:.3g} masses; at most {MAX_MASSES} per sweep "
+                         "(each is one simulation per position and command)") from None
     except ValueError:
         raise ValueError(f"--masses {text!r}: expected START:STOP:STEP or M1,M2,... in kg") from None
     if not masses or any(not math.isfinite(m) or m < 0 for m in masses):
         raise ValueError(f"--masses {text!r}: masses must be finite and >= 0 kg")
+    if len(masses) > MAX_MASSES:
+        raise ValueError(f"--masses: {len(masses)} masses; at most {MAX_MASSES} per sweep")
     return masses
 
 

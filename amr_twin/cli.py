@@ -37,7 +37,7 @@ class _App(typer.Typer):
             code = super().__call__(*args, standalone_mode=False, **kwargs)
         except _click_errors.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
-            hint = f" (see {where} --help)"
+            hint = _misplaced(exc) or f" (see {where} --help)"
             typer.echo(f"error: {where}: {' '.join(exc.format_message().split())}{hint}", err=True)
             sys.exit(2)
         except _click_errors.ClickException as exc:
@@ -47,6 +47,23 @@ class _App(typer.Typer):
             typer.echo("aborted", err=True)
             sys.exit(130)
         sys.exit(code if isinstance(code, int) else 0)
+
+
+def _misplaced(exc) -> str | None:
+    """For an option given to a group that belongs to its commands: where it goes."""
+    name = getattr(exc, "option_name", None)
+    group = getattr(exc.ctx, "command", None) if exc.ctx is not None else None
+    parent = exc.ctx.parent if exc.ctx is not None else None
+    if name and parent is not None and any(name in p.opts for p in getattr(parent.command, "params", [])):
+        return f": {name} is an option of {parent.command_path}; put it before {exc.ctx.info_name!r}"
+    commands = getattr(group, "commands", None)
+    if not name or not commands:
+        return None
+    owners = sorted(cmd for cmd, c in commands.items() if any(name in p.opts for p in getattr(c, "params", [])))
+    if not owners:
+        return None
+    return (f": {name} is an option of {' and '.join(owners)}; put it after the command, "
+            f"e.g. {exc.ctx.command_path} {owners[0]} {name} ...")
 
 
 app = _App(add_completion=False, no_args_is_help=True,

@@ -103,6 +103,7 @@ def register(app: typer.Typer) -> None:
     app.add_typer(sweep, name="sweep")
     _add_chapter5(experiment)
     _add_fusion(experiment)
+    _add_faults(experiment)
     _add_payload_sweep(sweep)
 
 
@@ -156,6 +157,43 @@ def _add_fusion(experiment: typer.Typer) -> None:
                    f"odometry drift {s['odom_drift_final_m']:.3f} m; map walls within 2 cells: "
                    f"{100 * s['map_walls_within_2_cells_frac']:.1f} %")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.1f} simulated s; wrote {out}/report.md")
+
+
+def _add_faults(experiment: typer.Typer) -> None:
+    """``amr-twin experiment faults``."""
+    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+
+    @experiment.command("faults")
+    def faults_cmd(
+        out: Path = typer.Option(..., "--out", help="Output folder: faults.md, faults.json, img/faults_*.png "
+                                 "(--out docs regenerates docs/faults.md)."),
+        jobs: Optional[int] = JobsOpt,
+        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    ) -> None:
+        """Inject each kind of fault under both firmwares and report what they do (docs/faults.md)."""
+        from .experiments import faults, faults_report
+
+        jobs = _check_common(jobs, "faithful", fail)
+        _check_outputs(fail, folders={"--out": out})
+        cfg = _config(config, params, set_)
+
+        def work():
+            from .atomic_file import all_or_nothing
+
+            results = faults.run(cfg, jobs=jobs, progress=progress)
+            with all_or_nothing():
+                faults_report.plot(results, out)
+                faults_report.report(results, out)
+            return results
+
+        results = _guard(work)
+        for row in results["rows"]:
+            left = row["wheels"]["left"]
+            typer.echo(f"{row['fault']:28s} {row['firmware']:9s} left {left['true_during_rpm']:6.1f} RPM, "
+                       f"offset {row['end_offset_m']:5.2f} m / {row['end_heading_offset_deg']:5.0f} deg, "
+                       f"stopped {'yes' if row['stopped_at_end'] else 'NO'}")
+        typer.echo(f"wall time {results['wall_s']:.1f} s; wrote {out}/faults.md, faults.json, img/faults_*.png")
 
 
 def _add_chapter5(experiment: typer.Typer) -> None:

@@ -42,6 +42,7 @@ class FaultInjector:
         self._saved: dict[int, object] = {}
         self._last: dict[str, object] = {}        # last IMU messages published (imu-stuck)
         self._times: dict[str, list[int]] = {}     # publication times of the sensor topics
+        self._imu_values: list[tuple] = []         # (gyro, accel) of each imu/data_raw message
         if any(f.kind in ("imu-stuck", "lidar-dead") for f in self.faults):
             twin.bus.add_tap(self._tap)
         for i, fault in enumerate(self.faults):
@@ -53,6 +54,9 @@ class FaultInjector:
         if topic in ("imu/data_raw", "imu/mag", "scan"):
             self._times.setdefault(topic, []).append(t_us)
             self._last[topic] = msg
+            if topic == "imu/data_raw":
+                g, a = msg.angular_velocity, msg.linear_acceleration
+                self._imu_values.append((g.x, g.y, g.z, a.x, a.y, a.z))
 
     # -- apply / clear ------------------------------------------------------------------
     def _set(self, i: int, on: bool) -> None:
@@ -107,7 +111,8 @@ class FaultInjector:
         end of the run, the largest true speed after the fault (RPM, signed +
         forward), the wheel speeds the firmware published after the fault (count and
         last value) and the PWM counts at the end. For the robot: the distance it
-        travelled after the fault, m. For sensor faults: the messages published after it.
+        travelled after the fault, m. For sensor faults: the messages published after it
+        (and, for the IMU, how many distinct gyro/accelerometer readings they carried).
         """
         t = series.t_s
         out = []
@@ -136,6 +141,10 @@ class FaultInjector:
                 if topic in self._times:
                     times = np.array(self._times[topic]) * 1e-6
                     effect[f"{topic}_published_after"] = int(np.sum(times >= fault.t_s))
+            if "imu/data_raw" in self._times:
+                times = np.array(self._times["imu/data_raw"]) * 1e-6
+                after_values = [v for v, t_m in zip(self._imu_values, times) if t_m >= fault.t_s]
+                effect["imu/data_raw_distinct_values_after"] = len(set(after_values))
             out.append(dict(fault.describe(), effect=effect))
         return out
 

@@ -61,8 +61,8 @@ class TwinOptions:
     firmware: str = "faithful"
     world: str = "warehouse"
     seed: int = 0
-    start_xy_yaw: tuple[float, float, float] | None = None  # x_m, y_m, yaw_rad; None: the world's own
-    # (amr_twin.worlds.default_start: the warehouse's is the west end of its central aisle, others the origin)
+    start_xy_yaw: tuple[float, float, float] | None = (0.0, 0.0, 0.0)  # x_m, y_m, yaw_rad; None: the world's
+    # own start (amr_twin.worlds.default_start: the warehouse's is the west end of its central aisle; the CLI's default)
     settle_s: float = 0.5
     record_every_steps: int = 10  # time series at 100 Hz with 1 ms steps
     hall_jitter_us: float = 0.0

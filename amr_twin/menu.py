@@ -161,7 +161,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
     cfg = _config(config, params, set_, extra)
     console = Console(highlight=False)
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
-    twin = _guard(lambda: Twin(cfg, TwinOptions(firmware=firmware, seed=seed, faults=faults)))
+    twin = _guard(lambda: Twin(cfg, TwinOptions(firmware=firmware, seed=seed, faults=faults, start_xy_yaw=None)))
 
     def show(topic: str, msg, t_us: int) -> None:
         if topic in ("wheel0_Vel", "wheel1_Vel"):

@@ -46,7 +46,11 @@ class FaultInjector:
         if any(f.kind in ("imu-stuck", "lidar-dead") for f in self.faults):
             twin.bus.add_tap(self._tap)
         for i, fault in enumerate(self.faults):
-            twin.clock.schedule(int(round(fault.t_s * US)), lambda i=i: self._set(i, True))
+            t_us = int(round(fault.t_s * US))
+            if t_us <= twin.clock.now_us:  # at the start: in force before anything is sent
+                self._set(i, True)
+            else:
+                twin.clock.schedule(t_us, lambda i=i: self._set(i, True))
             if fault.until_s is not None:
                 twin.clock.schedule(int(round(fault.until_s * US)), lambda i=i: self._set(i, False))
 

@@ -83,3 +83,16 @@ def test_log_format_errors_name_the_problem(tmp_path):
     bad.write_text("t_s,wheel,rpm,command\n")
     with pytest.raises(ValueError, match="no samples"):
         read_log(bad)
+
+
+def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
+    from typer.testing import CliRunner
+
+    from amr_twin.cli import app
+
+    short = tmp_path / "short.csv"
+    short.write_text("t_s,wheel,rpm,command\n0.5,left,10,linear:0.7\n2.0,left,50,linear:0.7\n")
+    out = tmp_path / "params.yaml"
+    res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "2"])
+    assert res.exit_code == 2 and "the log must be longer" in res.stderr and not out.exists()
+    assert len(res.stderr.strip().splitlines()) == 1

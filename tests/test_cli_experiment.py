@@ -152,3 +152,32 @@ def test_sweep_interrupted_while_recording_leaves_nothing_half_written(cfg, tmp_
                **dict(SWEEP, masses=[0.0]))
     assert list((tmp_path / "rec").iterdir()) == []  # neither the recording nor its temporary
     assert not (tmp_path / "out" / "runs").exists() or not list((tmp_path / "out" / "runs").iterdir())
+
+
+def test_sweep_sizes_are_bounded_before_any_work(tmp_path):
+    out = tmp_path / "s"
+    for args, text in ((["--masses", "0:60:1e-9"], "6e+10 masses; at most 1000"),
+                       (["--masses", "0:999:1", "--positions", "center,front,rear,left,right,0.1:0",
+                         "--commands", "linear:0.7,linear:0.5"], "12000 points; at most 10000"),
+                       (["--duration-s", "1e9"], "--duration-s 1e+09: must be in (0, 3600] s")):
+        res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(out), *args])
+        assert res.exit_code == 2 and text in res.stderr, res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_repeated_sweep_values_are_simulated_once(tmp_path):
+    res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path), "--masses", "0,0.0",
+                                   "--positions", "center,0:0", "--commands", "linear:0.7,linear:0.70",
+                                   "--duration-s", "1", "--jobs", "1", "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "1 points: 1 simulated" in res.stdout and "simulated once: 0.0, 0:0, linear:0.70" in res.stderr
+    assert len(list((tmp_path / "runs").iterdir())) == 1
+
+
+def test_an_unwritable_out_folder_is_refused_before_the_work(tmp_path, monkeypatch):
+    def read_only(*args, **kwargs):
+        raise OSError(30, "Read-only file system")
+
+    monkeypatch.setattr("tempfile.mkstemp", read_only)
+    res = CliRunner().invoke(app, ["experiment", "fusion", "--out", str(tmp_path / "f")])
+    assert res.exit_code == 2 and "Read-only file system" in res.stderr and "--out" in res.stderr

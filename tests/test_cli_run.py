@@ -190,3 +190,17 @@ def test_a_saved_ros_map_is_a_world(tmp_path):
 def test_unknown_world_is_one_line():
     res = _run("linear", "--speed-m-s", "0.5", "--world", "nowhere")
     assert res.exit_code == 2 and "--world nowhere" in res.output and len(res.output.strip().splitlines()) == 1
+
+
+def test_a_mission_carries_faults(tmp_path):
+    mission = tmp_path / "m.yaml"
+    mission.write_text("duration_s: 3\nsteps:\n  - {t_s: 0, linear: {speed_m_s: 0.5}}\n"
+                       "faults: [motor-left-stall@1, 'estop@2:for=0.5']\n")
+    info = _json("--mission", str(mission), "--world", "empty", "--fault", "battery-sag@2.5")
+    assert [f["kind"] for f in info["faults"]] == ["motor-left-stall", "estop", "battery-sag"]
+    assert info["faults"][1]["until_s"] == 2.5
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("duration_s: 3\nsteps:\n  - {t_s: 0, stop: {}}\nfaults: [hall-left-dead]\n")
+    res = _run("--mission", str(bad))
+    assert res.exit_code == 2 and "faults 'hall-left-dead': expected KIND@T" in res.stderr
+    assert str(bad) in res.stderr

@@ -94,3 +94,21 @@ def test_model_readme_is_current():
     from amr_twin.paths import MODEL_DIR
     assert (MODEL_DIR / "README.md").read_text() == readme_text(), \
         "models/amr/README.md is stale: run python -m amr_twin.parameter_doc"
+
+
+def test_a_parameter_file_that_is_a_folder_or_binary_is_named(tmp_path):
+    from typer.testing import CliRunner
+
+    from amr_twin.cli import app
+
+    binary = tmp_path / "p.yaml"
+    binary.write_bytes(bytes(range(128, 256)) * 8)
+    for path, text in ((tmp_path, "is a folder"), (binary, "not a text file")):
+        with pytest.raises(ConfigError, match=text):
+            load_config(override_file=path)
+        res = CliRunner().invoke(app, ["model", "--params", str(path)])
+        assert res.exit_code == 2 and res.stderr.startswith(f"error: --params {path}: ")
+        assert len(res.stderr.strip().splitlines()) == 1
+    (tmp_path / "o.yaml").write_text("wheel:\n  radiuss_m: 3\n")
+    with pytest.raises(ConfigError, match=r"o.yaml: wheel.radiuss_m: unknown key"):
+        load_config(override_file=tmp_path / "o.yaml")

@@ -125,3 +125,91 @@ def test_cli_rejects_bad_executor_options(tmp_path, args, needle):
     result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), *args])
     assert result.exit_code == 2 and needle in result.output
     assert not (tmp_path / "s").exists()
+
+
+def test_jobs_default_to_the_usable_cores_and_are_bounded():
+    cores = executor.usable_cores()
+    assert executor.check_jobs(None) == cores and executor.check_jobs(1) == 1
+    for bad in (0, cores + 1, 1000):
+        with pytest.raises(ValueError, match=rf"--jobs {bad}: must be in 1..{cores} on this machine"):
+            executor.check_jobs(bad)
+    result = CliRunner().invoke(app, ["sweep", "payload", "--out", "never", "--jobs", "1000"])
+    assert result.exit_code == 2 and "usable cores" in result.stderr
+
+
+def test_a_non_scheduler_or_malformed_address_is_one_line_without_a_hang(tmp_path):
+    import subprocess
+    import threading
+    import time
+
+    pytest.importorskip("distributed")
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+
+    def babble():  # accepts and answers garbage, as a proxy or another service would
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            conn.sendall(b"HTTP/1.1 400 Bad Request\r\n\r\n" + bytes(range(256)) * 4)
+            time.sleep(0.2)
+            conn.close()
+
+    threading.Thread(target=babble, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    code = ("from amr_twin.experiments.executor import connect_dask, ExecutorError\n"
+            "try:\n    connect_dask({!r}, 1.0)\nexcept ExecutorError as e:\n    print(e)\n")
+    try:
+        for addr, text in ((address, "no Dask scheduler answered there"), ("foo", "not a scheduler address")):
+            t0 = time.perf_counter()
+            proc = subprocess.run([sys.executable, "-c", code.format(addr)], capture_output=True, text=True,
+                                  timeout=60)
+            assert text in proc.stdout and proc.stdout.count("\n") == 1
+            assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr
+            assert time.perf_counter() - t0 < 8.0          # no 10 s finaliser
+    finally:
+        server.close()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_pool_workers_die_with_their_parent(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import time
+
+    script = ("import time\nfrom amr_twin.experiments.executor import run_all\n"
+              "list(run_all(time.sleep, [60.0, 60.0, 60.0], jobs=2, progress=False))\n")
+    parent = subprocess.Popen([sys.executable, "-c", script])
+
+    def children(pid):
+        out = []
+        for stat in os.listdir("/proc"):
+            if stat.isdigit():
+                try:
+                    fields = open(f"/proc/{stat}/stat").read().rsplit(")", 1)[1].split()
+                except OSError:
+                    continue
+                if int(fields[1]) == pid and fields[0] != "Z":
+                    out.append(int(stat))
+        return out
+
+    try:
+        deadline = time.monotonic() + 60
+        while len(children(parent.pid)) < 2 and time.monotonic() < deadline:  # 2 workers (+ resource tracker)
+            time.sleep(0.2)
+        workers = children(parent.pid)
+        assert len(workers) >= 2
+        time.sleep(3.0)  # the workers are busy in time.sleep(60)
+    finally:
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+    deadline = time.monotonic() + 10
+    alive = workers
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.2)
+        alive = [w for w in workers if os.path.exists(f"/proc/{w}") and
+                 open(f"/proc/{w}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"]
+    assert alive == []

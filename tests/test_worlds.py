@@ -84,3 +84,49 @@ def test_shipped_example_map_builds():
     model = build(load_config(), world=path).model
     names = [model.geom(i).name for i in range(model.ngeom)]
     assert sum(n.startswith("wall_") for n in names) == len(merge_boxes(load_map(path).occupied))
+
+
+def _write_map(tmp_path, yaml_text, pgm=None):
+    if pgm is not None:
+        (tmp_path / "m.pgm").write_bytes(pgm)
+    (tmp_path / "m.yaml").write_text(yaml_text)
+    return tmp_path / "m.yaml"
+
+
+@pytest.mark.parametrize("yaml_text, pgm, text", [
+    ("image: gone.pgm\nresolution: 0.05\n", None, "m.yaml: image "),
+    ("image: m.pgm\norigin: [0, 0, 0]\n", b"P5\n2 2\n255\n\x00\x00\x00\x00", "m.yaml: resolution is missing"),
+    ("image: m.pgm\nresolution: -0.05\n", b"P5\n2 2\n255\n\x00\x00\x00\x00", "resolution: -0.05 must be in (0, 100]"),
+    ("image: m.pgm\nresolution: 0.05\norigin: [0, 0]\n", b"P5\n2 2\n255\n\x00\x00\x00\x00", "origin: [0, 0] must be"),
+    ("image: m.pgm\nresolution: 0.05\n", b"P5\n100 100\n255\nabc", "m.pgm: truncated PGM (3 of 10000"),
+    ("image: m.pgm\nresolution: 0.05\n", bytes(range(7, 200)), "m.pgm: not a PGM image"),
+    ("image: m.pgm\nresolution: 0.05\n", b"P5\n2", "m.pgm: not a PGM image (header ends"),
+    ("resolution: 0.05\n", None, "m.yaml: image is missing"),
+    ("- a list\n", None, "expected a map_server mapping"),
+])
+def test_map_errors_are_one_line_naming_the_file(tmp_path, yaml_text, pgm, text):
+    from amr_twin.worlds import MapError
+
+    path = _write_map(tmp_path, yaml_text, pgm)
+    with pytest.raises(MapError) as exc:
+        load_map(path)
+    assert text in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_a_malformed_mjcf_world_is_named(tmp_path):
+    from typer.testing import CliRunner
+
+    from amr_twin.cli import app
+
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<mujoco><worldbody><geom type="plane" size="1 1 1"</worldbody></mujoco>')
+    res = CliRunner().invoke(app, ["run", "stop", "--world", str(bad)])
+    assert res.exit_code == 2 and f"--world {bad}: not a valid MJCF world" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_worlds_declare_their_start_pose():
+    from amr_twin.worlds import default_start
+
+    assert default_start("warehouse") == (-6.0, 0.0, 0.0)
+    assert default_start("empty") == (0.0, 0.0, 0.0) and default_start("nowhere.xml") == (0.0, 0.0, 0.0)

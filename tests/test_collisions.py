@@ -1,0 +1,101 @@
+"""Collisions of the robot with the world: detected, reported, stopped on; start poses refused."""
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli import app
+from amr_twin.collisions import StartPoseError
+from amr_twin.config import load_config
+from amr_twin.loop import Twin, TwinOptions
+from amr_twin.run import Command, run_command
+
+CFG = load_config()
+runner = CliRunner()
+
+KERB = """<mujoco model="kerb">
+  <worldbody>
+    <geom name="floor" type="plane" size="10 10 0.1"/>
+    <geom name="kerb" type="box" pos="1.5 0 0.02" size="0.05 2 0.02"/>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _json(*args):
+    res = runner.invoke(app, ["run", *args, "--json"])
+    return res, (json.loads(res.stdout) if res.stdout.strip().startswith("{") else None)
+
+
+def test_wheels_and_casters_on_the_floor_are_not_collisions():
+    result = run_command(CFG, Command("angular", speed_deg_s=90, icc_m=0), 4.0, TwinOptions(world="empty"))
+    assert result.collisions == [] and not result.halted
+
+
+def test_the_default_start_has_room_for_half_a_metre_per_second_for_20_s():
+    res, info = _json("linear", "--speed-m-s", "0.5", "--duration-s", "20")
+    assert res.exit_code == 0 and info["collisions"] == [] and "warning" not in res.stderr
+    assert info["start_pose"] == {"x_m": -6.0, "y_m": 0.0, "yaw_rad": 0.0}
+    assert info["final_pose"]["x_m"] > 3.0                  # drove about 10 m down the aisle
+
+
+def test_a_veering_run_reports_the_rack_it_hits_with_time_and_place():
+    res, info = _json("linear", "--speed-m-s", "0.7", "--duration-s", "9")
+    assert res.exit_code == 0
+    (hit,) = info["collisions"]
+    assert hit["hit"] == "rack_s_beam_low" and "base_link" in hit["robot_parts"]
+    assert 6.0 < hit["t_s"] < 8.0 and hit["y_m"] == pytest.approx(-2.96, abs=0.02)   # the beam's north face
+    assert hit["until_s"] > hit["t_s"] and hit["peak_force_n"] > 10.0
+    assert "warning: collision at t = " in res.stderr and "rack_s_beam_low" in res.stderr
+
+
+def test_stop_on_collision_ends_the_run_there_with_exit_code_4():
+    res, info = _json("linear", "--speed-m-s", "0.7", "--duration-s", "9", "--stop-on-collision")
+    assert res.exit_code == 4 and info["stopped_by_collision"]
+    assert info["sim_s"] == pytest.approx(info["collisions"][0]["t_s"], abs=1e-9)
+    assert info["sim_s"] < 8.0
+
+
+def test_a_low_kerb_is_hit_by_a_wheel_or_caster(tmp_path):
+    world = tmp_path / "kerb.xml"
+    world.write_text(KERB)
+    result = run_command(CFG, Command("linear", speed_m_s=0.4), 5.0, TwinOptions(world=str(world)))
+    assert result.collisions, "the kerb was not reported"
+    first = result.collisions[0]
+    assert first["hit"] == "kerb" and first["x_m"] == pytest.approx(1.45, abs=0.06)
+    assert any(p.startswith(("caster_", "wheel_")) for p in first["robot_parts"])
+
+
+def test_a_start_inside_a_rack_or_without_a_floor_is_refused(tmp_path):
+    with pytest.raises(StartPoseError, match="overlaps rack_n_beam_low"):
+        Twin(CFG, TwinOptions(start_xy_yaw=(-2.5, 3.0, 0.0)))
+    (tmp_path / "void.xml").write_text('<mujoco><worldbody><light pos="0 0 3"/></worldbody></mujoco>')
+    res = runner.invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--world", str(tmp_path / "void.xml")])
+    assert res.exit_code == 2 and "no floor" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    res = runner.invoke(app, ["run", "stop", "--start=10,0,0"])
+    assert res.exit_code == 2 and "--start 10,0,0" in res.stderr and "wall_east" in res.stderr
+
+
+def test_collisions_and_faults_are_in_the_recordings(tmp_path):
+    from rerun.chunk import RrdReader
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    mcap, rrd = tmp_path / "c.mcap", tmp_path / "c.rrd"
+    res, info = _json("linear", "--speed-m-s", "0.7", "--duration-s", "7.5", "--fault", "estop@7.3",
+                      "--mcap", str(mcap), "--record", str(rrd))
+    assert res.exit_code == 0 and len(info["collisions"]) == 1
+    store = get_typestore(Stores.ROS2_HUMBLE)                # ROS 2's own definitions, not ours
+    seen = {}
+    with Reader(mcap) as reader:
+        for con, t_ns, raw in reader.messages():
+            if con.topic in ("/twin/collisions", "/twin/faults"):
+                status = store.deserialize_cdr(raw, con.msgtype).status[0]
+                seen[con.topic] = (t_ns, status.level, status.message, {kv.key: kv.value for kv in status.values})
+    t_ns, level, message, values = seen["/twin/collisions"]
+    assert level == 2 and "rack_s_beam_low" in message
+    assert t_ns == round(info["collisions"][0]["t_s"] * 1e9) and float(values["y_m"]) == pytest.approx(-2.96, abs=0.02)
+    assert seen["/twin/faults"][0] == 7_300_000_000 and seen["/twin/faults"][1] == 1
+    paths = {str(c.entity_path) for c in RrdReader(str(rrd)).stream().to_chunks()}
+    assert {"/events/collisions", "/events/faults", "/world/collisions"} <= paths

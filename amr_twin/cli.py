@@ -144,6 +144,12 @@ def model(
     xy = _parse_xy(payload_xy)
     if xy is not None:
         extra["payload.xy_m"] = xy
+    from .outputs import OutputError, check_outputs
+
+    try:
+        check_outputs(files={"--export-urdf": export_urdf, "--export-mjcf": export_mjcf})
+    except OutputError as exc:
+        fail(str(exc))
     cfg = _config(config, params, set_, extra)
 
     def work():
@@ -166,14 +172,18 @@ def bench(
     sim_s: float = typer.Option(16.0, help="Simulated seconds per measurement."),
     suites: bool = typer.Option(False, "--suites", help="Also time the chapter 5 suite, a 100-run sweep and the "
                                 "fusion experiment (wall time, about a minute)."),
-    jobs: int = typer.Option(2, "--jobs", help="Worker processes for --suites."),
+    jobs: Optional[int] = typer.Option(None, "--jobs", help="Worker processes for --suites (default: the usable "
+                                       "cores)."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Measure the cost of the physics (and of the whole twin) per simulated second."""
     from .benchmark import run_benchmarks
+    from .experiments.executor import check_jobs
 
-    if jobs < 1:
-        fail(f"--jobs {jobs}: must be >= 1")
+    try:
+        jobs = check_jobs(jobs)
+    except ValueError as exc:
+        fail(str(exc))
     if not (0 < sim_s <= 1000):
         fail(f"--sim-s {sim_s}: must be in (0, 1000] s")
     cfg = _config(config, params, set_)

@@ -123,10 +123,11 @@ def _add_fusion(experiment: typer.Typer) -> None:
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Drive a warehouse route and compare raw odometry with the four fusion architectures of §6.2.2."""
+        check_firmware(firmware, fail)
+        _check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
         from .controllers.path_follower import RouteError, load_route
         from .experiments import fusion, fusion_report
 
-        check_firmware(firmware, fail)
         route_path = fusion.DEFAULT_ROUTE if route is None else route
         try:
             load_route(route_path)
@@ -134,7 +135,6 @@ def _add_fusion(experiment: typer.Typer) -> None:
             fail(f"--route {route_path}: {exc}")
         if not 0 <= seed < 2 ** 32:
             fail(f"--seed {seed}: must be in [0, 2^32)")
-        _check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
         cfg = _config(config, params, set_)
 
         def work():

@@ -143,7 +143,11 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 def register(app: typer.Typer) -> None:
     """Add ``run`` (linear, angular, motor, stop, --mission) and ``client`` to the app."""
     from .menu import client
-    from .run import Command
+
+    def Command(*args, **kwargs):  # noqa: N802 - amr_twin.run.Command, imported when a run starts
+        from .run import Command as RunCommand
+
+        return RunCommand(*args, **kwargs)
 
     run_app = typer.Typer(add_completion=False, no_args_is_help=False,
                           help="Run wheel commands on the twin, as wheel_Command_Client does. The options "

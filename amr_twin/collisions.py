@@ -12,7 +12,8 @@ physics step. The pairs in contact rarely change, so the common case costs one
 read of the geom pairs and a list comparison (about 3 us); the pairs are only
 classified when the set changes. Contact with one world geom is one
 :class:`Collision` episode, from the first instant it is seen to the last, with
-the robot parts involved and the peak normal force; a contact lost for less than
+the robot parts involved and the peak normal force (read when the contacts change
+and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less than
 :data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
 the loop to stop at the first collision.
 
@@ -34,7 +35,11 @@ SUPPORT_TILT_DEG = 30.0
 MERGE_GAP_S = 0.1
 """Contact with the same world geom lost for less than this continues the episode, s."""
 
+FORCE_EVERY_S = 0.1
+"""While the same contacts persist, their normal forces are read this often (peak force), s."""
+
 _FLOOR_TYPES = (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD)
+FORCE_EVERY_US = int(FORCE_EVERY_S * 1_000_000)
 _IGNORE, _COLLIDE, _BY_NORMAL = 0, 1, 2
 
 
@@ -89,6 +94,7 @@ class GeomRoles:
         self.support[list(physics.support_geoms.values())] = True
         self.floor = np.isin(m.geom_type, _FLOOR_TYPES) & ~self.robot
         self._pair: dict[tuple[int, int], int] = {}
+        self._part: dict[int, str] = {}
 
     def kind(self, g1: int, g2: int) -> int:
         """_IGNORE, _COLLIDE or _BY_NORMAL (a support geom on a non-floor world geom)."""
@@ -109,8 +115,12 @@ class GeomRoles:
 
     def robot_part(self, g: int) -> str:
         """The robot body of geom ``g``, without the ``amr/`` prefix (``base_link``, ``wheel_left_link``)."""
-        m = self.model
-        return _name(m, mujoco.mjtObj.mjOBJ_BODY, m.geom_bodyid[g], f"body {m.geom_bodyid[g]}").removeprefix("amr/")
+        part = self._part.get(g)
+        if part is None:
+            m = self.model
+            body = int(m.geom_bodyid[g])
+            part = self._part[g] = _name(m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}").removeprefix("amr/")
+        return part
 
     def world_name(self, g: int) -> str:
         """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed."""
@@ -169,20 +179,27 @@ class CollisionMonitor:
         """Callables ``f(collision)`` told of each new episode as it begins (the terminal menu prints it)."""
         self._open: dict[int, Collision] = {}  # world geom -> its episode
         self._last_pairs: list | None = None
+        self._last_full_us = -(1 << 62)
         self._force = np.zeros(6)
 
     def __call__(self, t_us: int) -> bool:
         """Grid instant ``t_us``: physics is there. True asks the loop to stop."""
         d = self.physics.data
         pairs = d.contact.geom.tolist() if d.ncon else []
-        if pairs == self._last_pairs:
-            return False  # the same contacts as last time, none of them a collision
+        if pairs == self._last_pairs:  # the same contacts as at the last instant, verdict unchanged
+            if not self._open:
+                return False
+            if t_us - self._last_full_us < FORCE_EVERY_US:  # an ongoing collision: extend it
+                for ep in self._open.values():
+                    ep._last_us, ep.until_s = t_us, t_us * 1e-6
+                return self.stop
         hits, by_normal = collision_contacts(self.roles, d, pairs)
         for i, robot_g, world_g in hits:
             self._touch(t_us, i, robot_g, world_g)
         self._close_stale(t_us)
+        self._last_full_us = t_us
         # cache only a verdict that cannot change while the pairs stay the same
-        self._last_pairs = pairs if not (hits or by_normal or self._open) else None
+        self._last_pairs = pairs if not by_normal else None
         return bool(hits) and self.stop
 
     def _touch(self, t_us: int, i: int, robot_g: int, world_g: int) -> None:

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .recorder import RunSeries
+if TYPE_CHECKING:  # the recorder imports the model build (trimesh): not on the CLI's start-up path
+    from .recorder import RunSeries
 
 CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_right",
                "true_rpm_left", "true_rpm_right", "pwm_counts_left", "pwm_counts_right",

@@ -7,7 +7,7 @@ through small hooks of the components, so that no component knows about faults:
 =================  ================================================================
 hall-dead          ``HallSensors.set_stuck`` (sensors/hall.py): no SC changes
 hall-chatter       ``HallSensors.glitch_rate_hz``: spurious SC pulses
-motor-stall        ``Physics.jam_wheel``: a dry-friction torque on the axle
+motor-stall        ``Physics.jam_wheel``: the wheel's hinge limited to its present angle
 wheel-lifted       ``Physics.lift_wheel``: the tyre's contacts switched off
 rosserial-*        ``RosserialLink.loss_prob`` / ``extra_latency_us``
 lidar-dead         ``Bus.intercept("scan")``: every scan dropped
@@ -74,7 +74,7 @@ class FaultInjector:
         elif fault.kind == "hall-chatter":
             twin.hall.glitch_rate_hz[w] = float(fault.value) if on else 0.0
         elif fault.kind == "motor-stall":
-            twin.physics.jam_wheel(w, float(fault.value) if on else None)
+            twin.physics.jam_wheel(w, on)
         elif fault.kind == "wheel-lifted":
             twin.physics.lift_wheel(w, on)
         elif fault.kind == "rosserial-loss":

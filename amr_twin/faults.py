@@ -44,9 +44,9 @@ KINDS: dict[str, KindSpec] = {
     "hall-chatter": KindSpec(True, "rate_hz", 200.0, (1.0, 20000.0), False,
                              "spurious 20 us pulses on the wheel's SC line at RATE_HZ on average (Poisson, "
                              "seeded): each adds two changes the firmware counts"),
-    "motor-stall": KindSpec(True, "torque_nm", 1000.0, (0.1, 1e5), False,
-                            "the wheel jams: a dry-friction torque of TORQUE_NM on its axle (default holds it "
-                            "against any motor torque)"),
+    "motor-stall": KindSpec(True, None, None, None, False,
+                            "the wheel jams (a seized hub, a stone): it cannot turn, whatever the motor and the "
+                            "ground do, until the fault clears"),
     "wheel-lifted": KindSpec(True, None, None, None, False,
                              "the wheel loses the ground (its tyre touches nothing): it spins freely, the "
                              "casters carry the robot"),

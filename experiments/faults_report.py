@@ -117,12 +117,16 @@ def _reading(case: str, rows: dict) -> str:
                 f"notices the stall or stops the other wheel; both resume the left wheel when the jam clears "
                 f"({_f(L(fa, 'true_before_stop_rpm'))} and {_f(L(im, 'true_before_stop_rpm'))} RPM before the stop).")
     if kind == "wheel-lifted":
-        return (f"The lifted wheel spins freely at {_f(L(fa, 'true_during_rpm'))} RPM (faithful) and "
-                f"{_f(L(im, 'true_during_rpm'))} RPM (improved). The robot keeps its course "
-                f"({_f(fa['end_offset_m'], '.2f')} and {_f(im['end_offset_m'], '.2f')} m from the fault-free run): "
-                f"the plant has no rolling resistance yet (frictionless casters), so at constant speed the one "
-                f"wheel still on the ground needs no force and makes no turning moment. Rerun this study when the "
-                f"plant gains rolling resistance.")
+        lifted = (f"The lifted wheel spins freely at {_f(L(fa, 'true_during_rpm'))} RPM (faithful) and "
+                  f"{_f(L(im, 'true_during_rpm'))} RPM (improved). ")
+        if max(fa["end_offset_m"], im["end_offset_m"]) < 0.05:
+            return lifted + ("The robot keeps its course: nothing resists its rolling, so at constant speed the "
+                             "one wheel still on the ground needs no force and makes no turning moment.")
+        return lifted + (f"Only the right wheel drives, against the rolling resistance of the casters and of "
+                         f"itself: the robot turns {_f(abs(fa['end_heading_offset_deg']), '.0f')} deg (faithful) "
+                         f"and {_f(abs(im['end_heading_offset_deg']), '.0f')} deg (improved) towards the lifted "
+                         "side during the 2 s, and neither firmware can tell: the lifted wheel's speed is "
+                         "what it commanded.")
     if kind == "rosserial-loss" and "0.3" not in case:
         return (f"With the link cut the stop sent at {STOP_T_S:g} s never arrives. Neither firmware has a "
                 f"watchdog on the link: the faithful one drives on at {_f(L(fa, 'true_before_stop_rpm'))} RPM and "

@@ -16,7 +16,6 @@ recordings and removes the temporaries that killed writers left there.
 
 from __future__ import annotations
 
-import os
 import weakref
 from pathlib import Path
 
@@ -89,31 +88,15 @@ def capture_of(twin) -> Capture | None:
     return _captures.get(twin)
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def remove_stale_temporaries(folder: Path) -> list[Path]:
-    """Delete the half-written recordings a killed writer left in ``folder``; return them.
+    """Delete the half-written recordings killed writers left in ``folder``; return them.
 
-    A writer that is interrupted normally removes its temporary file itself; one
-    killed outright (SIGKILL, a crashed worker) leaves ``.<name>.rrd.<pid>.tmp`` or
-    ``.<name>.mcap.<pid>.tmp`` behind. Only those of processes no longer running
-    are deleted, so a concurrent writer's file is left alone.
+    See :func:`amr_twin.atomic_file.remove_stale_temporaries`: a temporary whose writer
+    (the pid in its name) still runs is left alone.
     """
-    removed = []
-    for tmp in Path(folder).glob(".*.tmp"):
-        stem, _, pid = tmp.name[:-len(".tmp")].rpartition(".")
-        if stem.endswith((".rrd", ".mcap")) and pid.isdigit() and not _alive(int(pid)):
-            tmp.unlink(missing_ok=True)
-            removed.append(tmp)
-    return removed
+    from .atomic_file import remove_stale_temporaries as remove_stale
+
+    return remove_stale(folder)
 
 
 def recording_folder(folder: Path) -> Path:

@@ -48,13 +48,14 @@ def csv_text(series: RunSeries) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _clean(value):
+def json_ready(value):
+    """``value`` with every non-finite float (NaN, inf) replaced by None, recursively (strict JSON)."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
+        return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
+        return [json_ready(v) for v in value]
     return value
 
 
@@ -106,7 +107,7 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
     if start_xy_yaw is not None:
         sx, sy, syaw = start_xy_yaw
         out["start_pose"] = {"x_m": sx, "y_m": sy, "yaw_rad": syaw}
-    return _clean(out)
+    return json_ready(out)
 
 
 def _battery_summary(series: RunSeries) -> dict:

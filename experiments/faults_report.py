@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..faults import KINDS, kind_names, parse_fault
+from ..run_report import json_ready
 from .executor import save_figure, write_text
 from .faults import FAULT_T_S, FIRMWARES, SCENARIO, STOP_T_S
 
@@ -227,16 +228,7 @@ def markdown(results: dict) -> str:
 def report(results: dict, out: Path) -> dict:
     """Write ``faults.md`` and ``faults.json`` (the measures) in ``out``; return the measures."""
     data = {"scenario": SCENARIO, "fault_t_s": FAULT_T_S, "stop_t_s": STOP_T_S, "rows": results["rows"]}
-    write_text(Path(out) / "faults.json", json.dumps(_clean(data), indent=2, allow_nan=False) + "\n")
+    write_text(Path(out) / "faults.json", json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n")
     write_text(Path(out) / "faults.md", markdown(results))
     return data
 
-
-def _clean(value):
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    return value

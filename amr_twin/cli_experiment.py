@@ -20,75 +20,12 @@ from typing import Optional
 
 import typer
 
+from .cli_checks import (MAX_SWEEP_POINTS, JobsOpt, check_common, check_duration, check_outputs,
+                         check_record_folder, dask_client, unique)
 from .cli_options import check_firmware, firmware_option
-
-MAX_DURATION_S = 3600.0
-"""Longest simulated run of an experiment, s (see amr_twin.cli_run.MAX_RUN_S)."""
-
-MAX_SWEEP_POINTS = 10_000
-"""Most points of one sweep: each is a simulation (~0.5 s of CPU for 8 s) and a file in runs/."""
-
-JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per usable core; at most that).")
-
-
-def _check_common(jobs: Optional[int], firmware: str, fail) -> int:
-    """Firmware and --jobs (None -> the usable cores); returns the jobs to use."""
-    from .experiments.executor import check_jobs
-
-    check_firmware(firmware, fail)
-    try:
-        return check_jobs(jobs)
-    except ValueError as exc:
-        fail(str(exc))
-
-
-def _check_duration(duration_s: Optional[float], fail) -> None:
-    if duration_s is not None and not (0 < duration_s <= MAX_DURATION_S):
-        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_DURATION_S:g}] s (each run keeps its 100 Hz "
-             "series in memory)")
-
-
-def _check_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
-    """A recording option of a multi-run command takes a folder (one file per run), not a file name."""
-    if folder is None or folder.is_dir():
-        return
-    if folder.exists():
-        fail(f"{option} {folder}: exists and is not a folder (one {name} per run is written inside)")
-    if folder.suffix.lower() in (".rrd", ".mcap"):
-        fail(f"{option} {folder}: give a folder, not a file name (one {name} per run is written inside)")
-
-
-def _check_outputs(fail, files: dict | None = None, folders: dict | None = None) -> None:
-    from .outputs import OutputError, check_outputs
-
-    try:
-        check_outputs(files=files, folders=folders)
-    except OutputError as exc:
-        fail(str(exc))
-
-
-def _unique(items: list, key) -> tuple[list, list]:
-    """``items`` without repeats (by ``key``), in order; and the repeats dropped."""
-    seen, kept, dropped = set(), [], []
-    for item in items:
-        k = key(item)
-        (dropped if k in seen else kept).append(item)
-        seen.add(k)
-    return kept, dropped
-
 
 def _rpm(value) -> str:
     return "-" if value is None else f"{value:.2f}"
-
-
-def _dask_client(scheduler: str, timeout_s: float, fail):
-    """A connected ``distributed.Client``, or a one-line error and exit 2."""
-    from .experiments.executor import ExecutorError, connect_dask
-
-    try:
-        return connect_dask(scheduler, timeout_s)
-    except ExecutorError as exc:
-        fail(str(exc))
 
 
 def register(app: typer.Typer) -> None:
@@ -124,7 +61,7 @@ def _add_fusion(experiment: typer.Typer) -> None:
     ) -> None:
         """Drive a warehouse route and compare raw odometry with the four fusion architectures of §6.2.2."""
         check_firmware(firmware, fail)
-        _check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
+        check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
         from .controllers.path_follower import RouteError, load_route
         from .experiments import fusion, fusion_report
 
@@ -174,8 +111,8 @@ def _add_faults(experiment: typer.Typer) -> None:
         """Inject each kind of fault under both firmwares and report what they do (docs/faults.md)."""
         from .experiments import faults, faults_report
 
-        jobs = _check_common(jobs, "faithful", fail)
-        _check_outputs(fail, folders={"--out": out})
+        jobs = check_common(jobs, "faithful", fail)
+        check_outputs(fail, folders={"--out": out})
         cfg = _config(config, params, set_)
 
         def work():
@@ -218,17 +155,17 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time."""
         from .experiments import chapter5
 
-        jobs = _check_common(jobs, firmware, fail)
-        _check_duration(duration_s, fail)
+        jobs = check_common(jobs, firmware, fail)
+        check_duration(duration_s, fail)
         try:
             numbers = None if runs is None else [int(v) for v in runs.split(",")]
         except ValueError:
             fail(f"--runs {runs!r}: expected run numbers 1..8 separated by commas")
         if numbers is not None and not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
             fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
-        _check_folder("--record", record, fail, "run<N>.rrd")
-        _check_folder("--mcap", mcap, fail, "run<N>.mcap")
-        _check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
+        check_record_folder("--record", record, fail, "run<N>.rrd")
+        check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
+        check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
 
         def work():
@@ -295,7 +232,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
 
         from .experiments.executor import EXECUTORS
 
-        jobs = _check_common(jobs, firmware, fail)
+        jobs = check_common(jobs, firmware, fail)
         if executor not in EXECUTORS:
             fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
         if executor == "dask" and not scheduler:
@@ -304,7 +241,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
             fail("--scheduler is only used with --executor dask")
         if not math.isfinite(duration_s):
             fail(f"--duration-s {duration_s}: must be a finite number")
-        _check_duration(duration_s, fail)
+        check_duration(duration_s, fail)
         cfg = _config(config, params, set_)
         try:
             mass_list = payload_sweep.parse_masses(masses)
@@ -318,9 +255,9 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
             fail(str(exc))
         if not position_list or not command_list:
             fail("--positions and --commands must name at least one item each")
-        mass_list, dup_m = _unique(mass_list, float)
-        position_list, dup_p = _unique(position_list, lambda p: payload_sweep.position_xy_m(cfg, p))
-        command_list, dup_c = _unique(command_list, payload_sweep.parse_command)
+        mass_list, dup_m = unique(mass_list, float)
+        position_list, dup_p = unique(position_list, lambda p: payload_sweep.position_xy_m(cfg, p))
+        command_list, dup_c = unique(command_list, payload_sweep.parse_command)
         if dup_m or dup_p or dup_c:
             typer.echo("note: repeated sweep values are simulated once: "
                        + ", ".join(str(v) for v in dup_m + dup_p + dup_c), err=True)
@@ -328,11 +265,11 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         if n_points > MAX_SWEEP_POINTS:
             fail(f"--masses x --positions x --commands: {n_points} points; at most {MAX_SWEEP_POINTS} per sweep "
                  f"(each is a simulation of {duration_s:g} s and a file in runs/): split the sweep")
-        _check_folder("--record", record, fail, "<key>.rrd")
-        _check_folder("--mcap", mcap, fail, "<key>.mcap")
-        _check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
+        check_record_folder("--record", record, fail, "<key>.rrd")
+        check_record_folder("--mcap", mcap, fail, "<key>.mcap")
+        check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
 
-        client = _dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+        client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
 
         def work():
             from .atomic_file import all_or_nothing

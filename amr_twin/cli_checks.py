@@ -13,7 +13,7 @@ from typing import Optional
 
 import typer
 
-from .cli_options import check_firmware
+from .cli_options import checked_firmware
 
 MAX_DURATION_S = 3600.0
 """Longest simulated run of an experiment, s (see amr_twin.cli_run.MAX_RUN_S)."""
@@ -24,13 +24,16 @@ MAX_SWEEP_POINTS = 10_000
 JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per usable core; at most that).")
 
 
-def check_common(jobs: Optional[int], firmware: str, fail) -> int:
-    """Firmware and --jobs (None -> the usable cores); returns the jobs to use."""
+def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path] = None) -> tuple[int, str]:
+    """Firmware (and --sketch; an avr sketch is built now) and --jobs (None -> the usable cores).
+
+    Returns the jobs to use and the firmware string (``avr:DIR`` with a sketch).
+    """
     from .experiments.executor import check_jobs
 
-    check_firmware(firmware, fail)
+    kind = checked_firmware(firmware, sketch, fail)
     try:
-        return check_jobs(jobs)
+        return check_jobs(jobs), kind
     except ValueError as exc:
         fail(str(exc))
 

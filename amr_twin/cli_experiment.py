@@ -22,7 +22,7 @@ import typer
 
 from .cli_checks import (MAX_SWEEP_POINTS, JobsOpt, check_common, check_duration, check_outputs,
                          check_record_folder, dask_client, unique)
-from .cli_options import check_firmware, firmware_option
+from .cli_options import checked_firmware, firmware_option, sketch_option
 
 def _rpm(value) -> str:
     return "-" if value is None else f"{value:.2f}"
@@ -60,7 +60,7 @@ def _add_fusion(experiment: typer.Typer) -> None:
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Drive a warehouse route and compare raw odometry with the four fusion architectures of §6.2.2."""
-        check_firmware(firmware, fail)
+        firmware = checked_firmware(firmware, None, fail)
         check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
         from .controllers.path_follower import RouteError, load_route
         from .experiments import fusion, fusion_report
@@ -111,7 +111,7 @@ def _add_faults(experiment: typer.Typer) -> None:
         """Inject each kind of fault under both firmwares and report what they do (docs/faults.md)."""
         from .experiments import faults, faults_report
 
-        jobs = check_common(jobs, "faithful", fail)
+        jobs, _ = check_common(jobs, "faithful", fail)
         check_outputs(fail, folders={"--out": out})
         cfg = _config(config, params, set_)
 
@@ -141,7 +141,9 @@ def _add_chapter5(experiment: typer.Typer) -> None:
     def chapter5_cmd(
         out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, run<N>.png."),
         jobs: Optional[int] = JobsOpt,
-        firmware: str = firmware_option(),
+        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr (the runs are "
+                                     "then also done with faithful and the differences tabulated)."),
+        sketch: Optional[Path] = sketch_option(),
         runs: Optional[str] = typer.Option(None, "--runs", help="Run numbers to do, e.g. 1,3 (default all)."),
         duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Override every run's duration, s."),
         record: Optional[Path] = typer.Option(
@@ -155,7 +157,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time."""
         from .experiments import chapter5
 
-        jobs = check_common(jobs, firmware, fail)
+        jobs, firmware = check_common(jobs, firmware, fail, sketch)
         check_duration(duration_s, fail)
         try:
             numbers = None if runs is None else [int(v) for v in runs.split(",")]
@@ -172,7 +174,8 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             from .atomic_file import all_or_nothing
 
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
-                                   progress=progress, record_dir=record, mcap_dir=mcap)
+                                   progress=progress, record_dir=record, mcap_dir=mcap,
+                                   reference_firmware="faithful" if firmware.startswith("avr") else None)
             with all_or_nothing():
                 chapter5.plot(results, out)
                 return chapter5.report(results, out)
@@ -187,6 +190,10 @@ def _add_chapter5(experiment: typer.Typer) -> None:
                        f"{c['measure']} {_rpm(c['loaded'])} / {_rpm(c['unloaded'])} RPM: {c['verdict']} "
                        f"(true speed {_rpm(c['true_loaded'])} / {_rpm(c['true_unloaded'])}: {c['true_verdict']})")
         s = data["summary"]
+        if "firmware_comparison" in data:
+            fc, w = data["firmware_comparison"], data["firmware_comparison"]["worst"]
+            typer.echo(f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample difference "
+                       f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: {fc['verdict']}")
         typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
                    f"(jobs {jobs}, firmware {firmware})")
@@ -211,6 +218,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         duration_s: float = typer.Option(8.0, "--duration-s", help="Simulated seconds per point (at most 3600)."),
         jobs: Optional[int] = JobsOpt,
         firmware: str = firmware_option(),
+        sketch: Optional[Path] = sketch_option(),
         executor: str = typer.Option("local", "--executor", help="local (process pool of --jobs) or dask."),
         scheduler: Optional[str] = typer.Option(None, "--scheduler",
                                                 help="Dask scheduler address, e.g. tcp://127.0.0.1:8786."),
@@ -232,7 +240,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
 
         from .experiments.executor import EXECUTORS
 
-        jobs = check_common(jobs, firmware, fail)
+        jobs, firmware = check_common(jobs, firmware, fail, sketch)
         if executor not in EXECUTORS:
             fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
         if executor == "dask" and not scheduler:

@@ -27,7 +27,7 @@ from typing import Optional
 import typer
 
 from .cli import _config, _guard, fail
-from .cli_options import RunOptions, checked_firmware as _checked_firmware, shared
+from .cli_options import RunOptions, checked_firmware, shared
 from .run_report import CSV_COLUMNS, collision_warning, csv_text, series_table, summary, text_lines  # noqa: F401
 
 MAX_RUN_S = 3600.0
@@ -36,11 +36,6 @@ minute of CPU per simulated hour); longer studies are missions run in pieces."""
 
 DEFAULT_RUN_S = 10.0
 EXIT_COLLISION = 4
-
-
-def checked_firmware(firmware: str, sketch: Optional[Path]) -> str:
-    """``--firmware`` and ``--sketch`` as the firmware string (see :func:`amr_twin.cli_options.checked_firmware`)."""
-    return _checked_firmware(firmware, sketch, fail)
 
 
 def _finite(name: str, value: Optional[float], required: bool = True) -> Optional[float]:
@@ -84,7 +79,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     from .run import run_mission
 
     duration_s = _duration(opts, default_s)
-    firmware = _checked_firmware(opts.firmware, opts.sketch, fail)
+    firmware = checked_firmware(opts.firmware, opts.sketch, fail)
     extra = {}
     if _finite("--payload-kg", opts.payload_kg, required=False) is not None:
         extra["payload.mass_kg"] = opts.payload_kg

@@ -59,7 +59,10 @@ def test_bounds_are_one_line_before_the_run(args, text, tmp_path):
 
 def test_firmware_choices_come_from_the_firmware_factory():
     res = runner.invoke(app, ["run", "--help"])
-    assert " or ".join(FIRMWARES) in " ".join(res.output.replace("│", " ").split())
+    choices = ", ".join(FIRMWARES[:-1]) + " or " + FIRMWARES[-1]
+    assert choices in " ".join(res.output.replace("│", " ").split())
+    res = runner.invoke(app, ["run", "stop", "--firmware", "avx"])
+    assert res.exit_code == 2 and f"must be one of {', '.join(FIRMWARES)}" in res.stderr
 
 
 def test_parser_errors_and_misplaced_options_are_one_line():

@@ -28,7 +28,8 @@ import typer
 
 from .cli import _config, _guard, fail
 from .cli_options import RunOptions, checked_firmware, shared
-from .run_report import CSV_COLUMNS, collision_warning, csv_text, series_table, summary, text_lines  # noqa: F401
+from .run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
+                         summary, text_lines)
 
 MAX_RUN_S = 3600.0
 """Longest run, simulated s: a run keeps its 100 Hz series in memory (about 70 MB and a

@@ -118,6 +118,8 @@ class FaultInjector:
         travelled after the fault, m. For sensor faults: the messages published after it
         (and, for the IMU, how many distinct gyro/accelerometer readings they carried).
         """
+        from .recorder import signed_published
+
         t = series.t_s
         out = []
         for fault in self.faults:
@@ -127,7 +129,7 @@ class FaultInjector:
             wheels = {}
             for w, name in enumerate(WHEEL_NAMES):
                 rpm = series.true_rpm[:, w]
-                pub = series.published[w]
+                pub = signed_published(series, w)
                 pub_after = pub[pub[:, 0] >= fault.t_s] if len(pub) else pub
                 peak = rpm[after][np.argmax(np.abs(rpm[after]))] if after.any() else float("nan")
                 wheels[name] = {

@@ -15,10 +15,18 @@ CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_
                "true_rpm_left", "true_rpm_right", "pwm_counts_left", "pwm_counts_right",
                "x_m", "y_m", "yaw_rad", "odom_x_m", "odom_y_m", "odom_yaw_rad",
                "current_a_left", "current_a_right", "battery_a", "battery_v")
-"""Columns of ``--csv``: references signed (motion x speed), published RPM as on
-wheelN_Vel (magnitude, held between samples, 0 before the first), true signed RPM,
-analogWrite counts, true pose (world) and odometry pose (odom frame, held), each
-motor's (phase) current (+ driving forward), the battery's current and voltage."""
+"""Columns of ``--csv``: reference RPM (motion x speed of wheel_Command), published RPM
+(|wheelN_Vel| x the wheel's commanded direction, held between samples, 0 before the
+first), true RPM, analogWrite counts, true pose (world) and odometry pose (odom frame,
+held), each motor's (phase) current (+ driving forward), the battery's current and
+voltage. Every RPM, here and in ``--json``, is signed: + = the wheel rolls forward."""
+CSV_COMMENT = ("# amr-twin run: every rpm column is signed, + = the wheel rolls forward (REP-103); ref_rpm = "
+               "motion x speed of wheel_Command, pub_rpm = |wheelN_Vel| x the commanded direction; "
+               "x_m, y_m, yaw_rad in the world, odom_* in odom; current_a + driving forward")
+"""First line of ``--csv``: ``pandas.read_csv(path, comment="#")``, ``numpy.genfromtxt(path, delimiter=",",
+names=True, skip_header=1)``."""
+SIGNED_METRICS = ("reference", "final_value", "peak_value", "steady_error")
+"""Step metrics in RPM that carry the sign of the reference (overshoot and band are magnitudes)."""
 
 
 def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before: float = 0.0) -> np.ndarray:
@@ -30,11 +38,13 @@ def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before:
 
 def series_table(series: RunSeries) -> np.ndarray:
     """The ``--csv`` table, shape (n, len(CSV_COLUMNS))."""
+    from .recorder import signed_published
+
     t = series.t_s
     cmd_t = np.array([c[0] for c in series.commands], float)
     cmd = np.array([c[1] for c in series.commands], float).reshape(-1, 4)
     ref = [_held(t, cmd_t, cmd[:, 0] * cmd[:, 1]), _held(t, cmd_t, cmd[:, 2] * cmd[:, 3])]
-    pub = [_held(t, series.published[w][:, 0], series.published[w][:, 1]) for w in (0, 1)]
+    pub = [_held(t, p[:, 0], p[:, 1]) for p in (signed_published(series, w) for w in (0, 1))]
     odom = [_held(t, series.odom[:, 0], series.odom[:, k]) for k in (1, 2, 3)]
     return np.column_stack([t, *ref, *pub, series.true_rpm, series.pwm_counts, series.pose, *odom,
                             series.current_a, series.battery_a, series.battery_v])
@@ -43,7 +53,7 @@ def series_table(series: RunSeries) -> np.ndarray:
 def csv_text(series: RunSeries) -> str:
     """The ``--csv`` file: a header of :data:`CSV_COLUMNS`, one row per 10 ms."""
     rows = series_table(series)
-    lines = [",".join(CSV_COLUMNS)]
+    lines = [CSV_COMMENT, ",".join(CSV_COLUMNS)]
     lines += [",".join(f"{v:.9g}" for v in row) for row in rows]
     return "\n".join(lines) + "\n"
 
@@ -60,14 +70,17 @@ def json_ready(value):
 
 
 def _step_metrics(series: RunSeries, wheel: int, reference_rpm: float) -> dict:
-    """Step metrics of a wheel's published speed."""
+    """Step metrics of a wheel's signed published speed (those of :data:`SIGNED_METRICS` signed)."""
     from .metrics import step_info
+    from .recorder import signed_published
 
-    pub = series.published[wheel]
+    pub = signed_published(series, wheel)
     if reference_rpm == 0.0 or len(pub) < 2:
         return {}
     info = step_info(pub[:, 0], pub[:, 1], reference_rpm)
-    return info.as_dict() if hasattr(info, "as_dict") else dataclasses.asdict(info)
+    out = info.as_dict() if hasattr(info, "as_dict") else dataclasses.asdict(info)
+    sign = 1.0 if reference_rpm > 0 else -1.0  # step_info measures along the reference
+    return {k: (sign * v if k in SIGNED_METRICS else v) for k, v in out.items()}
 
 
 def summary(result, single: bool, start_xy_yaw=None) -> dict:
@@ -82,9 +95,11 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
     code = next((c for c in result.codes if c != 0), 0)
     last_s = series.t_s >= series.t_s[-1] - 1.0  # "final" electrical values: the last second
     wheels = {}
+    from .recorder import signed_published
+
     for w, name in enumerate(("left", "right")):
-        reference = wc[2 * w + 1] if wc else 0.0
-        pub = series.published[w]
+        reference = wc[2 * w] * wc[2 * w + 1] if wc else 0.0  # signed: motion x speed
+        pub = signed_published(series, w)
         entry = {"motion": int(wc[2 * w]) if wc else 0, "reference_rpm": reference,
                  "final_rpm": float(pub[-1, 1]) if len(pub) else 0.0,
                  "true_final_rpm": float(series.true_rpm[-1, w]), "samples": int(len(pub)),

@@ -73,7 +73,10 @@ def plot(results: dict, out: Path) -> list[Path]:
 
 
 def _f(value, fmt: str = ".1f") -> str:
-    return "-" if value is None or (isinstance(value, float) and not math.isfinite(value)) else format(value, fmt)
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    text = format(value, fmt)
+    return text[1:] if text.startswith("-") and not text.strip("-0.") else text  # no "-0.0"
 
 
 def _pair(rows: dict, key) -> tuple:

@@ -35,6 +35,10 @@ uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has 
     /wheel0_Vel, /wheel1_Vel   std_msgs/msg/Float64   |RPM| as published by the firmware (no sign)
     /twin/true_rpm     std_msgs/msg/Float64MultiArray [left, right], signed (+ rolling forward), 100 Hz
     /twin/pwm_counts   std_msgs/msg/Float64MultiArray [left, right] analogWrite counts, 100 Hz
+    /twin/motor_current std_msgs/msg/Float64MultiArray [left, right] motor (phase) current, A, + driving
+                                                      forward, 100 Hz
+    /battery_state     sensor_msgs/msg/BatteryState   the pack: voltage, current (negative discharging,
+                                                      as ROS states it), charge, 10 Hz
     /twin/ground_truth nav_msgs/msg/Odometry          world -> base_link: true pose, twist in base_link, 100 Hz
 """
 
@@ -49,7 +53,7 @@ from . import ros_state
 from .atomic_file import replacing
 from .event_log import mcap_items as event_items
 from .messages import String, TFMessage
-from .ros2_cdr import (encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
+from .ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
                        encode_range, encode_string, encode_tf_message, encode_twist)
 from .ros2_schemas import msgdef, ros2_type
@@ -58,6 +62,8 @@ REQUEST_FIELDS = "motionL,speedL,motionR,speedR"
 """Label of the one dimension of a recorded ``wheel_Command_Service`` request."""
 JOINT_STATE_PERIOD_US = 20_000
 """Period of /joint_states and of the joints' links on /tf, us (50 Hz)."""
+BATTERY_EVERY_ROWS = 10
+"""/battery_state every 10th row of the 100 Hz record grid (10 Hz)."""
 LATCHED = ("/tf_static", "/robot_description")
 """Topics offered transient-local (a late subscriber gets the last message)."""
 
@@ -134,13 +140,20 @@ def write_mcap(capture, series, path: Path) -> Path:
             items.append((int(t_us) * 1000, k, topic, typ, encode(msg)))
             k += 1
     t_ns = np.round(series.t_s * 1e9).astype(np.int64).tolist()
-    true_rpm, pwm = series.true_rpm.tolist(), series.pwm_counts.tolist()
+    true_rpm, pwm, current = series.true_rpm.tolist(), series.pwm_counts.tolist(), series.current_a.tolist()
+    volts, amps, soc = series.battery_v.tolist(), series.battery_a.tolist(), series.battery_soc.tolist()
+    capacity = capture.twin.cfg.battery.capacity_ah
     for i, t in enumerate(t_ns):
         items.append((t, k, "/twin/true_rpm", "std_msgs/Float64MultiArray",
                       encode_float64_multi_array(true_rpm[i])))
         items.append((t, k + 1, "/twin/pwm_counts", "std_msgs/Float64MultiArray",
                       encode_float64_multi_array(pwm[i])))
-        k += 2
+        items.append((t, k + 2, "/twin/motor_current", "std_msgs/Float64MultiArray",
+                      encode_float64_multi_array(current[i])))
+        if i % BATTERY_EVERY_ROWS == 0:
+            items.append((t, k + 3, "/battery_state", "sensor_msgs/BatteryState", encode_battery_state(
+                t, volts[i], -amps[i], soc[i] * capacity, capacity, soc[i])))
+        k += 4
     items += _state_items(capture, k)
     bus = capture.twin.bus
     items.append((0, -2, "/robot_description", "std_msgs/String", encode_string(String(capture.twin.urdf))))

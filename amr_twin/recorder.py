@@ -35,6 +35,7 @@ class RunSeries:
     voltage_v: np.ndarray        # (n, 2) phase voltage the driver applies (0 braking or coasting)
     current_a: np.ndarray        # (n, 2) motor (phase) current, + driving forward
     battery_a: np.ndarray        # (n,) the pack's current: drivers and auxiliary load
+    battery_soc: np.ndarray      # (n,) state of charge, 0..1 (the grid's accounting)
     published: dict[int, np.ndarray]  # wheel -> (k, 2) rows t_s, |rpm| as received on the PC (signed_published)
     odom: np.ndarray             # (k, 4) t_s, x_m, y_m, yaw_rad (odom frame)
     commands: list[tuple[float, list[float]]] = field(default_factory=list)
@@ -145,9 +146,13 @@ class Recorder:
         published = {w: np.array(v, float).reshape(-1, 2) for w, v in self._published.items()}
         cfg, mode, voltage = self.twin.cfg, pins[:, 4:6].astype(int), pins[:, 7:9]
         current = motor_currents_a(cfg, voltage, rows[:, 2:4], mode)
+        battery_a = battery_current_a(cfg, voltage, current, pins[:, 6])
+        # the plant drains the pack by the grid instant's current over the grid interval
+        drained_ah = np.concatenate([[0.0], np.cumsum(battery_a[1:] * np.diff(t))]) / 3600.0
+        soc = cfg.battery.soc_initial - drained_ah / cfg.battery.capacity_ah
         return RunSeries(
             t_s=t, wheel_angle_rad=rows[:, 0:2], true_rpm=rows[:, 2:4] * RAD_S_TO_RPM, pose=pose,
             pwm_counts=pins[:, 0:2].astype(int), direction=pins[:, 2:4].astype(int),
             mode=mode, battery_v=pins[:, 6], voltage_v=voltage, current_a=current,
-            battery_a=battery_current_a(cfg, voltage, current, pins[:, 6]), published=published,
+            battery_a=battery_a, battery_soc=soc, published=published,
             odom=np.array(self._odom, float).reshape(-1, 4), commands=list(self.commands))

@@ -40,7 +40,7 @@ from .atomic_file import replacing
 from .event_log import has_events, log_events
 from .rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
-from .rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_imu,  # noqa: F401
+from .rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,  # noqa: F401
                             _log_wheel_speeds, reference_rpm)
 from .rerun_world import (VISUAL_GROUPS, _log_body_transforms, _log_geoms, _log_scan,  # noqa: F401
                           _log_trajectory, _log_uwb, body_entity, uwb_geometry, uwb_ranges)
@@ -54,6 +54,7 @@ def _blueprint(has_imu: bool, has_uwb: bool = False, has_events: bool = False):
 
     plots = [rrb.TimeSeriesView(origin=f"wheels/{w}", name=f"{w} wheel RPM") for w in WHEELS]
     plots.append(rrb.TimeSeriesView(origin="duty", name="PWM counts"))
+    plots.append(rrb.TimeSeriesView(origin="electrics", name="currents A, battery V"))
     if has_imu:
         plots.append(rrb.TimeSeriesView(origin="imu", name="IMU"))
     if has_uwb:
@@ -88,6 +89,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
         _log_uwb(rec, m, capture)
         _log_wheel_speeds(rec, series)
         _log_duty(rec, series)
+        _log_electrics(rec, series)
         _log_commands(rec, series, result)
         _log_trajectory(rec, series)
         log_events(rec, capture.twin)  # collisions and faults (amr_twin/event_log.py)

@@ -4,6 +4,8 @@ All on the ``sim_time`` timeline (:data:`TIMELINE`, durations in s)::
 
     wheels/{left,right}/{reference,published,true}_rpm   Scalars, RPM
     duty/{left,right}                   analogWrite counts
+    electrics/{left,right}/current_a    Scalars, motor (phase) current, A, + driving forward
+    electrics/battery/{current_a,voltage_v}  Scalars, the pack
     imu/{accel,gyro,mag}                Scalars (x, y, z), m/s^2, rad/s, T
     commands                            TextLog of wheel_Command and the client calls
 
@@ -57,6 +59,13 @@ def _log_wheel_speeds(rec, series) -> None:
 def _log_duty(rec, series) -> None:
     for w, name in enumerate(WHEELS):
         _scalars(rec, f"duty/{name}", series.t_s, series.pwm_counts[:, w])
+
+
+def _log_electrics(rec, series) -> None:
+    for w, name in enumerate(WHEELS):
+        _scalars(rec, f"electrics/{name}/current_a", series.t_s, series.current_a[:, w])
+    _scalars(rec, "electrics/battery/current_a", series.t_s, series.battery_a)
+    _scalars(rec, "electrics/battery/voltage_v", series.t_s, series.battery_v)
 
 
 def _log_commands(rec, series, result=None) -> None:

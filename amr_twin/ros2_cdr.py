@@ -151,6 +151,27 @@ def encode_range(msg) -> bytes:
     return bytes(c.b)
 
 
+def encode_battery_state(t_ns: int, voltage_v: float, current_a: float, charge_ah: float,
+                         capacity_ah: float, percentage: float) -> bytes:
+    """The CDR payload of a ``sensor_msgs/BatteryState`` of the lithium pack (frame ``base_link``).
+
+    ``current_a`` as ROS states it: negative while discharging. Temperature and cell
+    values are not modelled (NaN, empty); status discharging, health unknown, Li-ion.
+    """
+    c = Cdr()
+    c.header(t_ns // 1_000_000_000, t_ns % 1_000_000_000, "base_link")
+    c.f32(voltage_v, float("nan"), current_a, charge_ah, capacity_ah, capacity_ah, percentage)
+    c.u8(2)  # POWER_SUPPLY_STATUS_DISCHARGING
+    c.u8(0)  # POWER_SUPPLY_HEALTH_UNKNOWN
+    c.u8(2)  # POWER_SUPPLY_TECHNOLOGY_LION
+    c.u8(1)  # present
+    c.f32_seq([])
+    c.f32_seq([])
+    c.string("base")
+    c.string("")
+    return bytes(c.b)
+
+
 def encode_float64(msg) -> bytes:
     """The CDR payload of a ``std_msgs/Float64`` message."""
     c = Cdr()

@@ -30,7 +30,8 @@ TOPIC_TYPES = {
     "/imu/mag": "sensor_msgs/msg/MagneticField", "/wheel0_Vel": "std_msgs/msg/Float64",
     "/wheel1_Vel": "std_msgs/msg/Float64", "/wheel_Command": "std_msgs/msg/Float64MultiArray",
     "/twin/true_rpm": "std_msgs/msg/Float64MultiArray", "/twin/pwm_counts": "std_msgs/msg/Float64MultiArray",
-    "/twin/ground_truth": "nav_msgs/msg/Odometry",
+    "/twin/ground_truth": "nav_msgs/msg/Odometry", "/twin/motor_current": "std_msgs/msg/Float64MultiArray",
+    "/battery_state": "sensor_msgs/msg/BatteryState",
 }
 
 
@@ -175,6 +176,15 @@ def test_values_against_the_simulation(recorded, decoded):
     assert [t for t, _m in decoded["/twin/true_rpm"]] == np.round(series.t_s * 1e9).astype(np.int64).tolist()
     pwm = np.array([m.data for _t, m in decoded["/twin/pwm_counts"]])
     assert np.array_equal(pwm, series.pwm_counts)
+    # electrics: motor currents at every row, the pack at 10 Hz (ROS: current negative discharging)
+    current = np.array([m.data for _t, m in decoded["/twin/motor_current"]])
+    assert np.array_equal(current, series.current_a) and current.max() > 1.0
+    battery = [m for _t, m in decoded["/battery_state"]]
+    assert len(battery) == len(series.t_s[::10])
+    assert [b.voltage for b in battery] == pytest.approx(series.battery_v[::10].tolist(), rel=1e-6)
+    assert [b.current for b in battery] == pytest.approx((-series.battery_a[::10]).tolist(), rel=1e-6)
+    assert all(b.current < 0 for b in battery)  # the pack discharges
+    assert battery[-1].percentage < battery[0].percentage == pytest.approx(_cfg.battery.soc_initial)
     # firmware topics: published RPM and the wheel commands
     for wheel in (0, 1):
         rpm = [m.data for _t, m in decoded[f"/wheel{wheel}_Vel"]]

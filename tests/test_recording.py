@@ -80,8 +80,10 @@ def test_rrd_entities_and_rates(recorded):
                    "/world/bodies/amr/base_link/geoms/boxes", "/world/bodies/amr/wheel_left_link/geoms/cylinders",
                    "/world/scan", "/world/bodies/amr/laser/scan", "/world/trajectory/true",
                    "/world/trajectory/odom", "/wheels/left/true_rpm", "/wheels/right/published_rpm",
-                   "/wheels/left/reference_rpm", "/duty/left", "/imu/accel", "/imu/gyro", "/commands"):
+                   "/wheels/left/reference_rpm", "/duty/left", "/imu/accel", "/imu/gyro", "/commands",
+                   "/electrics/left/current_a", "/electrics/battery/current_a", "/electrics/battery/voltage_v"):
         assert entity in entities, entity
+    assert rows["/electrics/right/current_a"] == len(result.series.t_s)
     # body transforms at ~30 Hz (33.3 Hz on the 10 ms grid) over the run
     n_tf = rows["/world/bodies/amr/wheel_left_link"]
     assert abs(n_tf - DURATION_S * 1e6 / capture.period_us) <= 2

@@ -133,6 +133,7 @@ class DriverCfg(Section):
     gain: float = P(unit="1", gt=0.1, le=20.0)
     deadband_duty: float = P(unit="1", ge=0.0, le=0.5)
     brake_current_limit_a: float = P(unit="A", gt=0.5, le=500.0)
+    continuous_current_a: float = P(unit="A", gt=0.5, le=100.0)
     quiescent_current_a: float = P(unit="A", ge=0.0, le=1.0)
 
 

@@ -12,8 +12,9 @@ placements that still lie on the deck; ``X:Y`` gives the box centre in metres.
 
 A point is **safe** when its position is valid, the simulation ran, the static
 tip margin is at least :data:`TIP_MARGIN_MIN_M`, no drive wheel ever lost
-contact (:data:`~amr_twin.statics.CONTACT_MIN_N`) and the base tilted at most
-:data:`TILT_LIMIT_DEG`. The highest safe payload of a position is the largest
+contact (:data:`~amr_twin.statics.CONTACT_MIN_N`), the base tilted at most
+:data:`TILT_LIMIT_DEG` and no motor's steady current exceeded the driver's continuous
+rating (``driver.continuous_current_a``). The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
 
 Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``<key>.rrd`` /
@@ -284,8 +285,11 @@ def simulate_point(point: Point) -> dict:
         row.update(_dynamics(point, cfg))
     except (BuildError, DivergenceError) as exc:
         row["error"] = str(exc).splitlines()[0]
+    currents = [row.get(f"{w}_steady_current_a") for w in WHEELS]
+    row["motor_overload"] = any(i is not None and i > cfg.driver.continuous_current_a for i in currents)
     row["safe"] = (not row["error"] and row.get("static_tip_margin_m", -1) >= TIP_MARGIN_MIN_M
-                   and not row.get("wheel_lift_off", True) and row.get("max_tilt_deg", 90) <= TILT_LIMIT_DEG)
+                   and not row.get("wheel_lift_off", True) and row.get("max_tilt_deg", 90) <= TILT_LIMIT_DEG
+                   and not row["motor_overload"])
     row["wall_s"] = round(time.perf_counter() - wall0, 3)
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
 

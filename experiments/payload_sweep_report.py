@@ -46,6 +46,9 @@ def unsafe_reason(row: dict) -> str:
         reasons.append(f"drive wheel lift-off (min load {row.get('dyn_min_wheel_n', float('nan')):.1f} N)")
     if row.get("max_tilt_deg", 90) > TILT_LIMIT_DEG:
         reasons.append(f"tilt {row.get('max_tilt_deg', float('nan')):.2f} deg > {TILT_LIMIT_DEG} deg")
+    if row.get("motor_overload"):
+        worst = max(row.get(f"{w}_steady_current_a") or 0.0 for w in WHEELS)
+        reasons.append(f"motor overload: {worst:.1f} A steady, over the driver's continuous rating")
     return "; ".join(reasons)
 
 
@@ -142,7 +145,8 @@ def report(results: dict, out_dir: Path) -> dict:
              f"{len(results['rows'])} points ({results['simulated']} simulated, {results['reused']} reused) in "
              f"{results['wall_s']:.1f} s wall time; {results['duration_s']} s per run, firmware {results['firmware']}.",
              "", f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
-             f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, for every command and every lighter payload.", "",
+             f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current, for every "
+             "command and every lighter payload.", "",
              "| position | highest safe kg | first unsafe kg | reason | heaviest tracking kg | invalid at kg |",
              "|---|---|---|---|---|---|"]
     for position, s in summary.items():

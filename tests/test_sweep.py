@@ -90,3 +90,16 @@ def test_per_wheel_panels_read_the_wheel_columns():
            "left_steady_error_rpm": -3.0, "right_steady_error_rpm": 1.0}
     assert _value(row, "~delay_s") == 1.2
     assert _value(row, "~steady_error_rpm") == 3.0
+
+
+def test_a_motor_over_the_drivers_continuous_rating_is_unsafe():
+    """The same point, once with the shipped rating (11.1 A) and once with a rating the
+    motors exceed while driving (0.6 A): only the second is unsafe, with the reason."""
+    from amr_twin.experiments.payload_sweep_report import unsafe_reason
+
+    low = load_config(sets=["driver.continuous_current_a=0.6"])
+    ok = ps.simulate_point(ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", load_config()))
+    over = ps.simulate_point(ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", low))
+    assert ok["safe"] and not ok["motor_overload"]
+    assert 0.6 < max(over["left_steady_current_a"], over["right_steady_current_a"]) < 11.1
+    assert not over["safe"] and over["motor_overload"] and "motor overload" in unsafe_reason(over)

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 import typer
+from typer.core import TyperCommand, TyperGroup
 
 from .controllers.firmware import FIRMWARES
 
@@ -53,6 +54,79 @@ def checked_firmware(firmware: str, sketch: Optional[Path], fail: Callable[[str]
     return kind
 
 
+LIVE_MODES = ("foxglove", "rerun")
+
+
+def live_option_args(args: list[str]) -> list[str]:
+    """``--live`` with its value optional: ``--live`` not followed by a mode means ``--live foxglove``.
+
+    (typer's parser has no options with an optional value: a bare ``--live`` is written out.)
+    """
+    out = list(args)
+    for i, arg in enumerate(out):
+        if arg == "--":
+            break
+        if arg == "--live" and (i + 1 == len(out) or out[i + 1] not in LIVE_MODES):
+            out[i] = "--live=foxglove"
+    return out
+
+
+class LiveGroup(TyperGroup):
+    """A command group whose ``--live`` takes an optional value (:func:`live_option_args`)."""
+
+    def parse_args(self, ctx, args):
+        return super().parse_args(ctx, live_option_args(args))
+
+
+class LiveCommand(TyperCommand):
+    """A command whose ``--live`` takes an optional value (:func:`live_option_args`)."""
+
+    def parse_args(self, ctx, args):
+        return super().parse_args(ctx, live_option_args(args))
+
+
+def live_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
+    """``--live [foxglove|rerun]``, ``--host``, ``--port``, ``--web-port``, ``--rate`` (amr_twin.live)."""
+    return {
+        "live": (Optional[str], typer.Option(None, "--live", metavar="[foxglove|rerun]", help="Serve the twin live "
+                 "while it runs, paced to --rate: foxglove (the default; Foxglove WebSocket server, the .mcap's "
+                 "channels, drive it with /cmd_vel) or rerun (the .rrd's streams over gRPC + a local web viewer).")),
+        "host": (str, typer.Option("127.0.0.1", "--host", help="With --live foxglove: the address to listen on "
+                 "(0.0.0.0: every interface).")),
+        "port": (Optional[int], typer.Option(None, "--port", help="With --live: the server's port (foxglove 8765, "
+                 "rerun's gRPC 9876; 0: a free one).")),
+        "web_port": (Optional[int], typer.Option(None, "--web-port", help="With --live rerun: the web viewer's "
+                     "port (default 9090; 0: a free one).")),
+        "rate": (Optional[float], typer.Option(None, "--rate", help="With --live: simulated seconds per wall "
+                 "second (default 1; 0: as fast as possible).")),
+    }
+
+
+def checked_live(live: Optional[str], host: str, port: Optional[int], web_port: Optional[int],
+                 rate: Optional[float], fail: Callable[[str], None], default_rate: float = 1.0):
+    """The :class:`~amr_twin.live.LiveOptions` of the live options, None without ``--live``; an option of
+    ``--live`` given without it, or a bad value, is refused in one line (``fail``)."""
+    import math
+
+    from .live import LiveOptions
+
+    if live is None:
+        for flag, value, unset in (("--port", port, None), ("--web-port", web_port, None), ("--rate", rate, None),
+                                   ("--host", host, "127.0.0.1")):
+            if value != unset:
+                fail(f"{flag} is an option of --live: give --live (or drop {flag})")
+        return None
+    if rate is not None and not math.isfinite(rate):
+        fail(f"--rate {rate}: must be a finite number in [0, 1000] (0: as fast as possible)")
+    options = LiveOptions(mode=live, host=host, port=port, web_port=web_port,
+                          rate=default_rate if rate is None else rate)
+    try:
+        options.check()
+    except ValueError as exc:
+        fail(str(exc))
+    return options
+
+
 @dataclass
 class RunOptions:
     """The options of ``amr-twin run`` that every command kind shares (see :data:`RUN_OPTIONS`)."""
@@ -74,6 +148,11 @@ class RunOptions:
     config: Optional[Path] = None
     params: Optional[Path] = None
     set_: list[str] = field(default_factory=list)
+    live: Optional[str] = None
+    host: str = "127.0.0.1"
+    port: Optional[int] = None
+    web_port: Optional[int] = None
+    rate: Optional[float] = None
 
 
 def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
@@ -106,6 +185,7 @@ def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
         "config": (Optional[Path], ConfigOpt),
         "params": (Optional[Path], ParamsOpt),
         "set_": (Optional[list[str]], SetOpt),
+        **live_options(),
     }
 
 

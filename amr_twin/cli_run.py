@@ -27,7 +27,7 @@ from typing import Optional
 import typer
 
 from .cli import _config, _guard, fail
-from .cli_options import RunOptions, checked_firmware, shared
+from .cli_options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
 from .run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
 
@@ -93,6 +93,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         check_outputs(files={"--csv": opts.csv, "--record": opts.record, "--mcap": opts.mcap})
     except OutputError as exc:
         fail(str(exc))
+    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision)
@@ -108,7 +109,10 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         if recording:
             from .rerun_log import attach
             attach(twin)
-        res = run_mission(cfg, steps, duration_s, options, twin=twin)
+        if live is None:
+            res = run_mission(cfg, steps, duration_s, options, twin=twin)
+        else:
+            res = _run_live(twin, live, lambda: run_mission(cfg, steps, duration_s, options, twin=twin))
         with all_or_nothing():
             if recording:
                 from .rerun_log import record_run
@@ -136,6 +140,22 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         raise typer.Exit(EXIT_COLLISION)
 
 
+def _run_live(twin, live, run):
+    """``run()`` with ``twin`` served live (amr_twin.live); Ctrl-C ends it without writing the outputs."""
+    from .live import LiveSession
+
+    session = LiveSession(twin, live, say=lambda line: typer.echo(line, err=True))
+    try:
+        return run()
+    except KeyboardInterrupt:
+        fail(f"interrupted at t={twin.t_s:.2f} s simulated; no output written", code=130)
+    finally:
+        session.close()
+        dropped = session.sink.dropped if hasattr(session.sink, "dropped") else 0
+        if dropped:
+            typer.echo(f"live: {dropped} client message(s) dropped (see the warnings above)", err=True)
+
+
 def register(app: typer.Typer) -> None:
     """Add ``run`` (linear, angular, motor, stop, --mission) and ``client`` to the app."""
     from .menu import client
@@ -145,11 +165,11 @@ def register(app: typer.Typer) -> None:
 
         return RunCommand(*args, **kwargs)
 
-    run_app = typer.Typer(add_completion=False, no_args_is_help=False,
+    run_app = typer.Typer(cls=LiveGroup, add_completion=False, no_args_is_help=False,
                           help="Run wheel commands on the twin, as wheel_Command_Client does. The options "
                                "below go before or after the command kind.")
     app.add_typer(run_app, name="run")
-    app.command(name="client")(client)
+    app.command(name="client", cls=LiveCommand)(client)
 
     def one(opts: RunOptions, command_factory) -> None:
         try:

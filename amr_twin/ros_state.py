@@ -24,6 +24,8 @@ clock event, the run is unchanged); the functions turn one sample into messages.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from .bus import BASE_FRAME
@@ -123,6 +125,15 @@ class StateSampler:
         self.t_us.append(int(t_us))
         self._rows.append(np.concatenate([d.qpos[self._qadr], d.qvel[self._dadr], d.qvel[dof:dof + 6],
                                           d.xpos[self._bodies].ravel(), d.xquat[self._bodies].ravel()]))
+
+    def split(self, t_us: int) -> "StateSampler":
+        """The samples at or before ``t_us``, removed from this sampler, as a sampler of their own
+        (a live viewer takes them as the clock passes them; :mod:`amr_twin.live_foxglove`)."""
+        n = int(np.searchsorted(np.asarray(self.t_us, np.int64), t_us, side="right"))
+        out = copy.copy(self)
+        out.t_us, out._rows = self.t_us[:n], self._rows[:n]
+        del self.t_us[:n], self._rows[:n]
+        return out
 
     def arrays(self) -> dict[str, np.ndarray]:
         """``t_us`` (n,); joint ``q``, ``qd`` (n, 6); base ``v_world``, ``v_body``, ``w_body`` (n, 3),

@@ -1,0 +1,274 @@
+"""The twin live over the Foxglove WebSocket protocol (issue 17): ``amr-twin run ... --live``.
+
+A foxglove-sdk server (``ws://HOST:PORT``, subprotocol ``foxglove.sdk.v1``, the message format
+of the published ``foxglove.websocket.v1`` specification) advertising the channels of the
+``.mcap`` recording, with the same ROS 2 schemas (``ros2msg``, :mod:`amr_twin.ros2_schemas`)
+and the same CDR payloads (:mod:`amr_twin.mcap_log`'s encoders and state messages), log
+times in simulated ns. Added: ``/twin/scene`` (``foxglove.SceneUpdate``,
+:mod:`amr_twin.live_scene`). Capabilities: ``time`` (the simulated clock, as
+foxglove_bridge with ``use_sim_time``), ``clientPublish`` (``/cmd_vel`` and
+``/wheel_Command_Service/request``, :mod:`amr_twin.live_inputs`) and ``services``
+(``/wheel_Command_Service``). ``/tf_static``, ``/robot_description`` and ``/twin/scene``'s
+static entities are sent again whenever a client subscribes to them (latched, as
+transient-local topics are).
+
+Messages reach the clients at the pacer's ticks (:mod:`amr_twin.live_pacer`), in time
+order, once the simulated clock has passed them. A client's message is decoded and
+checked in the server's thread, then published on the twin's bus at the next tick;
+one that is refused is logged (one line) and counted in :attr:`FoxgloveSink.dropped`.
+"""
+
+from __future__ import annotations
+
+import logging
+from types import SimpleNamespace
+
+import numpy as np
+
+from . import live_inputs
+from .event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
+from .mcap_log import BUS_TOPICS, _state_items
+from .messages import String, TFMessage
+from .recorder import RAD_S_TO_RPM
+from .ros2_cdr import encode_float64_multi_array, encode_string, encode_tf_message
+from .ros2_schemas import msgdef, ros2_type
+from .ros_state import StateSampler
+
+LOG = logging.getLogger(__name__)
+
+SCENE_TOPIC = "/twin/scene"
+GHOST_PERIOD_US = 100_000
+"""Period of the scene's ground-truth robot, us (10 Hz)."""
+SERVICE = "/wheel_Command_Service"
+STATE_TOPICS = {"/clock": "rosgraph_msgs/Clock", "/twin/ground_truth": "nav_msgs/Odometry",
+                "/joint_states": "sensor_msgs/JointState", "/tf": "tf2_msgs/TFMessage",
+                "/twin/true_rpm": "std_msgs/Float64MultiArray", "/twin/pwm_counts": "std_msgs/Float64MultiArray",
+                "/robot_description": "std_msgs/String", "/tf_static": "tf2_msgs/TFMessage",
+                "/twin/collisions": DIAGNOSTIC_ARRAY, "/twin/faults": DIAGNOSTIC_ARRAY}
+"""The recording's topics that are not bus topics (mcap_log, event_log), with their types."""
+LATCHED = ("/tf_static", "/robot_description", SCENE_TOPIC)
+
+
+def live_topics(twin) -> dict[str, str]:
+    """Topic -> type of the channels a live twin advertises: the ``.mcap``'s for this twin."""
+    sensors = getattr(twin, "lidar", None) is not None
+    skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
+    if getattr(twin, "uwb", None) is None:
+        skip.add("uwb/range")
+    topics = {topic: typ for bus_topic, (topic, typ, _enc) in BUS_TOPICS.items() if bus_topic not in skip}
+    topics.update(STATE_TOPICS)
+    return topics
+
+
+def _listener(foxglove, sink: "FoxgloveSink"):
+    """A ``foxglove.ServerListener`` (its callbacks run in the server's threads) handing events to ``sink``."""
+
+    class Listener(foxglove.ServerListener):
+        def on_subscribe(self, client, channel) -> None:
+            sink._on_subscribe(channel.topic)
+
+        def on_client_advertise(self, client, channel) -> None:
+            sink._on_client_advertise(client.id, channel)
+
+        def on_client_unadvertise(self, client, client_channel_id: int) -> None:
+            sink._client_channels.pop((client.id, client_channel_id), None)
+
+        def on_message_data(self, client, client_channel_id: int, data: bytes) -> None:
+            sink._on_client_message(client.id, client_channel_id, data)
+
+    return Listener()
+
+
+class FoxgloveSink:
+    """Serve ``twin`` live over the Foxglove WebSocket protocol, fed by ``pacer``.
+
+    Parameters
+    ----------
+    twin : Twin
+        The twin (built, not yet run); a bus tap and a grid sampler are attached to it.
+    pacer : Pacer
+        Runs the clients' messages in the twin's thread and calls :meth:`flush`.
+    host, port : str, int
+        Where the server listens (port 0: a free port, see :attr:`port`).
+    """
+
+    def __init__(self, twin, pacer, host: str = "127.0.0.1", port: int = 8765):
+        import foxglove
+        from foxglove.channels import SceneUpdateChannel
+
+        from .live_scene import SceneBuilder
+
+        self.twin, self.pacer, self.bus = twin, pacer, twin.bus
+        self.dropped = 0
+        """Client messages refused (logged)."""
+        self.accepted = 0
+        """Client messages handed to the twin."""
+        self._client_channels: dict[tuple[int, int], tuple[str, str, object]] = {}
+        self._ctx = foxglove.Context()
+        self.channels = {}
+        for topic, typ in live_topics(twin).items():
+            schema = foxglove.Schema(name=ros2_type(typ), encoding="ros2msg", data=msgdef(typ).encode())
+            self.channels[topic] = foxglove.Channel(topic, message_encoding="cdr", schema=schema, context=self._ctx)
+        self.scene_channel = SceneUpdateChannel(SCENE_TOPIC, context=self._ctx)
+        self.scene = SceneBuilder(twin.physics.model, twin.physics.data)
+        self._bus_out: list[tuple[int, int, object, bytes]] = []  # t_ns, seq, channel, payload
+        self._seq = 0
+        self._state = StateSampler(twin.physics.model, twin.physics.data)
+        self._wheels: list[tuple[int, list[float], list[float]]] = []  # t_us, true rpm, pwm counts
+        self._events_sent: set[tuple[str, int]] = set()
+        self._collisions_sent = 0
+        self._latched_due: set[str] = set(LATCHED)
+        twin.bus.add_tap(self._tap)
+        twin.samplers.append(self._on_grid)
+        self._on_grid(twin.t_phys_us)
+        service = foxglove.Service(SERVICE, schema=self._service_schema(foxglove), handler=self._on_service_call)
+        caps = foxglove.Capability
+        self.server = foxglove.start_server(
+            name="amr-twin", host=host, port=port, context=self._ctx, server_listener=_listener(foxglove, self),
+            capabilities=[caps.ClientPublish, caps.Services, caps.Time], supported_encodings=["cdr", "json"],
+            services=[service])
+        self.host, self.port = host, self.server.port
+
+    @property
+    def url(self) -> str:
+        return f"ws://{self.host}:{self.port}"
+
+    @staticmethod
+    def _service_schema(foxglove):
+        def message(name: str, text: str):
+            return foxglove.MessageSchema(encoding="cdr", schema=foxglove.Schema(
+                name=name, encoding="ros2msg", data=text.encode()))
+
+        return foxglove.ServiceSchema(live_inputs.SERVICE_TYPE,
+                                      request=message(live_inputs.SERVICE_TYPE + "_Request",
+                                                      live_inputs.SERVICE_REQUEST_DEF),
+                                      response=message(live_inputs.SERVICE_TYPE + "_Response", ""))
+
+    # -- the twin's side (its thread) ---------------------------------------------------
+    def _tap(self, topic: str, msg, t_us: int) -> None:
+        entry = BUS_TOPICS.get(topic)
+        if entry is None:
+            return
+        channel = self.channels.get(entry[0])
+        if channel is None or not channel.has_sinks():
+            return
+        self._seq += 1
+        self._bus_out.append((t_us * 1000, self._seq, channel, entry[2](msg)))
+
+    def _on_grid(self, t_us: int) -> None:
+        """Grid sampler (physics at ``t_us``): the state, the true wheel speeds and the PWM in force."""
+        self._state.sample(t_us)
+        d, pins = self.twin.physics.data, self.twin.firmware.pins
+        self._wheels.append((t_us, [float(d.sensordata[2] * RAD_S_TO_RPM), float(d.sensordata[3] * RAD_S_TO_RPM)],
+                             [pins[0].pwm_counts, pins[1].pwm_counts]))
+
+    def flush(self, t_us: int) -> None:
+        """Send everything up to ``t_us`` (simulated), in time order; broadcast the time."""
+        t_ns = t_us * 1000
+        for topic in sorted(self._latched_due):
+            self._send_latched(topic, t_ns)
+        self._latched_due.clear()
+        items = [(t, 0, s, ch, data) for t, s, ch, data in self._bus_out]
+        self._bus_out = []
+        batch = self._state.split(t_us)
+        if batch.t_us:
+            order = 0
+            for t, _k, topic, _typ, data in _state_items(SimpleNamespace(state=batch), 0):
+                order += 1
+                items.append((t, 1, order, self.channels[topic], data))
+            arrays = batch.arrays()
+            for i, tb in enumerate(batch.t_us):
+                if tb % GHOST_PERIOD_US == 0:
+                    self.scene_channel.log(self.scene.ghost_update(tb * 1000, arrays["pos"][i], arrays["quat"][i]),
+                                           log_time=tb * 1000)
+        n = 0
+        while n < len(self._wheels) and self._wheels[n][0] <= t_us:
+            tw, rpm, pwm = self._wheels[n]
+            items.append((tw * 1000, 2, n, self.channels["/twin/true_rpm"], encode_float64_multi_array(rpm)))
+            items.append((tw * 1000, 2, n, self.channels["/twin/pwm_counts"], encode_float64_multi_array(pwm)))
+            n += 1
+        del self._wheels[:n]
+        if has_events(self.twin):
+            items += self._event_items(t_ns)
+        items.sort(key=lambda it: (it[0], it[1], it[2]))
+        for t, _g, _o, channel, data in items:
+            channel.log(data, log_time=t)
+        self.server.broadcast_time(t_ns)
+
+    def _event_items(self, t_ns: int) -> list:
+        out = []
+        for t, _k, topic, _typ, data in mcap_items(self.twin, 0):
+            if t <= t_ns and (topic, t) not in self._events_sent:
+                self._events_sent.add((topic, t))
+                out.append((t, 3, len(self._events_sent), self.channels[topic], data))
+        collisions = self.twin.collisions.collisions
+        if len(collisions) > self._collisions_sent:
+            self._collisions_sent = len(collisions)
+            points = np.array([(c.x_m, c.y_m, c.z_m) for c in collisions])
+            self.scene_channel.log(self.scene.collisions_update(t_ns, points), log_time=t_ns)
+        return out
+
+    def _send_latched(self, topic: str, t_ns: int) -> None:
+        if topic == "/robot_description":
+            self.channels[topic].log(encode_string(String(self.twin.urdf)), log_time=t_ns)
+        elif topic == "/tf_static":
+            self.channels[topic].log(encode_tf_message(TFMessage(self.bus.static_transforms())), log_time=t_ns)
+        elif topic == SCENE_TOPIC:
+            self.scene_channel.log(self.scene.static_update(t_ns), log_time=t_ns)
+
+    def close(self) -> None:
+        """Stop the server (clients are disconnected)."""
+        self.server.stop()
+
+    # -- the clients' side (the server's threads) ------------------------------------------
+    def _on_subscribe(self, topic: str) -> None:
+        if topic in LATCHED:
+            try:
+                self.pacer.post(lambda: self._latched_due.add(topic))
+            except RuntimeError:  # the twin has stopped
+                pass
+
+    def _drop(self, client_id: int, what: str, reason: str) -> None:
+        self.dropped += 1
+        LOG.warning("live: dropped %s from client %d: %s", what, client_id, reason)
+
+    def _on_client_advertise(self, client_id: int, channel) -> None:
+        try:
+            decoder = live_inputs.input_for(channel.topic, channel.schema_name, channel.encoding)
+        except live_inputs.InputError as exc:
+            decoder = exc
+            LOG.warning("live: client %d advertises %s; its messages will be dropped: %s", client_id,
+                        channel.topic, exc)
+        self._client_channels[(client_id, channel.id)] = (channel.topic, channel.encoding, decoder)
+
+    def _on_client_message(self, client_id: int, channel_id: int, data: bytes) -> None:
+        entry = self._client_channels.get((client_id, channel_id))
+        if entry is None:
+            return self._drop(client_id, f"a message on channel {channel_id}", "the channel was not advertised")
+        topic, encoding, decoder = entry
+        if isinstance(decoder, Exception):
+            return self._drop(client_id, f"a message on {topic}", str(decoder))
+        try:
+            msg = decoder(data, encoding)
+        except live_inputs.InputError as exc:
+            return self._drop(client_id, f"a message on {topic}", str(exc))
+        if topic.lstrip("/") == "cmd_vel":
+            action = lambda: self.bus.publish("cmd_vel", msg)  # noqa: E731
+        else:
+            action = lambda: live_inputs.call_service(self.bus, msg)  # noqa: E731
+        try:
+            self.pacer.post(action)
+        except RuntimeError as exc:
+            return self._drop(client_id, f"a message on {topic}", str(exc))
+        self.accepted += 1
+
+    def _on_service_call(self, request) -> bytes:
+        """``/wheel_Command_Service`` (the server's thread): checked, then called at the next tick."""
+        try:
+            req = live_inputs.decode_service_request(request.payload, request.encoding)
+        except live_inputs.InputError as exc:
+            self._drop(request.client_id, f"a call of {SERVICE}", str(exc))
+            raise
+        self.pacer.call(lambda: live_inputs.call_service(self.bus, req))
+        self.accepted += 1
+        return live_inputs.service_response(request.encoding)

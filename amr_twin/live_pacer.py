@@ -1,0 +1,168 @@
+"""Real-time pacing of a running twin, and the one door through which other threads act on it (issue 17).
+
+:class:`Pacer` is a synced clock event of its own, every ``tick_us`` (20 ms, a multiple of
+the record grid). At each tick, with the physics brought up to the tick's instant by the
+loop as for any synced event, it
+
+1. sleeps until the wall clock reaches the tick's simulated time divided by ``rate``
+   (``rate = 0``: no sleep, as fast as possible);
+2. runs the calls other threads queued (a Foxglove client's ``cmd_vel``, a menu choice):
+   they act at this simulated instant, through the bus like any node of the twin, so
+   the physics never runs ahead of a command;
+3. hands every live sink (:mod:`amr_twin.live_foxglove`, :mod:`amr_twin.live_rerun`)
+   what happened up to this instant: ``sink.flush(t_us)``.
+
+The loop is untouched: it still steps the physics in C from one clock event to the next.
+A tick only adds chunk boundaries on the record grid, where the loop samples the physics
+anyway, so a paced run computes exactly what an unpaced one does (``tests/test_live_pacer.py``
+compares them bit for bit); only the calls of other threads change a run, as a command does.
+
+A twin that cannot keep up (``--rate`` too high for the machine) runs as fast as it can;
+when it falls more than :data:`MAX_LAG_S` behind, the wall-clock reference is moved up
+(it does not race to catch up) and :attr:`Pacer.lag_resets` counts it.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from concurrent.futures import Future
+from typing import Any, Callable
+
+LOG = logging.getLogger(__name__)
+
+TICK_US = 20_000
+"""Default period of the pacing event, us (50 Hz: the viewers' refresh, the commands' latency)."""
+MAX_LAG_S = 1.0
+"""Wall seconds behind the paced schedule after which the reference is moved up."""
+
+
+class PacerClosed(RuntimeError):
+    """The twin is no longer running: a call cannot be made."""
+
+
+class Pacer:
+    """Pace ``twin`` to ``rate`` simulated seconds per wall second and run other threads' calls.
+
+    Parameters
+    ----------
+    twin : Twin
+        The twin; the pacing event is scheduled on its clock from now on.
+    rate : float
+        Simulated seconds per wall-clock second; 0 runs as fast as possible.
+    tick_us : int
+        Period of the pacing event, us; a positive multiple of the twin's record grid.
+    """
+
+    def __init__(self, twin, rate: float = 1.0, tick_us: int = TICK_US):
+        if not rate >= 0 or rate == float("inf"):
+            raise ValueError(f"rate: {rate} must be a finite number >= 0 (0: as fast as possible)")
+        if tick_us <= 0 or tick_us % twin.grid_us:
+            raise ValueError(f"tick_us: {tick_us} must be a positive multiple of the record grid ({twin.grid_us} us)")
+        self.twin, self.rate, self.tick_us = twin, float(rate), int(tick_us)
+        self.sinks: list = []
+        """Objects with ``flush(t_us)`` (and ``close()``), called at every tick."""
+        self.lag_resets = 0
+        self.ticks = 0
+        self._calls: queue.SimpleQueue = queue.SimpleQueue()
+        self._closed = False
+        self._lock = threading.Lock()
+        self._wall0: float | None = None
+        self._sim0_us = 0
+        now = twin.clock.now_us
+        twin.clock.schedule((now // self.tick_us + 1) * self.tick_us, self._tick)
+
+    # -- the pacing event ------------------------------------------------------------
+    def _tick(self) -> None:
+        if self._closed:
+            return
+        clock = self.twin.clock
+        now_us = clock.now_us
+        self.ticks += 1
+        self._sleep_until(now_us)
+        self.run_calls()
+        self.flush(now_us)
+        clock.schedule(now_us + self.tick_us, self._tick)
+
+    def _sleep_until(self, t_us: int) -> None:
+        if self.rate == 0:
+            return
+        wall = time.perf_counter()
+        if self._wall0 is None:
+            self._wall0, self._sim0_us = wall, t_us
+            return
+        target = self._wall0 + (t_us - self._sim0_us) * 1e-6 / self.rate
+        if target > wall:
+            time.sleep(target - wall)
+        elif wall - target > MAX_LAG_S:
+            if not self.lag_resets:
+                LOG.warning("the twin runs behind --rate %g (%.1f s late at t=%.2f s); pacing from now on",
+                            self.rate, wall - target, t_us * 1e-6)
+            self.lag_resets += 1
+            self._wall0, self._sim0_us = wall, t_us
+
+    def flush(self, t_us: int) -> None:
+        """Hand each sink what happened up to ``t_us`` (at a tick, and once at the end of a run)."""
+        for sink in self.sinks:
+            try:
+                sink.flush(t_us)
+            except Exception:  # noqa: BLE001 - a viewer's failure must not stop the twin
+                LOG.exception("live sink %s failed at t=%.3f s", type(sink).__name__, t_us * 1e-6)
+
+    # -- calls from other threads --------------------------------------------------------
+    def post(self, func: Callable[[], Any]) -> Future:
+        """Queue ``func()`` to run at the next tick in the twin's thread; returns its future.
+
+        Raises :class:`PacerClosed` once the twin has stopped.
+        """
+        future: Future = Future()
+        with self._lock:
+            if self._closed:
+                raise PacerClosed("the twin is not running")
+            self._calls.put((func, future))
+        return future
+
+    def call(self, func: Callable[[], Any], timeout_s: float = 10.0) -> Any:
+        """Run ``func()`` at the next tick and return its result (or raise its exception)."""
+        return self.post(func).result(timeout=timeout_s)
+
+    def run_calls(self) -> int:
+        """Run the queued calls now (the twin's thread); a call that raises is logged and skipped."""
+        n = 0
+        while True:
+            try:
+                func, future = self._calls.get_nowait()
+            except queue.Empty:
+                return n
+            n += 1
+            if not future.set_running_or_notify_cancel():
+                continue
+            try:
+                future.set_result(func())
+            except Exception as exc:  # noqa: BLE001 - nothing another thread sends may stop the twin
+                LOG.error("call from another thread failed at t=%.3f s: %s", self.twin.clock.now_us * 1e-6, exc)
+                future.set_exception(exc)
+
+    def close(self) -> None:
+        """The run is over: refuse new calls, fail the queued ones, flush and close the sinks."""
+        with self._lock:
+            self._closed = True
+        while True:
+            try:
+                _func, future = self._calls.get_nowait()
+            except queue.Empty:
+                break
+            if future.set_running_or_notify_cancel():
+                future.set_exception(PacerClosed("the twin stopped before the call ran"))
+        self.flush(self.twin.clock.now_us)
+        for sink in self.sinks:
+            try:
+                sink.close()
+            except Exception:  # noqa: BLE001
+                LOG.exception("closing live sink %s failed", type(sink).__name__)
+
+    @property
+    def closed(self) -> bool:
+        return self._closed

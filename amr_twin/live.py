@@ -51,6 +51,34 @@ class LiveOptions:
             raise ValueError(f"--rate {self.rate}: must be a finite number in [0, 1000] (0: as fast as possible)")
         if self.web_port is not None and self.mode != "rerun":
             raise ValueError("--web-port is the Rerun web viewer's: give it with --live rerun")
+        if self.mode == "foxglove":
+            ports = (("--port", self.host, FOXGLOVE_PORT if self.port is None else self.port),)
+        else:  # Rerun's servers listen on every interface
+            ports = (("--port", "0.0.0.0", RERUN_PORT if self.port is None else self.port),
+                     ("--web-port", "0.0.0.0", RERUN_WEB_PORT if self.web_port is None else self.web_port))
+        for flag, host, port in ports:
+            problem = port_problem(host, port) if port else None
+            if problem:
+                raise ValueError(f"{flag} {port}: cannot listen on {host}:{port} ({problem}); "
+                                 "give another port, or 0 for a free one")
+
+
+def port_problem(host: str, port: int) -> str | None:
+    """Why a server could not listen on ``host:port`` now (None: it can), e.g. a port in use."""
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except OSError as exc:
+        return f"host {host!r}: {exc.strerror or exc}"
+    family, _type, _proto, _name, address = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            sock.bind(address)
+        except OSError as exc:
+            return exc.strerror or str(exc)
+    return None
 
 
 class LiveSession:

@@ -123,10 +123,15 @@ class FoxgloveSink:
         self._on_grid(twin.t_phys_us)
         service = foxglove.Service(SERVICE, schema=self._service_schema(foxglove), handler=self._on_service_call)
         caps = foxglove.Capability
-        self.server = foxglove.start_server(
-            name="amr-twin", host=host, port=port, context=self._ctx, server_listener=_listener(foxglove, self),
-            capabilities=[caps.ClientPublish, caps.Services, caps.Time], supported_encodings=["cdr", "json"],
-            services=[service])
+        try:
+            self.server = foxglove.start_server(
+                name="amr-twin", host=host, port=port, context=self._ctx, server_listener=_listener(foxglove, self),
+                capabilities=[caps.ClientPublish, caps.Services, caps.Time], supported_encodings=["cdr", "json"],
+                services=[service])
+        except RuntimeError as exc:  # foxglove's FoxgloveError, e.g. the port taken since the check
+            twin.bus.remove_tap(self._tap)
+            twin.samplers.remove(self._on_grid)
+            raise OSError(f"--port {port}: cannot serve on {host}:{port}: {exc}") from None
         self.host, self.port = host, self.server.port
 
     @property

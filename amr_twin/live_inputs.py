@@ -37,6 +37,9 @@ SERVICE_REQUEST_DEF = "int32 motionL\nfloat32 speedL\nint32 motionR\nfloat32 spe
 codes int, speeds float, fig. 3.3 prints float32 values); the .srv file is not printed. Its
 response is empty."""
 EMPTY_RESPONSE_CDR = b"\x00\x01\x00\x00\x00"
+MAX_BYTES = {"geometry_msgs/Twist": 64, "std_msgs/Float64MultiArray": 4096, SERVICE_TYPE: 4096}
+"""Largest payload taken per type, bytes: a Twist is 52 in CDR (a few more with padding or JSON
+spacing would still fit 64 in CDR; JSON gets 4096 throughout); a request of 4 values is under 100."""
 """An empty ROS 2 message in CDR: the header and rosidl's one placeholder byte."""
 
 
@@ -61,6 +64,9 @@ def _cdr_decoder(ros_type: str) -> Callable[[bytes], Any]:
 
 def _decode(data: bytes, encoding: str, ros_type: str):
     """A CDR payload as a namespace, or a JSON one as a dict."""
+    limit = MAX_BYTES[ros_type] if encoding == "cdr" else 4096
+    if len(data) > limit:
+        raise InputError(f"{encoding} payload of {len(data)} bytes: more than a {ros_type} can take ({limit})")
     try:
         if encoding == "cdr":
             return _cdr_decoder(ros_type)(bytes(data))
@@ -127,7 +133,7 @@ def decode_service_request(data: bytes, encoding: str) -> WheelCommandRequest:
         import struct
 
         payload = bytes(data)
-        if len(payload) < 20 or payload[1] not in (0, 1):
+        if len(payload) < 20 or len(payload) > 64 or payload[1] not in (0, 1):
             raise InputError(f"cdr request of {len(payload)} bytes: expected 20 (int32, float32, int32, float32)")
         order = "<" if payload[1] == 1 else ">"
         values = struct.unpack_from(order + "ifif", payload, 4)

@@ -97,6 +97,7 @@ class RerunSink:
         self._sent_pose_us = -1
         self._rows: list[tuple[int, np.ndarray, list]] = []  # t_us, loop sensors, pwm counts
         self._messages: dict[str, list] = {}
+        self._scans: list = []  # scans waiting for the poses that place their beams
         self._commands: list[tuple[float, list[float]]] = []
         self._trail: dict[str, list] = {"true": [], "odom": []}
         self._trail_t = {"true": -TRAIL_PERIOD_US, "odom": -TRAIL_PERIOD_US}
@@ -126,6 +127,7 @@ class RerunSink:
         from .event_log import log_events
         from .rerun_streams import _log_commands, _log_duty, _log_imu, _log_wheel_speeds
         from .rerun_world import _log_body_transforms, _log_scan
+        from .sensors.lidar_beams import scan_end_time_s
 
         rec, m = self.rec, self.twin.physics.model
         poses = [p for p in self._poses if p[0] <= t_us]
@@ -135,8 +137,15 @@ class RerunSink:
         if new_poses:
             _log_body_transforms(rec, m, self._window(new_poses, {}))
             self._sent_pose_us = new_poses[-1][0]
-        if poses:
-            _log_scan(rec, m, self._window(poses, {"scan": messages.get("scan", [])}))
+        self._scans += messages.pop("scan", [])
+        if self._scans and self._poses:
+            # a scan's beams are placed on the poses around them: wait for a pose at or after its last beam
+            # (the physics runs ahead of the clock, so there usually is one)
+            last_pose_s = self._poses[-1][0] * 1e-6
+            ready = [it for it in self._scans if scan_end_time_s(it[1]) <= last_pose_s]
+            self._scans = [it for it in self._scans if scan_end_time_s(it[1]) > last_pose_s]
+            if ready:
+                _log_scan(rec, m, self._window(self._poses, {"scan": ready}))
         keep_from = t_us - int(POSE_KEEP_S * 1e6)
         self._poses = [p for p in self._poses if p[0] >= keep_from]
         _log_imu(rec, self._window([], messages))

@@ -15,7 +15,6 @@ from __future__ import annotations
 import logging
 import math
 import threading
-import time
 from pathlib import Path
 from typing import Callable, Optional
 
@@ -24,7 +23,9 @@ from rich.console import Console
 from rich.markup import escape
 
 from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
-from .cli_options import checked_firmware, firmware_option, sketch_option
+from .cli_options import checked_firmware, checked_live, firmware_option, live_options, sketch_option
+
+_LIVE = live_options()
 
 MENU = """
 [bold]wheel_Command_Client[/bold]
@@ -38,19 +39,40 @@ MENU = """
 class RealTimeTwin:
     """A :class:`~amr_twin.loop.Twin` advanced in a thread at ``rate`` x real time.
 
+    The pacing is :mod:`amr_twin.live_pacer`'s (a clock event every 20 ms that sleeps to the
+    wall clock), so the run is the one an unpaced twin computes; a menu choice runs in the
+    twin's thread at the next pacing event (:meth:`call`). With ``live`` the twin is also
+    served live (:class:`~amr_twin.live.LiveSession`: Foxglove or Rerun).
+
     Parameters
     ----------
     twin : Twin
         The twin to run.
     rate : float
         Simulated seconds per wall-clock second (> 0).
-    chunk_s : float
-        Longest simulated time advanced per lock hold, s.
+    live : LiveOptions, optional
+        Serve the twin live as well (its ``rate`` is this one).
+    say : callable
+        Where the live session prints its addresses.
     """
 
-    def __init__(self, twin, rate: float = 1.0, chunk_s: float = 0.05):
-        self.twin, self.rate, self.chunk_s = twin, float(rate), float(chunk_s)
-        self.lock = threading.Lock()
+    PIECE_S = 0.1
+    """Simulated seconds per ``advance`` call: a stop request waits at most this long (on the record grid)."""
+
+    def __init__(self, twin, rate: float = 1.0, live=None, say=print):
+        from dataclasses import replace
+
+        from .live_pacer import Pacer
+
+        self.twin, self.rate = twin, float(rate)
+        self.session = None
+        if live is not None:
+            from .live import LiveSession
+
+            self.session = LiveSession(twin, replace(live, rate=self.rate), say=say)
+            self.pacer = self.session.pacer
+        else:
+            self.pacer = Pacer(twin, self.rate)
         self.error: Optional[BaseException] = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="twin", daemon=True)
@@ -60,22 +82,17 @@ class RealTimeTwin:
         return self
 
     def _run(self) -> None:
-        wall0, sim0 = time.perf_counter(), self.twin.t_s
         try:
             while not self._stop.is_set():
-                behind_s = sim0 + (time.perf_counter() - wall0) * self.rate - self.twin.t_s
-                if behind_s > 1e-4:
-                    with self.lock:
-                        self.twin.advance(min(behind_s, self.chunk_s))
-                else:
-                    time.sleep(0.002)
+                self.twin.advance(self.PIECE_S)
         except Exception as exc:  # noqa: BLE001 - reported to the user by the menu
             self.error = exc
+        finally:
+            (self.session or self.pacer).close()
 
     def call(self, func: Callable[[], int]) -> int:
-        """Run ``func`` (a client call) between two simulation chunks."""
-        with self.lock:
-            return func()
+        """Run ``func`` (a client call) in the twin's thread at the next pacing event."""
+        return self.pacer.call(func)
 
     def close(self) -> None:
         self._stop.set()
@@ -141,14 +158,18 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
                                                      help="Inject a fault T s after the start (repeatable; "
                                                           "docs/faults.md)."),
            config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt,
-           set_: Optional[list[str]] = SetOpt) -> None:
-    """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time."""
+           set_: Optional[list[str]] = SetOpt,
+           live: Optional[str] = _LIVE["live"][1], host: str = _LIVE["host"][1],
+           port: Optional[int] = _LIVE["port"][1], web_port: Optional[int] = _LIVE["web_port"][1]) -> None:
+    """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time (--live: served to
+    Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel)."""
     from .faults import FaultError, parse_faults
     from .loop import Twin, TwinOptions
 
     if not (math.isfinite(rate) and 0 < rate <= 1000):
         fail(f"--rate {rate}: must be a finite number in (0, 1000]")
     firmware = checked_firmware(firmware, sketch, fail)
+    live_opts = checked_live(live, host, port, web_port, None, fail, default_rate=rate)
     try:
         faults = parse_faults(fault or [], sensors=False)
     except FaultError as exc:
@@ -171,7 +192,8 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
     twin.bus.add_tap(show)
     twin.collisions.listeners.append(lambda c: console.print(escape(
         f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m")))
-    rt = RealTimeTwin(twin, rate).start()
+    rt = _guard(lambda: RealTimeTwin(twin, rate, live_opts, say=lambda line: console.print(escape(line))))
+    rt.start()
     console.print(f"twin running at {rate:g}x real time, firmware {firmware}")
     for f in faults:
         console.print(escape(f"fault {f.name} at {f.t_s:g} s: {f.describe()['description']}"))

@@ -51,6 +51,8 @@ class LiveOptions:
             raise ValueError(f"--rate {self.rate}: must be a finite number in [0, 1000] (0: as fast as possible)")
         if self.web_port is not None and self.mode != "rerun":
             raise ValueError("--web-port is the Rerun web viewer's: give it with --live rerun")
+        if self.mode == "rerun" and self.host != "127.0.0.1":
+            raise ValueError("--host is the Foxglove server's: Rerun's servers listen on every interface")
         if self.mode == "foxglove":
             ports = (("--port", self.host, FOXGLOVE_PORT if self.port is None else self.port),)
         else:  # Rerun's servers listen on every interface

@@ -47,6 +47,8 @@ STATE_TOPICS = {"/clock": "rosgraph_msgs/Clock", "/twin/ground_truth": "nav_msgs
                 "/twin/collisions": DIAGNOSTIC_ARRAY, "/twin/faults": DIAGNOSTIC_ARRAY}
 """The recording's topics that are not bus topics (mcap_log, event_log), with their types."""
 LATCHED = ("/tf_static", "/robot_description", SCENE_TOPIC)
+STATE_ITEM_TOPICS = ("/clock", "/twin/ground_truth", "/joint_states", "/tf")
+"""The topics of mcap_log._state_items."""
 
 
 def live_topics(twin) -> dict[str, str]:
@@ -175,30 +177,38 @@ class FoxgloveSink:
         self._latched_due.clear()
         items = [(t, 0, s, ch, data) for t, s, ch, data in self._bus_out]
         self._bus_out = []
-        batch = self._state.split(t_us)
-        if batch.t_us:
+        batch = self._state.split(t_us)  # taken in any case; turned into messages only for a subscriber
+        if batch.t_us and any(self.channels[t].has_sinks() for t in STATE_ITEM_TOPICS):
             order = 0
             for t, _k, topic, _typ, data in _state_items(SimpleNamespace(state=batch), 0):
                 order += 1
                 items.append((t, 1, order, self.channels[topic], data))
-            arrays = batch.arrays()
+        if batch.t_us and self.scene_channel.has_sinks():
             for i, tb in enumerate(batch.t_us):
                 if tb % GHOST_PERIOD_US == 0:
-                    self.scene_channel.log(self.scene.ghost_update(tb * 1000, arrays["pos"][i], arrays["quat"][i]),
-                                           log_time=tb * 1000)
+                    pos, quat = self._state_pose(batch, i)
+                    self.scene_channel.log(self.scene.ghost_update(tb * 1000, pos, quat), log_time=tb * 1000)
         n = 0
         while n < len(self._wheels) and self._wheels[n][0] <= t_us:
-            tw, rpm, pwm = self._wheels[n]
-            items.append((tw * 1000, 2, n, self.channels["/twin/true_rpm"], encode_float64_multi_array(rpm)))
-            items.append((tw * 1000, 2, n, self.channels["/twin/pwm_counts"], encode_float64_multi_array(pwm)))
             n += 1
-        del self._wheels[:n]
+        wheels, self._wheels = self._wheels[:n], self._wheels[n:]
+        for name, k in (("/twin/true_rpm", 1), ("/twin/pwm_counts", 2)):
+            channel = self.channels[name]
+            if channel.has_sinks():
+                items += [(row[0] * 1000, 2, i, channel, encode_float64_multi_array(row[k]))
+                          for i, row in enumerate(wheels)]
         if has_events(self.twin):
             items += self._event_items(t_ns)
         items.sort(key=lambda it: (it[0], it[1], it[2]))
         for t, _g, _o, channel, data in items:
             channel.log(data, log_time=t)
         self.server.broadcast_time(t_ns)
+
+    @staticmethod
+    def _state_pose(batch, i: int):
+        """The base's world position and quaternion of a state sample (the ground truth's)."""
+        arrays = batch.arrays()
+        return arrays["pos"][i], arrays["quat"][i]
 
     def _event_items(self, t_ns: int) -> list:
         out = []

@@ -4,7 +4,8 @@ The Rerun recording of :mod:`amr_twin.rerun_log`, streamed as the twin runs: a g
 (``rerun+http://127.0.0.1:PORT/proxy``; it keeps what was sent for late viewers) and Rerun's
 web viewer served locally on ``WEB_PORT`` and connected to it; the native viewer connects
 with ``rerun rerun+http://127.0.0.1:PORT/proxy``. Same application id, entity paths,
-``sim_time`` timeline and default blueprint as the ``.rrd`` (:func:`amr_twin.rerun_log._blueprint`),
+``sim_time`` timeline and default blueprint as the ``.rrd`` (:func:`amr_twin.rerun_log._blueprint`; its time
+panel follows the newest data, and a viewer that connects late gets the newest data first),
 the streams logged by the same ``_log_<stream>`` functions (:mod:`amr_twin.rerun_world`,
 :mod:`amr_twin.rerun_streams`, :mod:`amr_twin.event_log`), each flush handing them what the
 simulated clock has passed since the last one. Two differences with the file:
@@ -26,6 +27,9 @@ import numpy as np
 
 from .recorder import RAD_S_TO_RPM, yaw_from_quat
 
+FLUSH_US = 100_000
+"""The stream is fed every 0.1 s of simulated time (each flush is one Rerun chunk per entity: the
+per-chunk cost of the SDK and of the viewer, not the data, sets the price)."""
 TRAIL_POINTS = 3000
 """Points kept in each live trajectory line (5 min at 10 Hz)."""
 TRAIL_PERIOD_US = 100_000
@@ -80,7 +84,7 @@ class RerunSink:
         self.grpc_port = grpc_port or _free_port()
         self.web_port = web_port or _free_port()
         self.rec = rr.RecordingStream("amr_twin")
-        self.uri = self.rec.serve_grpc(grpc_port=self.grpc_port, default_blueprint=self._layout())
+        self.uri = self.rec.serve_grpc(grpc_port=self.grpc_port, default_blueprint=self._layout(), newest_first=True)
         self.web_url = None
         if web_viewer:
             rr.serve_web_viewer(web_port=self.web_port, open_browser=False, connect_to=self.uri)
@@ -104,12 +108,19 @@ class RerunSink:
         self._start = None
         self._next_trail_us = 0
         self._collisions_sent = 0
+        self._next_flush_us = 0
+        self._last_t_us = twin.clock.now_us
         twin.bus.add_tap(self._tap)
         twin.samplers.append(self._on_grid)
         self._on_grid(twin.t_phys_us)
 
     def _layout(self):
-        return self._blueprint(self._has_imu, self._has_uwb, self._has_events)
+        """The file's blueprint, its time panel following the newest data (a live view, not a replay)."""
+        import rerun.blueprint as rrb
+
+        layout = self._blueprint(self._has_imu, self._has_uwb, self._has_events)
+        layout.time_panel = rrb.TimePanel(timeline="sim_time", play_state="following", state="collapsed")
+        return layout
 
     # -- the twin's side ------------------------------------------------------------------
     def _tap(self, topic: str, msg, t_us: int) -> None:
@@ -123,7 +134,13 @@ class RerunSink:
             self._poses.append((t_us, d.xpos[self.body_ids].copy(), d.xquat[self.body_ids].copy()))
 
     def flush(self, t_us: int) -> None:
-        """Log everything up to ``t_us`` (simulated) to the stream."""
+        """Log everything up to ``t_us`` (simulated) to the stream, every :data:`FLUSH_US`."""
+        self._last_t_us = t_us
+        if t_us >= self._next_flush_us:
+            self._next_flush_us = (t_us // FLUSH_US + 1) * FLUSH_US
+            self._flush(t_us)
+
+    def _flush(self, t_us: int) -> None:
         from .event_log import log_events
         from .rerun_streams import _log_commands, _log_duty, _log_imu, _log_wheel_speeds
         from .rerun_world import _log_body_transforms, _log_scan
@@ -211,7 +228,9 @@ class RerunSink:
             self._trail[name].append((float(xy[0]), float(xy[1])))
 
     def close(self) -> None:
-        """Flush the stream; the gRPC server stops with the recording stream (the process' end)."""
+        """Log what is left and flush the stream; the gRPC server stops with the recording stream (the
+        process' end)."""
+        self._flush(self._last_t_us)
         self.rec.flush()
 
 

@@ -46,6 +46,8 @@ def test_live_rerun_run_prints_its_stream_and_viewer():
     (["--live", "--rate", "nan"], "--rate nan: must be a finite number"),
     (["--live", "--port", "70000"], "--port 70000: must be in [0, 65535]"),
     (["--live", "--web-port", "9091"], "--web-port is the Rerun web viewer's"),
+    (["--live", "rerun", "--host", "0.0.0.0"], "--host is the Foxglove server's"),
+    (["--host", "0.0.0.0"], "--host is an option of --live"),
 ])
 def test_bad_live_options_refused_in_one_line(args, message):
     result = runner.invoke(app, ["run", "linear", "--speed-m-s", "0.3", *args])

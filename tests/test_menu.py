@@ -37,3 +37,42 @@ def test_menu_linear_then_stop_then_exit():
     finally:
         child.close()
     assert child.exitstatus == 0
+
+
+def test_menu_live_foxglove_client_drives_and_menu_stops():
+    """``client --live``: a Foxglove client's Twist and the menu drive the same twin."""
+    pytest.importorskip("websockets")
+    from rosbags.typesys import Stores, get_typestore
+
+    from foxglove_client import FoxgloveClient
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    twist = ts.serialize_cdr(ts.types["geometry_msgs/msg/Twist"](
+        linear=ts.types["geometry_msgs/msg/Vector3"](0.5, 0.0, 0.0),
+        angular=ts.types["geometry_msgs/msg/Vector3"](0.0, 0.0, 0.0)), "geometry_msgs/msg/Twist")
+    child = pexpect.spawn(str(AMR_TWIN), ["client", "--live", "--port", "0"], encoding="utf-8", timeout=30,
+                          env={"TERM": "dumb", "NO_COLOR": "1", "COLUMNS": "200", "PATH": "/usr/bin:/bin"})
+    try:
+        child.expect(r"(ws://127\.0\.0\.1:\d+)")
+        url = child.match.group(1)
+        child.expect("choice: ")
+        with FoxgloveClient(url) as client:
+            client.wait_for_channels(["/wheel_Command"])
+            client.subscribe(["/wheel_Command"])
+            channel = client.advertise("/cmd_vel", "geometry_msgs/msg/Twist")
+            client.pump(0.2)
+            client.publish(channel, twist)
+            got = client.pump(3.0, until=lambda: False)
+            child.sendline("3")  # the menu's stop, on the same twin
+            child.expect(r"sent wheel_Command \[0, 0\.00000, 0, 0\.00000\]")
+            client.pump(1.0, got)
+        commands = [list(ts.deserialize_cdr(d, "std_msgs/msg/Float64MultiArray").data) for _w, _n, _t, d in got]
+        assert commands[0] == pytest.approx([1, 38.19719, 1, 38.19719], abs=1e-4)  # the Twist, via the diff drive
+        assert [0, 0, 0, 0] in commands[1:]  # the watchdog's stop (0.5 s later), then the menu's
+        child.sendline("0")
+        child.expect(r"exit at t=(\d+\.\d+) s")
+        assert float(child.match.group(1)) > 3.0
+        child.expect(pexpect.EOF)
+    finally:
+        child.close()
+    assert child.exitstatus == 0

@@ -140,12 +140,13 @@ def test_malformed_and_unknown_messages_dropped_the_twin_runs_on(served, typesto
         assert len([r for r in caplog.records if r.getMessage().startswith("live: dropped")]) == len(bad)
         assert all("\n" not in r.getMessage() for r in caplog.records)
 
-        client.publish(as_json, b'{"linear": {"x": 0.2}, "angular": {"z": 0.0}}')
+        client.publish(as_json, b'{"linear": {"x": 0.2}, "angular": {"z": 0.5}}')  # turning left (REP-103)
         client.publish(request, _array(typestore, [1, 30.0, -1, 30.0]))
         _settle(client, sink, len(bad) + 2)
         twin.advance(0.1)
-        rpm = 0.2 * 60 / (math.pi * 0.25)
-        assert [c for _t, c in commands] == [pytest.approx([1, rpm, 1, rpm], rel=1e-6), [1, 30.0, -1, 30.0]]
+        half_m = twin.client.half_separation_m
+        left, right = ((0.2 + s * 0.5 * half_m) * 60 / (math.pi * 0.25) for s in (-1, 1))
+        assert [c for _t, c in commands] == [pytest.approx([1, left, 1, right], rel=1e-6), [1, 30.0, -1, 30.0]]
 
         # a service call waits for the twin's next tick: the twin runs in a thread meanwhile
         with _running(twin):

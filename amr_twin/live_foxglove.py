@@ -27,10 +27,10 @@ import numpy as np
 
 from . import live_inputs
 from .event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
-from .mcap_log import BUS_TOPICS, _state_items
+from .live_rows import LiveRows
+from .mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from .messages import String, TFMessage
-from .recorder import RAD_S_TO_RPM
-from .ros2_cdr import encode_float64_multi_array, encode_string, encode_tf_message
+from .ros2_cdr import encode_battery_state, encode_float64_multi_array, encode_string, encode_tf_message
 from .ros2_schemas import msgdef, ros2_type
 from .ros_state import StateSampler
 
@@ -43,6 +43,7 @@ SERVICE = "/wheel_Command_Service"
 STATE_TOPICS = {"/clock": "rosgraph_msgs/Clock", "/twin/ground_truth": "nav_msgs/Odometry",
                 "/joint_states": "sensor_msgs/JointState", "/tf": "tf2_msgs/TFMessage",
                 "/twin/true_rpm": "std_msgs/Float64MultiArray", "/twin/pwm_counts": "std_msgs/Float64MultiArray",
+                "/twin/motor_current": "std_msgs/Float64MultiArray", "/battery_state": "sensor_msgs/BatteryState",
                 "/robot_description": "std_msgs/String", "/tf_static": "tf2_msgs/TFMessage",
                 "/twin/collisions": DIAGNOSTIC_ARRAY, "/twin/faults": DIAGNOSTIC_ARRAY}
 """The recording's topics that are not bus topics (mcap_log, event_log), with their types."""
@@ -116,13 +117,14 @@ class FoxgloveSink:
         self._bus_out: list[tuple[int, int, object, bytes]] = []  # t_ns, seq, channel, payload
         self._seq = 0
         self._state = StateSampler(twin.physics.model, twin.physics.data)
-        self._wheels: list[tuple[int, list[float], list[float]]] = []  # t_us, true rpm, pwm counts
+        self._rows = LiveRows(twin)  # true wheel speeds, PWM, currents, battery: the recorder's columns
         self._events_sent: set[tuple[str, int]] = set()
         self._collisions_sent = 0
         self._latched_due: set[str] = set(LATCHED)
         twin.bus.add_tap(self._tap)
         twin.samplers.append(self._on_grid)
         self._on_grid(twin.t_phys_us)
+        self._capacity_ah = twin.cfg.battery.capacity_ah
         service = foxglove.Service(SERVICE, schema=self._service_schema(foxglove), handler=self._on_service_call)
         caps = foxglove.Capability
         try:
@@ -133,6 +135,7 @@ class FoxgloveSink:
         except RuntimeError as exc:  # foxglove's FoxgloveError, e.g. the port taken since the check
             twin.bus.remove_tap(self._tap)
             twin.samplers.remove(self._on_grid)
+            twin.samplers.remove(self._rows._on_grid)
             raise OSError(f"--port {port}: cannot serve on {host}:{port}: {exc}") from None
         self.host, self.port = host, self.server.port
 
@@ -163,11 +166,8 @@ class FoxgloveSink:
         self._bus_out.append((t_us * 1000, self._seq, channel, entry[2](msg)))
 
     def _on_grid(self, t_us: int) -> None:
-        """Grid sampler (physics at ``t_us``): the state, the true wheel speeds and the PWM in force."""
+        """Grid sampler (physics at ``t_us``): the joint and base state."""
         self._state.sample(t_us)
-        d, pins = self.twin.physics.data, self.twin.firmware.pins
-        self._wheels.append((t_us, [float(d.sensordata[2] * RAD_S_TO_RPM), float(d.sensordata[3] * RAD_S_TO_RPM)],
-                             [pins[0].pwm_counts, pins[1].pwm_counts]))
 
     def flush(self, t_us: int) -> None:
         """Send everything up to ``t_us`` (simulated), in time order; broadcast the time."""
@@ -188,21 +188,34 @@ class FoxgloveSink:
                 if tb % GHOST_PERIOD_US == 0:
                     pos, quat = self._state_pose(batch, i)
                     self.scene_channel.log(self.scene.ghost_update(tb * 1000, pos, quat), log_time=tb * 1000)
-        n = 0
-        while n < len(self._wheels) and self._wheels[n][0] <= t_us:
-            n += 1
-        wheels, self._wheels = self._wheels[:n], self._wheels[n:]
-        for name, k in (("/twin/true_rpm", 1), ("/twin/pwm_counts", 2)):
-            channel = self.channels[name]
-            if channel.has_sinks():
-                items += [(row[0] * 1000, 2, i, channel, encode_float64_multi_array(row[k]))
-                          for i, row in enumerate(wheels)]
+        rows = self._rows.take(t_us)
+        if rows is not None:
+            items += self._row_items(rows)
         if has_events(self.twin):
             items += self._event_items(t_ns)
         items.sort(key=lambda it: (it[0], it[1], it[2]))
         for t, _g, _o, channel, data in items:
             channel.log(data, log_time=t)
         self.server.broadcast_time(t_ns)
+
+    def _row_items(self, rows) -> list:
+        """/twin/true_rpm, /twin/pwm_counts, /twin/motor_current (100 Hz) and /battery_state (10 Hz), as
+        mcap_log writes them, for the channels someone subscribed to."""
+        out = []
+        t_ns = (rows.t_us * 1000).tolist()
+        for name, column in (("/twin/true_rpm", rows.true_rpm), ("/twin/pwm_counts", rows.pwm_counts),
+                             ("/twin/motor_current", rows.current_a)):
+            channel = self.channels[name]
+            if channel.has_sinks():
+                values = column.tolist()
+                out += [(t, 2, i, channel, encode_float64_multi_array(v)) for i, (t, v) in enumerate(zip(t_ns, values))]
+        channel = self.channels["/battery_state"]
+        if channel.has_sinks():
+            cap = self._capacity_ah
+            volts, amps, soc = rows.battery_v.tolist(), rows.battery_a.tolist(), rows.battery_soc.tolist()
+            out += [(t, 2, i, channel, encode_battery_state(t, volts[i], -amps[i], soc[i] * cap, cap, soc[i]))
+                    for i, t in enumerate(t_ns) if rows.index[i] % BATTERY_EVERY_ROWS == 0]
+        return out
 
     @staticmethod
     def _state_pose(batch, i: int):

@@ -25,7 +25,6 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .recorder import RAD_S_TO_RPM, yaw_from_quat
 
 FLUSH_US = 100_000
 """The stream is fed every 0.1 s of simulated time (each flush is one Rerun chunk per entity: the
@@ -99,7 +98,9 @@ class RerunSink:
             log_events(self.rec, SimpleNamespace(collisions=None, faults=twin.faults))
         self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []  # t_us, xpos (nb, 3), xquat (nb, 4)
         self._sent_pose_us = -1
-        self._rows: list[tuple[int, np.ndarray, list]] = []  # t_us, loop sensors, pwm counts
+        from .live_rows import LiveRows
+
+        self._rows = LiveRows(twin)
         self._messages: dict[str, list] = {}
         self._scans: list = []  # scans waiting for the poses that place their beams
         self._commands: list[tuple[float, list[float]]] = []
@@ -128,8 +129,7 @@ class RerunSink:
             self._messages.setdefault(topic, []).append((t_us, msg))
 
     def _on_grid(self, t_us: int) -> None:
-        d, pins = self.twin.physics.data, self.twin.firmware.pins
-        self._rows.append((t_us, d.sensordata[:11].copy(), [pins[0].pwm_counts, pins[1].pwm_counts]))
+        d = self.twin.physics.data
         if t_us % self.period_us == 0:
             self._poses.append((t_us, d.xpos[self.body_ids].copy(), d.xquat[self.body_ids].copy()))
 
@@ -142,7 +142,7 @@ class RerunSink:
 
     def _flush(self, t_us: int) -> None:
         from .event_log import log_events
-        from .rerun_streams import _log_commands, _log_duty, _log_imu, _log_wheel_speeds
+        from .rerun_streams import _log_commands, _log_duty, _log_electrics, _log_imu, _log_wheel_speeds
         from .rerun_world import _log_body_transforms, _log_scan
         from .sensors.lidar_beams import scan_end_time_s
 
@@ -166,16 +166,14 @@ class RerunSink:
         keep_from = t_us - int(POSE_KEEP_S * 1e6)
         self._poses = [p for p in self._poses if p[0] >= keep_from]
         _log_imu(rec, self._window([], messages))
-        n = 0
-        while n < len(self._rows) and self._rows[n][0] <= t_us:
-            n += 1
-        rows, self._rows = self._rows[:n], self._rows[n:]
+        rows = self._rows.take(t_us)
         new_commands = [(t * 1e-6, [float(v) for v in msg.data]) for t, msg in messages.get("wheel_Command", [])]
         self._commands += new_commands
-        if rows:
+        if rows is not None:
             series = self._series(rows, messages)
             _log_wheel_speeds(rec, series)
             _log_duty(rec, series)
+            _log_electrics(rec, series)
             self._trajectory(series, messages.get("odom", []), t_us)
         if new_commands:
             _log_commands(rec, SimpleNamespace(commands=new_commands))
@@ -193,13 +191,11 @@ class RerunSink:
         return _Window(self.twin, self.body_ids, t, [p[1] for p in poses], [p[2] for p in poses], messages)
 
     def _series(self, rows, messages) -> SimpleNamespace:
-        t_s = np.array([r[0] for r in rows]) * 1e-6
-        sensors = np.array([r[1] for r in rows])
+        """The rows as the series the ``.rrd`` writers read, with the wheel speeds published meanwhile and
+        every command so far (the references are held from them)."""
         published = {w: np.array([(t * 1e-6, msg.data) for t, msg in messages.get(f"wheel{w}_Vel", [])],
                                  float).reshape(-1, 2) for w in (0, 1)}
-        pose = np.column_stack([sensors[:, 4], sensors[:, 5], yaw_from_quat(sensors[:, 7:11])])
-        return SimpleNamespace(t_s=t_s, true_rpm=sensors[:, 2:4] * RAD_S_TO_RPM, pwm_counts=np.array([r[2] for r in rows]),
-                               published=published, commands=self._commands, pose=pose)
+        return SimpleNamespace(**vars(rows), published=published, commands=self._commands)
 
     def _trajectory(self, series, odom, t_us: int) -> None:
         rr = self.rr

@@ -114,6 +114,10 @@ class Recorder:
             self._pin_t.append(t_us)
             self._pins.append(self._pin_row())
 
+    def pins_in_force(self) -> np.ndarray:
+        """The pin row :meth:`series` gives a grid row taken now (while the physics steps): the last kept."""
+        return self._pins[-1]
+
     def sample(self) -> None:
         """Record the present state as one row (at the start of a run)."""
         d = self.twin.physics.data

@@ -1,0 +1,67 @@
+"""The 100 Hz rows of a live twin, as :meth:`amr_twin.recorder.Recorder.series` gives them (issue 17).
+
+A grid sampler keeps, at each instant of the record grid, the loop's sensor row and the pin
+row the recorder will pair with it; :meth:`LiveRows.take` turns the rows the clock has passed
+into the series' columns with the recorder's own formulas (:func:`~amr_twin.plant.motor_currents_a`,
+:func:`~amr_twin.plant.battery_current_a`, the state of charge summed in the same order), so
+that a live viewer shows the numbers the ``.mcap`` and the ``.rrd`` hold, bit for bit.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from .build import LOOP_SENSOR_DIM
+from .plant import battery_current_a, motor_currents_a
+from .recorder import RAD_S_TO_RPM, yaw_from_quat
+
+
+class LiveRows:
+    """Grid rows of ``twin`` kept until taken (attach before the twin runs)."""
+
+    def __init__(self, twin):
+        self.twin = twin
+        self._rows: list[tuple[int, np.ndarray, np.ndarray]] = []  # t_us, sensors, pins in force
+        self._prev_t_s: float | None = None
+        self._drained_a_s = 0.0
+        self.count = 0
+        """Rows taken so far (the index of the next row in the run's series)."""
+        twin.samplers.append(self._on_grid)
+        self._on_grid(twin.t_phys_us)
+
+    def _on_grid(self, t_us: int) -> None:
+        d = self.twin.physics.data
+        self._rows.append((t_us, d.sensordata[:LOOP_SENSOR_DIM].copy(), self.twin.recorder.pins_in_force()))
+
+    def take(self, t_us: int) -> SimpleNamespace | None:
+        """The rows at or before ``t_us`` as series columns (None if there are none): ``t_us`` (n,) int,
+        ``t_s``, ``true_rpm`` (n, 2), ``pose`` (n, 3) x, y, yaw, ``pwm_counts`` (n, 2), ``current_a`` (n, 2),
+        ``battery_v``, ``battery_a``, ``battery_soc`` (n,), ``index`` (n,) the rows' places in the run."""
+        n = 0
+        while n < len(self._rows) and self._rows[n][0] <= t_us:
+            n += 1
+        if n == 0:
+            return None
+        rows, self._rows = self._rows[:n], self._rows[n:]
+        t_us_arr = np.array([r[0] for r in rows], np.int64)
+        t = t_us_arr * 1e-6
+        sensors = np.array([r[1] for r in rows])
+        pins = np.array([r[2] for r in rows])
+        cfg, mode, voltage = self.twin.cfg, pins[:, 4:6].astype(int), pins[:, 7:9]
+        current = motor_currents_a(cfg, voltage, sensors[:, 2:4], mode)
+        battery_a = battery_current_a(cfg, voltage, current, pins[:, 6])
+        soc = np.empty(n)
+        for i in range(n):  # the recorder's cumulative sum, element by element in the same order
+            if self._prev_t_s is not None:
+                self._drained_a_s = self._drained_a_s + battery_a[i] * (t[i] - self._prev_t_s)
+            self._prev_t_s = t[i]
+            soc[i] = cfg.battery.soc_initial - (self._drained_a_s / 3600.0) / cfg.battery.capacity_ah
+        index = np.arange(self.count, self.count + n)
+        self.count += n
+        return SimpleNamespace(
+            t_us=t_us_arr, t_s=t, true_rpm=sensors[:, 2:4] * RAD_S_TO_RPM,
+            pose=np.column_stack([sensors[:, 4], sensors[:, 5], yaw_from_quat(sensors[:, 7:11])]),
+            pwm_counts=pins[:, 0:2].astype(int), current_a=current, battery_v=pins[:, 6], battery_a=battery_a,
+            battery_soc=soc, index=index)

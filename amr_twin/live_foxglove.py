@@ -102,10 +102,8 @@ class FoxgloveSink:
         from .live_scene import SceneBuilder
 
         self.twin, self.pacer, self.bus = twin, pacer, twin.bus
-        self.dropped = 0
-        """Client messages refused (logged)."""
-        self.accepted = 0
-        """Client messages handed to the twin."""
+        self.dropped, self.accepted = 0, 0
+        """Client messages refused (each logged), and handed to the twin."""
         self._client_channels: dict[tuple[int, int], tuple[str, str, object]] = {}
         self._ctx = foxglove.Context()
         self.channels = {}

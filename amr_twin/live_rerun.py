@@ -66,7 +66,6 @@ class RerunSink:
     def __init__(self, twin, grpc_port: int = 9876, web_port: int = 9090, web_viewer: bool = True):
         import rerun as rr
 
-        from .rerun_capture import Capture
         from .rerun_log import _blueprint
         from .rerun_world import _log_geoms
 
@@ -74,8 +73,7 @@ class RerunSink:
         m = twin.physics.model
         self.body_ids = np.arange(1, m.nbody)
         grid_us = twin.grid_us
-        self.period_us = max(grid_us, int(round(1e6 / 30.0 / grid_us)) * grid_us)  # as Capture: ~30 Hz
-        assert Capture  # the same sampling as the file's capture (rerun_capture.Capture.period_us)
+        self.period_us = max(grid_us, int(round(1e6 / 30.0 / grid_us)) * grid_us)  # as rerun_capture.Capture's
         self._blueprint = _blueprint
         self._has_imu = getattr(twin, "imu", None) is not None
         self._has_uwb = getattr(twin, "uwb", None) is not None

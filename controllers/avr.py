@@ -1,6 +1,6 @@
 """The firmware as the board runs it: an Arduino sketch compiled with avr-gcc on an emulated ATmega2560.
 
-:class:`AvrFirmware` implements :class:`~amr_twin.controllers.firmware.Firmware` with the
+:class:`AvrFirmware` implements :class:`~amr_twin.controllers.firmware_params.Firmware` with the
 sketch's ELF running on :class:`~amr_twin.controllers.avr_board.AvrBoard` (libsimavr):
 
 - time: the board is reset, runs its setup(), and t = 0 is the first call of loop() (the Python
@@ -39,7 +39,7 @@ from amr_twin.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, FrameParser, 
 
 from .avr_board import AvrBoard, BoardError, symbol_address
 from .avr_build import DEFAULT_SKETCH, SketchError, build_sketch
-from .firmware import AvrParams, Publish
+from .firmware_params import AvrParams, Publish
 
 CYCLES_PER_US = 16
 UBRR0L, UBRR0H, UCSR0A = 0xC4, 0xC5, 0xC0

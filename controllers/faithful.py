@@ -5,7 +5,7 @@ C names are kept where the listing prints them (``Motor.driveNoAcc``,
 Reconstructed parts (not printed: ``computeSpeedFromSignal``, ``Motor.stop``/
 ``start``/``forward``/``backward``, the wheel_Command callback, ``PICallBack``,
 ``setup``/``loop``) are explained in docs/firmware.md. Each quirk sits behind a
-switch of :class:`~amr_twin.controllers.firmware.FaithfulParams`.
+switch of :class:`~amr_twin.controllers.firmware_params.FaithfulParams`.
 
 Contexts as on the board: ``PICallBack`` and ``PI_Control`` run in the Timer1
 ISR, ``speedChangeInt`` in the INT4/INT5 ISRs, the wheel_Command callback in
@@ -21,7 +21,7 @@ from amr_twin.clock import VirtualClock
 from amr_twin.pins import HIGH, LOW
 
 from .arduino import ArduinoRuntime, MainTask
-from .firmware import FaithfulParams, Publish
+from .firmware_params import FaithfulParams, Publish
 
 FORWARD, BACKWARD, STOP = 1, -1, 0  # listing 4.7
 

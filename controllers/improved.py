@@ -28,7 +28,7 @@ from amr_twin.clock import VirtualClock
 from amr_twin.pins import HIGH, LOW
 
 from .arduino import ArduinoRuntime
-from .firmware import ImprovedParams, Publish
+from .firmware_params import ImprovedParams, Publish
 
 FORWARD, BACKWARD, STOP = 1, -1, 0
 

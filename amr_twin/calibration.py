@@ -125,6 +125,10 @@ class Fit:
                           f"{self.residual:.3g} ({self.evaluations} evaluations, amr-twin calibrate)"}
         return tree
 
+    def config(self, base: TwinConfig) -> TwinConfig:
+        """``base`` with the fitted values."""
+        return _with(base, self.values)
+
     def report(self) -> dict:
         """JSON-ready summary."""
         return {"target": self.target, "residual": self.residual, "evaluations": self.evaluations,

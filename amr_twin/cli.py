@@ -208,6 +208,11 @@ def calibrate(
     target: str = typer.Option("thesis", help="'thesis' (bench point and chapter 5) or a CSV log with columns "
                                "t_s, wheel, rpm, command."),
     out: Path = typer.Option(Path("params.yaml"), help="Override file to write (use it with --params)."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Also write the calibration report: values, 1 "
+                                          "sigma, correlations and how the fit follows the held parameters "
+                                          "(what `--samples` draws from; models/amr/calibration.yaml)."),
+    no_fit: bool = typer.Option(False, "--no-fit", help="Do not fit: report the uncertainty of the given values "
+                                "(with --report; --out then holds them unchanged)."),
     max_evaluations: int = typer.Option(90, min=2, max=2000, help="Twin evaluations of the fit (about; each "
                                         "step costs one per parameter and one more)."),
     jobs: int = typer.Option(2, min=1, max=64, help="Worker processes for a thesis evaluation's runs."),
@@ -221,6 +226,8 @@ def calibrate(
 
     from .outputs import OutputError, check_file
 
+    if no_fit and report is None:
+        fail("--no-fit needs --report FILE (without a fit, the report is the only result)")
     base = _config(config, params, set_)  # the starting point, with the user's overrides
     if target != "thesis":
         if not Path(target).is_file():
@@ -229,14 +236,34 @@ def calibrate(
         _guard(lambda: _check_log_comparable(base, log, target))
     try:
         check_file("--out", out)
+        if report is not None:
+            check_file("--report", report)
     except OutputError as exc:
         fail(str(exc))
     with Progress(transient=True) as bar:
-        task = bar.add_task("calibrating", total=max_evaluations)
-        fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
-                                       progress=lambda i, n: bar.update(task, completed=min(i, n))))
-    _guard(lambda: write_params(fit, out))
-    typer.echo(json.dumps({**fit.report(), "out": str(out)}))
+        fit = None
+        if not no_fit:
+            task = bar.add_task("calibrating", total=max_evaluations)
+            fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
+                                           progress=lambda i, n: bar.update(task, completed=min(i, n))))
+        if report is not None:
+            from . import calibration_report
+
+            at = base if fit is None else _guard(lambda: fit.config(base))
+            task = bar.add_task("uncertainty", total=1)
+            result = _guard(lambda: calibration_report.evaluate(
+                at, target, jobs=jobs, progress=lambda i, n: bar.update(task, total=n, completed=i)))
+            fit = result.as_fit(fit)  # the override file carries the report's uncertainty
+    from .atomic_file import all_or_nothing
+
+    def write() -> None:
+        with all_or_nothing():
+            write_params(fit, out)
+            if report is not None:
+                calibration_report.write(result, report)
+
+    _guard(write)
+    typer.echo(json.dumps({**fit.report(), "out": str(out), **({"report": str(report)} if report else {})}))
 
 
 def _check_log_comparable(base, log: dict, target: str) -> None:

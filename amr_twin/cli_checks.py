@@ -83,3 +83,46 @@ def dask_client(scheduler: str, timeout_s: float, fail):
         return connect_dask(scheduler, timeout_s)
     except ExecutorError as exc:
         fail(str(exc))
+
+
+SamplesOpt = typer.Option(1, "--samples", help="Runs per point with parameters drawn from their spreads (the "
+                          "ranges and sigmas in models/amr/README.md): medians, 90 % intervals and sensitivities. "
+                          "1: the nominal parameters only.")
+SeedOpt = typer.Option(None, "--seed", help="Seed of the parameter draws with --samples (default 0; same seed, "
+                       "same draws).")
+SamplerOpt = typer.Option(None, "--sampler", help="lhs (Latin hypercube, default) or sobol (N a power of 2), with "
+                          "--samples.")
+CalibrationOpt = typer.Option(None, "--calibration", help="Calibration report the calibrated parameters are drawn "
+                              "from, with --samples (default: calibration.yaml beside the parameter file; "
+                              "amr-twin calibrate --report writes one).")
+
+
+def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], calibration: Optional[Path],
+                    config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], fail):
+    """``--samples`` and its options checked, and the drawn configurations (None for 1 sample).
+
+    Everything is checked before any simulation: a draw the schema refuses names its
+    sample and field.
+    """
+    from .config import ConfigError
+    from .uncertainty import MAX_SAMPLES, SAMPLERS, ParameterSpace
+
+    if not 1 <= samples <= MAX_SAMPLES:
+        fail(f"--samples {samples}: must be in 1..{MAX_SAMPLES}")
+    if samples == 1:
+        given = [name for name, v in (("--seed", seed), ("--sampler", sampler), ("--calibration", calibration))
+                 if v is not None]
+        if given:
+            fail(f"{', '.join(given)}: only used with --samples N (N >= 2)")
+        return None
+    if seed is not None and not 0 <= seed < 2 ** 32:
+        fail(f"--seed {seed}: must be in [0, 2^32)")
+    if sampler is not None and sampler not in SAMPLERS:
+        fail(f"--sampler {sampler!r}: must be one of {', '.join(SAMPLERS)}")
+    if calibration is not None and not calibration.is_file():
+        fail(f"--calibration {calibration}: no such file (amr-twin calibrate --report writes one)")
+    try:
+        space = ParameterSpace.load(config, override_file=params, sets=sets or [], calibration=calibration)
+        return space.draw(samples, seed=seed or 0, sampler=sampler or "lhs")
+    except (ConfigError, ValueError) as exc:
+        fail(str(exc))

@@ -20,12 +20,22 @@ from typing import Optional
 
 import typer
 
-from .cli_checks import (MAX_SWEEP_POINTS, JobsOpt, check_common, check_duration, check_outputs,
-                         check_record_folder, dask_client, unique)
+from .cli_checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
+                         check_duration, check_outputs, check_record_folder, dask_client, parameter_draws, unique)
 from .cli_options import checked_firmware, firmware_option, sketch_option
 
 def _rpm(value) -> str:
     return "-" if value is None else f"{value:.2f}"
+
+
+def _safe_interval(results: dict, position: str) -> str:
+    """``; over N draws: median M kg (90 %: L - H)`` of a sweep with samples, else ''."""
+    answer = results.get("answers", {}).get(position, {}).get("highest_safe_kg")
+    if not answer or not answer["n"]:
+        return ""
+    kg = {float("-inf"): "none"}
+    return (f"; over {answer['n']} draws: median {kg.get(answer['median'], answer['median'])} kg "
+            f"(90 %: {kg.get(answer['low'], answer['low'])} - {kg.get(answer['high'], answer['high'])})")
 
 
 def register(app: typer.Typer) -> None:
@@ -232,10 +242,17 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         mcap: Optional[Path] = typer.Option(
             None, "--mcap", metavar="DIR",
             help="Folder: one ROS 2 recording per point simulated now, DIR/<key>.mcap."),
+        samples: int = SamplesOpt, seed: Optional[int] = SeedOpt, sampler: Optional[str] = SamplerOpt,
+        calibration: Optional[Path] = CalibrationOpt,
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
-        """Sweep payload mass x position x command; resume by skipping the points already done."""
+        """Sweep payload mass x position x command; resume by skipping the points already done.
+
+        With --samples N each point also runs N times with parameters drawn from their spreads:
+        every metric as median and 90 % interval, the highest safe payload per position as an
+        interval, and the parameters that move each answer (summary.md, sensitivity.csv).
+        """
         from .experiments import payload_sweep, payload_sweep_report
 
         from .experiments.executor import EXECUTORS
@@ -270,9 +287,12 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
             typer.echo("note: repeated sweep values are simulated once: "
                        + ", ".join(str(v) for v in dup_m + dup_p + dup_c), err=True)
         n_points = len(mass_list) * len(position_list) * len(command_list)
-        if n_points > MAX_SWEEP_POINTS:
-            fail(f"--masses x --positions x --commands: {n_points} points; at most {MAX_SWEEP_POINTS} per sweep "
-                 f"(each is a simulation of {duration_s:g} s and a file in runs/): split the sweep")
+        runs = n_points * (1 + samples if samples > 1 else 1)
+        if runs > MAX_SWEEP_POINTS:
+            fail(f"--masses x --positions x --commands{' x (--samples + 1)' if samples > 1 else ''}: {runs} runs; at "
+                 f"most {MAX_SWEEP_POINTS} per sweep (each is a simulation of {duration_s:g} s and a file in runs/): "
+                 "split the sweep")
+        draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
         check_record_folder("--record", record, fail, "<key>.rrd")
         check_record_folder("--mcap", mcap, fail, "<key>.mcap")
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
@@ -284,7 +304,14 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
 
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
                                         jobs=jobs, firmware=firmware, progress=progress, client=client,
-                                        record_dir=record, mcap_dir=mcap)
+                                        record_dir=record, mcap_dir=mcap, draws=draws)
+            if draws is not None:
+                from .experiments import payload_spread_report as spread_report
+
+                spread_report.analyse(results)
+                with all_or_nothing():
+                    spread_report.plot(results, out)
+                    return results, spread_report.report(results, out)["positions"]
             with all_or_nothing():
                 payload_sweep_report.plot(results, out)
                 return results, payload_sweep_report.report(results, out)
@@ -297,10 +324,12 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         for position, s in summary.items():
             typer.echo(f"{position:20s} highest safe {s['highest_safe_kg']} kg"
                        + (f"  (unsafe at {s['first_unsafe_kg']} kg: {s['reason']})" if s["first_unsafe_kg"] is not None
-                          else ""))
+                          else "") + _safe_interval(results, position))
         where = f"dask {scheduler}" if client is not None else f"jobs {jobs}"
-        typer.echo(f"{len(results['rows'])} points: {results['simulated']} simulated, {results['reused']} reused; "
-                   f"wall time {results['wall_s']:.2f} s ({where}); wrote {out}/sweep.csv, summary.md")
+        what = "points" if draws is None else f"runs ({n_points} points x {samples} draws + nominal)"
+        typer.echo(f"{len(results['rows'])} {what}: {results['simulated']} simulated, {results['reused']} reused; "
+                   f"wall time {results['wall_s']:.2f} s ({where}); wrote {out}/sweep.csv, summary.md"
+                   + (", intervals.csv, sensitivity.csv" if draws is not None else ""))
         if record is not None or mcap is not None:
             typer.echo(f"recordings: {results['recorded']} points recorded in "
                        + ", ".join(str(f) for f in (record, mcap) if f is not None)

@@ -7,6 +7,14 @@ second YAML of plain values or of leaves, and ``key=value`` strings), validates
 ranges with pydantic and returns a frozen :class:`TwinConfig`. Errors are raised
 as :class:`ConfigError` with a one-line message naming the field and its range.
 
+A leaf may also say how uncertain its value is, with the reason (``reason:``), by
+one of: ``range: [lo, hi]`` (drawn uniformly; the value inside, the bounds inside the
+schema's), ``sigma: s`` (normal, same unit; a list of one sigma per element for a
+vector; ``sigma: 0`` holds the value exact) or ``follows: other.key`` (drawn with the
+same relative deviation as that parameter). Without any, the spread defaults from the
+source's kind (:mod:`amr_twin.uncertainty`). :func:`load_parameters` returns these
+leaf descriptions next to the configuration.
+
 The section classes (``SimCfg`` ... ``MappingCfg``) are declared in
 :mod:`amr_twin.config_sections`; this module assembles them into :class:`TwinConfig`
 and holds the loading (YAML leaves to plain values, overrides, error messages).
@@ -24,6 +32,8 @@ from pydantic import BaseModel, ValidationError, model_validator
 from .config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg, DriverCfg,
                               EkfCfg, ImuCfg, LidarCfg, LidarOdometryCfg, MappingCfg, MotorCfg,
                               PayloadCfg, Section, SimCfg, UwbCfg, WheelCfg)
+from .config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
+from .config_leaves import field_range as _field_range
 from .paths import MODEL_DIR
 
 DEFAULT_CONFIG = MODEL_DIR / "amr.yaml"
@@ -96,15 +106,15 @@ def _strip(node: dict, model: type[BaseModel], prefix: str, meta: dict) -> dict:
             allowed = ", ".join(model.model_fields)
             raise ConfigError(f"{path}: unknown key (allowed: {allowed})")
         if _is_leaf(sub):
-            extra = set(sub) - {"value", "unit", "source"}
+            extra = set(sub) - set(LEAF_KEYS)
             if extra:
-                raise ConfigError(f"{path}: unknown leaf key(s) {sorted(extra)} (allowed: value, unit, source)")
+                raise ConfigError(f"{path}: unknown leaf key(s) {sorted(extra)} (allowed: {', '.join(LEAF_KEYS)})")
             unit = _schema_unit(model, key)
             if "unit" not in sub or "source" not in sub:
                 raise ConfigError(f"{path}: a parameter needs value, unit and source")
             if unit is not None and sub["unit"] != unit:
                 raise ConfigError(f"{path}: unit '{sub['unit']}' but the schema's is '{unit}'")
-            meta[path] = {"unit": sub["unit"], "source": sub["source"]}
+            meta[path] = {"unit": sub["unit"], "source": sub["source"], **leaf_spread(sub, path, model, key)}
             out[key] = sub["value"]
         elif isinstance(sub, dict):
             sub_model = field.annotation
@@ -150,25 +160,6 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def _field_range(model: type[BaseModel], loc: list[str]) -> tuple[Any, Any, str]:
-    """(low, high, unit) declared in the schema for the field at ``loc``."""
-    field = None
-    for key in loc:
-        field = model.model_fields.get(key) if model is not None else None
-        if field is None:
-            return "-inf", "inf", ""
-        ann = field.annotation
-        model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else None
-    lo, hi = "-inf", "inf"
-    for m in field.metadata:
-        lo = getattr(m, "ge", None) if getattr(m, "ge", None) is not None else (
-            getattr(m, "gt", None) if getattr(m, "gt", None) is not None else lo)
-        hi = getattr(m, "le", None) if getattr(m, "le", None) is not None else (
-            getattr(m, "lt", None) if getattr(m, "lt", None) is not None else hi)
-    extra = field.json_schema_extra if isinstance(field.json_schema_extra, dict) else {}
-    return lo, hi, extra.get("unit", "")
-
-
 def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
     err = exc.errors()[0]
     loc = [str(p) for p in err["loc"] if not isinstance(p, int)]
@@ -199,6 +190,22 @@ def load_config(path: str | Path | None = None, *, override_file: str | Path | N
     sets : ``"dotted.key=value"`` strings, applied last.
     overrides : ``{"dotted.key": value}``, applied after ``sets`` (API use).
     """
+    return load_parameters(path, override_file=override_file, sets=sets, overrides=overrides)[0]
+
+
+def load_parameters(path: str | Path | None = None, *, override_file: str | Path | None = None,
+                    sets: list[str] | tuple[str, ...] = (), overrides: dict[str, Any] | None = None,
+                    ) -> tuple[TwinConfig, dict[str, dict]]:
+    """:func:`load_config`, and what the files say of each leaf.
+
+    Returns
+    -------
+    (TwinConfig, dict) : the configuration, and per dotted key ``{"unit", "source"}`` with
+    the leaf's ``range`` / ``sigma`` / ``follows`` and ``reason`` when given. A value
+    replaced by an override carries ``set_by`` (``--params FILE``, ``--set``,
+    ``override``); an override leaf with a source of its own replaces the file's
+    description (source and spread) instead.
+    """
     tree = read_tree(path)
     meta: dict[str, dict] = {}
     try:
@@ -210,17 +217,44 @@ def load_config(path: str | Path | None = None, *, override_file: str | Path | N
         try:
             for key, value in _flatten(extra):
                 _set_path(plain, key, value)
+                _override_meta(meta, key, value_at(extra, key), f"--params {override_file}")
         except ConfigError as exc:
             raise ConfigError(f"{override_file}: {exc}") from None
     for text in sets:
-        _set_path(plain, *parse_assignment(text))
+        key, value = parse_assignment(text)
+        _set_path(plain, key, value)
+        _override_meta(meta, key, None, "--set")
     for key, value in (overrides or {}).items():
         _set_path(plain, key, value)
+        _override_meta(meta, key, None, "override")
     _reject_nan(plain)
     try:
-        return TwinConfig.model_validate(plain)
+        cfg = TwinConfig.model_validate(plain)
     except ValidationError as exc:
         raise ConfigError(_format_error(exc, TwinConfig)) from None
+    check_follows(meta, plain)
+    return cfg, meta
+
+
+def _override_meta(meta: dict, key: str, leaf: Any, by: str) -> None:
+    """Record who replaced ``key``'s value. An override leaf with a source or a spread of its
+    own (range, sigma, follows) brings its own description; the file's spread does not
+    describe a value someone else chose."""
+    if key not in meta:  # a section, not a leaf: _set_path accepted it, validation judges it
+        return
+    base = meta[key]
+    if _is_leaf(leaf) and any(k in leaf for k in ("source", "reason") + SPREAD_KEYS):
+        section, name = key.rsplit(".", 1)
+        model: Any = TwinConfig
+        for part in section.split("."):
+            model = model.model_fields[part].annotation
+        extra = set(leaf) - set(LEAF_KEYS)
+        if extra:
+            raise ConfigError(f"{key}: unknown leaf key(s) {sorted(extra)} (allowed: {', '.join(LEAF_KEYS)})")
+        meta[key] = {"unit": base["unit"], "source": leaf.get("source", base["source"]),
+                     **leaf_spread(leaf, key, model, name)}
+    else:
+        meta[key] = {"unit": base["unit"], "source": base["source"], "set_by": by}
 
 
 def _reject_nan(tree: dict, prefix: str = "") -> None:

@@ -14,22 +14,34 @@ Robot body and drive: :class:`SimCfg`, :class:`ChassisCfg`, :class:`DeckCfg`,
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Iterator
+from typing import Annotated, Any, ClassVar, Iterator
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 
 def P(default: Any = ..., *, unit: str, ge: float | None = None, le: float | None = None,
-      gt: float | None = None, lt: float | None = None) -> Any:
-    """A physical parameter field: its unit and range travel with the schema."""
-    return Field(default, ge=ge, le=le, gt=gt, lt=lt, json_schema_extra={"unit": unit})
+      gt: float | None = None, lt: float | None = None, setting: bool = False) -> Any:
+    """A physical parameter field: its unit and range travel with the schema.
+
+    ``setting``: a value the user or the twin chooses (a time step, a sensor mode, a filter's
+    tuning), not a property of the robot measured with some uncertainty: never drawn by
+    :mod:`amr_twin.uncertainty`.
+    """
+    extra: dict[str, Any] = {"unit": unit}
+    if setting:
+        extra["setting"] = True
+    return Field(default, ge=ge, le=le, gt=gt, lt=lt, json_schema_extra=extra)
 
 
 class Section(BaseModel):
-    """Base of a parameter section: frozen, no unknown key, no inf or NaN."""
+    """Base of a parameter section: frozen, no unknown key, no inf or NaN.
+
+    ``SETTINGS = True`` on a section marks all its fields as settings (see :func:`P`).
+    """
 
     model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+    SETTINGS: ClassVar[bool] = False
 
 
 Vec3 = tuple[float, float, float]
@@ -40,7 +52,7 @@ PosVec3 = tuple[_Pos, _Pos, _Pos]
 
 
 class SimCfg(Section):
-    timestep_s: float = P(unit="s", ge=2e-4, le=0.002)
+    timestep_s: float = P(unit="s", ge=2e-4, le=0.002, setting=True)
     floor_friction: float = P(unit="1", ge=0.05, le=2.0)
     gravity_m_s2: float = P(unit="m/s^2", ge=0.0, le=20.0)
 
@@ -116,6 +128,9 @@ class CasterCfg(Section):
 
 
 class PayloadCfg(Section):
+    """The payload box: set per run (``--payload-kg``, the sweep's points)."""
+
+    SETTINGS: ClassVar[bool] = True
     mass_kg: float = P(unit="kg", ge=0.0, le=200.0)
     size_m: PosVec3 = P(unit="m")
     xy_m: tuple[float, float] = P(unit="m")
@@ -156,22 +171,22 @@ class BatteryCfg(Section):
 class ImuCfg(Section):
     """Adafruit 9-DOF IMU: LSM303DLHC accelerometer/magnetometer + L3GD20 gyroscope (SI units)."""
 
-    rate_hz: float = P(unit="Hz", ge=1.0, le=1000.0)
-    accel_range_m_s2: float = P(unit="m/s^2", gt=0.0, le=200.0)
-    accel_resolution_m_s2: float = P(unit="m/s^2", ge=0.0, le=1.0)
+    rate_hz: float = P(unit="Hz", ge=1.0, le=1000.0, setting=True)
+    accel_range_m_s2: float = P(unit="m/s^2", gt=0.0, le=200.0, setting=True)
+    accel_resolution_m_s2: float = P(unit="m/s^2", ge=0.0, le=1.0, setting=True)
     accel_noise_density_m_s2_sqrt_hz: float = P(unit="m/s^2/sqrt(Hz)", ge=0.0, le=0.1)
     accel_bias_sigma_m_s2: float = P(unit="m/s^2", ge=0.0, le=5.0)
     accel_bias_walk_m_s2_sqrt_s: float = P(unit="m/s^2/sqrt(s)", ge=0.0, le=0.1)
     accel_scale_sigma: float = P(unit="1", ge=0.0, le=0.1)
-    gyro_range_rad_s: float = P(unit="rad/s", gt=0.0, le=100.0)
-    gyro_resolution_rad_s: float = P(unit="rad/s", ge=0.0, le=0.1)
+    gyro_range_rad_s: float = P(unit="rad/s", gt=0.0, le=100.0, setting=True)
+    gyro_resolution_rad_s: float = P(unit="rad/s", ge=0.0, le=0.1, setting=True)
     gyro_noise_density_rad_s_sqrt_hz: float = P(unit="rad/s/sqrt(Hz)", ge=0.0, le=0.1)
     gyro_bias_sigma_rad_s: float = P(unit="rad/s", ge=0.0, le=1.0)
     gyro_bias_walk_rad_s_sqrt_s: float = P(unit="rad/s/sqrt(s)", ge=0.0, le=0.01)
     gyro_scale_sigma: float = P(unit="1", ge=0.0, le=0.1)
-    mag_range_t: float = P(unit="T", gt=0.0, le=1e-2)
-    mag_resolution_xy_t: float = P(unit="T", ge=0.0, le=1e-5)
-    mag_resolution_z_t: float = P(unit="T", ge=0.0, le=1e-5)
+    mag_range_t: float = P(unit="T", gt=0.0, le=1e-2, setting=True)
+    mag_resolution_xy_t: float = P(unit="T", ge=0.0, le=1e-5, setting=True)
+    mag_resolution_z_t: float = P(unit="T", ge=0.0, le=1e-5, setting=True)
     mag_noise_t: float = P(unit="T", ge=0.0, le=1e-4)
     mag_bias_sigma_t: float = P(unit="T", ge=0.0, le=1e-3)
 
@@ -179,13 +194,13 @@ class ImuCfg(Section):
 class LidarCfg(Section):
     """Slamtec RPLIDAR A1 (A1M8) 2D scanner."""
 
-    scan_rate_hz: float = P(unit="Hz", ge=1.0, le=10.0)
-    sample_rate_hz: int = P(unit="Hz", ge=2000, le=8000)
+    scan_rate_hz: float = P(unit="Hz", ge=1.0, le=10.0, setting=True)
+    sample_rate_hz: int = P(unit="Hz", ge=2000, le=8000, setting=True)
     range_min_m: float = P(unit="m", gt=0.0, le=1.0)
     range_max_m: float = P(unit="m", gt=1.0, le=40.0)
     range_noise_frac: float = P(unit="1", ge=0.0, le=0.1)
     range_noise_floor_m: float = P(unit="m", ge=0.0, le=0.1)
-    range_resolution_m: float = P(unit="m", ge=0.0, le=0.01)
+    range_resolution_m: float = P(unit="m", ge=0.0, le=0.01, setting=True)
 
     @model_validator(mode="after")
     def _sample_rate_is_a_mode(self) -> "LidarCfg":
@@ -204,15 +219,15 @@ class UwbCfg(Section):
     anchor_z_m)``; the tag is at ``tag_pos_m`` in ``base_link``.
     """
 
-    rate_hz: float = P(unit="Hz", ge=0.5, le=100.0)
+    rate_hz: float = P(unit="Hz", ge=0.5, le=100.0, setting=True)
     range_noise_sigma_m: float = P(unit="m", ge=0.0, le=1.0)
     dropout_prob: float = P(unit="1", ge=0.0, le=0.9)
     nlos_prob: float = P(unit="1", ge=0.0, le=1.0)
     nlos_bias_m: float = P(unit="m", ge=0.0, le=10.0)
     max_range_m: float = P(unit="m", ge=1.0, le=300.0)
-    anchors_x_m: tuple[_Coord, ...] = P(unit="m")
-    anchors_y_m: tuple[_Coord, ...] = P(unit="m")
-    anchor_z_m: float = P(unit="m", ge=0.0, le=30.0)
+    anchors_x_m: tuple[_Coord, ...] = P(unit="m", setting=True)
+    anchors_y_m: tuple[_Coord, ...] = P(unit="m", setting=True)
+    anchor_z_m: float = P(unit="m", ge=0.0, le=30.0, setting=True)
     tag_pos_m: Vec3 = P(unit="m")
     tag_mass_kg: float = P(unit="kg", gt=0.0, le=1.0)
     tag_size_m: PosVec3 = P(unit="m")
@@ -239,6 +254,8 @@ class EkfCfg(Section):
     assumes (not the simulated sensors' own), the Mahalanobis gate is in sigmas.
     """
 
+    SETTINGS: ClassVar[bool] = True
+
     accel_sigma_m_s2: float = P(unit="m/s^2", gt=0.0, le=20.0)
     alpha_sigma_rad_s2: float = P(unit="rad/s^2", gt=0.0, le=50.0)
     gyro_bias_walk_rad_s_sqrt_s: float = P(unit="rad/s/sqrt(s)", ge=0.0, le=0.1)
@@ -260,6 +277,8 @@ class EkfCfg(Section):
 class LidarOdometryCfg(Section):
     """kiss-icp settings of ``controllers/lidar_odometry.py`` (plain keyword arguments)."""
 
+    SETTINGS: ClassVar[bool] = True
+
     voxel_size_m: float = P(unit="m", ge=0.02, le=2.0)
     max_range_m: float = P(unit="m", gt=0.5, le=100.0)
     min_range_m: float = P(unit="m", ge=0.0, le=5.0)
@@ -274,6 +293,8 @@ class LidarOdometryCfg(Section):
 
 class MappingCfg(Section):
     """Occupancy grid of ``controllers/occupancy_grid.py``."""
+
+    SETTINGS: ClassVar[bool] = True
 
     resolution_m: float = P(unit="m", ge=0.01, le=1.0)
     margin_m: float = P(unit="m", ge=0.0, le=20.0)

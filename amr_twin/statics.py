@@ -133,12 +133,13 @@ def _active_set_guesses(names, points, spec, weight, com, iterations: int = 12):
         x = _solve_unchecked(regime, names, points, spec, weight, com)
         if x is None:
             return
+        fixed = [m for m in names if regime[m] in (STOP, SOLID)]  # x's force unknowns, before this round's moves
         for n in names:
             d, stiff, f0, travel = spec[n]
             s_n = d + x[0] + x[1] * points[n][0] + x[2] * points[n][1]
             r = regime[n]
             if r in (STOP, SOLID):
-                f = float(x[3 + [m for m in names if regime[m] in (STOP, SOLID)].index(n)])
+                f = float(x[3 + fixed.index(n)])
                 if r == STOP:
                     regime[n] = LIFTED if f < 0 else SPRUNG if f > f0 else STOP
                 else:

@@ -17,6 +17,13 @@ contact (:data:`~amr_twin.statics.CONTACT_MIN_N`), the base tilted at most
 rating (``driver.continuous_current_a``). The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
 
+With ``draws`` (:class:`amr_twin.uncertainty.Draws`, ``--samples N``), every point is
+also run once per drawn configuration: its key gains ``_s<i>_<id>`` (the sample's
+index and a hash of its drawn values) and its fingerprint covers the drawn
+configuration, so a resumed sweep redoes exactly the runs whose parameters changed.
+The nominal runs keep the keys of a sweep without samples (and are reused from one).
+:mod:`.payload_spread` reports medians, intervals and sensitivities.
+
 Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``<key>.rrd`` /
 ``<key>.mcap`` per point **simulated by this call**, written by the process that
 simulates it (the Dask workers with a cluster: the folder must be on storage they
@@ -123,10 +130,13 @@ class Point:
     cfg: TwinConfig
     rrd_path: str | None = None   # write the point's Rerun recording here (not part of the fingerprint)
     mcap_path: str | None = None  # write the point's ROS 2 topics here
+    sample: int | None = None     # index of the drawn configuration ``cfg`` (None: the nominal one)
+    sample_id: str = ""           # hash of the sample's drawn values (amr_twin.uncertainty.Draws.sample_id)
 
     @property
     def key(self) -> str:
-        return f"m{self.mass_kg:g}kg_{self.position}_{self.command}".replace(":", "_").replace("/", "_")
+        key = f"m{self.mass_kg:g}kg_{self.position}_{self.command}".replace(":", "_").replace("/", "_")
+        return key if self.sample is None else f"{key}_s{self.sample}_{self.sample_id}"
 
     @property
     def fingerprint(self) -> str:
@@ -268,6 +278,8 @@ def simulate_point(point: Point) -> dict:
     wall0 = time.perf_counter()
     row = {"key": point.key, "fingerprint": point.fingerprint, "mass_kg": point.mass_kg,
            "position": point.position, "command": point.command, "valid": True, "error": ""}
+    if point.sample is not None:
+        row.update(sample=point.sample, sample_id=point.sample_id)
     try:
         xy = position_xy_m(point.cfg, point.position)
         row.update(x_m=xy[0], y_m=xy[1])
@@ -296,7 +308,7 @@ def simulate_point(point: Point) -> dict:
 
 def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str], commands: list[str],
         duration_s: float = 8.0, jobs: int = 1, firmware: str = "faithful", progress: bool = True,
-        client=None, record_dir: Path | None = None, mcap_dir: Path | None = None) -> dict:
+        client=None, record_dir: Path | None = None, mcap_dir: Path | None = None, draws=None) -> dict:
     """Simulate the missing points of the sweep (one file each) and return all rows.
 
     The points run in this process (``jobs=1``), in ``jobs`` local worker
@@ -307,6 +319,10 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     ``record_dir`` / ``mcap_dir``: folders for one ``<key>.rrd`` / ``<key>.mcap``
     recording per point simulated now (points reused from ``runs/`` are not
     re-simulated for a missing recording; see the module notes).
+
+    ``draws``: :class:`amr_twin.uncertainty.Draws` of ``cfg``'s parameters; each point is
+    also run with each drawn configuration (rows with ``sample`` and ``sample_id``, after
+    the nominal rows).
 
     Returns
     -------
@@ -322,12 +338,16 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}
 
-    def make_point(m: float, p: str, c: str) -> Point:
-        key = Point(m, p, c, duration_s, firmware, cfg).key
+    def make_point(m: float, p: str, c: str, sample: int | None = None) -> Point:
+        extra = {} if sample is None else {"sample": sample, "sample_id": draws.sample_id(sample)}
+        point_cfg = cfg if sample is None else configs[sample]
+        key = Point(m, p, c, duration_s, firmware, point_cfg, **extra).key
         paths = {f"{kind}_path": str(folder / f"{key}.{kind}") for kind, folder in folders.items()}
-        return Point(m, p, c, duration_s, firmware, cfg, **paths)
+        return Point(m, p, c, duration_s, firmware, point_cfg, **paths, **extra)
 
-    points = [make_point(m, p, c) for m in masses for p in positions for c in commands]
+    configs = [draws.config(cfg, i) for i in range(len(draws))] if draws is not None else []
+    points = [make_point(m, p, c, sample) for sample in [None, *range(len(configs))]
+              for m in masses for p in positions for c in commands]
     rows, todo = {}, []
     for point in points:
         path = runs_dir / f"{point.key}.json"
@@ -348,4 +368,4 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     recorded = sum(any((folder / f"{key}.{kind}").exists() for kind, folder in folders.items()) for key in done)
     return {"rows": [rows[p.key] for p in points], "simulated": len(todo), "reused": len(points) - len(todo),
             "recorded": recorded, "wall_s": time.perf_counter() - wall0, "duration_s": duration_s,
-            "firmware": firmware}
+            "firmware": firmware, **({"draws": draws} if draws is not None else {})}

@@ -161,10 +161,16 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             help="Folder: one Rerun recording per run, DIR/run<N>.rrd (open with `rerun DIR/run1.rrd`)."),
         mcap: Optional[Path] = typer.Option(
             None, "--mcap", metavar="DIR", help="Folder: one ROS 2 recording per run, DIR/run<N>.mcap."),
+        samples: int = SamplesOpt, seed: Optional[int] = SeedOpt, sampler: Optional[str] = SamplerOpt,
+        calibration: Optional[Path] = CalibrationOpt,
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
-        """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time."""
+        """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time.
+
+        With --samples N the runs are repeated with N parameter draws: each metric's median and
+        90 % interval beside the thesis' value, and how many draws meet its band.
+        """
         from .experiments import chapter5
 
         jobs, firmware = check_common(jobs, firmware, fail, sketch)
@@ -179,6 +185,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
+        draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
 
         def work():
             from .atomic_file import all_or_nothing
@@ -186,6 +193,12 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
                                    progress=progress, record_dir=record, mcap_dir=mcap,
                                    reference_firmware="faithful" if firmware.startswith("avr") else None)
+            if draws is not None:
+                from .experiments import chapter5_spread
+
+                results["spread"] = chapter5_spread.run(cfg, draws, jobs=jobs, firmware=firmware, runs=numbers,
+                                                        duration_s=duration_s, progress=progress)
+                results["spread_summary"] = chapter5_spread.summarise(results, results["spread"])
             with all_or_nothing():
                 chapter5.plot(results, out)
                 return chapter5.report(results, out)
@@ -204,6 +217,12 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             fc, w = data["firmware_comparison"], data["firmware_comparison"]["worst"]
             typer.echo(f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample difference "
                        f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: {fc['verdict']}")
+        if "spread" in data:
+            sp = data["spread"]
+            met = [m for m in sp["metrics"] if "thesis" in m]
+            typer.echo(f"over {sp['samples']} parameter draws ({sp['wall_s']:.1f} s wall time): "
+                       f"{sum(m['in_band'] for m in met)} of {len(met) * sp['samples']} banded metrics in their band "
+                       "(report.md, spread section)")
         typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
         typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
                    f"(jobs {jobs}, firmware {firmware})")

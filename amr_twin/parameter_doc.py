@@ -21,14 +21,53 @@ def _fmt(value) -> str:
 
 
 def readme_text() -> str:
-    """The README: header, mass summary and one table row per parameter."""
+    """The README: header, mass summary, statics, uncertainty and one table row per parameter."""
+    from .uncertainty import ParameterSpace
+
     cfg = load_config()
-    rows = "\n".join(f"| `{k}` | {_fmt(v)} | {u} | {s.replace('|', '/')} |" for k, v, u, s in parameter_table())
+    space = ParameterSpace.load()
+    rows = "\n".join(f"| `{k}` | {_fmt(v)} | {u} | {s.replace('|', '/')} | {_spread_cell(space, k)} |"
+                     for k, v, u, s in parameter_table())
     summary = (f"Chassis link from the estimate: {mass.chassis_inertial(cfg).mass_kg:.2f} kg (frame "
                f"{mass.frame_inertial(cfg).mass_kg:.2f} kg of AISI304 tube); whole robot "
                f"{mass.robot_mass_kg(cfg):.2f} kg without payload.\n")
-    return (HEADER + summary + _statics_text(cfg)
-            + "\n## Parameters\n\n| key | value | unit | source |\n|---|---|---|---|\n" + rows + "\n")
+    return (HEADER + summary + _statics_text(cfg) + _uncertainty_text(space)
+            + "\n## Parameters\n\n| key | value | unit | source | spread (`--samples`) |\n|---|---|---|---|---|\n"
+            + rows + "\n")
+
+
+def _spread_cell(space, key: str) -> str:
+    s = space.spreads[key]
+    if s.kind == "calibrated":
+        rep = space.calibration
+        i = rep.keys.index(key)
+        j = max((j for j in range(len(rep.keys)) if j != i), key=lambda j: abs(rep.correlation[i, j]))
+        return (f"σ {s.sigma[0]:.3g}, jointly with the fit (r {rep.correlation[i, j]:+.3f} with "
+                f"`{rep.keys[j]}`; `calibration.yaml`)")
+    return f"{s.describe()}: {s.reason}".replace("|", "/")
+
+
+def _uncertainty_text(space) -> str:
+    """How each parameter's spread is set, and the calibration's correlations."""
+    from .parameter_spreads import DEFAULT_TOLERANCE
+
+    rep = space.calibration
+    head = "| | " + " | ".join(f"`{k}`" for k in rep.keys) + " |\n|---|" + "---|" * len(rep.keys) + "\n"
+    corr = "".join(f"| `{k}` (σ {s:.3g}) | " + " | ".join(f"{c:+.3f}" for c in row) + " |\n"
+                   for k, s, row in zip(rep.keys, rep.sigma, rep.correlation))
+    held = ", ".join(f"`{k}`" for k in rep.held_keys)
+    defaults = ", ".join(f"{kind} ±{tol:.0%}" for kind, tol in DEFAULT_TOLERANCE.items())
+    return ("\n## Uncertainty\n\n`--samples N` (`amr-twin sweep payload`, `amr-twin experiment chapter5`) draws the "
+            "robot's body and drive\nparameters from the spreads in the table below (`amr_twin/uncertainty.py`): a "
+            "leaf's `range: [lo, hi]`\n(uniform), `sigma` (normal) or `follows` (the same relative deviation as "
+            "another parameter), each\nwith its `reason`; without one, the source's kind sets it (uniform, "
+            f"{defaults}; a vector, a zero or an\ninteger stays exact). Settings (time step, payload, sensor modes, "
+            "estimator tuning) are never drawn.\n\nThe calibrated parameters are drawn jointly from the calibration's "
+            f"report (`calibration.yaml`, {rep.target},\nchi^2 {rep.chi2:.1f}; written by `amr-twin calibrate --no-fit "
+            "--report models/amr/calibration.yaml`):\n\n" + head + corr +
+            f"\nand each draw is shifted by how the fit follows the parameters it held: {held}\n"
+            "(`follow` in `calibration.yaml`; e.g. a damper 0.004 N m s/rad stronger takes 0.03 N m off the dry "
+            "friction,\nsince the bench point pins their sum), so that every drawn plant still fits the thesis.\n")
 
 
 def _statics_text(cfg) -> str:

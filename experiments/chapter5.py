@@ -339,7 +339,8 @@ def _public(results: dict) -> dict:
             "threshold_crr": payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
                                                    results["crr"]["tyres"]),
             "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)},
-            **({"firmware_comparison": results["firmware_comparison"]} if "firmware_comparison" in results else {})}
+            **({"firmware_comparison": results["firmware_comparison"]} if "firmware_comparison" in results else {}),
+            **({"spread": results["spread_summary"]} if "spread_summary" in results else {})}
 
 
 def report(results: dict, out_dir: Path) -> dict:

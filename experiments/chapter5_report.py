@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .chapter5_payload import markdown as payload_markdown
+from .chapter5_spread_report import markdown as spread_markdown
 from .firmware_comparison import markdown as comparison_markdown
 
 COLUMNS = (("delay_s", "delay s"), ("rise_s", "rise s"), ("peak_s", "peak s"), ("settling_s", "settling s"),
@@ -108,6 +109,8 @@ def markdown(data: dict) -> str:
         "## Bands missed", "", *_misses(data), "",
         *(["## Firmware against firmware, sample by sample", "", *comparison_markdown(data["firmware_comparison"]), ""]
           if "firmware_comparison" in data else []),
+        *(["## Spread over the parameters' uncertainty", "", *spread_markdown(data["spread"]), ""]
+          if "spread" in data else []),
         "## Figures", "",
         *[f"![run {r['run']}: {r['title']}](run{r['run']}.png)\n" for r in data["runs"]],
     ]
@@ -142,6 +145,10 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
                     label=f"wheel{w}_Vel (published)")
             ax.plot(raw["t_s"], np.abs(raw["true_rpm"][:, w]), color=c, lw=0.6, alpha=0.6,
                     label=f"{name} true |speed|")
+            band = results.get("spread", {}).get("bands", {}).get(r["run"])
+            if band is not None:
+                ax.fill_between(band["t_s"], band[name]["low"], band[name]["high"], color=c, alpha=0.15, lw=0,
+                                label=f"{name} true, 90 % of {len(results['spread']['samples'])} draws")
         ax.set(xlabel="time (s)", ylabel="wheel speed (RPM)", title=f"Run {r['run']}: {r['title']}",
                xlim=(0, r["duration_s"]))
         ax.grid(alpha=0.3)

@@ -1,0 +1,44 @@
+"""The chapter 5 report's section on the spread over parameter draws (from :func:`.chapter5_spread.summarise`)."""
+
+from __future__ import annotations
+
+
+def _num(v, digits: int = 2) -> str:
+    return "—" if v is None else f"{v:.{digits}f}"
+
+
+def markdown(s: dict) -> list[str]:
+    """The report's section on the spread."""
+    n = s["samples"]
+    lines = [f"Each run again with {n} parameter draws ({s['sampler']}, seed {s['seed']}, {len(s['parameters'])} "
+             f"parameters of the body and drive; spreads in `models/amr/README.md`). Median ({s['level']:.0%} "
+             "interval) over the draws beside the thesis; *in band*: draws inside §5.1.3's band; drivers: the "
+             f"largest rank correlations above chance (|rho| > {s['noise_level_rho']:.2f}).", "",
+             "| run | wheel | metric | thesis | band | twin nominal | twin over the draws | in band | drivers |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for m in s["metrics"]:
+        if "thesis" not in m:
+            continue
+        drivers = ", ".join(f"`{d['parameter']}` {d['rho']:+.2f}" for d in m["drivers"]) or "—"
+        lines.append(f"| {m['run']} | {m['wheel']} | {m['metric']} | {m['thesis']} | {m['band'][0]} – {m['band'][1]} "
+                     f"| {_num(m['nominal'])} | {_num(m['median'])} ({_num(m['low'])} – {_num(m['high'])}) | "
+                     f"{m['in_band']} of {n} | {drivers} |")
+    lines += ["", "True wheel speed (not judged):", "", "| run | wheel | metric | nominal | over the draws |",
+              "|---|---|---|---|---|"]
+    for m in s["metrics"]:
+        if m["source"] == "true" and m["metric"] in ("delay_s", "rise_s", "settling_s", "overshoot"):
+            lines.append(f"| {m['run']} | {m['wheel']} | {m['metric']} | {_num(m['nominal'])} | {_num(m['median'])} "
+                         f"({_num(m['low'])} – {_num(m['high'])}) |")
+    lines += ["", "§5.1.4 over the draws:", ""]
+    for d in s["duty_raised"]:
+        lines.append(f"- run {d['loaded_run']} (20 kg) against run {d['unloaded_run']}, {d['wheel']} wheel: the PI "
+                     f"raises the duty in {d['draws']} of {n} draws")
+    for o in s["oscillation_more"]:
+        lines.append(f"- run {o['loaded_run']} against run {o['unloaded_run']}, {o['wheel']} wheel: the 20 kg wheel "
+                     f"oscillates more in {o['draws_published']} of {n} draws (true speed: {o['draws_true']})")
+    if s["oscillation_more"]:
+        lines.append(f"- \"the 20 kg runs oscillate more\" holds on every comparison in {s['oscillation_all_hold']} "
+                     f"of {n} draws")
+    if s["clipped"]:
+        lines += ["", "Draws clipped to a bound: " + ", ".join(f"`{k}` {v}" for k, v in s["clipped"].items()) + "."]
+    return lines

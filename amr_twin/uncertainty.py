@@ -185,14 +185,10 @@ class ParameterSpace:
                     values[r][key][i] = float(x[r, j])
                 else:
                     values[r][key] = float(x[r, j])
+        self._follow(values, keys)  # held parameters' followers first: the fit follows them too
         if self.calibration is not None:
             self._calibrated(values, block, norm.ppf(u[:, len(dims) - len(block):]), x, len(dims) - len(block))
-        for key in keys:
-            s = self.spreads[key]
-            if s.kind == FOLLOWS:
-                lead = self.spreads[s.follows].value
-                for r in range(n):
-                    values[r][key] = s.value * values[r][s.follows] / lead
+            self._follow(values, keys)
         clipped = {}
         for r in range(n):
             for key, v in values[r].items():
@@ -215,6 +211,14 @@ class ParameterSpace:
             except ConfigError as exc:
                 raise ConfigError(f"sample {r} of seed {seed}: {exc} (narrow a range in the parameter file)") from None
         return draws
+
+    def _follow(self, values: list[dict], keys: list[str]) -> None:
+        for key in keys:
+            s = self.spreads[key]
+            if s.kind == FOLLOWS:
+                lead = self.spreads[s.follows].value
+                for sample in values:
+                    sample[key] = s.value * self._value(sample, s.follows) / lead
 
     def _bounds(self, key: str) -> tuple[float, float]:
         lo, hi = self.spreads[key].bounds

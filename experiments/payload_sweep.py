@@ -94,12 +94,20 @@ def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:
     if name in POSITIONS:
         dx, dy = POSITIONS[name]
         sx, sy = cfg.payload.size_m[0] / 2, cfg.payload.size_m[1] / 2
-        return (round(dx * (cfg.chassis.length_m / 2 - sx), 6), round(dy * (cfg.chassis.width_m / 2 - sy), 6))
+        inside = [_micrometres_inside(v) for v in (cfg.chassis.length_m / 2 - sx, cfg.chassis.width_m / 2 - sy)]
+        return dx * inside[0] + 0.0, dy * inside[1] + 0.0  # + 0.0: no -0.0
     try:
         x, y = (float(v) for v in name.split(":"))
     except ValueError:
         raise ValueError(f"--positions {name!r}: not one of {', '.join(POSITIONS)} nor X:Y in metres") from None
     return x, y
+
+
+def _micrometres_inside(v: float) -> float:
+    """``v`` rounded to the micrometre, but never beyond it (a drawn deck length ending in 5 at the
+    seventh digit would otherwise put a flush payload off the deck)."""
+    r = round(v, 6)
+    return round(r - 1e-6, 6) if r > v + 1e-9 else r
 
 
 def with_payload(cfg: TwinConfig, mass_kg: float, xy_m: tuple[float, float]) -> TwinConfig:

@@ -63,6 +63,20 @@ def test_dask_sweep_equals_local_and_rerun_skips_finished(client, tmp_path):
     assert (again["simulated"], again["reused"]) == (0, 2)
 
 
+def test_dask_samples_equal_local_and_resume(client, tmp_path):
+    """With drawn parameters the cluster gives the local numbers too; the run keys carry the draws."""
+    from amr_twin.uncertainty import ParameterSpace
+
+    cfg = load_config()
+    draws = ParameterSpace.load().draw(2, seed=5)
+    local = ps.run(cfg, tmp_path / "local", masses=[20.0], jobs=1, draws=draws, **SWEEP)
+    on_dask = ps.run(cfg, tmp_path / "dask", masses=[20.0], client=client, draws=draws, **SWEEP)
+    assert [_numbers(r) for r in on_dask["rows"]] == [_numbers(r) for r in local["rows"]]
+    assert [r.get("sample") for r in on_dask["rows"]] == [None, 0, 1]
+    again = ps.run(cfg, tmp_path / "dask", masses=[20.0], client=client, draws=draws, **SWEEP)
+    assert (again["simulated"], again["reused"]) == (0, 3)
+
+
 def test_cli_dask_does_only_the_missing_points(cluster, tmp_path):
     cfg = load_config()
     done = ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)

@@ -103,3 +103,76 @@ def test_a_motor_over_the_drivers_continuous_rating_is_unsafe():
     assert ok["safe"] and not ok["motor_overload"]
     assert 0.6 < max(over["left_steady_current_a"], over["right_steady_current_a"]) < 11.1
     assert not over["safe"] and over["motor_overload"] and "motor overload" in unsafe_reason(over)
+
+
+def _without_wall(text: str) -> str:
+    """A CSV or JSON text without its wall-time fields (the only ones not simulated)."""
+    if text.lstrip().startswith("{"):
+        data = json.loads(text)
+        data.pop("wall_s", None)
+        return json.dumps(data, sort_keys=True)
+    rows = list(csv.reader(text.splitlines()))
+    drop = rows[0].index("wall_s")
+    return "\n".join(",".join(c for i, c in enumerate(r) if i != drop) for r in rows)
+
+
+def test_one_sample_is_the_plain_sweep(tmp_path):
+    args = ["sweep", "payload", "--masses", "0,20", "--positions", "center", "--commands", "linear:0.7",
+            "--duration-s", str(DURATION_S), "--jobs", "1", "--no-progress"]
+    plain = CliRunner().invoke(app, args + ["--out", str(tmp_path / "plain")])
+    one = CliRunner().invoke(app, args + ["--out", str(tmp_path / "one"), "--samples", "1"])
+    assert plain.exit_code == 0 and one.exit_code == 0, one.output
+    for name in ("sweep.csv", "summary.json"):
+        assert _without_wall((tmp_path / "one" / name).read_text()) == _without_wall((tmp_path / "plain" / name).read_text())
+    assert sorted(p.name for p in (tmp_path / "one").iterdir()) == sorted(p.name for p in (tmp_path / "plain").iterdir())
+
+
+def test_samples_run_resume_and_report(cfg, tmp_path):
+    from amr_twin.experiments import payload_spread_report as spread_report
+    from amr_twin.uncertainty import ParameterSpace
+
+    space = ParameterSpace.load()
+    args = dict(masses=[0.0, 20.0], positions=["center"], commands=["linear:0.7"], duration_s=DURATION_S,
+                progress=False)
+    draws = space.draw(2, seed=0)
+    results = ps.run(cfg, tmp_path, draws=draws, **args)
+    assert (results["simulated"], results["reused"]) == (6, 0)
+    nominal = [r for r in results["rows"] if "sample" not in r]
+    plain = ps.run(cfg, tmp_path / "plain", **args)["rows"]
+    assert [{k: v for k, v in r.items() if k != "wall_s"} for r in nominal] == \
+        [{k: v for k, v in r.items() if k != "wall_s"} for r in plain]
+    drawn = [r for r in results["rows"] if "sample" in r]
+    assert sorted({r["sample"] for r in drawn}) == [0, 1]
+    assert all(r["key"].endswith(f"_s{r['sample']}_{draws.sample_id(r['sample'])}") for r in drawn)
+    loads = [r["dyn_min_wheel_n"] for r in results["rows"] if r["mass_kg"] == 0.0]
+    assert len({round(v, 6) for v in loads}) == 3  # nominal and both draws differ
+    again = ps.run(cfg, tmp_path, draws=draws, **args)
+    assert (again["simulated"], again["reused"]) == (0, 6)
+    other = ps.run(cfg, tmp_path, draws=space.draw(2, seed=1), **args)
+    assert (other["simulated"], other["reused"]) == (4, 2)  # new draws, same nominal runs
+
+    spread_report.analyse(results)
+    spread_report.plot(results, tmp_path)
+    summary = spread_report.report(results, tmp_path)
+    for name in ("sweep.csv", "samples.csv", "intervals.csv", "sensitivity.csv", "summary.md",
+                 "sweep_linear_0.7.png", "sensitivity.png"):
+        assert (tmp_path / name).stat().st_size > 0, name
+    with open(tmp_path / "intervals.csv") as fh:
+        entries = [r for r in csv.DictReader(fh) if r["n"] == "2"]
+    assert entries and all(float(r["low"]) <= float(r["median"]) <= float(r["high"]) for r in entries)
+    assert summary["samples"]["n"] == 2 and summary["answers"]["center"]["highest_safe_kg"]["n"] == 2
+    assert "90% interval" in (tmp_path / "summary.md").read_text()
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--seed", "3"], "--seed: only used with --samples N"),
+    (["--samples", "3", "--sampler", "sobol"], "power of 2"),
+    (["--samples", "0"], "--samples 0: must be in 1..4096"),
+    (["--samples", "4096", "--masses", "0:60:10"], "runs; at most 10000"),
+    (["--samples", "2", "--calibration", "nowhere.yaml"], "--calibration nowhere.yaml: no such file"),
+])
+def test_sample_options_are_checked_before_the_work(tmp_path, extra, words):
+    result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--positions", "center",
+                                      "--commands", "linear:0.7", *extra])
+    assert result.exit_code == 2 and words in result.output, result.output
+    assert not (tmp_path / "s").exists()

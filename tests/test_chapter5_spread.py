@@ -1,0 +1,46 @@
+"""chapter5 --samples: the runs again over parameter draws, each banded metric beside the thesis with its
+spread, the true-speed band in the plots; the nominal results are those without samples."""
+
+import json
+
+import numpy as np
+from typer.testing import CliRunner
+
+from amr_twin.cli import app
+
+ARGS = ["experiment", "chapter5", "--runs", "1", "--duration-s", "3", "--jobs", "1", "--no-progress"]
+
+
+def test_chapter5_samples_report_the_spread_beside_the_thesis(tmp_path):
+    plain = CliRunner().invoke(app, ARGS + ["--out", str(tmp_path / "plain")])
+    drawn = CliRunner().invoke(app, ARGS + ["--out", str(tmp_path / "drawn"), "--samples", "3", "--seed", "2"])
+    assert plain.exit_code == 0 and drawn.exit_code == 0, drawn.output
+    assert "over 3 parameter draws" in drawn.output
+    a = json.loads((tmp_path / "plain" / "metrics.json").read_text())
+    b = json.loads((tmp_path / "drawn" / "metrics.json").read_text())
+    strip = lambda d: [{k: v for k, v in r.items() if k != "wall_s"} for r in d["runs"]]  # noqa: E731
+    assert strip(a) == strip(b)  # the nominal runs are untouched by the draws
+    spread = b["spread"]
+    assert spread["samples"] == 3 and spread["seed"] == 2 and "driver.gain" in spread["parameters"]
+    banded = [m for m in spread["metrics"] if "thesis" in m]
+    assert {m["metric"] for m in banded} == {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot"}
+    assert all(m["source"] == "published" and 0 <= m["in_band"] <= 3 and len(m["drivers"]) <= 3 for m in banded)
+    rise = next(m for m in spread["metrics"] if (m["source"], m["metric"]) == ("true", "rise_s"))
+    assert rise["low"] < rise["high"] and rise["low"] <= rise["median"] <= rise["high"]  # the draws move it
+    assert rise["nominal"] == a["runs"][0]["wheels"]["left"]["true"]["rise_s"]
+    report = (tmp_path / "drawn" / "report.md").read_text()
+    assert "## Spread over the parameters' uncertainty" in report and "| 1 | left | overshoot | 2.0 | 0.0 – 3.0 |" in report
+    assert (tmp_path / "drawn" / "run1.png").stat().st_size > (tmp_path / "plain" / "run1.png").stat().st_size
+
+
+def test_true_speed_bands_bracket_the_median():
+    from amr_twin.config import load_config
+    from amr_twin.experiments import chapter5_spread
+    from amr_twin.uncertainty import ParameterSpace
+
+    draws = ParameterSpace.load().draw(3, seed=0, include=("driver.gain",))
+    out = chapter5_spread.run(load_config(), draws, runs=[2], duration_s=2.0, progress=False)
+    band = out["bands"][2]["right"]
+    assert len(band["low"]) == len(out["bands"][2]["t_s"])
+    assert np.all(band["low"] <= band["median"] + 1e-9) and np.all(band["median"] <= band["high"] + 1e-9)
+    assert np.max(band["high"] - band["low"]) > 1.0  # the drawn gains and Ke spread the speed by RPMs

@@ -93,8 +93,9 @@ def answers(results: dict) -> dict:
     """Per position: nominal and per-draw answers with their intervals (see the module notes).
 
     Returns ``{position: {"highest_safe_kg": {...}, "commands": {command: {answer: {...}}}}}``,
-    each answer ``{"nominal", "draws": [per sample], "median", "low", "high", "n"}``
-    (``-inf`` in ``draws``: no swept payload is safe).
+    each answer ``{"nominal", "draws": [per sample], "median", "low", "high", "n", "within"}``
+    (``-inf`` in ``draws``: no swept payload is safe; ``within``: the draws in which it happens
+    within the swept masses, for the highest safe payload those unsafe below the heaviest).
     """
     nominal, samples = split(results)
     order = sorted(samples)
@@ -107,7 +108,9 @@ def answers(results: dict) -> dict:
             return -math.inf if v is None else float(v)
 
         draws = [safe(per_sample[s]) for s in order]
-        entry = {"highest_safe_kg": {"nominal": safe(base), "draws": draws, **interval(draws, discrete=True)},
+        top = max(r["mass_kg"] for r in nominal)
+        entry = {"highest_safe_kg": {"nominal": safe(base), "draws": draws, **interval(draws, discrete=True),
+                                     "within": sum(v < top for v in draws)},
                  "commands": {}}
         for command in dict.fromkeys(r["command"] for r in nominal):
             def mine(rows: list[dict]) -> list[dict]:
@@ -118,7 +121,7 @@ def answers(results: dict) -> dict:
                 values = [crossing_kg(mine(samples[s]), column, limit, direction) for s in order]
                 entry["commands"][command][name] = {
                     "nominal": crossing_kg(mine(nominal), column, limit, direction), "draws": values,
-                    **interval(values, discrete=True)}
+                    **interval(values, discrete=True), "within": sum(math.isfinite(v) for v in values)}
         out[position] = entry
     return out
 

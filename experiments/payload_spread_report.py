@@ -31,7 +31,7 @@ def _kg(v) -> str:
 def _span(a: dict, top: float) -> str:
     """``median (low – high)`` of an answer; ``> top`` for draws beyond the sweep."""
     def one(v):
-        return f"> {top:g}" if v == math.inf else _kg(v) if v == -math.inf else ("—" if v is None else f"{v:.1f}")
+        return f"> {top:g}" if v == math.inf else _kg(v) if v == -math.inf else ("—" if v is None else f"{v:.3g}")
     if a["n"] == 0:
         return "—"
     return f"{one(a['median'])} ({one(a['low'])} – {one(a['high'])})"
@@ -193,24 +193,24 @@ def _markdown(results, base, found, sens, top, n) -> str:
              f"with the answer, listed when |rho| > {noise_level(n):.2f} (chance would exceed it about one time in "
              f"20; with {len(draws.names)} parameters expect a few such by chance).", "",
              "## Highest safe payload per position", "",
-             "| position | nominal kg | over the draws kg | unsafe first (nominal) | what moves it |",
-             "|---|---|---|---|---|"]
+             f"| position | nominal kg | over the draws kg | draws unsafe within {top:g} kg | unsafe first (nominal) | "
+             "what moves it |", "|---|---|---|---|---|---|"]
     for position, b in base.items():
         a = found[position]["highest_safe_kg"]
         first = f"{b['first_unsafe_kg']:g} kg: {b['reason']}" if b["first_unsafe_kg"] is not None else "—"
-        lines.append(f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {first} | "
+        lines.append(f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {a['within']} of {a['n']} | {first} | "
                      f"{_who(sens, position, '', 'highest_safe_kg')} |")
     lines += ["", "## Lift-off, tilt and tip margin per position and command", "",
               "Payload (kg) from which it happens, interpolated between the swept masses; "
               f"`> {top:g}`: not within the sweep.", "",
-              "| position | command | answer | nominal kg | over the draws kg | what moves it |",
-              "|---|---|---|---|---|---|"]
+              f"| position | command | answer | nominal kg | over the draws kg | draws within {top:g} kg | what moves it |",
+              "|---|---|---|---|---|---|---|"]
     for position, entry in found.items():
         for command, per in entry["commands"].items():
             for answer, a in per.items():
                 nominal = _span({"n": 1, "median": a["nominal"], "low": None, "high": None}, top).split(" (")[0]
                 lines.append(f"| {position} | {command} | {spread.ANSWER_TEXT[answer]} | {nominal} | "
-                             f"{_span(a, top)} | {_who(sens, position, command, answer)} |")
+                             f"{_span(a, top)} | {a['within']} of {a['n']} | {_who(sens, position, command, answer)} |")
     if draws.clipped:
         lines += ["", "Draws clipped to a bound (schema or calibration): "
                   + ", ".join(f"`{k}` {v} of {len(draws)}" for k, v in draws.clipped.items()) + "."]

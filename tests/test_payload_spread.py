@@ -43,6 +43,7 @@ def test_answers_and_their_driver():
     assert lift["nominal"] == pytest.approx(59.5 / 1.5) and lift["draws"][0] == pytest.approx(
         59.5 / (1.0 + 3.0 * values[0, 1]))
     assert lift["low"] <= lift["median"] <= lift["high"] and lift["n"] == n
+    assert lift["within"] == int(np.sum(59.5 / (1.0 + 3.0 * values[:, 1]) <= 40.0))  # lifts within the swept 40 kg
     safe = found["rear"]["highest_safe_kg"]
     assert safe["nominal"] == 30.0 and set(safe["draws"]) <= set(masses) | {-math.inf}
     sens = spread.sensitivity(results, found)

@@ -23,7 +23,6 @@ draw stays a plant that fits the targets. The report is a YAML file
 
 from __future__ import annotations
 
-import math
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -61,6 +60,7 @@ class CalibrationReport:
     held_keys: tuple[str, ...]      # parameters held at their sourced values
     held_values: np.ndarray         # (h,) at which the fit was made
     follow: np.ndarray              # (k, h) d fitted / d held
+    undetermined: tuple[str, ...] = ()  # fitted parameters whose 1 sigma would exceed their bounds (left out)
 
     @property
     def covariance(self) -> np.ndarray:
@@ -76,8 +76,10 @@ class CalibrationReport:
 
         sigma = dict(zip(self.keys, self.sigma.tolist()))
         corr = {a: dict(zip(self.keys, row.tolist())) for a, row in zip(self.keys, self.correlation)}
-        if fit is not None:
-            return dataclasses.replace(fit, sigma=sigma, correlation=corr)
+        if fit is not None:  # parameters the report leaves out (undetermined) keep the fit's own figures
+            return dataclasses.replace(fit, sigma={**fit.sigma, **sigma},
+                                       correlation={k: {**fit.correlation.get(k, {}), **corr.get(k, {})}
+                                                    for k in fit.correlation})
         return Fit(values=dict(zip(self.keys, self.values.tolist())), sigma=sigma, correlation=corr,
                    residual=self.chi2, evaluations=1 + len(self.keys) + len(self.held_keys), target=self.target)
 
@@ -91,6 +93,7 @@ class CalibrationReport:
             "correlation": [[r(c) for c in row] for row in self.correlation],
             "held": {k: {"value": r(v), "follow": {f: r(d) for f, d in zip(self.keys, col)}}
                      for k, v, col in zip(self.held_keys, self.held_values, self.follow.T)},
+            **({"undetermined": list(self.undetermined)} if self.undetermined else {}),
         }
 
     @classmethod
@@ -107,7 +110,8 @@ class CalibrationReport:
                 bounds=np.array([params[k]["bounds"] for k in keys], dtype=float).reshape(len(keys), 2),
                 held_keys=tuple(held), held_values=np.array([float(h["value"]) for h in held.values()]),
                 follow=np.array([[float(h["follow"][k]) for h in held.values()] for k in keys]).reshape(len(keys),
-                                                                                                         len(held)))
+                                                                                                         len(held)),
+                undetermined=tuple(tree.get("undetermined") or ()))
         except (KeyError, TypeError, ValueError) as exc:
             raise ConfigError(f"{where}: not a calibration report ({type(exc).__name__}: {exc}); "
                               "amr-twin calibrate --report writes one") from None
@@ -150,6 +154,10 @@ def _residual_function(target: str, pool) -> Callable[[TwinConfig], np.ndarray]:
 def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tuple[float, float]] | None = None,
              held: dict[str, float] | None = None, jobs: int = 1, progress=None) -> CalibrationReport:
     """Linearise the calibration at ``cfg`` (see the module notes): ``1 + k + h`` evaluations.
+
+    A fitted parameter the targets cannot place within its bounds (1 sigma above the bounds'
+    span: the right motor in a log of the left wheel) is left out of the report, listed in
+    ``undetermined``; the others' uncertainty is then given with it held.
 
     Parameters
     ----------
@@ -197,13 +205,17 @@ def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tupl
     finally:
         if pool is not None:
             pool.shutdown()
+    sigma_all, _ = cal._uncertainty(jac_u, span)
+    keep = sigma_all <= span  # the targets place it within its bounds (not so: the right motor in a left-wheel log)
+    undetermined = tuple(k for k, ok in zip(keys, keep) if not ok)
+    keys, jac_u, span, x0, lo, hi = ([k for k, ok in zip(keys, keep) if ok], jac_u[:, keep], span[keep], x0[keep],
+                                     lo[keep], hi[keep])
+    if not keys:
+        raise ValueError("the targets determine none of the fitted parameters")
     sigma, corr = cal._uncertainty(jac_u, span)
     jac_a = jac_u / span  # d r / d x in the parameters' own units
     follow = -np.linalg.pinv(jac_a.T @ jac_a) @ jac_a.T @ jac_b
     name = "the thesis (bench point as motor current; ch. 5 runs 1-3)" if target == "thesis" else str(target)
-    if not np.all(np.isfinite(sigma)):
-        bad = [k for k, s in zip(keys, sigma) if not math.isfinite(s)]
-        raise ValueError(f"the targets do not determine {', '.join(bad)}: no finite uncertainty")
     return CalibrationReport(target=name, chi2=float(np.sum(r0 ** 2)), keys=tuple(keys), values=x0, sigma=sigma,
                              correlation=corr, bounds=np.column_stack([lo, hi]), held_keys=tuple(held_keys),
-                             held_values=b0, follow=follow)
+                             held_values=b0, follow=follow, undetermined=undetermined)

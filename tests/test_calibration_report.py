@@ -74,3 +74,18 @@ def test_no_fit_needs_a_report(tmp_path):
     result = CliRunner().invoke(app, ["calibrate", "--no-fit", "--out", str(tmp_path / "p.yaml")])
     assert result.exit_code == 2 and "--no-fit needs --report" in result.output
     assert not (tmp_path / "p.yaml").exists()
+
+
+def test_a_parameter_the_log_does_not_see_is_left_out(tmp_path):
+    """A log of the left wheel says nothing of the right motor: the report leaves it out (the
+    draws cannot take it from there) instead of giving it an infinite sigma."""
+    from test_calibration import _write_log
+
+    log = tmp_path / "left.csv"
+    _write_log(log, gain=1.5)
+    rep = cr.evaluate(load_config(), str(log), parameters={"driver.gain": (0.8, 4.0),
+                                                           "motor_right.ke_v_s_rad": (0.35, 0.7)}, held={})
+    assert rep.keys == ("driver.gain",) and rep.undetermined == ("motor_right.ke_v_s_rad",)
+    assert 0 < rep.sigma[0] < 0.5
+    again = cr.CalibrationReport.from_dict(rep.as_dict())
+    assert again.undetermined == rep.undetermined

@@ -308,9 +308,9 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         n_points = len(mass_list) * len(position_list) * len(command_list)
         runs = n_points * (1 + samples if samples > 1 else 1)
         if runs > MAX_SWEEP_POINTS:
-            fail(f"--masses x --positions x --commands{' x (--samples + 1)' if samples > 1 else ''}: {runs} runs; at "
-                 f"most {MAX_SWEEP_POINTS} per sweep (each is a simulation of {duration_s:g} s and a file in runs/): "
-                 "split the sweep")
+            what = f" x (--samples + 1): {runs} runs" if samples > 1 else f": {n_points} points"
+            fail(f"--masses x --positions x --commands{what}; at most {MAX_SWEEP_POINTS} per sweep "
+                 f"(each is a simulation of {duration_s:g} s and a file in runs/): split the sweep")
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
         check_record_folder("--record", record, fail, "<key>.rrd")
         check_record_folder("--mcap", mcap, fail, "<key>.mcap")

@@ -140,9 +140,10 @@ class ParameterSpace:
             if s.kind != CALIBRATED:
                 continue
             if s.sigma is None:
-                where = self.calibration_path or "no calibration report"
-                raise ConfigError(f"{key}: calibrated, but {where} does not cover it (amr-twin calibrate --report "
-                                  "writes one; or give the leaf a range or sigma)")
+                where = (f"the calibration report {self.calibration_path} does not cover it" if self.calibration_path
+                         else "no calibration report (calibration.yaml beside the parameter file, or --calibration)")
+                raise ConfigError(f"{key}: calibrated, but {where}: amr-twin calibrate --report writes one; or give "
+                                  "the leaf a range or sigma")
             fitted = float(self.calibration.values[self.calibration.keys.index(key)])
             if not math.isclose(fitted, s.value, rel_tol=1e-4, abs_tol=1e-9):
                 raise ConfigError(f"{key}: {s.value:g} here but {fitted:g} in the calibration report "

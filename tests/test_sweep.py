@@ -168,7 +168,7 @@ def test_samples_run_resume_and_report(cfg, tmp_path):
     (["--seed", "3"], "--seed: only used with --samples N"),
     (["--samples", "3", "--sampler", "sobol"], "power of 2"),
     (["--samples", "0"], "--samples 0: must be in 1..4096"),
-    (["--samples", "4096", "--masses", "0:60:10"], "runs; at most 10000"),
+    (["--samples", "4096", "--masses", "0:60:10"], "(--samples + 1): 28679 runs; at most 10000"),
     (["--samples", "2", "--calibration", "nowhere.yaml"], "--calibration nowhere.yaml: no such file"),
 ])
 def test_sample_options_are_checked_before_the_work(tmp_path, extra, words):

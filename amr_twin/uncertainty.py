@@ -21,7 +21,8 @@ whole fit. Another study reuses it as
 
 :func:`interval` and :func:`rank_correlations` summarise the results: medians with a
 90 % interval, and Spearman rank correlations of each drawn dimension with a result
-(|rho| above :func:`noise_level` is unlikely to be chance, about 5 % per pair).
+(|rho| above :func:`noise_level` for all the drawn parameters: about one chance in 20 that
+any unrelated one reaches it).
 """
 
 from __future__ import annotations
@@ -303,6 +304,9 @@ def rank_correlations(x: np.ndarray, y: Sequence[float | None]) -> np.ndarray:
     return out
 
 
-def noise_level(n: int) -> float:
-    """|rho| that an unrelated parameter exceeds with about 5 % chance in ``n`` samples (1.96/sqrt(n-1))."""
-    return 1.96 / math.sqrt(max(n - 1, 1))
+def noise_level(n: int, parameters: int = 1) -> float:
+    """|rho| that the largest of ``parameters`` unrelated ones exceeds in ``n`` samples about one
+    time in 20 (two-sided, Bonferroni: ``Phi^-1(1 - 0.025 / parameters) / sqrt(n - 1)``)."""
+    from scipy.stats import norm
+
+    return float(norm.ppf(1 - 0.025 / max(parameters, 1)) / math.sqrt(max(n - 1, 1)))

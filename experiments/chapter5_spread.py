@@ -72,6 +72,7 @@ def summarise(nominal: dict, spread: dict) -> dict:
     draws, samples = spread["draws"], spread["samples"]
     order = sorted(samples)
     x = draws.values[order]
+    limit = noise_level(len(order), len(draws.names))
     metrics = []
     for r in nominal["runs"]:
         for wheel, w in r["wheels"].items():
@@ -87,10 +88,10 @@ def summarise(nominal: dict, spread: dict) -> dict:
                     if band is not None:
                         inside = [v is not None and band.low <= v <= band.high for v in values]
                         rho = rank_correlations(x, values)
-                        ranked = [j for j in np.argsort(-np.nan_to_num(np.abs(rho))) if abs(rho[j]) > noise_level(len(x))]
+                        ranked = [j for j in np.argsort(-np.nan_to_num(np.abs(rho))) if np.isfinite(rho[j])]
                         entry.update(thesis=band.thesis, band=[band.low, band.high], in_band=int(sum(inside)),
-                                     drivers=[{"parameter": draws.names[j], "rho": round(float(rho[j]), 3)}
-                                              for j in ranked[:TOP]])
+                                     drivers=[{"parameter": draws.names[j], "rho": round(float(rho[j]), 3),
+                                               "notable": bool(abs(rho[j]) > limit)} for j in ranked[:TOP]])
                     metrics.append(entry)
     oscillation = [compare_oscillation(samples[i]) for i in order]
     pairs = {}
@@ -105,7 +106,7 @@ def summarise(nominal: dict, spread: dict) -> dict:
             raised[(d["loaded_run"], d["unloaded_run"], d["wheel"])] = raised.get(
                 (d["loaded_run"], d["unloaded_run"], d["wheel"]), 0) + bool(d["raised"])
     return {"samples": len(order), "wall_s": round(spread["wall_s"], 3), "seed": draws.seed, "sampler": draws.sampler, "level": LEVEL,
-            "parameters": list(draws.names), "clipped": draws.clipped, "noise_level_rho": noise_level(len(order)),
+            "parameters": list(draws.names), "clipped": draws.clipped, "noise_level_rho": limit,
             "metrics": metrics,
             "oscillation_more": [{"loaded_run": a, "unloaded_run": b, "wheel": w, "draws_published": v["published"],
                                   "draws_true": v["true"]} for (a, b, w), v in pairs.items()],

@@ -12,14 +12,16 @@ def markdown(s: dict) -> list[str]:
     n = s["samples"]
     lines = [f"Each run again with {n} parameter draws ({s['sampler']}, seed {s['seed']}, {len(s['parameters'])} "
              f"parameters of the body and drive; spreads in `models/amr/README.md`). Median ({s['level']:.0%} "
-             "interval) over the draws beside the thesis; *in band*: draws inside §5.1.3's band; drivers: the "
-             f"largest rank correlations above chance (|rho| > {s['noise_level_rho']:.2f}).", "",
+             "interval) over the draws beside the thesis; *in band*: draws inside §5.1.3's band; drivers: the three "
+             f"largest rank correlations, **bold** beyond chance (|rho| > {s['noise_level_rho']:.2f}, which the largest "
+             f"of {len(s['parameters'])} unrelated parameters reaches about one time in 20).", "",
              "| run | wheel | metric | thesis | band | twin nominal | twin over the draws | in band | drivers |",
              "|---|---|---|---|---|---|---|---|---|"]
     for m in s["metrics"]:
         if "thesis" not in m:
             continue
-        drivers = ", ".join(f"`{d['parameter']}` {d['rho']:+.2f}" for d in m["drivers"]) or "—"
+        drivers = ", ".join(("**`{}` {:+.2f}**" if d.get("notable") else "`{}` {:+.2f}").format(d["parameter"], d["rho"])
+                            for d in m["drivers"]) or "—"
         lines.append(f"| {m['run']} | {m['wheel']} | {m['metric']} | {m['thesis']} | {m['band'][0]} – {m['band'][1]} "
                      f"| {_num(m['nominal'])} | {_num(m['median'])} ({_num(m['low'])} – {_num(m['high'])}) | "
                      f"{m['in_band']} of {n} | {drivers} |")

@@ -36,7 +36,7 @@ CROSSINGS = (  # answer: (column, limit, direction: +1 when the answer is the ma
 ANSWER_TEXT = {"highest_safe_kg": "highest safe payload", "lift_off_kg": "a drive wheel lifts off from",
                "tilt_limit_kg": f"tilt above {TILT_LIMIT_DEG:g} deg from",
                "tip_margin_kg": f"static tip margin below {TIP_MARGIN_MIN_M * 100:g} cm from"}
-TOP = 5  # parameters listed per answer
+TOP = 3  # parameters listed per answer
 
 
 def split(results: dict) -> tuple[list[dict], dict[int, list[dict]]]:
@@ -130,13 +130,14 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
     """Rank correlation of every drawn parameter with every answer of :func:`answers`.
 
     Returns one row per answer and parameter: ``position, command ('' for the highest safe
-    payload), answer, parameter, rho, notable`` (|rho| above :func:`~amr_twin.uncertainty.noise_level`),
+    payload), answer, parameter, rho, notable`` (|rho| above :func:`~amr_twin.uncertainty.noise_level`
+    for all the drawn parameters),
     sorted by answer, then |rho| descending.
     """
     draws = results["draws"]
     _, samples = split(results)
     x = draws.values[sorted(samples)]
-    limit = noise_level(len(x))
+    limit = noise_level(len(x), len(draws.names))
     rows = []
 
     def add(position: str, command: str, answer: str, values: list[float]) -> None:
@@ -156,6 +157,6 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
 
 
 def drivers(sens: list[dict], position: str, command: str, answer: str, top: int = TOP) -> list[dict]:
-    """The ``top`` parameters of one answer whose |rho| is above the noise level."""
+    """The ``top`` parameters of one answer by |rho| (``notable`` marks those beyond chance)."""
     return [r for r in sens if (r["position"], r["command"], r["answer"]) == (position, command, answer)
-            and r["notable"]][:top]
+            and r["rho"] is not None][:top]

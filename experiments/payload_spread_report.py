@@ -119,7 +119,7 @@ def _plot_sensitivity(results: dict, out_dir: Path, plt) -> Path:
     cols = min(4, n)
     fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(4.5 * cols, 2.6 * ((n + cols - 1) // cols)),
                              squeeze=False)
-    limit = noise_level(len(results["draws"]))
+    limit = noise_level(len(results["draws"]), len(results["draws"].names))
     for ax, (position, command, answer) in zip(axes.flat, groups):
         rows = [r for r in sens if (r["position"], r["command"], r["answer"]) == (position, command, answer)
                 and r["rho"] is not None][:6][::-1]
@@ -167,7 +167,7 @@ def report(results: dict, out_dir: Path) -> dict:
                "firmware": results["firmware"],
                "samples": {"n": len(draws), "seed": draws.seed, "sampler": draws.sampler, "level": LEVEL,
                            "parameters": list(draws.names), "clipped": draws.clipped,
-                           "noise_level_rho": round(noise_level(len(draws)), 4)}}
+                           "noise_level_rho": round(noise_level(len(draws), len(draws.names)), 4)}}
     write_json(out_dir / "summary.json", summary)
     write_text(out_dir / "summary.md", _markdown(results, base, found, sens, top, len(samples)))
     return summary
@@ -175,7 +175,8 @@ def report(results: dict, out_dir: Path) -> dict:
 
 def _who(sens, position, command, answer) -> str:
     rows = spread.drivers(sens, position, command, answer)
-    return ", ".join(f"`{r['parameter']}` {r['rho']:+.2f}" for r in rows) or "none above chance"
+    return ", ".join(("**`{}` {:+.2f}**" if r["notable"] else "`{}` {:+.2f}").format(r["parameter"], r["rho"])
+                     for r in rows) or "—"
 
 
 def _markdown(results, base, found, sens, top, n) -> str:
@@ -189,9 +190,10 @@ def _markdown(results, base, found, sens, top, n) -> str:
              "`models/amr/README.md`).", "",
              f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
              f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, for every command and every lighter payload. Intervals: "
-             f"median ({LEVEL:.0%} interval) over the draws. Drivers: Spearman rank correlation of a drawn parameter "
-             f"with the answer, listed when |rho| > {noise_level(n):.2f} (chance would exceed it about one time in "
-             f"20; with {len(draws.names)} parameters expect a few such by chance).", "",
+             f"median ({LEVEL:.0%} interval) over the draws. What moves it: the {spread.TOP} parameters of largest "
+             f"Spearman rank correlation with the answer over the draws; **bold** beyond chance (|rho| > "
+             f"{noise_level(n, len(draws.names)):.2f}: the largest of {len(draws.names)} unrelated parameters reaches "
+             f"it about one time in 20 with {n} draws; the others are candidates, not findings).", "",
              "## Highest safe payload per position", "",
              f"| position | nominal kg | over the draws kg | draws unsafe within {top:g} kg | unsafe first (nominal) | "
              "what moves it |", "|---|---|---|---|---|---|"]

@@ -48,7 +48,8 @@ def test_answers_and_their_driver():
     assert safe["nominal"] == 30.0 and set(safe["draws"]) <= set(masses) | {-math.inf}
     sens = spread.sensitivity(results, found)
     top = spread.drivers(sens, "rear", "angular:-60:-1", "lift_off_kg")
-    assert top and top[0]["parameter"] == "b" and top[0]["rho"] < -0.9
+    assert top and top[0]["parameter"] == "b" and top[0]["rho"] < -0.9 and top[0]["notable"]
+    assert not any(r["notable"] for r in top[1:])  # a is unrelated
     assert [r["parameter"] for r in spread.drivers(sens, "rear", "", "highest_safe_kg")][:1] == ["b"]
     never = found["rear"]["commands"]["angular:-60:-1"]["tilt_limit_kg"]
     assert never["nominal"] == math.inf and never["median"] == math.inf

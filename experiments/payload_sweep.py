@@ -14,7 +14,12 @@ A point is **safe** when its position is valid, the simulation ran, the static
 tip margin is at least :data:`TIP_MARGIN_MIN_M`, no drive wheel ever lost
 contact (:data:`~amr_twin.statics.CONTACT_MIN_N`), the base tilted at most
 :data:`TILT_LIMIT_DEG` and no motor's steady current exceeded the driver's continuous
-rating (``driver.continuous_current_a``). The highest safe payload of a position is the largest
+rating (``driver.continuous_current_a``). The support loads are read every :data:`SAMPLE_S` from the
+springs that carry the chassis, as the statics and the rolling resistance take them
+(a tyre's ``k_t q + c_t q'``; a caster's spring, or its contact while on its stop):
+the contact force of a single step chatters when a wheel carries little (20 N on the
+stiff 2 ms contact: 0 in most steps, 100 N and more in between, about 200 Hz) while
+the tyre stays compressed; that minimum is kept as ``dyn_min_wheel_contact_n``. The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
 
 With ``draws`` (:class:`amr_twin.uncertainty.Draws`, ``--samples N``), every point is
@@ -58,6 +63,7 @@ TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
 MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
 MAX_MASSES = 1000          # masses per sweep: each is a simulation per position and command
+ROWS = 2                   # what a row means: 2 = support loads from the springs (1: contact forces); in the fingerprint
 
 
 def parse_masses(text: str) -> list[float]:
@@ -150,7 +156,8 @@ class Point:
     def fingerprint(self) -> str:
         from ..controllers.firmware import firmware_identity  # avr: the sketch's sources count too
 
-        text = self.cfg.model_dump_json() + f"|{firmware_identity(self.firmware)}|{self.duration_s}"
+        text = (self.cfg.model_dump_json() + f"|{firmware_identity(self.firmware)}|{self.duration_s}"
+                + f"|rows {ROWS}")
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -227,10 +234,11 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     if code != 0:
         return {"error": f"command refused (code {code}): {twin.client.last_error}"}
     req = twin.client.last_request
-    loads, tilt, vel = [], [], []
+    loads, contact, tilt, vel = [], [], [], []
     for t_s in np.arange(SAMPLE_S, point.duration_s + 1e-9, SAMPLE_S):
         twin.advance_to_us(int(round(t_s * 1e6)))
-        loads.append(twin.physics.support_normal_forces_n())
+        loads.append(list(twin.rolling.loads))  # the springs' loads (module notes)
+        contact.append(twin.physics.support_normal_forces_n())
         tilt.append(twin.physics.base_tilt_rad())
         vel.append(twin.physics.base_velocity())
     s = twin.recorder.series()
@@ -247,7 +255,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     out = {"max_tilt_deg": math.degrees(max(tilt)),
            "dyn_min_wheel_n": min(v for n, v in min_load.items() if n.startswith("wheel")),
            "dyn_min_caster_n": min(v for n, v in min_load.items() if n.startswith("caster")),
-           "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N)}
+           "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
+           "dyn_min_wheel_contact_n": float(np.min(np.array(contact)[:, :2]))}
     out.update(_min_wheel_mechanism(cfg, loads, np.array(vel), s))
     out.update(_electrics(s, point.duration_s))
     out["wheel_lift_off"] = out["dyn_min_wheel_n"] < CONTACT_MIN_N

@@ -176,3 +176,17 @@ def test_sample_options_are_checked_before_the_work(tmp_path, extra, words):
                                       "--commands", "linear:0.7", *extra])
     assert result.exit_code == 2 and words in result.output, result.output
     assert not (tmp_path / "s").exists()
+
+
+def test_lift_off_is_judged_on_the_springs_not_on_contact_chatter():
+    """Balls 1 mm low: the empty robot's inner wheel carries about 20 N in the clockwise turn and
+    its stiff contact chatters (0 N in most steps); the tyre stays compressed, so the wheel has not
+    lifted. Balls 2 mm low: the tyre spring goes slack, a real lift-off."""
+    rows = {}
+    for drop in (0.001, 0.002):
+        cfg = load_config(sets=[f"caster.drop_m={drop}"])
+        rows[drop] = ps.simulate_point(ps.Point(0.0, "center", "angular:-60:-1", 2.5, "faithful", cfg))
+    chatter, lifted = rows[0.001], rows[0.002]
+    assert chatter["dyn_min_wheel_contact_n"] < 0.5 < 5.0 < chatter["dyn_min_wheel_n"]
+    assert not chatter["wheel_lift_off"] and chatter["safe"]
+    assert lifted["wheel_lift_off"] and "wheel_right" in lifted["dyn_lifted"] and not lifted["safe"]

@@ -8,7 +8,8 @@ row per point and drawn configuration):
 - :func:`answers`: per position, the highest safe payload (as
   :func:`.payload_sweep_report.summarise` decides it) for each draw; per position and
   command, the payload from which a drive wheel lifts off, the base tilts past 3
-  degrees and the static tip margin falls below 2 cm, each interpolated linearly
+  degrees, the static tip margin falls below 2 cm and a motor's steady current
+  exceeds the driver's continuous rating (the draw's own), each interpolated linearly
   between the swept masses for each draw (``inf``: not within the sweep; the lightest
   mass when it already happens there), with their median and 90 % interval;
 - :func:`sensitivity`: the Spearman rank correlation of each drawn parameter with each
@@ -25,17 +26,20 @@ import numpy as np
 
 from ..statics import CONTACT_MIN_N
 from ..uncertainty import interval, noise_level, rank_correlations
-from .payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
+from .payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, WHEELS
 from .payload_sweep_report import PANELS, _value, summarise
 
+CURRENT_RATIO = "steady_current_ratio"  # the larger motor's steady current over the driver's rating (derived)
 CROSSINGS = (  # answer: (column, limit, direction: +1 when the answer is the mass where it exceeds the limit)
     ("lift_off_kg", "dyn_min_wheel_n", CONTACT_MIN_N, -1),
     ("tilt_limit_kg", "max_tilt_deg", TILT_LIMIT_DEG, +1),
     ("tip_margin_kg", "static_tip_margin_m", TIP_MARGIN_MIN_M, -1),
+    ("overload_kg", CURRENT_RATIO, 1.0, +1),
 )
 ANSWER_TEXT = {"highest_safe_kg": "highest safe payload", "lift_off_kg": "a drive wheel lifts off from",
                "tilt_limit_kg": f"tilt above {TILT_LIMIT_DEG:g} deg from",
-               "tip_margin_kg": f"static tip margin below {TIP_MARGIN_MIN_M * 100:g} cm from"}
+               "tip_margin_kg": f"static tip margin below {TIP_MARGIN_MIN_M * 100:g} cm from",
+               "overload_kg": "a motor over the driver's continuous rating from"}
 TOP = 3  # parameters listed per answer
 
 
@@ -73,11 +77,21 @@ def intervals(results: dict) -> list[dict]:
     return out
 
 
+def _column(r: dict, column: str) -> float | None:
+    """A row's value; :data:`CURRENT_RATIO` from both motors' steady currents and the row's rating."""
+    if column != CURRENT_RATIO:
+        return r.get(column)
+    currents = [r.get(f"{w}_steady_current_a") for w in WHEELS]
+    if r.get("current_limit_a") is None or any(i is None for i in currents):
+        return None
+    return max(currents) / r["current_limit_a"]
+
+
 def crossing_kg(rows: list[dict], column: str, limit: float, direction: int) -> float:
     """The payload at which ``column`` passes ``limit`` (``direction`` +1: rises above, -1: falls
     below), linear between the swept masses; ``inf`` if it never does, the lightest mass if
     it already has there; NaN when a point did not run."""
-    pts = sorted((r["mass_kg"], r.get(column)) for r in rows if r.get("valid", True))
+    pts = sorted((r["mass_kg"], _column(r, column)) for r in rows if r.get("valid", True))
     if not pts or any(v is None for _, v in pts):
         return math.nan
     past = [direction * (v - limit) > 0 for _, v in pts]

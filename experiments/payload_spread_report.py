@@ -189,7 +189,8 @@ def _markdown(results, base, found, sens, top, n) -> str:
              f"({draws.sampler}, seed {draws.seed}, {len(draws.names)} parameters varied: `samples.csv`; spreads in "
              "`models/amr/README.md`).", "",
              f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
-             f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, for every command and every lighter payload. Intervals: "
+             f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current (the draw's "
+             "rating), for every command and every lighter payload. Intervals: "
              f"median ({LEVEL:.0%} interval) over the draws. What moves it: the {spread.TOP} parameters of largest "
              f"Spearman rank correlation with the answer over the draws; **bold** beyond chance (|rho| > "
              f"{noise_level(n, len(draws.names)):.2f}: the largest of {len(draws.names)} unrelated parameters reaches "
@@ -202,7 +203,7 @@ def _markdown(results, base, found, sens, top, n) -> str:
         first = f"{b['first_unsafe_kg']:g} kg: {b['reason']}" if b["first_unsafe_kg"] is not None else "—"
         lines.append(f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {a['within']} of {a['n']} | {first} | "
                      f"{_who(sens, position, '', 'highest_safe_kg')} |")
-    lines += ["", "## Lift-off, tilt and tip margin per position and command", "",
+    lines += ["", "## Lift-off, tilt, tip margin and motor overload per position and command", "",
               "Payload (kg) from which it happens, interpolated between the swept masses; "
               f"`> {top:g}`: not within the sweep.", "",
               f"| position | command | answer | nominal kg | over the draws kg | draws within {top:g} kg | what moves it |",

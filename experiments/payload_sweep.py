@@ -63,7 +63,7 @@ TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
 MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
 MAX_MASSES = 1000          # masses per sweep: each is a simulation per position and command
-ROWS = 2                   # what a row means: 2 = support loads from the springs (1: contact forces); in the fingerprint
+ROWS = 3                   # what a row means (in the fingerprint): 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
 
 
 def parse_masses(text: str) -> list[float]:
@@ -315,6 +315,7 @@ def simulate_point(point: Point) -> dict:
     except (BuildError, DivergenceError) as exc:
         row["error"] = str(exc).splitlines()[0]
     currents = [row.get(f"{w}_steady_current_a") for w in WHEELS]
+    row["current_limit_a"] = cfg.driver.continuous_current_a  # the rating this row is judged by (a draw may move it)
     row["motor_overload"] = any(i is not None and i > cfg.driver.continuous_current_a for i in currents)
     row["safe"] = (not row["error"] and row.get("static_tip_margin_m", -1) >= TIP_MARGIN_MIN_M
                    and not row.get("wheel_lift_off", True) and row.get("max_tilt_deg", 90) <= TILT_LIMIT_DEG

@@ -53,3 +53,20 @@ def test_answers_and_their_driver():
     assert [r["parameter"] for r in spread.drivers(sens, "rear", "", "highest_safe_kg")][:1] == ["b"]
     never = found["rear"]["commands"]["angular:-60:-1"]["tilt_limit_kg"]
     assert never["nominal"] == math.inf and never["median"] == math.inf
+
+
+def test_overload_is_judged_by_each_rows_own_rating():
+    """The same currents (4, 8, 12 A over 0, 20, 40 kg): with an 11.1 A rating the larger motor
+    passes it at 35.5 kg, with a drawn 6 A rating at 10 kg; the smaller motor does not decide."""
+    def row(mass, amps, rating):
+        return {**_row(mass, 50.0), "left_steady_current_a": amps, "right_steady_current_a": amps / 2,
+                "current_limit_a": rating}
+
+    currents = ((0, 4.0), (20, 8.0), (40, 12.0))
+    assert spread.crossing_kg([row(m, a, 11.1) for m, a in currents], spread.CURRENT_RATIO, 1.0, +1) == \
+        pytest.approx(20 + 20 * 3.1 / 4.0)
+    assert spread.crossing_kg([row(m, a, 6.0) for m, a in currents], spread.CURRENT_RATIO, 1.0, +1) == \
+        pytest.approx(10.0)
+    assert spread.crossing_kg([row(m, a, 13.0) for m, a in currents], spread.CURRENT_RATIO, 1.0, +1) == math.inf
+    unrated = [{k: v for k, v in row(m, a, 11.1).items() if k != "current_limit_a"} for m, a in currents]
+    assert math.isnan(spread.crossing_kg(unrated, spread.CURRENT_RATIO, 1.0, +1))  # a row of an older sweep

@@ -202,7 +202,7 @@ def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s)
         mechanism = f"lateral load transfer, {ay:+.2f} m/s^2 (turning)"
     else:
         mechanism = f"longitudinal load transfer, {ax:+.2f} m/s^2 ({'braking' if ax * vel[i, 0] < 0 else 'accelerating'})"
-    return {"dyn_min_wheel": wheel, "dyn_min_wheel_t_s": float(t[i]), "dyn_min_wheel_accel_m_s2": [ax, ay],
+    return {"dyn_min_wheel": wheel, "dyn_min_wheel_t_s": float(t[i]), "dyn_min_wheel_accel_m_s2": [float(ax), float(ay)],
             "dyn_min_wheel_quasi_static_n": both, "dyn_min_wheel_mechanism": mechanism}
 
 

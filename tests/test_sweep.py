@@ -148,6 +148,8 @@ def test_samples_run_resume_and_report(cfg, tmp_path):
     assert len({round(v, 6) for v in loads}) == 3  # nominal and both draws differ
     again = ps.run(cfg, tmp_path, draws=draws, **args)
     assert (again["simulated"], again["reused"]) == (0, 6)
+    from amr_twin.experiments.payload_sweep_report import _csv
+    assert _csv(again["rows"]) == _csv(results["rows"])  # read back from the files: the same CSV as fresh
     other = ps.run(cfg, tmp_path, draws=space.draw(2, seed=1), **args)
     assert (other["simulated"], other["reused"]) == (4, 2)  # new draws, same nominal runs
 

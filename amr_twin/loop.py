@@ -140,7 +140,8 @@ class Twin:
                                autostart=False)
             self.lidar.start_motor(grid_us=self.grid_us, samplers=self.samplers)
         self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
-        self._last_row = self.physics.data.sensordata[:LOOP_SENSOR_DIM].copy()
+        self._loop_sensors = self.physics.data.sensordata[:LOOP_SENSOR_DIM]  # a view: MjData's buffers stay put
+        self._last_row = self._loop_sensors.tolist()
         self._next_check_us = int(options.check_every_s * US)
         for sampler in self.samplers:
             sampler(0)
@@ -206,7 +207,7 @@ class Twin:
         Python lists: a chunk is a handful of samples.
         """
         m, d, dt, every = self.physics.model, self.physics.data, self.dt_us, self.recorder.every
-        sensordata, step, samplers = d.sensordata, mujoco.mj_step, self.samplers
+        sensors, step, samplers = self._loop_sensors, mujoco.mj_step, self.samplers
         k = k0 = self.t_phys_us // dt
         k_end = k0 + nstep
         ts, rows = [k0 * dt], [self._last_row]
@@ -215,7 +216,7 @@ class Twin:
             step(m, d, mark - k)
             k = mark
             t = k * dt
-            row = sensordata[:LOOP_SENSOR_DIM].copy()
+            row = sensors.tolist()
             ts.append(t)
             rows.append(row)
             grid_t.append(t)
@@ -232,12 +233,12 @@ class Twin:
             step(m, d, k_end - k)
             k = k_end
             ts.append(k * dt)
-            rows.append(sensordata[:LOOP_SENSOR_DIM].copy())
+            rows.append(sensors.tolist())
         self.t_phys_us = k * dt
         self._last_row = rows[-1]
         if grid_t:
             self.recorder.extend_grid(grid_t, grid_rows)
-        edges = self.hall.edges_from_samples(ts, [r[:4].tolist() for r in rows])
+        edges = self.hall.edges_from_samples(ts, rows)
         if edges:
             self._pending.extend(edges)
 

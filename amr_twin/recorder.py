@@ -134,7 +134,7 @@ class Recorder:
             self._t.append(t_us[keep])
             self._rows.append(rows[keep])
 
-    def extend_grid(self, t_us: list[int], rows: list[np.ndarray]) -> None:
+    def extend_grid(self, t_us: list[int], rows: list[list[float]]) -> None:
         """Keep rows already on the record grid (lists from the loop; stacked lazily)."""
         self._t.append(t_us)
         self._rows.append(rows)

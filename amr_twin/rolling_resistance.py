@@ -78,6 +78,11 @@ class RollingResistance:
         for i, geom in enumerate(physics.support_geoms.values()):
             self._support_of_geom[geom] = i
         self.loads = [0.0] * 6
+        self._fast = (d.qpos, d.qvel, d.xmat[self._base], d.xpos, m.dof_frictionloss, d.qfrc_applied,
+                      *self._tyres, tuple(self._casters), tuple(self._ball_body), self._base,
+                      self._k_t, self._c_t, self._f0_c, self._k_c, self._c_c, self._tyre_arm_m,
+                      tuple(self._motor_friction), tuple(self._wheel_dof), self._ball_crr, self._root_dof)
+        """Everything :meth:`__call__` reads, in one tuple (MjData's arrays are views: they stay put)."""
 
     def _caster_contact_loads(self) -> list[float]:
         """(4,) normal contact force on the caster balls in the last step, N: the casters
@@ -95,20 +100,19 @@ class RollingResistance:
         return out
 
     def __call__(self, t_us: int = 0) -> None:
-        # plain floats: indexing them is cheap (array views cached: each attribute access
-        # of MjData makes a new view, ~0.3 us)
-        qpos, qvel = self._qpos.tolist(), self._qvel.tolist()
+        # Plain floats and locals (one attribute read of a tuple of constants): this runs on
+        # cold caches every 10 ms, where each attribute lookup and MjData access counts.
+        (qpos_v, qvel_v, xmat_base, xpos_v, fl, qfrc, (qa, va), (qb, vb), casters, balls, base,
+         k_t, c_t, f0, k_c, c_c, arm, (fric_l, fric_r), (dof_l, dof_r), crr, r0) = self._fast
+        qpos, qvel = qpos_v.tolist(), qvel_v.tolist()
         loads = self.loads
-        k_t, c_t = self._k_t, self._c_t
-        (qa, va), (qb, vb) = self._tyres
         load = k_t * qpos[qa] + c_t * qvel[va]
         loads[0] = load if load > 0.0 else 0.0
         load = k_t * qpos[qb] + c_t * qvel[vb]
         loads[1] = load if load > 0.0 else 0.0
         contact = None
-        f0, k_c, c_c = self._f0_c, self._k_c, self._c_c
         i = 2
-        for qa, va in self._casters:
+        for qa, va in casters:
             q = qpos[qa]
             if q > 1e-6:  # off its stop: the spring carries the load
                 load = f0 + k_c * q + c_c * qvel[va]
@@ -118,24 +122,21 @@ class RollingResistance:
                     contact = self._caster_contact_loads()
                 loads[i] = contact[i - 2]
             i += 1
-        arm, fl, friction, (dof_l, dof_r) = self._tyre_arm_m, self._friction, self._motor_friction, self._wheel_dof
-        fl[dof_l] = friction[0] + arm * loads[0]
-        fl[dof_r] = friction[1] + arm * loads[1]
-        crr = self._ball_crr
+        fl[dof_l] = fric_l + arm * loads[0]
+        fl[dof_r] = fric_r + arm * loads[1]
         if crr == 0.0:
             return
         # ball velocity over the floor: the base's (world) velocity plus its yaw rate
         # (world z of the body-frame angular velocity) times the ball's lever arm
-        r0 = self._root_dof
         vx, vy = qvel[r0], qvel[r0 + 1]
-        _, _, _, _, _, _, x6, x7, x8 = self._xmat[self._base].tolist()
+        _, _, _, _, _, _, x6, x7, x8 = xmat_base.tolist()
         wz = x6 * qvel[r0 + 3] + x7 * qvel[r0 + 4] + x8 * qvel[r0 + 5]
-        xpos = self._xpos.tolist()
-        bx, by, _ = xpos[self._base]
+        xpos = xpos_v.tolist()
+        bx, by, _ = xpos[base]
         fx = fy = tz = 0.0
         hypot, eps = math.hypot, BALL_SPEED_EPS_M_S
         i = 2
-        for body in self._ball_body:
+        for body in balls:
             px, py, _ = xpos[body]
             rx, ry = px - bx, py - by  # contact point, on the floor under the ball
             ux, uy = vx - wz * ry, vy + wz * rx
@@ -146,4 +147,4 @@ class RollingResistance:
             i += 1
         # the free joint's generalized force: world force, then the moment in the body frame
         # (R^T (0, 0, tz): the third column of the rotation's transpose is its third row)
-        self._qfrc[r0:r0 + 6] = (fx, fy, 0.0, x6 * tz, x7 * tz, x8 * tz)
+        qfrc[r0:r0 + 6] = (fx, fy, 0.0, x6 * tz, x7 * tz, x8 * tz)

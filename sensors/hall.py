@@ -163,7 +163,8 @@ class HallSensors:
     def edges_from_samples(self, ts: list[int], rows: list[list[float]]) -> list[tuple[int, int]]:
         """Plain-Python core of :meth:`edges_hermite`: sorted ``(t_us, wheel)`` edges.
 
-        ``rows[i]`` holds the angles of all wheels then their speeds at ``ts[i]``.
+        ``rows[i]`` holds the angles of all wheels then their speeds at ``ts[i]`` (further
+        values in a row are ignored: the loop passes its sensor rows as they are).
         A chunk holds a few samples and a few edges, where numpy's per-call cost
         would dominate (``min``/``max`` of two floats are written as conditional
         expressions: same results, a third of the cost). Intervals where a wheel's
@@ -174,7 +175,8 @@ class HallSensors:
         for w in range(nw):
             speeds = [r[nw + w] for r in rows]
             if any(a * b < 0 for a, b in zip(speeds, speeds[1:])):
-                t_arr, q, v = _split(np.array(ts, np.int64), np.array(rows)[:, :nw], np.array(rows)[:, nw:], 8)
+                samples = np.array(rows)
+                t_arr, q, v = _split(np.array(ts, np.int64), samples[:, :nw], samples[:, nw:2 * nw], 8)
                 ts, rows = t_arr.tolist(), np.hstack([q, v]).tolist()
                 break
         pitch, offsets, floor = self.pitch_rad, self.offset_rad.tolist(), math.floor

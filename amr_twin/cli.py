@@ -24,7 +24,6 @@ except ImportError:  # pragma: no cover - older typer on click
     from click import exceptions as _click_errors
 
 from .cli_options import ConfigOpt, ParamsOpt, SetOpt  # noqa: F401 - used by the command modules
-from .config import ConfigError, load_config
 
 
 class _App(typer.Typer):
@@ -77,6 +76,8 @@ def fail(message: str, code: int = 2) -> None:
 
 
 def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
+    from .config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
+
     try:
         return load_config(config, override_file=params, sets=sets or [], overrides=extra)
     except ConfigError as exc:
@@ -97,6 +98,7 @@ def _guard(func):
     """
     from .atomic_file import WriteError
     from .build import BuildError
+    from .config import ConfigError
     from .physics import DivergenceError
 
     try:

@@ -1,4 +1,4 @@
-"""Mass properties of the robot's links from its parametric geometry (trimesh).
+"""Mass properties of the robot's links from its parametric geometry (closed forms).
 
 The AISI304 frame is built of square tubes (four corner posts and, on each of the
 three floors, a perimeter of four rails plus one cross rail over the axle); each
@@ -10,6 +10,11 @@ Everything is summed into the chassis link's mass, centre of mass and inertia
 LiDAR on ``laser``, the IMU board on ``imu_link``, the UWB tag on ``uwb_tag``:
 :func:`sensor_link_inertials`); the xacro draws the same members from
 :func:`frame_members`.
+
+Every part is a solid of uniform density with a textbook inertia: a box
+``m (b^2 + c^2) / 12``..., a cylinder ``m r^2 / 2`` about its axis and ``m (3 r^2 + h^2) / 12``
+across, a sphere ``2 m r^2 / 5`` (tests/test_mass.py checks them against trimesh's
+meshes). No mesh library on the model build's path: this module costs microseconds.
 """
 
 from __future__ import annotations
@@ -17,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import trimesh
 
 from .config import TwinConfig
 
@@ -36,10 +40,29 @@ class Inertial:
         return (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
 
 
+def box_inertia(extents, mass_kg: float) -> np.ndarray:
+    """(3, 3) inertia of a solid box of ``extents`` (a, b, c) m about its centre, kg m^2."""
+    a, b, c = (float(e) for e in extents)
+    return np.diag([mass_kg * (b * b + c * c) / 12.0, mass_kg * (a * a + c * c) / 12.0,
+                    mass_kg * (a * a + b * b) / 12.0])
+
+
+def cylinder_inertia(radius_m: float, height_m: float, mass_kg: float) -> np.ndarray:
+    """(3, 3) inertia of a solid cylinder about its centre, axis along z, kg m^2."""
+    across = mass_kg * (3.0 * radius_m ** 2 + height_m ** 2) / 12.0
+    return np.diag([across, across, 0.5 * mass_kg * radius_m ** 2])
+
+
+def sphere_inertia(radius_m: float, mass_kg: float) -> np.ndarray:
+    """(3, 3) inertia of a solid sphere about its centre, kg m^2."""
+    return np.eye(3) * (0.4 * mass_kg * radius_m ** 2)
+
+
 def _box(extents, center, mass_kg: float | None = None, density: float | None = None) -> Inertial:
-    mesh = trimesh.creation.box(extents=extents)
-    mesh.density = density if density is not None else mass_kg / mesh.volume
-    return Inertial(float(mesh.mass), np.asarray(center, float), np.asarray(mesh.moment_inertia))
+    """A solid box of ``extents`` at ``center``, of a given mass or density (kg/m^3)."""
+    if mass_kg is None:
+        mass_kg = density * float(np.prod(extents))
+    return Inertial(float(mass_kg), np.asarray(center, float), box_inertia(extents, mass_kg))
 
 
 def _tube(extents, center, axis: int, wall_m: float, density: float) -> Inertial:
@@ -148,20 +171,16 @@ def chassis_inertial(cfg: TwinConfig) -> Inertial:
 def wheel_inertial(cfg: TwinConfig) -> Inertial:
     """Rotating share of a hub motor (rotor, magnets, tyre) as a solid cylinder, axis along y."""
     w = cfg.wheel
-    mesh = trimesh.creation.cylinder(radius=w.radius_m, height=w.width_m, sections=256)
     mass = w.mass_kg * w.rotor_fraction
-    mesh.density = mass / mesh.volume
-    i = np.asarray(mesh.moment_inertia)  # cylinder axis is the mesh z axis
-    perm = [0, 2, 1]  # mesh z -> link y
+    i = cylinder_inertia(w.radius_m, w.width_m, mass)  # axis along z
+    perm = [0, 2, 1]  # cylinder z -> link y
     return Inertial(mass, np.zeros(3), i[np.ix_(perm, perm)])
 
 
 def caster_inertial(cfg: TwinConfig) -> Inertial:
     """Caster ball unit (housing, spring, ball) as a solid sphere."""
     k = cfg.caster
-    mesh = trimesh.creation.icosphere(subdivisions=3, radius=k.ball_diameter_m / 2)
-    mesh.density = k.mass_kg / mesh.volume
-    return Inertial(k.mass_kg, np.zeros(3), np.asarray(mesh.moment_inertia))
+    return Inertial(k.mass_kg, np.zeros(3), sphere_inertia(k.ball_diameter_m / 2, k.mass_kg))
 
 
 def robot_mass_kg(cfg: TwinConfig) -> float:

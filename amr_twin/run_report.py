@@ -6,9 +6,9 @@ import dataclasses
 import math
 from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # numpy and the recorder (the model build) stay off the CLI's start-up path (--help)
+    import numpy as np
 
-if TYPE_CHECKING:  # the recorder imports the model build (trimesh): not on the CLI's start-up path
     from .recorder import RunSeries
 
 CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_right",
@@ -31,6 +31,8 @@ SIGNED_METRICS = ("reference", "final_value", "peak_value", "steady_error")
 
 def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before: float = 0.0) -> np.ndarray:
     """Zero-order hold of samples (t_sample, values) at ``t_query``."""
+    import numpy as np
+
     idx = np.searchsorted(t_sample, t_query, side="right") - 1
     out = np.where(idx >= 0, values[np.clip(idx, 0, None)] if len(values) else before, before)
     return out.astype(float)
@@ -38,6 +40,8 @@ def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before:
 
 def series_table(series: RunSeries) -> np.ndarray:
     """The ``--csv`` table, shape (n, len(CSV_COLUMNS))."""
+    import numpy as np
+
     from .recorder import signed_published
 
     t = series.t_s
@@ -91,6 +95,8 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
     ended at the first one (``--stop-on-collision``); ``faults``: each injected fault
     with its effect (:meth:`amr_twin.fault_injector.FaultInjector.report`).
     """
+    import numpy as np
+
     series, wc = result.series, result.wheel_command
     code = next((c for c in result.codes if c != 0), 0)
     last_s = series.t_s >= series.t_s[-1] - 1.0  # "final" electrical values: the last second
@@ -127,6 +133,8 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
 
 def _battery_summary(series: RunSeries) -> dict:
     """The pack over the run: mean current, final voltage, energy drawn and per metre driven."""
+    import numpy as np
+
     power = series.battery_v * series.battery_a
     energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(series.t_s)))
     distance = float(np.sum(np.hypot(*np.diff(series.pose[:, :2], axis=0).T)))

@@ -17,7 +17,7 @@ def read_yaml(path: str | Path, kind: str, error: type[Exception]) -> Any:
     """The parsed content of ``path``; ``error(f"{kind} {path}: ...")`` if it cannot be read or parsed."""
     path = Path(path)
     try:
-        return yaml.safe_load(path.read_text())
+        return yaml.load(path.read_text(), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except OSError as exc:
         raise error(f"{kind} {path}: {exc.strerror or exc}") from None
     except yaml.YAMLError as exc:

@@ -110,3 +110,36 @@ def test_spec_adds_what_urdf_cannot_carry():
 def test_unknown_world_is_refused():
     with pytest.raises(BuildError, match="no such world"):
         build(load_config(), world="moon")
+
+
+def test_urdf_is_made_and_checked_once_per_robot(monkeypatch, tmp_path):
+    """robot_urdf: xacro and yourdfpy run once per fingerprint; the payload (added on the MjSpec)
+    does not change it, a wheel radius does; a fresh process reads the disk cache."""
+    monkeypatch.setenv("AMR_TWIN_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(build_mod, "_urdf_memo", {})
+    calls = []
+    real_check = build_mod.check_urdf
+    monkeypatch.setattr(build_mod, "check_urdf", lambda urdf: (calls.append(1), real_check(urdf)))
+    base = load_config()
+    first = build_mod.robot_urdf(base)
+    assert first == urdf_string(base) and len(calls) == 1
+    assert build_mod.robot_urdf(load_config(sets=["payload.mass_kg=30"])) == first and len(calls) == 1
+    bigger = load_config(sets=["wheel.radius_m=0.13"])
+    assert build_mod.urdf_fingerprint(bigger) != build_mod.urdf_fingerprint(base)
+    assert build_mod.robot_urdf(bigger) == urdf_string(bigger) and len(calls) == 2
+    assert len(list((tmp_path / "urdf").glob("*.urdf"))) == 2
+    code = ("import amr_twin.build as b, sys; from amr_twin.config import load_config; "
+            "b.urdf_string = None; b.robot_urdf(load_config()); print('xacro' in sys.modules)")
+    env = {**__import__("os").environ, "AMR_TWIN_CACHE_DIR": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert out.stdout.strip() == "False"  # from the disk: neither xacro nor yourdfpy
+
+
+def test_unwritable_urdf_cache_still_builds(monkeypatch, tmp_path):
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("")
+    monkeypatch.setenv("AMR_TWIN_CACHE_DIR", str(blocker))
+    monkeypatch.setattr(build_mod, "_urdf_memo", {})
+    assert build(load_config(), world="empty").model.nu == 2
+    monkeypatch.setenv("AMR_TWIN_CACHE_DIR", "")
+    assert build_mod.urdf_cache_dir() is None

@@ -1,0 +1,19 @@
+"""Test session set-up: the model build's URDF cache in a folder of its own, removed afterwards,
+so that the tests neither read nor fill the user's cache (subprocesses inherit it)."""
+
+import os
+import shutil
+import tempfile
+
+_made: list[str] = []
+
+
+def pytest_configure(config):
+    if "AMR_TWIN_CACHE_DIR" not in os.environ:
+        _made.append(tempfile.mkdtemp(prefix="amr-twin-test-cache-"))
+        os.environ["AMR_TWIN_CACHE_DIR"] = _made[-1]
+
+
+def pytest_unconfigure(config):
+    for folder in _made:
+        shutil.rmtree(folder, ignore_errors=True)

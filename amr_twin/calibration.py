@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import csv
 import math
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -271,6 +270,8 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     """
     from scipy.optimize import least_squares
 
+    from .experiments.executor import worker_pool
+
     base = base or load_config()
     parameters = parameters or PARAMETERS
     keys = list(parameters)
@@ -280,7 +281,7 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     targets = thesis_targets()
     count = [0]
     last: dict = {}
-    pool = ProcessPoolExecutor(jobs) if jobs > 1 and log is None else None
+    pool = worker_pool(jobs) if jobs > 1 and log is None else None  # spawned, warm, die with this process
 
     def cfg_at(u: np.ndarray) -> TwinConfig:
         return _with(base, dict(zip(keys, (lo + (hi - lo) * u).tolist())))

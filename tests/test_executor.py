@@ -187,36 +187,37 @@ def test_a_non_scheduler_or_malformed_address_is_one_line_without_a_hang(tmp_pat
         server.close()
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
-def test_pool_workers_die_with_their_parent(tmp_path):
+def _children(pid):
+    import os
+
+    out = []
+    for stat in os.listdir("/proc"):
+        if stat.isdigit():
+            try:
+                fields = open(f"/proc/{stat}/stat").read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != "Z":
+                out.append(int(stat))
+    return out
+
+
+def _kill_and_check_no_worker_survives(command, n_children):
+    """Start ``command``, wait for ``n_children`` children (workers, resource tracker), kill -9
+    the parent, then every child must be gone within 10 s."""
     import os
     import signal
     import subprocess
     import time
 
-    script = ("import time\nfrom amr_twin.experiments.executor import run_all\n"
-              "list(run_all(time.sleep, [60.0, 60.0, 60.0], jobs=2, progress=False))\n")
-    parent = subprocess.Popen([sys.executable, "-c", script])
-
-    def children(pid):
-        out = []
-        for stat in os.listdir("/proc"):
-            if stat.isdigit():
-                try:
-                    fields = open(f"/proc/{stat}/stat").read().rsplit(")", 1)[1].split()
-                except OSError:
-                    continue
-                if int(fields[1]) == pid and fields[0] != "Z":
-                    out.append(int(stat))
-        return out
-
+    parent = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        deadline = time.monotonic() + 60
-        while len(children(parent.pid)) < 2 and time.monotonic() < deadline:  # 2 workers (+ resource tracker)
+        deadline = time.monotonic() + 90
+        while len(_children(parent.pid)) < n_children and time.monotonic() < deadline:
             time.sleep(0.2)
-        workers = children(parent.pid)
-        assert len(workers) >= 2
-        time.sleep(3.0)  # the workers are busy in time.sleep(60)
+        workers = _children(parent.pid)
+        assert len(workers) >= n_children
+        time.sleep(3.0)  # the workers are busy
     finally:
         parent.send_signal(signal.SIGKILL)
         parent.wait()
@@ -227,3 +228,40 @@ def test_pool_workers_die_with_their_parent(tmp_path):
         alive = [w for w in workers if os.path.exists(f"/proc/{w}") and
                  open(f"/proc/{w}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"]
     assert alive == []
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_pool_workers_die_with_their_parent():
+    script = ("import time\nfrom amr_twin.experiments.executor import run_all\n"
+              "list(run_all(time.sleep, [60.0, 60.0, 60.0, 60.0], jobs=3, progress=False))\n")
+    _kill_and_check_no_worker_survives([sys.executable, "-c", script], 3)  # 2 workers + resource tracker
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_calibrate_workers_die_with_it(tmp_path):
+    """amr-twin calibrate --jobs 2: killed outright, it leaves no worker behind."""
+    from pathlib import Path
+
+    cli = Path(sys.executable).with_name("amr-twin")
+    _kill_and_check_no_worker_survives([str(cli), "calibrate", "--jobs", "2", "--max-evaluations", "4",
+                                        "--out", str(tmp_path / "p.yaml")], 3)
+
+
+def test_the_caller_and_a_warm_worker_share_the_items(tmp_path, monkeypatch):
+    """jobs=2: this process simulates too (the first item at once, before the worker is warm);
+    each item is done once; the pool stays warm for the next call."""
+    import os
+
+    (tmp_path / "who_runs.py").write_text("import os, time\n"
+                                          "def run(x):\n    time.sleep(0.3)\n    return x, os.getpid()\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import who_runs
+
+    got = list(executor.run_all(who_runs.run, list(range(12)), jobs=2, progress=False))
+    assert sorted(item for item, _ in got) == list(range(12))
+    assert all(item == value for item, (value, _pid) in got)
+    pids = [pid for _, (_, pid) in got]
+    assert got[0][1][1] == os.getpid()  # the caller started at once
+    assert len(set(pids)) == 2          # and the worker took part once warm
+    again = list(executor.run_all(who_runs.run, [20, 21, 22, 23], jobs=2, progress=False))
+    assert len({pid for _, (_, pid) in again}) == 2  # the warm worker at once

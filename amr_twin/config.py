@@ -23,6 +23,7 @@ and holds the loading (YAML leaves to plain values, overrides, error messages).
 from __future__ import annotations
 
 import math
+import pickle
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -288,9 +289,27 @@ def _read_yaml(path: Path) -> dict:
     return data
 
 
+_trees: dict[tuple[str, int, int], bytes] = {}
+
+
 def read_tree(path: str | Path | None = None) -> dict:
-    """The raw YAML tree of a parameter file (with units and sources)."""
-    return _read_yaml(Path(path) if path is not None else DEFAULT_CONFIG)
+    """The raw YAML tree of a parameter file (with units and sources), a fresh copy.
+
+    Parsed once per file version (path, modification time, size) in a process: a sweep
+    loads the parameter file once per point (~13 ms of YAML, ~0.2 ms from the memo).
+    """
+    path = Path(path) if path is not None else DEFAULT_CONFIG
+    try:
+        st = path.stat()
+        key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
+    except OSError:
+        key = None  # _read_yaml names the problem
+    if key in _trees:
+        return pickle.loads(_trees[key])
+    tree = _read_yaml(path)
+    if key is not None:
+        _trees[key] = pickle.dumps(tree)
+    return tree
 
 
 def parameter_table(path: str | Path | None = None) -> list[tuple[str, Any, str, str]]:

@@ -19,7 +19,7 @@ Entities::
     world/bodies/<body>/geoms/<kind>    static Boxes3D / Ellipsoids3D / Cylinders3D
     world/bodies/amr/laser/scan         LaserScan points in the laser frame
     world/scan                          the same points in the world (deskewed per beam)
-    world/trajectory/{true,odom}        LineStrips3D, growing at 2 Hz
+    world/trajectory/{true,odom}/<k>    LineStrips3D, growing at 2 Hz, one entity per 10 s
     wheels/{left,right}/{reference,published,true}_rpm   Scalars
     duty/{left,right}                   analogWrite counts
     imu/{accel,gyro,mag}                Scalars (x, y, z)

@@ -97,8 +97,18 @@ def _log_body_transforms(rec, m, capture: Capture) -> None:
                                                         quaternion=q[:, [1, 2, 3, 0]]))
 
 
+TRAJECTORY_BLOCK_S = 10.0
+"""The growing paths are logged in blocks of this many seconds, one entity each (linear size)."""
+
+
 def _log_trajectory(rec, series, rate_hz: float = 2.0) -> None:
-    """True (world) and odometry (odom frame put on the start pose) paths, growing."""
+    """True (world) and odometry (odom frame put on the start pose) paths, growing.
+
+    ``world/trajectory/{true,odom}/<block>``: each block of :data:`TRAJECTORY_BLOCK_S` is a
+    line strip that grows at ``rate_hz`` from the end of the block before it and then stays
+    (the viewer keeps an entity's latest strip), so a run of any length costs a file that
+    grows linearly with it, not with its square.
+    """
     import rerun as rr
 
     true_xy = series.pose[:, :2]
@@ -109,23 +119,36 @@ def _log_trajectory(rec, series, rate_hz: float = 2.0) -> None:
     end = float(series.t_s[-1]) if len(series.t_s) else 0.0
     for t in np.append(np.arange(0.0, end, 1.0 / rate_hz), end):
         rec.set_time(TIMELINE, duration=float(t))
+        block = int(t // TRAJECTORY_BLOCK_S)
+        t_block = block * TRAJECTORY_BLOCK_S
         for name, tt, xy, color in (("true", series.t_s, true_xy, (40, 160, 40)),
                                     ("odom", odom[:, 0], odom_xy, (220, 60, 60))):
             n = int(np.searchsorted(tt, t, side="right"))
-            if n >= 2:
-                pts = np.vstack([xy[:n:5], xy[n - 1:n]])
+            first = max(0, int(np.searchsorted(tt, t_block, side="left")) - 1)  # joins the block before
+            if n - first >= 2:
+                pts = np.vstack([xy[first:n:5], xy[n - 1:n]])
                 pts = np.column_stack([pts, np.full(len(pts), 0.01)])
-                rec.log(f"world/trajectory/{name}", rr.LineStrips3D([pts], colors=[color], radii=[0.01]))
+                rec.log(f"world/trajectory/{name}/{block:04d}", rr.LineStrips3D([pts], colors=[color], radii=[0.01]))
 
 
-def _body_pose_at(capture: Capture, m, body: str, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Position (n, 3), m, and yaw (n,), rad, of ``body`` at ``t_s``, interpolated from the body samples."""
+def _pose_track(capture: Capture, m, body: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sample times (n,), s, positions (n, 3), m, and unwrapped yaw (n,), rad, of ``body``."""
     j = int(np.nonzero(capture.body_ids == mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body))[0][0])
     t, pos, quat = capture.body_poses()
     q = quat[:, j]
     yaw = np.unwrap(np.arctan2(2 * (q[:, 0] * q[:, 3] + q[:, 1] * q[:, 2]), 1 - 2 * (q[:, 2] ** 2 + q[:, 3] ** 2)))
-    p = np.column_stack([np.interp(t_s, t, pos[:, j, k]) for k in range(3)])
-    return p, np.interp(t_s, t, yaw)
+    return t, pos[:, j], yaw
+
+
+def _interp_pose(track, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (n, 3) and yaw (n,) of a :func:`_pose_track` at ``t_s``, linear between samples."""
+    t, pos, yaw = track
+    return np.column_stack([np.interp(t_s, t, pos[:, k]) for k in range(3)]), np.interp(t_s, t, yaw)
+
+
+def _body_pose_at(capture: Capture, m, body: str, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position (n, 3), m, and yaw (n,), rad, of ``body`` at ``t_s``, interpolated from the body samples."""
+    return _interp_pose(_pose_track(capture, m, body), t_s)
 
 
 def _laser_pose_at(capture: Capture, m, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -134,25 +157,41 @@ def _laser_pose_at(capture: Capture, m, t_s: np.ndarray) -> tuple[np.ndarray, np
 
 
 def _log_scan(rec, m, capture: Capture) -> None:
+    """Every scan in the laser frame and in the world (each beam at its own instant's laser pose).
+
+    The laser's pose track is made once and all beams of all scans are placed in one
+    vectorised pass: the cost grows with the number of beams, not with their square.
+    """
     import rerun as rr
 
     scans = capture.messages.get("scan", [])
     if not scans:
         return
+    ranges, t_beam, angles, ends = [], [], [], []
     for _t_us, msg in scans:
         r = np.asarray(msg.ranges, float)
-        ang = msg.angle_min + msg.angle_increment * np.arange(len(r))
-        ok = np.isfinite(r)
-        r = np.where(ok, r, 0.0)  # no return: inf; dropped below, kept out of the products
-        local = np.column_stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(r)])[ok]
-        t_beam = msg.header.stamp.to_sec() + msg.time_increment * np.arange(len(r))[ok]
-        p, yaw = _laser_pose_at(capture, m, t_beam)
-        c, s = np.cos(yaw), np.sin(yaw)
-        world = np.column_stack([p[:, 0] + c * local[:, 0] - s * local[:, 1],
-                                 p[:, 1] + s * local[:, 0] + c * local[:, 1], p[:, 2]])
-        rec.set_time(TIMELINE, duration=scan_end_time_s(msg))  # the rotation is complete
-        rec.log("world/bodies/amr/laser/scan", rr.Points3D(local, colors=[(250, 200, 40)], radii=[0.01]))
-        rec.log("world/scan", rr.Points3D(world, colors=[(40, 120, 250)], radii=[0.015]))
+        i = np.arange(len(r))
+        ranges.append(r)
+        angles.append(msg.angle_min + msg.angle_increment * i)
+        t_beam.append(msg.header.stamp.to_sec() + msg.time_increment * i)
+        ends.append(scan_end_time_s(msg))
+    sizes = [len(r) for r in ranges]
+    r, ang, t_all = np.concatenate(ranges), np.concatenate(angles), np.concatenate(t_beam)
+    ok = np.isfinite(r)
+    r = np.where(ok, r, 0.0)  # no return: inf; dropped below, kept out of the products
+    local = np.column_stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(r)])
+    p, yaw = _interp_pose(_pose_track(capture, m, "amr/laser"), t_all)
+    c, s = np.cos(yaw), np.sin(yaw)
+    world = np.column_stack([p[:, 0] + c * local[:, 0] - s * local[:, 1],
+                             p[:, 1] + s * local[:, 0] + c * local[:, 1], p[:, 2]])
+    start = 0
+    for n, end_s in zip(sizes, ends):
+        keep = ok[start:start + n]
+        rec.set_time(TIMELINE, duration=end_s)  # the rotation is complete
+        rec.log("world/bodies/amr/laser/scan", rr.Points3D(local[start:start + n][keep], colors=[(250, 200, 40)],
+                                                          radii=[0.01]))
+        rec.log("world/scan", rr.Points3D(world[start:start + n][keep], colors=[(40, 120, 250)], radii=[0.015]))
+        start += n
 
 
 def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:

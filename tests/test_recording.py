@@ -78,8 +78,8 @@ def test_rrd_entities_and_rates(recorded):
     for entity in ("/world/bodies/amr/base_link", "/world/bodies/amr/wheel_left_link",
                    "/world/bodies/amr/caster_rear_right_link", "/world/bodies/world/geoms/boxes",
                    "/world/bodies/amr/base_link/geoms/boxes", "/world/bodies/amr/wheel_left_link/geoms/cylinders",
-                   "/world/scan", "/world/bodies/amr/laser/scan", "/world/trajectory/true",
-                   "/world/trajectory/odom", "/wheels/left/true_rpm", "/wheels/right/published_rpm",
+                   "/world/scan", "/world/bodies/amr/laser/scan", "/world/trajectory/true/0000",
+                   "/world/trajectory/odom/0000", "/wheels/left/true_rpm", "/wheels/right/published_rpm",
                    "/wheels/left/reference_rpm", "/duty/left", "/imu/accel", "/imu/gyro", "/commands",
                    "/electrics/left/current_a", "/electrics/battery/current_a", "/electrics/battery/voltage_v"):
         assert entity in entities, entity

@@ -74,6 +74,43 @@ class Cdr:
 
 _U32 = struct.Struct("<I")
 _STAMP = struct.Struct("<iI")
+_F64X3, _F64X4, _F64X6, _F64X7 = (struct.Struct(f"<{n}d") for n in (3, 4, 6, 7))
+_ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR little endian, no options
+_EMPTY_LAYOUT = _ENCAPSULATION + bytes(8)  # Float64MultiArray: no dimension, data_offset 0
+_strings: dict[str, bytes] = {}
+
+
+def _string(text: str) -> bytes:
+    """A CDR string (uint32 length, UTF-8, NUL), cached: frame ids repeat in every message.
+    The caller aligns to 4 first."""
+    out = _strings.get(text)
+    if out is None:
+        data = text.encode("utf-8") + b"\x00"
+        out = _strings[text] = _U32.pack(len(data)) + data
+    return out
+
+
+def _header(h) -> bytearray:
+    """The payload so far: encapsulation, then a ``std_msgs/Header`` at the start of the message."""
+    b = bytearray(_ENCAPSULATION)
+    b += _STAMP.pack(h.stamp.sec, h.stamp.nanosec)
+    b += _string(h.frame_id)
+    return b
+
+
+def _pad(b: bytearray, n: int) -> bytes:
+    """Zero bytes that align the next primitive of size ``n`` (offsets count after the encapsulation)."""
+    return bytes(-(len(b) - 4) % n)
+
+
+_LE_F64 = np.dtype("<f8")
+
+
+def _f64_bytes(values) -> bytes:
+    """float64 values as little-endian bytes (no length prefix)."""
+    if type(values) is np.ndarray and values.dtype == _LE_F64:
+        return values.tobytes()
+    return np.asarray(values, _LE_F64).tobytes()
 
 
 def _hdr(c: Cdr, h) -> None:
@@ -82,55 +119,52 @@ def _hdr(c: Cdr, h) -> None:
 
 
 def encode_odometry(msg) -> bytes:
-    """The CDR payload of a ``nav_msgs/Odometry`` message."""
-    c = Cdr()
-    _hdr(c, msg.header)
-    c.string(msg.child_frame_id)
+    """The CDR payload of a ``nav_msgs/Odometry`` message (precompiled: struct layouts, cached strings)."""
+    b = _header(msg.header)
+    b += _pad(b, 4)
+    b += _string(msg.child_frame_id)
+    b += _pad(b, 8)
     p, o = msg.pose.pose.position, msg.pose.pose.orientation
-    c.f64(p.x, p.y, p.z, o.x, o.y, o.z, o.w)
-    c.f64_array(msg.pose.covariance)
     lin, ang = msg.twist.twist.linear, msg.twist.twist.angular
-    c.f64(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
-    c.f64_array(msg.twist.covariance)
-    return bytes(c.b)
-
-
+    b += _F64X7.pack(p.x, p.y, p.z, o.x, o.y, o.z, o.w)
+    b += _f64_bytes(msg.pose.covariance)
+    b += _F64X6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+    b += _f64_bytes(msg.twist.covariance)
+    return bytes(b)
 def encode_tf_message(msg) -> bytes:
     """The CDR payload of a ``tf2_msgs/TFMessage`` message."""
-    c = Cdr()
-    c.u32(len(msg.transforms))
+    b = bytearray(_ENCAPSULATION)
+    b += _U32.pack(len(msg.transforms))
     for ts in msg.transforms:
-        _hdr(c, ts.header)
-        c.string(ts.child_frame_id)
+        h = ts.header
+        b += _STAMP.pack(h.stamp.sec, h.stamp.nanosec)  # 4-aligned: after a u32 or 8-byte doubles
+        b += _string(h.frame_id)
+        b += _pad(b, 4)
+        b += _string(ts.child_frame_id)
+        b += _pad(b, 8)
         t, r = ts.transform.translation, ts.transform.rotation
-        c.f64(t.x, t.y, t.z, r.x, r.y, r.z, r.w)
-    return bytes(c.b)
-
-
+        b += _F64X7.pack(t.x, t.y, t.z, r.x, r.y, r.z, r.w)
+    return bytes(b)
 def encode_imu(msg) -> bytes:
     """The CDR payload of a ``sensor_msgs/Imu`` message."""
-    c = Cdr()
-    _hdr(c, msg.header)
+    b = _header(msg.header)
+    b += _pad(b, 8)
     o, w, a = msg.orientation, msg.angular_velocity, msg.linear_acceleration
-    c.f64(o.x, o.y, o.z, o.w)
-    c.f64_array(msg.orientation_covariance)
-    c.f64(w.x, w.y, w.z)
-    c.f64_array(msg.angular_velocity_covariance)
-    c.f64(a.x, a.y, a.z)
-    c.f64_array(msg.linear_acceleration_covariance)
-    return bytes(c.b)
-
-
+    b += _F64X4.pack(o.x, o.y, o.z, o.w)
+    b += _f64_bytes(msg.orientation_covariance)
+    b += _F64X3.pack(w.x, w.y, w.z)
+    b += _f64_bytes(msg.angular_velocity_covariance)
+    b += _F64X3.pack(a.x, a.y, a.z)
+    b += _f64_bytes(msg.linear_acceleration_covariance)
+    return bytes(b)
 def encode_magnetic_field(msg) -> bytes:
     """The CDR payload of a ``sensor_msgs/MagneticField`` message."""
-    c = Cdr()
-    _hdr(c, msg.header)
+    b = _header(msg.header)
+    b += _pad(b, 8)
     f = msg.magnetic_field
-    c.f64(f.x, f.y, f.z)
-    c.f64_array(msg.magnetic_field_covariance)
-    return bytes(c.b)
-
-
+    b += _F64X3.pack(f.x, f.y, f.z)
+    b += _f64_bytes(msg.magnetic_field_covariance)
+    return bytes(b)
 def encode_laser_scan(msg) -> bytes:
     """The CDR payload of a ``sensor_msgs/LaserScan`` message."""
     c = Cdr()
@@ -184,19 +218,18 @@ def encode_float64_multi_array(values, labels: str | None = None) -> bytes:
 
     Empty layout, or with ``labels`` one dimension of that label, size and stride n.
     """
+    if labels is None:  # dim count 0, data_offset 0, n, then the doubles from offset 16
+        n = len(values)
+        return _EMPTY_LAYOUT + _U32.pack(n) + b"\x00\x00\x00\x00" + _f64_bytes(values) if n else \
+            _EMPTY_LAYOUT + _U32.pack(0)
     c = Cdr()
-    if labels is None:
-        c.u32(0)  # layout.dim: empty
-    else:
-        c.u32(1)
-        c.string(labels)
-        c.u32(len(values))
-        c.u32(len(values))
+    c.u32(1)
+    c.string(labels)
+    c.u32(len(values))
+    c.u32(len(values))
     c.u32(0)  # layout.data_offset
     c.f64_seq(values)
     return bytes(c.b)
-
-
 def encode_float64_multi_array_msg(msg) -> bytes:
     """The CDR payload of a ``std_msgs/Float64MultiArray`` message (its first dimension's label kept)."""
     dim = msg.layout.dim
@@ -212,11 +245,7 @@ def encode_string(msg) -> bytes:
 
 def encode_clock(msg) -> bytes:
     """The CDR payload of a ``rosgraph_msgs/Clock`` message."""
-    c = Cdr()
-    c.stamp(msg.clock.sec, msg.clock.nanosec)
-    return bytes(c.b)
-
-
+    return _ENCAPSULATION + _STAMP.pack(msg.clock.sec, msg.clock.nanosec)
 def encode_twist(msg) -> bytes:
     """The CDR payload of a ``geometry_msgs/Twist`` message."""
     c = Cdr()

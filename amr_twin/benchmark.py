@@ -2,13 +2,15 @@
 
 Times are the process' CPU time (:data:`timer`, ``time.process_time``), not wall
 time: on a shared machine other work delays a run without costing it CPU, which
-made wall-clock ratios swing by 2x. Each figure is the best of a few repeats (the
-minimum is the least disturbed measurement); on an idle machine CPU and wall time
-agree.
+made wall-clock ratios swing by 2x. Each figure is the median of :data:`REPEATS`
+interleaved repeats (twin, bare, twin, bare, ...: a disturbance of the machine
+hits both), each ratio the median of the repeats' own ratios; on an idle machine
+CPU and wall time agree.
 """
 
 from __future__ import annotations
 
+import statistics
 import time
 
 from .build import build
@@ -17,18 +19,18 @@ from .physics import Physics
 from .pins import DriverPins
 from .plant import Plant
 
-REPEATS = 3
+REPEATS = 5
 timer = time.process_time
 """Clock of every benchmark figure, s (CPU time of this process)."""
 
 
-def _best(func, repeats: int = REPEATS) -> float:
-    best = float("inf")
+def _median_time(func, repeats: int = REPEATS) -> float:
+    times = []
     for _ in range(repeats):
         t0 = timer()
         func()
-        best = min(best, timer() - t0)
-    return best
+        times.append(timer() - t0)
+    return statistics.median(times)
 
 
 def bare_physics(cfg: TwinConfig, sim_s: float) -> dict:
@@ -40,7 +42,7 @@ def bare_physics(cfg: TwinConfig, sim_s: float) -> dict:
     plant.apply(pins)
     physics.step(1000)
     nstep = int(round(sim_s / physics.timestep_s))
-    wall = _best(lambda: physics.step(nstep))
+    wall = _median_time(lambda: physics.step(nstep))
     physics.check()
     return {
         "physics_us_per_step": round(wall / nstep * 1e6, 2),
@@ -82,7 +84,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
     result.update(twin_figures(cfg, sim_s))
     from .sensor_benchmark import sensor_figures  # IMU + LiDAR against the same bare figure
-    result.update(sensor_figures(cfg, sim_s, result["bare_physics_s_per_sim_s"]))
+    result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"
     return result

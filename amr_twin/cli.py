@@ -176,13 +176,13 @@ def model(
 def bench(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     sim_s: float = typer.Option(16.0, help="Simulated seconds per measurement."),
-    suites: bool = typer.Option(False, "--suites", help="Also time the chapter 5 suite, a 100-run sweep and the "
-                                "fusion experiment (wall time, about a minute)."),
+    suites: bool = typer.Option(False, "--suites", help="Also time what users wait for: start-up, chapter 5 "
+                                "with --jobs 1 and N, a 100-point sweep, .rrd writing, fusion (several minutes)."),
     jobs: Optional[int] = typer.Option(None, "--jobs", help="Worker processes for --suites (default: the usable "
                                        "cores)."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Measure the cost of the physics (and of the whole twin) per simulated second."""
+    """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
     from .benchmark import run_benchmarks
     from .experiments.executor import check_jobs
 

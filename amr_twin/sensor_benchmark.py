@@ -4,14 +4,16 @@ Scenario: the twin benchmark's (chapter 5 run 3: linear 0.7 m/s, faithful
 firmware, warehouse) with ``TwinOptions(sensors=True)``: IMU at 100 Hz and
 RPLIDAR A1 at 5.5 Hz (2000 samples/s, laser pose sampled every 20 ms on the
 record grid, the 364 beams of a rotation cast in one call, sensors/lidar.py).
-Figures: CPU time, best of a few repeats (amr_twin/benchmark.py).
+Figures: CPU time, medians of interleaved repeats (amr_twin/benchmark.py).
 """
 
 from __future__ import annotations
 
+import statistics
+
 import mujoco
 
-from .benchmark import timer
+from .benchmark import REPEATS, timer
 from .bus import Bus
 from .clock import VirtualClock
 from .config import TwinConfig
@@ -19,7 +21,6 @@ from .loop import Twin
 from .sensors.lidar import Lidar
 from .twin_benchmark import twin_run_s
 
-REPEATS = 3
 SCAN_REPEATS = 200
 
 
@@ -52,7 +53,7 @@ def lidar_scan_cost_us(twin: Twin) -> tuple[float, float]:
     return best_rotation * 1e6, best_one * 1e6
 
 
-def sensor_figures(cfg: TwinConfig, sim_s: float, bare_physics_s_per_sim_s: float | None = None) -> dict:
+def sensor_figures(cfg: TwinConfig, sim_s: float) -> dict:
     """Sensor cost figures.
 
     Parameters
@@ -60,12 +61,10 @@ def sensor_figures(cfg: TwinConfig, sim_s: float, bare_physics_s_per_sim_s: floa
     cfg : TwinConfig
         Parameters (``imu:`` and ``lidar:`` sections included).
     sim_s : float
-        Simulated duration of each timed run, s.
-    bare_physics_s_per_sim_s : float, optional
-        Wall seconds per simulated second of bare ``mj_step`` on the same scenario,
-        measured earlier in the same run. The reference is the best of it and of
-        this function's own bare repeats, interleaved with the twin's (the
-        machine is noisy: a figure measured minutes apart is not comparable).
+        Simulated duration of each timed run, s. Each repeat times the twin with
+        sensors, bare ``mj_step`` from the state it reached, and the twin without
+        sensors, interleaved (the machine is noisy: figures measured minutes apart
+        are not comparable); each ratio is the median of the repeats' ratios.
 
     Returns
     -------
@@ -77,25 +76,23 @@ def sensor_figures(cfg: TwinConfig, sim_s: float, bare_physics_s_per_sim_s: floa
         ``lidar_scan_one_call_us`` (the same beams in one ``mj_multiRay``),
         ``lidar_beams_per_scan``.
     """
-    with_best = without_best = float("inf")
-    bare_best = float("inf") if bare_physics_s_per_sim_s is None else bare_physics_s_per_sim_s * sim_s
+    with_t, without_t, bare_t = [], [], []
     twin = None
     for _ in range(REPEATS):  # interleaved so that a disturbance hits all three
         cpu_s, twin = twin_run_s(cfg, sim_s, sensors=True)
-        with_best = min(with_best, cpu_s)
+        with_t.append(cpu_s)
         m, d = twin.physics.model, twin.physics.data
         nstep = int(round(sim_s / m.opt.timestep))
         t0 = timer()
         mujoco.mj_step(m, d, nstep)
-        bare_best = min(bare_best, timer() - t0)
-        without_best = min(without_best, twin_run_s(cfg, sim_s, sensors=False)[0])
+        bare_t.append(timer() - t0)
+        without_t.append(twin_run_s(cfg, sim_s, sensors=False)[0])
     mujoco.mj_forward(twin.physics.model, twin.physics.data)
     scan_groups_us, scan_one_us = lidar_scan_cost_us(twin)
-    bare = bare_best / sim_s
     return {
-        "sensors_s_per_sim_s": round(with_best / sim_s, 5),
-        "sensors_ratio": round(with_best / sim_s / bare, 3),
-        "twin_no_sensors_ratio": round(without_best / sim_s / bare, 3),
+        "sensors_s_per_sim_s": round(statistics.median(with_t) / sim_s, 5),
+        "sensors_ratio": round(statistics.median(w / b for w, b in zip(with_t, bare_t)), 3),
+        "twin_no_sensors_ratio": round(statistics.median(w / b for w, b in zip(without_t, bare_t)), 3),
         "lidar_scan_us": round(scan_groups_us, 1),
         "lidar_scan_one_call_us": round(scan_one_us, 1),
         "lidar_beams_per_scan": twin.lidar.n_beams,

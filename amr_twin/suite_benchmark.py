@@ -1,55 +1,153 @@
-"""Wall-time figures of the experiment suites: ``amr-twin bench --suites`` (issue #6 speed targets).
+"""Figures of the waits users see: ``amr-twin bench --suites`` (issue 15's acceptance figures).
 
-Unlike the per-step ratios of :mod:`amr_twin.benchmark` (CPU time against bare
-physics), these targets are wall times on the 2-core machine: the chapter 5 suite
-(132 simulated s) in under 10 s, a 100-run payload sweep in under 2 minutes. So
-they are measured with ``time.perf_counter`` and printed with the load average, by
-which a reader can judge how busy the machine was. Results go to a temporary
-folder that is removed afterwards.
+Each figure is the median of :data:`~amr_twin.benchmark.REPEATS` interleaved repeats,
+except the 100-point sweep and the fusion experiment (one run each; the sweep's
+per-point figure is its mean over the 100 points):
+
+- ``help_cpu_s``, ``run_1s_cpu_s``: CPU time (user + sys) of ``amr-twin --help`` and of a
+  1 s ``amr-twin run`` in a fresh process (the imports, the build, the run, the output);
+- ``chapter5_wall_s_jobs1`` / ``chapter5_wall_s_jobsN``: wall time of ``amr-twin experiment
+  chapter5 --runs 1,...,8`` (132 simulated s) in a fresh process with ``--jobs 1`` and N;
+- ``sweep_cpu_s``: CPU time of a 100-point payload sweep (8 s each) in this process;
+  ``sweep_point_ratio``: its CPU per point against bare physics (``mj_step``) of the same
+  simulated time on a point's model;
+- ``rrd_write_60s_s``, ``rrd_write_240s_s``: CPU time of writing the ``.rrd`` of a 60 s and of
+  a 240 s run with sensors (spinning in place in the warehouse), and their ratio;
+- ``fusion_wall_s``: the fusion experiment (wall), with the load average around it all.
 """
 
 from __future__ import annotations
 
 import os
+import shutil
+import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 
+from .benchmark import REPEATS, timer
 from .config import TwinConfig
 
 SWEEP_MASSES = [5.0 * i for i in range(10)]                # 0..45 kg
 SWEEP_POSITIONS = ["center", "front", "rear", "left", "right"]
 SWEEP_COMMANDS = ["linear:0.7", "angular:60:-1"]           # 10 x 5 x 2 = 100 runs
 SWEEP_DURATION_S = 8.0
+RRD_DURATIONS_S = (60.0, 240.0)
+
+
+def _cli() -> str:
+    return str(Path(sys.executable).with_name("amr-twin"))
+
+
+def _child_cpu_s(args: list[str]) -> float:
+    """CPU time (user + sys) of a child process running ``args`` to its end, s."""
+    proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
+    _pid, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode != 0:
+        raise RuntimeError(f"benchmark command failed ({proc.returncode}): {' '.join(args)}")
+    return usage.ru_utime + usage.ru_stime
+
+
+def _child_wall_s(args: list[str]) -> float:
+    t0 = time.perf_counter()
+    subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, check=True)
+    return time.perf_counter() - t0
+
+
+def startup_figures(repeats: int = REPEATS) -> dict:
+    """``help_cpu_s`` and ``run_1s_cpu_s``: medians of interleaved fresh processes."""
+    cli = _cli()
+    help_t, run_t = [], []
+    for _ in range(repeats):
+        help_t.append(_child_cpu_s([cli, "--help"]))
+        run_t.append(_child_cpu_s([cli, "run", "linear", "--speed-m-s", "0.5", "--duration-s", "1"]))
+    return {"help_cpu_s": round(statistics.median(help_t), 3), "run_1s_cpu_s": round(statistics.median(run_t), 3)}
+
+
+def chapter5_jobs_figures(jobs: int, repeats: int = REPEATS) -> dict:
+    """Wall time of the eight chapter 5 runs with ``--jobs 1`` and ``--jobs jobs``, interleaved."""
+    cli, walls = _cli(), {1: [], jobs: []}
+    with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
+        for _ in range(repeats):
+            for n in walls:
+                out = Path(tmp) / f"ch5_{n}"
+                walls[n].append(_child_wall_s([cli, "experiment", "chapter5", "--runs", "1,2,3,4,5,6,7,8",
+                                               "--jobs", str(n), "--no-progress", "--out", str(out)]))
+                shutil.rmtree(out, ignore_errors=True)
+    one, many = statistics.median(walls[1]), statistics.median(walls[jobs])
+    return {"chapter5_wall_s_jobs1": round(one, 2), f"chapter5_wall_s_jobs{jobs}": round(many, 2),
+            "chapter5_parallel_speedup": round(one / many, 2)}
+
+
+def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
+    """CPU of a 100-point sweep (8 s each, in this process) and per point against bare physics."""
+    import mujoco
+
+    from .experiments import payload_sweep
+    from .loop import Twin, TwinOptions
+
+    with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
+        t0 = timer()
+        sweep = payload_sweep.run(cfg, Path(tmp), SWEEP_MASSES, SWEEP_POSITIONS, SWEEP_COMMANDS,
+                                  duration_s=SWEEP_DURATION_S, jobs=1, progress=False)
+        cpu = timer() - t0
+    point = payload_sweep.with_payload(cfg, 20.0, (0.0, 0.0))
+    twin = Twin(point, TwinOptions(world="empty"))
+    twin.client.linear(0.7)
+    twin.advance(1.0)
+    m, d = twin.physics.model, twin.physics.data
+    bare = []
+    for _ in range(repeats):
+        t0 = timer()
+        mujoco.mj_step(m, d, int(round(SWEEP_DURATION_S / m.opt.timestep)))
+        bare.append(timer() - t0)
+    n = len(sweep["rows"])
+    return {"sweep_points": n, "sweep_simulated": sweep["simulated"], "sweep_cpu_s": round(cpu, 2),
+            "sweep_point_cpu_s": round(cpu / n, 3), "sweep_point_bare_physics_s": round(statistics.median(bare), 3),
+            "sweep_point_ratio": round(cpu / n / statistics.median(bare), 2)}
+
+
+def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
+    """CPU of writing the ``.rrd`` of a 60 s and a 240 s run with sensors (interleaved writes)."""
+    from .loop import Twin, TwinOptions
+    from .rerun_log import attach, write_rrd
+    from .run import Command, run_mission
+
+    runs = {}
+    for duration in RRD_DURATIONS_S:
+        options = TwinOptions(sensors=True)
+        twin = Twin(cfg, options)
+        capture = attach(twin)
+        result = run_mission(cfg, [(0.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))], duration, options,
+                             twin=twin)
+        runs[duration] = (capture, result)
+    times = {d: [] for d in RRD_DURATIONS_S}
+    with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
+        for _ in range(repeats):
+            for duration, (capture, result) in runs.items():
+                t0 = timer()
+                write_rrd(capture, result.series, Path(tmp) / "run.rrd", result)
+                times[duration].append(timer() - t0)
+    short, long = (statistics.median(times[d]) for d in RRD_DURATIONS_S)
+    return {"rrd_write_60s_s": round(short, 3), "rrd_write_240s_s": round(long, 3),
+            "rrd_write_ratio_240_60": round(long / short, 2)}
 
 
 def suite_figures(cfg: TwinConfig, jobs: int = 2) -> dict:
-    """Run the chapter 5 suite, a 100-run sweep and the fusion experiment; return their wall times, s."""
-    from .experiments import chapter5, fusion, payload_sweep
+    """Every figure of the module notes; takes several minutes on the 2-core machine."""
+    from .experiments import fusion
 
     load_before = os.getloadavg()[0]
-    t0 = time.perf_counter()
-    ch5 = chapter5.run(cfg, jobs=jobs, progress=False)
-    ch5_wall = time.perf_counter() - t0
-    with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
-        t0 = time.perf_counter()
-        sweep = payload_sweep.run(cfg, Path(tmp), SWEEP_MASSES, SWEEP_POSITIONS, SWEEP_COMMANDS,
-                                  duration_s=SWEEP_DURATION_S, jobs=jobs, progress=False)
-        sweep_wall = time.perf_counter() - t0
+    out = {"suites_repeats": REPEATS, "jobs": jobs}
+    out.update(startup_figures())
+    out.update(chapter5_jobs_figures(jobs) if jobs > 1 else {})
+    out.update(sweep_figures(cfg))
+    out.update(rrd_figures(cfg))
     t0 = time.perf_counter()
     fus = fusion.run(cfg, progress=False)
-    fusion_wall = time.perf_counter() - t0
-    return {
-        "jobs": jobs,
-        "chapter5_sim_s": round(float(ch5["sim_s"]), 1),
-        "chapter5_wall_s": round(ch5_wall, 2),
-        "sweep_runs": len(sweep["rows"]),
-        "sweep_simulated": sweep["simulated"],
-        "sweep_sim_s": round(len(sweep["rows"]) * SWEEP_DURATION_S, 1),
-        "sweep_wall_s": round(sweep_wall, 2),
-        "fusion_sim_s": round(fus.sim_s, 1),
-        "fusion_wall_s": round(fusion_wall, 2),
-        "load_average_1min_before": round(load_before, 2),
-        "load_average_1min_after": round(os.getloadavg()[0], 2),
-        "suites_timer": "perf_counter (wall)",
-    }
+    out.update(fusion_sim_s=round(fus.sim_s, 1), fusion_wall_s=round(time.perf_counter() - t0, 2))
+    out.update(load_average_1min_before=round(load_before, 2), load_average_1min_after=round(os.getloadavg()[0], 2))
+    return out

@@ -9,13 +9,13 @@ one ``mj_step(m, d, n)`` call: the cost of the physics alone.
 
 from __future__ import annotations
 
+import statistics
+
 import mujoco
 
-from .benchmark import timer
+from .benchmark import REPEATS, timer
 from .config import TwinConfig
 from .loop import Twin, TwinOptions
-
-REPEATS = 3
 
 
 def twin_run_s(cfg: TwinConfig, sim_s: float, firmware: str = "faithful",
@@ -33,21 +33,24 @@ def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
     """``twin_s_per_sim_s``, ``bare_physics_s_per_sim_s`` (same scenario) and their ``ratio``.
 
     Repeats are interleaved (twin, bare, twin, bare, ...) so that a disturbance of
-    the machine hits both; each figure is the best of its repeats.
+    the machine hits both; each figure is the median of its repeats, the ratio the
+    median of the repeats' ratios.
     """
-    twin_best = bare_best = float("inf")
+    twin_t, bare_t = [], []
     for _ in range(REPEATS):
         cpu_s, twin = twin_run_s(cfg, sim_s, firmware)
-        twin_best = min(twin_best, cpu_s)
+        twin_t.append(cpu_s)
         m, d = twin.physics.model, twin.physics.data
         nstep = int(round(sim_s / m.opt.timestep))
         t0 = timer()
         mujoco.mj_step(m, d, nstep)
-        bare_best = min(bare_best, timer() - t0)
+        bare_t.append(timer() - t0)
+    twin_s, bare_s = statistics.median(twin_t), statistics.median(bare_t)
     return {
         "twin_scenario": f"chapter 5 run 3: linear 0.7 m/s, {sim_s:g} s, {firmware}",
-        "twin_s_per_sim_s": round(twin_best / sim_s, 5),
-        "bare_physics_s_per_sim_s": round(bare_best / sim_s, 5),
-        "ratio": round(twin_best / bare_best, 3),
-        "realtime_factor_twin": round(sim_s / twin_best, 1),
+        "twin_s_per_sim_s": round(twin_s / sim_s, 5),
+        "bare_physics_s_per_sim_s": round(bare_s / sim_s, 5),
+        "ratio": round(statistics.median(t / b for t, b in zip(twin_t, bare_t)), 3),
+        "realtime_factor_twin": round(sim_s / twin_s, 1),
+        "repeats": REPEATS,
     }

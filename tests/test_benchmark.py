@@ -12,7 +12,9 @@ README_KEYS = ("physics_us_per_step", "twin_s_per_sim_s", "bare_physics_s_per_si
 def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     r = run_benchmarks(load_config(), sim_s=0.2)
     assert all(r[k] > 0 for k in README_KEYS), r
-    assert r["ratio"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.02)
+    # the ratio is the median of the repeats' own ratios: near the ratio of the medians
+    assert r["ratio"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.25)
+    assert r["repeats"] >= 5
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
 
@@ -25,3 +27,15 @@ def test_bench_refuses_bad_options_in_one_line(args, text):
 
     res = CliRunner().invoke(app, ["bench", *args])
     assert res.exit_code == 2 and text in res.output and len(res.output.strip().splitlines()) == 1
+
+
+def test_suite_figures_of_a_cheap_stand_in(monkeypatch):
+    """The acceptance figures' helpers on tiny stand-ins: fresh processes timed by their own
+    rusage, the rrd figure from two captured runs (not timed against targets here)."""
+    from amr_twin import suite_benchmark as sb
+
+    fig = sb.startup_figures(repeats=1)
+    assert 0 < fig["help_cpu_s"] < fig["run_1s_cpu_s"]
+    monkeypatch.setattr(sb, "RRD_DURATIONS_S", (0.5, 2.0))
+    rrd = sb.rrd_figures(load_config(), repeats=1)
+    assert rrd["rrd_write_60s_s"] > 0 and rrd["rrd_write_ratio_240_60"] > 0

@@ -173,6 +173,7 @@ class CollisionMonitor:
 
     def __init__(self, physics, stop: bool = False):
         self.physics, self.stop = physics, stop
+        self._data = physics.data
         self.roles = GeomRoles(physics)
         self.collisions: list[Collision] = []
         self.listeners: list = []
@@ -184,7 +185,7 @@ class CollisionMonitor:
 
     def __call__(self, t_us: int) -> bool:
         """Grid instant ``t_us``: physics is there. True asks the loop to stop."""
-        d = self.physics.data
+        d = self._data
         pairs = d.contact.geom.tolist() if d.ncon else []
         if pairs == self._last_pairs:  # the same contacts as at the last instant, verdict unchanged
             if not self._open:

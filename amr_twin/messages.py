@@ -47,9 +47,17 @@ class Time:
 
     @classmethod
     def from_us(cls, t_us: int) -> Time:
-        """Exact stamp of an integer number of microseconds."""
+        """Exact stamp of an integer number of microseconds.
+
+        Made through the slots directly (a frozen dataclass's ``__init__`` sets each field
+        with ``object.__setattr__``: twice the cost); every published message is stamped."""
         sec, rem_us = divmod(int(t_us), 1_000_000)
-        return cls(sec, rem_us * 1000)
+        if cls is not Time:
+            return cls(sec, rem_us * 1000)
+        stamp = _new_object(Time)
+        _set_sec(stamp, sec)
+        _set_nanosec(stamp, rem_us * 1000)
+        return stamp
 
     @classmethod
     def from_sec(cls, t_s: float) -> Time:
@@ -64,6 +72,10 @@ class Time:
     def to_us(self) -> int:
         """Time in whole microseconds (truncated)."""
         return self.sec * 1_000_000 + self.nanosec // 1000
+
+
+_new_object = object.__new__
+_set_sec, _set_nanosec = Time.__dict__["sec"].__set__, Time.__dict__["nanosec"].__set__
 
 
 # -- std_msgs -----------------------------------------------------------------

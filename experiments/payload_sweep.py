@@ -235,12 +235,22 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
         return {"error": f"command refused (code {code}): {twin.client.last_error}"}
     req = twin.client.last_request
     loads, contact, tilt, vel = [], [], [], []
-    for t_s in np.arange(SAMPLE_S, point.duration_s + 1e-9, SAMPLE_S):
-        twin.advance_to_us(int(round(t_s * 1e6)))
-        loads.append(list(twin.rolling.loads))  # the springs' loads (module notes)
-        contact.append(twin.physics.support_normal_forces_n())
-        tilt.append(twin.physics.base_tilt_rad())
-        vel.append(twin.physics.base_velocity())
+    physics, every_us = twin.physics, int(round(SAMPLE_S * 1e6))
+
+    def sample(t_us: int) -> bool:
+        """Every SAMPLE_S on the loop's record grid, the physics at ``t_us`` (after the rolling
+        resistance's sampler, whose springs' loads it reads). The point runs as one call of the
+        loop, as ``amr-twin run`` does (stopping the loop every sample moved the results by about
+        1e-4 relative and cost about 2 % more CPU)."""
+        if t_us % every_us == 0:
+            loads.append(list(twin.rolling.loads))  # the springs' loads (module notes)
+            contact.append(physics.support_normal_forces_n())
+            tilt.append(physics.base_tilt_rad())
+            vel.append(physics.base_velocity())
+        return False
+
+    twin.samplers.append(sample)
+    twin.advance_to_us(int(round(point.duration_s * 1e6)))
     s = twin.recorder.series()
     if recording:
         from ..rerun_log import record_run

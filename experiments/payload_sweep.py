@@ -63,7 +63,7 @@ TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
 MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
 MAX_MASSES = 1000          # masses per sweep: each is a simulation per position and command
-ROWS = 3                   # what a row means (in the fingerprint): 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
+ROWS = 4                   # what a row means (in the fingerprint): 4 = sampled on the loop's record grid in one call; 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
 
 
 def parse_masses(text: str) -> list[float]:

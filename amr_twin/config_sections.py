@@ -224,6 +224,8 @@ class UwbCfg(Section):
     dropout_prob: float = P(unit="1", ge=0.0, le=0.9)
     nlos_prob: float = P(unit="1", ge=0.0, le=1.0)
     nlos_bias_m: float = P(unit="m", ge=0.0, le=10.0)
+    blocked_bias_m: float = P(unit="m", ge=0.0, le=10.0)
+    blocked_dropout_prob: float = P(unit="1", ge=0.0, le=1.0)
     max_range_m: float = P(unit="m", ge=1.0, le=300.0)
     anchors_x_m: tuple[_Coord, ...] = P(unit="m", setting=True)
     anchors_y_m: tuple[_Coord, ...] = P(unit="m", setting=True)

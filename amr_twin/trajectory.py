@@ -13,13 +13,16 @@ ATE (absolute trajectory error)
     ``evo_ape --align`` and the TUM RGB-D benchmark (Sturm et al., IROS 2012)
     compute it.
 RPE (relative pose error)
-    For every sample ``i`` the first later sample ``j`` after which the *true*
-    path has travelled at least ``rpe_delta_m``; the error of the relative
-    motion ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` (``Q`` truth, ``P`` estimate, SE(2)).
+    For every sample ``i`` the later sample ``j`` whose distance travelled along the
+    *true* path since ``i`` is nearest to ``rpe_delta_m`` (the first of equals), kept
+    if it is within 10 % of ``rpe_delta_m``; the error of the relative motion
+    ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` (``Q`` truth, ``P`` estimate, SE(2)).
     ``rpe_trans_m`` is the RMSE of ``|t(E)|`` and ``rpe_rot_deg`` the RMSE of
-    ``|angle(E)|`` over all such pairs (evo's ``evo_rpe --delta 1 --delta_unit m
-    --all_pairs``). RPE does not depend on the alignment. With no pair (a path
-    shorter than ``rpe_delta_m``) both are NaN.
+    ``|angle(E)|`` over all such pairs: evo's definition (``evo_rpe tum REF EST
+    --delta 1 --delta_unit m --all_pairs --pairs_from_reference``, and ``-r
+    angle_deg`` for the rotation; ``evo.core.filters.filter_pairs_by_path``). RPE
+    does not depend on the alignment. With no pair (a path shorter than
+    ``rpe_delta_m``) both are NaN.
 
 Pure numpy; no simulation imports.
 """
@@ -32,6 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import se2
+
+RPE_REL_TOL = 0.1
+"""A pair is kept when its travelled distance is within this fraction of ``rpe_delta_m`` (evo's ``rel_delta_tol``)."""
 
 
 @dataclass(frozen=True)
@@ -104,13 +110,34 @@ def _relative(pose: np.ndarray, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarra
     return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]), pose[j, 2] - pose[i, 2]
 
 
+def rpe_pairs(pose_true: np.ndarray, rpe_delta_m: float, rel_tol: float = RPE_REL_TOL) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs ``(i, j)`` of the RPE: for each ``i`` the later ``j`` travelled nearest ``rpe_delta_m``.
+
+    As ``evo.core.filters.filter_pairs_by_path(..., all_pairs=True)`` with ``tol =
+    rel_tol * rpe_delta_m``, vectorised: the distance travelled is non-decreasing,
+    so the nearest is one of the two samples around ``d_i + delta`` (the first of
+    a run of equal distances).
+    """
+    d = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pose_true[:, :2], axis=0).T))])
+    n = len(d)
+    i = np.arange(n - 1)
+    target = d[i] + rpe_delta_m
+    hi = np.searchsorted(d, target, side="left")            # first with d >= target (n: none)
+    lo = np.maximum(np.searchsorted(d, d[np.maximum(hi - 1, 0)], side="left"), i + 1)  # first of the run below
+    hi_ok = hi < n
+    err_hi = np.where(hi_ok, np.abs(d[np.minimum(hi, n - 1)] - d[i] - rpe_delta_m), np.inf)
+    lo_ok = (hi - 1 >= i + 1)
+    err_lo = np.where(lo_ok, np.abs(d[np.minimum(lo, n - 1)] - d[i] - rpe_delta_m), np.inf)
+    use_lo = err_lo <= err_hi
+    j = np.where(use_lo, lo, hi)
+    err = np.where(use_lo, err_lo, err_hi)
+    keep = err <= rel_tol * rpe_delta_m
+    return i[keep], j[keep]
+
+
 def rpe(pose_est: np.ndarray, pose_true: np.ndarray, rpe_delta_m: float) -> tuple[float, float]:
     """RPE ``(trans_m, rot_deg)`` RMSEs of time-matched ``(N, 3)`` poses (module docstring); NaN if no pair."""
-    travelled = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pose_true[:, :2], axis=0).T))])
-    i = np.arange(len(travelled))
-    j = np.searchsorted(travelled, travelled + rpe_delta_m - 1e-12, side="left")
-    keep = j < len(travelled)
-    i, j = i[keep], j[keep]
+    i, j = rpe_pairs(pose_true, rpe_delta_m)
     if i.size == 0:
         return math.nan, math.nan
     t_true, r_true = _relative(pose_true, i, j)

@@ -29,6 +29,8 @@ WALL_HEIGHT_M = 2.0
 WORLD_DIR = ROOT / "models" / "worlds"
 START_NUMERIC = "start_xy_yaw"
 """Name of an MJCF ``<custom><numeric>`` holding a world's default start pose: x_m y_m yaw_rad."""
+ANCHORS_NUMERIC = "uwb_anchors_xy_m"
+"""Name of an MJCF ``<custom><numeric>`` holding a world's UWB anchors: x0 y0 x1 y1 ... (m)."""
 
 
 def world_path(world: str | Path) -> Path:
@@ -37,27 +39,48 @@ def world_path(world: str | Path) -> Path:
     return WORLD_DIR / f"{world}.xml" if not path.suffix else path
 
 
+def _numeric(world: str | Path, name: str) -> list[float] | None:
+    """Values of the MJCF ``<custom><numeric name=NAME>`` of ``world``; None if absent or unreadable."""
+    path = world_path(world)
+    if path.suffix.lower() != ".xml":
+        return None
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        return None
+    for numeric in root.iter("numeric"):
+        if numeric.get("name") == name:
+            try:
+                return [float(v) for v in (numeric.get("data") or "").split()]
+            except ValueError:
+                return None
+    return None
+
+
 def default_start(world: str | Path) -> tuple[float, float, float]:
     """The world's start pose ``(x_m, y_m, yaw_rad)``: its ``start_xy_yaw`` numeric, else the origin.
 
     Only MJCF worlds can declare one (``<custom><numeric name="start_xy_yaw" data="x y yaw"/>``);
     a file that cannot be read gives the origin (the model build reports the error).
     """
-    path = world_path(world)
-    if path.suffix.lower() != ".xml":
-        return (0.0, 0.0, 0.0)
-    try:
-        root = ET.parse(path).getroot()
-    except (OSError, ET.ParseError):
-        return (0.0, 0.0, 0.0)
-    for numeric in root.iter("numeric"):
-        if numeric.get("name") == START_NUMERIC:
-            try:
-                x, y, yaw = (float(v) for v in (numeric.get("data") or "").split())
-            except ValueError:
-                break
-            return (x, y, yaw)
-    return (0.0, 0.0, 0.0)
+    values = _numeric(world, START_NUMERIC)
+    return (values[0], values[1], values[2]) if values is not None and len(values) == 3 else (0.0, 0.0, 0.0)
+
+
+def uwb_anchors_xy_m(world: str | Path) -> np.ndarray | None:
+    """The UWB anchors a world declares, ``(K, 2)`` m in its frame, or None (then ``uwb.anchors_*`` apply).
+
+    An MJCF world declares them as ``<custom><numeric name="uwb_anchors_xy_m" data="x0 y0 x1 y1 ..."/>``
+    (the anchors are part of the site, like its walls; their height is ``uwb.anchor_z_m``).
+    Raises :class:`MapError` for an odd count or fewer than 3 anchors.
+    """
+    values = _numeric(world, ANCHORS_NUMERIC)
+    if values is None:
+        return None
+    if len(values) % 2 or not 3 <= len(values) // 2 <= 16 or not all(math.isfinite(v) for v in values):
+        raise MapError(f"{world_path(world)}: numeric {ANCHORS_NUMERIC} must hold 3 to 16 finite x y pairs, "
+                       f"got {len(values)} values")
+    return np.asarray(values, dtype=float).reshape(-1, 2)
 
 
 @dataclass(frozen=True)

@@ -4,6 +4,7 @@ A route is a polyline in the ``map`` frame: the start pose's position, then the
 waypoints. Route files (YAML)::
 
     name: warehouse_60m
+    world: warehouse                     # optional: a world of models/worlds/, or a file beside the route
     start_xy_yaw: [-7.5, 0.0, 0.0]      # x_m, y_m, yaw_rad of base_link at the start
     waypoints_xy_m: [[6.2, 0.0], [6.2, 5.5]]
     max_speed_m_s: 1.0                   # (0, 1]
@@ -48,7 +49,7 @@ from amr_twin.yaml_file import read_yaml
 
 MAX_ROUTE_SPEED_M_S = 1.0
 """Highest route speed accepted, m/s (issue #8: 'at up to 1 m/s')."""
-ROUTE_FIELDS = ("name", "start_xy_yaw", "waypoints_xy_m", "max_speed_m_s", "max_angular_rad_s",
+ROUTE_FIELDS = ("name", "world", "start_xy_yaw", "waypoints_xy_m", "max_speed_m_s", "max_angular_rad_s",
                 "lookahead_m", "goal_tolerance_m")
 
 
@@ -75,6 +76,9 @@ class Route:
         Pure-pursuit lookahead along the path, m, > 0.
     goal_tolerance_m : float
         Distance to the goal at which the route is done, m, > 0.
+    world : str
+        The world the route is drawn in: a name of ``models/worlds/`` or a file path
+        (:func:`amr_twin.worlds.world_path`); its frame is the route's ``map``.
     """
 
     name: str
@@ -84,6 +88,7 @@ class Route:
     max_angular_rad_s: float = 1.0
     lookahead_m: float = 0.8
     goal_tolerance_m: float = 0.2
+    world: str = "warehouse"
 
     def __post_init__(self) -> None:
         try:
@@ -133,10 +138,27 @@ def load_route(path: str | Path) -> Route:
     for key in ("start_xy_yaw", "waypoints_xy_m"):
         if key not in tree:
             raise RouteError(f"route {path.name}: {key} is missing")
+    world = tree.get("world", "warehouse")
+    if not isinstance(world, str) or not world.strip():
+        raise RouteError(f"route {path.name}: world: {world!r} must be a world name or a file path")
+    tree["world"] = _world_of(world.strip(), path)
     try:
         return Route(**{"name": path.stem, **tree})
     except RouteError as exc:
         raise RouteError(f"route {path.name}: {exc}") from None
+
+
+def _world_of(world: str, route_path: Path) -> str:
+    """A route's ``world``: a name of ``models/worlds/`` as it is, a file resolved beside the route; must exist."""
+    from amr_twin.worlds import world_path
+
+    path = world_path(world)
+    if Path(world).suffix:
+        path = path if path.is_absolute() else (route_path.parent / path)
+    if not path.is_file():
+        raise RouteError(f"route {route_path.name}: world: {world!r} is not a world of models/worlds/ nor a file "
+                         f"({path} does not exist)")
+    return world if not Path(world).suffix else str(path)
 
 
 def route_length_m(route: Route) -> float:

@@ -41,7 +41,8 @@ from .fusion_map import build_map
 from .. import se2
 from .fusion_streams import Streams, odom_poses, relative_motion
 
-DEFAULT_ROUTE = Path(__file__).resolve().parent / "routes" / "warehouse_60m.yaml"
+ROUTES_DIR = Path(__file__).resolve().parent / "routes"
+DEFAULT_ROUTE = ROUTES_DIR / "warehouse_60m.yaml"
 ARCHITECTURES = ("odom", "odom+lidar", "odom+imu", "odom+uwb", "odom+uwb+imu")
 REST_S = 2.0           # standing still before the route: the IMU's rest calibration
 TAIL_S = 1.0           # standing still after the goal
@@ -57,6 +58,7 @@ class Estimate:
     t_s: np.ndarray
     pose: np.ndarray
     errors: TrajectoryErrors | None = None
+    ate_aligned_m: float = float("nan")  # ATE after the least-squares SE(2) alignment onto the truth
     wall_s: float = 0.0
     beam_poses: list | None = None  # LiDAR odometry only: per scan, (n_beams, 3) laser poses in the map
 
@@ -80,17 +82,20 @@ class FusionResults:
     boxes: Footprints | None = None     # the world at the LiDAR's height
     grid: object = None                 # OccupancyGrid from the LiDAR odometry's poses
     anchors_xy_m: np.ndarray | None = None  # UWB anchors (K, 2), map frame
+    uwb_blocked: list | None = None     # per anchor: exchanges whose line a wall blocked
+    uwb_exchanges: int = 0
+    message_counts: dict | None = None  # messages per stream (kept when the streams are dropped)
 
 
 def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "improved", progress: bool = True,
           rrd_path: Path | None = None, mcap_path: Path | None = None) -> tuple[Twin, Streams, bool]:
-    """Drive ``route`` in the warehouse with IMU, LiDAR and UWB on; return the twin and the recorded streams.
+    """Drive ``route`` in its world with IMU, LiDAR and UWB on; return the twin and the recorded streams.
 
     ``rrd_path`` / ``mcap_path``: also write the drive as a Rerun / MCAP recording.
     """
     from ..sensors.uwb import UwbSensor
 
-    twin = Twin(cfg, TwinOptions(firmware=firmware, world="warehouse", seed=seed,
+    twin = Twin(cfg, TwinOptions(firmware=firmware, world=route.world, seed=seed,
                                  start_xy_yaw=route.start_xy_yaw, sensors=True))
     m, d = twin.physics.model, twin.physics.data
     twin.uwb = UwbSensor(m, d, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
@@ -191,18 +196,48 @@ def laser_in_base(cfg: TwinConfig) -> tuple[float, float, float]:
     return float(pos_m[0]), float(pos_m[1]), 0.0
 
 
+def route_file(route: str | Path | None) -> Path:
+    """The file of ``--route``: None is the default route, a bare name one of ``experiments/routes/``."""
+    if route is None:
+        return DEFAULT_ROUTE
+    path = Path(route)
+    if not path.suffix and not path.exists():
+        return ROUTES_DIR / f"{route}.yaml"
+    return path
+
+
+def route_names() -> list[str]:
+    """The routes that come with the twin (``experiments/routes/*.yaml``)."""
+    return sorted(p.stem for p in ROUTES_DIR.glob("*.yaml"))
+
+
+def site_config(cfg: TwinConfig, route: Route) -> TwinConfig:
+    """``cfg`` with the UWB anchors of the route's world, when the world declares its own."""
+    from ..worlds import uwb_anchors_xy_m
+
+    anchors = uwb_anchors_xy_m(route.world)
+    if anchors is None:
+        return cfg
+    uwb = cfg.uwb.model_copy(update={"anchors_x_m": tuple(float(v) for v in anchors[:, 0]),
+                                     "anchors_y_m": tuple(float(v) for v in anchors[:, 1])})
+    return cfg.model_copy(update={"uwb": uwb})
+
+
 def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 0, firmware: str = "improved",
         progress: bool = True, rrd_path: Path | None = None, mcap_path: Path | None = None) -> FusionResults:
     """Drive the route, run the five architectures and score them against the truth."""
     route = load_route(route_path)
+    cfg = site_config(cfg, route)
     t0 = time.perf_counter()
     twin, streams, reached = drive(cfg, route, seed=seed, firmware=firmware, progress=progress,
                                    rrd_path=rrd_path, mcap_path=mcap_path)
     series = twin.recorder.series()
     res = FusionResults(route=route, seed=seed, firmware=firmware, t_true_s=series.t_s, pose_true=series.pose,
                         streams=streams, sim_s=twin.t_s, drive_wall_s=time.perf_counter() - t0,
-                        reached_goal=reached)
+                        reached_goal=reached, message_counts=streams.counts())
     res.cross_track_rms_m = float(np.sqrt(np.mean(distance_to_path_m(route, series.pose[:, :2]) ** 2)))
+    res.uwb_blocked = twin.uwb.blocked.tolist()
+    res.uwb_exchanges = int(twin.uwb.exchanges)
     start = route.start_xy_yaw
     jobs = (  # in the order of ARCHITECTURES
         lambda: estimate_odom(streams, start),
@@ -215,11 +250,36 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
         t1 = time.perf_counter()
         est = job()
         est.wall_s = time.perf_counter() - t1
+        est.t_s, est.pose = last_per_stamp(est.t_s, est.pose)
         est.errors = errors(est.t_s, est.pose, series.t_s, series.pose, rpe_delta_m=RPE_DELTA_M)
+        est.ate_aligned_m = errors(est.t_s, est.pose, series.t_s, series.pose, rpe_delta_m=RPE_DELTA_M,
+                                   align=True).ate_m
         res.estimates[est.name] = est
     res.anchors_xy_m = np.asarray(cfg.uwb.anchors_xy_m, float).reshape(-1, 2)
     res.boxes = scan_plane_boxes(twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2]))
     res.grid = build_map(streams.scan, res.estimates["odom+lidar"].beam_poses, res.boxes, cfg.mapping.resolution_m,
                          cfg.mapping.margin_m)
     res.wall_s = time.perf_counter() - t0
+    return res
+
+
+def last_per_stamp(t_s: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Keep the last pose of each stamp: the estimate once every message of that instant is fused.
+
+    A filter updated by two messages of one stamp (the odometry and the gyro on the 10 ms
+    grid) records two poses there; a trajectory has one pose per instant (TUM tools pair
+    poses by stamp).
+    """
+    t_s = np.asarray(t_s, float)
+    if len(t_s) < 2:
+        return t_s, pose
+    keep = np.append(t_s[1:] != t_s[:-1], True)
+    return t_s[keep], np.asarray(pose, float)[keep]
+
+
+def slim(res: FusionResults) -> FusionResults:
+    """``res`` without the recorded messages and the per-beam laser poses (to send it between processes)."""
+    res.streams = Streams()
+    for est in res.estimates.values():
+        est.beam_poses = None
     return res

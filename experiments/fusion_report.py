@@ -17,7 +17,7 @@ import numpy as np
 from .executor import save_figure, write_json, write_text
 from .fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
 from .fusion_map import TOLERANCE_CELLS, agreement
-from .. import atomic_file, se2
+from .. import atomic_file, se2, tum
 
 LIDAR_ATE_MAX_M = 0.10   # issue #8 acceptance
 COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",
@@ -59,8 +59,8 @@ def plot(results: FusionResults, out: Path) -> list[Path]:
     ax.set_aspect("equal")
     ax.set_xlabel("x, m (map)")
     ax.set_ylabel("y, m (map)")
-    ax.set_title(f"Fusion architectures on a {results.estimates['odom'].errors.length_m:.0f} m warehouse route "
-                 f"(seed {results.seed}; grey: the world at LiDAR height)")
+    ax.set_title(f"Fusion architectures on the {results.estimates['odom'].errors.length_m:.0f} m route "
+                 f"`{results.route.name}` (seed {results.seed}; grey: the world at LiDAR height)")
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
     paths = [out / "trajectories.png"]
     save_figure(fig, paths[0])
@@ -119,26 +119,78 @@ def summary(results: FusionResults, map_check) -> dict:
     }
 
 
-def report(results: FusionResults, out: Path) -> dict:
-    """Save the map, write ``metrics.json`` and ``report.md``; return the metrics."""
+def tum_name(name: str) -> str:
+    """File name of an architecture's TUM trajectory: ``odom+uwb+imu`` -> ``odom_uwb_imu.tum``."""
+    return name.replace("+", "_") + ".tum"
+
+
+def write_trajectories(results: FusionResults, out: Path) -> dict[str, str]:
+    """Write ``truth.tum`` and one TUM file per architecture into ``out``; return {architecture: file name}.
+
+    The truth is sampled at its 100 Hz record and at every estimate's stamps
+    (:func:`amr_twin.tum.truth_at`), so that evo's nearest-stamp association pairs each
+    estimate pose with the true pose of its own instant.
+    """
+    out = Path(out)
+    ests = [results.estimates[name] for name in ARCHITECTURES]
+    t_truth, pose_truth = tum.truth_at(results.t_true_s, results.pose_true, [e.t_s for e in ests])
+    tum.write(out / "truth.tum", t_truth, pose_truth)
+    for est in ests:
+        tum.write(out / tum_name(est.name), est.t_s, est.pose)
+    return {est.name: tum_name(est.name) for est in ests}
+
+
+def evo_commands(folder: str = "DIR", name: str = "odom_uwb_imu.tum") -> list[str]:
+    """The evo commands that reproduce an architecture's ATE (plain, aligned) and RPE from the TUM files."""
+    ref, est = f"{folder}/truth.tum", f"{folder}/{name}"
+    return [f"evo_ape tum {ref} {est}", f"evo_ape tum {ref} {est} --align",
+            f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference",
+            f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference -r angle_deg"]
+
+
+DEFINITIONS = [
+    "- **ATE m**: RMS of the position error |p_est(t) - p_true(t)| over the estimate's samples, the truth "
+    "interpolated at each stamp, **without alignment** (every estimate starts from the known start pose, "
+    "in the map frame); evo's `evo_ape` default (translation part, RMSE).",
+    "- **ATE aligned m**: the same after the least-squares SE(2) alignment of the estimate onto the truth "
+    "(Umeyama/Horn, no scale; `evo_ape --align`): what is left when a constant offset of the whole "
+    "trajectory is forgiven. It removes the effect of an early heading error and so favours drifting "
+    "estimates.",
+    "- **RPE m / 1 m, deg / 1 m**: RMS of the translation and rotation error of the relative motion over "
+    "every pair of samples about 1 m of true travel apart (the nearest, within 10 %; evo's `evo_rpe "
+    "--delta 1 --delta_unit m --all_pairs --pairs_from_reference`).",
+    "- **final** errors at the estimate's last sample; **RMS / max heading** over all samples.",
+]
+
+
+def report(results: FusionResults, out: Path, figures: bool = True) -> dict:
+    """Save the map and the TUM trajectories, write ``metrics.json`` and ``report.md``; return the metrics.
+
+    ``figures``: the report shows ``trajectories.png`` and ``errors.png`` (written by :func:`plot`).
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     map_check = _save_map(results, out)
+    files = write_trajectories(results, out)
     data = {
-        "route": {"name": results.route.name, "length_m": results.estimates["odom"].errors.length_m,
+        "route": {"name": results.route.name, "world": results.route.world,
+                  "length_m": results.estimates["odom"].errors.length_m,
                   "max_speed_m_s": results.route.max_speed_m_s, "reached_goal": results.reached_goal,
                   "cross_track_rms_m": results.cross_track_rms_m},
         "seed": results.seed, "firmware": results.firmware, "sim_s": results.sim_s,
-        "drive_wall_s": results.drive_wall_s, "wall_s": results.wall_s, "messages": results.streams.counts(),
+        "drive_wall_s": results.drive_wall_s, "wall_s": results.wall_s, "messages": results.message_counts,
+        "uwb": {"anchors_xy_m": results.anchors_xy_m.tolist(), "exchanges": results.uwb_exchanges,
+                "blocked_per_anchor": results.uwb_blocked},
         "rpe_delta_m": RPE_DELTA_M,
         "architectures": {name: {**dataclasses.asdict(results.estimates[name].errors),
-                                 "wall_s": results.estimates[name].wall_s}
+                                 "ate_aligned_m": results.estimates[name].ate_aligned_m,
+                                 "wall_s": results.estimates[name].wall_s, "tum": files[name]}
                           for name in ARCHITECTURES},
         "map": {"tolerance_cells": TOLERANCE_CELLS, **dataclasses.asdict(map_check)},
     }
     data["summary"] = summary(results, map_check)
     write_json(out / "metrics.json", data)
-    write_text(out / "report.md", markdown(data))
+    write_text(out / "report.md", markdown(data, figures))
     return data
 
 
@@ -148,34 +200,39 @@ def _yaw(data: dict, name: str) -> str:
             f"final {e['final_yaw_err_deg']:.2f} deg")
 
 
-def markdown(data: dict) -> str:
-    """``report.md`` from the metrics."""
-    r, s, m = data["route"], data["summary"], data["map"]
+def markdown(data: dict, figures: bool = True) -> str:
+    """``report.md`` from the metrics (``figures``: link ``trajectories.png`` and ``errors.png``)."""
+    r, s, m, u = data["route"], data["summary"], data["map"], data["uwb"]
+    blocked = ", ".join(f"{100 * b / max(u['exchanges'] / len(u['blocked_per_anchor']), 1):.0f} %"
+                        for b in u["blocked_per_anchor"])
     lines = [
         "# Chapter 6 in the twin: localisation architectures compared (fig. 6.8)", "",
-        f"Route `{r['name']}`: {r['length_m']:.1f} m driven at up to {r['max_speed_m_s']:.1f} m/s in "
-        f"{data['sim_s']:.1f} simulated s (wall time {data['drive_wall_s']:.1f} s for the drive, {data['wall_s']:.1f} s in all); goal reached: "
-        f"{'yes' if r['reached_goal'] else 'NO'}; cross-track RMS {r['cross_track_rms_m']:.3f} m. "
-        f"Firmware `{data['firmware']}`, seed {data['seed']}. Messages: "
-        + ", ".join(f"{k} {v}" for k, v in data["messages"].items()) + ".", "",
-        "| architecture | ATE m | RPE m / 1 m | RPE deg / 1 m | final position error m | final heading error deg "
-        "| RMS heading error deg | max heading error deg | compute s |",
-        "|---|---|---|---|---|---|---|---|---|",
+        f"Route `{r['name']}` in world `{r['world']}`: {r['length_m']:.1f} m driven at up to "
+        f"{r['max_speed_m_s']:.1f} m/s in {data['sim_s']:.1f} simulated s (wall time {data['drive_wall_s']:.1f} s "
+        f"for the drive, {data['wall_s']:.1f} s in all); goal reached: {'yes' if r['reached_goal'] else 'NO'}; "
+        f"cross-track RMS {r['cross_track_rms_m']:.3f} m. Firmware `{data['firmware']}`, seed {data['seed']}. "
+        "Messages: " + ", ".join(f"{k} {v}" for k, v in data["messages"].items()) + ". UWB exchanges with a "
+        f"wall in the line, per anchor: {blocked}.", "",
+        "| architecture | ATE m | ATE aligned m | RPE m / 1 m | RPE deg / 1 m | final position error m "
+        "| final heading error deg | RMS heading error deg | max heading error deg | compute s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, e in data["architectures"].items():
-        lines.append(f"| {name} | {e['ate_m']:.3f} | {e['rpe_trans_m']:.3f} | {e['rpe_rot_deg']:.2f} | "
-                     f"{e['final_pos_err_m']:.3f} | {e['final_yaw_err_deg']:.2f} | {e['rms_yaw_err_deg']:.2f} | "
-                     f"{e['max_yaw_err_deg']:.2f} | {e['wall_s']:.2f} |")
+        lines.append(f"| {name} | {e['ate_m']:.3f} | {e['ate_aligned_m']:.3f} | {e['rpe_trans_m']:.3f} | "
+                     f"{e['rpe_rot_deg']:.2f} | {e['final_pos_err_m']:.3f} | {e['final_yaw_err_deg']:.2f} | "
+                     f"{e['rms_yaw_err_deg']:.2f} | {e['max_yaw_err_deg']:.2f} | {e['wall_s']:.2f} |")
+    lines += ["", *DEFINITIONS, "",
+              "Trajectories (TUM: `timestamp tx ty tz qx qy qz qw`, map frame): `truth.tum` and "
+              + ", ".join(f"`{e['tum']}`" for e in data["architectures"].values())
+              + ". Reproduce a row with [evo](https://github.com/MichaelGrupp/evo), e.g. for odom+uwb+imu: "
+              + "; ".join(f"`{c}`" for c in evo_commands(".")) + ".", ""]
+    if figures:
+        lines += ["![trajectories](trajectories.png)", "", "![errors](errors.png)", ""]
     lines += [
-        "", "![trajectories](trajectories.png)", "", "![errors](errors.png)", "",
-        "## Acceptance (issue #8)", "",
+        "## Checks", "",
         f"- Raw odometry drift: {s['odom_drift_final_m']:.3f} m at the end of the route "
         f"({s['odom_drift_pct_of_length']:.2f} % of the distance).",
-        f"- Odometry + IMU beats odometry alone on heading (RMS heading error): "
-        f"{'yes' if s['imu_beats_odom_on_heading'] else 'NO'} ({_yaw(data, 'odom+imu')} against "
-        f"{_yaw(data, 'odom')}). The gyro's scale error is drawn per seed (imu.gyro_scale_sigma): "
-        "over the route's turning it can leave the final heading of odom+imu worse than odometry's "
-        "while the RMS and maximum are better.",
+        f"- Odometry + IMU against odometry alone on heading: {_yaw(data, 'odom+imu')} against {_yaw(data, 'odom')}.",
         f"- LiDAR odometry ATE under {LIDAR_ATE_MAX_M:.2f} m: {'yes' if s['lidar_ate_under_0_10_m'] else 'NO'} "
         f"({data['architectures']['odom+lidar']['ate_m']:.3f} m).",
         f"- Map: {m['occupied_cells']} occupied cells, {100 * m['within_tolerance_frac']:.1f} % within "

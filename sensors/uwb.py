@@ -16,9 +16,17 @@ Schedule (round-robin)
 Errors (:func:`corrupt_ranges`), per exchange
     ``r = d + n + b``: white noise ``n ~ N(0, range_noise_sigma_m)``; with
     probability ``nlos_prob`` a non-line-of-sight bias ``b ~ Exp(mean nlos_bias_m)``
-    (positive: a blocked first path only arrives late, APS006 part 1); the reading is
+    (positive: a blocked first path only arrives late, APS006 part 1; what the
+    world's geometry does not hold: people, forklifts, goods); the reading is
     clipped at 0. With probability ``dropout_prob`` the exchange fails, and ranges
     beyond ``max_range_m`` are never received: neither is published.
+Walls (:class:`UwbSensor`: physical NLOS)
+    The tag-anchor line is cast against the world's geoms (group 0, ``mj_ray``).
+    When a wall, rack or pallet stands in it, the direct path is blocked: the
+    exchange gets a further bias ``Exp(mean blocked_bias_m)`` and fails with
+    probability ``blocked_dropout_prob`` (through-wall delay and attenuation). This
+    is what makes an NLOS zone: a long corridor whose walls hide the anchors of the
+    hall next to it.
 Messages
     ``sensor_msgs/Range`` on ``uwb/range``, one per successful exchange, stamped at
     the exchange, ``header.frame_id = "uwb_anchor_<i>"``, ``radiation_type =
@@ -28,14 +36,15 @@ Messages
     (:mod:`amr_twin.ros_state`).
 
 :func:`simulate_ranges` makes the same messages offline from tag positions (tests,
-replays); :class:`UwbSensor` samples the twin on the clock. This module does not
-import mujoco: it reads ``MjData.xpos``/``xmat`` of the base body.
+replays); :class:`UwbSensor` samples the twin on the clock (it reads ``MjData.xpos``/``xmat``
+of the base body and casts one ray per exchange).
 """
 
 from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
 from amr_twin.bus import Bus
@@ -83,8 +92,8 @@ def tag_positions_m(pose: np.ndarray, tag_pos_m) -> np.ndarray:
     return np.column_stack((pose[:, 0] + c * tx - s * ty, pose[:, 1] + s * tx + c * ty))
 
 
-def corrupt_ranges(true_range_m: np.ndarray, cfg: UwbCfg,
-                   rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+def corrupt_ranges(true_range_m: np.ndarray, cfg: UwbCfg, rng: np.random.Generator,
+                   blocked: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Noise, NLOS bias and dropouts of a batch of exchanges.
 
     Parameters
@@ -95,7 +104,10 @@ def corrupt_ranges(true_range_m: np.ndarray, cfg: UwbCfg,
         Error parameters.
     rng : numpy.random.Generator
         Draws, in this order: N uniforms (dropout), N uniforms (NLOS), N
-        exponentials (NLOS bias), N normals (noise).
+        exponentials (NLOS bias), N normals (noise); with ``blocked``, then N
+        exponentials (blocked bias) and N uniforms (blocked dropout).
+    blocked : ndarray of bool, shape (N,), optional
+        Exchanges whose direct path a wall blocks (``blocked_bias_m``, ``blocked_dropout_prob``).
 
     Returns
     -------
@@ -109,8 +121,15 @@ def corrupt_ranges(true_range_m: np.ndarray, cfg: UwbCfg,
     u_drop, u_nlos = rng.random(n), rng.random(n)
     bias = rng.exponential(cfg.nlos_bias_m, n) if cfg.nlos_bias_m > 0 else np.zeros(n)
     noise = cfg.range_noise_sigma_m * rng.standard_normal(n)
-    r = np.maximum(d + noise + np.where(u_nlos < cfg.nlos_prob, bias, 0.0), 0.0)
-    return r, (u_drop >= cfg.dropout_prob) & (d <= cfg.max_range_m)
+    r = d + noise + np.where(u_nlos < cfg.nlos_prob, bias, 0.0)
+    received = (u_drop >= cfg.dropout_prob) & (d <= cfg.max_range_m)
+    if blocked is not None:
+        wall = rng.exponential(cfg.blocked_bias_m, n) if cfg.blocked_bias_m > 0 else np.zeros(n)
+        u_wall = rng.random(n)
+        blocked = np.asarray(blocked, dtype=bool)
+        r = r + np.where(blocked, wall, 0.0)
+        received &= ~(blocked & (u_wall < cfg.blocked_dropout_prob))
+    return np.maximum(r, 0.0), received
 
 
 def _message(seq: int, stamp: Time, index: int, range_m: float, cfg: UwbCfg) -> Range:
@@ -183,11 +202,20 @@ class UwbSensor:
         MuJoCo name of ``base_link``.
     autostart : bool
         Schedule the first exchange at the next slot of the time grid.
+    walls : bool
+        Cast each tag-anchor line against the world's geoms (group 0) and apply the
+        blocked-path bias and loss (module notes); False: line of sight everywhere.
+
+    ``blocked`` counts the exchanges per anchor whose line a wall blocked.
     """
 
     def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: UwbCfg, seed=0,
-                 body: str = "amr/base_link", autostart: bool = True):
-        self.data, self.clock, self.bus, self.cfg = data, clock, bus, cfg
+                 body: str = "amr/base_link", autostart: bool = True, walls: bool = True):
+        self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
+        self.walls = bool(walls)
+        self._groups = np.zeros(6, dtype=np.uint8)
+        self._groups[0] = 1  # the world's geoms only: not the robot (1, 2), not a payload (4)
+        self._geomid = np.zeros(1, dtype=np.int32)
         self.body_id = int(model.body(body).id)
         self.rng = np.random.default_rng(seed)
         self.anchors_xyz_m = np.column_stack((cfg.anchors_xy_m, np.full(len(cfg.anchors_x_m), cfg.anchor_z_m)))
@@ -198,6 +226,7 @@ class UwbSensor:
         bus.send_transform(anchor_transforms(self.anchors_xyz_m, FRAME_PREFIX + "{}"), static=True)
         self.seq = 0
         self.exchanges = 0
+        self.blocked = np.zeros(self.n_anchors, dtype=np.int64)
         self._handle = None
         if autostart:
             self.start()
@@ -226,8 +255,15 @@ class UwbSensor:
         self._handle = self.clock.schedule(self.clock.now_us + self.slot_us, self._tick)
         index = self.exchanges % self.n_anchors
         self.exchanges += 1
-        d = np.linalg.norm(self.anchors_xyz_m[index] - self.tag_world_m())
-        r, ok = corrupt_ranges(np.array([d]), self.cfg, self.rng)
+        tag = self.tag_world_m()
+        line = self.anchors_xyz_m[index] - tag
+        d = np.linalg.norm(line)
+        blocked = None
+        if self.walls:
+            hit = mujoco.mj_ray(self.model, self.data, tag, line, self._groups, 1, -1, self._geomid)
+            blocked = np.array([0.0 <= hit < 1.0])  # a surface between tag and anchor (hit in units of the line)
+            self.blocked[index] += int(blocked[0])
+        r, ok = corrupt_ranges(np.array([d]), self.cfg, self.rng, blocked)
         if ok[0]:
             self.pub.publish(_message(self.seq, Time.from_us(self.clock.now_us), index, r[0], self.cfg))
             self.seq += 1

@@ -92,6 +92,32 @@ def test_default_route_keeps_clearance_from_every_world_geom():
     assert _clearance_m(np.array([[-7.5, -1.5]]), boxes)[0] < CLEARANCE_M
 
 
+def test_corridor_route_keeps_clearance_and_runs_the_corridor():
+    route = load_route(ROOT / "experiments" / "routes" / "corridor.yaml")
+    assert route.world == "corridor"
+    boxes = _world_boxes(ROOT / "models" / "worlds" / "corridor.xml")
+    walls = [b for b in boxes if b[0].startswith("corridor_")]
+    others = [b for b in boxes if not b[0].startswith("corridor_")]
+    assert len(walls) == 3 and {"rack_s_u0", "pallet_3", "wall_east_n"} <= {b[0] for b in others}
+    pts = _densify(route.path_xy_m())
+    assert _clearance_m(pts, others).min() >= CLEARANCE_M
+    assert _clearance_m(pts, walls).min() >= 1.0   # the corridor is 2.2 m wide
+    in_corridor = pts[pts[:, 0] > 10.2]
+    assert np.ptp(in_corridor[:, 0]) > 30.0        # a long straight inside it (and back)
+    assert 100.0 < route_length_m(route) < 125.0
+
+
+def test_route_world_must_exist(tmp_path):
+    text = DEFAULT_ROUTE.read_text()
+    bad = tmp_path / "r.yaml"
+    bad.write_text(text + "world: nowhere\n")
+    with pytest.raises(RouteError, match="world"):
+        load_route(bad)
+    (tmp_path / "w.xml").write_text((ROOT / "models" / "worlds" / "corridor.xml").read_text())
+    bad.write_text(text + "world: w.xml\n")  # a file beside the route
+    assert load_route(bad).world == str(tmp_path / "w.xml")
+
+
 def test_route_length_counts_the_start():
     route = Route("l", (0.0, 0.0, 0.0), np.array([[3.0, 4.0], [3.0, 0.0]]))
     assert route_length_m(route) == pytest.approx(9.0)

@@ -59,14 +59,20 @@ def test_rigidly_moved_trajectory_aligns_back_and_rpe_ignores_the_move():
     assert back == pytest.approx(-np.array([[c, s], [-s, c]]) @ shift)  # p = R^T (est - shift)
 
 
-@pytest.mark.parametrize("delta_m", [1.0, 2.0])
+@pytest.mark.parametrize("delta_m", [1.0, 3.0])
 def test_constant_yaw_rate_error_gives_rpe_rotation_of_rate_times_delta_time(delta_m):
-    t, truth = _straight(speed_m_s=0.5)  # 0.5 m/s: 1 m takes 2 s
+    t, truth = _straight(speed_m_s=0.4)  # 0.04 m a sample: delta_m is a whole number of samples
     rate_rad_s = math.radians(1.0)
     est = truth.copy()
     est[:, 2] += rate_rad_s * t  # heading drifts by 1 deg/s, positions exact
     e = errors(t, est, t, truth, rpe_delta_m=delta_m)
-    assert e.rpe_rot_deg == pytest.approx(1.0 * delta_m / 0.5, rel=1e-6)
+    # evo's pairs: delta_m ahead, and near the end the last sample while it is within 10 % of delta_m
+    # (no sample lies on that bound here)
+    travel = truth[-1, 0] - truth[:, 0]
+    pair_m = np.minimum(travel, delta_m)[travel > 0.9 * delta_m]
+    expected_deg = math.sqrt(np.mean((1.0 * pair_m / 0.4) ** 2))
+    assert expected_deg < 1.0 * delta_m / 0.4 - 1e-3  # the end pairs are shorter
+    assert e.rpe_rot_deg == pytest.approx(expected_deg, rel=1e-6)
     assert e.final_yaw_err_deg == pytest.approx(math.degrees(rate_rad_s * t[-1]), rel=1e-9)
     assert e.max_yaw_err_deg == pytest.approx(e.final_yaw_err_deg)
 

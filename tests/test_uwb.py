@@ -111,7 +111,8 @@ def test_uwb_sensor_in_the_twin():
     twin = Twin(cfg, TwinOptions(sensors=True, world="warehouse"))
     msgs = []
     twin.bus.subscribe("uwb/range", msgs.append)
-    uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
+    uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3],
+                    walls=False)  # line of sight everywhere: the racks' beams are in some lines here
     twin.advance(1.0)
     # 10 Hz x 4 anchors, round-robin every 25 ms, 5 % dropped
     assert uwb.slot_us == 25_000 and uwb.exchanges in (40, 41)
@@ -126,3 +127,29 @@ def test_uwb_sensor_in_the_twin():
     err = np.array([m.range - true[anchor_index(m.header.frame_id)] for m in msgs])
     assert np.all(np.abs(err) < 4 * cfg.uwb.range_noise_sigma_m)
     assert np.std(err) > 0.02  # noisy, not exact
+
+
+def test_walls_block_the_bays_anchors_in_the_corridor():
+    """Physical NLOS: deep in the corridor world only the end anchor is in sight; the others read long."""
+    from amr_twin.experiments.fusion import site_config
+    from amr_twin.controllers.path_follower import Route
+    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.sensors.uwb import UwbSensor
+
+    route = Route("here", (28.0, 0.0, 0.0), [[30.0, 0.0]], world="corridor")
+    cfg = site_config(load_config(overrides={"uwb.nlos_prob": 0.0, "uwb.dropout_prob": 0.0}), route)
+    assert len(cfg.uwb.anchors_x_m) == 5  # the world's own anchors
+    twin = Twin(cfg, TwinOptions(world="corridor", start_xy_yaw=route.start_xy_yaw))
+    msgs = []
+    twin.bus.subscribe("uwb/range", msgs.append)
+    uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
+    twin.advance(3.0)
+    per_anchor = np.bincount(np.arange(uwb.exchanges) % 5, minlength=5)  # round-robin from anchor 0
+    assert list(uwb.blocked[:4]) == list(per_anchor[:4]) and uwb.blocked[4] == 0
+    per_anchor = per_anchor[0]
+    true = uwb.true_ranges_m()
+    err = {i: np.array([m.range - true[i] for m in msgs if anchor_index(m.header.frame_id) == i]) for i in range(5)}
+    assert np.all(np.abs(err[4]) < 4 * cfg.uwb.range_noise_sigma_m)  # the end anchor: line of sight
+    hall = np.concatenate([err[i] for i in range(4)])
+    assert 0.3 < np.mean(hall) < 1.0  # biased long by the walls (mean blocked_bias_m 0.6 m)
+    assert len(hall) < 0.85 * 4 * per_anchor  # and often lost (blocked_dropout_prob 0.3)

@@ -22,7 +22,7 @@ import typer
 
 from .cli_checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
                          check_duration, check_outputs, check_record_folder, dask_client, parameter_draws, unique)
-from .cli_options import checked_firmware, firmware_option, sketch_option
+from .cli_options import firmware_option, sketch_option
 
 def _rpm(value) -> str:
     return "-" if value is None else f"{value:.2f}"
@@ -49,61 +49,11 @@ def register(app: typer.Typer) -> None:
     app.add_typer(experiment, name="experiment")
     app.add_typer(sweep, name="sweep")
     _add_chapter5(experiment)
-    _add_fusion(experiment)
+    from .cli_fusion import add_fusion
+
+    add_fusion(experiment)
     _add_faults(experiment)
     _add_payload_sweep(sweep)
-
-
-def _add_fusion(experiment: typer.Typer) -> None:
-    """``amr-twin experiment fusion``."""
-    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
-
-    @experiment.command("fusion")
-    def fusion_cmd(
-        out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, PNGs, map.yaml/.pgm/.png."),
-        route: Optional[Path] = typer.Option(None, "--route", help="Route YAML (default: the 60 m warehouse route)."),
-        seed: int = typer.Option(0, "--seed", help="Seed of the sensor noise (IMU, LiDAR, UWB)."),
-        firmware: str = firmware_option("improved"),
-        record: Optional[Path] = typer.Option(None, "--record", help="Also write the drive as a Rerun recording (.rrd)."),
-        mcap: Optional[Path] = typer.Option(None, "--mcap", help="Also write the drive as ROS 2 messages (.mcap)."),
-        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
-        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
-    ) -> None:
-        """Drive a warehouse route and compare raw odometry with the four fusion architectures of §6.2.2."""
-        firmware = checked_firmware(firmware, None, fail)
-        check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
-        from .controllers.path_follower import RouteError, load_route
-        from .experiments import fusion, fusion_report
-
-        route_path = fusion.DEFAULT_ROUTE if route is None else route
-        try:
-            load_route(route_path)
-        except (RouteError, OSError) as exc:
-            fail(f"--route {route_path}: {exc}")
-        if not 0 <= seed < 2 ** 32:
-            fail(f"--seed {seed}: must be in [0, 2^32)")
-        cfg = _config(config, params, set_)
-
-        def work():
-            from .atomic_file import all_or_nothing
-
-            results = fusion.run(cfg, route_path, seed=seed, firmware=firmware, progress=progress,
-                                 rrd_path=record, mcap_path=mcap)
-            with all_or_nothing():
-                fusion_report.plot(results, out)
-                return fusion_report.report(results, out)
-
-        data = _guard(work)
-        typer.echo(f"{'architecture':14s} {'ATE m':>7s} {'RPE m/m':>8s} {'RPE deg/m':>9s} {'final m':>8s} "
-                   f"{'RMS yaw deg':>11s}")
-        for name, e in data["architectures"].items():
-            typer.echo(f"{name:14s} {e['ate_m']:7.3f} {e['rpe_trans_m']:8.3f} {e['rpe_rot_deg']:9.2f} "
-                       f"{e['final_pos_err_m']:8.3f} {e['rms_yaw_err_deg']:11.2f}")
-        s, r = data["summary"], data["route"]
-        typer.echo(f"route {r['name']} {r['length_m']:.1f} m, goal {'reached' if r['reached_goal'] else 'NOT reached'}; "
-                   f"odometry drift {s['odom_drift_final_m']:.3f} m; map walls within 2 cells: "
-                   f"{100 * s['map_walls_within_2_cells_frac']:.1f} %")
-        typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.1f} simulated s; wrote {out}/report.md")
 
 
 def _add_faults(experiment: typer.Typer) -> None:

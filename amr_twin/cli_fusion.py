@@ -1,0 +1,145 @@
+"""``amr-twin experiment fusion``: chapter 6's architectures on a route, one seed or many.
+
+One seed (``--seed N``, default 0) writes the full report into ``--out``: tables,
+figures, the map and the TUM trajectories. Many (``--seeds 0:9``) run in parallel
+(``--jobs`` local workers, or ``--executor dask --scheduler ADDRESS``) and write the
+summary (mean, sd and range of every metric) with one folder per seed. Every option is
+checked, and the route and its world read, before the first drive.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .cli_checks import JobsOpt, check_common, check_outputs, dask_client
+from .cli_options import firmware_option
+
+
+def add_fusion(experiment: typer.Typer) -> None:
+    """Register ``amr-twin experiment fusion`` on ``experiment``."""
+    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+
+    @experiment.command("fusion")
+    def fusion_cmd(
+        out: Path = typer.Option(..., "--out", help="Output folder: report.md, metrics.json, PNGs, map, TUM "
+                                 "trajectories (with --seeds: the summary and seed<N>/ per seed)."),
+        route: Optional[str] = typer.Option(None, "--route", help="A route of experiments/routes/ by name "
+                                            "(warehouse_60m, the default; corridor) or a route YAML file."),
+        seed: Optional[int] = typer.Option(None, "--seed", help="One seed: the sensors' noise and the robot's "
+                                           "own errors (default 0)."),
+        seeds: Optional[str] = typer.Option(None, "--seeds", help="Many seeds, A:B (both included) or a,b,c: "
+                                            "each metric's mean, sd and range over them."),
+        jobs: Optional[int] = JobsOpt,
+        executor: str = typer.Option("local", "--executor", help="With --seeds: local (process pool of --jobs) "
+                                     "or dask."),
+        scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, e.g. "
+                                                "tcp://127.0.0.1:8786."),
+        scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s",
+                                                  help="Give up reaching the Dask scheduler after this long, s."),
+        firmware: str = firmware_option("improved"),
+        record: Optional[Path] = typer.Option(None, "--record", help="Also write the drive as a Rerun recording "
+                                              "(.rrd; one seed only)."),
+        mcap: Optional[Path] = typer.Option(None, "--mcap", help="Also write the drive as ROS 2 messages "
+                                            "(.mcap; one seed only)."),
+        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    ) -> None:
+        """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
+        from .controllers.path_follower import RouteError, load_route
+        from .experiments import fusion
+        from .experiments.executor import EXECUTORS
+        from .experiments.fusion_seeds import parse_seeds
+
+        jobs, firmware = check_common(jobs, firmware, fail)
+        if seed is not None and seeds is not None:
+            fail("--seed and --seeds: give one of them")
+        try:
+            seed_list = parse_seeds(seeds) if seeds is not None else [0 if seed is None else seed]
+        except ValueError as exc:
+            fail(str(exc))
+        if not all(0 <= s < 2 ** 32 for s in seed_list):
+            fail(f"--seed {seed_list[0]}: must be in [0, 2^32)")
+        many = len(seed_list) > 1
+        if many and (record is not None or mcap is not None):
+            fail("--record/--mcap record one drive: use --seed N with them, not --seeds")
+        if executor not in EXECUTORS:
+            fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
+        if executor == "dask" and not scheduler:
+            fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
+        if executor == "local" and scheduler:
+            fail("--scheduler is only used with --executor dask")
+        route_path = fusion.route_file(route)
+        try:
+            load_route(route_path)
+        except (RouteError, OSError) as exc:
+            known = ", ".join(fusion.route_names())
+            fail(f"--route {route}: {exc}" if route_path.exists() or route is None
+                 else f"--route {route}: no such route file, nor a route of the twin ({known})")
+        check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
+        cfg = _config(config, params, set_)
+        client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+        try:
+            if many:
+                _many(cfg, route_path, seed_list, firmware, jobs, client, progress, out, _guard)
+            else:
+                _one(cfg, route_path, seed_list[0], firmware, progress, record, mcap, out, _guard)
+        finally:
+            if client is not None:
+                client.close()
+
+
+def _one(cfg, route_path: Path, seed: int, firmware: str, progress: bool, record, mcap, out: Path, guard) -> None:
+    from .experiments import fusion, fusion_report
+
+    def work():
+        from .atomic_file import all_or_nothing
+
+        results = fusion.run(cfg, route_path, seed=seed, firmware=firmware, progress=progress,
+                             rrd_path=record, mcap_path=mcap)
+        with all_or_nothing():
+            fusion_report.plot(results, out)
+            return fusion_report.report(results, out)
+
+    data = guard(work)
+    typer.echo(f"{'architecture':14s} {'ATE m':>7s} {'aligned':>8s} {'RPE m/m':>8s} {'RPE deg/m':>9s} "
+               f"{'final m':>8s} {'RMS yaw deg':>11s}")
+    for name, e in data["architectures"].items():
+        typer.echo(f"{name:14s} {e['ate_m']:7.3f} {e['ate_aligned_m']:8.3f} {e['rpe_trans_m']:8.3f} "
+                   f"{e['rpe_rot_deg']:9.2f} {e['final_pos_err_m']:8.3f} {e['rms_yaw_err_deg']:11.2f}")
+    s, r = data["summary"], data["route"]
+    typer.echo(f"route {r['name']} {r['length_m']:.1f} m, goal {'reached' if r['reached_goal'] else 'NOT reached'}; "
+               f"odometry drift {s['odom_drift_final_m']:.3f} m; map walls within 2 cells: "
+               f"{100 * s['map_walls_within_2_cells_frac']:.1f} %")
+    typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.1f} simulated s; wrote {out}/report.md, "
+               f"truth.tum and one .tum per architecture (evo_ape tum {out}/truth.tum {out}/odom.tum)")
+
+
+def _many(cfg, route_path: Path, seeds: list[int], firmware: str, jobs: int, client, progress: bool, out: Path,
+          guard) -> None:
+    import time
+
+    from .experiments import fusion_seeds
+    from .experiments.fusion_seeds_report import cell
+
+    def work():
+        from .atomic_file import all_or_nothing
+
+        t0 = time.perf_counter()
+        results = fusion_seeds.run(cfg, route_path, seeds, firmware=firmware, jobs=jobs, client=client,
+                                   progress=progress)
+        with all_or_nothing():
+            return fusion_seeds.write(results, out), time.perf_counter() - t0
+
+    data, wall_s = guard(work)
+    typer.echo(f"{'architecture':14s} {'ATE m, mean ± sd (range)':32s} {'aligned':32s} {'RPE m / 1 m':32s}")
+    for name, a in data["architectures"].items():
+        typer.echo(f"{name:14s} {cell(a['ate_m'], 3):32s} {cell(a['ate_aligned_m'], 3):32s} "
+                   f"{cell(a['rpe_trans_m'], 3):32s}")
+    missed = [s for s, ok in zip(data["seeds"], data["reached_goal"]) if not ok]
+    where = "dask" if client is not None else f"jobs {jobs}"
+    typer.echo(f"route {data['route']['name']}, {len(seeds)} seeds; goal "
+               + ("reached in all" if not missed else f"NOT reached with seeds {missed}")
+               + f"; wall time {wall_s:.1f} s ({where}); wrote {out}/report.md, metrics.json, seeds.png, seed<N>/")

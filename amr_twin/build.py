@@ -65,7 +65,10 @@ def derived_params(cfg: TwinConfig) -> dict:
         "floor_a_z_m": c.floor_a_z_m, "floor_b_z_m": c.floor_b_z_m, "floor_c_z_m": c.floor_c_z_m,
         "tube_outer_m": c.tube_outer_m, "sheet_thickness_m": c.sheet_thickness_m,
         "deck_thickness_m": cfg.deck.thickness_m,
-        "wheel_radius_m": w.radius_m, "wheel_width_m": w.width_m, "wheel_separation_m": w.separation_m,
+        # the true geometry: the nominal radius and separation plus the tyres' errors (wheel.*_error_*)
+        "wheel_radius_m": w.radius_m, "wheel_width_m": w.width_m,
+        "wheel_separation_m": w.separation_m + w.separation_error_m,
+        "wheel_left_radius_m": w.radius_of("left"), "wheel_right_radius_m": w.radius_of("right"),
         "wheel_torque_limit_nm": max(m.ke_v_s_rad * m.current_limit_a for m in (cfg.motor_left, cfg.motor_right)),
         "wheel_speed_limit_rad_s": cfg.battery.v_full_v / min(cfg.motor_left.ke_v_s_rad, cfg.motor_right.ke_v_s_rad),
         "caster_ball_diameter_m": k.ball_diameter_m, "caster_x_m": k.x_m, "caster_y_m": k.y_m,
@@ -251,7 +254,7 @@ def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         # An ellipsoid keeps a single contact point under the hub while spinning in
         # place (a cylinder micro-hops, stack-notes.md); its local z is the axle.
         geom.type = mujoco.mjtGeom.mjGEOM_ELLIPSOID
-        geom.size = [w.radius_m, w.radius_m, w.width_m / 2]
+        geom.size = [w.radius_of(side), w.radius_of(side), w.width_m / 2]
         # sliding friction only; the tyre's rolling resistance is a load-dependent
         # torque (amr_twin.rolling_resistance): MuJoCo's rolling friction (condim 6)
         # made these stiff contacts chatter

@@ -44,6 +44,9 @@ def add_fusion(experiment: typer.Typer) -> None:
                                               "(.rrd; one seed only)."),
         mcap: Optional[Path] = typer.Option(None, "--mcap", help="Also write the drive as ROS 2 messages "
                                             "(.mcap; one seed only)."),
+        robot_errors: bool = typer.Option(True, "--robot-errors/--no-robot-errors", help="Each seed also draws "
+                                          "the robot's own errors (tyre radii, track, hall sensors) within their "
+                                          "sourced tolerances; off: the robot is exactly as its odometry assumes."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
@@ -83,22 +86,23 @@ def add_fusion(experiment: typer.Typer) -> None:
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
         try:
             if many:
-                _many(cfg, route_path, seed_list, firmware, jobs, client, progress, out, _guard)
+                _many(cfg, route_path, seed_list, firmware, robot_errors, jobs, client, progress, out, _guard)
             else:
-                _one(cfg, route_path, seed_list[0], firmware, progress, record, mcap, out, _guard)
+                _one(cfg, route_path, seed_list[0], firmware, robot_errors, progress, record, mcap, out, _guard)
         finally:
             if client is not None:
                 client.close()
 
 
-def _one(cfg, route_path: Path, seed: int, firmware: str, progress: bool, record, mcap, out: Path, guard) -> None:
+def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, progress: bool, record, mcap, out: Path,
+         guard) -> None:
     from .experiments import fusion, fusion_report
 
     def work():
         from .atomic_file import all_or_nothing
 
         results = fusion.run(cfg, route_path, seed=seed, firmware=firmware, progress=progress,
-                             rrd_path=record, mcap_path=mcap)
+                             rrd_path=record, mcap_path=mcap, robot_errors=robot_errors)
         with all_or_nothing():
             fusion_report.plot(results, out)
             return fusion_report.report(results, out)
@@ -117,8 +121,8 @@ def _one(cfg, route_path: Path, seed: int, firmware: str, progress: bool, record
                f"truth.tum and one .tum per architecture (evo_ape tum {out}/truth.tum {out}/odom.tum)")
 
 
-def _many(cfg, route_path: Path, seeds: list[int], firmware: str, jobs: int, client, progress: bool, out: Path,
-          guard) -> None:
+def _many(cfg, route_path: Path, seeds: list[int], firmware: str, robot_errors: bool, jobs: int, client,
+          progress: bool, out: Path, guard) -> None:
     import time
 
     from .experiments import fusion_seeds
@@ -128,8 +132,8 @@ def _many(cfg, route_path: Path, seeds: list[int], firmware: str, jobs: int, cli
         from .atomic_file import all_or_nothing
 
         t0 = time.perf_counter()
-        results = fusion_seeds.run(cfg, route_path, seeds, firmware=firmware, jobs=jobs, client=client,
-                                   progress=progress)
+        results = fusion_seeds.run(cfg, route_path, seeds, firmware=firmware, robot_errors=robot_errors,
+                                   jobs=jobs, client=client, progress=progress)
         with all_or_nothing():
             return fusion_seeds.write(results, out), time.perf_counter() - t0
 

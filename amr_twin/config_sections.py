@@ -112,6 +112,17 @@ class WheelCfg(Section):
     tyre_stiffness_n_m: float = P(unit="N/m", ge=1e4, le=1e6)
     tyre_damping_n_s_m: float = P(unit="N*s/m", ge=0.0, le=1e4)
     rolling_resistance: float = P(unit="1", ge=0.0, le=0.1)
+    radius_error_left_m: float = P(unit="m", ge=-0.01, le=0.01)
+    radius_error_right_m: float = P(unit="m", ge=-0.01, le=0.01)
+    separation_error_m: float = P(unit="m", ge=-0.05, le=0.05)
+    radius_tolerance_m: float = P(unit="m", ge=0.0, le=0.005)
+    separation_tolerance_m: float = P(unit="m", ge=0.0, le=0.02)
+    hall_misalignment_sigma_deg: float = P(unit="deg", ge=0.0, le=2.0)
+    hall_jitter_us: float = P(unit="us", ge=0.0, le=100.0)
+
+    def radius_of(self, side: str) -> float:
+        """The ``left`` or ``right`` tyre's true rolling radius, m: ``radius_m`` plus its error."""
+        return self.radius_m + (self.radius_error_left_m if side == "left" else self.radius_error_right_m)
 
 
 class CasterCfg(Section):

@@ -38,6 +38,7 @@ from ..loop import Twin, TwinOptions
 from ..trajectory import TrajectoryErrors, errors
 from ..world_geometry import Footprints, scan_plane_boxes
 from .fusion_map import build_map
+from .fusion_robot import NOMINAL, RobotErrors, draw
 from .. import se2
 from .fusion_streams import Streams, odom_poses, relative_motion
 
@@ -85,18 +86,23 @@ class FusionResults:
     uwb_blocked: list | None = None     # per anchor: exchanges whose line a wall blocked
     uwb_exchanges: int = 0
     message_counts: dict | None = None  # messages per stream (kept when the streams are dropped)
+    robot: dict | None = None           # the robot's own errors of this seed (fusion_robot), IMU's included
 
 
 def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "improved", progress: bool = True,
-          rrd_path: Path | None = None, mcap_path: Path | None = None) -> tuple[Twin, Streams, bool]:
+          rrd_path: Path | None = None, mcap_path: Path | None = None,
+          robot: RobotErrors = NOMINAL) -> tuple[Twin, Streams, bool]:
     """Drive ``route`` in its world with IMU, LiDAR and UWB on; return the twin and the recorded streams.
 
-    ``rrd_path`` / ``mcap_path``: also write the drive as a Rerun / MCAP recording.
+    ``robot``: the robot's own errors (its true wheel geometry and hall sensors; the odometry
+    keeps the nominal geometry of ``cfg``). ``rrd_path`` / ``mcap_path``: also write the
+    drive as a Rerun / MCAP recording.
     """
     from ..sensors.uwb import UwbSensor
 
-    twin = Twin(cfg, TwinOptions(firmware=firmware, world=route.world, seed=seed,
-                                 start_xy_yaw=route.start_xy_yaw, sensors=True))
+    twin = Twin(robot.config(cfg), TwinOptions(firmware=firmware, world=route.world, seed=seed,
+                                               start_xy_yaw=route.start_xy_yaw, sensors=True,
+                                               **robot.twin_options()))
     m, d = twin.physics.model, twin.physics.data
     twin.uwb = UwbSensor(m, d, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
     streams = Streams()
@@ -224,13 +230,19 @@ def site_config(cfg: TwinConfig, route: Route) -> TwinConfig:
 
 
 def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 0, firmware: str = "improved",
-        progress: bool = True, rrd_path: Path | None = None, mcap_path: Path | None = None) -> FusionResults:
-    """Drive the route, run the five architectures and score them against the truth."""
+        progress: bool = True, rrd_path: Path | None = None, mcap_path: Path | None = None,
+        robot_errors: bool = True) -> FusionResults:
+    """Drive the route, run the five architectures and score them against the truth.
+
+    ``robot_errors``: the seed also draws the robot's own errors (:mod:`.fusion_robot`);
+    False drives the robot exactly as its odometry assumes it.
+    """
     route = load_route(route_path)
     cfg = site_config(cfg, route)
+    robot = draw(cfg, seed) if robot_errors else NOMINAL
     t0 = time.perf_counter()
     twin, streams, reached = drive(cfg, route, seed=seed, firmware=firmware, progress=progress,
-                                   rrd_path=rrd_path, mcap_path=mcap_path)
+                                   rrd_path=rrd_path, mcap_path=mcap_path, robot=robot)
     series = twin.recorder.series()
     res = FusionResults(route=route, seed=seed, firmware=firmware, t_true_s=series.t_s, pose_true=series.pose,
                         streams=streams, sim_s=twin.t_s, drive_wall_s=time.perf_counter() - t0,
@@ -238,6 +250,8 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
     res.cross_track_rms_m = float(np.sqrt(np.mean(distance_to_path_m(route, series.pose[:, :2]) ** 2)))
     res.uwb_blocked = twin.uwb.blocked.tolist()
     res.uwb_exchanges = int(twin.uwb.exchanges)
+    gyro = twin.imu.models["gyro"]
+    res.robot = {**robot.as_dict(cfg), "drawn": bool(robot_errors), "gyro_scale_z": float(gyro.scale[2])}
     start = route.start_xy_yaw
     jobs = (  # in the order of ARCHITECTURES
         lambda: estimate_odom(streams, start),

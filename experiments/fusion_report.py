@@ -181,6 +181,7 @@ def report(results: FusionResults, out: Path, figures: bool = True) -> dict:
         "drive_wall_s": results.drive_wall_s, "wall_s": results.wall_s, "messages": results.message_counts,
         "uwb": {"anchors_xy_m": results.anchors_xy_m.tolist(), "exchanges": results.uwb_exchanges,
                 "blocked_per_anchor": results.uwb_blocked},
+        "robot": results.robot,
         "rpe_delta_m": RPE_DELTA_M,
         "architectures": {name: {**dataclasses.asdict(results.estimates[name].errors),
                                  "ate_aligned_m": results.estimates[name].ate_aligned_m,
@@ -200,6 +201,20 @@ def _yaw(data: dict, name: str) -> str:
             f"final {e['final_yaw_err_deg']:.2f} deg")
 
 
+def robot_line(robot: dict | None) -> str:
+    """One sentence on the robot's own errors of this seed (``FusionResults.robot``)."""
+    if not robot:
+        return ""
+    what = "drawn for this seed" if robot["drawn"] else "none: the robot is exactly as its odometry assumes"
+    return (f"The robot's own errors ({what}): tyre radii {1e3 * robot['radius_error_left_m']:+.2f} mm left, "
+            f"{1e3 * robot['radius_error_right_m']:+.2f} mm right, track {1e3 * robot['separation_error_m']:+.2f} mm "
+            f"(the odometry assumes the nominal geometry: distance {100 * robot['odom_distance_error']:+.2f} %, "
+            f"heading drift {robot['odom_heading_drift_deg_per_m']:+.3f} deg per metre of straight, turns "
+            f"{100 * robot['odom_turn_error']:+.2f} %); hall sensors off by up to "
+            f"{max(abs(v) for row in robot['hall_misalignment_deg'] for v in row):.2f} deg, edge jitter "
+            f"{robot['hall_jitter_us']:.1f} us; gyro scale error {100 * robot['gyro_scale_z']:+.2f} %.")
+
+
 def markdown(data: dict, figures: bool = True) -> str:
     """``report.md`` from the metrics (``figures``: link ``trajectories.png`` and ``errors.png``)."""
     r, s, m, u = data["route"], data["summary"], data["map"], data["uwb"]
@@ -212,7 +227,7 @@ def markdown(data: dict, figures: bool = True) -> str:
         f"for the drive, {data['wall_s']:.1f} s in all); goal reached: {'yes' if r['reached_goal'] else 'NO'}; "
         f"cross-track RMS {r['cross_track_rms_m']:.3f} m. Firmware `{data['firmware']}`, seed {data['seed']}. "
         "Messages: " + ", ".join(f"{k} {v}" for k, v in data["messages"].items()) + ". UWB exchanges with a "
-        f"wall in the line, per anchor: {blocked}.", "",
+        f"wall in the line, per anchor: {blocked}.", "", robot_line(data["robot"]), "",
         "| architecture | ATE m | ATE aligned m | RPE m / 1 m | RPE deg / 1 m | final position error m "
         "| final heading error deg | RMS heading error deg | max heading error deg | compute s |",
         "|---|---|---|---|---|---|---|---|---|---|",

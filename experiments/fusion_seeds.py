@@ -36,11 +36,13 @@ class SeedJob:
     route_path: str
     seed: int
     firmware: str
+    robot_errors: bool = True
 
 
 def run_seed(job: SeedJob) -> fusion.FusionResults:
     """Drive and score one seed; the recorded messages are dropped before the result travels back."""
-    return fusion.slim(fusion.run(job.cfg, job.route_path, seed=job.seed, firmware=job.firmware, progress=False))
+    return fusion.slim(fusion.run(job.cfg, job.route_path, seed=job.seed, firmware=job.firmware, progress=False,
+                                  robot_errors=job.robot_errors))
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -66,10 +68,10 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def run(cfg: TwinConfig, route_path: Path | str, seeds: list[int], *, firmware: str = "improved", jobs: int = 1,
-        client=None, progress: bool = True) -> list[fusion.FusionResults]:
+def run(cfg: TwinConfig, route_path: Path | str, seeds: list[int], *, firmware: str = "improved",
+        robot_errors: bool = True, jobs: int = 1, client=None, progress: bool = True) -> list[fusion.FusionResults]:
     """Run every seed (``jobs`` local workers, or the Dask ``client``); results in the order of ``seeds``."""
-    items = [SeedJob(cfg, str(route_path), int(s), firmware) for s in seeds]
+    items = [SeedJob(cfg, str(route_path), int(s), firmware, robot_errors) for s in seeds]
     done = {item.seed: res for item, res in run_all(run_seed, items, jobs=jobs, description="fusion seeds",
                                                      progress=progress, client=client)}
     return [done[s] for s in seeds]

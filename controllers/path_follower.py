@@ -23,9 +23,14 @@ route needs:
   the projection (clamped at the goal). With ``alpha`` its bearing in
   ``base_link`` and ``d`` its distance, the curvature is ``2 sin(alpha) / d``.
 
-The linear speed is the least of ``max_speed_m_s``, ``max_angular_rad_s / |curvature|``
-and ``sqrt(2 * decel * remaining path)`` (a stop at the goal), and at least
-``min_speed_m_s``. If ``|alpha|`` exceeds ``turn_in_place_rad`` (60 deg) the
+The linear speed is the least of ``max_speed_m_s``, ``max_angular_rad_s / |curvature|``,
+``sqrt(2 * decel * remaining path)`` (a stop at the goal) and ``sqrt(2 * decel * (path to the
+next sharp corner - lookahead / 2))``, and at least ``min_speed_m_s``. A sharp corner turns by
+more than ``sharp_corner_rad`` (120 deg): pure pursuit rounds a right angle, but at a sharper
+corner the lookahead point swings behind the robot, which turns in place about half a
+lookahead before the corner. It gets there at the least speed instead of at full speed, as a
+velocity smoother would have it (a wheel that reverses while still spinning is also what a
+direction-less wheel speed sensor counts wrong). If ``|alpha|`` exceeds ``turn_in_place_rad`` (60 deg) the
 robot turns in place (angular ``gain * alpha`` clipped to the limit) until
 ``|alpha|`` falls under ``turn_in_place_exit_rad``. The follower is done when it
 is within ``goal_tolerance_m`` of the last waypoint after having made progress
@@ -190,11 +195,13 @@ class PurePursuit:
         below which it drives again, rad.
     turn_gain_per_s : float
         Yaw rate per rad of bearing in a turn in place, 1/s (clipped to the route's limit).
+    sharp_corner_rad : float
+        Corners turning by more than this are approached slowing down to the least speed, rad.
     """
 
     def __init__(self, route: Route, *, min_speed_m_s: float = 0.1, decel_m_s2: float = 0.5,
                  turn_in_place_rad: float = math.radians(60.0), turn_in_place_exit_rad: float = math.radians(20.0),
-                 turn_gain_per_s: float = 1.5):
+                 turn_gain_per_s: float = 1.5, sharp_corner_rad: float = math.radians(120.0)):
         self.route = route
         self.path = route.path_xy_m()
         self._seg = seg = np.diff(self.path, axis=0)
@@ -206,6 +213,9 @@ class PurePursuit:
         self.turn_in_place_rad, self.turn_in_place_exit_rad = float(turn_in_place_rad), float(turn_in_place_exit_rad)
         self.turn_gain_per_s = float(turn_gain_per_s)
         self.search_m = 2.0 * route.lookahead_m + 1.0
+        turn = np.abs(np.angle(np.exp(1j * np.diff(np.arctan2(seg[:, 1], seg[:, 0])))))  # at interior vertices
+        self._sharp_s = self._s0[1:-1][turn > float(sharp_corner_rad)]
+        """Arc lengths of the corners the robot will turn in place at, m."""
         self.progress_m = 0.0
         """Arc length of the robot's projection on the path, m (never decreases)."""
         self.cross_track_m = 0.0
@@ -230,7 +240,7 @@ class PurePursuit:
         u = ((xy - a) * ab).sum(1) / (length * length)
         u = np.minimum(np.maximum(u, np.maximum((lo - s0) / length, 0.0)), np.minimum((hi - s0) / length, 1.0))
         dist = np.hypot(*(a + u[:, None] * ab - xy).T)
-        k = int(np.argmin(dist))
+        k = int(np.argmax(dist <= dist.min() + 1e-6))  # the nearest; of a path doubling back, the earlier leg
         return float(s0[k] + u[k] * length[k]), float(dist[k])
 
     def command(self, x_m: float, y_m: float, yaw_rad: float) -> tuple[float, float, bool]:
@@ -261,7 +271,10 @@ class PurePursuit:
             w = max(-r.max_angular_rad_s, min(r.max_angular_rad_s, self.turn_gain_per_s * alpha))
             return 0.0, w, False
         curvature = 2.0 * math.sin(alpha) / dist
-        v = min(r.max_speed_m_s, math.sqrt(2.0 * self.decel_m_s2 * max(remaining_m, 0.0)))
+        ahead = self._sharp_s[self._sharp_s > self.progress_m - 1e-9]
+        to_stop_m = min(remaining_m, float(ahead[0]) - self.progress_m - 0.5 * r.lookahead_m) if ahead.size \
+            else remaining_m
+        v = min(r.max_speed_m_s, math.sqrt(2.0 * self.decel_m_s2 * max(to_stop_m, 0.0)))
         if abs(curvature) > 1e-9:
             v = min(v, r.max_angular_rad_s / abs(curvature))
         v = max(v, self.min_speed_m_s)

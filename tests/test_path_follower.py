@@ -118,6 +118,22 @@ def test_route_world_must_exist(tmp_path):
     assert load_route(bad).world == str(tmp_path / "w.xml")
 
 
+def test_slows_down_before_a_reversal_and_rounds_right_angles_at_speed():
+    reverse = Route("rev", (0.0, 0.0, 0.0), [[10.0, 0.0], [4.0, 0.0]])
+    rows, done = _drive_kinematic(reverse)
+    assert done
+    turning = np.flatnonzero((rows[:, 4] == 0.0) & (rows[:, 5] != 0.0))
+    first = turning[0]
+    assert rows[first, 1] > 9.0                    # the turn in place is at the reversal
+    assert rows[first - 1, 4] <= 0.15              # ... reached at a crawl, not at 1 m/s
+    assert rows[:first, 4].max() == pytest.approx(1.0)
+    # a right angle is rounded at speed, no stop and no turn in place
+    square = Route("l", (0.0, 0.0, 0.0), [[10.0, 0.0], [10.0, 10.0]])
+    rows, done = _drive_kinematic(square)
+    near = np.hypot(rows[:, 1] - 10.0, rows[:, 2]) < 1.0
+    assert done and rows[near, 4].min() > 0.3
+
+
 def test_route_length_counts_the_start():
     route = Route("l", (0.0, 0.0, 0.0), np.array([[3.0, 4.0], [3.0, 0.0]]))
     assert route_length_m(route) == pytest.approx(9.0)

@@ -134,7 +134,7 @@ def test_files_of_the_report(default_run):
 
     t, pose = tum.read(out / "odom_uwb_imu.tum")
     est = results.estimates["odom+uwb+imu"]
-    assert np.array_equal(t, est.t_s) and np.all(np.diff(t) > 0)
+    assert np.allclose(t, est.t_s, rtol=0, atol=1e-7) and np.all(np.diff(t) > 0)
     assert np.allclose(pose[:, :2], est.pose[:, :2], atol=1e-6)
     t_truth, _ = tum.read(out / "truth.tum")
     assert np.isin(np.round(t * 1e6), np.round(t_truth * 1e6)).all()  # every estimate stamp has its true pose
@@ -179,3 +179,80 @@ def test_cli_rejects_a_broken_route(tmp_path):
     assert res.exit_code == 2
     assert "max_speed_m_s" in res.output and len(res.output.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+CORRIDOR_SHORT = """\
+name: corridor_short
+world: corridor
+start_xy_yaw: [12.0, 0.0, 0.0]
+waypoints_xy_m:
+  - [34.0, 0.0]
+max_speed_m_s: 1.0
+"""
+
+
+@pytest.fixture(scope="module")
+def corridor_seeds(tmp_path_factory):
+    """22 m down the corridor world's featureless corridor, seeds 0 and 1 on two workers, from the CLI."""
+    from typer.testing import CliRunner
+
+    from amr_twin.cli import app
+
+    tmp = tmp_path_factory.mktemp("corridor")
+    route = tmp / "corridor_short.yaml"
+    route.write_text(CORRIDOR_SHORT)
+    out = tmp / "out"
+    res = CliRunner().invoke(app, ["experiment", "fusion", "--route", str(route), "--seeds", "0:1", "--jobs", "2",
+                                   "--out", str(out), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    return json.loads((out / "metrics.json").read_text()), out, res.stdout
+
+
+def test_seeds_report_mean_sd_and_range_of_every_metric(corridor_seeds):
+    data, out, stdout = corridor_seeds
+    assert data["seeds"] == [0, 1] and all(data["reached_goal"])
+    for name in fusion.ARCHITECTURES:
+        per = [d["architectures"][name]["ate_m"] for d in data["per_seed"]]
+        s = data["architectures"][name]["ate_m"]
+        assert s["mean"] == pytest.approx(np.mean(per)) and s["sd"] == pytest.approx(np.std(per, ddof=1))
+        assert (s["min"], s["max"]) == (pytest.approx(min(per)), pytest.approx(max(per)))
+    odom = [d["architectures"]["odom"]["ate_m"] for d in data["per_seed"]]
+    assert odom[0] != odom[1]  # the wheel odometry differs between seeds (each seed is another robot)
+    for seed in (0, 1):
+        assert (out / f"seed{seed}" / "truth.tum").stat().st_size > 0
+        assert (out / f"seed{seed}" / "odom_uwb_imu.tum").stat().st_size > 0
+    assert (out / "seeds.png").stat().st_size > 0 and (out / "seed0" / "trajectories.png").exists()
+    text = (out / "report.md").read_text()
+    a = data["architectures"]["odom"]["ate_m"]
+    assert f"| odom | {a['mean']:.3f} ± {a['sd']:.3f} ({a['min']:.3f}-{a['max']:.3f}) |" in text
+    assert "odom " in stdout and "2 seeds" in stdout
+
+
+def test_in_the_corridor_scan_matching_slides_and_uwb_loses_the_bays_anchors(corridor_seeds):
+    data, out, _ = corridor_seeds
+    for d in data["per_seed"]:
+        seed = json.loads((out / f"seed{d['seed']}" / "metrics.json").read_text())
+        blocked, per_anchor = seed["uwb"]["blocked_per_anchor"], seed["uwb"]["exchanges"] / 5
+        assert min(blocked[:4]) > 0.9 * per_anchor and blocked[4] == 0   # the NLOS zone, by the walls
+        a = d["architectures"]
+        # two parallel walls and no end in range: kiss-icp slides along the corridor
+        assert a["odom+lidar"]["final_pos_err_m"] > 1.0 > 0.3 > a["odom+imu"]["final_pos_err_m"]
+        assert a["odom+uwb"]["ate_m"] > 0.15   # one anchor in sight (0.04 m in the warehouse)
+        assert a["odom+uwb+imu"]["ate_m"] < a["odom+uwb"]["ate_m"]
+
+
+def test_cli_refuses_bad_seed_options_before_the_work(tmp_path):
+    from typer.testing import CliRunner
+
+    from amr_twin.cli import app
+
+    for args, words in ((["--seed", "1", "--seeds", "0:2"], "--seed and --seeds"),
+                        (["--seeds", "5:2"], "--seeds"), (["--seeds", "1,x"], "--seeds"),
+                        (["--seeds", "0:1", "--record", str(tmp_path / "r.rrd")], "--record"),
+                        (["--route", "nowhere"], "corridor, warehouse_60m"),
+                        (["--executor", "dask"], "--scheduler")):
+        res = CliRunner().invoke(app, ["experiment", "fusion", "--out", str(tmp_path / "o"), *args])
+        assert res.exit_code == 2, (args, res.output)
+        assert words in res.output and len(res.output.strip().splitlines()) == 1, (args, res.output)
+    assert not (tmp_path / "o").exists()
+    assert fusion.route_file("corridor") == fusion.ROUTES_DIR / "corridor.yaml"

@@ -79,7 +79,7 @@ def test_urdf_frame_tubes_match_the_mass_model():
 
 def test_broken_xacro_gives_one_line_error(tmp_path):
     bad = tmp_path / "bad.urdf.xacro"
-    bad.write_text((MODEL_DIR / "amr.urdf.xacro").read_text().replace("${p['wheel_radius_m']}", "${p['no_such']}"))
+    bad.write_text((MODEL_DIR / "amr.urdf.xacro").read_text().replace("p['wheel_width_m']", "p['no_such']"))
     with pytest.raises(BuildError) as info:
         build(load_config(), xacro_file=bad)
     assert "\n" not in str(info.value) and "xacro" in str(info.value)

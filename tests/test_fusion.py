@@ -256,3 +256,24 @@ def test_cli_refuses_bad_seed_options_before_the_work(tmp_path):
         assert words in res.output and len(res.output.strip().splitlines()) == 1, (args, res.output)
     assert not (tmp_path / "o").exists()
     assert fusion.route_file("corridor") == fusion.ROUTES_DIR / "corridor.yaml"
+
+
+def test_seeds_on_a_dask_cluster_give_the_local_numbers(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    from amr_twin.experiments import executor, fusion_seeds
+
+    route = tmp_path / "short.yaml"
+    route.write_text(SHORT_ROUTE)
+    cfg = load_config()
+    local = fusion_seeds.run(cfg, route, [8], progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
+        client = executor.connect_dask(c.scheduler_address, timeout_s=10.0)
+        try:
+            remote = fusion_seeds.run(cfg, route, [7, 8], client=client, progress=False)
+        finally:
+            client.close()
+    assert [r.seed for r in remote] == [7, 8]
+    for name in fusion.ARCHITECTURES:
+        assert remote[1].estimates[name].errors == local[0].estimates[name].errors
+        assert np.array_equal(remote[1].estimates[name].pose, local[0].estimates[name].pose)
+    assert remote[0].robot != remote[1].robot

@@ -51,7 +51,7 @@ def add_fusion(experiment: typer.Typer) -> None:
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
-        from .controllers.path_follower import RouteError, load_route
+        from .controllers.route import RouteError, load_route
         from .experiments import fusion
         from .experiments.executor import EXECUTORS
         from .experiments.fusion_seeds import parse_seeds

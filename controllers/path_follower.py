@@ -1,16 +1,6 @@
-"""Routes and a pure-pursuit path follower publishing ``geometry_msgs/Twist`` on ``cmd_vel``.
+"""A pure-pursuit path follower publishing ``geometry_msgs/Twist`` on ``cmd_vel``.
 
-A route is a polyline in the ``map`` frame: the start pose's position, then the
-waypoints. Route files (YAML)::
-
-    name: warehouse_60m
-    world: warehouse                     # optional: a world of models/worlds/, or a file beside the route
-    start_xy_yaw: [-7.5, 0.0, 0.0]      # x_m, y_m, yaw_rad of base_link at the start
-    waypoints_xy_m: [[6.2, 0.0], [6.2, 5.5]]
-    max_speed_m_s: 1.0                   # (0, 1]
-    max_angular_rad_s: 1.0               # > 0
-    lookahead_m: 0.8                     # > 0
-    goal_tolerance_m: 0.2                # > 0
+Routes (:mod:`.route`, re-exported here) are polylines in the ``map`` frame.
 
 Pure pursuit (Coulter, CMU-RI-TR-92-01), with two additions that a crossing
 route needs:
@@ -41,8 +31,6 @@ commands zero.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -50,134 +38,9 @@ import numpy as np
 from amr_twin.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.messages import Twist, Vector3
-from amr_twin.yaml_file import read_yaml
 
-MAX_ROUTE_SPEED_M_S = 1.0
-"""Highest route speed accepted, m/s (issue #8: 'at up to 1 m/s')."""
-ROUTE_FIELDS = ("name", "world", "start_xy_yaw", "waypoints_xy_m", "max_speed_m_s", "max_angular_rad_s",
-                "lookahead_m", "goal_tolerance_m")
-
-
-class RouteError(ValueError):
-    """A route is invalid; the message is one line naming the field."""
-
-
-@dataclass(frozen=True)
-class Route:
-    """A route: start pose, waypoints (the path is start -> waypoints) and follower limits.
-
-    Attributes
-    ----------
-    name : str
-    start_xy_yaw : tuple of 3 float
-        Start pose of ``base_link`` in ``map``: x_m, y_m, yaw_rad.
-    waypoints_xy_m : np.ndarray, shape (N, 2)
-        Waypoints in ``map``, m; the last one is the goal.
-    max_speed_m_s : float
-        Linear speed limit, m/s, in (0, 1].
-    max_angular_rad_s : float
-        Yaw rate limit, rad/s, > 0.
-    lookahead_m : float
-        Pure-pursuit lookahead along the path, m, > 0.
-    goal_tolerance_m : float
-        Distance to the goal at which the route is done, m, > 0.
-    world : str
-        The world the route is drawn in: a name of ``models/worlds/`` or a file path
-        (:func:`amr_twin.worlds.world_path`); its frame is the route's ``map``.
-    """
-
-    name: str
-    start_xy_yaw: tuple[float, float, float]
-    waypoints_xy_m: np.ndarray
-    max_speed_m_s: float = MAX_ROUTE_SPEED_M_S
-    max_angular_rad_s: float = 1.0
-    lookahead_m: float = 0.8
-    goal_tolerance_m: float = 0.2
-    world: str = "warehouse"
-
-    def __post_init__(self) -> None:
-        try:
-            start = tuple(float(v) for v in np.asarray(self.start_xy_yaw, dtype=float).ravel())
-        except (TypeError, ValueError):
-            start = ()
-        if len(start) != 3 or not all(math.isfinite(v) for v in start):
-            raise RouteError(f"start_xy_yaw: {self.start_xy_yaw!r} must be 3 finite numbers [x_m, y_m, yaw_rad]")
-        object.__setattr__(self, "start_xy_yaw", start)
-        try:
-            pts = np.array(self.waypoints_xy_m, dtype=float)
-        except (TypeError, ValueError):
-            raise RouteError("waypoints_xy_m: must be a list of [x_m, y_m] pairs") from None
-        if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 1:
-            raise RouteError(f"waypoints_xy_m: shape {pts.shape} must be (N, 2) with N >= 1")
-        if not np.isfinite(pts).all():
-            raise RouteError("waypoints_xy_m: all coordinates must be finite")
-        path = np.vstack([np.array(start[:2])[None], pts])
-        if np.any(np.hypot(*np.diff(path, axis=0).T) < 1e-6):
-            raise RouteError("waypoints_xy_m: consecutive points (start included) must differ")
-        pts.setflags(write=False)
-        object.__setattr__(self, "waypoints_xy_m", pts)
-        limits = (("max_speed_m_s", 0.0, MAX_ROUTE_SPEED_M_S), ("max_angular_rad_s", 0.0, math.inf),
-                  ("lookahead_m", 0.0, math.inf), ("goal_tolerance_m", 0.0, math.inf))
-        for name, low, high in limits:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                    or not low < value <= high:
-                allowed = f"({low:g}, {high:g}]" if math.isfinite(high) else f"> {low:g}"
-                raise RouteError(f"{name}: {value!r} must be a finite number in {allowed}")
-            object.__setattr__(self, name, float(value))
-
-    def path_xy_m(self) -> np.ndarray:
-        """The polyline ``(N + 1, 2)``: the start position, then the waypoints, m."""
-        return np.vstack([np.array(self.start_xy_yaw[:2])[None], self.waypoints_xy_m])
-
-
-def load_route(path: str | Path) -> Route:
-    """Read and validate a route YAML file (module docstring); raises :class:`RouteError`."""
-    path = Path(path)
-    tree = read_yaml(path, "route", RouteError)
-    if not isinstance(tree, dict):
-        raise RouteError(f"route {path.name}: expected a mapping with {', '.join(ROUTE_FIELDS)}")
-    unknown = [k for k in tree if k not in ROUTE_FIELDS]
-    if unknown:
-        raise RouteError(f"route {path.name}: unknown key {unknown[0]!r} (expected {', '.join(ROUTE_FIELDS)})")
-    for key in ("start_xy_yaw", "waypoints_xy_m"):
-        if key not in tree:
-            raise RouteError(f"route {path.name}: {key} is missing")
-    world = tree.get("world", "warehouse")
-    if not isinstance(world, str) or not world.strip():
-        raise RouteError(f"route {path.name}: world: {world!r} must be a world name or a file path")
-    tree["world"] = _world_of(world.strip(), path)
-    try:
-        return Route(**{"name": path.stem, **tree})
-    except RouteError as exc:
-        raise RouteError(f"route {path.name}: {exc}") from None
-
-
-def _world_of(world: str, route_path: Path) -> str:
-    """A route's ``world``: a name of ``models/worlds/`` as it is, a file resolved beside the route; must exist."""
-    from amr_twin.worlds import world_path
-
-    path = world_path(world)
-    if Path(world).suffix:
-        path = path if path.is_absolute() else (route_path.parent / path)
-    if not path.is_file():
-        raise RouteError(f"route {route_path.name}: world: {world!r} is not a world of models/worlds/ nor a file "
-                         f"({path} does not exist)")
-    return world if not Path(world).suffix else str(path)
-
-
-def route_length_m(route: Route) -> float:
-    """Length of the route's polyline from the start through every waypoint, m."""
-    return float(np.sum(np.hypot(*np.diff(route.path_xy_m(), axis=0).T)))
-
-
-def distance_to_path_m(route: Route, xy_m: np.ndarray) -> np.ndarray:
-    """Distance ``(K,)`` from each point of ``xy_m (K, 2)`` to the nearest point of the route polyline, m."""
-    p = np.atleast_2d(np.asarray(xy_m, dtype=float))[:, None, :]
-    path = route.path_xy_m()
-    a, ab = path[:-1], np.diff(path, axis=0)
-    u = np.clip(((p - a) * ab).sum(2) / (ab * ab).sum(1), 0.0, 1.0)  # (K, segments)
-    return np.linalg.norm(p - (a + u[..., None] * ab), axis=2).min(1)
+from .route import (MAX_ROUTE_SPEED_M_S, ROUTE_FIELDS, Route, RouteError, distance_to_path_m,  # noqa: F401
+                    load_route, route_length_m)
 
 
 class PurePursuit:

@@ -33,7 +33,8 @@ from ..config import TwinConfig
 from ..controllers.diff_drive import DiffDriveNode
 from ..controllers.ekf import EkfNode
 from ..controllers.lidar_odometry import LidarOdometry
-from ..controllers.path_follower import PathFollowerNode, Route, distance_to_path_m, load_route, route_length_m
+from ..controllers.path_follower import PathFollowerNode
+from ..controllers.route import Route, distance_to_path_m, load_route, route_length_m
 from ..loop import Twin, TwinOptions
 from ..trajectory import TrajectoryErrors, errors
 from ..world_geometry import Footprints, scan_plane_boxes

@@ -117,6 +117,9 @@ def write(results: list[fusion.FusionResults], out: Path) -> dict:
         "length_m": spread([d["route"]["length_m"] for d in per_seed]),
         "sim_s": spread([d["sim_s"] for d in per_seed]),
         "wall_s": spread([d["wall_s"] for d in per_seed]),
+        "map_within_tolerance_frac": spread([d["map"]["within_tolerance_frac"] for d in per_seed]),
+        "uwb_blocked_frac": spread([sum(d["uwb"]["blocked_per_anchor"]) / max(d["uwb"]["exchanges"], 1)
+                                    for d in per_seed]),
         "robot": [d.get("robot") for d in per_seed],
         "architectures": summarise(per_seed),
         "per_seed": [{"seed": d["seed"], "architectures": d["architectures"], "robot": d.get("robot")}

@@ -25,6 +25,11 @@ def cell(s: dict, decimals: int) -> str:
     return f"{f.format(s['mean'])} ± {f.format(s['sd'])} ({f.format(s['min'])}-{f.format(s['max'])})"
 
 
+def percent(s: dict) -> dict:
+    """A spread of fractions in percent."""
+    return {k: v if k == "n" or v is None else 100.0 * v for k, v in s.items()}
+
+
 def table(data: dict) -> list[str]:
     """The summary table: one row per architecture, each metric as mean ± sd (min-max)."""
     lines = ["| architecture | " + " | ".join(title for _, title, _ in METRICS) + " | lowest ATE |",
@@ -70,6 +75,9 @@ def markdown(data: dict) -> str:
         "and in the spread.", "",
         "Each cell: mean ± standard deviation (lowest-highest) over the seeds.", "",
         *table(data), "",
+        f"Map from the LiDAR odometry, occupied cells within 2 cells of the world's walls: "
+        f"{cell(percent(data['map_within_tolerance_frac']), 1)} %. UWB exchanges with a wall in the "
+        f"tag-anchor line: {cell(percent(data['uwb_blocked_frac']), 1)} %.", "",
         *DEFINITIONS, "",
         "## Every seed", "",
         *per_seed_table(data), "",

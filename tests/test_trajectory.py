@@ -142,3 +142,22 @@ def test_bad_input_raises_one_line_value_error_naming_the_argument(kwargs, name)
     with pytest.raises(ValueError, match=f"^{name}") as info:
         errors(**args)
     assert "\n" not in str(info.value)
+
+
+def test_planar_alignment_never_mirrors_the_trajectory():
+    # evo's --align (3D Umeyama) can rotate a planar trajectory 180 deg about an axis in the floor,
+    # i.e. mirror it, and so scores a mirrored estimate as perfect; a robot on the floor cannot do that
+    t, pose = _circle()
+    mirrored = np.column_stack([pose[:, 0], -pose[:, 1], -pose[:, 2]])
+    assert errors(t, mirrored, t, pose, align=True).ate_m > 1.0
+    evo = pytest.importorskip("evo")
+    from evo.core.trajectory import PoseTrajectory3D
+
+    def traj(p):
+        xyz = np.column_stack([p[:, :2], np.zeros(len(p))])
+        quat = np.column_stack([np.cos(p[:, 2] / 2), np.zeros((len(p), 2)), np.sin(p[:, 2] / 2)])  # w x y z
+        return PoseTrajectory3D(xyz, quat, t)
+
+    est = traj(mirrored)
+    est.align(traj(pose), correct_scale=False)
+    assert np.abs(est.positions_xyz[:, :2] - pose[:, :2]).max() < 1e-6, evo.__name__  # evo: mirrored onto truth

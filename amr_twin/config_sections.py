@@ -115,10 +115,10 @@ class WheelCfg(Section):
     radius_error_left_m: float = P(unit="m", ge=-0.01, le=0.01)
     radius_error_right_m: float = P(unit="m", ge=-0.01, le=0.01)
     separation_error_m: float = P(unit="m", ge=-0.05, le=0.05)
-    radius_tolerance_m: float = P(unit="m", ge=0.0, le=0.005)
-    separation_tolerance_m: float = P(unit="m", ge=0.0, le=0.02)
-    hall_misalignment_sigma_deg: float = P(unit="deg", ge=0.0, le=2.0)
-    hall_jitter_us: float = P(unit="us", ge=0.0, le=100.0)
+    radius_tolerance_m: float = P(unit="m", ge=0.0, le=0.005, setting=True)
+    separation_tolerance_m: float = P(unit="m", ge=0.0, le=0.02, setting=True)
+    hall_misalignment_sigma_deg: float = P(unit="deg", ge=0.0, le=2.0, setting=True)
+    hall_jitter_us: float = P(unit="us", ge=0.0, le=100.0, setting=True)
 
     def radius_of(self, side: str) -> float:
         """The ``left`` or ``right`` tyre's true rolling radius, m: ``radius_m`` plus its error."""

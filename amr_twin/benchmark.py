@@ -13,11 +13,11 @@ from __future__ import annotations
 import statistics
 import time
 
-from .build import build
-from .config import TwinConfig
-from .physics import Physics
-from .pins import DriverPins
-from .plant import Plant
+from amr_twin.build import build
+from amr_twin.config import TwinConfig
+from amr_twin.physics import Physics
+from amr_twin.pins import DriverPins
+from amr_twin.plant import Plant
 
 REPEATS = 5
 timer = time.process_time
@@ -59,8 +59,8 @@ def avr_figures(cfg: TwinConfig, sim_s: float) -> dict:
     simulated over CPU seconds; ``avr_skipped`` names what is missing when the Debian packages
     are not installed.
     """
-    from .controllers.avr_build import missing_tools
-    from .twin_benchmark import twin_figures
+    from amr_twin.controllers.avr_build import missing_tools
+    from amr_twin.twin_benchmark import twin_figures
 
     problem = missing_tools()
     if problem:
@@ -78,12 +78,12 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     the whole twin against bare physics on one scenario (see twin_benchmark);
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
     """
-    from .twin_benchmark import twin_figures
+    from amr_twin.twin_benchmark import twin_figures
 
     result = bare_physics(cfg, sim_s)
     result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
     result.update(twin_figures(cfg, sim_s))
-    from .sensor_benchmark import sensor_figures  # IMU + LiDAR against the same bare figure
+    from amr_twin.sensor_benchmark import sensor_figures  # IMU + LiDAR against the same bare figure
     result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"

@@ -30,9 +30,9 @@ import mujoco
 import numpy as np
 import yaml
 
-from . import mass
-from .config import TwinConfig
-from .paths import MODEL_DIR, ROOT
+from amr_twin import mass
+from amr_twin.config import TwinConfig
+from amr_twin.paths import MODEL_DIR, ROOT
 
 XACRO_FILE = MODEL_DIR / "amr.urdf.xacro"
 WORLD_DIR = ROOT / "models" / "worlds"
@@ -351,7 +351,7 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
         names = sorted(p.stem for p in WORLD_DIR.glob("*.xml"))
         raise BuildError(f"--world {world}: no such world (available: {', '.join(names)})")
     if path.suffix in (".yaml", ".yml"):  # a ROS map_server map: walls extruded from the image
-        from .worlds import world_xml
+        from amr_twin.worlds import world_xml
         spec = mujoco.MjSpec.from_string(world_xml(path))
     else:
         try:

@@ -41,11 +41,11 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .atomic_file import write_text
-from .config import TwinConfig, load_config
-from .loop import TwinOptions
-from .metrics import step_info
-from .run import Command, run_command
+from amr_twin.atomic_file import write_text
+from amr_twin.config import TwinConfig, load_config
+from amr_twin.loop import TwinOptions
+from amr_twin.metrics import step_info
+from amr_twin.run import Command, run_command
 
 PARAMETERS = {  # dotted key: (lower, upper) bounds, physically plausible
     "driver.gain": (0.8, 4.0),
@@ -112,7 +112,7 @@ class Fit:
 
     def override_tree(self) -> dict:
         """Nested YAML tree for ``--params`` (values with unit and source)."""
-        from .config import parameter_table
+        from amr_twin.config import parameter_table
 
         units = {key: unit for key, _v, unit, _s in parameter_table()}
         tree: dict = {}
@@ -157,9 +157,9 @@ def bench_current_a(cfg: TwinConfig, wheel: int, quantity: str = BENCH_QUANTITY,
 # ------------------------------------------------------------------------- chapter 5 features
 def command_reference(cfg: TwinConfig, command: Command) -> tuple[float, float]:
     """Signed wheel references (RPM) the client sends for ``command``."""
-    from .bus import Bus
-    from .clock import VirtualClock
-    from .controllers.wheel_command import WheelCommandClient, WheelCommandService
+    from amr_twin.bus import Bus
+    from amr_twin.clock import VirtualClock
+    from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
 
     bus = Bus(VirtualClock())
     WheelCommandService(bus)
@@ -270,7 +270,7 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     """
     from scipy.optimize import least_squares
 
-    from .experiments.executor import worker_pool
+    from amr_twin.experiments.executor import worker_pool
 
     base = base or load_config()
     parameters = parameters or PARAMETERS

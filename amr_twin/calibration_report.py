@@ -31,7 +31,7 @@ from typing import Callable
 import numpy as np
 import yaml
 
-from .config import ConfigError, TwinConfig
+from amr_twin.config import ConfigError, TwinConfig
 
 HELD = {  # held parameter: forward step of its derivative (a fair part of its spread, above the features' noise)
     "motor_left.resistance_ohm": 0.03, "motor_right.resistance_ohm": 0.03,
@@ -72,7 +72,7 @@ class CalibrationReport:
         and residuals when given (a fit this report was evaluated at), else the report's."""
         import dataclasses
 
-        from .calibration import Fit
+        from amr_twin.calibration import Fit
 
         sigma = dict(zip(self.keys, self.sigma.tolist()))
         corr = {a: dict(zip(self.keys, row.tolist())) for a, row in zip(self.keys, self.correlation)}
@@ -134,7 +134,7 @@ def read(path: str | Path) -> CalibrationReport:
 
 def write(report: CalibrationReport, path: str | Path) -> None:
     """Write a report atomically."""
-    from .atomic_file import write_text
+    from amr_twin.atomic_file import write_text
 
     write_text(Path(path), "# amr-twin calibration report (amr-twin calibrate --report): the fitted values, their\n"
                "# 1 sigma and correlations, and d fitted / d held for the parameters the fit held fixed\n"
@@ -142,7 +142,7 @@ def write(report: CalibrationReport, path: str | Path) -> None:
 
 
 def _residual_function(target: str, pool) -> Callable[[TwinConfig], np.ndarray]:
-    from . import calibration as cal
+    from amr_twin import calibration as cal
 
     if target == "thesis":
         targets = cal.thesis_targets()
@@ -168,7 +168,7 @@ def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tupl
     jobs : worker processes for a thesis evaluation's three runs.
     progress : ``progress(i, n)`` after each evaluation.
     """
-    from . import calibration as cal
+    from amr_twin import calibration as cal
 
     parameters = parameters or cal.PARAMETERS
     held = dict(HELD if held is None else held)

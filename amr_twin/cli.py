@@ -27,7 +27,7 @@ try:  # typer >= 0.20 carries its own copy of click
 except ImportError:  # pragma: no cover - older typer on click
     from click import exceptions as _click_errors
 
-from .cli_options import ConfigOpt, ParamsOpt, SetOpt  # noqa: F401 - used by the command modules
+from amr_twin.cli_options import ConfigOpt, ParamsOpt, SetOpt  # noqa: F401 - used by the command modules
 
 
 class _App(typer.Typer):
@@ -80,7 +80,7 @@ def fail(message: str, code: int = 2) -> None:
 
 
 def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
-    from .config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
+    from amr_twin.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
 
     try:
         return load_config(config, override_file=params, sets=sets or [], overrides=extra)
@@ -100,10 +100,10 @@ def _guard(func):
     simulation diverged: exit 3. A file could not be written (disk full, read-only):
     exit 1, naming the file.
     """
-    from .atomic_file import WriteError
-    from .build import BuildError
-    from .config import ConfigError
-    from .physics import DivergenceError
+    from amr_twin.atomic_file import WriteError
+    from amr_twin.build import BuildError
+    from amr_twin.config import ConfigError
+    from amr_twin.physics import DivergenceError
 
     try:
         return func()
@@ -139,8 +139,8 @@ def model(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Build the robot model; export URDF/MJCF; print mass, static loads and tip margin."""
-    from . import build as build_mod
-    from .statics import describe
+    from amr_twin import build as build_mod
+    from amr_twin.statics import describe
 
     extra = {}
     if payload_kg is not None:
@@ -150,7 +150,7 @@ def model(
     xy = _parse_xy(payload_xy)
     if xy is not None:
         extra["payload.xy_m"] = xy
-    from .outputs import OutputError, check_outputs
+    from amr_twin.outputs import OutputError, check_outputs
 
     try:
         check_outputs(files={"--export-urdf": export_urdf, "--export-mjcf": export_mjcf})
@@ -183,8 +183,8 @@ def bench(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
-    from .benchmark import run_benchmarks
-    from .experiments.executor import check_jobs
+    from amr_twin.benchmark import run_benchmarks
+    from amr_twin.experiments.executor import check_jobs
 
     try:
         jobs = check_jobs(jobs)
@@ -197,7 +197,7 @@ def bench(
     def measure() -> dict:
         figures = run_benchmarks(cfg, sim_s=sim_s)
         if suites:
-            from .suite_benchmark import suite_figures
+            from amr_twin.suite_benchmark import suite_figures
             figures.update(suite_figures(cfg, jobs=jobs))
         return figures
 
@@ -227,10 +227,10 @@ def calibrate(
     """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
     from rich.progress import Progress
 
-    from .calibration import calibrate as fit_plant
-    from .calibration import read_log, write_params
+    from amr_twin.calibration import calibrate as fit_plant
+    from amr_twin.calibration import read_log, write_params
 
-    from .outputs import OutputError, check_file
+    from amr_twin.outputs import OutputError, check_file
 
     if no_fit and report is None:
         fail("--no-fit needs --report FILE (without a fit, the report is the only result)")
@@ -253,14 +253,14 @@ def calibrate(
             fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
                                            progress=lambda i, n: bar.update(task, completed=min(i, n))))
         if report is not None:
-            from . import calibration_report
+            from amr_twin import calibration_report
 
             at = base if fit is None else _guard(lambda: fit.config(base))
             task = bar.add_task("uncertainty", total=1)
             result = _guard(lambda: calibration_report.evaluate(
                 at, target, jobs=jobs, progress=lambda i, n: bar.update(task, total=n, completed=i)))
             fit = result.as_fit(fit)  # the override file carries the report's uncertainty
-    from .atomic_file import all_or_nothing
+    from amr_twin.atomic_file import all_or_nothing
 
     def write() -> None:
         with all_or_nothing():
@@ -278,8 +278,8 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
     The fit compares the twin's published speeds with the log's over the log's span (plus
     0.5 s); a shorter log would only be scored by a fixed penalty, not fitted.
     """
-    from .loop import TwinOptions
-    from .run import Command, run_command
+    from amr_twin.loop import TwinOptions
+    from amr_twin.run import Command, run_command
 
     for text, wheels in log.items():
         duration = max(float(v[:, 0].max()) for v in wheels.values()) + 0.5
@@ -291,10 +291,10 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
                                  "needed to compare: the log must be longer")
 
 
-from .cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
+from amr_twin.cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
 
 
-from .cli_run import register as _register_run; _register_run(app)  # noqa: E402,E702 - run, client
+from amr_twin.cli_run import register as _register_run; _register_run(app)  # noqa: E402,E702 - run, client
 
 
 def main() -> None:  # pragma: no cover - console entry

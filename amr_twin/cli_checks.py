@@ -13,7 +13,7 @@ from typing import Optional
 
 import typer
 
-from .cli_options import checked_firmware
+from amr_twin.cli_options import checked_firmware
 
 MAX_DURATION_S = 3600.0
 """Longest simulated run of an experiment, s (see amr_twin.cli_run.MAX_RUN_S)."""
@@ -29,7 +29,7 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
 
     Returns the jobs to use and the firmware string (``avr:DIR`` with a sketch).
     """
-    from .experiments.executor import check_jobs
+    from amr_twin.experiments.executor import check_jobs
 
     kind = checked_firmware(firmware, sketch, fail)
     try:
@@ -56,8 +56,8 @@ def check_record_folder(option: str, folder: Optional[Path], fail, name: str) ->
 
 def check_outputs(fail, files: dict | None = None, folders: dict | None = None) -> None:
     """:func:`amr_twin.outputs.check_outputs`, its refusal as one line and exit 2."""
-    from .outputs import OutputError
-    from .outputs import check_outputs as check
+    from amr_twin.outputs import OutputError
+    from amr_twin.outputs import check_outputs as check
 
     try:
         check(files=files, folders=folders)
@@ -77,7 +77,7 @@ def unique(items: list, key) -> tuple[list, list]:
 
 def dask_client(scheduler: str, timeout_s: float, fail):
     """A connected ``distributed.Client``, or a one-line error and exit 2."""
-    from .experiments.executor import ExecutorError, connect_dask
+    from amr_twin.experiments.executor import ExecutorError, connect_dask
 
     try:
         return connect_dask(scheduler, timeout_s)
@@ -104,8 +104,8 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
     Everything is checked before any simulation: a draw the schema refuses names its
     sample and field.
     """
-    from .config import ConfigError
-    from .uncertainty import MAX_SAMPLES, SAMPLERS, ParameterSpace
+    from amr_twin.config import ConfigError
+    from amr_twin.uncertainty import MAX_SAMPLES, SAMPLERS, ParameterSpace
 
     if not 1 <= samples <= MAX_SAMPLES:
         fail(f"--samples {samples}: must be in 1..{MAX_SAMPLES}")

@@ -20,9 +20,9 @@ from typing import Optional
 
 import typer
 
-from .cli_checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
+from amr_twin.cli_checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
                          check_duration, check_outputs, check_record_folder, dask_client, parameter_draws, unique)
-from .cli_options import firmware_option, sketch_option
+from amr_twin.cli_options import firmware_option, sketch_option
 
 def _rpm(value) -> str:
     return "-" if value is None else f"{value:.2f}"
@@ -49,7 +49,7 @@ def register(app: typer.Typer) -> None:
     app.add_typer(experiment, name="experiment")
     app.add_typer(sweep, name="sweep")
     _add_chapter5(experiment)
-    from .cli_fusion import add_fusion
+    from amr_twin.cli_fusion import add_fusion
 
     add_fusion(experiment)
     _add_faults(experiment)
@@ -58,7 +58,7 @@ def register(app: typer.Typer) -> None:
 
 def _add_faults(experiment: typer.Typer) -> None:
     """``amr-twin experiment faults``."""
-    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @experiment.command("faults")
     def faults_cmd(
@@ -69,14 +69,14 @@ def _add_faults(experiment: typer.Typer) -> None:
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Inject each kind of fault under both firmwares and report what they do (docs/faults.md)."""
-        from .experiments import faults, faults_report
+        from amr_twin.experiments import faults, faults_report
 
         jobs, _ = check_common(jobs, "faithful", fail)
         check_outputs(fail, folders={"--out": out})
         cfg = _config(config, params, set_)
 
         def work():
-            from .atomic_file import all_or_nothing
+            from amr_twin.atomic_file import all_or_nothing
 
             results = faults.run(cfg, jobs=jobs, progress=progress)
             with all_or_nothing():
@@ -95,7 +95,7 @@ def _add_faults(experiment: typer.Typer) -> None:
 
 def _add_chapter5(experiment: typer.Typer) -> None:
     """``amr-twin experiment chapter5``."""
-    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @experiment.command("chapter5")
     def chapter5_cmd(
@@ -121,7 +121,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         With --samples N the runs are repeated with N parameter draws: each metric's median and
         90 % interval beside the thesis' value, and how many draws meet its band.
         """
-        from .experiments import chapter5
+        from amr_twin.experiments import chapter5
 
         jobs, firmware = check_common(jobs, firmware, fail, sketch)
         check_duration(duration_s, fail)
@@ -138,13 +138,13 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
 
         def work():
-            from .atomic_file import all_or_nothing
+            from amr_twin.atomic_file import all_or_nothing
 
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
                                    progress=progress, record_dir=record, mcap_dir=mcap,
                                    reference_firmware="faithful" if firmware.startswith("avr") else None)
             if draws is not None:
-                from .experiments import chapter5_spread
+                from amr_twin.experiments import chapter5_spread
 
                 results["spread"] = chapter5_spread.run(cfg, draws, jobs=jobs, firmware=firmware, runs=numbers,
                                                         duration_s=duration_s, progress=progress)
@@ -184,7 +184,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
 
 def _add_payload_sweep(sweep: typer.Typer) -> None:
     """``amr-twin sweep payload``."""
-    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @sweep.command("payload")
     def payload_cmd(
@@ -222,9 +222,9 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         every metric as median and 90 % interval, the highest safe payload per position as an
         interval, and the parameters that move each answer (summary.md, sensitivity.csv).
         """
-        from .experiments import payload_sweep, payload_sweep_report
+        from amr_twin.experiments import payload_sweep, payload_sweep_report
 
-        from .experiments.executor import EXECUTORS
+        from amr_twin.experiments.executor import EXECUTORS
 
         jobs, firmware = check_common(jobs, firmware, fail, sketch)
         if executor not in EXECUTORS:
@@ -269,13 +269,13 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
 
         def work():
-            from .atomic_file import all_or_nothing
+            from amr_twin.atomic_file import all_or_nothing
 
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
                                         jobs=jobs, firmware=firmware, progress=progress, client=client,
                                         record_dir=record, mcap_dir=mcap, draws=draws)
             if draws is not None:
-                from .experiments import payload_spread_report as spread_report
+                from amr_twin.experiments import payload_spread_report as spread_report
 
                 spread_report.analyse(results)
                 with all_or_nothing():

@@ -14,13 +14,13 @@ from typing import Optional
 
 import typer
 
-from .cli_checks import JobsOpt, check_common, check_outputs, dask_client
-from .cli_options import firmware_option
+from amr_twin.cli_checks import JobsOpt, check_common, check_outputs, dask_client
+from amr_twin.cli_options import firmware_option
 
 
 def add_fusion(experiment: typer.Typer) -> None:
     """Register ``amr-twin experiment fusion`` on ``experiment``."""
-    from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @experiment.command("fusion")
     def fusion_cmd(
@@ -51,10 +51,10 @@ def add_fusion(experiment: typer.Typer) -> None:
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
-        from .controllers.route import RouteError, load_route
-        from .experiments import fusion
-        from .experiments.executor import EXECUTORS
-        from .experiments.fusion_seeds import parse_seeds
+        from amr_twin.controllers.route import RouteError, load_route
+        from amr_twin.experiments import fusion
+        from amr_twin.experiments.executor import EXECUTORS
+        from amr_twin.experiments.fusion_seeds import parse_seeds
 
         jobs, firmware = check_common(jobs, firmware, fail)
         if seed is not None and seeds is not None:
@@ -96,10 +96,10 @@ def add_fusion(experiment: typer.Typer) -> None:
 
 def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, progress: bool, record, mcap, out: Path,
          guard) -> None:
-    from .experiments import fusion, fusion_report
+    from amr_twin.experiments import fusion, fusion_report
 
     def work():
-        from .atomic_file import all_or_nothing
+        from amr_twin.atomic_file import all_or_nothing
 
         results = fusion.run(cfg, route_path, seed=seed, firmware=firmware, progress=progress,
                              rrd_path=record, mcap_path=mcap, robot_errors=robot_errors)
@@ -125,11 +125,11 @@ def _many(cfg, route_path: Path, seeds: list[int], firmware: str, robot_errors: 
           progress: bool, out: Path, guard) -> None:
     import time
 
-    from .experiments import fusion_seeds
-    from .experiments.fusion_seeds_report import cell
+    from amr_twin.experiments import fusion_seeds
+    from amr_twin.experiments.fusion_seeds_report import cell
 
     def work():
-        from .atomic_file import all_or_nothing
+        from amr_twin.atomic_file import all_or_nothing
 
         t0 = time.perf_counter()
         results = fusion_seeds.run(cfg, route_path, seeds, firmware=firmware, robot_errors=robot_errors,

@@ -21,7 +21,7 @@ from typing import Callable, Optional
 import typer
 from typer.core import TyperCommand, TyperGroup
 
-from .controllers.firmware import FIRMWARES
+from amr_twin.controllers.firmware import FIRMWARES
 
 ConfigOpt = typer.Option(None, "--config", help="Parameter file (default models/amr/amr.yaml).")
 ParamsOpt = typer.Option(None, "--params", help="Second YAML overriding values of the parameter file.")
@@ -44,7 +44,7 @@ def sketch_option() -> typer.models.OptionInfo:
 def checked_firmware(firmware: str, sketch: Optional[Path], fail: Callable[[str], None]) -> str:
     """``--firmware`` and ``--sketch`` as the firmware string (``avr:DIR`` with a sketch); for avr the
     toolchain is checked and the sketch built now. A refusal is one line (``fail``)."""
-    from .controllers.firmware import check_avr, firmware_kind
+    from amr_twin.controllers.firmware import check_avr, firmware_kind
 
     try:
         kind = firmware_kind(firmware, None if sketch is None else str(sketch))
@@ -108,7 +108,7 @@ def checked_live(live: Optional[str], host: str, port: Optional[int], web_port: 
     ``--live`` given without it, or a bad value, is refused in one line (``fail``)."""
     import math
 
-    from .live import LiveOptions
+    from amr_twin.live import LiveOptions
 
     if live is None:
         for flag, value, unset in (("--port", port, None), ("--web-port", web_port, None), ("--rate", rate, None),

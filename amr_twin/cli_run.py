@@ -26,9 +26,9 @@ from typing import Optional
 
 import typer
 
-from .cli import _config, _guard, fail
-from .cli_options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
-from .run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
+from amr_twin.cli import _config, _guard, fail
+from amr_twin.cli_options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
+from amr_twin.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
 
 MAX_RUN_S = 3600.0
@@ -74,10 +74,10 @@ def _duration(opts: RunOptions, default_s: float) -> float:
 def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RUN_S,
             mission_faults: tuple[str, ...] = ()) -> None:
     """Check everything, run ``steps`` and report; exits non-zero on a refusal or a stop."""
-    from .faults import FaultError, parse_faults
-    from .loop import TwinOptions
-    from .outputs import OutputError, check_outputs
-    from .run import run_mission
+    from amr_twin.faults import FaultError, parse_faults
+    from amr_twin.loop import TwinOptions
+    from amr_twin.outputs import OutputError, check_outputs
+    from amr_twin.run import run_mission
 
     duration_s = _duration(opts, default_s)
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
@@ -102,12 +102,12 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     recording = opts.record is not None or opts.mcap is not None
 
     def work():
-        from .atomic_file import all_or_nothing
-        from .loop import Twin
+        from amr_twin.atomic_file import all_or_nothing
+        from amr_twin.loop import Twin
 
         twin = Twin(cfg, options)
         if recording:
-            from .rerun_log import attach
+            from amr_twin.rerun_log import attach
             attach(twin)
         if live is None:
             res = run_mission(cfg, steps, duration_s, options, twin=twin)
@@ -115,10 +115,10 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
             res = _run_live(twin, live, lambda: run_mission(cfg, steps, duration_s, options, twin=twin))
         with all_or_nothing():
             if recording:
-                from .rerun_log import record_run
+                from amr_twin.rerun_log import record_run
                 record_run(twin, rrd_path=opts.record, mcap_path=opts.mcap, result=res)
             if opts.csv is not None:
-                from .atomic_file import write_text
+                from amr_twin.atomic_file import write_text
                 write_text(opts.csv, csv_text(res.series))
         return res, twin.start_xy_yaw
 
@@ -142,7 +142,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 
 def _run_live(twin, live, run):
     """``run()`` with ``twin`` served live (amr_twin.live); Ctrl-C ends it without writing the outputs."""
-    from .live import LiveSession
+    from amr_twin.live import LiveSession
 
     session = LiveSession(twin, live, say=lambda line: typer.echo(line, err=True))
     try:
@@ -158,10 +158,10 @@ def _run_live(twin, live, run):
 
 def register(app: typer.Typer) -> None:
     """Add ``run`` (linear, angular, motor, stop, --mission) and ``client`` to the app."""
-    from .menu import client
+    from amr_twin.menu import client
 
     def Command(*args, **kwargs):  # noqa: N802 - amr_twin.run.Command, imported when a run starts
-        from .run import Command as RunCommand
+        from amr_twin.run import Command as RunCommand
 
         return RunCommand(*args, **kwargs)
 
@@ -190,7 +190,7 @@ def register(app: typer.Typer) -> None:
             return
         if mission is None:
             fail("give a command (linear, angular, motor, stop) or --mission FILE")
-        from .mission import MissionError, load_mission_file
+        from amr_twin.mission import MissionError, load_mission_file
 
         try:
             plan = load_mission_file(mission)

@@ -18,7 +18,7 @@ SPREAD_KEYS = ("range", "sigma", "follows")
 
 
 def _error(message: str) -> Exception:
-    from .config import ConfigError  # the one error type of the parameter files
+    from amr_twin.config import ConfigError  # the one error type of the parameter files
 
     return ConfigError(message)
 

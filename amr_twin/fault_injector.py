@@ -26,7 +26,7 @@ import dataclasses
 
 import numpy as np
 
-from .faults import WHEEL_NAMES, Fault
+from amr_twin.faults import WHEEL_NAMES, Fault
 
 US = 1_000_000
 WINDOW_S = 0.5
@@ -118,7 +118,7 @@ class FaultInjector:
         travelled after the fault, m. For sensor faults: the messages published after it
         (and, for the IMU, how many distinct gyro/accelerometer readings they carried).
         """
-        from .recorder import signed_published
+        from amr_twin.recorder import signed_published
 
         t = series.t_s
         out = []

@@ -96,8 +96,8 @@ class LiveSession:
     """
 
     def __init__(self, twin, options: LiveOptions, say=print):
-        from .controllers.diff_drive import DiffDriveNode
-        from .live_pacer import Pacer
+        from amr_twin.controllers.diff_drive import DiffDriveNode
+        from amr_twin.live_pacer import Pacer
 
         options.check()
         self.twin, self.options = twin, options
@@ -105,14 +105,14 @@ class LiveSession:
         self.pacer = Pacer(twin, options.rate)
         rate = "as fast as possible" if options.rate == 0 else f"at {options.rate:g}x real time"
         if options.mode == "foxglove":
-            from .live_foxglove import FoxgloveSink
+            from amr_twin.live_foxglove import FoxgloveSink
 
             port = FOXGLOVE_PORT if options.port is None else options.port
             self.sink = FoxgloveSink(twin, self.pacer, options.host, port)
             say(f"live: Foxglove WebSocket server on {self.sink.url} (the twin runs {rate}; "
                 "publish geometry_msgs/msg/Twist on /cmd_vel to drive it)")
         else:
-            from .live_rerun import RerunSink
+            from amr_twin.live_rerun import RerunSink
 
             self.sink = RerunSink(twin, RERUN_PORT if options.port is None else options.port,
                                   RERUN_WEB_PORT if options.web_port is None else options.web_port)

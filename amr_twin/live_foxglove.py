@@ -25,14 +25,14 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from . import live_inputs
-from .event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
-from .live_rows import LiveRows
-from .mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
-from .messages import String, TFMessage
-from .ros2_cdr import encode_battery_state, encode_float64_multi_array, encode_string, encode_tf_message
-from .ros2_schemas import msgdef, ros2_type
-from .ros_state import StateSampler
+from amr_twin import live_inputs
+from amr_twin.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
+from amr_twin.live_rows import LiveRows
+from amr_twin.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
+from amr_twin.messages import String, TFMessage
+from amr_twin.ros2_cdr import encode_battery_state, encode_float64_multi_array, encode_string, encode_tf_message
+from amr_twin.ros2_schemas import msgdef, ros2_type
+from amr_twin.ros_state import StateSampler
 
 LOG = logging.getLogger(__name__)
 
@@ -99,7 +99,7 @@ class FoxgloveSink:
         import foxglove
         from foxglove.channels import SceneUpdateChannel
 
-        from .live_scene import SceneBuilder
+        from amr_twin.live_scene import SceneBuilder
 
         self.twin, self.pacer, self.bus = twin, pacer, twin.bus
         self.dropped, self.accepted = 0, 0

@@ -24,9 +24,9 @@ import json
 import math
 from typing import Any, Callable
 
-from .controllers.wheel_command import MAX_RPM, SERVICE_NAME, WheelCommandRequest
-from .messages import Twist, Vector3
-from .ros2_schemas import msgdef
+from amr_twin.controllers.wheel_command import MAX_RPM, SERVICE_NAME, WheelCommandRequest
+from amr_twin.messages import Twist, Vector3
+from amr_twin.ros2_schemas import msgdef
 
 TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/Twist")
 REQUEST_TYPES = ("std_msgs/msg/Float64MultiArray", "std_msgs/Float64MultiArray")

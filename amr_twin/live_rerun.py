@@ -66,8 +66,8 @@ class RerunSink:
     def __init__(self, twin, grpc_port: int = 9876, web_port: int = 9090, web_viewer: bool = True):
         import rerun as rr
 
-        from .rerun_log import _blueprint
-        from .rerun_world import _log_geoms
+        from amr_twin.rerun_log import _blueprint
+        from amr_twin.rerun_world import _log_geoms
 
         self.twin, self.rr = twin, rr
         m = twin.physics.model
@@ -91,12 +91,12 @@ class RerunSink:
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_geoms(self.rec, m)
         if twin.faults is not None:
-            from .event_log import log_events
+            from amr_twin.event_log import log_events
 
             log_events(self.rec, SimpleNamespace(collisions=None, faults=twin.faults))
         self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []  # t_us, xpos (nb, 3), xquat (nb, 4)
         self._sent_pose_us = -1
-        from .live_rows import LiveRows
+        from amr_twin.live_rows import LiveRows
 
         self._rows = LiveRows(twin)
         self._messages: dict[str, list] = {}
@@ -139,10 +139,10 @@ class RerunSink:
             self._flush(t_us)
 
     def _flush(self, t_us: int) -> None:
-        from .event_log import log_events
-        from .rerun_streams import _log_commands, _log_duty, _log_electrics, _log_imu, _log_wheel_speeds
-        from .rerun_world import _log_body_transforms, _log_scan
-        from .sensors.lidar_beams import scan_end_time_s
+        from amr_twin.event_log import log_events
+        from amr_twin.rerun_streams import _log_commands, _log_duty, _log_electrics, _log_imu, _log_wheel_speeds
+        from amr_twin.rerun_world import _log_body_transforms, _log_scan
+        from amr_twin.sensors.lidar_beams import scan_end_time_s
 
         rec, m = self.rec, self.twin.physics.model
         poses = [p for p in self._poses if p[0] <= t_us]

@@ -34,22 +34,22 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from .build import LOOP_SENSOR_DIM, build
-from .bus import Bus
-from .clock import VirtualClock
-from .collisions import CollisionMonitor, check_start, check_supported
-from .config import TwinConfig
-from .controllers.firmware import make_firmware
-from .controllers.odometry import WheelOdometry
-from .controllers.wheel_command import WheelCommandClient, WheelCommandService
-from .messages import Float64
-from .physics import Physics
-from .plant import Plant
-from .recorder import Recorder
-from .rolling_resistance import RollingResistance
-from .ros_state import robot_static_transforms
-from .rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
-from .sensors.hall import HallSensors
+from amr_twin.build import LOOP_SENSOR_DIM, build
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.collisions import CollisionMonitor, check_start, check_supported
+from amr_twin.config import TwinConfig
+from amr_twin.controllers.firmware import make_firmware
+from amr_twin.controllers.odometry import WheelOdometry
+from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
+from amr_twin.messages import Float64
+from amr_twin.physics import Physics
+from amr_twin.plant import Plant
+from amr_twin.recorder import Recorder
+from amr_twin.rolling_resistance import RollingResistance
+from amr_twin.ros_state import robot_static_transforms
+from amr_twin.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
+from amr_twin.sensors.hall import HallSensors
 
 US = 1_000_000
 
@@ -80,7 +80,7 @@ class Twin:
     """The whole robot: build it, then :meth:`advance` it in simulated time."""
 
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
-        from .worlds import default_start
+        from amr_twin.worlds import default_start
 
         self.cfg, self.options = cfg, options
         start = options.start_xy_yaw if options.start_xy_yaw is not None else default_start(options.world)
@@ -130,8 +130,8 @@ class Twin:
         self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision)
         self.samplers.append(self.collisions)
         if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
-            from .sensors.imu import ImuSensor
-            from .sensors.lidar import Lidar
+            from amr_twin.sensors.imu import ImuSensor
+            from amr_twin.sensors.lidar import Lidar
             m, d = self.physics.model, self.physics.data
             self.imu = ImuSensor(m, d, self.clock, self.bus, cfg.imu, seed=[options.seed, 1],
                                  autostart=False)
@@ -147,7 +147,7 @@ class Twin:
             sampler(0)
         self.faults = None
         if options.faults:
-            from .fault_injector import FaultInjector
+            from amr_twin.fault_injector import FaultInjector
             self.faults = FaultInjector(self, options.faults)
         self.firmware.start()
         self.plant.apply(self.firmware.pins)

@@ -49,14 +49,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import ros_state
-from .atomic_file import replacing
-from .event_log import mcap_items as event_items
-from .messages import String, TFMessage
-from .ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
+from amr_twin import ros_state
+from amr_twin.atomic_file import replacing
+from amr_twin.event_log import mcap_items as event_items
+from amr_twin.messages import String, TFMessage
+from amr_twin.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
                        encode_range, encode_string, encode_tf_message, encode_twist)
-from .ros2_schemas import msgdef, ros2_type
+from amr_twin.ros2_schemas import msgdef, ros2_type
 
 REQUEST_FIELDS = "motionL,speedL,motionR,speedR"
 """Label of the one dimension of a recorded ``wheel_Command_Service`` request."""

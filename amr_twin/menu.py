@@ -22,8 +22,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from .cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
-from .cli_options import checked_firmware, checked_live, firmware_option, live_options, sketch_option
+from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+from amr_twin.cli_options import checked_firmware, checked_live, firmware_option, live_options, sketch_option
 
 _LIVE = live_options()
 
@@ -62,12 +62,12 @@ class RealTimeTwin:
     def __init__(self, twin, rate: float = 1.0, live=None, say=print):
         from dataclasses import replace
 
-        from .live_pacer import Pacer
+        from amr_twin.live_pacer import Pacer
 
         self.twin, self.rate = twin, float(rate)
         self.session = None
         if live is not None:
-            from .live import LiveSession
+            from amr_twin.live import LiveSession
 
             self.session = LiveSession(twin, replace(live, rate=self.rate), say=say)
             self.pacer = self.session.pacer
@@ -163,8 +163,8 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
            port: Optional[int] = _LIVE["port"][1], web_port: Optional[int] = _LIVE["web_port"][1]) -> None:
     """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time (--live: served to
     Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel)."""
-    from .faults import FaultError, parse_faults
-    from .loop import Twin, TwinOptions
+    from amr_twin.faults import FaultError, parse_faults
+    from amr_twin.loop import Twin, TwinOptions
 
     if not (math.isfinite(rate) and 0 < rate <= 1000):
         fail(f"--rate {rate}: must be a finite number in (0, 1000]")

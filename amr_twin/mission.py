@@ -28,8 +28,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from .run import KINDS, Command
-from .yaml_file import read_yaml
+from amr_twin.run import KINDS, Command
+from amr_twin.yaml_file import read_yaml
 
 FIELDS = {
     "linear": {"speed_m_s": True},
@@ -106,7 +106,7 @@ def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
 
 
 def _faults(tree) -> tuple[str, ...]:
-    from .faults import FaultError, parse_faults
+    from amr_twin.faults import FaultError, parse_faults
 
     faults = tree.get("faults") or []
     if not isinstance(faults, list) or not all(isinstance(f, str) for f in faults):

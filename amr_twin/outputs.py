@@ -19,7 +19,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from .atomic_file import remove_stale_temporaries
+from amr_twin.atomic_file import remove_stale_temporaries
 
 
 class OutputError(ValueError):

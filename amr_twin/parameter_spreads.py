@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from .config import ConfigError, TwinConfig
-from .config_leaves import field_range
+from amr_twin.config import ConfigError, TwinConfig
+from amr_twin.config_leaves import field_range
 
 DEFAULT_TOLERANCE = {"thesis": 0.02, "datasheet": 0.05, "estimate": 0.20}
 """Half-width of the default uniform spread, relative to the value, by source kind."""
@@ -139,7 +139,7 @@ def with_values(base: TwinConfig, values: dict[str, Any]) -> TwinConfig:
     """``base`` with ``{dotted key: value}`` replaced, validated again."""
     from pydantic import ValidationError
 
-    from .config import _format_error
+    from amr_twin.config import _format_error
 
     data = base.model_dump()
     for key, value in values.items():

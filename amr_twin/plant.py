@@ -32,10 +32,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .config import TwinConfig
-from .config_sections import BatteryCfg, DriverCfg, MotorCfg
-from .physics import Physics
-from .pins import DriverPins
+from amr_twin.config import TwinConfig
+from amr_twin.config_sections import BatteryCfg, DriverCfg, MotorCfg
+from amr_twin.physics import Physics
+from amr_twin.pins import DriverPins
 
 
 @dataclass

@@ -11,16 +11,16 @@ import tempfile
 import time
 from pathlib import Path
 
-from .config import TwinConfig
-from .loop import Twin, TwinOptions
-from .run import Command, run_mission
+from amr_twin.config import TwinConfig
+from amr_twin.loop import Twin, TwinOptions
+from amr_twin.run import Command, run_mission
 
 DURATION_S = 16.0
 STEPS = [(0.0, Command("linear", speed_m_s=0.7))]
 
 
 def _timed(cfg: TwinConfig, rrd: Path | None = None, mcap: Path | None = None) -> float:
-    from .rerun_log import attach, record_run
+    from amr_twin.rerun_log import attach, record_run
 
     options = TwinOptions()
     t0 = time.perf_counter()
@@ -52,6 +52,6 @@ def recording_figures(cfg: TwinConfig, repeats: int = 3) -> dict:
 if __name__ == "__main__":  # python -m amr_twin.recording_benchmark
     import json
 
-    from .config import load_config
+    from amr_twin.config import load_config
 
     print(json.dumps(recording_figures(load_config()), indent=1))

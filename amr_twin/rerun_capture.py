@@ -45,7 +45,7 @@ class Capture:
         self._t: list[int] = []
         self._pos: list[np.ndarray] = []
         self._quat: list[np.ndarray] = []
-        from .ros_state import StateSampler
+        from amr_twin.ros_state import StateSampler
         self.state = StateSampler(m, twin.physics.data)
         """Joint and base state on every grid instant (:mod:`amr_twin.ros_state`)."""
         twin.bus.add_tap(self._tap)
@@ -94,7 +94,7 @@ def remove_stale_temporaries(folder: Path) -> list[Path]:
     See :func:`amr_twin.atomic_file.remove_stale_temporaries`: a temporary whose writer
     (the pid in its name) still runs is left alone.
     """
-    from .atomic_file import remove_stale_temporaries as remove_stale
+    from amr_twin.atomic_file import remove_stale_temporaries as remove_stale
 
     return remove_stale(folder)
 

@@ -36,13 +36,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .atomic_file import replacing
-from .event_log import has_events, log_events
-from .rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
+from amr_twin.atomic_file import replacing
+from amr_twin.event_log import has_events, log_events
+from amr_twin.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
-from .rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,  # noqa: F401
+from amr_twin.rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,  # noqa: F401
                             _log_wheel_speeds, reference_rpm)
-from .rerun_world import (VISUAL_GROUPS, _log_body_transforms, _log_geoms, _log_scan,  # noqa: F401
+from amr_twin.rerun_world import (VISUAL_GROUPS, _log_body_transforms, _log_geoms, _log_scan,  # noqa: F401
                           _log_trajectory, _log_uwb, body_entity, uwb_geometry, uwb_ranges)
 
 TRACKED = "world/bodies/amr/base_link"
@@ -112,7 +112,7 @@ def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> d
     if rrd_path is not None:
         out["rrd"] = write_rrd(capture, series, rrd_path, result)
     if mcap_path is not None:
-        from .mcap_log import write_mcap
+        from amr_twin.mcap_log import write_mcap
 
         out["mcap"] = write_mcap(capture, series, mcap_path)
     return out

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .recorder import signed_published
-from .rerun_capture import Capture
+from amr_twin.recorder import signed_published
+from amr_twin.rerun_capture import Capture
 
 TIMELINE = "sim_time"
 WHEELS = ("left", "right")

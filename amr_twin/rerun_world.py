@@ -21,9 +21,9 @@ import math
 import mujoco
 import numpy as np
 
-from .rerun_capture import Capture
-from .rerun_streams import TIMELINE, _scalars, _time
-from .sensors.lidar_beams import scan_end_time_s
+from amr_twin.rerun_capture import Capture
+from amr_twin.rerun_streams import TIMELINE, _scalars, _time
+from amr_twin.sensors.lidar_beams import scan_end_time_s
 
 VISUAL_GROUPS = (0, 1, 4)  # world, robot visuals, payload (2 is robot collision)
 
@@ -209,7 +209,7 @@ def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:
 
 def uwb_ranges(capture: Capture) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """The captured ``uwb/range`` messages per anchor: ``{i: (stamp t_s (n,), range_m (n,))}``."""
-    from .sensors.uwb import anchor_index
+    from amr_twin.sensors.uwb import anchor_index
 
     per: dict[int, tuple[list, list]] = {}
     for _t_us, msg in capture.messages.get("uwb/range", []):

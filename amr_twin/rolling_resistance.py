@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 
-from .config import TwinConfig
+from amr_twin.config import TwinConfig
 
 BALL_SPEED_EPS_M_S = 0.005
 """Ball speed below which the caster resistance fades linearly to zero, m/s."""

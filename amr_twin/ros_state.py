@@ -28,8 +28,8 @@ import copy
 
 import numpy as np
 
-from .bus import BASE_FRAME
-from .messages import (Clock, Header, JointState, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Time,
+from amr_twin.bus import BASE_FRAME
+from amr_twin.messages import (Clock, Header, JointState, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Time,
                        TFMessage, Transform, TransformStamped, Twist, TwistWithCovariance, Vector3)
 
 ROBOT = "amr/"

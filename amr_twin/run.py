@@ -12,9 +12,9 @@ import math
 import time
 from dataclasses import dataclass, field
 
-from .config import TwinConfig
-from .loop import Twin, TwinOptions
-from .recorder import RunSeries
+from amr_twin.config import TwinConfig
+from amr_twin.loop import Twin, TwinOptions
+from amr_twin.recorder import RunSeries
 
 KINDS = ("linear", "angular", "motor", "stop")
 

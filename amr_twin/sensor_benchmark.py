@@ -13,13 +13,13 @@ import statistics
 
 import mujoco
 
-from .benchmark import REPEATS, timer
-from .bus import Bus
-from .clock import VirtualClock
-from .config import TwinConfig
-from .loop import Twin
-from .sensors.lidar import Lidar
-from .twin_benchmark import twin_run_s
+from amr_twin.benchmark import REPEATS, timer
+from amr_twin.bus import Bus
+from amr_twin.clock import VirtualClock
+from amr_twin.config import TwinConfig
+from amr_twin.loop import Twin
+from amr_twin.sensors.lidar import Lidar
+from amr_twin.twin_benchmark import twin_run_s
 
 SCAN_REPEATS = 200
 

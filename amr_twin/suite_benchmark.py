@@ -27,8 +27,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from .benchmark import REPEATS, timer
-from .config import TwinConfig
+from amr_twin.benchmark import REPEATS, timer
+from amr_twin.config import TwinConfig
 
 SWEEP_MASSES = [5.0 * i for i in range(10)]                # 0..45 kg
 SWEEP_POSITIONS = ["center", "front", "rear", "left", "right"]
@@ -86,8 +86,8 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
     """CPU of a 100-point sweep (8 s each, in this process) and per point against bare physics."""
     import mujoco
 
-    from .experiments import payload_sweep
-    from .loop import Twin, TwinOptions
+    from amr_twin.experiments import payload_sweep
+    from amr_twin.loop import Twin, TwinOptions
 
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
         t0 = timer()
@@ -112,9 +112,9 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
 
 def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
     """CPU of writing the ``.rrd`` of a 60 s and a 240 s run with sensors (interleaved writes)."""
-    from .loop import Twin, TwinOptions
-    from .rerun_log import attach, write_rrd
-    from .run import Command, run_mission
+    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.rerun_log import attach, write_rrd
+    from amr_twin.run import Command, run_mission
 
     runs = {}
     for duration in RRD_DURATIONS_S:
@@ -138,7 +138,7 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
 
 def suite_figures(cfg: TwinConfig, jobs: int = 2) -> dict:
     """Every figure of the module notes; takes several minutes on the 2-core machine."""
-    from .experiments import fusion
+    from amr_twin.experiments import fusion
 
     load_before = os.getloadavg()[0]
     out = {"suites_repeats": REPEATS, "jobs": jobs}

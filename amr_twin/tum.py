@@ -23,7 +23,7 @@ from typing import Iterable
 
 import numpy as np
 
-from . import atomic_file, se2
+from amr_twin import atomic_file, se2
 
 HEADER = "# timestamp tx ty tz qx qy qz qw\n"
 

@@ -13,9 +13,9 @@ import statistics
 
 import mujoco
 
-from .benchmark import REPEATS, timer
-from .config import TwinConfig
-from .loop import Twin, TwinOptions
+from amr_twin.benchmark import REPEATS, timer
+from amr_twin.config import TwinConfig
+from amr_twin.loop import Twin, TwinOptions
 
 
 def twin_run_s(cfg: TwinConfig, sim_s: float, firmware: str = "faithful",

@@ -36,9 +36,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .config import DEFAULT_CONFIG, ConfigError, TwinConfig, load_parameters
-from .config_leaves import value_at
-from .parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, Spread, spread_of, with_values
+from amr_twin.config import DEFAULT_CONFIG, ConfigError, TwinConfig, load_parameters
+from amr_twin.config_leaves import value_at
+from amr_twin.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, Spread, spread_of, with_values
 
 PLANT = ("sim.", "chassis.", "deck.", "components.", "wheel.", "caster.", "motor_left.", "motor_right.",
          "driver.", "battery.")
@@ -120,7 +120,7 @@ class ParameterSpace:
              calibration: str | Path | None = None) -> "ParameterSpace":
         """The parameter file with its overrides (as :func:`amr_twin.config.load_config`) and
         the calibration's report (default ``calibration.yaml`` beside the parameter file)."""
-        from . import calibration_report
+        from amr_twin import calibration_report
 
         cfg, meta = load_parameters(path, override_file=override_file, sets=sets, overrides=overrides)
         report_path = Path(calibration) if calibration is not None else Path(path or DEFAULT_CONFIG).parent / \

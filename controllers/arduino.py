@@ -34,7 +34,7 @@ from typing import Callable, Generator, Iterator
 from amr_twin.clock import VirtualClock
 from amr_twin.pins import HIGH, LOW, DriverPins
 
-from .firmware_params import BoardParams
+from amr_twin.controllers.firmware_params import BoardParams
 
 MainTask = Generator[int, None, None]
 """Main-context work: yields delay() durations in milliseconds."""

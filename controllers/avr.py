@@ -37,9 +37,9 @@ from amr_twin.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, FrameParser, 
                                       deserialize_float64, frame, serialize_float64,
                                       serialize_float64_multiarray, topic_request)
 
-from .avr_board import AvrBoard, BoardError, symbol_address
-from .avr_build import DEFAULT_SKETCH, SketchError, build_sketch
-from .firmware_params import AvrParams, Publish
+from amr_twin.controllers.avr_board import AvrBoard, BoardError, symbol_address
+from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch
+from amr_twin.controllers.firmware_params import AvrParams, Publish
 
 CYCLES_PER_US = 16
 UBRR0L, UBRR0H, UCSR0A = 0xC4, 0xC5, 0xC0

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from .avr_build import ARDUINO_AVR, F_CPU_HZ, MCU, cache_dir, missing_tools
+from amr_twin.controllers.avr_build import ARDUINO_AVR, F_CPU_HZ, MCU, cache_dir, missing_tools
 
 BRIDGE_SOURCE = Path(__file__).resolve().parent / "arduino" / "cosim" / "avr_cosim.c"
 

@@ -26,7 +26,7 @@ from amr_twin.bus import Bus
 from amr_twin.clock import EventHandle, VirtualClock
 from amr_twin.messages import Twist
 
-from .wheel_command import OK, WheelCommandClient
+from amr_twin.controllers.wheel_command import OK, WheelCommandClient
 
 LOG = logging.getLogger(__name__)
 

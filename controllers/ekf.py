@@ -42,7 +42,7 @@ from amr_twin.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovar
                                Range, Twist, TwistWithCovariance, Vector3)
 from amr_twin.sensors.uwb import anchor_index
 
-from .ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
+from amr_twin.controllers.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
                         pose_difference_twist, predict_mean, process_noise, range_model,
                         transition_jacobian)
 

@@ -20,8 +20,8 @@ from typing import Sequence
 from amr_twin.clock import VirtualClock
 from amr_twin.pins import HIGH, LOW
 
-from .arduino import ArduinoRuntime, MainTask
-from .firmware_params import FaithfulParams, Publish
+from amr_twin.controllers.arduino import ArduinoRuntime, MainTask
+from amr_twin.controllers.firmware_params import FaithfulParams, Publish
 
 FORWARD, BACKWARD, STOP = 1, -1, 0  # listing 4.7
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from amr_twin.clock import VirtualClock
 
-from .firmware_params import (AvrParams, BoardParams, FaithfulParams, Firmware, ImprovedParams,
+from amr_twin.controllers.firmware_params import (AvrParams, BoardParams, FaithfulParams, Firmware, ImprovedParams,
                               Publish)
 
 __all__ = ["FIRMWARES", "AvrParams", "BoardParams", "FaithfulParams", "Firmware", "ImprovedParams",
@@ -43,7 +43,7 @@ def firmware_kind(firmware: str, sketch: str | None = None) -> str:
         raise ValueError(f"--sketch is used with --firmware avr only (got --firmware {firmware})")
     from pathlib import Path
 
-    from .avr_build import check_sketch
+    from amr_twin.controllers.avr_build import check_sketch
 
     check_sketch(Path(sketch))
     return f"avr:{Path(sketch).resolve()}"
@@ -53,7 +53,7 @@ def firmware_identity(firmware: str) -> str:
     """What identifies the firmware's behaviour: the kind, plus the sources' hash for ``avr``."""
     if not firmware.startswith("avr"):
         return firmware
-    from .avr_build import DEFAULT_SKETCH, source_hash
+    from amr_twin.controllers.avr_build import DEFAULT_SKETCH, source_hash
 
     sketch = firmware.partition(":")[2] or DEFAULT_SKETCH
     return f"{firmware}@{source_hash(sketch)}"
@@ -63,8 +63,8 @@ def check_avr(firmware: str) -> None:
     """For an ``avr`` firmware: the toolchain is there and the sketch builds (else ValueError, one line)."""
     if not firmware.startswith("avr"):
         return
-    from .avr import topic_table
-    from .avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
+    from amr_twin.controllers.avr import topic_table
+    from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
 
     problem = missing_tools()
     if problem:
@@ -90,7 +90,7 @@ def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
         Defaults to the thesis values (``avr:DIR`` sets ``AvrParams.sketch_dir``).
     """
     if kind == "avr" or kind.startswith("avr:"):
-        from .avr import AvrFirmware
+        from amr_twin.controllers.avr import AvrFirmware
         sketch = kind.partition(":")[2] or None
         if params is None:
             params = AvrParams(sketch_dir=sketch)
@@ -99,9 +99,9 @@ def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
             params = replace(params, sketch_dir=sketch)
         return AvrFirmware(clock, publish, params)
     if kind == "faithful":
-        from .faithful import FaithfulFirmware
+        from amr_twin.controllers.faithful import FaithfulFirmware
         return FaithfulFirmware(clock, publish, params or FaithfulParams())
     if kind == "improved":
-        from .improved import ImprovedFirmware
+        from amr_twin.controllers.improved import ImprovedFirmware
         return ImprovedFirmware(clock, publish, params or ImprovedParams())
     raise ValueError(f"unknown firmware kind {kind!r}")

@@ -27,8 +27,8 @@ from typing import Sequence
 from amr_twin.clock import VirtualClock
 from amr_twin.pins import HIGH, LOW
 
-from .arduino import ArduinoRuntime
-from .firmware_params import ImprovedParams, Publish
+from amr_twin.controllers.arduino import ArduinoRuntime
+from amr_twin.controllers.firmware_params import ImprovedParams, Publish
 
 FORWARD, BACKWARD, STOP = 1, -1, 0
 

@@ -66,8 +66,8 @@ from amr_twin.messages import (Float64, Float64MultiArray, Header, Odometry, Poi
                                PoseWithCovariance, Quaternion, Time, Transform,
                                TransformStamped, Twist, TwistWithCovariance, Vector3)
 
-from .dead_reckoning import SmoothedPose, arc, twist_step
-from .wheel_command import WHEEL_RADIUS_M
+from amr_twin.controllers.dead_reckoning import SmoothedPose, arc, twist_step
+from amr_twin.controllers.wheel_command import WHEEL_RADIUS_M
 
 WHEEL_SEPARATION_M = 0.48
 """``L`` of listing 4.2."""

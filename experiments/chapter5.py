@@ -29,11 +29,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
-from . import chapter5_payload as payload
-from ..config import TwinConfig
-from ..loop import TwinOptions
-from ..metrics import step_info
-from ..run import Command, run_command
+from amr_twin.experiments import chapter5_payload as payload
+from amr_twin.config import TwinConfig
+from amr_twin.loop import TwinOptions
+from amr_twin.metrics import step_info
+from amr_twin.run import Command, run_command
 
 WHEELS = ("left", "right")
 STEP_SPLIT_RPM = 75.0  # the thesis' split: "steps valued at maximum 75 RPM" and higher
@@ -199,10 +199,10 @@ def simulate(job: _Job) -> dict:
     if job.rrd_path is None and job.mcap_path is None and pace_us is None:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
-        from ..loop import Twin
-        from ..rerun_log import attach, record_run
-        from ..run import run_mission
-        from .firmware_comparison import pace
+        from amr_twin.loop import Twin
+        from amr_twin.rerun_log import attach, record_run
+        from amr_twin.run import run_mission
+        from amr_twin.experiments.firmware_comparison import pace
 
         twin = Twin(cfg, options)
         if pace_us is not None:
@@ -269,13 +269,13 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     -------
     dict : ``{"firmware", "wall_s", "sim_s", "runs": [per run], "comparisons": [...]}``.
     """
-    from .executor import run_all
+    from amr_twin.experiments.executor import run_all
 
     specs = [s for s in RUNS if runs is None or s.number in runs]
     if not specs:
         raise ValueError(f"runs: {runs} selects none of 1..{len(RUNS)}")
     wall0 = time.perf_counter()
-    from ..rerun_capture import recording_folder
+    from amr_twin.rerun_capture import recording_folder
 
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}
@@ -302,7 +302,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
            "payload_duty": payload.duty_comparison(results),
            "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
     if reference_firmware is not None:
-        from .firmware_comparison import PACE_US, command_timeline, compare, timeline_table
+        from amr_twin.experiments.firmware_comparison import PACE_US, command_timeline, compare, timeline_table
 
         ref = [_Job(s, cfg, reference_firmware, duration_s or s.duration_s, extra=extra)
                for extra in ({}, {"pace_us": PACE_US}) for s in specs]
@@ -319,7 +319,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
 
 def plot(results: dict, out_dir: Path) -> list[Path]:
     """One PNG per run (``run<N>.png``), see :func:`.chapter5_report.plot`."""
-    from .chapter5_report import plot as plot_runs
+    from amr_twin.experiments.chapter5_report import plot as plot_runs
 
     return plot_runs(results, out_dir)
 
@@ -345,8 +345,8 @@ def _public(results: dict) -> dict:
 
 def report(results: dict, out_dir: Path) -> dict:
     """Write ``metrics.json`` and ``report.md`` (run :func:`plot` for the figures); return the JSON."""
-    from .chapter5_report import markdown
-    from .executor import write_json, write_text
+    from amr_twin.experiments.chapter5_report import markdown
+    from amr_twin.experiments.executor import write_json, write_text
 
     data = _public(results)
     write_json(Path(out_dir) / "metrics.json", data)

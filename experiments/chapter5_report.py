@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .chapter5_payload import markdown as payload_markdown
-from .chapter5_spread_report import markdown as spread_markdown
-from .firmware_comparison import markdown as comparison_markdown
+from amr_twin.experiments.chapter5_payload import markdown as payload_markdown
+from amr_twin.experiments.chapter5_spread_report import markdown as spread_markdown
+from amr_twin.experiments.firmware_comparison import markdown as comparison_markdown
 
 COLUMNS = (("delay_s", "delay s"), ("rise_s", "rise s"), ("peak_s", "peak s"), ("settling_s", "settling s"),
            ("overshoot", "overshoot RPM"), ("steady_error", "steady err RPM"), ("oscillation", "oscillation RPM"))
@@ -125,7 +125,7 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from .executor import save_figure
+    from amr_twin.experiments.executor import save_figure
 
     paths = []
     colours = {"left": "tab:blue", "right": "tab:red"}

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..uncertainty import LEVEL, interval, noise_level, rank_correlations
-from . import chapter5_payload as payload
-from .chapter5 import BANDS, RUNS, _Job, analyse, compare_oscillation, simulate, step_class
+from amr_twin.uncertainty import LEVEL, interval, noise_level, rank_correlations
+from amr_twin.experiments import chapter5_payload as payload
+from amr_twin.experiments.chapter5 import BANDS, RUNS, _Job, analyse, compare_oscillation, simulate, step_class
 
 TOP = 3  # parameters named per banded metric
 METRICS = ("delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error", "oscillation")
@@ -32,7 +32,7 @@ def run(cfg, draws, jobs: int = 1, firmware: str = "faithful", runs: list[int] |
     """
     import time
 
-    from .executor import run_all
+    from amr_twin.experiments.executor import run_all
 
     wall0 = time.perf_counter()
     specs = [s for s in RUNS if runs is None or s.number in runs]

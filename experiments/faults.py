@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import TwinConfig
-from ..loop import TwinOptions
-from ..run import Command, run_mission
+from amr_twin.config import TwinConfig
+from amr_twin.loop import TwinOptions
+from amr_twin.run import Command, run_mission
 
 SPEED_M_S = 0.5
 FAULT_T_S = 5.0
@@ -61,7 +61,7 @@ class Case:
 
 def simulate(case: Case) -> dict:
     """Run one case; its series and fault report as plain arrays (picklable, for worker processes)."""
-    from ..faults import KINDS, parse_faults
+    from amr_twin.faults import KINDS, parse_faults
 
     faults = parse_faults([case.fault]) if case.fault else ()
     sensors = any(KINDS[f.kind].needs_sensors for f in faults)
@@ -129,7 +129,7 @@ def run(cfg: TwinConfig, jobs: int = 1, progress: bool = True, cases: tuple[str,
     """Simulate every case under both firmwares and the baselines; return raw runs and measures."""
     import time
 
-    from .executor import run_all
+    from amr_twin.experiments.executor import run_all
 
     wall0 = time.perf_counter()
     todo = [Case(None, fw, cfg) for fw in FIRMWARES] + [Case(c, fw, cfg) for c in cases for fw in FIRMWARES]

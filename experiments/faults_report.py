@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..faults import KINDS, kind_names, parse_fault
-from ..run_report import json_ready
-from .executor import save_figure, write_text
-from .faults import FAULT_T_S, FIRMWARES, SCENARIO, STOP_T_S
+from amr_twin.faults import KINDS, kind_names, parse_fault
+from amr_twin.run_report import json_ready
+from amr_twin.experiments.executor import save_figure, write_text
+from amr_twin.experiments.faults import FAULT_T_S, FIRMWARES, SCENARIO, STOP_T_S
 
 REFERENCE_RPM = 38.197  # linear 0.5 m/s: 0.5 / (2 pi 0.125) * 60
 

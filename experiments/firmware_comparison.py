@@ -61,10 +61,10 @@ def command_timeline(firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int
     Python ports the command arrives when the link's frame ends (115200 baud); for ``avr`` its
     bytes start at t = 0 and every instruction is checked for a pin change.
     """
-    from ..clock import VirtualClock
-    from ..controllers.firmware import make_firmware
-    from ..messages import Float64MultiArray
-    from ..rosserial import frame_bytes, frame_time_us
+    from amr_twin.clock import VirtualClock
+    from amr_twin.controllers.firmware import make_firmware
+    from amr_twin.messages import Float64MultiArray
+    from amr_twin.rosserial import frame_bytes, frame_time_us
 
     clock = VirtualClock()
     fw = make_firmware(firmware, clock, lambda topic, value: None)

@@ -29,19 +29,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import TwinConfig
-from ..controllers.diff_drive import DiffDriveNode
-from ..controllers.ekf import EkfNode
-from ..controllers.lidar_odometry import LidarOdometry
-from ..controllers.path_follower import PathFollowerNode
-from ..controllers.route import Route, distance_to_path_m, load_route, route_length_m
-from ..loop import Twin, TwinOptions
-from ..trajectory import TrajectoryErrors, errors
-from ..world_geometry import Footprints, scan_plane_boxes
-from .fusion_map import build_map
-from .fusion_robot import NOMINAL, RobotErrors, draw
-from .. import se2
-from .fusion_streams import Streams, odom_poses, relative_motion
+from amr_twin.config import TwinConfig
+from amr_twin.controllers.diff_drive import DiffDriveNode
+from amr_twin.controllers.ekf import EkfNode
+from amr_twin.controllers.lidar_odometry import LidarOdometry
+from amr_twin.controllers.path_follower import PathFollowerNode
+from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
+from amr_twin.loop import Twin, TwinOptions
+from amr_twin.trajectory import TrajectoryErrors, errors
+from amr_twin.world_geometry import Footprints, scan_plane_boxes
+from amr_twin.experiments.fusion_map import build_map
+from amr_twin.experiments.fusion_robot import NOMINAL, RobotErrors, draw
+from amr_twin import se2
+from amr_twin.experiments.fusion_streams import Streams, odom_poses, relative_motion
 
 ROUTES_DIR = Path(__file__).resolve().parent / "routes"
 DEFAULT_ROUTE = ROUTES_DIR / "warehouse_60m.yaml"
@@ -99,7 +99,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     keeps the nominal geometry of ``cfg``). ``rrd_path`` / ``mcap_path``: also write the
     drive as a Rerun / MCAP recording.
     """
-    from ..sensors.uwb import UwbSensor
+    from amr_twin.sensors.uwb import UwbSensor
 
     twin = Twin(robot.config(cfg), TwinOptions(firmware=firmware, world=route.world, seed=seed,
                                                start_xy_yaw=route.start_xy_yaw, sensors=True,
@@ -109,7 +109,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     streams = Streams()
     twin.bus.add_tap(streams.tap)
     if rrd_path is not None or mcap_path is not None:
-        from ..rerun_capture import attach
+        from amr_twin.rerun_capture import attach
         attach(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)
     twin.advance(REST_S)
@@ -134,7 +134,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     if bar is not None:
         bar[0].stop()
     if rrd_path is not None or mcap_path is not None:
-        from ..rerun_log import record_run
+        from amr_twin.rerun_log import record_run
         record_run(twin, rrd_path=rrd_path, mcap_path=mcap_path)
     return twin, streams, bool(follower.done)
 
@@ -220,7 +220,7 @@ def route_names() -> list[str]:
 
 def site_config(cfg: TwinConfig, route: Route) -> TwinConfig:
     """``cfg`` with the UWB anchors of the route's world, when the world declares its own."""
-    from ..worlds import uwb_anchors_xy_m
+    from amr_twin.worlds import uwb_anchors_xy_m
 
     anchors = uwb_anchors_xy_m(route.world)
     if anchors is None:

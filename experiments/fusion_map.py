@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..controllers.occupancy_grid import OccupancyGrid
-from ..world_geometry import Footprints, distance_to_boxes_m, surface_samples_m
-from ..worlds import OccupancyMap, load_map
+from amr_twin.controllers.occupancy_grid import OccupancyGrid
+from amr_twin.world_geometry import Footprints, distance_to_boxes_m, surface_samples_m
+from amr_twin.worlds import OccupancyMap, load_map
 
 TOLERANCE_CELLS = 2
 

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .executor import save_figure, write_json, write_text
-from .fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
-from .fusion_map import TOLERANCE_CELLS, agreement
-from .. import atomic_file, se2, tum
+from amr_twin.experiments.executor import save_figure, write_json, write_text
+from amr_twin.experiments.fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
+from amr_twin.experiments.fusion_map import TOLERANCE_CELLS, agreement
+from amr_twin import atomic_file, se2, tum
 
 LIDAR_ATE_MAX_M = 0.10   # issue #8 acceptance
 COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",

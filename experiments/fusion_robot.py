@@ -21,7 +21,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..config import TwinConfig
+from amr_twin.config import TwinConfig
 
 CLIP_SIGMA = 3.0
 """Draws are clipped at this many standard deviations (the sourced ranges' ends)."""

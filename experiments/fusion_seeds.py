@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import TwinConfig
-from . import fusion
-from .executor import run_all, save_figure, write_json, write_text
-from .fusion_seeds_report import METRICS, markdown, seed_text
+from amr_twin.config import TwinConfig
+from amr_twin.experiments import fusion
+from amr_twin.experiments.executor import run_all, save_figure, write_json, write_text
+from amr_twin.experiments.fusion_seeds_report import METRICS, markdown, seed_text
 
 MAX_SEEDS = 1000
 
@@ -99,7 +99,7 @@ def summarise(per_seed: list[dict]) -> dict:
 
 def write(results: list[fusion.FusionResults], out: Path) -> dict:
     """Write each seed's folder, the summary and ``seeds.png`` into ``out``; return the summary's data."""
-    from . import fusion_report
+    from amr_twin.experiments import fusion_report
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -137,7 +137,7 @@ def _plot(data: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .fusion_report import COLOURS
+    from amr_twin.experiments.fusion_report import COLOURS
 
     names = list(data["architectures"])
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained", sharey=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .fusion_report import DEFINITIONS, evo_commands, tum_name
+from amr_twin.experiments.fusion_report import DEFINITIONS, evo_commands, tum_name
 
 METRICS = (("ate_m", "ATE m", 3), ("ate_aligned_m", "ATE aligned m", 3), ("rpe_trans_m", "RPE m / 1 m", 3),
            ("rpe_rot_deg", "RPE deg / 1 m", 2), ("final_pos_err_m", "final position m", 3),

@@ -14,7 +14,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from .. import se2
+from amr_twin import se2
 
 TOPICS = {"odom": "odom", "imu/data_raw": "imu", "uwb/range": "uwb", "scan": "scan"}
 """Recorded topic -> stream name."""

@@ -24,10 +24,10 @@ import math
 
 import numpy as np
 
-from ..statics import CONTACT_MIN_N
-from ..uncertainty import interval, noise_level, rank_correlations
-from .payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, WHEELS
-from .payload_sweep_report import PANELS, _value, summarise
+from amr_twin.statics import CONTACT_MIN_N
+from amr_twin.uncertainty import interval, noise_level, rank_correlations
+from amr_twin.experiments.payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, WHEELS
+from amr_twin.experiments.payload_sweep_report import PANELS, _value, summarise
 
 CURRENT_RATIO = "steady_current_ratio"  # the larger motor's steady current over the driver's rating (derived)
 CROSSINGS = (  # answer: (column, limit, direction: +1 when the answer is the mass where it exceeds the limit)

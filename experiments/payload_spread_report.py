@@ -14,10 +14,10 @@ import io
 import math
 from pathlib import Path
 
-from ..uncertainty import LEVEL, noise_level
-from . import payload_spread as spread
-from .payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
-from .payload_sweep_report import PANELS, _csv, _lowest_wheel_loads, _value
+from amr_twin.uncertainty import LEVEL, noise_level
+from amr_twin.experiments import payload_spread as spread
+from amr_twin.experiments.payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
+from amr_twin.experiments.payload_sweep_report import PANELS, _csv, _lowest_wheel_loads, _value
 
 
 def _kg(v) -> str:
@@ -64,7 +64,7 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .executor import save_figure
+    from amr_twin.experiments.executor import save_figure
 
     nominal, samples = spread.split(results)
     paths = []
@@ -101,7 +101,7 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
 def _band(samples: dict, mass, position, command, column) -> tuple[float, float, float]:
     import numpy as np
 
-    from ..uncertainty import interval
+    from amr_twin.uncertainty import interval
 
     values = [_value(r, column) for rows in samples.values() for r in rows
               if (r["mass_kg"], r["position"], r["command"]) == (mass, position, command) and r.get("valid", True)]
@@ -110,7 +110,7 @@ def _band(samples: dict, mass, position, command, column) -> tuple[float, float,
 
 
 def _plot_sensitivity(results: dict, out_dir: Path, plt) -> Path:
-    from .executor import save_figure
+    from amr_twin.experiments.executor import save_figure
 
     sens = results["sensitivity"]
     groups = list(dict.fromkeys((r["position"], r["command"], r["answer"]) for r in sens
@@ -149,8 +149,8 @@ def analyse(results: dict) -> None:
 
 def report(results: dict, out_dir: Path) -> dict:
     """Write the CSVs, ``summary.json`` and ``summary.md`` (after :func:`analyse`); return the summary."""
-    from .executor import write_json, write_text
-    from .payload_sweep_report import summarise
+    from amr_twin.experiments.executor import write_json, write_text
+    from amr_twin.experiments.payload_sweep_report import summarise
 
     out_dir = Path(out_dir)
     draws, found, sens = results["draws"], results["answers"], results["sensitivity"]

@@ -49,10 +49,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import ConfigError, TwinConfig, load_config
-from ..metrics import step_info
-from ..run import Command
-from .chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
+from amr_twin.config import ConfigError, TwinConfig, load_config
+from amr_twin.metrics import step_info
+from amr_twin.run import Command
+from amr_twin.experiments.chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
 
 POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
              "front-left-corner": (1, 1), "front-right-corner": (1, -1),
@@ -154,7 +154,7 @@ class Point:
 
     @property
     def fingerprint(self) -> str:
-        from ..controllers.firmware import firmware_identity  # avr: the sketch's sources count too
+        from amr_twin.controllers.firmware import firmware_identity  # avr: the sketch's sources count too
 
         text = (self.cfg.model_dump_json() + f"|{firmware_identity(self.firmware)}|{self.duration_s}"
                 + f"|rows {ROWS}")
@@ -183,7 +183,7 @@ def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s)
     ``loads`` (k, 6) support loads and ``vel`` (k, 6) base velocities (world linear, body
     angular) every :data:`SAMPLE_S`; ``s`` the run's series (for the yaw).
     """
-    from ..statics import solve
+    from amr_twin.statics import solve
 
     i, w = np.unravel_index(np.argmin(loads[:, :2]), loads[:, :2].shape)
     t = SAMPLE_S * (np.arange(len(loads)) + 1)
@@ -219,13 +219,13 @@ def _electrics(s, duration_s: float) -> dict:
 
 
 def _dynamics(point: Point, cfg: TwinConfig) -> dict:
-    from ..loop import Twin, TwinOptions
-    from ..statics import CONTACT_MIN_N
+    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.statics import CONTACT_MIN_N
 
     recording = point.rrd_path is not None or point.mcap_path is not None
     twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty"))
     if recording:
-        from ..rerun_capture import attach
+        from amr_twin.rerun_capture import attach
 
         attach(twin)
     twin.advance_to_us(0)
@@ -253,8 +253,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     twin.advance_to_us(int(round(point.duration_s * 1e6)))
     s = twin.recorder.series()
     if recording:
-        from ..rerun_log import record_run
-        from ..run import RunResult
+        from amr_twin.rerun_log import record_run
+        from amr_twin.run import RunResult
 
         result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
                            sim_s=point.duration_s, wall_s=0.0)
@@ -298,9 +298,9 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
 
 def simulate_point(point: Point) -> dict:
     """Statics and one run of a sweep point, as one flat JSON-ready row."""
-    from ..build import BuildError
-    from ..physics import DivergenceError
-    from ..statics import CONTACT_MIN_N, describe
+    from amr_twin.build import BuildError
+    from amr_twin.physics import DivergenceError
+    from amr_twin.statics import CONTACT_MIN_N, describe
 
     wall0 = time.perf_counter()
     row = {"key": point.key, "fingerprint": point.fingerprint, "mass_kg": point.mass_kg,
@@ -356,12 +356,12 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     -------
     dict : ``{"rows": [...], "simulated": n, "reused": n, "recorded": n, "wall_s": s}``.
     """
-    from .executor import run_all, write_json
+    from amr_twin.experiments.executor import run_all, write_json
 
     for c in commands:
         parse_command(c)
     runs_dir = Path(out_dir) / "runs"
-    from ..rerun_capture import recording_folder
+    from amr_twin.rerun_capture import recording_folder
 
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, WHEELS
+from amr_twin.experiments.payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, WHEELS
 
 PANELS = (  # (column or per-wheel suffix, label); per-wheel ones plot the worse driven wheel
     ("~delay_s", "delay (s)"), ("~settling_s", "settling (s)"), ("~overshoot_rpm", "overshoot (RPM)"),
@@ -80,7 +80,7 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .executor import save_figure
+    from amr_twin.experiments.executor import save_figure
 
     rows, paths = results["rows"], []
     for command in dict.fromkeys(r["command"] for r in rows):
@@ -132,7 +132,7 @@ def _lowest_wheel_loads(rows: list[dict]) -> list[str]:
 
 def report(results: dict, out_dir: Path) -> dict:
     """Write ``sweep.csv``, ``summary.json`` and ``summary.md``; return the summary."""
-    from .executor import write_json, write_text
+    from amr_twin.experiments.executor import write_json, write_text
 
     out_dir = Path(out_dir)
     summary = summarise(results)

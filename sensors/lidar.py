@@ -53,7 +53,7 @@ from amr_twin.clock import VirtualClock
 from amr_twin.config_sections import LidarCfg
 from amr_twin.messages import Header, LaserScan, Time
 
-from .lidar_beams import (SEEN_GROUPS, US, PoseSamples, beam_angles_rad, beam_directions, group_masks,
+from amr_twin.sensors.lidar_beams import (SEEN_GROUPS, US, PoseSamples, beam_angles_rad, beam_directions, group_masks,
                           motion_correction_m, noisy_ranges, scan_timing, world_directions)
 
 CUTOFF_M = 1e6

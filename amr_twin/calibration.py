@@ -157,7 +157,7 @@ def bench_current_a(cfg: TwinConfig, wheel: int, quantity: str = BENCH_QUANTITY,
 # ------------------------------------------------------------------------- chapter 5 features
 def command_reference(cfg: TwinConfig, command: Command) -> tuple[float, float]:
     """Signed wheel references (RPM) the client sends for ``command``."""
-    from amr_twin.bus import Bus
+    from amr_twin.ros.bus import Bus
     from amr_twin.clock import VirtualClock
     from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
 

@@ -15,7 +15,7 @@ Two kinds of event share one time order (ties: the order of scheduling):
   state and acts on the rest of the twin only by publishing on ``topics``
   (odometry, a sensor message sampled earlier). The loop may run it while the
   physics is ahead of it, as far as the bus' lookahead for those topics allows
-  (:meth:`amr_twin.bus.Bus.lookahead_us`): no subscriber, no limit.
+  (:meth:`amr_twin.ros.bus.Bus.lookahead_us`): no subscriber, no limit.
 
 Time is an integer number of microseconds (``t_us``), like the Arduino's
 ``micros()``, so that event times are exact and ordering is deterministic.
@@ -145,7 +145,7 @@ class VirtualClock:
         lookahead_us : callable
             ``lookahead_us(topics)``: the earliest delay after which a message on
             ``topics`` can act on anything that reads the physics, us
-            (:meth:`amr_twin.bus.Bus.lookahead_us`).
+            (:meth:`amr_twin.ros.bus.Bus.lookahead_us`).
 
         Returns
         -------

@@ -19,7 +19,7 @@ DiagnosticArray is what ``rqt_robot_monitor`` and Foxglove's diagnostics panels 
 
 from __future__ import annotations
 
-from amr_twin.ros2_cdr import Cdr
+from amr_twin.ros.ros2_cdr import Cdr
 
 OK, WARN, ERROR = 0, 1, 2  # diagnostic_msgs/DiagnosticStatus levels
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/DiagnosticArray"

@@ -12,7 +12,7 @@ Two inputs, as a ROS 2 graph of the robot would take them:
     a call of the thesis' service: it publishes ``wheel_Command`` to the Arduino.
 
 Payloads are CDR (either byte order, decoded by ``mcap_ros2`` against the definitions of
-:mod:`amr_twin.ros2_schemas`) or JSON (ROS field names, missing fields 0). Anything else
+:mod:`amr_twin.ros.ros2_schemas`) or JSON (ROS field names, missing fields 0). Anything else
 (another topic or type, a payload that does not decode, a value out of range or not
 finite) raises :class:`InputError` with one line saying why; the caller logs it and drops
 the message. Nothing a client sends reaches the twin unchecked.
@@ -25,8 +25,8 @@ import math
 from typing import Any, Callable
 
 from amr_twin.controllers.wheel_command import MAX_RPM, SERVICE_NAME, WheelCommandRequest
-from amr_twin.messages import Twist, Vector3
-from amr_twin.ros2_schemas import msgdef
+from amr_twin.ros.messages import Twist, Vector3
+from amr_twin.ros.ros2_schemas import msgdef
 
 TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/Twist")
 REQUEST_TYPES = ("std_msgs/msg/Float64MultiArray", "std_msgs/Float64MultiArray")
@@ -93,7 +93,7 @@ def _finite(value, what: str) -> float:
 
 
 def decode_twist(data: bytes, encoding: str) -> Twist:
-    """A client's ``geometry_msgs/msg/Twist`` as the twin's :class:`~amr_twin.messages.Twist` (m/s, rad/s)."""
+    """A client's ``geometry_msgs/msg/Twist`` as the twin's :class:`~amr_twin.ros.messages.Twist` (m/s, rad/s)."""
     msg = _decode(data, encoding, "geometry_msgs/Twist")
     out = []
     for part in ("linear", "angular"):

@@ -27,7 +27,7 @@ import math
 import mujoco
 import numpy as np
 
-from amr_twin.ros_state import ROBOT
+from amr_twin.ros.ros_state import ROBOT
 
 VISUAL_GROUPS = (0, 1, 4)  # world, robot visuals, payload (as in the .rrd: rerun_world.VISUAL_GROUPS)
 GHOST_RGBA = (0.2, 0.75, 0.25, 0.35)

@@ -8,7 +8,7 @@ orders events in time:
    rosserial frame arriving, a sensor reading the physics), the divergence check
    or the end of the run; *publishing* events (odometry, IMU and LiDAR messages,
    :mod:`amr_twin.clock`) do not stop the physics unless a subscriber could act on
-   what they publish before it (:meth:`amr_twin.bus.Bus.lookahead_us`);
+   what they publish before it (:meth:`amr_twin.ros.bus.Bus.lookahead_us`);
 2. step the physics in C up to that instant with the actuation held, keeping the
    wheel angles on the record grid (every ``record_every_steps``) and handing the
    grid instants to the grid samplers (the rolling resistance from the present
@@ -35,20 +35,20 @@ import mujoco
 import numpy as np
 
 from amr_twin.build import LOOP_SENSOR_DIM, build
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.collisions import CollisionMonitor, check_start, check_supported
 from amr_twin.config import TwinConfig
 from amr_twin.controllers.firmware import make_firmware
 from amr_twin.controllers.odometry import WheelOdometry
 from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
-from amr_twin.messages import Float64
+from amr_twin.ros.messages import Float64
 from amr_twin.physics import Physics
 from amr_twin.plant import Plant
 from amr_twin.recorder import Recorder
 from amr_twin.rolling_resistance import RollingResistance
-from amr_twin.ros_state import robot_static_transforms
-from amr_twin.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
+from amr_twin.ros.ros_state import robot_static_transforms
+from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
 from amr_twin.sensors.hall import HallSensors
 
 US = 1_000_000

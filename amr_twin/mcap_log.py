@@ -1,17 +1,17 @@
 """Record a run as ROS 2 messages in an ``.mcap`` file (issue 7, issue 13).
 
-The same streams as :mod:`amr_twin.rerun_log`, CDR-encoded (:mod:`amr_twin.ros2_cdr`)
-with ROS 2 message definitions (schema encoding ``ros2msg``, :mod:`amr_twin.ros2_schemas`),
+The same streams as :mod:`amr_twin.rerun_log`, CDR-encoded (:mod:`amr_twin.ros.ros2_cdr`)
+with ROS 2 message definitions (schema encoding ``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`),
 so ``ros2 bag info/play`` (rosbag2 MCAP storage) and Foxglove read the file. Log and
 publish times are the simulation time (ns) at which the bus delivered the message;
 header stamps are the messages' own. Bus topics are the messages the nodes published
 (as they were); the robot's state (joint states, link transforms, ground truth,
-clock) is built by :mod:`amr_twin.ros_state` from the capture's samples.
+clock) is built by :mod:`amr_twin.ros.ros_state` from the capture's samples.
 
 The bag holds what a ROS 2 graph of the robot would have recorded, so ``ros2 bag play
 --clock`` into nav2, slam_toolbox, robot_localization or RViz needs no other node
 (do not run a second robot_state_publisher: /tf already has the joints' links).
-Frames (REP-105, :mod:`amr_twin.ros_state`): ``odom -> base_link -> laser, imu_link,
+Frames (REP-105, :mod:`amr_twin.ros.ros_state`): ``odom -> base_link -> laser, imu_link,
 uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has no parent
 (``map -> odom`` is a localiser's). Topics::
 
@@ -49,14 +49,14 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin import ros_state
+from amr_twin.ros import ros_state
 from amr_twin.atomic_file import replacing
 from amr_twin.event_log import mcap_items as event_items
-from amr_twin.messages import String, TFMessage
-from amr_twin.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
+from amr_twin.ros.messages import String, TFMessage
+from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
                        encode_range, encode_string, encode_tf_message, encode_twist)
-from amr_twin.ros2_schemas import msgdef, ros2_type
+from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 
 REQUEST_FIELDS = "motionL,speedL,motionR,speedR"
 """Label of the one dimension of a recorded ``wheel_Command_Service`` request."""

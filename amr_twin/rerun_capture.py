@@ -6,7 +6,7 @@ Stage 1 of a recording (stage 2, writing the files, is :mod:`amr_twin.rerun_log`
 message with its time, us) and samples the world pose of each robot body as a grid
 sampler of the loop (default ~30 Hz on the recorder's 10 ms grid; no clock event, so
 the physics chunks, hence the run, are unchanged), and the joint and base state on
-every grid instant for the ROS messages of :mod:`amr_twin.ros_state` (joint states,
+every grid instant for the ROS messages of :mod:`amr_twin.ros.ros_state` (joint states,
 link transforms, ground truth). It only reads ``MjData``.
 
 Both writers write a temporary file next to the target and rename it when complete
@@ -45,9 +45,9 @@ class Capture:
         self._t: list[int] = []
         self._pos: list[np.ndarray] = []
         self._quat: list[np.ndarray] = []
-        from amr_twin.ros_state import StateSampler
+        from amr_twin.ros.ros_state import StateSampler
         self.state = StateSampler(m, twin.physics.data)
-        """Joint and base state on every grid instant (:mod:`amr_twin.ros_state`)."""
+        """Joint and base state on every grid instant (:mod:`amr_twin.ros.ros_state`)."""
         twin.bus.add_tap(self._tap)
         self._sample(twin.t_phys_us)
         self.state.sample(twin.t_phys_us)

@@ -12,7 +12,7 @@ sketch's ELF running on :class:`~amr_twin.controllers.avr_board.AvrBoard` (libsi
 - pins: PWM duty from the Timer4 compare registers (OCR4A/B when the output is connected by
   ``analogWrite``, else 0 or 255 from the port), DIR/BRAKE/STOP from PORTA;
 - SC edges: each edge toggles pin 2 or 3 (INT4/INT5) at its microsecond;
-- rosserial: real frames (:mod:`amr_twin.rosserial_frame`) over USART0 at the baud the sketch
+- rosserial: real frames (:mod:`amr_twin.ros.rosserial_frame`) over USART0 at the baud the sketch
   set (115200 -> UBRR 16 with U2X: 117647 bit/s, 85 us a byte, both ways, since the Mega's
   USB-serial chip runs the same divider). A frame from the PC enters the receiver byte by
   byte from the instant it is published (plus the link's extra latency); a frame from the board
@@ -30,10 +30,10 @@ from functools import lru_cache
 from typing import Sequence
 
 from amr_twin.clock import VirtualClock
-from amr_twin.messages import Float64, Float64MultiArray
+from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.pins import DriverPins
-from amr_twin.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
-from amr_twin.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, FrameParser, TopicInfo,
+from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
+from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, FrameParser, TopicInfo,
                                       deserialize_float64, frame, serialize_float64,
                                       serialize_float64_multiarray, topic_request)
 

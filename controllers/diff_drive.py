@@ -22,9 +22,9 @@ from __future__ import annotations
 import logging
 import math
 
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import EventHandle, VirtualClock
-from amr_twin.messages import Twist
+from amr_twin.ros.messages import Twist
 
 from amr_twin.controllers.wheel_command import OK, WheelCommandClient
 

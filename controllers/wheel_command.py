@@ -36,8 +36,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from amr_twin.bus import Bus, ServiceCallError
-from amr_twin.messages import Float64MultiArray
+from amr_twin.ros.bus import Bus, ServiceCallError
+from amr_twin.ros.messages import Float64MultiArray
 
 LOG = logging.getLogger(__name__)
 

@@ -63,8 +63,8 @@ def command_timeline(firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int
     """
     from amr_twin.clock import VirtualClock
     from amr_twin.controllers.firmware import make_firmware
-    from amr_twin.messages import Float64MultiArray
-    from amr_twin.rosserial import frame_bytes, frame_time_us
+    from amr_twin.ros.messages import Float64MultiArray
+    from amr_twin.ros.rosserial import frame_bytes, frame_time_us
 
     clock = VirtualClock()
     fw = make_firmware(firmware, clock, lambda topic, value: None)

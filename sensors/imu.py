@@ -27,7 +27,7 @@ grid) the loop copies the true values on its record grid while the physics steps
 the errors of the samples taken so far are drawn in one batch (same numbers as
 one by one), and each message goes out from a publishing clock event at its
 sample instant, which does not stop the physics unless a subscriber could act on
-it sooner (:meth:`amr_twin.bus.Bus.lookahead_us`). The covariance arrays of the
+it sooner (:meth:`amr_twin.ros.bus.Bus.lookahead_us`). The covariance arrays of the
 messages are shared and read-only.
 
 Covariances say what a reading's error is on the *raw* topic (:func:`covariances`):
@@ -47,10 +47,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.bus import IMU_FRAME, Bus
+from amr_twin.ros.bus import IMU_FRAME, Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.config_sections import ImuCfg
-from amr_twin.messages import Header, Imu, MagneticField, Quaternion, Time, Vector3
+from amr_twin.ros.messages import Header, Imu, MagneticField, Quaternion, Time, Vector3
 
 US = 1_000_000
 SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")

@@ -33,7 +33,7 @@ Messages
     Range.INFRARED`` (ROS has no UWB type), ``field_of_view = 2 pi``: the range is
     measured from that anchor to the tag (frame ``uwb_tag`` of the URDF). A
     :class:`UwbSensor` sends the anchors as static frames ``map -> uwb_anchor_<i>``
-    (:mod:`amr_twin.ros_state`).
+    (:mod:`amr_twin.ros.ros_state`).
 
 :func:`simulate_ranges` makes the same messages offline from tag positions (tests,
 replays); :class:`UwbSensor` samples the twin on the clock (it reads ``MjData.xpos``/``xmat``
@@ -47,11 +47,11 @@ import math
 import mujoco
 import numpy as np
 
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.config_sections import UwbCfg
-from amr_twin.messages import Header, Range, Time
-from amr_twin.ros_state import anchor_transforms
+from amr_twin.ros.messages import Header, Range, Time
+from amr_twin.ros.ros_state import anchor_transforms
 
 US = 1_000_000
 TOPIC = "uwb/range"

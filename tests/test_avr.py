@@ -18,8 +18,8 @@ from amr_twin.config import load_config
 from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
 from amr_twin.controllers.firmware import AvrParams
 from amr_twin.loop import TwinOptions
-from amr_twin.rosserial import PC_TO_ARDUINO
-from amr_twin.rosserial_frame import MD5SUM
+from amr_twin.ros.rosserial import PC_TO_ARDUINO
+from amr_twin.ros.rosserial_frame import MD5SUM
 from amr_twin.run import Command, run_command
 
 MISSING = missing_tools()

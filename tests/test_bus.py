@@ -1,13 +1,13 @@
-"""Topics, latency, queues, latching, services, taps and tf of amr_twin.bus."""
+"""Topics, latency, queues, latching, services, taps and tf of amr_twin.ros.bus."""
 
 import math
 
 import pytest
 
 
-from amr_twin.bus import Bus, ServiceCallError, TransformError
+from amr_twin.ros.bus import Bus, ServiceCallError, TransformError
 from amr_twin.clock import VirtualClock
-from amr_twin.messages import (Float64, Header, Quaternion, TFMessage, Transform,
+from amr_twin.ros.messages import (Float64, Header, Quaternion, TFMessage, Transform,
                                TransformStamped, Twist, Vector3)
 
 

@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.config import load_config
 from amr_twin.controllers.ekf import EkfNode
-from amr_twin.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Range, Time,
+from amr_twin.ros.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Range, Time,
                                Twist, TwistWithCovariance, Vector3)
 from amr_twin.sensors.uwb import simulate_ranges, tag_positions_m
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from amr_twin.build import build
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.config import load_config
 from amr_twin.sensors.lidar import Lidar

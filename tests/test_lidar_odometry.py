@@ -12,7 +12,7 @@ import pytest
 
 from amr_twin import se2
 from amr_twin.controllers.lidar_odometry import LidarOdometry, beam_times_s, scan_end_time_s, scan_points
-from amr_twin.messages import Header, LaserScan, Time
+from amr_twin.ros.messages import Header, LaserScan, Time
 
 ROOM = (-4.0, 6.0, -3.0, 2.5)  # inner faces x_min, x_max, y_min, y_max, m
 LASER = (0.30, 0.0, 0.0)

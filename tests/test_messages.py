@@ -1,4 +1,4 @@
-"""ROS 1 serialised sizes, type names and stamp helpers of amr_twin.messages."""
+"""ROS 1 serialised sizes, type names and stamp helpers of amr_twin.ros.messages."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 
-from amr_twin import messages as m
+from amr_twin.ros import messages as m
 
 
 def test_type_names_are_ros_names():

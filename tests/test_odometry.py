@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.messages import Float64, Float64MultiArray
+from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.controllers.odometry import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S, WheelOdometry
 
 RPM_PER_M_S = 60.0 / (math.pi * 0.25)

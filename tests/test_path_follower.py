@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.controllers.path_follower import (PathFollowerNode, PurePursuit, Route, RouteError,
                                                 distance_to_path_m, load_route, route_length_m)
-from amr_twin.messages import Twist
+from amr_twin.ros.messages import Twist
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_ROUTE = ROOT / "experiments" / "routes" / "warehouse_60m.yaml"

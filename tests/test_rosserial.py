@@ -1,13 +1,13 @@
-"""Frame timing, serialisation on the wire, extra latency and loss of amr_twin.rosserial."""
+"""Frame timing, serialisation on the wire, extra latency and loss of amr_twin.ros.rosserial."""
 
 
 import pytest
 
 
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.messages import Float64, Float64MultiArray
-from amr_twin.rosserial import (ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink,
+from amr_twin.ros.messages import Float64, Float64MultiArray
+from amr_twin.ros.rosserial import (ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink,
                                 frame_bytes, frame_time_us)
 
 WHEEL_COMMAND = Float64MultiArray(data=[1.0, 38.19718551635742, 1.0, 38.19718551635742])

@@ -5,7 +5,7 @@ import struct
 import numpy as np
 import pytest
 
-from amr_twin.rosserial_frame import (MD5SUM, FrameParser, TopicInfo, deserialize_float64,
+from amr_twin.ros.rosserial_frame import (MD5SUM, FrameParser, TopicInfo, deserialize_float64,
                                       deserialize_float64_multiarray, frame, serialize_float64,
                                       serialize_float64_multiarray, topic_request)
 

@@ -6,7 +6,7 @@ import math
 import pytest
 
 
-from amr_twin.bus import Bus
+from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.controllers.wheel_command import (MAX_RPM, MIN_RPM, WheelCommandClient,
                                        WheelCommandRequest, WheelCommandService,

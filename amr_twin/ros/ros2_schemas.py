@@ -4,7 +4,7 @@ The schemas of an MCAP file in the ``ros2`` profile (schema encoding ``ros2msg``
 :func:`msgdef` gives a type's definition followed by those of the types it uses,
 as rosbag2 stores them; :func:`ros2_type` its full name (``pkg/msg/Name``). The
 definitions follow ROS 2 Humble's (constants and default values included); the
-payloads are encoded by :mod:`amr_twin.ros2_cdr`.
+payloads are encoded by :mod:`amr_twin.ros.ros2_cdr`.
 """
 
 from __future__ import annotations

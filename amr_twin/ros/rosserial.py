@@ -7,7 +7,7 @@
     | serialised message ... | message checksum
 
 so a frame is :data:`FRAME_OVERHEAD_BYTES` = 8 bytes plus the ROS 1 serialisation
-(:meth:`serialized_size` of :mod:`amr_twin.messages`). The UART sends 10 bits per
+(:meth:`serialized_size` of :mod:`amr_twin.ros.messages`). The UART sends 10 bits per
 byte (start + 8 data + stop), so a frame occupies the wire for
 ``ceil(bytes * 10 / baud)`` seconds, rounded up to whole microseconds.
 
@@ -114,7 +114,7 @@ class RosserialLink:
     def send(self, direction: str, topic: str, msg: Any, deliver: Deliver) -> int | None:
         """Queue ``msg`` on the wire of ``direction``; call ``deliver(topic, msg)`` on arrival.
 
-        ``deliver`` can be :meth:`amr_twin.bus.Bus.publish` (PC side) or a
+        ``deliver`` can be :meth:`amr_twin.ros.bus.Bus.publish` (PC side) or a
         firmware's subscriber callback wrapper.
 
         Returns

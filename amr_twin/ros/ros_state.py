@@ -2,8 +2,8 @@
 
 What ``robot_state_publisher``, a ``joint_state_broadcaster``, Gazebo's ``p3d``
 plugin and ``/clock`` would give a ROS user of the twin, built from MuJoCo's state
-into the message types of :mod:`amr_twin.messages` (one source for the bus and the
-recordings; :mod:`amr_twin.ros2_cdr` encodes them).
+into the message types of :mod:`amr_twin.ros.messages` (one source for the bus and the
+recordings; :mod:`amr_twin.ros.ros2_cdr` encodes them).
 
 Frames (REP-105). One tree per root, every frame with one parent::
 
@@ -28,8 +28,8 @@ import copy
 
 import numpy as np
 
-from amr_twin.bus import BASE_FRAME
-from amr_twin.messages import (Clock, Header, JointState, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Time,
+from amr_twin.ros.bus import BASE_FRAME
+from amr_twin.ros.messages import (Clock, Header, JointState, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Time,
                        TFMessage, Transform, TransformStamped, Twist, TwistWithCovariance, Vector3)
 
 ROBOT = "amr/"

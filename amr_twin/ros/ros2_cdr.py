@@ -1,8 +1,8 @@
 """CDR payloads of ROS 2 messages (XCDR1 little endian, as rmw / rosbag2 write it).
 
 :class:`Cdr` builds one payload; ``encode_<message>(msg) -> bytes`` serialises one
-message of :mod:`amr_twin.messages` (ROS field names) against the definitions of
-:mod:`amr_twin.ros2_schemas`. Encoded here with :mod:`struct` and numpy: the generic
+message of :mod:`amr_twin.ros.messages` (ROS field names) against the definitions of
+:mod:`amr_twin.ros.ros2_schemas`. Encoded here with :mod:`struct` and numpy: the generic
 encoder of ``mcap-ros2-support`` costs ~3x more. The tests decode the payloads with
 ``mcap_ros2.decoder`` and with ``rosbags`` (against ROS 2 Humble's own definitions).
 """

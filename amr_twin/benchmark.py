@@ -13,8 +13,8 @@ from __future__ import annotations
 import statistics
 import time
 
-from amr_twin.build import build
-from amr_twin.config import TwinConfig
+from amr_twin.model.build import build
+from amr_twin.model.config import TwinConfig
 from amr_twin.physics import Physics
 from amr_twin.pins import DriverPins
 from amr_twin.plant import Plant

@@ -42,7 +42,7 @@ import numpy as np
 import yaml
 
 from amr_twin.atomic_file import write_text
-from amr_twin.config import TwinConfig, load_config
+from amr_twin.model.config import TwinConfig, load_config
 from amr_twin.loop import TwinOptions
 from amr_twin.metrics import step_info
 from amr_twin.run import Command, run_command
@@ -112,7 +112,7 @@ class Fit:
 
     def override_tree(self) -> dict:
         """Nested YAML tree for ``--params`` (values with unit and source)."""
-        from amr_twin.config import parameter_table
+        from amr_twin.model.config import parameter_table
 
         units = {key: unit for key, _v, unit, _s in parameter_table()}
         tree: dict = {}

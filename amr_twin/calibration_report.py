@@ -31,7 +31,7 @@ from typing import Callable
 import numpy as np
 import yaml
 
-from amr_twin.config import ConfigError, TwinConfig
+from amr_twin.model.config import ConfigError, TwinConfig
 
 HELD = {  # held parameter: forward step of its derivative (a fair part of its spread, above the features' noise)
     "motor_left.resistance_ohm": 0.03, "motor_right.resistance_ohm": 0.03,

@@ -80,7 +80,7 @@ def fail(message: str, code: int = 2) -> None:
 
 
 def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
-    from amr_twin.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
+    from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
 
     try:
         return load_config(config, override_file=params, sets=sets or [], overrides=extra)
@@ -101,8 +101,8 @@ def _guard(func):
     exit 1, naming the file.
     """
     from amr_twin.atomic_file import WriteError
-    from amr_twin.build import BuildError
-    from amr_twin.config import ConfigError
+    from amr_twin.model.build import BuildError
+    from amr_twin.model.config import ConfigError
     from amr_twin.physics import DivergenceError
 
     try:
@@ -139,8 +139,8 @@ def model(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Build the robot model; export URDF/MJCF; print mass, static loads and tip margin."""
-    from amr_twin import build as build_mod
-    from amr_twin.statics import describe
+    from amr_twin.model import build as build_mod
+    from amr_twin.model.statics import describe
 
     extra = {}
     if payload_kg is not None:

@@ -104,7 +104,7 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
     Everything is checked before any simulation: a draw the schema refuses names its
     sample and field.
     """
-    from amr_twin.config import ConfigError
+    from amr_twin.model.config import ConfigError
     from amr_twin.uncertainty import MAX_SAMPLES, SAMPLERS, ParameterSpace
 
     if not 1 <= samples <= MAX_SAMPLES:

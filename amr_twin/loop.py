@@ -34,11 +34,11 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from amr_twin.build import LOOP_SENSOR_DIM, build
+from amr_twin.model.build import LOOP_SENSOR_DIM, build
 from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
 from amr_twin.collisions import CollisionMonitor, check_start, check_supported
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.controllers.firmware import make_firmware
 from amr_twin.controllers.odometry import WheelOdometry
 from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
@@ -62,7 +62,7 @@ class TwinOptions:
     world: str = "warehouse"
     seed: int = 0
     start_xy_yaw: tuple[float, float, float] | None = (0.0, 0.0, 0.0)  # x_m, y_m, yaw_rad; None: the world's
-    # own start (amr_twin.worlds.default_start: the warehouse's is the west end of its central aisle; the CLI's default)
+    # own start (amr_twin.model.worlds.default_start: the warehouse's is the west end of its central aisle; the CLI's default)
     settle_s: float = 0.5
     record_every_steps: int = 10  # time series at 100 Hz with 1 ms steps
     hall_jitter_us: float = 0.0
@@ -80,7 +80,7 @@ class Twin:
     """The whole robot: build it, then :meth:`advance` it in simulated time."""
 
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
-        from amr_twin.worlds import default_start
+        from amr_twin.model.worlds import default_start
 
         self.cfg, self.options = cfg, options
         start = options.start_xy_yaw if options.start_xy_yaw is not None else default_start(options.world)

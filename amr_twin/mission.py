@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amr_twin.run import KINDS, Command
-from amr_twin.yaml_file import read_yaml
+from amr_twin.model.yaml_file import read_yaml
 
 FIELDS = {
     "linear": {"speed_m_s": True},

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from amr_twin.build import CASTERS, ROBOT_PREFIX, WHEELS
+from amr_twin.model.build import CASTERS, ROBOT_PREFIX, WHEELS
 
 
 class DivergenceError(RuntimeError):

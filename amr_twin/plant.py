@@ -32,8 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from amr_twin.config import TwinConfig
-from amr_twin.config_sections import BatteryCfg, DriverCfg, MotorCfg
+from amr_twin.model.config import TwinConfig
+from amr_twin.model.config_sections import BatteryCfg, DriverCfg, MotorCfg
 from amr_twin.physics import Physics
 from amr_twin.pins import DriverPins
 

@@ -11,7 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.run import Command, run_mission
 
@@ -52,6 +52,6 @@ def recording_figures(cfg: TwinConfig, repeats: int = 3) -> dict:
 if __name__ == "__main__":  # python -m amr_twin.recording_benchmark
     import json
 
-    from amr_twin.config import load_config
+    from amr_twin.model.config import load_config
 
     print(json.dumps(recording_figures(load_config()), indent=1))

@@ -1,6 +1,6 @@
 """Python API: run one wheel command (or a timed list of them) and get the time series.
 
->>> from amr_twin.config import load_config
+>>> from amr_twin.model.config import load_config
 >>> from amr_twin.run import Command, run_command
 >>> result = run_command(load_config(), Command("motor", wheel="left", direction="forward", speed_m_s=1.0), 18.0)
 >>> result.series.published[0]  # (k, 2): t_s, rpm as published on wheel0_Vel
@@ -12,7 +12,7 @@ import math
 import time
 from dataclasses import dataclass, field
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.recorder import RunSeries
 

@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 from amr_twin.benchmark import REPEATS, timer
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 
 SWEEP_MASSES = [5.0 * i for i in range(10)]                # 0..45 kg
 SWEEP_POSITIONS = ["center", "front", "rear", "left", "right"]

@@ -14,7 +14,7 @@ import statistics
 import mujoco
 
 from amr_twin.benchmark import REPEATS, timer
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.loop import Twin, TwinOptions
 
 

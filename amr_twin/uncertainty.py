@@ -1,6 +1,6 @@
 """Monte Carlo over the parameters' uncertainty: drawn configurations and what moves the results.
 
-:class:`ParameterSpace` holds every parameter's spread (:mod:`amr_twin.parameter_spreads`:
+:class:`ParameterSpace` holds every parameter's spread (:mod:`amr_twin.model.parameter_spreads`:
 a leaf's ``range``/``sigma``/``follows``, or the default of its source's kind, or the
 calibration's report) and :meth:`~ParameterSpace.draw` draws ``n`` configurations:
 
@@ -36,9 +36,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from amr_twin.config import DEFAULT_CONFIG, ConfigError, TwinConfig, load_parameters
-from amr_twin.config_leaves import value_at
-from amr_twin.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, Spread, spread_of, with_values
+from amr_twin.model.config import DEFAULT_CONFIG, ConfigError, TwinConfig, load_parameters
+from amr_twin.model.config_leaves import value_at
+from amr_twin.model.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, Spread, spread_of, with_values
 
 PLANT = ("sim.", "chassis.", "deck.", "components.", "wheel.", "caster.", "motor_left.", "motor_right.",
          "driver.", "battery.")
@@ -107,7 +107,7 @@ def unit_samples(n: int, d: int, seed: int, sampler: str = "lhs") -> np.ndarray:
 
 @dataclass(frozen=True)
 class ParameterSpace:
-    """Every parameter's :class:`~amr_twin.parameter_spreads.Spread` for one configuration."""
+    """Every parameter's :class:`~amr_twin.model.parameter_spreads.Spread` for one configuration."""
 
     cfg: TwinConfig
     spreads: dict[str, Spread]
@@ -118,7 +118,7 @@ class ParameterSpace:
     def load(cls, path: str | Path | None = None, *, override_file: str | Path | None = None,
              sets: Sequence[str] = (), overrides: dict | None = None,
              calibration: str | Path | None = None) -> "ParameterSpace":
-        """The parameter file with its overrides (as :func:`amr_twin.config.load_config`) and
+        """The parameter file with its overrides (as :func:`amr_twin.model.config.load_config`) and
         the calibration's report (default ``calibration.yaml`` beside the parameter file)."""
         from amr_twin import calibration_report
 

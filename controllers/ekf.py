@@ -37,7 +37,7 @@ import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
 from amr_twin.ros.bus import BASE_FRAME, ODOM_FRAME, Bus
-from amr_twin.config_sections import EkfCfg, UwbCfg
+from amr_twin.model.config_sections import EkfCfg, UwbCfg
 from amr_twin.ros.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion,
                                Range, Twist, TwistWithCovariance, Vector3)
 from amr_twin.sensors.uwb import anchor_index

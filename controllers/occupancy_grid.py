@@ -21,7 +21,7 @@ the cells up to ``range_max`` free (right for a scanner whose no-return means
 :meth:`OccupancyGrid.save` writes ``<stem>.yaml`` + ``<stem>.pgm`` as ROS
 map_saver does (P5, 254 free, 0 occupied, 205 unknown; ``mode: trinary``, ``negate: 0``,
 ``occupied_thresh: 0.65``, ``free_thresh: 0.196``; ``origin`` the lower-left
-corner), which :func:`amr_twin.worlds.load_map` and map_server read, and
+corner), which :func:`amr_twin.model.worlds.load_map` and map_server read, and
 ``<stem>.png``, the same image (black occupied, white free, grey unknown).
 """
 
@@ -34,7 +34,7 @@ import numpy as np
 import yaml
 
 from amr_twin.ros.messages import LaserScan
-from amr_twin.worlds import write_pgm
+from amr_twin.model.worlds import write_pgm
 
 OCCUPIED_THRESH = 0.65
 FREE_THRESH = 0.196

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.yaml_file import read_yaml
+from amr_twin.model.yaml_file import read_yaml
 
 MAX_ROUTE_SPEED_M_S = 1.0
 """Highest route speed accepted, m/s (issue #8: 'at up to 1 m/s')."""
@@ -57,7 +57,7 @@ class Route:
         Distance to the goal at which the route is done, m, > 0.
     world : str
         The world the route is drawn in: a name of ``models/worlds/`` or a file path
-        (:func:`amr_twin.worlds.world_path`); its frame is the route's ``map``.
+        (:func:`amr_twin.model.worlds.world_path`); its frame is the route's ``map``.
     """
 
     name: str
@@ -129,7 +129,7 @@ def load_route(path: str | Path) -> Route:
 
 def _world_of(world: str, route_path: Path) -> str:
     """A route's ``world``: a name of ``models/worlds/`` as it is, a file resolved beside the route; must exist."""
-    from amr_twin.worlds import world_path
+    from amr_twin.model.worlds import world_path
 
     path = world_path(world)
     if Path(world).suffix:

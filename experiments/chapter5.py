@@ -30,7 +30,7 @@ from pathlib import Path
 
 
 from amr_twin.experiments import chapter5_payload as payload
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.loop import TwinOptions
 from amr_twin.metrics import step_info
 from amr_twin.run import Command, run_command

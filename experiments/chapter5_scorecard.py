@@ -16,7 +16,7 @@ import json
 import math
 from pathlib import Path
 
-from amr_twin.paths import ROOT
+from amr_twin.model.paths import ROOT
 
 SCORECARD = ROOT / "tests" / "chapter5_scorecard.json"
 TOLERANCE = {"s": 0.05, "RPM": 0.5}
@@ -70,7 +70,7 @@ def worse(committed: dict, new: dict) -> list[str]:
 def main() -> None:  # pragma: no cover - writes the committed file
     import tempfile
 
-    from amr_twin.config import load_config
+    from amr_twin.model.config import load_config
     from amr_twin.experiments import chapter5
 
     results = chapter5.run(load_config(), jobs=2, progress=True, study=False)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.loop import TwinOptions
 from amr_twin.run import Command, run_mission
 

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.controllers.diff_drive import DiffDriveNode
 from amr_twin.controllers.ekf import EkfNode
 from amr_twin.controllers.lidar_odometry import LidarOdometry
@@ -37,7 +37,7 @@ from amr_twin.controllers.path_follower import PathFollowerNode
 from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.trajectory import TrajectoryErrors, errors
-from amr_twin.world_geometry import Footprints, scan_plane_boxes
+from amr_twin.model.world_geometry import Footprints, scan_plane_boxes
 from amr_twin.experiments.fusion_map import build_map
 from amr_twin.experiments.fusion_robot import NOMINAL, RobotErrors, draw
 from amr_twin import se2
@@ -220,7 +220,7 @@ def route_names() -> list[str]:
 
 def site_config(cfg: TwinConfig, route: Route) -> TwinConfig:
     """``cfg`` with the UWB anchors of the route's world, when the world declares its own."""
-    from amr_twin.worlds import uwb_anchors_xy_m
+    from amr_twin.model.worlds import uwb_anchors_xy_m
 
     anchors = uwb_anchors_xy_m(route.world)
     if anchors is None:

@@ -2,7 +2,7 @@
 
 The grid covers the world's footprints plus ``mapping.margin_m``; each beam goes in
 at the laser pose of its own instant (a scan moves ~0.15 m at 0.8 m/s). The map is read back
-through the map_server loader (:func:`amr_twin.worlds.load_map`), so what is judged
+through the map_server loader (:func:`amr_twin.model.worlds.load_map`), so what is judged
 is what a ROS user would load. Agreement: the distance of every occupied cell's
 centre to the nearest world footprint at the LiDAR's height, in cells, and the
 share of the world's outline seen by the map (outline samples with an occupied
@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.controllers.occupancy_grid import OccupancyGrid
-from amr_twin.world_geometry import Footprints, distance_to_boxes_m, surface_samples_m
-from amr_twin.worlds import OccupancyMap, load_map
+from amr_twin.model.world_geometry import Footprints, distance_to_boxes_m, surface_samples_m
+from amr_twin.model.worlds import OccupancyMap, load_map
 
 TOLERANCE_CELLS = 2
 

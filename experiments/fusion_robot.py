@@ -5,7 +5,7 @@ rolling radii differ from the nominal 0.125 m and from each other, the effective
 the nominal 0.48 m, the hall sensors sit off their nominal places, and their edges jitter.
 The odometry node and the cmd_vel node keep the nominal geometry (the thesis' listings,
 uncalibrated); the physics rolls on the true one (``wheel.radius_error_*_m``,
-``wheel.separation_error_m``, applied by :mod:`amr_twin.build`). The IMU's turn-on bias and
+``wheel.separation_error_m``, applied by :mod:`amr_twin.model.build`). The IMU's turn-on bias and
 scale error are drawn by the IMU itself from the same seed (:mod:`amr_twin.sensors.imu`).
 
 :func:`draw` takes each error from a normal with the sourced 1-sigma of ``models/amr/amr.yaml``
@@ -21,7 +21,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 
 CLIP_SIGMA = 3.0
 """Draws are clipped at this many standard deviations (the sourced ranges' ends)."""

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 from amr_twin.experiments import fusion
 from amr_twin.experiments.executor import run_all, save_figure, write_json, write_text
 from amr_twin.experiments.fusion_seeds_report import METRICS, markdown, seed_text

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from amr_twin.statics import CONTACT_MIN_N
+from amr_twin.model.statics import CONTACT_MIN_N
 from amr_twin.uncertainty import interval, noise_level, rank_correlations
 from amr_twin.experiments.payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, WHEELS
 from amr_twin.experiments.payload_sweep_report import PANELS, _value, summarise

@@ -12,7 +12,7 @@ placements that still lie on the deck; ``X:Y`` gives the box centre in metres.
 
 A point is **safe** when its position is valid, the simulation ran, the static
 tip margin is at least :data:`TIP_MARGIN_MIN_M`, no drive wheel ever lost
-contact (:data:`~amr_twin.statics.CONTACT_MIN_N`), the base tilted at most
+contact (:data:`~amr_twin.model.statics.CONTACT_MIN_N`), the base tilted at most
 :data:`TILT_LIMIT_DEG` and no motor's steady current exceeded the driver's continuous
 rating (``driver.continuous_current_a``). The support loads are read every :data:`SAMPLE_S` from the
 springs that carry the chassis, as the statics and the rolling resistance take them
@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.config import ConfigError, TwinConfig, load_config
+from amr_twin.model.config import ConfigError, TwinConfig, load_config
 from amr_twin.metrics import step_info
 from amr_twin.run import Command
 from amr_twin.experiments.chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
@@ -178,12 +178,12 @@ def _slip(series, cfg: TwinConfig) -> np.ndarray:
 
 def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s) -> dict:
     """When and why a drive wheel is least loaded: the accelerations at that instant and the
-    quasi-static loads they give (:func:`amr_twin.statics.solve` with d'Alembert's force).
+    quasi-static loads they give (:func:`amr_twin.model.statics.solve` with d'Alembert's force).
 
     ``loads`` (k, 6) support loads and ``vel`` (k, 6) base velocities (world linear, body
     angular) every :data:`SAMPLE_S`; ``s`` the run's series (for the yaw).
     """
-    from amr_twin.statics import solve
+    from amr_twin.model.statics import solve
 
     i, w = np.unravel_index(np.argmin(loads[:, :2]), loads[:, :2].shape)
     t = SAMPLE_S * (np.arange(len(loads)) + 1)
@@ -220,7 +220,7 @@ def _electrics(s, duration_s: float) -> dict:
 
 def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     from amr_twin.loop import Twin, TwinOptions
-    from amr_twin.statics import CONTACT_MIN_N
+    from amr_twin.model.statics import CONTACT_MIN_N
 
     recording = point.rrd_path is not None or point.mcap_path is not None
     twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty"))
@@ -298,9 +298,9 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
 
 def simulate_point(point: Point) -> dict:
     """Statics and one run of a sweep point, as one flat JSON-ready row."""
-    from amr_twin.build import BuildError
+    from amr_twin.model.build import BuildError
     from amr_twin.physics import DivergenceError
-    from amr_twin.statics import CONTACT_MIN_N, describe
+    from amr_twin.model.statics import CONTACT_MIN_N, describe
 
     wall0 = time.perf_counter()
     row = {"key": point.key, "fingerprint": point.fingerprint, "mass_kg": point.mass_kg,

@@ -49,7 +49,7 @@ import numpy as np
 
 from amr_twin.ros.bus import IMU_FRAME, Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.config_sections import ImuCfg
+from amr_twin.model.config_sections import ImuCfg
 from amr_twin.ros.messages import Header, Imu, MagneticField, Quaternion, Time, Vector3
 
 US = 1_000_000

@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from amr_twin.config_sections import LidarCfg
+from amr_twin.model.config_sections import LidarCfg
 
 US = 1_000_000
 SEEN_GROUPS = (0, 4)

@@ -14,7 +14,7 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli import app
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
 from amr_twin.controllers.firmware import AvrParams
 from amr_twin.loop import TwinOptions

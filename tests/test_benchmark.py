@@ -3,7 +3,7 @@
 import pytest
 
 from amr_twin.benchmark import run_benchmarks
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 
 README_KEYS = ("physics_us_per_step", "twin_s_per_sim_s", "bare_physics_s_per_sim_s", "ratio",
                "sensors_ratio", "lidar_scan_us", "lidar_scan_one_call_us")

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import yourdfpy
 
-from amr_twin import build as build_mod
-from amr_twin.build import GROUP_COLLISION, GROUP_PAYLOAD, GROUP_VISUAL, BuildError, build, urdf_string
-from amr_twin.config import load_config
-from amr_twin.mass import frame_members
-from amr_twin.paths import MODEL_DIR
+from amr_twin.model import build as build_mod
+from amr_twin.model.build import GROUP_COLLISION, GROUP_PAYLOAD, GROUP_VISUAL, BuildError, build, urdf_string
+from amr_twin.model.config import load_config
+from amr_twin.model.mass import frame_members
+from amr_twin.model.paths import MODEL_DIR
 
 
 def test_committed_files_are_not_stale(tmp_path):
@@ -128,7 +128,7 @@ def test_urdf_is_made_and_checked_once_per_robot(monkeypatch, tmp_path):
     assert build_mod.urdf_fingerprint(bigger) != build_mod.urdf_fingerprint(base)
     assert build_mod.robot_urdf(bigger) == urdf_string(bigger) and len(calls) == 2
     assert len(list((tmp_path / "urdf").glob("*.urdf"))) == 2
-    code = ("import amr_twin.build as b, sys; from amr_twin.config import load_config; "
+    code = ("import amr_twin.model.build as b, sys; from amr_twin.model.config import load_config; "
             "b.urdf_string = None; b.robot_urdf(load_config()); print('xacro' in sys.modules)")
     env = {**__import__("os").environ, "AMR_TWIN_CACHE_DIR": str(tmp_path)}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)

@@ -10,8 +10,8 @@ from typer.testing import CliRunner
 from amr_twin import calibration_report as cr
 from amr_twin.calibration import BENCH_RPM, _with, thesis_residual
 from amr_twin.cli import app
-from amr_twin.config import load_config
-from amr_twin.paths import MODEL_DIR
+from amr_twin.model.config import load_config
+from amr_twin.model.paths import MODEL_DIR
 
 REPORT = MODEL_DIR / "calibration.yaml"
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
 from amr_twin.experiments.chapter5_scorecard import SCORECARD, scorecard, worse
 from amr_twin.loop import TwinOptions

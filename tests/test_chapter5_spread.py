@@ -34,7 +34,7 @@ def test_chapter5_samples_report_the_spread_beside_the_thesis(tmp_path):
 
 
 def test_true_speed_bands_bracket_the_median():
-    from amr_twin.config import load_config
+    from amr_twin.model.config import load_config
     from amr_twin.experiments import chapter5_spread
     from amr_twin.uncertainty import ParameterSpace
 

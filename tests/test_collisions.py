@@ -7,7 +7,7 @@ from typer.testing import CliRunner
 
 from amr_twin.cli import app
 from amr_twin.collisions import StartPoseError
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.run import Command, run_command
 

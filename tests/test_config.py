@@ -5,7 +5,7 @@ import math
 import pytest
 import yaml
 
-from amr_twin.config import DEFAULT_CONFIG, ConfigError, load_config, parameter_table
+from amr_twin.model.config import DEFAULT_CONFIG, ConfigError, load_config, parameter_table
 
 
 def test_every_parameter_has_unit_and_source():
@@ -83,17 +83,17 @@ def test_battery_voltages_must_be_ordered():
 
 
 def test_model_readme_lists_every_parameter():
-    from amr_twin.paths import MODEL_DIR
+    from amr_twin.model.paths import MODEL_DIR
     readme = (MODEL_DIR / "README.md").read_text()
     missing = [key for key, *_ in parameter_table() if f"`{key}`" not in readme]
     assert not missing, f"models/amr/README.md lacks {missing}"
 
 
 def test_model_readme_is_current():
-    from amr_twin.parameter_doc import readme_text
-    from amr_twin.paths import MODEL_DIR
+    from amr_twin.model.parameter_doc import readme_text
+    from amr_twin.model.paths import MODEL_DIR
     assert (MODEL_DIR / "README.md").read_text() == readme_text(), \
-        "models/amr/README.md is stale: run python -m amr_twin.parameter_doc"
+        "models/amr/README.md is stale: run python -m amr_twin.model.parameter_doc"
 
 
 def test_a_parameter_file_that_is_a_folder_or_binary_is_named(tmp_path):

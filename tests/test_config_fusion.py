@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amr_twin.config import ConfigError, load_config
+from amr_twin.model.config import ConfigError, load_config
 
 
 def test_fusion_sections_loaded():

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.build import build
-from amr_twin.config import load_config
+from amr_twin.model.build import build
+from amr_twin.model.config import load_config
 from amr_twin.physics import DivergenceError, Physics
 from amr_twin.pins import HIGH, LOW, DriverPins
 from amr_twin.plant import Plant

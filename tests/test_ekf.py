@@ -7,7 +7,7 @@ import pytest
 
 from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.controllers.ekf import EkfNode
 from amr_twin.ros.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Range, Time,
                                Twist, TwistWithCovariance, Vector3)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.controllers.ekf_model import (N_STATE, W, YAW, predict_mean, process_noise, range_model,
                                             transition_jacobian)
 

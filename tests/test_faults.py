@@ -8,7 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli import app
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.faults import FaultError, kind_names, parse_fault, parse_faults
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.run import Command, run_mission

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.experiments import fusion, fusion_report
 
 SHORT_ROUTE = """\
@@ -149,7 +149,7 @@ def test_files_of_the_report(default_run):
 
 
 def test_the_saved_map_loads_as_a_world(default_run):
-    from amr_twin.build import build
+    from amr_twin.model.build import build
 
     _, _, out = default_run
     model = build(load_config(), out / "map.yaml").model

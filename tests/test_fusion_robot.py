@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.experiments.fusion_robot import CLIP_SIGMA, NOMINAL, RobotErrors, draw
 from amr_twin.loop import TwinOptions
 from amr_twin.run import Command, run_command
@@ -33,7 +33,7 @@ def test_the_errors_go_into_the_physics_and_not_into_the_odometry():
     true = robot.config(cfg)
     assert true.wheel.radius_m == cfg.wheel.radius_m and true.wheel.separation_m == cfg.wheel.separation_m
     assert true.wheel.radius_of("left") == pytest.approx(0.1247) and true.wheel.radius_of("right") == pytest.approx(0.1254)
-    from amr_twin.build import build
+    from amr_twin.model.build import build
 
     model = build(true, "empty").model
     left, right = (model.geom(f"amr/wheel_{s}_collision") for s in ("left", "right"))

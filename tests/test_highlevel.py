@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.controllers.diff_drive import DiffDriveNode
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.ros.messages import Twist, Vector3

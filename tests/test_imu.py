@@ -7,7 +7,7 @@ import pytest
 
 from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.sensors.imu import AxisModel, ImuSensor, axis_models, corrupt
 
 
@@ -32,7 +32,7 @@ class Rig:
     """The robot on the empty floor with an IMU on its own clock, stepped by hand."""
 
     def __init__(self, overrides=None, seed=0):
-        from amr_twin.build import build
+        from amr_twin.model.build import build
         from amr_twin.physics import Physics
 
         self.cfg = load_config(overrides=overrides or {})

@@ -6,10 +6,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from amr_twin.build import build
+from amr_twin.model.build import build
 from amr_twin.ros.bus import Bus
 from amr_twin.clock import VirtualClock
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.sensors.lidar import Lidar
 
 ROOM = (-2.0, 3.0, -1.5, 2.5)  # inner faces x_min, x_max, y_min, y_max, m

@@ -44,7 +44,7 @@ def test_scan_and_odom_live_at_their_rates_as_in_the_mcap(tmp_path, typestore):
     """Acceptance 1: /scan and /odom advertised with their ROS 2 schemas in CDR as in the .mcap
     (the same run writes one), received at their rates within 10 %, the simulated time going
     with the wall clock within 5 %. Every channel of the .mcap is served, with the same bytes."""
-    from amr_twin.config import load_config
+    from amr_twin.model.config import load_config
     from amr_twin.mcap_log import LATCHED
 
     mcap = tmp_path / "run.mcap"

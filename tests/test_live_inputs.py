@@ -92,7 +92,7 @@ def test_wheel_requests_checked(typestore):
 @pytest.fixture()
 def served():
     """An idle twin (stop at t = 0) served on a free port, unpaced; the test advances it."""
-    from amr_twin.config import load_config
+    from amr_twin.model.config import load_config
     from amr_twin.live import LiveOptions, LiveSession
     from amr_twin.loop import Twin, TwinOptions
 

@@ -6,7 +6,7 @@ import threading
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.live_pacer import Pacer, PacerClosed
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.faults import parse_faults
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach, record_run

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.loop import Twin, TwinOptions
 
 SENSOR_TOPICS = ("odom", "tf", "imu/data_raw", "imu/mag", "scan")

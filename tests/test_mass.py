@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from amr_twin import mass
-from amr_twin.config import load_config
+from amr_twin.model import mass
+from amr_twin.model.config import load_config
 
 
 # Hand figures from amr.yaml (chassis 0.70 x 0.40 m, floors at 0.10 / 0.27 / 0.42 m,
@@ -107,6 +107,6 @@ def test_mass_module_needs_no_mesh_library():
     import subprocess
     import sys
 
-    code = "import sys, amr_twin.build, amr_twin.statics; print('trimesh' in sys.modules)"
+    code = "import sys, amr_twin.model.build, amr_twin.model.statics; print('trimesh' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 from amr_twin.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach, record_run
 from amr_twin.run import Command, run_mission

@@ -8,7 +8,7 @@ import yaml
 
 from amr_twin.controllers.occupancy_grid import FREE_THRESH, OccupancyGrid
 from amr_twin.ros.messages import Header, LaserScan, Time
-from amr_twin.worlds import load_map, read_pgm
+from amr_twin.model.worlds import load_map, read_pgm
 
 HALF_M = 2.0  # the room's inner faces at x, y = +-2 m
 RES_M = 0.05
@@ -145,9 +145,9 @@ def test_save_writes_map_server_files_that_the_world_loader_reads(tmp_path):
 @pytest.fixture(scope="module")
 def warehouse_scans():
     """10 s near the east wall: 0.6 m/s east for 4 s, then one turn in place; scans and the true pose."""
-    from amr_twin.config import load_config
+    from amr_twin.model.config import load_config
     from amr_twin.loop import Twin, TwinOptions
-    from amr_twin.world_geometry import scan_plane_boxes
+    from amr_twin.model.world_geometry import scan_plane_boxes
 
     cfg = load_config()
     twin = Twin(cfg, TwinOptions(sensors=True, firmware="improved", world="warehouse", start_xy_yaw=(5.5, 0.5, 0.0)))
@@ -167,7 +167,7 @@ def warehouse_scans():
 def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_path):
     from amr_twin import se2
     from amr_twin.controllers.lidar_odometry import beam_times_s
-    from amr_twin.world_geometry import distance_to_boxes_m
+    from amr_twin.model.world_geometry import distance_to_boxes_m
 
     scans, t_true, pose_true, boxes, laser_xy_yaw = warehouse_scans
     grid = OccupancyGrid(RES_M, 21.0, 15.0, (-10.5, -7.5))

@@ -278,7 +278,7 @@ def test_node_publishes_cmd_vel_at_its_rate_and_zero_when_done():
 def test_twin_rounds_the_first_rack_corners_without_touching_anything():
     """The default route's two corners around the north rack's east end, improved firmware, true pose."""
     mujoco = pytest.importorskip("mujoco")
-    from amr_twin.config import load_config
+    from amr_twin.model.config import load_config
     from amr_twin.controllers.diff_drive import DiffDriveNode
     from amr_twin.loop import Twin, TwinOptions
 

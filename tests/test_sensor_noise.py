@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.config import load_config
+from amr_twin.model.config import load_config
 
 GYRO_SIGMA_RAD_S = math.radians(0.03) * math.sqrt(100.0)
 ACCEL_SIGMA_M_S2 = math.hypot(220e-6 * 9.80665 * math.sqrt(100.0), 0.00980665 / math.sqrt(12))

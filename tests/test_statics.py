@@ -5,16 +5,16 @@ import mujoco
 import numpy as np
 import pytest
 
-from amr_twin.build import export
-from amr_twin.config import load_config
-from amr_twin.statics import describe, solve, tip_margin_m
+from amr_twin.model.build import export
+from amr_twin.model.config import load_config
+from amr_twin.model.statics import describe, solve, tip_margin_m
 
 G = 9.81
 BALL_KG = 0.15
 
 
 def _mujoco_mass_kg(cfg) -> float:
-    """The robot's mass as MuJoCo sums its bodies (not amr_twin.mass)."""
+    """The robot's mass as MuJoCo sums its bodies (not amr_twin.model.mass)."""
     m = mujoco.MjModel.from_xml_path(str(_export(cfg)))
     return float(m.body_subtreemass[m.body("base_link").id])
 

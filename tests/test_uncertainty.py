@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from amr_twin.config import ConfigError
-from amr_twin.statics import solve
+from amr_twin.model.config import ConfigError
+from amr_twin.model.statics import solve
 from amr_twin.uncertainty import (ParameterSpace, interval, noise_level, rank_correlations, unit_samples,
                                   with_values)
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.world_geometry import Footprints, distance_to_boxes_m, scan_plane_boxes, surface_samples_m
+from amr_twin.model.world_geometry import Footprints, distance_to_boxes_m, scan_plane_boxes, surface_samples_m
 
 
 def _one_box(yaw: float) -> Footprints:
@@ -34,8 +34,8 @@ def test_outline_samples_lie_on_the_outline():
 
 
 def test_warehouse_walls_at_lidar_height():
-    from amr_twin.build import build
-    from amr_twin.config import load_config
+    from amr_twin.model.build import build
+    from amr_twin.model.config import load_config
 
     model = build(load_config(), "warehouse").model
     boxes = scan_plane_boxes(model, 0.45)

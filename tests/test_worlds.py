@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from amr_twin.worlds import load_map, merge_boxes, read_pgm, wall_boxes, world_xml, write_pgm
+from amr_twin.model.worlds import load_map, merge_boxes, read_pgm, wall_boxes, world_xml, write_pgm
 
 
 def _map(tmp_path, image, origin=(-1.0, -2.0, 0.0), negate=0, res=0.1):
@@ -75,9 +75,9 @@ def test_rotated_origin_rotates_the_boxes(tmp_path):
 
 
 def test_shipped_example_map_builds():
-    from amr_twin.build import build
-    from amr_twin.config import load_config
-    from amr_twin.paths import ROOT
+    from amr_twin.model.build import build
+    from amr_twin.model.config import load_config
+    from amr_twin.model.paths import ROOT
 
     path = ROOT / "models" / "worlds" / "room_map.yaml"
     assert len(merge_boxes(load_map(path).occupied)) < 20
@@ -105,7 +105,7 @@ def _write_map(tmp_path, yaml_text, pgm=None):
     ("- a list\n", None, "expected a map_server mapping"),
 ])
 def test_map_errors_are_one_line_naming_the_file(tmp_path, yaml_text, pgm, text):
-    from amr_twin.worlds import MapError
+    from amr_twin.model.worlds import MapError
 
     path = _write_map(tmp_path, yaml_text, pgm)
     with pytest.raises(MapError) as exc:
@@ -126,7 +126,7 @@ def test_a_malformed_mjcf_world_is_named(tmp_path):
 
 
 def test_worlds_declare_their_start_pose():
-    from amr_twin.worlds import default_start
+    from amr_twin.model.worlds import default_start
 
     assert default_start("warehouse") == (-6.0, 0.0, 0.0)
     assert default_start("empty") == (0.0, 0.0, 0.0) and default_start("nowhere.xml") == (0.0, 0.0, 0.0)

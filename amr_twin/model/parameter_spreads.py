@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from amr_twin.config import ConfigError, TwinConfig
-from amr_twin.config_leaves import field_range
+from amr_twin.model.config import ConfigError, TwinConfig
+from amr_twin.model.config_leaves import field_range
 
 DEFAULT_TOLERANCE = {"thesis": 0.02, "datasheet": 0.05, "estimate": 0.20}
 """Half-width of the default uniform spread, relative to the value, by source kind."""
@@ -103,7 +103,7 @@ def _is_setting(key: str) -> bool:
 
 def spread_of(key: str, value: Any, meta: dict, calibrated: dict[str, float] | None = None) -> Spread:
     """A parameter's :class:`Spread` from its leaf description (``meta`` of
-    :func:`amr_twin.config.load_parameters`). ``calibrated``: 1 sigma of the calibration's
+    :func:`amr_twin.model.config.load_parameters`). ``calibrated``: 1 sigma of the calibration's
     parameters (their correlations are the report's)."""
     bounds = schema_bounds(key)
     if "range" in meta:
@@ -139,7 +139,7 @@ def with_values(base: TwinConfig, values: dict[str, Any]) -> TwinConfig:
     """``base`` with ``{dotted key: value}`` replaced, validated again."""
     from pydantic import ValidationError
 
-    from amr_twin.config import _format_error
+    from amr_twin.model.config import _format_error
 
     data = base.model_dump()
     for key, value in values.items():

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@
 Each field is declared with :func:`P`, which carries its unit (checked against the
 file's ``unit:`` when loading) and its allowed range; cross-field checks are
 ``model_validator``s that raise a one-line message naming the field. The sections
-are assembled into :class:`amr_twin.config.TwinConfig`, which also loads them.
+are assembled into :class:`amr_twin.model.config.TwinConfig`, which also loads them.
 
 Robot body and drive: :class:`SimCfg`, :class:`ChassisCfg`, :class:`DeckCfg`,
 :class:`ComponentsCfg`, :class:`WheelCfg`, :class:`CasterCfg`, :class:`PayloadCfg`,

@@ -1,6 +1,6 @@
 """The keys of a parameter leaf beyond its value: unit, source, and its uncertainty.
 
-:mod:`amr_twin.config` reads each leaf ``{value, unit, source}`` of the parameter file;
+:mod:`amr_twin.model.config` reads each leaf ``{value, unit, source}`` of the parameter file;
 a leaf may add one of ``range: [lo, hi]``, ``sigma: s`` or ``follows: section.key``
 with a ``reason:`` (see :mod:`amr_twin.uncertainty` for what they mean when drawing).
 This module checks them, one line per refusal naming the parameter.
@@ -18,7 +18,7 @@ SPREAD_KEYS = ("range", "sigma", "follows")
 
 
 def _error(message: str) -> Exception:
-    from amr_twin.config import ConfigError  # the one error type of the parameter files
+    from amr_twin.model.config import ConfigError  # the one error type of the parameter files
 
     return ConfigError(message)
 

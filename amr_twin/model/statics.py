@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.config import TwinConfig
+from amr_twin.model.config import TwinConfig
 
 CONTACT_MIN_N = 0.5
 """A support carrying less than this is counted as lifted off."""
@@ -54,7 +54,7 @@ class Statics:
 
 def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
     """Total mass (kg) and centre of mass ((3,), m, base_link) with the payload."""
-    from amr_twin import mass
+    from amr_twin.model import mass
 
     c, w, k, p = cfg.chassis, cfg.wheel, cfg.caster, cfg.payload
     parts = [mass.chassis_inertial(cfg), *mass.sensor_inertials_in_base(cfg)]
@@ -89,7 +89,7 @@ def solve(cfg: TwinConfig, accel_m_s2: tuple[float, float] = (0.0, 0.0)) -> Stat
     quasi-static loads of a robot that accelerates or turns: d'Alembert's force ``-m a``
     at the centre of mass moves the weight's line of action by ``-a z_com / g``.
     """
-    from amr_twin import mass
+    from amr_twin.model import mass
 
     g = cfg.sim.gravity_m_s2
     m_kg, com = robot_mass_com(cfg)

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.paths import ROOT
+from amr_twin.model.paths import ROOT
 
 WALL_HEIGHT_M = 2.0
 WORLD_DIR = ROOT / "models" / "worlds"
@@ -189,7 +189,7 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
     Raises :class:`MapError` (one line naming the YAML or the image) when a field is
     missing or out of range, or the image cannot be read.
     """
-    from amr_twin.yaml_file import read_yaml
+    from amr_twin.model.yaml_file import read_yaml
 
     yaml_path = Path(yaml_path)
     meta = read_yaml(yaml_path, "map", MapError)

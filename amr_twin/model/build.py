@@ -30,9 +30,9 @@ import mujoco
 import numpy as np
 import yaml
 
-from amr_twin import mass
-from amr_twin.config import TwinConfig
-from amr_twin.paths import MODEL_DIR, ROOT
+from amr_twin.model import mass
+from amr_twin.model.config import TwinConfig
+from amr_twin.model.paths import MODEL_DIR, ROOT
 
 XACRO_FILE = MODEL_DIR / "amr.urdf.xacro"
 WORLD_DIR = ROOT / "models" / "worlds"
@@ -241,7 +241,7 @@ as stiff as the 1 ms step allows (MuJoCo recommends a time constant of at least 
 the timestep; an impedance of 0.98 made the caster balls chatter). A support then
 sinks a few micrometres into the floor, so the load split follows the physical
 springs (tyres, caster springs) within 0.4 % of the hand calculation of
-:mod:`amr_twin.statics`, not the solver's softness (default solref/solimp: 1.4 %)."""
+:mod:`amr_twin.model.statics`, not the solver's softness (default solref/solimp: 1.4 %)."""
 
 
 def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
@@ -351,7 +351,7 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
         names = sorted(p.stem for p in WORLD_DIR.glob("*.xml"))
         raise BuildError(f"--world {world}: no such world (available: {', '.join(names)})")
     if path.suffix in (".yaml", ".yml"):  # a ROS map_server map: walls extruded from the image
-        from amr_twin.worlds import world_xml
+        from amr_twin.model.worlds import world_xml
         spec = mujoco.MjSpec.from_string(world_xml(path))
     else:
         try:

@@ -16,7 +16,7 @@ source's kind (:mod:`amr_twin.uncertainty`). :func:`load_parameters` returns the
 leaf descriptions next to the configuration.
 
 The section classes (``SimCfg`` ... ``MappingCfg``) are declared in
-:mod:`amr_twin.config_sections`; this module assembles them into :class:`TwinConfig`
+:mod:`amr_twin.model.config_sections`; this module assembles them into :class:`TwinConfig`
 and holds the loading (YAML leaves to plain values, overrides, error messages).
 """
 
@@ -30,12 +30,12 @@ from typing import Any, Iterator
 import yaml
 from pydantic import BaseModel, ValidationError, model_validator
 
-from amr_twin.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg, DriverCfg,
+from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg, DriverCfg,
                               EkfCfg, ImuCfg, LidarCfg, LidarOdometryCfg, MappingCfg, MotorCfg,
                               PayloadCfg, Section, SimCfg, UwbCfg, WheelCfg)
-from amr_twin.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
-from amr_twin.config_leaves import field_range as _field_range
-from amr_twin.paths import MODEL_DIR
+from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
+from amr_twin.model.config_leaves import field_range as _field_range
+from amr_twin.model.paths import MODEL_DIR
 
 DEFAULT_CONFIG = MODEL_DIR / "amr.yaml"
 SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)

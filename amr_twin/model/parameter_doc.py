@@ -1,17 +1,17 @@
 """The parameter table of ``models/amr/README.md``, generated from the parameter file.
 
-``python -m amr_twin.parameter_doc`` rewrites the README's table and mass summary
+``python -m amr_twin.model.parameter_doc`` rewrites the README's table and mass summary
 after a change of ``amr.yaml`` (a test fails when a parameter is missing from it).
 """
 
 from __future__ import annotations
 
-from amr_twin import mass
-from amr_twin.config import load_config, parameter_table
-from amr_twin.statics import sensitivity, solve
-from amr_twin.paths import MODEL_DIR
+from amr_twin.model import mass
+from amr_twin.model.config import load_config, parameter_table
+from amr_twin.model.statics import sensitivity, solve
+from amr_twin.model.paths import MODEL_DIR
 
-HEADER = "# AMR robot model (amr-twin)\n\nThe differential-drive warehouse AMR of the thesis (`../../../shared/seed`, ch. 2): an AISI304\ntube chassis with three floors, two BLDC hub-motor wheels on the mid-length axle, four\nspring-loaded ball casters at the deck corners, an RPLIDAR A1 on the front border of the\npayload floor and an Adafruit 9-DOF IMU on the second floor. Laid out after mujoco_menagerie.\n\n| file | what it is |\n|---|---|\n| `amr.yaml` | **the** parameter file: every value with unit and source (table below) |\n| `amr.urdf.xacro` | source of the geometry: links, joints, visuals, collision shapes, inertias from the parameters |\n| `amr.urdf` | generated URDF (checked with yourdfpy) |\n| `amr.xml` | generated robot MJCF (MjSpec): free joint, motors, caster springs, contact parameters, sensors, sites |\n| `scene.xml` | the robot in the default warehouse (`../worlds/warehouse.xml`) for MuJoCo's viewer |\n\n## Build steps\n\n```\namr-twin model --export-urdf models/amr/amr.urdf --export-mjcf models/amr/amr.xml\n```\n\n1. `amr.yaml` is loaded and validated (pydantic, frozen; unknown keys, wrong units, out-of-range\n   or NaN values are refused with a one-line error). Overrides: `--params mine.yaml`, `--set key=value`.\n2. Mass properties are computed in closed form from the same parametric geometry\n   (`amr_twin/mass.py`, checked against trimesh in the tests): the frame's hollow tubes (outer\n   box minus bore), the floor plates, each component as a box, the hub-motor stators on the\n   chassis and the rotors in the wheel links (solid cylinders), the caster units (solid spheres).\n3. xacro renders `amr.urdf.xacro` with the resolved parameters; yourdfpy loads and validates it.\n4. MuJoCo imports the URDF into an MjSpec (visuals kept, no link fusion) and the build adds what\n   URDF cannot carry: the free joint; ellipsoid wheel collision shapes (a cylinder loses contact\n   when spinning in place); each tyre's radial compliance as a vertical slide between hub and\n   chassis (stiffness, damping); frictionless caster balls (`priority=1`, `condim=1`) on vertical\n   slide joints with stiffness, damping and a preload (`springref` below the lower stop); stiff\n   contacts for wheels and balls (solref 2 ms, solimp 0.97), so that the load split follows the\n   springs, not the solver; the motors as affine actuators (torque = Kt/R·v − Kt·Ke/R·ω, clipped\n   at Kt·I_max: MuJoCo's quasi-static DC motor, evaluated in C; a braked motor is the same\n   motor at zero phase voltage, its phases shorted); IMU, laser and base sites and sensors; the\n   payload box; geom groups (0 world, 1 robot visual, 2 robot collision, 4 payload). The\n   tyres' and casters' rolling resistance, proportional to their loads, is applied while the\n   twin runs (`amr_twin/rolling_resistance.py`).\n5. The robot is attached to a world (`--world warehouse|empty|PATH`) and compiled. A test fails\n   when the committed `amr.urdf`/`amr.xml` differ from what the build makes.\n\n"
+HEADER = "# AMR robot model (amr-twin)\n\nThe differential-drive warehouse AMR of the thesis (`../../../shared/seed`, ch. 2): an AISI304\ntube chassis with three floors, two BLDC hub-motor wheels on the mid-length axle, four\nspring-loaded ball casters at the deck corners, an RPLIDAR A1 on the front border of the\npayload floor and an Adafruit 9-DOF IMU on the second floor. Laid out after mujoco_menagerie.\n\n| file | what it is |\n|---|---|\n| `amr.yaml` | **the** parameter file: every value with unit and source (table below) |\n| `amr.urdf.xacro` | source of the geometry: links, joints, visuals, collision shapes, inertias from the parameters |\n| `amr.urdf` | generated URDF (checked with yourdfpy) |\n| `amr.xml` | generated robot MJCF (MjSpec): free joint, motors, caster springs, contact parameters, sensors, sites |\n| `scene.xml` | the robot in the default warehouse (`../worlds/warehouse.xml`) for MuJoCo's viewer |\n\n## Build steps\n\n```\namr-twin model --export-urdf models/amr/amr.urdf --export-mjcf models/amr/amr.xml\n```\n\n1. `amr.yaml` is loaded and validated (pydantic, frozen; unknown keys, wrong units, out-of-range\n   or NaN values are refused with a one-line error). Overrides: `--params mine.yaml`, `--set key=value`.\n2. Mass properties are computed in closed form from the same parametric geometry\n   (`amr_twin/model/mass.py`, checked against trimesh in the tests): the frame's hollow tubes (outer\n   box minus bore), the floor plates, each component as a box, the hub-motor stators on the\n   chassis and the rotors in the wheel links (solid cylinders), the caster units (solid spheres).\n3. xacro renders `amr.urdf.xacro` with the resolved parameters; yourdfpy loads and validates it.\n4. MuJoCo imports the URDF into an MjSpec (visuals kept, no link fusion) and the build adds what\n   URDF cannot carry: the free joint; ellipsoid wheel collision shapes (a cylinder loses contact\n   when spinning in place); each tyre's radial compliance as a vertical slide between hub and\n   chassis (stiffness, damping); frictionless caster balls (`priority=1`, `condim=1`) on vertical\n   slide joints with stiffness, damping and a preload (`springref` below the lower stop); stiff\n   contacts for wheels and balls (solref 2 ms, solimp 0.97), so that the load split follows the\n   springs, not the solver; the motors as affine actuators (torque = Kt/R·v − Kt·Ke/R·ω, clipped\n   at Kt·I_max: MuJoCo's quasi-static DC motor, evaluated in C; a braked motor is the same\n   motor at zero phase voltage, its phases shorted); IMU, laser and base sites and sensors; the\n   payload box; geom groups (0 world, 1 robot visual, 2 robot collision, 4 payload). The\n   tyres' and casters' rolling resistance, proportional to their loads, is applied while the\n   twin runs (`amr_twin/rolling_resistance.py`).\n5. The robot is attached to a world (`--world warehouse|empty|PATH`) and compiled. A test fails\n   when the committed `amr.urdf`/`amr.xml` differ from what the build makes.\n\n"
 
 
 def _fmt(value) -> str:
@@ -49,7 +49,7 @@ def _spread_cell(space, key: str) -> str:
 
 def _uncertainty_text(space) -> str:
     """How each parameter's spread is set, and the calibration's correlations."""
-    from amr_twin.parameter_spreads import DEFAULT_TOLERANCE
+    from amr_twin.model.parameter_spreads import DEFAULT_TOLERANCE
 
     rep = space.calibration
     head = "| | " + " | ".join(f"`{k}`" for k in rep.keys) + " |\n|---|" + "---|" * len(rep.keys) + "\n"
@@ -76,7 +76,7 @@ def _statics_text(cfg) -> str:
     loads = ", ".join(f"{k} {v:.1f} N" for k, v in st.loads_n.items())
     rows = "\n".join(f"| {r['case']} | {r['variant']} | {r['wheel_left']:.1f} | {r['caster_front_left']:.1f} | "
                      f"{r['caster_rear_left']:.1f} | {', '.join(r['lifted']) or '-'} |" for r in sensitivity(cfg))
-    return ("\n## Static loads\n\nFrom the springs that carry them (`amr_twin/statics.py`, a hand calculation that "
+    return ("\n## Static loads\n\nFrom the springs that carry them (`amr_twin/model/statics.py`, a hand calculation that "
             "a test checks against\na free settle of `amr.xml` on a plane): tyres of radial stiffness "
             "`wheel.tyre_stiffness_n_m`, casters\nwith their preload and spring, whose balls at the lower stop reach "
             "`caster.drop_m` below the unloaded\ntyres. Without payload: " + loads + ".\n\n"

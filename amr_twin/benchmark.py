@@ -15,9 +15,9 @@ import time
 
 from amr_twin.model.build import build
 from amr_twin.model.config import TwinConfig
-from amr_twin.physics import Physics
-from amr_twin.pins import DriverPins
-from amr_twin.plant import Plant
+from amr_twin.sim.physics import Physics
+from amr_twin.sim.pins import DriverPins
+from amr_twin.sim.plant import Plant
 
 REPEATS = 5
 timer = time.process_time

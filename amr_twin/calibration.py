@@ -43,9 +43,9 @@ import yaml
 
 from amr_twin.atomic_file import write_text
 from amr_twin.model.config import TwinConfig, load_config
-from amr_twin.loop import TwinOptions
+from amr_twin.sim.loop import TwinOptions
 from amr_twin.metrics import step_info
-from amr_twin.run import Command, run_command
+from amr_twin.sim.run import Command, run_command
 
 PARAMETERS = {  # dotted key: (lower, upper) bounds, physically plausible
     "driver.gain": (0.8, 4.0),
@@ -158,7 +158,7 @@ def bench_current_a(cfg: TwinConfig, wheel: int, quantity: str = BENCH_QUANTITY,
 def command_reference(cfg: TwinConfig, command: Command) -> tuple[float, float]:
     """Signed wheel references (RPM) the client sends for ``command``."""
     from amr_twin.ros.bus import Bus
-    from amr_twin.clock import VirtualClock
+    from amr_twin.sim.clock import VirtualClock
     from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
 
     bus = Bus(VirtualClock())

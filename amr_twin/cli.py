@@ -103,7 +103,7 @@ def _guard(func):
     from amr_twin.atomic_file import WriteError
     from amr_twin.model.build import BuildError
     from amr_twin.model.config import ConfigError
-    from amr_twin.physics import DivergenceError
+    from amr_twin.sim.physics import DivergenceError
 
     try:
         return func()
@@ -278,8 +278,8 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
     The fit compares the twin's published speeds with the log's over the log's span (plus
     0.5 s); a shorter log would only be scored by a fixed penalty, not fitted.
     """
-    from amr_twin.loop import TwinOptions
-    from amr_twin.run import Command, run_command
+    from amr_twin.sim.loop import TwinOptions
+    from amr_twin.sim.run import Command, run_command
 
     for text, wheels in log.items():
         duration = max(float(v[:, 0].max()) for v in wheels.values()) + 0.5

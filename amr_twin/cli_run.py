@@ -2,11 +2,11 @@
 
 ``amr-twin run linear|angular|motor|stop`` sends one wheel_Command_Client call at
 t = 0 and runs the twin for ``--duration-s``; ``amr-twin run --mission FILE`` runs
-a timed list of them (format in :mod:`amr_twin.mission`). The shared options
+a timed list of them (format in :mod:`amr_twin.sim.mission`). The shared options
 (:mod:`amr_twin.cli_options`) go before or after the command kind. ``--csv`` writes
 the time series, ``--json`` prints one summary object, ``--fault`` injects faults
-(:mod:`amr_twin.faults`), ``--stop-on-collision`` ends the run at the first
-collision (:mod:`amr_twin.collisions`).
+(:mod:`amr_twin.sim.faults`), ``--stop-on-collision`` ends the run at the first
+collision (:mod:`amr_twin.sim.collisions`).
 
 Everything is checked before the model is built: numbers, faults, the start pose
 format, every output path (:mod:`amr_twin.outputs`). Exit codes: 0 done (collisions
@@ -74,10 +74,10 @@ def _duration(opts: RunOptions, default_s: float) -> float:
 def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RUN_S,
             mission_faults: tuple[str, ...] = ()) -> None:
     """Check everything, run ``steps`` and report; exits non-zero on a refusal or a stop."""
-    from amr_twin.faults import FaultError, parse_faults
-    from amr_twin.loop import TwinOptions
+    from amr_twin.sim.faults import FaultError, parse_faults
+    from amr_twin.sim.loop import TwinOptions
     from amr_twin.outputs import OutputError, check_outputs
-    from amr_twin.run import run_mission
+    from amr_twin.sim.run import run_mission
 
     duration_s = _duration(opts, default_s)
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
@@ -103,7 +103,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 
     def work():
         from amr_twin.atomic_file import all_or_nothing
-        from amr_twin.loop import Twin
+        from amr_twin.sim.loop import Twin
 
         twin = Twin(cfg, options)
         if recording:
@@ -160,8 +160,8 @@ def register(app: typer.Typer) -> None:
     """Add ``run`` (linear, angular, motor, stop, --mission) and ``client`` to the app."""
     from amr_twin.menu import client
 
-    def Command(*args, **kwargs):  # noqa: N802 - amr_twin.run.Command, imported when a run starts
-        from amr_twin.run import Command as RunCommand
+    def Command(*args, **kwargs):  # noqa: N802 - amr_twin.sim.run.Command, imported when a run starts
+        from amr_twin.sim.run import Command as RunCommand
 
         return RunCommand(*args, **kwargs)
 
@@ -181,7 +181,7 @@ def register(app: typer.Typer) -> None:
     @run_app.callback(invoke_without_command=True)
     @shared(fail)
     def run(opts: RunOptions, ctx: typer.Context,
-            mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/mission.py); "
+            mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/sim/mission.py); "
                                                    "its faults: list adds to --fault.")) -> None:
         """Run a command kind (linear, angular, motor, stop) or a --mission file."""
         if ctx.invoked_subcommand is not None:
@@ -190,7 +190,7 @@ def register(app: typer.Typer) -> None:
             return
         if mission is None:
             fail("give a command (linear, angular, motor, stop) or --mission FILE")
-        from amr_twin.mission import MissionError, load_mission_file
+        from amr_twin.sim.mission import MissionError, load_mission_file
 
         try:
             plan = load_mission_file(mission)

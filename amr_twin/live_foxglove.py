@@ -26,7 +26,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from amr_twin import live_inputs
-from amr_twin.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
+from amr_twin.sim.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
 from amr_twin.live_rows import LiveRows
 from amr_twin.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.messages import String, TFMessage

@@ -2,8 +2,8 @@
 
 A grid sampler keeps, at each instant of the record grid, the loop's sensor row and the pin
 row the recorder will pair with it; :meth:`LiveRows.take` turns the rows the clock has passed
-into the series' columns with the recorder's own formulas (:func:`~amr_twin.plant.motor_currents_a`,
-:func:`~amr_twin.plant.battery_current_a`, the state of charge summed in the same order), so
+into the series' columns with the recorder's own formulas (:func:`~amr_twin.sim.plant.motor_currents_a`,
+:func:`~amr_twin.sim.plant.battery_current_a`, the state of charge summed in the same order), so
 that a live viewer shows the numbers the ``.mcap`` and the ``.rrd`` hold, bit for bit.
 """
 
@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from amr_twin.model.build import LOOP_SENSOR_DIM
-from amr_twin.plant import battery_current_a, motor_currents_a
+from amr_twin.sim.plant import battery_current_a, motor_currents_a
 from amr_twin.recorder import RAD_S_TO_RPM, yaw_from_quat
 
 

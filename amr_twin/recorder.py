@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from amr_twin.model.build import LOOP_SENSOR_DIM
-from amr_twin.plant import MODE_CODES, battery_current_a, motor_currents_a
+from amr_twin.sim.plant import MODE_CODES, battery_current_a, motor_currents_a
 
 RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
 

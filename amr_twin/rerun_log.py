@@ -3,7 +3,7 @@
 Two stages, so that a recorded run costs little while it runs:
 
 1. :class:`~amr_twin.rerun_capture.Capture` (:func:`attach`, :mod:`amr_twin.rerun_capture`)
-   is attached to a :class:`~amr_twin.loop.Twin` before it runs. It taps the bus and
+   is attached to a :class:`~amr_twin.sim.loop.Twin` before it runs. It taps the bus and
    samples the world pose of each robot body as a grid sampler of the loop, so the
    run is unchanged.
 2. After the run :func:`write_rrd` (or :func:`record_run`, which also writes the
@@ -27,7 +27,7 @@ Entities::
     world/uwb/anchors                   static Points3D of the anchors
     world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
     commands                            TextLog of wheel_Command and the client calls
-    events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/event_log.py)
+    events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/sim/event_log.py)
 
 A default blueprint (3D view + time-series plots) is sent with the recording.
 """
@@ -37,7 +37,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from amr_twin.atomic_file import replacing
-from amr_twin.event_log import has_events, log_events
+from amr_twin.sim.event_log import has_events, log_events
 from amr_twin.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
 from amr_twin.rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,  # noqa: F401
@@ -92,7 +92,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
         _log_electrics(rec, series)
         _log_commands(rec, series, result)
         _log_trajectory(rec, series)
-        log_events(rec, capture.twin)  # collisions and faults (amr_twin/event_log.py)
+        log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
         rec.flush()
         rec.disconnect()
     return path
@@ -101,7 +101,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
 def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> dict[str, Path]:
     """Write the recordings of a finished run (its twin was :func:`attach`-ed before running).
 
-    ``result`` (a :class:`~amr_twin.run.RunResult`) adds the client calls; without it
+    ``result`` (a :class:`~amr_twin.sim.run.RunResult`) adds the client calls; without it
     the series is taken from the twin's recorder. Returns {"rrd": path, "mcap": path}.
     """
     capture = twin_or_capture if isinstance(twin_or_capture, Capture) else capture_of(twin_or_capture)

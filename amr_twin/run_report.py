@@ -91,9 +91,9 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
     """The ``--json`` object of a run.
 
     ``collisions``: every contact episode of the robot's body with the world
-    (:meth:`amr_twin.collisions.Collision.as_dict`); ``stopped_by_collision``: the run
+    (:meth:`amr_twin.sim.collisions.Collision.as_dict`); ``stopped_by_collision``: the run
     ended at the first one (``--stop-on-collision``); ``faults``: each injected fault
-    with its effect (:meth:`amr_twin.fault_injector.FaultInjector.report`).
+    with its effect (:meth:`amr_twin.sim.fault_injector.FaultInjector.report`).
     """
     import numpy as np
 

@@ -15,9 +15,9 @@ import mujoco
 
 from amr_twin.benchmark import REPEATS, timer
 from amr_twin.ros.bus import Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import TwinConfig
-from amr_twin.loop import Twin
+from amr_twin.sim.loop import Twin
 from amr_twin.sensors.lidar import Lidar
 from amr_twin.twin_benchmark import twin_run_s
 

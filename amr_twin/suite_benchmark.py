@@ -87,7 +87,7 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
     import mujoco
 
     from amr_twin.experiments import payload_sweep
-    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.sim.loop import Twin, TwinOptions
 
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
         t0 = timer()
@@ -112,9 +112,9 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
 
 def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
     """CPU of writing the ``.rrd`` of a 60 s and a 240 s run with sensors (interleaved writes)."""
-    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.sim.loop import Twin, TwinOptions
     from amr_twin.rerun_log import attach, write_rrd
-    from amr_twin.run import Command, run_mission
+    from amr_twin.sim.run import Command, run_mission
 
     runs = {}
     for duration in RRD_DURATIONS_S:

@@ -15,7 +15,7 @@ import mujoco
 
 from amr_twin.benchmark import REPEATS, timer
 from amr_twin.model.config import TwinConfig
-from amr_twin.loop import Twin, TwinOptions
+from amr_twin.sim.loop import Twin, TwinOptions
 
 
 def twin_run_s(cfg: TwinConfig, sim_s: float, firmware: str = "faithful",

@@ -29,9 +29,9 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Sequence
 
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
-from amr_twin.pins import DriverPins
+from amr_twin.sim.pins import DriverPins
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
 from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, FrameParser, TopicInfo,
                                       deserialize_float64, frame, serialize_float64,

@@ -61,7 +61,7 @@ from typing import Sequence
 import numpy as np
 
 from amr_twin.ros.bus import BASE_FRAME, ODOM_FRAME, Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import (Float64, Float64MultiArray, Header, Odometry, Point, Pose,
                                PoseWithCovariance, Quaternion, Time, Transform,
                                TransformStamped, Twist, TwistWithCovariance, Vector3)

@@ -36,7 +36,7 @@ from typing import Callable
 import numpy as np
 
 from amr_twin.ros.bus import Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import Twist, Vector3
 
 from amr_twin.controllers.route import (MAX_ROUTE_SPEED_M_S, ROUTE_FIELDS, Route, RouteError, distance_to_path_m,  # noqa: F401

@@ -31,9 +31,9 @@ from pathlib import Path
 
 from amr_twin.experiments import chapter5_payload as payload
 from amr_twin.model.config import TwinConfig
-from amr_twin.loop import TwinOptions
+from amr_twin.sim.loop import TwinOptions
 from amr_twin.metrics import step_info
-from amr_twin.run import Command, run_command
+from amr_twin.sim.run import Command, run_command
 
 WHEELS = ("left", "right")
 STEP_SPLIT_RPM = 75.0  # the thesis' split: "steps valued at maximum 75 RPM" and higher
@@ -199,9 +199,9 @@ def simulate(job: _Job) -> dict:
     if job.rrd_path is None and job.mcap_path is None and pace_us is None:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
-        from amr_twin.loop import Twin
+        from amr_twin.sim.loop import Twin
         from amr_twin.rerun_log import attach, record_run
-        from amr_twin.run import run_mission
+        from amr_twin.sim.run import run_mission
         from amr_twin.experiments.firmware_comparison import pace
 
         twin = Twin(cfg, options)

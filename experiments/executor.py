@@ -62,8 +62,8 @@ def _warm_worker(parent_pid: int) -> None:
     """Pool worker start-up: die with the parent, then import the twin (numpy, MuJoCo, the
     model build and the loop) before the first item arrives."""
     _watch_parent(parent_pid)
-    import amr_twin.loop  # noqa: F401
-    import amr_twin.run  # noqa: F401
+    import amr_twin.sim.loop  # noqa: F401
+    import amr_twin.sim.run  # noqa: F401
 
 
 def _ready() -> int:

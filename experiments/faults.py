@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.loop import TwinOptions
-from amr_twin.run import Command, run_mission
+from amr_twin.sim.loop import TwinOptions
+from amr_twin.sim.run import Command, run_mission
 
 SPEED_M_S = 0.5
 FAULT_T_S = 5.0
@@ -44,7 +44,7 @@ CASES = (
     "battery-cut@5:for=2",
     "estop@5:for=2",
 )
-"""The faults studied, one of each kind (KIND@T[:ARGS], amr_twin/faults.py)."""
+"""The faults studied, one of each kind (KIND@T[:ARGS], amr_twin/sim/faults.py)."""
 
 FIRMWARES = ("faithful", "improved")
 
@@ -61,7 +61,7 @@ class Case:
 
 def simulate(case: Case) -> dict:
     """Run one case; its series and fault report as plain arrays (picklable, for worker processes)."""
-    from amr_twin.faults import KINDS, parse_faults
+    from amr_twin.sim.faults import KINDS, parse_faults
 
     faults = parse_faults([case.fault]) if case.fault else ()
     sensors = any(KINDS[f.kind].needs_sensors for f in faults)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.faults import KINDS, kind_names, parse_fault
+from amr_twin.sim.faults import KINDS, kind_names, parse_fault
 from amr_twin.run_report import json_ready
 from amr_twin.experiments.executor import save_figure, write_text
 from amr_twin.experiments.faults import FAULT_T_S, FIRMWARES, SCENARIO, STOP_T_S
@@ -199,7 +199,7 @@ def markdown(results: dict) -> str:
         "it and the last one, the PWM at the end; the distance driven after it; for sensor faults the "
         "messages published after it. Recordings carry them as `/twin/faults` (diagnostic_msgs/"
         "DiagnosticArray) in the `.mcap` and `events/faults` in the `.rrd`. The faults act through small "
-        "hooks of the components (`amr_twin/fault_injector.py`); random draws (frame loss, chatter) follow "
+        "hooks of the components (`amr_twin/sim/fault_injector.py`); random draws (frame loss, chatter) follow "
         "`--seed`.", "",
         "## What the firmwares do", "",
         f"Scenario: {SCENARIO}. Regenerate this page and its figures with "

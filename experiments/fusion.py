@@ -35,7 +35,7 @@ from amr_twin.controllers.ekf import EkfNode
 from amr_twin.controllers.lidar_odometry import LidarOdometry
 from amr_twin.controllers.path_follower import PathFollowerNode
 from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
-from amr_twin.loop import Twin, TwinOptions
+from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.trajectory import TrajectoryErrors, errors
 from amr_twin.model.world_geometry import Footprints, scan_plane_boxes
 from amr_twin.experiments.fusion_map import build_map

@@ -51,7 +51,7 @@ import numpy as np
 
 from amr_twin.model.config import ConfigError, TwinConfig, load_config
 from amr_twin.metrics import step_info
-from amr_twin.run import Command
+from amr_twin.sim.run import Command
 from amr_twin.experiments.chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
 
 POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
@@ -219,7 +219,7 @@ def _electrics(s, duration_s: float) -> dict:
 
 
 def _dynamics(point: Point, cfg: TwinConfig) -> dict:
-    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.sim.loop import Twin, TwinOptions
     from amr_twin.model.statics import CONTACT_MIN_N
 
     recording = point.rrd_path is not None or point.mcap_path is not None
@@ -254,7 +254,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     s = twin.recorder.series()
     if recording:
         from amr_twin.rerun_log import record_run
-        from amr_twin.run import RunResult
+        from amr_twin.sim.run import RunResult
 
         result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
                            sim_s=point.duration_s, wall_s=0.0)
@@ -299,7 +299,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
 def simulate_point(point: Point) -> dict:
     """Statics and one run of a sweep point, as one flat JSON-ready row."""
     from amr_twin.model.build import BuildError
-    from amr_twin.physics import DivergenceError
+    from amr_twin.sim.physics import DivergenceError
     from amr_twin.model.statics import CONTACT_MIN_N, describe
 
     wall0 = time.perf_counter()

@@ -56,7 +56,7 @@ class HallSensors:
         self.jitter_us = float(jitter_us)
         self._rng = np.random.default_rng(seed)
         self._count = np.zeros((self.n_wheels, N_SENSORS), dtype=np.int64)
-        # fault injection (amr_twin/fault_injector.py): stuck sensors, glitches on the SC line
+        # fault injection (amr_twin/sim/fault_injector.py): stuck sensors, glitches on the SC line
         self.stuck = [[False] * N_SENSORS for _ in range(self.n_wheels)]
         self.glitch_rate_hz = [0.0] * self.n_wheels
         self._glitch_rng = np.random.default_rng([0 if seed is None else seed, 3])

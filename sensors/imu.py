@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from amr_twin.ros.bus import IMU_FRAME, Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config_sections import ImuCfg
 from amr_twin.ros.messages import Header, Imu, MagneticField, Quaternion, Time, Vector3
 
@@ -194,7 +194,7 @@ class ImuSensor:
             ``period_us`` is a multiple of it, the loop samples the true values
             on its grid while it steps (:meth:`on_grid`) and the messages go out
             from *publishing* clock events at the sample instants: the physics
-            is not stopped for them (:mod:`amr_twin.clock`). Otherwise each
+            is not stopped for them (:mod:`amr_twin.sim.clock`). Otherwise each
             sample is a clock event that reads ``MjData`` at its instant.
         samplers : list, optional
             The loop's list of grid samplers; :meth:`on_grid` is appended to it.

@@ -29,7 +29,7 @@ the present laser frame, and the nearer hit wins. Two ways to drive it:
   beams are cast when a rotation is complete (at the first pose sample after its
   last beam; also every ``loop_cast_us`` if shorter than a rotation), and the
   scan goes out from a publishing clock event at that instant
-  (:mod:`amr_twin.clock`: it stops the physics only if a subscriber of ``scan``
+  (:mod:`amr_twin.sim.clock`: it stops the physics only if a subscriber of ``scan``
   could act sooner).
 
 Rays see the world and a payload only (``SEEN_GROUPS``). The cutoff is large and
@@ -49,7 +49,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.ros.bus import LASER_FRAME, Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config_sections import LidarCfg
 from amr_twin.ros.messages import Header, LaserScan, Time
 

@@ -17,10 +17,10 @@ from amr_twin.cli import app
 from amr_twin.model.config import load_config
 from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
 from amr_twin.controllers.firmware import AvrParams
-from amr_twin.loop import TwinOptions
+from amr_twin.sim.loop import TwinOptions
 from amr_twin.ros.rosserial import PC_TO_ARDUINO
 from amr_twin.ros.rosserial_frame import MD5SUM
-from amr_twin.run import Command, run_command
+from amr_twin.sim.run import Command, run_command
 
 MISSING = missing_tools()
 needs_avr = pytest.mark.skipif(MISSING is not None, reason=MISSING or "")
@@ -118,7 +118,7 @@ def test_published_speeds_are_the_boards_32_bit_doubles(cfg):
 
 @needs_avr
 def test_a_corrupted_command_frame_is_refused_by_the_boards_checksum(cfg):
-    from amr_twin.loop import Twin
+    from amr_twin.sim.loop import Twin
 
     twin = Twin(cfg, TwinOptions(firmware="avr", world="empty", rosserial_loss_prob=1.0))
     LINEAR.send(twin)
@@ -176,7 +176,7 @@ def test_cli_run_with_the_emulated_board(cfg):
 
 def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
     """Left PWM counts, on a bare clock: left wheel at 20 RPM of SC edges; commands at 0, 1.0, 1.1 s."""
-    from amr_twin.clock import VirtualClock
+    from amr_twin.sim.clock import VirtualClock
     from amr_twin.controllers.firmware import make_firmware
 
     clock = VirtualClock()

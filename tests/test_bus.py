@@ -6,7 +6,7 @@ import pytest
 
 
 from amr_twin.ros.bus import Bus, ServiceCallError, TransformError
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import (Float64, Header, Quaternion, TFMessage, Transform,
                                TransformStamped, Twist, Vector3)
 
@@ -176,7 +176,7 @@ def test_taps_see_service_requests_failed_calls_included(bus, clock):
 
 
 def test_lookahead_is_the_smallest_subscriber_latency_and_taps_do_not_count(bus):
-    from amr_twin.clock import NEVER_US
+    from amr_twin.sim.clock import NEVER_US
 
     bus.add_tap(lambda topic, msg, t_us: None)
     assert bus.lookahead_us(("odom", "tf")) == NEVER_US

@@ -10,9 +10,9 @@ import yaml
 from amr_twin.calibration import (BENCH_CURRENT_A, calibrate, bench_current_a, read_log, thesis_residual,
                                   write_params)
 from amr_twin.model.config import load_config
-from amr_twin.loop import TwinOptions
+from amr_twin.sim.loop import TwinOptions
 from amr_twin.model.paths import MODEL_DIR
-from amr_twin.run import Command, run_command
+from amr_twin.sim.run import Command, run_command
 
 LOG_COMMAND = "motor:left:forward:1.0"
 

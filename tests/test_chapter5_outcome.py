@@ -12,8 +12,8 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
 from amr_twin.experiments.chapter5_scorecard import SCORECARD, scorecard, worse
-from amr_twin.loop import TwinOptions
-from amr_twin.run import Command, run_command
+from amr_twin.sim.loop import TwinOptions
+from amr_twin.sim.run import Command, run_command
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from amr_twin.cli import app
 from amr_twin.cli_run import CSV_COLUMNS, CSV_COMMENT
-from amr_twin.mission import MissionError, parse_mission
+from amr_twin.sim.mission import MissionError, parse_mission
 
 ROOT = Path(__file__).resolve().parents[1]
 runner = CliRunner()

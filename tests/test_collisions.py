@@ -6,10 +6,10 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli import app
-from amr_twin.collisions import StartPoseError
+from amr_twin.sim.collisions import StartPoseError
 from amr_twin.model.config import load_config
-from amr_twin.loop import Twin, TwinOptions
-from amr_twin.run import Command, run_command
+from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.sim.run import Command, run_command
 
 CFG = load_config()
 runner = CliRunner()

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amr_twin.ros.bus import Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import load_config
 from amr_twin.controllers.ekf import EkfNode
 from amr_twin.ros.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Range, Time,

@@ -9,9 +9,9 @@ from typer.testing import CliRunner
 
 from amr_twin.cli import app
 from amr_twin.model.config import load_config
-from amr_twin.faults import FaultError, kind_names, parse_fault, parse_faults
-from amr_twin.loop import Twin, TwinOptions
-from amr_twin.run import Command, run_mission
+from amr_twin.sim.faults import FaultError, kind_names, parse_fault, parse_faults
+from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.sim.run import Command, run_mission
 
 CFG = load_config()
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amr_twin.ros.bus import Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import load_config
 from amr_twin.sensors.imu import AxisModel, ImuSensor, axis_models, corrupt
 
@@ -33,7 +33,7 @@ class Rig:
 
     def __init__(self, overrides=None, seed=0):
         from amr_twin.model.build import build
-        from amr_twin.physics import Physics
+        from amr_twin.sim.physics import Physics
 
         self.cfg = load_config(overrides=overrides or {})
         self.physics = Physics(build(self.cfg, world="empty").model)

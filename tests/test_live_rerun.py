@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.faults import parse_faults
-from amr_twin.loop import Twin, TwinOptions
+from amr_twin.sim.faults import parse_faults
+from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach, record_run
-from amr_twin.run import Command, run_mission
+from amr_twin.sim.run import Command, run_mission
 
 RERUN = str(Path(sys.executable).with_name("rerun"))
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (1.5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]

@@ -9,7 +9,7 @@ import pytest
 
 
 from amr_twin.ros.bus import Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.controllers.odometry import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S, WheelOdometry
 

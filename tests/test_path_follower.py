@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from amr_twin.ros.bus import Bus
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 from amr_twin.controllers.path_follower import (PathFollowerNode, PurePursuit, Route, RouteError,
                                                 distance_to_path_m, load_route, route_length_m)
 from amr_twin.ros.messages import Twist
@@ -280,7 +280,7 @@ def test_twin_rounds_the_first_rack_corners_without_touching_anything():
     mujoco = pytest.importorskip("mujoco")
     from amr_twin.model.config import load_config
     from amr_twin.controllers.diff_drive import DiffDriveNode
-    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.sim.loop import Twin, TwinOptions
 
     full = load_route(DEFAULT_ROUTE)
     route = replace(full, name="corner", start_xy_yaw=(3.0, 0.0, 0.0),

@@ -10,9 +10,9 @@ from typer.testing import CliRunner
 
 from amr_twin.cli import app
 from amr_twin.model.config import load_config
-from amr_twin.loop import Twin, TwinOptions
+from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach, record_run
-from amr_twin.run import Command, run_mission
+from amr_twin.sim.run import Command, run_mission
 
 from uwb_run import UWB_S, record_uwb_run
 

@@ -203,7 +203,7 @@ def test_uwb_frames_exist_in_tf_static_on_the_map_side(uwb_bag):
 def test_cmd_vel_and_service_calls_are_in_the_bag(tmp_path):
     from amr_twin.model.config import load_config
     from amr_twin.controllers.diff_drive import DiffDriveNode
-    from amr_twin.loop import Twin, TwinOptions
+    from amr_twin.sim.loop import Twin, TwinOptions
     from amr_twin.ros.messages import Twist, Vector3
     from amr_twin.rerun_log import attach, record_run
 

@@ -8,9 +8,9 @@ recordings asked for.
 from pathlib import Path
 
 from amr_twin.model.config import load_config
-from amr_twin.loop import Twin, TwinOptions
+from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.rerun_log import attach, record_run
-from amr_twin.run import Command, run_mission
+from amr_twin.sim.run import Command, run_mission
 
 UWB_S = 2.0
 """Duration of the run, s."""

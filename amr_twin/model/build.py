@@ -256,7 +256,7 @@ def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         geom.type = mujoco.mjtGeom.mjGEOM_ELLIPSOID
         geom.size = [w.radius_of(side), w.radius_of(side), w.width_m / 2]
         # sliding friction only; the tyre's rolling resistance is a load-dependent
-        # torque (amr_twin.rolling_resistance): MuJoCo's rolling friction (condim 6)
+        # torque (amr_twin.sim.rolling_resistance): MuJoCo's rolling friction (condim 6)
         # made these stiff contacts chatter
         geom.condim = 3
         geom.friction = [w.friction, 0.0, 0.0]
@@ -302,7 +302,7 @@ def _add_casters(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         ball = _collision_geom(body)
         ball.name = f"caster_{name}_ball"
         # A frictionless ball: its rolling resistance (a force Crr * N against its
-        # velocity) is applied by amr_twin.rolling_resistance. Priority makes the
+        # velocity) is applied by amr_twin.sim.rolling_resistance. Priority makes the
         # ball's friction, condim and solver parameters win the contact mix.
         ball.priority = 1
         ball.condim = 1

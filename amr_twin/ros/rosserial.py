@@ -32,7 +32,7 @@ import copy
 import random
 from typing import Any, Callable
 
-from amr_twin.clock import VirtualClock
+from amr_twin.sim.clock import VirtualClock
 
 FRAME_OVERHEAD_BYTES = 8
 """rosserial framing bytes added to each serialised message."""

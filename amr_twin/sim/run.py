@@ -1,7 +1,7 @@
 """Python API: run one wheel command (or a timed list of them) and get the time series.
 
 >>> from amr_twin.model.config import load_config
->>> from amr_twin.run import Command, run_command
+>>> from amr_twin.sim.run import Command, run_command
 >>> result = run_command(load_config(), Command("motor", wheel="left", direction="forward", speed_m_s=1.0), 18.0)
 >>> result.series.published[0]  # (k, 2): t_s, rpm as published on wheel0_Vel
 """
@@ -13,7 +13,7 @@ import time
 from dataclasses import dataclass, field
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.loop import Twin, TwinOptions
+from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recorder import RunSeries
 
 KINDS = ("linear", "angular", "motor", "stop")
@@ -106,7 +106,7 @@ class RunResult:
     sim_s: float
     wall_s: float
     errors: list[str] = field(default_factory=list)
-    collisions: list[dict] = field(default_factory=list)  # amr_twin.collisions.Collision.as_dict()
+    collisions: list[dict] = field(default_factory=list)  # amr_twin.sim.collisions.Collision.as_dict()
     halted: bool = False  # stopped at the first collision (TwinOptions.stop_on_collision)
     faults: list[dict] = field(default_factory=list)  # injected faults and their effect
 

@@ -1,4 +1,4 @@
-"""Inject parsed faults (:mod:`amr_twin.faults`) into a running :class:`~amr_twin.loop.Twin`.
+"""Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running :class:`~amr_twin.sim.loop.Twin`.
 
 Each fault is a synced clock event at its time (the physics is brought to that
 instant first) and, with ``for=S``, another that clears it. The effects go
@@ -26,7 +26,7 @@ import dataclasses
 
 import numpy as np
 
-from amr_twin.faults import WHEEL_NAMES, Fault
+from amr_twin.sim.faults import WHEEL_NAMES, Fault
 
 US = 1_000_000
 WINDOW_S = 0.5

@@ -1,6 +1,6 @@
 """The plant between the Arduino's pins and the wheels: battery, drivers, hub motors.
 
-Per wheel, a ZS-X11D1-like driver reads its pins (:class:`~amr_twin.pins.DriverPins`)
+Per wheel, a ZS-X11D1-like driver reads its pins (:class:`~amr_twin.sim.pins.DriverPins`)
 and powers a BLDC hub motor from the battery:
 
 - STOP low (disabled) or the e-stop relays open: phases open, zero current, the
@@ -34,8 +34,8 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.model.config_sections import BatteryCfg, DriverCfg, MotorCfg
-from amr_twin.physics import Physics
-from amr_twin.pins import DriverPins
+from amr_twin.sim.physics import Physics
+from amr_twin.sim.pins import DriverPins
 
 
 @dataclass
@@ -45,7 +45,7 @@ class Battery:
     cfg: BatteryCfg
     soc: float = field(init=False)
     current_a: float = 0.0
-    sag_v: float = 0.0  # fault injection (amr_twin/fault_injector.py): extra terminal-voltage drop, V
+    sag_v: float = 0.0  # fault injection (amr_twin/sim/fault_injector.py): extra terminal-voltage drop, V
 
     def __post_init__(self) -> None:
         c = self.cfg
@@ -115,7 +115,7 @@ class Plant:
         self.motors: tuple[MotorCfg, MotorCfg] = (cfg.motor_left, cfg.motor_right)
         self.battery = Battery(cfg.battery)
         self.estop = False
-        self.supply_cut = False  # fault injection (amr_twin/fault_injector.py): drivers unpowered, coast
+        self.supply_cut = False  # fault injection (amr_twin/sim/fault_injector.py): drivers unpowered, coast
         self.voltage_v = [0.0, 0.0]
         self.mode = ["coast", "coast"]
         self._data = physics.data

@@ -1,13 +1,13 @@
 """The simulation loop: physics, plant, hall sensors, firmware and PC-side nodes on one clock.
 
-Roles (after dm_control's physics / task / loop): :class:`~amr_twin.physics.Physics`
+Roles (after dm_control's physics / task / loop): :class:`~amr_twin.sim.physics.Physics`
 owns MjData, the firmware and the nodes own their logic, and :class:`Twin` only
 orders events in time:
 
 1. find the next *synced* clock event (a timer tick, the end of a ``delay()``, a
    rosserial frame arriving, a sensor reading the physics), the divergence check
    or the end of the run; *publishing* events (odometry, IMU and LiDAR messages,
-   :mod:`amr_twin.clock`) do not stop the physics unless a subscriber could act on
+   :mod:`amr_twin.sim.clock`) do not stop the physics unless a subscriber could act on
    what they publish before it (:meth:`amr_twin.ros.bus.Bus.lookahead_us`);
 2. step the physics in C up to that instant with the actuation held, keeping the
    wheel angles on the record grid (every ``record_every_steps``) and handing the
@@ -36,17 +36,17 @@ import numpy as np
 
 from amr_twin.model.build import LOOP_SENSOR_DIM, build
 from amr_twin.ros.bus import Bus
-from amr_twin.clock import VirtualClock
-from amr_twin.collisions import CollisionMonitor, check_start, check_supported
+from amr_twin.sim.clock import VirtualClock
+from amr_twin.sim.collisions import CollisionMonitor, check_start, check_supported
 from amr_twin.model.config import TwinConfig
 from amr_twin.controllers.firmware import make_firmware
 from amr_twin.controllers.odometry import WheelOdometry
 from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
 from amr_twin.ros.messages import Float64
-from amr_twin.physics import Physics
-from amr_twin.plant import Plant
+from amr_twin.sim.physics import Physics
+from amr_twin.sim.plant import Plant
 from amr_twin.recorder import Recorder
-from amr_twin.rolling_resistance import RollingResistance
+from amr_twin.sim.rolling_resistance import RollingResistance
 from amr_twin.ros.ros_state import robot_static_transforms
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
 from amr_twin.sensors.hall import HallSensors
@@ -71,8 +71,8 @@ class TwinOptions:
     rosserial_loss_prob: float = 0.0
     check_every_s: float = 0.5  # divergence check period
     sensors: bool = False  # IMU (imu/data_raw, imu/mag) and LiDAR (scan) on the clock
-    stop_on_collision: bool = False  # halt the twin at the first collision (amr_twin.collisions)
-    faults: tuple = ()  # amr_twin.faults.Fault items, injected at their times
+    stop_on_collision: bool = False  # halt the twin at the first collision (amr_twin.sim.collisions)
+    faults: tuple = ()  # amr_twin.sim.faults.Fault items, injected at their times
     firmware_params: object = field(default=None, compare=False)
 
 
@@ -147,7 +147,7 @@ class Twin:
             sampler(0)
         self.faults = None
         if options.faults:
-            from amr_twin.fault_injector import FaultInjector
+            from amr_twin.sim.fault_injector import FaultInjector
             self.faults = FaultInjector(self, options.faults)
         self.firmware.start()
         self.plant.apply(self.firmware.pins)

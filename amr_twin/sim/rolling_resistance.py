@@ -86,7 +86,7 @@ class RollingResistance:
 
     def _caster_contact_loads(self) -> list[float]:
         """(4,) normal contact force on the caster balls in the last step, N: the casters
-        entries of :meth:`amr_twin.physics.Physics.support_normal_forces_n`, summed in the same
+        entries of :meth:`amr_twin.sim.physics.Physics.support_normal_forces_n`, summed in the same
         order, in plain Python (a call costs ~5 us instead of ~20 us)."""
         d = self._data
         out = [0.0] * 4

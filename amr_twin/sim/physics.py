@@ -191,7 +191,7 @@ class Physics:
         else:
             raise ValueError(f"mode must be drive, coast or brake, got {mode!r}")
 
-    # -- faults (amr_twin/fault_injector.py) --------------------------------------------
+    # -- faults (amr_twin/sim/fault_injector.py) --------------------------------------------
     def jam_wheel(self, wheel: int, jammed: bool) -> None:
         """Block ``wheel`` where it is (a joint limit of +-1 mrad around its angle), or free it.
 

@@ -6,7 +6,7 @@ field, or an upward-facing surface: contact normal within :data:`SUPPORT_TILT_DE
 of vertical). The chassis touching a rack, a wheel rubbing a wall and the robot
 lying on the floor after tipping over are collisions.
 
-:class:`CollisionMonitor` is a grid sampler of the loop (:attr:`amr_twin.loop.Twin.samplers`):
+:class:`CollisionMonitor` is a grid sampler of the loop (:attr:`amr_twin.sim.loop.Twin.samplers`):
 on every record-grid instant (10 ms) it reads MuJoCo's contact list of the last
 physics step. The pairs in contact rarely change, so the common case costs one
 read of the geom pairs and a list comparison (about 3 us); the pairs are only
@@ -166,7 +166,7 @@ class CollisionMonitor:
 
     Parameters
     ----------
-    physics : amr_twin.physics.Physics
+    physics : amr_twin.sim.physics.Physics
     stop : bool
         Ask the loop to stop at the first collision (the sampler returns True).
     """

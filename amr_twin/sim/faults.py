@@ -13,7 +13,7 @@ run; ``ARGS`` a comma-separated list: the kind's parameter (bare, or by name) an
     estop@5:for=2                 the e-stop pressed for 2 s
 
 This module parses and validates (one-line :class:`FaultError` naming the
-specification); :mod:`amr_twin.fault_injector` applies the faults to a running twin.
+specification); :mod:`amr_twin.sim.fault_injector` applies the faults to a running twin.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ Format (YAML)::
         motor: {wheel: left, direction: forward, speed_m_s: 0.3}
       - t_s: 4
         stop: {}
-    faults:                 # optional: KIND@T[:ARGS] as --fault (amr_twin/faults.py)
+    faults:                 # optional: KIND@T[:ARGS] as --fault (amr_twin/sim/faults.py)
       - hall-left-dead@3
       - rosserial-loss@5:0.5,for=2
 
@@ -28,7 +28,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from amr_twin.run import KINDS, Command
+from amr_twin.sim.run import KINDS, Command
 from amr_twin.model.yaml_file import read_yaml
 
 FIELDS = {
@@ -106,7 +106,7 @@ def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
 
 
 def _faults(tree) -> tuple[str, ...]:
-    from amr_twin.faults import FaultError, parse_faults
+    from amr_twin.sim.faults import FaultError, parse_faults
 
     faults = tree.get("faults") or []
     if not isinstance(faults, list) or not all(isinstance(f, str) for f in faults):

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from amr_twin.atomic_file import write_text
+from amr_twin.recording.atomic_file import write_text
 from amr_twin.model.config import TwinConfig, load_config
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.metrics import step_info

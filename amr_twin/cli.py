@@ -100,7 +100,7 @@ def _guard(func):
     simulation diverged: exit 3. A file could not be written (disk full, read-only):
     exit 1, naming the file.
     """
-    from amr_twin.atomic_file import WriteError
+    from amr_twin.recording.atomic_file import WriteError
     from amr_twin.model.build import BuildError
     from amr_twin.model.config import ConfigError
     from amr_twin.sim.physics import DivergenceError
@@ -150,7 +150,7 @@ def model(
     xy = _parse_xy(payload_xy)
     if xy is not None:
         extra["payload.xy_m"] = xy
-    from amr_twin.outputs import OutputError, check_outputs
+    from amr_twin.recording.outputs import OutputError, check_outputs
 
     try:
         check_outputs(files={"--export-urdf": export_urdf, "--export-mjcf": export_mjcf})
@@ -230,7 +230,7 @@ def calibrate(
     from amr_twin.calibration import calibrate as fit_plant
     from amr_twin.calibration import read_log, write_params
 
-    from amr_twin.outputs import OutputError, check_file
+    from amr_twin.recording.outputs import OutputError, check_file
 
     if no_fit and report is None:
         fail("--no-fit needs --report FILE (without a fit, the report is the only result)")
@@ -260,7 +260,7 @@ def calibrate(
             result = _guard(lambda: calibration_report.evaluate(
                 at, target, jobs=jobs, progress=lambda i, n: bar.update(task, total=n, completed=i)))
             fit = result.as_fit(fit)  # the override file carries the report's uncertainty
-    from amr_twin.atomic_file import all_or_nothing
+    from amr_twin.recording.atomic_file import all_or_nothing
 
     def write() -> None:
         with all_or_nothing():

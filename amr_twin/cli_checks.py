@@ -2,7 +2,7 @@
 
 Numbers and folders are checked before any model is built: the firmware and
 ``--jobs`` (:func:`amr_twin.experiments.executor.check_jobs`), durations, recording
-folders, every output (:mod:`amr_twin.outputs`), repeated sweep values, the Dask
+folders, every output (:mod:`amr_twin.recording.outputs`), repeated sweep values, the Dask
 scheduler.
 """
 
@@ -55,9 +55,9 @@ def check_record_folder(option: str, folder: Optional[Path], fail, name: str) ->
 
 
 def check_outputs(fail, files: dict | None = None, folders: dict | None = None) -> None:
-    """:func:`amr_twin.outputs.check_outputs`, its refusal as one line and exit 2."""
-    from amr_twin.outputs import OutputError
-    from amr_twin.outputs import check_outputs as check
+    """:func:`amr_twin.recording.outputs.check_outputs`, its refusal as one line and exit 2."""
+    from amr_twin.recording.outputs import OutputError
+    from amr_twin.recording.outputs import check_outputs as check
 
     try:
         check(files=files, folders=folders)

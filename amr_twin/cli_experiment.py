@@ -3,9 +3,9 @@
 Both simulate first and write afterwards, every file through a temporary file and a
 rename: an interrupted command leaves no half-written output (the sweep keeps the
 per-point files already finished, and a rerun only simulates the missing ones). The
-report and its plots are written together (:func:`amr_twin.atomic_file.all_or_nothing`):
+report and its plots are written together (:func:`amr_twin.recording.atomic_file.all_or_nothing`):
 a full disk leaves the previous report, not half of a new one. Every output folder is
-checked before the first simulation (:mod:`amr_twin.outputs`).
+checked before the first simulation (:mod:`amr_twin.recording.outputs`).
 
 ``--record DIR`` / ``--mcap DIR`` take a folder: one recording per run
 (``run<N>.rrd``) or per sweep point (``<key>.rrd``), written by the worker that
@@ -76,7 +76,7 @@ def _add_faults(experiment: typer.Typer) -> None:
         cfg = _config(config, params, set_)
 
         def work():
-            from amr_twin.atomic_file import all_or_nothing
+            from amr_twin.recording.atomic_file import all_or_nothing
 
             results = faults.run(cfg, jobs=jobs, progress=progress)
             with all_or_nothing():
@@ -138,7 +138,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
 
         def work():
-            from amr_twin.atomic_file import all_or_nothing
+            from amr_twin.recording.atomic_file import all_or_nothing
 
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
                                    progress=progress, record_dir=record, mcap_dir=mcap,
@@ -269,7 +269,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
 
         def work():
-            from amr_twin.atomic_file import all_or_nothing
+            from amr_twin.recording.atomic_file import all_or_nothing
 
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
                                         jobs=jobs, firmware=firmware, progress=progress, client=client,

@@ -9,7 +9,7 @@ the time series, ``--json`` prints one summary object, ``--fault`` injects fault
 collision (:mod:`amr_twin.sim.collisions`).
 
 Everything is checked before the model is built: numbers, faults, the start pose
-format, every output path (:mod:`amr_twin.outputs`). Exit codes: 0 done (collisions
+format, every output path (:mod:`amr_twin.recording.outputs`). Exit codes: 0 done (collisions
 are reported, on stderr too); 1 the client refused a command (the thesis' message
 on stderr) or an output could not be written; 2 bad input, one line; 3 the
 simulation diverged; 4 stopped by a collision (``--stop-on-collision``). The
@@ -28,7 +28,7 @@ import typer
 
 from amr_twin.cli import _config, _guard, fail
 from amr_twin.cli_options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
-from amr_twin.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
+from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
 
 MAX_RUN_S = 3600.0
@@ -76,7 +76,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     """Check everything, run ``steps`` and report; exits non-zero on a refusal or a stop."""
     from amr_twin.sim.faults import FaultError, parse_faults
     from amr_twin.sim.loop import TwinOptions
-    from amr_twin.outputs import OutputError, check_outputs
+    from amr_twin.recording.outputs import OutputError, check_outputs
     from amr_twin.sim.run import run_mission
 
     duration_s = _duration(opts, default_s)
@@ -102,12 +102,12 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     recording = opts.record is not None or opts.mcap is not None
 
     def work():
-        from amr_twin.atomic_file import all_or_nothing
+        from amr_twin.recording.atomic_file import all_or_nothing
         from amr_twin.sim.loop import Twin
 
         twin = Twin(cfg, options)
         if recording:
-            from amr_twin.rerun_log import attach
+            from amr_twin.recording.rerun_log import attach
             attach(twin)
         if live is None:
             res = run_mission(cfg, steps, duration_s, options, twin=twin)
@@ -115,10 +115,10 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
             res = _run_live(twin, live, lambda: run_mission(cfg, steps, duration_s, options, twin=twin))
         with all_or_nothing():
             if recording:
-                from amr_twin.rerun_log import record_run
+                from amr_twin.recording.rerun_log import record_run
                 record_run(twin, rrd_path=opts.record, mcap_path=opts.mcap, result=res)
             if opts.csv is not None:
-                from amr_twin.atomic_file import write_text
+                from amr_twin.recording.atomic_file import write_text
                 write_text(opts.csv, csv_text(res.series))
         return res, twin.start_xy_yaw
 

@@ -3,7 +3,7 @@
 A foxglove-sdk server (``ws://HOST:PORT``, subprotocol ``foxglove.sdk.v1``, the message format
 of the published ``foxglove.websocket.v1`` specification) advertising the channels of the
 ``.mcap`` recording, with the same ROS 2 schemas (``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`)
-and the same CDR payloads (:mod:`amr_twin.mcap_log`'s encoders and state messages), log
+and the same CDR payloads (:mod:`amr_twin.recording.mcap_log`'s encoders and state messages), log
 times in simulated ns. Added: ``/twin/scene`` (``foxglove.SceneUpdate``,
 :mod:`amr_twin.live_scene`). Capabilities: ``time`` (the simulated clock, as
 foxglove_bridge with ``use_sim_time``), ``clientPublish`` (``/cmd_vel`` and
@@ -28,7 +28,7 @@ import numpy as np
 from amr_twin import live_inputs
 from amr_twin.sim.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
 from amr_twin.live_rows import LiveRows
-from amr_twin.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
+from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.messages import String, TFMessage
 from amr_twin.ros.ros2_cdr import encode_battery_state, encode_float64_multi_array, encode_string, encode_tf_message
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type

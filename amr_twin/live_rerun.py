@@ -1,13 +1,13 @@
 """The twin live in Rerun (issue 17): ``amr-twin run ... --live rerun``.
 
-The Rerun recording of :mod:`amr_twin.rerun_log`, streamed as the twin runs: a gRPC server
+The Rerun recording of :mod:`amr_twin.recording.rerun_log`, streamed as the twin runs: a gRPC server
 (``rerun+http://127.0.0.1:PORT/proxy``; it keeps what was sent for late viewers) and Rerun's
 web viewer served locally on ``WEB_PORT`` and connected to it; the native viewer connects
 with ``rerun rerun+http://127.0.0.1:PORT/proxy``. Same application id, entity paths,
-``sim_time`` timeline and default blueprint as the ``.rrd`` (:func:`amr_twin.rerun_log._blueprint`; its time
+``sim_time`` timeline and default blueprint as the ``.rrd`` (:func:`amr_twin.recording.rerun_log._blueprint`; its time
 panel follows the newest data, and a viewer that connects late gets the newest data first),
-the streams logged by the same ``_log_<stream>`` functions (:mod:`amr_twin.rerun_world`,
-:mod:`amr_twin.rerun_streams`, :mod:`amr_twin.sim.event_log`), each flush handing them what the
+the streams logged by the same ``_log_<stream>`` functions (:mod:`amr_twin.recording.rerun_world`,
+:mod:`amr_twin.recording.rerun_streams`, :mod:`amr_twin.sim.event_log`), each flush handing them what the
 simulated clock has passed since the last one. Two differences with the file:
 
 - ``world/trajectory/{true,odom}`` grow every 0.5 s from poses at 10 Hz (the file: 2 Hz
@@ -39,7 +39,7 @@ TOPICS = ("scan", "imu/data_raw", "imu/mag", "wheel0_Vel", "wheel1_Vel", "wheel_
 
 
 class _Window:
-    """What the ``.rrd`` writers read of a :class:`~amr_twin.rerun_capture.Capture`, over a span of time."""
+    """What the ``.rrd`` writers read of a :class:`~amr_twin.recording.rerun_capture.Capture`, over a span of time."""
 
     def __init__(self, twin, body_ids, t_s, pos, quat, messages):
         self.twin, self.body_ids, self.messages = twin, body_ids, messages
@@ -66,8 +66,8 @@ class RerunSink:
     def __init__(self, twin, grpc_port: int = 9876, web_port: int = 9090, web_viewer: bool = True):
         import rerun as rr
 
-        from amr_twin.rerun_log import _blueprint
-        from amr_twin.rerun_world import _log_geoms
+        from amr_twin.recording.rerun_log import _blueprint
+        from amr_twin.recording.rerun_world import _log_geoms
 
         self.twin, self.rr = twin, rr
         m = twin.physics.model
@@ -140,8 +140,8 @@ class RerunSink:
 
     def _flush(self, t_us: int) -> None:
         from amr_twin.sim.event_log import log_events
-        from amr_twin.rerun_streams import _log_commands, _log_duty, _log_electrics, _log_imu, _log_wheel_speeds
-        from amr_twin.rerun_world import _log_body_transforms, _log_scan
+        from amr_twin.recording.rerun_streams import _log_commands, _log_duty, _log_electrics, _log_imu, _log_wheel_speeds
+        from amr_twin.recording.rerun_world import _log_body_transforms, _log_scan
         from amr_twin.sensors.lidar_beams import scan_end_time_s
 
         rec, m = self.rec, self.twin.physics.model

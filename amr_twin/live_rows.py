@@ -1,4 +1,4 @@
-"""The 100 Hz rows of a live twin, as :meth:`amr_twin.recorder.Recorder.series` gives them (issue 17).
+"""The 100 Hz rows of a live twin, as :meth:`amr_twin.recording.recorder.Recorder.series` gives them (issue 17).
 
 A grid sampler keeps, at each instant of the record grid, the loop's sensor row and the pin
 row the recorder will pair with it; :meth:`LiveRows.take` turns the rows the clock has passed
@@ -15,7 +15,7 @@ import numpy as np
 
 from amr_twin.model.build import LOOP_SENSOR_DIM
 from amr_twin.sim.plant import battery_current_a, motor_currents_a
-from amr_twin.recorder import RAD_S_TO_RPM, yaw_from_quat
+from amr_twin.recording.recorder import RAD_S_TO_RPM, yaw_from_quat
 
 
 class LiveRows:

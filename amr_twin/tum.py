@@ -23,7 +23,9 @@ from typing import Iterable
 
 import numpy as np
 
-from amr_twin import atomic_file, se2
+from amr_twin import se2
+
+from amr_twin.recording import atomic_file
 
 HEADER = "# timestamp tx ty tz qx qy qz qw\n"
 

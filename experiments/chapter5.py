@@ -16,7 +16,7 @@ verdict is judged on the published samples, the true speed's is reported too.
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
 
 Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``run<N>.rrd`` /
-``run<N>.mcap`` per run (:mod:`amr_twin.rerun_log`, :mod:`amr_twin.mcap_log`),
+``run<N>.mcap`` per run (:mod:`amr_twin.recording.rerun_log`, :mod:`amr_twin.recording.mcap_log`),
 written by the process that simulates the run, through a temporary name and a
 rename. Recording does not change the results.
 """
@@ -200,7 +200,7 @@ def simulate(job: _Job) -> dict:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
         from amr_twin.sim.loop import Twin
-        from amr_twin.rerun_log import attach, record_run
+        from amr_twin.recording.rerun_log import attach, record_run
         from amr_twin.sim.run import run_mission
         from amr_twin.experiments.firmware_comparison import pace
 
@@ -275,7 +275,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     if not specs:
         raise ValueError(f"runs: {runs} selects none of 1..{len(RUNS)}")
     wall0 = time.perf_counter()
-    from amr_twin.rerun_capture import recording_folder
+    from amr_twin.recording.rerun_capture import recording_folder
 
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}

@@ -29,7 +29,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
-from amr_twin import atomic_file
+from amr_twin.recording import atomic_file
 
 EXECUTORS = ("local", "dask")
 SCHEDULER_TIMEOUT_S = 5.0  # default time to reach a Dask scheduler, s

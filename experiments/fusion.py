@@ -109,7 +109,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     streams = Streams()
     twin.bus.add_tap(streams.tap)
     if rrd_path is not None or mcap_path is not None:
-        from amr_twin.rerun_capture import attach
+        from amr_twin.recording.rerun_capture import attach
         attach(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)
     twin.advance(REST_S)
@@ -134,7 +134,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     if bar is not None:
         bar[0].stop()
     if rrd_path is not None or mcap_path is not None:
-        from amr_twin.rerun_log import record_run
+        from amr_twin.recording.rerun_log import record_run
         record_run(twin, rrd_path=rrd_path, mcap_path=mcap_path)
     return twin, streams, bool(follower.done)
 

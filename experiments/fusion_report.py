@@ -17,7 +17,8 @@ import numpy as np
 from amr_twin.experiments.executor import save_figure, write_json, write_text
 from amr_twin.experiments.fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
 from amr_twin.experiments.fusion_map import TOLERANCE_CELLS, agreement
-from amr_twin import atomic_file, se2, tum
+from amr_twin import se2, tum
+from amr_twin.recording import atomic_file
 
 LIDAR_ATE_MAX_M = 0.10   # issue #8 acceptance
 COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",
@@ -92,7 +93,7 @@ def _save_map(results: FusionResults, out: Path):
     """Save the grid as map.yaml/.pgm/.png in ``out`` via a staging folder; return its check.
 
     The map is judged as saved (read back from the staging folder) and then moved
-    into ``out`` with the other outputs (:func:`amr_twin.atomic_file.all_or_nothing`).
+    into ``out`` with the other outputs (:func:`amr_twin.recording.atomic_file.all_or_nothing`).
     """
     staging = atomic_file.temporary_name(out / "map")
     staging.mkdir(parents=True, exist_ok=True)

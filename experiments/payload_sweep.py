@@ -225,7 +225,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     recording = point.rrd_path is not None or point.mcap_path is not None
     twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty"))
     if recording:
-        from amr_twin.rerun_capture import attach
+        from amr_twin.recording.rerun_capture import attach
 
         attach(twin)
     twin.advance_to_us(0)
@@ -253,7 +253,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     twin.advance_to_us(int(round(point.duration_s * 1e6)))
     s = twin.recorder.series()
     if recording:
-        from amr_twin.rerun_log import record_run
+        from amr_twin.recording.rerun_log import record_run
         from amr_twin.sim.run import RunResult
 
         result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
@@ -361,7 +361,7 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     for c in commands:
         parse_command(c)
     runs_dir = Path(out_dir) / "runs"
-    from amr_twin.rerun_capture import recording_folder
+    from amr_twin.recording.rerun_capture import recording_folder
 
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}

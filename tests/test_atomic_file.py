@@ -2,7 +2,7 @@
 
 import pytest
 
-from amr_twin.atomic_file import replacing, temporary_name, write_text
+from amr_twin.recording.atomic_file import replacing, temporary_name, write_text
 
 
 def test_write_replaces_and_leaves_no_temporary(tmp_path):

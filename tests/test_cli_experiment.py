@@ -141,7 +141,7 @@ def test_sweep_records_each_point_and_resume_does_not_redo(cfg, tmp_path):
 
 
 def test_sweep_interrupted_while_recording_leaves_nothing_half_written(cfg, tmp_path, monkeypatch):
-    import amr_twin.rerun_log as rerun_log
+    import amr_twin.recording.rerun_log as rerun_log
 
     def interrupt(*_args, **_kwargs):
         raise KeyboardInterrupt

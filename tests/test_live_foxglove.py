@@ -45,7 +45,7 @@ def test_scan_and_odom_live_at_their_rates_as_in_the_mcap(tmp_path, typestore):
     (the same run writes one), received at their rates within 10 %, the simulated time going
     with the wall clock within 5 %. Every channel of the .mcap is served, with the same bytes."""
     from amr_twin.model.config import load_config
-    from amr_twin.mcap_log import LATCHED
+    from amr_twin.recording.mcap_log import LATCHED
 
     mcap = tmp_path / "run.mcap"
     proc, url = start_cli(["run", "linear", "--speed-m-s", "0.3", "--duration-s", "10", "--world", "empty",

@@ -2,7 +2,7 @@
 
 The stream is read by Rerun's own viewer binary (``rerun URI --save FILE``: it connects to the
 gRPC server as any viewer does and writes what it receives), then compared with the ``.rrd``
-that :func:`amr_twin.rerun_log.record_run` writes for the same run: same entities, same rows,
+that :func:`amr_twin.recording.rerun_log.record_run` writes for the same run: same entities, same rows,
 same values, same default blueprint. ``rerun rrd verify`` checks the streamed file (the viewer's ``--save`` of a stream writes no
 footer, the optional index of a finished file: checked without it).
 """
@@ -21,7 +21,7 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.sim.faults import parse_faults
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.rerun_log import attach, record_run
+from amr_twin.recording.rerun_log import attach, record_run
 from amr_twin.sim.run import Command, run_mission
 
 RERUN = str(Path(sys.executable).with_name("rerun"))

@@ -8,10 +8,10 @@ import sys
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin import atomic_file
-from amr_twin.atomic_file import WriteError, all_or_nothing, remove_stale_temporaries, write_text
+from amr_twin.recording import atomic_file
+from amr_twin.recording.atomic_file import WriteError, all_or_nothing, remove_stale_temporaries, write_text
 from amr_twin.cli import app
-from amr_twin.outputs import OutputError, check_file, check_folder, check_outputs
+from amr_twin.recording.outputs import OutputError, check_file, check_folder, check_outputs
 
 runner = CliRunner()
 
@@ -78,7 +78,7 @@ def test_files_of_a_batch_appear_together_or_not_at_all(tmp_path, monkeypatch):
 
 
 def test_a_full_disk_at_the_end_of_a_run_is_one_line_exit_1_and_no_file(tmp_path, monkeypatch):
-    import amr_twin.mcap_log as mcap_log
+    import amr_twin.recording.mcap_log as mcap_log
 
     def no_space(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 from amr_twin.cli import app
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.rerun_log import attach, record_run
+from amr_twin.recording.rerun_log import attach, record_run
 from amr_twin.sim.run import Command, run_mission
 
 from uwb_run import UWB_S, record_uwb_run
@@ -190,7 +190,7 @@ def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
     import os
     import subprocess
 
-    from amr_twin.rerun_capture import recording_folder, remove_stale_temporaries
+    from amr_twin.recording.rerun_capture import recording_folder, remove_stale_temporaries
 
     dead = subprocess.Popen(["true"])
     dead.wait()
@@ -213,7 +213,7 @@ def uwb_recorded(tmp_path_factory):
 
 
 def test_rrd_uwb_ranges_per_anchor(uwb_recorded):
-    from amr_twin.rerun_world import uwb_ranges
+    from amr_twin.recording.rerun_world import uwb_ranges
 
     cfg, capture, paths = uwb_recorded
     msgs = capture.messages["uwb/range"]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.rerun_log import attach, record_run
+from amr_twin.recording.rerun_log import attach, record_run
 from amr_twin.sim.run import Command, run_mission
 
 UWB_S = 2.0
@@ -29,7 +29,7 @@ def record_uwb_run(out_dir: Path, rrd: bool = True, mcap: bool = True):
     Returns
     -------
     tuple
-        ``(cfg, capture, paths)``: the configuration, the :class:`~amr_twin.rerun_capture.Capture`
+        ``(cfg, capture, paths)``: the configuration, the :class:`~amr_twin.recording.rerun_capture.Capture`
         and ``{"rrd": path, "mcap": path}`` of the files written.
     """
     from amr_twin.sensors.uwb import UwbSensor

@@ -1,12 +1,12 @@
 """Collisions and injected faults in the recordings: a small stream of their own.
 
-``.rrd`` (:func:`log_events`, called by :func:`amr_twin.rerun_log.write_rrd`)::
+``.rrd`` (:func:`log_events`, called by :func:`amr_twin.recording.rerun_log.write_rrd`)::
 
     events/collisions     TextLog (WARN) at each collision's first contact
     events/faults         TextLog (WARN) at each fault's start and end
     world/collisions      Points3D, red, the first contact points so far
 
-``.mcap`` (:func:`mcap_items`, added by :func:`amr_twin.mcap_log.write_mcap`)::
+``.mcap`` (:func:`mcap_items`, added by :func:`amr_twin.recording.mcap_log.write_mcap`)::
 
     /twin/collisions  diagnostic_msgs/msg/DiagnosticArray  one status (ERROR) per collision, at its
                       first contact: name "twin/collision", message "<parts> hit <geom>", values
@@ -85,7 +85,7 @@ def log_events(rec, twin) -> None:
     import numpy as np
     import rerun as rr
 
-    from amr_twin.rerun_streams import TIMELINE
+    from amr_twin.recording.rerun_streams import TIMELINE
 
     points = []
     for c in _collisions(twin):

@@ -118,7 +118,7 @@ class FaultInjector:
         travelled after the fault, m. For sensor faults: the messages published after it
         (and, for the IMU, how many distinct gyro/accelerometer readings they carried).
         """
-        from amr_twin.recorder import signed_published
+        from amr_twin.recording.recorder import signed_published
 
         t = series.t_s
         out = []

@@ -45,7 +45,7 @@ from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandS
 from amr_twin.ros.messages import Float64
 from amr_twin.sim.physics import Physics
 from amr_twin.sim.plant import Plant
-from amr_twin.recorder import Recorder
+from amr_twin.recording.recorder import Recorder
 from amr_twin.sim.rolling_resistance import RollingResistance
 from amr_twin.ros.ros_state import robot_static_transforms
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink

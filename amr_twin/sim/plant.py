@@ -74,7 +74,7 @@ class Battery:
 
 
 MODE_CODES = {"drive": 0, "coast": 1, "brake": 2}
-"""Motor modes as recorded (:attr:`amr_twin.recorder.RunSeries.mode`)."""
+"""Motor modes as recorded (:attr:`amr_twin.recording.recorder.RunSeries.mode`)."""
 
 
 def motor_currents_a(cfg: TwinConfig, voltage_v: np.ndarray, speed_rad_s: np.ndarray,

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.recorder import RunSeries
+from amr_twin.recording.recorder import RunSeries
 
 KINDS = ("linear", "angular", "motor", "stop")
 

@@ -11,7 +11,7 @@ Positions in m in the simulation's world frame (Z up), on the ``sim_time`` timel
     world/uwb/anchors                   static Points3D of the anchors
     world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
 
-The plots' streams are in :mod:`amr_twin.rerun_streams`.
+The plots' streams are in :mod:`amr_twin.recording.rerun_streams`.
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ import math
 import mujoco
 import numpy as np
 
-from amr_twin.rerun_capture import Capture
-from amr_twin.rerun_streams import TIMELINE, _scalars, _time
+from amr_twin.recording.rerun_capture import Capture
+from amr_twin.recording.rerun_streams import TIMELINE, _scalars, _time
 from amr_twin.sensors.lidar_beams import scan_end_time_s
 
 VISUAL_GROUPS = (0, 1, 4)  # world, robot visuals, payload (2 is robot collision)

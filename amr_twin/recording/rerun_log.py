@@ -2,15 +2,15 @@
 
 Two stages, so that a recorded run costs little while it runs:
 
-1. :class:`~amr_twin.rerun_capture.Capture` (:func:`attach`, :mod:`amr_twin.rerun_capture`)
+1. :class:`~amr_twin.recording.rerun_capture.Capture` (:func:`attach`, :mod:`amr_twin.recording.rerun_capture`)
    is attached to a :class:`~amr_twin.sim.loop.Twin` before it runs. It taps the bus and
    samples the world pose of each robot body as a grid sampler of the loop, so the
    run is unchanged.
 2. After the run :func:`write_rrd` (or :func:`record_run`, which also writes the
-   MCAP file of :mod:`amr_twin.mcap_log`) turns the capture plus the finished
-   :class:`~amr_twin.recorder.RunSeries` into Rerun columns, one ``_log_<stream>``
-   function per stream (:mod:`amr_twin.rerun_world` for the 3D view,
-   :mod:`amr_twin.rerun_streams` for the plots), all on the ``sim_time`` timeline.
+   MCAP file of :mod:`amr_twin.recording.mcap_log`) turns the capture plus the finished
+   :class:`~amr_twin.recording.recorder.RunSeries` into Rerun columns, one ``_log_<stream>``
+   function per stream (:mod:`amr_twin.recording.rerun_world` for the 3D view,
+   :mod:`amr_twin.recording.rerun_streams` for the plots), all on the ``sim_time`` timeline.
 
 Entities::
 
@@ -36,13 +36,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from amr_twin.atomic_file import replacing
+from amr_twin.recording.atomic_file import replacing
 from amr_twin.sim.event_log import has_events, log_events
-from amr_twin.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
+from amr_twin.recording.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
-from amr_twin.rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,  # noqa: F401
+from amr_twin.recording.rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,  # noqa: F401
                             _log_wheel_speeds, reference_rpm)
-from amr_twin.rerun_world import (VISUAL_GROUPS, _log_body_transforms, _log_geoms, _log_scan,  # noqa: F401
+from amr_twin.recording.rerun_world import (VISUAL_GROUPS, _log_body_transforms, _log_geoms, _log_scan,  # noqa: F401
                           _log_trajectory, _log_uwb, body_entity, uwb_geometry, uwb_ranges)
 
 TRACKED = "world/bodies/amr/base_link"
@@ -112,7 +112,7 @@ def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> d
     if rrd_path is not None:
         out["rrd"] = write_rrd(capture, series, rrd_path, result)
     if mcap_path is not None:
-        from amr_twin.mcap_log import write_mcap
+        from amr_twin.recording.mcap_log import write_mcap
 
         out["mcap"] = write_mcap(capture, series, mcap_path)
     return out

@@ -1,6 +1,6 @@
 """Record a run as ROS 2 messages in an ``.mcap`` file (issue 7, issue 13).
 
-The same streams as :mod:`amr_twin.rerun_log`, CDR-encoded (:mod:`amr_twin.ros.ros2_cdr`)
+The same streams as :mod:`amr_twin.recording.rerun_log`, CDR-encoded (:mod:`amr_twin.ros.ros2_cdr`)
 with ROS 2 message definitions (schema encoding ``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`),
 so ``ros2 bag info/play`` (rosbag2 MCAP storage) and Foxglove read the file. Log and
 publish times are the simulation time (ns) at which the bus delivered the message;
@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.ros import ros_state
-from amr_twin.atomic_file import replacing
+from amr_twin.recording.atomic_file import replacing
 from amr_twin.sim.event_log import mcap_items as event_items
 from amr_twin.ros.messages import String, TFMessage
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,

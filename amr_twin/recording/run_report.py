@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # numpy and the recorder (the model build) stay off the CLI's start-up path (--help)
     import numpy as np
 
-    from amr_twin.recorder import RunSeries
+    from amr_twin.recording.recorder import RunSeries
 
 CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_right",
                "true_rpm_left", "true_rpm_right", "pwm_counts_left", "pwm_counts_right",
@@ -42,7 +42,7 @@ def series_table(series: RunSeries) -> np.ndarray:
     """The ``--csv`` table, shape (n, len(CSV_COLUMNS))."""
     import numpy as np
 
-    from amr_twin.recorder import signed_published
+    from amr_twin.recording.recorder import signed_published
 
     t = series.t_s
     cmd_t = np.array([c[0] for c in series.commands], float)
@@ -76,7 +76,7 @@ def json_ready(value):
 def _step_metrics(series: RunSeries, wheel: int, reference_rpm: float) -> dict:
     """Step metrics of a wheel's signed published speed (those of :data:`SIGNED_METRICS` signed)."""
     from amr_twin.metrics import step_info
-    from amr_twin.recorder import signed_published
+    from amr_twin.recording.recorder import signed_published
 
     pub = signed_published(series, wheel)
     if reference_rpm == 0.0 or len(pub) < 2:
@@ -101,7 +101,7 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
     code = next((c for c in result.codes if c != 0), 0)
     last_s = series.t_s >= series.t_s[-1] - 1.0  # "final" electrical values: the last second
     wheels = {}
-    from amr_twin.recorder import signed_published
+    from amr_twin.recording.recorder import signed_published
 
     for w, name in enumerate(("left", "right")):
         reference = wc[2 * w] * wc[2 * w + 1] if wc else 0.0  # signed: motion x speed

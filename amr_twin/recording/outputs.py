@@ -6,7 +6,7 @@ stands where a folder of its path should be, the nearest existing folder accepts
 a new file (probed by creating and deleting one: read-only mounts and permissions
 are caught, whatever ``os.access`` says), and no two outputs name the same path.
 The temporaries that killed runs left for the same targets are removed
-(:func:`amr_twin.atomic_file.remove_stale_temporaries`). Nothing is created: the
+(:func:`amr_twin.recording.atomic_file.remove_stale_temporaries`). Nothing is created: the
 folders are made when the files are written.
 
 Failures raise :class:`OutputError` (a ``ValueError``) with one line naming the
@@ -19,7 +19,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from amr_twin.atomic_file import remove_stale_temporaries
+from amr_twin.recording.atomic_file import remove_stale_temporaries
 
 
 class OutputError(ValueError):

@@ -1,7 +1,7 @@
 """The capture of a running twin, and the file names recordings are written through.
 
-Stage 1 of a recording (stage 2, writing the files, is :mod:`amr_twin.rerun_log` and
-:mod:`amr_twin.mcap_log`): a :class:`Capture` is attached to a
+Stage 1 of a recording (stage 2, writing the files, is :mod:`amr_twin.recording.rerun_log` and
+:mod:`amr_twin.recording.mcap_log`): a :class:`Capture` is attached to a
 :class:`~amr_twin.sim.loop.Twin` before it runs. It taps the bus (keeps every published
 message with its time, us) and samples the world pose of each robot body as a grid
 sampler of the loop (default ~30 Hz on the recorder's 10 ms grid; no clock event, so
@@ -10,7 +10,7 @@ every grid instant for the ROS messages of :mod:`amr_twin.ros.ros_state` (joint 
 link transforms, ground truth). It only reads ``MjData``.
 
 Both writers write a temporary file next to the target and rename it when complete
-(:mod:`amr_twin.atomic_file`); :func:`recording_folder` prepares a folder of per-run
+(:mod:`amr_twin.recording.atomic_file`); :func:`recording_folder` prepares a folder of per-run
 recordings and removes the temporaries that killed writers left there.
 """
 
@@ -91,10 +91,10 @@ def capture_of(twin) -> Capture | None:
 def remove_stale_temporaries(folder: Path) -> list[Path]:
     """Delete the half-written recordings killed writers left in ``folder``; return them.
 
-    See :func:`amr_twin.atomic_file.remove_stale_temporaries`: a temporary whose writer
+    See :func:`amr_twin.recording.atomic_file.remove_stale_temporaries`: a temporary whose writer
     (the pid in its name) still runs is left alone.
     """
-    from amr_twin.atomic_file import remove_stale_temporaries as remove_stale
+    from amr_twin.recording.atomic_file import remove_stale_temporaries as remove_stale
 
     return remove_stale(folder)
 

@@ -9,16 +9,16 @@ All on the ``sim_time`` timeline (:data:`TIMELINE`, durations in s)::
     imu/{accel,gyro,mag}                Scalars (x, y, z), m/s^2, rad/s, T
     commands                            TextLog of wheel_Command and the client calls
 
-The entities of the 3D view are in :mod:`amr_twin.rerun_world`; the file is written by
-:func:`amr_twin.rerun_log.write_rrd`.
+The entities of the 3D view are in :mod:`amr_twin.recording.rerun_world`; the file is written by
+:func:`amr_twin.recording.rerun_log.write_rrd`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from amr_twin.recorder import signed_published
-from amr_twin.rerun_capture import Capture
+from amr_twin.recording.recorder import signed_published
+from amr_twin.recording.rerun_capture import Capture
 
 TIMELINE = "sim_time"
 WHEELS = ("left", "right")

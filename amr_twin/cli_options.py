@@ -86,7 +86,7 @@ class LiveCommand(TyperCommand):
 
 
 def live_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
-    """``--live [foxglove|rerun]``, ``--host``, ``--port``, ``--web-port``, ``--rate`` (amr_twin.live)."""
+    """``--live [foxglove|rerun]``, ``--host``, ``--port``, ``--web-port``, ``--rate`` (amr_twin.live.session)."""
     return {
         "live": (Optional[str], typer.Option(None, "--live", metavar="[foxglove|rerun]", help="Serve the twin live "
                  "while it runs, paced to --rate: foxglove (the default; Foxglove WebSocket server, the .mcap's "
@@ -104,11 +104,11 @@ def live_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
 
 def checked_live(live: Optional[str], host: str, port: Optional[int], web_port: Optional[int],
                  rate: Optional[float], fail: Callable[[str], None], default_rate: float = 1.0):
-    """The :class:`~amr_twin.live.LiveOptions` of the live options, None without ``--live``; an option of
+    """The :class:`~amr_twin.live.session.LiveOptions` of the live options, None without ``--live``; an option of
     ``--live`` given without it, or a bad value, is refused in one line (``fail``)."""
     import math
 
-    from amr_twin.live import LiveOptions
+    from amr_twin.live.session import LiveOptions
 
     if live is None:
         for flag, value, unset in (("--port", port, None), ("--web-port", web_port, None), ("--rate", rate, None),

@@ -141,8 +141,8 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 
 
 def _run_live(twin, live, run):
-    """``run()`` with ``twin`` served live (amr_twin.live); Ctrl-C ends it without writing the outputs."""
-    from amr_twin.live import LiveSession
+    """``run()`` with ``twin`` served live (amr_twin.live.session); Ctrl-C ends it without writing the outputs."""
+    from amr_twin.live.session import LiveSession
 
     session = LiveSession(twin, live, say=lambda line: typer.echo(line, err=True))
     try:

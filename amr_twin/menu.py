@@ -39,10 +39,10 @@ MENU = """
 class RealTimeTwin:
     """A :class:`~amr_twin.sim.loop.Twin` advanced in a thread at ``rate`` x real time.
 
-    The pacing is :mod:`amr_twin.live_pacer`'s (a clock event every 20 ms that sleeps to the
+    The pacing is :mod:`amr_twin.live.pacer`'s (a clock event every 20 ms that sleeps to the
     wall clock), so the run is the one an unpaced twin computes; a menu choice runs in the
     twin's thread at the next pacing event (:meth:`call`). With ``live`` the twin is also
-    served live (:class:`~amr_twin.live.LiveSession`: Foxglove or Rerun).
+    served live (:class:`~amr_twin.live.session.LiveSession`: Foxglove or Rerun).
 
     Parameters
     ----------
@@ -62,12 +62,12 @@ class RealTimeTwin:
     def __init__(self, twin, rate: float = 1.0, live=None, say=print):
         from dataclasses import replace
 
-        from amr_twin.live_pacer import Pacer
+        from amr_twin.live.pacer import Pacer
 
         self.twin, self.rate = twin, float(rate)
         self.session = None
         if live is not None:
-            from amr_twin.live import LiveSession
+            from amr_twin.live.session import LiveSession
 
             self.session = LiveSession(twin, replace(live, rate=self.rate), say=say)
             self.pacer = self.session.pacer

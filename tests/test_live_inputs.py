@@ -14,8 +14,8 @@ import time
 import numpy as np
 import pytest
 
-from amr_twin import live_inputs
-from amr_twin.live_inputs import InputError
+from amr_twin.live import inputs as live_inputs
+from amr_twin.live.inputs import InputError
 
 from foxglove_client import FoxgloveClient
 
@@ -93,7 +93,7 @@ def test_wheel_requests_checked(typestore):
 def served():
     """An idle twin (stop at t = 0) served on a free port, unpaced; the test advances it."""
     from amr_twin.model.config import load_config
-    from amr_twin.live import LiveOptions, LiveSession
+    from amr_twin.live.session import LiveOptions, LiveSession
     from amr_twin.sim.loop import Twin, TwinOptions
 
     twin = Twin(load_config(), TwinOptions(world="empty"))
@@ -115,7 +115,7 @@ def _settle(client, sink, n, timeout_s=10.0):
 def test_malformed_and_unknown_messages_dropped_the_twin_runs_on(served, typestore, caplog):
     twin, session, commands = served
     sink = session.sink
-    with FoxgloveClient(sink.url) as client, caplog.at_level(logging.WARNING, logger="amr_twin.live_foxglove"):
+    with FoxgloveClient(sink.url) as client, caplog.at_level(logging.WARNING, logger="amr_twin.live.foxglove"):
         client.wait_for_channels(["/odom"])
         good = client.advertise("/cmd_vel", "geometry_msgs/msg/Twist")
         as_json = client.advertise("/cmd_vel", "geometry_msgs/msg/Twist", encoding="json")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.live_pacer import Pacer, PacerClosed
+from amr_twin.live.pacer import Pacer, PacerClosed
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_log import attach
 from amr_twin.sim.run import Command, run_mission
@@ -21,7 +21,7 @@ def _run(options, live: bool):
     capture = attach(twin)
     session = None
     if live:  # the whole live session: pacer (unpaced), Foxglove server and its samplers, diff-drive node
-        from amr_twin.live import LiveOptions, LiveSession
+        from amr_twin.live.session import LiveOptions, LiveSession
 
         session = LiveSession(twin, LiveOptions(port=0, rate=0.0), say=lambda _line: None)
     result = run_mission(cfg, STEPS, 5.0, options, twin=twin)

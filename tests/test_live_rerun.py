@@ -73,7 +73,7 @@ def _views(path) -> list[tuple]:
 @pytest.fixture(scope="module")
 def streamed(tmp_path_factory):
     """A 3 s run with IMU, LiDAR and a fault, streamed live (unpaced) and recorded to a file."""
-    from amr_twin.live import LiveOptions, LiveSession
+    from amr_twin.live.session import LiveOptions, LiveSession
 
     folder = tmp_path_factory.mktemp("live_rerun")
     cfg = load_config()

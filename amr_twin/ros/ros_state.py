@@ -128,7 +128,7 @@ class StateSampler:
 
     def split(self, t_us: int) -> "StateSampler":
         """The samples at or before ``t_us``, removed from this sampler, as a sampler of their own
-        (a live viewer takes them as the clock passes them; :mod:`amr_twin.live_foxglove`)."""
+        (a live viewer takes them as the clock passes them; :mod:`amr_twin.live.foxglove`)."""
         n = int(np.searchsorted(np.asarray(self.t_us, np.int64), t_us, side="right"))
         out = copy.copy(self)
         out.t_us, out._rows = self.t_us[:n], self._rows[:n]

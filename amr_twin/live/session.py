@@ -2,13 +2,13 @@
 
 ``amr-twin run ... --live [foxglove|rerun] [--port P] [--rate R]`` and ``amr-twin client --live``:
 
-- ``foxglove`` (the default): a Foxglove WebSocket server (:mod:`amr_twin.live_foxglove`),
+- ``foxglove`` (the default): a Foxglove WebSocket server (:mod:`amr_twin.live.foxglove`),
   the channels of the ``.mcap`` plus ``/twin/scene``; a client drives the twin with
   ``/cmd_vel`` (Foxglove's Teleop panel) or wheel_Command requests;
 - ``rerun``: the ``.rrd``'s streams and blueprint live over gRPC, with Rerun's web viewer
-  served locally (:mod:`amr_twin.live_rerun`).
+  served locally (:mod:`amr_twin.live.rerun_stream`).
 
-In both the twin runs paced to ``rate`` x real time (:mod:`amr_twin.live_pacer`; 0: as fast as
+In both the twin runs paced to ``rate`` x real time (:mod:`amr_twin.live.pacer`; 0: as fast as
 possible), with the cmd_vel diff-drive node of ``controllers/diff_drive.py`` (0.5 s watchdog)
 subscribed, as a ROS 2 graph of the robot would have it.
 """
@@ -97,7 +97,7 @@ class LiveSession:
 
     def __init__(self, twin, options: LiveOptions, say=print):
         from amr_twin.controllers.diff_drive import DiffDriveNode
-        from amr_twin.live_pacer import Pacer
+        from amr_twin.live.pacer import Pacer
 
         options.check()
         self.twin, self.options = twin, options
@@ -105,14 +105,14 @@ class LiveSession:
         self.pacer = Pacer(twin, options.rate)
         rate = "as fast as possible" if options.rate == 0 else f"at {options.rate:g}x real time"
         if options.mode == "foxglove":
-            from amr_twin.live_foxglove import FoxgloveSink
+            from amr_twin.live.foxglove import FoxgloveSink
 
             port = FOXGLOVE_PORT if options.port is None else options.port
             self.sink = FoxgloveSink(twin, self.pacer, options.host, port)
             say(f"live: Foxglove WebSocket server on {self.sink.url} (the twin runs {rate}; "
                 "publish geometry_msgs/msg/Twist on /cmd_vel to drive it)")
         else:
-            from amr_twin.live_rerun import RerunSink
+            from amr_twin.live.rerun_stream import RerunSink
 
             self.sink = RerunSink(twin, RERUN_PORT if options.port is None else options.port,
                                   RERUN_WEB_PORT if options.web_port is None else options.web_port)

@@ -5,14 +5,14 @@ of the published ``foxglove.websocket.v1`` specification) advertising the channe
 ``.mcap`` recording, with the same ROS 2 schemas (``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`)
 and the same CDR payloads (:mod:`amr_twin.recording.mcap_log`'s encoders and state messages), log
 times in simulated ns. Added: ``/twin/scene`` (``foxglove.SceneUpdate``,
-:mod:`amr_twin.live_scene`). Capabilities: ``time`` (the simulated clock, as
+:mod:`amr_twin.live.scene`). Capabilities: ``time`` (the simulated clock, as
 foxglove_bridge with ``use_sim_time``), ``clientPublish`` (``/cmd_vel`` and
-``/wheel_Command_Service/request``, :mod:`amr_twin.live_inputs`) and ``services``
+``/wheel_Command_Service/request``, :mod:`amr_twin.live.inputs`) and ``services``
 (``/wheel_Command_Service``). ``/tf_static``, ``/robot_description`` and ``/twin/scene``'s
 static entities are sent again whenever a client subscribes to them (latched, as
 transient-local topics are).
 
-Messages reach the clients at the pacer's ticks (:mod:`amr_twin.live_pacer`), in time
+Messages reach the clients at the pacer's ticks (:mod:`amr_twin.live.pacer`), in time
 order, once the simulated clock has passed them. A client's message is decoded and
 checked in the server's thread, then published on the twin's bus at the next tick;
 one that is refused is logged (one line) and counted in :attr:`FoxgloveSink.dropped`.
@@ -25,9 +25,9 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from amr_twin import live_inputs
+from amr_twin.live import inputs as live_inputs
 from amr_twin.sim.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
-from amr_twin.live_rows import LiveRows
+from amr_twin.live.rows import LiveRows
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.messages import String, TFMessage
 from amr_twin.ros.ros2_cdr import encode_battery_state, encode_float64_multi_array, encode_string, encode_tf_message
@@ -99,7 +99,7 @@ class FoxgloveSink:
         import foxglove
         from foxglove.channels import SceneUpdateChannel
 
-        from amr_twin.live_scene import SceneBuilder
+        from amr_twin.live.scene import SceneBuilder
 
         self.twin, self.pacer, self.bus = twin, pacer, twin.bus
         self.dropped, self.accepted = 0, 0

@@ -96,7 +96,7 @@ class RerunSink:
             log_events(self.rec, SimpleNamespace(collisions=None, faults=twin.faults))
         self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []  # t_us, xpos (nb, 3), xquat (nb, 4)
         self._sent_pose_us = -1
-        from amr_twin.live_rows import LiveRows
+        from amr_twin.live.rows import LiveRows
 
         self._rows = LiveRows(twin)
         self._messages: dict[str, list] = {}

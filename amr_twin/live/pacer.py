@@ -9,7 +9,7 @@ loop as for any synced event, it
 2. runs the calls other threads queued (a Foxglove client's ``cmd_vel``, a menu choice):
    they act at this simulated instant, through the bus like any node of the twin, so
    the physics never runs ahead of a command;
-3. hands every live sink (:mod:`amr_twin.live_foxglove`, :mod:`amr_twin.live_rerun`)
+3. hands every live sink (:mod:`amr_twin.live.foxglove`, :mod:`amr_twin.live.rerun_stream`)
    what happened up to this instant: ``sink.flush(t_us)``.
 
 The loop is untouched: it still steps the physics in C from one clock event to the next.

@@ -227,8 +227,8 @@ def calibrate(
     """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
     from rich.progress import Progress
 
-    from amr_twin.calibration import calibrate as fit_plant
-    from amr_twin.calibration import read_log, write_params
+    from amr_twin.analysis.calibration import calibrate as fit_plant
+    from amr_twin.analysis.calibration import read_log, write_params
 
     from amr_twin.recording.outputs import OutputError, check_file
 
@@ -253,7 +253,7 @@ def calibrate(
             fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
                                            progress=lambda i, n: bar.update(task, completed=min(i, n))))
         if report is not None:
-            from amr_twin import calibration_report
+            from amr_twin.analysis import calibration_report
 
             at = base if fit is None else _guard(lambda: fit.config(base))
             task = bar.add_task("uncertainty", total=1)

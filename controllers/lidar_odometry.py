@@ -19,8 +19,8 @@ Time
 Motion prior
     ``prior_base_delta`` is the motion of ``base_link`` over
     :meth:`LidarOdometry.prior_interval_s`, from the previous scan's ``t_end`` to
-    this one's (e.g. wheel odometry interpolated at both stamps, :func:`amr_twin.se2.between`
-    of :func:`amr_twin.se2.interpolate`), expressed in the earlier ``base_link`` frame. For
+    this one's (e.g. wheel odometry interpolated at both stamps, :func:`amr_twin.analysis.se2.between`
+    of :func:`amr_twin.analysis.se2.interpolate`), expressed in the earlier ``base_link`` frame. For
     the first scan it covers the rotation before its ``t_end`` and only deskews it
     (the map starts from that scan: a distorted first scan biases every later
     pose). It is moved to the laser frame, ``L^-1 D L`` with ``L`` the laser pose
@@ -44,7 +44,7 @@ from kiss_icp.config import KISSConfig
 from kiss_icp.kiss_icp import KissICP
 
 from amr_twin.ros.messages import LaserScan
-from amr_twin import se2
+from amr_twin.analysis import se2
 from amr_twin.sensors.lidar_beams import beam_times_s, scan_end_time_s  # noqa: F401 (part of this API)
 
 MIN_POINTS = 20

@@ -3,14 +3,14 @@
 :func:`run` simulates the runs (§5.1.1-5.1.4), :func:`plot` draws one figure per run
 as in chapter 5, :func:`report` writes ``metrics.json`` and ``report.md``.
 
-The metrics (:mod:`amr_twin.metrics`) are judged on the **published** samples
+The metrics (:mod:`amr_twin.analysis.metrics`) are judged on the **published** samples
 (``wheel0_Vel``/``wheel1_Vel``, what the thesis plotted), joined by straight lines
 and starting from rest at the command; the true wheel speed is measured too, for
 reference. Settling band: ``max(5 % of the step, 4 RPM)`` around the reference;
 4 RPM is the firmware's THRESHOLD_CONTROL, inside which the PI does not act.
 Oscillation (the 20 kg runs' "more oscillation", §5.1.4): the named measure
 :data:`OSCILLATION_MEASURE`, the excess total variation of the speed from its
-first 90 % crossing to 5 s after the command (:func:`amr_twin.metrics.step_info`),
+first 90 % crossing to 5 s after the command (:func:`amr_twin.analysis.metrics.step_info`),
 compared per wheel between each 20 kg run and the same command unloaded; the
 verdict is judged on the published samples, the true speed's is reported too.
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
@@ -32,7 +32,7 @@ from pathlib import Path
 from amr_twin.experiments import chapter5_payload as payload
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import TwinOptions
-from amr_twin.metrics import step_info
+from amr_twin.analysis.metrics import step_info
 from amr_twin.sim.run import Command, run_command
 
 WHEELS = ("left", "right")

@@ -36,11 +36,11 @@ from amr_twin.controllers.lidar_odometry import LidarOdometry
 from amr_twin.controllers.path_follower import PathFollowerNode
 from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.trajectory import TrajectoryErrors, errors
+from amr_twin.analysis.trajectory import TrajectoryErrors, errors
 from amr_twin.model.world_geometry import Footprints, scan_plane_boxes
 from amr_twin.experiments.fusion_map import build_map
 from amr_twin.experiments.fusion_robot import NOMINAL, RobotErrors, draw
-from amr_twin import se2
+from amr_twin.analysis import se2
 from amr_twin.experiments.fusion_streams import Streams, odom_poses, relative_motion
 
 ROUTES_DIR = Path(__file__).resolve().parent / "routes"

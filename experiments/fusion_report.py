@@ -17,7 +17,7 @@ import numpy as np
 from amr_twin.experiments.executor import save_figure, write_json, write_text
 from amr_twin.experiments.fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
 from amr_twin.experiments.fusion_map import TOLERANCE_CELLS, agreement
-from amr_twin import se2, tum
+from amr_twin.analysis import se2, tum
 from amr_twin.recording import atomic_file
 
 LIDAR_ATE_MAX_M = 0.10   # issue #8 acceptance
@@ -129,7 +129,7 @@ def write_trajectories(results: FusionResults, out: Path) -> dict[str, str]:
     """Write ``truth.tum`` and one TUM file per architecture into ``out``; return {architecture: file name}.
 
     The truth is sampled at its 100 Hz record and at every estimate's stamps
-    (:func:`amr_twin.tum.truth_at`), so that evo's nearest-stamp association pairs each
+    (:func:`amr_twin.analysis.tum.truth_at`), so that evo's nearest-stamp association pairs each
     estimate pose with the true pose of its own instant.
     """
     out = Path(out)

@@ -3,7 +3,7 @@
 A :class:`Streams` is a bus tap: it keeps every ``odom``, ``imu/data_raw``,
 ``uwb/range`` and ``scan`` message as published, and replays them merged in
 stamp order (ties keep publication order), as a rosbag replay would.
-Poses are arrays ``(N, 3)``: ``x_m, y_m, yaw_rad`` (algebra in :mod:`amr_twin.se2`).
+Poses are arrays ``(N, 3)``: ``x_m, y_m, yaw_rad`` (algebra in :mod:`amr_twin.analysis.se2`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from amr_twin import se2
+from amr_twin.analysis import se2
 
 TOPICS = {"odom": "odom", "imu/data_raw": "imu", "uwb/range": "uwb", "scan": "scan"}
 """Recorded topic -> stream name."""

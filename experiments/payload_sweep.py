@@ -22,7 +22,7 @@ stiff 2 ms contact: 0 in most steps, 100 N and more in between, about 200 Hz) wh
 the tyre stays compressed; that minimum is kept as ``dyn_min_wheel_contact_n``. The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
 
-With ``draws`` (:class:`amr_twin.uncertainty.Draws`, ``--samples N``), every point is
+With ``draws`` (:class:`amr_twin.analysis.uncertainty.Draws`, ``--samples N``), every point is
 also run once per drawn configuration: its key gains ``_s<i>_<id>`` (the sample's
 index and a hash of its drawn values) and its fingerprint covers the drawn
 configuration, so a resumed sweep redoes exactly the runs whose parameters changed.
@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config import ConfigError, TwinConfig, load_config
-from amr_twin.metrics import step_info
+from amr_twin.analysis.metrics import step_info
 from amr_twin.sim.run import Command
 from amr_twin.experiments.chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
 
@@ -145,7 +145,7 @@ class Point:
     rrd_path: str | None = None   # write the point's Rerun recording here (not part of the fingerprint)
     mcap_path: str | None = None  # write the point's ROS 2 topics here
     sample: int | None = None     # index of the drawn configuration ``cfg`` (None: the nominal one)
-    sample_id: str = ""           # hash of the sample's drawn values (amr_twin.uncertainty.Draws.sample_id)
+    sample_id: str = ""           # hash of the sample's drawn values (amr_twin.analysis.uncertainty.Draws.sample_id)
 
     @property
     def key(self) -> str:
@@ -348,7 +348,7 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     recording per point simulated now (points reused from ``runs/`` are not
     re-simulated for a missing recording; see the module notes).
 
-    ``draws``: :class:`amr_twin.uncertainty.Draws` of ``cfg``'s parameters; each point is
+    ``draws``: :class:`amr_twin.analysis.uncertainty.Draws` of ``cfg``'s parameters; each point is
     also run with each drawn configuration (rows with ``sample`` and ``sample_id``, after
     the nominal rows).
 

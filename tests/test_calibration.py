@@ -7,7 +7,7 @@ import re
 import pytest
 import yaml
 
-from amr_twin.calibration import (BENCH_CURRENT_A, calibrate, bench_current_a, read_log, thesis_residual,
+from amr_twin.analysis.calibration import (BENCH_CURRENT_A, calibrate, bench_current_a, read_log, thesis_residual,
                                   write_params)
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import TwinOptions

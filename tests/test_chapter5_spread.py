@@ -36,7 +36,7 @@ def test_chapter5_samples_report_the_spread_beside_the_thesis(tmp_path):
 def test_true_speed_bands_bracket_the_median():
     from amr_twin.model.config import load_config
     from amr_twin.experiments import chapter5_spread
-    from amr_twin.uncertainty import ParameterSpace
+    from amr_twin.analysis.uncertainty import ParameterSpace
 
     draws = ParameterSpace.load().draw(3, seed=0, include=("driver.gain",))
     out = chapter5_spread.run(load_config(), draws, runs=[2], duration_s=2.0, progress=False)

@@ -137,7 +137,7 @@ def test_files_of_the_report(default_run):
     assert f"| odom+lidar | {lidar['ate_m']:.3f} | {lidar['ate_aligned_m']:.3f} |" in text
     assert "without alignment" in text and "evo_ape tum ./truth.tum ./odom_uwb_imu.tum --align" in text
     # the TUM files hold the estimates as scored: one pose per stamp, stamps kept to the microsecond
-    from amr_twin import tum
+    from amr_twin.analysis import tum
 
     t, pose = tum.read(out / "odom_uwb_imu.tum")
     est = results.estimates["odom+uwb+imu"]

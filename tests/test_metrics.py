@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.metrics import step_info
+from amr_twin.analysis.metrics import step_info
 
 T = np.linspace(0.0, 10.0, 100_001)  # 0.1 ms: interpolation error far below the tolerances
 

@@ -165,7 +165,7 @@ def warehouse_scans():
 
 
 def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_path):
-    from amr_twin import se2
+    from amr_twin.analysis import se2
     from amr_twin.controllers.lidar_odometry import beam_times_s
     from amr_twin.model.world_geometry import distance_to_boxes_m
 

@@ -6,7 +6,7 @@ import yaml
 
 from amr_twin.model.config import DEFAULT_CONFIG, ConfigError, load_parameters
 from amr_twin.model.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, source_kind
-from amr_twin.uncertainty import ParameterSpace
+from amr_twin.analysis.uncertainty import ParameterSpace
 
 
 @pytest.fixture(scope="module")

@@ -1,11 +1,11 @@
-"""Planar pose algebra (amr_twin.se2), no mujoco."""
+"""Planar pose algebra (amr_twin.analysis.se2), no mujoco."""
 
 import math
 
 import numpy as np
 import pytest
 
-from amr_twin import se2
+from amr_twin.analysis import se2
 
 
 def test_compose_then_between_is_identity():

@@ -1,12 +1,12 @@
-"""ATE / RPE against known answers (amr_twin/trajectory.py)."""
+"""ATE / RPE against known answers (amr_twin/analysis/trajectory.py)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from amr_twin import se2
-from amr_twin.trajectory import TrajectoryErrors, align_se2, errors
+from amr_twin.analysis import se2
+from amr_twin.analysis.trajectory import TrajectoryErrors, align_se2, errors
 
 
 def _straight(n=201, speed_m_s=1.0, dt_s=0.1, yaw_rad=0.0):

@@ -11,7 +11,7 @@ import pytest
 
 from amr_twin.model.config import ConfigError
 from amr_twin.model.statics import solve
-from amr_twin.uncertainty import (ParameterSpace, interval, noise_level, rank_correlations, unit_samples,
+from amr_twin.analysis.uncertainty import (ParameterSpace, interval, noise_level, rank_correlations, unit_samples,
                                   with_values)
 
 
@@ -21,7 +21,7 @@ def space():
 
 
 def _draw_json(seed: int) -> str:
-    code = ("import json; from amr_twin.uncertainty import ParameterSpace; "
+    code = ("import json; from amr_twin.analysis.uncertainty import ParameterSpace; "
             f"d = ParameterSpace.load().draw(6, seed={seed}); print(json.dumps(d.overrides))")
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
 

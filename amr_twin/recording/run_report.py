@@ -75,7 +75,7 @@ def json_ready(value):
 
 def _step_metrics(series: RunSeries, wheel: int, reference_rpm: float) -> dict:
     """Step metrics of a wheel's signed published speed (those of :data:`SIGNED_METRICS` signed)."""
-    from amr_twin.metrics import step_info
+    from amr_twin.analysis.metrics import step_info
     from amr_twin.recording.recorder import signed_published
 
     pub = signed_published(series, wheel)

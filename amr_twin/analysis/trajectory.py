@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin import se2
+from amr_twin.analysis import se2
 
 RPE_REL_TOL = 0.1
 """A pair is kept when its travelled distance is within this fraction of ``rpe_delta_m`` (evo's ``rel_delta_tol``)."""

@@ -44,7 +44,7 @@ import yaml
 from amr_twin.recording.atomic_file import write_text
 from amr_twin.model.config import TwinConfig, load_config
 from amr_twin.sim.loop import TwinOptions
-from amr_twin.metrics import step_info
+from amr_twin.analysis.metrics import step_info
 from amr_twin.sim.run import Command, run_command
 
 PARAMETERS = {  # dotted key: (lower, upper) bounds, physically plausible

@@ -11,9 +11,9 @@ The twin's poses are planar ``(N, 3)`` arrays ``[x_m, y_m, yaw_rad]``: written w
 
 :func:`truth_at` samples the true trajectory at the union of its own stamps and every
 estimate's (linear interpolation between record samples, yaw unwrapped, as
-:func:`amr_twin.trajectory.errors` does), so that a tool associating stamps by nearest
+:func:`amr_twin.analysis.trajectory.errors` does), so that a tool associating stamps by nearest
 neighbour (evo's ``--t_max_diff``) pairs every estimate pose with the true pose of its
-own instant and scores what :mod:`amr_twin.trajectory` scores.
+own instant and scores what :mod:`amr_twin.analysis.trajectory` scores.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import Iterable
 
 import numpy as np
 
-from amr_twin import se2
+from amr_twin.analysis import se2
 
 from amr_twin.recording import atomic_file
 

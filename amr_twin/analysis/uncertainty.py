@@ -111,7 +111,7 @@ class ParameterSpace:
 
     cfg: TwinConfig
     spreads: dict[str, Spread]
-    calibration: Any = None          # amr_twin.calibration_report.CalibrationReport or None
+    calibration: Any = None          # amr_twin.analysis.calibration_report.CalibrationReport or None
     calibration_path: Path | None = None
 
     @classmethod
@@ -120,7 +120,7 @@ class ParameterSpace:
              calibration: str | Path | None = None) -> "ParameterSpace":
         """The parameter file with its overrides (as :func:`amr_twin.model.config.load_config`) and
         the calibration's report (default ``calibration.yaml`` beside the parameter file)."""
-        from amr_twin import calibration_report
+        from amr_twin.analysis import calibration_report
 
         cfg, meta = load_parameters(path, override_file=override_file, sets=sets, overrides=overrides)
         report_path = Path(calibration) if calibration is not None else Path(path or DEFAULT_CONFIG).parent / \

@@ -2,7 +2,7 @@
 and how the fit would follow the parameters it held at their sourced values.
 
 :func:`evaluate` linearises the calibration's weighted residuals ``r`` (the targets of
-:mod:`amr_twin.calibration`, each ``(twin - target) / sigma``) at a configuration:
+:mod:`amr_twin.analysis.calibration`, each ``(twin - target) / sigma``) at a configuration:
 
 - ``J_a``, the Jacobian in the fitted parameters, by forward differences in the fit's
   own scaled variables (a step of 2 % of each parameter's bound span, toward the
@@ -14,7 +14,7 @@ and how the fit would follow the parameters it held at their sourced values.
   s/rad stronger takes ``7.5 x 0.004`` N m off the fitted dry friction, since the bench
   point pins their sum at 71.5 RPM).
 
-:mod:`amr_twin.uncertainty` draws the fitted parameters jointly from this normal and
+:mod:`amr_twin.analysis.uncertainty` draws the fitted parameters jointly from this normal and
 shifts each draw by ``follow`` times the held parameters' deviations, so that every
 draw stays a plant that fits the targets. The report is a YAML file
 (``models/amr/calibration.yaml`` for the shipped values), written by ``amr-twin calibrate
@@ -43,7 +43,7 @@ HELD = {  # held parameter: forward step of its derivative (a fair part of its s
 }
 """Not held: ``wheel.radius_m``. Its derivative is lost in the 8-bit duty's steps (the radius sets
 the commanded RPM): steps of 1 and 2 mm gave the driver gain -68 and +4.7 per metre."""
-STEP_FRACTION = 0.02  # the fit's finite-difference step, in its scaled variables (amr_twin.calibration)
+STEP_FRACTION = 0.02  # the fit's finite-difference step, in its scaled variables (amr_twin.analysis.calibration)
 
 
 @dataclass(frozen=True)
@@ -68,11 +68,11 @@ class CalibrationReport:
         return self.correlation * np.outer(self.sigma, self.sigma)
 
     def as_fit(self, fit=None):
-        """An :class:`amr_twin.calibration.Fit` with this report's uncertainty: ``fit``'s values
+        """An :class:`amr_twin.analysis.calibration.Fit` with this report's uncertainty: ``fit``'s values
         and residuals when given (a fit this report was evaluated at), else the report's."""
         import dataclasses
 
-        from amr_twin.calibration import Fit
+        from amr_twin.analysis.calibration import Fit
 
         sigma = dict(zip(self.keys, self.sigma.tolist()))
         corr = {a: dict(zip(self.keys, row.tolist())) for a, row in zip(self.keys, self.correlation)}
@@ -142,7 +142,7 @@ def write(report: CalibrationReport, path: str | Path) -> None:
 
 
 def _residual_function(target: str, pool) -> Callable[[TwinConfig], np.ndarray]:
-    from amr_twin import calibration as cal
+    from amr_twin.analysis import calibration as cal
 
     if target == "thesis":
         targets = cal.thesis_targets()
@@ -162,13 +162,13 @@ def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tupl
     Parameters
     ----------
     cfg : the configuration whose fitted values are reported (a fit's result, or the shipped file).
-    target : "thesis" or the path of a log (as :func:`amr_twin.calibration.calibrate`).
-    parameters : fitted parameters and their bounds (default :data:`amr_twin.calibration.PARAMETERS`).
+    target : "thesis" or the path of a log (as :func:`amr_twin.analysis.calibration.calibrate`).
+    parameters : fitted parameters and their bounds (default :data:`amr_twin.analysis.calibration.PARAMETERS`).
     held : held parameters and their forward steps (default :data:`HELD`).
     jobs : worker processes for a thesis evaluation's three runs.
     progress : ``progress(i, n)`` after each evaluation.
     """
-    from amr_twin import calibration as cal
+    from amr_twin.analysis import calibration as cal
 
     parameters = parameters or cal.PARAMETERS
     held = dict(HELD if held is None else held)

@@ -183,7 +183,7 @@ def bench(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
-    from amr_twin.benchmark import run_benchmarks
+    from amr_twin.bench.physics import run_benchmarks
     from amr_twin.experiments.executor import check_jobs
 
     try:
@@ -197,7 +197,7 @@ def bench(
     def measure() -> dict:
         figures = run_benchmarks(cfg, sim_s=sim_s)
         if suites:
-            from amr_twin.suite_benchmark import suite_figures
+            from amr_twin.bench.suites import suite_figures
             figures.update(suite_figures(cfg, jobs=jobs))
         return figures
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from amr_twin.benchmark import run_benchmarks
+from amr_twin.bench.physics import run_benchmarks
 from amr_twin.model.config import load_config
 
 README_KEYS = ("physics_us_per_step", "twin_s_per_sim_s", "bare_physics_s_per_sim_s", "ratio",
@@ -32,7 +32,7 @@ def test_bench_refuses_bad_options_in_one_line(args, text):
 def test_suite_figures_of_a_cheap_stand_in(monkeypatch):
     """The acceptance figures' helpers on tiny stand-ins: fresh processes timed by their own
     rusage, the rrd figure from two captured runs (not timed against targets here)."""
-    from amr_twin import suite_benchmark as sb
+    from amr_twin.bench import suites as sb
 
     fig = sb.startup_figures(repeats=1)
     assert 0 < fig["help_cpu_s"] < fig["run_1s_cpu_s"]

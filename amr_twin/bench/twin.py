@@ -13,14 +13,14 @@ import statistics
 
 import mujoco
 
-from amr_twin.benchmark import REPEATS, timer
+from amr_twin.bench.physics import REPEATS, timer
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import Twin, TwinOptions
 
 
 def twin_run_s(cfg: TwinConfig, sim_s: float, firmware: str = "faithful",
                sensors: bool = False) -> tuple[float, Twin]:
-    """CPU time (:data:`~amr_twin.benchmark.timer`) of ``sim_s`` of the scenario (linear 0.7 m/s), and the twin."""
+    """CPU time (:data:`~amr_twin.bench.physics.timer`) of ``sim_s`` of the scenario (linear 0.7 m/s), and the twin."""
     twin = Twin(cfg, TwinOptions(firmware=firmware, sensors=sensors))
     twin.client.linear(0.7)
     t0 = timer()

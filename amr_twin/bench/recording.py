@@ -49,7 +49,7 @@ def recording_figures(cfg: TwinConfig, repeats: int = 3) -> dict:
             "run_record_mcap_s": both_s, "record_mcap_ratio": both_s / run_s, **sizes}
 
 
-if __name__ == "__main__":  # python -m amr_twin.recording_benchmark
+if __name__ == "__main__":  # python -m amr_twin.bench.recording
     import json
 
     from amr_twin.model.config import load_config

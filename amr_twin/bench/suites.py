@@ -1,6 +1,6 @@
 """Figures of the waits users see: ``amr-twin bench --suites`` (issue 15's acceptance figures).
 
-Each figure is the median of :data:`~amr_twin.benchmark.REPEATS` interleaved repeats,
+Each figure is the median of :data:`~amr_twin.bench.physics.REPEATS` interleaved repeats,
 except the 100-point sweep and the fusion experiment (one run each; the sweep's
 per-point figure is its mean over the 100 points):
 
@@ -27,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from amr_twin.benchmark import REPEATS, timer
+from amr_twin.bench.physics import REPEATS, timer
 from amr_twin.model.config import TwinConfig
 
 SWEEP_MASSES = [5.0 * i for i in range(10)]                # 0..45 kg

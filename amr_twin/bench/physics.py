@@ -60,7 +60,7 @@ def avr_figures(cfg: TwinConfig, sim_s: float) -> dict:
     are not installed.
     """
     from amr_twin.controllers.avr_build import missing_tools
-    from amr_twin.twin_benchmark import twin_figures
+    from amr_twin.bench.twin import twin_figures
 
     problem = missing_tools()
     if problem:
@@ -78,12 +78,12 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     the whole twin against bare physics on one scenario (see twin_benchmark);
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
     """
-    from amr_twin.twin_benchmark import twin_figures
+    from amr_twin.bench.twin import twin_figures
 
     result = bare_physics(cfg, sim_s)
     result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
     result.update(twin_figures(cfg, sim_s))
-    from amr_twin.sensor_benchmark import sensor_figures  # IMU + LiDAR against the same bare figure
+    from amr_twin.bench.sensors import sensor_figures  # IMU + LiDAR against the same bare figure
     result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"

@@ -4,7 +4,7 @@ Scenario: the twin benchmark's (chapter 5 run 3: linear 0.7 m/s, faithful
 firmware, warehouse) with ``TwinOptions(sensors=True)``: IMU at 100 Hz and
 RPLIDAR A1 at 5.5 Hz (2000 samples/s, laser pose sampled every 20 ms on the
 record grid, the 364 beams of a rotation cast in one call, sensors/lidar.py).
-Figures: CPU time, medians of interleaved repeats (amr_twin/benchmark.py).
+Figures: CPU time, medians of interleaved repeats (amr_twin/bench/physics.py).
 """
 
 from __future__ import annotations
@@ -13,13 +13,13 @@ import statistics
 
 import mujoco
 
-from amr_twin.benchmark import REPEATS, timer
+from amr_twin.bench.physics import REPEATS, timer
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import Twin
 from amr_twin.sensors.lidar import Lidar
-from amr_twin.twin_benchmark import twin_run_s
+from amr_twin.bench.twin import twin_run_s
 
 SCAN_REPEATS = 200
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
 from amr_twin.controllers.firmware import AvrParams

@@ -23,7 +23,7 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
 def test_bench_refuses_bad_options_in_one_line(args, text):
     from typer.testing import CliRunner
 
-    from amr_twin.cli import app
+    from amr_twin.cli.main import app
 
     res = CliRunner().invoke(app, ["bench", *args])
     assert res.exit_code == 2 and text in res.output and len(res.output.strip().splitlines()) == 1

@@ -88,7 +88,7 @@ def test_log_format_errors_name_the_problem(tmp_path):
 def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
     from typer.testing import CliRunner
 
-    from amr_twin.cli import app
+    from amr_twin.cli.main import app
 
     short = tmp_path / "short.csv"
     short.write_text("t_s,wheel,rpm,command\n0.5,left,10,linear:0.7\n2.0,left,50,linear:0.7\n")

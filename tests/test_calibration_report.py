@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 
 from amr_twin.analysis import calibration_report as cr
 from amr_twin.analysis.calibration import BENCH_RPM, _with, thesis_residual
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.model.paths import MODEL_DIR
 

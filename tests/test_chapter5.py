@@ -5,7 +5,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
 from amr_twin.sim.run import run_command

@@ -6,7 +6,7 @@ import json
 import numpy as np
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 
 ARGS = ["experiment", "chapter5", "--runs", "1", "--duration-s", "3", "--jobs", "1", "--no-progress"]
 

@@ -12,7 +12,7 @@ import pyarrow as pa
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
 from amr_twin.experiments import payload_sweep as ps

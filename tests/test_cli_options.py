@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.controllers.firmware import FIRMWARES
 
 runner = CliRunner()

@@ -99,7 +99,7 @@ def test_model_readme_is_current():
 def test_a_parameter_file_that_is_a_folder_or_binary_is_named(tmp_path):
     from typer.testing import CliRunner
 
-    from amr_twin.cli import app
+    from amr_twin.cli.main import app
 
     binary = tmp_path / "p.yaml"
     binary.write_bytes(bytes(range(128, 256)) * 8)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.sim.faults import FaultError, kind_names, parse_fault, parse_faults
 from amr_twin.sim.loop import Twin, TwinOptions

@@ -178,7 +178,7 @@ def test_without_robot_errors_the_odometry_is_the_same_on_every_seed(tmp_path):
 def test_cli_rejects_a_broken_route(tmp_path):
     from typer.testing import CliRunner
 
-    from amr_twin.cli import app
+    from amr_twin.cli.main import app
 
     bad = tmp_path / "bad.yaml"
     bad.write_text(SHORT_ROUTE.replace("max_speed_m_s: 1.0", "max_speed_m_s: 3.0"))
@@ -203,7 +203,7 @@ def corridor_seeds(tmp_path_factory):
     """22 m down the corridor world's featureless corridor, seeds 0 and 1 on two workers, from the CLI."""
     from typer.testing import CliRunner
 
-    from amr_twin.cli import app
+    from amr_twin.cli.main import app
 
     tmp = tmp_path_factory.mktemp("corridor")
     route = tmp / "corridor_short.yaml"
@@ -251,7 +251,7 @@ def test_in_the_corridor_scan_matching_slides_and_uwb_loses_the_bays_anchors(cor
 def test_cli_refuses_bad_seed_options_before_the_work(tmp_path):
     from typer.testing import CliRunner
 
-    from amr_twin.cli import app
+    from amr_twin.cli.main import app
 
     for args, words in ((["--seed", "1", "--seeds", "0:2"], "--seed and --seeds"),
                         (["--seeds", "5:2"], "--seeds"), (["--seeds", "1,x"], "--seeds"),

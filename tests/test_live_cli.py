@@ -6,8 +6,8 @@ import socket
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
-from amr_twin.cli_options import live_option_args
+from amr_twin.cli.main import app
+from amr_twin.cli.options import live_option_args
 
 pytest.importorskip("foxglove")
 runner = CliRunner()

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.controllers.dead_reckoning import twist_step
 
 from uwb_run import record_uwb_run

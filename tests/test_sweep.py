@@ -6,7 +6,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.cli import app
+from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments import payload_sweep as ps
 from amr_twin.experiments import payload_sweep_report as report

@@ -116,7 +116,7 @@ def test_map_errors_are_one_line_naming_the_file(tmp_path, yaml_text, pgm, text)
 def test_a_malformed_mjcf_world_is_named(tmp_path):
     from typer.testing import CliRunner
 
-    from amr_twin.cli import app
+    from amr_twin.cli.main import app
 
     bad = tmp_path / "bad.xml"
     bad.write_text('<mujoco><worldbody><geom type="plane" size="1 1 1"</worldbody></mujoco>')

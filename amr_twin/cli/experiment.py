@@ -20,9 +20,9 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli_checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
+from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
                          check_duration, check_outputs, check_record_folder, dask_client, parameter_draws, unique)
-from amr_twin.cli_options import firmware_option, sketch_option
+from amr_twin.cli.options import firmware_option, sketch_option
 
 def _rpm(value) -> str:
     return "-" if value is None else f"{value:.2f}"
@@ -49,7 +49,7 @@ def register(app: typer.Typer) -> None:
     app.add_typer(experiment, name="experiment")
     app.add_typer(sweep, name="sweep")
     _add_chapter5(experiment)
-    from amr_twin.cli_fusion import add_fusion
+    from amr_twin.cli.fusion import add_fusion
 
     add_fusion(experiment)
     _add_faults(experiment)
@@ -58,7 +58,7 @@ def register(app: typer.Typer) -> None:
 
 def _add_faults(experiment: typer.Typer) -> None:
     """``amr-twin experiment faults``."""
-    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @experiment.command("faults")
     def faults_cmd(
@@ -95,7 +95,7 @@ def _add_faults(experiment: typer.Typer) -> None:
 
 def _add_chapter5(experiment: typer.Typer) -> None:
     """``amr-twin experiment chapter5``."""
-    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @experiment.command("chapter5")
     def chapter5_cmd(
@@ -184,7 +184,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
 
 def _add_payload_sweep(sweep: typer.Typer) -> None:
     """``amr-twin sweep payload``."""
-    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @sweep.command("payload")
     def payload_cmd(

@@ -13,10 +13,10 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli_options import checked_firmware
+from amr_twin.cli.options import checked_firmware
 
 MAX_DURATION_S = 3600.0
-"""Longest simulated run of an experiment, s (see amr_twin.cli_run.MAX_RUN_S)."""
+"""Longest simulated run of an experiment, s (see amr_twin.cli.run.MAX_RUN_S)."""
 
 MAX_SWEEP_POINTS = 10_000
 """Most points of one sweep: each is a simulation (~0.5 s of CPU for 8 s) and a file in runs/."""

@@ -3,7 +3,7 @@
 ``amr-twin run linear|angular|motor|stop`` sends one wheel_Command_Client call at
 t = 0 and runs the twin for ``--duration-s``; ``amr-twin run --mission FILE`` runs
 a timed list of them (format in :mod:`amr_twin.sim.mission`). The shared options
-(:mod:`amr_twin.cli_options`) go before or after the command kind. ``--csv`` writes
+(:mod:`amr_twin.cli.options`) go before or after the command kind. ``--csv`` writes
 the time series, ``--json`` prints one summary object, ``--fault`` injects faults
 (:mod:`amr_twin.sim.faults`), ``--stop-on-collision`` ends the run at the first
 collision (:mod:`amr_twin.sim.collisions`).
@@ -26,8 +26,8 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli import _config, _guard, fail
-from amr_twin.cli_options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
+from amr_twin.cli.main import _config, _guard, fail
+from amr_twin.cli.options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
 
@@ -158,7 +158,7 @@ def _run_live(twin, live, run):
 
 def register(app: typer.Typer) -> None:
     """Add ``run`` (linear, angular, motor, stop, --mission) and ``client`` to the app."""
-    from amr_twin.menu import client
+    from amr_twin.cli.menu import client
 
     def Command(*args, **kwargs):  # noqa: N802 - amr_twin.sim.run.Command, imported when a run starts
         from amr_twin.sim.run import Command as RunCommand

@@ -14,13 +14,13 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli_checks import JobsOpt, check_common, check_outputs, dask_client
-from amr_twin.cli_options import firmware_option
+from amr_twin.cli.checks import JobsOpt, check_common, check_outputs, dask_client
+from amr_twin.cli.options import firmware_option
 
 
 def add_fusion(experiment: typer.Typer) -> None:
     """Register ``amr-twin experiment fusion`` on ``experiment``."""
-    from amr_twin.cli import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
 
     @experiment.command("fusion")
     def fusion_cmd(

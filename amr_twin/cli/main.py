@@ -27,7 +27,7 @@ try:  # typer >= 0.20 carries its own copy of click
 except ImportError:  # pragma: no cover - older typer on click
     from click import exceptions as _click_errors
 
-from amr_twin.cli_options import ConfigOpt, ParamsOpt, SetOpt  # noqa: F401 - used by the command modules
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt  # noqa: F401 - used by the command modules
 
 
 class _App(typer.Typer):
@@ -291,10 +291,10 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
                                  "needed to compare: the log must be longer")
 
 
-from amr_twin.cli_experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
+from amr_twin.cli.experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
 
 
-from amr_twin.cli_run import register as _register_run; _register_run(app)  # noqa: E402,E702 - run, client
+from amr_twin.cli.run import register as _register_run; _register_run(app)  # noqa: E402,E702 - run, client
 
 
 def main() -> None:  # pragma: no cover - console entry

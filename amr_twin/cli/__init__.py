@@ -1,0 +1,1 @@
+"""The command line: one module per command group (main, run, experiment, fusion, menu), shared options and checks."""

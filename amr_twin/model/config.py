@@ -33,6 +33,7 @@ from pydantic import BaseModel, ValidationError, model_validator
 from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg, DriverCfg,
                               EkfCfg, ImuCfg, LidarCfg, LidarOdometryCfg, MappingCfg, MotorCfg,
                               PayloadCfg, Section, SimCfg, UwbCfg, WheelCfg)
+from amr_twin.model.config_leaves import ConfigError  # noqa: F401 - the parameter files' error, raised here too
 from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
 from amr_twin.model.config_leaves import field_range as _field_range
 from amr_twin.model.paths import MODEL_DIR
@@ -40,10 +41,6 @@ from amr_twin.model.paths import MODEL_DIR
 DEFAULT_CONFIG = MODEL_DIR / "amr.yaml"
 SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 """libyaml's safe loader when PyYAML has it (amr.yaml in ~3 ms instead of ~30 ms), else the Python one."""
-
-
-class ConfigError(ValueError):
-    """A parameter file or override is invalid; the message is one line."""
 
 
 class TwinConfig(Section):

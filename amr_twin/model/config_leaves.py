@@ -17,9 +17,11 @@ LEAF_KEYS = ("value", "unit", "source", "range", "sigma", "follows", "reason")
 SPREAD_KEYS = ("range", "sigma", "follows")
 
 
-def _error(message: str) -> Exception:
-    from amr_twin.model.config import ConfigError  # the one error type of the parameter files
+class ConfigError(ValueError):
+    """A parameter file or override is invalid; the message is one line (re-exported by config)."""
 
+
+def _error(message: str) -> Exception:
     return ConfigError(message)
 
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from amr_twin.bench.physics import run_benchmarks
+from amr_twin.bench.figures import run_benchmarks
 from amr_twin.model.config import load_config
 
 README_KEYS = ("physics_us_per_step", "twin_s_per_sim_s", "bare_physics_s_per_sim_s", "ratio",

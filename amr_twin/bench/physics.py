@@ -1,4 +1,4 @@
-"""Benchmarks printed by ``amr-twin bench``: each figure against bare physics in the same run.
+"""Bare MuJoCo physics of the twin's model, the floor every ``amr-twin bench`` figure is quoted against.
 
 Times are the process' CPU time (:data:`timer`, ``time.process_time``), not wall
 time: on a shared machine other work delays a run without costing it CPU, which
@@ -50,41 +50,3 @@ def bare_physics(cfg: TwinConfig, sim_s: float) -> dict:
         "realtime_factor_physics": round(sim_s / wall, 1),
         "timestep_s": physics.timestep_s,
     }
-
-
-def avr_figures(cfg: TwinConfig, sim_s: float) -> dict:
-    """The twin with ``--firmware avr`` (the sketch on the emulated ATmega2560), same scenario.
-
-    ``avr_ratio`` against bare physics measured in the same repeats, ``avr_realtime_factor``
-    simulated over CPU seconds; ``avr_skipped`` names what is missing when the Debian packages
-    are not installed.
-    """
-    from amr_twin.controllers.avr_build import missing_tools
-    from amr_twin.bench.twin import twin_figures
-
-    problem = missing_tools()
-    if problem:
-        return {"avr_skipped": problem}
-    avr = twin_figures(cfg, sim_s, firmware="avr")
-    return {"avr_twin_s_per_sim_s": avr["twin_s_per_sim_s"], "avr_ratio": avr["ratio"],
-            "avr_realtime_factor": avr["realtime_factor_twin"]}
-
-
-def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
-    """All benchmark figures of the twin, measured in one run.
-
-    ``physics_us_per_step``: settled robot driving at a constant duty in the
-    warehouse. ``twin_s_per_sim_s`` / ``bare_physics_s_per_sim_s`` / ``ratio``:
-    the whole twin against bare physics on one scenario (see twin_benchmark);
-    ``avr_*``: the same with the emulated board (:func:`avr_figures`).
-    """
-    from amr_twin.bench.twin import twin_figures
-
-    result = bare_physics(cfg, sim_s)
-    result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
-    result.update(twin_figures(cfg, sim_s))
-    from amr_twin.bench.sensors import sensor_figures  # IMU + LiDAR against the same bare figure
-    result.update(sensor_figures(cfg, sim_s))
-    result.update(avr_figures(cfg, sim_s))
-    result["timer"] = "process_time"
-    return result

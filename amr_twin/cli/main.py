@@ -183,7 +183,7 @@ def bench(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
-    from amr_twin.bench.physics import run_benchmarks
+    from amr_twin.bench.figures import run_benchmarks
     from amr_twin.experiments.executor import check_jobs
 
     try:

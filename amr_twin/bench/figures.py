@@ -1,0 +1,49 @@
+"""Every figure printed by ``amr-twin bench``, each against bare physics in the same run.
+
+:func:`run_benchmarks` puts together bare physics (:mod:`amr_twin.bench.physics`), the whole
+twin (:mod:`amr_twin.bench.twin`), its sensors (:mod:`amr_twin.bench.sensors`) and the
+emulated board (:func:`avr_figures`).
+"""
+
+from __future__ import annotations
+
+from amr_twin.bench.physics import bare_physics
+from amr_twin.model.config import TwinConfig
+
+
+def avr_figures(cfg: TwinConfig, sim_s: float) -> dict:
+    """The twin with ``--firmware avr`` (the sketch on the emulated ATmega2560), same scenario.
+
+    ``avr_ratio`` against bare physics measured in the same repeats, ``avr_realtime_factor``
+    simulated over CPU seconds; ``avr_skipped`` names what is missing when the Debian packages
+    are not installed.
+    """
+    from amr_twin.controllers.avr_build import missing_tools
+    from amr_twin.bench.twin import twin_figures
+
+    problem = missing_tools()
+    if problem:
+        return {"avr_skipped": problem}
+    avr = twin_figures(cfg, sim_s, firmware="avr")
+    return {"avr_twin_s_per_sim_s": avr["twin_s_per_sim_s"], "avr_ratio": avr["ratio"],
+            "avr_realtime_factor": avr["realtime_factor_twin"]}
+
+
+def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
+    """All benchmark figures of the twin, measured in one run.
+
+    ``physics_us_per_step``: settled robot driving at a constant duty in the
+    warehouse. ``twin_s_per_sim_s`` / ``bare_physics_s_per_sim_s`` / ``ratio``:
+    the whole twin against bare physics on one scenario (see twin_benchmark);
+    ``avr_*``: the same with the emulated board (:func:`avr_figures`).
+    """
+    from amr_twin.bench.twin import twin_figures
+
+    result = bare_physics(cfg, sim_s)
+    result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
+    result.update(twin_figures(cfg, sim_s))
+    from amr_twin.bench.sensors import sensor_figures  # IMU + LiDAR against the same bare figure
+    result.update(sensor_figures(cfg, sim_s))
+    result.update(avr_figures(cfg, sim_s))
+    result["timer"] = "process_time"
+    return result

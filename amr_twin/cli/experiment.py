@@ -58,7 +58,8 @@ def register(app: typer.Typer) -> None:
 
 def _add_faults(experiment: typer.Typer) -> None:
     """``amr-twin experiment faults``."""
-    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.common import _config, _guard, fail
+    from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
     @experiment.command("faults")
     def faults_cmd(
@@ -95,7 +96,8 @@ def _add_faults(experiment: typer.Typer) -> None:
 
 def _add_chapter5(experiment: typer.Typer) -> None:
     """``amr-twin experiment chapter5``."""
-    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.common import _config, _guard, fail
+    from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
     @experiment.command("chapter5")
     def chapter5_cmd(
@@ -184,7 +186,8 @@ def _add_chapter5(experiment: typer.Typer) -> None:
 
 def _add_payload_sweep(sweep: typer.Typer) -> None:
     """``amr-twin sweep payload``."""
-    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.common import _config, _guard, fail
+    from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
     @sweep.command("payload")
     def payload_cmd(

@@ -20,7 +20,8 @@ from amr_twin.cli.options import firmware_option
 
 def add_fusion(experiment: typer.Typer) -> None:
     """Register ``amr-twin experiment fusion`` on ``experiment``."""
-    from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+    from amr_twin.cli.common import _config, _guard, fail
+    from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
     @experiment.command("fusion")
     def fusion_cmd(

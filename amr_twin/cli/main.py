@@ -27,7 +27,8 @@ try:  # typer >= 0.20 carries its own copy of click
 except ImportError:  # pragma: no cover - older typer on click
     from click import exceptions as _click_errors
 
-from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt  # noqa: F401 - used by the command modules
+from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
 
 class _App(typer.Typer):
@@ -71,50 +72,6 @@ def _misplaced(exc) -> str | None:
 
 app = _App(add_completion=False, no_args_is_help=True,
            help="amr-twin: headless MuJoCo digital twin of the thesis AMR.")
-
-
-def fail(message: str, code: int = 2) -> None:
-    """Print a one-line error and exit non-zero."""
-    typer.echo(f"error: {message}", err=True)
-    raise typer.Exit(code)
-
-
-def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
-    from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
-
-    try:
-        return load_config(config, override_file=params, sets=sets or [], overrides=extra)
-    except ConfigError as exc:
-        text = str(exc)
-        for option, path in (("--params", params), ("--config", config)):
-            if path is not None and text.startswith(f"{path}:"):
-                text = f"{option} {text}"
-                break
-        fail(text)
-
-
-def _guard(func):
-    """Turn the twin's own errors into one-line messages.
-
-    Bad input found while building (a world file, a start pose): exit 2. The
-    simulation diverged: exit 3. A file could not be written (disk full, read-only):
-    exit 1, naming the file.
-    """
-    from amr_twin.recording.atomic_file import WriteError
-    from amr_twin.model.build import BuildError
-    from amr_twin.model.config import ConfigError
-    from amr_twin.sim.physics import DivergenceError
-
-    try:
-        return func()
-    except (ConfigError, BuildError, ValueError) as exc:
-        fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
-    except DivergenceError as exc:
-        fail(str(exc), code=3)
-    except WriteError as exc:
-        fail(f"cannot write {exc.filename}: {exc.strerror}", code=1)
-    except OSError as exc:
-        fail(f"{exc.filename + ': ' if exc.filename else ''}{exc.strerror or exc}", code=1)
 
 
 def _parse_xy(text: Optional[str]) -> Optional[list[float]]:

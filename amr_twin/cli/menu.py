@@ -22,7 +22,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from amr_twin.cli.main import ConfigOpt, ParamsOpt, SetOpt, _config, _guard, fail
+from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 from amr_twin.cli.options import checked_firmware, checked_live, firmware_option, live_options, sketch_option
 
 _LIVE = live_options()

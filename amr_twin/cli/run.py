@@ -26,7 +26,7 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.main import _config, _guard, fail
+from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)

@@ -1,0 +1,56 @@
+"""What every command group shares: the one-line failure, the parameter file from the options, the error guard.
+
+Each command module (main, run, experiment, fusion, menu) imports these from here, so
+that no command module imports another.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+
+def fail(message: str, code: int = 2) -> None:
+    """Print a one-line error and exit non-zero."""
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code)
+
+
+def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
+    from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
+
+    try:
+        return load_config(config, override_file=params, sets=sets or [], overrides=extra)
+    except ConfigError as exc:
+        text = str(exc)
+        for option, path in (("--params", params), ("--config", config)):
+            if path is not None and text.startswith(f"{path}:"):
+                text = f"{option} {text}"
+                break
+        fail(text)
+
+
+def _guard(func):
+    """Turn the twin's own errors into one-line messages.
+
+    Bad input found while building (a world file, a start pose): exit 2. The
+    simulation diverged: exit 3. A file could not be written (disk full, read-only):
+    exit 1, naming the file.
+    """
+    from amr_twin.recording.atomic_file import WriteError
+    from amr_twin.model.build import BuildError
+    from amr_twin.model.config import ConfigError
+    from amr_twin.sim.physics import DivergenceError
+
+    try:
+        return func()
+    except (ConfigError, BuildError, ValueError) as exc:
+        fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    except DivergenceError as exc:
+        fail(str(exc), code=3)
+    except WriteError as exc:
+        fail(f"cannot write {exc.filename}: {exc.strerror}", code=1)
+    except OSError as exc:
+        fail(f"{exc.filename + ': ' if exc.filename else ''}{exc.strerror or exc}", code=1)

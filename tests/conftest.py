@@ -1,9 +1,15 @@
 """Test session set-up: the model build's URDF cache in a folder of its own, removed afterwards,
-so that the tests neither read nor fill the user's cache (subprocesses inherit it)."""
+so that the tests neither read nor fill the user's cache (subprocesses inherit it).
+The tests live in folders mirroring amr_twin's packages; the helpers they share
+(foxglove_client, uwb_run, wheel_model) stay here, on the path of every folder."""
 
 import os
 import shutil
+import sys
 import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
 
 _made: list[str] = []
 

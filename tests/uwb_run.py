@@ -1,4 +1,4 @@
-"""The 2 s UWB run that the recording tests write and read back (tests/test_recording.py, test_mcap_rosbags.py).
+"""The 2 s UWB run that the recording tests write and read back (tests/recording/test_recording.py, test_mcap_rosbags.py).
 
 The twin drives straight at 0.5 m/s in the empty world with the UWB tag of the
 default configuration (no IMU, no LiDAR), its capture attached, and writes the

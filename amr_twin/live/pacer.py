@@ -14,7 +14,7 @@ loop as for any synced event, it
 
 The loop is untouched: it still steps the physics in C from one clock event to the next.
 A tick only adds chunk boundaries on the record grid, where the loop samples the physics
-anyway, so a paced run computes exactly what an unpaced one does (``tests/test_live_pacer.py``
+anyway, so a paced run computes exactly what an unpaced one does (``tests/live/test_live_pacer.py``
 compares them bit for bit); only the calls of other threads change a run, as a command does.
 
 A twin that cannot keep up (``--rate`` too high for the machine) runs as fast as it can;

@@ -13,7 +13,7 @@ LiDAR on ``laser``, the IMU board on ``imu_link``, the UWB tag on ``uwb_tag``:
 
 Every part is a solid of uniform density with a textbook inertia: a box
 ``m (b^2 + c^2) / 12``..., a cylinder ``m r^2 / 2`` about its axis and ``m (3 r^2 + h^2) / 12``
-across, a sphere ``2 m r^2 / 5`` (tests/test_mass.py checks them against trimesh's
+across, a sphere ``2 m r^2 / 5`` (tests/model/test_mass.py checks them against trimesh's
 meshes). No mesh library on the model build's path: this module costs microseconds.
 """
 

@@ -14,7 +14,7 @@ from amr_twin.controllers.path_follower import (PathFollowerNode, PurePursuit, R
                                                 distance_to_path_m, load_route, route_length_m)
 from amr_twin.ros.messages import Twist
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_ROUTE = ROOT / "experiments" / "routes" / "warehouse_60m.yaml"
 WAREHOUSE = ROOT / "models" / "worlds" / "warehouse.xml"
 CLEARANCE_M = 0.8

@@ -13,7 +13,7 @@ from amr_twin.cli.main import app
 from amr_twin.cli.run import CSV_COLUMNS, CSV_COMMENT
 from amr_twin.sim.mission import MissionError, parse_mission
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 runner = CliRunner()
 
 

@@ -29,7 +29,7 @@ def imu_at_rest():
     import sys
     from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).parent))
+    sys.path.insert(0, str(Path(__file__).parents[1]))
     from test_imu import Rig
 
     out = []

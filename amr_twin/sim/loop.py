@@ -72,6 +72,8 @@ class TwinOptions:
     check_every_s: float = 0.5  # divergence check period
     sensors: bool = False  # IMU (imu/data_raw, imu/mag) and LiDAR (scan) on the clock
     stop_on_collision: bool = False  # halt the twin at the first collision (amr_twin.sim.collisions)
+    odometry: bool = True  # the wheel odometry node (odom, tf); off for runs nothing reads it from (a sweep
+    # point): it only publishes, so the drive is the same to the bit without it
     faults: tuple = ()  # amr_twin.sim.faults.Fault items, injected at their times
     firmware_params: object = field(default=None, compare=False)
 
@@ -117,8 +119,8 @@ class Twin:
             self.firmware.connect(self.bus, self.link)
         else:
             self.bus.subscribe("wheel_Command", self._to_arduino)
-        self.odometry = WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
-                                      wheel_separation_m=cfg.wheel.separation_m)
+        self.odometry = (WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
+                                       wheel_separation_m=cfg.wheel.separation_m) if options.odometry else None)
         self.recorder = Recorder(self)
         self.grid_us = self.dt_us * self.recorder.every
         self.rolling = RollingResistance(self.physics, cfg)

@@ -85,3 +85,20 @@ def test_a_synced_event_sees_the_physics_at_its_instant(cfg):
     twin.client.linear(0.5)
     twin.advance(1.0)
     assert [t_phys - t for t, t_phys in seen] == [544, 0, 999]  # the first step at or after t
+
+
+@pytest.mark.parametrize("firmware", ["faithful", "improved"])
+def test_without_the_odometry_node_the_drive_is_the_same_to_the_bit(cfg, firmware):
+    """TwinOptions(odometry=False) (a sweep point) drops the odom/tf publisher and nothing else."""
+    series = {}
+    for odometry in (True, False):
+        twin = Twin(cfg, TwinOptions(world="empty", firmware=firmware, odometry=odometry))
+        twin.client.angular(60.0, -1.0)
+        twin.advance(2.0)
+        series[odometry] = twin.recorder.series()
+    on, off = series[True], series[False]
+    assert len(on.odom) > 50 and len(off.odom) == 0
+    for name in ("pose", "pwm_counts", "current_a", "battery_v"):
+        np.testing.assert_array_equal(getattr(on, name), getattr(off, name), err_msg=name)
+    for wheel in (0, 1):
+        np.testing.assert_array_equal(on.published[wheel], off.published[wheel])

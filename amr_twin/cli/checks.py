@@ -44,6 +44,18 @@ def check_duration(duration_s: Optional[float], fail) -> None:
              "series in memory)")
 
 
+def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
+    """``--executor local|dask`` and ``--scheduler``: dask needs an address, local takes none."""
+    from amr_twin.experiments.executor import EXECUTORS
+
+    if executor not in EXECUTORS:
+        fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
+    if executor == "dask" and not scheduler:
+        fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
+    if executor == "local" and scheduler:
+        fail("--scheduler is only used with --executor dask")
+
+
 def check_record_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
     """A recording option of a multi-run command takes a folder (one file per run), not a file name."""
     if folder is None or folder.is_dir():

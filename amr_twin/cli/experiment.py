@@ -21,7 +21,8 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
-                         check_duration, check_outputs, check_record_folder, dask_client, parameter_draws, unique)
+                                 check_duration, check_executor, check_outputs, check_record_folder, dask_client,
+                                 parameter_draws, unique)
 from amr_twin.cli.options import firmware_option, sketch_option
 
 def _rpm(value) -> str:
@@ -227,15 +228,8 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         """
         from amr_twin.experiments import payload_sweep, payload_sweep_report
 
-        from amr_twin.experiments.executor import EXECUTORS
-
         jobs, firmware = check_common(jobs, firmware, fail, sketch)
-        if executor not in EXECUTORS:
-            fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
-        if executor == "dask" and not scheduler:
-            fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
-        if executor == "local" and scheduler:
-            fail("--scheduler is only used with --executor dask")
+        check_executor(executor, scheduler, fail)
         if not math.isfinite(duration_s):
             fail(f"--duration-s {duration_s}: must be a finite number")
         check_duration(duration_s, fail)

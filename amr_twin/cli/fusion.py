@@ -14,7 +14,7 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import JobsOpt, check_common, check_outputs, dask_client
+from amr_twin.cli.checks import JobsOpt, check_common, check_executor, check_outputs, dask_client
 from amr_twin.cli.options import firmware_option
 
 
@@ -54,7 +54,6 @@ def add_fusion(experiment: typer.Typer) -> None:
         """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
         from amr_twin.controllers.route import RouteError, load_route
         from amr_twin.experiments import fusion
-        from amr_twin.experiments.executor import EXECUTORS
         from amr_twin.experiments.fusion_seeds import parse_seeds
 
         jobs, firmware = check_common(jobs, firmware, fail)
@@ -69,12 +68,7 @@ def add_fusion(experiment: typer.Typer) -> None:
         many = len(seed_list) > 1
         if many and (record is not None or mcap is not None):
             fail("--record/--mcap record one drive: use --seed N with them, not --seeds")
-        if executor not in EXECUTORS:
-            fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
-        if executor == "dask" and not scheduler:
-            fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
-        if executor == "local" and scheduler:
-            fail("--scheduler is only used with --executor dask")
+        check_executor(executor, scheduler, fail)
         route_path = fusion.route_file(route)
         try:
             load_route(route_path)

@@ -5,7 +5,7 @@ rolling radii differ from the nominal 0.125 m and from each other, the effective
 the nominal 0.48 m, the hall sensors sit off their nominal places, and their edges jitter.
 The odometry node and the cmd_vel node keep the nominal geometry (the thesis' listings,
 uncalibrated); the physics rolls on the true one (``wheel.radius_error_*_m``,
-``wheel.separation_error_m``, applied by :mod:`amr_twin.model.build`). The IMU's turn-on bias and
+``wheel.separation_error_m``, applied by :mod:`amr_twin.model.urdf`). The IMU's turn-on bias and
 scale error are drawn by the IMU itself from the same seed (:mod:`amr_twin.sensors.imu`).
 
 :func:`draw` takes each error from a normal with the sourced 1-sigma of ``models/amr/amr.yaml``

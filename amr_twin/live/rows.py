@@ -13,7 +13,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from amr_twin.model.build import LOOP_SENSOR_DIM
+from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
 from amr_twin.sim.plant import battery_current_a, motor_currents_a
 from amr_twin.recording.recorder import RAD_S_TO_RPM, yaw_from_quat
 

@@ -1,6 +1,6 @@
 """Time series of a run: what the loop sees every step, and what the bus carries.
 
-Per physics step the loop hands over the first :data:`~amr_twin.model.build.LOOP_SENSOR_DIM`
+Per physics step the loop hands over the first :data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM`
 sensor values (wheel angles and speeds, base pose); the recorder keeps one row in
 ``record_every_steps`` together with the pins and the battery voltage, which only
 change at events. A bus tap keeps every published wheel speed, wheel command and
@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from amr_twin.model.build import LOOP_SENSOR_DIM
+from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
 from amr_twin.sim.plant import MODE_CODES, battery_current_a, motor_currents_a
 
 RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)

@@ -34,7 +34,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from amr_twin.model.build import LOOP_SENSOR_DIM, build
+from amr_twin.model.build import build
+from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.sim.collisions import CollisionMonitor, check_start, check_supported

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from amr_twin.model.build import CASTERS, ROBOT_PREFIX, WHEELS
+from amr_twin.model.build import ROBOT_PREFIX
+from amr_twin.model.robot_spec import CASTERS, WHEELS
 
 
 class DivergenceError(RuntimeError):

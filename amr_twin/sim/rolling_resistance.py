@@ -16,7 +16,7 @@ Each support resists rolling in proportion to its contact normal force ``N``:
   is not pushed about by a force held between updates.
 
 Why not MuJoCo's contact friction: rolling friction (condim 6) on the tyres and
-sliding friction on the balls made the stiff contacts of :mod:`amr_twin.model.build` chatter
+sliding friction on the balls made the stiff contacts of :mod:`amr_twin.model.robot_spec` chatter
 (normal loads swinging 0-200 N at 100-250 Hz while driving, with elliptic cones as
 with pyramidal ones); the frictionless balls and condim 3 tyres do not.
 

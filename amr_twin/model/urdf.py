@@ -1,0 +1,175 @@
+"""The robot description: parameters -> xacro -> URDF, checked by yourdfpy and cached.
+
+:func:`derived_params` flattens the parameter file into what the xacro reads (lengths m,
+masses kg, inertias kg m^2 as the diagonal [ixx, iyy, izz], positions [x, y, z] m);
+:func:`robot_urdf` runs xacro and yourdfpy once per :func:`urdf_fingerprint` and keeps the
+result in this process and on disk (:func:`urdf_cache_dir`). The MjSpec stage that adds
+what URDF cannot carry is :mod:`amr_twin.model.robot_spec`; the assembly in a world is
+:mod:`amr_twin.model.build`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from amr_twin.model import mass
+from amr_twin.model.config import TwinConfig
+from amr_twin.model.paths import MODEL_DIR, ROOT
+
+XACRO_FILE = MODEL_DIR / "amr.urdf.xacro"
+
+CACHE_ENV = "AMR_TWIN_CACHE_DIR"
+"""Environment variable naming the folder of the URDF cache (default ``$XDG_CACHE_HOME/amr-twin``,
+``~/.cache/amr-twin``); an empty value turns the disk cache off."""
+CACHE_FORMAT = 1
+"""Part of every cache key: raise it when what a cached URDF means changes."""
+_urdf_memo: dict[str, str] = {}
+
+
+class BuildError(RuntimeError):
+    """The model could not be built; the message is one line."""
+
+
+def derived_params(cfg: TwinConfig) -> dict:
+    """The flat parameter set the xacro reads (geometry, inertias, limits)."""
+    c, w, k = cfg.chassis, cfg.wheel, cfg.caster
+    p = {
+        "chassis_length_m": c.length_m, "chassis_width_m": c.width_m,
+        "floor_a_z_m": c.floor_a_z_m, "floor_b_z_m": c.floor_b_z_m, "floor_c_z_m": c.floor_c_z_m,
+        "tube_outer_m": c.tube_outer_m, "sheet_thickness_m": c.sheet_thickness_m,
+        "deck_thickness_m": cfg.deck.thickness_m,
+        # the true geometry: the nominal radius and separation plus the tyres' errors (wheel.*_error_*)
+        "wheel_radius_m": w.radius_m, "wheel_width_m": w.width_m,
+        "wheel_separation_m": w.separation_m + w.separation_error_m,
+        "wheel_left_radius_m": w.radius_of("left"), "wheel_right_radius_m": w.radius_of("right"),
+        "wheel_torque_limit_nm": max(m.ke_v_s_rad * m.current_limit_a for m in (cfg.motor_left, cfg.motor_right)),
+        "wheel_speed_limit_rad_s": cfg.battery.v_full_v / min(cfg.motor_left.ke_v_s_rad, cfg.motor_right.ke_v_s_rad),
+        "caster_ball_diameter_m": k.ball_diameter_m, "caster_x_m": k.x_m, "caster_y_m": k.y_m,
+        "caster_travel_m": k.travel_m, "caster_drop_m": k.drop_m,
+        # what URDF can say of the MJCF's joint dynamics (<dynamics>, <limit>): set again on the MjSpec (robot_spec)
+        "wheel_left_damping": cfg.motor_left.damping_nm_s_rad, "wheel_left_friction": cfg.motor_left.friction_nm,
+        "wheel_right_damping": cfg.motor_right.damping_nm_s_rad, "wheel_right_friction": cfg.motor_right.friction_nm,
+        "caster_damping_n_s_m": k.damping_n_s_m, "caster_effort_n": k.preload_n + k.stiffness_n_m * k.travel_m,
+        "uwb_tag_pos_m": list(cfg.uwb.tag_pos_m), "uwb_tag_size_m": list(cfg.uwb.tag_size_m),
+    }
+    for name, comp in cfg.components.items():
+        p[f"{name}_size_m"] = list(comp.size_m)
+        p[f"{name}_pos_m"] = list(comp.pos_m)
+    sensors = mass.sensor_link_inertials(cfg)
+    for prefix, inertial in (("chassis", mass.chassis_inertial(cfg)), ("wheel", mass.wheel_inertial(cfg)),
+                             ("caster", mass.caster_inertial(cfg)), ("laser", sensors["laser"]),
+                             ("imu_link", sensors["imu_link"]), ("uwb_tag", sensors["uwb_tag"])):
+        p[f"{prefix}_mass_kg"] = inertial.mass_kg
+        p[f"{prefix}_com_m"] = [float(v) for v in inertial.com_m]
+        p[f"{prefix}_inertia"] = [float(v) for v in inertial.diag()]
+    return {key: (float(v) if isinstance(v, (int, float, np.floating)) else v) for key, v in p.items()}
+
+
+def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
+    """Run xacro on the robot description with the resolved parameters."""
+    import xacro  # imported here: slow, and only needed to build
+
+    with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as fh:
+        yaml.safe_dump(derived_params(cfg), fh)
+        params_path = fh.name
+    try:
+        doc = xacro.process_file(str(xacro_file), mappings={"params": params_path})
+    except Exception as exc:  # XacroException, XML parse errors, missing file
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise BuildError(f"xacro {xacro_file.name}: {first}") from None
+    finally:
+        Path(params_path).unlink(missing_ok=True)
+    text = doc.toprettyxml(indent="  ")
+    # xacro names its absolute source path in a header comment: keep the file portable
+    source = Path(xacro_file).resolve()
+    shown = source.relative_to(ROOT).as_posix() if source.is_relative_to(ROOT) else source.name
+    return text.replace(str(xacro_file), shown).replace(str(source), shown)
+
+
+def urdf_cache_dir() -> Path | None:
+    """The URDF cache's folder (:data:`CACHE_ENV`), or None when the disk cache is off."""
+    configured = os.environ.get(CACHE_ENV)
+    if configured is not None:
+        return Path(configured) / "urdf" if configured.strip() else None
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "amr-twin" / "urdf"
+
+
+def urdf_fingerprint(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
+    """Key of the robot description: the xacro source and the parameters it reads (not the
+    payload, the motors' electrics or anything else added on the MjSpec), sha256."""
+    text = Path(xacro_file).read_text()
+    digest = hashlib.sha256()
+    builder = Path(__file__).read_bytes()  # this module makes the URDF from the xacro's output
+    for part in (f"format {CACHE_FORMAT}", str(xacro_file), text, json.dumps(derived_params(cfg), sort_keys=True)):
+        digest.update(part.encode())
+        digest.update(b"\0")
+    digest.update(builder)
+    return digest.hexdigest()[:32]
+
+
+def robot_urdf(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
+    """The robot's URDF (:func:`urdf_string`), validated (:func:`check_urdf`) once per fingerprint.
+
+    Cached in this process and on disk (:func:`urdf_cache_dir`): a payload sweep or a
+    second run of the same robot skips xacro (~45 ms) and yourdfpy (~20 ms, and its trimesh
+    import, ~0.8 s). A cached file is written only after the check passed, by one rename.
+    """
+    try:
+        key = urdf_fingerprint(cfg, xacro_file)
+    except OSError as exc:
+        raise BuildError(f"xacro {Path(xacro_file).name}: {exc.strerror or exc}") from None
+    urdf = _urdf_memo.get(key)
+    if urdf is not None:
+        return urdf
+    folder = urdf_cache_dir()
+    path = folder / f"{key}.urdf" if folder is not None else None
+    try:
+        urdf = path.read_text() if path is not None else None
+    except (OSError, UnicodeDecodeError):
+        urdf = None
+    if not urdf:
+        urdf = urdf_string(cfg, xacro_file)
+        check_urdf(urdf)
+        if path is not None:
+            _store(path, urdf)
+    _urdf_memo[key] = urdf
+    return urdf
+
+
+def _store(path: Path, text: str) -> None:
+    """Write a cache file whole (temporary, then rename); a cache that cannot be written is skipped."""
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def check_urdf(urdf: str) -> None:
+    """Load and validate the URDF with yourdfpy; raise BuildError if it is invalid."""
+    import yourdfpy
+
+    try:
+        robot = yourdfpy.URDF.load(io.StringIO(urdf), load_meshes=False, build_scene_graph=True)
+    except Exception as exc:
+        raise BuildError(f"URDF: {str(exc).splitlines()[0]}") from None
+    if not robot.validate():
+        raise BuildError("URDF: yourdfpy validation failed")
+    if robot.base_link != "base_link":
+        raise BuildError(f"URDF: root link is {robot.base_link!r}, expected 'base_link'")

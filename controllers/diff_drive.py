@@ -24,7 +24,7 @@ import math
 
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import EventHandle, VirtualClock
-from amr_twin.ros.messages import Twist
+from amr_twin.ros.geometry_messages import Twist
 
 from amr_twin.controllers.wheel_command import OK, WheelCommandClient
 

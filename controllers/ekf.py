@@ -38,8 +38,10 @@ from filterpy.kalman import ExtendedKalmanFilter
 
 from amr_twin.ros.bus import BASE_FRAME, ODOM_FRAME, Bus
 from amr_twin.model.config_sections import EkfCfg, UwbCfg
-from amr_twin.ros.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion,
-                               Range, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Twist,
+                                            TwistWithCovariance, Vector3)
+from amr_twin.ros.messages import Header
+from amr_twin.ros.sensor_messages import Imu, Range
 from amr_twin.sensors.uwb import anchor_index
 
 from amr_twin.controllers.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,

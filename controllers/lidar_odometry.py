@@ -43,7 +43,7 @@ import numpy as np
 from kiss_icp.config import KISSConfig
 from kiss_icp.kiss_icp import KissICP
 
-from amr_twin.ros.messages import LaserScan
+from amr_twin.ros.sensor_messages import LaserScan
 from amr_twin.analysis import se2
 from amr_twin.sensors.lidar_beams import beam_times_s, scan_end_time_s  # noqa: F401 (part of this API)
 

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from amr_twin.ros.messages import LaserScan
+from amr_twin.ros.sensor_messages import LaserScan
 from amr_twin.model.worlds import write_pgm
 
 OCCUPIED_THRESH = 0.65

@@ -62,9 +62,9 @@ import numpy as np
 
 from amr_twin.ros.bus import BASE_FRAME, ODOM_FRAME, Bus
 from amr_twin.sim.clock import VirtualClock
-from amr_twin.ros.messages import (Float64, Float64MultiArray, Header, Odometry, Point, Pose,
-                               PoseWithCovariance, Quaternion, Time, Transform,
-                               TransformStamped, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Transform,
+                                            TransformStamped, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
 
 from amr_twin.controllers.dead_reckoning import SmoothedPose, arc, twist_step
 from amr_twin.controllers.wheel_command import WHEEL_RADIUS_M

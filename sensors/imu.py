@@ -50,7 +50,9 @@ import numpy as np
 from amr_twin.ros.bus import IMU_FRAME, Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config_sections import ImuCfg
-from amr_twin.ros.messages import Header, Imu, MagneticField, Quaternion, Time, Vector3
+from amr_twin.ros.geometry_messages import Quaternion, Vector3
+from amr_twin.ros.messages import Header, Time
+from amr_twin.ros.sensor_messages import Imu, MagneticField
 
 US = 1_000_000
 SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")

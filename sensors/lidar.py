@@ -51,7 +51,8 @@ import numpy as np
 from amr_twin.ros.bus import LASER_FRAME, Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config_sections import LidarCfg
-from amr_twin.ros.messages import Header, LaserScan, Time
+from amr_twin.ros.messages import Header, Time
+from amr_twin.ros.sensor_messages import LaserScan
 
 from amr_twin.sensors.lidar_beams import (SEEN_GROUPS, US, PoseSamples, beam_angles_rad, beam_directions, group_masks,
                           motion_correction_m, noisy_ranges, scan_timing, world_directions)

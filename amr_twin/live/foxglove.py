@@ -29,7 +29,8 @@ from amr_twin.live import inputs as live_inputs
 from amr_twin.sim.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
 from amr_twin.live.rows import LiveRows
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
-from amr_twin.ros.messages import String, TFMessage
+from amr_twin.ros.geometry_messages import TFMessage
+from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import encode_battery_state, encode_float64_multi_array, encode_string, encode_tf_message
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 from amr_twin.ros.ros_state import StateSampler

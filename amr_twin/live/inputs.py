@@ -25,7 +25,7 @@ import math
 from typing import Any, Callable
 
 from amr_twin.controllers.wheel_command import MAX_RPM, SERVICE_NAME, WheelCommandRequest
-from amr_twin.ros.messages import Twist, Vector3
+from amr_twin.ros.geometry_messages import Twist, Vector3
 from amr_twin.ros.ros2_schemas import msgdef
 
 TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/Twist")
@@ -93,7 +93,8 @@ def _finite(value, what: str) -> float:
 
 
 def decode_twist(data: bytes, encoding: str) -> Twist:
-    """A client's ``geometry_msgs/msg/Twist`` as the twin's :class:`~amr_twin.ros.messages.Twist` (m/s, rad/s)."""
+    """A client's ``geometry_msgs/msg/Twist`` as the twin's
+    :class:`~amr_twin.ros.geometry_messages.Twist` (m/s, rad/s)."""
     msg = _decode(data, encoding, "geometry_msgs/Twist")
     out = []
     for part in ("linear", "angular"):

@@ -52,7 +52,8 @@ import numpy as np
 from amr_twin.ros import ros_state
 from amr_twin.recording.atomic_file import replacing
 from amr_twin.sim.event_log import mcap_items as event_items
-from amr_twin.ros.messages import String, TFMessage
+from amr_twin.ros.geometry_messages import TFMessage
+from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
                        encode_range, encode_string, encode_tf_message, encode_twist)

@@ -33,7 +33,7 @@ from collections import deque
 from typing import Any, Callable
 
 from amr_twin.sim.clock import NEVER_US, EventHandle, VirtualClock
-from amr_twin.ros.messages import Quaternion, TFMessage, Transform, TransformStamped, Vector3
+from amr_twin.ros.geometry_messages import Quaternion, TFMessage, Transform, TransformStamped, Vector3
 
 ODOM_FRAME = "odom"
 BASE_FRAME = "base_link"

@@ -29,8 +29,10 @@ import copy
 import numpy as np
 
 from amr_twin.ros.bus import BASE_FRAME
-from amr_twin.ros.messages import (Clock, Header, JointState, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Time,
-                       TFMessage, Transform, TransformStamped, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, TFMessage, Transform,
+                                            TransformStamped, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.messages import Clock, Header, Time
+from amr_twin.ros.sensor_messages import JointState
 
 ROBOT = "amr/"
 """Prefix of the robot's MuJoCo names (build.py)."""

@@ -9,8 +9,10 @@ from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import load_config
 from amr_twin.controllers.ekf import EkfNode
-from amr_twin.ros.messages import (Header, Imu, Odometry, Point, Pose, PoseWithCovariance, Quaternion, Range, Time,
-                               Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Twist,
+                                            TwistWithCovariance, Vector3)
+from amr_twin.ros.messages import Header, Time
+from amr_twin.ros.sensor_messages import Imu, Range
 from amr_twin.sensors.uwb import simulate_ranges, tag_positions_m
 
 CFG = load_config()

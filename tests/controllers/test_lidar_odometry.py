@@ -12,7 +12,8 @@ import pytest
 
 from amr_twin.analysis import se2
 from amr_twin.controllers.lidar_odometry import LidarOdometry, beam_times_s, scan_end_time_s, scan_points
-from amr_twin.ros.messages import Header, LaserScan, Time
+from amr_twin.ros.messages import Header, Time
+from amr_twin.ros.sensor_messages import LaserScan
 
 ROOM = (-4.0, 6.0, -3.0, 2.5)  # inner faces x_min, x_max, y_min, y_max, m
 LASER = (0.30, 0.0, 0.0)

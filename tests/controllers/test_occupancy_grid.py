@@ -7,7 +7,8 @@ import pytest
 import yaml
 
 from amr_twin.controllers.occupancy_grid import FREE_THRESH, OccupancyGrid
-from amr_twin.ros.messages import Header, LaserScan, Time
+from amr_twin.ros.messages import Header, Time
+from amr_twin.ros.sensor_messages import LaserScan
 from amr_twin.model.worlds import load_map, read_pgm
 
 HALF_M = 2.0  # the room's inner faces at x, y = +-2 m

@@ -12,7 +12,7 @@ from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.controllers.path_follower import (PathFollowerNode, PurePursuit, Route, RouteError,
                                                 distance_to_path_m, load_route, route_length_m)
-from amr_twin.ros.messages import Twist
+from amr_twin.ros.geometry_messages import Twist
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_ROUTE = ROOT / "experiments" / "routes" / "warehouse_60m.yaml"

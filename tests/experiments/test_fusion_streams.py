@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from amr_twin.experiments.fusion_streams import Streams, relative_motion
-from amr_twin.ros.messages import Header, Odometry, Quaternion, Time
+from amr_twin.ros.geometry_messages import Odometry, Quaternion
+from amr_twin.ros.messages import Header, Time
 
 
 def _odom(t_us: int, x: float, y: float, yaw: float) -> Odometry:

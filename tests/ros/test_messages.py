@@ -1,4 +1,5 @@
-"""ROS 1 serialised sizes, type names and stamp helpers of amr_twin.ros.messages."""
+"""ROS 1 serialised sizes, type names and stamp helpers of amr_twin.ros.messages and its
+geometry_msgs/tf2_msgs/nav_msgs (geometry_messages) and sensor_msgs (sensor_messages) families."""
 
 import math
 
@@ -6,22 +7,22 @@ import numpy as np
 import pytest
 
 
-from amr_twin.ros import messages as m
+from amr_twin.ros import geometry_messages as g, messages as m, sensor_messages as s
 
 
 def test_type_names_are_ros_names():
-    assert m.LaserScan._type == "sensor_msgs/LaserScan"
-    assert m.Odometry._type == "nav_msgs/Odometry"
-    assert m.TFMessage._type == "tf2_msgs/TFMessage"
+    assert s.LaserScan._type == "sensor_msgs/LaserScan"
+    assert g.Odometry._type == "nav_msgs/Odometry"
+    assert g.TFMessage._type == "tf2_msgs/TFMessage"
     assert m.Float64MultiArray._type == "std_msgs/Float64MultiArray"
-    assert m.Imu()._type == "sensor_msgs/Imu"
+    assert s.Imu()._type == "sensor_msgs/Imu"
 
 
 def test_fixed_sizes():
     assert m.Float64().serialized_size() == 8
-    for cls, size in [(m.Vector3, 24), (m.Point, 24), (m.Quaternion, 32), (m.Pose, 56),
-                      (m.Twist, 48), (m.Transform, 56), (m.PoseWithCovariance, 344),
-                      (m.TwistWithCovariance, 336)]:
+    for cls, size in [(g.Vector3, 24), (g.Point, 24), (g.Quaternion, 32), (g.Pose, 56),
+                      (g.Twist, 48), (g.Transform, 56), (g.PoseWithCovariance, 344),
+                      (g.TwistWithCovariance, 336)]:
         assert cls().serialized_size() == size, cls
 
 
@@ -41,31 +42,31 @@ def test_wheel_command_array_size():
 
 
 def test_variable_message_sizes():
-    odom = m.Odometry(header=m.Header(frame_id="odom"), child_frame_id="base_link")
+    odom = g.Odometry(header=m.Header(frame_id="odom"), child_frame_id="base_link")
     assert odom.serialized_size() == 20 + 13 + 344 + 336
-    imu = m.Imu(header=m.Header(frame_id="imu_link"))
+    imu = s.Imu(header=m.Header(frame_id="imu_link"))
     assert imu.serialized_size() == 24 + 32 + 72 + 24 + 72 + 24 + 72
-    mag = m.MagneticField(header=m.Header(frame_id="imu_link"))
+    mag = s.MagneticField(header=m.Header(frame_id="imu_link"))
     assert mag.serialized_size() == 24 + 24 + 72
-    scan = m.LaserScan(header=m.Header(frame_id="laser"), ranges=np.ones(360, np.float32),
+    scan = s.LaserScan(header=m.Header(frame_id="laser"), ranges=np.ones(360, np.float32),
                        intensities=np.ones(360, np.float32))
     assert scan.serialized_size() == 21 + 7 * 4 + 4 + 360 * 4 + 4 + 360 * 4
-    ts = m.TransformStamped(m.Header(frame_id="odom"), "base_link")
+    ts = g.TransformStamped(m.Header(frame_id="odom"), "base_link")
     assert ts.serialized_size() == 20 + 13 + 56
-    assert m.TFMessage([ts, ts]).serialized_size() == 4 + 2 * 89
+    assert g.TFMessage([ts, ts]).serialized_size() == 4 + 2 * 89
 
 
 def test_covariance_defaults_are_independent_arrays():
-    a, b = m.PoseWithCovariance(), m.PoseWithCovariance()
+    a, b = g.PoseWithCovariance(), g.PoseWithCovariance()
     a.covariance[0] = 1.0
     assert b.covariance[0] == 0.0 and a.covariance.shape == (36,)
-    imu = m.Imu()
+    imu = s.Imu()
     assert imu.orientation_covariance.shape == (9,)
 
 
 def test_messages_use_slots():
     with pytest.raises(AttributeError):
-        m.Twist().linar = 1.0  # typo must not create a field
+        g.Twist().linar = 1.0  # typo must not create a field
 
 
 def test_time_from_microseconds_is_exact():
@@ -78,6 +79,6 @@ def test_time_from_microseconds_is_exact():
 
 @pytest.mark.parametrize("yaw", [0.0, 0.3, -2.0, math.pi - 1e-9])
 def test_quaternion_yaw_round_trip(yaw):
-    q = m.Quaternion.from_yaw(yaw)
+    q = g.Quaternion.from_yaw(yaw)
     assert q.yaw_rad() == pytest.approx(yaw)
     assert q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2 == pytest.approx(1.0)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.ros.messages import Range
+from amr_twin.ros.sensor_messages import Range
 from amr_twin.sensors.uwb import (anchor_frame, anchor_index, corrupt_ranges, simulate_ranges,
                                   tag_positions_m)
 

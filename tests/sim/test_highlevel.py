@@ -13,7 +13,7 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.controllers.diff_drive import DiffDriveNode
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.ros.messages import Twist, Vector3
+from amr_twin.ros.geometry_messages import Twist, Vector3
 from amr_twin.sim.run import Command, run_command, run_mission
 
 FIRMWARES = ("faithful", "improved")

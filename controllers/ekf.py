@@ -36,7 +36,8 @@ import math
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from amr_twin.ros.bus import BASE_FRAME, ODOM_FRAME, Bus
+from amr_twin.ros.bus import Bus
+from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.model.config_sections import EkfCfg, UwbCfg
 from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Twist,
                                             TwistWithCovariance, Vector3)

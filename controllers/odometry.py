@@ -60,7 +60,8 @@ from typing import Sequence
 
 import numpy as np
 
-from amr_twin.ros.bus import BASE_FRAME, ODOM_FRAME, Bus
+from amr_twin.ros.bus import Bus
+from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Transform,
                                             TransformStamped, Twist, TwistWithCovariance, Vector3)

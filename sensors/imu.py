@@ -47,7 +47,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.ros.bus import IMU_FRAME, Bus
+from amr_twin.ros.bus import Bus
+from amr_twin.ros.tf_buffer import IMU_FRAME
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config_sections import ImuCfg
 from amr_twin.ros.geometry_messages import Quaternion, Vector3

@@ -48,7 +48,8 @@ from collections import deque
 import mujoco
 import numpy as np
 
-from amr_twin.ros.bus import LASER_FRAME, Bus
+from amr_twin.ros.bus import Bus
+from amr_twin.ros.tf_buffer import LASER_FRAME
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config_sections import LidarCfg
 from amr_twin.ros.messages import Header, Time

@@ -28,7 +28,7 @@ import copy
 
 import numpy as np
 
-from amr_twin.ros.bus import BASE_FRAME
+from amr_twin.ros.tf_buffer import BASE_FRAME
 from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, TFMessage, Transform,
                                             TransformStamped, Twist, TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Clock, Header, Time

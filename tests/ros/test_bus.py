@@ -5,7 +5,8 @@ import math
 import pytest
 
 
-from amr_twin.ros.bus import Bus, ServiceCallError, TransformError
+from amr_twin.ros.bus import Bus, ServiceCallError
+from amr_twin.ros.tf_buffer import TransformError
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.geometry_messages import Quaternion, TFMessage, Transform, TransformStamped, Twist, Vector3
 from amr_twin.ros.messages import Float64, Header

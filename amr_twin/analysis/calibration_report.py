@@ -2,7 +2,7 @@
 and how the fit would follow the parameters it held at their sourced values.
 
 :func:`evaluate` linearises the calibration's weighted residuals ``r`` (the targets of
-:mod:`amr_twin.analysis.calibration`, each ``(twin - target) / sigma``) at a configuration:
+:mod:`amr_twin.analysis.calibration_targets`, each ``(twin - target) / sigma``) at a configuration:
 
 - ``J_a``, the Jacobian in the fitted parameters, by forward differences in the fit's
   own scaled variables (a step of 2 % of each parameter's bound span, toward the
@@ -142,13 +142,13 @@ def write(report: CalibrationReport, path: str | Path) -> None:
 
 
 def _residual_function(target: str, pool) -> Callable[[TwinConfig], np.ndarray]:
-    from amr_twin.analysis import calibration as cal
+    from amr_twin.analysis import calibration_targets as ct
 
     if target == "thesis":
-        targets = cal.thesis_targets()
-        return lambda cfg: cal.weighted_residuals(cal.thesis_features(cfg, pool), targets)
-    log = cal.read_log(Path(target))
-    return lambda cfg: cal.log_residuals(cfg, log)
+        targets = ct.thesis_targets()
+        return lambda cfg: ct.weighted_residuals(ct.thesis_features(cfg, pool), targets)
+    log = ct.read_log(Path(target))
+    return lambda cfg: ct.log_residuals(cfg, log)
 
 
 def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tuple[float, float]] | None = None,

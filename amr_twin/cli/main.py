@@ -185,7 +185,8 @@ def calibrate(
     from rich.progress import Progress
 
     from amr_twin.analysis.calibration import calibrate as fit_plant
-    from amr_twin.analysis.calibration import read_log, write_params
+    from amr_twin.analysis.calibration import write_params
+    from amr_twin.analysis.calibration_targets import read_log
 
     from amr_twin.recording.outputs import OutputError, check_file
 

@@ -7,8 +7,8 @@ import re
 import pytest
 import yaml
 
-from amr_twin.analysis.calibration import (BENCH_CURRENT_A, calibrate, bench_current_a, read_log, thesis_residual,
-                                  write_params)
+from amr_twin.analysis.calibration import calibrate, write_params
+from amr_twin.analysis.calibration_targets import BENCH_CURRENT_A, bench_current_a, read_log, thesis_residual
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.model.paths import MODEL_DIR

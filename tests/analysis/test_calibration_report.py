@@ -8,7 +8,8 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.analysis import calibration_report as cr
-from amr_twin.analysis.calibration import BENCH_RPM, _with, thesis_residual
+from amr_twin.analysis.calibration import _with
+from amr_twin.analysis.calibration_targets import BENCH_RPM, thesis_residual
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.model.paths import MODEL_DIR

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from amr_twin.analysis.uncertainty import LEVEL, noise_level
 from amr_twin.experiments import payload_spread as spread
-from amr_twin.experiments.payload_sweep import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
+from amr_twin.experiments.payload_simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 from amr_twin.experiments.payload_sweep_report import PANELS, _csv, _lowest_wheel_loads, _value
 
 

@@ -86,7 +86,7 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
     """CPU of a 100-point sweep (8 s each, in this process) and per point against bare physics."""
     import mujoco
 
-    from amr_twin.experiments import payload_sweep
+    from amr_twin.experiments import payload_point, payload_sweep
     from amr_twin.sim.loop import Twin, TwinOptions
 
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
@@ -94,7 +94,7 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
         sweep = payload_sweep.run(cfg, Path(tmp), SWEEP_MASSES, SWEEP_POSITIONS, SWEEP_COMMANDS,
                                   duration_s=SWEEP_DURATION_S, jobs=1, progress=False)
         cpu = timer() - t0
-    point = payload_sweep.with_payload(cfg, 20.0, (0.0, 0.0))
+    point = payload_point.with_payload(cfg, 20.0, (0.0, 0.0))
     twin = Twin(point, TwinOptions(world="empty"))
     twin.client.linear(0.7)
     twin.advance(1.0)

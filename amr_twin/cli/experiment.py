@@ -226,7 +226,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         every metric as median and 90 % interval, the highest safe payload per position as an
         interval, and the parameters that move each answer (summary.md, sensitivity.csv).
         """
-        from amr_twin.experiments import payload_sweep, payload_sweep_report
+        from amr_twin.experiments import payload_point, payload_sweep, payload_sweep_report
 
         jobs, firmware = check_common(jobs, firmware, fail, sketch)
         check_executor(executor, scheduler, fail)
@@ -235,20 +235,20 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         check_duration(duration_s, fail)
         cfg = _config(config, params, set_)
         try:
-            mass_list = payload_sweep.parse_masses(masses)
+            mass_list = payload_point.parse_masses(masses)
             position_list = [p.strip() for p in positions.split(",") if p.strip()]
             for p in position_list:
-                payload_sweep.position_xy_m(cfg, p)
+                payload_point.position_xy_m(cfg, p)
             command_list = [c.strip() for c in commands.split(",") if c.strip()]
             for c in command_list:
-                payload_sweep.parse_command(c)
+                payload_point.parse_command(c)
         except ValueError as exc:
             fail(str(exc))
         if not position_list or not command_list:
             fail("--positions and --commands must name at least one item each")
         mass_list, dup_m = unique(mass_list, float)
-        position_list, dup_p = unique(position_list, lambda p: payload_sweep.position_xy_m(cfg, p))
-        command_list, dup_c = unique(command_list, payload_sweep.parse_command)
+        position_list, dup_p = unique(position_list, lambda p: payload_point.position_xy_m(cfg, p))
+        command_list, dup_c = unique(command_list, payload_point.parse_command)
         if dup_m or dup_p or dup_c:
             typer.echo("note: repeated sweep values are simulated once: "
                        + ", ".join(str(v) for v in dup_m + dup_p + dup_c), err=True)

@@ -16,6 +16,7 @@ from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
 from amr_twin.experiments import payload_sweep as ps
+from amr_twin.experiments.payload_point import Point
 
 CH5_RUNS, CH5_DURATION_S = [1, 3], 2.0
 SWEEP = dict(masses=[0.0, 20.0], positions=["center"], commands=["linear:0.7"], duration_s=1.0)
@@ -119,7 +120,7 @@ def test_sweep_records_each_point_and_resume_does_not_redo(cfg, tmp_path):
     res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(out), "--jobs", "2", "--record", str(rec),
                                    *SWEEP_ARGS])
     assert res.exit_code == 0, res.output
-    keys = sorted(ps.Point(m, "center", "linear:0.7", 1.0, "faithful", cfg).key for m in SWEEP["masses"])
+    keys = sorted(Point(m, "center", "linear:0.7", 1.0, "faithful", cfg).key for m in SWEEP["masses"])
     assert sorted(p.name for p in rec.iterdir()) == [f"{k}.rrd" for k in keys]
     for key in keys:
         rows, last_ns = rrd_summary(rec / f"{key}.rrd")

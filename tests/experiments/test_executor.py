@@ -17,6 +17,7 @@ from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments import executor
 from amr_twin.experiments import payload_sweep as ps
+from amr_twin.experiments.payload_point import Point
 
 DURATION_S = 1.5
 SWEEP = dict(positions=["center"], commands=["linear:0.7"], duration_s=DURATION_S, progress=False)
@@ -57,7 +58,7 @@ def test_dask_sweep_equals_local_and_rerun_skips_finished(client, tmp_path):
     assert heavy["total_mass_kg"] == pytest.approx(light["total_mass_kg"] + 20.0)
     assert heavy["dyn_min_wheel_n"] > light["dyn_min_wheel_n"]  # the points really differ
     files = sorted(p.name for p in (tmp_path / "dask" / "runs").iterdir())
-    assert files == sorted(f"{ps.Point(m, 'center', 'linear:0.7', DURATION_S, 'faithful', cfg).key}.json"
+    assert files == sorted(f"{Point(m, 'center', 'linear:0.7', DURATION_S, 'faithful', cfg).key}.json"
                            for m in (0.0, 20.0))  # one whole file per point, no temporary left
     again = ps.run(cfg, tmp_path / "dask", masses=[0.0, 20.0], client=client, **SWEEP)
     assert (again["simulated"], again["reused"]) == (0, 2)
@@ -79,7 +80,7 @@ def test_dask_samples_equal_local_and_resume(client, tmp_path):
 
 def test_cli_dask_does_only_the_missing_points(cluster, tmp_path):
     cfg = load_config()
-    done = ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)
+    done = Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)
     (tmp_path / "runs").mkdir()
     marker = {"key": done.key, "fingerprint": done.fingerprint, "mass_kg": 0.0, "position": "center",
               "command": "linear:0.7", "valid": True, "error": "", "safe": True}

@@ -9,6 +9,8 @@ from typer.testing import CliRunner
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments import payload_sweep as ps
+from amr_twin.experiments.payload_point import Point
+from amr_twin.experiments.payload_simulation import simulate_point
 from amr_twin.experiments import payload_sweep_report as report
 
 DURATION_S = 2.0
@@ -23,13 +25,13 @@ def test_tiny_sweep_then_resume(cfg, tmp_path):
     args = dict(masses=[0.0, 20.0], positions=["center"], commands=["linear:0.7"], duration_s=DURATION_S,
                 progress=False)
     # an interrupted earlier run left the 20 kg point done: its file must be reused, not redone
-    done = ps.Point(20.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)
+    done = Point(20.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)
     marker = {"key": done.key, "fingerprint": done.fingerprint, "mass_kg": 20.0, "position": "center",
               "command": "linear:0.7", "valid": True, "error": "", "safe": True, "marker": "kept"}
     (tmp_path / "runs").mkdir()
     (tmp_path / "runs" / f"{done.key}.json").write_text(json.dumps(marker))
     # a file from other parameters (stale fingerprint) is redone
-    stale = ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)
+    stale = Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", cfg)
     (tmp_path / "runs" / f"{stale.key}.json").write_text(json.dumps({**marker, "fingerprint": "old"}))
 
     results = ps.run(cfg, tmp_path, **args)
@@ -53,31 +55,6 @@ def test_tiny_sweep_then_resume(cfg, tmp_path):
     assert (tmp_path / "sweep_linear_0.7.png").exists() and (tmp_path / "summary.md").exists()
 
 
-def test_off_deck_position_is_invalid(cfg):
-    row = ps.simulate_point(ps.Point(10.0, "0.5:0", "linear:0.7", DURATION_S, "faithful", cfg))
-    assert row["valid"] is False and row["safe"] is False and "outside the deck" in row["error"]
-    assert "invalid position" in report.unsafe_reason(row)
-
-
-def test_named_positions_lie_on_the_deck(cfg):
-    for name in ps.POSITIONS:
-        x, y = ps.position_xy_m(cfg, name)
-        ps.with_payload(cfg, 20.0, (x, y))  # raises ConfigError if off the deck
-    assert ps.position_xy_m(cfg, "front-left-corner") == (pytest.approx(0.2), pytest.approx(0.075))
-
-
-def test_parsing():
-    assert ps.parse_masses("0:60:20") == [0, 20, 40, 60]
-    assert ps.parse_masses("5,10") == [5, 10]
-    for bad in ("0:60:0", "a", "-5", "nan"):
-        with pytest.raises(ValueError):
-            ps.parse_masses(bad)
-    assert ps.parse_command("angular:60:-1").icc_m == -1.0
-    assert ps.parse_command("motor:right:-1").direction == "backward"
-    with pytest.raises(ValueError):
-        ps.parse_command("spin:3")
-
-
 def test_cli_dask_not_available(tmp_path):
     result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--executor", "dask"])
     assert result.exit_code == 2 and "dask" in result.output
@@ -90,19 +67,6 @@ def test_per_wheel_panels_read_the_wheel_columns():
            "left_steady_error_rpm": -3.0, "right_steady_error_rpm": 1.0}
     assert _value(row, "~delay_s") == 1.2
     assert _value(row, "~steady_error_rpm") == 3.0
-
-
-def test_a_motor_over_the_drivers_continuous_rating_is_unsafe():
-    """The same point, once with the shipped rating (11.1 A) and once with a rating the
-    motors exceed while driving (0.6 A): only the second is unsafe, with the reason."""
-    from amr_twin.experiments.payload_sweep_report import unsafe_reason
-
-    low = load_config(sets=["driver.continuous_current_a=0.6"])
-    ok = ps.simulate_point(ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", load_config()))
-    over = ps.simulate_point(ps.Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", low))
-    assert ok["safe"] and not ok["motor_overload"]
-    assert 0.6 < max(over["left_steady_current_a"], over["right_steady_current_a"]) < 11.1
-    assert not over["safe"] and over["motor_overload"] and "motor overload" in unsafe_reason(over)
 
 
 def _without_wall(text: str) -> str:
@@ -187,7 +151,7 @@ def test_lift_off_is_judged_on_the_springs_not_on_contact_chatter():
     rows = {}
     for drop in (0.001, 0.002):
         cfg = load_config(sets=[f"caster.drop_m={drop}"])
-        rows[drop] = ps.simulate_point(ps.Point(0.0, "center", "angular:-60:-1", 2.5, "faithful", cfg))
+        rows[drop] = simulate_point(Point(0.0, "center", "angular:-60:-1", 2.5, "faithful", cfg))
     chatter, lifted = rows[0.001], rows[0.002]
     assert chatter["dyn_min_wheel_contact_n"] < 0.5 < 5.0 < chatter["dyn_min_wheel_n"]
     assert not chatter["wheel_lift_off"] and chatter["safe"]

@@ -1,0 +1,121 @@
+"""Payload sweep points: the payload's named positions, the ``--masses`` / ``--commands`` parsers
+and :class:`Point`, one (mass, position, command) simulation with its result key and fingerprint.
+
+Named positions put the payload box **flush with the deck's edges** (``front``:
+against the front edge, ``front-left-corner``: in that corner...), the worst
+placements that still lie on the deck; ``X:Y`` gives the box centre in metres.
+A point's key names its file ``runs/<key>.json``; its fingerprint covers the
+configuration, the firmware, the duration and what a row means (:data:`ROWS`), so a
+resumed sweep redoes exactly the points whose inputs changed
+(:mod:`.payload_sweep`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+
+from amr_twin.model.config import TwinConfig, load_config
+from amr_twin.sim.run import Command
+
+POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
+             "front-left-corner": (1, 1), "front-right-corner": (1, -1),
+             "rear-left-corner": (-1, 1), "rear-right-corner": (-1, -1)}
+MAX_MASSES = 1000          # masses per sweep: each is a simulation per position and command
+ROWS = 4                   # what a row means (in the fingerprint): 4 = sampled on the loop's record grid in one call; 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
+
+
+def parse_masses(text: str) -> list[float]:
+    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg."""
+    try:
+        if ":" in text:
+            start, stop, step = (float(v) for v in text.split(":"))
+            if not (step > 0 and stop >= start and math.isfinite(stop - start)):
+                raise ValueError
+            count = math.floor((stop - start) / step + 1e-9) + 1
+            if count > MAX_MASSES:
+                raise OverflowError(count)
+            return [round(start + i * step, 6) for i in range(count)]
+        masses = [float(v) for v in text.split(",") if v.strip()]
+    except OverflowError as exc:
+        raise ValueError(f"--masses {text!r}: {exc.args[0]:.3g} masses; at most {MAX_MASSES} per sweep "
+                         "(each is one simulation per position and command)") from None
+    except ValueError:
+        raise ValueError(f"--masses {text!r}: expected START:STOP:STEP or M1,M2,... in kg") from None
+    if not masses or any(not math.isfinite(m) or m < 0 for m in masses):
+        raise ValueError(f"--masses {text!r}: masses must be finite and >= 0 kg")
+    if len(masses) > MAX_MASSES:
+        raise ValueError(f"--masses: {len(masses)} masses; at most {MAX_MASSES} per sweep")
+    return masses
+
+
+def parse_command(text: str) -> Command:
+    """One ``--commands`` entry -> Command (see :meth:`Command.parse`)."""
+    return Command.parse(text, what="--commands")
+
+
+def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:
+    """Payload centre of a named position (box flush with the deck edges) or of ``X:Y``, m."""
+    if name in POSITIONS:
+        dx, dy = POSITIONS[name]
+        sx, sy = cfg.payload.size_m[0] / 2, cfg.payload.size_m[1] / 2
+        inside = [_micrometres_inside(v) for v in (cfg.chassis.length_m / 2 - sx, cfg.chassis.width_m / 2 - sy)]
+        return dx * inside[0] + 0.0, dy * inside[1] + 0.0  # + 0.0: no -0.0
+    try:
+        x, y = (float(v) for v in name.split(":"))
+    except ValueError:
+        raise ValueError(f"--positions {name!r}: not one of {', '.join(POSITIONS)} nor X:Y in metres") from None
+    return x, y
+
+
+def _micrometres_inside(v: float) -> float:
+    """``v`` rounded to the micrometre, but never beyond it (a drawn deck length ending in 5 at the
+    seventh digit would otherwise put a flush payload off the deck)."""
+    r = round(v, 6)
+    return round(r - 1e-6, 6) if r > v + 1e-9 else r
+
+
+def with_payload(cfg: TwinConfig, mass_kg: float, xy_m: tuple[float, float]) -> TwinConfig:
+    """``cfg`` with another payload, validated again (raises :class:`ConfigError`)."""
+    flat: dict = {}
+
+    def walk(node: dict, prefix: str) -> None:
+        for key, value in node.items():
+            if isinstance(value, dict):
+                walk(value, f"{prefix}{key}.")
+            else:
+                flat[prefix + key] = list(value) if isinstance(value, tuple) else value
+
+    walk(cfg.model_dump(), "")
+    flat.update({"payload.mass_kg": mass_kg, "payload.xy_m": list(xy_m)})
+    return load_config(overrides=flat)
+
+
+@dataclass(frozen=True)
+class Point:
+    """One sweep point (picklable work item)."""
+
+    mass_kg: float
+    position: str
+    command: str
+    duration_s: float
+    firmware: str
+    cfg: TwinConfig
+    rrd_path: str | None = None   # write the point's Rerun recording here (not part of the fingerprint)
+    mcap_path: str | None = None  # write the point's ROS 2 topics here
+    sample: int | None = None     # index of the drawn configuration ``cfg`` (None: the nominal one)
+    sample_id: str = ""           # hash of the sample's drawn values (amr_twin.analysis.uncertainty.Draws.sample_id)
+
+    @property
+    def key(self) -> str:
+        key = f"m{self.mass_kg:g}kg_{self.position}_{self.command}".replace(":", "_").replace("/", "_")
+        return key if self.sample is None else f"{key}_s{self.sample}_{self.sample_id}"
+
+    @property
+    def fingerprint(self) -> str:
+        from amr_twin.controllers.firmware import firmware_identity  # avr: the sketch's sources count too
+
+        text = (self.cfg.model_dump_json() + f"|{firmware_identity(self.firmware)}|{self.duration_s}"
+                + f"|rows {ROWS}")
+        return hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -1,0 +1,208 @@
+"""One payload sweep point simulated: statics, one run in the empty world, and its flat row.
+
+A point is **safe** when its position is valid, the simulation ran, the static
+tip margin is at least :data:`TIP_MARGIN_MIN_M`, no drive wheel ever lost
+contact (:data:`~amr_twin.model.statics.CONTACT_MIN_N`), the base tilted at most
+:data:`TILT_LIMIT_DEG` and no motor's steady current exceeded the driver's continuous
+rating (``driver.continuous_current_a``). The support loads are read every :data:`SAMPLE_S` from the
+springs that carry the chassis, as the statics and the rolling resistance take them
+(a tyre's ``k_t q + c_t q'``; a caster's spring, or its contact while on its stop):
+the contact force of a single step chatters when a wheel carries little (20 N on the
+stiff 2 ms contact: 0 in most steps, 100 N and more in between, about 200 Hz) while
+the tyre stays compressed; that minimum is kept as ``dyn_min_wheel_contact_n``.
+
+A point with ``rrd_path`` / ``mcap_path`` writes its recording from the process that
+simulates it, before its row is returned; recording does not change the row.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from amr_twin.model.config import ConfigError, TwinConfig
+from amr_twin.analysis.metrics import step_info
+from amr_twin.experiments.chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
+from amr_twin.experiments.payload_point import Point, parse_command, position_xy_m, with_payload
+
+SAMPLE_S = 0.02           # period of the support-load and tilt samples, s
+TIP_MARGIN_MIN_M = 0.02   # static tip margin below which a point is unsafe, m
+TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
+MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
+TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
+
+
+def _slip(series, cfg: TwinConfig) -> np.ndarray:
+    """(n, 2) wheel surface speed minus the ground speed of the wheel centre, m/s."""
+    t, pose = series.t_s, series.pose
+    if len(t) < 3:
+        return np.zeros((len(t), 2))
+    vx, vy = np.gradient(pose[:, 0], t), np.gradient(pose[:, 1], t)
+    yaw = np.unwrap(pose[:, 2])
+    v = vx * np.cos(yaw) + vy * np.sin(yaw)
+    omega = np.gradient(yaw, t)
+    half = cfg.wheel.separation_m / 2
+    ground = np.column_stack([v - omega * half, v + omega * half])
+    surface = series.true_rpm * (2 * math.pi / 60) * cfg.wheel.radius_m
+    return surface - ground
+
+
+def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s) -> dict:
+    """When and why a drive wheel is least loaded: the accelerations at that instant and the
+    quasi-static loads they give (:func:`amr_twin.model.statics.solve` with d'Alembert's force).
+
+    ``loads`` (k, 6) support loads and ``vel`` (k, 6) base velocities (world linear, body
+    angular) every :data:`SAMPLE_S`; ``s`` the run's series (for the yaw).
+    """
+    from amr_twin.model.statics import solve
+
+    i, w = np.unravel_index(np.argmin(loads[:, :2]), loads[:, :2].shape)
+    t = SAMPLE_S * (np.arange(len(loads)) + 1)
+    yaw = np.interp(t, s.t_s, np.unwrap(s.pose[:, 2]))
+    acc_world = np.gradient(vel[:, :2], SAMPLE_S, axis=0)
+    c, sn = np.cos(yaw[i]), np.sin(yaw[i])
+    ax, ay = c * acc_world[i, 0] + sn * acc_world[i, 1], -sn * acc_world[i, 0] + c * acc_world[i, 1]
+    wheel = WHEELS[w]
+    static = solve(cfg).loads_n[f"wheel_{wheel}"]
+    both = solve(cfg, (ax, ay)).loads_n[f"wheel_{wheel}"]
+    lateral = solve(cfg, (0.0, ay)).loads_n[f"wheel_{wheel}"] - static
+    longitudinal = solve(cfg, (ax, 0.0)).loads_n[f"wheel_{wheel}"] - static
+    if max(abs(lateral), abs(longitudinal)) < 0.05 * static:
+        mechanism = "static load split"
+    elif abs(lateral) >= abs(longitudinal):
+        mechanism = f"lateral load transfer, {ay:+.2f} m/s^2 (turning)"
+    else:
+        mechanism = f"longitudinal load transfer, {ax:+.2f} m/s^2 ({'braking' if ax * vel[i, 0] < 0 else 'accelerating'})"
+    return {"dyn_min_wheel": wheel, "dyn_min_wheel_t_s": float(t[i]), "dyn_min_wheel_accel_m_s2": [float(ax), float(ay)],
+            "dyn_min_wheel_quasi_static_n": both, "dyn_min_wheel_mechanism": mechanism}
+
+
+def _electrics(s, duration_s: float) -> dict:
+    """Steady motor currents, the battery's current and the energy per metre driven."""
+    tail = s.t_s >= 0.75 * duration_s
+    power = s.battery_v * s.battery_a
+    energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(s.t_s)))
+    distance = float(np.sum(np.hypot(*np.diff(s.pose[:, :2], axis=0).T)))
+    out = {f"{name}_steady_current_a": float(np.mean(np.abs(s.current_a[tail, w]))) for w, name in enumerate(WHEELS)}
+    out.update(battery_steady_a=float(np.mean(s.battery_a[tail])), energy_j=energy, distance_m=distance,
+               energy_j_per_m=energy / distance if distance > 0.05 else None)
+    return out
+
+
+def _dynamics(point: Point, cfg: TwinConfig) -> dict:
+    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.model.statics import CONTACT_MIN_N
+
+    recording = point.rrd_path is not None or point.mcap_path is not None
+    # nothing here reads the wheel odometry: without it a point is the same to the bit, ~12 % cheaper
+    twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty", odometry=recording))
+    if recording:
+        from amr_twin.recording.rerun_capture import attach
+
+        attach(twin)
+    twin.advance_to_us(0)
+    command = parse_command(point.command)
+    code = command.send(twin)
+    if code != 0:
+        return {"error": f"command refused (code {code}): {twin.client.last_error}"}
+    req = twin.client.last_request
+    loads, contact, tilt, vel = [], [], [], []
+    physics, every_us = twin.physics, int(round(SAMPLE_S * 1e6))
+
+    def sample(t_us: int) -> bool:
+        """Every SAMPLE_S on the loop's record grid, the physics at ``t_us`` (after the rolling
+        resistance's sampler, whose springs' loads it reads). The point runs as one call of the
+        loop, as ``amr-twin run`` does (stopping the loop every sample moved the results by about
+        1e-4 relative and cost about 2 % more CPU)."""
+        if t_us % every_us == 0:
+            loads.append(list(twin.rolling.loads))  # the springs' loads (module notes)
+            contact.append(physics.support_normal_forces_n())
+            tilt.append(physics.base_tilt_rad())
+            vel.append(physics.base_velocity())
+        return False
+
+    twin.samplers.append(sample)
+    twin.advance_to_us(int(round(point.duration_s * 1e6)))
+    s = twin.recorder.series()
+    if recording:
+        from amr_twin.recording.rerun_log import record_run
+        from amr_twin.sim.run import RunResult
+
+        result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
+                           sim_s=point.duration_s, wall_s=0.0)
+        record_run(twin, rrd_path=point.rrd_path, mcap_path=point.mcap_path, result=result)
+    names = list(twin.physics.support_geoms)
+    loads = np.array(loads)
+    min_load = dict(zip(names, loads.min(axis=0).tolist()))
+    out = {"max_tilt_deg": math.degrees(max(tilt)),
+           "dyn_min_wheel_n": min(v for n, v in min_load.items() if n.startswith("wheel")),
+           "dyn_min_caster_n": min(v for n, v in min_load.items() if n.startswith("caster")),
+           "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
+           "dyn_min_wheel_contact_n": float(np.min(np.array(contact)[:, :2]))}
+    out.update(_min_wheel_mechanism(cfg, loads, np.array(vel), s))
+    out.update(_electrics(s, point.duration_s))
+    out["wheel_lift_off"] = out["dyn_min_wheel_n"] < CONTACT_MIN_N
+    slip = _slip(s, cfg)
+    tail = s.t_s >= 0.75 * point.duration_s
+    cmd = [req.motionL, req.speedL, req.motionR, req.speedR]
+    for w, name in enumerate(WHEELS):
+        ref = float(cmd[2 * w]) * float(cmd[2 * w + 1])
+        out[f"{name}_reference_rpm"] = ref
+        out[f"{name}_max_slip_m_s"] = float(np.max(np.abs(slip[:, w])))
+        if ref == 0.0:
+            continue
+        pub = s.published[w]
+        if len(pub) >= 1:
+            info = step_info(pub[:, 0], pub[:, 1], abs(ref), settling_band=settling_band_rpm(ref),
+                             oscillation_window_s=TRANSIENT_WINDOW_S).as_dict()
+            for k in ("delay_s", "rise_s", "peak_s", "settling_s"):
+                out[f"{name}_{k}"] = info[k]
+            for k in ("overshoot", "steady_error", "oscillation"):
+                out[f"{name}_{k}_rpm"] = info[k]
+        out[f"{name}_steady_duty"] = float(np.mean(s.pwm_counts[tail, w]) / 255.0)
+        out[f"{name}_open_loop_duty"] = abs(ref) / MAX_VEL_RPM
+        surface = np.abs(s.true_rpm[tail, w]) * (2 * math.pi / 60) * cfg.wheel.radius_m
+        out[f"{name}_steady_slip_ratio"] = float(np.mean(np.abs(slip[tail, w])) / max(np.mean(surface), 1e-6))
+    errors = [out.get(f"{n}_steady_error_rpm") for n in WHEELS if out.get(f"{n}_reference_rpm")]
+    out["tracks"] = all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors)
+    return out
+
+
+def simulate_point(point: Point) -> dict:
+    """Statics and one run of a sweep point, as one flat JSON-ready row."""
+    from amr_twin.model.build import BuildError
+    from amr_twin.sim.physics import DivergenceError
+    from amr_twin.model.statics import CONTACT_MIN_N, describe
+
+    wall0 = time.perf_counter()
+    row = {"key": point.key, "fingerprint": point.fingerprint, "mass_kg": point.mass_kg,
+           "position": point.position, "command": point.command, "valid": True, "error": ""}
+    if point.sample is not None:
+        row.update(sample=point.sample, sample_id=point.sample_id)
+    try:
+        xy = position_xy_m(point.cfg, point.position)
+        row.update(x_m=xy[0], y_m=xy[1])
+        cfg = with_payload(point.cfg, point.mass_kg, xy)
+    except (ConfigError, ValueError) as exc:
+        row.update(valid=False, error=str(exc), safe=False)
+        return row
+    try:
+        static = describe(cfg)
+        loads = static["static_load_n"]
+        row.update(total_mass_kg=static["total_mass_kg"], static_tip_margin_m=static["tip_margin_m"],
+                   static_min_caster_n=min(v for k, v in loads.items() if k.startswith("caster")),
+                   static_lifted=";".join(k for k, v in loads.items() if v < CONTACT_MIN_N),
+                   **{f"static_{k}_n": v for k, v in loads.items()})
+        row.update(_dynamics(point, cfg))
+    except (BuildError, DivergenceError) as exc:
+        row["error"] = str(exc).splitlines()[0]
+    currents = [row.get(f"{w}_steady_current_a") for w in WHEELS]
+    row["current_limit_a"] = cfg.driver.continuous_current_a  # the rating this row is judged by (a draw may move it)
+    row["motor_overload"] = any(i is not None and i > cfg.driver.continuous_current_a for i in currents)
+    row["safe"] = (not row["error"] and row.get("static_tip_margin_m", -1) >= TIP_MARGIN_MIN_M
+                   and not row.get("wheel_lift_off", True) and row.get("max_tilt_deg", 90) <= TILT_LIMIT_DEG
+                   and not row["motor_overload"])
+    row["wall_s"] = round(time.perf_counter() - wall0, 3)
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}

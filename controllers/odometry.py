@@ -28,20 +28,8 @@ What a speed sample means (``speed_samples``)
 
 Two poses (REP-105: ``odom -> base_link`` must be continuous)
 -------------------------------------------------------------
-The *smoothed* pose (:class:`~amr_twin.controllers.dead_reckoning.SmoothedPose`)
-integrates these speed estimates, and a window that arrives corrects the past it
-describes: the best estimate in hindsight, which jumps when a sample arrives
-(0.7 m after the first revolution of a start). The *published* pose is integrated
-forward only, as a ROS diff-drive controller does, and never revised: it moves
-with the wheel speeds in force (each following its estimate at most at
-``max_wheel_accel_m_s2``: the two wheels' samples arrive at different instants),
-plus a correction twist that makes up its difference to the smoothed pose, in the
-body frame, over one time ``T >= catchup_time_s`` for x, y and yaw together,
-stretched so that the correction stays within ``catchup_max_fraction`` of the
-motion the wheels give (of the speed for x and y, of the yaw rate for yaw) plus :data:`CATCHUP_FLOOR_M_S` and :data:`CATCHUP_FLOOR_RAD_S`
-(what is left at a stop settles at those rates). The published twist is the one the
-published pose moves with, correction included (``linear.y`` is non-zero only
-while a sideways difference is made up), so integrating it gives the pose.
+The *smoothed* pose corrects the past a window describes (it jumps when a sample arrives); the
+*published* one is integrated forward only, never revised (:mod:`amr_twin.controllers.published_pose`).
 
 ``odom`` (frame ``odom``, child ``base_link``) and the ``odom -> base_link``
 transform are published at ``publish_rate_hz``, the first at the node's start.
@@ -61,13 +49,12 @@ from typing import Sequence
 import numpy as np
 
 from amr_twin.ros.bus import Bus
-from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
-from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Transform,
                                             TransformStamped, Twist, TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
-
-from amr_twin.controllers.dead_reckoning import SmoothedPose, arc, twist_step
+from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
+from amr_twin.sim.clock import VirtualClock
+from amr_twin.controllers.published_pose import PublishedPose
 from amr_twin.controllers.wheel_command import WHEEL_RADIUS_M
 
 WHEEL_SEPARATION_M = 0.48
@@ -75,10 +62,6 @@ WHEEL_SEPARATION_M = 0.48
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
 SPEED_SAMPLES = ("window", "hold")
-DEADBAND_M, DEADBAND_RAD = 5e-4, 5e-4
-"""A difference to the smoothed pose below both is left alone, m and rad (the correction ends)."""
-CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S = 0.05, 0.1
-"""Correction allowed beyond ``catchup_max_fraction`` of the wheels' motion (the rest after a stop), m/s, rad/s."""
 
 
 def _covariance(diagonal: Sequence[float]) -> np.ndarray:
@@ -166,14 +149,14 @@ class WheelOdometry:
         self.sample_latency_us = int(round(sample_latency_s * 1e6))
         self.max_substep_us = max(1, int(round(max_substep_s * 1e6)))
         self.brake_stop_us = max(0, int(round(brake_stop_s * 1e6)))
-        self.catchup_s = float(catchup_time_s)
-        self.catchup_max_fraction = float(catchup_max_fraction)
         self._rim = tuple(2.0 * math.pi / 60.0 * r for r in (self.left_radius_m, self.right_radius_m))  # m/s per RPM
-        self._accel_rpm_per_us = tuple(max_wheel_accel_m_s2 * 1e-6 / k for k in self._rim)
+        self.published = PublishedPose(self._body, self.max_substep_us,
+                                       tuple(max_wheel_accel_m_s2 * 1e-6 / k for k in self._rim),
+                                       float(catchup_time_s), float(catchup_max_fraction))
         self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
         self._motion = [0, 0]
         self._seq = 0
-        self._restart(clock.now_us, (0.0, 0.0, 0.0), (0.0, 0.0))
+        self.published.restart(clock.now_us, (0.0, 0.0, 0.0), (0.0, 0.0))
         self._pub = bus.advertise("odom", Odometry)
         self._subs = [bus.subscribe("wheel0_Vel", lambda m: self._on_speed(0, m)),
                       bus.subscribe("wheel1_Vel", lambda m: self._on_speed(1, m))]
@@ -182,15 +165,26 @@ class WheelOdometry:
         self._topics = ("odom", "tf") if publish_tf else ("odom",)
         self._timer = clock.schedule(clock.now_us, self._on_timer, publishes=self._topics)
 
-    def _restart(self, t_us: int, pose: tuple[float, float, float], rpm: Sequence[float]) -> None:
-        self.smoothed = SmoothedPose(t_us, pose, rpm, self._body, self.max_substep_us)
-        self._profiles = self.smoothed.profiles
-        self._t_us = t_us  # the published pose is integrated up to here; never revised
-        self._pose = tuple(float(v) for v in pose)  # yaw not wrapped
-        self.x_m, self.y_m = self._pose[0], self._pose[1]
-        self.yaw_rad = math.atan2(math.sin(self._pose[2]), math.cos(self._pose[2]))
-        self._used = [float(rpm[0]), float(rpm[1])]  # RPM the pose moves with at self._t_us
-        self._correction = (0.0, 0.0, 0.0)  # body twist toward the smoothed pose: m/s, m/s, rad/s
+    @property
+    def x_m(self) -> float:
+        """Published x in ``odom``, m (as of the last :meth:`update`)."""
+        return self.published.pose[0]
+
+    @property
+    def y_m(self) -> float:
+        """Published y in ``odom``, m (as of the last :meth:`update`)."""
+        return self.published.pose[1]
+
+    @property
+    def yaw_rad(self) -> float:
+        """Published yaw in ``odom``, rad, wrapped to [-pi, pi] (as of the last :meth:`update`)."""
+        yaw = self.published.pose[2]
+        return math.atan2(math.sin(yaw), math.cos(yaw))
+
+    @property
+    def catchup_max_fraction(self) -> float:
+        """Largest correction as a fraction of the wheels' speed and yaw rate (constructor)."""
+        return self.published.catchup_max_fraction
 
     # -- inputs -----------------------------------------------------------------
     def _on_speed(self, wheel: int, msg: Float64) -> None:
@@ -200,7 +194,7 @@ class WheelOdometry:
             rpm = self._direction[wheel] * abs(float(msg.data))
         self.update()
         now = self.clock.now_us
-        profile = self._profiles[wheel]
+        profile = self.published.profiles[wheel]
         known_us = profile.known_us(now)
         if self.speed_samples == "hold":
             profile.cut(now)  # a measurement supersedes an assumed brake ramp
@@ -212,7 +206,7 @@ class WheelOdometry:
             if profile.last_rpm == 0.0:  # it stood before: it started with this window, not before
                 profile.step(t1 - length_us, 0.0)
             profile.window(t1 - length_us, t1, rpm)
-        self._changed()
+        self.published.changed()
 
     def _on_command(self, msg: Float64MultiArray) -> None:
         self.update()
@@ -221,7 +215,7 @@ class WheelOdometry:
             if motion == self._motion[wheel]:
                 continue
             self._motion[wheel] = motion
-            profile = self._profiles[wheel]
+            profile = self.published.profiles[wheel]
             profile.cut(now)
             if motion == 0:
                 profile.step(now, profile.last_rpm)
@@ -229,19 +223,19 @@ class WheelOdometry:
             else:
                 self._direction[wheel] = 1 if motion > 0 else -1
                 profile.step(now, self._direction[wheel] * abs(profile.last_rpm))
-        for profile in self._profiles:
+        for profile in self.published.profiles:
             if profile.last_rpm == 0.0 and profile.last_us < now:
                 profile.step(now, 0.0)  # at rest until this command: no motion before it
-        self._changed()
+        self.published.changed()
 
     def set_wheel_speeds_rpm(self, left_rpm: float, right_rpm: float) -> None:
         """Signed wheel speeds from now on (forward positive), RPM."""
         self.update()
         now = self.clock.now_us
-        for profile, rpm in zip(self._profiles, (left_rpm, right_rpm)):
+        for profile, rpm in zip(self.published.profiles, (left_rpm, right_rpm)):
             profile.cut(now)
             profile.step(now, rpm)
-        self._changed()
+        self.published.changed()
 
     # -- state ------------------------------------------------------------------
     def _body(self, left_rpm: float, right_rpm: float) -> tuple[float, float]:
@@ -249,35 +243,10 @@ class WheelOdometry:
         v_right = right_rpm * 2.0 * math.pi / 60.0 * self.right_radius_m
         return 0.5 * (v_left + v_right), (v_right - v_left) / self.separation_m
 
-    def _changed(self) -> None:
-        self.smoothed.changed()
-        if self._accel_rpm_per_us[0] == math.inf:  # no limit: a new speed is in force at once
-            self._used = self.smoothed.speeds_rpm(self._t_us)
-        self._retarget()
-
-    def _retarget(self) -> None:
-        """The correction twist from the difference between the smoothed and the published pose now."""
-        x, y, yaw = self._pose
-        hx, hy, hyaw = self.smoothed.pose_at(self._t_us)
-        c, s = math.cos(yaw), math.sin(yaw)
-        ex, ey = c * (hx - x) + s * (hy - y), -s * (hx - x) + c * (hy - y)
-        eyaw = hyaw - yaw  # both unwrapped from the same start: no wrapping (a spin can lag > pi)
-        e_xy = math.hypot(ex, ey)
-        if e_xy <= DEADBAND_M and abs(eyaw) <= DEADBAND_RAD:
-            self._correction = (0.0, 0.0, 0.0)
-            return
-        v, w = self._body(*self._used)
-        k = self.catchup_max_fraction
-        t_s = max(self.catchup_s, e_xy / (k * abs(v) + CATCHUP_FLOOR_M_S),
-                  abs(eyaw) / (k * abs(w) + CATCHUP_FLOOR_RAD_S))
-        self._correction = (ex / t_s, ey / t_s, eyaw / t_s)
-
     def body_twist(self) -> tuple[float, float, float]:
         """Body twist the published pose moves with now: ``vx_m_s, vy_m_s, w_rad_s`` (CCW +)."""
         self.update()
-        v, w = self._body(*self._used)
-        cx, cy, cw = self._correction
-        return v + cx, cy, w + cw
+        return self.published.twist()
 
     def body_velocity(self) -> tuple[float, float]:
         """Forward speed (m/s) and yaw rate (rad/s, CCW +) the published pose moves with now."""
@@ -285,58 +254,20 @@ class WheelOdometry:
         return vx, w
 
     def update(self) -> None:
-        """Integrate the published pose forward from the last update to ``clock.now_us``.
-
-        Pieces between the speed profiles' knots; within a piece steps of at most
-        ``max_substep_s`` while a speed varies (one exact arc when none does and no
-        correction runs). The correction twist stays as computed at the previous
-        update; it is recomputed at the end.
-        """
-        now = self.clock.now_us
-        t = self._t_us
-        if now <= t:
-            return
-        profiles, used, accel = self._profiles, self._used, self._accel_rpm_per_us
-        cx, cy, cw = self._correction
-        steady = cx == cy == cw == 0.0
-        pose = self._pose
-        knots = sorted({k for p in profiles for k in p.t_us if t < k < now})
-        for t_next in knots + [now]:
-            segs = [p.segment(t) for p in profiles]
-            while t < t_next:
-                rpm0 = [p.at(t, sg) for p, sg in zip(profiles, segs)]
-                if steady and rpm0 == used and [p.at(t_next, sg) for p, sg in zip(profiles, segs)] == rpm0:
-                    pose = arc(pose, *self._body(*used), (t_next - t) * 1e-6)  # exact
-                    t = t_next
-                    continue
-                t1 = min(t_next, t + self.max_substep_us)
-                dt = t1 - t
-                mean = [0.0, 0.0]
-                for w, (p, sg) in enumerate(zip(profiles, segs)):
-                    goal = p.at(t1, sg)
-                    step = accel[w] * dt
-                    new = min(max(goal, used[w] - step), used[w] + step)
-                    mean[w] = 0.5 * (used[w] + new)
-                    used[w] = new
-                v, w_rad_s = self._body(*mean)
-                pose = twist_step(pose, v + cx, cy, w_rad_s + cw, dt * 1e-6)
-                t = t1
-        self._t_us, self._pose = now, pose
-        self.x_m, self.y_m = pose[0], pose[1]
-        self.yaw_rad = math.atan2(math.sin(pose[2]), math.cos(pose[2]))
-        self._retarget()
+        """Integrate the published pose forward to ``clock.now_us`` (:meth:`PublishedPose.advance`)."""
+        self.published.advance(self.clock.now_us)
 
     def smoothed_pose(self) -> tuple[float, float, float]:
         """The smoothed (hindsight) pose now: ``x_m, y_m, yaw_rad`` in ``odom``, yaw wrapped."""
         self.update()
-        x, y, yaw = self.smoothed.pose_at(self._t_us)
+        x, y, yaw = self.published.smoothed.pose_at(self.published.t_us)
         return x, y, math.atan2(math.sin(yaw), math.cos(yaw))
 
     def reset(self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0) -> None:
         """Set the pose in ``odom`` (the speeds in force are kept)."""
         self.update()
-        rpm = self.smoothed.speeds_rpm(self.clock.now_us)
-        self._restart(self.clock.now_us, (float(x_m), float(y_m), float(yaw_rad)), rpm)
+        rpm = self.published.smoothed.speeds_rpm(self.clock.now_us)
+        self.published.restart(self.clock.now_us, (float(x_m), float(y_m), float(yaw_rad)), rpm)
 
     # -- output -----------------------------------------------------------------
     def _on_timer(self) -> None:

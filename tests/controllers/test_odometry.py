@@ -11,7 +11,8 @@ import pytest
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
-from amr_twin.controllers.odometry import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S, WheelOdometry
+from amr_twin.controllers.odometry import WheelOdometry
+from amr_twin.controllers.published_pose import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S
 
 RPM_PER_M_S = 60.0 / (math.pi * 0.25)
 CIRCUMFERENCE_M = 2 * math.pi * 0.125

@@ -1,18 +1,9 @@
 """The eight step experiments of thesis chapter 5, measured and judged against the thesis.
 
 :func:`run` simulates the runs (§5.1.1-5.1.4), :func:`plot` draws one figure per run
-as in chapter 5, :func:`report` writes ``metrics.json`` and ``report.md``.
-
-The metrics (:mod:`amr_twin.analysis.metrics`) are judged on the **published** samples
-(``wheel0_Vel``/``wheel1_Vel``, what the thesis plotted), joined by straight lines
-and starting from rest at the command; the true wheel speed is measured too, for
-reference. Settling band: ``max(5 % of the step, 4 RPM)`` around the reference;
-4 RPM is the firmware's THRESHOLD_CONTROL, inside which the PI does not act.
-Oscillation (the 20 kg runs' "more oscillation", §5.1.4): the named measure
-:data:`OSCILLATION_MEASURE`, the excess total variation of the speed from its
-first 90 % crossing to 5 s after the command (:func:`amr_twin.analysis.metrics.step_info`),
-compared per wheel between each 20 kg run and the same command unloaded; the
-verdict is judged on the published samples, the true speed's is reported too.
+as in chapter 5, :func:`report` writes ``metrics.json`` and ``report.md``. The runs are
+judged against the thesis by :mod:`.chapter5_criteria` (published samples, settling band,
+the 20 kg runs' oscillation).
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
 
 Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``run<N>.rrd`` /
@@ -23,7 +14,6 @@ rename. Recording does not change the results.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,11 +24,8 @@ from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.analysis.metrics import step_info
 from amr_twin.sim.run import Command, run_command
-
-WHEELS = ("left", "right")
-STEP_SPLIT_RPM = 75.0  # the thesis' split: "steps valued at maximum 75 RPM" and higher
-THRESHOLD_CONTROL_RPM = 4.0
-TRANSIENT_WINDOW_S = 5.0  # oscillation is measured from the 90 % crossing to 5 s after the command
+from amr_twin.experiments.chapter5_criteria import (BANDS, TRANSIENT_WINDOW_S, WHEELS, compare_oscillation,
+                                                    judge, oscillation_verdict, settling_band_rpm, step_class)
 
 
 @dataclass(frozen=True)
@@ -63,112 +50,6 @@ RUNS = (
     RunSpec(8, "rotation 60 deg/s, ICC 1 m right, 20 kg", Command("angular", speed_deg_s=-60.0, icc_m=-1.0),
             16.0, 20.0),
 )
-
-
-@dataclass(frozen=True)
-class Band:
-    """An accepted range for one metric of the published samples (§5.1.3)."""
-
-    metric: str
-    step_class: str  # "small" (<= 75 RPM), "large" (> 75 RPM) or "any"
-    wheel: str       # "left", "right" or "any"
-    low: float
-    high: float
-    thesis: float    # the value the thesis reports
-
-
-BANDS = (
-    Band("delay_s", "small", "any", 0.1, 0.3, 0.2),
-    Band("rise_s", "small", "any", 0.3, 0.7, 0.5),
-    Band("peak_s", "small", "any", 0.4, 0.8, 0.6),
-    Band("delay_s", "large", "any", 0.3, 0.7, 0.5),
-    Band("rise_s", "large", "any", 0.7, 1.3, 1.0),
-    Band("peak_s", "large", "any", 0.8, 1.4, 1.1),
-    Band("settling_s", "any", "any", 0.0, 1.6, 1.3),
-    Band("overshoot", "any", "right", 2.0, 6.0, 4.0),
-    Band("overshoot", "any", "left", 0.0, 3.0, 2.0),
-)
-OSCILLATION_PAIRS = ((7, 3), (8, 5))  # (loaded, unloaded): "more oscillation" with 20 kg (§5.1.4)
-OSCILLATION_MEASURE = "excess total variation"
-OSCILLATION_DEFINITION = (f"excess total variation of the wheel speed from its first 90 % crossing to "
-                          f"{TRANSIENT_WINDOW_S:g} s after the command: sum |y[i+1] - y[i]| - |y_end - y_start| "
-                          "on the linearly interpolated signal, RPM (0 for a monotone approach, twice the summed "
-                          "swing amplitudes otherwise)")
-
-
-def step_class(step_rpm: float) -> str:
-    """"small" for steps of at most 75 RPM, "large" above."""
-    return "small" if abs(step_rpm) <= STEP_SPLIT_RPM else "large"
-
-
-def settling_band_rpm(step_rpm: float) -> float:
-    """Half-width of the settling band: 5 % of the step, at least the PI's 4 RPM dead zone."""
-    return max(0.05 * abs(step_rpm), THRESHOLD_CONTROL_RPM)
-
-
-def judge(wheel: str, step_rpm: float, metrics: dict) -> dict:
-    """Verdict of each banded metric: ``{metric: {twin, thesis, band, verdict}}``.
-
-    A metric that could not be measured (None/NaN) fails.
-    """
-    out = {}
-    cls = step_class(step_rpm)
-    for band in BANDS:
-        if band.step_class not in ("any", cls) or band.wheel not in ("any", wheel):
-            continue
-        value = metrics.get(band.metric)
-        ok = value is not None and math.isfinite(value) and band.low <= value <= band.high
-        out[band.metric] = {"twin": value, "thesis": band.thesis, "band": [band.low, band.high],
-                            "verdict": "pass" if ok else "fail"}
-    return out
-
-
-def _more(loaded: float | None, unloaded: float | None) -> str:
-    ok = loaded is not None and unloaded is not None and loaded > unloaded
-    return "pass" if ok else "fail"
-
-
-def compare_oscillation(results: list[dict]) -> list[dict]:
-    """Loaded against unloaded oscillation, per driven wheel of each pair of :data:`OSCILLATION_PAIRS`.
-
-    Returns
-    -------
-    list of dict : ``loaded_run, unloaded_run, wheel, measure``; ``loaded``,
-    ``unloaded`` and ``verdict`` on the published samples (the judged values);
-    ``true_loaded``, ``true_unloaded`` and ``true_verdict`` on the true speed.
-    A value that could not be measured (None) fails.
-    """
-    by_number = {r["run"]: r for r in results}
-    out = []
-    for loaded, unloaded in OSCILLATION_PAIRS:
-        if loaded not in by_number or unloaded not in by_number:
-            continue
-        for wheel in WHEELS:
-            a = by_number[loaded]["wheels"].get(wheel)
-            b = by_number[unloaded]["wheels"].get(wheel)
-            if a is None or b is None:
-                continue
-            va, vb = ((w.get("published") or {}).get("oscillation") for w in (a, b))
-            ta, tb = ((w.get("true") or {}).get("oscillation") for w in (a, b))
-            out.append({"loaded_run": loaded, "unloaded_run": unloaded, "wheel": wheel,
-                        "measure": OSCILLATION_MEASURE, "loaded": va, "unloaded": vb, "verdict": _more(va, vb),
-                        "true_loaded": ta, "true_unloaded": tb, "true_verdict": _more(ta, tb)})
-    return out
-
-
-def oscillation_verdict(comparisons: list[dict]) -> dict:
-    """Overall "the 20 kg runs oscillate more" verdict: it holds only if every comparison passes.
-
-    Returns
-    -------
-    dict : ``{"measure", "definition", "published_passed", "true_passed", "comparisons", "verdict"}``
-    with ``verdict`` "pass" or "fail" (judged on the published samples; "fail" when there is no pair).
-    """
-    n = len(comparisons)
-    passed = sum(c["verdict"] == "pass" for c in comparisons)
-    return {"measure": OSCILLATION_MEASURE, "definition": OSCILLATION_DEFINITION, "comparisons": n,
-            "published_passed": passed, "true_passed": sum(c.get("true_verdict") == "pass" for c in comparisons),
-            "verdict": "pass" if n and passed == n else "fail"}
 
 
 @dataclass

@@ -17,7 +17,8 @@ import numpy as np
 
 from amr_twin.analysis.uncertainty import LEVEL, interval, noise_level, rank_correlations
 from amr_twin.experiments import chapter5_payload as payload
-from amr_twin.experiments.chapter5 import BANDS, RUNS, _Job, analyse, compare_oscillation, simulate, step_class
+from amr_twin.experiments.chapter5 import RUNS, _Job, analyse, simulate
+from amr_twin.experiments.chapter5_criteria import BANDS, compare_oscillation, step_class
 
 TOP = 3  # parameters named per banded metric
 METRICS = ("delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error", "oscillation")

@@ -24,7 +24,7 @@ import numpy as np
 
 from amr_twin.model.config import ConfigError, TwinConfig
 from amr_twin.analysis.metrics import step_info
-from amr_twin.experiments.chapter5 import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
+from amr_twin.experiments.chapter5_criteria import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
 from amr_twin.experiments.payload_point import Point, parse_command, position_xy_m, with_payload
 
 SAMPLE_S = 0.02           # period of the support-load and tilt samples, s

@@ -26,7 +26,7 @@ import numpy as np
 
 from amr_twin.model.statics import CONTACT_MIN_N
 from amr_twin.analysis.uncertainty import interval, noise_level, rank_correlations
-from amr_twin.experiments.chapter5 import WHEELS
+from amr_twin.experiments.chapter5_criteria import WHEELS
 from amr_twin.experiments.payload_simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 from amr_twin.experiments.payload_sweep_report import PANELS, _value, summarise
 

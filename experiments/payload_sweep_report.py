@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.experiments.chapter5 import WHEELS
+from amr_twin.experiments.chapter5_criteria import WHEELS
 from amr_twin.experiments.payload_simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 
 PANELS = (  # (column or per-wheel suffix, label); per-wheel ones plot the worse driven wheel

@@ -1,0 +1,59 @@
+"""Chapter 5's criteria: the verdict logic on synthetic metrics, and how the report states it."""
+
+from amr_twin.experiments import chapter5_criteria as criteria
+
+CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot"}
+
+
+def test_judge_uses_each_wheels_own_step_size():
+    good_small = {"delay_s": 0.2, "rise_s": 0.5, "peak_s": 0.6, "settling_s": 1.3, "overshoot": 4.0}
+    checks = criteria.judge("right", 60.8, good_small)
+    assert {k: c["verdict"] for k, c in checks.items()} == dict.fromkeys(CHECKED, "pass")
+    assert checks["delay_s"]["band"] == [0.1, 0.3]
+    large = criteria.judge("left", 99.2, good_small)  # same numbers, > 75 RPM bands
+    assert large["delay_s"]["band"] == [0.3, 0.7] and large["delay_s"]["verdict"] == "fail"
+    assert large["overshoot"]["band"] == [0.0, 3.0] and large["overshoot"]["verdict"] == "fail"
+    assert criteria.judge("left", -91.67, {})["rise_s"]["verdict"] == "fail"  # unmeasured fails
+    assert criteria.judge("left", 75.0, {})["rise_s"]["band"] == [0.3, 0.7]  # 75 RPM is still small
+
+
+def _synthetic_run(number, left, right, true_left=0.0, true_right=0.0):
+    return {"run": number, "wheels": {"left": {"published": {"oscillation": left}, "true": {"oscillation": true_left}},
+                                      "right": {"published": {"oscillation": right},
+                                                "true": {"oscillation": true_right}}}}
+
+
+def test_oscillation_comparison():
+    runs = [_synthetic_run(3, 1.0, 2.0, 5.0, 5.0), _synthetic_run(7, 3.0, 1.0, 4.0, 6.0),
+            _synthetic_run(5, 1.0, None), _synthetic_run(8, 2.0, 4.0, None, 1.0)]
+    out = criteria.compare_oscillation(runs)
+    verdicts = {(c["loaded_run"], c["wheel"]): c["verdict"] for c in out}
+    assert verdicts == {(7, "left"): "pass", (7, "right"): "fail", (8, "left"): "pass", (8, "right"): "fail"}
+    true = {(c["loaded_run"], c["wheel"]): c["true_verdict"] for c in out}
+    assert true == {(7, "left"): "fail", (7, "right"): "pass", (8, "left"): "fail", (8, "right"): "pass"}
+    assert all(c["measure"] == criteria.OSCILLATION_MEASURE for c in out)
+    overall = criteria.oscillation_verdict(out)
+    assert (overall["comparisons"], overall["published_passed"], overall["true_passed"]) == (4, 2, 2)
+    assert overall["verdict"] == "fail"  # the claim needs every comparison
+    assert criteria.oscillation_verdict([c for c in out if c["verdict"] == "pass"])["verdict"] == "pass"
+    assert criteria.oscillation_verdict([])["verdict"] == "fail"
+
+
+def test_report_states_the_oscillation_measure_and_verdict():
+    from amr_twin.experiments.chapter5_report import markdown
+
+    runs = [_synthetic_run(3, 1.0, 2.0, 5.0, 5.0), _synthetic_run(7, 3.0, 4.0, 6.0, 7.0)]
+    comparisons = criteria.compare_oscillation(runs)
+    for run, payload in zip(runs, (0.0, 20.0)):
+        run.update(title=f"run {run['run']}", payload_kg=payload, errors=[])
+        for w in run["wheels"].values():
+            w.update(reference_rpm=53.48, step_class="small", samples=5, checks={})
+    data = {"firmware": "faithful", "jobs": 1, "wall_s": 1.0, "sim_s": 32.0, "judged_on": "published samples",
+            "settling_band": "4 RPM", "oscillation": "excess total variation", "bands": [], "runs": runs,
+            "comparisons": comparisons, "oscillation_verdict": criteria.oscillation_verdict(comparisons),
+            "summary": {"checks": 2, "passed": 2}}
+    text = markdown(data)
+    assert "Named measure: **excess total variation**" in text
+    assert "| 7 | 20 | right | 53.48 | 4.00 | 7.00 |" in text  # per run and wheel: published, true
+    assert "| 7 | 3 | left | 3.00 / 1.00 | pass | 6.00 / 5.00 | pass |" in text
+    assert '"the 20 kg runs oscillate more" holds** — the 20 kg wheel oscillates more in 2 of 2' in text

@@ -45,7 +45,7 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
 
     The points run in this process (``jobs=1``), in ``jobs`` local worker
     processes, or on the Dask cluster of ``client`` (a ``distributed.Client``,
-    see :func:`~amr_twin.experiments.executor.connect_dask`); either way each
+    see :func:`~amr_twin.experiments.dask_cluster.connect_dask`); either way each
     result comes back here and is written atomically as it arrives.
 
     ``record_dir`` / ``mcap_dir``: folders for one ``<key>.rrd`` / ``<key>.mcap``

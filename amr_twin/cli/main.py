@@ -141,7 +141,7 @@ def bench(
 ) -> None:
     """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
     from amr_twin.bench.figures import run_benchmarks
-    from amr_twin.experiments.executor import check_jobs
+    from amr_twin.experiments.process_pool import check_jobs
 
     try:
         jobs = check_jobs(jobs)

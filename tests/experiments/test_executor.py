@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
-from amr_twin.experiments import executor
+from amr_twin.experiments import dask_cluster, executor, process_pool
 from amr_twin.experiments import payload_sweep as ps
 from amr_twin.experiments.payload_point import Point
 
@@ -33,7 +33,7 @@ def cluster():
 
 @pytest.fixture(scope="module")
 def client(cluster):
-    c = executor.connect_dask(cluster.scheduler_address, timeout_s=10.0)
+    c = dask_cluster.connect_dask(cluster.scheduler_address, timeout_s=10.0)
     yield c
     c.close()
 
@@ -114,8 +114,8 @@ def test_local_executor_same_contract(jobs):
 def test_unreachable_scheduler_is_one_line_error(tmp_path):
     pytest.importorskip("distributed")
     address = f"tcp://127.0.0.1:{_free_port()}"
-    with pytest.raises(executor.ExecutorError, match="cannot reach the Dask scheduler within 0.5 s"):
-        executor.connect_dask(address, timeout_s=0.5)
+    with pytest.raises(dask_cluster.ExecutorError, match="cannot reach the Dask scheduler within 0.5 s"):
+        dask_cluster.connect_dask(address, timeout_s=0.5)
     result = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--executor", "dask",
                                       "--scheduler", address, "--scheduler-timeout-s", "0.5"])
     assert result.exit_code == 2 and "cannot reach the Dask scheduler" in result.output
@@ -125,8 +125,8 @@ def test_unreachable_scheduler_is_one_line_error(tmp_path):
 
 def test_dask_not_installed(monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
-    with pytest.raises(executor.ExecutorError, match="not installed"):
-        executor.connect_dask("tcp://127.0.0.1:8786")
+    with pytest.raises(dask_cluster.ExecutorError, match="not installed"):
+        dask_cluster.connect_dask("tcp://127.0.0.1:8786")
 
 
 @pytest.mark.parametrize("args, needle", [
@@ -143,11 +143,11 @@ def test_cli_rejects_bad_executor_options(tmp_path, args, needle):
 
 
 def test_jobs_default_to_the_usable_cores_and_are_bounded():
-    cores = executor.usable_cores()
-    assert executor.check_jobs(None) == cores and executor.check_jobs(1) == 1
+    cores = process_pool.usable_cores()
+    assert process_pool.check_jobs(None) == cores and process_pool.check_jobs(1) == 1
     for bad in (0, cores + 1, 1000):
         with pytest.raises(ValueError, match=rf"--jobs {bad}: must be in 1..{cores} on this machine"):
-            executor.check_jobs(bad)
+            process_pool.check_jobs(bad)
     result = CliRunner().invoke(app, ["sweep", "payload", "--out", "never", "--jobs", "1000"])
     assert result.exit_code == 2 and "usable cores" in result.stderr
 
@@ -174,7 +174,7 @@ def test_a_non_scheduler_or_malformed_address_is_one_line_without_a_hang(tmp_pat
 
     threading.Thread(target=babble, daemon=True).start()
     address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
-    code = ("from amr_twin.experiments.executor import connect_dask, ExecutorError\n"
+    code = ("from amr_twin.experiments.dask_cluster import connect_dask, ExecutorError\n"
             "try:\n    connect_dask({!r}, 1.0)\nexcept ExecutorError as e:\n    print(e)\n")
     try:
         for addr, text in ((address, "no Dask scheduler answered there"), ("foo", "not a scheduler address")):
@@ -258,13 +258,13 @@ def test_the_caller_and_a_warm_worker_share_the_items(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(tmp_path))
     import who_runs
 
-    executor._close_pools()  # workers spawned by earlier tests do not have tmp_path on their sys.path
+    process_pool._close_pools()  # workers spawned by earlier tests do not have tmp_path on their sys.path
 
     got = list(executor.run_all(who_runs.run, list(range(6)), jobs=2, progress=False))
     assert sorted(item for item, _ in got) == list(range(6))
     assert all(item == value for item, (value, _pid) in got)
     assert got[0][1][1] == os.getpid()  # the caller started at once, whether the worker is warm or not
-    worker = executor._shared_pool(1).submit(executor._ready).result(timeout=120)  # warm by now
+    worker = process_pool._shared_pool(1).submit(process_pool._ready).result(timeout=120)  # warm by now
     again = list(executor.run_all(who_runs.run, list(range(20, 28)), jobs=2, progress=False))
     assert sorted(item for item, _ in again) == list(range(20, 28))
     pids = {pid for _, (_, pid) in again}

@@ -267,14 +267,14 @@ def test_cli_refuses_bad_seed_options_before_the_work(tmp_path):
 
 def test_seeds_on_a_dask_cluster_give_the_local_numbers(tmp_path):
     distributed = pytest.importorskip("distributed")
-    from amr_twin.experiments import executor, fusion_seeds
+    from amr_twin.experiments import dask_cluster, fusion_seeds
 
     route = tmp_path / "short.yaml"
     route.write_text(SHORT_ROUTE)
     cfg = load_config()
     local = fusion_seeds.run(cfg, route, [8], progress=False)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
-        client = executor.connect_dask(c.scheduler_address, timeout_s=10.0)
+        client = dask_cluster.connect_dask(c.scheduler_address, timeout_s=10.0)
         try:
             remote = fusion_seeds.run(cfg, route, [7, 8], client=client, progress=False)
         finally:

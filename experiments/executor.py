@@ -21,7 +21,6 @@ from typing import Any, Callable, Iterable, Iterator
 from amr_twin.recording import atomic_file
 from amr_twin.experiments.dask_cluster import cluster_results
 from amr_twin.experiments.process_pool import pool_results
-from amr_twin.experiments.process_pool import worker_pool  # noqa: F401 - imported from here by analysis/calibration
 
 EXECUTORS = ("local", "dask")
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 import statistics
 import time
 
+import mujoco
+
 from amr_twin.model.build import build
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.physics import Physics
@@ -31,6 +33,15 @@ def _median_time(func, repeats: int = REPEATS) -> float:
         func()
         times.append(timer() - t0)
     return statistics.median(times)
+
+
+def bare_steps_s(physics: Physics, sim_s: float) -> float:
+    """CPU seconds of ``sim_s`` of mj_step alone on ``physics``' model and data as they are now."""
+    m, d = physics.model, physics.data
+    nstep = int(round(sim_s / m.opt.timestep))
+    t0 = timer()
+    mujoco.mj_step(m, d, nstep)
+    return timer() - t0
 
 
 def bare_physics(cfg: TwinConfig, sim_s: float) -> dict:

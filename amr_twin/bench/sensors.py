@@ -13,7 +13,7 @@ import statistics
 
 import mujoco
 
-from amr_twin.bench.physics import REPEATS, timer
+from amr_twin.bench.physics import REPEATS, bare_steps_s, timer
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import TwinConfig
@@ -81,11 +81,7 @@ def sensor_figures(cfg: TwinConfig, sim_s: float) -> dict:
     for _ in range(REPEATS):  # interleaved so that a disturbance hits all three
         cpu_s, twin = twin_run_s(cfg, sim_s, sensors=True)
         with_t.append(cpu_s)
-        m, d = twin.physics.model, twin.physics.data
-        nstep = int(round(sim_s / m.opt.timestep))
-        t0 = timer()
-        mujoco.mj_step(m, d, nstep)
-        bare_t.append(timer() - t0)
+        bare_t.append(bare_steps_s(twin.physics, sim_s))
         without_t.append(twin_run_s(cfg, sim_s, sensors=False)[0])
     mujoco.mj_forward(twin.physics.model, twin.physics.data)
     scan_groups_us, scan_one_us = lidar_scan_cost_us(twin)

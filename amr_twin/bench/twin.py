@@ -11,9 +11,7 @@ from __future__ import annotations
 
 import statistics
 
-import mujoco
-
-from amr_twin.bench.physics import REPEATS, timer
+from amr_twin.bench.physics import REPEATS, bare_steps_s, timer
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import Twin, TwinOptions
 
@@ -40,11 +38,7 @@ def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
     for _ in range(REPEATS):
         cpu_s, twin = twin_run_s(cfg, sim_s, firmware)
         twin_t.append(cpu_s)
-        m, d = twin.physics.model, twin.physics.data
-        nstep = int(round(sim_s / m.opt.timestep))
-        t0 = timer()
-        mujoco.mj_step(m, d, nstep)
-        bare_t.append(timer() - t0)
+        bare_t.append(bare_steps_s(twin.physics, sim_s))
     twin_s, bare_s = statistics.median(twin_t), statistics.median(bare_t)
     return {
         "twin_scenario": f"chapter 5 run 3: linear 0.7 m/s, {sim_s:g} s, {firmware}",

@@ -21,6 +21,9 @@ import typer
 
 # headless: MuJoCo need not load its OpenGL bindings (glfw, ~0.1 s of start-up) unless asked to
 os.environ.setdefault("MUJOCO_GL", "disable")
+# no pydantic plugins in the command line's process (its entry-point scan is ~12 ms of every start-up);
+# PYDANTIC_DISABLE_PLUGINS= (empty) in the environment brings them back
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 try:  # typer >= 0.20 carries its own copy of click
     from typer._click import exceptions as _click_errors

@@ -23,11 +23,9 @@ and holds the loading (YAML leaves to plain values, overrides, error messages).
 from __future__ import annotations
 
 import math
-import pickle
 from pathlib import Path
 from typing import Any, Iterator
 
-import yaml
 from pydantic import BaseModel, ValidationError, model_validator
 
 from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg, DriverCfg,
@@ -36,10 +34,9 @@ from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, C
 from amr_twin.model.config_leaves import ConfigError  # noqa: F401 - the parameter files' error, raised here too
 from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
 from amr_twin.model.config_leaves import field_range as _field_range
-from amr_twin.model.paths import MODEL_DIR
+from amr_twin.model.parameter_tree import DEFAULT_CONFIG, read_tree
+from amr_twin.model.parameter_tree import read_yaml as _read_yaml
 
-DEFAULT_CONFIG = MODEL_DIR / "amr.yaml"
-SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 """libyaml's safe loader when PyYAML has it (amr.yaml in ~3 ms instead of ~30 ms), else the Python one."""
 
 
@@ -153,6 +150,8 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     if "=" not in text:
         raise ConfigError(f"--set {text!r}: expected key=value")
     key, raw = text.split("=", 1)
+    import yaml  # only for --set: off the start-up of the other commands
+
     try:
         value = yaml.safe_load(raw)
     except yaml.YAMLError as exc:
@@ -266,47 +265,6 @@ def _reject_nan(tree: dict, prefix: str = "") -> None:
         for v in values:
             if isinstance(v, float) and not math.isfinite(v):
                 raise ConfigError(f"{prefix}{key}: {v!r} must be a finite number")
-
-
-def _read_yaml(path: Path) -> dict:
-    try:
-        data = yaml.load(path.read_text(), Loader=SAFE_LOADER)
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such parameter file") from None
-    except IsADirectoryError:
-        raise ConfigError(f"{path}: is a folder, not a parameter file (YAML)") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a text file (a YAML parameter file is expected)") from None
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot be read ({exc.strerror or exc})") from None
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from None
-    if not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping at the top level")
-    return data
-
-
-_trees: dict[tuple[str, int, int], bytes] = {}
-
-
-def read_tree(path: str | Path | None = None) -> dict:
-    """The raw YAML tree of a parameter file (with units and sources), a fresh copy.
-
-    Parsed once per file version (path, modification time, size) in a process: a sweep
-    loads the parameter file once per point (~13 ms of YAML, ~0.2 ms from the memo).
-    """
-    path = Path(path) if path is not None else DEFAULT_CONFIG
-    try:
-        st = path.stat()
-        key = (str(path.resolve()), st.st_mtime_ns, st.st_size)
-    except OSError:
-        key = None  # _read_yaml names the problem
-    if key in _trees:
-        return pickle.loads(_trees[key])
-    tree = _read_yaml(path)
-    if key is not None:
-        _trees[key] = pickle.dumps(tree)
-    return tree
 
 
 def parameter_table(path: str | Path | None = None) -> list[tuple[str, Any, str, str]]:

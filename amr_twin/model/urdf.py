@@ -10,26 +10,21 @@ what URDF cannot carry is :mod:`amr_twin.model.robot_spec`; the assembly in a wo
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import io
 import json
-import os
 import tempfile
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from amr_twin.model import mass
 from amr_twin.model.config import TwinConfig
+from amr_twin.model.disk_cache import CACHE_ENV, cache_dir, read_entry, store  # noqa: F401 - CACHE_ENV named here too
 from amr_twin.model.paths import MODEL_DIR, ROOT
 
 XACRO_FILE = MODEL_DIR / "amr.urdf.xacro"
 
-CACHE_ENV = "AMR_TWIN_CACHE_DIR"
-"""Environment variable naming the folder of the URDF cache (default ``$XDG_CACHE_HOME/amr-twin``,
-``~/.cache/amr-twin``); an empty value turns the disk cache off."""
 CACHE_FORMAT = 1
 """Part of every cache key: raise it when what a cached URDF means changes."""
 _urdf_memo: dict[str, str] = {}
@@ -77,6 +72,7 @@ def derived_params(cfg: TwinConfig) -> dict:
 def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
     """Run xacro on the robot description with the resolved parameters."""
     import xacro  # imported here: slow, and only needed to build
+    import yaml
 
     with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as fh:
         yaml.safe_dump(derived_params(cfg), fh)
@@ -96,12 +92,8 @@ def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
 
 
 def urdf_cache_dir() -> Path | None:
-    """The URDF cache's folder (:data:`CACHE_ENV`), or None when the disk cache is off."""
-    configured = os.environ.get(CACHE_ENV)
-    if configured is not None:
-        return Path(configured) / "urdf" if configured.strip() else None
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "amr-twin" / "urdf"
+    """The URDF cache's folder (:data:`~amr_twin.model.disk_cache.CACHE_ENV`), or None when the disk cache is off."""
+    return cache_dir("urdf")
 
 
 def urdf_fingerprint(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
@@ -134,31 +126,16 @@ def robot_urdf(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
     folder = urdf_cache_dir()
     path = folder / f"{key}.urdf" if folder is not None else None
     try:
-        urdf = path.read_text() if path is not None else None
-    except (OSError, UnicodeDecodeError):
+        urdf = (read_entry(path) or b"").decode()
+    except UnicodeDecodeError:
         urdf = None
     if not urdf:
         urdf = urdf_string(cfg, xacro_file)
         check_urdf(urdf)
         if path is not None:
-            _store(path, urdf)
+            store(path, urdf.encode())
     _urdf_memo[key] = urdf
     return urdf
-
-
-def _store(path: Path, text: str) -> None:
-    """Write a cache file whole (temporary, then rename); a cache that cannot be written is skipped."""
-    tmp = None
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except OSError:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
 
 
 def check_urdf(urdf: str) -> None:

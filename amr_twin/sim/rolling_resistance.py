@@ -25,27 +25,55 @@ The normal loads come from the springs that carry them: a tyre's ``k_t q + c_t q
 weight while the spring is off its stop; a caster resting on its stop is read from
 the contact force of the last step. The resistances are updated on the loop's record
 grid (every 10 ms), where the loads change little; the tyre friction acts in C at
-every step in between. Plain Python floats: a call costs a few microseconds.
+every step in between.
+
+The update runs in C when a compiler is at hand (``rolling_resistance.c``, built at first
+use by :mod:`amr_twin.sim.native_build`: ~1 us a call against ~9 us here); :meth:`__call__`
+is its Python twin, the same operations in the same order (same bits), which runs
+without a compiler and which the tests hold the C helper to.
 """
 
 from __future__ import annotations
 
+import ctypes
 import math
+from pathlib import Path
+
+import numpy as np
 
 from amr_twin.model.config import TwinConfig
+from amr_twin.sim.native_build import load_helper, native_status
+
+C_SOURCE = Path(__file__).with_name("rolling_resistance.c")
 
 BALL_SPEED_EPS_M_S = 0.005
 """Ball speed below which the caster resistance fades linearly to zero, m/s."""
 
 
+class _Params(ctypes.Structure):
+    """``rr_params`` of rolling_resistance.c."""
+
+    _fields_ = [("tyre_qpos", ctypes.c_int * 2), ("tyre_dof", ctypes.c_int * 2),
+                ("caster_qpos", ctypes.c_int * 4), ("caster_dof", ctypes.c_int * 4),
+                ("ball_body", ctypes.c_int * 4), ("base", ctypes.c_int), ("root_dof", ctypes.c_int),
+                ("wheel_dof", ctypes.c_int * 2), ("ngeom", ctypes.c_int),
+                ("support_of_geom", ctypes.POINTER(ctypes.c_int)),
+                ("k_t", ctypes.c_double), ("c_t", ctypes.c_double), ("f0_c", ctypes.c_double),
+                ("k_c", ctypes.c_double), ("c_c", ctypes.c_double), ("tyre_arm_m", ctypes.c_double),
+                ("motor_friction", ctypes.c_double * 2), ("ball_crr", ctypes.c_double),
+                ("ball_speed_eps", ctypes.c_double)]
+
+
 class RollingResistance:
     """Updates the tyres' and casters' rolling resistance from the present loads.
 
-    Call it (``rr(t_us)``) on the record grid; :attr:`loads` holds the normal loads
-    it used, N: wheel left, right, casters fl, fr, rl, rr.
+    Call :attr:`update` (``update(t_us)``) on the record grid: the C helper, or
+    :meth:`__call__` (its Python twin) without one; :attr:`loads` holds the normal loads
+    it used, N: wheel left, right, casters fl, fr, rl, rr. ``native=False`` forces the
+    Python twin.
     """
 
-    def __init__(self, physics, cfg: TwinConfig):
+    def __init__(self, physics, cfg: TwinConfig, native: bool = True):
         import mujoco
 
         self.physics = physics
@@ -77,12 +105,58 @@ class RollingResistance:
         self._support_of_geom = [-1] * m.ngeom
         for i, geom in enumerate(physics.support_geoms.values()):
             self._support_of_geom[geom] = i
-        self.loads = [0.0] * 6
+        self._loads = [0.0] * 6
         self._fast = (d.qpos, d.qvel, d.xmat[self._base], d.xpos, m.dof_frictionloss, d.qfrc_applied,
                       *self._tyres, tuple(self._casters), tuple(self._ball_body), self._base,
                       self._k_t, self._c_t, self._f0_c, self._k_c, self._c_c, self._tyre_arm_m,
                       tuple(self._motor_friction), tuple(self._wheel_dof), self._ball_crr, self._root_dof)
         """Everything :meth:`__call__` reads, in one tuple (MjData's arrays are views: they stay put)."""
+        self.update = self.__call__
+        """The grid sampler: the C helper when built, else :meth:`__call__`."""
+        self._loads_c = None
+        self.engine = "Python (native=False)"
+        """Which runs: ``"C"`` or ``"Python (<why>)"``."""
+        if native:
+            self._use_native(m, d)
+
+    def _use_native(self, m, d) -> None:
+        lib = load_helper(C_SOURCE)
+        self.engine = native_status(C_SOURCE)
+        if lib is None:
+            return
+        p = _Params()
+        (p.tyre_qpos[0], p.tyre_dof[0]), (p.tyre_qpos[1], p.tyre_dof[1]) = self._tyres
+        for i, (qa, va) in enumerate(self._casters):
+            p.caster_qpos[i], p.caster_dof[i] = qa, va
+        for i, body in enumerate(self._ball_body):
+            p.ball_body[i] = body
+        p.base, p.root_dof = self._base, self._root_dof
+        p.wheel_dof[0], p.wheel_dof[1] = self._wheel_dof
+        self._lut = np.ascontiguousarray(self._support_of_geom, dtype=np.intc)
+        p.ngeom = len(self._lut)
+        p.support_of_geom = self._lut.ctypes.data_as(ctypes.POINTER(ctypes.c_int))
+        p.k_t, p.c_t, p.f0_c, p.k_c, p.c_c = self._k_t, self._c_t, self._f0_c, self._k_c, self._c_c
+        p.tyre_arm_m = self._tyre_arm_m
+        p.motor_friction[0], p.motor_friction[1] = self._motor_friction
+        p.ball_crr, p.ball_speed_eps = self._ball_crr, BALL_SPEED_EPS_M_S
+        self._params = p
+        self._loads_c = (ctypes.c_double * 6)()
+        fn = lib.rr_update
+        fn.restype = None
+        fn.argtypes = [ctypes.c_void_p] * 4
+        args = (ctypes.c_void_p(m._address), ctypes.c_void_p(d._address), ctypes.byref(p),
+                ctypes.cast(self._loads_c, ctypes.c_void_p))
+        self._keep = (m, d, args)  # the model and data outlive every call
+
+        def update(t_us: int = 0, _fn=fn, _args=args) -> None:
+            _fn(*_args)
+
+        self.update = update
+
+    @property
+    def loads(self) -> list[float]:
+        """(6,) normal loads at the last update, N: wheel left, right, casters fl, fr, rl, rr."""
+        return list(self._loads_c) if self._loads_c is not None else list(self._loads)
 
     def _caster_contact_loads(self) -> list[float]:
         """(4,) normal contact force on the caster balls in the last step, N: the casters
@@ -95,7 +169,7 @@ class RollingResistance:
             lut, force = self._support_of_geom, d.efc_force
             for (g1, g2), adr in zip(con.geom.tolist(), con.efc_address.tolist()):
                 k = max(lut[g1], lut[g2])
-                if k >= 2:
+                if k >= 2 and adr >= 0:  # -1: a contact not in the constraints
                     out[k - 2] += force.item(adr)
         return out
 
@@ -105,7 +179,7 @@ class RollingResistance:
         (qpos_v, qvel_v, xmat_base, xpos_v, fl, qfrc, (qa, va), (qb, vb), casters, balls, base,
          k_t, c_t, f0, k_c, c_c, arm, (fric_l, fric_r), (dof_l, dof_r), crr, r0) = self._fast
         qpos, qvel = qpos_v.tolist(), qvel_v.tolist()
-        loads = self.loads
+        loads = self._loads
         load = k_t * qpos[qa] + c_t * qvel[va]
         loads[0] = load if load > 0.0 else 0.0
         load = k_t * qpos[qb] + c_t * qvel[vb]
@@ -134,13 +208,13 @@ class RollingResistance:
         xpos = xpos_v.tolist()
         bx, by, _ = xpos[base]
         fx = fy = tz = 0.0
-        hypot, eps = math.hypot, BALL_SPEED_EPS_M_S
+        sqrt, eps = math.sqrt, BALL_SPEED_EPS_M_S
         i = 2
         for body in balls:
             px, py, _ = xpos[body]
             rx, ry = px - bx, py - by  # contact point, on the floor under the ball
             ux, uy = vx - wz * ry, vy + wz * rx
-            speed = hypot(ux, uy)
+            speed = sqrt(ux * ux + uy * uy)  # as the C helper (libm's hypot and Python's differ in the last bit)
             scale = crr * loads[i] / (eps if eps > speed else speed)  # max(speed, eps)
             fx_i, fy_i = -scale * ux, -scale * uy
             fx, fy, tz = fx + fx_i, fy + fy_i, tz + rx * fy_i - ry * fx_i

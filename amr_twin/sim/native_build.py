@@ -1,0 +1,102 @@
+"""Small C helpers of the loop, compiled at first use against the installed MuJoCo's headers.
+
+A helper (a ``.c`` file next to its Python twin) is built with the system's C compiler
+(``cc``) into the disk cache (:func:`amr_twin.model.disk_cache.cache_dir` ``native``), keyed
+by the source, the MuJoCo version and the flags, written whole (temporary file, then
+rename), and loaded with ctypes. It takes MuJoCo's ``mjModel*`` and ``mjData*`` (the
+bindings' ``_address``) and reads and writes their arrays in place: one call instead of
+some thirty Python reads of MjData per grid instant.
+
+``-ffp-contract=off``: no fused multiply-adds, so the C helper and its Python twin round
+every operation alike and give the same bits. Without a compiler, with the disk cache off
+or with ``AMR_TWIN_NATIVE=0`` the Python twin runs (same results, slower);
+:func:`native_status` says which and why.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+from amr_twin.model.disk_cache import cache_dir
+
+NATIVE_ENV = "AMR_TWIN_NATIVE"
+"""Environment variable: ``0`` runs the Python twins of the C helpers."""
+FLAGS = ("-O2", "-std=c11", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math")
+BUILD_FORMAT = 1
+"""Part of every build's key: raise it when what a built helper means changes."""
+
+_loaded: dict[str, ctypes.CDLL | None] = {}
+_why_not: dict[str, str] = {}
+
+
+def _mujoco_include() -> tuple[Path, str]:
+    import mujoco
+
+    return Path(mujoco.__file__).parent / "include", mujoco.__version__
+
+
+def load_helper(source: Path) -> ctypes.CDLL | None:
+    """The compiled helper of ``source`` (built if not cached), or None (see :func:`native_status`)."""
+    name = str(source)
+    if name in _loaded:
+        return _loaded[name]
+    lib, why = None, ""
+    if os.environ.get(NATIVE_ENV, "1").strip() == "0":
+        why = f"{NATIVE_ENV}=0"
+    else:
+        lib, why = _build_and_load(Path(source))
+    _loaded[name], _why_not[name] = lib, why
+    return lib
+
+
+def native_status(source: Path) -> str:
+    """``"C"`` when the helper of ``source`` is in use, else ``"Python (<why>)"``."""
+    lib = load_helper(source)
+    return "C" if lib is not None else f"Python ({_why_not[str(source)]})"
+
+
+def _build_and_load(source: Path) -> tuple[ctypes.CDLL | None, str]:
+    include, version = _mujoco_include()
+    if not (include / "mujoco" / "mujoco.h").exists():
+        return None, f"MuJoCo's headers not found in {include}"
+    folder = cache_dir("native")
+    if folder is None:
+        return None, "disk cache off"
+    try:
+        text = source.read_bytes()
+    except OSError as exc:
+        return None, f"{source.name}: {exc.strerror or exc}"
+    key = hashlib.sha256(b"\0".join([text, version.encode(), " ".join(FLAGS).encode(),
+                                      str(BUILD_FORMAT).encode()])).hexdigest()[:24]
+    target = folder / f"{source.stem}-{key}.so"
+    if not target.exists():
+        compiler = shutil.which("cc") or shutil.which("gcc")
+        if compiler is None:
+            return None, "no C compiler (cc)"
+        tmp = None
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=".tmp")
+            os.close(fd)
+            out = subprocess.run([compiler, *FLAGS, "-I", str(include), str(source), "-o", tmp, "-lm"],
+                                 capture_output=True, text=True, timeout=120)
+            if out.returncode != 0:
+                first = (out.stderr.strip().splitlines() or ["failed"])[0]
+                return None, f"{source.name} did not compile: {first}"
+            os.replace(tmp, target)
+            tmp = None
+        except (OSError, subprocess.SubprocessError) as exc:
+            return None, f"{source.name} could not be built: {exc}"
+        finally:
+            if tmp is not None:
+                Path(tmp).unlink(missing_ok=True)
+    try:
+        return ctypes.CDLL(str(target)), ""
+    except OSError as exc:
+        return None, f"{target.name} could not be loaded: {exc}"

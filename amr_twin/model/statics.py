@@ -52,11 +52,19 @@ class Statics:
     com_m: np.ndarray                  # (3,) robot with payload, base_link (standing unloaded)
 
 
-def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
-    """Total mass (kg) and centre of mass ((3,), m, base_link) with the payload."""
+_unloaded_memo: dict[tuple, tuple] = {}
+
+
+def _unloaded_parts(cfg: TwinConfig) -> tuple:
+    """The robot's parts without the payload (base_link), kept per robot: a sweep's points
+    differ by their payload only, and each solves the statics several times (~2 ms a build)."""
     from amr_twin.model import mass
 
-    c, w, k, p = cfg.chassis, cfg.wheel, cfg.caster, cfg.payload
+    key = (cfg.chassis, cfg.deck, cfg.components, cfg.wheel, cfg.caster, cfg.uwb)
+    parts = _unloaded_memo.get(key)
+    if parts is not None:
+        return parts
+    w, k = cfg.wheel, cfg.caster
     parts = [mass.chassis_inertial(cfg), *mass.sensor_inertials_in_base(cfg)]
     rotor = mass.wheel_inertial(cfg)
     parts += [mass.Inertial(rotor.mass_kg, np.array([0.0, s * w.separation_m / 2, w.radius_m]), rotor.inertia_kg_m2)
@@ -65,6 +73,21 @@ def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
     r_ball = k.ball_diameter_m / 2
     parts += [mass.Inertial(ball.mass_kg, np.array([sx * k.x_m, sy * k.y_m, r_ball - k.drop_m]), ball.inertia_kg_m2)
               for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    for part in parts:
+        part.com_m.setflags(write=False)
+        part.inertia_kg_m2.setflags(write=False)
+    if len(_unloaded_memo) > 64:
+        _unloaded_memo.clear()
+    _unloaded_memo[key] = parts = tuple(parts)
+    return parts
+
+
+def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
+    """Total mass (kg) and centre of mass ((3,), m, base_link) with the payload."""
+    from amr_twin.model import mass
+
+    c, p = cfg.chassis, cfg.payload
+    parts = list(_unloaded_parts(cfg))
     if p.mass_kg > 0:
         z = c.floor_c_z_m + c.sheet_thickness_m + p.size_m[2] / 2
         parts.append(mass.Inertial(p.mass_kg, np.array([p.xy_m[0], p.xy_m[1], z]), np.zeros((3, 3))))

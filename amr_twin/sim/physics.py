@@ -68,6 +68,7 @@ class Physics:
         self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
         self._support_lut = np.full(m.ngeom, -1, dtype=np.int64)
         self._support_lut[list(self.support_geoms.values())] = np.arange(len(self.support_geoms))
+        self._support_lut_list = self._support_lut.tolist()
         self._support_contype = {g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
                                  for g in self.support_geoms.values()}
         self._drive_range = m.actuator_forcerange[self.actuator].copy()
@@ -150,14 +151,14 @@ class Physics:
         normal force, for pyramidal-free elliptic cones and for frictionless contacts).
         """
         d = self.data
-        out = np.zeros(len(self.support_geoms))
-        if d.ncon:
-            con = d.contact
-            geom = con.geom
-            k = np.maximum(self._support_lut[geom[:, 0]], self._support_lut[geom[:, 1]])
-            hit = k >= 0
-            np.add.at(out, k[hit], d.efc_force[con.efc_address[hit]])
-        return out
+        out = [0.0] * len(self.support_geoms)
+        if d.ncon:  # a handful of contacts: plain Python, in contact order (~5 us against ~30 with numpy)
+            con, lut, force = d.contact, self._support_lut_list, d.efc_force
+            for (g1, g2), adr in zip(con.geom.tolist(), con.efc_address.tolist()):
+                k = max(lut[g1], lut[g2])
+                if k >= 0 and adr >= 0:  # -1: a contact not in the constraints
+                    out[k] += force.item(adr)
+        return np.array(out)
 
     def support_loads_n(self) -> dict[str, float]:
         """Normal contact force on each wheel and caster ball, N (0 when lifted)."""

@@ -76,3 +76,16 @@ def test_parser_errors_and_misplaced_options_are_one_line():
     assert "put it after the command, e.g. amr-twin experiment chapter5 --jobs" in res.stderr
     res = run("run", "linear", "--mission", "m.yaml")
     assert res.returncode == 2 and "put it before 'linear'" in res.stderr
+
+
+def test_only_the_invoked_group_is_built_and_the_app_is_restored():
+    import typer.main
+
+    full = {c.name or c.callback.__name__ for c in app.registered_commands} | {g.name for g in app.registered_groups}
+    with app._only_group(["run", "linear", "--speed-m-s", "0.5"]):
+        assert sorted(typer.main.get_command(app).commands) == ["run"]
+    for argv in ([], ["--help"], ["model"], ["nosuch"], ["--config", "x", "run"]):
+        with app._only_group(argv):
+            assert set(typer.main.get_command(app).commands) == full
+    assert {c.name or c.callback.__name__ for c in app.registered_commands} | {g.name for g in app.registered_groups} == full
+    assert {"run", "experiment", "sweep", "model", "bench"} <= full

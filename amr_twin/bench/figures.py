@@ -36,8 +36,12 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     warehouse. ``twin_s_per_sim_s`` / ``bare_physics_s_per_sim_s`` / ``ratio``:
     the whole twin against bare physics on one scenario (see twin_benchmark);
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
+    ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
+    (:mod:`amr_twin.sim.native_build`), which the figures were measured with.
     """
     from amr_twin.bench.twin import twin_figures
+    from amr_twin.sim.native_build import native_status
+    from amr_twin.sim.rolling_resistance import C_SOURCE
 
     result = bare_physics(cfg, sim_s)
     result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
@@ -46,4 +50,5 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"
+    result["rolling_resistance_engine"] = native_status(C_SOURCE)
     return result

@@ -16,6 +16,7 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert r["ratio"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.25)
     assert r["repeats"] >= 5
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
+    assert r["rolling_resistance_engine"] == "C" or r["rolling_resistance_engine"].startswith("Python (")
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
 
 

@@ -31,7 +31,7 @@ FLAGS = ("-O2", "-std=c11", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-
 BUILD_FORMAT = 1
 """Part of every build's key: raise it when what a built helper means changes."""
 
-_loaded: dict[str, ctypes.CDLL | None] = {}
+_loaded: dict[str, ctypes.PyDLL | None] = {}
 _why_not: dict[str, str] = {}
 
 
@@ -41,7 +41,7 @@ def _mujoco_include() -> tuple[Path, str]:
     return Path(mujoco.__file__).parent / "include", mujoco.__version__
 
 
-def load_helper(source: Path) -> ctypes.CDLL | None:
+def load_helper(source: Path) -> ctypes.PyDLL | None:
     """The compiled helper of ``source`` (built if not cached), or None (see :func:`native_status`)."""
     name = str(source)
     if name in _loaded:
@@ -61,7 +61,7 @@ def native_status(source: Path) -> str:
     return "C" if lib is not None else f"Python ({_why_not[str(source)]})"
 
 
-def _build_and_load(source: Path) -> tuple[ctypes.CDLL | None, str]:
+def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
     include, version = _mujoco_include()
     if not (include / "mujoco" / "mujoco.h").exists():
         return None, f"MuJoCo's headers not found in {include}"
@@ -97,6 +97,6 @@ def _build_and_load(source: Path) -> tuple[ctypes.CDLL | None, str]:
             if tmp is not None:
                 Path(tmp).unlink(missing_ok=True)
     try:
-        return ctypes.CDLL(str(target)), ""
+        return ctypes.PyDLL(str(target)), ""  # PyDLL: the call holds the GIL, as its Python twin does
     except OSError as exc:
         return None, f"{target.name} could not be loaded: {exc}"

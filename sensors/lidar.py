@@ -32,7 +32,7 @@ the present laser frame, and the nearer hit wins. Two ways to drive it:
   (:mod:`amr_twin.sim.clock`: it stops the physics only if a subscriber of ``scan``
   could act sooner).
 
-Rays see the world and a payload only (``SEEN_GROUPS``). The cutoff is large and
+Rays see the world and a payload only (:data:`~amr_twin.sensors.lidar_beams.SEEN_GROUPS`). The cutoff is large and
 ranges are clamped here (``mj_multiRay`` culls by bounding volume, stack-notes.md),
 then noised (``inf`` where invalid, as ``rplidar_ros`` publishes it).
 
@@ -55,7 +55,7 @@ from amr_twin.model.config_sections import LidarCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 
-from amr_twin.sensors.lidar_beams import (SEEN_GROUPS, US, PoseSamples, beam_angles_rad, beam_directions, group_masks,
+from amr_twin.sensors.lidar_beams import (US, PoseSamples, beam_angles_rad, beam_directions, group_masks,
                           motion_correction_m, noisy_ranges, scan_timing, world_directions)
 
 CUTOFF_M = 1e6

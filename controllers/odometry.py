@@ -276,13 +276,16 @@ class WheelOdometry:
 
     def publish(self) -> Odometry:
         """Integrate to now, publish ``odom`` (and tf) and return the message."""
-        self.update()
-        stamp = Time.from_us(self.clock.now_us)
-        vx_m_s, vy_m_s, w_rad_s = self.body_twist()
-        orientation = Quaternion.from_yaw(self.yaw_rad)
+        now = self.clock.now_us
+        published = self.published
+        published.advance(now)  # update(), once: body_twist() and the pose properties read its result
+        stamp = Time.from_us(now)
+        vx_m_s, vy_m_s, w_rad_s = published.twist()
+        x_m, y_m, yaw = published.pose
+        orientation = Quaternion.from_yaw(math.atan2(math.sin(yaw), math.cos(yaw)))  # yaw_rad: wrapped
         msg = Odometry(
             header=Header(self._seq, stamp, self.frame_id), child_frame_id=self.child_frame_id,
-            pose=PoseWithCovariance(Pose(Point(self.x_m, self.y_m, 0.0), orientation),
+            pose=PoseWithCovariance(Pose(Point(x_m, y_m, 0.0), orientation),
                                     self.pose_covariance),
             twist=TwistWithCovariance(Twist(Vector3(vx_m_s, vy_m_s, 0.0), Vector3(0.0, 0.0, w_rad_s)),
                                       self.twist_covariance))
@@ -291,7 +294,7 @@ class WheelOdometry:
         if self.publish_tf:
             self.bus.send_transform(TransformStamped(
                 Header(0, stamp, self.frame_id), self.child_frame_id,
-                Transform(Vector3(self.x_m, self.y_m, 0.0), orientation)))
+                Transform(Vector3(x_m, y_m, 0.0), orientation)))
         return msg
 
     def shutdown(self) -> None:

@@ -18,8 +18,10 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -72,7 +74,8 @@ def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
         text = source.read_bytes()
     except OSError as exc:
         return None, f"{source.name}: {exc.strerror or exc}"
-    key = hashlib.sha256(b"\0".join([text, version.encode(), " ".join(FLAGS).encode(),
+    machine = f"{sys.platform} {platform.machine()} {sys.implementation.cache_tag}".encode()  # a shared home
+    key = hashlib.sha256(b"\0".join([text, version.encode(), " ".join(FLAGS).encode(), machine,
                                       str(BUILD_FORMAT).encode()])).hexdigest()[:24]
     target = folder / f"{source.stem}-{key}.so"
     if not target.exists():
@@ -99,4 +102,5 @@ def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
     try:
         return ctypes.PyDLL(str(target)), ""  # PyDLL: the call holds the GIL, as its Python twin does
     except OSError as exc:
+        target.unlink(missing_ok=True)  # the next process builds it again
         return None, f"{target.name} could not be loaded: {exc}"

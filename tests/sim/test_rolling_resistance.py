@@ -75,3 +75,25 @@ def test_without_a_helper_the_python_twin_runs_and_says_why(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
     assert out.stdout.strip() == "Python (AMR_TWIN_NATIVE=0)"
     assert C_SOURCE.exists()
+
+
+@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+def test_a_damaged_build_is_replaced(tmp_path):
+    """A built helper that does not load is removed, so that the next process builds it again."""
+    source = tmp_path / "helper.c"
+    source.write_text("int answer(void) { return 42; }\n")
+    code = ("import sys; from pathlib import Path; from amr_twin.sim import native_build as nb; "
+            "s = Path(sys.argv[1]); lib = nb.load_helper(s); print(nb.native_status(s), lib.answer() if lib else '-')")
+    env = {**os.environ, "AMR_TWIN_CACHE_DIR": str(tmp_path / "cache")}
+
+    def status():
+        out = subprocess.run([sys.executable, "-c", code, str(source)], capture_output=True, text=True, env=env,
+                             check=True)
+        return out.stdout.strip()
+
+    assert status() == "C 42"
+    (built,) = (tmp_path / "cache" / "native").glob("helper-*.so")
+    built.write_bytes(b"not a shared object")
+    assert status().startswith("Python (helper-")  # falls back, and removes it
+    assert not built.exists()
+    assert status() == "C 42"  # built again

@@ -7,7 +7,7 @@ import pytest
 
 from amr_twin.model.build import export
 from amr_twin.model.config import load_config
-from amr_twin.model.statics import describe, solve, tip_margin_m
+from amr_twin.model.statics import describe, solve
 
 G = 9.81
 BALL_KG = 0.15
@@ -99,13 +99,6 @@ def test_caster_set_up_moves_the_load_between_wheels_and_casters():
     assert softer.loads_n["wheel_left"] > nominal.loads_n["wheel_left"] + 10
 
 
-def test_tip_margin_geometry():
-    square = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]], float)
-    assert tip_margin_m(square, np.array([0.0, 0.0])) == pytest.approx(1.0)
-    assert tip_margin_m(square, np.array([0.5, 0.0])) == pytest.approx(0.5)
-    assert tip_margin_m(square, np.array([1.5, 0.0])) == pytest.approx(-0.5)
-
-
 def test_unloaded_tip_margin_is_the_distance_to_the_wheel_caster_edge():
     """All supports on the floor: the nearest edge of the hexagon is the line from a rear
     caster (-0.30, 0.17) to a wheel (0, 0.24); the centre of mass sits a few mm behind the axle."""
@@ -137,25 +130,3 @@ def test_mass_and_com_follow_every_section_they_are_built_from(key, value, moves
         assert np.max(np.abs(com_m - base_com)) > 1e-6
     again_mass, again_com = robot_mass_com(load_config())
     assert again_mass == base_mass and np.array_equal(again_com, base_com)
-
-
-@pytest.mark.parametrize("seed", range(5))
-def test_support_polygon_and_margin_agree_with_scipy_convex_hull(seed):
-    """The hand-written hull against Qhull (scipy), on random point sets with the com inside and outside."""
-    ConvexHull = pytest.importorskip("scipy.spatial").ConvexHull
-    from amr_twin.model.statics import support_polygon
-
-    rng = np.random.default_rng(seed)
-    for n in (3, 4, 6, 9):
-        pts = rng.uniform(-0.4, 0.4, (n, 2))
-        hull = ConvexHull(pts)
-        ours = support_polygon(pts)
-        assert sorted(map(tuple, ours.round(12))) == sorted(map(tuple, pts[hull.vertices].round(12)))
-        for com in rng.uniform(-0.6, 0.6, (20, 2)):
-            qhull = float(np.min(-(hull.equations[:, :2] @ com + hull.equations[:, 2])))
-            assert tip_margin_m(pts, com) == pytest.approx(qhull, abs=1e-12)
-
-
-def test_supports_in_a_line_have_no_margin():
-    line = np.array([[0.0, 0.0], [0.1, 0.0], [0.3, 0.0], [0.2, 0.0]])
-    assert tip_margin_m(line, np.array([0.1, 0.0])) == -float("inf")

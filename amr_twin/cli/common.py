@@ -1,4 +1,5 @@
-"""What every command group shares: the one-line failure, the parameter file from the options, the error guard.
+"""What every command group shares: the one-line failure, the parameter file from the options, the error guard,
+the garbage collector's start-up settings.
 
 Each command module (main, run, experiment, fusion, menu) imports these from here, so
 that no command module imports another.
@@ -6,10 +7,29 @@ that no command module imports another.
 
 from __future__ import annotations
 
+import gc
 from pathlib import Path
 from typing import Optional
 
 import typer
+
+START_UP_GC_THRESHOLDS = (100_000, 50, 100)
+"""Garbage-collector thresholds while a command starts (Python's default: 700, 10, 10)."""
+_RUNTIME_GC_THRESHOLDS = gc.get_threshold()
+
+
+def start_up() -> None:
+    """A command starts: rarer collections while the imports build about a million objects
+    (the default thresholds scan them over and over: ~40 ms of a 1 s run)."""
+    gc.set_threshold(*START_UP_GC_THRESHOLDS)
+
+
+def started() -> None:
+    """The command's imports are done (its parameters are loaded): the start-up objects are frozen
+    out of every later collection and the usual thresholds come back, so that a long sweep frees
+    each point's twin as before (with the start-up thresholds kept, 120 points grew from 78 to 156 MB)."""
+    gc.freeze()
+    gc.set_threshold(*_RUNTIME_GC_THRESHOLDS)
 
 
 def fail(message: str, code: int = 2) -> None:
@@ -22,7 +42,9 @@ def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[
     from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
 
     try:
-        return load_config(config, override_file=params, sets=sets or [], overrides=extra)
+        cfg = load_config(config, override_file=params, sets=sets or [], overrides=extra)
+        started()
+        return cfg
     except ConfigError as exc:
         text = str(exc)
         for option, path in (("--params", params), ("--config", config)):

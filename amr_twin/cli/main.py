@@ -32,12 +32,8 @@ try:  # typer >= 0.20 carries its own copy of click
 except ImportError:  # pragma: no cover - older typer on click
     from click import exceptions as _click_errors
 
-from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.common import _config, _guard, fail, start_up
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
-
-
-GC_THRESHOLDS = (100_000, 50, 100)
-"""The command line's garbage-collector thresholds (Python's default: 700, 10, 10)."""
 
 
 class _App(typer.Typer):
@@ -49,9 +45,10 @@ class _App(typer.Typer):
         argv = kwargs.get("args", args[0] if args else None)
         # Start-up allocates about a million objects (numpy, mujoco, pydantic, typer), which the
         # default thresholds scan over and over, and the interpreter scans them all once more at
-        # exit: a 1 s run spent ~0.1 s of its 0.9 s CPU there. Rarer collections while the command
-        # runs, and the survivors frozen before exit (files are closed, atexit handlers still run).
-        gc.set_threshold(GC_THRESHOLDS[0], GC_THRESHOLDS[1], GC_THRESHOLDS[2])
+        # exit: a 1 s run spent ~0.1 s of its 0.9 s CPU there. Rarer collections until the command's
+        # parameters are loaded (amr_twin.cli.common.started), and the survivors frozen before exit
+        # (files are closed, atexit handlers still run).
+        start_up()
         try:
             with self._only_group(sys.argv[1:] if argv is None else list(argv)):
                 code = super().__call__(*args, standalone_mode=False, **kwargs)

@@ -66,9 +66,10 @@ class Physics:
         G = mujoco.mjtObj.mjOBJ_GEOM
         self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
         self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
-        self._support_lut = np.full(m.ngeom, -1, dtype=np.int64)
-        self._support_lut[list(self.support_geoms.values())] = np.arange(len(self.support_geoms))
-        self._support_lut_list = self._support_lut.tolist()
+        self.support_of_geom = [-1] * m.ngeom
+        """(ngeom,) index of each geom in :attr:`support_geoms` (0-5), -1 for the others."""
+        for i, g in enumerate(self.support_geoms.values()):
+            self.support_of_geom[g] = i
         self._support_contype = {g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
                                  for g in self.support_geoms.values()}
         self._drive_range = m.actuator_forcerange[self.actuator].copy()
@@ -153,7 +154,7 @@ class Physics:
         d = self.data
         out = [0.0] * len(self.support_geoms)
         if d.ncon:  # a handful of contacts: plain Python, in contact order (~5 us against ~30 with numpy)
-            con, lut, force = d.contact, self._support_lut_list, d.efc_force
+            con, lut, force = d.contact, self.support_of_geom, d.efc_force
             for (g1, g2), adr in zip(con.geom.tolist(), con.efc_address.tolist()):
                 k = max(lut[g1], lut[g2])
                 if k >= 0 and adr >= 0:  # -1: a contact not in the constraints

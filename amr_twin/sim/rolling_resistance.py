@@ -101,10 +101,7 @@ class RollingResistance:
         self._ball_crr = k.rolling_resistance
         self._base = physics.base_body
         self._root_dof = int(physics.root_dof)
-        # support index (0-5, as Physics.support_geoms) of every geom, -1 for the others
-        self._support_of_geom = [-1] * m.ngeom
-        for i, geom in enumerate(physics.support_geoms.values()):
-            self._support_of_geom[geom] = i
+        self._support_of_geom = physics.support_of_geom  # support index (0-5) of every geom, -1 for the others
         self._loads = [0.0] * 6
         self._fast = (d.qpos, d.qvel, d.xmat[self._base], d.xpos, m.dof_frictionloss, d.qfrc_applied,
                       *self._tyres, tuple(self._casters), tuple(self._ball_body), self._base,

@@ -55,8 +55,8 @@ from amr_twin.model.config_sections import LidarCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 
-from amr_twin.sensors.lidar_beams import (US, PoseSamples, beam_angles_rad, beam_directions, group_masks,
-                          motion_correction_m, noisy_ranges, scan_timing, world_directions)
+from amr_twin.sensors.lidar_beams import US, PoseSamples, beam_angles_rad, beam_directions, group_masks, scan_timing
+from amr_twin.sensors.lidar_kernels import beam_kernels
 
 CUTOFF_M = 1e6
 """Culling distance passed to ``mj_multiRay``: effectively none."""
@@ -84,11 +84,15 @@ class Lidar:
         In the twin: longest time between two casts, us.
     autostart : bool
         Start rotating (standalone) at the current clock time.
+    native : bool
+        Use the C helper for the beams' arithmetic when it builds
+        (:mod:`amr_twin.sensors.lidar_kernels`; same bits as its Python twin);
+        :attr:`engine` says which runs.
     """
 
     def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: LidarCfg, seed: int | None = 0,
                  group_us: int = 20000, frame_id: str = LASER_FRAME, site: str = "amr/laser",
-                 autostart: bool = True, loop_cast_us: int = 200000):
+                 autostart: bool = True, loop_cast_us: int = 200000, native: bool = True):
         if group_us <= 0 or loop_cast_us <= 0:
             raise ValueError(f"group_us {group_us}, loop_cast_us {loop_cast_us}: must be > 0")
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
@@ -99,6 +103,9 @@ class Lidar:
         self.n_beams, self.beam_dt_us, self.scan_us = scan_timing(cfg)
         self.angle_min, self.angle_increment, self.angles_rad = beam_angles_rad(self.n_beams)
         self.local_dirs = beam_directions(self.angles_rad)  # (n, 3) in the laser frame
+        self._kernels = beam_kernels(self.n_beams, cfg, native)
+        self.engine = self._kernels.engine
+        """Which runs the beams' arithmetic: ``"C"`` or ``"Python (<why>)"``."""
         # negative (clockwise); float32 on the wire: the float32 next to -1/sample_rate toward 0, so
         # that stamp + i * time_increment never falls before the beam's true instant (by ~10 ns)
         self._time_increment = float(np.nextafter(np.float32(-self.beam_dt_us / US), np.float32(0.0)))
@@ -127,7 +134,7 @@ class Lidar:
         self._samplers: list | None = None  # the loop's grid samplers (in the twin)
         self._grid: tuple[int, list] | None = None
         self._poses = PoseSamples()
-        self._lx, self._ly = self.local_dirs[:, 0:1].copy(), self.local_dirs[:, 1:2].copy()
+        self._lx, self._ly = self.local_dirs[:, 0:1].copy(), self.local_dirs[:, 1:2].copy()  # (n, 1) each
         self._done: deque = deque()  # (t_us, scan, beam_t_us, hit_geom) cast, not yet published
         self.running = False
         self._new_rotation(clock.now_us)
@@ -238,10 +245,9 @@ class Lidar:
             return
         origin = d.site_xpos[s]
         lx, ly = self._lx[start:stop], self._ly[start:stop]
-        if at_own_instants and self._poses.n > 0:
-            pose = self._poses.at(self.beam_t_us[start:stop])  # (k, 9)
-            u = world_directions(pose, lx, ly)
-            shift = origin - pose[:, 0:3]  # (k, 3) o_now - o_i
+        kernels, poses = self._kernels, self._poses
+        if at_own_instants and poses.n > 0:  # u (k, 3) and shift = o_now - o_i (k, 3)
+            u, shift = kernels.geometry(self.beam_t_us[start:stop], lx, ly, poses.rows, poses.n, origin)
         else:
             u, shift = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T, None
         normal = self._normal[:3 * k]
@@ -249,7 +255,7 @@ class Lidar:
         groups = self.geomgroup if self._world_groups is None else self._world_groups
         mujoco.mj_multiRay(m, d, origin, u.ravel(), groups, 1, -1, geomid, dist, normal, k, CUTOFF_M)
         if shift is not None:  # r_i = r + n.(o_now - o_i) / n.u_i (0 where no hit: n = 0)
-            dist += motion_correction_m(normal.reshape(k, 3), u, shift)
+            kernels.correct(normal.reshape(k, 3), u, shift, dist)
         if self._payload_groups is not None:  # what moves with the robot: the present frame
             u_now = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
             pgeom, pdist = self._pgeom[:k], self._pdist[:k]
@@ -261,8 +267,8 @@ class Lidar:
     def noisy_ranges(self, dist: np.ndarray, geomid: np.ndarray) -> np.ndarray:
         """Noisy ranges (n,) float32, m, inf where invalid, of true distances ``dist`` (n,) and hit
         geoms ``geomid`` (n,), -1 for none (:func:`~amr_twin.sensors.lidar_beams.noisy_ranges` with
-        this sensor's config and generator)."""
-        return noisy_ranges(dist, geomid, self.cfg, self.rng)
+        this sensor's config and generator, in C when the helper is built)."""
+        return self._kernels.noise(dist, geomid, self.rng.standard_normal(len(dist)))
 
     def _finish(self, t_us: int) -> None:
         """The rotation in progress is cast: add the noise and publish it (or queue it)."""

@@ -141,21 +141,29 @@ class PoseSamples:
 
         Returns (k, 9): position (m), then the laser x and y axes in the world.
         """
-        n, poses = self.n, self.rows
-        if n < 2:
-            return np.repeat(poses[0:1, 1:], len(t_us), axis=0)
-        ts = poses[:n, 0]
-        j = np.minimum(np.maximum(ts.searchsorted(t_us, side="right") - 1, 0), n - 2)
-        t0 = ts[j]
-        a = np.minimum(np.maximum((t_us - t0) / (ts[j + 1] - t0), 0.0), 1.0)[:, None]
-        p0 = poses[j, 1:]
-        return p0 + a * (poses[j + 1, 1:] - p0)
+        return interpolate_poses(self.rows, self.n, t_us)
+
+
+def interpolate_poses(rows: np.ndarray, n: int, t_us: np.ndarray) -> np.ndarray:
+    """Poses (k, 9) at the instants ``t_us`` (k,) from the first ``n`` sample ``rows`` of :class:`PoseSamples`.
+
+    Linear between the two samples around each instant, held outside them (the first
+    row alone when ``n < 2``): position (m), laser x axis, laser y axis.
+    """
+    if n < 2:
+        return np.repeat(rows[0:1, 1:], len(t_us), axis=0)
+    ts = rows[:n, 0]
+    j = np.minimum(np.maximum(ts.searchsorted(t_us, side="right") - 1, 0), n - 2)
+    t0 = ts[j]
+    a = np.minimum(np.maximum((t_us - t0) / (ts[j + 1] - t0), 0.0), 1.0)[:, None]
+    p0 = rows[j, 1:]
+    return p0 + a * (rows[j + 1, 1:] - p0)
 
 
 def world_directions(pose: np.ndarray, lx: np.ndarray, ly: np.ndarray) -> np.ndarray:
     """Unit beam directions in the world (k, 3) from laser poses (k, 9) and laser-frame components (k, 1) x 2."""
     u = pose[:, 3:6] * lx + pose[:, 6:9] * ly  # R l with l_z = 0
-    u /= np.sqrt(np.einsum("ij,ij->i", u, u))[:, None]
+    u /= np.sqrt(u[:, 0] * u[:, 0] + u[:, 1] * u[:, 1] + u[:, 2] * u[:, 2])[:, None]  # the C helper's order
     return u
 
 
@@ -171,8 +179,9 @@ def motion_correction_m(normal: np.ndarray, u: np.ndarray, shift_m: np.ndarray) 
     shift_m : ndarray, shape (k, 3)
         ``o_now - o_i``: origin now minus origin at each beam's instant, m.
     """
-    nu = np.einsum("ij,ij->i", normal, u)
-    return np.divide(np.einsum("ij,ij->i", normal, shift_m), nu, out=np.zeros(len(u)), where=np.abs(nu) > 1e-3)
+    nu = normal[:, 0] * u[:, 0] + normal[:, 1] * u[:, 1] + normal[:, 2] * u[:, 2]  # the C helper's order
+    ns = normal[:, 0] * shift_m[:, 0] + normal[:, 1] * shift_m[:, 1] + normal[:, 2] * shift_m[:, 2]
+    return np.divide(ns, nu, out=np.zeros(len(u)), where=np.abs(nu) > 1e-3)
 
 
 def noisy_ranges(dist: np.ndarray, geomid: np.ndarray, cfg: LidarCfg, rng: np.random.Generator) -> np.ndarray:
@@ -194,8 +203,13 @@ def noisy_ranges(dist: np.ndarray, geomid: np.ndarray, cfg: LidarCfg, rng: np.ra
     ndarray, shape (n,), float32
         Ranges, m; inf where nothing was hit or out of ``[range_min, range_max]``.
     """
+    return quantised_ranges(dist, geomid, rng.standard_normal(len(dist)), cfg)
+
+
+def quantised_ranges(dist: np.ndarray, geomid: np.ndarray, z: np.ndarray, cfg: LidarCfg) -> np.ndarray:
+    """:func:`noisy_ranges` with the ``n`` standard normals ``z`` (n,) given: ranges (n,) float32, m."""
     sigma = np.maximum(cfg.range_noise_floor_m, cfg.range_noise_frac * dist)
-    r = dist + sigma * rng.standard_normal(len(dist))
+    r = dist + sigma * z
     if cfg.range_resolution_m > 0:
         r = np.round(r / cfg.range_resolution_m) * cfg.range_resolution_m
     valid = (geomid >= 0) & (r >= cfg.range_min_m) & (r <= cfg.range_max_m)

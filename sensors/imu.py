@@ -7,7 +7,7 @@ come from MuJoCo's ``accelerometer``, ``gyro`` and ``magnetometer`` sensors on t
 ``amr/imu`` site (frame ``imu_link``, REP-103 axes): specific force (m/s^2, +9.81
 on z at rest), body rate (rad/s) and the world field ``opt.magnetic`` (T).
 
-Each axis of each sensor is corrupted as (see :func:`corrupt`)::
+Each axis of each sensor is corrupted as (:mod:`amr_twin.sensors.imu_errors`)::
 
     y = quantise(clip((1 + s) * x + b0 + b_walk(t) + n, +-range), resolution)
 
@@ -43,7 +43,6 @@ This module does not import mujoco: it reads ``MjData.sensordata`` by address.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -54,79 +53,11 @@ from amr_twin.model.config_sections import ImuCfg
 from amr_twin.ros.geometry_messages import Quaternion, Vector3
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Imu, MagneticField
+from amr_twin.sensors.imu_errors import ErrorStream, axis_models, covariances
 
 US = 1_000_000
 SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")
 """MuJoCo sensors read by the IMU: accelerometer, gyro, magnetometer (3 values each)."""
-
-
-@dataclass
-class AxisModel:
-    """Error model of one 3-axis sensor; all arrays shape (3,), in the sensor's SI unit."""
-
-    bias: np.ndarray
-    scale: np.ndarray
-    noise_sigma: float
-    walk_sigma: float
-    range_max: float
-    resolution: np.ndarray
-
-
-def corrupt(true: np.ndarray, model: AxisModel, rng: np.random.Generator, dt_s: float) -> np.ndarray:
-    """Advance the bias random walk by ``dt_s`` and return one corrupted sample.
-
-    Parameters
-    ----------
-    true : ndarray, shape (3,)
-        True value in the sensor frame (m/s^2, rad/s or T).
-    model : AxisModel
-        Error state; ``model.bias`` is updated in place by the random walk.
-    rng : numpy.random.Generator
-        Source of the noise (three normals for the walk, three for the noise).
-    dt_s : float
-        Time since the previous sample, s.
-
-    Returns
-    -------
-    ndarray, shape (3,)
-        Scaled, biased, noisy, saturated and quantised reading.
-    """
-    if model.walk_sigma > 0:
-        model.bias += rng.normal(0.0, model.walk_sigma * np.sqrt(dt_s), 3)
-    noise = rng.normal(0.0, model.noise_sigma, 3) if model.noise_sigma > 0 else 0.0
-    y = np.clip((1.0 + model.scale) * true + model.bias + noise, -model.range_max, model.range_max)
-    res = model.resolution
-    return np.where(res > 0, np.round(y / np.where(res > 0, res, 1.0)) * res, y)
-
-
-def axis_models(cfg: ImuCfg, rng: np.random.Generator) -> dict[str, AxisModel]:
-    """Draw the turn-on biases and scale errors of accel, gyro and mag (in that order)."""
-    rate = cfg.rate_hz
-    return {
-        "accel": AxisModel(rng.normal(0.0, cfg.accel_bias_sigma_m_s2, 3), rng.normal(0.0, cfg.accel_scale_sigma, 3),
-                           cfg.accel_noise_density_m_s2_sqrt_hz * np.sqrt(rate), cfg.accel_bias_walk_m_s2_sqrt_s,
-                           cfg.accel_range_m_s2, np.full(3, cfg.accel_resolution_m_s2)),
-        "gyro": AxisModel(rng.normal(0.0, cfg.gyro_bias_sigma_rad_s, 3), rng.normal(0.0, cfg.gyro_scale_sigma, 3),
-                          cfg.gyro_noise_density_rad_s_sqrt_hz * np.sqrt(rate), cfg.gyro_bias_walk_rad_s_sqrt_s,
-                          cfg.gyro_range_rad_s, np.full(3, cfg.gyro_resolution_rad_s)),
-        "mag": AxisModel(rng.normal(0.0, cfg.mag_bias_sigma_t, 3), np.zeros(3), cfg.mag_noise_t, 0.0,
-                         cfg.mag_range_t,
-                         np.array([cfg.mag_resolution_xy_t, cfg.mag_resolution_xy_t, cfg.mag_resolution_z_t])),
-    }
-
-
-def covariances(models: dict[str, AxisModel], cfg: ImuCfg) -> dict[str, np.ndarray]:
-    """Row-major 3x3 covariances (9,) of the raw readings of ``accel``, ``gyro`` and ``mag``.
-
-    Diagonal: ``noise_sigma^2 + bias_sigma^2 + resolution^2 / 12`` per axis (SI units
-    squared), the error of one uncalibrated reading (module docstring).
-    """
-    bias = {"accel": cfg.accel_bias_sigma_m_s2, "gyro": cfg.gyro_bias_sigma_rad_s, "mag": cfg.mag_bias_sigma_t}
-    out = {}
-    for name, m in models.items():
-        variance = m.noise_sigma ** 2 + bias[name] ** 2 + np.asarray(m.resolution, float) ** 2 / 12.0
-        out[name] = np.diag(np.broadcast_to(variance, (3,))).ravel()
-    return out
 
 
 class ImuSensor:
@@ -146,10 +77,12 @@ class ImuSensor:
         Seed of the ``numpy.random.Generator`` (biases, scale errors, noise).
     autostart : bool
         Schedule the first sample at the current clock time.
+    native : bool
+        Corrupt the samples in C when the helper builds (same bits; :attr:`engine` says which runs).
     """
 
     def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: ImuCfg, seed: int | None = 0,
-                 frame_id: str = IMU_FRAME, autostart: bool = True):
+                 frame_id: str = IMU_FRAME, autostart: bool = True, native: bool = True):
         self.data, self.clock, self.bus, self.cfg, self.frame_id = data, clock, bus, cfg, frame_id
         self._adr = [int(model.sensor(name).adr[0]) for name in SENSOR_NAMES]
         self.rng = np.random.default_rng(seed)
@@ -161,18 +94,9 @@ class ImuSensor:
         self._cov = covariances(self.models, cfg)
         self._orientation_cov = np.zeros(9)
         self._orientation_cov[0] = -1.0  # orientation not provided (data_raw)
-        ms = [self.models[k] for k in ("accel", "gyro", "mag")]
-        self._bias = np.concatenate([m.bias for m in ms])  # (9,) evolving biases
-        for i, m in enumerate(ms):
-            m.bias = self._bias[3 * i:3 * i + 3]  # views: the models show the current bias
-        self._scale = np.concatenate([m.scale for m in ms])
-        self._noise = np.repeat([m.noise_sigma for m in ms], 3)
-        self._walk = np.repeat([m.walk_sigma * np.sqrt(self.dt_s) for m in ms], 3)
-        self._range = np.repeat([m.range_max for m in ms], 3)
-        self._res = np.concatenate([m.resolution for m in ms])
-        self._quantised = self._res > 0  # axes with a resolution of 0 are not quantised
-        self._res = np.where(self._quantised, self._res, 1.0)
-        self._inv_res = 1.0 / self._res
+        self.errors = ErrorStream(self.models, self.dt_s, self.rng, native)
+        """The nine axes' error state (the models' ``bias`` arrays are views of ``errors.bias``)."""
+        self.engine = self.errors.engine
         self.seq = 0
         self._handle = None
         self._samplers: list | None = None  # the loop's grid samplers while fed by the loop
@@ -236,33 +160,13 @@ class ImuSensor:
         return np.concatenate((sd[a[0]:a[0] + 3], sd[a[1]:a[1] + 3], sd[a[2]:a[2] + 3]))
 
     def corrupt_batch(self, true: np.ndarray) -> np.ndarray:
-        """Corrupt ``n`` consecutive samples, advancing the error state by ``n`` periods.
+        """Corrupt ``n`` consecutive samples (n, 9), advancing the error state by ``n`` periods.
 
-        Same arithmetic as :func:`corrupt` on the nine axes at once: per sample the
-        random walk, then noise, scale, clip and quantisation; the generator draws
-        9 walk normals then 9 noise normals per sample, so a batch gives the same
-        numbers as ``n`` calls of :meth:`sample`.
-
-        Parameters
-        ----------
-        true : ndarray, shape (n, 9)
-            True accel (m/s^2), gyro (rad/s) and mag (T) values, sensor frame.
-
-        Returns
-        -------
-        ndarray, shape (n, 9)
-            Readings in the same units.
+        True accel (m/s^2), gyro (rad/s) and mag (T) values in, readings in the same
+        units out (:meth:`amr_twin.sensors.imu_errors.ErrorStream.corrupt_python`, or its C
+        twin); a batch gives the same numbers as ``n`` calls of :meth:`sample`.
         """
-        n = len(true)
-        z = self.rng.standard_normal((n, 18))
-        steps = np.empty((n + 1, 9))
-        steps[0] = self._bias
-        steps[1:] = self._walk * z[:, :9]
-        bias = np.cumsum(steps, axis=0)[1:]  # sequential: bias_k = bias_(k-1) + walk_k
-        self._bias[:] = bias[-1]
-        y = (1.0 + self._scale) * true + bias + self._noise * z[:, 9:]
-        y = np.minimum(np.maximum(y, -self._range), self._range)
-        return np.where(self._quantised, np.round(y * self._inv_res) * self._res, y)
+        return self.errors.corrupt_batch(true)
 
     def sample(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """One corrupted sample (accel, gyro, mag) of ``MjData`` now, advancing the error state by one period."""
@@ -289,7 +193,7 @@ class ImuSensor:
         if not self._ready:
             if not self._true_t:
                 raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid")
-            y = self.corrupt_batch(self._true[:len(self._true_t)])
+            y = self.errors.corrupt_batch(self._true[:len(self._true_t)])
             self._ready.extend(zip(self._true_t, y.tolist()))
             self._true_t.clear()
         t_us, y = self._ready.popleft()

@@ -8,7 +8,8 @@ import pytest
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import load_config
-from amr_twin.sensors.imu import AxisModel, ImuSensor, axis_models, corrupt
+from amr_twin.sensors.imu import ImuSensor
+from amr_twin.sensors.imu_errors import AxisModel, axis_models, corrupt
 
 
 def test_corrupt_quantises_saturates_and_walks():

@@ -125,7 +125,7 @@ class Twin:
         self.recorder = Recorder(self)
         self.grid_us = self.dt_us * self.recorder.every
         self.rolling = RollingResistance(self.physics, cfg)
-        self.samplers: list = [self.rolling.update, self.plant.account_battery]
+        self.samplers: list = [self.rolling.update, self.plant.battery.account]
         """Callables ``f(t_us)`` run on the record grid while the physics steps (physics at ``t_us``):
         the rolling resistance from the present loads, the battery, the collision monitor, the
         sensors' samplers. One that returns True halts the twin there."""

@@ -14,8 +14,8 @@ and powers a BLDC hub motor from the battery:
 
 The motor is the quasi-static DC model of MuJoCo's documentation, evaluated in C
 by an affine actuator: ``torque = Kt/R * v - Kt*Ke/R * omega``, clipped at
-``Kt * I_max`` (current limit). The battery (open-circuit voltage from state of
-charge, internal resistance) is updated on the loop's record grid (every 10 ms,
+``Kt * I_max`` (current limit). The battery (:mod:`amr_twin.sim.battery`: open-circuit
+voltage from state of charge, internal resistance) is updated on the loop's record grid (every 10 ms,
 whatever the events in between, so that a run does not depend on how the loop
 splits it), from the currents drawn at that instant: each
 driver's input current (``v_phase * i_phase / V_batt``, a lossless power stage, plus
@@ -28,52 +28,16 @@ motor's (DC-equivalent phase) current, the one that makes torque (``Kt * I``);
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.model.config_sections import BatteryCfg, DriverCfg, MotorCfg
+from amr_twin.model.config_sections import DriverCfg, MotorCfg
+from amr_twin.sim.battery import BRAKE, COAST, DRIVE, Battery
 from amr_twin.sim.physics import Physics
 from amr_twin.sim.pins import DriverPins
 
 
-@dataclass
-class Battery:
-    """Lithium pack: OCV piecewise linear in SOC through (0, empty), (0.5, nominal), (1, full)."""
-
-    cfg: BatteryCfg
-    soc: float = field(init=False)
-    current_a: float = 0.0
-    sag_v: float = 0.0  # fault injection (amr_twin/sim/fault_injector.py): extra terminal-voltage drop, V
-
-    def __post_init__(self) -> None:
-        c = self.cfg
-        self.soc = c.soc_initial
-        # plain floats of the frozen config, read every 10 ms (the same arithmetic as spelled out)
-        self._empty_v, self._nominal_v = c.v_empty_v, c.v_nominal_v
-        self._low_span_v, self._high_span_v = c.v_nominal_v - c.v_empty_v, c.v_full_v - c.v_nominal_v
-        self._r_ohm = c.internal_resistance_ohm
-        self._capacity_as = c.capacity_ah * 3600.0
-
-    def ocv_v(self) -> float:
-        """Open-circuit voltage at the present state of charge, V."""
-        s = min(1.0, max(0.0, self.soc))
-        if s < 0.5:
-            return self._empty_v + self._low_span_v * s / 0.5
-        return self._nominal_v + self._high_span_v * (s - 0.5) / 0.5
-
-    def terminal_v(self) -> float:
-        """Terminal voltage under the present current, V."""
-        return self.ocv_v() - self._r_ohm * self.current_a - self.sag_v
-
-    def draw(self, current_a: float, duration_s: float) -> None:
-        """Drain ``current_a`` (negative: charge, regenerative braking) for ``duration_s``."""
-        self.current_a = current_a
-        self.soc -= current_a * duration_s / self._capacity_as
-
-
-MODE_CODES = {"drive": 0, "coast": 1, "brake": 2}
+MODE_CODES = {"drive": DRIVE, "coast": COAST, "brake": BRAKE}
 """Motor modes as recorded (:attr:`amr_twin.recording.recorder.RunSeries.mode`)."""
 
 
@@ -118,13 +82,12 @@ class Plant:
         self.supply_cut = False  # fault injection (amr_twin/sim/fault_injector.py): drivers unpowered, coast
         self.voltage_v = [0.0, 0.0]
         self.mode = ["coast", "coast"]
-        self._data = physics.data
-        self._wheel_dof = [int(v) for v in physics.wheel_dof]
-        self._t_last_s = physics.time_s
-        # per wheel, plain floats for the 10 ms accounting: Ke, R, current limit
+        # per wheel, plain floats: Ke, R, current limit
         self._motor_consts = [(m.ke_v_s_rad, m.resistance_ohm, m.current_limit_a) for m in self.motors]
         self._quiescent2_a = 2 * self.driver.quiescent_current_a
         self._aux_w = cfg.battery.auxiliary_power_w
+        self.battery.connect(physics.data, physics.wheel_dof, self._motor_consts, self.driver.brake_current_limit_a,
+                             self._quiescent2_a, self._aux_w)
 
     def phase_voltage_v(self, pins: DriverPins) -> float:
         """Signed phase voltage the driver applies for these pins while enabled."""
@@ -143,6 +106,7 @@ class Plant:
             else:
                 mode, volt = "drive", self.phase_voltage_v(p)
             self.mode[w], self.voltage_v[w] = mode, volt
+            self.battery.set_motor(w, MODE_CODES[mode], volt)
             limit = self.motors[w].ke_v_s_rad * brake_limit_a if mode == "brake" else None
             self.physics.set_motor(w, mode, volt, limit)
 
@@ -178,35 +142,6 @@ class Plant:
         return supply + self._quiescent2_a + self._aux_w / v_batt
 
     def account_battery(self, t_us: int = 0) -> None:
-        """Drain the battery by the present current since the last call (a grid sampler of the loop).
-
-        The arithmetic of :meth:`battery_current_a` (and :meth:`Battery.terminal_v`), inlined
-        with conditional expressions for ``min``/``max`` (same results): it runs every 10 ms,
-        where each Python call costs a few tenths of a microsecond."""
-        d, b = self._data, self.battery
-        t = d.time
-        dt = t - self._t_last_s
-        self._t_last_s = t
-        s = b.soc
-        s = s if s > 0.0 else 0.0
-        s = s if s < 1.0 else 1.0
-        ocv = (b._empty_v + b._low_span_v * s / 0.5 if s < 0.5
-               else b._nominal_v + b._high_span_v * (s - 0.5) / 0.5)
-        v_batt = ocv - b._r_ohm * b.current_a - b.sag_v
-        v_batt = v_batt if v_batt > 1.0 else 1.0
-        qvel, (dof_l, dof_r) = d.qvel, self._wheel_dof
-        supply = 0.0
-        for mode, volt, dof, (ke, r_ohm, limit) in zip(self.mode, self.voltage_v, (dof_l, dof_r),
-                                                       self._motor_consts):
-            if mode == "coast":
-                i = 0.0
-            else:
-                if mode == "brake":
-                    limit = self.driver.brake_current_limit_a
-                i = (volt - ke * qvel.item(dof)) / r_ohm
-                i = i if i < limit else limit
-                i = i if i > -limit else -limit
-            supply = volt * i if dof == dof_l else supply + volt * i
-        current = supply / v_batt + self._quiescent2_a + self._aux_w / v_batt
-        b.current_a = current
-        b.soc -= current * dt / b._capacity_as
+        """Drain the battery by the present current since the last call (:meth:`Battery.account`;
+        the loop calls that directly, on its record grid)."""
+        self.battery.account(t_us)

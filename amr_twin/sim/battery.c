@@ -1,0 +1,49 @@
+/* The battery's 10 ms accounting: what both drivers and the auxiliary load draw, one grid instant.
+ *
+ * The C twin of Battery.account (amr_twin/sim/battery.py): the same operations in the same
+ * order on IEEE doubles (compiled with -ffp-contract=off), so that both give the same bits;
+ * tests/sim/test_battery.py checks a run of each. The state lives in the struct, which the
+ * Python class reads and writes (its soc, current_a and sag_v are properties on it).
+ * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ */
+#include <mujoco/mujoco.h>
+
+typedef struct {
+    double soc, current_a, sag_v, t_last_s;       /* state: charge 0-1, pack current A, fault drop V, s */
+    double empty_v, nominal_v, low_span_v, high_span_v, r_ohm, capacity_as;  /* the pack */
+    double volt[2];                               /* phase voltage of each motor, V */
+    int mode[2];                                  /* 0 drive, 1 coast, 2 brake (plant.MODE_CODES) */
+    double ke[2], r_ohm_motor[2], limit_a[2];     /* V s/rad, ohm, A */
+    double brake_limit_a, quiescent2_a, aux_w;    /* A, A (both drivers), W */
+    int dof[2];                                   /* the wheel hinges' dof addresses */
+} battery_state;
+
+/* Drain the pack by the present current since the last call (d->time). */
+void battery_account(const mjData* d, battery_state* b) {
+    double t = d->time;
+    double dt = t - b->t_last_s;
+    b->t_last_s = t;
+    double s = b->soc;
+    s = s > 0.0 ? s : 0.0;
+    s = s < 1.0 ? s : 1.0;
+    double ocv = s < 0.5 ? b->empty_v + b->low_span_v * s / 0.5
+                         : b->nominal_v + b->high_span_v * (s - 0.5) / 0.5;
+    double v_batt = ocv - b->r_ohm * b->current_a - b->sag_v;
+    v_batt = v_batt > 1.0 ? v_batt : 1.0;
+    double supply = 0.0;
+    for (int w = 0; w < 2; w++) {
+        double i;
+        if (b->mode[w] == 1) {
+            i = 0.0;
+        } else {
+            double limit = b->mode[w] == 2 ? b->brake_limit_a : b->limit_a[w];
+            i = (b->volt[w] - b->ke[w] * d->qvel[b->dof[w]]) / b->r_ohm_motor[w];
+            i = i < limit ? i : limit;
+            i = i > -limit ? i : -limit;
+        }
+        supply = w == 0 ? b->volt[w] * i : supply + b->volt[w] * i;
+    }
+    double current = supply / v_batt + b->quiescent2_a + b->aux_w / v_batt;
+    b->current_a = current;
+    b->soc = b->soc - current * dt / b->capacity_as;
+}

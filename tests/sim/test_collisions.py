@@ -99,3 +99,64 @@ def test_collisions_and_faults_are_in_the_recordings(tmp_path):
     assert seen["/twin/faults"][0] == 7_300_000_000 and seen["/twin/faults"][1] == 1
     paths = {str(c.entity_path) for c in RrdReader(str(rrd)).stream().to_chunks()}
     assert {"/events/collisions", "/events/faults", "/world/collisions"} <= paths
+
+
+def test_c_pair_check_and_python_give_the_same_episodes(monkeypatch):
+    """The veering run that scrapes a rack, then a spin against it: the same episodes either way."""
+    import functools
+    import shutil
+
+    import amr_twin.sim.loop as loop_mod
+    from amr_twin.sim.collisions import CollisionMonitor
+
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler")
+    out = []
+    for native in (True, False):
+        monkeypatch.setattr(loop_mod, "CollisionMonitor", functools.partial(CollisionMonitor, native=native))
+        twin = Twin(CFG, TwinOptions(start_xy_yaw=None))
+        twin.client.linear(0.7)
+        twin.advance(8.5)
+        twin.client.angular(90.0, 0.0)
+        twin.advance(1.5)
+        out.append((twin.collisions.engine, twin.collisions.as_dicts()))
+    (c_engine, c_hits), (py_engine, py_hits) = out
+    assert c_engine == "C" and py_engine == "Python (native=False)"
+    assert c_hits == py_hits and len(c_hits) >= 1 and c_hits[0]["hit"] == "rack_s_beam_low"
+
+
+def test_the_c_pair_check_sees_any_change_of_the_pairs():
+    """One contact each time, on the same floor: a ball resting there, then another one instead."""
+    import ctypes
+    import shutil
+
+    import mujoco
+
+    from amr_twin.sim import native_build
+    from amr_twin.sim.collisions import C_SOURCE, _Memo
+
+    if shutil.which("cc") is None and shutil.which("gcc") is None:
+        pytest.skip("no C compiler")
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody><geom name="floor" type="plane" size="5 5 .1"/>
+      <body><freejoint/><geom name="a" type="sphere" size=".1"/></body>
+      <body><freejoint/><geom name="b" type="sphere" size=".1"/></body></worldbody></mujoco>""")
+    d = mujoco.MjData(m)
+    fn = native_build.load_helper(C_SOURCE).contacts_changed
+    fn.restype, fn.argtypes = ctypes.c_int, [ctypes.c_void_p, ctypes.c_void_p]
+    memo, pairs = _Memo(), (ctypes.c_int * 8)()
+    memo.cap, memo.pairs = 4, pairs
+
+    def changed(a_z, b_z, valid=True):
+        d.qpos[:7], d.qpos[7:] = [0, 0, a_z, 1, 0, 0, 0], [1, 0, b_z, 1, 0, 0, 0]
+        mujoco.mj_forward(m, d)
+        out = fn(d._address, ctypes.addressof(memo))
+        memo.valid = int(valid)
+        return out, d.contact.geom.tolist()
+
+    assert changed(0.099, 1.0) == (1, [[0, 1]])  # nothing kept yet
+    assert changed(0.098, 1.0)[0] == 0           # the same pair
+    assert changed(1.0, 0.099) == (1, [[0, 2]])  # the same count and first geom, another ball
+    assert changed(0.099, 0.099)[0] == 1         # both
+    assert changed(0.099, 0.099, valid=False)[0] == 0
+    assert changed(0.099, 0.099)[0] == 1         # invalidated by the monitor: classified again
+    assert changed(1.0, 1.0)[0] == 1 and changed(1.0, 1.0)[0] == 0  # none, then none again

@@ -146,7 +146,7 @@ class ErrorStream:
             self._use_native()
 
     def _use_native(self) -> None:
-        from amr_twin.sim.native_build import load_helper, native_status
+        from amr_twin.sim.native_build import address, load_helper, native_status
 
         lib = load_helper(C_SOURCE)
         self.engine = native_status(C_SOURCE)
@@ -166,7 +166,7 @@ class ErrorStream:
             true = true if true.flags.c_contiguous and true.dtype == np.float64 else np.ascontiguousarray(true, float)
             bias, noise = self._errors(n)
             out = np.empty((n, 9))
-            fn(n, true.ctypes.data, bias.ctypes.data, noise.ctypes.data, axes_p, out.ctypes.data)
+            fn(n, address(true), address(bias), address(noise), axes_p, address(out))
             return out
 
         self.corrupt_batch = corrupt_c

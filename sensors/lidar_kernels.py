@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
+from amr_twin.sim.native_build import address
 from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
 
 C_SOURCE = Path(__file__).with_name("lidar_beams.c")
@@ -70,6 +71,7 @@ class BeamKernels:
             fn.restype = None
         self._u = np.zeros((n_beams, 3))
         self._shift = np.zeros((n_beams, 3))
+        self._u_at, self._shift_at = address(self._u), address(self._shift)
         self._noise_args = (float(cfg.range_noise_floor_m), float(cfg.range_noise_frac),
                             float(cfg.range_resolution_m), float(cfg.range_min_m), float(cfg.range_max_m))
 
@@ -79,21 +81,21 @@ class BeamKernels:
         u, shift = self._u[:k], self._shift[:k]
         t_us, lx, ly = _c(t_us, np.int64), _c(lx, np.float64), _c(ly, np.float64)
         rows, origin = _c(rows, np.float64), _c(origin, np.float64)
-        self._geometry(k, t_us.ctypes.data, lx.ctypes.data, ly.ctypes.data, rows.ctypes.data, int(npose),
-                       origin.ctypes.data, u.ctypes.data, shift.ctypes.data)
+        self._geometry(k, address(t_us), address(lx), address(ly), address(rows), int(npose), address(origin),
+                       self._u_at, self._shift_at)
         return u, shift
 
     def correct(self, normal: np.ndarray, u: np.ndarray, shift: np.ndarray, dist: np.ndarray) -> None:
         normal, u, shift = _c(normal, np.float64), _c(u, np.float64), _c(shift, np.float64)
         if not (dist.flags.c_contiguous and dist.dtype == np.float64 and dist.flags.writeable):
             raise ValueError("dist: a writeable C-contiguous float64 array is corrected in place")
-        self._correct(len(dist), normal.ctypes.data, u.ctypes.data, shift.ctypes.data, dist.ctypes.data)
+        self._correct(len(dist), address(normal), address(u), address(shift), address(dist))
 
     def noise(self, dist: np.ndarray, geomid: np.ndarray, z: np.ndarray) -> np.ndarray:
         n = len(dist)
         out = np.empty(n, np.float32)
         dist, geomid, z = _c(dist, np.float64), _c(geomid, np.int32), _c(z, np.float64)
-        self._noise(n, dist.ctypes.data, geomid.ctypes.data, z.ctypes.data, *self._noise_args, out.ctypes.data)
+        self._noise(n, address(dist), address(geomid), address(z), *self._noise_args, address(out))
         return out
 
 

@@ -37,6 +37,21 @@ _loaded: dict[str, ctypes.PyDLL | None] = {}
 _why_not: dict[str, str] = {}
 
 
+_char_at = ctypes.c_char.from_buffer
+
+
+def address(array) -> int:
+    """Address of the first byte of a C-contiguous numpy ``array``, to pass to a helper.
+
+    Through the buffer protocol (about 0.8 us) rather than ``array.ctypes.data`` (about
+    3 us: it builds a ctypes helper object each time); read-only arrays take the slow way.
+    """
+    try:
+        return ctypes.addressof(_char_at(array))
+    except (TypeError, ValueError, BufferError):
+        return array.ctypes.data
+
+
 def _mujoco_include() -> tuple[Path, str]:
     import mujoco
 

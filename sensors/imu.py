@@ -102,10 +102,11 @@ class ImuSensor:
         self._samplers: list | None = None  # the loop's grid samplers while fed by the loop
         self._start_us = 0
         self._true_t: list[int] = []  # instants of the true values taken on the grid, us
-        self._true = np.zeros((64, 9))  # the true values, first len(_true_t) rows
+        self._true: list[list[float]] = []  # the true values (9 each) at those instants
         self._ready: deque[tuple[int, list[float]]] = deque()  # (t_us, 9 readings) to publish
         a = self._adr
         self._sd9 = data.sensordata[a[0]:a[0] + 9] if a[1] == a[0] + 3 and a[2] == a[0] + 6 else None
+        self._true9_list = self._sd9.tolist if self._sd9 is not None else lambda: self._true9().tolist()
         for cov in (*self._cov.values(), self._orientation_cov):
             cov.flags.writeable = False  # shared by every message: read-only
         if autostart:
@@ -146,6 +147,7 @@ class ImuSensor:
             self._samplers.remove(self.on_grid)
             self._samplers = None
         self._true_t.clear()
+        self._true.clear()
         self._ready.clear()
 
     def true_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -175,14 +177,8 @@ class ImuSensor:
 
     def on_grid(self, t_us: int) -> None:
         """The loop's grid sampler: keep the true values at the sample instants (physics at ``t_us``)."""
-        if t_us % self.period_us == 0 and t_us >= self._start_us:
-            n = len(self._true_t)
-            if n == len(self._true):
-                self._true = np.concatenate([self._true, np.zeros_like(self._true)])
-            if self._sd9 is not None:
-                self._true[n] = self._sd9
-            else:
-                self._true[n] = self._true9()
+        if t_us >= self._start_us and not t_us % self.period_us:  # plain lists: this runs every 10 ms
+            self._true.append(self._true9_list())
             self._true_t.append(t_us)
 
     def _publish_next(self) -> None:
@@ -193,9 +189,10 @@ class ImuSensor:
         if not self._ready:
             if not self._true_t:
                 raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid")
-            y = self.errors.corrupt_batch(self._true[:len(self._true_t)])
+            y = self.errors.corrupt_batch(np.array(self._true))
             self._ready.extend(zip(self._true_t, y.tolist()))
             self._true_t.clear()
+            self._true.clear()
         t_us, y = self._ready.popleft()
         if t_us != now:
             raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid (got {t_us})")

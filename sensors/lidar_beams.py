@@ -108,33 +108,42 @@ def group_masks(geom_group: np.ndarray, geom_moving: np.ndarray) -> tuple[np.nda
 class PoseSamples:
     """Laser pose samples: rows of ``t_us``, position (3, m), laser x axis and y axis in the world (3 + 3).
 
-    The buffer grows by doubling; :attr:`n` rows are valid.
+    Kept as plain lists (a sample is taken every 20 ms, where a numpy row costs 5 us on the
+    loop's cold caches); :attr:`rows` is their (n, 10) array, built when asked for.
     """
 
-    def __init__(self, capacity: int = 32):
-        self.rows = np.zeros((capacity, 10))
-        self.n = 0
+    def __init__(self):
+        self._rows: list[list[float]] = []
+        self._array: np.ndarray | None = None
+
+    @property
+    def n(self) -> int:
+        """Samples kept."""
+        return len(self._rows)
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The samples, shape (n, 10), float64 (at least one row: zeros when there is none)."""
+        if self._array is None:
+            self._array = np.array(self._rows, float) if self._rows else np.zeros((1, 10))
+        return self._array
 
     def append(self, t_us: int, position_m: np.ndarray, xmat: np.ndarray) -> None:
         """Add the sample at ``t_us``: ``position_m`` (3,) and the rotation matrix ``xmat`` (9,), row-major."""
-        n, rows = self.n, self.rows
-        if n == len(rows):
-            rows = self.rows = np.concatenate([rows, np.zeros_like(rows)])
-        row = rows[n]
-        row[0] = t_us
-        row[1:4] = position_m
-        row[4:7] = xmat[0::3]  # laser x axis in the world
-        row[7:10] = xmat[1::3]  # laser y axis
-        self.n = n + 1
+        x, y, z = position_m.tolist()
+        m = xmat.tolist()
+        self._rows.append([t_us, x, y, z, m[0], m[3], m[6], m[1], m[4], m[7]])  # the laser x axis, y axis
+        self._array = None
 
     def keep_last(self) -> None:
         """Forget all samples but the newest."""
-        self.rows[0] = self.rows[self.n - 1]
-        self.n = 1
+        del self._rows[:-1]
+        self._array = None
 
     def clear(self) -> None:
         """Forget all samples."""
-        self.n = 0
+        self._rows.clear()
+        self._array = None
 
     def at(self, t_us: np.ndarray) -> np.ndarray:
         """Laser poses at the instants ``t_us`` (k,), linear between the samples (held outside them).

@@ -27,7 +27,7 @@ def _rotation(rng, k):
 
 
 def _poses(rng, n):
-    poses = PoseSamples(capacity=4)
+    poses = PoseSamples()
     for i in range(n):
         yaw, tilt = rng.uniform(-np.pi, np.pi), rng.normal(0.0, 0.02)
         c, s = np.cos(yaw), np.sin(yaw)

@@ -37,11 +37,13 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     the whole twin against bare physics on one scenario (see twin_benchmark);
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
     ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
-    (:mod:`amr_twin.sim.native_build`), which the figures were measured with.
+    (:mod:`amr_twin.sim.native_build`), which the figures were measured with;
+    ``native_engines``: the same for every C helper, by name.
     """
     from amr_twin.bench.twin import twin_figures
+    from amr_twin.sensors import imu_errors, lidar_kernels
+    from amr_twin.sim import battery, collisions, rolling_resistance
     from amr_twin.sim.native_build import native_status
-    from amr_twin.sim.rolling_resistance import C_SOURCE
 
     result = bare_physics(cfg, sim_s)
     result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")
@@ -50,5 +52,8 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"
-    result["rolling_resistance_engine"] = native_status(C_SOURCE)
+    helpers = (rolling_resistance, battery, collisions, imu_errors, lidar_kernels)
+    engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
+    result["rolling_resistance_engine"] = engines["rolling_resistance"]
+    result["native_engines"] = engines
     return result

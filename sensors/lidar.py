@@ -56,10 +56,8 @@ from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 
 from amr_twin.sensors.lidar_beams import US, PoseSamples, beam_angles_rad, beam_directions, group_masks, scan_timing
-from amr_twin.sensors.lidar_kernels import beam_kernels
+from amr_twin.sensors.lidar_kernels import CUTOFF_M, beam_kernels
 
-CUTOFF_M = 1e6
-"""Culling distance passed to ``mj_multiRay``: effectively none."""
 
 
 class Lidar:
@@ -114,6 +112,10 @@ class Lidar:
         self.cast_every_us = self.group_us  # longest time between casts
         moving = model.body_rootid[model.geom_bodyid] != 0  # cast what moves with the robot apart
         self.geomgroup, self._world_groups, self._payload_groups = group_masks(model.geom_group, moving)
+        self._kernels.bind(model, data, self.site_id,
+                           self.geomgroup if self._world_groups is None else self._world_groups)
+        self._no_dist, self._no_hit = np.full(self.n_beams, -1.0), np.full(self.n_beams, -1, np.int32)
+        self._beam_offsets_us = self.beam_dt_us * np.arange(self.n_beams - 1, -1, -1, dtype=np.int64)
         self.dist_m = np.full(self.n_beams, -1.0)
         """True distances of the rotation in progress, m (-1: no hit)."""
         self._normal = np.zeros(3 * self.n_beams)
@@ -182,9 +184,9 @@ class Lidar:
     # -- scanning ------------------------------------------------------------------
     def _new_rotation(self, t0_us: int) -> None:
         self.t0_us = t0_us
-        self.dist_m = np.full(self.n_beams, -1.0)
-        self.hit_geom = np.full(self.n_beams, -1, np.int32)
-        self.beam_t_us = t0_us + self.beam_dt_us * np.arange(self.n_beams - 1, -1, -1, dtype=np.int64)
+        self.dist_m = self._no_dist.copy()  # new arrays: the published scan keeps the last ones
+        self.hit_geom = self._no_hit.copy()
+        self.beam_t_us = self._beam_offsets_us + t0_us
         self._next = 0  # beams cast so far, in acquisition order (indices n - 1 down to n - _next)
         self._last_cast_us = t0_us
         self._last_beam_us = int(self.beam_t_us[0])
@@ -243,20 +245,19 @@ class Lidar:
         m, d, s, k = self.model, self.data, self.site_id, stop - start
         if k <= 0:
             return
-        origin = d.site_xpos[s]
-        lx, ly = self._lx[start:stop], self._ly[start:stop]
-        kernels, poses = self._kernels, self._poses
-        if at_own_instants and poses.n > 0:  # u (k, 3) and shift = o_now - o_i (k, 3)
-            u, shift = kernels.geometry(self.beam_t_us[start:stop], lx, ly, poses.rows, poses.n, origin)
-        else:
-            u, shift = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T, None
-        normal = self._normal[:3 * k]
         geomid, dist = self.hit_geom[start:stop], self.dist_m[start:stop]
-        groups = self.geomgroup if self._world_groups is None else self._world_groups
-        mujoco.mj_multiRay(m, d, origin, u.ravel(), groups, 1, -1, geomid, dist, normal, k, CUTOFF_M)
-        if shift is not None:  # r_i = r + n.(o_now - o_i) / n.u_i (0 where no hit: n = 0)
-            kernels.correct(normal.reshape(k, 3), u, shift, dist)
-        if self._payload_groups is not None:  # what moves with the robot: the present frame
+        poses = self._poses
+        if at_own_instants and poses.n > 0:  # directions at the beams' instants, ranges corrected:
+            # r_i = r + n.(o_now - o_i) / n.u_i (0 where no hit: n = 0)
+            self._kernels.cast(self.beam_t_us[start:stop], self._lx[start:stop], self._ly[start:stop], poses.rows,
+                               poses.n, dist, geomid)
+        else:
+            u = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
+            groups = self.geomgroup if self._world_groups is None else self._world_groups
+            mujoco.mj_multiRay(m, d, d.site_xpos[s], u.ravel(), groups, 1, -1, geomid, dist, self._normal[:3 * k], k,
+                               CUTOFF_M)
+        if self._payload_groups is not None:
+            origin = d.site_xpos[s]  # what moves with the robot: the present frame
             u_now = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
             pgeom, pdist = self._pgeom[:k], self._pdist[:k]
             mujoco.mj_multiRay(m, d, origin, u_now.ravel(), self._payload_groups, 1, -1, pgeom, pdist,

@@ -4,11 +4,13 @@
  * amr_twin/sensors/lidar_beams.py: the same operations in the same order on IEEE doubles
  * (compiled with -ffp-contract=off; +, -, *, / and sqrt are correctly rounded, round half to
  * even as numpy's round), so both give the same bits; tests/sensors/test_lidar_beams.py
- * checks it. The ray cast itself stays MuJoCo's mj_multiRay, called from Python between
- * lb_geometry and lb_correct. Built at first use (amr_twin/sim/native_build.py).
+ * checks it. lb_cast runs the three steps of a cast at the beams' own instants in one call: the
+ * directions, MuJoCo's mj_multiRay (through a pointer to it, taken from the loaded libmujoco)
+ * and the motion correction. Built at first use (amr_twin/sim/native_build.py).
  */
 #include <math.h>
 #include <stdint.h>
+#include <mujoco/mujoco.h>
 
 /* Laser pose of each of k beams at its instant t_us[i], linear between the pose samples
  * (rows: npose rows of t_us, position (3), laser x axis (3), laser y axis (3); held outside
@@ -69,4 +71,28 @@ void lb_noise(int n, const double* dist, const int32_t* geomid, const double* z,
         int valid = geomid[i] >= 0 && r >= range_min_m && r <= range_max_m;
         out[i] = valid ? (float)r : INFINITY;
     }
+}
+
+typedef void (*lb_multiray_fn)(const mjModel* m, mjData* d, const mjtNum pnt[3], const mjtNum* vec,
+                               const mjtByte* geomgroup, mjtBool flg_static, int bodyexclude,
+                               int* geomid, mjtNum* dist, mjtNum* normal, int nray, mjtNum cutoff);
+
+typedef struct {
+    lb_multiray_fn multiray;  /* MuJoCo's mj_multiRay */
+    const mjtByte* groups;    /* (6,) the geom groups the rays see */
+    int site;                 /* the laser site */
+    double cutoff;            /* culling distance, m */
+    double* u;                /* (n, 3) work: directions */
+    double* shift;            /* (n, 3) work: origin shifts */
+    double* normal;           /* (n, 3) work: hit normals */
+} lb_caster;
+
+/* Cast k beams from the present laser origin, each along its direction at its own instant, and
+ * correct the ranges for the origin's motion since: dist (k,) m (-1: no hit), geomid (k,). */
+void lb_cast(const lb_caster* c, const mjModel* m, mjData* d, int k, const int64_t* t_us, const double* lx,
+             const double* ly, const double* rows, int npose, double* dist, int* geomid) {
+    const double* origin = d->site_xpos + 3 * c->site;
+    lb_geometry(k, t_us, lx, ly, rows, npose, origin, c->u, c->shift);
+    c->multiray(m, d, origin, c->u, c->groups, 1, -1, geomid, dist, c->normal, k, c->cutoff);
+    lb_correct(k, c->normal, c->u, c->shift, dist);
 }

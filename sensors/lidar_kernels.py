@@ -16,6 +16,10 @@ Both classes take and return the same arrays:
   ``(u, shift)``: unit directions in the world (k, 3) and origin now minus origin at each
   beam's instant (k, 3), m;
 - :meth:`correct`: adds the motion correction to ``dist`` (k,), m, in place;
+- :meth:`cast`: the three steps of a cast at the beams' own instants (:meth:`geometry`,
+  ``mj_multiRay`` from the present laser origin, :meth:`correct`) into ``dist`` and
+  ``geomid`` (k,), after :meth:`bind` named the model, data, laser site and geom groups
+  (the C helper calls ``mj_multiRay`` itself, through a pointer into the loaded libmujoco);
 - :meth:`noise`: noisy ranges (n,) float32, m, inf where invalid, from standard normals.
 """
 
@@ -24,6 +28,7 @@ from __future__ import annotations
 import ctypes
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
@@ -31,6 +36,8 @@ from amr_twin.sim.native_build import address
 from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
 
 C_SOURCE = Path(__file__).with_name("lidar_beams.c")
+CUTOFF_M = 1e6
+"""Culling distance passed to ``mj_multiRay``: effectively none (ranges are clamped by the noise model)."""
 
 _P = ctypes.c_void_p
 
@@ -41,6 +48,20 @@ class PythonBeamKernels:
     def __init__(self, n_beams: int, cfg: LidarCfg, why: str = "native=False"):
         self.cfg = cfg
         self.engine = f"Python ({why})"
+        self._normal = np.zeros(3 * n_beams)
+
+    def bind(self, model, data, site: int, groups: np.ndarray) -> None:
+        self._bound = (model, data, int(site), groups)
+
+    def cast(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
+             dist: np.ndarray, geomid: np.ndarray) -> None:
+        m, d, site, groups = self._bound
+        k = len(t_us)
+        origin = d.site_xpos[site]
+        u, shift = self.geometry(t_us, lx, ly, rows, npose, origin)
+        normal = self._normal[:3 * k]
+        mujoco.mj_multiRay(m, d, origin, u.ravel(), groups, 1, -1, geomid, dist, normal, k, CUTOFF_M)
+        self.correct(normal.reshape(k, 3), u, shift, dist)
 
     def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
                  origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -64,16 +85,39 @@ class BeamKernels:
         self.engine = "C"
         self.cfg = cfg
         self._geometry, self._correct, self._noise = lib.lb_geometry, lib.lb_correct, lib.lb_noise
+        self._cast = lib.lb_cast
         self._geometry.argtypes = [ctypes.c_int, _P, _P, _P, _P, ctypes.c_int, _P, _P, _P]
         self._correct.argtypes = [ctypes.c_int, _P, _P, _P, _P]
         self._noise.argtypes = [ctypes.c_int, _P, _P, _P] + [ctypes.c_double] * 5 + [_P]
-        for fn in (self._geometry, self._correct, self._noise):
+        self._cast.argtypes = [_P, _P, _P, ctypes.c_int, _P, _P, _P, _P, ctypes.c_int, _P, _P]
+        for fn in (self._geometry, self._correct, self._noise, self._cast):
             fn.restype = None
         self._u = np.zeros((n_beams, 3))
         self._shift = np.zeros((n_beams, 3))
+        self._normal = np.zeros((n_beams, 3))
         self._u_at, self._shift_at = address(self._u), address(self._shift)
         self._noise_args = (float(cfg.range_noise_floor_m), float(cfg.range_noise_frac),
                             float(cfg.range_resolution_m), float(cfg.range_min_m), float(cfg.range_max_m))
+
+    def bind(self, model, data, site: int, groups: np.ndarray) -> None:
+        """Cast in ``model`` and ``data`` from the laser ``site``, seeing the geom ``groups`` (6,) uint8."""
+        self._groups = np.ascontiguousarray(groups, np.uint8)
+        caster = self._caster = _Caster()
+        caster.multiray = _multiray_address()
+        caster.groups, caster.site, caster.cutoff = address(self._groups), int(site), CUTOFF_M
+        caster.u, caster.shift, caster.normal = self._u_at, self._shift_at, address(self._normal)
+        self._keep = (model, data)  # the model and data outlive every call
+        self._cast_head = (ctypes.addressof(caster), model._address, data._address)
+        self._bound = (model, data, int(site), self._groups)
+
+    def cast(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
+             dist: np.ndarray, geomid: np.ndarray) -> None:
+        if not (dist.flags.c_contiguous and dist.dtype == np.float64 and geomid.flags.c_contiguous
+                and geomid.dtype == np.int32):
+            raise ValueError("dist, geomid: C-contiguous float64 and int32 arrays are written in place")
+        t_us, lx, ly, rows = _c(t_us, np.int64), _c(lx, np.float64), _c(ly, np.float64), _c(rows, np.float64)
+        self._cast(*self._cast_head, len(t_us), address(t_us), address(lx), address(ly), address(rows), int(npose),
+                   address(dist), address(geomid))
 
     def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
                  origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -97,6 +141,21 @@ class BeamKernels:
         dist, geomid, z = _c(dist, np.float64), _c(geomid, np.int32), _c(z, np.float64)
         self._noise(n, address(dist), address(geomid), address(z), *self._noise_args, address(out))
         return out
+
+
+class _Caster(ctypes.Structure):
+    """``lb_caster`` of lidar_beams.c."""
+
+    _fields_ = [("multiray", _P), ("groups", _P), ("site", ctypes.c_int), ("cutoff", ctypes.c_double),
+                ("u", _P), ("shift", _P), ("normal", _P)]
+
+
+def _multiray_address() -> int:
+    """Address of ``mj_multiRay`` in the libmujoco the bindings loaded (the same library: dlopen shares it)."""
+    (lib,) = sorted(Path(mujoco.__file__).parent.glob("libmujoco.so*"))[:1] or [None]
+    if lib is None:
+        raise OSError("libmujoco.so not found next to the mujoco package")
+    return ctypes.cast(ctypes.CDLL(str(lib)).mj_multiRay, ctypes.c_void_p).value
 
 
 def _c(a: np.ndarray, dtype) -> np.ndarray:

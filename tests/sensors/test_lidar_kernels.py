@@ -71,3 +71,27 @@ def test_motion_correction_and_noise_are_the_same_bits(seed):
     r_c, r_py = c.noise(d_c, geomid, z), py.noise(d_py, geomid, z)
     assert r_c.dtype == r_py.dtype == np.float32 and r_c.tobytes() == r_py.tobytes()
     assert np.isinf(r_c).any() and np.isfinite(r_c).any()
+
+
+def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch):
+    """Driving and spinning with a payload in the scan plane: every scan identical (C cast, numpy twin)."""
+    import functools
+
+    import amr_twin.sensors.lidar as lidar_mod
+    from amr_twin.sim.loop import Twin, TwinOptions
+
+    cfg = load_config(overrides={"payload.mass_kg": 20.0, "payload.xy_m": [-0.15, 0.0]})  # seen from the laser
+    out = []
+    for native in (True, False):
+        monkeypatch.setattr(lidar_mod, "Lidar", functools.partial(lidar_mod.Lidar, native=native))
+        twin = Twin(cfg, TwinOptions(sensors=True))
+        scans = []
+        twin.bus.subscribe("scan", lambda msg: scans.append(msg.ranges.tobytes()))
+        twin.client.linear(0.7)
+        twin.advance(1.5)
+        twin.client.angular(-60.0, 0.0)
+        twin.advance(1.5)
+        out.append((twin.lidar.engine, scans, twin.lidar.dist_m.tobytes()))
+    (c_engine, *c_scans), (py_engine, *py_scans) = out
+    assert c_engine == "C" and py_engine == "Python (native=False)"
+    assert len(c_scans[0]) >= 15 and c_scans == py_scans

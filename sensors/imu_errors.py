@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config_sections import ImuCfg
+from amr_twin.sim.native_build import address, open_helper
 
 C_SOURCE = Path(__file__).with_name("imu_errors.c")
 ERROR_BLOCK = 256
@@ -141,17 +142,11 @@ class ErrorStream:
         self._inv_res = 1.0 / self._res
         self.corrupt_batch = self.corrupt_python
         """``corrupt_batch(true)``: the C helper when built, else :meth:`corrupt_python`."""
-        self.engine = "Python (native=False)"
-        if native:
-            self._use_native()
+        lib, self.engine = open_helper(C_SOURCE, native)
+        if lib is not None:
+            self._use_native(lib)
 
-    def _use_native(self) -> None:
-        from amr_twin.sim.native_build import address, load_helper, native_status
-
-        lib = load_helper(C_SOURCE)
-        self.engine = native_status(C_SOURCE)
-        if lib is None:
-            return
+    def _use_native(self, lib) -> None:
         axes = self._axes = _Axes()
         axes.scale1[:] = (1.0 + self._scale).tolist()
         axes.range[:], axes.res[:] = self._range.tolist(), self._res.tolist()

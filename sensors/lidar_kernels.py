@@ -32,7 +32,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
-from amr_twin.sim.native_build import address
+from amr_twin.sim.native_build import address, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
 
 C_SOURCE = Path(__file__).with_name("lidar_beams.c")
@@ -167,12 +167,8 @@ def _c(a: np.ndarray, dtype) -> np.ndarray:
 
 def beam_kernels(n_beams: int, cfg: LidarCfg, native: bool = True) -> BeamKernels | PythonBeamKernels:
     """The C helper when it builds and loads (and ``native``), else its Python twin; ``.engine`` says which."""
-    if not native:
-        return PythonBeamKernels(n_beams, cfg)
-    from amr_twin.sim.native_build import load_helper, native_status
-
-    lib = load_helper(C_SOURCE)
+    lib, engine = open_helper(C_SOURCE, native)
     if lib is None:
-        return PythonBeamKernels(n_beams, cfg, native_status(C_SOURCE)[len("Python ("):-1])
+        return PythonBeamKernels(n_beams, cfg, engine[len("Python ("):-1])
     return BeamKernels(lib, n_beams, cfg)
 

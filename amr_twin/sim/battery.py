@@ -22,7 +22,7 @@ import ctypes
 from pathlib import Path
 
 from amr_twin.model.config_sections import BatteryCfg
-from amr_twin.sim.native_build import load_helper, native_status
+from amr_twin.sim.native_build import open_helper
 
 C_SOURCE = Path(__file__).with_name("battery.c")
 
@@ -114,8 +114,7 @@ class Battery:
             s.dof[w] = int(wheel_dof[w])
             s.ke[w], s.r_ohm_motor[w], s.limit_a[w] = (float(v) for v in motors[w])
         s.brake_limit_a, s.quiescent2_a, s.aux_w = float(brake_limit_a), float(quiescent2_a), float(aux_w)
-        lib = load_helper(C_SOURCE) if self._native else None
-        self.engine = native_status(C_SOURCE) if self._native else "Python (native=False)"
+        lib, self.engine = open_helper(C_SOURCE, self._native)
         self.account = self.account_python
         if lib is not None:
             fn = lib.battery_account

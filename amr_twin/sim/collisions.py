@@ -34,6 +34,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from amr_twin.sim.native_build import open_helper
+
 SUPPORT_TILT_DEG = 30.0
 """A wheel or caster contact whose normal is within this angle of vertical is standing, deg."""
 
@@ -200,18 +202,12 @@ class CollisionMonitor:
         self._last_full_us = -(1 << 62)
         self._force = np.zeros(6)
         self._memo = None
-        self.engine = "Python (native=False)"
+        lib, self.engine = open_helper(C_SOURCE, native)
         """Which compares the pairs: ``"C"`` or ``"Python (<why>)"``."""
-        if native:
-            self._use_native()
+        if lib is not None:
+            self._use_native(lib)
 
-    def _use_native(self) -> None:
-        from amr_twin.sim.native_build import load_helper, native_status
-
-        lib = load_helper(C_SOURCE)
-        self.engine = native_status(C_SOURCE)
-        if lib is None:
-            return
+    def _use_native(self, lib) -> None:
         memo = self._memo = _Memo()
         self._pairs = (ctypes.c_int * (2 * MEMO_PAIRS))()
         memo.cap, memo.pairs = MEMO_PAIRS, self._pairs

@@ -72,6 +72,14 @@ def load_helper(source: Path) -> ctypes.PyDLL | None:
     return lib
 
 
+def open_helper(source: Path, native: bool = True) -> tuple[ctypes.PyDLL | None, str]:
+    """``(helper, engine)``: the built helper of ``source`` (None without one) and ``"C"`` or
+    ``"Python (<why>)"``; ``native=False`` asks for the Python twin."""
+    if not native:
+        return None, "Python (native=False)"
+    return load_helper(source), native_status(source)
+
+
 def native_status(source: Path) -> str:
     """``"C"`` when the helper of ``source`` is in use, else ``"Python (<why>)"``."""
     lib = load_helper(source)

@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.native_build import load_helper, native_status
+from amr_twin.sim.native_build import open_helper
 
 C_SOURCE = Path(__file__).with_name("rolling_resistance.c")
 
@@ -111,16 +111,12 @@ class RollingResistance:
         self.update = self.__call__
         """The grid sampler: the C helper when built, else :meth:`__call__`."""
         self._loads_c = None
-        self.engine = "Python (native=False)"
+        lib, self.engine = open_helper(C_SOURCE, native)
         """Which runs: ``"C"`` or ``"Python (<why>)"``."""
-        if native:
-            self._use_native(m, d)
+        if lib is not None:
+            self._use_native(lib, m, d)
 
-    def _use_native(self, m, d) -> None:
-        lib = load_helper(C_SOURCE)
-        self.engine = native_status(C_SOURCE)
-        if lib is None:
-            return
+    def _use_native(self, lib, m, d) -> None:
         p = _Params()
         (p.tyre_qpos[0], p.tyre_dof[0]), (p.tyre_qpos[1], p.tyre_dof[1]) = self._tyres
         for i, (qa, va) in enumerate(self._casters):

@@ -115,16 +115,18 @@ class PublishedPose:
         for t_next in knots + [now]:
             segs = [p.segment(t) for p in profiles]
             while t < t_next:
-                rpm0 = [p.at(t, sg) for p, sg in zip(profiles, segs)]
-                if steady and rpm0 == used and [p.at(t_next, sg) for p, sg in zip(profiles, segs)] == rpm0:
-                    pose = arc(pose, *self._body(*used), (t_next - t) * 1e-6)  # exact
-                    t = t_next
-                    continue
+                if steady:
+                    rpm0 = [p.at(t, sg) for p, sg in zip(profiles, segs)]
+                    if rpm0 == used and [p.at(t_next, sg) for p, sg in zip(profiles, segs)] == rpm0:
+                        pose = arc(pose, *self._body(*used), (t_next - t) * 1e-6)  # exact
+                        t = t_next
+                        continue
                 t1 = min(t_next, t + self.max_substep_us)
                 dt = t1 - t
                 mean = [0.0, 0.0]
-                for w, (p, sg) in enumerate(zip(profiles, segs)):
-                    goal = p.at(t1, sg)
+                for w in (0, 1):
+                    s0, r0, s1, r1 = segs[w]  # SpeedProfile.at(t1, segs[w]), spelled out (it runs at 100 Hz)
+                    goal = r0 if s1 <= s0 else r0 + (r1 - r0) * (t1 - s0) / (s1 - s0)
                     step = accel[w] * dt
                     new = min(max(goal, used[w] - step), used[w] + step)
                     mean[w] = 0.5 * (used[w] + new)

@@ -163,7 +163,7 @@ class WheelOdometry:
         if not signed_input:
             self._subs.append(bus.subscribe("wheel_Command", self._on_command))
         self._topics = ("odom", "tf") if publish_tf else ("odom",)
-        self._timer = clock.schedule(clock.now_us, self._on_timer, publishes=self._topics)
+        self._timer = clock.schedule_every(clock.now_us, self.period_us, self._on_timer, publishes=self._topics)
 
     @property
     def x_m(self) -> float:
@@ -271,7 +271,6 @@ class WheelOdometry:
 
     # -- output -----------------------------------------------------------------
     def _on_timer(self) -> None:
-        self._timer = self.clock.schedule_in(self.period_us, self._on_timer, publishes=self._topics)
         self.publish()
 
     def publish(self) -> Odometry:

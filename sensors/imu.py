@@ -135,10 +135,10 @@ class ImuSensor:
         if grid_us and samplers is not None and self.period_us % int(grid_us) == 0:
             self._samplers = samplers
             samplers.append(self.on_grid)
-            self._handle = self.clock.schedule(first_us, self._publish_next,
-                                               publishes=("imu/data_raw", "imu/mag"))
+            self._handle = self.clock.schedule_every(first_us, self.period_us, self._publish_next,
+                                                     publishes=("imu/data_raw", "imu/mag"))
         else:
-            self._handle = self.clock.schedule(first_us, self._tick)
+            self._handle = self.clock.schedule_every(first_us, self.period_us, self._tick)
 
     def stop(self) -> None:
         """Stop sampling (samples taken and not yet published are discarded)."""
@@ -186,8 +186,6 @@ class ImuSensor:
     def _publish_next(self) -> None:
         """Publishing event: the sample taken on the grid at this instant goes out."""
         now = self.clock.now_us
-        self._handle = self.clock.schedule(now + self.period_us, self._publish_next,
-                                           publishes=("imu/data_raw", "imu/mag"))
         if not self._ready:
             if not self._true_t:
                 raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid")
@@ -201,7 +199,6 @@ class ImuSensor:
         self._publish(y)
 
     def _tick(self) -> None:
-        self._handle = self.clock.schedule(self.clock.now_us + self.period_us, self._tick)
         self._publish(self.corrupt_batch(self._true9()[None, :])[0].tolist())
 
     def _publish(self, a: list[float]) -> None:

@@ -17,6 +17,10 @@ Two kinds of event share one time order (ties: the order of scheduling):
   physics is ahead of it, as far as the bus' lookahead for those topics allows
   (:meth:`amr_twin.ros.bus.Bus.lookahead_us`): no subscriber, no limit.
 
+A periodic event (:meth:`VirtualClock.schedule_every`, a ROS timer) is queued again one
+period later as it fires, before its callback runs: the same order as a callback that
+schedules its next occurrence first, without a new event each time.
+
 Time is an integer number of microseconds (``t_us``), like the Arduino's
 ``micros()``, so that event times are exact and ordering is deterministic.
 """
@@ -32,10 +36,12 @@ NEVER_US = 2**62
 
 
 class _Event:
-    __slots__ = ("t_us", "callback", "publishes", "cancelled")
+    __slots__ = ("t_us", "callback", "publishes", "cancelled", "period_us")
 
-    def __init__(self, t_us: int, callback: Callable[[], None], publishes: tuple[str, ...] | None):
+    def __init__(self, t_us: int, callback: Callable[[], None], publishes: tuple[str, ...] | None,
+                 period_us: int = 0):
         self.t_us, self.callback, self.publishes, self.cancelled = t_us, callback, publishes, False
+        self.period_us = period_us
 
 
 class EventHandle:
@@ -48,7 +54,7 @@ class EventHandle:
 
     @property
     def t_us(self) -> int:
-        """Time at which the event fires, microseconds."""
+        """Time at which the event fires (next), microseconds."""
         return self._event.t_us
 
     @property
@@ -116,6 +122,20 @@ class VirtualClock:
         heapq.heappush(self._queue if topics is None else self._free, (t_us, next(self._seq), event))
         return EventHandle(event)
 
+    def schedule_every(self, first_us: int, period_us: int, callback: Callable[[], None],
+                       publishes: Sequence[str] | None = None) -> EventHandle:
+        """Run ``callback`` at ``first_us`` and then every ``period_us`` until the handle is cancelled.
+
+        Each occurrence is queued as the previous one fires, before its callback runs (see
+        :meth:`schedule` for ``publishes``).
+        """
+        period_us = int(period_us)
+        if period_us <= 0:
+            raise ValueError(f"period_us={period_us} must be > 0")
+        handle = self.schedule(first_us, callback, publishes)
+        handle._event.period_us = period_us
+        return handle
+
     def schedule_in(self, delay_us: int, callback: Callable[[], None],
                     publishes: Sequence[str] | None = None) -> EventHandle:
         """Run ``callback`` ``delay_us`` microseconds from now (see :meth:`schedule`)."""
@@ -180,6 +200,9 @@ class VirtualClock:
             if event.cancelled:
                 continue
             self.now_us = t_e
+            if event.period_us:  # periodic: the next occurrence is queued first
+                event.t_us = t_next = t_e + event.period_us
+                heapq.heappush(queue, (t_next, next(self._seq), event))
             event.callback()
             fired += 1
         self.now_us = t_us

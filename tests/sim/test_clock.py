@@ -43,3 +43,36 @@ def test_schedule_in_the_past_is_refused():
     clock = VirtualClock(start_us=10)
     with pytest.raises(ValueError, match="in the past"):
         clock.schedule(9, lambda: None, publishes=())
+
+
+def test_a_periodic_event_fires_like_one_that_reschedules_itself_and_stops_when_cancelled():
+    """Ties with other events resolve as if the callback had scheduled its next occurrence first."""
+
+    def run(periodic: bool) -> list:
+        clock, log = VirtualClock(), []
+        handles = []
+
+        def tick():
+            if not periodic:
+                handles.append(clock.schedule(clock.now_us + 300, tick, publishes=("t",)))
+            log.append(("tick", clock.now_us))
+            clock.schedule(clock.now_us + 300, lambda t=clock.now_us: log.append(("other", t)))
+
+        if periodic:
+            handles.append(clock.schedule_every(100, 300, tick, publishes=("t",)))
+        else:
+            handles.append(clock.schedule(100, tick, publishes=("t",)))
+        clock.run_until(1000)
+        handles[-1].cancel()
+        clock.run_until(3000)
+        return log
+
+    log = run(periodic=True)
+    assert log == run(periodic=False)
+    assert [t for kind, t in log if kind == "tick"] == [100, 400, 700, 1000]
+    assert log[-1] == ("other", 1000)  # nothing after the cancel but what the last tick scheduled
+
+
+def test_a_period_must_be_positive():
+    with pytest.raises(ValueError, match="period_us=0"):
+        VirtualClock().schedule_every(0, 0, lambda: None)

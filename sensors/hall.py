@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from amr_twin.sensors.hall_edges import edge_kernel, solve_hermite, split_trajectory
+
 SENSOR_PITCH_DEG = 12.0
 """Wheel angle between two toggles of one hall sensor, degrees (15 pole pairs)."""
 
@@ -43,10 +45,14 @@ class HallSensors:
         microseconds (optocoupler/driver latency spread). Default 0.
     seed : int or None
         Seed of the ``numpy.random.Generator`` that draws the jitter.
+    native : bool
+        Run the crossing loop of :meth:`edges_from_samples` in C when the helper builds
+        (:mod:`amr_twin.sensors.hall_edges`, same edges; not with jitter or glitches);
+        :attr:`engine` says which.
     """
 
     def __init__(self, n_wheels: int = 2, misalignment_deg=0.0, jitter_us: float = 0.0,
-                 seed: int | None = None):
+                 seed: int | None = None, native: bool = True):
         self.n_wheels = int(n_wheels)
         nominal_deg = SENSOR_SPACING_DEG * np.arange(N_SENSORS)
         mis = np.broadcast_to(np.asarray(misalignment_deg, dtype=float),
@@ -60,6 +66,7 @@ class HallSensors:
         self.stuck = [[False] * N_SENSORS for _ in range(self.n_wheels)]
         self.glitch_rate_hz = [0.0] * self.n_wheels
         self._glitch_rng = np.random.default_rng([0 if seed is None else seed, 3])
+        self._kernel, self.engine = edge_kernel(self.offset_rad, self.pitch_rad, native)
 
     def _lattice_index(self, angle_rad: np.ndarray) -> np.ndarray:
         """Toggle count of every sensor, shape ``angle_rad.shape + (3,)``."""
@@ -167,7 +174,8 @@ class HallSensors:
         values in a row are ignored: the loop passes its sensor rows as they are).
         A chunk holds a few samples and a few edges, where numpy's per-call cost
         would dominate (``min``/``max`` of two floats are written as conditional
-        expressions: same results, a third of the cost). Intervals where a wheel's
+        expressions: same results, a third of the cost); the crossing loop runs in C
+        when the helper is built (same edges), here otherwise or with jitter or glitches. Intervals where a wheel's
         speed changes sign (it may cross a boundary twice) are first split into 8
         sub-intervals.
         """
@@ -176,11 +184,16 @@ class HallSensors:
             speeds = [r[nw + w] for r in rows]
             if any(a * b < 0 for a, b in zip(speeds, speeds[1:])):
                 samples = np.array(rows)
-                t_arr, q, v = _split(np.array(ts, np.int64), samples[:, :nw], samples[:, nw:2 * nw], 8)
+                t_arr, q, v = split_trajectory(np.array(ts, np.int64), samples[:, :nw], samples[:, nw:2 * nw], 8)
                 ts, rows = t_arr.tolist(), np.hstack([q, v]).tolist()
                 break
-        pitch, offsets, floor = self.pitch_rad, self.offset_rad.tolist(), math.floor
         jitter = self.jitter_us > 0.0
+        if self._kernel is not None and not jitter and not any(self.glitch_rate_hz):
+            edges = self._kernel.edges(ts, rows, self.stuck, self._count)
+            if edges is not None:
+                edges.sort(key=_edge_time)
+                return edges
+        pitch, offsets, floor = self.pitch_rad, self.offset_rad.tolist(), math.floor
         t_first, t_last = ts[0] + 1, ts[-1]
         intervals = range(len(ts) - 1)
         edges: list[tuple[int, int]] = []
@@ -201,7 +214,7 @@ class HallSensors:
                     m0, m1 = speeds[i] * h, speeds[i + 1] * h
                     up = c1 > count
                     for lattice in (range(count + 1, c1 + 1) if up else range(count, c1, -1)):
-                        s = _solve_hermite(q0, q1, m0, m1, off + pitch * lattice)
+                        s = solve_hermite(q0, q1, m0, m1, off + pitch * lattice)
                         t = t0 + s * span
                         if jitter:
                             t += float(self._rng.normal(0.0, self.jitter_us))
@@ -244,54 +257,3 @@ class HallSensors:
 
 def _edge_time(edge: tuple[int, int]) -> int:
     return edge[0]
-
-
-def _solve_hermite(q0: float, q1: float, m0: float, m1: float, theta: float) -> float:
-    """Fraction s in [0, 1] where the Hermite cubic through (q0, m0), (q1, m1) equals theta.
-
-    Newton's method on the cubic's power form ``((a s + b) s + c) s + d`` from the
-    linear guess, clamped to [0, 1], until a step is below ``STEP_TOL`` (four steps
-    at most). The result differs from the exact root by about 1e-16; the edge time
-    ``t0 + s * span`` (span <= 10 ms) is rounded to the microsecond, so that
-    difference never shows.
-    """
-    dq = q1 - q0
-    s = (theta - q0) / dq if q1 != q0 else 0.5
-    s = s if s > 0.0 else 0.0
-    s = s if s < 1.0 else 1.0
-    a = m0 + m1 - 2.0 * dq
-    b = 3.0 * dq - 2.0 * m0 - m1
-    d = q0 - theta
-    a3, b2 = 3.0 * a, 2.0 * b
-    for _ in range(4):
-        df = (a3 * s + b2) * s + m0
-        if abs(df) < 1e-12:
-            break
-        step = (((a * s + b) * s + m0) * s + d) / df
-        s -= step
-        s = s if s > 0.0 else 0.0
-        s = s if s < 1.0 else 1.0
-        if abs(step) < STEP_TOL:
-            break
-    return s
-
-
-STEP_TOL = 1e-13
-"""Newton step of :func:`_solve_hermite` below which the root is taken as found (a fraction of
-the interval: 1e-9 us of a 10 ms interval)."""
-
-
-def _split(t_us: np.ndarray, q: np.ndarray, v: np.ndarray, parts: int):
-    """Resample a Hermite trajectory with ``parts`` sub-intervals per interval."""
-    frac = np.arange(parts) / parts
-    t_new = (t_us[:-1, None] + frac * np.diff(t_us)[:, None]).ravel()
-    t_new = np.append(np.rint(t_new).astype(np.int64), t_us[-1])
-    i = np.clip(np.searchsorted(t_us, t_new, side="right") - 1, 0, len(t_us) - 2)
-    h = ((t_us[i + 1] - t_us[i]) * 1e-6)[:, None]
-    s = ((t_new - t_us[i]) * 1e-6)[:, None] / h
-    s2, s3 = s * s, s * s * s
-    q_new = ((2 * s3 - 3 * s2 + 1) * q[i] + (s3 - 2 * s2 + s) * h * v[i]
-             + (-2 * s3 + 3 * s2) * q[i + 1] + (s3 - s2) * h * v[i + 1])
-    v_new = ((6 * s2 - 6 * s) * q[i] / h + (3 * s2 - 4 * s + 1) * v[i]
-             + (-6 * s2 + 6 * s) * q[i + 1] / h + (3 * s2 - 2 * s) * v[i + 1])
-    return t_new, q_new, v_new

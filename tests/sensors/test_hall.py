@@ -1,6 +1,8 @@
 """Hall sensors and SC output: 90 changes per revolution, both directions, vectorised."""
 
 
+import shutil
+
 import numpy as np
 import pytest
 
@@ -147,3 +149,27 @@ def test_edge_times_are_the_cubics_roots_to_the_microsecond(seed):
     want, ties = _bisect_edges(ts, rows, hall.offset_rad.tolist(), hall.pitch_rad)
     assert len(got) >= 10 and ties == 0
     assert sorted(got) == want
+
+
+@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+@pytest.mark.parametrize("seed", range(4))
+def test_c_crossing_loop_gives_the_python_twins_edges_and_counts(seed):
+    """Random chunks (both directions, a speed changing sign, a stuck sensor, a long fast chunk)."""
+    rng = np.random.default_rng(seed)
+    mis = rng.uniform(-0.5, 0.5, (2, 3))
+    c, py = HallSensors(misalignment_deg=mis), HallSensors(misalignment_deg=mis, native=False)
+    assert c.engine == "C" and py.engine == "Python (native=False)"
+    for chunk in range(30):
+        n = int(rng.integers(1, 40))
+        ts = np.cumsum(np.r_[1_000_000 + chunk * 500_000, rng.integers(1_000, 10_001, n)]).tolist()
+        t_s = (np.array(ts) - ts[0]) * 1e-6
+        speed, accel = rng.uniform(-40.0, 40.0, 2), rng.uniform(-200.0, 200.0, 2)
+        q = rng.uniform(-50, 50, 2) + speed * t_s[:, None] + 0.5 * accel * t_s[:, None] ** 2
+        rows = np.hstack([q, speed + accel * t_s[:, None], rng.normal(size=(n + 1, 3))]).tolist()  # extra columns
+        wheel, sensor = int(rng.integers(0, 2)), int(rng.integers(0, 3))
+        for h in (c, py):
+            h.reset(q[0])
+            h.set_stuck(wheel, sensor, chunk % 3 == 0, float(q[0, wheel]))
+        got, want = c.edges_from_samples(ts, rows), py.edges_from_samples(ts, rows)
+        assert got == want and np.array_equal(c._count, py._count)
+    assert len(want) > 0

@@ -43,3 +43,14 @@ def test_suite_figures_of_a_cheap_stand_in(monkeypatch):
     monkeypatch.setattr(sb, "RRD_DURATIONS_S", (0.5, 2.0))
     rrd = sb.rrd_figures(load_config(), repeats=1)
     assert rrd["rrd_write_60s_s"] > 0 and rrd["rrd_write_ratio_240_60"] > 0
+
+
+def test_the_benchmark_scenario_touches_nothing_but_the_floor():
+    """The bare figure steps on from where the twin ended: a robot pressed against a rack there
+    would make the floor of every ratio unrepresentative (it did, from the old start)."""
+    from amr_twin.bench.twin import twin_run_s
+
+    _cpu, twin = twin_run_s(load_config(), 16.0, sensors=True)
+    assert twin.collisions.collisions == []
+    assert twin.physics.pose().x_m - (-8.0) > 10.0  # it drove the whole 11 m down the aisle
+    assert (twin.lidar.last_hit_geom >= 0).mean() > 0.95  # walls and racks in range of the LiDAR

@@ -79,12 +79,10 @@ class Recorder:
         self.commands: list[tuple[float, list[float]]] = []
         self._handlers = {"wheel0_Vel": self._on_wheel0, "wheel1_Vel": self._on_wheel1,
                           "wheel_Command": self._on_command, "odom": self._on_odom}
-        twin.bus.add_tap(self._tap)
+        twin.bus.add_tap(self._tap, topics=tuple(self._handlers))  # not called for IMU, scan, tf
 
     def _tap(self, topic: str, msg, t_us: int) -> None:
-        handler = self._handlers.get(topic)  # one lookup: most messages (IMU, scan, tf) are not kept
-        if handler is not None:
-            handler(msg, t_us * 1e-6)
+        self._handlers[topic](msg, t_us * 1e-6)
 
     def _on_wheel0(self, msg, t_s: float) -> None:
         self._published[0].append((t_s, msg.data))

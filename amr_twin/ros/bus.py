@@ -111,7 +111,8 @@ class Bus:
         self._types: dict[str, type] = {}
         self._latched: dict[str, Any] = {}
         self._services: dict[str, Callable[[Any], Any]] = {}
-        self._taps: list[Tap] = []
+        self._taps: list[tuple[Tap, frozenset[str] | None]] = []  # (tap, its topics or None: all)
+        self._taps_by_topic: dict[str, tuple[Tap, ...]] = {}  # each topic's taps, in the order added
         self._static: dict[str, TransformStamped] = {}
         self._intercepts: dict[str, Callable[[Any], Any]] = {}
         self.tf = TfBuffer()
@@ -158,9 +159,12 @@ class Bus:
                     return
         if topic in self._latched:
             self._latched[topic] = msg
-        if self._taps:
+        taps = self._taps_by_topic.get(topic)
+        if taps is None:
+            taps = self._taps_of(topic)
+        if taps:
             now_us = self.clock.now_us
-            for tap in tuple(self._taps):
+            for tap in taps:
                 tap(topic, msg, now_us)
         subs = self._subs.get(topic)
         if subs:
@@ -184,13 +188,20 @@ class Bus:
                     best = max(sub.latency_us, 0)
         return best
 
-    def add_tap(self, tap: Tap) -> None:
-        """Register ``tap(topic, msg, t_us)``, called for every published message.
+    def add_tap(self, tap: Tap, topics: tuple[str, ...] | None = None) -> None:
+        """Register ``tap(topic, msg, t_us)``, called for every message published on ``topics``
+        (every topic when None; a service call is a message on ``<service>/request``).
 
         A tap observes: it must not publish, schedule or read the physics (the
-        loop may run publishing events while the physics is ahead of them).
+        loop may run publishing events while the physics is ahead of them). Taps
+        are called in the order they were added.
         """
-        self._taps.append(tap)
+        self._taps.append((tap, None if topics is None else frozenset(_name(t) for t in topics)))
+        self._taps_by_topic.clear()
+
+    def _taps_of(self, topic: str) -> tuple[Tap, ...]:
+        taps = self._taps_by_topic[topic] = tuple(t for t, topics in self._taps if topics is None or topic in topics)
+        return taps
 
     def intercept(self, topic: str, func: Callable[[Any], Any] | None) -> None:
         """Pass every message on ``topic`` through ``func(msg)`` before taps and subscribers.
@@ -205,8 +216,13 @@ class Bus:
             self._intercepts[_name(topic)] = func
 
     def remove_tap(self, tap: Tap) -> None:
-        """Unregister a tap added with :meth:`add_tap`."""
-        self._taps.remove(tap)
+        """Unregister a tap added with :meth:`add_tap` (ValueError if it was not)."""
+        for i, (t, _topics) in enumerate(self._taps):
+            if t == tap:
+                del self._taps[i]
+                self._taps_by_topic.clear()
+                return
+        raise ValueError(f"{tap!r} is not a tap of this bus")
 
     def topics(self) -> list[str]:
         """Names of the topics advertised or subscribed so far."""
@@ -236,10 +252,14 @@ class Bus:
         ServiceCallError
             No server, or the server raised (the cause is chained).
         """
-        if self._taps:
+        topic = _name(name) + "/request"
+        taps = self._taps_by_topic.get(topic)
+        if taps is None:
+            taps = self._taps_of(topic)
+        if taps:
             now_us = self.clock.now_us
-            for tap in tuple(self._taps):
-                tap(_name(name) + "/request", request, now_us)
+            for tap in taps:
+                tap(topic, request, now_us)
         handler = self._services.get(_name(name))
         if handler is None:
             raise ServiceCallError(f"service {_name(name)!r} is not advertised")

@@ -91,6 +91,23 @@ def test_taps_see_every_message_with_its_time(bus, clock):
     bus.remove_tap(tap)
     bus.publish("a", Float64(1.0))
     assert len(log) == 2
+    with pytest.raises(ValueError):
+        bus.remove_tap(tap)
+
+
+def test_a_tap_of_some_topics_sees_only_them_in_the_order_taps_were_added(bus, clock):
+    log = []
+    bus.add_tap(lambda topic, msg, t_us: log.append(("all", topic)))
+    bus.publish("odom", Float64(0.0))  # before the others were added
+    bus.add_tap(lambda topic, msg, t_us: log.append(("odom", topic)), topics=("/odom", "stop/request"))
+    bus.add_tap(lambda topic, msg, t_us: log.append(("all2", topic)))
+    bus.advertise_service("stop", lambda req: None)
+    for topic in ("imu/data_raw", "odom", "scan"):
+        bus.publish(topic, Float64(1.0))
+    bus.call_service("stop", None)
+    assert log == [("all", "odom"), ("all", "imu/data_raw"), ("all2", "imu/data_raw"),
+                   ("all", "odom"), ("odom", "odom"), ("all2", "odom"), ("all", "scan"), ("all2", "scan"),
+                   ("all", "stop/request"), ("odom", "stop/request"), ("all2", "stop/request")]
 
 
 def test_services(bus):

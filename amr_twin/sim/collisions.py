@@ -208,12 +208,10 @@ class CollisionMonitor:
             self._use_native(lib)
 
     def _use_native(self, lib) -> None:
-        memo = self._memo = _Memo()
         self._pairs = (ctypes.c_int * (2 * MEMO_PAIRS))()
-        memo.cap, memo.pairs = MEMO_PAIRS, self._pairs
+        memo = self._memo = _Memo(cap=MEMO_PAIRS, pairs=self._pairs)
         fn = lib.contacts_changed
-        fn.restype, fn.argtypes = ctypes.c_int, [ctypes.c_void_p, ctypes.c_void_p]
-        self._keep = self._data  # the data outlives every call
+        fn.restype, fn.argtypes = ctypes.c_int, [ctypes.c_void_p, ctypes.c_void_p]  # self._data outlives it
         self._changed = functools.partial(fn, ctypes.c_void_p(self._data._address),
                                           ctypes.cast(ctypes.pointer(memo), ctypes.c_void_p))
 
@@ -221,8 +219,7 @@ class CollisionMonitor:
         """Grid instant ``t_us``: physics is there. True asks the loop to stop."""
         d, memo = self._data, self._memo
         if memo is not None:
-            same = not self._changed()
-            pairs = None
+            same, pairs = not self._changed(), None
         else:
             pairs = d.contact.geom.tolist() if d.ncon else []
             same = pairs == self._last_pairs

@@ -1,9 +1,9 @@
 /* Beams of the RPLIDAR A1: directions at their own instants, motion correction, range noise.
  *
- * The C twins of beam_geometry, motion_correction_m and noisy_ranges in
- * amr_twin/sensors/lidar_beams.py: the same operations in the same order on IEEE doubles
+ * The C twins of interpolate_poses with world_directions, motion_correction_m and quantised_ranges
+ * in amr_twin/sensors/lidar_beams.py (PythonBeamKernels in lidar_kernels.py): the same operations in the same order on IEEE doubles
  * (compiled with -ffp-contract=off; +, -, *, / and sqrt are correctly rounded, round half to
- * even as numpy's round), so both give the same bits; tests/sensors/test_lidar_beams.py
+ * even as numpy's round), so both give the same bits; tests/sensors/test_lidar_kernels.py
  * checks it. lb_cast runs the three steps of a cast at the beams' own instants in one call: the
  * directions, MuJoCo's mj_multiRay (through a pointer to it, taken from the loaded libmujoco)
  * and the motion correction. Built at first use (amr_twin/sim/native_build.py).

@@ -3,10 +3,10 @@
 :class:`BeamKernels` calls the C helper ``lidar_beams.c`` (built at first use by
 :mod:`amr_twin.sim.native_build`); :class:`PythonBeamKernels` is its Python twin, made of the
 numpy functions of :mod:`amr_twin.sensors.lidar_beams`: the same operations in the same
-order, so both give the same bits (tests/sensors/test_lidar_beams.py). A rotation's
-arithmetic costs about 20 us in C against about 400 us of numpy on the loop's cold caches
-(measured in a 8 s run with the LiDAR alone: 22 us per 10 ms tick). The ray cast stays
-MuJoCo's ``mj_multiRay``, between :meth:`geometry` and :meth:`correct`.
+order, so both give the same bits (tests/sensors/test_lidar_kernels.py). A rotation's
+arithmetic around the ray cast costs about 25 us in C against about 400 us of numpy on the
+loop's cold caches (measured in 8 and 16 s runs). The ray cast stays MuJoCo's
+``mj_multiRay``, between :meth:`geometry` and :meth:`correct`.
 
 Both classes take and return the same arrays:
 

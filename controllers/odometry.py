@@ -157,7 +157,7 @@ class WheelOdometry:
         self._motion = [0, 0]
         self._seq = 0
         self.published.restart(clock.now_us, (0.0, 0.0, 0.0), (0.0, 0.0))
-        self._pub = bus.advertise("odom", Odometry)
+        bus.advertise("odom", Odometry)  # declares the type; publish() hands messages to bus.publish
         self._subs = [bus.subscribe("wheel0_Vel", lambda m: self._on_speed(0, m)),
                       bus.subscribe("wheel1_Vel", lambda m: self._on_speed(1, m))]
         if not signed_input:

@@ -14,7 +14,7 @@ Beam instants of a message (:func:`beam_times_s`, :func:`scan_end_time_s`)
     Beam ``i`` was acquired at ``stamp + i * time_increment``; ``time_increment``
     is negative for a scanner that spins clockwise (the A1), whose stamp is then
     the end of the rotation.
-Motion during a rotation (:class:`PoseSamples`, :func:`world_directions`, :func:`motion_correction_m`)
+Motion during a rotation (:class:`PoseSamples`, :func:`interpolate_poses`, :func:`world_directions`, :func:`motion_correction_m`)
     The laser pose is sampled at regular instants. A beam acquired between two
     samples points along its own direction at its instant (linear interpolation
     of the laser axes of the two samples around it, then normalised); it is cast
@@ -144,13 +144,6 @@ class PoseSamples:
         """Forget all samples."""
         self._rows.clear()
         self._array = None
-
-    def at(self, t_us: np.ndarray) -> np.ndarray:
-        """Laser poses at the instants ``t_us`` (k,), linear between the samples (held outside them).
-
-        Returns (k, 9): position (m), then the laser x and y axes in the world.
-        """
-        return interpolate_poses(self.rows, self.n, t_us)
 
 
 def interpolate_poses(rows: np.ndarray, n: int, t_us: np.ndarray) -> np.ndarray:

@@ -74,9 +74,10 @@ def _with_payload(cfg: TwinConfig, mass_kg: float) -> TwinConfig:
 
 def simulate(job: _Job) -> dict:
     """Run one experiment; return its raw series (picklable, for worker processes)."""
-    options = TwinOptions(firmware=job.firmware, world="empty", seed=job.seed)
     cfg = _with_payload(job.cfg, job.spec.payload_kg)
     pace_us = job.extra.get("pace_us")
+    recording = job.rrd_path is not None or job.mcap_path is not None
+    options = TwinOptions(firmware=job.firmware, world="empty", seed=job.seed, visuals=recording)
     if job.rrd_path is None and job.mcap_path is None and pace_us is None:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:

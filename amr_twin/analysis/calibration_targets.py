@@ -120,7 +120,7 @@ def command_reference(cfg: TwinConfig, command: Command) -> tuple[float, float]:
 def _run_features(job: tuple[TwinConfig, _RunTargets]) -> dict[str, float]:
     """Simulate one chapter 5 run and measure its features (NaN when not measurable)."""
     cfg, spec = job
-    series = run_command(cfg, spec.command, CALIBRATION_S, TwinOptions(world="empty")).series
+    series = run_command(cfg, spec.command, CALIBRATION_S, TwinOptions(world="empty", visuals=False)).series
     refs = command_reference(cfg, spec.command)
     prefix = spec.targets[0].name.split(".")[0]
     out = {}
@@ -196,7 +196,7 @@ def log_residuals(cfg: TwinConfig, log: dict[str, dict[int, np.ndarray]]) -> np.
     errors = []
     for text, wheels in log.items():
         duration = max(float(v[:, 0].max()) for v in wheels.values()) + 0.5
-        series = run_command(cfg, Command.parse(text), duration, TwinOptions(world="empty")).series
+        series = run_command(cfg, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)).series
         for w, samples in wheels.items():
             pub = series.published[w]
             if len(pub) < 2:

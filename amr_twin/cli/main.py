@@ -274,7 +274,7 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
 
     for text, wheels in log.items():
         duration = max(float(v[:, 0].max()) for v in wheels.values()) + 0.5
-        series = run_command(base, Command.parse(text), duration, TwinOptions(world="empty")).series
+        series = run_command(base, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)).series
         for w, samples in wheels.items():
             if len(series.published[w]) < 2:
                 raise ValueError(f"--target {target}: command {text}: in the log's {duration:g} s the twin publishes "

@@ -95,11 +95,12 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         fail(str(exc))
     live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
+    recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
-                          start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision)
+                          start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
+                          visuals=recording or live is not None)
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
-    recording = opts.record is not None or opts.mcap is not None
 
     def work():
         from amr_twin.recording.atomic_file import all_or_nothing

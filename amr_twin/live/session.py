@@ -100,6 +100,8 @@ class LiveSession:
         from amr_twin.live.pacer import Pacer
 
         options.check()
+        if not twin.options.visuals:
+            raise ValueError("a live view draws the robot: build the twin with TwinOptions(visuals=True)")
         self.twin, self.options = twin, options
         self.diff_drive = DiffDriveNode(twin.bus, twin.clock, twin.client, cmd_timeout_s=CMD_TIMEOUT_S)
         self.pacer = Pacer(twin, options.rate)

@@ -25,6 +25,8 @@ GROUP_WORLD, GROUP_VISUAL, GROUP_COLLISION, GROUP_PAYLOAD = 0, 1, 2, 4
 WHEELS = ("left", "right")
 CASTERS = ("front_left", "front_right", "rear_left", "rear_right")
 LOOP_SENSOR_DIM = 11
+IMU_SENSORS = ("imu_accel", "imu_gyro", "imu_mag")
+"""The IMU's MuJoCo sensors, after the loop's; :func:`amr_twin.model.build.build` can leave them out."""
 
 
 def robot_spec(cfg: TwinConfig, urdf: str) -> mujoco.MjSpec:
@@ -171,7 +173,6 @@ def _add_sensors(spec: mujoco.MjSpec) -> None:
                     objtype=mujoco.mjtObj.mjOBJ_SITE, objname="base")
     spec.add_sensor(name="base_quat", type=mujoco.mjtSensor.mjSENS_FRAMEQUAT,
                     objtype=mujoco.mjtObj.mjOBJ_SITE, objname="base")
-    for name, kind in (("imu_accel", mujoco.mjtSensor.mjSENS_ACCELEROMETER),
-                       ("imu_gyro", mujoco.mjtSensor.mjSENS_GYRO),
-                       ("imu_mag", mujoco.mjtSensor.mjSENS_MAGNETOMETER)):
+    for name, kind in zip(IMU_SENSORS, (mujoco.mjtSensor.mjSENS_ACCELEROMETER, mujoco.mjtSensor.mjSENS_GYRO,
+                                        mujoco.mjtSensor.mjSENS_MAGNETOMETER)):
         spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="imu")

@@ -79,7 +79,12 @@ class Capture:
 
 
 def attach(twin, body_hz: float = 30.0) -> Capture:
-    """Start capturing ``twin`` (before it runs); returns the :class:`Capture`."""
+    """Start capturing ``twin`` (before it runs); returns the :class:`Capture`.
+
+    Raises ValueError for a twin built without the robot's visuals (``TwinOptions(visuals=False)``).
+    """
+    if not twin.options.visuals:
+        raise ValueError("a recording draws the robot: build the twin with TwinOptions(visuals=True)")
     return _captures.get(twin) or Capture(twin, body_hz)
 
 

@@ -162,6 +162,7 @@ def test_cli_record_and_mcap(tmp_path):
     assert msgs["/odom"][-1][4].pose.pose.position.x == pytest.approx(info["final_odom_pose"]["x_m"])
     rows, _ = _rrd_chunks(rrd)
     assert "/world/bodies/amr/base_link" in rows and "/wheels/right/true_rpm" in rows
+    assert "/world/bodies/amr/base_link/geoms/boxes" in rows  # a recording run keeps the robot's visuals
 
 
 def test_recording_does_not_change_a_run_advanced_in_small_steps():

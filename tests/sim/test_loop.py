@@ -102,3 +102,29 @@ def test_without_the_odometry_node_the_drive_is_the_same_to_the_bit(cfg, firmwar
         np.testing.assert_array_equal(getattr(on, name), getattr(off, name), err_msg=name)
     for wheel in (0, 1):
         np.testing.assert_array_equal(on.published[wheel], off.published[wheel])
+
+
+def test_without_the_robot_visuals_the_run_is_the_same_to_the_bit(cfg):
+    """TwinOptions(visuals=False) (a run nothing draws) leaves the visual geoms out of the model and
+    nothing else: the same drive, contacts and loads, and no recording can be attached to it."""
+    from amr_twin.recording.rerun_log import attach
+
+    twins = {}
+    for visuals in (True, False):
+        twin = Twin(load_config(overrides={"payload.mass_kg": 30.0}),
+                    TwinOptions(world="warehouse", start_xy_yaw=(-8.0, 0.5, 0.5), visuals=visuals))
+        twin.client.linear(0.7)
+        twin.advance(1.5)
+        twin.client.angular(-60.0, 0.0)
+        twin.advance(1.0)
+        twins[visuals] = twin
+    on, off = twins[True], twins[False]
+    assert off.physics.model.ngeom < on.physics.model.ngeom - 30
+    assert on.physics.data.ncon == off.physics.data.ncon >= 6
+    for name in ("pose", "true_rpm", "pwm_counts", "current_a", "battery_v"):
+        np.testing.assert_array_equal(getattr(on.recorder.series(), name), getattr(off.recorder.series(), name),
+                                      err_msg=name)
+    np.testing.assert_array_equal(on.physics.data.qvel, off.physics.data.qvel)
+    attach(on)
+    with pytest.raises(ValueError, match="visuals=True"):
+        attach(off)

@@ -18,7 +18,7 @@ import mujoco
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.model.paths import ROOT
-from amr_twin.model.robot_spec import GROUP_VISUAL, GROUP_WORLD, IMU_SENSORS, robot_spec
+from amr_twin.model.robot_spec import GROUP_WORLD, IMU_SENSORS, robot_spec
 from amr_twin.model.urdf import XACRO_FILE, BuildError, robot_urdf
 
 WORLD_DIR = ROOT / "models" / "worlds"
@@ -65,21 +65,12 @@ class Build:
     urdf: str
 
 
-def _strip(robot: mujoco.MjSpec, visuals: bool, imu: bool) -> mujoco.MjSpec:
-    """``robot`` without its visual geoms (group 1) and/or its IMU's MuJoCo sensors.
-
-    Neither changes the dynamics: the visual geoms collide with nothing and carry no mass
-    (every link has its URDF inertial), and a sensor only reads the state. Together they
-    are about 20 % of a step in the empty world: 40 of the robot's 51 geoms are visuals
-    posed every step, and the accelerometer makes every step compute the bodies'
-    accelerations (``mj_rnePostConstraint``) for nobody.
-    """
-    if not visuals:
-        for geom in [g for g in robot.geoms if g.group == GROUP_VISUAL]:
-            robot.delete(geom)
-    if not imu:
-        for sensor in [s for s in robot.sensors if s.name in IMU_SENSORS]:
-            robot.delete(sensor)
+def _without_imu(robot: mujoco.MjSpec) -> mujoco.MjSpec:
+    """``robot`` without its IMU's MuJoCo sensors: they only read the state, but the
+    accelerometer makes every step compute the bodies' accelerations
+    (``mj_rnePostConstraint``, ~5 % of a step) for nobody when the IMU is off."""
+    for sensor in [s for s in robot.sensors if s.name in IMU_SENSORS]:
+        robot.delete(sensor)
     return robot
 
 
@@ -87,19 +78,20 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
           xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True) -> Build:
     """Build the robot in a world and compile it (the URDF from :func:`robot_urdf`'s cache).
 
-    ``visuals=False`` leaves the robot's visual geoms out of the compiled model and
-    ``imu=False`` the IMU's sensors (a model nothing draws or reads the IMU of: the same
-    dynamics to the bit, cheaper steps; see :func:`_strip`). ``robot_spec`` keeps them all.
+    ``visuals=False`` leaves the robot's visual geoms out (40 of its 51 geoms, posed every
+    step: ~15 % of a step in the empty world) and ``imu=False`` the IMU's sensors: a model
+    nothing draws or reads the IMU of, with the same dynamics to the bit.
     """
     urdf = robot_urdf(cfg, xacro_file)
-    robot = robot_spec(cfg, urdf)
+    robot = robot_spec(cfg, urdf, visuals)
     robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
     scene = _world_spec(cfg, world)
     x, y, yaw = start_xy_yaw
     held = Path(world).stem == "stand"
     z = STAND_HEIGHT_M if held else 0.0
     frame = scene.worldbody.add_frame(pos=[x, y, z], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
-    scene.attach(_strip(mujoco.MjSpec.from_string(robot_xml), visuals, imu), prefix=ROBOT_PREFIX, frame=frame)
+    attached = mujoco.MjSpec.from_string(robot_xml)
+    scene.attach(attached if imu else _without_imu(attached), prefix=ROBOT_PREFIX, frame=frame)
     if held:  # the work station of fig. 5.1: the chassis welded where it stands
         scene.add_equality(type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
                            name1=ROBOT_PREFIX + "base_link", name="stand")

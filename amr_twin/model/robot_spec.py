@@ -29,12 +29,18 @@ IMU_SENSORS = ("imu_accel", "imu_gyro", "imu_mag")
 """The IMU's MuJoCo sensors, after the loop's; :func:`amr_twin.model.build.build` can leave them out."""
 
 
-def robot_spec(cfg: TwinConfig, urdf: str) -> mujoco.MjSpec:
-    """The robot alone: URDF import plus everything URDF cannot carry."""
-    # MuJoCo's URDF parser reads its options from a <mujoco> element in the URDF:
-    # keep the visuals (it discards them by default) and every link as a body.
-    options = '<mujoco><compiler discardvisual="false" fusestatic="false" strippath="true"/></mujoco>'
+def robot_spec(cfg: TwinConfig, urdf: str, visuals: bool = True) -> mujoco.MjSpec:
+    """The robot alone: URDF import plus everything URDF cannot carry.
+
+    ``visuals=False``: without the URDF's visual elements (group 1), for a model nothing
+    draws; they collide with nothing and weigh nothing (each link has its inertial).
+    """
+    # MuJoCo's URDF parser reads its options from a <mujoco> element in the URDF: keep the
+    # visuals (it discards them by default, at parse time) and every link as a body.
+    discard = "false" if visuals else "true"
+    options = f'<mujoco><compiler discardvisual="{discard}" fusestatic="false" strippath="true"/></mujoco>'
     spec = mujoco.MjSpec.from_string(urdf.replace("</robot>", options + "</robot>", 1))
+    spec.compiler.discardvisual = False  # at compile it would drop every contype-0 geom, the payload's too
     spec.modelname = "amr"
     # Elliptic friction cones: the contact's first constraint row is its normal force
     # (read by Physics.support_normal_forces_n); exported with the robot.

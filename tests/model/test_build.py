@@ -31,19 +31,21 @@ def test_unknown_world_is_refused():
 
 
 def test_a_model_without_visuals_or_imu_weighs_the_same():
-    """build(visuals=False, imu=False): no robot visual geom, no IMU sensor, the same masses and
-    inertias, collision shapes and the loop's sensors; robot_spec (the export) keeps them all."""
+    """build(visuals=False, imu=False): no robot visual geom, no IMU sensor; the same masses and
+    inertias, collision shapes, payload box (the LiDAR sees it) and loop sensors."""
     import numpy as np
 
-    from amr_twin.model.robot_spec import GROUP_COLLISION, GROUP_VISUAL, IMU_SENSORS, LOOP_SENSOR_DIM
+    from amr_twin.model.robot_spec import GROUP_COLLISION, GROUP_PAYLOAD, GROUP_VISUAL, IMU_SENSORS, LOOP_SENSOR_DIM
 
-    full = build(load_config(), world="empty")
-    lean = build(load_config(), world="empty", visuals=False, imu=False)
+    cfg = load_config(overrides={"payload.mass_kg": 25.0})
+    full = build(cfg, world="empty")
+    lean = build(cfg, world="empty", visuals=False, imu=False)
     a, b = full.model, lean.model
-    assert GROUP_VISUAL in a.geom_group and GROUP_VISUAL not in b.geom_group
+    assert sum(a.geom_group == GROUP_VISUAL) >= 30 and GROUP_VISUAL not in b.geom_group
     assert sum(a.geom_group == GROUP_COLLISION) == sum(b.geom_group == GROUP_COLLISION) >= 9
+    assert sum(a.geom_group == GROUP_PAYLOAD) == sum(b.geom_group == GROUP_PAYLOAD) == 1
     for name in ("body_mass", "body_inertia", "body_ipos", "body_iquat", "body_subtreemass", "jnt_stiffness"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert a.body_subtreemass[1] > 25.0
     assert a.nsensordata == b.nsensordata + 9 and b.nsensordata == LOOP_SENSOR_DIM
     assert {lean.spec.sensor("amr/" + n) for n in IMU_SENSORS} == {None}
-    assert len(full.robot_spec.geoms) == len(lean.robot_spec.geoms)

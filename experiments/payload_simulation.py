@@ -109,19 +109,23 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     if code != 0:
         return {"error": f"command refused (code {code}): {twin.client.last_error}"}
     req = twin.client.last_request
-    loads, contact, tilt, vel = [], [], [], []
-    physics, every_us = twin.physics, int(round(SAMPLE_S * 1e6))
+    loads, contact, up_z, vel = [], [], [], []
+    every_us, rolling, contact_loads = int(round(SAMPLE_S * 1e6)), twin.rolling, twin.rolling.contact_loads
+    d, base, r0 = twin.physics.data, twin.physics.base_body, int(twin.physics.root_dof)
+    xmat, qvel, zz = d.xmat, d.qvel, 9 * base + 8
 
     def sample(t_us: int) -> bool:
         """Every SAMPLE_S on the loop's record grid, the physics at ``t_us`` (after the rolling
-        resistance's sampler, whose springs' loads it reads). The point runs as one call of the
-        loop, as ``amr-twin run`` does (stopping the loop every sample moved the results by about
-        1e-4 relative and cost about 2 % more CPU)."""
+        resistance's sampler, whose springs' loads it reads): the support loads, the support
+        contacts' normal forces, the world z of the base's z axis (the tilt's cosine) and the
+        base velocity (:meth:`amr_twin.sim.physics.Physics.base_velocity`). The point runs as one
+        call of the loop, as ``amr-twin run`` does (stopping the loop every sample moved the
+        results by about 1e-4 relative and cost about 2 % more CPU)."""
         if t_us % every_us == 0:
-            loads.append(list(twin.rolling.loads))  # the springs' loads (module notes)
-            contact.append(physics.support_normal_forces_n())
-            tilt.append(physics.base_tilt_rad())
-            vel.append(physics.base_velocity())
+            loads.append(rolling.loads)  # the springs' loads (module notes)
+            contact.append(contact_loads())
+            up_z.append(xmat.item(zz))
+            vel.append(qvel[r0:r0 + 6].tolist())
         return False
 
     twin.samplers.append(sample)
@@ -137,7 +141,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     names = list(twin.physics.support_geoms)
     loads = np.array(loads)
     min_load = dict(zip(names, loads.min(axis=0).tolist()))
-    out = {"max_tilt_deg": math.degrees(max(tilt)),
+    out = {"max_tilt_deg": math.degrees(math.acos(max(-1.0, min(1.0, min(up_z))))),  # acos falls: the largest tilt
            "dyn_min_wheel_n": min(v for n, v in min_load.items() if n.startswith("wheel")),
            "dyn_min_caster_n": min(v for n, v in min_load.items() if n.startswith("caster")),
            "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),

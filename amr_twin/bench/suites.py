@@ -95,7 +95,7 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
                                   duration_s=SWEEP_DURATION_S, jobs=1, progress=False)
         cpu = timer() - t0
     point = payload_point.with_payload(cfg, 20.0, (0.0, 0.0))
-    twin = Twin(point, TwinOptions(world="empty"))
+    twin = Twin(point, TwinOptions(world="empty", visuals=False))  # the model a sweep point runs
     twin.client.linear(0.7)
     twin.advance(1.0)
     m, d = twin.physics.model, twin.physics.data

@@ -86,3 +86,20 @@ void rr_update(const mjModel* m, mjData* d, const rr_params* p, double* loads) {
     qfrc[4] = x7 * tz;
     qfrc[5] = x8 * tz;
 }
+
+/* Normal contact force (6,) N on the wheels L, R and caster balls fl, fr, rl, rr in the last
+ * step: each contact's first constraint row, summed by support in contact order, as
+ * Physics.support_normal_forces_n (amr_twin/sim/physics.py) does in Python. */
+void rr_contact_loads(const mjData* d, const rr_params* p, double* out) {
+    for (int k = 0; k < 6; k++)
+        out[k] = 0.0;
+    for (int i = 0; i < d->ncon; i++) {
+        const mjContact* con = d->contact + i;
+        int g1 = con->geom[0], g2 = con->geom[1];
+        int k1 = (g1 >= 0 && g1 < p->ngeom) ? p->support_of_geom[g1] : -1;
+        int k2 = (g2 >= 0 && g2 < p->ngeom) ? p->support_of_geom[g2] : -1;
+        int k = k1 > k2 ? k1 : k2;
+        if (k >= 0 && con->efc_address >= 0)
+            out[k] += d->efc_force[con->efc_address];
+    }
+}

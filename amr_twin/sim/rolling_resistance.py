@@ -110,6 +110,9 @@ class RollingResistance:
         """Everything :meth:`__call__` reads, in one tuple (MjData's arrays are views: they stay put)."""
         self.update = self.__call__
         """The grid sampler: the C helper when built, else :meth:`__call__`."""
+        self.contact_loads = lambda: physics.support_normal_forces_n().tolist()
+        """``contact_loads()``: (6,) list, :meth:`amr_twin.sim.physics.Physics.support_normal_forces_n`
+        (the C helper's ``rr_contact_loads`` when built: the same bits, ~0.5 against ~10 us)."""
         self._loads_c = None
         lib, self.engine = open_helper(C_SOURCE, native)
         """Which runs: ``"C"`` or ``"Python (<why>)"``."""
@@ -145,6 +148,17 @@ class RollingResistance:
             _fn(*_args)
 
         self.update = update
+        contact = lib.rr_contact_loads
+        contact.restype = None
+        contact.argtypes = [ctypes.c_void_p] * 3
+        out = (ctypes.c_double * 6)()
+        contact_args = (args[1], args[2], ctypes.cast(out, ctypes.c_void_p))
+
+        def contact_loads(_fn=contact, _args=contact_args, _out=out) -> list[float]:
+            _fn(*_args)
+            return _out[:]
+
+        self.contact_loads = contact_loads
 
     @property
     def loads(self) -> list[float]:

@@ -49,3 +49,13 @@ def test_a_model_without_visuals_or_imu_weighs_the_same():
     assert a.body_subtreemass[1] > 25.0
     assert a.nsensordata == b.nsensordata + 9 and b.nsensordata == LOOP_SENSOR_DIM
     assert {lean.spec.sensor("amr/" + n) for n in IMU_SENSORS} == {None}
+
+
+def test_the_viewer_scene_has_the_twins_options():
+    """models/amr/scene.xml (for MuJoCo's viewer) loads and steps with the options the twin builds with."""
+    import mujoco
+
+    viewer = mujoco.MjModel.from_xml_path(str(MODEL_DIR / "scene.xml")).opt
+    twin = build(load_config()).model.opt
+    for name in ("timestep", "integrator", "cone", "disableflags", "enableflags"):
+        assert getattr(viewer, name) == getattr(twin, name), name

@@ -128,3 +128,27 @@ def test_without_the_robot_visuals_the_run_is_the_same_to_the_bit(cfg):
     attach(on)
     with pytest.raises(ValueError, match="visuals=True"):
         attach(off)
+
+
+def test_without_island_discovery_the_run_is_the_same_to_the_bit():
+    """The build disables MuJoCo's constraint islands (one robot: at most one island); with them on,
+    a run with a payload off centre, a turn and a stop gives the same bits."""
+    import mujoco
+
+    cfg = load_config(overrides={"payload.mass_kg": 40.0, "payload.xy_m": [0.1, 0.05]})
+    series = {}
+    for islands in (False, True):
+        twin = Twin(cfg, TwinOptions(world="empty", visuals=False))
+        flag = int(mujoco.mjtDisableBit.mjDSBL_ISLAND)
+        assert twin.physics.model.opt.disableflags & flag
+        if islands:
+            twin.physics.model.opt.disableflags &= ~flag
+        twin.client.linear(0.7)
+        twin.advance(1.5)
+        twin.client.angular(-60.0, 0.0)
+        twin.advance(1.0)
+        twin.client.stop()
+        twin.advance(0.5)
+        series[islands] = twin.recorder.series()
+    for name in ("pose", "true_rpm", "current_a"):
+        np.testing.assert_array_equal(getattr(series[False], name), getattr(series[True], name), err_msg=name)

@@ -41,6 +41,31 @@ def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch, payload_kg):
         assert np.array_equal(np.asarray(a), np.asarray(b))
 
 
+@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+def test_contact_loads_of_the_helper_are_the_physics_contact_forces():
+    """rr_contact_loads (a sweep point's 50 Hz sample) gives Physics.support_normal_forces_n's bits:
+    the wheels' and balls' normal contact forces, each support on its own, through a turn with
+    a payload at the rear that unloads the front casters."""
+    cfg = load_config(overrides={"payload.mass_kg": 45.0, "payload.xy_m": [-0.2, 0.07]})
+    twin = Twin(cfg, TwinOptions(world="empty", visuals=False))
+    assert twin.rolling.engine == "C"
+    seen = []
+
+    def sample(t_us):
+        seen.append((twin.rolling.contact_loads(), twin.physics.support_normal_forces_n().tolist()))
+
+    twin.samplers.append(sample)
+    twin.client.linear(0.7)
+    twin.advance(1.0)
+    twin.client.angular(-60.0, 0.0)
+    twin.advance(1.0)
+    c, py = np.array([a for a, _ in seen]), np.array([b for _, b in seen])
+    assert len(seen) >= 200 and np.array_equal(c, py)
+    weight = cfg.payload.mass_kg * cfg.sim.gravity_m_s2
+    assert np.all(c[:, :2] > 50.0) and c.sum(axis=1).mean() > weight  # the robot and its load stand on them
+    assert c[:, 2:4].mean() < c[:, 4:].mean()  # rear payload: the rear casters carry more than the front
+
+
 def test_resistance_follows_the_loads(monkeypatch):
     """Tyre: the hinge friction grows by Crr N r; balls: Crr N against the ball's motion."""
     cfg = load_config(overrides={"payload.mass_kg": 30.0})

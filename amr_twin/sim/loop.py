@@ -34,17 +34,16 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from amr_twin.model.build import build
 from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.collisions import CollisionMonitor, check_start, check_supported
+from amr_twin.sim.collisions import CollisionMonitor
 from amr_twin.model.config import TwinConfig
 from amr_twin.controllers.firmware import make_firmware
 from amr_twin.controllers.odometry import WheelOdometry
 from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
 from amr_twin.ros.messages import Float64
-from amr_twin.sim.physics import Physics
+from amr_twin.sim.settled_physics import settled_physics
 from amr_twin.sim.plant import Plant
 from amr_twin.recording.recorder import Recorder
 from amr_twin.sim.rolling_resistance import RollingResistance
@@ -90,17 +89,12 @@ class Twin:
         self.cfg, self.options = cfg, options
         start = options.start_xy_yaw if options.start_xy_yaw is not None else default_start(options.world)
         self.start_xy_yaw = tuple(float(v) for v in start)
-        built = build(cfg, options.world, self.start_xy_yaw, visuals=options.visuals, imu=options.sensors)
-        self.urdf = built.urdf
-        """The robot description as built (``/robot_description`` of a recording)."""
-        self.physics = Physics(built.model)
         pose = f"{start[0]:g},{start[1]:g},{math.degrees(start[2]):g}"
         where = (f"--start {pose} in world {options.world}" if options.start_xy_yaw is not None
                  else f"the start pose {pose} of world {options.world}")
-        check_start(self.physics, where)
-        self.physics.settle(options.settle_s)
-        check_supported(self.physics, where)
-        self.physics.data.time = 0.0
+        self.physics, self.urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals,
+                                                  options.sensors, options.settle_s, where)
+        """:attr:`urdf`: the robot description as built (``/robot_description`` of a recording)."""
         self.dt_us = int(round(self.physics.timestep_s * US))
         self.t_phys_us = 0
         self.clock = VirtualClock()

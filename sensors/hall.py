@@ -180,6 +180,12 @@ class HallSensors:
         sub-intervals.
         """
         nw = self.n_wheels
+        jitter = self.jitter_us > 0.0
+        if self._kernel is not None and not jitter and not any(self.glitch_rate_hz):
+            edges = self._kernel.edges(ts, rows, self.stuck, self._count)  # resamples as below, in C
+            if edges is not None:
+                edges.sort(key=_edge_time)
+                return edges
         for w in range(nw):
             speeds = [r[nw + w] for r in rows]
             if any(a * b < 0 for a, b in zip(speeds, speeds[1:])):
@@ -187,12 +193,6 @@ class HallSensors:
                 t_arr, q, v = split_trajectory(np.array(ts, np.int64), samples[:, :nw], samples[:, nw:2 * nw], 8)
                 ts, rows = t_arr.tolist(), np.hstack([q, v]).tolist()
                 break
-        jitter = self.jitter_us > 0.0
-        if self._kernel is not None and not jitter and not any(self.glitch_rate_hz):
-            edges = self._kernel.edges(ts, rows, self.stuck, self._count)
-            if edges is not None:
-                edges.sort(key=_edge_time)
-                return edges
         pitch, offsets, floor = self.pitch_rad, self.offset_rad.tolist(), math.floor
         t_first, t_last = ts[0] + 1, ts[-1]
         intervals = range(len(ts) - 1)

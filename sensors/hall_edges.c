@@ -33,6 +33,16 @@ static double solve_hermite(double q0, double q1, double m0, double m1, double t
     return s;
 }
 
+/* 1 if some wheel's speed changes sign between two of the n + 1 samples (rows as below): the
+ * caller resamples such a chunk first (a wheel may cross a boundary twice in an interval). */
+int hall_reverses(int n, const double* rows, int ncol, int nw) {
+    for (int w = 0; w < nw; w++)
+        for (int i = 0; i < n; i++)
+            if (rows[i * ncol + nw + w] * rows[(i + 1) * ncol + nw + w] < 0.0)
+                return 1;
+    return 0;
+}
+
 /* n + 1 samples: ts (n + 1,) us; rows (n + 1, ncol): the nw wheel angles (rad), then their
  * speeds (rad/s). offsets (nw, 3) rad, stuck (nw, 3), pitch rad. Writes each free sensor's final
  * toggle count to count (nw, 3) and the edges (time us, wheel) to out_t, out_w in the order

@@ -13,6 +13,7 @@ method is its Python twin.
 from __future__ import annotations
 
 import ctypes
+from array import array
 from pathlib import Path
 
 import numpy as np
@@ -31,10 +32,14 @@ class EdgeKernel:
         fn = self._fn = lib.hall_edges
         p, i = ctypes.c_void_p, ctypes.c_int
         fn.restype, fn.argtypes = i, [i, p, p, i, i, p, p, ctypes.c_double, p, p, p, i]
+        reverses = self._reverses = lib.hall_reverses
+        reverses.restype, reverses.argtypes = i, [i, p, i, i]
         self.n_wheels = len(offsets_rad)
         self._offsets = np.ascontiguousarray(offsets_rad, float)
         self._pitch = float(pitch_rad)
         self._stuck = np.zeros(self._offsets.shape, np.intc)
+        self._stuck_as = [[False] * self._offsets.shape[1] for _ in range(self.n_wheels)]
+        self._any_stuck = False
         self._count = np.zeros(self._offsets.shape, np.int64)
         self._t, self._w = np.zeros(MAX_EDGES, np.int64), np.zeros(MAX_EDGES, np.intc)
         self._fixed = (address(self._offsets), address(self._stuck), self._pitch, address(self._count),
@@ -44,17 +49,36 @@ class EdgeKernel:
               count: np.ndarray) -> list[tuple[int, int]] | None:
         """``(t_us, wheel)`` edges in the order wheel, sensor, interval, crossing (not sorted), the
         free sensors' final toggle counts written to ``count`` (n_wheels, 3); None beyond
-        :data:`MAX_EDGES` edges."""
-        t = np.array(ts, np.int64)
-        r = np.array(rows, float)
-        self._stuck[:] = stuck
+        :data:`MAX_EDGES` edges. ``rows`` as :meth:`amr_twin.sensors.hall.HallSensors.edges_from_samples`
+        takes them; a chunk where a speed changes sign is resampled first (:func:`split_trajectory`),
+        as there. The samples go to C as flat arrays of the angles and speeds only (``array``:
+        a third of the cost of numpy's conversion of nested lists)."""
+        nw = self.n_wheels
+        ncol = 2 * nw
+        t = array("q", ts)
+        flat: list[float] = []
+        extend = flat.extend
+        for row in rows:
+            extend(row[:ncol])
+        r = array("d", flat)
+        if self._reverses(len(t) - 1, address(r), ncol, nw):
+            samples = np.frombuffer(r).reshape(len(t), ncol)
+            t_new, q, v = split_trajectory(np.frombuffer(t, np.int64), samples[:, :nw], samples[:, nw:], 8)
+            t, r = t_new, np.ascontiguousarray(np.hstack([q, v]))
+        if stuck != self._stuck_as:
+            self._stuck[:] = stuck
+            self._stuck_as = [list(s) for s in stuck]
+            self._any_stuck = any(map(any, stuck))
         offsets_at, stuck_at, pitch, count_at, t_at, w_at, cap = self._fixed
-        n = self._fn(len(t) - 1, address(t), address(r), r.shape[1], self.n_wheels, offsets_at, stuck_at, pitch,
+        n = self._fn(len(t) - 1, address(t), address(r), ncol, nw, offsets_at, stuck_at, pitch,
                      count_at, t_at, w_at, cap)
         if n < 0:
             return None
-        free = self._stuck == 0
-        count[free] = self._count[free]
+        if self._any_stuck:
+            free = self._stuck == 0
+            count[free] = self._count[free]
+        else:
+            count[:] = self._count
         return list(zip(self._t[:n].tolist(), self._w[:n].tolist()))
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from amr_twin.experiments import chapter5_payload as payload
-from amr_twin.model.config import TwinConfig
+from amr_twin.model.config import TwinConfig, with_values
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.analysis.metrics import step_info
 from amr_twin.sim.run import Command, run_command
@@ -65,11 +65,7 @@ class _Job:
 
 
 def _with_payload(cfg: TwinConfig, mass_kg: float) -> TwinConfig:
-    if mass_kg == cfg.payload.mass_kg:
-        return cfg
-    data = cfg.model_dump()
-    data["payload"]["mass_kg"] = mass_kg
-    return TwinConfig.model_validate(data)
+    return cfg if mass_kg == cfg.payload.mass_kg else with_values(cfg, {"payload.mass_kg": mass_kg})
 
 
 def simulate(job: _Job) -> dict:

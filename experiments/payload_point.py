@@ -16,7 +16,7 @@ import hashlib
 import math
 from dataclasses import dataclass
 
-from amr_twin.model.config import TwinConfig, load_config
+from amr_twin.model.config import TwinConfig, with_values
 from amr_twin.sim.run import Command
 
 POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
@@ -78,18 +78,7 @@ def _micrometres_inside(v: float) -> float:
 
 def with_payload(cfg: TwinConfig, mass_kg: float, xy_m: tuple[float, float]) -> TwinConfig:
     """``cfg`` with another payload, validated again (raises :class:`ConfigError`)."""
-    flat: dict = {}
-
-    def walk(node: dict, prefix: str) -> None:
-        for key, value in node.items():
-            if isinstance(value, dict):
-                walk(value, f"{prefix}{key}.")
-            else:
-                flat[prefix + key] = list(value) if isinstance(value, tuple) else value
-
-    walk(cfg.model_dump(), "")
-    flat.update({"payload.mass_kg": mass_kg, "payload.xy_m": list(xy_m)})
-    return load_config(overrides=flat)
+    return with_values(cfg, {"payload.mass_kg": mass_kg, "payload.xy_m": list(xy_m)})
 
 
 @dataclass(frozen=True)

@@ -235,6 +235,19 @@ def load_parameters(path: str | Path | None = None, *, override_file: str | Path
     return cfg, meta
 
 
+def with_values(cfg: TwinConfig, overrides: dict[str, Any]) -> TwinConfig:
+    """``cfg`` with the values of ``overrides`` (``{"dotted.key": value}``) replaced, validated
+    again like a loaded file (raises :class:`ConfigError`); the parameter file is not read again."""
+    plain = cfg.model_dump()
+    for key, value in overrides.items():
+        _set_path(plain, key, value)
+    _reject_nan(plain)
+    try:
+        return TwinConfig.model_validate(plain)
+    except ValidationError as exc:
+        raise ConfigError(_format_error(exc, TwinConfig)) from None
+
+
 def _override_meta(meta: dict, key: str, leaf: Any, by: str) -> None:
     """Record who replaced ``key``'s value. An override leaf with a source or a spread of its
     own (range, sigma, follows) brings its own description; the file's spread does not

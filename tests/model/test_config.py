@@ -112,3 +112,23 @@ def test_a_parameter_file_that_is_a_folder_or_binary_is_named(tmp_path):
     (tmp_path / "o.yaml").write_text("wheel:\n  radiuss_m: 3\n")
     with pytest.raises(ConfigError, match=r"o.yaml: wheel.radiuss_m: unknown key"):
         load_config(override_file=tmp_path / "o.yaml")
+
+
+def test_with_values_replaces_and_validates_like_a_loaded_file():
+    """with_values (a sweep point's payload) gives what loading the file with the same overrides
+    gives, and refuses what loading refuses, with the same one-line messages."""
+    from amr_twin.model.config import with_values
+
+    base = load_config(overrides={"wheel.radius_m": 0.081})
+    changes = {"payload.mass_kg": 30.0, "payload.xy_m": [-0.1, 0.05]}
+    assert with_values(base, changes) == load_config(overrides={"wheel.radius_m": 0.081, **changes})
+    assert with_values(base, changes).wheel.radius_m == 0.081
+    for bad, message in (({"payload.mass_kg": -1.0}, "payload.mass_kg: -1.0 is out of range"),
+                         ({"payload.mass_kg": float("nan")}, "payload.mass_kg: nan must be a finite number"),
+                         ({"payload.colour": 1}, "payload.colour: unknown key"),
+                         ({"payload.mass_kg": 5.0, "payload.xy_m": [0.5, 0.0]}, "outside the deck")):
+        with pytest.raises(ConfigError, match=message.replace(".", r"\.")) as info:
+            with_values(base, bad)
+        with pytest.raises(ConfigError) as loaded:
+            load_config(overrides={"wheel.radius_m": 0.081, **bad})
+        assert str(info.value) == str(loaded.value) and "\n" not in str(info.value)

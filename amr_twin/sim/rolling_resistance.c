@@ -23,12 +23,29 @@ typedef struct {
     double ball_speed_eps;              /* m/s */
 } rr_params;
 
+/* Normal contact force (6,) N on the wheels L, R and caster balls fl, fr, rl, rr in the last
+ * step: each contact's first constraint row, summed by support in contact order, as
+ * Physics.support_normal_forces_n (amr_twin/sim/physics.py) does in Python. */
+void rr_contact_loads(const mjData* d, const rr_params* p, double* out) {
+    for (int k = 0; k < 6; k++)
+        out[k] = 0.0;
+    for (int i = 0; i < d->ncon; i++) {
+        const mjContact* con = d->contact + i;
+        int g1 = con->geom[0], g2 = con->geom[1];
+        int k1 = (g1 >= 0 && g1 < p->ngeom) ? p->support_of_geom[g1] : -1;
+        int k2 = (g2 >= 0 && g2 < p->ngeom) ? p->support_of_geom[g2] : -1;
+        int k = k1 > k2 ? k1 : k2;
+        if (k >= 0 && con->efc_address >= 0)
+            out[k] += d->efc_force[con->efc_address];
+    }
+}
+
 /* Normal loads (6,) N: wheel left, right, casters fl, fr, rl, rr; sets the hinges' friction
  * loss and the chassis' generalized force (unless ball_crr is 0). */
 void rr_update(const mjModel* m, mjData* d, const rr_params* p, double* loads) {
     const double* qpos = d->qpos;
     const double* qvel = d->qvel;
-    double load, contact[4] = {0.0, 0.0, 0.0, 0.0};
+    double load, contact[6];
     int have_contact = 0;
 
     for (int w = 0; w < 2; w++) {
@@ -42,18 +59,10 @@ void rr_update(const mjModel* m, mjData* d, const rr_params* p, double* loads) {
             loads[2 + c] = load > 0.0 ? load : 0.0;
         } else {  /* on its stop (or lifted): the contact force of the last step */
             if (!have_contact) {
-                for (int i = 0; i < d->ncon; i++) {
-                    const mjContact* con = d->contact + i;
-                    int g1 = con->geom[0], g2 = con->geom[1];
-                    int k1 = (g1 >= 0 && g1 < p->ngeom) ? p->support_of_geom[g1] : -1;
-                    int k2 = (g2 >= 0 && g2 < p->ngeom) ? p->support_of_geom[g2] : -1;
-                    int k = k1 > k2 ? k1 : k2;
-                    if (k >= 2 && con->efc_address >= 0)
-                        contact[k - 2] += d->efc_force[con->efc_address];
-                }
+                rr_contact_loads(d, p, contact);
                 have_contact = 1;
             }
-            loads[2 + c] = contact[c];
+            loads[2 + c] = contact[2 + c];
         }
     }
     m->dof_frictionloss[p->wheel_dof[0]] = p->motor_friction[0] + p->tyre_arm_m * loads[0];
@@ -85,21 +94,4 @@ void rr_update(const mjModel* m, mjData* d, const rr_params* p, double* loads) {
     qfrc[3] = x6 * tz;
     qfrc[4] = x7 * tz;
     qfrc[5] = x8 * tz;
-}
-
-/* Normal contact force (6,) N on the wheels L, R and caster balls fl, fr, rl, rr in the last
- * step: each contact's first constraint row, summed by support in contact order, as
- * Physics.support_normal_forces_n (amr_twin/sim/physics.py) does in Python. */
-void rr_contact_loads(const mjData* d, const rr_params* p, double* out) {
-    for (int k = 0; k < 6; k++)
-        out[k] = 0.0;
-    for (int i = 0; i < d->ncon; i++) {
-        const mjContact* con = d->contact + i;
-        int g1 = con->geom[0], g2 = con->geom[1];
-        int k1 = (g1 >= 0 && g1 < p->ngeom) ? p->support_of_geom[g1] : -1;
-        int k2 = (g2 >= 0 && g2 < p->ngeom) ? p->support_of_geom[g2] : -1;
-        int k = k1 > k2 ? k1 : k2;
-        if (k >= 0 && con->efc_address >= 0)
-            out[k] += d->efc_force[con->efc_address];
-    }
 }

@@ -184,14 +184,14 @@ def _log_scan(rec, m, capture: Capture) -> None:
     c, s = np.cos(yaw), np.sin(yaw)
     world = np.column_stack([p[:, 0] + c * local[:, 0] - s * local[:, 1],
                              p[:, 1] + s * local[:, 0] + c * local[:, 1], p[:, 2]])
-    start = 0
-    for n, end_s in zip(sizes, ends):
-        keep = ok[start:start + n]
-        rec.set_time(TIMELINE, duration=end_s)  # the rotation is complete
-        rec.log("world/bodies/amr/laser/scan", rr.Points3D(local[start:start + n][keep], colors=[(250, 200, 40)],
-                                                          radii=[0.01]))
-        rec.log("world/scan", rr.Points3D(world[start:start + n][keep], colors=[(40, 120, 250)], radii=[0.015]))
-        start += n
+    # one row per scan at the end of its rotation, its beams with a return: two columnar sends
+    bounds = np.r_[0, np.cumsum(sizes)]
+    kept = np.diff(np.r_[0, np.cumsum(ok)][bounds])  # beams with a return, per scan
+    for entity, points, colour, radius in (("world/bodies/amr/laser/scan", local, (250, 200, 40), 0.01),
+                                           ("world/scan", world, (40, 120, 250), 0.015)):
+        style = rr.Points3D.columns(colors=np.tile(colour, (len(sizes), 1)), radii=np.full(len(sizes), radius))
+        rec.send_columns(entity, indexes=_time(ends),
+                         columns=[*rr.Points3D.columns(positions=points[ok]).partition(kept), *style])
 
 
 def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:

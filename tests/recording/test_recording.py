@@ -110,6 +110,35 @@ def test_rrd_entities_and_rates(recorded):
     assert not any(e.startswith(("/uwb", "/world/uwb")) for e in entities)  # no UWB sensor: no UWB ranges
 
 
+def test_rrd_scans_are_the_scans_beams(recorded):
+    """Each scan row holds its own beams with a return: in the laser frame at their measured
+    ranges and angles, in the world at the same distance from the laser's track, stamped at
+    the end of the rotation."""
+    from amr_twin.sensors.lidar_beams import scan_end_time_s
+
+    _cfg, capture, _result, _plain, paths = recorded
+    _rows, batches = _rrd_chunks(paths["rrd"])
+
+    def column(entity, name):
+        return [v for b in batches[entity] for v in b.column(name).to_pylist()]
+
+    scans = [msg for _t, msg in capture.messages["scan"]]
+    local = column("/world/bodies/amr/laser/scan", "Points3D:positions")
+    world = column("/world/scan", "Points3D:positions")
+    times = column("/world/scan", "sim_time")
+    assert len(local) == len(world) == len(times) == len(scans) > 10
+    for k in (0, len(scans) // 2, len(scans) - 1):
+        msg, pts, wpts = scans[k], np.array(local[k]), np.array(world[k])
+        ok = np.isfinite(msg.ranges)
+        angles = (msg.angle_min + msg.angle_increment * np.arange(len(msg.ranges)))[ok]
+        assert len(pts) == len(wpts) == ok.sum() > 100
+        np.testing.assert_allclose(np.hypot(pts[:, 0], pts[:, 1]), msg.ranges[ok], rtol=1e-5)
+        np.testing.assert_allclose(np.arctan2(pts[:, 1], pts[:, 0]), np.angle(np.exp(1j * angles)), atol=1e-5)
+        laser_z = wpts[0, 2]
+        assert np.allclose(wpts[:, 2], laser_z, atol=1e-3) and 0.1 < laser_z < 1.0  # the chassis pitches a little
+        assert abs(times[k].total_seconds() - scan_end_time_s(msg)) < 1e-6
+
+
 def test_mcap_topics_rates_and_values(recorded):
     _cfg, capture, result, _plain, paths = recorded
     msgs = _mcap_messages(paths["mcap"])

@@ -111,8 +111,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     req = twin.client.last_request
     loads, contact, up_z, vel = [], [], [], []
     every_us, rolling, contact_loads = int(round(SAMPLE_S * 1e6)), twin.rolling, twin.rolling.contact_loads
-    d, base, r0 = twin.physics.data, twin.physics.base_body, int(twin.physics.root_dof)
-    xmat, qvel, zz = d.xmat, d.qvel, 9 * base + 8
+    up_z_now, velocity_now = twin.physics.base_up_z, twin.physics.base_velocity_list
 
     def sample(t_us: int) -> bool:
         """Every SAMPLE_S on the loop's record grid, the physics at ``t_us`` (after the rolling
@@ -124,8 +123,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
         if t_us % every_us == 0:
             loads.append(rolling.loads)  # the springs' loads (module notes)
             contact.append(contact_loads())
-            up_z.append(xmat.item(zz))
-            vel.append(qvel[r0:r0 + 6].tolist())
+            up_z.append(up_z_now())
+            vel.append(velocity_now())
         return False
 
     twin.samplers.append(sample)

@@ -145,8 +145,15 @@ class Physics:
 
     def base_tilt_rad(self) -> float:
         """Angle between the base z axis and the world vertical."""
-        zz = self.data.xmat[self.base_body].reshape(3, 3)[2, 2]
-        return math.acos(max(-1.0, min(1.0, zz)))
+        return math.acos(max(-1.0, min(1.0, self.base_up_z())))
+
+    def base_up_z(self) -> float:
+        """World z of the base's z axis: the cosine of :meth:`base_tilt_rad` (one float read)."""
+        return self.data.xmat.item(9 * self.base_body + 8)
+
+    def base_velocity_list(self) -> list[float]:
+        """:meth:`base_velocity` as a plain list (a sampler's 50 Hz read)."""
+        return self.data.qvel[self.root_dof:self.root_dof + 6].tolist()
 
     def robot_mass_kg(self) -> float:
         return float(self.model.body_subtreemass[self.base_body])

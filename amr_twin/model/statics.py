@@ -83,17 +83,29 @@ def _unloaded_parts(cfg: TwinConfig) -> tuple:
     return parts
 
 
+_loaded_memo: dict[tuple, tuple] = {}
+
+
 def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
-    """Total mass (kg) and centre of mass ((3,), m, base_link) with the payload."""
+    """Total mass (kg) and centre of mass ((3,), m, base_link, read-only) with the payload;
+    kept per robot and payload (a sweep point solves the statics five times)."""
     from amr_twin.model import mass
 
     c, p = cfg.chassis, cfg.payload
+    key = (cfg.chassis, cfg.deck, cfg.components, cfg.wheel, cfg.caster, cfg.uwb, p)
+    kept = _loaded_memo.get(key)
+    if kept is not None:
+        return kept
     parts = list(_unloaded_parts(cfg))
     if p.mass_kg > 0:
         z = c.floor_c_z_m + c.sheet_thickness_m + p.size_m[2] / 2
         parts.append(mass.Inertial(p.mass_kg, np.array([p.xy_m[0], p.xy_m[1], z]), np.zeros((3, 3))))
     total = mass.combine(parts)
-    return total.mass_kg, total.com_m
+    total.com_m.setflags(write=False)
+    if len(_loaded_memo) > 64:
+        _loaded_memo.clear()
+    _loaded_memo[key] = kept = (total.mass_kg, total.com_m)
+    return kept
 
 
 def support_points_xy(cfg: TwinConfig) -> dict[str, np.ndarray]:

@@ -117,6 +117,7 @@ def test_unloaded_tip_margin_is_the_distance_to_the_wheel_caster_edge():
     ("caster.drop_m", 0.004, "com"),
     ("components.lidar.pos_m", [0.3, 0.0, 0.35], "com"),
     ("uwb.tag_mass_kg", 0.05, "mass"),
+    ("payload.mass_kg", 20.0, "mass"),
 ])
 def test_mass_and_com_follow_every_section_they_are_built_from(key, value, moves):
     """robot_mass_com keeps the unloaded robot per robot: a change of any section it reads shows."""

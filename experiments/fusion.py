@@ -101,14 +101,15 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     """
     from amr_twin.sensors.uwb import UwbSensor
 
+    recording = rrd_path is not None or mcap_path is not None
     twin = Twin(robot.config(cfg), TwinOptions(firmware=firmware, world=route.world, seed=seed,
-                                               start_xy_yaw=route.start_xy_yaw, sensors=True,
+                                               start_xy_yaw=route.start_xy_yaw, sensors=True, visuals=recording,
                                                **robot.twin_options()))
     m, d = twin.physics.model, twin.physics.data
     twin.uwb = UwbSensor(m, d, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
     streams = Streams()
     twin.bus.add_tap(streams.tap)
-    if rrd_path is not None or mcap_path is not None:
+    if recording:
         from amr_twin.recording.rerun_capture import attach
         attach(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)

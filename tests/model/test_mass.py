@@ -110,3 +110,25 @@ def test_mass_module_needs_no_mesh_library():
     code = "import sys, amr_twin.model.build, amr_twin.model.statics; print('trimesh' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("key, value, moves", [
+    ("components.battery.mass_kg", 9.0, "mass"),
+    ("deck.density_kg_m3", 2900.0, "mass"),
+    ("chassis.tube_wall_m", 0.002, "mass"),
+    ("wheel.radius_m", 0.14, "com"),
+    ("caster.drop_m", 0.004, "com"),
+    ("components.lidar.pos_m", [0.3, 0.0, 0.35], "com"),
+    ("uwb.tag_mass_kg", 0.05, "mass"),
+    ("payload.mass_kg", 20.0, "mass"),
+])
+def test_mass_and_com_follow_every_section_they_are_built_from(key, value, moves):
+    """robot_mass_com keeps the robot per robot and payload: a change of any section it reads shows."""
+    base_mass, base_com = mass.robot_mass_com(load_config())
+    mass_kg, com_m = mass.robot_mass_com(load_config(overrides={key: value}))
+    if moves == "mass":
+        assert abs(mass_kg - base_mass) > 1e-6
+    else:
+        assert np.max(np.abs(com_m - base_com)) > 1e-6
+    again_mass, again_com = mass.robot_mass_com(load_config())
+    assert again_mass == base_mass and np.array_equal(again_com, base_com)

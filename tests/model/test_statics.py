@@ -107,27 +107,3 @@ def test_unloaded_tip_margin_is_the_distance_to_the_wheel_caster_edge():
     hand = abs((c - a) * (y - b) - (d - b) * (x - a)) / np.hypot(c - a, d - b)
     assert info["tip_margin_m"] == pytest.approx(hand, abs=1e-4)
     assert 0.2 < hand < 0.25
-
-
-@pytest.mark.parametrize("key, value, moves", [
-    ("components.battery.mass_kg", 9.0, "mass"),
-    ("deck.density_kg_m3", 2900.0, "mass"),
-    ("chassis.tube_wall_m", 0.002, "mass"),
-    ("wheel.radius_m", 0.14, "com"),
-    ("caster.drop_m", 0.004, "com"),
-    ("components.lidar.pos_m", [0.3, 0.0, 0.35], "com"),
-    ("uwb.tag_mass_kg", 0.05, "mass"),
-    ("payload.mass_kg", 20.0, "mass"),
-])
-def test_mass_and_com_follow_every_section_they_are_built_from(key, value, moves):
-    """robot_mass_com keeps the unloaded robot per robot: a change of any section it reads shows."""
-    from amr_twin.model.statics import robot_mass_com
-
-    base_mass, base_com = robot_mass_com(load_config())
-    mass_kg, com_m = robot_mass_com(load_config(overrides={key: value}))
-    if moves == "mass":
-        assert abs(mass_kg - base_mass) > 1e-6
-    else:
-        assert np.max(np.abs(com_m - base_com)) > 1e-6
-    again_mass, again_com = robot_mass_com(load_config())
-    assert again_mass == base_mass and np.array_equal(again_com, base_com)

@@ -92,9 +92,11 @@ class Twin:
         pose = f"{start[0]:g},{start[1]:g},{math.degrees(start[2]):g}"
         where = (f"--start {pose} in world {options.world}" if options.start_xy_yaw is not None
                  else f"the start pose {pose} of world {options.world}")
-        self.physics, self.urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals,
-                                                  options.sensors, options.settle_s, where)
-        """:attr:`urdf`: the robot description as built (``/robot_description`` of a recording)."""
+        physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals, options.sensors,
+                                        options.settle_s, where)
+        self.physics = physics
+        self.urdf = urdf
+        """The robot description as built (``/robot_description`` of a recording)."""
         self.dt_us = int(round(self.physics.timestep_s * US))
         self.t_phys_us = 0
         self.clock = VirtualClock()

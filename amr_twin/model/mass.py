@@ -192,10 +192,15 @@ def robot_mass_kg(cfg: TwinConfig) -> float:
 _unloaded_memo: dict[tuple, tuple] = {}
 
 
+def _robot_key(cfg: TwinConfig) -> tuple:
+    """The sections the unloaded robot's mass properties are built from (hashable: frozen models)."""
+    return cfg.chassis, cfg.deck, cfg.components, cfg.wheel, cfg.caster, cfg.uwb
+
+
 def _unloaded_parts(cfg: TwinConfig) -> tuple:
     """The robot's parts without the payload (base_link), kept per robot: a sweep's points
     differ by their payload only, and each solves the statics several times (~2 ms a build)."""
-    key = (cfg.chassis, cfg.deck, cfg.components, cfg.wheel, cfg.caster, cfg.uwb)
+    key = _robot_key(cfg)
     parts = _unloaded_memo.get(key)
     if parts is not None:
         return parts
@@ -224,7 +229,7 @@ def robot_mass_com(cfg: TwinConfig) -> tuple[float, np.ndarray]:
     """Total mass (kg) and centre of mass ((3,), m, base_link, read-only) with the payload;
     kept per robot and payload (a sweep point solves the statics five times)."""
     c, p = cfg.chassis, cfg.payload
-    key = (cfg.chassis, cfg.deck, cfg.components, cfg.wheel, cfg.caster, cfg.uwb, p)
+    key = (*_robot_key(cfg), p)
     kept = _loaded_memo.get(key)
     if kept is not None:
         return kept

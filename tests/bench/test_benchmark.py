@@ -54,3 +54,24 @@ def test_the_benchmark_scenario_touches_nothing_but_the_floor():
     assert twin.collisions.collisions == []
     assert twin.physics.pose().x_m - (-8.0) > 10.0  # it drove the whole 11 m down the aisle
     assert (twin.lidar.last_hit_geom >= 0).mean() > 0.95  # walls and racks in range of the LiDAR
+
+
+def test_timed_children_cache_their_bytecode_outside_the_tree(tmp_path, monkeypatch):
+    """Start-up is timed as a user's second start: with PYTHONDONTWRITEBYTECODE set (as on this
+    sandbox), a child given the bench's environment still caches the package's bytecode, in the
+    bench's own folder and not beside the sources."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import amr_twin
+    from amr_twin.bench import suites as sb
+
+    monkeypatch.setenv("PYTHONDONTWRITEBYTECODE", "1")
+    tree = Path(amr_twin.__file__).parent
+    before = sorted(tree.rglob("*.pyc"))
+    cache = tmp_path / "pycache"
+    subprocess.run([sys.executable, "-c", "import amr_twin.bench.suites"], check=True, env=sb._child_env(str(cache)))
+    cached = {p.name.split(".")[0] for p in cache.rglob("*.pyc") if "amr_twin" in p.parts}
+    assert {"suites", "physics", "config"} <= cached
+    assert sorted(tree.rglob("*.pyc")) == before

@@ -19,13 +19,18 @@ import sys
 from pathlib import Path
 from typing import Optional
 
-import typer
-
+# Set before anything imports numpy, MuJoCo or pydantic (the values a user exported win):
 # headless: MuJoCo need not load its OpenGL bindings (glfw, ~0.1 s of start-up) unless asked to
 os.environ.setdefault("MUJOCO_GL", "disable")
 # no pydantic plugins in the command line's process (its entry-point scan is ~12 ms of every start-up);
 # PYDANTIC_DISABLE_PLUGINS= (empty) in the environment brings them back
 os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
+# numpy's OpenBLAS on one thread: its worker threads spin-wait after start-up and after each call
+# (~0.11 s of CPU on `import numpy` on 2 cores, a sixth of a 1 s run), while the twin's matrices are
+# small (a 14 x 14 mass matrix, 3 x 3 covariances); the pool workers inherit it (on 2 cores they competed)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import typer  # noqa: E402
 
 try:  # typer >= 0.20 carries its own copy of click
     from typer._click import exceptions as _click_errors

@@ -1,0 +1,25 @@
+"""The command line's process: what it sets before numpy loads."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+COUNT_THREADS = "import os, numpy; print(len(os.listdir('/proc/self/task')))"
+
+
+def _threads(code: str, **env) -> int:
+    base = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    out = subprocess.run([sys.executable, "-c", code], env={**base, **env}, capture_output=True, text=True, check=True)
+    return int(out.stdout.split()[-1])
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task") or (os.cpu_count() or 1) < 2,
+                    reason="counts the threads of a process in /proc on a machine with 2 cores or more")
+def test_the_command_line_starts_no_blas_threads_unless_asked():
+    """numpy's OpenBLAS starts a worker per core that spin-waits (~0.1 s of CPU at import on 2 cores):
+    the command line's process runs it on its own thread, and a value the user exported wins."""
+    assert _threads(COUNT_THREADS) > 1  # numpy alone: OpenBLAS's workers
+    assert _threads("import amr_twin.cli.main; " + COUNT_THREADS) == 1
+    assert _threads("import amr_twin.cli.main; " + COUNT_THREADS, OPENBLAS_NUM_THREADS="2") == 2

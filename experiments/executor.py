@@ -26,7 +26,8 @@ EXECUTORS = ("local", "dask")
 
 
 def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
-            description: str = "runs", progress: bool = True, client=None) -> Iterator[tuple[Any, Any]]:
+            description: str = "runs", progress: bool = True, client=None,
+            size: Callable[[Any], int] | None = None) -> Iterator[tuple[Any, Any]]:
     """Yield ``(item, func(item))`` as each completes (in order when ``jobs == 1`` and no client).
 
     Parameters
@@ -39,25 +40,27 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
     progress : show the rich progress bar (stderr).
     client : a ``distributed.Client`` (see :func:`~.dask_cluster.connect_dask`): run the items on
         its cluster instead of locally. The caller keeps ownership of it.
+    size : how many runs an item holds (the progress bar counts runs); 1 each when None.
     """
     items = list(items)
     if jobs < 1:
         raise ValueError(f"jobs: {jobs} must be >= 1")
+    size = size or (lambda item: 1)
     with _progress_bar(progress) as bar:
-        task = bar.add_task(description, total=len(items))
+        task = bar.add_task(description, total=sum(size(item) for item in items))
         if client is not None:
             for item, result in cluster_results(client, func, items):
-                bar.advance(task)
+                bar.advance(task, size(item))
                 yield item, result
             return
         if jobs == 1 or len(items) <= 1:
             for item in items:
                 result = func(item)
-                bar.advance(task)
+                bar.advance(task, size(item))
                 yield item, result
             return
         for item, result in pool_results(func, items, min(jobs, len(items)) - 1):
-            bar.advance(task)
+            bar.advance(task, size(item))
             yield item, result
 
 
@@ -73,7 +76,7 @@ class _NoBar:
     def add_task(self, description: str, total: int) -> int:
         return 0
 
-    def advance(self, task: int) -> None:
+    def advance(self, task: int, runs: int = 1) -> None:
         return None
 
 

@@ -210,3 +210,9 @@ def simulate_point(point: Point) -> dict:
                    and not row["motor_overload"])
     row["wall_s"] = round(time.perf_counter() - wall0, 3)
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+
+
+def simulate_points(points: tuple[Point, ...]) -> list[dict]:
+    """:func:`simulate_point` of each point, in order, in this process (a work item of the sweep)."""
+    return [simulate_point(point) for point in points]
+

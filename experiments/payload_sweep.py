@@ -35,7 +35,7 @@ from pathlib import Path
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.experiments.payload_point import Point, parse_command
-from amr_twin.experiments.payload_simulation import simulate_point
+from amr_twin.experiments.payload_simulation import simulate_points
 
 
 def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str], commands: list[str],
@@ -93,11 +93,37 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
             todo.append(point)
     wall0 = time.perf_counter()
     done = set()
-    for item, row in run_all(simulate_point, todo, jobs, "payload sweep", progress, client=client):
-        write_json(runs_dir / f"{item.key}.json", row)
-        rows[item.key] = row
-        done.add(item.key)
+    work = [(p,) for p in todo] if client is not None else by_payload(todo, jobs)
+    for group, group_rows in run_all(simulate_points, work, jobs, "payload sweep", progress, client=client,
+                                     size=len):
+        for item, row in zip(group, group_rows):
+            write_json(runs_dir / f"{item.key}.json", row)
+            rows[item.key] = row
+            done.add(item.key)
     recorded = sum(any((folder / f"{key}.{kind}").exists() for kind, folder in folders.items()) for key in done)
     return {"rows": [rows[p.key] for p in points], "simulated": len(todo), "reused": len(points) - len(todo),
             "recorded": recorded, "wall_s": time.perf_counter() - wall0, "duration_s": duration_s,
             "firmware": firmware, **({"draws": draws} if draws is not None else {})}
+
+
+def by_payload(points: list[Point], jobs: int = 1) -> list[tuple[Point, ...]]:
+    """The points as work items: the commands of one payload (mass, position, drawn configuration)
+    together, so that one process runs them and its second twin starts from the first's built and
+    settled physics (:mod:`amr_twin.sim.settled_physics`) instead of building and settling again.
+
+    Adjacent points only (the sweep lists each payload's commands one after the other); one point
+    per item when that would leave fewer items than ``jobs`` processes (a small sweep stays
+    parallel).
+    """
+    groups: list[list[Point]] = []
+    for point in points:
+        last = groups[-1][-1] if groups else None
+        if last is not None and last.cfg is point.cfg and (last.mass_kg, last.position, last.sample) == \
+                (point.mass_kg, point.position, point.sample):
+            groups[-1].append(point)
+        else:
+            groups.append([point])
+    if len(groups) < jobs:
+        return [(p,) for p in points]
+    return [tuple(g) for g in groups]
+

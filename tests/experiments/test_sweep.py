@@ -156,3 +156,32 @@ def test_lift_off_is_judged_on_the_springs_not_on_contact_chatter():
     assert chatter["dyn_min_wheel_contact_n"] < 0.5 < 5.0 < chatter["dyn_min_wheel_n"]
     assert not chatter["wheel_lift_off"] and chatter["safe"]
     assert lifted["wheel_lift_off"] and "wheel_right" in lifted["dyn_lifted"] and not lifted["safe"]
+
+
+def test_a_payloads_commands_are_one_work_item(cfg):
+    """Each payload's commands run in one process (its second twin starts from the first's settled
+    physics); a sweep with fewer payloads than processes keeps one point per item (stays parallel);
+    drawn configurations are never merged with the nominal one."""
+    commands = ["linear:0.7", "angular:60:-1"]
+    points = [Point(m, p, c, 1.0, "faithful", cfg) for m in (0.0, 20.0) for p in ("center", "rear") for c in commands]
+    groups = ps.by_payload(points, jobs=2)
+    assert [len(g) for g in groups] == [2, 2, 2, 2]
+    for g in groups:
+        assert len({(p.mass_kg, p.position) for p in g}) == 1 and [p.command for p in g] == commands
+    assert [p for g in groups for p in g] == points
+    assert ps.by_payload(points, jobs=5) == [(p,) for p in points]
+    drawn = cfg.model_copy()
+    mixed = [points[0], Point(0.0, "center", "angular:60:-1", 1.0, "faithful", drawn, sample=0, sample_id="x")]
+    assert ps.by_payload(mixed) == [(mixed[0],), (mixed[1],)]
+
+
+def test_a_parallel_sweep_gives_the_rows_of_a_serial_one(cfg, tmp_path):
+    args = dict(masses=[0.0, 20.0], positions=["center"], commands=["linear:0.7", "angular:60:-1"], duration_s=1.0,
+                progress=False)
+    rows = {jobs: ps.run(cfg, tmp_path / f"jobs{jobs}", jobs=jobs, **args)["rows"] for jobs in (1, 2)}
+    for r in (*rows[1], *rows[2]):
+        r.pop("wall_s", None)
+    keys = [Point(m, "center", c, 1.0, "faithful", cfg).key for m in args["masses"] for c in args["commands"]]
+    assert [r["key"] for r in rows[1]] == [r["key"] for r in rows[2]] == keys
+    assert all(json.loads((tmp_path / "jobs2" / "runs" / f"{k}.json").read_text())["key"] == k for k in keys)
+    assert json.dumps(rows[2], sort_keys=True) == json.dumps(rows[1], sort_keys=True)

@@ -215,4 +215,3 @@ def simulate_point(point: Point) -> dict:
 def simulate_points(points: tuple[Point, ...]) -> list[dict]:
     """:func:`simulate_point` of each point, in order, in this process (a work item of the sweep)."""
     return [simulate_point(point) for point in points]
-

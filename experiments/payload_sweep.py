@@ -3,8 +3,10 @@
 One simulation per (mass, position, command) point, in the empty world; each
 point's result is one JSON file ``runs/<key>.json`` written atomically, so a rerun
 after an interruption only simulates the missing points (a file made with other
-parameters, firmware or duration is redone). A position that puts the payload off
-the deck fails the configuration check and is recorded as invalid.
+parameters, firmware or duration is redone). The commands of one payload are one work
+item (:func:`by_payload`): their files are written when the last of them is done. A
+position that puts the payload off the deck fails the configuration check and is
+recorded as invalid.
 
 The points (named positions, the parsers, keys and fingerprints) are in
 :mod:`.payload_point`; one point's simulation and when it is **safe** in
@@ -126,4 +128,3 @@ def by_payload(points: list[Point], jobs: int = 1) -> list[tuple[Point, ...]]:
     if len(groups) < jobs:
         return [(p,) for p in points]
     return [tuple(g) for g in groups]
-

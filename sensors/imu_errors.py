@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config_sections import ImuCfg
-from amr_twin.sim.native_build import address, open_helper
+from amr_twin.sim.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("imu_errors.c")
 ERROR_BLOCK = 256
@@ -158,7 +158,7 @@ class ErrorStream:
 
         def corrupt_c(true: np.ndarray) -> np.ndarray:
             n = len(true)
-            true = true if true.flags.c_contiguous and true.dtype == np.float64 else np.ascontiguousarray(true, float)
+            true = c_array(true, np.float64)
             bias, noise = self._errors(n)
             out = np.empty((n, 9))
             fn(n, address(true), address(bias), address(noise), axes_p, address(out))

@@ -32,7 +32,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
-from amr_twin.sim.native_build import address, open_helper
+from amr_twin.sim.native_build import address, c_array, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
 
 C_SOURCE = Path(__file__).with_name("lidar_beams.c")
@@ -115,7 +115,8 @@ class BeamKernels:
         if not (dist.flags.c_contiguous and dist.dtype == np.float64 and geomid.flags.c_contiguous
                 and geomid.dtype == np.int32):
             raise ValueError("dist, geomid: C-contiguous float64 and int32 arrays are written in place")
-        t_us, lx, ly, rows = _c(t_us, np.int64), _c(lx, np.float64), _c(ly, np.float64), _c(rows, np.float64)
+        t_us, lx, ly = c_array(t_us, np.int64), c_array(lx, np.float64), c_array(ly, np.float64)
+        rows = c_array(rows, np.float64)
         self._cast(*self._cast_head, len(t_us), address(t_us), address(lx), address(ly), address(rows), int(npose),
                    address(dist), address(geomid))
 
@@ -123,14 +124,14 @@ class BeamKernels:
                  origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         k = len(t_us)
         u, shift = self._u[:k], self._shift[:k]
-        t_us, lx, ly = _c(t_us, np.int64), _c(lx, np.float64), _c(ly, np.float64)
-        rows, origin = _c(rows, np.float64), _c(origin, np.float64)
+        t_us, lx, ly = c_array(t_us, np.int64), c_array(lx, np.float64), c_array(ly, np.float64)
+        rows, origin = c_array(rows, np.float64), c_array(origin, np.float64)
         self._geometry(k, address(t_us), address(lx), address(ly), address(rows), int(npose), address(origin),
                        self._u_at, self._shift_at)
         return u, shift
 
     def correct(self, normal: np.ndarray, u: np.ndarray, shift: np.ndarray, dist: np.ndarray) -> None:
-        normal, u, shift = _c(normal, np.float64), _c(u, np.float64), _c(shift, np.float64)
+        normal, u, shift = c_array(normal, np.float64), c_array(u, np.float64), c_array(shift, np.float64)
         if not (dist.flags.c_contiguous and dist.dtype == np.float64 and dist.flags.writeable):
             raise ValueError("dist: a writeable C-contiguous float64 array is corrected in place")
         self._correct(len(dist), address(normal), address(u), address(shift), address(dist))
@@ -138,7 +139,7 @@ class BeamKernels:
     def noise(self, dist: np.ndarray, geomid: np.ndarray, z: np.ndarray) -> np.ndarray:
         n = len(dist)
         out = np.empty(n, np.float32)
-        dist, geomid, z = _c(dist, np.float64), _c(geomid, np.int32), _c(z, np.float64)
+        dist, geomid, z = c_array(dist, np.float64), c_array(geomid, np.int32), c_array(z, np.float64)
         self._noise(n, address(dist), address(geomid), address(z), *self._noise_args, address(out))
         return out
 
@@ -156,13 +157,6 @@ def _multiray_address() -> int:
     if lib is None:
         raise OSError("libmujoco.so not found next to the mujoco package")
     return ctypes.cast(ctypes.CDLL(str(lib)).mj_multiRay, ctypes.c_void_p).value
-
-
-def _c(a: np.ndarray, dtype) -> np.ndarray:
-    """``a`` as a C-contiguous array of ``dtype`` (itself when it already is one)."""
-    if a.dtype == dtype and a.flags.c_contiguous:
-        return a
-    return np.ascontiguousarray(a, dtype)
 
 
 def beam_kernels(n_beams: int, cfg: LidarCfg, native: bool = True) -> BeamKernels | PythonBeamKernels:

@@ -52,6 +52,16 @@ def address(array) -> int:
         return array.ctypes.data
 
 
+def c_array(array, dtype):
+    """``array`` as a C-contiguous numpy array of ``dtype`` for a helper: itself when it already is one
+    (no call into ``numpy.ascontiguousarray``: these run at the sensors' rates)."""
+    if array.dtype == dtype and array.flags.c_contiguous:
+        return array
+    import numpy as np
+
+    return np.ascontiguousarray(array, dtype)
+
+
 def _mujoco_include() -> tuple[Path, str]:
     import mujoco
 

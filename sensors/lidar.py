@@ -15,7 +15,7 @@ acquired at ``stamp + i * time_increment`` as ``laser_geometry`` and the twin's
 LiDAR odometry compute it. (``rplidar_ros`` reverses the array the same way but
 keeps a positive ``time_increment`` with the stamp at the rotation's start,
 which times every beam but the middle one wrongly.) The laser pose is sampled at regular instants; beams are cast in groups,
-one ``mujoco.mj_multiRay`` call from the present laser position, with the beam
+one call from the present laser position (MuJoCo's ray functions, :mod:`~amr_twin.sensors.lidar_kernels`), with the beam
 geometry, motion correction and range noise of :mod:`amr_twin.sensors.lidar_beams`.
 Geoms that move with the robot (a payload, group 4) are cast in a second call in
 the present laser frame, and the nearer hit wins. Two ways to drive it:
@@ -233,7 +233,7 @@ class Lidar:
             self._poses.keep_last()
 
     def cast(self, start: int, stop: int, at_own_instants: bool = True) -> None:
-        """Cast beams ``start:stop`` (one ``mj_multiRay`` call, two with a payload).
+        """Cast beams ``start:stop`` (one call of the kernels' cast, a second ``mj_multiRay`` with a payload).
 
         With ``at_own_instants`` each beam is cast along its direction at its own
         instant ``beam_t_us[i]``, with the range corrected for the origin's motion

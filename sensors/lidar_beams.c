@@ -5,8 +5,10 @@
  * (compiled with -ffp-contract=off; +, -, *, / and sqrt are correctly rounded, round half to
  * even as numpy's round), so both give the same bits; tests/sensors/test_lidar_kernels.py
  * checks it. lb_cast runs the three steps of a cast at the beams' own instants in one call: the
- * directions, MuJoCo's mj_multiRay (through a pointer to it, taken from the loaded libmujoco)
- * and the motion correction. Built at first use (amr_twin/sim/native_build.py).
+ * directions, the rays (lb_rays: MuJoCo's mju_rayGeom per geom behind an azimuth cull of its own,
+ * the hits of mj_multiRay to the bit; mj_multiRay itself when a mesh, height field or SDF is in
+ * view; both through pointers taken from the loaded libmujoco) and the motion correction. Built
+ * at first use (amr_twin/sim/native_build.py).
  */
 #include <math.h>
 #include <stdint.h>
@@ -76,6 +78,8 @@ void lb_noise(int n, const double* dist, const int32_t* geomid, const double* z,
 typedef void (*lb_multiray_fn)(const mjModel* m, mjData* d, const mjtNum pnt[3], const mjtNum* vec,
                                const mjtByte* geomgroup, mjtBool flg_static, int bodyexclude,
                                int* geomid, mjtNum* dist, mjtNum* normal, int nray, mjtNum cutoff);
+typedef mjtNum (*lb_raygeom_fn)(const mjtNum pos[3], const mjtNum mat[9], const mjtNum size[3],
+                                const mjtNum pnt[3], const mjtNum vec[3], int geomtype, mjtNum normal[3]);
 
 typedef struct {
     lb_multiray_fn multiray;  /* MuJoCo's mj_multiRay */
@@ -85,7 +89,106 @@ typedef struct {
     double* u;                /* (n, 3) work: directions */
     double* shift;            /* (n, 3) work: origin shifts */
     double* normal;           /* (n, 3) work: hit normals */
+    lb_raygeom_fn raygeom;    /* MuJoCo's mju_rayGeom; NULL: every cast goes to mj_multiRay */
+    int* seen;                /* (ngeom,) work: the geoms a ray may hit, in id order */
+    double* span;             /* (ngeom, 3) work: their azimuth from the origin, lowest and highest offset */
 } lb_caster;
+
+#define LB_PI 3.14159265358979323846
+#define LB_ALL 10.0           /* an offset span wider than any: the geom is tried by every ray */
+#define LB_MARGIN_RAD 1e-9    /* widening of a span for the rounding of atan2 */
+
+static double lb_wrap(double a) {
+    return a > LB_PI ? a - 2 * LB_PI : (a <= -LB_PI ? a + 2 * LB_PI : a);
+}
+
+/* The geoms mj_multiRay(flg_static = 1, bodyexclude = -1) would try, in id order, with the
+ * azimuth span of their bounding box seen from p: the centre's azimuth and the offsets of the
+ * box's corners from it. The corners bound the azimuths of the box's horizontal outline (a
+ * convex polygon whose angular extent, seen from outside, is reached at its vertices), so a ray
+ * whose azimuth lies outside the span misses the geom; a span of pi or more (p above the outline)
+ * and a plane are tried by every ray. Returns the number of geoms, or -1 when one of them is a
+ * mesh, height field or SDF (MuJoCo's own ray functions: the caller casts with mj_multiRay). */
+static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, const double* p) {
+    int n = 0;
+    for (int g = 0; g < m->ngeom; g++) {
+        int mat = m->geom_matid[g];
+        if (mat < 0 ? m->geom_rgba[4 * g + 3] == 0 : m->mat_rgba[4 * mat + 3] == 0) continue;  /* invisible */
+        int group = m->geom_group[g] < 0 ? 0 : (m->geom_group[g] > mjNGROUP - 1 ? mjNGROUP - 1 : m->geom_group[g]);
+        if (!c->groups[group]) continue;
+        int type = m->geom_type[g];
+        if (type == mjGEOM_MESH || type == mjGEOM_HFIELD || type == mjGEOM_SDF) return -1;
+        const double* pos = d->geom_xpos + 3 * g;
+        double rel[3] = {pos[0] - p[0], pos[1] - p[1], pos[2] - p[2]};
+        if (sqrt(rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]) > c->cutoff + m->geom_rbound[g]) continue;
+        double* s = c->span + 3 * n;
+        c->seen[n++] = g;
+        s[0] = atan2(rel[1], rel[0]);
+        s[1] = -LB_ALL;
+        s[2] = LB_ALL;
+        if (type == mjGEOM_PLANE) continue;
+        const double* box = m->geom_aabb + 6 * g;  /* centre and half sizes in the geom frame */
+        const double* mat9 = d->geom_xmat + 9 * g;
+        double lo = 0.0, hi = 0.0;
+        for (int v = 0; v < 8; v++) {
+            double x = box[0] + (v & 1 ? box[3] : -box[3]);
+            double y = box[1] + (v & 2 ? box[4] : -box[4]);
+            double z = box[2] + (v & 4 ? box[5] : -box[5]);
+            double wx = mat9[0] * x + mat9[1] * y + mat9[2] * z + rel[0];
+            double wy = mat9[3] * x + mat9[4] * y + mat9[5] * z + rel[1];
+            double a = lb_wrap(atan2(wy, wx) - s[0]);
+            lo = a < lo ? a : lo;
+            hi = a > hi ? a : hi;
+        }
+        if (hi - lo < LB_PI - 1e-6) {
+            s[1] = lo - LB_MARGIN_RAD;
+            s[2] = hi + LB_MARGIN_RAD;
+        }
+    }
+    return n;
+}
+
+/* Cast k unit directions u from p: for each, the nearest hit among the prepared geoms by MuJoCo's
+ * mju_rayGeom, tried in id order (ties: the lower id, as mj_multiRay); dist (k,) m, -1 and geomid
+ * -1 and a zero normal where none. Returns 0, or -1 when mj_multiRay must cast instead. */
+static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const double* p, int k,
+                   const double* u, int* geomid, double* dist, double* normal) {
+    int n = lb_prepare(c, m, d, p);
+    if (n < 0) return -1;
+    for (int i = 0; i < k; i++) {
+        const double* v = u + 3 * i;
+        double az = atan2(v[1], v[0]), best = -1.0, nrm[3] = {0.0, 0.0, 0.0}, out[3];
+        int hit = -1;
+        for (int j = 0; j < n; j++) {
+            const double* s = c->span + 3 * j;
+            if (s[1] > -LB_ALL) {
+                double off = lb_wrap(az - s[0]);
+                if (off < s[1] || off > s[2]) continue;
+            }
+            int g = c->seen[j];
+            double x = c->raygeom(d->geom_xpos + 3 * g, d->geom_xmat + 9 * g, m->geom_size + 3 * g, p, v,
+                                  m->geom_type[g], out);
+            if (x >= 0 && (x < best || best < 0)) {
+                best = x;
+                hit = g;
+                nrm[0] = out[0], nrm[1] = out[1], nrm[2] = out[2];
+            }
+        }
+        dist[i] = best;
+        geomid[i] = hit;
+        for (int a = 0; a < 3; a++) normal[3 * i + a] = nrm[a];
+    }
+    return 0;
+}
+
+/* Cast k unit directions u (k, 3) from p: dist (k,) m (-1: no hit), geomid (k,), normals in
+ * c->normal. Through lb_rays (MuJoCo's per-geom ray functions behind a cheaper cull than
+ * mj_multiRay's, the same hits) unless a seen geom needs mj_multiRay. */
+void lb_cast_rays(const lb_caster* c, const mjModel* m, mjData* d, const double* p, int k, const double* u,
+                  double* dist, int* geomid) {
+    if (!c->raygeom || lb_rays(c, m, d, p, k, u, geomid, dist, c->normal) < 0)
+        c->multiray(m, d, p, u, c->groups, 1, -1, geomid, dist, c->normal, k, c->cutoff);
+}
 
 /* Cast k beams from the present laser origin, each along its direction at its own instant, and
  * correct the ranges for the origin's motion since: dist (k,) m (-1: no hit), geomid (k,). */
@@ -93,6 +196,6 @@ void lb_cast(const lb_caster* c, const mjModel* m, mjData* d, int k, const int64
              const double* ly, const double* rows, int npose, double* dist, int* geomid) {
     const double* origin = d->site_xpos + 3 * c->site;
     lb_geometry(k, t_us, lx, ly, rows, npose, origin, c->u, c->shift);
-    c->multiray(m, d, origin, c->u, c->groups, 1, -1, geomid, dist, c->normal, k, c->cutoff);
+    lb_cast_rays(c, m, d, origin, k, c->u, dist, geomid);
     lb_correct(k, c->normal, c->u, c->shift, dist);
 }

@@ -5,8 +5,8 @@
  * (compiled with -ffp-contract=off; +, -, *, / and sqrt are correctly rounded, round half to
  * even as numpy's round), so both give the same bits; tests/sensors/test_lidar_kernels.py
  * checks it. lb_cast runs the three steps of a cast at the beams' own instants in one call: the
- * directions, the rays (lb_rays: MuJoCo's mju_rayGeom per geom behind an azimuth cull of its own,
- * the hits of mj_multiRay to the bit; mj_multiRay itself when a mesh, height field or SDF is in
+ * directions, the rays (lb_rays: MuJoCo's mju_rayGeom per geom behind a cull of its own, azimuth
+ * spans and nearest first, the hits of mj_multiRay to the bit; mj_multiRay itself when a mesh, height field or SDF is in
  * view; both through pointers taken from the loaded libmujoco) and the motion correction. Built
  * at first use (amr_twin/sim/native_build.py).
  */
@@ -90,8 +90,9 @@ typedef struct {
     double* shift;            /* (n, 3) work: origin shifts */
     double* normal;           /* (n, 3) work: hit normals */
     lb_raygeom_fn raygeom;    /* MuJoCo's mju_rayGeom; NULL: every cast goes to mj_multiRay */
-    int* seen;                /* (ngeom,) work: the geoms a ray may hit, in id order */
-    double* span;             /* (ngeom, 3) work: their azimuth from the origin, lowest and highest offset */
+    int* seen;                /* (ngeom,) work: the geoms a ray may hit, nearest first */
+    double* span;             /* (ngeom, 4) work: their azimuth from the origin, lowest and highest offset,
+                                 least distance to the origin */
 } lb_caster;
 
 #define LB_PI 3.14159265358979323846
@@ -102,13 +103,15 @@ static double lb_wrap(double a) {
     return a > LB_PI ? a - 2 * LB_PI : (a <= -LB_PI ? a + 2 * LB_PI : a);
 }
 
-/* The geoms mj_multiRay(flg_static = 1, bodyexclude = -1) would try, in id order, with the
- * azimuth span of their bounding box seen from p: the centre's azimuth and the offsets of the
- * box's corners from it. The corners bound the azimuths of the box's horizontal outline (a
- * convex polygon whose angular extent, seen from outside, is reached at its vertices), so a ray
- * whose azimuth lies outside the span misses the geom; a span of pi or more (p above the outline)
- * and a plane are tried by every ray. Returns the number of geoms, or -1 when one of them is a
- * mesh, height field or SDF (MuJoCo's own ray functions: the caller casts with mj_multiRay). */
+/* The geoms mj_multiRay(flg_static = 1, bodyexclude = -1) would try, with the azimuth span of
+ * their bounding box seen from p: the centre's azimuth and the offsets of the box's corners from
+ * it. The corners bound the azimuths of the box's horizontal outline (a convex polygon whose
+ * angular extent, seen from outside, is reached at its vertices), so a ray whose azimuth lies
+ * outside the span misses the geom; a span of pi or more (p above the outline) and a plane are
+ * tried by every ray. Sorted by their least distance to p (the centre's distance less the
+ * bounding sphere's radius; 0 for a plane), nearest first, so that a ray stops at the first geom
+ * farther than its nearest hit. Returns the number of geoms, or -1 when one of them is a mesh,
+ * height field or SDF (MuJoCo's own ray functions: the caller casts with mj_multiRay). */
 static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, const double* p) {
     int n = 0;
     for (int g = 0; g < m->ngeom; g++) {
@@ -120,12 +123,14 @@ static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, con
         if (type == mjGEOM_MESH || type == mjGEOM_HFIELD || type == mjGEOM_SDF) return -1;
         const double* pos = d->geom_xpos + 3 * g;
         double rel[3] = {pos[0] - p[0], pos[1] - p[1], pos[2] - p[2]};
-        if (sqrt(rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]) > c->cutoff + m->geom_rbound[g]) continue;
-        double* s = c->span + 3 * n;
+        double centre_m = sqrt(rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]);
+        if (centre_m > c->cutoff + m->geom_rbound[g]) continue;
+        double* s = c->span + 4 * n;
         c->seen[n++] = g;
         s[0] = atan2(rel[1], rel[0]);
         s[1] = -LB_ALL;
         s[2] = LB_ALL;
+        s[3] = type == mjGEOM_PLANE || centre_m < m->geom_rbound[g] ? 0.0 : centre_m - m->geom_rbound[g];
         if (type == mjGEOM_PLANE) continue;
         const double* box = m->geom_aabb + 6 * g;  /* centre and half sizes in the geom frame */
         const double* mat9 = d->geom_xmat + 9 * g;
@@ -145,12 +150,22 @@ static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, con
             s[2] = hi + LB_MARGIN_RAD;
         }
     }
+    for (int i = 1; i < n; i++) {  /* insertion sort by least distance (a few dozen geoms) */
+        int g = c->seen[i], j = i;
+        double row[4] = {c->span[4 * i], c->span[4 * i + 1], c->span[4 * i + 2], c->span[4 * i + 3]};
+        for (; j > 0 && c->span[4 * (j - 1) + 3] > row[3]; j--) {
+            c->seen[j] = c->seen[j - 1];
+            for (int a = 0; a < 4; a++) c->span[4 * j + a] = c->span[4 * (j - 1) + a];
+        }
+        c->seen[j] = g;
+        for (int a = 0; a < 4; a++) c->span[4 * j + a] = row[a];
+    }
     return n;
 }
 
 /* Cast k unit directions u from p: for each, the nearest hit among the prepared geoms by MuJoCo's
- * mju_rayGeom, tried in id order (ties: the lower id, as mj_multiRay); dist (k,) m, -1 and geomid
- * -1 and a zero normal where none. Returns 0, or -1 when mj_multiRay must cast instead. */
+ * mju_rayGeom (ties: the lower id, as mj_multiRay, which tries them in id order); dist (k,) m, -1
+ * and geomid -1 and a zero normal where none. Returns 0, or -1 when mj_multiRay must cast instead. */
 static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const double* p, int k,
                    const double* u, int* geomid, double* dist, double* normal) {
     int n = lb_prepare(c, m, d, p);
@@ -160,7 +175,8 @@ static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const 
         double az = atan2(v[1], v[0]), best = -1.0, nrm[3] = {0.0, 0.0, 0.0}, out[3];
         int hit = -1;
         for (int j = 0; j < n; j++) {
-            const double* s = c->span + 3 * j;
+            const double* s = c->span + 4 * j;
+            if (best >= 0 && s[3] > best) break;  /* this geom and all after it are farther than the hit */
             if (s[1] > -LB_ALL) {
                 double off = lb_wrap(az - s[0]);
                 if (off < s[1] || off > s[2]) continue;
@@ -168,7 +184,7 @@ static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const 
             int g = c->seen[j];
             double x = c->raygeom(d->geom_xpos + 3 * g, d->geom_xmat + 9 * g, m->geom_size + 3 * g, p, v,
                                   m->geom_type[g], out);
-            if (x >= 0 && (x < best || best < 0)) {
+            if (x >= 0 && (best < 0 || x < best || (x == best && g < hit))) {
                 best = x;
                 hit = g;
                 nrm[0] = out[0], nrm[1] = out[1], nrm[2] = out[2];

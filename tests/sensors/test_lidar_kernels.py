@@ -99,10 +99,13 @@ def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch
 
 def _scene(rng, mesh: bool = False) -> str:
     """A random MJCF world: primitives of every kind turned any way, some unseen (group 3), some
-    invisible, some doubled, one on a free body, a floor; a mesh box with ``mesh``."""
+    invisible, some doubled, a panel flush with a wall, one on a free body, a floor; a mesh box with
+    ``mesh``."""
     kinds = [("box", "0.4 0.2 0.6"), ("cylinder", "0.3 0.5"), ("capsule", "0.2 0.4"), ("sphere", "0.35"),
              ("ellipsoid", "0.5 0.2 0.3"), ("box", "3.0 0.05 1.0")]
-    geoms = []
+    # a panel flush with the face of a long wall, listed first: rays hit both at the same distance,
+    # the wall's bounding sphere is nearer, and the panel (the lower id) must win, as in mj_multiRay
+    geoms = ['<geom type="box" size="0.2 1.0 1.0" pos="3.0 0.0 0.5"/>', '<geom type="box" size="0.2 5.0 2.0" pos="3.0 0.0 0.5"/>']
     for i in range(40):
         kind, size = kinds[i % len(kinds)]
         pos = " ".join(f"{v:.3f}" for v in rng.uniform([-6, -6, -0.5], [6, 6, 2.0]))

@@ -1,17 +1,17 @@
 """Figures of the waits users see: ``amr-twin bench --suites`` (issue 15's acceptance figures).
 
 Each figure is the median of :data:`~amr_twin.bench.physics.REPEATS` interleaved repeats,
-except the 100-point sweep and the fusion experiment (one run each; the sweep's
-per-point figure is its mean over the 100 points):
+except the fusion experiment (one run):
 
 - ``help_cpu_s``, ``run_1s_cpu_s``: CPU time (user + sys) of ``amr-twin --help`` and of a
   1 s ``amr-twin run`` in a fresh process (the imports, the build, the run, the output), as a
   user's second start finds it: Python's bytecode cached (see :func:`_child_env`);
 - ``chapter5_wall_s_jobs1`` / ``chapter5_wall_s_jobsN``: wall time of ``amr-twin experiment
   chapter5 --runs 1,...,8`` (132 simulated s) in a fresh process with ``--jobs 1`` and N;
-- ``sweep_cpu_s``: CPU time of a 100-point payload sweep (8 s each) in this process;
-  ``sweep_point_ratio``: its CPU per point against bare physics (``mj_step``) of the same
-  simulated time on a point's model;
+- ``sweep_cpu_s``: CPU time of a 100-point payload sweep (8 s each), each repeat in a fresh
+  process (:mod:`amr_twin.bench.sweep_round`; ``sweep_cpu_s_rounds`` lists them);
+  ``sweep_point_ratio``: the median of the rounds' CPU per point against bare physics
+  (``mj_step``) of the same simulated time on a point's model, timed right after the sweep;
 - ``rrd_write_60s_s``, ``rrd_write_240s_s``: CPU time of writing the ``.rrd`` of a 60 s and of
   a 240 s run with sensors (spinning in place in the warehouse), and their ratio;
 - ``fusion_wall_s``: the fusion experiment (wall), with the load average around it all.
@@ -19,7 +19,9 @@ per-point figure is its mean over the 100 points):
 
 from __future__ import annotations
 
+import json
 import os
+import pickle
 import shutil
 import statistics
 import subprocess
@@ -29,12 +31,9 @@ import time
 from pathlib import Path
 
 from amr_twin.bench.physics import REPEATS, timer
+from amr_twin.bench.sweep_round import SWEEP, SWEEP_COMMANDS, SWEEP_DURATION_S, SWEEP_MASSES, SWEEP_POSITIONS  # noqa: F401
 from amr_twin.model.config import TwinConfig
 
-SWEEP_MASSES = [5.0 * i for i in range(10)]                # 0..45 kg
-SWEEP_POSITIONS = ["center", "front", "rear", "left", "right"]
-SWEEP_COMMANDS = ["linear:0.7", "angular:60:-1"]           # 10 x 5 x 2 = 100 runs
-SWEEP_DURATION_S = 8.0
 RRD_DURATIONS_S = (60.0, 240.0)
 
 
@@ -108,32 +107,32 @@ def chapter5_jobs_figures(jobs: int, repeats: int = REPEATS) -> dict:
             "chapter5_parallel_speedup": round(one / many, 2)}
 
 
-def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
-    """CPU of a 100-point sweep (8 s each, in this process) and per point against bare physics."""
-    import mujoco
-
-    from amr_twin.experiments import payload_point, payload_sweep
-    from amr_twin.sim.loop import Twin, TwinOptions
-
+def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS, spec: dict = SWEEP) -> dict:
+    """CPU of a 100-point sweep (8 s each; ``spec`` another) and per point against bare physics:
+    medians of ``repeats`` rounds, each in a fresh process (:mod:`amr_twin.bench.sweep_round`)."""
+    rounds = []
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
-        t0 = timer()
-        sweep = payload_sweep.run(cfg, Path(tmp), SWEEP_MASSES, SWEEP_POSITIONS, SWEEP_COMMANDS,
-                                  duration_s=SWEEP_DURATION_S, jobs=1, progress=False)
-        cpu = timer() - t0
-    point = payload_point.with_payload(cfg, 20.0, (0.0, 0.0))
-    twin = Twin(point, TwinOptions(world="empty", visuals=False))  # the model a sweep point runs
-    twin.client.linear(0.7)
-    twin.advance(1.0)
-    m, d = twin.physics.model, twin.physics.data
-    bare = []
-    for _ in range(repeats):
-        t0 = timer()
-        mujoco.mj_step(m, d, int(round(SWEEP_DURATION_S / m.opt.timestep)))
-        bare.append(timer() - t0)
-    n = len(sweep["rows"])
-    return {"sweep_points": n, "sweep_simulated": sweep["simulated"], "sweep_cpu_s": round(cpu, 2),
-            "sweep_point_cpu_s": round(cpu / n, 3), "sweep_point_bare_physics_s": round(statistics.median(bare), 3),
-            "sweep_point_ratio": round(cpu / n / statistics.median(bare), 2)}
+        path = Path(tmp) / "round.pkl"
+        path.write_bytes(pickle.dumps((cfg, spec)))
+        env = _child_env(str(Path(tmp) / "pycache"))
+        for _ in range(repeats):
+            rounds.append(_sweep_round([sys.executable, "-m", "amr_twin.bench.sweep_round", str(path)], env))
+    cpu, bare = [r["sweep_cpu_s"] for r in rounds], [r["bare_point_s"] for r in rounds]
+    n = rounds[0]["points"]
+    return {"sweep_points": n, "sweep_simulated": rounds[0]["simulated"],
+            "sweep_cpu_s": round(statistics.median(cpu), 2), "sweep_cpu_s_rounds": [round(c, 2) for c in cpu],
+            "sweep_point_cpu_s": round(statistics.median(cpu) / n, 3),
+            "sweep_point_bare_physics_s": round(statistics.median(bare), 3),
+            "sweep_point_ratio": round(statistics.median(c / n / b for c, b in zip(cpu, bare)), 2)}
+
+
+def _sweep_round(args: list[str], env: dict) -> dict:
+    """Run one round's process; its JSON line."""
+    proc = subprocess.run(args, capture_output=True, text=True, env=env, stdin=subprocess.DEVNULL)
+    if proc.returncode != 0:
+        last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        raise RuntimeError(f"sweep round failed ({proc.returncode}): {last}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
 def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
@@ -162,16 +161,26 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
             "rrd_write_ratio_240_60": round(long / short, 2)}
 
 
-def suite_figures(cfg: TwinConfig, jobs: int = 2) -> dict:
-    """Every figure of the module notes; takes several minutes on the 2-core machine."""
+def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
+    """Every figure of the module notes; takes several minutes on the 2-core machine.
+
+    ``progress(text)``, when given, is told each stage as it starts (the command line prints it
+    on stderr)."""
     from amr_twin.experiments import fusion
 
+    say = progress or (lambda text: None)
     load_before = os.getloadavg()[0]
     out = {"suites_repeats": REPEATS, "jobs": jobs}
+    say(f"start-up: --help and a 1 s run, {REPEATS} each")
     out.update(startup_figures())
-    out.update(chapter5_jobs_figures(jobs) if jobs > 1 else {})
+    if jobs > 1:
+        say(f"chapter 5 with --jobs 1 and {jobs}, {REPEATS} each")
+        out.update(chapter5_jobs_figures(jobs))
+    say(f"100-point sweep, {REPEATS} rounds of about 20 s of CPU")
     out.update(sweep_figures(cfg))
+    say("writing the .rrd of a 60 s and a 240 s run")
     out.update(rrd_figures(cfg))
+    say("the fusion experiment")
     t0 = time.perf_counter()
     fus = fusion.run(cfg, progress=False)
     out.update(fusion_sim_s=round(fus.sim_s, 1), fusion_wall_s=round(time.perf_counter() - t0, 2))

@@ -190,10 +190,12 @@ def bench(
     cfg = _config(config, params, set_)
 
     def measure() -> dict:
+        if suites:
+            typer.echo("bench: the loop against bare physics", err=True)
         figures = run_benchmarks(cfg, sim_s=sim_s)
         if suites:
             from amr_twin.bench.suites import suite_figures
-            figures.update(suite_figures(cfg, jobs=jobs))
+            figures.update(suite_figures(cfg, jobs=jobs, progress=lambda text: typer.echo(f"bench: {text}", err=True)))
         return figures
 
     result = _guard(measure)

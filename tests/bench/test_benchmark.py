@@ -75,3 +75,52 @@ def test_timed_children_cache_their_bytecode_outside_the_tree(tmp_path, monkeypa
     cached = {p.name.split(".")[0] for p in cache.rglob("*.pyc") if "amr_twin" in p.parts}
     assert {"suites", "physics", "config"} <= cached
     assert sorted(tree.rglob("*.pyc")) == before
+
+
+def test_sweep_rounds_run_in_fresh_processes_and_the_figure_is_their_median(monkeypatch):
+    """The sweep figure: each round a process of its own that sweeps and then steps bare physics;
+    the figures are the medians of the rounds (a stand-in sweep of two 0.3 s points, three rounds)."""
+    import os
+
+    from amr_twin.bench import suites as sb
+
+    pids, real = [], sb._sweep_round
+
+    def spy(args, env):
+        row = real(args, env)
+        pids.append(row["pid"])
+        return row
+
+    monkeypatch.setattr(sb, "_sweep_round", spy)
+    spec = {"masses": [0.0, 10.0], "positions": ["center"], "commands": ["linear:0.7"], "duration_s": 0.3}
+    fig = sb.sweep_figures(load_config(), repeats=3, spec=spec)
+    assert len(set(pids)) == 3 and os.getpid() not in pids
+    rounds = fig["sweep_cpu_s_rounds"]
+    assert len(rounds) == 3 and fig["sweep_cpu_s"] == sorted(rounds)[1] and fig["sweep_points"] == 2
+    assert fig["sweep_simulated"] == 2 and 0 < fig["sweep_point_bare_physics_s"] < fig["sweep_point_cpu_s"]
+
+
+def test_the_suites_say_each_stage_as_it_starts(monkeypatch):
+    """bench --suites runs for minutes: each stage is announced before it runs (stand-in stages)."""
+    from types import SimpleNamespace
+
+    from amr_twin.bench import suites as sb
+    from amr_twin.experiments import fusion
+
+    said, ran = [], []
+
+    def stage(name, figures):
+        def run(*args, **kwargs):
+            ran.append((name, len(said)))
+            return figures
+        return run
+
+    monkeypatch.setattr(sb, "startup_figures", stage("startup", {"help_cpu_s": 0.1}))
+    monkeypatch.setattr(sb, "chapter5_jobs_figures", stage("chapter5", {}))
+    monkeypatch.setattr(sb, "sweep_figures", stage("sweep", {}))
+    monkeypatch.setattr(sb, "rrd_figures", stage("rrd", {}))
+    monkeypatch.setattr(fusion, "run", stage("fusion", SimpleNamespace(sim_s=1.0)))
+    out = sb.suite_figures(load_config(), jobs=2, progress=said.append)
+    assert [name for name, _ in ran] == ["startup", "chapter5", "sweep", "rrd", "fusion"]
+    assert [n for _, n in ran] == [1, 2, 3, 4, 5]  # each announced just before it ran
+    assert "sweep" in said[2] and ".rrd" in said[3] and out["help_cpu_s"] == 0.1

@@ -129,9 +129,7 @@ class BeamKernels:
 
     def cast(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
              dist: np.ndarray, geomid: np.ndarray) -> None:
-        if not (dist.flags.c_contiguous and dist.dtype == np.float64 and geomid.flags.c_contiguous
-                and geomid.dtype == np.int32):
-            raise ValueError("dist, geomid: C-contiguous float64 and int32 arrays are written in place")
+        _check_outputs(dist, geomid, len(t_us))
         t_us, lx, ly = c_array(t_us, np.int64), c_array(lx, np.float64), c_array(ly, np.float64)
         rows = c_array(rows, np.float64)
         self._cast(*self._cast_head, len(t_us), address(t_us), address(lx), address(ly), address(rows), int(npose),
@@ -142,9 +140,9 @@ class BeamKernels:
         no correction): ``dist`` (k,) m, -1 for none, and ``geomid`` (k,) written in place; returns
         the hit normals (k, 3), a view of a reused buffer."""
         k = len(u)
-        if not (len(dist) == len(geomid) == k and k <= len(self._normal) and dist.flags.c_contiguous
-                and dist.dtype == np.float64 and geomid.flags.c_contiguous and geomid.dtype == np.int32):
-            raise ValueError("dist, geomid: C-contiguous float64 and int32 arrays of len(u) <= n_beams")
+        if k > len(self._normal):
+            raise ValueError(f"{k} directions: at most n_beams = {len(self._normal)}")
+        _check_outputs(dist, geomid, k)
         origin, u = c_array(origin, np.float64), c_array(u, np.float64)
         self._rays(*self._cast_head, address(origin), k, address(u), address(dist), address(geomid))
         return self._normal[:k]
@@ -171,6 +169,13 @@ class BeamKernels:
         dist, geomid, z = c_array(dist, np.float64), c_array(geomid, np.int32), c_array(z, np.float64)
         self._noise(n, address(dist), address(geomid), address(z), *self._noise_args, address(out))
         return out
+
+
+def _check_outputs(dist: np.ndarray, geomid: np.ndarray, k: int) -> None:
+    """``dist`` and ``geomid``, written in place by the helper: C-contiguous float64 and int32 of length ``k``."""
+    if not (len(dist) == len(geomid) == k and dist.flags.c_contiguous and dist.dtype == np.float64
+            and geomid.flags.c_contiguous and geomid.dtype == np.int32):
+        raise ValueError(f"dist, geomid: C-contiguous float64 and int32 arrays of length {k} are written in place")
 
 
 class _Caster(ctypes.Structure):

@@ -12,6 +12,7 @@
  */
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <mujoco/mujoco.h>
 
 /* Laser pose of each of k beams at its instant t_us[i], linear between the pose samples
@@ -82,6 +83,13 @@ typedef mjtNum (*lb_raygeom_fn)(const mjtNum pos[3], const mjtNum mat[9], const 
                                 const mjtNum pnt[3], const mjtNum vec[3], int geomtype, mjtNum normal[3]);
 
 typedef struct {
+    double azimuth;           /* of the geom's centre seen from the origin, rad */
+    double lo, hi;            /* lowest and highest azimuth offset of its bounding box's corners, rad (+-LB_ALL: any) */
+    double near_m;            /* least distance of its bounding sphere to the origin, m (0 for a plane) */
+    int geom;                 /* its id */
+} lb_geom;
+
+typedef struct {
     lb_multiray_fn multiray;  /* MuJoCo's mj_multiRay */
     const mjtByte* groups;    /* (6,) the geom groups the rays see */
     int site;                 /* the laser site */
@@ -90,14 +98,15 @@ typedef struct {
     double* shift;            /* (n, 3) work: origin shifts */
     double* normal;           /* (n, 3) work: hit normals */
     lb_raygeom_fn raygeom;    /* MuJoCo's mju_rayGeom; NULL: every cast goes to mj_multiRay */
-    int* seen;                /* (ngeom,) work: the geoms a ray may hit, nearest first */
-    double* span;             /* (ngeom, 4) work: their azimuth from the origin, lowest and highest offset,
-                                 least distance to the origin */
+    lb_geom* seen;            /* (ngeom,) work: the geoms a ray may hit, nearest first */
 } lb_caster;
 
 #define LB_PI 3.14159265358979323846
 #define LB_ALL 10.0           /* an offset span wider than any: the geom is tried by every ray */
 #define LB_MARGIN_RAD 1e-9    /* widening of a span for the rounding of atan2 */
+
+/* Bytes of an lb_geom (the caller allocates ngeom of them). */
+int lb_geom_bytes(void) { return (int)sizeof(lb_geom); }
 
 static double lb_wrap(double a) {
     return a > LB_PI ? a - 2 * LB_PI : (a <= -LB_PI ? a + 2 * LB_PI : a);
@@ -112,6 +121,13 @@ static double lb_wrap(double a) {
  * bounding sphere's radius; 0 for a plane), nearest first, so that a ray stops at the first geom
  * farther than its nearest hit. Returns the number of geoms, or -1 when one of them is a mesh,
  * height field or SDF (MuJoCo's own ray functions: the caller casts with mj_multiRay). */
+static int lb_nearer(const void* a, const void* b) {
+    const lb_geom* x = a;
+    const lb_geom* y = b;
+    if (x->near_m != y->near_m) return x->near_m < y->near_m ? -1 : 1;
+    return x->geom - y->geom;
+}
+
 static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, const double* p) {
     int n = 0;
     for (int g = 0; g < m->ngeom; g++) {
@@ -125,12 +141,12 @@ static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, con
         double rel[3] = {pos[0] - p[0], pos[1] - p[1], pos[2] - p[2]};
         double centre_m = sqrt(rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]);
         if (centre_m > c->cutoff + m->geom_rbound[g]) continue;
-        double* s = c->span + 4 * n;
-        c->seen[n++] = g;
-        s[0] = atan2(rel[1], rel[0]);
-        s[1] = -LB_ALL;
-        s[2] = LB_ALL;
-        s[3] = type == mjGEOM_PLANE || centre_m < m->geom_rbound[g] ? 0.0 : centre_m - m->geom_rbound[g];
+        lb_geom* s = c->seen + n++;
+        s->geom = g;
+        s->azimuth = atan2(rel[1], rel[0]);
+        s->lo = -LB_ALL;
+        s->hi = LB_ALL;
+        s->near_m = type == mjGEOM_PLANE || centre_m < m->geom_rbound[g] ? 0.0 : centre_m - m->geom_rbound[g];
         if (type == mjGEOM_PLANE) continue;
         const double* box = m->geom_aabb + 6 * g;  /* centre and half sizes in the geom frame */
         const double* mat9 = d->geom_xmat + 9 * g;
@@ -141,25 +157,16 @@ static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, con
             double z = box[2] + (v & 4 ? box[5] : -box[5]);
             double wx = mat9[0] * x + mat9[1] * y + mat9[2] * z + rel[0];
             double wy = mat9[3] * x + mat9[4] * y + mat9[5] * z + rel[1];
-            double a = lb_wrap(atan2(wy, wx) - s[0]);
+            double a = lb_wrap(atan2(wy, wx) - s->azimuth);
             lo = a < lo ? a : lo;
             hi = a > hi ? a : hi;
         }
         if (hi - lo < LB_PI - 1e-6) {
-            s[1] = lo - LB_MARGIN_RAD;
-            s[2] = hi + LB_MARGIN_RAD;
+            s->lo = lo - LB_MARGIN_RAD;
+            s->hi = hi + LB_MARGIN_RAD;
         }
     }
-    for (int i = 1; i < n; i++) {  /* insertion sort by least distance (a few dozen geoms) */
-        int g = c->seen[i], j = i;
-        double row[4] = {c->span[4 * i], c->span[4 * i + 1], c->span[4 * i + 2], c->span[4 * i + 3]};
-        for (; j > 0 && c->span[4 * (j - 1) + 3] > row[3]; j--) {
-            c->seen[j] = c->seen[j - 1];
-            for (int a = 0; a < 4; a++) c->span[4 * j + a] = c->span[4 * (j - 1) + a];
-        }
-        c->seen[j] = g;
-        for (int a = 0; a < 4; a++) c->span[4 * j + a] = row[a];
-    }
+    qsort(c->seen, n, sizeof(lb_geom), lb_nearer);
     return n;
 }
 
@@ -175,13 +182,13 @@ static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const 
         double az = atan2(v[1], v[0]), best = -1.0, nrm[3] = {0.0, 0.0, 0.0}, out[3];
         int hit = -1;
         for (int j = 0; j < n; j++) {
-            const double* s = c->span + 4 * j;
-            if (best >= 0 && s[3] > best) break;  /* this geom and all after it are farther than the hit */
-            if (s[1] > -LB_ALL) {
-                double off = lb_wrap(az - s[0]);
-                if (off < s[1] || off > s[2]) continue;
+            const lb_geom* s = c->seen + j;
+            if (best >= 0 && s->near_m > best) break;  /* this geom and all after it are farther than the hit */
+            if (s->lo > -LB_ALL) {
+                double off = lb_wrap(az - s->azimuth);
+                if (off < s->lo || off > s->hi) continue;
             }
-            int g = c->seen[j];
+            int g = s->geom;
             double x = c->raygeom(d->geom_xpos + 3 * g, d->geom_xmat + 9 * g, m->geom_size + 3 * g, p, v,
                                   m->geom_type[g], out);
             if (x >= 0 && (best < 0 || x < best || (x == best && g < hit))) {

@@ -99,6 +99,8 @@ class BeamKernels:
         self.cfg = cfg
         self._geometry, self._correct, self._noise = lib.lb_geometry, lib.lb_correct, lib.lb_noise
         self._cast, self._rays = lib.lb_cast, lib.lb_cast_rays
+        lib.lb_geom_bytes.restype = ctypes.c_int
+        self._geom_bytes = int(lib.lb_geom_bytes())
         self._geometry.argtypes = [ctypes.c_int, _P, _P, _P, _P, ctypes.c_int, _P, _P, _P]
         self._correct.argtypes = [ctypes.c_int, _P, _P, _P, _P]
         self._noise.argtypes = [ctypes.c_int, _P, _P, _P] + [ctypes.c_double] * 5 + [_P]
@@ -121,8 +123,8 @@ class BeamKernels:
         caster.groups, caster.site, caster.cutoff = address(self._groups), int(site), CUTOFF_M
         caster.u, caster.shift, caster.normal = self._u_at, self._shift_at, address(self._normal)
         caster.raygeom = _mujoco_address("mju_rayGeom") if self.cull else None
-        self._seen, self._span = np.zeros(model.ngeom, np.int32), np.zeros((model.ngeom, 4))
-        caster.seen, caster.span = address(self._seen), address(self._span)
+        self._seen = np.zeros(max(model.ngeom, 1) * self._geom_bytes, np.uint8)  # lb_geom work rows
+        caster.seen = address(self._seen)
         self._keep = (model, data)  # the model and data outlive every call
         self._cast_head = (ctypes.addressof(caster), model._address, data._address)
         self._bound = (model, data, int(site), self._groups)
@@ -182,7 +184,7 @@ class _Caster(ctypes.Structure):
     """``lb_caster`` of lidar_beams.c."""
 
     _fields_ = [("multiray", _P), ("groups", _P), ("site", ctypes.c_int), ("cutoff", ctypes.c_double),
-                ("u", _P), ("shift", _P), ("normal", _P), ("raygeom", _P), ("seen", _P), ("span", _P)]
+                ("u", _P), ("shift", _P), ("normal", _P), ("raygeom", _P), ("seen", _P)]
 
 
 def _mujoco_address(name: str) -> int:

@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 
 from amr_twin.bench.physics import REPEATS, timer
-from amr_twin.bench.sweep_round import SWEEP, SWEEP_COMMANDS, SWEEP_DURATION_S, SWEEP_MASSES, SWEEP_POSITIONS  # noqa: F401
+from amr_twin.bench.sweep_round import SWEEP
 from amr_twin.model.config import TwinConfig
 
 RRD_DURATIONS_S = (60.0, 240.0)

@@ -107,3 +107,33 @@ def test_unloaded_tip_margin_is_the_distance_to_the_wheel_caster_edge():
     hand = abs((c - a) * (y - b) - (d - b) * (x - a)) / np.hypot(c - a, d - b)
     assert info["tip_margin_m"] == pytest.approx(hand, abs=1e-4)
     assert 0.2 < hand < 0.25
+
+
+def test_a_solution_asked_again_is_the_kept_one_and_the_callers_own(monkeypatch):
+    """solve: the same robot and acceleration are solved once while among the last
+    SOLVED_KEPT asked; another payload or acceleration is solved anew; a caller's edits of
+    its result change nothing kept."""
+    import amr_twin.model.statics as statics
+
+    monkeypatch.setattr(statics, "_solved", {})
+    calls = []
+    real = statics._solve
+    monkeypatch.setattr(statics, "_solve", lambda cfg, a: (calls.append((cfg.payload.mass_kg, a)), real(cfg, a))[1])
+    cfg, heavy = load_config(), load_config(sets=["payload.mass_kg=30"])
+    first = solve(cfg)
+    wheel = first.loads_n["wheel_left"]
+    first.loads_n["wheel_left"] = -1.0
+    first.com_m[0] = 9.0
+    again = solve(cfg, (0.0, 0.0))
+    assert again.loads_n["wheel_left"] == wheel and again.com_m[0] != 9.0 and len(calls) == 1
+    assert solve(heavy).loads_n["wheel_left"] > wheel and len(calls) == 2
+    turning = solve(cfg, (0.0, 2.0))
+    assert turning.loads_n["wheel_left"] != wheel and len(calls) == 3
+    for i in range(statics.SOLVED_KEPT - 1):  # the robot at rest stays among the last asked...
+        solve(cfg, (0.01 * (i + 1), 0.0))
+        solve(cfg)
+    assert len(calls) == 3 + statics.SOLVED_KEPT - 1
+    for i in range(statics.SOLVED_KEPT):  # ... until SOLVED_KEPT others were asked after it
+        solve(heavy, (0.0, 0.01 * (i + 1)))
+    solve(cfg)
+    assert len(calls) == 3 + 2 * statics.SOLVED_KEPT

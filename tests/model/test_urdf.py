@@ -1,6 +1,7 @@
 """The robot description: xacro -> URDF, checked by yourdfpy, cached once per fingerprint."""
 
 import io
+import json
 import subprocess
 import sys
 
@@ -70,3 +71,24 @@ def test_unwritable_urdf_cache_still_builds(monkeypatch, tmp_path):
     assert build(load_config(), world="empty").model.nu == 2
     monkeypatch.setenv("AMR_TWIN_CACHE_DIR", "")
     assert urdf_mod.urdf_cache_dir() is None
+
+
+def test_derived_params_are_kept_per_robot_not_per_payload(monkeypatch):
+    """A sweep's points (payloads apart) share the xacro's parameters, made once; any section the
+    xacro reads gives new ones; a caller's edit of its copy changes nothing kept."""
+    monkeypatch.setattr(urdf_mod, "_params_memo", {})
+    calls = []
+    real = urdf_mod._derived_params
+    monkeypatch.setattr(urdf_mod, "_derived_params", lambda cfg: (calls.append(1), real(cfg))[1])
+    base = urdf_mod.derived_params(load_config())
+    assert urdf_mod.derived_params(load_config(sets=["payload.mass_kg=30", "payload.xy_m=[0.1,0.05]"])) == base
+    assert len(calls) == 1
+    for change, key, value in (("wheel.radius_m=0.13", "wheel_radius_m", 0.13),
+                               ("chassis.length_m=0.72", "chassis_length_m", 0.72),
+                               ("motor_left.friction_nm=0.0215", "wheel_left_friction", 0.0215)):
+        assert urdf_mod.derived_params(load_config(sets=[change]))[key] == value != base[key]
+    before = json.dumps(base, sort_keys=True)
+    mine = urdf_mod.derived_params(load_config())
+    mine["chassis_com_m"][0] = 99.0
+    mine["chassis_mass_kg"] = 0.0
+    assert json.dumps(urdf_mod.derived_params(load_config()), sort_keys=True) == before

@@ -109,26 +109,16 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     if code != 0:
         return {"error": f"command refused (code {code}): {twin.client.last_error}"}
     req = twin.client.last_request
-    loads, contact, up_z, vel = [], [], [], []
-    every_us, rolling, contact_loads = int(round(SAMPLE_S * 1e6)), twin.rolling, twin.rolling.contact_loads
-    up_z_now, velocity_now = twin.physics.base_up_z, twin.physics.base_velocity_list
-
-    def sample(t_us: int) -> bool:
-        """Every SAMPLE_S on the loop's record grid, the physics at ``t_us`` (after the rolling
-        resistance's sampler, whose springs' loads it reads): the support loads, the support
-        contacts' normal forces, the world z of the base's z axis (the tilt's cosine) and the
-        base velocity (:meth:`amr_twin.sim.physics.Physics.base_velocity`). The point runs as one
-        call of the loop, as ``amr-twin run`` does (stopping the loop every sample moved the
-        results by about 1e-4 relative and cost about 2 % more CPU)."""
-        if t_us % every_us == 0:
-            loads.append(rolling.loads)  # the springs' loads (module notes)
-            contact.append(contact_loads())
-            up_z.append(up_z_now())
-            vel.append(velocity_now())
-        return False
-
-    twin.samplers.append(sample)
+    # every SAMPLE_S on the loop's record grid, after the rolling resistance's update at the same
+    # instant: the springs' loads it used, the supports' contact forces, the world z of the
+    # base's z axis (the tilt's cosine) and the base velocity (RollingResistance.support_rows).
+    # The point runs as one call of the loop, as ``amr-twin run`` does (stopping the loop every
+    # sample moved the results by about 1e-4 relative and cost about 2 % more CPU).
+    support = twin.rolling.support_rows(int(round(SAMPLE_S * 1e6)))
+    twin.samplers.append(support)
     twin.advance_to_us(int(round(point.duration_s * 1e6)))
+    rows = support.rows()
+    loads, contact, up_z, vel = rows[:, 0:6], rows[:, 6:12], rows[:, 12], rows[:, 13:19]
     s = twin.recorder.series()
     if recording:
         from amr_twin.recording.rerun_log import record_run
@@ -138,14 +128,13 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
                            sim_s=point.duration_s, wall_s=0.0)
         record_run(twin, rrd_path=point.rrd_path, mcap_path=point.mcap_path, result=result)
     names = list(twin.physics.support_geoms)
-    loads = np.array(loads)
     min_load = dict(zip(names, loads.min(axis=0).tolist()))
-    out = {"max_tilt_deg": math.degrees(math.acos(max(-1.0, min(1.0, min(up_z))))),  # acos falls: the largest tilt
+    out = {"max_tilt_deg": math.degrees(math.acos(max(-1.0, min(1.0, float(up_z.min()))))),  # acos falls: the largest tilt
            "dyn_min_wheel_n": min(v for n, v in min_load.items() if n.startswith("wheel")),
            "dyn_min_caster_n": min(v for n, v in min_load.items() if n.startswith("caster")),
            "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
-           "dyn_min_wheel_contact_n": float(np.min(np.array(contact)[:, :2]))}
-    out.update(_min_wheel_mechanism(cfg, loads, np.array(vel), s))
+           "dyn_min_wheel_contact_n": float(np.min(contact[:, :2]))}
+    out.update(_min_wheel_mechanism(cfg, loads, vel, s))
     out.update(_electrics(s, point.duration_s))
     out["wheel_lift_off"] = out["dyn_min_wheel_n"] < CONTACT_MIN_N
     slip = _slip(s, cfg)

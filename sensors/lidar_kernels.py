@@ -41,7 +41,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
-from amr_twin.sim.native_build import address, c_array, open_helper
+from amr_twin.sim.native_build import address, c_array, mujoco_address, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
 
 C_SOURCE = Path(__file__).with_name("lidar_beams.c")
@@ -119,10 +119,10 @@ class BeamKernels:
         """Cast in ``model`` and ``data`` from the laser ``site``, seeing the geom ``groups`` (6,) uint8."""
         self._groups = np.ascontiguousarray(groups, np.uint8)
         caster = self._caster = _Caster()
-        caster.multiray = _mujoco_address("mj_multiRay")
+        caster.multiray = mujoco_address("mj_multiRay")
         caster.groups, caster.site, caster.cutoff = address(self._groups), int(site), CUTOFF_M
         caster.u, caster.shift, caster.normal = self._u_at, self._shift_at, address(self._normal)
-        caster.raygeom = _mujoco_address("mju_rayGeom") if self.cull else None
+        caster.raygeom = mujoco_address("mju_rayGeom") if self.cull else None
         self._seen = np.zeros(max(model.ngeom, 1) * self._geom_bytes, np.uint8)  # lb_geom work rows
         caster.seen = address(self._seen)
         self._keep = (model, data)  # the model and data outlive every call
@@ -185,14 +185,6 @@ class _Caster(ctypes.Structure):
 
     _fields_ = [("multiray", _P), ("groups", _P), ("site", ctypes.c_int), ("cutoff", ctypes.c_double),
                 ("u", _P), ("shift", _P), ("normal", _P), ("raygeom", _P), ("seen", _P)]
-
-
-def _mujoco_address(name: str) -> int:
-    """Address of the function ``name`` in the libmujoco the bindings loaded (the same library: dlopen shares it)."""
-    (lib,) = sorted(Path(mujoco.__file__).parent.glob("libmujoco.so*"))[:1] or [None]
-    if lib is None:
-        raise OSError("libmujoco.so not found next to the mujoco package")
-    return ctypes.cast(getattr(ctypes.CDLL(str(lib)), name), ctypes.c_void_p).value
 
 
 def beam_kernels(n_beams: int, cfg: LidarCfg, native: bool = True) -> BeamKernels | PythonBeamKernels:

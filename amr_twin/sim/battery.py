@@ -22,6 +22,7 @@ import ctypes
 from pathlib import Path
 
 from amr_twin.model.config_sections import BatteryCfg
+from amr_twin.sim.grid_steps import CALL2, sampler
 from amr_twin.sim.native_build import open_helper
 
 C_SOURCE = Path(__file__).with_name("battery.c")
@@ -125,6 +126,7 @@ class Battery:
             def account(t_us: int = 0, _fn=fn, _args=args) -> None:
                 _fn(*_args)
 
+            account.grid_native = sampler(CALL2, fn, data._address, s)  # the loop's grid in C calls it itself
             self.account = account
 
     def set_motor(self, wheel: int, mode: int, voltage_v: float) -> None:

@@ -34,6 +34,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from amr_twin.sim.grid_steps import CHANGED, sampler
 from amr_twin.sim.native_build import open_helper
 
 SUPPORT_TILT_DEG = 30.0
@@ -214,6 +215,18 @@ class CollisionMonitor:
         fn.restype, fn.argtypes = ctypes.c_int, [ctypes.c_void_p, ctypes.c_void_p]  # self._data outlives it
         self._changed = functools.partial(fn, ctypes.c_void_p(self._data._address),
                                           ctypes.cast(ctypes.pointer(memo), ctypes.c_void_p))
+        self._native = sampler(CHANGED, fn, self._data._address, memo)
+
+    @property
+    def grid_native(self):
+        """The C form for the loop's grid in C (:mod:`amr_twin.sim.grid_steps`): the comparison
+        of the pairs, the instant handed to :meth:`grid_resume` when they changed; None (the
+        Python loop) without the helper or while a collision is open (each instant extends it)."""
+        return self._native if self._memo is not None and not self._open else None
+
+    def grid_resume(self, t_us: int) -> bool:
+        """Grid instant ``t_us`` whose pairs the C form found changed (and kept): classify them."""
+        return self._classify(t_us, None)
 
     def __call__(self, t_us: int) -> bool:
         """Grid instant ``t_us``: physics is there. True asks the loop to stop."""
@@ -230,6 +243,10 @@ class CollisionMonitor:
                 for ep in self._open.values():
                     ep._last_us, ep.until_s = t_us, t_us * 1e-6
                 return self.stop
+        return self._classify(t_us, pairs)
+
+    def _classify(self, t_us: int, pairs: list | None) -> bool:
+        d, memo = self._data, self._memo
         if pairs is None:
             pairs = d.contact.geom.tolist() if d.ncon else []
         hits, by_normal = collision_contacts(self.roles, d, pairs)

@@ -38,6 +38,7 @@ from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.sim.collisions import CollisionMonitor
+from amr_twin.sim.grid_steps import grid_stepper
 from amr_twin.model.config import TwinConfig
 from amr_twin.controllers.firmware import make_firmware
 from amr_twin.controllers.odometry import WheelOdometry
@@ -140,6 +141,8 @@ class Twin:
             self.lidar = Lidar(m, d, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2],
                                autostart=False)
             self.lidar.start_motor(grid_us=self.grid_us, samplers=self.samplers)
+        self._stepper = grid_stepper(self.physics, LOOP_SENSOR_DIM, self.recorder.every, self.dt_us)
+        """The grid loop in C (:mod:`amr_twin.sim.grid_steps`), None without its helper."""
         self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
         self._loop_sensors = self.physics.data.sensordata[:LOOP_SENSOR_DIM]  # a view: MjData's buffers stay put
         self._last_row = self._loop_sensors.tolist()
@@ -205,8 +208,13 @@ class Twin:
         Hall edge times come from a cubic Hermite interpolation of the sampled
         wheel angles and speeds (exact for constant acceleration; the actuation
         is constant inside a chunk), solved per edge to the microsecond. Plain
-        Python lists: a chunk is a handful of samples.
+        Python lists: a chunk is a handful of samples. When every grid sampler has a
+        C form the grid loop runs in C (:meth:`_step_grid_in_c`), else here.
         """
+        stepper = self._stepper
+        if stepper is not None and stepper.use(self.samplers):
+            self._step_grid_in_c(stepper, nstep)
+            return
         m, d, dt, every = self.physics.model, self.physics.data, self.dt_us, self.recorder.every
         sensors, step, samplers = self._loop_sensors, mujoco.mj_step, self.samplers
         k = k0 = self.t_phys_us // dt
@@ -235,6 +243,48 @@ class Twin:
             k = k_end
             ts.append(k * dt)
             rows.append(sensors.tolist())
+        self.t_phys_us = k * dt
+        self._last_row = rows[-1]
+        if grid_t:
+            self.recorder.extend_grid(grid_t, grid_rows)
+        edges = self.hall.edges_from_samples(ts, rows)
+        if edges:
+            self._pending.extend(edges)
+
+    def _step_grid_in_c(self, stepper, nstep: int) -> None:
+        """:meth:`_step_physics` with its grid loop in C (:mod:`amr_twin.sim.grid_steps`): the same
+        steps, rows and sampler calls; an instant a sampler hands back runs the rest here."""
+        dt, every = self.dt_us, self.recorder.every
+        k = k0 = self.t_phys_us // dt
+        k_end = k0 + nstep
+        first = (k0 // every + 1) * every
+        nmarks = (k_end - first) // every + 1 if first <= k_end else 0
+        grid_t, grid_rows = [], []
+        done = 0
+        while done < nmarks:
+            mark = first + done * every
+            reached, handoff = stepper.run(mark - k, nmarks - done, mark * dt)
+            k = mark + (reached - 1) * every
+            grid_t.extend(range(mark * dt, k * dt + 1, every * dt))
+            grid_rows.extend(stepper.rows[:reached].tolist())
+            done += reached
+            if handoff >= 0:
+                t = k * dt
+                samplers = self.samplers
+                stop = bool(stepper.resume[handoff](t))
+                for sampler in samplers[handoff + 1:]:
+                    if sampler(t):
+                        stop = True
+                if stop:
+                    self.halted = True
+                    k_end = k
+                    break
+        ts, rows = [k0 * dt, *grid_t], [self._last_row, *grid_rows]
+        if k < k_end:
+            mujoco.mj_step(self.physics.model, self.physics.data, k_end - k)
+            k = k_end
+            ts.append(k * dt)
+            rows.append(self._loop_sensors.tolist())
         self.t_phys_us = k * dt
         self._last_row = rows[-1]
         if grid_t:

@@ -62,6 +62,23 @@ def c_array(array, dtype):
     return np.ascontiguousarray(array, dtype)
 
 
+def mujoco_address(name: str) -> int:
+    """Address of the symbol ``name`` (a function, or a variable such as ``mju_user_error``) in
+    the libmujoco the bindings loaded (the same library: dlopen shares it)."""
+    global _libmujoco
+    if _libmujoco is None:
+        import mujoco
+
+        (lib,) = sorted(Path(mujoco.__file__).parent.glob("libmujoco.so*"))[:1] or [None]
+        if lib is None:
+            raise OSError("libmujoco.so not found next to the mujoco package")
+        _libmujoco = ctypes.CDLL(str(lib))
+    return ctypes.cast(getattr(_libmujoco, name), ctypes.c_void_p).value
+
+
+_libmujoco = None
+
+
 def _mujoco_include() -> tuple[Path, str]:
     import mujoco
 

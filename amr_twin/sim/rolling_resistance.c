@@ -95,3 +95,15 @@ void rr_update(const mjModel* m, mjData* d, const rr_params* p, double* loads) {
     qfrc[4] = x7 * tz;
     qfrc[5] = x8 * tz;
 }
+
+/* A row (19,) of a sweep point's support sample, as RollingResistance.support_rows keeps it in
+ * Python: the loads of the last update (6), the contact loads (6, rr_contact_loads), the
+ * world z of the base's z axis and the base's free-joint velocity (6). */
+void rr_support_row(const mjData* d, const rr_params* p, const double* loads, double* row) {
+    for (int k = 0; k < 6; k++)
+        row[k] = loads[k];
+    rr_contact_loads(d, p, row + 6);
+    row[12] = d->xmat[9 * p->base + 8];
+    for (int k = 0; k < 6; k++)
+        row[13 + k] = d->qvel[p->root_dof + k];
+}

@@ -42,10 +42,13 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
+from amr_twin.sim.grid_steps import CALL4, GridRows, sampler
 from amr_twin.sim.native_build import open_helper
 
 C_SOURCE = Path(__file__).with_name("rolling_resistance.c")
 
+SUPPORT_ROW = 19
+"""Values in a row of :meth:`RollingResistance.support_rows`."""
 BALL_SPEED_EPS_M_S = 0.005
 """Ball speed below which the caster resistance fades linearly to zero, m/s."""
 
@@ -146,7 +149,9 @@ class RollingResistance:
         def update(t_us: int = 0, _fn=fn, _args=args) -> None:
             _fn(*_args)
 
+        update.grid_native = sampler(CALL4, fn, m._address, d._address, p, self._loads_c)  # the loop's grid in C
         self.update = update
+        self._row_fn = lib.rr_support_row
         contact = lib.rr_contact_loads
         contact.restype = None
         contact.argtypes = [ctypes.c_void_p] * 3
@@ -158,6 +163,22 @@ class RollingResistance:
             return _out[:]
 
         self.contact_loads = contact_loads
+
+    def support_rows(self, period_us: int) -> GridRows:
+        """A grid sampler keeping, every ``period_us`` (after this one's update at the same
+        instant): the loads used (6), the supports' contact loads (6, :attr:`contact_loads`),
+        the world z of the base's z axis (:meth:`~amr_twin.sim.physics.Physics.base_up_z`) and
+        the base velocity (6, :meth:`~amr_twin.sim.physics.Physics.base_velocity`): a (19,)
+        row (``rr_support_row`` in C, the same values)."""
+        physics = self.physics
+
+        def row() -> list[float]:
+            return [*self.loads, *self.contact_loads(), physics.base_up_z(), *physics.base_velocity_list()]
+
+        c_row = None
+        if self._loads_c is not None:
+            c_row = (self._row_fn, self.physics.data._address, self._params, self._loads_c)
+        return GridRows(SUPPORT_ROW, period_us, row, c_row)
 
     @property
     def loads(self) -> list[float]:

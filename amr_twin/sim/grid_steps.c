@@ -1,0 +1,113 @@
+/* A chunk of the loop's physics in one call: mj_step to each record-grid instant, the loop
+ * sensors' row kept, and the grid samplers that have a C form run there, in their order.
+ *
+ * The C twin of the grid loop of Twin._step_physics (amr_twin/sim/loop.py): the same mj_step
+ * calls in the same order and, at each instant, the same helpers the Python samplers call
+ * (rr_update, battery_account, contacts_changed, rr_support_row), so both give the same bits;
+ * tests/sim/test_grid_steps.py compares runs of each. A sampler may hand the instant back to
+ * Python (gs_ctx.handoff: the collision monitor when the contacts changed, a row keeper when
+ * its rows are full); the loop then runs that sampler's Python side and the samplers after it.
+ *
+ * mj_step is called through a pointer into the libmujoco the bindings loaded. MuJoCo's errors
+ * are caught as the bindings catch them: mju_user_error points to a handler that jumps back
+ * here for the length of the call (then restored); the call returns -1 with the message.
+ * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ */
+#include <setjmp.h>
+#include <stdint.h>
+#include <string.h>
+#include <mujoco/mujoco.h>
+
+enum { GS_CALL2 = 0, GS_CALL3 = 1, GS_CALL4 = 2, GS_CHANGED = 3, GS_ROW = 4 };
+
+typedef struct {
+    int kind;           /* how fn is called (the enum above) */
+    int width, cap, n;  /* GS_ROW: values a row, rows of room in out, rows kept */
+    int64_t period_us;  /* runs at the grid instants t with t % period_us == 0 */
+    void* fn;
+    void* a[4];         /* fn's arguments (GS_ROW: a[0..2], then the row) */
+    double* out;        /* GS_ROW: (cap, width) rows */
+} gs_sampler;
+
+typedef struct {
+    void (*step)(const mjModel*, mjData*);
+    void (**user_error)(const char*);  /* libmujoco's mju_user_error */
+    const mjModel* m;
+    mjData* d;
+    const double* sensors;  /* the loop sensors (ncol values of d->sensordata) */
+    int ncol, rows_cap;
+    double* rows;           /* (rows_cap, ncol) rows at the instants stepped to */
+    int every;              /* steps between grid instants */
+    int64_t grid_us;
+    gs_sampler** s;
+    int ns;
+    int handoff;            /* -1, or the sampler that hands the last instant to Python */
+    char message[256];      /* MuJoCo's error, when the call returns -1 */
+} gs_ctx;
+
+static _Thread_local jmp_buf gs_jump;
+static _Thread_local gs_ctx* gs_current;
+
+static void gs_on_error(const char* msg) {
+    strncpy(gs_current->message, msg, sizeof gs_current->message - 1);
+    gs_current->message[sizeof gs_current->message - 1] = '\0';
+    longjmp(gs_jump, 1);
+}
+
+/* Step nfirst steps to the first of nmarks grid instants (t_first_us), then every steps to
+ * each next one; at each, keep the row and run the samplers due. Returns the instants
+ * reached (rows kept): nmarks, or fewer when a sampler handed the last one to Python
+ * (c->handoff >= 0, the samplers before it ran); -1 on a MuJoCo error. */
+int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
+    void (*saved)(const char*) = *c->user_error;
+    gs_current = c;
+    c->handoff = -1;
+    *c->user_error = gs_on_error;
+    if (setjmp(gs_jump)) {
+        *c->user_error = saved;
+        return -1;
+    }
+    int n = nfirst, j = 0;
+    for (; j < nmarks; j++) {
+        for (int i = 0; i < n; i++)
+            c->step(c->m, c->d);
+        n = c->every;
+        memcpy(c->rows + (size_t)j * c->ncol, c->sensors, sizeof(double) * c->ncol);
+        int64_t t = t_first_us + j * c->grid_us;
+        for (int i = 0; i < c->ns; i++) {
+            gs_sampler* g = c->s[i];
+            if (g->period_us > 1 && t % g->period_us != 0)
+                continue;
+            void** a = g->a;
+            switch (g->kind) {
+            case GS_CALL2:
+                ((void (*)(void*, void*))g->fn)(a[0], a[1]);
+                break;
+            case GS_CALL3:
+                ((void (*)(void*, void*, void*))g->fn)(a[0], a[1], a[2]);
+                break;
+            case GS_CALL4:
+                ((void (*)(void*, void*, void*, void*))g->fn)(a[0], a[1], a[2], a[3]);
+                break;
+            case GS_CHANGED:
+                if (((int (*)(void*, void*))g->fn)(a[0], a[1])) {
+                    c->handoff = i;
+                    *c->user_error = saved;
+                    return j + 1;
+                }
+                break;
+            case GS_ROW:
+                if (g->n >= g->cap) {
+                    c->handoff = i;
+                    *c->user_error = saved;
+                    return j + 1;
+                }
+                ((void (*)(void*, void*, void*, double*))g->fn)(a[0], a[1], a[2], g->out + (size_t)g->n * g->width);
+                g->n++;
+                break;
+            }
+        }
+    }
+    *c->user_error = saved;
+    return nmarks;
+}

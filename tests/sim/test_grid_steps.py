@@ -1,0 +1,140 @@
+"""The loop's grid in C (amr_twin/sim/grid_steps.c) against its Python twin (the grid loop of
+Twin._step_physics): the same bits through a drive with a payload, a collision and a stop on
+collision, with every instant's samplers; MuJoCo's errors become exceptions."""
+
+import ctypes
+import functools
+import shutil
+from types import SimpleNamespace
+
+import mujoco
+import numpy as np
+import pytest
+
+import amr_twin.sim.grid_steps as grid_steps
+import amr_twin.sim.loop as loop_mod
+from amr_twin.model.config import load_config
+from amr_twin.sim.grid_steps import GridRows, grid_stepper
+from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.sim.native_build import mujoco_address
+
+pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None,
+                                reason="no C compiler")
+HEAVY_REAR = load_config(overrides={"payload.mass_kg": 40.0, "payload.xy_m": [-0.2, 0.05]})
+
+
+def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
+    """The twin of ``options`` driven by ``script``, with a support sampler (50 Hz), its grid in C
+    or in Python; what it ends with, and how often the C grid ran and handed an instant back."""
+    monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+    calls = {"runs": 0, "handoffs": 0}
+    real = grid_steps.GridStepper.run
+
+    def run(self, *args):
+        reached, handoff = real(self, *args)
+        calls["runs"] += 1
+        calls["handoffs"] += handoff >= 0
+        return reached, handoff
+
+    monkeypatch.setattr(grid_steps.GridStepper, "run", run)
+    twin = Twin(cfg or load_config(), options)
+    support = twin.rolling.support_rows(20_000)
+    twin.samplers.append(support)
+    script(twin)
+    d, s = twin.physics.data, twin.recorder.series()
+    state = {"qpos": d.qpos.copy(), "qvel": d.qvel.copy(), "time": d.time, "t_phys_us": twin.t_phys_us,
+             "halted": twin.halted, "soc": twin.plant.battery.soc, "t_s": s.t_s, "rows": support.rows(),
+             "angle": s.wheel_angle_rad, "rpm": s.true_rpm, "pose": s.pose, "pwm": s.pwm_counts,
+             "current": s.current_a, "published": [s.published[w] for w in sorted(s.published)],
+             "collisions": twin.collisions.as_dicts(), "friction": twin.physics.model.dof_frictionloss.copy()}
+    return state, calls
+
+
+def _same(a: dict, b: dict) -> None:
+    for key in a:
+        if key in ("collisions", "halted"):
+            assert a[key] == b[key], key
+        elif key == "published":
+            assert len(a[key]) == len(b[key]) and all(np.array_equal(x, y) for x, y in zip(a[key], b[key])), key
+        else:
+            assert np.array_equal(np.asarray(a[key]), np.asarray(b[key])), key
+
+
+def _veer_and_spin(twin):
+    twin.client.linear(0.7)
+    twin.advance(8.5)  # veers into the rack south of the aisle (test_collisions)
+    twin.client.angular(90.0, 0.0)
+    twin.advance(1.5)
+
+
+@pytest.mark.parametrize("payload", ["none", "heavy at the rear"])
+def test_the_grid_in_c_gives_the_python_loops_bits_through_a_collision(monkeypatch, payload):
+    """The veering run that scrapes a rack (without a payload; with 40 kg at the rear it passes),
+    then a spin: the state, the record, the published speeds, the support samples, the battery
+    and the episodes are the same to the bit; the C grid ran and handed instants back (the
+    contacts changing, the support rows outgrowing their room)."""
+    cfg = HEAVY_REAR if payload != "none" else load_config()
+    options = TwinOptions(start_xy_yaw=None, visuals=False)
+    c_state, c_calls = _run(monkeypatch, True, options, _veer_and_spin, cfg)
+    py_state, py_calls = _run(monkeypatch, False, options, _veer_and_spin, cfg)
+    assert py_calls["runs"] == 0 and c_calls["runs"] > 50 and c_calls["handoffs"] >= 3
+    assert len(c_state["rows"]) == 500
+    if payload == "none":
+        assert c_state["collisions"] and c_state["collisions"][0]["hit"] == "rack_s_beam_low"
+    _same(c_state, py_state)
+
+
+def test_a_stop_on_collision_halts_both_at_the_same_instant(monkeypatch):
+    options = TwinOptions(start_xy_yaw=None, visuals=False, stop_on_collision=True)
+
+    def drive(twin):
+        twin.client.linear(0.7)
+        twin.advance(9.0)
+
+    c_state, c_calls = _run(monkeypatch, True, options, drive)
+    py_state, _ = _run(monkeypatch, False, options, drive)
+    assert c_state["halted"] and c_calls["handoffs"] >= 1
+    assert 6.0 < c_state["t_phys_us"] * 1e-6 < 8.0
+    _same(c_state, py_state)
+
+
+def test_rows_kept_in_c_are_the_python_rows():
+    """GridRows: the C row keeper (the C grid) and the Python row (the Python loop) keep the same
+    values at the same instants, through two growths of its room; the last row is the physics
+    as the run ends (loads, contact forces, tilt cosine, base velocity, in that order)."""
+    out = []
+    for in_c in (True, False):
+        twin = Twin(HEAVY_REAR, TwinOptions(world="empty", visuals=False))
+        support = twin.rolling.support_rows(30_000)
+        if not in_c:  # the same row in Python only: the twin's grid runs in Python
+            support = GridRows(support.width, support.period_us, support._row)
+        assert (support.grid_native is not None) == in_c
+        twin.samplers.append(support)
+        twin.client.angular(60.0, -1.0)
+        twin.advance(6.0)
+        out.append(support.rows())
+    rows, python = out
+    assert rows.shape == (200, 19) and np.array_equal(rows, python)
+    physics = twin.physics
+    last = [*twin.rolling.loads, *physics.support_normal_forces_n(), physics.base_up_z(),
+            *physics.base_velocity()]
+    assert rows[-1].tolist() == last
+    assert rows[:, 12].min() < 1.0 and np.abs(rows[:, 13:19]).max() > 0.1 and rows[:, 6:12].max() > 50.0
+
+
+def test_a_mujoco_error_in_the_c_grid_is_raised_and_the_handler_restored():
+    """A model whose stack overflows in mj_step: FatalError with MuJoCo's message, as the bindings
+    raise it, and mju_user_error as it was."""
+    xml = ('<mujoco><size memory="16K"/><worldbody><geom type="plane" size="5 5 .1"/>'
+           + "".join(f'<body pos="{0.05 * i} 0 {0.1 + 0.01 * i}"><freejoint/><geom type="box" size=".1 .1 .1"/></body>'
+                     for i in range(20)) + "</worldbody></mujoco>")
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    handler = ctypes.c_void_p.from_address(mujoco_address("mju_user_error")).value
+    stepper = grid_stepper(SimpleNamespace(model=m, data=d), ncol=0, every=10, dt_us=2000)
+    assert stepper is not None and stepper.use([])
+    with pytest.raises(mujoco.FatalError, match="stack overflow"):
+        stepper.run(10, 20, 20_000)
+    assert ctypes.c_void_p.from_address(mujoco_address("mju_user_error")).value == handler
+    with pytest.raises(mujoco.FatalError, match="stack overflow"):
+        mujoco.mj_step(m, d, 20)  # the bindings' own handling is untouched

@@ -117,8 +117,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     support = twin.rolling.support_rows(int(round(SAMPLE_S * 1e6)))
     twin.samplers.append(support)
     twin.advance_to_us(int(round(point.duration_s * 1e6)))
-    rows = support.rows()
-    loads, contact, up_z, vel = rows[:, 0:6], rows[:, 6:12], rows[:, 12], rows[:, 13:19]
+    rows = support.take()  # the instant, then the values
+    loads, contact, up_z, vel = rows[:, 1:7], rows[:, 7:13], rows[:, 13], rows[:, 14:20]
     s = twin.recorder.series()
     if recording:
         from amr_twin.recording.rerun_log import record_run

@@ -54,6 +54,8 @@ from amr_twin.ros.geometry_messages import Quaternion, Vector3
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Imu, MagneticField
 from amr_twin.sensors.imu_errors import ErrorStream, axis_models, covariances
+from amr_twin.sim.grid_steps import GridRows, gather
+from amr_twin.sim.native_build import address
 
 US = 1_000_000
 SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")
@@ -101,8 +103,8 @@ class ImuSensor:
         self._handle = None
         self._samplers: list | None = None  # the loop's grid samplers while fed by the loop
         self._start_us = 0
-        self._true_t: list[int] = []  # instants of the true values taken on the grid, us
-        self._true: list[list[float]] = []  # the true values (9 each) at those instants
+        self._native = native
+        self._true: GridRows | None = None  # the true values (9) taken on the loop's grid, after their instants
         self._ready: deque[tuple[int, list[float]]] = deque()  # (t_us, 9 readings) to publish
         a = self._adr
         self._sd9 = data.sensordata[a[0]:a[0] + 9] if a[1] == a[0] + 3 and a[2] == a[0] + 6 else None
@@ -122,19 +124,23 @@ class ImuSensor:
         grid_us : int, optional
             The simulation loop's sampling grid, us. With ``samplers``, when
             ``period_us`` is a multiple of it, the loop samples the true values
-            on its grid while it steps (:meth:`on_grid`) and the messages go out
+            on its grid while it steps (a :class:`~amr_twin.sim.grid_steps.GridRows`,
+            in C when the loop runs its grid there) and the messages go out
             from *publishing* clock events at the sample instants: the physics
             is not stopped for them (:mod:`amr_twin.sim.clock`). Otherwise each
             sample is a clock event that reads ``MjData`` at its instant.
         samplers : list, optional
-            The loop's list of grid samplers; :meth:`on_grid` is appended to it.
+            The loop's list of grid samplers; the true values' keeper is appended to it.
         """
         if self._handle is not None:
             return
         first_us = self._start_us = -(-self.clock.now_us // self.period_us) * self.period_us
         if grid_us and samplers is not None and self.period_us % int(grid_us) == 0:
             self._samplers = samplers
-            samplers.append(self.on_grid)
+            at, a = address(self.data.sensordata), self._adr  # the three vectors' values, where they lie
+            c_row = gather([at + 8 * (a[v] + k) for v in range(3) for k in range(3)]) if self._native else None
+            self._true = GridRows(9, self.period_us, self._true9_list, c_row, start_us=first_us)
+            samplers.append(self._true)
             self._handle = self.clock.schedule_every(first_us, self.period_us, self._publish_next,
                                                      publishes=("imu/data_raw", "imu/mag"))
         else:
@@ -146,10 +152,9 @@ class ImuSensor:
             self._handle.cancel()
             self._handle = None
         if self._samplers is not None:
-            self._samplers.remove(self.on_grid)
+            self._samplers.remove(self._true)
             self._samplers = None
-        self._true_t.clear()
-        self._true.clear()
+        self._true = None
         self._ready.clear()
 
     def true_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -177,22 +182,15 @@ class ImuSensor:
         y = self.corrupt_batch(self._true9()[None, :])[0]
         return y[0:3], y[3:6], y[6:9]
 
-    def on_grid(self, t_us: int) -> None:
-        """The loop's grid sampler: keep the true values at the sample instants (physics at ``t_us``)."""
-        if t_us >= self._start_us and not t_us % self.period_us:  # plain lists: this runs every 10 ms
-            self._true.append(self._true9_list())
-            self._true_t.append(t_us)
-
     def _publish_next(self) -> None:
         """Publishing event: the sample taken on the grid at this instant goes out."""
         now = self.clock.now_us
         if not self._ready:
-            if not self._true_t:
+            true = self._true.take() if self._true is not None else np.zeros((0, 10))
+            if not len(true):
                 raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid")
-            y = self.errors.corrupt_batch(np.array(self._true))
-            self._ready.extend(zip(self._true_t, y.tolist()))
-            self._true_t.clear()
-            self._true.clear()
+            y = self.errors.corrupt_batch(np.ascontiguousarray(true[:, 1:]))
+            self._ready.extend(zip(true[:, 0].astype(np.int64).tolist(), y.tolist()))
         t_us, y = self._ready.popleft()
         if t_us != now:
             raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid (got {t_us})")

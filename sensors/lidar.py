@@ -55,6 +55,7 @@ from amr_twin.model.config_sections import LidarCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 
+from amr_twin.sim.grid_steps import NEVER_BEFORE
 from amr_twin.sensors.lidar_beams import US, PoseSamples, beam_angles_rad, beam_directions, group_masks, scan_timing
 from amr_twin.sensors.lidar_kernels import CUTOFF_M, beam_kernels
 
@@ -96,7 +97,6 @@ class Lidar:
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
         self.frame_id = frame_id
         self.site_id = int(model.site(site).id)
-        self._site_pos, self._site_mat = data.site_xpos[self.site_id], data.site_xmat[self.site_id]  # views
         self.rng = np.random.default_rng(seed)
         self.n_beams, self.beam_dt_us, self.scan_us = scan_timing(cfg)
         self.angle_min, self.angle_increment, self.angles_rad = beam_angles_rad(self.n_beams)
@@ -135,7 +135,7 @@ class Lidar:
         self._handle = None
         self._samplers: list | None = None  # the loop's grid samplers (in the twin)
         self._grid: tuple[int, list] | None = None
-        self._poses = PoseSamples()
+        self._poses = PoseSamples(data, self.site_id, self.cast_period_us, self._after_pose, native)
         self._lx, self._ly = self.local_dirs[:, 0:1].copy(), self.local_dirs[:, 1:2].copy()  # (n, 1) each
         self._done: deque = deque()  # (t_us, scan, beam_t_us, hit_geom) cast, not yet published
         self.running = False
@@ -163,12 +163,13 @@ class Lidar:
             grid, self._samplers = self._grid
             self.cast_period_us = -(-self.group_us // grid) * grid
             self.cast_every_us = self.loop_cast_us
-            self._samplers.append(self.on_sample)
+            self._samplers.append(self._poses)
             self._handle = self.clock.schedule(self._publish_time_us(now), self._publish_next, publishes=("scan",))
         else:
             self.cast_period_us = self.cast_every_us = self.group_us
             grid = self.group_us
             self._handle = self.clock.schedule(-(-now // grid) * grid, self._on_cast)
+        self._poses.period_us = self.cast_period_us
 
     def stop_motor(self, request=None) -> None:
         """Stop rotating; the scan in progress and scans not yet published are discarded."""
@@ -177,9 +178,10 @@ class Lidar:
             self._handle.cancel()
             self._handle = None
         if self._samplers is not None:
-            self._samplers.remove(self.on_sample)
+            self._samplers.remove(self._poses)
             self._samplers = None
         self._done.clear()
+        self._poses.due_us = NEVER_BEFORE  # not rotating: each sample runs the casts' bookkeeping
 
     # -- scanning ------------------------------------------------------------------
     def _new_rotation(self, t0_us: int) -> None:
@@ -191,6 +193,7 @@ class Lidar:
         self._last_cast_us = t0_us
         self._last_beam_us = int(self.beam_t_us[0])
         self._next_cast_us = min(self._last_beam_us, t0_us + self.cast_every_us)
+        self._poses.due_us = self._next_cast_us if self.running else NEVER_BEFORE
 
     def _on_cast(self) -> None:
         """Standalone clock event: sample the pose, cast, publish a completed rotation."""
@@ -205,9 +208,11 @@ class Lidar:
         after the previous cast. Called by the loop on its record grid (twin) or
         by this sensor's clock events (standalone).
         """
-        if t_us % self.cast_period_us:
-            return
-        self._poses.append(t_us, self._site_pos, self._site_mat)
+        self._poses(t_us)  # the pose at the multiples of cast_period_us, then _after_pose if due
+
+    def _after_pose(self, t_us: int) -> None:
+        """A pose sample at ``t_us`` is kept and the casts are due (``t_us >= _next_cast_us``, or
+        the motor stopped): cast the beams due, finish a complete rotation."""
         if t_us < self._next_cast_us and self.running:
             return
         cast = False
@@ -229,6 +234,7 @@ class Lidar:
                 self._last_cast_us = t_us
             break
         self._next_cast_us = min(self._last_beam_us, self._last_cast_us + self.cast_every_us)
+        self._poses.due_us = self._next_cast_us if self.running else NEVER_BEFORE
         if cast or not self.running:  # later beams only need the samples from now on
             self._poses.keep_last()
 

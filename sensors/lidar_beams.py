@@ -38,6 +38,8 @@ import math
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
+from amr_twin.sim.grid_steps import GridRows, gather
+from amr_twin.sim.native_build import address
 
 US = 1_000_000
 SEEN_GROUPS = (0, 4)
@@ -105,45 +107,32 @@ def group_masks(geom_group: np.ndarray, geom_moving: np.ndarray) -> tuple[np.nda
     return seen, world, payload_groups
 
 
-class PoseSamples:
+class PoseSamples(GridRows):
     """Laser pose samples: rows of ``t_us``, position (3, m), laser x axis and y axis in the world (3 + 3).
 
-    Kept as plain lists (a sample is taken every 20 ms, where a numpy row costs 5 us on the
-    loop's cold caches); :attr:`rows` is their (n, 10) array, built when asked for.
+    A :class:`~amr_twin.sim.grid_steps.GridRows` of the laser site's ``site_xpos`` and
+    ``site_xmat`` (``data``, ``site_id``) every ``period_us``: kept by the loop's grid (in C,
+    ``gs_gather``, when the loop runs its grid there) or by the sensor's clock events;
+    ``after(t_us)`` runs after a sample at or after :attr:`due_us` (the casts). ``native=False``:
+    Python only.
     """
 
-    def __init__(self):
-        self._rows: list[list[float]] = []
-        self._array: np.ndarray | None = None
+    def __init__(self, data, site_id: int, period_us: int, after, native: bool = True):
+        pos, mat = data.site_xpos[site_id], data.site_xmat[site_id]  # views: MjData's buffers stay put
 
-    @property
-    def n(self) -> int:
-        """Samples kept."""
-        return len(self._rows)
+        def row() -> list[float]:
+            x, y, z = pos.tolist()
+            m = mat.tolist()
+            return [x, y, z, m[0], m[3], m[6], m[1], m[4], m[7]]  # the laser x axis, y axis
+
+        at = address(data.site_xpos) + 8 * 3 * site_id, address(data.site_xmat) + 8 * 9 * site_id
+        c_row = gather([at[0] + 8 * k for k in range(3)] + [at[1] + 8 * k for k in (0, 3, 6, 1, 4, 7)]) if native else None
+        super().__init__(9, period_us, row, c_row, after=after)
 
     @property
     def rows(self) -> np.ndarray:
         """The samples, shape (n, 10), float64 (at least one row: zeros when there is none)."""
-        if self._array is None:
-            self._array = np.array(self._rows, float) if self._rows else np.zeros((1, 10))
-        return self._array
-
-    def append(self, t_us: int, position_m: np.ndarray, xmat: np.ndarray) -> None:
-        """Add the sample at ``t_us``: ``position_m`` (3,) and the rotation matrix ``xmat`` (9,), row-major."""
-        x, y, z = position_m.tolist()
-        m = xmat.tolist()
-        self._rows.append([t_us, x, y, z, m[0], m[3], m[6], m[1], m[4], m[7]])  # the laser x axis, y axis
-        self._array = None
-
-    def keep_last(self) -> None:
-        """Forget all samples but the newest."""
-        del self._rows[:-1]
-        self._array = None
-
-    def clear(self) -> None:
-        """Forget all samples."""
-        self._rows.clear()
-        self._array = None
+        return super().rows if self.n else np.zeros((1, 10))
 
 
 def interpolate_poses(rows: np.ndarray, n: int, t_us: np.ndarray) -> np.ndarray:

@@ -3,10 +3,12 @@
  *
  * The C twin of the grid loop of Twin._step_physics (amr_twin/sim/loop.py): the same mj_step
  * calls in the same order and, at each instant, the same helpers the Python samplers call
- * (rr_update, battery_account, contacts_changed, rr_support_row), so both give the same bits;
+ * (rr_update, battery_account, contacts_changed, the row keepers' rr_support_row and gs_gather), so
+ * both give the same bits;
  * tests/sim/test_grid_steps.py compares runs of each. A sampler may hand the instant back to
  * Python (gs_ctx.handoff: the collision monitor when the contacts changed, a row keeper when
- * its rows are full); the loop then runs that sampler's Python side and the samplers after it.
+ * its rows are full or, after keeping one, when its owner has work due, as the LiDAR's cast);
+ * the loop then runs that sampler's Python side and the samplers after it.
  *
  * mj_step is called through a pointer into the libmujoco the bindings loaded. MuJoCo's errors
  * are caught as the bindings catch them: mju_user_error points to a handler that jumps back
@@ -22,12 +24,21 @@ enum { GS_CALL2 = 0, GS_CALL3 = 1, GS_CALL4 = 2, GS_CHANGED = 3, GS_ROW = 4 };
 
 typedef struct {
     int kind;           /* how fn is called (the enum above) */
-    int width, cap, n;  /* GS_ROW: values a row, rows of room in out, rows kept */
-    int64_t period_us;  /* runs at the grid instants t with t % period_us == 0 */
+    int width, cap, n;  /* GS_ROW: values a row (the instant first), rows of room in out, rows kept */
+    int64_t period_us;  /* runs at the grid instants t >= start_us with t % period_us == 0 */
+    int64_t start_us;
+    int64_t due_us;     /* GS_ROW: from this instant on, a row kept hands the instant to Python */
     void* fn;
-    void* a[4];         /* fn's arguments (GS_ROW: a[0..2], then the row) */
+    void* a[4];         /* fn's arguments (GS_ROW: a[0..2], then the row after its instant) */
     double* out;        /* GS_ROW: (cap, width) rows */
 } gs_sampler;
+
+/* A row keeper's values: row[k] = *at[k] for k < *n (MjData values where they lie). */
+void gs_gather(const double* const* at, const int* n, const void* unused, double* row) {
+    (void)unused;
+    for (int k = 0; k < *n; k++)
+        row[k] = *at[k];
+}
 
 typedef struct {
     void (*step)(const mjModel*, mjData*);
@@ -76,7 +87,7 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
         int64_t t = t_first_us + j * c->grid_us;
         for (int i = 0; i < c->ns; i++) {
             gs_sampler* g = c->s[i];
-            if (g->period_us > 1 && t % g->period_us != 0)
+            if ((g->period_us > 1 && t % g->period_us != 0) || t < g->start_us)
                 continue;
             void** a = g->a;
             switch (g->kind) {
@@ -97,13 +108,20 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
                 }
                 break;
             case GS_ROW:
-                if (g->n >= g->cap) {
+                if (g->n >= g->cap) {  /* full: Python grows the room and keeps the row */
                     c->handoff = i;
                     *c->user_error = saved;
                     return j + 1;
                 }
-                ((void (*)(void*, void*, void*, double*))g->fn)(a[0], a[1], a[2], g->out + (size_t)g->n * g->width);
+                double* row = g->out + (size_t)g->n * g->width;
+                row[0] = (double)t;
+                ((void (*)(void*, void*, void*, double*))g->fn)(a[0], a[1], a[2], row + 1);
                 g->n++;
+                if (t >= g->due_us) {  /* kept; what follows is Python's */
+                    c->handoff = i;
+                    *c->user_error = saved;
+                    return j + 1;
+                }
                 break;
             }
         }

@@ -3,14 +3,16 @@
 Between two events the loop steps the physics to each record-grid instant (every 10 ms),
 keeps the loop sensors' row there and runs the grid samplers. When every sampler of the
 twin has a C form (its ``grid_native``: a :class:`Sampler`; the rolling resistance, the
-battery, the collision monitor while no collision is open, a :class:`GridRows` keeper),
+battery, the collision monitor while no collision is open, and :class:`GridRows` keepers:
+a sweep point's support loads, the IMU's true values, the LiDAR's laser poses),
 :class:`GridStepper` runs that loop in ``grid_steps.c``: mj_step through a pointer into
 libmujoco, the row copied, the samplers' helpers called in order; one call a chunk against
-one Python round trip and three to four helper calls an instant (a sweep point's 800 instants
-cost ~12 ms of Python). A sampler may hand an instant back (:attr:`Sampler.kind`
-:data:`CHANGED`, :data:`ROW`): its ``grid_resume`` (or itself) and the samplers after it then
-run in Python there. Any other sampler (the IMU, the LiDAR, a recording's poses) keeps the
-Python loop, which is this module's Python twin: the same bits (tests/sim/test_grid_steps.py).
+one Python round trip and three to five helper calls an instant (a sweep point's 800 instants
+cost ~12 ms of Python). A sampler may hand an instant back (:data:`CHANGED`: the contacts
+changed; :data:`ROW`: its room is full, or its owner has work due, as a LiDAR cast): its
+``grid_resume`` (or itself) and the samplers after it then run in Python there. Any other
+sampler (a recording's body poses, a live view's rows) keeps the Python loop, which is this
+module's Python twin: the same bits (tests/sim/test_grid_steps.py).
 """
 
 from __future__ import annotations
@@ -27,20 +29,23 @@ CALL2, CALL3, CALL4, CHANGED, ROW = range(5)
 """How a :class:`Sampler`'s function is called: with 2, 3 or 4 of its arguments; as a test whose
 non-zero result hands the instant to Python; as a row keeper ``f(a0, a1, a2, row)``."""
 _P = ctypes.c_void_p
+NEVER_BEFORE, NEVER_DUE = -(1 << 62), 1 << 62
 
 
 class Sampler(ctypes.Structure):
     """``gs_sampler`` of grid_steps.c: a grid sampler's C form."""
 
     _fields_ = [("kind", ctypes.c_int), ("width", ctypes.c_int), ("cap", ctypes.c_int), ("n", ctypes.c_int),
-                ("period_us", ctypes.c_int64), ("fn", _P), ("a", _P * 4), ("out", _P)]
+                ("period_us", ctypes.c_int64), ("start_us", ctypes.c_int64), ("due_us", ctypes.c_int64),
+                ("fn", _P), ("a", _P * 4), ("out", _P)]
 
 
 def sampler(kind: int, function, *args, period_us: int = 1) -> Sampler:
     """A :class:`Sampler` calling the helper ``function`` (a ctypes function of a loaded helper)
     with ``args`` (addresses, or ctypes structures and arrays: their addresses), at the grid instants that are
     multiples of ``period_us``."""
-    s = Sampler(kind=kind, period_us=int(period_us), fn=ctypes.cast(function, _P).value)
+    s = Sampler(kind=kind, period_us=int(period_us), start_us=NEVER_BEFORE, due_us=NEVER_DUE,
+                fn=ctypes.cast(function, _P).value)
     for i, arg in enumerate(args):
         s.a[i] = arg if isinstance(arg, int) else ctypes.addressof(arg)
     s._keep = args  # the arguments outlive the sampler
@@ -118,43 +123,102 @@ def grid_stepper(physics, ncol: int, every: int, dt_us: int, native: bool = True
     return GridStepper(lib, physics, ncol, every, dt_us) if lib is not None else None
 
 
-class GridRows:
-    """A grid sampler keeping a row of ``width`` values every ``period_us``: ``row()`` (a list)
-    in Python; in C (``c_row``: a helper ``f(a0, a1, a2, double* row)`` and its three arguments)
-    when the loop runs its grid in C. Both must give the same values. :meth:`rows` returns them."""
+def gather(pointers: list[int]) -> tuple | None:
+    """``c_row`` of a :class:`GridRows` whose values are the doubles at ``pointers`` (addresses
+    in MjData; ``gs_gather``), or None without the helper."""
+    lib, _engine = open_helper(C_SOURCE)
+    if lib is None:
+        return None
+    at = (ctypes.c_void_p * len(pointers))(*pointers)
+    return (lib.gs_gather, at, ctypes.c_int(len(pointers)), 0)
 
-    def __init__(self, width: int, period_us: int, row, c_row: tuple | None = None):
-        self.width, self.period_us, self._row = int(width), int(period_us), row
-        self._buf = np.zeros((64, self.width))
+
+class GridRows:
+    """A grid sampler keeping, every ``period_us`` from ``start_us`` on, a row: the instant (us, as
+    a float) and ``width`` values, from ``row()`` (a list) in Python or, when the loop runs its
+    grid in C, from ``c_row`` (a helper ``f(a0, a1, a2, double* values)`` and its three arguments);
+    both must give the same values. After a row at or after :attr:`due_us`, ``after(t_us)`` runs
+    (in Python: the LiDAR casts there). :attr:`rows` are the rows kept."""
+
+    def __init__(self, width: int, period_us: int, row, c_row: tuple | None = None, after=None,
+                 start_us: int = NEVER_BEFORE):
+        self.width, self._row, self._after = int(width), row, after
+        self._buf = np.zeros((64, self.width + 1))
         self._n = 0
         self.grid_native = None
         """The :class:`Sampler` of the C form (None without one)."""
         if c_row is not None:
             fn, *args = c_row
-            self.grid_native = sampler(ROW, fn, *args, period_us=self.period_us)
-            self.grid_native.width, self.grid_native.cap = self.width, len(self._buf)
+            self.grid_native = sampler(ROW, fn, *args)
+            self.grid_native.width, self.grid_native.cap = self.width + 1, len(self._buf)
             self.grid_native.out = address(self._buf)
+        self.period_us, self.start_us, self.due_us = int(period_us), int(start_us), NEVER_DUE
 
-    def _count(self) -> int:
+    def __setattr__(self, name, value):
+        object.__setattr__(self, name, value)
+        if name in ("period_us", "start_us", "due_us") and self.grid_native is not None:
+            setattr(self.grid_native, name, value)  # the C form's copy
+
+    @property
+    def n(self) -> int:
+        """Rows kept."""
         return self.grid_native.n if self.grid_native is not None else self._n
 
+    def _set_n(self, n: int) -> None:
+        if self.grid_native is not None:
+            self.grid_native.n = n
+        else:
+            self._n = n
+
     def __call__(self, t_us: int) -> bool:
-        if t_us % self.period_us:
+        if t_us % self.period_us or t_us < self.start_us:
             return False
-        n = self._count()
-        if n >= len(self._buf):  # full: twice the room (the C side keeps to the new buffer)
-            grown = np.zeros((2 * len(self._buf), self.width))
+        self._keep(t_us)
+        if t_us >= self.due_us:
+            self._after(t_us)
+        return False
+
+    def grid_resume(self, t_us: int) -> bool:
+        """The instant ``t_us`` handed back by the C form: its row kept (unless the room was
+        full), then ``after`` if due."""
+        n = self.n
+        if not (n and self._buf[n - 1, 0] == t_us):
+            self._keep(t_us)
+        if t_us >= self.due_us:
+            self._after(t_us)
+        return False
+
+    def _keep(self, t_us: int) -> None:
+        n = self.n
+        if n >= len(self._buf):  # full: twice the room (the C form keeps to the new buffer)
+            grown = np.zeros((2 * len(self._buf), self.width + 1))
             grown[:n] = self._buf[:n]
             self._buf = grown
             if self.grid_native is not None:
                 self.grid_native.out, self.grid_native.cap = address(grown), len(grown)
-        self._buf[n] = self._row()
-        if self.grid_native is not None:
-            self.grid_native.n = n + 1
-        else:
-            self._n = n + 1
-        return False
+        row = self._buf[n]
+        row[0] = t_us
+        row[1:] = self._row()
+        self._set_n(n + 1)
 
+    @property
     def rows(self) -> np.ndarray:
-        """(n, width) the rows kept, in time order (a copy)."""
-        return self._buf[:self._count()].copy()
+        """(n, 1 + width) the rows kept, in time order: a view, valid until the next row."""
+        return self._buf[:self.n]
+
+    def take(self) -> np.ndarray:
+        """The rows kept (a copy), forgetting them."""
+        out = self._buf[:self.n].copy()
+        self._set_n(0)
+        return out
+
+    def keep_last(self) -> None:
+        """Forget all rows but the newest."""
+        n = self.n
+        if n > 1:
+            self._buf[0] = self._buf[n - 1]
+            self._set_n(1)
+
+    def clear(self) -> None:
+        """Forget all rows."""
+        self._set_n(0)

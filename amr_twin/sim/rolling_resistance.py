@@ -168,8 +168,8 @@ class RollingResistance:
         """A grid sampler keeping, every ``period_us`` (after this one's update at the same
         instant): the loads used (6), the supports' contact loads (6, :attr:`contact_loads`),
         the world z of the base's z axis (:meth:`~amr_twin.sim.physics.Physics.base_up_z`) and
-        the base velocity (6, :meth:`~amr_twin.sim.physics.Physics.base_velocity`): a (19,)
-        row (``rr_support_row`` in C, the same values)."""
+        the base velocity (6, :meth:`~amr_twin.sim.physics.Physics.base_velocity`): 19 values
+        a row, after its instant (``rr_support_row`` in C, the same values)."""
         physics = self.physics
 
         def row() -> list[float]:

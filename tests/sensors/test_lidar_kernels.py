@@ -1,12 +1,12 @@
 """The LiDAR's per-beam arithmetic: the C helper against its numpy twin, to the bit."""
 
 import shutil
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.sensors.lidar_beams import PoseSamples
 from amr_twin.sensors.lidar_kernels import beam_kernels
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
@@ -27,13 +27,15 @@ def _rotation(rng, k):
 
 
 def _poses(rng, n):
-    poses = PoseSamples()
+    """n pose samples as PoseSamples keeps them: rows of t_us, position, the laser x axis and y axis
+    (the first and second columns of the site's rotation)."""
+    rows = []
     for i in range(n):
         yaw, tilt = rng.uniform(-np.pi, np.pi), rng.normal(0.0, 0.02)
         c, s = np.cos(yaw), np.sin(yaw)
-        xmat = np.array([[c, -s, tilt], [s, c, 0.0], [-tilt, 0.0, 1.0]]).ravel()
-        poses.append(20_000 * i, rng.normal(0.0, 2.0, 3), xmat)
-    return poses
+        xmat = np.array([[c, -s, tilt], [s, c, 0.0], [-tilt, 0.0, 1.0]])
+        rows.append([20_000 * i, *rng.normal(0.0, 2.0, 3), *xmat[:, 0], *xmat[:, 1]])
+    return SimpleNamespace(rows=np.array(rows), n=n)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

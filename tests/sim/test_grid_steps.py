@@ -14,9 +14,9 @@ import pytest
 import amr_twin.sim.grid_steps as grid_steps
 import amr_twin.sim.loop as loop_mod
 from amr_twin.model.config import load_config
-from amr_twin.sim.grid_steps import GridRows, grid_stepper
+from amr_twin.sim.grid_steps import GridRows, gather, grid_stepper
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.native_build import mujoco_address
+from amr_twin.sim.native_build import address, mujoco_address
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None,
                                 reason="no C compiler")
@@ -43,7 +43,7 @@ def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
     script(twin)
     d, s = twin.physics.data, twin.recorder.series()
     state = {"qpos": d.qpos.copy(), "qvel": d.qvel.copy(), "time": d.time, "t_phys_us": twin.t_phys_us,
-             "halted": twin.halted, "soc": twin.plant.battery.soc, "t_s": s.t_s, "rows": support.rows(),
+             "halted": twin.halted, "soc": twin.plant.battery.soc, "t_s": s.t_s, "rows": support.take(),
              "angle": s.wheel_angle_rad, "rpm": s.true_rpm, "pose": s.pose, "pwm": s.pwm_counts,
              "current": s.current_a, "published": [s.published[w] for w in sorted(s.published)],
              "collisions": twin.collisions.as_dicts(), "friction": twin.physics.model.dof_frictionloss.copy()}
@@ -112,14 +112,15 @@ def test_rows_kept_in_c_are_the_python_rows():
         twin.samplers.append(support)
         twin.client.angular(60.0, -1.0)
         twin.advance(6.0)
-        out.append(support.rows())
+        out.append(support.take())
     rows, python = out
-    assert rows.shape == (200, 19) and np.array_equal(rows, python)
+    assert rows.shape == (200, 20) and np.array_equal(rows, python)
+    assert rows[:, 0].tolist() == [30_000.0 * (i + 1) for i in range(200)]  # the instants first
     physics = twin.physics
     last = [*twin.rolling.loads, *physics.support_normal_forces_n(), physics.base_up_z(),
             *physics.base_velocity()]
-    assert rows[-1].tolist() == last
-    assert rows[:, 12].min() < 1.0 and np.abs(rows[:, 13:19]).max() > 0.1 and rows[:, 6:12].max() > 50.0
+    assert rows[-1, 1:].tolist() == last
+    assert rows[:, 13].min() < 1.0 and np.abs(rows[:, 14:20]).max() > 0.1 and rows[:, 7:13].max() > 50.0
 
 
 def test_a_mujoco_error_in_the_c_grid_is_raised_and_the_handler_restored():
@@ -138,3 +139,64 @@ def test_a_mujoco_error_in_the_c_grid_is_raised_and_the_handler_restored():
     assert ctypes.c_void_p.from_address(mujoco_address("mju_user_error")).value == handler
     with pytest.raises(mujoco.FatalError, match="stack overflow"):
         mujoco.mj_step(m, d, 20)  # the bindings' own handling is untouched
+
+
+def test_with_the_imu_and_lidar_the_grid_in_c_gives_the_same_messages(monkeypatch):
+    """The twin with its IMU (100 Hz) and LiDAR: their samples kept in C (gs_gather of the IMU's
+    sensor values and the laser site's pose), each LiDAR cast handed back to Python; the IMU,
+    magnetometer and scan messages and the state are those of the Python loop, to the bit."""
+    out = []
+    for native in (True, False):
+        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        calls = []
+        real = grid_steps.GridStepper.run
+        monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])
+        twin = Twin(HEAVY_REAR, TwinOptions(sensors=True, visuals=False, start_xy_yaw=None))
+        msgs = []
+        for topic, values in (("imu/data_raw", lambda m: (m.angular_velocity, m.linear_acceleration)),
+                              ("imu/mag", lambda m: (m.magnetic_field,)),
+                              ("scan", lambda m: (m.ranges.tobytes(),))):
+            twin.bus.subscribe(topic, lambda m, topic=topic, values=values:
+                               msgs.append((topic, m.header.stamp.to_us(), values(m))))
+        twin.client.linear(0.5)
+        twin.advance(2.0)
+        twin.client.angular(-60.0, 0.0)
+        twin.advance(2.0)
+        out.append((msgs, twin.physics.data.qpos.copy(), calls))
+    (c_msgs, c_qpos, c_calls), (py_msgs, py_qpos, py_calls) = out
+    topics = [t for t, _s, _m in c_msgs]
+    handoffs = sum(h >= 0 for _r, h in c_calls)  # a cast each (~22 in 4 s), not a pose sample each (200)
+    assert py_calls == [] and len(c_calls) > 20 and topics.count("scan") <= handoffs <= 2 * topics.count("scan")
+    assert topics.count("imu/data_raw") == 401 and topics.count("scan") >= 20
+    assert c_msgs == py_msgs and np.array_equal(c_qpos, py_qpos)
+
+
+def test_a_row_keeper_hands_back_each_due_instant_once_with_its_row(monkeypatch):
+    """GridRows with work due (as the LiDAR's casts): ``after`` runs at the first kept instant at
+    or after ``due_us`` (one on the grid itself), in C as in Python; every row is kept once."""
+    out = []
+    for native in (True, False):
+        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        twin = Twin(load_config(), TwinOptions(world="empty", visuals=False))
+        qpos = twin.physics.data.qpos
+        seen = []
+
+        def after(t_us):
+            seen.append(t_us)
+            keeper.due_us = t_us + 70_000  # between two instants of the keeper
+
+        keeper = GridRows(1, 20_000, lambda: [qpos[0]], gather([address(qpos)]), after=after)
+        keeper.due_us = 60_000  # on an instant
+        twin.samplers.append(keeper)
+        twin.client.linear(0.5)
+        twin.advance(1.0)
+        out.append((seen, keeper.take()))
+    (c_seen, c_rows), (py_seen, py_rows) = out
+    due, expected = 60_000, []
+    for t in range(20_000, 1_000_001, 20_000):
+        if t >= due:
+            expected.append(t)
+            due = t + 70_000
+    assert c_seen == py_seen == expected and expected[:3] == [60_000, 140_000, 220_000]
+    assert c_rows[:, 0].tolist() == list(range(20_000, 1_000_001, 20_000)) and np.array_equal(c_rows, py_rows)
+    assert c_rows[-1, 1] > 0.3  # x driven at 0.5 m/s: the values, not zeros

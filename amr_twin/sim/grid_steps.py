@@ -152,12 +152,39 @@ class GridRows:
             self.grid_native = sampler(ROW, fn, *args)
             self.grid_native.width, self.grid_native.cap = self.width + 1, len(self._buf)
             self.grid_native.out = address(self._buf)
-        self.period_us, self.start_us, self.due_us = int(period_us), int(start_us), NEVER_DUE
+        self._period_us, self._start_us, self._due_us = int(period_us), int(start_us), NEVER_DUE
+        self._sync()
 
-    def __setattr__(self, name, value):
-        object.__setattr__(self, name, value)
-        if name in ("period_us", "start_us", "due_us") and self.grid_native is not None:
-            setattr(self.grid_native, name, value)  # the C form's copy
+    def _sync(self) -> None:
+        if self.grid_native is not None:  # the C form's copies
+            g = self.grid_native
+            g.period_us, g.start_us, g.due_us = self._period_us, self._start_us, self._due_us
+
+    @property
+    def period_us(self) -> int:
+        """Rows are kept at the grid instants that are multiples of this, us."""
+        return self._period_us
+
+    @period_us.setter
+    def period_us(self, value: int) -> None:
+        self._period_us = int(value)
+        self._sync()
+
+    @property
+    def start_us(self) -> int:
+        """Rows are kept from this instant on, us."""
+        return self._start_us
+
+    @property
+    def due_us(self) -> int:
+        """``after`` runs after a row kept at or after this instant, us."""
+        return self._due_us
+
+    @due_us.setter
+    def due_us(self, value: int) -> None:
+        self._due_us = int(value)
+        if self.grid_native is not None:
+            self.grid_native.due_us = self._due_us
 
     @property
     def n(self) -> int:
@@ -171,10 +198,10 @@ class GridRows:
             self._n = n
 
     def __call__(self, t_us: int) -> bool:
-        if t_us % self.period_us or t_us < self.start_us:
+        if t_us % self._period_us or t_us < self._start_us:
             return False
         self._keep(t_us)
-        if t_us >= self.due_us:
+        if t_us >= self._due_us:
             self._after(t_us)
         return False
 
@@ -184,22 +211,25 @@ class GridRows:
         n = self.n
         if not (n and self._buf[n - 1, 0] == t_us):
             self._keep(t_us)
-        if t_us >= self.due_us:
+        if t_us >= self._due_us:
             self._after(t_us)
         return False
 
     def _keep(self, t_us: int) -> None:
-        n = self.n
-        if n >= len(self._buf):  # full: twice the room (the C form keeps to the new buffer)
-            grown = np.zeros((2 * len(self._buf), self.width + 1))
-            grown[:n] = self._buf[:n]
-            self._buf = grown
-            if self.grid_native is not None:
-                self.grid_native.out, self.grid_native.cap = address(grown), len(grown)
-        row = self._buf[n]
-        row[0] = t_us
-        row[1:] = self._row()
-        self._set_n(n + 1)
+        g = self.grid_native
+        n = g.n if g is not None else self._n
+        buf = self._buf
+        if n >= len(buf):  # full: twice the room (the C form keeps to the new buffer)
+            buf = np.zeros((2 * len(buf), self.width + 1))
+            buf[:n] = self._buf[:n]
+            self._buf = buf
+            if g is not None:
+                g.out, g.cap = address(buf), len(buf)
+        buf[n] = [t_us, *self._row()]  # one conversion of a plain list
+        if g is not None:
+            g.n = n + 1
+        else:
+            self._n = n + 1
 
     @property
     def rows(self) -> np.ndarray:

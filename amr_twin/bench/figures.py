@@ -42,7 +42,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     """
     from amr_twin.bench.twin import twin_figures
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
-    from amr_twin.sim import battery, collisions, rolling_resistance
+    from amr_twin.sim import battery, collisions, grid_steps, rolling_resistance
     from amr_twin.sim.native_build import native_status
 
     result = bare_physics(cfg, sim_s)
@@ -52,7 +52,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"
-    helpers = (rolling_resistance, battery, collisions, hall_edges, imu_errors, lidar_kernels)
+    helpers = (grid_steps, rolling_resistance, battery, collisions, hall_edges, imu_errors, lidar_kernels)
     engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
     result["rolling_resistance_engine"] = engines["rolling_resistance"]
     result["native_engines"] = engines

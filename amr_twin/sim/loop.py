@@ -208,77 +208,20 @@ class Twin:
         Hall edge times come from a cubic Hermite interpolation of the sampled
         wheel angles and speeds (exact for constant acceleration; the actuation
         is constant inside a chunk), solved per edge to the microsecond. Plain
-        Python lists: a chunk is a handful of samples. When every grid sampler has a
-        C form the grid loop runs in C (:meth:`_step_grid_in_c`), else here.
+        Python lists: a chunk is a handful of samples. The grid loop runs in C when
+        every grid sampler has a C form (:meth:`_grid_in_c`), else here (:meth:`_grid_in_python`).
         """
+        dt = self.dt_us
+        k0 = self.t_phys_us // dt
+        k_end = k0 + nstep
+        grid_t, grid_rows = [], []
         stepper = self._stepper
         if stepper is not None and stepper.use(self.samplers):
-            self._step_grid_in_c(stepper, nstep)
-            return
-        m, d, dt, every = self.physics.model, self.physics.data, self.dt_us, self.recorder.every
-        sensors, step, samplers = self._loop_sensors, mujoco.mj_step, self.samplers
-        k = k0 = self.t_phys_us // dt
-        k_end = k0 + nstep
-        ts, rows = [k0 * dt], [self._last_row]
-        grid_t, grid_rows = [], []
-        for mark in range((k0 // every + 1) * every, k_end + 1, every):
-            step(m, d, mark - k)
-            k = mark
-            t = k * dt
-            row = sensors.tolist()
-            ts.append(t)
-            rows.append(row)
-            grid_t.append(t)
-            grid_rows.append(row)
-            stop = False
-            for sampler in samplers:
-                if sampler(t):
-                    stop = True
-            if stop:
-                self.halted = True
-                k_end = k
-                break
-        if k < k_end:
-            step(m, d, k_end - k)
-            k = k_end
-            ts.append(k * dt)
-            rows.append(sensors.tolist())
-        self.t_phys_us = k * dt
-        self._last_row = rows[-1]
-        if grid_t:
-            self.recorder.extend_grid(grid_t, grid_rows)
-        edges = self.hall.edges_from_samples(ts, rows)
-        if edges:
-            self._pending.extend(edges)
-
-    def _step_grid_in_c(self, stepper, nstep: int) -> None:
-        """:meth:`_step_physics` with its grid loop in C (:mod:`amr_twin.sim.grid_steps`): the same
-        steps, rows and sampler calls; an instant a sampler hands back runs the rest here."""
-        dt, every = self.dt_us, self.recorder.every
-        k = k0 = self.t_phys_us // dt
-        k_end = k0 + nstep
-        first = (k0 // every + 1) * every
-        nmarks = (k_end - first) // every + 1 if first <= k_end else 0
-        grid_t, grid_rows = [], []
-        done = 0
-        while done < nmarks:
-            mark = first + done * every
-            reached, handoff = stepper.run(mark - k, nmarks - done, mark * dt)
-            k = mark + (reached - 1) * every
-            grid_t.extend(range(mark * dt, k * dt + 1, every * dt))
-            grid_rows.extend(stepper.rows[:reached].tolist())
-            done += reached
-            if handoff >= 0:
-                t = k * dt
-                samplers = self.samplers
-                stop = bool(stepper.resume[handoff](t))
-                for sampler in samplers[handoff + 1:]:
-                    if sampler(t):
-                        stop = True
-                if stop:
-                    self.halted = True
-                    k_end = k
-                    break
+            k = self._grid_in_c(stepper, k0, k_end, grid_t, grid_rows)
+        else:
+            k = self._grid_in_python(k0, k_end, grid_t, grid_rows)
+        if self.halted:  # a sampler stopped the physics at step k
+            k_end = k
         ts, rows = [k0 * dt, *grid_t], [self._last_row, *grid_rows]
         if k < k_end:
             mujoco.mj_step(self.physics.model, self.physics.data, k_end - k)
@@ -292,6 +235,56 @@ class Twin:
         edges = self.hall.edges_from_samples(ts, rows)
         if edges:
             self._pending.extend(edges)
+
+    def _grid_in_python(self, k: int, k_end: int, grid_t: list, grid_rows: list) -> int:
+        """From step ``k``, step to each grid instant up to step ``k_end``, keeping its time and
+        row in ``grid_t`` and ``grid_rows`` and running the grid samplers there; the step reached
+        (the last instant's, or ``k``). A sampler returning True halts the twin at its instant."""
+        m, d, dt, every = self.physics.model, self.physics.data, self.dt_us, self.recorder.every
+        sensors, step, samplers = self._loop_sensors, mujoco.mj_step, self.samplers
+        for mark in range((k // every + 1) * every, k_end + 1, every):
+            step(m, d, mark - k)
+            k = mark
+            t = k * dt
+            row = sensors.tolist()
+            grid_t.append(t)
+            grid_rows.append(row)
+            stop = False
+            for sampler in samplers:
+                if sampler(t):
+                    stop = True
+            if stop:
+                self.halted = True
+                break
+        return k
+
+    def _grid_in_c(self, stepper, k: int, k_end: int, grid_t: list, grid_rows: list) -> int:
+        """:meth:`_grid_in_python` with the grid loop in C (:mod:`amr_twin.sim.grid_steps`): the same
+        steps, rows and sampler calls. An instant a sampler hands back runs the rest of its
+        samplers here; if one then has no C form (a collision opened) the chunk ends in Python."""
+        dt, every = self.dt_us, self.recorder.every
+        first = (k // every + 1) * every
+        nmarks = (k_end - first) // every + 1 if first <= k_end else 0
+        done = 0
+        while done < nmarks:
+            mark = first + done * every
+            reached, handoff = stepper.run(mark - k, nmarks - done, mark * dt)
+            k = mark + (reached - 1) * every
+            grid_t.extend(range(mark * dt, k * dt + 1, every * dt))
+            grid_rows.extend(stepper.rows[:reached].tolist())
+            done += reached
+            if handoff >= 0:
+                t = k * dt
+                stop = bool(stepper.resume[handoff](t))
+                for sampler in self.samplers[handoff + 1:]:
+                    if sampler(t):
+                        stop = True
+                if stop:
+                    self.halted = True
+                    return k
+                if done < nmarks and not stepper.use(self.samplers):
+                    return self._grid_in_python(k, k_end, grid_t, grid_rows)
+        return k
 
     def _deliver_edges(self, t_until_us: int) -> None:
         """Deliver the pending SC edges up to ``t_until_us`` to the firmware's ISR, in time order."""

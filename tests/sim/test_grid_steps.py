@@ -200,3 +200,37 @@ def test_a_row_keeper_hands_back_each_due_instant_once_with_its_row(monkeypatch)
     assert c_seen == py_seen == expected and expected[:3] == [60_000, 140_000, 220_000]
     assert c_rows[:, 0].tolist() == list(range(20_000, 1_000_001, 20_000)) and np.array_equal(c_rows, py_rows)
     assert c_rows[-1, 1] > 0.3  # x driven at 0.5 m/s: the values, not zeros
+
+
+def test_while_a_collision_is_open_the_monitor_sees_every_instant(monkeypatch):
+    """An open collision episode is extended at every grid instant (its ``until_s``, its peak
+    force every 0.1 s): once the C grid hands back the instant that opens one, the rest of the
+    chunk runs in Python, as every later chunk until it closes."""
+    from amr_twin.sim.collisions import CollisionMonitor
+
+    seen, open_at = set(), set()
+    real_call, real_resume = CollisionMonitor.__call__, CollisionMonitor.grid_resume
+
+    def call(self, t_us):
+        seen.add(t_us)
+        stop = real_call(self, t_us)
+        if self._open:
+            open_at.add(t_us)
+        return stop
+
+    def resume(self, t_us):
+        seen.add(t_us)
+        stop = real_resume(self, t_us)
+        if self._open:
+            open_at.add(t_us)
+        return stop
+
+    monkeypatch.setattr(CollisionMonitor, "__call__", call)
+    monkeypatch.setattr(CollisionMonitor, "grid_resume", resume)
+    twin = Twin(load_config(), TwinOptions(start_xy_yaw=None, visuals=False))
+    twin.client.linear(0.7)
+    twin.advance(8.5)  # veers into the rack's beam and scrapes along it
+    hit = twin.collisions.collisions[0]
+    first, last = int(round(hit.t_s * 1e6)), int(round(hit.until_s * 1e6))
+    grid = set(range(first, last + 1, twin.grid_us))
+    assert last - first > 200_000 and grid <= open_at and grid <= seen

@@ -17,6 +17,7 @@
  */
 #include <setjmp.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include <mujoco/mujoco.h>
 
@@ -60,6 +61,8 @@ static _Thread_local jmp_buf gs_jump;
 static _Thread_local gs_ctx* gs_current;
 
 static void gs_on_error(const char* msg) {
+    if (gs_current == NULL)  /* not inside gs_run on this thread: nowhere to return to */
+        abort();
     strncpy(gs_current->message, msg, sizeof gs_current->message - 1);
     gs_current->message[sizeof gs_current->message - 1] = '\0';
     longjmp(gs_jump, 1);
@@ -68,14 +71,18 @@ static void gs_on_error(const char* msg) {
 /* Step nfirst steps to the first of nmarks grid instants (t_first_us), then every steps to
  * each next one; at each, keep the row and run the samplers due. Returns the instants
  * reached (rows kept): nmarks, or fewer when a sampler handed the last one to Python
- * (c->handoff >= 0, the samplers before it ran); -1 on a MuJoCo error. */
+ * (c->handoff >= 0, the samplers before it ran); -1 on a MuJoCo error; -2 (nothing done) when
+ * the rows have no room for nmarks or a step count is below 1. */
 int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
+    c->handoff = -1;
+    if (nmarks > c->rows_cap || nfirst < 1 || c->every < 1)
+        return -2;
     void (*saved)(const char*) = *c->user_error;
     gs_current = c;
-    c->handoff = -1;
     *c->user_error = gs_on_error;
     if (setjmp(gs_jump)) {
         *c->user_error = saved;
+        gs_current = NULL;
         return -1;
     }
     int n = nfirst, j = 0;
@@ -104,6 +111,7 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
                 if (((int (*)(void*, void*))g->fn)(a[0], a[1])) {
                     c->handoff = i;
                     *c->user_error = saved;
+                    gs_current = NULL;
                     return j + 1;
                 }
                 break;
@@ -111,6 +119,7 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
                 if (g->n >= g->cap) {  /* full: Python grows the room and keeps the row */
                     c->handoff = i;
                     *c->user_error = saved;
+                    gs_current = NULL;
                     return j + 1;
                 }
                 double* row = g->out + (size_t)g->n * g->width;
@@ -120,6 +129,7 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
                 if (t >= g->due_us) {  /* kept; what follows is Python's */
                     c->handoff = i;
                     *c->user_error = saved;
+                    gs_current = NULL;
                     return j + 1;
                 }
                 break;
@@ -127,5 +137,6 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
         }
     }
     *c->user_error = saved;
+    gs_current = NULL;
     return nmarks;
 }

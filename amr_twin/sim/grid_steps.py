@@ -44,6 +44,8 @@ def sampler(kind: int, function, *args, period_us: int = 1) -> Sampler:
     """A :class:`Sampler` calling the helper ``function`` (a ctypes function of a loaded helper)
     with ``args`` (addresses, or ctypes structures and arrays: their addresses), at the grid instants that are
     multiples of ``period_us``."""
+    if int(period_us) < 1:
+        raise ValueError(f"grid sampler: period_us {period_us} must be >= 1")
     s = Sampler(kind=kind, period_us=int(period_us), start_us=NEVER_BEFORE, due_us=NEVER_DUE,
                 fn=ctypes.cast(function, _P).value)
     for i, arg in enumerate(args):
@@ -110,6 +112,8 @@ class GridStepper:
             self.rows = np.zeros((max(nmarks, 2 * len(self.rows), 64), c.ncol))
             c.rows, c.rows_cap = address(self.rows), len(self.rows)
         reached = self._run(self._ctx_at, nfirst, nmarks, t_first_us)
+        if reached == -2:
+            raise ValueError(f"grid steps: nfirst {nfirst} and every {c.every} must be >= 1")
         if reached < 0:
             import mujoco
 
@@ -152,8 +156,8 @@ class GridRows:
             self.grid_native = sampler(ROW, fn, *args)
             self.grid_native.width, self.grid_native.cap = self.width + 1, len(self._buf)
             self.grid_native.out = address(self._buf)
-        self._period_us, self._start_us, self._due_us = int(period_us), int(start_us), NEVER_DUE
-        self._sync()
+        self._period_us, self._start_us, self._due_us = 1, int(start_us), NEVER_DUE
+        self.period_us = period_us  # checked
 
     def _sync(self) -> None:
         if self.grid_native is not None:  # the C form's copies
@@ -167,6 +171,8 @@ class GridRows:
 
     @period_us.setter
     def period_us(self, value: int) -> None:
+        if int(value) < 1:
+            raise ValueError(f"GridRows: period_us {value} must be >= 1")
         self._period_us = int(value)
         self._sync()
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from itertools import islice
 
 import mujoco
 import numpy as np
@@ -276,7 +277,7 @@ class Twin:
             if handoff >= 0:
                 t = k * dt
                 stop = bool(stepper.resume[handoff](t))
-                for sampler in self.samplers[handoff + 1:]:
+                for sampler in islice(self.samplers, handoff + 1, None):  # the live list, as the Python loop walks it
                     if sampler(t):
                         stop = True
                 if stop:

@@ -234,3 +234,54 @@ def test_while_a_collision_is_open_the_monitor_sees_every_instant(monkeypatch):
     first, last = int(round(hit.t_s * 1e6)), int(round(hit.until_s * 1e6))
     grid = set(range(first, last + 1, twin.grid_us))
     assert last - first > 200_000 and grid <= open_at and grid <= seen
+
+
+@pytest.mark.parametrize("change", ["add", "remove"])
+def test_samplers_added_or_removed_at_a_handed_back_instant_run_as_in_python(monkeypatch, change):
+    """A row keeper's ``after`` (run at an instant the C grid handed back) adds a sampler, or
+    removes one: the live list is walked at that instant, in C as in Python (the added one keeps
+    its first row there)."""
+    out = []
+    for native in (True, False):
+        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        twin = Twin(load_config(), TwinOptions(world="empty", visuals=False))
+        qpos = twin.physics.data.qpos
+        log = []
+
+        def keeper(period_us, after=None):
+            return GridRows(1, period_us, lambda: [qpos[0]], gather([address(qpos)]), after=after)
+
+        def first_after(t_us):
+            log.append(("first", t_us))
+            first.due_us = t_us + 40_000
+
+        def second_after(t_us):
+            log.append(("second", t_us))
+            second.due_us = t_us + 40_000
+            if t_us == 120_000:
+                if change == "add":
+                    twin.samplers.append(late)
+                else:
+                    twin.samplers.remove(last)
+
+        first, second = keeper(20_000, first_after), keeper(20_000, second_after)
+        late, last = keeper(10_000), keeper(10_000)
+        first.due_us = second.due_us = 40_000
+        twin.samplers += [first, second] + ([last] if change == "remove" else [])
+        twin.client.linear(0.5)
+        twin.advance(0.4)
+        out.append((log, [k.take()[:, 0].tolist() for k in (first, second, late, last)]))
+    assert out[0] == out[1]
+    if change == "add":  # its first row at the instant it was added, after the one that added it
+        assert out[0][1][2][0] == 120_000.0
+    else:  # removed before its turn at that instant: its last row the one before
+        assert out[0][1][3][-1] == 110_000.0
+
+
+def test_a_row_keeper_refuses_a_period_below_one_microsecond():
+    with pytest.raises(ValueError, match="period_us 0 must be >= 1"):
+        GridRows(1, 0, lambda: [0.0])
+    keeper = GridRows(1, 10_000, lambda: [0.0])
+    with pytest.raises(ValueError, match="period_us -5 must be >= 1"):
+        keeper.period_us = -5
+    assert keeper.period_us == 10_000

@@ -171,13 +171,18 @@ def test_with_the_imu_and_lidar_the_grid_in_c_gives_the_same_messages(monkeypatc
     assert c_msgs == py_msgs and np.array_equal(c_qpos, py_qpos)
 
 
+def _empty_twin(monkeypatch, native: bool) -> Twin:
+    """The default robot in the empty world, its grid in C (``native``) or in Python."""
+    monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+    return Twin(load_config(), TwinOptions(world="empty", visuals=False))
+
+
 def test_a_row_keeper_hands_back_each_due_instant_once_with_its_row(monkeypatch):
     """GridRows with work due (as the LiDAR's casts): ``after`` runs at the first kept instant at
     or after ``due_us`` (one on the grid itself), in C as in Python; every row is kept once."""
     out = []
     for native in (True, False):
-        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
-        twin = Twin(load_config(), TwinOptions(world="empty", visuals=False))
+        twin = _empty_twin(monkeypatch, native)
         qpos = twin.physics.data.qpos
         seen = []
 
@@ -243,8 +248,7 @@ def test_samplers_added_or_removed_at_a_handed_back_instant_run_as_in_python(mon
     its first row there)."""
     out = []
     for native in (True, False):
-        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
-        twin = Twin(load_config(), TwinOptions(world="empty", visuals=False))
+        twin = _empty_twin(monkeypatch, native)
         qpos = twin.physics.data.qpos
         log = []
 

@@ -23,9 +23,10 @@ the present laser frame, and the nearer hit wins. Two ways to drive it:
 - standalone (:meth:`Lidar.start_motor` without arguments): a clock event at
   every multiple of ``group_us`` (default 20 ms) samples the pose, casts the
   beams acquired since the previous event and publishes a completed rotation;
-- in the twin (``start_motor(grid_us, samplers)``): the simulation loop calls
-  :meth:`Lidar.on_sample` on its record grid while the physics steps (no clock
-  event); the pose is sampled every ``group_us`` (rounded up to the grid), the
+- in the twin (``start_motor(grid_us, samplers)``): the simulation loop keeps the
+  pose samples on its record grid while the physics steps (a
+  :class:`~amr_twin.sensors.lidar_beams.PoseSamples`, in C when the loop runs its grid
+  there; no clock event); the pose is sampled every ``group_us`` (rounded up to the grid), the
   beams are cast when a rotation is complete (at the first pose sample after its
   last beam; also every ``loop_cast_us`` if shorter than a rotation), and the
   scan goes out from a publishing clock event at that instant

@@ -1,5 +1,8 @@
 """Model build: the robot in a world, compiled, and the committed URDF/MJCF it exports."""
 
+import re
+
+import numpy as np
 import pytest
 
 from amr_twin.model import build as build_mod
@@ -8,13 +11,48 @@ from amr_twin.model.config import load_config
 from amr_twin.model.paths import MODEL_DIR
 
 
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def _numbers_and_text(text: str) -> tuple[list[float], str]:
+    """The numbers of an XML text, and the text with each number replaced by ``#``."""
+    return [float(v) for v in NUMBER.findall(text)], NUMBER.sub("#", text)
+
+
+def _assert_same_model(committed: str, fresh: str, name: str) -> None:
+    """Same structure and names to the character, every number within 1e-9 relative (1e-12 absolute):
+    a float's last printed digit moves with numpy's and libm's versions, a parameter change does not
+    hide in it (the smallest one the parameter file can express moves an inertia by ~1e-6)."""
+    a_num, a_text = _numbers_and_text(committed)
+    b_num, b_text = _numbers_and_text(fresh)
+    assert a_text == b_text, f"models/amr/{name} is stale (its structure): {REGENERATE}"
+    assert len(a_num) == len(b_num)
+    np.testing.assert_allclose(a_num, b_num, rtol=1e-9, atol=1e-12, err_msg=f"models/amr/{name} is stale: {REGENERATE}")
+
+
+REGENERATE = "run amr-twin model --export-urdf models/amr/amr.urdf --export-mjcf models/amr/amr.xml"
+
+
 def test_committed_files_are_not_stale(tmp_path):
-    """The committed URDF/MJCF equal what the build makes now (regenerate with amr-twin model --export-*)."""
+    """The committed URDF/MJCF equal what the build makes now, to the last digit that does not depend on
+    the machine (regenerate with amr-twin model --export-*)."""
     urdf, mjcf = tmp_path / "amr.urdf", tmp_path / "amr.xml"
     build_mod.export(load_config(), urdf, mjcf)
-    assert (MODEL_DIR / "amr.urdf").read_text() == urdf.read_text(), \
-        "models/amr/amr.urdf is stale: run amr-twin model --export-urdf models/amr/amr.urdf --export-mjcf models/amr/amr.xml"
-    assert (MODEL_DIR / "amr.xml").read_text() == mjcf.read_text(), "models/amr/amr.xml is stale"
+    _assert_same_model((MODEL_DIR / "amr.urdf").read_text(), urdf.read_text(), "amr.urdf")
+    _assert_same_model((MODEL_DIR / "amr.xml").read_text(), mjcf.read_text(), "amr.xml")
+
+
+def test_the_staleness_check_sees_a_parameter_change(tmp_path):
+    """A wheel 1 g heavier (the last digit the parameter file gives a mass) fails the check; a last-digit
+    wobble of a printed float does not."""
+    urdf, mjcf = tmp_path / "amr.urdf", tmp_path / "amr.xml"
+    build_mod.export(load_config(overrides={"wheel.mass_kg": 3.501}), urdf, mjcf)
+    with pytest.raises(AssertionError, match="stale"):
+        _assert_same_model((MODEL_DIR / "amr.urdf").read_text(), urdf.read_text(), "amr.urdf")
+    committed = (MODEL_DIR / "amr.urdf").read_text()
+    value = NUMBER.findall(committed.split("ixx=")[1])[0]
+    wobbled = committed.replace(value, value[:-1] + str((int(value[-1]) + 1) % 10), 1)
+    _assert_same_model(committed, wobbled, "amr.urdf")
 
 
 def test_broken_xacro_gives_one_line_error(tmp_path):

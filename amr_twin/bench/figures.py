@@ -7,7 +7,7 @@ emulated board (:func:`avr_figures`).
 
 from __future__ import annotations
 
-from amr_twin.bench.physics import bare_physics
+from amr_twin.bench.physics import bare_physics, tyre_figures
 from amr_twin.model.config import TwinConfig
 
 
@@ -35,14 +35,16 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     ``physics_us_per_step``: settled robot driving at a constant duty in the
     warehouse. ``twin_s_per_sim_s`` / ``bare_physics_s_per_sim_s`` / ``ratio``:
     the whole twin against bare physics on one scenario (see twin_benchmark);
-    ``avr_*``: the same with the emulated board (:func:`avr_figures`).
+    ``avr_*``: the same with the emulated board (:func:`avr_figures`). ``tyres_*`` and
+    ``rigid_physics_us_per_step``: bare physics with the brush tyres against the rigid contact
+    (:func:`~amr_twin.bench.physics.tyre_figures`).
     ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
     (:mod:`amr_twin.sim.native_build`), which the figures were measured with;
     ``native_engines``: the same for every C helper, by name.
     """
     from amr_twin.bench.twin import twin_figures
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
-    from amr_twin.sim import battery, collisions, grid_steps, rolling_resistance
+    from amr_twin.sim import battery, collisions, grid_steps, rolling_resistance, tyres
     from amr_twin.sim.native_build import native_status
 
     result = bare_physics(cfg, sim_s)
@@ -51,8 +53,9 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     from amr_twin.bench.sensors import sensor_figures  # IMU + LiDAR against the same bare figure
     result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
+    result.update(tyre_figures(cfg, sim_s))
     result["timer"] = "process_time"
-    helpers = (grid_steps, rolling_resistance, battery, collisions, hall_edges, imu_errors, lidar_kernels)
+    helpers = (grid_steps, rolling_resistance, battery, collisions, hall_edges, imu_errors, lidar_kernels, tyres)
     engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
     result["rolling_resistance_engine"] = engines["rolling_resistance"]
     result["native_engines"] = engines

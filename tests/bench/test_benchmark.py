@@ -18,8 +18,10 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
     assert r["rolling_resistance_engine"] == "C" or r["rolling_resistance_engine"].startswith("Python (")
     assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "hall_edges", "imu_errors",
-                                         "lidar_beams"}
+                                         "lidar_beams", "tyres"}
     assert all(e == "C" or e.startswith("Python (") for e in r["native_engines"].values())
+    assert r["tyres_physics_ratio"] > 0 and r["rigid_physics_us_per_step"] > 0  # issue 30: brush against rigid
+    assert r["tyres_engine"] == r["native_engines"]["tyres"]
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
 
 

@@ -94,11 +94,19 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     except OutputError as exc:
         fail(str(exc))
     live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail)
+    calibration = None
+    if opts.odometry is not None:
+        from amr_twin.controllers.odometry_calibration import load
+
+        try:
+            calibration = load(opts.odometry)
+        except ValueError as exc:
+            fail(str(exc))
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
-                          visuals=recording or live is not None)
+                          visuals=recording or live is not None, odometry_calibration=calibration)
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
 

@@ -80,6 +80,8 @@ class TwinOptions:
     visuals: bool = True  # the robot's visual geoms in the model; off for runs nothing draws (no .rrd, no live
     # view): they collide with nothing and weigh nothing, so the dynamics are the same to the bit, ~15 % cheaper
     firmware_params: object = field(default=None, compare=False)
+    odometry_calibration: object = None  # controllers/odometry_calibration.OdometryCalibration: the odometry
+    # node's effective wheel radii and wheelbase (a UMBmark calibration); None: the nominal geometry
 
 
 class Twin:
@@ -120,8 +122,12 @@ class Twin:
             self.firmware.connect(self.bus, self.link)
         else:
             self.bus.subscribe("wheel_Command", self._to_arduino)
+        calibration = options.odometry_calibration
         self.odometry = (WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
-                                       wheel_separation_m=cfg.wheel.separation_m) if options.odometry else None)
+                                       wheel_separation_m=cfg.wheel.separation_m,
+                                       **({} if calibration is None else
+                                          calibration.multipliers(cfg.wheel.radius_m, cfg.wheel.separation_m)))
+                         if options.odometry else None)
         self.recorder = Recorder(self)
         self.grid_us = self.dt_us * self.recorder.every
         self.rolling = RollingResistance(self.physics, cfg)

@@ -126,6 +126,7 @@ class WheelCfg(Section):
     separation_tolerance_m: float = P(unit="m", ge=0.0, le=0.02, setting=True)
     hall_misalignment_sigma_deg: float = P(unit="deg", ge=0.0, le=2.0, setting=True)
     hall_jitter_us: float = P(unit="us", ge=0.0, le=100.0, setting=True)
+    hall_hysteresis_deg: float = P(unit="deg", ge=0.0, le=2.0)
 
     def radius_of(self, side: str) -> float:
         """The ``left`` or ``right`` tyre's true rolling radius, m: ``radius_m`` plus its error."""

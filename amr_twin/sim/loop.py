@@ -110,7 +110,8 @@ class Twin:
                                   loss_prob=options.rosserial_loss_prob, seed=options.seed)
         self.plant = Plant(cfg, self.physics)
         self.hall = HallSensors(2, misalignment_deg=options.hall_misalignment_deg,
-                                jitter_us=options.hall_jitter_us, seed=options.seed)
+                                jitter_us=options.hall_jitter_us, seed=options.seed,
+                                hysteresis_deg=cfg.wheel.hall_hysteresis_deg)
         self.hall.reset(self.physics.wheel_angles_rad())
         self.firmware = make_firmware(options.firmware, self.clock, self._arduino_publish,
                                       options.firmware_params)

@@ -54,6 +54,9 @@ PosVec3 = tuple[_Pos, _Pos, _Pos]
 class SimCfg(Section):
     timestep_s: float = P(unit="s", ge=2e-4, le=0.002, setting=True)
     floor_friction: float = P(unit="1", ge=0.05, le=2.0)
+    floor_friction_field: bool = P(unit="bool", setting=True)
+    floor_friction_low: float = P(unit="1", ge=0.05, le=2.0)
+    floor_patch_m: float = P(unit="m", ge=0.1, le=4.0)
     gravity_m_s2: float = P(unit="m/s^2", ge=0.0, le=20.0)
 
 

@@ -3,7 +3,8 @@
 The model build (:func:`amr_twin.model.build.build`) adds the numeric :data:`NUMERIC` with the
 values of :data:`NUMERIC_FIELDS` (the parameters from ``wheel.*``, then the ids of the joints,
 geoms and bodies the tyre callback reads, written after compiling by :func:`set_addresses`) and
-:data:`USERDATA_SIZE` values of ``d.userdata`` for the deflection states. The callback that uses
+:data:`USERDATA_SIZE` values of ``d.userdata`` for the deflection states and the floor's friction
+field (:data:`FIELD_OFFSET`). The callback that uses
 them is :mod:`amr_twin.sim.tyres` (and its C twin ``tyres.c``, whose enums follow this layout).
 """
 
@@ -18,7 +19,13 @@ NUMERIC_FIELDS = ("format", "userdata", "root_dof", "base", "mu", "c_alpha", "c_
 """The numeric's values, in order (tyres.c's enums)."""
 STATE_FIELDS = ("u_m", "v_m", "psi_rad", "fx_n", "fy_n", "mz_nm", "load_n")
 """Per wheel in ``d.userdata`` after the time stamp: deflections (state), then the last output."""
-USERDATA_SIZE = 1 + 2 * len(STATE_FIELDS)
+FIELD_CELLS = 32
+"""Nodes of the floor's friction field along x and along y (periodic: it repeats every 32 patches)."""
+FIELD_OFFSET = 1 + 2 * len(STATE_FIELDS)
+"""Where the friction field starts in the tyres' user data: node count (0: no field, the numeric's
+``mu`` everywhere), node spacing (m), then the (FIELD_CELLS, FIELD_CELLS) friction coefficients,
+row y, column x (:mod:`amr_twin.sim.floor_friction`)."""
+USERDATA_SIZE = FIELD_OFFSET + 2 + FIELD_CELLS * FIELD_CELLS
 V_SIGN_M_S = 0.01
 """Rolling speed over which the direction of rolling is smoothed, m/s (turn slip's sign)."""
 

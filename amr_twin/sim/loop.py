@@ -99,6 +99,14 @@ class Twin:
         physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals, options.sensors,
                                         options.settle_s, where)
         self.physics = physics
+        self.floor = None
+        """The floor's friction field of this run (:mod:`amr_twin.sim.floor_friction`), drawn from the
+        seed with ``sim.floor_friction_field`` and the brush tyres; None otherwise."""
+        if cfg.sim.floor_friction_field and physics.tyres_engine is not None:
+            from amr_twin.sim.floor_friction import draw
+
+            self.floor = draw(cfg, options.seed)
+            physics.set_floor_friction(self.floor)
         self.urdf = urdf
         """The robot description as built (``/robot_description`` of a recording)."""
         self.dt_us = int(round(self.physics.timestep_s * US))

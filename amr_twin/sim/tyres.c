@@ -24,9 +24,10 @@
 enum { N_FORMAT, N_USERDATA, N_ROOT_DOF, N_BASE, N_MU, N_C_ALPHA, N_C_KAPPA, N_SIGMA_ALPHA, N_SIGMA_KAPPA,
        N_CROWN, N_LOSS, N_K_T, N_C_T, N_V_SIGN, N_WHEEL0 };
 enum { W_SLIDE, W_HINGE, W_GEOM, W_SIZE };
-/* userdata layout: t_state, then per wheel u, v, psi (state) and fx, fy, mz, load (last output) */
-enum { U_T, U_WHEEL0 };
+/* userdata layout: t_state, then per wheel u, v, psi (state) and fx, fy, mz, load (last output),
+ * then the floor's friction field: node count n (0: none), node spacing, n x n coefficients (row y) */
 enum { S_U, S_V, S_PSI, S_FX, S_FY, S_MZ, S_LOAD, S_SIZE };
+enum { U_T, U_WHEEL0, U_FIELD = U_WHEEL0 + 2 * S_SIZE };
 
 static void cross(const double* a, const double* b, double* out) {
     out[0] = a[1] * b[2] - a[2] * b[1];
@@ -41,6 +42,22 @@ static int tyre_numeric(const mjModel* m) {
         if (strcmp(m->names + m->name_numericadr[i], TYRE_NUMERIC) == 0)
             return i;
     return -1;
+}
+
+/* The floor's friction coefficient at (x, y), m: bilinear between the field's nodes, which repeat
+ * every n nodes (tyre_forces' twin in tyres.py, friction_at). */
+static double friction_at(const double* f, double x, double y) {
+    long n = (long)f[0];
+    double cell = f[1];
+    const double* v = f + 2;
+    double u = x / cell, w = y / cell;
+    double iu = floor(u), iw = floor(w);
+    double fx = u - iu, fy = w - iw;
+    long i0 = (((long)iu) % n + n) % n, j0 = (((long)iw) % n + n) % n;
+    long i1 = (i0 + 1) % n, j1 = (j0 + 1) % n;
+    double a = v[j0 * n + i0] + fx * (v[j0 * n + i1] - v[j0 * n + i0]);
+    double b = v[j1 * n + i0] + fx * (v[j1 * n + i1] - v[j1 * n + i0]);
+    return a + fy * (b - a);
 }
 
 void tyres_passive(const mjModel* m, mjData* d) {
@@ -91,6 +108,7 @@ void tyres_passive(const mjModel* m, mjData* d) {
         ex1 = ex1 / norm;
         double ey0 = -ex1, ey1 = ex0;
         double pc[3] = {anchor[0], anchor[1], anchor[2] - r};  /* contact point */
+        double mu_c = st[U_FIELD] > 0.0 ? friction_at(st + U_FIELD, pc[0], pc[1]) : mu;
         double rh[3] = {anchor[0] - xb[0], anchor[1] - xb[1], anchor[2] - xb[2]};
         double rc[3] = {pc[0] - xb[0], pc[1] - xb[1], pc[2] - xb[2]};
         double dc[3] = {0.0, 0.0, -r};  /* contact point from the hub */
@@ -120,11 +138,11 @@ void tyres_passive(const mjModel* m, mjData* d) {
         double dpsi = -wz - speed * s[S_PSI] / s_kappa;
         double u = s[S_U] + dt * du, v = s[S_V] + dt * dv, psi = s[S_PSI] + dt * dpsi;
         /* brush: the linear force saturates as the patch slides, fully at 3 mu N */
-        double lim = 3.0 * mu * load;
+        double lim = 3.0 * mu_c * load;
         double fx = kx * u, fy = ky * v;
         double lin = sqrt(fx * fx + fy * fy);
         if (lin > lim) {  /* sliding: mu N along the deflection, which goes no further */
-            double slide_f = mu * load / lin, back = lim / lin;
+            double slide_f = mu_c * load / lin, back = lim / lin;
             fx = fx * slide_f;
             fy = fy * slide_f;
             u = u * back;
@@ -135,7 +153,7 @@ void tyres_passive(const mjModel* m, mjData* d) {
             fx = (fx + loss * kx * du) * scale;
             fy = (fy + loss * ky * dv) * scale;
         }
-        double mmax = 3.0 * M_PI / 16.0 * mu * load * sqrt(a * b);
+        double mmax = 3.0 * M_PI / 16.0 * mu_c * load * sqrt(a * b);
         double mz = kpsi * psi;
         if (fabs(mz) > mmax) {
             psi = psi * mmax / fabs(mz);

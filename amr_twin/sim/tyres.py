@@ -30,7 +30,9 @@ ch. 3 the brush model, ch. 5/7 the single-point transient model):
   up to a Hertzian patch's full-slip torque ``(3 pi / 16) mu N sqrt(a b)`` (Johnson, *Contact
   Mechanics*, 1985, §7.3), ``tau`` the rubber's loss time;
 - applied at the contact point ``r`` below the hub as generalized forces of the chassis' free
-  joint, the tyre slide and the wheel hinge (the Jacobians written out: no ``mj_applyFT``).
+  joint, the tyre slide and the wheel hinge (the Jacobians written out: no ``mj_applyFT``);
+- ``mu`` is ``wheel.friction``, or the floor's friction field at the contact point when the run
+  has one (:mod:`amr_twin.sim.floor_friction`, :func:`set_friction_field`, :func:`friction_at`).
 
 The callback is process-wide: :func:`install` sets it once (the C helper ``tyres.c`` when a
 compiler is at hand, else :func:`tyre_forces`, its Python twin: the same operations in the same
@@ -46,7 +48,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from amr_twin.model.tyre_numeric import FORMAT, NUMERIC, NUMERIC_FIELDS, STATE_FIELDS
+from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, FORMAT, NUMERIC, NUMERIC_FIELDS, STATE_FIELDS
 from amr_twin.sim.native_build import mujoco_address, open_helper
 
 C_SOURCE = Path(__file__).with_name("tyres.c")
@@ -117,6 +119,46 @@ def contacts(model, data) -> tuple[WheelContact, WheelContact] | None:
     return WheelContact(*values[:size]), WheelContact(*values[size:])
 
 
+def _userdata_start(model) -> int | None:
+    """Where the tyres' user data starts in ``model``'s MjData, or None (no tyres)."""
+    import mujoco
+
+    n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)
+    return None if n < 0 else int(model.numeric_data[int(model.numeric_adr[n]) + 1])
+
+
+def set_friction_field(model, data, spacing_m: float, values) -> None:
+    """Put the floor's friction field in ``data``: ``values`` (FIELD_CELLS, FIELD_CELLS) friction
+    coefficients at nodes ``spacing_m`` apart (row y, column x; repeating), or ``values=None`` for
+    none (the model's ``wheel.friction`` everywhere). ValueError for a model without tyres."""
+    start = _userdata_start(model)
+    if start is None:
+        raise ValueError("friction field: the model has no brush tyres (wheel.tyre_slip is off)")
+    at = start + FIELD_OFFSET
+    if values is None:
+        data.userdata[at:at + 2 + FIELD_CELLS ** 2] = 0.0
+        return
+    data.userdata[at] = float(FIELD_CELLS)
+    data.userdata[at + 1] = float(spacing_m)
+    data.userdata[at + 2:at + 2 + FIELD_CELLS ** 2] = [float(v) for row in values for v in row]
+
+
+def friction_at(field, x: float, y: float) -> float:
+    """The twin of ``friction_at`` (tyres.c): the coefficient at (x, y), m, of ``field`` (the user
+    data from :data:`FIELD_OFFSET` on, a list): bilinear between nodes, repeating every n nodes."""
+    n = int(field[0])
+    cell = field[1]
+    u, w = x / cell, y / cell
+    iu, iw = math.floor(u), math.floor(w)
+    fx, fy = u - iu, w - iw
+    i0, j0 = iu % n, iw % n
+    i1, j1 = (i0 + 1) % n, (j0 + 1) % n
+    v = 2
+    a = field[v + j0 * n + i0] + fx * (field[v + j0 * n + i1] - field[v + j0 * n + i0])
+    b = field[v + j1 * n + i0] + fx * (field[v + j1 * n + i1] - field[v + j1 * n + i0])
+    return a + fy * (b - a)
+
+
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
@@ -153,6 +195,8 @@ def tyre_forces(m, d) -> None:
     tau0 = tau1 = tau2 = 0.0
     qf = d.qfrc_passive
     size = len(STATE_FIELDS)
+    at = ud + FIELD_OFFSET
+    field = st[at:at + 2 + FIELD_CELLS ** 2].tolist() if st[at] > 0.0 else None
     for k in range(2):
         slide, hinge, geom = (int(v) for v in wheels[3 * k:3 * k + 3])
         s0 = ud + 1 + size * k
@@ -171,6 +215,7 @@ def tyre_forces(m, d) -> None:
         ex1 = ex1 / norm
         ey0, ey1 = -ex1, ex0
         pc = (anchor[0], anchor[1], anchor[2] - r)
+        mu_c = friction_at(field, pc[0], pc[1]) if field is not None else mu
         rh = (anchor[0] - xb[0], anchor[1] - xb[1], anchor[2] - xb[2])
         rc = (pc[0] - xb[0], pc[1] - xb[1], pc[2] - xb[2])
         dc = (0.0, 0.0, -r)
@@ -198,11 +243,11 @@ def tyre_forces(m, d) -> None:
         dv = -vsy + a / 3.0 * wz * sgn - speed * v_0 / s_alpha
         dpsi = -wz - speed * psi0 / s_kappa
         u, v, psi = u0 + dt * du, v_0 + dt * dv, psi0 + dt * dpsi
-        lim = 3.0 * mu * load
+        lim = 3.0 * mu_c * load
         fx, fy = kx * u, ky * v
         lin = math.sqrt(fx * fx + fy * fy)
         if lin > lim:
-            slide_f, back = mu * load / lin, lim / lin
+            slide_f, back = mu_c * load / lin, lim / lin
             fx = fx * slide_f
             fy = fy * slide_f
             u = u * back
@@ -212,7 +257,7 @@ def tyre_forces(m, d) -> None:
             scale = 1.0 - q + q * q / 3.0
             fx = (fx + loss * kx * du) * scale
             fy = (fy + loss * ky * dv) * scale
-        mmax = 3.0 * math.pi / 16.0 * mu * load * math.sqrt(a * b)
+        mmax = 3.0 * math.pi / 16.0 * mu_c * load * math.sqrt(a * b)
         mz = kpsi * psi
         if abs(mz) > mmax:
             psi = psi * mmax / abs(mz)

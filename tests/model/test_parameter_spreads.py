@@ -81,7 +81,7 @@ def test_settings_are_never_drawn(space):
                 "mapping.resolution_m", "uwb.anchors_x_m"):
         assert space.spreads[key].kind == EXACT and not space.spreads[key].drawn, key
     drawn = space.draw(8, include=("sim.", "payload.", "ekf.", "mapping.")).names
-    assert drawn == ("sim.floor_friction",)
+    assert drawn == ("sim.floor_friction", "sim.floor_friction_low", "sim.floor_patch_m")  # the floor's, all physical
 
 
 def test_calibrated_parameters_come_from_the_report(space):

@@ -55,6 +55,7 @@ class Profile:
     turn_deg_s: float = 45.0
     accel_m_s2: float = 0.5
     stop_speed_m_s: float = 0.08
+    crawl_s: float = 0.3
     brake_lead_s: float = 0.15
     rest_s: float = 1.0
 
@@ -125,7 +126,8 @@ class SquareDriver:
             self.client.stop()
             self._task = None
             return
-        reach = math.sqrt(p.stop_speed_m_s ** 2 + 2.0 * p.accel_m_s2 * max(remaining - command * p.brake_lead_s, 0.0))
+        approach = remaining - p.stop_speed_m_s * (p.crawl_s + p.brake_lead_s)  # the crawl, then the brake
+        reach = math.sqrt(p.stop_speed_m_s ** 2 + 2.0 * p.accel_m_s2 * max(approach, 0.0))
         command = max(min(task["cruise"], command + p.accel_m_s2 * period, reach), p.stop_speed_m_s)
         task["command"] = command
         if task["turn"]:

@@ -146,6 +146,8 @@ class AvrFirmware:
         """Frames from the board that failed their checksum (none expected)."""
         self.time_requests = 0
         """Time requests the board sent (rosserial's time sync; the host answers each)."""
+        self.negotiations = 0
+        """Topic negotiations the board answered (one per topic request of a host)."""
         self.serial = self.pacer = None
         self._serial_out: deque[tuple[int, int]] = deque()  # (cycle its last bit leaves the wire, byte)
         if p.serial_pty is not None:
@@ -250,6 +252,10 @@ class AvrFirmware:
         self.clock.schedule(t_us, self._sync)
 
     def _deliver(self, topic_id: int, message: bytes, arrival_us: int) -> None:
+        if topic_id == ID_PUBLISHER:  # the board answers a topic request: its first publisher opens the answer
+            if self.publishers and TopicInfo.deserialize(message).topic_id == min(self.publishers):
+                self.negotiations += 1
+            return
         if topic_id == ID_TIME:
             self.time_requests += 1
             if self.serial is None:  # the twin is the host: answer with the simulated time

@@ -122,6 +122,9 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         from amr_twin.sim.loop import Twin
 
         twin = Twin(cfg, options)
+        if opts.serial_pty is not None:
+            typer.echo(f"serial-pty: the board's serial port is {opts.serial_pty} (-> {twin.firmware.serial.device}), "
+                       f"paced at {rate:g}x real time", err=True)
         try:
             if recording:
                 from amr_twin.recording.rerun_log import attach
@@ -132,7 +135,11 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
                 res = _run_live(twin, live, lambda: run_mission(cfg, steps, duration_s, options, twin=twin), ros1, rate)
         finally:
             if opts.serial_pty is not None:
-                twin.firmware.close()  # the pseudo-terminal's link goes with the run
+                fw = twin.firmware
+                typer.echo(f"serial-pty: the board answered {fw.negotiations} topic negotiation(s) and asked the "
+                           f"time {fw.time_requests} time(s); {fw.serial.bytes_in} bytes in, {fw.serial.bytes_out} out, "
+                           f"{fw.serial.bytes_dropped} dropped; {fw.pacer.lag_resets} lag reset(s)", err=True)
+                fw.close()  # the pseudo-terminal's link goes with the run
         with all_or_nothing():
             if recording:
                 from amr_twin.recording.rerun_log import record_run

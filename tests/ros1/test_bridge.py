@@ -39,7 +39,7 @@ def bag(ros_env, tmp_path_factory):
     rec = subprocess.Popen(["rosbag", "record", "-O", str(out / "run.bag"), *TOPICS, "__name:=test_record"],
                            env=ros_env, cwd=out, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     rsp = subprocess.Popen(["/usr/lib/robot_state_publisher/robot_state_publisher", "/tf:=/rsp_tf",
-                            "/tf_static:=/rsp_tf_static", "__name:=test_rsp"], env=ros_env,
+                            "/tf_static:=/rsp_tf_static", "__name:=test_rsp", "_publish_frequency:=1000.0"], env=ros_env,
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         time.sleep(1.5)  # both subscribed before the twin starts
@@ -70,7 +70,8 @@ def test_rosbag_info_shows_every_topic_at_its_rate_on_sim_time(bag):
     assert abs(counts["/scan"] - RUN_S * 5.5) <= 1.5
     assert counts["/tf_static"] == 1 and counts["/wheel_Command"] == 1
     assert counts["/wheel0_Vel"] >= 5 and counts["/diagnostics"] >= RUN_S  # the battery once a second
-    assert counts["/rsp_tf"] >= 0.98 * counts["/joint_states"]  # robot_state_publisher: one per joint state
+    # robot_state_publisher: one transform message per joint state (a few lost to its queues at 7x real time)
+    assert counts["/rsp_tf"] >= 0.98 * counts["/joint_states"]
     # the bag's time is the twin's simulated time (use_sim_time), not the wall clock's 2026
     assert 0.0 <= info["start"] < 0.05 and abs(info["end"] - RUN_S) < 0.05
     assert info["duration"] == pytest.approx(RUN_S, abs=0.05)

@@ -6,9 +6,10 @@ answers within 3 s (else one line naming it). :class:`Ros1Session` then starts t
 (on a free port; its URI is printed), joins the master as the node ``/amr_twin``, sets
 ``/use_sim_time`` and ``/robot_description``, and bridges the twin (:class:`~amr_twin.ros1.bridge.Ros1Bridge`),
 fed by a :class:`~amr_twin.live.pacer.Pacer` (as fast as possible, or ``--rate`` x real time). Before
-the twin runs it waits until the subscribers already on the graph (a ``rosbag record``, a node waiting
-for ``/scan``: those the master lists) have connected, at most :data:`SETTLE_MAX_S`: a twin far faster
-than real time would otherwise run past the first messages before they connect. :meth:`Ros1Session.close` stops the bridge,
+the twin runs it waits until the nodes already on the graph (a ``rosbag record``, a node waiting for
+``/scan``, the thesis' service publishing ``/wheel_Command``: those the master lists) are connected to
+it, at most :data:`SETTLE_MAX_S`: a twin far faster than real time would otherwise run past the first
+messages before they connect. :meth:`Ros1Session.close` stops the bridge,
 rospy and the private roscore.
 """
 
@@ -86,16 +87,18 @@ class Ros1Session:
                 b.diag_pub, b.description_pub]
 
     def settle(self, max_s: float = SETTLE_MAX_S) -> bool:
-        """Wait until each subscriber the master lists for the twin's topics is connected (at most
-        ``max_s``); True if all are."""
+        """Wait until the twin is connected to each subscriber of its topics and each publisher of its inputs
+        that the master lists (at most ``max_s``); True if it is."""
         import rosgraph
 
         me = self.rospy.get_name()
-        _pubs, subs, _services = rosgraph.Master(me).getSystemState()
-        want = {topic: sum(1 for node in nodes if node != me) for topic, nodes in subs}
+        pubs, subs, _services = rosgraph.Master(me).getSystemState()
+        others = {topic: sum(1 for node in nodes if node != me) for topic, nodes in subs}
+        sources = {topic: sum(1 for node in nodes if node != me) for topic, nodes in pubs}
         deadline = time.monotonic() + max_s
         while True:
-            if all(p.get_num_connections() >= want.get(p.resolved_name, 0) for p in self._publishers()):
+            if (all(p.get_num_connections() >= others.get(p.resolved_name, 0) for p in self._publishers())
+                    and all(s.get_num_connections() >= sources.get(s.resolved_name, 0) for s in self.bridge._subs)):
                 return True
             if time.monotonic() > deadline:
                 return False

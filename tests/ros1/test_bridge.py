@@ -157,3 +157,55 @@ def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_trans
     assert angles[:, 1].max() > 1.0  # and the wheel turns: not the identity all along
     # the URDF's axle where the twin's wheel sits on its tyre spring, ~1 mm off
     assert np.abs(np.array(offsets)).max() < 3e-3
+
+
+def _echo_once(env, topic: str, timeout_s: float = 30.0) -> dict:
+    out = subprocess.run(["rostopic", "echo", "-n", "1", topic], env=env, capture_output=True, text=True,
+                         timeout=timeout_s)
+    assert out.returncode == 0, out.stderr
+    return yaml.safe_load(out.stdout.split("---")[0])
+
+
+def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env, catkin_setup):
+    import pexpect
+
+    from conftest import in_workspace
+
+    _rosparam_set(ros_env, "/use_sim_time", True)
+    service = subprocess.Popen(in_workspace(catkin_setup, "rosrun amr_idea_control wheel_Command_Service"),
+                               env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(1.0)  # the service registered: the twin connects to it before it runs (Ros1Session.settle)
+    twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "40", "--world", "empty", "--ros1", "--rate", "4",
+                             "--json"], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    command = subprocess.Popen(["rostopic", "echo", "-n", "1", "--filter", "m.data[1] > 0", "/wheel_Command"],
+                               env=ros_env, stdout=subprocess.PIPE, text=True)  # not the twin's own stop at t = 0
+    try:
+        time.sleep(2.0)  # the service and the echo on the graph; the twin's own stop at t = 0 is behind us
+        client = pexpect.spawn("bash", ["-c", f"source {catkin_setup} && rosrun amr_idea_control wheel_Command_Client"],
+                               env=ros_env, encoding="utf-8", timeout=20)
+        client.expect("choice: ")
+        client.sendline("1")
+        client.expect(r"linear speed \[m/s\]: ")
+        client.sendline("0.7")
+        client.expect(r"\(code (-?\d)\)")
+        assert client.match.group(1) == "0"
+        client.expect("choice: ")
+        client.sendline("0")
+        client.expect(pexpect.EOF)
+        sent = yaml.safe_load(command.communicate(timeout=20)[0].split("---")[0])
+        # listing 4.4: 0.7 m/s -> 0.7 * 60 / (0.25 pi) = 53.476 RPM, both wheels forward, float32 as the request
+        assert sent["data"] == pytest.approx([1.0, 53.476, 1.0, 53.476], abs=1e-3)
+        time.sleep(2.5)  # ~10 simulated s at 4x: the PI has settled
+        speed = _echo_once(ros_env, "/wheel0_Vel")["data"]
+        assert abs(speed - 53.476) <= 4.0  # the firmware's THRESHOLD_CONTROL
+        out, err = twin.communicate(timeout=60)
+        assert twin.returncode == 0, err
+    finally:
+        for proc in (command, twin):
+            if proc.poll() is None:
+                proc.kill()
+        stop(service)
+    import json
+
+    wheels = json.loads(out)["wheels"]
+    assert all(abs(wheels[w]["true_final_rpm"] - 53.476) < 4.0 for w in ("left", "right"))

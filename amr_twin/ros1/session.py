@@ -80,6 +80,7 @@ class Ros1Session:
         say(f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; "
             "publish /wheel_Command or /cmd_vel to drive it)")
         self.settle()
+        self.bridge.start()
 
     def _publishers(self) -> list:
         b = self.bridge

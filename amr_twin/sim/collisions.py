@@ -20,7 +20,8 @@ and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less tha
 the loop to stop at the first collision.
 
 :func:`check_start` refuses a start pose where the robot overlaps the world, and
-:func:`check_supported` one where nothing holds it up (a world without a floor).
+:func:`check_supported` one where nothing holds it up (a world without a floor, and no
+fixture such as the ``stand`` world's weld).
 """
 
 from __future__ import annotations
@@ -306,8 +307,20 @@ def check_start(physics, where: str) -> None:
                              "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
 
 
+def held_by_fixture(physics) -> bool:
+    """Whether an active weld holds the robot's base where it stands (the ``stand`` world's
+    fixture, the work station of fig. 5.1: chassis held, wheels free)."""
+    m, d = physics.model, physics.data
+    weld = mujoco.mjtEq.mjEQ_WELD
+    return any(m.eq_type[i] == weld and d.eq_active[i] and physics.base_body in (m.eq_obj1id[i], m.eq_obj2id[i])
+               for i in range(m.neq))
+
+
 def check_supported(physics, where: str) -> None:
-    """Raise :class:`StartPoseError` if no wheel or caster touches anything after settling."""
+    """Raise :class:`StartPoseError` if, after settling, no wheel or caster touches anything
+    and no fixture holds the base (:func:`held_by_fixture`)."""
+    if held_by_fixture(physics):
+        return
     d = physics.data
     support = set(physics.support_geoms.values())
     touching = any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist()) if d.ncon else False

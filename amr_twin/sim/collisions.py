@@ -18,10 +18,7 @@ the robot parts involved and the peak normal force (read when the contacts chang
 and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less than
 :data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
 the loop to stop at the first collision.
-
-:func:`check_start` refuses a start pose where the robot overlaps the world, and
-:func:`check_supported` one where nothing holds it up (a world without a floor, and no
-fixture such as the ``stand`` world's weld).
+The checks of a start pose use the same classification: :mod:`amr_twin.sim.start_pose`.
 """
 
 from __future__ import annotations
@@ -53,10 +50,6 @@ C_SOURCE = Path(__file__).with_name("collisions.c")
 MEMO_PAIRS = 256
 """Contact pairs the C helper keeps; with more in contact every instant is classified in Python."""
 _IGNORE, _COLLIDE, _BY_NORMAL = 0, 1, 2
-
-
-class StartPoseError(ValueError):
-    """The robot cannot start where asked (inside an obstacle, nothing under it); one line."""
 
 
 @dataclass
@@ -290,41 +283,3 @@ class CollisionMonitor:
 
     def as_dicts(self) -> list[dict]:
         return [c.as_dict() for c in self.collisions]
-
-
-def check_start(physics, where: str) -> None:
-    """Raise :class:`StartPoseError` if the robot overlaps the world where it was placed.
-
-    ``physics`` has just been built (``mj_forward`` ran: the contacts are those of
-    the start pose); ``where`` names the pose for the message.
-    """
-    roles = GeomRoles(physics)
-    mujoco.mj_forward(physics.model, physics.data)
-    hits, _ = collision_contacts(roles, physics.data)
-    if hits:
-        names = sorted({roles.world_name(w) for _i, _r, w in hits})
-        raise StartPoseError(f"{where}: the robot overlaps {', '.join(names)} there; "
-                             "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
-
-
-def held_by_fixture(physics) -> bool:
-    """Whether an active weld holds the robot's base where it stands (the ``stand`` world's
-    fixture, the work station of fig. 5.1: chassis held, wheels free)."""
-    m, d = physics.model, physics.data
-    weld = mujoco.mjtEq.mjEQ_WELD
-    return any(m.eq_type[i] == weld and d.eq_active[i] and physics.base_body in (m.eq_obj1id[i], m.eq_obj2id[i])
-               for i in range(m.neq))
-
-
-def check_supported(physics, where: str) -> None:
-    """Raise :class:`StartPoseError` if, after settling, no wheel or caster touches anything
-    and no fixture holds the base (:func:`held_by_fixture`)."""
-    if held_by_fixture(physics):
-        return
-    d = physics.data
-    support = set(physics.support_geoms.values())
-    touching = any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist()) if d.ncon else False
-    if not touching:
-        z = float(physics.data.qpos[physics.root_qpos + 2])
-        raise StartPoseError(f"{where}: nothing holds the robot up (no wheel or caster touches the ground "
-                             f"after settling, base at z = {z:.2f} m): the world has no floor there")

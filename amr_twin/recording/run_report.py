@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import TYPE_CHECKING
 
@@ -25,8 +24,6 @@ CSV_COMMENT = ("# amr-twin run: every rpm column is signed, + = the wheel rolls 
                "x_m, y_m, yaw_rad in the world, odom_* in odom; current_a + driving forward")
 """First line of ``--csv``: ``pandas.read_csv(path, comment="#")``, ``numpy.genfromtxt(path, delimiter=",",
 names=True, skip_header=1)``."""
-SIGNED_METRICS = ("reference", "final_value", "peak_value", "steady_error")
-"""Step metrics in RPM that carry the sign of the reference (overshoot and band are magnitudes)."""
 
 
 def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before: float = 0.0) -> np.ndarray:
@@ -74,17 +71,15 @@ def json_ready(value):
 
 
 def _step_metrics(series: RunSeries, wheel: int, reference_rpm: float) -> dict:
-    """Step metrics of a wheel's signed published speed (those of :data:`SIGNED_METRICS` signed)."""
+    """Step metrics of a wheel's signed published speed (those of
+    :data:`amr_twin.analysis.metrics.SIGNED_METRICS` signed)."""
     from amr_twin.analysis.metrics import step_info
     from amr_twin.recording.recorder import signed_published
 
     pub = signed_published(series, wheel)
     if reference_rpm == 0.0 or len(pub) < 2:
         return {}
-    info = step_info(pub[:, 0], pub[:, 1], reference_rpm)
-    out = info.as_dict() if hasattr(info, "as_dict") else dataclasses.asdict(info)
-    sign = 1.0 if reference_rpm > 0 else -1.0  # step_info measures along the reference
-    return {k: (sign * v if k in SIGNED_METRICS else v) for k, v in out.items()}
+    return step_info(pub[:, 0], pub[:, 1], reference_rpm).as_dict(sign=1.0 if reference_rpm > 0 else -1.0)
 
 
 def summary(result, single: bool, start_xy_yaw=None) -> dict:

@@ -106,7 +106,9 @@ def test_one_sign_convention_in_json_and_csv(tmp_path):
         w = info["wheels"][name]
         assert w["reference_rpm"] == pytest.approx(-91.67, abs=0.01) and w["true_final_rpm"] < -80
         assert w["final_rpm"] < -80 and w["reference"] == pytest.approx(w["reference_rpm"])
-        assert w["final_value"] < -80 and w["peak_value"] <= w["final_value"] and w["overshoot"] >= 0
+        assert w["final_value"] < -80 and w["overshoot"] >= 0
+        assert w["steady_error"] == pytest.approx(w["final_value"] - w["reference"])  # the offset, signed
+        assert w["peak_value"] is None or w["peak_value"] < w["final_value"]  # a peak lies beyond it
         assert table[f"ref_rpm_{name}"][-1] == pytest.approx(w["reference_rpm"], rel=1e-6)
         assert table[f"pub_rpm_{name}"][-1] == pytest.approx(w["final_rpm"], rel=1e-6)
         assert table[f"true_rpm_{name}"][-1] == pytest.approx(w["true_final_rpm"], rel=1e-6)

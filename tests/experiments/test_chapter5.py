@@ -10,7 +10,7 @@ from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
 from amr_twin.sim.run import run_command
 
-CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot"}
+CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
 
 
 @pytest.fixture(scope="module")

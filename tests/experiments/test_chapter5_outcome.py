@@ -1,6 +1,6 @@
 """The main outcome under test (issue 12): the eight chapter 5 runs may not get worse against
-the thesis than the committed scorecard; the right wheel overshoots more than the left
-(§5.1.3); a payload loads the motors (§5.1.4)."""
+the thesis than the committed scorecard; the right wheel tracks worse than the left (§5.1.3);
+a payload loads the motors (§5.1.4)."""
 
 import json
 import tempfile
@@ -43,13 +43,16 @@ def test_worse_finds_a_check_that_leaves_its_band():
                                                      "b": {"twin": 9.0, "band": [0.0, 3.0]}}})
 
 
-def test_right_wheel_overshoots_more_than_the_left(suite):
-    """§5.1.3: the right wheel overshoots about 4 RPM, the left 0-2 RPM (runs 1 and 2, the same
-    76.39 RPM step on each wheel alone)."""
+def test_right_wheel_tracks_worse_than_the_left(suite):
+    """§5.1.3: "the performances of the right DC motor wheel are worse" (runs 1 and 2, the same
+    76.39 RPM step on each wheel alone): the calibrated right motor (lower Ke) ends further above
+    its reference. Its overshoot above its own final value is no larger than the left's (1.46
+    against 1.48 RPM), which the scorecard records (issue 30: what passed as the right wheel's
+    larger overshoot was this offset)."""
     by_run = {r["run"]: r for r in suite["runs"]}
-    left = by_run[1]["wheels"]["left"]["published"]["overshoot"]
-    right = by_run[2]["wheels"]["right"]["published"]["overshoot"]
-    assert right > left + 0.5
+    left, right = by_run[1]["wheels"]["left"]["published"], by_run[2]["wheels"]["right"]["published"]
+    assert right["steady_error"] > left["steady_error"] + 0.5
+    assert right["overshoot"] < 2.0  # outside the thesis' 2-6 RPM: a miss, said
 
 
 def test_motor_current_rises_with_payload():

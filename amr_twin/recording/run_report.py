@@ -103,6 +103,7 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
         pub = signed_published(series, w)
         entry = {"motion": int(wc[2 * w]) if wc else 0, "reference_rpm": reference,
                  "final_rpm": float(pub[-1, 1]) if len(pub) else 0.0,
+                 "final_rpm_t_s": float(pub[-1, 0]) if len(pub) else None,
                  "true_final_rpm": float(series.true_rpm[-1, w]), "samples": int(len(pub)),
                  "current_a_final": float(series.current_a[last_s, w].mean()),
                  "current_a_peak": float(np.abs(series.current_a[:, w]).max())}
@@ -123,6 +124,8 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
     if start_xy_yaw is not None:
         sx, sy, syaw = start_xy_yaw
         out["start_pose"] = {"x_m": sx, "y_m": sy, "yaw_rad": syaw}
+        turned = math.remainder(yaw - syaw, math.tau)
+        out["from_start"] = {"distance_m": math.hypot(x - sx, y - sy), "heading_deg": math.degrees(turned)}
     return json_ready(out)
 
 
@@ -145,8 +148,8 @@ def text_lines(result, info: dict) -> list[str]:
     if wc:
         lines.append(f"wheel_Command [{wc[0]:g}, {wc[1]:.5f}, {wc[2]:g}, {wc[3]:.5f}]")
     for name, entry in info["wheels"].items():
-        lines.append(f"{name:5s} reference {entry['reference_rpm']:8.3f} RPM, published {entry['final_rpm']:8.3f} RPM, "
-                     f"true {entry['true_final_rpm']:8.3f} RPM")
+        lines.append(f"{name:5s} reference {entry['reference_rpm']:8.3f} RPM, true {entry['true_final_rpm']:8.3f} RPM, "
+                     + _published(entry, result.sim_s))
     for fault in info["faults"]:
         until = f" until {fault['until_s']:g} s" if fault["until_s"] is not None else ""
         lines.append(f"fault {fault['kind']} at {fault['t_s']:g} s{until}: " + _fault_effect(fault))
@@ -158,7 +161,23 @@ def text_lines(result, info: dict) -> list[str]:
     lines.append(f"pose x {pose['x_m']:.3f} m, y {pose['y_m']:.3f} m, yaw {pose['yaw_rad']:.3f} rad "
                  f"after {result.sim_s:g} s simulated ({result.wall_s:.2f} s wall)"
                  + (", stopped by the collision" if result.halted else ""))
+    moved = info.get("from_start")
+    if moved is not None and len(result.commands) > 1:  # a mission: where it ended against where it began
+        lines.append(f"ended {moved['distance_m']:.2f} m from its start pose, heading {moved['heading_deg']:+.1f} deg "
+                     "from its start heading (a mission's commands are timed: nothing steers by the pose)")
     return lines
+
+
+def _published(entry: dict, end_s: float) -> str:
+    """The last published speed with its time: the firmware publishes once per wheel
+    revolution and nothing while the wheel stands, so the last sample may be old."""
+    t = entry.get("final_rpm_t_s")
+    if t is None:
+        return "nothing published"
+    text = f"last published {entry['final_rpm']:8.3f} RPM at {t:.2f} s"
+    if abs(entry["true_final_rpm"]) < 0.5 and entry["final_rpm"] != 0.0:
+        text += f", {end_s - t:.2f} s before the end (the wheel stands: nothing is published at rest)"
+    return text
 
 
 def _fault_effect(fault: dict) -> str:

@@ -154,6 +154,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
                 out[f"{name}_{k}"] = info[k]
             for k in ("overshoot", "steady_error", "oscillation"):
                 out[f"{name}_{k}_rpm"] = info[k]
+        sign = 1.0 if ref > 0 else -1.0  # the true speed's offset along the reference, as the published one's
+        out[f"{name}_true_steady_error_rpm"] = float(sign * np.mean(s.true_rpm[tail, w]) - abs(ref))
         out[f"{name}_steady_duty"] = float(np.mean(s.pwm_counts[tail, w]) / 255.0)
         out[f"{name}_open_loop_duty"] = abs(ref) / MAX_VEL_RPM
         surface = np.abs(s.true_rpm[tail, w]) * (2 * math.pi / 60) * cfg.wheel.radius_m

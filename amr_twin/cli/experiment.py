@@ -278,19 +278,20 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
                 with all_or_nothing():
                     spread_report.plot(results, out)
                     return results, spread_report.report(results, out)["positions"]
+            improved = payload_sweep.improved_beside(cfg, out, results, jobs=jobs, progress=progress, client=client)
             with all_or_nothing():
-                payload_sweep_report.plot(results, out)
-                return results, payload_sweep_report.report(results, out)
+                payload_sweep_report.plot(results, out, improved)
+                return results, payload_sweep_report.report(results, out, improved)
 
         try:
             results, summary = _guard(work)
         finally:
             if client is not None:
                 client.close()
-        for position, s in summary.items():
-            typer.echo(f"{position:20s} highest safe {s['highest_safe_kg']} kg"
-                       + (f"  (unsafe at {s['first_unsafe_kg']} kg: {s['reason']})" if s["first_unsafe_kg"] is not None
-                          else "") + _safe_interval(results, position))
+        lines = (payload_sweep_report.answer_lines(summary, results) if draws is None else
+                 [f"{position:20s} {s['answer']}{_safe_interval(results, position)}" for position, s in summary.items()])
+        for line in lines:
+            typer.echo(line)
         where = f"dask {scheduler}" if client is not None else f"jobs {jobs}"
         what = "points" if draws is None else f"runs ({n_points} points x {samples} draws + nominal)"
         typer.echo(f"{len(results['rows'])} {what}: {results['simulated']} simulated, {results['reused']} reused; "

@@ -104,8 +104,9 @@ def _add_chapter5(experiment: typer.Typer) -> None:
     def chapter5_cmd(
         out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, run<N>.png."),
         jobs: Optional[int] = JobsOpt,
-        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr (the runs are "
-                                     "then also done with faithful and the differences tabulated)."),
+        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr; default faithful "
+                                     "(docs/firmware.md; with avr the runs are also done with faithful and the "
+                                     "differences tabulated)."),
         sketch: Optional[Path] = sketch_option(),
         runs: Optional[str] = typer.Option(None, "--runs", help="Run numbers to do, e.g. 1,3 (default all)."),
         duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Override every run's duration, s."),

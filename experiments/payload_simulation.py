@@ -32,6 +32,10 @@ TIP_MARGIN_MIN_M = 0.02   # static tip margin below which a point is unsafe, m
 TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
 MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
+RUNAWAY_RPM = TRACK_TOLERANCE_RPM + MAX_VEL_RPM / 255.0
+"""A wheel whose true speed ends further than this from its reference has left it (RPM): beyond the
+faithful PI's dead zone and one duty count (4.13 RPM), which is as well as the faithful firmware holds
+a wheel (chapter 5's 99.20 RPM wheels end +4.6 and +6.0 RPM off)."""
 
 
 def _slip(series, cfg: TwinConfig) -> np.ndarray:

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.experiments.chapter5_criteria import WHEELS
-from amr_twin.experiments.payload_simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, TRACK_TOLERANCE_RPM
+from amr_twin.experiments.payload_simulation import RUNAWAY_RPM, TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, TRACK_TOLERANCE_RPM
 
 PANELS = (  # (column or per-wheel suffix, label); per-wheel ones plot the worse driven wheel
     ("~delay_s", "delay (s)"), ("~settling_s", "settling (s)"), ("~overshoot_rpm", "overshoot (RPM)"),
@@ -61,15 +61,11 @@ def limit_causes(row: dict) -> list[tuple[str, str]]:
         worst = max(row.get(f"{w}_steady_current_a") or 0.0 for w in WHEELS)
         rating = row.get("current_limit_a")
         current = f"{worst:.1f} A steady" + (f" > {rating:.1f} A" if rating is not None else "")
-        # the wheels' true speeds over the run's last quarter against their references
-        off = max(((abs(e), w) for w in WHEELS if row.get(f"{w}_reference_rpm")
-                   and (e := row.get(f"{w}_true_steady_error_rpm")) is not None), default=(0.0, ""))
-        if off[0] <= TRACK_TOLERANCE_RPM:
+        off = _farthest(row)
+        if off is None:
             out.append(("overload", current))
         else:
-            ref = abs(row[f"{off[1]}_reference_rpm"])
-            speed = ref + row[f"{off[1]}_true_steady_error_rpm"]  # along the reference: < 0 turning backward
-            out.append(("runaway", f"{off[1]} wheel at {speed:.0f} RPM against {ref:.1f}, {current}"))
+            out.append(("runaway", f"{off}, {current}"))
     if row.get("static_tip_margin_m", -1) < TIP_MARGIN_MIN_M:
         out.append(("tipping", f"{row.get('static_tip_margin_m')} m < {TIP_MARGIN_MIN_M} m"))
     if row.get("wheel_lift_off", True):
@@ -77,6 +73,18 @@ def limit_causes(row: dict) -> list[tuple[str, str]]:
     if row.get("max_tilt_deg", 90) > TILT_LIMIT_DEG:
         out.append(("tilt", f"{row.get('max_tilt_deg', float('nan')):.2f} deg > {TILT_LIMIT_DEG} deg"))
     return out
+
+
+def _farthest(row: dict) -> str | None:
+    """The driven wheel whose true speed (the run's last quarter) left its reference by more than
+    :data:`~amr_twin.experiments.payload_simulation.RUNAWAY_RPM`, in words; None if none did."""
+    off = max(((abs(e), w) for w in WHEELS if row.get(f"{w}_reference_rpm")
+               and (e := row.get(f"{w}_true_steady_error_rpm")) is not None), default=(0.0, ""))
+    if off[0] <= RUNAWAY_RPM:
+        return None
+    ref = abs(row[f"{off[1]}_reference_rpm"])
+    speed = ref + row[f"{off[1]}_true_steady_error_rpm"]  # along the reference: < 0 turning backward
+    return f"{off[1]} wheel at {speed:.0f} RPM against {ref:.1f}"
 
 
 def unsafe_reason(row: dict) -> str:
@@ -102,27 +110,36 @@ def summarise(results: dict) -> dict:
                 break
             highest = m
         tracking = [r["mass_kg"] for r in mine if r.get("tracks")]
+        left = [(r["mass_kg"], r["command"], _farthest(r)) for r in mine if _farthest(r)]
+        leaves = min(left, key=lambda m: m[0]) if left else None
         entry = {"highest_safe_kg": highest, "first_unsafe_kg": first_unsafe, "reason": reason,
                  "causes": causes, "lightest_kg": masses[0], "heaviest_kg": masses[-1],
                  "beyond_grid": first_unsafe is None, "below_grid": highest is None,
                  "invalid_kg": sorted({r["mass_kg"] for r in mine if not r.get("valid", True)}),
-                 "heaviest_tracking_kg": max(tracking) if tracking else None}
+                 "heaviest_tracking_kg": max(tracking) if tracking else None,
+                 "leaves_reference_kg": leaves[0] if leaves else None,
+                 "leaves_reference": f"in {leaves[1]}: {leaves[2]}" if leaves else ""}
         entry["answer"] = answer(entry)
         out[position] = entry
     return out
 
 
 def answer(s: dict) -> str:
-    """One sentence for a position's entry of :func:`summarise`: never "None kg"."""
+    """One sentence for a position's entry of :func:`summarise`: never "None kg". A wheel that left its
+    reference at a mass the criteria call safe is said too."""
+    left = s["leaves_reference_kg"]
+    early = "" if left is None else f"from {left:g} kg a wheel leaves its reference {s['leaves_reference']}"
     if s["beyond_grid"]:
-        if s["heaviest_kg"] == s["lightest_kg"]:
-            return f"safe at {s['heaviest_kg']:g} kg, the only mass swept: the limit lies beyond it"
-        return f"safe up to {s['heaviest_kg']:g} kg, the heaviest swept: the limit lies beyond the masses swept"
+        only = s["heaviest_kg"] == s["lightest_kg"]
+        text = (f"safe at {s['heaviest_kg']:g} kg, the only mass swept: the limit lies beyond it" if only else
+                f"safe up to {s['heaviest_kg']:g} kg, the heaviest swept: the limit lies beyond the masses swept")
+        return text + (f" (yet {early})" if early else "")
     if s["below_grid"]:
         lighter = "unloaded" if s["lightest_kg"] == 0 else "no lighter payload was swept"
         return (f"no safe payload among the masses swept: unsafe already at {s['first_unsafe_kg']:g} kg, the "
                 f"lightest ({lighter}), {s['reason']}")
-    return f"highest safe {s['highest_safe_kg']:g} kg; unsafe at {s['first_unsafe_kg']:g} kg {s['reason']}"
+    early = f" (by the criteria; yet {early})" if early and left < s["first_unsafe_kg"] else ""
+    return f"highest safe {s['highest_safe_kg']:g} kg{early}; unsafe at {s['first_unsafe_kg']:g} kg {s['reason']}"
 
 
 def _plotted(rows: list[dict]) -> tuple[list[str], dict[str, str]]:

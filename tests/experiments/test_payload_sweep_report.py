@@ -43,6 +43,14 @@ def test_a_limit_within_beyond_or_below_the_grid_is_said():
         assert "None" not in json.dumps(entry["rear"]["answer"])
 
 
+def test_a_safe_mass_at_which_a_wheel_leaves_its_reference_is_said():
+    left = _row(10.0, right_true_steady_error_rpm=-14.9)  # beyond the 4 RPM dead zone and one duty count
+    held = _row(0.0, left_true_steady_error_rpm=4.6)  # chapter 5's +4.6 RPM: one count above, held
+    answer = _answer([held, left, _row(20.0, False, static_tip_margin_m=0.01)])["rear"]["answer"]
+    assert answer.startswith("highest safe 10 kg (by the criteria; yet from 10 kg a wheel leaves its reference "
+                             "in angular:-60:-1: right wheel at 46 RPM against 60.8); unsafe at 20 kg")
+
+
 def test_an_overload_while_a_wheel_leaves_its_reference_is_a_runaway():
     """Issue 30: 20 kg at the rear edge, the clockwise turn, faithful firmware: 12.3 A on the inner
     wheel, which turns backward instead of at 60.8 RPM: the firmware's runaway, not the rating."""
@@ -50,7 +58,7 @@ def test_an_overload_while_a_wheel_leaves_its_reference_is_a_runaway():
                    right_true_steady_error_rpm=-64.0)
     assert [c for c, _ in report.limit_causes(runaway)] == ["runaway"]
     assert "right wheel at -3 RPM against 60.8, 12.3 A steady > 11.1 A" in report.unsafe_reason(runaway)
-    tracked = _row(30.0, False, motor_overload=True, right_steady_current_a=12.3, right_true_steady_error_rpm=-3.9)
+    tracked = _row(30.0, False, motor_overload=True, right_steady_current_a=12.3, right_true_steady_error_rpm=-8.0)
     assert [c for c, _ in report.limit_causes(tracked)] == ["overload"]
     tipping = _row(30.0, False, static_tip_margin_m=0.01, max_tilt_deg=4.0)
     assert [c for c, _ in report.limit_causes(tipping)] == ["tipping", "tilt"]
@@ -70,7 +78,10 @@ def test_the_improved_firmware_runs_beside_where_the_faithful_one_runs_away(rear
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
     rear = next(i for i, line in enumerate(lines) if line.startswith("rear"))
-    assert "highest safe 20 kg; unsafe at 30 kg in angular:-60:-1: runaway" in lines[rear]
+    assert lines[rear].split()[1:4] == ["highest", "safe", "20"]
+    # the inner wheel has left its reference already at 20 kg (14 RPM against 60.8 in 8 s): said
+    assert "yet from 20 kg a wheel leaves its reference in angular:-60:-1: right wheel at" in lines[rear]
+    assert "; unsafe at 30 kg in angular:-60:-1: runaway" in lines[rear]
     assert lines[rear + 1].strip().startswith("improved firmware: safe up to 30 kg, the heaviest swept")
     center = next(line for line in lines if line.startswith("center"))
     assert "safe up to 30 kg" in center

@@ -18,8 +18,14 @@ from amr_twin.sim.run import Command, run_command
 
 @pytest.fixture(scope="module")
 def suite():
-    results = chapter5.run(load_config(), jobs=2, progress=False, study=False)
+    results = chapter5.run(load_config(), jobs=2, progress=False)
     return chapter5.report(results, Path(tempfile.mkdtemp()))
+
+
+def test_the_header_counts_every_run_the_progress_bar_counts(suite):
+    """Issue 33: "8 runs, 132 simulated s" left out the 8 rolling-resistance study runs."""
+    assert (len(suite["runs"]), suite["study_runs"]) == (8, 8)
+    assert suite["sim_s"] == 132.0 and suite["study_sim_s"] == 128.0  # runs 3 and 7 (16 s) at four Crr
 
 
 def test_no_check_worse_than_the_committed_scorecard(suite):

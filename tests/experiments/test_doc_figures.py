@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from amr_twin.experiments import doc_figures
+from amr_twin.experiments import doc_figures, doc_texts
 from amr_twin.experiments.chapter5_scorecard import SCORECARD
 
 
@@ -19,14 +19,14 @@ def test_each_document_is_what_its_generator_writes(path):
 
 def test_the_chapter5_paragraph_says_what_the_scorecard_holds():
     card = json.loads(SCORECARD.read_text())
-    text = doc_figures.chapter5_summary(card)
+    text = doc_texts.chapter5_summary(card)
     assert f"**{card['passed']} of {card['checks_total']} checks pass**" in text
     assert f"passes {card['true_passed']} of {card['true_checks_total']}" in text
     more = copy.deepcopy(card)  # were the right wheel to overshoot 2 RPM more, the claim would turn
     more["checks"]["run2.right.overshoot"]["twin"] = more["checks"]["run1.left.overshoot"]["twin"] + 2.0
     assert "does not overshoot more" in text and "overshoots more than the left, as in §5.1.3" in \
-        doc_figures.chapter5_summary(more)
-    lines = doc_figures.chapter5_table(card).splitlines()
+        doc_texts.chapter5_summary(more)
+    lines = doc_texts.chapter5_table(card).splitlines()
     assert sum(line.startswith("| ") and line[2].isdigit() for line in lines) == 14  # one row per driven wheel
 
 

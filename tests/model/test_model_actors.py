@@ -198,3 +198,14 @@ def test_add_actors_places_every_kind_in_any_spec():
     add_actors(spec, (Actor("person", ((1, 1), (2, 1)), 1.0), Actor("pallet_jack", ((0, -2), (0, 2)), 1.0)), CFG)
     m = spec.compile()
     assert m.nmocap == 2 and m.body("pallet_jack_1").geomnum == 6 and m.body("person_0").geomnum == 4
+
+
+def test_the_scan_planes_walls_leave_the_actors_out():
+    """A jack's frame cut at 0.15 m: not a wall of the world's map (it moves)."""
+    from amr_twin.model.world_geometry import scan_plane_boxes
+
+    jack = (Actor("pallet_jack", ((0.0, 1.5), (3.0, 1.5)), 1.0),)
+    model = build(CFG, "warehouse", (-6, 0, 0), visuals=False, imu=False, actors=jack).model
+    names = scan_plane_boxes(model, 0.15).names
+    assert "pallet_0" in names                                  # a loose pallet is
+    assert not any(n.startswith("pallet_jack") for n in names)

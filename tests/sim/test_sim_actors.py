@@ -174,3 +174,17 @@ def test_the_same_seed_gives_the_same_trajectories_and_another_seed_others():
     assert a.shape == (21, 4, 3) and np.array_equal(a, b)
     c = run(12)
     assert not np.allclose(a, c) and np.ptp(a[:, :, :2], axis=0).max() > 1.0  # they moved
+
+
+def test_a_wheel_touching_an_actor_is_always_a_collision_even_standing_on_it():
+    """A wheel on a rack's top face counts by the contact's normal (standing is not a collision); on
+    an actor (a wheel up on a fork) it is one whatever the normal."""
+    from amr_twin.sim.collisions import _BY_NORMAL, _COLLIDE, _IGNORE, GeomRoles
+
+    twin, _ = _twin([Actor("pallet_jack", ((0.0, 1.5), (3.0, 1.5)), 1.0)])
+    m, roles = twin.physics.model, GeomRoles(twin.physics)
+    wheel = twin.physics.support_geoms["wheel_left"]
+    fork, rack, floor = (m.geom(n).id for n in ("pallet_jack_0/fork_left", "rack_n_beam_low", "floor"))
+    assert roles.kind(wheel, fork) == _COLLIDE and roles.kind(fork, wheel) == _COLLIDE
+    assert roles.kind(wheel, rack) == _BY_NORMAL and roles.kind(wheel, floor) == _IGNORE
+    assert roles.world_name(fork) == "pallet_jack_0" and roles.world_name(rack) == "rack_n_beam_low"

@@ -20,7 +20,9 @@ Format (YAML)::
 
 Each step has ``t_s`` and exactly one command key. Unknown keys, missing or
 non-finite numbers raise :class:`MissionError` with a one-line message naming
-the step and the field. Speeds outside the thesis range are not checked here:
+the step and the field. An actor needs its ``kind``, ``waypoints_xy_m`` and
+``speed_m_s`` (:meth:`amr_twin.model.actors.Actor.from_mapping`); its speed range and
+its path through the world are checked when the model is built (docs/actors.md). Speeds outside the thesis range are not checked here:
 the client refuses them at run time (code 1), as on the robot.
 """
 

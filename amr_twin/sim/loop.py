@@ -12,7 +12,7 @@ orders events in time:
 2. step the physics in C up to that instant with the actuation held, keeping the
    wheel angles on the record grid (every ``record_every_steps``) and handing the
    grid instants to the grid samplers (the rolling resistance from the present
-   contact loads, the IMU's true values, the LiDAR's poses and casts);
+   contact loads, the actors' poses, the IMU's true values, the LiDAR's poses and casts);
 3. turn the angles into SC edges (interpolated to the microsecond) and deliver
    them to the firmware's pin-change interrupt in time order, each at its time,
    interleaved with the publishing events that fall in the chunk;

@@ -1,8 +1,8 @@
 """Every figure printed by ``amr-twin bench``, each against bare physics in the same run.
 
 :func:`run_benchmarks` puts together bare physics (:mod:`amr_twin.bench.physics`), the whole
-twin (:mod:`amr_twin.bench.twin`), its sensors (:mod:`amr_twin.bench.sensors`) and the
-emulated board (:func:`avr_figures`).
+twin (:mod:`amr_twin.bench.twin`), its sensors (:mod:`amr_twin.bench.sensors`), four actors
+(:mod:`amr_twin.bench.actors`) and the emulated board (:func:`avr_figures`).
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     """
     from amr_twin.bench.twin import twin_figures
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
-    from amr_twin.sim import battery, collisions, grid_steps, rolling_resistance
+    from amr_twin.sim import actors, battery, collisions, grid_steps, rolling_resistance
     from amr_twin.sim.native_build import native_status
 
     result = bare_physics(cfg, sim_s)
@@ -52,10 +52,12 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result.update(twin_figures(cfg, sim_s))
     from amr_twin.bench.sensors import sensor_figures  # IMU + LiDAR against the same bare figure
     result.update(sensor_figures(cfg, sim_s))
+    from amr_twin.bench.actors import actor_figures  # four people and jacks, with and without sensors
+    result.update(actor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"
     result["ratios"] = RATIOS
-    helpers = (grid_steps, rolling_resistance, battery, collisions, hall_edges, imu_errors, lidar_kernels)
+    helpers = (grid_steps, rolling_resistance, battery, collisions, actors, hall_edges, imu_errors, lidar_kernels)
     engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
     result["rolling_resistance_engine"] = engines["rolling_resistance"]
     result["native_engines"] = engines

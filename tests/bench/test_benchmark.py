@@ -23,8 +23,10 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert r["ratio_of_medians"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.01)
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
     assert r["rolling_resistance_engine"] == "C" or r["rolling_resistance_engine"].startswith("Python (")
-    assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "hall_edges", "imu_errors",
-                                         "lidar_beams"}
+    assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "actors",
+                                        "hall_edges", "imu_errors", "lidar_beams"}
+    assert r["actors_ratio"] > 0 and r["actors_sensors_over_sensors"] > 0 and r["actors_over_twin"] > 0
+    assert r["actors_collisions"] == 0 and r["actors_engine"] == r["native_engines"]["actors"]
     assert all(e == "C" or e.startswith("Python (") for e in r["native_engines"].values())
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
 
@@ -60,6 +62,17 @@ def test_the_benchmark_scenario_touches_nothing_but_the_floor():
     assert twin.collisions.collisions == []
     assert twin.physics.pose().x_m - (-8.0) > 10.0  # it drove the whole 11 m down the aisle
     assert (twin.lidar.last_hit_geom >= 0).mean() > 0.95  # walls and racks in range of the LiDAR
+
+
+def test_the_actors_benchmark_touches_nothing_and_its_actors_move_in_the_lidars_view():
+    from amr_twin.bench.actors import actors_run_s
+
+    _cpu, twin = actors_run_s(load_config(), 16.0, sensors=True)
+    assert twin.collisions.collisions == []
+    assert twin.actors.progress_s() == [16.0, 15.5, 16.0, 16.0]  # none waited
+    hit = {int(twin.physics.model.geom_bodyid[g]) for g in twin.lidar.last_hit_geom if g >= 0}
+    bodies = {twin.physics.model.body(f"{a.kind}_{i}").id for i, a in enumerate(twin.actors.actors)}
+    assert len(hit & bodies) >= 2  # some in sight of the last scan
 
 
 def test_timed_children_cache_their_bytecode_outside_the_tree(tmp_path, monkeypatch):

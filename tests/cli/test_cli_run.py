@@ -228,3 +228,55 @@ def test_a_mission_carries_faults(tmp_path):
     res = _run("--mission", str(bad))
     assert res.exit_code == 2 and "faults 'hall-left-dead': expected KIND@T" in res.stderr
     assert str(bad) in res.stderr
+
+
+@pytest.mark.parametrize("args, text", [
+    (["--actor", "robot:0,0;1,1"], "--actor 'robot:0,0;1,1': expected KIND:X1,Y1;X2,Y2"),
+    (["--actor", "person:-3,2;-3,-2@2.5"], "actor 0 (person_0): speed 2.5 m/s outside the person's [0.5, 1.8] m/s"),
+    (["--actor", "person:-4.5,2;-4.5,5"], "actor 0 (person_0): its path runs into rack_n_"),
+    (["--actor", "pallet_jack:-3,2;-3,-2", "--actor", "person:-3,2;-3,2"], "waypoints 0 and 1 coincide"),
+    (["--actors-random", "0"], "--actors-random '0': expected N[/stop=M] with N in 1..50"),
+    (["--actors-random", "many"], "--actors-random 'many'"),
+    (["--actor", "person:-5.8,0"], "the robot overlaps person_0 there"),
+])
+def test_bad_actors_are_refused_before_the_run_in_one_line(args, text, tmp_path):
+    out = tmp_path / "never.csv"
+    result = _run("stop", *args, "--csv", str(out))
+    assert result.exit_code == 2, result.output
+    assert text in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_driving_into_a_person_is_reported_naming_them():
+    result = _run("linear", "--speed-m-s", "0.5", "--duration-s", "4", "--actor", "person:-4.6,0", "--json")
+    assert result.exit_code == 0
+    (hit,) = json.loads(result.stdout)["collisions"]
+    assert hit["hit"] == "person_0" and "base_link" in hit["robot_parts"]
+    assert "warning: collision at t = " in result.stderr and "with person_0" in result.stderr
+    text = _run("linear", "--speed-m-s", "0.5", "--duration-s", "4", "--actor", "person:-4.6,0").stdout
+    assert "base_link hit person_0" in text
+
+
+def test_a_mission_places_actors_and_the_person_waits_for_the_robot(tmp_path):
+    info = _json("--mission", str(ROOT / "experiments/missions/person_crossing.yaml"))
+    assert info["collisions"] == [] and info["codes"] == [0, 0]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("duration_s: 5\nsteps: [{t_s: 0, stop: {}}]\nactors: [{kind: person, waypoints_xy_m: [[0, 0]]}]\n")
+    result = _run("--mission", str(bad))
+    assert result.exit_code == 2 and "actors[0].speed_m_s is missing" in result.stderr
+
+
+def test_random_actors_follow_the_seed(tmp_path):
+    """--actors-random N draws from --seed: the same poses on /actors/poses for the same seed, others
+    for another."""
+    from mcap.reader import make_reader
+
+    def poses(seed, name):
+        path = tmp_path / name
+        result = _run("stop", "--duration-s", "1", "--actors-random", "3", "--seed", str(seed), "--mcap", str(path))
+        assert result.exit_code == 0, result.output
+        with open(path, "rb") as f:
+            return [m.data for _s, c, m in make_reader(f).iter_messages() if c.topic == "/actors/poses"]
+
+    a, b, c = poses(5, "a.mcap"), poses(5, "b.mcap"), poses(6, "c.mcap")
+    assert len(a) == 11 and a == b and a != c

@@ -177,9 +177,11 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             typer.echo(f"over {sp['samples']} parameter draws ({sp['wall_s']:.1f} s wall time): "
                        f"{sum(m['in_band'] for m in met)} of {len(met) * sp['samples']} banded metrics in their band "
                        "(report.md, spread section)")
-        typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
-        typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
-                   f"(jobs {jobs}, firmware {firmware})")
+        typer.echo(f"checks passed {s['passed']}/{s['checks']} on the published samples (true speed "
+                   f"{s['true_passed']}/{s['true_checks']}); wrote {out}/metrics.json, report.md")
+        study = f" and {data['study_runs']} rolling-resistance study runs" if data["study_runs"] else ""
+        typer.echo(f"wall time {data['wall_s']:.2f} s for {len(data['runs'])} runs{study}, "
+                   f"{data['sim_s'] + data['study_sim_s']:.0f} simulated s (jobs {jobs}, firmware {firmware})")
         for folder, ext in ((record, "rrd"), (mcap, "mcap")):
             if folder is not None:
                 typer.echo(f"recordings: {folder}/run<N>.{ext} for runs "

@@ -118,6 +118,9 @@ def test_no_peak_while_still_rising_or_within_the_tolerance():
     t = np.arange(1.0, 11.0)
     rising = step_info(t, 10.0 * t, 100.0)  # its maximum is its last sample
     assert rising.overshoot == 0.0 and math.isnan(rising.peak_s)
+    wobble = 10.0 * t
+    wobble[-1] = wobble[-2] - 0.05  # still rising but for 0.05 at the end: it does not come back
+    assert step_info(t, wobble, 100.0).overshoot == 0.0
     flat = np.array([40.0, 99.0, 100.00005, 100.0, 100.0, 100.0, 100.0, 100.0, 100.0, 100.0])
     assert math.isnan(step_info(t, flat, 100.0).peak_s)  # 5e-5 over: below 0.1 % of the step
     bump = flat.copy()

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import statistics
 
-from amr_twin.bench.physics import REPEATS, bare_steps_s, timer
+from amr_twin.bench.physics import REPEATS, bare_steps_s, paired_ratio, timer
 from amr_twin.bench.twin import BENCH_START
 from amr_twin.model.actors import Actor
 from amr_twin.model.config import TwinConfig
@@ -53,9 +53,9 @@ def actor_figures(cfg: TwinConfig, sim_s: float) -> dict:
         without_t.append(actors_run_s(cfg, sim_s, sensors=False, actors=())[0])
     return {
         "actors_s_per_sim_s": round(statistics.median(with_s) / sim_s, 5),
-        "actors_ratio": round(statistics.median(w / b for w, b in zip(with_s, bare)), 3),
-        "actors_sensors_over_sensors": round(statistics.median(w / o for w, o in zip(with_s, without_s)), 3),
-        "actors_over_twin": round(statistics.median(w / o for w, o in zip(with_t, without_t)), 3),
+        **paired_ratio("actors_ratio", with_s, bare),
+        **paired_ratio("actors_sensors_over_sensors", with_s, without_s),
+        **paired_ratio("actors_over_twin", with_t, without_t),
         "actors_engine": twin.actors.engine,
         "actors_collisions": len(twin.collisions.collisions),
     }

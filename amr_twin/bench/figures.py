@@ -7,7 +7,7 @@ twin (:mod:`amr_twin.bench.twin`), its sensors (:mod:`amr_twin.bench.sensors`), 
 
 from __future__ import annotations
 
-from amr_twin.bench.physics import bare_physics
+from amr_twin.bench.physics import RATIOS, bare_physics
 from amr_twin.model.config import TwinConfig
 
 
@@ -26,6 +26,7 @@ def avr_figures(cfg: TwinConfig, sim_s: float) -> dict:
         return {"avr_skipped": problem}
     avr = twin_figures(cfg, sim_s, firmware="avr")
     return {"avr_twin_s_per_sim_s": avr["twin_s_per_sim_s"], "avr_ratio": avr["ratio"],
+            "avr_ratio_repeats": avr["ratio_repeats"], "avr_ratio_of_medians": avr["ratio_of_medians"],
             "avr_realtime_factor": avr["realtime_factor_twin"]}
 
 
@@ -33,8 +34,9 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     """All benchmark figures of the twin, measured in one run.
 
     ``physics_us_per_step``: settled robot driving at a constant duty in the
-    warehouse. ``twin_s_per_sim_s`` / ``bare_physics_s_per_sim_s`` / ``ratio``:
-    the whole twin against bare physics on one scenario (see twin_benchmark);
+    warehouse (``straight_bare_physics_s_per_sim_s``: not the loop scenario's bare figure).
+    ``twin_s_per_sim_s`` / ``bare_physics_s_per_sim_s`` / ``ratio``: the whole twin against bare
+    physics on one scenario (:mod:`amr_twin.bench.twin`; how the ratios are taken: ``ratios``);
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
     ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
     (:mod:`amr_twin.sim.native_build`), which the figures were measured with;
@@ -54,6 +56,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result.update(actor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
     result["timer"] = "process_time"
+    result["ratios"] = RATIOS
     helpers = (grid_steps, rolling_resistance, battery, collisions, actors, hall_edges, imu_errors, lidar_kernels)
     engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
     result["rolling_resistance_engine"] = engines["rolling_resistance"]

@@ -31,8 +31,8 @@ SetOpt = typer.Option(None, "--set", help="Override one value: key=value (repeat
 def firmware_option(default: str = "faithful") -> typer.models.OptionInfo:
     """``--firmware``: its choices are the firmware factory's (:data:`~amr_twin.controllers.firmware.FIRMWARES`)."""
     choices = ", ".join(FIRMWARES[:-1]) + " or " + FIRMWARES[-1]
-    return typer.Option(default, "--firmware", help=f"Arduino firmware: {choices} (docs/firmware.md; avr: the "
-                        "sketch compiled with avr-gcc on an emulated ATmega2560).")
+    return typer.Option(default, "--firmware", help=f"Arduino firmware: {choices}; default {default} "
+                        "(docs/firmware.md; avr: the sketch compiled with avr-gcc on an emulated ATmega2560).")
 
 
 def sketch_option() -> typer.models.OptionInfo:

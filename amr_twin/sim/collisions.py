@@ -20,9 +20,7 @@ the robot parts involved and the peak normal force (read when the contacts chang
 and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less than
 :data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
 the loop to stop at the first collision.
-
-:func:`check_start` refuses a start pose where the robot overlaps the world, and
-:func:`check_supported` one where nothing holds it up (a world without a floor).
+The checks of a start pose use the same classification: :mod:`amr_twin.sim.start_pose`.
 """
 
 from __future__ import annotations
@@ -54,10 +52,6 @@ C_SOURCE = Path(__file__).with_name("collisions.c")
 MEMO_PAIRS = 256
 """Contact pairs the C helper keeps; with more in contact every instant is classified in Python."""
 _IGNORE, _COLLIDE, _BY_NORMAL = 0, 1, 2
-
-
-class StartPoseError(ValueError):
-    """The robot cannot start where asked (inside an obstacle, nothing under it); one line."""
 
 
 @dataclass
@@ -301,29 +295,3 @@ class CollisionMonitor:
 
     def as_dicts(self) -> list[dict]:
         return [c.as_dict() for c in self.collisions]
-
-
-def check_start(physics, where: str) -> None:
-    """Raise :class:`StartPoseError` if the robot overlaps the world where it was placed.
-
-    ``physics`` has just been built (``mj_forward`` ran: the contacts are those of
-    the start pose); ``where`` names the pose for the message.
-    """
-    roles = GeomRoles(physics)
-    mujoco.mj_forward(physics.model, physics.data)
-    hits, _ = collision_contacts(roles, physics.data)
-    if hits:
-        names = sorted({roles.world_name(w) for _i, _r, w in hits})
-        raise StartPoseError(f"{where}: the robot overlaps {', '.join(names)} there; "
-                             "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
-
-
-def check_supported(physics, where: str) -> None:
-    """Raise :class:`StartPoseError` if no wheel or caster touches anything after settling."""
-    d = physics.data
-    support = set(physics.support_geoms.values())
-    touching = any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist()) if d.ncon else False
-    if not touching:
-        z = float(physics.data.qpos[physics.root_qpos + 2])
-        raise StartPoseError(f"{where}: nothing holds the robot up (no wheel or caster touches the ground "
-                             f"after settling, base at z = {z:.2f} m): the world has no floor there")

@@ -127,10 +127,10 @@ class Twin:
         self.recorder = Recorder(self)
         self.grid_us = self.dt_us * self.recorder.every
         self.rolling = RollingResistance(self.physics, cfg)
-        self.samplers: list = [self.rolling.update, self.plant.battery.account]
+        self.samplers: list = [self.rolling.update, self.plant.battery.account, self.recorder.battery]
         """Callables ``f(t_us)`` run on the record grid while the physics steps (physics at ``t_us``):
-        the rolling resistance from the present loads, the battery, the collision monitor, the
-        sensors' samplers. One that returns True halts the twin there."""
+        the rolling resistance from the present loads, the battery and the recorder's copy of its
+        state, the collision monitor, the sensors' samplers. One that returns True halts the twin there."""
         self.halted = False
         self.actors = None
         """The actors' motion (:class:`amr_twin.sim.actors.ActorMotion`), None without actors."""

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from amr_twin.model.build import build
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.collisions import check_start, check_supported
+from amr_twin.sim.start_pose import check_start, check_supported
 from amr_twin.sim.physics import Physics
 
 KEEP = 2

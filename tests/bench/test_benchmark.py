@@ -1,5 +1,7 @@
 """amr-twin bench: the figures the README quotes are all there and consistent (not timed)."""
 
+import statistics
+
 import pytest
 
 from amr_twin.bench.figures import run_benchmarks
@@ -12,9 +14,13 @@ README_KEYS = ("physics_us_per_step", "twin_s_per_sim_s", "bare_physics_s_per_si
 def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     r = run_benchmarks(load_config(), sim_s=0.2)
     assert all(r[k] > 0 for k in README_KEYS), r
-    # the ratio is the median of the repeats' own ratios: near the ratio of the medians
-    assert r["ratio"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.25)
-    assert r["repeats"] >= 5
+    # issue 33: a `ratio` of 1.136 beside medians whose ratio was 0.91, unexplained. Each ratio is
+    # the median of the repeats' paired ratios, listed, with the ratio of the medians beside it
+    assert r["repeats"] >= 5 and "median over the repeats of a paired ratio" in r["ratios"]
+    for name in ("ratio", "sensors_ratio", "twin_no_sensors_ratio"):
+        assert len(r[f"{name}_repeats"]) == r["repeats"]
+        assert r[name] == pytest.approx(statistics.median(r[f"{name}_repeats"]), abs=1e-3)
+    assert r["ratio_of_medians"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.01)
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
     assert r["rolling_resistance_engine"] == "C" or r["rolling_resistance_engine"].startswith("Python (")
     assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "actors",

@@ -106,7 +106,9 @@ def test_one_sign_convention_in_json_and_csv(tmp_path):
         w = info["wheels"][name]
         assert w["reference_rpm"] == pytest.approx(-91.67, abs=0.01) and w["true_final_rpm"] < -80
         assert w["final_rpm"] < -80 and w["reference"] == pytest.approx(w["reference_rpm"])
-        assert w["final_value"] < -80 and w["peak_value"] <= w["final_value"] and w["overshoot"] >= 0
+        assert w["final_value"] < -80 and w["overshoot"] >= 0
+        assert w["steady_error"] == pytest.approx(w["final_value"] - w["reference"])  # the offset, signed
+        assert w["peak_value"] is None or w["peak_value"] < w["final_value"]  # a peak lies beyond it
         assert table[f"ref_rpm_{name}"][-1] == pytest.approx(w["reference_rpm"], rel=1e-6)
         assert table[f"pub_rpm_{name}"][-1] == pytest.approx(w["final_rpm"], rel=1e-6)
         assert table[f"true_rpm_{name}"][-1] == pytest.approx(w["true_final_rpm"], rel=1e-6)
@@ -118,6 +120,28 @@ def test_square_mission_runs(tmp_path):
     assert info["codes"] == [0] * 9 and info["sim_s"] == 14
     assert [c["kind"] for c in info["command"]][-1] == "stop"
     assert out.exists()
+
+
+def test_square_mission_says_where_it_ended_and_that_its_speeds_are_old():
+    """Issue 33: after the stop the last published speeds are seconds old (nothing is
+    published at rest), and the timed "square" does not close: both are said."""
+    square = str(ROOT / "experiments/missions/square.yaml")
+    info = _json("--mission", square, "--world", "empty")
+    start, end = info["start_pose"], info["final_pose"]
+    moved = info["from_start"]
+    assert moved["distance_m"] == pytest.approx(math.dist((start["x_m"], start["y_m"]), (end["x_m"], end["y_m"])))
+    assert moved["heading_deg"] == pytest.approx(math.degrees(end["yaw_rad"] - start["yaw_rad"]))  # within +-180
+    assert moved["distance_m"] > 0.2 and abs(moved["heading_deg"]) > 20  # timed commands: it does not close
+    text = _run("--mission", square, "--world", "empty")
+    assert text.exit_code == 0
+    assert f"ended {moved['distance_m']:.2f} m from its start pose, heading {moved['heading_deg']:+.1f} deg" in text.stdout
+    for name, wheel in info["wheels"].items():
+        assert wheel["final_rpm"] != 0 and wheel["final_rpm_t_s"] < info["sim_s"] - 1.0  # the stop came at 12 s
+        line = next(x for x in text.stdout.splitlines() if x.startswith(name))
+        assert f"last published {wheel['final_rpm']:8.3f} RPM at {wheel['final_rpm_t_s']:.2f} s" in line
+        assert "nothing is published at rest" in line
+    single = _run("linear", "--speed-m-s", "0.5", "--duration-s", "3", "--world", "empty")
+    assert "at rest" not in single.stdout and "ended" not in single.stdout  # a wheel still turning; one command
 
 
 def test_mission_errors_are_one_line(tmp_path):

@@ -45,7 +45,7 @@ def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
     state = {"qpos": d.qpos.copy(), "qvel": d.qvel.copy(), "time": d.time, "t_phys_us": twin.t_phys_us,
              "halted": twin.halted, "soc": twin.plant.battery.soc, "t_s": s.t_s, "rows": support.take(),
              "angle": s.wheel_angle_rad, "rpm": s.true_rpm, "pose": s.pose, "pwm": s.pwm_counts,
-             "current": s.current_a, "published": [s.published[w] for w in sorted(s.published)],
+             "current": s.current_a, "battery": (s.battery_v, s.battery_a, s.battery_soc), "published": [s.published[w] for w in sorted(s.published)],
              "collisions": twin.collisions.as_dicts(), "friction": twin.physics.model.dof_frictionloss.copy()}
     return state, calls
 

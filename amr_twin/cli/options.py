@@ -31,8 +31,8 @@ SetOpt = typer.Option(None, "--set", help="Override one value: key=value (repeat
 def firmware_option(default: str = "faithful") -> typer.models.OptionInfo:
     """``--firmware``: its choices are the firmware factory's (:data:`~amr_twin.controllers.firmware.FIRMWARES`)."""
     choices = ", ".join(FIRMWARES[:-1]) + " or " + FIRMWARES[-1]
-    return typer.Option(default, "--firmware", help=f"Arduino firmware: {choices} (docs/firmware.md; avr: the "
-                        "sketch compiled with avr-gcc on an emulated ATmega2560).")
+    return typer.Option(default, "--firmware", help=f"Arduino firmware: {choices}; default {default} "
+                        "(docs/firmware.md; avr: the sketch compiled with avr-gcc on an emulated ATmega2560).")
 
 
 def sketch_option() -> typer.models.OptionInfo:
@@ -193,6 +193,8 @@ class RunOptions:
     start: Optional[str] = None
     sensors: bool = False
     fault: list[str] = field(default_factory=list)
+    actor: list[str] = field(default_factory=list)
+    actors_random: Optional[str] = None
     stop_on_collision: bool = False
     csv: Optional[Path] = None
     as_json: bool = False
@@ -230,6 +232,13 @@ def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
         "fault": (Optional[list[str]], typer.Option(None, "--fault", metavar="KIND@T[:ARGS]",
                   help="Inject a fault at T s (repeatable), e.g. hall-left-dead@3, rosserial-loss@2:0.3,for=5; "
                   "kinds and arguments in docs/faults.md.")),
+        "actor": (Optional[list[str]], typer.Option(None, "--actor", metavar="KIND:X1,Y1;X2,Y2[@V][+T][/loop][/stop=M]",
+                  help="A person or pallet_jack walking these waypoints (m, world frame) at V m/s from T s "
+                  "(repeatable; /loop: round again; /stop=M: halts while the robot is within M m ahead); "
+                  "docs/actors.md.")),
+        "actors_random": (Optional[str], typer.Option(None, "--actors-random", metavar="N[/stop=M]",
+                          help="N people and pallet jacks on random loops of the world's free space, drawn "
+                          "from --seed (at most 50).")),
         "stop_on_collision": (bool, typer.Option(False, "--stop-on-collision", help="End the run at the first "
                               "collision (exit code 4).")),
         "csv": (Optional[Path], typer.Option(None, "--csv", help="Write the time series here (CSV).")),
@@ -264,7 +273,7 @@ def merge(ctx: typer.Context, values: dict, fail: Callable[[str], None]) -> RunO
     out = {}
     for name in RUN_OPTIONS:
         mine, theirs = values[name], parent.params[name] if parent is not None else None
-        if name in ("fault", "set_"):
+        if name in ("fault", "set_", "actor"):
             out[name] = list(theirs or []) + list(mine or [])
             continue
         here, before = _given(ctx, name), _given(parent, name)

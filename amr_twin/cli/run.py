@@ -72,8 +72,42 @@ def _duration(opts: RunOptions, default_s: float) -> float:
     return duration_s
 
 
+MAX_ACTORS = 50
+"""Most actors in one run (each costs a few microseconds a grid instant and a mocap body)."""
+
+
+def _actors(opts: RunOptions, mission_actors: tuple, cfg, start, fail) -> tuple:
+    """The mission's actors, ``--actor``'s and ``--actors-random``'s, in that order; a bad one refused
+    in one line (their paths are checked against the world when it is built)."""
+    from amr_twin.model.actors import Actor, ActorError, check_speeds
+
+    try:
+        actors = list(mission_actors) + [Actor.parse(text, cfg) for text in opts.actor]
+        if opts.actors_random is not None:
+            count, _, flag = opts.actors_random.partition("/")
+            if not count.isdigit() or not 1 <= int(count) <= MAX_ACTORS or (flag and not flag.startswith("stop=")):
+                fail(f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}")
+            stop = float(flag[5:]) if flag else 0.0
+            actors += list(_guard(lambda: _random_actors(cfg, opts, int(count), start, stop)))
+        check_speeds(tuple(actors), cfg)
+    except (ActorError, ValueError) as exc:
+        fail(str(exc))
+    if len(actors) > MAX_ACTORS:
+        fail(f"--actor: {len(actors)} actors, at most {MAX_ACTORS}")
+    return tuple(actors)
+
+
+def _random_actors(cfg, opts: RunOptions, count: int, start, stop_m: float) -> tuple:
+    from amr_twin.model.actor_space import random_actors
+    from amr_twin.model.build import world_model
+    from amr_twin.model.worlds import default_start
+
+    x, y, _yaw = start if start is not None else default_start(opts.world)
+    return random_actors(world_model(cfg, opts.world), count, opts.seed, cfg, (x, y), stop_within_m=stop_m)
+
+
 def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RUN_S,
-            mission_faults: tuple[str, ...] = ()) -> None:
+            mission_faults: tuple[str, ...] = (), mission_actors: tuple = ()) -> None:
     """Check everything, run ``steps`` and report; exits non-zero on a refusal or a stop."""
     from amr_twin.sim.faults import FaultError, parse_faults
     from amr_twin.sim.loop import TwinOptions
@@ -110,10 +144,12 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
             fail(str(exc))
         steps = []  # the stop is the board's state at power-up: nothing is sent on its serial port
     cfg = _config(opts.config, opts.params, opts.set_, extra)
+    actors = _actors(opts, mission_actors, cfg, start, fail)
     recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
-                          visuals=recording or live is not None or ros1 is not None, firmware_params=avr_params)
+                          visuals=recording or live is not None or ros1 is not None, firmware_params=avr_params,
+                          actors=actors)
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
 
@@ -228,7 +264,7 @@ def register(app: typer.Typer) -> None:
     @shared(fail)
     def run(opts: RunOptions, ctx: typer.Context,
             mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/sim/mission.py); "
-                                                   "its faults: list adds to --fault.")) -> None:
+                                                   "its faults: list adds to --fault, its actors: to --actor.")) -> None:
         """Run a command kind (linear, angular, motor, stop) or a --mission file."""
         if ctx.invoked_subcommand is not None:
             if mission is not None:
@@ -242,7 +278,7 @@ def register(app: typer.Typer) -> None:
             plan = load_mission_file(mission)
         except MissionError as exc:
             fail(str(exc))
-        execute(opts, plan.steps, False, plan.duration_s, plan.faults)
+        execute(opts, plan.steps, False, plan.duration_s, plan.faults, plan.actors)
 
     @run_app.command()
     @shared(fail)

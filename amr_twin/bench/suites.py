@@ -163,6 +163,13 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
             "rrd_write_ratio_240_60": round(long / short, 2)}
 
 
+def ros1_stage(progress=None) -> dict:
+    """The ROS 1 figures (:mod:`amr_twin.bench.ros1`; rospy is imported in its child processes only)."""
+    from amr_twin.bench.ros1 import ros1_figures
+
+    return ros1_figures(progress=progress)
+
+
 def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
     """Every figure of the module notes; takes several minutes on the 2-core machine.
 
@@ -186,8 +193,7 @@ def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
     t0 = time.perf_counter()
     fus = fusion.run(cfg, progress=False)
     out.update(fusion_sim_s=round(fus.sim_s, 1), fusion_wall_s=round(time.perf_counter() - t0, 2))
-    from amr_twin.bench.ros1 import ros1_figures  # ROS 1 (issue 31): bridge, pacing, serial latency; ~2.5 min
-
-    out.update(ros1_figures(progress=say))
+    say("ROS 1: the bridge against no bridge, --rate 1 for 60 s, the serial port's latency (about 3 min)")
+    out.update(ros1_stage(progress=say))
     out.update(load_average_1min_before=round(load_before, 2), load_average_1min_after=round(os.getloadavg()[0], 2))
     return out

@@ -148,7 +148,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
-                          visuals=recording or live is not None or ros1 is not None, firmware_params=avr_params,
+                          visuals=recording or live is not None, firmware_params=avr_params,
                           actors=actors)
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())

@@ -212,3 +212,28 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
 
     wheels = json.loads(out)["wheels"]
     assert all(abs(wheels[w]["true_final_rpm"] - 53.476) < 4.0 for w in ("left", "right"))
+
+
+def test_the_lidars_stop_motor_service_on_the_graph_stops_the_scans(ros_env, tmp_path):
+    from rosbags.highlevel import AnyReader
+
+    mcap = tmp_path / "run.mcap"
+    twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "12", "--world", "empty", "--sensors", "--ros1",
+                             "--rate", "2", "--mcap", str(mcap)], env=ros_env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        twin.stderr.readline()  # "ros1: the twin is /amr_twin ...": on the graph
+        time.sleep(1.0)
+        call = subprocess.run(["rosservice", "call", "--wait", "/stop_motor"], env=ros_env, capture_output=True,
+                              text=True, timeout=30)
+        assert call.returncode == 0, call.stderr
+        twin.wait(60)
+    finally:
+        if twin.poll() is None:
+            twin.kill()
+    assert twin.returncode == 0
+    with AnyReader([mcap]) as reader:
+        stamps = [t * 1e-9 for c, t, _raw in reader.messages(connections=[c for c in reader.connections
+                                                                             if c.topic == "/scan"])]
+    assert stamps and stamps[-1] < 9.0  # the motor stopped some seconds into the 12 s run: no scan after
+    assert len(stamps) >= 5  # it scanned before (at 5.5 Hz)

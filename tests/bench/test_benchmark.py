@@ -139,7 +139,8 @@ def test_the_suites_say_each_stage_as_it_starts(monkeypatch):
     monkeypatch.setattr(sb, "sweep_figures", stage("sweep", {}))
     monkeypatch.setattr(sb, "rrd_figures", stage("rrd", {}))
     monkeypatch.setattr(fusion, "run", stage("fusion", SimpleNamespace(sim_s=1.0)))
+    monkeypatch.setattr(sb, "ros1_stage", stage("ros1", {}))
     out = sb.suite_figures(load_config(), jobs=2, progress=said.append)
-    assert [name for name, _ in ran] == ["startup", "chapter5", "sweep", "rrd", "fusion"]
-    assert [n for _, n in ran] == [1, 2, 3, 4, 5]  # each announced just before it ran
+    assert [name for name, _ in ran] == ["startup", "chapter5", "sweep", "rrd", "fusion", "ros1"]
+    assert [n for _, n in ran] == [1, 2, 3, 4, 5, 6]  # each announced just before it ran
     assert "sweep" in said[2] and ".rrd" in said[3] and out["help_cpu_s"] == 0.1

@@ -25,7 +25,8 @@ from amr_twin.experiments.umbmark_seeds import Phase, SeedResult
 
 MAX_PANELS = 12
 """Seeds drawn in the Borenstein plot (the first ones; every seed is in the tables)."""
-PARTS = (("node", "odometry node (UMBmark's error)"), ("wheels", "geometry + slip (true wheel angles, nominal geometry)"),
+PARTS = (("node", "odometry node (UMBmark's error)"),
+         ("wheels", "geometry + slip (true wheel angles, the odometry's geometry)"),
          ("slip", "tyre slip (true wheel angles, true geometry)"), ("sampling", "the odometry's sampling of the speeds"))
 
 
@@ -53,6 +54,8 @@ def summary(results: list[SeedResult], rigid: list[SeedResult] | None) -> dict:
     before = [r.before.node.e_max_syst_m for r in results]
     out = {"e_max_syst_before_m": spread(before),
            "spread_before_m": spread([r.before.node.e_nonsyst_rms_m for r in results]),
+           "slip_spread_before_m": spread([r.before.slip.e_nonsyst_rms_m for r in results]),
+           "sampling_spread_before_m": spread([r.before.sampling.e_nonsyst_rms_m for r in results]),
            "sampling_e_max_syst_m": spread([r.before.sampling.e_max_syst_m for r in results]),
            "slip_e_max_syst_m": spread([r.before.slip.e_max_syst_m for r in results]),
            "geometry_and_slip_e_max_syst_m": spread([r.before.wheels.e_max_syst_m for r in results])}
@@ -65,6 +68,8 @@ def summary(results: list[SeedResult], rigid: list[SeedResult] | None) -> dict:
                    seeds_reduced=sum(1 for f in factors if f > 1.0))
     if rigid:
         out["rigid_spread_before_m"] = spread([r.before.node.e_nonsyst_rms_m for r in rigid])
+        out["rigid_slip_spread_before_m"] = spread([r.before.slip.e_nonsyst_rms_m for r in rigid])
+        out["rigid_sampling_spread_before_m"] = spread([r.before.sampling.e_nonsyst_rms_m for r in rigid])
         out["rigid_e_max_syst_before_m"] = spread([r.before.node.e_max_syst_m for r in rigid])
     return out
 
@@ -89,9 +94,13 @@ def markdown(data: dict) -> str:
                   "(Borenstein and Feng report about an order of magnitude on real robots)"]
     lines.append(f"- non-systematic spread before: {_mm_cell(s['spread_before_m'])}"
                  + (f"; after: {_mm_cell(s['spread_after_m'])}" if "spread_after_m" in s else ""))
+    lines.append(f"- parts of that spread (each part's own spread): tyre slip {_mm_cell(s['slip_spread_before_m'])}, "
+                 f"the odometry's sampling {_mm_cell(s['sampling_spread_before_m'])}")
     if "rigid_spread_before_m" in s:
         lines.append(f"- with the tyre model off (rigid contact, the same robots and run seeds): spread "
-                     f"{_mm_cell(s['rigid_spread_before_m'])}, E_max,syst {_mm_cell(s['rigid_e_max_syst_before_m'])}")
+                     f"{_mm_cell(s['rigid_spread_before_m'])} (tyre slip {_mm_cell(s['rigid_slip_spread_before_m'])}, "
+                     f"sampling {_mm_cell(s['rigid_sampling_spread_before_m'])}), E_max,syst "
+                     f"{_mm_cell(s['rigid_e_max_syst_before_m'])}")
     lines += [f"- parts of E_max,syst before (UMBmark of each part's return errors): geometry + slip "
               f"{_mm_cell(s['geometry_and_slip_e_max_syst_m'])}, of which tyre slip {_mm_cell(s['slip_e_max_syst_m'])}; "
               f"the odometry's sampling {_mm_cell(s['sampling_e_max_syst_m'])}", "",

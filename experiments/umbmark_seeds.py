@@ -10,7 +10,7 @@ uses (:func:`~amr_twin.experiments.umbmark.calibration`) and drives the squares 
 
 Besides the odometry node's return errors (what UMBmark measures on the robot), each phase keeps
 UMBmark of the parts of those errors (:class:`Phase`): the wheels' true angles integrated with the
-nominal geometry (geometry and tyre slip) and with the true geometry (the slip alone); the rest is
+geometry the odometry assumes (geometry and tyre slip) and with the true one (the slip alone); the rest is
 the odometry's sampling of the speeds. The seeds run in the project's process pool
 (:func:`~amr_twin.experiments.executor.run_all`); results come back in the order of the seeds.
 """
@@ -39,7 +39,7 @@ STREAM = 30
 class Phase:
     """One set of squares (before or after the calibration) and UMBmark of their return errors:
     the odometry node's (``node``), its geometry-and-slip part (``wheels``: the true wheel angles
-    with the nominal geometry), its slip part (``slip``: with the true geometry) and its sampling
+    with the geometry the odometry assumes), its slip part (``slip``: with the true geometry) and its sampling
     part (``sampling``: the wheels' pose minus the node's)."""
 
     runs: tuple[SquareRun, ...]

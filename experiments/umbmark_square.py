@@ -23,10 +23,11 @@ smallest and the same from run to run. The hard brake does not skid the tyres (a
 asks 22 N of a wheel that can give 52 N).
 
 What is returned (:class:`SquareRun`) is the return pose by the odometry node, by the wheels'
-true angles integrated with the nominal and with the true geometry (an ideal encoder, from the
-recorder's 100 Hz wheel angles) and in truth: ``true - node`` is UMBmark's return error;
-``true - wheels(nominal)`` its geometry and slip part, ``true - wheels(true geometry)`` the slip
-alone; the rest, ``wheels(nominal) - node``, is the odometry's sampling of the speeds.
+true angles integrated with the odometry's geometry (nominal, or its calibration) and with the
+true geometry (an ideal encoder, from the recorder's 100 Hz wheel angles) and in truth: ``true -
+node`` is UMBmark's return error; ``true - wheels(odometry's geometry)`` its geometry and slip
+part, ``true - wheels(true geometry)`` the slip alone; the rest, ``wheels - node``, is the
+odometry's sampling of the speeds.
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ class Profile:
 @dataclass(frozen=True)
 class SquareRun:
     """One square: return poses (the start's frame, m, deg) by the odometry node, by the wheels'
-    true angles with the nominal geometry and with the true one, and in truth."""
+    true angles with the odometry's geometry and with the true one, and in truth."""
 
     direction: str
     run: int
@@ -83,7 +84,7 @@ class SquareRun:
 
     @property
     def wheels_error_m(self) -> tuple[float, float]:
-        """``true - wheels(nominal geometry)``: geometry and slip, m."""
+        """``true - wheels(the odometry's geometry)``: geometry and slip, m."""
         return (self.true_xy_m[0] - self.wheels_xy_m[0], self.true_xy_m[1] - self.wheels_xy_m[1])
 
     @property
@@ -190,11 +191,10 @@ def drive_square(twin, direction: str, profile: Profile = Profile(), run: int = 
     dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
     true_xy = (c * dx + s * dy, -s * dx + c * dy)
     angles = twin.recorder.series().wheel_angle_rad
-    w = twin.cfg.wheel
-    nominal = wheel_pose(angles, w.radius_m, w.radius_m, w.separation_m)
+    w, odo = twin.cfg.wheel, twin.odometry
+    assumed = wheel_pose(angles, odo.left_radius_m, odo.right_radius_m, odo.separation_m)
     exact = wheel_pose(angles, w.radius_m + w.radius_error_left_m, w.radius_m + w.radius_error_right_m,
                        w.separation_m + w.separation_error_m)
-    odo = twin.odometry
-    return SquareRun(direction, run, twin.options.seed, (odo.x_m, odo.y_m), nominal[:2], exact[:2], true_xy,
+    return SquareRun(direction, run, twin.options.seed, (odo.x_m, odo.y_m), assumed[:2], exact[:2], true_xy,
                      math.degrees(odo.yaw_rad), math.degrees(math.remainder(end.yaw_rad - start.yaw_rad, 2 * math.pi)),
                      twin.t_s)

@@ -89,10 +89,10 @@ class Physics:
     def set_floor_friction(self, field) -> None:
         """Give the brush tyres the floor's friction field (:class:`~amr_twin.sim.floor_friction.FrictionField`,
         or None for ``wheel.friction`` everywhere); ValueError with the rigid contact."""
-        from amr_twin.sim import tyres
+        from amr_twin.sim.floor_friction import set_friction_field
 
-        tyres.set_friction_field(self.model, self.data, *((None, None) if field is None
-                                                          else (field.spacing_m, field.values.tolist())))
+        set_friction_field(self.model, self.data, *((None, None) if field is None
+                                                    else (field.spacing_m, field.values.tolist())))
 
     def clone(self) -> "Physics":
         """An independent copy in its present state: the model and the data (contacts and

@@ -45,7 +45,7 @@ static int tyre_numeric(const mjModel* m) {
 }
 
 /* The floor's friction coefficient at (x, y), m: bilinear between the field's nodes, which repeat
- * every n nodes (tyre_forces' twin in tyres.py, friction_at). */
+ * every n nodes (its Python twin: friction_at in amr_twin/sim/floor_friction.py). */
 static double friction_at(const double* f, double x, double y) {
     long n = (long)f[0];
     double cell = f[1];

@@ -32,7 +32,7 @@ ch. 3 the brush model, ch. 5/7 the single-point transient model):
 - applied at the contact point ``r`` below the hub as generalized forces of the chassis' free
   joint, the tyre slide and the wheel hinge (the Jacobians written out: no ``mj_applyFT``);
 - ``mu`` is ``wheel.friction``, or the floor's friction field at the contact point when the run
-  has one (:mod:`amr_twin.sim.floor_friction`, :func:`set_friction_field`, :func:`friction_at`).
+  has one (:mod:`amr_twin.sim.floor_friction`).
 
 The callback is process-wide: :func:`install` sets it once (the C helper ``tyres.c`` when a
 compiler is at hand, else :func:`tyre_forces`, its Python twin: the same operations in the same
@@ -49,6 +49,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, FORMAT, NUMERIC, NUMERIC_FIELDS, STATE_FIELDS
+from amr_twin.sim.floor_friction import friction_at
 from amr_twin.sim.native_build import mujoco_address, open_helper
 
 C_SOURCE = Path(__file__).with_name("tyres.c")
@@ -117,46 +118,6 @@ def contacts(model, data) -> tuple[WheelContact, WheelContact] | None:
     size = len(STATE_FIELDS)
     values = data.userdata[start:start + 2 * size].tolist()
     return WheelContact(*values[:size]), WheelContact(*values[size:])
-
-
-def _userdata_start(model) -> int | None:
-    """Where the tyres' user data starts in ``model``'s MjData, or None (no tyres)."""
-    import mujoco
-
-    n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)
-    return None if n < 0 else int(model.numeric_data[int(model.numeric_adr[n]) + 1])
-
-
-def set_friction_field(model, data, spacing_m: float, values) -> None:
-    """Put the floor's friction field in ``data``: ``values`` (FIELD_CELLS, FIELD_CELLS) friction
-    coefficients at nodes ``spacing_m`` apart (row y, column x; repeating), or ``values=None`` for
-    none (the model's ``wheel.friction`` everywhere). ValueError for a model without tyres."""
-    start = _userdata_start(model)
-    if start is None:
-        raise ValueError("friction field: the model has no brush tyres (wheel.tyre_slip is off)")
-    at = start + FIELD_OFFSET
-    if values is None:
-        data.userdata[at:at + 2 + FIELD_CELLS ** 2] = 0.0
-        return
-    data.userdata[at] = float(FIELD_CELLS)
-    data.userdata[at + 1] = float(spacing_m)
-    data.userdata[at + 2:at + 2 + FIELD_CELLS ** 2] = [float(v) for row in values for v in row]
-
-
-def friction_at(field, x: float, y: float) -> float:
-    """The twin of ``friction_at`` (tyres.c): the coefficient at (x, y), m, of ``field`` (the user
-    data from :data:`FIELD_OFFSET` on, a list): bilinear between nodes, repeating every n nodes."""
-    n = int(field[0])
-    cell = field[1]
-    u, w = x / cell, y / cell
-    iu, iw = math.floor(u), math.floor(w)
-    fx, fy = u - iu, w - iw
-    i0, j0 = iu % n, iw % n
-    i1, j1 = (i0 + 1) % n, (j0 + 1) % n
-    v = 2
-    a = field[v + j0 * n + i0] + fx * (field[v + j0 * n + i1] - field[v + j0 * n + i0])
-    b = field[v + j1 * n + i0] + fx * (field[v + j1 * n + i1] - field[v + j1 * n + i0])
-    return a + fy * (b - a)
 
 
 def _cross(a, b):

@@ -2,9 +2,10 @@
 phase), and its refusals (one line, exit 2, nothing written).
 
 What the case must show, each a figure a user reads off the report: the calibration written for
-each robot's odometry reduces its E_max,syst (Borenstein's claim, here on every seed), the files
-are there and agree (the YAML the odometry node reads is the JSON's), and the brush tyres add to
-the non-systematic spread what the rigid contact does not have."""
+each robot's odometry reduces its E_max,syst (Borenstein's claim, here on every seed), UMBmark
+finds the robot's drawn wheel diameters, the files are there and agree (the YAML the odometry
+node reads is the JSON's), and the same robots are driven with the rigid contact. (The spreads
+need several runs a direction: tests/experiments/test_umbmark_seeds.py.)"""
 
 import json
 

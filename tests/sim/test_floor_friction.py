@@ -39,9 +39,9 @@ def test_the_look_up_is_bilinear_in_x_then_y_and_repeats():
     data = [float(n), h, *field.values.ravel().tolist()]
     rng = np.random.default_rng(0)
     for x, y in rng.uniform(-n * h * 0.99, n * h * 1.95, (200, 2)):
-        assert tyres.friction_at(data, x, y) == pytest.approx(float(reference((y, x))), abs=1e-12)
-    assert tyres.friction_at(data, 0.0, 0.0) == field.values[0, 0]
-    assert tyres.friction_at(data, h, 0.0) == field.values[0, 1]  # one node along x: the next column
+        assert floor_friction.friction_at(data, x, y) == pytest.approx(float(reference((y, x))), abs=1e-12)
+    assert floor_friction.friction_at(data, 0.0, 0.0) == field.values[0, 0]
+    assert floor_friction.friction_at(data, h, 0.0) == field.values[0, 1]  # one node along x: the next column
 
 
 def _pivot(field_sets, native: bool, steps_s: float = 1.5):
@@ -66,7 +66,7 @@ def test_c_helper_and_python_twin_look_the_field_up_to_the_same_bits():
 
 def test_the_field_is_in_the_tyres_data_and_acts_on_them():
     twin, state = _pivot([], True, 0.5)
-    start = tyres._userdata_start(twin.physics.model) + FIELD_OFFSET
+    start = floor_friction._userdata_start(twin.physics.model) + FIELD_OFFSET
     assert state[2][start] == FIELD_CELLS and state[2][start + 2:start + 2 + FIELD_CELLS ** 2].tolist() == \
         twin.floor.values.ravel().tolist()
     # the same run on a field of the clean floor everywhere is the run without a field, to the bit

@@ -63,7 +63,8 @@ def test_acceptance_of_issue_8(default_run):
     # with the robot's own tyre and track errors (issue 18) the gyro beats the odometry on
     # heading, absolute and relative: on every seed of 0-9 of both routes (README). Issue 30: the
     # odometry counts every SC edge, so its heading error is the robot's (seed 0: 7.5 against the
-    # gyro's 1.3 deg RMS); the edges it had lost at each start and stop had made it 1.3 here
+    # gyro's 1.3 deg RMS); the edges it lost at each start and stop before had offset that drift
+    # on this seed, by chance (1.3-3.3 deg RMS, with where they fell)
     assert a["odom+imu"]["rms_yaw_err_deg"] < a["odom"]["rms_yaw_err_deg"]
     assert a["odom+imu"]["rpe_rot_deg"] < a["odom"]["rpe_rot_deg"]
     # on seeds 0-9 kiss-icp stays within 0.12 m (issue 8 asked 0.10: seed 8, the robot with the worst

@@ -213,3 +213,16 @@ def test_hysteresis_shifts_steady_edges_by_half_the_band_and_keeps_their_spacing
     plain, shifted = found
     assert len(plain) == len(shifted) > 10
     assert np.allclose(shifted - plain, np.radians(0.2) / w * 1e6, atol=1.0)
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_latch_remembers_its_state_from_one_chunk_to_the_next(native):
+    """A wheel that stops inside the band (4.05 deg: past the boundary at 4, short of the 4.1 where
+    the latch toggles), then, in the loop's next chunk, rolls on to 4.5 deg: one change, at 4.1."""
+    hall = HallSensors(n_wheels=1, native=native, hysteresis_deg=0.2)
+    hall.reset([0.0])
+    w = np.radians(2.0)  # rad/s
+    first = hall.edges_from_samples([0, 1_000_000, 2_025_000], [[0.0, w], [w, w], [np.radians(4.05), 0.0]])
+    second = hall.edges_from_samples([2_025_000, 3_000_000, 4_000_000],
+                                     [[np.radians(4.05), 0.0], [np.radians(4.3), w], [np.radians(4.5), 0.0]])
+    assert first == [] and len(second) == 1

@@ -39,6 +39,7 @@ except ImportError:  # pragma: no cover - older typer on click
 
 from amr_twin.cli.common import _config, _guard, fail, start_up
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+from amr_twin.cli.path_options import CheckedGroup
 
 
 class _App(typer.Typer):
@@ -108,7 +109,7 @@ def _misplaced(exc) -> str | None:
             f"e.g. {exc.ctx.command_path} {owners[0]} {name} ...")
 
 
-app = _App(add_completion=False, no_args_is_help=True,
+app = _App(cls=CheckedGroup, add_completion=False, no_args_is_help=True,
            help="amr-twin: headless MuJoCo digital twin of the thesis AMR.")
 
 

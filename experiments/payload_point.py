@@ -27,23 +27,30 @@ ROWS = 5                   # what a row means (in the fingerprint): 5 = ball spe
 
 
 def parse_masses(text: str) -> list[float]:
-    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg."""
+    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg; ValueError with one line."""
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
-            if not (step > 0 and stop >= start and math.isfinite(stop - start)):
-                raise ValueError
-            count = math.floor((stop - start) / step + 1e-9) + 1
-            if count > MAX_MASSES:
-                raise OverflowError(count)
-            return [round(start + i * step, 6) for i in range(count)]
-        masses = [float(v) for v in text.split(",") if v.strip()]
-    except OverflowError as exc:
-        raise ValueError(f"--masses {text!r}: {exc.args[0]:.3g} masses; at most {MAX_MASSES} per sweep "
-                         "(each is one simulation per position and command)") from None
+        else:
+            masses = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise ValueError(f"--masses {text!r}: expected START:STOP:STEP or M1,M2,... in kg") from None
-    if not masses or any(not math.isfinite(m) or m < 0 for m in masses):
+    if ":" in text:
+        if not all(math.isfinite(v) for v in (start, stop, step)):
+            raise ValueError(f"--masses {text!r}: START, STOP and STEP must be finite numbers (kg)")
+        if stop < start:
+            raise ValueError(f"--masses {text!r}: STOP {stop:g} kg is below START {start:g} kg: give START <= STOP "
+                             f"(e.g. {stop:g}:{start:g}:{abs(step):g})")
+        if step <= 0:
+            raise ValueError(f"--masses {text!r}: STEP {step:g} kg must be > 0")
+        count = math.floor((stop - start) / step + 1e-9) + 1
+        if count > MAX_MASSES:
+            raise ValueError(f"--masses {text!r}: {count:.3g} masses; at most {MAX_MASSES} per sweep "
+                             "(each is one simulation per position and command)")
+        masses = [round(start + i * step, 6) for i in range(count)]
+    if not masses:
+        raise ValueError(f"--masses {text!r}: names no mass (START:STOP:STEP or M1,M2,... in kg)")
+    if any(not math.isfinite(m) or m < 0 for m in masses):
         raise ValueError(f"--masses {text!r}: masses must be finite and >= 0 kg")
     if len(masses) > MAX_MASSES:
         raise ValueError(f"--masses: {len(masses)} masses; at most {MAX_MASSES} per sweep")

@@ -13,7 +13,7 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.options import checked_firmware
+from amr_twin.cli.options import checked_firmware, checked_seed
 
 MAX_DURATION_S = 3600.0
 """Longest simulated run of an experiment, s (see amr_twin.cli.run.MAX_RUN_S)."""
@@ -127,8 +127,7 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
         if given:
             fail(f"{', '.join(given)}: only used with --samples N (N >= 2)")
         return None
-    if seed is not None and not 0 <= seed < 2 ** 32:
-        fail(f"--seed {seed}: must be in [0, 2^32)")
+    checked_seed(seed, fail)
     if sampler is not None and sampler not in SAMPLERS:
         fail(f"--sampler {sampler!r}: must be one of {', '.join(SAMPLERS)}")
     if calibration is not None and not calibration.is_file():

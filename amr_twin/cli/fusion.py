@@ -15,7 +15,7 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import JobsOpt, check_common, check_executor, check_outputs, dask_client
-from amr_twin.cli.options import firmware_option
+from amr_twin.cli.options import checked_seed, firmware_option
 
 
 def add_fusion(experiment: typer.Typer) -> None:
@@ -63,8 +63,7 @@ def add_fusion(experiment: typer.Typer) -> None:
             seed_list = parse_seeds(seeds) if seeds is not None else [0 if seed is None else seed]
         except ValueError as exc:
             fail(str(exc))
-        if not all(0 <= s < 2 ** 32 for s in seed_list):
-            fail(f"--seed {seed_list[0]}: must be in [0, 2^32)")
+        checked_seed(seed, fail)
         many = len(seed_list) > 1
         if many and (record is not None or mcap is not None):
             fail("--record/--mcap record one drive: use --seed N with them, not --seeds")

@@ -61,7 +61,8 @@ class _App(typer.Typer):
         except _click_errors.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
             hint = _misplaced(exc) or f" (see {where} --help)"
-            typer.echo(f"error: {where}: {' '.join(exc.format_message().split())}{hint}", err=True)
+            typer.echo(f"error: {where}: {_missing_command(exc) or ' '.join(exc.format_message().split())}{hint}",
+                       err=True)
             sys.exit(2)
         except _click_errors.ClickException as exc:
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
@@ -90,6 +91,14 @@ class _App(typer.Typer):
             yield
         finally:
             self.registered_commands, self.registered_groups = saved
+
+
+def _missing_command(exc) -> str | None:
+    """For a group given no command: which it has."""
+    commands = getattr(exc.ctx.command, "commands", None) if exc.ctx is not None else None
+    if not commands or exc.format_message() != "Missing command.":
+        return None
+    return f"give a command: {', '.join(commands)}"
 
 
 def _misplaced(exc) -> str | None:

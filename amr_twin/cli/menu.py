@@ -25,7 +25,8 @@ if TYPE_CHECKING:
 
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
-from amr_twin.cli.options import checked_firmware, checked_live, firmware_option, live_options, sketch_option
+from amr_twin.cli.options import (checked_firmware, checked_live, checked_seed, firmware_option, live_options,
+                                  sketch_option)
 
 _LIVE = live_options()
 
@@ -177,6 +178,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
 
     if not (math.isfinite(rate) and 0 < rate <= 1000):
         fail(f"--rate {rate}: must be a finite number in (0, 1000]")
+    checked_seed(seed, fail)
     firmware = checked_firmware(firmware, sketch, fail)
     live_opts = checked_live(live, host, port, web_port, None, fail, default_rate=rate)
     try:

@@ -175,11 +175,15 @@ def _commands(command) -> Iterator:
 
 class CheckedGroup(TyperGroup):
     """The app's root group: each command below it checks its paths (:func:`check_paths`) before its
-    callback runs, and refuses an empty path while parsing."""
+    callback runs, and refuses an empty path while parsing. A group given no command fails with a
+    usage error (``Missing command.``, one line naming its commands: :mod:`amr_twin.cli.main`) instead
+    of printing its help and an empty error."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         for command in _commands(self):
+            if getattr(command, "commands", None):
+                command.no_args_is_help = False
             for param in command.params:
                 if role(param) is not None:
                     _refuse_empty(param)

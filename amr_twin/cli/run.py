@@ -27,7 +27,8 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.common import _config, _guard, fail
-from amr_twin.cli.options import LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, shared
+from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, checked_seed,
+                                  shared)
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
 
@@ -80,6 +81,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     from amr_twin.sim.run import run_mission
 
     duration_s = _duration(opts, default_s)
+    checked_seed(opts.seed, fail)
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
     extra = {}
     if _finite("--payload-kg", opts.payload_kg, required=False) is not None:

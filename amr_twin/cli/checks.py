@@ -15,9 +15,6 @@ import typer
 
 from amr_twin.cli.options import checked_firmware, checked_seed
 
-MAX_DURATION_S = 3600.0
-"""Longest simulated run of an experiment, s (see amr_twin.cli.run.MAX_RUN_S)."""
-
 MAX_SWEEP_POINTS = 10_000
 """Most points of one sweep: each is a simulation (~0.5 s of CPU for 8 s) and a file in runs/."""
 
@@ -39,8 +36,10 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
 
 
 def check_duration(duration_s: Optional[float], fail) -> None:
-    if duration_s is not None and not (0 < duration_s <= MAX_DURATION_S):
-        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_DURATION_S:g}] s (each run keeps its 100 Hz "
+    from amr_twin.sim.run import MAX_RUN_S
+
+    if duration_s is not None and not (0 < duration_s <= MAX_RUN_S):
+        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_RUN_S:g}] s (each run keeps its 100 Hz "
              "series in memory)")
 
 

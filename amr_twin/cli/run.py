@@ -29,6 +29,7 @@ import typer
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, checked_seed,
                                   shared)
+from amr_twin.sim.run import MAX_RUN_S
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
 

@@ -17,6 +17,10 @@ from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.recorder import RunSeries
 
 KINDS = ("linear", "angular", "motor", "stop")
+MAX_RUN_S = 3600.0
+"""Longest run, simulated s: a run keeps its 100 Hz series in memory (about 70 MB and a minute of CPU per
+simulated hour); longer studies are missions run in pieces. Every command that simulates checks its own
+durations against it before the work (with its option's or file's name); :func:`run_mission` refuses more."""
 
 
 @dataclass(frozen=True)
@@ -114,8 +118,8 @@ class RunResult:
 def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s: float,
                 options: TwinOptions = TwinOptions(), twin: Twin | None = None) -> RunResult:
     """Send each command at its time (s from the start) and run for ``duration_s``."""
-    if not (math.isfinite(duration_s) and duration_s > 0):
-        raise ValueError(f"duration_s: {duration_s} must be a finite number > 0")
+    if not (math.isfinite(duration_s) and 0 < duration_s <= MAX_RUN_S):
+        raise ValueError(f"duration_s: {duration_s} must be a finite number in (0, {MAX_RUN_S:g}] s")
     steps = sorted(steps, key=lambda s: s[0])
     if any(t < 0 or t > duration_s for t, _ in steps):
         raise ValueError(f"mission: command times must lie in [0, {duration_s}] s")

@@ -53,6 +53,7 @@ def add_fusion(experiment: typer.Typer) -> None:
     ) -> None:
         """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
         from amr_twin.controllers.route import RouteError, load_route
+        from amr_twin.model.build import BuildError
         from amr_twin.experiments import fusion
         from amr_twin.experiments.fusion_seeds import parse_seeds
 
@@ -70,13 +71,17 @@ def add_fusion(experiment: typer.Typer) -> None:
         check_executor(executor, scheduler, fail)
         route_path = fusion.route_file(route)
         try:
-            load_route(route_path)
+            loaded = load_route(route_path)
         except (RouteError, OSError) as exc:
             known = ", ".join(fusion.route_names())
             fail(f"--route {route}: {exc}" if route_path.exists() or route is None
                  else f"--route {route}: no such route file, nor a route of the twin ({known})")
         check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
         cfg = _config(config, params, set_)
+        try:  # the drive's simulated time bounded, every point in the world's free space
+            fusion.check_route(cfg, loaded)
+        except (RouteError, BuildError) as exc:
+            fail(f"--route {route_path}: {exc}")
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
         try:
             if many:

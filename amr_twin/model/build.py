@@ -77,6 +77,16 @@ def _without_imu(robot: mujoco.MjSpec) -> mujoco.MjSpec:
     return robot
 
 
+def compile_world(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
+    """The world alone, compiled (no robot): its geometry, to check a route against it before a run."""
+    try:
+        return _world_spec(cfg, world).compile()
+    except BuildError:
+        raise
+    except Exception as exc:
+        raise BuildError(f"--world {world}: MuJoCo compile: {str(exc).splitlines()[0]}") from None
+
+
 def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
           xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True) -> Build:
     """Build the robot in a world and compile it (the URDF from :func:`robot_urdf`'s cache).
@@ -106,13 +116,13 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
 
 
 def export(cfg: TwinConfig, urdf_path: Path | None = None, mjcf_path: Path | None = None) -> Build:
-    """Write the URDF and the robot MJCF (the committed files are made this way)."""
+    """Write the URDF and the robot MJCF (the committed files are made this way): both or neither
+    (:func:`amr_twin.recording.atomic_file.all_or_nothing`), never half of one."""
+    from amr_twin.recording.atomic_file import all_or_nothing, write_text
+
     result = build(cfg)
-    for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
-        if path is None:
-            continue
-        path = Path(path)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(text)
-        tmp.replace(path)  # never leave a half-written file
+    with all_or_nothing():
+        for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
+            if path is not None:
+                write_text(path, text)
     return result

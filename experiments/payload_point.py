@@ -45,7 +45,7 @@ def parse_masses(text: str) -> list[float]:
             raise ValueError(f"--masses {text!r}: STEP {step:g} kg must be > 0")
         count = math.floor((stop - start) / step + 1e-9) + 1
         if count > MAX_MASSES:
-            raise ValueError(f"--masses {text!r}: {count:.3g} masses; at most {MAX_MASSES} per sweep "
+            raise ValueError(f"--masses {text!r}: {count if count < 1e6 else f'{count:.3g}'} masses; at most {MAX_MASSES} per sweep "
                              "(each is one simulation per position and command)")
         masses = [round(start + i * step, 6) for i in range(count)]
     if not masses:

@@ -20,9 +20,9 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
-                                 check_duration, check_executor, check_outputs, check_record_folder, dask_client,
-                                 parameter_draws, unique)
+from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt,
+                                 check_common, check_duration, check_estimate, check_executor, check_outputs,
+                                 check_record_folder, dask_client, parameter_draws, unique)
 from amr_twin.cli.options import firmware_option, sketch_option
 
 def _rpm(value) -> str:
@@ -117,6 +117,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         samples: int = SamplesOpt, seed: Optional[int] = SeedOpt, sampler: Optional[str] = SamplerOpt,
         calibration: Optional[Path] = CalibrationOpt,
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        yes: bool = YesOpt,
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time.
@@ -139,6 +140,11 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
+        one_pass_s = sum(duration_s or r.duration_s for r in chapter5.RUNS if numbers is None or r.number in numbers)
+        passes = 1 + (samples if draws is not None else 0) + (2 if firmware.startswith("avr") else 0) \
+            + (1 if numbers is None and duration_s is None else 0)  # the rolling-resistance study: at most a pass
+        check_estimate(f"experiment chapter5: {passes} pass{'es' if passes != 1 else ''} of the runs", one_pass_s * passes, "chapter5", jobs,
+                       firmware, yes, fail)
 
         def work():
             from amr_twin.recording.atomic_file import all_or_nothing
@@ -218,6 +224,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         samples: int = SamplesOpt, seed: Optional[int] = SeedOpt, sampler: Optional[str] = SamplerOpt,
         calibration: Optional[Path] = CalibrationOpt,
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        yes: bool = YesOpt,
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Sweep payload mass x position x command; resume by skipping the points already done.
@@ -264,13 +271,18 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
 
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+        workers = jobs if client is None else max(1, sum(client.nthreads().values()))
+
+        def estimate(todo: int) -> None:  # the points not done yet, before the first is simulated
+            check_estimate(f"sweep payload: {todo} points to simulate (of {runs})", todo * duration_s, "sweep",
+                           workers, firmware, yes, fail)
 
         def work():
             from amr_twin.recording.atomic_file import all_or_nothing
 
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
                                         jobs=jobs, firmware=firmware, progress=progress, client=client,
-                                        record_dir=record, mcap_dir=mcap, draws=draws)
+                                        record_dir=record, mcap_dir=mcap, draws=draws, before=estimate)
             if draws is not None:
                 from amr_twin.experiments import payload_spread_report as spread_report
 

@@ -14,7 +14,7 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import JobsOpt, check_common, check_executor, check_outputs, dask_client
+from amr_twin.cli.checks import JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_outputs, dask_client
 from amr_twin.cli.options import checked_seed, firmware_option
 
 
@@ -49,6 +49,7 @@ def add_fusion(experiment: typer.Typer) -> None:
                                           "the robot's own errors (tyre radii, track, hall sensors) within their "
                                           "sourced tolerances; off: the robot is exactly as its odometry assumes."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        yes: bool = YesOpt,
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
@@ -83,7 +84,11 @@ def add_fusion(experiment: typer.Typer) -> None:
         except (RouteError, BuildError) as exc:
             fail(f"--route {route_path}: {exc}")
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+        workers = 1 if not many else jobs if client is None else max(1, sum(client.nthreads().values()))
+        drive_s = fusion.REST_S + fusion.route_length_m(loaded) / loaded.max_speed_m_s + fusion.TAIL_S
         try:
+            check_estimate(f"experiment fusion: {len(seed_list)} drive{'s' if many else ''} of {route_path.stem}",
+                           drive_s * len(seed_list), "fusion", workers, firmware, yes, fail)
             if many:
                 _many(cfg, route_path, seed_list, firmware, robot_errors, jobs, client, progress, out, _guard)
             else:

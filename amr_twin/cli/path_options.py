@@ -13,7 +13,9 @@ Refused, in one line naming both options, exit 2, before anything is read or wri
 - an output that is an input: the same path once links are resolved, or the same file by another
   name (a hard link: same device and inode);
 - an output folder that holds an input (the files written there could replace it);
-- an empty path given to any of these options (``--out ""`` would be the current folder).
+- an empty path given to any of these options (``--out ""`` would be the current folder);
+- an output another command is writing (its lock, :mod:`amr_twin.recording.output_lock`, held for as
+  long as the command runs): the holder's pid is named.
 """
 
 from __future__ import annotations
@@ -130,8 +132,9 @@ def paths_of(ctx) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
     return outputs, inputs
 
 
-def check_paths(ctx) -> None:
-    """Refuse (one line, exit 2) an output of ``ctx``'s command that is, or holds, one of its inputs."""
+def check_paths(ctx) -> list[tuple[str, Path]]:
+    """Refuse (one line, exit 2) an output of ``ctx``'s command that is, or holds, one of its inputs;
+    return the outputs."""
     from amr_twin.cli.common import fail
     from amr_twin.recording.outputs import OutputError, check_not_inputs
 
@@ -140,6 +143,7 @@ def check_paths(ctx) -> None:
         check_not_inputs(outputs, inputs)
     except OutputError as exc:
         fail(str(exc))
+    return outputs
 
 
 def _refuse_empty(param) -> None:
@@ -155,13 +159,22 @@ def _refuse_empty(param) -> None:
 
 
 def _checked(callback):
-    """``callback`` preceded by :func:`check_paths` (a group whose command follows leaves it to the command)."""
+    """``callback`` preceded by :func:`check_paths` and run holding its outputs' locks
+    (:mod:`amr_twin.recording.output_lock`); a group whose command follows leaves both to the command."""
     @functools.wraps(callback)
     def checked(*args, **kwargs):
+        from amr_twin.cli.common import fail
+        from amr_twin.recording.output_lock import OutputBusy, holding
+
         ctx = get_current_context()
-        if not (getattr(ctx.command, "commands", None) and ctx.invoked_subcommand):
-            check_paths(ctx)
-        return callback(*args, **kwargs)
+        if getattr(ctx.command, "commands", None) and ctx.invoked_subcommand:
+            return callback(*args, **kwargs)
+        outputs = check_paths(ctx)
+        try:
+            with holding(outputs):
+                return callback(*args, **kwargs)
+        except OutputBusy as exc:
+            fail(str(exc))
 
     checked.paths_checked = True
     return checked

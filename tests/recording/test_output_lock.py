@@ -1,0 +1,78 @@
+"""An output in use is refused naming its holder; a killed holder's lock is taken over; nothing is left."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli.main import app
+from amr_twin.recording.output_lock import OutputBusy, OutputLock, holding, lock_path
+
+runner = CliRunner()
+HOLD = ("import sys, time\nfrom amr_twin.recording.output_lock import OutputLock\n"
+        "OutputLock('--out', sys.argv[1]).acquire()\nprint('held', flush=True)\ntime.sleep(60)\n")
+
+
+@pytest.fixture
+def holder(tmp_path):
+    """Another process holding the lock of tmp_path / "out" (killed at the end)."""
+    proc = subprocess.Popen([sys.executable, "-c", HOLD, str(tmp_path / "out")], stdout=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "held"
+    yield proc
+    proc.kill()
+    proc.wait()
+
+
+def test_a_second_command_on_an_output_in_use_refuses_naming_the_holder(tmp_path, holder):
+    with pytest.raises(OutputBusy, match=rf"--out .*out: in use by another amr-twin command \(pid {holder.pid}, since "):
+        OutputLock("--out", tmp_path / "out").acquire()
+    res = runner.invoke(app, ["sweep", "payload", "--out", str(tmp_path / "out"), "--masses", "0",
+                              "--positions", "center", "--commands", "linear:0.5", "--no-progress"])
+    assert res.exit_code == 2 and f"(pid {holder.pid}," in res.stderr and "--out" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".out.amr-twin.lock"]  # the holder's, nothing more
+
+
+def test_a_killed_holder_s_lock_is_taken_over(tmp_path, holder):
+    holder.send_signal(signal.SIGKILL)
+    holder.wait()
+    assert lock_path(tmp_path / "out").exists()  # left behind by the killed process
+    lock = OutputLock("--out", tmp_path / "out")
+    assert lock.acquire()
+    assert lock_path(tmp_path / "out").read_text().split()[0] == str(os.getpid())
+    lock.release()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_lock_is_released_and_its_folders_removed(tmp_path):
+    target = tmp_path / "a" / "b" / "run.csv"
+    with holding([("--csv", target), ("--mcap", target)]):  # one path twice: one lock, not a self-refusal
+        assert lock_path(target).exists()
+    assert list(tmp_path.iterdir()) == []  # a/b made for the lock, removed empty
+    (tmp_path / "keep").mkdir()
+    with holding([("--out", tmp_path / "keep" / "x")]):
+        (tmp_path / "keep" / "x").mkdir()
+    assert [p.name for p in (tmp_path / "keep").iterdir()] == ["x"]
+
+
+def test_a_run_holds_its_outputs_until_it_ends(tmp_path):
+    """While a run writes run.csv, another command writing it is refused; after it ends, it is free."""
+    csv = tmp_path / "run.csv"
+    cli = [sys.executable, "-m", "amr_twin.cli.main", "run", "linear", "--speed-m-s", "0.3", "--csv", str(csv)]
+    first = subprocess.Popen([*cli, "--duration-s", "600", "--world", "empty"], stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not lock_path(csv).exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        res = runner.invoke(app, ["run", "stop", "--duration-s", "0.1", "--csv", str(csv)])
+        assert res.exit_code == 2 and f"pid {first.pid}" in res.stderr
+    finally:
+        first.send_signal(signal.SIGINT)
+        first.wait(timeout=60)
+    assert not csv.exists() and list(tmp_path.iterdir()) == []  # interrupted: no file, no lock
+    res = runner.invoke(app, ["run", "stop", "--duration-s", "0.1", "--csv", str(csv)])
+    assert res.exit_code == 0 and csv.exists()

@@ -7,7 +7,8 @@ file holds the holder's pid and start time; a second command asking for it refus
 naming the output and that pid (it does not wait: a sweep that waited would then find every
 point done and redo nothing, a waste of the wait). The kernel drops the lock of a process that
 dies, however it dies: the next command takes a killed holder's lock over. The lock file is
-removed on release, and so are the parent folders made for it that stayed empty.
+removed on release, and so are the parent folders made for it that stayed empty, and, when the
+command failed, the output folders it made and left empty.
 """
 
 from __future__ import annotations
@@ -101,9 +102,14 @@ class OutputLock:
 
 @contextmanager
 def holding(outputs: list[tuple[str, Path]]) -> Iterator[None]:
-    """Hold the locks of ``outputs`` (option, path) while the block runs; OutputBusy if one is in use."""
+    """Hold the locks of ``outputs`` (option, path) while the block runs; OutputBusy if one is in use.
+
+    When the block fails, an output folder it made and left empty is removed (a sweep's recording
+    folder, made before its first point failed to be written).
+    """
     held: list[OutputLock] = []
     files = set()
+    new = [Path(path) for _option, path in outputs if not Path(path).exists()]
     try:
         for option, path in outputs:
             if lock_path(path) in files:  # one path given twice (refused by the command): one lock
@@ -113,6 +119,11 @@ def holding(outputs: list[tuple[str, Path]]) -> Iterator[None]:
             if lock.acquire():
                 held.append(lock)
         yield
+    except BaseException:
+        for path in new:
+            if path.is_dir() and not path.is_symlink() and not any(path.iterdir()):
+                path.rmdir()
+        raise
     finally:
         for lock in reversed(held):
             lock.release()

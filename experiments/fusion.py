@@ -214,7 +214,7 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
     leaves its world's free space (:func:`amr_twin.controllers.route.check_in_free_space`); RouteError."""
     from amr_twin.controllers.route import RouteError, check_in_free_space
     from amr_twin.model.build import compile_world
-    from amr_twin.sim.run import MAX_RUN_S
+    from amr_twin.sim.bounds import MAX_RUN_S
 
     bound = drive_bound_s(route)
     if bound > MAX_RUN_S:

@@ -73,7 +73,27 @@ def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:
         x, y = (float(v) for v in name.split(":"))
     except ValueError:
         raise ValueError(f"--positions {name!r}: not one of {', '.join(POSITIONS)} nor X:Y in metres") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError(f"--positions {name!r}: X and Y must be finite numbers (m)")
     return x, y
+
+
+def check_on_deck(cfg: TwinConfig, name: str) -> None:
+    """Refuse a position ``X:Y`` whose payload box leaves ``cfg``'s deck (ValueError naming the deck's bounds);
+    a drawn deck (``--samples``) may still be too small for it: that point is recorded invalid."""
+    x, y = position_xy_m(cfg, name)
+    hx = cfg.chassis.length_m / 2 - cfg.payload.size_m[0] / 2
+    hy = cfg.chassis.width_m / 2 - cfg.payload.size_m[1] / 2
+    if abs(x) > hx + 1e-9 or abs(y) > hy + 1e-9:
+        raise ValueError(f"--positions {name!r}: the payload box ({cfg.payload.size_m[0]:g} x "
+                         f"{cfg.payload.size_m[1]:g} m) leaves the deck: |X| <= {hx:.3f} m and |Y| <= {hy:.3f} m")
+
+
+def check_accepted(cfg: TwinConfig, text: str) -> None:
+    """Refuse a ``--commands`` entry the client refuses (its thesis ranges): every point would be refused."""
+    client = parse_command(text).dry_run(cfg)
+    if client.last_error:
+        raise ValueError(f"--commands {text!r}: the client refuses it ({client.last_error})")
 
 
 def _micrometres_inside(v: float) -> float:

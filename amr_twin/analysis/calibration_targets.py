@@ -105,15 +105,7 @@ def bench_current_a(cfg: TwinConfig, wheel: int, quantity: str = BENCH_QUANTITY,
 # ------------------------------------------------------------------------- chapter 5 features
 def command_reference(cfg: TwinConfig, command: Command) -> tuple[float, float]:
     """Signed wheel references (RPM) the client sends for ``command``."""
-    from amr_twin.ros.bus import Bus
-    from amr_twin.sim.clock import VirtualClock
-    from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
-
-    bus = Bus(VirtualClock())
-    WheelCommandService(bus)
-    client = WheelCommandClient(bus, wheel_radius_m=cfg.wheel.radius_m, half_separation_m=cfg.wheel.separation_m / 2)
-    command.send(type("T", (), {"client": client})())
-    r = client.last_request
+    r = command.dry_run(cfg).last_request
     return (r.motionL * r.speedL, r.motionR * r.speedR) if r is not None else (0.0, 0.0)
 
 
@@ -188,7 +180,7 @@ def read_log(path: Path) -> dict[str, dict[int, np.ndarray]]:
     import io
 
     from amr_twin.model.yaml_file import read_text
-    from amr_twin.sim.run import MAX_RUN_S
+    from amr_twin.sim.bounds import MAX_RUN_S
 
     text = read_text(path, "", ValueError, limit=MAX_LOG_BYTES)
     groups: dict[str, dict[int, list]] = {}

@@ -70,11 +70,11 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
 
 
 def check_duration(duration_s: Optional[float], fail) -> None:
-    from amr_twin.sim.run import MAX_RUN_S
+    """``--duration-s`` of an experiment's runs: a run's length (:mod:`amr_twin.sim.bounds`)."""
+    from amr_twin.sim.bounds import duration_problem
 
-    if duration_s is not None and not (0 < duration_s <= MAX_RUN_S):
-        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_RUN_S:g}] s (each run keeps its 100 Hz "
-             "series in memory)")
+    if duration_s is not None and duration_problem(duration_s):
+        fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
 
 
 def check_executor(executor: str, scheduler: Optional[str], fail) -> None:

@@ -245,10 +245,10 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
             mass_list = payload_point.parse_masses(masses)
             position_list = [p.strip() for p in positions.split(",") if p.strip()]
             for p in position_list:
-                payload_point.position_xy_m(cfg, p)
+                payload_point.check_on_deck(cfg, p)
             command_list = [c.strip() for c in commands.split(",") if c.strip()]
             for c in command_list:
-                payload_point.parse_command(c)
+                payload_point.check_accepted(cfg, c)
         except ValueError as exc:
             fail(str(exc))
         if not position_list or not command_list:

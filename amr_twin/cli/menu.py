@@ -85,8 +85,13 @@ class RealTimeTwin:
         return self
 
     def _run(self) -> None:
+        from amr_twin.sim.bounds import MAX_RUN_S
+
         try:
             while not self._stop.is_set():
+                if self.twin.t_s + self.PIECE_S > MAX_RUN_S + 1e-9:  # a run keeps its series in memory
+                    raise RuntimeError(f"it reached the bound of a run, {MAX_RUN_S:g} simulated s (its 100 Hz "
+                                       "series are kept in memory): start the client again")
                 self.twin.advance(self.PIECE_S)
         except Exception as exc:  # noqa: BLE001 - reported to the user by the menu
             self.error = exc

@@ -77,6 +77,20 @@ def check_duration(duration_s: Optional[float], fail) -> None:
         fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
 
 
+def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool = False, processes: int = 1,
+                 what: str = "the run") -> None:
+    """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`, one per
+    process) exceeds what the machine has available now; nothing is refused where that is unknown."""
+    from amr_twin.sim.bounds import available_mb, memory_mb
+
+    need, have = memory_mb(duration_s, recorded, sensors) * processes, available_mb()
+    if have is not None and need > have:
+        kept = "its messages until they are written" if recorded else "its 100 Hz series"
+        fail(f"--duration-s {duration_s:g}: {what} would need about {need / 1024:.1f} GB of memory (it keeps {kept}"
+             f"{f', {processes} processes' if processes > 1 else ''}); {have / 1024:.1f} GB are available: "
+             "ask for less (a shorter run, fewer --jobs, no recording)")
+
+
 def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
     """``--executor local|dask`` and ``--scheduler``: dask needs an address, local takes none."""
     from amr_twin.experiments.executor import EXECUTORS

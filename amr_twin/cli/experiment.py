@@ -21,7 +21,7 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt,
-                                 check_common, check_duration, check_estimate, check_executor, check_outputs,
+                                 check_common, check_duration, check_estimate, check_executor, check_memory, check_outputs,
                                  check_record_folder, dask_client, parameter_draws, unique)
 from amr_twin.cli.options import firmware_option, sketch_option
 
@@ -137,6 +137,8 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
         check_record_folder("--record", record, fail, "run<N>.rrd")
         check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
+        check_memory(duration_s or max(r.duration_s for r in chapter5.RUNS), fail, recorded=bool(record or mcap),
+                     processes=jobs, what="each run")
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
@@ -268,6 +270,8 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
         check_record_folder("--record", record, fail, "<key>.rrd")
         check_record_folder("--mcap", mcap, fail, "<key>.mcap")
+        check_memory(duration_s, fail, recorded=bool(record or mcap), processes=jobs if executor == "local" else 1,
+                     what="each point")
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
 
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None

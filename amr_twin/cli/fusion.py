@@ -14,7 +14,8 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_outputs, dask_client
+from amr_twin.cli.checks import (JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_memory,
+                                 check_outputs, dask_client)
 from amr_twin.cli.options import checked_seed, firmware_option
 
 
@@ -87,6 +88,9 @@ def add_fusion(experiment: typer.Typer) -> None:
         workers = 1 if not many else jobs if client is None else max(1, sum(client.nthreads().values()))
         drive_s = fusion.REST_S + fusion.route_length_m(loaded) / loaded.max_speed_m_s + fusion.TAIL_S
         try:
+            # a drive keeps every sensor message for its estimators, as a recording does
+            check_memory(fusion.drive_bound_s(loaded), fail, recorded=True, sensors=True,
+                         processes=workers if client is None else 1, what="each drive")
             check_estimate(f"experiment fusion: {len(seed_list)} drive{'s' if many else ''} of {route_path.stem}",
                            drive_s * len(seed_list), "fusion", workers, firmware, yes, fail)
             if many:

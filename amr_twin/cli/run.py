@@ -95,8 +95,11 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     except OutputError as exc:
         fail(str(exc))
     live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail)
-    cfg = _config(opts.config, opts.params, opts.set_, extra)
     recording = opts.record is not None or opts.mcap is not None
+    from amr_twin.cli.checks import check_memory
+
+    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors)
+    cfg = _config(opts.config, opts.params, opts.set_, extra)
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None)

@@ -34,12 +34,9 @@ A default blueprint (3D view + time-series plots) is sent with the recording.
 
 from __future__ import annotations
 
-import os
-import shutil
-import sys
 from pathlib import Path
 
-from amr_twin.recording.atomic_file import WriteError, replacing, why
+from amr_twin.recording.atomic_file import write_bytes
 from amr_twin.sim.event_log import has_events, log_events
 from amr_twin.recording.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
@@ -73,83 +70,45 @@ def _blueprint(has_imu: bool, has_uwb: bool = False, has_events: bool = False):
         collapse_panels=True)
 
 
-FLUSH_TIMEOUT_S = 120.0
-"""Longest wait for Rerun's file writer to write what was logged, s (it hangs, rarely, when it failed)."""
-QUIET_RERUN = "warn,re_log_encoding=off,re_sdk::recording_stream=off"
-"""Rerun's log filter in a process that only writes files, unless RUST_LOG says otherwise: a failed write
-is reported once, in one line, by :func:`write_rrd`, not by the file writer's thread too."""
-
-
-def _writer_failure(tmp: Path, path: Path, reason: str) -> OSError:
-    """The error of a file Rerun's writer could not finish, named after ``path``: a file-size limit
-    (``ulimit -f``), a full disk, or the writer's own words."""
-    import errno
-    import resource
-
-    size = tmp.stat().st_size if tmp.exists() else 0
-    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
-    if limit != resource.RLIM_INFINITY and size >= limit:
-        return WriteError(errno.EFBIG, why(errno.EFBIG, "File too large"), str(path))
-    free = shutil.disk_usage(tmp.parent).free if tmp.parent.exists() else 0
-    if free < 1024 * 1024:
-        return WriteError(errno.ENOSPC, "No space left on device", str(path))
-    return WriteError(errno.EIO, f"Rerun's file writer stopped ({reason})", str(path))
-
-
-def _check_complete(tmp: Path, path: Path) -> None:
-    """Raise unless ``tmp`` is a whole .rrd: its footer (written last, with a checksum) reads back."""
-    import warnings
-
-    from rerun.chunk import RrdReader
-
-    with warnings.catch_warnings(record=True) as seen:
-        warnings.simplefilter("always")
-        try:
-            RrdReader(str(tmp))
-        except Exception as exc:  # noqa: BLE001 - Rerun's reader raises RuntimeError with the reason
-            raise _writer_failure(tmp, path, " ".join(str(exc).split())) from None
-    if any("no footer" in str(w.message) for w in seen):
-        raise _writer_failure(tmp, path, "the file has no footer")
+ENCODE_TIMEOUT_S = 600.0
+"""Longest wait for Rerun to encode what was logged, s (no file is involved: it does not fail on a full disk)."""
 
 
 def write_rrd(capture: Capture, series, path: Path, result=None, application_id: str = "amr_twin") -> Path:
     """Write the capture and ``series`` to ``path`` (.rrd), through a temporary file.
 
-    Rerun's file writer runs in a thread of its own and reports a full disk or a file-size limit
-    by a ``RuntimeError`` from :meth:`flush` ("File-writer thread shut down prematurely"), or not
-    at all: the written file is read back (its footer) before it replaces ``path``, and a failure
-    is a :class:`~amr_twin.recording.atomic_file.WriteError` naming ``path`` (no half file is left).
+    Rerun encodes the recording into a byte stream (:meth:`RecordingStream.binary_stream`) that this
+    process writes in one piece once everything is logged: a full disk or a file-size limit is an
+    ``OSError`` naming ``path`` (:func:`~amr_twin.recording.atomic_file.replacing`) and no half file is
+    left. Rerun's own file writer (``RecordingStream.save``) writes from a thread of its own and, on such
+    an error, hangs in ``save`` or ``flush``, raises "File-writer thread shut down prematurely", or says
+    nothing and leaves a truncated file (rerun-sdk 0.41). The stream is read once: reading it in pieces
+    gives a file whose checksums fail. The encoded bytes (about 0.09 MB per simulated second with the
+    sensors) are held in memory until then, beside the capture.
     """
-    if "rerun" not in sys.modules:  # the filter is read once, when Rerun starts
-        os.environ.setdefault("RUST_LOG", QUIET_RERUN)
     import rerun as rr
 
     path = Path(path)
     m = capture.twin.physics.model
     rec = rr.RecordingStream(application_id)
-    with replacing(path) as tmp:
-        rec.save(tmp, default_blueprint=_blueprint(bool(capture.messages.get("imu/data_raw")),
-                                                   bool(capture.messages.get("uwb/range")),
-                                                   has_events(capture.twin)))
-        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-        _log_geoms(rec, m)
-        _log_body_transforms(rec, m, capture)
-        _log_scan(rec, m, capture)
-        _log_imu(rec, capture)
-        _log_uwb(rec, m, capture)
-        _log_wheel_speeds(rec, series)
-        _log_duty(rec, series)
-        _log_electrics(rec, series)
-        _log_commands(rec, series, result)
-        _log_trajectory(rec, series)
-        log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
-        try:
-            rec.flush(timeout_sec=FLUSH_TIMEOUT_S)
-        except RuntimeError as exc:  # the writer thread stopped, or the wait ran out
-            rec.disconnect()
-            raise _writer_failure(tmp, path, str(exc)) from None
-        rec.disconnect()
-        _check_complete(tmp, path)
+    stream = rec.binary_stream()
+    rec.send_blueprint(_blueprint(bool(capture.messages.get("imu/data_raw")), bool(capture.messages.get("uwb/range")),
+                                  has_events(capture.twin)), make_active=False, make_default=True)
+    rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    _log_geoms(rec, m)
+    _log_body_transforms(rec, m, capture)
+    _log_scan(rec, m, capture)
+    _log_imu(rec, capture)
+    _log_uwb(rec, m, capture)
+    _log_wheel_speeds(rec, series)
+    _log_duty(rec, series)
+    _log_electrics(rec, series)
+    _log_commands(rec, series, result)
+    _log_trajectory(rec, series)
+    log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
+    rec.disconnect()
+    data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
+    write_bytes(path, data)
     return path
 
 

@@ -97,3 +97,17 @@ def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
     res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "6"])
     assert res.exit_code == 2 and "the log must be longer" in res.stderr and not out.exists()
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("budget", [6, 13])
+def test_the_fit_never_exceeds_its_evaluation_budget(tmp_path, budget):
+    """scipy's max_nfev counts steps, each with a Jacobian of one evaluation per parameter (issue 33: a
+    budget of 2 made 7): every evaluation is counted, and a budget below one step is refused."""
+    log = tmp_path / "real.csv"
+    _write_log(log, gain=1.45)
+    calls = []
+    fit = calibrate(str(log), base=load_config(sets=["driver.gain=1.9"]), max_evaluations=budget,
+                    progress=lambda i, n: calls.append(i))
+    assert fit.evaluations == len(calls) and 6 <= fit.evaluations <= budget
+    with pytest.raises(ValueError, match="max_evaluations 5: at least 6"):
+        calibrate(str(log), base=load_config(), max_evaluations=5)

@@ -141,8 +141,11 @@ def test_the_client_stops_at_the_bound_of_a_run(monkeypatch):
     monkeypatch.setattr("amr_twin.sim.bounds.MAX_RUN_S", 0.5)
     twin = Twin(load_config(), TwinOptions(world="empty", visuals=False))
     rt = RealTimeTwin(twin, rate=1000.0).start()
-    rt._thread.join(timeout=30)
-    assert not rt._thread.is_alive() and "bound of a run, 0.5 simulated s" in str(rt.error)
+    try:
+        rt._thread.join(timeout=30)
+        assert not rt._thread.is_alive() and "bound of a run, 0.5 simulated s" in str(rt.error)
+    finally:
+        rt.close()
     assert 0.4 <= twin.t_s <= 0.5 + 1e-9
 
 

@@ -109,7 +109,6 @@ def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeyp
     args = ["sweep", "payload", "--out", tmp_path / "sweep", "--masses", "0:200:1", "--jobs", 1,
             "--positions", "center,front,rear,left,right,front-left-corner,front-right-corner,rear-left-corner,"
             "rear-right-corner", "--commands", "linear:0.7,linear:0.3,angular:60:-1,angular:30:0,motor:left:1"]
-    refused(args, "sweep payload: 9045 points to simulate (of 9045): about ", "add --yes")
 
     class Started(Exception):
         pass
@@ -117,10 +116,13 @@ def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeyp
     def simulate(*_args, **_kwargs):
         raise Started
 
-    monkeypatch.setattr("amr_twin.experiments.executor.run_all", simulate)
+    monkeypatch.setattr("amr_twin.experiments.executor.run_all", simulate)  # no point is simulated here
+    refused(args, "sweep payload: 9045 points to simulate (of 9045): about ", "add --yes")
     with pytest.raises(Started):  # with --yes the points start
         _call([*args, "--yes"])
     assert "note: sweep payload: 9045 points to simulate" in capsys.readouterr().err
+    monkeypatch.setattr("amr_twin.experiments.chapter5.run", simulate)
+    monkeypatch.setattr("amr_twin.experiments.fusion_seeds.run", simulate)
     refused(["experiment", "chapter5", "--out", tmp_path / "c5", "--samples", 4096], "experiment chapter5: ",
             "add --yes")
     refused(["experiment", "fusion", "--out", tmp_path / "f", "--seeds", "0:999"], "1000 drives", "add --yes")
@@ -128,8 +130,10 @@ def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeyp
 
 def test_a_run_larger_than_the_memory_available_is_refused(tmp_path, refused, monkeypatch):
     monkeypatch.setattr("amr_twin.sim.bounds.available_mb", lambda: 1000.0)
-    refused(["run", "stop", "--duration-s", 3600, "--sensors", "--mcap", tmp_path / "r.mcap"],
-            "--duration-s 3600: the run would need about 4.8 GB of memory", "1.0 GB are available")
+    with monkeypatch.context() as guard:
+        guard.setattr("amr_twin.sim.run.run_mission", None)  # were it not refused, it would fail at once
+        refused(["run", "stop", "--duration-s", 3600, "--sensors", "--mcap", tmp_path / "r.mcap"],
+                "--duration-s 3600: the run would need about 4.8 GB of memory", "1.0 GB are available")
     assert _call(["run", "stop", "--duration-s", 5, "--sensors", "--mcap", tmp_path / "r.mcap"]) == 0
 
 

@@ -81,7 +81,8 @@ def _route(tmp_path: Path, name: str, **changes) -> Path:
     return _write(tmp_path / f"{name}.yaml", text)
 
 
-def test_fusion_routes_outside_the_world_or_too_long_are_refused_before_the_drive(tmp_path, refused):
+def test_fusion_routes_outside_the_world_or_too_long_are_refused_before_the_drive(tmp_path, refused, monkeypatch):
+    monkeypatch.setattr("amr_twin.experiments.fusion.drive", None)  # were one not refused, it would fail at once
     out = tmp_path / "never"
     goal = "  - [6.2, -1.4]\n"
     cases = {"outside": ("  - [60.0, -1.4]\n", "waypoints_xy_m[5] (60, -1.4) lies outside the world of warehouse"),

@@ -13,6 +13,7 @@ import resource
 import shutil
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -173,10 +174,23 @@ def test_malformed_calibration_logs_name_the_file(tmp_path, refused):
     refused(["calibrate", "--target", "/dev/zero", "--out", out], "--target /dev/zero: not a regular file")
 
 
+def _unblock(fifo: Path) -> threading.Timer:
+    """Open ``fifo`` for writing in 5 s if someone reads it (a reader would wait forever otherwise)."""
+    def poke():
+        try:
+            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        except OSError:  # no reader: nobody opened it, as it should be
+            pass
+    timer = threading.Timer(5.0, poke)
+    timer.start()
+    return timer
+
+
 def test_unreadable_input_files_name_the_file(tmp_path, refused):
     binary = tmp_path / "bin.yaml"
     binary.write_bytes(b"\xff\xfe" * 100)
     os.mkfifo(tmp_path / "pipe.yaml")
+    _unblock(tmp_path / "pipe.yaml")
     for option, path, words in (("--mission", binary, "not a text file"), ("--mission", tmp_path, "is a folder"),
                                 ("--mission", tmp_path / "pipe.yaml", "not a regular file"),
                                 ("--config", "/dev/zero", "not a regular file"),

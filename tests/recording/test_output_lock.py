@@ -76,3 +76,16 @@ def test_a_run_holds_its_outputs_until_it_ends(tmp_path):
     assert not csv.exists() and list(tmp_path.iterdir()) == []  # interrupted: no file, no lock
     res = runner.invoke(app, ["run", "stop", "--duration-s", "0.1", "--csv", str(csv)])
     assert res.exit_code == 0 and csv.exists()
+
+
+def test_a_failed_command_leaves_no_empty_output_folder(tmp_path):
+    """A sweep's recording folder made before its first point failed to be written is removed; a folder
+    that was there before, or that holds a file, is kept."""
+    (tmp_path / "old").mkdir()
+    with pytest.raises(OSError):
+        with holding([("--record", tmp_path / "rec"), ("--out", tmp_path / "old"), ("--mcap", tmp_path / "full")]):
+            for name in ("rec", "full"):
+                (tmp_path / name).mkdir()
+            (tmp_path / "full" / "a.mcap").write_text("x")
+            raise OSError(28, "No space left on device")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["full", "old"]

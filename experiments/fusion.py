@@ -213,7 +213,7 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
     """Refuse, before any drive, a route whose drive could take more than ``MAX_RUN_S`` simulated s or that
     leaves its world's free space (:func:`amr_twin.controllers.route.check_in_free_space`); RouteError."""
     from amr_twin.controllers.route import RouteError, check_in_free_space
-    from amr_twin.model.build import compile_world
+    from amr_twin.model.build import world_model
     from amr_twin.sim.bounds import MAX_RUN_S
 
     bound = drive_bound_s(route)
@@ -221,7 +221,7 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
         raise RouteError(f"route {route.name}: {route_length_m(route):.0f} m at up to {route.max_speed_m_s:g} m/s "
                          f"may take {bound:.0f} s of simulation ({TIMEOUT_FACTOR:g} x length / speed before it gives "
                          f"up); at most {MAX_RUN_S:g} s: a shorter route or a higher max_speed_m_s")
-    model = compile_world(cfg, route.world)
+    model = world_model(cfg, route.world)
     top_m = float(cfg.components.lidar.pos_m[2])  # the robot's highest part
     slices = [scan_plane_boxes(model, z) for z in [*np.arange(0.02, top_m, 0.05), top_m]]
     keep = {}

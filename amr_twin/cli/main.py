@@ -230,6 +230,8 @@ def calibrate(
                                         "per fitted parameter and one more: the fit takes at most this // 6 steps)."),
     jobs: Optional[int] = typer.Option(None, "--jobs", help="Worker processes for a thesis evaluation's three runs "
                                        "(default: the usable cores, at most 3; at most the usable cores)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the result as one JSON object (values, sigma, "
+                                 "correlations, features) instead of the summary."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
@@ -268,7 +270,9 @@ def calibrate(
             check_file("--report", report)
     except OutputError as exc:
         fail(str(exc))
-    with Progress(transient=True) as bar:
+    from rich.console import Console
+
+    with Progress(transient=True, console=Console(stderr=True)) as bar:  # stdout: the result only
         fit = None
         if not no_fit:
             task = bar.add_task("calibrating", total=max_evaluations)
@@ -291,7 +295,11 @@ def calibrate(
                 calibration_report.write(result, report)
 
     _guard(write)
-    typer.echo(json.dumps({**fit.report(), "out": str(out), **({"report": str(report)} if report else {})}))
+    if as_json:
+        typer.echo(json.dumps({**fit.report(), "out": str(out), **({"report": str(report)} if report else {})}))
+        return
+    for line in fit.text_lines() + ["", f"wrote {out}" + (f" and the report {report}" if report else "")]:
+        typer.echo(line)
 
 
 MAX_EVALUATIONS = 2000

@@ -75,15 +75,19 @@ INPUTS: dict[str, Callable[[object], list[Path]]] = {
 }
 """Options whose value names what the command reads: flag -> the files (or folders) it reads."""
 
-OUTPUTS = ("--out", "--csv", "--record", "--mcap", "--report", "--export-urdf", "--export-mjcf")
+OUTPUTS = ("--out", "--csv", "--record", "--mcap", "--report", "--export-urdf", "--export-mjcf",
+           "--serial-pty")  # the last: a link made to the emulated board's pseudo-terminal
 """Options whose value names a file or folder the command writes."""
+
+PATH_METAVARS = ("PATH", "FILE", "DIR")
 
 
 def is_path_option(param) -> bool:
-    """A command-line option whose value is a path (typer's ``Path`` annotation)."""
+    """A command-line option whose value is a path: typer's ``Path`` annotation, or a metavar saying so."""
     descriptor = getattr(param, "type_descriptor", None)
     return getattr(param, "param_type_name", "") == "option" and bool(
-        getattr(descriptor, "is_path", False) or type(getattr(param, "type", None)).__name__ == "Path")
+        getattr(descriptor, "is_path", False) or type(getattr(param, "type", None)).__name__ == "Path"
+        or (param.metavar or "").upper() in PATH_METAVARS)
 
 
 def role(param) -> str | None:

@@ -40,6 +40,8 @@ uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has 
     /battery_state     sensor_msgs/msg/BatteryState   the pack: voltage, current (negative discharging,
                                                       as ROS states it), charge, 10 Hz
     /twin/ground_truth nav_msgs/msg/Odometry          world -> base_link: true pose, twist in base_link, 100 Hz
+    /actors/poses      geometry_msgs/msg/PoseArray    the people's and pallet jacks' true poses, frame map (the
+                                                      world), 10 Hz (with TwinOptions(actors=...))
 """
 
 from __future__ import annotations
@@ -56,7 +58,7 @@ from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
-                       encode_range, encode_string, encode_tf_message, encode_twist)
+                       encode_pose_array, encode_range, encode_string, encode_tf_message, encode_twist)
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 
 REQUEST_FIELDS = "motionL,speedL,motionR,speedR"
@@ -88,6 +90,7 @@ BUS_TOPICS = {
     "imu/data_raw": ("/imu/data_raw", "sensor_msgs/Imu", encode_imu),
     "imu/mag": ("/imu/mag", "sensor_msgs/MagneticField", encode_magnetic_field),
     "uwb/range": ("/uwb/range", "sensor_msgs/Range", encode_range),
+    "actors/poses": ("/actors/poses", "geometry_msgs/PoseArray", encode_pose_array),
 }
 
 

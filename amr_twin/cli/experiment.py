@@ -21,8 +21,8 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt,
-                                 check_common, check_duration, check_estimate, check_executor, check_memory, check_outputs,
-                                 check_record_folder, dask_client, parameter_draws, unique)
+                                 check_common, check_duration, check_estimate, check_executor, check_memory,
+                                 check_outputs, check_record_folder, dask_client, parameter_draws, unique)
 from amr_twin.cli.options import firmware_option, sketch_option
 
 def _rpm(value) -> str:
@@ -146,8 +146,8 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         one_pass_s = sum(duration_s or r.duration_s for r in chapter5.RUNS if numbers is None or r.number in numbers)
         passes = 1 + (samples if draws is not None else 0) + (2 if firmware.startswith("avr") else 0) \
             + (1 if numbers is None and duration_s is None else 0)  # the rolling-resistance study: at most a pass
-        check_estimate(f"experiment chapter5: {passes} pass{'es' if passes != 1 else ''} of the runs", one_pass_s * passes, "chapter5", jobs,
-                       firmware, yes, fail)
+        check_estimate(f"experiment chapter5: {passes} pass{'es' if passes != 1 else ''} of the runs",
+                       one_pass_s * passes, "chapter5", jobs, firmware, yes, fail)
 
         def work():
             from amr_twin.recording.atomic_file import all_or_nothing

@@ -155,7 +155,24 @@ def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
         msg = f"{value!r} is out of range: allowed [{lo}, {hi}] {unit}".rstrip()
     elif err["type"] == "finite_number":
         msg = f"{value!r}: must be a finite number"
+    elif err["type"] in ("missing", "too_short", "too_long") and isinstance(value, (list, tuple)):
+        size = _tuple_size(model, loc)  # a fixed-size vector given another number of values
+        msg = f"{list(value)!r} has {len(value)} value(s); it takes {size}" if size else msg
     return f"{'.'.join(loc)}: {msg}" if loc else msg
+
+
+def _tuple_size(model: type[BaseModel], loc: list[str]) -> int | None:
+    """The number of values of the fixed-size tuple field at ``loc`` (None: not one)."""
+    import typing
+
+    annotation: Any = model
+    for key in loc:
+        fields = getattr(annotation, "model_fields", None)
+        if not fields or key not in fields:
+            return None
+        annotation = fields[key].annotation
+    args = typing.get_args(annotation)
+    return len(args) if typing.get_origin(annotation) is tuple and args and Ellipsis not in args else None
 
 
 def load_config(path: str | Path | None = None, *, override_file: str | Path | None = None,

@@ -55,9 +55,8 @@ def _kind(value: Any) -> str:
         return "true or false"
     if isinstance(value, (int, float)):  # NaN and infinities too: refused later as not finite
         return "a number"
-    if isinstance(value, (list, tuple)):
-        what = "number" if all(_kind(v) == "a number" for v in value) else "item"
-        return f"a list of {len(value)} {what}{'s' if len(value) != 1 else ''}"
+    if isinstance(value, (list, tuple)):  # its length is the schema's to judge (some vectors have any)
+        return "a list of numbers" if all(_kind(v) == "a number" for v in value) else "a list"
     return "a word" if isinstance(value, str) else type(value).__name__
 
 
@@ -106,7 +105,9 @@ class Blame:
         self.by[key] = who
 
     def message(self, text: str) -> str:
-        """``text`` (``key: reason``) led by who set ``key``, when someone did."""
+        """``text`` (``key: reason``) led by who set ``key``, or, for a section's rule (``uwb: anchors_y_m:
+        ...``), who set the parameter of that section it names; unchanged when nobody did."""
         key = text.split(":", 1)[0].split(",")[0].strip()
-        who = self.by.get(key)
+        who = self.by.get(key) or next((w for k, w in self.by.items() if k.startswith(key + ".")
+                                        and k.rsplit(".", 1)[-1] in text), None)
         return f"{who}: {text}" if who else text

@@ -1,20 +1,22 @@
 """Locks on outputs in use: a second command writing the same file or folder refuses at once.
 
-Every output of a command (a file or a folder) is locked for as long as the command runs, by
-an exclusive ``flock`` on ``.<name>.amr-twin.lock`` beside it (in its parent folder, so that a
-folder output is locked before it exists and a file output without touching it). The lock
-file holds the holder's pid and start time; a second command asking for it refuses in one line
-naming the output and that pid (it does not wait: a sweep that waited would then find every
+Every output of a command (a file or a folder) is locked for as long as the command runs, by an
+exclusive ``flock`` on a lock file named after the output's resolved path, in a folder of this
+user's locks (:data:`LOCK_DIR`, in the system's temporary folder): nothing appears beside the
+outputs, and an output whose folders do not exist yet is locked all the same. The lock file holds
+the holder's pid, its start time and the output; a second command asking for it refuses in one
+line naming the output and that pid (it does not wait: a sweep that waited would then find every
 point done and redo nothing, a waste of the wait). The kernel drops the lock of a process that
 dies, however it dies: the next command takes a killed holder's lock over. The lock file is
-removed on release, and so are the parent folders made for it that stayed empty, and, when the
-command failed, the output folders it made and left empty.
+removed on release and, when the command failed, so are the output folders it made and left empty.
 """
 
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import os
+import tempfile
 import time
 from contextlib import contextmanager
 from pathlib import Path
@@ -25,17 +27,14 @@ class OutputBusy(ValueError):
     """An output is locked by another running command; one line naming it and the holder's pid."""
 
 
+LOCK_DIR = Path(tempfile.gettempdir()) / f"amr-twin-locks-{os.getuid()}"
+"""Where this user's commands keep the locks of their outputs."""
+
+
 def lock_path(path: Path | str) -> Path:
-    """The lock file of output ``path`` (links resolved): ``.<name>.amr-twin.lock`` beside it."""
-    path = Path(path).resolve()
-    return path.with_name(f".{path.name}.amr-twin.lock")
-
-
-def _made_parents(folder: Path) -> list[Path]:
-    """Create ``folder`` and its missing parents; the ones made, deepest first."""
-    missing = [p for p in [folder, *folder.parents] if not p.exists()]
-    folder.mkdir(parents=True, exist_ok=True)
-    return missing
+    """The lock file of output ``path``: named after its resolved path (links followed as far as it exists)."""
+    key = hashlib.sha256(str(Path(path).resolve()).encode()).hexdigest()[:32]
+    return LOCK_DIR / f"{key}.lock"
 
 
 class OutputLock:
@@ -45,20 +44,18 @@ class OutputLock:
         self.option, self.path = option, Path(path)
         self.file = lock_path(path)
         self.fd: int | None = None
-        self.made: list[Path] = []
 
     def acquire(self) -> bool:
-        """Take the lock; False when it cannot be made (an unwritable folder: the command's own output
-        checks say so), OutputBusy when another process holds it."""
+        """Take the lock; False when the lock file cannot be made (no temporary folder: the output is
+        then not locked), OutputBusy when another process holds it."""
         try:
-            self.made = _made_parents(self.file.parent)
+            LOCK_DIR.mkdir(mode=0o700, exist_ok=True)
         except OSError:
             return False
         while True:
             try:
-                fd = os.open(self.file, os.O_RDWR | os.O_CREAT, 0o644)
+                fd = os.open(self.file, os.O_RDWR | os.O_CREAT, 0o600)
             except OSError:
-                self._remove_made()
                 return False
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -77,7 +74,7 @@ class OutputLock:
                 break
             os.close(fd)
         os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()} {time.strftime('%Y-%m-%dT%H:%M:%S')}\n".encode())
+        os.write(fd, f"{os.getpid()} {time.strftime('%Y-%m-%dT%H:%M:%S')} {Path(self.path).resolve()}\n".encode())
         self.fd = fd
         return True
 
@@ -89,15 +86,6 @@ class OutputLock:
         finally:
             os.close(self.fd)
             self.fd = None
-            self._remove_made()
-
-    def _remove_made(self) -> None:
-        for folder in self.made:  # deepest first; only those still empty
-            try:
-                folder.rmdir()
-            except OSError:
-                break
-        self.made = []
 
 
 @contextmanager

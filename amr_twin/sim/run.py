@@ -13,7 +13,7 @@ import time
 from dataclasses import dataclass, field
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.bounds import MAX_RUN_S, duration_problem
+from amr_twin.sim.bounds import MAX_RUN_S
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.recorder import RunSeries
 
@@ -128,8 +128,8 @@ class RunResult:
 def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s: float,
                 options: TwinOptions = TwinOptions(), twin: Twin | None = None) -> RunResult:
     """Send each command at its time (s from the start) and run for ``duration_s``."""
-    if duration_problem(duration_s):  # the commands check their own durations first, naming their option or file
-        raise ValueError(f"duration_s: {duration_s} {duration_problem(duration_s)}")
+    if not (math.isfinite(duration_s) and 0 < duration_s <= MAX_RUN_S):  # the commands check theirs first
+        raise ValueError(f"duration_s: {duration_s} must be a finite number in (0, {MAX_RUN_S:g}] s")
     steps = sorted(steps, key=lambda s: s[0])
     if any(t < 0 or t > duration_s for t, _ in steps):
         raise ValueError(f"mission: command times must lie in [0, {duration_s}] s")

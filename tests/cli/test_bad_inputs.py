@@ -157,7 +157,8 @@ def test_the_client_stops_at_the_bound_of_a_run(monkeypatch):
 
 def test_the_command_line_starts_without_the_twin():
     """The bounds and path checks are read at start-up: they must not import numpy, MuJoCo or pydantic."""
-    code = "import sys, amr_twin.cli.main; print(sorted(m for m in ('numpy', 'mujoco', 'pydantic') if m in sys.modules))"
+    code = ("import sys, amr_twin.cli.main; "
+            "print(sorted(m for m in ('numpy', 'mujoco', 'pydantic') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True)
     assert out.stdout.strip() == "[]"
 
@@ -235,11 +236,12 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path):
     (["run", "stop", "--set", "pos_m=1"], ["--set 'pos_m=1': 'pos_m' is not a parameter; did you mean",
                                             "components.imu.pos_m"]),
     (["run", "stop", "--set", "=5"], ["--set '=5': expected KEY=VALUE with a parameter's dotted key"]),
-    (["run", "stop", "--set", "wheel.radius_m=true"], ["--set 'wheel.radius_m=true': wheel.radius_m takes a number (m), "
-                                                        "not true or false"]),
+    (["run", "stop", "--set", "wheel.radius_m=true"], ["--set 'wheel.radius_m=true': wheel.radius_m takes a "
+                                                        "number (m), not true or false"]),
     (["run", "stop", "--set", "wheel.radius_m=5"], ["--set 'wheel.radius_m=5': wheel.radius_m: 5 is out of range: "
                                                      "allowed [0.05, 0.3] m"]),
-    (["run", "stop", "--set", "payload.xy_m=[1]"], ["payload.xy_m takes a list of 2 numbers (m), not a list of 1"]),
+    (["run", "stop", "--set", "payload.xy_m=[1]"], ["--set 'payload.xy_m=[1]': payload.xy_m: [1] has 1 value(s); "
+                                                     "it takes 2"]),
     (["run", "stop", "--set", "wheel.radius_m=1e400"], ["--set 'wheel.radius_m=1e400': wheel.radius_m: inf must be "
                                                          "a finite number"]),
     (["run", "stop", "--payload-kg", "1e6"], ["--payload-kg 1e+06: payload.mass_kg: 1000000.0 is out of range"]),

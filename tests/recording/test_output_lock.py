@@ -34,7 +34,7 @@ def test_a_second_command_on_an_output_in_use_refuses_naming_the_holder(tmp_path
                               "--positions", "center", "--commands", "linear:0.5", "--no-progress"])
     assert res.exit_code == 2 and f"(pid {holder.pid}," in res.stderr and "--out" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
-    assert sorted(p.name for p in tmp_path.iterdir()) == [".out.amr-twin.lock"]  # the holder's, nothing more
+    assert list(tmp_path.iterdir()) == []  # nothing beside the outputs, then or now
 
 
 def test_a_killed_holder_s_lock_is_taken_over(tmp_path, holder):
@@ -48,15 +48,13 @@ def test_a_killed_holder_s_lock_is_taken_over(tmp_path, holder):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_the_lock_is_released_and_its_folders_removed(tmp_path):
+def test_the_lock_is_released_and_nothing_is_made_for_it(tmp_path):
     target = tmp_path / "a" / "b" / "run.csv"
     with holding([("--csv", target), ("--mcap", target)]):  # one path twice: one lock, not a self-refusal
-        assert lock_path(target).exists()
-    assert list(tmp_path.iterdir()) == []  # a/b made for the lock, removed empty
-    (tmp_path / "keep").mkdir()
-    with holding([("--out", tmp_path / "keep" / "x")]):
-        (tmp_path / "keep" / "x").mkdir()
-    assert [p.name for p in (tmp_path / "keep").iterdir()] == ["x"]
+        assert lock_path(target).exists() and lock_path(target).read_text().split()[2] == str(target)
+        with pytest.raises(OutputBusy):  # the same output by another name is the same lock
+            OutputLock("--csv", tmp_path / "a" / ".." / "a" / "b" / "run.csv").acquire()
+    assert not lock_path(target).exists() and list(tmp_path.iterdir()) == []
 
 
 def test_a_run_holds_its_outputs_until_it_ends(tmp_path):

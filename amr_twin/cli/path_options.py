@@ -72,6 +72,8 @@ INPUTS: dict[str, Callable[[object], list[Path]]] = {
     "--target": _target_file,        # 'thesis' or a CSV log
     "--world": _world_files,         # a name of models/worlds/, an MJCF file or a map YAML (+ its image)
     "--route": _route_file,          # a name of experiments/routes/ or a route YAML
+    "--map": _world_files,           # a map_server YAML (+ its image): the navigation commands'
+    "--slam-map": _world_files,
 }
 """Options whose value names what the command reads: flag -> the files (or folders) it reads."""
 

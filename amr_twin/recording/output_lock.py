@@ -7,8 +7,9 @@ outputs, and an output whose folders do not exist yet is locked all the same. Th
 the holder's pid, its start time and the output; a second command asking for it refuses in one
 line naming the output and that pid (it does not wait: a sweep that waited would then find every
 point done and redo nothing, a waste of the wait). The kernel drops the lock of a process that
-dies, however it dies: the next command takes a killed holder's lock over. The lock file is
-removed on release and, when the command failed, so are the output folders it made and left empty.
+dies, however it dies: the next command takes a killed holder's lock over, and removes the lock
+files nobody holds. The lock file is removed on release and, when the command failed, so are the
+output folders it made and left empty.
 """
 
 from __future__ import annotations
@@ -37,6 +38,27 @@ def lock_path(path: Path | str) -> Path:
     return LOCK_DIR / f"{key}.lock"
 
 
+def remove_stale_locks() -> list[Path]:
+    """Delete the lock files nobody holds (those of killed commands); return them. A file is taken, then
+    removed: a command opening it meanwhile sees another inode than the path's and opens the path again."""
+    removed = []
+    for file in LOCK_DIR.glob("*.lock"):
+        try:
+            fd = os.open(file, os.O_RDWR)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            if os.fstat(fd).st_ino == os.stat(file).st_ino:
+                file.unlink()
+                removed.append(file)
+        except OSError:  # held by a running command, or gone
+            pass
+        finally:
+            os.close(fd)
+    return removed
+
+
 class OutputLock:
     """The lock of one output (:func:`lock_path`); :meth:`acquire` raises :class:`OutputBusy`."""
 
@@ -52,6 +74,7 @@ class OutputLock:
             LOCK_DIR.mkdir(mode=0o700, exist_ok=True)
         except OSError:
             return False
+        remove_stale_locks()
         while True:
             try:
                 fd = os.open(self.file, os.O_RDWR | os.O_CREAT, 0o600)

@@ -45,7 +45,15 @@ def test_a_killed_holder_s_lock_is_taken_over(tmp_path, holder):
     assert lock.acquire()
     assert lock_path(tmp_path / "out").read_text().split()[0] == str(os.getpid())
     lock.release()
-    assert list(tmp_path.iterdir()) == []
+    assert list(tmp_path.iterdir()) == [] and not lock_path(tmp_path / "out").exists()
+
+
+def test_the_lock_files_of_killed_commands_are_removed_those_held_kept(tmp_path, holder):
+    stale = lock_path(tmp_path / "killed")
+    stale.write_text("999999 2026-01-01T00:00:00 killed\n")
+    with holding([("--csv", tmp_path / "x.csv")]):
+        assert not stale.exists()
+        assert lock_path(tmp_path / "out").exists()  # the running holder's
 
 
 def test_the_lock_is_released_and_nothing_is_made_for_it(tmp_path):

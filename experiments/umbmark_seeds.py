@@ -31,6 +31,8 @@ from amr_twin.experiments.umbmark_square import DIRECTIONS, Profile, SquareRun, 
 
 MAX_RUNS = 50
 """Most squares per direction and phase (each ~1 s of CPU)."""
+SQUARE_S = 60.0
+"""Simulated time of one square, s (four legs of 4 m at up to 0.4 m/s, four turns, the rests: 59-61 s)."""
 STREAM = 30
 """First entry of every run's seed sequence (issue 30's squares): ``[STREAM, seed, phase, direction, run]``."""
 

@@ -13,7 +13,7 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import JobsOpt, check_common, check_outputs
+from amr_twin.cli.checks import JobsOpt, YesOpt, check_common, check_estimate, check_outputs
 
 RESERVED = ("wheel.tyre_slip", "sim.floor_friction_field")
 """Settings the command's own options choose (--tyres/--no-tyres, --floor-field/--no-floor-field)."""
@@ -36,12 +36,13 @@ def add_umbmark(experiment: typer.Typer) -> None:
         floor_field: bool = typer.Option(True, "--floor-field/--no-floor-field", help="The floor's friction "
                                          "field, drawn per square (acts through the brush tyres)."),
         jobs: Optional[int] = JobsOpt,
+        yes: bool = YesOpt,
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """UMBmark (4 m squares both ways) per robot, its calibration of the odometry, and the squares again."""
         from amr_twin.experiments.fusion_seeds import parse_seeds
-        from amr_twin.experiments.umbmark_seeds import MAX_RUNS
+        from amr_twin.experiments.umbmark_seeds import MAX_RUNS, SQUARE_S
 
         jobs, _ = check_common(jobs, "improved", fail)
         try:
@@ -58,6 +59,9 @@ def add_umbmark(experiment: typer.Typer) -> None:
         sets = list(set_ or []) + [f"wheel.tyre_slip={str(tyres).lower()}",
                                    f"sim.floor_friction_field={str(floor_field).lower()}"]
         cfg = _config(config, params, sets)
+        squares = len(seed_list) * runs * 2 * (3 if tyres else 2)  # before and after; the rigid contact's before
+        check_estimate(f"experiment umbmark: {squares} squares", squares * SQUARE_S, "umbmark", jobs, "improved",
+                       yes, fail)
         _run(cfg, seed_list, runs, tyres, floor_field, jobs, progress, out, _guard)
 
 

@@ -85,6 +85,7 @@ def test_the_rigid_contact_runs_are_the_same_robots(report):
     (["--set", "wheel.tyre_slip=false"], "--set wheel.tyre_slip: chosen by this command's --tyres/--no-tyres"),
     (["--set", "sim.floor_friction_field=true"], "--set sim.floor_friction_field"),
     (["--jobs", "0"], "--jobs"),
+    (["--seeds", "0:999", "--runs", "50"], "300000 squares: about 30.0 h with"),  # and "add --yes"
 ])
 def test_bad_options_are_refused_in_one_line_before_any_square(tmp_path, args, words):
     out = tmp_path / "out"

@@ -21,6 +21,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 QUAD_SEGS = 3
+TOLERANCE_M = 1e-3
 
 
 class VisibilityGraph:
@@ -34,8 +35,11 @@ class VisibilityGraph:
             polys.append(shapely.Polygon(corners))
         grown = shapely.union_all([p.buffer(radius_m, quad_segs=QUAD_SEGS) for p in polys])
         self.free = shapely.box(*bounds_xy_m).difference(grown)
-        shapely.prepare(self.free)
-        self._vertices = None
+        # the segments are checked against obstacles grown 1 mm less: a segment tangent to a corner
+        # touches it at a vertex, and rounding would otherwise put it a hair inside
+        self._room = shapely.box(*bounds_xy_m).difference(
+            shapely.union_all([p.buffer(radius_m - TOLERANCE_M, quad_segs=QUAD_SEGS) for p in polys]))
+        shapely.prepare(self._room)
 
     def _component(self, xy):
         geoms = getattr(self.free, "geoms", [self.free])
@@ -49,18 +53,19 @@ class VisibilityGraph:
         comp = self._component(start_xy)
         if comp is None or not comp.covers(shapely.Point(goal_xy)):
             return math.inf
-        rings = [comp.exterior, *comp.interiors]
-        verts = np.vstack([np.asarray(r.coords)[:-1] for r in rings])
+        comp = shapely.orient_polygons(comp)  # exterior counter-clockwise, holes clockwise: free space on the left
+        verts = []
+        for ring in [comp.exterior, *comp.interiors]:
+            v = np.asarray(ring.coords)[:-1]
+            e_in, e_out = v - np.roll(v, 1, axis=0), np.roll(v, -1, axis=0) - v
+            turn = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
+            verts.append(v[turn < 0])  # a shortest path bends only where the boundary turns into the free space
+        verts = np.vstack(verts)
         pts = np.vstack([np.asarray(start_xy, float)[None], np.asarray(goal_xy, float)[None], verts])
         n = len(pts)
         i, j = np.triu_indices(n, 1)
-        # a vertex of the boundary is on it: check each segment shrunk by 1 mm at both ends
         a, b = pts[i], pts[j]
         d = np.hypot(*(b - a).T)
-        u = (b - a) / np.maximum(d, 1e-12)[:, None]
-        shrink = np.minimum(1e-3, 0.25 * d)[:, None]
-        lines = shapely.linestrings(np.stack([a + u * shrink, b - u * shrink], axis=1))
-        shapely.prepare(comp)
-        ok = shapely.covers(comp, lines)
+        ok = shapely.covers(self._room, shapely.linestrings(np.stack([a, b], axis=1)))
         graph = csr_matrix((d[ok], (i[ok], j[ok])), shape=(n, n))
         return float(dijkstra(graph, directed=False, indices=0)[1])

@@ -73,7 +73,7 @@ class CollisionMonitor:
             c, s = math.cos(yaw), math.sin(yaw)
             dx, dy = pts[:, 0] - x, pts[:, 1] - y
             after = self.footprint.distance_m(np.column_stack([c * dx + s * dy, -s * dx + c * dy])).min()
-            if after <= self.footprint.distance_m(pts).min():
+            if after < self.footprint.distance_m(pts).min() - 0.005:
                 self.actions["stop"] += 1
                 return 0.0, 0.0
             self.actions["escape"] += 1

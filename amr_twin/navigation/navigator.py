@@ -34,7 +34,7 @@ from amr_twin.navigation.progress import ProgressChecker, at_goal
 from amr_twin.navigation.recoveries import ROUND_ROBIN
 from amr_twin.ros.geometry_messages import Twist, Vector3
 
-UNMAPPED_M = 0.25
+UNMAPPED_M = 0.3
 """A scan return farther than this from the static map is unmapped (a person, a pallet jack), m."""
 
 

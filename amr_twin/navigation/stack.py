@@ -87,7 +87,10 @@ def load_static_map(cfg, world: str, map_yaml: str | None) -> StaticMap:
 
 
 def make_costmap(static: StaticMap, footprint: Footprint) -> Costmap:
-    return Costmap(static, footprint.inscribed_radius_m, INFLATION_RADIUS_M, COST_SCALING_PER_M)
+    """The costmap of a map for the robot's footprint; unknown cells are free to plan through (nav2's
+    ``allow_unknown``, its default): a map built from scans leaves cells unknown along the rack faces."""
+    return Costmap(static, footprint.inscribed_radius_m, INFLATION_RADIUS_M, COST_SCALING_PER_M,
+                   unknown_is_lethal=False)
 
 
 def attach(twin, cfg, static: StaticMap, options: NavigationOptions) -> Navigator:

@@ -7,8 +7,8 @@ either *mapped* (within a few cm of the static map: a rack, a wall) or *unmapped
 pallet jack); the caller says which. Zones are the footprint grown by a pad:
 
 - *approach*: the command is projected ``time_before_collision_s`` ahead; if the footprint grown
-  by ``pad_m`` (mapped returns) or ``people_pad_m`` (unmapped ones: the clearance kept from people)
-  would reach a return within that time, the speeds are scaled so that it would reach it no earlier
+  by ``pad_m`` (mapped returns) or, for unmapped ones, by ``people_pad_m`` at its front (its rear
+  when backing up; the clearance kept from people) and 0.1 m elsewhere (a turn in place) would reach a return within that time, the speeds are scaled so that it would reach it no earlier
   than ``time_before_collision_s`` (nav2's approach model); a return already inside the grown
   footprint stops the robot unless the command opens the gap to the nearest return (then slowly);
 - *slowdown*: an unmapped return inside the footprint grown by ``slow_pad_m`` ahead of the robot
@@ -35,7 +35,13 @@ class CollisionMonitor:
                  time_before_collision_s: float = 1.2, slow_pad_m: float = 0.9, slow_ratio: float = 0.4,
                  step_s: float = 0.05):
         self.footprint = footprint
-        self.zones = (footprint.padded(pad_m), footprint.padded(people_pad_m))
+        near = footprint.padded(pad_m)
+        side = max(pad_m, 0.1)
+        # unmapped returns: the people pad ahead and behind (the way the robot drives), ``side`` around
+        self._people = {1: Footprint(footprint.x_min_m - side, footprint.x_max_m + people_pad_m, footprint.half_width_m + side),
+                        -1: Footprint(footprint.x_min_m - people_pad_m, footprint.x_max_m + side, footprint.half_width_m + side),
+                        0: footprint.padded(side)}
+        self.zones = (near, self._people[1])
         self.slow = footprint.padded(slow_pad_m)
         self.max_v_m_s = max_v_m_s
         self.time_s, self.slow_ratio, self.step_s = time_before_collision_s, slow_ratio, step_s
@@ -62,6 +68,7 @@ class CollisionMonitor:
         of which ``unmapped`` (P,) bool the map does not hold."""
         if len(points_base) == 0 or (v == 0.0 and w == 0.0):
             return v, w
+        self.zones = (self.zones[0], self._people[0 if abs(v) < 0.02 else (1 if v > 0 else -1)])
         reach = self.circumscribed(self.slow) + abs(v) * self.time_s + 0.1
         near = np.hypot(points_base[:, 0], points_base[:, 1]) <= reach
         pts, unmapped = points_base[near], np.asarray(unmapped, bool)[near]

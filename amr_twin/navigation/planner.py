@@ -4,8 +4,12 @@ As nav2's planner server with a grid planner (NavFn, Smac 2D with ``downsample_c
 
 1. The costmap is downsampled by ``downsample`` (a coarse cell takes its worst fine cell):
    0.1 m cells cost a quarter of 0.05 m ones and lose nothing a 2 m aisle needs.
-2. Cells within the footprint's inscribed radius of an obstacle (cost >= 253) cannot be
-   entered; a move between neighbours costs its length (1 or sqrt 2 cells) times the mean of
+2. Cells closer to an obstacle than ``turn_room_m`` (the footprint's circumscribed radius: room
+   to turn the rectangle anywhere on the path) cannot be entered; when that leaves no path, the
+   search is done again with only the inscribed radius kept (cost >= 253: a narrow gap the
+   rectangle may pass straight but not turn in); cells of the obstacle layer (people, pallet
+   jacks: what the map does not hold) are kept ``unmapped_pad_m`` farther still (the clearance
+   the collision monitor keeps from them); a move between neighbours costs its length (1 or sqrt 2 cells) times the mean of
    the two cells' ``1 + cost_weight * cost / 252`` (NavFn's neutral cost plus a share of the
    inflation cost: paths keep to the middle of aisles). The start cell is always enterable (a
    robot that backed up close to a rack can leave). scipy's Dijkstra (``scipy.sparse.csgraph``)
@@ -52,17 +56,29 @@ class GlobalPlanner:
     """A* on a :class:`Costmap` with shortening (module docstring)."""
 
     def __init__(self, costmap: Costmap, downsample: int = 2, cost_weight: float = 1.0,
-                 clearance_m: float = 0.6, spacing_m: float = 0.05):
+                 clearance_m: float = 0.6, spacing_m: float = 0.05, turn_room_m: float = 0.0,
+                 unmapped_pad_m: float = 0.0):
         self.costmap, self.downsample = costmap, int(downsample)
+        self.unmapped_pad_m = float(unmapped_pad_m)
+        self.turn_room_m = float(turn_room_m)
         self.cost_weight, self.clearance_m, self.spacing_m = float(cost_weight), float(clearance_m), float(spacing_m)
         self.last_error = ""
 
-    def _weights(self) -> np.ndarray:
-        k, cost = self.downsample, self.costmap.cost()
+    def _weights(self, keep_m: float) -> np.ndarray:
+        """Coarse cell weights; cells closer than ``keep_m`` to an obstacle blocked (inf)."""
+        k, cm = self.downsample, self.costmap
+        cost, dist = cm.cost(), cm.dist_m
         rows, cols = cost.shape[0] // k * k, cost.shape[1] // k * k
-        coarse = cost[:rows, :cols].reshape(rows // k, k, cols // k, k).max(axis=(1, 3))
+
+        def pool(a, how):
+            return how(a[:rows, :cols].reshape(rows // k, k, cols // k, k), axis=(1, 3))
+
+        coarse = pool(cost, np.max)
         w = 1.0 + self.cost_weight * coarse / 252.0
-        w[coarse >= INSCRIBED] = np.inf
+        blocked = (coarse >= INSCRIBED) | (pool(dist, np.min) < keep_m)
+        if cm.marked.any():  # what the map does not hold (people, pallet jacks): kept farther from
+            blocked |= pool(cm.obstacle_dist_m, np.min) < max(keep_m, cm.inscribed_m) + self.unmapped_pad_m
+        w[blocked] = np.inf
         return w
 
     def plan(self, start_xy_m, goal_xy_m, goal_yaw_rad: float | None = None) -> Plan | None:
@@ -74,18 +90,13 @@ class GlobalPlanner:
             self.last_error = problem
             return None
         cm, k = self.costmap, self.downsample
-        w = self._weights()
-        cell = []
-        for xy in (start_xy_m, goal_xy_m):
-            r, c, inside = cm.cells(np.asarray(xy, float)[None])
-            if not inside[0]:
-                self.last_error = f"({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"
-                return None
-            cell.append((min(int(r[0]) // k, w.shape[0] - 1), min(int(c[0]) // k, w.shape[1] - 1)))
-        w[cell[0]] = min(w[cell[0]], 1.0 + self.cost_weight) if np.isfinite(w[cell[0]]) else 1.0 + self.cost_weight
-        if not np.isfinite(w[cell[1]]):
-            w[cell[1]] = 1.0 + self.cost_weight  # a goal cell shared with an obstacle's coarse cell
-        path = _shortest_cells(w, cell[0], cell[1])
+        for keep_m in (self.turn_room_m, 0.0):  # room to turn the rectangle, else the inscribed radius
+            path = self._search(start_xy_m, goal_xy_m, keep_m)
+            if path is not None and not isinstance(path, str):
+                break
+        if isinstance(path, str):
+            self.last_error = path
+            return None
         if path is None:
             self.last_error = (f"no path from ({start_xy_m[0]:.2f}, {start_xy_m[1]:.2f}) to "
                                f"({goal_xy_m[0]:.2f}, {goal_xy_m[1]:.2f}): the goal is cut off")
@@ -95,6 +106,21 @@ class GlobalPlanner:
         poses = self._resample(self._shorten(xy), goal_yaw_rad)
         length = float(np.hypot(*np.diff(poses[:, :2], axis=0).T).sum())
         return Plan(poses, length, time.process_time() - t0)
+
+    def _search(self, start_xy_m, goal_xy_m, keep_m: float):
+        """Coarse cells of the cheapest path keeping ``keep_m`` from obstacles (None: none; a str: why not)."""
+        cm, k = self.costmap, self.downsample
+        w = self._weights(keep_m)
+        cell = []
+        for xy in (start_xy_m, goal_xy_m):
+            r, c, inside = cm.cells(np.asarray(xy, float)[None])
+            if not inside[0]:
+                return f"({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"
+            cell.append((min(int(r[0]) // k, w.shape[0] - 1), min(int(c[0]) // k, w.shape[1] - 1)))
+        w[cell[0]] = min(w[cell[0]], 1.0 + self.cost_weight) if np.isfinite(w[cell[0]]) else 1.0 + self.cost_weight
+        if not np.isfinite(w[cell[1]]):
+            w[cell[1]] = 1.0 + self.cost_weight  # a goal cell shared with an obstacle's coarse cell
+        return _shortest_cells(w, cell[0], cell[1])
 
     def _clearance(self, a: np.ndarray, b: np.ndarray) -> float:
         n = max(2, int(math.ceil(np.hypot(*(b - a)) / (0.5 * self.costmap.resolution_m))) + 1)

@@ -32,6 +32,8 @@ REST_S = 2.0
 RESOLUTION_M = 0.05
 INFLATION_RADIUS_M = 1.0
 COST_SCALING_PER_M = 3.0
+PEOPLE_PAD_M = 0.35
+"""Clearance kept from what the map does not hold (the collision monitor's people pad), m."""
 
 
 @dataclass(frozen=True)
@@ -132,7 +134,8 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions) -> Navigato
         controller = Mppi(costmap, footprint, limits, dt, seed=options.seed)
     else:
         controller = RegulatedPurePursuit(costmap, footprint, limits, dt)
-    return Navigator(twin.bus, twin.clock, pose_source, costmap, GlobalPlanner(costmap), controller, footprint,
+    planner = GlobalPlanner(costmap, turn_room_m=footprint.circumscribed_radius_m, unmapped_pad_m=PEOPLE_PAD_M)
+    return Navigator(twin.bus, twin.clock, pose_source, costmap, planner, controller, footprint,
                      limits, options.goals, params, start_s=twin.t_s + REST_S)
 
 

@@ -85,14 +85,14 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
         check_outputs(files={"--csv": opts.csv, "--record": opts.record, "--mcap": opts.mcap})
     except (FaultError, OutputError) as exc:
         fail(str(exc))
-    if opts.live is not None:
-        fail("--live: not offered with goals yet (record with --record/--mcap and open the file)")
+    from amr_twin.cli.options import checked_live
+    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail)
     extra = {"payload.mass_kg": opts.payload_kg} if opts.payload_kg is not None else {}
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     static = _guard(lambda: _checked(cfg, opts, goals, nav))
     recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world, start_xy_yaw=_start_pose(opts.start),
-                          faults=faults, stop_on_collision=opts.stop_on_collision, visuals=recording)
+                          faults=faults, stop_on_collision=opts.stop_on_collision, visuals=recording or live is not None)
 
     def work():
         from amr_twin.navigation.stack import NavigationOptions, navigate
@@ -105,10 +105,20 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
             if recording:
                 from amr_twin.recording.rerun_log import attach
                 attach(twin)
+            if live is not None:  # the live session brings its cmd_vel node (and the pacing)
+                from amr_twin.live.session import LiveSession
+                held["live"] = LiveSession(twin, live, say=lambda line: typer.echo(line, err=True))
 
         nav_opts = NavigationOptions(goals=tuple(goals), map_yaml=nav.get("map"), localisation=nav["localisation"],
                                      controller=nav["controller"], seed=opts.seed, timeout_s=duration_s)
-        run = navigate(cfg, replace(options), nav_opts, static=static, on_twin=on_twin)
+        try:
+            run = navigate(cfg, replace(options), nav_opts, static=static, on_twin=on_twin,
+                           publish=recording or live is not None, drive=live is None)
+        except KeyboardInterrupt:
+            fail(f"interrupted at t={held['twin'].t_s:.2f} s simulated; no output written", code=130)
+        finally:
+            if "live" in held:
+                held["live"].close()
         with all_or_nothing():
             if recording:
                 from amr_twin.recording.rerun_log import record_run

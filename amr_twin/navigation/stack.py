@@ -23,6 +23,7 @@ from amr_twin.navigation.footprint import Footprint, robot_footprint
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.localisation import SOURCES, PoseSource
 from amr_twin.navigation.navigator import GoalOutcome, Navigator, NavParams
+from amr_twin.navigation.outputs import NavOutputs
 from amr_twin.navigation.planner import GlobalPlanner
 from amr_twin.navigation.static_map import StaticMap, world_map, yaml_map
 
@@ -95,8 +96,11 @@ def make_costmap(static: StaticMap, footprint: Footprint) -> Costmap:
                    unknown_is_lethal=False)
 
 
-def attach(twin, cfg, static: StaticMap, options: NavigationOptions) -> Navigator:
-    """Put the diff-drive node, the localisation and the navigator on ``twin``'s bus (module docstring)."""
+def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bool = True,
+           drive: bool = True) -> Navigator:
+    """Put the diff-drive node (unless ``drive`` is False: a live session brings its own), the localisation
+    and the navigator on ``twin``'s bus (module docstring); ``publish``: the plan, map, costmap and footprint
+    messages (:mod:`amr_twin.navigation.outputs`) too."""
     from amr_twin.controllers.diff_drive import DiffDriveNode
     from amr_twin.navigation.mppi import Mppi
     from amr_twin.navigation.rpp import RegulatedPurePursuit
@@ -105,7 +109,8 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions) -> Navigato
         raise ValueError(f"localisation: {options.localisation!r} is not one of {', '.join(SOURCES)}")
     if options.controller not in CONTROLLERS:
         raise ValueError(f"controller: {options.controller!r} is not one of {', '.join(CONTROLLERS)}")
-    DiffDriveNode(twin.bus, twin.clock, twin.client)
+    if drive:
+        DiffDriveNode(twin.bus, twin.clock, twin.client)
     start = twin.start_xy_yaw
     frame = (0.0, 0.0, 0.0)
     if options.localisation == "truth":
@@ -135,16 +140,18 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions) -> Navigato
     else:
         controller = RegulatedPurePursuit(costmap, footprint, limits, dt)
     planner = GlobalPlanner(costmap, turn_room_m=footprint.circumscribed_radius_m, unmapped_pad_m=PEOPLE_PAD_M)
+    outputs = NavOutputs(twin.bus, twin.clock, costmap, footprint) if publish else None
     return Navigator(twin.bus, twin.clock, pose_source, costmap, planner, controller, footprint,
-                     limits, options.goals, params, start_s=twin.t_s + REST_S)
+                     limits, options.goals, params, outputs=outputs, start_s=twin.t_s + REST_S)
 
 
 def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | None = None,
-             on_twin=None, progress=None) -> NavigationRun:
+             on_twin=None, progress=None, publish: bool = False, drive: bool = True) -> NavigationRun:
     """Build the twin (``twin_options``, sensors on), attach the stack, run until every goal has an outcome.
 
     ``on_twin(twin)`` is called once the twin is built (a recording's capture attaches there);
-    ``progress(t_s)`` every simulated half second. Raises nothing for a failed goal: its outcome says it.
+    ``progress(t_s)`` every simulated half second; ``publish``, ``drive``: as :func:`attach`. Raises nothing
+    for a failed goal: its outcome says it.
     """
     from dataclasses import replace
 
@@ -155,7 +162,7 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
     twin = Twin(cfg, replace(twin_options, sensors=True))
     if on_twin is not None:
         on_twin(twin)
-    nav = attach(twin, cfg, static, options)
+    nav = attach(twin, cfg, static, options, publish=publish, drive=drive)
     twin.navigator = nav
     twin.advance(REST_S)
     timeout = options.timeout_s

@@ -38,7 +38,8 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
     ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
     (:mod:`amr_twin.sim.native_build`), which the figures were measured with;
-    ``native_engines``: the same for every C helper, by name.
+    ``native_engines``: the same for every C helper, by name; ``nav_*``: the navigation stack's
+    (:mod:`amr_twin.bench.navigation`).
     """
     from amr_twin.bench.twin import twin_figures
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
@@ -51,6 +52,8 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     from amr_twin.bench.sensors import sensor_figures  # IMU + LiDAR against the same bare figure
     result.update(sensor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
+    from amr_twin.bench.navigation import navigation_figures  # planning, controllers, the twin navigating
+    result.update(navigation_figures(cfg, sim_s))
     result["timer"] = "process_time"
     helpers = (grid_steps, rolling_resistance, battery, collisions, hall_edges, imu_errors, lidar_kernels)
     engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}

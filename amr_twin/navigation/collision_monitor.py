@@ -58,10 +58,15 @@ class CollisionMonitor:
     def _time_to_collision(self, points: np.ndarray, unmapped: np.ndarray, v: float, w: float) -> float:
         """First time (s) at which a zone, moving at (v, w) from the origin, holds a point of its kind."""
         n = int(math.ceil(self.time_s / self.step_s))
-        for k, (x, y, yaw) in enumerate(arc_poses(0.0, 0.0, 0.0, v, w, self.step_s, n)):
-            if self._inside(points, unmapped, x, y, yaw):
-                return (k + 1) * self.step_s
-        return math.inf
+        poses = arc_poses(0.0, 0.0, 0.0, v, w, self.step_s, n)
+        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        dx, dy = points[None, :, 0] - poses[:, 0:1], points[None, :, 1] - poses[:, 1:2]
+        lx, ly = c * dx + s * dy, -s * dx + c * dy                     # (n, P) in each future base_link
+        hit = np.zeros(lx.shape, bool)
+        for zone, which in ((self.zones[0], ~unmapped), (self.zones[1], unmapped)):
+            hit |= which[None, :] & (lx >= zone.x_min_m) & (lx <= zone.x_max_m) & (np.abs(ly) <= zone.half_width_m)
+        k = np.flatnonzero(hit.any(axis=1))
+        return (int(k[0]) + 1) * self.step_s if len(k) else math.inf
 
     def filter(self, v: float, w: float, points_base: np.ndarray, unmapped: np.ndarray) -> tuple[float, float]:
         """The command ``(v, w)`` made safe against scan returns ``points_base`` (P, 2) in ``base_link``,

@@ -33,6 +33,7 @@ from scipy.ndimage import distance_transform_edt
 from amr_twin.navigation.static_map import StaticMap
 
 LETHAL, INSCRIBED, NO_INFORMATION = 254, 253, 255
+KEEP_CHANGES = 256
 
 
 def inflation_cost(dist_m: np.ndarray, inscribed_m: float, inflation_radius_m: float,
@@ -82,6 +83,10 @@ class Costmap:
         self.obstacle_dist_m = np.full(self.shape, self._cap, np.float32)
         """Distance from each cell to the nearest cell of the obstacle layer alone, capped, m (float32)."""
         self.updates = 0
+        self.version = 0
+        """Counts the changes of the layers; :attr:`changes` keeps the last ones' windows."""
+        self.changes: list[tuple[int, tuple[int, int, int, int] | None]] = []
+        """``(version, (r0, r1, c0, c1))`` of each change, rows r0..r1-1 and columns c0..c1-1 (None: all)."""
 
     def _distance(self, lethal: np.ndarray) -> np.ndarray:
         if not lethal.any():
@@ -173,9 +178,16 @@ class Costmap:
         core = np.s_[R0 - S0:R1 - S0, C0 - T0:C1 - T0]
         self.dist_m[R0:R1, C0:C1] = self._distance(self.static_lethal[S0:S1, T0:T1] | marked)[core]
         self.obstacle_dist_m[R0:R1, C0:C1] = self._distance(marked)[core]
+        self._changed((R0, R1, C0, C1))
+
+    def _changed(self, window) -> None:
+        self.version += 1
+        self.changes.append((self.version, window))
+        del self.changes[:-KEEP_CHANGES]
 
     def clear(self) -> None:
         """Forget the obstacle layer (nav2's ClearEntireCostmap)."""
         self.marked[:] = False
         self.dist_m[:] = self.static_dist_m
         self.obstacle_dist_m[:] = self._cap
+        self._changed(None)

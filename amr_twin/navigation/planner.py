@@ -36,7 +36,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from amr_twin.navigation.costmap import INSCRIBED, Costmap
+from amr_twin.navigation.costmap import INSCRIBED, Costmap, inflation_cost
 
 
 @dataclass(frozen=True)
@@ -60,24 +60,45 @@ class GlobalPlanner:
                  unmapped_pad_m: float = 0.0):
         self.costmap, self.downsample = costmap, int(downsample)
         self.unmapped_pad_m = float(unmapped_pad_m)
+        self._coarse, self._seen = None, -1
         self.turn_room_m = float(turn_room_m)
         self.cost_weight, self.clearance_m, self.spacing_m = float(cost_weight), float(clearance_m), float(spacing_m)
         self.last_error = ""
 
+    def _pooled(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The coarse grids (worst cost, least distance, least distance to the obstacle layer), brought up
+        to date over the windows the costmap changed since the last plan (all of them the first time)."""
+        k, cm = self.downsample, self.costmap
+        rows, cols = cm.shape[0] // k * k, cm.shape[1] // k * k
+        seen = self._seen
+        if self._coarse is None or (cm.changes and seen < cm.changes[0][0] - 1) or \
+                any(w is None for v, w in cm.changes if v > seen):
+            windows = [(0, rows, 0, cols)]
+            self._coarse = [np.zeros((rows // k, cols // k), t) for t in (np.uint8, np.float32, np.float32)]
+        else:
+            windows = [w for v, w in cm.changes if v > seen]
+        for r0, r1, c0, c1 in windows:
+            r0, c0 = r0 // k * k, c0 // k * k
+            r1, c1 = min(-(-r1 // k) * k, rows), min(-(-c1 // k) * k, cols)
+            if r1 <= r0 or c1 <= c0:
+                continue
+            dist = cm.dist_m[r0:r1, c0:c1]
+            for i, (a, how) in enumerate(((inflation_cost(dist, cm.inscribed_m, cm.inflation_radius_m,
+                                                           cm.cost_scaling_per_m), np.max), (dist, np.min),
+                                          (cm.obstacle_dist_m[r0:r1, c0:c1], np.min))):
+                pooled = how(a.reshape((r1 - r0) // k, k, (c1 - c0) // k, k), axis=(1, 3))
+                self._coarse[i][r0 // k:r1 // k, c0 // k:c1 // k] = pooled
+        self._seen = cm.version
+        return self._coarse
+
     def _weights(self, keep_m: float) -> np.ndarray:
         """Coarse cell weights; cells closer than ``keep_m`` to an obstacle blocked (inf)."""
-        k, cm = self.downsample, self.costmap
-        cost, dist = cm.cost(), cm.dist_m
-        rows, cols = cost.shape[0] // k * k, cost.shape[1] // k * k
-
-        def pool(a, how):
-            return how(a[:rows, :cols].reshape(rows // k, k, cols // k, k), axis=(1, 3))
-
-        coarse = pool(cost, np.max)
+        cm = self.costmap
+        coarse, near, near_obstacle = self._pooled()
         w = 1.0 + self.cost_weight * coarse / 252.0
-        blocked = (coarse >= INSCRIBED) | (pool(dist, np.min) < keep_m)
+        blocked = (coarse >= INSCRIBED) | (near < keep_m)
         if cm.marked.any():  # what the map does not hold (people, pallet jacks): kept farther from
-            blocked |= pool(cm.obstacle_dist_m, np.min) < max(keep_m, cm.inscribed_m) + self.unmapped_pad_m
+            blocked |= near_obstacle < max(keep_m, cm.inscribed_m) + self.unmapped_pad_m
         w[blocked] = np.inf
         return w
 

@@ -15,7 +15,8 @@ RUN = CliRunner()
 
 @pytest.mark.parametrize("args, text", [
     (["--goal", "-20,-6.4", "--world", "aisles"], "goal -20,-6.4: "),        # inside a rack row: cut off
-    (["--goal", "-6,3.5"], "lies 0.20 m from an obstacle"),               # against the warehouse's north rack
+    (["--goal", "-3,3.0"], "lies inside an obstacle of the map"),          # on the warehouse north rack's beam
+    (["--goal", "-3,3.25"], "closer than the robot's half width"),
     (["--goal", "100,3", "--world", "aisles"], "lies outside the map"),
     (["--goal", "3"], "--goal '3': expected X_M,Y_M"),
     (["--goal", "1,nan"], "each value must be finite"),

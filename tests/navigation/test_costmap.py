@@ -47,6 +47,8 @@ def test_a_person_who_walks_away_leaves_no_obstacle_once_the_scan_has_cleared_it
 
 def test_clearing_stops_at_the_raytrace_range(costmap):
     person = (9.0, 4.0, 0.25)  # 6 m from the laser: marked from 3.5 m away, not cleared from 6 m
+    costmap.update_scan(*_scan((3.0, 4.0), [person]), obstacle_range_m=4.0, raytrace_range_m=5.0)
+    assert costmap.marked.sum() == 0  # beyond the marking range
     costmap.update_scan(*_scan((5.5, 4.0), [person]), obstacle_range_m=4.0, raytrace_range_m=5.0)
     assert costmap.marked.sum() > 0
     costmap.update_scan(*_scan((3.0, 4.0), []), obstacle_range_m=4.0, raytrace_range_m=5.0)

@@ -50,3 +50,26 @@ def test_the_plan_keeps_to_the_middle_of_a_corridor():
     _cm, p = _planner(two_corridors())
     plan = p.plan(np.array([3.0, 2.5]), np.array([9.0, 2.5]))
     assert np.abs(plan.xy_m[:, 1] - 2.5).max() < 0.1  # 1 m from both walls all the way
+
+
+def test_in_the_aisles_hall_the_plan_takes_the_shortest_route():
+    """Between routes of as many grid moves, the one of fewest metres: diagonals cost sqrt 2. From the west
+    cross aisle to the east block's second aisle the visibility graph's shortest path is 34.1 m."""
+    from amr_twin.model.config import load_config
+    from amr_twin.navigation.footprint import robot_footprint
+    from amr_twin.navigation.stack import make_costmap, true_map
+
+    cfg = load_config()
+    fp = robot_footprint(cfg)
+    p = GlobalPlanner(make_costmap(true_map(cfg, "aisles"), fp), turn_room_m=fp.circumscribed_radius_m)
+    plan = p.plan(np.array([-23.5, 0.0]), np.array([10.0, -4.8]))
+    assert 34.07 <= plan.length_m <= 1.05 * 34.07
+
+
+def test_diagonal_moves_cost_their_length():
+    """Through a gap behind a baffle (12.7 m) or over the end of a long wall (15.7 m): a search charging
+    a diagonal move like a straight one (pyastar2d's) finds the second as short as the first and took it."""
+    static = room(14.0, 12.0, walls=[(6.8, 0.0, 7.2, 1.0), (6.8, 2.6, 7.2, 7.0), (4.8, 0.0, 5.2, 4.0)])
+    _cm, p = _planner(static)
+    plan = p.plan(np.array([2.0, 2.0]), np.array([12.0, 2.0]))
+    assert plan.length_m < 13.0 and plan.xy_m[:, 1].max() < 5.0

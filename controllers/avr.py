@@ -21,11 +21,19 @@ sketch's ELF running on :class:`~amr_twin.controllers.avr_board.AvrBoard` (libsi
   ``loss_prob``) are corrupted (PC -> board: the board's checksum test drops them) or dropped.
 
 Topic ids and types come from the sketch itself: before the run, the ELF is started on a second
-board and asked for its topics as rosserial_python does (:func:`topic_table`).
+board and asked for its topics as rosserial_python does (:func:`topic_table`). The twin's PC side is
+the rosserial host: the sketch is built with ``AMR_TWIN_ROS_CONFIGURED_AT_START`` (ros_lib starts
+as if the host had negotiated before t = 0), and each time request the board sends is answered
+with the simulated time. With ``AvrParams(serial_pty=PATH)`` a real host is: USART0 is served on a
+pseudo-terminal paced to wall time (:mod:`amr_twin.controllers.avr_serial_port`), the sketch is
+built without that define (it waits for the host's negotiation), the bus' ``wheel_Command`` no
+longer reaches the board, and the board's frames still reach the bus (odometry, recordings).
 """
 
 from __future__ import annotations
 
+import struct
+from collections import deque
 from functools import lru_cache
 from typing import Sequence
 
@@ -33,7 +41,7 @@ from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.sim.pins import DriverPins
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
-from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, FrameParser, TopicInfo,
+from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, FrameParser, TopicInfo,
                                       deserialize_float64, frame, serialize_float64,
                                       serialize_float64_multiarray, topic_request)
 
@@ -46,6 +54,14 @@ UBRR0L, UBRR0H, UCSR0A = 0xC4, 0xC5, 0xC0
 """USART0 baud registers (data-space addresses)."""
 
 KNOWN_TYPES = ("std_msgs/Float64", "std_msgs/Float64MultiArray")
+CONFIGURED_AT_START = "AMR_TWIN_ROS_CONFIGURED_AT_START"
+"""ros_lib define of the twin's own runs: the board starts configured (the twin is the host)."""
+
+
+def sketch_defines(params: AvrParams) -> tuple[str, ...]:
+    """The preprocessor names the sketch of ``params`` is built with."""
+    defines = () if params.idle_sleep else ("AMR_TWIN_ROS_BUSY_SPIN",)
+    return defines if params.serial_pty is not None else defines + (CONFIGURED_AT_START,)
 
 
 def byte_cycles(board: AvrBoard) -> int:
@@ -105,8 +121,7 @@ class AvrFirmware:
             raise ValueError("AvrParams.board: latch_int_flag_while_detached and record_pin_log belong to the "
                              "Python ports' board; simavr decides the first, and the emulated board keeps no pin log")
         sketch = DEFAULT_SKETCH if p.sketch_dir is None else p.sketch_dir
-        defines = () if p.idle_sleep else ("AMR_TWIN_ROS_BUSY_SPIN",)
-        self.elf = str(build_sketch(sketch, defines))
+        self.elf = str(build_sketch(sketch, sketch_defines(p)))
         publishers, subscribers = topic_table(self.elf)
         self.publishers = {info.topic_id: info for info in publishers}
         self.subscribers = {info.topic_name: info for info in subscribers}
@@ -129,11 +144,23 @@ class AvrFirmware:
         self._extra_sync: int | None = None
         self.frames_dropped = 0
         """Frames from the board that failed their checksum (none expected)."""
+        self.time_requests = 0
+        """Time requests the board sent (rosserial's time sync; the host answers each)."""
+        self.negotiations = 0
+        """Topic negotiations the board answered (one per topic request of a host)."""
+        self.serial = self.pacer = None
+        self._serial_out: deque[tuple[int, int]] = deque()  # (cycle its last bit leaves the wire, byte)
+        if p.serial_pty is not None:
+            from amr_twin.controllers.avr_serial_port import PtySerialPort, WallPacer
+
+            self.serial, self.pacer = PtySerialPort(p.serial_pty), WallPacer()
 
     # -- wiring into the twin ---------------------------------------------------------
     def connect(self, bus, link) -> None:
         """Carry the sketch's topics between ``bus`` and the UART, with ``link``'s latency and loss."""
         self._bus, self._link = bus, link
+        if self.serial is not None:  # the board's serial port is the host's
+            return
         for name, info in self.subscribers.items():
             bus.subscribe(name, lambda msg, info=info: self._send(info, msg))
 
@@ -158,6 +185,22 @@ class AvrFirmware:
     def _tick(self) -> None:
         self.clock.schedule_in(self.p.sync_period_us, self._tick)
         self._sync()
+        if self.serial is not None:
+            self._serve()
+
+    def _serve(self) -> None:
+        """Pseudo-terminal: pace to the wall clock, take the host's bytes, send the board's that left the wire."""
+        now = self.clock.now_us
+        self.pacer.sleep_until(now)
+        data = self.serial.read()
+        if data:
+            self._queue_rx(now, data)
+        cycle, out = now * CYCLES_PER_US + self.lead_cycles, self._serial_out
+        if out and out[0][0] <= cycle:
+            ready = bytearray()
+            while out and out[0][0] <= cycle:
+                ready.append(out.popleft()[1])
+            self.serial.write(bytes(ready))
 
     def _sync(self) -> None:
         now = self.clock.now_us
@@ -185,9 +228,11 @@ class AvrFirmware:
     def _receive(self, tx: list[tuple[int, int]]) -> None:
         """Board bytes written to UDR0: their time on the wire, then the frames they complete."""
         per_byte = byte_cycles(self.board)
-        for cycle, _ in tx:
+        for cycle, byte in tx:
             self._tx_free = max(cycle, self._tx_free) + per_byte
             self._wire_end.append(self._tx_free)
+            if self.serial is not None:
+                self._serial_out.append((self._tx_free, byte))
         for f in self._parser.feed(bytes(b for _, b in tx)):
             arrival = -(-(self._wire_end[f.last - self._wire_base] - self.lead_cycles) // CYCLES_PER_US)
             self._deliver(f.topic_id, f.message, arrival)
@@ -207,6 +252,15 @@ class AvrFirmware:
         self.clock.schedule(t_us, self._sync)
 
     def _deliver(self, topic_id: int, message: bytes, arrival_us: int) -> None:
+        if topic_id == ID_PUBLISHER:  # the board answers a topic request: its first publisher opens the answer
+            if self.publishers and TopicInfo.deserialize(message).topic_id == min(self.publishers):
+                self.negotiations += 1
+            return
+        if topic_id == ID_TIME:
+            self.time_requests += 1
+            if self.serial is None:  # the twin is the host: answer with the simulated time
+                self.clock.schedule(max(arrival_us, self.clock.now_us), self._answer_time)
+            return
         info = self.publishers.get(topic_id)
         if info is None or info.message_type != "std_msgs/Float64":
             return
@@ -224,24 +278,38 @@ class AvrFirmware:
             publish, topic = self._publish, info.topic_name
             self.clock.schedule(at, lambda: publish(topic, value))
 
+    def _answer_time(self) -> None:
+        """The host's answer to a time request: std_msgs/Time of the simulated clock, now."""
+        now = self.clock.now_us
+        self._send_frame(frame(ID_TIME, struct.pack("<II", now // 1_000_000, now % 1_000_000 * 1000)))
+
     def _send(self, info: TopicInfo, msg) -> None:
         """Put ``msg`` on the PC -> board wire as a rosserial frame on the sketch's topic id."""
         if info.message_type == "std_msgs/Float64MultiArray":
             payload = serialize_float64_multiarray([float(x) for x in msg.data])
         else:
             payload = serialize_float64(float(msg.data))
-        data = frame(info.topic_id, payload)
+        self._send_frame(frame(info.topic_id, payload))
+
+    def _send_frame(self, data: bytes) -> None:
+        """A frame from the twin's PC side on the PC -> board wire, from now (plus the link's latency, or lost)."""
         start_us = self.clock.now_us
         if self._link is not None:
             start_us += self._link.extra_latency_us
             if self._link.draw_loss(PC_TO_ARDUINO, len(data)):
                 data = data[:-1] + bytes(((data[-1] + 1) & 0xFF,))  # the checksum fails on the board
+        self._queue_rx(start_us, data)
+
+    def _queue_rx(self, start_us: int, data: bytes) -> None:
+        """Bytes entering the board's receiver from ``start_us`` on, behind those already queued."""
         per_byte = byte_cycles(self.board)
         start = max(start_us * CYCLES_PER_US + self.lead_cycles, self._rx_free, self.board.cycle)
         self.board.queue_rx(start, data, per_byte)
         self._rx_free = start + len(data) * per_byte
 
     def close(self) -> None:
-        """Free the emulator."""
+        """Free the emulator (and the pseudo-terminal)."""
+        if self.serial is not None:
+            self.serial.close()
         self.board.close()
 

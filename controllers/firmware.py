@@ -59,18 +59,19 @@ def firmware_identity(firmware: str) -> str:
     return f"{firmware}@{source_hash(sketch)}"
 
 
-def check_avr(firmware: str) -> None:
-    """For an ``avr`` firmware: the toolchain is there and the sketch builds (else ValueError, one line)."""
+def check_avr(firmware: str, params: AvrParams | None = None) -> None:
+    """For an ``avr`` firmware: the toolchain is there and the sketch builds as ``params`` run it (else
+    ValueError, one line)."""
     if not firmware.startswith("avr"):
         return
-    from amr_twin.controllers.avr import topic_table
+    from amr_twin.controllers.avr import sketch_defines, topic_table
     from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
 
     problem = missing_tools()
     if problem:
         raise ValueError(f"--firmware avr: {problem}")
     try:
-        topic_table(str(build_sketch(firmware.partition(":")[2] or DEFAULT_SKETCH)))
+        topic_table(str(build_sketch(firmware.partition(":")[2] or DEFAULT_SKETCH, sketch_defines(params or AvrParams()))))
     except SketchError as exc:
         raise ValueError(f"--firmware {firmware}: {exc}") from None
 

@@ -107,3 +107,5 @@ class AvrParams:
     # to read (ros_lib/ArduinoHardware.h); False: busy loop as rosserial_arduino (same results, ~3x slower)
     sync_period_us: int = 1000  # the board is brought up to the loop's time at least this often, us
     board: BoardParams = field(default_factory=BoardParams)  # pins the sketch must use (its wiring)
+    serial_pty: str | None = None  # serve USART0 on a pseudo-terminal linked at this path, paced to wall
+    # time, for a rosserial host (controllers/avr_serial_port.py); None: the twin's own PC side is the host

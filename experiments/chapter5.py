@@ -24,8 +24,9 @@ from amr_twin.model.config import TwinConfig, with_values
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.analysis.metrics import step_info
 from amr_twin.sim.run import Command, run_command
-from amr_twin.experiments.chapter5_criteria import (BANDS, TRANSIENT_WINDOW_S, WHEELS, compare_oscillation,
-                                                    judge, oscillation_verdict, settling_band_rpm, step_class)
+from amr_twin.experiments.chapter5_criteria import (BANDS, DEFINITIONS, SOURCES, TRANSIENT_WINDOW_S, WHEELS,
+                                                    compare_oscillation, judge, oscillation_verdict,
+                                                    settling_band_rpm, step_class)
 
 
 @dataclass(frozen=True)
@@ -110,11 +111,12 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
         t0 = raw["t_command_s"]
         pub = raw["published"][w]
         kw = dict(t0_s=t0, settling_band=band, oscillation_window_s=TRANSIENT_WINDOW_S)
-        published = step_info(pub[:, 0], pub[:, 1], abs(reference), **kw).as_dict() if len(pub) else None
-        true = step_info(raw["t_s"], raw["true_rpm"][:, w], reference, **kw).as_dict()
-        checks = judge(name, reference, published or {})
+        sign = 1.0 if reference > 0 else -1.0  # the published speeds are magnitudes (|wheelN_Vel|)
+        published = (step_info(pub[:, 0], pub[:, 1], abs(reference), **kw).as_dict(sign) if len(pub) else None)
+        true = step_info(raw["t_s"], raw["true_rpm"][:, w], reference, **kw).as_dict(sign)
         wheels[name] = {"reference_rpm": reference, "step_class": step_class(reference),
-                        "samples": len(pub), "published": published, "true": true, "checks": checks}
+                        "samples": len(pub), "published": published, "true": true,
+                        "checks": judge(name, reference, published or {}), "true_checks": judge(name, reference, true)}
     return {"run": spec.number, "title": spec.title, "command": spec.command.describe(),
             "payload_kg": spec.payload_kg, "duration_s": raw["sim_s"], "wheel_command": raw["wheel_command"],
             "codes": raw["codes"], "errors": raw["errors"], "wall_s": raw["wall_s"], "wheels": wheels, "raw": raw}
@@ -175,6 +177,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
             done[job.spec.number] = analyse(job.spec, raw)
     results = [done[s.number] for s in specs]
     out = {"firmware": firmware, "jobs": jobs, "sim_s": sum(r["duration_s"] for r in results), "runs": results,
+           "study_runs": len(analysed), "study_sim_s": sum(a["duration_s"] for _, a in analysed),
            "comparisons": compare_oscillation(results),
            "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
            "payload_duty": payload.duty_comparison(results),
@@ -196,8 +199,8 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
 
 
 def plot(results: dict, out_dir: Path) -> list[Path]:
-    """One PNG per run (``run<N>.png``), see :func:`.chapter5_report.plot`."""
-    from amr_twin.experiments.chapter5_report import plot as plot_runs
+    """One PNG per run (``run<N>.png``), see :func:`.chapter5_figure.plot`."""
+    from amr_twin.experiments.chapter5_figure import plot as plot_runs
 
     return plot_runs(results, out_dir)
 
@@ -206,17 +209,23 @@ def _public(results: dict) -> dict:
     runs = [{k: v for k, v in r.items() if k != "raw"} for r in results["runs"]]
     checks = [c for r in runs for w in r["wheels"].values() for c in w["checks"].values()]
     checks += results["comparisons"]
+    true_checks = [c for r in runs for w in r["wheels"].values() for c in w["true_checks"].values()]
     return {"firmware": results["firmware"], "jobs": results["jobs"], "wall_s": round(results["wall_s"], 3),
-            "sim_s": results["sim_s"], "judged_on": "published samples, linear interpolation from rest at the command",
-            "settling_band": "max(5 % of the step, 4 RPM) around the reference",
+            "sim_s": results["sim_s"], "study_runs": results.get("study_runs", 0),
+            "study_sim_s": results.get("study_sim_s", 0.0),
+            "judged_on": "published samples, linear interpolation from rest at the command",
+            "definitions": DEFINITIONS,
+            "settling_band": "max(5 % of the step, 4 RPM) around the final value",
             "oscillation": f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S:g} s",
             "oscillation_verdict": oscillation_verdict(results["comparisons"]),
-            "bands": [vars(b) for b in BANDS], "runs": runs, "comparisons": results["comparisons"],
+            "bands": [dict(vars(b), source=SOURCES[b.metric]) for b in BANDS], "runs": runs, "comparisons": results["comparisons"],
             "crr": results["crr"], "payload_duty": results["payload_duty"],
             "rolling_resistance_study": results["rolling_resistance_study"],
             "threshold_crr": payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
                                                    results["crr"]["tyres"]),
-            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks)},
+            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks),
+                        "true_checks": len(true_checks),
+                        "true_passed": sum(c["verdict"] == "pass" for c in true_checks)},
             **({"firmware_comparison": results["firmware_comparison"]} if "firmware_comparison" in results else {}),
             **({"spread": results["spread_summary"]} if "spread_summary" in results else {})}
 

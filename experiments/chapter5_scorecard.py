@@ -2,7 +2,9 @@
 the twin worse against the thesis fails a test until the scorecard is updated on purpose.
 
 ``python -m amr_twin.experiments.chapter5_scorecard`` runs the eight runs (faithful
-firmware, shipped parameters) and rewrites ``tests/chapter5_scorecard.json``;
+firmware, shipped parameters) and rewrites ``tests/chapter5_scorecard.json`` (the checks of the
+published samples, which the report's verdict counts, and of the true speed against the same
+bands, ``run<N>.<wheel>.true.<metric>``);
 :func:`worse` lists what got worse between a committed scorecard and a new one.
 
 A check's *miss* is its distance outside the thesis' band (0 inside); a value that
@@ -31,12 +33,15 @@ def scorecard(data: dict) -> dict:
     checks = {}
     for r in data["runs"]:
         for wheel, w in r["wheels"].items():
-            for metric, c in w["checks"].items():
-                checks[f"run{r['run']}.{wheel}.{metric}"] = {"twin": c["twin"], "band": c["band"],
-                                                             "thesis": c["thesis"], "unit": _unit(metric)}
+            for kind, prefix in (("checks", ""), ("true_checks", "true.")):
+                for metric, c in w[kind].items():
+                    checks[f"run{r['run']}.{wheel}.{prefix}{metric}"] = {
+                        "twin": c["twin"], "band": c["band"], "thesis": c["thesis"], "unit": _unit(metric)}
     overshoot = {f"run{r['run']}.{wheel}": (w["published"] or {}).get("overshoot")
                  for r in data["runs"] for wheel, w in r["wheels"].items()}
-    return {"firmware": data["firmware"], "passed": data["summary"]["passed"], "checks_total": data["summary"]["checks"],
+    s = data["summary"]
+    return {"firmware": data["firmware"], "passed": s["passed"], "checks_total": s["checks"],
+            "true_passed": s["true_passed"], "true_checks_total": s["true_checks"],
             "checks": checks, "published_overshoot_rpm": overshoot,
             "oscillation_published_passed": data["oscillation_verdict"]["published_passed"],
             "duty_raised_with_20kg": [c["raised"] for c in data.get("payload_duty", [])]}
@@ -62,8 +67,9 @@ def worse(committed: dict, new: dict) -> list[str]:
         if after > before + TOLERANCE[old["unit"]]:
             out.append(f"{key}: {now['twin']} misses its band {now['band']} by {after:.3g} {old['unit']} "
                        f"(committed {old['twin']}, {before:.3g})")
-    if new["passed"] < committed["passed"]:
-        out.append(f"checks passed: {new['passed']} < {committed['passed']} committed")
+    for key, what in (("passed", "checks passed"), ("true_passed", "true-speed checks passed")):
+        if new.get(key, 0) < committed.get(key, 0):
+            out.append(f"{what}: {new[key]} < {committed[key]} committed")
     return out
 
 

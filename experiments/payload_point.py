@@ -23,7 +23,7 @@ POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1),
              "front-left-corner": (1, 1), "front-right-corner": (1, -1),
              "rear-left-corner": (-1, 1), "rear-right-corner": (-1, -1)}
 MAX_MASSES = 1000          # masses per sweep: each is a simulation per position and command
-ROWS = 5                   # what a row means (in the fingerprint): 5 = ball speed as sqrt(ux^2 + uy^2) (C and Python alike); 4 = sampled on the loop's record grid in one call; 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
+ROWS = 6                   # what a row means (in the fingerprint): 6 = with the true speed's steady error; 5 = ball speed as sqrt(ux^2 + uy^2) (C and Python alike); 4 = sampled on the loop's record grid in one call; 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
 
 
 def parse_masses(text: str) -> list[float]:

@@ -32,6 +32,10 @@ TIP_MARGIN_MIN_M = 0.02   # static tip margin below which a point is unsafe, m
 TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
 MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
+RUNAWAY_RPM = TRACK_TOLERANCE_RPM + MAX_VEL_RPM / 255.0
+"""A wheel whose true speed ends further than this from its reference has left it (RPM): beyond the
+faithful PI's dead zone and one duty count (4.13 RPM), which is as well as the faithful firmware holds
+a wheel (chapter 5's 99.20 RPM wheels end +4.6 and +6.0 RPM off)."""
 
 
 def _slip(series, cfg: TwinConfig) -> np.ndarray:
@@ -154,6 +158,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
                 out[f"{name}_{k}"] = info[k]
             for k in ("overshoot", "steady_error", "oscillation"):
                 out[f"{name}_{k}_rpm"] = info[k]
+        sign = 1.0 if ref > 0 else -1.0  # the true speed's offset along the reference, as the published one's
+        out[f"{name}_true_steady_error_rpm"] = float(sign * np.mean(s.true_rpm[tail, w]) - abs(ref))
         out[f"{name}_steady_duty"] = float(np.mean(s.pwm_counts[tail, w]) / 255.0)
         out[f"{name}_open_loop_duty"] = abs(ref) / MAX_VEL_RPM
         surface = np.abs(s.true_rpm[tail, w]) * (2 * math.pi / 60) * cfg.wheel.radius_m

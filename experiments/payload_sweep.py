@@ -128,3 +128,24 @@ def by_payload(points: list[Point], jobs: int = 1) -> list[tuple[Point, ...]]:
     if len(groups) < jobs:
         return [(p,) for p in points]
     return [tuple(g) for g in groups]
+
+
+def improved_beside(cfg: TwinConfig, out_dir: Path, results: dict, jobs: int = 1, progress: bool = True,
+                    client=None) -> dict | None:
+    """The positions of a faithful-firmware sweep whose limit is a runaway (the firmware's: the
+    wheels leave their references and the motor current follows;
+    :func:`.payload_sweep_report.limit_causes`), run again with the improved firmware on the same
+    masses and commands, into ``out_dir/improved`` (resumed like any sweep); None when there is
+    none, or the sweep ran another firmware."""
+    from amr_twin.experiments.payload_sweep_report import summarise
+
+    if results["firmware"] != "faithful":
+        return None
+    rows = results["rows"]
+    positions = [p for p, s in summarise(results).items() if "runaway" in s["causes"]]
+    if not positions:
+        return None
+    masses = sorted({r["mass_kg"] for r in rows if r["position"] in positions})
+    commands = list(dict.fromkeys(r["command"] for r in rows))
+    return run(cfg, Path(out_dir) / "improved", masses, positions, commands, duration_s=results["duration_s"],
+               jobs=jobs, firmware="improved", progress=progress, client=client)

@@ -77,6 +77,28 @@ class Fit:
                 "values": self.values, "sigma": self.sigma, "correlation": self.correlation,
                 "features": self.features}
 
+    def text_lines(self, strong: float = 0.9) -> list[str]:
+        """The summary a person reads (``amr-twin calibrate`` without ``--json``): chi^2, each value
+        with its 1 sigma, the correlations above ``strong`` in magnitude, each feature against its target."""
+        over = f" over {len(self.features)} targets" if self.features else ""
+        lines = [f"calibrated against {self.target}: chi^2 {self.residual:.2f}{over}, {self.evaluations} evaluations",
+                 "", f"{'parameter':28s} {'value':>10s} {'1 sigma':>10s}"]
+        lines += [f"{k:28s} {v:10.4g} {self.sigma.get(k, math.nan):10.2g}" for k, v in self.values.items()]
+        keys = list(self.values)
+        pairs = [f"{a} ~ {b} {self.correlation[a][b]:+.2f}" for i, a in enumerate(keys) for b in keys[i + 1:]
+                 if abs(self.correlation.get(a, {}).get(b, 0.0)) >= strong]
+        lines += ["", f"correlated (|r| >= {strong:g}):" + ("" if pairs else " none"), *(f"  {p}" for p in pairs)]
+        if self.features:
+            lines += ["", f"{'feature':28s} {'twin':>10s} {'target':>10s} {'sigma':>8s} {'unit':5s} {'(twin-target)/sigma':>20s}"]
+            lines += [f"{f['name']:28s} {_num(f['twin']):>10s} {f['target']:10.4g} {f['sigma']:8.3g} {f['unit']:5s} "
+                      f"{_num(f['weighted'], '+.2f'):>20s}" for f in self.features]
+        return lines
+
+
+def _num(value, spec: str = ".4g") -> str:
+    """A feature's value; one the run does not show (None or NaN) as 'missing'."""
+    return "missing" if value is None or not math.isfinite(value) else format(value, spec)
+
 
 # ------------------------------------------------------------------------- the fit
 def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int = 60,

@@ -1,32 +1,42 @@
-"""Step-response metrics of a sampled signal (App. I and fig. 5.3 of the thesis).
+"""Step-response metrics of a sampled signal: the time-domain specifications of fig. 5.3 and App. I.
 
-:func:`step_info` works on the dense true wheel speed (100 Hz) and on the sparse
-speed samples the firmware publishes (one per wheel revolution, about 1 s apart).
-Definitions, all times measured from the step instant ``t0_s``:
+The thesis' fig. 5.3 lists Ogata's specifications (delay, rise, peak and settling time,
+maximum overshoot); :func:`step_info` measures them as Ogata defines them (K. Ogata, *Modern
+Control Engineering*, 5th ed., 2010, §5-3 "Transient-response specifications", fig. 5-8), with
+the steady-state error of §5-8 (e_ss = r - c(inf), reported here as c(inf) - r). MATLAB's
+``stepinfo`` uses the same definitions (overshoot relative to ``|y_final - y_init|``). It works
+on the dense true wheel speed (100 Hz) and on the sparse speed samples the firmware publishes
+(one per wheel revolution, about 1 s apart). All times are measured from the step instant
+``t0_s``:
 
-* the signal and the reference are sign-normalised (a step to -91.67 RPM is
-  measured as a step to +91.67 RPM), and the **step size** is
-  ``|reference| - initial_value``; the 10/50/90 % levels and the overshoot are
-  taken with respect to the **reference** (the line the thesis' plots compare
-  against), not to the final value;
-* between samples the signal is **interpolated linearly** (the thesis read its
-  metrics off rqt_plot curves, which join the published samples by lines); when
-  the first sample comes after ``t0_s`` the signal is taken to be at
-  ``initial_value`` at ``t0_s`` (the wheel is at rest before the step);
-* ``delay_s``: first crossing of 50 % of the step; ``rise_s``: first crossing of
-  90 % minus first crossing of 10 %; ``peak_s``, ``peak_value``: first sample
-  of the maximum; ``overshoot``: ``max(0, peak_value - reference)`` in the
-  signal's units, ``overshoot_pct`` the same in % of the step size;
+* the signal and the reference are sign-normalised (a step to -91.67 RPM is measured as a
+  step to +91.67 RPM); the **final value** ``c(inf)`` is the mean of the samples in the last
+  ``final_fraction`` of the record (at least the last sample), and the **step** is
+  ``final_value - initial_value``; the 10/50/90 % levels, the settling band's centre and the
+  overshoot are taken with respect to the **final value**, not the reference;
+* ``steady_error = final_value - reference``: the offset from the reference, on its own (a
+  permanent offset is not an overshoot);
+* between samples the signal is **interpolated linearly** (the thesis read its metrics off
+  rqt_plot curves, which join the published samples by lines); when the first sample comes
+  after ``t0_s`` the signal is taken to be at ``initial_value`` at ``t0_s`` (the wheel is at
+  rest before the step);
+* ``delay_s``: first crossing of 50 % of the final value; ``rise_s``: first crossing of 90 %
+  minus first crossing of 10 % (NaN when the final value does not lie beyond the initial
+  value in the reference's direction);
+* a **peak** exists when the response crosses its final value and comes back: its maximum
+  exceeds the final value, and a later sample lies below the maximum, each by more than
+  ``peak_tolerance`` (default 0.1 % of the step: the published speed's timing resolution is
+  about 1e-5 of it). Then ``peak_s``, ``peak_value`` are the first sample of the maximum,
+  ``overshoot = peak_value - final_value`` in the signal's units and ``overshoot_pct`` the
+  same in % of ``|step|`` (Ogata's M_p). Without a peak (a monotone approach, or a record
+  still rising at its end) ``peak_s`` and ``peak_value`` are NaN and the overshoot is 0;
 * ``settling_s``: the time after which the interpolated signal stays within
-  ``reference +- settling_band`` until the end of the record (the crossing into
-  the band after the last sample outside it); NaN if the last sample is outside;
-* ``final_value``: mean of the samples in the last ``final_fraction`` of the
-  record (at least the last sample); ``steady_error = final_value - reference``;
-* ``oscillation``: **excess total variation** of the signal over the window
-  from the first 90 % crossing to ``t0_s + oscillation_window_s`` (the record's
-  end by default): ``sum |y[i+1] - y[i]| - |y_end - y_start|``. It is zero for a
-  monotone approach and twice the summed swing amplitudes for an oscillating one,
-  in the signal's units.
+  ``final_value +- settling_band`` until the end of the record (the crossing into the band
+  after the last sample outside it); NaN if the last sample is outside;
+* ``oscillation``: **excess total variation** of the signal over the window from the first
+  90 % crossing to ``t0_s + oscillation_window_s`` (the record's end by default):
+  ``sum |y[i+1] - y[i]| - |y_end - y_start|``. It is zero for a monotone approach and twice
+  the summed swing amplitudes for an oscillating one, in the signal's units.
 
 A metric that cannot be measured (the level is never reached) is NaN.
 """
@@ -37,6 +47,11 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
+
+
+SIGNED_METRICS = ("reference", "final_value", "peak_value", "steady_error")
+"""Metrics measured along the reference that carry its sign in :meth:`StepInfo.as_dict`
+(the overshoot, the band and the oscillation are magnitudes)."""
 
 
 @dataclass(frozen=True)
@@ -56,13 +71,15 @@ class StepInfo:
     steady_error: float
     oscillation: float
 
-    def as_dict(self) -> dict:
-        """JSON-ready dict; NaN becomes None."""
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+    def as_dict(self, sign: float = 1.0) -> dict:
+        """JSON-ready dict; NaN becomes None. With ``sign`` -1 (a step to a negative
+        reference) the values of :data:`SIGNED_METRICS` carry the reference's sign; the
+        others are magnitudes or times."""
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else (sign * v if k in SIGNED_METRICS else v))
                 for k, v in asdict(self).items()}
 
 
-def _first_crossing_s(t: np.ndarray, y: np.ndarray, level: float) -> float:
+def first_crossing_s(t: np.ndarray, y: np.ndarray, level: float) -> float:
     """First time the linear interpolation of (t, y) reaches ``level`` from below; NaN if never."""
     above = np.nonzero(y >= level)[0]
     if len(above) == 0:
@@ -74,9 +91,9 @@ def _first_crossing_s(t: np.ndarray, y: np.ndarray, level: float) -> float:
     return float(t0 + (level - y0) / (y1 - y0) * (t1 - t0))
 
 
-def _settling_s(t: np.ndarray, y: np.ndarray, reference: float, band: float) -> float:
-    """Time from which the interpolated signal stays within reference +- band."""
-    error = np.abs(y - reference)
+def _settling_s(t: np.ndarray, y: np.ndarray, centre: float, band: float) -> float:
+    """Time from which the interpolated signal stays within centre +- band."""
+    error = np.abs(y - centre)
     outside = np.nonzero(error > band)[0]
     if len(outside) == 0:
         return float(t[0])
@@ -84,8 +101,17 @@ def _settling_s(t: np.ndarray, y: np.ndarray, reference: float, band: float) -> 
     if i == len(y) - 1:
         return math.nan
     # the segment i -> i+1 enters the band: interpolate where |error| meets the band
-    bound = reference + band if y[i] > reference else reference - band
+    bound = centre + band if y[i] > centre else centre - band
     return float(t[i] + (bound - y[i]) / (y[i + 1] - y[i]) * (t[i + 1] - t[i]))
+
+
+def _peak(y: np.ndarray, final_value: float, tolerance: float) -> int | None:
+    """Index of the response's peak (first sample of its maximum) if it crosses its final value
+    and comes back, each by more than ``tolerance``; None for a monotone approach."""
+    i = int(np.argmax(y))
+    if y[i] - final_value <= tolerance or i == len(y) - 1:
+        return None
+    return i if float(np.min(y[i + 1:])) < y[i] - tolerance else None
 
 
 def _excess_variation(t: np.ndarray, y: np.ndarray, t_start_s: float, t_end_s: float) -> float:
@@ -100,7 +126,7 @@ def _excess_variation(t: np.ndarray, y: np.ndarray, t_start_s: float, t_end_s: f
 
 def step_info(t_s, y, reference: float, t0_s: float = 0.0, settling_band: float | None = None,
               initial_value: float | None = 0.0, final_fraction: float = 0.2,
-              oscillation_window_s: float | None = None) -> StepInfo:
+              oscillation_window_s: float | None = None, peak_tolerance: float | None = None) -> StepInfo:
     """Step-response metrics of a sampled signal (see the module docstring).
 
     Parameters
@@ -109,13 +135,15 @@ def step_info(t_s, y, reference: float, t0_s: float = 0.0, settling_band: float 
     y : (n,) signal, any unit (RPM for wheel speeds); signed or magnitude.
     reference : the step's target value, same unit; its sign normalises ``y``.
     t0_s : time of the step, s; samples before it are ignored.
-    settling_band : half-width of the settling band around the reference, in the
-        signal's units; default 5 % of the step size.
+    settling_band : half-width of the settling band around the final value, in the
+        signal's units; default 5 % of the step.
     initial_value : value of the signal at ``t0_s`` when no sample lies there
         (None: use the first sample as is).
     final_fraction : fraction of the record (after ``t0_s``) averaged for the final value.
     oscillation_window_s : end of the oscillation window, s after ``t0_s``
         (None: the end of the record).
+    peak_tolerance : how far above its final value, and back below its maximum, the signal
+        must go to have a peak, in the signal's units; default 0.1 % of the step.
 
     Returns
     -------
@@ -136,19 +164,22 @@ def step_info(t_s, y, reference: float, t0_s: float = 0.0, settling_band: float 
     if len(t) < 2:
         raise ValueError("step_info needs at least two samples at or after t0_s")
     y_start = y[0]
-    step = ref - y_start
-    band = 0.05 * abs(step) if settling_band is None else float(settling_band)
-    level = lambda fraction: y_start + fraction * step  # noqa: E731
-    t10, t50, t90 = (_first_crossing_s(t, y, level(f)) for f in (0.1, 0.5, 0.9))
-    i_peak = int(np.argmax(y))
-    peak_value = float(y[i_peak])
-    overshoot = max(0.0, peak_value - ref)
     in_tail = t >= t[-1] - final_fraction * (t[-1] - t[0])  # always holds the last sample
     final_value = float(np.mean(y[in_tail]))
+    step = final_value - y_start
+    band = 0.05 * abs(step) if settling_band is None else float(settling_band)
+    if step > 0.0:
+        t10, t50, t90 = (first_crossing_s(t, y, y_start + f * step) for f in (0.1, 0.5, 0.9))
+    else:  # the signal ends where it started, or on the other side: no rise to time
+        t10 = t50 = t90 = math.nan
+    tolerance = 1e-3 * abs(step) if peak_tolerance is None else float(peak_tolerance)
+    i_peak = _peak(y, final_value, tolerance)
+    overshoot = 0.0 if i_peak is None else float(y[i_peak]) - final_value
     t_end = t[-1] if oscillation_window_s is None else min(t[-1], oscillation_window_s)
     return StepInfo(
         reference=ref, final_value=final_value, delay_s=t50, rise_s=t90 - t10,
-        peak_s=float(t[i_peak]), peak_value=peak_value, overshoot=overshoot,
+        peak_s=math.nan if i_peak is None else float(t[i_peak]),
+        peak_value=math.nan if i_peak is None else float(y[i_peak]), overshoot=overshoot,
         overshoot_pct=100.0 * overshoot / abs(step) if step else math.nan,
-        settling_s=_settling_s(t, y, ref, band), settling_band=band,
+        settling_s=_settling_s(t, y, final_value, band), settling_band=band,
         steady_error=final_value - ref, oscillation=_excess_variation(t, y, t90, t_end))

@@ -26,6 +26,21 @@ timer = time.process_time
 """Clock of every benchmark figure, s (CPU time of this process)."""
 
 
+RATIOS = ("each *_ratio is the median over the repeats of a paired ratio: the loop's CPU s over bare "
+          "physics' CPU s measured right after it in the same repeat (a disturbance of the machine hits both); "
+          "*_ratio_repeats lists the paired ratios; *_ratio_of_medians divides the two medians (the *_s_per_sim_s "
+          "figures), which pairs numbers from different repeats and differs when the load changes between them")
+"""How ``amr-twin bench`` states its ratios (in its JSON as ``ratios``)."""
+
+
+def paired_ratio(name: str, loop_s: list[float], bare_s: list[float], digits: int = 3) -> dict:
+    """``{name: median of the repeats' loop/bare ratios, name_repeats: each, name_of_medians: the
+    medians' ratio}`` (see :data:`RATIOS`)."""
+    pairs = [a / b for a, b in zip(loop_s, bare_s)]
+    return {name: round(statistics.median(pairs), digits), f"{name}_repeats": [round(r, digits) for r in pairs],
+            f"{name}_of_medians": round(statistics.median(loop_s) / statistics.median(bare_s), digits)}
+
+
 def _median_time(func, repeats: int = REPEATS) -> float:
     times = []
     for _ in range(repeats):

@@ -13,7 +13,7 @@ import statistics
 
 import mujoco
 
-from amr_twin.bench.physics import REPEATS, bare_steps_s, timer
+from amr_twin.bench.physics import REPEATS, bare_steps_s, paired_ratio, timer
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import TwinConfig
@@ -87,8 +87,8 @@ def sensor_figures(cfg: TwinConfig, sim_s: float) -> dict:
     scan_groups_us, scan_one_us = lidar_scan_cost_us(twin)
     return {
         "sensors_s_per_sim_s": round(statistics.median(with_t) / sim_s, 5),
-        "sensors_ratio": round(statistics.median(w / b for w, b in zip(with_t, bare_t)), 3),
-        "twin_no_sensors_ratio": round(statistics.median(w / b for w, b in zip(without_t, bare_t)), 3),
+        **paired_ratio("sensors_ratio", with_t, bare_t),
+        **paired_ratio("twin_no_sensors_ratio", without_t, bare_t),
         "lidar_scan_us": round(scan_groups_us, 1),
         "lidar_scan_one_call_us": round(scan_one_us, 1),
         "lidar_beams_per_scan": twin.lidar.n_beams,

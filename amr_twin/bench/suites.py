@@ -15,6 +15,8 @@ except the fusion experiment (one run):
 - ``rrd_write_60s_s``, ``rrd_write_240s_s``: CPU time of writing the ``.rrd`` of a 60 s and of
   a 240 s run with sensors (spinning in place in the warehouse), and their ratio;
 - ``fusion_wall_s``: the fusion experiment (wall), with the load average around it all.
+- ``ros1_*``: the ROS 1 path (issue 31, :mod:`amr_twin.bench.ros1`): the bridge against the same twin
+  without it, the pacing at ``--rate 1`` over 60 s, a ``wheel_Command``'s delay through the board's pseudo-terminal.
 """
 
 from __future__ import annotations
@@ -161,6 +163,13 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
             "rrd_write_ratio_240_60": round(long / short, 2)}
 
 
+def ros1_stage(progress=None) -> dict:
+    """The ROS 1 figures (:mod:`amr_twin.bench.ros1`; rospy is imported in its child processes only)."""
+    from amr_twin.bench.ros1 import ros1_figures
+
+    return ros1_figures(progress=progress)
+
+
 def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
     """Every figure of the module notes; takes several minutes on the 2-core machine.
 
@@ -184,5 +193,7 @@ def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
     t0 = time.perf_counter()
     fus = fusion.run(cfg, progress=False)
     out.update(fusion_sim_s=round(fus.sim_s, 1), fusion_wall_s=round(time.perf_counter() - t0, 2))
+    say("ROS 1: the bridge against no bridge, --rate 1 for 60 s, the serial port's latency (about 3 min)")
+    out.update(ros1_stage(progress=say))
     out.update(load_average_1min_before=round(load_before, 2), load_average_1min_after=round(os.getloadavg()[0], 2))
     return out

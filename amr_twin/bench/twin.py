@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import statistics
 
-from amr_twin.bench.physics import REPEATS, bare_steps_s, timer
+from amr_twin.bench.physics import REPEATS, bare_steps_s, paired_ratio, timer
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import Twin, TwinOptions
 
@@ -43,7 +43,8 @@ def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
 
     Repeats are interleaved (twin, bare, twin, bare, ...) so that a disturbance of
     the machine hits both; each figure is the median of its repeats, the ratio the
-    median of the repeats' ratios.
+    median of the repeats' paired ratios, with each of them and the ratio of the medians
+    beside it (:func:`~amr_twin.bench.physics.paired_ratio`).
     """
     twin_t, bare_t = [], []
     for _ in range(REPEATS):
@@ -56,7 +57,7 @@ def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
         "twin_collisions": len(twin.collisions.collisions),
         "twin_s_per_sim_s": round(twin_s / sim_s, 5),
         "bare_physics_s_per_sim_s": round(bare_s / sim_s, 5),
-        "ratio": round(statistics.median(t / b for t, b in zip(twin_t, bare_t)), 3),
+        **paired_ratio("ratio", twin_t, bare_t),
         "realtime_factor_twin": round(sim_s / twin_s, 1),
         "repeats": REPEATS,
     }

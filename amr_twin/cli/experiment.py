@@ -107,8 +107,9 @@ def _add_chapter5(experiment: typer.Typer) -> None:
     def chapter5_cmd(
         out: Path = typer.Option(..., "--out", help="Output folder: metrics.json, report.md, run<N>.png."),
         jobs: Optional[int] = JobsOpt,
-        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr (the runs are "
-                                     "then also done with faithful and the differences tabulated)."),
+        firmware: str = typer.Option("faithful", "--firmware", help="faithful, improved or avr; default faithful "
+                                     "(docs/firmware.md; with avr the runs are also done with faithful and the "
+                                     "differences tabulated)."),
         sketch: Optional[Path] = sketch_option(),
         runs: Optional[str] = typer.Option(None, "--runs", help="Run numbers to do, e.g. 1,3 (default all)."),
         duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Override every run's duration, s."),
@@ -179,9 +180,11 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             typer.echo(f"over {sp['samples']} parameter draws ({sp['wall_s']:.1f} s wall time): "
                        f"{sum(m['in_band'] for m in met)} of {len(met) * sp['samples']} banded metrics in their band "
                        "(report.md, spread section)")
-        typer.echo(f"checks passed {s['passed']}/{s['checks']}; wrote {out}/metrics.json, report.md")
-        typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.0f} simulated s "
-                   f"(jobs {jobs}, firmware {firmware})")
+        typer.echo(f"checks passed {s['passed']}/{s['checks']} on the published samples (true speed "
+                   f"{s['true_passed']}/{s['true_checks']}); wrote {out}/metrics.json, report.md")
+        study = f" and {data['study_runs']} rolling-resistance study runs" if data["study_runs"] else ""
+        typer.echo(f"wall time {data['wall_s']:.2f} s for {len(data['runs'])} runs{study}, "
+                   f"{data['sim_s'] + data['study_sim_s']:.0f} simulated s (jobs {jobs}, firmware {firmware})")
         for folder, ext in ((record, "rrd"), (mcap, "mcap")):
             if folder is not None:
                 typer.echo(f"recordings: {folder}/run<N>.{ext} for runs "
@@ -281,19 +284,20 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
                 with all_or_nothing():
                     spread_report.plot(results, out)
                     return results, spread_report.report(results, out)["positions"]
+            improved = payload_sweep.improved_beside(cfg, out, results, jobs=jobs, progress=progress, client=client)
             with all_or_nothing():
-                payload_sweep_report.plot(results, out)
-                return results, payload_sweep_report.report(results, out)
+                payload_sweep_report.plot(results, out, improved)
+                return results, payload_sweep_report.report(results, out, improved)
 
         try:
             results, summary = _guard(work)
         finally:
             if client is not None:
                 client.close()
-        for position, s in summary.items():
-            typer.echo(f"{position:20s} highest safe {s['highest_safe_kg']} kg"
-                       + (f"  (unsafe at {s['first_unsafe_kg']} kg: {s['reason']})" if s["first_unsafe_kg"] is not None
-                          else "") + _safe_interval(results, position))
+        lines = (payload_sweep_report.answer_lines(summary, results) if draws is None else
+                 [f"{position:20s} {s['answer']}{_safe_interval(results, position)}" for position, s in summary.items()])
+        for line in lines:
+            typer.echo(line)
         where = f"dask {scheduler}" if client is not None else f"jobs {jobs}"
         what = "points" if draws is None else f"runs ({n_points} points x {samples} draws + nominal)"
         typer.echo(f"{len(results['rows'])} {what}: {results['simulated']} simulated, {results['reused']} reused; "

@@ -68,8 +68,12 @@ def _checked(cfg, opts, goals, nav: dict):
     return static
 
 
-def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_faults: tuple = ()) -> None:
-    """Check, navigate to ``goals`` in turn, print and write the outputs, exit as the module docstring says."""
+def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_faults: tuple = (), mission_actors: tuple = (),
+              actors_of=None) -> None:
+    """Check, navigate to ``goals`` in turn, print and write the outputs, exit as the module docstring says.
+
+    ``actors_of(opts, mission_actors, cfg, start, fail)``: the people and pallet jacks of the mission,
+    ``--actor`` and ``--actors-random`` (amr_twin/cli/run.py's, handed in: no import circle)."""
     from dataclasses import replace
 
     from amr_twin.cli.options import checked_firmware
@@ -91,8 +95,11 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     static = _guard(lambda: _checked(cfg, opts, goals, nav))
     recording = opts.record is not None or opts.mcap is not None
-    options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world, start_xy_yaw=_start_pose(opts.start),
-                          faults=faults, stop_on_collision=opts.stop_on_collision, visuals=recording or live is not None)
+    start = _start_pose(opts.start)
+    actors = actors_of(opts, tuple(mission_actors), cfg, start, fail) if actors_of is not None else tuple(mission_actors)
+    options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world, start_xy_yaw=start,
+                          faults=faults, stop_on_collision=opts.stop_on_collision, visuals=recording or live is not None,
+                          actors=actors)
 
     def work():
         from amr_twin.navigation.stack import NavigationOptions, navigate
@@ -166,8 +173,8 @@ def _report(run, as_json: bool) -> None:
                f"yaw {math.degrees(info['final_pose'][2]):.0f} deg")
 
 
-def add_goto(run_app: typer.Typer) -> None:
-    """Register ``amr-twin run goto`` on the run group."""
+def add_goto(run_app: typer.Typer, actors_of) -> None:
+    """Register ``amr-twin run goto`` on the run group (``actors_of``: as :func:`run_goals`)."""
 
     @run_app.command()
     @shared(fail)
@@ -185,4 +192,4 @@ def add_goto(run_app: typer.Typer) -> None:
         if not any(_given(c, "firmware") for c in (ctx, ctx.parent)):
             opts.firmware = "improved"  # the faithful one restarts its ramps on every cmd_vel (docs/navigation.md)
         nav = {"map": None if map_ is None else str(map_), "localisation": localisation, "controller": controller}
-        run_goals(opts, [parse_goal(goal)], nav, opts.duration_s)
+        run_goals(opts, [parse_goal(goal)], nav, opts.duration_s, actors_of=actors_of)

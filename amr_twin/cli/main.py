@@ -219,6 +219,8 @@ def calibrate(
     max_evaluations: int = typer.Option(90, min=2, max=2000, help="Twin evaluations of the fit (about; each "
                                         "step costs one per parameter and one more)."),
     jobs: int = typer.Option(2, min=1, max=64, help="Worker processes for a thesis evaluation's runs."),
+    as_json: bool = typer.Option(False, "--json", help="Print the result as one JSON object (values, sigma, "
+                                 "correlations, features) instead of the summary."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
@@ -244,7 +246,9 @@ def calibrate(
             check_file("--report", report)
     except OutputError as exc:
         fail(str(exc))
-    with Progress(transient=True) as bar:
+    from rich.console import Console
+
+    with Progress(transient=True, console=Console(stderr=True)) as bar:  # stdout: the result only
         fit = None
         if not no_fit:
             task = bar.add_task("calibrating", total=max_evaluations)
@@ -267,7 +271,11 @@ def calibrate(
                 calibration_report.write(result, report)
 
     _guard(write)
-    typer.echo(json.dumps({**fit.report(), "out": str(out), **({"report": str(report)} if report else {})}))
+    if as_json:
+        typer.echo(json.dumps({**fit.report(), "out": str(out), **({"report": str(report)} if report else {})}))
+        return
+    for line in fit.text_lines() + ["", f"wrote {out}" + (f" and the report {report}" if report else "")]:
+        typer.echo(line)
 
 
 def _check_log_comparable(base, log: dict, target: str) -> None:

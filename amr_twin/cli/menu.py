@@ -25,9 +25,11 @@ if TYPE_CHECKING:
 
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
-from amr_twin.cli.options import checked_firmware, checked_live, firmware_option, live_options, sketch_option
+from amr_twin.cli.options import (checked_firmware, checked_live, checked_ros1, firmware_option, live_options,
+                                  ros1_options, sketch_option)
 
 _LIVE = live_options()
+_ROS1 = ros1_options()
 
 MENU = """
 [bold]wheel_Command_Client[/bold]
@@ -56,12 +58,14 @@ class RealTimeTwin:
         Serve the twin live as well (its ``rate`` is this one).
     say : callable
         Where the live session prints its addresses.
+    ros1 : Ros1Options, optional
+        Put the twin on a ROS 1 graph as well (:mod:`amr_twin.ros1.session`).
     """
 
     PIECE_S = 0.1
     """Simulated seconds per ``advance`` call: a stop request waits at most this long (on the record grid)."""
 
-    def __init__(self, twin, rate: float = 1.0, live=None, say=print):
+    def __init__(self, twin, rate: float = 1.0, live=None, say=print, ros1=None):
         from dataclasses import replace
 
         from amr_twin.live.pacer import Pacer
@@ -75,6 +79,16 @@ class RealTimeTwin:
             self.pacer = self.session.pacer
         else:
             self.pacer = Pacer(twin, self.rate)
+        self.ros1 = None
+        if ros1 is not None:
+            from amr_twin.ros1.session import Ros1Session
+
+            if live is None:
+                from amr_twin.controllers.diff_drive import DiffDriveNode
+                from amr_twin.live.session import CMD_TIMEOUT_S
+
+                DiffDriveNode(twin.bus, twin.clock, twin.client, cmd_timeout_s=CMD_TIMEOUT_S)
+            self.ros1 = Ros1Session(twin, self.pacer, ros1, say=say)
         self.error: Optional[BaseException] = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="twin", daemon=True)
@@ -91,6 +105,8 @@ class RealTimeTwin:
             self.error = exc
         finally:
             (self.session or self.pacer).close()
+            if self.ros1 is not None:
+                self.ros1.close()
 
     def call(self, func: Callable[[], int]) -> int:
         """Run ``func`` (a client call) in the twin's thread at the next pacing event."""
@@ -169,9 +185,10 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
            config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt,
            set_: Optional[list[str]] = SetOpt,
            live: Optional[str] = _LIVE["live"][1], host: str = _LIVE["host"][1],
-           port: Optional[int] = _LIVE["port"][1], web_port: Optional[int] = _LIVE["web_port"][1]) -> None:
+           port: Optional[int] = _LIVE["port"][1], web_port: Optional[int] = _LIVE["web_port"][1],
+           ros1: bool = _ROS1["ros1"][1], roscore: bool = _ROS1["roscore"][1]) -> None:
     """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time (--live: served to
-    Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel)."""
+    Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel; --ros1: on a ROS 1 graph)."""
     from amr_twin.sim.faults import FaultError, parse_faults
     from amr_twin.sim.loop import Twin, TwinOptions
 
@@ -179,6 +196,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
         fail(f"--rate {rate}: must be a finite number in (0, 1000]")
     firmware = checked_firmware(firmware, sketch, fail)
     live_opts = checked_live(live, host, port, web_port, None, fail, default_rate=rate)
+    ros1_opts = checked_ros1(ros1, roscore, None, firmware, True, rate, fail)[0]
     try:
         faults = parse_faults(fault or [], sensors=False)
     except FaultError as exc:
@@ -203,7 +221,8 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
     twin.bus.add_tap(show)
     twin.collisions.listeners.append(lambda c: console.print(escape(
         f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m")))
-    rt = _guard(lambda: RealTimeTwin(twin, rate, live_opts, say=lambda line: console.print(escape(line))))
+    rt = _guard(lambda: RealTimeTwin(twin, rate, live_opts, say=lambda line: console.print(escape(line)),
+                                     ros1=ros1_opts))
     rt.start()
     console.print(f"twin running at {rate:g}x real time, firmware {firmware}")
     for f in faults:

@@ -31,8 +31,8 @@ SetOpt = typer.Option(None, "--set", help="Override one value: key=value (repeat
 def firmware_option(default: str = "faithful") -> typer.models.OptionInfo:
     """``--firmware``: its choices are the firmware factory's (:data:`~amr_twin.controllers.firmware.FIRMWARES`)."""
     choices = ", ".join(FIRMWARES[:-1]) + " or " + FIRMWARES[-1]
-    return typer.Option(default, "--firmware", help=f"Arduino firmware: {choices} (docs/firmware.md; avr: the "
-                        "sketch compiled with avr-gcc on an emulated ATmega2560).")
+    return typer.Option(default, "--firmware", help=f"Arduino firmware: {choices}; default {default} "
+                        "(docs/firmware.md; avr: the sketch compiled with avr-gcc on an emulated ATmega2560).")
 
 
 def sketch_option() -> typer.models.OptionInfo:
@@ -97,22 +97,23 @@ def live_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
                  "rerun's gRPC 9876; 0: a free one).")),
         "web_port": (Optional[int], typer.Option(None, "--web-port", help="With --live rerun: the web viewer's "
                      "port (default 9090; 0: a free one).")),
-        "rate": (Optional[float], typer.Option(None, "--rate", help="With --live: simulated seconds per wall "
-                 "second (default 1; 0: as fast as possible).")),
+        "rate": (Optional[float], typer.Option(None, "--rate", help="With --live, --ros1 or --serial-pty: "
+                 "simulated seconds per wall second (default 1; --ros1 alone: 0, as fast as possible).")),
     }
 
 
 def checked_live(live: Optional[str], host: str, port: Optional[int], web_port: Optional[int],
-                 rate: Optional[float], fail: Callable[[str], None], default_rate: float = 1.0):
+                 rate: Optional[float], fail: Callable[[str], None], default_rate: float = 1.0, paced: bool = False):
     """The :class:`~amr_twin.live.session.LiveOptions` of the live options, None without ``--live``; an option of
-    ``--live`` given without it, or a bad value, is refused in one line (``fail``)."""
+    ``--live`` given without it, or a bad value, is refused in one line (``fail``); ``paced``: ``--rate`` serves
+    another option of the command (``--ros1``, ``--serial-pty``)."""
     import math
 
     from amr_twin.live.session import LiveOptions
 
     if live is None:
-        for flag, value, unset in (("--port", port, None), ("--web-port", web_port, None), ("--rate", rate, None),
-                                   ("--host", host, "127.0.0.1")):
+        for flag, value, unset in (("--port", port, None), ("--web-port", web_port, None),
+                                   ("--rate", None if paced else rate, None), ("--host", host, "127.0.0.1")):
             if value != unset:
                 fail(f"{flag} is an option of --live: give --live (or drop {flag})")
         return None
@@ -125,6 +126,58 @@ def checked_live(live: Optional[str], host: str, port: Optional[int], web_port: 
     except ValueError as exc:
         fail(str(exc))
     return options
+
+
+def ros1_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
+    """``--ros1``, ``--roscore``, ``--serial-pty PATH`` (amr_twin.ros1.session, controllers/avr_serial_port.py)."""
+    return {
+        "ros1": (bool, typer.Option(False, "--ros1", help="Join the ROS 1 graph at ROS_MASTER_URI (Debian's ROS 1) "
+                 "and bridge the twin both ways: /clock (use_sim_time), /tf, /odom, /scan, /imu/*, /joint_states, "
+                 "... out; /wheel_Command and /cmd_vel in (docs/ros1.md). As fast as possible unless --rate.")),
+        "roscore": (bool, typer.Option(False, "--roscore", help="With --ros1: start a private roscore on a free "
+                    "port (its URI is printed) instead of joining ROS_MASTER_URI.")),
+        "serial_pty": (Optional[str], typer.Option(None, "--serial-pty", metavar="PATH", help="With --firmware avr: "
+                       "serve the emulated Mega's serial port on a pseudo-terminal linked at PATH (as /dev/ttyACM0 "
+                       "on the robot) for a rosserial host, paced to real time; the board is driven from ROS, not "
+                       "by the run's command (give `run stop`).")),
+    }
+
+
+def checked_ros1(ros1: bool, roscore: bool, serial_pty: Optional[str], firmware: str, live_given: bool,
+                 rate: Optional[float], fail: Callable[[str], None]):
+    """``(Ros1Options or None, AvrParams or None, rate)`` of the ROS 1 options, checked before the work: ROS 1
+    installed, the master answering, the pseudo-terminal's path free. ``rate`` is the pacing of a run that
+    is not served live: ``--rate``, else as fast as possible (0), or real time (1) with ``--serial-pty``."""
+    import math
+
+    if roscore and not ros1:
+        fail("--roscore is an option of --ros1: give --ros1 (or drop --roscore)")
+    params = None
+    if serial_pty is not None:
+        if not firmware.startswith("avr"):
+            fail(f"--serial-pty serves the emulated board's serial port: give --firmware avr (got {firmware})")
+        from amr_twin.controllers.avr_serial_port import pty_problem
+        from amr_twin.controllers.firmware import AvrParams
+
+        problem = pty_problem(serial_pty)  # a link left dangling by a killed twin is replaced
+        if problem:
+            fail(f"--serial-pty {serial_pty}: {problem}")
+        params = AvrParams(serial_pty=serial_pty)
+        if rate is not None and not (math.isfinite(rate) and 0 < rate <= 1000):
+            fail(f"--rate {rate}: with --serial-pty the board's serial port runs paced: give a rate in (0, 1000]")
+    if not live_given and rate is not None and not (math.isfinite(rate) and 0 <= rate <= 1000):
+        fail(f"--rate {rate}: must be a finite number in [0, 1000] (0: as fast as possible)")
+    options = None
+    if ros1:
+        from amr_twin.ros1.session import Ros1Options
+
+        options = Ros1Options(roscore=roscore, firmware_topics=serial_pty is None)
+        try:
+            options.check()
+        except ValueError as exc:
+            fail(str(exc))
+    default = 1.0 if serial_pty is not None else 0.0
+    return options, params, default if rate is None else rate
 
 
 @dataclass
@@ -140,6 +193,8 @@ class RunOptions:
     start: Optional[str] = None
     sensors: bool = False
     fault: list[str] = field(default_factory=list)
+    actor: list[str] = field(default_factory=list)
+    actors_random: Optional[str] = None
     stop_on_collision: bool = False
     csv: Optional[Path] = None
     as_json: bool = False
@@ -153,6 +208,9 @@ class RunOptions:
     port: Optional[int] = None
     web_port: Optional[int] = None
     rate: Optional[float] = None
+    ros1: bool = False
+    roscore: bool = False
+    serial_pty: Optional[str] = None
 
 
 def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
@@ -174,6 +232,13 @@ def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
         "fault": (Optional[list[str]], typer.Option(None, "--fault", metavar="KIND@T[:ARGS]",
                   help="Inject a fault at T s (repeatable), e.g. hall-left-dead@3, rosserial-loss@2:0.3,for=5; "
                   "kinds and arguments in docs/faults.md.")),
+        "actor": (Optional[list[str]], typer.Option(None, "--actor", metavar="KIND:X1,Y1;X2,Y2[@V][+T][/loop][/stop=M]",
+                  help="A person or pallet_jack walking these waypoints (m, world frame) at V m/s from T s "
+                  "(repeatable; /loop: round again; /stop=M: halts while the robot is within M m ahead); "
+                  "docs/actors.md.")),
+        "actors_random": (Optional[str], typer.Option(None, "--actors-random", metavar="N[/stop=M]",
+                          help="N people and pallet jacks on random loops of the world's free space, drawn "
+                          "from --seed (at most 50).")),
         "stop_on_collision": (bool, typer.Option(False, "--stop-on-collision", help="End the run at the first "
                               "collision (exit code 4).")),
         "csv": (Optional[Path], typer.Option(None, "--csv", help="Write the time series here (CSV).")),
@@ -186,6 +251,7 @@ def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
         "params": (Optional[Path], ParamsOpt),
         "set_": (Optional[list[str]], SetOpt),
         **live_options(),
+        **ros1_options(),
     }
 
 
@@ -207,7 +273,7 @@ def merge(ctx: typer.Context, values: dict, fail: Callable[[str], None]) -> RunO
     out = {}
     for name in RUN_OPTIONS:
         mine, theirs = values[name], parent.params[name] if parent is not None else None
-        if name in ("fault", "set_"):
+        if name in ("fault", "set_", "actor"):
             out[name] = list(theirs or []) + list(mine or [])
             continue
         here, before = _given(ctx, name), _given(parent, name)

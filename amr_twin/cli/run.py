@@ -28,6 +28,7 @@ import typer
 
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, _given, checked_firmware, checked_live,
+                                  checked_ros1,
                                   shared)
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
@@ -59,8 +60,42 @@ def _duration(opts: RunOptions, default_s: float) -> float:
     return duration_s
 
 
+MAX_ACTORS = 50
+"""Most actors in one run (each costs a few microseconds a grid instant and a mocap body)."""
+
+
+def _actors(opts: RunOptions, mission_actors: tuple, cfg, start, fail) -> tuple:
+    """The mission's actors, ``--actor``'s and ``--actors-random``'s, in that order; a bad one refused
+    in one line (their paths are checked against the world when it is built)."""
+    from amr_twin.model.actors import Actor, ActorError, check_speeds
+
+    try:
+        actors = list(mission_actors) + [Actor.parse(text, cfg) for text in opts.actor]
+        if opts.actors_random is not None:
+            count, _, flag = opts.actors_random.partition("/")
+            if not count.isdigit() or not 1 <= int(count) <= MAX_ACTORS or (flag and not flag.startswith("stop=")):
+                fail(f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}")
+            stop = float(flag[5:]) if flag else 0.0
+            actors += list(_guard(lambda: _random_actors(cfg, opts, int(count), start, stop)))
+        check_speeds(tuple(actors), cfg)
+    except (ActorError, ValueError) as exc:
+        fail(str(exc))
+    if len(actors) > MAX_ACTORS:
+        fail(f"--actor: {len(actors)} actors, at most {MAX_ACTORS}")
+    return tuple(actors)
+
+
+def _random_actors(cfg, opts: RunOptions, count: int, start, stop_m: float) -> tuple:
+    from amr_twin.model.actor_space import random_actors
+    from amr_twin.model.build import world_model
+    from amr_twin.model.worlds import default_start
+
+    x, y, _yaw = start if start is not None else default_start(opts.world)
+    return random_actors(world_model(cfg, opts.world), count, opts.seed, cfg, (x, y), stop_within_m=stop_m)
+
+
 def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RUN_S,
-            mission_faults: tuple[str, ...] = ()) -> None:
+            mission_faults: tuple[str, ...] = (), mission_actors: tuple = ()) -> None:
     """Check everything, run ``steps`` and report; exits non-zero on a refusal or a stop."""
     from amr_twin.sim.faults import FaultError, parse_faults
     from amr_twin.sim.loop import TwinOptions
@@ -81,12 +116,28 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         check_outputs(files={"--csv": opts.csv, "--record": opts.record, "--mcap": opts.mcap})
     except OutputError as exc:
         fail(str(exc))
-    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail)
+    paced = opts.ros1 or opts.serial_pty is not None
+    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail, paced=paced)
+    ros1, avr_params, rate = checked_ros1(opts.ros1, opts.roscore, opts.serial_pty, firmware, live is not None,
+                                          opts.rate, fail)
+    if opts.serial_pty is not None:
+        if not (single and len(steps) == 1 and steps[0][1].kind == "stop"):
+            fail("--serial-pty: the board's serial port is your rosserial host's: drive it from ROS and give "
+                 "`run stop` (the board starts braked)")
+        from amr_twin.controllers.firmware import check_avr
+
+        try:
+            check_avr(firmware, avr_params)
+        except ValueError as exc:
+            fail(str(exc))
+        steps = []  # the stop is the board's state at power-up: nothing is sent on its serial port
     cfg = _config(opts.config, opts.params, opts.set_, extra)
+    actors = _actors(opts, mission_actors, cfg, start, fail)
     recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
-                          visuals=recording or live is not None)
+                          visuals=recording or live is not None, firmware_params=avr_params,
+                          actors=actors)
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
 
@@ -95,13 +146,24 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         from amr_twin.sim.loop import Twin
 
         twin = Twin(cfg, options)
-        if recording:
-            from amr_twin.recording.rerun_log import attach
-            attach(twin)
-        if live is None:
-            res = run_mission(cfg, steps, duration_s, options, twin=twin)
-        else:
-            res = _run_live(twin, live, lambda: run_mission(cfg, steps, duration_s, options, twin=twin))
+        if opts.serial_pty is not None:
+            typer.echo(f"serial-pty: the board's serial port is {opts.serial_pty} (-> {twin.firmware.serial.device}), "
+                       f"paced at {rate:g}x real time", err=True)
+        try:
+            if recording:
+                from amr_twin.recording.rerun_log import attach
+                attach(twin)
+            if live is None and ros1 is None:
+                res = run_mission(cfg, steps, duration_s, options, twin=twin)
+            else:
+                res = _run_live(twin, live, lambda: run_mission(cfg, steps, duration_s, options, twin=twin), ros1, rate)
+        finally:
+            if opts.serial_pty is not None:
+                fw = twin.firmware
+                typer.echo(f"serial-pty: the board answered {fw.negotiations} topic negotiation(s) and asked the "
+                           f"time {fw.time_requests} time(s); {fw.serial.bytes_in} bytes in, {fw.serial.bytes_out} out, "
+                           f"{fw.serial.bytes_dropped} dropped; {fw.pacer.lag_resets} lag reset(s)", err=True)
+                fw.close()  # the pseudo-terminal's link goes with the run
         with all_or_nothing():
             if recording:
                 from amr_twin.recording.rerun_log import record_run
@@ -129,20 +191,39 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         raise typer.Exit(EXIT_COLLISION)
 
 
-def _run_live(twin, live, run):
-    """``run()`` with ``twin`` served live (amr_twin.live.session); Ctrl-C ends it without writing the outputs."""
-    from amr_twin.live.session import LiveSession
+def _run_live(twin, live, run, ros1=None, rate: float = 1.0):
+    """``run()`` with ``twin`` served live (amr_twin.live.session) and/or on a ROS 1 graph (amr_twin.ros1.session);
+    Ctrl-C ends it without writing the outputs."""
+    say = lambda line: typer.echo(line, err=True)  # noqa: E731
+    session = ros = None
+    if live is not None:
+        from amr_twin.live.session import LiveSession
 
-    session = LiveSession(twin, live, say=lambda line: typer.echo(line, err=True))
+        session = LiveSession(twin, live, say=say)
+        pacer = session.pacer
+    else:
+        from amr_twin.controllers.diff_drive import DiffDriveNode
+        from amr_twin.live.pacer import Pacer
+        from amr_twin.live.session import CMD_TIMEOUT_S
+
+        pacer = Pacer(twin, rate)
+        DiffDriveNode(twin.bus, twin.clock, twin.client, cmd_timeout_s=CMD_TIMEOUT_S)
     try:
+        if ros1 is not None:
+            from amr_twin.ros1.session import Ros1Session
+
+            ros = Ros1Session(twin, pacer, ros1, say=say)
         return run()
     except KeyboardInterrupt:
         fail(f"interrupted at t={twin.t_s:.2f} s simulated; no output written", code=130)
     finally:
-        session.close()
-        dropped = session.sink.dropped if hasattr(session.sink, "dropped") else 0
-        if dropped:
-            typer.echo(f"live: {dropped} client message(s) dropped (see the warnings above)", err=True)
+        (session or pacer).close()
+        if ros is not None:
+            ros.close()
+        for name, sink in (("live", session.sink if session else None), ("ros1", ros.bridge if ros else None)):
+            dropped = getattr(sink, "dropped", 0)
+            if dropped:
+                typer.echo(f"{name}: {dropped} message(s) from clients dropped (see the warnings above)", err=True)
 
 
 def register(app: typer.Typer) -> None:
@@ -171,7 +252,7 @@ def register(app: typer.Typer) -> None:
     @shared(fail)
     def run(opts: RunOptions, ctx: typer.Context,
             mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/sim/mission.py); "
-                                                   "its faults: list adds to --fault.")) -> None:
+                                                   "its faults: list adds to --fault, its actors: to --actor.")) -> None:
         """Run a command kind (linear, angular, motor, stop) or a --mission file."""
         if ctx.invoked_subcommand is not None:
             if mission is not None:
@@ -191,9 +272,9 @@ def register(app: typer.Typer) -> None:
             if not _given(ctx, "firmware"):
                 opts.firmware = "improved"  # as run goto (amr_twin/cli/goto.py)
             run_goals(opts, plan.goals, nav, opts.duration_s if opts.duration_s is not None else plan.duration_s,
-                      plan.faults)
+                      plan.faults, plan.actors, actors_of=_actors)
             return
-        execute(opts, plan.steps, False, plan.duration_s, plan.faults)
+        execute(opts, plan.steps, False, plan.duration_s, plan.faults, plan.actors)
 
     @run_app.command()
     @shared(fail)
@@ -234,4 +315,4 @@ def register(app: typer.Typer) -> None:
 
     from amr_twin.cli.goto import add_goto
 
-    add_goto(run_app)
+    add_goto(run_app, _actors)

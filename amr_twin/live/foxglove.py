@@ -4,8 +4,8 @@ A foxglove-sdk server (``ws://HOST:PORT``, subprotocol ``foxglove.sdk.v1``, the 
 of the published ``foxglove.websocket.v1`` specification) advertising the channels of the
 ``.mcap`` recording, with the same ROS 2 schemas (``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`)
 and the same CDR payloads (:mod:`amr_twin.recording.mcap_log`'s encoders and state messages), log
-times in simulated ns. Added: ``/twin/scene`` (``foxglove.SceneUpdate``,
-:mod:`amr_twin.live.scene`). Capabilities: ``time`` (the simulated clock, as
+times in simulated ns (``/actors/poses`` with actors). Added: ``/twin/scene`` (``foxglove.SceneUpdate``,
+:mod:`amr_twin.live.scene`: the world, the robot, the actors where they are). Capabilities: ``time`` (the simulated clock, as
 foxglove_bridge with ``use_sim_time``), ``clientPublish`` (``/cmd_vel`` and
 ``/wheel_Command_Service/request``, :mod:`amr_twin.live.inputs`) and ``services``
 (``/wheel_Command_Service``). ``/tf_static``, ``/robot_description`` and ``/twin/scene``'s
@@ -59,6 +59,8 @@ def live_topics(twin) -> dict[str, str]:
     skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
     if getattr(twin, "uwb", None) is None:
         skip.add("uwb/range")
+    if getattr(twin, "actors", None) is None:
+        skip.add("actors/poses")
     topics = {topic: typ for bus_topic, (topic, typ, _enc) in BUS_TOPICS.items() if bus_topic not in skip}
     topics.update(STATE_TOPICS)
     return topics
@@ -114,6 +116,7 @@ class FoxgloveSink:
         self.scene_channel = SceneUpdateChannel(SCENE_TOPIC, context=self._ctx)
         self.scene = SceneBuilder(twin.physics.model, twin.physics.data)
         self._bus_out: list[tuple[int, int, object, bytes]] = []  # t_ns, seq, channel, payload
+        self._actor_scenes: list[tuple[int, list]] = []  # t_ns, actor poses for the scene
         self._seq = 0
         self._state = StateSampler(twin.physics.model, twin.physics.data)
         self._rows = LiveRows(twin)  # true wheel speeds, PWM, currents, battery: the recorder's columns
@@ -155,6 +158,9 @@ class FoxgloveSink:
 
     # -- the twin's side (its thread) ---------------------------------------------------
     def _tap(self, topic: str, msg, t_us: int) -> None:
+        if topic == "actors/poses" and self.scene_channel.has_sinks():
+            poses = [(p.position.x, p.position.y, p.orientation.yaw_rad()) for p in msg.poses]
+            self._actor_scenes.append((t_us * 1000, poses))
         entry = BUS_TOPICS.get(topic)
         if entry is None:
             return
@@ -187,6 +193,9 @@ class FoxgloveSink:
                 if tb % GHOST_PERIOD_US == 0:
                     pos, quat = self._state_pose(batch, i)
                     self.scene_channel.log(self.scene.ghost_update(tb * 1000, pos, quat), log_time=tb * 1000)
+        for t, poses in self._actor_scenes:
+            self.scene_channel.log(self.scene.actors_update(t, poses), log_time=t)
+        self._actor_scenes = []
         rows = self._rows.take(t_us)
         if rows is not None:
             items += self._row_items(rows)

@@ -1,10 +1,10 @@
 """The 100 Hz rows of a live twin, as :meth:`amr_twin.recording.recorder.Recorder.series` gives them (issue 17).
 
-A grid sampler keeps, at each instant of the record grid, the loop's sensor row and the pin
-row the recorder will pair with it; :meth:`LiveRows.take` turns the rows the clock has passed
-into the series' columns with the recorder's own formulas (:func:`~amr_twin.sim.plant.motor_currents_a`,
-:func:`~amr_twin.sim.plant.battery_current_a`, the state of charge summed in the same order), so
-that a live viewer shows the numbers the ``.mcap`` and the ``.rrd`` hold, bit for bit.
+A grid sampler keeps, at each instant of the record grid, the loop's sensor row, the pin
+row the recorder will pair with it and the battery's state as its accounting left it (what
+the recorder keeps too); :meth:`LiveRows.take` turns the rows the clock has passed into the
+series' columns with the recorder's own formula (:func:`~amr_twin.sim.plant.motor_currents_a`),
+so that a live viewer shows the numbers the ``.mcap`` and the ``.rrd`` hold, bit for bit.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
-from amr_twin.sim.plant import battery_current_a, motor_currents_a
+from amr_twin.sim.plant import motor_currents_a
 from amr_twin.recording.recorder import RAD_S_TO_RPM, yaw_from_quat
 
 
@@ -23,9 +23,7 @@ class LiveRows:
 
     def __init__(self, twin):
         self.twin = twin
-        self._rows: list[tuple[int, np.ndarray, np.ndarray]] = []  # t_us, sensors, pins in force
-        self._prev_t_s: float | None = None
-        self._drained_a_s = 0.0
+        self._rows: list[tuple[int, np.ndarray, np.ndarray, list]] = []  # t_us, sensors, pins, battery
         self.count = 0
         """Rows taken so far (the index of the next row in the run's series)."""
         twin.samplers.append(self._on_grid)
@@ -33,7 +31,8 @@ class LiveRows:
 
     def _on_grid(self, t_us: int) -> None:
         d = self.twin.physics.data
-        self._rows.append((t_us, d.sensordata[:LOOP_SENSOR_DIM].copy(), self.twin.recorder.pins_in_force()))
+        self._rows.append((t_us, d.sensordata[:LOOP_SENSOR_DIM].copy(), self.twin.recorder.pins_in_force(),
+                           self.twin.plant.battery.grid_state()))
 
     def take(self, t_us: int) -> SimpleNamespace | None:
         """The rows at or before ``t_us`` as series columns (None if there are none): ``t_us`` (n,) int,
@@ -49,19 +48,13 @@ class LiveRows:
         t = t_us_arr * 1e-6
         sensors = np.array([r[1] for r in rows])
         pins = np.array([r[2] for r in rows])
-        cfg, mode, voltage = self.twin.cfg, pins[:, 4:6].astype(int), pins[:, 7:9]
-        current = motor_currents_a(cfg, voltage, sensors[:, 2:4], mode)
-        battery_a = battery_current_a(cfg, voltage, current, pins[:, 6])
-        soc = np.empty(n)
-        for i in range(n):  # the recorder's cumulative sum, element by element in the same order
-            if self._prev_t_s is not None:
-                self._drained_a_s = self._drained_a_s + battery_a[i] * (t[i] - self._prev_t_s)
-            self._prev_t_s = t[i]
-            soc[i] = cfg.battery.soc_initial - (self._drained_a_s / 3600.0) / cfg.battery.capacity_ah
+        battery = np.array([r[3] for r in rows])  # terminal_v, current_a, soc
+        mode, voltage = pins[:, 4:6].astype(int), pins[:, 6:8]
+        current = motor_currents_a(self.twin.cfg, voltage, sensors[:, 2:4], mode)
         index = np.arange(self.count, self.count + n)
         self.count += n
         return SimpleNamespace(
             t_us=t_us_arr, t_s=t, true_rpm=sensors[:, 2:4] * RAD_S_TO_RPM,
             pose=np.column_stack([sensors[:, 4], sensors[:, 5], yaw_from_quat(sensors[:, 7:11])]),
-            pwm_counts=pins[:, 0:2].astype(int), current_a=current, battery_v=pins[:, 6], battery_a=battery_a,
-            battery_soc=soc, index=index)
+            pwm_counts=pins[:, 0:2].astype(int), current_a=current, battery_v=battery[:, 0], battery_a=battery[:, 1],
+            battery_soc=battery[:, 2], index=index)

@@ -13,6 +13,8 @@ in m, colours from the model)::
     ground_truth    frame odom    the whole robot, translucent green, at its true pose (the
                                   twin's ground truth, 10 Hz): its offset from robot/ is the
                                   odometry's error
+    actors          frame odom    the people and pallet jacks at their true poses (actors/poses,
+                                  10 Hz; amr_twin.sim.actors), not in ``world``
     collisions      frame odom    a red sphere at each collision's first contact
 
 Frame ``odom`` is the root of the twin's tf tree (REP-105; the twin publishes no
@@ -95,6 +97,7 @@ class SceneBuilder:
         self._world: list[tuple] = []   # (kind, pos, quat, size, rgba) in odom
         self._links: dict[str, list[tuple]] = {}  # link -> geoms in the link's frame
         self._ghost: list[tuple] = []   # robot geoms in base_link's frame (the start configuration)
+        self._actors: list[list[tuple]] = [[] for _ in range(model.nmocap)]  # per mocap body: geoms in its frame
         for g in range(model.ngeom):
             if model.geom_group[g] not in VISUAL_GROUPS or model.geom_rgba[g][3] == 0:
                 continue
@@ -106,7 +109,10 @@ class SceneBuilder:
             body = int(model.geom_bodyid[g])
             name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or ""
             gpos, gquat = data.geom_xpos[g], _mat_quat(data.geom_xmat[g])
-            if name.startswith(ROBOT):
+            if model.body_mocapid[body] >= 0:  # an actor: drawn where actors/poses puts it
+                self._actors[model.body_mocapid[body]].append(
+                    (kind, model.geom_pos[g].copy(), model.geom_quat[g].copy(), size, rgba))
+            elif name.startswith(ROBOT):
                 self._links.setdefault(name[len(ROBOT):], []).append(
                     (kind, model.geom_pos[g].copy(), model.geom_quat[g].copy(), size, rgba))
                 p, q = _compose(*base_inv, gpos, gquat)
@@ -172,6 +178,16 @@ class SceneBuilder:
         odom_inv = _inverse(*self._odom_in_world)
         offset = _compose(*odom_inv, pos, quat)
         return self.fm.SceneUpdate(entities=[self._entity("ground_truth", "odom", self._ghost, t_ns, offset=offset)])
+
+    def actors_update(self, t_ns: int, poses_world):
+        """The actors at their world poses ``poses_world`` ((x_m, y_m, yaw_rad) each, in the order of
+        ``actors/poses``), drawn in ``odom``."""
+        odom_inv = _inverse(*self._odom_in_world)
+        geoms = []
+        for (x, y, yaw), parts in zip(poses_world, self._actors):
+            pose = _compose(*odom_inv, [x, y, 0.0], [math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+            geoms += [(kind, *_compose(*pose, p, q), size, rgba) for kind, p, q, size, rgba in parts]
+        return self.fm.SceneUpdate(entities=[self._entity("actors", "odom", geoms, t_ns)])
 
     def collisions_update(self, t_ns: int, points_world):
         """Red spheres (0.1 m) at the collisions' first contacts (world points (n, 3), m), in ``odom``."""

@@ -58,6 +58,16 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
     return spec
 
 
+def world_model(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
+    """The world alone, compiled (no robot): where actors may walk (:mod:`amr_twin.model.actor_space`)."""
+    try:
+        return _world_spec(cfg, world).compile()
+    except BuildError:
+        raise
+    except Exception as exc:
+        raise BuildError(f"--world {world}: MuJoCo compile: {str(exc).splitlines()[0]}") from None
+
+
 @dataclass
 class Build:
     """Result of :func:`build`: the compiled model and the specs it came from."""
@@ -78,8 +88,13 @@ def _without_imu(robot: mujoco.MjSpec) -> mujoco.MjSpec:
 
 
 def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
-          xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, obstacles: tuple = ()) -> Build:
+          xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, actors: tuple = (),
+          obstacles: tuple = ()) -> Build:
     """Build the robot in a world and compile it (the URDF from :func:`robot_urdf`'s cache).
+
+    ``actors`` (:class:`~amr_twin.model.actors.Actor`) are added as mocap bodies at their poses at
+    t = 0, after their speeds and paths are checked against their kinds' ranges and the world's
+    free space (:class:`~amr_twin.model.actors.ActorError`, one line).
 
     ``visuals=False`` leaves the robot's visual geoms out (40 of its 51 geoms, posed every
     step: ~15 % of a step in the empty world) and ``imu=False`` the IMU's sensors: a model
@@ -105,10 +120,19 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
     if held:  # the work station of fig. 5.1: the chassis welded where it stands
         scene.add_equality(type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
                            name1=ROBOT_PREFIX + "base_link", name="stand")
+    if actors:
+        from amr_twin.model.actors import add_actors, check_speeds
+
+        check_speeds(tuple(actors), cfg)
+        add_actors(scene, tuple(actors), cfg)
     try:
         model = scene.compile()
     except Exception as exc:
         raise BuildError(f"MuJoCo compile: {str(exc).splitlines()[0]}") from None
+    if actors:
+        from amr_twin.model.actor_space import check_paths
+
+        check_paths(model, tuple(actors), cfg)
     return Build(model=model, spec=scene, robot_spec=robot, urdf=urdf)
 
 

@@ -3,7 +3,8 @@
 Used to judge a map against the world it was built in (the map's walls against the
 world's walls) and a route's clearance. Boxes come from a compiled model (geom
 group 0, after ``mj_forward``), so default classes and rotations are resolved by
-MuJoCo; a box is kept when it spans the plane's height ``z_m``. Distances are
+MuJoCo; a box is kept when it spans the plane's height ``z_m`` (an actor's, a mocap body that moves,
+never: amr_twin/model/actors.py). Distances are
 computed in numpy for many points at once.
 """
 
@@ -40,7 +41,8 @@ def scan_plane_boxes(model, z_m: float) -> Footprints:
     mujoco.mj_forward(model, data)
     keep = []
     for g in range(model.ngeom):
-        if model.geom_group[g] != WORLD_GROUP or model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX:
+        if (model.geom_group[g] != WORLD_GROUP or model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX
+                or model.body_mocapid[model.geom_bodyid[g]] >= 0):
             continue
         R = data.geom_xmat[g].reshape(3, 3)
         half_z = np.abs(R[2]) @ model.geom_size[g]  # vertical half extent of the (possibly rotated) box

@@ -44,6 +44,8 @@ uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has 
     /battery_state     sensor_msgs/msg/BatteryState   the pack: voltage, current (negative discharging,
                                                       as ROS states it), charge, 10 Hz
     /twin/ground_truth nav_msgs/msg/Odometry          world -> base_link: true pose, twist in base_link, 100 Hz
+    /actors/poses      geometry_msgs/msg/PoseArray    the people's and pallet jacks' true poses, frame map (the
+                                                      world), 10 Hz (with TwinOptions(actors=...))
 """
 
 from __future__ import annotations
@@ -60,7 +62,7 @@ from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
-                       encode_range, encode_string, encode_tf_message, encode_twist)
+                       encode_pose_array, encode_range, encode_string, encode_tf_message, encode_twist)
 from amr_twin.ros.nav_messages import encode_occupancy_grid, encode_path, encode_polygon_stamped
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 
@@ -100,6 +102,7 @@ BUS_TOPICS = {
     "local_costmap/costmap": ("/local_costmap/costmap", "nav_msgs/OccupancyGrid", encode_occupancy_grid),
     "local_costmap/published_footprint": ("/local_costmap/published_footprint", "geometry_msgs/PolygonStamped",
                                           encode_polygon_stamped),
+    "actors/poses": ("/actors/poses", "geometry_msgs/PoseArray", encode_pose_array),
 }
 
 

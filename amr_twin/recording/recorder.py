@@ -2,9 +2,10 @@
 
 Per physics step the loop hands over the first :data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM`
 sensor values (wheel angles and speeds, base pose); the recorder keeps one row in
-``record_every_steps`` together with the pins and the battery voltage, which only
-change at events. A bus tap keeps every published wheel speed, wheel command and
-odometry message with its delivery time.
+``record_every_steps`` together with the pins in force, which only change at events, and
+the battery's state as its accounting left it at that instant (:attr:`Recorder.battery`,
+a grid sampler after the battery's: terminal voltage, current, charge). A bus tap keeps
+every published wheel speed, wheel command and odometry message with its delivery time.
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
-from amr_twin.sim.plant import MODE_CODES, battery_current_a, motor_currents_a
+from amr_twin.sim.grid_steps import GridRows, gather
+from amr_twin.sim.plant import MODE_CODES, motor_currents_a
 
 RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
 
@@ -31,10 +33,10 @@ class RunSeries:
     pwm_counts: np.ndarray       # (n, 2) analogWrite value on the driver's PWM pin
     direction: np.ndarray        # (n, 2) +1 DIR high (forward), -1 low
     mode: np.ndarray             # (n, 2) 0 drive, 1 coast, 2 brake
-    battery_v: np.ndarray        # (n,) terminal voltage
+    battery_v: np.ndarray        # (n,) terminal voltage at the instant (the battery's accounting)
     voltage_v: np.ndarray        # (n, 2) phase voltage the driver applies (0 braking or coasting)
     current_a: np.ndarray        # (n, 2) motor (phase) current, + driving forward
-    battery_a: np.ndarray        # (n,) the pack's current: drivers and auxiliary load
+    battery_a: np.ndarray        # (n,) the pack's current: drivers and auxiliary load (the accounting's)
     battery_soc: np.ndarray      # (n,) state of charge, 0..1 (the grid's accounting)
     published: dict[int, np.ndarray]  # wheel -> (k, 2) rows t_s, |rpm| as received on the PC (signed_published)
     odom: np.ndarray             # (k, 4) t_s, x_m, y_m, yaw_rad (odom frame)
@@ -77,6 +79,10 @@ class Recorder:
         self._published: dict[int, list[tuple[float, float]]] = {0: [], 1: []}
         self._odom: list[tuple[float, float, float, float]] = []
         self.commands: list[tuple[float, list[float]]] = []
+        battery = twin.plant.battery
+        self.battery = GridRows(3, 1, battery.grid_state, gather(battery.grid_state_addresses()))
+        """Grid sampler (the loop runs it after the battery's accounting): rows ``t_us, terminal_v,
+        current_a, soc`` (:meth:`amr_twin.sim.battery.Battery.grid_state`)."""
         self._handlers = {"wheel0_Vel": self._on_wheel0, "wheel1_Vel": self._on_wheel1,
                           "wheel_Command": self._on_command, "odom": self._on_odom}
         twin.bus.add_tap(self._tap, topics=tuple(self._handlers))  # not called for IMU, scan, tf
@@ -101,8 +107,7 @@ class Recorder:
     def _pin_row(self) -> np.ndarray:
         pins, plant = self.twin.firmware.pins, self.twin.plant
         return np.array([pins[0].pwm_counts, pins[1].pwm_counts, pins[0].direction, pins[1].direction,
-                         MODE_CODES[plant.mode[0]], MODE_CODES[plant.mode[1]], plant.battery.terminal_v(),
-                         plant.voltage_v[0], plant.voltage_v[1]])
+                         MODE_CODES[plant.mode[0]], MODE_CODES[plant.mode[1]], plant.voltage_v[0], plant.voltage_v[1]])
 
     def pins_changed(self, t_us: int) -> None:
         """The plant was updated at physics time ``t_us``: keep the new pin levels."""
@@ -146,15 +151,15 @@ class Recorder:
         pins = np.array(self._pins)[np.clip(idx, 0, None)]
         pose = np.column_stack([rows[:, 4], rows[:, 5], yaw_from_quat(rows[:, 7:11])])
         published = {w: np.array(v, float).reshape(-1, 2) for w, v in self._published.items()}
-        cfg, mode, voltage = self.twin.cfg, pins[:, 4:6].astype(int), pins[:, 7:9]
-        current = motor_currents_a(cfg, voltage, rows[:, 2:4], mode)
-        battery_a = battery_current_a(cfg, voltage, current, pins[:, 6])
-        # the plant drains the pack by the grid instant's current over the grid interval
-        drained_ah = np.concatenate([[0.0], np.cumsum(battery_a[1:] * np.diff(t))]) / 3600.0
-        soc = cfg.battery.soc_initial - drained_ah / cfg.battery.capacity_ah
+        mode, voltage = pins[:, 4:6].astype(int), pins[:, 6:8]
+        current = motor_currents_a(self.twin.cfg, voltage, rows[:, 2:4], mode)
+        # the battery as its accounting left it at each row's instant (the last at or before it)
+        kept = self.battery.rows
+        at = np.clip(np.searchsorted(kept[:, 0], t_us, side="right") - 1, 0, None)
+        battery_v, battery_a, soc = kept[at, 1], kept[at, 2], kept[at, 3]
         return RunSeries(
             t_s=t, wheel_angle_rad=rows[:, 0:2], true_rpm=rows[:, 2:4] * RAD_S_TO_RPM, pose=pose,
             pwm_counts=pins[:, 0:2].astype(int), direction=pins[:, 2:4].astype(int),
-            mode=mode, battery_v=pins[:, 6], voltage_v=voltage, current_a=current,
+            mode=mode, battery_v=battery_v, voltage_v=voltage, current_a=current,
             battery_a=battery_a, battery_soc=soc, published=published,
             odom=np.array(self._odom, float).reshape(-1, 4), commands=list(self.commands))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import TYPE_CHECKING
 
@@ -25,8 +24,6 @@ CSV_COMMENT = ("# amr-twin run: every rpm column is signed, + = the wheel rolls 
                "x_m, y_m, yaw_rad in the world, odom_* in odom; current_a + driving forward")
 """First line of ``--csv``: ``pandas.read_csv(path, comment="#")``, ``numpy.genfromtxt(path, delimiter=",",
 names=True, skip_header=1)``."""
-SIGNED_METRICS = ("reference", "final_value", "peak_value", "steady_error")
-"""Step metrics in RPM that carry the sign of the reference (overshoot and band are magnitudes)."""
 
 
 def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before: float = 0.0) -> np.ndarray:
@@ -74,17 +71,15 @@ def json_ready(value):
 
 
 def _step_metrics(series: RunSeries, wheel: int, reference_rpm: float) -> dict:
-    """Step metrics of a wheel's signed published speed (those of :data:`SIGNED_METRICS` signed)."""
+    """Step metrics of a wheel's signed published speed (those of
+    :data:`amr_twin.analysis.metrics.SIGNED_METRICS` signed)."""
     from amr_twin.analysis.metrics import step_info
     from amr_twin.recording.recorder import signed_published
 
     pub = signed_published(series, wheel)
     if reference_rpm == 0.0 or len(pub) < 2:
         return {}
-    info = step_info(pub[:, 0], pub[:, 1], reference_rpm)
-    out = info.as_dict() if hasattr(info, "as_dict") else dataclasses.asdict(info)
-    sign = 1.0 if reference_rpm > 0 else -1.0  # step_info measures along the reference
-    return {k: (sign * v if k in SIGNED_METRICS else v) for k, v in out.items()}
+    return step_info(pub[:, 0], pub[:, 1], reference_rpm).as_dict(sign=1.0 if reference_rpm > 0 else -1.0)
 
 
 def summary(result, single: bool, start_xy_yaw=None) -> dict:
@@ -108,6 +103,7 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
         pub = signed_published(series, w)
         entry = {"motion": int(wc[2 * w]) if wc else 0, "reference_rpm": reference,
                  "final_rpm": float(pub[-1, 1]) if len(pub) else 0.0,
+                 "final_rpm_t_s": float(pub[-1, 0]) if len(pub) else None,
                  "true_final_rpm": float(series.true_rpm[-1, w]), "samples": int(len(pub)),
                  "current_a_final": float(series.current_a[last_s, w].mean()),
                  "current_a_peak": float(np.abs(series.current_a[:, w]).max())}
@@ -128,6 +124,8 @@ def summary(result, single: bool, start_xy_yaw=None) -> dict:
     if start_xy_yaw is not None:
         sx, sy, syaw = start_xy_yaw
         out["start_pose"] = {"x_m": sx, "y_m": sy, "yaw_rad": syaw}
+        turned = math.remainder(yaw - syaw, math.tau)
+        out["from_start"] = {"distance_m": math.hypot(x - sx, y - sy), "heading_deg": math.degrees(turned)}
     return json_ready(out)
 
 
@@ -150,8 +148,8 @@ def text_lines(result, info: dict) -> list[str]:
     if wc:
         lines.append(f"wheel_Command [{wc[0]:g}, {wc[1]:.5f}, {wc[2]:g}, {wc[3]:.5f}]")
     for name, entry in info["wheels"].items():
-        lines.append(f"{name:5s} reference {entry['reference_rpm']:8.3f} RPM, published {entry['final_rpm']:8.3f} RPM, "
-                     f"true {entry['true_final_rpm']:8.3f} RPM")
+        lines.append(f"{name:5s} reference {entry['reference_rpm']:8.3f} RPM, true {entry['true_final_rpm']:8.3f} RPM, "
+                     + _published(entry, result.sim_s))
     for fault in info["faults"]:
         until = f" until {fault['until_s']:g} s" if fault["until_s"] is not None else ""
         lines.append(f"fault {fault['kind']} at {fault['t_s']:g} s{until}: " + _fault_effect(fault))
@@ -163,7 +161,23 @@ def text_lines(result, info: dict) -> list[str]:
     lines.append(f"pose x {pose['x_m']:.3f} m, y {pose['y_m']:.3f} m, yaw {pose['yaw_rad']:.3f} rad "
                  f"after {result.sim_s:g} s simulated ({result.wall_s:.2f} s wall)"
                  + (", stopped by the collision" if result.halted else ""))
+    moved = info.get("from_start")
+    if moved is not None and len(result.commands) > 1:  # a mission: where it ended against where it began
+        lines.append(f"ended {moved['distance_m']:.2f} m from its start pose, heading {moved['heading_deg']:+.1f} deg "
+                     "from its start heading (a mission's commands are timed: nothing steers by the pose)")
     return lines
+
+
+def _published(entry: dict, end_s: float) -> str:
+    """The last published speed with its time: the firmware publishes once per wheel
+    revolution and nothing while the wheel stands, so the last sample may be old."""
+    t = entry.get("final_rpm_t_s")
+    if t is None:
+        return "nothing published"
+    text = f"last published {entry['final_rpm']:8.3f} RPM at {t:.2f} s"
+    if abs(entry["true_final_rpm"]) < 0.5 and entry["final_rpm"] != 0.0:
+        text += f", {end_s - t:.2f} s before the end (the wheel stands: nothing is published at rest)"
+    return text
 
 
 def _fault_effect(fault: dict) -> str:

@@ -73,6 +73,18 @@ class Pose(_Fixed):
     orientation: Quaternion = field(default_factory=Quaternion)
 
 
+@dataclass(slots=True)
+class PoseArray:
+    """geometry_msgs/PoseArray: poses in ``header.frame_id`` (the twin's ``actors/poses``)."""
+
+    _type: ClassVar[str] = "geometry_msgs/PoseArray"
+    header: Header = field(default_factory=Header)
+    poses: list[Pose] = field(default_factory=list)
+
+    def serialized_size(self) -> int:
+        return self.header.serialized_size() + 4 + 56 * len(self.poses)
+
+
 @dataclass(slots=True, eq=False)
 class PoseWithCovariance(_Fixed):
     """geometry_msgs/PoseWithCovariance; covariance of (x, y, z, rx, ry, rz), 36 values."""

@@ -264,3 +264,16 @@ def encode_joint_state(msg) -> bytes:
     c.f64_seq(msg.velocity)
     c.f64_seq(msg.effort)
     return bytes(c.b)
+
+
+def encode_pose_array(msg) -> bytes:
+    """The CDR payload of a ``geometry_msgs/PoseArray`` message."""
+    b = _header(msg.header)
+    b += _pad(b, 4)
+    b += _U32.pack(len(msg.poses))
+    if msg.poses:
+        b += _pad(b, 8)
+    for pose in msg.poses:
+        p, o = pose.position, pose.orientation
+        b += _F64X7.pack(p.x, p.y, p.z, o.x, o.y, o.z, o.w)
+    return bytes(b)

@@ -10,6 +10,7 @@
 
 typedef struct {
     double soc, current_a, sag_v, t_last_s;       /* state: charge 0-1, pack current A, fault drop V, s */
+    double terminal_v;                            /* after the last accounting: OCV - R I - sag, V */
     double empty_v, nominal_v, low_span_v, high_span_v, r_ohm, capacity_as;  /* the pack */
     double volt[2];                               /* phase voltage of each motor, V */
     int mode[2];                                  /* 0 drive, 1 coast, 2 brake (plant.MODE_CODES) */
@@ -18,7 +19,8 @@ typedef struct {
     int dof[2];                                   /* the wheel hinges' dof addresses */
 } battery_state;
 
-/* Drain the pack by the present current since the last call (d->time). */
+/* Drain the pack by the present current since the last call (d->time); keep the terminal
+ * voltage that current leaves (the recorder's battery_v at this grid instant). */
 void battery_account(const mjData* d, battery_state* b) {
     double t = d->time;
     double dt = t - b->t_last_s;
@@ -46,4 +48,9 @@ void battery_account(const mjData* d, battery_state* b) {
     double current = supply / v_batt + b->quiescent2_a + b->aux_w / v_batt;
     b->current_a = current;
     b->soc = b->soc - current * dt / b->capacity_as;
+    s = b->soc;
+    s = s > 0.0 ? s : 0.0;
+    s = s < 1.0 ? s : 1.0;
+    ocv = s < 0.5 ? b->empty_v + b->low_span_v * s / 0.5 : b->nominal_v + b->high_span_v * (s - 0.5) / 0.5;
+    b->terminal_v = ocv - b->r_ohm * current - b->sag_v;
 }

@@ -6,7 +6,9 @@ Open-circuit voltage piecewise linear in the state of charge through (0, empty),
 loop's record grid (every 10 ms): the currents drawn at that instant, each driver's
 input current (``v_phase * i_phase / V_batt``, a lossless power stage, plus its
 quiescent current) and the auxiliary load at constant power, drain the charge for
-the time since the last call.
+the time since the last call; the terminal voltage that current leaves is kept with it
+(:meth:`Battery.grid_state`: the recorder's ``battery_v``, ``battery_a`` and
+``battery_soc`` at every grid instant).
 
 The accounting runs in C when a compiler is at hand (``battery.c``, built at first use by
 :mod:`amr_twin.sim.native_build`; measured in a 8 s run: about 13 us per 10 ms tick of
@@ -37,7 +39,7 @@ class _State(ctypes.Structure):
     """``battery_state`` of battery.c."""
 
     _fields_ = [("soc", ctypes.c_double), ("current_a", ctypes.c_double), ("sag_v", ctypes.c_double),
-                ("t_last_s", ctypes.c_double),
+                ("t_last_s", ctypes.c_double), ("terminal_v", ctypes.c_double),
                 ("empty_v", ctypes.c_double), ("nominal_v", ctypes.c_double), ("low_span_v", ctypes.c_double),
                 ("high_span_v", ctypes.c_double), ("r_ohm", ctypes.c_double), ("capacity_as", ctypes.c_double),
                 ("volt", _D2), ("mode", _I2), ("ke", _D2), ("r_ohm_motor", _D2), ("limit_a", _D2),
@@ -77,6 +79,7 @@ class Battery:
         s.low_span_v, s.high_span_v = cfg.v_nominal_v - cfg.v_empty_v, cfg.v_full_v - cfg.v_nominal_v
         s.r_ohm, s.capacity_as = cfg.internal_resistance_ohm, cfg.capacity_ah * 3600.0
         s.mode[0] = s.mode[1] = COAST
+        s.terminal_v = self.ocv_v()
         self._data = None
         self.account = self.account_python
         """The grid sampler ``account(t_us)``: the C helper once :meth:`connect` found it, else the twin."""
@@ -161,3 +164,21 @@ class Battery:
         current = supply / v_batt + b.quiescent2_a + b.aux_w / v_batt
         b.current_a = current
         b.soc = b.soc - current * dt / b.capacity_as
+        s = b.soc
+        s = s if s > 0.0 else 0.0
+        s = s if s < 1.0 else 1.0
+        ocv = (b.empty_v + b.low_span_v * s / 0.5 if s < 0.5
+               else b.nominal_v + b.high_span_v * (s - 0.5) / 0.5)
+        b.terminal_v = ocv - b.r_ohm * current - b.sag_v
+
+    # -- what the accounting leaves, for the recorder ---------------------------------
+    def grid_state(self) -> list[float]:
+        """``[terminal_v, current_a, soc]`` as the last accounting left them (V, A, 1): the
+        terminal voltage at the charge left and the current drawn, minus a fault's sag."""
+        s = self._s
+        return [s.terminal_v, s.current_a, s.soc]
+
+    def grid_state_addresses(self) -> list[int]:
+        """Where the values of :meth:`grid_state` lie (for a C row keeper, ``grid_steps.gather``)."""
+        base = ctypes.addressof(self._s)
+        return [base + getattr(_State, name).offset for name in ("terminal_v", "current_a", "soc")]

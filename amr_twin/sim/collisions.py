@@ -4,7 +4,9 @@ A *collision* is any contact between a geom of the robot and a geom of the world
 other than a wheel or a caster ball standing on the floor (a plane or height
 field, or an upward-facing surface: contact normal within :data:`SUPPORT_TILT_DEG`
 of vertical). The chassis touching a rack, a wheel rubbing a wall and the robot
-lying on the floor after tipping over are collisions.
+lying on the floor after tipping over are collisions. Any contact with an actor (a
+person or pallet jack, :mod:`amr_twin.model.actors`: a mocap body) is one, a wheel on a
+jack's fork too; it is named by the actor's body (``person_0``), all its geoms one episode.
 
 :class:`CollisionMonitor` is a grid sampler of the loop (:attr:`amr_twin.sim.loop.Twin.samplers`):
 on every record-grid instant (10 ms) it reads MuJoCo's contact list of the last
@@ -12,15 +14,13 @@ physics step. The pairs in contact rarely change, so the common case costs one
 read of the geom pairs and a comparison, in C when a compiler is at hand
 (``collisions.c``, :mod:`amr_twin.sim.native_build`: about 1 us against 11 us of Python on
 the loop's cold caches, measured in a 8 s run); the pairs are only classified when the
-set changes. Contact with one world geom is one
+set changes. Contact with one world geom (or one actor) is one
 :class:`Collision` episode, from the first instant it is seen to the last, with
 the robot parts involved and the peak normal force (read when the contacts change
 and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less than
 :data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
 the loop to stop at the first collision.
-
-:func:`check_start` refuses a start pose where the robot overlaps the world, and
-:func:`check_supported` one where nothing holds it up (a world without a floor).
+The checks of a start pose use the same classification: :mod:`amr_twin.sim.start_pose`.
 """
 
 from __future__ import annotations
@@ -54,16 +54,12 @@ MEMO_PAIRS = 256
 _IGNORE, _COLLIDE, _BY_NORMAL = 0, 1, 2
 
 
-class StartPoseError(ValueError):
-    """The robot cannot start where asked (inside an obstacle, nothing under it); one line."""
-
-
 @dataclass
 class Collision:
     """One contact episode between the robot and a world geom.
 
     ``t_s``/``x_m``/``y_m``/``z_m``: time and world position of the first contact
-    point; ``until_s``: last instant it was seen; ``hit``: the world geom's name;
+    point; ``until_s``: last instant it was seen; ``hit``: the world geom's name (an actor's body name);
     ``robot_parts``: the robot bodies that touched it; ``robot_pose``: base pose
     (x_m, y_m, yaw_rad) at the first contact; ``peak_force_n``: largest normal
     contact force seen, N.
@@ -104,8 +100,10 @@ class GeomRoles:
         self.support = np.zeros(m.ngeom, bool)
         self.support[list(physics.support_geoms.values())] = True
         self.floor = np.isin(m.geom_type, _FLOOR_TYPES) & ~self.robot
+        self.actor = (m.body_mocapid[m.geom_bodyid] >= 0) & ~self.robot  # (ngeom,) bool: a person's, a jack's
         self._pair: dict[tuple[int, int], int] = {}
         self._part: dict[int, str] = {}
+        self._world: dict[int, str] = {}
 
     def kind(self, g1: int, g2: int) -> int:
         """_IGNORE, _COLLIDE or _BY_NORMAL (a support geom on a non-floor world geom)."""
@@ -117,7 +115,7 @@ class GeomRoles:
                 k = _IGNORE  # world-world, or the robot with itself
             else:
                 part, other = (g1, g2) if r1 else (g2, g1)
-                if self.support[part]:
+                if self.support[part] and not self.actor[other]:
                     k = _IGNORE if self.floor[other] else _BY_NORMAL
                 else:
                     k = _COLLIDE
@@ -134,12 +132,20 @@ class GeomRoles:
         return part
 
     def world_name(self, g: int) -> str:
-        """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed."""
+        """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed; an actor's body name."""
+        name = self._world.get(g)
+        if name is None:
+            name = self._world[g] = self._world_name(g)
+        return name
+
+    def _world_name(self, g: int) -> str:
         m = self.model
+        body = m.geom_bodyid[g]
+        if self.actor[g]:
+            return _name(m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}")
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)
         if name:
             return name
-        body = m.geom_bodyid[g]
         return f"geom {g}" + (f" of body {_name(m, mujoco.mjtObj.mjOBJ_BODY, body, str(body))}" if body else "")
 
 
@@ -198,7 +204,7 @@ class CollisionMonitor:
         self.collisions: list[Collision] = []
         self.listeners: list = []
         """Callables ``f(collision)`` told of each new episode as it begins (the terminal menu prints it)."""
-        self._open: dict[int, Collision] = {}  # world geom -> its episode
+        self._open: dict[str, Collision] = {}  # what was hit (a world geom's name, an actor's) -> its episode
         self._last_pairs: list | None = None
         self._last_full_us = -(1 << 62)
         self._force = np.zeros(6)
@@ -265,14 +271,14 @@ class CollisionMonitor:
         mujoco.mj_contactForce(m, d, i, self._force)
         force = abs(float(self._force[0]))
         part = self.roles.robot_part(robot_g)
-        ep = self._open.get(world_g)
+        hit = self.roles.world_name(world_g)
+        ep = self._open.get(hit)
         if ep is None:
             pos = d.contact.pos[i]
             pose = self.physics.pose()
             ep = Collision(t_us * 1e-6, float(pos[0]), float(pos[1]), float(pos[2]),
-                           self.roles.world_name(world_g), [part], (pose.x_m, pose.y_m, pose.yaw_rad),
-                           until_s=t_us * 1e-6)
-            self._open[world_g] = ep
+                           hit, [part], (pose.x_m, pose.y_m, pose.yaw_rad), until_s=t_us * 1e-6)
+            self._open[hit] = ep
             self.collisions.append(ep)
             for listener in self.listeners:
                 listener(ep)
@@ -289,29 +295,3 @@ class CollisionMonitor:
 
     def as_dicts(self) -> list[dict]:
         return [c.as_dict() for c in self.collisions]
-
-
-def check_start(physics, where: str) -> None:
-    """Raise :class:`StartPoseError` if the robot overlaps the world where it was placed.
-
-    ``physics`` has just been built (``mj_forward`` ran: the contacts are those of
-    the start pose); ``where`` names the pose for the message.
-    """
-    roles = GeomRoles(physics)
-    mujoco.mj_forward(physics.model, physics.data)
-    hits, _ = collision_contacts(roles, physics.data)
-    if hits:
-        names = sorted({roles.world_name(w) for _i, _r, w in hits})
-        raise StartPoseError(f"{where}: the robot overlaps {', '.join(names)} there; "
-                             "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
-
-
-def check_supported(physics, where: str) -> None:
-    """Raise :class:`StartPoseError` if no wheel or caster touches anything after settling."""
-    d = physics.data
-    support = set(physics.support_geoms.values())
-    touching = any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist()) if d.ncon else False
-    if not touching:
-        z = float(physics.data.qpos[physics.root_qpos + 2])
-        raise StartPoseError(f"{where}: nothing holds the robot up (no wheel or caster touches the ground "
-                             f"after settling, base at z = {z:.2f} m): the world has no floor there")

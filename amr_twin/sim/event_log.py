@@ -55,29 +55,30 @@ def _diagnostic(t_ns: int, level: int, name: str, message: str, values: dict) ->
     return bytes(c.b)
 
 
-def mcap_items(twin, order: int) -> list[tuple[int, int, str, str, bytes]]:
-    """``(t_ns, order, topic, type, CDR payload)`` of the twin's collisions and faults (see the module notes)."""
-    items = []
+def statuses(twin) -> list[tuple[int, str, int, str, str, dict]]:
+    """``(t_ns, topic, level, name, message, values)`` of the twin's collisions and faults, one
+    DiagnosticStatus each (see the module notes); the ROS 1 bridge publishes the same on /diagnostics."""
+    out = []
     for c in _collisions(twin):
-        t_ns = int(round(c.t_s * 1e9))
         values = {k: v for k, v in c.as_dict().items() if k != "robot_pose"}
         values["robot_parts"] = ",".join(c.robot_parts)
         values.update({f"robot_{k}": v for k, v in c.as_dict()["robot_pose"].items()})
-        items.append((t_ns, order, "/twin/collisions", DIAGNOSTIC_ARRAY,
-                      _diagnostic(t_ns, ERROR, "twin/collision", f"{', '.join(c.robot_parts)} hit {c.hit}", values)))
-        order += 1
+        out.append((int(round(c.t_s * 1e9)), "/twin/collisions", ERROR, "twin/collision",
+                    f"{', '.join(c.robot_parts)} hit {c.hit}", values))
     for f in _faults(twin):
         d = f.describe()
         values = {k: v for k, v in d.items() if k != "description" and v is not None}
         for t_s, level, what in ((f.t_s, WARN, "injected"), (f.until_s, OK, "cleared")):
-            if t_s is None:
-                continue
-            t_ns = int(round(t_s * 1e9))
-            items.append((t_ns, order, "/twin/faults", DIAGNOSTIC_ARRAY,
-                          _diagnostic(t_ns, level, f"twin/fault/{f.name}", f"{f.text} {what}: {d['description']}",
-                                      values)))
-            order += 1
-    return items
+            if t_s is not None:
+                out.append((int(round(t_s * 1e9)), "/twin/faults", level, f"twin/fault/{f.name}",
+                            f"{f.text} {what}: {d['description']}", values))
+    return out
+
+
+def mcap_items(twin, order: int) -> list[tuple[int, int, str, str, bytes]]:
+    """``(t_ns, order, topic, type, CDR payload)`` of the twin's collisions and faults (see the module notes)."""
+    return [(t_ns, order + i, topic, DIAGNOSTIC_ARRAY, _diagnostic(t_ns, level, name, message, values))
+            for i, (t_ns, topic, level, name, message, values) in enumerate(statuses(twin))]
 
 
 def log_events(rec, twin) -> None:

@@ -3,7 +3,8 @@
  *
  * The C twin of the grid loop of Twin._step_physics (amr_twin/sim/loop.py): the same mj_step
  * calls in the same order and, at each instant, the same helpers the Python samplers call
- * (rr_update, battery_account, contacts_changed, the row keepers' rr_support_row and gs_gather), so
+ * (rr_update, battery_account, actors_update, contacts_changed, the row keepers' rr_support_row, gs_gather
+ * and actors_row), so
  * both give the same bits;
  * tests/sim/test_grid_steps.py compares runs of each. A sampler may hand the instant back to
  * Python (gs_ctx.handoff: the collision monitor when the contacts changed, a row keeper when
@@ -21,7 +22,7 @@
 #include <string.h>
 #include <mujoco/mujoco.h>
 
-enum { GS_CALL2 = 0, GS_CALL3 = 1, GS_CALL4 = 2, GS_CHANGED = 3, GS_ROW = 4 };
+enum { GS_CALL2 = 0, GS_CALL3 = 1, GS_CALL4 = 2, GS_CHANGED = 3, GS_ROW = 4, GS_TIMED = 5 };
 
 typedef struct {
     int kind;           /* how fn is called (the enum above) */
@@ -106,6 +107,9 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
                 break;
             case GS_CALL4:
                 ((void (*)(void*, void*, void*, void*))g->fn)(a[0], a[1], a[2], a[3]);
+                break;
+            case GS_TIMED:  /* fn(a0, a1, the instant in us) */
+                ((void (*)(void*, void*, int64_t))g->fn)(a[0], a[1], t);
                 break;
             case GS_CHANGED:
                 if (((int (*)(void*, void*))g->fn)(a[0], a[1])) {

@@ -3,7 +3,7 @@
 Between two events the loop steps the physics to each record-grid instant (every 10 ms),
 keeps the loop sensors' row there and runs the grid samplers. When every sampler of the
 twin has a C form (its ``grid_native``: a :class:`Sampler`; the rolling resistance, the
-battery, the collision monitor while no collision is open, and :class:`GridRows` keepers:
+battery, the actors' motion, the collision monitor while no collision is open, and :class:`GridRows` keepers:
 a sweep point's support loads, the IMU's true values, the LiDAR's laser poses),
 :class:`GridStepper` runs that loop in ``grid_steps.c``: mj_step through a pointer into
 libmujoco, the row copied, the samplers' helpers called in order; one call a chunk against
@@ -25,9 +25,10 @@ import numpy as np
 from amr_twin.sim.native_build import address, mujoco_address, open_helper
 
 C_SOURCE = Path(__file__).with_name("grid_steps.c")
-CALL2, CALL3, CALL4, CHANGED, ROW = range(5)
+CALL2, CALL3, CALL4, CHANGED, ROW, TIMED = range(6)
 """How a :class:`Sampler`'s function is called: with 2, 3 or 4 of its arguments; as a test whose
-non-zero result hands the instant to Python; as a row keeper ``f(a0, a1, a2, row)``."""
+non-zero result hands the instant to Python; as a row keeper ``f(a0, a1, a2, row)``; with 2 of its
+arguments and the instant, us (int64: ``f(a0, a1, t_us)``)."""
 _P = ctypes.c_void_p
 NEVER_BEFORE, NEVER_DUE = -(1 << 62), 1 << 62
 

@@ -15,10 +15,14 @@ Format (YAML)::
     faults:                 # optional: KIND@T[:ARGS] as --fault (amr_twin/sim/faults.py)
       - hall-left-dead@3
       - rosserial-loss@5:0.5,for=2
+    actors:                 # optional: people and pallet jacks (amr_twin/model/actors.py, docs/actors.md)
+      - {kind: person, waypoints_xy_m: [[-3, 2], [-3, -2]], speed_m_s: 1.2, start_s: 1, loop: true}
 
 Each step has ``t_s`` and exactly one command key. Unknown keys, missing or
 non-finite numbers raise :class:`MissionError` with a one-line message naming
-the step and the field. Speeds outside the thesis range are not checked here:
+the step and the field. An actor needs its ``kind``, ``waypoints_xy_m`` and
+``speed_m_s`` (:meth:`amr_twin.model.actors.Actor.from_mapping`); its speed range and
+its path through the world are checked when the model is built (docs/actors.md). Speeds outside the thesis range are not checked here:
 the client refuses them at run time (code 1), as on the robot.
 
 A navigation mission has ``goals`` instead of ``steps`` (visited in order by the
@@ -108,6 +112,7 @@ class Mission:
     duration_s: float | None
     steps: list[tuple[float, Command]]
     faults: tuple[str, ...] = ()
+    actors: tuple = ()  # amr_twin.model.actors.Actor items
     goals: tuple = ()
     navigation: dict | None = None
 
@@ -149,8 +154,8 @@ def _goals_plan(tree: dict) -> Mission:
             if not isinstance(tree[key], str) or not tree[key]:
                 raise MissionError(f"{key}: {tree[key]!r} must be a name or a file path")
             nav[key] = tree[key]
-    return Mission(duration_s, [], _faults(tree), tuple(parse_goal(f"goals[{i}]", g) for i, g in enumerate(goals)),
-                   nav)
+    return Mission(duration_s, [], _faults(tree), _actors(tree),
+                   tuple(parse_goal(f"goals[{i}]", g) for i, g in enumerate(goals)), nav)
 
 
 def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
@@ -172,13 +177,25 @@ def _faults(tree) -> tuple[str, ...]:
     return tuple(faults)
 
 
+def _actors(tree) -> tuple:
+    from amr_twin.model.actors import Actor, ActorError
+
+    actors = tree.get("actors") or []
+    if not isinstance(actors, list):
+        raise MissionError("actors: expected a list of {kind, waypoints_xy_m, speed_m_s, ...} mappings")
+    try:
+        return tuple(Actor.from_mapping(a, f"actors[{i}]") for i, a in enumerate(actors))
+    except ActorError as exc:
+        raise MissionError(str(exc)) from None
+
+
 def parse_mission_plan(tree) -> Mission:
     """A loaded mission mapping to a :class:`Mission`."""
     if not isinstance(tree, dict):
         raise MissionError("mission: expected a mapping with duration_s and steps (or goals)")
-    unknown = [k for k in tree if k not in ("duration_s", "steps", "faults", "goals") + NAV_KEYS]
+    unknown = [k for k in tree if k not in ("duration_s", "steps", "faults", "actors", "goals") + NAV_KEYS]
     if unknown:
-        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps, faults; "
+        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps, faults, actors; "
                            f"or goals, {', '.join(NAV_KEYS)})")
     if "goals" in tree:
         return _goals_plan(tree)
@@ -197,7 +214,7 @@ def parse_mission_plan(tree) -> Mission:
     for i, (t_s, _) in enumerate(parsed):
         if not 0.0 <= t_s <= duration_s:
             raise MissionError(f"steps[{i}].t_s: {t_s} must lie in [0, {duration_s}] s")
-    return Mission(duration_s, sorted(parsed, key=lambda s: s[0]), _faults(tree))
+    return Mission(duration_s, sorted(parsed, key=lambda s: s[0]), _faults(tree), _actors(tree))
 
 
 def load_mission_file(path: str | Path) -> Mission:

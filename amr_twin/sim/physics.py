@@ -190,6 +190,28 @@ class Physics:
             out[name] = pos[:2].copy()
         return out
 
+    def base_heading_xy(self) -> tuple[float, float, float, float]:
+        """Base origin x, y (m) and the world x, y of its x axis (unnormalised when tilted), plain floats."""
+        b, d = self.base_body, self.data
+        return (d.xpos.item(3 * b), d.xpos.item(3 * b + 1), d.xmat.item(9 * b), d.xmat.item(9 * b + 3))
+
+    # -- things that move in the world (amr_twin/sim/actors.py) ----------------------------
+    def mocap_index(self, body: str) -> int:
+        """The mocap index of the world's mocap body ``body`` (an actor: ``person_0``)."""
+        m = self.model
+        b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
+        if b < 0 or m.body_mocapid[b] < 0:
+            raise KeyError(f"model has no mocap body named {body}")
+        return int(m.body_mocapid[b])
+
+    def set_mocap_pose(self, body: str | int, x_m: float, y_m: float, yaw_rad: float) -> None:
+        """Place the mocap body ``body`` (name, or :meth:`mocap_index`) on the floor at ``x_m, y_m``
+        heading ``yaw_rad``; it is there from the next step on."""
+        i = body if isinstance(body, int) else self.mocap_index(body)
+        h = 0.5 * yaw_rad
+        self.data.mocap_pos[i] = (x_m, y_m, 0.0)
+        self.data.mocap_quat[i] = (math.cos(h), 0.0, 0.0, math.sin(h))
+
     # -- actuation --------------------------------------------------------------------
     def set_motor(self, wheel: int, mode: str, voltage_v: float = 0.0, torque_limit_nm: float | None = None) -> None:
         """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``.

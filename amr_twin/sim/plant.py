@@ -62,14 +62,6 @@ def motor_currents_a(cfg: TwinConfig, voltage_v: np.ndarray, speed_rad_s: np.nda
     return out
 
 
-def battery_current_a(cfg: TwinConfig, voltage_v: np.ndarray, current_a: np.ndarray,
-                      battery_v: np.ndarray) -> np.ndarray:
-    """(n,) the pack's current from (n, 2) phase voltages and currents and (n,) its voltage, A."""
-    v_batt = np.maximum(1.0, battery_v)
-    supply = (voltage_v * current_a).sum(axis=1) / v_batt + 2 * cfg.driver.quiescent_current_a
-    return supply + cfg.battery.auxiliary_power_w / v_batt
-
-
 class Plant:
     """Drivers, motors and battery of both wheels, applied to a :class:`Physics`."""
 
@@ -131,15 +123,6 @@ class Plant:
             i = (volt - ke * speed) / r_ohm
             out.append(max(-limit, min(limit, i)))
         return out
-
-    def battery_current_a(self) -> float:
-        """The pack's current now, A: both drivers (quiescent included) plus the auxiliary load.
-
-        The scalar form of :func:`battery_current_a`."""
-        v_batt = max(1.0, self.battery.terminal_v())
-        motor = self.motor_currents_a()
-        supply = (self.voltage_v[0] * motor[0] + self.voltage_v[1] * motor[1]) / v_batt
-        return supply + self._quiescent2_a + self._aux_w / v_batt
 
     def account_battery(self, t_us: int = 0) -> None:
         """Drain the battery by the present current since the last call (:meth:`Battery.account`;

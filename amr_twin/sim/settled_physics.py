@@ -9,7 +9,7 @@ copy gives the same bits as stepping on from the original, and each twin gets it
 copy to change (motor modes, rolling resistance, faults).
 
 Kept: the last :data:`KEEP` settled models of this process, by configuration, world,
-start pose, visuals, IMU sensors and settling time; built-in worlds only (a world file
+start pose, visuals, IMU sensors, actors and settling time; built-in worlds only (a world file
 may change between runs). A configuration that cannot be hashed is built every time.
 """
 
@@ -20,7 +20,7 @@ from pathlib import Path
 
 from amr_twin.model.build import build
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.collisions import check_start, check_supported
+from amr_twin.sim.start_pose import check_start, check_supported
 from amr_twin.sim.physics import Physics
 
 KEEP = 2
@@ -30,14 +30,18 @@ _kept: OrderedDict = OrderedDict()
 
 
 def settled_physics(cfg: TwinConfig, world: str, start_xy_yaw: tuple[float, float, float], visuals: bool,
-                    imu: bool, settle_s: float, where: str, obstacles: tuple = ()) -> tuple[Physics, str]:
-    """``(physics, urdf)``: the robot built in ``world`` (with ``obstacles`` added) at ``start_xy_yaw`` (x_m, y_m, yaw_rad),
+                    imu: bool, settle_s: float, where: str, actors: tuple = (),
+                    obstacles: tuple = ()) -> tuple[Physics, str]:
+    """``(physics, urdf)``: the robot built in ``world`` at ``start_xy_yaw`` (x_m, y_m, yaw_rad) with
+    ``actors`` (:class:`~amr_twin.model.actors.Actor`, standing at their poses at t = 0) and ``obstacles``
+    (:class:`~amr_twin.model.worlds.Obstacle`, unmapped boxes),
     checked clear of the world (``where`` names the start in the errors), settled for
     ``settle_s`` with its motors braked and its clock set back to 0; a copy of a kept one when
     the same was settled before."""
     key = None
     if not Path(str(world)).suffix:
-        key = (cfg, str(world), tuple(start_xy_yaw), bool(visuals), bool(imu), float(settle_s), tuple(obstacles))
+        key = (cfg, str(world), tuple(start_xy_yaw), bool(visuals), bool(imu), float(settle_s), tuple(actors),
+               tuple(obstacles))
         try:
             kept = _kept.get(key)
         except TypeError:  # an unhashable configuration: build it
@@ -45,7 +49,8 @@ def settled_physics(cfg: TwinConfig, world: str, start_xy_yaw: tuple[float, floa
         if kept is not None:
             _kept.move_to_end(key)
             return kept[0].clone(), kept[1]
-    built = build(cfg, world, start_xy_yaw, visuals=visuals, imu=imu, obstacles=tuple(obstacles))
+    built = build(cfg, world, start_xy_yaw, visuals=visuals, imu=imu, actors=tuple(actors),
+                  obstacles=tuple(obstacles))
     physics = Physics(built.model)
     check_start(physics, where)
     physics.settle(settle_s)

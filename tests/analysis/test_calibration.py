@@ -96,3 +96,51 @@ def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
     res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "2"])
     assert res.exit_code == 2 and "the log must be longer" in res.stderr and not out.exists()
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
+    """Issue 33: calibrate printed one unformatted 4 KB JSON line. Now one line per parameter
+    (value, 1 sigma) and per feature (a thesis target), the strong correlations named; --json
+    for a program. The progress bar goes to stderr."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from amr_twin.cli.main import app
+    from amr_twin.sim.run import Command, run_command
+
+    series = run_command(load_config(), Command("linear", speed_m_s=0.7), 4.0).series
+    log = tmp_path / "log.csv"
+    log.write_text("t_s,wheel,rpm,command\n" + "".join(
+        f"{t},{w},{rpm},linear:0.7\n" for w in (0, 1) for t, rpm in series.published[w]))
+    args = ["calibrate", "--target", str(log), "--max-evaluations", "2", "--jobs", "1"]
+    text = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a.yaml")])
+    assert text.exit_code == 0, text.output
+    lines = text.stdout.splitlines()
+    assert lines[0].startswith(f"calibrated against {log}: chi^2 ") and max(map(len, lines)) < 160
+    for key in ("driver.gain", "motor_left.ke_v_s_rad", "motor_right.friction_nm"):
+        row = next(line for line in lines if line.startswith(key)).split()
+        assert len(row) == 3 and float(row[2]) > 0  # value and its 1 sigma
+    assert "correlated (|r| >= 0.9):" in lines
+    assert lines[-1] == f"wrote {tmp_path / 'a.yaml'}"
+    machine = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "b.yaml"), "--json"])
+    (line,) = machine.stdout.strip().splitlines()
+    data = json.loads(line)
+    assert set(data["values"]) == set(data["sigma"]) >= {"driver.gain"} and data["out"] == str(tmp_path / "b.yaml")
+
+
+def test_the_summary_lists_each_feature_against_its_target():
+    from amr_twin.analysis.calibration import Fit
+
+    fit = Fit(values={"driver.gain": 1.61}, sigma={"driver.gain": 0.14}, correlation={"driver.gain": {"driver.gain": 1}},
+              residual=19.05, evaluations=40, target="the thesis",
+              features=[{"name": "run2.right.overshoot", "twin": 1.45, "target": 4.0, "sigma": 1.0, "unit": "RPM",
+                         "weighted": -2.55},
+                        {"name": "run3.left.true_delay", "twin": None, "target": 0.2, "sigma": 0.15, "unit": "s",
+                         "weighted": 10.0}])
+    lines = fit.text_lines()
+    assert lines[0] == "calibrated against the thesis: chi^2 19.05 over 2 targets, 40 evaluations"
+    assert next(x for x in lines if x.startswith("run2.right.overshoot")).split() == [
+        "run2.right.overshoot", "1.45", "4", "1", "RPM", "-2.55"]
+    assert next(x for x in lines if x.startswith("run3.left.true_delay")).split()[1] == "missing"
+    assert "correlated (|r| >= 0.9): none" in lines

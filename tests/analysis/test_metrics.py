@@ -76,12 +76,57 @@ def test_sparse_samples_interpolate_from_rest():
     assert info.oscillation == pytest.approx(4.0)
 
 
-def test_never_reaching_gives_nan():
+def test_a_response_that_ends_short_is_timed_on_its_final_value_and_its_offset_said():
+    """Ogata's times are fractions of the final value; the shortfall is the steady error's."""
     t = np.linspace(0, 5, 51)
-    info = step_info(t, 0.3 * np.ones_like(t) * np.minimum(t, 1.0), 1.0)
-    assert math.isnan(info.delay_s) and math.isnan(info.rise_s) and math.isnan(info.settling_s)
-    assert info.as_dict()["delay_s"] is None
-    assert info.steady_error == pytest.approx(-0.7)
+    info = step_info(t, 0.3 * np.minimum(t, 1.0), 1.0)
+    assert info.final_value == pytest.approx(0.3) and info.steady_error == pytest.approx(-0.7)
+    assert info.delay_s == pytest.approx(0.5) and info.rise_s == pytest.approx(0.8)
+    assert info.overshoot == 0.0 and math.isnan(info.peak_s)  # a ramp and a plateau: no peak
+    at_rest = step_info(t, np.zeros_like(t), 1.0)
+    assert math.isnan(at_rest.delay_s) and math.isnan(at_rest.rise_s)
+    assert at_rest.as_dict()["delay_s"] is None and at_rest.steady_error == -1.0
+
+
+def test_a_permanent_offset_is_a_steady_error_not_an_overshoot():
+    """Chapter 5 run 6, right wheel: a monotone rise to 105.17 RPM against 99.20 (issue 30)."""
+    y = first_order(T, k=105.17, tau=0.5)
+    info = step_info(T, y, 99.20, settling_band=4.96)
+    assert info.overshoot == 0.0 and info.overshoot_pct == 0.0
+    assert math.isnan(info.peak_s) and math.isnan(info.peak_value) and info.as_dict()["peak_s"] is None
+    assert info.steady_error == pytest.approx(5.97, abs=1e-3)
+    # settled about its own final value: 4.96 RPM is 4.72 % of the step, exp(-t/tau) = 0.0472
+    assert info.settling_s == pytest.approx(-0.5 * math.log(4.96 / 105.17), abs=1e-3)
+    # sampled once per revolution as the firmware publishes it, the same
+    ts = np.arange(1.56, 16.0, 0.8)
+    sparse = step_info(ts, first_order(ts, k=105.17, tau=0.5), 99.20)
+    assert sparse.overshoot == 0.0 and math.isnan(sparse.peak_s)
+
+
+def test_overshoot_is_measured_from_the_final_value_it_comes_back_to():
+    """Run 4's shape: up to 99.17, back to 93.98 (reference 91.67): 5.19 over, 2.31 off."""
+    t = np.array([1.15, 2.01, 3.01, 4.01, 5.01, 6.03, 7.04, 8.04, 12.0, 15.0])
+    y = np.array([63.64, 99.02, 99.17, 99.14, 99.10, 95.31, 94.06, 93.98, 93.98, 93.98])
+    info = step_info(t, y, 91.67)
+    assert info.peak_s == 3.01 and info.peak_value == 99.17
+    assert info.overshoot == pytest.approx(99.17 - 93.98)
+    assert info.overshoot_pct == pytest.approx(100 * (99.17 - 93.98) / 93.98)
+    assert info.steady_error == pytest.approx(93.98 - 91.67)
+
+
+def test_no_peak_while_still_rising_or_within_the_tolerance():
+    t = np.arange(1.0, 11.0)
+    rising = step_info(t, 10.0 * t, 100.0)  # its maximum is its last sample
+    assert rising.overshoot == 0.0 and math.isnan(rising.peak_s)
+    wobble = 10.0 * t
+    wobble[-1] = wobble[-2] - 0.05  # still rising but for 0.05 at the end: it does not come back
+    assert step_info(t, wobble, 100.0).overshoot == 0.0
+    flat = np.array([40.0, 99.0, 100.00005, 100.0, 100.0, 100.0, 100.0, 100.0, 100.0, 100.0])
+    assert math.isnan(step_info(t, flat, 100.0).peak_s)  # 5e-5 over: below 0.1 % of the step
+    bump = flat.copy()
+    bump[2] = 100.5
+    info = step_info(t, bump, 100.0)
+    assert info.peak_s == 3.0 and info.overshoot == pytest.approx(0.5)
 
 
 def test_steady_error_from_the_tail():

@@ -1,5 +1,7 @@
 """amr-twin bench: the figures the README quotes are all there and consistent (not timed)."""
 
+import statistics
+
 import pytest
 
 from amr_twin.bench.figures import run_benchmarks
@@ -12,13 +14,19 @@ README_KEYS = ("physics_us_per_step", "twin_s_per_sim_s", "bare_physics_s_per_si
 def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     r = run_benchmarks(load_config(), sim_s=0.2)
     assert all(r[k] > 0 for k in README_KEYS), r
-    # the ratio is the median of the repeats' own ratios: near the ratio of the medians
-    assert r["ratio"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.25)
-    assert r["repeats"] >= 5
+    # issue 33: a `ratio` of 1.136 beside medians whose ratio was 0.91, unexplained. Each ratio is
+    # the median of the repeats' paired ratios, listed, with the ratio of the medians beside it
+    assert r["repeats"] >= 5 and "median over the repeats of a paired ratio" in r["ratios"]
+    for name in ("ratio", "sensors_ratio", "twin_no_sensors_ratio"):
+        assert len(r[f"{name}_repeats"]) == r["repeats"]
+        assert r[name] == pytest.approx(statistics.median(r[f"{name}_repeats"]), abs=1e-3)
+    assert r["ratio_of_medians"] == pytest.approx(r["twin_s_per_sim_s"] / r["bare_physics_s_per_sim_s"], rel=0.01)
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
     assert r["rolling_resistance_engine"] == "C" or r["rolling_resistance_engine"].startswith("Python (")
-    assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "hall_edges", "imu_errors",
-                                         "lidar_beams"}
+    assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "actors",
+                                        "hall_edges", "imu_errors", "lidar_beams"}
+    assert r["actors_ratio"] > 0 and r["actors_sensors_over_sensors"] > 0 and r["actors_over_twin"] > 0
+    assert r["actors_collisions"] == 0 and r["actors_engine"] == r["native_engines"]["actors"]
     assert all(e == "C" or e.startswith("Python (") for e in r["native_engines"].values())
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
     assert 0 < r["nav_plan_ms_p50"] <= r["nav_plan_ms_p95"] and r["nav_plans"] == 30  # issue 32's figures
@@ -58,6 +66,17 @@ def test_the_benchmark_scenario_touches_nothing_but_the_floor():
     assert twin.collisions.collisions == []
     assert twin.physics.pose().x_m - (-8.0) > 10.0  # it drove the whole 11 m down the aisle
     assert (twin.lidar.last_hit_geom >= 0).mean() > 0.95  # walls and racks in range of the LiDAR
+
+
+def test_the_actors_benchmark_touches_nothing_and_its_actors_move_in_the_lidars_view():
+    from amr_twin.bench.actors import actors_run_s
+
+    _cpu, twin = actors_run_s(load_config(), 16.0, sensors=True)
+    assert twin.collisions.collisions == []
+    assert twin.actors.progress_s() == [16.0, 15.5, 16.0, 16.0]  # none waited
+    hit = {int(twin.physics.model.geom_bodyid[g]) for g in twin.lidar.last_hit_geom if g >= 0}
+    bodies = {twin.physics.model.body(f"{a.kind}_{i}").id for i, a in enumerate(twin.actors.actors)}
+    assert len(hit & bodies) >= 2  # some in sight of the last scan
 
 
 def test_timed_children_cache_their_bytecode_outside_the_tree(tmp_path, monkeypatch):
@@ -124,7 +143,8 @@ def test_the_suites_say_each_stage_as_it_starts(monkeypatch):
     monkeypatch.setattr(sb, "sweep_figures", stage("sweep", {}))
     monkeypatch.setattr(sb, "rrd_figures", stage("rrd", {}))
     monkeypatch.setattr(fusion, "run", stage("fusion", SimpleNamespace(sim_s=1.0)))
+    monkeypatch.setattr(sb, "ros1_stage", stage("ros1", {}))
     out = sb.suite_figures(load_config(), jobs=2, progress=said.append)
-    assert [name for name, _ in ran] == ["startup", "chapter5", "sweep", "rrd", "fusion"]
-    assert [n for _, n in ran] == [1, 2, 3, 4, 5]  # each announced just before it ran
+    assert [name for name, _ in ran] == ["startup", "chapter5", "sweep", "rrd", "fusion", "ros1"]
+    assert [n for _, n in ran] == [1, 2, 3, 4, 5, 6]  # each announced just before it ran
     assert "sweep" in said[2] and ".rrd" in said[3] and out["help_cpu_s"] == 0.1

@@ -83,6 +83,9 @@ def test_chapter5_one_recording_per_run(chapter5_cli):
         assert abs(counts["/odom"] - 50 * CH5_DURATION_S) <= 1
         assert counts["/wheel_Command"] == 1
     assert "run<N>.rrd for runs 1,3" in res.output
+    # the runs and the simulated time it states are those it ran (runs 1 and 3: no study runs)
+    assert f"for 2 runs, {2 * CH5_DURATION_S:.0f} simulated s (jobs 2" in res.output
+    assert "on the published samples (true speed " in res.output
 
 
 def test_chapter5_results_identical_with_and_without_recording(cfg, chapter5_cli):

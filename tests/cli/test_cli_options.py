@@ -65,6 +65,17 @@ def test_firmware_choices_come_from_the_firmware_factory():
     assert res.exit_code == 2 and f"must be one of {', '.join(FIRMWARES)}" in res.stderr
 
 
+@pytest.mark.parametrize("command, default", [(["run"], "faithful"), (["experiment", "chapter5"], "faithful"),
+                                              (["experiment", "fusion"], "improved"),
+                                              (["sweep", "payload"], "faithful")])
+def test_each_commands_default_firmware_is_in_its_help(command, default):
+    """Issue 33: `experiment fusion` runs the improved firmware unless told otherwise, and its
+    --help did not say so."""
+    res = runner.invoke(app, [*command, "--help"], terminal_width=200)
+    text = " ".join(res.output.replace("│", " ").split())
+    assert f"or avr; default {default} (docs/firmware.md" in text
+
+
 def test_parser_errors_and_misplaced_options_are_one_line():
     def run(*args):
         return subprocess.run([str(AMR_TWIN), *args], capture_output=True, text=True, timeout=60)

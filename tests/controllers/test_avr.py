@@ -103,7 +103,11 @@ def test_idle_sleep_of_spin_once_changes_nothing_observable(cfg):
     sleeping = _run(cfg, "avr", 2.5, Command("motor", wheel="left", speed_m_s=1.0))
     busy = _run(cfg, "avr", 2.5, Command("motor", wheel="left", speed_m_s=1.0), AvrParams(idle_sleep=False))
     assert len(sleeping.published[0]) == len(busy.published[0]) >= 1
-    np.testing.assert_allclose(sleeping.published[0], busy.published[0], atol=1e-3)
+    # the sleeping loop and the busy one wait in delay() with different instructions, so a ramp step can
+    # end a few cycles apart and cross a 1 ms physics step in one and not the other: the samples
+    # then differ by a few thousandths of an RPM (0.004 seen), their times by a tenth of a millisecond
+    np.testing.assert_allclose(sleeping.published[0][:, 1], busy.published[0][:, 1], atol=0.01)
+    np.testing.assert_allclose(sleeping.published[0][:, 0], busy.published[0][:, 0], atol=3e-4)
     np.testing.assert_array_equal(sleeping.pwm_counts, busy.pwm_counts)
 
 
@@ -201,15 +205,36 @@ def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
 
 
 @needs_avr
-def test_a_command_queued_during_a_ramp_runs_inside_the_speed_isr_on_the_board():
-    # listing 4.12 calls node.spinOnce() inside speedChangeInt: on the board the third command, waiting
-    # in the serial buffer while loop() sits in the second's ramp, runs in the ISR when the sample
-    # completes (~3.2 s); there delay() cannot wait (interrupts are off), so its 10-step ramp to
-    # 300 RPM (72 counts) collapses into milliseconds. The port runs it in main context after the
-    # second ramp (docs/firmware.md).
+def test_a_command_queued_during_a_ramp_waits_for_the_ramp_on_the_board_as_in_the_port():
+    # listing 4.12 calls node.spinOnce() inside speedChangeInt; ros_lib's spinOnce() does nothing inside
+    # an interrupt (no frame read or written there, issue 31), so the third command, waiting in the serial
+    # buffer while loop() sits in the second's ramp, runs in main context when that ramp ends (3.5 s), as
+    # in the port; before, it ran inside the ISR at the next sample (~3.2 s) and its ramp to 300 RPM (72
+    # counts) collapsed into milliseconds (docs/firmware.md)
     board, port = _pwm_log("avr", 3_600_000), _pwm_log("faithful", 3_600_000)
-    t72 = next(t for t, c in board if c == 72)
-    burst = [t for t, c in board if 3_200_000 <= t <= t72]
-    assert 3_200_000 < t72 < 3_300_000 and len(burst) >= 9 and t72 - burst[0] < 30_000
-    assert all(c < 60 for _, c in port)  # the port has not reached it by 3.6 s: 250 ms steps
-    assert any(3_450_000 < t < 3_600_000 and c < 20 for t, c in port)  # its ramp for 300 starts at 3.5 s
+    assert all(c < 60 for _, c in board) and all(c < 60 for _, c in port)
+    late = [(t, c) for t, c in board if t > 2_900_000]
+    assert [c for _, c in late] == [c for t, c in port if t > 2_900_000] == [32, 36, 33, 11]
+    for (tb, _), (tp, _) in zip(late, [x for x in port if x[0] > 2_900_000]):
+        assert 0 <= tb - tp < 10_000  # each step a few ms later on the board (its ramp's arithmetic)
+
+
+@needs_avr
+def test_the_board_asks_the_time_every_5_s_and_keeps_publishing_while_answered(cfg, monkeypatch):
+    from amr_twin.controllers.avr import AvrFirmware
+    from amr_twin.sim.loop import Twin
+
+    def run(answer: bool):
+        if not answer:
+            monkeypatch.setattr(AvrFirmware, "_answer_time", lambda self: None)
+        twin = Twin(cfg, TwinOptions(firmware="avr", world="empty"))
+        Command("motor", wheel="left", speed_m_s=0.5).send(twin)
+        twin.advance(19.0)
+        return twin.firmware.time_requests, twin.recorder.series().published[0][:, 0]
+
+    requests, t_s = run(True)
+    assert requests == 3  # at 5, 10 and 15 s (ros_lib's SYNC_PERIOD_MS), each answered with the sim time
+    assert t_s[-1] > 17.0
+    # unanswered, the board takes the host for gone after 15 s (SYNC_TIMEOUT_MS) and stops publishing
+    requests, t_s = run(False)
+    assert requests == 2 and 13.0 < t_s[-1] < 15.1  # the third request would be due as it gives up

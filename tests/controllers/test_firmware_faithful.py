@@ -179,6 +179,23 @@ def test_pi_raises_duty_when_the_wheel_is_slow():
     assert [c for _, c in pi] == expected and expected[-1] > expected[0]
 
 
+def test_integral_is_clamped_to_the_control_range():
+    """Listing 4.11 clamps the integral (total_error) to [min_control, max_control] (issue 30: a
+    removed clamp survived the suite). A wheel 10 RPM faster than its set point (beyond the 4 RPM
+    dead zone) cannot wind it below min_control = 0, so every PI action writes the same duty,
+    sp + kp e - sp/10; a wheel far too slow winds it up only to max_control (here 40 RPM)."""
+    clock, fw, pubs = make()
+    fw.on_wheel_command([1, 60.0, 1, 0])
+    feed_edges(clock, fw, 70.0, 8_000_000)
+    pi = writes(fw, 0, after_us=600_000)
+    assert len(pi) >= 6 and fw.total_error[0] == 0.0
+    assert {c for _, c in pi} == {int((60.0 + 0.001 * -10.0 - 6.0) / 1054 * 255)}
+    clock, fw, pubs = make(replace(LOG, max_control_rpm=40.0))
+    fw.on_wheel_command([1, 30.0, 1, 0])
+    feed_edges(clock, fw, 10.0, 30_000_000)  # 20 RPM short: 20 more each action, up to 40
+    assert fw.total_error[0] == 40.0
+
+
 @pytest.mark.parametrize("quirk", [True, False])
 def test_quirk_int_ms_delta_vs_T_silences_the_pi_in_the_16_bit_wrap(quirk):
     clock, fw, pubs = make(replace(LOG, quirk_int_ms_delta_vs_T=quirk))

@@ -112,6 +112,24 @@ def test_anti_windup_keeps_the_integral_bounded_when_saturated():
     assert fw.integral_rpm[0] <= 60.0 and fw.pins[0].pwm_counts <= int(60 / 1054 * 255) + 1
 
 
+def test_anti_windup_stops_integrating_where_the_output_saturates():
+    """Conditional integration (issue 30: the condition flipped survived the suite): inside the
+    8 RPM band, after the ramp. Saturated high (max_control 60 RPM, set point 64, the wheel at
+    60: error +4), the integral stops once the output reaches 60: at most one tick's ki e dt
+    (0.24 RPM) beyond the room left, 60 - 0.9 x 64 - 0.5 x 4 = 0.4 RPM. Saturated low (min_control
+    0, set point 10, the wheel at 16: error -6), it stops where the output reaches 0: at -6, and
+    one tick (0.36 RPM) at most beyond."""
+    clock, fw, pubs = make(params=replace(LOG, max_control_rpm=60.0))
+    fw.on_wheel_command([1, 64.0, 1, 0])
+    feed_edges(clock, fw, 60.0, 5_000_000)
+    assert 0.0 < fw.integral_rpm[0] <= 0.4 + 0.24 + 1e-9
+    assert fw.pins[0].pwm_counts in (int(60 / 1054 * 255), int(60 / 1054 * 255) + 1)  # dithered about 14.5
+    clock, fw, pubs = make()
+    fw.on_wheel_command([1, 10.0, 1, 0])
+    feed_edges(clock, fw, 16.0, 5_000_000)
+    assert -6.0 - 0.36 - 1e-9 <= fw.integral_rpm[0] < -5.0
+
+
 def test_left_wheel_76_rpm_both_modes_settle_and_improved_is_faster():
     sp, band, t_cmd = 76.39, 4.0, 100_000
     result = {}

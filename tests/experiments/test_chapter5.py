@@ -10,7 +10,7 @@ from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
 from amr_twin.sim.run import run_command
 
-CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot"}
+CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
 
 
 @pytest.fixture(scope="module")
@@ -59,3 +59,20 @@ def test_cli_rejects_bad_jobs_and_writes_nothing(tmp_path):
     result = CliRunner().invoke(app, ["experiment", "chapter5", "--out", str(tmp_path / "x"), "--jobs", "0"])
     assert result.exit_code == 2 and "--jobs" in result.output
     assert not (tmp_path / "x").exists()
+
+
+def test_a_backward_run_has_one_sign_in_metrics_json_and_report_md(tmp_path):
+    """Issue 33: run 4's reference was -91.67 in report.md and +91.67 in metrics.json. Every signed
+    value (reference, final value, steady error) carries the reference's sign in both."""
+    results = chapter5.run(load_config(), runs=[4], duration_s=4.0, progress=False)
+    data = chapter5.report(results, tmp_path)
+    report = (tmp_path / "report.md").read_text()
+    for name, wheel in data["runs"][0]["wheels"].items():
+        assert wheel["reference_rpm"] == pytest.approx(-91.67, abs=0.01)
+        for source in ("published", "true"):
+            m = wheel[source]
+            assert m["reference"] == pytest.approx(wheel["reference_rpm"]) and m["final_value"] < -80
+            assert m["steady_error"] == pytest.approx(m["final_value"] - m["reference"])
+        assert f"| 4 | {name} | -91.67 |" in report
+    assert "| 4 | left | 91.67 |" not in report and "samples |" in report.split("## True wheel speed")[0]
+    assert "samples" not in report.split("## True wheel speed")[1].split("\n\n")[2]  # no repeated sample counts

@@ -2,11 +2,12 @@
 
 from amr_twin.experiments import chapter5_criteria as criteria
 
-CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot"}
+CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
 
 
 def test_judge_uses_each_wheels_own_step_size():
-    good_small = {"delay_s": 0.2, "rise_s": 0.5, "peak_s": 0.6, "settling_s": 1.3, "overshoot": 4.0}
+    good_small = {"delay_s": 0.2, "rise_s": 0.5, "peak_s": 0.6, "settling_s": 1.3, "overshoot": 4.0,
+                  "steady_error": -3.5}
     checks = criteria.judge("right", 60.8, good_small)
     assert {k: c["verdict"] for k, c in checks.items()} == dict.fromkeys(CHECKED, "pass")
     assert checks["delay_s"]["band"] == [0.1, 0.3]
@@ -15,6 +16,17 @@ def test_judge_uses_each_wheels_own_step_size():
     assert large["overshoot"]["band"] == [0.0, 3.0] and large["overshoot"]["verdict"] == "fail"
     assert criteria.judge("left", -91.67, {})["rise_s"]["verdict"] == "fail"  # unmeasured fails
     assert criteria.judge("left", 75.0, {})["rise_s"]["band"] == [0.3, 0.7]  # 75 RPM is still small
+
+
+def test_a_steady_offset_is_judged_on_its_own():
+    """Run 6's right wheel (issue 30): a monotone rise to +5.97 RPM over 99.20 has no overshoot,
+    which passes nothing for the right wheel (band 2-6 RPM), and its offset fails on its own;
+    an offset inside the faithful PI's 4 RPM dead zone passes, either sign."""
+    offset = criteria.judge("right", 99.2, {"overshoot": 0.0, "steady_error": 5.97})
+    assert offset["overshoot"]["verdict"] == "fail" and offset["steady_error"]["verdict"] == "fail"
+    assert offset["steady_error"]["band"] == [-4.0, 4.0] and offset["steady_error"]["thesis"] == 0.0
+    for error, verdict in ((-3.9, "pass"), (3.9, "pass"), (-4.1, "fail"), (4.1, "fail")):
+        assert criteria.judge("left", 53.48, {"steady_error": error})["steady_error"]["verdict"] == verdict
 
 
 def _synthetic_run(number, left, right, true_left=0.0, true_right=0.0):
@@ -47,12 +59,16 @@ def test_report_states_the_oscillation_measure_and_verdict():
     for run, payload in zip(runs, (0.0, 20.0)):
         run.update(title=f"run {run['run']}", payload_kg=payload, errors=[])
         for w in run["wheels"].values():
-            w.update(reference_rpm=53.48, step_class="small", samples=5, checks={})
+            w.update(reference_rpm=53.48, step_class="small", samples=5, checks={}, true_checks={})
     data = {"firmware": "faithful", "jobs": 1, "wall_s": 1.0, "sim_s": 32.0, "judged_on": "published samples",
-            "settling_band": "4 RPM", "oscillation": "excess total variation", "bands": [], "runs": runs,
-            "comparisons": comparisons, "oscillation_verdict": criteria.oscillation_verdict(comparisons),
-            "summary": {"checks": 2, "passed": 2}}
+            "definitions": criteria.DEFINITIONS, "settling_band": "4 RPM", "oscillation": "excess total variation",
+            "bands": [], "runs": runs, "comparisons": comparisons,
+            "oscillation_verdict": criteria.oscillation_verdict(comparisons),
+            "summary": {"checks": 2, "passed": 2, "true_checks": 0, "true_passed": 0}}
     text = markdown(data)
+    assert "2 runs (32 simulated s) in 1.0 s wall time" in text  # no study runs: none counted
+    study = markdown({**data, "study_runs": 8, "study_sim_s": 128.0})
+    assert "2 runs (32 simulated s) and 8 rolling-resistance study runs (128 s), 10 runs and 160 simulated s" in study
     assert "Named measure: **excess total variation**" in text
     assert "| 7 | 20 | right | 53.48 | 4.00 | 7.00 |" in text  # per run and wheel: published, true
     assert "| 7 | 3 | left | 3.00 / 1.00 | pass | 6.00 / 5.00 | pass |" in text

@@ -1,6 +1,6 @@
 """The main outcome under test (issue 12): the eight chapter 5 runs may not get worse against
-the thesis than the committed scorecard; the right wheel overshoots more than the left
-(§5.1.3); a payload loads the motors (§5.1.4)."""
+the thesis than the committed scorecard; the right wheel tracks worse than the left (§5.1.3);
+a payload loads the motors (§5.1.4)."""
 
 import json
 import tempfile
@@ -18,8 +18,14 @@ from amr_twin.sim.run import Command, run_command
 
 @pytest.fixture(scope="module")
 def suite():
-    results = chapter5.run(load_config(), jobs=2, progress=False, study=False)
+    results = chapter5.run(load_config(), jobs=2, progress=False)
     return chapter5.report(results, Path(tempfile.mkdtemp()))
+
+
+def test_the_header_counts_every_run_the_progress_bar_counts(suite):
+    """Issue 33: "8 runs, 132 simulated s" left out the 8 rolling-resistance study runs."""
+    assert (len(suite["runs"]), suite["study_runs"]) == (8, 8)
+    assert suite["sim_s"] == 132.0 and suite["study_sim_s"] == 128.0  # runs 3 and 7 (16 s) at four Crr
 
 
 def test_no_check_worse_than_the_committed_scorecard(suite):
@@ -29,6 +35,20 @@ def test_no_check_worse_than_the_committed_scorecard(suite):
     now = scorecard(suite)
     assert worse(committed, now) == []
     assert set(now["checks"]) == set(committed["checks"])
+
+
+def test_the_committed_scorecard_is_what_the_runs_give_now(suite):
+    """The documents quote the scorecard (experiments/doc_figures.py): its values may not drift from
+    the code's, better or worse (issue 33). Within 1e-3: the runs are deterministic."""
+    import math
+
+    committed, now = json.loads(SCORECARD.read_text()), scorecard(suite)
+    drifted = [f"{k}: {c['twin']} committed, {now['checks'][k]['twin']} now" for k, c in committed["checks"].items()
+               if (c["twin"] is None) != (now["checks"][k]["twin"] is None) or c["twin"] is not None
+               and not math.isclose(c["twin"], now["checks"][k]["twin"], rel_tol=1e-3, abs_tol=1e-3)]
+    counts = ("passed", "checks_total", "true_passed", "true_checks_total", "oscillation_published_passed")
+    drifted += [f"{k}: {committed[k]} committed, {now[k]} now" for k in counts if committed[k] != now[k]]
+    assert not drifted, "run python -m amr_twin.experiments.doc_figures: " + "; ".join(drifted[:6])
 
 
 def test_worse_finds_a_check_that_leaves_its_band():
@@ -43,13 +63,16 @@ def test_worse_finds_a_check_that_leaves_its_band():
                                                      "b": {"twin": 9.0, "band": [0.0, 3.0]}}})
 
 
-def test_right_wheel_overshoots_more_than_the_left(suite):
-    """§5.1.3: the right wheel overshoots about 4 RPM, the left 0-2 RPM (runs 1 and 2, the same
-    76.39 RPM step on each wheel alone)."""
+def test_right_wheel_tracks_worse_than_the_left(suite):
+    """§5.1.3: "the performances of the right DC motor wheel are worse" (runs 1 and 2, the same
+    76.39 RPM step on each wheel alone): the calibrated right motor (lower Ke) ends further above
+    its reference. Its overshoot above its own final value is no larger than the left's (1.46
+    against 1.48 RPM), which the scorecard records (issue 30: what passed as the right wheel's
+    larger overshoot was this offset)."""
     by_run = {r["run"]: r for r in suite["runs"]}
-    left = by_run[1]["wheels"]["left"]["published"]["overshoot"]
-    right = by_run[2]["wheels"]["right"]["published"]["overshoot"]
-    assert right > left + 0.5
+    left, right = by_run[1]["wheels"]["left"]["published"], by_run[2]["wheels"]["right"]["published"]
+    assert right["steady_error"] > left["steady_error"] + 0.5
+    assert right["overshoot"] < 2.0  # outside the thesis' 2-6 RPM: a miss, said
 
 
 def test_motor_current_rises_with_payload():

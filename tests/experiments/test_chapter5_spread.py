@@ -23,7 +23,7 @@ def test_chapter5_samples_report_the_spread_beside_the_thesis(tmp_path):
     spread = b["spread"]
     assert spread["samples"] == 3 and spread["seed"] == 2 and "driver.gain" in spread["parameters"]
     banded = [m for m in spread["metrics"] if "thesis" in m]
-    assert {m["metric"] for m in banded} == {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot"}
+    assert {m["metric"] for m in banded} == {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
     assert all(m["source"] == "published" and 0 <= m["in_band"] <= 3 and len(m["drivers"]) <= 3 for m in banded)
     rise = next(m for m in spread["metrics"] if (m["source"], m["metric"]) == ("true", "rise_s"))
     assert rise["low"] < rise["high"] and rise["low"] <= rise["median"] <= rise["high"]  # the draws move it

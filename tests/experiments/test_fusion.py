@@ -40,6 +40,21 @@ def test_the_route_is_driven_to_its_goal(default_run):
     assert counts["odom"] == pytest.approx(50 * results.sim_s, rel=0.02)
 
 
+def test_the_committed_fusion_figures_are_what_seed_0_gives_now(default_run):
+    """The README's and docs/fusion.md's fusion tables are written from docs/fusion_<route>.json
+    (experiments/doc_figures.py); its seed 0 on the default route is this drive, within 1e-3."""
+    from amr_twin.experiments.doc_figures import COMMAND, fusion_json
+
+    _, data, _ = default_run
+    committed = json.loads(fusion_json("warehouse_60m").read_text())
+    (seed0,) = [d for d in committed["per_seed"] if d["seed"] == 0]
+    drifted = [f"{name}.{key}: {value} committed, {data['architectures'][name][key]} now"
+               for name, metrics in seed0["architectures"].items() for key, value in metrics.items()
+               if isinstance(value, float) and not math.isclose(value, data["architectures"][name][key],
+                                                                rel_tol=1e-3, abs_tol=1e-4)]
+    assert not drifted, f"run {COMMAND}: " + "; ".join(drifted[:6])
+
+
 def test_acceptance_of_issue_8(default_run):
     _, data, _ = default_run
     a, s = data["architectures"], data["summary"]

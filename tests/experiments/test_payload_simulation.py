@@ -18,7 +18,7 @@ def cfg():
 def test_off_deck_position_is_invalid(cfg):
     row = simulate_point(Point(10.0, "0.5:0", "linear:0.7", DURATION_S, "faithful", cfg))
     assert row["valid"] is False and row["safe"] is False and "outside the deck" in row["error"]
-    assert "invalid position" in report.unsafe_reason(row)
+    assert report.unsafe_reason(row).startswith("invalid payload: payload.xy_m")
 
 
 def test_a_motor_over_the_drivers_continuous_rating_is_unsafe():
@@ -31,4 +31,5 @@ def test_a_motor_over_the_drivers_continuous_rating_is_unsafe():
     over = simulate_point(Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", low))
     assert ok["safe"] and not ok["motor_overload"]
     assert 0.6 < max(over["left_steady_current_a"], over["right_steady_current_a"]) < 11.1
-    assert not over["safe"] and over["motor_overload"] and "motor overload" in unsafe_reason(over)
+    assert not over["safe"] and over["motor_overload"]
+    assert unsafe_reason(over).startswith("motor current rating (wheels tracking)")  # not a runaway: it tracks

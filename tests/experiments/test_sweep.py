@@ -46,6 +46,9 @@ def test_tiny_sweep_then_resume(cfg, tmp_path):
 
     again = ps.run(cfg, tmp_path, **args)
     assert (again["simulated"], again["reused"]) == (0, 2)
+    shorter = ps.run(cfg, tmp_path, **{**args, "duration_s": 0.5, "masses": [0.0]})
+    assert (shorter["simulated"], shorter["reused"]) == (1, 0)  # another duration: redone, not reused
+    assert shorter["rows"][0]["fingerprint"] != fresh["fingerprint"]
 
     report.plot(results, tmp_path)
     summary = report.report(results, tmp_path)

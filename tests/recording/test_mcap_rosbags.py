@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_log import attach, record_run
@@ -31,15 +32,16 @@ TOPIC_TYPES = {
     "/wheel1_Vel": "std_msgs/msg/Float64", "/wheel_Command": "std_msgs/msg/Float64MultiArray",
     "/twin/true_rpm": "std_msgs/msg/Float64MultiArray", "/twin/pwm_counts": "std_msgs/msg/Float64MultiArray",
     "/twin/ground_truth": "nav_msgs/msg/Odometry", "/twin/motor_current": "std_msgs/msg/Float64MultiArray",
-    "/battery_state": "sensor_msgs/msg/BatteryState",
+    "/battery_state": "sensor_msgs/msg/BatteryState", "/actors/poses": "geometry_msgs/msg/PoseArray",
 }
+ACTORS = (Actor("person", ((2.0, -2.0), (2.0, 2.0)), 1.2, loop=True), Actor("pallet_jack", ((5.0, 1.0),), 1.0))
 
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
-    """One 4 s run with IMU and LiDAR, its capture, and the ``.mcap`` file it wrote."""
+    """One 4 s run with IMU, LiDAR and two actors, its capture, and the ``.mcap`` file it wrote."""
     cfg = load_config()
-    options = TwinOptions(sensors=True)
+    options = TwinOptions(sensors=True, actors=ACTORS)
     twin = Twin(cfg, options)
     capture = attach(twin)
     result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)
@@ -208,6 +210,23 @@ def test_values_against_the_simulation(recorded, decoded):
     assert static == {("base_link", "laser"), ("base_link", "imu_link"), ("base_link", "uwb_tag")}
 
 
+def test_actor_poses_at_10_hz_in_the_map_frame_with_the_simulated_values(recorded, decoded):
+    """/actors/poses: one PoseArray every 100 ms from t = 0, frame map, the poses the twin published
+    (the walker down its segment at 1.2 m/s, the jack standing)."""
+    cfg, capture, _result, _path = recorded
+    msgs = decoded["/actors/poses"]
+    src = capture.messages["actors/poses"]
+    assert [t for t, _m in msgs] == [int(round(0.1 * k * 1e9)) for k in range(int(DURATION_S * 10) + 1)]
+    assert len(src) == len(msgs)
+    for (t_ns, msg), (_t_us, want) in zip(msgs, src):
+        assert msg.header.frame_id == "map" and msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec == t_ns
+        assert [(p.position.x, p.position.y, p.orientation.z, p.orientation.w) for p in msg.poses] == \
+            [(p.position.x, p.position.y, p.orientation.z, p.orientation.w) for p in want.poses]
+    at_2s = msgs[20][1].poses
+    assert (at_2s[0].position.x, at_2s[0].position.y) == pytest.approx((2.0, -2.0 + 1.2 * 2.0))
+    assert _yaw_rad(at_2s[0].orientation) == pytest.approx(math.pi / 2) and at_2s[1].position.x == 5.0
+
+
 def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
     """The MCAP ros2 profile requires offered_qos_profiles; /tf_static must be transient-local for tf2."""
     from rosbags.rosbag2 import Reader
@@ -240,7 +259,7 @@ def test_uwb_range_topic_and_definition(uwb_bag):
     humble = get_typestore(Stores.ROS2_HUMBLE)
     con = connections["/uwb/range"]
     assert con.msgtype == "sensor_msgs/msg/Range" and con.ext.serialization_format == "cdr"
-    assert set(connections) == (set(TOPIC_TYPES) - {"/scan", "/imu/data_raw", "/imu/mag"}) | {"/uwb/range"}
+    assert set(connections) == (set(TOPIC_TYPES) - {"/scan", "/imu/data_raw", "/imu/mag", "/actors/poses"}) | {"/uwb/range"}
     types = get_types_from_msg(con.msgdef.data, con.msgtype)
     assert types["sensor_msgs/msg/Range"] == humble.fielddefs["sensor_msgs/msg/Range"]  # constants included
     embedded = get_typestore(Stores.EMPTY)

@@ -9,6 +9,8 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
+from amr_twin.model.actor_paths import actor_path
+from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_log import attach, record_run
@@ -18,12 +20,13 @@ from uwb_run import UWB_S, record_uwb_run
 
 DURATION_S = 4.0
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))]
+WALKER = Actor("person", ((3.0, -2.0), (3.0, 2.0)), 1.2, loop=True)
 
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
     cfg = load_config()
-    options = TwinOptions(sensors=True)
+    options = TwinOptions(sensors=True, actors=(WALKER,))
     twin = Twin(cfg, options)
     capture = attach(twin)
     result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)
@@ -108,6 +111,22 @@ def test_rrd_entities_and_rates(recorded):
                             for b in batches["/world/bodies/amr/wheel_left_link"]])
     assert len({tuple(np.round(np.ravel(q), 3)) for q in quats}) > 10
     assert not any(e.startswith(("/uwb", "/world/uwb")) for e in entities)  # no UWB sensor: no UWB ranges
+
+
+def test_rrd_actor_body_walks_its_path_with_its_geoms(recorded):
+    """The walker's body in the .rrd: its legs, torso and head, and its transform at ~30 Hz where its
+    path puts it (one grid instant, 10 ms, behind: MuJoCo moves a mocap body at the next step)."""
+    cfg, capture, _result, _plain, paths = recorded
+    rows, batches = _rrd_chunks(paths["rrd"])
+    assert "/world/bodies/person_0/geoms/cylinders" in rows and "/world/bodies/person_0/geoms/boxes" in rows
+    t = np.concatenate([b.column("sim_time").to_numpy() for b in batches["/world/bodies/person_0"]
+                        if "sim_time" in b.schema.names]).astype("timedelta64[ns]").astype(float) * 1e-9
+    xyz = np.concatenate([np.array(b.column("Transform3D:translation").to_pylist(), dtype=float).reshape(-1, 3)
+                          for b in batches["/world/bodies/person_0"] if "sim_time" in b.schema.names])
+    path = actor_path(WALKER, cfg)
+    want = np.array([path.pose_at(max(0.0, s - 0.01))[:2] for s in t])
+    assert len(t) >= DURATION_S * 30 - 2 and np.abs(xyz[:, :2] - want).max() < 1e-6   # float32 in the file
+    assert np.ptp(xyz[:, 1]) > 3.0                           # it walked
 
 
 def test_rrd_scans_are_the_scans_beams(recorded):

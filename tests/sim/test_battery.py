@@ -20,18 +20,54 @@ def _twin(monkeypatch, cfg, native: bool, **options) -> Twin:
     return Twin(cfg, TwinOptions(world="empty", **options))
 
 
+def _ocv_v(cfg, soc: np.ndarray) -> np.ndarray:
+    """The pack's open-circuit voltage by its definition in the parameter file: linear through
+    (0, empty), (0.5, nominal), (1, full)."""
+    b = cfg.battery
+    return np.interp(soc, [0.0, 0.5, 1.0], [b.v_empty_v, b.v_nominal_v, b.v_full_v])
+
+
 @pytest.mark.parametrize("native", [True, False])
 def test_at_rest_it_drains_the_quiescent_and_auxiliary_current(monkeypatch, native):
-    """Standing still, the pack gives 2 quiescent currents and the auxiliary power: I = 2 Iq + P / V."""
+    """Standing still, the pack gives 2 quiescent currents and the auxiliary power at its terminal
+    voltage: I = 2 Iq + P / V, V = OCV(soc) - R I, solved here by hand (a quadratic in V). At rest
+    nothing changes but the charge (1e-4 of it in 20 s), so the 10 ms the accounting's voltage lags
+    its current is worth about 1e-9 of it: the tolerances are 1e-7 and 1e-4 (issue 30: the R I
+    drop, 0.1-0.3 % of the current, hid inside the former 0.1 %)."""
     cfg = load_config()
     twin = _twin(monkeypatch, cfg, native)
     b = twin.plant.battery
     soc0 = b.soc
     twin.advance(20.0)
-    v = b.terminal_v()
-    expected_a = 2 * cfg.driver.quiescent_current_a + cfg.battery.auxiliary_power_w / v
-    assert b.current_a == pytest.approx(expected_a, rel=1e-3)
-    assert soc0 - b.soc == pytest.approx(expected_a * 20.0 / (cfg.battery.capacity_ah * 3600), rel=2e-3)
+    r, q, p = cfg.battery.internal_resistance_ohm, 2 * cfg.driver.quiescent_current_a, cfg.battery.auxiliary_power_w
+    ocv = float(_ocv_v(cfg, b.soc))
+    v = (ocv - r * q + np.sqrt((ocv - r * q) ** 2 - 4 * r * p)) / 2  # V^2 - (OCV - R q) V + R P = 0
+    expected_a = q + p / v
+    assert b.current_a == pytest.approx(expected_a, rel=1e-7)
+    assert b.terminal_v() == pytest.approx(v, rel=1e-9)
+    assert soc0 - b.soc == pytest.approx(expected_a * 20.0 / (cfg.battery.capacity_ah * 3600), rel=1e-4)
+
+
+def test_battery_voltage_is_recorded_at_every_grid_instant(monkeypatch):
+    """Issue 30: the terminal voltage follows the current between pin changes (it was held from one
+    pin change to the next: 39.505 V to 8.55 s while the current fell at 8.05 s). Every row: V =
+    OCV(soc) - R I, and the state of charge drains by the current over each 10 ms."""
+    cfg = load_config(overrides={"payload.mass_kg": 20.0})
+    twin = _twin(monkeypatch, cfg, True)
+    twin.client.linear(0.7)
+    twin.advance(6.0)
+    twin.client.stop()
+    twin.advance(3.0)
+    s = twin.recorder.series()
+    ocv = _ocv_v(cfg, s.battery_soc)
+    np.testing.assert_allclose(s.battery_v, ocv - cfg.battery.internal_resistance_ohm * s.battery_a, rtol=0, atol=1e-9)
+    drained = -np.diff(s.battery_soc) * cfg.battery.capacity_ah * 3600  # A s per interval
+    np.testing.assert_allclose(drained, s.battery_a[1:] * np.diff(s.t_s), rtol=1e-9, atol=1e-15)
+    pins = np.column_stack([s.pwm_counts, s.direction, s.mode])
+    same_pins = np.all(pins[1:] == pins[:-1], axis=1)
+    moved = np.abs(np.diff(s.battery_v)) > 1e-6
+    assert np.count_nonzero(same_pins & moved) > 100  # the voltage moves with the current, pins or not
+    assert s.battery_v.max() - s.battery_v.min() > 0.1
 
 
 def test_driving_draws_the_motors_power_from_the_pack(monkeypatch):
@@ -94,5 +130,5 @@ def test_c_helper_and_python_twin_agree_on_every_branch():
                 b.set_motor(w, int(modes[w]), float(volts[w]))
         native_account()
         python_account()
-        assert (native.soc, native.current_a) == (python.soc, python.current_a)
+        assert native.grid_state() == python.grid_state()  # terminal voltage, current, charge
     assert np.isfinite(native.soc)

@@ -45,7 +45,7 @@ def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
     state = {"qpos": d.qpos.copy(), "qvel": d.qvel.copy(), "time": d.time, "t_phys_us": twin.t_phys_us,
              "halted": twin.halted, "soc": twin.plant.battery.soc, "t_s": s.t_s, "rows": support.take(),
              "angle": s.wheel_angle_rad, "rpm": s.true_rpm, "pose": s.pose, "pwm": s.pwm_counts,
-             "current": s.current_a, "published": [s.published[w] for w in sorted(s.published)],
+             "current": s.current_a, "battery": (s.battery_v, s.battery_a, s.battery_soc), "published": [s.published[w] for w in sorted(s.published)],
              "collisions": twin.collisions.as_dicts(), "friction": twin.physics.model.dof_frictionloss.copy()}
     return state, calls
 
@@ -289,3 +289,41 @@ def test_a_row_keeper_refuses_a_period_below_one_microsecond():
     with pytest.raises(ValueError, match="period_us -5 must be >= 1"):
         keeper.period_us = -5
     assert keeper.period_us == 10_000
+
+
+def test_with_actors_the_grid_in_c_gives_the_python_loops_bits(monkeypatch):
+    """People and a pallet jack moved by actors.c on the C grid and by their Python twin on the
+    Python grid: a person waiting for the robot, one walking into it (a collision, the Python loop
+    while it lasts), a looping jack; the LiDAR casting every 20 ms. The state, the mocap poses, the
+    published poses and scans and the episodes are the same to the bit; the C grid ran."""
+    import amr_twin.sim.actors as actors_mod
+    from amr_twin.model.actors import Actor
+
+    actors = (Actor("person", ((-2.5, 0.3), (-8.0, 0.3)), 1.3, stop_within_m=1.0),
+              Actor("person", ((-4.8, -2.0), (-4.8, 2.0)), 0.9, start_s=1.0),
+              Actor("pallet_jack", ((0.0, 1.5), (4.0, 1.5), (4.0, -1.5)), 1.2, loop=True))
+    out = []
+    real_open = actors_mod.open_helper
+    for native in (True, False):
+        monkeypatch.setattr(actors_mod, "open_helper", lambda src, nat=True, native=native: real_open(src, native))
+        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        calls = []
+        real = grid_steps.GridStepper.run
+        monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])
+        twin = Twin(load_config(), TwinOptions(sensors=True, visuals=False, start_xy_yaw=None, actors=actors))
+        assert twin.actors.engine == ("C" if native else "Python (native=False)")
+        msgs = []
+        twin.bus.subscribe("actors/poses", lambda m: msgs.append([(p.position.x, p.position.y, p.orientation.z,
+                                                                   p.orientation.w) for p in m.poses]), queue_size=100)
+        twin.bus.subscribe("scan", lambda m: msgs.append(m.ranges.tobytes()), queue_size=100)
+        twin.client.linear(0.3)
+        twin.advance(4.0)
+        d = twin.physics.data
+        out.append((msgs, d.qpos.copy(), d.mocap_pos.copy(), d.mocap_quat.copy(), twin.collisions.as_dicts(),
+                    twin.actors.progress_s(), calls))
+    c, py = out
+    assert py[-1] == [] and len(c[-1]) > 20
+    assert "person_1" in [h["hit"] for h in c[4]] and c[5][0] < 3.0       # one walked into it, one waited
+    assert c[0] == py[0] and len(c[0]) > 60
+    for a, b in zip(c[1:6], py[1:6]):
+        assert np.array_equal(np.asarray(a), np.asarray(b)) if not isinstance(a, list) else a == b

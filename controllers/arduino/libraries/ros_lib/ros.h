@@ -1,17 +1,21 @@
 /* ros.h: the amr-twin's minimal rosserial client for the Arduino Mega (the project's own code).
  *
  * The same API as rosserial_arduino's ros_lib for what the thesis sketch uses:
- * ros::NodeHandle (initNode, advertise, subscribe, spinOnce, getHardware()->setBaud),
+ * ros::NodeHandle (initNode, advertise, subscribe, spinOnce, now, getHardware()->setBaud),
  * ros::Publisher, ros::Subscriber<MsgT>, std_msgs::Float64, std_msgs::Float64MultiArray.
  * Frames follow the rosserial serial protocol (protocol version 0xfe, length and message
- * checksums); the twin's PC side (amr_twin/rosserial_frame.py) speaks the same protocol.
+ * checksums, topic negotiation, time sync, TX_STOP: ros/node_handle.h says what a host relies on);
+ * the twin's PC side (amr_twin/ros/rosserial_frame.py) and its rosserial host
+ * (amr_twin/ros1/serial_host.py) speak the same protocol.
  *
  * Differences from rosserial_arduino, all documented in docs/firmware.md:
- * - no time synchronisation, parameters, logging or services;
- * - publish() sends at once, without waiting for serial_node's topic negotiation (it still
- *   answers a topic request with the TopicInfo frames, as rosserial does);
+ * - no parameters, logging or services;
+ * - a publish() inside an interrupt is written later, from main context; spinOnce() inside an
+ *   interrupt does nothing (ros/node_handle.h);
  * - Float64MultiArray keeps at most 8 data values and no layout dimensions.
- */
+ *
+ * yield(), which Arduino's delay() calls while it waits, is defined here (weak: a sketch's own
+ * wins) to write the frames published inside interrupts meanwhile. */
 #ifndef AMR_TWIN_ROS_H
 #define AMR_TWIN_ROS_H
 
@@ -21,6 +25,11 @@
 namespace ros {
 /* rosserial_arduino's sizes for the ATmega2560: 25 subscribers, 25 publishers, 512-byte buffers. */
 typedef NodeHandle_<ArduinoHardware, 25, 25, 512, 512> NodeHandle;
+}
+
+__attribute__((weak)) void yield(void) {
+  ros::NodeHandleBase_ *nh = ros::activeNodeHandle();
+  if (nh) nh->flushDeferred();
 }
 
 #endif

@@ -15,6 +15,7 @@ namespace ros {
 
 class Msg {
 public:
+  virtual int serializedLength() const = 0;
   virtual int serialize(unsigned char *outbuffer) const = 0;
   virtual int deserialize(unsigned char *inbuffer) = 0;
   virtual const char *getType() = 0;

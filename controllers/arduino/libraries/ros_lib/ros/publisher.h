@@ -9,7 +9,14 @@ namespace ros {
 class NodeHandleBase_ {
 public:
   virtual int publish(int id, const Msg *msg) = 0;
+  virtual void flushDeferred() = 0;
 };
+
+/* The NodeHandle that initNode() made active: ros.h's yield() writes its deferred frames. */
+inline NodeHandleBase_ *&activeNodeHandle() {
+  static NodeHandleBase_ *active = 0;
+  return active;
+}
 
 class Publisher {
 public:

@@ -18,6 +18,9 @@ public:
 
   TopicInfo() : topic_id(0), topic_name(""), message_type(""), md5sum(""), buffer_size(0) {}
 
+  virtual int serializedLength() const {
+    return 2 + 4 + strlen(topic_name) + 4 + strlen(message_type) + 4 + strlen(md5sum) + 4;
+  }
   virtual int serialize(unsigned char *out) const {
     int o = 0;
     out[o++] = topic_id & 0xFF;

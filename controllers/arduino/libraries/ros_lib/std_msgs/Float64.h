@@ -13,6 +13,7 @@ public:
 
   Float64() : data(0) {}
 
+  virtual int serializedLength() const { return 8; }
   virtual int serialize(unsigned char *out) const { return serializeAvrFloat64(out, data); }
 
   virtual int deserialize(unsigned char *in) {

@@ -22,6 +22,7 @@ public:
     for (int i = 0; i < CAPACITY; i++) data[i] = 0;
   }
 
+  virtual int serializedLength() const { return 12 + 8 * (int)data_length; }
   virtual int serialize(unsigned char *out) const {
     int o = writeUint32(out, 0);                  /* no dimensions */
     o += writeUint32(out + o, data_offset);

@@ -1,0 +1,175 @@
+"""The ROS 1 path's figures of ``amr-twin bench --suites`` (issue 31), each measured in fresh child processes.
+
+- ``ros1_bridge_ratio``: CPU time (every thread of the process) of the twin with sensors bridged to a
+  private roscore, at full speed, while ``rosbag record`` subscribes to what a ROS 1 stack of the robot
+  reads (:data:`SUBSCRIBED`: clock, tf, odometry, joint states, scan, IMU), against the same twin
+  without the bridge; the benchmark's scenario
+  (:data:`~amr_twin.bench.twin.BENCH_START`, chapter 5 run 3 with IMU and LiDAR), medians of interleaved
+  repeats (target 1.25). Only the run is timed (the set-up, rospy's import and the wait for the
+  recorder's connections are not).
+- ``ros1_paced_sim_per_wall``: the same bridged twin paced at ``--rate 1`` for ``PACED_S`` simulated
+  seconds: simulated over wall seconds of the run (target within 1 % of 1).
+- ``ros1_serial_latency_ms``: the board's serial port on a pseudo-terminal (``--firmware avr
+  --serial-pty``): a host thread writes a ``wheel_Command`` frame at random instants; the delay from
+  its write to the simulated instant its first byte enters the board's receiver (on the wall clock the
+  twin is paced to), median and largest, against the frame's own time on the wire at 115200 baud
+  (``ros1_serial_frame_ms``; target: the largest delay within one frame time).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+from amr_twin.bench.twin import BENCH_START
+
+REPEATS = 5
+SIM_S = 20.0
+PACED_S = 60.0
+SUBSCRIBED = ("/clock", "/tf", "/tf_static", "/odom", "/joint_states", "/scan", "/imu/data_raw", "/imu/mag")
+"""The topics the bridge figure's recorder takes (each costs a socket write a message in the twin's process)."""
+COMMANDS = 40
+"""wheel_Command frames written by the serial latency figure's host thread."""
+
+
+def _child(mode: str, sim_s: float, env: dict) -> dict:
+    out = subprocess.run([sys.executable, "-m", "amr_twin.bench.ros1", mode, str(sim_s)], env=env,
+                         capture_output=True, text=True, timeout=600)
+    if out.returncode != 0:
+        raise RuntimeError(f"bench ros1 {mode}: {out.stderr.strip().splitlines()[-1:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _twin(sensors: bool = True, firmware: str = "faithful", params=None):
+    from amr_twin.model.config import load_config
+    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.sim.run import Command
+
+    twin = Twin(load_config(), TwinOptions(firmware=firmware, sensors=sensors, start_xy_yaw=BENCH_START,
+                                           firmware_params=params, visuals=False))  # as the command builds it
+    Command("linear", speed_m_s=0.7).send(twin)
+    return twin
+
+
+def _measure(mode: str, sim_s: float) -> dict:
+    """One child's figure (see the module notes)."""
+    if mode == "serial":
+        return _serial_latency(sim_s)
+    twin = _twin()
+    session = None
+    if mode != "plain":
+        from amr_twin.controllers.diff_drive import DiffDriveNode
+        from amr_twin.live.pacer import Pacer
+        from amr_twin.ros1.session import Ros1Options, Ros1Session
+
+        pacer = Pacer(twin, 1.0 if mode == "paced" else 0.0)
+        DiffDriveNode(twin.bus, twin.clock, twin.client)
+        session = Ros1Session(twin, pacer, Ros1Options(), say=lambda line: None)
+    cpu0, wall0 = time.process_time(), time.perf_counter()
+    twin.advance(sim_s)
+    out = {"cpu_s": time.process_time() - cpu0, "wall_s": time.perf_counter() - wall0, "sim_s": sim_s}
+    if session is not None:
+        pacer.close()
+        session.close()
+    return out
+
+
+def _serial_latency(sim_s: float) -> dict:
+    import random
+    import threading
+
+    from amr_twin.controllers.firmware import AvrParams
+    from amr_twin.ros.rosserial_frame import frame, serialize_float64_multiarray
+
+    path = os.path.join(tempfile.mkdtemp(prefix="amr-twin-bench-"), "ttyACM0")
+    twin = _twin(sensors=False, firmware="avr", params=AvrParams(serial_pty=path))
+    fw = twin.firmware
+    fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+    data = frame(100, serialize_float64_multiarray([1.0, 40.0, 1.0, 40.0]))
+    writes: list[float] = []
+    arrivals: list[int] = []
+    read = fw.serial.read
+
+    def read_and_note():  # the instant the twin takes the host's bytes, simulated us
+        got = read()
+        if got:
+            arrivals.append(twin.clock.now_us)
+        return got
+
+    fw.serial.read = read_and_note
+    rng = random.Random(0)
+
+    def host():
+        time.sleep(0.5)
+        for _ in range(COMMANDS):
+            time.sleep(rng.uniform(0.05, 0.25))
+            writes.append(time.perf_counter())
+            os.write(fd, data)
+
+    thread = threading.Thread(target=host)
+    thread.start()
+    twin.advance(sim_s)
+    thread.join()
+    os.close(fd)
+    delays = [fw.pacer.wall_of(t) - w for w, t in zip(writes, arrivals)]
+    fw.close()
+    return {"delays_ms": [d * 1e3 for d in delays], "frame_bytes": len(data), "matched": len(delays) == len(writes)}
+
+
+def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
+    """The figures of the module notes; ``ros1_skipped`` says why when Debian's ROS 1 (or, for the serial
+    figure, the AVR toolchain) is absent."""
+    from amr_twin.controllers.avr_build import missing_tools
+    from amr_twin.ros1.installation import missing
+    from amr_twin.ros1.master import start_roscore
+    from amr_twin.ros.rosserial import frame_time_us
+
+    problem = missing()
+    if problem:
+        return {"ros1_skipped": problem}
+    say = progress or (lambda text: None)
+    master = start_roscore()
+    env = dict(os.environ, ROS_MASTER_URI=master.uri, ROS_IP="127.0.0.1")
+    out: dict = {}
+    folder = tempfile.mkdtemp(prefix="amr-twin-bench-bag-")
+    rec = subprocess.Popen(["rosbag", "record", "-O", os.path.join(folder, "bench.bag"), *SUBSCRIBED,
+                            "__name:=bench_record"], env=env, cwd=folder, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL)
+    try:
+        time.sleep(1.0)
+        plain, bridged = [], []
+        for r in range(repeats):
+            say(f"ROS 1 bridge, repeat {r + 1} of {repeats}")
+            plain.append(_child("plain", SIM_S, env)["cpu_s"])
+            bridged.append(_child("bridge", SIM_S, env)["cpu_s"])
+        out.update(ros1_bridge_ratio=statistics.median(b / p for b, p in zip(bridged, plain)),
+                   ros1_bridge_cpu_s=statistics.median(bridged), ros1_plain_cpu_s=statistics.median(plain),
+                   ros1_scenario=f"chapter 5 run 3 with sensors, {SIM_S:g} s, full speed, rosbag record of "
+                                 f"{' '.join(SUBSCRIBED)}")
+        say(f"ROS 1 bridge paced at --rate 1 for {PACED_S:g} s")
+        paced = _child("paced", PACED_S, env)
+        out["ros1_paced_sim_per_wall"] = paced["sim_s"] / paced["wall_s"]
+    finally:
+        rec.send_signal(2)
+        rec.wait(10)
+        master.stop()
+    avr = missing_tools()
+    if avr:
+        out["ros1_serial_skipped"] = avr
+        return out
+    say("the board's serial port on a pseudo-terminal: wheel_Command latency")
+    serial = _child("serial", 10.0, dict(os.environ))
+    delays = serial["delays_ms"]
+    out.update(ros1_serial_latency_ms=statistics.median(delays), ros1_serial_latency_max_ms=max(delays),
+               ros1_serial_frame_ms=frame_time_us(serial["frame_bytes"], 115200) / 1000,
+               ros1_serial_commands=len(delays) if serial["matched"] else f"{len(delays)} (unmatched)")
+    return out
+
+
+if __name__ == "__main__":
+    print(json.dumps(_measure(sys.argv[1], float(sys.argv[2]))))

@@ -1,0 +1,238 @@
+"""Things that move in a world: people and pallet jacks on scripted paths, as MuJoCo mocap bodies.
+
+An :class:`Actor` walks its waypoints at a constant speed, heading along each segment, and
+turns on the spot at each corner at its kind's turn rate (``actors.<kind>.turn_rate_rad_s``);
+from ``start_s`` on, once (then it stands at its last waypoint) or in a ``loop`` (back to the
+first). Its timing is :mod:`amr_twin.model.actor_paths`; the loop moves it
+(:mod:`amr_twin.sim.actors`). Scripted actors do not avoid anything: with ``stop_within_m`` a
+person (or a jack) halts while the robot's footprint is that close ahead of it, and walks on
+when it is not.
+
+:func:`add_actors` adds actor ``i`` to a world's MjSpec as the mocap body ``<kind>_<i>``
+(:func:`body_name`) at its pose at t = 0, its geoms in the world's group 0 (the LiDAR's,
+:data:`amr_twin.sensors.lidar_beams.SEEN_GROUPS`), those that can reach the robot colliding
+with it (a mocap body is kinematic: it pushes the robot and nothing stops it; it never touches
+the world's static geoms). Sizes from the ``actors:`` section of the parameter file; what a
+0.45 m scan plane cuts of each is in docs/actors.md:
+
+- ``person``: two vertical leg cylinders (the plane cuts them below the knee: two circles
+  about 0.12 m across), a torso box and a head sphere (above the plane, drawn and seen by
+  nothing below 0.8 m; they do not collide). The legs do not swing.
+- ``pallet_jack``: two forks (0.085 m high: below the plane), the steer frame, the pump
+  cylinder and the handle; the plane cuts the pump (about 0.2 m across) only. Forks lead
+  (+x of the body). The person who walks it is not part of it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+KINDS = ("person", "pallet_jack")
+MAX_COORD_M = 1e4
+MAX_START_S = 1e6
+MAX_STOP_M = 10.0
+
+
+class ActorError(ValueError):
+    """An actor is invalid; the message is one line naming it and the field."""
+
+
+def _finite(where: str, value, lo: float = -math.inf, hi: float = math.inf) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ActorError(f"{where}: {value!r} is not a finite number")
+    if not lo <= value <= hi:
+        raise ActorError(f"{where}: {value:g} must lie in [{lo:g}, {hi:g}]")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Actor:
+    """A person or pallet jack on a scripted path (module notes).
+
+    ``kind``: ``"person"`` or ``"pallet_jack"``; ``waypoints_xy_m``: world points (x, y), m,
+    at least one (one: it stands there facing +x); ``speed_m_s``: along the segments;
+    ``start_s``: when it sets off (it stands at its first waypoint before); ``loop``: back to the
+    first waypoint and round again; ``stop_within_m``: halt while the robot's footprint is
+    nearer than this ahead of it, m (0: never).
+    """
+
+    kind: str
+    waypoints_xy_m: tuple[tuple[float, float], ...]
+    speed_m_s: float
+    start_s: float = 0.0
+    loop: bool = False
+    stop_within_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ActorError(f"actor kind {self.kind!r}: must be one of {', '.join(KINDS)}")
+        try:
+            points = tuple((float(x), float(y)) for x, y in self.waypoints_xy_m)
+        except (TypeError, ValueError):
+            raise ActorError(f"{self.kind}: waypoints_xy_m must be a list of (x, y) pairs in m") from None
+        if not points:
+            raise ActorError(f"{self.kind}: waypoints_xy_m needs at least one (x, y) point")
+        for i, (x, y) in enumerate(points):
+            _finite(f"{self.kind}: waypoint {i} x", x, -MAX_COORD_M, MAX_COORD_M)
+            _finite(f"{self.kind}: waypoint {i} y", y, -MAX_COORD_M, MAX_COORD_M)
+            if i and points[i - 1] == (x, y):
+                raise ActorError(f"{self.kind}: waypoints {i - 1} and {i} coincide at ({x:g}, {y:g})")
+        if self.loop and (len(points) < 2 or (len(points) == 2 and points[0] == points[1])):
+            raise ActorError(f"{self.kind}: a loop needs at least two distinct waypoints")
+        object.__setattr__(self, "waypoints_xy_m", points)
+        _finite(f"{self.kind}: speed_m_s", self.speed_m_s, 1e-3, 10.0)
+        _finite(f"{self.kind}: start_s", self.start_s, 0.0, MAX_START_S)
+        _finite(f"{self.kind}: stop_within_m", self.stop_within_m, 0.0, MAX_STOP_M)
+        if not isinstance(self.loop, bool):
+            raise ActorError(f"{self.kind}: loop must be true or false")
+
+    @classmethod
+    def parse(cls, text: str, cfg) -> "Actor":
+        """``KIND:X1,Y1;X2,Y2[;...][@SPEED_M_S][+START_S][/loop][/stop=M]`` (the ``--actor`` form).
+
+        Without ``@SPEED_M_S`` the kind's ``actors.<kind>.speed_m_s`` of ``cfg``.
+        """
+        where = f"--actor {text!r}"
+        kind, sep, rest = text.strip().partition(":")
+        if not sep or kind not in KINDS:
+            raise ActorError(f"{where}: expected KIND:X1,Y1;X2,Y2[@SPEED][+START][/loop][/stop=M] "
+                             f"with KIND one of {', '.join(KINDS)}")
+        rest, *flags = rest.split("/")
+        loop, stop = False, 0.0
+        try:
+            for flag in flags:
+                if flag == "loop":
+                    loop = True
+                elif flag.startswith("stop="):
+                    stop = float(flag[5:])
+                else:
+                    raise ActorError(f"{where}: unknown flag /{flag} (allowed: /loop, /stop=M)")
+            start = 0.0
+            if "+" in rest:
+                rest, start_text = rest.rsplit("+", 1)
+                start = float(start_text)
+            speed = getattr(cfg.actors, kind).speed_m_s
+            if "@" in rest:
+                rest, speed_text = rest.split("@", 1)
+                speed = float(speed_text)
+            points = []
+            for pair in rest.split(";"):
+                x, y = pair.split(",")
+                points.append((float(x), float(y)))
+        except ValueError as exc:
+            if isinstance(exc, ActorError):
+                raise
+            raise ActorError(f"{where}: expected KIND:X1,Y1;X2,Y2[@SPEED][+START][/loop][/stop=M], "
+                             "numbers in m, m/s and s") from None
+        try:
+            return cls(kind, tuple(points), speed, start, loop, stop)
+        except ActorError as exc:
+            raise ActorError(f"{where}: {exc}") from None
+
+    @classmethod
+    def from_mapping(cls, tree, where: str) -> "Actor":
+        """A mission's actor: ``{kind, waypoints_xy_m: [[x, y], ...], speed_m_s, start_s?, loop?, stop_within_m?}``."""
+        fields = ("kind", "waypoints_xy_m", "speed_m_s", "start_s", "loop", "stop_within_m")
+        if not isinstance(tree, dict):
+            raise ActorError(f"{where}: expected a mapping with {', '.join(fields)}")
+        unknown = [k for k in tree if k not in fields]
+        if unknown:
+            raise ActorError(f"{where}: unknown key {unknown[0]!r} (expected {', '.join(fields)})")
+        for key in fields[:3]:
+            if key not in tree:
+                raise ActorError(f"{where}.{key} is missing")
+        if tree["kind"] not in KINDS:
+            raise ActorError(f"{where}.kind: {tree['kind']!r} must be one of {', '.join(KINDS)}")
+        points = tree["waypoints_xy_m"]
+        if not isinstance(points, list) or not all(isinstance(p, list) and len(p) == 2 for p in points):
+            raise ActorError(f"{where}.waypoints_xy_m: expected a list of [x, y] pairs in m")
+        loop = tree.get("loop", False)
+        if not isinstance(loop, bool):
+            raise ActorError(f"{where}.loop: {loop!r} must be true or false")
+        try:
+            return cls(tree["kind"], tuple(tuple(p) for p in points), _finite(f"{where}.speed_m_s", tree["speed_m_s"]),
+                       _finite(f"{where}.start_s", tree.get("start_s", 0.0)), loop,
+                       _finite(f"{where}.stop_within_m", tree.get("stop_within_m", 0.0)))
+        except ActorError as exc:
+            raise ActorError(f"{where}: {exc}") from None
+
+
+def body_name(index: int, actor: Actor) -> str:
+    """The mocap body (and collision report name) of actor ``index``: ``<kind>_<index>``."""
+    return f"{actor.kind}_{index}"
+
+
+def check_speeds(actors: tuple[Actor, ...], cfg) -> None:
+    """Each actor's speed within its kind's sourced range (``actors.<kind>.speed_min/max_m_s``)."""
+    for i, a in enumerate(actors):
+        k = getattr(cfg.actors, a.kind)
+        if not k.speed_min_m_s <= a.speed_m_s <= k.speed_max_m_s:
+            raise ActorError(f"actor {i} ({body_name(i, a)}): speed {a.speed_m_s:g} m/s outside the {a.kind}'s "
+                             f"[{k.speed_min_m_s:g}, {k.speed_max_m_s:g}] m/s (actors.{a.kind}.speed_min_m_s, "
+                             "speed_max_m_s)")
+
+
+def footprint_half_m(kind: str, cfg) -> tuple[float, float]:
+    """Half length (along its heading) and half width of an actor's footprint, m: everything of it
+    that stands on the floor (a person's torso, wider than the legs; a jack's outline)."""
+    if kind == "person":
+        p = cfg.actors.person
+        return max(p.torso_depth_m, 2 * p.leg_radius_m) / 2, max(p.torso_width_m, p.leg_spacing_m + 2 * p.leg_radius_m) / 2
+    j = cfg.actors.pallet_jack
+    return j.length_m / 2, j.width_m / 2
+
+
+_RGBA = {"legs": [0.15, 0.20, 0.35, 1.0], "torso": [1.0, 0.55, 0.05, 1.0], "head": [0.85, 0.70, 0.55, 1.0],
+         "jack": [0.80, 0.10, 0.10, 1.0], "handle": [0.15, 0.15, 0.15, 1.0]}
+
+
+def _person(body, name: str, p) -> None:
+    import mujoco
+
+    cyl, box, sphere = mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_SPHERE
+    half_leg = p.leg_length_m / 2
+    for side, y in (("left", p.leg_spacing_m / 2), ("right", -p.leg_spacing_m / 2)):
+        body.add_geom(name=f"{name}/leg_{side}", type=cyl, size=[p.leg_radius_m, half_leg, 0],
+                      pos=[0, y, half_leg], rgba=_RGBA["legs"])
+    head_r = 0.1 * p.height_m / 1.7
+    torso_h = p.height_m - 2 * head_r - p.leg_length_m
+    body.add_geom(name=f"{name}/torso", type=box, size=[p.torso_depth_m / 2, p.torso_width_m / 2, torso_h / 2],
+                  pos=[0, 0, p.leg_length_m + torso_h / 2], rgba=_RGBA["torso"], contype=0, conaffinity=0)
+    body.add_geom(name=f"{name}/head", type=sphere, size=[head_r, 0, 0], pos=[0, 0, p.height_m - head_r],
+                  rgba=_RGBA["head"], contype=0, conaffinity=0)
+
+
+def _pallet_jack(body, name: str, j) -> None:
+    import mujoco
+
+    box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
+    front, back = j.length_m / 2, -j.length_m / 2
+    heel = front - j.fork_length_m  # the forks' back end: the steer frame behind it
+    for side, y in (("left", (j.width_m - j.fork_width_m) / 2), ("right", -(j.width_m - j.fork_width_m) / 2)):
+        body.add_geom(name=f"{name}/fork_{side}", type=box,
+                      size=[j.fork_length_m / 2, j.fork_width_m / 2, j.fork_height_m / 2],
+                      pos=[(front + heel) / 2, y, j.fork_height_m / 2], rgba=_RGBA["jack"])
+    body.add_geom(name=f"{name}/frame", type=box, size=[(heel - back) / 2, j.width_m / 2, j.frame_height_m / 2],
+                  pos=[(heel + back) / 2, 0, j.frame_height_m / 2], rgba=_RGBA["jack"])
+    x_pump = back + j.pump_radius_m
+    body.add_geom(name=f"{name}/pump", type=cyl, size=[j.pump_radius_m, j.pump_height_m / 2, 0],
+                  pos=[x_pump, 0, j.pump_height_m / 2], rgba=_RGBA["jack"])
+    half = (j.handle_height_m - j.pump_height_m) / 2
+    body.add_geom(name=f"{name}/handle", type=cyl, size=[0.015, half, 0], pos=[x_pump, 0, j.pump_height_m + half],
+                  rgba=_RGBA["handle"])
+    body.add_geom(name=f"{name}/grip", type=box, size=[0.02, 0.18, 0.02], pos=[x_pump, 0, j.handle_height_m],
+                  rgba=_RGBA["handle"], contype=0, conaffinity=0)
+
+
+def add_actors(spec, actors: tuple[Actor, ...], cfg) -> None:
+    """Add each actor to the world ``spec`` (an ``mujoco.MjSpec``) as a mocap body at its pose at
+    t = 0 (module notes); its geoms named ``<body>/<part>``, group 0."""
+    from amr_twin.model.actor_paths import actor_path
+
+    for i, actor in enumerate(actors):
+        name = body_name(i, actor)
+        x, y, yaw = actor_path(actor, cfg).pose_at(0.0)
+        body = spec.worldbody.add_body(name=name, mocap=True, pos=[x, y, 0.0],
+                                       quat=[math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)])
+        (_person if actor.kind == "person" else _pallet_jack)(body, name, getattr(cfg.actors, actor.kind))

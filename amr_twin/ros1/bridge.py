@@ -1,0 +1,268 @@
+"""The twin's bus and state on a ROS 1 graph, both ways (issue 31): :class:`Ros1Bridge`.
+
+Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mcap_log`):
+
+- every bus message of :data:`~amr_twin.recording.mcap_log.BUS_TOPICS` as it is published (a bus tap):
+  ``/odom``, ``/tf`` (odom -> base_link), ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
+  ``/cmd_vel``, ``/wheel_Command``, ``/wheel0_Vel``, ``/wheel1_Vel`` (as the firmware publishes them)
+  and ``/wheel_Command_Service/request``; ``/tf_static`` latched;
+- ``/clock`` every ``clock_period_us`` of simulated time, a clock event of its own (the nodes run
+  with ``/use_sim_time``, which the session sets);
+- from grid samples, handed over at the pacer's ticks (:mod:`amr_twin.live.pacer`): ``/joint_states``
+  and the joints' links on ``/tf`` (50 Hz: what robot_state_publisher would send), ``/twin/ground_truth``
+  (100 Hz), ``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current`` (100 Hz), ``/battery_state``
+  (10 Hz); ``/diagnostics``: each collision and fault as it happens (the ``.mcap``'s ``/twin/collisions`` and
+  ``/twin/faults`` statuses) and the battery once a second;
+- ``/robot_description`` latched (and the ``robot_description`` parameter, set by the session).
+
+In: ``/wheel_Command`` (``std_msgs/Float64MultiArray``, the thesis' service's output) and ``/cmd_vel``
+(``geometry_msgs/Twist``, for the diff-drive node), checked as a live client's are
+(:mod:`amr_twin.live.inputs`) and published on the bus at the pacer's next tick; the LiDAR's
+``start_motor`` and ``stop_motor`` (``std_srvs/Empty``, §6.1.1) call the bus' services there. A message
+the bridge itself put on the graph is not taken back, and one taken from the graph is not put back.
+With ``firmware_topics=False`` (the board's serial port served to a rosserial host, which carries them)
+``wheel_Command``, ``wheel0_Vel`` and ``wheel1_Vel`` are left to the host.
+
+A message is built only for a topic someone subscribes to (``get_num_connections``), and written to its
+subscribers' sockets as it is published (rospy's publishers without a queue: a queue's hand-over to a
+writer thread cost 45 us of CPU a message against 6 us): none is dropped, and a twin running as fast as
+it can runs no faster than its slowest subscriber takes them.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import warnings
+
+from amr_twin.live.rows import LiveRows
+from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, JOINT_STATE_PERIOD_US, REQUEST_FIELDS
+from amr_twin.ros import ros_state
+from amr_twin.ros.geometry_messages import TFMessage
+from amr_twin.ros.messages import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
+from amr_twin.ros1.messages import InputError, Ros1Messages, twist_from_ros, wheel_command_from_ros
+from amr_twin.sim.event_log import statuses
+
+LOG = logging.getLogger(__name__)
+
+FIRMWARE_TOPICS = ("wheel_Command", "wheel0_Vel", "wheel1_Vel")
+ROW_TOPICS = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current")
+STATE_BATCH = 10
+"""Grid samples of the joint and base state published together when the twin runs unpaced (100 ms)."""
+DIAGNOSTICS_PERIOD_ROWS = 100
+"""The battery's status on /diagnostics every 100th row of the 100 Hz grid (1 Hz)."""
+
+
+class Ros1Bridge:
+    """Publish ``twin`` on the ROS 1 graph rospy joined, and take its inputs; a sink of ``pacer``.
+
+    Parameters
+    ----------
+    twin : Twin
+        Built, not yet run; a bus tap, two grid samplers and a clock event are attached to it.
+    pacer : Pacer
+        Runs the graph's inputs in the twin's thread and calls :meth:`flush` at its ticks.
+    firmware_topics : bool
+        Carry ``wheel_Command`` in and ``wheelN_Vel`` out (False: a rosserial host does).
+    clock_period_us : int
+        Period of ``/clock``, simulated us (100 Hz: what the recordings hold).
+    """
+
+    def __init__(self, twin, pacer, firmware_topics: bool = True, clock_period_us: int = 10_000):
+        self.conv = conv = Ros1Messages()
+        rospy = self.rospy = conv.rospy
+        self.twin, self.pacer, self.bus = twin, pacer, twin.bus
+        self.dropped = 0
+        """Messages from the graph refused (each logged)."""
+        self._closed = False
+        self._from_graph: str | None = None  # the bus topic of a message being handed over from the graph
+        self._lock = threading.Lock()
+        sensors = getattr(twin, "lidar", None) is not None
+        skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
+        if not firmware_topics:
+            skip.update(FIRMWARE_TOPICS)
+
+        def pub(topic, typ, latch=False):
+            with warnings.catch_warnings():  # rospy warns of a publisher without a queue: this one is meant
+                warnings.simplefilter("ignore")
+                return rospy.Publisher(topic, conv.ros_class(typ), queue_size=None, latch=latch)
+
+        self.pubs = {bus: pub(topic, typ) for bus, (topic, typ, _enc) in BUS_TOPICS.items()
+                     if bus not in skip and not (bus == "uwb/range" and getattr(twin, "uwb", None) is None)}
+        self.pubs["tf_static"] = pub("/tf_static", "tf2_msgs/TFMessage", latch=True)
+        self.tf = self.pubs["tf"]
+        self.clock_pub = pub("/clock", "rosgraph_msgs/Clock")
+        self.state_pubs = {"/twin/ground_truth": pub("/twin/ground_truth", "nav_msgs/Odometry"),
+                           "/joint_states": pub("/joint_states", "sensor_msgs/JointState")}
+        self.row_pubs = {t: pub(t, "std_msgs/Float64MultiArray") for t in ROW_TOPICS}
+        self.battery_pub = pub("/battery_state", "sensor_msgs/BatteryState")
+        self.diag_pub = pub("/diagnostics", "diagnostic_msgs/DiagnosticArray")
+        self.description_pub = pub("/robot_description", "std_msgs/String", latch=True)
+        self.description_pub.publish(conv.ros_class("std_msgs/String")(data=twin.urdf))
+        self.pubs["tf_static"].publish(conv.to_ros(TFMessage(self.bus.static_transforms())))
+        self._subs = []
+        if firmware_topics:
+            self._subs.append(rospy.Subscriber("/wheel_Command", conv.ros_class("std_msgs/Float64MultiArray"),
+                                               self._on_wheel_command, queue_size=100))
+        self._subs.append(rospy.Subscriber("/cmd_vel", conv.ros_class("geometry_msgs/Twist"), self._on_cmd_vel,
+                                           queue_size=100))
+        self._services = []
+        if self.bus.has_service("start_motor"):
+            from std_srvs.srv import Empty, EmptyResponse
+
+            for name in ("start_motor", "stop_motor"):
+                def handler(_req, name=name):
+                    self.pacer.call(lambda: self.bus.call_service(name, None))
+                    return EmptyResponse()
+                self._services.append(rospy.Service(name, Empty, handler))
+        self._state = ros_state.StateSampler(twin.physics.model, twin.physics.data)
+        twin.samplers.append(self._state.sample)
+        self._state.sample(twin.t_phys_us)
+        self._rows = None  # the recorder's columns, sampled once a row topic has a subscriber (LiveRows)
+        self._events_sent: set = set()
+        twin.bus.add_tap(self._tap)
+        now = twin.clock.now_us
+        self._clock_event = twin.clock.schedule_every(now, clock_period_us, self._publish_clock, publishes=())
+
+    def start(self) -> None:
+        """The graph's subscribers have connected (before the run): sample the recorder's columns if one of
+        their topics is wanted (later, from the first flush that finds a subscriber)."""
+        if self._rows is None and any(p.get_num_connections() for p in (*self.row_pubs.values(), self.battery_pub,
+                                                                          self.diag_pub)):
+            self._rows = LiveRows(self.twin)
+
+    # -- out (the twin's thread) ------------------------------------------------------------
+    def _tap(self, topic: str, msg, t_us: int) -> None:
+        pub = self.pubs.get(topic)
+        if pub is None or topic == self._from_graph or not (topic == "tf_static" or pub.get_num_connections()):
+            return
+        if topic == "wheel_Command_Service/request":
+            msg = Float64MultiArray(MultiArrayLayout([MultiArrayDimension(REQUEST_FIELDS, 4, 4)]),
+                                    [float(msg.motionL), float(msg.speedL), float(msg.motionR), float(msg.speedR)])
+        pub.publish(self.conv.encode(msg))
+
+    def _publish_clock(self) -> None:
+        if self.clock_pub.get_num_connections():
+            now = self.twin.clock.now_us
+            self.clock_pub.publish(self.conv.ros_class("rosgraph_msgs/Clock")(
+                self.rospy.Time(now // 1_000_000, now % 1_000_000 * 1000)))
+
+    def flush(self, t_us: int) -> None:
+        """Publish the grid samples and events up to ``t_us`` (simulated), in time order.
+
+        Unpaced, the joint and base state waits for :data:`STATE_BATCH` grid samples (numpy's work costs
+        per call, not per sample); the pacer's last flush takes what is left."""
+        if self.pacer.rate > 0 or self.pacer.closed or len(self._state.t_us) >= STATE_BATCH:
+            self._publish_state(t_us)
+        if self._rows is None:
+            self.start()
+        else:
+            rows = self._rows.take(t_us)
+            if rows is not None:
+                self._publish_rows(rows)
+        self._publish_events(t_us)
+
+    def _publish_state(self, t_us: int) -> None:
+        batch = self._state.split(t_us)
+        gt, js = self.state_pubs["/twin/ground_truth"], self.state_pubs["/joint_states"]
+        want_gt, want_js, want_tf = gt.get_num_connections(), js.get_num_connections(), self.tf.get_num_connections()
+        if batch.t_us and (want_gt or want_js or want_tf):
+            a = {key: v.tolist() for key, v in batch.arrays().items()}
+            for i, ts in enumerate(a["t_us"]):
+                if want_gt:
+                    gt.publish(self.conv.encode(ros_state.ground_truth(ts, a["pos"][i], a["quat"][i], a["v_body"][i],
+                                                                       a["w_body"][i])))
+                if ts % JOINT_STATE_PERIOD_US == 0:
+                    if want_js:
+                        js.publish(self.conv.encode(ros_state.joint_state(ts, batch.joint_names, a["q"][i], a["qd"][i])))
+                    if want_tf:
+                        self.tf.publish(self.conv.encode(ros_state.link_transforms(ts, batch.child_frames,
+                                                                                   a["link_pos"][i], a["link_quat"][i])))
+
+    def _publish_rows(self, rows) -> None:
+        encode = self.conv.encode
+        for topic, column in zip(ROW_TOPICS, (rows.true_rpm, rows.pwm_counts, rows.current_a)):
+            pub = self.row_pubs[topic]
+            if pub.get_num_connections():
+                for values in column.astype(float).tolist():
+                    pub.publish(encode(Float64MultiArray(data=values)))
+        want_battery, want_diag = self.battery_pub.get_num_connections(), self.diag_pub.get_num_connections()
+        if not (want_battery or want_diag):
+            return
+        cap = self.twin.cfg.battery.capacity_ah
+        battery = self.conv.ros_class("sensor_msgs/BatteryState")
+        for i, (t, volts, amps, soc) in enumerate(zip(rows.t_us.tolist(), rows.battery_v.tolist(),
+                                                      rows.battery_a.tolist(), rows.battery_soc.tolist())):
+            stamp = self.rospy.Time(t // 1_000_000, t % 1_000_000 * 1000)
+            if want_battery and rows.index[i] % BATTERY_EVERY_ROWS == 0:
+                msg = battery(voltage=volts, current=-amps, charge=soc * cap, capacity=cap, design_capacity=cap,
+                              percentage=soc, present=True)
+                msg.header.stamp = stamp
+                self.battery_pub.publish(msg)
+            if want_diag and rows.index[i] % DIAGNOSTICS_PERIOD_ROWS == 0:
+                level = 0 if soc > 0.2 else 1
+                self._publish_status(stamp, level, "amr/battery", f"{volts:.2f} V, {soc * 100:.0f} %",
+                                     {"voltage_v": volts, "current_a": amps, "soc": soc})
+
+    def _publish_events(self, t_us: int) -> None:
+        for t_ns, _topic, level, name, message, values in statuses(self.twin):
+            key = (t_ns, name)
+            if t_ns <= t_us * 1000 and key not in self._events_sent:
+                self._events_sent.add(key)
+                self._publish_status(self.rospy.Time(t_ns // 1_000_000_000, t_ns % 1_000_000_000), level, name,
+                                     message, values)
+
+    def _publish_status(self, stamp, level: int, name: str, message: str, values: dict) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        array = DiagnosticArray(status=[DiagnosticStatus(level=level, name=name, message=message, hardware_id="amr",
+                                                         values=[KeyValue(str(k), str(v)) for k, v in values.items()])])
+        array.header.stamp = stamp
+        self.diag_pub.publish(array)
+
+    # -- in (rospy's threads) ------------------------------------------------------------------
+    def _own(self, msg) -> bool:
+        return msg._connection_header.get("callerid") == self.rospy.get_name()
+
+    def _post(self, what: str, topic: str, convert, msg) -> None:
+        if self._own(msg):
+            return
+        try:
+            value = convert(msg)
+        except InputError as exc:
+            with self._lock:
+                self.dropped += 1
+            LOG.warning("ros1: dropped %s from %s: %s", what, msg._connection_header.get("callerid"), exc)
+            return
+
+        def act():
+            self._from_graph = topic
+            try:
+                self.bus.publish(topic, value)
+            finally:
+                self._from_graph = None
+        try:
+            self.pacer.post(act)
+        except RuntimeError:  # the twin has stopped
+            pass
+
+    def _on_wheel_command(self, msg) -> None:
+        self._post("a wheel_Command", "wheel_Command", wheel_command_from_ros, msg)
+
+    def _on_cmd_vel(self, msg) -> None:
+        self._post("a cmd_vel", "cmd_vel", twist_from_ros, msg)
+
+    def close(self) -> None:
+        """Stop publishing and taking inputs (a second call does nothing)."""
+        if self._closed:
+            return
+        self._closed = True
+        self._clock_event.cancel()
+        self.bus.remove_tap(self._tap)
+        for sub in self._subs:
+            sub.unregister()
+        for srv in self._services:
+            srv.shutdown()
+        for pub in [*self.pubs.values(), self.clock_pub, *self.state_pubs.values(), *self.row_pubs.values(),
+                    self.battery_pub, self.diag_pub, self.description_pub]:
+            pub.unregister()

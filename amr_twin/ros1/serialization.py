@@ -1,0 +1,99 @@
+"""The ROS 1 wire format of the twin's high-rate messages, written with ``struct`` (the bridge's fast path).
+
+Filling genpy's message objects field by field cost 26 us (``sensor_msgs/Imu``) to 38 us
+(``nav_msgs/Odometry``) a message, six times their serialisation; these writers produce the same bytes
+(``tests/ros1/test_serialization.py`` compares them with genpy's, type by type) in a few microseconds.
+The ROS 1 format: little-endian, no alignment; a string or a variable array is a uint32 count then its
+items; ``time`` is uint32 sec, uint32 nsec; ``std_msgs/Header`` is uint32 seq, time, string frame_id.
+:data:`WRITERS` maps a type to its writer ``f(msg) -> bytes``; the rest go through genpy.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Callable
+
+import numpy as np
+
+_I = struct.Struct("<I")
+_HEAD = struct.Struct("<III")
+_D3, _D4, _D7, _D6 = (struct.Struct(f"<{n}d") for n in (3, 4, 7, 6))
+_F7 = struct.Struct("<7f")
+
+
+def _string(text: str) -> bytes:
+    data = text.encode()
+    return _I.pack(len(data)) + data
+
+
+def _header(h) -> bytes:
+    return _HEAD.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec) + _string(h.frame_id)
+
+
+def _f64s(values, count: bool) -> bytes:
+    data = np.asarray(values, dtype="<f8").tobytes()
+    return (_I.pack(len(data) // 8) + data) if count else data
+
+
+def _vec(v) -> bytes:
+    return _D3.pack(v.x, v.y, v.z)
+
+
+def _quat(q) -> bytes:
+    return _D4.pack(q.x, q.y, q.z, q.w)
+
+
+def imu(m) -> bytes:
+    return b"".join((_header(m.header), _quat(m.orientation), _f64s(m.orientation_covariance, False),
+                     _vec(m.angular_velocity), _f64s(m.angular_velocity_covariance, False),
+                     _vec(m.linear_acceleration), _f64s(m.linear_acceleration_covariance, False)))
+
+
+def magnetic_field(m) -> bytes:
+    return _header(m.header) + _vec(m.magnetic_field) + _f64s(m.magnetic_field_covariance, False)
+
+
+def odometry(m) -> bytes:
+    p, t = m.pose.pose, m.twist.twist
+    return b"".join((_header(m.header), _string(m.child_frame_id), _vec(p.position), _quat(p.orientation),
+                     _f64s(m.pose.covariance, False), _vec(t.linear), _vec(t.angular),
+                     _f64s(m.twist.covariance, False)))
+
+
+def tf_message(m) -> bytes:
+    parts = [_I.pack(len(m.transforms))]
+    for ts in m.transforms:
+        tr = ts.transform
+        parts += (_header(ts.header), _string(ts.child_frame_id), _vec(tr.translation), _quat(tr.rotation))
+    return b"".join(parts)
+
+
+def joint_state(m) -> bytes:
+    names = b"".join(_string(n) for n in m.name)
+    return b"".join((_header(m.header), _I.pack(len(m.name)), names, _f64s(m.position, True),
+                     _f64s(m.velocity, True), _f64s(m.effort, True)))
+
+
+def laser_scan(m) -> bytes:
+    ranges = np.asarray(m.ranges, dtype="<f4").tobytes()
+    intensities = np.asarray(m.intensities, dtype="<f4").tobytes()
+    return b"".join((_header(m.header), _F7.pack(m.angle_min, m.angle_max, m.angle_increment, m.time_increment,
+                                                 m.scan_time, m.range_min, m.range_max),
+                     _I.pack(len(ranges) // 4), ranges, _I.pack(len(intensities) // 4), intensities))
+
+
+def float64_multi_array(m) -> bytes:
+    dims = b"".join(_string(d.label) + struct.pack("<II", d.size, d.stride) for d in m.layout.dim)
+    return _I.pack(len(m.layout.dim)) + dims + _I.pack(m.layout.data_offset) + _f64s(m.data, True)
+
+
+def float64(m) -> bytes:
+    return struct.pack("<d", m.data)
+
+
+WRITERS: dict[str, Callable] = {
+    "sensor_msgs/Imu": imu, "sensor_msgs/MagneticField": magnetic_field, "nav_msgs/Odometry": odometry,
+    "tf2_msgs/TFMessage": tf_message, "sensor_msgs/JointState": joint_state, "sensor_msgs/LaserScan": laser_scan,
+    "std_msgs/Float64MultiArray": float64_multi_array, "std_msgs/Float64": float64,
+}
+"""ROS type -> writer of the twin's message of that type."""

@@ -1,0 +1,114 @@
+"""The twin joins a ROS 1 graph for a run: ``amr-twin run ... --ros1 [--roscore]``, ``amr-twin client --ros1``.
+
+:class:`Ros1Options` is checked before anything is built: Debian's ROS 1 is there (else one line naming
+the packages) and, unless ``--roscore`` asks for a private master, the master at ``ROS_MASTER_URI``
+answers within 3 s (else one line naming it). :class:`Ros1Session` then starts the private ``roscore``
+(on a free port; its URI is printed), joins the master as the node ``/amr_twin``, sets
+``/use_sim_time`` and ``/robot_description``, and bridges the twin (:class:`~amr_twin.ros1.bridge.Ros1Bridge`),
+fed by a :class:`~amr_twin.live.pacer.Pacer` (as fast as possible, or ``--rate`` x real time). Before
+the twin runs it waits until the nodes already on the graph (a ``rosbag record``, a node waiting for
+``/scan``, the thesis' service publishing ``/wheel_Command``: those the master lists) are connected to
+it, at most :data:`SETTLE_MAX_S`: a twin far faster than real time would otherwise run past the first
+messages before they connect. :meth:`Ros1Session.close` stops the bridge,
+rospy and the private roscore.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+
+from amr_twin.ros1.master import DEFAULT_MASTER_URI, Master, master_problem, start_roscore
+
+NODE_NAME = "amr_twin"
+SETTLE_MAX_S = 2.0
+"""Longest wait for the graph's subscribers to connect before the twin runs, wall s."""
+
+
+def master_uri() -> str:
+    """``ROS_MASTER_URI``, or ROS 1's default."""
+    return os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+
+
+@dataclass(frozen=True)
+class Ros1Options:
+    """``--ros1``: join the graph at ``ROS_MASTER_URI``, or a private roscore (``roscore``); ``firmware_topics``
+    False when the board's serial port is served to a rosserial host (it carries them)."""
+
+    roscore: bool = False
+    firmware_topics: bool = True
+
+    def check(self) -> None:
+        """Raise ValueError (one line) when ROS 1 is absent or the master does not answer within 3 s."""
+        from amr_twin.ros1.installation import missing
+
+        problem = missing()
+        if problem:
+            raise ValueError(f"--ros1: {problem}")
+        if not self.roscore:
+            problem = master_problem(master_uri(), 3.0)
+            if problem:
+                raise ValueError(f"--ros1: {problem} (start roscore, or give --roscore for a private one)")
+
+
+class Ros1Session:
+    """Bridge ``twin`` to the ROS 1 graph, fed by ``pacer``; :meth:`close` when the run is over."""
+
+    def __init__(self, twin, pacer, options: Ros1Options, say=print):
+        from amr_twin.ros1.bridge import Ros1Bridge
+        from amr_twin.ros1.installation import import_rospy
+
+        self.master = start_roscore() if options.roscore else Master(master_uri())
+        self.rospy = rospy = None
+        try:
+            if options.roscore:
+                os.environ["ROS_MASTER_URI"] = self.master.uri
+                os.environ.setdefault("ROS_IP", "127.0.0.1")
+            rospy = self.rospy = import_rospy()
+            rospy.init_node(NODE_NAME, anonymous=False, disable_signals=True, log_level=rospy.WARN)
+            rospy.set_param("/use_sim_time", True)
+            rospy.set_param("/robot_description", twin.urdf)
+            self.bridge = Ros1Bridge(twin, pacer, firmware_topics=options.firmware_topics)
+        except BaseException:
+            if rospy is not None:
+                rospy.signal_shutdown("the twin could not join the graph")
+            self.master.stop()
+            raise
+        pacer.sinks.append(self.bridge)
+        where = f"a private roscore at {self.master.uri}" if options.roscore else f"the master at {self.master.uri}"
+        say(f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; "
+            "publish /wheel_Command or /cmd_vel to drive it)")
+        self.settle()
+        self.bridge.start()
+
+    def _publishers(self) -> list:
+        b = self.bridge
+        return [*b.pubs.values(), b.clock_pub, *b.state_pubs.values(), *b.row_pubs.values(), b.battery_pub,
+                b.diag_pub, b.description_pub]
+
+    def settle(self, max_s: float = SETTLE_MAX_S) -> bool:
+        """Wait until the twin is connected to each subscriber of its topics and each publisher of its inputs
+        that the master lists (at most ``max_s``); True if it is."""
+        import rosgraph
+
+        me = self.rospy.get_name()
+        pubs, subs, _services = rosgraph.Master(me).getSystemState()
+        others = {topic: sum(1 for node in nodes if node != me) for topic, nodes in subs}
+        sources = {topic: sum(1 for node in nodes if node != me) for topic, nodes in pubs}
+        deadline = time.monotonic() + max_s
+        while True:
+            if (all(p.get_num_connections() >= others.get(p.resolved_name, 0) for p in self._publishers())
+                    and all(s.get_num_connections() >= sources.get(s.resolved_name, 0) for s in self.bridge._subs)):
+                return True
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.02)
+
+    def close(self) -> None:
+        """Stop the bridge (if the pacer has not), rospy, and the private roscore."""
+        try:
+            self.bridge.close()
+        finally:
+            self.rospy.signal_shutdown("the twin's run is over")
+            self.master.stop()

@@ -1,0 +1,192 @@
+"""The actors in the running twin: moved on the loop's grid, their true poses on ``actors/poses``.
+
+:class:`ActorMotion` is a grid sampler of the loop (:attr:`amr_twin.sim.loop.Twin.samplers`): at
+every record-grid instant (10 ms) it advances each actor's walking time, poses it
+(:meth:`amr_twin.model.actor_paths.ActorPath.pose_at`) and writes the pose to its mocap body
+through the physics layer (:meth:`amr_twin.sim.physics.Physics.set_mocap_pose`). The body holds
+that pose until the next instant (MuJoCo moves a mocap body where it is told, no faster): a
+person at 1.5 m/s jumps 15 mm every 10 ms. The contacts and the LiDAR's rays see it from the
+next physics step on, so a cast at an instant sees the actors where they were one instant
+before; the LiDAR casts every 20 ms while actors move (:class:`~amr_twin.sim.loop.Twin`), so a
+beam sees an actor within about 2 cm of where it was at the beam's own instant.
+
+An actor with ``stop_within_m`` does not walk on at an instant where the robot's chassis
+footprint (``chassis.length_m`` x ``chassis.width_m`` about the base) is nearer than that to
+its centre and ahead of it (the footprint's nearest point in front of its heading); the others
+never wait: scripted actors do not avoid.
+
+The update runs in C when a compiler is at hand (``actors.c``: the loop's grid stays in C with
+actors); :meth:`ActorMotion.update_python` is its Python twin, the same operations in the same
+order (same bits), on the same state (ctypes structs both read and write).
+
+:class:`ActorPoses` publishes the true poses as ``geometry_msgs/PoseArray`` on ``actors/poses``
+(frame ``map``: the world frame; one pose per actor in the order of ``TwinOptions.actors``, z = 0)
+every :data:`PUBLISH_PERIOD_US`, from rows a :class:`~amr_twin.sim.grid_steps.GridRows` keeps on
+the grid (in C with the motion): a publishing clock event that never stops the physics.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+
+from amr_twin.model.actor_paths import actor_path
+from amr_twin.model.actors import Actor, body_name
+from amr_twin.sim.grid_steps import TIMED, GridRows, sampler
+from amr_twin.sim.native_build import address, open_helper
+
+C_SOURCE = Path(__file__).with_name("actors.c")
+PUBLISH_PERIOD_US = 100_000
+"""``actors/poses`` every 100 ms (10 Hz)."""
+TOPIC, FRAME = "actors/poses", "map"
+US = 1_000_000
+
+
+class _State(ctypes.Structure):
+    """``actor_state`` of actors.c."""
+
+    _fields_ = [("phases", ctypes.c_void_p), ("nphase", ctypes.c_int), ("mocap", ctypes.c_int),
+                ("period_s", ctypes.c_double), ("start_us", ctypes.c_int64), ("progress_us", ctypes.c_int64),
+                ("last_us", ctypes.c_int64), ("stop_m", ctypes.c_double), ("pose", ctypes.c_double * 3)]
+
+
+class _Ctx(ctypes.Structure):
+    """``actors_ctx`` of actors.c."""
+
+    _fields_ = [("n", ctypes.c_int), ("a", ctypes.POINTER(_State)), ("base_body", ctypes.c_int),
+                ("half_len_m", ctypes.c_double), ("half_wid_m", ctypes.c_double)]
+
+
+class ActorMotion:
+    """Moves the ``actors`` (:class:`~amr_twin.model.actors.Actor`, in the order their bodies were
+    built) of a twin's ``physics`` on the loop's grid (module notes).
+
+    :attr:`update` is the grid sampler (``update(t_us)``): the C helper when built, else
+    :meth:`update_python`; ``native=False`` forces the Python twin (:attr:`engine` says which).
+    """
+
+    def __init__(self, physics, actors: tuple[Actor, ...], cfg, native: bool = True):
+        self.physics, self.actors = physics, tuple(actors)
+        self.names = tuple(body_name(i, a) for i, a in enumerate(self.actors))
+        """Each actor's body name (``person_0``, ...), as collisions report it."""
+        self.paths = [actor_path(a, cfg) for a in self.actors]
+        self._phases = [np.ascontiguousarray(p.phases, np.float64) for p in self.paths]
+        n = len(self.actors)
+        self._states = (_State * max(n, 1))()
+        for s, a, path, phases, name in zip(self._states, self.actors, self.paths, self._phases, self.names):
+            s.phases, s.nphase, s.mocap = address(phases), len(phases), physics.mocap_index(name)
+            s.period_s, s.start_us = path.period_s, int(round(a.start_s * US))
+            s.progress_us, s.last_us, s.stop_m = 0, 0, a.stop_within_m
+            s.pose[0], s.pose[1], s.pose[2] = path.pose_at(0.0)
+        self._ctx = _Ctx(n=n, a=ctypes.cast(self._states, ctypes.POINTER(_State)), base_body=physics.base_body,
+                         half_len_m=cfg.chassis.length_m / 2, half_wid_m=cfg.chassis.width_m / 2)
+        self._waits = any(a.stop_within_m > 0 for a in self.actors)
+        self.update = self.update_python
+        """The grid sampler: the C helper when built, else :meth:`update_python`."""
+        lib, self.engine = open_helper(C_SOURCE, native)
+        """Which runs: ``"C"`` or ``"Python (<why>)"``."""
+        self._row_c = None
+        if lib is not None:
+            self._use_native(lib)
+
+    def _use_native(self, lib) -> None:
+        fn = lib.actors_update
+        fn.restype, fn.argtypes = None, [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64]
+        ctx, d = ctypes.addressof(self._ctx), self.physics.data._address
+        self._keep = (self.physics.model, self.physics.data)  # the data outlives every call
+
+        def update(t_us: int, _fn=fn, _ctx=ctx, _d=d) -> None:
+            _fn(_ctx, _d, t_us)
+
+        update.grid_native = sampler(TIMED, fn, ctx, d)  # the loop's grid in C
+        self.update = update
+        self._row_c = (lib.actors_row, ctx, 0, 0)
+
+    def update_python(self, t_us: int) -> None:
+        """Grid instant ``t_us``: the Python twin of ``actors_update`` (module notes)."""
+        physics = self.physics
+        base = physics.base_heading_xy() if self._waits else None
+        for s, path in zip(self._states, self.paths):
+            start, last = s.start_us, s.last_us
+            since = last if last > start else start
+            if t_us > since and not self._blocked(s, base):
+                s.progress_us += t_us - since
+            s.last_us = t_us
+            x, y, yaw = path.pose_at(s.progress_us / 1e6)
+            s.pose[0], s.pose[1], s.pose[2] = x, y, yaw
+            physics.set_mocap_pose(s.mocap, x, y, yaw)
+
+    def _blocked(self, s: _State, base) -> bool:
+        """``actor_blocked`` of actors.c: the robot's footprint nearer than ``stop_m`` ahead of the actor."""
+        stop = s.stop_m
+        if stop <= 0.0:
+            return False
+        bx, by, hx, hy = base
+        n = math.sqrt(hx * hx + hy * hy)
+        cs, sn = hx / n, hy / n
+        ax, ay, yaw = s.pose
+        dx, dy = ax - bx, ay - by
+        lx, ly = cs * dx + sn * dy, cs * dy - sn * dx
+        hl, hw = self._ctx.half_len_m, self._ctx.half_wid_m
+        qx = -hl if lx < -hl else (hl if lx > hl else lx)
+        qy = -hw if ly < -hw else (hw if ly > hw else ly)
+        gx, gy = qx - lx, qy - ly
+        dist2 = gx * gx + gy * gy
+        if dist2 >= stop * stop:
+            return False
+        wx, wy = cs * gx - sn * gy, sn * gx + cs * gy
+        return wx * math.cos(yaw) + wy * math.sin(yaw) > 0.0 or dist2 == 0.0
+
+    def poses(self) -> list[tuple[float, float, float]]:
+        """Each actor's pose as last placed: ``(x_m, y_m, yaw_rad)``."""
+        return [tuple(s.pose) for s in self._states[:len(self.actors)]]
+
+    def progress_s(self) -> list[float]:
+        """Each actor's walking time so far, s (less than the time since its start when it waited)."""
+        return [s.progress_us / US for s in self._states[:len(self.actors)]]
+
+    def pose_rows(self, period_us: int = PUBLISH_PERIOD_US) -> GridRows:
+        """A grid sampler keeping every ``period_us`` the poses (x_m, y_m, yaw_rad per actor) just
+        placed (``actors_row`` in C, the same values); put it after :attr:`update`."""
+        def row() -> list[float]:
+            return [v for s in self._states[:len(self.actors)] for v in s.pose]
+
+        return GridRows(3 * len(self.actors), period_us, row, self._row_c, start_us=0)
+
+
+class ActorPoses:
+    """Publishes ``actors/poses`` (module notes) from ``motion``'s pose rows; appends the rows'
+    keeper to ``samplers`` (after the motion's sampler, which must be in it already)."""
+
+    def __init__(self, motion: ActorMotion, clock, bus, samplers: list, period_us: int = PUBLISH_PERIOD_US):
+        from amr_twin.ros.geometry_messages import PoseArray
+
+        self.clock, self.bus, self.n = clock, bus, len(motion.actors)
+        self.rows = motion.pose_rows(period_us)
+        samplers.insert(samplers.index(motion.update) + 1, self.rows)
+        self._ready: deque = deque()
+        self.seq = 0
+        bus.advertise(TOPIC, PoseArray)
+        first = -(-clock.now_us // period_us) * period_us
+        self._handle = clock.schedule_every(first, period_us, self._publish_next, publishes=(TOPIC,))
+
+    def _publish_next(self) -> None:
+        from amr_twin.ros.geometry_messages import Point, Pose, PoseArray, Quaternion
+        from amr_twin.ros.messages import Header, Time
+
+        now = self.clock.now_us
+        if not self._ready:
+            self._ready.extend(self.rows.take().tolist())
+        while self._ready and self._ready[0][0] < now:  # rows of instants no event publishes (a late start)
+            self._ready.popleft()
+        if not self._ready or self._ready[0][0] != now:
+            raise RuntimeError(f"actor poses at t_us={now} were not kept on the loop's grid")
+        row = self._ready.popleft()
+        self.seq += 1
+        poses = [Pose(Point(row[1 + 3 * i], row[2 + 3 * i], 0.0), Quaternion.from_yaw(row[3 + 3 * i]))
+                 for i in range(self.n)]
+        self.bus.publish(TOPIC, PoseArray(Header(self.seq, Time.from_us(now), FRAME), poses))

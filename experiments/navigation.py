@@ -2,11 +2,14 @@
 
 Each episode (:func:`episodes`) draws, from its own seed, a start and a goal pose 10 to 50 m apart
 (straight line) in the world's free space (at least ``FREE_CLEARANCE_M`` from any obstacle, both
-reachable), and a scenario: ``clear``; ``person``, a person (0.45 x 0.3 x 1.7 m) standing in an
-aisle on the way, off its middle; or ``pallet_jack``, a loaded pallet jack (1.6 x 0.75 x 1.3 m, the
-load hides the forks, so the scan sees its whole footprint) in an aisle on the way, anywhere
-across it (it may leave room to pass, or block the aisle). Neither is on any map. Until moving
-people land (the ``actors`` branch: amr_twin/model/actors.py), the person stands still.
+reachable), and a scenario: ``clear``; ``person``, a person crossing an aisle on the way (``people
+= "walking"``: an :class:`~amr_twin.model.actors.Actor` of amr_twin/model/actors.py walking across
+the aisle at 1.3 m/s, setting off when the robot should be about 3 m away, halting while the
+robot is within 0.6 m ahead of them (people give way), then standing at the
+aisle's side) or standing in it off its middle (``"static"``: a 0.45 x 0.3 x 1.7 m box); or
+``pallet_jack``, a loaded pallet jack (1.6 x 0.75 x 1.3 m, the load hides the forks, so the scan
+sees its whole footprint) in an aisle on the way, anywhere across it (it may leave room to pass,
+or block the aisle). Neither is on any map.
 
 Each episode runs on the world's true map and on the SLAM map (a map built from the LiDAR's
 scans, :mod:`.navigation_map`), the same start, goal, obstacle and seed, with the localisation and
@@ -44,6 +47,7 @@ class Episode:
     goal: tuple
     scenario: str
     obstacle: Obstacle | None
+    actor: object = None  # amr_twin.model.actors.Actor of a walking person
 
 
 def _free_cells(costmap) -> np.ndarray:
@@ -51,8 +55,16 @@ def _free_cells(costmap) -> np.ndarray:
     return costmap.centres_xy_m(rows, cols)
 
 
-def _place(rng, scenario: str, plan, costmap, start, goal) -> Obstacle | None:
-    """An obstacle in an aisle on the planned way, at least 3 m from start and goal; None if no room."""
+ROBOT_SPEED_M_S = 0.55
+"""The robot's mean speed on its way (from the episodes' times), to time a walking person's crossing."""
+CROSS_HALF_M = 0.7
+STOP_WITHIN_M = 0.6
+"""A walking person halts while the robot is this close ahead of them (people give way), m."""
+
+
+def _place(rng, scenario: str, plan, costmap, start, goal, people: str = "static"):
+    """An obstacle (or a walking person: an Actor) in an aisle on the planned way, at least 3 m from start
+    and goal; None if no room."""
     xy = plan.xy_m
     s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
     d = costmap.static_distance_at(xy)
@@ -62,6 +74,16 @@ def _place(rng, scenario: str, plan, costmap, start, goal) -> Obstacle | None:
         return None
     i = int(rng.choice(np.flatnonzero(ok)))
     yaw = float(plan.poses[i, 2])
+    if scenario == "person" and people == "walking":
+        from amr_twin.model.actors import Actor
+        from amr_twin.navigation.stack import REST_S
+
+        side = float(rng.choice([-1.0, 1.0]))
+        n = np.array([-math.sin(yaw), math.cos(yaw)]) * side
+        a, b = xy[i] - CROSS_HALF_M * n, xy[i] + CROSS_HALF_M * n
+        start_s = max(0.0, REST_S + (s[i] - 3.0) / ROBOT_SPEED_M_S)
+        return Actor("person", ((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))), 1.3, start_s=start_s,
+                     stop_within_m=STOP_WITHIN_M)
     if scenario == "person":
         size, offset = PERSON_SIZE_M, float(rng.choice([-1.0, 1.0]) * rng.uniform(0.35, 0.6))
     else:
@@ -71,7 +93,7 @@ def _place(rng, scenario: str, plan, costmap, start, goal) -> Obstacle | None:
     return Obstacle(scenario, float(x), float(y), size, yaw)
 
 
-def episodes(cfg, world: str, n: int, seed: int = 0) -> list[Episode]:
+def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "static") -> list[Episode]:
     """``n`` episodes, episode ``i`` drawn from ``default_rng([seed, i])`` (module docstring)."""
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.planner import GlobalPlanner
@@ -93,10 +115,11 @@ def episodes(cfg, world: str, n: int, seed: int = 0) -> list[Episode]:
                 continue
             start = (float(a[0]), float(a[1]), float(rng.uniform(-math.pi, math.pi)))
             goal = (float(b[0]), float(b[1]), float(rng.uniform(-math.pi, math.pi)))
-            obstacle = None if scenario == "clear" else _place(rng, scenario, plan, costmap, start, goal)
-            if scenario != "clear" and obstacle is None:
+            placed = None if scenario == "clear" else _place(rng, scenario, plan, costmap, start, goal, people)
+            if scenario != "clear" and placed is None:
                 continue
-            out.append(Episode(i, seed, start, goal, scenario, obstacle))
+            actor = placed if placed is not None and not isinstance(placed, Obstacle) else None
+            out.append(Episode(i, seed, start, goal, scenario, None if actor is not None else placed, actor))
             break
         else:
             raise ValueError(f"episode {i}: no start/goal pair {MIN_APART_M:g}-{MAX_APART_M:g} m apart found in "
@@ -127,7 +150,8 @@ def run_episode(item: EpisodeRun) -> dict:
     ep = item.episode
     obstacles = () if ep.obstacle is None else (ep.obstacle,)
     twin_options = TwinOptions(firmware=item.firmware, world=item.world, seed=ep.seed * 100_003 + ep.index,
-                               start_xy_yaw=ep.start, visuals=False, obstacles=obstacles)
+                               start_xy_yaw=ep.start, visuals=False, obstacles=obstacles,
+                               actors=() if ep.actor is None else (ep.actor,))
     options = NavigationOptions(goals=(ep.goal,), map_yaml=item.slam_yaml if item.map_kind == "slam" else None,
                                 localisation=item.localisation, controller=item.controller,
                                 seed=ep.seed * 100_003 + ep.index)
@@ -146,7 +170,7 @@ def _timed_episode(item: EpisodeRun) -> dict:
 
 def run(cfg, world: str, n: int, *, seed: int = 0, maps: tuple = MAPS, slam_yaml: str | None = None,
         slam_stem=None, localisation: str = "ekf", controller: str = "mppi", firmware: str = "improved",
-        jobs: int = 1, client=None, progress: bool = True) -> dict:
+        jobs: int = 1, client=None, progress: bool = True, people: str = "static") -> dict:
     """Every episode on every map (building the SLAM map at ``slam_stem`` first when ``slam_yaml`` is None)."""
     import time
 
@@ -163,14 +187,15 @@ def run(cfg, world: str, n: int, *, seed: int = 0, maps: tuple = MAPS, slam_yaml
             slam_yaml = slam["yaml"]
         else:
             slam = {"yaml": str(slam_yaml), "route": "given (--slam-map)"}
-    eps = episodes(cfg, world, n, seed)
+    eps = episodes(cfg, world, n, seed, people)
     items = [EpisodeRun(cfg, world, ep, kind, slam_yaml, localisation, controller, firmware)
              for ep in eps for kind in maps]
     rows = [row for _item, row in run_all(_timed_episode, items, jobs=jobs, client=client,
                                           description="navigation episodes", progress=progress)]
     rows.sort(key=lambda r: (r["index"], MAPS.index(r["map"])))
     static_maps = {kind: load_static_map(cfg, world, slam_yaml if kind == "slam" else None) for kind in maps}
-    return {"world": world, "episodes": n, "seed": seed, "maps": list(maps), "localisation": localisation,
+    return {"world": world, "episodes": n, "seed": seed, "people": people, "maps": list(maps),
+            "localisation": localisation,
             "controller": controller, "firmware": firmware, "slam_map": slam,
             "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
                        "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",

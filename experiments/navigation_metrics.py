@@ -24,6 +24,8 @@ import math
 import numpy as np
 
 W_DEADBAND_RAD_S = 0.02
+PERSON_HALF_M = (0.15, 0.225)
+"""Half the depth and width of a walking person's body (amr.yaml's actors.person torso, 0.25 x 0.45 m, legs within)."""
 
 
 def footprint_clearance_m(poses: np.ndarray, footprint, boxes) -> np.ndarray:
@@ -89,6 +91,15 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
     every = pose[moving][::10]
     clearance = footprint_clearance_m(every, footprint, boxes)
     person = footprint_clearance_m(every, footprint, extra) if ob is not None and ob.name == "person" else None
+    if episode.actor is not None and run.actor_poses:  # a walking person: their body (0.45 x 0.3 m) at 10 Hz
+        ta = np.array([a[0] for a in run.actor_poses])
+        keep = (ta >= t0) & (ta <= t1)
+        body = np.array([a[1][0] for a in run.actor_poses])[keep]
+        robot = np.column_stack([np.interp(ta[keep], t, pose[:, k]) for k in range(2)] +
+                                [np.interp(ta[keep], t, np.unwrap(pose[:, 2]))])
+        person = np.array([footprint_clearance_m(robot[k:k + 1], footprint, Boxes(
+            body[k:k + 1, :2], np.array([[PERSON_HALF_M[0], PERSON_HALF_M[1]]]), body[k:k + 1, 2], ("person",)))[0]
+            for k in range(len(robot))])
     reached = out.status == "succeeded"
     success = reached and not run.collisions
     time_s = float(t1 - t0)
@@ -106,6 +117,8 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
         "start": list(episode.start), "goal": list(episode.goal),
         "obstacle": None if ob is None else {"kind": ob.name, "x_m": ob.x_m, "y_m": ob.y_m, "size_m": list(ob.size_m),
                                              "yaw_rad": ob.yaw_rad},
+        "actor": None if episode.actor is None else {"kind": episode.actor.kind, "start_s": episode.actor.start_s,
+                                                     "waypoints_xy_m": [list(p) for p in episode.actor.waypoints_xy_m]},
         "status": out.status, "reason": out.reason, "success": bool(success), "collisions": len(run.collisions),
         "collided_with": sorted({col.get("world", "?") for col in run.collisions}),
         "time_s": time_s, "barn_score": barn, "travelled_m": travelled, "optimal_m": optimal,

@@ -66,7 +66,8 @@ def report(data: dict, out: Path) -> None:
     write_json(out / "metrics.json", data)
     s = data["summary"]
     lines = [f"# Navigation experiment: {data['episodes']} episodes x {len(data['maps'])} maps", "",
-             f"World `{data['world']}`, seed {data['seed']}, localisation `{data['localisation']}`, controller "
+             f"World `{data['world']}`, seed {data['seed']}, people `{data.get('people', 'static')}`, localisation "
+             f"`{data['localisation']}`, controller "
              f"`{data['controller']}`, firmware `{data['firmware']}`. Optimal length: {data['optimal']}.", "",
              "| map / scenario | episodes | success | collisions | time s | BARN | travelled/optimal median (max) "
              "| min clearance m | person >= 0.3 m | plan ms p50/p95 | controller ms p50/p99 | recoveries /100 m "

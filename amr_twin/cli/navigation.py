@@ -33,6 +33,8 @@ def add_navigation(experiment: typer.Typer) -> None:
         maps: str = typer.Option("true,slam", "--maps", help="true, slam or true,slam."),
         slam_map: Optional[Path] = typer.Option(None, "--slam-map", help="Use this map_server YAML as the SLAM map "
                                                 "instead of building one."),
+        people: str = typer.Option("static", "--people", help="The person scenario: static (standing in an aisle) "
+                                   "or walking (an actor crossing the aisle ahead of the robot, amr_twin/model/actors.py)."),
         localisation: str = typer.Option("ekf", "--localisation", help="truth, ekf or odom."),
         controller: str = typer.Option("mppi", "--controller", help="mppi or rpp."),
         firmware: str = firmware_option("improved"),
@@ -54,6 +56,8 @@ def add_navigation(experiment: typer.Typer) -> None:
         kinds = tuple(k.strip() for k in maps.split(","))
         if not kinds or any(k not in ("true", "slam") for k in kinds) or len(set(kinds)) != len(kinds):
             fail(f"--maps {maps!r}: true, slam or true,slam")
+        if people not in ("static", "walking"):
+            fail(f"--people {people!r}: static or walking")
         if localisation not in SOURCES:
             fail(f"--localisation {localisation!r}: must be one of {', '.join(SOURCES)}")
         if controller not in CONTROLLERS:
@@ -85,7 +89,7 @@ def add_navigation(experiment: typer.Typer) -> None:
             data = navigation.run(cfg, world, episodes, seed=seed, maps=kinds,
                                   slam_yaml=None if slam_map is None else str(slam_map), slam_stem=out / "slam_map",
                                   localisation=localisation, controller=controller, firmware=firmware, jobs=jobs,
-                                  client=client, progress=progress)
+                                  client=client, progress=progress, people=people)
             static_maps = data.pop("static_maps")
             with all_or_nothing():
                 navigation_report.plot(data["rows"], static_maps, out)

@@ -63,6 +63,7 @@ class NavigationRun:
     sim_s: float = 0.0
     wall_s: float = 0.0
     timed_out: bool = False
+    actor_poses: list = field(default_factory=list)  # (t_s, [(x_m, y_m, yaw_rad), ...]) of actors/poses, 10 Hz
 
 
 def robot_top_m(cfg) -> float:
@@ -164,6 +165,9 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
         on_twin(twin)
     nav = attach(twin, cfg, static, options, publish=publish, drive=drive)
     twin.navigator = nav
+    actor_poses = []
+    twin.bus.add_tap(lambda _topic, msg, t_us: actor_poses.append(
+        (t_us * 1e-6, [(p.position.x, p.position.y, p.orientation.yaw_rad()) for p in msg.poses])), ("actors/poses",))
     twin.advance(REST_S)
     timeout = options.timeout_s
     while not nav.done and not twin.halted:
@@ -187,4 +191,4 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
     cmds = np.array(nav.commands, float).reshape(-1, 3)
     return NavigationRun(nav.outcomes, series.t_s, series.pose, cmds, np.array(nav.controller_cpu_s),
                          twin.collisions.as_dicts(), dict(nav.monitor.actions), twin.t_s,
-                         time.perf_counter() - wall0, timed_out)
+                         time.perf_counter() - wall0, timed_out, actor_poses)

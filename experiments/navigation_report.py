@@ -36,6 +36,9 @@ def plot(rows: list[dict], static_maps: dict, out: Path) -> list[Path]:
             ax.plot(xy[:, 0], xy[:, 1], ".", color=colour, ms=1.2, alpha=0.6)
             ax.plot(*r["start"][:2], "o", color=colour, ms=3)
             ax.plot(*r["goal"][:2], "x", color=colour, ms=5)
+            if r.get("actor"):
+                line = np.asarray(r["actor"]["waypoints_xy_m"], float)
+                ax.plot(line[:, 0], line[:, 1], "-", color=COLOURS["person"], lw=3, alpha=0.6)
             ob = r["obstacle"]
             if ob is not None:
                 L, W = ob["size_m"][0], ob["size_m"][1]
@@ -44,8 +47,10 @@ def plot(rows: list[dict], static_maps: dict, out: Path) -> list[Path]:
                 ax.add_patch(Rectangle(corner, L, W, angle=math.degrees(ob["yaw_rad"]), color=COLOURS[ob["kind"]],
                                        alpha=0.7))
         n_ok = sum(r["success"] for r in sel)
-        ax.set_title(f"{len(sel)} episodes on the {kind} map ({sm.source}): {n_ok} succeeded; blue clear, green "
-                     "person, orange pallet jack (rectangles: the unmapped obstacles), red failed; o start, x goal")
+        ax.set_title(f"{len(sel)} episodes on the {kind} map ({Path(sm.source).name}): {n_ok} succeeded\n"
+                     "blue clear, green person, orange pallet jack (rectangles: the unmapped obstacles; walking "
+                     "people: their crossing line), red failed; o start, x goal; dots: the true pose at 5 Hz",
+                     fontsize=10)
         ax.set_xlabel("x, m (map)")
         ax.set_ylabel("y, m (map)")
         ax.set_aspect("equal")

@@ -52,6 +52,10 @@ def _start_pose(text: Optional[str]) -> Optional[tuple[float, float, float]]:
     return x_m, y_m, math.radians(yaw_deg)
 
 
+OPTION_OF = {"payload.mass_kg": "--payload-kg", "payload.xy_m": "--payload-xy"}
+"""The parameter each command option sets (the ``extra`` of :func:`_config`)."""
+
+
 def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
     from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
 
@@ -65,6 +69,10 @@ def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[
             if path is not None and text.startswith(f"{path}:"):
                 text = f"{option} {text}"
                 break
+        for key, value in (extra or {}).items():
+            if text.startswith(f"{key}:") and key in OPTION_OF:
+                shown = ",".join(f"{v:g}" for v in value) if isinstance(value, (list, tuple)) else f"{value:g}"
+                text = f"{OPTION_OF[key]} {shown}: {text}"
         fail(text)
 
 

@@ -28,14 +28,10 @@ import typer
 
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, _given, checked_firmware, checked_live,
-                                  checked_ros1,
-                                  shared)
+                                  checked_ros1, checked_seed, shared)
+from amr_twin.sim.bounds import duration_problem
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
-
-MAX_RUN_S = 3600.0
-"""Longest run, simulated s: a run keeps its 100 Hz series in memory (about 70 MB and a
-minute of CPU per simulated hour); longer studies are missions run in pieces."""
 
 DEFAULT_RUN_S = 10.0
 EXIT_COLLISION = 4
@@ -54,9 +50,8 @@ def _finite(name: str, value: Optional[float], required: bool = True) -> Optiona
 def _duration(opts: RunOptions, default_s: float) -> float:
     duration_s = _finite("--duration-s", opts.duration_s, required=False)
     duration_s = default_s if duration_s is None else duration_s
-    if not 0 < duration_s <= MAX_RUN_S:
-        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_RUN_S:g}] s (a run keeps its 100 Hz series in "
-             "memory, ~70 MB per simulated hour; run longer studies as several missions)")
+    if duration_problem(duration_s):
+        fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
     return duration_s
 
 
@@ -103,6 +98,10 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     from amr_twin.sim.run import run_mission
 
     duration_s = _duration(opts, default_s)
+    last_s = max((t for t, _ in steps), default=0.0)
+    if last_s > duration_s:
+        fail(f"--duration-s {duration_s:g}: ends before the mission's last step, at {last_s:g} s")
+    checked_seed(opts.seed, fail)
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
     extra = {}
     if _finite("--payload-kg", opts.payload_kg, required=False) is not None:
@@ -131,9 +130,12 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         except ValueError as exc:
             fail(str(exc))
         steps = []  # the stop is the board's state at power-up: nothing is sent on its serial port
+    recording = opts.record is not None or opts.mcap is not None
+    from amr_twin.cli.checks import check_memory
+
+    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     actors = _actors(opts, mission_actors, cfg, start, fail)
-    recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None, firmware_params=avr_params,

@@ -59,7 +59,8 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
 
 
 def world_model(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
-    """The world alone, compiled (no robot): where actors may walk (:mod:`amr_twin.model.actor_space`)."""
+    """The world alone, compiled (no robot): where actors may walk (:mod:`amr_twin.model.actor_space`), where a
+    route may go (:func:`amr_twin.experiments.fusion.check_route`)."""
     try:
         return _world_spec(cfg, world).compile()
     except BuildError:
@@ -137,13 +138,13 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
 
 
 def export(cfg: TwinConfig, urdf_path: Path | None = None, mjcf_path: Path | None = None) -> Build:
-    """Write the URDF and the robot MJCF (the committed files are made this way)."""
+    """Write the URDF and the robot MJCF (the committed files are made this way): both or neither
+    (:func:`amr_twin.recording.atomic_file.all_or_nothing`), never half of one."""
+    from amr_twin.recording.atomic_file import all_or_nothing, write_text
+
     result = build(cfg)
-    for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
-        if path is None:
-            continue
-        path = Path(path)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(text)
-        tmp.replace(path)  # never leave a half-written file
+    with all_or_nothing():
+        for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
+            if path is not None:
+                write_text(path, text)
     return result

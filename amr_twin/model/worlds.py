@@ -39,6 +39,20 @@ def world_path(world: str | Path) -> Path:
     return WORLD_DIR / f"{world}.xml" if not path.suffix else path
 
 
+def world_files(world: str | Path) -> list[Path]:
+    """The files ``world`` reads: its MJCF file, or a map YAML and the image it names (when it names one)."""
+    path = world_path(world)
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        return [path]
+    from amr_twin.model.yaml_file import read_yaml
+
+    try:
+        image = read_yaml(path, "map", MapError).get("image")
+    except (MapError, AttributeError):  # unreadable: the model build says why
+        return [path]
+    return [path] + ([path.parent / image] if isinstance(image, str) and image.strip() else [])
+
+
 def _numeric(world: str | Path, name: str) -> list[float] | None:
     """Values of the MJCF ``<custom><numeric name=NAME>`` of ``world``; None if absent or unreadable."""
     path = world_path(world)

@@ -2,7 +2,7 @@
 
 Format (YAML)::
 
-    duration_s: 14          # simulated seconds, > 0
+    duration_s: 14          # simulated seconds, in [0.1, 3600]
     steps:                  # sent in time order; t_s in [0, duration_s]
       - t_s: 0
         linear: {speed_m_s: 0.5}              # negative: backward
@@ -42,6 +42,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from amr_twin.sim.bounds import duration_problem
 from amr_twin.sim.run import KINDS, Command
 from amr_twin.model.yaml_file import read_yaml
 
@@ -205,8 +206,8 @@ def parse_mission_plan(tree) -> Mission:
     if "duration_s" not in tree:
         raise MissionError("mission: duration_s is missing")
     duration_s = _number("duration_s", tree["duration_s"])
-    if duration_s <= 0:
-        raise MissionError(f"duration_s: {duration_s} must be > 0")
+    if duration_problem(duration_s):
+        raise MissionError(f"duration_s: {duration_s:g} {duration_problem(duration_s)}")
     steps = tree.get("steps")
     if not isinstance(steps, list) or not steps:
         raise MissionError("mission: steps must be a non-empty list")

@@ -53,6 +53,9 @@ def register(app: typer.Typer) -> None:
     from amr_twin.cli.fusion import add_fusion
 
     add_fusion(experiment)
+    from amr_twin.cli.navigation import add_navigation
+
+    add_navigation(experiment)
     _add_faults(experiment)
     _add_payload_sweep(sweep)
 

@@ -8,6 +8,7 @@ that no command module imports another.
 from __future__ import annotations
 
 import gc
+import math
 from pathlib import Path
 from typing import Optional
 
@@ -36,6 +37,19 @@ def fail(message: str, code: int = 2) -> None:
     """Print a one-line error and exit non-zero."""
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code)
+
+
+def _start_pose(text: Optional[str]) -> Optional[tuple[float, float, float]]:
+    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error otherwise."""
+    if text is None:
+        return None
+    try:
+        x_m, y_m, yaw_deg = (float(v) for v in text.split(","))
+    except ValueError:
+        fail(f"--start {text!r}: expected X_M,Y_M,YAW_DEG, e.g. -7.5,0,0")
+    if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x_m, y_m, yaw_deg)):
+        fail(f"--start {text!r}: each value must be finite and within +-10000")
+    return x_m, y_m, math.radians(yaw_deg)
 
 
 OPTION_OF = {"payload.mass_kg": "--payload-kg", "payload.xy_m": "--payload-xy"}

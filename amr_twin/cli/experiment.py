@@ -53,6 +53,9 @@ def register(app: typer.Typer) -> None:
     from amr_twin.cli.fusion import add_fusion
 
     add_fusion(experiment)
+    from amr_twin.cli.navigation import add_navigation
+
+    add_navigation(experiment)
     from amr_twin.cli.umbmark import add_umbmark
 
     add_umbmark(experiment)

@@ -26,9 +26,9 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.common import _config, _guard, fail
-from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, checked_ros1,
-                                  checked_seed, shared)
+from amr_twin.cli.common import _config, _guard, _start_pose, fail
+from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, _given, checked_firmware, checked_live,
+                                  checked_ros1, checked_seed, shared)
 from amr_twin.sim.bounds import duration_problem
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
@@ -45,19 +45,6 @@ def _finite(name: str, value: Optional[float], required: bool = True) -> Optiona
     if not math.isfinite(value):
         fail(f"{name} {value}: must be a finite number")
     return value
-
-
-def _start_pose(text: Optional[str]) -> Optional[tuple[float, float, float]]:
-    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error otherwise."""
-    if text is None:
-        return None
-    try:
-        x_m, y_m, yaw_deg = (float(v) for v in text.split(","))
-    except ValueError:
-        fail(f"--start {text!r}: expected X_M,Y_M,YAW_DEG, e.g. -7.5,0,0")
-    if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x_m, y_m, yaw_deg)):
-        fail(f"--start {text!r}: each value must be finite and within +-10000")
-    return x_m, y_m, math.radians(yaw_deg)
 
 
 def _duration(opts: RunOptions, default_s: float) -> float:
@@ -289,6 +276,14 @@ def register(app: typer.Typer) -> None:
             plan = load_mission_file(mission)
         except MissionError as exc:
             fail(str(exc))
+        if plan.goals:
+            from amr_twin.cli.goto import run_goals
+            nav = {"map": None, "localisation": "ekf", "controller": "mppi", **plan.navigation}
+            if not _given(ctx, "firmware"):
+                opts.firmware = "improved"  # as run goto (amr_twin/cli/goto.py)
+            run_goals(opts, plan.goals, nav, opts.duration_s if opts.duration_s is not None else plan.duration_s,
+                      plan.faults, plan.actors, actors_of=_actors)
+            return
         execute(opts, plan.steps, False, plan.duration_s, plan.faults, plan.actors)
 
     @run_app.command()
@@ -327,3 +322,7 @@ def register(app: typer.Typer) -> None:
     def stop(opts: RunOptions) -> None:
         """Brake both wheels (fig. 3.7)."""
         one(opts, lambda: Command("stop"))
+
+    from amr_twin.cli.goto import add_goto
+
+    add_goto(run_app, _actors)

@@ -120,7 +120,8 @@ def _tyre_contacts(scene: mujoco.MjSpec, cfg: TwinConfig) -> None:
 
 
 def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
-          xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, actors: tuple = ()) -> Build:
+          xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, actors: tuple = (),
+          obstacles: tuple = ()) -> Build:
     """Build the robot in a world and compile it (the URDF from :func:`robot_urdf`'s cache).
 
     ``actors`` (:class:`~amr_twin.model.actors.Actor`) are added as mocap bodies at their poses at
@@ -129,13 +130,20 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
 
     ``visuals=False`` leaves the robot's visual geoms out (40 of its 51 geoms, posed every
     step: ~15 % of a step in the empty world) and ``imu=False`` the IMU's sensors: a model
-    nothing draws or reads the IMU of, with the same dynamics to the bit.
+    nothing draws or reads the IMU of, with the same dynamics to the bit. ``obstacles``
+    (:class:`~amr_twin.model.worlds.Obstacle`): boxes added to the world (group 0, unmapped).
     """
     urdf = robot_urdf(cfg, xacro_file)
     robot = robot_spec(cfg, urdf, visuals)
     with _compiling():
         robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
     scene = _world_spec(cfg, world)
+    for ob in obstacles:
+        scene.worldbody.add_geom(name=f"obstacle_{ob.name}", type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
+                                 pos=[ob.x_m, ob.y_m, ob.size_m[2] / 2],
+                                 size=[ob.size_m[0] / 2, ob.size_m[1] / 2, ob.size_m[2] / 2],
+                                 quat=[math.cos(ob.yaw_rad / 2), 0, 0, math.sin(ob.yaw_rad / 2)],
+                                 rgba=[0.9, 0.75, 0.1, 1])
     x, y, yaw = start_xy_yaw
     held = Path(world).stem == "stand"
     z = STAND_HEIGHT_M if held else 0.0

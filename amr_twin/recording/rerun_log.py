@@ -28,6 +28,7 @@ Entities::
     world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
     commands                            TextLog of wheel_Command and the client calls
     events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/sim/event_log.py)
+    world/navigation/{map,plan,costmap,footprint}  the navigation stack's (amr_twin/recording/rerun_navigation.py)
 
 A default blueprint (3D view + time-series plots) is sent with the recording.
 """
@@ -37,6 +38,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from amr_twin.recording.atomic_file import write_bytes
+from amr_twin.recording.rerun_navigation import _log_navigation
 from amr_twin.sim.event_log import has_events, log_events
 from amr_twin.recording.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
@@ -105,6 +107,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     _log_electrics(rec, series)
     _log_commands(rec, series, result)
     _log_trajectory(rec, series)
+    _log_navigation(rec, capture)  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
     log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
     rec.disconnect()
     data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""

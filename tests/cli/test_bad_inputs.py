@@ -256,7 +256,7 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path):
     (["run", "stop", "--live", "bogus"], ["--live 'bogus': must be one of foxglove, rerun"]),
     (["run", "stop", "--live", "--host", "999.1.1.1"], ["--host 999.1.1.1: not an address"]),
     (["sweep"], ["amr-twin sweep: give a command: payload"]),
-    (["experiment"], ["amr-twin experiment: give a command: chapter5, fusion, navigation, faults"]),
+    (["experiment"], ["amr-twin experiment: give a command: chapter5, fusion, navigation, umbmark, faults"]),
     ([], ["amr-twin: give a command: model, "]),
     (["experiment", "chapter5", "--out", ""], ["'--out'", "an empty path"]),
     (["run", "stop", "--csv", ""], ["'--csv'", "an empty path"]),

@@ -67,7 +67,10 @@ def _measure(mode: str, sim_s: float) -> dict:
         from amr_twin.live.pacer import Pacer
         from amr_twin.ros1.session import Ros1Options, Ros1Session
 
-        pacer = Pacer(twin, 1.0 if mode == "paced" else 0.0)
+        from amr_twin.ros1.bridge import pacer_tick_us
+
+        rate = 1.0 if mode == "paced" else 0.0
+        pacer = Pacer(twin, rate, pacer_tick_us(rate))
         DiffDriveNode(twin.bus, twin.clock, twin.client)
         session = Ros1Session(twin, pacer, Ros1Options(), say=lambda line: None)
     cpu0, wall0 = time.process_time(), time.perf_counter()

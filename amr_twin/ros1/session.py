@@ -31,6 +31,19 @@ def master_uri() -> str:
     return os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
 
 
+def _leave_own_clock(rospy) -> None:
+    """The twin is the graph's clock: where ``/use_sim_time`` was already set, rospy subscribed the node to
+    ``/clock`` when it joined, and every clock message the twin wrote came back to its own process to be
+    read and decoded by rospy's thread (~27 us of CPU each). Unsubscribe it; rospy's time in the twin's
+    process stays where it was (its own stamps come from the simulation)."""
+    import rospy.impl.simtime as simtime
+
+    sub = getattr(simtime, "_clock_sub", None)
+    if sub is not None:
+        sub.unregister()
+        simtime._clock_sub = None
+
+
 @dataclass(frozen=True)
 class Ros1Options:
     """``--ros1``: join the graph at ``ROS_MASTER_URI``, or a private roscore (``roscore``); ``firmware_topics``
@@ -67,6 +80,7 @@ class Ros1Session:
                 os.environ.setdefault("ROS_IP", "127.0.0.1")
             rospy = self.rospy = import_rospy()
             rospy.init_node(NODE_NAME, anonymous=False, disable_signals=True, log_level=rospy.WARN)
+            _leave_own_clock(rospy)
             rospy.set_param("/use_sim_time", True)
             rospy.set_param("/robot_description", twin.urdf)
             self.bridge = Ros1Bridge(twin, pacer, firmware_topics=options.firmware_topics)

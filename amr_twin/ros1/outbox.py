@@ -9,7 +9,7 @@ writes each publisher's frames to each of its connections in one write, through 
 transports (``write_data``). The bytes on the wire are rospy's: only the writes are fewer.
 
 Within a topic the order is kept; a subscriber receives a flush's messages together (the
-bridge flushes at the pacer's ticks: every 20 ms of simulated time, or every 100 ms when
+bridge flushes at the pacer's ticks: every 20 ms of simulated time, or every 200 ms when
 unpaced). A connection whose write fails is closed, as rospy's publish closes it (rospy then
 drops it from the publisher).
 """
@@ -25,7 +25,7 @@ class Outbox:
     """Frames waiting for :meth:`flush`, per rospy publisher (see the module notes)."""
 
     def __init__(self):
-        self._frames: dict = {}  # publisher impl -> [frame bytes]
+        self._frames: dict = {}  # publisher impl -> [length, bytes, length, bytes, ...]
         self.messages = 0
         """Messages written so far (each counted once, whatever its subscribers)."""
         self.writes = 0
@@ -42,7 +42,7 @@ class Outbox:
         frames = self._frames.get(pub.impl)
         if frames is None:
             frames = self._frames[pub.impl] = []
-        frames.append(_LEN.pack(len(payload)) + payload)
+        frames += (_LEN.pack(len(payload)), payload)
 
     def flush(self) -> None:
         """Write every publisher's frames to each of its connections, one write each."""
@@ -50,7 +50,7 @@ class Outbox:
             return
         pending, self._frames = self._frames, {}
         for impl, frames in pending.items():
-            self.messages += len(frames)
+            self.messages += len(frames) // 2
             if impl.closed:
                 continue
             data = b"".join(frames)

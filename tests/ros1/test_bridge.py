@@ -180,6 +180,15 @@ def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_trans
     assert np.abs(np.array(offsets)).max() < 3e-3
 
 
+SPEEDS = """
+import rospy
+from std_msgs.msg import Float64
+rospy.init_node("test_speeds")
+rospy.Subscriber("/wheel0_Vel", Float64, lambda m: print(rospy.get_rostime().to_sec(), m.data, flush=True))
+rospy.spin()
+"""
+
+
 def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env, catkin_setup):
     import json
 
@@ -192,8 +201,9 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
                                env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     command = subprocess.Popen(["rostopic", "echo", "-n", "1", "--filter", "m.data[1] > 0", "/wheel_Command"],
                                env=ros_env, stdout=subprocess.PIPE, text=True)  # not the twin's own stop at t = 0
-    speeds = subprocess.Popen(["rostopic", "echo", "-p", "/wheel0_Vel"], env=ros_env, stdout=subprocess.PIPE,
-                              text=True)  # each published speed, with the simulated time it arrived
+    # each speed the firmware publishes, with the simulated time it arrived (Debian's rospy; rostopic would not
+    # subscribe before someone publishes the topic)
+    speeds = subprocess.Popen(["/usr/bin/python3", "-c", SPEEDS], env=ros_env, stdout=subprocess.PIPE, text=True)
     twin = client = None
     try:
         # everything on the graph and waiting before the twin starts: the service with the echo connected to its
@@ -203,8 +213,8 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
         client.expect("choice: ")
         wait_for(lambda: any(n.startswith("/rostopic") for n in connected_subscribers(ros_env, "/wheel_Command_Service",
                                                                                       "/wheel_Command"))
-                 and any(n.startswith("/rostopic") for n in subscribers(ros_env, "/wheel0_Vel")),
-                 "the service and both echoes on the graph")
+                 and "/test_speeds" in subscribers(ros_env, "/wheel0_Vel"),
+                 "the service, the echo and the speed listener on the graph")
         twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "40", "--world", "empty", "--ros1", "--rate",
                                  "4", "--json"], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         wait_for(lambda: "/amr_twin" in connected_subscribers(ros_env, "/wheel_Command_Service", "/wheel_Command"),
@@ -229,9 +239,9 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
         if client is not None:
             client.close(force=True)
         stop(service)
-    stop(speeds)
-    rows = [line.split(",") for line in speeds.communicate(timeout=30)[0].splitlines()[1:] if line.strip()]
-    t_s, rpm = np.array([float(t) * 1e-9 for t, _v in rows]), np.array([float(v) for _t, v in rows])
+        stop(speeds)
+    rows = [line.split() for line in speeds.communicate(timeout=30)[0].splitlines() if line.strip()]
+    t_s, rpm = np.array([float(t) for t, _v in rows]), np.array([float(v) for _t, v in rows])
     # the firmware publishes |RPM| once a revolution from the command on (t_s[0]); from 10 simulated s later the
     # PI has settled: every speed it publishes is within its THRESHOLD_CONTROL (4 RPM) of 53.476
     settled = rpm[t_s > t_s[0] + 10.0]

@@ -152,3 +152,38 @@ def distance_to_path_m(route: Route, xy_m: np.ndarray) -> np.ndarray:
     a, ab = path[:-1], np.diff(path, axis=0)
     u = np.clip(((p - a) * ab).sum(2) / (ab * ab).sum(1), 0.0, 1.0)  # (K, segments)
     return np.linalg.norm(p - (a + u[..., None] * ab), axis=2).min(1)
+
+
+def check_in_free_space(route: Route, boxes, half_width_m: float, world: str = "") -> None:
+    """Refuse a route the robot cannot drive in its world: a start or waypoint outside the world's extent
+    (the box hull of its geoms at the robot's height), a point where the robot's footprint
+    (``half_width_m``) meets a geom, or a path crossing one. ``boxes``: the world's
+    :class:`~amr_twin.model.world_geometry.Footprints`; a world without any (``empty``) has no extent.
+    Raises :class:`RouteError` naming the route, the point and the world.
+    """
+    from amr_twin.model.world_geometry import distance_to_boxes_m
+
+    if len(boxes) == 0:
+        return
+    c, s = np.abs(np.cos(boxes.yaw_rad)), np.abs(np.sin(boxes.yaw_rad))
+    hx, hy = boxes.half_xy_m.T
+    reach = np.stack([c * hx + s * hy, s * hx + c * hy], axis=1)  # (K, 2): each box's half extent along x, y
+    lo, hi = (boxes.centre_xy_m - reach).min(0), (boxes.centre_xy_m + reach).max(0)
+    names = ["start_xy_yaw"] + [f"waypoints_xy_m[{i}]" for i in range(len(route.waypoints_xy_m))]
+    where = f" of {world}" if world else ""
+    for name, (x, y) in zip(names, route.path_xy_m()):
+        if not (lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]):
+            raise RouteError(f"route {route.name}: {name} ({x:g}, {y:g}) lies outside the world{where}: its walls "
+                             f"span x {lo[0]:.1f} to {hi[0]:.1f} m, y {lo[1]:.1f} to {hi[1]:.1f} m")
+        gaps = [float(distance_to_boxes_m(np.array([[x, y]]), boxes[k:k + 1])[0]) for k in range(len(boxes))]
+        k = int(np.argmin(gaps))
+        if gaps[k] < half_width_m:
+            raise RouteError(f"route {route.name}: {name} ({x:g}, {y:g}) is {gaps[k]:.2f} m from {boxes.names[k]}"
+                             f"{where}; the robot needs {half_width_m:.2f} m (its half width)")
+    path = route.path_xy_m()
+    for i, (a, b) in enumerate(zip(path[:-1], path[1:])):
+        n = max(2, int(np.ceil(np.hypot(*(b - a)) / 0.05)) + 1)
+        points = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
+        if (distance_to_boxes_m(points, boxes) == 0.0).any():
+            raise RouteError(f"route {route.name}: the leg to {names[i + 1]} ({b[0]:g}, {b[1]:g}) crosses a "
+                             f"geom{where}")

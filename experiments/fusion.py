@@ -204,6 +204,37 @@ def laser_in_base(cfg: TwinConfig) -> tuple[float, float, float]:
     return float(pos_m[0]), float(pos_m[1]), 0.0
 
 
+def drive_bound_s(route: Route) -> float:
+    """Simulated seconds a drive of ``route`` takes at most: the rest, the give-up time and the tail."""
+    return REST_S + TIMEOUT_FACTOR * route_length_m(route) / route.max_speed_m_s + TAIL_S
+
+
+def check_route(cfg: TwinConfig, route: Route) -> None:
+    """Refuse, before any drive, a route whose drive could take more than ``MAX_RUN_S`` simulated s or that
+    leaves its world's free space (:func:`amr_twin.controllers.route.check_in_free_space`); RouteError."""
+    from amr_twin.controllers.route import RouteError, check_in_free_space
+    from amr_twin.model.build import world_model
+    from amr_twin.sim.bounds import MAX_RUN_S
+
+    bound = drive_bound_s(route)
+    if bound > MAX_RUN_S:
+        raise RouteError(f"route {route.name}: {route_length_m(route):.0f} m at up to {route.max_speed_m_s:g} m/s "
+                         f"may take {bound:.0f} s of simulation ({TIMEOUT_FACTOR:g} x length / speed before it gives "
+                         f"up); at most {MAX_RUN_S:g} s: a shorter route or a higher max_speed_m_s")
+    model = world_model(cfg, route.world)
+    top_m = float(cfg.components.lidar.pos_m[2])  # the robot's highest part
+    slices = [scan_plane_boxes(model, z) for z in [*np.arange(0.02, top_m, 0.05), top_m]]
+    keep = {}
+    for cut in slices:  # every geom the robot's height meets, once
+        for i, name in enumerate(cut.names):
+            keep.setdefault(name, (cut.centre_xy_m[i], cut.half_xy_m[i], cut.yaw_rad[i]))
+    boxes = Footprints(np.array([v[0] for v in keep.values()]).reshape(-1, 2),
+                       np.array([v[1] for v in keep.values()]).reshape(-1, 2),
+                       np.array([v[2] for v in keep.values()]), tuple(keep))
+    half_width_m = max(cfg.chassis.width_m / 2, (cfg.wheel.separation_m + cfg.wheel.width_m) / 2)
+    check_in_free_space(route, boxes, half_width_m, world=route.world)
+
+
 def route_file(route: str | Path | None) -> Path:
     """The file of ``--route``: None is the default route, a bare name one of ``experiments/routes/``."""
     if route is None:
@@ -240,6 +271,7 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
     False drives the robot exactly as its odometry assumes it.
     """
     route = load_route(route_path)
+    check_route(cfg, route)
     cfg = site_config(cfg, route)
     robot = draw(cfg, seed) if robot_errors else NOMINAL
     t0 = time.perf_counter()

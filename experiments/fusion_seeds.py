@@ -51,9 +51,13 @@ def parse_seeds(text: str) -> list[int]:
     try:
         if ":" in text:
             lo, hi = (int(v) for v in text.split(":"))
+            if hi - lo + 1 > MAX_SEEDS:  # counted before the list is made (0:10**12 would fill the memory)
+                raise OverflowError(hi - lo + 1)
             seeds = list(range(lo, hi + 1))
         else:
             seeds = [int(v) for v in text.split(",") if v.strip()]
+    except OverflowError as exc:
+        raise ValueError(f"--seeds {text!r}: {exc.args[0]} seeds; at most {MAX_SEEDS} (each is a drive)") from None
     except ValueError:
         raise ValueError(f"--seeds {text!r}: expected A:B (both included), a,b,c or one seed, whole numbers") from None
     if not seeds:

@@ -27,23 +27,30 @@ ROWS = 6                   # what a row means (in the fingerprint): 6 = with the
 
 
 def parse_masses(text: str) -> list[float]:
-    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg."""
+    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg; ValueError with one line."""
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
-            if not (step > 0 and stop >= start and math.isfinite(stop - start)):
-                raise ValueError
-            count = math.floor((stop - start) / step + 1e-9) + 1
-            if count > MAX_MASSES:
-                raise OverflowError(count)
-            return [round(start + i * step, 6) for i in range(count)]
-        masses = [float(v) for v in text.split(",") if v.strip()]
-    except OverflowError as exc:
-        raise ValueError(f"--masses {text!r}: {exc.args[0]:.3g} masses; at most {MAX_MASSES} per sweep "
-                         "(each is one simulation per position and command)") from None
+        else:
+            masses = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise ValueError(f"--masses {text!r}: expected START:STOP:STEP or M1,M2,... in kg") from None
-    if not masses or any(not math.isfinite(m) or m < 0 for m in masses):
+    if ":" in text:
+        if not all(math.isfinite(v) for v in (start, stop, step)):
+            raise ValueError(f"--masses {text!r}: START, STOP and STEP must be finite numbers (kg)")
+        if stop < start:
+            raise ValueError(f"--masses {text!r}: STOP {stop:g} kg is below START {start:g} kg: give START <= STOP "
+                             f"(e.g. {stop:g}:{start:g}:{abs(step):g})")
+        if step <= 0:
+            raise ValueError(f"--masses {text!r}: STEP {step:g} kg must be > 0")
+        count = math.floor((stop - start) / step + 1e-9) + 1
+        if count > MAX_MASSES:
+            raise ValueError(f"--masses {text!r}: {count if count < 1e6 else f'{count:.3g}'} masses; at most {MAX_MASSES} per sweep "
+                             "(each is one simulation per position and command)")
+        masses = [round(start + i * step, 6) for i in range(count)]
+    if not masses:
+        raise ValueError(f"--masses {text!r}: names no mass (START:STOP:STEP or M1,M2,... in kg)")
+    if any(not math.isfinite(m) or m < 0 for m in masses):
         raise ValueError(f"--masses {text!r}: masses must be finite and >= 0 kg")
     if len(masses) > MAX_MASSES:
         raise ValueError(f"--masses: {len(masses)} masses; at most {MAX_MASSES} per sweep")
@@ -66,7 +73,27 @@ def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:
         x, y = (float(v) for v in name.split(":"))
     except ValueError:
         raise ValueError(f"--positions {name!r}: not one of {', '.join(POSITIONS)} nor X:Y in metres") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError(f"--positions {name!r}: X and Y must be finite numbers (m)")
     return x, y
+
+
+def check_on_deck(cfg: TwinConfig, name: str) -> None:
+    """Refuse a position ``X:Y`` whose payload box leaves ``cfg``'s deck (ValueError naming the deck's bounds);
+    a drawn deck (``--samples``) may still be too small for it: that point is recorded invalid."""
+    x, y = position_xy_m(cfg, name)
+    hx = cfg.chassis.length_m / 2 - cfg.payload.size_m[0] / 2
+    hy = cfg.chassis.width_m / 2 - cfg.payload.size_m[1] / 2
+    if abs(x) > hx + 1e-9 or abs(y) > hy + 1e-9:
+        raise ValueError(f"--positions {name!r}: the payload box ({cfg.payload.size_m[0]:g} x "
+                         f"{cfg.payload.size_m[1]:g} m) leaves the deck: |X| <= {hx:.3f} m and |Y| <= {hy:.3f} m")
+
+
+def check_accepted(cfg: TwinConfig, text: str) -> None:
+    """Refuse a ``--commands`` entry the client refuses (its thesis ranges): every point would be refused."""
+    client = parse_command(text).dry_run(cfg)
+    if client.last_error:
+        raise ValueError(f"--commands {text!r}: the client refuses it ({client.last_error})")
 
 
 def _micrometres_inside(v: float) -> float:

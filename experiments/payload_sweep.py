@@ -42,7 +42,8 @@ from amr_twin.experiments.payload_simulation import simulate_points
 
 def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str], commands: list[str],
         duration_s: float = 8.0, jobs: int = 1, firmware: str = "faithful", progress: bool = True,
-        client=None, record_dir: Path | None = None, mcap_dir: Path | None = None, draws=None) -> dict:
+        client=None, record_dir: Path | None = None, mcap_dir: Path | None = None, draws=None,
+        before=None) -> dict:
     """Simulate the missing points of the sweep (one file each) and return all rows.
 
     The points run in this process (``jobs=1``), in ``jobs`` local worker
@@ -57,6 +58,9 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     ``draws``: :class:`amr_twin.analysis.uncertainty.Draws` of ``cfg``'s parameters; each point is
     also run with each drawn configuration (rows with ``sample`` and ``sample_id``, after
     the nominal rows).
+
+    ``before(n)``: called with the number of points to simulate (those not done already), before
+    the first is (the CLI's time estimate, which may stop the sweep there).
 
     Returns
     -------
@@ -93,6 +97,8 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
             rows[point.key] = row
         else:
             todo.append(point)
+    if before is not None:
+        before(len(todo))
     wall0 = time.perf_counter()
     done = set()
     work = [(p,) for p in todo] if client is not None else by_payload(todo, jobs)

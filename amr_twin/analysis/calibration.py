@@ -101,13 +101,21 @@ def _num(value, spec: str = ".4g") -> str:
 
 
 # ------------------------------------------------------------------------- the fit
+def evaluations_per_step(parameters: dict[str, tuple[float, float]] | None = None) -> int:
+    """Twin evaluations of one step of the fit: the point and one per parameter (its Jacobian)."""
+    return len(parameters or PARAMETERS) + 1
+
+
 def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int = 60,
               parameters: dict[str, tuple[float, float]] | None = None, progress=None, jobs: int = 1,
               bench: str = BENCH_QUANTITY) -> Fit:
     """Fit ``parameters`` (default :data:`PARAMETERS`) to ``target`` ("thesis" or a CSV path).
 
     ``base`` is the starting configuration (the parameter file with its overrides);
-    ``jobs`` worker processes simulate a thesis evaluation's three runs in parallel.
+    ``jobs`` worker processes simulate a thesis evaluation's three runs in parallel. At most
+    ``max_evaluations`` evaluations of the twin are made: scipy's ``max_nfev`` counts steps, each
+    of which evaluates the point and, once accepted, its Jacobian (one more per parameter), so the
+    fit takes ``max_evaluations // (parameters + 1)`` steps (ValueError below one step).
     """
     from scipy.optimize import least_squares
 
@@ -116,6 +124,10 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     base = base or load_config()
     parameters = parameters or PARAMETERS
     keys = list(parameters)
+    per_step = evaluations_per_step(parameters)
+    if max_evaluations < per_step:
+        raise ValueError(f"max_evaluations {max_evaluations}: at least {per_step} (the starting point and one per "
+                         f"parameter for the Jacobian)")
     lo, hi = np.array([parameters[k][0] for k in keys]), np.array([parameters[k][1] for k in keys])
     x0 = np.clip(np.array([_get(base, k) for k in keys]), lo, hi)
     log = read_log(Path(target)) if target != "thesis" else None
@@ -139,9 +151,9 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
         return weighted_residuals(features, targets)
 
     try:
-        # max_nfev counts the steps, not the finite differences: n + 1 evaluations per step
+        # max_nfev counts the steps, not the finite differences: at most n + 1 evaluations per step
         res = least_squares(f, (x0 - lo) / (hi - lo), bounds=(0.0, 1.0), method="trf", diff_step=0.02,
-                            max_nfev=max(2, max_evaluations // (len(keys) + 1)), x_scale=1.0)
+                            max_nfev=max_evaluations // per_step, x_scale=1.0)
         features = last.get(tuple(res.x)) if log is None else None
     finally:
         if pool is not None:

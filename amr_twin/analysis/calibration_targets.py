@@ -105,15 +105,7 @@ def bench_current_a(cfg: TwinConfig, wheel: int, quantity: str = BENCH_QUANTITY,
 # ------------------------------------------------------------------------- chapter 5 features
 def command_reference(cfg: TwinConfig, command: Command) -> tuple[float, float]:
     """Signed wheel references (RPM) the client sends for ``command``."""
-    from amr_twin.ros.bus import Bus
-    from amr_twin.sim.clock import VirtualClock
-    from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
-
-    bus = Bus(VirtualClock())
-    WheelCommandService(bus)
-    client = WheelCommandClient(bus, wheel_radius_m=cfg.wheel.radius_m, half_separation_m=cfg.wheel.separation_m / 2)
-    command.send(type("T", (), {"client": client})())
-    r = client.last_request
+    r = command.dry_run(cfg).last_request
     return (r.motionL * r.speedL, r.motionR * r.speedR) if r is not None else (0.0, 0.0)
 
 
@@ -168,26 +160,64 @@ def thesis_residual(cfg: TwinConfig, bench: str = BENCH_QUANTITY) -> float:
 
 
 # ------------------------------------------------------------------------- a log of the robot
+MAX_LOG_BYTES = 64 * 1024 * 1024
+"""Largest log read, bytes (an hour of both wheels at 100 Hz is ~30 MB)."""
+MAX_LOG_RPM = 2000.0
+"""Largest wheel speed a log may give, RPM (the hub motors' no-load speed is below 1000 RPM)."""
+LOG_TAIL_S = 0.5
+"""Each command of a log is simulated until its last sample plus this, s."""
+
+
 def read_log(path: Path) -> dict[str, dict[int, np.ndarray]]:
-    """Group a log by command: {command: {wheel: (k, 2) t_s, rpm}}."""
+    """Group a log by command: {command: {wheel: (k, 2) t_s, rpm}}.
+
+    Refused with one line naming the file (and the line): a file that is no UTF-8 text, a folder, a
+    device or larger than :data:`MAX_LOG_BYTES`; a row of another number of fields than the header;
+    a value that is not a number, not finite, a time outside ``[0, MAX_RUN_S - 0.5]`` s or a speed
+    beyond :data:`MAX_LOG_RPM`; commands whose runs together simulate more than ``MAX_RUN_S`` per
+    evaluation of the fit.
+    """
+    import io
+
+    from amr_twin.model.yaml_file import read_text
+    from amr_twin.sim.bounds import MAX_RUN_S
+
+    text = read_text(path, "", ValueError, limit=MAX_LOG_BYTES)
     groups: dict[str, dict[int, list]] = {}
-    with open(path, newline="") as fh:
-        reader = csv.DictReader(fh)
-        missing = {"t_s", "wheel", "rpm", "command"} - set(reader.fieldnames or [])
-        if missing:
-            raise ValueError(f"{path}: missing column(s) {sorted(missing)} (need t_s, wheel, rpm, command)")
-        for line, row in enumerate(reader, 2):
-            try:
-                t, rpm = float(row["t_s"]), float(row["rpm"])
-            except ValueError:
-                raise ValueError(f"{path}:{line}: t_s and rpm must be numbers") from None
-            wheel = {"0": 0, "left": 0, "1": 1, "right": 1}.get(row["wheel"].strip())
-            if wheel is None or not (math.isfinite(t) and math.isfinite(rpm)):
-                raise ValueError(f"{path}:{line}: wheel must be left/right/0/1 and values finite")
-            Command.parse(row["command"], what=f"{path}:{line}: command")
-            groups.setdefault(row["command"].strip(), {}).setdefault(wheel, []).append((t, rpm))
+    reader = csv.DictReader(io.StringIO(text, newline=""))
+    missing = {"t_s", "wheel", "rpm", "command"} - set(reader.fieldnames or [])
+    if missing:
+        raise ValueError(f"{path}: missing column(s) {sorted(missing)} (need t_s, wheel, rpm, command)")
+    last_t = MAX_RUN_S - LOG_TAIL_S
+    try:
+        rows = list(enumerate(reader, 2))
+    except csv.Error as exc:
+        raise ValueError(f"{path}:{reader.line_num}: not a CSV row ({exc})") from None
+    for line, row in rows:
+        if None in row or any(row[k] is None for k in ("t_s", "wheel", "rpm", "command")):
+            fields = len(reader.fieldnames) + len(row.get(None) or []) - sum(v is None for v in row.values())
+            raise ValueError(f"{path}:{line}: {fields} field(s); every row has the header's "
+                             f"{len(reader.fieldnames)} ({', '.join(reader.fieldnames)})")
+        try:
+            t, rpm = float(row["t_s"]), float(row["rpm"])
+        except ValueError:
+            raise ValueError(f"{path}:{line}: t_s and rpm must be numbers") from None
+        wheel = {"0": 0, "left": 0, "1": 1, "right": 1}.get(row["wheel"].strip())
+        if wheel is None or not (math.isfinite(t) and math.isfinite(rpm)):
+            raise ValueError(f"{path}:{line}: wheel must be left/right/0/1 and values finite")
+        if not 0.0 <= t <= last_t:
+            raise ValueError(f"{path}:{line}: t_s {t:g} must lie in [0, {last_t:g}] s (a command is simulated "
+                             f"until its last sample + {LOG_TAIL_S:g} s, at most {MAX_RUN_S:g} s)")
+        if abs(rpm) > MAX_LOG_RPM:
+            raise ValueError(f"{path}:{line}: rpm {rpm:g} must lie within +-{MAX_LOG_RPM:g} RPM")
+        Command.parse(row["command"], what=f"{path}:{line}: command")
+        groups.setdefault(row["command"].strip(), {}).setdefault(wheel, []).append((t, rpm))
     if not groups:
         raise ValueError(f"{path}: no samples")
+    total_s = sum(max(t for v in wheels.values() for t, _ in v) + LOG_TAIL_S for wheels in groups.values())
+    if total_s > MAX_RUN_S:
+        raise ValueError(f"{path}: its {len(groups)} commands are simulated for {total_s:g} s in all at every "
+                         f"evaluation of the fit; at most {MAX_RUN_S:g} s (split the log)")
     return {cmd: {w: np.array(sorted(v)) for w, v in wheels.items()} for cmd, wheels in groups.items()}
 
 
@@ -195,7 +225,7 @@ def log_residuals(cfg: TwinConfig, log: dict[str, dict[int, np.ndarray]]) -> np.
     """Twin minus log at the log's sample times, RPM (1 RPM per sample = 1 sigma)."""
     errors = []
     for text, wheels in log.items():
-        duration = max(float(v[:, 0].max()) for v in wheels.values()) + 0.5
+        duration = max(float(v[:, 0].max()) for v in wheels.values()) + LOG_TAIL_S
         series = run_command(cfg, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)).series
         for w, samples in wheels.items():
             pub = series.published[w]

@@ -40,7 +40,8 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
     ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
     (:mod:`amr_twin.sim.native_build`), which the figures were measured with;
-    ``native_engines``: the same for every C helper, by name.
+    ``native_engines``: the same for every C helper, by name; ``nav_*``: the navigation stack's
+    (:mod:`amr_twin.bench.navigation`).
     """
     from amr_twin.bench.twin import twin_figures
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
@@ -55,6 +56,8 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     from amr_twin.bench.actors import actor_figures  # four people and jacks, with and without sensors
     result.update(actor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
+    from amr_twin.bench.navigation import navigation_figures  # planning, controllers, the twin navigating
+    result.update(navigation_figures(cfg, sim_s))
     result["timer"] = "process_time"
     result["ratios"] = RATIOS
     helpers = (grid_steps, rolling_resistance, battery, collisions, actors, hall_edges, imu_errors, lidar_kernels)

@@ -13,15 +13,46 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.options import checked_firmware
-
-MAX_DURATION_S = 3600.0
-"""Longest simulated run of an experiment, s (see amr_twin.cli.run.MAX_RUN_S)."""
+from amr_twin.cli.options import checked_firmware, checked_seed
 
 MAX_SWEEP_POINTS = 10_000
 """Most points of one sweep: each is a simulation (~0.5 s of CPU for 8 s) and a file in runs/."""
 
 JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per usable core; at most that).")
+YesOpt = typer.Option(False, "--yes", help="Start without asking when the time estimated beforehand is above 10 min "
+                      "(without it such a run is refused, its estimate named).")
+
+CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16}
+"""CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table): a
+100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s on one
+job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s."""
+AVR_COST = 4.0
+"""How much more the emulated ATmega2560 costs (the bench's avr_ratio, 5.5, against the loop's 1.3)."""
+CONFIRM_ABOVE_S = 600.0
+"""A run estimated to take longer than this (wall s) starts only with --yes."""
+
+
+def _minutes(seconds: float) -> str:
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.1f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def check_estimate(what: str, sim_s: float, kind: str, workers: int, firmware: str, yes: bool, fail) -> float:
+    """Estimate the wall time of ``sim_s`` simulated seconds on ``workers`` processes; above
+    :data:`CONFIRM_ABOVE_S` refuse (one line naming the estimate and --yes) unless ``yes``; say it on
+    stderr when above a minute. Returns the estimate, s."""
+    cost = CPU_S_PER_SIM_S[kind] * (AVR_COST if firmware.startswith("avr") else 1.0)
+    wall_s = sim_s * cost / max(1, workers)
+    text = (f"{what}: about {_minutes(wall_s)} with {workers} worker{'s' if workers != 1 else ''} "
+            f"({sim_s:.0f} simulated s at {cost:g} s of CPU each, as the bench measured)")
+    if wall_s > CONFIRM_ABOVE_S and not yes:
+        fail(f"{text}; above {CONFIRM_ABOVE_S / 60:.0f} min: add --yes to start it, or ask for less")
+    if wall_s > 60:
+        typer.echo(f"note: {text}", err=True)
+    return wall_s
 
 
 def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path] = None) -> tuple[int, str]:
@@ -39,9 +70,25 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
 
 
 def check_duration(duration_s: Optional[float], fail) -> None:
-    if duration_s is not None and not (0 < duration_s <= MAX_DURATION_S):
-        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_DURATION_S:g}] s (each run keeps its 100 Hz "
-             "series in memory)")
+    """``--duration-s`` of an experiment's runs: a run's length (:mod:`amr_twin.sim.bounds`)."""
+    from amr_twin.sim.bounds import duration_problem
+
+    if duration_s is not None and duration_problem(duration_s):
+        fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
+
+
+def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool = False, processes: int = 1,
+                 what: str = "the run") -> None:
+    """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`, one per
+    process) exceeds what the machine has available now; nothing is refused where that is unknown."""
+    from amr_twin.sim.bounds import available_mb, memory_mb
+
+    need, have = memory_mb(duration_s, recorded, sensors) * processes, available_mb()
+    if have is not None and need > have:
+        kept = "its messages until they are written" if recorded else "its 100 Hz series"
+        fail(f"--duration-s {duration_s:g}: {what} would need about {need / 1024:.1f} GB of memory (it keeps {kept}"
+             f"{f', {processes} processes' if processes > 1 else ''}); {have / 1024:.1f} GB are available: "
+             "ask for less (a shorter run, fewer --jobs, no recording)")
 
 
 def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
@@ -127,8 +174,7 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
         if given:
             fail(f"{', '.join(given)}: only used with --samples N (N >= 2)")
         return None
-    if seed is not None and not 0 <= seed < 2 ** 32:
-        fail(f"--seed {seed}: must be in [0, 2^32)")
+    checked_seed(seed, fail)
     if sampler is not None and sampler not in SAMPLERS:
         fail(f"--sampler {sampler!r}: must be one of {', '.join(SAMPLERS)}")
     if calibration is not None and not calibration.is_file():

@@ -8,6 +8,7 @@ that no command module imports another.
 from __future__ import annotations
 
 import gc
+import math
 from pathlib import Path
 from typing import Optional
 
@@ -38,6 +39,23 @@ def fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
+def _start_pose(text: Optional[str]) -> Optional[tuple[float, float, float]]:
+    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error otherwise."""
+    if text is None:
+        return None
+    try:
+        x_m, y_m, yaw_deg = (float(v) for v in text.split(","))
+    except ValueError:
+        fail(f"--start {text!r}: expected X_M,Y_M,YAW_DEG, e.g. -7.5,0,0")
+    if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x_m, y_m, yaw_deg)):
+        fail(f"--start {text!r}: each value must be finite and within +-10000")
+    return x_m, y_m, math.radians(yaw_deg)
+
+
+OPTION_OF = {"payload.mass_kg": "--payload-kg", "payload.xy_m": "--payload-xy"}
+"""The parameter each command option sets (the ``extra`` of :func:`_config`)."""
+
+
 def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
     from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
 
@@ -51,6 +69,10 @@ def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[
             if path is not None and text.startswith(f"{path}:"):
                 text = f"{option} {text}"
                 break
+        for key, value in (extra or {}).items():
+            if text.startswith(f"{key}:") and key in OPTION_OF:
+                shown = ",".join(f"{v:g}" for v in value) if isinstance(value, (list, tuple)) else f"{value:g}"
+                text = f"{OPTION_OF[key]} {shown}: {text}"
         fail(text)
 
 

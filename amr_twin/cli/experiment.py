@@ -20,9 +20,9 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, check_common,
-                                 check_duration, check_executor, check_outputs, check_record_folder, dask_client,
-                                 parameter_draws, unique)
+from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt,
+                                 check_common, check_duration, check_estimate, check_executor, check_memory,
+                                 check_outputs, check_record_folder, dask_client, parameter_draws, unique)
 from amr_twin.cli.options import firmware_option, sketch_option
 
 def _rpm(value) -> str:
@@ -53,6 +53,9 @@ def register(app: typer.Typer) -> None:
     from amr_twin.cli.fusion import add_fusion
 
     add_fusion(experiment)
+    from amr_twin.cli.navigation import add_navigation
+
+    add_navigation(experiment)
     _add_faults(experiment)
     _add_payload_sweep(sweep)
 
@@ -118,6 +121,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         samples: int = SamplesOpt, seed: Optional[int] = SeedOpt, sampler: Optional[str] = SamplerOpt,
         calibration: Optional[Path] = CalibrationOpt,
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        yes: bool = YesOpt,
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time.
@@ -137,9 +141,16 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
         check_record_folder("--record", record, fail, "run<N>.rrd")
         check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
+        check_memory(duration_s or max(r.duration_s for r in chapter5.RUNS), fail, recorded=bool(record or mcap),
+                     processes=jobs, what="each run")
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
+        one_pass_s = sum(duration_s or r.duration_s for r in chapter5.RUNS if numbers is None or r.number in numbers)
+        passes = 1 + (samples if draws is not None else 0) + (2 if firmware.startswith("avr") else 0) \
+            + (1 if numbers is None and duration_s is None else 0)  # the rolling-resistance study: at most a pass
+        check_estimate(f"experiment chapter5: {passes} pass{'es' if passes != 1 else ''} of the runs",
+                       one_pass_s * passes, "chapter5", jobs, firmware, yes, fail)
 
         def work():
             from amr_twin.recording.atomic_file import all_or_nothing
@@ -221,6 +232,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         samples: int = SamplesOpt, seed: Optional[int] = SeedOpt, sampler: Optional[str] = SamplerOpt,
         calibration: Optional[Path] = CalibrationOpt,
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        yes: bool = YesOpt,
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Sweep payload mass x position x command; resume by skipping the points already done.
@@ -241,10 +253,10 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
             mass_list = payload_point.parse_masses(masses)
             position_list = [p.strip() for p in positions.split(",") if p.strip()]
             for p in position_list:
-                payload_point.position_xy_m(cfg, p)
+                payload_point.check_on_deck(cfg, p)
             command_list = [c.strip() for c in commands.split(",") if c.strip()]
             for c in command_list:
-                payload_point.parse_command(c)
+                payload_point.check_accepted(cfg, c)
         except ValueError as exc:
             fail(str(exc))
         if not position_list or not command_list:
@@ -264,16 +276,23 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
         check_record_folder("--record", record, fail, "<key>.rrd")
         check_record_folder("--mcap", mcap, fail, "<key>.mcap")
+        check_memory(duration_s, fail, recorded=bool(record or mcap), processes=jobs if executor == "local" else 1,
+                     what="each point")
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
 
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+        workers = jobs if client is None else max(1, sum(client.nthreads().values()))
+
+        def estimate(todo: int) -> None:  # the points not done yet, before the first is simulated
+            check_estimate(f"sweep payload: {todo} points to simulate (of {runs})", todo * duration_s, "sweep",
+                           workers, firmware, yes, fail)
 
         def work():
             from amr_twin.recording.atomic_file import all_or_nothing
 
             results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
                                         jobs=jobs, firmware=firmware, progress=progress, client=client,
-                                        record_dir=record, mcap_dir=mcap, draws=draws)
+                                        record_dir=record, mcap_dir=mcap, draws=draws, before=estimate)
             if draws is not None:
                 from amr_twin.experiments import payload_spread_report as spread_report
 

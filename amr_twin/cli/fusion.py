@@ -14,8 +14,9 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import JobsOpt, check_common, check_executor, check_outputs, dask_client
-from amr_twin.cli.options import firmware_option
+from amr_twin.cli.checks import (JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_memory,
+                                 check_outputs, dask_client)
+from amr_twin.cli.options import checked_seed, firmware_option
 
 
 def add_fusion(experiment: typer.Typer) -> None:
@@ -49,10 +50,12 @@ def add_fusion(experiment: typer.Typer) -> None:
                                           "the robot's own errors (tyre radii, track, hall sensors) within their "
                                           "sourced tolerances; off: the robot is exactly as its odometry assumes."),
         progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+        yes: bool = YesOpt,
         config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
     ) -> None:
         """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
         from amr_twin.controllers.route import RouteError, load_route
+        from amr_twin.model.build import BuildError
         from amr_twin.experiments import fusion
         from amr_twin.experiments.fusion_seeds import parse_seeds
 
@@ -63,23 +66,33 @@ def add_fusion(experiment: typer.Typer) -> None:
             seed_list = parse_seeds(seeds) if seeds is not None else [0 if seed is None else seed]
         except ValueError as exc:
             fail(str(exc))
-        if not all(0 <= s < 2 ** 32 for s in seed_list):
-            fail(f"--seed {seed_list[0]}: must be in [0, 2^32)")
+        checked_seed(seed, fail)
         many = len(seed_list) > 1
         if many and (record is not None or mcap is not None):
             fail("--record/--mcap record one drive: use --seed N with them, not --seeds")
         check_executor(executor, scheduler, fail)
         route_path = fusion.route_file(route)
         try:
-            load_route(route_path)
+            loaded = load_route(route_path)
         except (RouteError, OSError) as exc:
             known = ", ".join(fusion.route_names())
             fail(f"--route {route}: {exc}" if route_path.exists() or route is None
                  else f"--route {route}: no such route file, nor a route of the twin ({known})")
         check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
         cfg = _config(config, params, set_)
+        try:  # the drive's simulated time bounded, every point in the world's free space
+            fusion.check_route(cfg, loaded)
+        except (RouteError, BuildError) as exc:
+            fail(f"--route {route_path}: {exc}")
         client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+        workers = 1 if not many else jobs if client is None else max(1, sum(client.nthreads().values()))
+        drive_s = fusion.REST_S + fusion.route_length_m(loaded) / loaded.max_speed_m_s + fusion.TAIL_S
         try:
+            # a drive keeps every sensor message for its estimators, as a recording does
+            check_memory(fusion.drive_bound_s(loaded), fail, recorded=True, sensors=True,
+                         processes=workers if client is None else 1, what="each drive")
+            check_estimate(f"experiment fusion: {len(seed_list)} drive{'s' if many else ''} of {route_path.stem}",
+                           drive_s * len(seed_list), "fusion", workers, firmware, yes, fail)
             if many:
                 _many(cfg, route_path, seed_list, firmware, robot_errors, jobs, client, progress, out, _guard)
             else:

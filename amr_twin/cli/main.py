@@ -39,6 +39,7 @@ except ImportError:  # pragma: no cover - older typer on click
 
 from amr_twin.cli.common import _config, _guard, fail, start_up
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+from amr_twin.cli.path_options import CheckedGroup
 
 
 class _App(typer.Typer):
@@ -60,7 +61,8 @@ class _App(typer.Typer):
         except _click_errors.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
             hint = _misplaced(exc) or f" (see {where} --help)"
-            typer.echo(f"error: {where}: {' '.join(exc.format_message().split())}{hint}", err=True)
+            typer.echo(f"error: {where}: {_missing_command(exc) or ' '.join(exc.format_message().split())}{hint}",
+                       err=True)
             sys.exit(2)
         except _click_errors.ClickException as exc:
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
@@ -91,6 +93,14 @@ class _App(typer.Typer):
             self.registered_commands, self.registered_groups = saved
 
 
+def _missing_command(exc) -> str | None:
+    """For a group given no command: which it has."""
+    commands = getattr(exc.ctx.command, "commands", None) if exc.ctx is not None else None
+    if not commands or exc.format_message() != "Missing command.":
+        return None
+    return f"give a command: {', '.join(commands)}"
+
+
 def _misplaced(exc) -> str | None:
     """For an option given to a group that belongs to its commands: where it goes."""
     name = getattr(exc, "option_name", None)
@@ -108,7 +118,7 @@ def _misplaced(exc) -> str | None:
             f"e.g. {exc.ctx.command_path} {owners[0]} {name} ...")
 
 
-app = _App(add_completion=False, no_args_is_help=True,
+app = _App(cls=CheckedGroup, add_completion=False, no_args_is_help=True,
            help="amr-twin: headless MuJoCo digital twin of the thesis AMR.")
 
 
@@ -216,9 +226,10 @@ def calibrate(
                                           "(what `--samples` draws from; models/amr/calibration.yaml)."),
     no_fit: bool = typer.Option(False, "--no-fit", help="Do not fit: report the uncertainty of the given values "
                                 "(with --report; --out then holds them unchanged)."),
-    max_evaluations: int = typer.Option(90, min=2, max=2000, help="Twin evaluations of the fit (about; each "
-                                        "step costs one per parameter and one more)."),
-    jobs: int = typer.Option(2, min=1, max=64, help="Worker processes for a thesis evaluation's runs."),
+    max_evaluations: int = typer.Option(90, help="Most twin evaluations of the fit, 6 to 2000 (a step costs one "
+                                        "per fitted parameter and one more: the fit takes at most this // 6 steps)."),
+    jobs: Optional[int] = typer.Option(None, "--jobs", help="Worker processes for a thesis evaluation's three runs "
+                                       "(default: the usable cores, at most 3; at most the usable cores)."),
     as_json: bool = typer.Option(False, "--json", help="Print the result as one JSON object (values, sigma, "
                                  "correlations, features) instead of the summary."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
@@ -232,13 +243,26 @@ def calibrate(
 
     from amr_twin.recording.outputs import OutputError, check_file
 
+    from amr_twin.analysis.calibration import PARAMETERS, evaluations_per_step
+    from amr_twin.experiments.process_pool import check_jobs
+
     if no_fit and report is None:
         fail("--no-fit needs --report FILE (without a fit, the report is the only result)")
+    if not evaluations_per_step() <= max_evaluations <= MAX_EVALUATIONS:
+        fail(f"--max-evaluations {max_evaluations}: must be in {evaluations_per_step()}..{MAX_EVALUATIONS} (a fit "
+             f"evaluates the starting point and once more per fitted parameter, {len(PARAMETERS)}, for its Jacobian)")
+    try:
+        jobs = min(check_jobs(jobs), 3) if jobs is None else check_jobs(jobs)
+    except ValueError as exc:
+        fail(str(exc))
     base = _config(config, params, set_)  # the starting point, with the user's overrides
     if target != "thesis":
-        if not Path(target).is_file():
+        if not Path(target).exists():
             fail(f"--target {target!r}: neither 'thesis' nor an existing CSV file")
-        log = _guard(lambda: read_log(Path(target)))  # a malformed log is refused before any simulation
+        try:  # a malformed log is refused before any simulation
+            log = read_log(Path(target))
+        except ValueError as exc:
+            fail(f"--target {exc}")
         _guard(lambda: _check_log_comparable(base, log, target))
     try:
         check_file("--out", out)
@@ -278,17 +302,22 @@ def calibrate(
         typer.echo(line)
 
 
+MAX_EVALUATIONS = 2000
+"""Most twin evaluations of one calibration (each simulates the thesis' three runs or the whole log)."""
+
+
 def _check_log_comparable(base, log: dict, target: str) -> None:
     """Refuse a log the twin cannot be compared with: it must publish two speeds per logged wheel.
 
     The fit compares the twin's published speeds with the log's over the log's span (plus
-    0.5 s); a shorter log would only be scored by a fixed penalty, not fitted.
+    ``LOG_TAIL_S``); a shorter log would only be scored by a fixed penalty, not fitted.
     """
+    from amr_twin.analysis.calibration_targets import LOG_TAIL_S
     from amr_twin.sim.loop import TwinOptions
     from amr_twin.sim.run import Command, run_command
 
     for text, wheels in log.items():
-        duration = max(float(v[:, 0].max()) for v in wheels.values()) + 0.5
+        duration = max(float(v[:, 0].max()) for v in wheels.values()) + LOG_TAIL_S
         series = run_command(base, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)).series
         for w, samples in wheels.items():
             if len(series.published[w]) < 2:

@@ -25,8 +25,8 @@ if TYPE_CHECKING:
 
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
-from amr_twin.cli.options import (checked_firmware, checked_live, checked_ros1, firmware_option, live_options,
-                                  ros1_options, sketch_option)
+from amr_twin.cli.options import (checked_firmware, checked_live, checked_ros1, checked_seed, firmware_option,
+                                  live_options, ros1_options, sketch_option)
 
 _LIVE = live_options()
 _ROS1 = ros1_options()
@@ -98,8 +98,13 @@ class RealTimeTwin:
         return self
 
     def _run(self) -> None:
+        from amr_twin.sim.bounds import MAX_RUN_S
+
         try:
             while not self._stop.is_set():
+                if self.twin.t_s + self.PIECE_S > MAX_RUN_S + 1e-9:  # a run keeps its series in memory
+                    raise RuntimeError(f"it reached the bound of a run, {MAX_RUN_S:g} simulated s (its 100 Hz "
+                                       "series are kept in memory): start the client again")
                 self.twin.advance(self.PIECE_S)
         except Exception as exc:  # noqa: BLE001 - reported to the user by the menu
             self.error = exc
@@ -194,6 +199,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
 
     if not (math.isfinite(rate) and 0 < rate <= 1000):
         fail(f"--rate {rate}: must be a finite number in (0, 1000]")
+    checked_seed(seed, fail)
     firmware = checked_firmware(firmware, sketch, fail)
     live_opts = checked_live(live, host, port, web_port, None, fail, default_rate=rate)
     ros1_opts = checked_ros1(ros1, roscore, None, firmware, True, rate, fail)[0]

@@ -54,11 +54,24 @@ def checked_firmware(firmware: str, sketch: Optional[Path], fail: Callable[[str]
     return kind
 
 
+SEED_LIMIT = 2 ** 32
+"""Seeds are whole numbers in [0, 2^32) (numpy's SeedSequence takes any non-negative one; a bound keeps keys short)."""
+
+
+def checked_seed(seed: Optional[int], fail: Callable[[str], None], option: str = "--seed") -> Optional[int]:
+    """``--seed``: a whole number in [0, 2^32), or a one-line refusal (``fail``)."""
+    if seed is not None and not 0 <= seed < SEED_LIMIT:
+        fail(f"{option} {seed}: must be a whole number in [0, 2^32)")
+    return seed
+
+
 LIVE_MODES = ("foxglove", "rerun")
 
 
-def live_option_args(args: list[str]) -> list[str]:
-    """``--live`` with its value optional: ``--live`` not followed by a mode means ``--live foxglove``.
+def live_option_args(args: list[str], commands=()) -> list[str]:
+    """``--live`` with its value optional: ``--live`` followed by nothing, an option or one of the group's
+    ``commands`` means ``--live foxglove``; any other word is its value (checked: ``--live bogus`` is refused
+    naming the modes).
 
     (typer's parser has no options with an optional value: a bare ``--live`` is written out.)
     """
@@ -66,7 +79,7 @@ def live_option_args(args: list[str]) -> list[str]:
     for i, arg in enumerate(out):
         if arg == "--":
             break
-        if arg == "--live" and (i + 1 == len(out) or out[i + 1] not in LIVE_MODES):
+        if arg == "--live" and (i + 1 == len(out) or out[i + 1].startswith("-") or out[i + 1] in commands):
             out[i] = "--live=foxglove"
     return out
 
@@ -75,7 +88,7 @@ class LiveGroup(TyperGroup):
     """A command group whose ``--live`` takes an optional value (:func:`live_option_args`)."""
 
     def parse_args(self, ctx, args):
-        return super().parse_args(ctx, live_option_args(args))
+        return super().parse_args(ctx, live_option_args(args, self.commands))
 
 
 class LiveCommand(TyperCommand):

@@ -26,15 +26,12 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.common import _config, _guard, fail
-from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, checked_firmware, checked_live, checked_ros1,
-                                  shared)
+from amr_twin.cli.common import _config, _guard, _start_pose, fail
+from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, _given, checked_firmware, checked_live,
+                                  checked_ros1, checked_seed, shared)
+from amr_twin.sim.bounds import duration_problem
 from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
                          summary, text_lines)
-
-MAX_RUN_S = 3600.0
-"""Longest run, simulated s: a run keeps its 100 Hz series in memory (about 70 MB and a
-minute of CPU per simulated hour); longer studies are missions run in pieces."""
 
 DEFAULT_RUN_S = 10.0
 EXIT_COLLISION = 4
@@ -50,25 +47,11 @@ def _finite(name: str, value: Optional[float], required: bool = True) -> Optiona
     return value
 
 
-def _start_pose(text: Optional[str]) -> Optional[tuple[float, float, float]]:
-    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error otherwise."""
-    if text is None:
-        return None
-    try:
-        x_m, y_m, yaw_deg = (float(v) for v in text.split(","))
-    except ValueError:
-        fail(f"--start {text!r}: expected X_M,Y_M,YAW_DEG, e.g. -7.5,0,0")
-    if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x_m, y_m, yaw_deg)):
-        fail(f"--start {text!r}: each value must be finite and within +-10000")
-    return x_m, y_m, math.radians(yaw_deg)
-
-
 def _duration(opts: RunOptions, default_s: float) -> float:
     duration_s = _finite("--duration-s", opts.duration_s, required=False)
     duration_s = default_s if duration_s is None else duration_s
-    if not 0 < duration_s <= MAX_RUN_S:
-        fail(f"--duration-s {duration_s:g}: must be in (0, {MAX_RUN_S:g}] s (a run keeps its 100 Hz series in "
-             "memory, ~70 MB per simulated hour; run longer studies as several missions)")
+    if duration_problem(duration_s):
+        fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
     return duration_s
 
 
@@ -115,6 +98,10 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     from amr_twin.sim.run import run_mission
 
     duration_s = _duration(opts, default_s)
+    last_s = max((t for t, _ in steps), default=0.0)
+    if last_s > duration_s:
+        fail(f"--duration-s {duration_s:g}: ends before the mission's last step, at {last_s:g} s")
+    checked_seed(opts.seed, fail)
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
     extra = {}
     if _finite("--payload-kg", opts.payload_kg, required=False) is not None:
@@ -143,9 +130,12 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         except ValueError as exc:
             fail(str(exc))
         steps = []  # the stop is the board's state at power-up: nothing is sent on its serial port
+    recording = opts.record is not None or opts.mcap is not None
+    from amr_twin.cli.checks import check_memory
+
+    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     actors = _actors(opts, mission_actors, cfg, start, fail)
-    recording = opts.record is not None or opts.mcap is not None
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None, firmware_params=avr_params,
@@ -280,6 +270,14 @@ def register(app: typer.Typer) -> None:
             plan = load_mission_file(mission)
         except MissionError as exc:
             fail(str(exc))
+        if plan.goals:
+            from amr_twin.cli.goto import run_goals
+            nav = {"map": None, "localisation": "ekf", "controller": "mppi", **plan.navigation}
+            if not _given(ctx, "firmware"):
+                opts.firmware = "improved"  # as run goto (amr_twin/cli/goto.py)
+            run_goals(opts, plan.goals, nav, opts.duration_s if opts.duration_s is not None else plan.duration_s,
+                      plan.faults, plan.actors, actors_of=_actors)
+            return
         execute(opts, plan.steps, False, plan.duration_s, plan.faults, plan.actors)
 
     @run_app.command()
@@ -318,3 +316,7 @@ def register(app: typer.Typer) -> None:
     def stop(opts: RunOptions) -> None:
         """Brake both wheels (fig. 3.7)."""
         one(opts, lambda: Command("stop"))
+
+    from amr_twin.cli.goto import add_goto
+
+    add_goto(run_app, _actors)

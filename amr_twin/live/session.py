@@ -42,8 +42,7 @@ class LiveOptions:
     def check(self) -> None:
         """Raise ValueError (one line naming the option) on a bad value."""
         if self.mode not in MODES:
-            raise ValueError(f"--live {self.mode!r}: expected foxglove or rerun (write --live after the command "
-                             "kind, or --live foxglove)")
+            raise ValueError(f"--live {self.mode!r}: must be one of {', '.join(MODES)} (a bare --live is foxglove)")
         for flag, port in (("--port", self.port), ("--web-port", self.web_port)):
             if port is not None and not 0 <= port <= 65535:
                 raise ValueError(f"{flag} {port}: must be in [0, 65535] (0: a free port)")
@@ -58,11 +57,32 @@ class LiveOptions:
         else:  # Rerun's servers listen on every interface
             ports = (("--port", "0.0.0.0", RERUN_PORT if self.port is None else self.port),
                      ("--web-port", "0.0.0.0", RERUN_WEB_PORT if self.web_port is None else self.web_port))
+        problem = host_problem(self.host) if self.mode == "foxglove" else None
+        if problem:
+            raise ValueError(f"--host {self.host}: {problem}; give an address of this machine (127.0.0.1: this "
+                             "machine only, 0.0.0.0: every interface)")
         for flag, host, port in ports:
             problem = port_problem(host, port) if port else None
             if problem:
                 raise ValueError(f"{flag} {port}: cannot listen on {host}:{port} ({problem}); "
                                  "give another port, or 0 for a free one")
+
+
+def host_problem(host: str) -> str | None:
+    """Why a server could not listen on ``host`` (None: it can): no such address, or not one of this machine."""
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, 0, type=socket.SOCK_STREAM)
+    except OSError as exc:
+        return f"not an address ({exc.strerror or exc})"
+    family, _type, _proto, _name, address = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as sock:
+        try:
+            sock.bind((address[0], 0, *address[2:]))
+        except OSError as exc:
+            return f"not an address of this machine ({exc.strerror or exc})"
+    return None
 
 
 def port_problem(host: str, port: int) -> str | None:

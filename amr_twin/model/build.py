@@ -59,7 +59,8 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
 
 
 def world_model(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
-    """The world alone, compiled (no robot): where actors may walk (:mod:`amr_twin.model.actor_space`)."""
+    """The world alone, compiled (no robot): where actors may walk (:mod:`amr_twin.model.actor_space`), where a
+    route may go (:func:`amr_twin.experiments.fusion.check_route`)."""
     try:
         return _world_spec(cfg, world).compile()
     except BuildError:
@@ -88,7 +89,8 @@ def _without_imu(robot: mujoco.MjSpec) -> mujoco.MjSpec:
 
 
 def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
-          xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, actors: tuple = ()) -> Build:
+          xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, actors: tuple = (),
+          obstacles: tuple = ()) -> Build:
     """Build the robot in a world and compile it (the URDF from :func:`robot_urdf`'s cache).
 
     ``actors`` (:class:`~amr_twin.model.actors.Actor`) are added as mocap bodies at their poses at
@@ -97,12 +99,19 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
 
     ``visuals=False`` leaves the robot's visual geoms out (40 of its 51 geoms, posed every
     step: ~15 % of a step in the empty world) and ``imu=False`` the IMU's sensors: a model
-    nothing draws or reads the IMU of, with the same dynamics to the bit.
+    nothing draws or reads the IMU of, with the same dynamics to the bit. ``obstacles``
+    (:class:`~amr_twin.model.worlds.Obstacle`): boxes added to the world (group 0, unmapped).
     """
     urdf = robot_urdf(cfg, xacro_file)
     robot = robot_spec(cfg, urdf, visuals)
     robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
     scene = _world_spec(cfg, world)
+    for ob in obstacles:
+        scene.worldbody.add_geom(name=f"obstacle_{ob.name}", type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
+                                 pos=[ob.x_m, ob.y_m, ob.size_m[2] / 2],
+                                 size=[ob.size_m[0] / 2, ob.size_m[1] / 2, ob.size_m[2] / 2],
+                                 quat=[math.cos(ob.yaw_rad / 2), 0, 0, math.sin(ob.yaw_rad / 2)],
+                                 rgba=[0.9, 0.75, 0.1, 1])
     x, y, yaw = start_xy_yaw
     held = Path(world).stem == "stand"
     z = STAND_HEIGHT_M if held else 0.0
@@ -129,13 +138,13 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
 
 
 def export(cfg: TwinConfig, urdf_path: Path | None = None, mjcf_path: Path | None = None) -> Build:
-    """Write the URDF and the robot MJCF (the committed files are made this way)."""
+    """Write the URDF and the robot MJCF (the committed files are made this way): both or neither
+    (:func:`amr_twin.recording.atomic_file.all_or_nothing`), never half of one."""
+    from amr_twin.recording.atomic_file import all_or_nothing, write_text
+
     result = build(cfg)
-    for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
-        if path is None:
-            continue
-        path = Path(path)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(text)
-        tmp.replace(path)  # never leave a half-written file
+    with all_or_nothing():
+        for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
+            if path is not None:
+                write_text(path, text)
     return result

@@ -35,6 +35,8 @@ from amr_twin.model.config_actors import ActorsCfg
 from amr_twin.model.config_leaves import ConfigError  # noqa: F401 - the parameter files' error, raised here too
 from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
 from amr_twin.model.config_leaves import field_range as _field_range
+from amr_twin.model.config_overrides import Blame, check_assignment, check_kind, parse_assignment
+from amr_twin.model.config_overrides import set_path as _set_path
 from amr_twin.model.parameter_tree import DEFAULT_CONFIG, read_tree
 from amr_twin.model.parameter_tree import read_yaml as _read_yaml
 
@@ -125,16 +127,8 @@ def _strip(node: dict, model: type[BaseModel], prefix: str, meta: dict) -> dict:
     return out
 
 
-def _set_path(tree: dict, dotted: str, value: Any) -> None:
-    keys = dotted.split(".")
-    node = tree
-    for k in keys[:-1]:
-        if not isinstance(node.get(k), dict):
-            raise ConfigError(f"{dotted}: unknown key")
-        node = node[k]
-    if keys[-1] not in node:
-        raise ConfigError(f"{dotted}: unknown key")
-    node[keys[-1]] = value
+def _copy(tree: dict) -> dict:
+    return {k: _copy(v) if isinstance(v, dict) else v for k, v in tree.items()}
 
 
 def _flatten(tree: dict, prefix: str = "") -> Iterator[tuple[str, Any]]:
@@ -145,20 +139,6 @@ def _flatten(tree: dict, prefix: str = "") -> Iterator[tuple[str, Any]]:
             yield from _flatten(sub, prefix + key + ".")
         else:
             yield prefix + key, sub
-
-
-def parse_assignment(text: str) -> tuple[str, Any]:
-    """Parse ``key=value`` (value in YAML syntax, e.g. ``payload.xy_m=[0.1,0]``)."""
-    if "=" not in text:
-        raise ConfigError(f"--set {text!r}: expected key=value")
-    key, raw = text.split("=", 1)
-    import yaml  # only for --set: off the start-up of the other commands
-
-    try:
-        value = yaml.safe_load(raw)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"--set {key}: cannot parse value {raw!r}") from exc
-    return key.strip(), value
 
 
 def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
@@ -175,7 +155,24 @@ def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
         msg = f"{value!r} is out of range: allowed [{lo}, {hi}] {unit}".rstrip()
     elif err["type"] == "finite_number":
         msg = f"{value!r}: must be a finite number"
+    elif err["type"] in ("missing", "too_short", "too_long") and isinstance(value, (list, tuple)):
+        size = _tuple_size(model, loc)  # a fixed-size vector given another number of values
+        msg = f"{list(value)!r} has {len(value)} value(s); it takes {size}" if size else msg
     return f"{'.'.join(loc)}: {msg}" if loc else msg
+
+
+def _tuple_size(model: type[BaseModel], loc: list[str]) -> int | None:
+    """The number of values of the fixed-size tuple field at ``loc`` (None: not one)."""
+    import typing
+
+    annotation: Any = model
+    for key in loc:
+        fields = getattr(annotation, "model_fields", None)
+        if not fields or key not in fields:
+            return None
+        annotation = fields[key].annotation
+    args = typing.get_args(annotation)
+    return len(args) if typing.get_origin(annotation) is tuple and args and Ellipsis not in args else None
 
 
 def load_config(path: str | Path | None = None, *, override_file: str | Path | None = None,
@@ -213,26 +210,35 @@ def load_parameters(path: str | Path | None = None, *, override_file: str | Path
         plain = _strip(tree, TwinConfig, "", meta)
     except ConfigError as exc:
         raise ConfigError(f"{path}: {exc}" if path is not None else str(exc)) from None
+    blame = Blame()
+    tree_values = _copy(plain)  # the file's values: the kind each parameter takes
     if override_file is not None:
         extra = _read_yaml(Path(override_file))
         try:
             for key, value in _flatten(extra):
                 _set_path(plain, key, value)
+                if key in meta:
+                    check_kind(key, value, meta, value_at(tree_values, key))
                 _override_meta(meta, key, value_at(extra, key), f"--params {override_file}")
+                blame.set(key, str(override_file))
         except ConfigError as exc:
             raise ConfigError(f"{override_file}: {exc}") from None
     for text in sets:
         key, value = parse_assignment(text)
+        check_assignment(text, key, value, meta, tree_values)
         _set_path(plain, key, value)
         _override_meta(meta, key, None, "--set")
+        blame.set(key, f"--set {text!r}")
     for key, value in (overrides or {}).items():
         _set_path(plain, key, value)
         _override_meta(meta, key, None, "override")
-    _reject_nan(plain)
     try:
+        _reject_nan(plain)
         cfg = TwinConfig.model_validate(plain)
+    except ConfigError as exc:
+        raise ConfigError(blame.message(str(exc))) from None
     except ValidationError as exc:
-        raise ConfigError(_format_error(exc, TwinConfig)) from None
+        raise ConfigError(blame.message(_format_error(exc, TwinConfig))) from None
     check_follows(meta, plain)
     return cfg, meta
 

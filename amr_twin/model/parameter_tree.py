@@ -24,9 +24,20 @@ TREE_CACHE_FORMAT = 1
 """Part of every parsed-tree cache key: raise it when what a cached tree means changes."""
 
 
+MAX_PARAMETER_FILE_BYTES = 16 * 1024 * 1024
+"""Largest parameter file read, bytes (amr.yaml is ~40 kB): a device or a huge file is refused, not read."""
+
+
 def _read_text(path: Path) -> bytes:
+    if path.exists() and not path.is_dir() and not path.is_file():  # opening a pipe would wait for a writer
+        raise ConfigError(f"{path}: not a regular file (a device or a pipe), not a parameter file (YAML)")
     try:
-        return path.read_bytes()
+        with open(path, "rb") as fh:
+            raw = fh.read(MAX_PARAMETER_FILE_BYTES + 1)
+        if len(raw) > MAX_PARAMETER_FILE_BYTES:
+            raise ConfigError(f"{path}: larger than {MAX_PARAMETER_FILE_BYTES // 1024 // 1024} MB, not a parameter "
+                              "file")
+        return raw
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such parameter file") from None
     except IsADirectoryError:

@@ -29,6 +29,10 @@ class Footprints:
     def __len__(self) -> int:
         return len(self.names)
 
+    def __getitem__(self, index: slice) -> "Footprints":
+        """The footprints of a slice (e.g. ``boxes[k:k + 1]``: one of them)."""
+        return Footprints(self.centre_xy_m[index], self.half_xy_m[index], self.yaw_rad[index], self.names[index])
+
 
 def scan_plane_boxes(model, z_m: float) -> Footprints:
     """Footprints of the world's box geoms (group 0) of a compiled ``model`` that span height ``z_m``.

@@ -39,6 +39,20 @@ def world_path(world: str | Path) -> Path:
     return WORLD_DIR / f"{world}.xml" if not path.suffix else path
 
 
+def world_files(world: str | Path) -> list[Path]:
+    """The files ``world`` reads: its MJCF file, or a map YAML and the image it names (when it names one)."""
+    path = world_path(world)
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        return [path]
+    from amr_twin.model.yaml_file import read_yaml
+
+    try:
+        image = read_yaml(path, "map", MapError).get("image")
+    except (MapError, AttributeError):  # unreadable: the model build says why
+        return [path]
+    return [path] + ([path.parent / image] if isinstance(image, str) and image.strip() else [])
+
+
 def _numeric(world: str | Path, name: str) -> list[float] | None:
     """Values of the MJCF ``<custom><numeric name=NAME>`` of ``world``; None if absent or unreadable."""
     path = world_path(world)
@@ -84,12 +98,39 @@ def uwb_anchors_xy_m(world: str | Path) -> np.ndarray | None:
 
 
 @dataclass(frozen=True)
+class Obstacle:
+    """A box standing on the floor that the world file does not hold (an unmapped pallet jack, a box).
+
+    Added to the world when the twin is built (``TwinOptions.obstacles``): the LiDAR sees it if it
+    reaches the scan plane, the robot can hit it, and no map of the world holds it. ``x_m, y_m``:
+    its centre in the world frame; ``size_m``: length, width, height; ``yaw_rad`` about +z.
+    """
+
+    name: str
+    x_m: float
+    y_m: float
+    size_m: tuple[float, float, float]
+    yaw_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        values = (self.x_m, self.y_m, self.yaw_rad, *self.size_m)
+        if len(self.size_m) != 3 or not all(math.isfinite(v) for v in values) or min(self.size_m) <= 0:
+            raise ValueError(f"obstacle {self.name!r}: position and yaw finite, size_m three lengths > 0 "
+                             f"(got {self.x_m}, {self.y_m}, {self.size_m}, {self.yaw_rad})")
+
+
+@dataclass(frozen=True)
 class OccupancyMap:
-    """An occupancy grid: ``occupied[row, col]`` with row 0 at the top of the image (max y)."""
+    """An occupancy grid: ``occupied[row, col]`` with row 0 at the top of the image (max y).
+
+    ``free[row, col]``: the cells map_server reads as free (occupancy below ``free_thresh``); a
+    cell neither occupied nor free is unknown.
+    """
 
     occupied: np.ndarray
     resolution_m: float
     origin_xyyaw: tuple[float, float, float]
+    free: np.ndarray | None = None
 
 
 class MapError(ValueError):
@@ -208,6 +249,7 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
         raise MapError(f"{yaml_path}: origin: {origin!r} must be [x_m, y_m, yaw_rad], three finite numbers")
     origin = tuple(float(v) for v in origin)
     occupied = _map_number(yaml_path, meta, "occupied_thresh", 0.65, 0.0, 1.0)
+    free = _map_number(yaml_path, meta, "free_thresh", 0.196, 0.0, 1.0)
     negate = meta.get("negate", 0)
     if negate not in (0, 1, True, False):
         raise MapError(f"{yaml_path}: negate: {negate!r} must be 0 or 1")
@@ -216,9 +258,10 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
     except MapError as exc:
         raise MapError(f"{yaml_path}: image {exc}") from None
     if mode == "raw":  # the pixel is the occupancy in percent (255 unknown)
-        return OccupancyMap((image != 255) & (image / 100.0 > occupied), resolution, origin)
+        known = image != 255
+        return OccupancyMap(known & (image / 100.0 > occupied), resolution, origin, known & (image / 100.0 < free))
     p = image / 255.0 if int(negate) else (255 - image.astype(float)) / 255.0
-    return OccupancyMap(p > occupied, resolution, origin)
+    return OccupancyMap(p > occupied, resolution, origin, p < free)
 
 
 def merge_boxes(occupied: np.ndarray) -> list[tuple[int, int, int, int]]:

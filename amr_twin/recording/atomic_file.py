@@ -9,7 +9,8 @@ the error (an ``OSError``) names the target, not the temporary.
 
 Several files that belong together (a report and its plots) are written inside
 :func:`all_or_nothing`: every temporary is written first, and the renames happen
-only when all of them succeeded; a full disk half-way leaves none of the new files.
+only when all of them succeeded; a full disk half-way leaves none of the new files,
+and no folder made for them (an output folder that would stay empty is removed).
 
 A process killed outright leaves its temporary behind; the pid in the name tells
 whether its writer still runs, and :func:`remove_stale_temporaries` deletes those
@@ -25,6 +26,7 @@ from pathlib import Path
 from typing import Iterator
 
 _batch: list[list] = []  # stack of open all_or_nothing() batches: [(tmp, target) renames, cleanups]
+_made: list[list[Path]] = []  # per open batch: the folders its writers created (removed if it fails)
 
 
 def temporary_name(path: str | Path) -> Path:
@@ -38,8 +40,19 @@ class WriteError(OSError):
 
 
 def _named(exc: OSError, path: Path) -> WriteError:
-    """The same error as a :class:`WriteError` naming ``path`` (the target)."""
-    return WriteError(exc.errno, exc.strerror or str(exc), str(path))
+    """The same error as a :class:`WriteError` naming ``path`` (the target); a file too large says the limit."""
+    return WriteError(exc.errno, why(exc.errno, exc.strerror or str(exc)), str(path))
+
+
+def why(errno_: int | None, strerror: str) -> str:
+    """``strerror``, with the file-size limit (``ulimit -f``) when that is what was hit."""
+    import errno
+    import resource
+
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    if errno_ == errno.EFBIG and limit != resource.RLIM_INFINITY:
+        return f"{strerror} (the file-size limit, ulimit -f, is {limit} bytes)"
+    return strerror
 
 
 @contextmanager
@@ -52,6 +65,10 @@ def replacing(path: str | Path) -> Iterator[Path]:
     path = Path(path)
     tmp = temporary_name(path)
     deferred = False
+    made = [p for p in [path.parent, *path.parent.parents] if not p.exists()]  # deepest first
+    if _made:
+        _made[-1].extend(made)
+    done = False
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         yield tmp
@@ -60,6 +77,7 @@ def replacing(path: str | Path) -> Iterator[Path]:
             deferred = True
         else:
             os.replace(tmp, path)
+        done = True
     except WriteError:
         raise
     except OSError as exc:
@@ -67,6 +85,8 @@ def replacing(path: str | Path) -> Iterator[Path]:
     finally:
         if not deferred:
             tmp.unlink(missing_ok=True)
+        if not done and not _made:
+            remove_empty(made)
 
 
 def place(written: str | Path, path: str | Path) -> None:
@@ -95,14 +115,19 @@ def all_or_nothing() -> Iterator[None]:
     """Files written inside appear together at the end, or none of them if anything fails."""
     renames: list = []
     _batch.append(renames)
+    _made.append([])
     try:
         yield
     except BaseException:
         _batch.pop()
         for tmp, _path in renames:
             _remove(tmp)
+        remove_empty(sorted(set(_made.pop()), key=lambda p: len(p.parts), reverse=True))
         raise
     _batch.pop()
+    made = _made.pop()
+    if _made:  # an outer batch removes them if it fails
+        _made[-1].extend(made)
     try:
         for tmp, path in renames:
             if path is not None:
@@ -125,6 +150,15 @@ def write_bytes(path: str | Path, data: bytes) -> None:
 def write_text(path: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
     write_bytes(path, text.encode())
+
+
+def remove_empty(folders: list[Path]) -> None:
+    """Remove the folders (deepest first) that are empty: those a failed write made for nothing."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:
+            pass
 
 
 def _remove(path: Path) -> None:

@@ -29,6 +29,10 @@ uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has 
     /uwb/range         sensor_msgs/msg/Range          one per anchor exchange, frame uwb_anchor_<i>
                                                       (only when a UwbSensor publishes, e.g. the fusion drive)
     /cmd_vel           geometry_msgs/msg/Twist        when a node drives on cmd_vel (path follower)
+    /plan, /map, /local_costmap/costmap, /local_costmap/published_footprint
+                       nav_msgs/msg/Path, OccupancyGrid, geometry_msgs/msg/PolygonStamped: the navigation
+                                                      stack's (amr_twin/navigation/outputs.py), frame map
+    /ground_truth/odom, /odometry/filtered   nav_msgs/msg/Odometry: the localisation it used
     /wheel_Command_Service/request  std_msgs/msg/Float64MultiArray  every service call
                                                       [motionL, speedL, motionR, speedR] (labelled)
     /wheel_Command     std_msgs/msg/Float64MultiArray [motionL, speedL, motionR, speedR]
@@ -59,6 +63,7 @@ from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
                        encode_pose_array, encode_range, encode_string, encode_tf_message, encode_twist)
+from amr_twin.ros.nav_messages import encode_occupancy_grid, encode_path, encode_polygon_stamped
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 
 REQUEST_FIELDS = "motionL,speedL,motionR,speedR"
@@ -67,7 +72,7 @@ JOINT_STATE_PERIOD_US = 20_000
 """Period of /joint_states and of the joints' links on /tf, us (50 Hz)."""
 BATTERY_EVERY_ROWS = 10
 """/battery_state every 10th row of the 100 Hz record grid (10 Hz)."""
-LATCHED = ("/tf_static", "/robot_description")
+LATCHED = ("/tf_static", "/robot_description", "/map")
 """Topics offered transient-local (a late subscriber gets the last message)."""
 
 
@@ -90,6 +95,13 @@ BUS_TOPICS = {
     "imu/data_raw": ("/imu/data_raw", "sensor_msgs/Imu", encode_imu),
     "imu/mag": ("/imu/mag", "sensor_msgs/MagneticField", encode_magnetic_field),
     "uwb/range": ("/uwb/range", "sensor_msgs/Range", encode_range),
+    "ground_truth/odom": ("/ground_truth/odom", "nav_msgs/Odometry", encode_odometry),
+    "odometry/filtered": ("/odometry/filtered", "nav_msgs/Odometry", encode_odometry),
+    "plan": ("/plan", "nav_msgs/Path", encode_path),
+    "map": ("/map", "nav_msgs/OccupancyGrid", encode_occupancy_grid),
+    "local_costmap/costmap": ("/local_costmap/costmap", "nav_msgs/OccupancyGrid", encode_occupancy_grid),
+    "local_costmap/published_footprint": ("/local_costmap/published_footprint", "geometry_msgs/PolygonStamped",
+                                          encode_polygon_stamped),
     "actors/poses": ("/actors/poses", "geometry_msgs/PoseArray", encode_pose_array),
 }
 

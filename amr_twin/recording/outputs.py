@@ -4,7 +4,9 @@ Each command checks every file and folder it will write before it builds the
 model: the target is not a folder (for a file) or a file (for a folder), no file
 stands where a folder of its path should be, the nearest existing folder accepts
 a new file (probed by creating and deleting one: read-only mounts and permissions
-are caught, whatever ``os.access`` says), and no two outputs name the same path.
+are caught, whatever ``os.access`` says), no two outputs name the same path, and no
+output is one of the command's inputs (:func:`check_not_inputs`: the same file after
+resolving links, hard links included, or a folder holding an input).
 The temporaries that killed runs left for the same targets are removed
 (:func:`amr_twin.recording.atomic_file.remove_stale_temporaries`). Nothing is created: the
 folders are made when the files are written.
@@ -107,3 +109,51 @@ def check_outputs(files: dict[str, Path | str | None] | None = None,
         for d_option, d_path in folders.items():
             if f_path is not None and d_path is not None and Path(f_path).resolve() == Path(d_path).resolve():
                 raise OutputError(f"{f_option} and {d_option} both name {f_path}: give each output its own path")
+
+
+def same_file(a: Path | str, b: Path | str) -> bool:
+    """``a`` and ``b`` are one file: the same path once links are resolved, or (both existing) the same
+    inode on the same device, which catches hard links and bind mounts."""
+    a, b = Path(a), Path(b)
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        sa, sb = a.stat(), b.stat()
+    except OSError:
+        return False
+    return (sa.st_dev, sa.st_ino) == (sb.st_dev, sb.st_ino)
+
+
+def _holds(folder: Path, path: Path) -> bool:
+    """``path`` lies inside ``folder`` (links resolved; a folder that does not exist yet holds nothing)."""
+    if not folder.is_dir():
+        return False
+    folder, path = folder.resolve(), path.resolve()
+    return folder in path.parents
+
+
+def _pairs(items) -> list:
+    return list(items.items()) if isinstance(items, dict) else list(items)
+
+
+def check_not_inputs(outputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]],
+                     inputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]]) -> None:
+    """Refuse an output that is an input, or a folder output that holds one (its files could replace it).
+
+    ``outputs`` and ``inputs``: option (``--csv``; ``--config (default)`` for an input the command reads
+    without being told) -> path, None = not given; or a list of such pairs (an option given twice).
+    Raises :class:`OutputError` naming both.
+    """
+    for o_label, o_path in _pairs(outputs):
+        if o_path is None:
+            continue
+        for i_label, i_path in _pairs(inputs):
+            if i_path is None:
+                continue
+            if same_file(o_path, i_path):
+                how = "" if Path(o_path).resolve() == Path(i_path).resolve() else " (the same file by another name)"
+                raise OutputError(f"{o_label} {o_path}: is the input {i_label} {i_path}{how}; writing it would "
+                                  f"destroy it: give {o_label} another path")
+            if _holds(Path(o_path), Path(i_path)):
+                raise OutputError(f"{o_label} {o_path}: holds the input {i_label} {i_path}; the files written there "
+                                  f"could replace it: give {o_label} a folder of its own")

@@ -28,6 +28,7 @@ Entities::
     world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
     commands                            TextLog of wheel_Command and the client calls
     events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/sim/event_log.py)
+    world/navigation/{map,plan,costmap,footprint}  the navigation stack's (amr_twin/recording/rerun_navigation.py)
 
 A default blueprint (3D view + time-series plots) is sent with the recording.
 """
@@ -36,7 +37,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from amr_twin.recording.atomic_file import replacing
+from amr_twin.recording.atomic_file import write_bytes
+from amr_twin.recording.rerun_navigation import _log_navigation
 from amr_twin.sim.event_log import has_events, log_events
 from amr_twin.recording.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
                             remove_stale_temporaries)
@@ -70,31 +72,46 @@ def _blueprint(has_imu: bool, has_uwb: bool = False, has_events: bool = False):
         collapse_panels=True)
 
 
+ENCODE_TIMEOUT_S = 600.0
+"""Longest wait for Rerun to encode what was logged, s (no file is involved: it does not fail on a full disk)."""
+
+
 def write_rrd(capture: Capture, series, path: Path, result=None, application_id: str = "amr_twin") -> Path:
-    """Write the capture and ``series`` to ``path`` (.rrd), through a temporary file."""
+    """Write the capture and ``series`` to ``path`` (.rrd), through a temporary file.
+
+    Rerun encodes the recording into a byte stream (:meth:`RecordingStream.binary_stream`) that this
+    process writes in one piece once everything is logged: a full disk or a file-size limit is an
+    ``OSError`` naming ``path`` (:func:`~amr_twin.recording.atomic_file.replacing`) and no half file is
+    left. Rerun's own file writer (``RecordingStream.save``) writes from a thread of its own and, on such
+    an error, hangs in ``save`` or ``flush``, raises "File-writer thread shut down prematurely", or says
+    nothing and leaves a truncated file (rerun-sdk 0.41). The stream is read once: reading it in pieces
+    gives a file whose checksums fail. The encoded bytes (about 0.09 MB per simulated second with the
+    sensors) are held in memory until then, beside the capture.
+    """
     import rerun as rr
 
     path = Path(path)
     m = capture.twin.physics.model
     rec = rr.RecordingStream(application_id)
-    with replacing(path) as tmp:
-        rec.save(tmp, default_blueprint=_blueprint(bool(capture.messages.get("imu/data_raw")),
-                                                   bool(capture.messages.get("uwb/range")),
-                                                   has_events(capture.twin)))
-        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-        _log_geoms(rec, m)
-        _log_body_transforms(rec, m, capture)
-        _log_scan(rec, m, capture)
-        _log_imu(rec, capture)
-        _log_uwb(rec, m, capture)
-        _log_wheel_speeds(rec, series)
-        _log_duty(rec, series)
-        _log_electrics(rec, series)
-        _log_commands(rec, series, result)
-        _log_trajectory(rec, series)
-        log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
-        rec.flush()
-        rec.disconnect()
+    stream = rec.binary_stream()
+    rec.send_blueprint(_blueprint(bool(capture.messages.get("imu/data_raw")), bool(capture.messages.get("uwb/range")),
+                                  has_events(capture.twin)), make_active=False, make_default=True)
+    rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    _log_geoms(rec, m)
+    _log_body_transforms(rec, m, capture)
+    _log_scan(rec, m, capture)
+    _log_imu(rec, capture)
+    _log_uwb(rec, m, capture)
+    _log_wheel_speeds(rec, series)
+    _log_duty(rec, series)
+    _log_electrics(rec, series)
+    _log_commands(rec, series, result)
+    _log_trajectory(rec, series)
+    _log_navigation(rec, capture)  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
+    log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
+    rec.disconnect()
+    data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
+    write_bytes(path, data)
     return path
 
 

@@ -65,6 +65,14 @@ _DEFS = {
                                          "string name\nstring message\nstring hardware_id\n"
                                          "diagnostic_msgs/KeyValue[] values"),
     "diagnostic_msgs/DiagnosticArray": "std_msgs/Header header\ndiagnostic_msgs/DiagnosticStatus[] status",
+    "geometry_msgs/PoseStamped": "std_msgs/Header header\ngeometry_msgs/Pose pose",
+    "nav_msgs/Path": "std_msgs/Header header\ngeometry_msgs/PoseStamped[] poses",
+    "nav_msgs/MapMetaData": ("builtin_interfaces/Time map_load_time\nfloat32 resolution\nuint32 width\nuint32 height\n"
+                             "geometry_msgs/Pose origin"),
+    "nav_msgs/OccupancyGrid": "std_msgs/Header header\nnav_msgs/MapMetaData info\nint8[] data",
+    "geometry_msgs/Point32": "float32 x\nfloat32 y\nfloat32 z",
+    "geometry_msgs/Polygon": "geometry_msgs/Point32[] points",
+    "geometry_msgs/PolygonStamped": "std_msgs/Header header\ngeometry_msgs/Polygon polygon",
     "sensor_msgs/Range": ("uint8 ULTRASOUND=0\nuint8 INFRARED=1\nstd_msgs/Header header\nuint8 radiation_type\n"
                           "float32 field_of_view\nfloat32 min_range\nfloat32 max_range\nfloat32 range"),
 }

@@ -77,6 +77,7 @@ class TwinOptions:
     odometry: bool = True  # the wheel odometry node (odom, tf); off for runs nothing reads it from (a sweep
     # point): it only publishes, so the drive is the same to the bit without it
     faults: tuple = ()  # amr_twin.sim.faults.Fault items, injected at their times
+    obstacles: tuple = ()  # amr_twin.model.worlds.Obstacle boxes added to the world (unmapped: no map holds them)
     visuals: bool = True  # the robot's visual geoms in the model; off for runs nothing draws (no .rrd, no live
     # view): they collide with nothing and weigh nothing, so the dynamics are the same to the bit, ~15 % cheaper
     actors: tuple = ()  # amr_twin.model.actors.Actor items: people and pallet jacks moved on the grid
@@ -97,7 +98,7 @@ class Twin:
         where = (f"--start {pose} in world {options.world}" if options.start_xy_yaw is not None
                  else f"the start pose {pose} of world {options.world}")
         physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals, options.sensors,
-                                        options.settle_s, where, tuple(options.actors))
+                                        options.settle_s, where, tuple(options.actors), options.obstacles)
         self.physics = physics
         self.urdf = urdf
         """The robot description as built (``/robot_description`` of a recording)."""

@@ -2,7 +2,7 @@
 
 Format (YAML)::
 
-    duration_s: 14          # simulated seconds, > 0
+    duration_s: 14          # simulated seconds, in [0.1, 3600]
     steps:                  # sent in time order; t_s in [0, duration_s]
       - t_s: 0
         linear: {speed_m_s: 0.5}              # negative: backward
@@ -24,6 +24,16 @@ the step and the field. An actor needs its ``kind``, ``waypoints_xy_m`` and
 ``speed_m_s`` (:meth:`amr_twin.model.actors.Actor.from_mapping`); its speed range and
 its path through the world are checked when the model is built (docs/actors.md). Speeds outside the thesis range are not checked here:
 the client refuses them at run time (code 1), as on the robot.
+
+A navigation mission has ``goals`` instead of ``steps`` (visited in order by the
+navigation stack, amr_twin/navigation/; ``duration_s`` is then optional, a time limit)::
+
+    goals:                  # x_m, y_m and optionally yaw_deg (REP-103), in the map frame
+      - [10.0, -4.8]
+      - {x_m: 20.0, y_m: 4.8, yaw_deg: 180}
+    map: my_map.yaml        # optional: a map_server map (default: the world's true map)
+    localisation: ekf       # optional: truth, ekf (default) or odom
+    controller: mppi        # optional: mppi (default) or rpp
 """
 
 from __future__ import annotations
@@ -32,6 +42,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from amr_twin.sim.bounds import duration_problem
 from amr_twin.sim.run import KINDS, Command
 from amr_twin.model.yaml_file import read_yaml
 
@@ -96,12 +107,56 @@ def parse_step(index: int, step) -> tuple[float, Command]:
 
 @dataclass(frozen=True)
 class Mission:
-    """A validated mission: its length, its timed commands and its fault specifications."""
+    """A validated mission: its length, its timed commands and its fault specifications; or its goals
+    ``(x_m, y_m, yaw_rad or None)`` with the navigation's ``map``, ``localisation`` and ``controller``."""
 
-    duration_s: float
+    duration_s: float | None
     steps: list[tuple[float, Command]]
     faults: tuple[str, ...] = ()
     actors: tuple = ()  # amr_twin.model.actors.Actor items
+    goals: tuple = ()
+    navigation: dict | None = None
+
+
+NAV_KEYS = ("map", "localisation", "controller")
+
+
+def parse_goal(where: str, goal) -> tuple[float, float, float | None]:
+    """``[x_m, y_m]``, ``[x_m, y_m, yaw_deg]`` or ``{x_m, y_m, yaw_deg}`` to ``(x_m, y_m, yaw_rad or None)``."""
+    if isinstance(goal, dict):
+        unknown = [k for k in goal if k not in ("x_m", "y_m", "yaw_deg")]
+        if unknown or "x_m" not in goal or "y_m" not in goal:
+            raise MissionError(f"{where}: expected x_m, y_m and optionally yaw_deg")
+        values = [goal["x_m"], goal["y_m"]] + ([goal["yaw_deg"]] if "yaw_deg" in goal else [])
+    elif isinstance(goal, list) and len(goal) in (2, 3):
+        values = goal
+    else:
+        raise MissionError(f"{where}: expected [x_m, y_m], [x_m, y_m, yaw_deg] or a mapping of them")
+    numbers = [_number(f"{where}[{i}]", v) for i, v in enumerate(values)]
+    if any(abs(v) > 1e4 for v in numbers):
+        raise MissionError(f"{where}: each value must lie within +-10000")
+    return numbers[0], numbers[1], math.radians(numbers[2]) if len(numbers) == 3 else None
+
+
+def _goals_plan(tree: dict) -> Mission:
+    goals = tree["goals"]
+    if "steps" in tree:
+        raise MissionError("mission: give steps (wheel commands) or goals (navigation), not both")
+    if not isinstance(goals, list) or not goals:
+        raise MissionError("goals: must be a non-empty list of [x_m, y_m] or [x_m, y_m, yaw_deg]")
+    duration_s = None
+    if "duration_s" in tree:
+        duration_s = _number("duration_s", tree["duration_s"])
+        if duration_s <= 0:
+            raise MissionError(f"duration_s: {duration_s} must be > 0")
+    nav = {}
+    for key in NAV_KEYS:
+        if key in tree:
+            if not isinstance(tree[key], str) or not tree[key]:
+                raise MissionError(f"{key}: {tree[key]!r} must be a name or a file path")
+            nav[key] = tree[key]
+    return Mission(duration_s, [], _faults(tree), _actors(tree),
+                   tuple(parse_goal(f"goals[{i}]", g) for i, g in enumerate(goals)), nav)
 
 
 def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
@@ -138,15 +193,21 @@ def _actors(tree) -> tuple:
 def parse_mission_plan(tree) -> Mission:
     """A loaded mission mapping to a :class:`Mission`."""
     if not isinstance(tree, dict):
-        raise MissionError("mission: expected a mapping with duration_s and steps")
-    unknown = [k for k in tree if k not in ("duration_s", "steps", "faults", "actors")]
+        raise MissionError("mission: expected a mapping with duration_s and steps (or goals)")
+    unknown = [k for k in tree if k not in ("duration_s", "steps", "faults", "actors", "goals") + NAV_KEYS]
     if unknown:
-        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps, faults, actors)")
+        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps, faults, actors; "
+                           f"or goals, {', '.join(NAV_KEYS)})")
+    if "goals" in tree:
+        return _goals_plan(tree)
+    extra = [k for k in NAV_KEYS if k in tree]
+    if extra:
+        raise MissionError(f"{extra[0]}: a navigation key, given without goals")
     if "duration_s" not in tree:
         raise MissionError("mission: duration_s is missing")
     duration_s = _number("duration_s", tree["duration_s"])
-    if duration_s <= 0:
-        raise MissionError(f"duration_s: {duration_s} must be > 0")
+    if duration_problem(duration_s):
+        raise MissionError(f"duration_s: {duration_s:g} {duration_problem(duration_s)}")
     steps = tree.get("steps")
     if not isinstance(steps, list) or not steps:
         raise MissionError("mission: steps must be a non-empty list")
@@ -162,9 +223,12 @@ def load_mission_file(path: str | Path) -> Mission:
     path = Path(path)
     tree = read_yaml(path, "mission", MissionError)
     try:
-        return parse_mission_plan(tree)
+        plan = parse_mission_plan(tree)
     except MissionError as exc:
         raise MissionError(f"mission {path}: {exc}") from None
+    if plan.navigation and "map" in plan.navigation and not Path(plan.navigation["map"]).is_absolute():
+        plan.navigation["map"] = str(path.parent / plan.navigation["map"])  # beside the mission file
+    return plan
 
 
 def load_mission(path: str | Path) -> tuple[float, list[tuple[float, Command]]]:

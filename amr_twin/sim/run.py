@@ -13,6 +13,7 @@ import time
 from dataclasses import dataclass, field
 
 from amr_twin.model.config import TwinConfig
+from amr_twin.sim.bounds import MAX_RUN_S
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.recorder import RunSeries
 
@@ -83,6 +84,19 @@ class Command:
             return client.motor(self.wheel, self.direction, self.speed_m_s)
         return client.stop()
 
+    def dry_run(self, cfg: TwinConfig):
+        """Send the command to a client of its own, with no twin (its conversions and range checks only):
+        the client after the call (``last_request``, ``last_error``)."""
+        from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
+        from amr_twin.ros.bus import Bus
+        from amr_twin.sim.clock import VirtualClock
+
+        bus = Bus(VirtualClock())
+        WheelCommandService(bus)
+        client = WheelCommandClient(bus, wheel_radius_m=cfg.wheel.radius_m, half_separation_m=cfg.wheel.separation_m / 2)
+        self.send(type("Twinless", (), {"client": client})())
+        return client
+
     def describe(self) -> dict:
         """The command as a JSON-ready dict."""
         out = {"kind": self.kind}
@@ -114,8 +128,8 @@ class RunResult:
 def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s: float,
                 options: TwinOptions = TwinOptions(), twin: Twin | None = None) -> RunResult:
     """Send each command at its time (s from the start) and run for ``duration_s``."""
-    if not (math.isfinite(duration_s) and duration_s > 0):
-        raise ValueError(f"duration_s: {duration_s} must be a finite number > 0")
+    if not (math.isfinite(duration_s) and 0 < duration_s <= MAX_RUN_S):  # the commands check theirs first
+        raise ValueError(f"duration_s: {duration_s} must be a finite number in (0, {MAX_RUN_S:g}] s")
     steps = sorted(steps, key=lambda s: s[0])
     if any(t < 0 or t > duration_s for t, _ in steps):
         raise ValueError(f"mission: command times must lie in [0, {duration_s}] s")

@@ -30,15 +30,18 @@ _kept: OrderedDict = OrderedDict()
 
 
 def settled_physics(cfg: TwinConfig, world: str, start_xy_yaw: tuple[float, float, float], visuals: bool,
-                    imu: bool, settle_s: float, where: str, actors: tuple = ()) -> tuple[Physics, str]:
+                    imu: bool, settle_s: float, where: str, actors: tuple = (),
+                    obstacles: tuple = ()) -> tuple[Physics, str]:
     """``(physics, urdf)``: the robot built in ``world`` at ``start_xy_yaw`` (x_m, y_m, yaw_rad) with
-    ``actors`` (:class:`~amr_twin.model.actors.Actor`, standing at their poses at t = 0),
+    ``actors`` (:class:`~amr_twin.model.actors.Actor`, standing at their poses at t = 0) and ``obstacles``
+    (:class:`~amr_twin.model.worlds.Obstacle`, unmapped boxes),
     checked clear of the world (``where`` names the start in the errors), settled for
     ``settle_s`` with its motors braked and its clock set back to 0; a copy of a kept one when
     the same was settled before."""
     key = None
     if not Path(str(world)).suffix:
-        key = (cfg, str(world), tuple(start_xy_yaw), bool(visuals), bool(imu), float(settle_s), tuple(actors))
+        key = (cfg, str(world), tuple(start_xy_yaw), bool(visuals), bool(imu), float(settle_s), tuple(actors),
+               tuple(obstacles))
         try:
             kept = _kept.get(key)
         except TypeError:  # an unhashable configuration: build it
@@ -46,7 +49,8 @@ def settled_physics(cfg: TwinConfig, world: str, start_xy_yaw: tuple[float, floa
         if kept is not None:
             _kept.move_to_end(key)
             return kept[0].clone(), kept[1]
-    built = build(cfg, world, start_xy_yaw, visuals=visuals, imu=imu, actors=tuple(actors))
+    built = build(cfg, world, start_xy_yaw, visuals=visuals, imu=imu, actors=tuple(actors),
+                  obstacles=tuple(obstacles))
     physics = Physics(built.model)
     check_start(physics, where)
     physics.settle(settle_s)

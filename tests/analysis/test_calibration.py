@@ -36,6 +36,7 @@ def test_fit_recovers_driver_gain_from_a_log(tmp_path):
     assert abs(fit.values["driver.gain"] - 1.45) < abs(1.9 - 1.45) / 3
     assert fit.residual < 4.0 * n  # RMS under 2 RPM, half the firmware's 4 RPM dead band
     assert 0 < fit.sigma["driver.gain"] < 0.2
+    assert fit.evaluations <= 14  # the budget holds (scipy's max_nfev counts steps, not evaluations)
     out = tmp_path / "params.yaml"
     write_params(fit, out)
     cfg = load_config(override_file=out)
@@ -93,9 +94,23 @@ def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
     short = tmp_path / "short.csv"
     short.write_text("t_s,wheel,rpm,command\n0.5,left,10,linear:0.7\n2.0,left,50,linear:0.7\n")
     out = tmp_path / "params.yaml"
-    res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "2"])
+    res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "6"])
     assert res.exit_code == 2 and "the log must be longer" in res.stderr and not out.exists()
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("budget", [6, 13])
+def test_the_fit_never_exceeds_its_evaluation_budget(tmp_path, budget):
+    """scipy's max_nfev counts steps, each with a Jacobian of one evaluation per parameter (issue 33: a
+    budget of 2 made 7): every evaluation is counted, and a budget below one step is refused."""
+    log = tmp_path / "real.csv"
+    _write_log(log, gain=1.45)
+    calls = []
+    fit = calibrate(str(log), base=load_config(sets=["driver.gain=1.9"]), max_evaluations=budget,
+                    progress=lambda i, n: calls.append(i))
+    assert fit.evaluations == len(calls) and 6 <= fit.evaluations <= budget
+    with pytest.raises(ValueError, match="max_evaluations 5: at least 6"):
+        calibrate(str(log), base=load_config(), max_evaluations=5)
 
 
 def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
@@ -113,7 +128,7 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
     log = tmp_path / "log.csv"
     log.write_text("t_s,wheel,rpm,command\n" + "".join(
         f"{t},{w},{rpm},linear:0.7\n" for w in (0, 1) for t, rpm in series.published[w]))
-    args = ["calibrate", "--target", str(log), "--max-evaluations", "2", "--jobs", "1"]
+    args = ["calibrate", "--target", str(log), "--max-evaluations", "6", "--jobs", "1"]
     text = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a.yaml")])
     assert text.exit_code == 0, text.output
     lines = text.stdout.splitlines()

@@ -29,6 +29,10 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert r["actors_collisions"] == 0 and r["actors_engine"] == r["native_engines"]["actors"]
     assert all(e == "C" or e.startswith("Python (") for e in r["native_engines"].values())
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
+    assert 0 < r["nav_plan_ms_p50"] <= r["nav_plan_ms_p95"] and r["nav_plans"] == 30  # issue 32's figures
+    for setup in ("truth_rpp", "ekf_mppi"):
+        assert r[f"nav_{setup}_realtime_factor"] > 0 and r[f"nav_{setup}_ratio"] > 1
+    assert 0 < r["nav_mppi_ms_p50"] <= r["nav_mppi_ms_p99"] and 0 < r["nav_rpp_ms_p50"] <= r["nav_rpp_ms_p99"]
 
 
 @pytest.mark.parametrize("args, text", [(["--jobs", "0"], "--jobs 0"), (["--sim-s", "-1"], "--sim-s -1")])

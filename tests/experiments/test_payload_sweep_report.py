@@ -93,9 +93,12 @@ def test_the_improved_firmware_runs_beside_where_the_faithful_one_runs_away(rear
     assert "| rear | highest safe 20 kg" in (out / "summary.md").read_text()
 
 
-def test_no_empty_plot_is_drawn(tmp_path):
+def test_no_empty_plot_is_drawn(tmp_path, monkeypatch):
     """Issue 33: a command every point of which the client refuses drew 15 empty panels; a
-    position off the deck made matplotlib warn. No PNG then, and the reason said."""
+    position off the deck made matplotlib warn. No PNG then, and the reason said. (The command line
+    refuses such a command before the sweep, tests/cli/test_bad_inputs.py: let it through here, as a
+    drawn wheel radius may make the client refuse some points.)"""
+    monkeypatch.setattr("amr_twin.experiments.payload_point.check_accepted", lambda cfg, text: None)
     result = CliRunner().invoke(app, ["sweep", "payload", "--masses", "0,10", "--positions", "center",
                                       "--commands", "linear:50", "--duration-s", "1", "--no-progress",
                                       "--jobs", "1", "--out", str(tmp_path / "fast")])

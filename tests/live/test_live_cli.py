@@ -15,10 +15,18 @@ QUICK = ["--duration-s", "0.2", "--world", "empty", "--rate", "0", "--port", "0"
 
 
 def test_bare_live_means_foxglove_wherever_it_stands():
+    kinds = ("linear", "stop")
     assert live_option_args(["--live"]) == ["--live=foxglove"]
-    assert live_option_args(["--live", "linear", "--port", "0"]) == ["--live=foxglove", "linear", "--port", "0"]
-    assert live_option_args(["linear", "--live", "rerun"]) == ["linear", "--live", "rerun"]
+    assert live_option_args(["--live", "linear", "--port", "0"], kinds) == ["--live=foxglove", "linear", "--port", "0"]
+    assert live_option_args(["linear", "--live", "rerun"], kinds) == ["linear", "--live", "rerun"]
+    assert live_option_args(["linear", "--live", "--json"], kinds) == ["linear", "--live=foxglove", "--json"]
     assert live_option_args(["--", "--live"]) == ["--", "--live"]
+    # any other word is the value, refused naming the modes (it was taken for an extra argument)
+    assert live_option_args(["stop", "--live", "bogus"], kinds) == ["stop", "--live", "bogus"]
+    for args in (["run", "stop", "--live", "bogus"], ["run", "--live", "bogus", "stop"], ["client", "--live", "bogus"]):
+        res = runner.invoke(app, args)
+        assert res.exit_code == 2 and res.stderr.strip() == \
+            "error: --live 'bogus': must be one of foxglove, rerun (a bare --live is foxglove)"
 
 
 @pytest.mark.parametrize("args", [["linear", "--speed-m-s", "0.3", "--live", *QUICK, "--json"],
@@ -41,7 +49,8 @@ def test_live_rerun_run_prints_its_stream_and_viewer():
 @pytest.mark.parametrize("args,message", [
     (["--rate", "2"], "--rate is an option of --live"),
     (["--port", "9000"], "--port is an option of --live"),
-    (["--live=bogus"], "--live 'bogus': expected foxglove or rerun"),
+    (["--live=bogus"], "--live 'bogus': must be one of foxglove, rerun"),
+    (["--live", "--host", "999.1.1.1"], "--host 999.1.1.1: not an address ("),
     (["--live", "--rate", "-1"], "--rate -1.0: must be a finite number in [0, 1000]"),
     (["--live", "--rate", "nan"], "--rate nan: must be a finite number"),
     (["--live", "--port", "70000"], "--port 70000: must be in [0, 65535]"),

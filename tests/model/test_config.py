@@ -32,12 +32,12 @@ def test_config_is_frozen():
 
 @pytest.mark.parametrize("assignment, field, words", [
     ("payload.mass_kg=-1", "payload.mass_kg", "[0.0, 200.0]"),
-    ("wheel.foo=1", "wheel.foo", "unknown key"),
+    ("wheel.foo=1", "wheel.foo", "is not a parameter"),
     ("wheel.radius_m=.nan", "wheel.radius_m", "finite"),
     ("chassis.width_m=0.9", "chassis.width_m", "[0.25, 0.46]"),
     ("payload.xy_m=[0.3,0.0]", "payload.xy_m", "outside the deck"),
 ])
-def test_bad_values_give_one_line_naming_the_field(assignment, field, words):
+def test_bad_values_give_one_line_naming_the_option_and_the_field(assignment, field, words):
     sets = [assignment]
     if assignment.startswith("payload.xy"):
         sets.insert(0, "payload.mass_kg=20")
@@ -45,7 +45,7 @@ def test_bad_values_give_one_line_naming_the_field(assignment, field, words):
         load_config(sets=sets)
     message = str(info.value)
     assert "\n" not in message
-    assert message.startswith(field)
+    assert message.startswith(f"--set {assignment!r}: ") and field in message
     assert words in message
 
 

@@ -23,3 +23,21 @@ def test_an_error_keeps_the_old_file_and_removes_the_temporary(tmp_path):
             raise RuntimeError("interrupted")
     assert target.read_text() == "old"
     assert not temporary_name(target).exists()
+
+
+def test_a_failed_batch_removes_the_folders_it_made(tmp_path):
+    """Chapter 5's --out when its PNG cannot be written: no empty folder is left (nor its parents)."""
+    from amr_twin.recording.atomic_file import all_or_nothing
+
+    with pytest.raises(OSError):
+        with all_or_nothing():
+            write_text(tmp_path / "out" / "deeper" / "report.md", "text")
+            with replacing(tmp_path / "out" / "deeper" / "run1.png"):
+                raise OSError(27, "File too large")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "kept").mkdir()
+    with pytest.raises(KeyboardInterrupt):  # interrupted: the same
+        with all_or_nothing():
+            write_text(tmp_path / "kept" / "new" / "a.csv", "text")
+            raise KeyboardInterrupt
+    assert [p.name for p in tmp_path.iterdir()] == ["kept"] and list((tmp_path / "kept").iterdir()) == []

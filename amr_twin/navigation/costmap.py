@@ -1,0 +1,193 @@
+"""A layered costmap as nav2's: static layer, obstacle layer with marking and ray-traced clearing, inflation.
+
+Cells are those of the :class:`~amr_twin.navigation.static_map.StaticMap` (row 0 at the lowest
+y). Layers:
+
+- **static**: the map's occupied cells, and its unknown cells when ``unknown_is_lethal`` (nav2's
+  ``track_unknown_space`` with a planner that does not ``allow_unknown``).
+- **obstacle**: cells marked by the live scan. :meth:`Costmap.update_scan` first *clears* every
+  cell that a beam crossed (from the laser to half a cell before its end, up to
+  ``raytrace_range_m``; a beam without a return clears to that range), then *marks* the cell of
+  every return within ``obstacle_range_m``: a person who walked away is cleared by the first
+  beams that pass where they stood. A return within ``static_tolerance_m`` of a static obstacle
+  is not marked (the map already holds it; localisation error would otherwise paint a second,
+  flickering wall beside every wall).
+- **inflation**: :attr:`Costmap.dist_m`, each cell's distance to the nearest lethal cell of
+  either layer (Euclidean distance transform, capped at ``inflation_radius_m``), and its cost
+  as nav2's inflation layer gives it (:func:`inflation_cost`): 254 on a lethal cell, 253 within
+  the footprint's inscribed radius (a collision whatever the heading), then
+  ``252 exp(-cost_scaling (d - inscribed))`` out to ``inflation_radius_m``, 0 beyond.
+
+The static distances are computed once; a scan recomputes the distance transform only around
+the cells whose mark changed (a window grown by the inflation radius, where the capped distances
+are exact).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.ndimage import distance_transform_edt
+
+from amr_twin.navigation.static_map import StaticMap
+
+LETHAL, INSCRIBED, NO_INFORMATION = 254, 253, 255
+KEEP_CHANGES = 256
+
+
+def inflation_cost(dist_m: np.ndarray, inscribed_m: float, inflation_radius_m: float,
+                   cost_scaling_per_m: float) -> np.ndarray:
+    """nav2's inflation cost (uint8) of cells at ``dist_m`` from the nearest lethal cell."""
+    d = np.asarray(dist_m, np.float32)
+    cost = np.where(d <= inflation_radius_m, 252.0 * np.exp(-cost_scaling_per_m * (d - inscribed_m)), 0.0)
+    cost = np.where(d <= inscribed_m, INSCRIBED, np.minimum(cost, 252.0))
+    return np.where(d <= 0.0, LETHAL, cost).astype(np.uint8)
+
+
+class Costmap:
+    """Static, obstacle and inflation layers on the grid of ``static``.
+
+    Parameters
+    ----------
+    static : StaticMap
+    inscribed_radius_m : float
+        The footprint's inscribed radius (:class:`~amr_twin.navigation.footprint.Footprint`), m.
+    inflation_radius_m, cost_scaling_per_m : float
+        nav2's ``inflation_radius`` (m) and ``cost_scaling_factor`` (1/m).
+    unknown_is_lethal : bool
+        Unknown cells of the map are obstacles.
+    static_tolerance_m : float
+        Returns this close to a static obstacle are not marked, m.
+    """
+
+    def __init__(self, static: StaticMap, inscribed_radius_m: float, inflation_radius_m: float,
+                 cost_scaling_per_m: float, unknown_is_lethal: bool = True, static_tolerance_m: float = 0.1):
+        self.static = static
+        self.resolution_m = static.resolution_m
+        self.origin_xy_m = np.asarray(static.origin_xy_m, float)
+        self.shape = static.shape
+        self.inscribed_m = float(inscribed_radius_m)
+        self.inflation_radius_m = float(inflation_radius_m)
+        self.cost_scaling_per_m = float(cost_scaling_per_m)
+        self.static_lethal = static.occupied | (static.unknown if unknown_is_lethal else False)
+        self._pad = int(math.ceil(self.inflation_radius_m / self.resolution_m)) + 1
+        self.static_dist_m = self._distance(self.static_lethal)
+        near = self.static_dist_m <= static_tolerance_m + 1e-6
+        self._near_static = near
+        self.marked = np.zeros(self.shape, bool)
+        """The obstacle layer: cells marked by the scan."""
+        self.dist_m = self.static_dist_m.copy()
+        """Distance from each cell to the nearest lethal cell of either layer, capped, m (float32)."""
+        self._cap = np.float32(self.inflation_radius_m + self.resolution_m)
+        self.obstacle_dist_m = np.full(self.shape, self._cap, np.float32)
+        """Distance from each cell to the nearest cell of the obstacle layer alone, capped, m (float32)."""
+        self.updates = 0
+        self.version = 0
+        """Counts the changes of the layers; :attr:`changes` keeps the last ones' windows."""
+        self.changes: list[tuple[int, tuple[int, int, int, int] | None]] = []
+        """``(version, (r0, r1, c0, c1))`` of each change, rows r0..r1-1 and columns c0..c1-1 (None: all)."""
+
+    def _distance(self, lethal: np.ndarray) -> np.ndarray:
+        if not lethal.any():
+            return np.full(lethal.shape, self.inflation_radius_m + self.resolution_m, np.float32)
+        d = distance_transform_edt(~lethal) * self.resolution_m
+        return np.minimum(d, self.inflation_radius_m + self.resolution_m).astype(np.float32)
+
+    # -- geometry -----------------------------------------------------------------------
+    def cells(self, xy_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Row, column and on-the-grid flag of map-frame points (K, 2)."""
+        xy = np.asarray(xy_m, float).reshape(-1, 2)
+        col = np.floor((xy[:, 0] - self.origin_xy_m[0]) / self.resolution_m).astype(np.int64)
+        row = np.floor((xy[:, 1] - self.origin_xy_m[1]) / self.resolution_m).astype(np.int64)
+        inside = (row >= 0) & (row < self.shape[0]) & (col >= 0) & (col < self.shape[1])
+        return row, col, inside
+
+    def centres_xy_m(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Map-frame centres (K, 2) of cells, m."""
+        return self.origin_xy_m + (np.column_stack([cols, rows]) + 0.5) * self.resolution_m
+
+    def distance_at(self, xy_m: np.ndarray) -> np.ndarray:
+        """Distance to the nearest lethal cell at map-frame points (K,), m; 0 off the grid."""
+        row, col, inside = self.cells(xy_m)
+        out = np.zeros(len(row), np.float32)
+        out[inside] = self.dist_m[row[inside], col[inside]]
+        return out
+
+    def static_distance_at(self, xy_m: np.ndarray) -> np.ndarray:
+        """Distance to the nearest lethal cell of the static layer alone at points (K,), m; 0 off the grid."""
+        row, col, inside = self.cells(xy_m)
+        out = np.zeros(len(row), np.float32)
+        out[inside] = self.static_dist_m[row[inside], col[inside]]
+        return out
+
+    def obstacle_distance_at(self, xy_m: np.ndarray) -> np.ndarray:
+        """Distance to the nearest cell of the obstacle layer (what the map does not hold) at points (K,), m."""
+        row, col, inside = self.cells(xy_m)
+        out = np.full(len(row), self._cap, np.float32)
+        out[inside] = self.obstacle_dist_m[row[inside], col[inside]]
+        return out
+
+    def cost(self) -> np.ndarray:
+        """The combined cost of every cell, (rows, cols) uint8 (nav2's values)."""
+        return inflation_cost(self.dist_m, self.inscribed_m, self.inflation_radius_m, self.cost_scaling_per_m)
+
+    # -- obstacle layer ----------------------------------------------------------------
+    def update_scan(self, origins_xy_m: np.ndarray, ends_xy_m: np.ndarray, hit: np.ndarray,
+                    obstacle_range_m: float, raytrace_range_m: float) -> int:
+        """Clear along the beams, then mark their returns; return how many cells changed.
+
+        ``origins_xy_m`` (K, 2): the laser's position at each beam's instant; ``ends_xy_m`` (K, 2):
+        the beam's end (its return, or any point along it without one); ``hit`` (K,): a return.
+        """
+        o = np.asarray(origins_xy_m, float).reshape(-1, 2)
+        e = np.asarray(ends_xy_m, float).reshape(-1, 2)
+        hit = np.asarray(hit, bool)
+        v = e - o
+        length = np.hypot(v[:, 0], v[:, 1])
+        u = v / np.maximum(length, 1e-9)[:, None]
+        free_len = np.where(hit, np.minimum(length - 0.5 * self.resolution_m, raytrace_range_m), raytrace_range_m)
+        step = 0.75 * self.resolution_m
+        beams = np.flatnonzero(free_len > 0)
+        counts = np.floor(free_len[beams] / step).astype(np.int64) + 1
+        ray = np.repeat(beams, counts)
+        first = np.repeat(np.cumsum(counts) - counts, counts)
+        dist = (np.arange(len(ray)) - first) * step
+        before = self.marked.copy()
+        row, col, inside = self.cells(o[ray] + dist[:, None] * u[ray])
+        self.marked[row[inside], col[inside]] = False
+        near = hit & (length <= obstacle_range_m)
+        row, col, inside = self.cells(e[near])
+        row, col = row[inside], col[inside]
+        keep = ~self._near_static[row, col]
+        self.marked[row[keep], col[keep]] = True
+        changed = np.argwhere(before != self.marked)
+        if len(changed):
+            self._refresh(changed[:, 0].min(), changed[:, 0].max(), changed[:, 1].min(), changed[:, 1].max())
+        self.updates += 1
+        return int(len(changed))
+
+    def _refresh(self, r0: int, r1: int, c0: int, c1: int) -> None:
+        """Recompute the distances of the cells within the inflation radius of rows r0..r1, cols c0..c1."""
+        p = self._pad
+        R0, R1 = max(r0 - p, 0), min(r1 + p + 1, self.shape[0])
+        C0, C1 = max(c0 - p, 0), min(c1 + p + 1, self.shape[1])
+        S0, S1 = max(R0 - p, 0), min(R1 + p, self.shape[0])  # the window's own surroundings count too
+        T0, T1 = max(C0 - p, 0), min(C1 + p, self.shape[1])
+        marked = self.marked[S0:S1, T0:T1]
+        core = np.s_[R0 - S0:R1 - S0, C0 - T0:C1 - T0]
+        self.dist_m[R0:R1, C0:C1] = self._distance(self.static_lethal[S0:S1, T0:T1] | marked)[core]
+        self.obstacle_dist_m[R0:R1, C0:C1] = self._distance(marked)[core]
+        self._changed((R0, R1, C0, C1))
+
+    def _changed(self, window) -> None:
+        self.version += 1
+        self.changes.append((self.version, window))
+        del self.changes[:-KEEP_CHANGES]
+
+    def clear(self) -> None:
+        """Forget the obstacle layer (nav2's ClearEntireCostmap)."""
+        self.marked[:] = False
+        self.dist_m[:] = self.static_dist_m
+        self.obstacle_dist_m[:] = self._cap
+        self._changed(None)

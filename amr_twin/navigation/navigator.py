@@ -1,0 +1,240 @@
+"""The navigator node: goals in, ``cmd_vel`` out, on the twin's bus and clock (nav2's bt_navigator).
+
+It subscribes to ``scan`` and to the localisation's odometry topic
+(:class:`~amr_twin.navigation.localisation.PoseSource`) and publishes ``cmd_vel`` (the diff-drive
+node turns it into wheel commands for the firmware), ``plan`` (``nav_msgs/Path``) and, for the
+recordings, the costmap and the footprint (:mod:`amr_twin.navigation.outputs`). Its timers run on
+the virtual clock; it reads nothing of the twin but bus messages. nav2's default behaviour tree,
+reconstructed from its description (navigate_to_pose_w_replanning_and_recovery):
+
+- every scan updates the costmap's obstacle layer;
+- the plan is computed again at ``planner_hz`` (1 Hz) from the present pose;
+- every ``1 / controller_hz`` s the controller follows the plan, after a rotation in place to the
+  path's heading when it is more than ``rotate_to_path_rad`` off (nav2's RotationShimController);
+  within ``xy_tolerance_m`` of the goal the robot turns in place to the goal's yaw; the
+  collision monitor filters every command;
+- a failure (no plan, the controller blocked for ``blocked_s``, no progress) starts the next
+  recovery of the round robin (clear costmaps, spin, wait, back up); after ``max_failures`` the
+  goal is aborted with a one-line reason (:attr:`GoalOutcome.reason`), and so are the goals after it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from amr_twin.navigation.collision_monitor import CollisionMonitor
+from amr_twin.navigation.kinematics import Limits, rotation_rate, wrap
+from amr_twin.navigation.path_handler import PathHandler
+from amr_twin.navigation.planner import GlobalPlanner
+from amr_twin.navigation.progress import ProgressChecker, at_goal
+from amr_twin.navigation.recoveries import ROUND_ROBIN
+from amr_twin.ros.geometry_messages import Twist, Vector3
+
+UNMAPPED_M = 0.3
+"""A scan return farther than this from the static map is unmapped (a person, a pallet jack), m."""
+
+
+@dataclass(frozen=True)
+class NavParams:
+    """Rates, tolerances and ranges of the navigator (``navigation:`` section of the parameter file)."""
+
+    controller_hz: float = 20.0
+    planner_hz: float = 1.0
+    xy_tolerance_m: float = 0.25
+    yaw_tolerance_rad: float = 0.25
+    rotate_to_path_rad: float = math.radians(45.0)
+    obstacle_range_m: float = 4.0
+    raytrace_range_m: float = 5.0
+    blocked_s: float = 1.5
+    max_failures: int = 6
+    laser_xy_yaw: tuple = (0.3, 0.0, 0.0)
+
+
+@dataclass
+class GoalOutcome:
+    """What became of one goal: ``succeeded`` or ``aborted`` (with the reason), times in s."""
+
+    goal: tuple
+    status: str = "pending"
+    reason: str = ""
+    t_start_s: float = math.nan
+    t_end_s: float = math.nan
+    recoveries: list = field(default_factory=list)   # (t_s, name)
+    plan_cpu_s: list = field(default_factory=list)
+    first_plan_length_m: float = math.nan
+
+
+class Navigator:
+    """Drive to each goal ``(x_m, y_m, yaw_rad or None)`` in turn (module docstring), from ``start_s``."""
+
+    def __init__(self, bus, clock, pose_source, costmap, planner: GlobalPlanner, controller, footprint,
+                 limits: Limits, goals, params: NavParams = NavParams(), outputs=None, start_s: float = 0.0):
+        self.bus, self.clock, self.pose_source = bus, clock, pose_source
+        self.costmap, self.planner, self.controller = costmap, planner, controller
+        self.footprint, self.limits, self.p = footprint, limits, params
+        self.dt_s = 1.0 / params.controller_hz
+        self.monitor = CollisionMonitor(footprint, limits.max_v_m_s)
+        self.progress = ProgressChecker()
+        self.outcomes = [GoalOutcome(tuple(g)) for g in goals]
+        self.controller_cpu_s: list[float] = []
+        self.commands: list[tuple] = []    # (t_s, v, w) published
+        self.outputs = outputs
+        self._goal_i, self._path, self._plan = 0, None, None
+        self._next_plan_s = 0.0
+        self._recovery, self._failures, self._rr = None, 0, 0
+        self._blocked_since: float | None = None
+        self._rotating_to_goal = False
+        self._scan_points = np.zeros((0, 2))
+        self._unmapped = np.zeros(0, bool)
+        self._cmd = bus.advertise("cmd_vel", Twist)
+        bus.subscribe("scan", self._on_scan)
+        first = max(clock.now_us, int(round(start_s * 1e6)))
+        self._timer = clock.schedule_every(first, int(round(self.dt_s * 1e6)), self._on_timer)
+
+    # -- state ----------------------------------------------------------------------------
+    @property
+    def done(self) -> bool:
+        """Every goal has an outcome."""
+        return self._goal_i >= len(self.outcomes)
+
+    @property
+    def plan(self):
+        return self._plan
+
+    def _on_scan(self, scan) -> None:
+        if not self.pose_source.ready:
+            return
+        origin, end, hit = self.pose_source.scan_in_map(scan, self.p.laser_xy_yaw, self.p.raytrace_range_m)
+        self.costmap.update_scan(origin, end, hit, self.p.obstacle_range_m, self.p.raytrace_range_m)
+        self._scan_points = end[hit]
+        self._unmapped = self.costmap.static_distance_at(self._scan_points) > UNMAPPED_M
+
+    def _publish(self, v: float, w: float) -> None:
+        pose = self.pose_source.pose() if self.pose_source.ready else None
+        if pose is not None and len(self._scan_points) and (v or w):
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            d = self._scan_points - pose[:2]
+            v, w = self.monitor.filter(v, w, np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]),
+                                       self._unmapped)
+        self.commands.append((self.clock.now_s, v, w))
+        self._cmd.publish(Twist(Vector3(float(v), 0.0, 0.0), Vector3(0.0, 0.0, float(w))))
+
+    def _finish(self, status: str, reason: str = "") -> None:
+        out = self.outcomes[self._goal_i]
+        out.status, out.reason, out.t_end_s = status, reason, self.clock.now_s
+        self._goal_i += 1
+        self._path = self._plan = self._recovery = None
+        self._failures, self._blocked_since, self._rotating_to_goal = 0, None, False
+        self._next_plan_s = self.clock.now_s
+        self.progress.reset()
+        if status == "aborted":  # the goals after it are not attempted
+            for later in self.outcomes[self._goal_i:]:
+                later.status, later.reason = "aborted", f"not attempted: an earlier goal failed ({reason})"
+            self._goal_i = len(self.outcomes)
+
+    def _fail(self, why: str) -> None:
+        """A failure of planning or control: the next recovery, or the goal aborted."""
+        self._failures += 1
+        out = self.outcomes[self._goal_i]
+        if self._failures > self.p.max_failures:
+            g = out.goal
+            self._finish("aborted", f"goal ({g[0]:.2f}, {g[1]:.2f}) not reached: {why} "
+                                    f"(after {self.p.max_failures} recoveries)")
+            return
+        kind = ROUND_ROBIN[self._rr % len(ROUND_ROBIN)]
+        self._rr += 1
+        self._recovery = kind(self.costmap, self.footprint, self.limits, self.dt_s)
+        self._recovery.start(self.clock.now_s, self.pose_source.pose())
+        out.recoveries.append((self.clock.now_s, kind.name, why))
+        self._blocked_since = None
+        self.progress.reset()
+        if hasattr(self.controller, "reset"):
+            self.controller.reset()
+
+    def _replan(self, pose) -> bool:
+        out = self.outcomes[self._goal_i]
+        g = out.goal
+        plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2])
+        if plan is None:  # nav2: clear the global costmap and try once more before failing
+            self.costmap.clear()
+            plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2])
+        self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
+        if plan is None:
+            return False
+        out.plan_cpu_s.append(plan.cpu_s)
+        if math.isnan(out.first_plan_length_m):
+            out.first_plan_length_m = plan.length_m
+        self._plan, self._path = plan, PathHandler(plan.poses)
+        if self.outputs is not None:
+            self.outputs.plan(plan)
+        return True
+
+    # -- the control cycle ----------------------------------------------------------------------
+    def _on_timer(self) -> None:
+        if self.done or not self.pose_source.ready:
+            if self.done:
+                self._timer.cancel()
+            self._publish(0.0, 0.0)
+            return
+        now, pose, vel = self.clock.now_s, self.pose_source.pose(), self._velocity()
+        out = self.outcomes[self._goal_i]
+        if math.isnan(out.t_start_s):
+            out.t_start_s = now
+        v, w = self._cycle(now, pose, vel, out)
+        if not self.done or (v, w) == (0.0, 0.0):
+            self._publish(v, w)
+        if self.outputs is not None:
+            self.outputs.cycle(now, pose, self.costmap)
+
+    def _velocity(self) -> tuple[float, float]:
+        """The last command (what the drive is ramping to): a cleaner velocity than the estimate's."""
+        return (self.commands[-1][1], self.commands[-1][2]) if self.commands else (0.0, 0.0)
+
+    def _cycle(self, now: float, pose, vel, out: GoalOutcome) -> tuple[float, float]:
+        lim, g = self.limits, out.goal
+        if self._recovery is not None:
+            step = self._recovery.step(now, pose, vel)
+            if not step.done:
+                return step.v_m_s, step.w_rad_s
+            self._recovery = None
+            self._next_plan_s = now  # replan at once
+            return lim.ramp(0.0, 0.0, *vel, self.dt_s)
+        if at_goal(pose[0], pose[1], g, self.p.xy_tolerance_m) or self._rotating_to_goal:
+            self._rotating_to_goal = True
+            err = 0.0 if len(g) < 3 or g[2] is None else float(wrap(g[2] - pose[2]))
+            if abs(err) <= self.p.yaw_tolerance_rad and abs(vel[0]) < 0.05 and abs(vel[1]) < 0.1:
+                self._finish("succeeded")
+                return 0.0, 0.0
+            w = 0.0 if abs(err) <= self.p.yaw_tolerance_rad * 0.5 else rotation_rate(err, lim, vel[1], self.dt_s)
+            return lim.ramp(0.0, w, *vel, self.dt_s)
+        if self._path is None or now >= self._next_plan_s:
+            if not self._replan(pose):
+                self._fail(self.planner.last_error or "no plan")
+                return lim.ramp(0.0, 0.0, *vel, self.dt_s)
+        path = self._path
+        path.update(pose[0], pose[1])
+        if not self.progress.check(now, pose[0], pose[1]):
+            self._fail("failed to make progress")
+            return lim.ramp(0.0, 0.0, *vel, self.dt_s)
+        ahead = path.ahead(0.6)[-1]
+        heading = math.atan2(ahead[1] - pose[1], ahead[0] - pose[0])
+        err = float(wrap(heading - pose[2]))
+        if path.remaining_m > 0.3 and (abs(err) > self.p.rotate_to_path_rad or
+                                       (abs(err) > 0.15 and abs(vel[0]) < 0.02 and vel[1] != 0.0)):
+            if hasattr(self.controller, "reset"):
+                self.controller.reset()
+            return lim.ramp(0.0, rotation_rate(err, lim, vel[1], self.dt_s), *vel, self.dt_s)
+        t0 = time.process_time()
+        cmd = self.controller.command(pose, vel, path)
+        self.controller_cpu_s.append(time.process_time() - t0)
+        if cmd.blocked:
+            self._blocked_since = now if self._blocked_since is None else self._blocked_since
+            if now - self._blocked_since >= self.p.blocked_s:
+                self._fail("the way ahead is blocked")
+        else:
+            self._blocked_since = None
+        return cmd.v_m_s, cmd.w_rad_s

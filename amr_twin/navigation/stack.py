@@ -1,0 +1,194 @@
+"""The navigation stack on a twin: its map, its localisation, the navigator, driven to the end.
+
+:func:`true_map` and :func:`load_static_map` give the static layer's map (the world's true map, or
+a map_server YAML: a map the fusion experiment saved, an imported ROS map). :func:`attach` puts
+on a running twin's bus what a ROS graph of the robot would run: the cmd_vel diff-drive node, the
+localisation the user picks (ground truth, the EKF of odometry + gyro + UWB with its UWB tag, or
+the wheel odometry alone) and the :class:`~amr_twin.navigation.navigator.Navigator`, which starts
+after ``REST_S`` standing still (the EKF's gyro calibration).
+:func:`navigate` runs a twin through a list of goals and returns a :class:`NavigationRun`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from amr_twin.navigation.costmap import Costmap
+from amr_twin.navigation.footprint import Footprint, robot_footprint
+from amr_twin.navigation.kinematics import Limits
+from amr_twin.navigation.localisation import SOURCES, PoseSource
+from amr_twin.navigation.navigator import GoalOutcome, Navigator, NavParams
+from amr_twin.navigation.outputs import NavOutputs
+from amr_twin.navigation.planner import GlobalPlanner
+from amr_twin.navigation.static_map import StaticMap, world_map, yaml_map
+
+CONTROLLERS = ("mppi", "rpp")
+REST_S = 2.0
+"""Standing still before the first goal: the gyro's rest calibration of the EKF (ekf.imu_rest_calibration_s)."""
+RESOLUTION_M = 0.05
+INFLATION_RADIUS_M = 1.0
+COST_SCALING_PER_M = 3.0
+PEOPLE_PAD_M = 0.35
+"""Clearance kept from what the map does not hold (the collision monitor's people pad), m."""
+
+
+@dataclass(frozen=True)
+class NavigationOptions:
+    """Goals ``(x_m, y_m, yaw_rad or None)``, the map (None: the world's true map), localisation, controller."""
+
+    goals: tuple
+    map_yaml: str | None = None
+    localisation: str = "ekf"
+    controller: str = "mppi"
+    seed: int = 0
+    timeout_s: float | None = None   # None: 60 s + 4 s per metre of the first plans
+
+
+@dataclass
+class NavigationRun:
+    """What :func:`navigate` returns: each goal's outcome, the true trajectory, the commands, the costs."""
+
+    outcomes: list[GoalOutcome]
+    t_s: np.ndarray                   # (n,) the recorder's 100 Hz grid
+    pose_true: np.ndarray             # (n, 3) x_m, y_m, yaw_rad
+    commands: np.ndarray              # (k, 3) t_s, v_m_s, w_rad_s published on cmd_vel
+    controller_cpu_s: np.ndarray
+    collisions: list = field(default_factory=list)
+    monitor_actions: dict = field(default_factory=dict)
+    sim_s: float = 0.0
+    wall_s: float = 0.0
+    timed_out: bool = False
+    actor_poses: list = field(default_factory=list)  # (t_s, [(x_m, y_m, yaw_rad), ...]) of actors/poses, 10 Hz
+
+
+def robot_top_m(cfg) -> float:
+    """Height of the robot's highest part (the LiDAR's top), m: what stands lower than this can be hit."""
+    lidar = cfg.components.lidar
+    return float(lidar.pos_m[2] + lidar.size_m[2] / 2)
+
+
+def true_map(cfg, world: str) -> StaticMap:
+    """The world's true map: every world geom from the floor to the robot's top (:func:`world_map`)."""
+    import mujoco
+
+    from amr_twin.model.worlds import world_path
+
+    path = world_path(world)
+    if path.suffix.lower() in (".yaml", ".yml"):
+        return yaml_map(path)
+    model = mujoco.MjModel.from_xml_path(str(path))
+    return world_map(model, RESOLUTION_M, 0.005, robot_top_m(cfg), source=f"world {world}")
+
+
+def load_static_map(cfg, world: str, map_yaml: str | None) -> StaticMap:
+    """The static layer's map: ``map_yaml`` (map_server) when given, else the world's true map."""
+    return yaml_map(Path(map_yaml)) if map_yaml else true_map(cfg, world)
+
+
+def make_costmap(static: StaticMap, footprint: Footprint) -> Costmap:
+    """The costmap of a map for the robot's footprint; unknown cells are free to plan through (nav2's
+    ``allow_unknown``, its default): a map built from scans leaves cells unknown along the rack faces."""
+    return Costmap(static, footprint.inscribed_radius_m, INFLATION_RADIUS_M, COST_SCALING_PER_M,
+                   unknown_is_lethal=False)
+
+
+def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bool = True,
+           drive: bool = True) -> Navigator:
+    """Put the diff-drive node (unless ``drive`` is False: a live session brings its own), the localisation
+    and the navigator on ``twin``'s bus (module docstring); ``publish``: the plan, map, costmap and footprint
+    messages (:mod:`amr_twin.navigation.outputs`) too."""
+    from amr_twin.controllers.diff_drive import DiffDriveNode
+    from amr_twin.navigation.mppi import Mppi
+    from amr_twin.navigation.rpp import RegulatedPurePursuit
+
+    if options.localisation not in SOURCES:
+        raise ValueError(f"localisation: {options.localisation!r} is not one of {', '.join(SOURCES)}")
+    if options.controller not in CONTROLLERS:
+        raise ValueError(f"controller: {options.controller!r} is not one of {', '.join(CONTROLLERS)}")
+    if drive:
+        DiffDriveNode(twin.bus, twin.clock, twin.client)
+    start = twin.start_xy_yaw
+    frame = (0.0, 0.0, 0.0)
+    if options.localisation == "truth":
+        from amr_twin.sensors.ground_truth import GroundTruth
+        twin.ground_truth = GroundTruth(twin.physics, twin.clock, twin.bus)
+    elif options.localisation == "ekf":
+        from amr_twin.controllers.ekf import EkfNode
+        from amr_twin.model.worlds import uwb_anchors_xy_m
+        from amr_twin.sensors.uwb import UwbSensor
+
+        uwb = cfg.uwb
+        anchors = uwb_anchors_xy_m(twin.options.world)
+        if anchors is not None:
+            uwb = uwb.model_copy(update={"anchors_x_m": tuple(anchors[:, 0]), "anchors_y_m": tuple(anchors[:, 1])})
+        twin.uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, uwb, seed=[twin.options.seed, 3])
+        twin.ekf = EkfNode(cfg.ekf, use_imu=True, use_uwb=True, uwb=uwb, initial_pose=start, bus=twin.bus)
+    else:
+        frame = start
+    pose_source = PoseSource(twin.bus, SOURCES[options.localisation], frame)
+    footprint = robot_footprint(cfg)
+    costmap = make_costmap(static, footprint)
+    limits, params = Limits(), NavParams(laser_xy_yaw=(float(cfg.components.lidar.pos_m[0]),
+                                                       float(cfg.components.lidar.pos_m[1]), 0.0))
+    dt = 1.0 / params.controller_hz
+    if options.controller == "mppi":
+        controller = Mppi(costmap, footprint, limits, dt, seed=options.seed)
+    else:
+        controller = RegulatedPurePursuit(costmap, footprint, limits, dt)
+    planner = GlobalPlanner(costmap, turn_room_m=footprint.circumscribed_radius_m, unmapped_pad_m=PEOPLE_PAD_M)
+    outputs = NavOutputs(twin.bus, twin.clock, costmap, footprint) if publish else None
+    return Navigator(twin.bus, twin.clock, pose_source, costmap, planner, controller, footprint,
+                     limits, options.goals, params, outputs=outputs, start_s=twin.t_s + REST_S)
+
+
+def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | None = None,
+             on_twin=None, progress=None, publish: bool = False, drive: bool = True) -> NavigationRun:
+    """Build the twin (``twin_options``, sensors on), attach the stack, run until every goal has an outcome.
+
+    ``on_twin(twin)`` is called once the twin is built (a recording's capture attaches there);
+    ``progress(t_s)`` every simulated half second; ``publish``, ``drive``: as :func:`attach`. Raises nothing
+    for a failed goal: its outcome says it.
+    """
+    from dataclasses import replace
+
+    from amr_twin.sim.loop import Twin
+
+    wall0 = time.perf_counter()
+    static = static if static is not None else load_static_map(cfg, twin_options.world, options.map_yaml)
+    twin = Twin(cfg, replace(twin_options, sensors=True))
+    if on_twin is not None:
+        on_twin(twin)
+    nav = attach(twin, cfg, static, options, publish=publish, drive=drive)
+    twin.navigator = nav
+    actor_poses = []
+    twin.bus.add_tap(lambda _topic, msg, t_us: actor_poses.append(
+        (t_us * 1e-6, [(p.position.x, p.position.y, p.orientation.yaw_rad()) for p in msg.poses])), ("actors/poses",))
+    twin.advance(REST_S)
+    timeout = options.timeout_s
+    while not nav.done and not twin.halted:
+        if timeout is None:
+            lengths = [o.first_plan_length_m for o in nav.outcomes if not math.isnan(o.first_plan_length_m)]
+            limit = REST_S + 60.0 + 4.0 * sum(lengths) if lengths else REST_S + 60.0
+        else:
+            limit = REST_S + timeout
+        if twin.t_s >= limit:
+            break
+        twin.advance(0.5)
+        if progress is not None:
+            progress(twin.t_s)
+    timed_out = not nav.done and not twin.halted
+    if timed_out:
+        for out in nav.outcomes:
+            if out.status == "pending":
+                out.status, out.reason = "aborted", f"timed out at t = {twin.t_s:.1f} s"
+    twin.advance(0.5)  # the stop settles
+    series = twin.recorder.series()
+    cmds = np.array(nav.commands, float).reshape(-1, 3)
+    return NavigationRun(nav.outcomes, series.t_s, series.pose, cmds, np.array(nav.controller_cpu_s),
+                         twin.collisions.as_dicts(), dict(nav.monitor.actions), twin.t_s,
+                         time.perf_counter() - wall0, timed_out, actor_poses)

@@ -1,0 +1,204 @@
+"""``amr-twin experiment navigation``: seeded episodes of start/goal pairs in the warehouse, measured as nav2 is.
+
+Each episode (:func:`episodes`) draws, from its own seed, a start and a goal pose 10 to 50 m apart
+(straight line) in the world's free space (at least ``FREE_CLEARANCE_M`` from any obstacle, both
+reachable), and a scenario: ``clear``; ``person``, a person crossing an aisle on the way (``people
+= "walking"``: an :class:`~amr_twin.model.actors.Actor` of amr_twin/model/actors.py walking across
+the aisle at 1.3 m/s, setting off when the robot should be about 3 m away, halting while the
+robot is within 0.6 m ahead of them (people give way), then standing at the
+aisle's side) or standing in it off its middle (``"static"``: a 0.45 x 0.3 x 1.7 m box); or
+``pallet_jack``, a loaded pallet jack (1.6 x 0.75 x 1.3 m, the load hides the forks, so the scan
+sees its whole footprint) in an aisle on the way, anywhere across it (it may leave room to pass,
+or block the aisle). Neither is on any map.
+
+Each episode runs on the world's true map and on the SLAM map (a map built from the LiDAR's
+scans, :mod:`.navigation_map`), the same start, goal, obstacle and seed, with the localisation and
+controller chosen (EKF of odometry, gyro and UWB, and MPPI, by default). :func:`run_episode` is the
+worker (picklable items, :func:`amr_twin.experiments.executor.run_all`); the metrics are in
+:mod:`.navigation_metrics`, the report and plots in :mod:`.navigation_report`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from amr_twin.model.worlds import Obstacle
+
+SCENARIOS = ("clear", "person", "pallet_jack")
+SHARES = (0.5, 0.25, 0.25)
+"""The share of episodes of each scenario."""
+MIN_APART_M, MAX_APART_M = 10.0, 50.0
+FREE_CLEARANCE_M = 0.7
+PERSON_SIZE_M = (0.45, 0.30, 1.70)
+JACK_SIZE_M = (1.60, 0.75, 1.30)
+MAPS = ("true", "slam")
+
+
+@dataclass(frozen=True)
+class Episode:
+    """One start/goal pair: poses ``(x_m, y_m, yaw_rad)``, its scenario, its unmapped obstacle (or None)."""
+
+    index: int
+    seed: int
+    start: tuple
+    goal: tuple
+    scenario: str
+    obstacle: Obstacle | None
+    actor: object = None  # amr_twin.model.actors.Actor of a walking person
+
+
+def _free_cells(costmap) -> np.ndarray:
+    rows, cols = np.nonzero(costmap.static_dist_m >= FREE_CLEARANCE_M)
+    return costmap.centres_xy_m(rows, cols)
+
+
+ROBOT_SPEED_M_S = 0.55
+"""The robot's mean speed on its way (from the episodes' times), to time a walking person's crossing."""
+CROSS_HALF_M = 0.7
+STOP_WITHIN_M = 0.6
+"""A walking person halts while the robot is this close ahead of them (people give way), m."""
+
+
+def _place(rng, scenario: str, plan, costmap, start, goal, people: str = "static"):
+    """An obstacle (or a walking person: an Actor) in an aisle on the planned way, at least 3 m from start
+    and goal; None if no room."""
+    xy = plan.xy_m
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    d = costmap.static_distance_at(xy)
+    ok = (s > 3.0) & (s < s[-1] - 3.0) & (d >= 0.9) & (d <= 1.1)  # the middle of a 2 m aisle
+    ok &= (np.hypot(*(xy - np.asarray(start[:2])).T) > 3.0) & (np.hypot(*(xy - np.asarray(goal[:2])).T) > 3.0)
+    if not ok.any():
+        return None
+    i = int(rng.choice(np.flatnonzero(ok)))
+    yaw = float(plan.poses[i, 2])
+    if scenario == "person" and people == "walking":
+        from amr_twin.model.actors import Actor
+        from amr_twin.navigation.stack import REST_S
+
+        side = float(rng.choice([-1.0, 1.0]))
+        n = np.array([-math.sin(yaw), math.cos(yaw)]) * side
+        a, b = xy[i] - CROSS_HALF_M * n, xy[i] + CROSS_HALF_M * n
+        start_s = max(0.0, REST_S + (s[i] - 3.0) / ROBOT_SPEED_M_S)
+        return Actor("person", ((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))), 1.3, start_s=start_s,
+                     stop_within_m=STOP_WITHIN_M)
+    if scenario == "person":
+        size, offset = PERSON_SIZE_M, float(rng.choice([-1.0, 1.0]) * rng.uniform(0.35, 0.6))
+    else:
+        size, offset = JACK_SIZE_M, float(rng.uniform(-0.55, 0.55))
+    x = xy[i, 0] - math.sin(yaw) * offset
+    y = xy[i, 1] + math.cos(yaw) * offset
+    return Obstacle(scenario, float(x), float(y), size, yaw)
+
+
+def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "static") -> list[Episode]:
+    """``n`` episodes, episode ``i`` drawn from ``default_rng([seed, i])`` (module docstring)."""
+    from amr_twin.navigation.footprint import robot_footprint
+    from amr_twin.navigation.planner import GlobalPlanner
+    from amr_twin.navigation.stack import make_costmap, true_map
+
+    costmap = make_costmap(true_map(cfg, world), robot_footprint(cfg))
+    planner = GlobalPlanner(costmap)
+    free = _free_cells(costmap)
+    out = []
+    for i in range(n):
+        rng = np.random.default_rng([seed, i])
+        scenario = str(rng.choice(SCENARIOS, p=SHARES))
+        for _attempt in range(200):
+            a, b = free[rng.integers(len(free))], free[rng.integers(len(free))]
+            if not MIN_APART_M <= math.hypot(*(b - a)) <= MAX_APART_M:
+                continue
+            plan = planner.plan(a, b)
+            if plan is None:
+                continue
+            start = (float(a[0]), float(a[1]), float(rng.uniform(-math.pi, math.pi)))
+            goal = (float(b[0]), float(b[1]), float(rng.uniform(-math.pi, math.pi)))
+            placed = None if scenario == "clear" else _place(rng, scenario, plan, costmap, start, goal, people)
+            if scenario != "clear" and placed is None:
+                continue
+            actor = placed if placed is not None and not isinstance(placed, Obstacle) else None
+            out.append(Episode(i, seed, start, goal, scenario, None if actor is not None else placed, actor))
+            break
+        else:
+            raise ValueError(f"episode {i}: no start/goal pair {MIN_APART_M:g}-{MAX_APART_M:g} m apart found in "
+                             f"world {world}")
+    return out
+
+
+@dataclass(frozen=True)
+class EpisodeRun:
+    """A worker's item: an episode on one map, with what it needs to run."""
+
+    cfg: object
+    world: str
+    episode: Episode
+    map_kind: str
+    slam_yaml: str | None
+    localisation: str = "ekf"
+    controller: str = "mppi"
+    firmware: str = "improved"
+
+
+def run_episode(item: EpisodeRun) -> dict:
+    """Drive one episode and measure it (:func:`amr_twin.experiments.navigation_metrics.measure`)."""
+    from amr_twin.experiments.navigation_metrics import measure
+    from amr_twin.navigation.stack import NavigationOptions, navigate
+    from amr_twin.sim.loop import TwinOptions
+
+    ep = item.episode
+    obstacles = () if ep.obstacle is None else (ep.obstacle,)
+    twin_options = TwinOptions(firmware=item.firmware, world=item.world, seed=ep.seed * 100_003 + ep.index,
+                               start_xy_yaw=ep.start, visuals=False, obstacles=obstacles,
+                               actors=() if ep.actor is None else (ep.actor,))
+    options = NavigationOptions(goals=(ep.goal,), map_yaml=item.slam_yaml if item.map_kind == "slam" else None,
+                                localisation=item.localisation, controller=item.controller,
+                                seed=ep.seed * 100_003 + ep.index)
+    run = navigate(item.cfg, twin_options, options)
+    return measure(item.cfg, item.world, ep, item.map_kind, run)
+
+
+def _timed_episode(item: EpisodeRun) -> dict:
+    import time
+
+    t0 = time.process_time()
+    row = run_episode(item)
+    row["cpu_s"] = time.process_time() - t0
+    return row
+
+
+def run(cfg, world: str, n: int, *, seed: int = 0, maps: tuple = MAPS, slam_yaml: str | None = None,
+        slam_stem=None, localisation: str = "ekf", controller: str = "mppi", firmware: str = "improved",
+        jobs: int = 1, client=None, progress: bool = True, people: str = "static") -> dict:
+    """Every episode on every map (building the SLAM map at ``slam_stem`` first when ``slam_yaml`` is None)."""
+    import time
+
+    from amr_twin.experiments.executor import run_all
+    from amr_twin.experiments.navigation_metrics import summary
+    from amr_twin.experiments.navigation_map import build_slam_map
+    from amr_twin.navigation.stack import load_static_map
+
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    slam = None
+    if "slam" in maps:
+        if slam_yaml is None:
+            slam = build_slam_map(cfg, world, slam_stem, seed=seed, progress=progress)
+            slam_yaml = slam["yaml"]
+        else:
+            slam = {"yaml": str(slam_yaml), "route": "given (--slam-map)"}
+    eps = episodes(cfg, world, n, seed, people)
+    items = [EpisodeRun(cfg, world, ep, kind, slam_yaml, localisation, controller, firmware)
+             for ep in eps for kind in maps]
+    rows = [row for _item, row in run_all(_timed_episode, items, jobs=jobs, client=client,
+                                          description="navigation episodes", progress=progress)]
+    rows.sort(key=lambda r: (r["index"], MAPS.index(r["map"])))
+    static_maps = {kind: load_static_map(cfg, world, slam_yaml if kind == "slam" else None) for kind in maps}
+    return {"world": world, "episodes": n, "seed": seed, "people": people, "maps": list(maps),
+            "localisation": localisation,
+            "controller": controller, "firmware": firmware, "slam_map": slam,
+            "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
+                       "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
+            "summary": summary(rows), "rows": rows, "static_maps": static_maps, "jobs": jobs,
+            "wall_s": time.perf_counter() - wall0,
+            "cpu_s": time.process_time() - cpu0 + sum(r["cpu_s"] for r in rows) * (jobs > 1 or client is not None)}

@@ -1,0 +1,112 @@
+"""``amr-twin run goto`` and navigation missions: refusals before the build, outcomes, recordings."""
+
+import json
+import math
+import shutil
+import subprocess
+
+import pytest
+from typer.testing import CliRunner
+
+from amr_twin.cli.main import app
+
+RUN = CliRunner()
+
+
+@pytest.mark.parametrize("args, text", [
+    (["--goal", "-20,-6.4", "--world", "aisles"], "goal -20,-6.4: "),        # inside a rack row: cut off
+    (["--goal", "-3,3.0"], "lies inside an obstacle of the map"),          # on the warehouse north rack's beam
+    (["--goal", "-3,3.25"], "closer than the robot's half width"),
+    (["--goal", "100,3", "--world", "aisles"], "lies outside the map"),
+    (["--goal", "3"], "--goal '3': expected X_M,Y_M"),
+    (["--goal", "1,nan"], "each value must be finite"),
+    (["--goal", "1,1", "--controller", "dwb"], "--controller 'dwb'"),
+    (["--goal", "1,1", "--localisation", "amcl"], "--localisation 'amcl'"),
+    (["--goal", "1,1", "--map", "nowhere.yaml"], "--map nowhere.yaml: no such file"),
+])
+def test_a_goal_that_cannot_be_reached_is_refused_in_one_line_before_the_run(args, text, monkeypatch):
+    import amr_twin.navigation.stack as stack
+
+    monkeypatch.setattr(stack, "navigate", lambda *a, **k: pytest.fail("the run started"))
+    res = RUN.invoke(app, ["run", "goto", *args])
+    assert res.exit_code == 2, res.output
+    assert text in res.output and len(res.output.strip().splitlines()) == 1, res.output
+
+
+def test_a_goal_inside_a_rack_is_named_as_cut_off(monkeypatch):
+    res = RUN.invoke(app, ["run", "goto", "--goal", "-20,-6.4", "--world", "aisles"])
+    assert "cut off" in res.output  # the rack's inside is enclosed by its beams at the robot's height
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    out = tmp_path_factory.mktemp("goto")
+    res = RUN.invoke(app, ["run", "goto", "--goal", "-6,0,180", "--start=-9,0,0", "--localisation", "truth",
+                           "--controller", "rpp", "--json", "--mcap", str(out / "g.mcap"), "--record",
+                           str(out / "g.rrd")])
+    return res, out
+
+
+def test_goto_reaches_the_goal_and_reports_it(recorded):
+    res, _ = recorded
+    assert res.exit_code == 0, res.output
+    info = json.loads(res.output)
+    goal = info["goals"][0]
+    assert goal["status"] == "succeeded" and info["collisions"] == []
+    x, y, yaw = info["final_pose"]
+    assert math.hypot(x + 6.0, y) <= 0.25 and abs(math.remainder(yaw - math.pi, 2 * math.pi)) <= 0.25
+
+
+def test_the_mcap_holds_the_plan_map_costmap_and_footprint_as_ros_reads_them(recorded):
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    _, out = recorded
+    last, counts = {}, {}
+    with open(out / "g.mcap", "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for schema, channel, _msg, decoded in reader.iter_decoded_messages(
+                topics=["/plan", "/map", "/local_costmap/costmap", "/local_costmap/published_footprint"]):
+            last[channel.topic] = (schema.name, decoded)
+            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+    assert {t: s for t, (s, _) in last.items()} == {
+        "/plan": "nav_msgs/msg/Path", "/map": "nav_msgs/msg/OccupancyGrid",
+        "/local_costmap/costmap": "nav_msgs/msg/OccupancyGrid",
+        "/local_costmap/published_footprint": "geometry_msgs/msg/PolygonStamped"}
+    plan = last["/plan"][1]
+    assert plan.header.frame_id == "map" and abs(plan.poses[-1].pose.position.x + 6.0) < 1e-9
+    grid = last["/map"][1]
+    assert len(grid.data) == grid.info.width * grid.info.height and max(grid.data) == 100 and min(grid.data) == 0
+    assert counts["/map"] == 1 and counts["/local_costmap/costmap"] >= 10  # 2 Hz over the run
+    corners = last["/local_costmap/published_footprint"][1].polygon.points
+    sides = [math.dist((a.x, a.y), (b.x, b.y)) for a, b in zip(corners, corners[1:] + corners[:1])]
+    assert sorted(round(s, 3) for s in sides) == [0.53, 0.53, 0.7, 0.7]
+
+
+def test_the_rrd_holds_the_navigation_entities(recorded):
+    from rerun.chunk import RrdReader
+
+    _, out = recorded
+    paths = {str(ch.entity_path) for ch in RrdReader(str(out / "g.rrd")).stream().to_chunks()}
+    assert {"/world/navigation/plan", "/world/navigation/map", "/world/navigation/costmap",
+            "/world/navigation/footprint"} <= paths
+    rerun = shutil.which("rerun")
+    if rerun:
+        assert subprocess.run([rerun, "rrd", "verify", str(out / "g.rrd")], capture_output=True).returncode == 0
+
+
+def test_a_navigation_mission_visits_its_goals_in_turn(tmp_path):
+    mission = tmp_path / "m.yaml"
+    mission.write_text("goals:\n  - [-6, 0]\n  - {x_m: -8, y_m: 0, yaw_deg: 180}\nlocalisation: truth\ncontroller: rpp\n")
+    res = RUN.invoke(app, ["run", "--mission", str(mission), "--start=-9,0,0", "--json"])
+    assert res.exit_code == 0, res.output
+    goals = json.loads(res.output)["goals"]
+    assert [g["status"] for g in goals] == ["succeeded", "succeeded"]
+    assert goals[0]["t_end_s"] < goals[1]["t_start_s"] + 1e-9
+
+
+def test_a_goal_not_reached_exits_5_with_its_reason(tmp_path):
+    res = RUN.invoke(app, ["run", "goto", "--goal", "-3,0", "--start=-9,0,0", "--localisation", "truth",
+                           "--controller", "rpp", "--duration-s", "3"])
+    assert res.exit_code == 5
+    assert "timed out" in res.output.splitlines()[-1]

@@ -22,8 +22,10 @@ from dataclasses import dataclass
 from amr_twin.ros1.master import DEFAULT_MASTER_URI, Master, master_problem, start_roscore
 
 NODE_NAME = "amr_twin"
-SETTLE_MAX_S = 2.0
-"""Longest wait for the graph's subscribers to connect before the twin runs, wall s."""
+SETTLE_MAX_S = 10.0
+"""Longest wait for the graph's subscribers to connect before the twin runs, wall s (it ends as soon as they
+are: a few ms each; the bound only matters for a node the master lists that does not answer, or a machine so
+busy that connecting takes seconds, where 2 s was too short)."""
 
 
 def master_uri() -> str:
@@ -93,7 +95,9 @@ class Ros1Session:
         where = f"a private roscore at {self.master.uri}" if options.roscore else f"the master at {self.master.uri}"
         say(f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; "
             "publish /wheel_Command or /cmd_vel to drive it)")
-        self.settle()
+        if not self.settle():
+            say(f"ros1: not every node the master lists on the twin's topics connected within {SETTLE_MAX_S:g} s; "
+                "the run starts without them")
         self.bridge.start()
 
     def _publishers(self) -> list:

@@ -71,7 +71,7 @@ def _measure(mode: str, sim_s: float) -> dict:
         from amr_twin.live.pacer import Pacer
         from amr_twin.ros1.session import Ros1Options, Ros1Session
 
-        from amr_twin.ros1.bridge import pacer_tick_us
+        from amr_twin.ros1.session import pacer_tick_us
 
         rate = 1.0 if mode == "paced" else 0.0
         pacer = Pacer(twin, rate, pacer_tick_us(rate))

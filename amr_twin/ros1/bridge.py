@@ -24,13 +24,11 @@ With ``firmware_topics=False`` (the board's serial port served to a rosserial ho
 ``wheel_Command``, ``wheel0_Vel`` and ``wheel1_Vel`` are left to the host.
 
 A message is built only for a topic someone subscribes to. The high-rate ones (the types of
-:data:`~amr_twin.ros1.serialization.WRITERS`, and ``/clock``) are serialised here and written to their
-subscribers' sockets at the pacer's ticks, a tick's messages of a topic in one write
-(:class:`~amr_twin.ros1.outbox.Outbox`; the pacer ticks every 20 ms paced, every :data:`UNPACED_TICK_US`
-unpaced); the rest, and the latched
-topics, go through rospy's publishers (without a queue: a queue's hand-over to a writer thread cost 45 us
-of CPU a message). The writes block: none is dropped, and a twin running as fast as it can runs no
-faster than its slowest subscriber's socket takes them.
+:data:`~amr_twin.ros1.serialization.WRITERS`, ``/clock``) are serialised here and written at the pacer's
+ticks (20 ms paced, :data:`~amr_twin.ros1.session.UNPACED_TICK_US` unpaced), a tick's messages of a topic in one write
+(:class:`~amr_twin.ros1.outbox.Outbox`); the rest, and the latched topics, go through rospy's publishers
+(without a queue: a writer thread's hand-over cost 45 us of CPU a message). The writes block: none is
+dropped, and a twin running as fast as it can runs no faster than its subscribers' sockets take them.
 """
 
 from __future__ import annotations
@@ -53,21 +51,9 @@ LOG = logging.getLogger(__name__)
 
 FIRMWARE_TOPICS = ("wheel_Command", "wheel0_Vel", "wheel1_Vel")
 ROW_TOPICS = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current")
-UNPACED_TICK_US = 200_000
-"""The pacer's tick when the twin runs unpaced on the graph, us. Each tick stops the physics' grid loop and
-costs numpy's work on the state samples and a write per topic and subscriber, whatever their number (20 ms
-ticks cost 12 % of the twin's CPU without a subscriber; 100 ms ticks put the bridge at 1.27x, 200 ms at 1.22x);
-unpaced, nothing waits on the wall clock. A message from the graph acts at the next tick (200 ms of simulated
-time, ~3 ms of wall time at full speed)."""
-
-
-def pacer_tick_us(rate: float) -> int:
-    """The pacer's tick for a bridged twin paced at ``rate`` (0: unpaced), us."""
-    from amr_twin.live.pacer import TICK_US
-
-    return TICK_US if rate > 0 else UNPACED_TICK_US
 DIAGNOSTICS_PERIOD_ROWS = 100
 """The battery's status on /diagnostics every 100th row of the 100 Hz grid (1 Hz)."""
+
 
 
 class Ros1Bridge:

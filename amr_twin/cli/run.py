@@ -216,7 +216,9 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0):
         from amr_twin.live.pacer import Pacer
         from amr_twin.live.session import CMD_TIMEOUT_S
 
-        pacer = Pacer(twin, rate)
+        from amr_twin.ros1.session import pacer_tick_us
+
+        pacer = Pacer(twin, rate, pacer_tick_us(rate))
         DiffDriveNode(twin.bus, twin.clock, twin.client, cmd_timeout_s=CMD_TIMEOUT_S)
     try:
         if ros1 is not None:

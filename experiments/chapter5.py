@@ -79,7 +79,8 @@ def simulate(job: _Job) -> dict:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
         from amr_twin.sim.loop import Twin
-        from amr_twin.recording.rerun_log import attach, record_run
+        from amr_twin.recording.rerun_capture import attach
+        from amr_twin.recording.rerun_log import record_run
         from amr_twin.sim.run import run_mission
         from amr_twin.experiments.firmware_comparison import pace
 

@@ -110,7 +110,7 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
         def on_twin(twin):
             held["twin"] = twin
             if recording:
-                from amr_twin.recording.rerun_log import attach
+                from amr_twin.recording.rerun_capture import attach
                 attach(twin)
             if live is not None:  # the live session brings its cmd_vel node (and the pacing)
                 from amr_twin.live.session import LiveSession

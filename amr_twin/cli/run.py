@@ -30,8 +30,7 @@ from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, _given, checked_firmware, checked_live,
                                   checked_ros1, checked_seed, shared)
 from amr_twin.sim.bounds import duration_problem
-from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
-                         summary, text_lines)
+from amr_twin.recording.run_report import collision_warning, csv_text, summary, text_lines
 
 DEFAULT_RUN_S = 10.0
 EXIT_COLLISION = 4
@@ -161,7 +160,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
                        f"paced at {rate:g}x real time", err=True)
         try:
             if recording:
-                from amr_twin.recording.rerun_log import attach
+                from amr_twin.recording.rerun_capture import attach
                 attach(twin)
             if live is None and ros1 is None:
                 res = run_mission(cfg, steps, duration_s, options, twin=twin)

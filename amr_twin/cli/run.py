@@ -32,7 +32,8 @@ from amr_twin.cli.goto import goto, run_goals
 from amr_twin.cli.options import (LiveGroup, RunOptions, _given, checked_firmware, checked_live,
                                   checked_ros1, checked_seed, shared)
 from amr_twin.sim.bounds import duration_problem
-from amr_twin.recording.run_report import collision_warning, csv_text, summary, text_lines
+from amr_twin.recording.run_report import collision_warning, csv_text, text_lines
+from amr_twin.recording.run_summary import summary
 
 DEFAULT_RUN_S = 10.0
 EXIT_COLLISION = 4
@@ -153,7 +154,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     result, start_pose = _guard(work)
     info = summary(result, single, start_pose)
     if opts.as_json:
-        typer.echo(json.dumps(info))
+        typer.echo(json.dumps(info.as_json()))
     else:
         for line in text_lines(result, info):
             typer.echo(line)
@@ -162,7 +163,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         typer.echo(warning, err=True)
     for message in result.errors:
         typer.echo(message, err=True)
-    if info["code"] != 0:
+    if info.code != 0:
         raise typer.Exit(1)
     if result.halted:
         raise typer.Exit(EXIT_COLLISION)

@@ -103,34 +103,34 @@ def chapter5(
             return chapter5.report(results, out)
 
     data = _guard(work)
-    for r in data["runs"]:
-        for wheel, w in r["wheels"].items():
-            verdicts = " ".join(f"{k}={'ok' if c['verdict'] == 'pass' else 'MISS'}" for k, c in w["checks"].items())
-            typer.echo(f"run {r['run']} {wheel:5s} {w['reference_rpm']:8.2f} RPM  {verdicts}")
-    for c in data["comparisons"]:
-        typer.echo(f"run {c['loaded_run']} (20 kg) against run {c['unloaded_run']} {c['wheel']:5s} "
-                   f"{c['measure']} {_rpm(c['loaded'])} / {_rpm(c['unloaded'])} RPM: {c['verdict']} "
-                   f"(true speed {_rpm(c['true_loaded'])} / {_rpm(c['true_unloaded'])}: {c['true_verdict']})")
-    s = data["summary"]
-    if "firmware_comparison" in data:
-        fc, w = data["firmware_comparison"], data["firmware_comparison"]["worst"]
+    for r in data.runs:
+        for wheel, w in r.wheels.items():
+            verdicts = " ".join(f"{k}={'ok' if c.verdict == 'pass' else 'MISS'}" for k, c in w.checks.items())
+            typer.echo(f"run {r.run} {wheel:5s} {w.reference_rpm:8.2f} RPM  {verdicts}")
+    for c in data.comparisons:
+        typer.echo(f"run {c.loaded_run} (20 kg) against run {c.unloaded_run} {c.wheel:5s} "
+                   f"{c.measure} {_rpm(c.loaded)} / {_rpm(c.unloaded)} RPM: {c.verdict} "
+                   f"(true speed {_rpm(c.true_loaded)} / {_rpm(c.true_unloaded)}: {c.true_verdict})")
+    s = data.summary
+    if data.firmware_comparison is not None:
+        fc, w = data.firmware_comparison, data.firmware_comparison["worst"]
         typer.echo(f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample difference "
                    f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: {fc['verdict']}")
-    if "spread" in data:
-        sp = data["spread"]
+    if data.spread is not None:
+        sp = data.spread
         met = [m for m in sp["metrics"] if "thesis" in m]
         typer.echo(f"over {sp['samples']} parameter draws ({sp['wall_s']:.1f} s wall time): "
                    f"{sum(m['in_band'] for m in met)} of {len(met) * sp['samples']} banded metrics in their band "
                    "(report.md, spread section)")
-    typer.echo(f"checks passed {s['passed']}/{s['checks']} on the published samples (true speed "
-               f"{s['true_passed']}/{s['true_checks']}); wrote {out}/metrics.json, report.md")
-    study = f" and {data['study_runs']} rolling-resistance study runs" if data["study_runs"] else ""
-    typer.echo(f"wall time {data['wall_s']:.2f} s for {len(data['runs'])} runs{study}, "
-               f"{data['sim_s'] + data['study_sim_s']:.0f} simulated s (jobs {jobs}, firmware {firmware})")
+    typer.echo(f"checks passed {s.passed}/{s.checks} on the published samples (true speed "
+               f"{s.true_passed}/{s.true_checks}); wrote {out}/metrics.json, report.md")
+    study = f" and {data.study_runs} rolling-resistance study runs" if data.study_runs else ""
+    typer.echo(f"wall time {data.wall_s:.2f} s for {len(data.runs)} runs{study}, "
+               f"{data.sim_s + data.study_sim_s:.0f} simulated s (jobs {jobs}, firmware {firmware})")
     for folder, ext in ((record, "rrd"), (mcap, "mcap")):
         if folder is not None:
             typer.echo(f"recordings: {folder}/run<N>.{ext} for runs "
-                       + ",".join(str(r["run"]) for r in data["runs"]))
+                       + ",".join(str(r.run) for r in data.runs))
 
 
 def faults_experiment(

@@ -5,11 +5,12 @@ After a change of the plant or the firmwares, one command regenerates them all:
     python -m amr_twin.experiments.doc_figures
 
 It runs the fault study into ``docs/`` (``amr-twin experiment faults --out docs``: ``faults.md``,
-``faults.json``, ``img/faults_*.png``), the payload sweep of ``docs/results.md`` (``docs/payload_sweep.json``,
-``docs/img/sweep_angular.png``), the fusion experiment's ten seeds on both routes
-(``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
-(``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``), then rewrites the generated
-blocks of :data:`DOCUMENTS` (their texts: :mod:`.doc_texts`) from those committed files and the
+``faults.json``, ``img/faults_*.png``), the payload sweep of ``docs/results.md``
+(``docs/payload_sweep.json``, ``docs/img/sweep_angular.png``), the fusion experiment's ten seeds on
+both routes (``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
+(``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture),
+then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.doc_texts`) from those
+committed files and the
 calibration's report (``models/amr/calibration.yaml``: after a new fit, ``amr-twin calibrate
 --no-fit --report models/amr/calibration.yaml`` first). A block is the text between
 ``<!-- generated: NAME ... -->`` and ``<!-- end: NAME -->``;

@@ -10,9 +10,8 @@ It runs the fault study into ``docs/`` (``amr-twin experiment faults --out docs`
 both routes (``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
 (``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture),
 then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.doc_texts`) from those
-committed files and the
-calibration's report (``models/amr/calibration.yaml``: after a new fit, ``amr-twin calibrate
---no-fit --report models/amr/calibration.yaml`` first). A block is the text between
+committed files and the calibration's report (``models/amr/calibration.yaml``: after a new fit,
+``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text between
 ``<!-- generated: NAME ... -->`` and ``<!-- end: NAME -->``;
 :func:`expected` gives a document as its blocks would be written now, which the tests hold every
 document to, and the tests hold the committed results to a fresh run (``test_faults_report``,

@@ -196,3 +196,17 @@ def test_the_readme_stays_a_five_minute_read():
     assert "<!-- generated: " not in readme
     assert re.search(r"!\[[^\]]+\]\(docs/img/\w+\.png\)", readme)
     assert "](docs/index.md)" in readme
+
+
+def test_the_readme_set_up_commands_are_what_ci_runs():
+    """The README's two set-up commands (install + chapter 5, install + tests) are the ones .ci/run proves on a
+    fresh clone: the same venv, the same constrained install, the same test command."""
+    readme = (ROOT / "README.md").read_text()
+    setup = readme[readme.index("## Set up on a fresh machine"):readme.index("\n## ", readme.index("## Set up") + 3)]
+    commands = re.findall(r"^```\n(.+)\n```$", setup, re.M)
+    install = 'python3 -m venv .venv && . .venv/bin/activate && pip install -c constraints.txt -e ".[dev]"'
+    assert commands == [f"{install} && amr-twin experiment chapter5 --out results/chapter5",
+                        f"{install} && python -m pytest -q"]
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert {"python3 -m venv .venv", ". .venv/bin/activate", "python -m pytest -q"} <= set(ci)
+    assert any(line.endswith('install --quiet -c constraints.txt -e ".[dev]"') for line in ci)

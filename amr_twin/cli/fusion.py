@@ -113,14 +113,15 @@ def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, pr
     data = guard(work)
     typer.echo(f"{'architecture':14s} {'ATE m':>7s} {'aligned':>8s} {'RPE m/m':>8s} {'RPE deg/m':>9s} "
                f"{'final m':>8s} {'RMS yaw deg':>11s}")
-    for name, e in data["architectures"].items():
-        typer.echo(f"{name:14s} {e['ate_m']:7.3f} {e['ate_aligned_m']:8.3f} {e['rpe_trans_m']:8.3f} "
-                   f"{e['rpe_rot_deg']:9.2f} {e['final_pos_err_m']:8.3f} {e['rms_yaw_err_deg']:11.2f}")
-    s, r = data["summary"], data["route"]
-    typer.echo(f"route {r['name']} {r['length_m']:.1f} m, goal {'reached' if r['reached_goal'] else 'NOT reached'}; "
-               f"odometry drift {s['odom_drift_final_m']:.3f} m; map walls within 2 cells: "
-               f"{100 * s['map_walls_within_2_cells_frac']:.1f} %")
-    typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.1f} simulated s; wrote {out}/report.md, "
+    for name, a in data.architectures.items():
+        e = a.errors
+        typer.echo(f"{name:14s} {e.ate_m:7.3f} {a.ate_aligned_m:8.3f} {e.rpe_trans_m:8.3f} "
+                   f"{e.rpe_rot_deg:9.2f} {e.final_pos_err_m:8.3f} {e.rms_yaw_err_deg:11.2f}")
+    s, r = data.summary, data.route
+    typer.echo(f"route {r.name} {r.length_m:.1f} m, goal {'reached' if r.reached_goal else 'NOT reached'}; "
+               f"odometry drift {s.odom_drift_final_m:.3f} m; map walls within 2 cells: "
+               f"{100 * s.map_walls_within_2_cells_frac:.1f} %")
+    typer.echo(f"wall time {data.wall_s:.2f} s for {data.sim_s:.1f} simulated s; wrote {out}/report.md, "
                f"truth.tum and one .tum per architecture (evo_ape tum {out}/truth.tum {out}/odom.tum)")
 
 

@@ -57,6 +57,22 @@ def _world_files(value) -> list[Path]:
     return [] if value is None else world_files(value)
 
 
+def _mission_files(value) -> list[Path]:
+    """The mission file and, for a navigation mission naming a ``map:``, that map's YAML and image."""
+    if value is None:
+        return []
+    from amr_twin.model.yaml_file import read_yaml
+
+    path = Path(value)
+    try:
+        name = read_yaml(path, "mission", ValueError).get("map")
+    except (ValueError, AttributeError):  # unreadable: loading the mission says why
+        return [path]
+    if not isinstance(name, str) or not name.strip():
+        return [path]
+    return [path] + _world_files(str(path.parent / name))  # a relative map lies beside the mission
+
+
 def _route_file(value) -> list[Path]:
     from amr_twin.experiments.fusion import route_file
 
@@ -66,7 +82,7 @@ def _route_file(value) -> list[Path]:
 INPUTS: dict[str, Callable[[object], list[Path]]] = {
     "--config": _config_file,       # none given: the robot's parameter file
     "--params": _given,
-    "--mission": _given,
+    "--mission": _mission_files,     # with a navigation mission's map (YAML + image)
     "--calibration": _given,
     "--sketch": _given,              # a folder
     "--target": _target_file,        # 'thesis' or a CSV log

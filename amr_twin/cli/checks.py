@@ -178,10 +178,12 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
     checked_seed(seed, fail)
     if sampler is not None and sampler not in SAMPLERS:
         fail(f"--sampler {sampler!r}: must be one of {', '.join(SAMPLERS)}")
-    if calibration is not None and not calibration.is_file():
+    if calibration is not None and not calibration.exists():
         fail(f"--calibration {calibration}: no such file (amr-twin calibrate --report writes one)")
     try:
         space = ParameterSpace.load(config, override_file=params, sets=sets or [], calibration=calibration)
         return space.draw(samples, seed=seed or 0, sampler=sampler or "lhs")
     except (ConfigError, ValueError) as exc:
-        fail(str(exc))
+        head, _, rest = str(exc).partition(":")
+        fail(f"--calibration {calibration}:{rest}" if calibration is not None and head.endswith(str(calibration))
+             else str(exc))

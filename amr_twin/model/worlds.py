@@ -137,6 +137,9 @@ class MapError(ValueError):
     """A map file (YAML or PGM) is invalid; the message is one line naming the file."""
 
 
+MAX_ORIGIN = 1e4
+"""Largest |x|, |y| (m) and |yaw| (rad) of a map's origin (as --start's bound): farther, the world's
+floats lose their centimetres."""
 MAX_MAP_PIXELS = 25_000_000
 """Largest map image, pixels (5000 x 5000): every occupied run becomes a MuJoCo geom."""
 
@@ -169,10 +172,12 @@ def read_pgm(path: str | Path) -> np.ndarray:
 
     Raises :class:`MapError` (one line naming the file) for anything else.
     """
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise MapError(f"{path}: cannot read the map image ({exc.strerror or exc})") from None
+    from amr_twin.model.yaml_file import read_bytes
+
+    try:  # a regular file of a bounded size: /dev/zero or a pipe is refused, not read or waited on
+        data = read_bytes(path, "", MapError, limit=MAX_MAP_PIXELS + 4096)
+    except MapError as exc:
+        raise MapError(f"{exc} (the map image)") from None
     tokens, pos = _pgm_tokens(data, path)
     magic = tokens[0]
     if magic not in (b"P5", b"P2"):
@@ -247,9 +252,13 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
     if not isinstance(origin, (list, tuple)) or len(origin) != 3 or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in origin):
         raise MapError(f"{yaml_path}: origin: {origin!r} must be [x_m, y_m, yaw_rad], three finite numbers")
+    if not all(abs(v) <= MAX_ORIGIN for v in origin):
+        raise MapError(f"{yaml_path}: origin: {origin!r}: each value must lie within +-{MAX_ORIGIN:g} (m, m, rad)")
     origin = tuple(float(v) for v in origin)
     occupied = _map_number(yaml_path, meta, "occupied_thresh", 0.65, 0.0, 1.0)
     free = _map_number(yaml_path, meta, "free_thresh", 0.196, 0.0, 1.0)
+    if free >= occupied:
+        raise MapError(f"{yaml_path}: free_thresh {free:g} must be below occupied_thresh {occupied:g} (map_server)")
     negate = meta.get("negate", 0)
     if negate not in (0, 1, True, False):
         raise MapError(f"{yaml_path}: negate: {negate!r} must be 0 or 1")

@@ -201,6 +201,39 @@ def test_unreadable_input_files_name_the_file(tmp_path, refused):
         refused(args, str(path), words)
 
 
+def test_unreadable_odometry_calibration_and_map_image_name_the_file(tmp_path, refused):
+    """These were read whole: /dev/zero filled the memory (MemoryError), a pipe waited for ever, and the
+    messages were Python's ("IsADirectoryError", "'utf-8' codec can't decode")."""
+    binary = tmp_path / "bin.yaml"
+    binary.write_bytes(b"\xff\xfe" * 100)
+    for name in ("odometry.yaml", "image.pgm"):
+        os.mkfifo(tmp_path / name)
+        _unblock(tmp_path / name)
+    stop = ["run", "stop", "--duration-s", "0.5", "--world"]
+    refused([*stop, "empty", "--odometry", tmp_path / "odometry.yaml"], "--odometry", "not a regular file")
+    refused([*stop, "empty", "--odometry", tmp_path], f"--odometry {tmp_path}: is a folder")
+    refused([*stop, "empty", "--odometry", binary], f"--odometry {binary}: not a text file")
+    refused(["experiment", "chapter5", "--out", tmp_path / "c", "--samples", 2, "--calibration", binary],
+            f"--calibration {binary}: not a text file")
+    world = _write(tmp_path / "map.yaml", "image: image.pgm\nresolution: 0.05\n")
+    refused([*stop, world], f"{world}: image", "image.pgm: not a regular file")
+    _write(world, "image: /dev/zero\nresolution: 0.05\n")
+    refused([*stop, world], f"{world}: image /dev/zero: not a regular file")
+
+
+def test_a_map_s_numbers_are_read_as_yaml_1_2_reads_them_and_bounded(tmp_path, refused, capsys):
+    """``resolution: 5e-2`` was a word to YAML 1.1 ("must be a finite number"); read as a number, an
+    ``origin`` of 1e308 must then be refused, not simulated (it was, exit 0)."""
+    (tmp_path / "free.pgm").write_bytes(b"P5 40 40 255\n" + bytes([254]) * 1600)
+    world = _write(tmp_path / "map.yaml", "image: free.pgm\nresolution: 5e-2\norigin: [-1e0, -1e0, 0]\n")
+    assert _call(["run", "stop", "--duration-s", "0.5", "--world", world]) == 0
+    capsys.readouterr()
+    _write(world, "image: free.pgm\nresolution: 0.05\norigin: [1e308, 0, 0]\n")
+    refused(["run", "stop", "--world", world], f"{world}: origin: [1e+308, 0, 0]: each value must lie within +-10000")
+    _write(world, "image: free.pgm\nresolution: 0.05\noccupied_thresh: 0.1\nfree_thresh: 0.9\n")
+    refused(["run", "stop", "--world", world], "free_thresh 0.9 must be below occupied_thresh 0.1")
+
+
 def _limited(args, limit_bytes: int, cwd: Path, env: dict | None = None):
     """``amr-twin args`` in a process whose files may not grow beyond ``limit_bytes`` (``ulimit -f``)."""
     def limit():

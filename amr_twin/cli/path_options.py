@@ -16,6 +16,8 @@ Refused, in one line naming both options, exit 2, before anything is read or wri
 - an empty path given to any of these options (``--out ""`` would be the current folder);
 - an output another command is writing (its lock, :mod:`amr_twin.recording.output_lock`, held for as
   long as the command runs): the holder's pid is named.
+
+A command interrupted (Ctrl-C) says so in one line, exit 130: its files are written together at the end.
 """
 
 from __future__ import annotations
@@ -198,6 +200,9 @@ def _checked(callback):
                 return callback(*args, **kwargs)
         except OutputBusy as exc:
             fail(str(exc))
+        except KeyboardInterrupt:  # typer would exit 130 without a word
+            kept = " (the points finished are kept in runs/: a rerun resumes from them)" if "sweep" in ctx.command_path else ""
+            fail(f"{ctx.command_path}: interrupted; no output written{kept}", code=130)
 
     checked.paths_checked = True
     return checked

@@ -260,6 +260,23 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path, tmp_path_fac
     assert list(tmp_path.iterdir()) == []  # no empty output folder
 
 
+@pytest.mark.parametrize("args, target", [
+    (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1", "--no-progress"], "amr_twin.experiments.chapter5.run"),
+    (["sweep", "payload", "--out", "{tmp}/s", "--masses", "0", "--positions", "center", "--commands", "stop",
+      "--no-progress"], "amr_twin.experiments.payload_sweep.run"),
+    (["run", "stop", "--duration-s", "1", "--csv", "{tmp}/r.csv"], "amr_twin.sim.run.run_mission"),
+])
+def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refused, monkeypatch):
+    """Ctrl-C: typer exited 130 without a word; now one line naming the command, nothing written."""
+    def interrupted(*_args, **_kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(target, interrupted)
+    line = refused([a.format(tmp=tmp_path) for a in args], "interrupted; no output written", code=130)
+    assert line.startswith(f"error: amr-twin {args[0]} {args[1]}: ")
+    assert ("a rerun resumes" in line) == (args[0] == "sweep")
+
+
 # ---------------------------------------------------------------------------------------------- messages
 @pytest.mark.parametrize("args, words", [
     (["run", "stop", "--seed", -1], ["--seed -1: must be a whole number in [0, 2^32)"]),

@@ -93,7 +93,11 @@ def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool 
 
 
 def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
-    """``--executor local|dask`` and ``--scheduler``: dask needs an address, local takes none."""
+    """``--executor local|dask``, ``--scheduler`` and the command's ``--scheduler-timeout-s`` (read from its
+    context): dask needs an address, local takes neither (given with it, they were ignored)."""
+    import math
+
+    from amr_twin.cli.path_options import get_current_context
     from amr_twin.experiments.executor import EXECUTORS
 
     if executor not in EXECUTORS:
@@ -102,6 +106,14 @@ def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
         fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
     if executor == "local" and scheduler:
         fail("--scheduler is only used with --executor dask")
+    ctx = get_current_context(silent=True)
+    if ctx is None or "scheduler_timeout_s" not in ctx.params:
+        return
+    timeout_s, source = ctx.params["scheduler_timeout_s"], ctx.get_parameter_source("scheduler_timeout_s")
+    if executor == "local" and source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP"):
+        fail("--scheduler-timeout-s is only used with --executor dask")
+    if not (math.isfinite(timeout_s) and 0 < timeout_s < 3600):
+        fail(f"--scheduler-timeout-s {timeout_s:g}: must be in (0, 3600) s")
 
 
 def check_record_folder(option: str, folder: Optional[Path], fail, name: str) -> None:

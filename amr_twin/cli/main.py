@@ -66,7 +66,7 @@ class _App(typer.Typer):
         except _click_errors.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
             hint = _misplaced(exc) or f" (see {where} --help)"
-            typer.echo(f"error: {where}: {_missing_command(exc) or ' '.join(exc.format_message().split())}{hint}",
+            typer.echo(f"error: {where}: {_missing_command(exc) or _plain(' '.join(exc.format_message().split()))}{hint}",
                        err=True)
             sys.exit(2)
         except _click_errors.ClickException as exc:
@@ -96,6 +96,20 @@ class _App(typer.Typer):
             yield
         finally:
             self.registered_commands, self.registered_groups = saved
+
+
+_PARSER_WORDS = {"Input should be a valid integer, unable to parse string as an integer": "expects a whole number",
+                 "Input should be a valid integer, got a number with a fractional part": "expects a whole number",
+                 "Input should be a valid number, unable to parse string as a number": "expects a number",
+                 "Input should be a valid boolean, unable to interpret input": "expects true or false"}
+"""typer's (pydantic's) words for a value of the wrong type, and the project's."""
+
+
+def _plain(message: str) -> str:
+    """A usage error's message in the project's words (:data:`_PARSER_WORDS`)."""
+    for theirs, ours in _PARSER_WORDS.items():
+        message = message.replace(theirs, ours)
+    return message
 
 
 def _missing_command(exc) -> str | None:
@@ -200,8 +214,10 @@ def bench(
         jobs = check_jobs(jobs)
     except ValueError as exc:
         fail(str(exc))
-    if not (0 < sim_s <= 1000):
-        fail(f"--sim-s {sim_s}: must be in (0, 1000] s")
+    from amr_twin.sim.bounds import MIN_RUN_S
+
+    if not (MIN_RUN_S <= sim_s <= 1000):  # 1e-300 s divided by zero
+        fail(f"--sim-s {sim_s:g}: must be in [{MIN_RUN_S:g}, 1000] s")
     cfg = _config(config, params, set_)
 
     def measure() -> dict:

@@ -57,7 +57,9 @@ def _kind(value: Any) -> str:
         return "a number"
     if isinstance(value, (list, tuple)):  # its length is the schema's to judge (some vectors have any)
         return "a list of numbers" if all(_kind(v) == "a number" for v in value) else "a list"
-    return "a word" if isinstance(value, str) else type(value).__name__
+    if value is None:
+        return "nothing"  # --set key= (was "NoneType")
+    return "a word" if isinstance(value, str) else "a mapping" if isinstance(value, dict) else type(value).__name__
 
 
 def check_assignment(text: str, key: str, value: Any, meta: dict[str, dict], plain: dict) -> None:

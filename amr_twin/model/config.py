@@ -158,7 +158,19 @@ def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
     elif err["type"] in ("missing", "too_short", "too_long") and isinstance(value, (list, tuple)):
         size = _tuple_size(model, loc)  # a fixed-size vector given another number of values
         msg = f"{list(value)!r} has {len(value)} value(s); it takes {size}" if size else msg
+    elif err["type"] == "missing":  # pydantic's "Field required"
+        msg = "missing: give its {value, unit, source} leaf"
+    elif err["type"] in ("dict_type", "model_type", "model_attributes_type"):  # "a valid dictionary or instance of"
+        msg = f"{value!r} is not a section: give its parameters as keys"
+    elif err["type"] in _KINDS:  # "Input should be a valid number, unable to parse ..."
+        msg = f"{value!r} is not {_KINDS[err['type']]}"
     return f"{'.'.join(loc)}: {msg}" if loc else msg
+
+
+_KINDS = {"float_parsing": "a number", "float_type": "a number", "int_parsing": "a whole number",
+          "int_type": "a whole number", "int_from_float": "a whole number", "bool_parsing": "true or false",
+          "bool_type": "true or false", "string_type": "a word", "tuple_type": "a list", "list_type": "a list"}
+"""pydantic's error types of a value of the wrong kind, and the kind in the project's words."""
 
 
 def _tuple_size(model: type[BaseModel], loc: list[str]) -> int | None:
@@ -236,9 +248,9 @@ def load_parameters(path: str | Path | None = None, *, override_file: str | Path
         _reject_nan(plain)
         cfg = TwinConfig.model_validate(plain)
     except ConfigError as exc:
-        raise ConfigError(blame.message(str(exc))) from None
-    except ValidationError as exc:
-        raise ConfigError(blame.message(_format_error(exc, TwinConfig))) from None
+        raise ConfigError(blame.message(str(exc), path)) from None
+    except ValidationError as exc:  # a value nobody overrode is the parameter file's: it is named
+        raise ConfigError(blame.message(_format_error(exc, TwinConfig), path)) from None
     check_follows(meta, plain)
     return cfg, meta
 

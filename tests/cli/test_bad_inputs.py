@@ -342,3 +342,20 @@ def test_a_params_file_s_bad_value_names_the_file(tmp_path, refused):
     refused(["run", "stop", "--params", params], f"--params {params}: wheel.radius_m: 5 is out of range")
     params.write_text("wheel:\n  radius_m: true\n")
     refused(["run", "stop", "--params", params], f"--params {params}: wheel.radius_m takes a number (m)")
+
+
+def test_a_parameter_file_s_bad_leaf_is_named_in_the_project_s_words(tmp_path, refused):
+    """pydantic's "Field required" and "Input should be a valid dictionary or instance of WheelCfg" named
+    no file; a word as a ranged value was called a vector's range."""
+    text = (ROOT / "models" / "amr" / "amr.yaml").read_text()
+    radius = next(line for line in text.splitlines() if line.startswith("  radius_m: {value: 0.125,"))
+    cases = {"missing": (radius + "\n", "", "wheel.radius_m: missing: give its {value, unit, source} leaf"),
+             "word": (radius, radius.replace("0.125", "abc"), "wheel.radius_m: value 'abc' is not a finite number"),
+             "unranged": ("rotor_fraction: {value: 0.6,", "rotor_fraction: {value: abc,",
+                          "wheel.rotor_fraction: 'abc' is not a number")}
+    for name, (old, new, words) in cases.items():
+        assert old in text, name
+        config = _write(tmp_path / f"{name}.yaml", text.replace(old, new, 1))
+        refused(["run", "stop", "--config", config], f"--config {config}: {words}")
+    params = _write(tmp_path / "p.yaml", "wheel: 5\n")
+    refused(["run", "stop", "--params", params], f"--params {params}: wheel: 5 is not a section")

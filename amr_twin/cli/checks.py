@@ -79,11 +79,19 @@ def check_duration(duration_s: Optional[float], fail) -> None:
 
 
 def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool = False, processes: int = 1,
-                 what: str = "the run") -> None:
+                 what: str = "the run", rerun: bool = False) -> None:
     """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`, one per
-    process) exceeds what the machine has available now; nothing is refused where that is unknown."""
-    from amr_twin.sim.bounds import available_mb, memory_mb
+    process) exceeds what the machine has available now, or, with the Rerun recording (``rerun``), the
+    address space it reserves, the process' limit (``ulimit -v``); nothing is refused where unknown."""
+    from amr_twin.sim.bounds import RERUN_ADDRESS_SPACE_MB, address_space_mb, available_mb, memory_mb
 
+    limit = address_space_mb()
+    space = memory_mb(duration_s, recorded, sensors) + (RERUN_ADDRESS_SPACE_MB if rerun else 0.0)
+    if limit is not None and space > limit:
+        fail(f"--duration-s {duration_s:g}{' with --record' if rerun else ''}: {what} would need about "
+             f"{space / 1024:.1f} GB of address space{' (the Rerun recording reserves ~3 GB)' if rerun else ''}; "
+             "the limit (ulimit -v) is "
+             f"{limit / 1024:.1f} GB: raise it, or ask for less (a shorter run, no recording)")
     need, have = memory_mb(duration_s, recorded, sensors) * processes, available_mb()
     if have is not None and need > have:
         kept = "its messages until they are written" if recorded else "its 100 Hz series"

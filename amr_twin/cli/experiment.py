@@ -145,7 +145,7 @@ def _add_chapter5(experiment: typer.Typer) -> None:
         check_record_folder("--record", record, fail, "run<N>.rrd")
         check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
         check_memory(duration_s or max(r.duration_s for r in chapter5.RUNS), fail, recorded=bool(record or mcap),
-                     processes=jobs, what="each run")
+                     processes=jobs, what="each run", rerun=record is not None)
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)

@@ -139,6 +139,24 @@ def test_a_run_larger_than_the_memory_available_is_refused(tmp_path, refused, mo
     assert _call(["run", "stop", "--duration-s", 5, "--sensors", "--mcap", tmp_path / "r.mcap"]) == 0
 
 
+def test_a_memory_limit_is_checked_before_and_one_line_after(tmp_path, refused, monkeypatch):
+    """``ulimit -v``: Rerun's recorder reserves ~3 GB of address space (it aborted the process with a Rust
+    backtrace below that), and a MemoryError while writing was a traceback of 116 lines."""
+    monkeypatch.setattr("amr_twin.sim.bounds.address_space_mb", lambda: 1200.0)
+    with monkeypatch.context() as guard:
+        guard.setattr("amr_twin.sim.run.run_mission", None)  # were it not refused, it would fail at once
+        refused(["run", "stop", "--duration-s", 60, "--record", tmp_path / "r.rrd"],
+                "--duration-s 60 with --record: the run would need about 3.2 GB of address space",
+                "the limit (ulimit -v) is 1.2 GB")
+
+    def exhausted(*_args, **_kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr("amr_twin.sim.run.run_mission", exhausted)
+    refused(["run", "stop", "--duration-s", 1, "--csv", tmp_path / "r.csv"], "out of memory (the limit, ulimit -v, "
+            "is 1.2 GB); nothing written", code=1)
+
+
 def test_the_client_stops_at_the_bound_of_a_run(monkeypatch):
     from amr_twin.cli.menu import RealTimeTwin
     from amr_twin.model.config import load_config

@@ -181,6 +181,8 @@ def model(
     except OutputError as exc:
         fail(str(exc))
     cfg = _config(config, params, set_, extra)
+    if xy is not None and cfg.payload.mass_kg == 0:  # ignored (and not checked against the deck), exit 0
+        fail(f"--payload-xy {payload_xy}: there is no payload to place (payload.mass_kg is 0): give --payload-kg")
 
     def work():
         if export_urdf or export_mjcf:

@@ -235,8 +235,13 @@ def load_parameters(path: str | Path | None = None, *, override_file: str | Path
                 blame.set(key, str(override_file))
         except ConfigError as exc:
             raise ConfigError(f"{override_file}: {exc}") from None
+    given: dict[str, tuple[str, Any]] = {}
     for text in sets:
         key, value = parse_assignment(text)
+        if key in given and given[key][1] != value:  # the last one won, the first was ignored
+            raise ConfigError(f"--set {key}: given twice with different values ({given[key][0]!r} and {text!r}); "
+                              "give it once")
+        given[key] = (text, value)
         check_assignment(text, key, value, meta, tree_values)
         _set_path(plain, key, value)
         _override_meta(meta, key, None, "--set")

@@ -345,6 +345,9 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
     (["run", "stop", "--set", "wheel.radius_m="], ["--set 'wheel.radius_m=': wheel.radius_m takes a number (m), "
                                                    "not nothing"]),
     (["run", "stop", "--seed", "1e3"], ["Invalid value for '--seed': expects a whole number"]),
+    (["run", "stop", "--set", "sim.floor_friction_field=true", "--set", "sim.floor_friction_field=false"],
+     ["--set sim.floor_friction_field: given twice with different values"]),  # the first was ignored
+    (["model", "--payload-xy", "1e308,0"], ["--payload-xy 1e308,0: there is no payload to place"]),  # exit 0
     (["run", "stop", "--duration-s", "abc"], ["Invalid value for '--duration-s': expects a number"]),
 ])
 def test_refusals_name_the_option_and_what_is_allowed(args, words, tmp_path, refused, monkeypatch):

@@ -339,7 +339,13 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
     from amr_twin.sim.loop import TwinOptions
     from amr_twin.sim.run import Command, run_command
 
+    import logging
+
+    logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())  # said below
     for text, wheels in log.items():
+        refused = Command.parse(text).dry_run(base).last_error  # was blamed on the log's length
+        if refused:
+            raise ValueError(f"--target {target}: command {text}: the client refuses it ({refused})")
         duration = max(float(v[:, 0].max()) for v in wheels.values()) + LOG_TAIL_S
         series = run_command(base, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)).series
         for w, samples in wheels.items():

@@ -191,6 +191,9 @@ def test_malformed_calibration_logs_name_the_file(tmp_path, refused):
     refused(["calibrate", "--target", binary, "--out", out], f"--target {binary}: not a text file")
     refused(["calibrate", "--target", tmp_path, "--out", out], f"--target {tmp_path}: is a folder")
     refused(["calibrate", "--target", "/dev/zero", "--out", out], "--target /dev/zero: not a regular file")
+    fast = _write(tmp_path / "fast.csv", "t_s,wheel,rpm,command\n0.5,left,10,linear:99\n")  # blamed on its length
+    refused(["calibrate", "--target", fast, "--out", out], f"--target {fast}: command linear:99: the client refuses "
+            "it (ERROR: linear velocity not valid")
 
 
 def _unblock(fifo: Path) -> threading.Timer:

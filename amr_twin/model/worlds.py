@@ -140,6 +140,11 @@ class MapError(ValueError):
 MAX_ORIGIN = 1e4
 """Largest |x|, |y| (m) and |yaw| (rad) of a map's origin (as --start's bound): farther, the world's
 floats lose their centimetres."""
+MAX_WALL_BOXES = 20_000
+"""Most wall boxes (MuJoCo geoms) of a map's world: 4 times a SLAM map of the aisles world (4894);
+45,000 (a 300 x 300 checkerboard) took 9 s to build and check, a 1500 x 1500 one did not end in 60 s."""
+MAX_WALL_RUNS = 1_000_000
+"""Most runs of occupied cells (along the rows) a map's walls are merged from (the merge loops over them)."""
 MAX_MAP_PIXELS = 25_000_000
 """Largest map image, pixels (5000 x 5000): every occupied run becomes a MuJoCo geom."""
 
@@ -317,11 +322,21 @@ def world_xml(yaml_path: str | Path, wall_height_m: float = WALL_HEIGHT_M) -> st
     """MJCF text of the map's world: floor, light and merged wall boxes (group 0)."""
     grid = load_map(yaml_path)
     rows, cols = grid.occupied.shape
+    padded = np.pad(grid.occupied, ((0, 0), (1, 0))).astype(np.int8)
+    runs = int(np.count_nonzero(np.diff(padded, axis=1) == 1))  # counted before the merge, which loops over them
+    if runs > MAX_WALL_RUNS:
+        raise MapError(f"{yaml_path}: {runs:,} runs of occupied cells; at most {MAX_WALL_RUNS:,} (a map this "
+                       "fragmented, noise or a checkerboard, would be a world of too many walls)")
+    boxes = wall_boxes(grid, wall_height_m)
+    if len(boxes) > MAX_WALL_BOXES:
+        raise MapError(f"{yaml_path}: {len(boxes):,} wall boxes after merging its occupied cells; at most "
+                       f"{MAX_WALL_BOXES:,} (each is a MuJoCo geom: 45,000 took 9 s to build; a SLAM map of the aisles "
+                       "world has about 5,000)")
     span = max(rows, cols) * grid.resolution_m + abs(grid.origin_xyyaw[0]) + abs(grid.origin_xyyaw[1])
     lines = [f'<mujoco model="{Path(yaml_path).stem}">', "  <worldbody>",
              '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
              f'    <geom name="floor" type="plane" size="{span:.3f} {span:.3f} 0.1" rgba="0.55 0.55 0.55 1"/>']
-    for i, (centre, half, yaw) in enumerate(wall_boxes(grid, wall_height_m)):
+    for i, (centre, half, yaw) in enumerate(boxes):
         pos = " ".join(f"{v:.6g}" for v in centre)
         size = " ".join(f"{v:.6g}" for v in half)
         lines.append(f'    <geom name="wall_{i}" type="box" pos="{pos}" size="{size}" '

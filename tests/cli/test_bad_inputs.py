@@ -242,6 +242,22 @@ def test_unreadable_odometry_calibration_and_map_image_name_the_file(tmp_path, r
     refused([*stop, world], f"{world}: image /dev/zero: not a regular file")
 
 
+def _checkerboard(path: Path, n: int) -> Path:
+    path.write_bytes(b"P5 %d %d 255\n" % (n, n) + bytes(0 if (i // n + i % n) % 2 else 254 for i in range(n * n)))
+    return path
+
+
+def test_a_map_too_fragmented_to_build_is_refused_before_the_build(tmp_path, refused, monkeypatch):
+    """Every run of occupied cells became a MuJoCo geom: a 1500 x 1500 checkerboard did not build in 60 s."""
+    _checkerboard(tmp_path / "chk.pgm", 210)  # 22,050 boxes
+    world = _write(tmp_path / "chk.yaml", "image: chk.pgm\nresolution: 0.05\norigin: [-5.25, -5.25, 0]\n")
+    refused(["run", "stop", "--world", world, "--start", "20,20,0"], f"{world}: 22,050 wall boxes after merging",
+            "at most 20,000")
+    monkeypatch.setattr("amr_twin.model.worlds.MAX_WALL_RUNS", 1000)  # the bound on the runs, before merging
+    refused(["run", "stop", "--world", world, "--start", "20,20,0"], f"{world}: 22,050 runs of occupied cells; "
+            "at most 1,000")
+
+
 def test_a_map_s_numbers_are_read_as_yaml_1_2_reads_them_and_bounded(tmp_path, refused, capsys):
     """``resolution: 5e-2`` was a word to YAML 1.1 ("must be a finite number"); read as a number, an
     ``origin`` of 1e308 must then be refused, not simulated (it was, exit 0)."""

@@ -123,6 +123,8 @@ def _missing_command(exc) -> str | None:
 def _misplaced(exc) -> str | None:
     """For an option given to a group that belongs to its commands: where it goes."""
     name = getattr(exc, "option_name", None)
+    if "given twice" in exc.format_message():  # amr_twin.cli.path_options._once: the option is in its place
+        return None
     group = getattr(exc.ctx, "command", None) if exc.ctx is not None else None
     parent = exc.ctx.parent if exc.ctx is not None else None
     if name and parent is not None and any(name in p.opts for p in getattr(parent.command, "params", [])):

@@ -214,15 +214,43 @@ def _commands(command) -> Iterator:
         yield from _commands(sub)
 
 
+def _once(command) -> None:
+    """An option of one value given twice with different values (``--live foxglove --live rerun``) is a
+    usage error (exit 2) instead of the last one silently winning; a repeatable option is not touched."""
+    make_parser = command.make_parser
+
+    def checked_parser(ctx):
+        parser = make_parser(ctx)
+        for option in {id(o): o for o in (*parser._long_opt.values(), *parser._short_opt.values())}.values():
+            if option.action not in ("store", "store_const"):
+                continue
+            process = option.process
+
+            def once(value, state, option=option, process=process):
+                new = option.const if option.action == "store_const" else value
+                if option.dest in state.opts and state.opts[option.dest] != new:
+                    flags = "/".join(option.obj.opts + option.obj.secondary_opts)
+                    old = state.opts[option.dest]
+                    raise _click_errors.BadOptionUsage(flags, f"{flags} given twice with different values ({old} and "
+                                                       f"{new}): give it once", ctx=ctx)
+                process(value, state)
+
+            option.process = once
+        return parser
+
+    command.make_parser = checked_parser
+
+
 class CheckedGroup(TyperGroup):
     """The app's root group: each command below it checks its paths (:func:`check_paths`) before its
-    callback runs, and refuses an empty path while parsing. A group given no command fails with a
+    callback runs, and refuses an empty path and an option given twice (:func:`_once`) while parsing. A group given no command fails with a
     usage error (``Missing command.``, one line naming its commands: :mod:`amr_twin.cli.main`) instead
     of printing its help and an empty error."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         for command in _commands(self):
+            _once(command)
             if getattr(command, "commands", None):
                 command.no_args_is_help = False
             for param in command.params:

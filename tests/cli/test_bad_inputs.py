@@ -366,6 +366,10 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
     (["run", "stop", "--seed", "1e3"], ["Invalid value for '--seed': expects a whole number"]),
     (["run", "stop", "--set", "sim.floor_friction_field=true", "--set", "sim.floor_friction_field=false"],
      ["--set sim.floor_friction_field: given twice with different values"]),  # the first was ignored
+    (["run", "stop", "--live", "foxglove", "--live", "rerun"], ["--live given twice with different values "
+                                                                 "(foxglove and rerun): give it once"]),  # rerun won
+    (["experiment", "chapter5", "--out", "{tmp}/c", "--progress", "--no-progress"], ["--progress/--no-progress "
+                                                                                     "given twice"]),
     (["model", "--payload-xy", "1e308,0"], ["--payload-xy 1e308,0: there is no payload to place"]),  # exit 0
     (["run", "stop", "--duration-s", "abc"], ["Invalid value for '--duration-s': expects a number"]),
 ])

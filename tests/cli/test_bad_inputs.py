@@ -370,6 +370,9 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
                                                                  "(foxglove and rerun): give it once"]),  # rerun won
     (["experiment", "chapter5", "--out", "{tmp}/c", "--progress", "--no-progress"], ["--progress/--no-progress "
                                                                                      "given twice"]),
+    (["sweep", "payload", "--out", "{tmp}/s", "--masses", "1000"], ["--masses '1000': 1000 kg is above "
+                                                                     "payload.mass_kg's allowed [0.0, 200.0] kg"]),
+    (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1,1"], ["--runs '1,1': a run is named twice"]),
     (["model", "--payload-xy", "1e308,0"], ["--payload-xy 1e308,0: there is no payload to place"]),  # exit 0
     (["run", "stop", "--duration-s", "abc"], ["Invalid value for '--duration-s': expects a number"]),
 ])
@@ -379,6 +382,36 @@ def test_refusals_name_the_option_and_what_is_allowed(args, words, tmp_path, ref
         monkeypatch.setattr(work, None)  # were the command not refused, its work would fail at once
     line = refused([str(a).format(tmp=tmp_path) for a in args], *words)
     assert not any(w in line for w in ("Input should", "NoneType", "could not convert", "expected non-negative"))
+
+
+def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(tmp_path, refused, monkeypatch):
+    """run goto ran with --ros1, --serial-pty and --odometry ignored (exit 0), and with a time limit of 1e-9 s."""
+    class Started(Exception):
+        pass
+
+    seen = {}
+
+    def navigate(cfg, options, *_args, **_kwargs):
+        seen["options"] = options
+        raise Started
+
+    monkeypatch.setattr("amr_twin.navigation.stack.navigate", navigate)
+    goto = ["run", "goto", "--world", "aisles", "--goal", "0,2.4", "--localisation", "truth"]
+    refused([*goto, "--ros1"], "--ros1 is not available with goals")
+    refused([*goto, "--firmware", "avr", "--serial-pty", tmp_path / "tty"], "--serial-pty is not available with goals")
+    refused([*goto, "--duration-s", "1e-9"], "--duration-s 1e-09: must be in [0.1, 3600] s")
+    odometry = _write(tmp_path / "odo.yaml", "wheel_odometry:\n  left_wheel_radius_m: 0.1251\n"
+                      "  right_wheel_radius_m: 0.1249\n  wheel_separation_m: 0.487\n")
+    with pytest.raises(Started):
+        _call([*goto, "--odometry", odometry])
+    assert seen["options"].odometry_calibration.left_wheel_radius_m == 0.1251
+
+
+def test_umbmark_refuses_a_params_file_setting_what_its_options_choose(tmp_path, refused, monkeypatch):
+    monkeypatch.setattr("amr_twin.experiments.umbmark_seeds.run", None)  # were it not refused, it would fail at once
+    params = _write(tmp_path / "p.yaml", "wheel:\n  tyre_slip: false\n")  # replaced by --tyres without a word
+    refused(["experiment", "umbmark", "--out", tmp_path / "u", "--params", params],
+            f"--params {params}: wheel.tyre_slip is chosen by this command's --tyres/--no-tyres")
 
 
 def test_a_params_file_s_bad_value_names_the_file(tmp_path, refused):

@@ -99,7 +99,7 @@ def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "static") -> 
     from amr_twin.navigation.planner import GlobalPlanner
     from amr_twin.navigation.stack import make_costmap, true_map
 
-    costmap = make_costmap(true_map(cfg, world), robot_footprint(cfg))
+    costmap = make_costmap(true_map(cfg, world), robot_footprint(cfg), cfg.navigation)
     planner = GlobalPlanner(costmap)
     free = _free_cells(costmap)
     out = []

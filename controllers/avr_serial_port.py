@@ -16,8 +16,11 @@ replaced); it is removed when the port closes.
 
 from __future__ import annotations
 
+import array
 import errno
+import fcntl
 import os
+import termios
 import time
 import tty
 from dataclasses import dataclass
@@ -110,6 +113,13 @@ class PtySerialPort:
         out = b"".join(chunks)
         self.bytes_in += len(out)
         return out
+
+    @property
+    def in_waiting(self) -> int:
+        """Bytes the host wrote that the twin has not read yet (pyserial's name)."""
+        count = array.array("i", [0])
+        fcntl.ioctl(self._master, termios.FIONREAD, count)
+        return count[0]
 
     def write(self, data: bytes) -> None:
         """Send ``data`` to the host; what the pseudo-terminal cannot take now is dropped and counted."""

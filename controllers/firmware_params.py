@@ -87,6 +87,12 @@ class ImprovedParams:
     zero_speed_timeout_us: int = 150_000  # no edge for this long -> speed 0, us
     pi_period_us: int = 20_000  # PI tick (50 Hz), us
     publish_every_ticks: int = 5  # wheelN_Vel every 5 PI ticks (10 Hz)
+    publish_mean: bool = True  # wheelN_Vel is the mean speed since the previous sample (edges counted);
+    # False: the PI's sliding-window estimate at that instant (before issue 30; the odometry then loses
+    # about an edge per wheel at each start and stop, docs/umbmark.md)
+    extrapolate_above_rpm: float = 15.0  # the mean counts the part of an edge rolled since the last edge
+    # at this per-edge speed or more: braked from 15 RPM a wheel of the twin rolls 43 mm (5 edges) on, so
+    # the edge is sure to come; below, whole edges only (a sample then resolves one edge, 6.7 RPM at 10 Hz)
     kp: float = 0.5  # proportional gain, RPM of command per RPM of error
     ki: float = 3.0  # integral gain, RPM of command per RPM*s of error, 1/s
     feedforward_gain: float = 0.9  # open-loop command = gain * reference (listing 4.11's bias)

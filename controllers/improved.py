@@ -13,7 +13,14 @@ Differences from the faithful port (see docs/firmware.md):
 - The reference is slew-limited in both directions (decelerations ramp too), by
   the timer, so ``loop()`` never blocks in ``delay()``; a change of direction ramps
   through zero and flips DIR there.
-- wheel0_Vel / wheel1_Vel published at a fixed rate (RPM, magnitude).
+- wheel0_Vel / wheel1_Vel published at a fixed rate (RPM, magnitude): the mean speed since the
+  previous sample (``publish_mean``), the SC edges counted since then, with the part of an edge
+  rolled since the last one at speeds where the next edge is sure to come (the PI keeps the
+  per-edge speed). That is what the wheel odometry node takes a
+  sample for (its window mode), so it counts every edge: its error stays within an edge (8.7 mm
+  of rim) instead of growing by about an edge per wheel at each start and stop, as it did
+  integrating the PI's estimate (which lags at low speeds and is 0 below 4.4 RPM;
+  ``publish_mean=False``; measured in docs/umbmark.md).
 - Same semantics: motion 0 brakes (BRAKE high), motion +-1 at speed 0 coasts
   (STOP low) and the PI leaves that wheel alone.
 """
@@ -52,8 +59,10 @@ class ImprovedFirmware:
         self.rt = ArduinoRuntime(clock, p.board)
         self.pins = self.rt.pins
         self._edges = (deque(maxlen=p.window_edges + 1), deque(maxlen=p.window_edges + 1))
-        self._isr = (lambda: self._edges[0].append(self.rt.micros()),
-                     lambda: self._edges[1].append(self.rt.micros()))
+        self._count = [0, 0]  # SC edges since start (the SC output has no direction)
+        self._position = [0.0, 0.0]  # edges the published samples account for
+        self._published_us = 0
+        self._isr = (lambda: self._edge(0), lambda: self._edge(1))
         self.motion = [STOP, STOP]
         self.setpoint_rpm = [0.0, 0.0]  # commanded magnitude
         self.reference_rpm = [0.0, 0.0]  # ramped, signed (+ = forward)
@@ -72,6 +81,7 @@ class ImprovedFirmware:
             self.rt.digitalWrite(b.stop_pins[i], HIGH)
             self.rt.digitalWrite(b.dir_pins[i], HIGH)
             self.rt.attachInterrupt(self.rt.digitalPinToInterrupt(b.speed_pins[i]), self._isr[i])
+        self._published_us = self.rt.micros()
         self.rt.timer_initialize(self.p.pi_period_us, self._tick)
 
     def on_wheel_command(self, data: Sequence[float]) -> None:
@@ -120,6 +130,27 @@ class ImprovedFirmware:
         return 1 if self.pins[i].dir_level == HIGH else -1
 
     # -- speed -------------------------------------------------------------------------
+    def _edge(self, i: int) -> None:
+        """SC change of wheel ``i`` (ISR): timestamped for the speed, counted for the published mean."""
+        self._edges[i].append(self.rt.micros())
+        self._count[i] += 1
+
+    def mean_rpm(self, i: int, now_us: int, dt_us: int) -> float:
+        """Mean speed magnitude of wheel ``i`` over the last ``dt_us`` (since the previous sample),
+        RPM: the SC edges counted since then and, at ``extrapolate_above_rpm`` or more (where even
+        the brake lets the wheel roll several edges on, so the next edge is sure to come), the part
+        of an edge rolled since the last one, from the per-edge speed; never behind what the
+        previous sample accounted for."""
+        p, edges = self.p, self._edges[i]
+        position = float(self._count[i])
+        if edges and self.speed_rpm[i] >= p.extrapolate_above_rpm:
+            since_us = (now_us - edges[-1]) & 0xFFFFFFFF
+            position += min(self.speed_rpm[i] * p.edges_per_rev * since_us / 60e6, 1.0)
+        position = max(position, self._position[i])
+        rpm = (position - self._position[i]) * 60e6 / (p.edges_per_rev * max(dt_us, 1))
+        self._position[i] = position
+        return rpm
+
     def measured_rpm(self, i: int) -> float:
         """Speed magnitude of wheel ``i`` from its recent SC edges, RPM."""
         p, edges = self.p, self._edges[i]
@@ -174,5 +205,12 @@ class ImprovedFirmware:
             self.rt.analogWrite(b.pwm_pins[i], out)
         self._ticks += 1
         if self._ticks % p.publish_every_ticks == 0:
-            self._publish("wheel0_Vel", self.speed_rpm[0])
-            self._publish("wheel1_Vel", self.speed_rpm[1])
+            if p.publish_mean:
+                now = self.rt.micros()
+                dt_us = (now - self._published_us) & 0xFFFFFFFF
+                self._published_us = now
+                rpm = (self.mean_rpm(0, now, dt_us), self.mean_rpm(1, now, dt_us))
+            else:
+                rpm = self.speed_rpm
+            self._publish("wheel0_Vel", rpm[0])
+            self._publish("wheel1_Vel", rpm[1])

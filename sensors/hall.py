@@ -43,6 +43,11 @@ class HallSensors:
     jitter_us : float
         Standard deviation of a Gaussian timing jitter on each SC edge,
         microseconds (optocoupler/driver latency spread). Default 0.
+    hysteresis_deg : float
+        Width of each latch's hysteresis band, degrees of wheel angle: a sensor toggles
+        ``hysteresis_deg / 2`` past its boundary, forward or backward, so a wheel that stops
+        at a boundary and springs back a little does not toggle it again. Default 0
+        (every path); :meth:`edges_from_samples` only otherwise.
     seed : int or None
         Seed of the ``numpy.random.Generator`` that draws the jitter.
     native : bool
@@ -52,13 +57,16 @@ class HallSensors:
     """
 
     def __init__(self, n_wheels: int = 2, misalignment_deg=0.0, jitter_us: float = 0.0,
-                 seed: int | None = None, native: bool = True):
+                 seed: int | None = None, native: bool = True, hysteresis_deg: float = 0.0):
         self.n_wheels = int(n_wheels)
         nominal_deg = SENSOR_SPACING_DEG * np.arange(N_SENSORS)
         mis = np.broadcast_to(np.asarray(misalignment_deg, dtype=float),
                               (self.n_wheels, N_SENSORS))
         self.offset_rad = np.deg2rad(nominal_deg + mis)  # (n_wheels, 3)
         self.pitch_rad = np.deg2rad(SENSOR_PITCH_DEG)
+        if not 0.0 <= hysteresis_deg < SENSOR_PITCH_DEG:
+            raise ValueError(f"hysteresis_deg: {hysteresis_deg} must be in [0, {SENSOR_PITCH_DEG:g})")
+        self.half_band_rad = math.radians(0.5 * hysteresis_deg)
         self.jitter_us = float(jitter_us)
         self._rng = np.random.default_rng(seed)
         self._count = np.zeros((self.n_wheels, N_SENSORS), dtype=np.int64)
@@ -66,7 +74,7 @@ class HallSensors:
         self.stuck = [[False] * N_SENSORS for _ in range(self.n_wheels)]
         self.glitch_rate_hz = [0.0] * self.n_wheels
         self._glitch_rng = np.random.default_rng([0 if seed is None else seed, 3])
-        self._kernel, self.engine = edge_kernel(self.offset_rad, self.pitch_rad, native)
+        self._kernel, self.engine = edge_kernel(self.offset_rad, self.pitch_rad, self.half_band_rad, native)
 
     def _lattice_index(self, angle_rad: np.ndarray) -> np.ndarray:
         """Toggle count of every sensor, shape ``angle_rad.shape + (3,)``."""
@@ -104,6 +112,8 @@ class HallSensors:
         edge_wheel : ndarray of int64
             Wheel index of each edge.
         """
+        if self.half_band_rad:
+            raise ValueError("HallSensors.edges: the dense path has no hysteresis; use edges_from_samples")
         t_us = np.asarray(t_us, dtype=np.int64)
         angle = np.asarray(angle_rad, dtype=float).reshape(len(t_us), self.n_wheels)
         count = self._lattice_index(angle)                 # (n+1, W, 3)
@@ -193,7 +203,7 @@ class HallSensors:
                 t_arr, q, v = split_trajectory(np.array(ts, np.int64), samples[:, :nw], samples[:, nw:2 * nw], 8)
                 ts, rows = t_arr.tolist(), np.hstack([q, v]).tolist()
                 break
-        pitch, offsets, floor = self.pitch_rad, self.offset_rad.tolist(), math.floor
+        pitch, offsets, floor, hb = self.pitch_rad, self.offset_rad.tolist(), math.floor, self.half_band_rad
         t_first, t_last = ts[0] + 1, ts[-1]
         intervals = range(len(ts) - 1)
         edges: list[tuple[int, int]] = []
@@ -203,18 +213,21 @@ class HallSensors:
             for k, off in enumerate(offsets[w]):
                 if self.stuck[w][k]:
                     continue
-                count = floor((angles[0] - off) / pitch)
+                count = int(self._count[w, k])
                 for i in intervals:
                     q1 = angles[i + 1]
-                    c1 = floor((q1 - off) / pitch)
-                    if c1 == count:
-                        continue
+                    c1 = floor((q1 - off - hb) / pitch)  # forward: toggles hb past the boundary
+                    up = c1 > count
+                    if not up:
+                        c1 = floor((q1 - off + hb) / pitch)  # backward: hb before it
+                        if c1 >= count:
+                            continue
                     q0, t0, span = angles[i], ts[i], ts[i + 1] - ts[i]
                     h = span * 1e-6
                     m0, m1 = speeds[i] * h, speeds[i + 1] * h
-                    up = c1 > count
+                    shift = hb if up else -hb
                     for lattice in (range(count + 1, c1 + 1) if up else range(count, c1, -1)):
-                        s = solve_hermite(q0, q1, m0, m1, off + pitch * lattice)
+                        s = solve_hermite(q0, q1, m0, m1, off + pitch * lattice + shift)
                         t = t0 + s * span
                         if jitter:
                             t += float(self._rng.normal(0.0, self.jitter_us))

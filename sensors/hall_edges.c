@@ -44,31 +44,38 @@ int hall_reverses(int n, const double* rows, int ncol, int nw) {
 }
 
 /* n + 1 samples: ts (n + 1,) us; rows (n + 1, ncol): the nw wheel angles (rad), then their
- * speeds (rad/s). offsets (nw, 3) rad, stuck (nw, 3), pitch rad. Writes each free sensor's final
- * toggle count to count (nw, 3) and the edges (time us, wheel) to out_t, out_w in the order
- * wheel, sensor, interval, crossing. Returns the number of edges, or -1 if more than cap. */
+ * speeds (rad/s). offsets (nw, 3) rad, stuck (nw, 3), pitch rad, hb half the latches' hysteresis
+ * band rad (a sensor toggles hb past its boundary forward, hb before it backward). count (nw, 3):
+ * each sensor's toggle count at ts[0], the free sensors' final ones written back. Writes the
+ * edges (time us, wheel) to out_t, out_w in the order wheel, sensor, interval, crossing. Returns
+ * the number of edges, or -1 if more than cap. */
 int hall_edges(int n, const int64_t* ts, const double* rows, int ncol, int nw, const double* offsets,
-               const int* stuck, double pitch, int64_t* count_out, int64_t* out_t, int* out_w, int cap) {
+               const int* stuck, double pitch, double hb, int64_t* count_io, int64_t* out_t, int* out_w,
+               int cap) {
     int ne = 0;
     int64_t t_first = ts[0] + 1, t_last = ts[n];
     for (int w = 0; w < nw; w++) {
         for (int k = 0; k < 3; k++) {
             if (stuck[3 * w + k]) continue;
             double off = offsets[3 * w + k];
-            int64_t count = (int64_t)floor((rows[w] - off) / pitch);
+            int64_t count = count_io[3 * w + k];
             for (int i = 0; i < n; i++) {
                 double q1 = rows[(i + 1) * ncol + w];
-                int64_t c1 = (int64_t)floor((q1 - off) / pitch);
-                if (c1 == count) continue;
+                int64_t c1 = (int64_t)floor((q1 - off - hb) / pitch);
+                int up = c1 > count;
+                if (!up) {
+                    c1 = (int64_t)floor((q1 - off + hb) / pitch);
+                    if (c1 >= count) continue;
+                }
                 double q0 = rows[i * ncol + w];
                 int64_t t0 = ts[i], span = ts[i + 1] - ts[i];
                 double h = (double)span * 1e-6;
                 double m0 = rows[i * ncol + nw + w] * h, m1 = rows[(i + 1) * ncol + nw + w] * h;
-                int up = c1 > count;
+                double shift = up ? hb : -hb;
                 int64_t lattice = up ? count + 1 : count, last = up ? c1 : c1 + 1;
                 for (;;) {
                     if (ne >= cap) return -1;
-                    double s = solve_hermite(q0, q1, m0, m1, off + pitch * (double)lattice);
+                    double s = solve_hermite(q0, q1, m0, m1, off + pitch * (double)lattice + shift);
                     double t = (double)t0 + s * (double)span;
                     int64_t r = (int64_t)nearbyint(t);
                     r = r > t_first ? r : t_first;
@@ -80,7 +87,7 @@ int hall_edges(int n, const int64_t* ts, const double* rows, int ncol, int nw, c
                 }
                 count = c1;
             }
-            count_out[3 * w + k] = count;
+            count_io[3 * w + k] = count;
         }
     }
     return ne;

@@ -28,10 +28,10 @@ MAX_EDGES = 4096
 class EdgeKernel:
     """The C crossing loop for ``n_wheels`` wheels with hall ``offsets_rad`` (n_wheels, 3) and ``pitch_rad``."""
 
-    def __init__(self, lib: ctypes.PyDLL, offsets_rad: np.ndarray, pitch_rad: float):
+    def __init__(self, lib: ctypes.PyDLL, offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float):
         fn = self._fn = lib.hall_edges
-        p, i = ctypes.c_void_p, ctypes.c_int
-        fn.restype, fn.argtypes = i, [i, p, p, i, i, p, p, ctypes.c_double, p, p, p, i]
+        p, i, d = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+        fn.restype, fn.argtypes = i, [i, p, p, i, i, p, p, d, d, p, p, p, i]
         reverses = self._reverses = lib.hall_reverses
         reverses.restype, reverses.argtypes = i, [i, p, i, i]
         self.n_wheels = len(offsets_rad)
@@ -42,13 +42,13 @@ class EdgeKernel:
         self._any_stuck = False
         self._count = np.zeros(self._offsets.shape, np.int64)
         self._t, self._w = np.zeros(MAX_EDGES, np.int64), np.zeros(MAX_EDGES, np.intc)
-        self._fixed = (address(self._offsets), address(self._stuck), self._pitch, address(self._count),
-                       address(self._t), address(self._w), MAX_EDGES)
+        self._fixed = (address(self._offsets), address(self._stuck), self._pitch, float(half_band_rad),
+                       address(self._count), address(self._t), address(self._w), MAX_EDGES)
 
     def edges(self, ts: list[int], rows: list[list[float]], stuck: list[list[bool]],
               count: np.ndarray) -> list[tuple[int, int]] | None:
-        """``(t_us, wheel)`` edges in the order wheel, sensor, interval, crossing (not sorted), the
-        free sensors' final toggle counts written to ``count`` (n_wheels, 3); None beyond
+        """``(t_us, wheel)`` edges in the order wheel, sensor, interval, crossing (not sorted), from
+        the toggle counts ``count`` (n_wheels, 3), the free sensors' final ones written back; None beyond
         :data:`MAX_EDGES` edges. ``rows`` as :meth:`amr_twin.sensors.hall.HallSensors.edges_from_samples`
         takes them; a chunk where a speed changes sign is resampled first (:func:`split_trajectory`),
         as there. The samples go to C as flat arrays of the angles and speeds only (``array``:
@@ -69,8 +69,9 @@ class EdgeKernel:
             self._stuck[:] = stuck
             self._stuck_as = [list(s) for s in stuck]
             self._any_stuck = any(map(any, stuck))
-        offsets_at, stuck_at, pitch, count_at, t_at, w_at, cap = self._fixed
-        n = self._fn(len(t) - 1, address(t), address(r), ncol, nw, offsets_at, stuck_at, pitch,
+        offsets_at, stuck_at, pitch, half_band, count_at, t_at, w_at, cap = self._fixed
+        self._count[:] = count
+        n = self._fn(len(t) - 1, address(t), address(r), ncol, nw, offsets_at, stuck_at, pitch, half_band,
                      count_at, t_at, w_at, cap)
         if n < 0:
             return None
@@ -82,10 +83,11 @@ class EdgeKernel:
         return list(zip(self._t[:n].tolist(), self._w[:n].tolist()))
 
 
-def edge_kernel(offsets_rad: np.ndarray, pitch_rad: float, native: bool = True) -> tuple[EdgeKernel | None, str]:
+def edge_kernel(offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float = 0.0,
+                native: bool = True) -> tuple[EdgeKernel | None, str]:
     """``(kernel, engine)``: the C crossing loop (None without the helper) and ``"C"`` or ``"Python (<why>)"``."""
     lib, engine = open_helper(C_SOURCE, native)
-    return (EdgeKernel(lib, offsets_rad, pitch_rad) if lib is not None else None), engine
+    return (EdgeKernel(lib, offsets_rad, pitch_rad, half_band_rad) if lib is not None else None), engine
 
 
 def solve_hermite(q0: float, q1: float, m0: float, m1: float, theta: float) -> float:

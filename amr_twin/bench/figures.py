@@ -7,7 +7,7 @@ twin (:mod:`amr_twin.bench.twin`), its sensors (:mod:`amr_twin.bench.sensors`), 
 
 from __future__ import annotations
 
-from amr_twin.bench.physics import RATIOS, bare_physics
+from amr_twin.bench.physics import RATIOS, bare_physics, tyre_figures
 from amr_twin.model.config import TwinConfig
 
 
@@ -38,6 +38,8 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     ``twin_s_per_sim_s`` / ``bare_physics_s_per_sim_s`` / ``ratio``: the whole twin against bare
     physics on one scenario (:mod:`amr_twin.bench.twin`; how the ratios are taken: ``ratios``);
     ``avr_*``: the same with the emulated board (:func:`avr_figures`).
+    ``tyres_*`` and ``rigid_physics_us_per_step``: bare physics with the brush tyres against the
+    rigid contact (:func:`~amr_twin.bench.physics.tyre_figures`).
     ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
     (:mod:`amr_twin.sim.native_build`), which the figures were measured with;
     ``native_engines``: the same for every C helper, by name; ``nav_*``: the navigation stack's
@@ -45,7 +47,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     """
     from amr_twin.bench.twin import twin_figures
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
-    from amr_twin.sim import actors, battery, collisions, grid_steps, rolling_resistance
+    from amr_twin.sim import actors, battery, collisions, grid_steps, rolling_resistance, tyres
     from amr_twin.sim.native_build import native_status
 
     result = bare_physics(cfg, sim_s)
@@ -56,11 +58,12 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     from amr_twin.bench.actors import actor_figures  # four people and jacks, with and without sensors
     result.update(actor_figures(cfg, sim_s))
     result.update(avr_figures(cfg, sim_s))
+    result.update(tyre_figures(cfg, sim_s))
     from amr_twin.bench.navigation import navigation_figures  # planning, controllers, the twin navigating
     result.update(navigation_figures(cfg, sim_s))
     result["timer"] = "process_time"
     result["ratios"] = RATIOS
-    helpers = (grid_steps, rolling_resistance, battery, collisions, actors, hall_edges, imu_errors, lidar_kernels)
+    helpers = (grid_steps, rolling_resistance, battery, collisions, actors, hall_edges, imu_errors, lidar_kernels, tyres)
     engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
     result["rolling_resistance_engine"] = engines["rolling_resistance"]
     result["native_engines"] = engines

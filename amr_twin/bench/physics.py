@@ -76,3 +76,40 @@ def bare_physics(cfg: TwinConfig, sim_s: float) -> dict:
         "realtime_factor_physics": round(sim_s / wall, 1),
         "timestep_s": physics.timestep_s,
     }
+
+
+TYRES_START = (-8.0, 0.0, 0.0)
+"""Start of the tyre comparison: the west end of the warehouse's central aisle, heading along it."""
+
+
+def _driving(cfg: TwinConfig) -> Physics:
+    """The robot settled at :data:`TYRES_START` in the warehouse, then driven 1 s straight at a
+    constant duty (about 0.5 m/s: 16 s stay in the aisle)."""
+    physics = Physics(build(cfg, world="warehouse", start_xy_yaw=TYRES_START).model)
+    physics.settle(0.5)
+    Plant(cfg, physics).apply((DriverPins(8, 1, 0, 1), DriverPins(8, 1, 0, 1)))
+    physics.step(1000)
+    return physics
+
+
+def tyre_figures(cfg: TwinConfig, sim_s: float) -> dict:
+    """Bare physics of the warehouse model with the brush tyres (:mod:`amr_twin.sim.tyres`) against
+    the rigid contact of the model before them (``wheel.tyre_slip`` off), in the same run: each
+    repeat steps a copy of each settled, driving robot (interleaved), ``tyres_physics_ratio`` the
+    median of the repeats' ratios. Issue 30's target: at most 1.10."""
+    from amr_twin.model.config import with_values
+    from amr_twin.sim import tyres
+
+    brush = _driving(with_values(cfg, {"wheel.tyre_slip": True}))
+    rigid = _driving(with_values(cfg, {"wheel.tyre_slip": False}))
+    brush_t, rigid_t = [], []
+    for _ in range(REPEATS):
+        brush_t.append(bare_steps_s(brush.clone(), sim_s))
+        rigid_t.append(bare_steps_s(rigid.clone(), sim_s))
+    nstep = int(round(sim_s / brush.timestep_s))
+    return {
+        "tyres_physics_us_per_step": round(statistics.median(brush_t) / nstep * 1e6, 2),
+        "rigid_physics_us_per_step": round(statistics.median(rigid_t) / nstep * 1e6, 2),
+        "tyres_physics_ratio": round(statistics.median(b / r for b, r in zip(brush_t, rigid_t)), 3),
+        "tyres_engine": tyres.engine(),
+    }

@@ -6,7 +6,10 @@
   without the bridge; the benchmark's scenario
   (:data:`~amr_twin.bench.twin.BENCH_START`, chapter 5 run 3 with IMU and LiDAR), medians of interleaved
   repeats (target 1.25). Only the run is timed (the set-up, rospy's import and the wait for the
-  recorder's connections are not).
+  recorder's connections are not). With it: ``ros1_bridge_messages_per_sim_s`` (what the bridge wrote),
+  ``ros1_bridge_writes_per_sim_s`` (socket writes), ``ros1_bridge_us_per_message`` (the extra CPU over the
+  messages) and ``ros1_bridge_recorded`` (messages in the recorder's bag over messages written, the topics
+  it took; at full speed it may fall behind, which costs the twin nothing).
 - ``ros1_paced_sim_per_wall``: the same bridged twin paced at ``--rate 1`` for ``PACED_S`` simulated
   seconds: simulated over wall seconds of the run (target within 1 % of 1).
 - ``ros1_serial_latency_ms``: the board's serial port on a pseudo-terminal (``--firmware avr
@@ -25,6 +28,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 from amr_twin.bench.twin import BENCH_START
 
@@ -67,7 +71,10 @@ def _measure(mode: str, sim_s: float) -> dict:
         from amr_twin.live.pacer import Pacer
         from amr_twin.ros1.session import Ros1Options, Ros1Session
 
-        pacer = Pacer(twin, 1.0 if mode == "paced" else 0.0)
+        from amr_twin.ros1.session import pacer_tick_us
+
+        rate = 1.0 if mode == "paced" else 0.0
+        pacer = Pacer(twin, rate, pacer_tick_us(rate))
         DiffDriveNode(twin.bus, twin.clock, twin.client)
         session = Ros1Session(twin, pacer, Ros1Options(), say=lambda line: None)
     cpu0, wall0 = time.process_time(), time.perf_counter()
@@ -76,6 +83,7 @@ def _measure(mode: str, sim_s: float) -> dict:
     if session is not None:
         pacer.close()
         session.close()
+        out.update(messages=session.bridge.out.messages, writes=session.bridge.out.writes)
     return out
 
 
@@ -121,6 +129,14 @@ def _serial_latency(sim_s: float) -> dict:
     return {"delays_ms": [d * 1e3 for d in delays], "frame_bytes": len(data), "matched": len(delays) == len(writes)}
 
 
+def _bag_messages(path: str) -> int:
+    """Messages in a bag, but the latched ones (read with the rosbags library)."""
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([Path(path)]) as reader:
+        return sum(c.msgcount for c in reader.connections if c.topic not in ("/tf_static",))
+
+
 def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
     """The figures of the module notes; ``ros1_skipped`` says why when Debian's ROS 1 (or, for the serial
     figure, the AVR toolchain) is absent."""
@@ -142,22 +158,34 @@ def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
                            stderr=subprocess.DEVNULL)
     try:
         time.sleep(1.0)
-        plain, bridged = [], []
+        plain, bridged, runs = [], [], []
         for r in range(repeats):
             say(f"ROS 1 bridge, repeat {r + 1} of {repeats}")
             plain.append(_child("plain", SIM_S, env)["cpu_s"])
-            bridged.append(_child("bridge", SIM_S, env)["cpu_s"])
+            runs.append(_child("bridge", SIM_S, env))
+            bridged.append(runs[-1]["cpu_s"])
+        messages = statistics.median(r["messages"] for r in runs)
         out.update(ros1_bridge_ratio=statistics.median(b / p for b, p in zip(bridged, plain)),
                    ros1_bridge_cpu_s=statistics.median(bridged), ros1_plain_cpu_s=statistics.median(plain),
+                   ros1_bridge_messages_per_sim_s=messages / SIM_S,
+                   ros1_bridge_writes_per_sim_s=statistics.median(r["writes"] for r in runs) / SIM_S,
+                   ros1_bridge_us_per_message=statistics.median(
+                       (b - p) / r["messages"] * 1e6 for b, p, r in zip(bridged, plain, runs)),
                    ros1_scenario=f"chapter 5 run 3 with sensors, {SIM_S:g} s, full speed, rosbag record of "
                                  f"{' '.join(SUBSCRIBED)}")
         say(f"ROS 1 bridge paced at --rate 1 for {PACED_S:g} s")
         paced = _child("paced", PACED_S, env)
         out["ros1_paced_sim_per_wall"] = paced["sim_s"] / paced["wall_s"]
+        out["_paced_messages"] = paced["messages"]
     finally:
         rec.send_signal(2)
         rec.wait(10)
         master.stop()
+    if "ros1_bridge_messages_per_sim_s" in out:
+        kept = _bag_messages(os.path.join(folder, "bench.bag"))
+        written = sum(r["messages"] for r in runs) + out.get("_paced_messages", 0)
+        out["ros1_bridge_recorded"] = f"{kept} of {written}"
+    out.pop("_paced_messages", None)
     avr = missing_tools()
     if avr:
         out["ros1_serial_skipped"] = avr

@@ -22,10 +22,11 @@ JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per 
 YesOpt = typer.Option(False, "--yes", help="Start without asking when the time estimated beforehand is above 10 min "
                       "(without it such a run is refused, its estimate named).")
 
-CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16}
+CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark": 0.012}
 """CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table): a
 100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s on one
-job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s."""
+job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark square (no
+sensors, the empty world): 0.73 s of CPU for its 60 simulated s (issue 30's ten robots, 300 squares)."""
 AVR_COST = 4.0
 """How much more the emulated ATmega2560 costs (the bench's avr_ratio, 5.5, against the loop's 1.3)."""
 CONFIRM_ABOVE_S = 600.0

@@ -56,6 +56,9 @@ def register(app: typer.Typer) -> None:
     from amr_twin.cli.navigation import add_navigation
 
     add_navigation(experiment)
+    from amr_twin.cli.umbmark import add_umbmark
+
+    add_umbmark(experiment)
     _add_faults(experiment)
     _add_payload_sweep(sweep)
 

@@ -216,6 +216,7 @@ class RunOptions:
     config: Optional[Path] = None
     params: Optional[Path] = None
     set_: list[str] = field(default_factory=list)
+    odometry: Optional[Path] = None
     live: Optional[str] = None
     host: str = "127.0.0.1"
     port: Optional[int] = None
@@ -263,6 +264,9 @@ def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
         "config": (Optional[Path], ConfigOpt),
         "params": (Optional[Path], ParamsOpt),
         "set_": (Optional[list[str]], SetOpt),
+        "odometry": (Optional[Path], typer.Option(None, "--odometry", metavar="FILE", help="The wheel odometry "
+                     "node's calibration (YAML: per-wheel radii and wheelbase, as amr-twin experiment umbmark "
+                     "writes it) instead of the nominal geometry.")),
         **live_options(),
         **ros1_options(),
     }

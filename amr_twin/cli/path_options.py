@@ -74,6 +74,7 @@ INPUTS: dict[str, Callable[[object], list[Path]]] = {
     "--route": _route_file,          # a name of experiments/routes/ or a route YAML
     "--map": _world_files,           # a map_server YAML (+ its image): the navigation commands'
     "--slam-map": _world_files,
+    "--odometry": _given,            # the wheel odometry's calibration (run; experiment umbmark writes them)
 }
 """Options whose value names what the command reads: flag -> the files (or folders) it reads."""
 

@@ -130,6 +130,14 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         except ValueError as exc:
             fail(str(exc))
         steps = []  # the stop is the board's state at power-up: nothing is sent on its serial port
+    calibration = None
+    if opts.odometry is not None:
+        from amr_twin.controllers.odometry_calibration import load
+
+        try:
+            calibration = load(opts.odometry)
+        except ValueError as exc:
+            fail(str(exc))
     recording = opts.record is not None or opts.mcap is not None
     from amr_twin.cli.checks import check_memory
 
@@ -139,7 +147,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None, firmware_params=avr_params,
-                          actors=actors)
+                          actors=actors, odometry_calibration=calibration)
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
 
@@ -208,7 +216,9 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0):
         from amr_twin.live.pacer import Pacer
         from amr_twin.live.session import CMD_TIMEOUT_S
 
-        pacer = Pacer(twin, rate)
+        from amr_twin.ros1.session import pacer_tick_us
+
+        pacer = Pacer(twin, rate, pacer_tick_us(rate))
         DiffDriveNode(twin.bus, twin.clock, twin.client, cmd_timeout_s=CMD_TIMEOUT_S)
     try:
         if ros1 is not None:

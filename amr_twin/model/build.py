@@ -10,6 +10,7 @@ world it stands in, compiles it and exports the URDF and the robot MJCF.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,6 +21,7 @@ from amr_twin.model.config import TwinConfig
 from amr_twin.model.paths import ROOT
 from amr_twin.model.robot_spec import GROUP_WORLD, IMU_SENSORS, robot_spec
 from amr_twin.model.urdf import XACRO_FILE, BuildError, robot_urdf
+from amr_twin.model import tyre_numeric as tyres
 
 WORLD_DIR = ROOT / "models" / "worlds"
 ROBOT_PREFIX = "amr/"
@@ -88,6 +90,35 @@ def _without_imu(robot: mujoco.MjSpec) -> mujoco.MjSpec:
     return robot
 
 
+@contextlib.contextmanager
+def _compiling():
+    """No Python ``mjcb_passive`` while MuJoCo compiles: it calls the callback with models of its own,
+    which the bindings cannot hand to Python (the tyres' Python twin, :mod:`amr_twin.sim.tyres`;
+    their C helper needs no such care)."""
+    callback = mujoco.get_mjcb_passive()
+    if callback is None:
+        yield
+        return
+    mujoco.set_mjcb_passive(None)
+    try:
+        yield
+    finally:
+        mujoco.set_mjcb_passive(callback)
+
+
+def _tyre_contacts(scene: mujoco.MjSpec, cfg: TwinConfig) -> None:
+    """The tyres' floor forces by the brush model (:mod:`amr_twin.sim.tyres`): the wheels' contacts
+    carry the normal force only (condim 1; their priority makes it win the mix), the model carries
+    the tyre parameters (a numeric) and their deflection states (user data). The exported robot
+    MJCF keeps the rigid contact: these forces need the twin's callback."""
+    for side in ("left", "right"):
+        geom = scene.geom(f"{ROBOT_PREFIX}wheel_{side}_collision")
+        geom.condim = 1
+        geom.friction = [0.0, 0.0, 0.0]
+    scene.add_numeric(name=tyres.NUMERIC, data=tyres.numeric_values(cfg, scene.nuserdata))
+    scene.nuserdata += tyres.USERDATA_SIZE
+
+
 def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
           xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, actors: tuple = (),
           obstacles: tuple = ()) -> Build:
@@ -104,7 +135,8 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
     """
     urdf = robot_urdf(cfg, xacro_file)
     robot = robot_spec(cfg, urdf, visuals)
-    robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
+    with _compiling():
+        robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
     scene = _world_spec(cfg, world)
     for ob in obstacles:
         scene.worldbody.add_geom(name=f"obstacle_{ob.name}", type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
@@ -121,15 +153,20 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
     if held:  # the work station of fig. 5.1: the chassis welded where it stands
         scene.add_equality(type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
                            name1=ROBOT_PREFIX + "base_link", name="stand")
+    if cfg.wheel.tyre_slip:
+        _tyre_contacts(scene, cfg)
     if actors:
         from amr_twin.model.actors import add_actors, check_speeds
 
         check_speeds(tuple(actors), cfg)
         add_actors(scene, tuple(actors), cfg)
     try:
-        model = scene.compile()
+        with _compiling():
+            model = scene.compile()
     except Exception as exc:
         raise BuildError(f"MuJoCo compile: {str(exc).splitlines()[0]}") from None
+    if cfg.wheel.tyre_slip:
+        tyres.set_addresses(model, ROBOT_PREFIX)
     if actors:
         from amr_twin.model.actor_space import check_paths
 

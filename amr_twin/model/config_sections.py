@@ -54,6 +54,9 @@ PosVec3 = tuple[_Pos, _Pos, _Pos]
 class SimCfg(Section):
     timestep_s: float = P(unit="s", ge=2e-4, le=0.002, setting=True)
     floor_friction: float = P(unit="1", ge=0.05, le=2.0)
+    floor_friction_field: bool = P(unit="bool", setting=True)
+    floor_friction_low: float = P(unit="1", ge=0.05, le=2.0)
+    floor_patch_m: float = P(unit="m", ge=0.1, le=4.0)
     gravity_m_s2: float = P(unit="m/s^2", ge=0.0, le=20.0)
 
 
@@ -112,6 +115,13 @@ class WheelCfg(Section):
     tyre_stiffness_n_m: float = P(unit="N/m", ge=1e4, le=1e6)
     tyre_damping_n_s_m: float = P(unit="N*s/m", ge=0.0, le=1e4)
     rolling_resistance: float = P(unit="1", ge=0.0, le=0.1)
+    tyre_slip: bool = P(unit="bool", setting=True)
+    cornering_stiffness_per_n: float = P(unit="1/rad", ge=0.5, le=50.0)
+    slip_stiffness_per_n: float = P(unit="1", ge=0.5, le=50.0)
+    relaxation_length_lateral_m: float = P(unit="m", ge=0.005, le=0.5)
+    relaxation_length_longitudinal_m: float = P(unit="m", ge=0.005, le=0.5)
+    tyre_crown_radius_m: float = P(unit="m", ge=0.003, le=0.1)
+    tyre_loss_time_s: float = P(unit="s", ge=0.0, le=0.05)
     radius_error_left_m: float = P(unit="m", ge=-0.01, le=0.01)
     radius_error_right_m: float = P(unit="m", ge=-0.01, le=0.01)
     separation_error_m: float = P(unit="m", ge=-0.05, le=0.05)
@@ -119,6 +129,7 @@ class WheelCfg(Section):
     separation_tolerance_m: float = P(unit="m", ge=0.0, le=0.02, setting=True)
     hall_misalignment_sigma_deg: float = P(unit="deg", ge=0.0, le=2.0, setting=True)
     hall_jitter_us: float = P(unit="us", ge=0.0, le=100.0, setting=True)
+    hall_hysteresis_deg: float = P(unit="deg", ge=0.0, le=2.0)
 
     def radius_of(self, side: str) -> float:
         """The ``left`` or ``right`` tyre's true rolling radius, m: ``radius_m`` plus its error."""

@@ -6,8 +6,8 @@ Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mca
   ``/odom``, ``/tf`` (odom -> base_link), ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
   ``/cmd_vel``, ``/wheel_Command``, ``/wheel0_Vel``, ``/wheel1_Vel`` (as the firmware publishes them)
   and ``/wheel_Command_Service/request``; ``/tf_static`` latched;
-- ``/clock`` every ``clock_period_us`` of simulated time, a clock event of its own (the nodes run
-  with ``/use_sim_time``, which the session sets);
+- ``/clock`` every ``clock_period_us`` of simulated time (written at the pacer's ticks, each instant's
+  message; the nodes run with ``/use_sim_time``, which the session sets);
 - from grid samples, handed over at the pacer's ticks (:mod:`amr_twin.live.pacer`): ``/joint_states``
   and the joints' links on ``/tf`` (50 Hz: what robot_state_publisher would send), ``/twin/ground_truth``
   (100 Hz), ``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current`` (100 Hz), ``/battery_state``
@@ -23,10 +23,12 @@ the bridge itself put on the graph is not taken back, and one taken from the gra
 With ``firmware_topics=False`` (the board's serial port served to a rosserial host, which carries them)
 ``wheel_Command``, ``wheel0_Vel`` and ``wheel1_Vel`` are left to the host.
 
-A message is built only for a topic someone subscribes to (``get_num_connections``), and written to its
-subscribers' sockets as it is published (rospy's publishers without a queue: a queue's hand-over to a
-writer thread cost 45 us of CPU a message against 6 us): none is dropped, and a twin running as fast as
-it can runs no faster than its slowest subscriber takes them.
+A message is built only for a topic someone subscribes to. The high-rate ones (the types of
+:data:`~amr_twin.ros1.serialization.WRITERS`, ``/clock``) are serialised here and written at the pacer's
+ticks (20 ms paced, :data:`~amr_twin.ros1.session.UNPACED_TICK_US` unpaced), a tick's messages of a topic in one write
+(:class:`~amr_twin.ros1.outbox.Outbox`); the rest, and the latched topics, go through rospy's publishers
+(without a queue: a writer thread's hand-over cost 45 us of CPU a message). The writes block: none is
+dropped, and a twin running as fast as it can runs no faster than its subscribers' sockets take them.
 """
 
 from __future__ import annotations
@@ -41,16 +43,17 @@ from amr_twin.ros import ros_state
 from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from amr_twin.ros1.messages import InputError, Ros1Messages, twist_from_ros, wheel_command_from_ros
+from amr_twin.ros1.outbox import Outbox
+from amr_twin.ros1.serialization import WRITERS, StateFrames, clock_us, float64_multi_array
 from amr_twin.sim.event_log import statuses
 
 LOG = logging.getLogger(__name__)
 
 FIRMWARE_TOPICS = ("wheel_Command", "wheel0_Vel", "wheel1_Vel")
 ROW_TOPICS = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current")
-STATE_BATCH = 10
-"""Grid samples of the joint and base state published together when the twin runs unpaced (100 ms)."""
 DIAGNOSTICS_PERIOD_ROWS = 100
 """The battery's status on /diagnostics every 100th row of the 100 Hz grid (1 Hz)."""
+
 
 
 class Ros1Bridge:
@@ -74,6 +77,7 @@ class Ros1Bridge:
         self.twin, self.pacer, self.bus = twin, pacer, twin.bus
         self.dropped = 0
         """Messages from the graph refused (each logged)."""
+        self.out = Outbox()
         self._closed = False
         self._from_graph: str | None = None  # the bus topic of a message being handed over from the graph
         self._lock = threading.Lock()
@@ -91,6 +95,9 @@ class Ros1Bridge:
                      if bus not in skip and not (bus == "uwb/range" and getattr(twin, "uwb", None) is None)}
         self.pubs["tf_static"] = pub("/tf_static", "tf2_msgs/TFMessage", latch=True)
         self.tf = self.pubs["tf"]
+        self._fast = {bus: (p, WRITERS[BUS_TOPICS[bus][1]]) for bus, p in self.pubs.items()
+                      if bus in BUS_TOPICS and BUS_TOPICS[bus][1] in WRITERS and bus != "wheel_Command_Service/request"}
+        """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to the outbox."""
         self.clock_pub = pub("/clock", "rosgraph_msgs/Clock")
         self.state_pubs = {"/twin/ground_truth": pub("/twin/ground_truth", "nav_msgs/Odometry"),
                            "/joint_states": pub("/joint_states", "sensor_msgs/JointState")}
@@ -118,42 +125,58 @@ class Ros1Bridge:
         self._state = ros_state.StateSampler(twin.physics.model, twin.physics.data)
         twin.samplers.append(self._state.sample)
         self._state.sample(twin.t_phys_us)
+        self._frames = StateFrames(self._state.joint_names, self._state.child_frames, ros_state.BASE_FRAME)
         self._rows = None  # the recorder's columns, sampled once a row topic has a subscriber (LiveRows)
         self._events_sent: set = set()
         twin.bus.add_tap(self._tap)
-        now = twin.clock.now_us
-        self._clock_event = twin.clock.schedule_every(now, clock_period_us, self._publish_clock, publishes=())
+        self._clock_period_us = int(clock_period_us)
+        self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
     def start(self) -> None:
         """The graph's subscribers have connected (before the run): sample the recorder's columns if one of
         their topics is wanted (later, from the first flush that finds a subscriber)."""
-        if self._rows is None and any(p.get_num_connections() for p in (*self.row_pubs.values(), self.battery_pub,
-                                                                          self.diag_pub)):
+        if self._rows is None and any(Outbox.wanted(p) for p in (*self.row_pubs.values(), self.battery_pub,
+                                                                 self.diag_pub)):
             self._rows = LiveRows(self.twin)
 
     # -- out (the twin's thread) ------------------------------------------------------------
     def _tap(self, topic: str, msg, t_us: int) -> None:
+        fast = self._fast.get(topic)
+        if fast is not None:  # the high-rate path: a few hundred messages a simulated second
+            pub, writer = fast
+            impl = pub.impl
+            if impl is not None and impl.connections and topic != self._from_graph:
+                self.out.put(pub, writer(msg))
+            return
         pub = self.pubs.get(topic)
-        if pub is None or topic == self._from_graph or not (topic == "tf_static" or pub.get_num_connections()):
+        if pub is None or topic == self._from_graph:
+            return
+        if topic == "tf_static":  # latched: rospy keeps it for later subscribers
+            pub.publish(self.conv.to_ros(msg))
+            return
+        if not Outbox.wanted(pub):
             return
         if topic == "wheel_Command_Service/request":
             msg = Float64MultiArray(MultiArrayLayout([MultiArrayDimension(REQUEST_FIELDS, 4, 4)]),
                                     [float(msg.motionL), float(msg.speedL), float(msg.motionR), float(msg.speedR)])
-        pub.publish(self.conv.encode(msg))
+        writer = WRITERS.get(msg._type)
+        if writer is None:
+            pub.publish(self.conv.to_ros(msg))
+        else:
+            self.out.put(pub, writer(msg))
 
-    def _publish_clock(self) -> None:
-        if self.clock_pub.get_num_connections():
-            now = self.twin.clock.now_us
-            self.clock_pub.publish(self.conv.ros_class("rosgraph_msgs/Clock")(
-                self.rospy.Time(now // 1_000_000, now % 1_000_000 * 1000)))
+    def _publish_clock(self, t_us: int) -> None:
+        """``/clock`` at each multiple of the clock's period up to ``t_us``."""
+        period, wanted = self._clock_period_us, Outbox.wanted(self.clock_pub)
+        while self._next_clock_us <= t_us:
+            if wanted:
+                self.out.put(self.clock_pub, clock_us(self._next_clock_us))
+            self._next_clock_us += period
 
     def flush(self, t_us: int) -> None:
-        """Publish the grid samples and events up to ``t_us`` (simulated), in time order.
-
-        Unpaced, the joint and base state waits for :data:`STATE_BATCH` grid samples (numpy's work costs
-        per call, not per sample); the pacer's last flush takes what is left."""
-        if self.pacer.rate > 0 or self.pacer.closed or len(self._state.t_us) >= STATE_BATCH:
-            self._publish_state(t_us)
+        """Publish the clock, the grid samples and events up to ``t_us`` (simulated), and write the outbox."""
+        self._publish_clock(t_us)
+        self._publish_state(t_us)
         if self._rows is None:
             self.start()
         else:
@@ -161,31 +184,30 @@ class Ros1Bridge:
             if rows is not None:
                 self._publish_rows(rows)
         self._publish_events(t_us)
+        self.out.flush()
 
     def _publish_state(self, t_us: int) -> None:
         batch = self._state.split(t_us)
-        gt, js = self.state_pubs["/twin/ground_truth"], self.state_pubs["/joint_states"]
-        want_gt, want_js, want_tf = gt.get_num_connections(), js.get_num_connections(), self.tf.get_num_connections()
-        if batch.t_us and (want_gt or want_js or want_tf):
-            a = {key: v.tolist() for key, v in batch.arrays().items()}
+        gt, js, out = self.state_pubs["/twin/ground_truth"], self.state_pubs["/joint_states"], self.out
+        want_gt, want_js, want_tf = Outbox.wanted(gt), Outbox.wanted(js), Outbox.wanted(self.tf)
+        if len(batch) and (want_gt or want_js or want_tf):
+            a = {key: v.tolist() for key, v in batch.arrays(0 if want_gt else JOINT_STATE_PERIOD_US, want_gt).items()}
             for i, ts in enumerate(a["t_us"]):
                 if want_gt:
-                    gt.publish(self.conv.encode(ros_state.ground_truth(ts, a["pos"][i], a["quat"][i], a["v_body"][i],
-                                                                       a["w_body"][i])))
+                    out.put(gt, WRITERS["nav_msgs/Odometry"](ros_state.ground_truth(
+                        ts, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i])))
                 if ts % JOINT_STATE_PERIOD_US == 0:
                     if want_js:
-                        js.publish(self.conv.encode(ros_state.joint_state(ts, batch.joint_names, a["q"][i], a["qd"][i])))
+                        out.put(js, self._frames.joint_state(ts, a["q"][i], a["qd"][i]))
                     if want_tf:
-                        self.tf.publish(self.conv.encode(ros_state.link_transforms(ts, batch.child_frames,
-                                                                                   a["link_pos"][i], a["link_quat"][i])))
+                        out.put(self.tf, self._frames.link_transforms(ts, a["link_pos"][i], a["link_quat"][i]))
 
     def _publish_rows(self, rows) -> None:
-        encode = self.conv.encode
         for topic, column in zip(ROW_TOPICS, (rows.true_rpm, rows.pwm_counts, rows.current_a)):
             pub = self.row_pubs[topic]
-            if pub.get_num_connections():
+            if Outbox.wanted(pub):
                 for values in column.astype(float).tolist():
-                    pub.publish(encode(Float64MultiArray(data=values)))
+                    self.out.put(pub, float64_multi_array(Float64MultiArray(data=values)))
         want_battery, want_diag = self.battery_pub.get_num_connections(), self.diag_pub.get_num_connections()
         if not (want_battery or want_diag):
             return
@@ -257,7 +279,7 @@ class Ros1Bridge:
         if self._closed:
             return
         self._closed = True
-        self._clock_event.cancel()
+        self.out.flush()
         self.bus.remove_tap(self._tap)
         for sub in self._subs:
             sub.unregister()

@@ -4,9 +4,8 @@ The twin's messages (:mod:`amr_twin.ros.messages`, ``geometry_messages``, ``sens
 the ROS 1 field names and their ``_type``; :class:`Ros1Messages` fills the rospy class of the same type
 field by field, following the class' ``_slot_types`` (a plan kept per class): ``time`` from the twin's
 ``Time(sec, nanosec)``, arrays as plain lists (``rospy.numpy_msg`` fails with numpy >= 2.3), nested
-messages recursively. :meth:`Ros1Messages.encode` takes the fast path for the high-rate types: their
-bytes written by :mod:`amr_twin.ros1.serialization`, carried by a subclass of the rospy class that
-writes them as they are. Incoming ``cmd_vel`` and ``wheel_Command`` come back as the twin's messages,
+messages recursively (the bridge's low-rate and latched messages; the high-rate ones are written by
+:mod:`amr_twin.ros1.serialization`). Incoming ``cmd_vel`` and ``wheel_Command`` come back as the twin's messages,
 checked by :mod:`amr_twin.live.inputs` as any client's are.
 """
 
@@ -17,7 +16,6 @@ from typing import Any, Callable
 from amr_twin.live.inputs import InputError, _finite, check_request
 from amr_twin.ros.geometry_messages import Twist, Vector3
 from amr_twin.ros.messages import Float64MultiArray
-from amr_twin.ros1.serialization import WRITERS
 
 PRIMITIVE = {"float64": float, "float32": float, "string": str, "bool": bool}
 
@@ -34,7 +32,6 @@ class Ros1Messages:
         self._get_class = roslib.message.get_message_class
         self._classes: dict[str, type] = {}
         self._plans: dict[type, list[tuple[str, Callable[[Any], Any]]]] = {}
-        self._raw: dict[str, type] = {}
 
     def ros_class(self, type_name: str) -> type:
         """The rospy message class of ``pkg/Name`` (ValueError if Debian's packages lack it)."""
@@ -45,28 +42,6 @@ class Ros1Messages:
                 raise ValueError(f"no ROS 1 message class {type_name} (install its python3-*-msgs package)")
             self._classes[type_name] = cls
         return cls
-
-    def raw_class(self, type_name: str) -> type:
-        """A subclass of the rospy class of ``type_name`` made from serialised bytes: ``cls(raw)``."""
-        cls = self._raw.get(type_name)
-        if cls is None:
-            def __init__(self, raw: bytes):
-                self.raw = raw
-
-            def serialize(self, buff):
-                buff.write(self.raw)
-
-            base = self.ros_class(type_name)
-            cls = self._raw[type_name] = type(f"Serialized{base.__name__}", (base,), {
-                "__slots__": ("raw",), "_has_header": False, "__init__": __init__, "serialize": serialize})
-        return cls
-
-    def encode(self, msg) -> Any:
-        """``msg`` ready for a rospy publisher: its bytes (high-rate types) or :meth:`to_ros`."""
-        writer = WRITERS.get(msg._type)
-        if writer is None:
-            return self.to_ros(msg)
-        return self.raw_class(msg._type)(writer(msg))
 
     def to_ros(self, msg) -> Any:
         """``msg`` (a twin message with ``_type``) as an instance of its rospy class."""

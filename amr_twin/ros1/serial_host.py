@@ -12,7 +12,8 @@ No registry here ships rosserial, so this node speaks the protocol as upstream's
 - a time request (id 10) is answered with ``rospy.Time.now()`` (simulated time under ``/use_sim_time``);
   the client's time requests keep the link in sync: after ``3 * timeout`` s without one the host
   drops sync and asks for the topics again (a *renegotiation*, logged and counted);
-- on shutdown it tells the client to stop (TX_STOP, id 11).
+- on shutdown it tells the client to stop (TX_STOP, id 11);
+- a port that cannot be opened (not there yet) is tried again every :data:`RETRY_S`, as upstream's does.
 
 Parameters (private, as serial_node's): ``~port`` (``/dev/ttyACM0``), ``~baud`` (57600),
 ``~timeout`` (5 s). Run with Debian's Python (``/usr/bin/python3``), e.g. through
@@ -29,11 +30,14 @@ import select
 import struct
 import termios
 import threading
+import time
 import tty
 
 from amr_twin.ros.rosserial_frame import ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, ID_TX_STOP, FrameParser, TopicInfo, frame
 
 ID_LOG, ID_PARAMETER_REQUEST = 7, 6
+RETRY_S = 0.5
+"""Wait between two attempts to open a port that is not there, s (upstream's serial_node keeps trying too)."""
 
 
 def open_port(path: str, baud: int) -> int:
@@ -171,11 +175,20 @@ def main() -> None:
     port = rospy.get_param("~port", "/dev/ttyACM0")
     baud = int(rospy.get_param("~baud", 57600))
     timeout_s = float(rospy.get_param("~timeout", 5.0))
-    try:
-        fd = open_port(port, baud)
-    except (OSError, ValueError) as exc:
-        rospy.logfatal("rosserial: cannot open %s: %s", port, exc)
-        raise SystemExit(1)
+    fd, said = None, False
+    while fd is None:
+        try:
+            fd = open_port(port, baud)
+        except ValueError as exc:
+            rospy.logfatal("rosserial: cannot open %s: %s", port, exc)
+            raise SystemExit(1)
+        except OSError as exc:  # not there (yet): a board plugged in later, a twin started later
+            if not said:
+                rospy.logerr("rosserial: cannot open %s (%s); trying again every %g s", port, exc.strerror, RETRY_S)
+                said = True
+            if rospy.is_shutdown():
+                return
+            time.sleep(RETRY_S)
     rospy.loginfo("rosserial: connected to %s at %d baud", port, baud)
     host = SerialHost(rospy, fd, timeout_s)
     host.spin()

@@ -91,6 +91,41 @@ def float64(m) -> bytes:
     return struct.pack("<d", m.data)
 
 
+_TIME = struct.Struct("<II")
+
+
+def clock_us(t_us: int) -> bytes:
+    """``rosgraph_msgs/Clock`` at ``t_us`` (simulated us)."""
+    return _TIME.pack(t_us // 1_000_000, t_us % 1_000_000 * 1000)
+
+
+class StateFrames:
+    """``sensor_msgs/JointState`` and the moving links' ``tf2_msgs/TFMessage`` written straight from a grid
+    sample's values (one ``struct`` call each, no message objects): the bytes :func:`joint_state` and
+    :func:`tf_message` give for :func:`amr_twin.ros.ros_state.joint_state` and ``link_transforms``."""
+
+    def __init__(self, joint_names, child_frames, parent: str):
+        n = len(joint_names)
+        names = b"".join(_string(name) for name in joint_names)
+        self._names, self._n = names, n
+        self._js = struct.Struct(f"<IIIII{len(names)}sI{n}dI{n}dI")
+        self._links = [_string(parent) + _string(child) for child in child_frames]
+        self._tf = struct.Struct("<I" + "".join(f"III{len(b)}s7d" for b in self._links))
+
+    def joint_state(self, t_us: int, q, qd) -> bytes:
+        """Positions ``q`` and velocities ``qd`` (n,) at ``t_us``; no efforts."""
+        n, sec, nsec = self._n, t_us // 1_000_000, t_us % 1_000_000 * 1000
+        return self._js.pack(0, sec, nsec, 0, n, self._names, n, *q, n, *qd, 0)
+
+    def link_transforms(self, t_us: int, link_pos, link_quat) -> bytes:
+        """Each link's position (3,) and orientation (4,) w, x, y, z relative to the parent, at ``t_us``."""
+        sec, nsec = t_us // 1_000_000, t_us % 1_000_000 * 1000
+        args = [len(self._links)]
+        for blob, (x, y, z), (w, qx, qy, qz) in zip(self._links, link_pos, link_quat):
+            args += (0, sec, nsec, blob, x, y, z, qx, qy, qz, w)
+        return self._tf.pack(*args)
+
+
 WRITERS: dict[str, Callable] = {
     "sensor_msgs/Imu": imu, "sensor_msgs/MagneticField": magnetic_field, "nav_msgs/Odometry": odometry,
     "tf2_msgs/TFMessage": tf_message, "sensor_msgs/JointState": joint_state, "sensor_msgs/LaserScan": laser_scan,

@@ -22,13 +22,41 @@ from dataclasses import dataclass
 from amr_twin.ros1.master import DEFAULT_MASTER_URI, Master, master_problem, start_roscore
 
 NODE_NAME = "amr_twin"
-SETTLE_MAX_S = 2.0
-"""Longest wait for the graph's subscribers to connect before the twin runs, wall s."""
+SETTLE_MAX_S = 10.0
+"""Longest wait for the graph's subscribers to connect before the twin runs, wall s (it ends as soon as they
+are: a few ms each; the bound only matters for a node the master lists that does not answer, or a machine so
+busy that connecting takes seconds, where 2 s was too short)."""
+UNPACED_TICK_US = 200_000
+"""The pacer's tick when the twin runs unpaced on the graph, us. Each tick stops the physics' grid loop and
+costs numpy's work on the state samples and a write per topic and subscriber, whatever their number (20 ms
+ticks cost 12 % of the twin's CPU without a subscriber; 100 ms ticks put the bridge at 1.27x, 200 ms at 1.22x);
+unpaced, nothing waits on the wall clock. A message from the graph acts at the next tick (200 ms of simulated
+time, ~3 ms of wall time at full speed)."""
+
+
+def pacer_tick_us(rate: float) -> int:
+    """The pacer's tick for a bridged twin paced at ``rate`` (0: unpaced), us."""
+    from amr_twin.live.pacer import TICK_US
+
+    return TICK_US if rate > 0 else UNPACED_TICK_US
 
 
 def master_uri() -> str:
     """``ROS_MASTER_URI``, or ROS 1's default."""
     return os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+
+
+def _leave_own_clock(rospy) -> None:
+    """The twin is the graph's clock: where ``/use_sim_time`` was already set, rospy subscribed the node to
+    ``/clock`` when it joined, and every clock message the twin wrote came back to its own process to be
+    read and decoded by rospy's thread (~27 us of CPU each). Unsubscribe it; rospy's time in the twin's
+    process stays where it was (its own stamps come from the simulation)."""
+    import rospy.impl.simtime as simtime
+
+    sub = getattr(simtime, "_clock_sub", None)
+    if sub is not None:
+        sub.unregister()
+        simtime._clock_sub = None
 
 
 @dataclass(frozen=True)
@@ -67,6 +95,7 @@ class Ros1Session:
                 os.environ.setdefault("ROS_IP", "127.0.0.1")
             rospy = self.rospy = import_rospy()
             rospy.init_node(NODE_NAME, anonymous=False, disable_signals=True, log_level=rospy.WARN)
+            _leave_own_clock(rospy)
             rospy.set_param("/use_sim_time", True)
             rospy.set_param("/robot_description", twin.urdf)
             self.bridge = Ros1Bridge(twin, pacer, firmware_topics=options.firmware_topics)
@@ -79,7 +108,9 @@ class Ros1Session:
         where = f"a private roscore at {self.master.uri}" if options.roscore else f"the master at {self.master.uri}"
         say(f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; "
             "publish /wheel_Command or /cmd_vel to drive it)")
-        self.settle()
+        if not self.settle():
+            say(f"ros1: not every node the master lists on the twin's topics connected within {SETTLE_MAX_S:g} s; "
+                "the run starts without them")
         self.bridge.start()
 
     def _publishers(self) -> list:

@@ -259,3 +259,12 @@ class GridRows:
     def clear(self) -> None:
         """Forget all rows."""
         self._set_n(0)
+
+    def take_until(self, t_us: int) -> np.ndarray:
+        """The rows kept at or before ``t_us`` (a copy), forgetting them; later rows stay."""
+        n = self.n
+        k = int(np.searchsorted(self._buf[:n, 0], t_us, side="right"))
+        out = self._buf[:k].copy()
+        self._buf[:n - k] = self._buf[k:n]
+        self._set_n(n - k)
+        return out

@@ -83,6 +83,8 @@ class TwinOptions:
     actors: tuple = ()  # amr_twin.model.actors.Actor items: people and pallet jacks moved on the grid
     # (amr_twin.sim.actors), their true poses on actors/poses
     firmware_params: object = field(default=None, compare=False)
+    odometry_calibration: object = None  # controllers/odometry_calibration.OdometryCalibration: the odometry
+    # node's effective wheel radii and wheelbase (a UMBmark calibration); None: the nominal geometry
 
 
 class Twin:
@@ -100,6 +102,14 @@ class Twin:
         physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals, options.sensors,
                                         options.settle_s, where, tuple(options.actors), options.obstacles)
         self.physics = physics
+        self.floor = None
+        """The floor's friction field of this run (:mod:`amr_twin.sim.floor_friction`), drawn from the
+        seed with ``sim.floor_friction_field`` and the brush tyres; None otherwise."""
+        if cfg.sim.floor_friction_field and physics.tyres_engine is not None:
+            from amr_twin.sim.floor_friction import draw
+
+            self.floor = draw(cfg, options.seed)
+            physics.set_floor_friction(self.floor)
         self.urdf = urdf
         """The robot description as built (``/robot_description`` of a recording)."""
         self.dt_us = int(round(self.physics.timestep_s * US))
@@ -111,7 +121,8 @@ class Twin:
                                   loss_prob=options.rosserial_loss_prob, seed=options.seed)
         self.plant = Plant(cfg, self.physics)
         self.hall = HallSensors(2, misalignment_deg=options.hall_misalignment_deg,
-                                jitter_us=options.hall_jitter_us, seed=options.seed)
+                                jitter_us=options.hall_jitter_us, seed=options.seed,
+                                hysteresis_deg=cfg.wheel.hall_hysteresis_deg)
         self.hall.reset(self.physics.wheel_angles_rad())
         self.firmware = make_firmware(options.firmware, self.clock, self._arduino_publish,
                                       options.firmware_params)
@@ -123,8 +134,12 @@ class Twin:
             self.firmware.connect(self.bus, self.link)
         else:
             self.bus.subscribe("wheel_Command", self._to_arduino)
+        calibration = options.odometry_calibration
         self.odometry = (WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
-                                       wheel_separation_m=cfg.wheel.separation_m) if options.odometry else None)
+                                       wheel_separation_m=cfg.wheel.separation_m,
+                                       **({} if calibration is None else
+                                          calibration.multipliers(cfg.wheel.radius_m, cfg.wheel.separation_m)))
+                         if options.odometry else None)
         self.recorder = Recorder(self)
         self.grid_us = self.dt_us * self.recorder.every
         self.rolling = RollingResistance(self.physics, cfg)

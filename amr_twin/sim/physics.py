@@ -20,6 +20,7 @@ import numpy as np
 
 from amr_twin.model.build import ROBOT_PREFIX
 from amr_twin.model.robot_spec import CASTERS, WHEELS
+from amr_twin.model.tyre_numeric import NUMERIC as TYRE_NUMERIC
 
 
 class DivergenceError(RuntimeError):
@@ -76,7 +77,22 @@ class Physics:
         self._drive_range = m.actuator_forcerange[self.actuator].copy()
         self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
         self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
+        self.tyres_engine = None
+        """What computes the brush tyres' forces (:mod:`amr_twin.sim.tyres`): ``"C"``, ``"Python (...)"``,
+        or None for the rigid contact (``wheel.tyre_slip`` off)."""
+        if mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, TYRE_NUMERIC) >= 0:
+            from amr_twin.sim import tyres
+
+            self.tyres_engine = tyres.install()
         mujoco.mj_forward(m, self.data)
+
+    def set_floor_friction(self, field) -> None:
+        """Give the brush tyres the floor's friction field (:class:`~amr_twin.sim.floor_friction.FrictionField`,
+        or None for ``wheel.friction`` everywhere); ValueError with the rigid contact."""
+        from amr_twin.sim.floor_friction import set_friction_field
+
+        set_friction_field(self.model, self.data, *((None, None) if field is None
+                                                    else (field.spacing_m, field.values.tolist())))
 
     def clone(self) -> "Physics":
         """An independent copy in its present state: the model and the data (contacts and

@@ -24,10 +24,12 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
     assert r["rolling_resistance_engine"] == "C" or r["rolling_resistance_engine"].startswith("Python (")
     assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "actors",
-                                        "hall_edges", "imu_errors", "lidar_beams"}
+                                        "hall_edges", "imu_errors", "lidar_beams", "tyres"}
     assert r["actors_ratio"] > 0 and r["actors_sensors_over_sensors"] > 0 and r["actors_over_twin"] > 0
     assert r["actors_collisions"] == 0 and r["actors_engine"] == r["native_engines"]["actors"]
     assert all(e == "C" or e.startswith("Python (") for e in r["native_engines"].values())
+    assert r["tyres_physics_ratio"] > 0 and r["rigid_physics_us_per_step"] > 0  # issue 30: brush against rigid
+    assert r["tyres_engine"] == r["native_engines"]["tyres"]
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
     assert 0 < r["nav_plan_ms_p50"] <= r["nav_plan_ms_p95"] and r["nav_plans"] == 30  # issue 32's figures
     for setup in ("truth_rpp", "ekf_mppi"):

@@ -2,6 +2,7 @@
 protocol (no ROS needed): ros_lib's negotiation, time sync, TX_STOP, and no publishing before configured."""
 
 import os
+import select
 import struct
 import time
 
@@ -26,17 +27,32 @@ def link(tmp_path_factory):
     twin.firmware.pacer.rate = 50.0  # the pacing's rate: 50x real time keeps the test short
     fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
     parser = FrameParser()
+    port = twin.firmware.serial
+    received = [0]
+
+    def until(condition, what: str) -> None:  # the kernel hands pseudo-terminal bytes over in its own time
+        deadline = time.monotonic() + 30.0
+        while not condition():
+            assert time.monotonic() < deadline, f"not within 30 s: {what}"
+            select.select([fd], [], [], 0.01)
 
     def exchange(seconds: float, send: bytes = b"") -> list:
+        """Write ``send``, let the board see it, run ``seconds``, and read every byte the board wrote."""
         if send:
             os.write(fd, send)
+            until(lambda: port.in_waiting >= len(send), "the host's bytes on the board's side")
         twin.advance(seconds)
-        time.sleep(0.01)
-        try:
-            data = os.read(fd, 1 << 16)
-        except BlockingIOError:
-            data = b""
-        return parser.feed(data)
+        chunks = []
+
+        def read_all() -> bool:
+            try:
+                chunks.append(os.read(fd, 1 << 16))
+                received[0] += len(chunks[-1])
+            except BlockingIOError:
+                pass
+            return received[0] >= port.bytes_out
+        until(read_all, "the board's bytes on the host's side")
+        return parser.feed(b"".join(chunks))
 
     yield twin, exchange, parser
     os.close(fd)

@@ -61,11 +61,14 @@ def test_acceptance_of_issue_8(default_run):
     assert set(a) == set(fusion.ARCHITECTURES)
     assert s["odom_drift_final_m"] > 0.0 and math.isfinite(s["odom_drift_final_m"])
     # with the robot's own tyre and track errors (issue 18) the gyro beats the odometry on
-    # heading, absolute and relative: on every seed of 0-9 of both routes (README)
+    # heading, absolute and relative: on every seed of 0-9 of both routes (README). Issue 30: the
+    # odometry counts every SC edge, so its heading error is the robot's (seed 0: 7.5 against the
+    # gyro's 1.3 deg RMS); the edges it lost at each start and stop before had offset that drift
+    # on this seed, by chance (1.3-3.3 deg RMS, with where they fell)
     assert a["odom+imu"]["rms_yaw_err_deg"] < a["odom"]["rms_yaw_err_deg"]
     assert a["odom+imu"]["rpe_rot_deg"] < a["odom"]["rpe_rot_deg"]
-    # on seeds 0-9 kiss-icp stays within 0.14 m (issue 8 asked 0.10: seeds 3 and 8, the robots with the
-    # worst odometry prior, miss it) and beats the odometry; ranges and gyro together are best
+    # on seeds 0-9 kiss-icp stays within 0.12 m (issue 8 asked 0.10: seed 8, the robot with the worst
+    # odometry prior, misses it) and beats the odometry; ranges and gyro together are best
     assert a["odom+lidar"]["ate_m"] < min(0.15, a["odom"]["ate_m"])
     assert a["odom+uwb+imu"]["ate_m"] == min(e["ate_m"] for e in a.values())
     assert s["map_walls_within_2_cells_frac"] >= 0.90   # 93.5-99.8 % on seeds 0-9

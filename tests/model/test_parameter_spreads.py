@@ -82,7 +82,7 @@ def test_settings_are_never_drawn(space):
         assert space.spreads[key].kind == EXACT and not space.spreads[key].drawn, key
     assert not [k for k in space.drawn_keys() if k.startswith(("navigation.", "actors."))]  # ranges or not
     drawn = space.draw(8, include=("sim.", "payload.", "ekf.", "mapping.")).names
-    assert drawn == ("sim.floor_friction",)
+    assert drawn == ("sim.floor_friction", "sim.floor_friction_low", "sim.floor_patch_m")  # the floor's, all physical
 
 
 def test_calibrated_parameters_come_from_the_report(space):
@@ -96,7 +96,7 @@ def test_calibrated_parameters_come_from_the_report(space):
 def test_a_calibrated_value_the_report_does_not_describe_is_refused(tmp_path):
     mine = tmp_path / "mine.yaml"
     mine.write_text(yaml.safe_dump({"driver": {"gain": {"value": 1.9, "source": "calibrated: my own log"}}}))
-    with pytest.raises(ConfigError, match=r"driver.gain: 1.9 here but 1.629 in the calibration report"):
+    with pytest.raises(ConfigError, match=r"driver.gain: 1.9 here but 1.647 in the calibration report"):
         ParameterSpace.load(override_file=mine)
     with pytest.raises(ConfigError, match="no such|cannot read"):
         ParameterSpace.load(calibration=tmp_path / "missing.yaml")

@@ -74,17 +74,22 @@ def corridors(tmp_path_factory):
 @pytest.fixture(scope="module")
 def blocked(corridors):
     jack = Obstacle("pallet_jack", 6.2, 2.5, (0.6, 1.95, 1.3))  # across the south corridor
-    return _go(corridors, (1.0, 2.5, 0.0), (11.0, 2.5, 0.0), obstacles=[jack]), jack
+    return [_go(corridors, (1.0, 2.5, 0.0), (11.0, 2.5, 0.0), obstacles=[jack], seed=s) for s in (0, 1, 2)], jack
 
 
 def test_a_blocked_aisle_leads_to_a_replan_through_another(blocked, corridors):
-    run, jack = blocked
-    assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
-    assert run.collisions == []
-    went = run.pose_true[:, 1]
-    assert went.max() > 4.8  # round the middle wall, through the north corridor (y = 4.5 to 6.5)
-    assert footprint_clearance_m(run.pose_true[::10], FP, _boxes(corridors, [jack])).min() > 0.05  # 0.11 m: round the wall end
-    assert len(run.outcomes[0].plan_cpu_s) >= 5  # replanned on the way, at 1 Hz
+    """Three seeds (MPPI's samples, the sensors' noise): an episode can end stuck in its recoveries at
+    the middle wall's west end (issue 30: 1 of 18 episodes, seeds 0-5 on three plant variants, timed
+    out; the others took 31-98 s), so two of three must succeed, and every success goes round."""
+    runs, jack = blocked
+    done = [run for run in runs if run.outcomes[0].status == "succeeded"]
+    assert len(done) >= 2, [run.outcomes[0].reason for run in runs]
+    assert all(run.collisions == [] for run in runs)
+    for run in done:
+        went = run.pose_true[:, 1]
+        assert went.max() > 4.8  # round the middle wall, through the north corridor (y = 4.5 to 6.5)
+        assert footprint_clearance_m(run.pose_true[::10], FP, _boxes(corridors, [jack])).min() > 0.05  # round the wall end
+        assert len(run.outcomes[0].plan_cpu_s) >= 5  # replanned on the way, at 1 Hz
 
 
 def test_the_stack_is_built_from_the_navigation_section_and_its_overrides(corridors):

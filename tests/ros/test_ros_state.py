@@ -221,3 +221,30 @@ def test_cmd_vel_and_service_calls_are_in_the_bag(tmp_path):
     assert len(calls) == 2 and calls[0] == pytest.approx([1, left, 1, right], rel=1e-6)
     assert calls[1] == [0.0, 0.0, 0.0, 0.0]
     assert [m.data.tolist() for _t_ns, m in bag["/wheel_Command"]] == calls
+
+
+def test_the_state_samplers_c_form_keeps_the_python_forms_values_and_arrays_take_a_period():
+    from amr_twin.model.config import load_config
+    from amr_twin.ros.ros_state import StateSampler
+    from amr_twin.sim.loop import Twin, TwinOptions
+
+    twin = Twin(load_config(), TwinOptions(world="empty"))
+    native = StateSampler(twin.physics.model, twin.physics.data)
+    python = StateSampler(twin.physics.model, twin.physics.data, native=False)
+    assert native.sample.grid_native is not None and python.sample.grid_native is None
+    twin.samplers += [native.sample, python.sample]
+    twin.client.linear(0.5)
+    twin.advance(0.5)  # the loop's grid in Python (a sampler without a C form): both samplers called there
+    twin.samplers.remove(python.sample)
+    twin.advance(0.5)  # in C: the native one alone
+    assert len(native) == 100 and np.array_equal(native.sample.rows[:50], python.sample.rows)
+    assert native.t_us == list(range(10_000, 1_000_001, 10_000))
+    moved = native.arrays()
+    assert np.ptp(moved["pos"][:, 0]) > 0.1 and np.ptp(moved["q"][:, 0]) > 1.0  # the robot drove, its wheels turned
+    half = native.split(500_000)
+    assert half.t_us[-1] == 500_000 and native.t_us[0] == 510_000  # split takes the samples up to the instant
+    every = half.arrays(20_000, base=False)
+    full = half.arrays()
+    assert every["t_us"].tolist() == list(range(20_000, 500_001, 20_000)) and "pos" not in every
+    for key in ("q", "qd", "link_pos", "link_quat"):
+        assert np.array_equal(every[key], full[key][1::2]), key

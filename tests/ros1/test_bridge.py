@@ -3,7 +3,9 @@
 
 One 20 s run with sensors (module fixture) at 5x real time, recorded while robot_state_publisher turns its
 /joint_states into transforms on /rsp_tf (remapped, so that they can be told from the twin's own). At full
-speed (18x to 50x real time here), and at 10x, rosbag record's subscriber queues overflow: it drops messages.
+speed, and at 10x, rosbag record's subscriber queues (100 messages a topic) can overflow on a busy machine: it
+drops messages. At 5x it keeps every one (the counts below are exact), provided it is connected before the
+twin runs and has read every byte before it is stopped: the tests wait for both, never for a fixed time.
 """
 
 import subprocess
@@ -16,7 +18,8 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import ROOT, needs_ros1, stop
+from conftest import (ROOT, connected_subscribers, needs_ros1, services, stop, subscribers, wait_for,
+                      wait_until_recorded)
 
 AMR_TWIN = str(Path(sys.executable).with_name("amr-twin"))
 URDF = ROOT / "models" / "amr" / "amr.urdf"
@@ -43,12 +46,17 @@ def bag(ros_env, tmp_path_factory):
                             "/tf_static:=/rsp_tf_static", "__name:=test_rsp", "_publish_frequency:=1000.0"], env=ros_env,
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        time.sleep(1.5)  # both subscribed before the twin starts
+        # both on the graph before the twin starts (it then connects to them before it runs: Ros1Session.settle),
+        # and the recorder connected to robot_state_publisher's output
+        wait_for(lambda: all("/test_record" in subscribers(ros_env, t) for t in TOPICS)
+                 and "/test_rsp" in subscribers(ros_env, "/joint_states")
+                 and "/test_record" in connected_subscribers(ros_env, "/test_rsp", "/rsp_tf"),
+                 "rosbag record and robot_state_publisher on the graph")
         run = subprocess.run([AMR_TWIN, "run", "linear", "--speed-m-s", "0.5", "--duration-s", str(RUN_S), "--world",
                               "empty", "--sensors", "--ros1", "--rate", "5", "--json"], env=ros_env, capture_output=True, text=True,
                              timeout=120)
         assert run.returncode == 0, run.stderr
-        time.sleep(1.0)  # the last messages reach the recorder
+        wait_until_recorded(rec.pid)  # the twin's last messages are in the recorder
     finally:
         stop(rsp)
         stop(rec)
@@ -69,11 +77,12 @@ def test_rosbag_info_shows_every_topic_at_its_rate_on_sim_time(bag):
                       ("/clock", 100), ("/twin/ground_truth", 100), ("/battery_state", 10)):
         assert counts[topic] == int(RUN_S * hz) + 1, topic
     assert abs(counts["/scan"] - RUN_S * 5.5) <= 1.5
+    assert counts["/tf"] == 2 * (int(RUN_S * 50) + 1)  # odom -> base_link (odometry node) and the moving links
     assert counts["/tf_static"] == 1 and counts["/wheel_Command"] == 1
     assert counts["/wheel0_Vel"] >= 5 and counts["/diagnostics"] >= RUN_S  # the battery once a second
-    # robot_state_publisher: one transform message per joint state it takes (its subscriber keeps one
-    # message: at 5x real time it skips some)
-    assert 0.3 * counts["/joint_states"] <= counts["/rsp_tf"] <= counts["/joint_states"]
+    # robot_state_publisher: at most one transform message per joint state it takes; its subscriber keeps one
+    # message (queue size 1), so how many of the 1001 it takes depends on the CPU it gets, not on the twin
+    assert 1 <= counts["/rsp_tf"] <= counts["/joint_states"]
     # the bag's time is the twin's simulated time (use_sim_time), not the wall clock's 2026
     # (the recorder's clock reads 0 until its first /clock: the first instants' messages take their times then)
     assert 0.0 <= info["start"] < 0.2 and abs(info["end"] - RUN_S) < 0.05
@@ -141,10 +150,19 @@ def test_a_tf2_buffer_from_the_bag_finds_every_urdf_frame_at_every_scan(bag):
 def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_transforms(bag):
     path, _info, _run = bag
     rospy, buf, _scans, rsp = _tf_buffer(path)
+    import rosbag
+
+    with rosbag.Bag(str(path)) as b:
+        joint_stamps = {msg.header.stamp for _topic, msg, _t in b.read_messages(topics=["/joint_states"])}
     wheels = [t for t in rsp if t.child_frame_id == "wheel_left_link"]
-    assert len(wheels) >= 300 and all(t.header.frame_id == "base_link" for t in wheels)
+    # robot_state_publisher keeps one joint state at a time (queue size 1): it takes as many of the 1001 as the
+    # CPU it gets allows, each at that joint state's stamp; on any machine some, across the whole run
+    assert len(wheels) >= 10 and all(t.header.frame_id == "base_link" for t in wheels)
+    assert all(t.header.stamp in joint_stamps for t in wheels)
+    seen = sorted(t.header.stamp.to_sec() for t in wheels)
+    assert seen[0] < 0.25 * RUN_S and seen[-1] > 0.75 * RUN_S, seen
     angles, offsets = [], []
-    for t in wheels[::25]:
+    for t in wheels:
         mine = buf.lookup_transform("base_link", "wheel_left_link", t.header.stamp).transform
         theirs = t.transform
         offsets.append(np.subtract([theirs.translation.x, theirs.translation.y, theirs.translation.z],
@@ -162,14 +180,18 @@ def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_trans
     assert np.abs(np.array(offsets)).max() < 3e-3
 
 
-def _echo_once(env, topic: str, timeout_s: float = 30.0) -> dict:
-    out = subprocess.run(["rostopic", "echo", "-n", "1", topic], env=env, capture_output=True, text=True,
-                         timeout=timeout_s)
-    assert out.returncode == 0, out.stderr
-    return yaml.safe_load(out.stdout.split("---")[0])
+SPEEDS = """
+import rospy
+from std_msgs.msg import Float64
+rospy.init_node("test_speeds")
+rospy.Subscriber("/wheel0_Vel", Float64, lambda m: print(rospy.get_rostime().to_sec(), m.data, flush=True))
+rospy.spin()
+"""
 
 
 def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env, catkin_setup):
+    import json
+
     import pexpect
 
     from conftest import in_workspace
@@ -177,16 +199,26 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
     _rosparam_set(ros_env, "/use_sim_time", True)
     service = subprocess.Popen(in_workspace(catkin_setup, "rosrun amr_idea_control wheel_Command_Service"),
                                env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    time.sleep(1.0)  # the service registered: the twin connects to it before it runs (Ros1Session.settle)
-    twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "40", "--world", "empty", "--ros1", "--rate", "4",
-                             "--json"], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     command = subprocess.Popen(["rostopic", "echo", "-n", "1", "--filter", "m.data[1] > 0", "/wheel_Command"],
                                env=ros_env, stdout=subprocess.PIPE, text=True)  # not the twin's own stop at t = 0
+    # each speed the firmware publishes, with the simulated time it arrived (Debian's rospy; rostopic would not
+    # subscribe before someone publishes the topic)
+    speeds = subprocess.Popen(["/usr/bin/python3", "-c", SPEEDS], env=ros_env, stdout=subprocess.PIPE, text=True)
+    twin = client = None
     try:
-        time.sleep(2.0)  # the service and the echo on the graph; the twin's own stop at t = 0 is behind us
+        # everything on the graph and waiting before the twin starts: the service with the echo connected to its
+        # wheel_Command, the speed echo subscribed (the twin connects to it before it runs), the client's menu
         client = pexpect.spawn("bash", ["-c", f"source {catkin_setup} && rosrun amr_idea_control wheel_Command_Client"],
-                               env=ros_env, encoding="utf-8", timeout=20)
+                               env=ros_env, encoding="utf-8", timeout=60)
         client.expect("choice: ")
+        wait_for(lambda: any(n.startswith("/rostopic") for n in connected_subscribers(ros_env, "/wheel_Command_Service",
+                                                                                      "/wheel_Command"))
+                 and "/test_speeds" in subscribers(ros_env, "/wheel0_Vel"),
+                 "the service, the echo and the speed listener on the graph")
+        twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "40", "--world", "empty", "--ros1", "--rate",
+                                 "4", "--json"], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        wait_for(lambda: "/amr_twin" in connected_subscribers(ros_env, "/wheel_Command_Service", "/wheel_Command"),
+                 "the twin connected to the service's wheel_Command")
         client.sendline("1")
         client.expect(r"linear speed \[m/s\]: ")
         client.sendline("0.7")
@@ -195,45 +227,69 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
         client.expect("choice: ")
         client.sendline("0")
         client.expect(pexpect.EOF)
-        sent = yaml.safe_load(command.communicate(timeout=20)[0].split("---")[0])
+        sent = yaml.safe_load(command.communicate(timeout=60)[0].split("---")[0])
         # listing 4.4: 0.7 m/s -> 0.7 * 60 / (0.25 pi) = 53.476 RPM, both wheels forward, float32 as the request
         assert sent["data"] == pytest.approx([1.0, 53.476, 1.0, 53.476], abs=1e-3)
-        time.sleep(2.5)  # ~10 simulated s at 4x: the PI has settled
-        speed = _echo_once(ros_env, "/wheel0_Vel")["data"]
-        assert abs(speed - 53.476) <= 4.0  # the firmware's THRESHOLD_CONTROL
-        out, err = twin.communicate(timeout=60)
+        out, err = twin.communicate(timeout=120)
         assert twin.returncode == 0, err
     finally:
         for proc in (command, twin):
-            if proc.poll() is None:
+            if proc is not None and proc.poll() is None:
                 proc.kill()
+        if client is not None:
+            client.close(force=True)
         stop(service)
-    import json
-
+        stop(speeds)
+    rows = [line.split() for line in speeds.communicate(timeout=30)[0].splitlines() if line.strip()]
+    t_s, rpm = np.array([float(t) for t, _v in rows]), np.array([float(v) for _t, v in rows])
+    # the firmware publishes |RPM| once a revolution from the command on (t_s[0]); from 10 simulated s later the
+    # PI has settled: every speed it publishes is within its THRESHOLD_CONTROL (4 RPM) of 53.476
+    settled = rpm[t_s > t_s[0] + 10.0]
+    assert len(settled) >= 5, (t_s, rpm)
+    assert np.all(np.abs(settled - 53.476) <= 4.0), settled
     wheels = json.loads(out)["wheels"]
     assert all(abs(wheels[w]["true_final_rpm"] - 53.476) < 4.0 for w in ("left", "right"))
+
+
+STOP_MOTOR = """
+import rospy
+from std_srvs.srv import Empty
+rospy.init_node("test_stop_motor")
+print("ready", flush=True)
+rospy.wait_for_service("/stop_motor")
+while rospy.get_rostime().to_sec() < 2.0:  # simulated time: some scans first
+    rospy.sleep(0.01)
+t0 = rospy.get_rostime().to_sec()
+rospy.ServiceProxy("/stop_motor", Empty)()
+rospy.sleep(0.05)  # the clock of the instant the call acted has come
+print(t0, rospy.get_rostime().to_sec(), flush=True)
+"""
 
 
 def test_the_lidars_stop_motor_service_on_the_graph_stops_the_scans(ros_env, tmp_path):
     from rosbags.highlevel import AnyReader
 
+    _rosparam_set(ros_env, "/use_sim_time", True)
     mcap = tmp_path / "run.mcap"
-    twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "12", "--world", "empty", "--sensors", "--ros1",
-                             "--rate", "2", "--mcap", str(mcap)], env=ros_env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)
+    # the caller (Debian's rospy) is on the graph first, and calls 2 simulated s into the run
+    caller = subprocess.Popen(["/usr/bin/python3", "-c", STOP_MOTOR], env=ros_env, stdout=subprocess.PIPE, text=True)
+    twin = None
     try:
-        twin.stderr.readline()  # "ros1: the twin is /amr_twin ...": on the graph
-        time.sleep(1.0)
-        call = subprocess.run(["rosservice", "call", "--wait", "/stop_motor"], env=ros_env, capture_output=True,
-                              text=True, timeout=30)
-        assert call.returncode == 0, call.stderr
-        twin.wait(60)
+        assert caller.stdout.readline().strip() == "ready"
+        wait_for(lambda: "/test_stop_motor" in subscribers(ros_env, "/clock"), "the caller subscribed to /clock")
+        twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "12", "--world", "empty", "--sensors",
+                                 "--ros1", "--rate", "2", "--mcap", str(mcap)], env=ros_env, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, text=True)
+        t0, t1 = map(float, caller.communicate(timeout=120)[0].split())
+        _out, err = twin.communicate(timeout=120)
+        assert twin.returncode == 0, err
     finally:
-        if twin.poll() is None:
-            twin.kill()
-    assert twin.returncode == 0
+        for proc in (caller, twin):
+            if proc is not None and proc.poll() is None:
+                proc.kill()
     with AnyReader([mcap]) as reader:
-        stamps = [t * 1e-9 for c, t, _raw in reader.messages(connections=[c for c in reader.connections
-                                                                             if c.topic == "/scan"])]
-    assert stamps and stamps[-1] < 9.0  # the motor stopped some seconds into the 12 s run: no scan after
-    assert len(stamps) >= 5  # it scanned before (at 5.5 Hz)
+        stamps = np.array([t * 1e-9 for c, t, _raw in reader.messages(connections=[c for c in reader.connections
+                                                                                   if c.topic == "/scan"])])
+    assert 2.0 <= t0 <= t1 <= 10.0  # the call acted between t0 and t1, 2 s or more before the run's end (12 s)
+    assert len(stamps) >= 5 and stamps.max() >= t0 - 0.2  # it scanned at 5.5 Hz until the call ...
+    assert stamps.max() <= t1  # ... and not after it: no scan in the 2 s or more left

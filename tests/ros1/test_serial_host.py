@@ -110,36 +110,53 @@ def test_a_frame_before_negotiation_or_no_time_request_for_15_s_makes_the_host_a
     assert host.renegotiations == 1 and [f.topic_id for f in host.frames()][-1] == ID_PUBLISHER
 
 
+DRIVE = """
+import sys
+import rospy
+from amr_idea_control.srv import RequestPacket
+from std_msgs.msg import Float64
+rospy.init_node("test_drive")
+print("ready", flush=True)
+sys.stdin.readline()  # the host has configured the board and is connected to the service's wheel_Command
+rospy.ServiceProxy("/wheel_Command_Service", RequestPacket)(1, 40.0, 1, 40.0)
+while not rospy.is_shutdown():  # the board's speed, through the pseudo-terminal and the host, on the graph
+    speed = rospy.wait_for_message("/wheel0_Vel", Float64, timeout=120).data
+    if speed > 20.0:
+        print(speed, flush=True)
+        break
+"""
+
+
 @needs_ros1
 @needs_avr
 def test_listing_4_1s_launch_on_the_twins_serial_port_moves_the_emulated_board(ros_env, catkin_setup, tmp_path):
+    from conftest import connected_subscribers, services, wait_for
+
     pty = tmp_path / "ttyACM0"
-    twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--firmware", "avr", "--serial-pty", str(pty), "--ros1",
-                             "--rate", "4", "--duration-s", "30", "--world", "empty", "--json"], env=ros_env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    launch = None
+    # the launch file first: its host waits for the port (as upstream's does); the twin then creates it
+    launch = subprocess.Popen(in_workspace(catkin_setup, f"roslaunch amr_idea_bringup amr_idea.launch port:={pty} "
+                                           "serial_pkg:=amr_idea_bringup serial_type:=rosserial_host"),
+                              env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    drive = twin = None
     try:
-        for _ in range(100):
-            if pty.is_symlink():
-                break
-            time.sleep(0.1)
-        launch = subprocess.Popen(in_workspace(catkin_setup, f"roslaunch amr_idea_bringup amr_idea.launch port:={pty} "
-                                               "serial_pkg:=amr_idea_bringup serial_type:=rosserial_host"),
-                                  env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        time.sleep(3.0)
-        call = subprocess.run(in_workspace(catkin_setup, "rosservice call --wait /wheel_Command_Service 1 40 1 40"),
-                              env=ros_env, capture_output=True, text=True, timeout=30)
-        assert call.returncode == 0, call.stderr
-        # the board's speed, through the pseudo-terminal and the host, on the graph
-        echo = subprocess.run(["rostopic", "echo", "-n", "1", "/wheel0_Vel"], env=ros_env, capture_output=True,
-                              text=True, timeout=30)
-        assert echo.returncode == 0 and yaml.safe_load(echo.stdout.split("---")[0])["data"] > 20.0
-        out, err = twin.communicate(timeout=60)
+        (tmp_path / "drive.py").write_text(DRIVE)
+        drive = subprocess.Popen(in_workspace(catkin_setup, f"/usr/bin/python3 {tmp_path / 'drive.py'}"), env=ros_env,
+                                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert drive.stdout.readline().strip() == "ready"
+        wait_for(lambda: "/wheel_Command_Service" in services(ros_env), "the launch file's service on the graph")
+        twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--firmware", "avr", "--serial-pty", str(pty), "--ros1",
+                                 "--rate", "4", "--duration-s", "30", "--world", "empty", "--json"], env=ros_env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        wait_for(lambda: "/serial_node" in connected_subscribers(ros_env, "/wheel_Command_Service", "/wheel_Command"),
+                 "the host negotiated the board's topics and connected to the service")
+        speed, why = drive.communicate("go\n", timeout=120)
+        assert speed and float(speed) > 20.0, why
+        out, err = twin.communicate(timeout=120)
     finally:
-        if twin.poll() is None:
-            twin.kill()
-        if launch is not None:
-            stop(launch)
+        for proc in (drive, twin):
+            if proc is not None and proc.poll() is None:
+                proc.kill()
+        stop(launch)
     assert twin.returncode == 0, err
     assert not pty.exists() and not pty.is_symlink()  # the link goes with the run
     wheels = json.loads(out)["wheels"]

@@ -43,3 +43,15 @@ def test_the_writer_gives_genpys_bytes(msg):
     assert WRITERS[msg._type](msg) == buff.getvalue()
     back = conv.ros_class(msg._type)().deserialize(WRITERS[msg._type](msg))  # and genpy reads it back
     assert back._type == msg._type
+
+
+def test_the_state_frames_are_the_writers_bytes_of_ros_states_messages():
+    from amr_twin.ros1.serialization import StateFrames, joint_state, tf_message
+
+    joints, links = ["wheel_left_joint", "caster_front_left_joint"], ["wheel_left_link", "caster_front_left_link"]
+    frames = StateFrames(joints, links, "base_link")
+    q, qd = rng.normal(size=2).tolist(), rng.normal(size=2).tolist()
+    pos, quat = rng.normal(size=(2, 3)).tolist(), rng.normal(size=(2, 4)).tolist()
+    for t_us in (0, 40_000, 1_234_560_000):
+        assert frames.joint_state(t_us, q, qd) == joint_state(ros_state.joint_state(t_us, joints, q, qd))
+        assert frames.link_transforms(t_us, pos, quat) == tf_message(ros_state.link_transforms(t_us, links, pos, quat))

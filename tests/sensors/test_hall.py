@@ -152,12 +152,13 @@ def test_edge_times_are_the_cubics_roots_to_the_microsecond(seed):
 
 
 @pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
-@pytest.mark.parametrize("seed", range(4))
-def test_c_crossing_loop_gives_the_python_twins_edges_and_counts(seed):
+@pytest.mark.parametrize("seed, hysteresis_deg", [(0, 0.0), (1, 0.0), (2, 0.3), (3, 0.3)])
+def test_c_crossing_loop_gives_the_python_twins_edges_and_counts(seed, hysteresis_deg):
     """Random chunks (both directions, a speed changing sign, a stuck sensor, a long fast chunk)."""
     rng = np.random.default_rng(seed)
     mis = rng.uniform(-0.5, 0.5, (2, 3))
-    c, py = HallSensors(misalignment_deg=mis), HallSensors(misalignment_deg=mis, native=False)
+    c = HallSensors(misalignment_deg=mis, hysteresis_deg=hysteresis_deg)
+    py = HallSensors(misalignment_deg=mis, native=False, hysteresis_deg=hysteresis_deg)
     assert c.engine == "C" and py.engine == "Python (native=False)"
     for chunk in range(30):
         n = int(rng.integers(1, 40))
@@ -173,3 +174,55 @@ def test_c_crossing_loop_gives_the_python_twins_edges_and_counts(seed):
         got, want = c.edges_from_samples(ts, rows), py.edges_from_samples(ts, rows)
         assert got == want and np.array_equal(c._count, py._count)
     assert len(want) > 0
+
+
+def _spring_back(hall: HallSensors) -> list:
+    """A wheel rolling forward that stops 0.12 deg past a boundary (at 4 deg) and springs back
+    0.15 deg, sampled every 10 ms (angle and speed: a cosine stop, then a cosine return)."""
+    stop, back = np.radians(4.12), np.radians(0.15)
+    t = np.arange(0, 0.400001, 0.01)
+    q = np.where(t < 0.2, stop - np.radians(2.0) * (1 + np.cos(np.pi * t / 0.2)) / 2,
+                 stop - back * (1 - np.cos(np.pi * (t - 0.2) / 0.2)) / 2)
+    v = np.where(t < 0.2, np.radians(2.0) * np.pi / 0.4 * np.sin(np.pi * t / 0.2),
+                 -back * np.pi / 0.4 * np.sin(np.pi * (t - 0.2) / 0.2))
+    q, v = np.column_stack([q, q]), np.column_stack([v, v])
+    hall.reset(q[0])
+    return hall.edges_from_samples((t * 1e6).round().astype(int).tolist(), np.hstack([q, v]).tolist())
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_the_latches_hysteresis_keeps_a_wheel_springing_back_from_toggling_again(native):
+    """Without hysteresis the sensor passed at 4 deg toggles back (two SC changes, which a counter
+    without direction takes for two edges of travel); with a 0.2 deg band it toggled at 4.1 deg and
+    the wheel, back to 3.97 deg, stays inside the band (one change each wheel)."""
+    plain = _spring_back(HallSensors(n_wheels=2, native=native))
+    latch = _spring_back(HallSensors(n_wheels=2, native=native, hysteresis_deg=0.2))
+    assert len(plain) == 4 and len(latch) == 2 and {w for _, w in latch} == {0, 1}
+
+
+def test_hysteresis_shifts_steady_edges_by_half_the_band_and_keeps_their_spacing():
+    w = 2.0  # rad/s
+    t = np.arange(0, 0.5, 0.01)
+    rows = np.column_stack([0.01 + w * t, np.full_like(t, w)]).tolist()
+    ts = (t * 1e6).round().astype(int).tolist()
+    found = []
+    for band in (0.0, 0.4):
+        hall = HallSensors(n_wheels=1, hysteresis_deg=band)
+        hall.reset([0.01])
+        found.append(np.array([e for e, _ in hall.edges_from_samples(ts, rows)]))
+    plain, shifted = found
+    assert len(plain) == len(shifted) > 10
+    assert np.allclose(shifted - plain, np.radians(0.2) / w * 1e6, atol=1.0)
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_latch_remembers_its_state_from_one_chunk_to_the_next(native):
+    """A wheel that stops inside the band (4.05 deg: past the boundary at 4, short of the 4.1 where
+    the latch toggles), then, in the loop's next chunk, rolls on to 4.5 deg: one change, at 4.1."""
+    hall = HallSensors(n_wheels=1, native=native, hysteresis_deg=0.2)
+    hall.reset([0.0])
+    w = np.radians(2.0)  # rad/s
+    first = hall.edges_from_samples([0, 1_000_000, 2_025_000], [[0.0, w], [w, w], [np.radians(4.05), 0.0]])
+    second = hall.edges_from_samples([2_025_000, 3_000_000, 4_000_000],
+                                     [[np.radians(4.05), 0.0], [np.radians(4.3), w], [np.radians(4.5), 0.0]])
+    assert first == [] and len(second) == 1

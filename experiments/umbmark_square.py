@@ -1,0 +1,200 @@
+"""One UMBmark square driven by the twin on its own wheel odometry (Borenstein and Feng, 1996).
+
+The robot starts at rest, drives ``side_m`` straight, comes to rest, turns 90 degrees in place
+(left for counter-clockwise, right for clockwise), comes to rest, four times; each leg and each
+turn ends where the wheel odometry node (:class:`~amr_twin.controllers.odometry.WheelOdometry`,
+calibrated or not) says, as UMBmark drives a real robot. The driver (:class:`SquareDriver`) is a
+node on the bus: it acts on each wheel speed sample the firmware publishes (``wheel1_Vel``, 10 Hz
+with the improved firmware), the instant the odometry has integrated it, and commands through
+the ``wheel_Command`` client as a user would. Its profile (:class:`Profile`):
+
+- a motion starts on a sample and its command ramps up by ``accel`` a sample (within the
+  firmware's own slew limit, 150 RPM/s = 1.96 m/s^2 at the rim);
+- it brakes on the sample whose stop lands nearest the end by the odometry (the odometry counts
+  ``brake_lead_s`` of the commanded speed after a brake);
+- it stands ``rest_s`` after each stop (the firmware's zero speed and the odometry's catch-up).
+
+Why these (measured, docs/umbmark.md): the odometry integrates 10 Hz speed samples that each
+describe the last ~100 ms of SC edges, 90 a revolution (8.7 mm of rim an edge), and none below
+about 4.4 RPM (no edge within 150 ms). What it misses is the travel at the low speeds of each
+start and stop, about one edge per wheel: slow ramps and crawling to the end make it larger
+(+1.9 deg of heading a turn crawling at 8 RPM), starting and braking on a sample makes it
+smallest and the same from run to run. The hard brake does not skid the tyres (at 0.4 m/s it
+asks 22 N of a wheel that can give 52 N).
+
+What is returned (:class:`SquareRun`) is the return pose by the odometry node, by the wheels'
+true angles integrated with the odometry's geometry (nominal, or its calibration) and with the
+true geometry (an ideal encoder, from the recorder's 100 Hz wheel angles) and in truth: ``true -
+node`` is UMBmark's return error; ``true - wheels(odometry's geometry)`` its geometry and slip
+part, ``true - wheels(true geometry)`` the slip alone; the rest, ``wheels - node``, is the
+odometry's sampling of the speeds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from amr_twin.controllers.dead_reckoning import arc
+
+DIRECTIONS = ("cw", "ccw")
+MAX_MOTION_S = 60.0
+"""A leg or a turn that has not ended by then is a failure (bounded runs)."""
+POLL_S = 0.02
+"""The twin advances this long between looks at whether the driver is done, s."""
+
+
+@dataclass(frozen=True)
+class Profile:
+    """How the square is driven (module notes). Speeds and accelerations are the wheels' at the
+    rim (a turn's rate is its wheels' speed over half the wheelbase)."""
+
+    side_m: float = 4.0
+    speed_m_s: float = 0.4
+    turn_deg_s: float = 45.0
+    accel_m_s2: float = 0.5
+    stop_speed_m_s: float = 0.08
+    crawl_s: float = 0.3
+    brake_lead_s: float = 0.15
+    rest_s: float = 1.0
+
+
+@dataclass(frozen=True)
+class SquareRun:
+    """One square: return poses (the start's frame, m, deg) by the odometry node, by the wheels'
+    true angles with the odometry's geometry and with the true one, and in truth."""
+
+    direction: str
+    run: int
+    seed: int
+    node_xy_m: tuple[float, float]
+    wheels_xy_m: tuple[float, float]
+    wheels_true_geometry_xy_m: tuple[float, float]
+    true_xy_m: tuple[float, float]
+    node_yaw_deg: float
+    true_yaw_deg: float
+    sim_s: float
+
+    @property
+    def error_m(self) -> tuple[float, float]:
+        """UMBmark's return error ``true - node`` (Borenstein's epsilon = x_abs - x_calc), m."""
+        return (self.true_xy_m[0] - self.node_xy_m[0], self.true_xy_m[1] - self.node_xy_m[1])
+
+    @property
+    def wheels_error_m(self) -> tuple[float, float]:
+        """``true - wheels(the odometry's geometry)``: geometry and slip, m."""
+        return (self.true_xy_m[0] - self.wheels_xy_m[0], self.true_xy_m[1] - self.wheels_xy_m[1])
+
+    @property
+    def slip_error_m(self) -> tuple[float, float]:
+        """``true - wheels(true geometry)``: what the tyres do on the floor, m."""
+        return (self.true_xy_m[0] - self.wheels_true_geometry_xy_m[0],
+                self.true_xy_m[1] - self.wheels_true_geometry_xy_m[1])
+
+
+class SquareDriver:
+    """The square's driver: a node that acts on each ``wheel1_Vel`` sample (module notes)."""
+
+    def __init__(self, twin, profile: Profile):
+        self.twin, self.profile = twin, profile
+        self.odometry, self.client = twin.odometry, twin.client
+        self.half_separation_m = 0.5 * twin.cfg.wheel.separation_m
+        fw = twin.firmware.p
+        self.period_s = fw.pi_period_us * fw.publish_every_ticks * 1e-6
+        self._task: dict | None = None
+        self._sub = twin.bus.subscribe("wheel1_Vel", self._on_sample)
+
+    def _remaining_m(self, task: dict) -> float:
+        """What is left of the motion by the odometry, m of rim."""
+        odo = self.odometry
+        if task["turn"]:
+            turned = task["sign"] * math.remainder(odo.yaw_rad - task["yaw0"], 2 * math.pi)
+            return (task["target"] - turned) * self.half_separation_m
+        return task["target"] - math.hypot(odo.x_m - task["x0"], odo.y_m - task["y0"])
+
+    def _on_sample(self, _msg) -> None:
+        """The odometry has just integrated a sample: brake if this is the sample nearest the end,
+        else the next speed of the trapezoid (sent now, so starts and stops fall on samples)."""
+        task = self._task
+        if task is None:
+            return
+        p, period = self.profile, self.period_s
+        remaining = self._remaining_m(task)
+        command = task["command"]
+        if command > 0.0 and remaining <= command * (p.brake_lead_s + 0.5 * period):
+            self.client.stop()
+            self._task = None
+            return
+        approach = remaining - p.stop_speed_m_s * (p.crawl_s + p.brake_lead_s)  # the crawl, then the brake
+        reach = math.sqrt(p.stop_speed_m_s ** 2 + 2.0 * p.accel_m_s2 * max(approach, 0.0))
+        command = max(min(task["cruise"], command + p.accel_m_s2 * period, reach), p.stop_speed_m_s)
+        task["command"] = command
+        if task["turn"]:
+            self.client.angular(task["sign"] * math.degrees(command / self.half_separation_m), 0.0)
+        else:
+            self.client.linear(command)
+
+    def _motion(self, turn: bool, target: float, sign: float = 1.0) -> None:
+        """One leg (``target`` m) or turn in place (``target`` rad, ``sign`` +1 left), then the rest."""
+        p, odo, twin = self.profile, self.odometry, self.twin
+        cruise = math.radians(p.turn_deg_s) * self.half_separation_m if turn else p.speed_m_s
+        self._task = dict(turn=turn, target=target, sign=sign, x0=odo.x_m, y0=odo.y_m, yaw0=odo.yaw_rad,
+                          cruise=cruise, command=0.0)
+        t_end = twin.t_s + MAX_MOTION_S
+        while self._task is not None:
+            if twin.t_s > t_end:
+                self._task = None
+                self.client.stop()
+                raise RuntimeError(f"UMBmark square: a {'turn' if turn else 'leg'} did not end within "
+                                   f"{MAX_MOTION_S:g} s")
+            twin.advance(POLL_S)
+        twin.advance(p.rest_s)
+
+    def square(self, direction: str) -> None:
+        """Drive the four legs and turns of one square (``"cw"`` or ``"ccw"``) from where the robot stands."""
+        if direction not in DIRECTIONS:
+            raise ValueError(f"direction: {direction!r} must be cw or ccw")
+        sign = 1.0 if direction == "ccw" else -1.0
+        self.twin.advance(self.profile.rest_s)
+        for _ in range(4):
+            self._motion(False, self.profile.side_m)
+            self._motion(True, math.pi / 2, sign)
+
+    def close(self) -> None:
+        """Stop listening to the samples."""
+        self._sub.unregister()
+
+
+def wheel_pose(angles_rad: np.ndarray, left_radius_m: float, right_radius_m: float,
+               separation_m: float) -> tuple[float, float, float]:
+    """Pose ``(x_m, y_m, yaw_rad)`` from the start of an ideal encoder odometry: (n, 2) wheel angles
+    [left, right], rad, each increment integrated as an arc."""
+    d = np.diff(np.asarray(angles_rad, float), axis=0)
+    pose = (0.0, 0.0, 0.0)
+    for dl, dr in zip((d[:, 0] * left_radius_m).tolist(), (d[:, 1] * right_radius_m).tolist()):
+        pose = arc(pose, 0.5 * (dl + dr), (dr - dl) / separation_m, 1.0)
+    return pose
+
+
+def drive_square(twin, direction: str, profile: Profile = Profile(), run: int = 0) -> SquareRun:
+    """Drive one square with ``twin`` (fresh: its recorder starts with it) from where it stands."""
+    start = twin.physics.pose()
+    driver = SquareDriver(twin, profile)
+    try:
+        driver.square(direction)
+    finally:
+        driver.close()
+    end = twin.physics.pose()
+    c, s = math.cos(start.yaw_rad), math.sin(start.yaw_rad)
+    dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
+    true_xy = (c * dx + s * dy, -s * dx + c * dy)
+    angles = twin.recorder.series().wheel_angle_rad
+    w, odo = twin.cfg.wheel, twin.odometry
+    assumed = wheel_pose(angles, odo.left_radius_m, odo.right_radius_m, odo.separation_m)
+    exact = wheel_pose(angles, w.radius_m + w.radius_error_left_m, w.radius_m + w.radius_error_right_m,
+                       w.separation_m + w.separation_error_m)
+    return SquareRun(direction, run, twin.options.seed, (odo.x_m, odo.y_m), assumed[:2], exact[:2], true_xy,
+                     math.degrees(odo.yaw_rad), math.degrees(math.remainder(end.yaw_rad - start.yaw_rad, 2 * math.pi)),
+                     twin.t_s)

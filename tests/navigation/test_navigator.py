@@ -78,14 +78,12 @@ def blocked(corridors):
 
 
 def test_a_blocked_aisle_leads_to_a_replan_through_another(blocked, corridors):
-    """Three seeds (MPPI's samples, the sensors' noise): an episode can end stuck in its recoveries at
-    the middle wall's west end (issue 30: 1 of 18 episodes, seeds 0-5 on three plant variants, timed
-    out; the others took 31-98 s), so two of three must succeed, and every success goes round."""
+    """Three seeds (MPPI's samples, the sensors' noise), every one reaches the goal round the middle wall
+    (with the brush tyres, seeds 0-5 took 33-39 s of simulated time, no recovery)."""
     runs, jack = blocked
-    done = [run for run in runs if run.outcomes[0].status == "succeeded"]
-    assert len(done) >= 2, [run.outcomes[0].reason for run in runs]
-    assert all(run.collisions == [] for run in runs)
-    for run in done:
+    for run in runs:
+        assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
+        assert run.collisions == []
         went = run.pose_true[:, 1]
         assert went.max() > 4.8  # round the middle wall, through the north corridor (y = 4.5 to 6.5)
         assert footprint_clearance_m(run.pose_true[::10], FP, _boxes(corridors, [jack])).min() > 0.05  # round the wall end

@@ -154,7 +154,8 @@ def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
             ctx = err["ctx"]
             lo = ctx.get("ge", ctx.get("gt", lo))
             hi = ctx.get("le", ctx.get("lt", hi))
-        msg = f"{value!r} is out of range: allowed [{lo}, {hi}] {unit}".rstrip()
+        left, right = _open_ends(model, loc, err["ctx"])
+        msg = f"{value!r} is out of range: allowed {'(' if left else '['}{lo}, {hi}{')' if right else ']'} {unit}".rstrip()
     elif err["type"] == "finite_number":
         msg = f"{value!r}: must be a finite number"
     elif err["type"] in ("missing", "too_short", "too_long") and isinstance(value, (list, tuple)):
@@ -173,6 +174,21 @@ _KINDS = {"float_parsing": "a number", "float_type": "a number", "int_parsing": 
           "int_type": "a whole number", "int_from_float": "a whole number", "bool_parsing": "true or false",
           "bool_type": "true or false", "string_type": "a word", "tuple_type": "a list", "list_type": "a list"}
 """pydantic's error types of a value of the wrong kind, and the kind in the project's words."""
+
+
+def _open_ends(model: type[BaseModel], loc: list[str], ctx: dict) -> tuple[bool, bool]:
+    """Whether the range of the field at ``loc`` excludes its low and its high end (``gt``, ``lt``): an
+    exclusive bound was printed as ``[0.0, 3.0]`` for a refused 0."""
+    field: Any = None
+    for key in loc:
+        fields = getattr(model, "model_fields", None) or {}
+        field = fields.get(key)
+        if field is None:
+            return "gt" in ctx, "lt" in ctx
+        model = field.annotation
+    metadata = getattr(field, "metadata", ())
+    return (any(getattr(m, "gt", None) is not None for m in metadata) or "gt" in ctx,
+            any(getattr(m, "lt", None) is not None for m in metadata) or "lt" in ctx)
 
 
 def _tuple_size(model: type[BaseModel], loc: list[str]) -> int | None:

@@ -373,6 +373,8 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
     (["sweep", "payload", "--out", "{tmp}/s", "--masses", "1000"], ["--masses '1000': 1000 kg is above "
                                                                      "payload.mass_kg's allowed [0.0, 200.0] kg"]),
     (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1,1"], ["--runs '1,1': a run is named twice"]),
+    (["run", "stop", "--set", "navigation.costmap.inflation_radius_m=0"], ["inflation_radius_m: 0 is out of range: "
+                                                                           "allowed (0.0, 3.0] m"]),  # was [0.0, 3.0]
     (["model", "--payload-xy", "1e308,0"], ["--payload-xy 1e308,0: there is no payload to place"]),  # exit 0
     (["run", "stop", "--duration-s", "abc"], ["Invalid value for '--duration-s': expects a number"]),
 ])

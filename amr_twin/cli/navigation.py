@@ -12,7 +12,7 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import JobsOpt, check_common, check_executor, check_outputs, dask_client
-from amr_twin.cli.options import firmware_option
+from amr_twin.cli.options import checked_seed, firmware_option
 
 MAX_EPISODES = 1000
 
@@ -51,6 +51,7 @@ def add_navigation(experiment: typer.Typer) -> None:
         from amr_twin.navigation.stack import CONTROLLERS
 
         jobs, firmware = check_common(jobs, firmware, fail)
+        checked_seed(seed, fail)  # -1 failed in numpy ("expected non-negative integer"), naming no option
         if not 1 <= episodes <= MAX_EPISODES:
             fail(f"--episodes {episodes}: must be in [1, {MAX_EPISODES}]")
         kinds = tuple(k.strip() for k in maps.split(","))

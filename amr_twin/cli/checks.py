@@ -22,11 +22,13 @@ JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per 
 YesOpt = typer.Option(False, "--yes", help="Start without asking when the time estimated beforehand is above 10 min "
                       "(without it such a run is refused, its estimate named).")
 
-CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark": 0.012}
+CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark": 0.012, "navigation": 0.19}
 """CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table): a
 100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s on one
 job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark square (no
-sensors, the empty world): 0.73 s of CPU for its 60 simulated s (issue 30's ten robots, 300 squares)."""
+sensors, the empty world): 0.73 s of CPU for its 60 simulated s (issue 30's ten robots, 300 squares). Navigation
+(sensors, EKF + MPPI, the episodes' people and the SLAM map's build): 368 s of CPU for the 32 runs of about 59
+simulated s of ``experiment navigation --episodes 16 --seed 1`` (docs/navigation.md)."""
 AVR_COST = 4.0
 """How much more the emulated ATmega2560 costs (the bench's avr_ratio, 5.5, against the loop's 1.3)."""
 CONFIRM_ABOVE_S = 600.0
@@ -48,7 +50,7 @@ def check_estimate(what: str, sim_s: float, kind: str, workers: int, firmware: s
     cost = CPU_S_PER_SIM_S[kind] * (AVR_COST if firmware.startswith("avr") else 1.0)
     wall_s = sim_s * cost / max(1, workers)
     text = (f"{what}: about {_minutes(wall_s)} with {workers} worker{'s' if workers != 1 else ''} "
-            f"({sim_s:.0f} simulated s at {cost:g} s of CPU each, as the bench measured)")
+            f"({sim_s:.0f} simulated s at {cost:g} s of CPU each, as measured)")
     if wall_s > CONFIRM_ABOVE_S and not yes:
         fail(f"{text}; above {CONFIRM_ABOVE_S / 60:.0f} min: add --yes to start it, or ask for less")
     if wall_s > 60:

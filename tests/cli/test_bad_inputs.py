@@ -128,6 +128,9 @@ def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeyp
     refused(["experiment", "chapter5", "--out", tmp_path / "c5", "--samples", 4096], "experiment chapter5: ",
             "add --yes")
     refused(["experiment", "fusion", "--out", tmp_path / "f", "--seeds", "0:999"], "1000 drives", "add --yes")
+    monkeypatch.setattr("amr_twin.experiments.navigation.run", simulate)
+    refused(["experiment", "navigation", "--out", tmp_path / "n", "--episodes", 1000, "--maps", "true"],
+            "experiment navigation: 1000 episode(s) on 1 map(s): about ", "add --yes")
 
 
 def test_a_run_larger_than_the_memory_available_is_refused(tmp_path, refused, monkeypatch):

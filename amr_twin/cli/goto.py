@@ -60,6 +60,9 @@ def _checked(cfg, opts, goals, nav: dict):
     start = _start_pose(opts.start) or default_start(opts.world)
     planner = GlobalPlanner(make_costmap(static, robot_footprint(cfg), cfg.navigation))
     here = np.array(start[:2], float)
+    if not planner.costmap.cells(here[None])[2][0]:
+        of = f"--map {nav['map']}" if nav.get("map") else f"--world {opts.world}"
+        fail(f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of {of}: give --start X_M,Y_M,YAW_DEG on it")
     for x, y, yaw in goals:
         name = f"goal {x:g},{y:g}"
         if planner.plan(here, np.array([x, y])) is None:

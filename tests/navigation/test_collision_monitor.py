@@ -80,3 +80,6 @@ def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_un
     assert mon.filter(0.5, 0.4, *no_scan, people_base=close) == (0.0, 0.0)  # towards them
     v, w = mon.filter(-0.2, 0.0, *no_scan, people_base=close)  # backing away: allowed
     assert v == -0.2 and mon.actions["people_escape"] == 1
+    # a turn in place away from them (the disc's gap grows) is refused all the same: it swings the corners
+    assert mon.filter(0.0, -0.5, *no_scan, people_base=close) == (0.0, 0.0)
+    assert mon.filter(0.0, 0.5, *no_scan, people_base=beside) == (0.0, 0.5)  # farther: turn freely

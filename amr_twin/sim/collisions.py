@@ -21,6 +21,9 @@ and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less tha
 :data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
 the loop to stop at the first collision.
 The checks of a start pose use the same classification: :mod:`amr_twin.sim.start_pose`.
+
+Part of the physics layer (``PHYSICS_LAYER``): a grid sampler: reads MjData's contacts and their
+forces (``mj_contactForce``) at each grid instant.
 """
 
 from __future__ import annotations
@@ -36,6 +39,8 @@ import numpy as np
 
 from amr_twin.sim.grid_steps import CHANGED, sampler
 from amr_twin.sim.native_build import open_helper
+
+PHYSICS_LAYER = True
 
 SUPPORT_TILT_DEG = 30.0
 """A wheel or caster contact whose normal is within this angle of vertical is standing, deg."""

@@ -30,15 +30,15 @@ PHYSICS_LAYER = True
 
 class GridLoop:
     """Chunks of ``physics`` (:class:`~amr_twin.sim.physics.Physics`) with ``samplers`` run every
-    ``every`` steps of ``dt_us``; the C grid loop unless ``native`` is False or its helper is missing."""
+    ``every`` steps of ``dt_us``; the C grid loop unless its helper is missing."""
 
-    def __init__(self, physics, samplers: list, every: int, dt_us: int, native: bool = True):
+    def __init__(self, physics, samplers: list, every: int, dt_us: int):
         self.samplers = samplers
         self.every, self.dt_us = int(every), int(dt_us)
         self.halted = False
         """True once a grid sampler returned True (the loop steps no further)."""
         self._m, self._d = physics.model, physics.data
-        self._stepper = grid_stepper(physics, LOOP_SENSOR_DIM, self.every, self.dt_us, native)
+        self._stepper = grid_stepper(physics, LOOP_SENSOR_DIM, self.every, self.dt_us)
         """The grid loop in C (:mod:`amr_twin.sim.grid_steps`), None without its helper."""
         self._sensors = physics.data.sensordata[:LOOP_SENSOR_DIM]  # a view: MjData's buffers stay put
         self.last_row = self._sensors.tolist()

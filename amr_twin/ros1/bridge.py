@@ -2,7 +2,7 @@
 
 Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mcap_log`):
 
-- every bus message of :data:`~amr_twin.recording.mcap_log.BUS_TOPICS` as it is published (a bus tap):
+- every bus message of :data:`~amr_twin.recording.mcap_log.BUS_TOPICS` as it is published (the twin's ``on_message`` hook):
   ``/odom``, ``/tf`` (odom -> base_link), ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
   ``/cmd_vel``, ``/wheel_Command``, ``/wheel0_Vel``, ``/wheel1_Vel`` (as the firmware publishes them)
   and ``/wheel_Command_Service/request``; ``/tf_static`` latched;

@@ -2,22 +2,25 @@
 
 :class:`~amr_twin.sim.loop.Twin` is a :class:`Hooks`; what runs downstream of the loop subscribes
 here and reads the twin's :class:`~amr_twin.sim.observables.Observables`, instead of reaching into
-its physics, plant, hall sensors, firmware or bus (tests/sim/test_hooks.py holds the modules to it).
+its physics, plant, hall sensors or firmware or tapping its bus (tests/sim/test_hooks.py holds the
+recorder, the fault injector, the live views and the ROS 1 bridge to it). A node (a PC-side program:
+odometry, teleop, the navigation stack) sits on the bus itself, as it would on a ROS graph.
 The hooks, in the order the loop calls them within one of its steps (:data:`HOOKS`):
 
 ``on_grid(sampler)``
     per record-grid instant (every 10 ms of simulated time, while the physics steps between two
     events): ``sampler(t_us)`` with the physics at ``t_us``; a sampler returning True halts the
     twin there. A sampler with a C form (``sampler.grid_native``, :mod:`amr_twin.sim.grid_steps`:
-    the rows of :meth:`~amr_twin.sim.observables.Observables.rows`) keeps the grid loop in C; one
-    without makes that loop run in Python, slower.
+    a :class:`~amr_twin.sim.grid_steps.GridRows`, e.g. :func:`amr_twin.sim.named_index.value_rows`)
+    keeps the grid loop in C; one without makes that loop run in Python, slower.
 ``on_grid_rows(fn)``
     after each chunk of physics: ``fn(t_us, rows)``, the chunk's grid instants (list of int, us) and
     the loop sensors' rows there (lists of :data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM` floats:
     what the ``loop_sensors`` observable reads); both lists are shared: read, do not change.
 ``on_event(fn)``
-    after the clock's events of an instant ran (timer ticks, rosserial frames, sensors, nodes) and the
-    pins were applied to the plant: ``fn(t_us)``, the physics time.
+    at each instant the physics stopped at (a synced clock event: a timer tick, a rosserial frame, a
+    divergence check, the end of an ``advance``), after the clock's events up to it ran and the pins
+    were applied to the plant: ``fn(t_us)``, the physics time.
 ``on_actuation(fn)``
     when the plant took the pins anew (new levels, the periodic re-application with the battery's
     voltage, a fault or the e-stop: :class:`~amr_twin.sim.actuation.Actuation`): ``fn(t_us)``; the
@@ -25,8 +28,6 @@ The hooks, in the order the loop calls them within one of its steps (:data:`HOOK
 ``on_message(tap, topics=None)``
     per message published on the bus: ``tap(topic, msg, t_us)`` (:meth:`amr_twin.ros.bus.Bus.add_tap`),
     for ``topics`` only when given.
-``on_collision(fn)``
-    at each collision's first contact: ``fn(collision)`` (:class:`~amr_twin.sim.collisions.Collision`).
 
 :meth:`Hooks.unhook` removes a subscriber from whichever hook holds it.
 """
@@ -35,7 +36,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-HOOKS = ("on_grid", "on_grid_rows", "on_event", "on_actuation", "on_message", "on_collision")
+HOOKS = ("on_grid", "on_grid_rows", "on_event", "on_actuation", "on_message")
 """Every hook the loop defines (docs/architecture.md names each; a test checks it)."""
 
 
@@ -49,7 +50,6 @@ class Hooks:
         self._grid_row_hooks: list = []
         self._event_hooks: list = []
         self._actuation_hooks: list = []
-        self._collision_hooks: list = []
 
     def on_grid(self, sampler: Callable[[int], object], after: Callable | None = None) -> Callable:
         """Run ``sampler(t_us)`` at every grid instant (after ``after``, a sampler already hooked, when
@@ -80,16 +80,10 @@ class Hooks:
         self._bus.add_tap(tap, topics=topics)
         return tap
 
-    def on_collision(self, fn: Callable[[object], None]) -> Callable:
-        """Call ``fn(collision)`` at each collision's first contact; returns it."""
-        self._collision_hooks.append(fn)
-        return fn
-
     def unhook(self, fn: Callable) -> None:
         """Remove ``fn`` from every hook that holds it (ValueError if none does)."""
         found = False
-        for hooks in (self.samplers, self._grid_row_hooks, self._event_hooks, self._actuation_hooks,
-                      self._collision_hooks):
+        for hooks in (self.samplers, self._grid_row_hooks, self._event_hooks, self._actuation_hooks):
             while fn in hooks:
                 hooks.remove(fn)
                 found = True

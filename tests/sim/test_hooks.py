@@ -152,3 +152,13 @@ def test_unhook_removes_a_subscriber_from_its_hook():
     assert len(calls) == n
     with pytest.raises(ValueError, match="hooked to nothing"):
         twin.unhook(grid)
+
+
+def test_the_architecture_document_names_every_hook():
+    doc = (ROOT / "docs" / "architecture.md").read_text()
+    missing = [name for name in HOOKS if f"`{name}(" not in doc]
+    assert not missing, f"docs/architecture.md does not describe {missing}"
+    from amr_twin.sim.hooks import Hooks
+
+    defined = {n for n in vars(Hooks) if n.startswith("on_")}
+    assert defined == set(HOOKS), "HOOKS lists every on_* method of Hooks"

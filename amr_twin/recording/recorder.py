@@ -112,24 +112,10 @@ class Recorder:
             self._pin_t.append(t_us)
             self._pins.append(row)
 
-    def pins_in_force(self) -> np.ndarray:
-        """The pin row :meth:`series` gives a grid row taken now (while the physics steps): the last kept."""
-        return self._pins[-1]
-
     def sample(self) -> None:
         """Record the present state as one row (at the start of a run)."""
         self._t.append(np.array([self.twin.t_phys_us]))
         self._rows.append(np.array([self.twin.observables.loop_sensors()]))
-
-    def extend(self, t_us: np.ndarray, rows: np.ndarray) -> None:
-        """Keep the rows of a chunk that fall on the record grid (t_us: (n,), rows: (n, LOOP_SENSOR_DIM))."""
-        keep = (t_us // self.twin.dt_us) % self.every == 0
-        if keep.all():
-            self._t.append(t_us)
-            self._rows.append(rows)
-        elif keep.any():
-            self._t.append(t_us[keep])
-            self._rows.append(rows[keep])
 
     def extend_grid(self, t_us: list[int], rows: list[list[float]]) -> None:
         """Keep rows already on the record grid (lists from the loop; stacked lazily)."""

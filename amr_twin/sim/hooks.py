@@ -51,13 +51,9 @@ class Hooks:
         self._event_hooks: list = []
         self._actuation_hooks: list = []
 
-    def on_grid(self, sampler: Callable[[int], object], after: Callable | None = None) -> Callable:
-        """Run ``sampler(t_us)`` at every grid instant (after ``after``, a sampler already hooked, when
-        given; else last); returns it."""
-        if after is None:
-            self.samplers.append(sampler)
-        else:
-            self.samplers.insert(self.samplers.index(after) + 1, sampler)
+    def on_grid(self, sampler: Callable[[int], object]) -> Callable:
+        """Run ``sampler(t_us)`` at every grid instant, after those hooked before it; returns it."""
+        self.samplers.append(sampler)
         return sampler
 
     def on_grid_rows(self, fn: Callable[[list, list], None]) -> Callable:

@@ -25,7 +25,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from amr_twin.sim.grid_steps import NEVER_BEFORE, GridRows, gather
+from amr_twin.sim.grid_steps import GridRows, gather
 from amr_twin.sim.native_build import address
 
 PHYSICS_LAYER = True
@@ -150,9 +150,8 @@ class NamedIndex:
         self.data = _Struct(data, model, in_data=True)
 
 
-def value_rows(named_arrays: list[tuple[NamedArray, object]], period_us: int = 1, start_us: int = NEVER_BEFORE,
-               after=None, native: bool = True) -> GridRows:
-    """A grid sampler (:class:`~amr_twin.sim.grid_steps.GridRows`) keeping every ``period_us`` the values
+def value_rows(named_arrays: list[tuple[NamedArray, object]], native: bool = True) -> GridRows:
+    """A grid sampler (:class:`~amr_twin.sim.grid_steps.GridRows`) keeping at each grid instant the values
     ``array[key]`` of each ``(array, key)`` in ``named_arrays``, in order: gathered in C where they lie
     when the loop runs its grid there and (one ctypes call) in Python too, or read from the arrays
     without the helper or with ``native=False``: the same values."""
@@ -165,7 +164,7 @@ def value_rows(named_arrays: list[tuple[NamedArray, object]], period_us: int = 1
 
         def row() -> list[float]:
             return np.concatenate([np.ravel(a[i]) for a, i in views]).tolist()
-    return GridRows(len(pointers), period_us, row, c_row, after=after, start_us=start_us)
+    return GridRows(len(pointers), 1, row, c_row)
 
 
 def _calling(c_row: tuple, width: int):

@@ -53,7 +53,3 @@ class Observables:
     def collisions(self) -> list:
         """The collisions so far (:class:`~amr_twin.sim.collisions.Collision`, in order; a live list)."""
         return self._collisions.collisions
-
-    def wheel_angles_rad(self) -> list[float]:
-        """[left, right] wheel angles now, rad."""
-        return self._physics.wheel_angles_rad().tolist()

@@ -107,7 +107,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
                                                **robot.twin_options()))
     twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
     streams = Streams()
-    twin.bus.add_tap(streams.tap)
+    twin.on_message(streams.tap)
     if recording:
         from amr_twin.recording.rerun_capture import attach
         attach(twin)

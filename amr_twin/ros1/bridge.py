@@ -280,7 +280,7 @@ class Ros1Bridge:
             return
         self._closed = True
         self.out.flush()
-        self.bus.remove_tap(self._tap)
+        self.twin.unhook(self._tap)
         for sub in self._subs:
             sub.unregister()
         for srv in self._services:

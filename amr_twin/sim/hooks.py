@@ -28,6 +28,10 @@ The hooks, in the order the loop calls them within one of its steps (:data:`HOOK
 ``on_message(tap, topics=None)``
     per message published on the bus: ``tap(topic, msg, t_us)`` (:meth:`amr_twin.ros.bus.Bus.add_tap`),
     for ``topics`` only when given.
+``on_collision(fn)``
+    at the first contact of each collision (in a grid sampler: the physics at that instant):
+    ``fn(collision)``, a :class:`~amr_twin.sim.collisions.Collision`; the ``collisions`` observable
+    lists them all.
 
 :meth:`Hooks.unhook` removes a subscriber from whichever hook holds it.
 """
@@ -36,7 +40,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-HOOKS = ("on_grid", "on_grid_rows", "on_event", "on_actuation", "on_message")
+HOOKS = ("on_grid", "on_grid_rows", "on_event", "on_actuation", "on_message", "on_collision")
 """Every hook the loop defines (docs/architecture.md names each; a test checks it)."""
 
 
@@ -50,6 +54,7 @@ class Hooks:
         self._grid_row_hooks: list = []
         self._event_hooks: list = []
         self._actuation_hooks: list = []
+        self._collision_hooks: list = []
 
     def on_grid(self, sampler: Callable[[int], object]) -> Callable:
         """Run ``sampler(t_us)`` at every grid instant, after those hooked before it; returns it."""
@@ -76,10 +81,16 @@ class Hooks:
         self._bus.add_tap(tap, topics=topics)
         return tap
 
+    def on_collision(self, fn: Callable[[object], None]) -> Callable:
+        """Call ``fn(collision)`` at each collision's first contact; returns it."""
+        self._collision_hooks.append(fn)
+        return fn
+
     def unhook(self, fn: Callable) -> None:
         """Remove ``fn`` from every hook that holds it (ValueError if none does)."""
         found = False
-        for hooks in (self.samplers, self._grid_row_hooks, self._event_hooks, self._actuation_hooks):
+        for hooks in (self.samplers, self._grid_row_hooks, self._event_hooks, self._actuation_hooks,
+                      self._collision_hooks):
             while fn in hooks:
                 hooks.remove(fn)
                 found = True

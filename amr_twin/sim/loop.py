@@ -9,14 +9,20 @@ orders events in time:
    or the end of the run; *publishing* events (odometry, IMU and LiDAR messages,
    :mod:`amr_twin.sim.clock`) do not stop the physics unless a subscriber could act on
    what they publish before it (:meth:`amr_twin.ros.bus.Bus.lookahead_us`);
-2. step the physics in C up to that instant with the actuation held, keeping the
-   wheel angles on the record grid (every ``record_every_steps``) and handing the
-   grid instants to the grid samplers (the rolling resistance from the present
-   contact loads, the actors' poses, the IMU's true values, the LiDAR's poses and casts);
+2. step the physics in C up to that instant with the actuation held
+   (:class:`~amr_twin.sim.grid_loop.GridLoop`), keeping the loop sensors' rows on the
+   record grid (every ``record_every_steps``) and handing the grid instants to the grid
+   samplers (the ``on_grid`` hook: the rolling resistance from the present contact loads,
+   the battery, the actors' poses, the IMU's true values, the LiDAR's poses and casts, and
+   what downstream hooked there), then the chunk's rows to ``on_grid_rows``;
 3. turn the angles into SC edges (interpolated to the microsecond) and deliver
    them to the firmware's pin-change interrupt in time order, each at its time,
    interleaved with the publishing events that fall in the chunk;
-4. run the clock's events; apply the pins to the plant.
+4. run the clock's events; apply the pins to the plant when they changed
+   (:class:`~amr_twin.sim.actuation.Actuation`, the ``on_actuation`` hook); call ``on_event``.
+
+Downstream code subscribes to these hooks (:mod:`amr_twin.sim.hooks`) and reads
+:attr:`Twin.observables`; docs/architecture.md draws the whole.
 
 A grid sampler that returns True (the collision monitor with ``stop_on_collision``)
 ends the chunk at that grid instant and halts the twin: :meth:`Twin.advance` does
@@ -30,7 +36,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from itertools import islice
 
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.actuation import Actuation
@@ -153,7 +158,8 @@ class Twin(Hooks):
         self.on_grid(self.rolling.update)
         self.on_grid(self.plant.battery.account)
         self.actuation = Actuation(self.plant, self.firmware, self._actuation_hooks)
-        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision)
+        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision,
+                                           listeners=self._collision_hooks)
         self._grid = GridLoop(self.physics, self.samplers, self.grid_every, self.dt_us)
         self.observables = Observables(self.physics, self._grid, self.actuation, self.plant.battery, self.collisions)
         """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
@@ -164,9 +170,9 @@ class Twin(Hooks):
         if options.actors:
             from amr_twin.sim.actors import ActorMotion, ActorPoses
             self.actors = ActorMotion(self.physics, tuple(options.actors), cfg)
-            self.samplers.append(self.actors.update)
+            self.on_grid(self.actors.update)
             self._actor_poses = ActorPoses(self.actors, self.clock, self.bus, self.samplers)
-        self.samplers.append(self.collisions)
+        self.on_grid(self.collisions)
         if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
             from amr_twin.sensors.imu import ImuSensor
             from amr_twin.sensors.lidar import Lidar

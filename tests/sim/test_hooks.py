@@ -32,8 +32,7 @@ def reaches(source: str) -> list[str]:
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Attribute) and _is_twin(node.value) and node.attr in PARTS:
             found.append(f"{node.lineno}: {ast.unparse(node)}")
-        elif (isinstance(node, ast.Attribute) and node.attr in TAPS and isinstance(node.value, ast.Attribute)
-              and node.value.attr == "bus" and _is_twin(node.value.value)):
+        elif isinstance(node, ast.Attribute) and node.attr in TAPS:  # a bus' taps, whichever name it goes by
             found.append(f"{node.lineno}: {ast.unparse(node)}")
     return found
 
@@ -56,6 +55,7 @@ def test_consumers_subscribe_to_hooks_instead_of_reaching_into_the_twin():
     "def f(twin):\n    twin.samplers.append(print)\n",
     "def f(twin):\n    twin.bus.add_tap(print)\n",
     "def f(capture):\n    return capture.twin.plant.battery\n",
+    "class C:\n    def close(self):\n        self.bus.remove_tap(self._tap)\n",
 ])
 def test_the_walk_sees_a_reach(source):
     assert reaches(source)
@@ -162,3 +162,18 @@ def test_the_architecture_document_names_every_hook():
 
     defined = {n for n in vars(Hooks) if n.startswith("on_")}
     assert defined == set(HOOKS), "HOOKS lists every on_* method of Hooks"
+
+
+def test_collision_hook_tells_of_each_collision_once_at_its_first_contact():
+    from amr_twin.model.worlds import Obstacle
+
+    box = Obstacle("crate", 1.2, 0.0, (0.3, 1.0, 0.5))
+    twin = Twin(load_config(), TwinOptions(world="empty", odometry=False, visuals=False, obstacles=(box,)))
+    told = []
+    twin.on_collision(lambda c: told.append((c.t_s, c.hit)))
+    twin.client.linear(0.5)
+    twin.advance(4.0)
+    assert [hit for _, hit in told] == ["obstacle_crate"]  # one episode, told once
+    (t_s, _), = told
+    assert t_s == twin.observables.collisions[0].t_s and 1.0 < t_s < 3.5
+    assert round(t_s * 1e6) % twin.grid_us == 0  # at a grid instant, in the sampler

@@ -5,13 +5,13 @@ After a change of the plant or the firmwares, one command regenerates them all:
     python -m amr_twin.experiments.doc_figures
 
 It runs the fault study into ``docs/`` (``amr-twin experiment faults --out docs``: ``faults.md``,
-``faults.json``, ``img/faults_*.png``), the README's payload sweep (``docs/payload_sweep.json``,
-``docs/img/sweep_angular.png``), the fusion experiment's ten seeds on both routes
-(``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
-(``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``), then rewrites the generated
-blocks of :data:`DOCUMENTS` (their texts: :mod:`.doc_texts`) from those committed files and the
-calibration's report (``models/amr/calibration.yaml``: after a new fit, ``amr-twin calibrate
---no-fit --report models/amr/calibration.yaml`` first). A block is the text between
+``faults.json``, ``img/faults_*.png``), the payload sweep of ``docs/results.md``
+(``docs/payload_sweep.json``, ``docs/img/sweep_angular.png``), the fusion experiment's ten seeds on
+both routes (``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
+(``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture),
+then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.doc_texts`) from those
+committed files and the calibration's report (``models/amr/calibration.yaml``: after a new fit,
+``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text between
 ``<!-- generated: NAME ... -->`` and ``<!-- end: NAME -->``;
 :func:`expected` gives a document as its blocks would be written now, which the tests hold every
 document to, and the tests hold the committed results to a fresh run (``test_faults_report``,
@@ -25,27 +25,28 @@ import re
 from pathlib import Path
 
 from amr_twin.experiments.chapter5_scorecard import SCORECARD
-from amr_twin.experiments.doc_texts import (README_FUSION, calibration_summary, chapter5_summary, chapter5_table,
+from amr_twin.experiments.doc_texts import (SUMMARY_FUSION, calibration_summary, chapter5_summary, chapter5_table,
                                             faults_summary, fusion_table, payload_summary)
 from amr_twin.model.paths import ROOT
 
 COMMAND = "python -m amr_twin.experiments.doc_figures"
 FAULTS_JSON = ROOT / "docs" / "faults.json"
 CALIBRATION = ROOT / "models" / "amr" / "calibration.yaml"
-DOCUMENTS = (ROOT / "README.md", ROOT / "docs" / "validation.md", ROOT / "docs" / "fusion.md")
-"""The documents with generated blocks (``docs/faults.md`` is generated whole)."""
+DOCUMENTS = (ROOT / "docs" / "results.md", ROOT / "docs" / "validation.md", ROOT / "docs" / "fusion.md")
+"""The documents with generated blocks (``docs/faults.md`` is generated whole; the README has none: it
+links to ``docs/results.md``)."""
 _BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w-]+) [^>]*-->\n)(?P<body>.*?)(<!-- end: (?P=name) -->)", re.S)
 
 PAYLOAD_SWEEP = {"masses": [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
                  "positions": ["center", "front", "rear", "front-left-corner"],
                  "commands": ["linear:0.7", "angular:-60:-1"]}
-"""The README's payload sweep (``amr-twin sweep payload --masses 0:60:10 --positions
+"""The payload sweep of ``docs/results.md`` (``amr-twin sweep payload --masses 0:60:10 --positions
 center,front,rear,front-left-corner --commands linear:0.7,angular:-60:-1``), 8 s a point."""
 PAYLOAD_JSON = ROOT / "docs" / "payload_sweep.json"
 
 
 def payload_figures(results: dict, improved: dict | None) -> dict:
-    """What the README quotes of the payload sweep (committed as :data:`PAYLOAD_JSON`)."""
+    """What ``docs/results.md`` quotes of the payload sweep (committed as :data:`PAYLOAD_JSON`)."""
     from amr_twin.experiments.payload_sweep_report import summarise
 
     summary = summarise(results)
@@ -79,7 +80,7 @@ def blocks() -> dict[str, str]:
     return {"chapter5-summary": chapter5_summary(card), "chapter5-checks": chapter5_table(card),
             "faults-summary": faults_summary(json.loads(FAULTS_JSON.read_text())),
             "payload-summary": payload_summary(json.loads(PAYLOAD_JSON.read_text())),
-            **{f"fusion-{r}-readme": fusion_table(json.loads(fusion_json(r).read_text()), README_FUSION)
+            **{f"fusion-{r}-summary": fusion_table(json.loads(fusion_json(r).read_text()), SUMMARY_FUSION)
                for r in FUSION_ROUTES},
             **{f"fusion-{r}": fusion_table(json.loads(fusion_json(r).read_text())) for r in FUSION_ROUTES},
             "calibration-summary": calibration_summary(yaml.safe_load(CALIBRATION.read_text()))}

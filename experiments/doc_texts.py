@@ -32,7 +32,7 @@ def _counts(checks: dict, prefix: str = "") -> dict[str, tuple[int, int]]:
 
 
 def chapter5_summary(card: dict) -> str:
-    """The README's chapter 5 paragraph, from the scorecard."""
+    """``docs/results.md``'s chapter 5 paragraph, from the scorecard."""
     c, pub, true = card["checks"], _counts(card["checks"]), _counts(card["checks"], "true.")
     timing = ("delay_s", "rise_s", "peak_s", "settling_s")
     timed = [sum(true[m][i] for m in timing) for i in (0, 1)]
@@ -102,7 +102,7 @@ def chapter5_table(card: dict) -> str:
 
 
 def faults_summary(data: dict) -> str:
-    """The README's fault paragraph, from docs/faults.json."""
+    """``docs/results.md``'s fault paragraph, from docs/faults.json."""
     rows = {(r["fault"], r["firmware"]): r for r in data["rows"]}
 
     def left(case: str, fw: str, key: str = "true_during_rpm") -> float:
@@ -159,7 +159,7 @@ def calibration_summary(report: dict) -> str:
 
 
 def payload_summary(data: dict) -> str:
-    """The README's payload sweep paragraph, from :data:`PAYLOAD_JSON`."""
+    """``docs/results.md``'s payload sweep paragraph, from :data:`PAYLOAD_JSON`."""
     low, energy = data["lowest_wheel"], data["center_energy_j_per_m"]
     answers = "; ".join(f"**{p}**: {s['answer']}" + (f"; with the improved firmware: {s['improved']['answer']}"
                                                      if "improved" in s else "")
@@ -177,8 +177,8 @@ def payload_summary(data: dict) -> str:
             f"{energy['60']:.0f} J/m with 60 kg (pack and electronics).\n")
 
 
-README_FUSION = ("ate_m", "ate_aligned_m", "rpe_trans_m", "rpe_rot_deg", "rms_yaw_err_deg")
-"""The columns of the README's fusion tables (``docs/fusion.md`` has them all)."""
+SUMMARY_FUSION = ("ate_m", "ate_aligned_m", "rpe_trans_m", "rpe_rot_deg", "rms_yaw_err_deg")
+"""The columns of ``docs/results.md``'s fusion tables (``docs/fusion.md`` has them all)."""
 
 
 def fusion_table(data: dict, keys: tuple[str, ...] | None = None) -> str:

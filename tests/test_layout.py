@@ -13,6 +13,8 @@ ROOT = Path(__file__).resolve().parents[1]
 FOLDERS = {"amr_twin": ROOT / "amr_twin", "amr_twin.controllers": ROOT / "controllers",
            "amr_twin.sensors": ROOT / "sensors", "amr_twin.experiments": ROOT / "experiments"}
 SUBPACKAGES = sorted(p.parent.name for p in (ROOT / "amr_twin").glob("*/__init__.py"))
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+"""The README and the docs pages, whose links and shown imports are checked."""
 
 
 def _modules() -> dict[str, Path]:
@@ -110,12 +112,11 @@ def test_the_top_level_is_small_and_each_package_says_its_role():
         assert doc and len(doc.splitlines()) == 1, f"amr_twin/{name}/__init__.py: one line saying its role"
 
 
-def test_the_readme_lists_every_package():
-    readme = (ROOT / "README.md").read_text()
-    built = readme[readme.index("## How it is built"):]
-    built = built[: built.index("\n## ", 3)]
+def test_the_layout_page_lists_every_package():
+    """docs/layout.md (how it is built; the README links to it) names every package of amr_twin/."""
+    layout = (ROOT / "docs" / "layout.md").read_text()
     for name in SUBPACKAGES:
-        assert re.search(rf"`amr_twin/{name}/`", built), f"README's How it is built lacks amr_twin/{name}/"
+        assert re.search(rf"`amr_twin/{name}/`", layout), f"docs/layout.md lacks amr_twin/{name}/"
 
 
 def test_tests_mirror_the_packages():
@@ -126,10 +127,10 @@ def test_tests_mirror_the_packages():
     assert loose == [], f"tests outside the package folders: {loose}"
 
 
-def test_the_names_the_readme_shows_import():
-    readme = (ROOT / "README.md").read_text()
-    shown = re.findall(r"^from (amr_twin[\w.]*) import ([\w, ]+)$", readme, re.M)
-    assert len(shown) >= 3
+def test_the_names_the_readme_and_docs_show_import():
+    shown = [found for page in DOCUMENTS
+             for found in re.findall(r"^from (amr_twin[\w.]*) import ([\w, ]+)$", page.read_text(), re.M)]
+    assert len(shown) >= 5
     for module, names in shown:
         mod = importlib.import_module(module)
         for name in names.split(","):
@@ -147,3 +148,65 @@ def test_the_old_module_paths_still_import():
     assert loop.Twin is new_loop.Twin and loop.TwinOptions is new_loop.TwinOptions
     assert run.Command is new_run.Command and run.run_command is new_run.run_command
     assert rerun_log.attach is new_rerun_log.attach and rerun_log.record_run is new_rerun_log.record_run
+
+
+_FENCED = re.compile(r"^```.*?^```", re.M | re.S)
+_CODE = re.compile(r"`([^`\n]+)`")
+_LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
+_REPO_PATH = re.compile(r"^(?:docs|models|controllers|experiments|sensors|amr_twin|tests|\.ci)/[\w./-]*$")
+
+
+def broken_links(page: Path) -> list[str]:
+    """``page``'s relative markdown links (resolved from its folder) and quoted repository paths such as
+    `docs/faults.md` (resolved from the root) that name no file or folder; code blocks are skipped."""
+    text = _FENCED.sub("", page.read_text())
+    broken = []
+    for target in _LINK.findall(_CODE.sub("", text)):
+        if re.match(r"^[a-z]+:", target) or target.startswith("#"):
+            continue  # a web address or an anchor in the page
+        if not (page.parent / target.split("#")[0]).exists():
+            broken.append(target)
+    return broken + [path for path in _CODE.findall(text) if _REPO_PATH.match(path) and not (ROOT / path).exists()]
+
+
+def test_every_link_in_the_readme_and_docs_resolves():
+    broken = {page.relative_to(ROOT).as_posix(): found for page in DOCUMENTS if (found := broken_links(page))}
+    assert not broken, broken
+
+
+def test_the_link_check_finds_a_broken_link(tmp_path):
+    (tmp_path / "there.md").write_text("x")
+    page = tmp_path / "page.md"
+    page.write_text("[ok](there.md) [ok](there.md#part) [web](https://rerun.io) `docs/index.md`\n"
+                    "[gone](gone.md) ![gone](img/gone.png) `docs/gone.md`\n```\n[in code](nowhere.md)\n```\n")
+    assert broken_links(page) == ["gone.md", "img/gone.png", "docs/gone.md"]
+
+
+def test_the_docs_index_lists_every_page():
+    index = (ROOT / "docs" / "index.md").read_text()
+    listed = set(re.findall(r"^- \[[^\]]+\]\(([\w-]+\.md)\): \S", index, re.M))
+    pages = {p.name for p in (ROOT / "docs").glob("*.md")} - {"index.md"}
+    assert pages <= listed, f"docs/index.md lacks {sorted(pages - listed)} (one line each)"
+
+
+def test_the_readme_stays_a_five_minute_read():
+    """Issue 34: set-up, a first run with its picture, the commands by task and links; figures live in docs/."""
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 130
+    assert "<!-- generated: " not in readme
+    assert re.search(r"!\[[^\]]+\]\(docs/img/\w+\.png\)", readme)
+    assert "](docs/index.md)" in readme
+
+
+def test_the_readme_set_up_commands_are_what_ci_runs():
+    """The README's two set-up commands (install + chapter 5, install + tests) are the ones .ci/run proves on a
+    fresh clone: the same venv, the same constrained install, the same test command."""
+    readme = (ROOT / "README.md").read_text()
+    setup = readme[readme.index("## Set up on a fresh machine"):readme.index("\n## ", readme.index("## Set up") + 3)]
+    commands = re.findall(r"^```\n(.+)\n```$", setup, re.M)
+    install = 'python3 -m venv .venv && . .venv/bin/activate && pip install -c constraints.txt -e ".[dev]"'
+    assert commands == [f"{install} && amr-twin experiment chapter5 --out results/chapter5",
+                        f"{install} && python -m pytest -q"]
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert {"python3 -m venv .venv", ". .venv/bin/activate", "python -m pytest -q"} <= set(ci)
+    assert any(line.endswith('install --quiet -c constraints.txt -e ".[dev]"') for line in ci)

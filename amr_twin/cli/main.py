@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import json
+import logging
 import math
 import os
 import sys
@@ -29,6 +30,10 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 # (~0.11 s of CPU on `import numpy` on 2 cores, a sixth of a 1 s run), while the twin's matrices are
 # small (a 14 x 14 mass matrix, 3 x 3 covariances); the pool workers inherit it (on 2 cores they competed)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# matplotlib's own warnings are not the command's: one that cannot save its font cache (a full disk, a
+# file-size limit) would print a second line beside the command's one-line error, and the cache is only
+# a speed-up (it is rebuilt at the next start); a real failure to draw still raises and is reported
+logging.getLogger("matplotlib").setLevel(logging.ERROR)
 
 import typer  # noqa: E402
 

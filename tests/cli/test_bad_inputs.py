@@ -201,17 +201,18 @@ def test_unreadable_input_files_name_the_file(tmp_path, refused):
         refused(args, str(path), words)
 
 
-def _limited(args, limit_bytes: int, cwd: Path):
+def _limited(args, limit_bytes: int, cwd: Path, env: dict | None = None):
     """``amr-twin args`` in a process whose files may not grow beyond ``limit_bytes`` (``ulimit -f``)."""
     def limit():
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, resource.RLIM_INFINITY))
 
     return subprocess.run([str(AMR_TWIN), *map(str, args)], capture_output=True, text=True, timeout=300, cwd=cwd,
-                          preexec_fn=limit)
+                          preexec_fn=limit, env=env)
 
 
-def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path):
-    """Each writer: the CSV, the .mcap, the .rrd (Rerun's file writer thread); then chapter 5's PNG."""
+def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path, tmp_path_factory):
+    """Each writer: the CSV, the .mcap, the .rrd (Rerun's file writer thread); then chapter 5's PNG, with
+    matplotlib's font cache not made yet (as on a new machine: it cannot be saved under the limit either)."""
     run = ["run", "linear", "--speed-m-s", "0.5", "--duration-s", "3", "--world", "empty"]
     for option, name in (("--csv", "r.csv"), ("--mcap", "r.mcap"), ("--record", "r.rrd")):
         res = _limited([*run, option, tmp_path / name], 20_000, tmp_path)
@@ -220,7 +221,8 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path):
                                      "limit, ulimit -f, is 20000 bytes)"
         assert list(tmp_path.iterdir()) == []
     res = _limited(["experiment", "chapter5", "--out", tmp_path / "c5" / "deeper", "--runs", 1, "--duration-s", 2,
-                    "--no-progress"], 20_000, tmp_path)
+                    "--no-progress"], 20_000, tmp_path,
+                   env={**os.environ, "MPLCONFIGDIR": str(tmp_path_factory.mktemp("matplotlib_config"))})
     assert res.returncode == 1 and res.stderr.count("\n") == 1 and "File too large" in res.stderr
     assert list(tmp_path.iterdir()) == []  # no empty output folder
 

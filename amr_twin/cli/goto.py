@@ -58,7 +58,7 @@ def _checked(cfg, opts, goals, nav: dict):
     except MapError as exc:
         fail(f"--map {exc}" if nav.get("map") else str(exc))
     start = _start_pose(opts.start) or default_start(opts.world)
-    planner = GlobalPlanner(make_costmap(static, robot_footprint(cfg)))
+    planner = GlobalPlanner(make_costmap(static, robot_footprint(cfg), cfg.navigation))
     here = np.array(start[:2], float)
     for x, y, yaw in goals:
         name = f"goal {x:g},{y:g}"

@@ -33,7 +33,7 @@ def add_navigation(experiment: typer.Typer) -> None:
         maps: str = typer.Option("true,slam", "--maps", help="true, slam or true,slam."),
         slam_map: Optional[Path] = typer.Option(None, "--slam-map", help="Use this map_server YAML as the SLAM map "
                                                 "instead of building one."),
-        people: str = typer.Option("static", "--people", help="The person scenario: static (standing in an aisle) "
+        people: str = typer.Option("walking", "--people", help="The person scenario: static (standing in an aisle) "
                                    "or walking (an actor crossing the aisle ahead of the robot, amr_twin/model/actors.py)."),
         localisation: str = typer.Option("ekf", "--localisation", help="truth, ekf or odom."),
         controller: str = typer.Option("mppi", "--controller", help="mppi or rpp."),

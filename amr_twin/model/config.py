@@ -32,6 +32,7 @@ from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, C
                               EkfCfg, ImuCfg, LidarCfg, LidarOdometryCfg, MappingCfg, MotorCfg,
                               PayloadCfg, Section, SimCfg, UwbCfg, WheelCfg)
 from amr_twin.model.config_actors import ActorsCfg
+from amr_twin.model.config_navigation import NavigationCfg
 from amr_twin.model.config_leaves import ConfigError  # noqa: F401 - the parameter files' error, raised here too
 from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
 from amr_twin.model.config_leaves import field_range as _field_range
@@ -64,6 +65,7 @@ class TwinConfig(Section):
     lidar_odometry: LidarOdometryCfg
     mapping: MappingCfg
     actors: ActorsCfg
+    navigation: NavigationCfg
 
     @model_validator(mode="after")
     def _geometry_consistent(self) -> "TwinConfig":

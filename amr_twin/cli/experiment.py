@@ -142,10 +142,12 @@ def _add_chapter5(experiment: typer.Typer) -> None:
             fail(f"--runs {runs!r}: expected run numbers 1..8 separated by commas")
         if numbers is not None and not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
             fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
+        if numbers is not None and len(set(numbers)) != len(numbers):  # run once, silently
+            fail(f"--runs {runs!r}: a run is named twice")
         check_record_folder("--record", record, fail, "run<N>.rrd")
         check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
         check_memory(duration_s or max(r.duration_s for r in chapter5.RUNS), fail, recorded=bool(record or mcap),
-                     processes=jobs, what="each run")
+                     processes=jobs, what="each run", rerun=record is not None)
         check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
         cfg = _config(config, params, set_)
         draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
@@ -254,6 +256,7 @@ def _add_payload_sweep(sweep: typer.Typer) -> None:
         cfg = _config(config, params, set_)
         try:
             mass_list = payload_point.parse_masses(masses)
+            payload_point.check_masses(masses, mass_list)
             position_list = [p.strip() for p in positions.split(",") if p.strip()]
             for p in position_list:
                 payload_point.check_on_deck(cfg, p)

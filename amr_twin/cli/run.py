@@ -70,7 +70,7 @@ def _actors(opts: RunOptions, mission_actors: tuple, cfg, start, fail) -> tuple:
             count, _, flag = opts.actors_random.partition("/")
             if not count.isdigit() or not 1 <= int(count) <= MAX_ACTORS or (flag and not flag.startswith("stop=")):
                 fail(f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}")
-            stop = float(flag[5:]) if flag else 0.0
+            stop = _stop_distance(opts.actors_random, flag[5:]) if flag else 0.0
             actors += list(_guard(lambda: _random_actors(cfg, opts, int(count), start, stop)))
         check_speeds(tuple(actors), cfg)
     except (ActorError, ValueError) as exc:
@@ -78,6 +78,20 @@ def _actors(opts: RunOptions, mission_actors: tuple, cfg, start, fail) -> tuple:
     if len(actors) > MAX_ACTORS:
         fail(f"--actor: {len(actors)} actors, at most {MAX_ACTORS}")
     return tuple(actors)
+
+
+def _stop_distance(given: str, text: str) -> float:
+    """``--actors-random``'s ``/stop=M``, m; a one-line refusal naming the option (was Python's
+    "could not convert string to float")."""
+    from amr_twin.model.actors import MAX_STOP_M
+
+    try:
+        stop_m = float(text)
+    except ValueError:
+        stop_m = math.nan
+    if not (math.isfinite(stop_m) and 0 <= stop_m <= MAX_STOP_M):
+        fail(f"--actors-random {given!r}: /stop=M takes a distance M in [0, {MAX_STOP_M:g}] m")
+    return stop_m
 
 
 def _random_actors(cfg, opts: RunOptions, count: int, start, stop_m: float) -> tuple:
@@ -141,7 +155,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     recording = opts.record is not None or opts.mcap is not None
     from amr_twin.cli.checks import check_memory
 
-    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors)
+    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors, rerun=opts.record is not None)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     actors = _actors(opts, mission_actors, cfg, start, fail)
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,

@@ -148,10 +148,10 @@ class GlobalPlanner:
         cm, k = self.costmap, self.downsample
         w = self._weights(keep_m, people_xy_m, pad_m)
         cell = []
-        for xy in (start_xy_m, goal_xy_m):
+        for name, xy in (("the start", start_xy_m), ("the goal", goal_xy_m)):
             r, c, inside = cm.cells(np.asarray(xy, float)[None])
             if not inside[0]:
-                return f"({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"
+                return f"{name} ({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"
             cell.append((min(int(r[0]) // k, w.shape[0] - 1), min(int(c[0]) // k, w.shape[1] - 1)))
         w[cell[0]] = min(w[cell[0]], 1.0 + self.cost_weight) if np.isfinite(w[cell[0]]) else 1.0 + self.cost_weight
         if not np.isfinite(w[cell[1]]):

@@ -34,7 +34,8 @@ def check_start(physics, where: str) -> None:
     hits, _ = collision_contacts(roles, physics.data)
     if hits:
         names = sorted({roles.world_name(w) for _i, _r, w in hits})
-        raise StartPoseError(f"{where}: the robot overlaps {', '.join(names)} there; "
+        shown = ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+        raise StartPoseError(f"{where}: the robot overlaps {shown} there; "
                              "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
 
 

@@ -38,6 +38,9 @@ Messages
 :func:`simulate_ranges` makes the same messages offline from tag positions (tests,
 replays); :class:`UwbSensor` samples the twin on the clock (it reads ``MjData.xpos``/``xmat``
 of the base body and casts one ray per exchange).
+
+Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads the tag's pose from MjData and casts
+each tag-anchor line with ``mj_ray``.
 """
 
 from __future__ import annotations
@@ -53,6 +56,8 @@ from amr_twin.model.config_sections import UwbCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Range
 from amr_twin.ros.ros_state import anchor_transforms
+
+PHYSICS_LAYER = True
 
 US = 1_000_000
 TOPIC = "uwb/range"
@@ -189,7 +194,7 @@ class UwbSensor:
 
     Parameters
     ----------
-    model, data : mujoco.MjModel, mujoco.MjData
+    physics : amr_twin.sim.physics.Physics
         The compiled twin, with a body named ``body``.
     clock : VirtualClock
         Shared clock; one event per exchange (``rate_hz * n_anchors`` per second).
@@ -210,8 +215,9 @@ class UwbSensor:
     ``blocked`` counts the exchanges per anchor whose line a wall blocked.
     """
 
-    def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: UwbCfg, seed=0,
+    def __init__(self, physics, clock: VirtualClock, bus: Bus, cfg: UwbCfg, seed=0,
                  body: str = "amr/base_link", autostart: bool = True, walls: bool = True):
+        model, data = physics.model, physics.data
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
         self.walls = bool(walls)
         self._groups = np.zeros(6, dtype=np.uint8)

@@ -245,8 +245,8 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
             side = "left " if topic == "wheel0_Vel" else "right"
             console.print(f"[dim]t={t_us * 1e-6:8.3f} s[/dim]  {topic} ({side}) {msg.data:8.3f} RPM")
 
-    twin.bus.add_tap(show)
-    twin.collisions.listeners.append(lambda c: console.print(escape(
+    twin.on_message(show)
+    twin.on_collision(lambda c: console.print(escape(
         f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m")))
     rt = _guard(lambda: RealTimeTwin(twin, rate, live_opts, say=lambda line: console.print(escape(line)),
                                      ros1=ros1_opts))

@@ -150,7 +150,7 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
         anchors = uwb_anchors_xy_m(twin.options.world)
         if anchors is not None:
             uwb = uwb.model_copy(update={"anchors_x_m": tuple(anchors[:, 0]), "anchors_y_m": tuple(anchors[:, 1])})
-        twin.uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, uwb, seed=[twin.options.seed, 3])
+        twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, uwb, seed=[twin.options.seed, 3])
         twin.ekf = EkfNode(cfg.ekf, use_imu=True, use_uwb=True, uwb=uwb, initial_pose=start, bus=twin.bus)
     else:
         frame = start
@@ -201,7 +201,7 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
     nav = attach(twin, cfg, static, options, publish=publish, drive=drive)
     twin.navigator = nav
     actor_poses = []
-    twin.bus.add_tap(lambda _topic, msg, t_us: actor_poses.append(
+    twin.on_message(lambda _topic, msg, t_us: actor_poses.append(
         (t_us * 1e-6, [(p.position.x, p.position.y, p.orientation.yaw_rad()) for p in msg.poses])), ("actors/poses",))
     twin.advance(REST_S)
     timeout = options.timeout_s

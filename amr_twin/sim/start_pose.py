@@ -5,6 +5,9 @@ classified as :mod:`amr_twin.sim.collisions` classifies them during a run), and
 :func:`check_supported` one where nothing holds it up after settling: no wheel or caster
 touches anything and no fixture holds the base (a world without a floor; the ``stand``
 world's weld, the work station of fig. 5.1, holds it with the wheels in the air).
+
+Part of the physics layer (``PHYSICS_LAYER``): places the robot at its start pose in MjData and
+checks its contacts (``mj_forward``).
 """
 
 from __future__ import annotations
@@ -12,6 +15,8 @@ from __future__ import annotations
 import mujoco
 
 from amr_twin.sim.collisions import GeomRoles, collision_contacts
+
+PHYSICS_LAYER = True
 
 
 class StartPoseError(ValueError):

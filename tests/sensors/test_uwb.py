@@ -111,7 +111,7 @@ def test_uwb_sensor_in_the_twin():
     twin = Twin(cfg, TwinOptions(sensors=True, world="warehouse"))
     msgs = []
     twin.bus.subscribe("uwb/range", msgs.append)
-    uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3],
+    uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3],
                     walls=False)  # line of sight everywhere: the racks' beams are in some lines here
     twin.advance(1.0)
     # 10 Hz x 4 anchors, round-robin every 25 ms, 5 % dropped
@@ -142,7 +142,7 @@ def test_walls_block_the_bays_anchors_in_the_corridor():
     twin = Twin(cfg, TwinOptions(world="corridor", start_xy_yaw=route.start_xy_yaw))
     msgs = []
     twin.bus.subscribe("uwb/range", msgs.append)
-    uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
+    uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
     twin.advance(3.0)
     per_anchor = np.bincount(np.arange(uwb.exchanges) % 5, minlength=5)  # round-robin from anchor 0
     assert list(uwb.blocked[:4]) == list(per_anchor[:4]) and uwb.blocked[4] == 0

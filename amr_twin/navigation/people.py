@@ -16,8 +16,10 @@ Reconstructed from those descriptions, each scan:
    the textbook g-h filter), its speed capped at ``max_speed_m_s``. A track not seen for
    ``keep_s`` is dropped.
 3. **People.** A track is a person once seen ``confirm`` times and once it has moved more than
-   ``moved_m`` from where it was first seen: a cluster that never moved is an upright, a box or a
-   pallet the map lacks (on a map built from scans, many), left to the costmap. People walk on at
+   ``moved_m`` from where it was first seen (with ``moved_m`` > 0 a cluster that never moved is taken
+   for an upright or a box the map lacks and left to the costmap; the twin's setting is 0, every
+   person-sized cluster is a person: people who wait at an aisle's side, or who crossed before the
+   robot came in range, were otherwise passed as obstacles are, 0.07 m away). People walk on at
    constant velocity (:meth:`People.at`) for at most ``horizon_s``; a person slower than
    ``min_speed_m_s`` is held where they stand (the filter's noise on a person standing still).
 

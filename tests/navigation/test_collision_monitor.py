@@ -80,3 +80,10 @@ def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_un
     assert mon.filter(0.5, 0.4, *no_scan, people_base=close) == (0.0, 0.0)  # towards them
     v, w = mon.filter(-0.2, 0.0, *no_scan, people_base=close)  # backing away: allowed
     assert v == -0.2 and mon.actions["people_escape"] == 1
+    # a turn in place away from them (the disc's gap grows) is refused all the same: it swings the corners
+    assert mon.filter(0.0, -0.5, *no_scan, people_base=close) == (0.0, 0.0)
+    assert mon.filter(0.0, 0.5, *no_scan, people_base=beside) == (0.0, 0.5)  # farther: turn freely
+    # driving on away from one who walks up behind: at full speed (at the people speed towards them)
+    behind = _people((-0.55, -0.45), (0.0, 1.3))
+    assert mon.filter(0.6, 0.0, *no_scan, people_base=behind) == (0.6, 0.0)
+    assert mon.filter(0.6, 0.0, *no_scan, people_base=_people((0.55, -0.45), (1.3, 0.0)))[0] == 0.3  # ahead, walking on

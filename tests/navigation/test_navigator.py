@@ -143,6 +143,27 @@ def test_a_person_stepping_into_the_path_2_m_ahead_stops_or_diverts_the_robot_0_
 
 
 @pytest.fixture(scope="module")
+def standing(corridors):
+    """A person standing at the south corridor's side, 0.65 m off the robot's line, who never walks: the
+    robot drives past them (the experiment's people wait at an aisle's side so before they cross)."""
+    person = Actor("person", ((6.0, 1.85),), 1.3)
+    twin_options = TwinOptions(firmware="improved", world=str(corridors), start_xy_yaw=(1.0, 2.5, 0.0), visuals=False,
+                               actors=(person,), seed=0)
+    return navigate(CFG, twin_options, NavigationOptions(goals=((11.0, 2.5, 0.0),), localisation="truth",
+                                                         controller="mppi"))
+
+
+def test_a_person_standing_still_beside_the_way_is_passed_0_3_m_away(standing):
+    """Never seen walking, they are a person all the same (navigation.people.moved_m 0): a robot that kept
+    only an obstacle's clearance from them (moved_m 0.5) passed 0.28 m from their body."""
+    run = standing
+    assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
+    assert run.collisions == []
+    rows = _person_clearance(run)
+    assert rows and min(r[1] for r in rows) >= 0.3, min(r[1] for r in rows)
+
+
+@pytest.fixture(scope="module")
 def unseen(tmp_path_factory):
     """Two seeded start/goal pairs on a warehouse generated here, localised by the EKF (UWB anchors of the
     parameter file: the hall's corners), imported as a ROS map world."""

@@ -156,13 +156,14 @@ class AvrFirmware:
             self.serial, self.pacer = PtySerialPort(p.serial_pty), WallPacer()
 
     # -- wiring into the twin ---------------------------------------------------------
-    def connect(self, bus, link) -> None:
-        """Carry the sketch's topics between ``bus`` and the UART, with ``link``'s latency and loss."""
+    def connect(self, bus, link) -> bool:
+        """Carry the sketch's topics between ``bus`` and the UART, with ``link``'s latency and loss
+        (True: it speaks rosserial itself, :meth:`amr_twin.controllers.firmware_params.Firmware.connect`)."""
         self._bus, self._link = bus, link
-        if self.serial is not None:  # the board's serial port is the host's
-            return
-        for name, info in self.subscribers.items():
-            bus.subscribe(name, lambda msg, info=info: self._send(info, msg))
+        if self.serial is None:  # else the board's serial port is the host's
+            for name, info in self.subscribers.items():
+                bus.subscribe(name, lambda msg, info=info: self._send(info, msg))
+        return True
 
     # -- Firmware protocol --------------------------------------------------------------
     def start(self) -> None:

@@ -44,14 +44,16 @@ def predict_mean(x: np.ndarray, dt_s: float) -> None:
 
 def transition_jacobian(x: np.ndarray, dt_s: float) -> np.ndarray:
     """Jacobian ``F`` (6, 6) of :func:`predict_mean` at the state ``x`` (6,) over ``dt_s`` s."""
-    c = math.cos(x[YAW] + 0.5 * x[W] * dt_s)
-    s = math.sin(x[YAW] + 0.5 * x[W] * dt_s)
-    vdt = x[V] * dt_s
-    F = np.eye(N_STATE)
-    F[X, YAW], F[X, V], F[X, W] = -vdt * s, dt_s * c, -vdt * s * 0.5 * dt_s
-    F[Y, YAW], F[Y, V], F[Y, W] = vdt * c, dt_s * s, vdt * c * 0.5 * dt_s
-    F[YAW, W] = dt_s
-    return F
+    yaw, v, w = float(x[YAW]), float(x[V]), float(x[W])
+    c = math.cos(yaw + 0.5 * w * dt_s)
+    s = math.sin(yaw + 0.5 * w * dt_s)
+    vdt = v * dt_s
+    return np.array([[1.0, 0.0, -vdt * s, dt_s * c, -vdt * s * 0.5 * dt_s, 0.0],
+                     [0.0, 1.0, vdt * c, dt_s * s, vdt * c * 0.5 * dt_s, 0.0],
+                     [0.0, 0.0, 1.0, 0.0, dt_s, 0.0],
+                     [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                     [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                     [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
 
 
 def process_noise(x: np.ndarray, dt_s: float, cfg: EkfCfg) -> np.ndarray:
@@ -62,22 +64,18 @@ def process_noise(x: np.ndarray, dt_s: float, cfg: EkfCfg) -> np.ndarray:
     bias (``cfg.gyro_bias_walk_rad_s_sqrt_s``); 1e-12 m^2/s on x and y keeps ``P``
     positive definite across the heading.
     """
-    c = math.cos(x[YAW] + 0.5 * x[W] * dt_s)
-    s = math.sin(x[YAW] + 0.5 * x[W] * dt_s)
+    yaw, w = float(x[YAW]), float(x[W])
+    c = math.cos(yaw + 0.5 * w * dt_s)
+    s = math.sin(yaw + 0.5 * w * dt_s)
     qa, qw = cfg.accel_sigma_m_s2 ** 2, cfg.alpha_sigma_rad_s2 ** 2
     d2, d3 = dt_s * dt_s / 2.0, dt_s ** 3 / 3.0
-    Q = np.zeros((N_STATE, N_STATE))
-    Q[X, X], Q[X, Y], Q[Y, Y] = qa * d3 * c * c, qa * d3 * c * s, qa * d3 * s * s
-    Q[Y, X] = Q[X, Y]
-    Q[X, V] = Q[V, X] = qa * d2 * c
-    Q[Y, V] = Q[V, Y] = qa * d2 * s
-    Q[V, V] = qa * dt_s
-    Q[YAW, YAW], Q[YAW, W], Q[W, W] = qw * d3, qw * d2, qw * dt_s
-    Q[W, YAW] = Q[YAW, W]
-    Q[BG, BG] = cfg.gyro_bias_walk_rad_s_sqrt_s ** 2 * dt_s
-    Q[X, X] += 1e-12 * dt_s
-    Q[Y, Y] += 1e-12 * dt_s
-    return Q
+    qxy, qxv, qyv, qyw = qa * d3 * c * s, qa * d2 * c, qa * d2 * s, qw * d2
+    return np.array([[qa * d3 * c * c + 1e-12 * dt_s, qxy, 0.0, qxv, 0.0, 0.0],
+                     [qxy, qa * d3 * s * s + 1e-12 * dt_s, 0.0, qyv, 0.0, 0.0],
+                     [0.0, 0.0, qw * d3, 0.0, qyw, 0.0],
+                     [qxv, qyv, 0.0, qa * dt_s, 0.0, 0.0],
+                     [0.0, 0.0, qyw, 0.0, qw * dt_s, 0.0],
+                     [0.0, 0.0, 0.0, 0.0, 0.0, cfg.gyro_bias_walk_rad_s_sqrt_s ** 2 * dt_s]])
 
 
 def linear_model(rows: Sequence[int], n: int = N_STATE) -> tuple[Callable, Callable, np.ndarray]:
@@ -158,11 +156,13 @@ def odometry_covariances(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         the entries the planar state does not hold are 0.
     """
     pose_cov = np.zeros((6, 6))
-    idx = (X, Y, None, None, None, YAW)
-    for i, a in enumerate(idx):
-        for j, b in enumerate(idx):
-            if a is not None and b is not None:
-                pose_cov[i, j] = P[a, b]
+    pose_cov[_POSE_ROWS] = P[_POSE_STATE]
     twist_cov = np.zeros((6, 6))
-    twist_cov[0, 0], twist_cov[0, 5], twist_cov[5, 0], twist_cov[5, 5] = P[V, V], P[V, W], P[W, V], P[W, W]
+    twist_cov[_TWIST_ROWS] = P[_TWIST_STATE]
     return pose_cov.ravel(), twist_cov.ravel()
+
+
+_POSE_ROWS, _POSE_STATE = np.ix_((0, 1, 5), (0, 1, 5)), np.ix_((X, Y, YAW), (X, Y, YAW))
+"""Rows/columns (x, y, rot z) of a pose covariance and the state entries they hold."""
+_TWIST_ROWS, _TWIST_STATE = np.ix_((0, 5), (0, 5)), np.ix_((V, W), (V, W))
+"""Rows/columns (vx, wz) of a twist covariance and the state entries they hold."""

@@ -159,6 +159,10 @@ class FaithfulFirmware:
             else p.short_sample_edges
 
     # -- Firmware protocol ---------------------------------------------------------
+    def connect(self, bus, link) -> bool:
+        """No UART of its own: the loop bridges wheel_Command and the published speeds."""
+        return False
+
     def start(self) -> None:
         """setup(): wheels braked, Timer1 every 0.2 s calling PICallBack."""
         for m in self.motors:

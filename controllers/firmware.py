@@ -7,8 +7,8 @@ Mega 2560 on the shared :class:`~amr_twin.sim.clock.VirtualClock`; ``avr`` is th
 same firmware as an Arduino sketch (``controllers/arduino/motor_control``, or a
 user's sketch folder) compiled with avr-gcc and run on an emulated ATmega2560
 (:mod:`~amr_twin.controllers.avr`). A firmware that speaks rosserial on its own
-UART has ``connect(bus, link)``; the loop then hands it the bus instead of
-bridging ``wheel_Command`` and ``wheelN_Vel`` itself.
+UART says so from ``connect(bus, link)``; the loop then bridges neither
+``wheel_Command`` nor ``wheelN_Vel`` itself.
 
 Published speeds (``wheel0_Vel``, ``wheel1_Vel``) are RPM as a positive
 magnitude: the SC output carries no direction, and the thesis firmware publishes

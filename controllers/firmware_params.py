@@ -22,6 +22,11 @@ class Firmware(Protocol):
 
     pins: tuple[DriverPins, DriverPins]
 
+    def connect(self, bus, link) -> bool:
+        """Attach to the PC side: True if the firmware speaks rosserial on its own (emulated) UART over
+        ``link`` with ``bus`` (the loop then bridges nothing), False if the loop should bridge
+        ``wheel_Command`` to :meth:`on_wheel_command` and the published speeds itself."""
+
     def start(self) -> None:
         """setup(): initial pin levels, the timer scheduled on the clock."""
 

@@ -77,6 +77,10 @@ class ImprovedFirmware:
         self._dt_s = p.pi_period_us * 1e-6
 
     # -- Firmware protocol ---------------------------------------------------------
+    def connect(self, bus, link) -> bool:
+        """No UART of its own: the loop bridges wheel_Command and the published speeds."""
+        return False
+
     def start(self) -> None:
         """setup(): wheels braked, SC interrupts attached for good, Timer1 at the PI rate."""
         b = self.p.board

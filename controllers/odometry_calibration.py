@@ -47,13 +47,12 @@ class OdometryCalibration:
 
 def load(path: Path | str) -> OdometryCalibration:
     """Read a calibration file; ValueError naming the file and the field otherwise."""
-    import yaml
+    from amr_twin.model.yaml_file import read_yaml
 
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise ValueError(f"--odometry {path}: cannot read it as YAML ({type(exc).__name__})") from None
+    if not path.exists():
+        raise ValueError(f"--odometry {path}: no such file (amr-twin experiment umbmark writes one)")
+    data = read_yaml(path, "--odometry", ValueError)  # a device, a pipe, binary or bad YAML: one line
     node = data.get(KEY) if isinstance(data, dict) else None
     if not isinstance(node, dict):
         raise ValueError(f"--odometry {path}: expected a '{KEY}:' mapping with {', '.join(FIELDS)}")

@@ -158,5 +158,24 @@ def main() -> None:  # pragma: no cover - rewrites the committed results and doc
           f"blocks of {', '.join(str(p.relative_to(ROOT)) for p in DOCUMENTS)}")
 
 
+def parse_args(argv: list[str]) -> None:
+    """The command takes no arguments: ``--help`` prints what it does; anything else is refused (exit 2)
+    before any work (it ignored them, and ``--help`` started the minutes of rewriting)."""
+    import argparse
+    import sys
+
+    parser = argparse.ArgumentParser(prog=COMMAND, description="Rewrite the figures the documents quote from fresh "
+                                     "runs (docs/faults.md, the payload sweep, fusion and chapter 5 results, the "
+                                     "generated blocks of README.md, docs/validation.md, docs/fusion.md); several "
+                                     "minutes.")
+    _, extra = parser.parse_known_args(argv)
+    if extra:
+        print(f"error: {COMMAND}: takes no arguments (got {' '.join(extra)}); see --help", file=sys.stderr)
+        raise SystemExit(2)
+
+
 if __name__ == "__main__":  # pragma: no cover
+    import sys
+
+    parse_args(sys.argv[1:])
     main()

@@ -105,10 +105,9 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     twin = Twin(robot.config(cfg), TwinOptions(firmware=firmware, world=route.world, seed=seed,
                                                start_xy_yaw=route.start_xy_yaw, sensors=True, visuals=recording,
                                                **robot.twin_options()))
-    m, d = twin.physics.model, twin.physics.data
-    twin.uwb = UwbSensor(m, d, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
+    twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
     streams = Streams()
-    twin.bus.add_tap(streams.tap)
+    twin.on_message(streams.tap)
     if recording:
         from amr_twin.recording.rerun_capture import attach
         attach(twin)

@@ -62,7 +62,7 @@ STOP_WITHIN_M = 0.6
 """A walking person halts while the robot is this close ahead of them (people give way), m."""
 
 
-def _place(rng, scenario: str, plan, costmap, start, goal, people: str = "static"):
+def _place(rng, scenario: str, plan, costmap, start, goal, people: str = "walking"):
     """An obstacle (or a walking person: an Actor) in an aisle on the planned way, at least 3 m from start
     and goal; None if no room."""
     xy = plan.xy_m
@@ -93,13 +93,13 @@ def _place(rng, scenario: str, plan, costmap, start, goal, people: str = "static
     return Obstacle(scenario, float(x), float(y), size, yaw)
 
 
-def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "static") -> list[Episode]:
+def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") -> list[Episode]:
     """``n`` episodes, episode ``i`` drawn from ``default_rng([seed, i])`` (module docstring)."""
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.planner import GlobalPlanner
     from amr_twin.navigation.stack import make_costmap, true_map
 
-    costmap = make_costmap(true_map(cfg, world), robot_footprint(cfg))
+    costmap = make_costmap(true_map(cfg, world), robot_footprint(cfg), cfg.navigation)
     planner = GlobalPlanner(costmap)
     free = _free_cells(costmap)
     out = []
@@ -170,7 +170,7 @@ def _timed_episode(item: EpisodeRun) -> dict:
 
 def run(cfg, world: str, n: int, *, seed: int = 0, maps: tuple = MAPS, slam_yaml: str | None = None,
         slam_stem=None, localisation: str = "ekf", controller: str = "mppi", firmware: str = "improved",
-        jobs: int = 1, client=None, progress: bool = True, people: str = "static") -> dict:
+        jobs: int = 1, client=None, progress: bool = True, people: str = "walking") -> dict:
     """Every episode on every map (building the SLAM map at ``slam_stem`` first when ``slam_yaml`` is None)."""
     import time
 

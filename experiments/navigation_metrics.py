@@ -60,7 +60,7 @@ def _sign_changes(w: np.ndarray) -> int:
 def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
     """The metrics of one finished episode (module docstring), with its trajectory at 5 Hz for the plots."""
     from amr_twin.experiments.navigation_optimal import VisibilityGraph
-    from amr_twin.model.worlds import world_path
+    from amr_twin.model.worlds import world_path, world_xml
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.kinematics import Limits
     from amr_twin.navigation.static_map import Boxes, obstacle_boxes
@@ -69,7 +69,9 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
 
     out = run.outcomes[0]
     footprint = robot_footprint(cfg)
-    world_boxes = obstacle_boxes(mujoco.MjModel.from_xml_path(str(world_path(world))), 0.005, robot_top_m(cfg))
+    model = (mujoco.MjModel.from_xml_string(world_xml(world)) if str(world).endswith(".yaml")  # a ROS map world
+             else mujoco.MjModel.from_xml_path(str(world_path(world))))
+    world_boxes = obstacle_boxes(model, 0.005, robot_top_m(cfg))
     ob = episode.obstacle
     extra = Boxes(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), ()) if ob is None else \
         Boxes(np.array([[ob.x_m, ob.y_m]]), np.array([[ob.size_m[0] / 2, ob.size_m[1] / 2]]), np.array([ob.yaw_rad]),

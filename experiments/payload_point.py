@@ -89,6 +89,18 @@ def check_on_deck(cfg: TwinConfig, name: str) -> None:
                          f"{cfg.payload.size_m[1]:g} m) leaves the deck: |X| <= {hx:.3f} m and |Y| <= {hy:.3f} m")
 
 
+def check_masses(text: str, masses: list[float]) -> None:
+    """Refuse masses above the schema's payload range: every such point was simulated as "invalid" and the
+    answer read "unsafe already at 1000 kg" (ValueError naming ``--masses`` and the range)."""
+    from amr_twin.model.config_leaves import field_range
+
+    low, high, unit = field_range(TwinConfig, ["payload", "mass_kg"])
+    over = [m for m in masses if m > high]
+    if over:
+        raise ValueError(f"--masses {text!r}: {over[0]:g} {unit} is above payload.mass_kg's allowed "
+                         f"[{low}, {high}] {unit}")
+
+
 def check_accepted(cfg: TwinConfig, text: str) -> None:
     """Refuse a ``--commands`` entry the client refuses (its thesis ranges): every point would be refused."""
     client = parse_command(text).dry_run(cfg)

@@ -119,7 +119,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     # The point runs as one call of the loop, as ``amr-twin run`` does (stopping the loop every
     # sample moved the results by about 1e-4 relative and cost about 2 % more CPU).
     support = twin.rolling.support_rows(int(round(SAMPLE_S * 1e6)))
-    twin.samplers.append(support)
+    twin.on_grid(support)
     twin.advance_to_us(int(round(point.duration_s * 1e6)))
     rows = support.take()  # the instant, then the values
     loads, contact, up_z, vel = rows[:, 1:7], rows[:, 7:13], rows[:, 13], rows[:, 14:20]

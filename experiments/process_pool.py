@@ -45,7 +45,12 @@ def check_jobs(jobs: int | None) -> int:
 
 def _warm_worker(parent_pid: int) -> None:
     """Pool worker start-up: die with the parent, then import the twin (numpy, MuJoCo, the
-    model build and the loop) before the first item arrives."""
+    model build and the loop) before the first item arrives. Ctrl-C is the parent's to handle (it
+    stops the workers): a worker ignores SIGINT, which the terminal sends to every process of the
+    command (each printed its traceback)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _watch_parent(parent_pid)
     import amr_twin.sim.loop  # noqa: F401
     import amr_twin.sim.run  # noqa: F401

@@ -38,6 +38,9 @@ thus trusts the gyro to 10 deg/s, not to its 0.05 deg/s noise; the calibration
 step that earns the noise level is the rest mean of the first seconds (the twin's
 EKF does it, ``ekf.imu_rest_calibration_s``, :mod:`amr_twin.controllers.ekf`).
 This module does not import mujoco: it reads ``MjData.sensordata`` by address.
+
+Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads MuJoCo's accelerometer, gyro and
+magnetometer values where they lie in MjData (by address, in C on the loop's grid).
 """
 
 from __future__ import annotations
@@ -57,6 +60,8 @@ from amr_twin.sensors.imu_errors import ErrorStream, axis_models, covariances
 from amr_twin.sim.grid_steps import GridRows, gather
 from amr_twin.sim.native_build import address
 
+PHYSICS_LAYER = True
+
 US = 1_000_000
 SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")
 """MuJoCo sensors read by the IMU: accelerometer, gyro, magnetometer (3 values each)."""
@@ -67,7 +72,7 @@ class ImuSensor:
 
     Parameters
     ----------
-    model, data : mujoco.MjModel, mujoco.MjData
+    physics : amr_twin.sim.physics.Physics
         The compiled twin (sensors named as in :data:`SENSOR_NAMES`).
     clock : VirtualClock
         Shared clock; one event per sample.
@@ -83,8 +88,9 @@ class ImuSensor:
         Corrupt the samples in C when the helper builds (same bits; :attr:`engine` says which runs).
     """
 
-    def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: ImuCfg, seed: int | None = 0,
+    def __init__(self, physics, clock: VirtualClock, bus: Bus, cfg: ImuCfg, seed: int | None = 0,
                  frame_id: str = IMU_FRAME, autostart: bool = True, native: bool = True):
+        model, data = physics.model, physics.data
         self.data, self.clock, self.bus, self.cfg, self.frame_id = data, clock, bus, cfg, frame_id
         self._adr = [int(model.sensor(name).adr[0]) for name in SENSOR_NAMES]
         self.rng = np.random.default_rng(seed)

@@ -40,6 +40,9 @@ then noised (``inf`` where invalid, as ``rplidar_ros`` publishes it).
 A ``sensor_msgs/LaserScan`` goes out on ``scan`` at the first pose sample at or
 after the last beam of its rotation (frame ``laser``, stamp = the last beam). ``start_motor`` / ``stop_motor`` services start and stop the
 rotation (the motor spin-up time is not modelled).
+
+Part of the physics layer (``PHYSICS_LAYER``): a sensor: casts its beams with ``mj_multiRay`` on
+MjData at each laser pose.
 """
 
 from __future__ import annotations
@@ -60,6 +63,8 @@ from amr_twin.sim.grid_steps import NEVER_BEFORE
 from amr_twin.sensors.lidar_beams import US, PoseSamples, beam_angles_rad, beam_directions, group_masks, scan_timing
 from amr_twin.sensors.lidar_kernels import CUTOFF_M, beam_kernels
 
+PHYSICS_LAYER = True
+
 
 
 class Lidar:
@@ -67,7 +72,7 @@ class Lidar:
 
     Parameters
     ----------
-    model, data : mujoco.MjModel, mujoco.MjData
+    physics : amr_twin.sim.physics.Physics
         The compiled twin, with a site ``amr/laser``.
     clock : VirtualClock
         Shared clock.
@@ -90,9 +95,10 @@ class Lidar:
         :attr:`engine` says which runs.
     """
 
-    def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: LidarCfg, seed: int | None = 0,
+    def __init__(self, physics, clock: VirtualClock, bus: Bus, cfg: LidarCfg, seed: int | None = 0,
                  group_us: int = 20000, frame_id: str = LASER_FRAME, site: str = "amr/laser",
                  autostart: bool = True, loop_cast_us: int = 200000, native: bool = True):
+        model, data = physics.model, physics.data
         if group_us <= 0 or loop_cast_us <= 0:
             raise ValueError(f"group_us {group_us}, loop_cast_us {loop_cast_us}: must be > 0")
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg

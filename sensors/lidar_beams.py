@@ -29,6 +29,9 @@ Range noise (:func:`noisy_ranges`)
     Gaussian with sigma ``max(floor, frac * r)``, then quantised to the 1/4 mm of
     the A1 protocol. No hit, or a range outside ``[range_min, range_max]``, is
     ``inf`` as ``rplidar_ros`` publishes it.
+
+Part of the physics layer (``PHYSICS_LAYER``): keeps the laser site's pose from MjData on the loop's
+grid (views of ``site_xpos``/``site_xmat``).
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ import numpy as np
 from amr_twin.model.config_sections import LidarCfg
 from amr_twin.sim.grid_steps import GridRows, gather
 from amr_twin.sim.native_build import address
+
+PHYSICS_LAYER = True
 
 US = 1_000_000
 SEEN_GROUPS = (0, 4)

@@ -30,6 +30,9 @@ Both classes take and return the same arrays:
   (the C helper calls MuJoCo's functions itself, through pointers into the loaded libmujoco);
 - :meth:`rays` (the helper only): the ray cast alone, unit directions from an origin;
 - :meth:`noise`: noisy ranges (n,) float32, m, inf where invalid, from standard normals.
+
+Part of the physics layer (``PHYSICS_LAYER``): the LiDAR's ray casts (``mj_multiRay`` on MjData) and
+their C arithmetic.
 """
 
 from __future__ import annotations
@@ -44,6 +47,8 @@ from amr_twin.model.config_sections import LidarCfg
 from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, c_array, mujoco_address, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
+
+PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("lidar_beams.c")
 CUTOFF_M = 1e6

@@ -38,6 +38,9 @@ Messages
 :func:`simulate_ranges` makes the same messages offline from tag positions (tests,
 replays); :class:`UwbSensor` samples the twin on the clock (it reads ``MjData.xpos``/``xmat``
 of the base body and casts one ray per exchange).
+
+Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads the tag's pose from MjData and casts
+each tag-anchor line with ``mj_ray``.
 """
 
 from __future__ import annotations
@@ -53,6 +56,8 @@ from amr_twin.model.config_sections import UwbCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Range
 from amr_twin.ros.ros_state import anchor_transforms
+
+PHYSICS_LAYER = True
 
 US = 1_000_000
 TOPIC = "uwb/range"
@@ -133,6 +138,23 @@ def corrupt_ranges(true_range_m: np.ndarray, cfg: UwbCfg, rng: np.random.Generat
     return np.maximum(r, 0.0), received
 
 
+def corrupt_range(d_m: float, cfg: UwbCfg, rng: np.random.Generator, blocked: bool | None = None) -> tuple[float, bool]:
+    """One exchange of :func:`corrupt_ranges` (the same draws in the same order, the same sums): the
+    sensor's path at 60 Hz, where NumPy's per-call cost on arrays of one dominated. Returns
+    ``(range_m, received)``."""
+    u_drop, u_nlos = rng.random(), rng.random()
+    bias = rng.exponential(cfg.nlos_bias_m) if cfg.nlos_bias_m > 0 else 0.0
+    noise = cfg.range_noise_sigma_m * rng.standard_normal()
+    r = d_m + noise + (bias if u_nlos < cfg.nlos_prob else 0.0)
+    received = u_drop >= cfg.dropout_prob and d_m <= cfg.max_range_m
+    if blocked is not None:
+        wall = rng.exponential(cfg.blocked_bias_m) if cfg.blocked_bias_m > 0 else 0.0
+        u_wall = rng.random()
+        r = r + (wall if blocked else 0.0)
+        received = received and not (blocked and u_wall < cfg.blocked_dropout_prob)
+    return max(r, 0.0), bool(received)
+
+
 def _message(seq: int, stamp: Time, index: int, range_m: float, cfg: UwbCfg) -> Range:
     return Range(header=Header(seq, stamp, anchor_frame(index)), radiation_type=Range.INFRARED,
                  field_of_view=FIELD_OF_VIEW_RAD, min_range=0.0, max_range=cfg.max_range_m,
@@ -189,7 +211,7 @@ class UwbSensor:
 
     Parameters
     ----------
-    model, data : mujoco.MjModel, mujoco.MjData
+    physics : amr_twin.sim.physics.Physics
         The compiled twin, with a body named ``body``.
     clock : VirtualClock
         Shared clock; one event per exchange (``rate_hz * n_anchors`` per second).
@@ -210,8 +232,9 @@ class UwbSensor:
     ``blocked`` counts the exchanges per anchor whose line a wall blocked.
     """
 
-    def __init__(self, model, data, clock: VirtualClock, bus: Bus, cfg: UwbCfg, seed=0,
+    def __init__(self, physics, clock: VirtualClock, bus: Bus, cfg: UwbCfg, seed=0,
                  body: str = "amr/base_link", autostart: bool = True, walls: bool = True):
+        model, data = physics.model, physics.data
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
         self.walls = bool(walls)
         self._groups = np.zeros(6, dtype=np.uint8)
@@ -262,9 +285,9 @@ class UwbSensor:
         blocked = None
         if self.walls:
             hit = mujoco.mj_ray(self.model, self.data, tag, line, self._groups, 1, -1, self._geomid)
-            blocked = np.array([0.0 <= hit < 1.0])  # a surface between tag and anchor (hit in units of the line)
-            self.blocked[index] += int(blocked[0])
-        r, ok = corrupt_ranges(np.array([d]), self.cfg, self.rng, blocked)
-        if ok[0]:
-            self.pub.publish(_message(self.seq, Time.from_us(self.clock.now_us), index, r[0], self.cfg))
+            blocked = 0.0 <= hit < 1.0  # a surface between tag and anchor (hit in units of the line)
+            self.blocked[index] += int(blocked)
+        r, ok = corrupt_range(d, self.cfg, self.rng, blocked)
+        if ok:
+            self.pub.publish(_message(self.seq, Time.from_us(self.clock.now_us), index, r, self.cfg))
             self.seq += 1

@@ -113,7 +113,8 @@ class CalibrationReport:
                                                                                                          len(held)),
                 undetermined=tuple(tree.get("undetermined") or ()))
         except (KeyError, TypeError, ValueError) as exc:
-            raise ConfigError(f"{where}: not a calibration report ({type(exc).__name__}: {exc}); "
+            why = f"no {exc.args[0]!r} key" if isinstance(exc, KeyError) else str(exc).splitlines()[0]
+            raise ConfigError(f"{where}: not a calibration report ({why}); "
                               "amr-twin calibrate --report writes one") from None
         if report.correlation.shape != (len(keys), len(keys)) or not np.all(np.isfinite(report.sigma)):
             raise ConfigError(f"{where}: the correlation must be {len(keys)} x {len(keys)} and every sigma finite")
@@ -122,13 +123,12 @@ class CalibrationReport:
 
 def read(path: str | Path) -> CalibrationReport:
     """Read a report file (one-line :class:`ConfigError` if it is missing or malformed)."""
+    from amr_twin.model.yaml_file import read_yaml
+
     path = Path(path)
-    try:
-        tree = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the calibration report ({exc.strerror or exc})") from None
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from None
+    if not path.exists():
+        raise ConfigError(f"{path}: no such calibration report")
+    tree = read_yaml(path, "calibration report", ConfigError)  # a device, a pipe, binary or bad YAML: one line
     return CalibrationReport.from_dict(tree if isinstance(tree, dict) else {}, str(path))
 
 

@@ -30,12 +30,11 @@ REPEATS = 3
 
 def planning_figures(cfg) -> dict:
     from amr_twin.navigation.footprint import robot_footprint
-    from amr_twin.navigation.planner import GlobalPlanner
-    from amr_twin.navigation.stack import PEOPLE_PAD_M, make_costmap, true_map
+    from amr_twin.navigation.stack import make_costmap, make_planner, true_map
 
     fp = robot_footprint(cfg)
-    costmap = make_costmap(true_map(cfg, WORLD), fp)
-    planner = GlobalPlanner(costmap, turn_room_m=fp.circumscribed_radius_m, unmapped_pad_m=PEOPLE_PAD_M)
+    costmap = make_costmap(true_map(cfg, WORLD), fp, cfg.navigation)
+    planner = make_planner(costmap, fp, cfg.navigation)
     free = costmap.centres_xy_m(*np.nonzero(costmap.static_dist_m >= 0.7))
     rng = np.random.default_rng(0)
     times = []

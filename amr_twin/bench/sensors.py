@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import statistics
 
-import mujoco
 
 from amr_twin.bench.physics import REPEATS, bare_steps_s, paired_ratio, timer
 from amr_twin.ros.bus import Bus
@@ -32,9 +31,9 @@ def lidar_scan_cost_us(twin: Twin) -> tuple[float, float]:
     the twin's model and data, standing still, on a clock of its own; the second
     casts the 364 beams from the present pose in one ``mj_multiRay`` call.
     """
-    m, d, cfg = twin.physics.model, twin.physics.data, twin.cfg.lidar
+    cfg = twin.cfg.lidar
     clock = VirtualClock()
-    lidar = Lidar(m, d, clock, Bus(clock), cfg, autostart=False)
+    lidar = Lidar(twin.physics, clock, Bus(clock), cfg, autostart=False)
     lidar.start_motor(grid_us=twin.grid_us, samplers=[])
     grid_us, t_us = twin.grid_us, 0
     block = 10 * lidar.scan_us // grid_us  # grid instants of about 10 rotations
@@ -83,7 +82,7 @@ def sensor_figures(cfg: TwinConfig, sim_s: float) -> dict:
         with_t.append(cpu_s)
         bare_t.append(bare_steps_s(twin.physics, sim_s))
         without_t.append(twin_run_s(cfg, sim_s, sensors=False)[0])
-    mujoco.mj_forward(twin.physics.model, twin.physics.data)
+    twin.physics.forward()
     scan_groups_us, scan_one_us = lidar_scan_cost_us(twin)
     return {
         "sensors_s_per_sim_s": round(statistics.median(with_t) / sim_s, 5),

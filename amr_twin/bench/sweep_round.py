@@ -31,9 +31,7 @@ SWEEP = {"masses": SWEEP_MASSES, "positions": SWEEP_POSITIONS, "commands": SWEEP
 
 def sweep_round(cfg, spec: dict = SWEEP) -> dict:
     """Time the sweep ``spec`` of ``cfg`` and then bare physics of one point of it, CPU s (module notes)."""
-    import mujoco
-
-    from amr_twin.bench.physics import timer
+    from amr_twin.bench.physics import bare_steps_s, timer
     from amr_twin.experiments import payload_point, payload_sweep
     from amr_twin.sim.loop import Twin, TwinOptions
 
@@ -45,10 +43,7 @@ def sweep_round(cfg, spec: dict = SWEEP) -> dict:
     twin = Twin(payload_point.with_payload(cfg, 20.0, (0.0, 0.0)), TwinOptions(world="empty", visuals=False))
     twin.client.linear(0.7)
     twin.advance(1.0)  # the model a sweep point runs, moving
-    m, d = twin.physics.model, twin.physics.data
-    t0 = timer()
-    mujoco.mj_step(m, d, int(round(spec["duration_s"] / m.opt.timestep)))
-    bare = timer() - t0
+    bare = bare_steps_s(twin.physics, spec["duration_s"])
     return {"sweep_cpu_s": cpu, "bare_point_s": bare, "points": len(sweep["rows"]), "simulated": sweep["simulated"],
             "pid": os.getpid()}
 

@@ -3,6 +3,8 @@ the people and pallet jacks that walk the world (amr_twin/model/actors.py), chec
 
 from __future__ import annotations
 
+import math
+
 from amr_twin.cli.common import _guard, fail
 from amr_twin.cli.options import RunOptions
 
@@ -22,7 +24,7 @@ def checked_actors(opts: RunOptions, mission_actors: tuple, cfg, start) -> tuple
             count, _, flag = opts.actors_random.partition("/")
             if not count.isdigit() or not 1 <= int(count) <= MAX_ACTORS or (flag and not flag.startswith("stop=")):
                 fail(f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}")
-            stop = float(flag[5:]) if flag else 0.0
+            stop = _stop_distance(opts.actors_random, flag[5:]) if flag else 0.0
             actors += list(_guard(lambda: _random_actors(cfg, opts, int(count), start, stop)))
         check_speeds(tuple(actors), cfg)
     except (ActorError, ValueError) as exc:
@@ -30,6 +32,20 @@ def checked_actors(opts: RunOptions, mission_actors: tuple, cfg, start) -> tuple
     if len(actors) > MAX_ACTORS:
         fail(f"--actor: {len(actors)} actors, at most {MAX_ACTORS}")
     return tuple(actors)
+
+
+def _stop_distance(given: str, text: str) -> float:
+    """``--actors-random``'s ``/stop=M``, m; a one-line refusal naming the option (was Python's
+    "could not convert string to float")."""
+    from amr_twin.model.actors import MAX_STOP_M
+
+    try:
+        stop_m = float(text)
+    except ValueError:
+        stop_m = math.nan
+    if not (math.isfinite(stop_m) and 0 <= stop_m <= MAX_STOP_M):
+        fail(f"--actors-random {given!r}: /stop=M takes a distance M in [0, {MAX_STOP_M:g}] m")
+    return stop_m
 
 
 def _random_actors(cfg, opts: RunOptions, count: int, start, stop_m: float) -> tuple:

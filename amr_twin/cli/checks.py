@@ -22,11 +22,13 @@ JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per 
 YesOpt = typer.Option(False, "--yes", help="Start without asking when the time estimated beforehand is above 10 min "
                       "(without it such a run is refused, its estimate named).")
 
-CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark": 0.012}
+CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark": 0.012, "navigation": 0.19}
 """CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table): a
 100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s on one
 job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark square (no
-sensors, the empty world): 0.73 s of CPU for its 60 simulated s (issue 30's ten robots, 300 squares)."""
+sensors, the empty world): 0.73 s of CPU for its 60 simulated s (issue 30's ten robots, 300 squares). Navigation
+(sensors, EKF + MPPI, the episodes' people and the SLAM map's build): 368 s of CPU for the 32 runs of about 59
+simulated s of ``experiment navigation --episodes 16 --seed 1`` (docs/navigation.md)."""
 AVR_COST = 4.0
 """How much more the emulated ATmega2560 costs (the bench's avr_ratio, 5.5, against the loop's 1.3)."""
 CONFIRM_ABOVE_S = 600.0
@@ -48,7 +50,7 @@ def check_estimate(what: str, sim_s: float, kind: str, workers: int, firmware: s
     cost = CPU_S_PER_SIM_S[kind] * (AVR_COST if firmware.startswith("avr") else 1.0)
     wall_s = sim_s * cost / max(1, workers)
     text = (f"{what}: about {_minutes(wall_s)} with {workers} worker{'s' if workers != 1 else ''} "
-            f"({sim_s:.0f} simulated s at {cost:g} s of CPU each, as the bench measured)")
+            f"({sim_s:.0f} simulated s at {cost:g} s of CPU each, as measured)")
     if wall_s > CONFIRM_ABOVE_S and not yes:
         fail(f"{text}; above {CONFIRM_ABOVE_S / 60:.0f} min: add --yes to start it, or ask for less")
     if wall_s > 60:
@@ -79,11 +81,19 @@ def check_duration(duration_s: Optional[float], fail) -> None:
 
 
 def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool = False, processes: int = 1,
-                 what: str = "the run") -> None:
+                 what: str = "the run", rerun: bool = False) -> None:
     """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`, one per
-    process) exceeds what the machine has available now; nothing is refused where that is unknown."""
-    from amr_twin.sim.bounds import available_mb, memory_mb
+    process) exceeds what the machine has available now, or, with the Rerun recording (``rerun``), the
+    address space it reserves, the process' limit (``ulimit -v``); nothing is refused where unknown."""
+    from amr_twin.sim.bounds import RERUN_ADDRESS_SPACE_MB, address_space_mb, available_mb, memory_mb
 
+    limit = address_space_mb()
+    space = memory_mb(duration_s, recorded, sensors) + (RERUN_ADDRESS_SPACE_MB if rerun else 0.0)
+    if limit is not None and space > limit:
+        fail(f"--duration-s {duration_s:g}{' with --record' if rerun else ''}: {what} would need about "
+             f"{space / 1024:.1f} GB of address space{' (the Rerun recording reserves ~3 GB)' if rerun else ''}; "
+             "the limit (ulimit -v) is "
+             f"{limit / 1024:.1f} GB: raise it, or ask for less (a shorter run, no recording)")
     need, have = memory_mb(duration_s, recorded, sensors) * processes, available_mb()
     if have is not None and need > have:
         kept = "its messages until they are written" if recorded else "its 100 Hz series"
@@ -93,7 +103,11 @@ def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool 
 
 
 def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
-    """``--executor local|dask`` and ``--scheduler``: dask needs an address, local takes none."""
+    """``--executor local|dask``, ``--scheduler`` and the command's ``--scheduler-timeout-s`` (read from its
+    context): dask needs an address, local takes neither (given with it, they were ignored)."""
+    import math
+
+    from amr_twin.cli.path_options import get_current_context
     from amr_twin.experiments.executor import EXECUTORS
 
     if executor not in EXECUTORS:
@@ -102,6 +116,14 @@ def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
         fail("--executor dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
     if executor == "local" and scheduler:
         fail("--scheduler is only used with --executor dask")
+    ctx = get_current_context(silent=True)
+    if ctx is None or "scheduler_timeout_s" not in ctx.params:
+        return
+    timeout_s, source = ctx.params["scheduler_timeout_s"], ctx.get_parameter_source("scheduler_timeout_s")
+    if executor == "local" and source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP"):
+        fail("--scheduler-timeout-s is only used with --executor dask")
+    if not (math.isfinite(timeout_s) and 0 < timeout_s < 3600):
+        fail(f"--scheduler-timeout-s {timeout_s:g}: must be in (0, 3600) s")
 
 
 def check_record_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
@@ -178,10 +200,12 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
     checked_seed(seed, fail)
     if sampler is not None and sampler not in SAMPLERS:
         fail(f"--sampler {sampler!r}: must be one of {', '.join(SAMPLERS)}")
-    if calibration is not None and not calibration.is_file():
+    if calibration is not None and not calibration.exists():
         fail(f"--calibration {calibration}: no such file (amr-twin calibrate --report writes one)")
     try:
         space = ParameterSpace.load(config, override_file=params, sets=sets or [], calibration=calibration)
         return space.draw(samples, seed=seed or 0, sampler=sampler or "lhs")
     except (ConfigError, ValueError) as exc:
-        fail(str(exc))
+        head, _, rest = str(exc).partition(":")
+        fail(f"--calibration {calibration}:{rest}" if calibration is not None and head.endswith(str(calibration))
+             else str(exc))

@@ -96,5 +96,11 @@ def _guard(func):
         fail(str(exc), code=3)
     except WriteError as exc:
         fail(f"cannot write {exc.filename}: {exc.strerror}", code=1)
+    except MemoryError:  # a traceback of 116 lines under ulimit -v; the outputs are written whole or not at all
+        from amr_twin.sim.bounds import address_space_mb
+
+        limit = address_space_mb()
+        fail("out of memory" + (f" (the limit, ulimit -v, is {limit / 1024:.1f} GB)" if limit else "")
+             + "; nothing written: ask for less (a shorter run, no recording, fewer --jobs)", code=1)
     except OSError as exc:
         fail(f"{exc.filename + ': ' if exc.filename else ''}{exc.strerror or exc}", code=1)

@@ -24,7 +24,7 @@ from amr_twin.cli.checks import (CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt
                                  parameter_draws)
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.fusion import fusion
-from amr_twin.cli.navigation import add_navigation
+from amr_twin.cli.navigation import navigation
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, sketch_option
 from amr_twin.cli.umbmark import umbmark
 
@@ -73,10 +73,12 @@ def chapter5(
         fail(f"--runs {runs!r}: expected run numbers 1..8 separated by commas")
     if numbers is not None and not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
         fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
+    if numbers is not None and len(set(numbers)) != len(numbers):  # run once, silently
+        fail(f"--runs {runs!r}: a run is named twice")
     check_record_folder("--record", record, fail, "run<N>.rrd")
     check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
     check_memory(duration_s or max(r.duration_s for r in chapter5.RUNS), fail, recorded=bool(record or mcap),
-                 processes=jobs, what="each run")
+                 processes=jobs, what="each run", rerun=record is not None)
     check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
     cfg = _config(config, params, set_)
     draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
@@ -166,6 +168,6 @@ def faults_experiment(
 
 
 app.command("fusion")(fusion)
-add_navigation(app)  # a module-level command after the nav2 merge
+app.command("navigation")(navigation)
 app.command("umbmark")(umbmark)
 app.command("faults")(faults_experiment)

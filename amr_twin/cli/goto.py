@@ -59,8 +59,11 @@ def _checked(cfg, opts, goals, nav: dict):
     except MapError as exc:
         fail(f"--map {exc}" if nav.get("map") else str(exc))
     start = _start_pose(opts.start) or default_start(opts.world)
-    planner = GlobalPlanner(make_costmap(static, robot_footprint(cfg)))
+    planner = GlobalPlanner(make_costmap(static, robot_footprint(cfg), cfg.navigation))
     here = np.array(start[:2], float)
+    if not planner.costmap.cells(here[None])[2][0]:
+        of = f"--map {nav['map']}" if nav.get("map") else f"--world {opts.world}"
+        fail(f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of {of}: give --start X_M,Y_M,YAW_DEG on it")
     for x, y, yaw in goals:
         name = f"goal {x:g},{y:g}"
         if planner.plan(here, np.array([x, y])) is None:
@@ -83,8 +86,12 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     from amr_twin.sim.loop import TwinOptions
 
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
-    if duration_s is not None and not (math.isfinite(duration_s) and 0 < duration_s <= 3600):
-        fail(f"--duration-s {duration_s:g}: must be in (0, 3600] s (the time limit of the goals)")
+    for flag, given in (("--ros1", opts.ros1), ("--roscore", opts.roscore), ("--serial-pty", opts.serial_pty)):
+        if given:  # they were ignored: the navigation stack drives the twin here
+            fail(f"{flag} is not available with goals (run goto, a mission's goals:): use it with a command kind "
+                 "or a mission's steps")
+    if duration_s is not None and not (math.isfinite(duration_s) and 0.1 <= duration_s <= 3600):
+        fail(f"--duration-s {duration_s:g}: must be in [0.1, 3600] s (the time limit of the goals)")
     try:
         faults = parse_faults(list(mission_faults) + list(opts.fault), duration_s=duration_s or 3600.0, sensors=True)
         check_outputs(files={"--csv": opts.csv, "--record": opts.record, "--mcap": opts.mcap})
@@ -98,9 +105,17 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     recording = opts.record is not None or opts.mcap is not None
     start = _start_pose(opts.start)
     actors = checked_actors(opts, tuple(mission_actors), cfg, start)
+    calibration = None
+    if opts.odometry is not None:  # it was ignored: the odometry kept the nominal geometry
+        from amr_twin.controllers.odometry_calibration import load
+
+        try:
+            calibration = load(opts.odometry)
+        except ValueError as exc:
+            fail(str(exc))
     options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world, start_xy_yaw=start,
                           faults=faults, stop_on_collision=opts.stop_on_collision, visuals=recording or live is not None,
-                          actors=actors)
+                          actors=actors, odometry_calibration=calibration)
 
     def work():
         from amr_twin.navigation.stack import NavigationOptions, navigate

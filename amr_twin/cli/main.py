@@ -70,7 +70,7 @@ class _App(typer.Typer):
         except _click_errors.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
             hint = _misplaced(exc) or f" (see {where} --help)"
-            typer.echo(f"error: {where}: {_missing_command(exc) or ' '.join(exc.format_message().split())}{hint}",
+            typer.echo(f"error: {where}: {_missing_command(exc) or _plain(' '.join(exc.format_message().split()))}{hint}",
                        err=True)
             sys.exit(2)
         except _click_errors.ClickException as exc:
@@ -102,6 +102,20 @@ class _App(typer.Typer):
             self.registered_commands, self.registered_groups = saved
 
 
+_PARSER_WORDS = {"Input should be a valid integer, unable to parse string as an integer": "expects a whole number",
+                 "Input should be a valid integer, got a number with a fractional part": "expects a whole number",
+                 "Input should be a valid number, unable to parse string as a number": "expects a number",
+                 "Input should be a valid boolean, unable to interpret input": "expects true or false"}
+"""typer's (pydantic's) words for a value of the wrong type, and the project's."""
+
+
+def _plain(message: str) -> str:
+    """A usage error's message in the project's words (:data:`_PARSER_WORDS`)."""
+    for theirs, ours in _PARSER_WORDS.items():
+        message = message.replace(theirs, ours)
+    return message
+
+
 def _missing_command(exc) -> str | None:
     """For a group given no command: which it has."""
     commands = getattr(exc.ctx.command, "commands", None) if exc.ctx is not None else None
@@ -113,6 +127,8 @@ def _missing_command(exc) -> str | None:
 def _misplaced(exc) -> str | None:
     """For an option given to a group that belongs to its commands: where it goes."""
     name = getattr(exc, "option_name", None)
+    if "given twice" in exc.format_message():  # amr_twin.cli.path_options._once: the option is in its place
+        return None
     group = getattr(exc.ctx, "command", None) if exc.ctx is not None else None
     parent = exc.ctx.parent if exc.ctx is not None else None
     if name and parent is not None and any(name in p.opts for p in getattr(parent.command, "params", [])):
@@ -171,6 +187,8 @@ def model(
     except OutputError as exc:
         fail(str(exc))
     cfg = _config(config, params, set_, extra)
+    if xy is not None and cfg.payload.mass_kg == 0:  # ignored (and not checked against the deck), exit 0
+        fail(f"--payload-xy {payload_xy}: there is no payload to place (payload.mass_kg is 0): give --payload-kg")
 
     def work():
         if export_urdf or export_mjcf:
@@ -204,8 +222,10 @@ def bench(
         jobs = check_jobs(jobs)
     except ValueError as exc:
         fail(str(exc))
-    if not (0 < sim_s <= 1000):
-        fail(f"--sim-s {sim_s}: must be in (0, 1000] s")
+    from amr_twin.sim.bounds import MIN_RUN_S
+
+    if not (MIN_RUN_S <= sim_s <= 1000):  # 1e-300 s divided by zero
+        fail(f"--sim-s {sim_s:g}: must be in [{MIN_RUN_S:g}, 1000] s")
     cfg = _config(config, params, set_)
 
     def measure() -> dict:
@@ -325,7 +345,13 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
     from amr_twin.sim.loop import TwinOptions
     from amr_twin.sim.run import Command, run_command
 
+    import logging
+
+    logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())  # said below
     for text, wheels in log.items():
+        refused = Command.parse(text).dry_run(base).last_error  # was blamed on the log's length
+        if refused:
+            raise ValueError(f"--target {target}: command {text}: the client refuses it ({refused})")
         duration = max(float(v[:, 0].max()) for v in wheels.values()) + LOG_TAIL_S
         series = run_command(base, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)).series
         for w, samples in wheels.items():

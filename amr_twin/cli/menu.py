@@ -129,8 +129,29 @@ def escape(text: str) -> str:
     return rich_escape(text)
 
 
+MAX_LINE = 1024
+"""Longest line the menu reads from a file or a pipe, characters (``input()`` read /dev/zero whole: 9 GB in 48 s)."""
+
+
+def read_line(console: Console, prompt: str, stdin=None) -> str:
+    """One answer: from a terminal with its line editing; from a file or a pipe at most :data:`MAX_LINE`
+    characters, else a one-line refusal (exit 2). EOFError at the end of the input."""
+    import sys
+
+    stdin = sys.stdin if stdin is None else stdin
+    if stdin.isatty():
+        return console.input(prompt, markup=False)
+    console.print(prompt, end="", markup=False)
+    line = stdin.readline(MAX_LINE + 1)
+    if not line:
+        raise EOFError
+    if len(line) > MAX_LINE or "\0" in line:
+        fail(f"standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)")
+    return line
+
+
 def _ask(console: Console, prompt: str) -> Optional[float]:
-    text = console.input(prompt, markup=False).strip()
+    text = read_line(console, prompt).strip()
     try:
         value = float(text)
     except ValueError:
@@ -224,8 +245,8 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
             side = "left " if topic == "wheel0_Vel" else "right"
             console.print(f"[dim]t={t_us * 1e-6:8.3f} s[/dim]  {topic} ({side}) {msg.data:8.3f} RPM")
 
-    twin.bus.add_tap(show)
-    twin.collisions.listeners.append(lambda c: console.print(escape(
+    twin.on_message(show)
+    twin.on_collision(lambda c: console.print(escape(
         f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m")))
     rt = _guard(lambda: RealTimeTwin(twin, rate, live_opts, say=lambda line: console.print(escape(line)),
                                      ros1=ros1_opts))
@@ -236,7 +257,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
     try:
         while rt.error is None:
             console.print(MENU)
-            if not _choice(console, rt, console.input("choice: ", markup=False).strip()):
+            if not _choice(console, rt, read_line(console, "choice: ").strip()):
                 break
     except (EOFError, KeyboardInterrupt):
         pass

@@ -16,6 +16,8 @@ Refused, in one line naming both options, exit 2, before anything is read or wri
 - an empty path given to any of these options (``--out ""`` would be the current folder);
 - an output another command is writing (its lock, :mod:`amr_twin.recording.output_lock`, held for as
   long as the command runs): the holder's pid is named.
+
+A command interrupted (Ctrl-C) says so in one line, exit 130: its files are written together at the end.
 """
 
 from __future__ import annotations
@@ -57,6 +59,22 @@ def _world_files(value) -> list[Path]:
     return [] if value is None else world_files(value)
 
 
+def _mission_files(value) -> list[Path]:
+    """The mission file and, for a navigation mission naming a ``map:``, that map's YAML and image."""
+    if value is None:
+        return []
+    from amr_twin.model.yaml_file import read_yaml
+
+    path = Path(value)
+    try:
+        name = read_yaml(path, "mission", ValueError).get("map")
+    except (ValueError, AttributeError):  # unreadable: loading the mission says why
+        return [path]
+    if not isinstance(name, str) or not name.strip():
+        return [path]
+    return [path] + _world_files(str(path.parent / name))  # a relative map lies beside the mission
+
+
 def _route_file(value) -> list[Path]:
     from amr_twin.experiments.fusion import route_file
 
@@ -66,7 +84,7 @@ def _route_file(value) -> list[Path]:
 INPUTS: dict[str, Callable[[object], list[Path]]] = {
     "--config": _config_file,       # none given: the robot's parameter file
     "--params": _given,
-    "--mission": _given,
+    "--mission": _mission_files,     # with a navigation mission's map (YAML + image)
     "--calibration": _given,
     "--sketch": _given,              # a folder
     "--target": _target_file,        # 'thesis' or a CSV log
@@ -182,6 +200,9 @@ def _checked(callback):
                 return callback(*args, **kwargs)
         except OutputBusy as exc:
             fail(str(exc))
+        except KeyboardInterrupt:  # typer would exit 130 without a word
+            kept = " (the points finished are kept in runs/: a rerun resumes from them)" if "sweep" in ctx.command_path else ""
+            fail(f"{ctx.command_path}: interrupted; no output written{kept}", code=130)
 
     checked.paths_checked = True
     return checked
@@ -193,15 +214,43 @@ def _commands(command) -> Iterator:
         yield from _commands(sub)
 
 
+def _once(command) -> None:
+    """An option of one value given twice with different values (``--live foxglove --live rerun``) is a
+    usage error (exit 2) instead of the last one silently winning; a repeatable option is not touched."""
+    make_parser = command.make_parser
+
+    def checked_parser(ctx):
+        parser = make_parser(ctx)
+        for option in {id(o): o for o in (*parser._long_opt.values(), *parser._short_opt.values())}.values():
+            if option.action not in ("store", "store_const"):
+                continue
+            process = option.process
+
+            def once(value, state, option=option, process=process):
+                new = option.const if option.action == "store_const" else value
+                if option.dest in state.opts and state.opts[option.dest] != new:
+                    flags = "/".join(option.obj.opts + option.obj.secondary_opts)
+                    old = state.opts[option.dest]
+                    raise _click_errors.BadOptionUsage(flags, f"{flags} given twice with different values ({old} and "
+                                                       f"{new}): give it once", ctx=ctx)
+                process(value, state)
+
+            option.process = once
+        return parser
+
+    command.make_parser = checked_parser
+
+
 class CheckedGroup(TyperGroup):
     """The app's root group: each command below it checks its paths (:func:`check_paths`) before its
-    callback runs, and refuses an empty path while parsing. A group given no command fails with a
+    callback runs, and refuses an empty path and an option given twice (:func:`_once`) while parsing. A group given no command fails with a
     usage error (``Missing command.``, one line naming its commands: :mod:`amr_twin.cli.main`) instead
     of printing its help and an empty error."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         for command in _commands(self):
+            _once(command)
             if getattr(command, "commands", None):
                 command.no_args_is_help = False
             for param in command.params:

@@ -109,7 +109,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     recording = opts.record is not None or opts.mcap is not None
     from amr_twin.cli.checks import check_memory
 
-    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors)
+    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors, rerun=opts.record is not None)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     actors = checked_actors(opts, mission_actors, cfg, start)
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,

@@ -86,6 +86,7 @@ def payload(
     cfg = _config(config, params, set_)
     try:
         mass_list = payload_point.parse_masses(masses)
+        payload_point.check_masses(masses, mass_list)
         position_list = [p.strip() for p in positions.split(",") if p.strip()]
         for p in position_list:
             payload_point.check_on_deck(cfg, p)

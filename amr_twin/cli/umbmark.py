@@ -51,6 +51,15 @@ def umbmark(
         key = item.partition("=")[0].strip()
         if key in RESERVED:
             fail(f"--set {key}: chosen by this command's --tyres/--no-tyres and --floor-field/--no-floor-field")
+    if params is not None:  # its value was replaced by the options' without a word
+        from amr_twin.model.yaml_file import read_yaml
+
+        tree = read_yaml(params, "--params", lambda text: ValueError(text)) if params.is_file() else None
+        for key in RESERVED:
+            section, name = key.split(".")
+            if isinstance(tree, dict) and isinstance(tree.get(section), dict) and name in tree[section]:
+                fail(f"--params {params}: {key} is chosen by this command's --tyres/--no-tyres and "
+                     "--floor-field/--no-floor-field")
     check_outputs(fail, folders={"--out": out})
     sets = list(set_ or []) + [f"wheel.tyre_slip={str(tyres).lower()}",
                                f"sim.floor_friction_field={str(floor_field).lower()}"]

@@ -114,17 +114,17 @@ class FoxgloveSink:
             schema = foxglove.Schema(name=ros2_type(typ), encoding="ros2msg", data=msgdef(typ).encode())
             self.channels[topic] = foxglove.Channel(topic, message_encoding="cdr", schema=schema, context=self._ctx)
         self.scene_channel = SceneUpdateChannel(SCENE_TOPIC, context=self._ctx)
-        self.scene = SceneBuilder(twin.physics.model, twin.physics.data)
+        self.scene = SceneBuilder(twin.observables.model, twin.observables.named)
         self._bus_out: list[tuple[int, int, object, bytes]] = []  # t_ns, seq, channel, payload
         self._actor_scenes: list[tuple[int, list]] = []  # t_ns, actor poses for the scene
         self._seq = 0
-        self._state = StateSampler(twin.physics.model, twin.physics.data)
+        self._state = StateSampler(twin.observables.model, twin.observables.named)
         self._rows = LiveRows(twin)  # true wheel speeds, PWM, currents, battery: the recorder's columns
         self._events_sent: set[tuple[str, int]] = set()
         self._collisions_sent = 0
         self._latched_due: set[str] = set(LATCHED)
-        twin.bus.add_tap(self._tap)
-        twin.samplers.append(self._on_grid)
+        twin.on_message(self._tap)
+        twin.on_grid(self._on_grid)
         self._on_grid(twin.t_phys_us)
         self._capacity_ah = twin.cfg.battery.capacity_ah
         service = foxglove.Service(SERVICE, schema=self._service_schema(foxglove), handler=self._on_service_call)
@@ -135,9 +135,9 @@ class FoxgloveSink:
                 capabilities=[caps.ClientPublish, caps.Services, caps.Time], supported_encodings=["cdr", "json"],
                 services=[service])
         except RuntimeError as exc:  # foxglove's FoxgloveError, e.g. the port taken since the check
-            twin.bus.remove_tap(self._tap)
-            twin.samplers.remove(self._on_grid)
-            twin.samplers.remove(self._rows._on_grid)
+            twin.unhook(self._tap)
+            twin.unhook(self._on_grid)
+            twin.unhook(self._rows._on_grid)
             raise OSError(f"--port {port}: cannot serve on {host}:{port}: {exc}") from None
         self.host, self.port = host, self.server.port
 
@@ -237,7 +237,7 @@ class FoxgloveSink:
             if t <= t_ns and (topic, t) not in self._events_sent:
                 self._events_sent.add((topic, t))
                 out.append((t, 3, len(self._events_sent), self.channels[topic], data))
-        collisions = self.twin.collisions.collisions
+        collisions = self.twin.observables.collisions
         if len(collisions) > self._collisions_sent:
             self._collisions_sent = len(collisions)
             points = np.array([(c.x_m, c.y_m, c.z_m) for c in collisions])

@@ -70,8 +70,9 @@ class RerunSink:
         from amr_twin.recording.rerun_world import _log_geoms
 
         self.twin, self.rr = twin, rr
-        m = twin.physics.model
+        m = twin.observables.model
         self.body_ids = np.arange(1, m.nbody)
+        self._xpos, self._xquat = twin.observables.named.data.xpos, twin.observables.named.data.xquat
         grid_us = twin.grid_us
         self.period_us = max(grid_us, int(round(1e6 / 30.0 / grid_us)) * grid_us)  # as rerun_capture.Capture's
         self._blueprint = _blueprint
@@ -109,8 +110,8 @@ class RerunSink:
         self._collisions_sent = 0
         self._next_flush_us = 0
         self._last_t_us = twin.clock.now_us
-        twin.bus.add_tap(self._tap)
-        twin.samplers.append(self._on_grid)
+        twin.on_message(self._tap)
+        twin.on_grid(self._on_grid)
         self._on_grid(twin.t_phys_us)
 
     def _layout(self):
@@ -127,9 +128,8 @@ class RerunSink:
             self._messages.setdefault(topic, []).append((t_us, msg))
 
     def _on_grid(self, t_us: int) -> None:
-        d = self.twin.physics.data
         if t_us % self.period_us == 0:
-            self._poses.append((t_us, d.xpos[self.body_ids].copy(), d.xquat[self.body_ids].copy()))
+            self._poses.append((t_us, self._xpos[self.body_ids].copy(), self._xquat[self.body_ids].copy()))
 
     def flush(self, t_us: int) -> None:
         """Log everything up to ``t_us`` (simulated) to the stream, every :data:`FLUSH_US`."""
@@ -144,7 +144,7 @@ class RerunSink:
         from amr_twin.recording.rerun_world import _log_body_transforms, _log_scan
         from amr_twin.sensors.lidar_beams import scan_end_time_s
 
-        rec, m = self.rec, self.twin.physics.model
+        rec, m = self.rec, self.twin.observables.model
         poses = [p for p in self._poses if p[0] <= t_us]
         new_poses = [p for p in poses if p[0] > self._sent_pose_us]
         messages = {k: [it for it in v if it[0] <= t_us] for k, v in self._messages.items()}
@@ -175,7 +175,7 @@ class RerunSink:
             self._trajectory(series, messages.get("odom", []), t_us)
         if new_commands:
             _log_commands(rec, SimpleNamespace(commands=new_commands))
-        collisions = self.twin.collisions.collisions
+        collisions = self.twin.observables.collisions
         if len(collisions) > self._collisions_sent:
             if not self._has_events:
                 self._has_events = True

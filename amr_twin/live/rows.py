@@ -13,7 +13,6 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
 from amr_twin.sim.plant import motor_currents_a
 from amr_twin.recording.recorder import RAD_S_TO_RPM, yaw_from_quat
 
@@ -26,13 +25,13 @@ class LiveRows:
         self._rows: list[tuple[int, np.ndarray, np.ndarray, list]] = []  # t_us, sensors, pins, battery
         self.count = 0
         """Rows taken so far (the index of the next row in the run's series)."""
-        twin.samplers.append(self._on_grid)
+        self._observables = twin.observables
+        twin.on_grid(self._on_grid)
         self._on_grid(twin.t_phys_us)
 
     def _on_grid(self, t_us: int) -> None:
-        d = self.twin.physics.data
-        self._rows.append((t_us, d.sensordata[:LOOP_SENSOR_DIM].copy(), self.twin.recorder.pins_in_force(),
-                           self.twin.plant.battery.grid_state()))
+        seen = self._observables
+        self._rows.append((t_us, seen.loop_sensors(), seen.drive(), seen.battery()))
 
     def take(self, t_us: int) -> SimpleNamespace | None:
         """The rows at or before ``t_us`` as series columns (None if there are none): ``t_us`` (n,) int,

@@ -82,18 +82,22 @@ class SceneBuilder:
 
     Parameters
     ----------
-    model, data : mujoco.MjModel, mujoco.MjData
-        The twin at t = 0 (after settling): the world's geoms and the start pose are read from it.
+    model : mujoco.MjModel
+        The compiled twin (``twin.observables.model``).
+    named : amr_twin.sim.named_index.NamedIndex
+        Its named views at t = 0, after settling (``twin.observables.named``): the world's geoms and
+        the start pose are read from them.
     """
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData):
+    def __init__(self, model: mujoco.MjModel, named):
         import foxglove.messages as fm
 
         self.fm = fm
+        d = named.data
         base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + "base_link")
-        self._odom_in_world = planar_origin(data.xpos[base], data.xquat[base])
+        self._odom_in_world = planar_origin(d.xpos[base], d.xquat[base])
         world_from_odom_inv = _inverse(*self._odom_in_world)
-        base_inv = _inverse(data.xpos[base], data.xquat[base])
+        base_inv = _inverse(d.xpos[base], d.xquat[base])
         self._world: list[tuple] = []   # (kind, pos, quat, size, rgba) in odom
         self._links: dict[str, list[tuple]] = {}  # link -> geoms in the link's frame
         self._ghost: list[tuple] = []   # robot geoms in base_link's frame (the start configuration)
@@ -108,7 +112,7 @@ class SceneBuilder:
             rgba = _rgba(model, g)
             body = int(model.geom_bodyid[g])
             name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or ""
-            gpos, gquat = data.geom_xpos[g], _mat_quat(data.geom_xmat[g])
+            gpos, gquat = d.geom_xpos[g], _mat_quat(d.geom_xmat[g])
             if model.body_mocapid[body] >= 0:  # an actor: drawn where actors/poses puts it
                 self._actors[model.body_mocapid[body]].append(
                     (kind, model.geom_pos[g].copy(), model.geom_quat[g].copy(), size, rgba))

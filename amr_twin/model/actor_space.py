@@ -15,6 +15,9 @@ separating-axis test.
 pallet jack, a speed uniform in its kind's range, a loop of :data:`RANDOM_WAYPOINTS` waypoints
 2-15 m apart whose whole path keeps :data:`RANDOM_CLEARANCE_M` from every obstacle, starting
 clear of the robot. Same seed and world, same actors.
+
+Part of the physics layer (``PHYSICS_LAYER``): places a freshly compiled world's bodies in a private
+MjData (``mj_kinematics``) to read where its static geoms stand; no twin's state is read or written.
 """
 
 from __future__ import annotations
@@ -26,6 +29,8 @@ import numpy as np
 from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actors import KINDS, Actor, ActorError, body_name, footprint_half_m
 from amr_twin.model.world_geometry import WORLD_GROUP, Footprints
+
+PHYSICS_LAYER = True
 
 STEP_M = 0.05
 STEP_RAD = 0.05

@@ -32,6 +32,7 @@ from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, C
                               EkfCfg, ImuCfg, LidarCfg, LidarOdometryCfg, MappingCfg, MotorCfg,
                               PayloadCfg, Section, SimCfg, UwbCfg, WheelCfg)
 from amr_twin.model.config_actors import ActorsCfg
+from amr_twin.model.config_navigation import NavigationCfg
 from amr_twin.model.config_leaves import ConfigError  # noqa: F401 - the parameter files' error, raised here too
 from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
 from amr_twin.model.config_leaves import field_range as _field_range
@@ -64,6 +65,7 @@ class TwinConfig(Section):
     lidar_odometry: LidarOdometryCfg
     mapping: MappingCfg
     actors: ActorsCfg
+    navigation: NavigationCfg
 
     @model_validator(mode="after")
     def _geometry_consistent(self) -> "TwinConfig":
@@ -152,13 +154,41 @@ def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
             ctx = err["ctx"]
             lo = ctx.get("ge", ctx.get("gt", lo))
             hi = ctx.get("le", ctx.get("lt", hi))
-        msg = f"{value!r} is out of range: allowed [{lo}, {hi}] {unit}".rstrip()
+        left, right = _open_ends(model, loc, err["ctx"])
+        msg = f"{value!r} is out of range: allowed {'(' if left else '['}{lo}, {hi}{')' if right else ']'} {unit}".rstrip()
     elif err["type"] == "finite_number":
         msg = f"{value!r}: must be a finite number"
     elif err["type"] in ("missing", "too_short", "too_long") and isinstance(value, (list, tuple)):
         size = _tuple_size(model, loc)  # a fixed-size vector given another number of values
         msg = f"{list(value)!r} has {len(value)} value(s); it takes {size}" if size else msg
+    elif err["type"] == "missing":  # pydantic's "Field required"
+        msg = "missing: give its {value, unit, source} leaf"
+    elif err["type"] in ("dict_type", "model_type", "model_attributes_type"):  # "a valid dictionary or instance of"
+        msg = f"{value!r} is not a section: give its parameters as keys"
+    elif err["type"] in _KINDS:  # "Input should be a valid number, unable to parse ..."
+        msg = f"{value!r} is not {_KINDS[err['type']]}"
     return f"{'.'.join(loc)}: {msg}" if loc else msg
+
+
+_KINDS = {"float_parsing": "a number", "float_type": "a number", "int_parsing": "a whole number",
+          "int_type": "a whole number", "int_from_float": "a whole number", "bool_parsing": "true or false",
+          "bool_type": "true or false", "string_type": "a word", "tuple_type": "a list", "list_type": "a list"}
+"""pydantic's error types of a value of the wrong kind, and the kind in the project's words."""
+
+
+def _open_ends(model: type[BaseModel], loc: list[str], ctx: dict) -> tuple[bool, bool]:
+    """Whether the range of the field at ``loc`` excludes its low and its high end (``gt``, ``lt``): an
+    exclusive bound was printed as ``[0.0, 3.0]`` for a refused 0."""
+    field: Any = None
+    for key in loc:
+        fields = getattr(model, "model_fields", None) or {}
+        field = fields.get(key)
+        if field is None:
+            return "gt" in ctx, "lt" in ctx
+        model = field.annotation
+    metadata = getattr(field, "metadata", ())
+    return (any(getattr(m, "gt", None) is not None for m in metadata) or "gt" in ctx,
+            any(getattr(m, "lt", None) is not None for m in metadata) or "lt" in ctx)
 
 
 def _tuple_size(model: type[BaseModel], loc: list[str]) -> int | None:
@@ -223,8 +253,13 @@ def load_parameters(path: str | Path | None = None, *, override_file: str | Path
                 blame.set(key, str(override_file))
         except ConfigError as exc:
             raise ConfigError(f"{override_file}: {exc}") from None
+    given: dict[str, tuple[str, Any]] = {}
     for text in sets:
         key, value = parse_assignment(text)
+        if key in given and given[key][1] != value:  # the last one won, the first was ignored
+            raise ConfigError(f"--set {key}: given twice with different values ({given[key][0]!r} and {text!r}); "
+                              "give it once")
+        given[key] = (text, value)
         check_assignment(text, key, value, meta, tree_values)
         _set_path(plain, key, value)
         _override_meta(meta, key, None, "--set")
@@ -236,9 +271,9 @@ def load_parameters(path: str | Path | None = None, *, override_file: str | Path
         _reject_nan(plain)
         cfg = TwinConfig.model_validate(plain)
     except ConfigError as exc:
-        raise ConfigError(blame.message(str(exc))) from None
-    except ValidationError as exc:
-        raise ConfigError(blame.message(_format_error(exc, TwinConfig))) from None
+        raise ConfigError(blame.message(str(exc), path)) from None
+    except ValidationError as exc:  # a value nobody overrode is the parameter file's: it is named
+        raise ConfigError(blame.message(_format_error(exc, TwinConfig), path)) from None
     check_follows(meta, plain)
     return cfg, meta
 

@@ -43,8 +43,10 @@ def leaf_spread(sub: dict, path: str, model: type[BaseModel], key: str) -> dict:
         raise _error(f"{path}: {given[0]} needs its reason (reason: \"...\")")
     value, kind, spec = sub["value"], given[0], sub[given[0]]
     if kind == "range":
-        if not is_number(value):
+        if isinstance(value, list):
             raise _error(f"{path}: range is for a scalar number; give sigma per element for a vector")
+        if not is_number(value):  # a word, true/false, NaN: was reported as a vector's range
+            raise _error(f"{path}: value {value!r} is not a finite number")
         if not (isinstance(spec, list) and len(spec) == 2 and all(is_number(v) for v in spec) and spec[0] < spec[1]):
             raise _error(f"{path}: range must be [lo, hi] with finite numbers lo < hi, got {spec!r}")
         if not spec[0] <= value <= spec[1]:

@@ -57,7 +57,9 @@ def _kind(value: Any) -> str:
         return "a number"
     if isinstance(value, (list, tuple)):  # its length is the schema's to judge (some vectors have any)
         return "a list of numbers" if all(_kind(v) == "a number" for v in value) else "a list"
-    return "a word" if isinstance(value, str) else type(value).__name__
+    if value is None:
+        return "nothing"  # --set key= (was "NoneType")
+    return "a word" if isinstance(value, str) else "a mapping" if isinstance(value, dict) else type(value).__name__
 
 
 def check_assignment(text: str, key: str, value: Any, meta: dict[str, dict], plain: dict) -> None:
@@ -104,10 +106,12 @@ class Blame:
     def set(self, key: str, who: str) -> None:
         self.by[key] = who
 
-    def message(self, text: str) -> str:
+    def message(self, text: str, file=None) -> str:
         """``text`` (``key: reason``) led by who set ``key``, or, for a section's rule (``uwb: anchors_y_m:
-        ...``), who set the parameter of that section it names; unchanged when nobody did."""
+        ...``), who set the parameter of that section it names; when nobody did, by the parameter ``file``
+        (None: the robot's own, unnamed)."""
         key = text.split(":", 1)[0].split(",")[0].strip()
         who = self.by.get(key) or next((w for k, w in self.by.items() if k.startswith(key + ".")
                                         and k.rsplit(".", 1)[-1] in text), None)
+        who = who or (str(file) if file is not None else None)
         return f"{who}: {text}" if who else text

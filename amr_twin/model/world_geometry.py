@@ -6,6 +6,9 @@ group 0, after ``mj_forward``), so default classes and rotations are resolved by
 MuJoCo; a box is kept when it spans the plane's height ``z_m`` (an actor's, a mocap body that moves,
 never: amr_twin/model/actors.py). Distances are
 computed in numpy for many points at once.
+
+Part of the physics layer (``PHYSICS_LAYER``): forwards a private MjData of a freshly compiled world
+to read its static box geoms; no twin's state is read or written.
 """
 
 from __future__ import annotations
@@ -13,6 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+PHYSICS_LAYER = True
 
 WORLD_GROUP = 0
 

@@ -137,6 +137,14 @@ class MapError(ValueError):
     """A map file (YAML or PGM) is invalid; the message is one line naming the file."""
 
 
+MAX_ORIGIN = 1e4
+"""Largest |x|, |y| (m) and |yaw| (rad) of a map's origin (as --start's bound): farther, the world's
+floats lose their centimetres."""
+MAX_WALL_BOXES = 20_000
+"""Most wall boxes (MuJoCo geoms) of a map's world: 4 times a SLAM map of the aisles world (4894);
+45,000 (a 300 x 300 checkerboard) took 9 s to build and check, a 1500 x 1500 one did not end in 60 s."""
+MAX_WALL_RUNS = 1_000_000
+"""Most runs of occupied cells (along the rows) a map's walls are merged from (the merge loops over them)."""
 MAX_MAP_PIXELS = 25_000_000
 """Largest map image, pixels (5000 x 5000): every occupied run becomes a MuJoCo geom."""
 
@@ -169,10 +177,12 @@ def read_pgm(path: str | Path) -> np.ndarray:
 
     Raises :class:`MapError` (one line naming the file) for anything else.
     """
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise MapError(f"{path}: cannot read the map image ({exc.strerror or exc})") from None
+    from amr_twin.model.yaml_file import read_bytes
+
+    try:  # a regular file of a bounded size: /dev/zero or a pipe is refused, not read or waited on
+        data = read_bytes(path, "", MapError, limit=MAX_MAP_PIXELS + 4096)
+    except MapError as exc:
+        raise MapError(f"{exc} (the map image)") from None
     tokens, pos = _pgm_tokens(data, path)
     magic = tokens[0]
     if magic not in (b"P5", b"P2"):
@@ -247,9 +257,13 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
     if not isinstance(origin, (list, tuple)) or len(origin) != 3 or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in origin):
         raise MapError(f"{yaml_path}: origin: {origin!r} must be [x_m, y_m, yaw_rad], three finite numbers")
+    if not all(abs(v) <= MAX_ORIGIN for v in origin):
+        raise MapError(f"{yaml_path}: origin: {origin!r}: each value must lie within +-{MAX_ORIGIN:g} (m, m, rad)")
     origin = tuple(float(v) for v in origin)
     occupied = _map_number(yaml_path, meta, "occupied_thresh", 0.65, 0.0, 1.0)
     free = _map_number(yaml_path, meta, "free_thresh", 0.196, 0.0, 1.0)
+    if free >= occupied:
+        raise MapError(f"{yaml_path}: free_thresh {free:g} must be below occupied_thresh {occupied:g} (map_server)")
     negate = meta.get("negate", 0)
     if negate not in (0, 1, True, False):
         raise MapError(f"{yaml_path}: negate: {negate!r} must be 0 or 1")
@@ -308,11 +322,21 @@ def world_xml(yaml_path: str | Path, wall_height_m: float = WALL_HEIGHT_M) -> st
     """MJCF text of the map's world: floor, light and merged wall boxes (group 0)."""
     grid = load_map(yaml_path)
     rows, cols = grid.occupied.shape
+    padded = np.pad(grid.occupied, ((0, 0), (1, 0))).astype(np.int8)
+    runs = int(np.count_nonzero(np.diff(padded, axis=1) == 1))  # counted before the merge, which loops over them
+    if runs > MAX_WALL_RUNS:
+        raise MapError(f"{yaml_path}: {runs:,} runs of occupied cells; at most {MAX_WALL_RUNS:,} (a map this "
+                       "fragmented, noise or a checkerboard, would be a world of too many walls)")
+    boxes = wall_boxes(grid, wall_height_m)
+    if len(boxes) > MAX_WALL_BOXES:
+        raise MapError(f"{yaml_path}: {len(boxes):,} wall boxes after merging its occupied cells; at most "
+                       f"{MAX_WALL_BOXES:,} (each is a MuJoCo geom: 45,000 took 9 s to build; a SLAM map of the aisles "
+                       "world has about 5,000)")
     span = max(rows, cols) * grid.resolution_m + abs(grid.origin_xyyaw[0]) + abs(grid.origin_xyyaw[1])
     lines = [f'<mujoco model="{Path(yaml_path).stem}">', "  <worldbody>",
              '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
              f'    <geom name="floor" type="plane" size="{span:.3f} {span:.3f} 0.1" rgba="0.55 0.55 0.55 1"/>']
-    for i, (centre, half, yaw) in enumerate(wall_boxes(grid, wall_height_m)):
+    for i, (centre, half, yaw) in enumerate(boxes):
         pos = " ".join(f"{v:.6g}" for v in centre)
         size = " ".join(f"{v:.6g}" for v in half)
         lines.append(f'    <geom name="wall_{i}" type="box" pos="{pos}" size="{size}" '

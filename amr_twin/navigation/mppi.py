@@ -16,11 +16,17 @@ Each control cycle, reconstructed from the papers' and nav2's descriptions:
      the plan point it could reach (progress);
    - *goal*: near the goal, the distance of the trajectory's points to it;
    - *prefer forward*: backing up costs;
-   - *speed near people*: the square of the speed where an obstacle the map does not hold (the
-     costmap's obstacle layer: people, pallet jacks) is within ``social_radius_m``.
+   - *people* (the tracked people of :mod:`amr_twin.navigation.people`, each a disc of
+     ``person_radius_m``, walking on at constant velocity over the horizon): a trajectory whose
+     footprint circles come within ``person_clearance_m`` of where a person will be at that step
+     costs ``people_collision`` (larger the sooner; a robot already closer than that pays for
+     coming closer still), within ``person_margin_m`` a repulsion, and *speed near people*: the
+     square of the speed where a person will be within ``social_radius_m`` (what else the map
+     does not hold, a pallet jack, is the obstacle critic's and the collision monitor's).
 4. The weights ``exp(-(S - min S) / temperature)`` average the noise into the new nominal,
    smoothed by a 3-step moving average (nav2 smooths with a Savitzky-Golay filter); its first
-   step is the command. No feasible sample: stop, and report it (``blocked``).
+   step is the command. Every sample colliding: stop, and report it (``blocked``); most of the
+   weights on colliding samples: report it too.
 """
 
 from __future__ import annotations
@@ -37,101 +43,138 @@ from amr_twin.navigation.rpp import Twist2D
 
 
 class Mppi:
-    """MPPI local controller (module docstring). ``seed``: the noise stream (same seed, same commands)."""
+    """MPPI local controller (module docstring). ``seed``: the noise stream (same seed, same commands).
+
+    Arrays are time-major inside: controls (T, K, 2), trajectories (T, K), so that each step of the
+    ramps' clipping works on contiguous memory.
+    """
+
+    sees_people = True
 
     def __init__(self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, *, samples: int = 400,
                  steps: int = 25, step_s: float = 0.1, sigma_v: float = 0.25, sigma_w: float = 0.6,
                  temperature: float = 0.25, margin_m: float = 0.25, social_radius_m: float = 1.0,
-                 weights: dict | None = None, seed: int = 0):
+                 person_radius_m: float = 0.25, person_clearance_m: float = 0.25, person_margin_m: float = 0.6,
+                 prediction_s: float = 2.5, weights: dict | None = None, seed: int = 0):
         self.costmap, self.limits, self.dt_s = costmap, limits, float(dt_s)
         self.K, self.T, self.step_s = int(samples), int(steps), float(step_s)
-        self.sigma = np.array([sigma_v, sigma_w])
+        self.sigma = np.array([sigma_v, sigma_w], np.float32)
         self.temperature, self.margin_m, self.social_radius_m = temperature, margin_m, social_radius_m
+        self.person_radius_m, self.person_clearance_m = person_radius_m, person_clearance_m
+        self.person_margin_m, self.prediction_s = person_margin_m, prediction_s
         hx = 0.5 * (footprint.x_max_m - footprint.x_min_m)
         cx = 0.5 * (footprint.x_max_m + footprint.x_min_m)
         self.circle_x = np.array([cx - hx / 2, cx + hx / 2])
         self.circle_r = math.hypot(hx / 2, footprint.half_width_m)
         self.w = {"collision": 1e4, "obstacle": 40.0, "align": 3.0, "progress": 4.0, "goal": 6.0,
-                  "forward": 3.0, "social": 4.0, **(weights or {})}
+                  "forward": 3.0, "social": 4.0, "people_collision": 2e3, "people": 8.0, **(weights or {})}
         self.rng = np.random.default_rng(seed)
         self.nominal = np.zeros((self.T, 2))
+        f32 = np.float32  # the samples in single precision: half the memory traffic, the same decisions
+        self._u_min = np.array([limits.min_v_m_s, -limits.max_w_rad_s], f32)
+        self._u_max = np.array([limits.max_v_m_s, limits.max_w_rad_s], f32)
+        self._down = np.array([limits.decel_m_s2, limits.angular_accel_rad_s2], f32) * f32(self.step_s)
+        self._up = np.array([limits.accel_m_s2, limits.angular_accel_rad_s2], f32) * f32(self.step_s)
 
     def reset(self) -> None:
         """Forget the nominal sequence (after a rotation in place or a recovery)."""
         self.nominal[:] = 0.0
 
     def _feasible(self, u: np.ndarray, v0: float, w0: float) -> np.ndarray:
-        lim, dt = self.limits, self.step_s
-        u[..., 0] = np.clip(u[..., 0], lim.min_v_m_s, lim.max_v_m_s)
-        u[..., 1] = np.clip(u[..., 1], -lim.max_w_rad_s, lim.max_w_rad_s)
-        v_prev, w_prev = np.full(len(u), v0), np.full(len(u), w0)
+        """``u`` (T, K, 2) clipped in place to the speed limits and, step by step from ``(v0, w0)``, to the ramps."""
+        np.clip(u, self._u_min, self._u_max, out=u)
+        prev = np.array([v0, w0], u.dtype)
         for t in range(self.T):
-            v_prev = u[:, t, 0] = np.clip(u[:, t, 0], v_prev - lim.decel_m_s2 * dt, v_prev + lim.accel_m_s2 * dt)
-            w_prev = u[:, t, 1] = np.clip(u[:, t, 1], w_prev - lim.angular_accel_rad_s2 * dt,
-                                          w_prev + lim.angular_accel_rad_s2 * dt)
+            step = u[t]
+            np.maximum(step, prev - self._down, out=step)
+            np.minimum(step, prev + self._up, out=step)
+            prev = step
         return u
 
     def rollout(self, pose, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Positions x, y and headings (K, T) of control sequences ``u`` (K, T, 2) from ``pose``."""
-        dt = self.step_s
-        yaw = pose[2] + np.cumsum(u[..., 1], axis=1) * dt
-        mid = yaw - 0.5 * u[..., 1] * dt
-        x = pose[0] + np.cumsum(u[..., 0] * np.cos(mid), axis=1) * dt
-        y = pose[1] + np.cumsum(u[..., 0] * np.sin(mid), axis=1) * dt
+        """Positions x, y and headings (T, K) of control sequences ``u`` (T, K, 2) from ``pose``."""
+        dt = u.dtype.type(self.step_s)
+        yaw = np.cumsum(u[..., 1], axis=0)
+        yaw *= dt
+        yaw += u.dtype.type(pose[2])
+        mid = yaw - 0.5 * dt * u[..., 1]
+        x = np.cumsum(u[..., 0] * np.cos(mid), axis=0)
+        x *= dt
+        x += u.dtype.type(pose[0])  # map coordinates of tens of m: float32 keeps them to about 4 um
+        y = np.cumsum(u[..., 0] * np.sin(mid), axis=0)
+        y *= dt
+        y += u.dtype.type(pose[1])
         return x, y, yaw
 
-    def costs(self, x, y, yaw, u, path: PathHandler) -> tuple[np.ndarray, np.ndarray]:
-        """Critic cost (K,) of each trajectory and whether it collides (K,)."""
-        w, cm, K, T = self.w, self.costmap, x.shape[0], x.shape[1]
+    def _circles(self, x, y, yaw) -> np.ndarray:
+        """Centres (2, T, K, 2) of the footprint's two circles."""
         c, s = np.cos(yaw), np.sin(yaw)
-        d = np.stack([cm.distance_at(np.column_stack([(x + c * cx).ravel(), (y + s * cx).ravel()])).reshape(K, T)
-                      for cx in self.circle_x]).min(0)
+        return np.stack([np.stack([x + c * x.dtype.type(cx), y + s * x.dtype.type(cx)], axis=-1) for cx in self.circle_x])
+
+    def _people_costs(self, circles, u, people, t_s: float) -> np.ndarray:
+        """The people critics (module docstring) for the tracked ``people`` at ``t_s``; (K,)."""
+        w, T = self.w, u.shape[0]
+        at = people.at(t_s + self.step_s * np.arange(1, T + 1), self.prediction_s)  # (N, T, 2)
+        d = np.sqrt(((circles[:, None] - at[None, :, :, None, :]) ** 2).sum(-1))     # (2, N, T, K)
+        gap = d.min(axis=(0, 1)) - self.circle_r - self.person_radius_m            # (T, K)
+        now = min(self.person_clearance_m, float(gap[0].max()) - 0.02)  # already closer: do not come closer
+        close = gap < now
+        first = np.where(close.any(0), close.argmax(0), T)
+        cost = w["people_collision"] * close.any(0) * (1.0 + (T - first) / T)
+        cost += w["people"] * np.maximum(self.person_margin_m - gap, 0.0).mean(0)
+        near = np.maximum(1.0 - gap / self.social_radius_m, 0.0)
+        return cost + w["social"] * (u[..., 0] ** 2 * near).mean(0)
+
+    def costs(self, x, y, yaw, u, path: PathHandler, people=None, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Critic cost (K,) of each trajectory (T, K) and whether it collides (K,) with what the costmap holds."""
+        w, cm, T = self.w, self.costmap, x.shape[0]
+        circles = self._circles(x, y, yaw)
+        d = cm.distance_at(circles.reshape(-1, 2)).reshape(2, *x.shape).min(0)
         hit = d < self.circle_r
-        first = np.where(hit.any(1), hit.argmax(1), T)
-        cost = w["collision"] * (hit.any(1)) * (1.0 + (T - first) / T)
-        cost += w["obstacle"] * np.maximum(self.circle_r + self.margin_m - d, 0.0).mean(1)
+        any_hit = hit.any(0)
+        first = np.where(any_hit, hit.argmax(0), T)
+        cost = w["collision"] * any_hit * (1.0 + (T - first) / T)
+        cost += w["obstacle"] * np.maximum(self.circle_r + self.margin_m - d, 0.0).mean(0)
         horizon = self.limits.max_v_m_s * self.T * self.step_s
         ref = path.ahead(horizon + 0.5)[::2, :2]
-        sub = np.s_[:, 1::3]
-        px, py = x[sub].ravel(), y[sub].ravel()
-        dist = np.sqrt(((px[:, None] - ref[None, :, 0]) ** 2 + (py[:, None] - ref[None, :, 1]) ** 2).min(1))
-        near_goal = path.remaining_m < 1.0
-        if not near_goal:
-            cost += w["align"] * dist.reshape(K, -1).mean(1)
+        px, py = x[1::3], y[1::3]                                                   # (T/3, K)
+        dist = np.sqrt(((px[..., None] - ref[:, 0]) ** 2 + (py[..., None] - ref[:, 1]) ** 2).min(-1))
+        if path.remaining_m >= 1.0:
+            cost += w["align"] * dist.mean(0)
             reach = ref[min(len(ref) - 1, int(horizon / (2 * 0.05 + 1e-9)))] if len(ref) else path.goal[:2]
-            cost += w["progress"] * np.hypot(x[:, -1] - reach[0], y[:, -1] - reach[1])
+            cost += w["progress"] * np.hypot(x[-1] - reach[0], y[-1] - reach[1])
         else:
             g = path.goal
-            cost += w["goal"] * np.hypot(x - g[0], y - g[1]).mean(1)
-        cost += w["forward"] * np.maximum(-u[..., 0], 0.0).mean(1)
-        if cm.marked.any():
-            dd = cm.obstacle_distance_at(np.column_stack([x.ravel(), y.ravel()])).reshape(K, T)
-            near = np.maximum(1.0 - dd / self.social_radius_m, 0.0)
-            cost += w["social"] * (u[..., 0] ** 2 * near).mean(1)
-        return cost, hit.any(1)
+            cost += w["goal"] * np.hypot(x - g[0], y - g[1]).mean(0)
+        cost += w["forward"] * np.maximum(-u[..., 0], 0.0).mean(0)
+        if people is not None and len(people):
+            cost += self._people_costs(circles, u, people, t_s)
+        return cost, any_hit
 
-    def command(self, pose, velocity, path: PathHandler) -> Twist2D:
-        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w)."""
+    def command(self, pose, velocity, path: PathHandler, people=None, t_s: float = 0.0) -> Twist2D:
+        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w), at time
+        ``t_s`` with the tracked ``people`` (:class:`~amr_twin.navigation.people.People`) about."""
         pose = np.asarray(pose, float)
         v0, w0 = (float(v) for v in velocity)
-        eps = self.rng.standard_normal((self.K, self.T, 2)) * self.sigma
-        eps[0] = 0.0
-        u = self.nominal[None] + eps
-        u[1, :, :] = 0.0  # the braking sample
+        u = self.rng.standard_normal((self.T, self.K, 2), dtype=np.float32)
+        u *= self.sigma
+        u += self.nominal[:, None, :]
+        u[:, 0] = self.nominal
+        u[:, 1] = 0.0  # the braking sample
         u = self._feasible(u, v0, w0)
         x, y, yaw = self.rollout(pose, u)
-        cost, hit = self.costs(x, y, yaw, u, path)
+        cost, hit = self.costs(x, y, yaw, u, path, people, t_s)
         if hit.all():
             self.reset()
             return Twist2D(*self.limits.ramp(0.0, 0.0, v0, w0, self.dt_s), True)
         wgt = np.exp(-(cost - cost.min()) / self.temperature)
         wgt /= wgt.sum()
-        new = (wgt[:, None, None] * u).sum(0)
+        # a weighted mean of feasible sequences, and its 3-step moving average, are feasible (the limits
+        # and ramps are convex constraints): no second clipping
+        new = np.tensordot(u, wgt.astype(u.dtype), axes=([1], [0])).astype(float)  # (T, 2)
         new[1:-1] = (new[:-2] + new[1:-1] + new[2:]) / 3.0
-        new = self._feasible(new[None], v0, w0)[0]
         v, w = self.limits.ramp(float(new[0, 0]), float(new[0, 1]), v0, w0, self.dt_s)
-        t = np.minimum(np.arange(self.T) + self.dt_s / self.step_s, self.T - 1)  # shifted by one control period
-        self.nominal = np.column_stack([np.interp(t, np.arange(self.T), new[:, i]) for i in range(2)])
-        bx, by, byaw = self.rollout(pose, new[None])
-        blocked = bool(self.costs(bx, by, byaw, new[None], path)[1][0])
-        return Twist2D(v, w, blocked)
+        shift = min(self.dt_s / self.step_s, 1.0)  # shifted by one control period, the last step held
+        self.nominal[:-1] = (1.0 - shift) * new[:-1] + shift * new[1:]
+        self.nominal[-1] = new[-1]
+        return Twist2D(v, w, bool(wgt[hit].sum() > 0.5))  # most of the weight on colliding samples: blocked

@@ -8,7 +8,10 @@ the virtual clock; it reads nothing of the twin but bus messages. nav2's default
 reconstructed from its description (navigate_to_pose_w_replanning_and_recovery):
 
 - every scan updates the costmap's obstacle layer;
-- the plan is computed again at ``planner_hz`` (1 Hz) from the present pose;
+- the plan is computed again at ``planner_hz`` (1 Hz) from the present pose when it could come out
+  different: the costmap changed since the last plan, or the robot is more than ``off_path_m``
+  off it (on an unchanged costmap the rest of a shortest path is the shortest path from each of
+  its points);
 - every ``1 / controller_hz`` s the controller follows the plan, after a rotation in place to the
   path's heading when it is more than ``rotate_to_path_rad`` off (nav2's RotationShimController);
   within ``xy_tolerance_m`` of the goal the robot turns in place to the goal's yaw; the
@@ -29,18 +32,16 @@ import numpy as np
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.kinematics import Limits, rotation_rate, wrap
 from amr_twin.navigation.path_handler import PathHandler
+from amr_twin.navigation.people import NOBODY, PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner
 from amr_twin.navigation.progress import ProgressChecker, at_goal
 from amr_twin.navigation.recoveries import ROUND_ROBIN
 from amr_twin.ros.geometry_messages import Twist, Vector3
 
-UNMAPPED_M = 0.3
-"""A scan return farther than this from the static map is unmapped (a person, a pallet jack), m."""
-
-
 @dataclass(frozen=True)
 class NavParams:
-    """Rates, tolerances and ranges of the navigator (``navigation:`` section of the parameter file)."""
+    """Rates, tolerances and ranges of the navigator (``navigation.navigator``, ``.costmap`` and ``.planner`` of
+    the parameter file, where each has its source; the stack builds this from them)."""
 
     controller_hz: float = 20.0
     planner_hz: float = 1.0
@@ -49,7 +50,9 @@ class NavParams:
     rotate_to_path_rad: float = math.radians(45.0)
     obstacle_range_m: float = 4.0
     raytrace_range_m: float = 5.0
+    unmapped_m: float = 0.2
     blocked_s: float = 1.5
+    off_path_m: float = 0.5
     max_failures: int = 6
     laser_xy_yaw: tuple = (0.3, 0.0, 0.0)
 
@@ -72,24 +75,31 @@ class Navigator:
     """Drive to each goal ``(x_m, y_m, yaw_rad or None)`` in turn (module docstring), from ``start_s``."""
 
     def __init__(self, bus, clock, pose_source, costmap, planner: GlobalPlanner, controller, footprint,
-                 limits: Limits, goals, params: NavParams = NavParams(), outputs=None, start_s: float = 0.0):
+                 limits: Limits, goals, params: NavParams = NavParams(), outputs=None, start_s: float = 0.0, *,
+                 monitor: CollisionMonitor | None = None, tracker: PeopleTracker | None = None,
+                 progress: ProgressChecker | None = None, recovery_settings: dict | None = None):
         self.bus, self.clock, self.pose_source = bus, clock, pose_source
         self.costmap, self.planner, self.controller = costmap, planner, controller
         self.footprint, self.limits, self.p = footprint, limits, params
         self.dt_s = 1.0 / params.controller_hz
-        self.monitor = CollisionMonitor(footprint, limits.max_v_m_s)
-        self.progress = ProgressChecker()
+        self.monitor = monitor if monitor is not None else CollisionMonitor(footprint, limits.max_v_m_s)
+        self.progress = progress if progress is not None else ProgressChecker()
+        self.recovery_settings = recovery_settings or {}
+        """Each recovery's settings by its name (``spin``: ``angle_rad``, ...)."""
         self.outcomes = [GoalOutcome(tuple(g)) for g in goals]
         self.controller_cpu_s: list[float] = []
         self.commands: list[tuple] = []    # (t_s, v, w) published
         self.outputs = outputs
         self._goal_i, self._path, self._plan = 0, None, None
-        self._next_plan_s = 0.0
+        self._next_plan_s, self._plan_version = 0.0, -1
         self._recovery, self._failures, self._rr = None, 0, 0
         self._blocked_since: float | None = None
         self._rotating_to_goal = False
         self._scan_points = np.zeros((0, 2))
         self._unmapped = np.zeros(0, bool)
+        self.tracker = tracker if tracker is not None else PeopleTracker()
+        self.people = NOBODY
+        """The tracked people (:class:`~amr_twin.navigation.people.People`) after the last scan."""
         self._cmd = bus.advertise("cmd_vel", Twist)
         bus.subscribe("scan", self._on_scan)
         first = max(clock.now_us, int(round(start_s * 1e6)))
@@ -111,15 +121,24 @@ class Navigator:
         origin, end, hit = self.pose_source.scan_in_map(scan, self.p.laser_xy_yaw, self.p.raytrace_range_m)
         self.costmap.update_scan(origin, end, hit, self.p.obstacle_range_m, self.p.raytrace_range_m)
         self._scan_points = end[hit]
-        self._unmapped = self.costmap.static_distance_at(self._scan_points) > UNMAPPED_M
+        self._unmapped = self.costmap.static_distance_at(self._scan_points) > self.p.unmapped_m
+        t = scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(hit))
+        self.tracker.update(self._scan_points[self._unmapped], t[hit][self._unmapped], origin[0], t[-1])
+        self.people = self.tracker.people()
 
     def _publish(self, v: float, w: float) -> None:
         pose = self.pose_source.pose() if self.pose_source.ready else None
         if pose is not None and len(self._scan_points) and (v or w):
             c, s = math.cos(pose[2]), math.sin(pose[2])
             d = self._scan_points - pose[:2]
+            people = None
+            if len(self.people):
+                xy = self.people.at(np.array([self.clock.now_s]), self.tracker.horizon_s)[:, 0] - pose[:2]
+                vel = self.people.v_m_s
+                people = (np.column_stack([c * xy[:, 0] + s * xy[:, 1], -s * xy[:, 0] + c * xy[:, 1]]),
+                          np.column_stack([c * vel[:, 0] + s * vel[:, 1], -s * vel[:, 0] + c * vel[:, 1]]))
             v, w = self.monitor.filter(v, w, np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]),
-                                       self._unmapped)
+                                       self._unmapped, people)
         self.commands.append((self.clock.now_s, v, w))
         self._cmd.publish(Twist(Vector3(float(v), 0.0, 0.0), Vector3(0.0, 0.0, float(w))))
 
@@ -147,7 +166,8 @@ class Navigator:
             return
         kind = ROUND_ROBIN[self._rr % len(ROUND_ROBIN)]
         self._rr += 1
-        self._recovery = kind(self.costmap, self.footprint, self.limits, self.dt_s)
+        self._recovery = kind(self.costmap, self.footprint, self.limits, self.dt_s,
+                              **self.recovery_settings.get(kind.name, {}))
         self._recovery.start(self.clock.now_s, self.pose_source.pose())
         out.recoveries.append((self.clock.now_s, kind.name, why))
         self._blocked_since = None
@@ -155,13 +175,25 @@ class Navigator:
         if hasattr(self.controller, "reset"):
             self.controller.reset()
 
+    def _plan_stale(self, pose) -> bool:
+        """Whether a new plan could differ: the costmap changed since the last one, or the robot left it by more
+        than ``off_path_m`` (a plan is optimal from each of its points on the same costmap)."""
+        if self.costmap.version != self._plan_version:
+            return True
+        self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
+        return self._path.distance_to_path_m(pose[0], pose[1]) > self.p.off_path_m
+
     def _replan(self, pose) -> bool:
         out = self.outcomes[self._goal_i]
         g = out.goal
-        plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2])
+        self._plan_version = self.costmap.version
+        ppl = self.people
+        standing = ppl.xy_m[(np.hypot(*ppl.v_m_s.T) == 0.0) &
+                            (np.hypot(*(ppl.xy_m - pose[:2]).T) > self.planner.people_m + 0.1)]  # not those at the robot
+        plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
         if plan is None:  # nav2: clear the global costmap and try once more before failing
             self.costmap.clear()
-            plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2])
+            plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
         self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
         if plan is None:
             return False
@@ -211,7 +243,7 @@ class Navigator:
                 return 0.0, 0.0
             w = 0.0 if abs(err) <= self.p.yaw_tolerance_rad * 0.5 else rotation_rate(err, lim, vel[1], self.dt_s)
             return lim.ramp(0.0, w, *vel, self.dt_s)
-        if self._path is None or now >= self._next_plan_s:
+        if self._path is None or (now >= self._next_plan_s and self._plan_stale(pose)):
             if not self._replan(pose):
                 self._fail(self.planner.last_error or "no plan")
                 return lim.ramp(0.0, 0.0, *vel, self.dt_s)
@@ -229,7 +261,10 @@ class Navigator:
                 self.controller.reset()
             return lim.ramp(0.0, rotation_rate(err, lim, vel[1], self.dt_s), *vel, self.dt_s)
         t0 = time.process_time()
-        cmd = self.controller.command(pose, vel, path)
+        if getattr(self.controller, "sees_people", False):
+            cmd = self.controller.command(pose, vel, path, self.people, now)
+        else:  # RPP: the collision monitor's people zones alone
+            cmd = self.controller.command(pose, vel, path)
         self.controller_cpu_s.append(time.process_time() - t0)
         if cmd.blocked:
             self._blocked_since = now if self._blocked_since is None else self._blocked_since

@@ -9,7 +9,11 @@ As nav2's planner server with a grid planner (NavFn, Smac 2D with ``downsample_c
    search is done again with only the inscribed radius kept (cost >= 253: a narrow gap the
    rectangle may pass straight but not turn in); cells of the obstacle layer (people, pallet
    jacks: what the map does not hold) are kept ``unmapped_pad_m`` farther still (the clearance
-   the collision monitor keeps from them); a move between neighbours costs its length (1 or sqrt 2 cells) times the mean of
+   the collision monitor keeps from them), and when that leaves no path either, only the
+   inscribed radius (a jack beside an aisle that a map built from scans draws narrower than it
+   is: the robot fits, slowly, the monitor watching), and the cells within ``people_m`` of a person standing
+   in the way (a tracked person, :mod:`amr_twin.navigation.people`: their disc, the monitor's
+   people zone and the robot's half width) are blocked; a move between neighbours costs its length (1 or sqrt 2 cells) times the mean of
    the two cells' ``1 + cost_weight * cost / 252`` (NavFn's neutral cost plus a share of the
    inflation cost: paths keep to the middle of aisles). The start cell is always enterable (a
    robot that backed up close to a rack can leave). scipy's Dijkstra (``scipy.sparse.csgraph``)
@@ -57,10 +61,10 @@ class GlobalPlanner:
 
     def __init__(self, costmap: Costmap, downsample: int = 2, cost_weight: float = 1.0,
                  clearance_m: float = 0.6, spacing_m: float = 0.05, turn_room_m: float = 0.0,
-                 unmapped_pad_m: float = 0.0):
+                 unmapped_pad_m: float = 0.0, people_m: float = 0.0):
         self.costmap, self.downsample = costmap, int(downsample)
-        self.unmapped_pad_m = float(unmapped_pad_m)
-        self._coarse, self._seen = None, -1
+        self.unmapped_pad_m, self.people_m = float(unmapped_pad_m), float(people_m)
+        self._coarse, self._seen, self._graph = None, -1, None
         self.turn_room_m = float(turn_room_m)
         self.cost_weight, self.clearance_m, self.spacing_m = float(cost_weight), float(clearance_m), float(spacing_m)
         self.last_error = ""
@@ -91,19 +95,28 @@ class GlobalPlanner:
         self._seen = cm.version
         return self._coarse
 
-    def _weights(self, keep_m: float) -> np.ndarray:
-        """Coarse cell weights; cells closer than ``keep_m`` to an obstacle blocked (inf)."""
+    def _weights(self, keep_m: float, people_xy_m=None, pad_m: float = 0.0) -> np.ndarray:
+        """Coarse cell weights; cells closer than ``keep_m`` to an obstacle, or than ``people_m`` to a person
+        at ``people_xy_m`` (N, 2), blocked (inf)."""
         cm = self.costmap
         coarse, near, near_obstacle = self._pooled()
         w = 1.0 + self.cost_weight * coarse / 252.0
         blocked = (coarse >= INSCRIBED) | (near < keep_m)
         if cm.marked.any():  # what the map does not hold (people, pallet jacks): kept farther from
-            blocked |= near_obstacle < max(keep_m, cm.inscribed_m) + self.unmapped_pad_m
+            blocked |= near_obstacle < max(keep_m, cm.inscribed_m) + pad_m
+        size = cm.resolution_m * self.downsample
+        for x, y in np.zeros((0, 2)) if people_xy_m is None else people_xy_m:
+            c0, r0 = int((x - self.people_m - cm.origin_xy_m[0]) // size), int((y - self.people_m - cm.origin_xy_m[1]) // size)
+            n = int(2 * self.people_m // size) + 2
+            rr, cc = np.mgrid[max(r0, 0):min(r0 + n, w.shape[0]), max(c0, 0):min(c0 + n, w.shape[1])]
+            inside = np.hypot(cm.origin_xy_m[0] + (cc + 0.5) * size - x, cm.origin_xy_m[1] + (rr + 0.5) * size - y) < self.people_m
+            blocked[rr[inside], cc[inside]] = True
         w[blocked] = np.inf
         return w
 
-    def plan(self, start_xy_m, goal_xy_m, goal_yaw_rad: float | None = None) -> Plan | None:
-        """A plan from ``start_xy_m`` to ``goal_xy_m`` (the last heading ``goal_yaw_rad`` if given), or None
+    def plan(self, start_xy_m, goal_xy_m, goal_yaw_rad: float | None = None, people_xy_m=None) -> Plan | None:
+        """A plan from ``start_xy_m`` to ``goal_xy_m`` (the last heading ``goal_yaw_rad`` if given) keeping the
+        robot's centre ``people_m`` from the people standing at ``people_xy_m`` (N, 2), or None
         (:attr:`last_error` says why)."""
         t0 = time.process_time()
         problem = goal_problem(self.costmap, goal_xy_m)
@@ -111,8 +124,8 @@ class GlobalPlanner:
             self.last_error = problem
             return None
         cm, k = self.costmap, self.downsample
-        for keep_m in (self.turn_room_m, 0.0):  # room to turn the rectangle, else the inscribed radius
-            path = self._search(start_xy_m, goal_xy_m, keep_m)
+        for keep_m, pad_m in ((self.turn_room_m, self.unmapped_pad_m), (0.0, self.unmapped_pad_m), (0.0, 0.0)):
+            path = self._search(start_xy_m, goal_xy_m, keep_m, people_xy_m, pad_m)
             if path is not None and not isinstance(path, str):
                 break
         if isinstance(path, str):
@@ -124,38 +137,51 @@ class GlobalPlanner:
             return None
         xy = cm.origin_xy_m + (path[:, ::-1] + 0.5) * cm.resolution_m * k
         xy[0], xy[-1] = start_xy_m[:2], goal_xy_m[:2]
-        poses = self._resample(self._shorten(xy), goal_yaw_rad)
+        people = np.zeros((0, 2)) if people_xy_m is None else np.asarray(people_xy_m, float).reshape(-1, 2)
+        poses = self._resample(self._shorten(xy, people), goal_yaw_rad)
         length = float(np.hypot(*np.diff(poses[:, :2], axis=0).T).sum())
         return Plan(poses, length, time.process_time() - t0)
 
-    def _search(self, start_xy_m, goal_xy_m, keep_m: float):
-        """Coarse cells of the cheapest path keeping ``keep_m`` from obstacles (None: none; a str: why not)."""
+    def _search(self, start_xy_m, goal_xy_m, keep_m: float, people_xy_m=None, pad_m: float = 0.0):
+        """Coarse cells of the cheapest path keeping ``keep_m`` from obstacles, ``pad_m`` more from those of the
+        obstacle layer (None: none; a str: why not)."""
         cm, k = self.costmap, self.downsample
-        w = self._weights(keep_m)
+        w = self._weights(keep_m, people_xy_m, pad_m)
         cell = []
-        for xy in (start_xy_m, goal_xy_m):
+        for name, xy in (("the start", start_xy_m), ("the goal", goal_xy_m)):
             r, c, inside = cm.cells(np.asarray(xy, float)[None])
             if not inside[0]:
-                return f"({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"
+                return f"{name} ({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"
             cell.append((min(int(r[0]) // k, w.shape[0] - 1), min(int(c[0]) // k, w.shape[1] - 1)))
         w[cell[0]] = min(w[cell[0]], 1.0 + self.cost_weight) if np.isfinite(w[cell[0]]) else 1.0 + self.cost_weight
         if not np.isfinite(w[cell[1]]):
             w[cell[1]] = 1.0 + self.cost_weight  # a goal cell shared with an obstacle's coarse cell
-        return _shortest_cells(w, cell[0], cell[1])
+        if self._graph is None or self._graph.shape != w.shape:
+            self._graph = GridGraph(w.shape)
+        return self._graph.shortest(w, cell[0], cell[1])
 
-    def _clearance(self, a: np.ndarray, b: np.ndarray) -> float:
+    def _clearance(self, a: np.ndarray, b: np.ndarray, people_xy_m: np.ndarray) -> tuple[float, float]:
+        """Least clearance along the segment a-b to an obstacle, and to a person less ``people_m`` (may be < 0)."""
         n = max(2, int(math.ceil(np.hypot(*(b - a)) / (0.5 * self.costmap.resolution_m))) + 1)
-        return float(self.costmap.distance_at(a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)).min())
+        pts = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
+        return float(self.costmap.distance_at(pts).min()), float(self._people_clearance(pts, people_xy_m).min())
 
-    def _shorten(self, xy: np.ndarray) -> np.ndarray:
-        """Line-of-sight shortening (module docstring, step 3)."""
-        d = self.costmap.distance_at(xy)
-        floor = self.costmap.inscribed_m
+    def _people_clearance(self, xy: np.ndarray, people_xy_m: np.ndarray) -> np.ndarray:
+        """Distance (K,) of points to the nearest person less ``people_m`` (inf without people), m."""
+        if len(people_xy_m) == 0:
+            return np.full(len(xy), np.inf)
+        return np.hypot(xy[:, None, 0] - people_xy_m[:, 0], xy[:, None, 1] - people_xy_m[:, 1]).min(1) - self.people_m
+
+    def _shorten(self, xy: np.ndarray, people_xy_m: np.ndarray) -> np.ndarray:
+        """Line-of-sight shortening (module docstring, step 3), keeping as far from people as the grid path did."""
+        d, dp = self.costmap.distance_at(xy), self._people_clearance(xy, people_xy_m)
+        floor, half = self.costmap.inscribed_m, 0.5 * self.costmap.resolution_m
         keep, i, n = [0], 0, len(xy)
 
         def clear(j: int) -> bool:
-            need = max(min(float(d[i:j + 1].min()), self.clearance_m) - 0.5 * self.costmap.resolution_m, floor)
-            return self._clearance(xy[i], xy[j]) >= need
+            need = max(min(float(d[i:j + 1].min()), self.clearance_m) - half, floor)
+            obstacle, person = self._clearance(xy[i], xy[j], people_xy_m)
+            return obstacle >= need and person >= min(float(dp[i:j + 1].min()), 0.0) - half
 
         while i < n - 1:
             good, step = i + 1, 1
@@ -188,27 +214,40 @@ class GlobalPlanner:
         return np.column_stack([x, y, yaw])
 
 
-def _shortest_cells(w: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np.ndarray | None:
-    """Cells (N, 2) row, col of the cheapest 8-connected path on weights ``w`` (inf: blocked), or None."""
-    h, wd = w.shape
-    idx = np.arange(h * wd).reshape(h, wd)
-    flat = w.ravel()
-    rows, cols, vals = [], [], []
-    for dr, dc, length in ((0, 1, 1.0), (1, 0, 1.0), (1, 1, math.sqrt(2.0)), (1, -1, math.sqrt(2.0))):
-        a = idx[:h - dr, max(-dc, 0):wd - max(dc, 0)].ravel()
-        b = idx[dr:, max(dc, 0):wd + min(dc, 0)].ravel()
-        cost = length * 0.5 * (flat[a] + flat[b])
-        ok = np.isfinite(cost)
-        rows.append(a[ok]), cols.append(b[ok]), vals.append(cost[ok])
-    graph = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(h * wd, h * wd))
-    s, g = idx[start], idx[goal]
-    dist, pred = dijkstra(graph, directed=False, indices=s, return_predecessors=True)
-    if not np.isfinite(dist[g]):
-        return None
-    chain = [g]
-    while chain[-1] != s:
-        chain.append(pred[chain[-1]])
-    return np.column_stack(np.unravel_index(np.array(chain[::-1]), (h, wd)))
+class GridGraph:
+    """The 8-connected graph of a ``shape`` grid, both directions of every move, in CSR order: built once,
+    its edge weights set per search (an infinite weight: no edge, as scipy's Dijkstra takes it)."""
+
+    def __init__(self, shape: tuple[int, int]):
+        h, wd = shape
+        self.shape = shape
+        idx = np.arange(h * wd).reshape(h, wd)
+        a, b, length = [], [], []
+        for dr, dc, step in ((0, 1, 1.0), (1, 0, 1.0), (1, 1, math.sqrt(2.0)), (1, -1, math.sqrt(2.0))):
+            p = idx[:h - dr, max(-dc, 0):wd - max(dc, 0)].ravel()
+            q = idx[dr:, max(dc, 0):wd + min(dc, 0)].ravel()
+            a += [p, q]
+            b += [q, p]
+            length += [np.full(len(p), step)] * 2
+        a, b, length = np.concatenate(a), np.concatenate(b), np.concatenate(length)
+        order = np.argsort(a, kind="stable")
+        self.a, self.b, self.length = a[order], b[order], length[order]
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.a, minlength=h * wd))])
+
+    def shortest(self, w: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np.ndarray | None:
+        """Cells (N, 2) row, col of the cheapest path on cell weights ``w`` (inf: blocked), or None; a move
+        costs its length times the mean of its two cells' weights."""
+        flat = w.ravel()
+        graph = csr_matrix((self.length * 0.5 * (flat[self.a] + flat[self.b]), self.b, self.indptr),
+                           shape=(flat.size, flat.size))
+        s, g = np.ravel_multi_index(start, self.shape), np.ravel_multi_index(goal, self.shape)
+        dist, pred = dijkstra(graph, directed=True, indices=s, return_predecessors=True)
+        if not np.isfinite(dist[g]):
+            return None
+        chain = [g]
+        while chain[-1] != s:
+            chain.append(pred[chain[-1]])
+        return np.column_stack(np.unravel_index(np.array(chain[::-1]), self.shape))
 
 
 def goal_problem(costmap: Costmap, goal_xy_m) -> str:

@@ -34,7 +34,12 @@ class Recovery:
 
     name = "recovery"
 
-    def __init__(self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float):
+    def __init__(self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, **settings):
+        """``settings``: the class's own (``angle_rad``, ``duration_s``, ``distance_m``, ``speed_m_s``) for this one."""
+        for key, value in settings.items():
+            if not hasattr(type(self), key):
+                raise TypeError(f"{type(self).__name__}: no setting {key!r}")
+            setattr(self, key, value)
         self.costmap, self.limits, self.dt_s = costmap, limits, dt_s
         self.outline = footprint.outline_xy_m(0.5 * costmap.resolution_m)
         self.t0_s, self.pose0 = 0.0, np.zeros(3)

@@ -18,23 +18,22 @@ from pathlib import Path
 
 import numpy as np
 
+from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint, robot_footprint
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.localisation import SOURCES, PoseSource
 from amr_twin.navigation.navigator import GoalOutcome, Navigator, NavParams
 from amr_twin.navigation.outputs import NavOutputs
+from amr_twin.navigation.people import PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner
+from amr_twin.navigation.progress import ProgressChecker
 from amr_twin.navigation.static_map import StaticMap, world_map, yaml_map
 
 CONTROLLERS = ("mppi", "rpp")
 REST_S = 2.0
 """Standing still before the first goal: the gyro's rest calibration of the EKF (ekf.imu_rest_calibration_s)."""
 RESOLUTION_M = 0.05
-INFLATION_RADIUS_M = 1.0
-COST_SCALING_PER_M = 3.0
-PEOPLE_PAD_M = 0.35
-"""Clearance kept from what the map does not hold (the collision monitor's people pad), m."""
 
 
 @dataclass(frozen=True)
@@ -90,11 +89,38 @@ def load_static_map(cfg, world: str, map_yaml: str | None) -> StaticMap:
     return yaml_map(Path(map_yaml)) if map_yaml else true_map(cfg, world)
 
 
-def make_costmap(static: StaticMap, footprint: Footprint) -> Costmap:
-    """The costmap of a map for the robot's footprint; unknown cells are free to plan through (nav2's
-    ``allow_unknown``, its default): a map built from scans leaves cells unknown along the rack faces."""
-    return Costmap(static, footprint.inscribed_radius_m, INFLATION_RADIUS_M, COST_SCALING_PER_M,
-                   unknown_is_lethal=False)
+def make_costmap(static: StaticMap, footprint: Footprint, nav) -> Costmap:
+    """The costmap of a map for the robot's footprint and the settings ``nav`` (``cfg.navigation``); unknown
+    cells are free to plan through (nav2's ``allow_unknown``, its default): a map built from scans leaves
+    cells unknown along the rack faces."""
+    c = nav.costmap
+    return Costmap(static, footprint.inscribed_radius_m, c.inflation_radius_m, c.cost_scaling_per_m,
+                   unknown_is_lethal=False, static_tolerance_m=c.static_tolerance_m)
+
+
+def make_planner(costmap: Costmap, footprint: Footprint, nav) -> GlobalPlanner:
+    """The global planner of the stack on ``costmap``: room to turn the footprint kept, ``nav.planner``'s settings,
+    standing people kept the monitor's ``people_stop_m`` and ``people_margin_m`` more from the robot's sides."""
+    p = nav.planner
+    people_m = nav.people.person_radius_m + nav.monitor.people_stop_m + footprint.inscribed_radius_m + p.people_margin_m
+    return GlobalPlanner(costmap, downsample=p.downsample, cost_weight=p.cost_weight,
+                         turn_room_m=footprint.circumscribed_radius_m, unmapped_pad_m=p.unmapped_pad_m,
+                         people_m=people_m)
+
+
+def make_controller(kind: str, costmap: Costmap, footprint: Footprint, nav, seed: int = 0):
+    """The local controller ``kind`` (:data:`CONTROLLERS`) with ``nav``'s settings (MPPI's samples, horizon,
+    critics and people; RPP's nav2 defaults)."""
+    from amr_twin.navigation.mppi import Mppi
+    from amr_twin.navigation.rpp import RegulatedPurePursuit
+
+    limits, dt = Limits(**nav.limits.model_dump()), 1.0 / nav.navigator.controller_hz
+    if kind == "rpp":
+        return RegulatedPurePursuit(costmap, footprint, limits, dt)
+    m = nav.mppi.model_dump()
+    return Mppi(costmap, footprint, limits, dt, **{k: v for k, v in m.items() if k != "weights"},
+                weights=m["weights"], person_radius_m=nav.people.person_radius_m,
+                prediction_s=nav.people.horizon_s, seed=seed)
 
 
 def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bool = True,
@@ -103,8 +129,6 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
     and the navigator on ``twin``'s bus (module docstring); ``publish``: the plan, map, costmap and footprint
     messages (:mod:`amr_twin.navigation.outputs`) too."""
     from amr_twin.controllers.diff_drive import DiffDriveNode
-    from amr_twin.navigation.mppi import Mppi
-    from amr_twin.navigation.rpp import RegulatedPurePursuit
 
     if options.localisation not in SOURCES:
         raise ValueError(f"localisation: {options.localisation!r} is not one of {', '.join(SOURCES)}")
@@ -126,24 +150,36 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
         anchors = uwb_anchors_xy_m(twin.options.world)
         if anchors is not None:
             uwb = uwb.model_copy(update={"anchors_x_m": tuple(anchors[:, 0]), "anchors_y_m": tuple(anchors[:, 1])})
-        twin.uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, uwb, seed=[twin.options.seed, 3])
-        twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=True, uwb=uwb, initial_pose=start, bus=twin.bus)
+        twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, uwb, seed=[twin.options.seed, 3])
+        twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=True, uwb=uwb,
+                           initial_pose=start, bus=twin.bus)
     else:
         frame = start
     pose_source = PoseSource(twin.bus, SOURCES[options.localisation], frame)
-    footprint = robot_footprint(cfg)
-    costmap = make_costmap(static, footprint)
-    limits, params = Limits(), NavParams(laser_xy_yaw=(float(cfg.components.lidar.pos_m[0]),
-                                                       float(cfg.components.lidar.pos_m[1]), 0.0))
-    dt = 1.0 / params.controller_hz
-    if options.controller == "mppi":
-        controller = Mppi(costmap, footprint, limits, dt, seed=options.seed)
-    else:
-        controller = RegulatedPurePursuit(costmap, footprint, limits, dt)
-    planner = GlobalPlanner(costmap, turn_room_m=footprint.circumscribed_radius_m, unmapped_pad_m=PEOPLE_PAD_M)
+    nav, footprint = cfg.navigation, robot_footprint(cfg)
+    costmap = make_costmap(static, footprint, nav)
+    limits = Limits(**nav.limits.model_dump())
+    n, c, pl = nav.navigator, nav.costmap, nav.planner
+    params = NavParams(controller_hz=n.controller_hz, planner_hz=pl.planner_hz, xy_tolerance_m=n.xy_tolerance_m,
+                       yaw_tolerance_rad=n.yaw_tolerance_rad, rotate_to_path_rad=n.rotate_to_path_rad,
+                       obstacle_range_m=c.obstacle_range_m, raytrace_range_m=c.raytrace_range_m,
+                       unmapped_m=c.unmapped_m if options.map_yaml is None else c.unmapped_map_file_m,
+                       blocked_s=n.blocked_s, off_path_m=pl.off_path_m,
+                       max_failures=n.max_failures,
+                       laser_xy_yaw=(float(cfg.components.lidar.pos_m[0]), float(cfg.components.lidar.pos_m[1]), 0.0))
+    controller = make_controller(options.controller, costmap, footprint, nav, options.seed)
+    people = nav.people.model_dump()
+    radius = people.pop("person_radius_m")
+    monitor = CollisionMonitor(footprint, limits.max_v_m_s, person_radius_m=radius, **nav.monitor.model_dump())
+    r = nav.recoveries
+    recovery_settings = {"spin": {"angle_rad": r.spin_rad}, "wait": {"duration_s": r.wait_s},
+                         "backup": {"distance_m": r.backup_m, "speed_m_s": r.backup_m_s}}
     outputs = NavOutputs(twin.bus, twin.clock, costmap, footprint) if publish else None
-    return Navigator(twin.bus, twin.clock, pose_source, costmap, planner, controller, footprint,
-                     limits, options.goals, params, outputs=outputs, start_s=twin.t_s + REST_S)
+    return Navigator(twin.bus, twin.clock, pose_source, costmap, make_planner(costmap, footprint, nav), controller,
+                     footprint, limits, options.goals, params, outputs=outputs, start_s=twin.t_s + REST_S,
+                     monitor=monitor, tracker=PeopleTracker(**people),
+                     progress=ProgressChecker(n.progress_radius_m, n.progress_time_s),
+                     recovery_settings=recovery_settings)
 
 
 def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | None = None,
@@ -166,7 +202,7 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
     nav = attach(twin, cfg, static, options, publish=publish, drive=drive)
     twin.navigator = nav
     actor_poses = []
-    twin.bus.add_tap(lambda _topic, msg, t_us: actor_poses.append(
+    twin.on_message(lambda _topic, msg, t_us: actor_poses.append(
         (t_us * 1e-6, [(p.position.x, p.position.y, p.orientation.yaw_rad()) for p in msg.poses])), ("actors/poses",))
     twin.advance(REST_S)
     timeout = options.timeout_s

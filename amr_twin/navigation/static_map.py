@@ -11,6 +11,9 @@ cell further):
   exactly (a cell is occupied when the box overlaps it); other shapes by their bounding box.
 - :func:`yaml_map`: a map_server YAML + PGM (a map the fusion experiment saved, an imported
   ROS map): occupied, free and unknown cells as map_server's trinary reading gives them.
+
+Part of the physics layer (``PHYSICS_LAYER``): :func:`world_map` forwards a private MjData of a
+freshly compiled world to read where its geoms stand; no twin's state is read or written.
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+PHYSICS_LAYER = True
 
 WORLD_GROUP = 0
 MARGIN_M = 0.5

@@ -1,11 +1,11 @@
 """Time series of a run: what the loop sees every step, and what the bus carries.
 
-Per physics step the loop hands over the first :data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM`
-sensor values (wheel angles and speeds, base pose); the recorder keeps one row in
-``record_every_steps`` together with the pins in force, which only change at events, and
-the battery's state as its accounting left it at that instant (:attr:`Recorder.battery`,
-a grid sampler after the battery's: terminal voltage, current, charge). A bus tap keeps
-every published wheel speed, wheel command and odometry message with its delivery time.
+A consumer of the loop's hooks (:mod:`amr_twin.sim.hooks`) and observables: ``on_grid_rows``
+hands over the loop sensors' rows on the record grid (wheel angles and speeds, base pose);
+``on_actuation`` the drive in force, which only changes at events; a grid sampler after the
+battery's accounting (``on_grid``, :attr:`Recorder.battery`) keeps the battery's state as the
+accounting left it (terminal voltage, current, charge); ``on_message`` keeps every published
+wheel speed, wheel command and odometry message with its delivery time.
 """
 
 from __future__ import annotations
@@ -15,9 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
-from amr_twin.sim.grid_steps import GridRows, gather
-from amr_twin.sim.plant import MODE_CODES, motor_currents_a
+from amr_twin.sim.plant import motor_currents_a
 
 RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
 
@@ -67,11 +65,11 @@ def yaw_from_quat(q: np.ndarray) -> np.ndarray:
 
 
 class Recorder:
-    """Collects a run's time series from the loop and the bus."""
+    """Collects a run's time series from the hooks of ``twin`` (a :class:`~amr_twin.sim.loop.Twin`)."""
 
     def __init__(self, twin) -> None:
         self.twin = twin
-        self.every = max(1, int(twin.options.record_every_steps))
+        self.every = twin.grid_every
         self._t: list[np.ndarray] = []
         self._rows: list[np.ndarray] = []
         self._pin_t: list[int] = []
@@ -79,13 +77,14 @@ class Recorder:
         self._published: dict[int, list[tuple[float, float]]] = {0: [], 1: []}
         self._odom: list[tuple[float, float, float, float]] = []
         self.commands: list[tuple[float, list[float]]] = []
-        battery = twin.plant.battery
-        self.battery = GridRows(3, 1, battery.grid_state, gather(battery.grid_state_addresses()))
-        """Grid sampler (the loop runs it after the battery's accounting): rows ``t_us, terminal_v,
-        current_a, soc`` (:meth:`amr_twin.sim.battery.Battery.grid_state`)."""
+        self.battery = twin.on_grid(twin.observables.battery_rows())
+        """Grid sampler (hooked after the battery's accounting): rows ``t_us, terminal_v, current_a, soc``
+        (:meth:`amr_twin.sim.observables.Observables.battery`)."""
         self._handlers = {"wheel0_Vel": self._on_wheel0, "wheel1_Vel": self._on_wheel1,
                           "wheel_Command": self._on_command, "odom": self._on_odom}
-        twin.bus.add_tap(self._tap, topics=tuple(self._handlers))  # not called for IMU, scan, tf
+        twin.on_message(self._tap, topics=tuple(self._handlers))  # not called for IMU, scan, tf
+        twin.on_actuation(self.pins_changed)
+        twin.on_grid_rows(self.extend_grid)
 
     def _tap(self, topic: str, msg, t_us: int) -> None:
         self._handlers[topic](msg, t_us * 1e-6)
@@ -104,38 +103,19 @@ class Recorder:
         yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
         self._odom.append((t_s, msg.pose.pose.position.x, msg.pose.pose.position.y, yaw))
 
-    def _pin_row(self) -> np.ndarray:
-        pins, plant = self.twin.firmware.pins, self.twin.plant
-        return np.array([pins[0].pwm_counts, pins[1].pwm_counts, pins[0].direction, pins[1].direction,
-                         MODE_CODES[plant.mode[0]], MODE_CODES[plant.mode[1]], plant.voltage_v[0], plant.voltage_v[1]])
-
     def pins_changed(self, t_us: int) -> None:
-        """The plant was updated at physics time ``t_us``: keep the new pin levels."""
+        """The plant took the pins at physics time ``t_us`` (``on_actuation``): keep the drive in force."""
+        row = np.array(self.twin.observables.drive())
         if self._pin_t and self._pin_t[-1] == t_us:
-            self._pins[-1] = self._pin_row()
+            self._pins[-1] = row
         else:
             self._pin_t.append(t_us)
-            self._pins.append(self._pin_row())
-
-    def pins_in_force(self) -> np.ndarray:
-        """The pin row :meth:`series` gives a grid row taken now (while the physics steps): the last kept."""
-        return self._pins[-1]
+            self._pins.append(row)
 
     def sample(self) -> None:
         """Record the present state as one row (at the start of a run)."""
-        d = self.twin.physics.data
         self._t.append(np.array([self.twin.t_phys_us]))
-        self._rows.append(d.sensordata[None, :LOOP_SENSOR_DIM].copy())
-
-    def extend(self, t_us: np.ndarray, rows: np.ndarray) -> None:
-        """Keep the rows of a chunk that fall on the record grid (t_us: (n,), rows: (n, LOOP_SENSOR_DIM))."""
-        keep = (t_us // self.twin.dt_us) % self.every == 0
-        if keep.all():
-            self._t.append(t_us)
-            self._rows.append(rows)
-        elif keep.any():
-            self._t.append(t_us[keep])
-            self._rows.append(rows[keep])
+        self._rows.append(np.array([self.twin.observables.loop_sensors()]))
 
     def extend_grid(self, t_us: list[int], rows: list[list[float]]) -> None:
         """Keep rows already on the record grid (lists from the loop; stacked lazily)."""

@@ -7,7 +7,7 @@ message with its time, us) and samples the world pose of each robot body as a gr
 sampler of the loop (default ~30 Hz on the recorder's 10 ms grid; no clock event, so
 the physics chunks, hence the run, are unchanged), and the joint and base state on
 every grid instant for the ROS messages of :mod:`amr_twin.ros.ros_state` (joint states,
-link transforms, ground truth). It only reads ``MjData``.
+link transforms, ground truth). It reads the twin through its hooks and observables.
 
 Both writers write a temporary file next to the target and rename it when complete
 (:mod:`amr_twin.recording.atomic_file`); :func:`recording_folder` prepares a folder of per-run
@@ -29,7 +29,7 @@ _captures: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 class Capture:
     """Bus messages and body poses of a running twin (attach before running).
 
-    The body poses are taken by a grid sampler of the loop (``twin.samplers``,
+    The body poses are taken by a grid sampler of the loop (``twin.on_grid``,
     called on the record grid while the physics steps), not by a clock event: the
     capture adds no boundary to the physics chunks, so a recorded run is the same
     run whatever the caller's ``advance`` pattern (a sweep's 20 ms loop included).
@@ -38,20 +38,21 @@ class Capture:
     def __init__(self, twin, body_hz: float = 30.0):
         self.twin = twin
         self.messages: dict[str, list[tuple[int, object]]] = {}
-        m = twin.physics.model
+        m = twin.observables.model
         self.body_ids = np.array([b for b in range(1, m.nbody)], dtype=int)
-        grid_us = twin.dt_us * twin.recorder.every
+        self._xpos, self._xquat = twin.observables.named.data.xpos, twin.observables.named.data.xquat
+        grid_us = twin.grid_us
         self.period_us = max(grid_us, int(round(US / body_hz / grid_us)) * grid_us)
         self._t: list[int] = []
         self._pos: list[np.ndarray] = []
         self._quat: list[np.ndarray] = []
         from amr_twin.ros.ros_state import StateSampler
-        self.state = StateSampler(m, twin.physics.data)
+        self.state = StateSampler(m, twin.observables.named)
         """Joint and base state on every grid instant (:mod:`amr_twin.ros.ros_state`)."""
-        twin.bus.add_tap(self._tap)
+        twin.on_message(self._tap)
         self._sample(twin.t_phys_us)
         self.state.sample(twin.t_phys_us)
-        twin.samplers.append(self._on_grid)
+        twin.on_grid(self._on_grid)
         _captures[twin] = self
 
     def _tap(self, topic: str, msg, t_us: int) -> None:
@@ -61,10 +62,10 @@ class Capture:
         lst.append((t_us, msg))
 
     def _sample(self, t_us: int) -> None:
-        d, ids = self.twin.physics.data, self.body_ids
+        ids = self.body_ids
         self._t.append(int(t_us))
-        self._pos.append(d.xpos[ids].copy())
-        self._quat.append(d.xquat[ids].copy())
+        self._pos.append(self._xpos[ids].copy())
+        self._quat.append(self._xquat[ids].copy())
 
     def _on_grid(self, t_us: int) -> None:
         """Grid sampler: the physics is at ``t_us``; keep the poses every ``period_us``, the state always."""

@@ -89,7 +89,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     import rerun as rr
 
     path = Path(path)
-    m = capture.twin.physics.model
+    m = capture.twin.observables.model
     rec = rr.RecordingStream(application_id)
     stream = rec.binary_stream()
     rec.send_blueprint(_blueprint(bool(capture.messages.get("imu/data_raw")), bool(capture.messages.get("uwb/range")),

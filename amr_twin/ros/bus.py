@@ -215,6 +215,10 @@ class Bus:
         else:
             self._intercepts[_name(topic)] = func
 
+    def has_tap(self, tap: Tap) -> bool:
+        """Whether ``tap`` is added."""
+        return any(t == tap for t, _topics in self._taps)
+
     def remove_tap(self, tap: Tap) -> None:
         """Unregister a tap added with :meth:`add_tap` (ValueError if it was not)."""
         for i, (t, _topics) in enumerate(self._taps):

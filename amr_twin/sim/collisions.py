@@ -21,6 +21,9 @@ and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less tha
 :data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
 the loop to stop at the first collision.
 The checks of a start pose use the same classification: :mod:`amr_twin.sim.start_pose`.
+
+Part of the physics layer (``PHYSICS_LAYER``): a grid sampler: reads MjData's contacts and their
+forces (``mj_contactForce``) at each grid instant.
 """
 
 from __future__ import annotations
@@ -37,6 +40,8 @@ import numpy as np
 from amr_twin.sim.grid_steps import CHANGED, sampler
 from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import open_helper
+
+PHYSICS_LAYER = True
 
 SUPPORT_TILT_DEG = 30.0
 """A wheel or caster contact whose normal is within this angle of vertical is standing, deg."""
@@ -199,15 +204,17 @@ class CollisionMonitor:
         Ask the loop to stop at the first collision (the sampler returns True).
     native : bool
         Compare the pairs in C when the helper builds (:attr:`engine` says which runs).
+    listeners : list, optional
+        Callables ``f(collision)`` to tell of each new episode (a live list: the twin's ``on_collision`` hook's).
     """
 
-    def __init__(self, physics, stop: bool = False, native: bool = True):
+    def __init__(self, physics, stop: bool = False, native: bool = True, listeners: list | None = None):
         self.physics, self.stop = physics, stop
         self._data = physics.data
         self.roles = GeomRoles(physics)
         self.collisions: list[Collision] = []
-        self.listeners: list = []
-        """Callables ``f(collision)`` told of each new episode as it begins (the terminal menu prints it)."""
+        self.listeners: list = [] if listeners is None else listeners
+        """Callables ``f(collision)`` told of each new episode as it begins (the twin's ``on_collision`` hook)."""
         self._open: dict[str, Collision] = {}  # what was hit (a world geom's name, an actor's) -> its episode
         self._last_pairs: list | None = None
         self._last_full_us = -(1 << 62)

@@ -1,8 +1,10 @@
 """Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running :class:`~amr_twin.sim.loop.Twin`.
 
 Each fault is a synced clock event at its time (the physics is brought to that
-instant first) and, with ``for=S``, another that clears it. The effects go
-through small hooks of the components, so that no component knows about faults:
+instant first) and, with ``for=S``, another that clears it. The twin hands the injector
+the parts a fault acts on (:class:`FaultTargets`); the effects go through small handles of
+those parts, so that no component knows about faults, and the injector watches the sensor
+topics through the twin's ``on_message`` hook:
 
 =================  ================================================================
 hall-dead          ``HallSensors.set_stuck`` (sensors/hall.py): no SC changes
@@ -12,9 +14,9 @@ wheel-lifted       ``Physics.lift_wheel``: the tyre's contacts switched off
 rosserial-*        ``RosserialLink.loss_prob`` / ``extra_latency_us``
 lidar-dead         ``Bus.intercept("scan")``: every scan dropped
 imu-stuck          ``Bus.intercept("imu/...")``: the last sample repeated, new stamps
-battery-sag        ``Battery.sag_v`` (plant.py): the terminal voltage lowered
-battery-cut        ``Plant.supply_cut``: the drivers unpowered, the wheels coast
-estop              ``Plant.set_estop``: the relays open the phases
+battery-sag        ``Actuation.sag_battery`` (actuation.py): the terminal voltage lowered
+battery-cut        ``Actuation.cut_supply``: the drivers unpowered, the wheels coast
+estop              ``Actuation.press_estop``: the relays open the phases
 =================  ================================================================
 
 :meth:`FaultInjector.report` measures what each fault did from the run's series.
@@ -23,6 +25,7 @@ estop              ``Plant.set_estop``: the relays open the phases
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable
 
 import numpy as np
 
@@ -33,26 +36,39 @@ WINDOW_S = 0.5
 """Averaging window of the speeds before a fault and at the end of the run, s."""
 
 
-class FaultInjector:
-    """Schedules and applies ``faults`` on ``twin`` (built by the twin when ``TwinOptions.faults`` is set)."""
+@dataclasses.dataclass(frozen=True)
+class FaultTargets:
+    """What the faults act on, handed over by the twin that owns them."""
 
-    def __init__(self, twin, faults: tuple[Fault, ...]):
-        self.twin = twin
+    hall: object        # sensors.hall.HallSensors
+    physics: object     # amr_twin.sim.physics.Physics: jam_wheel, lift_wheel, wheel_angles_rad
+    link: object        # amr_twin.ros.rosserial.RosserialLink
+    bus: object         # amr_twin.ros.bus.Bus: intercept
+    actuation: object   # amr_twin.sim.actuation.Actuation
+    t_us: Callable[[], int]  # the physics time now, us
+
+
+class FaultInjector:
+    """Schedules ``faults`` on ``clock`` and applies them to ``targets``; ``hooks`` the twin's
+    (:class:`~amr_twin.sim.hooks.Hooks`). Built by the twin when ``TwinOptions.faults`` is set."""
+
+    def __init__(self, faults: tuple[Fault, ...], clock, hooks, targets: FaultTargets):
+        self.targets = targets
         self.faults = tuple(faults)
         self._saved: dict[int, object] = {}
         self._last: dict[str, object] = {}        # last IMU messages published (imu-stuck)
         self._times: dict[str, list[int]] = {}     # publication times of the sensor topics
         self._imu_values: list[tuple] = []         # (gyro, accel) of each imu/data_raw message
         if any(f.kind in ("imu-stuck", "lidar-dead") for f in self.faults):
-            twin.bus.add_tap(self._tap)
+            hooks.on_message(self._tap)
         for i, fault in enumerate(self.faults):
             t_us = int(round(fault.t_s * US))
-            if t_us <= twin.clock.now_us:  # at the start: in force before anything is sent
+            if t_us <= clock.now_us:  # at the start: in force before anything is sent
                 self._set(i, True)
             else:
-                twin.clock.schedule(t_us, lambda i=i: self._set(i, True))
+                clock.schedule(t_us, lambda i=i: self._set(i, True))
             if fault.until_s is not None:
-                twin.clock.schedule(int(round(fault.until_s * US)), lambda i=i: self._set(i, False))
+                clock.schedule(int(round(fault.until_s * US)), lambda i=i: self._set(i, False))
 
     def _tap(self, topic: str, msg, t_us: int) -> None:
         if topic in ("imu/data_raw", "imu/mag", "scan"):
@@ -64,41 +80,35 @@ class FaultInjector:
 
     # -- apply / clear ------------------------------------------------------------------
     def _set(self, i: int, on: bool) -> None:
-        fault, twin = self.faults[i], self.twin
+        fault, to = self.faults[i], self.targets
         w = fault.wheel
         if fault.kind == "hall-dead":
             sensors = range(3) if fault.value == "all" else ["abc".index(fault.value)]
-            angle = float(twin.physics.wheel_angles_rad()[w])
+            angle = float(to.physics.wheel_angles_rad()[w])
             for k in sensors:
-                twin.hall.set_stuck(w, k, on, angle)
+                to.hall.set_stuck(w, k, on, angle)
         elif fault.kind == "hall-chatter":
-            twin.hall.glitch_rate_hz[w] = float(fault.value) if on else 0.0
+            to.hall.glitch_rate_hz[w] = float(fault.value) if on else 0.0
         elif fault.kind == "motor-stall":
-            twin.physics.jam_wheel(w, on)
+            to.physics.jam_wheel(w, on)
         elif fault.kind == "wheel-lifted":
-            twin.physics.lift_wheel(w, on)
+            to.physics.lift_wheel(w, on)
         elif fault.kind == "rosserial-loss":
-            self._swap(i, on, twin.link, "loss_prob", float(fault.value))
+            self._swap(i, on, to.link, "loss_prob", float(fault.value))
         elif fault.kind == "rosserial-latency":
-            self._swap(i, on, twin.link, "extra_latency_us", int(round(float(fault.value) * 1000)))
+            self._swap(i, on, to.link, "extra_latency_us", int(round(float(fault.value) * 1000)))
         elif fault.kind == "lidar-dead":
-            twin.bus.intercept("scan", (lambda msg: None) if on else None)
+            to.bus.intercept("scan", (lambda msg: None) if on else None)
         elif fault.kind == "imu-stuck":
             for topic in ("imu/data_raw", "imu/mag"):
                 held = self._last.get(topic)
-                twin.bus.intercept(topic, _repeat(held) if on and held is not None else None)
-        elif fault.kind in ("battery-sag", "battery-cut", "estop"):
-            plant = twin.plant
-            if fault.kind == "battery-sag":
-                headroom = plant.battery.ocv_v() - 1.0  # the drivers never see a negative supply
-                plant.battery.sag_v = min(float(fault.value), headroom) if on else 0.0
-                plant.apply(twin.firmware.pins)
-            elif fault.kind == "battery-cut":
-                plant.supply_cut = on
-                plant.apply(twin.firmware.pins)
-            else:
-                plant.set_estop(on, twin.firmware.pins)
-            twin.recorder.pins_changed(twin.t_phys_us)
+                to.bus.intercept(topic, _repeat(held) if on and held is not None else None)
+        elif fault.kind == "battery-sag":
+            to.actuation.sag_battery(float(fault.value) if on else 0.0, to.t_us())
+        elif fault.kind == "battery-cut":
+            to.actuation.cut_supply(on, to.t_us())
+        elif fault.kind == "estop":
+            to.actuation.press_estop(on, to.t_us())
 
     def _swap(self, i: int, on: bool, obj, attr: str, value) -> None:
         if on:

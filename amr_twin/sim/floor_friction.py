@@ -13,6 +13,9 @@ patch slides at ``3 mu N`` of deflection force) and the spin torque's cap: with 
 
 Part of the physics layer: :func:`set_friction_field` writes the field into the tyres' user data
 (``Physics.set_floor_friction``); :func:`friction_at` is the look-up's Python twin.
+
+Part of the physics layer (``PHYSICS_LAYER``): writes the floor's friction field into the tyres'
+user data of MjModel/MjData.
 """
 
 from __future__ import annotations
@@ -24,6 +27,8 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, NUMERIC
+
+PHYSICS_LAYER = True
 
 STREAM = 5
 """Index of the floor's stream of a run's seed (1 IMU, 2 LiDAR, 3 UWB, 4 the robot's own errors)."""

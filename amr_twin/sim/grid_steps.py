@@ -13,6 +13,9 @@ changed; :data:`ROW`: its room is full, or its owner has work due, as a LiDAR ca
 ``grid_resume`` (or itself) and the samplers after it then run in Python there. Any other
 sampler (a recording's body poses, a live view's rows) keeps the Python loop, which is this
 module's Python twin: the same bits (tests/sim/test_grid_steps.py).
+
+Part of the physics layer (``PHYSICS_LAYER``): the grid loop in C: ``mj_step`` to each grid instant
+and the rows read where they lie in MjData.
 """
 
 from __future__ import annotations
@@ -24,6 +27,8 @@ import numpy as np
 
 from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, mujoco_address, open_helper
+
+PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("grid_steps.c")
 CALL2, CALL3, CALL4, CHANGED, ROW, TIMED = range(6)

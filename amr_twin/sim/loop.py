@@ -9,14 +9,20 @@ orders events in time:
    or the end of the run; *publishing* events (odometry, IMU and LiDAR messages,
    :mod:`amr_twin.sim.clock`) do not stop the physics unless a subscriber could act on
    what they publish before it (:meth:`amr_twin.ros.bus.Bus.lookahead_us`);
-2. step the physics in C up to that instant with the actuation held, keeping the
-   wheel angles on the record grid (every ``record_every_steps``) and handing the
-   grid instants to the grid samplers (the rolling resistance from the present
-   contact loads, the actors' poses, the IMU's true values, the LiDAR's poses and casts);
+2. step the physics in C up to that instant with the actuation held
+   (:class:`~amr_twin.sim.grid_loop.GridLoop`), keeping the loop sensors' rows on the
+   record grid (every ``record_every_steps``) and handing the grid instants to the grid
+   samplers (the ``on_grid`` hook: the rolling resistance from the present contact loads,
+   the battery, the actors' poses, the IMU's true values, the LiDAR's poses and casts, and
+   what downstream hooked there), then the chunk's rows to ``on_grid_rows``;
 3. turn the angles into SC edges (interpolated to the microsecond) and deliver
    them to the firmware's pin-change interrupt in time order, each at its time,
    interleaved with the publishing events that fall in the chunk;
-4. run the clock's events; apply the pins to the plant.
+4. run the clock's events; apply the pins to the plant when they changed
+   (:class:`~amr_twin.sim.actuation.Actuation`, the ``on_actuation`` hook); call ``on_event``.
+
+Downstream code subscribes to these hooks (:mod:`amr_twin.sim.hooks`) and reads
+:attr:`Twin.observables`; docs/architecture.md draws the whole.
 
 A grid sampler that returns True (the collision monitor with ``stop_on_collision``)
 ends the chunk at that grid instant and halts the twin: :meth:`Twin.advance` does
@@ -30,16 +36,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from itertools import islice
 
-import mujoco
-import numpy as np
-
-from amr_twin.model.robot_spec import LOOP_SENSOR_DIM
 from amr_twin.ros.bus import Bus
+from amr_twin.sim.actuation import Actuation
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.sim.collisions import CollisionMonitor
-from amr_twin.sim.grid_steps import grid_stepper
+from amr_twin.sim.grid_loop import GridLoop
+from amr_twin.sim.hooks import Hooks
+from amr_twin.sim.observables import Observables
 from amr_twin.model.config import TwinConfig
 from amr_twin.controllers.firmware import make_firmware
 from amr_twin.controllers.odometry import WheelOdometry
@@ -87,8 +91,13 @@ class TwinOptions:
     # node's effective wheel radii and wheelbase (a UMBmark calibration); None: the nominal geometry
 
 
-class Twin:
-    """The whole robot: build it, then :meth:`advance` it in simulated time."""
+class Twin(Hooks):
+    """The whole robot: build it, then :meth:`advance` it in simulated time.
+
+    Code downstream of the loop subscribes to its hooks (:class:`~amr_twin.sim.hooks.Hooks`:
+    ``on_grid``, ``on_grid_rows``, ``on_event``, ``on_actuation``, ``on_message``) and reads
+    :attr:`observables`; it does not reach into :attr:`physics`, :attr:`plant`, :attr:`hall`
+    or :attr:`firmware` (tests/sim/test_hooks.py)."""
 
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
         from amr_twin.model.worlds import default_start
@@ -116,6 +125,7 @@ class Twin:
         self.t_phys_us = 0
         self.clock = VirtualClock()
         self.bus = Bus(self.clock)
+        self._init_hooks(self.bus)
         self.bus.send_transform(robot_static_transforms(self.physics.model), static=True)  # laser, imu_link, uwb_tag
         self.link = RosserialLink(self.clock, extra_latency_us=options.rosserial_extra_latency_us,
                                   loss_prob=options.rosserial_loss_prob, seed=options.seed)
@@ -131,9 +141,7 @@ class Twin:
         self.service = WheelCommandService(self.bus)
         self.client = WheelCommandClient(self.bus, wheel_radius_m=cfg.wheel.radius_m,
                                          half_separation_m=cfg.wheel.separation_m / 2)
-        if hasattr(self.firmware, "connect"):  # it speaks rosserial on its own (emulated) UART
-            self.firmware.connect(self.bus, self.link)
-        else:
+        if not self.firmware.connect(self.bus, self.link):  # else it speaks rosserial on its own UART
             self.bus.subscribe("wheel_Command", self._to_arduino)
         calibration = options.odometry_calibration
         self.odometry = (WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
@@ -141,50 +149,53 @@ class Twin:
                                        **({} if calibration is None else
                                           calibration.multipliers(cfg.wheel.radius_m, cfg.wheel.separation_m)))
                          if options.odometry else None)
-        self.recorder = Recorder(self)
-        self.grid_us = self.dt_us * self.recorder.every
+        self.grid_every = max(1, int(options.record_every_steps))
+        """Physics steps between two instants of the record grid (the ``on_grid`` hook's)."""
+        self.grid_us = self.dt_us * self.grid_every
         self.rolling = RollingResistance(self.physics, cfg)
-        self.samplers: list = [self.rolling.update, self.plant.battery.account, self.recorder.battery]
-        """Callables ``f(t_us)`` run on the record grid while the physics steps (physics at ``t_us``):
-        the rolling resistance from the present loads, the battery and the recorder's copy of its
-        state, the collision monitor, the sensors' samplers. One that returns True halts the twin there."""
+        # the twin's own grid samplers first: the rolling resistance from the present loads and
+        # the battery's accounting; then the recorder's copy of the battery's state, the collision
+        # monitor and the sensors' samplers (the on_grid hook: amr_twin/sim/hooks.py)
+        self.on_grid(self.rolling.update)
+        self.on_grid(self.plant.battery.account)
+        self.actuation = Actuation(self.plant, self.firmware, self._actuation_hooks)
+        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision,
+                                           listeners=self._collision_hooks)
+        self._grid = GridLoop(self.physics, self.samplers, self.grid_every, self.dt_us)
+        self.observables = Observables(self.physics, self._grid, self.actuation, self.plant.battery, self.collisions)
+        """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
+        self.recorder = Recorder(self)
         self.halted = False
         self.actors = None
         """The actors' motion (:class:`amr_twin.sim.actors.ActorMotion`), None without actors."""
         if options.actors:
             from amr_twin.sim.actors import ActorMotion, ActorPoses
             self.actors = ActorMotion(self.physics, tuple(options.actors), cfg)
-            self.samplers.append(self.actors.update)
+            self.on_grid(self.actors.update)
             self._actor_poses = ActorPoses(self.actors, self.clock, self.bus, self.samplers)
-        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision)
-        self.samplers.append(self.collisions)
+        self.on_grid(self.collisions)
         if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
             from amr_twin.sensors.imu import ImuSensor
             from amr_twin.sensors.lidar import Lidar
-            m, d = self.physics.model, self.physics.data
-            self.imu = ImuSensor(m, d, self.clock, self.bus, cfg.imu, seed=[options.seed, 1],
+            self.imu = ImuSensor(self.physics, self.clock, self.bus, cfg.imu, seed=[options.seed, 1],
                                  autostart=False)
             self.imu.start(grid_us=self.grid_us, samplers=self.samplers)
             # with actors moving, a cast every 20 ms (each beam sees them within ~2 cm of where they
             # were at its instant) rather than one a rotation (up to 0.27 m off for a walker)
-            self.lidar = Lidar(m, d, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2],
+            self.lidar = Lidar(self.physics, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2],
                                autostart=False, **({"loop_cast_us": 20_000} if options.actors else {}))
             self.lidar.start_motor(grid_us=self.grid_us, samplers=self.samplers)
-        self._stepper = grid_stepper(self.physics, LOOP_SENSOR_DIM, self.recorder.every, self.dt_us)
-        """The grid loop in C (:mod:`amr_twin.sim.grid_steps`), None without its helper."""
         self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
-        self._loop_sensors = self.physics.data.sensordata[:LOOP_SENSOR_DIM]  # a view: MjData's buffers stay put
-        self._last_row = self._loop_sensors.tolist()
         self._next_check_us = int(options.check_every_s * US)
         for sampler in self.samplers:
             sampler(0)
         self.faults = None
         if options.faults:
-            from amr_twin.sim.fault_injector import FaultInjector
-            self.faults = FaultInjector(self, options.faults)
+            from amr_twin.sim.fault_injector import FaultInjector, FaultTargets
+            self.faults = FaultInjector(options.faults, self.clock, self, FaultTargets(
+                self.hall, self.physics, self.link, self.bus, self.actuation, lambda: self.t_phys_us))
         self.firmware.start()
-        self.plant.apply(self.firmware.pins)
-        self.recorder.pins_changed(0)
+        self.actuation.apply(0)
         self.recorder.sample()
 
     # -- rosserial bridge ---------------------------------------------------------
@@ -207,7 +218,7 @@ class Twin:
         self.advance_to_us(self.clock.now_us + int(round(duration_s * US)))
 
     def advance_to_us(self, t_end_us: int) -> None:
-        clock, fw, plant = self.clock, self.firmware, self.plant
+        clock, actuation, event_hooks = self.clock, self.actuation, self._event_hooks
         lookahead = self.bus.lookahead_us
         last_pins = None
         while clock.now_us < t_end_us and not self.halted:
@@ -220,100 +231,34 @@ class Twin:
                     t_evt = max(clock.now_us, min(t_evt, self.t_phys_us))
             self._deliver_edges(t_evt)
             clock.run_until(t_evt)
-            pins = fw.pins
-            key = (pins[0].pwm_counts, pins[0].dir_level, pins[0].brake_level, pins[0].stop_level,
-                   pins[1].pwm_counts, pins[1].dir_level, pins[1].brake_level, pins[1].stop_level)
+            key = actuation.levels()
             if key != last_pins or t_evt >= self._next_check_us:
-                plant.apply(pins)
-                self.recorder.pins_changed(self.t_phys_us)
+                actuation.apply(self.t_phys_us)
                 last_pins = key
             if t_evt >= self._next_check_us:
                 self.physics.check()
                 self._next_check_us += int(self.options.check_every_s * US)
+            for fn in event_hooks:
+                fn(self.t_phys_us)
 
     def _step_physics(self, nstep: int) -> None:
-        """Step ``nstep`` times in C, sampling the loop sensors on the record grid.
+        """Step ``nstep`` times, sampling the loop sensors on the record grid (:class:`~amr_twin.sim.grid_loop.GridLoop`).
 
         Hall edge times come from a cubic Hermite interpolation of the sampled
         wheel angles and speeds (exact for constant acceleration; the actuation
         is constant inside a chunk), solved per edge to the microsecond. Plain
-        Python lists: a chunk is a handful of samples. The grid loop runs in C when
-        every grid sampler has a C form (:meth:`_grid_in_c`), else here (:meth:`_grid_in_python`).
+        Python lists: a chunk is a handful of samples.
         """
-        dt = self.dt_us
-        k0 = self.t_phys_us // dt
-        k_end = k0 + nstep
-        grid_t, grid_rows = [], []
-        stepper = self._stepper
-        if stepper is not None and stepper.use(self.samplers):
-            k = self._grid_in_c(stepper, k0, k_end, grid_t, grid_rows)
-        else:
-            k = self._grid_in_python(k0, k_end, grid_t, grid_rows)
-        if self.halted:  # a sampler stopped the physics at step k
-            k_end = k
-        ts, rows = [k0 * dt, *grid_t], [self._last_row, *grid_rows]
-        if k < k_end:
-            mujoco.mj_step(self.physics.model, self.physics.data, k_end - k)
-            k = k_end
-            ts.append(k * dt)
-            rows.append(self._loop_sensors.tolist())
-        self.t_phys_us = k * dt
-        self._last_row = rows[-1]
+        grid = self._grid
+        k, ts, rows, grid_t, grid_rows = grid.run(self.t_phys_us // self.dt_us, nstep)
+        self.halted = grid.halted
+        self.t_phys_us = k * self.dt_us
         if grid_t:
-            self.recorder.extend_grid(grid_t, grid_rows)
+            for fn in self._grid_row_hooks:
+                fn(grid_t, grid_rows)
         edges = self.hall.edges_from_samples(ts, rows)
         if edges:
             self._pending.extend(edges)
-
-    def _grid_in_python(self, k: int, k_end: int, grid_t: list, grid_rows: list) -> int:
-        """From step ``k``, step to each grid instant up to step ``k_end``, keeping its time and
-        row in ``grid_t`` and ``grid_rows`` and running the grid samplers there; the step reached
-        (the last instant's, or ``k``). A sampler returning True halts the twin at its instant."""
-        m, d, dt, every = self.physics.model, self.physics.data, self.dt_us, self.recorder.every
-        sensors, step, samplers = self._loop_sensors, mujoco.mj_step, self.samplers
-        for mark in range((k // every + 1) * every, k_end + 1, every):
-            step(m, d, mark - k)
-            k = mark
-            t = k * dt
-            row = sensors.tolist()
-            grid_t.append(t)
-            grid_rows.append(row)
-            stop = False
-            for sampler in samplers:
-                if sampler(t):
-                    stop = True
-            if stop:
-                self.halted = True
-                break
-        return k
-
-    def _grid_in_c(self, stepper, k: int, k_end: int, grid_t: list, grid_rows: list) -> int:
-        """:meth:`_grid_in_python` with the grid loop in C (:mod:`amr_twin.sim.grid_steps`): the same
-        steps, rows and sampler calls. An instant a sampler hands back runs the rest of its
-        samplers here; if one then has no C form (a collision opened) the chunk ends in Python."""
-        dt, every = self.dt_us, self.recorder.every
-        first = (k // every + 1) * every
-        nmarks = (k_end - first) // every + 1 if first <= k_end else 0
-        done = 0
-        while done < nmarks:
-            mark = first + done * every
-            reached, handoff = stepper.run(mark - k, nmarks - done, mark * dt)
-            k = mark + (reached - 1) * every
-            grid_t.extend(range(mark * dt, k * dt + 1, every * dt))
-            grid_rows.extend(stepper.rows[:reached].tolist())
-            done += reached
-            if handoff >= 0:
-                t = k * dt
-                stop = bool(stepper.resume[handoff](t))
-                for sampler in islice(self.samplers, handoff + 1, None):  # the live list, as the Python loop walks it
-                    if sampler(t):
-                        stop = True
-                if stop:
-                    self.halted = True
-                    return k
-                if done < nmarks and not stepper.use(self.samplers):
-                    return self._grid_in_python(k, k_end, grid_t, grid_rows)
-        return k
 
     def _deliver_edges(self, t_until_us: int) -> None:
         """Deliver the pending SC edges up to ``t_until_us`` to the firmware's ISR, in time order."""

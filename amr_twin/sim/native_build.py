@@ -11,6 +11,9 @@ some thirty Python reads of MjData per grid instant.
 every operation alike and give the same bits. Without a compiler, with the disk cache off
 or with ``AMR_TWIN_NATIVE=0`` the Python twin runs (same results, slower);
 :func:`native_status` says which and why.
+
+Part of the physics layer (``PHYSICS_LAYER``): builds the C helpers that read and write MjData and
+gives them its arrays' addresses.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from pathlib import Path
 
 from amr_twin.model.disk_cache import cache_dir
 from amr_twin.sim.c_layout import LAYOUT_HEADER, layout_problem
+
+PHYSICS_LAYER = True
 
 NATIVE_ENV = "AMR_TWIN_NATIVE"
 """Environment variable: ``0`` runs the Python twins of the C helpers."""

@@ -1,12 +1,17 @@
-"""Physics wrapper: the only code that touches ``MjData``, always by name.
+"""Physics wrapper: the door to ``MjData``, always by name.
 
 It owns the compiled model and its data, resolves the robot's joints, actuators,
-geoms and sensors by name once, and offers what the rest of the twin needs:
+geoms and sensors by name once, offers named views of both (:attr:`Physics.named`,
+as dm_control's ``physics.named``) and what the rest of the twin needs:
 stepping in C, wheel angles and speeds, the base pose, contact loads per named
 geom, and the three motor modes (drive, coast, brake) set on the actuators'
 parameters between steps (the per-step torque stays in C). A braked motor is a
 motor at zero phase voltage (phases shorted): torque ``-Kt Ke / R * omega``, within
 the brake's own current limit.
+
+The physics layer is this module and those that declare ``PHYSICS_LAYER = True`` with the
+reason (C-speed callbacks and grid samplers, ray-casting sensors, the grid loop); no other
+module touches MjData (tests/sim/test_physics_door.py).
 """
 
 from __future__ import annotations
@@ -21,6 +26,9 @@ import numpy as np
 from amr_twin.model.build import ROBOT_PREFIX
 from amr_twin.model.robot_spec import CASTERS, WHEELS
 from amr_twin.model.tyre_numeric import NUMERIC as TYRE_NUMERIC
+from amr_twin.sim.named_index import NamedIndex
+
+PHYSICS_LAYER = True
 
 
 class DivergenceError(RuntimeError):
@@ -102,6 +110,18 @@ class Physics:
         twin.model = copy.copy(self.model)
         twin.data = copy.copy(self.data)
         return twin
+
+    @property
+    def named(self) -> NamedIndex:
+        """Named views of the model and data: ``named.data.qpos["amr/wheel_left_joint"]`` (:mod:`amr_twin.sim.named_index`)."""
+        named = self.__dict__.get("_named")
+        if named is None or named.data._struct is not self.data:  # a clone has data of its own
+            named = self._named = NamedIndex(self.model, self.data)
+        return named
+
+    def forward(self) -> None:
+        """Recompute the derived quantities (positions, contacts, sensors) of the present state (``mj_forward``)."""
+        mujoco.mj_forward(self.model, self.data)
 
     # -- time and stepping ----------------------------------------------------------
     @property

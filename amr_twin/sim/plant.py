@@ -78,7 +78,7 @@ class Plant:
         self._motor_consts = [(m.ke_v_s_rad, m.resistance_ohm, m.current_limit_a) for m in self.motors]
         self._quiescent2_a = 2 * self.driver.quiescent_current_a
         self._aux_w = cfg.battery.auxiliary_power_w
-        self.battery.connect(physics.data, physics.wheel_dof, self._motor_consts, self.driver.brake_current_limit_a,
+        self.battery.connect(physics, physics.wheel_dof, self._motor_consts, self.driver.brake_current_limit_a,
                              self._quiescent2_a, self._aux_w)
 
     def phase_voltage_v(self, pins: DriverPins) -> float:

@@ -31,6 +31,9 @@ The update runs in C when a compiler is at hand (``rolling_resistance.c``, built
 use by :mod:`amr_twin.sim.native_build`: ~1 us a call against ~9 us here); :meth:`__call__`
 is its Python twin, the same operations in the same order (same bits), which runs
 without a compiler and which the tests hold the C helper to.
+
+Part of the physics layer (``PHYSICS_LAYER``): a grid sampler in C: reads the contact loads and
+wheel speeds from MjData and writes ``qfrc_applied``.
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ from amr_twin.model.config import TwinConfig
 from amr_twin.sim.grid_steps import CALL4, GridRows, sampler
 from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import open_helper
+
+PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("rolling_resistance.c")
 

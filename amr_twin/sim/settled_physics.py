@@ -11,6 +11,9 @@ copy to change (motor modes, rolling resistance, faults).
 Kept: the last :data:`KEEP` settled models of this process, by configuration, world,
 start pose, visuals, IMU sensors, actors and settling time; built-in worlds only (a world file
 may change between runs). A configuration that cannot be hashed is built every time.
+
+Part of the physics layer (``PHYSICS_LAYER``): builds the settled Physics of a run (MjData's time
+reset after settling).
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ from amr_twin.model.build import build
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.start_pose import check_start, check_supported
 from amr_twin.sim.physics import Physics
+
+PHYSICS_LAYER = True
 
 KEEP = 2
 """Settled models kept (a sweep's points of one configuration come one after the other)."""

@@ -5,6 +5,9 @@ classified as :mod:`amr_twin.sim.collisions` classifies them during a run), and
 :func:`check_supported` one where nothing holds it up after settling: no wheel or caster
 touches anything and no fixture holds the base (a world without a floor; the ``stand``
 world's weld, the work station of fig. 5.1, holds it with the wheels in the air).
+
+Part of the physics layer (``PHYSICS_LAYER``): places the robot at its start pose in MjData and
+checks its contacts (``mj_forward``).
 """
 
 from __future__ import annotations
@@ -12,6 +15,8 @@ from __future__ import annotations
 import mujoco
 
 from amr_twin.sim.collisions import GeomRoles, collision_contacts
+
+PHYSICS_LAYER = True
 
 
 class StartPoseError(ValueError):
@@ -29,7 +34,8 @@ def check_start(physics, where: str) -> None:
     hits, _ = collision_contacts(roles, physics.data)
     if hits:
         names = sorted({roles.world_name(w) for _i, _r, w in hits})
-        raise StartPoseError(f"{where}: the robot overlaps {', '.join(names)} there; "
+        shown = ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+        raise StartPoseError(f"{where}: the robot overlaps {shown} there; "
                              "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
 
 

@@ -40,6 +40,9 @@ order, the same bits, slower) and refuses to replace someone else's. It acts onl
 carry the numeric :data:`NUMERIC` (written by the model build), so other models in the process
 are not touched. The state advances only when ``d.time`` has moved on: an extra ``mj_forward`` at
 the same instant changes nothing; a copy of the data carries it.
+
+Part of the physics layer (``PHYSICS_LAYER``): a MuJoCo passive callback: reads MjData and adds the
+tyres' forces to ``qfrc_passive`` inside ``mj_step``.
 """
 
 from __future__ import annotations
@@ -51,6 +54,8 @@ from pathlib import Path
 from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, FORMAT, NUMERIC, NUMERIC_FIELDS, STATE_FIELDS
 from amr_twin.sim.floor_friction import friction_at
 from amr_twin.sim.native_build import mujoco_address, open_helper
+
+PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("tyres.c")
 _installed: list = []  # [engine, helper, (global pointer, bindings' callback)]: what this process set

@@ -128,6 +128,9 @@ def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeyp
     refused(["experiment", "chapter5", "--out", tmp_path / "c5", "--samples", 4096], "experiment chapter5: ",
             "add --yes")
     refused(["experiment", "fusion", "--out", tmp_path / "f", "--seeds", "0:999"], "1000 drives", "add --yes")
+    monkeypatch.setattr("amr_twin.experiments.navigation.run", simulate)
+    refused(["experiment", "navigation", "--out", tmp_path / "n", "--episodes", 1000, "--maps", "true"],
+            "experiment navigation: 1000 episode(s) on 1 map(s): about ", "add --yes")
 
 
 def test_a_run_larger_than_the_memory_available_is_refused(tmp_path, refused, monkeypatch):
@@ -137,6 +140,24 @@ def test_a_run_larger_than_the_memory_available_is_refused(tmp_path, refused, mo
         refused(["run", "stop", "--duration-s", 3600, "--sensors", "--mcap", tmp_path / "r.mcap"],
                 "--duration-s 3600: the run would need about 4.8 GB of memory", "1.0 GB are available")
     assert _call(["run", "stop", "--duration-s", 5, "--sensors", "--mcap", tmp_path / "r.mcap"]) == 0
+
+
+def test_a_memory_limit_is_checked_before_and_one_line_after(tmp_path, refused, monkeypatch):
+    """``ulimit -v``: Rerun's recorder reserves ~3 GB of address space (it aborted the process with a Rust
+    backtrace below that), and a MemoryError while writing was a traceback of 116 lines."""
+    monkeypatch.setattr("amr_twin.sim.bounds.address_space_mb", lambda: 1200.0)
+    with monkeypatch.context() as guard:
+        guard.setattr("amr_twin.sim.run.run_mission", None)  # were it not refused, it would fail at once
+        refused(["run", "stop", "--duration-s", 60, "--record", tmp_path / "r.rrd"],
+                "--duration-s 60 with --record: the run would need about 3.2 GB of address space",
+                "the limit (ulimit -v) is 1.2 GB")
+
+    def exhausted(*_args, **_kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr("amr_twin.sim.run.run_mission", exhausted)
+    refused(["run", "stop", "--duration-s", 1, "--csv", tmp_path / "r.csv"], "out of memory (the limit, ulimit -v, "
+            "is 1.2 GB); nothing written", code=1)
 
 
 def test_the_client_stops_at_the_bound_of_a_run(monkeypatch):
@@ -173,6 +194,9 @@ def test_malformed_calibration_logs_name_the_file(tmp_path, refused):
     refused(["calibrate", "--target", binary, "--out", out], f"--target {binary}: not a text file")
     refused(["calibrate", "--target", tmp_path, "--out", out], f"--target {tmp_path}: is a folder")
     refused(["calibrate", "--target", "/dev/zero", "--out", out], "--target /dev/zero: not a regular file")
+    fast = _write(tmp_path / "fast.csv", "t_s,wheel,rpm,command\n0.5,left,10,linear:99\n")  # blamed on its length
+    refused(["calibrate", "--target", fast, "--out", out], f"--target {fast}: command linear:99: the client refuses "
+            "it (ERROR: linear velocity not valid")
 
 
 def _unblock(fifo: Path) -> threading.Timer:
@@ -201,6 +225,55 @@ def test_unreadable_input_files_name_the_file(tmp_path, refused):
         refused(args, str(path), words)
 
 
+def test_unreadable_odometry_calibration_and_map_image_name_the_file(tmp_path, refused):
+    """These were read whole: /dev/zero filled the memory (MemoryError), a pipe waited for ever, and the
+    messages were Python's ("IsADirectoryError", "'utf-8' codec can't decode")."""
+    binary = tmp_path / "bin.yaml"
+    binary.write_bytes(b"\xff\xfe" * 100)
+    for name in ("odometry.yaml", "image.pgm"):
+        os.mkfifo(tmp_path / name)
+        _unblock(tmp_path / name)
+    stop = ["run", "stop", "--duration-s", "0.5", "--world"]
+    refused([*stop, "empty", "--odometry", tmp_path / "odometry.yaml"], "--odometry", "not a regular file")
+    refused([*stop, "empty", "--odometry", tmp_path], f"--odometry {tmp_path}: is a folder")
+    refused([*stop, "empty", "--odometry", binary], f"--odometry {binary}: not a text file")
+    refused(["experiment", "chapter5", "--out", tmp_path / "c", "--samples", 2, "--calibration", binary],
+            f"--calibration {binary}: not a text file")
+    world = _write(tmp_path / "map.yaml", "image: image.pgm\nresolution: 0.05\n")
+    refused([*stop, world], f"{world}: image", "image.pgm: not a regular file")
+    _write(world, "image: /dev/zero\nresolution: 0.05\n")
+    refused([*stop, world], f"{world}: image /dev/zero: not a regular file")
+
+
+def _checkerboard(path: Path, n: int) -> Path:
+    path.write_bytes(b"P5 %d %d 255\n" % (n, n) + bytes(0 if (i // n + i % n) % 2 else 254 for i in range(n * n)))
+    return path
+
+
+def test_a_map_too_fragmented_to_build_is_refused_before_the_build(tmp_path, refused, monkeypatch):
+    """Every run of occupied cells became a MuJoCo geom: a 1500 x 1500 checkerboard did not build in 60 s."""
+    _checkerboard(tmp_path / "chk.pgm", 210)  # 22,050 boxes
+    world = _write(tmp_path / "chk.yaml", "image: chk.pgm\nresolution: 0.05\norigin: [-5.25, -5.25, 0]\n")
+    refused(["run", "stop", "--world", world, "--start", "20,20,0"], f"{world}: 22,050 wall boxes after merging",
+            "at most 20,000")
+    monkeypatch.setattr("amr_twin.model.worlds.MAX_WALL_RUNS", 1000)  # the bound on the runs, before merging
+    refused(["run", "stop", "--world", world, "--start", "20,20,0"], f"{world}: 22,050 runs of occupied cells; "
+            "at most 1,000")
+
+
+def test_a_map_s_numbers_are_read_as_yaml_1_2_reads_them_and_bounded(tmp_path, refused, capsys):
+    """``resolution: 5e-2`` was a word to YAML 1.1 ("must be a finite number"); read as a number, an
+    ``origin`` of 1e308 must then be refused, not simulated (it was, exit 0)."""
+    (tmp_path / "free.pgm").write_bytes(b"P5 40 40 255\n" + bytes([254]) * 1600)
+    world = _write(tmp_path / "map.yaml", "image: free.pgm\nresolution: 5e-2\norigin: [-1e0, -1e0, 0]\n")
+    assert _call(["run", "stop", "--duration-s", "0.5", "--world", world]) == 0
+    capsys.readouterr()
+    _write(world, "image: free.pgm\nresolution: 0.05\norigin: [1e308, 0, 0]\n")
+    refused(["run", "stop", "--world", world], f"{world}: origin: [1e+308, 0, 0]: each value must lie within +-10000")
+    _write(world, "image: free.pgm\nresolution: 0.05\noccupied_thresh: 0.1\nfree_thresh: 0.9\n")
+    refused(["run", "stop", "--world", world], "free_thresh 0.9 must be below occupied_thresh 0.1")
+
+
 def _limited(args, limit_bytes: int, cwd: Path, env: dict | None = None):
     """``amr-twin args`` in a process whose files may not grow beyond ``limit_bytes`` (``ulimit -f``)."""
     def limit():
@@ -225,6 +298,23 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path, tmp_path_fac
                    env={**os.environ, "MPLCONFIGDIR": str(tmp_path_factory.mktemp("matplotlib_config"))})
     assert res.returncode == 1 and res.stderr.count("\n") == 1 and "File too large" in res.stderr
     assert list(tmp_path.iterdir()) == []  # no empty output folder
+
+
+@pytest.mark.parametrize("args, target", [
+    (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1", "--no-progress"], "amr_twin.experiments.chapter5.run"),
+    (["sweep", "payload", "--out", "{tmp}/s", "--masses", "0", "--positions", "center", "--commands", "stop",
+      "--no-progress"], "amr_twin.experiments.payload_sweep.run"),
+    (["run", "stop", "--duration-s", "1", "--csv", "{tmp}/r.csv"], "amr_twin.sim.run.run_mission"),
+])
+def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refused, monkeypatch):
+    """Ctrl-C: typer exited 130 without a word; now one line naming the command, nothing written."""
+    def interrupted(*_args, **_kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(target, interrupted)
+    line = refused([a.format(tmp=tmp_path) for a in args], "interrupted; no output written", code=130)
+    assert line.startswith(f"error: amr-twin {args[0]} {args[1]}: ")
+    assert ("a rerun resumes" in line) == (args[0] == "sweep")
 
 
 # ---------------------------------------------------------------------------------------------- messages
@@ -263,9 +353,70 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path, tmp_path_fac
     (["experiment", "chapter5", "--out", ""], ["'--out'", "an empty path"]),
     (["run", "stop", "--csv", ""], ["'--csv'", "an empty path"]),
     (["run", "stop", "--config", ""], ["'--config'", "an empty path"]),
+    # found by the hostile round of 26 Nov (each was a traceback, a library's words or an ignored option)
+    (["bench", "--sim-s", "1e-300"], ["--sim-s 1e-300: must be in [0.1, 1000] s"]),  # ZeroDivisionError
+    (["experiment", "navigation", "--out", "{tmp}/n", "--seed", -1], ["--seed -1: must be a whole number"]),
+    (["experiment", "navigation", "--out", "{tmp}/n", "--seed", 2 ** 40], ["--seed 1099511627776: must be"]),
+    (["experiment", "navigation", "--out", "{tmp}/n", "--scheduler-timeout-s", 3],
+     ["--scheduler-timeout-s is only used with --executor dask"]),  # ignored, the episodes ran
+    (["sweep", "payload", "--out", "{tmp}/s", "--scheduler-timeout-s", "nan"], ["--scheduler-timeout-s"]),
+    (["sweep", "payload", "--out", "{tmp}/s", "--executor", "dask", "--scheduler", "tcp://127.0.0.1:1",
+      "--scheduler-timeout-s", "-1"], ["--scheduler-timeout-s -1: must be in (0, 3600) s"]),
+    (["run", "stop", "--actors-random", "1/stop=abc"], ["--actors-random '1/stop=abc': /stop=M takes a distance"]),
+    (["run", "stop", "--actors-random", "1/stop=nan"], ["--actors-random '1/stop=nan': /stop=M"]),
+    (["run", "stop", "--set", "wheel.radius_m="], ["--set 'wheel.radius_m=': wheel.radius_m takes a number (m), "
+                                                   "not nothing"]),
+    (["run", "stop", "--seed", "1e3"], ["Invalid value for '--seed': expects a whole number"]),
+    (["run", "stop", "--set", "sim.floor_friction_field=true", "--set", "sim.floor_friction_field=false"],
+     ["--set sim.floor_friction_field: given twice with different values"]),  # the first was ignored
+    (["run", "stop", "--live", "foxglove", "--live", "rerun"], ["--live given twice with different values "
+                                                                 "(foxglove and rerun): give it once"]),  # rerun won
+    (["experiment", "chapter5", "--out", "{tmp}/c", "--progress", "--no-progress"], ["--progress/--no-progress "
+                                                                                     "given twice"]),
+    (["sweep", "payload", "--out", "{tmp}/s", "--masses", "1000"], ["--masses '1000': 1000 kg is above "
+                                                                     "payload.mass_kg's allowed [0.0, 200.0] kg"]),
+    (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1,1"], ["--runs '1,1': a run is named twice"]),
+    (["run", "stop", "--set", "navigation.costmap.inflation_radius_m=0"], ["inflation_radius_m: 0 is out of range: "
+                                                                           "allowed (0.0, 3.0] m"]),  # was [0.0, 3.0]
+    (["model", "--payload-xy", "1e308,0"], ["--payload-xy 1e308,0: there is no payload to place"]),  # exit 0
+    (["run", "stop", "--duration-s", "abc"], ["Invalid value for '--duration-s': expects a number"]),
 ])
-def test_refusals_name_the_option_and_what_is_allowed(args, words, tmp_path, refused):
-    refused([str(a).format(tmp=tmp_path) for a in args], *words)
+def test_refusals_name_the_option_and_what_is_allowed(args, words, tmp_path, refused, monkeypatch):
+    for work in ("amr_twin.experiments.navigation.run", "amr_twin.experiments.payload_sweep.run",
+                 "amr_twin.experiments.chapter5.run"):
+        monkeypatch.setattr(work, None)  # were the command not refused, its work would fail at once
+    line = refused([str(a).format(tmp=tmp_path) for a in args], *words)
+    assert not any(w in line for w in ("Input should", "NoneType", "could not convert", "expected non-negative"))
+
+
+def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(tmp_path, refused, monkeypatch):
+    """run goto ran with --ros1, --serial-pty and --odometry ignored (exit 0), and with a time limit of 1e-9 s."""
+    class Started(Exception):
+        pass
+
+    seen = {}
+
+    def navigate(cfg, options, *_args, **_kwargs):
+        seen["options"] = options
+        raise Started
+
+    monkeypatch.setattr("amr_twin.navigation.stack.navigate", navigate)
+    goto = ["run", "goto", "--world", "aisles", "--goal", "0,2.4", "--localisation", "truth"]
+    refused([*goto, "--ros1"], "--ros1 is not available with goals")
+    refused([*goto, "--firmware", "avr", "--serial-pty", tmp_path / "tty"], "--serial-pty is not available with goals")
+    refused([*goto, "--duration-s", "1e-9"], "--duration-s 1e-09: must be in [0.1, 3600] s")
+    odometry = _write(tmp_path / "odo.yaml", "wheel_odometry:\n  left_wheel_radius_m: 0.1251\n"
+                      "  right_wheel_radius_m: 0.1249\n  wheel_separation_m: 0.487\n")
+    with pytest.raises(Started):
+        _call([*goto, "--odometry", odometry])
+    assert seen["options"].odometry_calibration.left_wheel_radius_m == 0.1251
+
+
+def test_umbmark_refuses_a_params_file_setting_what_its_options_choose(tmp_path, refused, monkeypatch):
+    monkeypatch.setattr("amr_twin.experiments.umbmark_seeds.run", None)  # were it not refused, it would fail at once
+    params = _write(tmp_path / "p.yaml", "wheel:\n  tyre_slip: false\n")  # replaced by --tyres without a word
+    refused(["experiment", "umbmark", "--out", tmp_path / "u", "--params", params],
+            f"--params {params}: wheel.tyre_slip is chosen by this command's --tyres/--no-tyres")
 
 
 def test_a_params_file_s_bad_value_names_the_file(tmp_path, refused):
@@ -273,3 +424,20 @@ def test_a_params_file_s_bad_value_names_the_file(tmp_path, refused):
     refused(["run", "stop", "--params", params], f"--params {params}: wheel.radius_m: 5 is out of range")
     params.write_text("wheel:\n  radius_m: true\n")
     refused(["run", "stop", "--params", params], f"--params {params}: wheel.radius_m takes a number (m)")
+
+
+def test_a_parameter_file_s_bad_leaf_is_named_in_the_project_s_words(tmp_path, refused):
+    """pydantic's "Field required" and "Input should be a valid dictionary or instance of WheelCfg" named
+    no file; a word as a ranged value was called a vector's range."""
+    text = (ROOT / "models" / "amr" / "amr.yaml").read_text()
+    radius = next(line for line in text.splitlines() if line.startswith("  radius_m: {value: 0.125,"))
+    cases = {"missing": (radius + "\n", "", "wheel.radius_m: missing: give its {value, unit, source} leaf"),
+             "word": (radius, radius.replace("0.125", "abc"), "wheel.radius_m: value 'abc' is not a finite number"),
+             "unranged": ("rotor_fraction: {value: 0.6,", "rotor_fraction: {value: abc,",
+                          "wheel.rotor_fraction: 'abc' is not a number")}
+    for name, (old, new, words) in cases.items():
+        assert old in text, name
+        config = _write(tmp_path / f"{name}.yaml", text.replace(old, new, 1))
+        refused(["run", "stop", "--config", config], f"--config {config}: {words}")
+    params = _write(tmp_path / "p.yaml", "wheel: 5\n")
+    refused(["run", "stop", "--params", params], f"--params {params}: wheel: 5 is not a section")

@@ -33,6 +33,20 @@ def test_a_goal_that_cannot_be_reached_is_refused_in_one_line_before_the_run(arg
     assert text in res.output and len(res.output.strip().splitlines()) == 1, res.output
 
 
+def test_a_start_off_the_map_is_named_as_the_start(tmp_path, monkeypatch):
+    """A map file covering 2 x 2 m at the origin; the aisles world's start (-23.5, 0) lies off it."""
+    import amr_twin.navigation.stack as stack
+
+    monkeypatch.setattr(stack, "navigate", lambda *a, **k: pytest.fail("the run started"))
+    (tmp_path / "m.pgm").write_bytes(b"P5\n40 40\n255\n" + bytes([254]) * 1600)
+    (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+                                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    res = RUN.invoke(app, ["run", "goto", "--goal", "1,1", "--world", "aisles", "--map", str(tmp_path / "m.yaml")])
+    assert res.exit_code == 2, res.output
+    assert "the start (-23.5, 0) lies outside the map of --map" in res.output, res.output
+    assert len(res.output.strip().splitlines()) == 1 and "goal" not in res.output, res.output
+
+
 def test_a_goal_inside_a_rack_is_named_as_cut_off(monkeypatch):
     res = RUN.invoke(app, ["run", "goto", "--goal", "-20,-6.4", "--world", "aisles"])
     assert "cut off" in res.output  # the rack's inside is enclosed by its beams at the robot's height

@@ -67,8 +67,9 @@ def test_sweep_interrupted_while_recording_leaves_nothing_half_written(cfg, tmp_
 def test_sweep_sizes_are_bounded_before_any_work(tmp_path):
     out = tmp_path / "s"
     for args, text in ((["--masses", "0:60:1e-9"], "6e+10 masses; at most 1000"),
-                       (["--masses", "0:999:1", "--positions", "center,front,rear,left,right,0.1:0",
-                         "--commands", "linear:0.7,linear:0.5"], "12000 points; at most 10000"),
+                       (["--masses", "0:199.5:0.5", "--positions", "center,front,rear,left,right,0.1:0",
+                         "--commands", "linear:0.7,linear:0.5,linear:0.3,angular:60:-1,stop"],
+                        "12000 points; at most 10000"),
                        (["--duration-s", "1e9"], "--duration-s 1e+09: must be in [0.1, 3600] s")):
         res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(out), *args])
         assert res.exit_code == 2 and text in res.stderr, res.stderr

@@ -76,3 +76,23 @@ def test_menu_live_foxglove_client_drives_and_menu_stops():
     finally:
         child.close()
     assert child.exitstatus == 0
+
+
+def test_the_menu_reads_bounded_lines_from_a_pipe_or_a_file(tmp_path):
+    """``amr-twin client < /dev/zero``: input() read the endless line whole (9 GB in 48 s). From a pipe or a
+    file a line is at most MAX_LINE characters: a longer one is refused in one line (exit 2); short
+    answers are read as from a terminal."""
+    import subprocess
+
+    from amr_twin.cli.menu import MAX_LINE
+
+    zeros = tmp_path / "zeros"
+    zeros.write_bytes(bytes(20 * MAX_LINE))  # /dev/zero, bounded so that the unfixed menu ends too
+    with open(zeros, "rb") as stdin:
+        res = subprocess.run([str(AMR_TWIN), "client", "--rate", "20"], stdin=stdin, capture_output=True, text=True,
+                             timeout=60)
+    assert res.returncode == 2 and res.stderr.strip().splitlines() == [
+        f"error: standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)"]
+    res = subprocess.run([str(AMR_TWIN), "client", "--rate", "20"], input="1\n0.5\n3\n0\n", capture_output=True,
+                         text=True, timeout=60)
+    assert res.returncode == 0 and "sent wheel_Command [1, 38.19719, 1, 38.19719]" in res.stdout, res.stderr

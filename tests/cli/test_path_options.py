@@ -132,6 +132,12 @@ def test_an_option_given_to_the_group_is_compared_with_the_command_s(tmp_path):
     (tmp_path / "room.yaml").write_text("image: room.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
     _refused(["run", "stop", "--world", str(tmp_path / "room.yaml"), "--csv", str(tmp_path / "room.pgm")],
              tmp_path, "--csv", "--world")
+    # so is a navigation mission's map (beside the mission), YAML and image (both were overwritten, exit 0)
+    goals = tmp_path / "goals.yaml"
+    goals.write_text("goals:\n  - [1.0, 0.5]\nmap: room.yaml\n")
+    for victim in ("room.yaml", "room.pgm"):
+        _refused(["run", "--mission", str(goals), "--world", "empty", "--csv", str(tmp_path / victim)],
+                 tmp_path, "--csv", "--mission", victim)
 
 
 def test_a_given_input_is_not_confused_with_the_default(tmp_path):

@@ -8,7 +8,9 @@ import pytest
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.model.config import load_config
+from amr_twin.controllers import ekf
 from amr_twin.controllers.ekf import EkfNode
+from amr_twin.controllers.ekf_model import predict_mean
 from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Twist,
                                             TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Header, Time
@@ -169,6 +171,29 @@ def test_range_jacobian_matches_finite_differences():
         dx[i] = 1e-6
         assert (node.range_model(x + dx, 1)[0] - r) / 1e-6 == pytest.approx(H[0, i], abs=1e-5)
     assert np.all(H[0, 3:] == 0.0)
+
+
+class _FilterpyEkf(ekf.ExtendedKalmanFilter):
+    """filterpy's EKF as it comes, with only the unicycle prediction of the state (the node's before its lean
+    ``predict``/``update``)."""
+
+    dt_s = 0.0
+
+    def predict_x(self, u=0) -> None:
+        predict_mean(self.x, self.dt_s)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_lean_filter_gives_filterpys_bits(seed, monkeypatch):
+    msgs = _messages(seed)
+    lean = _run(msgs, use_imu=True, use_uwb=True)
+    monkeypatch.setattr(ekf, "_UnicycleEkf", _FilterpyEkf)
+    reference = _run(msgs, use_imu=True, use_uwb=True)
+    assert lean.fused == reference.fused and lean.rejected_ranges == reference.rejected_ranges
+    assert np.array_equal(lean.history()[1], reference.history()[1])
+    assert np.array_equal(lean.filter.P, reference.filter.P)
+    assert np.array_equal(lean.message(Time.from_sec(1.0)).pose.covariance,
+                          reference.message(Time.from_sec(1.0)).pose.covariance)
 
 
 def test_same_seed_same_output():

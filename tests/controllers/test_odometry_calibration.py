@@ -31,7 +31,7 @@ def test_text_and_load_give_the_calibration_back(tmp_path):
      "left_wheel_radius_m"),
     ("wheel_odometry:\n  left_wheel_radius_m: 0.125\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n"
      "  wheel_base: 1\n", "wheel_base: unknown key"),
-    ("{{{", "cannot read it as YAML"),
+    ("{{{", "not valid YAML"),
 ])
 def test_a_bad_file_is_refused_naming_the_file_and_field(tmp_path, body, names):
     path = tmp_path / "odom.yaml"

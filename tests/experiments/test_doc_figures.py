@@ -47,3 +47,15 @@ def test_a_block_is_replaced_between_its_markers_only(tmp_path):
     assert out == "before\n<!-- generated: faults-summary (cmd) -->\nnew text\n<!-- end: faults-summary -->\nafter\n"
     with pytest.raises(KeyError):
         doc_figures.expected(doc, {})
+
+
+def test_the_command_takes_no_arguments_and_starts_no_work_for_help(monkeypatch, capsys):
+    """``python -m amr_twin.experiments.doc_figures --help`` ignored its arguments and started the minutes
+    of rewriting the committed results; now ``--help`` prints and exits, anything else is refused (exit 2)."""
+    monkeypatch.setattr(doc_figures, "main", None)  # were the work started, it would fail at once
+    for argv, code in ((["--help"], 0), (["--out", "x"], 2), (["bogus"], 2)):
+        with pytest.raises(SystemExit) as stop:
+            doc_figures.parse_args(argv)
+        assert stop.value.code == code
+    assert "Rewrite the figures" in capsys.readouterr().out
+    doc_figures.parse_args([])  # no argument: the work goes ahead

@@ -269,3 +269,16 @@ def test_the_caller_and_a_warm_worker_share_the_items(tmp_path, monkeypatch):
     assert sorted(item for item, _ in again) == list(range(20, 28))
     pids = {pid for _, (_, pid) in again}
     assert pids == {os.getpid(), worker}  # the warm worker took items at once, the caller too
+
+
+def _sigint_handler() -> str:
+    import signal
+
+    return "ignored" if signal.getsignal(signal.SIGINT) == signal.SIG_IGN else "handled"
+
+
+def test_a_pool_worker_leaves_ctrl_c_to_its_parent():
+    """The terminal sends Ctrl-C to every process of the command: a worker that took it printed its
+    KeyboardInterrupt traceback ("Process SpawnProcess-1: ..."); the parent stops the workers."""
+    worker = process_pool._shared_pool(1).submit(_sigint_handler).result(timeout=120)
+    assert worker == "ignored" and _sigint_handler() == "handled"

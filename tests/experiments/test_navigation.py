@@ -26,10 +26,16 @@ def test_episodes_are_seeded_apart_and_placed_as_the_docstring_says(episodes):
         apart = math.hypot(e.goal[0] - e.start[0], e.goal[1] - e.start[1])
         assert nv.MIN_APART_M <= apart <= nv.MAX_APART_M
         if e.scenario == "clear":
-            assert e.obstacle is None
+            assert e.obstacle is None and e.actor is None
+        elif e.scenario == "person":  # walking (the default): an actor crossing, on no map
+            assert e.obstacle is None and e.actor.kind == "person" and e.actor.speed_m_s == 1.3
+            (ax, ay), (bx, by) = e.actor.waypoints_xy_m
+            assert math.hypot(bx - ax, by - ay) == pytest.approx(2 * nv.CROSS_HALF_M)
+            for end in (e.start, e.goal):
+                assert math.hypot((ax + bx) / 2 - end[0], (ay + by) / 2 - end[1]) > 3.0
         else:
             ob = e.obstacle
-            assert ob.name == e.scenario
+            assert ob.name == e.scenario and e.actor is None
             for end in (e.start, e.goal):
                 assert math.hypot(ob.x_m - end[0], ob.y_m - end[1]) > 3.0
     assert {e.scenario for e in episodes} == set(nv.SCENARIOS)

@@ -32,7 +32,7 @@ def test_actors_are_drawn_at_their_poses_not_in_the_static_world():
 
     walker = Actor("person", ((-3.0, 2.0), (-3.0, -2.0)), 1.0)
     twin = Twin(CFG, TwinOptions(start_xy_yaw=(-6.0, 0.0, 0.0), actors=(walker,)))
-    scene = SceneBuilder(twin.physics.model, twin.physics.data)
+    scene = SceneBuilder(twin.observables.model, twin.observables.named)
     world = _decoded(scene.static_update()).entities[0]
     assert world.id == "world" and len(world.cylinders) == 0           # the warehouse has no cylinder: no legs
     (entity,) = _decoded(scene.actors_update(5, [(1.0, 0.5, math.pi / 2)])).entities

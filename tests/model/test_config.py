@@ -15,7 +15,8 @@ def test_every_parameter_has_unit_and_source():
     for key, _value, unit, source in rows:
         assert unit, key
         assert len(source) > 8, f"{key}: source too short"
-        assert any(w in source for w in ("thesis", "estimate", "datasheet", "calibrated", "robot-facts", "set per run", "standard")), key
+        assert any(w in source for w in ("thesis", "estimate", "datasheet", "calibrated", "robot-facts", "set per run", "standard",
+                                     "nav2", "measured", "issue 32")), key
 
 
 def test_thesis_geometry_loaded():
@@ -37,6 +38,8 @@ def test_config_is_frozen():
     ("wheel.radius_m=.nan", "wheel.radius_m", "finite"),
     ("chassis.width_m=0.9", "chassis.width_m", "[0.25, 0.46]"),
     ("payload.xy_m=[0.3,0.0]", "payload.xy_m", "outside the deck"),
+    ("navigation.mppi.samples=5", "navigation.mppi.samples", "16"),
+    ("navigation.costmap.raytrace_range_m=2", "navigation.costmap.raytrace_range_m", "obstacle_range_m"),
 ])
 def test_bad_values_give_one_line_naming_the_option_and_the_field(assignment, field, words):
     sets = [assignment]

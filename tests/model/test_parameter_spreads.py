@@ -79,8 +79,9 @@ def test_defaults_follow_the_source_kind(space):
 
 def test_settings_are_never_drawn(space):
     for key in ("sim.timestep_s", "payload.mass_kg", "ekf.accel_sigma_m_s2", "lidar.sample_rate_hz",
-                "mapping.resolution_m", "uwb.anchors_x_m"):
+                "mapping.resolution_m", "uwb.anchors_x_m", "navigation.mppi.step_s"):
         assert space.spreads[key].kind == EXACT and not space.spreads[key].drawn, key
+    assert not [k for k in space.drawn_keys() if k.startswith(("navigation.", "actors."))]  # ranges or not
     drawn = space.draw(8, include=("sim.", "payload.", "ekf.", "mapping.")).names
     assert drawn == ("sim.floor_friction", "sim.floor_friction_low", "sim.floor_patch_m")  # the floor's, all physical
 

@@ -53,3 +53,37 @@ def test_a_turn_in_place_beside_an_unmapped_obstacle_is_allowed():
     jack = np.column_stack([np.full(20, -1.0), np.linspace(-0.5, 0.5, 20)])  # 0.65 m behind the rear
     v, w = mon.filter(0.0, 0.5, jack, np.ones(20, bool))
     assert w == 0.5 and math.isclose(v, 0.0)
+
+
+def _people(xy, v):
+    return np.array([xy], float), np.array([v], float)
+
+
+def test_a_person_walking_at_the_robots_side_is_stopped_for_before_they_meet():
+    """A person 1.2 m to the left and 0.9 m ahead walks across at 1.3 m/s: nothing is in the raw
+    scan's zones yet, but the people zone, with the person walking on, scales the command."""
+    mon = CollisionMonitor(FP, 0.8)
+    no_scan = np.zeros((0, 2)), np.zeros(0, bool)
+    v, _w = mon.filter(0.8, 0.0, *no_scan, people_base=_people((0.9, 1.2), (0.0, -1.3)))
+    assert v < 0.3 and mon.actions["people_approach"] == 1
+    v_away, _w = mon.filter(0.8, 0.0, *no_scan, people_base=_people((0.9, 1.2), (0.0, 1.3)))  # walking away
+    assert mon.actions["people_approach"] == 1 and v_away == 0.3  # only the speed near people (0.3 m/s)
+    assert mon.filter(0.8, 0.0, *no_scan, people_base=_people((-0.9, 1.2), (0.0, 1.3))) == (0.8, 0.0)  # behind
+
+
+def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_unless_it_moves_away():
+    mon = CollisionMonitor(FP, 0.8)
+    no_scan = np.zeros((0, 2)), np.zeros(0, bool)
+    beside = _people((-1.0, FP.half_width_m + 0.25 + 0.35), (0.0, 0.0))  # behind the axle: 0.35 m from the disc
+    assert mon.filter(0.5, 0.0, *no_scan, people_base=beside) == (0.5, 0.0)
+    close = _people((0.5, 0.6), (0.0, 0.0))  # ahead on the left, 0.12 m from the disc: inside the 0.3 m zone
+    assert mon.filter(0.5, 0.4, *no_scan, people_base=close) == (0.0, 0.0)  # towards them
+    v, w = mon.filter(-0.2, 0.0, *no_scan, people_base=close)  # backing away: allowed
+    assert v == -0.2 and mon.actions["people_escape"] == 1
+    # a turn in place away from them (the disc's gap grows) is refused all the same: it swings the corners
+    assert mon.filter(0.0, -0.5, *no_scan, people_base=close) == (0.0, 0.0)
+    assert mon.filter(0.0, 0.5, *no_scan, people_base=beside) == (0.0, 0.5)  # farther: turn freely
+    # driving on away from one who walks up behind: at full speed (at the people speed towards them)
+    behind = _people((-0.55, -0.45), (0.0, 1.3))
+    assert mon.filter(0.6, 0.0, *no_scan, people_base=behind) == (0.6, 0.0)
+    assert mon.filter(0.6, 0.0, *no_scan, people_base=_people((0.55, -0.45), (1.3, 0.0)))[0] == 0.3  # ahead, walking on

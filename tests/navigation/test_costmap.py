@@ -66,3 +66,23 @@ def test_inflation_costs_are_nav2s():
     assert c[0] == LETHAL and c[1] == INSCRIBED and c[2] == INSCRIBED
     assert c[3] == int(252 * np.exp(-3.0 * (0.3 - 0.265)))
     assert list(c[3:6]) == sorted(c[3:6], reverse=True) and c[5] > 0 and c[6] == 0
+
+
+def test_each_scan_leaves_the_layers_as_a_rebuild_from_scratch_would():
+    """The update touches only the cells that changed (and their inflation window): after people walk about,
+    the obstacle layer's distances equal a distance transform of the whole grid, and a scan that changes
+    nothing is no change (no new version: the planner skips its replan)."""
+    from scipy.ndimage import distance_transform_edt
+
+    cm = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
+    rng = np.random.default_rng(4)
+    for k in range(12):
+        people = [(float(x), float(y), 0.2) for x, y in rng.uniform([2.0, 2.0], [10.0, 6.0], (3, 2))]
+        cm.update_scan(*_scan((rng.uniform(1.0, 11.0), rng.uniform(1.0, 7.0)), people), 4.0, 5.0)
+    full = np.minimum(distance_transform_edt(~(cm.static_lethal | cm.marked)) * 0.05, 1.05)
+    assert cm.marked.any() and np.allclose(cm.dist_m, full, atol=1e-5)
+    version = cm.version
+    origin = (6.0, 4.0)
+    cm.update_scan(*_scan(origin, [(8.0, 4.0, 0.2)]), 4.0, 5.0)
+    assert cm.version == version + 1
+    assert cm.update_scan(*_scan(origin, [(8.0, 4.0, 0.2)]), 4.0, 5.0) == 0 and cm.version == version + 1

@@ -61,7 +61,7 @@ def test_in_the_aisles_hall_the_plan_takes_the_shortest_route():
 
     cfg = load_config()
     fp = robot_footprint(cfg)
-    p = GlobalPlanner(make_costmap(true_map(cfg, "aisles"), fp), turn_room_m=fp.circumscribed_radius_m)
+    p = GlobalPlanner(make_costmap(true_map(cfg, "aisles"), fp, cfg.navigation), turn_room_m=fp.circumscribed_radius_m)
     plan = p.plan(np.array([-23.5, 0.0]), np.array([10.0, -4.8]))
     assert 34.07 <= plan.length_m <= 1.05 * 34.07
 
@@ -73,3 +73,13 @@ def test_diagonal_moves_cost_their_length():
     _cm, p = _planner(static)
     plan = p.plan(np.array([2.0, 2.0]), np.array([12.0, 2.0]))
     assert plan.length_m < 13.0 and plan.xy_m[:, 1].max() < 5.0
+
+
+def test_a_person_standing_in_the_way_is_kept_people_m_from_or_the_corridor_is_given_up():
+    cm, p = _planner(two_corridors(), people_m=0.865)
+    start, goal = np.array([1.0, 2.5]), np.array([11.0, 2.5])
+    aside = p.plan(start, goal, people_xy_m=np.array([[6.0, 1.9]]))  # 0.4 m south of the south corridor's middle
+    d = np.hypot(*(aside.xy_m - [6.0, 1.9]).T)
+    assert d.min() >= 0.865 - 0.05 and aside.xy_m[:, 1].max() < 3.5  # past them, in the same corridor
+    middle = p.plan(start, goal, people_xy_m=np.array([[6.0, 2.5]]))  # no room for 0.865 m: the north corridor
+    assert middle.xy_m[:, 1].max() > 4.5

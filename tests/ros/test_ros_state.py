@@ -230,8 +230,8 @@ def test_the_state_samplers_c_form_keeps_the_python_forms_values_and_arrays_take
     from amr_twin.sim.loop import Twin, TwinOptions
 
     twin = Twin(load_config(), TwinOptions(world="empty"))
-    native = StateSampler(twin.physics.model, twin.physics.data)
-    python = StateSampler(twin.physics.model, twin.physics.data, native=False)
+    native = StateSampler(twin.observables.model, twin.observables.named)
+    python = StateSampler(twin.observables.model, twin.observables.named, native=False)
     assert native.sample.grid_native is not None and python.sample.grid_native is None
     twin.samplers += [native.sample, python.sample]
     twin.client.linear(0.5)

@@ -6,7 +6,7 @@ import pytest
 
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
-from amr_twin.ros.messages import Float64, Float64MultiArray
+from amr_twin.ros.messages import Float64, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from amr_twin.ros.rosserial import (ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink,
                                 frame_bytes, frame_time_us)
 
@@ -78,6 +78,22 @@ def test_delivery_is_a_snapshot_and_can_publish_on_the_bus():
     msg.data = 99.0  # the sender reuses its message object, as firmware does
     clock.run_until(10_000)
     assert seen == [(1389, 10.0)]
+
+
+@pytest.mark.parametrize("dims", [0, 1])
+def test_a_multi_array_is_delivered_as_sent(dims):
+    clock = VirtualClock()
+    link, seen = RosserialLink(clock), []
+    layout = MultiArrayLayout([MultiArrayDimension("wheels", 4, 4)] * dims, data_offset=1)
+    msg = Float64MultiArray(layout, [1.0, 50.0, -1.0, 60.0])
+    link.send(PC_TO_ARDUINO, "wheel_Command", msg, lambda _topic, m: seen.append(m))
+    msg.data[1] = 0.0  # the sender reuses its message object and list
+    msg.layout.data_offset = 7
+    if dims:
+        msg.layout.dim[0].size = 9
+    clock.run_until(10_000)
+    assert seen == [Float64MultiArray(MultiArrayLayout([MultiArrayDimension("wheels", 4, 4)] * dims, data_offset=1),
+                                      [1.0, 50.0, -1.0, 60.0])]
 
 
 def test_loss_is_seeded_and_still_occupies_the_wire():

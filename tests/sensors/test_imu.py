@@ -44,7 +44,7 @@ class Rig:
         self.imu_msgs, self.mag_msgs = [], []
         self.bus.subscribe("imu/data_raw", self.imu_msgs.append)
         self.bus.subscribe("imu/mag", self.mag_msgs.append)
-        self.imu = ImuSensor(self.physics.model, self.physics.data, self.clock, self.bus, self.cfg.imu, seed=seed)
+        self.imu = ImuSensor(self.physics, self.clock, self.bus, self.cfg.imu, seed=seed)
 
     def run(self, duration_s):
         n = int(round(duration_s * 100))

@@ -1,6 +1,7 @@
 """RPLIDAR A1: ranges in a known room, payload, motion distortion, own-geom masking, seeds, services."""
 
 import math
+from types import SimpleNamespace
 
 import mujoco
 import numpy as np
@@ -53,7 +54,7 @@ class Rig:
         self.bus = Bus(self.clock)
         self.scans = []
         self.bus.subscribe("scan", self.scans.append)
-        self.lidar = Lidar(self.m, self.d, self.clock, self.bus, self.cfg.lidar, seed=seed, autostart=False)
+        self.lidar = Lidar(SimpleNamespace(model=self.m, data=self.d), self.clock, self.bus, self.cfg.lidar, seed=seed, autostart=False)
 
     def pose(self, x, y, yaw, yaw_rate=0.0):
         q = self.d.qpos

@@ -7,7 +7,7 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.ros.sensor_messages import Range
-from amr_twin.sensors.uwb import (anchor_frame, anchor_index, corrupt_ranges, simulate_ranges,
+from amr_twin.sensors.uwb import (anchor_frame, anchor_index, corrupt_range, corrupt_ranges, simulate_ranges,
                                   tag_positions_m)
 
 
@@ -28,6 +28,21 @@ def test_exact_ranges_without_errors():
     r, ok = corrupt_ranges(d, cfg, np.random.default_rng(0))
     assert r.tolist() == d.tolist()
     assert ok.tolist() == [True, True, True, False]  # beyond max_range_m (40 m)
+
+
+@pytest.mark.parametrize("walls", [False, True])
+def test_one_exchange_draws_as_a_batch_of_one(walls):
+    cfg = _cfg(range_noise_sigma_m=0.05, nlos_prob=0.3, nlos_bias_m=0.4, dropout_prob=0.2, blocked_bias_m=0.6,
+               blocked_dropout_prob=0.5)
+    one, batch, rng_d = np.random.default_rng(3), np.random.default_rng(3), np.random.default_rng(4)
+    seen = set()
+    for _ in range(400):
+        d, blocked = rng_d.uniform(0.0, 45.0), (bool(rng_d.random() < 0.5) if walls else None)
+        r, ok = corrupt_range(d, cfg, one, blocked)
+        rb, okb = corrupt_ranges(np.array([d]), cfg, batch, None if blocked is None else np.array([blocked]))
+        assert (r, ok) == (rb[0], okb[0])
+        seen.add(ok)
+    assert seen == {True, False}
 
 
 def test_noise_and_dropout_statistics():
@@ -111,7 +126,7 @@ def test_uwb_sensor_in_the_twin():
     twin = Twin(cfg, TwinOptions(sensors=True, world="warehouse"))
     msgs = []
     twin.bus.subscribe("uwb/range", msgs.append)
-    uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3],
+    uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3],
                     walls=False)  # line of sight everywhere: the racks' beams are in some lines here
     twin.advance(1.0)
     # 10 Hz x 4 anchors, round-robin every 25 ms, 5 % dropped
@@ -142,7 +157,7 @@ def test_walls_block_the_bays_anchors_in_the_corridor():
     twin = Twin(cfg, TwinOptions(world="corridor", start_xy_yaw=route.start_xy_yaw))
     msgs = []
     twin.bus.subscribe("uwb/range", msgs.append)
-    uwb = UwbSensor(twin.physics.model, twin.physics.data, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
+    uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
     twin.advance(3.0)
     per_anchor = np.bincount(np.arange(uwb.exchanges) % 5, minlength=5)  # round-robin from anchor 0
     assert list(uwb.blocked[:4]) == list(per_anchor[:4]) and uwb.blocked[4] == 0

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import amr_twin.sim.grid_steps as grid_steps
-import amr_twin.sim.loop as loop_mod
+import amr_twin.sim.grid_loop as grid_loop_mod
 from amr_twin.model.config import load_config
 from amr_twin.sim.grid_steps import GridRows, gather, grid_stepper
 from amr_twin.sim.loop import Twin, TwinOptions
@@ -26,7 +26,7 @@ HEAVY_REAR = load_config(overrides={"payload.mass_kg": 40.0, "payload.xy_m": [-0
 def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
     """The twin of ``options`` driven by ``script``, with a support sampler (50 Hz), its grid in C
     or in Python; what it ends with, and how often the C grid ran and handed an instant back."""
-    monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+    monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
     calls = {"runs": 0, "handoffs": 0}
     real = grid_steps.GridStepper.run
 
@@ -147,7 +147,7 @@ def test_with_the_imu_and_lidar_the_grid_in_c_gives_the_same_messages(monkeypatc
     magnetometer and scan messages and the state are those of the Python loop, to the bit."""
     out = []
     for native in (True, False):
-        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
         calls = []
         real = grid_steps.GridStepper.run
         monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])
@@ -173,7 +173,7 @@ def test_with_the_imu_and_lidar_the_grid_in_c_gives_the_same_messages(monkeypatc
 
 def _empty_twin(monkeypatch, native: bool) -> Twin:
     """The default robot in the empty world, its grid in C (``native``) or in Python."""
-    monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+    monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
     return Twin(load_config(), TwinOptions(world="empty", visuals=False))
 
 
@@ -306,7 +306,7 @@ def test_with_actors_the_grid_in_c_gives_the_python_loops_bits(monkeypatch):
     real_open = actors_mod.open_helper
     for native in (True, False):
         monkeypatch.setattr(actors_mod, "open_helper", lambda src, nat=True, native=native: real_open(src, native))
-        monkeypatch.setattr(loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
         calls = []
         real = grid_steps.GridStepper.run
         monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])

@@ -30,6 +30,18 @@ def test_a_start_inside_a_rack_or_without_a_floor_is_refused(tmp_path):
     assert res.exit_code == 2 and "--start 10,0,0" in res.stderr and "wall_east" in res.stderr
 
 
+def test_a_start_overlapping_many_geoms_names_five_and_counts_the_rest(tmp_path):
+    """A map of many small walls under the robot: the refusal stays a short line (was every name)."""
+    boxes = "".join(f'<geom name="post_{i}" type="box" size="0.02 0.02 0.3" pos="{-0.3 + 0.06 * i:.2f} 0 0.3"/>'
+                    for i in range(9))
+    (tmp_path / "posts.xml").write_text('<mujoco><worldbody><geom name="floor" type="plane" size="5 5 0.1"/>'
+                                        f"{boxes}</worldbody></mujoco>")
+    res = runner.invoke(app, ["run", "stop", "--world", str(tmp_path / "posts.xml")])
+    assert res.exit_code == 2, res.output
+    line, = res.stderr.strip().splitlines()
+    assert "post_0, post_1, post_2, post_3, post_4 and 4 more there" in line, line
+
+
 def test_the_stand_holds_the_robot_and_gives_the_bench_point():
     """The README's bench-point command (issue 30): the stand world's weld holds the chassis
     (fig. 5.1), so the start check lets it run with no wheel on the floor, and the free left

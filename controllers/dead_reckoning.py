@@ -77,22 +77,6 @@ class SpeedProfile:
         self.t_us = self.t_us[:i] + [int(t_us)]
         self.rpm = self.rpm[:i] + [value]
 
-    def integral(self, t0_us: int, t1_us: int) -> float:
-        """Integral of the speed over ``[t0_us, t1_us]`` (exact on the linear pieces), RPM * us."""
-        if t1_us <= t0_us:
-            return 0.0
-        total, t = 0.0, t0_us
-        i = bisect_right(self.t_us, t0_us)
-        for k in self.t_us[i:]:
-            if k >= t1_us:
-                break
-            if k > t:
-                seg = self.segment(t)
-                total += 0.5 * (self.at(t, seg) + self.at(k, seg)) * (k - t)
-                t = k
-        seg = self.segment(t)
-        return total + 0.5 * (self.at(t, seg) + self.at(t1_us, seg)) * (t1_us - t)
-
     def trim(self, t_us: int) -> None:
         """Forget the knots before ``t_us``, keeping the speed in force from it."""
         i = max(bisect_right(self.t_us, t_us) - 1, 0)

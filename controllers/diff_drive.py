@@ -40,8 +40,8 @@ class DiffDriveNode:
         Bus carrying ``cmd_vel`` and the wheel command service.
     clock : VirtualClock
         Shared clock used for the command timeout.
-    client : WheelCommandClient, optional
-        Client used to send commands (default: one with the thesis constants).
+    client : WheelCommandClient
+        Client used to send commands (the twin's: ``twin.client``, with the configured geometry).
     cmd_timeout_s : float
         Stop the wheels this long after the last ``cmd_vel``, seconds (<= 0: never).
     saturate : bool
@@ -52,11 +52,11 @@ class DiffDriveNode:
         Input topic name.
     """
 
-    def __init__(self, bus: Bus, clock: VirtualClock, client: WheelCommandClient | None = None,
+    def __init__(self, bus: Bus, clock: VirtualClock, client: WheelCommandClient,
                  cmd_timeout_s: float = 0.5, saturate: bool = True,
                  resend_identical: bool = False, topic: str = "cmd_vel"):
         self.bus, self.clock = bus, clock
-        self.client = client if client is not None else WheelCommandClient(bus)
+        self.client = client
         self.cmd_timeout_us = int(round(cmd_timeout_s * 1e6))
         self.saturate = saturate
         self.resend_identical = resend_identical

@@ -16,7 +16,7 @@ Measurements (sigmas from the ``ekf:`` config, not from the messages)
 Gyro bias
     The L3GD20's turn-on bias (10 deg/s) is removed by a rest calibration: the
     gyro is averaged over its first ``imu_rest_calibration_s`` seconds while the
-    odometry says the robot stands (``|v|``, ``0.24 m * |w|`` at most
+    odometry says the robot stands (``|v|``, half the wheel separation times ``|w|`` at most
     ``rest_speed_m_s``; at rest when no odometry has arrived), and the mean
     initialises the bias state with variance ``gyro_w_sigma^2 / n``. The bias stays
     a state, observable against the odometry's yaw rate. Gyro samples of the
@@ -53,8 +53,6 @@ from amr_twin.controllers.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, lin
 
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
-HALF_TRACK_M = 0.24
-"""Half the wheel separation (listing 4.2): turns a yaw rate into a wheel speed for the rest test."""
 
 
 class _UnicycleEkf(ExtendedKalmanFilter):
@@ -106,6 +104,8 @@ class EkfNode:
     ----------
     cfg : EkfCfg
         Noise, gate and calibration settings (``ekf:`` section).
+    wheel_separation_m : float
+        ``wheel.separation_m``: half of it turns a yaw rate into a wheel speed for the rest test.
     use_odom, use_imu, use_uwb : bool
         Which measurements are fused (the others are ignored).
     anchors_xy_m : ndarray, shape (M, 2), optional
@@ -122,7 +122,7 @@ class EkfNode:
         Tag position in ``base_link``, m (default: ``uwb``'s, else the origin).
     """
 
-    def __init__(self, cfg: EkfCfg, *, use_odom: bool = True, use_imu: bool, use_uwb: bool,
+    def __init__(self, cfg: EkfCfg, *, wheel_separation_m: float, use_odom: bool = True, use_imu: bool, use_uwb: bool,
                  anchors_xy_m: np.ndarray | None = None, initial_pose=(0.0, 0.0, 0.0),
                  bus: Bus | None = None, uwb: UwbCfg | None = None,
                  anchor_z_m: float | None = None, tag_pos_m=None):
@@ -132,6 +132,7 @@ class EkfNode:
         if pose.shape != (3,) or not np.all(np.isfinite(pose)):
             raise ValueError(f"initial_pose: expected 3 finite numbers (x_m, y_m, yaw_rad), got {initial_pose!r}")
         self.cfg, self.use_odom, self.use_imu, self.use_uwb = cfg, use_odom, use_imu, use_uwb
+        self.half_track_m = 0.5 * float(wheel_separation_m)
         if anchors_xy_m is None and uwb is not None:
             anchors_xy_m = uwb.anchors_xy_m
         tag = tag_pos_m if tag_pos_m is not None else (uwb.tag_pos_m if uwb is not None else (0.0, 0.0, 0.0))
@@ -232,7 +233,7 @@ class EkfNode:
 
     def _at_rest(self) -> bool:
         v, w = self._last_twist
-        return abs(v) <= self.cfg.rest_speed_m_s and abs(w) * HALF_TRACK_M <= self.cfg.rest_speed_m_s
+        return abs(v) <= self.cfg.rest_speed_m_s and abs(w) * self.half_track_m <= self.cfg.rest_speed_m_s
 
     def _finish_calibration(self) -> None:
         f = self.filter

@@ -132,12 +132,16 @@ class FaithfulFirmware:
         Shared clock.
     publish : callable
         ``publish(topic, rpm)``; ``wheel0_Vel``/``wheel1_Vel``, RPM >= 0.
+    edges_per_rev : int
+        SC changes per wheel revolution (``wheel.sc_edges_per_rev``: 90, the listing's count).
     params : FaithfulParams
         Thesis constants and quirk switches.
     """
 
-    def __init__(self, clock: VirtualClock, publish: Publish, params: FaithfulParams | None = None):
+    def __init__(self, clock: VirtualClock, publish: Publish, edges_per_rev: int,
+                 params: FaithfulParams | None = None):
         self.p = p = params or FaithfulParams()
+        self.edges_per_rev = int(edges_per_rev)
         self.clock, self._publish = clock, publish
         self.rt = ArduinoRuntime(clock, p.board)
         self.pins = self.rt.pins
@@ -151,7 +155,7 @@ class FaithfulFirmware:
         self.total_error = [0.0, 0.0]
         self.previousSetPoint = [0.0, 0.0]
         self._isr = (lambda: self.speedChangeInt(0), lambda: self.speedChangeInt(1))
-        self.sample_edges = p.edges_per_rev if p.quirk_first_sample_after_full_rev \
+        self.sample_edges = self.edges_per_rev if p.quirk_first_sample_after_full_rev \
             else p.short_sample_edges
 
     # -- Firmware protocol ---------------------------------------------------------
@@ -267,4 +271,4 @@ class FaithfulFirmware:
         """RPM from the micros() elapsed over one sample. Reconstructed: 60e6 / val per rev."""
         if val <= 0:
             return 0.0
-        return 60e6 * (self.sample_edges / self.p.edges_per_rev) / val
+        return 60e6 * (self.sample_edges / self.edges_per_rev) / val

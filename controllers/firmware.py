@@ -76,8 +76,13 @@ def check_avr(firmware: str, params: AvrParams | None = None) -> None:
         raise ValueError(f"--firmware {firmware}: {exc}") from None
 
 
+SKETCH_EDGES_PER_REV = 90
+"""SC changes per revolution the thesis sketch counts (``counter[index] == 90``, motor_control.ino)."""
+
+
 def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
-                  params: FaithfulParams | ImprovedParams | AvrParams | None = None) -> Firmware:
+                  params: FaithfulParams | ImprovedParams | AvrParams | None = None, *,
+                  edges_per_rev: int) -> Firmware:
     """Build a firmware of ``kind`` on ``clock`` publishing through ``publish``.
 
     Parameters
@@ -89,10 +94,17 @@ def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
         ``publish(topic, rpm)``, topics ``wheel0_Vel`` / ``wheel1_Vel``.
     params : FaithfulParams, ImprovedParams or AvrParams, optional
         Defaults to the thesis values (``avr:DIR`` sets ``AvrParams.sketch_dir``).
+    edges_per_rev : int
+        SC changes per wheel revolution (``wheel.sc_edges_per_rev``). The Python ports count
+        them; the thesis sketch has its count compiled in (:data:`SKETCH_EDGES_PER_REV`), so
+        ``avr`` with its default sketch refuses any other.
     """
     if kind == "avr" or kind.startswith("avr:"):
         from amr_twin.controllers.avr import AvrFirmware
         sketch = kind.partition(":")[2] or None
+        if sketch is None and edges_per_rev != SKETCH_EDGES_PER_REV:
+            raise ValueError(f"--firmware avr: the thesis sketch counts {SKETCH_EDGES_PER_REV} SC changes per "
+                             f"revolution, the configured wheel has {edges_per_rev} (wheel.hall_pole_pairs)")
         if params is None:
             params = AvrParams(sketch_dir=sketch)
         elif sketch is not None:
@@ -101,8 +113,8 @@ def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
         return AvrFirmware(clock, publish, params)
     if kind == "faithful":
         from amr_twin.controllers.faithful import FaithfulFirmware
-        return FaithfulFirmware(clock, publish, params or FaithfulParams())
+        return FaithfulFirmware(clock, publish, edges_per_rev, params or FaithfulParams())
     if kind == "improved":
         from amr_twin.controllers.improved import ImprovedFirmware
-        return ImprovedFirmware(clock, publish, params or ImprovedParams())
+        return ImprovedFirmware(clock, publish, edges_per_rev, params or ImprovedParams())
     raise ValueError(f"unknown firmware kind {kind!r}")

@@ -56,7 +56,6 @@ class FaithfulParams:
     """Constants of the thesis firmware and its quirk switches (all True = as printed)."""
 
     max_vel_rpm: float = 1054.0  # MAX_VEL, RPM at duty 1; listing 4.7
-    edges_per_rev: int = 90  # SC changes per revolution; §2.2.1, fig. 2.13
     timer_period_us: int = 200_000  # PICallBack timer; §3.2.3 "every 0.2 seconds"
     kp: float = 0.001  # proportional gain, duty-free RPM/RPM; §4 listing 4.11 text
     ki: float = 0.15  # integral gain, 1/s; listing 4.11 text
@@ -76,7 +75,7 @@ class FaithfulParams:
     quirk_signed_ramp_test: bool = True  # `deltaDuty >= THRESHOLD_SMALL_ACC`: decelerations jump
     quirk_pi_early_return_keeps_interrupts_off: bool = True  # PI_Control returns w/o interrupts()
     quirk_int_ms_delta_vs_T: bool = True  # 16-bit int ms delta compared with T = 0.2 (s)
-    quirk_first_sample_after_full_rev: bool = True  # 90 changes per sample (one revolution)
+    quirk_first_sample_after_full_rev: bool = True  # a revolution of changes per sample (90, §2.2.1)
     short_sample_edges: int = 18  # SC changes per sample when the quirk above is off (1/5 rev)
     board: BoardParams = field(default_factory=BoardParams)
 
@@ -86,7 +85,6 @@ class ImprovedParams:
     """Improved firmware: per-edge speed, fixed-rate PI with anti-windup, two-way ramp."""
 
     max_vel_rpm: float = 1054.0  # RPM at duty 1; listing 4.7
-    edges_per_rev: int = 90  # SC changes per revolution; §2.2.1
     window_edges: int = 18  # max SC intervals in the sliding period window (1/5 rev)
     window_us: int = 100_000  # max age of the window's oldest edge, us
     zero_speed_timeout_us: int = 150_000  # no edge for this long -> speed 0, us

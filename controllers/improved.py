@@ -49,12 +49,16 @@ class ImprovedFirmware:
         Shared clock.
     publish : callable
         ``publish(topic, rpm)``; ``wheel0_Vel``/``wheel1_Vel``, RPM >= 0.
+    edges_per_rev : int
+        SC changes per wheel revolution (``wheel.sc_edges_per_rev``).
     params : ImprovedParams
         Gains, rates and windows.
     """
 
-    def __init__(self, clock: VirtualClock, publish: Publish, params: ImprovedParams | None = None):
+    def __init__(self, clock: VirtualClock, publish: Publish, edges_per_rev: int,
+                 params: ImprovedParams | None = None):
         self.p = p = params or ImprovedParams()
+        self.edges_per_rev = int(edges_per_rev)
         self.clock, self._publish = clock, publish
         self.rt = ArduinoRuntime(clock, p.board)
         self.pins = self.rt.pins
@@ -149,9 +153,9 @@ class ImprovedFirmware:
         position = float(self._count[i])
         if edges and self.speed_rpm[i] >= p.extrapolate_above_rpm:
             since_us = (now_us - edges[-1]) & 0xFFFFFFFF
-            position += min(self.speed_rpm[i] * p.edges_per_rev * since_us / 60e6, 1.0)
+            position += min(self.speed_rpm[i] * self.edges_per_rev * since_us / 60e6, 1.0)
         position = max(position, self._position[i])
-        rpm = (position - self._position[i]) * 60e6 / (p.edges_per_rev * max(dt_us, 1))
+        rpm = (position - self._position[i]) * 60e6 / (self.edges_per_rev * max(dt_us, 1))
         self._position[i] = position
         return rpm
 
@@ -174,9 +178,9 @@ class ImprovedFirmware:
         if n >= 3:
             n -= n % 3
         span_us = (last - edges[-1 - n]) & 0xFFFFFFFF
-        rpm = 60e6 * n / (p.edges_per_rev * max(span_us, 1))
+        rpm = 60e6 * n / (self.edges_per_rev * max(span_us, 1))
         if since_us > 0:
-            rpm = min(rpm, 60e6 / (p.edges_per_rev * since_us))
+            rpm = min(rpm, 60e6 / (self.edges_per_rev * since_us))
         return rpm
 
     # -- Timer1 ISR --------------------------------------------------------------------

@@ -119,11 +119,6 @@ class LidarOdometry:
         self.skipped = 0
         """Scans with fewer than :data:`MIN_POINTS` valid beams (not registered)."""
 
-    @property
-    def last_stamp_s(self) -> float | None:
-        """``t_end`` of the last registered scan, s (None before the first)."""
-        return self._t_s[-1] if self._t_s else None
-
     def prior_interval_s(self, scan: LaserScan) -> tuple[float, float]:
         """Interval ``(t0_s, t1_s)`` over which :meth:`register` wants the motion prior of ``scan``.
 

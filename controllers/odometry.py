@@ -55,10 +55,6 @@ from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.controllers.published_pose import PublishedPose
-from amr_twin.controllers.wheel_command import WHEEL_RADIUS_M
-
-WHEEL_SEPARATION_M = 0.48
-"""``L`` of listing 4.2."""
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
 SPEED_SAMPLES = ("window", "hold")
@@ -78,7 +74,7 @@ class WheelOdometry:
     bus, clock : Bus, VirtualClock
         Shared bus and clock.
     wheel_radius_m, wheel_separation_m : float
-        Nominal geometry, m (thesis: 0.125 and 0.48).
+        Nominal geometry, m (``wheel.radius_m``, ``wheel.separation_m``: the thesis' 0.125 and listing 4.2's L 0.48).
     wheel_radius_multiplier, left_radius_multiplier, right_radius_multiplier : float
         Calibration factors of the radii (global, then per wheel).
     wheel_separation_multiplier : float
@@ -110,8 +106,7 @@ class WheelOdometry:
         the rim (``inf``: none); what this costs is made up by the correction.
     """
 
-    def __init__(self, bus: Bus, clock: VirtualClock, wheel_radius_m: float = WHEEL_RADIUS_M,
-                 wheel_separation_m: float = WHEEL_SEPARATION_M,
+    def __init__(self, bus: Bus, clock: VirtualClock, *, wheel_radius_m: float, wheel_separation_m: float,
                  wheel_radius_multiplier: float = 1.0, left_radius_multiplier: float = 1.0,
                  right_radius_multiplier: float = 1.0, wheel_separation_multiplier: float = 1.0,
                  publish_rate_hz: float = 50.0,

@@ -39,8 +39,7 @@ from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.geometry_messages import Twist, Vector3
 
-from amr_twin.controllers.route import (MAX_ROUTE_SPEED_M_S, ROUTE_FIELDS, Route, RouteError, distance_to_path_m,  # noqa: F401
-                    load_route, route_length_m)
+from amr_twin.controllers.route import Route
 
 
 class PurePursuit:

@@ -41,10 +41,6 @@ from amr_twin.ros.messages import Float64MultiArray
 
 LOG = logging.getLogger(__name__)
 
-WHEEL_DIAM_M = 0.25
-WHEEL_RADIUS_M = 0.125
-HALF_SEPARATION_M = 0.24
-"""``R`` of listing 4.2: wheel centre to robot mid point."""
 MAX_VEL_RPM = 1054.0
 MIN_RPM = 0.0
 MAX_RPM = MAX_VEL_RPM
@@ -105,9 +101,9 @@ class WheelCommandClient:
     bus : Bus
         Bus carrying the service.
     wheel_radius_m : float
-        Drive wheel radius, m (thesis: WHEEL_DIAM 0.25 m).
+        Drive wheel radius, m (``wheel.radius_m``; thesis: WHEEL_DIAM 0.25 m).
     half_separation_m : float
-        ``R``, wheel centre to the robot mid point, m (thesis 0.24 m).
+        ``R`` of listing 4.2, wheel centre to the robot mid point, m (half ``wheel.separation_m``).
     min_rpm, max_rpm : float
         Accepted range of each wheel's |speed|, RPM.
     listing_motion_codes : bool
@@ -116,8 +112,7 @@ class WheelCommandClient:
         Round speeds to float32 as the request fields are.
     """
 
-    def __init__(self, bus: Bus, wheel_radius_m: float = WHEEL_RADIUS_M,
-                 half_separation_m: float = HALF_SEPARATION_M, min_rpm: float = MIN_RPM,
+    def __init__(self, bus: Bus, *, wheel_radius_m: float, half_separation_m: float, min_rpm: float = MIN_RPM,
                  max_rpm: float = MAX_RPM, listing_motion_codes: bool = False,
                  float32_request: bool = True, service_name: str = SERVICE_NAME):
         self.bus = bus

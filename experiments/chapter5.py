@@ -1,7 +1,8 @@
 """The eight step experiments of thesis chapter 5, measured and judged against the thesis.
 
 :func:`run` simulates the runs (§5.1.1-5.1.4), :func:`plot` draws one figure per run
-as in chapter 5, :func:`report` writes ``metrics.json`` and ``report.md``. The runs are
+as in chapter 5, :func:`report` writes ``metrics.json`` (from the typed
+:class:`.chapter5_metrics.Chapter5Metrics`) and ``report.md``. The runs are
 judged against the thesis by :mod:`.chapter5_criteria` (published samples, settling band,
 the 20 kg runs' oscillation).
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
@@ -24,9 +25,9 @@ from amr_twin.model.config import TwinConfig, with_values
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.analysis.metrics import step_info
 from amr_twin.sim.run import Command, run_command
-from amr_twin.experiments.chapter5_criteria import (BANDS, DEFINITIONS, SOURCES, TRANSIENT_WINDOW_S, WHEELS,
-                                                    compare_oscillation, judge, oscillation_verdict,
+from amr_twin.experiments.chapter5_criteria import (TRANSIENT_WINDOW_S, WHEELS, compare_oscillation, judge,
                                                     settling_band_rpm, step_class)
+from amr_twin.experiments.chapter5_metrics import Chapter5Metrics, metrics
 
 
 @dataclass(frozen=True)
@@ -79,7 +80,8 @@ def simulate(job: _Job) -> dict:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
         from amr_twin.sim.loop import Twin
-        from amr_twin.recording.rerun_log import attach, record_run
+        from amr_twin.recording.rerun_capture import attach
+        from amr_twin.recording.rerun_log import record_run
         from amr_twin.sim.run import run_mission
         from amr_twin.experiments.firmware_comparison import pace
 
@@ -205,37 +207,14 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
     return plot_runs(results, out_dir)
 
 
-def _public(results: dict) -> dict:
-    runs = [{k: v for k, v in r.items() if k != "raw"} for r in results["runs"]]
-    checks = [c for r in runs for w in r["wheels"].values() for c in w["checks"].values()]
-    checks += results["comparisons"]
-    true_checks = [c for r in runs for w in r["wheels"].values() for c in w["true_checks"].values()]
-    return {"firmware": results["firmware"], "jobs": results["jobs"], "wall_s": round(results["wall_s"], 3),
-            "sim_s": results["sim_s"], "study_runs": results.get("study_runs", 0),
-            "study_sim_s": results.get("study_sim_s", 0.0),
-            "judged_on": "published samples, linear interpolation from rest at the command",
-            "definitions": DEFINITIONS,
-            "settling_band": "max(5 % of the step, 4 RPM) around the final value",
-            "oscillation": f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S:g} s",
-            "oscillation_verdict": oscillation_verdict(results["comparisons"]),
-            "bands": [dict(vars(b), source=SOURCES[b.metric]) for b in BANDS], "runs": runs, "comparisons": results["comparisons"],
-            "crr": results["crr"], "payload_duty": results["payload_duty"],
-            "rolling_resistance_study": results["rolling_resistance_study"],
-            "threshold_crr": payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
-                                                   results["crr"]["tyres"]),
-            "summary": {"checks": len(checks), "passed": sum(c["verdict"] == "pass" for c in checks),
-                        "true_checks": len(true_checks),
-                        "true_passed": sum(c["verdict"] == "pass" for c in true_checks)},
-            **({"firmware_comparison": results["firmware_comparison"]} if "firmware_comparison" in results else {}),
-            **({"spread": results["spread_summary"]} if "spread_summary" in results else {})}
-
-
-def report(results: dict, out_dir: Path) -> dict:
-    """Write ``metrics.json`` and ``report.md`` (run :func:`plot` for the figures); return the JSON."""
+def report(results: dict, out_dir: Path) -> Chapter5Metrics:
+    """Write ``metrics.json`` (from the typed metrics) and ``report.md`` (run :func:`plot` for the
+    figures); return the metrics."""
     from amr_twin.experiments.chapter5_report import markdown
     from amr_twin.experiments.executor import write_json, write_text
 
-    data = _public(results)
-    write_json(Path(out_dir) / "metrics.json", data)
-    write_text(Path(out_dir) / "report.md", markdown(data))
+    data = metrics(results)
+    written = data.as_json()
+    write_json(Path(out_dir) / "metrics.json", written)
+    write_text(Path(out_dir) / "report.md", markdown(written))
     return data

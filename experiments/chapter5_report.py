@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 from amr_twin.experiments.chapter5_payload import markdown as payload_markdown
 from amr_twin.experiments.chapter5_spread_report import markdown as spread_markdown

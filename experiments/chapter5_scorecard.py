@@ -80,7 +80,7 @@ def main() -> None:  # pragma: no cover - writes the committed file
     from amr_twin.experiments import chapter5
 
     results = chapter5.run(load_config(), jobs=2, progress=True, study=False)
-    data = chapter5.report(results, Path(tempfile.mkdtemp()))
+    data = chapter5.report(results, Path(tempfile.mkdtemp())).as_json()
     SCORECARD.write_text(json.dumps(scorecard(data), indent=1, sort_keys=True) + "\n")
     print(f"wrote {SCORECARD}: {data['summary']['passed']}/{data['summary']['checks']} checks pass")
 

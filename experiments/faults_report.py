@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.sim.faults import KINDS, kind_names, parse_fault
-from amr_twin.recording.run_report import json_ready
+from amr_twin.recording.run_summary import json_ready
 from amr_twin.experiments.executor import save_figure, write_text
 from amr_twin.experiments.faults import FAULT_T_S, FIRMWARES, SCENARIO, STOP_T_S
 

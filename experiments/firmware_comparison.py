@@ -62,12 +62,12 @@ def command_timeline(firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int
     bytes start at t = 0 and every instruction is checked for a pin change.
     """
     from amr_twin.sim.clock import VirtualClock
-    from amr_twin.controllers.firmware import make_firmware
+    from amr_twin.controllers.firmware import SKETCH_EDGES_PER_REV, make_firmware
     from amr_twin.ros.messages import Float64MultiArray
     from amr_twin.ros.rosserial import frame_bytes, frame_time_us
 
     clock = VirtualClock()
-    fw = make_firmware(firmware, clock, lambda topic, value: None)
+    fw = make_firmware(firmware, clock, lambda topic, value: None, edges_per_rev=SKETCH_EDGES_PER_REV)  # never turn
     events = []
     if firmware.startswith("avr"):
         board, lead = fw.board, fw.lead_cycles

@@ -160,7 +160,7 @@ def estimate_odom(streams: Streams, start: tuple[float, float, float]) -> Estima
 def estimate_ekf(cfg: TwinConfig, streams: Streams, start: tuple[float, float, float], *,
                  use_imu: bool, use_uwb: bool) -> Estimate:
     """Replay the streams in stamp order into an :class:`EkfNode`."""
-    node = EkfNode(cfg.ekf, use_odom=True, use_imu=use_imu, use_uwb=use_uwb, uwb=cfg.uwb, initial_pose=start)
+    node = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_odom=True, use_imu=use_imu, use_uwb=use_uwb, uwb=cfg.uwb, initial_pose=start)
     handlers = {"odom": node.on_odom, "imu": node.on_imu, "uwb": node.on_range}
     kinds = ("odom",) + (("imu",) if use_imu else ()) + (("uwb",) if use_uwb else ())
     for kind, msg in streams.merged(kinds):

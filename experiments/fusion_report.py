@@ -9,18 +9,17 @@ file goes through a temporary file and a rename.
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
 
 from amr_twin.experiments.executor import save_figure, write_json, write_text
-from amr_twin.experiments.fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
-from amr_twin.experiments.fusion_map import TOLERANCE_CELLS, agreement
+from amr_twin.experiments.fusion import ARCHITECTURES, FusionResults
+from amr_twin.experiments.fusion_metrics import LIDAR_ATE_MAX_M, FusionMetrics, metrics
+from amr_twin.experiments.fusion_map import agreement
 from amr_twin.analysis import se2, tum
 from amr_twin.recording import atomic_file
 
-LIDAR_ATE_MAX_M = 0.10   # issue #8 acceptance
 COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",
            "odom+uwb+imu": "tab:blue"}
 
@@ -107,19 +106,6 @@ def _save_map(results: FusionResults, out: Path):
     return map_check
 
 
-def summary(results: FusionResults, map_check) -> dict:
-    """The acceptance verdicts of issue #8 on this run."""
-    e = {name: results.estimates[name].errors for name in ARCHITECTURES}
-    return {
-        "odom_drift_final_m": e["odom"].final_pos_err_m,
-        "odom_drift_pct_of_length": 100.0 * e["odom"].final_pos_err_m / max(e["odom"].length_m, 1e-9),
-        "imu_beats_odom_on_heading": e["odom+imu"].rms_yaw_err_deg < e["odom"].rms_yaw_err_deg,
-        "lidar_ate_under_0_10_m": e["odom+lidar"].ate_m < LIDAR_ATE_MAX_M,
-        "map_walls_within_2_cells_frac": map_check.within_tolerance_frac,
-        "reached_goal": results.reached_goal,
-    }
-
-
 def tum_name(name: str) -> str:
     """File name of an architecture's TUM trajectory: ``odom+uwb+imu`` -> ``odom_uwb_imu.tum``."""
     return name.replace("+", "_") + ".tum"
@@ -164,8 +150,9 @@ DEFINITIONS = [
 ]
 
 
-def report(results: FusionResults, out: Path, figures: bool = True) -> dict:
-    """Save the map and the TUM trajectories, write ``metrics.json`` and ``report.md``; return the metrics.
+def report(results: FusionResults, out: Path, figures: bool = True) -> FusionMetrics:
+    """Save the map and the TUM trajectories, write ``metrics.json`` (from the typed
+    :class:`~.fusion_metrics.FusionMetrics`) and ``report.md``; return the metrics.
 
     ``figures``: the report shows ``trajectories.png`` and ``errors.png`` (written by :func:`plot`).
     """
@@ -173,26 +160,10 @@ def report(results: FusionResults, out: Path, figures: bool = True) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     map_check = _save_map(results, out)
     files = write_trajectories(results, out)
-    data = {
-        "route": {"name": results.route.name, "world": results.route.world,
-                  "length_m": results.estimates["odom"].errors.length_m,
-                  "max_speed_m_s": results.route.max_speed_m_s, "reached_goal": results.reached_goal,
-                  "cross_track_rms_m": results.cross_track_rms_m},
-        "seed": results.seed, "firmware": results.firmware, "sim_s": results.sim_s,
-        "drive_wall_s": results.drive_wall_s, "wall_s": results.wall_s, "messages": results.message_counts,
-        "uwb": {"anchors_xy_m": results.anchors_xy_m.tolist(), "exchanges": results.uwb_exchanges,
-                "blocked_per_anchor": results.uwb_blocked},
-        "robot": results.robot,
-        "rpe_delta_m": RPE_DELTA_M,
-        "architectures": {name: {**dataclasses.asdict(results.estimates[name].errors),
-                                 "ate_aligned_m": results.estimates[name].ate_aligned_m,
-                                 "wall_s": results.estimates[name].wall_s, "tum": files[name]}
-                          for name in ARCHITECTURES},
-        "map": {"tolerance_cells": TOLERANCE_CELLS, **dataclasses.asdict(map_check)},
-    }
-    data["summary"] = summary(results, map_check)
-    write_json(out / "metrics.json", data)
-    write_text(out / "report.md", markdown(data, figures))
+    data = metrics(results, map_check, files)
+    written = data.as_json()
+    write_json(out / "metrics.json", written)
+    write_text(out / "report.md", markdown(written, figures))
     return data
 
 

@@ -112,7 +112,7 @@ def write(results: list[fusion.FusionResults], out: Path) -> dict:
         folder = out / f"seed{res.seed}"
         if k == 0:
             fusion_report.plot(res, folder)
-        per_seed.append(fusion_report.report(res, folder, figures=k == 0))
+        per_seed.append(fusion_report.report(res, folder, figures=k == 0).as_json())
     first = results[0]
     data = {
         "route": {key: per_seed[0]["route"][key] for key in ("name", "world", "max_speed_m_s")},

@@ -26,6 +26,7 @@ from amr_twin.model.config import ConfigError, TwinConfig
 from amr_twin.analysis.metrics import step_info
 from amr_twin.experiments.chapter5_criteria import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
 from amr_twin.experiments.payload_point import Point, parse_command, position_xy_m, with_payload
+from amr_twin.experiments.payload_result import Dynamics, Electrics, MinWheel, PointResult, Statics, WheelRun
 
 SAMPLE_S = 0.02           # period of the support-load and tilt samples, s
 TIP_MARGIN_MIN_M = 0.02   # static tip margin below which a point is unsafe, m
@@ -53,7 +54,7 @@ def _slip(series, cfg: TwinConfig) -> np.ndarray:
     return surface - ground
 
 
-def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s) -> dict:
+def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s) -> MinWheel:
     """When and why a drive wheel is least loaded: the accelerations at that instant and the
     quasi-static loads they give (:func:`amr_twin.model.statics.solve` with d'Alembert's force).
 
@@ -79,23 +80,22 @@ def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s)
         mechanism = f"lateral load transfer, {ay:+.2f} m/s^2 (turning)"
     else:
         mechanism = f"longitudinal load transfer, {ax:+.2f} m/s^2 ({'braking' if ax * vel[i, 0] < 0 else 'accelerating'})"
-    return {"dyn_min_wheel": wheel, "dyn_min_wheel_t_s": float(t[i]), "dyn_min_wheel_accel_m_s2": [float(ax), float(ay)],
-            "dyn_min_wheel_quasi_static_n": both, "dyn_min_wheel_mechanism": mechanism}
+    return MinWheel(wheel, float(t[i]), [float(ax), float(ay)], both, mechanism)
 
 
-def _electrics(s, duration_s: float) -> dict:
+def _electrics(s, duration_s: float) -> Electrics:
     """Steady motor currents, the battery's current and the energy per metre driven."""
     tail = s.t_s >= 0.75 * duration_s
     power = s.battery_v * s.battery_a
     energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(s.t_s)))
     distance = float(np.sum(np.hypot(*np.diff(s.pose[:, :2], axis=0).T)))
-    out = {f"{name}_steady_current_a": float(np.mean(np.abs(s.current_a[tail, w]))) for w, name in enumerate(WHEELS)}
-    out.update(battery_steady_a=float(np.mean(s.battery_a[tail])), energy_j=energy, distance_m=distance,
-               energy_j_per_m=energy / distance if distance > 0.05 else None)
-    return out
+    currents = tuple(float(np.mean(np.abs(s.current_a[tail, w]))) for w in range(len(WHEELS)))
+    return Electrics(currents, float(np.mean(s.battery_a[tail])), energy, distance,
+                     energy / distance if distance > 0.05 else None)
 
 
-def _dynamics(point: Point, cfg: TwinConfig) -> dict:
+def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
+    """The run of ``point`` in the empty world, or None and why the command was refused."""
     from amr_twin.sim.loop import Twin, TwinOptions
     from amr_twin.model.statics import CONTACT_MIN_N
 
@@ -111,7 +111,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
     command = parse_command(point.command)
     code = command.send(twin)
     if code != 0:
-        return {"error": f"command refused (code {code}): {twin.client.last_error}"}
+        return None, f"command refused (code {code}): {twin.client.last_error}"
     req = twin.client.last_request
     # every SAMPLE_S on the loop's record grid, after the rolling resistance's update at the same
     # instant: the springs' loads it used, the supports' contact forces, the world z of the
@@ -133,80 +133,78 @@ def _dynamics(point: Point, cfg: TwinConfig) -> dict:
         record_run(twin, rrd_path=point.rrd_path, mcap_path=point.mcap_path, result=result)
     names = list(twin.physics.support_geoms)
     min_load = dict(zip(names, loads.min(axis=0).tolist()))
-    out = {"max_tilt_deg": math.degrees(math.acos(max(-1.0, min(1.0, float(up_z.min()))))),  # acos falls: the largest tilt
-           "dyn_min_wheel_n": min(v for n, v in min_load.items() if n.startswith("wheel")),
-           "dyn_min_caster_n": min(v for n, v in min_load.items() if n.startswith("caster")),
-           "dyn_lifted": ";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
-           "dyn_min_wheel_contact_n": float(np.min(contact[:, :2]))}
-    out.update(_min_wheel_mechanism(cfg, loads, vel, s))
-    out.update(_electrics(s, point.duration_s))
-    out["wheel_lift_off"] = out["dyn_min_wheel_n"] < CONTACT_MIN_N
+    min_wheel_n = min(v for n, v in min_load.items() if n.startswith("wheel"))
     slip = _slip(s, cfg)
     tail = s.t_s >= 0.75 * point.duration_s
     cmd = [req.motionL, req.speedL, req.motionR, req.speedR]
-    for w, name in enumerate(WHEELS):
-        ref = float(cmd[2 * w]) * float(cmd[2 * w + 1])
-        out[f"{name}_reference_rpm"] = ref
-        out[f"{name}_max_slip_m_s"] = float(np.max(np.abs(slip[:, w])))
-        if ref == 0.0:
-            continue
-        pub = s.published[w]
-        if len(pub) >= 1:
-            info = step_info(pub[:, 0], pub[:, 1], abs(ref), settling_band=settling_band_rpm(ref),
-                             oscillation_window_s=TRANSIENT_WINDOW_S).as_dict()
-            for k in ("delay_s", "rise_s", "peak_s", "settling_s"):
-                out[f"{name}_{k}"] = info[k]
-            for k in ("overshoot", "steady_error", "oscillation"):
-                out[f"{name}_{k}_rpm"] = info[k]
-        sign = 1.0 if ref > 0 else -1.0  # the true speed's offset along the reference, as the published one's
-        out[f"{name}_true_steady_error_rpm"] = float(sign * np.mean(s.true_rpm[tail, w]) - abs(ref))
-        out[f"{name}_steady_duty"] = float(np.mean(s.pwm_counts[tail, w]) / 255.0)
-        out[f"{name}_open_loop_duty"] = abs(ref) / MAX_VEL_RPM
-        surface = np.abs(s.true_rpm[tail, w]) * (2 * math.pi / 60) * cfg.wheel.radius_m
-        out[f"{name}_steady_slip_ratio"] = float(np.mean(np.abs(slip[tail, w])) / max(np.mean(surface), 1e-6))
-    errors = [out.get(f"{n}_steady_error_rpm") for n in WHEELS if out.get(f"{n}_reference_rpm")]
-    out["tracks"] = all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors)
-    return out
+    wheels = tuple(_wheel_run(w, float(cmd[2 * w]) * float(cmd[2 * w + 1]), s, slip, tail, cfg)
+                   for w in range(len(WHEELS)))
+    errors = [(w.step or {}).get("steady_error_rpm") for w in wheels if w.reference_rpm]
+    return Dynamics(
+        max_tilt_deg=math.degrees(math.acos(max(-1.0, min(1.0, float(up_z.min()))))),  # acos falls: the largest tilt
+        min_wheel_n=min_wheel_n, min_caster_n=min(v for n, v in min_load.items() if n.startswith("caster")),
+        lifted=";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
+        min_wheel_contact_n=float(np.min(contact[:, :2])), min_wheel=_min_wheel_mechanism(cfg, loads, vel, s),
+        electrics=_electrics(s, point.duration_s), wheel_lift_off=min_wheel_n < CONTACT_MIN_N, wheels=wheels,
+        tracks=all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors)), ""
 
 
-def simulate_point(point: Point) -> dict:
-    """Statics and one run of a sweep point, as one flat JSON-ready row."""
+def _wheel_run(w: int, ref: float, s, slip: np.ndarray, tail: np.ndarray, cfg: TwinConfig) -> WheelRun:
+    """Wheel ``w`` of the run, its signed reference ``ref`` RPM: the step of its published speed and its
+    steady state (over ``tail``, the last quarter)."""
+    name, max_slip = WHEELS[w], float(np.max(np.abs(slip[:, w])))
+    if ref == 0.0:
+        return WheelRun(name, ref, max_slip)
+    pub, step = s.published[w], None
+    if len(pub) >= 1:
+        info = step_info(pub[:, 0], pub[:, 1], abs(ref), settling_band=settling_band_rpm(ref),
+                         oscillation_window_s=TRANSIENT_WINDOW_S).as_dict()
+        step = {k: info[k] for k in ("delay_s", "rise_s", "peak_s", "settling_s")}
+        step.update({f"{k}_rpm": info[k] for k in ("overshoot", "steady_error", "oscillation")})
+    sign = 1.0 if ref > 0 else -1.0  # the true speed's offset along the reference, as the published one's
+    surface = np.abs(s.true_rpm[tail, w]) * (2 * math.pi / 60) * cfg.wheel.radius_m
+    steady = {"true_steady_error_rpm": float(sign * np.mean(s.true_rpm[tail, w]) - abs(ref)),
+              "steady_duty": float(np.mean(s.pwm_counts[tail, w]) / 255.0), "open_loop_duty": abs(ref) / MAX_VEL_RPM,
+              "steady_slip_ratio": float(np.mean(np.abs(slip[tail, w])) / max(np.mean(surface), 1e-6))}
+    return WheelRun(name, ref, max_slip, step, steady)
+
+
+def simulate_point(point: Point) -> PointResult:
+    """Statics and one run of a sweep point (:meth:`PointResult.as_json`: its flat JSON-ready row)."""
     from amr_twin.model.build import BuildError
     from amr_twin.sim.physics import DivergenceError
     from amr_twin.model.statics import CONTACT_MIN_N, describe
 
     wall0 = time.perf_counter()
-    row = {"key": point.key, "fingerprint": point.fingerprint, "mass_kg": point.mass_kg,
-           "position": point.position, "command": point.command, "valid": True, "error": ""}
-    if point.sample is not None:
-        row.update(sample=point.sample, sample_id=point.sample_id)
+    res = PointResult(point.key, point.fingerprint, point.mass_kg, point.position, point.command,
+                      sample=point.sample, sample_id=point.sample_id if point.sample is not None else None)
     try:
-        xy = position_xy_m(point.cfg, point.position)
-        row.update(x_m=xy[0], y_m=xy[1])
-        cfg = with_payload(point.cfg, point.mass_kg, xy)
+        res.xy_m = position_xy_m(point.cfg, point.position)
+        cfg = with_payload(point.cfg, point.mass_kg, res.xy_m)
     except (ConfigError, ValueError) as exc:
-        row.update(valid=False, error=str(exc), safe=False)
-        return row
+        res.valid, res.error = False, str(exc)
+        return res
     try:
         static = describe(cfg)
         loads = static["static_load_n"]
-        row.update(total_mass_kg=static["total_mass_kg"], static_tip_margin_m=static["tip_margin_m"],
-                   static_min_caster_n=min(v for k, v in loads.items() if k.startswith("caster")),
-                   static_lifted=";".join(k for k, v in loads.items() if v < CONTACT_MIN_N),
-                   **{f"static_{k}_n": v for k, v in loads.items()})
-        row.update(_dynamics(point, cfg))
+        res.statics = Statics(static["total_mass_kg"], static["tip_margin_m"],
+                              min(v for k, v in loads.items() if k.startswith("caster")),
+                              ";".join(k for k, v in loads.items() if v < CONTACT_MIN_N), dict(loads))
+        res.dynamics, res.error = _dynamics(point, cfg)
     except (BuildError, DivergenceError) as exc:
-        row["error"] = str(exc).splitlines()[0]
-    currents = [row.get(f"{w}_steady_current_a") for w in WHEELS]
-    row["current_limit_a"] = cfg.driver.continuous_current_a  # the rating this row is judged by (a draw may move it)
-    row["motor_overload"] = any(i is not None and i > cfg.driver.continuous_current_a for i in currents)
-    row["safe"] = (not row["error"] and row.get("static_tip_margin_m", -1) >= TIP_MARGIN_MIN_M
-                   and not row.get("wheel_lift_off", True) and row.get("max_tilt_deg", 90) <= TILT_LIMIT_DEG
-                   and not row["motor_overload"])
-    row["wall_s"] = round(time.perf_counter() - wall0, 3)
-    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+        res.error = str(exc).splitlines()[0]
+    currents = res.dynamics.electrics.steady_current_a if res.dynamics is not None else ()
+    res.current_limit_a = cfg.driver.continuous_current_a  # the rating this row is judged by (a draw may move it)
+    res.motor_overload = any(i > cfg.driver.continuous_current_a for i in currents)
+    d = res.dynamics
+    res.safe = (not res.error and res.statics is not None and res.statics.tip_margin_m >= TIP_MARGIN_MIN_M
+                and d is not None and not d.wheel_lift_off and d.max_tilt_deg <= TILT_LIMIT_DEG
+                and not res.motor_overload)
+    res.wall_s = round(time.perf_counter() - wall0, 3)
+    return res
 
 
 def simulate_points(points: tuple[Point, ...]) -> list[dict]:
-    """:func:`simulate_point` of each point, in order, in this process (a work item of the sweep)."""
-    return [simulate_point(point) for point in points]
+    """The rows (:meth:`PointResult.as_json`) of :func:`simulate_point` of each point, in order, in this
+    process (a work item of the sweep)."""
+    return [simulate_point(point).as_json() for point in points]

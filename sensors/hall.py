@@ -1,9 +1,9 @@
 """Hall sensors of the hub motors and the driver's SC speed-pulse output.
 
-Each M365-type hub motor has three hall sensors Ha, Hb, Hc and 15 pole pairs, so
-each sensor toggles every 360 / 30 = 12 degrees of wheel angle; the three are
-4 degrees apart. The ZS-X11D1 driver's SC output changes state whenever one of
-them does: 90 SC state changes per wheel revolution (thesis §2.2.1, fig. 2.13).
+Each M365-type hub motor has three hall sensors Ha, Hb, Hc and ``wheel.hall_pole_pairs``
+pole pairs (15), so each sensor toggles every 360 / 30 = 12 degrees of wheel angle; the
+three are a third of that (4 degrees) apart. The ZS-X11D1 driver's SC output changes state
+whenever one of them does: 90 SC state changes per wheel revolution (thesis §2.2.1, fig. 2.13).
 
 :class:`HallSensors` turns a chunk of the physics trajectory (wheel angles at
 the physics step times) into the SC edges inside it, vectorised with numpy.
@@ -16,12 +16,6 @@ import math
 import numpy as np
 
 from amr_twin.sensors.hall_edges import edge_kernel, solve_hermite, split_trajectory
-
-SENSOR_PITCH_DEG = 12.0
-"""Wheel angle between two toggles of one hall sensor, degrees (15 pole pairs)."""
-
-SENSOR_SPACING_DEG = 4.0
-"""Wheel angle between the three sensors' lattices, degrees."""
 
 N_SENSORS = 3
 """Ha, Hb, Hc."""
@@ -37,9 +31,12 @@ class HallSensors:
     ----------
     n_wheels : int
         Number of wheels (2: index 0 left, 1 right).
+    pole_pairs : int
+        The motor's pole pairs (``wheel.hall_pole_pairs``): a sensor toggles every
+        ``360 / (2 pole_pairs)`` degrees of wheel angle (:attr:`pitch_rad`).
     misalignment_deg : float or array_like, shape (3,) or (n_wheels, 3)
         Mounting error of each sensor, degrees of wheel angle, added to its
-        nominal offset (0, 4, 8 degrees). Default 0.
+        nominal offset (0, 1/3 and 2/3 of a pitch: 0, 4, 8 degrees at 15 pole pairs). Default 0.
     jitter_us : float
         Standard deviation of a Gaussian timing jitter on each SC edge,
         microseconds (optocoupler/driver latency spread). Default 0.
@@ -56,16 +53,18 @@ class HallSensors:
         :attr:`engine` says which.
     """
 
-    def __init__(self, n_wheels: int = 2, misalignment_deg=0.0, jitter_us: float = 0.0,
+    def __init__(self, n_wheels: int = 2, *, pole_pairs: int, misalignment_deg=0.0, jitter_us: float = 0.0,
                  seed: int | None = None, native: bool = True, hysteresis_deg: float = 0.0):
         self.n_wheels = int(n_wheels)
-        nominal_deg = SENSOR_SPACING_DEG * np.arange(N_SENSORS)
+        pitch_deg = 360.0 / (2 * int(pole_pairs))
+        nominal_deg = pitch_deg / N_SENSORS * np.arange(N_SENSORS)
         mis = np.broadcast_to(np.asarray(misalignment_deg, dtype=float),
                               (self.n_wheels, N_SENSORS))
         self.offset_rad = np.deg2rad(nominal_deg + mis)  # (n_wheels, 3)
-        self.pitch_rad = np.deg2rad(SENSOR_PITCH_DEG)
-        if not 0.0 <= hysteresis_deg < SENSOR_PITCH_DEG:
-            raise ValueError(f"hysteresis_deg: {hysteresis_deg} must be in [0, {SENSOR_PITCH_DEG:g})")
+        self.pitch_rad = np.deg2rad(pitch_deg)
+        """Wheel angle between two toggles of one hall sensor, rad."""
+        if not 0.0 <= hysteresis_deg < pitch_deg:
+            raise ValueError(f"hysteresis_deg: {hysteresis_deg} must be in [0, {pitch_deg:g})")
         self.half_band_rad = math.radians(0.5 * hysteresis_deg)
         self.jitter_us = float(jitter_us)
         self._rng = np.random.default_rng(seed)
@@ -159,26 +158,12 @@ class HallSensors:
         order = np.argsort(edge_t, kind="stable")
         return edge_t[order], wheel[order].astype(np.int64)
 
-    def edges_hermite(self, t_us, angle_rad, speed_rad_s) -> tuple[np.ndarray, np.ndarray]:
-        """SC edges from sparse samples of angle and speed (cubic Hermite in between).
-
-        Same edges as :meth:`edges` on the densely interpolated trajectory, but each
-        crossing time is solved on the cubic directly, so the cost grows with the
-        number of edges, not of physics steps.
-
-        Parameters
-        ----------
-        t_us : (n+1,) int sample times, microseconds.
-        angle_rad, speed_rad_s : (n+1, n_wheels) wheel angles (rad) and speeds (rad/s).
-        """
-        q = np.asarray(angle_rad, dtype=float).reshape(len(t_us), self.n_wheels)
-        v = np.asarray(speed_rad_s, dtype=float).reshape(len(t_us), self.n_wheels)
-        edges = self.edges_from_samples([int(t) for t in t_us], np.hstack([q, v]).tolist())
-        return (np.array([e[0] for e in edges], np.int64).reshape(-1),
-                np.array([e[1] for e in edges], np.int64).reshape(-1))
-
     def edges_from_samples(self, ts: list[int], rows: list[list[float]]) -> list[tuple[int, int]]:
-        """Plain-Python core of :meth:`edges_hermite`: sorted ``(t_us, wheel)`` edges.
+        """SC edges from sparse samples of angle and speed (cubic Hermite in between): sorted ``(t_us, wheel)`` edges.
+
+        Same edges as :meth:`edges` on the densely interpolated trajectory, but each crossing
+        time is solved on the cubic directly, so the cost grows with the number of edges, not of
+        physics steps.
 
         ``rows[i]`` holds the angles of all wheels then their speeds at ``ts[i]`` (further
         values in a row are ignored: the loop passes its sensor rows as they are).

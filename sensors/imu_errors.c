@@ -6,6 +6,7 @@
  * checks it. Built at first use (amr_twin/sim/native_build.py).
  */
 #include <math.h>
+#include "c_layout.h"
 
 typedef struct {
     double scale1[9];     /* 1 + scale error of each axis */
@@ -14,6 +15,10 @@ typedef struct {
     double inv_res[9];    /* 1 / res */
     int quantised[9];     /* resolution > 0 */
 } imu_axes;
+
+/* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
+AMR_LAYOUT(AMR_STRUCT(imu_axes), AMR_FIELD(imu_axes, scale1), AMR_FIELD(imu_axes, range),
+           AMR_FIELD(imu_axes, res), AMR_FIELD(imu_axes, inv_res), AMR_FIELD(imu_axes, quantised))
 
 /* out (n, 9) = quantise(clip(scale1 * true + bias + noise, +-range)), row-major arrays. */
 void imu_corrupt(int n, const double* true_, const double* bias, const double* noise, const imu_axes* a,

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config_sections import ImuCfg
+from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("imu_errors.c")
@@ -105,6 +106,9 @@ class _Axes(ctypes.Structure):
 
     _fields_ = [("scale1", ctypes.c_double * 9), ("range", ctypes.c_double * 9), ("res", ctypes.c_double * 9),
                 ("inv_res", ctypes.c_double * 9), ("quantised", ctypes.c_int * 9)]
+
+
+register(C_SOURCE, imu_axes=_Axes)
 
 
 class ErrorStream:

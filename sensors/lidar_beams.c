@@ -14,6 +14,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <mujoco/mujoco.h>
+#include "c_layout.h"
 
 /* Laser pose of each of k beams at its instant t_us[i], linear between the pose samples
  * (rows: npose rows of t_us, position (3), laser x axis (3), laser y axis (3); held outside
@@ -100,6 +101,12 @@ typedef struct {
     lb_raygeom_fn raygeom;    /* MuJoCo's mju_rayGeom; NULL: every cast goes to mj_multiRay */
     lb_geom* seen;            /* (ngeom,) work: the geoms a ray may hit, nearest first */
 } lb_caster;
+
+/* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
+AMR_LAYOUT(AMR_STRUCT(lb_caster), AMR_FIELD(lb_caster, multiray), AMR_FIELD(lb_caster, groups),
+           AMR_FIELD(lb_caster, site), AMR_FIELD(lb_caster, cutoff), AMR_FIELD(lb_caster, u),
+           AMR_FIELD(lb_caster, shift), AMR_FIELD(lb_caster, normal), AMR_FIELD(lb_caster, raygeom),
+           AMR_FIELD(lb_caster, seen))
 
 #define LB_PI 3.14159265358979323846
 #define LB_ALL 10.0           /* an offset span wider than any: the geom is tried by every ray */

@@ -44,6 +44,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
+from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, c_array, mujoco_address, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
 
@@ -190,6 +191,9 @@ class _Caster(ctypes.Structure):
 
     _fields_ = [("multiray", _P), ("groups", _P), ("site", ctypes.c_int), ("cutoff", ctypes.c_double),
                 ("u", _P), ("shift", _P), ("normal", _P), ("raygeom", _P), ("seen", _P)]
+
+
+register(C_SOURCE, lb_caster=_Caster)
 
 
 def beam_kernels(n_beams: int, cfg: LidarCfg, native: bool = True) -> BeamKernels | PythonBeamKernels:

@@ -137,19 +137,6 @@ def test_the_names_the_readme_and_docs_show_import():
             assert hasattr(mod, name.strip()), f"{module}.{name.strip()}"
 
 
-def test_the_old_module_paths_still_import():
-    """Code written against the flat layout keeps working through the top-level modules."""
-    from amr_twin import config, loop, rerun_log, run
-    from amr_twin.model import config as new_config
-    from amr_twin.recording import rerun_log as new_rerun_log
-    from amr_twin.sim import loop as new_loop, run as new_run
-
-    assert config.load_config is new_config.load_config
-    assert loop.Twin is new_loop.Twin and loop.TwinOptions is new_loop.TwinOptions
-    assert run.Command is new_run.Command and run.run_command is new_run.run_command
-    assert rerun_log.attach is new_rerun_log.attach and rerun_log.record_run is new_rerun_log.record_run
-
-
 _FENCED = re.compile(r"^```.*?^```", re.M | re.S)
 _CODE = re.compile(r"`([^`\n]+)`")
 _LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")

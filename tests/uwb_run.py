@@ -9,7 +9,8 @@ from pathlib import Path
 
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.recording.rerun_log import attach, record_run
+from amr_twin.recording.rerun_capture import attach
+from amr_twin.recording.rerun_log import record_run
 from amr_twin.sim.run import Command, run_mission
 
 UWB_S = 2.0

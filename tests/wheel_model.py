@@ -8,7 +8,10 @@ import math
 
 import numpy as np
 
+from amr_twin.model.config import load_config
 from amr_twin.sensors.hall import HallSensors
+
+WHEEL = load_config().wheel
 
 K_RPM = 1054.0 / 0.9  # duty 0.9*sp/1054 -> sp
 TAU_S = 0.25  # time constant, s
@@ -16,7 +19,7 @@ TAU_S = 0.25  # time constant, s
 
 def simulate(fw, clock, t_end_us, state=None):
     """First-order wheel model (speed' = (k*duty*dir - speed)/tau) with hall edges."""
-    hall, speed, angle = state or (HallSensors(), np.zeros(2), np.zeros(2))
+    hall, speed, angle = state or (HallSensors(pole_pairs=WHEEL.hall_pole_pairs), np.zeros(2), np.zeros(2))
     while clock.now_us < t_end_us:
         t0 = clock.now_us
         t1 = min(t0 - t0 % 1000 + 1000, clock.next_event_us(), t_end_us)

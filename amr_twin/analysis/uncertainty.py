@@ -36,7 +36,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from amr_twin.model.config import DEFAULT_CONFIG, ConfigError, TwinConfig, load_parameters
+from amr_twin.model.config import ConfigError, TwinConfig, load_parameters
+from amr_twin.model.parameter_tree import DEFAULT_CONFIG
 from amr_twin.model.config_leaves import value_at
 from amr_twin.model.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, Spread, spread_of, with_values
 

@@ -20,7 +20,8 @@ STEPS = [(0.0, Command("linear", speed_m_s=0.7))]
 
 
 def _timed(cfg: TwinConfig, rrd: Path | None = None, mcap: Path | None = None) -> float:
-    from amr_twin.recording.rerun_log import attach, record_run
+    from amr_twin.recording.rerun_capture import attach
+    from amr_twin.recording.rerun_log import record_run
 
     options = TwinOptions()
     t0 = time.perf_counter()

@@ -37,8 +37,7 @@ def twin_run_s(cfg: TwinConfig, sim_s: float, firmware: str = "faithful",
     return timer() - t0, twin
 
 
-def twin_figures(cfg: TwinConfig, sim_s: float, bare_hint: float | None = None,
-                 firmware: str = "faithful") -> dict:
+def twin_figures(cfg: TwinConfig, sim_s: float, firmware: str = "faithful") -> dict:
     """``twin_s_per_sim_s``, ``bare_physics_s_per_sim_s`` (same scenario) and their ``ratio``.
 
     Repeats are interleaved (twin, bare, twin, bare, ...) so that a disturbance of

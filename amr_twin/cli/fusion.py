@@ -16,90 +16,85 @@ import typer
 
 from amr_twin.cli.checks import (JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_memory,
                                  check_outputs, dask_client)
-from amr_twin.cli.options import checked_seed, firmware_option
+from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, checked_seed, firmware_option
 
 
-def add_fusion(experiment: typer.Typer) -> None:
-    """Register ``amr-twin experiment fusion`` on ``experiment``."""
-    from amr_twin.cli.common import _config, _guard, fail
-    from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+def fusion(
+    out: Path = typer.Option(..., "--out", help="Output folder: report.md, metrics.json, PNGs, map, TUM "
+                             "trajectories (with --seeds: the summary and seed<N>/ per seed)."),
+    route: Optional[str] = typer.Option(None, "--route", help="A route of experiments/routes/ by name "
+                                        "(warehouse_60m, the default; corridor) or a route YAML file."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="One seed: the sensors' noise and the robot's "
+                                       "own errors (default 0)."),
+    seeds: Optional[str] = typer.Option(None, "--seeds", help="Many seeds, A:B (both included) or a,b,c: "
+                                        "each metric's mean, sd and range over them."),
+    jobs: Optional[int] = JobsOpt,
+    executor: str = typer.Option("local", "--executor", help="With --seeds: local (process pool of --jobs) "
+                                 "or dask."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, e.g. "
+                                            "tcp://127.0.0.1:8786."),
+    scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s",
+                                              help="Give up reaching the Dask scheduler after this long, s."),
+    firmware: str = firmware_option("improved"),
+    record: Optional[Path] = typer.Option(None, "--record", help="Also write the drive as a Rerun recording "
+                                          "(.rrd; one seed only)."),
+    mcap: Optional[Path] = typer.Option(None, "--mcap", help="Also write the drive as ROS 2 messages "
+                                        "(.mcap; one seed only)."),
+    robot_errors: bool = typer.Option(True, "--robot-errors/--no-robot-errors", help="Each seed also draws "
+                                      "the robot's own errors (tyre radii, track, hall sensors) within their "
+                                      "sourced tolerances; off: the robot is exactly as its odometry assumes."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+    yes: bool = YesOpt,
+    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+) -> None:
+    """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
+    from amr_twin.controllers.route import RouteError, load_route
+    from amr_twin.model.build import BuildError
+    from amr_twin.experiments import fusion
+    from amr_twin.experiments.fusion_seeds import parse_seeds
 
-    @experiment.command("fusion")
-    def fusion_cmd(
-        out: Path = typer.Option(..., "--out", help="Output folder: report.md, metrics.json, PNGs, map, TUM "
-                                 "trajectories (with --seeds: the summary and seed<N>/ per seed)."),
-        route: Optional[str] = typer.Option(None, "--route", help="A route of experiments/routes/ by name "
-                                            "(warehouse_60m, the default; corridor) or a route YAML file."),
-        seed: Optional[int] = typer.Option(None, "--seed", help="One seed: the sensors' noise and the robot's "
-                                           "own errors (default 0)."),
-        seeds: Optional[str] = typer.Option(None, "--seeds", help="Many seeds, A:B (both included) or a,b,c: "
-                                            "each metric's mean, sd and range over them."),
-        jobs: Optional[int] = JobsOpt,
-        executor: str = typer.Option("local", "--executor", help="With --seeds: local (process pool of --jobs) "
-                                     "or dask."),
-        scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, e.g. "
-                                                "tcp://127.0.0.1:8786."),
-        scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s",
-                                                  help="Give up reaching the Dask scheduler after this long, s."),
-        firmware: str = firmware_option("improved"),
-        record: Optional[Path] = typer.Option(None, "--record", help="Also write the drive as a Rerun recording "
-                                              "(.rrd; one seed only)."),
-        mcap: Optional[Path] = typer.Option(None, "--mcap", help="Also write the drive as ROS 2 messages "
-                                            "(.mcap; one seed only)."),
-        robot_errors: bool = typer.Option(True, "--robot-errors/--no-robot-errors", help="Each seed also draws "
-                                          "the robot's own errors (tyre radii, track, hall sensors) within their "
-                                          "sourced tolerances; off: the robot is exactly as its odometry assumes."),
-        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
-        yes: bool = YesOpt,
-        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
-    ) -> None:
-        """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
-        from amr_twin.controllers.route import RouteError, load_route
-        from amr_twin.model.build import BuildError
-        from amr_twin.experiments import fusion
-        from amr_twin.experiments.fusion_seeds import parse_seeds
-
-        jobs, firmware = check_common(jobs, firmware, fail)
-        if seed is not None and seeds is not None:
-            fail("--seed and --seeds: give one of them")
-        try:
-            seed_list = parse_seeds(seeds) if seeds is not None else [0 if seed is None else seed]
-        except ValueError as exc:
-            fail(str(exc))
-        checked_seed(seed, fail)
-        many = len(seed_list) > 1
-        if many and (record is not None or mcap is not None):
-            fail("--record/--mcap record one drive: use --seed N with them, not --seeds")
-        check_executor(executor, scheduler, fail)
-        route_path = fusion.route_file(route)
-        try:
-            loaded = load_route(route_path)
-        except (RouteError, OSError) as exc:
-            known = ", ".join(fusion.route_names())
-            fail(f"--route {route}: {exc}" if route_path.exists() or route is None
-                 else f"--route {route}: no such route file, nor a route of the twin ({known})")
-        check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
-        cfg = _config(config, params, set_)
-        try:  # the drive's simulated time bounded, every point in the world's free space
-            fusion.check_route(cfg, loaded)
-        except (RouteError, BuildError) as exc:
-            fail(f"--route {route_path}: {exc}")
-        client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
-        workers = 1 if not many else jobs if client is None else max(1, sum(client.nthreads().values()))
-        drive_s = fusion.REST_S + fusion.route_length_m(loaded) / loaded.max_speed_m_s + fusion.TAIL_S
-        try:
-            # a drive keeps every sensor message for its estimators, as a recording does
-            check_memory(fusion.drive_bound_s(loaded), fail, recorded=True, sensors=True,
-                         processes=workers if client is None else 1, what="each drive")
-            check_estimate(f"experiment fusion: {len(seed_list)} drive{'s' if many else ''} of {route_path.stem}",
-                           drive_s * len(seed_list), "fusion", workers, firmware, yes, fail)
-            if many:
-                _many(cfg, route_path, seed_list, firmware, robot_errors, jobs, client, progress, out, _guard)
-            else:
-                _one(cfg, route_path, seed_list[0], firmware, robot_errors, progress, record, mcap, out, _guard)
-        finally:
-            if client is not None:
-                client.close()
+    jobs, firmware = check_common(jobs, firmware, fail)
+    if seed is not None and seeds is not None:
+        fail("--seed and --seeds: give one of them")
+    try:
+        seed_list = parse_seeds(seeds) if seeds is not None else [0 if seed is None else seed]
+    except ValueError as exc:
+        fail(str(exc))
+    checked_seed(seed, fail)
+    many = len(seed_list) > 1
+    if many and (record is not None or mcap is not None):
+        fail("--record/--mcap record one drive: use --seed N with them, not --seeds")
+    check_executor(executor, scheduler, fail)
+    route_path = fusion.route_file(route)
+    try:
+        loaded = load_route(route_path)
+    except (RouteError, OSError) as exc:
+        known = ", ".join(fusion.route_names())
+        fail(f"--route {route}: {exc}" if route_path.exists() or route is None
+             else f"--route {route}: no such route file, nor a route of the twin ({known})")
+    check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
+    cfg = _config(config, params, set_)
+    try:  # the drive's simulated time bounded, every point in the world's free space
+        fusion.check_route(cfg, loaded)
+    except (RouteError, BuildError) as exc:
+        fail(f"--route {route_path}: {exc}")
+    client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+    workers = 1 if not many else jobs if client is None else max(1, sum(client.nthreads().values()))
+    drive_s = fusion.REST_S + fusion.route_length_m(loaded) / loaded.max_speed_m_s + fusion.TAIL_S
+    try:
+        # a drive keeps every sensor message for its estimators, as a recording does
+        check_memory(fusion.drive_bound_s(loaded), fail, recorded=True, sensors=True,
+                     processes=workers if client is None else 1, what="each drive")
+        check_estimate(f"experiment fusion: {len(seed_list)} drive{'s' if many else ''} of {route_path.stem}",
+                       drive_s * len(seed_list), "fusion", workers, firmware, yes, fail)
+        if many:
+            _many(cfg, route_path, seed_list, firmware, robot_errors, jobs, client, progress, out, _guard)
+        else:
+            _one(cfg, route_path, seed_list[0], firmware, robot_errors, progress, record, mcap, out, _guard)
+    finally:
+        if client is not None:
+            client.close()
 
 
 def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, progress: bool, record, mcap, out: Path,
@@ -118,14 +113,15 @@ def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, pr
     data = guard(work)
     typer.echo(f"{'architecture':14s} {'ATE m':>7s} {'aligned':>8s} {'RPE m/m':>8s} {'RPE deg/m':>9s} "
                f"{'final m':>8s} {'RMS yaw deg':>11s}")
-    for name, e in data["architectures"].items():
-        typer.echo(f"{name:14s} {e['ate_m']:7.3f} {e['ate_aligned_m']:8.3f} {e['rpe_trans_m']:8.3f} "
-                   f"{e['rpe_rot_deg']:9.2f} {e['final_pos_err_m']:8.3f} {e['rms_yaw_err_deg']:11.2f}")
-    s, r = data["summary"], data["route"]
-    typer.echo(f"route {r['name']} {r['length_m']:.1f} m, goal {'reached' if r['reached_goal'] else 'NOT reached'}; "
-               f"odometry drift {s['odom_drift_final_m']:.3f} m; map walls within 2 cells: "
-               f"{100 * s['map_walls_within_2_cells_frac']:.1f} %")
-    typer.echo(f"wall time {data['wall_s']:.2f} s for {data['sim_s']:.1f} simulated s; wrote {out}/report.md, "
+    for name, a in data.architectures.items():
+        e = a.errors
+        typer.echo(f"{name:14s} {e.ate_m:7.3f} {a.ate_aligned_m:8.3f} {e.rpe_trans_m:8.3f} "
+                   f"{e.rpe_rot_deg:9.2f} {e.final_pos_err_m:8.3f} {e.rms_yaw_err_deg:11.2f}")
+    s, r = data.summary, data.route
+    typer.echo(f"route {r.name} {r.length_m:.1f} m, goal {'reached' if r.reached_goal else 'NOT reached'}; "
+               f"odometry drift {s.odom_drift_final_m:.3f} m; map walls within 2 cells: "
+               f"{100 * s.map_walls_within_2_cells_frac:.1f} %")
+    typer.echo(f"wall time {data.wall_s:.2f} s for {data.sim_s:.1f} simulated s; wrote {out}/report.md, "
                f"truth.tum and one .tum per architecture (evo_ape tum {out}/truth.tum {out}/odom.tum)")
 
 

@@ -18,6 +18,7 @@ from typing import Optional
 
 import typer
 
+from amr_twin.cli.actor_options import checked_actors
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.options import RunOptions, _given, shared
 
@@ -71,12 +72,12 @@ def _checked(cfg, opts, goals, nav: dict):
     return static
 
 
-def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_faults: tuple = (), mission_actors: tuple = (),
-              actors_of=None) -> None:
+def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_faults: tuple = (),
+              mission_actors: tuple = ()) -> None:
     """Check, navigate to ``goals`` in turn, print and write the outputs, exit as the module docstring says.
 
-    ``actors_of(opts, mission_actors, cfg, start, fail)``: the people and pallet jacks of the mission,
-    ``--actor`` and ``--actors-random`` (amr_twin/cli/run.py's, handed in: no import circle)."""
+    ``mission_actors``: the mission's people and pallet jacks (``--actor`` and ``--actors-random``
+    add to them, :func:`amr_twin.cli.actor_options.checked_actors`)."""
     from dataclasses import replace
 
     from amr_twin.cli.options import checked_firmware
@@ -103,7 +104,7 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     static = _guard(lambda: _checked(cfg, opts, goals, nav))
     recording = opts.record is not None or opts.mcap is not None
     start = _start_pose(opts.start)
-    actors = actors_of(opts, tuple(mission_actors), cfg, start, fail) if actors_of is not None else tuple(mission_actors)
+    actors = checked_actors(opts, tuple(mission_actors), cfg, start)
     calibration = None
     if opts.odometry is not None:  # it was ignored: the odometry kept the nominal geometry
         from amr_twin.controllers.odometry_calibration import load
@@ -125,7 +126,7 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
         def on_twin(twin):
             held["twin"] = twin
             if recording:
-                from amr_twin.recording.rerun_log import attach
+                from amr_twin.recording.rerun_capture import attach
                 attach(twin)
             if live is not None:  # the live session brings its cmd_vel node (and the pacing)
                 from amr_twin.live.session import LiveSession
@@ -188,23 +189,19 @@ def _report(run, as_json: bool) -> None:
                f"yaw {math.degrees(info['final_pose'][2]):.0f} deg")
 
 
-def add_goto(run_app: typer.Typer, actors_of) -> None:
-    """Register ``amr-twin run goto`` on the run group (``actors_of``: as :func:`run_goals`)."""
-
-    @run_app.command()
-    @shared(fail)
-    def goto(opts: RunOptions, ctx: typer.Context,
-             goal: Optional[str] = typer.Option(None, "--goal", help="X_M,Y_M[,YAW_DEG] in the map frame (REP-103)."),
-             map_: Optional[Path] = typer.Option(None, "--map", help="A map_server YAML (a map the fusion experiment "
-                                                 "saved, an imported ROS map); default: the world's true map."),
-             localisation: str = typer.Option("ekf", "--localisation", help="truth (the twin's ground truth), ekf "
-                                              "(odometry + gyro + UWB) or odom (wheel odometry alone)."),
-             controller: str = typer.Option("mppi", "--controller", help="mppi or rpp (regulated pure pursuit).")
-             ) -> None:
-        """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/navigation.md)."""
-        if goal is None:
-            fail("--goal is required (X_M,Y_M or X_M,Y_M,YAW_DEG)")
-        if not any(_given(c, "firmware") for c in (ctx, ctx.parent)):
-            opts.firmware = "improved"  # the faithful one restarts its ramps on every cmd_vel (docs/navigation.md)
-        nav = {"map": None if map_ is None else str(map_), "localisation": localisation, "controller": controller}
-        run_goals(opts, [parse_goal(goal)], nav, opts.duration_s, actors_of=actors_of)
+@shared(fail)
+def goto(opts: RunOptions, ctx: typer.Context,
+         goal: Optional[str] = typer.Option(None, "--goal", help="X_M,Y_M[,YAW_DEG] in the map frame (REP-103)."),
+         map_: Optional[Path] = typer.Option(None, "--map", help="A map_server YAML (a map the fusion experiment "
+                                             "saved, an imported ROS map); default: the world's true map."),
+         localisation: str = typer.Option("ekf", "--localisation", help="truth (the twin's ground truth), ekf "
+                                          "(odometry + gyro + UWB) or odom (wheel odometry alone)."),
+         controller: str = typer.Option("mppi", "--controller", help="mppi or rpp (regulated pure pursuit).")
+         ) -> None:
+    """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/navigation.md)."""
+    if goal is None:
+        fail("--goal is required (X_M,Y_M or X_M,Y_M,YAW_DEG)")
+    if not any(_given(c, "firmware") for c in (ctx, ctx.parent)):
+        opts.firmware = "improved"  # the faithful one restarts its ramps on every cmd_vel (docs/navigation.md)
+    nav = {"map": None if map_ is None else str(map_), "localisation": localisation, "controller": controller}
+    run_goals(opts, [parse_goal(goal)], nav, opts.duration_s)

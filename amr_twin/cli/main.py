@@ -42,8 +42,12 @@ try:  # typer >= 0.20 carries its own copy of click
 except ImportError:  # pragma: no cover - older typer on click
     from click import exceptions as _click_errors
 
+from amr_twin.cli import experiment as experiment_group
+from amr_twin.cli import run as run_group
+from amr_twin.cli import sweep as sweep_group
 from amr_twin.cli.common import _config, _guard, fail, start_up
-from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+from amr_twin.cli.menu import client
+from amr_twin.cli.options import ConfigOpt, LiveCommand, ParamsOpt, SetOpt
 from amr_twin.cli.path_options import CheckedGroup
 
 
@@ -357,10 +361,10 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
                                  "needed to compare: the log must be longer")
 
 
-from amr_twin.cli.experiment import register as _register_experiment; _register_experiment(app)  # noqa: E402,E702
-
-
-from amr_twin.cli.run import register as _register_run; _register_run(app)  # noqa: E402,E702 - run, client
+app.add_typer(run_group.app, name="run")
+app.add_typer(experiment_group.app, name="experiment")
+app.add_typer(sweep_group.app, name="sweep")
+app.command(name="client", cls=LiveCommand)(client)
 
 
 def main() -> None:  # pragma: no cover - console entry

@@ -12,7 +12,8 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_outputs, dask_client
-from amr_twin.cli.options import checked_seed, firmware_option
+from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, checked_seed, firmware_option
 
 MAX_EPISODES = 1000
 EPISODE_SIM_S = 70.0
@@ -20,98 +21,92 @@ EPISODE_SIM_S = 70.0
 was 56-98 s by scenario (66 s on the true map, 74 s on the SLAM map)."""
 
 
-def add_navigation(experiment: typer.Typer) -> None:
-    """Register ``amr-twin experiment navigation`` on ``experiment``."""
-    from amr_twin.cli.common import _config, _guard, fail
-    from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+def navigation(
+    out: Path = typer.Option(..., "--out", help="Output folder: report.md, metrics.json, trajectories_<map>.png, "
+                             "the SLAM map (slam_map.yaml/.pgm/.png)."),
+    episodes: int = typer.Option(50, "--episodes", help="Start/goal pairs, each run on every map."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the episodes (episode i: default_rng([seed, i]))."),
+    world: str = typer.Option("aisles", "--world", help="A world of models/worlds/ with a mapping route "
+                              "(experiments/routes/<world>_mapping.yaml) or give --slam-map."),
+    maps: str = typer.Option("true,slam", "--maps", help="true, slam or true,slam."),
+    slam_map: Optional[Path] = typer.Option(None, "--slam-map", help="Use this map_server YAML as the SLAM map "
+                                            "instead of building one."),
+    people: str = typer.Option("walking", "--people", help="The person scenario: static (standing in an aisle) "
+                               "or walking (an actor crossing the aisle ahead of the robot, amr_twin/model/actors.py)."),
+    localisation: str = typer.Option("ekf", "--localisation", help="truth, ekf or odom."),
+    controller: str = typer.Option("mppi", "--controller", help="mppi or rpp."),
+    firmware: str = firmware_option("improved"),
+    jobs: Optional[int] = JobsOpt,
+    executor: str = typer.Option("local", "--executor", help="local (process pool of --jobs) or dask."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address."),
+    scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s"),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+    yes: bool = YesOpt,
+    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+) -> None:
+    """Navigate seeded start/goal pairs, some with an unmapped person or pallet jack, on the true and SLAM maps."""
+    from amr_twin.model.worlds import world_path
+    from amr_twin.navigation.localisation import SOURCES
+    from amr_twin.navigation.stack import CONTROLLERS
 
-    @experiment.command("navigation")
-    def navigation_cmd(
-        out: Path = typer.Option(..., "--out", help="Output folder: report.md, metrics.json, trajectories_<map>.png, "
-                                 "the SLAM map (slam_map.yaml/.pgm/.png)."),
-        episodes: int = typer.Option(50, "--episodes", help="Start/goal pairs, each run on every map."),
-        seed: int = typer.Option(0, "--seed", help="Seed of the episodes (episode i: default_rng([seed, i]))."),
-        world: str = typer.Option("aisles", "--world", help="A world of models/worlds/ with a mapping route "
-                                  "(experiments/routes/<world>_mapping.yaml) or give --slam-map."),
-        maps: str = typer.Option("true,slam", "--maps", help="true, slam or true,slam."),
-        slam_map: Optional[Path] = typer.Option(None, "--slam-map", help="Use this map_server YAML as the SLAM map "
-                                                "instead of building one."),
-        people: str = typer.Option("walking", "--people", help="The person scenario: static (standing in an aisle) "
-                                   "or walking (an actor crossing the aisle ahead of the robot, amr_twin/model/actors.py)."),
-        localisation: str = typer.Option("ekf", "--localisation", help="truth, ekf or odom."),
-        controller: str = typer.Option("mppi", "--controller", help="mppi or rpp."),
-        firmware: str = firmware_option("improved"),
-        jobs: Optional[int] = JobsOpt,
-        executor: str = typer.Option("local", "--executor", help="local (process pool of --jobs) or dask."),
-        scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address."),
-        scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s"),
-        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
-        yes: bool = YesOpt,
-        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
-    ) -> None:
-        """Navigate seeded start/goal pairs, some with an unmapped person or pallet jack, on the true and SLAM maps."""
-        from amr_twin.model.worlds import world_path
-        from amr_twin.navigation.localisation import SOURCES
-        from amr_twin.navigation.stack import CONTROLLERS
-
-        jobs, firmware = check_common(jobs, firmware, fail)
-        checked_seed(seed, fail)  # -1 failed in numpy ("expected non-negative integer"), naming no option
-        if not 1 <= episodes <= MAX_EPISODES:
-            fail(f"--episodes {episodes}: must be in [1, {MAX_EPISODES}]")
-        kinds = tuple(k.strip() for k in maps.split(","))
-        if not kinds or any(k not in ("true", "slam") for k in kinds) or len(set(kinds)) != len(kinds):
-            fail(f"--maps {maps!r}: true, slam or true,slam")
-        if people not in ("static", "walking"):
-            fail(f"--people {people!r}: static or walking")
-        if localisation not in SOURCES:
-            fail(f"--localisation {localisation!r}: must be one of {', '.join(SOURCES)}")
-        if controller not in CONTROLLERS:
-            fail(f"--controller {controller!r}: must be one of {', '.join(CONTROLLERS)}")
-        if not world_path(world).is_file() or world_path(world).suffix != ".xml":
-            fail(f"--world {world}: not an MJCF world of models/worlds/ nor an .xml file")
-        if slam_map is not None:
-            from amr_twin.model.worlds import MapError, load_map
-            try:
-                load_map(slam_map)
-            except MapError as exc:
-                fail(f"--slam-map {exc}")
-        elif "slam" in kinds:
-            from amr_twin.experiments.navigation_map import mapping_route
-            try:
-                mapping_route(world)
-            except ValueError as exc:
-                fail(str(exc))
-        check_executor(executor, scheduler, fail)
-        check_outputs(fail, folders={"--out": out})
-        check_estimate(f"experiment navigation: {episodes} episode(s) on {len(kinds)} map(s)",
-                       episodes * len(kinds) * EPISODE_SIM_S, "navigation", jobs, firmware, yes, fail)
-        cfg = _config(config, params, set_)
-        client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
-
-        def work():
-            from amr_twin.experiments import navigation, navigation_report
-            from amr_twin.recording.atomic_file import all_or_nothing
-
-            out.mkdir(parents=True, exist_ok=True)
-            data = navigation.run(cfg, world, episodes, seed=seed, maps=kinds,
-                                  slam_yaml=None if slam_map is None else str(slam_map), slam_stem=out / "slam_map",
-                                  localisation=localisation, controller=controller, firmware=firmware, jobs=jobs,
-                                  client=client, progress=progress, people=people)
-            static_maps = data.pop("static_maps")
-            with all_or_nothing():
-                navigation_report.plot(data["rows"], static_maps, out)
-                navigation_report.report(data, out)
-            return data
-
+    jobs, firmware = check_common(jobs, firmware, fail)
+    checked_seed(seed, fail)  # -1 failed in numpy ("expected non-negative integer"), naming no option
+    if not 1 <= episodes <= MAX_EPISODES:
+        fail(f"--episodes {episodes}: must be in [1, {MAX_EPISODES}]")
+    kinds = tuple(k.strip() for k in maps.split(","))
+    if not kinds or any(k not in ("true", "slam") for k in kinds) or len(set(kinds)) != len(kinds):
+        fail(f"--maps {maps!r}: true, slam or true,slam")
+    if people not in ("static", "walking"):
+        fail(f"--people {people!r}: static or walking")
+    if localisation not in SOURCES:
+        fail(f"--localisation {localisation!r}: must be one of {', '.join(SOURCES)}")
+    if controller not in CONTROLLERS:
+        fail(f"--controller {controller!r}: must be one of {', '.join(CONTROLLERS)}")
+    if not world_path(world).is_file() or world_path(world).suffix != ".xml":
+        fail(f"--world {world}: not an MJCF world of models/worlds/ nor an .xml file")
+    if slam_map is not None:
+        from amr_twin.model.worlds import MapError, load_map
         try:
-            data = _guard(work)
-        finally:
-            if client is not None:
-                client.close()
-        for key, v in data["summary"].items():
-            ratio = v["travelled_over_optimal_median"]
-            typer.echo(f"{key:22s} {v['episodes']:4d} episodes: success {100 * v['success_rate']:5.1f} %, "
-                       f"collisions {v['collisions']}, travelled/optimal median "
-                       f"{'-' if ratio is None else f'{ratio:.3f}'}, BARN {v['barn_score_mean']:.3f}")
-        typer.echo(f"wall time {data['wall_s']:.0f} s, CPU {data['cpu_s']:.0f} s; wrote {out}/report.md, "
-                   "metrics.json, trajectories_*.png")
+            load_map(slam_map)
+        except MapError as exc:
+            fail(f"--slam-map {exc}")
+    elif "slam" in kinds:
+        from amr_twin.experiments.navigation_map import mapping_route
+        try:
+            mapping_route(world)
+        except ValueError as exc:
+            fail(str(exc))
+    check_executor(executor, scheduler, fail)
+    check_outputs(fail, folders={"--out": out})
+    check_estimate(f"experiment navigation: {episodes} episode(s) on {len(kinds)} map(s)",
+                   episodes * len(kinds) * EPISODE_SIM_S, "navigation", jobs, firmware, yes, fail)
+    cfg = _config(config, params, set_)
+    client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
+
+    def work():
+        from amr_twin.experiments import navigation, navigation_report
+        from amr_twin.recording.atomic_file import all_or_nothing
+
+        out.mkdir(parents=True, exist_ok=True)
+        data = navigation.run(cfg, world, episodes, seed=seed, maps=kinds,
+                              slam_yaml=None if slam_map is None else str(slam_map), slam_stem=out / "slam_map",
+                              localisation=localisation, controller=controller, firmware=firmware, jobs=jobs,
+                              client=client, progress=progress, people=people)
+        static_maps = data.pop("static_maps")
+        with all_or_nothing():
+            navigation_report.plot(data["rows"], static_maps, out)
+            navigation_report.report(data, out)
+        return data
+
+    try:
+        data = _guard(work)
+    finally:
+        if client is not None:
+            client.close()
+    for key, v in data["summary"].items():
+        ratio = v["travelled_over_optimal_median"]
+        typer.echo(f"{key:22s} {v['episodes']:4d} episodes: success {100 * v['success_rate']:5.1f} %, "
+                   f"collisions {v['collisions']}, travelled/optimal median "
+                   f"{'-' if ratio is None else f'{ratio:.3f}'}, BARN {v['barn_score_mean']:.3f}")
+    typer.echo(f"wall time {data['wall_s']:.0f} s, CPU {data['cpu_s']:.0f} s; wrote {out}/report.md, "
+               "metrics.json, trajectories_*.png")

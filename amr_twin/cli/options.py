@@ -65,9 +65,6 @@ def checked_seed(seed: Optional[int], fail: Callable[[str], None], option: str =
     return seed
 
 
-LIVE_MODES = ("foxglove", "rerun")
-
-
 def live_option_args(args: list[str], commands=()) -> list[str]:
     """``--live`` with its value optional: ``--live`` followed by nothing, an option or one of the group's
     ``commands`` means ``--live foxglove``; any other word is its value (checked: ``--live bogus`` is refused

@@ -26,12 +26,14 @@ from typing import Optional
 
 import typer
 
+from amr_twin.cli.actor_options import checked_actors
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
-from amr_twin.cli.options import (LiveCommand, LiveGroup, RunOptions, _given, checked_firmware, checked_live,
+from amr_twin.cli.goto import goto, run_goals
+from amr_twin.cli.options import (LiveGroup, RunOptions, _given, checked_firmware, checked_live,
                                   checked_ros1, checked_seed, shared)
 from amr_twin.sim.bounds import duration_problem
-from amr_twin.recording.run_report import (CSV_COLUMNS, CSV_COMMENT, collision_warning, csv_text, series_table,  # noqa: F401
-                         summary, text_lines)
+from amr_twin.recording.run_report import collision_warning, csv_text, text_lines
+from amr_twin.recording.run_summary import summary
 
 DEFAULT_RUN_S = 10.0
 EXIT_COLLISION = 4
@@ -53,54 +55,6 @@ def _duration(opts: RunOptions, default_s: float) -> float:
     if duration_problem(duration_s):
         fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
     return duration_s
-
-
-MAX_ACTORS = 50
-"""Most actors in one run (each costs a few microseconds a grid instant and a mocap body)."""
-
-
-def _actors(opts: RunOptions, mission_actors: tuple, cfg, start, fail) -> tuple:
-    """The mission's actors, ``--actor``'s and ``--actors-random``'s, in that order; a bad one refused
-    in one line (their paths are checked against the world when it is built)."""
-    from amr_twin.model.actors import Actor, ActorError, check_speeds
-
-    try:
-        actors = list(mission_actors) + [Actor.parse(text, cfg) for text in opts.actor]
-        if opts.actors_random is not None:
-            count, _, flag = opts.actors_random.partition("/")
-            if not count.isdigit() or not 1 <= int(count) <= MAX_ACTORS or (flag and not flag.startswith("stop=")):
-                fail(f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}")
-            stop = _stop_distance(opts.actors_random, flag[5:]) if flag else 0.0
-            actors += list(_guard(lambda: _random_actors(cfg, opts, int(count), start, stop)))
-        check_speeds(tuple(actors), cfg)
-    except (ActorError, ValueError) as exc:
-        fail(str(exc))
-    if len(actors) > MAX_ACTORS:
-        fail(f"--actor: {len(actors)} actors, at most {MAX_ACTORS}")
-    return tuple(actors)
-
-
-def _stop_distance(given: str, text: str) -> float:
-    """``--actors-random``'s ``/stop=M``, m; a one-line refusal naming the option (was Python's
-    "could not convert string to float")."""
-    from amr_twin.model.actors import MAX_STOP_M
-
-    try:
-        stop_m = float(text)
-    except ValueError:
-        stop_m = math.nan
-    if not (math.isfinite(stop_m) and 0 <= stop_m <= MAX_STOP_M):
-        fail(f"--actors-random {given!r}: /stop=M takes a distance M in [0, {MAX_STOP_M:g}] m")
-    return stop_m
-
-
-def _random_actors(cfg, opts: RunOptions, count: int, start, stop_m: float) -> tuple:
-    from amr_twin.model.actor_space import random_actors
-    from amr_twin.model.build import world_model
-    from amr_twin.model.worlds import default_start
-
-    x, y, _yaw = start if start is not None else default_start(opts.world)
-    return random_actors(world_model(cfg, opts.world), count, opts.seed, cfg, (x, y), stop_within_m=stop_m)
 
 
 def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RUN_S,
@@ -157,7 +111,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 
     check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors, rerun=opts.record is not None)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
-    actors = _actors(opts, mission_actors, cfg, start, fail)
+    actors = checked_actors(opts, mission_actors, cfg, start)
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None, firmware_params=avr_params,
@@ -175,7 +129,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
                        f"paced at {rate:g}x real time", err=True)
         try:
             if recording:
-                from amr_twin.recording.rerun_log import attach
+                from amr_twin.recording.rerun_capture import attach
                 attach(twin)
             if live is None and ros1 is None:
                 res = run_mission(cfg, steps, duration_s, options, twin=twin)
@@ -200,7 +154,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     result, start_pose = _guard(work)
     info = summary(result, single, start_pose)
     if opts.as_json:
-        typer.echo(json.dumps(info))
+        typer.echo(json.dumps(info.as_json()))
     else:
         for line in text_lines(result, info):
             typer.echo(line)
@@ -209,7 +163,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         typer.echo(warning, err=True)
     for message in result.errors:
         typer.echo(message, err=True)
-    if info["code"] != 0:
+    if info.code != 0:
         raise typer.Exit(1)
     if result.halted:
         raise typer.Exit(EXIT_COLLISION)
@@ -252,93 +206,94 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0):
                 typer.echo(f"{name}: {dropped} message(s) from clients dropped (see the warnings above)", err=True)
 
 
-def register(app: typer.Typer) -> None:
-    """Add ``run`` (linear, angular, motor, stop, --mission) and ``client`` to the app."""
-    from amr_twin.cli.menu import client
+def Command(*args, **kwargs):  # noqa: N802 - amr_twin.sim.run.Command, imported when a run starts
+    from amr_twin.sim.run import Command as RunCommand
 
-    def Command(*args, **kwargs):  # noqa: N802 - amr_twin.sim.run.Command, imported when a run starts
-        from amr_twin.sim.run import Command as RunCommand
+    return RunCommand(*args, **kwargs)
 
-        return RunCommand(*args, **kwargs)
 
-    run_app = typer.Typer(cls=LiveGroup, add_completion=False, no_args_is_help=False,
-                          help="Run wheel commands on the twin, as wheel_Command_Client does. The options "
-                               "below go before or after the command kind.")
-    app.add_typer(run_app, name="run")
-    app.command(name="client", cls=LiveCommand)(client)
+def one(opts: RunOptions, command_factory) -> None:
+    """Run the single command ``command_factory()`` builds (its ValueError refused in one line)."""
+    try:
+        command = command_factory()
+    except ValueError as exc:
+        fail(str(exc))
+    execute(opts, [(0.0, command)], True)
 
-    def one(opts: RunOptions, command_factory) -> None:
-        try:
-            command = command_factory()
-        except ValueError as exc:
-            fail(str(exc))
-        execute(opts, [(0.0, command)], True)
 
-    @run_app.callback(invoke_without_command=True)
-    @shared(fail)
-    def run(opts: RunOptions, ctx: typer.Context,
-            mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/sim/mission.py); "
-                                                   "its faults: list adds to --fault, its actors: to --actor.")) -> None:
-        """Run a command kind (linear, angular, motor, stop) or a --mission file."""
-        if ctx.invoked_subcommand is not None:
-            if mission is not None:
-                fail("--mission and a command kind cannot be combined")
-            return
-        if mission is None:
-            fail("give a command (linear, angular, motor, stop) or --mission FILE")
-        from amr_twin.sim.mission import MissionError, load_mission_file
+app = typer.Typer(cls=LiveGroup, add_completion=False, no_args_is_help=False,
+                  help="Run wheel commands on the twin, as wheel_Command_Client does. The options "
+                       "below go before or after the command kind.")
+"""``amr-twin run``: linear, angular, motor, stop, goto (:func:`amr_twin.cli.goto.goto`) or --mission."""
 
-        try:
-            plan = load_mission_file(mission)
-        except MissionError as exc:
-            fail(str(exc))
-        if plan.goals:
-            from amr_twin.cli.goto import run_goals
-            nav = {"map": None, "localisation": "ekf", "controller": "mppi", **plan.navigation}
-            if not _given(ctx, "firmware"):
-                opts.firmware = "improved"  # as run goto (amr_twin/cli/goto.py)
-            run_goals(opts, plan.goals, nav, opts.duration_s if opts.duration_s is not None else plan.duration_s,
-                      plan.faults, plan.actors, actors_of=_actors)
-            return
-        execute(opts, plan.steps, False, plan.duration_s, plan.faults, plan.actors)
 
-    @run_app.command()
-    @shared(fail)
-    def linear(opts: RunOptions,
-               speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="m/s; negative: backward.")) -> None:
-        """Linear motion: both wheels at the same speed (listing 4.4)."""
-        speed = _finite("--speed-m-s", speed_m_s)
-        one(opts, lambda: Command("linear", speed_m_s=speed))
+@app.callback(invoke_without_command=True)
+@shared(fail)
+def run(opts: RunOptions, ctx: typer.Context,
+        mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/sim/mission.py); "
+                                               "its faults: list adds to --fault, its actors: to --actor.")) -> None:
+    """Run a command kind (linear, angular, motor, stop) or a --mission file."""
+    if ctx.invoked_subcommand is not None:
+        if mission is not None:
+            fail("--mission and a command kind cannot be combined")
+        return
+    if mission is None:
+        fail("give a command (linear, angular, motor, stop) or --mission FILE")
+    from amr_twin.sim.mission import MissionError, load_mission_file
 
-    @run_app.command()
-    @shared(fail)
-    def angular(opts: RunOptions,
-                speed_deg_s: Optional[float] = typer.Option(None, "--speed-deg-s", help="deg/s, CCW +."),
-                icc_m: Optional[float] = typer.Option(None, "--icc-m", help="ICC distance, m, + to the left.")) -> None:
-        """Rotation about an ICC (listing 4.5; REP-103 signs)."""
-        speed, icc = _finite("--speed-deg-s", speed_deg_s), _finite("--icc-m", icc_m)
-        one(opts, lambda: Command("angular", speed_deg_s=speed, icc_m=icc))
+    try:
+        plan = load_mission_file(mission)
+    except MissionError as exc:
+        fail(str(exc))
+    if plan.goals:
+        nav = {"map": None, "localisation": "ekf", "controller": "mppi", **plan.navigation}
+        if not _given(ctx, "firmware"):
+            opts.firmware = "improved"  # as run goto (amr_twin/cli/goto.py)
+        run_goals(opts, plan.goals, nav, opts.duration_s if opts.duration_s is not None else plan.duration_s,
+                  plan.faults, plan.actors)
+        return
+    execute(opts, plan.steps, False, plan.duration_s, plan.faults, plan.actors)
 
-    @run_app.command()
-    @shared(fail)
-    def motor(opts: RunOptions,
-              wheel: Optional[str] = typer.Option(None, "--wheel", help="left or right."),
-              direction: Optional[str] = typer.Option(None, "--direction", help="forward or backward."),
-              speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="Rim speed, m/s, >= 0.")) -> None:
-        """One wheel driven, the other free-spinning (fig. 3.6)."""
-        if wheel is None:
-            fail("--wheel is required (left or right)")
-        if direction is None:
-            fail("--direction is required (forward or backward)")
-        speed = _finite("--speed-m-s", speed_m_s)
-        one(opts, lambda: Command("motor", wheel=wheel, direction=direction, speed_m_s=speed))
 
-    @run_app.command()
-    @shared(fail)
-    def stop(opts: RunOptions) -> None:
-        """Brake both wheels (fig. 3.7)."""
-        one(opts, lambda: Command("stop"))
+@app.command()
+@shared(fail)
+def linear(opts: RunOptions,
+           speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="m/s; negative: backward.")) -> None:
+    """Linear motion: both wheels at the same speed (listing 4.4)."""
+    speed = _finite("--speed-m-s", speed_m_s)
+    one(opts, lambda: Command("linear", speed_m_s=speed))
 
-    from amr_twin.cli.goto import add_goto
 
-    add_goto(run_app, _actors)
+@app.command()
+@shared(fail)
+def angular(opts: RunOptions,
+            speed_deg_s: Optional[float] = typer.Option(None, "--speed-deg-s", help="deg/s, CCW +."),
+            icc_m: Optional[float] = typer.Option(None, "--icc-m", help="ICC distance, m, + to the left.")) -> None:
+    """Rotation about an ICC (listing 4.5; REP-103 signs)."""
+    speed, icc = _finite("--speed-deg-s", speed_deg_s), _finite("--icc-m", icc_m)
+    one(opts, lambda: Command("angular", speed_deg_s=speed, icc_m=icc))
+
+
+@app.command()
+@shared(fail)
+def motor(opts: RunOptions,
+          wheel: Optional[str] = typer.Option(None, "--wheel", help="left or right."),
+          direction: Optional[str] = typer.Option(None, "--direction", help="forward or backward."),
+          speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="Rim speed, m/s, >= 0.")) -> None:
+    """One wheel driven, the other free-spinning (fig. 3.6)."""
+    if wheel is None:
+        fail("--wheel is required (left or right)")
+    if direction is None:
+        fail("--direction is required (forward or backward)")
+    speed = _finite("--speed-m-s", speed_m_s)
+    one(opts, lambda: Command("motor", wheel=wheel, direction=direction, speed_m_s=speed))
+
+
+@app.command()
+@shared(fail)
+def stop(opts: RunOptions) -> None:
+    """Brake both wheels (fig. 3.7)."""
+    one(opts, lambda: Command("stop"))
+
+
+app.command("goto")(goto)

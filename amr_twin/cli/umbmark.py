@@ -14,64 +14,60 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import JobsOpt, YesOpt, check_common, check_estimate, check_outputs
+from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
 RESERVED = ("wheel.tyre_slip", "sim.floor_friction_field")
 """Settings the command's own options choose (--tyres/--no-tyres, --floor-field/--no-floor-field)."""
 
 
-def add_umbmark(experiment: typer.Typer) -> None:
-    """Register ``amr-twin experiment umbmark`` on ``experiment``."""
-    from amr_twin.cli.common import _config, _guard, fail
-    from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+def umbmark(
+    out: Path = typer.Option(..., "--out", help="Output folder: report.md, metrics.json, borenstein.png, "
+                             "emax.png, calibration/seed<N>.yaml."),
+    seeds: str = typer.Option("0:9", "--seeds", help="Robots, A:B (both included), a,b,c or one seed: each "
+                              "draws its tyre radii, track and hall sensors (as amr-twin experiment fusion)."),
+    runs: int = typer.Option(5, "--runs", help="Squares per direction and phase (Borenstein: 5)."),
+    tyres: bool = typer.Option(True, "--tyres/--no-tyres", help="Brush tyres (with them the same robots are "
+                               "also driven with the rigid contact, for the spread) or the rigid contact only."),
+    floor_field: bool = typer.Option(True, "--floor-field/--no-floor-field", help="The floor's friction "
+                                     "field, drawn per square (acts through the brush tyres)."),
+    jobs: Optional[int] = JobsOpt,
+    yes: bool = YesOpt,
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+) -> None:
+    """UMBmark (4 m squares both ways) per robot, its calibration of the odometry, and the squares again."""
+    from amr_twin.experiments.fusion_seeds import parse_seeds
+    from amr_twin.experiments.umbmark_seeds import MAX_RUNS, SQUARE_S
 
-    @experiment.command("umbmark")
-    def umbmark_cmd(
-        out: Path = typer.Option(..., "--out", help="Output folder: report.md, metrics.json, borenstein.png, "
-                                 "emax.png, calibration/seed<N>.yaml."),
-        seeds: str = typer.Option("0:9", "--seeds", help="Robots, A:B (both included), a,b,c or one seed: each "
-                                  "draws its tyre radii, track and hall sensors (as amr-twin experiment fusion)."),
-        runs: int = typer.Option(5, "--runs", help="Squares per direction and phase (Borenstein: 5)."),
-        tyres: bool = typer.Option(True, "--tyres/--no-tyres", help="Brush tyres (with them the same robots are "
-                                   "also driven with the rigid contact, for the spread) or the rigid contact only."),
-        floor_field: bool = typer.Option(True, "--floor-field/--no-floor-field", help="The floor's friction "
-                                         "field, drawn per square (acts through the brush tyres)."),
-        jobs: Optional[int] = JobsOpt,
-        yes: bool = YesOpt,
-        progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
-        config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
-    ) -> None:
-        """UMBmark (4 m squares both ways) per robot, its calibration of the odometry, and the squares again."""
-        from amr_twin.experiments.fusion_seeds import parse_seeds
-        from amr_twin.experiments.umbmark_seeds import MAX_RUNS, SQUARE_S
+    jobs, _ = check_common(jobs, "improved", fail)
+    try:
+        seed_list = parse_seeds(seeds)
+    except ValueError as exc:
+        fail(str(exc))
+    if not 1 <= runs <= MAX_RUNS:
+        fail(f"--runs {runs}: must be in 1..{MAX_RUNS} (squares per direction and phase, ~1 s of CPU each)")
+    for item in set_ or []:
+        key = item.partition("=")[0].strip()
+        if key in RESERVED:
+            fail(f"--set {key}: chosen by this command's --tyres/--no-tyres and --floor-field/--no-floor-field")
+    if params is not None:  # its value was replaced by the options' without a word
+        from amr_twin.model.yaml_file import read_yaml
 
-        jobs, _ = check_common(jobs, "improved", fail)
-        try:
-            seed_list = parse_seeds(seeds)
-        except ValueError as exc:
-            fail(str(exc))
-        if not 1 <= runs <= MAX_RUNS:
-            fail(f"--runs {runs}: must be in 1..{MAX_RUNS} (squares per direction and phase, ~1 s of CPU each)")
-        for item in set_ or []:
-            key = item.partition("=")[0].strip()
-            if key in RESERVED:
-                fail(f"--set {key}: chosen by this command's --tyres/--no-tyres and --floor-field/--no-floor-field")
-        if params is not None:  # its value was replaced by the options' without a word
-            from amr_twin.model.yaml_file import read_yaml
-
-            tree = read_yaml(params, "--params", lambda text: ValueError(text)) if params.is_file() else None
-            for key in RESERVED:
-                section, name = key.split(".")
-                if isinstance(tree, dict) and isinstance(tree.get(section), dict) and name in tree[section]:
-                    fail(f"--params {params}: {key} is chosen by this command's --tyres/--no-tyres and "
-                         "--floor-field/--no-floor-field")
-        check_outputs(fail, folders={"--out": out})
-        sets = list(set_ or []) + [f"wheel.tyre_slip={str(tyres).lower()}",
-                                   f"sim.floor_friction_field={str(floor_field).lower()}"]
-        cfg = _config(config, params, sets)
-        squares = len(seed_list) * runs * 2 * (3 if tyres else 2)  # before and after; the rigid contact's before
-        check_estimate(f"experiment umbmark: {squares} squares", squares * SQUARE_S, "umbmark", jobs, "improved",
-                       yes, fail)
-        _run(cfg, seed_list, runs, tyres, floor_field, jobs, progress, out, _guard)
+        tree = read_yaml(params, "--params", lambda text: ValueError(text)) if params.is_file() else None
+        for key in RESERVED:
+            section, name = key.split(".")
+            if isinstance(tree, dict) and isinstance(tree.get(section), dict) and name in tree[section]:
+                fail(f"--params {params}: {key} is chosen by this command's --tyres/--no-tyres and "
+                     "--floor-field/--no-floor-field")
+    check_outputs(fail, folders={"--out": out})
+    sets = list(set_ or []) + [f"wheel.tyre_slip={str(tyres).lower()}",
+                               f"sim.floor_friction_field={str(floor_field).lower()}"]
+    cfg = _config(config, params, sets)
+    squares = len(seed_list) * runs * 2 * (3 if tyres else 2)  # before and after; the rigid contact's before
+    check_estimate(f"experiment umbmark: {squares} squares", squares * SQUARE_S, "umbmark", jobs, "improved",
+                   yes, fail)
+    _run(cfg, seed_list, runs, tyres, floor_field, jobs, progress, out, _guard)
 
 
 def _run(cfg, seeds: list[int], runs: int, tyres: bool, floor_field: bool, jobs: int, progress: bool, out: Path,

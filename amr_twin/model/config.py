@@ -38,7 +38,7 @@ from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, 
 from amr_twin.model.config_leaves import field_range as _field_range
 from amr_twin.model.config_overrides import Blame, check_assignment, check_kind, parse_assignment
 from amr_twin.model.config_overrides import set_path as _set_path
-from amr_twin.model.parameter_tree import DEFAULT_CONFIG, read_tree
+from amr_twin.model.parameter_tree import read_tree
 from amr_twin.model.parameter_tree import read_yaml as _read_yaml
 
 """libyaml's safe loader when PyYAML has it (amr.yaml in ~3 ms instead of ~30 ms), else the Python one."""

@@ -130,6 +130,12 @@ class WheelCfg(Section):
     hall_misalignment_sigma_deg: float = P(unit="deg", ge=0.0, le=2.0, setting=True)
     hall_jitter_us: float = P(unit="us", ge=0.0, le=100.0, setting=True)
     hall_hysteresis_deg: float = P(unit="deg", ge=0.0, le=2.0)
+    hall_pole_pairs: int = P(unit="1", ge=1, le=60)
+
+    @property
+    def sc_edges_per_rev(self) -> int:
+        """SC state changes per wheel revolution: three hall sensors, each toggling twice per pole pair."""
+        return 6 * self.hall_pole_pairs
 
     def radius_of(self, side: str) -> float:
         """The ``left`` or ``right`` tyre's true rolling radius, m: ``radius_m`` plus its error."""

@@ -20,7 +20,7 @@ import numpy as np
 
 from amr_twin.model import mass
 from amr_twin.model.config import TwinConfig
-from amr_twin.model.disk_cache import CACHE_ENV, cache_dir, read_entry, store  # noqa: F401 - CACHE_ENV named here too
+from amr_twin.model.disk_cache import cache_dir, read_entry, store
 from amr_twin.model.paths import MODEL_DIR, ROOT
 
 XACRO_FILE = MODEL_DIR / "amr.urdf.xacro"

@@ -151,7 +151,8 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
         if anchors is not None:
             uwb = uwb.model_copy(update={"anchors_x_m": tuple(anchors[:, 0]), "anchors_y_m": tuple(anchors[:, 1])})
         twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, uwb, seed=[twin.options.seed, 3])
-        twin.ekf = EkfNode(cfg.ekf, use_imu=True, use_uwb=True, uwb=uwb, initial_pose=start, bus=twin.bus)
+        twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=True, uwb=uwb,
+                           initial_pose=start, bus=twin.bus)
     else:
         frame = start
     pose_source = PoseSource(twin.bus, SOURCES[options.localisation], frame)

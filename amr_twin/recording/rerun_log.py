@@ -2,7 +2,7 @@
 
 Two stages, so that a recorded run costs little while it runs:
 
-1. :class:`~amr_twin.recording.rerun_capture.Capture` (:func:`attach`, :mod:`amr_twin.recording.rerun_capture`)
+1. :class:`~amr_twin.recording.rerun_capture.Capture` (:func:`~amr_twin.recording.rerun_capture.attach`)
    is attached to a :class:`~amr_twin.sim.loop.Twin` before it runs. It taps the bus and
    samples the world pose of each robot body as a grid sampler of the loop, so the
    run is unchanged.
@@ -40,12 +40,10 @@ from pathlib import Path
 from amr_twin.recording.atomic_file import write_bytes
 from amr_twin.recording.rerun_navigation import _log_navigation
 from amr_twin.sim.event_log import has_events, log_events
-from amr_twin.recording.rerun_capture import (US, Capture, attach, capture_of, recording_folder,  # noqa: F401
-                            remove_stale_temporaries)
-from amr_twin.recording.rerun_streams import (TIMELINE, WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,  # noqa: F401
-                            _log_wheel_speeds, reference_rpm)
-from amr_twin.recording.rerun_world import (VISUAL_GROUPS, _log_body_transforms, _log_geoms, _log_scan,  # noqa: F401
-                          _log_trajectory, _log_uwb, body_entity, uwb_geometry, uwb_ranges)
+from amr_twin.recording.rerun_capture import Capture, capture_of
+from amr_twin.recording.rerun_streams import (WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,
+                                              _log_wheel_speeds)
+from amr_twin.recording.rerun_world import _log_body_transforms, _log_geoms, _log_scan, _log_trajectory, _log_uwb
 
 TRACKED = "world/bodies/amr/base_link"
 """The 3D view's camera follows the robot's base."""

@@ -151,11 +151,6 @@ def _body_pose_at(capture: Capture, m, body: str, t_s: np.ndarray) -> tuple[np.n
     return _interp_pose(_pose_track(capture, m, body), t_s)
 
 
-def _laser_pose_at(capture: Capture, m, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Laser position (n, 3) and yaw (n,) at ``t_s``, interpolated from the body samples."""
-    return _body_pose_at(capture, m, "amr/laser", t_s)
-
-
 def _log_scan(rec, m, capture: Capture) -> None:
     """Every scan in the laser frame and in the world (each beam at its own instant's laser pose).
 

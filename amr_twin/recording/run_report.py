@@ -1,14 +1,15 @@
-"""What ``amr-twin run`` prints and writes: the ``--json`` summary, the text lines, the ``--csv`` table."""
+"""What ``amr-twin run`` prints and writes: the text lines, the ``--csv`` table (the ``--json`` summary:
+:mod:`amr_twin.recording.run_summary`)."""
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # numpy and the recorder (the model build) stay off the CLI's start-up path (--help)
     import numpy as np
 
     from amr_twin.recording.recorder import RunSeries
+    from amr_twin.recording.run_summary import RunSummary, WheelSummary
 
 CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_right",
                "true_rpm_left", "true_rpm_right", "pwm_counts_left", "pwm_counts_right",
@@ -59,123 +60,41 @@ def csv_text(series: RunSeries) -> str:
     return "\n".join(lines) + "\n"
 
 
-def json_ready(value):
-    """``value`` with every non-finite float (NaN, inf) replaced by None, recursively (strict JSON)."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: json_ready(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_ready(v) for v in value]
-    return value
-
-
-def _step_metrics(series: RunSeries, wheel: int, reference_rpm: float) -> dict:
-    """Step metrics of a wheel's signed published speed (those of
-    :data:`amr_twin.analysis.metrics.SIGNED_METRICS` signed)."""
-    from amr_twin.analysis.metrics import step_info
-    from amr_twin.recording.recorder import signed_published
-
-    pub = signed_published(series, wheel)
-    if reference_rpm == 0.0 or len(pub) < 2:
-        return {}
-    return step_info(pub[:, 0], pub[:, 1], reference_rpm).as_dict(sign=1.0 if reference_rpm > 0 else -1.0)
-
-
-def summary(result, single: bool, start_xy_yaw=None) -> dict:
-    """The ``--json`` object of a run.
-
-    ``collisions``: every contact episode of the robot's body with the world
-    (:meth:`amr_twin.sim.collisions.Collision.as_dict`); ``stopped_by_collision``: the run
-    ended at the first one (``--stop-on-collision``); ``faults``: each injected fault
-    with its effect (:meth:`amr_twin.sim.fault_injector.FaultInjector.report`).
-    """
-    import numpy as np
-
-    series, wc = result.series, result.wheel_command
-    code = next((c for c in result.codes if c != 0), 0)
-    last_s = series.t_s >= series.t_s[-1] - 1.0  # "final" electrical values: the last second
-    wheels = {}
-    from amr_twin.recording.recorder import signed_published
-
-    for w, name in enumerate(("left", "right")):
-        reference = wc[2 * w] * wc[2 * w + 1] if wc else 0.0  # signed: motion x speed
-        pub = signed_published(series, w)
-        entry = {"motion": int(wc[2 * w]) if wc else 0, "reference_rpm": reference,
-                 "final_rpm": float(pub[-1, 1]) if len(pub) else 0.0,
-                 "final_rpm_t_s": float(pub[-1, 0]) if len(pub) else None,
-                 "true_final_rpm": float(series.true_rpm[-1, w]), "samples": int(len(pub)),
-                 "current_a_final": float(series.current_a[last_s, w].mean()),
-                 "current_a_peak": float(np.abs(series.current_a[:, w]).max())}
-        if single:
-            entry.update(_step_metrics(series, w, reference))
-        wheels[name] = entry
-    commands = [dict(c.describe(), t_s=t) for t, c in result.commands]
-    x, y, yaw = (float(v) for v in series.pose[-1])
-    odom = series.odom[-1, 1:] if len(series.odom) else np.zeros(3)
-    out = {
-        "command": (commands[0] if commands else None) if single else commands, "wheel_command": wc,
-        "code": code, "codes": result.codes, "errors": result.errors, "wheels": wheels,
-        "final_pose": {"x_m": x, "y_m": y, "yaw_rad": yaw},
-        "final_odom_pose": {"x_m": float(odom[0]), "y_m": float(odom[1]), "yaw_rad": float(odom[2])},
-        "battery": _battery_summary(series),
-        "collisions": result.collisions, "stopped_by_collision": result.halted,
-        "faults": result.faults, "sim_s": result.sim_s, "wall_s": result.wall_s}
-    if start_xy_yaw is not None:
-        sx, sy, syaw = start_xy_yaw
-        out["start_pose"] = {"x_m": sx, "y_m": sy, "yaw_rad": syaw}
-        turned = math.remainder(yaw - syaw, math.tau)
-        out["from_start"] = {"distance_m": math.hypot(x - sx, y - sy), "heading_deg": math.degrees(turned)}
-    return json_ready(out)
-
-
-def _battery_summary(series: RunSeries) -> dict:
-    """The pack over the run: mean current, final voltage, energy drawn and per metre driven."""
-    import numpy as np
-
-    power = series.battery_v * series.battery_a
-    energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(series.t_s)))
-    distance = float(np.sum(np.hypot(*np.diff(series.pose[:, :2], axis=0).T)))
-    return {"battery_a_mean": float(series.battery_a.mean()), "battery_v_final": float(series.battery_v[-1]),
-            "energy_j": energy, "distance_m": distance,
-            "energy_j_per_m": energy / distance if distance > 0.05 else None}
-
-
-def text_lines(result, info: dict) -> list[str]:
+def text_lines(result, info: RunSummary) -> list[str]:
     """The plain-text report of a run (stdout without ``--json``)."""
     lines = []
     wc = result.wheel_command
     if wc:
         lines.append(f"wheel_Command [{wc[0]:g}, {wc[1]:.5f}, {wc[2]:g}, {wc[3]:.5f}]")
-    for name, entry in info["wheels"].items():
-        lines.append(f"{name:5s} reference {entry['reference_rpm']:8.3f} RPM, true {entry['true_final_rpm']:8.3f} RPM, "
+    for name, entry in info.wheels.items():
+        lines.append(f"{name:5s} reference {entry.reference_rpm:8.3f} RPM, true {entry.true_final_rpm:8.3f} RPM, "
                      + _published(entry, result.sim_s))
-    for fault in info["faults"]:
+    for fault in info.faults:
         until = f" until {fault['until_s']:g} s" if fault["until_s"] is not None else ""
         lines.append(f"fault {fault['kind']} at {fault['t_s']:g} s{until}: " + _fault_effect(fault))
-    for c in info["collisions"]:
+    for c in info.collisions:
         lines.append(_collision_line(c))
-    if not info["collisions"]:
+    if not info.collisions:
         lines.append("no collision")
-    pose = info["final_pose"]
-    lines.append(f"pose x {pose['x_m']:.3f} m, y {pose['y_m']:.3f} m, yaw {pose['yaw_rad']:.3f} rad "
+    pose = info.final_pose
+    lines.append(f"pose x {pose.x_m:.3f} m, y {pose.y_m:.3f} m, yaw {pose.yaw_rad:.3f} rad "
                  f"after {result.sim_s:g} s simulated ({result.wall_s:.2f} s wall)"
                  + (", stopped by the collision" if result.halted else ""))
-    moved = info.get("from_start")
+    moved = info.from_start
     if moved is not None and len(result.commands) > 1:  # a mission: where it ended against where it began
-        lines.append(f"ended {moved['distance_m']:.2f} m from its start pose, heading {moved['heading_deg']:+.1f} deg "
+        lines.append(f"ended {moved.distance_m:.2f} m from its start pose, heading {moved.heading_deg:+.1f} deg "
                      "from its start heading (a mission's commands are timed: nothing steers by the pose)")
     return lines
 
 
-def _published(entry: dict, end_s: float) -> str:
+def _published(entry: WheelSummary, end_s: float) -> str:
     """The last published speed with its time: the firmware publishes once per wheel
     revolution and nothing while the wheel stands, so the last sample may be old."""
-    t = entry.get("final_rpm_t_s")
+    t = entry.final_rpm_t_s
     if t is None:
         return "nothing published"
-    text = f"last published {entry['final_rpm']:8.3f} RPM at {t:.2f} s"
-    if abs(entry["true_final_rpm"]) < 0.5 and entry["final_rpm"] != 0.0:
+    text = f"last published {entry.final_rpm:8.3f} RPM at {t:.2f} s"
+    if abs(entry.true_final_rpm) < 0.5 and entry.final_rpm != 0.0:
         text += f", {end_s - t:.2f} s before the end (the wheel stands: nothing is published at rest)"
     return text
 
@@ -197,13 +116,13 @@ def _collision_line(c: dict) -> str:
             f"in contact until {c['until_s']:.2f} s, peak force {c['peak_force_n']:.0f} N")
 
 
-def collision_warning(info: dict) -> str | None:
+def collision_warning(info: RunSummary) -> str | None:
     """One stderr line when the run had collisions (also with ``--json``)."""
-    hits = info["collisions"]
+    hits = info.collisions
     if not hits:
         return None
     first = hits[0]
     more = f" and {len(hits) - 1} more" if len(hits) > 1 else ""
     return (f"warning: collision at t = {first['t_s']:.2f} s with {first['hit']} at "
-            f"({first['x_m']:.2f}, {first['y_m']:.2f}) m{more}" + (" (run stopped)" if info["stopped_by_collision"]
+            f"({first['x_m']:.2f}, {first['y_m']:.2f}) m{more}" + (" (run stopped)" if info.stopped_by_collision
                                                                   else ""))

@@ -47,10 +47,6 @@ class Cdr:
         self._align(8)
         self.b += struct.pack(f"<{len(values)}d", *values)
 
-    def f64_array(self, values) -> None:  # fixed-size float64[N]
-        self._align(8)
-        self.b += np.asarray(values, "<f8").tobytes()
-
     def f64_seq(self, values) -> None:  # float64[]
         a = np.asarray(values, "<f8")
         self.u32(len(a))

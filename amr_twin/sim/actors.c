@@ -11,6 +11,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <mujoco/mujoco.h>
+#include "c_layout.h"
 
 typedef struct {
     const double* phases;   /* (nphase, 7): t0_s, x0_m, y0_m, vx_m_s, vy_m_s, yaw0_rad, yaw_rate_rad_s */
@@ -30,6 +31,14 @@ typedef struct {
     int base_body;          /* the robot's base_link */
     double half_len_m, half_wid_m;  /* the robot's footprint about the base's origin */
 } actors_ctx;
+
+/* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
+AMR_LAYOUT(AMR_STRUCT(actor_state), AMR_FIELD(actor_state, phases), AMR_FIELD(actor_state, nphase),
+           AMR_FIELD(actor_state, mocap), AMR_FIELD(actor_state, period_s), AMR_FIELD(actor_state, start_us),
+           AMR_FIELD(actor_state, progress_us), AMR_FIELD(actor_state, last_us),
+           AMR_FIELD(actor_state, stop_m), AMR_FIELD(actor_state, pose), AMR_STRUCT(actors_ctx),
+           AMR_FIELD(actors_ctx, n), AMR_FIELD(actors_ctx, a), AMR_FIELD(actors_ctx, base_body),
+           AMR_FIELD(actors_ctx, half_len_m), AMR_FIELD(actors_ctx, half_wid_m))
 
 /* The pose after t seconds of walking (ActorPath.pose_at). */
 static void actor_pose(const actor_state* a, double t, double* out) {

@@ -40,6 +40,7 @@ import numpy as np
 from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actors import Actor, body_name
 from amr_twin.sim.grid_steps import TIMED, GridRows, sampler
+from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, open_helper
 
 PHYSICS_LAYER = True
@@ -64,6 +65,9 @@ class _Ctx(ctypes.Structure):
 
     _fields_ = [("n", ctypes.c_int), ("a", ctypes.POINTER(_State)), ("base_body", ctypes.c_int),
                 ("half_len_m", ctypes.c_double), ("half_wid_m", ctypes.c_double)]
+
+
+register(C_SOURCE, actor_state=_State, actors_ctx=_Ctx)
 
 
 class ActorMotion:

@@ -7,6 +7,7 @@
  * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
  */
 #include <mujoco/mujoco.h>
+#include "c_layout.h"
 
 typedef struct {
     double soc, current_a, sag_v, t_last_s;       /* state: charge 0-1, pack current A, fault drop V, s */
@@ -18,6 +19,18 @@ typedef struct {
     double brake_limit_a, quiescent2_a, aux_w;    /* A, A (both drivers), W */
     int dof[2];                                   /* the wheel hinges' dof addresses */
 } battery_state;
+
+/* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
+AMR_LAYOUT(AMR_STRUCT(battery_state), AMR_FIELD(battery_state, soc), AMR_FIELD(battery_state, current_a),
+           AMR_FIELD(battery_state, sag_v), AMR_FIELD(battery_state, t_last_s),
+           AMR_FIELD(battery_state, terminal_v), AMR_FIELD(battery_state, empty_v),
+           AMR_FIELD(battery_state, nominal_v), AMR_FIELD(battery_state, low_span_v),
+           AMR_FIELD(battery_state, high_span_v), AMR_FIELD(battery_state, r_ohm),
+           AMR_FIELD(battery_state, capacity_as), AMR_FIELD(battery_state, volt),
+           AMR_FIELD(battery_state, mode), AMR_FIELD(battery_state, ke),
+           AMR_FIELD(battery_state, r_ohm_motor), AMR_FIELD(battery_state, limit_a),
+           AMR_FIELD(battery_state, brake_limit_a), AMR_FIELD(battery_state, quiescent2_a),
+           AMR_FIELD(battery_state, aux_w), AMR_FIELD(battery_state, dof))
 
 /* Drain the pack by the present current since the last call (d->time); keep the terminal
  * voltage that current leaves (the recorder's battery_v at this grid instant). */

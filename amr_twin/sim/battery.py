@@ -28,6 +28,7 @@ from pathlib import Path
 
 from amr_twin.model.config_sections import BatteryCfg
 from amr_twin.sim.grid_steps import CALL2, sampler
+from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import open_helper
 
 PHYSICS_LAYER = True
@@ -50,6 +51,9 @@ class _State(ctypes.Structure):
                 ("volt", _D2), ("mode", _I2), ("ke", _D2), ("r_ohm_motor", _D2), ("limit_a", _D2),
                 ("brake_limit_a", ctypes.c_double), ("quiescent2_a", ctypes.c_double), ("aux_w", ctypes.c_double),
                 ("dof", _I2)]
+
+
+register(C_SOURCE, battery_state=_State)
 
 
 def _field(name: str, doc: str) -> property:

@@ -6,6 +6,7 @@
  * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
  */
 #include <mujoco/mujoco.h>
+#include "c_layout.h"
 
 typedef struct {
     int valid;   /* the kept pairs stand for a verdict that cannot change while they do */
@@ -13,6 +14,10 @@ typedef struct {
     int cap;     /* room in pairs */
     int* pairs;  /* (cap, 2) geom ids */
 } contact_memo;
+
+/* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
+AMR_LAYOUT(AMR_STRUCT(contact_memo), AMR_FIELD(contact_memo, valid), AMR_FIELD(contact_memo, n),
+           AMR_FIELD(contact_memo, cap), AMR_FIELD(contact_memo, pairs))
 
 /* 0 when the memo is valid and the pairs in contact are the kept ones (in order); otherwise
  * keeps the present pairs (if they fit; else leaves the memo invalid) and returns 1. */

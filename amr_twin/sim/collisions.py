@@ -38,6 +38,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.sim.grid_steps import CHANGED, sampler
+from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import open_helper
 
 PHYSICS_LAYER = True
@@ -188,6 +189,9 @@ class _Memo(ctypes.Structure):
 
     _fields_ = [("valid", ctypes.c_int), ("n", ctypes.c_int), ("cap", ctypes.c_int),
                 ("pairs", ctypes.POINTER(ctypes.c_int))]
+
+
+register(C_SOURCE, contact_memo=_Memo)
 
 
 class CollisionMonitor:

@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <mujoco/mujoco.h>
+#include "c_layout.h"
 
 enum { GS_CALL2 = 0, GS_CALL3 = 1, GS_CALL4 = 2, GS_CHANGED = 3, GS_ROW = 4, GS_TIMED = 5 };
 
@@ -57,6 +58,17 @@ typedef struct {
     int handoff;            /* -1, or the sampler that hands the last instant to Python */
     char message[256];      /* MuJoCo's error, when the call returns -1 */
 } gs_ctx;
+
+/* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
+AMR_LAYOUT(AMR_STRUCT(gs_sampler), AMR_FIELD(gs_sampler, kind), AMR_FIELD(gs_sampler, width),
+           AMR_FIELD(gs_sampler, cap), AMR_FIELD(gs_sampler, n), AMR_FIELD(gs_sampler, period_us),
+           AMR_FIELD(gs_sampler, start_us), AMR_FIELD(gs_sampler, due_us), AMR_FIELD(gs_sampler, fn),
+           AMR_FIELD(gs_sampler, a), AMR_FIELD(gs_sampler, out), AMR_STRUCT(gs_ctx), AMR_FIELD(gs_ctx, step),
+           AMR_FIELD(gs_ctx, user_error), AMR_FIELD(gs_ctx, m), AMR_FIELD(gs_ctx, d),
+           AMR_FIELD(gs_ctx, sensors), AMR_FIELD(gs_ctx, ncol), AMR_FIELD(gs_ctx, rows_cap),
+           AMR_FIELD(gs_ctx, rows), AMR_FIELD(gs_ctx, every), AMR_FIELD(gs_ctx, grid_us),
+           AMR_FIELD(gs_ctx, s), AMR_FIELD(gs_ctx, ns), AMR_FIELD(gs_ctx, handoff),
+           AMR_FIELD(gs_ctx, message))
 
 static _Thread_local jmp_buf gs_jump;
 static _Thread_local gs_ctx* gs_current;

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, mujoco_address, open_helper
 
 PHYSICS_LAYER = True
@@ -65,6 +66,9 @@ class _Context(ctypes.Structure):
                 ("ncol", ctypes.c_int), ("rows_cap", ctypes.c_int), ("rows", _P), ("every", ctypes.c_int),
                 ("grid_us", ctypes.c_int64), ("s", ctypes.POINTER(ctypes.POINTER(Sampler))), ("ns", ctypes.c_int),
                 ("handoff", ctypes.c_int), ("message", ctypes.c_char * 256)]
+
+
+register(C_SOURCE, gs_sampler=Sampler, gs_ctx=_Context)
 
 
 class GridStepper:

@@ -130,12 +130,13 @@ class Twin(Hooks):
         self.link = RosserialLink(self.clock, extra_latency_us=options.rosserial_extra_latency_us,
                                   loss_prob=options.rosserial_loss_prob, seed=options.seed)
         self.plant = Plant(cfg, self.physics)
-        self.hall = HallSensors(2, misalignment_deg=options.hall_misalignment_deg,
+        self.hall = HallSensors(2, pole_pairs=cfg.wheel.hall_pole_pairs,
+                                misalignment_deg=options.hall_misalignment_deg,
                                 jitter_us=options.hall_jitter_us, seed=options.seed,
                                 hysteresis_deg=cfg.wheel.hall_hysteresis_deg)
         self.hall.reset(self.physics.wheel_angles_rad())
         self.firmware = make_firmware(options.firmware, self.clock, self._arduino_publish,
-                                      options.firmware_params)
+                                      options.firmware_params, edges_per_rev=cfg.wheel.sc_edges_per_rev)
         # PC side (the mini PC): service, client, odometry; rosserial bridges to the Arduino
         self.service = WheelCommandService(self.bus)
         self.client = WheelCommandClient(self.bus, wheel_radius_m=cfg.wheel.radius_m,

@@ -229,9 +229,3 @@ def load_mission_file(path: str | Path) -> Mission:
     if plan.navigation and "map" in plan.navigation and not Path(plan.navigation["map"]).is_absolute():
         plan.navigation["map"] = str(path.parent / plan.navigation["map"])  # beside the mission file
     return plan
-
-
-def load_mission(path: str | Path) -> tuple[float, list[tuple[float, Command]]]:
-    """Read and validate a mission YAML file: ``(duration_s, steps)``."""
-    plan = load_mission_file(path)
-    return plan.duration_s, plan.steps

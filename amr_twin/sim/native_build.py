@@ -26,9 +26,11 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 from amr_twin.model.disk_cache import cache_dir
+from amr_twin.sim.c_layout import LAYOUT_HEADER, layout_problem
 
 PHYSICS_LAYER = True
 
@@ -100,6 +102,10 @@ def load_helper(source: Path) -> ctypes.PyDLL | None:
         why = f"{NATIVE_ENV}=0"
     else:
         lib, why = _build_and_load(Path(source))
+        why = layout_problem(source, lib) if lib is not None else why
+        if why and lib is not None:  # its structs are not those of the Python side (amr_twin.sim.c_layout)
+            lib = None
+            warnings.warn(f"{why}: the Python twin runs instead", RuntimeWarning, stacklevel=2)
     _loaded[name], _why_not[name] = lib, why
     return lib
 
@@ -126,7 +132,7 @@ def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
     if folder is None:
         return None, "disk cache off"
     try:
-        text = source.read_bytes()
+        text = source.read_bytes() + LAYOUT_HEADER.read_bytes()
     except OSError as exc:
         return None, f"{source.name}: {exc.strerror or exc}"
     machine = f"{sys.platform} {platform.machine()} {sys.implementation.cache_tag}".encode()  # a shared home
@@ -142,8 +148,9 @@ def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
             folder.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=".tmp")
             os.close(fd)
-            out = subprocess.run([compiler, *FLAGS, "-I", str(include), str(source), "-o", tmp, "-lm"],
-                                 capture_output=True, text=True, timeout=120)
+            command = [compiler, *FLAGS, "-I", str(include), "-I", str(LAYOUT_HEADER.parent), str(source), "-o", tmp,
+                       "-lm"]
+            out = subprocess.run(command, capture_output=True, text=True, timeout=120)
             if out.returncode != 0:
                 first = (out.stderr.strip().splitlines() or ["failed"])[0]
                 return None, f"{source.name} did not compile: {first}"

@@ -123,8 +123,3 @@ class Plant:
             i = (volt - ke * speed) / r_ohm
             out.append(max(-limit, min(limit, i)))
         return out
-
-    def account_battery(self, t_us: int = 0) -> None:
-        """Drain the battery by the present current since the last call (:meth:`Battery.account`;
-        the loop calls that directly, on its record grid)."""
-        self.battery.account(t_us)

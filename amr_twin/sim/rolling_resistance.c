@@ -7,6 +7,7 @@
  */
 #include <math.h>
 #include <mujoco/mujoco.h>
+#include "c_layout.h"
 
 typedef struct {
     int tyre_qpos[2], tyre_dof[2];      /* tyre slide joints: qpos and dof addresses */
@@ -22,6 +23,16 @@ typedef struct {
     double ball_crr;                    /* caster Crr */
     double ball_speed_eps;              /* m/s */
 } rr_params;
+
+/* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
+AMR_LAYOUT(AMR_STRUCT(rr_params), AMR_FIELD(rr_params, tyre_qpos), AMR_FIELD(rr_params, tyre_dof),
+           AMR_FIELD(rr_params, caster_qpos), AMR_FIELD(rr_params, caster_dof),
+           AMR_FIELD(rr_params, ball_body), AMR_FIELD(rr_params, base), AMR_FIELD(rr_params, root_dof),
+           AMR_FIELD(rr_params, wheel_dof), AMR_FIELD(rr_params, ngeom),
+           AMR_FIELD(rr_params, support_of_geom), AMR_FIELD(rr_params, k_t), AMR_FIELD(rr_params, c_t),
+           AMR_FIELD(rr_params, f0_c), AMR_FIELD(rr_params, k_c), AMR_FIELD(rr_params, c_c),
+           AMR_FIELD(rr_params, tyre_arm_m), AMR_FIELD(rr_params, motor_friction),
+           AMR_FIELD(rr_params, ball_crr), AMR_FIELD(rr_params, ball_speed_eps))
 
 /* Normal contact force (6,) N on the wheels L, R and caster balls fl, fr, rl, rr in the last
  * step: each contact's first constraint row, summed by support in contact order, as

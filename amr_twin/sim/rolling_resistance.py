@@ -46,6 +46,7 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.grid_steps import CALL4, GridRows, sampler
+from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import open_helper
 
 PHYSICS_LAYER = True
@@ -70,6 +71,9 @@ class _Params(ctypes.Structure):
                 ("k_c", ctypes.c_double), ("c_c", ctypes.c_double), ("tyre_arm_m", ctypes.c_double),
                 ("motor_friction", ctypes.c_double * 2), ("ball_crr", ctypes.c_double),
                 ("ball_speed_eps", ctypes.c_double)]
+
+
+register(C_SOURCE, rr_params=_Params)
 
 
 class RollingResistance:

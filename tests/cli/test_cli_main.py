@@ -23,3 +23,34 @@ def test_the_command_line_starts_no_blas_threads_unless_asked():
     assert _threads(COUNT_THREADS) > 1  # numpy alone: OpenBLAS's workers
     assert _threads("import amr_twin.cli.main; " + COUNT_THREADS) == 1
     assert _threads("import amr_twin.cli.main; " + COUNT_THREADS, OPENBLAS_NUM_THREADS="2") == 2
+
+
+HEAVY = ("mujoco", "matplotlib", "rerun", "scipy", "numpy")
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["run", "--help"], ["experiment", "--help"], ["sweep", "payload", "--help"]])
+def test_help_imports_none_of_the_heavy_libraries(argv):
+    """The command groups are module-level sub-apps imported at start-up: their modules keep the
+    twin, the plots and the recorders behind the commands (start-up time is a benchmarked figure)."""
+    code = ("import sys\nfrom amr_twin.cli.main import app\ntry:\n    app(sys.argv[1:])\nexcept SystemExit:\n    pass\n"
+            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=60, check=True)
+    assert "Usage" in out.stdout
+    assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_each_command_group_is_a_module_level_sub_app_of_module_level_commands():
+    """No command defined inside a function (a ``register()`` closure): each group is the ``app`` of
+    its module, each command a function of a module's top level."""
+    from amr_twin.cli import experiment, main, run, sweep
+
+    groups = {g.name: g.typer_instance for g in main.app.registered_groups}
+    assert groups == {"run": run.app, "experiment": experiment.app, "sweep": sweep.app}
+    commands = {(group, c.name or c.callback.__name__): c.callback
+                for group, sub in (("", main.app), *groups.items()) for c in sub.registered_commands}
+    assert {name for group, name in commands if group == "experiment"} == {"chapter5", "faults", "fusion",
+                                                                           "navigation", "umbmark"}
+    assert {name for group, name in commands if group == "run"} == {"linear", "angular", "motor", "stop", "goto"}
+    for (group, name), callback in commands.items():
+        original = getattr(callback, "__wrapped__", callback)
+        assert "<locals>" not in original.__qualname__, f"{group} {name}: defined inside a function"

@@ -181,12 +181,12 @@ def test_cli_run_with_the_emulated_board(cfg):
 def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
     """Left PWM counts, on a bare clock: left wheel at 20 RPM of SC edges; commands at 0, 1.0, 1.1 s."""
     from amr_twin.sim.clock import VirtualClock
-    from amr_twin.controllers.firmware import make_firmware
+    from amr_twin.controllers.firmware import SKETCH_EDGES_PER_REV, make_firmware
 
     clock = VirtualClock()
-    fw = make_firmware(kind, clock, lambda topic, value: None)
+    fw = make_firmware(kind, clock, lambda topic, value: None, edges_per_rev=SKETCH_EDGES_PER_REV)
     fw.start()
-    period = int(60e6 / (90 * 20))
+    period = int(60e6 / (SKETCH_EDGES_PER_REV * 20))
 
     def edge(t):
         fw.on_sc_edge(0)

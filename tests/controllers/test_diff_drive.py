@@ -9,7 +9,15 @@ from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.geometry_messages import Twist, Vector3
 from amr_twin.controllers.diff_drive import DiffDriveNode
-from amr_twin.controllers.wheel_command import WheelCommandService
+from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
+from amr_twin.model.config import load_config
+
+WHEEL = load_config().wheel
+
+
+def _client(bus):
+    """The thesis geometry (the config's: 0.125 m radius, 0.24 m half separation) the figures below use."""
+    return WheelCommandClient(bus, wheel_radius_m=WHEEL.radius_m, half_separation_m=WHEEL.separation_m / 2)
 
 
 @pytest.fixture
@@ -20,7 +28,7 @@ def rig():
     sent = []
     bus.add_tap(lambda topic, msg, t_us: sent.append((t_us, list(msg.data)))
                 if topic == "wheel_Command" else None)
-    node = DiffDriveNode(bus, clock)
+    node = DiffDriveNode(bus, clock, _client(bus))
     return clock, bus, node, sent
 
 
@@ -88,7 +96,7 @@ def test_configurable_timeout_and_resend():
     WheelCommandService(bus)
     sent = []
     bus.subscribe("wheel_Command", sent.append)
-    DiffDriveNode(bus, clock, cmd_timeout_s=0.2, resend_identical=True)
+    DiffDriveNode(bus, clock, _client(bus), cmd_timeout_s=0.2, resend_identical=True)
     bus.publish("cmd_vel", _twist(0.5, 0.0))
     bus.publish("cmd_vel", _twist(0.5, 0.0))
     assert len(sent) == 2
@@ -109,7 +117,7 @@ def test_without_saturation_the_command_is_refused():
     clock = VirtualClock()
     bus = Bus(clock)
     WheelCommandService(bus)
-    node = DiffDriveNode(bus, clock, saturate=False)
+    node = DiffDriveNode(bus, clock, _client(bus), saturate=False)
     bus.publish("cmd_vel", _twist(20.0, 0.0))
     assert node.last_code == 1
 
@@ -123,7 +131,7 @@ def test_non_finite_twist_is_ignored(rig):
 def test_no_server_reports_minus_one_and_retries():
     clock = VirtualClock()
     bus = Bus(clock)
-    node = DiffDriveNode(bus, clock)
+    node = DiffDriveNode(bus, clock, _client(bus))
     bus.publish("cmd_vel", _twist(0.5, 0.0))
     assert node.last_code == -1
     WheelCommandService(bus)

@@ -76,7 +76,7 @@ def _messages(seed: int, yaw_rate_scale: float = 1.05, gyro_bias_rad_s: float = 
 
 
 def _run(msgs, **kwargs) -> EkfNode:
-    node = EkfNode(CFG.ekf, uwb=CFG.uwb, **kwargs)
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, uwb=CFG.uwb, **kwargs)
     for _, kind, msg in msgs:
         (node.on_odom, node.on_imu, node.on_range)[kind](msg)
     return node
@@ -117,7 +117,7 @@ def test_rest_calibration_removes_the_gyro_bias(runs):
 
 def test_without_rest_calibration_the_bias_is_learnt_worse_from_the_odometry(runs):
     cfg = load_config(overrides={"ekf.imu_rest_calibration_s": 0.0})
-    node = EkfNode(cfg.ekf, use_imu=True, use_uwb=False)
+    node = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=False)
     for _, kind, msg in _messages(0, uwb=False):
         (node.on_odom, node.on_imu)[kind](msg)
     _, yaw = _errors(node)
@@ -142,7 +142,7 @@ def test_nlos_ranges_are_gated(runs):
 
 
 def _converged_uwb_node():
-    node = EkfNode(CFG.ekf, use_imu=False, use_uwb=True, uwb=CFG.uwb, initial_pose=(1.0, 2.0, 0.3))
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb, initial_pose=(1.0, 2.0, 0.3))
     for _, kind, msg in _messages(1)[:600]:
         if kind != 1:
             (node.on_odom, None, node.on_range)[kind](msg)
@@ -163,7 +163,7 @@ def test_gating_rejects_an_outlier_and_accepts_a_consistent_range():
 
 
 def test_range_jacobian_matches_finite_differences():
-    node = EkfNode(CFG.ekf, use_imu=False, use_uwb=True, uwb=CFG.uwb)
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb)
     x = np.array([1.0, -2.0, 0.7, 0.5, 0.1, 0.0])
     r, H = node.range_model(x, 1)
     for i in range(3):
@@ -209,7 +209,7 @@ def test_odometry_poses_differentiated_or_twist():
     results = {}
     for differential in (True, False):
         cfg = load_config(overrides={"ekf.odom_differential": differential})
-        node = EkfNode(cfg.ekf, use_imu=False, use_uwb=False)
+        node = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=False, use_uwb=False)
         for k in range(101):
             t = 0.02 * k
             msg = Odometry(header=Header(k, Time.from_sec(t), "odom"),
@@ -227,7 +227,7 @@ def test_bus_node_publishes_filtered_odometry():
     bus = Bus(clock)
     out = []
     bus.subscribe("odometry/filtered", out.append)
-    node = EkfNode(CFG.ekf, use_imu=True, use_uwb=False, bus=bus, initial_pose=(1.0, 0.0, 0.0))
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=True, use_uwb=False, bus=bus, initial_pose=(1.0, 0.0, 0.0))
     for k in range(10):
         stamp = Time.from_us(k * 20_000)
         bus.publish("imu/data_raw", Imu(header=Header(k, stamp, "imu_link"), angular_velocity=Vector3(0, 0, 0.05)))
@@ -245,11 +245,11 @@ def test_bus_node_publishes_filtered_odometry():
 
 def test_bad_arguments_name_the_field():
     with pytest.raises(ValueError, match="anchors_xy_m"):
-        EkfNode(CFG.ekf, use_imu=False, use_uwb=True)
+        EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True)
     with pytest.raises(ValueError, match="initial_pose"):
-        EkfNode(CFG.ekf, use_imu=False, use_uwb=False, initial_pose=(0.0, 1.0))
+        EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=False, initial_pose=(0.0, 1.0))
     with pytest.raises(ValueError, match="use_odom"):
-        EkfNode(CFG.ekf, use_odom=False, use_imu=False, use_uwb=False)
-    node = EkfNode(CFG.ekf, use_imu=False, use_uwb=True, uwb=CFG.uwb)
+        EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_odom=False, use_imu=False, use_uwb=False)
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb)
     with pytest.raises(ValueError, match="header.frame_id"):
         node.on_range(Range(Header(0, Time(), "uwb_anchor_9"), Range.INFRARED, 1.0, 0.0, 40.0, 3.0))

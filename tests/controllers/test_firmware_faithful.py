@@ -5,7 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 import wheel_model
-from wheel_model import K_RPM, TAU_S  # noqa: F401
+from wheel_model import WHEEL, K_RPM, TAU_S  # noqa: F401
 import pytest
 
 
@@ -22,7 +22,7 @@ def make(params=LOG):
     clock = VirtualClock()
     pubs = []
     fw = make_firmware("faithful", clock, lambda topic, v: pubs.append((clock.now_us, topic, v)),
-                       params)
+                       params, edges_per_rev=WHEEL.sc_edges_per_rev)
     fw.start()
     if fw.rt.pin_log is not None:
         fw.rt.pin_log.clear()  # drop setup()'s writes

@@ -4,7 +4,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from wheel_model import K_RPM, TAU_S, simulate  # noqa: F401
+from wheel_model import WHEEL, K_RPM, TAU_S, simulate  # noqa: F401
 import pytest
 
 
@@ -19,7 +19,8 @@ LOG = ImprovedParams(board=BoardParams(record_pin_log=True))
 def make(kind="improved", params=LOG):
     clock = VirtualClock()
     pubs = []
-    fw = make_firmware(kind, clock, lambda topic, v: pubs.append((clock.now_us, topic, v)), params)
+    fw = make_firmware(kind, clock, lambda topic, v: pubs.append((clock.now_us, topic, v)), params,
+                       edges_per_rev=WHEEL.sc_edges_per_rev)
     fw.start()
     return clock, fw, pubs
 

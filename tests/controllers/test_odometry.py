@@ -12,11 +12,14 @@ from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.controllers.odometry import WheelOdometry
+from amr_twin.model.config import load_config
 from amr_twin.controllers.published_pose import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S
 
-RPM_PER_M_S = 60.0 / (math.pi * 0.25)
-CIRCUMFERENCE_M = 2 * math.pi * 0.125
-EXACT = {"max_wheel_accel_m_s2": math.inf}  # speeds in force at once: analytic arcs
+WHEEL = load_config().wheel
+GEOMETRY = {"wheel_radius_m": WHEEL.radius_m, "wheel_separation_m": WHEEL.separation_m}
+RPM_PER_M_S = 60.0 / (math.pi * 2 * WHEEL.radius_m)
+CIRCUMFERENCE_M = 2 * math.pi * WHEEL.radius_m
+EXACT = {"max_wheel_accel_m_s2": math.inf, **GEOMETRY}  # speeds in force at once: analytic arcs
 
 
 @pytest.fixture
@@ -134,7 +137,7 @@ def test_calibration_multipliers(rig):
 
 def test_rate_covariances_and_sequence(rig):
     clock, bus, odom_msgs = rig
-    WheelOdometry(bus, clock, publish_rate_hz=20.0, pose_covariance_diagonal=[1, 2, 3, 4, 5, 6],
+    WheelOdometry(bus, clock, **GEOMETRY, publish_rate_hz=20.0, pose_covariance_diagonal=[1, 2, 3, 4, 5, 6],
                   twist_covariance_diagonal=[0.1] * 6)
     clock.run_until(1_000_000)
     assert len(odom_msgs) == 21  # the first at the start: tf covers the sensors' first stamps
@@ -144,12 +147,12 @@ def test_rate_covariances_and_sequence(rig):
     assert np.array_equal(np.diag(cov), [1, 2, 3, 4, 5, 6]) and cov[0, 1] == 0
     assert odom_msgs[0].twist.covariance[35] == 0.1
     with pytest.raises(ValueError):
-        WheelOdometry(bus, clock, pose_covariance_diagonal=[1, 2])
+        WheelOdometry(bus, clock, **GEOMETRY, pose_covariance_diagonal=[1, 2])
 
 
 def test_shutdown_stops_publishing(rig):
     clock, bus, odom_msgs = rig
-    odo = WheelOdometry(bus, clock)
+    odo = WheelOdometry(bus, clock, **GEOMETRY)
     clock.run_until(100_000)
     odo.shutdown()
     clock.run_until(1_000_000)
@@ -159,7 +162,7 @@ def test_shutdown_stops_publishing(rig):
 def _start_one_revolution_late(rig, **options):
     """At rest 1 s, start at 60 RPM; the first sample (mean of that revolution) arrives at 2.5 s."""
     clock, bus, odom_msgs = rig
-    odo = WheelOdometry(bus, clock, **options)
+    odo = WheelOdometry(bus, clock, **GEOMETRY, **options)
     clock.run_until(1_000_000)
     bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 60.0, 1.0, 60.0]))
     clock.run_until(1_500_000)  # the wheels turn from here on (true motion)
@@ -183,7 +186,7 @@ def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
     assert odo.x_m == pytest.approx(odo.smoothed_pose()[0], abs=1e-3)
     assert odo.x_m == pytest.approx(4.5 * CIRCUMFERENCE_M, abs=1e-3)
     assert odom_msgs[-1].pose.pose.position.x == pytest.approx(odo.x_m)
-    hold = WheelOdometry(rig[1], rig[0], speed_samples="hold")
+    hold = WheelOdometry(rig[1], rig[0], **GEOMETRY, speed_samples="hold")
     assert hold.speed_samples == "hold"
 
 
@@ -226,7 +229,7 @@ def test_hold_mode_lags_and_never_makes_up(rig):
 def test_windows_are_clipped_at_the_previous_sample(rig):
     """Improved firmware: samples faster than a revolution cover the time since the previous."""
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock)
+    odo = WheelOdometry(bus, clock, **GEOMETRY)
     bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 30.0, -1.0, 30.0]))
     for k in range(1, 11):
         clock.run_until(k * 100_000)
@@ -237,7 +240,7 @@ def test_windows_are_clipped_at_the_previous_sample(rig):
     clock.run_until(2_000_000)
     assert math.remainder(odo.yaw_rad + yaw_rate * 2.0, 2 * math.pi) == pytest.approx(0.0, abs=1e-3)
     with pytest.raises(ValueError):
-        WheelOdometry(bus, clock, speed_samples="guess")
+        WheelOdometry(bus, clock, **GEOMETRY, speed_samples="guess")
 
 
 def test_a_sample_supersedes_the_assumed_brake_ramp(rig):
@@ -265,4 +268,4 @@ def test_bad_options_are_refused(rig):
     for bad in ({"catchup_time_s": 0.0}, {"catchup_max_fraction": -0.1}, {"max_wheel_accel_m_s2": 0.0},
                 {"publish_rate_hz": 0.0}):
         with pytest.raises(ValueError, match=next(iter(bad))):
-            WheelOdometry(bus, clock, **bad)
+            WheelOdometry(bus, clock, **GEOMETRY, **bad)

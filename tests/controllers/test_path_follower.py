@@ -10,8 +10,8 @@ import pytest
 
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
-from amr_twin.controllers.path_follower import (PathFollowerNode, PurePursuit, Route, RouteError,
-                                                distance_to_path_m, load_route, route_length_m)
+from amr_twin.controllers.path_follower import PathFollowerNode, PurePursuit
+from amr_twin.controllers.route import Route, RouteError, distance_to_path_m, load_route, route_length_m
 from amr_twin.ros.geometry_messages import Twist
 
 ROOT = Path(__file__).resolve().parents[2]

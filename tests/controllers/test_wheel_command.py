@@ -11,6 +11,11 @@ from amr_twin.sim.clock import VirtualClock
 from amr_twin.controllers.wheel_command import (MAX_RPM, MIN_RPM, WheelCommandClient,
                                        WheelCommandRequest, WheelCommandService,
                                        wheel_Command_Client, wheel_Command_Service)
+from amr_twin.model.config import load_config
+
+WHEEL = load_config().wheel
+GEOMETRY = {"wheel_radius_m": WHEEL.radius_m, "half_separation_m": WHEEL.separation_m / 2}
+"""The configured geometry: the thesis' (0.125 m, 0.48 m), with which its printed figures were computed."""
 
 
 @pytest.fixture
@@ -20,7 +25,7 @@ def node():
     WheelCommandService(bus)
     published = []
     bus.subscribe("wheel_Command", lambda msg: published.append(list(msg.data)))
-    return WheelCommandClient(bus), published
+    return WheelCommandClient(bus, **GEOMETRY), published
 
 
 def _check(data, motion_l, speed_l, motion_r, speed_r, abs_tol=5e-3):
@@ -86,7 +91,7 @@ def test_listing_mode_forces_forward_outside_the_wheels():
     WheelCommandService(bus)
     published = []
     bus.subscribe("wheel_Command", lambda msg: published.append(list(msg.data)))
-    client = WheelCommandClient(bus, listing_motion_codes=True)
+    client = WheelCommandClient(bus, **GEOMETRY, listing_motion_codes=True)
     assert client.angular(60.0, -1.0) == 0  # as typed in the thesis' menu
     _check(published[0], 1, 99.20, 1, 60.80)
     assert client.angular(60.0, 0.0) == 0  # |icc| < R: per-wheel sign even in listing mode
@@ -146,7 +151,7 @@ def test_bad_motor_arguments(node):
 
 
 def test_no_server_is_code_minus_one():
-    client = WheelCommandClient(Bus(VirtualClock()))
+    client = WheelCommandClient(Bus(VirtualClock()), **GEOMETRY)
     assert client.linear(0.5) == -1
     assert client.last_error.startswith("ERROR while linear motion")
     assert client.angular(60.0, 1.0) == -1
@@ -157,7 +162,7 @@ def test_no_server_is_code_minus_one():
 
 
 def test_check_speed_range():
-    client = WheelCommandClient(Bus(VirtualClock()))
+    client = WheelCommandClient(Bus(VirtualClock()), **GEOMETRY)
     assert (MIN_RPM, MAX_RPM) == (0.0, 1054.0)
     assert client.checkSpeed(0.0) and client.checkSpeed(1054.0) and client.checkSpeed(-91.67)
     assert not client.check_speed(1054.1) and not client.check_speed(math.nan)

@@ -18,7 +18,7 @@ def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("ch5")
     results = chapter5.run(load_config(), runs=[3], duration_s=4.0, progress=False)
     chapter5.plot(results, out)
-    data = chapter5.report(results, out)
+    data = chapter5.report(results, out).as_json()
     return out, results, data
 
 
@@ -65,7 +65,7 @@ def test_a_backward_run_has_one_sign_in_metrics_json_and_report_md(tmp_path):
     """Issue 33: run 4's reference was -91.67 in report.md and +91.67 in metrics.json. Every signed
     value (reference, final value, steady error) carries the reference's sign in both."""
     results = chapter5.run(load_config(), runs=[4], duration_s=4.0, progress=False)
-    data = chapter5.report(results, tmp_path)
+    data = chapter5.report(results, tmp_path).as_json()
     report = (tmp_path / "report.md").read_text()
     for name, wheel in data["runs"][0]["wheels"].items():
         assert wheel["reference_rpm"] == pytest.approx(-91.67, abs=0.01)

@@ -19,7 +19,7 @@ from amr_twin.sim.run import Command, run_command
 @pytest.fixture(scope="module")
 def suite():
     results = chapter5.run(load_config(), jobs=2, progress=False)
-    return chapter5.report(results, Path(tempfile.mkdtemp()))
+    return chapter5.report(results, Path(tempfile.mkdtemp())).as_json()
 
 
 def test_the_header_counts_every_run_the_progress_bar_counts(suite):

@@ -24,7 +24,7 @@ def default_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("fusion")
     results = fusion.run(load_config(), progress=False)
     fusion_report.plot(results, out)
-    data = fusion_report.report(results, out)
+    data = fusion_report.report(results, out).as_json()
     return results, data, out
 
 

@@ -16,7 +16,7 @@ def cfg():
 
 
 def test_off_deck_position_is_invalid(cfg):
-    row = simulate_point(Point(10.0, "0.5:0", "linear:0.7", DURATION_S, "faithful", cfg))
+    row = simulate_point(Point(10.0, "0.5:0", "linear:0.7", DURATION_S, "faithful", cfg)).as_json()
     assert row["valid"] is False and row["safe"] is False and "outside the deck" in row["error"]
     assert report.unsafe_reason(row).startswith("invalid payload: payload.xy_m")
 
@@ -27,8 +27,8 @@ def test_a_motor_over_the_drivers_continuous_rating_is_unsafe():
     from amr_twin.experiments.payload_sweep_report import unsafe_reason
 
     low = load_config(sets=["driver.continuous_current_a=0.6"])
-    ok = simulate_point(Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", load_config()))
-    over = simulate_point(Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", low))
+    ok = simulate_point(Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", load_config())).as_json()
+    over = simulate_point(Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", low)).as_json()
     assert ok["safe"] and not ok["motor_overload"]
     assert 0.6 < max(over["left_steady_current_a"], over["right_steady_current_a"]) < 11.1
     assert not over["safe"] and over["motor_overload"]

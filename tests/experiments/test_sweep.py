@@ -155,7 +155,7 @@ def test_lift_off_is_judged_on_the_springs_not_on_contact_chatter():
     rows = {}
     for drop in (0.001, 0.002):
         cfg = load_config(sets=[f"caster.drop_m={drop}", "wheel.tyre_slip=false"])
-        rows[drop] = simulate_point(Point(0.0, "center", "angular:-60:-1", 2.5, "faithful", cfg))
+        rows[drop] = simulate_point(Point(0.0, "center", "angular:-60:-1", 2.5, "faithful", cfg)).as_json()
     chatter, lifted = rows[0.001], rows[0.002]
     assert chatter["dyn_min_wheel_contact_n"] < 0.5 < 5.0 < chatter["dyn_min_wheel_n"]
     assert not chatter["wheel_lift_off"] and chatter["safe"]

@@ -9,7 +9,7 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.live.pacer import Pacer, PacerClosed
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.recording.rerun_log import attach
+from amr_twin.recording.rerun_capture import attach
 from amr_twin.sim.run import Command, run_mission
 
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]

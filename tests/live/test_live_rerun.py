@@ -21,7 +21,8 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.sim.faults import parse_faults
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.recording.rerun_log import attach, record_run
+from amr_twin.recording.rerun_capture import attach
+from amr_twin.recording.rerun_log import record_run
 from amr_twin.sim.run import Command, run_mission
 
 RERUN = str(Path(sys.executable).with_name("rerun"))

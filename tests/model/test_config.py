@@ -5,7 +5,8 @@ import math
 import pytest
 import yaml
 
-from amr_twin.model.config import DEFAULT_CONFIG, ConfigError, load_config, parameter_table
+from amr_twin.model.config import ConfigError, load_config, parameter_table
+from amr_twin.model.parameter_tree import DEFAULT_CONFIG
 
 
 def test_every_parameter_has_unit_and_source():

@@ -4,7 +4,8 @@ never drawn, the calibrated parameters from the calibration's report (no mujoco)
 import pytest
 import yaml
 
-from amr_twin.model.config import DEFAULT_CONFIG, ConfigError, load_parameters
+from amr_twin.model.config import ConfigError, load_parameters
+from amr_twin.model.parameter_tree import DEFAULT_CONFIG
 from amr_twin.model.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, source_kind
 from amr_twin.analysis.uncertainty import ParameterSpace
 

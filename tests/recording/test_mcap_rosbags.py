@@ -15,7 +15,8 @@ import pytest
 from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.recording.rerun_log import attach, record_run
+from amr_twin.recording.rerun_capture import attach
+from amr_twin.recording.rerun_log import record_run
 from amr_twin.sim.run import Command, run_mission
 
 from uwb_run import UWB_S, record_uwb_run

@@ -205,7 +205,8 @@ def test_cmd_vel_and_service_calls_are_in_the_bag(tmp_path):
     from amr_twin.controllers.diff_drive import DiffDriveNode
     from amr_twin.sim.loop import Twin, TwinOptions
     from amr_twin.ros.geometry_messages import Twist, Vector3
-    from amr_twin.recording.rerun_log import attach, record_run
+    from amr_twin.recording.rerun_capture import attach
+    from amr_twin.recording.rerun_log import record_run
 
     twin = Twin(load_config(), TwinOptions(world="empty", firmware="improved"))
     attach(twin)

@@ -7,7 +7,10 @@ import numpy as np
 import pytest
 
 
+from amr_twin.model.config import load_config
 from amr_twin.sensors.hall import HallSensors
+
+POLE_PAIRS = load_config().wheel.hall_pole_pairs
 
 A0_RAD = 0.123  # start angle off the sensor lattices
 
@@ -24,7 +27,7 @@ def one_revolution(rpm: float, sign: int, step_us: int = 1000):
 @pytest.mark.parametrize("rpm", [10.0, 76.39, 200.0])
 @pytest.mark.parametrize("sign", [1, -1])
 def test_ninety_changes_per_revolution(rpm, sign):
-    hall = HallSensors()
+    hall = HallSensors(pole_pairs=POLE_PAIRS)
     t_us, angle = one_revolution(rpm, sign)
     hall.reset(angle[0])
     edge_t, edge_w = hall.edges(t_us, angle)
@@ -39,15 +42,15 @@ def test_ninety_changes_per_revolution(rpm, sign):
 
 def test_chunks_give_the_same_edges_as_one_call():
     t_us, angle = one_revolution(76.39, 1)
-    whole = HallSensors().edges(t_us, angle)
-    hall = HallSensors()
+    whole = HallSensors(pole_pairs=POLE_PAIRS).edges(t_us, angle)
+    hall = HallSensors(pole_pairs=POLE_PAIRS)
     parts = [hall.edges(t_us[i:i + 101], angle[i:i + 101]) for i in range(0, len(t_us) - 1, 100)]
     np.testing.assert_array_equal(whole[0], np.concatenate([p[0] for p in parts]))
     np.testing.assert_array_equal(whole[1], np.concatenate([p[1] for p in parts]))
 
 
 def test_back_and_forth_returns_to_the_same_states_and_sc_parity():
-    hall = HallSensors()
+    hall = HallSensors(pole_pairs=POLE_PAIRS)
     t_us = np.arange(0, 2_000_001, 1000, dtype=np.int64)
     swing = A0_RAD + 0.6 * np.sin(2 * np.pi * t_us / 1e6)  # +-34 degrees, two periods
     angle = np.column_stack([swing, -swing])
@@ -62,7 +65,7 @@ def test_back_and_forth_returns_to_the_same_states_and_sc_parity():
 
 
 def test_sc_level_toggles_on_every_edge():
-    hall = HallSensors(n_wheels=1)
+    hall = HallSensors(pole_pairs=POLE_PAIRS, n_wheels=1)
     t_us = np.array([0, 1000], dtype=np.int64)
     hall.reset([A0_RAD])
     levels = [int(hall.sc_level[0])]
@@ -74,7 +77,7 @@ def test_sc_level_toggles_on_every_edge():
 
 
 def test_misalignment_keeps_count_but_not_spacing():
-    hall = HallSensors(misalignment_deg=[0.0, 1.0, -0.5])
+    hall = HallSensors(pole_pairs=POLE_PAIRS, misalignment_deg=[0.0, 1.0, -0.5])
     t_us, angle = one_revolution(60.0, 1)
     edge_t, edge_w = hall.edges(t_us, angle)
     assert np.sum(edge_w == 0) == 90
@@ -84,9 +87,9 @@ def test_misalignment_keeps_count_but_not_spacing():
 
 def test_jitter_is_seeded_sorted_and_inside_the_chunk():
     t_us, angle = one_revolution(76.39, 1)
-    a = HallSensors(jitter_us=50.0, seed=7).edges(t_us, angle)
-    b = HallSensors(jitter_us=50.0, seed=7).edges(t_us, angle)
-    clean = HallSensors().edges(t_us, angle)
+    a = HallSensors(pole_pairs=POLE_PAIRS, jitter_us=50.0, seed=7).edges(t_us, angle)
+    b = HallSensors(pole_pairs=POLE_PAIRS, jitter_us=50.0, seed=7).edges(t_us, angle)
+    clean = HallSensors(pole_pairs=POLE_PAIRS).edges(t_us, angle)
     np.testing.assert_array_equal(a[0], b[0])
     assert np.all(np.diff(a[0]) >= 0)
     assert a[0][0] > t_us[0] and a[0][-1] <= t_us[-1]
@@ -135,7 +138,7 @@ def test_edge_times_are_the_cubics_roots_to_the_microsecond(seed):
     form: the same integer edge times on monotonic chunks of 10 ms samples at 20-250 RPM,
     accelerating and decelerating, with misaligned sensors."""
     rng = np.random.default_rng(seed)
-    hall = HallSensors(misalignment_deg=rng.uniform(-0.5, 0.5, (2, 3)))
+    hall = HallSensors(pole_pairs=POLE_PAIRS, misalignment_deg=rng.uniform(-0.5, 0.5, (2, 3)))
     n = 12
     ts = (np.arange(n + 1) * 10_000 + 1_000_000).tolist()
     speed = rng.uniform(2.0, 26.0, 2) * rng.choice([-1, 1], 2)  # rad/s, 20-250 RPM, either sign
@@ -157,8 +160,8 @@ def test_c_crossing_loop_gives_the_python_twins_edges_and_counts(seed, hysteresi
     """Random chunks (both directions, a speed changing sign, a stuck sensor, a long fast chunk)."""
     rng = np.random.default_rng(seed)
     mis = rng.uniform(-0.5, 0.5, (2, 3))
-    c = HallSensors(misalignment_deg=mis, hysteresis_deg=hysteresis_deg)
-    py = HallSensors(misalignment_deg=mis, native=False, hysteresis_deg=hysteresis_deg)
+    c = HallSensors(pole_pairs=POLE_PAIRS, misalignment_deg=mis, hysteresis_deg=hysteresis_deg)
+    py = HallSensors(pole_pairs=POLE_PAIRS, misalignment_deg=mis, native=False, hysteresis_deg=hysteresis_deg)
     assert c.engine == "C" and py.engine == "Python (native=False)"
     for chunk in range(30):
         n = int(rng.integers(1, 40))
@@ -195,8 +198,8 @@ def test_the_latches_hysteresis_keeps_a_wheel_springing_back_from_toggling_again
     """Without hysteresis the sensor passed at 4 deg toggles back (two SC changes, which a counter
     without direction takes for two edges of travel); with a 0.2 deg band it toggled at 4.1 deg and
     the wheel, back to 3.97 deg, stays inside the band (one change each wheel)."""
-    plain = _spring_back(HallSensors(n_wheels=2, native=native))
-    latch = _spring_back(HallSensors(n_wheels=2, native=native, hysteresis_deg=0.2))
+    plain = _spring_back(HallSensors(pole_pairs=POLE_PAIRS, n_wheels=2, native=native))
+    latch = _spring_back(HallSensors(pole_pairs=POLE_PAIRS, n_wheels=2, native=native, hysteresis_deg=0.2))
     assert len(plain) == 4 and len(latch) == 2 and {w for _, w in latch} == {0, 1}
 
 
@@ -207,7 +210,7 @@ def test_hysteresis_shifts_steady_edges_by_half_the_band_and_keeps_their_spacing
     ts = (t * 1e6).round().astype(int).tolist()
     found = []
     for band in (0.0, 0.4):
-        hall = HallSensors(n_wheels=1, hysteresis_deg=band)
+        hall = HallSensors(pole_pairs=POLE_PAIRS, n_wheels=1, hysteresis_deg=band)
         hall.reset([0.01])
         found.append(np.array([e for e, _ in hall.edges_from_samples(ts, rows)]))
     plain, shifted = found
@@ -219,7 +222,7 @@ def test_hysteresis_shifts_steady_edges_by_half_the_band_and_keeps_their_spacing
 def test_a_latch_remembers_its_state_from_one_chunk_to_the_next(native):
     """A wheel that stops inside the band (4.05 deg: past the boundary at 4, short of the 4.1 where
     the latch toggles), then, in the loop's next chunk, rolls on to 4.5 deg: one change, at 4.1."""
-    hall = HallSensors(n_wheels=1, native=native, hysteresis_deg=0.2)
+    hall = HallSensors(pole_pairs=POLE_PAIRS, n_wheels=1, native=native, hysteresis_deg=0.2)
     hall.reset([0.0])
     w = np.radians(2.0)  # rad/s
     first = hall.edges_from_samples([0, 1_000_000, 2_025_000], [[0.0, w], [w, w], [np.radians(4.05), 0.0]])

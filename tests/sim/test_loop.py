@@ -107,7 +107,7 @@ def test_without_the_odometry_node_the_drive_is_the_same_to_the_bit(cfg, firmwar
 def test_without_the_robot_visuals_the_run_is_the_same_to_the_bit(cfg):
     """TwinOptions(visuals=False) (a run nothing draws) leaves the visual geoms out of the model and
     nothing else: the same drive, contacts and loads, and no recording can be attached to it."""
-    from amr_twin.recording.rerun_log import attach
+    from amr_twin.recording.rerun_capture import attach
 
     twins = {}
     for visuals in (True, False):

@@ -63,7 +63,8 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
     from amr_twin.model.worlds import world_path, world_xml
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.kinematics import Limits
-    from amr_twin.navigation.static_map import Boxes, obstacle_boxes
+    from amr_twin.model.world_geometry import Footprints
+    from amr_twin.navigation.static_map import obstacle_boxes
     from amr_twin.navigation.stack import robot_top_m
     import mujoco
 
@@ -73,10 +74,10 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
              else mujoco.MjModel.from_xml_path(str(world_path(world))))
     world_boxes = obstacle_boxes(model, 0.005, robot_top_m(cfg))
     ob = episode.obstacle
-    extra = Boxes(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), ()) if ob is None else \
-        Boxes(np.array([[ob.x_m, ob.y_m]]), np.array([[ob.size_m[0] / 2, ob.size_m[1] / 2]]), np.array([ob.yaw_rad]),
+    extra = Footprints(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), ()) if ob is None else \
+        Footprints(np.array([[ob.x_m, ob.y_m]]), np.array([[ob.size_m[0] / 2, ob.size_m[1] / 2]]), np.array([ob.yaw_rad]),
               (ob.name,))
-    boxes = Boxes(np.vstack([world_boxes.centre_xy_m, extra.centre_xy_m]),
+    boxes = Footprints(np.vstack([world_boxes.centre_xy_m, extra.centre_xy_m]),
                   np.vstack([world_boxes.half_xy_m, extra.half_xy_m]),
                   np.concatenate([world_boxes.yaw_rad, extra.yaw_rad]), world_boxes.names + extra.names)
     c = boxes.centre_xy_m
@@ -99,7 +100,7 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
         body = np.array([a[1][0] for a in run.actor_poses])[keep]
         robot = np.column_stack([np.interp(ta[keep], t, pose[:, k]) for k in range(2)] +
                                 [np.interp(ta[keep], t, np.unwrap(pose[:, 2]))])
-        person = np.array([footprint_clearance_m(robot[k:k + 1], footprint, Boxes(
+        person = np.array([footprint_clearance_m(robot[k:k + 1], footprint, Footprints(
             body[k:k + 1, :2], np.array([[PERSON_HALF_M[0], PERSON_HALF_M[1]]]), body[k:k + 1, 2], ("person",)))[0]
             for k in range(len(robot))])
     reached = out.status == "succeeded"

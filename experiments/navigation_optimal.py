@@ -25,7 +25,7 @@ TOLERANCE_M = 1e-3
 
 
 class VisibilityGraph:
-    """The free space of ``boxes`` (:class:`~amr_twin.navigation.static_map.Boxes`) for a disc of ``radius_m``."""
+    """The free space of ``boxes`` (:class:`~amr_twin.model.world_geometry.Footprints`) for a disc of ``radius_m``."""
 
     def __init__(self, boxes, radius_m: float, bounds_xy_m: tuple[float, float, float, float]):
         polys = []

@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from amr_twin.model.world_geometry import Footprints
+
 PHYSICS_LAYER = True
 
 WORLD_GROUP = 0
@@ -46,17 +48,8 @@ class StaticMap:
         return self.occupied.shape
 
 
-@dataclass(frozen=True)
-class Boxes:
-    """Oriented boxes seen from above: centres (K, 2), half sizes (K, 2), yaw (K,), names; m, rad."""
 
-    centre_xy_m: np.ndarray
-    half_xy_m: np.ndarray
-    yaw_rad: np.ndarray
-    names: tuple[str, ...]
-
-
-def obstacle_boxes(model, z_low_m: float, z_high_m: float) -> Boxes:
+def obstacle_boxes(model, z_low_m: float, z_high_m: float) -> Footprints:
     """The world geoms of a compiled ``model`` whose height range meets ``[z_low_m, z_high_m]``.
 
     Boxes as they are; any other shape (but planes) as its axis-aligned bounding box.
@@ -87,10 +80,10 @@ def obstacle_boxes(model, z_low_m: float, z_high_m: float) -> Boxes:
         half.append(np.asarray(h, float))
         yaw.append(a)
         names.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}")
-    return Boxes(np.array(centre).reshape(-1, 2), np.array(half).reshape(-1, 2), np.array(yaw), tuple(names))
+    return Footprints(np.array(centre).reshape(-1, 2), np.array(half).reshape(-1, 2), np.array(yaw), tuple(names))
 
 
-def rasterise(boxes: Boxes, resolution_m: float, origin_xy_m: tuple[float, float],
+def rasterise(boxes: Footprints, resolution_m: float, origin_xy_m: tuple[float, float],
               shape: tuple[int, int]) -> np.ndarray:
     """Cells (rows, cols) overlapped by any of ``boxes`` (a cell's centre within the box grown by half a cell)."""
     occ = np.zeros(shape, bool)

@@ -9,7 +9,7 @@ from amr_twin.experiments import navigation as nv
 from amr_twin.experiments.navigation_metrics import _sign_changes, summary
 from amr_twin.experiments.navigation_optimal import VisibilityGraph
 from amr_twin.model.config import load_config
-from amr_twin.navigation.static_map import Boxes
+from amr_twin.model.world_geometry import Footprints
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +42,7 @@ def test_episodes_are_seeded_apart_and_placed_as_the_docstring_says(episodes):
 
 
 def _box(cx, cy, hx, hy):
-    return Boxes(np.array([[cx, cy]]), np.array([[hx, hy]]), np.zeros(1), ("box",))
+    return Footprints(np.array([[cx, cy]]), np.array([[hx, hy]]), np.zeros(1), ("box",))
 
 
 def test_the_visibility_graph_finds_the_shortest_way_round_a_box():

@@ -18,7 +18,8 @@ from amr_twin.model.config import load_config
 from amr_twin.model.worlds import Obstacle, load_map, wall_boxes, world_path
 from amr_twin.navigation.footprint import robot_footprint
 from amr_twin.navigation.stack import NavigationOptions, navigate, robot_top_m
-from amr_twin.navigation.static_map import Boxes, obstacle_boxes, yaml_map
+from amr_twin.model.world_geometry import Footprints
+from amr_twin.navigation.static_map import obstacle_boxes, yaml_map
 from amr_twin.sim.loop import TwinOptions
 
 from nav_grids import random_warehouse, two_corridors, write_map
@@ -31,14 +32,14 @@ def _boxes(world, obstacles=()):
     """The world's obstacles (an MJCF world's geoms, a ROS map's extruded walls) and ``obstacles``, as boxes."""
     if str(world).endswith(".yaml"):
         walls = wall_boxes(load_map(world))
-        b = Boxes(np.array([w[0][:2] for w in walls]), np.array([w[1][:2] for w in walls]),
+        b = Footprints(np.array([w[0][:2] for w in walls]), np.array([w[1][:2] for w in walls]),
                   np.array([w[2] for w in walls]), tuple(f"wall_{i}" for i in range(len(walls))))
     else:
         b = obstacle_boxes(mujoco.MjModel.from_xml_path(str(world_path(world))), 0.005, robot_top_m(CFG))
-    extra = Boxes(np.array([[o.x_m, o.y_m] for o in obstacles]).reshape(-1, 2),
+    extra = Footprints(np.array([[o.x_m, o.y_m] for o in obstacles]).reshape(-1, 2),
                   np.array([[o.size_m[0] / 2, o.size_m[1] / 2] for o in obstacles]).reshape(-1, 2),
                   np.array([o.yaw_rad for o in obstacles]), tuple(o.name for o in obstacles))
-    return Boxes(np.vstack([b.centre_xy_m, extra.centre_xy_m]), np.vstack([b.half_xy_m, extra.half_xy_m]),
+    return Footprints(np.vstack([b.centre_xy_m, extra.centre_xy_m]), np.vstack([b.half_xy_m, extra.half_xy_m]),
                  np.concatenate([b.yaw_rad, extra.yaw_rad]), b.names + extra.names)
 
 
@@ -122,7 +123,7 @@ def _person_clearance(run):
     rows = []
     for t_a, poses in run.actor_poses:
         k = min(int(np.searchsorted(run.t_s, t_a)), len(run.t_s) - 1)
-        body = Boxes(np.array([poses[0][:2]]), np.array([PERSON_HALF_M]), np.array([poses[0][2]]), ("person",))
+        body = Footprints(np.array([poses[0][:2]]), np.array([PERSON_HALF_M]), np.array([poses[0][2]]), ("person",))
         rows.append((t_a, float(footprint_clearance_m(run.pose_true[k:k + 1], FP, body)[0]), run.pose_true[k], poses[0]))
     return rows
 

@@ -142,6 +142,21 @@ class NavPeopleCfg(_Settings):
     horizon_s: float = P(unit="s", ge=0.0, le=10.0)
 
 
+class NavMapMatchingCfg(_Settings):
+    """The scan-to-map correction of the localisation (:class:`amr_twin.navigation.map_matching.MapMatcher`)."""
+
+    enabled: bool = P(unit="bool")
+    inlier_m: float = P(unit="m", gt=0.0, le=2.0)
+    iterations: int = P(unit="1", ge=1, le=20)
+    min_inliers: int = P(unit="1", ge=3, le=2000)
+    max_range_m: float = P(unit="m", gt=0.0, le=12.0)
+    sigma_m: float = P(unit="m", gt=0.0, le=1.0)
+    step_m: float = P(unit="m", gt=0.0, le=2.0)
+    step_rad: float = P(unit="rad", gt=0.0, le=1.0)
+    total_m: float = P(unit="m", gt=0.0, le=5.0)
+    total_rad: float = P(unit="rad", gt=0.0, le=3.2)
+
+
 class NavRecoveriesCfg(_Settings):
     """The recoveries of :mod:`amr_twin.navigation.recoveries`."""
 
@@ -161,6 +176,7 @@ class NavigationCfg(_Settings):
     mppi: NavMppiCfg
     monitor: NavMonitorCfg
     people: NavPeopleCfg
+    map_matching: NavMapMatchingCfg
     recoveries: NavRecoveriesCfg
 
     @model_validator(mode="after")

@@ -33,6 +33,8 @@ class PoseSource:
         self._hist: deque = deque()
         self.velocity = (0.0, 0.0)
         """Forward speed and yaw rate of the last message (m/s, rad/s)."""
+        self.correction = (0.0, 0.0, 0.0)
+        """``map`` from the topic's map: ``(tx_m, ty_m, theta_rad)``, the scan matcher's (:mod:`.map_matching`)."""
         bus.subscribe(topic, self._on_odometry)
 
     def _on_odometry(self, msg) -> None:
@@ -56,7 +58,7 @@ class PoseSource:
 
     def pose(self) -> np.ndarray:
         """The latest pose (3,): x_m, y_m, yaw_rad in ``map``."""
-        return np.array(self._hist[-1][1:])
+        return self._corrected(np.array(self._hist[-1][1:])[None])[0]
 
     def poses_at(self, t_s: np.ndarray) -> np.ndarray:
         """Poses (K, 3) at times ``t_s`` (K,), interpolated in the history (held at its ends)."""
@@ -65,7 +67,16 @@ class PoseSource:
         out = np.column_stack([np.interp(t_s, h[:, 0], h[:, 1]), np.interp(t_s, h[:, 0], h[:, 2]),
                                np.interp(t_s, h[:, 0], yaw)])
         out[:, 2] = wrap(out[:, 2])
-        return out
+        return self._corrected(out)
+
+    def _corrected(self, poses: np.ndarray) -> np.ndarray:
+        """Poses (K, 3) moved by :attr:`correction`."""
+        tx, ty, th = self.correction
+        if not (tx or ty or th):
+            return poses
+        c, s = math.cos(th), math.sin(th)
+        return np.column_stack([c * poses[:, 0] - s * poses[:, 1] + tx, s * poses[:, 0] + c * poses[:, 1] + ty,
+                                wrap(poses[:, 2] + th)])
 
     def scan_in_map(self, scan, laser_xy_yaw, raytrace_range_m: float):
         """Each beam of a ``LaserScan`` in ``map``: origins (K, 2), ends (K, 2) and returns (K,) bool.

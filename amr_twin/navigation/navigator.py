@@ -31,6 +31,7 @@ import numpy as np
 
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.kinematics import Limits, rotation_rate, wrap
+from amr_twin.navigation.map_matching import MapMatcher, apply
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner
@@ -77,8 +78,10 @@ class Navigator:
     def __init__(self, bus, clock, pose_source, costmap, planner: GlobalPlanner, controller, footprint,
                  limits: Limits, goals, params: NavParams = NavParams(), outputs=None, start_s: float = 0.0, *,
                  monitor: CollisionMonitor | None = None, tracker: PeopleTracker | None = None,
-                 progress: ProgressChecker | None = None, recovery_settings: dict | None = None):
+                 progress: ProgressChecker | None = None, recovery_settings: dict | None = None,
+                 matcher: MapMatcher | None = None):
         self.bus, self.clock, self.pose_source = bus, clock, pose_source
+        self.matcher = matcher
         self.costmap, self.planner, self.controller = costmap, planner, controller
         self.footprint, self.limits, self.p = footprint, limits, params
         self.dt_s = 1.0 / params.controller_hz
@@ -119,6 +122,11 @@ class Navigator:
         if not self.pose_source.ready:
             return
         origin, end, hit = self.pose_source.scan_in_map(scan, self.p.laser_xy_yaw, self.p.raytrace_range_m)
+        if self.matcher is not None:
+            step = self.matcher.update(origin[len(origin) // 2], end[hit])
+            if step[2] or step[0] or step[1]:
+                origin, end = apply(step, origin), apply(step, end)
+                self.pose_source.correction = self.matcher.correction
         self.costmap.update_scan(origin, end, hit, self.p.obstacle_range_m, self.p.raytrace_range_m)
         self._scan_points = end[hit]
         self._unmapped = self.costmap.static_distance_at(self._scan_points) > self.p.unmapped_m

@@ -23,6 +23,7 @@ from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint, robot_footprint
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.localisation import SOURCES, PoseSource
+from amr_twin.navigation.map_matching import MapMatcher
 from amr_twin.navigation.navigator import GoalOutcome, Navigator, NavParams
 from amr_twin.navigation.outputs import NavOutputs
 from amr_twin.navigation.people import PeopleTracker
@@ -179,7 +180,17 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
                      footprint, limits, options.goals, params, outputs=outputs, start_s=twin.t_s + REST_S,
                      monitor=monitor, tracker=PeopleTracker(**people),
                      progress=ProgressChecker(n.progress_radius_m, n.progress_time_s),
-                     recovery_settings=recovery_settings)
+                     recovery_settings=recovery_settings,
+                     matcher=make_matcher(costmap, nav, options.localisation))
+
+
+def make_matcher(costmap: Costmap, nav, localisation: str) -> MapMatcher | None:
+    """The scan-to-map correction of ``localisation``'s pose (``navigation.map_matching``); none for the
+    ground truth or when disabled."""
+    m = nav.map_matching.model_dump()
+    if localisation == "truth" or not m.pop("enabled"):
+        return None
+    return MapMatcher(costmap, **m)
 
 
 def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | None = None,

@@ -1,0 +1,110 @@
+"""The localisation's pose held to the map: each scan fitted to the static map (AMCL's role in nav2).
+
+nav2 never drives on its odometry fusion alone: AMCL matches every scan against the map and
+publishes the ``map -> odom`` correction. The twin's EKF (odometry, gyro, UWB) keeps the map frame
+to a decimetre, but in the aisles its UWB ranges come late through the racks (physical NLOS,
+sensors/uwb.py) and, through the tag's 0.3 m lever arm, turn its heading by several degrees within a
+second (measured: 0.07 rad within 0.6 s beside a rack's end, the EKF's own sigma 0.02 rad). At 5 m a
+degree is 9 cm: rack faces land off the map, the costmap marks them, people are seen in them and
+the planner plans round them. This module is not a particle filter; like the mapping drive's
+matcher (:mod:`amr_twin.experiments.navigation_scan_match`, after Hector SLAM's Gauss-Newton scan
+matcher, Kohlbrecher et al. 2011) it fits each scan rigidly to the static layer's distance field:
+
+1. The scan's returns within ``max_range_m``, placed by the corrected poses, are moved by an
+   increment ``(dx, dy, dyaw)`` about the laser; Gauss-Newton minimises the squared distance of
+   those within ``inlier_m`` of the map (the rest: people, pallet jacks, what the map lacks) to
+   the nearest static obstacle's face, the costmap's distance field interpolated bilinearly,
+   with a prior pulling the increment to none (``step_m``, ``step_rad``: the EKF's error changes
+   slowly) and the whole correction to none (``total_m``, ``total_rad``: the UWB bounds the EKF).
+2. With at least ``min_inliers`` returns the increment is composed into the correction, which
+   :class:`~amr_twin.navigation.localisation.PoseSource` applies to every pose it gives.
+
+A correction is a rigid transform of the plane, ``(tx_m, ty_m, theta_rad)``: ``p -> R(theta) p + t``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def compose(a, b) -> tuple[float, float, float]:
+    """The transform ``a`` after ``b``, both ``(tx_m, ty_m, theta_rad)``."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2])
+
+
+def apply(correction, xy_m: np.ndarray) -> np.ndarray:
+    """Points (K, 2) moved by a correction ``(tx_m, ty_m, theta_rad)``."""
+    c, s = math.cos(correction[2]), math.sin(correction[2])
+    xy = np.asarray(xy_m, float)
+    return np.column_stack([c * xy[:, 0] - s * xy[:, 1] + correction[0], s * xy[:, 0] + c * xy[:, 1] + correction[1]])
+
+
+class MapMatcher:
+    """Fits each scan to the static map of ``costmap`` and keeps the correction (module docstring)."""
+
+    def __init__(self, costmap, *, inlier_m: float = 0.3, iterations: int = 4, min_inliers: int = 40,
+                 max_range_m: float = 8.0, sigma_m: float = 0.05, step_m: float = 0.05,
+                 step_rad: float = 0.02, total_m: float = 0.5, total_rad: float = 0.2):
+        self.costmap = costmap
+        self.inlier_m, self.iterations, self.min_inliers = inlier_m, int(iterations), int(min_inliers)
+        self.max_range_m, self.sigma_m = max_range_m, sigma_m
+        self.step_m, self.step_rad, self.total_m, self.total_rad = step_m, step_rad, total_m, total_rad
+        self.correction = (0.0, 0.0, 0.0)
+        """``map`` from the localisation's frame: ``(tx_m, ty_m, theta_rad)``."""
+        self.matches = 0
+        self.skipped = 0
+
+    def _field(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distance to the static map's obstacles (K,) and its gradient (K, 2) at points ``q`` (K, 2), m:
+        the costmap's distance field (between cell centres) interpolated bilinearly, less half a cell, so
+        that a point on an obstacle's face reads 0; ``inf`` off the grid."""
+        cm = self.costmap
+        D, res = cm.static_dist_m, cm.resolution_m
+        u = (q[:, 0] - cm.origin_xy_m[0]) / res - 0.5
+        v = (q[:, 1] - cm.origin_xy_m[1]) / res - 0.5
+        j, i = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
+        inside = (i >= 0) & (i < D.shape[0] - 1) & (j >= 0) & (j < D.shape[1] - 1)
+        i, j = np.where(inside, i, 0), np.where(inside, j, 0)
+        fu, fv = u - j, v - i
+        d00, d01, d10, d11 = (D[i, j].astype(float), D[i, j + 1].astype(float), D[i + 1, j].astype(float),
+                              D[i + 1, j + 1].astype(float))
+        d = (1 - fv) * ((1 - fu) * d00 + fu * d01) + fv * ((1 - fu) * d10 + fu * d11) - 0.5 * res
+        g = np.column_stack([(1 - fv) * (d01 - d00) + fv * (d11 - d10), (1 - fu) * (d10 - d00) + fu * (d11 - d01)]) / res
+        return np.where(inside, d, np.inf), g
+
+    def update(self, laser_xy_m, points_xy_m: np.ndarray) -> tuple[float, float, float]:
+        """Fit one scan: its returns ``points_xy_m`` (P, 2) in ``map`` as the corrected poses place them,
+        seen from ``laser_xy_m`` (2,); returns the increment composed into :attr:`correction` (zero when
+        too few returns lie near the map)."""
+        c = np.asarray(laser_xy_m, float)
+        p = np.asarray(points_xy_m, float).reshape(-1, 2)
+        p = p[np.hypot(*(p - c).T) <= self.max_range_m] - c
+        if len(p) < self.min_inliers:
+            self.skipped += 1
+            return (0.0, 0.0, 0.0)
+        w_step = np.array([self.step_m, self.step_m, self.step_rad]) ** -2
+        w_total = np.array([self.total_m, self.total_m, self.total_rad]) ** -2
+        x = np.zeros(3)
+        at_laser = apply(self.correction, c[None])[0] - c   # what the correction does at the laser
+        total = np.array([at_laser[0], at_laser[1], self.correction[2]])
+        for _ in range(self.iterations):
+            cs, sn = math.cos(x[2]), math.sin(x[2])
+            q = np.column_stack([cs * p[:, 0] - sn * p[:, 1], sn * p[:, 0] + cs * p[:, 1]])
+            d, g = self._field(q + c + x[:2])
+            inlier = np.abs(d) <= self.inlier_m
+            if inlier.sum() < self.min_inliers:
+                self.skipped += 1
+                return (0.0, 0.0, 0.0)
+            J = np.column_stack([g[inlier], g[inlier, 1] * q[inlier, 0] - g[inlier, 0] * q[inlier, 1]])
+            A = J.T @ J / self.sigma_m ** 2 + np.diag(w_step + w_total)
+            b = -J.T @ d[inlier] / self.sigma_m ** 2 - w_step * x - w_total * (total + x)
+            x = x + np.linalg.solve(A, b)
+        # the increment about the laser, as a transform of the map: p -> R (p - c) + c + x[:2]
+        cs, sn = math.cos(x[2]), math.sin(x[2])
+        step = (c[0] - (cs * c[0] - sn * c[1]) + x[0], c[1] - (sn * c[0] + cs * c[1]) + x[1], float(x[2]))
+        self.correction = compose(step, self.correction)
+        self.matches += 1
+        return step

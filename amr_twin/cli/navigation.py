@@ -27,7 +27,8 @@ def navigation(
     episodes: int = typer.Option(50, "--episodes", help="Start/goal pairs, each run on every map."),
     seed: int = typer.Option(0, "--seed", help="Seed of the episodes (episode i: default_rng([seed, i]))."),
     world: str = typer.Option("aisles", "--world", help="A world of models/worlds/ with a mapping route "
-                              "(experiments/routes/<world>_mapping.yaml) or give --slam-map."),
+                              "(experiments/routes/<world>_mapping.yaml) or give --slam-map; or a ROS map .yaml "
+                              "(walls extruded) with --maps true."),
     maps: str = typer.Option("true,slam", "--maps", help="true, slam or true,slam."),
     slam_map: Optional[Path] = typer.Option(None, "--slam-map", help="Use this map_server YAML as the SLAM map "
                                             "instead of building one."),
@@ -62,8 +63,17 @@ def navigation(
         fail(f"--localisation {localisation!r}: must be one of {', '.join(SOURCES)}")
     if controller not in CONTROLLERS:
         fail(f"--controller {controller!r}: must be one of {', '.join(CONTROLLERS)}")
-    if not world_path(world).is_file() or world_path(world).suffix != ".xml":
-        fail(f"--world {world}: not an MJCF world of models/worlds/ nor an .xml file")
+    if not world_path(world).is_file() or world_path(world).suffix.lower() not in (".xml", ".yaml", ".yml"):
+        fail(f"--world {world}: not a world of models/worlds/, an MJCF .xml file nor a ROS map .yaml")
+    if world_path(world).suffix.lower() != ".xml":
+        from amr_twin.model.worlds import MapError, load_map
+        try:
+            load_map(world_path(world))
+        except MapError as exc:
+            fail(f"--world {exc}")
+        if "slam" in kinds and slam_map is None:
+            fail(f"--world {world}: a ROS map world has no mapping drive to build a SLAM map from: "
+                 "give --maps true or --slam-map")
     if slam_map is not None:
         from amr_twin.model.worlds import MapError, load_map
         try:

@@ -1,9 +1,15 @@
 """One UMBmark square driven by the twin on its own wheel odometry (Borenstein and Feng, 1996).
 
-The robot starts at rest, drives ``side_m`` straight, comes to rest, turns 90 degrees in place
-(left for counter-clockwise, right for clockwise), comes to rest, four times; each leg and each
-turn ends where the wheel odometry node (:class:`~amr_twin.controllers.odometry.WheelOdometry`,
-calibrated or not) says, as UMBmark drives a real robot. The driver (:class:`SquareDriver`) is a
+The robot starts at rest and is programmed to traverse the square by its odometry, as UMBmark
+drives a real robot: it drives to the corner ``side_m`` ahead, comes to rest, turns in place to the
+next leg's heading (left for counter-clockwise, right for clockwise), comes to rest, four times,
+every corner and heading in the frame of the wheel odometry node
+(:class:`~amr_twin.controllers.odometry.WheelOdometry`, calibrated or not). A leg steers onto its
+line by the odometry (pure pursuit ``lookahead_m`` ahead, the wheels' difference changed by at most
+the ramp's step a sample) and ends abreast of its corner; so a turn that ends a sample's crawl off
+its heading (1-2 degrees) is taken out by the next leg, and every run's square is the same by the
+odometry (``lookahead_m = 0``: legs straight by the wheels' command, as before issue 30's driver
+change, where each turn's end error bent the rest of the square and the runs differed by it). The driver (:class:`SquareDriver`) is a
 node on the bus: it acts on each wheel speed sample the firmware publishes (``wheel1_Vel``, 10 Hz
 with the improved firmware), the instant the odometry has integrated it, and commands through
 the ``wheel_Command`` client as a user would. Its profile (:class:`Profile`):

@@ -153,3 +153,71 @@ def test_the_culled_cast_hits_what_mj_multiray_and_mj_ray_hit(seed, mesh):
             assert (x, int(gid[0])) == (dist[i], geomid[i]) and nrm.tobytes() == normal[i].tobytes()
         hits += int((geomid >= 0).sum())
     assert hits > 1000
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("mesh", [False, True])
+def test_each_beam_is_cast_from_its_own_origin(seed, mesh):
+    """lb_cast with the laser moving up to 0.6 m during the beams (its cull prepared once from the present
+    origin, each geom's span widened for the beam's own origin) and the numpy twin: for every beam, the
+    geom and distance of MuJoCo's ``mj_ray`` from that beam's own origin along its own direction, to the
+    bit (a mesh in view: mj_multiRay per beam)."""
+    import mujoco
+
+    c, py = _kernels()
+    rng = np.random.default_rng(10 + seed)
+    m = mujoco.MjModel.from_xml_string(_scene(rng, mesh))
+    d = mujoco.MjData(m)
+    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "laser")
+    c.bind(m, d, site, groups)
+    py.bind(m, d, site, groups)
+    hits = moved = 0
+    for _ in range(8):
+        end = rng.uniform([-5, -5, 0.1], [5, 5, 1.2])
+        d.mocap_pos[0] = end
+        mujoco.mj_forward(m, d)
+        poses = _poses(rng, 10)  # 10 samples 20 ms apart ending at the present origin
+        poses.rows[:, 1:4] = end + np.cumsum(rng.normal(0.0, 0.12, (10, 3)) * [1, 1, 0.05], axis=0)[::-1]
+        poses.rows[:, 1:4] -= poses.rows[-1, 1:4] - end
+        t_us, lx, ly = _rotation(rng, 364)
+        out = []
+        for k in (c, py):
+            dist, geomid = np.zeros(364), np.zeros(364, np.int32)
+            k.cast(t_us, lx, ly, poses.rows, poses.n, dist, geomid)
+            out.append((dist, geomid))
+        (d_c, g_c), (d_py, g_py) = out
+        assert d_c.tobytes() == d_py.tobytes() and g_c.tobytes() == g_py.tobytes()
+        u, origin = py.geometry(t_us, lx, ly, poses.rows, poses.n)
+        for i in range(364):
+            gid, nrm = np.zeros(1, np.int32), np.zeros(3)
+            x = mujoco.mj_ray(m, d, origin[i], u[i], groups, 1, -1, gid, nrm)
+            assert (x, int(gid[0])) == (d_c[i], g_c[i]), i
+        hits += int((g_c >= 0).sum())
+        moved += int((np.linalg.norm(origin - end, axis=1) > 0.15).sum())
+    assert hits > 1500 and moved > 1000
+
+
+def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
+    """The laser drove 0.5 m away from a small sphere during the rotation: a beam acquired then, cast from
+    there, hits the sphere at 1.4 m, not the wall behind it at 1.8 m, though the sphere's bounding sphere
+    is 1.9 m from the present origin, farther than that wall hit (the cull's early stop is loosened by
+    how far each beam's origin is from the present one)."""
+    import mujoco
+
+    c, py = _kernels()
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+      <geom name="ball" type="sphere" size="0.1" pos="2.0 0 0.5"/>
+      <geom name="wall" type="box" size="0.1 4.0 1.0" pos="2.4 0 1.0"/>
+      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    rows = np.array([[0.0, 0.5, 0.0, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
+    t_us, lx, ly = np.array([0, 20_000], np.int64), np.ones((2, 1)), np.zeros((2, 1))
+    for k in (c, py):
+        k.bind(m, d, 0, groups)
+        dist, geomid = np.zeros(2), np.zeros(2, np.int32)
+        k.cast(t_us, lx, ly, rows, 2, dist, geomid)
+        assert [m.geom(g).name for g in geomid] == ["ball", "ball"]
+        assert dist == pytest.approx([1.4, 1.9], abs=1e-12)

@@ -68,6 +68,9 @@ void lb_noise(int n, const double* dist, const int32_t* geomid, const double* z,
 typedef void (*lb_multiray_fn)(const mjModel* m, mjData* d, const mjtNum pnt[3], const mjtNum* vec,
                                const mjtByte* geomgroup, mjtBool flg_static, int bodyexclude,
                                int* geomid, mjtNum* dist, mjtNum* normal, int nray, mjtNum cutoff);
+typedef mjtNum (*lb_ray_fn)(const mjModel* m, const mjData* d, const mjtNum pnt[3], const mjtNum vec[3],
+                            const mjtByte* geomgroup, mjtBool flg_static, int bodyexclude, int geomid[1],
+                            mjtNum normal[3]);
 typedef mjtNum (*lb_raygeom_fn)(const mjtNum pos[3], const mjtNum mat[9], const mjtNum size[3],
                                 const mjtNum pnt[3], const mjtNum vec[3], int geomtype, mjtNum normal[3]);
 
@@ -89,13 +92,14 @@ typedef struct {
     double* normal;           /* (n, 3) work: hit normals */
     lb_raygeom_fn raygeom;    /* MuJoCo's mju_rayGeom; NULL: every cast goes to mj_multiRay */
     lb_geom* seen;            /* (ngeom,) work: the geoms a ray may hit, nearest first */
+    lb_ray_fn ray;            /* MuJoCo's mj_ray (one ray from its own origin, when mj_multiRay must cast) */
 } lb_caster;
 
 /* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
 AMR_LAYOUT(AMR_STRUCT(lb_caster), AMR_FIELD(lb_caster, multiray), AMR_FIELD(lb_caster, groups),
            AMR_FIELD(lb_caster, site), AMR_FIELD(lb_caster, cutoff), AMR_FIELD(lb_caster, u),
            AMR_FIELD(lb_caster, org), AMR_FIELD(lb_caster, normal), AMR_FIELD(lb_caster, raygeom),
-           AMR_FIELD(lb_caster, seen))
+           AMR_FIELD(lb_caster, seen), AMR_FIELD(lb_caster, ray))
 
 #define LB_PI 3.14159265358979323846
 #define LB_ALL 10.0           /* an offset span wider than any: the geom is tried by every ray */
@@ -232,7 +236,9 @@ static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const 
 /* Cast k unit directions u (k, 3), ray i from org + 3 * i * stride (stride 0: all from org, 1: each
  * from its own origin), the cull prepared from p: dist (k,) m (-1: no hit), geomid (k,), normals in
  * c->normal. Through lb_rays (MuJoCo's per-geom ray functions behind a cheaper cull than
- * mj_multiRay's, the same hits) unless a seen geom needs mj_multiRay (one call per origin). */
+ * mj_multiRay's, the same hits) unless a seen geom needs MuJoCo's own casts: mj_multiRay from one
+ * origin, mj_ray per ray from their own (the same bits; mj_multiRay of one ray costs ~100 us among
+ * the aisles world's 415 geoms, mj_ray ~5 us). */
 static void lb_trace(const lb_caster* c, const mjModel* m, mjData* d, const double* p, int k, const double* org,
                      int stride, const double* u, double* dist, int* geomid) {
     if (c->raygeom && lb_rays(c, m, d, p, k, org, stride, u, geomid, dist, c->normal) == 0) return;
@@ -241,8 +247,7 @@ static void lb_trace(const lb_caster* c, const mjModel* m, mjData* d, const doub
         return;
     }
     for (int i = 0; i < k; i++)
-        c->multiray(m, d, org + 3 * i, u + 3 * i, c->groups, 1, -1, geomid + i, dist + i, c->normal + 3 * i, 1,
-                    c->cutoff);
+        dist[i] = c->ray(m, d, org + 3 * i, u + 3 * i, c->groups, 1, -1, geomid + i, c->normal + 3 * i);
 }
 
 /* Cast k unit directions u (k, 3) from p: dist (k,) m (-1: no hit), geomid (k,), normals in c->normal. */

@@ -7,7 +7,7 @@ order, so both give the same bits (tests/sensors/test_lidar_kernels.py). A rotat
 arithmetic around the ray cast costs about 25 us in C against about 400 us of numpy on the
 loop's cold caches (measured in 8 and 16 s runs). Each beam is cast from the laser's position at
 its own instant (its own origin), with MuJoCo's ray functions: the Python twin calls
-``mj_multiRay`` once per run of beams with the same origin (one ray each while the laser moves);
+``mj_multiRay`` once per run of beams with the same origin (``mj_ray`` for each while the laser moves);
 the helper calls MuJoCo's per-geom ``mju_rayGeom`` behind a cull of its own (``lb_rays``: a geom is tried by the rays whose
 azimuth falls in the span of its bounding box's corners seen from the laser, nearest bounding
 sphere first, until the geoms left are all farther than the hit; prepared once per cast from the
@@ -17,7 +17,7 @@ nothing to hit), ties to the lower id, so that it returns the same geoms, distan
 to the bit (tests/sensors/test_lidar_kernels.py, against ``mj_multiRay`` and ``mj_ray``). A
 rotation of 364 beams in the warehouse: 150 against 373 us in the twin (medians of 87 casts,
 two runs each; standing). A mesh, height field or SDF in view sends the cast to ``mj_multiRay``
-(one call per beam while the laser moves).
+(``mj_ray`` per beam while the laser moves).
 
 Until issue 33 each rotation was cast from the present origin in one call and each range
 corrected for the origin's motion on the plane of the surface hit (``r + n.(o_now - o_i) / n.u``):
@@ -78,11 +78,16 @@ class PythonBeamKernels:
              dist: np.ndarray, geomid: np.ndarray) -> None:
         m, d, _site, groups = self._bound
         u, origin = self.geometry(t_us, lx, ly, rows, npose)
-        # one mj_multiRay per run of beams with the same origin (bit for bit: the laser stood still)
+        # one mj_multiRay per run of beams with the same origin (bit for bit: the laser stood still),
+        # mj_ray for a beam alone (~5 us in the aisles world against ~100 us for mj_multiRay of one ray)
         change = np.flatnonzero(np.any(origin[1:] != origin[:-1], axis=1)) + 1
+        normal = self._normal
         for a, b in zip([0, *change.tolist()], [*change.tolist(), len(u)]):
-            mujoco.mj_multiRay(m, d, origin[a], u[a:b].ravel(), groups, 1, -1, geomid[a:b], dist[a:b],
-                               self._normal[:3 * (b - a)], b - a, CUTOFF_M)
+            if b - a == 1:
+                dist[a] = mujoco.mj_ray(m, d, origin[a], u[a], groups, 1, -1, geomid[a:b], normal[:3])
+            else:
+                mujoco.mj_multiRay(m, d, origin[a], u[a:b].ravel(), groups, 1, -1, geomid[a:b], dist[a:b],
+                                   normal[:3 * (b - a)], b - a, CUTOFF_M)
 
     def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray,
                  npose: int) -> tuple[np.ndarray, np.ndarray]:
@@ -133,6 +138,7 @@ class BeamKernels:
         caster.raygeom = mujoco_address("mju_rayGeom") if self.cull else None
         self._seen = np.zeros(max(model.ngeom, 1) * self._geom_bytes, np.uint8)  # lb_geom work rows
         caster.seen = address(self._seen)
+        caster.ray = mujoco_address("mj_ray")
         self._keep = (model, data)  # the model and data outlive every call
         self._cast_head = (ctypes.addressof(caster), model._address, data._address)
         self._bound = (model, data, int(site), self._groups)
@@ -186,7 +192,7 @@ class _Caster(ctypes.Structure):
     """``lb_caster`` of lidar_beams.c."""
 
     _fields_ = [("multiray", _P), ("groups", _P), ("site", ctypes.c_int), ("cutoff", ctypes.c_double),
-                ("u", _P), ("org", _P), ("normal", _P), ("raygeom", _P), ("seen", _P)]
+                ("u", _P), ("org", _P), ("normal", _P), ("raygeom", _P), ("seen", _P), ("ray", _P)]
 
 
 register(C_SOURCE, lb_caster=_Caster)

@@ -1,5 +1,6 @@
 """The LiDAR's per-beam arithmetic: the C helper against its numpy twin, to the bit."""
 
+import math
 import shutil
 from types import SimpleNamespace
 
@@ -221,3 +222,31 @@ def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
         k.cast(t_us, lx, ly, rows, 2, dist, geomid)
         assert [m.geom(g).name for g in geomid] == ["ball", "ball"]
         assert dist == pytest.approx([1.4, 1.9], abs=1e-12)
+
+
+def test_a_beam_from_beside_a_thin_post_sees_it():
+    """An 8 mm post 10 cm ahead of the present origin; a beam acquired 10 cm away, 3.5 cm from the post,
+    aimed at it 80 degrees off the post's azimuth seen from the present origin, hits it (an origin as far
+    off as the post's nearest corner: the post is tried by every such beam, no span widened)."""
+    import mujoco
+
+    c, py = _kernels()
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+      <geom name="post" type="cylinder" size="0.004 0.6" pos="0.1 0 0.6"/>
+      <geom name="wall" type="box" size="4.0 0.1 1.0" pos="0 -3.0 1.0"/>
+      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    o = 0.1 * np.array([np.cos(0.35), np.sin(0.35)])
+    to_post = np.array([0.1, 0.0]) - o
+    az = math.atan2(to_post[1], to_post[0])
+    rows = np.array([[0.0, *o, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
+    t_us, lx, ly = np.array([0], np.int64), np.full((1, 1), math.cos(az)), np.full((1, 1), math.sin(az))
+    assert az < -1.38  # outside the post's span seen from the present origin, widened by x (1 + x^2 / 4)
+    for k in (c, py):
+        k.bind(m, d, 0, groups)
+        dist, geomid = np.zeros(1), np.zeros(1, np.int32)
+        k.cast(t_us, lx, ly, rows, 2, dist, geomid)
+        assert m.geom(int(geomid[0])).name == "post"
+        assert dist[0] == pytest.approx(np.linalg.norm(to_post) - 0.004, abs=1e-9)

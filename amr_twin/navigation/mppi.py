@@ -58,6 +58,13 @@ def _declare(lib) -> None:
     lib.mppi_feasible.restype = None
     lib.mppi_costs.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, i32, i32, ptr, i32, ptr, i32, ptr, ptr]
     lib.mppi_costs.restype = None
+    f32 = ctypes.c_float
+    lib.mppi_sample.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, f32, f32]
+    lib.mppi_sample.restype = None
+    lib.mppi_headings.argtypes = [i32, i32, ptr, f32, f32, ptr, ptr]
+    lib.mppi_headings.restype = None
+    lib.mppi_positions.argtypes = [i32, i32, ptr, ptr, ptr, f32, f32, f32, ptr, ptr]
+    lib.mppi_positions.restype = None
     if lib.mppi_params_size() != len(PARAMS):
         raise RuntimeError(f"{C_SOURCE.name} takes {lib.mppi_params_size()} parameters, mppi.py {len(PARAMS)}")
 
@@ -125,8 +132,29 @@ class Mppi:
             prev = step
         return u
 
+    def _sample(self, v0: float, w0: float) -> np.ndarray:
+        """Step 1 of the module docstring: the feasible control sequences (T, K, 2) of this cycle."""
+        u = self.rng.standard_normal((self.T, self.K, 2), dtype=np.float32)
+        if self._lib is not None:
+            self._lib.mppi_sample(self.T, self.K, address(u), address(self.sigma), address(self.nominal),
+                                  *self._bounds, v0, w0)
+            return u
+        u *= self.sigma
+        u += self.nominal[:, None, :]
+        u[:, 0] = self.nominal
+        u[:, 1] = 0.0  # the braking sample
+        return self._feasible(u, v0, w0)
+
     def rollout(self, pose, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions x, y and headings (T, K) of control sequences ``u`` (T, K, 2) from ``pose``."""
+        if self._lib is not None:  # the C helper's sums around NumPy's cos and sin: the same bits
+            u, (T, K) = c_array(u, np.float32), u.shape[:2]
+            yaw, mid, x, y = (np.empty((T, K), np.float32) for _ in range(4))
+            self._lib.mppi_headings(T, K, address(u), self.step_s, pose[2], address(yaw), address(mid))
+            cm, sm = np.cos(mid), np.sin(mid)
+            self._lib.mppi_positions(T, K, address(u), address(cm), address(sm), self.step_s, pose[0], pose[1],
+                                     address(x), address(y))
+            return x, y, yaw
         dt = u.dtype.type(self.step_s)
         yaw = np.cumsum(u[..., 1], axis=0)
         yaw *= dt
@@ -213,12 +241,7 @@ class Mppi:
         ``t_s`` with the tracked ``people`` (:class:`~amr_twin.navigation.people.People`) about."""
         pose = np.asarray(pose, float)
         v0, w0 = (float(v) for v in velocity)
-        u = self.rng.standard_normal((self.T, self.K, 2), dtype=np.float32)
-        u *= self.sigma
-        u += self.nominal[:, None, :]
-        u[:, 0] = self.nominal
-        u[:, 1] = 0.0  # the braking sample
-        u = self._feasible(u, v0, w0)
+        u = self._sample(v0, w0)
         x, y, yaw = self.rollout(pose, u)
         cost, hit = self.costs(x, y, yaw, u, path, people, t_s)
         if hit.all():

@@ -41,6 +41,54 @@ void mppi_feasible(int T, int K, float* u, const float* u_min, const float* u_ma
     }
 }
 
+/* u (T, K, 2) of standard normal draws made the samples in place: scaled by sigma (2,), about the nominal
+ * (T, 2) (doubles, the sum rounded to float32 as NumPy's in-place add does), sample 0 the nominal itself,
+ * sample 1 braking (zeros), then clipped (mppi_feasible). */
+void mppi_sample(int T, int K, float* u, const float* sigma, const double* nominal, const float* u_min,
+                 const float* u_max, const float* down, const float* up, float v0, float w0) {
+    for (int t = 0; t < T; ++t) {
+        float* row = u + (int64_t)t * K * 2;
+        for (int k = 0; k < K; ++k)
+            for (int j = 0; j < 2; ++j) row[2 * k + j] = (float)((double)(row[2 * k + j] * sigma[j]) + nominal[2 * t + j]);
+        for (int j = 0; j < 2; ++j) {
+            row[j] = (float)nominal[2 * t + j];
+            row[2 + j] = 0.0f;
+        }
+    }
+    mppi_feasible(T, K, u, u_min, u_max, down, up, v0, w0);
+}
+
+/* The rollout's headings (T, K) from yaw0 and their midpoints over each step (Mppi.rollout's first half). */
+void mppi_headings(int T, int K, const float* u, float dt, float yaw0, float* yaw, float* mid) {
+    const float half = 0.5f * dt;
+    for (int k = 0; k < K; ++k) {
+        float acc = 0.0f;
+        for (int t = 0; t < T; ++t) {
+            int64_t i = (int64_t)t * K + k;
+            float w = u[2 * i + 1];
+            acc = t ? acc + w : w;
+            yaw[i] = acc * dt + yaw0;
+            mid[i] = yaw[i] - half * w;
+        }
+    }
+}
+
+/* The rollout's positions (T, K) from (x0, y0) with the cos cm and sin sm (T, K) of the midpoint headings. */
+void mppi_positions(int T, int K, const float* u, const float* cm, const float* sm, float dt, float x0, float y0,
+                    float* x, float* y) {
+    for (int k = 0; k < K; ++k) {
+        float ax = 0.0f, ay = 0.0f;
+        for (int t = 0; t < T; ++t) {
+            int64_t i = (int64_t)t * K + k;
+            float v = u[2 * i], px = v * cm[i], py = v * sm[i];
+            ax = t ? ax + px : px;
+            ay = t ? ay + py : py;
+            x[i] = ax * dt + x0;
+            y[i] = ay * dt + y0;
+        }
+    }
+}
+
 /* Distance (float32) to the nearest lethal cell at a map point; 0 off the grid (Costmap.distance_at). */
 static float lookup(const float* dist, int rows, int cols, const double* p, float x, float y) {
     double fc = floor(((double)x - p[P_ORIGIN_X]) / p[P_RES]), fr = floor(((double)y - p[P_ORIGIN_Y]) / p[P_RES]);

@@ -60,6 +60,8 @@ def test_the_c_critics_give_the_numpy_costs_collisions_and_commands_on_random_ro
         u_fast, u_slow = fast._feasible(u.copy(), *vel), slow._feasible(u.copy(), *vel)
         assert np.array_equal(u_fast, u_slow)  # the ramps' clipping: the same bits
         x, y, yaw = fast.rollout(pose, u_fast)
+        for a, b in zip((x, y, yaw), slow.rollout(pose, u_slow)):
+            assert np.array_equal(a, b)  # the rollout: the same bits
         t_s = people.t_s + float(rng.uniform(0.0, 0.3))
         c_fast, h_fast = fast.costs(x, y, yaw, u_fast, path, people, t_s)
         c_slow, h_slow = slow.costs(x, y, yaw, u_slow, path, people, t_s)
@@ -82,3 +84,16 @@ def test_the_c_and_numpy_controllers_give_the_same_commands_cycle_after_cycle(co
             assert abs(a.v_m_s - b.v_m_s) < 1e-4 and abs(a.w_rad_s - b.w_rad_s) < 1e-4 and a.blocked == b.blocked
             vel = (a.v_m_s, a.w_rad_s)
             pose = pose + 0.05 * np.array([vel[0] * math.cos(pose[2]), vel[0] * math.sin(pose[2]), vel[1]])
+
+
+def test_the_c_and_numpy_samples_are_the_same_bits(costmap):
+    """The sampled control sequences of a cycle (noise scaled about the nominal, clipped to the ramps)."""
+    fast, slow = _pair(costmap)
+    rng = np.random.default_rng(8)
+    for _ in range(5):
+        nominal = np.column_stack([rng.uniform(-0.2, 1.0, fast.T), rng.uniform(-1.5, 1.5, fast.T)])
+        fast.nominal[:], slow.nominal[:] = nominal, nominal
+        vel = (float(rng.uniform(-0.2, 1.0)), float(rng.uniform(-1.5, 1.5)))
+        a, b = fast._sample(*vel), slow._sample(*vel)
+        assert np.array_equal(a, b)  # noise about the nominal, the nominal and braking samples, the ramps
+        assert np.ptp(a[-1, 2:, 0]) > 0.1  # the samples do spread (the first step is pinned by the ramps)

@@ -27,6 +27,12 @@ Each control cycle, reconstructed from the papers' and nav2's descriptions:
    smoothed by a 3-step moving average (nav2 smooths with a Savitzky-Golay filter); its first
    step is the command. Every sample colliding: stop, and report it (``blocked``); most of the
    weights on colliding samples: report it too.
+
+Steps 1 to 3 run in C (``mppi_critics.c``, built at first use by :mod:`amr_twin.sim.native_build`):
+some hundred NumPy calls on (T, K) arrays a cycle had cost more than their arithmetic. NumPy keeps
+the random draws and the cos and sin; the C helper does the same float32 and double operations in
+the same order as the NumPy code here, its twin (``native=False``, or without a compiler), so that
+both give the same costs, collisions and commands (tests/navigation/test_mppi.py).
 """
 
 from __future__ import annotations
@@ -54,8 +60,6 @@ PARAMS = ("cx0", "cx1", "r", "margin", "collision", "obstacle", "align", "progre
 def _declare(lib) -> None:
     """The C helper's signatures (addresses as pointers, sizes as ints)."""
     ptr, i32 = ctypes.c_void_p, ctypes.c_int
-    lib.mppi_feasible.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ctypes.c_float, ctypes.c_float]
-    lib.mppi_feasible.restype = None
     lib.mppi_costs.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, i32, i32, ptr, i32, ptr, i32, ptr, ptr]
     lib.mppi_costs.restype = None
     f32 = ctypes.c_float
@@ -120,9 +124,6 @@ class Mppi:
 
     def _feasible(self, u: np.ndarray, v0: float, w0: float) -> np.ndarray:
         """``u`` (T, K, 2) clipped in place to the speed limits and, step by step from ``(v0, w0)``, to the ramps."""
-        if self._lib is not None:
-            self._lib.mppi_feasible(self.T, self.K, address(u), *self._bounds, v0, w0)
-            return u
         np.clip(u, self._u_min, self._u_max, out=u)
         prev = np.array([v0, w0], u.dtype)
         for t in range(self.T):

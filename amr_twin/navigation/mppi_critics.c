@@ -1,6 +1,6 @@
-/* The MPPI controller's feasibility clipping and critics in one pass: the C twin of Mppi._feasible and
- * Mppi.costs / Mppi._people_costs in amr_twin/navigation/mppi.py (the critics, their symbols and their
- * sources are described there). Arrays are time-major as there: controls (T, K, 2), trajectories (T, K).
+/* The MPPI controller's sampling, rollout sums and critics: the C twin of Mppi._sample (with _feasible),
+ * Mppi.rollout (around NumPy's cos and sin) and Mppi.costs (with _people_costs) in amr_twin/navigation/mppi.py
+ * (the critics, their symbols and their sources are described there). Arrays are time-major as there: controls (T, K, 2), trajectories (T, K).
  *
  * The same operations as the NumPy twin, in the same precision: the ramps' clipping in float32 (the same
  * bits), the footprint circles' centres in float32 from the NumPy rollout's positions and cos/sin of the
@@ -21,7 +21,7 @@ enum { P_CX0, P_CX1, P_R, P_MARGIN, P_W_COLLISION, P_W_OBSTACLE, P_W_ALIGN, P_W_
 int mppi_params_size(void) { return P_SIZE; }
 
 /* u (T, K, 2) clipped in place to [u_min, u_max] and, step by step from (v0, w0), to the ramps down/up. */
-void mppi_feasible(int T, int K, float* u, const float* u_min, const float* u_max, const float* down,
+static void mppi_feasible(int T, int K, float* u, const float* u_min, const float* u_max, const float* down,
                    const float* up, float v0, float w0) {
     for (int k = 0; k < K; ++k) {
         float prev[2] = {v0, w0};

@@ -1,6 +1,7 @@
 /* The MPPI controller's sampling, rollout sums and critics: the C twin of Mppi._sample (with _feasible),
  * Mppi.rollout (around NumPy's cos and sin) and Mppi.costs (with _people_costs) in amr_twin/navigation/mppi.py
- * (the critics, their symbols and their sources are described there). Arrays are time-major as there: controls (T, K, 2), trajectories (T, K).
+ * (the critics, their symbols and their sources are described there). Arrays are time-major as there:
+ * controls (T, K, 2), trajectories (T, K).
  *
  * The same operations as the NumPy twin, in the same precision: the ramps' clipping in float32 (the same
  * bits), the footprint circles' centres in float32 from the NumPy rollout's positions and cos/sin of the

@@ -14,8 +14,9 @@ matcher, Kohlbrecher et al. 2011) it fits each scan rigidly to the static layer'
    increment ``(dx, dy, dyaw)`` about the laser; Gauss-Newton minimises the squared distance of
    those within ``inlier_m`` of the map (the rest: people, pallet jacks, what the map lacks) to
    the nearest static obstacle's face, the costmap's distance field interpolated bilinearly,
-   with a prior pulling the increment to none (``step_m``, ``step_rad``: the EKF's error changes
-   slowly) and the whole correction to none (``total_m``, ``total_rad``: the UWB bounds the EKF).
+   damped by a prior on the increment (``step_m``, ``step_rad``), which also bound it (the EKF's
+   error changes slowly); the whole correction is bounded by ``total_m`` and ``total_rad`` at the
+   laser (the UWB bounds the EKF's error: a match that slid along look-alike rack faces stops there).
 2. With at least ``min_inliers`` returns the increment is composed into the correction, which
    :class:`~amr_twin.navigation.localisation.PoseSource` applies to every pose it gives.
 
@@ -86,7 +87,6 @@ class MapMatcher:
             self.skipped += 1
             return (0.0, 0.0, 0.0)
         w_step = np.array([self.step_m, self.step_m, self.step_rad]) ** -2
-        w_total = np.array([self.total_m, self.total_m, self.total_rad]) ** -2
         x = np.zeros(3)
         at_laser = apply(self.correction, c[None])[0] - c   # what the correction does at the laser
         total = np.array([at_laser[0], at_laser[1], self.correction[2]])
@@ -99,9 +99,16 @@ class MapMatcher:
                 self.skipped += 1
                 return (0.0, 0.0, 0.0)
             J = np.column_stack([g[inlier], g[inlier, 1] * q[inlier, 0] - g[inlier, 0] * q[inlier, 1]])
-            A = J.T @ J / self.sigma_m ** 2 + np.diag(w_step + w_total)
-            b = -J.T @ d[inlier] / self.sigma_m ** 2 - w_step * x - w_total * (total + x)
+            A = J.T @ J / self.sigma_m ** 2 + np.diag(w_step)
+            b = -J.T @ d[inlier] / self.sigma_m ** 2 - w_step * x
             x = x + np.linalg.solve(A, b)
+        # bounds: the step of a scan, then the whole correction (a match slid along look-alike racks stops there)
+        x[:2] *= min(1.0, self.step_m / max(float(np.hypot(*x[:2])), 1e-12))
+        x[2] = min(max(x[2], -self.step_rad), self.step_rad)
+        new = total + x
+        new[:2] *= min(1.0, self.total_m / max(float(np.hypot(*new[:2])), 1e-12))
+        new[2] = min(max(new[2], -self.total_rad), self.total_rad)
+        x = new - total
         # the increment about the laser, as a transform of the map: p -> R (p - c) + c + x[:2]
         cs, sn = math.cos(x[2]), math.sin(x[2])
         step = (c[0] - (cs * c[0] - sn * c[1]) + x[0], c[1] - (sn * c[0] + cs * c[1]) + x[1], float(x[2]))

@@ -137,3 +137,19 @@ def test_the_ekf_pose_is_held_to_the_map_in_the_aisles(ekf_runs):
     assert raw_yaw_rad > 0.05 and raw_pos_m > 0.1, (raw_pos_m, raw_yaw_rad)
     assert pos_m < 0.09 and yaw_rad < 0.03, (pos_m, yaw_rad)
     assert nav.matcher.matches >= 40 and nav.matcher.skipped <= 2, (nav.matcher.matches, nav.matcher.skipped)
+
+
+def test_each_step_and_the_whole_correction_are_bounded(costmap):
+    """A scan the map would explain only 0.6 m away: each scan moves the pose at most step_m, and the whole
+    correction stops at total_m (unbounded, the matches slid 1-4 m along the SLAM map's look-alike racks)."""
+    matcher = MapMatcher(costmap, inlier_m=0.8, step_m=0.03, total_m=0.3)
+    error = (0.6, 0.0, 0.0)
+    truth = _room_scan(LASER)
+    moved = []
+    for _ in range(30):
+        step = matcher.update(apply(compose(matcher.correction, error), LASER[None])[0],
+                              apply(compose(matcher.correction, error), truth))
+        moved.append(math.hypot(step[0], step[1]))
+    at_laser = apply(matcher.correction, LASER[None])[0] - LASER
+    assert max(moved) <= 0.03 + 1e-9 and min(moved[:5]) > 0.029, moved[:5]
+    assert abs(math.hypot(*at_laser) - 0.3) < 1e-6, at_laser

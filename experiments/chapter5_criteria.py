@@ -58,9 +58,9 @@ SOURCES = {"delay_s": "§5.1.3, fig. 5.3", "rise_s": "§5.1.3, fig. 5.3", "peak_
            "steady_error": "§5.1.3 (\"almost perfect track\"), listing 4.11's THRESHOLD_CONTROL"}
 """Where each band's thesis value is stated."""
 DEFINITIONS = ("Ogata, Modern Control Engineering, 5th ed., §5-3 (the specifications of the thesis' fig. 5.3): "
-               "delay = first 50 % of the final value, rise = 10 → 90 % of the final value, peak = first maximum "
-               "when the response crosses its final value and comes back, overshoot = peak − final value "
-               "(0 without a peak), settling = last entry into the band around the final value; steady error "
+               "delay = first 50 % of the final value, rise = 10 → 90 % of the final value, peak time = first peak "
+               "when the response crosses its final value and comes back (each by more than 0.1 % of the step), "
+               "overshoot = maximum peak − final value (0 without a peak), settling = last entry into the band around the final value; steady error "
                "= final value − reference (§5-8), the final value the mean of the last 20 % of the record")
 OSCILLATION_PAIRS = ((7, 3), (8, 5))  # (loaded, unloaded): "more oscillation" with 20 kg (§5.1.4)
 OSCILLATION_MEASURE = "excess total variation"

@@ -26,10 +26,17 @@ on the dense true wheel speed (100 Hz) and on the sparse speed samples the firmw
 * a **peak** exists when the response crosses its final value and comes back: its maximum
   exceeds the final value, and a later sample lies below the maximum, each by more than
   ``peak_tolerance`` (default 0.1 % of the step: the published speed's timing resolution is
-  about 1e-5 of it). Then ``peak_s``, ``peak_value`` are the first sample of the maximum,
-  ``overshoot = peak_value - final_value`` in the signal's units and ``overshoot_pct`` the
-  same in % of ``|step|`` (Ogata's M_p). Without a peak (a monotone approach, or a record
-  still rising at its end) ``peak_s`` and ``peak_value`` are NaN and the overshoot is 0;
+  about 1e-5 of it). Then, as Ogata defines them, ``peak_value`` is the **maximum** peak value
+  (its first sample), ``overshoot = peak_value - final_value`` in the signal's units and
+  ``overshoot_pct`` the same in % of ``|step|`` (M_p, "the maximum peak value of the response
+  curve"), and ``peak_s`` is the time of the **first** peak (t_p, "the time required for the
+  response to reach the first peak of the overshoot"): the first sample above the final value
+  by more than the tolerance from which the signal falls back by more than the tolerance before
+  it rises above it. On a response with one peak both are the same sample; on a rippled plateau
+  ``peak_s`` is its first ripple, not whichever ripple happens to be highest (MATLAB's
+  ``stepinfo`` gives the time of the maximum instead). Without a peak (a monotone approach,
+  or a record still rising at its end) ``peak_s`` and ``peak_value`` are NaN and the
+  overshoot is 0;
 * ``settling_s``: the time after which the interpolated signal stays within
   ``final_value +- settling_band`` until the end of the record (the crossing into the band
   after the last sample outside it); NaN if the last sample is outside;
@@ -106,12 +113,25 @@ def _settling_s(t: np.ndarray, y: np.ndarray, centre: float, band: float) -> flo
 
 
 def _peak(y: np.ndarray, final_value: float, tolerance: float) -> int | None:
-    """Index of the response's peak (first sample of its maximum) if it crosses its final value
-    and comes back, each by more than ``tolerance``; None for a monotone approach."""
+    """Index of the response's maximum peak (first sample of its maximum) if it crosses its final
+    value and comes back, each by more than ``tolerance``; None for a monotone approach."""
     i = int(np.argmax(y))
     if y[i] - final_value <= tolerance or i == len(y) - 1:
         return None
     return i if float(np.min(y[i + 1:])) < y[i] - tolerance else None
+
+
+def _first_peak(y: np.ndarray, final_value: float, tolerance: float, last: int) -> int:
+    """Index of the first peak, at or before the maximum peak ``last``: the first sample above
+    ``final_value + tolerance`` from which ``y`` falls by more than ``tolerance`` before it
+    exceeds that sample (Ogata's t_p; the maximum peak itself qualifies)."""
+    for i in np.nonzero(y[:last] > final_value + tolerance)[0]:
+        after = y[i + 1:]
+        back = np.nonzero(after < y[i] - tolerance)[0]
+        over = np.nonzero(after > y[i])[0]
+        if len(back) and (not len(over) or back[0] < over[0]):
+            return int(i)
+    return last
 
 
 def _excess_variation(t: np.ndarray, y: np.ndarray, t_start_s: float, t_end_s: float) -> float:
@@ -174,11 +194,12 @@ def step_info(t_s, y, reference: float, t0_s: float = 0.0, settling_band: float 
         t10 = t50 = t90 = math.nan
     tolerance = 1e-3 * abs(step) if peak_tolerance is None else float(peak_tolerance)
     i_peak = _peak(y, final_value, tolerance)
+    i_first = None if i_peak is None else _first_peak(y, final_value, tolerance, i_peak)
     overshoot = 0.0 if i_peak is None else float(y[i_peak]) - final_value
     t_end = t[-1] if oscillation_window_s is None else min(t[-1], oscillation_window_s)
     return StepInfo(
         reference=ref, final_value=final_value, delay_s=t50, rise_s=t90 - t10,
-        peak_s=math.nan if i_peak is None else float(t[i_peak]),
+        peak_s=math.nan if i_first is None else float(t[i_first]),
         peak_value=math.nan if i_peak is None else float(y[i_peak]), overshoot=overshoot,
         overshoot_pct=100.0 * overshoot / abs(step) if step else math.nan,
         settling_s=_settling_s(t, y, final_value, band), settling_band=band,

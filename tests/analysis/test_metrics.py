@@ -141,3 +141,24 @@ def test_bad_input():
         step_info([0, 1], [0, 1], 0.0)
     with pytest.raises(ValueError):
         step_info([0, 1, 2], [0, 1], 1.0)
+
+
+def test_peak_time_is_the_first_peak_of_a_rippled_plateau():
+    """Ogata's t_p (first peak) and M_p (maximum peak): on run 4's shape, a plateau whose ripples
+    differ by 0.1-0.7 RPM (far above the 0.1 % tolerance), the peak time is the first ripple, the
+    overshoot the highest one; a ripple inside the tolerance is not a peak of its own."""
+    t = np.round(np.arange(0.0, 12.0, 0.01), 2)
+    y = np.where(t < 1.0, 99.0 * t, 99.0) + np.where(t < 6.0, 0.0, -4.0 * np.minimum(t - 6.0, 1.0))
+    y = y + 0.4 * np.exp(-((t - 1.2) / 0.05) ** 2) + 1.1 * np.exp(-((t - 4.2) / 0.05) ** 2)
+    info = step_info(t, y, 95.0)
+    assert info.peak_s == pytest.approx(1.2)
+    assert info.peak_value == pytest.approx(100.1, abs=1e-6)
+    assert info.overshoot == pytest.approx(5.1, abs=1e-6)
+    # the first ripple shrunk to 0.05 RPM, below the tolerance (0.095 RPM): the first peak is the later one
+    low = np.where(t < 1.0, 99.0 * t, 99.0) + np.where(t < 6.0, 0.0, -4.0 * np.minimum(t - 6.0, 1.0))
+    low = low + 0.05 * np.exp(-((t - 1.2) / 0.05) ** 2) + 1.1 * np.exp(-((t - 4.2) / 0.05) ** 2)
+    assert step_info(t, low, 95.0).peak_s == pytest.approx(4.2)
+    # a first ripple that does not come back down by the tolerance before rising further is no peak
+    stair = np.where(t < 1.0, 99.0 * t, 99.0 + 0.2 * np.minimum(np.maximum(t - 1.2, 0.0), 3.0))
+    stair = stair + np.where(t < 6.0, 0.0, -4.6 * np.minimum(t - 6.0, 1.0))
+    assert step_info(t, stair, 95.0).peak_s == pytest.approx(4.2)

@@ -31,6 +31,7 @@ import math
 from dataclasses import dataclass
 
 from amr_twin.model.config import TwinConfig
+from amr_twin.model.urdf import BuildError
 
 LOAD_MARGIN = 1.3
 """Dynamic load over static load a tyre is checked at: chapter 5's 60 deg/s turns about 1 m load the
@@ -46,8 +47,9 @@ MAX_HALVINGS = 6
 _announced: set = set()  # the messages this process has written to stderr
 
 
-class TyreTimestepError(ValueError):
-    """The tyres need a timestep the loop cannot keep (one line: the parameters and S)."""
+class TyreTimestepError(BuildError):
+    """The tyres need a timestep the loop cannot keep (one line: the parameters and S; a
+    :class:`~amr_twin.model.urdf.BuildError`, so the CLI exits 2 and a sweep records it on the point)."""
 
 
 @dataclass(frozen=True)
@@ -136,7 +138,7 @@ def tyre_timestep(cfg: TwinConfig) -> TyreTimestep:
                 f"{w.slip_stiffness_per_n:g}, wheel.relaxation_length_longitudinal_m "
                 f"{w.relaxation_length_longitudinal_m:g}, wheel.tyre_loss_time_s {w.tyre_loss_time_s:g}, static "
                 f"load {max(load):.0f} N: S = {max(first):.2f}, allowed < {S_MAX:g}) on whole microseconds; "
-                f"set sim.timestep_s to {_largest_stable_us(max(load) * LOAD_MARGIN, cfg, mass):d}e-6 or less")
+                f"set sim.timestep_s to {_largest_stable_us(max(load) * LOAD_MARGIN, cfg, mass) / 1e6:g} or less")
     return TyreTimestep(dt0, dt, halvings, load, first, s)
 
 

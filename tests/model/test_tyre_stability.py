@@ -62,3 +62,16 @@ def test_the_linearised_update_is_stable_below_two_plus_a_half(tau_s):
         radius.append(np.max(np.abs(np.linalg.eigvals(np.array([[1.0, -dt], [dt * k / m, 1.0 - (a + b)]])))))
     k = stiffness[np.argmax(np.array(radius) > 1.0 + 1e-9)]
     assert stability_number(k, tau_s, dt, m) == pytest.approx(2.0 + k * dt * dt / m / 2.0, rel=5e-3)
+
+
+def test_a_halving_is_said_on_stderr_once(monkeypatch, capsys):
+    from amr_twin.model import tyre_stability
+
+    monkeypatch.setattr(tyre_stability, "_announced", set())
+    tyre_stability.announce(tyre_timestep(load_config()))
+    assert capsys.readouterr().err == ""
+    halved = tyre_timestep(load_config(sets=STIFF + ["payload.mass_kg=50"]))
+    tyre_stability.announce(halved)
+    tyre_stability.announce(halved)
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and "halved to 0.25 ms" in err[0] and "S = 3.70 > 1.5" in err[0]

@@ -6,7 +6,7 @@ BASE = {"samples": 2, "sampler": "lhs", "seed": 0, "parameters": ["wheel.tyre_lo
         "noise_level_rho": 0.5, "metrics": [], "duty_raised": [], "oscillation_more": [], "clipped": {}}
 
 
-def test_halved_draws_are_named_and_none_said_when_none():
+def test_halved_draws_are_named_and_nothing_said_without():
     assert not any("halved" in line for line in markdown({**BASE, "tyre_timestep_halved": []}))
     halved = [{"draw": 1, "run": 8, "timestep_s": 0.0005, "stability_limit": 1.5}]
     lines = [line for line in markdown({**BASE, "tyre_timestep_halved": halved}) if "halved" in line]

@@ -14,9 +14,9 @@ stamp is the instant of beam 0 (the last acquired, the end of the rotation) and
 acquired at ``stamp + i * time_increment`` as ``laser_geometry`` and the twin's
 LiDAR odometry compute it. (``rplidar_ros`` reverses the array the same way but
 keeps a positive ``time_increment`` with the stamp at the rotation's start,
-which times every beam but the middle one wrongly.) The laser pose is sampled at regular instants; beams are cast in groups,
-one call from the present laser position (MuJoCo's ray functions, :mod:`~amr_twin.sensors.lidar_kernels`), with the beam
-geometry, motion correction and range noise of :mod:`amr_twin.sensors.lidar_beams`.
+which times every beam but the middle one wrongly.) The laser pose is sampled at regular instants; beams are cast in groups, each
+beam from the laser position at its own instant (MuJoCo's ray functions, :mod:`~amr_twin.sensors.lidar_kernels`), with the beam
+geometry and range noise of :mod:`amr_twin.sensors.lidar_beams`.
 Geoms that move with the robot (a payload, group 4) are cast in a second call in
 the present laser frame, and the nearer hit wins. Two ways to drive it:
 
@@ -242,16 +242,18 @@ class Lidar:
             break
         self._next_cast_us = min(self._last_beam_us, self._last_cast_us + self.cast_every_us)
         self._poses.due_us = self._next_cast_us if self.running else NEVER_BEFORE
-        if cast or not self.running:  # later beams only need the samples from now on
+        if not self.running:
             self._poses.keep_last()
+        elif cast:  # later beams only need the samples from the one before the first of them on
+            self._poses.keep_from(int(self.beam_t_us[self.n_beams - 1 - self._next]))
 
     def cast(self, start: int, stop: int, at_own_instants: bool = True) -> None:
         """Cast beams ``start:stop`` (one call of the kernels' cast, a second ``mj_multiRay`` with a payload).
 
-        With ``at_own_instants`` each beam is cast along its direction at its own
-        instant ``beam_t_us[i]``, with the range corrected for the origin's motion
-        since then (module docstring; needs the pose samples around the beams,
-        the last one being the present pose). Otherwise all from the pose now.
+        With ``at_own_instants`` each beam is cast from the laser position and
+        along its direction at its own instant ``beam_t_us[i]`` (module docstring;
+        needs the pose samples around the beams, the last one being the present
+        pose). Otherwise all from the pose now.
         Stores the true distances (m, -1 for no hit) in :attr:`dist_m` and the hit
         geoms in :attr:`hit_geom`; noise is added for the whole rotation at its end.
         """
@@ -260,8 +262,7 @@ class Lidar:
             return
         geomid, dist = self.hit_geom[start:stop], self.dist_m[start:stop]
         poses = self._poses
-        if at_own_instants and poses.n > 0:  # directions at the beams' instants, ranges corrected:
-            # r_i = r + n.(o_now - o_i) / n.u_i (0 where no hit: n = 0)
+        if at_own_instants and poses.n > 0:  # origins and directions at the beams' instants
             self._kernels.cast(self.beam_t_us[start:stop], self._lx[start:stop], self._ly[start:stop], poses.rows,
                                poses.n, dist, geomid)
         else:

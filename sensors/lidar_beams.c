@@ -18,10 +18,10 @@
 
 /* Laser pose of each of k beams at its instant t_us[i], linear between the pose samples
  * (rows: npose rows of t_us, position (3), laser x axis (3), laser y axis (3); held outside
- * them), the beam's unit direction in the world u (k, 3) from its laser-frame components
- * lx[i], ly[i], and shift (k, 3) = origin - the laser position at its instant. */
+ * them): the beam's unit direction in the world u (k, 3) from its laser-frame components
+ * lx[i], ly[i], and its origin org (k, 3), m, the laser position at its instant. */
 void lb_geometry(int k, const int64_t* t_us, const double* lx, const double* ly,
-                 const double* rows, int npose, const double* origin, double* u, double* shift) {
+                 const double* rows, int npose, double* u, double* org) {
     for (int i = 0; i < k; i++) {
         double p[9];
         const double* p0 = rows + 1;
@@ -46,19 +46,7 @@ void lb_geometry(int k, const int64_t* t_us, const double* lx, const double* ly,
         for (int c = 0; c < 3; c++) ui[c] = p[3 + c] * lx[i] + p[6 + c] * ly[i];
         double norm = sqrt(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]);
         for (int c = 0; c < 3; c++) ui[c] = ui[c] / norm;
-        for (int c = 0; c < 3; c++) shift[3 * i + c] = origin[c] - p[c];
-    }
-}
-
-/* dist[i] += n.shift / n.u for the k beams (0 where |n.u| <= 1e-3: no hit or grazing). */
-void lb_correct(int k, const double* normal, const double* u, const double* shift, double* dist) {
-    for (int i = 0; i < k; i++) {
-        const double* n = normal + 3 * i;
-        const double* ui = u + 3 * i;
-        const double* s = shift + 3 * i;
-        double nu = n[0] * ui[0] + n[1] * ui[1] + n[2] * ui[2];
-        double ns = n[0] * s[0] + n[1] * s[1] + n[2] * s[2];
-        dist[i] = dist[i] + (fabs(nu) > 1e-3 ? ns / nu : 0.0);
+        for (int c = 0; c < 3; c++) org[3 * i + c] = p[c];
     }
 }
 
@@ -80,6 +68,9 @@ void lb_noise(int n, const double* dist, const int32_t* geomid, const double* z,
 typedef void (*lb_multiray_fn)(const mjModel* m, mjData* d, const mjtNum pnt[3], const mjtNum* vec,
                                const mjtByte* geomgroup, mjtBool flg_static, int bodyexclude,
                                int* geomid, mjtNum* dist, mjtNum* normal, int nray, mjtNum cutoff);
+typedef mjtNum (*lb_ray_fn)(const mjModel* m, const mjData* d, const mjtNum pnt[3], const mjtNum vec[3],
+                            const mjtByte* geomgroup, mjtBool flg_static, int bodyexclude, int geomid[1],
+                            mjtNum normal[3]);
 typedef mjtNum (*lb_raygeom_fn)(const mjtNum pos[3], const mjtNum mat[9], const mjtNum size[3],
                                 const mjtNum pnt[3], const mjtNum vec[3], int geomtype, mjtNum normal[3]);
 
@@ -87,6 +78,7 @@ typedef struct {
     double azimuth;           /* of the geom's centre seen from the origin, rad */
     double lo, hi;            /* lowest and highest azimuth offset of its bounding box's corners, rad (+-LB_ALL: any) */
     double near_m;            /* least distance of its bounding sphere to the origin, m (0 for a plane) */
+    double reach_m;           /* least horizontal distance of its bounding box's corners to the origin, m */
     int geom;                 /* its id */
 } lb_geom;
 
@@ -96,17 +88,18 @@ typedef struct {
     int site;                 /* the laser site */
     double cutoff;            /* culling distance, m */
     double* u;                /* (n, 3) work: directions */
-    double* shift;            /* (n, 3) work: origin shifts */
+    double* org;              /* (n, 3) work: the beams' origins */
     double* normal;           /* (n, 3) work: hit normals */
     lb_raygeom_fn raygeom;    /* MuJoCo's mju_rayGeom; NULL: every cast goes to mj_multiRay */
     lb_geom* seen;            /* (ngeom,) work: the geoms a ray may hit, nearest first */
+    lb_ray_fn ray;            /* MuJoCo's mj_ray (one ray from its own origin, when mj_multiRay must cast) */
 } lb_caster;
 
 /* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
 AMR_LAYOUT(AMR_STRUCT(lb_caster), AMR_FIELD(lb_caster, multiray), AMR_FIELD(lb_caster, groups),
            AMR_FIELD(lb_caster, site), AMR_FIELD(lb_caster, cutoff), AMR_FIELD(lb_caster, u),
-           AMR_FIELD(lb_caster, shift), AMR_FIELD(lb_caster, normal), AMR_FIELD(lb_caster, raygeom),
-           AMR_FIELD(lb_caster, seen))
+           AMR_FIELD(lb_caster, org), AMR_FIELD(lb_caster, normal), AMR_FIELD(lb_caster, raygeom),
+           AMR_FIELD(lb_caster, seen), AMR_FIELD(lb_caster, ray))
 
 #define LB_PI 3.14159265358979323846
 #define LB_ALL 10.0           /* an offset span wider than any: the geom is tried by every ray */
@@ -126,8 +119,10 @@ static double lb_wrap(double a) {
  * outside the span misses the geom; a span of pi or more (p above the outline) and a plane are
  * tried by every ray. Sorted by their least distance to p (the centre's distance less the
  * bounding sphere's radius; 0 for a plane), nearest first, so that a ray stops at the first geom
- * farther than its nearest hit. Returns the number of geoms, or -1 when one of them is a mesh,
- * height field or SDF (MuJoCo's own ray functions: the caller casts with mj_multiRay). */
+ * farther than its nearest hit. reach_m, the corners' least horizontal distance to p, lets a ray
+ * from another origin use the span (lb_rays). Returns the number of geoms, or -1 when one of them
+ * is a mesh, height field or SDF (MuJoCo's own ray functions: the caller casts with mj_multiRay).
+ * A geom is left out when farther than the cutoff from every point within slack_m of p. */
 static int lb_nearer(const void* a, const void* b) {
     const lb_geom* x = a;
     const lb_geom* y = b;
@@ -135,7 +130,7 @@ static int lb_nearer(const void* a, const void* b) {
     return x->geom - y->geom;
 }
 
-static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, const double* p) {
+static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, const double* p, double slack_m) {
     int n = 0;
     for (int g = 0; g < m->ngeom; g++) {
         int mat = m->geom_matid[g];
@@ -147,17 +142,18 @@ static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, con
         const double* pos = d->geom_xpos + 3 * g;
         double rel[3] = {pos[0] - p[0], pos[1] - p[1], pos[2] - p[2]};
         double centre_m = sqrt(rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]);
-        if (centre_m > c->cutoff + m->geom_rbound[g]) continue;
+        if (centre_m > c->cutoff + m->geom_rbound[g] + slack_m) continue;
         lb_geom* s = c->seen + n++;
         s->geom = g;
         s->azimuth = atan2(rel[1], rel[0]);
         s->lo = -LB_ALL;
         s->hi = LB_ALL;
+        s->reach_m = 0.0;
         s->near_m = type == mjGEOM_PLANE || centre_m < m->geom_rbound[g] ? 0.0 : centre_m - m->geom_rbound[g];
         if (type == mjGEOM_PLANE) continue;
         const double* box = m->geom_aabb + 6 * g;  /* centre and half sizes in the geom frame */
         const double* mat9 = d->geom_xmat + 9 * g;
-        double lo = 0.0, hi = 0.0;
+        double lo = 0.0, hi = 0.0, reach2 = INFINITY;
         for (int v = 0; v < 8; v++) {
             double x = box[0] + (v & 1 ? box[3] : -box[3]);
             double y = box[1] + (v & 2 ? box[4] : -box[4]);
@@ -167,36 +163,62 @@ static int lb_prepare(const lb_caster* c, const mjModel* m, const mjData* d, con
             double a = lb_wrap(atan2(wy, wx) - s->azimuth);
             lo = a < lo ? a : lo;
             hi = a > hi ? a : hi;
+            double r2 = wx * wx + wy * wy;
+            reach2 = r2 < reach2 ? r2 : reach2;
         }
         if (hi - lo < LB_PI - 1e-6) {
             s->lo = lo - LB_MARGIN_RAD;
             s->hi = hi + LB_MARGIN_RAD;
+            s->reach_m = sqrt(reach2);
         }
     }
     qsort(c->seen, n, sizeof(lb_geom), lb_nearer);
     return n;
 }
 
-/* Cast k unit directions u from p: for each, the nearest hit among the prepared geoms by MuJoCo's
+/* Cast k unit directions u, ray i from org + 3 * i * stride (stride 0: every ray from org), behind
+ * a cull prepared once from p: for each, the nearest hit among the prepared geoms by MuJoCo's
  * mju_rayGeom (ties: the lower id, as mj_multiRay, which tries them in id order); dist (k,) m, -1
- * and geomid -1 and a zero normal where none. Returns 0, or -1 when mj_multiRay must cast instead. */
+ * and geomid -1 and a zero normal where none. A ray from an origin D m from p sees each corner of a
+ * geom's box at most asin(D / reach_m) off its azimuth from p (D < reach_m), so the geom's span
+ * is widened by x (1 + x^2 / 4) >= asin(x), x = D / reach_m <= 1/2 (beyond: the geom is tried);
+ * a widened span of pi or more (the origin may be above the outline) is tried too; and the
+ * geom's bounding sphere is at least near_m - D from the origin. Returns 0, or -1 when mj_multiRay
+ * must cast instead. */
 static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const double* p, int k,
-                   const double* u, int* geomid, double* dist, double* normal) {
-    int n = lb_prepare(c, m, d, p);
+                   const double* org, int stride, const double* u, int* geomid, double* dist, double* normal) {
+    double slack_m = 0.0;
+    for (int i = 0; i < k && stride; i++) {
+        const double* o = org + 3 * i;
+        double e[3] = {o[0] - p[0], o[1] - p[1], o[2] - p[2]};
+        double off_m = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        slack_m = off_m > slack_m ? off_m : slack_m;
+    }
+    int n = lb_prepare(c, m, d, p, slack_m);
     if (n < 0) return -1;
     for (int i = 0; i < k; i++) {
         const double* v = u + 3 * i;
+        const double* o = org + 3 * i * stride;
+        double e[3] = {o[0] - p[0], o[1] - p[1], o[2] - p[2]};
+        double off_m = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        off_m = off_m > 0.0 ? off_m + 1e-9 : 0.0;  /* a nm for the rounding */
         double az = atan2(v[1], v[0]), best = -1.0, nrm[3] = {0.0, 0.0, 0.0}, out[3];
         int hit = -1;
         for (int j = 0; j < n; j++) {
             const lb_geom* s = c->seen + j;
-            if (best >= 0 && s->near_m > best) break;  /* this geom and all after it are farther than the hit */
+            if (best >= 0 && s->near_m - off_m > best) break;  /* this geom and all after it are farther than the hit */
             if (s->lo > -LB_ALL) {
+                double widen = 0.0;
+                if (off_m > 0.0) {
+                    double x = off_m / s->reach_m;
+                    widen = x * (1.0 + 0.25 * x * x) + LB_MARGIN_RAD;
+                    if (x > 0.5 || s->hi - s->lo + 2 * widen >= LB_PI - 1e-6) widen = LB_ALL;
+                }
                 double off = lb_wrap(az - s->azimuth);
-                if (off < s->lo || off > s->hi) continue;
+                if (off < s->lo - widen || off > s->hi + widen) continue;
             }
             int g = s->geom;
-            double x = c->raygeom(d->geom_xpos + 3 * g, d->geom_xmat + 9 * g, m->geom_size + 3 * g, p, v,
+            double x = c->raygeom(d->geom_xpos + 3 * g, d->geom_xmat + 9 * g, m->geom_size + 3 * g, o, v,
                                   m->geom_type[g], out);
             if (x >= 0 && (best < 0 || x < best || (x == best && g < hit))) {
                 best = x;
@@ -211,21 +233,33 @@ static int lb_rays(const lb_caster* c, const mjModel* m, const mjData* d, const 
     return 0;
 }
 
-/* Cast k unit directions u (k, 3) from p: dist (k,) m (-1: no hit), geomid (k,), normals in
+/* Cast k unit directions u (k, 3), ray i from org + 3 * i * stride (stride 0: all from org, 1: each
+ * from its own origin), the cull prepared from p: dist (k,) m (-1: no hit), geomid (k,), normals in
  * c->normal. Through lb_rays (MuJoCo's per-geom ray functions behind a cheaper cull than
- * mj_multiRay's, the same hits) unless a seen geom needs mj_multiRay. */
-void lb_cast_rays(const lb_caster* c, const mjModel* m, mjData* d, const double* p, int k, const double* u,
-                  double* dist, int* geomid) {
-    if (!c->raygeom || lb_rays(c, m, d, p, k, u, geomid, dist, c->normal) < 0)
-        c->multiray(m, d, p, u, c->groups, 1, -1, geomid, dist, c->normal, k, c->cutoff);
+ * mj_multiRay's, the same hits) unless a seen geom needs MuJoCo's own casts: mj_multiRay from one
+ * origin, mj_ray per ray from their own (the same bits; mj_multiRay of one ray costs ~100 us among
+ * the aisles world's 415 geoms, mj_ray ~5 us). */
+static void lb_trace(const lb_caster* c, const mjModel* m, mjData* d, const double* p, int k, const double* org,
+                     int stride, const double* u, double* dist, int* geomid) {
+    if (c->raygeom && lb_rays(c, m, d, p, k, org, stride, u, geomid, dist, c->normal) == 0) return;
+    if (!stride) {
+        c->multiray(m, d, org, u, c->groups, 1, -1, geomid, dist, c->normal, k, c->cutoff);
+        return;
+    }
+    for (int i = 0; i < k; i++)
+        dist[i] = c->ray(m, d, org + 3 * i, u + 3 * i, c->groups, 1, -1, geomid + i, c->normal + 3 * i);
 }
 
-/* Cast k beams from the present laser origin, each along its direction at its own instant, and
- * correct the ranges for the origin's motion since: dist (k,) m (-1: no hit), geomid (k,). */
+/* Cast k unit directions u (k, 3) from p: dist (k,) m (-1: no hit), geomid (k,), normals in c->normal. */
+void lb_cast_rays(const lb_caster* c, const mjModel* m, mjData* d, const double* p, int k, const double* u,
+                  double* dist, int* geomid) {
+    lb_trace(c, m, d, p, k, p, 0, u, dist, geomid);
+}
+
+/* Cast k beams, each along its direction from the laser's position at its own instant (the world as
+ * it is now; the cull prepared from the present laser origin): dist (k,) m (-1: no hit), geomid (k,). */
 void lb_cast(const lb_caster* c, const mjModel* m, mjData* d, int k, const int64_t* t_us, const double* lx,
              const double* ly, const double* rows, int npose, double* dist, int* geomid) {
-    const double* origin = d->site_xpos + 3 * c->site;
-    lb_geometry(k, t_us, lx, ly, rows, npose, origin, c->u, c->shift);
-    lb_cast_rays(c, m, d, origin, k, c->u, dist, geomid);
-    lb_correct(k, c->normal, c->u, c->shift, dist);
+    lb_geometry(k, t_us, lx, ly, rows, npose, c->u, c->org);
+    lb_trace(c, m, d, d->site_xpos + 3 * c->site, k, c->org, 1, c->u, dist, geomid);
 }

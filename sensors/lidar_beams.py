@@ -1,4 +1,4 @@
-"""Beams of the RPLIDAR A1: timing, directions, laser pose samples, motion correction, range noise.
+"""Beams of the RPLIDAR A1: timing, directions, laser pose samples, range noise.
 
 Pure numpy (no MuJoCo, no clock): the clock-driven sensor that casts the beams is
 :class:`amr_twin.sensors.lidar.Lidar`.
@@ -14,14 +14,12 @@ Beam instants of a message (:func:`beam_times_s`, :func:`scan_end_time_s`)
     Beam ``i`` was acquired at ``stamp + i * time_increment``; ``time_increment``
     is negative for a scanner that spins clockwise (the A1), whose stamp is then
     the end of the rotation.
-Motion during a rotation (:class:`PoseSamples`, :func:`interpolate_poses`, :func:`world_directions`, :func:`motion_correction_m`)
+Motion during a rotation (:class:`PoseSamples`, :func:`interpolate_poses`, :func:`world_directions`)
     The laser pose is sampled at regular instants. A beam acquired between two
-    samples points along its own direction at its instant (linear interpolation
-    of the laser axes of the two samples around it, then normalised); it is cast
-    from the present laser origin ``o_now`` and its range corrected for the
-    motion of the origin since its instant, exactly for the plane of the surface
-    hit (through the hit normal ``n``): ``r_i = r + n.(o_now - o_i) / n.u_i``,
-    ``o_i`` interpolated between the samples.
+    samples is cast from the laser pose at its own instant: from the laser
+    position there and along its own direction (linear interpolation of the
+    position and laser axes of the two samples around it, the direction then
+    normalised), in the world as it is when the beams are cast.
 Geom groups (:data:`SEEN_GROUPS`, :func:`group_masks`)
     Rays see geom groups 0 (world) and 4 (payload) only, never the robot's own
     wheels, casters or frame (groups 1, 2).
@@ -139,6 +137,16 @@ class PoseSamples(GridRows):
         """The samples, shape (n, 10), float64 (at least one row: zeros when there is none)."""
         return super().rows if self.n else np.zeros((1, 10))
 
+    def keep_from(self, t_us: int) -> None:
+        """Forget the samples that no instant at or after ``t_us`` needs: all before the last one at
+        or before ``t_us`` (the beams of a rotation that began before the newest sample are
+        interpolated from the sample before them, not held at the newest)."""
+        n = self.n
+        k = max(int(np.searchsorted(self._buf[:n, 0], t_us, side="right")) - 1, 0)
+        if k:
+            self._buf[:n - k] = self._buf[k:n]
+            self._set_n(n - k)
+
 
 def interpolate_poses(rows: np.ndarray, n: int, t_us: np.ndarray) -> np.ndarray:
     """Poses (k, 9) at the instants ``t_us`` (k,) from the first ``n`` sample ``rows`` of :class:`PoseSamples`.
@@ -161,23 +169,6 @@ def world_directions(pose: np.ndarray, lx: np.ndarray, ly: np.ndarray) -> np.nda
     u = pose[:, 3:6] * lx + pose[:, 6:9] * ly  # R l with l_z = 0
     u /= np.sqrt(u[:, 0] * u[:, 0] + u[:, 1] * u[:, 1] + u[:, 2] * u[:, 2])[:, None]  # the C helper's order
     return u
-
-
-def motion_correction_m(normal: np.ndarray, u: np.ndarray, shift_m: np.ndarray) -> np.ndarray:
-    """Range correction ``n.(o_now - o_i) / n.u_i`` (k,), m; 0 where no hit (``n = 0``) or grazing.
-
-    Parameters
-    ----------
-    normal : ndarray, shape (k, 3)
-        Surface normals at the hits (zero where none).
-    u : ndarray, shape (k, 3)
-        Unit beam directions.
-    shift_m : ndarray, shape (k, 3)
-        ``o_now - o_i``: origin now minus origin at each beam's instant, m.
-    """
-    nu = normal[:, 0] * u[:, 0] + normal[:, 1] * u[:, 1] + normal[:, 2] * u[:, 2]  # the C helper's order
-    ns = normal[:, 0] * shift_m[:, 0] + normal[:, 1] * shift_m[:, 1] + normal[:, 2] * shift_m[:, 2]
-    return np.divide(ns, nu, out=np.zeros(len(u)), where=np.abs(nu) > 1e-3)
 
 
 def noisy_ranges(dist: np.ndarray, geomid: np.ndarray, cfg: LidarCfg, rng: np.random.Generator) -> np.ndarray:

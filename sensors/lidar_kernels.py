@@ -1,33 +1,39 @@
-"""The LiDAR's per-beam arithmetic in C: directions at the beams' instants, motion correction, noise.
+"""The LiDAR's per-beam work in C: directions and origins at the beams' instants, the rays, noise.
 
 :class:`BeamKernels` calls the C helper ``lidar_beams.c`` (built at first use by
 :mod:`amr_twin.sim.native_build`); :class:`PythonBeamKernels` is its Python twin, made of the
 numpy functions of :mod:`amr_twin.sensors.lidar_beams`: the same operations in the same
 order, so both give the same bits (tests/sensors/test_lidar_kernels.py). A rotation's
 arithmetic around the ray cast costs about 25 us in C against about 400 us of numpy on the
-loop's cold caches (measured in 8 and 16 s runs). The ray cast, between :meth:`geometry` and
-:meth:`correct`, is MuJoCo's: the Python twin calls ``mj_multiRay``; the helper calls MuJoCo's
-per-geom ``mju_rayGeom`` behind a cull of its own (``lb_rays``: a geom is tried by the rays whose
+loop's cold caches (measured in 8 and 16 s runs). Each beam is cast from the laser's position at
+its own instant (its own origin), with MuJoCo's ray functions: the Python twin calls
+``mj_multiRay`` once per run of beams with the same origin (``mj_ray`` for each while the laser moves);
+the helper calls MuJoCo's per-geom ``mju_rayGeom`` behind a cull of its own (``lb_rays``: a geom is tried by the rays whose
 azimuth falls in the span of its bounding box's corners seen from the laser, nearest bounding
-sphere first, until the geoms left are all farther than the hit; ``mj_multiRay`` tries every
+sphere first, until the geoms left are all farther than the hit; prepared once per cast from the
+present laser origin, each geom's span widened for a beam by how far its origin is from there; ``mj_multiRay`` tries every
 geom its angular bounds pass and tests each body's bounding sphere per ray, ~0.25 us a ray with
 nothing to hit), ties to the lower id, so that it returns the same geoms, distances and normals
 to the bit (tests/sensors/test_lidar_kernels.py, against ``mj_multiRay`` and ``mj_ray``). A
 rotation of 364 beams in the warehouse: 150 against 373 us in the twin (medians of 87 casts,
-two runs each). A mesh, height field or SDF in view sends the cast to ``mj_multiRay``.
+two runs each; standing). A mesh, height field or SDF in view sends the cast to ``mj_multiRay``
+(``mj_ray`` per beam while the laser moves).
+
+Before (until issue 32's navigation runs showed its ghosts) each rotation was cast from the present
+origin in one call and each range corrected for the origin's motion on the plane of the surface hit
+(``r + n.(o_now - o_i) / n.u``): exact for an infinite plane only, it made returns 0.1-0.9 m off
+every surface beside thin uprights, braces and at grazing incidence (docs/lidar.md).
 
 Both classes take and return the same arrays:
 
 - :meth:`geometry`: beam instants ``t_us`` (k,) int64, laser-frame components ``lx``,
-  ``ly`` (k,) or (k, 1), the pose samples ``rows`` (>= npose, 10) of
-  :class:`~amr_twin.sensors.lidar_beams.PoseSamples` and the present origin (3,), m ->
-  ``(u, shift)``: unit directions in the world (k, 3) and origin now minus origin at each
-  beam's instant (k, 3), m;
-- :meth:`correct`: adds the motion correction to ``dist`` (k,), m, in place;
-- :meth:`cast`: the three steps of a cast at the beams' own instants (:meth:`geometry`,
-  the rays from the present laser origin, :meth:`correct`) into ``dist`` and
-  ``geomid`` (k,), after :meth:`bind` named the model, data, laser site and geom groups
-  (the C helper calls MuJoCo's functions itself, through pointers into the loaded libmujoco);
+  ``ly`` (k,) or (k, 1) and the pose samples ``rows`` (>= npose, 10) of
+  :class:`~amr_twin.sensors.lidar_beams.PoseSamples` -> ``(u, origin)``: unit directions in
+  the world (k, 3) and the laser position at each beam's instant (k, 3), m;
+- :meth:`cast`: a cast at the beams' own instants (:meth:`geometry`, then each ray from its
+  own origin) into ``dist`` and ``geomid`` (k,), after :meth:`bind` named the model, data,
+  laser site and geom groups (the C helper calls MuJoCo's functions itself, through pointers
+  into the loaded libmujoco);
 - :meth:`rays` (the helper only): the ray cast alone, unit directions from an origin;
 - :meth:`noise`: noisy ranges (n,) float32, m, inf where invalid, from standard normals.
 
@@ -46,7 +52,7 @@ import numpy as np
 from amr_twin.model.config_sections import LidarCfg
 from amr_twin.sim.c_layout import register
 from amr_twin.sim.native_build import address, c_array, mujoco_address, open_helper
-from amr_twin.sensors.lidar_beams import interpolate_poses, motion_correction_m, quantised_ranges, world_directions
+from amr_twin.sensors.lidar_beams import interpolate_poses, quantised_ranges, world_directions
 
 PHYSICS_LAYER = True
 
@@ -70,21 +76,23 @@ class PythonBeamKernels:
 
     def cast(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
              dist: np.ndarray, geomid: np.ndarray) -> None:
-        m, d, site, groups = self._bound
-        k = len(t_us)
-        origin = d.site_xpos[site]
-        u, shift = self.geometry(t_us, lx, ly, rows, npose, origin)
-        normal = self._normal[:3 * k]
-        mujoco.mj_multiRay(m, d, origin, u.ravel(), groups, 1, -1, geomid, dist, normal, k, CUTOFF_M)
-        self.correct(normal.reshape(k, 3), u, shift, dist)
+        m, d, _site, groups = self._bound
+        u, origin = self.geometry(t_us, lx, ly, rows, npose)
+        # one mj_multiRay per run of beams with the same origin (bit for bit: the laser stood still),
+        # mj_ray for a beam alone (~5 us in the aisles world against ~100 us for mj_multiRay of one ray)
+        change = np.flatnonzero(np.any(origin[1:] != origin[:-1], axis=1)) + 1
+        normal = self._normal
+        for a, b in zip([0, *change.tolist()], [*change.tolist(), len(u)]):
+            if b - a == 1:
+                dist[a] = mujoco.mj_ray(m, d, origin[a], u[a], groups, 1, -1, geomid[a:b], normal[:3])
+            else:
+                mujoco.mj_multiRay(m, d, origin[a], u[a:b].ravel(), groups, 1, -1, geomid[a:b], dist[a:b],
+                                   normal[:3 * (b - a)], b - a, CUTOFF_M)
 
-    def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
-                 origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray,
+                 npose: int) -> tuple[np.ndarray, np.ndarray]:
         pose = interpolate_poses(rows, npose, t_us)
-        return world_directions(pose, lx, ly), origin - pose[:, 0:3]
-
-    def correct(self, normal: np.ndarray, u: np.ndarray, shift: np.ndarray, dist: np.ndarray) -> None:
-        dist += motion_correction_m(normal, u, shift)
+        return world_directions(pose, lx, ly), np.ascontiguousarray(pose[:, 0:3])
 
     def noise(self, dist: np.ndarray, geomid: np.ndarray, z: np.ndarray) -> np.ndarray:
         return quantised_ranges(dist, geomid, z, self.cfg)
@@ -103,21 +111,20 @@ class BeamKernels:
     def __init__(self, lib: ctypes.PyDLL, n_beams: int, cfg: LidarCfg):
         self.engine = "C"
         self.cfg = cfg
-        self._geometry, self._correct, self._noise = lib.lb_geometry, lib.lb_correct, lib.lb_noise
+        self._geometry, self._noise = lib.lb_geometry, lib.lb_noise
         self._cast, self._rays = lib.lb_cast, lib.lb_cast_rays
         lib.lb_geom_bytes.restype = ctypes.c_int
         self._geom_bytes = int(lib.lb_geom_bytes())
-        self._geometry.argtypes = [ctypes.c_int, _P, _P, _P, _P, ctypes.c_int, _P, _P, _P]
-        self._correct.argtypes = [ctypes.c_int, _P, _P, _P, _P]
+        self._geometry.argtypes = [ctypes.c_int, _P, _P, _P, _P, ctypes.c_int, _P, _P]
         self._noise.argtypes = [ctypes.c_int, _P, _P, _P] + [ctypes.c_double] * 5 + [_P]
         self._cast.argtypes = [_P, _P, _P, ctypes.c_int, _P, _P, _P, _P, ctypes.c_int, _P, _P]
         self._rays.argtypes = [_P, _P, _P, _P, ctypes.c_int, _P, _P, _P]
-        for fn in (self._geometry, self._correct, self._noise, self._cast, self._rays):
+        for fn in (self._geometry, self._noise, self._cast, self._rays):
             fn.restype = None
         self._u = np.zeros((n_beams, 3))
-        self._shift = np.zeros((n_beams, 3))
+        self._origin = np.zeros((n_beams, 3))
         self._normal = np.zeros((n_beams, 3))
-        self._u_at, self._shift_at = address(self._u), address(self._shift)
+        self._u_at, self._origin_at = address(self._u), address(self._origin)
         self._noise_args = (float(cfg.range_noise_floor_m), float(cfg.range_noise_frac),
                             float(cfg.range_resolution_m), float(cfg.range_min_m), float(cfg.range_max_m))
 
@@ -127,10 +134,11 @@ class BeamKernels:
         caster = self._caster = _Caster()
         caster.multiray = mujoco_address("mj_multiRay")
         caster.groups, caster.site, caster.cutoff = address(self._groups), int(site), CUTOFF_M
-        caster.u, caster.shift, caster.normal = self._u_at, self._shift_at, address(self._normal)
+        caster.u, caster.org, caster.normal = self._u_at, self._origin_at, address(self._normal)
         caster.raygeom = mujoco_address("mju_rayGeom") if self.cull else None
         self._seen = np.zeros(max(model.ngeom, 1) * self._geom_bytes, np.uint8)  # lb_geom work rows
         caster.seen = address(self._seen)
+        caster.ray = mujoco_address("mj_ray")
         self._keep = (model, data)  # the model and data outlive every call
         self._cast_head = (ctypes.addressof(caster), model._address, data._address)
         self._bound = (model, data, int(site), self._groups)
@@ -155,21 +163,15 @@ class BeamKernels:
         self._rays(*self._cast_head, address(origin), k, address(u), address(dist), address(geomid))
         return self._normal[:k]
 
-    def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
-                 origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray,
+                 npose: int) -> tuple[np.ndarray, np.ndarray]:
         k = len(t_us)
-        u, shift = self._u[:k], self._shift[:k]
+        u, origin = self._u[:k], self._origin[:k]
         t_us, lx, ly = c_array(t_us, np.int64), c_array(lx, np.float64), c_array(ly, np.float64)
-        rows, origin = c_array(rows, np.float64), c_array(origin, np.float64)
-        self._geometry(k, address(t_us), address(lx), address(ly), address(rows), int(npose), address(origin),
-                       self._u_at, self._shift_at)
-        return u, shift
-
-    def correct(self, normal: np.ndarray, u: np.ndarray, shift: np.ndarray, dist: np.ndarray) -> None:
-        normal, u, shift = c_array(normal, np.float64), c_array(u, np.float64), c_array(shift, np.float64)
-        if not (dist.flags.c_contiguous and dist.dtype == np.float64 and dist.flags.writeable):
-            raise ValueError("dist: a writeable C-contiguous float64 array is corrected in place")
-        self._correct(len(dist), address(normal), address(u), address(shift), address(dist))
+        rows = c_array(rows, np.float64)
+        self._geometry(k, address(t_us), address(lx), address(ly), address(rows), int(npose), self._u_at,
+                       self._origin_at)
+        return u, origin
 
     def noise(self, dist: np.ndarray, geomid: np.ndarray, z: np.ndarray) -> np.ndarray:
         n = len(dist)
@@ -190,7 +192,7 @@ class _Caster(ctypes.Structure):
     """``lb_caster`` of lidar_beams.c."""
 
     _fields_ = [("multiray", _P), ("groups", _P), ("site", ctypes.c_int), ("cutoff", ctypes.c_double),
-                ("u", _P), ("shift", _P), ("normal", _P), ("raygeom", _P), ("seen", _P)]
+                ("u", _P), ("org", _P), ("normal", _P), ("raygeom", _P), ("seen", _P), ("ray", _P)]
 
 
 register(C_SOURCE, lb_caster=_Caster)

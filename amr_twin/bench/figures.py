@@ -47,6 +47,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     """
     from amr_twin.bench.twin import twin_figures
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
+    from amr_twin.navigation import mppi
     from amr_twin.sim import actors, battery, collisions, grid_steps, rolling_resistance, tyres
     from amr_twin.sim.native_build import native_status
 
@@ -63,7 +64,8 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     result.update(navigation_figures(cfg, sim_s))
     result["timer"] = "process_time"
     result["ratios"] = RATIOS
-    helpers = (grid_steps, rolling_resistance, battery, collisions, actors, hall_edges, imu_errors, lidar_kernels, tyres)
+    helpers = (grid_steps, rolling_resistance, battery, collisions, actors, hall_edges, imu_errors, lidar_kernels, tyres,
+               mppi)
     engines = {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
     result["rolling_resistance_engine"] = engines["rolling_resistance"]
     result["native_engines"] = engines

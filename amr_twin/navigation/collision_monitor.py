@@ -89,6 +89,17 @@ class CollisionMonitor:
         dx, dy = xy[:, 0] - x, xy[:, 1] - y
         return self.footprint.distance_m(np.column_stack([c * dx + s * dy, -s * dx + c * dy])) - self.person_radius_m
 
+    def _people_gaps(self, xy: np.ndarray, vel: np.ndarray, t_s: np.ndarray, poses: np.ndarray) -> np.ndarray:
+        """Clearance (n, N) from the footprint at each of ``poses`` (n, 3) of ``base_link`` to the people at
+        ``xy`` (N, 2) walking on at ``vel`` (N, 2) for ``t_s`` (n,): :meth:`_person_gap` at every step at once
+        (the same operations, so the same values; cos and sin by ``math`` as there)."""
+        future = xy[None] + t_s[:, None, None] * vel[None]                       # (n, N, 2)
+        c = np.array([math.cos(a) for a in poses[:, 2]])[:, None]
+        s = np.array([math.sin(a) for a in poses[:, 2]])[:, None]
+        dx, dy = future[..., 0] - poses[:, 0:1], future[..., 1] - poses[:, 1:2]
+        local = np.stack([c * dx + s * dy, -s * dx + c * dy], axis=-1)
+        return self.footprint.distance_m(local).reshape(len(poses), -1) - self.person_radius_m
+
     def _people_zones(self, v: float, w: float, xy: np.ndarray, vel: np.ndarray) -> tuple[float, float]:
         """The people zones (module docstring) for people at ``xy`` (N, 2) walking at ``vel`` (N, 2), base_link."""
         gap = self._person_gap(xy)
@@ -105,12 +116,11 @@ class CollisionMonitor:
         n = int(math.ceil(self.people_time_s / self.step_s))
         poses = arc_poses(0.0, 0.0, 0.0, v, w, self.step_s, n)
         t = self.step_s * np.arange(1, n + 1)
-        for k in range(n):
-            if (self._person_gap(xy + t[k] * vel, *poses[k]) < self.people_stop_m).any():
-                scale = t[k] / self.people_time_s
-                self.actions["people_approach"] += 1
-                v, w = v * scale, w * scale
-                break
+        k = np.flatnonzero((self._people_gaps(xy, vel, t, poses) < self.people_stop_m).any(1))
+        if len(k):  # the first step at which someone is within the stop clearance
+            scale = t[k[0]] / self.people_time_s
+            self.actions["people_approach"] += 1
+            v, w = v * scale, w * scale
         towards = (xy * vel).sum(1) < 0.0                              # walking towards the robot's origin
         ahead = xy[:, 0] * math.copysign(1.0, v) > 0.0 if v != 0.0 else np.zeros(len(xy), bool)
         if ((gap < self.people_slow_m) & (ahead | towards)).any() and abs(v) > self.people_slow_m_s:

@@ -27,12 +27,17 @@ are exact).
 
 from __future__ import annotations
 
+import ctypes
 import math
+from pathlib import Path
 
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from amr_twin.navigation.static_map import StaticMap
+from amr_twin.sim.native_build import address, c_array, open_helper
+
+C_SOURCE = Path(__file__).with_name("costmap_rays.c")
 
 LETHAL, INSCRIBED, NO_INFORMATION = 254, 253, 255
 KEEP_CHANGES = 256
@@ -61,10 +66,13 @@ class Costmap:
         Unknown cells of the map are obstacles.
     static_tolerance_m : float
         Returns this close to a static obstacle are not marked, m.
+    native : bool
+        False: the clearing march by NumPy rather than its C twin (``costmap_rays.c``; :attr:`engine` says which).
     """
 
     def __init__(self, static: StaticMap, inscribed_radius_m: float, inflation_radius_m: float,
-                 cost_scaling_per_m: float, unknown_is_lethal: bool = True, static_tolerance_m: float = 0.15):
+                 cost_scaling_per_m: float, unknown_is_lethal: bool = True, static_tolerance_m: float = 0.15,
+                 native: bool = True):
         self.static = static
         self.resolution_m = static.resolution_m
         self.origin_xy_m = np.asarray(static.origin_xy_m, float)
@@ -79,6 +87,14 @@ class Costmap:
         self._near_static = near
         self.marked = np.zeros(self.shape, bool)
         """The obstacle layer: cells marked by the scan."""
+        self._marked_u8 = self.marked.view(np.uint8)  # the same memory, for the C helper
+        self._lib, self.engine = open_helper(C_SOURCE, native)
+        if self._lib is not None:
+            ptr = ctypes.c_void_p
+            self._lib.costmap_crossed.argtypes = [ctypes.c_int, ptr, ptr, ptr, ctypes.c_double, ctypes.c_double,
+                                                  ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_int, ptr,
+                                                  ptr]
+            self._lib.costmap_crossed.restype = ctypes.c_int64
         self.dist_m = self.static_dist_m.copy()
         """Distance from each cell to the nearest lethal cell of either layer, capped, m (float32)."""
         self._cap = np.float32(self.inflation_radius_m + self.resolution_m)
@@ -149,16 +165,8 @@ class Costmap:
         length = np.hypot(v[:, 0], v[:, 1])
         u = v / np.maximum(length, 1e-9)[:, None]
         free_len = np.where(hit, np.minimum(length - 0.5 * self.resolution_m, raytrace_range_m), raytrace_range_m)
-        step = 0.75 * self.resolution_m
-        beams = np.flatnonzero(free_len > 0)
-        counts = np.floor(free_len[beams] / step).astype(np.int64) + 1
-        ray = np.repeat(beams, counts)
-        first = np.repeat(np.cumsum(counts) - counts, counts)
-        dist = (np.arange(len(ray)) - first) * step
-        row, col, inside = self.cells(o[ray] + dist[:, None] * u[ray])
-        flat = row[inside] * self.shape[1] + col[inside]
         marked = self.marked.reshape(-1)                        # a view: writes go to the layer
-        cleared = np.unique(flat[marked[flat]])                # few: the cells marked before and crossed now
+        cleared = np.unique(self._crossed(o, u, free_len))      # few: the cells marked before and crossed now
         marked[cleared] = False
         near = hit & (length <= obstacle_range_m)
         row, col, inside = self.cells(e[near])
@@ -173,6 +181,25 @@ class Costmap:
             self._refresh(r.min(), r.max(), c.min(), c.max())
         self.updates += 1
         return int(len(changed))
+
+    def _crossed(self, o: np.ndarray, u: np.ndarray, free_len: np.ndarray) -> np.ndarray:
+        """Flat indices of the marked cells that beams from ``o`` (K, 2) along ``u`` (K, 2) cross, sampled every
+        0.75 cell out to ``free_len`` (K,) m (with repeats); the C helper's loop or its NumPy twin (the same cells)."""
+        step = 0.75 * self.resolution_m
+        beams = np.flatnonzero(free_len > 0)
+        counts = np.floor(free_len[beams] / step).astype(np.int64) + 1
+        if self._lib is not None:
+            out = np.empty(int(counts.sum()), np.int64)
+            o, u, free_len = (c_array(a, np.float64) for a in (o, u, free_len))
+            n = self._lib.costmap_crossed(len(o), address(o), address(u), address(free_len), step, *self.origin_xy_m,
+                                          self.resolution_m, *self.shape, address(self._marked_u8), address(out))
+            return out[:n]
+        ray = np.repeat(beams, counts)
+        first = np.repeat(np.cumsum(counts) - counts, counts)
+        dist = (np.arange(len(ray)) - first) * step
+        row, col, inside = self.cells(o[ray] + dist[:, None] * u[ray])
+        flat = row[inside] * self.shape[1] + col[inside]
+        return flat[self.marked.reshape(-1)[flat]]
 
     def _refresh(self, r0: int, r1: int, c0: int, c1: int) -> None:
         """Recompute the distances of the cells within the inflation radius of rows r0..r1, cols c0..c1."""

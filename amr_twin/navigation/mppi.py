@@ -27,11 +27,19 @@ Each control cycle, reconstructed from the papers' and nav2's descriptions:
    smoothed by a 3-step moving average (nav2 smooths with a Savitzky-Golay filter); its first
    step is the command. Every sample colliding: stop, and report it (``blocked``); most of the
    weights on colliding samples: report it too.
+
+Steps 1 to 3 run in C (``mppi_critics.c``, built at first use by :mod:`amr_twin.sim.native_build`):
+some hundred NumPy calls on (T, K) arrays a cycle had cost more than their arithmetic. NumPy keeps
+the random draws and the cos and sin; the C helper does the same float32 and double operations in
+the same order as the NumPy code here, its twin (``native=False``, or without a compiler), so that
+both give the same costs, collisions and commands (tests/navigation/test_mppi.py).
 """
 
 from __future__ import annotations
 
+import ctypes
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -40,10 +48,34 @@ from amr_twin.navigation.footprint import Footprint
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.rpp import Twist2D
+from amr_twin.sim.native_build import address, c_array, open_helper
+
+C_SOURCE = Path(__file__).with_name("mppi_critics.c")
+PARAMS = ("cx0", "cx1", "r", "margin", "collision", "obstacle", "align", "progress", "goal", "forward", "social",
+          "people_collision", "people", "person_radius", "clearance", "person_margin", "social_radius", "origin_x",
+          "origin_y", "res", "reach_x", "reach_y", "goal_x", "goal_y", "follow")
+"""The C helper's parameter vector (doubles), in the order of its enum."""
+
+
+def _declare(lib) -> None:
+    """The C helper's signatures (addresses as pointers, sizes as ints)."""
+    ptr, i32 = ctypes.c_void_p, ctypes.c_int
+    lib.mppi_costs.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, i32, i32, ptr, i32, ptr, i32, ptr, ptr]
+    lib.mppi_costs.restype = None
+    f32 = ctypes.c_float
+    lib.mppi_sample.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, f32, f32]
+    lib.mppi_sample.restype = None
+    lib.mppi_headings.argtypes = [i32, i32, ptr, f32, f32, ptr, ptr]
+    lib.mppi_headings.restype = None
+    lib.mppi_positions.argtypes = [i32, i32, ptr, ptr, ptr, f32, f32, f32, ptr, ptr]
+    lib.mppi_positions.restype = None
+    if lib.mppi_params_size() != len(PARAMS):
+        raise RuntimeError(f"{C_SOURCE.name} takes {lib.mppi_params_size()} parameters, mppi.py {len(PARAMS)}")
 
 
 class Mppi:
     """MPPI local controller (module docstring). ``seed``: the noise stream (same seed, same commands).
+    ``native=False``: the NumPy critics rather than their C twin (:attr:`engine` says which run).
 
     Arrays are time-major inside: controls (T, K, 2), trajectories (T, K), so that each step of the
     ramps' clipping works on contiguous memory.
@@ -55,7 +87,8 @@ class Mppi:
                  steps: int = 25, step_s: float = 0.1, sigma_v: float = 0.25, sigma_w: float = 0.6,
                  temperature: float = 0.25, margin_m: float = 0.25, social_radius_m: float = 1.0,
                  person_radius_m: float = 0.25, person_clearance_m: float = 0.25, person_margin_m: float = 0.6,
-                 prediction_s: float = 2.5, weights: dict | None = None, seed: int = 0):
+                 prediction_s: float = 2.5, weights: dict | None = None, seed: int = 0,
+                 native: bool = True):
         self.costmap, self.limits, self.dt_s = costmap, limits, float(dt_s)
         self.K, self.T, self.step_s = int(samples), int(steps), float(step_s)
         self.sigma = np.array([sigma_v, sigma_w], np.float32)
@@ -75,6 +108,15 @@ class Mppi:
         self._u_max = np.array([limits.max_v_m_s, limits.max_w_rad_s], f32)
         self._down = np.array([limits.decel_m_s2, limits.angular_accel_rad_s2], f32) * f32(self.step_s)
         self._up = np.array([limits.accel_m_s2, limits.angular_accel_rad_s2], f32) * f32(self.step_s)
+        self._lib, self.engine = open_helper(C_SOURCE, native)
+        if self._lib is not None:
+            w = self.w
+            self._params = np.array([*self.circle_x, self.circle_r, margin_m, w["collision"], w["obstacle"],
+                                     w["align"], w["progress"], w["goal"], w["forward"], w["social"],
+                                     w["people_collision"], w["people"], person_radius_m, person_clearance_m,
+                                     person_margin_m, social_radius_m, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+            self._bounds = [address(a) for a in (self._u_min, self._u_max, self._down, self._up)]
+            _declare(self._lib)
 
     def reset(self) -> None:
         """Forget the nominal sequence (after a rotation in place or a recovery)."""
@@ -91,8 +133,29 @@ class Mppi:
             prev = step
         return u
 
+    def _sample(self, v0: float, w0: float) -> np.ndarray:
+        """Step 1 of the module docstring: the feasible control sequences (T, K, 2) of this cycle."""
+        u = self.rng.standard_normal((self.T, self.K, 2), dtype=np.float32)
+        if self._lib is not None:
+            self._lib.mppi_sample(self.T, self.K, address(u), address(self.sigma), address(self.nominal),
+                                  *self._bounds, v0, w0)
+            return u
+        u *= self.sigma
+        u += self.nominal[:, None, :]
+        u[:, 0] = self.nominal
+        u[:, 1] = 0.0  # the braking sample
+        return self._feasible(u, v0, w0)
+
     def rollout(self, pose, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions x, y and headings (T, K) of control sequences ``u`` (T, K, 2) from ``pose``."""
+        if self._lib is not None:  # the C helper's sums around NumPy's cos and sin: the same bits
+            u, (T, K) = c_array(u, np.float32), u.shape[:2]
+            yaw, mid, x, y = (np.empty((T, K), np.float32) for _ in range(4))
+            self._lib.mppi_headings(T, K, address(u), self.step_s, pose[2], address(yaw), address(mid))
+            cm, sm = np.cos(mid), np.sin(mid)
+            self._lib.mppi_positions(T, K, address(u), address(cm), address(sm), self.step_s, pose[0], pose[1],
+                                     address(x), address(y))
+            return x, y, yaw
         dt = u.dtype.type(self.step_s)
         yaw = np.cumsum(u[..., 1], axis=0)
         yaw *= dt
@@ -128,6 +191,12 @@ class Mppi:
     def costs(self, x, y, yaw, u, path: PathHandler, people=None, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Critic cost (K,) of each trajectory (T, K) and whether it collides (K,) with what the costmap holds."""
         w, cm, T = self.w, self.costmap, x.shape[0]
+        horizon = self.limits.max_v_m_s * self.T * self.step_s
+        ref = path.ahead(horizon + 0.5)[::2, :2]
+        follow = path.remaining_m >= 1.0
+        reach = ref[min(len(ref) - 1, int(horizon / (2 * 0.05 + 1e-9)))] if len(ref) else path.goal[:2]
+        if self._lib is not None:
+            return self._costs_c(x, y, yaw, u, ref, reach, follow, path.goal, people, t_s)
         circles = self._circles(x, y, yaw)
         d = cm.distance_at(circles.reshape(-1, 2)).reshape(2, *x.shape).min(0)
         hit = d < self.circle_r
@@ -135,13 +204,10 @@ class Mppi:
         first = np.where(any_hit, hit.argmax(0), T)
         cost = w["collision"] * any_hit * (1.0 + (T - first) / T)
         cost += w["obstacle"] * np.maximum(self.circle_r + self.margin_m - d, 0.0).mean(0)
-        horizon = self.limits.max_v_m_s * self.T * self.step_s
-        ref = path.ahead(horizon + 0.5)[::2, :2]
-        px, py = x[1::3], y[1::3]                                                   # (T/3, K)
-        dist = np.sqrt(((px[..., None] - ref[:, 0]) ** 2 + (py[..., None] - ref[:, 1]) ** 2).min(-1))
-        if path.remaining_m >= 1.0:
+        if follow:
+            px, py = x[1::3], y[1::3]                                                   # (T/3, K)
+            dist = np.sqrt(((px[..., None] - ref[:, 0]) ** 2 + (py[..., None] - ref[:, 1]) ** 2).min(-1))
             cost += w["align"] * dist.mean(0)
-            reach = ref[min(len(ref) - 1, int(horizon / (2 * 0.05 + 1e-9)))] if len(ref) else path.goal[:2]
             cost += w["progress"] * np.hypot(x[-1] - reach[0], y[-1] - reach[1])
         else:
             g = path.goal
@@ -151,17 +217,32 @@ class Mppi:
             cost += self._people_costs(circles, u, people, t_s)
         return cost, any_hit
 
+    def _costs_c(self, x, y, yaw, u, ref, reach, follow, goal, people, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`costs` by the C helper (the same critics; the headings enter as their cos and sin)."""
+        cm, (T, K) = self.costmap, x.shape
+        p = self._params
+        p[17:] = (cm.origin_xy_m[0], cm.origin_xy_m[1], cm.resolution_m, reach[0], reach[1], goal[0], goal[1],
+                  float(follow))
+        ref = c_array(ref, np.float64)
+        if people is not None and len(people):
+            at = c_array(people.at(t_s + self.step_s * np.arange(1, T + 1), self.prediction_s), np.float64)
+        else:
+            at = np.zeros((0, T, 2))
+        dist = c_array(cm.dist_m, np.float32)
+        cost, hit = np.empty(K), np.empty(K, np.uint8)
+        x, y, u = c_array(x, np.float32), c_array(y, np.float32), c_array(u, np.float32)
+        c, s = np.cos(yaw, dtype=np.float32), np.sin(yaw, dtype=np.float32)  # kept alive over the call
+        self._lib.mppi_costs(T, K, address(x), address(y), address(c), address(s), address(u), address(p),
+                             address(dist), dist.shape[0], dist.shape[1], address(ref), len(ref),
+                             address(at) if len(at) else None, len(at), address(cost), address(hit))
+        return cost, hit.view(bool)
+
     def command(self, pose, velocity, path: PathHandler, people=None, t_s: float = 0.0) -> Twist2D:
         """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w), at time
         ``t_s`` with the tracked ``people`` (:class:`~amr_twin.navigation.people.People`) about."""
         pose = np.asarray(pose, float)
         v0, w0 = (float(v) for v in velocity)
-        u = self.rng.standard_normal((self.T, self.K, 2), dtype=np.float32)
-        u *= self.sigma
-        u += self.nominal[:, None, :]
-        u[:, 0] = self.nominal
-        u[:, 1] = 0.0  # the braking sample
-        u = self._feasible(u, v0, w0)
+        u = self._sample(v0, w0)
         x, y, yaw = self.rollout(pose, u)
         cost, hit = self.costs(x, y, yaw, u, path, people, t_s)
         if hit.all():

@@ -24,7 +24,7 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert r["lidar_beams_per_scan"] == 364 and r["timer"] == "process_time"
     assert r["rolling_resistance_engine"] == "C" or r["rolling_resistance_engine"].startswith("Python (")
     assert set(r["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "actors",
-                                        "hall_edges", "imu_errors", "lidar_beams", "tyres"}
+                                        "hall_edges", "imu_errors", "lidar_beams", "tyres", "mppi_critics"}
     assert r["actors_ratio"] > 0 and r["actors_sensors_over_sensors"] > 0 and r["actors_over_twin"] > 0
     assert r["actors_collisions"] == 0 and r["actors_engine"] == r["native_engines"]["actors"]
     assert all(e == "C" or e.startswith("Python (") for e in r["native_engines"].values())

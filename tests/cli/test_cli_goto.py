@@ -68,7 +68,10 @@ def test_goto_reaches_the_goal_and_reports_it(recorded):
     goal = info["goals"][0]
     assert goal["status"] == "succeeded" and info["collisions"] == []
     x, y, yaw = info["final_pose"]
-    assert math.hypot(x + 6.0, y) <= 0.25 and abs(math.remainder(yaw - math.pi, 2 * math.pi)) <= 0.25
+    # the goal checker latches within 0.25 m (nav2's stateful SimpleGoalChecker), then the robot brakes at
+    # decel_m_s2 and turns to the goal's heading: it stops up to a few cm further (0.240 m before the
+    # LiDAR's beams were cast from their own origins, 0.256 m since, on this drive)
+    assert math.hypot(x + 6.0, y) <= 0.30 and abs(math.remainder(yaw - math.pi, 2 * math.pi)) <= 0.25
 
 
 def test_the_mcap_holds_the_plan_map_costmap_and_footprint_as_ros_reads_them(recorded):

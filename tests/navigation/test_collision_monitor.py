@@ -87,3 +87,21 @@ def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_un
     behind = _people((-0.55, -0.45), (0.0, 1.3))
     assert mon.filter(0.6, 0.0, *no_scan, people_base=behind) == (0.6, 0.0)
     assert mon.filter(0.6, 0.0, *no_scan, people_base=_people((0.55, -0.45), (1.3, 0.0)))[0] == 0.3  # ahead, walking on
+
+
+def test_the_people_gaps_of_all_steps_at_once_are_the_gaps_of_each_step():
+    """The approach model's clearances to people walking on, all its steps at once, are those of the
+    person gap at each step's pose (bit for bit: the monitor's decisions do not change), turning or not."""
+    from amr_twin.navigation.kinematics import arc_poses
+
+    mon, rng = CollisionMonitor(FP, 0.8), np.random.default_rng(4)
+    for _ in range(20):
+        xy, vel = rng.uniform(-3.0, 3.0, (int(rng.integers(1, 5)), 2)), rng.uniform(-1.5, 1.5, (1, 2))
+        vel = np.repeat(vel, len(xy), 0) + rng.uniform(-0.3, 0.3, xy.shape)
+        v, w = float(rng.uniform(-0.8, 0.8)), float(rng.choice([0.0, rng.uniform(-1.5, 1.5)]))
+        poses = arc_poses(0.0, 0.0, 0.0, v, w, mon.step_s, 40)
+        t = mon.step_s * np.arange(1, 41)
+        gaps = mon._people_gaps(xy, vel, t, poses)
+        assert gaps.shape == (40, len(xy))
+        for k in (0, 7, 39):
+            assert np.array_equal(gaps[k], mon._person_gap(xy + t[k] * vel, *poses[k]))

@@ -86,3 +86,47 @@ def test_each_scan_leaves_the_layers_as_a_rebuild_from_scratch_would():
     cm.update_scan(*_scan(origin, [(8.0, 4.0, 0.2)]), 4.0, 5.0)
     assert cm.version == version + 1
     assert cm.update_scan(*_scan(origin, [(8.0, 4.0, 0.2)]), 4.0, 5.0) == 0 and cm.version == version + 1
+
+
+def test_the_c_clearing_march_leaves_the_layers_of_its_numpy_twin():
+    """Scans from random places with random people about, some beams without a return and some ends off the
+    grid: the C march (costmap_rays.c) and its NumPy twin clear the same cells, so the two costmaps keep the
+    same obstacle layer and distances scan after scan."""
+    fast = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
+    slow = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0, native=False)
+    if fast.engine != "C":
+        pytest.skip(f"the C march is not built here: {fast.engine}")
+    rng, cleared = np.random.default_rng(2), 0
+    for _ in range(25):
+        origin = rng.uniform((0.5, 0.5), (11.5, 7.5))
+        people = [(*rng.uniform((0.5, 0.5), (11.5, 7.5)), 0.25) for _ in range(int(rng.integers(0, 4)))]
+        o, e, hit = _scan(origin, people)
+        hit = hit & (rng.random(len(hit)) > 0.1)          # dropped returns: cleared to the raytrace range
+        e = np.where(rng.random((len(e), 1)) < 0.05, e + rng.uniform(-30, 30, e.shape), e)  # some far off the grid
+        before = fast.marked.sum()
+        changed = [cm.update_scan(o, e, hit, obstacle_range_m=4.0, raytrace_range_m=5.0) for cm in (fast, slow)]
+        assert changed[0] == changed[1]
+        assert np.array_equal(fast.marked, slow.marked) and np.array_equal(fast.dist_m, slow.dist_m)
+        cleared += int(before > 0 and changed[0] > 0)
+    assert fast.marked.sum() > 0 and cleared >= 5  # the scans did mark and clear
+
+
+def test_the_c_march_crosses_the_cells_its_numpy_twin_crosses_on_a_dense_random_layer():
+    """Every sample counts on a layer a third marked: the same crossed cells, in the same order, from
+    beams of random origins, directions and free lengths (none, zero, past the grid's edge)."""
+    fast = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
+    slow = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0, native=False)
+    if fast.engine != "C":
+        pytest.skip(f"the C march is not built here: {fast.engine}")
+    rng = np.random.default_rng(6)
+    for cm in (fast, slow):
+        cm.marked[:] = np.random.default_rng(1).random(cm.shape) < 0.33
+    for _ in range(5):
+        n = 200
+        o = rng.uniform((-1.0, -1.0), (13.0, 9.0), (n, 2))
+        a = rng.uniform(-np.pi, np.pi, n)
+        u = np.column_stack([np.cos(a), np.sin(a)])
+        free = np.where(rng.random(n) < 0.1, rng.uniform(-0.5, 0.0, n), rng.uniform(0.0, 6.0, n))
+        free[::17] = 0.0  # a beam whose return is within half a cell: clears nothing
+        got, want = fast._crossed(o, u, free), slow._crossed(o, u, free)
+        assert len(want) > 1000 and np.array_equal(got, want)

@@ -128,13 +128,13 @@ def ekf_runs():
 
 
 def test_the_ekf_pose_is_held_to_the_map_in_the_aisles(ekf_runs):
-    """Beside a rack's end the UWB ranges come late through the racks and turn the EKF's heading (more
-    than 0.05 rad off, the robot then stalls before rack faces it sees off the map); matched to the map
-    the pose stays within 9 cm (along the aisle, where only the uprights tell where it is) and 0.03 rad of
-    the truth, every scan matched."""
+    """Beside a rack's end the UWB ranges come late through the racks and pull the EKF's pose off (0.09 m
+    and 0.026 rad on this drive; more than 0.05 rad on the drive the LiDAR's old ghost returns made,
+    docs/lidar.md); matched to the map the pose stays within 9 cm (along the aisle, where only the
+    uprights tell where it is) and 0.03 rad of the truth, every scan matched."""
     pos_m, yaw_rad, nav = ekf_runs[True]
     raw_pos_m, raw_yaw_rad, _ = ekf_runs[False]
-    assert raw_yaw_rad > 0.05 and raw_pos_m > 0.1, (raw_pos_m, raw_yaw_rad)
+    assert raw_pos_m > 0.08 and raw_pos_m > pos_m + 0.02, (raw_pos_m, raw_yaw_rad, pos_m)
     assert pos_m < 0.09 and yaw_rad < 0.03, (pos_m, yaw_rad)
     assert nav.matcher.matches >= 40 and nav.matcher.skipped <= 2, (nav.matcher.matches, nav.matcher.skipped)
 

@@ -1,5 +1,6 @@
 """The LiDAR's per-beam arithmetic: the C helper against its numpy twin, to the bit."""
 
+import math
 import shutil
 from types import SimpleNamespace
 
@@ -39,35 +40,29 @@ def _poses(rng, n):
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_directions_and_shifts_are_the_same_bits(seed):
+def test_directions_and_origins_are_the_same_bits(seed):
     c, py = _kernels()
     rng = np.random.default_rng(seed)
     for n in (1, 2, 5, 11):  # one sample (held), and instants before, between and after the samples
         poses = _poses(rng, n)
         t_us, lx, ly = _rotation(rng, int(rng.integers(1, 365)))
-        origin = rng.normal(0.0, 2.0, 3)
-        u_c, shift_c = (a.copy() for a in c.geometry(t_us, lx, ly, poses.rows, poses.n, origin))
-        u_py, shift_py = py.geometry(t_us, lx, ly, poses.rows, poses.n, origin)
-        assert u_c.tobytes() == u_py.tobytes() and shift_c.tobytes() == shift_py.tobytes()
+        u_c, org_c = (a.copy() for a in c.geometry(t_us, lx, ly, poses.rows, poses.n))
+        u_py, org_py = py.geometry(t_us, lx, ly, poses.rows, poses.n)
+        assert u_c.tobytes() == u_py.tobytes() and org_c.tobytes() == org_py.tobytes()
         assert np.allclose(np.linalg.norm(u_c, axis=1), 1.0)
+        # each origin lies on the segment between the samples around its instant (held outside them)
+        ts = poses.rows[:poses.n, 0]
+        for i in range(0, len(t_us), 17):
+            ref = [np.interp(t_us[i], ts, poses.rows[:poses.n, 1 + a]) for a in range(3)]
+            assert np.allclose(org_c[i], ref, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_motion_correction_and_noise_are_the_same_bits(seed):
+def test_noise_is_the_same_bits(seed):
     c, py = _kernels()
     rng = np.random.default_rng(seed)
     k = 364
-    normal = rng.normal(0.0, 1.0, (k, 3))
-    normal[::7] = 0.0  # no hit
-    u = rng.normal(0.0, 1.0, (k, 3))
-    u /= np.linalg.norm(u, axis=1)[:, None]
-    u[::11] = np.cross(normal[::11], [0.0, 0.0, 1.0]) + 1e-5  # grazing
-    shift = rng.normal(0.0, 0.05, (k, 3))
-    dist = rng.uniform(-1.0, 14.0, k)
-    d_c, d_py = dist.copy(), dist.copy()
-    c.correct(normal, u, shift, d_c)
-    py.correct(normal, u, shift, d_py)
-    assert d_c.tobytes() == d_py.tobytes() and not np.array_equal(d_c, dist)
+    d_c = d_py = rng.uniform(-1.0, 14.0, k)
     geomid = rng.integers(-1, 5, k).astype(np.int32)
     z = rng.standard_normal(k)
     r_c, r_py = c.noise(d_c, geomid, z), py.noise(d_py, geomid, z)
@@ -159,3 +154,99 @@ def test_the_culled_cast_hits_what_mj_multiray_and_mj_ray_hit(seed, mesh):
             assert (x, int(gid[0])) == (dist[i], geomid[i]) and nrm.tobytes() == normal[i].tobytes()
         hits += int((geomid >= 0).sum())
     assert hits > 1000
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("mesh", [False, True])
+def test_each_beam_is_cast_from_its_own_origin(seed, mesh):
+    """lb_cast with the laser moving up to 0.6 m during the beams (its cull prepared once from the present
+    origin, each geom's span widened for the beam's own origin) and the numpy twin: for every beam, the
+    geom and distance of MuJoCo's ``mj_ray`` from that beam's own origin along its own direction, to the
+    bit (a mesh in view: mj_multiRay per beam)."""
+    import mujoco
+
+    c, py = _kernels()
+    rng = np.random.default_rng(10 + seed)
+    m = mujoco.MjModel.from_xml_string(_scene(rng, mesh))
+    d = mujoco.MjData(m)
+    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "laser")
+    c.bind(m, d, site, groups)
+    py.bind(m, d, site, groups)
+    hits = moved = 0
+    for _ in range(8):
+        end = rng.uniform([-5, -5, 0.1], [5, 5, 1.2])
+        d.mocap_pos[0] = end
+        mujoco.mj_forward(m, d)
+        poses = _poses(rng, 10)  # 10 samples 20 ms apart ending at the present origin
+        poses.rows[:, 1:4] = end + np.cumsum(rng.normal(0.0, 0.12, (10, 3)) * [1, 1, 0.05], axis=0)[::-1]
+        poses.rows[:, 1:4] -= poses.rows[-1, 1:4] - end
+        t_us, lx, ly = _rotation(rng, 364)
+        out = []
+        for k in (c, py):
+            dist, geomid = np.zeros(364), np.zeros(364, np.int32)
+            k.cast(t_us, lx, ly, poses.rows, poses.n, dist, geomid)
+            out.append((dist, geomid))
+        (d_c, g_c), (d_py, g_py) = out
+        assert d_c.tobytes() == d_py.tobytes() and g_c.tobytes() == g_py.tobytes()
+        u, origin = py.geometry(t_us, lx, ly, poses.rows, poses.n)
+        for i in range(364):
+            gid, nrm = np.zeros(1, np.int32), np.zeros(3)
+            x = mujoco.mj_ray(m, d, origin[i], u[i], groups, 1, -1, gid, nrm)
+            assert (x, int(gid[0])) == (d_c[i], g_c[i]), i
+        hits += int((g_c >= 0).sum())
+        moved += int((np.linalg.norm(origin - end, axis=1) > 0.15).sum())
+    assert hits > 1500 and moved > 1000
+
+
+def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
+    """The laser drove 0.5 m away from a small sphere during the rotation: a beam acquired then, cast from
+    there, hits the sphere at 1.4 m, not the wall behind it at 1.8 m, though the sphere's bounding sphere
+    is 1.9 m from the present origin, farther than that wall hit (the cull's early stop is loosened by
+    how far each beam's origin is from the present one)."""
+    import mujoco
+
+    c, py = _kernels()
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+      <geom name="ball" type="sphere" size="0.1" pos="2.0 0 0.5"/>
+      <geom name="wall" type="box" size="0.1 4.0 1.0" pos="2.4 0 1.0"/>
+      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    rows = np.array([[0.0, 0.5, 0.0, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
+    t_us, lx, ly = np.array([0, 20_000], np.int64), np.ones((2, 1)), np.zeros((2, 1))
+    for k in (c, py):
+        k.bind(m, d, 0, groups)
+        dist, geomid = np.zeros(2), np.zeros(2, np.int32)
+        k.cast(t_us, lx, ly, rows, 2, dist, geomid)
+        assert [m.geom(g).name for g in geomid] == ["ball", "ball"]
+        assert dist == pytest.approx([1.4, 1.9], abs=1e-12)
+
+
+def test_a_beam_from_beside_a_thin_post_sees_it():
+    """An 8 mm post 10 cm ahead of the present origin; a beam acquired 10 cm away, 3.5 cm from the post,
+    aimed at it 80 degrees off the post's azimuth seen from the present origin, hits it (an origin as far
+    off as the post's nearest corner: the post is tried by every such beam, no span widened)."""
+    import mujoco
+
+    c, py = _kernels()
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+      <geom name="post" type="cylinder" size="0.004 0.6" pos="0.1 0 0.6"/>
+      <geom name="wall" type="box" size="4.0 0.1 1.0" pos="0 -3.0 1.0"/>
+      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    o = 0.1 * np.array([np.cos(0.35), np.sin(0.35)])
+    to_post = np.array([0.1, 0.0]) - o
+    az = math.atan2(to_post[1], to_post[0])
+    rows = np.array([[0.0, *o, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
+    t_us, lx, ly = np.array([0], np.int64), np.full((1, 1), math.cos(az)), np.full((1, 1), math.sin(az))
+    assert az < -1.38  # outside the post's span seen from the present origin, widened by x (1 + x^2 / 4)
+    for k in (c, py):
+        k.bind(m, d, 0, groups)
+        dist, geomid = np.zeros(1), np.zeros(1, np.int32)
+        k.cast(t_us, lx, ly, rows, 2, dist, geomid)
+        assert m.geom(int(geomid[0])).name == "post"
+        assert dist[0] == pytest.approx(np.linalg.norm(to_post) - 0.004, abs=1e-9)

@@ -98,7 +98,7 @@ def simulate(job: _Job) -> dict:
             "wheel_command": result.wheel_command, "t_command_s": s.commands[0][0] if s.commands else 0.0,
             "t_s": s.t_s, "true_rpm": s.true_rpm, "published": s.published, "pwm_counts": s.pwm_counts,
             "current_a": s.current_a, "battery_a": s.battery_a,
-            "sim_s": result.sim_s, "wall_s": result.wall_s}
+            "sim_s": result.sim_s, "wall_s": result.wall_s, "tyre_timestep": result.tyre_timestep}
 
 
 def analyse(spec: RunSpec, raw: dict) -> dict:
@@ -121,7 +121,8 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
                         "checks": judge(name, reference, published or {}), "true_checks": judge(name, reference, true)}
     return {"run": spec.number, "title": spec.title, "command": spec.command.describe(),
             "payload_kg": spec.payload_kg, "duration_s": raw["sim_s"], "wheel_command": raw["wheel_command"],
-            "codes": raw["codes"], "errors": raw["errors"], "wall_s": raw["wall_s"], "wheels": wheels, "raw": raw}
+            "codes": raw["codes"], "errors": raw["errors"], "wall_s": raw["wall_s"], "wheels": wheels,
+            "tyre_timestep": raw.get("tyre_timestep"), "raw": raw}
 
 
 def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,

@@ -52,7 +52,8 @@ class WheelMetrics:
 @dataclass(frozen=True)
 class RunMetrics:
     """One chapter 5 run: its number, title, command, payload kg, simulated and wall seconds, the
-    wheel_Command and the client's codes and errors, and each driven wheel (``left``, ``right``)."""
+    wheel_Command and the client's codes and errors, and each driven wheel (``left``, ``right``);
+    ``tyre_timestep``: the tyres' guard halved the physics timestep (written only then)."""
 
     run: int
     title: str
@@ -64,6 +65,7 @@ class RunMetrics:
     errors: list
     wall_s: float
     wheels: dict[str, WheelMetrics]
+    tyre_timestep: Optional[dict] = None  # the tyres' guard halved the timestep (amr_twin.model.tyre_stability)
 
 
 @dataclass(frozen=True)
@@ -131,7 +133,7 @@ class Chapter5Metrics:
     def as_json(self) -> dict:
         """The ``metrics.json`` object (``firmware_comparison`` and ``spread`` only when made)."""
         out = {f.name: getattr(self, f.name) for f in fields(self)}
-        out["runs"] = [asdict(r) for r in self.runs]
+        out["runs"] = [{k: v for k, v in asdict(r).items() if k != "tyre_timestep" or v is not None} for r in self.runs]
         out["comparisons"] = [asdict(c) for c in self.comparisons]
         out["summary"] = asdict(self.summary)
         for optional in ("firmware_comparison", "spread"):
@@ -149,7 +151,8 @@ def _wheel(w: dict) -> WheelMetrics:
 def metrics(results: dict) -> Chapter5Metrics:
     """The typed metrics of :func:`amr_twin.experiments.chapter5.run`'s ``results``."""
     runs = [RunMetrics(r["run"], r["title"], r["command"], r["payload_kg"], r["duration_s"], r["wheel_command"],
-                       r["codes"], r["errors"], r["wall_s"], {name: _wheel(w) for name, w in r["wheels"].items()})
+                       r["codes"], r["errors"], r["wall_s"], {name: _wheel(w) for name, w in r["wheels"].items()},
+                       r.get("tyre_timestep"))
             for r in results["runs"]]
     comparisons = [OscillationComparison(**c) for c in results["comparisons"]]
     checks = [c for r in runs for w in r.wheels.values() for c in w.checks.values()]

@@ -7,7 +7,8 @@ samples and true speed), the nominal value, the median and 90 % interval over th
 the thesis' value and band where §5.1.3 gives one, and in how many draws the metric lies in
 its band; the §5.1.4 answers (the PI raises the duty with 20 kg; the 20 kg runs oscillate
 more) as the number of draws in which they hold; and the parameters whose rank
-correlation with each banded metric is largest. ``chapter5_spread_report.markdown`` writes the report's
+correlation with each banded metric is largest; and each draw's run whose physics timestep the tyres'
+guard halved (``tyre_timestep_halved``, :mod:`amr_twin.model.tyre_stability`). ``chapter5_spread_report.markdown`` writes the report's
 section (:mod:`.chapter5_spread_report`); the run plots get the 90 % band of the true wheel speed.
 """
 
@@ -114,4 +115,6 @@ def summarise(nominal: dict, spread: dict) -> dict:
             "oscillation_all_hold": sum(all(c["verdict"] == "pass" for c in comps) and bool(comps)
                                         for comps in oscillation),
             "duty_raised": [{"loaded_run": a, "unloaded_run": b, "wheel": w, "draws": v}
-                            for (a, b, w), v in raised.items()]}
+                            for (a, b, w), v in raised.items()],
+            "tyre_timestep_halved": [{"draw": i, "run": r["run"], **r["tyre_timestep"]} for i in order
+                                     for r in samples[i] if r.get("tyre_timestep")]}

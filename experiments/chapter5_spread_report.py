@@ -41,6 +41,11 @@ def markdown(s: dict) -> list[str]:
     if s["oscillation_more"]:
         lines.append(f"- \"the 20 kg runs oscillate more\" holds on every comparison in {s['oscillation_all_hold']} "
                      f"of {n} draws")
+    halved = s.get("tyre_timestep_halved") or []
+    if halved:
+        lines += ["", f"Physics timestep halved by the tyres' guard (stability number S > {halved[0]['stability_limit']:g}, "
+                  "docs/tyres.md) in " + ", ".join(f"draw {h['draw']} run {h['run']} ({h['timestep_s'] * 1e3:g} ms)"
+                                                  for h in halved) + "."]
     if s["clipped"]:
         lines += ["", "Draws clipped to a bound: " + ", ".join(f"`{k}` {v}" for k, v in s["clipped"].items()) + "."]
     return lines

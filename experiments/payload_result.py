@@ -91,7 +91,8 @@ class WheelRun:
 class Dynamics:
     """The run: the largest tilt deg, the least wheel and caster spring loads N, the supports that
     lost contact, the least wheel contact force N (chatter included), the least loaded moment, the
-    electrics, whether a wheel lifted, each wheel, and whether every driven wheel tracked."""
+    electrics, whether a wheel lifted, each wheel, whether every driven wheel tracked, and the physics
+    timestep s where the tyres' guard halved it (:mod:`amr_twin.model.tyre_stability`; else None, not written)."""
 
     max_tilt_deg: float
     min_wheel_n: float
@@ -103,6 +104,7 @@ class Dynamics:
     wheel_lift_off: bool
     wheels: tuple[WheelRun, ...]
     tracks: bool
+    tyre_timestep_s: Optional[float] = None  # the physics timestep when the tyres' guard halved it, s
 
     def row(self) -> dict:
         out = {"max_tilt_deg": self.max_tilt_deg, "dyn_min_wheel_n": self.min_wheel_n,
@@ -112,6 +114,8 @@ class Dynamics:
         for wheel in self.wheels:
             out.update(wheel.row())
         out["tracks"] = self.tracks
+        if self.tyre_timestep_s is not None:
+            out["tyre_timestep_s"] = self.tyre_timestep_s
         return out
 
 

@@ -146,7 +146,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
         lifted=";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
         min_wheel_contact_n=float(np.min(contact[:, :2])), min_wheel=_min_wheel_mechanism(cfg, loads, vel, s),
         electrics=_electrics(s, point.duration_s), wheel_lift_off=min_wheel_n < CONTACT_MIN_N, wheels=wheels,
-        tracks=all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors)), ""
+        tracks=all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors),
+        tyre_timestep_s=twin.tyre_timestep.timestep_s if twin.tyre_timestep.halvings else None), ""
 
 
 def _wheel_run(w: int, ref: float, s, slip: np.ndarray, tail: np.ndarray, cfg: TwinConfig) -> WheelRun:

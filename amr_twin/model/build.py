@@ -22,6 +22,7 @@ from amr_twin.model.paths import ROOT
 from amr_twin.model.robot_spec import GROUP_WORLD, IMU_SENSORS, robot_spec
 from amr_twin.model.urdf import XACRO_FILE, BuildError, robot_urdf
 from amr_twin.model import tyre_numeric as tyres
+from amr_twin.model.tyre_stability import tyre_timestep
 
 WORLD_DIR = ROOT / "models" / "worlds"
 ROBOT_PREFIX = "amr/"
@@ -138,6 +139,7 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
     with _compiling():
         robot_xml = robot.to_xml()  # the robot alone, for export, before attaching
     scene = _world_spec(cfg, world)
+    scene.option.timestep = tyre_timestep(cfg).timestep_s  # the brush tyres' explicit states stable
     for ob in obstacles:
         scene.worldbody.add_geom(name=f"obstacle_{ob.name}", type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
                                  pos=[ob.x_m, ob.y_m, ob.size_m[2] / 2],

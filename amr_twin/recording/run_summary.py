@@ -89,7 +89,8 @@ class RunSummary:
     of the robot's body with the world (:meth:`amr_twin.sim.collisions.Collision.as_dict`);
     ``stopped_by_collision``: the run ended at the first one; ``faults``: each injected fault with
     its effect (:meth:`amr_twin.sim.fault_injector.FaultInjector.report`); ``sim_s`` and ``wall_s``:
-    simulated and wall-clock seconds.
+    simulated and wall-clock seconds; ``tyre_timestep``: the tyres' guard halved the physics timestep
+    (:meth:`amr_twin.model.tyre_stability.TyreTimestep.as_dict`; absent when it did not).
     """
 
     command: Union[dict, list, None]
@@ -108,6 +109,7 @@ class RunSummary:
     wall_s: float = 0.0
     start_pose: Optional[Pose2] = None
     from_start: Optional[FromStart] = None
+    tyre_timestep: Optional[dict] = None
 
     def as_json(self) -> dict:
         """The ``--json`` object (keys in this order; start_pose and from_start only when known)."""
@@ -123,6 +125,8 @@ class RunSummary:
             out["start_pose"] = asdict(self.start_pose)
         if self.from_start is not None:
             out["from_start"] = asdict(self.from_start)
+        if self.tyre_timestep is not None:
+            out["tyre_timestep"] = self.tyre_timestep
         return json_ready(out)
 
 
@@ -172,7 +176,8 @@ def summary(result, single: bool, start_xy_yaw=None) -> RunSummary:
         wheels=wheels, final_pose=Pose2(x, y, yaw),
         final_odom_pose=Pose2(float(odom[0]), float(odom[1]), float(odom[2])), battery=_battery(series),
         collisions=result.collisions, stopped_by_collision=result.halted, faults=result.faults,
-        sim_s=result.sim_s, wall_s=result.wall_s, start_pose=start, from_start=moved)
+        sim_s=result.sim_s, wall_s=result.wall_s, start_pose=start, from_start=moved,
+        tyre_timestep=result.tyre_timestep)
 
 
 def _step(pub, reference_rpm: float) -> Optional[StepInfo]:

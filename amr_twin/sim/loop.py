@@ -45,6 +45,7 @@ from amr_twin.sim.grid_loop import GridLoop
 from amr_twin.sim.hooks import Hooks
 from amr_twin.sim.observables import Observables
 from amr_twin.model.config import TwinConfig
+from amr_twin.model.tyre_stability import announce, tyre_timestep
 from amr_twin.controllers.firmware import make_firmware
 from amr_twin.controllers.odometry import WheelOdometry
 from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
@@ -70,7 +71,8 @@ class TwinOptions:
     start_xy_yaw: tuple[float, float, float] | None = (0.0, 0.0, 0.0)  # x_m, y_m, yaw_rad; None: the world's
     # own start (amr_twin.model.worlds.default_start: the warehouse's is the west end of its central aisle; the CLI's default)
     settle_s: float = 0.5
-    record_every_steps: int = 10  # time series at 100 Hz with 1 ms steps
+    record_every_steps: int = 10  # time series at 100 Hz with 1 ms steps (steps of sim.timestep_s: twice as
+    # many physics steps when the tyres' guard halved it, amr_twin.model.tyre_stability)
     hall_jitter_us: float = 0.0
     hall_misalignment_deg: float = 0.0
     rosserial_extra_latency_us: int = 0
@@ -121,6 +123,10 @@ class Twin(Hooks):
             physics.set_floor_friction(self.floor)
         self.urdf = urdf
         """The robot description as built (``/robot_description`` of a recording)."""
+        self.tyre_timestep = tyre_timestep(cfg)
+        """The brush tyres' guard (:mod:`amr_twin.model.tyre_stability`): the timestep the model was built
+        with, halved from ``sim.timestep_s`` when the tyres' explicit states needed it (said on stderr)."""
+        announce(self.tyre_timestep)
         self.dt_us = int(round(self.physics.timestep_s * US))
         self.t_phys_us = 0
         self.clock = VirtualClock()
@@ -149,8 +155,9 @@ class Twin(Hooks):
                                        **({} if calibration is None else
                                           calibration.multipliers(cfg.wheel.radius_m, cfg.wheel.separation_m)))
                          if options.odometry else None)
-        self.grid_every = max(1, int(options.record_every_steps))
-        """Physics steps between two instants of the record grid (the ``on_grid`` hook's)."""
+        self.grid_every = max(1, int(options.record_every_steps)) * self.tyre_timestep.steps_per_configured_step
+        """Physics steps between two instants of the record grid (the ``on_grid`` hook's): ``record_every_steps``
+        of ``sim.timestep_s``, the same instants when the tyres' guard halved the timestep."""
         self.grid_us = self.dt_us * self.grid_every
         self.rolling = RollingResistance(self.physics, cfg)
         # the twin's own grid samplers first: the rolling resistance from the present loads and

@@ -123,6 +123,7 @@ class RunResult:
     collisions: list[dict] = field(default_factory=list)  # amr_twin.sim.collisions.Collision.as_dict()
     halted: bool = False  # stopped at the first collision (TwinOptions.stop_on_collision)
     faults: list[dict] = field(default_factory=list)  # injected faults and their effect
+    tyre_timestep: dict | None = None  # the tyres' guard halved the timestep: TyreTimestep.as_dict(); else None
 
 
 def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s: float,
@@ -152,7 +153,8 @@ def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s:
     return RunResult(commands=steps[:len(codes)], codes=codes, wheel_command=last, series=series,
                      sim_s=twin.t_s if twin.halted else duration_s, wall_s=time.perf_counter() - wall0,
                      errors=errors, collisions=twin.collisions.as_dicts(), halted=twin.halted,
-                     faults=twin.faults.report(series) if twin.faults is not None else [])
+                     faults=twin.faults.report(series) if twin.faults is not None else [],
+                     tyre_timestep=twin.tyre_timestep.as_dict() if twin.tyre_timestep.halvings else None)
 
 
 def run_command(cfg: TwinConfig, command: Command, duration_s: float,

@@ -280,3 +280,22 @@ def test_random_actors_follow_the_seed(tmp_path):
 
     a, b, c = poses(5, "a.mcap"), poses(5, "b.mcap"), poses(6, "c.mcap")
     assert len(a) == 11 and a == b and a != c
+
+
+STIFF_TYRE = ("--payload-kg", "50", "--set", "wheel.slip_stiffness_per_n=25", "--set",
+              "wheel.relaxation_length_longitudinal_m=0.02", "--set", "wheel.tyre_loss_time_s=0.01")
+
+
+def test_tyre_guard_said_in_the_json_and_absent_when_nominal():
+    assert "tyre_timestep" not in _json("linear", "--speed-m-s", "0.7", "--duration-s", "0.2")
+    result = _run("linear", "--speed-m-s", "0.7", "--duration-s", "0.2", "--json", *STIFF_TYRE)
+    assert result.exit_code == 0, result.output
+    step = json.loads(result.stdout)["tyre_timestep"]
+    assert step["timestep_s"] == 0.00025 and step["configured_timestep_s"] == 0.001
+    assert max(step["stability_number_configured"]) > step["stability_limit"] > max(step["stability_number"])
+
+
+def test_tyre_guard_refuses_a_timestep_it_cannot_halve_on_whole_microseconds():
+    result = _run("linear", "--speed-m-s", "0.7", "--duration-s", "0.2", "--set", "sim.timestep_s=0.00125", *STIFF_TYRE)
+    assert result.exit_code == 2
+    assert "sim.timestep_s: 0.00125 s cannot be halved" in result.output and "S = 4.73" in result.output

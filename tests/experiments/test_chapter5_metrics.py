@@ -43,3 +43,14 @@ def test_the_json_is_written_from_the_records_in_their_order(typed):
     assert left["checks"]["rise_s"]["verdict"] == typed.runs[1].wheels["left"].checks["rise_s"].verdict
     assert out["summary"] == {"checks": 26, "passed": typed.summary.passed, "true_checks": 24,
                               "true_passed": typed.summary.true_passed}
+
+
+def test_a_run_whose_timestep_the_tyres_guard_halved_says_so_in_metrics_json():
+    """Stiff longitudinal tyre corner: run 8's 20 kg gives S = 2.15 at 1 ms (halved to 0.5 ms), run 3's
+    empty robot 1.12 (kept); only run 8 carries the record."""
+    cfg = load_config(sets=["wheel.slip_stiffness_per_n=25", "wheel.relaxation_length_longitudinal_m=0.02",
+                            "wheel.tyre_loss_time_s=0.01"])
+    written = metrics(chapter5.run(cfg, runs=[3, 8], duration_s=1.0, progress=False, study=False)).as_json()
+    runs = {r["run"]: r for r in json.loads(json.dumps(written))["runs"]}
+    assert "tyre_timestep" not in runs[3]
+    assert runs[8]["tyre_timestep"]["timestep_s"] == 0.0005 and runs[8]["tyre_timestep"]["halvings"] == 1

@@ -22,6 +22,7 @@ def test_chapter5_samples_report_the_spread_beside_the_thesis(tmp_path):
     assert strip(a) == strip(b)  # the nominal runs are untouched by the draws
     spread = b["spread"]
     assert spread["samples"] == 3 and spread["seed"] == 2 and "driver.gain" in spread["parameters"]
+    assert spread["tyre_timestep_halved"] == []  # draws near the nominal tyre: S far below the guard's limit
     banded = [m for m in spread["metrics"] if "thesis" in m]
     assert {m["metric"] for m in banded} == {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
     assert all(m["source"] == "published" and 0 <= m["in_band"] <= 3 and len(m["drivers"]) <= 3 for m in banded)

@@ -82,7 +82,8 @@ def markdown(data: dict) -> str:
              f"{m['runs']} squares of {m['side_m']:g} m clockwise and {m['runs']} counter-clockwise per seed and phase; "
              f"brush tyres {'on' if m['tyres'] else 'off (rigid contact)'}, the floor's friction field "
              f"{('on' if m['floor_field'] else 'off') if m['tyres'] else 'without effect (rigid contact)'}, "
-             "improved firmware; each seed the robot the fusion experiment "
+             "improved firmware; each square driven to its corners and headings by the robot's odometry; "
+             "each seed the robot the fusion experiment "
              "draws (tyre radii, track, hall sensors). E_max,syst: the larger distance of the two centres of "
              "gravity of the return errors from the origin; spread: the RMS distance of a direction's runs from "
              "its centre of gravity (the larger direction). All in mm.", "",

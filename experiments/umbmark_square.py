@@ -1,9 +1,15 @@
 """One UMBmark square driven by the twin on its own wheel odometry (Borenstein and Feng, 1996).
 
-The robot starts at rest, drives ``side_m`` straight, comes to rest, turns 90 degrees in place
-(left for counter-clockwise, right for clockwise), comes to rest, four times; each leg and each
-turn ends where the wheel odometry node (:class:`~amr_twin.controllers.odometry.WheelOdometry`,
-calibrated or not) says, as UMBmark drives a real robot. The driver (:class:`SquareDriver`) is a
+The robot starts at rest and is programmed to traverse the square by its odometry, as UMBmark
+drives a real robot: it drives to the corner ``side_m`` ahead, comes to rest, turns in place to the
+next leg's heading (left for counter-clockwise, right for clockwise), comes to rest, four times,
+every corner and heading in the frame of the wheel odometry node
+(:class:`~amr_twin.controllers.odometry.WheelOdometry`, calibrated or not). A leg steers onto its
+line by the odometry (pure pursuit ``lookahead_m`` ahead, the wheels' difference changed by at most
+the ramp's step a sample) and ends abreast of its corner; so a turn that ends a sample's crawl off
+its heading (1-2 degrees) is taken out by the next leg, and every run's square is the same by the
+odometry (``lookahead_m = 0``: legs straight by the wheels' command, as before issue 30's driver
+change, where each turn's end error bent the rest of the square and the runs differed by it). The driver (:class:`SquareDriver`) is a
 node on the bus: it acts on each wheel speed sample the firmware publishes (``wheel1_Vel``, 10 Hz
 with the improved firmware), the instant the odometry has integrated it, and commands through
 the ``wheel_Command`` client as a user would. Its profile (:class:`Profile`):
@@ -59,6 +65,8 @@ class Profile:
     crawl_s: float = 0.3
     brake_lead_s: float = 0.15
     rest_s: float = 1.0
+    lookahead_m: float = 1.0
+    max_curvature_1_m: float = 0.5
 
 
 @dataclass(frozen=True)
@@ -95,7 +103,14 @@ class SquareRun:
 
 
 class SquareDriver:
-    """The square's driver: a node that acts on each ``wheel1_Vel`` sample (module notes)."""
+    """The square's driver: a node that acts on each ``wheel1_Vel`` sample (module notes).
+
+    It drives the square by its odometry, as a UMBmark robot is programmed to: the corners are
+    ``(side, 0)``, ``(side, ±side)``, ``(0, ±side)`` and the start in the odometry's frame, each leg
+    steers onto the line from the previous corner to the next (pure pursuit, ``lookahead_m``) and
+    ends abreast of the corner, each turn ends at the next leg's heading (not 90 degrees from where
+    the last one ended), so a turn's end error is taken out by the next leg instead of bending the
+    rest of the square."""
 
     def __init__(self, twin, profile: Profile):
         self.twin, self.profile = twin, profile
@@ -107,12 +122,24 @@ class SquareDriver:
         self._sub = twin.bus.subscribe("wheel1_Vel", self._on_sample)
 
     def _remaining_m(self, task: dict) -> float:
-        """What is left of the motion by the odometry, m of rim."""
+        """What is left of the motion by the odometry, m of rim (a leg: along its line to the corner)."""
         odo = self.odometry
         if task["turn"]:
-            turned = task["sign"] * math.remainder(odo.yaw_rad - task["yaw0"], 2 * math.pi)
-            return (task["target"] - turned) * self.half_separation_m
-        return task["target"] - math.hypot(odo.x_m - task["x0"], odo.y_m - task["y0"])
+            return task["sign"] * math.remainder(task["yaw"] - odo.yaw_rad, 2 * math.pi) * self.half_separation_m
+        ux, uy = math.cos(task["yaw"]), math.sin(task["yaw"])
+        return (task["x"] - odo.x_m) * ux + (task["y"] - odo.y_m) * uy
+
+    def _curvature(self, task: dict, remaining_m: float) -> float:
+        """Pure pursuit onto the leg's line: the curvature (1/m, + left) of the arc through the point
+        ``lookahead_m`` further along the line than the robot, by the odometry, bounded."""
+        odo, p = self.odometry, self.profile
+        ux, uy = math.cos(task["yaw"]), math.sin(task["yaw"])
+        gx = task["x"] - (remaining_m - p.lookahead_m) * ux - odo.x_m
+        gy = task["y"] - (remaining_m - p.lookahead_m) * uy - odo.y_m
+        c, s = math.cos(odo.yaw_rad), math.sin(odo.yaw_rad)
+        lateral, distance2 = -s * gx + c * gy, gx * gx + gy * gy
+        kappa = 2.0 * lateral / distance2
+        return max(-p.max_curvature_1_m, min(p.max_curvature_1_m, kappa))
 
     def _on_sample(self, _msg) -> None:
         """The odometry has just integrated a sample: brake if this is the sample nearest the end,
@@ -133,15 +160,21 @@ class SquareDriver:
         task["command"] = command
         if task["turn"]:
             self.client.angular(task["sign"] * math.degrees(command / self.half_separation_m), 0.0)
+        elif p.lookahead_m > 0.0:
+            # the wheels' difference moves by at most accel a sample (the ramp's own limit)
+            step = p.accel_m_s2 * period
+            delta = command * self._curvature(task, remaining) * self.half_separation_m
+            delta = task["delta"] = max(task["delta"] - step, min(task["delta"] + step, delta))
+            self.client.wheels(command - delta, command + delta)
         else:
             self.client.linear(command)
 
-    def _motion(self, turn: bool, target: float, sign: float = 1.0) -> None:
-        """One leg (``target`` m) or turn in place (``target`` rad, ``sign`` +1 left), then the rest."""
-        p, odo, twin = self.profile, self.odometry, self.twin
+    def _motion(self, turn: bool, x_m: float, y_m: float, yaw_rad: float, sign: float = 1.0) -> None:
+        """One leg to the corner ``(x_m, y_m)`` along heading ``yaw_rad``, or a turn in place to
+        ``yaw_rad`` (``sign`` +1 left), by the odometry; then the rest."""
+        p, twin = self.profile, self.twin
         cruise = math.radians(p.turn_deg_s) * self.half_separation_m if turn else p.speed_m_s
-        self._task = dict(turn=turn, target=target, sign=sign, x0=odo.x_m, y0=odo.y_m, yaw0=odo.yaw_rad,
-                          cruise=cruise, command=0.0)
+        self._task = dict(turn=turn, x=x_m, y=y_m, yaw=yaw_rad, sign=sign, cruise=cruise, command=0.0, delta=0.0)
         t_end = twin.t_s + MAX_MOTION_S
         while self._task is not None:
             if twin.t_s > t_end:
@@ -153,14 +186,19 @@ class SquareDriver:
         twin.advance(p.rest_s)
 
     def square(self, direction: str) -> None:
-        """Drive the four legs and turns of one square (``"cw"`` or ``"ccw"``) from where the robot stands."""
+        """Drive the four legs and turns of one square (``"cw"`` or ``"ccw"``) from where the robot
+        stands, the square in the odometry's frame."""
         if direction not in DIRECTIONS:
             raise ValueError(f"direction: {direction!r} must be cw or ccw")
         sign = 1.0 if direction == "ccw" else -1.0
+        side, odo = self.profile.side_m, self.odometry
+        x, y, yaw = odo.x_m, odo.y_m, odo.yaw_rad
         self.twin.advance(self.profile.rest_s)
         for _ in range(4):
-            self._motion(False, self.profile.side_m)
-            self._motion(True, math.pi / 2, sign)
+            x, y = x + side * math.cos(yaw), y + side * math.sin(yaw)
+            self._motion(False, x, y, yaw)
+            yaw += sign * math.pi / 2
+            self._motion(True, x, y, yaw, sign)
 
     def close(self) -> None:
         """Stop listening to the samples."""

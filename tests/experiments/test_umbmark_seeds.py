@@ -18,11 +18,17 @@ def phases():
     return tyres, rigid
 
 
+@pytest.fixture(scope="module")
+def rigid_seeds(phases):
+    """Seed 0's rigid runs and seed 3's (the largest systematic errors of seeds 0-9: track +7.6 mm)."""
+    return [phases[1], run_seed(SeedJob(load_config(sets=["wheel.tyre_slip=false"]), 3, 2, calibrate=False))]
+
+
 def test_the_tyres_slip_spread_collapses_with_the_rigid_contact(phases):
     tyres, rigid = phases
     assert tyres.tyres and not rigid.tyres and tyres.after is None and tyres.calibration is None
-    assert tyres.before.slip.e_nonsyst_rms_m > 0.0005  # the floor's patches and the tyres: ~1-2 mm
-    assert rigid.before.slip.e_nonsyst_rms_m < 0.0002  # nothing slips: the hall jitter alone
+    assert tyres.before.slip.e_nonsyst_rms_m > 0.00015  # the floor's patches and the tyres: 0.3-0.6 mm
+    assert rigid.before.slip.e_nonsyst_rms_m < 0.00005  # nothing slips: 0.003-0.008 mm
     assert 0.03 < tyres.before.slip.e_max_syst_m < 0.06 and rigid.before.slip.e_max_syst_m < 0.003
 
 
@@ -40,3 +46,13 @@ def test_every_square_has_its_own_seed_and_the_same_robot(phases):
     assert run_seed_of(0, 1, "cw", 0) != run_seed_of(0, 0, "cw", 0) != run_seed_of(1, 0, "cw", 0)
     assert [r.direction for r in tyres.before.runs] == ["cw", "cw", "ccw", "ccw"]
     assert tyres.robot.radius_error_left_m != 0.0  # seed 0's own tyres
+
+
+def test_the_driver_adds_nothing_to_the_spread(phases, rigid_seeds):
+    """The square is driven by the odometry (its corners and headings): every run's square is the same
+    by the odometry, so the node's spread is its parts' (the sampling, and the slip with the tyres),
+    not the turns' end errors bending the square (the driver before: 12 mm on seed 3 rigid, its
+    sampling part 4 mm). Two robots, the rigid contact; seed 0 with the tyres."""
+    for result in [*rigid_seeds, phases[0]]:
+        b = result.before
+        assert b.node.e_nonsyst_rms_m < b.sampling.e_nonsyst_rms_m + b.slip.e_nonsyst_rms_m + 0.0015, result.seed

@@ -15,6 +15,7 @@ from collections import deque
 
 import numpy as np
 
+from amr_twin.analysis import se2
 from amr_twin.navigation.kinematics import wrap
 
 SOURCES = {"truth": "ground_truth/odom", "ekf": "odometry/filtered", "odom": "odom"}
@@ -58,7 +59,7 @@ class PoseSource:
 
     def pose(self) -> np.ndarray:
         """The latest pose (3,): x_m, y_m, yaw_rad in ``map``."""
-        return self._corrected(np.array(self._hist[-1][1:])[None])[0]
+        return self._corrected(np.array(self._hist[-1][1:]))
 
     def poses_at(self, t_s: np.ndarray) -> np.ndarray:
         """Poses (K, 3) at times ``t_s`` (K,), interpolated in the history (held at its ends)."""
@@ -70,13 +71,8 @@ class PoseSource:
         return self._corrected(out)
 
     def _corrected(self, poses: np.ndarray) -> np.ndarray:
-        """Poses (K, 3) moved by :attr:`correction`."""
-        tx, ty, th = self.correction
-        if not (tx or ty or th):
-            return poses
-        c, s = math.cos(th), math.sin(th)
-        return np.column_stack([c * poses[:, 0] - s * poses[:, 1] + tx, s * poses[:, 0] + c * poses[:, 1] + ty,
-                                wrap(poses[:, 2] + th)])
+        """Poses (K, 3) or a pose (3,) moved by :attr:`correction`."""
+        return se2.compose(self.correction, poses) if any(self.correction) else poses
 
     def scan_in_map(self, scan, laser_xy_yaw, raytrace_range_m: float):
         """Each beam of a ``LaserScan`` in ``map``: origins (K, 2), ends (K, 2) and returns (K,) bool.

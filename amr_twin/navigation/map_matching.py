@@ -20,7 +20,8 @@ matcher, Kohlbrecher et al. 2011) it fits each scan rigidly to the static layer'
 2. With at least ``min_inliers`` returns the increment is composed into the correction, which
    :class:`~amr_twin.navigation.localisation.PoseSource` applies to every pose it gives.
 
-A correction is a rigid transform of the plane, ``(tx_m, ty_m, theta_rad)``: ``p -> R(theta) p + t``.
+A correction is a rigid transform of the plane, ``(tx_m, ty_m, theta_rad)``: ``p -> R(theta) p + t``, a pose
+of :mod:`amr_twin.analysis.se2` (composed there; points moved by :func:`~amr_twin.navigation.kinematics.to_map`).
 """
 
 from __future__ import annotations
@@ -29,18 +30,8 @@ import math
 
 import numpy as np
 
-
-def compose(a, b) -> tuple[float, float, float]:
-    """The transform ``a`` after ``b``, both ``(tx_m, ty_m, theta_rad)``."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2])
-
-
-def apply(correction, xy_m: np.ndarray) -> np.ndarray:
-    """Points (K, 2) moved by a correction ``(tx_m, ty_m, theta_rad)``."""
-    c, s = math.cos(correction[2]), math.sin(correction[2])
-    xy = np.asarray(xy_m, float)
-    return np.column_stack([c * xy[:, 0] - s * xy[:, 1] + correction[0], s * xy[:, 0] + c * xy[:, 1] + correction[1]])
+from amr_twin.analysis import se2
+from amr_twin.navigation.kinematics import to_map
 
 
 class MapMatcher:
@@ -88,7 +79,7 @@ class MapMatcher:
             return (0.0, 0.0, 0.0)
         w_step = np.array([self.step_m, self.step_m, self.step_rad]) ** -2
         x = np.zeros(3)
-        at_laser = apply(self.correction, c[None])[0] - c   # what the correction does at the laser
+        at_laser = to_map(np.array([self.correction]), c[None])[0, 0] - c   # the correction's move of the laser
         total = np.array([at_laser[0], at_laser[1], self.correction[2]])
         for _ in range(self.iterations):
             cs, sn = math.cos(x[2]), math.sin(x[2])
@@ -112,6 +103,6 @@ class MapMatcher:
         # the increment about the laser, as a transform of the map: p -> R (p - c) + c + x[:2]
         cs, sn = math.cos(x[2]), math.sin(x[2])
         step = (c[0] - (cs * c[0] - sn * c[1]) + x[0], c[1] - (sn * c[0] + cs * c[1]) + x[1], float(x[2]))
-        self.correction = compose(step, self.correction)
+        self.correction = tuple(float(v) for v in se2.compose(step, self.correction))
         self.matches += 1
         return step

@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from amr_twin.navigation.collision_monitor import CollisionMonitor
-from amr_twin.navigation.kinematics import Limits, rotation_rate, wrap
-from amr_twin.navigation.map_matching import MapMatcher, apply
+from amr_twin.navigation.kinematics import Limits, rotation_rate, to_map, wrap
+from amr_twin.navigation.map_matching import MapMatcher
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner
@@ -125,7 +125,7 @@ class Navigator:
         if self.matcher is not None:
             step = self.matcher.update(origin[len(origin) // 2], end[hit])
             if step[2] or step[0] or step[1]:
-                origin, end = apply(step, origin), apply(step, end)
+                origin, end = to_map(np.array([step]), origin)[0], to_map(np.array([step]), end)[0]
                 self.pose_source.correction = self.matcher.correction
         self.costmap.update_scan(origin, end, hit, self.p.obstacle_range_m, self.p.raytrace_range_m)
         self._scan_points = end[hit]

@@ -6,11 +6,18 @@ import numpy as np
 import pytest
 
 from amr_twin.navigation.costmap import Costmap
-from amr_twin.navigation.map_matching import MapMatcher, apply, compose
+from amr_twin.analysis.se2 import compose
+from amr_twin.navigation.kinematics import to_map
+from amr_twin.navigation.map_matching import MapMatcher
 
 from nav_grids import room
 
 LASER = np.array([3.0, 4.0])
+
+
+def apply(correction, xy_m):
+    """Points (K, 2) moved by a correction ``(tx_m, ty_m, theta_rad)``."""
+    return to_map(np.array([correction], float), np.asarray(xy_m, float))[0]
 
 
 def _room_scan(origin, n=360, discs=()):

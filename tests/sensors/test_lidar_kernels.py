@@ -12,6 +12,8 @@ from amr_twin.sensors.lidar_kernels import beam_kernels
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
 CFG = load_config().lidar
+WORLD_ONLY = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+"""Geom groups the test casts see: the world (group 0) alone."""
 
 
 def _kernels():
@@ -132,7 +134,7 @@ def test_the_culled_cast_hits_what_mj_multiray_and_mj_ray_hit(seed, mesh):
     rng = np.random.default_rng(seed)
     m = mujoco.MjModel.from_xml_string(_scene(rng, mesh))
     d = mujoco.MjData(m)
-    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    groups = WORLD_ONLY
     site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "laser")
     c.bind(m, d, site, groups)
     hits = 0
@@ -169,7 +171,7 @@ def test_each_beam_is_cast_from_its_own_origin(seed, mesh):
     rng = np.random.default_rng(10 + seed)
     m = mujoco.MjModel.from_xml_string(_scene(rng, mesh))
     d = mujoco.MjData(m)
-    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    groups = WORLD_ONLY
     site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "laser")
     c.bind(m, d, site, groups)
     py.bind(m, d, site, groups)
@@ -213,7 +215,7 @@ def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
       <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
-    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    groups = WORLD_ONLY
     rows = np.array([[0.0, 0.5, 0.0, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
     t_us, lx, ly = np.array([0, 20_000], np.int64), np.ones((2, 1)), np.zeros((2, 1))
     for k in (c, py):
@@ -237,7 +239,7 @@ def test_a_beam_from_beside_a_thin_post_sees_it():
       <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
-    groups = np.array([1, 0, 0, 0, 0, 0], np.uint8)
+    groups = WORLD_ONLY
     o = 0.1 * np.array([np.cos(0.35), np.sin(0.35)])
     to_post = np.array([0.1, 0.0]) - o
     az = math.atan2(to_post[1], to_post[0])

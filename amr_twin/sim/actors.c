@@ -29,7 +29,7 @@ typedef struct {
     int n;
     actor_state* a;
     int base_body;          /* the robot's base_link */
-    double half_len_m, half_wid_m;  /* the robot's footprint about the base's origin */
+    double half_len_m, half_wid_m;  /* the robot's footprint about the base's origin (wheels included) */
 } actors_ctx;
 
 /* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */

@@ -154,6 +154,40 @@ def test_a_person_told_to_wait_stops_short_of_the_robot_and_one_not_told_walks_i
         assert [h["hit"] for h in twin.collisions.as_dicts()] == ["person_0"]
 
 
+@pytest.mark.parametrize("side", [1.0, -1.0])
+@pytest.mark.parametrize("angle_deg", [0.0, 40.0, 65.0, -65.0])
+def test_a_person_giving_way_beside_the_robot_keeps_their_body_0_3_m_from_its_footprint(side, angle_deg):
+    """Issue 32's acceptance asks 0.3 m from a person's body (the navigation metric's 0.30 x 0.45 m box)
+    to the robot's footprint (0.70 x 0.53 m: the wheels stick out of the 0.40 m chassis). A person
+    walking at the robot's left or right side, square to it or at an angle (forwards or backwards;
+    65 deg is seed 0 episode 13's), waiting within 0.6 m: halted within one grid step of 0.6 m from
+    their centre to the footprint across the wheels, their body at least 0.6 - 0.27 - 0.013 m from it
+    (shapely's distance, not the twin's). Measured to the chassis, they stood 0.065 m nearer, their
+    body 0.275 m from the footprint at 65 deg."""
+    from shapely.geometry import Polygon
+
+    from amr_twin.experiments.navigation_metrics import PERSON_HALF_M
+    from amr_twin.navigation.footprint import robot_footprint
+
+    stop_m = 0.6
+    fp = robot_footprint(CFG)
+    heading = side * (math.radians(angle_deg) - math.pi / 2)            # towards the side, tilted
+    target = np.array([START[0] + 0.1, START[1] + side * fp.half_width_m])
+    u = np.array([math.cos(heading), math.sin(heading)])
+    a, b = target - 2.0 * u, target + 0.5 * u
+    twin, poses = _twin([Actor("person", (tuple(a), tuple(b)), 1.3, stop_within_m=stop_m)])
+    twin.advance(3.0)
+    (x, y, yaw), = _xy_yaw(poses[-1])
+    assert twin.collisions.as_dicts() == [] and twin.actors.progress_s()[0] < 3.0 - 1.0   # it waited
+    centre = np.array([x - START[0], y - START[1]])                     # in base_link (the robot faces +x)
+    assert stop_m - 1.3 * 0.01 - 1e-9 <= fp.distance_m(centre)[0] <= stop_m
+    hx, hy = PERSON_HALF_M
+    c, s = math.cos(yaw), math.sin(yaw)
+    body = Polygon([(x + c * px - s * py, y + s * px + c * py) for px, py in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))])
+    robot = Polygon([(START[0] + px, START[1] + py) for px, py in fp.corners_xy_m()])
+    assert 0.3 <= body.distance(robot) <= stop_m - hx + 1e-9
+
+
 def test_a_person_told_to_wait_walks_on_when_the_robot_is_behind():
     """Within 1 m of the robot but walking away from it: nothing in its way."""
     person = Actor("person", ((-5.0, 0.0), (-2.0, 0.0)), 1.0, stop_within_m=1.0)

@@ -321,11 +321,27 @@ class LidarOdometryCfg(Section):
         return self
 
 
+class PoseGraphCfg(Section):
+    """The mapping drive's smoother (``controllers/pose_graph.py``): sigmas of its factors."""
+
+    SETTINGS: ClassVar[bool] = True
+
+    lidar_sigma_m: float = P(unit="m", gt=0.0, le=1.0)
+    lidar_yaw_sigma_rad: float = P(unit="rad", gt=0.0, le=1.0)
+    odometry_sigma_m: float = P(unit="m", gt=0.0, le=1.0)
+    odometry_yaw_sigma_rad: float = P(unit="rad", gt=0.0, le=1.0)
+    uwb_cauchy_k: float = P(unit="1", gt=0.0, le=100.0)
+    start_xy_sigma_m: float = P(unit="m", gt=0.0, le=10.0)
+    start_yaw_sigma_rad: float = P(unit="rad", gt=0.0, le=3.2)
+    max_iterations: int = P(unit="1", ge=1, le=1000)
+
+
 class MappingCfg(Section):
-    """Occupancy grid of ``controllers/occupancy_grid.py``."""
+    """Occupancy grid of ``controllers/occupancy_grid.py`` and the mapping drive's smoother."""
 
     SETTINGS: ClassVar[bool] = True
 
     resolution_m: float = P(unit="m", ge=0.01, le=1.0)
     margin_m: float = P(unit="m", ge=0.0, le=20.0)
+    pose_graph: PoseGraphCfg
 

@@ -1,0 +1,132 @@
+"""Offline pose-graph smoothing of a drive: LiDAR and wheel odometry between scans, UWB ranges to the anchors.
+
+The mapping drive's poses for the SLAM map (experiments/navigation_map.py). A filter (the EKF) gives
+each pose from the past alone, and its heading wanders where the UWB ranges are late behind racks
+(0.6-0.8 deg median, 2.4-4.0 deg p95 on the aisles' mapping drive); LiDAR odometry keeps the heading
+(0.3 deg median) but slides along look-alike aisles (1-1.5 m). A smoother uses the whole drive at
+once, as slam_toolbox's or Cartographer's offline modes do; the factor graph is solved by GTSAM
+(Dellaert and Kaess, *Factor Graphs for Robot Perception*, 2017), with its own factors:
+
+- ``X_k``: a ``Pose2`` (base in the map frame) at each scan's end stamp ``t_k``, kiss-icp's poses.
+- ``BetweenFactorPose2(X_k, X_k+1)``: kiss-icp's motion between two scans (sigmas ``lidar_*``), and
+  the wheel odometry's motion over the same interval (sigmas ``odometry_*``).
+- ``RangeFactorWithTransform2D(X_k, L_a)``: a UWB range to anchor ``a`` measured at ``t`` between
+  ``t_k`` and ``t_k+1`` (the nearer one), the tag placed by the odometry's motion from ``t_k`` to
+  ``t`` and its lever arm on the base. The anchors stand ``dz_m`` above the tag: the factor takes
+  the horizontal range ``sqrt(r^2 - dz^2)`` with the sigma scaled by ``r / sqrt(r^2 - dz^2)``; a range
+  under ``1.05 dz`` (the tag nearly under its anchor, where that scale blows up) is left out. Each is
+  robust (Cauchy, ``uwb_cauchy_k`` sigmas): a range late behind a rack weighs little.
+- ``L_a``: the anchors, held at their surveyed positions by a prior of 0.1 mm.
+- A prior on ``X_0``: the start pose (``start_xy_sigma_m``, ``start_yaw_sigma_rad``).
+
+Levenberg-Marquardt from kiss-icp's poses. No loop closures: the anchors bound the drift.
+Poses are arrays (N, 3) ``x_m, y_m, yaw_rad`` (:mod:`amr_twin.analysis.se2`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from amr_twin.analysis import se2
+from amr_twin.model.config_sections import PoseGraphCfg
+from amr_twin.sensors.uwb import anchor_index
+
+ANCHOR_KEY = 10 ** 7          # key of anchor 0; poses are keyed 0..N-1
+ANCHOR_SIGMA_M = 1e-4
+MIN_RANGE_OVER_DZ = 1.05
+
+
+@dataclass(frozen=True)
+class SmoothedTrajectory:
+    """What :func:`smooth` returns: the stamps (N,) s and poses (N, 3) in the map frame, the ranges
+    used and left out, the Levenberg-Marquardt iterations and the graph's error before and after."""
+
+    t_s: np.ndarray
+    pose: np.ndarray
+    ranges_used: int
+    ranges_left_out: int
+    iterations: int
+    error_before: float
+    error_after: float
+
+
+def _pose2(p):
+    import gtsam
+    return gtsam.Pose2(float(p[0]), float(p[1]), float(p[2]))
+
+
+def _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, tag_xy_m, dz_m, sigma_m, cauchy_k) -> int:
+    """Add a robust range factor per usable ``sensor_msgs/Range`` (module notes); how many were added."""
+    import gtsam
+
+    stamps = np.array([m.header.stamp.to_sec() for m in ranges], float)
+    z = np.array([m.range for m in ranges], float)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(z) & (stamps >= t_s[0]) & (stamps <= t_s[-1]) & (z > MIN_RANGE_OVER_DZ * dz_m)
+    idx = np.flatnonzero(ok)
+    if not len(idx):
+        return 0
+    k = np.clip(np.searchsorted(t_s, stamps[idx]), 1, len(t_s) - 1)
+    k = np.where(stamps[idx] - t_s[k - 1] < t_s[k] - stamps[idx], k - 1, k)
+    at_node = se2.interpolate(odom_t_s, odom_pose, t_s[k]).reshape(-1, 3)
+    at_range = se2.interpolate(odom_t_s, odom_pose, stamps[idx]).reshape(-1, 3)
+    sensor = se2.compose(se2.between(at_node, at_range), np.array([tag_xy_m[0], tag_xy_m[1], 0.0]))
+    horizontal = np.sqrt(z[idx] ** 2 - dz_m ** 2)
+    robust = gtsam.noiseModel.mEstimator.Cauchy.Create(cauchy_k)
+    for j, i in enumerate(idx):
+        noise = gtsam.noiseModel.Robust.Create(
+            robust, gtsam.noiseModel.Isotropic.Sigma(1, sigma_m * z[i] / horizontal[j]))
+        graph.add(gtsam.RangeFactorWithTransform2D(int(k[j]), ANCHOR_KEY + anchor_index(ranges[i].header.frame_id),
+                                                   float(horizontal[j]), noise, _pose2(sensor[j])))
+    return len(idx)
+
+
+def smooth(t_s: np.ndarray, lidar_pose: np.ndarray, odom_t_s: np.ndarray, odom_pose: np.ndarray, ranges: list,
+           anchors_xy_m: np.ndarray, tag_xy_m, dz_m: float, start_pose, range_sigma_m: float,
+           cfg: PoseGraphCfg) -> SmoothedTrajectory:
+    """Smooth a drive (module notes).
+
+    ``t_s`` (N,), ``lidar_pose`` (N, 3): kiss-icp's poses at the scans' ends, in the map frame;
+    ``odom_t_s`` (M,), ``odom_pose`` (M, 3): the wheel odometry (any fixed frame); ``ranges``: the
+    drive's ``sensor_msgs/Range`` messages (frame ``uwb_anchor_<i>``); ``anchors_xy_m`` (K, 2);
+    ``tag_xy_m``: the tag on the base, m; ``dz_m``: the anchors' height above the tag; ``start_pose``:
+    the prior of the first pose; ``range_sigma_m``: a line-of-sight range's sigma.
+    """
+    import gtsam
+
+    t_s, lidar_pose = np.asarray(t_s, float), np.asarray(lidar_pose, float).reshape(-1, 3)
+    n = len(t_s)
+    if n < 2 or np.any(np.diff(t_s) <= 0):
+        raise ValueError(f"t_s: {n} stamps; at least 2, strictly increasing")
+    anchors = np.asarray(anchors_xy_m, float).reshape(-1, 2)
+    graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+    for k in range(n):
+        values.insert(k, _pose2(lidar_pose[k]))
+    graph.add(gtsam.PriorFactorPose2(0, _pose2(start_pose), gtsam.noiseModel.Diagonal.Sigmas(
+        np.array([cfg.start_xy_sigma_m, cfg.start_xy_sigma_m, cfg.start_yaw_sigma_rad]))))
+    lidar = gtsam.noiseModel.Diagonal.Sigmas(np.array([cfg.lidar_sigma_m, cfg.lidar_sigma_m, cfg.lidar_yaw_sigma_rad]))
+    wheels = gtsam.noiseModel.Diagonal.Sigmas(
+        np.array([cfg.odometry_sigma_m, cfg.odometry_sigma_m, cfg.odometry_yaw_sigma_rad]))
+    odom_at = se2.interpolate(odom_t_s, odom_pose, t_s).reshape(-1, 3)
+    lidar_step, odom_step = se2.between(lidar_pose[:-1], lidar_pose[1:]), se2.between(odom_at[:-1], odom_at[1:])
+    for k in range(n - 1):
+        graph.add(gtsam.BetweenFactorPose2(k, k + 1, _pose2(lidar_step[k]), lidar))
+        graph.add(gtsam.BetweenFactorPose2(k, k + 1, _pose2(odom_step[k]), wheels))
+    anchor_noise = gtsam.noiseModel.Isotropic.Sigma(2, ANCHOR_SIGMA_M)
+    for a, xy in enumerate(anchors):
+        values.insert(ANCHOR_KEY + a, gtsam.Point2(*xy))
+        graph.add(gtsam.PriorFactorPoint2(ANCHOR_KEY + a, gtsam.Point2(*xy), anchor_noise))
+    for m in ranges:
+        if anchor_index(m.header.frame_id) >= len(anchors):
+            raise ValueError(f"uwb/range: {m.header.frame_id} is not one of the {len(anchors)} anchors")
+    used = _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, tag_xy_m, dz_m, range_sigma_m, cfg.uwb_cauchy_k)
+    params = gtsam.LevenbergMarquardtParams()
+    params.setMaxIterations(cfg.max_iterations)
+    optimizer = gtsam.LevenbergMarquardtOptimizer(graph, values, params)
+    before = graph.error(values)
+    result = optimizer.optimize()
+    pose = np.array([[result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()] for k in range(n)])
+    return SmoothedTrajectory(t_s, pose, used, len(ranges) - used, int(optimizer.iterations()), float(before),
+                              float(graph.error(result)))

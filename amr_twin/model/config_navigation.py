@@ -122,6 +122,7 @@ class NavMonitorCfg(_Settings):
     escape_m_s: float = P(unit="m/s", gt=0.0, le=1.0)
     escape_rad_s: float = P(unit="rad/s", gt=0.0, le=4.0)
     people_turn_m_s: float = P(unit="m/s", ge=0.0, le=0.5)
+    people_stop_lag_s: float = P(unit="s", ge=0.0, le=2.0)
 
 
 class NavPeopleCfg(_Settings):

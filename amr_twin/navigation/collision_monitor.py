@@ -45,7 +45,8 @@ class CollisionMonitor:
                  time_before_collision_s: float = 1.2, slow_pad_m: float = 0.9, slow_ratio: float = 0.4,
                  step_s: float = 0.05, person_radius_m: float = 0.25, people_stop_m: float = 0.3,
                  people_time_s: float = 2.0, people_slow_m: float = 1.2, people_slow_m_s: float = 0.3,
-                 escape_m_s: float = 0.15, escape_rad_s: float = 0.5, people_turn_m_s: float = 0.02):
+                 escape_m_s: float = 0.15, escape_rad_s: float = 0.5, people_turn_m_s: float = 0.02,
+                 decel_m_s2: float = 1.0, people_stop_lag_s: float = 0.0):
         self.footprint = footprint
         near = footprint.padded(pad_m)
         side = max(pad_m, 0.1)
@@ -58,6 +59,7 @@ class CollisionMonitor:
         self.max_v_m_s = max_v_m_s
         self.time_s, self.slow_ratio, self.step_s = time_before_collision_s, slow_ratio, step_s
         self.person_radius_m, self.people_stop_m, self.people_time_s = person_radius_m, people_stop_m, people_time_s
+        self.decel_m_s2, self.people_stop_lag_s = decel_m_s2, people_stop_lag_s
         self.people_slow_m, self.people_slow_m_s = people_slow_m, people_slow_m_s
         self.escape_m_s, self.escape_rad_s, self.people_turn_m_s = escape_m_s, escape_rad_s, people_turn_m_s
         self.actions: Counter = Counter()
@@ -116,7 +118,7 @@ class CollisionMonitor:
         n = int(math.ceil(self.people_time_s / self.step_s))
         poses = arc_poses(0.0, 0.0, 0.0, v, w, self.step_s, n)
         t = self.step_s * np.arange(1, n + 1)
-        k = np.flatnonzero((self._people_gaps(xy, vel, t, poses) < self.people_stop_m).any(1))
+        k = np.flatnonzero((self._people_gaps(xy, vel, t, poses) < self.people_stop_m + self.stopping_m(v)).any(1))
         if len(k):  # the first step at which someone is within the stop clearance
             scale = t[k[0]] / self.people_time_s
             self.actions["people_approach"] += 1
@@ -168,6 +170,13 @@ class CollisionMonitor:
             self.actions["slowdown"] += 1
             v = math.copysign(self.slow_ratio * self.max_v_m_s, v)
         return v, w
+
+    def stopping_m(self, v_m_s: float) -> float:
+        """How far the drive rolls after a stop at ``v_m_s``, m: ``|v| people_stop_lag_s + v^2 / (2 decel_m_s2)``
+        (the drive's lag, then the ramp): the approach zone about a person grows by it (a protective
+        field's stopping distance, ISO 3691-4), so that the robot stops ``people_stop_m`` from them."""
+        v = abs(v_m_s)
+        return v * self.people_stop_lag_s + v * v / (2.0 * self.decel_m_s2)
 
     def _escape(self, v: float, w: float) -> tuple[float, float]:
         """A move out of a zone: at most ``escape_m_s`` and ``escape_rad_s`` (a cap, not a scale: a scale

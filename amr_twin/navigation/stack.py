@@ -171,7 +171,8 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
     controller = make_controller(options.controller, costmap, footprint, nav, options.seed)
     people = nav.people.model_dump()
     radius = people.pop("person_radius_m")
-    monitor = CollisionMonitor(footprint, limits.max_v_m_s, person_radius_m=radius, **nav.monitor.model_dump())
+    monitor = CollisionMonitor(footprint, limits.max_v_m_s, person_radius_m=radius, decel_m_s2=limits.decel_m_s2,
+                               **nav.monitor.model_dump())
     r = nav.recoveries
     recovery_settings = {"spin": {"angle_rad": r.spin_rad}, "wait": {"duration_s": r.wait_s},
                          "backup": {"distance_m": r.backup_m, "speed_m_s": r.backup_m_s}}

@@ -16,7 +16,8 @@ pallet jack); the caller says which. Zones are the footprint grown by a pad:
 - *people* (the tracked people of :mod:`amr_twin.navigation.people`, each a disc of
   ``person_radius_m`` about its track): the approach model again, over ``people_time_s``, with
   every person walking on at their velocity, the zone the footprint grown by ``people_stop_m``
-  (the clearance kept from a person, all round); a person already that close stops the robot
+  (the clearance kept from a person, all round) plus the distance the drive rolls after a stop at the
+  commanded speed (:meth:`CollisionMonitor.stopping_m`: a protective field's stopping distance); a person already that close stops the robot
   unless the command opens the gap by driving (a turn in place, slower than ``people_turn_m_s``, is
   refused: it swings the rectangle's corners, and a disc about the legs misjudges how close they come to
   the torso; traced in the experiment's seed 0 episode 13, 0.33 -> 0.27 m), at ``people_slow_m_s`` at

@@ -105,3 +105,18 @@ def test_the_people_gaps_of_all_steps_at_once_are_the_gaps_of_each_step():
         assert gaps.shape == (40, len(xy))
         for k in (0, 7, 39):
             assert np.array_equal(gaps[k], mon._person_gap(xy + t[k] * vel, *poses[k]))
+
+
+def test_the_people_zone_grows_by_the_distance_the_drive_rolls_after_a_stop():
+    """A person standing beside the path ahead, their disc 0.36 m from it: at 0.3 m/s the drive would
+    roll 0.3 x 0.15 + 0.3^2 / 2 = 0.09 m after a stop, so the robot is slowed (the zone 0.39 m); at
+    0.05 m/s (0.009 m) it drives on; with no lag and a hard brake the zone stays 0.3 m."""
+    no_scan = np.zeros((0, 2)), np.zeros(0, bool)
+    person = _people((0.8, FP.half_width_m + 0.25 + 0.36), (0.0, 0.0))  # the front passes it within 1.5 s
+    mon = CollisionMonitor(FP, 0.8, decel_m_s2=1.0, people_stop_lag_s=0.15)
+    assert mon.stopping_m(-0.3) == mon.stopping_m(0.3) == 0.3 * 0.15 + 0.09 / 2.0
+    v, _w = mon.filter(0.3, 0.0, *no_scan, people_base=person)
+    assert v < 0.3 and mon.actions["people_approach"] == 1
+    assert mon.filter(0.05, 0.0, *no_scan, people_base=person) == (0.05, 0.0)
+    hard = CollisionMonitor(FP, 0.8, decel_m_s2=100.0, people_stop_lag_s=0.0)
+    assert hard.filter(0.3, 0.0, *no_scan, people_base=person) == (0.3, 0.0)

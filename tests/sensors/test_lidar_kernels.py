@@ -96,6 +96,17 @@ def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch
     assert len(c_scans[0]) >= 15 and c_scans == py_scans
 
 
+def _laser_scene(geoms: str):
+    """A model of ``geoms`` and a mocap ``laser`` site 0.5 m up at the origin, forwarded: (MjModel, MjData)."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_string(f"""<mujoco><worldbody>{geoms}
+      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    return m, d
+
+
 def _scene(rng, mesh: bool = False) -> str:
     """A random MJCF world: primitives of every kind turned any way, some unseen (group 3), some
     invisible, some doubled, a panel flush with a wall, one on a free body, a floor; a mesh box with
@@ -206,15 +217,10 @@ def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
     there, hits the sphere at 1.4 m, not the wall behind it at 1.8 m, though the sphere's bounding sphere
     is 1.9 m from the present origin, farther than that wall hit (the cull's early stop is loosened by
     how far each beam's origin is from the present one)."""
-    import mujoco
-
     c, py = _kernels()
-    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+    m, d = _laser_scene("""
       <geom name="ball" type="sphere" size="0.1" pos="2.0 0 0.5"/>
-      <geom name="wall" type="box" size="0.1 4.0 1.0" pos="2.4 0 1.0"/>
-      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
-    d = mujoco.MjData(m)
-    mujoco.mj_forward(m, d)
+      <geom name="wall" type="box" size="0.1 4.0 1.0" pos="2.4 0 1.0"/>""")
     groups = WORLD_ONLY
     rows = np.array([[0.0, 0.5, 0.0, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
     t_us, lx, ly = np.array([0, 20_000], np.int64), np.ones((2, 1)), np.zeros((2, 1))
@@ -230,15 +236,10 @@ def test_a_beam_from_beside_a_thin_post_sees_it():
     """An 8 mm post 10 cm ahead of the present origin; a beam acquired 10 cm away, 3.5 cm from the post,
     aimed at it 80 degrees off the post's azimuth seen from the present origin, hits it (an origin as far
     off as the post's nearest corner: the post is tried by every such beam, no span widened)."""
-    import mujoco
-
     c, py = _kernels()
-    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+    m, d = _laser_scene("""
       <geom name="post" type="cylinder" size="0.004 0.6" pos="0.1 0 0.6"/>
-      <geom name="wall" type="box" size="4.0 0.1 1.0" pos="0 -3.0 1.0"/>
-      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
-    d = mujoco.MjData(m)
-    mujoco.mj_forward(m, d)
+      <geom name="wall" type="box" size="4.0 0.1 1.0" pos="0 -3.0 1.0"/>""")
     groups = WORLD_ONLY
     o = 0.1 * np.array([np.cos(0.35), np.sin(0.35)])
     to_post = np.array([0.1, 0.0]) - o

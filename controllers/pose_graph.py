@@ -57,8 +57,9 @@ def _pose2(p):
     return gtsam.Pose2(float(p[0]), float(p[1]), float(p[2]))
 
 
-def _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, tag_xy_m, dz_m, sigma_m, cauchy_k) -> int:
-    """Add a robust range factor per usable ``sensor_msgs/Range`` (module notes); how many were added."""
+def _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz_m, sigma_m, cauchy_k) -> int:
+    """Add a robust range factor per usable ``sensor_msgs/Range`` (module notes), ``anchor`` (M,) the index
+    of each one's anchor; how many were added."""
     import gtsam
 
     stamps = np.array([m.header.stamp.to_sec() for m in ranges], float)
@@ -78,7 +79,7 @@ def _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, tag_xy_m, dz_m, sigm
     for j, i in enumerate(idx):
         noise = gtsam.noiseModel.Robust.Create(
             robust, gtsam.noiseModel.Isotropic.Sigma(1, sigma_m * z[i] / horizontal[j]))
-        graph.add(gtsam.RangeFactorWithTransform2D(int(k[j]), ANCHOR_KEY + anchor_index(ranges[i].header.frame_id),
+        graph.add(gtsam.RangeFactorWithTransform2D(int(k[j]), ANCHOR_KEY + int(anchor[i]),
                                                    float(horizontal[j]), noise, _pose2(sensor[j])))
     return len(idx)
 
@@ -118,10 +119,12 @@ def smooth(t_s: np.ndarray, lidar_pose: np.ndarray, odom_t_s: np.ndarray, odom_p
     for a, xy in enumerate(anchors):
         values.insert(ANCHOR_KEY + a, gtsam.Point2(*xy))
         graph.add(gtsam.PriorFactorPoint2(ANCHOR_KEY + a, gtsam.Point2(*xy), anchor_noise))
-    for m in ranges:
-        if anchor_index(m.header.frame_id) >= len(anchors):
-            raise ValueError(f"uwb/range: {m.header.frame_id} is not one of the {len(anchors)} anchors")
-    used = _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, tag_xy_m, dz_m, range_sigma_m, cfg.uwb_cauchy_k)
+    anchor = np.array([anchor_index(m.header.frame_id) for m in ranges], int)
+    if np.any(anchor >= len(anchors)):
+        bad = ranges[int(np.argmax(anchor >= len(anchors)))].header.frame_id
+        raise ValueError(f"uwb/range: {bad} is not one of the {len(anchors)} anchors")
+    used = _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz_m, range_sigma_m,
+                          cfg.uwb_cauchy_k)
     params = gtsam.LevenbergMarquardtParams()
     params.setMaxIterations(cfg.max_iterations)
     optimizer = gtsam.LevenbergMarquardtOptimizer(graph, values, params)

@@ -41,7 +41,7 @@ def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = 
     save ``<stem>.yaml/.pgm/.png``; its figures."""
     from amr_twin.controllers.pose_graph import smooth
     from amr_twin.controllers.route import load_route
-    from amr_twin.experiments.fusion import drive, estimate_ekf, estimate_lidar, site_config
+    from amr_twin.experiments.fusion import drive, estimate_ekf, estimate_lidar, last_per_stamp, site_config
     from amr_twin.experiments.fusion_streams import odom_poses
     from amr_twin.model.world_geometry import scan_plane_boxes
 
@@ -49,11 +49,11 @@ def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = 
     cfg = site_config(cfg, route)
     twin, streams, reached = drive(cfg, route, seed=seed, firmware="improved", progress=progress)
     lidar = estimate_lidar(cfg, streams, route.start_xy_yaw)
-    keep = np.append(lidar.t_s[1:] != lidar.t_s[:-1], True)
+    lidar_t, lidar_pose = last_per_stamp(lidar.t_s, lidar.pose)
     odom_t, odom_pose = odom_poses(streams.odom)
     tag = cfg.uwb.tag_pos_m
-    smoothed = smooth(lidar.t_s[keep], lidar.pose[keep], odom_t, odom_pose, streams.uwb, cfg.uwb.anchors_xy_m,
-                      tag[:2], cfg.uwb.anchor_z_m - tag[2], lidar.pose[0], cfg.ekf.uwb_range_sigma_m,
+    smoothed = smooth(lidar_t, lidar_pose, odom_t, odom_pose, streams.uwb, cfg.uwb.anchors_xy_m,
+                      tag[:2], cfg.uwb.anchor_z_m - tag[2], lidar_pose[0], cfg.ekf.uwb_range_sigma_m,
                       cfg.mapping.pose_graph)
     ekf = estimate_ekf(cfg, streams, route.start_xy_yaw, use_imu=True, use_uwb=True)
     boxes = scan_plane_boxes(twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2]))

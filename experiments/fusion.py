@@ -230,8 +230,7 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
     boxes = Footprints(np.array([v[0] for v in keep.values()]).reshape(-1, 2),
                        np.array([v[1] for v in keep.values()]).reshape(-1, 2),
                        np.array([v[2] for v in keep.values()]), tuple(keep))
-    half_width_m = max(cfg.chassis.width_m / 2, (cfg.wheel.separation_m + cfg.wheel.width_m) / 2)
-    check_in_free_space(route, boxes, half_width_m, world=route.world)
+    check_in_free_space(route, boxes, cfg.half_width_m, world=route.world)
 
 
 def route_file(route: str | Path | None) -> Path:

@@ -67,6 +67,12 @@ class TwinConfig(Section):
     actors: ActorsCfg
     navigation: NavigationCfg
 
+    @property
+    def half_width_m(self) -> float:
+        """Half the robot's width across its drive wheels' outer faces (the chassis' if wider), m: the
+        footprint navigation, the people giving way and the route checks take for the robot (0.265)."""
+        return max(self.chassis.width_m / 2, self.wheel.separation_m / 2 + self.wheel.width_m / 2)
+
     @model_validator(mode="after")
     def _geometry_consistent(self) -> "TwinConfig":
         c, w, k, p = self.chassis, self.wheel, self.caster, self.payload

@@ -70,5 +70,4 @@ class Footprint:
 def robot_footprint(cfg) -> Footprint:
     """The footprint of the robot of ``cfg`` (a :class:`~amr_twin.model.config.TwinConfig`)."""
     half_length = cfg.chassis.length_m / 2
-    half_width = max(cfg.chassis.width_m / 2, cfg.wheel.separation_m / 2 + cfg.wheel.width_m / 2)
-    return Footprint(-half_length, half_length, half_width)
+    return Footprint(-half_length, half_length, cfg.half_width_m)

@@ -11,10 +11,11 @@ before; the LiDAR casts every 20 ms while actors move (:class:`~amr_twin.sim.loo
 beam sees an actor within about 2 cm of where it was at the beam's own instant.
 
 An actor with ``stop_within_m`` does not walk on at an instant where the robot's footprint
-(``chassis.length_m`` long, as wide as its wheels' outer faces: :func:`robot_half_width_m`; the
-rectangle navigation and its metrics take for the robot) is nearer than that to its centre and
-ahead of it (the footprint's nearest point in front of its heading); the others never wait:
-scripted actors do not avoid.
+(``chassis.length_m`` long, as wide as its wheels' outer faces: ``TwinConfig.half_width_m``, the
+rectangle navigation and its metrics take for the robot; with the chassis' 0.20 m a person halting
+beside it stood 0.065 m nearer its wheels than ``stop_within_m`` said, docs/actors.md) is nearer than
+that to its centre and ahead of it (the footprint's nearest point in front of its heading); the others
+never wait: scripted actors do not avoid.
 
 The update runs in C when a compiler is at hand (``actors.c``: the loop's grid stays in C with
 actors); :meth:`ActorMotion.update_python` is its Python twin, the same operations in the same
@@ -51,15 +52,6 @@ PUBLISH_PERIOD_US = 100_000
 """``actors/poses`` every 100 ms (10 Hz)."""
 TOPIC, FRAME = "actors/poses", "map"
 US = 1_000_000
-
-
-def robot_half_width_m(cfg) -> float:
-    """Half the robot's width across its drive wheels' outer faces, m (0.265: ``wheel.separation_m``
-    0.48 + ``wheel.width_m`` 0.05 stick out of the 0.40 m chassis), or the chassis' if wider: what a
-    person giving way keeps clear of (``robot_footprint`` of amr_twin/navigation/footprint.py, the
-    same rectangle). With the chassis' 0.20 m a person halting beside the robot stood 0.065 m nearer
-    its wheels than ``stop_within_m`` said (docs/actors.md)."""
-    return max(cfg.chassis.width_m, cfg.wheel.separation_m + cfg.wheel.width_m) / 2
 
 
 class _State(ctypes.Structure):
@@ -102,7 +94,7 @@ class ActorMotion:
             s.progress_us, s.last_us, s.stop_m = 0, 0, a.stop_within_m
             s.pose[0], s.pose[1], s.pose[2] = path.pose_at(0.0)
         self._ctx = _Ctx(n=n, a=ctypes.cast(self._states, ctypes.POINTER(_State)), base_body=physics.base_body,
-                         half_len_m=cfg.chassis.length_m / 2, half_wid_m=robot_half_width_m(cfg))
+                         half_len_m=cfg.chassis.length_m / 2, half_wid_m=cfg.half_width_m)
         self._waits = any(a.stop_within_m > 0 for a in self.actors)
         self.update = self.update_python
         """The grid sampler: the C helper when built, else :meth:`update_python`."""

@@ -12,7 +12,10 @@ Measurements (sigmas from the ``ekf:`` config, not from the messages)
     ``odom`` twist ``v`` and ``w`` (robot_localization's ``odom0_config`` with vx
     and vyaw); ``imu/data_raw`` gyro z rate; ``uwb/range`` ranges, of which one
     whose innovation exceeds ``mahalanobis_gate`` sigmas is rejected
-    (robot_localization's ``*_rejection_threshold``).
+    (robot_localization's ``*_rejection_threshold``); with UWB (frame ``map``) also
+    ``map_match/pose`` (:data:`POSE_TOPIC`), a pose in ``map`` with the message's own
+    covariance of x, y and yaw, as robot_localization's ``pose0`` fuses AMCL's
+    ``amcl_pose`` (the navigation's scan-to-map match, :mod:`amr_twin.navigation.map_matching`).
 Gyro bias
     The L3GD20's turn-on bias (10 deg/s) is removed by a rest calibration: the
     gyro is averaged over its first ``imu_rest_calibration_s`` seconds while the
@@ -24,7 +27,7 @@ Gyro bias
 
 Messages are handled in the order given; one older than the filter time is fused
 at the filter time (counted in :attr:`EkfNode.late_messages`). With a bus the node
-subscribes to ``odom``, ``imu/data_raw`` and ``uwb/range`` (those in use) and
+subscribes to ``odom``, ``imu/data_raw``, ``uwb/range`` and ``map_match/pose`` (those in use) and
 publishes ``nav_msgs/Odometry`` on ``odometry/filtered`` after every odometry
 update (after every update when odometry is not fused).
 """
@@ -38,11 +41,12 @@ from filterpy.kalman import ExtendedKalmanFilter
 from numpy import dot
 from scipy import linalg
 
+from amr_twin.navigation.map_matching import POSE_TOPIC
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.model.config_sections import EkfCfg, UwbCfg
-from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Twist,
-                                            TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped,
+                                            Quaternion, Twist, TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Header
 from amr_twin.ros.sensor_messages import Imu, Range
 from amr_twin.sensors.uwb import anchor_index
@@ -53,6 +57,8 @@ from amr_twin.controllers.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, lin
 
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
+_POSE_ROWS = np.ix_([0, 1, 5], [0, 1, 5])
+"""x, y and yaw in a ``PoseWithCovariance``'s 6 x 6 covariance."""
 
 
 class _UnicycleEkf(ExtendedKalmanFilter):
@@ -156,6 +162,7 @@ class EkfNode:
         self._gyro_h = gyro_model()
         self._gyro_R = np.array([[cfg.gyro_w_sigma_rad_s ** 2]])
         self._uwb_R = np.array([[cfg.uwb_range_sigma_m ** 2]])
+        self._pose_h = linear_model([X, Y, YAW])
 
         self.t_s: float | None = None
         self._t_hist: list[float] = []
@@ -167,7 +174,7 @@ class EkfNode:
         self.calibrated = cfg.imu_rest_calibration_s <= 0.0
         self.late_messages = 0
         self.rejected_ranges = 0
-        self.fused = {"odom": 0, "imu": 0, "uwb": 0}
+        self.fused = {"odom": 0, "imu": 0, "uwb": 0, "pose": 0}
         self._seq = 0
         self._pub = None
         if bus is not None:
@@ -178,6 +185,7 @@ class EkfNode:
                 bus.subscribe("imu/data_raw", self.on_imu)
             if use_uwb:
                 bus.subscribe("uwb/range", self.on_range)
+                bus.subscribe(POSE_TOPIC, self.on_pose)
 
     # -- filter steps ---------------------------------------------------------------
     def _predict_to(self, t_s: float) -> None:
@@ -291,6 +299,22 @@ class EkfNode:
         self._record()
         if not self.use_odom:
             self._publish(msg.header.stamp)
+
+    def on_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        """Fuse a pose in ``map`` (x, y, yaw) with the message's covariance of them, then publish."""
+        if msg.header.frame_id != MAP_FRAME:
+            raise ValueError(f"{POSE_TOPIC}: header.frame_id must be {MAP_FRAME!r}, got {msg.header.frame_id!r}")
+        p = msg.pose.pose
+        z = np.array([[p.position.x], [p.position.y], [p.orientation.yaw_rad()]])
+        R = np.asarray(msg.pose.covariance, dtype=np.float64).reshape(6, 6)[_POSE_ROWS]
+        self._predict_to(msg.header.stamp.to_sec())
+        HJ, Hx, _ = self._pose_h
+        yaw = float(self.filter.x[YAW, 0])
+        z[2, 0] = yaw + math.remainder(z[2, 0] - yaw, math.tau)   # the innovation's yaw in (-pi, pi]
+        self.filter.update(z, HJ, Hx, R=R)
+        self.fused["pose"] += 1
+        self._record()
+        self._publish(msg.header.stamp)
 
     # -- outputs ------------------------------------------------------------------------
     @property

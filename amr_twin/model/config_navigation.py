@@ -156,6 +156,10 @@ class NavMapMatchingCfg(_Settings):
     step_rad: float = P(unit="rad", gt=0.0, le=1.0)
     total_m: float = P(unit="m", gt=0.0, le=5.0)
     total_rad: float = P(unit="rad", gt=0.0, le=3.2)
+    feedback: bool = P(unit="bool")
+    feedback_inflation: float = P(unit="1", ge=1.0, le=1e4)
+    feedback_floor_m: float = P(unit="m", gt=0.0, le=5.0)
+    feedback_floor_rad: float = P(unit="rad", gt=0.0, le=3.2)
 
 
 class NavRecoveriesCfg(_Settings):

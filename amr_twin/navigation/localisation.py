@@ -70,6 +70,28 @@ class PoseSource:
         out[:, 2] = wrap(out[:, 2])
         return self._corrected(out)
 
+    def raw_pose(self) -> np.ndarray:
+        """The latest pose (3,) of the topic in ``map``, without :attr:`correction`."""
+        return np.array(self._hist[-1][1:])
+
+    def rebase(self, before) -> None:
+        """The topic's latest pose jumped from ``before`` (3,): the EKF took in the map match
+        (:mod:`.map_matching`). The jump ``delta = new o before^-1`` moves the earlier history with it and
+        comes out of :attr:`correction`, so that every corrected pose stays where it was."""
+        new = self.raw_pose()
+        delta = se2.compose(new, se2.between(before, np.zeros(3)))
+        if not np.any(delta):
+            return
+        hist = self._hist
+        last = hist.pop()
+        if hist:
+            h = np.array(hist)
+            moved = se2.compose(delta, h[:, 1:])
+            hist.clear()
+            hist.extend((float(t), float(x), float(y), float(yaw)) for t, (x, y, yaw) in zip(h[:, 0], moved))
+        hist.append(last)
+        self.correction = tuple(float(v) for v in se2.compose(self.correction, se2.between(delta, np.zeros(3))))
+
     def _corrected(self, poses: np.ndarray) -> np.ndarray:
         """Poses (K, 3) or a pose (3,) moved by :attr:`correction`."""
         return se2.compose(self.correction, poses) if any(self.correction) else poses

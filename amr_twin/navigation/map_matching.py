@@ -19,6 +19,11 @@ matcher, Kohlbrecher et al. 2011) it fits each scan rigidly to the static layer'
    laser (the UWB bounds the EKF's error: a match that slid along look-alike rack faces stops there).
 2. With at least ``min_inliers`` returns the increment is composed into the correction, which
    :class:`~amr_twin.navigation.localisation.PoseSource` applies to every pose it gives.
+3. With ``feedback`` the corrected pose goes back to the EKF as a measurement (robot_localization
+   fusing AMCL's ``amcl_pose``; the navigator publishes it, :meth:`MapMatcher.pose_covariance` gives
+   its covariance) and the correction keeps only what the EKF did not take: the EKF's own state then
+   follows the map, so its Mahalanobis gate turns away the UWB ranges that come late through the
+   racks instead of drifting with them, beyond what a bounded correction can hold.
 
 A correction is a rigid transform of the plane, ``(tx_m, ty_m, theta_rad)``: ``p -> R(theta) p + t``, a pose
 of :mod:`amr_twin.analysis.se2` (composed there; points moved by :func:`~amr_twin.navigation.kinematics.to_map`).
@@ -32,6 +37,12 @@ import numpy as np
 
 from amr_twin.analysis import se2
 from amr_twin.navigation.kinematics import to_map
+from amr_twin.ros.geometry_messages import Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped, Quaternion
+from amr_twin.ros.messages import Header, Time
+
+POSE_TOPIC = "map_match/pose"
+"""Where the navigator publishes the matched pose for the EKF (``geometry_msgs/PoseWithCovarianceStamped``
+in ``map``; AMCL's ``amcl_pose``, which robot_localization fuses as ``pose0``)."""
 
 
 class MapMatcher:
@@ -39,13 +50,21 @@ class MapMatcher:
 
     def __init__(self, costmap, *, inlier_m: float = 0.3, iterations: int = 4, min_inliers: int = 40,
                  max_range_m: float = 8.0, sigma_m: float = 0.05, step_m: float = 0.05,
-                 step_rad: float = 0.02, total_m: float = 0.5, total_rad: float = 0.2):
+                 step_rad: float = 0.02, total_m: float = 0.5, total_rad: float = 0.2, feedback: bool = False,
+                 feedback_inflation: float = 1.0, feedback_floor_m: float = 0.05,
+                 feedback_floor_rad: float = 0.01):
         self.costmap = costmap
         self.inlier_m, self.iterations, self.min_inliers = inlier_m, int(iterations), int(min_inliers)
         self.max_range_m, self.sigma_m = max_range_m, sigma_m
         self.step_m, self.step_rad, self.total_m, self.total_rad = step_m, step_rad, total_m, total_rad
+        self.feedback, self.feedback_inflation = bool(feedback), feedback_inflation
+        self.feedback_floor = np.array([feedback_floor_m, feedback_floor_m, feedback_floor_rad]) ** 2
         self.correction = (0.0, 0.0, 0.0)
         """``map`` from the localisation's frame: ``(tx_m, ty_m, theta_rad)``."""
+        self.information = np.zeros((3, 3))
+        """The last fit's information ``J' J / sigma^2`` (3, 3) in its increment ``(dx_m, dy_m, dyaw_rad)``
+        about the laser at :attr:`centre_xy_m`."""
+        self.centre_xy_m = np.zeros(2)
         self.matches = 0
         self.skipped = 0
 
@@ -90,7 +109,8 @@ class MapMatcher:
                 self.skipped += 1
                 return (0.0, 0.0, 0.0)
             J = np.column_stack([g[inlier], g[inlier, 1] * q[inlier, 0] - g[inlier, 0] * q[inlier, 1]])
-            A = J.T @ J / self.sigma_m ** 2 + np.diag(w_step)
+            info = J.T @ J / self.sigma_m ** 2
+            A = info + np.diag(w_step)
             b = -J.T @ d[inlier] / self.sigma_m ** 2 - w_step * x
             x = x + np.linalg.solve(A, b)
         # bounds: the step of a scan, then the whole correction (a match slid along look-alike racks stops there)
@@ -104,5 +124,24 @@ class MapMatcher:
         cs, sn = math.cos(x[2]), math.sin(x[2])
         step = (c[0] - (cs * c[0] - sn * c[1]) + x[0], c[1] - (sn * c[0] + cs * c[1]) + x[1], float(x[2]))
         self.correction = tuple(float(v) for v in se2.compose(step, self.correction))
+        self.information, self.centre_xy_m = info, c
         self.matches += 1
         return step
+
+    def pose_covariance(self, base_xy_m) -> np.ndarray:
+        """Covariance (3, 3) of x_m, y_m, yaw_rad of ``base_link`` at ``base_xy_m`` (2,) after the last fit:
+        the fit's (the inverse of :attr:`information`, a direction the scan leaves open, an aisle's length,
+        stays open) moved from the laser to the base, times ``feedback_inflation`` (the returns are not
+        independent: neighbours fall in the same map cells), plus ``feedback_floor_*`` squared."""
+        cov = np.linalg.inv(self.information + 1e-6 * np.eye(3))
+        bx, by = np.asarray(base_xy_m, float) - self.centre_xy_m
+        J = np.array([[1.0, 0.0, -by], [0.0, 1.0, bx], [0.0, 0.0, 1.0]])
+        return self.feedback_inflation * (J @ cov @ J.T) + np.diag(self.feedback_floor)
+
+    def pose_message(self, pose, now_us: int, seq: int) -> PoseWithCovarianceStamped:
+        """``pose`` (3,) of ``base_link`` in ``map`` (the corrected one) with :meth:`pose_covariance`."""
+        cov6 = np.zeros((6, 6))
+        cov6[np.ix_([0, 1, 5], [0, 1, 5])] = self.pose_covariance(pose[:2])
+        cov6[2, 2] = cov6[3, 3] = cov6[4, 4] = 1e6   # z, roll, pitch: not measured (two_d_mode)
+        return PoseWithCovarianceStamped(Header(seq, Time.from_us(now_us), "map"), PoseWithCovariance(
+            Pose(Point(float(pose[0]), float(pose[1]), 0.0), Quaternion.from_yaw(float(pose[2]))), cov6.ravel()))

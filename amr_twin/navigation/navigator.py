@@ -31,13 +31,13 @@ import numpy as np
 
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.kinematics import Limits, rotation_rate, to_map, wrap
-from amr_twin.navigation.map_matching import MapMatcher
+from amr_twin.navigation.map_matching import POSE_TOPIC, MapMatcher
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner
 from amr_twin.navigation.progress import ProgressChecker, at_goal
 from amr_twin.navigation.recoveries import ROUND_ROBIN
-from amr_twin.ros.geometry_messages import Twist, Vector3
+from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped, Twist, Vector3
 
 @dataclass(frozen=True)
 class NavParams:
@@ -104,6 +104,8 @@ class Navigator:
         self.people = NOBODY
         """The tracked people (:class:`~amr_twin.navigation.people.People`) after the last scan."""
         self._cmd = bus.advertise("cmd_vel", Twist)
+        self._matched = (bus.advertise(POSE_TOPIC, PoseWithCovarianceStamped)
+                         if matcher is not None and matcher.feedback else None)
         bus.subscribe("scan", self._on_scan)
         first = max(clock.now_us, int(round(start_s * 1e6)))
         self._timer = clock.schedule_every(first, int(round(self.dt_s * 1e6)), self._on_timer)
@@ -123,10 +125,17 @@ class Navigator:
             return
         origin, end, hit = self.pose_source.scan_in_map(scan, self.p.laser_xy_yaw, self.p.raytrace_range_m)
         if self.matcher is not None:
+            matches = self.matcher.matches
             step = self.matcher.update(origin[len(origin) // 2], end[hit])
             if step[2] or step[0] or step[1]:
                 origin, end = to_map(np.array([step]), origin)[0], to_map(np.array([step]), end)[0]
                 self.pose_source.correction = self.matcher.correction
+            if self._matched is not None and self.matcher.matches > matches:   # to the EKF, which takes it in
+                before = self.pose_source.raw_pose()
+                self._matched.publish(self.matcher.pose_message(self.pose_source.pose(), self.clock.now_us,
+                                                                self.matcher.matches))
+                self.pose_source.rebase(before)
+                self.matcher.correction = self.pose_source.correction
         self.costmap.update_scan(origin, end, hit, self.p.obstacle_range_m, self.p.raytrace_range_m)
         self._scan_points = end[hit]
         self._unmapped = self.costmap.static_distance_at(self._scan_points) > self.p.unmapped_m

@@ -191,6 +191,7 @@ def make_matcher(costmap: Costmap, nav, localisation: str) -> MapMatcher | None:
     m = nav.map_matching.model_dump()
     if localisation == "truth" or not m.pop("enabled"):
         return None
+    m["feedback"] = m["feedback"] and localisation == "ekf"   # only the EKF takes the match in
     return MapMatcher(costmap, **m)
 
 

@@ -95,6 +95,18 @@ class PoseWithCovariance(_Fixed):
     covariance: np.ndarray = field(default_factory=_zeros(36))
 
 
+@dataclass(slots=True, eq=False)
+class PoseWithCovarianceStamped:
+    """geometry_msgs/PoseWithCovarianceStamped: a pose estimate in ``header.frame_id`` (AMCL's ``amcl_pose``)."""
+
+    _type: ClassVar[str] = "geometry_msgs/PoseWithCovarianceStamped"
+    header: Header = field(default_factory=Header)
+    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
+
+    def serialized_size(self) -> int:
+        return self.header.serialized_size() + self.pose.serialized_size()
+
+
 @dataclass(slots=True)
 class Twist(_Fixed):
     """geometry_msgs/Twist: linear (m/s) and angular (rad/s) velocity."""

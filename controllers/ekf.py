@@ -34,6 +34,7 @@ update (after every update when odometry is not fused).
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -41,6 +42,7 @@ from filterpy.kalman import ExtendedKalmanFilter
 from numpy import dot
 from scipy import linalg
 
+from amr_twin.analysis import se2
 from amr_twin.navigation.map_matching import POSE_TOPIC
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
@@ -301,20 +303,33 @@ class EkfNode:
             self._publish(msg.header.stamp)
 
     def on_pose(self, msg: PoseWithCovarianceStamped) -> None:
-        """Fuse a pose in ``map`` (x, y, yaw) with the message's covariance of them, then publish."""
+        """Fuse a pose in ``map`` (x, y, yaw) with the message's covariance of them, then publish.
+
+        A pose of an instant the filter has passed (the navigator matched the pose it was given) is carried
+        to the filter's time by the filter's own motion since, and the result published at the pose's stamp,
+        carried back: the receiver sees the jump the fusion made at the instant it knows."""
         if msg.header.frame_id != MAP_FRAME:
             raise ValueError(f"{POSE_TOPIC}: header.frame_id must be {MAP_FRAME!r}, got {msg.header.frame_id!r}")
         p = msg.pose.pose
-        z = np.array([[p.position.x], [p.position.y], [p.orientation.yaw_rad()]])
+        z = np.array([p.position.x, p.position.y, p.orientation.yaw_rad()])
         R = np.asarray(msg.pose.covariance, dtype=np.float64).reshape(6, 6)[_POSE_ROWS]
-        self._predict_to(msg.header.stamp.to_sec())
+        t_s = msg.header.stamp.to_sec()
+        k = bisect.bisect_right(self._t_hist, t_s) - 1
+        since = None
+        if self.t_s is not None and t_s < self.t_s and k >= 0:
+            since = se2.between(self._pose_hist[k], self.filter.x[:3, 0])   # the motion from then to now
+            z = se2.compose(z, since)
+        else:
+            self._predict_to(t_s)
         HJ, Hx, _ = self._pose_h
         yaw = float(self.filter.x[YAW, 0])
-        z[2, 0] = yaw + math.remainder(z[2, 0] - yaw, math.tau)   # the innovation's yaw in (-pi, pi]
-        self.filter.update(z, HJ, Hx, R=R)
+        z[2] = yaw + math.remainder(z[2] - yaw, math.tau)   # the innovation's yaw in (-pi, pi]
+        self.filter.update(z.reshape(3, 1), HJ, Hx, R=R)
         self.fused["pose"] += 1
         self._record()
-        self._publish(msg.header.stamp)
+        if self._pub is not None:
+            then = None if since is None else se2.compose(self.filter.x[:3, 0], se2.between(since, np.zeros(3)))
+            self._pub.publish(self.message(msg.header.stamp, pose=then))
 
     # -- outputs ------------------------------------------------------------------------
     @property
@@ -332,14 +347,16 @@ class EkfNode:
         pose[:, 2] = np.arctan2(np.sin(pose[:, 2]), np.cos(pose[:, 2]))
         return t, pose
 
-    def message(self, stamp) -> Odometry:
-        """The current estimate as ``nav_msgs/Odometry`` (frame ``odom`` or ``map``, child ``base_link``)."""
+    def message(self, stamp, pose=None) -> Odometry:
+        """The current estimate as ``nav_msgs/Odometry`` (frame ``odom`` or ``map``, child ``base_link``);
+        ``pose`` (3,) in place of the state's x, y, yaw."""
         x = self.filter.x[:, 0]
+        px, py, pyaw = (x[X], x[Y], x[YAW]) if pose is None else pose
         pose_cov, twist_cov = odometry_covariances(self.filter.P)
         self._seq += 1
         return Odometry(
             header=Header(self._seq, stamp, self.frame_id), child_frame_id=BASE_FRAME,
-            pose=PoseWithCovariance(Pose(Point(float(x[X]), float(x[Y]), 0.0), Quaternion.from_yaw(float(x[YAW]))),
+            pose=PoseWithCovariance(Pose(Point(float(px), float(py), 0.0), Quaternion.from_yaw(float(pyaw))),
                                     pose_cov),
             twist=TwistWithCovariance(Twist(Vector3(float(x[V]), 0.0, 0.0), Vector3(0.0, 0.0, float(x[W]))),
                                       twist_cov))

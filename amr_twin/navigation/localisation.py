@@ -70,6 +70,11 @@ class PoseSource:
         out[:, 2] = wrap(out[:, 2])
         return self._corrected(out)
 
+    @property
+    def stamp_s(self) -> float:
+        """The latest message's stamp, s."""
+        return self._hist[-1][0]
+
     def raw_pose(self) -> np.ndarray:
         """The latest pose (3,) of the topic in ``map``, without :attr:`correction`."""
         return np.array(self._hist[-1][1:])

@@ -138,10 +138,11 @@ class MapMatcher:
         J = np.array([[1.0, 0.0, -by], [0.0, 1.0, bx], [0.0, 0.0, 1.0]])
         return self.feedback_inflation * (J @ cov @ J.T) + np.diag(self.feedback_floor)
 
-    def pose_message(self, pose, now_us: int, seq: int) -> PoseWithCovarianceStamped:
-        """``pose`` (3,) of ``base_link`` in ``map`` (the corrected one) with :meth:`pose_covariance`."""
+    def pose_message(self, pose, stamp_s: float, seq: int) -> PoseWithCovarianceStamped:
+        """``pose`` (3,) of ``base_link`` in ``map`` at ``stamp_s`` (the corrected pose of the localisation's
+        message of that instant) with :meth:`pose_covariance`."""
         cov6 = np.zeros((6, 6))
         cov6[np.ix_([0, 1, 5], [0, 1, 5])] = self.pose_covariance(pose[:2])
         cov6[2, 2] = cov6[3, 3] = cov6[4, 4] = 1e6   # z, roll, pitch: not measured (two_d_mode)
-        return PoseWithCovarianceStamped(Header(seq, Time.from_us(now_us), "map"), PoseWithCovariance(
+        return PoseWithCovarianceStamped(Header(seq, Time.from_sec(stamp_s), "map"), PoseWithCovariance(
             Pose(Point(float(pose[0]), float(pose[1]), 0.0), Quaternion.from_yaw(float(pose[2]))), cov6.ravel()))

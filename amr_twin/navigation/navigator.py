@@ -132,7 +132,7 @@ class Navigator:
                 self.pose_source.correction = self.matcher.correction
             if self._matched is not None and self.matcher.matches > matches:   # to the EKF, which takes it in
                 before = self.pose_source.raw_pose()
-                self._matched.publish(self.matcher.pose_message(self.pose_source.pose(), self.clock.now_us,
+                self._matched.publish(self.matcher.pose_message(self.pose_source.pose(), self.pose_source.stamp_s,
                                                                 self.matcher.matches))
                 self.pose_source.rebase(before)
                 self.matcher.correction = self.pose_source.correction

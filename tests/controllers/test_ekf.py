@@ -253,3 +253,65 @@ def test_bad_arguments_name_the_field():
     node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb)
     with pytest.raises(ValueError, match="header.frame_id"):
         node.on_range(Range(Header(0, Time(), "uwb_anchor_9"), Range.INFRARED, 1.0, 0.0, 40.0, 3.0))
+
+
+def _pose_msg(x, y, yaw, cov_xy_yaw, t_s, frame="map"):
+    from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped
+
+    cov = np.diag([1.0, 1.0, 1e6, 1e6, 1e6, 1.0])
+    cov[np.ix_([0, 1, 5], [0, 1, 5])] = np.diag(cov_xy_yaw)
+    return PoseWithCovarianceStamped(Header(0, Time.from_sec(t_s), frame),
+                                     PoseWithCovariance(Pose(Point(x, y, 0.0), Quaternion.from_yaw(yaw)), cov.ravel()))
+
+
+def test_a_matched_pose_is_fused_by_its_own_covariance():
+    """The map match's pose (AMCL's amcl_pose as robot_localization's pose0): a tight one pulls the state onto
+    it, a direction its covariance leaves open (an aisle's length) is left to the rest; the yaw across +-pi
+    moves the short way; the node publishes after it; a pose not in ``map`` is refused."""
+    clock = VirtualClock()
+    bus = Bus(clock)
+    out = []
+    bus.subscribe("odometry/filtered", out.append)
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb,
+                   bus=bus, initial_pose=(2.0, 3.0, 3.1))
+    bus.publish("map_match/pose", _pose_msg(2.5, 3.4, -3.1, (1e4, 0.03 ** 2, 0.01 ** 2), 0.0))
+    x, y, yaw = node.state[:3]
+    p0, q0 = CFG.ekf.initial_xy_sigma_m ** 2, CFG.ekf.initial_yaw_sigma_rad ** 2   # the prior's variances
+    assert x == pytest.approx(2.0 + 0.5 * p0 / (p0 + 1e4), abs=1e-6) and x - 2.0 < 1e-3   # x: open, unmoved
+    assert y == pytest.approx(3.0 + 0.4 * p0 / (p0 + 0.03 ** 2), abs=1e-6) and y > 3.2    # y: tight, taken in
+    short_way = 2 * math.pi - 6.2                                             # -3.1 is 0.083 rad past 3.1
+    assert math.remainder(yaw - (3.1 + short_way * q0 / (q0 + 0.01 ** 2)), math.tau) == pytest.approx(0, abs=1e-6)
+    assert node.fused["pose"] == 1 and len(out) == 1 and out[0].pose.pose.position.y == pytest.approx(y)
+    with pytest.raises(ValueError, match="frame_id"):
+        node.on_pose(_pose_msg(2.5, 3.4, 0.0, (0.01, 0.01, 0.01), 0.1, frame="odom"))
+
+
+def test_a_pose_of_an_earlier_instant_is_carried_to_the_filters_time():
+    """The navigator matches the pose it was given, which the filter has since moved on from (odometry at
+    50 Hz, the match 0.1 s later): a pose equal to the filter's own of that instant must not move it (fused as
+    if current, it would pull the robot back by 0.08 m at 0.8 m/s, each match: the estimate lagged 1.5 m
+    behind along a 40 m aisle); the published pose is the corrected one of that instant, at its stamp."""
+    clock = VirtualClock()
+    bus = Bus(clock)
+    out = []
+    bus.subscribe("odometry/filtered", out.append)
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb,
+                   bus=bus, initial_pose=(2.0, 3.0, 0.5))
+    for k in range(60):
+        x = 2.0 + 0.8 * 0.02 * k
+        bus.publish("odom", Odometry(header=Header(k, Time.from_us(k * 20_000), "odom"),
+                                     pose=PoseWithCovariance(Pose(Point(x, 0.0, 0.0), Quaternion.from_yaw(0.0))),
+                                     twist=TwistWithCovariance(Twist(Vector3(0.8, 0, 0), Vector3(0, 0, 0)))))
+    then_msg = out[-6]                                          # 0.1 s before the filter's time
+    then = np.array([then_msg.pose.pose.position.x, then_msg.pose.pose.position.y,
+                     then_msg.pose.pose.orientation.yaw_rad()])
+    now = node.state[:3]
+    assert np.hypot(*(now[:2] - then[:2])) > 0.07
+    bus.publish("map_match/pose", _pose_msg(*then, (0.01 ** 2, 0.01 ** 2, 0.005 ** 2), then_msg.header.stamp.to_sec()))
+    assert node.state[:3] == pytest.approx(now, abs=1e-6)
+    assert out[-1].header.stamp == then_msg.header.stamp
+    assert out[-1].pose.pose.position.x == pytest.approx(then[0], abs=1e-6)
+    shifted = then + [0.0, 0.05, 0.0]                           # 5 cm further in map y then: so now
+    bus.publish("map_match/pose", _pose_msg(*shifted, (0.01 ** 2, 0.01 ** 2, 0.005 ** 2), then_msg.header.stamp.to_sec()))
+    moved = node.state[:3] - now
+    assert abs(moved[0]) < 1e-3 and 0.02 < moved[1] < 0.05 and abs(moved[2]) < 1e-3, moved

@@ -26,7 +26,8 @@ Gyro bias
     calibration are not fused.
 
 Messages are handled in the order given; one older than the filter time is fused
-at the filter time (counted in :attr:`EkfNode.late_messages`). With a bus the node
+at the filter time (counted in :attr:`EkfNode.late_messages`), but a matched pose is
+carried to it (:meth:`EkfNode.on_pose`). With a bus the node
 subscribes to ``odom``, ``imu/data_raw``, ``uwb/range`` and ``map_match/pose`` (those in use) and
 publishes ``nav_msgs/Odometry`` on ``odometry/filtered`` after every odometry
 update (after every update when odometry is not fused).
@@ -38,9 +39,6 @@ import bisect
 import math
 
 import numpy as np
-from filterpy.kalman import ExtendedKalmanFilter
-from numpy import dot
-from scipy import linalg
 
 from amr_twin.analysis import se2
 from amr_twin.navigation.map_matching import POSE_TOPIC
@@ -53,56 +51,14 @@ from amr_twin.ros.messages import Header
 from amr_twin.ros.sensor_messages import Imu, Range
 from amr_twin.sensors.uwb import anchor_index
 
+from amr_twin.controllers.ekf_filter import UnicycleEkf
 from amr_twin.controllers.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
-                        pose_difference_twist, predict_mean, process_noise, range_model,
-                        transition_jacobian)
+                        pose_difference_twist, process_noise, range_model, transition_jacobian)
 
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
 _POSE_ROWS = np.ix_([0, 1, 5], [0, 1, 5])
 """x, y and yaw in a ``PoseWithCovariance``'s 6 x 6 covariance."""
-
-
-class _UnicycleEkf(ExtendedKalmanFilter):
-    """filterpy's EKF with the nonlinear constant-velocity prediction, minus its per-call bookkeeping.
-
-    ``predict`` and ``update`` override filterpy's with the same equations, the same
-    NumPy products in the same order (so the same bits: ``tests/controllers/test_ekf.py``
-    compares them with filterpy's own), without what the node never reads and what
-    cost about 40 % of its CPU at about 200 messages a second (``amr-twin bench``'s
-    ``nav_ekf_mppi`` figures): the copies ``x_prior``, ``P_prior``, ``x_post``, ``P_post``
-    and ``deepcopy(z)``, filterpy's argument normalisation, scipy's finiteness check
-    of the innovation covariance before ``inv`` (``P`` and ``R`` are finite by
-    construction), and ``inv`` itself for a scalar measurement (``1 / S``: LAPACK's
-    inverse of a 1 x 1 matrix is that division). ``S``, ``SI``, ``K``, ``y`` and ``z``
-    are kept, so filterpy's ``mahalanobis`` and ``log_likelihood`` still hold. On the
-    bench run's recorded inputs the node's CPU went from 0.142 to 0.080 s.
-    """
-
-    dt_s = 0.0
-
-    def predict_x(self, u=0) -> None:
-        predict_mean(self.x, self.dt_s)
-
-    def predict(self, u=0) -> None:
-        """filterpy's ``predict``: ``x = f(x)``, ``P = F P F' + Q`` (no prior copies)."""
-        predict_mean(self.x, self.dt_s)
-        self.P = dot(self.F, self.P).dot(self.F.T) + self.Q
-
-    def update(self, z, HJacobian, Hx, R=None, args=(), hx_args=(), residual=np.subtract) -> None:
-        """filterpy's ``update`` (Joseph form) for ``z`` of shape (dim_z, 1) and ``R`` an array or None."""
-        R = self.R if R is None else R
-        H = HJacobian(self.x, *args)
-        PHT = dot(self.P, H.T)
-        self.S = dot(H, PHT) + R
-        self.SI = 1.0 / self.S if self.S.shape == (1, 1) else linalg.inv(self.S, check_finite=False)
-        self.K = PHT.dot(self.SI)
-        self.y = residual(z, Hx(self.x, *hx_args))
-        self.x = self.x + dot(self.K, self.y)
-        I_KH = self._I - dot(self.K, H)
-        self.P = dot(I_KH, self.P).dot(I_KH.T) + dot(self.K, R).dot(self.K.T)
-        self._log_likelihood = self._likelihood = self._mahalanobis = None
-        self.z = z
 
 
 class EkfNode:
@@ -154,7 +110,7 @@ class EkfNode:
             self.anchors_xy_m = np.asarray(anchors_xy_m, dtype=np.float64).reshape(-1, 2)
         self.frame_id = MAP_FRAME if use_uwb else ODOM_FRAME
 
-        f = self.filter = _UnicycleEkf(dim_x=6, dim_z=1)
+        f = self.filter = UnicycleEkf(dim_x=6, dim_z=1)
         f.x = np.array([[pose[0]], [pose[1]], [pose[2]], [0.0], [0.0], [0.0]])
         f.P = np.diag([cfg.initial_xy_sigma_m ** 2, cfg.initial_xy_sigma_m ** 2, cfg.initial_yaw_sigma_rad ** 2,
                        cfg.initial_v_sigma_m_s ** 2, cfg.initial_w_sigma_rad_s ** 2,

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from filterpy.kalman import ExtendedKalmanFilter
 
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.clock import VirtualClock
@@ -173,7 +174,7 @@ def test_range_jacobian_matches_finite_differences():
     assert np.all(H[0, 3:] == 0.0)
 
 
-class _FilterpyEkf(ekf.ExtendedKalmanFilter):
+class _FilterpyEkf(ExtendedKalmanFilter):
     """filterpy's EKF as it comes, with only the unicycle prediction of the state (the node's before its lean
     ``predict``/``update``)."""
 
@@ -187,7 +188,7 @@ class _FilterpyEkf(ekf.ExtendedKalmanFilter):
 def test_lean_filter_gives_filterpys_bits(seed, monkeypatch):
     msgs = _messages(seed)
     lean = _run(msgs, use_imu=True, use_uwb=True)
-    monkeypatch.setattr(ekf, "_UnicycleEkf", _FilterpyEkf)
+    monkeypatch.setattr(ekf, "UnicycleEkf", _FilterpyEkf)
     reference = _run(msgs, use_imu=True, use_uwb=True)
     assert lean.fused == reference.fused and lean.rejected_ranges == reference.rejected_ranges
     assert np.array_equal(lean.history()[1], reference.history()[1])

@@ -11,7 +11,8 @@ reconstructed from its description (navigate_to_pose_w_replanning_and_recovery):
 - the plan is computed again at ``planner_hz`` (1 Hz) from the present pose when it could come out
   different: the costmap changed since the last plan, or the robot is more than ``off_path_m``
   off it (on an unchanged costmap the rest of a shortest path is the shortest path from each of
-  its points);
+  its points); a new plan no shorter than the rest of the present one, which the robot is on and
+  which is still free (:meth:`GlobalPlanner.path_free`), does not replace it;
 - every ``1 / controller_hz`` s the controller follows the plan, after a rotation in place to the
   path's heading when it is more than ``rotate_to_path_rad`` off (nav2's RotationShimController);
   within ``xy_tolerance_m`` of the goal the robot turns in place to the goal's yaw; the
@@ -208,6 +209,15 @@ class Navigator:
         standing = ppl.xy_m[(np.hypot(*ppl.v_m_s.T) == 0.0) &
                             (np.hypot(*(ppl.xy_m - pose[:2]).T) > self.planner.people_m + 0.1)]  # not those at the robot
         plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
+        old = self._path
+        if (plan is not None and old is not None and plan.length_m >= old.remaining_m
+                and old.distance_to_path_m(pose[0], pose[1]) <= self.p.off_path_m
+                and self.planner.path_free(old.poses[old.index:, :2], standing)):
+            # nav2's replanning only if the path becomes invalid: a longer plan leaves a free path as it
+            # is (a tier's margin flickering with what the scans show of a pallet jack turned the robot
+            # back and forth between two routes, the path's heading each time)
+            self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
+            return True
         if plan is None:  # nav2: clear the global costmap and try once more before failing
             self.costmap.clear()
             plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)

@@ -142,6 +142,16 @@ class GlobalPlanner:
         length = float(np.hypot(*np.diff(poses[:, :2], axis=0).T).sum())
         return Plan(poses, length, time.process_time() - t0)
 
+    def path_free(self, xy_m: np.ndarray, people_xy_m=None) -> bool:
+        """Whether a path's points ``xy_m`` (N, 2) still pass where the planner's second tier would (the
+        inscribed radius from obstacles, ``unmapped_pad_m`` more from the obstacle layer's, ``people_m`` from
+        people standing at ``people_xy_m``), the last point (the goal's cell) aside."""
+        cm, k = self.costmap, self.downsample
+        w = self._weights(0.0, people_xy_m, self.unmapped_pad_m)
+        r, c, inside = cm.cells(np.asarray(xy_m, float)[:-1])
+        return bool(inside.all()) and bool(np.isfinite(w[np.minimum(r // k, w.shape[0] - 1),
+                                                         np.minimum(c // k, w.shape[1] - 1)]).all())
+
     def _search(self, start_xy_m, goal_xy_m, keep_m: float, people_xy_m=None, pad_m: float = 0.0):
         """Coarse cells of the cheapest path keeping ``keep_m`` from obstacles, ``pad_m`` more from those of the
         obstacle layer (None: none; a str: why not)."""

@@ -209,15 +209,6 @@ class Navigator:
         standing = ppl.xy_m[(np.hypot(*ppl.v_m_s.T) == 0.0) &
                             (np.hypot(*(ppl.xy_m - pose[:2]).T) > self.planner.people_m + 0.1)]  # not those at the robot
         plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
-        old = self._path
-        if (plan is not None and old is not None and plan.length_m >= old.remaining_m
-                and old.distance_to_path_m(pose[0], pose[1]) <= self.p.off_path_m
-                and self.planner.path_free(old.poses[old.index:, :2], standing)):
-            # nav2's replanning only if the path becomes invalid: a longer plan leaves a free path as it
-            # is (a tier's margin flickering with what the scans show of a pallet jack turned the robot
-            # back and forth between two routes, the path's heading each time)
-            self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
-            return True
         if plan is None:  # nav2: clear the global costmap and try once more before failing
             self.costmap.clear()
             plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
@@ -225,6 +216,14 @@ class Navigator:
         if plan is None:
             return False
         out.plan_cpu_s.append(plan.cpu_s)
+        old = self._path
+        if (old is not None and plan.length_m >= old.remaining_m
+                and old.distance_to_path_m(pose[0], pose[1]) <= self.p.off_path_m
+                and self.planner.path_free(old.poses[old.index:, :2], standing)):
+            # nav2's replanning only if the path becomes invalid: a longer plan leaves a free path as it
+            # is (a tier's margin flickering with what the scans show of a pallet jack turned the robot
+            # back and forth between two routes, the path's heading each time)
+            return True
         if math.isnan(out.first_plan_length_m):
             out.first_plan_length_m = plan.length_m
         self._plan, self._path = plan, PathHandler(plan.poses)

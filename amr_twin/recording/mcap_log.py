@@ -33,6 +33,8 @@ uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has 
                        nav_msgs/msg/Path, OccupancyGrid, geometry_msgs/msg/PolygonStamped: the navigation
                                                       stack's (amr_twin/navigation/outputs.py), frame map
     /ground_truth/odom, /odometry/filtered   nav_msgs/msg/Odometry: the localisation it used
+    /map_match/pose    geometry_msgs/msg/PoseWithCovarianceStamped: the scan-to-map match the EKF fuses
+                                                      (AMCL's amcl_pose), frame map, one a matched scan
     /wheel_Command_Service/request  std_msgs/msg/Float64MultiArray  every service call
                                                       [motionL, speedL, motionR, speedR] (labelled)
     /wheel_Command     std_msgs/msg/Float64MultiArray [motionL, speedL, motionR, speedR]
@@ -62,7 +64,7 @@ from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
                        encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
-                       encode_pose_array, encode_range, encode_string, encode_tf_message, encode_twist)
+                       encode_pose_array, encode_pose_with_covariance_stamped, encode_range, encode_string, encode_tf_message, encode_twist)
 from amr_twin.ros.nav_messages import encode_occupancy_grid, encode_path, encode_polygon_stamped
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 
@@ -97,6 +99,8 @@ BUS_TOPICS = {
     "uwb/range": ("/uwb/range", "sensor_msgs/Range", encode_range),
     "ground_truth/odom": ("/ground_truth/odom", "nav_msgs/Odometry", encode_odometry),
     "odometry/filtered": ("/odometry/filtered", "nav_msgs/Odometry", encode_odometry),
+    "map_match/pose": ("/map_match/pose", "geometry_msgs/PoseWithCovarianceStamped",
+                       encode_pose_with_covariance_stamped),
     "plan": ("/plan", "nav_msgs/Path", encode_path),
     "map": ("/map", "nav_msgs/OccupancyGrid", encode_occupancy_grid),
     "local_costmap/costmap": ("/local_costmap/costmap", "nav_msgs/OccupancyGrid", encode_occupancy_grid),

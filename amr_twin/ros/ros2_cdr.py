@@ -273,3 +273,13 @@ def encode_pose_array(msg) -> bytes:
         p, o = pose.position, pose.orientation
         b += _F64X7.pack(p.x, p.y, p.z, o.x, o.y, o.z, o.w)
     return bytes(b)
+
+
+def encode_pose_with_covariance_stamped(msg) -> bytes:
+    """The CDR payload of a ``geometry_msgs/PoseWithCovarianceStamped`` message."""
+    b = _header(msg.header)
+    b += _pad(b, 8)
+    p, o = msg.pose.pose.position, msg.pose.pose.orientation
+    b += _F64X7.pack(p.x, p.y, p.z, o.x, o.y, o.z, o.w)
+    b += _f64_bytes(msg.pose.covariance)
+    return bytes(b)

@@ -5,6 +5,7 @@ import math
 import shutil
 import subprocess
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -127,3 +128,33 @@ def test_a_goal_not_reached_exits_5_with_its_reason(tmp_path):
                            "--controller", "rpp", "--duration-s", "3"])
     assert res.exit_code == 5
     assert "timed out" in res.output.splitlines()[-1]
+
+
+def test_the_mcap_holds_the_map_match_the_ekf_fused(tmp_path):
+    """With the EKF held to the map (the default localisation) the matched poses go into the MCAP as AMCL's
+    amcl_pose would: geometry_msgs/PoseWithCovarianceStamped in map, read by the mcap library's ROS 2
+    decoder, each near the EKF's pose of its stamp, with the fit's covariance (a 2 m aisle: across it
+    tighter than along it)."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    res = RUN.invoke(app, ["run", "goto", "--world", "aisles", "--goal", "-10,-4.8,0", "--start=-13,-4.8,0",
+                           "--controller", "rpp", "--json", "--mcap", str(tmp_path / "g.mcap")])
+    assert res.exit_code == 0, res.output
+    matched, filtered = [], {}
+    with open(tmp_path / "g.mcap", "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        topics = ["/map_match/pose", "/odometry/filtered"]
+        for schema, channel, _msg, m in reader.iter_decoded_messages(topics=topics):
+            stamp = (m.header.stamp.sec, m.header.stamp.nanosec)
+            if channel.topic == "/map_match/pose":
+                assert schema.name == "geometry_msgs/msg/PoseWithCovarianceStamped"
+                matched.append((stamp, m))
+            else:
+                filtered[stamp] = m
+    assert len(matched) >= 20, len(matched)
+    for stamp, m in matched:
+        cov = np.array(m.pose.covariance).reshape(6, 6)
+        assert m.header.frame_id == "map" and cov[0, 0] > cov[1, 1] > 0 and cov[5, 5] > 0
+        ekf = filtered[stamp].pose.pose.position   # the EKF's pose of that instant, after it took the match in
+        assert math.hypot(m.pose.pose.position.x - ekf.x, m.pose.pose.position.y - ekf.y) < 0.05

@@ -83,3 +83,22 @@ def test_a_person_standing_in_the_way_is_kept_people_m_from_or_the_corridor_is_g
     assert d.min() >= 0.865 - 0.05 and aside.xy_m[:, 1].max() < 3.5  # past them, in the same corridor
     middle = p.plan(start, goal, people_xy_m=np.array([[6.0, 2.5]]))  # no room for 0.865 m: the north corridor
     assert middle.xy_m[:, 1].max() > 4.5
+
+
+def test_a_path_is_free_until_an_obstacle_or_a_person_closes_it():
+    """What the navigator asks before it keeps a plan: the south corridor's path is free; a pallet jack beside
+    it that leaves the robot room (the second tier: the inscribed radius, 0.45 m more from the jack) keeps it
+    free, one across it or a person standing on it does not."""
+    cm, p = _planner(two_corridors(), unmapped_pad_m=0.45, people_m=0.865)
+    south = p.plan(np.array([1.0, 2.5]), np.array([11.0, 2.5]))
+    assert p.path_free(south.xy_m)
+    path_y = float(np.interp(6.2, south.xy_m[:, 0], south.xy_m[:, 1]))
+    edge = path_y - 0.265 - 0.45 - 0.1   # a jack's north face 0.1 m clear of the second tier's keep-out
+    r0, r1 = int(1.5 / 0.05), int(edge / 0.05)
+    cm.marked[r0:r1, int(6.0 / 0.05):int(6.4 / 0.05)] = True
+    cm._refresh(r0, r1, int(6.0 / 0.05), int(6.4 / 0.05))
+    assert p.path_free(south.xy_m)
+    assert not p.path_free(south.xy_m, np.array([[6.2, path_y]]))
+    cm.marked[r0:int(3.5 / 0.05), int(6.0 / 0.05):int(6.4 / 0.05)] = True
+    cm._refresh(r0, int(3.5 / 0.05), int(6.0 / 0.05), int(6.4 / 0.05))
+    assert not p.path_free(south.xy_m)

@@ -234,3 +234,20 @@ def test_the_matched_pose_covariance_leaves_the_corridor_open():
     cov = msg.pose.covariance.reshape(6, 6)
     assert msg.header.frame_id == "map" and msg.header.stamp.to_sec() == 2.5
     assert cov[5, 5] == pytest.approx(inflated.pose_covariance(laser)[2, 2]) and cov[2, 2] >= 1e6
+
+
+def test_the_pose_covariance_moves_from_the_laser_to_the_base_as_a_rigid_motion(costmap):
+    """Checked by sampling: increments (dx, dy, dyaw) about the laser drawn from the fit's covariance (one with
+    cross terms), each moving the base 0.4 m behind and 0.1 m beside the laser as the rigid motion does;
+    the samples' covariance is what the EKF is given (inflation 1, floors 1e-9)."""
+    m = MapMatcher(costmap, feedback_inflation=1.0, feedback_floor_m=1e-9, feedback_floor_rad=1e-9)
+    cov = np.array([[4e-4, 1e-4, 2e-4], [1e-4, 9e-4, -3e-4], [2e-4, -3e-4, 6e-4]])
+    m.information, m.centre_xy_m = np.linalg.inv(cov), np.array([3.0, 4.0])
+    base = np.array([2.6, 4.1])
+    rng = np.random.default_rng(5)
+    d = rng.multivariate_normal(np.zeros(3), cov, 200_000)
+    rel = base - m.centre_xy_m
+    c, s = np.cos(d[:, 2]), np.sin(d[:, 2])
+    moved = m.centre_xy_m + np.column_stack([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]]) + d[:, :2]
+    sampled = np.cov(np.column_stack([moved, d[:, 2]]).T)
+    assert m.pose_covariance(base) == pytest.approx(sampled, rel=0.02, abs=2e-6)

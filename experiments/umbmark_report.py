@@ -3,9 +3,13 @@
 after the calibration, a panel per seed), ``emax.png`` (E_max,syst per seed before and after) and
 ``calibration/seed<N>.yaml`` (the odometry node's calibration, :mod:`amr_twin.controllers.odometry_calibration`).
 
-Figures are in the UMBmark sense: a seed's *reduction* is E_max,syst before over after; the
-*non-systematic spread* of a phase is the RMS distance of the runs from their cluster's centre of
-gravity (the larger of the two directions). Data come from :mod:`.umbmark_seeds`.
+Figures are in the UMBmark sense: a seed's *reduction* is E_max,syst before over after; a phase's
+*scatter* is the RMS distance of the runs from their cluster's centre of gravity (the larger of the two
+directions), and so is each part's. The *non-systematic spread* is the scatter of the part Borenstein
+and Feng's list of error sources calls non-systematic, what the wheels do on the floor (here the tyres'
+slip); the odometry's sampling part (the encoder's limited resolution and sampling rate, systematic
+sources in that list, which no calibration removes) is reported beside it. Data come from
+:mod:`.umbmark_seeds`.
 """
 
 from __future__ import annotations
@@ -93,19 +97,23 @@ def markdown(data: dict) -> str:
                   f"{cell(s['reduction'], 1)}, median {s['reduction_median']:.1f}, of the means "
                   f"{s['reduction_of_means']:.1f}; reduced on {s['seeds_reduced']} of {len(m['seeds'])} seeds "
                   "(Borenstein and Feng report about an order of magnitude on real robots)"]
-    lines.append(f"- non-systematic spread before: {_mm_cell(s['spread_before_m'])}"
-                 + (f"; after: {_mm_cell(s['spread_after_m'])}" if "spread_after_m" in s else ""))
-    lines.append(f"- parts of that spread (each part's own spread): tyre slip {_mm_cell(s['slip_spread_before_m'])}, "
-                 f"the odometry's sampling {_mm_cell(s['sampling_spread_before_m'])}")
-    if "rigid_spread_before_m" in s:
-        lines.append(f"- with the tyre model off (rigid contact, the same robots and run seeds): spread "
-                     f"{_mm_cell(s['rigid_spread_before_m'])} (tyre slip {_mm_cell(s['rigid_slip_spread_before_m'])}, "
-                     f"sampling {_mm_cell(s['rigid_sampling_spread_before_m'])}), E_max,syst "
-                     f"{_mm_cell(s['rigid_e_max_syst_before_m'])}")
+    rigid = "rigid_spread_before_m" in s
+    lines.append(f"- non-systematic spread (the wheels on the floor: the tyres' slip) before: "
+                 f"{_mm_cell(s['slip_spread_before_m'], 3)}"
+                 + (f"; with the tyre model off (rigid contact, the same robots and run seeds): "
+                    f"{_mm_cell(s['rigid_slip_spread_before_m'], 3)}" if rigid else ""))
+    lines.append(f"- the odometry's sampling part (the 90-edge encoder's resolution and the 10 Hz samples: "
+                 f"systematic sources in Borenstein and Feng's list, not removed by the calibration): "
+                 f"{_mm_cell(s['sampling_spread_before_m'])}"
+                 + (f"; rigid contact: {_mm_cell(s['rigid_sampling_spread_before_m'])}" if rigid else ""))
+    lines.append(f"- scatter of the return errors (all parts) before: {_mm_cell(s['spread_before_m'])}"
+                 + (f"; after: {_mm_cell(s['spread_after_m'])}" if "spread_after_m" in s else "")
+                 + (f"; rigid contact: {_mm_cell(s['rigid_spread_before_m'])}, E_max,syst "
+                    f"{_mm_cell(s['rigid_e_max_syst_before_m'])}" if rigid else ""))
     lines += [f"- parts of E_max,syst before (UMBmark of each part's return errors): geometry + slip "
               f"{_mm_cell(s['geometry_and_slip_e_max_syst_m'])}, of which tyre slip {_mm_cell(s['slip_e_max_syst_m'])}; "
               f"the odometry's sampling {_mm_cell(s['sampling_e_max_syst_m'])}", "",
-              "| seed | radii L, R mm | track mm | E_max,syst before | after | reduction | E_d | E_b | spread before | "
+              "| seed | radii L, R mm | track mm | E_max,syst before | after | reduction | E_d | E_b | scatter before | "
               "after | sampling part | slip part |", "|---|" + "---|" * 11]
     for d in data["per_seed"]:
         rb, b, a = d["robot"], d["before"], d["after"]
@@ -122,8 +130,8 @@ def markdown(data: dict) -> str:
     return "\n".join(lines)
 
 
-def _mm_cell(s: dict) -> str:
-    return cell({k: (v if k == "n" or v is None else 1e3 * v) for k, v in s.items()}, 1)
+def _mm_cell(s: dict, decimals: int = 1) -> str:
+    return cell({k: (v if k == "n" or v is None else 1e3 * v) for k, v in s.items()}, decimals)
 
 
 def plot_borenstein(data: dict, path: Path) -> None:
@@ -173,7 +181,7 @@ def plot_borenstein(data: dict, path: Path) -> None:
 
 
 def plot_emax(data: dict, path: Path) -> None:
-    """E_max,syst per seed before and after (log scale), and each seed's spread as the floor of what a
+    """E_max,syst per seed before and after (log scale), and each seed's scatter as the floor of what a
     calibration can reach."""
     import matplotlib
     matplotlib.use("Agg")
@@ -188,7 +196,7 @@ def plot_emax(data: dict, path: Path) -> None:
         ax.plot(x, [1e3 * d["after"]["node"]["e_max_syst_m"] for d in per], "o", color="tab:green",
                 label="E_max,syst after the calibration")
     ax.plot(x, [1e3 * d["before"]["node"]["e_nonsyst_rms_m"] for d in per], "_", color="k", ms=14,
-            label="non-systematic spread (RMS), before")
+            label="scatter of the return errors (RMS), before")
     ax.set_yscale("log")
     ax.set_xticks(x, [str(d["seed"]) for d in per])
     ax.set_xlabel("seed (robot)")

@@ -63,6 +63,8 @@ def test_the_files_agree(report):
         assert len(d["before"]["runs"]) == len(d["after"]["runs"]) == 2
     text = (out / "report.md").read_text()
     assert "E_max,syst before calibration" in text and "rigid contact" in text
+    nonsyst = [line for line in text.splitlines() if line.startswith("- non-systematic spread")]
+    assert len(nonsyst) == 1 and "with the tyre model off" in nonsyst[0]   # both, on the line UMBmark asks for
 
 
 def test_the_rigid_contact_runs_are_the_same_robots(report):

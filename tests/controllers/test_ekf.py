@@ -265,16 +265,21 @@ def _pose_msg(x, y, yaw, cov_xy_yaw, t_s, frame="map"):
                                      PoseWithCovariance(Pose(Point(x, y, 0.0), Quaternion.from_yaw(yaw)), cov.ravel()))
 
 
+def _map_ekf(initial_pose):
+    """An EKF in ``map`` (UWB on) on a bus, and the list its ``odometry/filtered`` messages go to."""
+    bus = Bus(VirtualClock())
+    out = []
+    bus.subscribe("odometry/filtered", out.append)
+    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb,
+                   bus=bus, initial_pose=initial_pose)
+    return bus, node, out
+
+
 def test_a_matched_pose_is_fused_by_its_own_covariance():
     """The map match's pose (AMCL's amcl_pose as robot_localization's pose0): a tight one pulls the state onto
     it, a direction its covariance leaves open (an aisle's length) is left to the rest; the yaw across +-pi
     moves the short way; the node publishes after it; a pose not in ``map`` is refused."""
-    clock = VirtualClock()
-    bus = Bus(clock)
-    out = []
-    bus.subscribe("odometry/filtered", out.append)
-    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb,
-                   bus=bus, initial_pose=(2.0, 3.0, 3.1))
+    bus, node, out = _map_ekf((2.0, 3.0, 3.1))
     bus.publish("map_match/pose", _pose_msg(2.5, 3.4, -3.1, (1e4, 0.03 ** 2, 0.01 ** 2), 0.0))
     x, y, yaw = node.state[:3]
     p0, q0 = CFG.ekf.initial_xy_sigma_m ** 2, CFG.ekf.initial_yaw_sigma_rad ** 2   # the prior's variances
@@ -292,12 +297,7 @@ def test_a_pose_of_an_earlier_instant_is_carried_to_the_filters_time():
     50 Hz, the match 0.1 s later): a pose equal to the filter's own of that instant must not move it (fused as
     if current, it would pull the robot back by 0.08 m at 0.8 m/s, each match: the estimate lagged 1.5 m
     behind along a 40 m aisle); the published pose is the corrected one of that instant, at its stamp."""
-    clock = VirtualClock()
-    bus = Bus(clock)
-    out = []
-    bus.subscribe("odometry/filtered", out.append)
-    node = EkfNode(CFG.ekf, wheel_separation_m=CFG.wheel.separation_m, use_imu=False, use_uwb=True, uwb=CFG.uwb,
-                   bus=bus, initial_pose=(2.0, 3.0, 0.5))
+    bus, node, out = _map_ekf((2.0, 3.0, 0.5))
     for k in range(60):
         x = 2.0 + 0.8 * 0.02 * k
         bus.publish("odom", Odometry(header=Header(k, Time.from_us(k * 20_000), "odom"),

@@ -65,6 +65,7 @@ def test_the_files_agree(report):
     assert "E_max,syst before calibration" in text and "rigid contact" in text
     nonsyst = [line for line in text.splitlines() if line.startswith("- non-systematic spread")]
     assert len(nonsyst) == 1 and "with the tyre model off" in nonsyst[0]   # both, on the line UMBmark asks for
+    assert nonsyst[0].count("±") == 2, nonsyst[0]                          # each a mean ± sd (min-max) over the seeds
 
 
 def test_the_rigid_contact_runs_are_the_same_robots(report):

@@ -143,3 +143,19 @@ def oscillation_verdict(comparisons: list[dict]) -> dict:
     return {"measure": OSCILLATION_MEASURE, "definition": OSCILLATION_DEFINITION, "comparisons": n,
             "published_passed": passed, "true_passed": sum(c.get("true_verdict") == "pass" for c in comparisons),
             "verdict": "pass" if n and passed == n else "fail"}
+
+
+def count_checks(runs: list[dict], comparisons: list[dict]) -> tuple[int, int, int, int]:
+    """The scorecard's counts of analysed runs (:func:`.chapter5.analyse`'s dicts) and their
+    oscillation comparisons (:func:`compare_oscillation`).
+
+    Returns
+    -------
+    (checks, passed, true_checks, true_passed) : the banded metrics of the published samples
+    and the comparisons' published verdicts; the banded metrics of the true speed.
+    """
+    checks = [c for r in runs for w in r["wheels"].values() for c in w["checks"].values()]
+    true_checks = [c for r in runs for w in r["wheels"].values() for c in w["true_checks"].values()]
+    passed = sum(c["verdict"] == "pass" for c in checks) + sum(c["verdict"] == "pass" for c in comparisons)
+    return (len(checks) + len(comparisons), passed, len(true_checks),
+            sum(c["verdict"] == "pass" for c in true_checks))

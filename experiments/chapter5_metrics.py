@@ -15,7 +15,7 @@ from typing import Optional
 
 from amr_twin.experiments import chapter5_payload as payload
 from amr_twin.experiments.chapter5_criteria import (BANDS, DEFINITIONS, SOURCES, TRANSIENT_WINDOW_S,
-                                                    oscillation_verdict)
+                                                    count_checks, oscillation_verdict)
 
 
 @dataclass(frozen=True)
@@ -155,9 +155,6 @@ def metrics(results: dict) -> Chapter5Metrics:
                        r.get("tyre_timestep"))
             for r in results["runs"]]
     comparisons = [OscillationComparison(**c) for c in results["comparisons"]]
-    checks = [c for r in runs for w in r.wheels.values() for c in w.checks.values()]
-    true_checks = [c for r in runs for w in r.wheels.values() for c in w.true_checks.values()]
-    passed = sum(c.verdict == "pass" for c in checks) + sum(c.verdict == "pass" for c in comparisons)
     return Chapter5Metrics(
         firmware=results["firmware"], jobs=results["jobs"], wall_s=round(results["wall_s"], 3),
         sim_s=results["sim_s"], study_runs=results.get("study_runs", 0), study_sim_s=results.get("study_sim_s", 0.0),
@@ -170,6 +167,5 @@ def metrics(results: dict) -> Chapter5Metrics:
         rolling_resistance_study=results["rolling_resistance_study"],
         threshold_crr=payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
                                             results["crr"]["tyres"]),
-        summary=CheckCount(len(checks) + len(comparisons), passed, len(true_checks),
-                           sum(c.verdict == "pass" for c in true_checks)),
+        summary=CheckCount(*count_checks(results["runs"], results["comparisons"])),
         firmware_comparison=results.get("firmware_comparison"), spread=results.get("spread_summary"))

@@ -5,7 +5,9 @@ The eight runs (or those chosen) are simulated again with each configuration dra
 (:func:`.chapter5.analyse`). :func:`summarise` gives, per run, wheel and metric (published
 samples and true speed), the nominal value, the median and 90 % interval over the draws,
 the thesis' value and band where §5.1.3 gives one, and in how many draws the metric lies in
-its band; the §5.1.4 answers (the PI raises the duty with 20 kg; the 20 kg runs oscillate
+its band; each draw's scorecard (``draw_checks``: the nominal run's counts, published and true
+speed, :func:`.chapter5_criteria.count_checks`), the draw numbers shared by any run of the same
+seed and sampler, so two runs (e.g. with and without the tyres) compare draw by draw; the §5.1.4 answers (the PI raises the duty with 20 kg; the 20 kg runs oscillate
 more) as the number of draws in which they hold; and the parameters whose rank
 correlation with each banded metric is largest; and each draw's run whose physics timestep the tyres'
 guard halved (``tyre_timestep_halved``, :mod:`amr_twin.model.tyre_stability`). ``chapter5_spread_report.markdown`` writes the report's
@@ -19,7 +21,7 @@ import numpy as np
 from amr_twin.analysis.uncertainty import LEVEL, interval, noise_level, rank_correlations
 from amr_twin.experiments import chapter5_payload as payload
 from amr_twin.experiments.chapter5 import RUNS, _Job, analyse, simulate
-from amr_twin.experiments.chapter5_criteria import BANDS, compare_oscillation, step_class
+from amr_twin.experiments.chapter5_criteria import BANDS, compare_oscillation, count_checks, step_class
 
 TOP = 3  # parameters named per banded metric
 METRICS = ("delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error", "oscillation")
@@ -96,6 +98,8 @@ def summarise(nominal: dict, spread: dict) -> dict:
                                                "notable": bool(abs(rho[j]) > limit)} for j in ranked[:TOP]])
                     metrics.append(entry)
     oscillation = [compare_oscillation(samples[i]) for i in order]
+    keys = ("draw", "checks", "passed", "true_checks", "true_passed")
+    draw_checks = [dict(zip(keys, (i, *count_checks(samples[i], comps)))) for i, comps in zip(order, oscillation)]
     pairs = {}
     for comps in oscillation:
         for c in comps:
@@ -109,7 +113,9 @@ def summarise(nominal: dict, spread: dict) -> dict:
                 (d["loaded_run"], d["unloaded_run"], d["wheel"]), 0) + bool(d["raised"])
     return {"samples": len(order), "wall_s": round(spread["wall_s"], 3), "seed": draws.seed, "sampler": draws.sampler, "level": LEVEL,
             "parameters": list(draws.names), "clipped": draws.clipped, "noise_level_rho": limit,
-            "metrics": metrics,
+            "metrics": metrics, "draw_checks": draw_checks,
+            "checks_passed": {source: interval([d[key] for d in draw_checks], discrete=True)
+                              for source, key in (("published", "passed"), ("true", "true_passed"))},
             "oscillation_more": [{"loaded_run": a, "unloaded_run": b, "wheel": w, "draws_published": v["published"],
                                   "draws_true": v["true"]} for (a, b, w), v in pairs.items()],
             "oscillation_all_hold": sum(all(c["verdict"] == "pass" for c in comps) and bool(comps)

@@ -25,6 +25,13 @@ def markdown(s: dict) -> list[str]:
         lines.append(f"| {m['run']} | {m['wheel']} | {m['metric']} | {m['thesis']} | {m['band'][0]} – {m['band'][1]} "
                      f"| {_num(m['nominal'])} | {_num(m['median'])} ({_num(m['low'])} – {_num(m['high'])}) | "
                      f"{m['in_band']} of {n} | {drivers} |")
+    checks, card = s["checks_passed"], s["draw_checks"][0] if s["draw_checks"] else None
+    if card is not None:
+        lines += ["", f"Checks passed over the draws (each draw's scorecard, as the nominal one's): published "
+                  f"samples median {checks['published']['median']:.0f} ({checks['published']['low']:.0f} – "
+                  f"{checks['published']['high']:.0f}) of {card['checks']}, true speed median "
+                  f"{checks['true']['median']:.0f} ({checks['true']['low']:.0f} – {checks['true']['high']:.0f}) of "
+                  f"{card['true_checks']}; each draw's counts are in `metrics.json` (`spread.draw_checks`)."]
     lines += ["", "True wheel speed (not judged):", "", "| run | wheel | metric | nominal | over the draws |",
               "|---|---|---|---|---|"]
     for m in s["metrics"]:

@@ -124,6 +124,10 @@ def chapter5(
         typer.echo(f"over {sp['samples']} parameter draws ({sp['wall_s']:.1f} s wall time): "
                    f"{sum(m['in_band'] for m in met)} of {len(met) * sp['samples']} banded metrics in their band "
                    "(report.md, spread section)")
+        cp = sp["checks_passed"]
+        typer.echo(f"checks passed over the draws: median {cp['published']['median']:.0f} "
+                   f"({cp['published']['low']:.0f}-{cp['published']['high']:.0f}) on the published samples, "
+                   f"{cp['true']['median']:.0f} ({cp['true']['low']:.0f}-{cp['true']['high']:.0f}) on the true speed")
     typer.echo(f"checks passed {s.passed}/{s.checks} on the published samples (true speed "
                f"{s.true_passed}/{s.true_checks}); wrote {out}/metrics.json, report.md")
     study = f" and {data.study_runs} rolling-resistance study runs" if data.study_runs else ""

@@ -73,3 +73,16 @@ def test_report_states_the_oscillation_measure_and_verdict():
     assert "| 7 | 20 | right | 53.48 | 4.00 | 7.00 |" in text  # per run and wheel: published, true
     assert "| 7 | 3 | left | 3.00 / 1.00 | pass | 6.00 / 5.00 | pass |" in text
     assert '"the 20 kg runs oscillate more" holds** — the 20 kg wheel oscillates more in 2 of 2' in text
+
+
+def test_count_checks_counts_the_comparisons_with_the_published_samples_only():
+    """The scorecard: published samples' banded metrics plus the oscillation comparisons' published
+    verdicts; the true speed's banded metrics apart (the comparisons' true verdicts not counted)."""
+    small = {"delay_s": 0.2, "rise_s": 0.5, "peak_s": 0.6, "settling_s": 1.3, "overshoot": 1.0, "steady_error": 0.5}
+    late = dict(small, delay_s=0.9, rise_s=2.0)
+    runs = [{"wheels": {"left": {"checks": criteria.judge("left", 60.8, small),          # 6 of 6
+                                 "true_checks": criteria.judge("left", 60.8, late)}}},   # 4 of 6
+            {"wheels": {"right": {"checks": criteria.judge("right", 60.8, late),         # 3 of 6 (overshoot < 2)
+                                  "true_checks": criteria.judge("right", 60.8, small)}}}]  # 5 of 6
+    comparisons = [{"verdict": "pass", "true_verdict": "fail"}, {"verdict": "fail", "true_verdict": "pass"}]
+    assert criteria.count_checks(runs, comparisons) == (14, 10, 12, 9)

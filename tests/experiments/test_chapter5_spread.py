@@ -45,3 +45,24 @@ def test_true_speed_bands_bracket_the_median():
     assert len(band["low"]) == len(out["bands"][2]["t_s"])
     assert np.all(band["low"] <= band["median"] + 1e-9) and np.all(band["median"] <= band["high"] + 1e-9)
     assert np.max(band["high"] - band["low"]) > 1.0  # the drawn gains and Ke spread the speed by RPMs
+
+
+def test_each_draws_scorecard_is_the_nominal_one_of_its_parameters():
+    """``draw_checks``: draw i's counts are what the nominal experiment scores with draw i's
+    parameters, so two spreads of the same seed (e.g. with and without the tyres) compare draw
+    by draw; the draws do move the scorecard."""
+    from amr_twin.model.config import load_config
+    from amr_twin.experiments import chapter5, chapter5_spread
+    from amr_twin.experiments.chapter5_criteria import count_checks
+    from amr_twin.analysis.uncertainty import ParameterSpace
+
+    cfg, runs = load_config(), [1, 2]
+    draws = ParameterSpace.load().draw(4, seed=0, include=("driver.gain", "motor_left.ke_v_s_rad"))
+    spread = chapter5_spread.run(cfg, draws, runs=runs, duration_s=4.0, progress=False)
+    summary = chapter5_spread.summarise(chapter5.run(cfg, runs=runs, duration_s=4.0, progress=False), spread)
+    cards = [(d["draw"], d["checks"], d["passed"], d["true_checks"], d["true_passed"]) for d in summary["draw_checks"]]
+    for i in range(len(draws)):
+        own = chapter5.run(draws.config(cfg, i), runs=runs, duration_s=4.0, progress=False)
+        assert cards[i] == (i, *count_checks(own["runs"], own["comparisons"]))
+    true = [c[4] for c in cards]
+    assert summary["checks_passed"]["true"]["low"] == min(true) < max(true) == summary["checks_passed"]["true"]["high"]

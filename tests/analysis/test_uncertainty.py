@@ -34,6 +34,16 @@ def test_same_seed_same_bytes_in_another_process(space):
     assert [here.sample_id(i) for i in range(6)] == [space.draw(6, seed=7).sample_id(i) for i in range(6)]
 
 
+def test_a_setting_no_draw_reads_leaves_the_draws_as_they_are(space):
+    """The tyres on and off draw the same robots (chapter 5's paired comparison, docs/tyres.md);
+    a drawn parameter's value set by hand does change them."""
+    here = space.draw(8, seed=3)
+    rigid = ParameterSpace.load(sets=["wheel.tyre_slip=false"]).draw(8, seed=3)
+    assert rigid.names == here.names and np.array_equal(rigid.values, here.values)
+    geared = ParameterSpace.load(sets=["driver.gain=1.7"]).draw(8, seed=3)
+    assert not np.array_equal(geared.values, here.values)
+
+
 def test_latin_hypercube_puts_one_draw_in_each_stratum(space):
     n = 16
     d = space.draw(n, seed=3, include=("caster.drop_m", "wheel.tyre_stiffness_n_m"))

@@ -10,10 +10,13 @@ what URDF cannot carry is :mod:`amr_twin.model.robot_spec`; the assembly in a wo
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import json
+import signal
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -155,14 +158,37 @@ def robot_urdf(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
     return urdf
 
 
-def check_urdf(urdf: str) -> None:
-    """Load and validate the URDF with yourdfpy; raise BuildError if it is invalid."""
-    import yourdfpy
-
+@contextlib.contextmanager
+def _ctrl_c_held():
+    """Ctrl-C (SIGINT) held back in this block and raised again after it, to the handler in place
+    before (KeyboardInterrupt by default). trimesh, which yourdfpy imports, catches ``BaseException``
+    around its optional imports (PIL, ...): a Ctrl-C while they ran was swallowed (a command ran on to
+    its end) or left a module replaced by trimesh's ExceptionWrapper (a TypeError later). A handler that
+    only notes the signal, not a blocked mask: the native threads numpy's BLAS starts would take a
+    signal the main thread blocks. Python's handlers are the main thread's: elsewhere nothing is held."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
     try:
-        robot = yourdfpy.URDF.load(io.StringIO(urdf), load_meshes=False, build_scene_graph=True)
-    except Exception as exc:
-        raise BuildError(f"URDF: {str(exc).splitlines()[0]}") from None
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if caught:
+            signal.raise_signal(signal.SIGINT)
+
+
+def check_urdf(urdf: str) -> None:
+    """Load and validate the URDF with yourdfpy; raise BuildError if it is invalid (a Ctrl-C meanwhile
+    raises KeyboardInterrupt after it: :func:`_ctrl_c_held`)."""
+    with _ctrl_c_held():
+        import yourdfpy
+
+        try:
+            robot = yourdfpy.URDF.load(io.StringIO(urdf), load_meshes=False, build_scene_graph=True)
+        except Exception as exc:
+            raise BuildError(f"URDF: {str(exc).splitlines()[0]}") from None
     if not robot.validate():
         raise BuildError("URDF: yourdfpy validation failed")
     if robot.base_link != "base_link":

@@ -92,3 +92,26 @@ def test_derived_params_are_kept_per_robot_not_per_payload(monkeypatch):
     mine["chassis_com_m"][0] = 99.0
     mine["chassis_mass_kg"] = 0.0
     assert json.dumps(urdf_mod.derived_params(load_config()), sort_keys=True) == before
+
+
+CTRL_C_IN_PIL = """
+import importlib.abc, os, signal, sys
+class CtrlC(importlib.abc.MetaPathFinder):  # Ctrl-C as trimesh's optional import of PIL starts
+    def find_spec(self, name, path=None, target=None):
+        if name == "PIL":
+            sys.meta_path.remove(self)
+            os.kill(os.getpid(), signal.SIGINT)
+        return None
+sys.meta_path.insert(0, CtrlC())
+from amr_twin.model.paths import MODEL_DIR
+from amr_twin.model.urdf import check_urdf
+check_urdf((MODEL_DIR / "amr.urdf").read_text())
+print("returned")
+"""
+
+
+def test_ctrl_c_while_trimesh_imports_is_not_swallowed():
+    """trimesh (imported by yourdfpy) catches BaseException around ``from PIL import Image``: a Ctrl-C
+    there was swallowed, and a run went on to its end. It is held back and raised after the check."""
+    out = subprocess.run([sys.executable, "-c", CTRL_C_IN_PIL], capture_output=True, text=True, timeout=120)
+    assert out.returncode != 0 and "KeyboardInterrupt" in out.stderr and "returned" not in out.stdout, out.stdout

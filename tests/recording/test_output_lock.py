@@ -69,7 +69,7 @@ def test_a_run_holds_its_outputs_until_it_ends(tmp_path):
     """While a run writes run.csv, another command writing it is refused; after it ends, it is free."""
     csv = tmp_path / "run.csv"
     cli = [sys.executable, "-m", "amr_twin.cli.main", "run", "linear", "--speed-m-s", "0.3", "--csv", str(csv)]
-    first = subprocess.Popen([*cli, "--duration-s", "600", "--world", "empty"], stderr=subprocess.PIPE, text=True)
+    first = subprocess.Popen([*cli, "--duration-s", "3600", "--world", "empty"], stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 60
         while not lock_path(csv).exists() and time.monotonic() < deadline:

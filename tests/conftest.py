@@ -2,7 +2,8 @@
 so that the tests neither read nor fill the user's cache (subprocesses inherit it); Ctrl-C
 (SIGINT) handled again when the suite was started with it ignored (a shell without job control
 ignores it in the commands it starts in the background, and their children inherit that): the
-tests that interrupt a run, a pool worker or rosbag record need it delivered.
+tests that interrupt a run or a pool worker need it delivered. (Started so, the ROS 1 rosbag
+fixture of tests/ros1/test_bridge.py still fails: its bag is left open; not traced.)
 The tests live in folders mirroring amr_twin's packages; the helpers they share
 (foxglove_client, uwb_run, wheel_model) stay here, on the path of every folder."""
 

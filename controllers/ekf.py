@@ -284,7 +284,7 @@ class EkfNode:
         self.fused["pose"] += 1
         self._record()
         if self._pub is not None:
-            then = None if since is None else se2.compose(self.filter.x[:3, 0], se2.between(since, np.zeros(3)))
+            then = None if since is None else se2.compose(self.filter.x[:3, 0], se2.inverse(since))
             self._pub.publish(self.message(msg.header.stamp, pose=then))
 
     # -- outputs ------------------------------------------------------------------------

@@ -33,6 +33,11 @@ def between(a, b) -> np.ndarray:
     return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap_rad(b[..., 2] - a[..., 2])], axis=-1)
 
 
+def inverse(a) -> np.ndarray:
+    """``a^-1``: the pose of ``a``'s parent frame in the frame of ``a`` (broadcast)."""
+    return between(a, np.zeros(3))
+
+
 def interpolate(t_s: np.ndarray, pose: np.ndarray, t_query_s) -> np.ndarray:
     """Poses at ``t_query_s`` by linear interpolation of ``(t_s (N,), pose (N, 3))``, yaw unwrapped.
 

@@ -84,7 +84,7 @@ class PoseSource:
         (:mod:`.map_matching`). The jump ``delta = new o before^-1`` moves the earlier history with it and
         comes out of :attr:`correction`, so that every corrected pose stays where it was."""
         new = self.raw_pose()
-        delta = se2.compose(new, se2.between(before, np.zeros(3)))
+        delta = se2.compose(new, se2.inverse(before))
         if not np.any(delta):
             return
         hist = self._hist
@@ -95,7 +95,7 @@ class PoseSource:
             hist.clear()
             hist.extend((float(t), float(x), float(y), float(yaw)) for t, (x, y, yaw) in zip(h[:, 0], moved))
         hist.append(last)
-        self.correction = tuple(float(v) for v in se2.compose(self.correction, se2.between(delta, np.zeros(3))))
+        self.correction = tuple(float(v) for v in se2.compose(self.correction, se2.inverse(delta)))
 
     def _corrected(self, poses: np.ndarray) -> np.ndarray:
         """Poses (K, 3) or a pose (3,) moved by :attr:`correction`."""

@@ -54,3 +54,11 @@ def test_matrix_round_trip():
     assert se2.from_matrix(se2.matrix(*pose)) == pytest.approx(pose)
     np.testing.assert_allclose(se2.matrix(*pose) @ se2.matrix(*pose)[:, [3]],
                                se2.matrix(*se2.compose(pose, pose))[:, [3]], atol=1e-12)
+
+
+def test_inverse_undoes_a_pose_on_either_side():
+    rng = np.random.default_rng(4)
+    a = np.column_stack([rng.uniform(-5, 5, (20, 2)), rng.uniform(-math.pi, math.pi, 20)])
+    for left, right in ((a, se2.inverse(a)), (se2.inverse(a), a)):
+        np.testing.assert_allclose(se2.compose(left, right), np.zeros_like(a), atol=1e-12)
+    np.testing.assert_allclose(se2.inverse([1.0, 0.0, math.pi / 2]), [0.0, 1.0, -math.pi / 2], atol=1e-12)

@@ -176,14 +176,39 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
     return Build(model=model, spec=scene, robot_spec=robot, urdf=urdf)
 
 
+def _option_fields(opt) -> list[str]:
+    """The names of ``mjOption``'s fields (the same on an MjSpec's option and a model's ``opt``)."""
+    return [name for name in dir(opt) if not name.startswith("_") and not callable(getattr(opt, name))]
+
+
+def robot_mjcf(result: Build) -> str:
+    """The robot MJCF alone, with the physics options its twin model runs with.
+
+    Args:
+        result: a :func:`build` result; every ``mjOption`` field of ``result.model.opt`` (timestep in s,
+            integrator, cone, solver and its iterations, noslip, flags, gravity in m/s^2, magnetic
+            field in T, ...) is copied onto ``result.robot_spec``'s option.
+
+    Returns:
+        The MJCF text: loaded alone in plain MuJoCo (a floor added) it steps as the twin does, not
+        at MuJoCo's defaults (2 ms, Euler), where the stiff caster contacts chatter.
+    """
+    option = result.robot_spec.option
+    for name in _option_fields(result.model.opt):
+        setattr(option, name, getattr(result.model.opt, name))
+    with _compiling():
+        return result.robot_spec.to_xml()
+
+
 def export(cfg: TwinConfig, urdf_path: Path | None = None, mjcf_path: Path | None = None) -> Build:
-    """Write the URDF and the robot MJCF (the committed files are made this way): both or neither
-    (:func:`amr_twin.recording.atomic_file.all_or_nothing`), never half of one."""
+    """Write the URDF and the robot MJCF (:func:`robot_mjcf`, with the twin's ``<option>``; the committed
+    files are made this way): both or neither (:func:`amr_twin.recording.atomic_file.all_or_nothing`),
+    never half of one."""
     from amr_twin.recording.atomic_file import all_or_nothing, write_text
 
     result = build(cfg)
     with all_or_nothing():
-        for path, text in ((urdf_path, result.urdf), (mjcf_path, result.robot_spec.to_xml())):
+        for path, text in ((urdf_path, result.urdf), (mjcf_path, robot_mjcf(result))):
             if path is not None:
                 write_text(path, text)
     return result

@@ -97,3 +97,19 @@ def test_the_viewer_scene_has_the_twins_options():
     twin = build(load_config()).model.opt
     for name in ("timestep", "integrator", "cone", "disableflags", "enableflags"):
         assert getattr(viewer, name) == getattr(twin, name), name
+
+
+def test_the_exported_mjcf_has_the_twins_options(tmp_path):
+    """The robot MJCF, fresh and committed, loaded alone carries every mjOption field the twin's model
+    runs with (timestep, integrator, cone, solver, iterations, noslip, flags, gravity, magnetic)."""
+    import mujoco
+
+    from amr_twin.model.build import _option_fields
+
+    mjcf = tmp_path / "amr.xml"
+    twin = build_mod.export(load_config(), mjcf_path=mjcf).model.opt
+    assert twin.timestep == load_config().sim.timestep_s  # no tyre halving at the default parameters
+    for path in (mjcf, MODEL_DIR / "amr.xml"):
+        exported = mujoco.MjModel.from_xml_path(str(path)).opt
+        for name in _option_fields(twin):
+            np.testing.assert_array_equal(getattr(exported, name), getattr(twin, name), err_msg=f"{path.name}: {name}")

@@ -137,23 +137,25 @@ def calibration_summary(report: dict) -> str:
     is pinned: ``sqrt(a^2 + b^2 - 2 r a b)`` of the relative sigmas ``a``, ``b`` and their correlation ``r``."""
     p, corr = report["parameters"], report["correlation"]
     keys = list(p)
-    gain = p["driver.gain"]
 
-    def ratio_pct(key: str) -> float:
-        a, b = gain["sigma"] / gain["value"], p[key]["sigma"] / p[key]["value"]
-        r = corr[keys.index("driver.gain")][keys.index(key)]
+    def ratio_pct(board: str, key: str) -> float:
+        a, b = p[board]["sigma"] / p[board]["value"], p[key]["sigma"] / p[key]["value"]
+        r = corr[keys.index(board)][keys.index(key)]
         return 100 * math.sqrt(max(0.0, a * a + b * b - 2 * r * a * b))
 
     def value(key: str, digits: int) -> str:
         return f"{p[key]['value']:.{digits}f} ± {p[key]['sigma']:.{digits}f}"
 
-    r = min(abs(corr[0][1]), abs(corr[0][2]))
+    r = min(abs(corr[keys.index("driver_left.gain")][keys.index("motor_left.ke_v_s_rad")]),
+            abs(corr[keys.index("driver_right.gain")][keys.index("motor_right.ke_v_s_rad")]))
     return (f"The calibration (`amr-twin calibrate --target thesis`: the bench point, the steady speeds, the "
             f"overshoot and the true-speed timings; `models/amr/calibration.yaml`, chi^2 {report['chi2']:.1f}) "
-            f"reports each parameter with its uncertainty: driver gain {value('driver.gain', 2)}, Ke "
-            f"{value('motor_left.ke_v_s_rad', 3)} and {value('motor_right.ke_v_s_rad', 3)} V s/rad, correlated "
-            f"at {r:.2f} or more (their ratio, the speed per duty count, is pinned within "
-            f"{ratio_pct('motor_left.ke_v_s_rad'):.1f} % left and {ratio_pct('motor_right.ke_v_s_rad'):.1f} % "
+            f"reports each parameter with its uncertainty: driver gains {value('driver_left.gain', 2)} left and "
+            f"{value('driver_right.gain', 2)} right, Ke "
+            f"{value('motor_left.ke_v_s_rad', 3)} and {value('motor_right.ke_v_s_rad', 3)} V s/rad, each wheel's "
+            f"gain and Ke correlated at {r:.2f} or more (their ratio, the speed per duty count, is pinned within "
+            f"{ratio_pct('driver_left.gain', 'motor_left.ke_v_s_rad'):.1f} % left and "
+            f"{ratio_pct('driver_right.gain', 'motor_right.ke_v_s_rad'):.1f} % "
             f"right), dry friction {value('motor_left.friction_nm', 3)} and {value('motor_right.friction_nm', 3)} "
             f"N m.\n")
 

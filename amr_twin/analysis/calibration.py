@@ -1,6 +1,6 @@
 """Calibration: identify the drive's unknowns from measured data, with their uncertainty.
 
-Unknowns (the thesis gives none of them): the driver's gain (the ZS-X11D1 reads the
+Unknowns (the thesis gives none of them): each driver board's gain (the ZS-X11D1 reads the
 PWM as a speed demand), each motor's back-EMF constant ``Ke`` and its own dry
 friction (bearings, seals, cogging). Every other drive parameter keeps its sourced
 value (winding resistance, iron-loss damping, tyre and caster rolling resistance).
@@ -33,7 +33,8 @@ from amr_twin.analysis.calibration_targets import (BENCH_QUANTITY, log_residuals
                                                    thesis_targets, weighted_residuals)
 
 PARAMETERS = {  # dotted key: (lower, upper) bounds, physically plausible
-    "driver.gain": (0.8, 4.0),
+    "driver_left.gain": (0.8, 4.0),
+    "driver_right.gain": (0.8, 4.0),
     "motor_left.ke_v_s_rad": (0.35, 0.70),   # 36 V hub motors with 500-1000 RPM no load
     "motor_right.ke_v_s_rad": (0.35, 0.70),
     "motor_left.friction_nm": (0.0, 2.0),

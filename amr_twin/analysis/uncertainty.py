@@ -42,7 +42,7 @@ from amr_twin.model.config_leaves import value_at
 from amr_twin.model.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, Spread, spread_of, with_values
 
 PLANT = ("sim.", "chassis.", "deck.", "components.", "wheel.", "caster.", "motor_left.", "motor_right.",
-         "driver.", "battery.")
+         "driver.", "driver_left.", "driver_right.", "battery.")
 """The robot's body and drive (not its sensors, nor the estimators)."""
 SAMPLERS = ("lhs", "sobol")
 MAX_SAMPLES = 4096

@@ -255,7 +255,7 @@ def calibrate(
                                           "(what `--samples` draws from; models/amr/calibration.yaml)."),
     no_fit: bool = typer.Option(False, "--no-fit", help="Do not fit: report the uncertainty of the given values "
                                 "(with --report; --out then holds them unchanged)."),
-    max_evaluations: int = typer.Option(90, help="Most twin evaluations of the fit, 6 to 2000 (a step costs one "
+    max_evaluations: int = typer.Option(90, help="Most twin evaluations of the fit, 7 to 2000 (a step costs one "
                                         "per fitted parameter and one more: the fit takes at most this // 6 steps)."),
     jobs: Optional[int] = typer.Option(None, "--jobs", help="Worker processes for a thesis evaluation's three runs "
                                        "(default: the usable cores, at most 3; at most the usable cores)."),

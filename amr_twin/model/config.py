@@ -28,7 +28,8 @@ from typing import Any, Iterator
 
 from pydantic import BaseModel, ValidationError, model_validator
 
-from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg, DriverCfg,
+from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg,
+                              DriverBoardCfg, DriverCfg,
                               EkfCfg, ImuCfg, LidarCfg, LidarOdometryCfg, MappingCfg, MotorCfg,
                               PayloadCfg, Section, SimCfg, UwbCfg, WheelCfg)
 from amr_twin.model.config_actors import ActorsCfg
@@ -57,6 +58,8 @@ class TwinConfig(Section):
     motor_left: MotorCfg
     motor_right: MotorCfg
     driver: DriverCfg
+    driver_left: DriverBoardCfg
+    driver_right: DriverBoardCfg
     battery: BatteryCfg
     imu: ImuCfg
     lidar: LidarCfg

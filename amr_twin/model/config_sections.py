@@ -172,8 +172,15 @@ class MotorCfg(Section):
     damping_nm_s_rad: float = P(unit="N*m*s/rad", ge=0.0, le=5.0)
 
 
-class DriverCfg(Section):
+class DriverBoardCfg(Section):
+    """One ZS-X11D1 board (one per wheel): what differs from board to board."""
+
     gain: float = P(unit="1", gt=0.1, le=20.0)
+
+
+class DriverCfg(Section):
+    """What the two ZS-X11D1 boards share (the model's ratings)."""
+
     deadband_duty: float = P(unit="1", ge=0.0, le=0.5)
     brake_current_limit_a: float = P(unit="A", gt=0.5, le=500.0)
     continuous_current_a: float = P(unit="A", gt=0.5, le=100.0)

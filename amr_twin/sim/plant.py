@@ -10,7 +10,8 @@ and powers a BLDC hub motor from the battery:
   the switches' rating (``driver.brake_current_limit_a``); no torque at standstill
   beyond the motor's own friction.
 - otherwise: phase voltage ``v = dir * V_batt * clip(gain * (duty - deadband) / (1 - deadband), 0, 1)``.
-  The driver treats the PWM input as a speed demand, hence a gain (calibrated).
+  The driver treats the PWM input as a speed demand, hence a gain (calibrated), one per board
+  (``driver_left.gain``, ``driver_right.gain``: the robot has two ZS-X11D1 boards).
 
 The motor is the quasi-static DC model of MuJoCo's documentation, evaluated in C
 by an affine actuator: ``torque = Kt/R * v - Kt*Ke/R * omega``, clipped at
@@ -31,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.model.config_sections import DriverCfg, MotorCfg
+from amr_twin.model.config_sections import DriverBoardCfg, DriverCfg, MotorCfg
 from amr_twin.sim.battery import BRAKE, COAST, DRIVE, Battery
 from amr_twin.sim.physics import Physics
 from amr_twin.sim.pins import DriverPins
@@ -68,6 +69,7 @@ class Plant:
     def __init__(self, cfg: TwinConfig, physics: Physics):
         self.cfg, self.physics = cfg, physics
         self.driver: DriverCfg = cfg.driver
+        self.boards: tuple[DriverBoardCfg, DriverBoardCfg] = (cfg.driver_left, cfg.driver_right)
         self.motors: tuple[MotorCfg, MotorCfg] = (cfg.motor_left, cfg.motor_right)
         self.battery = Battery(cfg.battery)
         self.estop = False
@@ -81,10 +83,10 @@ class Plant:
         self.battery.connect(physics, physics.wheel_dof, self._motor_consts, self.driver.brake_current_limit_a,
                              self._quiescent2_a, self._aux_w)
 
-    def phase_voltage_v(self, pins: DriverPins) -> float:
-        """Signed phase voltage the driver applies for these pins while enabled."""
+    def phase_voltage_v(self, pins: DriverPins, wheel: int) -> float:
+        """Signed phase voltage, V, that wheel ``wheel``'s driver (0 left, 1 right) applies for these pins."""
         db = self.driver.deadband_duty
-        level = min(1.0, max(0.0, self.driver.gain * (pins.duty - db) / (1.0 - db)))
+        level = min(1.0, max(0.0, self.boards[wheel].gain * (pins.duty - db) / (1.0 - db)))
         return pins.direction * level * self.battery.terminal_v()
 
     def apply(self, pins: tuple[DriverPins, DriverPins]) -> None:
@@ -96,7 +98,7 @@ class Plant:
             elif p.braking:
                 mode, volt = "brake", 0.0
             else:
-                mode, volt = "drive", self.phase_voltage_v(p)
+                mode, volt = "drive", self.phase_voltage_v(p, w)
             self.mode[w], self.voltage_v[w] = mode, volt
             self.battery.set_motor(w, MODE_CODES[mode], volt)
             limit = self.motors[w].ke_v_s_rad * brake_limit_a if mode == "brake" else None

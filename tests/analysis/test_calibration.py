@@ -18,7 +18,7 @@ LOG_COMMAND = "motor:left:forward:1.0"
 
 
 def _write_log(path, gain):
-    cfg = load_config(sets=[f"driver.gain={gain}"])
+    cfg = load_config(sets=[f"driver_left.gain={gain}"])
     series = run_command(cfg, Command.parse(LOG_COMMAND), 6.0, TwinOptions(world="empty")).series
     with open(path, "w", newline="") as fh:
         out = csv.writer(fh)
@@ -31,22 +31,22 @@ def _write_log(path, gain):
 def test_fit_recovers_driver_gain_from_a_log(tmp_path):
     log = tmp_path / "real.csv"
     n = _write_log(log, gain=1.45)
-    fit = calibrate(str(log), base=load_config(sets=["driver.gain=1.9"]), max_evaluations=14,
-                    parameters={"driver.gain": (1.0, 3.0)})
-    assert abs(fit.values["driver.gain"] - 1.45) < abs(1.9 - 1.45) / 3
+    fit = calibrate(str(log), base=load_config(sets=["driver_left.gain=1.9"]), max_evaluations=14,
+                    parameters={"driver_left.gain": (1.0, 3.0)})
+    assert abs(fit.values["driver_left.gain"] - 1.45) < abs(1.9 - 1.45) / 3
     assert fit.residual < 4.0 * n  # RMS under 2 RPM, half the firmware's 4 RPM dead band
-    assert 0 < fit.sigma["driver.gain"] < 0.2
+    assert 0 < fit.sigma["driver_left.gain"] < 0.2
     assert fit.evaluations <= 14  # the budget holds (scipy's max_nfev counts steps, not evaluations)
     out = tmp_path / "params.yaml"
     write_params(fit, out)
     cfg = load_config(override_file=out)
-    assert cfg.driver.gain == pytest.approx(fit.values["driver.gain"], abs=1e-4)
+    assert cfg.driver_left.gain == pytest.approx(fit.values["driver_left.gain"], abs=1e-4)
 
 
 def test_shipped_plant_gives_the_residual_amr_yaml_records():
     """The chi^2 written in the calibrated parameters' sources is what the shipped values give."""
     tree = yaml.safe_load((MODEL_DIR / "amr.yaml").read_text())
-    sources = [tree[s][k]["source"] for s, k in (("driver", "gain"), ("motor_left", "ke_v_s_rad"),
+    sources = [tree[s][k]["source"] for s, k in (("driver_left", "gain"), ("driver_right", "gain"), ("motor_left", "ke_v_s_rad"),
                                                    ("motor_right", "friction_nm"))]
     recorded = {float(re.search(r"chi\^2 ([0-9.]+)", s).group(1)) for s in sources}
     assert len(recorded) == 1  # one fit
@@ -67,7 +67,8 @@ def test_a_scaled_motor_no_longer_fits():
     timings and the bench point must tell them apart (issue 12: 19.4 against 19.9)."""
     cfg = load_config()
     base = thesis_residual(cfg)
-    scaled = load_config(sets=[f"driver.gain={cfg.driver.gain * 1.1}",
+    scaled = load_config(sets=[f"driver_left.gain={cfg.driver_left.gain * 1.1}",
+                               f"driver_right.gain={cfg.driver_right.gain * 1.1}",
                                f"motor_left.ke_v_s_rad={cfg.motor_left.ke_v_s_rad * 1.1}",
                                f"motor_right.ke_v_s_rad={cfg.motor_right.ke_v_s_rad * 1.1}"])
     assert thesis_residual(scaled) > base + 2.0
@@ -94,23 +95,23 @@ def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
     short = tmp_path / "short.csv"
     short.write_text("t_s,wheel,rpm,command\n0.5,left,10,linear:0.7\n2.0,left,50,linear:0.7\n")
     out = tmp_path / "params.yaml"
-    res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "6"])
+    res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "7"])
     assert res.exit_code == 2 and "the log must be longer" in res.stderr and not out.exists()
     assert len(res.stderr.strip().splitlines()) == 1
 
 
-@pytest.mark.parametrize("budget", [6, 13])
+@pytest.mark.parametrize("budget", [7, 15])
 def test_the_fit_never_exceeds_its_evaluation_budget(tmp_path, budget):
     """scipy's max_nfev counts steps, each with a Jacobian of one evaluation per parameter (issue 33: a
     budget of 2 made 7): every evaluation is counted, and a budget below one step is refused."""
     log = tmp_path / "real.csv"
     _write_log(log, gain=1.45)
     calls = []
-    fit = calibrate(str(log), base=load_config(sets=["driver.gain=1.9"]), max_evaluations=budget,
+    fit = calibrate(str(log), base=load_config(sets=["driver_left.gain=1.9"]), max_evaluations=budget,
                     progress=lambda i, n: calls.append(i))
-    assert fit.evaluations == len(calls) and 6 <= fit.evaluations <= budget
-    with pytest.raises(ValueError, match="max_evaluations 5: at least 6"):
-        calibrate(str(log), base=load_config(), max_evaluations=5)
+    assert fit.evaluations == len(calls) and 7 <= fit.evaluations <= budget
+    with pytest.raises(ValueError, match="max_evaluations 6: at least 7"):
+        calibrate(str(log), base=load_config(), max_evaluations=6)
 
 
 def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
@@ -128,12 +129,12 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
     log = tmp_path / "log.csv"
     log.write_text("t_s,wheel,rpm,command\n" + "".join(
         f"{t},{w},{rpm},linear:0.7\n" for w in (0, 1) for t, rpm in series.published[w]))
-    args = ["calibrate", "--target", str(log), "--max-evaluations", "6", "--jobs", "1"]
+    args = ["calibrate", "--target", str(log), "--max-evaluations", "7", "--jobs", "1"]
     text = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a.yaml")])
     assert text.exit_code == 0, text.output
     lines = text.stdout.splitlines()
     assert lines[0].startswith(f"calibrated against {log}: chi^2 ") and max(map(len, lines)) < 160
-    for key in ("driver.gain", "motor_left.ke_v_s_rad", "motor_right.friction_nm"):
+    for key in ("driver_left.gain", "motor_left.ke_v_s_rad", "motor_right.friction_nm"):
         row = next(line for line in lines if line.startswith(key)).split()
         assert len(row) == 3 and float(row[2]) > 0  # value and its 1 sigma
     assert "correlated (|r| >= 0.9):" in lines
@@ -141,13 +142,13 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
     machine = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "b.yaml"), "--json"])
     (line,) = machine.stdout.strip().splitlines()
     data = json.loads(line)
-    assert set(data["values"]) == set(data["sigma"]) >= {"driver.gain"} and data["out"] == str(tmp_path / "b.yaml")
+    assert set(data["values"]) == set(data["sigma"]) >= {"driver_left.gain"} and data["out"] == str(tmp_path / "b.yaml")
 
 
 def test_the_summary_lists_each_feature_against_its_target():
     from amr_twin.analysis.calibration import Fit
 
-    fit = Fit(values={"driver.gain": 1.61}, sigma={"driver.gain": 0.14}, correlation={"driver.gain": {"driver.gain": 1}},
+    fit = Fit(values={"driver_left.gain": 1.61}, sigma={"driver_left.gain": 0.14}, correlation={"driver_left.gain": {"driver_left.gain": 1}},
               residual=19.05, evaluations=40, target="the thesis",
               features=[{"name": "run2.right.overshoot", "twin": 1.45, "target": 4.0, "sigma": 1.0, "unit": "RPM",
                          "weighted": -2.55},

@@ -63,10 +63,10 @@ def test_evaluate_linearises_a_small_problem():
     """Fit only the driver gain, hold the state of charge: the gain must follow the pack's
     voltage, d gain / d soc = -gain x (dV/dsoc) / V (speed per duty = gain V / Ke held)."""
     cfg = load_config()
-    rep = cr.evaluate(cfg, parameters={"driver.gain": (0.8, 4.0)}, held={"battery.soc_initial": 0.1}, jobs=2)
+    rep = cr.evaluate(cfg, parameters={"driver_left.gain": (0.8, 4.0)}, held={"battery.soc_initial": 0.1}, jobs=2)
     b = cfg.battery
     volts = b.v_nominal_v + (b.v_full_v - b.v_nominal_v) * (b.soc_initial - 0.5) / 0.5
-    expected = -cfg.driver.gain * ((b.v_full_v - b.v_nominal_v) / 0.5) / volts
+    expected = -cfg.driver_left.gain * ((b.v_full_v - b.v_nominal_v) / 0.5) / volts
     assert rep.follow[0, 0] == pytest.approx(expected, rel=0.25)
     assert 0 < rep.sigma[0] < 0.2 and rep.chi2 == pytest.approx(19.52, abs=0.2)
 
@@ -84,9 +84,9 @@ def test_a_parameter_the_log_does_not_see_is_left_out(tmp_path):
 
     log = tmp_path / "left.csv"
     _write_log(log, gain=1.5)
-    rep = cr.evaluate(load_config(), str(log), parameters={"driver.gain": (0.8, 4.0),
+    rep = cr.evaluate(load_config(), str(log), parameters={"driver_left.gain": (0.8, 4.0),
                                                            "motor_right.ke_v_s_rad": (0.35, 0.7)}, held={})
-    assert rep.keys == ("driver.gain",) and rep.undetermined == ("motor_right.ke_v_s_rad",)
+    assert rep.keys == ("driver_left.gain",) and rep.undetermined == ("motor_right.ke_v_s_rad",)
     assert 0 < rep.sigma[0] < 0.5
     again = cr.CalibrationReport.from_dict(rep.as_dict())
     assert again.undetermined == rep.undetermined

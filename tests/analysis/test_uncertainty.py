@@ -40,7 +40,7 @@ def test_a_setting_no_draw_reads_leaves_the_draws_as_they_are(space):
     here = space.draw(8, seed=3)
     rigid = ParameterSpace.load(sets=["wheel.tyre_slip=false"]).draw(8, seed=3)
     assert rigid.names == here.names and np.array_equal(rigid.values, here.values)
-    geared = ParameterSpace.load(sets=["driver.gain=1.7"]).draw(8, seed=3)
+    geared = ParameterSpace.load(sets=["driver_left.gain=1.7"]).draw(8, seed=3)
     assert not np.array_equal(geared.values, here.values)
 
 
@@ -56,9 +56,9 @@ def test_latin_hypercube_puts_one_draw_in_each_stratum(space):
 def test_calibrated_parameters_are_drawn_jointly(space):
     """Gain and Ke keep their 0.99 correlation and the report's sigma: drawn one by one they would not."""
     rep = space.calibration
-    d = space.draw(400, seed=1, include=("driver.gain",))  # the whole fit comes along; no held parameter drawn
+    d = space.draw(400, seed=1, include=("driver_left.gain",))  # the whole fit comes along; no held parameter drawn
     assert set(d.names) == set(rep.keys)
-    gain, ke = d.values[:, d.names.index("driver.gain")], d.values[:, d.names.index("motor_left.ke_v_s_rad")]
+    gain, ke = d.values[:, d.names.index("driver_left.gain")], d.values[:, d.names.index("motor_left.ke_v_s_rad")]
     assert np.corrcoef(gain, ke)[0, 1] > 0.95
     assert np.std(gain) == pytest.approx(rep.sigma[0], rel=0.15)
     assert np.mean(gain) == pytest.approx(rep.values[0], abs=0.03)
@@ -75,16 +75,16 @@ def test_the_fit_follows_a_drawn_held_parameter(space):
     r_right = np.array([o["motor_right.resistance_ohm"] for o in d.overrides])
     assert np.allclose(r_right, r_left, rtol=1e-5)  # follows, same nominal 0.3
     j = [rep.held_keys.index(k) for k in ("motor_left.resistance_ohm", "motor_right.resistance_ohm")]
-    for key in ("driver.gain", "motor_left.ke_v_s_rad"):
+    for key in ("driver_left.gain", "motor_left.ke_v_s_rad"):
         slope = rep.follow[rep.keys.index(key), j].sum()
         got = np.array([o[key] for o in d.overrides])
         assert np.allclose(got, rep.values[rep.keys.index(key)] + slope * (r_left - 0.3), atol=2e-5 * abs(got).max()), key
 
 
 def test_a_set_calibrated_value_conditions_the_rest():
-    free = ParameterSpace.load().draw(200, seed=4, include=("driver.gain",))
-    fixed = ParameterSpace.load(sets=["driver.gain=1.75"]).draw(200, seed=4, include=("motor_left.ke_v_s_rad",))
-    assert "driver.gain" not in fixed.names and all("driver.gain" not in o for o in fixed.overrides)
+    free = ParameterSpace.load().draw(200, seed=4, include=("driver_left.gain",))
+    fixed = ParameterSpace.load(sets=["driver_left.gain=1.75"]).draw(200, seed=4, include=("motor_left.ke_v_s_rad",))
+    assert "driver_left.gain" not in fixed.names and all("driver_left.gain" not in o for o in fixed.overrides)
     ke_free = free.values[:, free.names.index("motor_left.ke_v_s_rad")]
     ke_fixed = fixed.values[:, fixed.names.index("motor_left.ke_v_s_rad")]
     assert np.std(ke_fixed) < 0.25 * np.std(ke_free)  # r = 0.996: the gain pins Ke
@@ -107,7 +107,7 @@ def test_hundreds_of_draws_are_valid_robots(space):
         cfg = d.config(space.cfg, i)
         assert cfg.chassis.width_m / 2 < cfg.wheel.separation_m / 2 - cfg.wheel.width_m / 2
     assert set(d.clipped) <= {"motor_left.friction_nm", "motor_right.friction_nm", "motor_left.ke_v_s_rad",
-                              "motor_right.ke_v_s_rad", "driver.gain"}
+                              "motor_right.ke_v_s_rad", "driver_left.gain", "driver_right.gain"}
 
 
 def test_a_draw_the_schema_refuses_names_its_sample(tmp_path):

@@ -21,7 +21,7 @@ def test_chapter5_samples_report_the_spread_beside_the_thesis(tmp_path):
     strip = lambda d: [{k: v for k, v in r.items() if k != "wall_s"} for r in d["runs"]]  # noqa: E731
     assert strip(a) == strip(b)  # the nominal runs are untouched by the draws
     spread = b["spread"]
-    assert spread["samples"] == 3 and spread["seed"] == 2 and "driver.gain" in spread["parameters"]
+    assert spread["samples"] == 3 and spread["seed"] == 2 and "driver_left.gain" in spread["parameters"]
     assert spread["tyre_timestep_halved"] == []  # draws near the nominal tyre: S far below the guard's limit
     banded = [m for m in spread["metrics"] if "thesis" in m]
     assert {m["metric"] for m in banded} == {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
@@ -39,7 +39,7 @@ def test_true_speed_bands_bracket_the_median():
     from amr_twin.experiments import chapter5_spread
     from amr_twin.analysis.uncertainty import ParameterSpace
 
-    draws = ParameterSpace.load().draw(3, seed=0, include=("driver.gain",))
+    draws = ParameterSpace.load().draw(3, seed=0, include=("driver_left.gain",))
     out = chapter5_spread.run(load_config(), draws, runs=[2], duration_s=2.0, progress=False)
     band = out["bands"][2]["right"]
     assert len(band["low"]) == len(out["bands"][2]["t_s"])
@@ -57,7 +57,7 @@ def test_each_draws_scorecard_is_the_nominal_one_of_its_parameters():
     from amr_twin.analysis.uncertainty import ParameterSpace
 
     cfg, runs = load_config(), [1, 2]
-    draws = ParameterSpace.load().draw(4, seed=0, include=("driver.gain", "motor_left.ke_v_s_rad"))
+    draws = ParameterSpace.load().draw(4, seed=0, include=("driver_left.gain", "motor_left.ke_v_s_rad"))
     spread = chapter5_spread.run(cfg, draws, runs=runs, duration_s=4.0, progress=False)
     summary = chapter5_spread.summarise(chapter5.run(cfg, runs=runs, duration_s=4.0, progress=False), spread)
     cards = [(d["draw"], d["checks"], d["passed"], d["true_checks"], d["true_passed"]) for d in summary["draw_checks"]]

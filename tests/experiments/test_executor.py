@@ -244,7 +244,7 @@ def test_calibrate_workers_die_with_it(tmp_path):
     from pathlib import Path
 
     cli = Path(sys.executable).with_name("amr-twin")
-    _kill_and_check_no_worker_survives([str(cli), "calibrate", "--jobs", "2", "--max-evaluations", "6",
+    _kill_and_check_no_worker_survives([str(cli), "calibrate", "--jobs", "2", "--max-evaluations", "7",
                                         "--out", str(tmp_path / "p.yaml")], 3)
 
 

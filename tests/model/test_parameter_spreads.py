@@ -88,16 +88,16 @@ def test_settings_are_never_drawn(space):
 
 def test_calibrated_parameters_come_from_the_report(space):
     rep = space.calibration
-    for key in ("driver.gain", "motor_left.ke_v_s_rad", "motor_right.friction_nm"):
+    for key in ("driver_left.gain", "motor_left.ke_v_s_rad", "motor_right.friction_nm"):
         assert space.spreads[key].kind == CALIBRATED
         assert space.spreads[key].sigma == (pytest.approx(float(rep.sigma[rep.keys.index(key)])),)
-    assert rep.correlation[rep.keys.index("driver.gain"), rep.keys.index("motor_left.ke_v_s_rad")] > 0.95
+    assert rep.correlation[rep.keys.index("driver_left.gain"), rep.keys.index("motor_left.ke_v_s_rad")] > 0.95
 
 
 def test_a_calibrated_value_the_report_does_not_describe_is_refused(tmp_path):
     mine = tmp_path / "mine.yaml"
-    mine.write_text(yaml.safe_dump({"driver": {"gain": {"value": 1.9, "source": "calibrated: my own log"}}}))
-    with pytest.raises(ConfigError, match=r"driver.gain: 1.9 here but 1.647 in the calibration report"):
+    mine.write_text(yaml.safe_dump({"driver_left": {"gain": {"value": 1.9, "source": "calibrated: my own log"}}}))
+    with pytest.raises(ConfigError, match=r"driver_left.gain: 1.9 here but 1.647 in the calibration report"):
         ParameterSpace.load(override_file=mine)
     with pytest.raises(ConfigError, match="no such|cannot read"):
         ParameterSpace.load(calibration=tmp_path / "missing.yaml")

@@ -10,10 +10,11 @@ wheel's reference (+ = the wheel rolls forward), times in seconds after the comm
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Optional
 
 from amr_twin.experiments import chapter5_payload as payload
+from amr_twin.experiments.chapter5_findings import Findings, findings
 from amr_twin.experiments.chapter5_criteria import (BANDS, DEFINITIONS, SOURCES, TRANSIENT_WINDOW_S,
                                                     count_checks, oscillation_verdict)
 
@@ -103,9 +104,11 @@ class Chapter5Metrics:
     The texts (``judged_on``, ``definitions``, ``settling_band``, ``oscillation``) say how the runs
     are judged; ``bands`` the thesis' bands with their sources; ``crr``, ``payload_duty``,
     ``rolling_resistance_study`` and ``threshold_crr`` the §5.1.4 study
-    (:mod:`amr_twin.experiments.chapter5_payload`); ``firmware_comparison`` (another firmware run
-    beside the reference, :mod:`amr_twin.experiments.firmware_comparison`) and ``spread`` (with
-    parameter draws, :mod:`amr_twin.experiments.chapter5_spread`) only when made.
+    (:mod:`amr_twin.experiments.chapter5_payload`); ``findings`` the thesis' findings judged from the
+    rest (:mod:`amr_twin.experiments.chapter5_findings`; None only while it is built);
+    ``firmware_comparison`` (another firmware run beside the reference,
+    :mod:`amr_twin.experiments.firmware_comparison`) and ``spread`` (with parameter draws,
+    :mod:`amr_twin.experiments.chapter5_spread`) only when made.
     """
 
     firmware: str
@@ -126,6 +129,7 @@ class Chapter5Metrics:
     payload_duty: list
     rolling_resistance_study: list
     threshold_crr: Optional[float]
+    findings: Optional[Findings]
     summary: CheckCount
     firmware_comparison: Optional[dict] = None
     spread: Optional[dict] = None
@@ -136,6 +140,8 @@ class Chapter5Metrics:
         out["runs"] = [{k: v for k, v in asdict(r).items() if k != "tyre_timestep" or v is not None} for r in self.runs]
         out["comparisons"] = [asdict(c) for c in self.comparisons]
         out["summary"] = asdict(self.summary)
+        if self.findings is not None:
+            out["findings"] = self.findings.as_json()
         for optional in ("firmware_comparison", "spread"):
             if out[optional] is None:
                 del out[optional]
@@ -155,7 +161,7 @@ def metrics(results: dict) -> Chapter5Metrics:
                        r.get("tyre_timestep"))
             for r in results["runs"]]
     comparisons = [OscillationComparison(**c) for c in results["comparisons"]]
-    return Chapter5Metrics(
+    data = Chapter5Metrics(
         firmware=results["firmware"], jobs=results["jobs"], wall_s=round(results["wall_s"], 3),
         sim_s=results["sim_s"], study_runs=results.get("study_runs", 0), study_sim_s=results.get("study_sim_s", 0.0),
         judged_on="published samples, linear interpolation from rest at the command", definitions=DEFINITIONS,
@@ -166,6 +172,7 @@ def metrics(results: dict) -> Chapter5Metrics:
         crr=results["crr"], payload_duty=results["payload_duty"],
         rolling_resistance_study=results["rolling_resistance_study"],
         threshold_crr=payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
-                                            results["crr"]["tyres"]),
+                                            results["crr"]["tyres"]), findings=None,
         summary=CheckCount(*count_checks(results["runs"], results["comparisons"])),
         firmware_comparison=results.get("firmware_comparison"), spread=results.get("spread_summary"))
+    return replace(data, findings=findings(data.as_json()))

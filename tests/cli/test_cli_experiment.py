@@ -83,6 +83,22 @@ def test_chapter5_one_recording_per_run(chapter5_cli):
     assert "on the published samples (true speed " in res.output
 
 
+def test_chapter5_terminal_opens_with_the_findings_then_the_counts(chapter5_cli):
+    """The findings first, one line each as in report.md, the pointer to docs/validation.md, then one
+    line of passes per metric instead of a MISS line per run and wheel."""
+    from amr_twin.experiments.chapter5_findings import VALIDATION_DOC, lines
+
+    base, res = chapter5_cli
+    found = json.loads((base / "out" / "metrics.json").read_text())["findings"]
+    out = res.output.splitlines()
+    expected = lines(found)
+    assert out[0].startswith("chapter 5 findings (faithful firmware; details in ")
+    assert out[1:1 + len(expected)] == ["  " + line for line in expected] and len(expected) == 7
+    assert out[1 + len(expected)].startswith(f"  why: {VALIDATION_DOC}")
+    assert out[2 + len(expected)].startswith("published checks passed by metric: delay_s ")
+    assert "MISS" not in res.output
+
+
 def test_chapter5_results_identical_with_and_without_recording(cfg, chapter5_cli):
     base, _res = chapter5_cli
     plain = chapter5.report(chapter5.run(cfg, runs=CH5_RUNS, duration_s=CH5_DURATION_S, progress=False),

@@ -45,3 +45,22 @@ def test_the_thesis_bands_are_drawn_with_their_source(run5_figure):
         assert any(label.startswith("steady error -4 to +4 RPM") for label in labels)
     left, right = (next(x for x in ax.get_legend_handles_labels()[1] if x.startswith("thesis")) for ax in fig.axes)
     assert left.endswith("delay 0.3-0.7 s at 50 %") and right.endswith("delay 0.1-0.3 s at 50 %")  # 99.2, 60.8 RPM
+
+
+def test_each_band_has_its_own_colour_and_the_earliest_first_sample_is_marked(run5_figure):
+    """The bands were all one green; the time before one revolution at the reference (listing 4.12)
+    is hatched, named in the legend and annotated, one revolution after the command."""
+    from amr_twin.experiments.chapter5_figure import BAND_STYLE, CAPTION
+
+    results, fig = run5_figure
+    assert len({colour for colour, _ in BAND_STYLE.values()}) == len(BAND_STYLE)
+    t0 = results["runs"][0]["raw"]["t_command_s"]
+    for ax, rpm in zip(fig.axes, (99.20, 60.80)):
+        labels = ax.get_legend().get_texts()
+        named = [t.get_text() for t in labels]
+        assert f"no published sample before {60 / rpm:.2f} s (one revolution, listing 4.12)" in named
+        assert any(p.get_hatch() == BAND_STYLE["first_sample"][1] for p in ax.patches)
+        (line,) = [ln for ln in ax.lines if ln.get_linestyle() == "-."]
+        assert line.get_xdata()[0] == pytest.approx(t0 + 60 / rpm)
+        assert any(t.get_text().startswith("earliest first sample") for t in ax.texts)
+    assert any(t.get_text() == CAPTION for t in fig.texts)

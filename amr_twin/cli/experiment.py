@@ -23,6 +23,7 @@ from amr_twin.cli.checks import (CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt
                                  check_duration, check_estimate, check_memory, check_outputs, check_record_folder,
                                  parameter_draws)
 from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.attainable import attainable
 from amr_twin.cli.fusion import fusion
 from amr_twin.cli.navigation import navigation
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, sketch_option
@@ -178,3 +179,4 @@ app.command("fusion")(fusion)
 app.command("navigation")(navigation)
 app.command("umbmark")(umbmark)
 app.command("faults")(faults_experiment)
+app.command("chapter5-attainable")(attainable)

@@ -15,6 +15,7 @@ from typing import Optional
 
 from amr_twin.experiments import chapter5_payload as payload
 from amr_twin.experiments.chapter5_findings import Findings, findings
+from amr_twin.experiments.chapter5_readings import readings
 from amr_twin.experiments.chapter5_criteria import (BANDS, DEFINITIONS, SOURCES, TRANSIENT_WINDOW_S,
                                                     count_checks, oscillation_verdict)
 
@@ -108,7 +109,8 @@ class Chapter5Metrics:
     rest (:mod:`amr_twin.experiments.chapter5_findings`; None only while it is built);
     ``firmware_comparison`` (another firmware run beside the reference,
     :mod:`amr_twin.experiments.firmware_comparison`) and ``spread`` (with parameter draws,
-    :mod:`amr_twin.experiments.chapter5_spread`) only when made.
+    :mod:`amr_twin.experiments.chapter5_spread`) only when made; ``readings`` the published timings
+    under each reading of :mod:`amr_twin.experiments.chapter5_readings` (when the runs carry their series).
     """
 
     firmware: str
@@ -133,6 +135,7 @@ class Chapter5Metrics:
     summary: CheckCount
     firmware_comparison: Optional[dict] = None
     spread: Optional[dict] = None
+    readings: Optional[list] = None
 
     def as_json(self) -> dict:
         """The ``metrics.json`` object (``firmware_comparison`` and ``spread`` only when made)."""
@@ -142,7 +145,7 @@ class Chapter5Metrics:
         out["summary"] = asdict(self.summary)
         if self.findings is not None:
             out["findings"] = self.findings.as_json()
-        for optional in ("firmware_comparison", "spread"):
+        for optional in ("firmware_comparison", "spread", "readings"):
             if out[optional] is None:
                 del out[optional]
         return out
@@ -174,5 +177,6 @@ def metrics(results: dict) -> Chapter5Metrics:
         threshold_crr=payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
                                             results["crr"]["tyres"]), findings=None,
         summary=CheckCount(*count_checks(results["runs"], results["comparisons"])),
-        firmware_comparison=results.get("firmware_comparison"), spread=results.get("spread_summary"))
+        firmware_comparison=results.get("firmware_comparison"), spread=results.get("spread_summary"),
+        readings=readings(results) if all("raw" in r for r in results["runs"]) else None)
     return replace(data, findings=findings(data.as_json()))

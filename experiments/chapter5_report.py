@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from amr_twin.experiments.chapter5_findings import TIMINGS, VALIDATION_DOC, VALIDATION_SECTION, lines
 from amr_twin.experiments.chapter5_payload import markdown as payload_markdown
+from amr_twin.experiments.chapter5_readings import markdown as readings_markdown
 from amr_twin.experiments.chapter5_spread_report import markdown as spread_markdown
 from amr_twin.experiments.firmware_comparison import markdown as comparison_markdown
 
@@ -159,6 +160,8 @@ def markdown(data: dict) -> str:
         "## Published samples (wheel0_Vel / wheel1_Vel), judged", "",
         f"Passed by metric: {passed_by_metric(data, 'checks')}.", "", *_table(data, "published", "checks"), "",
         *_bound_table(data),
+        *(["## How the thesis may have timed its plots: readings of the same samples", "",
+            *readings_markdown(data["readings"]), ""] if "readings" in data else []),
         "## True wheel speed (100 Hz), against the same bands", "",
         f"Not visible on the thesis' topics; shown because its timings are not limited by one sample per "
         f"revolution. Passed by metric: {passed_by_metric(data, 'true_checks')}.", "",

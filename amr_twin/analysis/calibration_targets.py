@@ -182,7 +182,7 @@ def read_log(path: Path) -> dict[str, dict[int, np.ndarray]]:
     from amr_twin.model.yaml_file import read_text
     from amr_twin.sim.bounds import MAX_RUN_S
 
-    text = read_text(path, "", ValueError, limit=MAX_LOG_BYTES)
+    text = read_text(path, "", ValueError, limit=MAX_LOG_BYTES).removeprefix("\ufeff")  # spreadsheets' BOM
     groups: dict[str, dict[int, list]] = {}
     reader = csv.DictReader(io.StringIO(text, newline=""))
     missing = {"t_s", "wheel", "rpm", "command"} - set(reader.fieldnames or [])

@@ -74,6 +74,17 @@ def test_a_scaled_motor_no_longer_fits():
     assert thesis_residual(scaled) > base + 2.0
 
 
+def test_a_log_with_a_byte_order_mark_reads_as_without(tmp_path):
+    """Spreadsheets export UTF-8 with a byte-order mark: the first column is still ``t_s``."""
+    plain, marked = tmp_path / "plain.csv", tmp_path / "marked.csv"
+    text = "t_s,wheel,rpm,command\n0.5,left,10,linear:0.7\n2.0,left,50,linear:0.7\n"
+    plain.write_text(text, encoding="utf-8")
+    marked.write_text(text, encoding="utf-8-sig")
+    assert marked.read_bytes().startswith(b"\xef\xbb\xbf")
+    a, b = read_log(plain), read_log(marked)
+    assert a.keys() == b.keys() and all((a[k][w] == b[k][w]).all() for k in a for w in a[k])
+
+
 def test_log_format_errors_name_the_problem(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("t_s,wheel,rpm\n0.1,left,3\n")

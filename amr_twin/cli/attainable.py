@@ -20,7 +20,7 @@ def attainable(
     samples: int = typer.Option(64, "--samples", help="Plants drawn inside the ranges, 1 to 512 (each runs the "
                                 "eight chapter 5 runs, about 2 s of wall on 2 cores)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the draws, >= 0 (same seed, same plants and results)."),
-    json_out: Optional[Path] = typer.Option(None, "--json", help="Write the summary and every draw here."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Write the summary and every draw here (JSON)."),
     jobs: Optional[int] = JobsOpt,
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
@@ -32,8 +32,8 @@ def attainable(
     if seed < 0:
         fail(f"--seed {seed}: must be >= 0")
     jobs, _ = check_common(jobs, "faithful", fail)
-    if json_out is not None:
-        check_outputs(fail, files={"--json": json_out})
+    if out is not None:
+        check_outputs(fail, files={"--out": out})
     cfg = _config(config, params, set_)
 
     def work():
@@ -43,8 +43,8 @@ def attainable(
             typer.echo(f"draw {i}/{n}", err=True)
 
         s = study.summary(study.study(cfg, samples, seed, jobs=jobs, progress=progress))
-        if json_out is not None:
-            write_json(json_out, {"seed": seed, "ranges": study.ranges(cfg), **s})
+        if out is not None:
+            write_json(out, {"seed": seed, "ranges": study.ranges(cfg), **s})
         return s
 
     for line in study.lines(_guard(work)):

@@ -49,7 +49,8 @@ def test_each_command_group_is_a_module_level_sub_app_of_module_level_commands()
     commands = {(group, c.name or c.callback.__name__): c.callback
                 for group, sub in (("", main.app), *groups.items()) for c in sub.registered_commands}
     assert {name for group, name in commands if group == "experiment"} == {"chapter5", "faults", "fusion",
-                                                                           "navigation", "umbmark"}
+                                                                           "navigation", "umbmark",
+                                                                           "chapter5-attainable"}
     assert {name for group, name in commands if group == "run"} == {"linear", "angular", "motor", "stop", "goto"}
     for (group, name), callback in commands.items():
         original = getattr(callback, "__wrapped__", callback)

@@ -76,7 +76,7 @@ def test_bad_options_are_refused_in_one_line(args, message):
 def test_the_command_writes_every_draw(tmp_path):
     out = tmp_path / "att.json"
     res = CliRunner().invoke(app, ["experiment", "chapter5-attainable", "--samples", "1", "--seed", "5",
-                                   "--jobs", "1", "--json", str(out)])
+                                   "--jobs", "1", "--out", str(out)])
     assert res.exit_code == 0, res.output
     data = json.loads(out.read_text())
     assert data["samples"] == 1 and len(data["draws"]) == 1 and set(data["held"]) == set(att.FINDINGS)

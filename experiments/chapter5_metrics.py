@@ -148,6 +148,7 @@ class Chapter5Metrics:
         for optional in ("firmware_comparison", "spread", "readings"):
             if out[optional] is None:
                 del out[optional]
+        out["summary"] = out.pop("summary")  # the counts close the file
         return out
 
 

@@ -6,7 +6,7 @@ friction (bearings, seals, cogging). Every other drive parameter keeps its sourc
 value (winding resistance, iron-loss damping, tyre and caster rolling resistance).
 Two targets:
 
-- ``thesis``: the bench point of listing 4.1 and chapter 5 runs 1-3, each feature against
+- ``thesis``: the bench point of listing 4.1 and chapter 5 runs 1-6, each feature against
   the thesis' value with its sigma;
 - a log ``LOG.csv`` of real wheel speeds, compared sample by sample (1 RPM per sample).
 
@@ -166,7 +166,7 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
         for t, r in zip(targets, res.fun):
             table.append({"name": t.name, "twin": features.get(t.name), "target": t.value, "sigma": t.sigma,
                           "unit": t.unit, "weighted": float(r)})
-    name = f"the thesis (bench point as {bench} current; ch. 5 runs 1-3)" if log is None else str(target)
+    name = f"the thesis (bench point as {bench} current; ch. 5 runs 1-6)" if log is None else str(target)
     return Fit(values=dict(zip(keys, values.tolist())), sigma=dict(zip(keys, sigma.tolist())),
                correlation={a: dict(zip(keys, row.tolist())) for a, row in zip(keys, corr)},
                residual=float(np.sum(res.fun ** 2)), evaluations=count[0], target=name, features=table)

@@ -215,7 +215,7 @@ def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tupl
     sigma, corr = cal._uncertainty(jac_u, span)
     jac_a = jac_u / span  # d r / d x in the parameters' own units
     follow = -np.linalg.pinv(jac_a.T @ jac_a) @ jac_a.T @ jac_b
-    name = "the thesis (bench point as motor current; ch. 5 runs 1-3)" if target == "thesis" else str(target)
+    name = "the thesis (bench point as motor current; ch. 5 runs 1-6)" if target == "thesis" else str(target)
     return CalibrationReport(target=name, chi2=float(np.sum(r0 ** 2)), keys=tuple(keys), values=x0, sigma=sigma,
                              correlation=corr, bounds=np.column_stack([lo, hi]), held_keys=tuple(held_keys),
                              held_values=b0, follow=follow, undetermined=undetermined)

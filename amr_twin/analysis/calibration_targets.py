@@ -9,9 +9,9 @@ Two targets (:mod:`amr_twin.analysis.calibration` fits the drive's unknowns to e
     71.5 RPM. Read as the motor (phase) current (:data:`BENCH_QUANTITY`; the reasons
     are in docs/validation.md): steady, the torque ``Ke I`` balances the motor's
     friction and damping, so the point pins the motor's own drag;
-  * chapter 5 runs 1-3 (faithful firmware, 10 s each, empty world): the published
-    speed's steady error (the thesis: an "almost perfect track") and overshoot
-    (right about 4 RPM, left about 1.5), and the delay and rise times of the true
+  * chapter 5 runs 1-6 (faithful firmware, 10 s each, empty world): the published
+    speed's steady error of every wheel (the thesis: an "almost perfect track"), and in
+    runs 1-3 the overshoot (right about 4 RPM, left about 1.5) and the delay and rise times of the true
     wheel speed against §5.1.3's figures (the time constant ``J R / Ke^2`` sets them,
     which pins ``Ke`` given ``R``).
 
@@ -64,7 +64,7 @@ class _RunTargets:
     targets: tuple[Target, ...]
 
 
-THESIS_RUNS = (  # chapter 5 runs 1-3; §5.1.3: delay 0.5 s / rise 1 s above 75 RPM, 0.2 / 0.5 s below
+THESIS_RUNS = (  # chapter 5 runs 1-6; §5.1.3: delay 0.5 s / rise 1 s above 75 RPM, 0.2 / 0.5 s below
     _RunTargets(Command("motor", wheel="left", speed_m_s=1.0), (0,), (
         Target("run1.left.steady_error", 0.0, 1.0, "RPM"), Target("run1.left.overshoot", 1.5, 1.0, "RPM"),
         Target("run1.left.true_delay", 0.5, 0.15, "s"), Target("run1.left.true_rise", 1.0, 0.2, "s"))),
@@ -76,6 +76,11 @@ THESIS_RUNS = (  # chapter 5 runs 1-3; §5.1.3: delay 0.5 s / rise 1 s above 75 
     _RunTargets(Command("linear", speed_m_s=0.7), (0, 1), (
         Target("run3.left.steady_error", 0.0, 1.0, "RPM"), Target("run3.right.steady_error", 0.0, 1.0, "RPM"),
         Target("run3.left.true_delay", 0.2, 0.15, "s"), Target("run3.left.true_rise", 0.5, 0.2, "s"))),
+    # runs 4-6, the faster steps: each wheel's steady speed ("almost perfect track" in every run)
+    *(_RunTargets(c, (0, 1), (Target(f"run{n}.left.steady_error", 0.0, 1.0, "RPM"),
+                              Target(f"run{n}.right.steady_error", 0.0, 1.0, "RPM")))
+      for n, c in ((4, Command("linear", speed_m_s=-1.2)), (5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0)),
+                   (6, Command("angular", speed_deg_s=60.0, icc_m=1.0)))),
 )
 BENCH_TARGETS = (Target("bench.left.current", BENCH_CURRENT_A, 0.04, "A"),
                  Target("bench.right.current", BENCH_CURRENT_A, 0.04, "A"))

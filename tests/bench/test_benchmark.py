@@ -78,7 +78,9 @@ def test_the_actors_benchmark_touches_nothing_and_its_actors_move_in_the_lidars_
     assert twin.actors.progress_s() == [16.0, 15.5, 16.0, 16.0]  # none waited
     hit = {int(twin.physics.model.geom_bodyid[g]) for g in twin.lidar.last_hit_geom if g >= 0}
     bodies = {twin.physics.model.body(f"{a.kind}_{i}").id for i, a in enumerate(twin.actors.actors)}
-    assert len(hit & bodies) >= 2  # some in sight of the last scan
+    # the person crossing the aisle ahead is in sight of the last scan (the side aisles' actors come and go
+    # behind the racks as the faithful firmware's dead zone lets the heading drift by 5-15 deg)
+    assert twin.physics.model.body("person_3").id in hit & bodies
 
 
 def test_timed_children_cache_their_bytecode_outside_the_tree(tmp_path, monkeypatch):

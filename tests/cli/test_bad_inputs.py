@@ -72,7 +72,7 @@ def test_calibrate_refuses_unbounded_logs_before_simulating(tmp_path, refused):
     fast = _write(tmp_path / "fast.csv", "t_s,wheel,rpm,command\n1,left,1e300,linear:0.5\n")
     refused(["calibrate", "--target", fast, "--out", out], "rpm 1e+300 must lie within +-2000 RPM")
     refused(["calibrate", "--jobs", 10 ** 6, "--out", out], "--jobs 1000000: must be in 1..")
-    refused(["calibrate", "--max-evaluations", 2, "--out", out], "--max-evaluations 2: must be in 6..2000")
+    refused(["calibrate", "--max-evaluations", 2, "--out", out], "--max-evaluations 2: must be in 7..2000")
 
 
 def _route(tmp_path: Path, name: str, **changes) -> Path:

@@ -67,7 +67,7 @@ def test_an_overload_while_a_wheel_leaves_its_reference_is_a_runaway():
 @pytest.fixture(scope="module")
 def rear_sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("sweep")
-    result = CliRunner().invoke(app, ["sweep", "payload", "--masses", "20,30", "--positions", "rear,center",
+    result = CliRunner().invoke(app, ["sweep", "payload", "--masses", "30,40", "--positions", "rear,center",
                                       "--commands", "angular:-60:-1", "--duration-s", "5", "--jobs", "1", "--no-progress",
                                       "--out", str(out)])
     return out, result
@@ -78,19 +78,21 @@ def test_the_improved_firmware_runs_beside_where_the_faithful_one_runs_away(rear
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
     rear = next(i for i, line in enumerate(lines) if line.startswith("rear"))
-    assert lines[rear].split()[1:4] == ["highest", "safe", "20"]
-    # the inner wheel has left its reference already at 20 kg (14 RPM against 60.8 in 8 s): said
-    assert "yet from 20 kg a wheel leaves its reference in angular:-60:-1: right wheel at" in lines[rear]
-    assert "; unsafe at 30 kg in angular:-60:-1: runaway" in lines[rear]
-    assert lines[rear + 1].strip().startswith("improved firmware: safe up to 30 kg, the heaviest swept")
+    assert lines[rear].split()[1:4] == ["highest", "safe", "30"]
+    # the inner wheel has left its reference already at 30 kg (11 RPM against 60.8 in 5 s): said
+    assert "yet from 30 kg a wheel leaves its reference in angular:-60:-1: right wheel at" in lines[rear]
+    assert "; unsafe at 40 kg in angular:-60:-1: runaway" in lines[rear]
+    # run again with the improved firmware: it holds the inner wheel better (24 against 0 RPM) but runs away too
+    assert lines[rear + 1].strip().startswith("improved firmware: highest safe 30 kg")
+    assert "unsafe at 40 kg in angular:-60:-1: runaway" in lines[rear + 1]
     center = next(line for line in lines if line.startswith("center"))
-    assert "safe up to 30 kg" in center
+    assert "safe up to 40 kg" in center
     summary = json.loads((out / "summary.json").read_text())["positions"]
     assert summary["rear"]["causes"] == ["runaway"] and summary["rear"]["improved"]["highest_safe_kg"] == 30.0
     assert "improved" not in summary["center"]  # its limit is not the firmware's: not run again
     assert sorted(p.name for p in (out / "improved" / "runs").iterdir()) == [
-        "m20kg_rear_angular_-60_-1.json", "m30kg_rear_angular_-60_-1.json"]
-    assert "| rear | highest safe 20 kg" in (out / "summary.md").read_text()
+        "m30kg_rear_angular_-60_-1.json", "m40kg_rear_angular_-60_-1.json"]
+    assert "| rear | highest safe 30 kg" in (out / "summary.md").read_text()
 
 
 def test_no_empty_plot_is_drawn(tmp_path, monkeypatch):

@@ -97,7 +97,7 @@ def test_calibrated_parameters_come_from_the_report(space):
 def test_a_calibrated_value_the_report_does_not_describe_is_refused(tmp_path):
     mine = tmp_path / "mine.yaml"
     mine.write_text(yaml.safe_dump({"driver_left": {"gain": {"value": 1.9, "source": "calibrated: my own log"}}}))
-    with pytest.raises(ConfigError, match=r"driver_left.gain: 1.9 here but 1.647 in the calibration report"):
+    with pytest.raises(ConfigError, match=r"driver_left.gain: 1.9 here but 1.698 in the calibration report"):
         ParameterSpace.load(override_file=mine)
     with pytest.raises(ConfigError, match="no such|cannot read"):
         ParameterSpace.load(calibration=tmp_path / "missing.yaml")

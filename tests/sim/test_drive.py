@@ -12,7 +12,8 @@ from amr_twin.sim.pins import HIGH, LOW, DriverPins
 from amr_twin.sim.plant import Plant
 
 # the shipped right motor differs from the left (calibrated, §5.1.3); make them identical
-IDENTICAL = [f"motor_right.{key}={value}" for key, value in load_config().motor_left.model_dump().items()]
+IDENTICAL = ([f"motor_right.{key}={value}" for key, value in load_config().motor_left.model_dump().items()]
+             + [f"driver_right.gain={load_config().driver_left.gain}"])
 
 
 def _robot(sets=(), payload_kg=0.0):

@@ -19,7 +19,7 @@ from amr_twin.sim.run import Command, run_command
 
 HAND_SIDE_SLIP_DEG = -1.32      # docs/tyres.md, steady turn (the axle slides outwards: to the right)
 HAND_UNDERSTEER = 0.00096       # 1 - yaw-rate gain, docs/tyres.md
-HAND_SCRUB_CURRENT_A = (0.0790, 0.0802)  # pivot: extra motor current, left and right, docs/tyres.md
+HAND_SCRUB_CURRENT_A = (0.0738, 0.0695)  # pivot: extra motor current, left and right, docs/tyres.md
 RIGID = ["wheel.tyre_slip=false"]
 
 

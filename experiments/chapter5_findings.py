@@ -33,6 +33,9 @@ TIMINGS = {"delay_s": 0.5, "rise_s": 0.8, "peak_s": 1.0, "settling_s": None}  # 
 VALIDATION_DOC = "docs/validation.md"
 """Where the chapter 5 findings and the bound are explained, relative to the repository's root."""
 VALIDATION_SECTION = "What the chapter 5 report states first"
+ATTAINABLE_SECTION = "Can a plant inside the sourced ranges meet the findings?"
+ATTAINABLE_COMMAND = "amr-twin experiment chapter5-attainable"
+"""Whether any plant inside the parameters' sourced ranges meets the findings: the command, its section."""
 
 
 @dataclass(frozen=True)

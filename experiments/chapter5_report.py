@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 
-from amr_twin.experiments.chapter5_findings import TIMINGS, VALIDATION_DOC, VALIDATION_SECTION, lines
+from amr_twin.experiments.chapter5_findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, TIMINGS, VALIDATION_DOC,
+                                                    VALIDATION_SECTION, lines)
 from amr_twin.experiments.chapter5_payload import markdown as payload_markdown
 from amr_twin.experiments.chapter5_readings import markdown as readings_markdown
 from amr_twin.experiments.chapter5_spread_report import markdown as spread_markdown
@@ -113,7 +114,9 @@ def _findings(data: dict) -> list[str]:
         return []
     return ["## What the twin reproduces (read this first)", "", *[f"- {line}" for line in lines(found)], "",
             f"Why, and how the bound is derived: [{VALIDATION_DOC}]({VALIDATION_DOC}) (the path is relative "
-            f"to the amr-twin repository's root), section \"{VALIDATION_SECTION}\".", ""]
+            f"to the amr-twin repository's root), section \"{VALIDATION_SECTION}\". Whether any plant inside the "
+            f"sourced ranges meets the findings not reproduced: `{ATTAINABLE_COMMAND}`, the same page, section "
+            f"\"{ATTAINABLE_SECTION}\".", ""]
 
 
 def _bound_table(data: dict) -> list[str]:

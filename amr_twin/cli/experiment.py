@@ -106,7 +106,8 @@ def chapter5(
             return chapter5.report(results, out)
 
     data = _guard(work)
-    from amr_twin.experiments.chapter5_findings import VALIDATION_DOC, VALIDATION_SECTION
+    from amr_twin.experiments.chapter5_findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, VALIDATION_DOC,
+                                                        VALIDATION_SECTION)
     from amr_twin.experiments.chapter5_findings import lines as finding_lines
     from amr_twin.experiments.chapter5_report import passed_by_metric
 
@@ -114,7 +115,8 @@ def chapter5(
     typer.echo(f"chapter 5 findings ({firmware} firmware; details in {out}/report.md):")
     for line in finding_lines(written["findings"]):
         typer.echo(f"  {line}")
-    typer.echo(f"  why: {VALIDATION_DOC} (in the repository), section \"{VALIDATION_SECTION}\"")
+    typer.echo(f"  why: {VALIDATION_DOC} (in the repository), section \"{VALIDATION_SECTION}\"; whether any plant "
+               f"inside the sourced ranges meets them: {ATTAINABLE_COMMAND}, section \"{ATTAINABLE_SECTION}\"")
     typer.echo(f"published checks passed by metric: {passed_by_metric(written, 'checks')}; oscillation "
                f"{data.oscillation_verdict['published_passed']} / {data.oscillation_verdict['comparisons']}")
     s = data.summary

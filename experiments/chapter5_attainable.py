@@ -17,6 +17,7 @@ from itertools import combinations
 import numpy as np
 
 from amr_twin.model.config import TwinConfig, load_parameters, with_values
+from amr_twin.model.paths import ROOT
 
 BOARD_TOLERANCE = 0.05
 """Right board's gain against the left's, +-: two ZS-X11D1 boards of one model differ by their 5 V
@@ -24,6 +25,14 @@ regulator (78L05 class, +-5 %) and input divider resistors (1-5 %), which scale 
 RANGED = ("motor_left.resistance_ohm", "wheel.rolling_resistance", "caster.rolling_resistance")
 FINDINGS = ("overshoot_right", "tracking", "duty_raised", "oscillation")
 MAX_SAMPLES = 512
+COMMITTED_JSON = ROOT / "docs" / "chapter5_attainable.json"
+"""The study the documents and the chapter 5 report quote (``python -m amr_twin.experiments.doc_figures``)."""
+COMMITTED_SEEDS = (1, 2)
+COMMITTED_SAMPLES = 64
+HELD = ("driver_left.gain", "motor_left.ke_v_s_rad", "motor_right.ke_v_s_rad", "motor_left.friction_nm",
+        "motor_right.friction_nm")
+"""The calibrated values the drawn plants keep, named in the committed study (the whole configuration but
+the drawn values is held to it by a hash)."""
 
 
 @dataclass(frozen=True)
@@ -98,6 +107,43 @@ def summary(draws: list[Draw]) -> dict:
             "most_oscillating_more": max(min(d.oscillation_more) for d in draws),
             "least_worst_steady_error_rpm": min(d.worst_steady_error_rpm for d in draws),
             "draws": [asdict(d) for d in draws]}
+
+
+def plant(cfg: TwinConfig) -> dict:
+    """What a study's draws depend on besides the seed: a SHA-256 of the configuration without the drawn
+    values, the calibrated values kept (:data:`HELD`) and the ranges drawn in."""
+    import hashlib
+    import json
+
+    bounds = ranges(cfg)
+    data = cfg.model_dump()
+    for key in bounds:
+        section, name = key.split(".")
+        del data[section][name]
+    digest = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
+    kept = {key: getattr(getattr(cfg, key.split(".")[0]), key.split(".")[1]) for key in HELD}
+    return {"config_sha256": digest, "held": kept, "ranges": {k: list(v) for k, v in bounds.items()}}
+
+
+def committed(cfg: TwinConfig) -> dict | None:
+    """The committed study (:data:`COMMITTED_JSON`) when it was drawn around ``cfg``'s plant, else None."""
+    import json
+
+    if not COMMITTED_JSON.exists():
+        return None
+    data = json.loads(COMMITTED_JSON.read_text())
+    return data if data.get("plant") == json.loads(json.dumps(plant(cfg))) else None
+
+
+def committed_write(cfg: TwinConfig, jobs: int = 2) -> dict:
+    """Run the study on :data:`COMMITTED_SEEDS` and write :data:`COMMITTED_JSON` (minutes)."""
+    from amr_twin.experiments.executor import write_json
+
+    data = {"command": "amr-twin experiment chapter5-attainable", "samples": COMMITTED_SAMPLES,
+            "plant": plant(cfg),
+            "seeds": {str(seed): summary(study(cfg, COMMITTED_SAMPLES, seed, jobs=jobs)) for seed in COMMITTED_SEEDS}}
+    write_json(COMMITTED_JSON, data)
+    return data
 
 
 def lines(s: dict) -> list[str]:

@@ -110,7 +110,8 @@ class Chapter5Metrics:
     ``firmware_comparison`` (another firmware run beside the reference,
     :mod:`amr_twin.experiments.firmware_comparison`) and ``spread`` (with parameter draws,
     :mod:`amr_twin.experiments.chapter5_spread`) only when made; ``readings`` the published timings
-    under each reading of :mod:`amr_twin.experiments.chapter5_readings` (when the runs carry their series).
+    under each reading of :mod:`amr_twin.experiments.chapter5_readings` (when the runs carry their series);
+    ``attainable`` the committed study of plants inside the sourced ranges, when it applies to this plant.
     """
 
     firmware: str
@@ -136,6 +137,7 @@ class Chapter5Metrics:
     firmware_comparison: Optional[dict] = None
     spread: Optional[dict] = None
     readings: Optional[list] = None
+    attainable: Optional[dict] = None
 
     def as_json(self) -> dict:
         """The ``metrics.json`` object (``firmware_comparison`` and ``spread`` only when made)."""
@@ -145,7 +147,7 @@ class Chapter5Metrics:
         out["summary"] = asdict(self.summary)
         if self.findings is not None:
             out["findings"] = self.findings.as_json()
-        for optional in ("firmware_comparison", "spread", "readings"):
+        for optional in ("firmware_comparison", "spread", "readings", "attainable"):
             if out[optional] is None:
                 del out[optional]
         out["summary"] = out.pop("summary")  # the counts close the file
@@ -179,5 +181,6 @@ def metrics(results: dict) -> Chapter5Metrics:
                                             results["crr"]["tyres"]), findings=None,
         summary=CheckCount(*count_checks(results["runs"], results["comparisons"])),
         firmware_comparison=results.get("firmware_comparison"), spread=results.get("spread_summary"),
-        readings=readings(results) if all("raw" in r for r in results["runs"]) else None)
+        readings=readings(results) if all("raw" in r for r in results["runs"]) else None,
+        attainable=results.get("attainable"))
     return replace(data, findings=findings(data.as_json()))

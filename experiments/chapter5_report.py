@@ -6,6 +6,7 @@ from __future__ import annotations
 from amr_twin.experiments.chapter5_findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, TIMINGS, VALIDATION_DOC,
                                                     VALIDATION_SECTION, lines)
 from amr_twin.experiments.chapter5_payload import markdown as payload_markdown
+from amr_twin.experiments.doc_texts import attainable_table
 from amr_twin.experiments.chapter5_readings import markdown as readings_markdown
 from amr_twin.experiments.chapter5_spread_report import markdown as spread_markdown
 from amr_twin.experiments.firmware_comparison import markdown as comparison_markdown
@@ -119,6 +120,16 @@ def _findings(data: dict) -> list[str]:
             f"\"{ATTAINABLE_SECTION}\".", ""]
 
 
+def _attainable(data: dict) -> list[str]:
+    """The committed study of plants inside the sourced ranges, when it was drawn around this plant."""
+    study = data.get("attainable")
+    if study is None:
+        return [f"The committed study (`docs/chapter5_attainable.json`) was drawn around another plant or run set "
+                f"than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for this one."]
+    return [f"Plants drawn uniformly inside the sourced ranges around this plant (`{ATTAINABLE_COMMAND}`, "
+            f"{VALIDATION_DOC}): per finding, in how many it holds.", "", *attainable_table(study).splitlines()]
+
+
 def _bound_table(data: dict) -> list[str]:
     """Listing 4.12's bound on each published timing, per run and wheel, against the band's upper end."""
     bounds = (data.get("findings") or {}).get("bounds")
@@ -152,6 +163,7 @@ def markdown(data: dict) -> str:
     out = [
         "# Chapter 5 step experiments: twin against thesis", "",
         *_findings(data),
+        f"## {ATTAINABLE_SECTION}", "", *_attainable(data), "",
         f"Firmware: **{data['firmware']}**; {runs} in {data['wall_s']:.1f} s wall time with {data['jobs']} job(s). "
         f"All checks on the published samples, attainable or not: {s['passed']} / {s['checks']}; the true "
         f"wheel speed against the same bands: {s['true_passed']} / {s['true_checks']}.", "",

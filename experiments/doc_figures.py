@@ -9,6 +9,7 @@ It runs the fault study into ``docs/`` (``amr-twin experiment faults --out docs`
 (``docs/payload_sweep.json``, ``docs/img/sweep_angular.png``), the fusion experiment's ten seeds on
 both routes (``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
 (``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture),
+the chapter 5 attainability study (``docs/chapter5_attainable.json``, 128 plants: a few minutes),
 then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.doc_texts`) from those
 committed files and the calibration's report (``models/amr/calibration.yaml``: after a new fit,
 ``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text between
@@ -25,8 +26,9 @@ import re
 from pathlib import Path
 
 from amr_twin.experiments.chapter5_scorecard import SCORECARD
-from amr_twin.experiments.doc_texts import (SUMMARY_FUSION, calibration_summary, chapter5_summary, chapter5_table,
-                                            faults_summary, fusion_table, payload_summary)
+from amr_twin.experiments.chapter5_attainable import COMMITTED_JSON
+from amr_twin.experiments.doc_texts import (SUMMARY_FUSION, attainable_table, calibration_summary, chapter5_summary,
+                                            chapter5_table, faults_summary, fusion_table, payload_summary)
 from amr_twin.model.paths import ROOT
 
 COMMAND = "python -m amr_twin.experiments.doc_figures"
@@ -83,7 +85,8 @@ def blocks() -> dict[str, str]:
             **{f"fusion-{r}-summary": fusion_table(json.loads(fusion_json(r).read_text()), SUMMARY_FUSION)
                for r in FUSION_ROUTES},
             **{f"fusion-{r}": fusion_table(json.loads(fusion_json(r).read_text())) for r in FUSION_ROUTES},
-            "calibration-summary": calibration_summary(yaml.safe_load(CALIBRATION.read_text()))}
+            "calibration-summary": calibration_summary(yaml.safe_load(CALIBRATION.read_text())),
+            "chapter5-attainable": attainable_table(json.loads(COMMITTED_JSON.read_text()))}
 
 
 def expected(path: Path, texts: dict[str, str] | None = None) -> str:
@@ -137,7 +140,7 @@ def _without_wall_times(value):
 
 
 def main() -> None:  # pragma: no cover - rewrites the committed results and documents (minutes)
-    from amr_twin.experiments import chapter5, chapter5_scorecard, faults, faults_report
+    from amr_twin.experiments import chapter5, chapter5_attainable, chapter5_scorecard, faults, faults_report
     from amr_twin.experiments.executor import write_text
     from amr_twin.model.config import load_config
 
@@ -148,6 +151,7 @@ def main() -> None:  # pragma: no cover - rewrites the committed results and doc
     chapter5_scorecard.main()
     payload_figures_write(cfg)
     fusion_write(cfg)
+    chapter5_attainable.committed_write(cfg)
     run1 = chapter5.run(cfg, runs=[1], progress=False)
     chapter5.plot(run1, ROOT / "docs" / "img")
     (ROOT / "docs" / "img" / "run1.png").replace(ROOT / "docs" / "img" / "chapter5_run1.png")

@@ -198,3 +198,31 @@ def fusion_table(data: dict, keys: tuple[str, ...] | None = None) -> str:
     lines += [f"| {name} | " + " | ".join(cell(a[k], d) for k, _, d in chosen) + " |"
               for name, a in data["architectures"].items()]
     return "\n".join(lines) + "\n"
+
+
+ATTAINABLE_ROWS = (("overshoot_right", "right overshoots 2-6 RPM and >= left + 1 (published), same order on the "
+                    "true speed, 4 of runs 3-8"),
+                   ("tracking", "unloaded wheels in the 4 RPM dead zone"),
+                   ("duty_raised", "20 kg: the PI raises the duty on all 4 wheels of runs 7, 8"),
+                   ("oscillation", "20 kg: more oscillation in 3 of 4 comparisons, samples and true speed"))
+
+
+def attainable_table(data: dict) -> str:
+    """The committed chapter 5 attainability study (``docs/chapter5_attainable.json``): per finding, the
+    plants of each seed where it holds, and the best figure reached over all of them."""
+    seeds = data["seeds"]
+    head = " | ".join(f"seed {k} ({v['samples']} plants)" for k, v in seeds.items())
+    s = list(seeds.values())
+    best = {"overshoot_right": f"right at most {max(v['best_right_overshoot_rpm'] for v in s):.2f} RPM; right "
+                               f"minus left at most {max(v['best_right_minus_left_rpm'] for v in s):.2f}",
+            "tracking": f"worst unloaded error {min(v['least_worst_steady_error_rpm'] for v in s):.2f} RPM at best",
+            "duty_raised": f"{max(v['most_raised_wheels'] for v in s)} of 4 wheels at most",
+            "oscillation": f"{max(v['most_oscillating_more'] for v in s)} of 4 at most"}
+    lines = [f"| finding | {head} | best figure reached |", "|---|" + "---|" * len(seeds) + "---|"]
+    for key, text in ATTAINABLE_ROWS:
+        lines.append(f"| {text} | " + " | ".join(str(v["held"][key]) for v in s) + f" | {best[key]} |")
+    lines.append("| all four | " + " | ".join(str(v["all"]) for v in seeds.values()) + " | |")
+    pairs = sum(v["pairs"][p] for v in seeds.values() for p in v["pairs"])
+    lines += ["", f"Pairs of findings holding together: {pairs} over {sum(v['samples'] for v in seeds.values())} "
+                  "plants."]
+    return "\n".join(lines) + "\n"

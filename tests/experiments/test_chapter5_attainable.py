@@ -82,3 +82,34 @@ def test_the_command_writes_every_draw(tmp_path):
     assert data["samples"] == 1 and len(data["draws"]) == 1 and set(data["held"]) == set(att.FINDINGS)
     assert data["draws"][0]["values"] == att.draw_values(load_config(), 1, 5)[0]
     assert "holds in" in res.stdout
+
+
+def test_the_plant_key_ignores_the_drawn_values_and_sees_any_other(cfg):
+    base = att.plant(cfg)
+    assert att.plant(load_config(sets=["wheel.rolling_resistance=0.021"]))["config_sha256"] == base["config_sha256"]
+    assert att.plant(load_config(sets=["wheel.tyre_slip=false"]))["config_sha256"] != base["config_sha256"]
+    assert att.plant(load_config(sets=["driver_left.gain=1.7"]))["held"]["driver_left.gain"] == 1.7
+
+
+def test_the_committed_study_is_of_the_shipped_plant_and_what_a_draw_gives_now(cfg):
+    """Regenerate with python -m amr_twin.experiments.doc_figures after a change of the plant."""
+    data = att.committed(cfg)
+    assert data is not None, "docs/chapter5_attainable.json was drawn around another plant: run doc_figures"
+    assert list(data["seeds"]) == [str(s) for s in att.COMMITTED_SEEDS]
+    first = data["seeds"]["1"]["draws"][0]
+    again = att.study(cfg, 1, 1, jobs=2)[0]
+    assert again.values == pytest.approx(first["values"], rel=1e-12) and again.holds == first["holds"]
+    assert again.overshoot_rpm == pytest.approx(first["overshoot_rpm"], abs=1e-6)
+    assert att.committed(load_config(sets=["wheel.tyre_slip=false"])) is None
+
+
+def test_the_report_quotes_the_study_or_says_it_does_not_apply():
+    from amr_twin.experiments.chapter5_report import _attainable
+
+    assert "drawn around another plant" in _attainable({})[0]
+    study = {"seeds": {"1": {"samples": 2, "held": {k: 0 for k in att.FINDINGS}, "all": 0,
+                             "pairs": {"a+b": 0}, "best_right_overshoot_rpm": 1.2, "best_right_minus_left_rpm": 0.3,
+                             "least_worst_steady_error_rpm": 2.5, "most_raised_wheels": 3,
+                             "most_oscillating_more": 1}}}
+    text = "\n".join(_attainable({"attainable": study}))
+    assert "| 20 kg: the PI raises the duty on all 4 wheels of runs 7, 8 | 0 | 3 of 4 wheels at most |" in text

@@ -9,8 +9,10 @@ The runs use the empty world (the warehouse walls would stop a 16 s straight run
 
 Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``run<N>.rrd`` /
 ``run<N>.mcap`` per run (:mod:`amr_twin.recording.rerun_log`, :mod:`amr_twin.recording.mcap_log`),
-written by the process that simulates the run, through a temporary name and a
-rename. Recording does not change the results.
+written by the process that simulates the run to a temporary name of this process
+(``.run<N>.rrd.<pid>.tmp``), renamed only once every run is done (with the caller's
+:func:`~amr_twin.recording.atomic_file.all_or_nothing` batch, if one is open) and removed if the
+runs are interrupted or fail. Recording does not change the results.
 """
 
 from __future__ import annotations
@@ -165,8 +167,16 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}
 
+    from amr_twin.recording.atomic_file import discard_after, place, temporary_name
+
+    staged: list[tuple[Path, Path]] = []  # (temporary of this process, recording) renamed at the end
+
     def target(kind: str, spec: RunSpec) -> str | None:
-        return str(folders[kind] / f"run{spec.number}.{kind}") if kind in folders else None
+        if kind not in folders:
+            return None
+        final = folders[kind] / f"run{spec.number}.{kind}"
+        staged.append((temporary_name(final), final))
+        return str(staged[-1][0])
 
     todo = [_Job(s, cfg, firmware, duration_s or s.duration_s, rrd_path=target("rrd", s),
                  mcap_path=target("mcap", s)) for s in specs]
@@ -175,11 +185,18 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
              for s in RUNS if s.number in payload.STUDY_RUNS] if study and runs is None and duration_s is None else []
     crr_of = {id(job): crr for crr, job in study}
     done, analysed = {}, []
-    for job, raw in run_all(simulate, todo + [job for _, job in study], jobs, "chapter 5 runs", progress):
-        if id(job) in crr_of:
-            analysed.append((crr_of[id(job)], analyse(job.spec, raw)))
-        else:
-            done[job.spec.number] = analyse(job.spec, raw)
+    try:
+        for job, raw in run_all(simulate, todo + [job for _, job in study], jobs, "chapter 5 runs", progress):
+            if id(job) in crr_of:
+                analysed.append((crr_of[id(job)], analyse(job.spec, raw)))
+            else:
+                done[job.spec.number] = analyse(job.spec, raw)
+    except BaseException:  # interrupted or failed: no recording of this call is left
+        for tmp, _final in staged:
+            discard_after(tmp)
+        raise
+    for tmp, final in staged:
+        place(tmp, final)
     results = [done[s.number] for s in specs]
     out = {"firmware": firmware, "jobs": jobs, "sim_s": sum(r["duration_s"] for r in results), "runs": results,
            "study_runs": len(analysed), "study_sim_s": sum(a["duration_s"] for _, a in analysed),

@@ -9,7 +9,8 @@ not half of a new one. Every output folder is checked before the first simulatio
 (:mod:`amr_twin.recording.outputs`).
 
 ``--record DIR`` / ``--mcap DIR`` take a folder: one recording per run (``run<N>.rrd``),
-written by the worker that simulates it.
+written by the worker that simulates it to a temporary name, renamed with the report at the end
+(an interrupted run leaves none).
 """
 
 from __future__ import annotations
@@ -89,19 +90,19 @@ def chapter5(
     check_estimate(f"experiment chapter5: {passes} pass{'es' if passes != 1 else ''} of the runs",
                    one_pass_s * passes, "chapter5", jobs, firmware, yes, fail)
 
-    def work():
+    def work():  # the recordings are renamed with the report, at the end: none if interrupted
         from amr_twin.recording.atomic_file import all_or_nothing
 
-        results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
-                               progress=progress, record_dir=record, mcap_dir=mcap,
-                               reference_firmware="faithful" if firmware.startswith("avr") else None)
-        if draws is not None:
-            from amr_twin.experiments import chapter5_spread
-
-            results["spread"] = chapter5_spread.run(cfg, draws, jobs=jobs, firmware=firmware, runs=numbers,
-                                                    duration_s=duration_s, progress=progress)
-            results["spread_summary"] = chapter5_spread.summarise(results, results["spread"])
         with all_or_nothing():
+            results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
+                                   progress=progress, record_dir=record, mcap_dir=mcap,
+                                   reference_firmware="faithful" if firmware.startswith("avr") else None)
+            if draws is not None:
+                from amr_twin.experiments import chapter5_spread
+
+                results["spread"] = chapter5_spread.run(cfg, draws, jobs=jobs, firmware=firmware,
+                                                        runs=numbers, duration_s=duration_s, progress=progress)
+                results["spread_summary"] = chapter5_spread.summarise(results, results["spread"])
             chapter5.plot(results, out)
             return chapter5.report(results, out)
 

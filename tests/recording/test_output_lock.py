@@ -95,3 +95,26 @@ def test_a_failed_command_leaves_no_empty_output_folder(tmp_path):
             (tmp_path / "full" / "a.mcap").write_text("x")
             raise OSError(28, "No space left on device")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["full", "old"]
+
+
+def test_an_interrupted_chapter5_leaves_none_of_its_recordings(tmp_path):
+    """Ctrl-C after a run was recorded (by a pool worker or this process): "no output written" holds
+    for the recordings too; none appears under its name before the end (a killed command leaves a
+    temporary, never a half ``run<N>.rrd``)."""
+    rec = tmp_path / "rec"
+    cli = [sys.executable, "-m", "amr_twin.cli.main", "experiment", "chapter5", "--out", str(tmp_path / "o"),
+           "--record", str(rec), "--runs", "1,2,3", "--duration-s", "120", "--jobs", "2", "--no-progress"]
+    proc = subprocess.Popen(cli, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not any(".rrd" in p.name for p in (rec.iterdir() if rec.is_dir() else [])):
+            assert time.monotonic() < deadline and proc.poll() is None
+            time.sleep(0.05)
+        time.sleep(0.5)  # the first recording is whole by now
+        assert proc.poll() is None and not any(p.name.endswith(".rrd") for p in rec.iterdir())
+    finally:
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "interrupted; no output written" in err
+    assert not rec.exists() or list(rec.iterdir()) == []
+    assert not (tmp_path / "o").exists()

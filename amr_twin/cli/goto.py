@@ -150,10 +150,11 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
                 from amr_twin.recording.atomic_file import write_text
                 from amr_twin.recording.run_report import csv_text
                 write_text(opts.csv, csv_text(held["twin"].recorder.series()))
-        return run
+        twin = held["twin"]  # each fault with its effect, as run linear reports it
+        return run, twin.faults.report(twin.recorder.series()) if twin.faults is not None else []
 
-    run = _guard(work)
-    _report(run, opts.as_json)
+    run, fault_report = _guard(work)
+    _report(run, opts.as_json, fault_report)
     if run.collisions:
         typer.echo(f"warning: {len(run.collisions)} collision(s), the first at t = {run.collisions[0]['t_s']:.2f} s "
                    f"with {run.collisions[0].get('world', '?')}", err=True)
@@ -163,8 +164,23 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
         raise typer.Exit(EXIT_NOT_REACHED)
 
 
-def _report(run, as_json: bool) -> None:
+def _finite(value):
+    """``value`` with every NaN or infinity (a goal with no plan: ``plan_length_m``) made None (JSON null)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
+
+
+def _report(run, as_json: bool, faults: list = ()) -> None:
+    """Each goal's outcome, the faults with their effects, the distance and final pose; ``--json``: one
+    object, in which a number that is not finite is null (JSON has no NaN)."""
     import numpy as np
+
+    from amr_twin.recording.run_report import fault_lines
 
     goals = [{"goal": [o.goal[0], o.goal[1], None if o.goal[2] is None else math.degrees(o.goal[2])],
               "status": o.status, "reason": o.reason, "t_start_s": o.t_start_s, "t_end_s": o.t_end_s,
@@ -173,17 +189,23 @@ def _report(run, as_json: bool) -> None:
     xy = run.pose_true[:, :2]
     info = {"goals": goals, "travelled_m": float(np.hypot(*np.diff(xy, axis=0).T).sum()),
             "final_pose": [float(v) for v in run.pose_true[-1]], "collisions": run.collisions,
-            "collision_monitor": run.monitor_actions, "sim_s": run.sim_s, "wall_s": run.wall_s}
+            "collision_monitor": run.monitor_actions, "faults": list(faults), "sim_s": run.sim_s,
+            "wall_s": run.wall_s}
+    info = _finite(info)
     if as_json:
-        typer.echo(json.dumps(info, default=lambda v: None if isinstance(v, float) and not math.isfinite(v) else v))
+        numpy_scalar = lambda v: v.item() if isinstance(v, np.generic) else v  # noqa: E731
+        typer.echo(json.dumps(info, allow_nan=False, default=numpy_scalar))
         return
-    for i, g in enumerate(goals):
+    for i, g in enumerate(info["goals"]):
         where = f"goal {i + 1} ({g['goal'][0]:g}, {g['goal'][1]:g})"
+        plan = "no plan" if g["plan_length_m"] is None else f"plan {g['plan_length_m']:.1f} m"
         if g["status"] == "succeeded":
-            typer.echo(f"{where}: reached at t = {g['t_end_s']:.1f} s (plan {g['plan_length_m']:.1f} m, "
+            typer.echo(f"{where}: reached at t = {g['t_end_s']:.1f} s ({plan}, "
                        f"{len(g['recoveries'])} recoveries)")
         else:
             typer.echo(f"{where}: NOT reached: {g['reason']}")
+    for line in fault_lines(info["faults"]):
+        typer.echo(line)
     typer.echo(f"travelled {info['travelled_m']:.1f} m in {run.sim_s:.1f} simulated s ({run.wall_s:.1f} s wall); "
                f"final pose x {info['final_pose'][0]:.2f} m, y {info['final_pose'][1]:.2f} m, "
                f"yaw {math.degrees(info['final_pose'][2]):.0f} deg")

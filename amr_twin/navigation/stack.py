@@ -76,12 +76,15 @@ def true_map(cfg, world: str) -> StaticMap:
     """The world's true map: every world geom from the floor to the robot's top (:func:`world_map`)."""
     import mujoco
 
-    from amr_twin.model.worlds import world_path
+    from amr_twin.model.build import world_compile_error, world_file
 
-    path = world_path(world)
+    path = world_file(world)
     if path.suffix.lower() in (".yaml", ".yml"):
         return yaml_map(path)
-    model = mujoco.MjModel.from_xml_path(str(path))
+    try:
+        model = mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as exc:
+        raise world_compile_error(world, exc) from None
     return world_map(model, RESOLUTION_M, 0.005, robot_top_m(cfg), source=f"world {world}")
 
 

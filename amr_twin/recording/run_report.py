@@ -69,9 +69,7 @@ def text_lines(result, info: RunSummary) -> list[str]:
     for name, entry in info.wheels.items():
         lines.append(f"{name:5s} reference {entry.reference_rpm:8.3f} RPM, true {entry.true_final_rpm:8.3f} RPM, "
                      + _published(entry, result.sim_s))
-    for fault in info.faults:
-        until = f" until {fault['until_s']:g} s" if fault["until_s"] is not None else ""
-        lines.append(f"fault {fault['kind']} at {fault['t_s']:g} s{until}: " + _fault_effect(fault))
+    lines.extend(fault_lines(info.faults))
     for c in info.collisions:
         lines.append(_collision_line(c))
     if not info.collisions:
@@ -104,6 +102,16 @@ def _published(entry: WheelSummary, end_s: float) -> str:
     return text
 
 
+def fault_lines(faults: list[dict]) -> list[str]:
+    """One line per injected fault and its effect
+    (:meth:`~amr_twin.sim.fault_injector.FaultInjector.report`)."""
+    lines = []
+    for fault in faults:
+        until = f" until {fault['until_s']:g} s" if fault["until_s"] is not None else ""
+        lines.append(f"fault {fault['kind']} at {fault['t_s']:g} s{until}: " + _fault_effect(fault))
+    return lines
+
+
 def _fault_effect(fault: dict) -> str:
     wheels = fault["effect"]["wheels"]
     parts = []
@@ -111,7 +119,9 @@ def _fault_effect(fault: dict) -> str:
         parts.append(f"{name} true {w['true_rpm_before'] if w['true_rpm_before'] is not None else float('nan'):.1f} -> "
                      f"{w['true_rpm_end'] if w['true_rpm_end'] is not None else float('nan'):.1f} RPM, "
                      f"{w['published_after']} published after")
-    return "; ".join(parts) + f"; moved {fault['effect']['moved_after_m']:.2f} m after"
+    sensors = "".join(f"; {fault['effect'][f'{topic}_published_after']} {topic} published after"
+                      for topic in ("scan", "imu/data_raw") if f"{topic}_published_after" in fault["effect"])
+    return "; ".join(parts) + f"; moved {fault['effect']['moved_after_m']:.2f} m after" + sensors
 
 
 def _collision_line(c: dict) -> str:

@@ -158,3 +158,29 @@ def test_the_mcap_holds_the_map_match_the_ekf_fused(tmp_path):
         assert m.header.frame_id == "map" and cov[0, 0] > cov[1, 1] > 0 and cov[5, 5] > 0
         ekf = filtered[stamp].pose.pose.position   # the EKF's pose of that instant, after it took the match in
         assert math.hypot(m.pose.pose.position.x - ekf.x, m.pose.pose.position.y - ekf.y) < 0.05
+
+
+def test_goto_reports_its_faults_and_writes_json_without_nan():
+    """A goal at the start has no plan: its plan_length_m is null, not NaN (which is not JSON); the
+    fault is reported with its effect, as run linear reports it, in the JSON and in the text."""
+    args = ["run", "goto", "--goal=-9,0", "--start=-9,0,0", "--localisation", "truth",
+            "--fault", "lidar-dead@0.5"]
+    res = RUN.invoke(app, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    info = json.loads(res.stdout, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
+    assert info["goals"][0]["plan_length_m"] is None
+    assert [f["kind"] for f in info["faults"]] == ["lidar-dead"]
+    assert info["faults"][0]["effect"]["scan_published_after"] == 0
+    res = RUN.invoke(app, args)
+    assert res.exit_code == 0 and "no plan" in res.stdout
+    assert "fault lidar-dead at 0.5 s: " in res.stdout and "; 0 scan published after" in res.stdout
+
+
+def test_the_goto_json_writer_refuses_what_is_not_json(monkeypatch):
+    """A NaN that reaches the writer is an error, never a NaN in the output."""
+    from amr_twin.cli import goto
+
+    monkeypatch.setattr(goto, "_finite", lambda value: value)
+    res = RUN.invoke(app, ["run", "goto", "--goal=-9,0", "--start=-9,0,0", "--localisation", "truth",
+                           "--json"])
+    assert res.exit_code != 0 and "NaN" not in res.stdout

@@ -56,10 +56,35 @@ OPTION_OF = {"payload.mass_kg": "--payload-kg", "payload.xy_m": "--payload-xy"}
 """The parameter each command option sets (the ``extra`` of :func:`_config`)."""
 
 
+def _shown(value) -> str:
+    return ",".join(f"{v:g}" for v in value) if isinstance(value, (list, tuple)) else f"{value:g}"
+
+
+def _check_set_against_options(sets: list[str], extra: dict) -> None:
+    """A ``--set`` of a parameter that a command option (:data:`OPTION_OF`) also sets, to another value:
+    one line naming both (the option won, the ``--set`` was ignored); the same value is accepted."""
+    from amr_twin.model.config_overrides import parse_assignment
+
+    for text in sets:
+        key, value = parse_assignment(text)
+        if key not in extra or key not in OPTION_OF:
+            continue
+        given = extra[key]
+        try:  # a value of the wrong kind is named by the parameter's own check
+            same = [float(v) for v in value] == [float(v) for v in given] \
+                if isinstance(value, (list, tuple)) else float(value) == float(given)
+        except (TypeError, ValueError):
+            continue
+        if not same:
+            fail(f"--set {text!r} and {OPTION_OF[key]} {_shown(given)} both set {key}, to different values: "
+                 "give one of them")
+
+
 def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
     from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
 
     try:
+        _check_set_against_options(sets or [], extra or {})
         cfg = load_config(config, override_file=params, sets=sets or [], overrides=extra)
         started()
         return cfg
@@ -71,8 +96,7 @@ def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[
                 break
         for key, value in (extra or {}).items():
             if text.startswith(f"{key}:") and key in OPTION_OF:
-                shown = ",".join(f"{v:g}" for v in value) if isinstance(value, (list, tuple)) else f"{value:g}"
-                text = f"{OPTION_OF[key]} {shown}: {text}"
+                text = f"{OPTION_OF[key]} {_shown(value)}: {text}"
         fail(text)
 
 

@@ -26,9 +26,10 @@ if TYPE_CHECKING:
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 from amr_twin.cli.options import (checked_firmware, checked_live, checked_ros1, checked_seed, firmware_option,
-                                  live_options, ros1_options, sketch_option)
+                                  live_options, ros1_options, sketch_option, _run_option_infos)
 
 _LIVE = live_options()
+_WORLD = _run_option_infos()["world"]  # as the run commands have it
 _ROS1 = ros1_options()
 
 MENU = """
@@ -208,6 +209,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
            fault: Optional[list[str]] = typer.Option(None, "--fault", metavar="KIND@T[:ARGS]",
                                                      help="Inject a fault T s after the start (repeatable; "
                                                           "docs/faults.md)."),
+           world: str = _WORLD[1],
            config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt,
            set_: Optional[list[str]] = SetOpt,
            live: Optional[str] = _LIVE["live"][1], host: str = _LIVE["host"][1],
@@ -238,7 +240,8 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
 
     console = Console(highlight=False)
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
-    twin = _guard(lambda: Twin(cfg, TwinOptions(firmware=firmware, seed=seed, faults=faults, start_xy_yaw=None)))
+    twin = _guard(lambda: Twin(cfg, TwinOptions(firmware=firmware, seed=seed, faults=faults, world=world,
+                                                start_xy_yaw=None)))
 
     def show(topic: str, msg, t_us: int) -> None:
         if topic in ("wheel0_Vel", "wheel1_Vel"):
@@ -251,7 +254,10 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
     rt = _guard(lambda: RealTimeTwin(twin, rate, live_opts, say=lambda line: console.print(escape(line)),
                                      ros1=ros1_opts))
     rt.start()
-    console.print(f"twin running at {rate:g}x real time, firmware {firmware}")
+    x, y, yaw = twin.start_xy_yaw
+    hint = "; --world empty: no walls" if world != "empty" else ""
+    console.print(escape(f"twin running at {rate:g}x real time, firmware {firmware}, world {world} "
+                         f"(start x {x:g} m, y {y:g} m, facing {math.degrees(yaw):g} deg{hint})"))
     for f in faults:
         console.print(escape(f"fault {f.name} at {f.t_s:g} s: {f.describe()['description']}"))
     try:

@@ -30,13 +30,45 @@ STAND_HEIGHT_M = 0.10
 """How high the ``stand`` world holds the chassis: wheels and casters clear of the floor."""
 
 
-def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
+def world_file(world: str | Path) -> Path:
+    """The file of ``--world``: a world of ``models/worlds/``, an MJCF world (``.xml``) or a map_server map
+    (``.yaml``); anything else, a URDF above all (MuJoCo would load it as a world with no floor), is a
+    :class:`BuildError` saying what is allowed."""
     path = Path(world)
     if not path.suffix:
         path = WORLD_DIR / f"{world}.xml"
+    names = ", ".join(sorted(p.stem for p in WORLD_DIR.glob("*.xml")))
     if not path.exists():
-        names = sorted(p.stem for p in WORLD_DIR.glob("*.xml"))
-        raise BuildError(f"--world {world}: no such world (available: {', '.join(names)})")
+        raise BuildError(f"--world {world}: no such world (available: {names})")
+    suffix = path.suffix.lower()
+    urdf = suffix == ".urdf" or (suffix == ".xml" and _root_tag(path) == "robot")
+    if urdf or suffix not in (".xml", ".yaml", ".yml"):
+        what = "a URDF describes a robot, not a world" if urdf else "not a world file"
+        raise BuildError(f"--world {world}: {what}: give a world ({names}), an MJCF world file (.xml) or a "
+                         "map_server map (.yaml)")
+    return path
+
+
+def _root_tag(path: Path) -> str | None:
+    """The root element's tag of an XML file (``robot``: a URDF, ``mujoco``: MJCF); None if not XML."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        for _event, element in ET.iterparse(str(path), events=("start",)):
+            return element.tag
+    except (ET.ParseError, OSError, UnicodeError):
+        return None
+    return None
+
+
+def world_compile_error(world: str | Path, exc: Exception) -> BuildError:
+    """MuJoCo's error compiling the world ``world``, naming its file (MuJoCo's text names neither)."""
+    first = " ".join(str(exc).split())[:200] or type(exc).__name__
+    return BuildError(f"--world {world}: MuJoCo compile: {first}")
+
+
+def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
+    path = world_file(world)
     if path.suffix in (".yaml", ".yml"):  # a ROS map_server map: walls extruded from the image
         from amr_twin.model.worlds import world_xml
         spec = mujoco.MjSpec.from_string(world_xml(path))
@@ -69,7 +101,7 @@ def world_model(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
     except BuildError:
         raise
     except Exception as exc:
-        raise BuildError(f"--world {world}: MuJoCo compile: {str(exc).splitlines()[0]}") from None
+        raise world_compile_error(world, exc) from None
 
 
 @dataclass
@@ -166,6 +198,11 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
         with _compiling():
             model = scene.compile()
     except Exception as exc:
+        try:  # the world alone: a fault of the world's file is named with the file
+            with _compiling():
+                _world_spec(cfg, world).compile()
+        except Exception:
+            raise world_compile_error(world, exc) from None
         raise BuildError(f"MuJoCo compile: {str(exc).splitlines()[0]}") from None
     if cfg.wheel.tyre_slip:
         tyres.set_addresses(model, ROBOT_PREFIX)

@@ -369,6 +369,10 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
     (["run", "stop", "--seed", "1e3"], ["Invalid value for '--seed': expects a whole number"]),
     (["run", "stop", "--set", "sim.floor_friction_field=true", "--set", "sim.floor_friction_field=false"],
      ["--set sim.floor_friction_field: given twice with different values"]),  # the first was ignored
+    (["run", "stop", "--set", "payload.mass_kg=10", "--payload-kg", "20"],
+     ["--set 'payload.mass_kg=10' and --payload-kg 20 both set payload.mass_kg"]),  # 20 was taken
+    (["model", "--set", "payload.xy_m=[0.1,0]", "--payload-kg", "5", "--payload-xy", "0,0"],
+     ["--set 'payload.xy_m=[0.1,0]' and --payload-xy 0,0 both set payload.xy_m"]),
     (["run", "stop", "--live", "foxglove", "--live", "rerun"], ["--live given twice with different values "
                                                                  "(foxglove and rerun): give it once"]),  # rerun won
     (["experiment", "chapter5", "--out", "{tmp}/c", "--progress", "--no-progress"], ["--progress/--no-progress "
@@ -387,6 +391,24 @@ def test_refusals_name_the_option_and_what_is_allowed(args, words, tmp_path, ref
         monkeypatch.setattr(work, None)  # were the command not refused, its work would fail at once
     line = refused([str(a).format(tmp=tmp_path) for a in args], *words)
     assert not any(w in line for w in ("Input should", "NoneType", "could not convert", "expected non-negative"))
+
+
+def test_a_world_file_that_does_not_compile_is_named_and_a_urdf_is_not_a_world(tmp_path, refused):
+    """A broken geom printed MuJoCo's text alone; a URDF was built as a world (no floor: "nothing
+    holds the robot up", with advice on the start pose)."""
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    broken = _write(inputs / "broken.xml",
+                    '<mujoco><worldbody><geom type="box" size="1 1"/></worldbody></mujoco>')
+    urdf = _write(inputs / "robot.urdf", '<robot name="r"><link name="a"/></robot>')
+    urdf_xml = _write(inputs / "robot.xml", '<robot name="r"><link name="a"/></robot>')
+    for kind in (["run", "stop", "--duration-s", "0.1"], ["run", "goto", "--goal", "1,1"]):
+        refused([*kind, "--world", broken], f"--world {broken}: MuJoCo compile: ", "size 2 must be positive")
+        for world in (urdf, urdf_xml):
+            line = refused([*kind, "--world", world],
+                           f"--world {world}: a URDF describes a robot, not a world",
+                           "an MJCF world file (.xml) or a map_server map (.yaml)")
+            assert "start" not in line
 
 
 def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(tmp_path, refused, monkeypatch):

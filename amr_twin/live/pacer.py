@@ -4,8 +4,10 @@
 the record grid). At each tick, with the physics brought up to the tick's instant by the
 loop as for any synced event, it
 
-1. sleeps until the wall clock reaches the tick's simulated time divided by ``rate``
-   (``rate = 0``: no sleep, as fast as possible);
+1. paced, lets each sink with a ``release(t_us, wait)`` method (the ROS 1 bridge) write what it
+   holds up to the tick in its own time order, ``wait(instant)`` (:meth:`Pacer.wait_until`) bringing
+   the wall clock to each instant first; then sleeps until the wall clock reaches the tick's
+   simulated time divided by ``rate`` (``rate = 0``: no release, no sleep, as fast as possible);
 2. runs the calls other threads queued (a Foxglove client's ``cmd_vel``, a menu choice):
    they act at this simulated instant, through the bus like any node of the twin, so
    the physics never runs ahead of a command;
@@ -81,12 +83,21 @@ class Pacer:
         clock = self.twin.clock
         now_us = clock.now_us
         self.ticks += 1
-        self._sleep_until(now_us)
+        if self.rate:
+            for sink in self.sinks:
+                release = getattr(sink, "release", None)
+                if release is not None:
+                    try:
+                        release(now_us, self.wait_until)
+                    except Exception:  # noqa: BLE001 - as flush: a sink's failure must not stop the twin
+                        LOG.exception("live sink %s failed at t=%.3f s", type(sink).__name__, now_us * 1e-6)
+        self.wait_until(now_us)
         self.run_calls()
         self.flush(now_us)
         clock.schedule(now_us + self.tick_us, self._tick)
 
-    def _sleep_until(self, t_us: int) -> None:
+    def wait_until(self, t_us: int) -> None:
+        """Sleep until the wall time of simulated ``t_us`` (paced; the first call sets the reference)."""
         if self.rate == 0:
             return
         wall = time.perf_counter()

@@ -1,4 +1,4 @@
-"""The twin's bus and state on a ROS 1 graph, both ways (issue 31): :class:`Ros1Bridge`.
+"""The twin's bus and state on a ROS 1 graph, both ways: :class:`Ros1Bridge`.
 
 Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mcap_log`):
 
@@ -6,8 +6,8 @@ Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mca
   ``/odom``, ``/tf`` (odom -> base_link), ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
   ``/cmd_vel``, ``/wheel_Command``, ``/wheel0_Vel``, ``/wheel1_Vel`` (as the firmware publishes them)
   and ``/wheel_Command_Service/request``; ``/tf_static`` latched;
-- ``/clock`` every ``clock_period_us`` of simulated time (written at the pacer's ticks, each instant's
-  message; the nodes run with ``/use_sim_time``, which the session sets);
+- ``/clock`` every ``clock_period_us`` of simulated time (paced: at each instant's wall time, before that
+  instant's messages; the nodes run with ``/use_sim_time``, which the session sets);
 - from grid samples, handed over at the pacer's ticks (:mod:`amr_twin.live.pacer`): ``/joint_states``
   and the joints' links on ``/tf`` (50 Hz: what robot_state_publisher would send), ``/twin/ground_truth``
   (100 Hz), ``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current`` (100 Hz), ``/battery_state``
@@ -23,16 +23,20 @@ the bridge itself put on the graph is not taken back, and one taken from the gra
 With ``firmware_topics=False`` (the board's serial port served to a rosserial host, which carries them)
 ``wheel_Command``, ``wheel0_Vel`` and ``wheel1_Vel`` are left to the host.
 
-A message is built only for a topic someone subscribes to. The high-rate ones (the types of
-:data:`~amr_twin.ros1.serialization.WRITERS`, ``/clock``) are serialised here and written at the pacer's
-ticks (20 ms paced, :data:`~amr_twin.ros1.session.UNPACED_TICK_US` unpaced), a tick's messages of a topic in one write
-(:class:`~amr_twin.ros1.outbox.Outbox`); the rest, and the latched topics, go through rospy's publishers
-(without a queue: a writer thread's hand-over cost 45 us of CPU a message). The writes block: none is
-dropped, and a twin running as fast as it can runs no faster than its subscribers' sockets take them.
+A message is built only for a topic someone subscribes to. Each is serialised here (``struct`` for the
+types of :data:`~amr_twin.ros1.serialization.WRITERS`, genpy for the rest) and kept, with its simulated
+instant, in an :class:`~amr_twin.ros1.outbox.Outbox`. Paced, the pacer's ticks hand it over
+(:meth:`Ros1Bridge.release`) and it is written as a ROS node writes: at each ``/clock`` instant's wall time,
+that ``/clock`` first, then the messages of that instant (those published between two clock instants at the
+next one). Unpaced, each tick (:data:`~amr_twin.ros1.session.UNPACED_TICK_US`) writes what is due at once,
+``/clock`` first, one write a topic. No stamp is written ahead of the ``/clock`` already written. Only the
+latched topics go through rospy's publishers. The writes block: none is dropped, and a twin running as fast
+as it can runs no faster than its subscribers' sockets take them.
 """
 
 from __future__ import annotations
 
+import io
 import logging
 import threading
 import warnings
@@ -77,7 +81,8 @@ class Ros1Bridge:
         self.twin, self.pacer, self.bus = twin, pacer, twin.bus
         self.dropped = 0
         """Messages from the graph refused (each logged)."""
-        self.out = Outbox()
+        self._clock_period_us = int(clock_period_us)
+        self.out = Outbox(self._clock_period_us)
         self._closed = False
         self._from_graph: str | None = None  # the bus topic of a message being handed over from the graph
         self._lock = threading.Lock()
@@ -98,7 +103,7 @@ class Ros1Bridge:
         self._fast = {bus: (p, WRITERS[BUS_TOPICS[bus][1]]) for bus, p in self.pubs.items()
                       if bus in BUS_TOPICS and BUS_TOPICS[bus][1] in WRITERS and bus != "wheel_Command_Service/request"}
         """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to the outbox."""
-        self.clock_pub = pub("/clock", "rosgraph_msgs/Clock")
+        self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
         self.state_pubs = {"/twin/ground_truth": pub("/twin/ground_truth", "nav_msgs/Odometry"),
                            "/joint_states": pub("/joint_states", "sensor_msgs/JointState")}
         self.row_pubs = {t: pub(t, "std_msgs/Float64MultiArray") for t in ROW_TOPICS}
@@ -129,7 +134,6 @@ class Ros1Bridge:
         self._rows = None  # the recorder's columns, sampled once a row topic has a subscriber (LiveRows)
         self._events_sent: set = set()
         twin.on_message(self._tap)
-        self._clock_period_us = int(clock_period_us)
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
     def start(self) -> None:
@@ -146,7 +150,7 @@ class Ros1Bridge:
             pub, writer = fast
             impl = pub.impl
             if impl is not None and impl.connections and topic != self._from_graph:
-                self.out.put(pub, writer(msg))
+                self.out.put(pub, writer(msg), t_us)
             return
         pub = self.pubs.get(topic)
         if pub is None or topic == self._from_graph:
@@ -161,20 +165,37 @@ class Ros1Bridge:
                                     [float(msg.motionL), float(msg.speedL), float(msg.motionR), float(msg.speedR)])
         writer = WRITERS.get(msg._type)
         if writer is None:
-            pub.publish(self.conv.to_ros(msg))
+            self._put_ros(pub, self.conv.to_ros(msg), t_us)
         else:
-            self.out.put(pub, writer(msg))
+            self.out.put(pub, writer(msg), t_us)
+
+    def _put_ros(self, pub, msg, t_us: int) -> None:
+        """A genpy message into the outbox (the bytes rospy's publish would write)."""
+        buf = io.BytesIO()
+        msg.serialize(buf)
+        self.out.put(pub, buf.getvalue(), t_us)
 
     def _publish_clock(self, t_us: int) -> None:
         """``/clock`` at each multiple of the clock's period up to ``t_us``."""
         period, wanted = self._clock_period_us, Outbox.wanted(self.clock_pub)
         while self._next_clock_us <= t_us:
             if wanted:
-                self.out.put(self.clock_pub, clock_us(self._next_clock_us))
+                self.out.put(self.clock_pub, clock_us(self._next_clock_us), self._next_clock_us)
             self._next_clock_us += period
 
+    def release(self, t_us: int, wait) -> None:
+        """Paced (the pacer's tick, before it sleeps): write what is due up to ``t_us`` at each clock
+        instant's wall time, ``wait(instant)`` (the pacer's sleep) before each."""
+        self._collect(t_us)
+        self.out.release(t_us, wait)
+
     def flush(self, t_us: int) -> None:
-        """Publish the clock, the grid samples and events up to ``t_us`` (simulated), and write the outbox."""
+        """Write everything due up to ``t_us`` (simulated) at once, ``/clock`` first."""
+        self._collect(t_us)
+        self.out.release(t_us)
+
+    def _collect(self, t_us: int) -> None:
+        """The clock, the grid samples and events up to ``t_us`` into the outbox."""
         self._publish_clock(t_us)
         self._publish_state(t_us)
         if self._rows is None:
@@ -184,7 +205,6 @@ class Ros1Bridge:
             if rows is not None:
                 self._publish_rows(rows)
         self._publish_events(t_us)
-        self.out.flush()
 
     def _publish_state(self, t_us: int) -> None:
         batch = self._state.split(t_us)
@@ -195,35 +215,37 @@ class Ros1Bridge:
             for i, ts in enumerate(a["t_us"]):
                 if want_gt:
                     out.put(gt, WRITERS["nav_msgs/Odometry"](ros_state.ground_truth(
-                        ts, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i])))
+                        ts, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i])), ts)
                 if ts % JOINT_STATE_PERIOD_US == 0:
                     if want_js:
-                        out.put(js, self._frames.joint_state(ts, a["q"][i], a["qd"][i]))
+                        out.put(js, self._frames.joint_state(ts, a["q"][i], a["qd"][i]), ts)
                     if want_tf:
-                        out.put(self.tf, self._frames.link_transforms(ts, a["link_pos"][i], a["link_quat"][i]))
+                        links = self._frames.link_transforms(ts, a["link_pos"][i], a["link_quat"][i])
+                        out.put(self.tf, links, ts)
 
     def _publish_rows(self, rows) -> None:
+        times = rows.t_us.tolist()
         for topic, column in zip(ROW_TOPICS, (rows.true_rpm, rows.pwm_counts, rows.current_a)):
             pub = self.row_pubs[topic]
             if Outbox.wanted(pub):
-                for values in column.astype(float).tolist():
-                    self.out.put(pub, float64_multi_array(Float64MultiArray(data=values)))
+                for t, values in zip(times, column.astype(float).tolist()):
+                    self.out.put(pub, float64_multi_array(Float64MultiArray(data=values)), t)
         want_battery, want_diag = self.battery_pub.get_num_connections(), self.diag_pub.get_num_connections()
         if not (want_battery or want_diag):
             return
         cap = self.twin.cfg.battery.capacity_ah
         battery = self.conv.ros_class("sensor_msgs/BatteryState")
-        for i, (t, volts, amps, soc) in enumerate(zip(rows.t_us.tolist(), rows.battery_v.tolist(),
+        for i, (t, volts, amps, soc) in enumerate(zip(times, rows.battery_v.tolist(),
                                                       rows.battery_a.tolist(), rows.battery_soc.tolist())):
             stamp = self.rospy.Time(t // 1_000_000, t % 1_000_000 * 1000)
             if want_battery and rows.index[i] % BATTERY_EVERY_ROWS == 0:
                 msg = battery(voltage=volts, current=-amps, charge=soc * cap, capacity=cap, design_capacity=cap,
                               percentage=soc, present=True)
                 msg.header.stamp = stamp
-                self.battery_pub.publish(msg)
+                self._put_ros(self.battery_pub, msg, t)
             if want_diag and rows.index[i] % DIAGNOSTICS_PERIOD_ROWS == 0:
                 level = 0 if soc > 0.2 else 1
-                self._publish_status(stamp, level, "amr/battery", f"{volts:.2f} V, {soc * 100:.0f} %",
+                self._publish_status(t, stamp, level, "amr/battery", f"{volts:.2f} V, {soc * 100:.0f} %",
                                      {"voltage_v": volts, "current_a": amps, "soc": soc})
 
     def _publish_events(self, t_us: int) -> None:
@@ -231,16 +253,16 @@ class Ros1Bridge:
             key = (t_ns, name)
             if t_ns <= t_us * 1000 and key not in self._events_sent:
                 self._events_sent.add(key)
-                self._publish_status(self.rospy.Time(t_ns // 1_000_000_000, t_ns % 1_000_000_000), level, name,
-                                     message, values)
+                stamp = self.rospy.Time(t_ns // 1_000_000_000, t_ns % 1_000_000_000)
+                self._publish_status(-(-t_ns // 1000), stamp, level, name, message, values)
 
-    def _publish_status(self, stamp, level: int, name: str, message: str, values: dict) -> None:
+    def _publish_status(self, t_us: int, stamp, level: int, name: str, message: str, values: dict) -> None:
         from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
         array = DiagnosticArray(status=[DiagnosticStatus(level=level, name=name, message=message, hardware_id="amr",
                                                          values=[KeyValue(str(k), str(v)) for k, v in values.items()])])
         array.header.stamp = stamp
-        self.diag_pub.publish(array)
+        self._put_ros(self.diag_pub, array, t_us)
 
     # -- in (rospy's threads) ------------------------------------------------------------------
     def _own(self, msg) -> bool:

@@ -54,3 +54,53 @@ def test_a_flush_writes_each_publishers_frames_once_per_connection_in_order():
     assert broken.closed and not a.closed and out.messages == 6
     out.flush()  # nothing new: nothing written
     assert out.writes == 3
+
+
+class _Clocked(_Connection):  # records each write with the simulated instant the wall clock was brought to
+    def __init__(self, name, now):
+        super().__init__()
+        self.name, self.now = name, now
+
+    def write_data(self, data):
+        self.now.append((self.now[0], self.name, _frames(data)))
+
+
+def test_paced_each_message_goes_at_its_clock_instant_after_that_clock_and_unpaced_clock_first():
+    now = [0]
+    log = now  # now[0]: the instant waited for; then (instant, topic, frames) for each write
+    clock, imu, scan = (_publisher(_Clocked(n, log)) for n in ("clock", "imu", "scan"))
+    out = Outbox(period_us=10_000, lead=clock, gap_us=1_000)
+    waits = []
+
+    def wait(t_us):
+        waits.append(t_us)
+        now[0] = t_us
+
+    for t in (0, 10_000, 20_000):
+        out.put(imu, b"i%d" % t, t)
+    out.put(scan, b"s", 12_345)  # published between two clock instants: written at the next one
+    for t in (0, 10_000, 20_000):
+        out.put(clock, struct.pack("<I", t), t)
+    out.release(20_000, wait)
+    writes = log[1:]
+    assert waits == [0, 1_000, 10_000, 11_000, 20_000, 21_000]
+    assert writes == [(0, "clock", [struct.pack("<I", 0)]), (1_000, "imu", [b"i0"]),
+                      (10_000, "clock", [struct.pack("<I", 10_000)]), (11_000, "imu", [b"i10000"]),
+                      (20_000, "clock", [struct.pack("<I", 20_000)]), (21_000, "scan", [b"s"]),
+                      (21_000, "imu", [b"i20000"])]  # in stamp order
+    # published at an instant already released (after the pacer's tick): written first at the next release
+    out.put(imu, b"late", 20_000)
+    del log[1:]
+    out.release(20_000, wait)
+    assert log[1:] == [(21_000, "imu", [b"late"])] and waits[-1] == 21_000
+    # unpaced: one write a publisher, /clock first, whatever the order they were put in
+    del log[1:]
+    for t in (30_000, 40_000):
+        out.put(imu, b"i%d" % t, t)
+        out.put(clock, struct.pack("<I", t), t)
+    out.put(imu, b"next", 50_000)  # after the release's instant: stays
+    out.release(40_000)
+    assert [(name, frames) for _t, name, frames in log[1:]] == [
+        ("clock", [struct.pack("<I", 30_000), struct.pack("<I", 40_000)]), ("imu", [b"i30000", b"i40000"])]
+    out.flush()
+    assert log[-1][1:] == ("imu", [b"next"]) and out.messages == 13

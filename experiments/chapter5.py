@@ -152,9 +152,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
 
     Returns
     -------
-    dict : ``{"firmware", "wall_s", "sim_s", "runs": [per run], "comparisons": [...]}``; with the eight
-        whole runs also ``"attainable"``: the committed study of plants inside the sourced ranges when it
-        was drawn around ``cfg``'s plant, else None (:func:`.chapter5_attainable.committed`).
+    dict : ``{"firmware", "wall_s", "sim_s", "runs": [per run], "comparisons": [...]}``.
     """
     from amr_twin.experiments.executor import run_all
 
@@ -216,10 +214,6 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
         if firmware.startswith("avr"):
             out["firmware_comparison"]["timeline"] = timeline_table(command_timeline(reference_firmware),
                                                                     command_timeline(firmware))
-    if runs is None and duration_s is None:  # the eight runs as the study judged them
-        from amr_twin.experiments.chapter5_attainable import committed
-
-        out["attainable"] = committed(cfg)
     out["wall_s"] = time.perf_counter() - wall0
     return out
 

@@ -124,8 +124,8 @@ def _attainable(data: dict) -> list[str]:
     """The committed study of plants inside the sourced ranges, when it was drawn around this plant."""
     study = data.get("attainable")
     if study is None:
-        return [f"The committed study (`docs/chapter5_attainable.json`) was drawn around another plant or run set "
-                f"than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for this one."]
+        return [f"The committed study (`docs/chapter5_attainable.json`) was drawn around another plant, firmware or run "
+                f"set than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for this plant."]
     return [f"Plants drawn uniformly inside the sourced ranges around this plant (`{ATTAINABLE_COMMAND}`, "
             f"{VALIDATION_DOC}): per finding, in how many it holds.", "", *attainable_table(study).splitlines()]
 

@@ -97,6 +97,10 @@ def chapter5(
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
                                    progress=progress, record_dir=record, mcap_dir=mcap,
                                    reference_firmware="faithful" if firmware.startswith("avr") else None)
+            if numbers is None and duration_s is None and firmware == "faithful":  # the runs the study judged
+                from amr_twin.experiments.chapter5_attainable import committed
+
+                results["attainable"] = committed(cfg)
             if draws is not None:
                 from amr_twin.experiments import chapter5_spread
 

@@ -1,44 +1,33 @@
 """Wheel odometry node: ``wheel0_Vel``/``wheel1_Vel`` to ``nav_msgs/Odometry`` on ``odom``.
 
-The firmware publishes each wheel's speed in RPM as measured on the driver's SC
-output, which has no direction (§3.2.3). The sign is taken from the last
-``wheel_Command`` motion code of that wheel (1 forward, -1 backward); under a
-brake (0) the wheel keeps its last direction and its speed falls linearly to 0
-over ``brake_stop_s`` (0.5 s: with its phases shorted a hub wheel of the twin covers, from 15
-to 80 RPM, the distance of a linear ramp to rest of 0.42 to 0.62 s). With
-``signed_input=True`` the wheel topics are read as signed RPM and ``wheel_Command``
-is ignored; :meth:`WheelOdometry.set_wheel_speeds_rpm` feeds signed speeds directly.
+Each wheel's speed estimate is built from the firmware's samples, signed by the ``wheel_Command``
+motion codes (:mod:`amr_twin.controllers.wheel_speed_samples`: what a sample means, ``speed_samples``).
+With ``signed_input=True`` the wheel topics are read as signed RPM and ``wheel_Command`` is ignored;
+:meth:`WheelOdometry.set_wheel_speeds_rpm` feeds signed speeds directly.
 
-What a speed sample means (``speed_samples``)
----------------------------------------------
-``"window"`` (default)
-    A sample of ``rpm`` received at ``t`` is the *mean* speed over its
-    measurement window ``[t - revolutions_per_sample * 60 / rpm, t]``: the thesis
-    firmware times exactly one revolution (90 SC changes) and publishes at its
-    end. The window is clipped at the previous knowledge of that wheel (its
-    previous sample, a brake, the node start), so a firmware that publishes
-    faster than one revolution (the improved one, 10 Hz) gets the mean over the
-    time since its previous sample. Between windows the speed is interpolated
-    linearly (a wheel that stood before a window stood until the window began);
-    after the newest one it is held.
-``"hold"``
-    Zero-order hold from the receipt of each sample (what a naive node does).
-    With one sample per revolution it lags: the first sample of a start arrives
-    about a revolution after the wheel started.
+Two poses (REP-105: ``odom -> base_link`` must be continuous): the *smoothed* pose corrects the past
+a window describes (it jumps when a sample arrives); the *published* one is integrated forward only,
+never revised (:mod:`amr_twin.controllers.published_pose`). ``odom`` (frame ``odom``, child
+``base_link``) and the ``odom -> base_link`` transform are published at ``publish_rate_hz``, the
+first at the node's start.
 
-Two poses (REP-105: ``odom -> base_link`` must be continuous)
--------------------------------------------------------------
-The *smoothed* pose corrects the past a window describes (it jumps when a sample arrives); the
-*published* one is integrated forward only, never revised (:mod:`amr_twin.controllers.published_pose`).
+What holds with the thesis firmware (``experiments/missions/stop_start.yaml``, ``stop_lengths.yaml``
+and three more stop-and-go runs in the empty world): while the robot stands the published pose moves
+under 1 mm and 0.01 degrees; from a restart to the next stop command its heading changes as the
+robot's within 5.0 degrees (5.6 over a turn in place at 90 deg/s after a 3 s stop), through that stop
+within 2.9 degrees (6.3 for that turn).
 
-``odom`` (frame ``odom``, child ``base_link``) and the ``odom -> base_link``
-transform are published at ``publish_rate_hz``, the first at the node's start.
-
-Known limits, inherited from the hardware: a wheel that stops without a brake
-command keeps its last speed until a new sample; a motion sign change is applied
-at command time while the wheel is still spinning the old way; until a wheel's
-first sample after a start, the published pose moves as if it stood (one
-revolution, 0.6 to 1.8 s with the thesis firmware), and makes that up afterwards.
+Known limits, inherited from the hardware: a start is estimated at the commanded speed until its
+first sample, so a wheel slower than commanded (a turn in place at 14 RPM runs at 10) is ahead by up
+to 40 degrees of heading before that sample, then made up while it turns; a revolution across a stop
+is split by the estimate of the motion before it, so an error there (a brake that ends sooner in a
+turn) moves to the restart (``stop_lengths.yaml``: 0.03 revolution of one wheel, the 5.6 degrees of its
+turn in place); a wheel commanded from rest that never turns reads a revolution; a wheel that stops
+without a brake command (stalled, coasting at speed 0) reads as at rest after ``sample_gap_s + 60 /
+rest_rpm`` s (6.4 s), having moved up to ``1.4 + ln(rpm / rest_rpm)`` revolutions too far (3.1 at 53
+RPM); a wheel that really turns slower than ``rest_rpm`` reads as at rest between its samples and is
+made up by them; a motion sign change is applied at command time while the wheel is still spinning
+the old way.
 """
 
 from __future__ import annotations
@@ -55,9 +44,10 @@ from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.sim.clock import VirtualClock
 from amr_twin.controllers.published_pose import PublishedPose
+from amr_twin.controllers.wheel_speed_samples import WheelSpeedSamples
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
-SPEED_SAMPLES = ("window", "hold")
+
 
 
 def _covariance(diagonal: Sequence[float]) -> np.ndarray:
@@ -74,7 +64,8 @@ class WheelOdometry:
     bus, clock : Bus, VirtualClock
         Shared bus and clock.
     wheel_radius_m, wheel_separation_m : float
-        Nominal geometry, m (``wheel.radius_m``, ``wheel.separation_m``: the thesis' 0.125 and listing 4.2's L 0.48).
+        Nominal geometry, m (``wheel.radius_m``, ``wheel.separation_m``: the thesis' 0.125 and listing
+        4.2's L 0.48).
     wheel_radius_multiplier, left_radius_multiplier, right_radius_multiplier : float
         Calibration factors of the radii (global, then per wheel).
     wheel_separation_multiplier : float
@@ -95,8 +86,9 @@ class WheelOdometry:
         Delay from the end of a measurement to its receipt, s (rosserial: ~1.4 ms).
     max_substep_s : float
         Longest arc while a speed varies, s.
-    brake_stop_s : float
-        Time a braked wheel takes to stop, s (the speed falls linearly).
+    brake_stop_s, brake_friction_rpm_s : float
+        Time a fast braked wheel takes to stop (the speed falls linearly), s, and the constant deceleration
+        that stops a slow one sooner, RPM/s (0: all in ``brake_stop_s``).
     catchup_time_s : float
         Shortest time over which the difference to the smoothed pose is made up, s (> 0).
     catchup_max_fraction : float
@@ -104,6 +96,13 @@ class WheelOdometry:
     max_wheel_accel_m_s2 : float
         Fastest change of each wheel's speed the published pose moves with, m/s^2 at
         the rim (``inf``: none); what this costs is made up by the correction.
+    sample_gap_s : float
+        Longest wait of the firmware between a sample and the start of the next measurement, s
+        (``inf``: a sample holds until the next, no silence bound).
+    rest_rpm : float
+        Slowest speed the node believes a silent wheel turns at, RPM (below the silence bound: at rest).
+    start_s : float
+        Time a wheel started from rest takes to reach its speed, s (the linear ramp of an estimate).
     """
 
     def __init__(self, bus: Bus, clock: VirtualClock, *, wheel_radius_m: float, wheel_separation_m: float,
@@ -116,16 +115,21 @@ class WheelOdometry:
                  frame_id: str = ODOM_FRAME, child_frame_id: str = BASE_FRAME,
                  speed_samples: str = "window", revolutions_per_sample: float = 1.0,
                  sample_latency_s: float = 0.0, max_substep_s: float = 0.01,
-                 brake_stop_s: float = 0.5, catchup_time_s: float = 0.1,
-                 catchup_max_fraction: float = 0.4, max_wheel_accel_m_s2: float = 4.0):
+                 brake_stop_s: float = 0.62, brake_friction_rpm_s: float = 13.0, catchup_time_s: float = 0.1,
+                 catchup_max_fraction: float = 0.4, max_wheel_accel_m_s2: float = 4.0,
+                 sample_gap_s: float = 0.45, rest_rpm: float = 10.0, start_s: float = 0.5):
         if publish_rate_hz <= 0:
             raise ValueError(f"publish_rate_hz must be positive, got {publish_rate_hz}")
-        if speed_samples not in SPEED_SAMPLES:
-            raise ValueError(f"speed_samples: {speed_samples!r} is not one of {SPEED_SAMPLES}")
         if not (catchup_time_s > 0 and math.isfinite(catchup_time_s)):
             raise ValueError(f"catchup_time_s: {catchup_time_s} must be a finite number > 0")
         if not (catchup_max_fraction >= 0 and math.isfinite(catchup_max_fraction)):
             raise ValueError(f"catchup_max_fraction: {catchup_max_fraction} must be a finite number >= 0")
+        if not sample_gap_s >= 0:
+            raise ValueError(f"sample_gap_s: {sample_gap_s} must be >= 0 (inf: samples held until the next)")
+        if not (rest_rpm >= 0 and math.isfinite(rest_rpm)):
+            raise ValueError(f"rest_rpm: {rest_rpm} must be a finite number >= 0")
+        if not (brake_friction_rpm_s >= 0 and math.isfinite(brake_friction_rpm_s)):
+            raise ValueError(f"brake_friction_rpm_s: {brake_friction_rpm_s} must be a finite number >= 0")
         if not max_wheel_accel_m_s2 > 0:
             raise ValueError(f"max_wheel_accel_m_s2: {max_wheel_accel_m_s2} must be > 0 (inf: no limit)")
         self.bus, self.clock = bus, clock
@@ -136,20 +140,24 @@ class WheelOdometry:
         self.period_us = int(round(1e6 / publish_rate_hz))
         self.pose_covariance = _covariance(pose_covariance_diagonal)
         self.twist_covariance = _covariance(twist_covariance_diagonal)
-        self.pose_covariance.flags.writeable = self.twist_covariance.flags.writeable = False  # shared by messages
+        # shared by messages
+        self.pose_covariance.flags.writeable = self.twist_covariance.flags.writeable = False
         self.signed_input, self.publish_tf = signed_input, publish_tf
         self.frame_id, self.child_frame_id = frame_id, child_frame_id
-        self.speed_samples = speed_samples
-        self.revolutions_per_sample = float(revolutions_per_sample)
-        self.sample_latency_us = int(round(sample_latency_s * 1e6))
         self.max_substep_us = max(1, int(round(max_substep_s * 1e6)))
-        self.brake_stop_us = max(0, int(round(brake_stop_s * 1e6)))
-        self._rim = tuple(2.0 * math.pi / 60.0 * r for r in (self.left_radius_m, self.right_radius_m))  # m/s per RPM
+        # m/s per RPM
+        self._rim = tuple(2.0 * math.pi / 60.0 * r for r in (self.left_radius_m, self.right_radius_m))
         self.published = PublishedPose(self._body, self.max_substep_us,
                                        tuple(max_wheel_accel_m_s2 * 1e-6 / k for k in self._rim),
                                        float(catchup_time_s), float(catchup_max_fraction))
-        self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
-        self._motion = [0, 0]
+        gap_us = sample_gap_s * 1e6
+        self.samples = WheelSpeedSamples(
+            self.published, clock.now_us, signed_input=signed_input, speed_samples=speed_samples,
+            revolutions_per_sample=revolutions_per_sample,
+            sample_latency_us=int(round(sample_latency_s * 1e6)),
+            brake_stop_us=max(0, int(round(brake_stop_s * 1e6))), brake_friction_rpm_s=brake_friction_rpm_s,
+            start_us=max(0, int(round(start_s * 1e6))),
+            sample_gap_us=gap_us if math.isinf(gap_us) else int(round(gap_us)), rest_rpm=rest_rpm)
         self._seq = 0
         self.published.restart(clock.now_us, (0.0, 0.0, 0.0), (0.0, 0.0))
         bus.advertise("odom", Odometry)  # declares the type; publish() hands messages to bus.publish
@@ -158,7 +166,8 @@ class WheelOdometry:
         if not signed_input:
             self._subs.append(bus.subscribe("wheel_Command", self._on_command))
         self._topics = ("odom", "tf") if publish_tf else ("odom",)
-        self._timer = clock.schedule_every(clock.now_us, self.period_us, self._on_timer, publishes=self._topics)
+        self._timer = clock.schedule_every(clock.now_us, self.period_us, self._on_timer,
+                                           publishes=self._topics)
 
     @property
     def x_m(self) -> float:
@@ -177,50 +186,26 @@ class WheelOdometry:
         return math.atan2(math.sin(yaw), math.cos(yaw))
 
     @property
+    def speed_samples(self) -> str:
+        """Meaning of a speed sample, ``"window"`` or ``"hold"`` (constructor)."""
+        return self.samples.speed_samples
+
+    @property
     def catchup_max_fraction(self) -> float:
         """Largest correction as a fraction of the wheels' speed and yaw rate (constructor)."""
         return self.published.catchup_max_fraction
 
     # -- inputs -----------------------------------------------------------------
     def _on_speed(self, wheel: int, msg: Float64) -> None:
-        if self.signed_input:
-            rpm = float(msg.data)
-        else:
-            rpm = self._direction[wheel] * abs(float(msg.data))
         self.update()
-        now = self.clock.now_us
-        profile = self.published.profiles[wheel]
-        known_us = profile.known_us(now)
-        if self.speed_samples == "hold":
-            profile.cut(now)  # a measurement supersedes an assumed brake ramp
-            profile.step(now, rpm)
-        else:
-            t1 = now - self.sample_latency_us
-            length_us = (self.revolutions_per_sample * 60e6 / abs(rpm)) if rpm else 1e15
-            profile.cut(max(t1 - length_us, known_us))
-            if profile.last_rpm == 0.0:  # it stood before: it started with this window, not before
-                profile.step(t1 - length_us, 0.0)
-            profile.window(t1 - length_us, t1, rpm)
+        self.samples.sample(wheel, msg.data, self.clock.now_us)
         self.published.changed()
 
     def _on_command(self, msg: Float64MultiArray) -> None:
         self.update()
-        now = self.clock.now_us
-        for wheel, motion in enumerate((int(msg.data[0]), int(msg.data[2]))):
-            if motion == self._motion[wheel]:
-                continue
-            self._motion[wheel] = motion
-            profile = self.published.profiles[wheel]
-            profile.cut(now)
-            if motion == 0:
-                profile.step(now, profile.last_rpm)
-                profile.window(now + self.brake_stop_us, now + self.brake_stop_us, 0.0)
-            else:
-                self._direction[wheel] = 1 if motion > 0 else -1
-                profile.step(now, self._direction[wheel] * abs(profile.last_rpm))
-        for profile in self.published.profiles:
-            if profile.last_rpm == 0.0 and profile.last_us < now:
-                profile.step(now, 0.0)  # at rest until this command: no motion before it
+        data = msg.data
+        self.samples.command((int(data[0]), int(data[2])), (float(data[1]), float(data[3])),
+                             self.clock.now_us)
         self.published.changed()
 
     def set_wheel_speeds_rpm(self, left_rpm: float, right_rpm: float) -> None:
@@ -263,6 +248,7 @@ class WheelOdometry:
         self.update()
         rpm = self.published.smoothed.speeds_rpm(self.clock.now_us)
         self.published.restart(self.clock.now_us, (float(x_m), float(y_m), float(yaw_rad)), rpm)
+        self.samples.restarted()
 
     # -- output -----------------------------------------------------------------
     def _on_timer(self) -> None:

@@ -10,10 +10,11 @@ with the wheel speeds in force (each following its estimate at most at
 plus a correction twist that makes up its difference to the smoothed pose, in the
 body frame, over one time ``T >= catchup_time_s`` for x, y and yaw together,
 stretched so that the correction stays within ``catchup_max_fraction`` of the
-motion the wheels give (of the speed for x and y, of the yaw rate for yaw) plus :data:`CATCHUP_FLOOR_M_S` and :data:`CATCHUP_FLOOR_RAD_S`
-(what is left at a stop settles at those rates). The published twist is the one the
-published pose moves with, correction included (``linear.y`` is non-zero only
-while a sideways difference is made up), so integrating it gives the pose.
+motion the wheels give (of the speed for x and y; for yaw, of the larger of the yaw rate and the one
+either wheel's speed gives turning in place, so a heading seen late is made up before a stop) plus
+:data:`CATCHUP_FLOOR_M_S` and :data:`CATCHUP_FLOOR_RAD_S` (what is left at a stop settles at those
+rates). The published twist is the one the published pose moves with, correction included
+(``linear.y`` is non-zero only while a sideways difference is made up), so integrating it gives the pose.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ from amr_twin.controllers.dead_reckoning import SmoothedPose, arc, twist_step
 DEADBAND_M, DEADBAND_RAD = 5e-4, 5e-4
 """A difference to the smoothed pose below both is left alone, m and rad (the correction ends)."""
 CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S = 0.05, 0.1
-"""Correction allowed beyond ``catchup_max_fraction`` of the wheels' motion (the rest after a stop), m/s, rad/s."""
+"""Correction allowed beyond ``catchup_max_fraction`` of the wheels' motion (the rest after a stop), m/s,
+rad/s."""
 
 
 class PublishedPose:
@@ -85,8 +87,11 @@ class PublishedPose:
             return
         v, w = self._body(*self.used)
         k = self.catchup_max_fraction
+        # yaw: within the fraction of the yaw rate, or of the one the wheels' speed gives turning in place
+        w_wheels = max(abs(w), abs(self._body(-self.used[0], self.used[0])[1]),
+                       abs(self._body(self.used[1], -self.used[1])[1]))
         t_s = max(self.catchup_s, e_xy / (k * abs(v) + CATCHUP_FLOOR_M_S),
-                  abs(eyaw) / (k * abs(w) + CATCHUP_FLOOR_RAD_S))
+                  abs(eyaw) / (k * w_wheels + CATCHUP_FLOOR_RAD_S))
         self.correction = (ex / t_s, ey / t_s, eyaw / t_s)
 
     def twist(self) -> tuple[float, float, float]:

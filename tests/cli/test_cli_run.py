@@ -194,7 +194,8 @@ def test_world_and_start_pose(tmp_path):
     assert 1.6 < pose["y_m"] < 2.1                           # ~0.7 m driven along +y
     assert pose["yaw_rad"] == pytest.approx(math.pi / 2, abs=0.05)
     odom = data["final_odom_pose"]                           # odometry starts at its own origin (REP-105)
-    assert 0.05 < odom["x_m"] < 0.8 and abs(odom["y_m"]) < 0.05  # (its first sample comes after a revolution)
+    # along its own x the distance driven (0.92 m; the node estimates the first revolution from the command)
+    assert odom["x_m"] == pytest.approx(pose["y_m"] - 1.0, abs=0.1) and abs(odom["y_m"]) < 0.05
 
 
 def test_a_saved_ros_map_is_a_world(tmp_path):

@@ -19,7 +19,8 @@ WHEEL = load_config().wheel
 GEOMETRY = {"wheel_radius_m": WHEEL.radius_m, "wheel_separation_m": WHEEL.separation_m}
 RPM_PER_M_S = 60.0 / (math.pi * 2 * WHEEL.radius_m)
 CIRCUMFERENCE_M = 2 * math.pi * WHEEL.radius_m
-EXACT = {"max_wheel_accel_m_s2": math.inf, **GEOMETRY}  # speeds in force at once: analytic arcs
+HELD = {"sample_gap_s": math.inf}  # a sample holds until the next (no silence bound): one sample, long arcs
+EXACT = {"max_wheel_accel_m_s2": math.inf, **HELD, **GEOMETRY}  # speeds in force at once: analytic arcs
 
 
 @pytest.fixture
@@ -99,7 +100,7 @@ def test_clockwise_about_icc_right_and_backward(rig):
 
 def test_brake_command_zeroes_a_stale_speed_after_the_brake_ramp(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, brake_stop_s=0.1, **EXACT)
+    odo = WheelOdometry(bus, clock, brake_stop_s=0.1, brake_friction_rpm_s=0.0, **EXACT)
     _firmware(bus, 1, RPM_PER_M_S, 1, RPM_PER_M_S)
     clock.run_until(1_000_000)
     bus.publish("wheel_Command", Float64MultiArray(data=[0.0, 0.0, 0.0, 0.0]))
@@ -159,12 +160,13 @@ def test_shutdown_stops_publishing(rig):
     assert len(odom_msgs) == 6
 
 
-def _start_one_revolution_late(rig, **options):
-    """At rest 1 s, start at 60 RPM; the first sample (mean of that revolution) arrives at 2.5 s."""
+def _start_one_revolution_late(rig, command_rpm=60.0, **options):
+    """At rest 1 s, commanded to ``command_rpm``; the wheels turn at 60 RPM from 1.5 s, and the first
+    sample (mean of that revolution) arrives at 2.5 s."""
     clock, bus, odom_msgs = rig
-    odo = WheelOdometry(bus, clock, **GEOMETRY, **options)
+    odo = WheelOdometry(bus, clock, **GEOMETRY, **{**HELD, **options})
     clock.run_until(1_000_000)
-    bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 60.0, 1.0, 60.0]))
+    bus.publish("wheel_Command", Float64MultiArray(data=[1.0, command_rpm, 1.0, command_rpm]))
     clock.run_until(1_500_000)  # the wheels turn from here on (true motion)
     clock.run_until(2_500_000)  # one revolution (1 s at 60 RPM) ended now
     return clock, bus, odom_msgs, odo
@@ -173,15 +175,16 @@ def _start_one_revolution_late(rig, **options):
 def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
     """Faithful firmware: one sample per revolution, stamped at its end; the smoothed pose has it."""
     clock, bus, odom_msgs, odo = _start_one_revolution_late(rig)
-    assert odo.x_m == 0.0 and odo.smoothed_pose()[0] == 0.0  # nothing measured yet
+    # nothing measured yet: the commanded 60 RPM, reached over the 0.5 s start ramp from 1 s
+    assert odo.x_m == pytest.approx(1.25 * CIRCUMFERENCE_M, rel=1e-9)
     bus.publish("wheel0_Vel", Float64(60.0))
     bus.publish("wheel1_Vel", Float64(60.0))
     # the wheels stood until the window 1.5-2.5 s at 60 RPM: one revolution, in hindsight
     assert odo.smoothed_pose()[0] == pytest.approx(CIRCUMFERENCE_M, rel=1e-9)
-    assert odo.x_m == 0.0  # the published pose does not jump
+    assert odo.x_m == pytest.approx(1.25 * CIRCUMFERENCE_M, rel=1e-9)  # the published pose does not jump
     clock.run_until(3_000_000)
     assert odo.smoothed_pose()[0] == pytest.approx(1.5 * CIRCUMFERENCE_M, rel=1e-9)  # held after it
-    assert 0.5 * CIRCUMFERENCE_M < odo.x_m < odo.smoothed_pose()[0]
+    assert odo.smoothed_pose()[0] < odo.x_m < 1.75 * CIRCUMFERENCE_M  # slower than the wheels: made up
     clock.run_until(6_000_000)  # made up by then, no overshoot
     assert odo.x_m == pytest.approx(odo.smoothed_pose()[0], abs=1e-3)
     assert odo.x_m == pytest.approx(4.5 * CIRCUMFERENCE_M, abs=1e-3)
@@ -193,7 +196,7 @@ def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
 def test_published_pose_is_continuous_and_its_twist_integrates_to_it(rig):
     """REP-105: no step larger than the wheels' motion allows (plus the bounded correction),
     and the published twist is the one the pose moves with."""
-    clock, bus, odom_msgs, odo = _start_one_revolution_late(rig)
+    clock, bus, odom_msgs, odo = _start_one_revolution_late(rig, command_rpm=30.0)  # faster than commanded
     bus.publish("wheel0_Vel", Float64(60.0))
     bus.publish("wheel1_Vel", Float64(62.0))  # the right wheel a little faster: a turn to make up
     clock.run_until(7_000_000)
@@ -220,6 +223,7 @@ def test_published_pose_is_continuous_and_its_twist_integrates_to_it(rig):
 
 def test_hold_mode_lags_and_never_makes_up(rig):
     clock, bus, _, odo = _start_one_revolution_late(rig, speed_samples="hold")
+    assert odo.x_m == 0.0  # no stand-in for a start: at rest until the first sample
     bus.publish("wheel0_Vel", Float64(60.0))
     bus.publish("wheel1_Vel", Float64(60.0))
     clock.run_until(6_000_000)
@@ -245,7 +249,7 @@ def test_windows_are_clipped_at_the_previous_sample(rig):
 
 def test_a_sample_supersedes_the_assumed_brake_ramp(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, brake_stop_s=0.5, signed_input=False, **EXACT)
+    odo = WheelOdometry(bus, clock, brake_stop_s=0.5, brake_friction_rpm_s=0.0, signed_input=False, **EXACT)
     _firmware(bus, 1, RPM_PER_M_S, 1, RPM_PER_M_S)
     clock.run_until(1_000_000)
     bus.publish("wheel_Command", Float64MultiArray(data=[0.0, 0.0, 0.0, 0.0]))
@@ -269,3 +273,77 @@ def test_bad_options_are_refused(rig):
                 {"publish_rate_hz": 0.0}):
         with pytest.raises(ValueError, match=next(iter(bad))):
             WheelOdometry(bus, clock, **GEOMETRY, **bad)
+
+
+def test_a_wheel_that_stops_without_a_brake_reads_at_rest_after_the_silence_bound(rig):
+    """Thesis firmware: nothing is published once a wheel stands. Silent past its next sample,
+    the wheel's speed falls under 60 / (time since the sample - gaps) RPM, and it is at rest
+    once that bound falls below rest_rpm."""
+    clock, bus, _ = rig
+    odo = WheelOdometry(bus, clock, max_wheel_accel_m_s2=math.inf, sample_gap_s=0.4, rest_rpm=10.0,
+                        **GEOMETRY)
+    bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 60.0, 1.0, 60.0]))
+    for t_us in (1_000_000, 2_400_000, 3_800_000):  # a revolution at 60 RPM, then the firmware's gap
+        clock.run_until(t_us)
+        bus.publish("wheel0_Vel", Float64(60.0))
+        bus.publish("wheel1_Vel", Float64(60.0))
+    x_sample = odo.smoothed_pose()[0]
+    clock.run_until(5_100_000)  # the next sample is not due yet: the speed holds
+    assert odo.body_velocity()[0] == pytest.approx(60.0 / RPM_PER_M_S)
+    clock.run_until(7_000_000)  # overdue: under the bound 60 / (7.0 - 3.8 - 0.4) RPM
+    assert 0.0 < odo.body_velocity()[0] <= 1.03 * 60.0 / 2.8 / RPM_PER_M_S  # knots 1.25x apart in time
+    clock.run_until(10_300_000)  # 60 / (10.3 - 4.2) < 10 RPM: at rest
+    assert odo.body_velocity() == (0.0, 0.0)
+    x_rest = odo.smoothed_pose()[0]
+    clock.run_until(30_000_000)
+    assert odo.smoothed_pose()[0] == x_rest and odo.x_m == pytest.approx(x_rest, abs=1e-3)
+    # held a revolution and the gap (1.4 rev), then at most ln(6) rev under the bound
+    assert x_rest - x_sample <= (1.4 + 1.03 * math.log(6.0)) * CIRCUMFERENCE_M
+    assert (odo.yaw_rad, odo.y_m) == pytest.approx((0.0, 0.0), abs=1e-9)
+
+
+def _stop_and_restart(bus, clock, gaps_s=(0.25, 0.4), until_s=17.0):
+    """Both wheels alike, straight: 60 RPM, brake at 5 s (to rest by 5.5 s), start at 10 s (60 RPM by
+    10.5 s). Each wheel publishes one revolution, then counts the next after its gap (as the thesis
+    firmware does): the revolution across the stop is published after the restart.
+    Returns the true distance, m."""
+    def rpm(t):
+        if t < 5.0:
+            return 60.0
+        if t < 10.0:
+            return 60.0 * max(0.0, 1.0 - (t - 5.0) / 0.5)
+        return 60.0 * min(1.0, (t - 10.0) / 0.5)
+
+    dt = 0.001
+    revs, count_from = 0.0, [(0.0, None), (0.0, None)]  # (count start, revs at it)
+    commands = {0: [1.0, 60.0, 1.0, 60.0], 5000: [0.0, 0.0, 0.0, 0.0], 10000: [1.0, 60.0, 1.0, 60.0]}
+    for k in range(int(until_s / dt)):
+        t = k * dt
+        clock.run_until(int(round(t * 1e6)))
+        if k in commands:
+            bus.publish("wheel_Command", Float64MultiArray(data=commands[k]))
+        for wheel in (0, 1):
+            start, at = count_from[wheel]
+            if at is None and t >= start:
+                count_from[wheel] = (t, revs)
+            elif at is not None and revs - at >= 1.0:
+                bus.publish(f"wheel{wheel}_Vel", Float64(60.0 / (t - start)))
+                count_from[wheel] = (t + gaps_s[wheel], None)
+        revs += 0.5 * (rpm(t) + rpm(t + dt)) / 60.0 * dt
+    return revs * CIRCUMFERENCE_M
+
+
+def test_a_restart_does_not_turn_when_the_wheels_do_not(rig):
+    """The revolutions across a stop are published after the restart, one wheel long after the
+    other: each keeps its count, and a wheel not measured since the start moves as the other."""
+    clock, bus, odom_msgs = rig
+    odo = WheelOdometry(bus, clock, **GEOMETRY)
+    distance_m = _stop_and_restart(bus, clock)
+    a = _poses(odom_msgs)
+    assert np.degrees(np.abs(a[:, 3]).max()) < 5.0  # published: never more than 5 degrees off
+    assert abs(math.degrees(odo.smoothed_pose()[2])) < 4.0  # the rest: a sample during the brake ramp
+    assert odo.smoothed_pose()[0] == pytest.approx(distance_m, rel=0.03)
+    assert odo.x_m == pytest.approx(distance_m, rel=0.03)
+    standing = (a[:, 0] > 6.0) & (a[:, 0] < 10.0)
+    assert np.ptp(a[standing, 1]) < 0.02  # still while the wheels stand
+

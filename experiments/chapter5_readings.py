@@ -25,9 +25,10 @@ import numpy as np
 
 from amr_twin.analysis.metrics import step_info
 from amr_twin.experiments.chapter5_criteria import TRANSIENT_WINDOW_S, judge, settling_band_rpm
+from amr_twin.experiments.chapter5_findings import TIMINGS as TIMING_BOUNDS
 
 READINGS = ("command", "first_sample", "mid_revolution")
-TIMINGS = ("delay_s", "rise_s", "peak_s", "settling_s")
+TIMINGS = tuple(TIMING_BOUNDS)  # delay, rise, peak, settling: the timings listing 4.12 bounds
 
 
 @dataclass(frozen=True)
@@ -77,7 +78,7 @@ def score(runs: list[dict], reading: str) -> ReadingScore:
     checks = 0
     for r in runs:
         raw = r["raw"]
-        for w, (name, wheel) in enumerate(r["wheels"].items()):
+        for name, wheel in r["wheels"].items():
             index = 0 if name == "left" else 1
             found = timings(raw["published"][index], raw["t_command_s"], wheel["reference_rpm"], name, reading)
             checks += 1

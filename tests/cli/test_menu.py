@@ -10,10 +10,21 @@ pexpect = pytest.importorskip("pexpect")
 AMR_TWIN = Path(sys.executable).with_name("amr-twin")
 
 
+def _client(*args: str, columns: int = 120):
+    """``amr-twin client ARGS`` under a pseudo-terminal, plain text."""
+    return pexpect.spawn(str(AMR_TWIN), ["client", *args], encoding="utf-8", timeout=30,
+                         env={"TERM": "dumb", "NO_COLOR": "1", "COLUMNS": str(columns), "PATH": "/usr/bin:/bin"})
+
+
+def _quit(child) -> None:
+    """Menu choice 0: the client says when it exits, then ends."""
+    child.sendline("0")
+    child.expect("exit at t=")
+    child.expect(pexpect.EOF)
+
+
 def test_menu_linear_then_stop_then_exit():
-    child = pexpect.spawn(str(AMR_TWIN), ["client", "--rate", "20", "--firmware", "faithful"],
-                          encoding="utf-8", timeout=30, env={"TERM": "dumb", "NO_COLOR": "1",
-                                                             "COLUMNS": "120", "PATH": "/usr/bin:/bin"})
+    child = _client("--rate", "20", "--firmware", "faithful")
     try:
         child.expect("Linear motion")
         child.expect("choice: ")
@@ -31,9 +42,7 @@ def test_menu_linear_then_stop_then_exit():
         child.expect("ERROR: linear velocity not valid")
         child.sendline("3")
         child.expect(r"sent wheel_Command \[0, 0\.00000, 0, 0\.00000\]")
-        child.sendline("0")
-        child.expect("exit at t=")
-        child.expect(pexpect.EOF)
+        _quit(child)
     finally:
         child.close()
     assert child.exitstatus == 0
@@ -101,9 +110,7 @@ def test_the_menu_reads_bounded_lines_from_a_pipe_or_a_file(tmp_path):
 def test_the_client_takes_a_world_as_the_run_commands_do():
     """``client`` had no ``--world``: the thesis' 0.7 m/s drove into the warehouse's south rack (at 7.3 s)
     with no hint. In the empty world it drives on; the start line names the world."""
-    child = pexpect.spawn(str(AMR_TWIN), ["client", "--rate", "20", "--world", "empty"],
-                          encoding="utf-8", timeout=30, env={"TERM": "dumb", "NO_COLOR": "1",
-                                                             "COLUMNS": "200", "PATH": "/usr/bin:/bin"})
+    child = _client("--rate", "20", "--world", "empty", columns=200)
     try:
         child.expect(r"world empty \(start x 0 m")
         child.expect("choice: ")
@@ -112,9 +119,7 @@ def test_the_client_takes_a_world_as_the_run_commands_do():
         child.sendline("0.7")
         index = child.expect([r"\[collision\]", r"t=\s*1[01]\.\d+ s"])
         assert index == 1, child.before
-        child.sendline("0")
-        child.expect("exit at t=")
-        child.expect(pexpect.EOF)
+        _quit(child)
     finally:
         child.close()
     assert child.exitstatus == 0

@@ -19,7 +19,9 @@ reconstructed from its description (navigate_to_pose_w_replanning_and_recovery):
   collision monitor filters every command;
 - a failure (no plan, the controller blocked for ``blocked_s``, no progress) starts the next
   recovery of the round robin (clear costmaps, spin, wait, back up); after ``max_failures`` the
-  goal is aborted with a one-line reason (:attr:`GoalOutcome.reason`), and so are the goals after it.
+  goal is aborted with a one-line reason (:attr:`GoalOutcome.reason`), and so are the goals after it;
+- a goal sent while one is active preempts it (:meth:`Navigator.send_goal`, nav2's and move_base's
+  preemption); :meth:`Navigator.cancel` ends the active goal and those queued, and the robot stops.
 """
 
 from __future__ import annotations
@@ -61,7 +63,8 @@ class NavParams:
 
 @dataclass
 class GoalOutcome:
-    """What became of one goal: ``succeeded`` or ``aborted`` (with the reason), times in s."""
+    """What became of one goal: ``succeeded``, ``aborted`` (with the reason), ``preempted`` (a new goal replaced
+    it) or ``canceled``; times in s."""
 
     goal: tuple
     status: str = "pending"
@@ -108,8 +111,50 @@ class Navigator:
         self._matched = (bus.advertise(POSE_TOPIC, PoseWithCovarianceStamped)
                          if matcher is not None and matcher.feedback else None)
         bus.subscribe("scan", self._on_scan)
-        first = max(clock.now_us, int(round(start_s * 1e6)))
-        self._timer = clock.schedule_every(first, int(round(self.dt_s * 1e6)), self._on_timer)
+        self._start_us = max(clock.now_us, int(round(start_s * 1e6)))
+        self._timer = None
+        if self.outcomes:
+            self._start_timer()
+
+    def _start_timer(self) -> None:
+        first = max(self.clock.now_us, self._start_us)
+        self._timer = self.clock.schedule_every(first, int(round(self.dt_s * 1e6)), self._on_timer)
+
+    # -- goals from outside (a user, an action server) ---------------------------------------
+    def send_goal(self, goal) -> GoalOutcome:
+        """Drive to ``goal`` ``(x_m, y_m, yaw_rad or None)`` now: the active goal ends ``preempted`` and the
+        queued ones ``canceled``. Returns the new goal's outcome (filled in as it goes)."""
+        self._end_all("preempted", "canceled", "replaced by a new goal")
+        out = GoalOutcome(tuple(goal))
+        self.outcomes.append(out)
+        self._goal_i = len(self.outcomes) - 1
+        if self._timer is None:
+            self._start_timer()
+        return out
+
+    def cancel(self, reason: str = "canceled") -> None:
+        """End the active goal and the queued ones as ``canceled``; the robot ramps to a stop."""
+        self._end_all("canceled", "canceled", reason)
+
+    def _end_all(self, active: str, queued: str, reason: str) -> None:
+        if self.done:
+            return
+        self._finish(active, reason)
+        for later in self.outcomes[self._goal_i:]:
+            later.status, later.reason = queued, reason
+        self._goal_i = len(self.outcomes)
+        if hasattr(self.controller, "reset"):
+            self.controller.reset()
+
+    @property
+    def active(self) -> GoalOutcome | None:
+        """The goal being driven to, or None."""
+        return None if self.done else self.outcomes[self._goal_i]
+
+    @property
+    def distance_left_m(self) -> float:
+        """Length of the rest of the present plan, m (NaN before the first plan of the active goal)."""
+        return math.nan if self.done or self._path is None else float(self._path.remaining_m)
 
     # -- state ----------------------------------------------------------------------------
     @property
@@ -234,9 +279,13 @@ class Navigator:
     # -- the control cycle ----------------------------------------------------------------------
     def _on_timer(self) -> None:
         if self.done or not self.pose_source.ready:
-            if self.done:
+            vel = self._velocity()
+            if self.done and vel == (0.0, 0.0):   # stopped: nothing more until a new goal
                 self._timer.cancel()
-            self._publish(0.0, 0.0)
+                self._timer = None
+                return
+            v, w = self.limits.ramp(0.0, 0.0, *vel, self.dt_s) if self.done else (0.0, 0.0)
+            self._publish(v, w)
             return
         now, pose, vel = self.clock.now_s, self.pose_source.pose(), self._velocity()
         out = self.outcomes[self._goal_i]

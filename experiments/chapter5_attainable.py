@@ -109,14 +109,19 @@ def summary(draws: list[Draw]) -> dict:
             "draws": [asdict(d) for d in draws]}
 
 
+UNUSED_SECTIONS = ("navigation", "actors")
+"""Sections of the parameter file no chapter 5 run reads (no navigation stack, no actors)."""
+
+
 def plant(cfg: TwinConfig) -> dict:
     """What a study's draws depend on besides the seed: a SHA-256 of the configuration without the drawn
-    values, the calibrated values kept (:data:`HELD`) and the ranges drawn in."""
+    values and without what chapter 5's runs do not use (:data:`UNUSED_SECTIONS`), the calibrated values kept
+    (:data:`HELD`) and the ranges drawn in."""
     import hashlib
     import json
 
     bounds = ranges(cfg)
-    data = cfg.model_dump()
+    data = {k: v for k, v in cfg.model_dump().items() if k not in UNUSED_SECTIONS}
     for key in bounds:
         section, name = key.split(".")
         del data[section][name]

@@ -46,6 +46,7 @@ from amr_twin.cli import experiment as experiment_group
 from amr_twin.cli import run as run_group
 from amr_twin.cli import sweep as sweep_group
 from amr_twin.cli.common import _config, _guard, fail, start_up
+from amr_twin.cli.fleet import fleet
 from amr_twin.cli.menu import client
 from amr_twin.cli.options import ConfigOpt, LiveCommand, ParamsOpt, SetOpt
 from amr_twin.cli.path_options import CheckedGroup
@@ -365,6 +366,7 @@ app.add_typer(run_group.app, name="run")
 app.add_typer(experiment_group.app, name="experiment")
 app.add_typer(sweep_group.app, name="sweep")
 app.command(name="client", cls=LiveCommand)(client)
+app.command(name="fleet")(fleet)
 
 
 def main() -> None:  # pragma: no cover - console entry

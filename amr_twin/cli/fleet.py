@@ -1,0 +1,99 @@
+"""``amr-twin fleet``: the twin as a VDA 5050 2.0 vehicle on an MQTT broker (docs/fleet.md).
+
+Every option is checked before the model is built; bad input is one line, exit 2. Without ``--vda5050`` an
+embedded broker (amqtt) serves on a free port of 127.0.0.1, printed at start. The run ends after
+``--duration-s`` simulated seconds, or at Ctrl-C (then the vehicle says OFFLINE and disconnects); ``--json``
+prints what it did as one JSON object.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+
+
+def _starts(text: Optional[str], robots: int) -> list:
+    """``X_M,Y_M,YAW_DEG[;...]`` as one (x_m, y_m, yaw_rad) a robot; None: the world's own start."""
+    if text is None:
+        return [None] * robots
+    out = []
+    for part in text.split(";"):
+        try:
+            x, y, yaw = (float(v) for v in part.split(","))
+        except ValueError:
+            fail(f"--starts {text!r}: expected X_M,Y_M,YAW_DEG for each robot (';' between robots)")
+        if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x, y, yaw)):
+            fail(f"--starts {text!r}: each value must be finite and within +-10000")
+        out.append((x, y, math.radians(yaw)))
+    if len(out) != robots:
+        fail(f"--starts {text!r}: {len(out)} poses for --robots {robots}: give one a robot")
+    return out
+
+
+def fleet(
+    robots: int = typer.Option(1, "--robots", help="How many robots (1 for now)."),
+    world: str = typer.Option("aisles", "--world", help="The world (its name is the VDA 5050 mapId)."),
+    starts: Optional[str] = typer.Option(None, "--starts", help="X_M,Y_M,YAW_DEG of each robot, ';' between "
+                                         "robots (default: the world's start)."),
+    vda5050: Optional[str] = typer.Option(None, "--vda5050", help="The broker, mqtt://HOST:PORT (default: an "
+                                          "embedded broker on a free port of 127.0.0.1)."),
+    interface: str = typer.Option("uagv", "--interface", help="The topics' interfaceName."),
+    duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Simulated seconds to run (default: "
+                                               "until Ctrl-C)."),
+    rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per wall second (0: as fast as possible)."),
+    as_json: bool = typer.Option(False, "--json", help="Print what the run did as one JSON object."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the sensors' noise."),
+    config: Optional[Path] = ConfigOpt,
+    params: Optional[Path] = ParamsOpt,
+    set_: Optional[list[str]] = SetOpt,
+) -> None:
+    """Serve the twin as VDA 5050 2.0 vehicle amr-1 (manufacturer amr-twin) on an MQTT broker."""
+    from amr_twin.fleet.protocol import check_name
+    from amr_twin.fleet.transport import broker_address
+
+    if robots != 1:
+        fail(f"--robots {robots}: only 1 for now (the multi-robot world is not built yet)")
+    poses = _starts(starts, robots)
+    for check in (lambda: check_name("--interface", interface),
+                  lambda: vda5050 is not None and broker_address(vda5050)):
+        try:
+            check()
+        except ValueError as exc:
+            fail(str(exc))
+    if not (math.isfinite(rate) and 0 <= rate <= 1000):
+        fail(f"--rate {rate:g}: must be a finite number in [0, 1000] (0: as fast as possible)")
+    if duration_s is not None and not (math.isfinite(duration_s) and 0 < duration_s <= 86400):
+        fail(f"--duration-s {duration_s:g}: must be in (0, 86400] s")
+    cfg = _config(config, params, set_)
+
+    def work() -> dict:
+        from amr_twin.fleet.session import FleetOptions, FleetSession
+        from amr_twin.fleet.protocol import topic
+
+        session = FleetSession(cfg, FleetOptions(world=world, start_xy_yaw=poses[0], url=vda5050,
+                                                 interface=interface, rate=rate, seed=seed))
+        typer.echo(f"vehicle amr-1 on {session.url}: {topic(interface, 'amr-1', '{order,instantActions,state,...}')}",
+                   err=True)
+        try:
+            left = math.inf if duration_s is None else duration_s
+            while left > 1e-9:
+                step = min(1.0, left)
+                session.run(step)
+                left -= step
+        except KeyboardInterrupt:
+            typer.echo("stopped", err=True)
+        finally:
+            out = session.summary()
+            session.close()
+        return out
+
+    out = _guard(work)
+    if as_json:
+        typer.echo(json.dumps(out))

@@ -1,0 +1,73 @@
+"""The action states of one vehicle (the specification's section 6.11): each action received, in order, with its
+status WAITING, INITIALIZING, RUNNING, FINISHED or FAILED (the 2.0 schema has no PAUSED)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+INSTANT_ACTIONS = frozenset({"cancelOrder", "startPause", "stopPause", "initPosition", "stateRequest",
+                             "factsheetRequest"})
+"""The instant actions this vehicle performs."""
+NODE_ACTIONS: frozenset = frozenset()
+"""The node actions it performs (pick, drop and charging are not built yet: an order carrying them is refused)."""
+EDGE_ACTIONS: frozenset = frozenset()
+DONE = ("FINISHED", "FAILED")
+
+
+@dataclass
+class ActionState:
+    """One action's state; ``order``: it came with the order (False: an instant action)."""
+
+    action_id: str
+    action_type: str
+    status: str = "WAITING"
+    result: str | None = None
+    order: bool = False
+
+    def message(self) -> dict:
+        """The state's ``actionStates`` entry."""
+        out = {"actionId": self.action_id, "actionType": self.action_type, "actionStatus": self.status}
+        if self.result is not None:
+            out["resultDescription"] = self.result
+        return out
+
+
+class ActionStates:
+    """The actions of the present order and the instant actions since, by actionId (insertion order)."""
+
+    def __init__(self):
+        self._states: dict[str, ActionState] = {}
+        self.changed = False
+
+    def add(self, action_id: str, action_type: str, status: str = "WAITING", order: bool = False) -> ActionState:
+        state = self._states[action_id] = ActionState(action_id, action_type, status, order=order)
+        self.changed = True
+        return state
+
+    def set(self, action_id: str, status: str, result: str | None = None) -> None:
+        state = self._states[action_id]
+        if (state.status, state.result) != (status, result if result is not None else state.result):
+            state.status, self.changed = status, True
+            if result is not None:
+                state.result = result
+
+    def get(self, action_id: str) -> ActionState | None:
+        return self._states.get(action_id)
+
+    def running(self, action_type: str) -> list[ActionState]:
+        """The actions of ``action_type`` not yet finished or failed."""
+        return [s for s in self._states.values() if s.action_type == action_type and s.status not in DONE]
+
+    def fail_order_actions(self, reason: str) -> None:
+        """Every order action not finished fails (a cancelled order)."""
+        for s in self._states.values():
+            if s.order and s.status not in DONE:
+                self.set(s.action_id, "FAILED", reason)
+
+    def new_order(self) -> None:
+        """A new order was accepted: the states kept until now are dropped (section 6.10.6)."""
+        self._states = {k: s for k, s in self._states.items() if s.status not in DONE}
+        self.changed = True
+
+    def messages(self) -> list[dict]:
+        return [s.message() for s in self._states.values()]

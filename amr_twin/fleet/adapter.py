@@ -1,0 +1,282 @@
+"""One vehicle's VDA 5050 2.0 side: orders and instant actions in, state and visualization out, on the twin's clock.
+
+:class:`VehicleAdapter` takes the messages of the ``order`` and ``instantActions`` topics (:meth:`handle`, in the
+twin's thread) and, every ``TICK_S`` of simulated time, follows the order: the next released node is sent to the
+vehicle as a goal (with its theta, if any); a node counts as traversed when the goal succeeds or, for a node
+the vehicle drives on from, when it passes within the node's allowed deviation (the vehicle's goal tolerance
+when 0). It stops at the last released node; unreleased ones (the horizon) wait for an order update, which is
+stitched at the last base node (:func:`~amr_twin.fleet.order.stitch`). The state goes out at every change and at
+least every ``STATE_PERIOD_S``; the visualization every tick. A refused order or action is answered with an
+error in the state (:class:`~amr_twin.fleet.order.Rejection`), never an exception.
+"""
+
+from __future__ import annotations
+
+import json
+
+from amr_twin.fleet.actions import EDGE_ACTIONS, INSTANT_ACTIONS, NODE_ACTIONS, ActionStates
+from amr_twin.fleet.order import Order, Rejection, parse_order, stitch
+from amr_twin.fleet.vehicle import within
+
+TICK_S = 0.1
+STATE_PERIOD_S = 1.0
+DRIVING_M_S, DRIVING_RAD_S = 0.01, 0.02
+"""Below both the vehicle counts as standing (``driving`` false)."""
+
+
+class VehicleAdapter:
+    """``vehicle`` (:class:`~amr_twin.fleet.vehicle.Vehicle`) behind VDA 5050; ``send(subtopic, message)`` publishes,
+    ``stamper`` (:class:`~amr_twin.fleet.protocol.Stamper`) heads each message, ``factsheet`` is the factsheet's
+    body; ``xy_tolerance_m``: the vehicle's own tolerance at a node (allowedDeviationXY 0)."""
+
+    def __init__(self, vehicle, clock, send, stamper, factsheet: dict, xy_tolerance_m: float = 0.25):
+        self.vehicle, self.clock, self.send, self.stamper = vehicle, clock, send, stamper
+        self.factsheet_body, self.xy_tolerance_m = factsheet, xy_tolerance_m
+        self.order: Order | None = None
+        self.nodes: list = []          # node states left, in sequence
+        self.edges: list = []
+        self.last_node = ("", 0)
+        self._last_node_obj = None
+        self.actions = ActionStates()
+        self.errors: list[dict] = []
+        self.paused = False
+        self._goal = None              # (node, outcome) sent to the vehicle
+        self._last_order_header: int | None = None
+        self._changed, self._last_state_s, self._driving = True, -1e9, False
+        self.log: list[tuple[float, str, dict]] = []
+        """Every message sent: (t_s, subtopic, message)."""
+        self._timer = clock.schedule_every(clock.now_us, int(TICK_S * 1e6), self._tick)
+
+    # -- in ---------------------------------------------------------------------------------------
+    def handle(self, subtopic: str, payload: bytes) -> None:
+        """A message of ``order`` or ``instantActions`` (raw JSON); a bad one becomes an error in the state."""
+        try:
+            msg = json.loads(payload)
+        except (ValueError, UnicodeDecodeError) as exc:
+            self._error(Rejection("validationError", f"{subtopic}: not JSON ({exc})", (("topic", subtopic),)))
+            return
+        if subtopic == "order":
+            self._on_order(msg)
+        elif subtopic == "instantActions":
+            self._on_instant_actions(msg)
+        self._changed = True
+
+    def _error(self, rejection: Rejection) -> None:
+        self.errors.append(rejection.error())
+        self._changed = True
+
+    def _on_order(self, msg) -> None:
+        header = msg.get("headerId") if isinstance(msg, dict) else None
+        if isinstance(header, int) and self._last_order_header is not None and 0 < header <= self._last_order_header:
+            self._error(Rejection("validationError", f"order: headerId {header} is not after the last order's "
+                                  f"{self._last_order_header} (a late or repeated message)",
+                                  (("topic", "order"), ("headerId", header))))
+            return
+        if isinstance(header, int):
+            self._last_order_header = header
+        try:
+            order = parse_order(msg, self.vehicle.map_id, NODE_ACTIONS, EDGE_ACTIONS)
+        except Rejection as exc:
+            self._error(exc)
+            return
+        try:
+            self._accept(order)
+        except Rejection as exc:
+            self._error(exc)
+
+    def _accept(self, order: Order) -> None:
+        current = self.order
+        if current is not None and order.order_id == current.order_id:
+            if order.update_id < current.update_id:
+                raise Rejection("orderUpdateError", f"order {order.order_id}: orderUpdateId {order.update_id} is "
+                                f"lower than the present {current.update_id}",
+                                (("topic", "order"), ("orderId", order.order_id), ("orderUpdateId", order.update_id)))
+            if order.update_id == current.update_id:
+                return   # the same message again: ignored (section 6.6.4.3)
+        stitched = current is not None and (bool(self.nodes) or order.order_id == current.order_id)
+        if stitched:
+            self.nodes, self.edges = stitch(self.nodes, self.edges, self._last_base(), order)
+        else:
+            first = order.nodes[0]
+            if not within(self.vehicle.pose(), first.x_m, first.y_m, None,
+                          max(first.deviation_xy_m, self.xy_tolerance_m), 0.0):
+                raise Rejection("noRouteError", f"order {order.order_id}: the first node {first.node_id} is not where "
+                                "the vehicle stands (nor within its allowed deviation)",
+                                (("topic", "order"), ("orderId", order.order_id), ("nodeId", first.node_id)))
+            self.nodes, self.edges = list(order.nodes), list(order.edges)
+        if current is None or order.order_id != current.order_id:
+            self.actions.new_order()
+        self.order = order
+        self.errors = [e for e in self.errors if e["errorType"] not in
+                       ("validationError", "orderError", "orderUpdateError", "noRouteError", "navigationError")]
+        if not stitched:                 # the first node is where the vehicle stands: traversed now
+            self._traverse(self.nodes[0], first=True)
+        elif self._goal is not None and self._goal[0] not in self.nodes:
+            self._goal = None
+
+    def _last_base(self):
+        """The last released node of the order: still to drive, or the last one traversed."""
+        released = [n for n in self.nodes if n.released]
+        return released[-1] if released else self._last_node_obj
+
+    def _on_instant_actions(self, msg) -> None:
+        actions = msg.get("actions") if isinstance(msg, dict) else None
+        if not isinstance(actions, list):
+            self._error(Rejection("validationError", "instantActions: field actions missing or not an array",
+                                  (("topic", "instantActions"),)))
+            return
+        for a in actions:
+            kind = a.get("actionType", a.get("actionName")) if isinstance(a, dict) else None
+            action_id = a.get("actionId") if isinstance(a, dict) else None
+            if not isinstance(kind, str) or not isinstance(action_id, str):
+                self._error(Rejection("validationError", "instantActions: an action without actionId or actionType",
+                                      (("topic", "instantActions"),)))
+                continue
+            self.actions.add(action_id, kind, "INITIALIZING")
+            if kind not in INSTANT_ACTIONS:
+                self.actions.set(action_id, "FAILED", "not an instant action of this vehicle")
+                self._error(Rejection("actionError", f"instant action {kind} is not one this vehicle performs",
+                                      (("topic", "instantActions"), ("actionId", action_id), ("actionType", kind))))
+                continue
+            getattr(self, f"_instant_{kind}")(action_id, {p.get("key"): p.get("value") for p in
+                                                          a.get("actionParameters") or [] if isinstance(p, dict)})
+
+    def _instant_cancelOrder(self, action_id: str, _params) -> None:
+        if not self.nodes and self._goal is None:
+            self.actions.set(action_id, "FAILED", "no order to cancel")
+            self._error(Rejection("noOrderToCancel", "cancelOrder: the vehicle has no order",
+                                  (("topic", "instantActions"), ("actionId", action_id))))
+            return
+        self.vehicle.cancel()
+        self.nodes, self.edges, self._goal = [], [], None
+        self.actions.fail_order_actions("order cancelled")
+        self.actions.set(action_id, "RUNNING")
+
+    def _instant_startPause(self, action_id: str, _params) -> None:
+        if not self.paused and self._goal is not None:
+            self.vehicle.cancel()
+            self._goal = None
+        self.paused = True
+        self.actions.set(action_id, "RUNNING")
+
+    def _instant_stopPause(self, action_id: str, _params) -> None:
+        self.paused = False
+        self.actions.set(action_id, "FINISHED")
+
+    def _instant_initPosition(self, action_id: str, params: dict) -> None:
+        x, y, theta = (params.get(k) for k in ("x", "y", "theta"))
+        ok = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (x, y, theta))
+        if ok and params.get("mapId", self.vehicle.map_id) == self.vehicle.map_id and \
+                within(self.vehicle.pose(), x, y, theta, 2 * self.xy_tolerance_m, 0.35):
+            self.last_node = (str(params.get("lastNodeId", self.last_node[0])), self.last_node[1])
+            self.actions.set(action_id, "FINISHED", "the pose agrees with the vehicle's localisation")
+            return
+        self.actions.set(action_id, "FAILED", "the twin's pose cannot be overridden: x, y, theta (and mapId) must "
+                         "agree with its localisation")
+        self._error(Rejection("actionError", "initPosition: the given pose is not where the vehicle is",
+                              (("topic", "instantActions"), ("actionId", action_id))))
+
+    def _instant_stateRequest(self, action_id: str, _params) -> None:
+        self.actions.set(action_id, "FINISHED")
+        self._publish_state()
+
+    def _instant_factsheetRequest(self, action_id: str, _params) -> None:
+        self.publish_factsheet()
+        self.actions.set(action_id, "FINISHED")
+
+    # -- the order ----------------------------------------------------------------------------
+    def _traverse(self, node, first: bool = False) -> None:
+        self.nodes.remove(node)
+        if not first and self.edges:
+            self.edges.pop(0)
+        self.last_node, self._last_node_obj = (node.node_id, node.sequence_id), node
+        self._goal = None
+        self._changed = True
+
+    def _follow(self) -> None:
+        if self.paused or not self.nodes or not self.nodes[0].released:
+            return
+        node = self.nodes[0]
+        if self._goal is None or self._goal[0] is not node:
+            self._goal = (node, self.vehicle.send_goal(node.x_m, node.y_m, node.theta_rad))
+        outcome = self._goal[1]
+        drives_on = len(self.nodes) > 1 and self.nodes[1].released
+        tol = max(node.deviation_xy_m, self.xy_tolerance_m)
+        if outcome.status == "succeeded" or (drives_on and within(self.vehicle.pose(), node.x_m, node.y_m,
+                                                                  node.theta_rad, tol, node.deviation_theta_rad)):
+            self._traverse(node)
+        elif outcome.status == "aborted":
+            self._error(Rejection("navigationError", f"node {node.node_id} not reached: {outcome.reason}",
+                                  (("nodeId", node.node_id), ("sequenceId", node.sequence_id))))
+            self.nodes, self.edges, self._goal = [], [], None
+
+    def _tick(self) -> None:
+        self._follow()
+        v, w = self.vehicle.velocity()
+        driving = abs(v) > DRIVING_M_S or abs(w) > DRIVING_RAD_S
+        if driving != self._driving:
+            self._driving, self._changed = driving, True
+        if not driving:
+            for kind in ("cancelOrder", "startPause"):
+                for s in self.actions.running(kind):
+                    self.actions.set(s.action_id, "FINISHED")
+        self._publish_visualization()
+        now = self.clock.now_s
+        if self._changed or self.actions.changed or now - self._last_state_s >= STATE_PERIOD_S - 1e-9:
+            self._publish_state()
+
+    # -- out ----------------------------------------------------------------------------------
+    def _emit(self, subtopic: str, body: dict) -> dict:
+        t = self.clock.now_s
+        msg = {**self.stamper.header(subtopic, t), **body}
+        self.log.append((t, subtopic, msg))
+        self.send(subtopic, msg)
+        return msg
+
+    def _position(self) -> dict:
+        pose = self.vehicle.pose()
+        if pose is None:
+            return {"x": 0.0, "y": 0.0, "theta": 0.0, "mapId": self.vehicle.map_id, "positionInitialized": False}
+        return {"x": pose[0], "y": pose[1], "theta": float(((pose[2] + 3.141592653589793) % 6.283185307179586)
+                                                           - 3.141592653589793),
+                "mapId": self.vehicle.map_id, "positionInitialized": True}
+
+    def _velocity(self) -> dict:
+        v, w = self.vehicle.velocity()
+        return {"vx": v, "vy": 0.0, "omega": w}
+
+    def _publish_visualization(self) -> None:
+        self._emit("visualization", {"agvPosition": self._position(), "velocity": self._velocity()})
+
+    def _publish_state(self) -> None:
+        volt, soc = self.vehicle.battery()
+        violated = self.vehicle.field_violated()
+        load = self.vehicle.payload_kg()
+        self._emit("state", {
+            "orderId": self.order.order_id if self.order else "",
+            "orderUpdateId": self.order.update_id if self.order else 0,
+            "lastNodeId": self.last_node[0], "lastNodeSequenceId": self.last_node[1],
+            "nodeStates": [n.state() for n in self.nodes], "edgeStates": [e.state() for e in self.edges],
+            "agvPosition": self._position(), "velocity": self._velocity(),
+            "loads": [{"weight": load}] if load > 0 else [],
+            "driving": self._driving, "paused": self.paused,
+            "newBaseRequest": bool(self.nodes) and not self.nodes[0].released,
+            "actionStates": self.actions.messages(),
+            "batteryState": {"batteryCharge": 100.0 * soc, "batteryVoltage": volt, "charging": False},
+            "operatingMode": "AUTOMATIC", "errors": list(self.errors), "information": [],
+            "safetyState": {"eStop": "MANUAL" if self.vehicle.estop_pressed() else "NONE",
+                            "fieldViolation": violated}})
+        self._changed, self.actions.changed, self._last_state_s = False, False, self.clock.now_s
+
+    def publish_factsheet(self) -> None:
+        """Send the factsheet (at connection and on factsheetRequest)."""
+        self._emit("factsheet", self.factsheet_body)
+
+    def connection(self, state: str) -> dict:
+        """A ``connection`` message with ``state`` (ONLINE, OFFLINE, CONNECTIONBROKEN), not sent (the transport
+        sends it, or sets it as its last will)."""
+        return {**self.stamper.header("connection", self.clock.now_s), "connectionState": state}
+
+    def close(self) -> None:
+        """Stop the adapter's timer."""
+        self._timer.cancel()

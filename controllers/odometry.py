@@ -243,12 +243,17 @@ class WheelOdometry:
         x, y, yaw = self.published.smoothed.pose_at(self.published.t_us)
         return x, y, math.atan2(math.sin(yaw), math.cos(yaw))
 
-    def reset(self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0) -> None:
-        """Set the pose in ``odom`` (the speeds in force are kept)."""
+    def reset(self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0, standing: bool = False) -> None:
+        """Set the pose in ``odom``: the speeds in force are kept, or, ``standing``, the node starts afresh
+        (both wheels at rest, every earlier sample and command forgotten: a robot reset)."""
         self.update()
-        rpm = self.published.smoothed.speeds_rpm(self.clock.now_us)
-        self.published.restart(self.clock.now_us, (float(x_m), float(y_m), float(yaw_rad)), rpm)
-        self.samples.restarted()
+        now = self.clock.now_us
+        rpm = (0.0, 0.0) if standing else self.published.smoothed.speeds_rpm(now)
+        self.published.restart(now, (float(x_m), float(y_m), float(yaw_rad)), rpm)
+        if standing:
+            self.samples.reset(now)
+        else:
+            self.samples.restarted()
 
     # -- output -----------------------------------------------------------------
     def _on_timer(self) -> None:

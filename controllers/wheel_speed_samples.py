@@ -76,6 +76,10 @@ class WheelSpeedSamples:
         self.sample_latency_us, self.brake_stop_us, self.start_us = sample_latency_us, brake_stop_us, start_us
         self.sample_gap_us, self.rest_rpm = sample_gap_us, float(rest_rpm)
         self.brake_friction_rpm_s = float(brake_friction_rpm_s)
+        self.reset(now_us)
+
+    def reset(self, now_us: int) -> None:
+        """Forget every sample and command: both wheels standing, never commanded, from ``now_us``."""
         self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
         self._sample_us: list[int | None] = [None, None]  # end of each wheel's newest measurement window
         self._command_rpm = [0.0, 0.0]  # each wheel's speed in the last wheel_Command, RPM

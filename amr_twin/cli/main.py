@@ -50,6 +50,7 @@ from amr_twin.cli.fleet import fleet
 from amr_twin.cli.menu import client
 from amr_twin.cli.options import ConfigOpt, LiveCommand, ParamsOpt, SetOpt
 from amr_twin.cli.path_options import CheckedGroup
+from amr_twin.ros1 import remapping
 
 
 class _App(typer.Typer):
@@ -65,8 +66,15 @@ class _App(typer.Typer):
         # parameters are loaded (amr_twin.cli.common.started), and the survivors frozen before exit
         # (files are closed, atexit handlers still run).
         start_up()
+        argv, ros_args = remapping.split(sys.argv[1:] if argv is None else list(argv))
+        bad = next(filter(None, map(remapping.problem, ros_args)), None)
+        if bad:
+            typer.echo(f"error: {bad}", err=True)
+            sys.exit(2)
+        remapping.keep(ros_args)  # roslaunch's __name:=, __log:=, remaps: for the ROS 1 node (amr_twin.ros1.remapping)
+        kwargs["args"], args = argv, ()
         try:
-            with self._only_group(sys.argv[1:] if argv is None else list(argv)):
+            with self._only_group(argv):
                 code = super().__call__(*args, standalone_mode=False, **kwargs)
         except _click_errors.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"

@@ -12,6 +12,7 @@ refused in one line).
 
 from __future__ import annotations
 
+import copy
 import functools
 import inspect
 from dataclasses import dataclass, field, fields
@@ -162,6 +163,10 @@ def checked_ros1(ros1: bool, roscore: bool, serial_pty: Optional[str], firmware:
 
     if roscore and not ros1:
         fail("--roscore is an option of --ros1: give --ros1 (or drop --roscore)")
+    from amr_twin.ros1.remapping import kept
+
+    if kept() and not ros1:
+        fail(f"ROS argument {kept()[0]!r} is for the twin's ROS 1 node: give --ros1 (or drop the NAME:=VALUE arguments)")
     params = None
     if serial_pty is not None:
         if not firmware.startswith("avr"):
@@ -224,11 +229,13 @@ class RunOptions:
     serial_pty: Optional[str] = None
 
 
-def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
-    """name -> (annotation, a fresh OptionInfo) for each field of :class:`RunOptions`."""
-    return {
+def _run_option_infos(overrides: dict | None = None) -> dict[str, tuple[object, typer.models.OptionInfo]]:
+    """name -> (annotation, a fresh OptionInfo) for each field of :class:`RunOptions`; ``overrides``: name ->
+    ``{"default": ..., "help": ...}`` for a command that runs with other defaults (``run goto``)."""
+    infos = {
         "duration_s": (Optional[float], typer.Option(None, "--duration-s", help="Simulated seconds (default 10; a "
-                       "mission's own), at most 3600.")),
+                       "mission's own), at most 3600; inf with --ros1 or --live: until Ctrl-C or SIGTERM (the outputs "
+                       "are written then).")),
         "payload_kg": (Optional[float], typer.Option(None, "--payload-kg", help="Payload mass, kg.")),
         "firmware": (str, firmware_option()),
         "sketch": (Optional[Path], sketch_option()),
@@ -267,6 +274,12 @@ def _run_option_infos() -> dict[str, tuple[object, typer.models.OptionInfo]]:
         **live_options(),
         **ros1_options(),
     }
+    for name, changes in (overrides or {}).items():
+        annotation, info = infos[name][0], copy.copy(infos[name][1])  # ConfigOpt and the like are shared
+        infos[name] = (annotation, info)
+        info.default = changes.get("default", info.default)
+        info.help = changes.get("help", info.help)
+    return infos
 
 
 RUN_OPTIONS = tuple(f.name for f in fields(RunOptions))
@@ -299,13 +312,14 @@ def merge(ctx: typer.Context, values: dict, fail: Callable[[str], None]) -> RunO
     return RunOptions(**out)
 
 
-def shared(fail: Callable[[str], None]):
-    """Decorator: add the :data:`RUN_OPTIONS` to a command; it receives ``opts: RunOptions`` first."""
+def shared(fail: Callable[[str], None], overrides: dict | None = None):
+    """Decorator: add the :data:`RUN_OPTIONS` to a command; it receives ``opts: RunOptions`` first.
+    ``overrides``: the command's own defaults and help texts (:func:`_run_option_infos`)."""
     def decorate(func):
         signature = inspect.signature(func, eval_str=True)
         own = [p for name, p in signature.parameters.items() if name != "opts"]
         extra = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=info, annotation=annotation)
-                 for name, (annotation, info) in _run_option_infos().items()]
+                 for name, (annotation, info) in _run_option_infos(overrides).items()]
 
         has_ctx = "ctx" in signature.parameters
         if not has_ctx:

@@ -24,6 +24,7 @@ import math
 from pathlib import Path
 from typing import Optional
 
+import click
 import typer
 
 from amr_twin.cli.actor_options import checked_actors
@@ -50,6 +51,13 @@ def _finite(name: str, value: Optional[float], required: bool = True) -> Optiona
 
 
 def _duration(opts: RunOptions, default_s: float) -> float:
+    if opts.duration_s == math.inf:  # until stopped: Ctrl-C, SIGTERM (roslaunch), _run_live
+        if not (opts.ros1 or opts.live is not None):
+            fail("--duration-s inf: a run until stopped is for the graph or a live view: give --ros1 or --live")
+        if opts.record is not None or opts.mcap is not None:
+            fail("--duration-s inf: --record and --mcap keep every message until the run ends: give a finite "
+                 "--duration-s")
+        return math.inf
     duration_s = _finite("--duration-s", opts.duration_s, required=False)
     duration_s = default_s if duration_s is None else duration_s
     if duration_problem(duration_s):
@@ -109,9 +117,21 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     recording = opts.record is not None or opts.mcap is not None
     from amr_twin.cli.checks import check_memory
 
-    check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors, rerun=opts.record is not None)
+    if duration_s != math.inf:  # until stopped: ~0.11 MB a simulated second, amr_twin.sim.bounds
+        check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors, rerun=opts.record is not None)
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     actors = checked_actors(opts, mission_actors, cfg, start)
+    navigation = None  # --ros1 --sensors: the navigation stack as move_base (amr_twin/ros1/navigation_setup.py)
+    if ros1 is not None and opts.sensors and opts.serial_pty is None:
+        from amr_twin.ros1.navigation_setup import RunNavigation
+
+        try:
+            navigation = RunNavigation.checked(cfg, opts.world, start)
+        except ValueError as exc:  # a world without a map, ROS 1 without actionlib: the run goes on without it
+            typer.echo(f"ros1: no move_base on this run: {exc}", err=True)
+        ctx = click.get_current_context(silent=True)
+        if navigation is not None and not any(_given(c, "firmware") for c in (ctx, ctx and ctx.parent)):
+            firmware = "improved"  # as run goto: the faithful one restarts its ramps on every cmd_vel
     options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None, firmware_params=avr_params,
@@ -131,10 +151,15 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
             if recording:
                 from amr_twin.recording.rerun_capture import attach
                 attach(twin)
+            run_steps = steps
+            if navigation is not None:
+                navigation.attach(twin, opts.seed)
+                run_steps = navigation.yielding(steps, say=lambda line: typer.echo(line, err=True))
             if live is None and ros1 is None:
                 res = run_mission(cfg, steps, duration_s, options, twin=twin)
             else:
-                res = _run_live(twin, live, lambda: run_mission(cfg, steps, duration_s, options, twin=twin), ros1, rate)
+                res = _run_live(twin, live, lambda: run_mission(cfg, run_steps, duration_s, options, twin=twin), ros1,
+                                rate, navigation)
         finally:
             if opts.serial_pty is not None:
                 fw = twin.firmware
@@ -169,10 +194,22 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         raise typer.Exit(EXIT_COLLISION)
 
 
-def _run_live(twin, live, run, ros1=None, rate: float = 1.0):
-    """``run()`` with ``twin`` served live (amr_twin.live.session) and/or on a ROS 1 graph (amr_twin.ros1.session);
-    Ctrl-C ends it without writing the outputs."""
+def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
+    """``run()`` with ``twin`` served live (amr_twin.live.session) and/or on a ROS 1 graph (amr_twin.ros1.session),
+    with ``navigation`` (amr_twin.ros1.navigation_setup) as move_base there. SIGINT (Ctrl-C) or SIGTERM (roslaunch
+    sends both) ends the run at the twin's next event and the outputs are written; a second one ends it at once,
+    without them (exit 130)."""
+    import signal
+
     say = lambda line: typer.echo(line, err=True)  # noqa: E731
+    signals: list[int] = []
+
+    def on_signal(signum, _frame):
+        if signals:
+            raise KeyboardInterrupt
+        signals.append(signum)
+        twin.stop()
+    before = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     session = ros = None
     if live is not None:
         from amr_twin.live.session import LiveSession
@@ -193,10 +230,17 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0):
             from amr_twin.ros1.session import Ros1Session
 
             ros = Ros1Session(twin, pacer, ros1, say=say)
-        return run()
+            if navigation is not None:
+                navigation.serve(twin, pacer, say=say)
+        result = run()
+        if signals:
+            say(f"stopped by {signal.Signals(signals[0]).name} at t={twin.t_s:.2f} s simulated; writing the outputs")
+        return result
     except KeyboardInterrupt:
         fail(f"interrupted at t={twin.t_s:.2f} s simulated; no output written", code=130)
     finally:
+        for s, handler in before.items():
+            signal.signal(s, handler)
         (session or pacer).close()
         if ros is not None:
             ros.close()

@@ -12,7 +12,10 @@ loop as for any synced event, it
    they act at this simulated instant, through the bus like any node of the twin, so
    the physics never runs ahead of a command;
 3. hands every live sink (:mod:`amr_twin.live.foxglove`, :mod:`amr_twin.live.rerun_stream`)
-   what happened up to this instant: ``sink.flush(t_us)``.
+   what happened up to this instant: ``sink.flush(t_us)``;
+4. paused (:meth:`Pacer.pause`, a ``pause_physics`` call), holds the twin at this instant: no physics,
+   no ``/clock``, while it goes on running the queued calls (every :data:`PAUSED_POLL_S`) until
+   :meth:`Pacer.resume` or the twin's stop (:meth:`~amr_twin.sim.loop.Twin.stop`); the wall-clock reference starts afresh after it.
 
 The loop is untouched: it still steps the physics in C from one clock event to the next.
 A tick only adds chunk boundaries on the record grid, where the loop samples the physics
@@ -39,6 +42,8 @@ TICK_US = 20_000
 """Default period of the pacing event, us (50 Hz: the viewers' refresh, the commands' latency)."""
 MAX_LAG_S = 1.0
 """Wall seconds behind the paced schedule after which the reference is moved up."""
+PAUSED_POLL_S = 0.005
+"""How often a paused twin runs the calls queued meanwhile, wall s (a service call's latency while paused)."""
 
 
 class PacerClosed(RuntimeError):
@@ -70,6 +75,7 @@ class Pacer:
         self.ticks = 0
         self._calls: queue.SimpleQueue = queue.SimpleQueue()
         self._closed = False
+        self._paused = threading.Event()
         self._lock = threading.Lock()
         self._wall0: float | None = None
         self._sim0_us = 0
@@ -94,7 +100,26 @@ class Pacer:
         self.wait_until(now_us)
         self.run_calls()
         self.flush(now_us)
+        if self._paused.is_set():
+            self._hold()
         clock.schedule(now_us + self.tick_us, self._tick)
+
+    def _hold(self) -> None:
+        """Paused: run the queued calls until resumed or stopped; pace afresh from then on."""
+        while self._paused.is_set() and not self.twin.stopped:
+            time.sleep(PAUSED_POLL_S)
+            self.run_calls()
+        self._paused.clear()
+        self._wall0 = None
+
+    # -- pausing (any thread) ------------------------------------------------------------
+    def pause(self) -> None:
+        """Hold the twin at the next tick (it keeps running the queued calls) until :meth:`resume`."""
+        self._paused.set()
+
+    def resume(self) -> None:
+        """Let a paused twin run on."""
+        self._paused.clear()
 
     def wait_until(self, t_us: int) -> None:
         """Sleep until the wall time of simulated ``t_us`` (paced; the first call sets the reference)."""

@@ -1,18 +1,19 @@
 """The twin's bus and state on a ROS 1 graph, both ways: :class:`Ros1Bridge`.
 
-Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mcap_log`):
+Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mcap_log`), every name but ``/clock``
+relative (in the node's namespace: ``ROS_NAMESPACE=r1`` gives ``/r1/odom``, ``/r1/tf``):
 
 - every bus message of :data:`~amr_twin.recording.mcap_log.BUS_TOPICS` as it is published (the twin's ``on_message`` hook):
-  ``/odom``, ``/tf`` (odom -> base_link), ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
+  ``/odom``, ``/tf`` (odom -> base_link; map -> odom from the localisation: :mod:`~amr_twin.ros1.map_transform`),
+  ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
   ``/cmd_vel``, ``/wheel_Command``, ``/wheel0_Vel``, ``/wheel1_Vel`` (as the firmware publishes them)
   and ``/wheel_Command_Service/request``; ``/tf_static`` latched;
 - ``/clock`` every ``clock_period_us`` of simulated time (paced: at each instant's wall time, before that
   instant's messages; the nodes run with ``/use_sim_time``, which the session sets);
 - from grid samples, handed over at the pacer's ticks (:mod:`amr_twin.live.pacer`): ``/joint_states``
   and the joints' links on ``/tf`` (50 Hz: what robot_state_publisher would send), ``/twin/ground_truth``
-  (100 Hz), ``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current`` (100 Hz), ``/battery_state``
-  (10 Hz); ``/diagnostics``: each collision and fault as it happens (the ``.mcap``'s ``/twin/collisions`` and
-  ``/twin/faults`` statuses) and the battery once a second;
+  (100 Hz); the rows and statuses, ``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current``,
+  ``/battery_state``, ``/diagnostics`` (:mod:`amr_twin.ros1.status_topics`);
 - ``/robot_description`` latched (and the ``robot_description`` parameter, set by the session).
 
 In: ``/wheel_Command`` (``std_msgs/Float64MultiArray``, the thesis' service's output) and ``/cmd_vel``
@@ -36,27 +37,23 @@ as it can runs no faster than its subscribers' sockets take them.
 
 from __future__ import annotations
 
-import io
 import logging
 import threading
 import warnings
 
-from amr_twin.live.rows import LiveRows
-from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, JOINT_STATE_PERIOD_US, REQUEST_FIELDS
+from amr_twin.recording.mcap_log import BUS_TOPICS, JOINT_STATE_PERIOD_US, REQUEST_FIELDS
 from amr_twin.ros import ros_state
 from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
+from amr_twin.ros1.map_transform import MapTransform
 from amr_twin.ros1.messages import InputError, Ros1Messages, twist_from_ros, wheel_command_from_ros
 from amr_twin.ros1.outbox import Outbox
-from amr_twin.ros1.serialization import WRITERS, StateFrames, clock_us, float64_multi_array
-from amr_twin.sim.event_log import statuses
+from amr_twin.ros1.serialization import WRITERS, StateFrames, clock_us
+from amr_twin.ros1.status_topics import StatusTopics
 
 LOG = logging.getLogger(__name__)
 
 FIRMWARE_TOPICS = ("wheel_Command", "wheel0_Vel", "wheel1_Vel")
-ROW_TOPICS = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current")
-DIAGNOSTICS_PERIOD_ROWS = 100
-"""The battery's status on /diagnostics every 100th row of the 100 Hz grid (1 Hz)."""
 
 
 
@@ -96,27 +93,28 @@ class Ros1Bridge:
                 warnings.simplefilter("ignore")
                 return rospy.Publisher(topic, conv.ros_class(typ), queue_size=None, latch=latch)
 
-        self.pubs = {bus: pub(topic, typ) for bus, (topic, typ, _enc) in BUS_TOPICS.items()
+        self.pubs = {bus: pub(topic.lstrip("/"), typ) for bus, (topic, typ, _enc) in BUS_TOPICS.items()
                      if bus not in skip and not (bus == "uwb/range" and getattr(twin, "uwb", None) is None)}
-        self.pubs["tf_static"] = pub("/tf_static", "tf2_msgs/TFMessage", latch=True)
+        self.pubs["tf_static"] = pub("tf_static", "tf2_msgs/TFMessage", latch=True)
         self.tf = self.pubs["tf"]
+        self.map_tf = MapTransform()
+        """``map -> odom`` on ``/tf`` from the localisation's pose in ``map`` (:mod:`amr_twin.ros1.map_transform`)."""
         self._fast = {bus: (p, WRITERS[BUS_TOPICS[bus][1]]) for bus, p in self.pubs.items()
                       if bus in BUS_TOPICS and BUS_TOPICS[bus][1] in WRITERS and bus != "wheel_Command_Service/request"}
         """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to the outbox."""
         self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
-        self.state_pubs = {"/twin/ground_truth": pub("/twin/ground_truth", "nav_msgs/Odometry"),
-                           "/joint_states": pub("/joint_states", "sensor_msgs/JointState")}
-        self.row_pubs = {t: pub(t, "std_msgs/Float64MultiArray") for t in ROW_TOPICS}
-        self.battery_pub = pub("/battery_state", "sensor_msgs/BatteryState")
-        self.diag_pub = pub("/diagnostics", "diagnostic_msgs/DiagnosticArray")
-        self.description_pub = pub("/robot_description", "std_msgs/String", latch=True)
+        self.state_pubs = {"/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
+                           "/joint_states": pub("joint_states", "sensor_msgs/JointState")}
+        self.status = StatusTopics(twin, conv, self.out, pub)
+        """``/twin/*`` rows, ``/battery_state``, ``/diagnostics`` (:mod:`amr_twin.ros1.status_topics`)."""
+        self.description_pub = pub("robot_description", "std_msgs/String", latch=True)
         self.description_pub.publish(conv.ros_class("std_msgs/String")(data=twin.urdf))
         self.pubs["tf_static"].publish(conv.to_ros(TFMessage(self.bus.static_transforms())))
         self._subs = []
         if firmware_topics:
-            self._subs.append(rospy.Subscriber("/wheel_Command", conv.ros_class("std_msgs/Float64MultiArray"),
+            self._subs.append(rospy.Subscriber("wheel_Command", conv.ros_class("std_msgs/Float64MultiArray"),
                                                self._on_wheel_command, queue_size=100))
-        self._subs.append(rospy.Subscriber("/cmd_vel", conv.ros_class("geometry_msgs/Twist"), self._on_cmd_vel,
+        self._subs.append(rospy.Subscriber("cmd_vel", conv.ros_class("geometry_msgs/Twist"), self._on_cmd_vel,
                                            queue_size=100))
         self._services = []
         if self.bus.has_service("start_motor"):
@@ -130,21 +128,22 @@ class Ros1Bridge:
         self._state = ros_state.StateSampler(twin.observables.model, twin.observables.named)
         twin.on_grid(self._state.sample)
         self._state.sample(twin.t_phys_us)
-        self._frames = StateFrames(self._state.joint_names, self._state.child_frames, ros_state.BASE_FRAME)
-        self._rows = None  # the recorder's columns, sampled once a row topic has a subscriber (LiveRows)
-        self._events_sent: set = set()
+        self._frames = StateFrames(self._state.joint_names, self._state.child_frames, ros_state.BASE_FRAME,
+                                   ros_state.WORLD_FRAME)
         twin.on_message(self._tap)
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
     def start(self) -> None:
-        """The graph's subscribers have connected (before the run): sample the recorder's columns if one of
-        their topics is wanted (later, from the first flush that finds a subscriber)."""
-        if self._rows is None and any(Outbox.wanted(p) for p in (*self.row_pubs.values(), self.battery_pub,
-                                                                 self.diag_pub)):
-            self._rows = LiveRows(self.twin)
+        """The graph's subscribers have connected (before the run): keep the recorder's rows if one of their
+        topics is wanted (later, from the first flush that finds a subscriber)."""
+        self.status.collect(self.twin.clock.now_us)
 
     # -- out (the twin's thread) ------------------------------------------------------------
     def _tap(self, topic: str, msg, t_us: int) -> None:
+        if topic in MapTransform.TOPICS and Outbox.wanted(self.tf):
+            due = self.map_tf.take(topic, msg)
+            if due is not None:
+                self.out.put(self.tf, due[1], due[0])
         fast = self._fast.get(topic)
         if fast is not None:  # the high-rate path: a few hundred messages a simulated second
             pub, writer = fast
@@ -165,15 +164,9 @@ class Ros1Bridge:
                                     [float(msg.motionL), float(msg.speedL), float(msg.motionR), float(msg.speedR)])
         writer = WRITERS.get(msg._type)
         if writer is None:
-            self._put_ros(pub, self.conv.to_ros(msg), t_us)
+            self.status.put_ros(pub, self.conv.to_ros(msg), t_us)
         else:
             self.out.put(pub, writer(msg), t_us)
-
-    def _put_ros(self, pub, msg, t_us: int) -> None:
-        """A genpy message into the outbox (the bytes rospy's publish would write)."""
-        buf = io.BytesIO()
-        msg.serialize(buf)
-        self.out.put(pub, buf.getvalue(), t_us)
 
     def _publish_clock(self, t_us: int) -> None:
         """``/clock`` at each multiple of the clock's period up to ``t_us``."""
@@ -198,13 +191,7 @@ class Ros1Bridge:
         """The clock, the grid samples and events up to ``t_us`` into the outbox."""
         self._publish_clock(t_us)
         self._publish_state(t_us)
-        if self._rows is None:
-            self.start()
-        else:
-            rows = self._rows.take(t_us)
-            if rows is not None:
-                self._publish_rows(rows)
-        self._publish_events(t_us)
+        self.status.collect(t_us)
 
     def _publish_state(self, t_us: int) -> None:
         batch = self._state.split(t_us)
@@ -214,55 +201,14 @@ class Ros1Bridge:
             a = {key: v.tolist() for key, v in batch.arrays(0 if want_gt else JOINT_STATE_PERIOD_US, want_gt).items()}
             for i, ts in enumerate(a["t_us"]):
                 if want_gt:
-                    out.put(gt, WRITERS["nav_msgs/Odometry"](ros_state.ground_truth(
-                        ts, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i])), ts)
+                    out.put(gt, self._frames.ground_truth(ts, a["pos"][i], a["quat"][i], a["v_body"][i],
+                                                          a["w_body"][i]), ts)
                 if ts % JOINT_STATE_PERIOD_US == 0:
                     if want_js:
                         out.put(js, self._frames.joint_state(ts, a["q"][i], a["qd"][i]), ts)
                     if want_tf:
                         links = self._frames.link_transforms(ts, a["link_pos"][i], a["link_quat"][i])
                         out.put(self.tf, links, ts)
-
-    def _publish_rows(self, rows) -> None:
-        times = rows.t_us.tolist()
-        for topic, column in zip(ROW_TOPICS, (rows.true_rpm, rows.pwm_counts, rows.current_a)):
-            pub = self.row_pubs[topic]
-            if Outbox.wanted(pub):
-                for t, values in zip(times, column.astype(float).tolist()):
-                    self.out.put(pub, float64_multi_array(Float64MultiArray(data=values)), t)
-        want_battery, want_diag = self.battery_pub.get_num_connections(), self.diag_pub.get_num_connections()
-        if not (want_battery or want_diag):
-            return
-        cap = self.twin.cfg.battery.capacity_ah
-        battery = self.conv.ros_class("sensor_msgs/BatteryState")
-        for i, (t, volts, amps, soc) in enumerate(zip(times, rows.battery_v.tolist(),
-                                                      rows.battery_a.tolist(), rows.battery_soc.tolist())):
-            stamp = self.rospy.Time(t // 1_000_000, t % 1_000_000 * 1000)
-            if want_battery and rows.index[i] % BATTERY_EVERY_ROWS == 0:
-                msg = battery(voltage=volts, current=-amps, charge=soc * cap, capacity=cap, design_capacity=cap,
-                              percentage=soc, present=True)
-                msg.header.stamp = stamp
-                self._put_ros(self.battery_pub, msg, t)
-            if want_diag and rows.index[i] % DIAGNOSTICS_PERIOD_ROWS == 0:
-                level = 0 if soc > 0.2 else 1
-                self._publish_status(t, stamp, level, "amr/battery", f"{volts:.2f} V, {soc * 100:.0f} %",
-                                     {"voltage_v": volts, "current_a": amps, "soc": soc})
-
-    def _publish_events(self, t_us: int) -> None:
-        for t_ns, _topic, level, name, message, values in statuses(self.twin):
-            key = (t_ns, name)
-            if t_ns <= t_us * 1000 and key not in self._events_sent:
-                self._events_sent.add(key)
-                stamp = self.rospy.Time(t_ns // 1_000_000_000, t_ns % 1_000_000_000)
-                self._publish_status(-(-t_ns // 1000), stamp, level, name, message, values)
-
-    def _publish_status(self, t_us: int, stamp, level: int, name: str, message: str, values: dict) -> None:
-        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-
-        array = DiagnosticArray(status=[DiagnosticStatus(level=level, name=name, message=message, hardware_id="amr",
-                                                         values=[KeyValue(str(k), str(v)) for k, v in values.items()])])
-        array.header.stamp = stamp
-        self._put_ros(self.diag_pub, array, t_us)
 
     # -- in (rospy's threads) ------------------------------------------------------------------
     def _own(self, msg) -> bool:
@@ -307,6 +253,6 @@ class Ros1Bridge:
             sub.unregister()
         for srv in self._services:
             srv.shutdown()
-        for pub in [*self.pubs.values(), self.clock_pub, *self.state_pubs.values(), *self.row_pubs.values(),
-                    self.battery_pub, self.diag_pub, self.description_pub]:
+        for pub in [*self.pubs.values(), self.clock_pub, *self.state_pubs.values(), *self.status.publishers,
+                    self.description_pub]:
             pub.unregister()

@@ -52,6 +52,16 @@ def master_problem(uri: str, timeout_s: float = 3.0) -> str | None:
     return None
 
 
+def master_pid(uri: str, timeout_s: float = 1.0) -> int | None:
+    """The pid of the master answering at ``uri`` within ``timeout_s`` (None: none answers): a new pid is a new
+    master, which knows nothing of the nodes registered with the one before."""
+    try:
+        code, _msg, pid = xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport(timeout_s)).getPid("/amr_twin_check")
+    except (OSError, xmlrpc.client.Error):
+        return None
+    return int(pid) if code == 1 else None
+
+
 def free_port() -> int:
     """A TCP port free on the loopback interface now."""
     with socket.socket() as s:
@@ -84,9 +94,10 @@ class Master:
             proc.wait()
 
 
-def start_roscore(timeout_s: float = 30.0, log_dir: str | None = None) -> Master:
-    """``roscore -p PORT`` on a free port, once its master answers (RuntimeError, one line, if it does not)."""
-    port = free_port()
+def start_roscore(timeout_s: float = 30.0, log_dir: str | None = None, port: int | None = None) -> Master:
+    """``roscore -p PORT`` on ``port`` (None: a free one), once its master answers (RuntimeError, one line, if it
+    does not)."""
+    port = free_port() if port is None else port
     uri = f"http://127.0.0.1:{port}"
     env = dict(os.environ, ROS_MASTER_URI=uri, ROS_IP="127.0.0.1")
     env.pop("ROS_HOSTNAME", None)

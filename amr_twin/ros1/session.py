@@ -19,19 +19,24 @@ import os
 import time
 from dataclasses import dataclass
 
+from amr_twin.ros1 import remapping
 from amr_twin.ros1.master import DEFAULT_MASTER_URI, Master, master_problem, start_roscore
+from amr_twin.ros1.master_watch import MasterWatch
+from amr_twin.ros1.sim_services import SimServices
 
 NODE_NAME = "amr_twin"
+"""The node's name (``__name:=`` renames it), in ``ROS_NAMESPACE`` (or ``__ns:=``) as every relative name."""
+_ABSENT = object()
 SETTLE_MAX_S = 10.0
 """Longest wait for the graph's subscribers to connect before the twin runs, wall s (it ends as soon as they
 are: a few ms each; the bound only matters for a node the master lists that does not answer, or a machine so
 busy that connecting takes seconds, where 2 s was too short)."""
-UNPACED_TICK_US = 200_000
+UNPACED_TICK_US = 400_000
 """The pacer's tick when the twin runs unpaced on the graph, us. Each tick stops the physics' grid loop and
 costs numpy's work on the state samples and a write per topic and subscriber, whatever their number (20 ms
-ticks cost 12 % of the twin's CPU without a subscriber; 100 ms ticks put the bridge at 1.27x, 200 ms at 1.22x);
-unpaced, nothing waits on the wall clock. A message from the graph acts at the next tick (200 ms of simulated
-time, ~3 ms of wall time at full speed)."""
+ticks cost 12 % of the twin's CPU without a subscriber; per tick, ~0.5 ms of the bridge's CPU and a write per
+topic and subscriber: docs/ros1.md); unpaced, nothing waits on the wall clock. A message from the graph acts
+at the next tick (400 ms of simulated time, ~8 ms of wall time at full speed)."""
 
 
 def pacer_tick_us(rate: float) -> int:
@@ -94,20 +99,26 @@ class Ros1Session:
                 os.environ["ROS_MASTER_URI"] = self.master.uri
                 os.environ.setdefault("ROS_IP", "127.0.0.1")
             rospy = self.rospy = import_rospy()
-            rospy.init_node(NODE_NAME, anonymous=False, disable_signals=True, log_level=rospy.WARN)
+            rospy.init_node(NODE_NAME, argv=remapping.node_argv(), anonymous=False, disable_signals=True,
+                            log_level=rospy.WARN)
             _leave_own_clock(rospy)
+            self._sim_time_before = rospy.get_param("/use_sim_time", _ABSENT)
             rospy.set_param("/use_sim_time", True)
-            rospy.set_param("/robot_description", twin.urdf)
+            rospy.set_param("robot_description", twin.urdf)
             self.bridge = Ros1Bridge(twin, pacer, firmware_topics=options.firmware_topics)
+            self.services = SimServices(twin, pacer, rospy)
         except BaseException:
             if rospy is not None:
                 rospy.signal_shutdown("the twin could not join the graph")
             self.master.stop()
             raise
         pacer.sinks.append(self.bridge)
+        self.watch = MasterWatch(self.master.uri, rospy, {"/use_sim_time": True,
+                                                          rospy.resolve_name("robot_description"): twin.urdf}, say)
         where = f"a private roscore at {self.master.uri}" if options.roscore else f"the master at {self.master.uri}"
-        say(f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; "
-            "publish /wheel_Command or /cmd_vel to drive it)")
+        say(f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; publish "
+            f"{rospy.resolve_name('wheel_Command')} or {rospy.resolve_name('cmd_vel')} to drive it; "
+            f"{rospy.get_name()}/pause_physics, ...)")
         if not self.settle():
             say(f"ros1: not every node the master lists on the twin's topics connected within {SETTLE_MAX_S:g} s; "
                 "the run starts without them")
@@ -115,8 +126,7 @@ class Ros1Session:
 
     def _publishers(self) -> list:
         b = self.bridge
-        return [*b.pubs.values(), b.clock_pub, *b.state_pubs.values(), *b.row_pubs.values(), b.battery_pub,
-                b.diag_pub, b.description_pub]
+        return [*b.pubs.values(), b.clock_pub, *b.state_pubs.values(), *b.status.publishers, b.description_pub]
 
     def settle(self, max_s: float = SETTLE_MAX_S) -> bool:
         """Wait until the twin is connected to each subscriber of its topics and each publisher of its inputs
@@ -137,9 +147,23 @@ class Ros1Session:
             time.sleep(0.02)
 
     def close(self) -> None:
-        """Stop the bridge (if the pacer has not), rospy, and the private roscore."""
+        """Stop the bridge (if the pacer has not) and the services, put ``/use_sim_time`` back as it was (deleted
+        if it was not set), stop rospy and the private roscore."""
         try:
+            self.watch.close()
+            self.services.close()
             self.bridge.close()
+            if not self.watch.lost:
+                self._restore_sim_time()
         finally:
             self.rospy.signal_shutdown("the twin's run is over")
             self.master.stop()
+
+    def _restore_sim_time(self) -> None:
+        try:
+            if self._sim_time_before is _ABSENT:
+                self.rospy.delete_param("/use_sim_time")
+            else:
+                self.rospy.set_param("/use_sim_time", self._sim_time_before)
+        except (KeyError, OSError):  # deleted meanwhile, or the master gone
+            pass

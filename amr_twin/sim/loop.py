@@ -93,6 +93,11 @@ class TwinOptions:
     # node's effective wheel radii and wheelbase (a UMBmark calibration); None: the nominal geometry
 
 
+PLACED_SIGMA = 1e-4
+"""Standard deviation of the pose a reset places the robot at, told to an EKF (m and rad): exact, but for the
+filter's conditioning."""
+
+
 class Twin(Hooks):
     """The whole robot: build it, then :meth:`advance` it in simulated time.
 
@@ -113,6 +118,7 @@ class Twin(Hooks):
         physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals, options.sensors,
                                         options.settle_s, where, tuple(options.actors), options.obstacles)
         self.physics = physics
+        self._rest = physics.positions()  # the robot settled at its start: how it stands after a teleport
         self.floor = None
         """The floor's friction field of this run (:mod:`amr_twin.sim.floor_friction`), drawn from the
         seed with ``sim.floor_friction_field`` and the brush tyres; None otherwise."""
@@ -173,6 +179,8 @@ class Twin(Hooks):
         """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
         self.recorder = Recorder(self)
         self.halted = False
+        self.stopped = False
+        """:meth:`stop` was called: :meth:`advance` returns at once (a run ended from outside, e.g. a signal)."""
         self.actors = None
         """The actors' motion (:class:`amr_twin.sim.actors.ActorMotion`), None without actors."""
         if options.actors:
@@ -228,7 +236,7 @@ class Twin(Hooks):
         clock, actuation, event_hooks = self.clock, self.actuation, self._event_hooks
         lookahead = self.bus.lookahead_us
         last_pins = None
-        while clock.now_us < t_end_us and not self.halted:
+        while clock.now_us < t_end_us and not self.halted and not self.stopped:
             t_evt = min(clock.next_synced_event_us(), t_end_us, self._next_check_us)
             t_evt = clock.physics_horizon_us(t_evt, lookahead)
             if self.t_phys_us < t_evt:
@@ -247,6 +255,57 @@ class Twin(Hooks):
                 self._next_check_us += int(self.options.check_every_s * US)
             for fn in event_hooks:
                 fn(self.t_phys_us)
+
+    def stop(self) -> None:
+        """End the run at the next event (safe from a signal handler): :meth:`advance` returns from then on."""
+        self.stopped = True
+
+    # -- the simulator's interface (amr_twin/ros1/sim_services.py) --------------------------
+    def set_robot_pose(self, x_m: float, y_m: float, yaw_rad: float) -> None:
+        """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame) at rest
+        (:meth:`~amr_twin.sim.physics.Physics.place_robot`); ValueError (one line), the robot left where it
+        was, where it would overlap the world."""
+        from amr_twin.sim.start_pose import StartPoseError, check_start
+
+        before = self.physics.place_robot(x_m, y_m, yaw_rad, self._rest)
+        try:
+            check_start(self.physics, f"pose {x_m:g},{y_m:g},{math.degrees(yaw_rad):g}")
+        except StartPoseError as exc:
+            self.physics.restore_positions(before)
+            raise ValueError(str(exc).split(";")[0]) from None
+
+    def reset_world(self) -> None:
+        """The actors back at the start of their paths, the robot at its start pose, at rest."""
+        if self.actors is not None:
+            self.actors.reset(self.clock.now_us)
+        self.set_robot_pose(*self.start_xy_yaw)
+
+    def reset_simulation(self) -> None:
+        """:meth:`reset_world`, then the robot's own state: the wheels braked (a stop through the client, so the
+        firmware's loop is told as by the menu), the odometry at the origin of ``odom``, standing, and an EKF (the
+        navigation stack's) told on the bus that the robot is at its start pose. Time runs on."""
+        self.reset_world()
+        self.client.stop()
+        if self.odometry is not None:
+            self.odometry.reset(standing=True)
+        if getattr(self, "ekf", None) is not None:
+            self._publish_placed_pose()
+
+    def _publish_placed_pose(self) -> None:
+        """The start pose, known to within :data:`PLACED_SIGMA`, on the EKF's pose input (``map_match/pose``)."""
+        import numpy as np
+
+        from amr_twin.navigation.map_matching import POSE_TOPIC
+        from amr_twin.ros.geometry_messages import (Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped,
+                                                    Quaternion)
+        from amr_twin.ros.messages import Header, Time
+
+        x, y, yaw = self.start_xy_yaw
+        cov = np.zeros(36)
+        cov[[0, 7, 35]] = PLACED_SIGMA ** 2
+        self.bus.publish(POSE_TOPIC, PoseWithCovarianceStamped(
+            Header(0, Time.from_us(self.clock.now_us), "map"),
+            PoseWithCovariance(Pose(Point(float(x), float(y), 0.0), Quaternion.from_yaw(float(yaw))), cov)))
 
     def _step_physics(self, nstep: int) -> None:
         """Step ``nstep`` times, sampling the loop sensors on the record grid (:class:`~amr_twin.sim.grid_loop.GridLoop`).

@@ -248,6 +248,41 @@ class Physics:
         self.data.mocap_pos[i] = (x_m, y_m, 0.0)
         self.data.mocap_quat[i] = (math.cos(h), 0.0, 0.0, math.sin(h))
 
+    # -- teleporting the robot (Twin.reset_world, Twin.set_robot_pose) ----------------------
+    def positions(self) -> np.ndarray:
+        """A copy of every joint position (``qpos``): a rest state for :meth:`place_robot`."""
+        return self.data.qpos.copy()
+
+    def place_robot(self, x_m: float, y_m: float, yaw_rad: float, rest: np.ndarray) -> np.ndarray:
+        """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame), standing as in ``rest``
+        (:meth:`positions` of it settled: its height, tilt, tyre and caster springs), every velocity zero;
+        the wheels keep their angles (their hall sensors see no jump). Returns the positions before, to
+        put back with :meth:`restore_positions`."""
+        d, a = self.data, self.root_qpos
+        before = d.qpos.copy()
+        wheels = d.qpos[self.wheel_qpos].copy()
+        d.qpos[:] = rest
+        d.qpos[self.wheel_qpos] = wheels
+        w, x, y, z = rest[a + 3:a + 7]
+        turn = 0.5 * (yaw_rad - math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+        quat = np.empty(4)
+        mujoco.mju_mulQuat(quat, np.array([math.cos(turn), 0.0, 0.0, math.sin(turn)]), rest[a + 3:a + 7])
+        d.qpos[a:a + 3] = (x_m, y_m, rest[a + 2])
+        d.qpos[a + 3:a + 7] = quat
+        self._at_rest()
+        return before
+
+    def restore_positions(self, qpos: np.ndarray) -> None:
+        """Put back the positions :meth:`place_robot` returned, every velocity zero."""
+        self.data.qpos[:] = qpos
+        self._at_rest()
+
+    def _at_rest(self) -> None:
+        d = self.data
+        d.qvel[:] = 0.0
+        d.qacc_warmstart[:] = 0.0
+        mujoco.mj_forward(self.model, d)
+
     # -- actuation --------------------------------------------------------------------
     def set_motor(self, wheel: int, mode: str, voltage_v: float = 0.0, torque_limit_nm: float | None = None) -> None:
         """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``.

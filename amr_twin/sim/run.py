@@ -18,6 +18,8 @@ from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.recorder import RunSeries
 
 KINDS = ("linear", "angular", "motor", "stop")
+UNTIL_STOPPED_US = 1 << 62
+"""The end of a run of ``duration_s = inf``, us (~146 000 years)."""
 
 
 @dataclass(frozen=True)
@@ -128,9 +130,11 @@ class RunResult:
 
 def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s: float,
                 options: TwinOptions = TwinOptions(), twin: Twin | None = None) -> RunResult:
-    """Send each command at its time (s from the start) and run for ``duration_s``."""
-    if not (math.isfinite(duration_s) and 0 < duration_s <= MAX_RUN_S):  # the commands check theirs first
-        raise ValueError(f"duration_s: {duration_s} must be a finite number in (0, {MAX_RUN_S:g}] s")
+    """Send each command at its time (s from the start) and run for ``duration_s`` (``math.inf``: until
+    ``twin.stop()``, called from a hook, another thread's call or a signal handler; a stopped run's ``sim_s``
+    is where it stopped)."""
+    if not (0 < duration_s <= MAX_RUN_S or duration_s == math.inf):  # the commands check theirs first
+        raise ValueError(f"duration_s: {duration_s} must be in (0, {MAX_RUN_S:g}] s or inf")
     steps = sorted(steps, key=lambda s: s[0])
     if any(t < 0 or t > duration_s for t, _ in steps):
         raise ValueError(f"mission: command times must lie in [0, {duration_s}] s")
@@ -139,7 +143,7 @@ def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s:
     codes, errors, last = [], [], None
     for t_s, command in steps:
         twin.advance_to_us(int(round(t_s * 1e6)))
-        if twin.halted:  # stopped by a collision: the later commands are not sent
+        if twin.halted or twin.stopped:  # stopped by a collision or from outside: the later commands are not sent
             break
         code = command.send(twin)
         codes.append(code)
@@ -148,10 +152,10 @@ def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s:
         elif twin.client.last_request is not None:
             r = twin.client.last_request
             last = [r.motionL, r.speedL, r.motionR, r.speedR]
-    twin.advance_to_us(int(round(duration_s * 1e6)))
+    twin.advance_to_us(int(round(duration_s * 1e6)) if duration_s != math.inf else UNTIL_STOPPED_US)
     series = twin.recorder.series()
     return RunResult(commands=steps[:len(codes)], codes=codes, wheel_command=last, series=series,
-                     sim_s=twin.t_s if twin.halted else duration_s, wall_s=time.perf_counter() - wall0,
+                     sim_s=twin.t_s if twin.halted or twin.stopped else duration_s, wall_s=time.perf_counter() - wall0,
                      errors=errors, collisions=twin.collisions.as_dicts(), halted=twin.halted,
                      faults=twin.faults.report(series) if twin.faults is not None else [],
                      tyre_timestep=twin.tyre_timestep.as_dict() if twin.tyre_timestep.halvings else None)

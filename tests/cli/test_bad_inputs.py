@@ -412,7 +412,8 @@ def test_a_world_file_that_does_not_compile_is_named_and_a_urdf_is_not_a_world(t
 
 
 def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(tmp_path, refused, monkeypatch):
-    """run goto ran with --ros1, --serial-pty and --odometry ignored (exit 0), and with a time limit of 1e-9 s."""
+    """run goto ran with --serial-pty and --odometry ignored (exit 0), and with a time limit of 1e-9 s; --roscore is
+    an option of --ros1 (which goals take: tests/ros1/test_goto_graph.py)."""
     class Started(Exception):
         pass
 
@@ -424,7 +425,7 @@ def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(tmp_pat
 
     monkeypatch.setattr("amr_twin.navigation.stack.navigate", navigate)
     goto = ["run", "goto", "--world", "aisles", "--goal", "0,2.4", "--localisation", "truth"]
-    refused([*goto, "--ros1"], "--ros1 is not available with goals")
+    refused([*goto, "--roscore"], "--roscore is an option of --ros1")
     refused([*goto, "--firmware", "avr", "--serial-pty", tmp_path / "tty"], "--serial-pty is not available with goals")
     refused([*goto, "--duration-s", "1e-9"], "--duration-s 1e-09: must be in [0.1, 3600] s")
     odometry = _write(tmp_path / "odo.yaml", "wheel_odometry:\n  left_wheel_radius_m: 0.1251\n"

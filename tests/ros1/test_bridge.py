@@ -10,7 +10,6 @@ twin runs and has read every byte before it is stopped: the tests wait for both,
 
 import subprocess
 import sys
-import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -18,8 +17,7 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import (ROOT, connected_subscribers, needs_ros1, services, stop, subscribers, wait_for,
-                      wait_until_recorded)
+from conftest import ROOT, connected_subscribers, needs_ros1, stop, subscribers, wait_for, wait_until_recorded
 
 AMR_TWIN = str(Path(sys.executable).with_name("amr-twin"))
 URDF = ROOT / "models" / "amr" / "amr.urdf"
@@ -77,7 +75,9 @@ def test_rosbag_info_shows_every_topic_at_its_rate_on_sim_time(bag):
                       ("/clock", 100), ("/twin/ground_truth", 100), ("/battery_state", 10)):
         assert counts[topic] == int(RUN_S * hz) + 1, topic
     assert abs(counts["/scan"] - RUN_S * 5.5) <= 1.5
-    assert counts["/tf"] == 2 * (int(RUN_S * 50) + 1)  # odom -> base_link (odometry node) and the moving links
+    # odom -> base_link (odometry node) and the moving links, 50 Hz each; no map -> odom (no map in the empty world:
+    # no localisation in map; test_tf_messages_by_frames tells them apart)
+    assert counts["/tf"] == 2 * (int(RUN_S * 50) + 1)
     assert counts["/tf_static"] == 1 and counts["/wheel_Command"] == 1
     assert counts["/wheel0_Vel"] >= 5 and counts["/diagnostics"] >= RUN_S  # the battery once a second
     # robot_state_publisher: at most one transform message per joint state it takes; its subscriber keeps one
@@ -131,6 +131,26 @@ def _tf_buffer(path):
 
 
 pytestmark = [needs_ros1, pytest.mark.filterwarnings("ignore:(translation|rotation) should be of type")]
+
+
+def test_tf_messages_by_frames(bag):
+    """/tf: one odom -> base_link message at each 50 Hz instant (the odometry node), one of the moving links (the
+    bridge's joint states), no map -> odom (the empty world has no map, so no localisation in map)."""
+    from amr_twin.ros1.installation import import_rospy
+
+    import_rospy()
+    import rosbag
+
+    path, _info, _run = bag
+    kinds: dict = {}
+    with rosbag.Bag(str(path)) as b:
+        for _topic, msg, _t in b.read_messages(topics=["/tf"]):
+            pairs = {(ts.header.frame_id, ts.child_frame_id) for ts in msg.transforms}
+            key = ("odom", "base_link") if ("odom", "base_link") in pairs else (
+                ("map", "odom") if ("map", "odom") in pairs else "links")
+            assert key == "links" or len(pairs) == 1, pairs
+            kinds[key] = kinds.get(key, 0) + 1
+    assert kinds == {("odom", "base_link"): int(RUN_S * 50) + 1, "links": int(RUN_S * 50) + 1}, kinds
 
 
 def test_a_tf2_buffer_from_the_bag_finds_every_urdf_frame_at_every_scan(bag):

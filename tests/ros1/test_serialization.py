@@ -26,6 +26,7 @@ def _cases():
     yield ros_state.joint_state(20_000, ["wheel_left_joint", "caster_front_left_joint"], [1.5, -0.002], [3.0, 0.01])
     yield ros_state.link_transforms(40_000, ["wheel_left_link", "wheel_right_link"], rng.normal(size=(2, 3)),
                                     rng.normal(size=(2, 4)))
+    yield ros_state.link_transforms(60_000, ["base_link"], rng.normal(size=(1, 3)), rng.normal(size=(1, 4)))
     yield LaserScan(Header(3, Time(5, 0), "laser"), -3.14, 3.1, 0.0172, -1.3e-4, 0.18, 0.15, 12.0,
                     rng.uniform(0.15, 12, 364).astype(np.float32), np.zeros(0, np.float32))
     yield Float64MultiArray(MultiArrayLayout([MultiArrayDimension("motionL,speedL,motionR,speedR", 4, 4)], 0),
@@ -55,3 +56,16 @@ def test_the_state_frames_are_the_writers_bytes_of_ros_states_messages():
     for t_us in (0, 40_000, 1_234_560_000):
         assert frames.joint_state(t_us, q, qd) == joint_state(ros_state.joint_state(t_us, joints, q, qd))
         assert frames.link_transforms(t_us, pos, quat) == tf_message(ros_state.link_transforms(t_us, links, pos, quat))
+
+
+def test_the_ground_truth_and_row_writers_give_the_message_writers_bytes():
+    """The bridge's direct writers: the ground truth from a grid sample, a row topic's values."""
+    from amr_twin.ros1.serialization import StateFrames, float64_multi_array, float64_row, odometry
+
+    frames = StateFrames(["wheel_left_joint"], ["wheel_left_link"], "base_link", "world")
+    for t_us in (0, 10_000, 1_234_560_000, 4_294_967_295_000_000 - 10_000):
+        pos, quat, v, w = (rng.normal(size=n).tolist() for n in (3, 4, 3, 3))
+        assert frames.ground_truth(t_us, pos, quat, v, w) == odometry(ros_state.ground_truth(t_us, pos, quat, v, w))
+    for values in ([], [1.5], rng.normal(size=2).tolist(), rng.normal(size=7).tolist()):
+        assert float64_row(values) == float64_multi_array(Float64MultiArray(data=values))
+

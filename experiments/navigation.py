@@ -15,7 +15,9 @@ Each episode runs on the world's true map and on the SLAM map (a map built from 
 scans, :mod:`.navigation_map`), the same start, goal, obstacle and seed, with the localisation and
 controller chosen (EKF of odometry, gyro and UWB, and MPPI, by default). :func:`run_episode` is the
 worker (picklable items, :func:`amr_twin.experiments.executor.run_all`); the metrics are in
-:mod:`.navigation_metrics`, the report and plots in :mod:`.navigation_report`.
+:mod:`.navigation_metrics`, the report and plots in :mod:`.navigation_report`. Generated halls
+(``generated:SEED``): their episodes and doorways in :mod:`.navigation_generated`, several at once by
+:func:`run_halls` (the true map only).
 """
 
 from __future__ import annotations
@@ -25,83 +27,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from amr_twin.experiments.navigation_episodes import (MAX_APART_M, MIN_APART_M, SCENARIOS, SHARES, Episode,
+                                                       free_cells, place)
 from amr_twin.model.worlds import Obstacle
 
-SCENARIOS = ("clear", "person", "pallet_jack")
-SHARES = (0.5, 0.25, 0.25)
-"""The share of episodes of each scenario."""
-MIN_APART_M, MAX_APART_M = 10.0, 50.0
-FREE_CLEARANCE_M = 0.7
-PERSON_SIZE_M = (0.45, 0.30, 1.70)
-JACK_SIZE_M = (1.60, 0.75, 1.30)
 MAPS = ("true", "slam")
 
 
-@dataclass(frozen=True)
-class Episode:
-    """One start/goal pair: poses ``(x_m, y_m, yaw_rad)``, its scenario, its unmapped obstacle (or None)."""
-
-    index: int
-    seed: int
-    start: tuple
-    goal: tuple
-    scenario: str
-    obstacle: Obstacle | None
-    actor: object = None  # amr_twin.model.actors.Actor of a walking person
-
-
-def _free_cells(costmap) -> np.ndarray:
-    rows, cols = np.nonzero(costmap.static_dist_m >= FREE_CLEARANCE_M)
-    return costmap.centres_xy_m(rows, cols)
-
-
-ROBOT_SPEED_M_S = 0.55
-"""The robot's mean speed on its way (from the episodes' times), to time a walking person's crossing."""
-CROSS_HALF_M = 0.7
-STOP_WITHIN_M = 0.6
-"""A walking person halts while the robot is this close ahead of them (people give way), m."""
-
-
-def _place(rng, scenario: str, plan, costmap, start, goal, people: str = "walking"):
-    """An obstacle (or a walking person: an Actor) in an aisle on the planned way, at least 3 m from start
-    and goal; None if no room."""
-    xy = plan.xy_m
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
-    d = costmap.static_distance_at(xy)
-    ok = (s > 3.0) & (s < s[-1] - 3.0) & (d >= 0.9) & (d <= 1.1)  # the middle of a 2 m aisle
-    ok &= (np.hypot(*(xy - np.asarray(start[:2])).T) > 3.0) & (np.hypot(*(xy - np.asarray(goal[:2])).T) > 3.0)
-    if not ok.any():
-        return None
-    i = int(rng.choice(np.flatnonzero(ok)))
-    yaw = float(plan.poses[i, 2])
-    if scenario == "person" and people == "walking":
-        from amr_twin.model.actors import Actor
-        from amr_twin.navigation.stack import REST_S
-
-        side = float(rng.choice([-1.0, 1.0]))
-        n = np.array([-math.sin(yaw), math.cos(yaw)]) * side
-        a, b = xy[i] - CROSS_HALF_M * n, xy[i] + CROSS_HALF_M * n
-        start_s = max(0.0, REST_S + (s[i] - 3.0) / ROBOT_SPEED_M_S)
-        return Actor("person", ((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))), 1.3, start_s=start_s,
-                     stop_within_m=STOP_WITHIN_M)
-    if scenario == "person":
-        size, offset = PERSON_SIZE_M, float(rng.choice([-1.0, 1.0]) * rng.uniform(0.35, 0.6))
-    else:
-        size, offset = JACK_SIZE_M, float(rng.uniform(-0.55, 0.55))
-    x = xy[i, 0] - math.sin(yaw) * offset
-    y = xy[i, 1] + math.cos(yaw) * offset
-    return Obstacle(scenario, float(x), float(y), size, yaw)
-
-
 def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") -> list[Episode]:
-    """``n`` episodes, episode ``i`` drawn from ``default_rng([seed, i])`` (module docstring)."""
+    """``n`` episodes, episode ``i`` drawn from ``default_rng([seed, i])`` (module docstring; a generated hall's:
+    :func:`amr_twin.experiments.navigation_generated.episodes`)."""
+    from amr_twin.model.generated_world import is_generated
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.planner import GlobalPlanner
     from amr_twin.navigation.stack import make_costmap, true_map
 
+    if is_generated(world):
+        from amr_twin.experiments.navigation_generated import episodes as hall_episodes
+        return hall_episodes(cfg, world, n, seed, people)
     costmap = make_costmap(true_map(cfg, world), robot_footprint(cfg), cfg.navigation)
     planner = GlobalPlanner(costmap)
-    free = _free_cells(costmap)
+    free = free_cells(costmap)
     out = []
     for i in range(n):
         rng = np.random.default_rng([seed, i])
@@ -115,7 +61,7 @@ def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") ->
                 continue
             start = (float(a[0]), float(a[1]), float(rng.uniform(-math.pi, math.pi)))
             goal = (float(b[0]), float(b[1]), float(rng.uniform(-math.pi, math.pi)))
-            placed = None if scenario == "clear" else _place(rng, scenario, plan, costmap, start, goal, people)
+            placed = None if scenario == "clear" else place(rng, scenario, plan, costmap, start, goal, people)
             if scenario != "clear" and placed is None:
                 continue
             actor = placed if placed is not None and not isinstance(placed, Obstacle) else None
@@ -142,8 +88,10 @@ class EpisodeRun:
 
 
 def run_episode(item: EpisodeRun) -> dict:
-    """Drive one episode and measure it (:func:`amr_twin.experiments.navigation_metrics.measure`)."""
+    """Drive one episode and measure it (:func:`amr_twin.experiments.navigation_metrics.measure`; in a generated
+    hall its doorways too, :func:`amr_twin.experiments.navigation_generated.door_metrics`)."""
     from amr_twin.experiments.navigation_metrics import measure
+    from amr_twin.model.generated_world import is_generated
     from amr_twin.navigation.stack import NavigationOptions, navigate
     from amr_twin.sim.loop import TwinOptions
 
@@ -156,7 +104,11 @@ def run_episode(item: EpisodeRun) -> dict:
                                 localisation=item.localisation, controller=item.controller,
                                 seed=ep.seed * 100_003 + ep.index)
     run = navigate(item.cfg, twin_options, options)
-    return measure(item.cfg, item.world, ep, item.map_kind, run)
+    row = measure(item.cfg, item.world, ep, item.map_kind, run)
+    if is_generated(item.world):
+        from amr_twin.experiments.navigation_generated import door_metrics
+        row.update(world=item.world, **door_metrics(item.cfg, item.world, ep, run))
+    return row
 
 
 def _timed_episode(item: EpisodeRun) -> dict:
@@ -202,3 +154,41 @@ def run(cfg, world: str, n: int, *, seed: int = 0, maps: tuple = MAPS, slam_yaml
             "summary": summary(rows), "rows": rows, "static_maps": static_maps, "jobs": jobs,
             "wall_s": time.perf_counter() - wall0,
             "cpu_s": time.process_time() - cpu0 + sum(r["cpu_s"] for r in rows) * (jobs > 1 or client is not None)}
+
+
+def run_halls(cfg, worlds: list[str], tuning: list[str], n: int, *, seed: int = 0, localisation: str = "ekf",
+              controller: str = "mppi", firmware: str = "improved", jobs: int = 1, client=None, progress: bool = True,
+              people: str = "walking") -> dict:
+    """``n`` episodes on the true map of each generated hall of ``worlds``, summed up for the ``tuning`` halls and
+    for the others (held out) apart (:mod:`.navigation_generated`); each with a walking person also run without
+    them, for the time the people cost (``people`` of each group's summary, ``rows_without_people``)."""
+    import time
+
+    from amr_twin.experiments.executor import run_all
+    from amr_twin.experiments.navigation_generated import WITHOUT_PEOPLE, door_summary, people_penalty, without_people
+    from amr_twin.experiments.navigation_metrics import summary
+    from amr_twin.navigation.stack import true_map
+
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    items = [EpisodeRun(cfg, world, ep, "true", None, localisation, controller, firmware)
+             for world in worlds for ep in episodes(cfg, world, n, seed, people)]
+    done = [row for _item, row in run_all(_timed_episode, items + without_people(items), jobs=jobs, client=client,
+                                          description="navigation episodes", progress=progress)]
+    done.sort(key=lambda r: (worlds.index(r["world"]), r["index"]))
+    rows = [r for r in done if r["scenario"] != WITHOUT_PEOPLE]
+    bare = [r for r in done if r["scenario"] == WITHOUT_PEOPLE]
+    groups = {"tuning": [w for w in worlds if w in tuning], "held_out": [w for w in worlds if w not in tuning]}
+    summaries = {}
+    for group, members in groups.items():
+        sel = [r for r in rows if r["world"] in members]
+        if sel:
+            summaries[group] = {"worlds": members, "episodes": summary(sel), "doors": door_summary(sel),
+                                "people": people_penalty(sel, [r for r in bare if r["world"] in members])}
+    return {"worlds": worlds, "groups": groups, "episodes": n, "seed": seed, "people": people, "maps": ["true"],
+            "localisation": localisation, "controller": controller, "firmware": firmware,
+            "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
+                       "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
+            "summary": summaries, "by_world": {w: door_summary([r for r in rows if r["world"] == w]) for w in worlds},
+            "rows": rows, "rows_without_people": bare, "static_maps": {w: true_map(cfg, w) for w in worlds},
+            "jobs": jobs, "wall_s": time.perf_counter() - wall0,
+            "cpu_s": time.process_time() - cpu0 + sum(r["cpu_s"] for r in done) * (jobs > 1 or client is not None)}

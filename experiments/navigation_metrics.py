@@ -2,7 +2,10 @@
 
 Per episode (:func:`measure`):
 
-- ``success``: the goal reached (within the goal checker's tolerances) without a collision;
+- ``success``: the goal reached without a collision, judged by the TRUE pose at the end: within the goal
+  checker's tolerances (xy and yaw) of the goal, whatever the navigator's estimate said
+  (:mod:`amr_twin.navigation.goal_truth`); ``final_error_*``: the truth's and the estimate's distance and
+  heading error from the goal at the end;
 - ``collisions``: contacts of the robot's body with the world (amr_twin/sim/collisions.py);
 - ``time_s``: from the navigator's start to the goal (or to the end);
 - ``barn_score``: ``success * OT / clip(AT, 2 OT, 8 OT)`` with ``OT`` the optimal length over the
@@ -45,6 +48,20 @@ def footprint_clearance_m(poses: np.ndarray, footprint, boxes) -> np.ndarray:
     return out
 
 
+def world_obstacle_boxes(cfg, world: str):
+    """The footprints of the world's obstacles the robot can hit (floor to its top; a ROS map world's extruded
+    walls), as :func:`footprint_clearance_m` takes them."""
+    import mujoco
+
+    from amr_twin.model.worlds import world_path, world_xml
+    from amr_twin.navigation.stack import robot_top_m
+    from amr_twin.navigation.static_map import obstacle_boxes
+
+    model = (mujoco.MjModel.from_xml_string(world_xml(world)) if str(world).endswith(".yaml")  # a ROS map world
+             else mujoco.MjModel.from_xml_path(str(world_path(world))))
+    return obstacle_boxes(model, 0.005, robot_top_m(cfg))
+
+
 def _to_base(pose, xy):
     c, s = math.cos(pose[2]), math.sin(pose[2])
     d = np.asarray(xy) - pose[:2]
@@ -60,19 +77,13 @@ def _sign_changes(w: np.ndarray) -> int:
 def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
     """The metrics of one finished episode (module docstring), with its trajectory at 5 Hz for the plots."""
     from amr_twin.experiments.navigation_optimal import VisibilityGraph
-    from amr_twin.model.worlds import world_path, world_xml
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.kinematics import Limits
     from amr_twin.model.world_geometry import Footprints
-    from amr_twin.navigation.static_map import obstacle_boxes
-    from amr_twin.navigation.stack import robot_top_m
-    import mujoco
 
     out = run.outcomes[0]
     footprint = robot_footprint(cfg)
-    model = (mujoco.MjModel.from_xml_string(world_xml(world)) if str(world).endswith(".yaml")  # a ROS map world
-             else mujoco.MjModel.from_xml_path(str(world_path(world))))
-    world_boxes = obstacle_boxes(model, 0.005, robot_top_m(cfg))
+    world_boxes = world_obstacle_boxes(cfg, world)
     ob = episode.obstacle
     extra = Footprints(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), ()) if ob is None else \
         Footprints(np.array([[ob.x_m, ob.y_m]]), np.array([[ob.size_m[0] / 2, ob.size_m[1] / 2]]), np.array([ob.yaw_rad]),
@@ -103,7 +114,9 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
         person = np.array([footprint_clearance_m(robot[k:k + 1], footprint, Footprints(
             body[k:k + 1, :2], np.array([[PERSON_HALF_M[0], PERSON_HALF_M[1]]]), body[k:k + 1, 2], ("person",)))[0]
             for k in range(len(robot))])
-    reached = out.status == "succeeded"
+    tol = cfg.navigation.navigator
+    final = run.final_errors[0]
+    reached = out.status == "succeeded" and final.within(tol.xy_tolerance_m, tol.yaw_tolerance_rad)
     success = reached and not run.collisions
     time_s = float(t1 - t0)
     ot = optimal / Limits().max_v_m_s
@@ -123,7 +136,9 @@ def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
         "actor": None if episode.actor is None else {"kind": episode.actor.kind, "start_s": episode.actor.start_s,
                                                      "waypoints_xy_m": [list(p) for p in episode.actor.waypoints_xy_m]},
         "status": out.status, "reason": out.reason, "success": bool(success), "collisions": len(run.collisions),
-        "collided_with": sorted({col.get("world", "?") for col in run.collisions}),
+        "collided_with": sorted({col.get("hit", "?") for col in run.collisions}),
+        "final_error_true_m": final.true_xy_m, "final_error_estimate_m": final.estimate_xy_m,
+        "final_error_true_yaw_rad": final.true_yaw_rad, "final_error_estimate_yaw_rad": final.estimate_yaw_rad,
         "time_s": time_s, "barn_score": barn, "travelled_m": travelled, "optimal_m": optimal,
         "travelled_over_optimal": travelled / optimal if reached and optimal > 0 else None,
         "min_clearance_m": float(clearance.min()) if len(clearance) else None,
@@ -166,6 +181,8 @@ def summary(rows: list[dict]) -> dict:
                 "barn_score_mean": float(np.mean([r["barn_score"] for r in sel])),
                 "travelled_over_optimal_median": _pct(ratios, 50), "travelled_over_optimal_max": max(ratios) if ratios else None,
                 "travelled_over_optimal_mean": float(np.mean(ratios)) if ratios else None,
+                "final_error_true_m_p95": _pct([r.get("final_error_true_m") for r in sel], 95),
+                "final_error_estimate_m_p95": _pct([r.get("final_error_estimate_m") for r in sel], 95),
                 "min_clearance_m": min((r["min_clearance_m"] for r in sel if r["min_clearance_m"] is not None), default=None),
                 "person_crossings": len(persons),
                 "person_clearance_ge_0_3_share": float(np.mean([p >= 0.3 for p in persons])) if persons else None,

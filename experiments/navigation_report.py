@@ -87,6 +87,9 @@ def report(data: dict, out: Path) -> None:
             f"{_fmt(v['plan_ms_p50'], 1)} / {_fmt(v['plan_ms_p95'], 1)} | "
             f"{_fmt(v['controller_ms_p50'], 2)} / {_fmt(v['controller_ms_p99'], 2)} | "
             f"{_fmt(v['recoveries_per_100m'], 2)} | {_fmt(v['w_sign_changes_last_m_mean'], 2)} |")
+    lines += ["", "Final distance to the goal, p95 (success is judged by the truth): " + "; ".join(
+        f"{key} true {_fmt(v.get('final_error_true_m_p95'), 3)} m, estimate {_fmt(v.get('final_error_estimate_m_p95'), 3)} m"
+        for key, v in s.items() if key.endswith("/all")) + "."]
     failed = [r for r in data["rows"] if not r["success"]]
     lines += ["", f"Failed episodes ({len(failed)}):", ""]
     lines += [f"- {r['map']} map, episode {r['index']} ({r['scenario']}): {r['status']}"

@@ -52,7 +52,9 @@ def _start_pose(text: Optional[str]) -> Optional[tuple[float, float, float]]:
     return x_m, y_m, math.radians(yaw_deg)
 
 
-OPTION_OF = {"payload.mass_kg": "--payload-kg", "payload.xy_m": "--payload-xy"}
+OPTION_OF = {"payload.mass_kg": "--payload-kg", "payload.xy_m": "--payload-xy",
+             "navigation.navigator.xy_tolerance_m": "--xy-tolerance-m",
+             "navigation.costmap.inflation_radius_m": "--inflation-radius-m"}
 """The parameter each command option sets (the ``extra`` of :func:`_config`)."""
 
 

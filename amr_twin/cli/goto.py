@@ -4,14 +4,17 @@ Everything is checked before the model is built, each refusal one line and exit 
 numbers, the map (``--map``, a map_server YAML), the localisation and the controller, and each
 goal against the map from where the robot will be (the start, then the goal before it): off
 the map, inside an obstacle or closer to one than the robot's half width, or cut off from it.
-Then the navigation stack (amr_twin/navigation/) drives the twin; a goal it cannot reach (a path
-that became blocked, no progress after the recoveries, the time limit) is reported in one line
-and the command exits :data:`EXIT_NOT_REACHED`.
+Then the navigation stack (amr_twin/navigation/) drives the twin, a progress line on stderr on long
+runs (:mod:`amr_twin.cli.goto_console`). A goal is reached only if the TRUE pose ends within the
+goal tolerances (:mod:`amr_twin.navigation.goal_truth`); one not reached (the truth missed it, a
+path that became blocked, no progress after the recoveries, the time limit) is reported in one
+line and the command exits :data:`EXIT_NOT_REACHED`. Ctrl-C cancels the goals: the robot stops,
+the outputs are written, exit :data:`~amr_twin.cli.goto_console.EXIT_CANCELED`; a second Ctrl-C
+quits at once (130, nothing written). ``--stop-on-collision``'s stop exits 4.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Optional
@@ -20,9 +23,32 @@ import typer
 
 from amr_twin.cli.actor_options import checked_actors
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
-from amr_twin.cli.options import RunOptions, _given, shared
+from amr_twin.cli.goto_console import EXIT_CANCELED, GotoConsole
+from amr_twin.cli.goto_report import clearance, report
+from amr_twin.cli.options import RunOptions, shared
 
 EXIT_NOT_REACHED = 5
+EXIT_COLLISION = 4
+GOTO_DEFAULTS = {"xy_tolerance_m": 0.25, "yaw_tolerance_deg": 14.3, "inflation_radius_m": 1.0}
+"""The parameter file's navigation.navigator.xy_tolerance_m, yaw_tolerance_rad (0.25 rad) and
+navigation.costmap.inflation_radius_m, as goto's help states them (a test holds them to the file)."""
+RUN_OVERRIDES = {
+    "duration_s": {"help": "Time limit of the goals, simulated s after the 2 s rest (default: 60 s + 4 s per metre of "
+                           "the goals' first plans), at most 3600."},
+    "firmware": {"default": "improved", "help": "Arduino firmware: improved, faithful or avr; default improved "
+                 "(the faithful one restarts its ramps on every cmd_vel: docs/navigation.md)."},
+    "sensors": {"help": "Always on with goto: the LiDAR and IMU feed the navigation."},
+    "seed": {"help": "Seed of the random draws: the sensors' noise, the MPPI's samples, --fault and --actors-random. "
+             "Same seed, same run."},
+    "live": {"help": "Serve the twin live while it runs, paced to --rate: foxglove (the default; publish a "
+             "geometry_msgs/msg/PoseStamped on /goal_pose, frame map or odom, for a new goal) or rerun."},
+    "rate": {"help": "With --live or --ros1: simulated seconds per wall second (default 1 with --live; --ros1 alone: "
+             "0, as fast as possible)."},
+    "ros1": {"help": "Join the ROS 1 graph at ROS_MASTER_URI (docs/ros1.md): the twin's topics, and the navigator as "
+             "move_base (a goal of the action or on move_base_simple/goal preempts --goal)."},
+    "serial_pty": {"help": "Not with goto (refused)."},
+}
+"""The run options whose default or meaning differs for goto (:func:`amr_twin.cli.options.shared`)."""
 
 
 def parse_goal(text: str, option: str = "--goal") -> tuple[float, float, float | None]:
@@ -73,11 +99,12 @@ def _checked(cfg, opts, goals, nav: dict):
 
 
 def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_faults: tuple = (),
-              mission_actors: tuple = ()) -> None:
+              mission_actors: tuple = (), settings: dict | None = None) -> None:
     """Check, navigate to ``goals`` in turn, print and write the outputs, exit as the module docstring says.
 
     ``mission_actors``: the mission's people and pallet jacks (``--actor`` and ``--actors-random``
-    add to them, :func:`amr_twin.cli.actor_options.checked_actors`)."""
+    add to them, :func:`amr_twin.cli.actor_options.checked_actors`); ``settings``: parameter file keys the
+    command's options set (goal tolerances, inflation)."""
     from dataclasses import replace
 
     from amr_twin.cli.options import checked_firmware
@@ -86,10 +113,9 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     from amr_twin.sim.loop import TwinOptions
 
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
-    for flag, given in (("--ros1", opts.ros1), ("--roscore", opts.roscore), ("--serial-pty", opts.serial_pty)):
-        if given:  # they were ignored: the navigation stack drives the twin here
-            fail(f"{flag} is not available with goals (run goto, a mission's goals:): use it with a command kind "
-                 "or a mission's steps")
+    if opts.serial_pty:  # the board would be driven from ROS; here the navigation stack drives the twin
+        fail("--serial-pty is not available with goals (run goto, a mission's goals:): use it with a command kind "
+             "or a mission's steps")
     if duration_s is not None and not (math.isfinite(duration_s) and 0.1 <= duration_s <= 3600):
         fail(f"--duration-s {duration_s:g}: must be in [0.1, 3600] s (the time limit of the goals)")
     try:
@@ -98,9 +124,15 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     except (FaultError, OutputError) as exc:
         fail(str(exc))
     from amr_twin.cli.options import checked_live
-    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail)
+    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail, paced=opts.ros1)
+    from amr_twin.cli.options import checked_ros1
+    ros1, _avr, rate = checked_ros1(opts.ros1, opts.roscore, None, firmware, live is not None, opts.rate, fail)
+    if ros1 is not None:
+        from amr_twin.ros1.navigation_server import missing
+        if missing():
+            fail(f"--ros1 with goals: {missing()}")
     extra = {"payload.mass_kg": opts.payload_kg} if opts.payload_kg is not None else {}
-    cfg = _config(opts.config, opts.params, opts.set_, extra)
+    cfg = _config(opts.config, opts.params, opts.set_, {**extra, **(settings or {})})
     static = _guard(lambda: _checked(cfg, opts, goals, nav))
     recording = opts.record is not None or opts.mcap is not None
     start = _start_pose(opts.start)
@@ -116,6 +148,8 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world, start_xy_yaw=start,
                           faults=faults, stop_on_collision=opts.stop_on_collision, visuals=recording or live is not None,
                           actors=actors, odometry_calibration=calibration)
+    say = lambda line: typer.echo(line, err=True)  # noqa: E731
+    console = GotoConsole(say)
 
     def work():
         from amr_twin.navigation.stack import NavigationOptions, navigate
@@ -130,100 +164,84 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
                 attach(twin)
             if live is not None:  # the live session brings its cmd_vel node (and the pacing)
                 from amr_twin.live.session import LiveSession
-                held["live"] = LiveSession(twin, live, say=lambda line: typer.echo(line, err=True))
+                held["live"] = LiveSession(twin, live, say=say)
+            if ros1 is not None:  # the graph, and the navigator as move_base (amr_twin/ros1/navigation_setup.py)
+                from amr_twin.ros1.navigation_setup import GoalsOnGraph
+                held["ros1"] = GoalsOnGraph(twin, cfg, static, ros1, rate, held["live"].pacer if live else None, say)
 
         nav_opts = NavigationOptions(goals=tuple(goals), map_yaml=nav.get("map"), localisation=nav["localisation"],
                                      controller=nav["controller"], seed=opts.seed, timeout_s=duration_s)
         try:
-            run = navigate(cfg, replace(options), nav_opts, static=static, on_twin=on_twin,
-                           publish=recording or live is not None, drive=live is None)
+            with console:
+                try:
+                    run = navigate(cfg, replace(options), nav_opts, static=static, on_twin=on_twin, progress=console,
+                                   publish=recording or live is not None or ros1 is not None, drive=live is None)
+                finally:
+                    if "live" in held:
+                        held["live"].close()
+                    if "ros1" in held:
+                        held["ros1"].close()
+                with all_or_nothing():
+                    if recording:
+                        from amr_twin.recording.rerun_log import record_run
+                        record_run(held["twin"], rrd_path=opts.record, mcap_path=opts.mcap)
+                    if opts.csv is not None:
+                        from amr_twin.recording.atomic_file import write_text
+                        from amr_twin.recording.run_report import csv_text
+                        write_text(opts.csv, csv_text(held["twin"].recorder.series()))
         except KeyboardInterrupt:
-            fail(f"interrupted at t={held['twin'].t_s:.2f} s simulated; no output written", code=130)
-        finally:
-            if "live" in held:
-                held["live"].close()
-        with all_or_nothing():
-            if recording:
-                from amr_twin.recording.rerun_log import record_run
-                record_run(held["twin"], rrd_path=opts.record, mcap_path=opts.mcap)
-            if opts.csv is not None:
-                from amr_twin.recording.atomic_file import write_text
-                from amr_twin.recording.run_report import csv_text
-                write_text(opts.csv, csv_text(held["twin"].recorder.series()))
+            t = f" at t={held['twin'].t_s:.2f} s simulated" if "twin" in held else ""
+            fail(f"interrupted{t}; no output written", code=130)
         twin = held["twin"]  # each fault with its effect, as run linear reports it
         return run, twin.faults.report(twin.recorder.series()) if twin.faults is not None else []
 
     run, fault_report = _guard(work)
-    _report(run, opts.as_json, fault_report)
+    report(run, opts.as_json, fault_report, clearance(cfg, opts.world, run))
     if run.collisions:
         typer.echo(f"warning: {len(run.collisions)} collision(s), the first at t = {run.collisions[0]['t_s']:.2f} s "
                    f"with {run.collisions[0].get('world', '?')}", err=True)
-    failed = [o for o in run.outcomes if o.status != "succeeded"]
+    if console.canceled_at_s is not None:
+        typer.echo(f"canceled by Ctrl-C at t = {console.canceled_at_s:.1f} s; the outputs are written", err=True)
+        raise typer.Exit(EXIT_CANCELED)
+    if opts.stop_on_collision and run.collisions:
+        raise typer.Exit(EXIT_COLLISION)
+    failed = [o for o in run.outcomes if o.status not in ("succeeded", "preempted")]
     if failed:
         typer.echo(f"error: {failed[0].reason}", err=True)
         raise typer.Exit(EXIT_NOT_REACHED)
 
 
-def _finite(value):
-    """``value`` with every NaN or infinity (a goal with no plan: ``plan_length_m``) made None (JSON null)."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    return value
-
-
-def _report(run, as_json: bool, faults: list = ()) -> None:
-    """Each goal's outcome, the faults with their effects, the distance and final pose; ``--json``: one
-    object, in which a number that is not finite is null (JSON has no NaN)."""
-    import numpy as np
-
-    from amr_twin.recording.run_report import fault_lines
-
-    goals = [{"goal": [o.goal[0], o.goal[1], None if o.goal[2] is None else math.degrees(o.goal[2])],
-              "status": o.status, "reason": o.reason, "t_start_s": o.t_start_s, "t_end_s": o.t_end_s,
-              "plan_length_m": o.first_plan_length_m, "recoveries": [list(r) for r in o.recoveries]}
-             for o in run.outcomes]
-    xy = run.pose_true[:, :2]
-    info = {"goals": goals, "travelled_m": float(np.hypot(*np.diff(xy, axis=0).T).sum()),
-            "final_pose": [float(v) for v in run.pose_true[-1]], "collisions": run.collisions,
-            "collision_monitor": run.monitor_actions, "faults": list(faults), "sim_s": run.sim_s,
-            "wall_s": run.wall_s}
-    info = _finite(info)
-    if as_json:
-        numpy_scalar = lambda v: v.item() if isinstance(v, np.generic) else v  # noqa: E731
-        typer.echo(json.dumps(info, allow_nan=False, default=numpy_scalar))
-        return
-    for i, g in enumerate(info["goals"]):
-        where = f"goal {i + 1} ({g['goal'][0]:g}, {g['goal'][1]:g})"
-        plan = "no plan" if g["plan_length_m"] is None else f"plan {g['plan_length_m']:.1f} m"
-        if g["status"] == "succeeded":
-            typer.echo(f"{where}: reached at t = {g['t_end_s']:.1f} s ({plan}, "
-                       f"{len(g['recoveries'])} recoveries)")
-        else:
-            typer.echo(f"{where}: NOT reached: {g['reason']}")
-    for line in fault_lines(info["faults"]):
-        typer.echo(line)
-    typer.echo(f"travelled {info['travelled_m']:.1f} m in {run.sim_s:.1f} simulated s ({run.wall_s:.1f} s wall); "
-               f"final pose x {info['final_pose'][0]:.2f} m, y {info['final_pose'][1]:.2f} m, "
-               f"yaw {math.degrees(info['final_pose'][2]):.0f} deg")
-
-
-@shared(fail)
+@shared(fail, overrides=RUN_OVERRIDES)
 def goto(opts: RunOptions, ctx: typer.Context,
          goal: Optional[str] = typer.Option(None, "--goal", help="X_M,Y_M[,YAW_DEG] in the map frame (REP-103)."),
          map_: Optional[Path] = typer.Option(None, "--map", help="A map_server YAML (a map the fusion experiment "
                                              "saved, an imported ROS map); default: the world's true map."),
          localisation: str = typer.Option("ekf", "--localisation", help="truth (the twin's ground truth), ekf "
-                                          "(odometry + gyro + UWB) or odom (wheel odometry alone)."),
-         controller: str = typer.Option("mppi", "--controller", help="mppi or rpp (regulated pure pursuit).")
+                                          "(odometry + gyro + UWB, held to the map) or odom (wheel odometry alone)."),
+         controller: str = typer.Option("mppi", "--controller", help="mppi or rpp (regulated pure pursuit)."),
+         xy_tolerance_m: Optional[float] = typer.Option(
+             None, "--xy-tolerance-m", help=f"Goal tolerance, m: the true pose must end this close to the goal "
+             f"(default {GOTO_DEFAULTS['xy_tolerance_m']:g}, navigation.navigator.xy_tolerance_m)."),
+         yaw_tolerance_deg: Optional[float] = typer.Option(
+             None, "--yaw-tolerance-deg", help=f"Goal heading tolerance, deg, for a goal with a yaw (default "
+             f"{GOTO_DEFAULTS['yaw_tolerance_deg']:g}, navigation.navigator.yaw_tolerance_rad 0.25)."),
+         inflation_radius_m: Optional[float] = typer.Option(
+             None, "--inflation-radius-m", help=f"How far from obstacles the costmap's cost spreads, m: larger keeps "
+             f"the robot nearer the middle of aisles (default {GOTO_DEFAULTS['inflation_radius_m']:g}, "
+             "navigation.costmap.inflation_radius_m)."),
          ) -> None:
-    """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/navigation.md)."""
+    """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/navigation.md).
+    Success is judged by the true pose; Ctrl-C stops the robot and writes the outputs (exit 6)."""
     if goal is None:
         fail("--goal is required (X_M,Y_M or X_M,Y_M,YAW_DEG)")
-    if not any(_given(c, "firmware") for c in (ctx, ctx.parent)):
-        opts.firmware = "improved"  # the faithful one restarts its ramps on every cmd_vel (docs/navigation.md)
+    settings = {}
+    if xy_tolerance_m is not None:
+        settings["navigation.navigator.xy_tolerance_m"] = xy_tolerance_m
+    if yaw_tolerance_deg is not None:
+        if not (math.isfinite(yaw_tolerance_deg) and 0.0 < yaw_tolerance_deg <= 180.0):
+            fail(f"--yaw-tolerance-deg {yaw_tolerance_deg:g}: must be in (0, 180] deg")
+        settings["navigation.navigator.yaw_tolerance_rad"] = math.radians(yaw_tolerance_deg)
+    if inflation_radius_m is not None:
+        settings["navigation.costmap.inflation_radius_m"] = inflation_radius_m
     nav = {"map": None if map_ is None else str(map_), "localisation": localisation, "controller": controller}
-    run_goals(opts, [parse_goal(goal)], nav, opts.duration_s)
+    run_goals(opts, [parse_goal(goal)], nav, opts.duration_s, settings=settings)

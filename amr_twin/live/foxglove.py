@@ -6,8 +6,8 @@ of the published ``foxglove.websocket.v1`` specification) advertising the channe
 and the same CDR payloads (:mod:`amr_twin.recording.mcap_log`'s encoders and state messages), log
 times in simulated ns (``/actors/poses`` with actors). Added: ``/twin/scene`` (``foxglove.SceneUpdate``,
 :mod:`amr_twin.live.scene`: the world, the robot, the actors where they are). Capabilities: ``time`` (the simulated clock, as
-foxglove_bridge with ``use_sim_time``), ``clientPublish`` (``/cmd_vel`` and
-``/wheel_Command_Service/request``, :mod:`amr_twin.live.inputs`) and ``services``
+foxglove_bridge with ``use_sim_time``), ``clientPublish`` (``/cmd_vel``,
+``/wheel_Command_Service/request`` and ``/goal_pose``, :mod:`amr_twin.live.inputs`) and ``services``
 (``/wheel_Command_Service``). ``/tf_static``, ``/robot_description`` and ``/twin/scene``'s
 static entities are sent again whenever a client subscribes to them (latched, as
 transient-local topics are).
@@ -15,7 +15,9 @@ transient-local topics are).
 Messages reach the clients at the pacer's ticks (:mod:`amr_twin.live.pacer`), in time
 order, once the simulated clock has passed them. A client's message is decoded and
 checked in the server's thread, then published on the twin's bus at the next tick;
-one that is refused is logged (one line) and counted in :attr:`FoxgloveSink.dropped`.
+one that is refused is logged (one line) and counted in :attr:`FoxgloveSink.dropped`. ``/goal_pose``
+(``geometry_msgs/msg/PoseStamped``) is also advertised by the server, so that clients find the topic
+and its schema (Foxglove's publish tools) and see each goal taken, echoed at the tick it reached the bus.
 """
 
 from __future__ import annotations
@@ -38,6 +40,8 @@ from amr_twin.ros.ros_state import StateSampler
 LOG = logging.getLogger(__name__)
 
 SCENE_TOPIC = "/twin/scene"
+GOAL_TOPIC = "/goal_pose"
+GOAL_TYPE = "geometry_msgs/PoseStamped"
 GHOST_PERIOD_US = 100_000
 """Period of the scene's ground-truth robot, us (10 Hz)."""
 SERVICE = "/wheel_Command_Service"
@@ -114,6 +118,8 @@ class FoxgloveSink:
             schema = foxglove.Schema(name=ros2_type(typ), encoding="ros2msg", data=msgdef(typ).encode())
             self.channels[topic] = foxglove.Channel(topic, message_encoding="cdr", schema=schema, context=self._ctx)
         self.scene_channel = SceneUpdateChannel(SCENE_TOPIC, context=self._ctx)
+        self.goal_channel = foxglove.Channel(GOAL_TOPIC, message_encoding="cdr", context=self._ctx, schema=foxglove.Schema(
+            name=ros2_type(GOAL_TYPE), encoding="ros2msg", data=msgdef(GOAL_TYPE).encode()))
         self.scene = SceneBuilder(twin.observables.model, twin.observables.named)
         self._bus_out: list[tuple[int, int, object, bytes]] = []  # t_ns, seq, channel, payload
         self._actor_scenes: list[tuple[int, list]] = []  # t_ns, actor poses for the scene
@@ -288,15 +294,27 @@ class FoxgloveSink:
             msg = decoder(data, encoding)
         except live_inputs.InputError as exc:
             return self._drop(client_id, f"a message on {topic}", str(exc))
-        if topic.lstrip("/") == "cmd_vel":
-            action = lambda: self.bus.publish("cmd_vel", msg)  # noqa: E731
-        else:
+        name = topic.lstrip("/")
+        if name == "wheel_Command_Service/request":
             action = lambda: live_inputs.call_service(self.bus, msg)  # noqa: E731
+        elif name == "goal_pose":
+            action = lambda: self._goal(msg)  # noqa: E731
+        else:
+            action = lambda: self.bus.publish(name, msg)  # noqa: E731
         try:
             self.pacer.post(action)
         except RuntimeError as exc:
             return self._drop(client_id, f"a message on {topic}", str(exc))
         self.accepted += 1
+
+    def _goal(self, msg) -> None:
+        """A client's goal (the twin's thread): stamped now, on the bus' ``goal_pose``, echoed to the clients."""
+        from amr_twin.ros.messages import Time
+        from amr_twin.ros.nav_messages import encode_pose_stamped
+
+        msg.header.stamp = Time.from_sec(self.twin.clock.now_s)
+        self.bus.publish("goal_pose", msg)
+        self.goal_channel.log(encode_pose_stamped(msg), log_time=self.twin.clock.now_us * 1000)
 
     def _on_service_call(self, request) -> bytes:
         """``/wheel_Command_Service`` (the server's thread): checked, then called at the next tick."""

@@ -10,6 +10,10 @@ Two inputs, as a ROS 2 graph of the robot would take them:
     ``[motionL, speedL, motionR, speedR]``, the request topic of the recordings), or a call
     of the ``wheel_Command_Service`` service (``amr_idea_control/srv/RequestPacket``)
     a call of the thesis' service: it publishes ``wheel_Command`` to the Arduino.
+``goal_pose`` (``geometry_msgs/msg/PoseStamped``, frame ``map`` or ``odom``)
+    a navigation goal (nav2's ``/goal_pose``, Foxglove's 3D panel "Publish pose"): published on
+    the twin's bus, where ``run goto``'s navigator takes it as a new goal that preempts the
+    active one.
 
 Payloads are CDR (either byte order, decoded by ``mcap_ros2`` against the definitions of
 :mod:`amr_twin.ros.ros2_schemas`) or JSON (ROS field names, missing fields 0). Anything else
@@ -25,11 +29,17 @@ import math
 from typing import Any, Callable
 
 from amr_twin.controllers.wheel_command import MAX_RPM, SERVICE_NAME, WheelCommandRequest
-from amr_twin.ros.geometry_messages import Twist, Vector3
+from amr_twin.ros.geometry_messages import Point, Pose, Quaternion, Twist, Vector3
+from amr_twin.ros.messages import Header, Time
+from amr_twin.ros.nav_messages import PoseStamped
 from amr_twin.ros.ros2_schemas import msgdef
 
 TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/Twist")
 REQUEST_TYPES = ("std_msgs/msg/Float64MultiArray", "std_msgs/Float64MultiArray")
+POSE_TYPES = ("geometry_msgs/msg/PoseStamped", "geometry_msgs/PoseStamped")
+GOAL_FRAMES = ("map", "odom")
+GOAL_LIMIT_M = 1e4
+"""Largest goal coordinate taken, m (as ``--goal``)."""
 ENCODINGS = ("cdr", "json")
 SERVICE_TYPE = "amr_idea_control/srv/RequestPacket"
 SERVICE_REQUEST_DEF = "int32 motionL\nfloat32 speedL\nint32 motionR\nfloat32 speedR\n"
@@ -37,7 +47,8 @@ SERVICE_REQUEST_DEF = "int32 motionL\nfloat32 speedL\nint32 motionR\nfloat32 spe
 codes int, speeds float, fig. 3.3 prints float32 values); the .srv file is not printed. Its
 response is empty."""
 EMPTY_RESPONSE_CDR = b"\x00\x01\x00\x00\x00"
-MAX_BYTES = {"geometry_msgs/Twist": 64, "std_msgs/Float64MultiArray": 4096, SERVICE_TYPE: 4096}
+MAX_BYTES = {"geometry_msgs/Twist": 64, "std_msgs/Float64MultiArray": 4096, SERVICE_TYPE: 4096,
+             "geometry_msgs/PoseStamped": 4096}
 """Largest payload taken per type, bytes: a Twist is 52 in CDR (a few more with padding or JSON
 spacing would still fit 64 in CDR; JSON gets 4096 throughout); a request of 4 values is under 100."""
 """An empty ROS 2 message in CDR: the header and rosidl's one placeholder byte."""
@@ -103,6 +114,27 @@ def decode_twist(data: bytes, encoding: str) -> Twist:
     return Twist(out[0], out[1])
 
 
+def decode_goal_pose(data: bytes, encoding: str) -> PoseStamped:
+    """A client's ``geometry_msgs/msg/PoseStamped`` goal: frame ``map`` (or empty) or ``odom``, a finite
+    position within +-10 km and a finite quaternion that is not zero (normalised; only its yaw counts)."""
+    msg = _decode(data, encoding, "geometry_msgs/PoseStamped")
+    frame = str(_field(_field(msg, "header", {}), "frame_id", "") or "map").lstrip("/")
+    if frame not in GOAL_FRAMES:
+        raise InputError(f"goal_pose in frame {frame!r}: give it in {' or '.join(GOAL_FRAMES)}")
+    pose = _field(msg, "pose", {})
+    xyz = [_finite(_field(_field(pose, "position", {}), k), f"pose.position.{k}") for k in "xyz"]
+    if max(abs(v) for v in xyz) > GOAL_LIMIT_M:
+        raise InputError(f"goal_pose at ({xyz[0]:g}, {xyz[1]:g}): each coordinate must be within +-{GOAL_LIMIT_M:g} m")
+    q = [_finite(_field(_field(pose, "orientation", {}), k, 1.0 if k == "w" else 0.0), f"pose.orientation.{k}")
+         for k in "xyzw"]
+    norm = math.sqrt(sum(v * v for v in q))
+    if norm < 1e-6:
+        raise InputError("goal_pose: pose.orientation is a zero quaternion")
+    x, y, z, w = (v / norm for v in q)
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return PoseStamped(Header(0, Time(), frame), Pose(Point(xyz[0], xyz[1], 0.0), Quaternion.from_yaw(yaw)))
+
+
 def check_request(values) -> WheelCommandRequest:
     """``[motionL, speedL, motionR, speedR]`` checked: motions -1, 0 or 1; speeds in [0, MAX_RPM] RPM."""
     values = list(values)
@@ -157,6 +189,7 @@ def call_service(bus, request: WheelCommandRequest) -> None:
 INPUT_TOPICS = {
     "cmd_vel": (TWIST_TYPES, decode_twist),
     "wheel_Command_Service/request": (REQUEST_TYPES, decode_request_topic),
+    "goal_pose": (POSE_TYPES, decode_goal_pose),
 }
 """Topics a client may publish: name without ``/`` -> (accepted schema names, decoder)."""
 
@@ -166,8 +199,8 @@ def input_for(topic: str, schema_name: str, encoding: str) -> Callable[[bytes, s
     name = topic.lstrip("/")
     entry = INPUT_TOPICS.get(name)
     if entry is None:
-        raise InputError(f"topic {topic!r}: the twin takes /cmd_vel ({TWIST_TYPES[0]}) and "
-                         f"/wheel_Command_Service/request ({REQUEST_TYPES[0]})")
+        raise InputError(f"topic {topic!r}: the twin takes /cmd_vel ({TWIST_TYPES[0]}), "
+                         f"/wheel_Command_Service/request ({REQUEST_TYPES[0]}) and /goal_pose ({POSE_TYPES[0]})")
     types, decoder = entry
     if schema_name not in types:
         raise InputError(f"topic {topic!r} with type {schema_name!r}: expected {types[0]}")

@@ -11,8 +11,9 @@ when it is not.
 :func:`add_actors` adds actor ``i`` to a world's MjSpec as the mocap body ``<kind>_<i>``
 (:func:`body_name`) at its pose at t = 0, its geoms in the world's group 0 (the LiDAR's,
 :data:`amr_twin.sensors.lidar_beams.SEEN_GROUPS`), those that can reach the robot colliding
-with it (a mocap body is kinematic: it pushes the robot and nothing stops it; it never touches
-the world's static geoms). Sizes from the ``actors:`` section of the parameter file; what a
+with it at contact priority 2 with the kind's compliance (``contact_timeconst_s``); a mocap body is
+kinematic, so :mod:`amr_twin.sim.actors` stops it where it touches the robot; it never touches the
+world's static geoms. Sizes from the ``actors:`` section of the parameter file; what a
 0.45 m scan plane cuts of each is in docs/actors.md:
 
 - ``person``: two vertical leg cylinders (the plane cuts them below the knee: two circles
@@ -187,6 +188,16 @@ _RGBA = {"legs": [0.15, 0.20, 0.35, 1.0], "torso": [1.0, 0.55, 0.05, 1.0], "head
          "jack": [0.80, 0.10, 0.10, 1.0], "handle": [0.15, 0.15, 0.15, 1.0]}
 
 
+PRIORITY = 2
+"""The actors' colliding geoms' contact priority: above the robot's wheels and casters (1), so that a touch
+takes the actor's compliance (``actors.<kind>.contact_timeconst_s``)."""
+
+
+def _touching(k) -> dict:
+    """What an actor's colliding geom touches the robot with: its priority and compliance."""
+    return {"priority": PRIORITY, "solref": [k.contact_timeconst_s, 1.0]}
+
+
 def _person(body, name: str, p) -> None:
     import mujoco
 
@@ -194,7 +205,7 @@ def _person(body, name: str, p) -> None:
     half_leg = p.leg_length_m / 2
     for side, y in (("left", p.leg_spacing_m / 2), ("right", -p.leg_spacing_m / 2)):
         body.add_geom(name=f"{name}/leg_{side}", type=cyl, size=[p.leg_radius_m, half_leg, 0],
-                      pos=[0, y, half_leg], rgba=_RGBA["legs"])
+                      pos=[0, y, half_leg], rgba=_RGBA["legs"], **_touching(p))
     head_r = 0.1 * p.height_m / 1.7
     torso_h = p.height_m - 2 * head_r - p.leg_length_m
     body.add_geom(name=f"{name}/torso", type=box, size=[p.torso_depth_m / 2, p.torso_width_m / 2, torso_h / 2],
@@ -212,15 +223,15 @@ def _pallet_jack(body, name: str, j) -> None:
     for side, y in (("left", (j.width_m - j.fork_width_m) / 2), ("right", -(j.width_m - j.fork_width_m) / 2)):
         body.add_geom(name=f"{name}/fork_{side}", type=box,
                       size=[j.fork_length_m / 2, j.fork_width_m / 2, j.fork_height_m / 2],
-                      pos=[(front + heel) / 2, y, j.fork_height_m / 2], rgba=_RGBA["jack"])
+                      pos=[(front + heel) / 2, y, j.fork_height_m / 2], rgba=_RGBA["jack"], **_touching(j))
     body.add_geom(name=f"{name}/frame", type=box, size=[(heel - back) / 2, j.width_m / 2, j.frame_height_m / 2],
-                  pos=[(heel + back) / 2, 0, j.frame_height_m / 2], rgba=_RGBA["jack"])
+                  pos=[(heel + back) / 2, 0, j.frame_height_m / 2], rgba=_RGBA["jack"], **_touching(j))
     x_pump = back + j.pump_radius_m
     body.add_geom(name=f"{name}/pump", type=cyl, size=[j.pump_radius_m, j.pump_height_m / 2, 0],
-                  pos=[x_pump, 0, j.pump_height_m / 2], rgba=_RGBA["jack"])
+                  pos=[x_pump, 0, j.pump_height_m / 2], rgba=_RGBA["jack"], **_touching(j))
     half = (j.handle_height_m - j.pump_height_m) / 2
     body.add_geom(name=f"{name}/handle", type=cyl, size=[0.015, half, 0], pos=[x_pump, 0, j.pump_height_m + half],
-                  rgba=_RGBA["handle"])
+                  rgba=_RGBA["handle"], **_touching(j))
     body.add_geom(name=f"{name}/grip", type=box, size=[0.02, 0.18, 0.02], pos=[x_pump, 0, j.handle_height_m],
                   rgba=_RGBA["handle"], contype=0, conaffinity=0)
 

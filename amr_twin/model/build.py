@@ -33,7 +33,15 @@ STAND_HEIGHT_M = 0.10
 def world_file(world: str | Path) -> Path:
     """The file of ``--world``: a world of ``models/worlds/``, an MJCF world (``.xml``) or a map_server map
     (``.yaml``); anything else, a URDF above all (MuJoCo would load it as a world with no floor), is a
-    :class:`BuildError` saying what is allowed."""
+    :class:`BuildError` saying what is allowed. ``generated:SEED[?door=W]``: a drawn hall
+    (:mod:`amr_twin.model.generated_world`)."""
+    from amr_twin.model.generated_world import is_generated, world_file as generated_file
+
+    if is_generated(world):
+        try:
+            return generated_file(str(world))
+        except ValueError as exc:
+            raise BuildError(str(exc)) from None
     path = Path(world)
     if not path.suffix:
         path = WORLD_DIR / f"{world}.xml"

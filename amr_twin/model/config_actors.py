@@ -22,6 +22,9 @@ class _Moving(Section):
     speed_min_m_s: float = P(unit="m/s", gt=0.0, le=3.0)
     speed_max_m_s: float = P(unit="m/s", gt=0.0, le=3.0)
     turn_rate_rad_s: float = P(unit="rad/s", gt=0.1, le=10.0)
+    give_way_s: float = P(unit="s", gt=0.0, le=600.0)
+    touch_m: float = P(unit="m", ge=0.0, le=0.01)
+    contact_timeconst_s: float = P(unit="s", ge=0.002, le=0.2)
 
     @model_validator(mode="after")
     def _speeds_ordered(self) -> "_Moving":

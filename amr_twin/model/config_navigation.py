@@ -62,6 +62,8 @@ class NavPlannerCfg(_Settings):
     people_margin_m: float = P(unit="m", ge=0.0, le=1.0)
     downsample: int = P(unit="1", ge=1, le=4)
     cost_weight: float = P(unit="1", ge=0.0, le=10.0)
+    footprint_clearance_m: float = P(unit="m", ge=0.0, le=0.5)
+    lead_m: float = P(unit="m", ge=0.0, le=1.5)
 
 
 class NavNavigatorCfg(_Settings):
@@ -69,6 +71,8 @@ class NavNavigatorCfg(_Settings):
 
     controller_hz: float = P(unit="Hz", ge=5.0, le=100.0)
     xy_tolerance_m: float = P(unit="m", gt=0.0, le=2.0)
+    approach_m: float = P(unit="m", gt=0.0, le=2.0)
+    approach_s: float = P(unit="s", gt=0.0, le=30.0)
     yaw_tolerance_rad: float = P(unit="rad", gt=0.0, le=3.2)
     rotate_to_path_rad: float = P(unit="rad", gt=0.0, le=3.2)
     blocked_s: float = P(unit="s", gt=0.0, le=30.0)
@@ -104,6 +108,8 @@ class NavMppiCfg(_Settings):
     social_radius_m: float = P(unit="m", gt=0.0, le=5.0)
     person_clearance_m: float = P(unit="m", ge=0.0, le=2.0)
     person_margin_m: float = P(unit="m", ge=0.0, le=3.0)
+    narrow_m: float = P(unit="m", ge=0.0, le=2.0)
+    narrow_v_m_s: float = P(unit="m/s", gt=0.0, le=1.5)
     weights: MppiWeightsCfg
 
 
@@ -125,8 +131,26 @@ class NavMonitorCfg(_Settings):
     people_stop_lag_s: float = P(unit="s", ge=0.0, le=2.0)
 
 
+class NavYieldingCfg(_Settings):
+    """The robot giving way to people (:class:`amr_twin.navigation.yielding.Yielding`)."""
+
+    enabled: bool = P(unit="bool")
+    margin_m: float = P(unit="m", ge=0.0, le=2.0)
+    speeds_m_s: tuple[float, ...] = P(unit="m/s")
+    turns_rad_s: tuple[float, ...] = P(unit="rad/s")
+    step_s: float = P(unit="s", gt=0.0, le=1.0)
+    standoff_m: float = P(unit="m", ge=0.0, le=3.0)
+    standoff_s: float = P(unit="s", gt=0.0, le=60.0)
+    back_s: float = P(unit="s", ge=0.0, le=10.0)
+    pad_m: float = P(unit="m", ge=0.0, le=1.0)
+    courtesy_m: float = P(unit="m", ge=0.0, le=2.0)
+    courtesy_s: float = P(unit="s", ge=0.0, le=10.0)
+    courtesy_forget_s: float = P(unit="s", ge=0.0, le=600.0)
+
+
 class NavPeopleCfg(_Settings):
-    """The people tracker (:class:`amr_twin.navigation.people.PeopleTracker`) and the person's disc."""
+    """The people tracker (:class:`amr_twin.navigation.people.PeopleTracker`), the person's disc, and the robot's
+    giving way to people (``yielding``)."""
 
     person_radius_m: float = P(unit="m", gt=0.0, le=1.0)
     join_m: float = P(unit="m", gt=0.0, le=1.0)
@@ -141,6 +165,7 @@ class NavPeopleCfg(_Settings):
     min_speed_m_s: float = P(unit="m/s", ge=0.0, le=2.0)
     moved_m: float = P(unit="m", ge=0.0, le=5.0)
     horizon_s: float = P(unit="s", ge=0.0, le=10.0)
+    yielding: NavYieldingCfg
 
 
 class NavMapMatchingCfg(_Settings):

@@ -34,14 +34,22 @@ ANCHORS_NUMERIC = "uwb_anchors_xy_m"
 
 
 def world_path(world: str | Path) -> Path:
-    """The file of ``world``: a name of ``models/worlds/`` (``warehouse``, ``empty``) or a path."""
+    """The file of ``world``: a name of ``models/worlds/`` (``warehouse``, ``empty``), a path, or a generated
+    hall ``generated:SEED[?door=W]`` (:mod:`amr_twin.model.generated_world`, written on first use)."""
+    from amr_twin.model.generated_world import is_generated, world_file
+
+    if is_generated(world):
+        return world_file(str(world))
     path = Path(world)
     return WORLD_DIR / f"{world}.xml" if not path.suffix else path
 
 
 def world_files(world: str | Path) -> list[Path]:
     """The files ``world`` reads: its MJCF file, or a map YAML and the image it names (when it names one)."""
-    path = world_path(world)
+    try:
+        path = world_path(world)
+    except ValueError:  # a bad generated:SEED name: the model build says why
+        return []
     if path.suffix.lower() not in (".yaml", ".yml"):
         return [path]
     from amr_twin.model.yaml_file import read_yaml

@@ -9,9 +9,11 @@ Each control cycle, reconstructed from the papers' and nav2's descriptions:
 2. The unicycle rolls every sequence out (vectorised: headings and positions as cumulative sums).
 3. Critics score each trajectory (lower is better):
 
-   - *obstacles / footprint*: the footprint as two circles covering the rectangle; a circle
-     closer to a lethal cell than its radius is a collision (``collision_cost``, larger the
-     sooner), and within ``margin_m`` of it a repulsion;
+   - *obstacles / footprint* (nav2's CostCritic with ``consider_footprint``): the footprint's
+     outline (a point every costmap cell) on a lethal cell is a collision (``collision_cost``,
+     larger the sooner), and its least distance to one (the clearance) within ``margin_m`` a
+     repulsion; the outline is looked at only where the centre is within the circumscribed radius
+     plus ``margin_m`` and a cell of an obstacle (farther, neither can be);
    - *path*: the distance of the trajectory's points to the plan (alignment) and of its end to
      the plan point it could reach (progress);
    - *goal*: near the goal, the distance of the trajectory's points to it;
@@ -23,9 +25,12 @@ Each control cycle, reconstructed from the papers' and nav2's descriptions:
      coming closer still), within ``person_margin_m`` a repulsion, and *speed near people*: the
      square of the speed where a person will be within ``social_radius_m`` (what else the map
      does not hold, a pallet jack, is the obstacle critic's and the collision monitor's).
+   The people critics see the footprint as two circles covering the rectangle.
 4. The weights ``exp(-(S - min S) / temperature)`` average the noise into the new nominal,
    smoothed by a 3-step moving average (nav2 smooths with a Savitzky-Golay filter); its first
-   step is the command. Every sample colliding: stop, and report it (``blocked``); most of the
+   step is the command. A plan passing within ``narrow_m`` of an obstacle in the next metre (a
+   narrow passage: a door) caps the speed at ``narrow_v_m_s`` (nav2's speed filter, RPP's
+   cost-regulated speed), for all the samples. Every sample colliding: stop, and report it (``blocked``); most of the
    weights on colliding samples: report it too.
 
 Steps 1 to 3 run in C (``mppi_critics.c``, built at first use by :mod:`amr_twin.sim.native_build`):
@@ -53,14 +58,15 @@ from amr_twin.sim.native_build import address, c_array, open_helper
 C_SOURCE = Path(__file__).with_name("mppi_critics.c")
 PARAMS = ("cx0", "cx1", "r", "margin", "collision", "obstacle", "align", "progress", "goal", "forward", "social",
           "people_collision", "people", "person_radius", "clearance", "person_margin", "social_radius", "origin_x",
-          "origin_y", "res", "reach_x", "reach_y", "goal_x", "goal_y", "follow")
+          "origin_y", "res", "reach_x", "reach_y", "goal_x", "goal_y", "follow", "check")
 """The C helper's parameter vector (doubles), in the order of its enum."""
 
 
 def _declare(lib) -> None:
     """The C helper's signatures (addresses as pointers, sizes as ints)."""
     ptr, i32 = ctypes.c_void_p, ctypes.c_int
-    lib.mppi_costs.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, i32, i32, ptr, i32, ptr, i32, ptr, ptr]
+    lib.mppi_costs.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, i32, i32, ptr, i32, ptr, i32, ptr, ptr, i32,
+                               ptr, ptr]
     lib.mppi_costs.restype = None
     f32 = ctypes.c_float
     lib.mppi_sample.argtypes = [i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, f32, f32]
@@ -87,8 +93,8 @@ class Mppi:
                  steps: int = 25, step_s: float = 0.1, sigma_v: float = 0.25, sigma_w: float = 0.6,
                  temperature: float = 0.25, margin_m: float = 0.25, social_radius_m: float = 1.0,
                  person_radius_m: float = 0.25, person_clearance_m: float = 0.25, person_margin_m: float = 0.6,
-                 prediction_s: float = 2.5, weights: dict | None = None, seed: int = 0,
-                 native: bool = True):
+                 prediction_s: float = 2.5, narrow_m: float = 0.0, narrow_v_m_s: float = 0.3,
+                 weights: dict | None = None, seed: int = 0, native: bool = True):
         self.costmap, self.limits, self.dt_s = costmap, limits, float(dt_s)
         self.K, self.T, self.step_s = int(samples), int(steps), float(step_s)
         self.sigma = np.array([sigma_v, sigma_w], np.float32)
@@ -99,6 +105,11 @@ class Mppi:
         cx = 0.5 * (footprint.x_max_m + footprint.x_min_m)
         self.circle_x = np.array([cx - hx / 2, cx + hx / 2])
         self.circle_r = math.hypot(hx / 2, footprint.half_width_m)
+        outline = footprint.outline_xy_m(costmap.resolution_m).astype(np.float32)
+        self._ox, self._oy = outline[:, 0].copy(), outline[:, 1].copy()
+        self.check_m = footprint.circumscribed_radius_m + margin_m + costmap.resolution_m
+        """Centres farther than this from an obstacle: the footprint's clearance is beyond ``margin_m``, m."""
+        self.narrow_m, self.narrow_v_m_s = float(narrow_m), float(narrow_v_m_s)
         self.w = {"collision": 1e4, "obstacle": 40.0, "align": 3.0, "progress": 4.0, "goal": 6.0,
                   "forward": 3.0, "social": 4.0, "people_collision": 2e3, "people": 8.0, **(weights or {})}
         self.rng = np.random.default_rng(seed)
@@ -114,7 +125,8 @@ class Mppi:
             self._params = np.array([*self.circle_x, self.circle_r, margin_m, w["collision"], w["obstacle"],
                                      w["align"], w["progress"], w["goal"], w["forward"], w["social"],
                                      w["people_collision"], w["people"], person_radius_m, person_clearance_m,
-                                     person_margin_m, social_radius_m, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+                                     person_margin_m, social_radius_m, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                                     self.check_m])
             self._bounds = [address(a) for a in (self._u_min, self._u_max, self._down, self._up)]
             _declare(self._lib)
 
@@ -197,13 +209,11 @@ class Mppi:
         reach = ref[min(len(ref) - 1, int(horizon / (2 * 0.05 + 1e-9)))] if len(ref) else path.goal[:2]
         if self._lib is not None:
             return self._costs_c(x, y, yaw, u, ref, reach, follow, path.goal, people, t_s)
-        circles = self._circles(x, y, yaw)
-        d = cm.distance_at(circles.reshape(-1, 2)).reshape(2, *x.shape).min(0)
-        hit = d < self.circle_r
+        clear, hit = self._footprint(x, y, np.cos(yaw), np.sin(yaw))
         any_hit = hit.any(0)
         first = np.where(any_hit, hit.argmax(0), T)
         cost = w["collision"] * any_hit * (1.0 + (T - first) / T)
-        cost += w["obstacle"] * np.maximum(self.circle_r + self.margin_m - d, 0.0).mean(0)
+        cost += w["obstacle"] * np.maximum(np.float32(self.margin_m) - clear, 0.0).mean(0)
         if follow:
             px, py = x[1::3], y[1::3]                                                   # (T/3, K)
             dist = np.sqrt(((px[..., None] - ref[:, 0]) ** 2 + (py[..., None] - ref[:, 1]) ** 2).min(-1))
@@ -214,15 +224,28 @@ class Mppi:
             cost += w["goal"] * np.hypot(x - g[0], y - g[1]).mean(0)
         cost += w["forward"] * np.maximum(-u[..., 0], 0.0).mean(0)
         if people is not None and len(people):
-            cost += self._people_costs(circles, u, people, t_s)
+            cost += self._people_costs(self._circles(x, y, yaw), u, people, t_s)
         return cost, any_hit
+
+    def _footprint(self, x, y, c, s) -> tuple[np.ndarray, np.ndarray]:
+        """The footprint critic's clearance (T, K) (float32, m; ``margin_m`` where the centre is beyond
+        :attr:`check_m`) and collisions (T, K) of poses at ``x, y`` heading ``c, s`` (cos, sin)."""
+        cm = self.costmap
+        d = cm.distance_at(np.column_stack([x.ravel(), y.ravel()])).reshape(x.shape)
+        clear = np.full(x.shape, np.float32(self.margin_m), np.float32)
+        near = d < np.float32(self.check_m)
+        xs, ys, cs, ss = (a[near][:, None] for a in (x, y, c, s))
+        px = xs + cs * self._ox - ss * self._oy
+        py = ys + ss * self._ox + cs * self._oy
+        clear[near] = cm.distance_at(np.column_stack([px.ravel(), py.ravel()])).reshape(px.shape).min(1)
+        return clear, (clear <= 0.0) | (d <= 0.0)
 
     def _costs_c(self, x, y, yaw, u, ref, reach, follow, goal, people, t_s) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`costs` by the C helper (the same critics; the headings enter as their cos and sin)."""
         cm, (T, K) = self.costmap, x.shape
         p = self._params
-        p[17:] = (cm.origin_xy_m[0], cm.origin_xy_m[1], cm.resolution_m, reach[0], reach[1], goal[0], goal[1],
-                  float(follow))
+        p[17:25] = (cm.origin_xy_m[0], cm.origin_xy_m[1], cm.resolution_m, reach[0], reach[1], goal[0], goal[1],
+                    float(follow))
         ref = c_array(ref, np.float64)
         if people is not None and len(people):
             at = c_array(people.at(t_s + self.step_s * np.arange(1, T + 1), self.prediction_s), np.float64)
@@ -234,7 +257,8 @@ class Mppi:
         c, s = np.cos(yaw, dtype=np.float32), np.sin(yaw, dtype=np.float32)  # kept alive over the call
         self._lib.mppi_costs(T, K, address(x), address(y), address(c), address(s), address(u), address(p),
                              address(dist), dist.shape[0], dist.shape[1], address(ref), len(ref),
-                             address(at) if len(at) else None, len(at), address(cost), address(hit))
+                             address(at) if len(at) else None, len(at), address(cost), address(hit), len(self._ox),
+                             address(self._ox), address(self._oy))
         return cost, hit.view(bool)
 
     def command(self, pose, velocity, path: PathHandler, people=None, t_s: float = 0.0) -> Twist2D:
@@ -242,6 +266,9 @@ class Mppi:
         ``t_s`` with the tracked ``people`` (:class:`~amr_twin.navigation.people.People`) about."""
         pose = np.asarray(pose, float)
         v0, w0 = (float(v) for v in velocity)
+        ahead = path.ahead(1.0)[:, :2]
+        narrow = self.narrow_m > 0.0 and float(self.costmap.distance_at(ahead).min()) < self.narrow_m
+        self._u_max[0] = min(self.limits.max_v_m_s, self.narrow_v_m_s) if narrow else self.limits.max_v_m_s
         u = self._sample(v0, w0)
         x, y, yaw = self.rollout(pose, u)
         cost, hit = self.costs(x, y, yaw, u, path, people, t_s)

@@ -4,8 +4,8 @@
  * controls (T, K, 2), trajectories (T, K).
  *
  * The same operations as the NumPy twin, in the same precision: the ramps' clipping in float32 (the same
- * bits), the footprint circles' centres in float32 from the NumPy rollout's positions and cos/sin of the
- * headings (the same bits, so the same costmap cells and the same collisions), the map lookups and the
+ * bits), the footprint outline's points and the people circles' centres in float32 from the NumPy rollout's
+ * positions and cos/sin of the headings (the same bits, so the same costmap cells and the same collisions), the map lookups and the
  * people's and the path's distances in double (the same bits: a minimum of squares, then its square root,
  * is the minimum of the roots), and the means in the twin's precision and order; the costs agree with the
  * twin's to rounding. One pass over the samples instead of some hundred NumPy calls on (T, K) arrays.
@@ -17,7 +17,7 @@
 /* parameter layout (doubles): see PARAMS in mppi.py */
 enum { P_CX0, P_CX1, P_R, P_MARGIN, P_W_COLLISION, P_W_OBSTACLE, P_W_ALIGN, P_W_PROGRESS, P_W_GOAL, P_W_FORWARD,
        P_W_SOCIAL, P_W_PEOPLE_COLLISION, P_W_PEOPLE, P_PERSON_RADIUS, P_CLEARANCE, P_PERSON_MARGIN, P_SOCIAL_RADIUS,
-       P_ORIGIN_X, P_ORIGIN_Y, P_RES, P_REACH_X, P_REACH_Y, P_GOAL_X, P_GOAL_Y, P_FOLLOW, P_SIZE };
+       P_ORIGIN_X, P_ORIGIN_Y, P_RES, P_REACH_X, P_REACH_Y, P_GOAL_X, P_GOAL_Y, P_FOLLOW, P_CHECK, P_SIZE };
 
 int mppi_params_size(void) { return P_SIZE; }
 
@@ -97,14 +97,31 @@ static float lookup(const float* dist, int rows, int cols, const double* p, floa
     return dist[(int64_t)fr * cols + (int64_t)fc];
 }
 
+/* The footprint critic's clearance at a pose (Mppi._footprint): the least distance over the outline (ox, oy)
+ * (P,) where the centre's distance d is below check, else margin; *collide set on a lethal cell. */
+static float footprint_clearance(const float* dist, int rows, int cols, const double* p, float x, float y, float c,
+                                 float s, int P, const float* ox, const float* oy, float margin, int* collide) {
+    float d = lookup(dist, rows, cols, p, x, y), clear = margin;
+    if (d < (float)p[P_CHECK]) {
+        clear = INFINITY;
+        for (int j = 0; j < P; ++j) {
+            float px = x + c * ox[j] - s * oy[j], py = y + s * ox[j] + c * oy[j];
+            float e = lookup(dist, rows, cols, p, px, py);
+            if (e < clear) clear = e;
+        }
+    }
+    *collide = clear <= 0.0f || d <= 0.0f;
+    return clear;
+}
+
 /* Cost (K,) and collision flag (K,) of the trajectories x, y (T, K) with headings' cos c and sin s (T, K),
  * controls u (T, K, 2): the costmap dist (rows, cols), the plan points ref (M, 2), the people's predicted
- * positions at (N, T, 2). Scratch: gap (T,) per sample. */
+ * positions at (N, T, 2), the footprint's outline (ox, oy) (P,). */
 void mppi_costs(int T, int K, const float* x, const float* y, const float* c, const float* s, const float* u,
                 const double* p, const float* dist, int rows, int cols, const double* ref, int M,
-                const double* at, int N, double* cost, uint8_t* hit) {
-    const float cx0 = (float)p[P_CX0], cx1 = (float)p[P_CX1], r32 = (float)p[P_R];
-    const float reach32 = (float)(p[P_R] + p[P_MARGIN]);
+                const double* at, int N, double* cost, uint8_t* hit, int P, const float* ox, const float* oy) {
+    const float cx0 = (float)p[P_CX0], cx1 = (float)p[P_CX1];
+    const float margin32 = (float)p[P_MARGIN];
     const float w_obstacle = (float)p[P_W_OBSTACLE], w_forward = (float)p[P_W_FORWARD];
     const double off = p[P_R], off_person = p[P_PERSON_RADIUS];
     /* people: the clearance the robot has now (the least over the samples' first step), as the twin */
@@ -134,10 +151,10 @@ void mppi_costs(int T, int K, const float* x, const float* y, const float* c, co
         for (int t = 0; t < T; ++t) {
             int64_t i = (int64_t)t * K + k;
             float ax = x[i] + c[i] * cx0, ay = y[i] + s[i] * cx0, bx = x[i] + c[i] * cx1, by = y[i] + s[i] * cx1;
-            float da = lookup(dist, rows, cols, p, ax, ay), db = lookup(dist, rows, cols, p, bx, by);
-            float d = da < db ? da : db;
-            if (d < r32 && first == T) first = t;
-            float rep = reach32 - d;
+            int collide;
+            float clear = footprint_clearance(dist, rows, cols, p, x[i], y[i], c[i], s[i], P, ox, oy, margin32, &collide);
+            if (collide && first == T) first = t;
+            float rep = margin32 - clear;
             obstacle += rep > 0.0f ? rep : 0.0f;
             float back = -u[i * 2];
             forward += back > 0.0f ? back : 0.0f;

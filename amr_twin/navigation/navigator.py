@@ -15,7 +15,8 @@ reconstructed from its description (navigate_to_pose_w_replanning_and_recovery):
   which is still free (:meth:`GlobalPlanner.path_free`), does not replace it;
 - every ``1 / controller_hz`` s the controller follows the plan, after a rotation in place to the
   path's heading when it is more than ``rotate_to_path_rad`` off (nav2's RotationShimController);
-  within ``xy_tolerance_m`` of the goal the robot turns in place to the goal's yaw; the
+  within ``approach_m`` of the goal (or within ``xy_tolerance_m`` and no longer closing in) the robot
+  stops and turns in place to the goal's yaw, reached within ``xy_tolerance_m``; the
   collision monitor filters every command;
 - a failure (no plan, the controller blocked for ``blocked_s``, no progress) starts the next
   recovery of the round robin (clear costmaps, spin, wait, back up); after ``max_failures`` the
@@ -38,8 +39,9 @@ from amr_twin.navigation.map_matching import POSE_TOPIC, MapMatcher
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner
-from amr_twin.navigation.progress import ProgressChecker, at_goal
+from amr_twin.navigation.progress import ProgressChecker
 from amr_twin.navigation.recoveries import ROUND_ROBIN
+from amr_twin.navigation.yielding import Yielding
 from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped, Twist, Vector3
 
 @dataclass(frozen=True)
@@ -50,6 +52,8 @@ class NavParams:
     controller_hz: float = 20.0
     planner_hz: float = 1.0
     xy_tolerance_m: float = 0.25
+    approach_m: float = 0.1
+    approach_s: float = 2.0
     yaw_tolerance_rad: float = 0.25
     rotate_to_path_rad: float = math.radians(45.0)
     obstacle_range_m: float = 4.0
@@ -74,6 +78,7 @@ class GoalOutcome:
     recoveries: list = field(default_factory=list)   # (t_s, name)
     plan_cpu_s: list = field(default_factory=list)
     first_plan_length_m: float = math.nan
+    pose_estimate_end: tuple | None = None   # the navigator's pose (x_m, y_m, yaw_rad) when it ended
 
 
 class Navigator:
@@ -83,8 +88,10 @@ class Navigator:
                  limits: Limits, goals, params: NavParams = NavParams(), outputs=None, start_s: float = 0.0, *,
                  monitor: CollisionMonitor | None = None, tracker: PeopleTracker | None = None,
                  progress: ProgressChecker | None = None, recovery_settings: dict | None = None,
-                 matcher: MapMatcher | None = None):
+                 matcher: MapMatcher | None = None, yielding: Yielding | None = None):
         self.bus, self.clock, self.pose_source = bus, clock, pose_source
+        self.yielding = yielding
+        """Keeps the robot out of people's predicted paths (:class:`~amr_twin.navigation.yielding.Yielding`), or None."""
         self.matcher = matcher
         self.costmap, self.planner, self.controller = costmap, planner, controller
         self.footprint, self.limits, self.p = footprint, limits, params
@@ -102,6 +109,8 @@ class Navigator:
         self._recovery, self._failures, self._rr = None, 0, 0
         self._blocked_since: float | None = None
         self._rotating_to_goal = False
+        self._inside_since: float | None = None   # when the estimate came within xy_tolerance_m of the goal
+        self._closest_m = math.inf
         self._scan_points = np.zeros((0, 2))
         self._unmapped = np.zeros(0, bool)
         self.tracker = tracker if tracker is not None else PeopleTracker()
@@ -191,26 +200,48 @@ class Navigator:
 
     def _publish(self, v: float, w: float) -> None:
         pose = self.pose_source.pose() if self.pose_source.ready else None
+        wanted = (v, w)
         if pose is not None and len(self._scan_points) and (v or w):
-            c, s = math.cos(pose[2]), math.sin(pose[2])
-            d = self._scan_points - pose[:2]
-            people = None
-            if len(self.people):
-                xy = self.people.at(np.array([self.clock.now_s]), self.tracker.horizon_s)[:, 0] - pose[:2]
-                vel = self.people.v_m_s
-                people = (np.column_stack([c * xy[:, 0] + s * xy[:, 1], -s * xy[:, 0] + c * xy[:, 1]]),
-                          np.column_stack([c * vel[:, 0] + s * vel[:, 1], -s * vel[:, 0] + c * vel[:, 1]]))
-            v, w = self.monitor.filter(v, w, np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]),
-                                       self._unmapped, people)
+            v, w = self.monitor.filter(v, w, *self._in_base(pose))
+        if self.yielding is not None and pose is not None and not self.done:
+            v, w = self._yield(pose, wanted, (v, w))
         self.commands.append((self.clock.now_s, v, w))
         self._cmd.publish(Twist(Vector3(float(v), 0.0, 0.0), Vector3(0.0, 0.0, float(w))))
+
+    def _in_base(self, pose, people: bool = True) -> tuple:
+        """What the collision monitor takes, in the base frame: the scan's points (n, 2), which of them are
+        unmapped, and (``people``) the people's predicted positions and velocities (or None)."""
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        rot = np.array([[c, -s], [s, c]])   # map -> base: row vectors times this
+        if people and len(self.people):
+            xy = self.people.at(np.array([self.clock.now_s]), self.tracker.horizon_s)[:, 0] - pose[:2]
+            people = (xy @ rot, self.people.v_m_s @ rot)
+        else:
+            people = None
+        return (self._scan_points - pose[:2]) @ rot, self._unmapped, people
+
+    def _yield(self, pose, wanted, filtered) -> tuple[float, float]:
+        """``filtered`` or, with a person about to walk into the robot where it would stand, the way out of their
+        path (:class:`~amr_twin.navigation.yielding.Yielding`), ramped, through the monitor's zones of returns
+        (not its people zones: they would stop the way out)."""
+        vel = self._velocity()
+        out = self.yielding.command(self.clock.now_s, pose, vel, wanted, filtered, self.people, self._scan_points)
+        if out is None:
+            return filtered
+        v, w = self.limits.ramp(*out, *vel, self.dt_s)
+        if len(self._scan_points) and (v or w):
+            v, w = self.monitor.filter(v, w, *self._in_base(pose, people=False))
+        return v, w
 
     def _finish(self, status: str, reason: str = "") -> None:
         out = self.outcomes[self._goal_i]
         out.status, out.reason, out.t_end_s = status, reason, self.clock.now_s
+        if self.pose_source.ready:
+            out.pose_estimate_end = tuple(float(v) for v in self.pose_source.pose())
         self._goal_i += 1
         self._path = self._plan = self._recovery = None
         self._failures, self._blocked_since, self._rotating_to_goal = 0, None, False
+        self._inside_since = None
         self._next_plan_s = self.clock.now_s
         self.progress.reset()
         if status == "aborted":  # the goals after it are not attempted
@@ -301,6 +332,20 @@ class Navigator:
         """The last command (what the drive is ramping to): a cleaner velocity than the estimate's."""
         return (self.commands[-1][1], self.commands[-1][2]) if self.commands else (0.0, 0.0)
 
+    def _arrived(self, now: float, pose, goal) -> bool:
+        """Time to stop and turn to the goal's yaw: within ``approach_m`` of the goal, or within ``xy_tolerance_m``
+        and no longer closing in (``approach_s`` inside it, or 2 cm past the closest approach)."""
+        d = math.hypot(pose[0] - goal[0], pose[1] - goal[1])
+        if d <= min(self.p.approach_m, self.p.xy_tolerance_m):
+            return True
+        if d > self.p.xy_tolerance_m:
+            self._inside_since = None
+            return False
+        if self._inside_since is None:
+            self._inside_since, self._closest_m = now, d
+        self._closest_m = min(self._closest_m, d)
+        return now - self._inside_since >= self.p.approach_s or d > self._closest_m + 0.02
+
     def _cycle(self, now: float, pose, vel, out: GoalOutcome) -> tuple[float, float]:
         lim, g = self.limits, out.goal
         if self._recovery is not None:
@@ -310,7 +355,7 @@ class Navigator:
             self._recovery = None
             self._next_plan_s = now  # replan at once
             return lim.ramp(0.0, 0.0, *vel, self.dt_s)
-        if at_goal(pose[0], pose[1], g, self.p.xy_tolerance_m) or self._rotating_to_goal:
+        if self._rotating_to_goal or self._arrived(now, pose, g):
             self._rotating_to_goal = True
             err = 0.0 if len(g) < 3 or g[2] is None else float(wrap(g[2] - pose[2]))
             if abs(err) <= self.p.yaw_tolerance_rad and abs(vel[0]) < 0.05 and abs(vel[1]) < 0.1:

@@ -23,8 +23,9 @@ Reconstructed from those descriptions, each scan:
    constant velocity (:meth:`People.at`) for at most ``horizon_s``; a person slower than
    ``min_speed_m_s`` is held where they stand (the filter's noise on a person standing still).
 
-:class:`People` is what the controller and the collision monitor read: positions (N, 2),
-velocities (N, 2) in ``map``, m and m/s, at time ``t_s``.
+:class:`People` is what the controller, the collision monitor and the robot's giving way
+(:mod:`amr_twin.navigation.yielding`) read: positions (N, 2), velocities (N, 2) in ``map``, m and m/s,
+at time ``t_s``, and each one's last walking velocity.
 """
 
 from __future__ import annotations
@@ -38,11 +39,13 @@ from scipy.sparse.csgraph import connected_components
 
 @dataclass(frozen=True)
 class People:
-    """Confirmed tracks at ``t_s``: positions ``xy_m`` (N, 2) and velocities ``v_m_s`` (N, 2) in ``map``."""
+    """Confirmed tracks at ``t_s``: positions ``xy_m`` (N, 2) and velocities ``v_m_s`` (N, 2) in ``map``;
+    ``intent_m_s`` (N, 2) each one's last walking velocity (zero if never seen walking; None: unknown)."""
 
     t_s: float
     xy_m: np.ndarray
     v_m_s: np.ndarray
+    intent_m_s: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.xy_m)
@@ -123,6 +126,8 @@ class PeopleTracker:
                 speed = float(np.hypot(*v))
                 self._v[j] = v if speed <= self.max_speed_m_s else v * (self.max_speed_m_s / speed)
                 self._t[j], self._hits[j] = t_c[i], self._hits[j] + 1
+                if speed >= self.min_speed_m_s:
+                    self._intent[j] = self._v[j]
                 self._moved[j] |= bool(np.hypot(*(self._xy[j] - self._first[j])) > self.moved_m)
         alive = self._t >= now - self.keep_s
         new = ~used
@@ -131,6 +136,7 @@ class PeopleTracker:
         self._first = np.vstack([self._first[alive], centre[new]])
         self._moved = np.concatenate([self._moved[alive], np.zeros(k, bool)])
         self._v = np.vstack([self._v[alive], np.zeros((k, 2))])
+        self._intent = np.vstack([self._intent[alive], np.zeros((k, 2))])
         self._t = np.concatenate([self._t[alive], t_c[new]])
         self._hits = np.concatenate([self._hits[alive], np.ones(k, int)])
 
@@ -143,9 +149,10 @@ class PeopleTracker:
         v[np.hypot(v[:, 0], v[:, 1]) < self.min_speed_m_s] = 0.0
         t = self._t[keep]
         xy = self._xy[keep] + v * (t.max() - t)[:, None]  # brought to one instant
-        return People(float(t.max()), xy, v)
+        return People(float(t.max()), xy, v, self._intent[keep].copy())
 
     def clear(self) -> None:
         """Forget every track."""
         self._xy, self._first, self._v = np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2))
+        self._intent = np.zeros((0, 2))
         self._t, self._hits, self._moved = np.zeros(0), np.zeros(0, int), np.zeros(0, bool)

@@ -21,10 +21,14 @@ As nav2's planner server with a grid planner (NavFn, Smac 2D with ``downsample_c
    (pyastar2d was measured first: as fast, but it charges a diagonal move like a straight one,
    so among routes with as many moves it picks any, a 41 m route where one of 35 m exists, and
    its float32 path bookkeeping crashed it once in 144 plans.)
-3. Line-of-sight shortening: from each kept vertex the path jumps to the farthest later vertex
+3. Narrow passages (:mod:`amr_twin.navigation.passages`, with a ``footprint``): where the robot cannot
+   turn in place, the path is moved to the passage's centre line and runs straight along it, from
+   where the robot can turn on one side to where it can on the other (a door: centred, aligned before
+   the footprint enters), when the footprint oriented along it keeps ``footprint_clearance_m``;
+4. Line-of-sight shortening of the rest: from each kept vertex the path jumps to the farthest later vertex
    whose straight segment keeps at least the clearance the grid path had between them (or
    ``clearance_m``, whichever is less) and stays out of the inscribed radius;
-4. the polyline is resampled every ``spacing_m`` with each point's heading along the path.
+5. the polyline is resampled every ``spacing_m`` with each point's heading along the path.
 
 :func:`goal_problem` says in one line why a goal cannot be planned to (off the map, inside an
 obstacle), or ''; :attr:`GlobalPlanner.last_error` why a plan failed.
@@ -41,6 +45,8 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from amr_twin.navigation.costmap import INSCRIBED, Costmap, inflation_cost
+from amr_twin.navigation.footprint import Footprint
+from amr_twin.navigation.passages import split
 
 
 @dataclass(frozen=True)
@@ -61,8 +67,10 @@ class GlobalPlanner:
 
     def __init__(self, costmap: Costmap, downsample: int = 2, cost_weight: float = 1.0,
                  clearance_m: float = 0.6, spacing_m: float = 0.05, turn_room_m: float = 0.0,
-                 unmapped_pad_m: float = 0.0, people_m: float = 0.0):
+                 unmapped_pad_m: float = 0.0, people_m: float = 0.0, footprint: Footprint | None = None,
+                 footprint_clearance_m: float = 0.1, lead_m: float = 0.35):
         self.costmap, self.downsample = costmap, int(downsample)
+        self.footprint, self.footprint_clearance_m, self.lead_m = footprint, float(footprint_clearance_m), float(lead_m)
         self.unmapped_pad_m, self.people_m = float(unmapped_pad_m), float(people_m)
         self._coarse, self._seen, self._graph = None, -1, None
         self.turn_room_m = float(turn_room_m)
@@ -138,7 +146,13 @@ class GlobalPlanner:
         xy = cm.origin_xy_m + (path[:, ::-1] + 0.5) * cm.resolution_m * k
         xy[0], xy[-1] = start_xy_m[:2], goal_xy_m[:2]
         people = np.zeros((0, 2)) if people_xy_m is None else np.asarray(people_xy_m, float).reshape(-1, 2)
-        poses = self._resample(self._shorten(xy, people), goal_yaw_rad)
+        if self.footprint is None:
+            xy = self._shorten(xy, people)
+        else:
+            parts = [piece if fixed else self._shorten(piece, people)
+                     for fixed, piece in split(cm, self.footprint, xy, self.footprint_clearance_m, self.lead_m)]
+            xy = np.vstack([parts[0]] + [p[1:] for p in parts[1:]])
+        poses = self._resample(xy, goal_yaw_rad)
         length = float(np.hypot(*np.diff(poses[:, :2], axis=0).T).sum())
         return Plan(poses, length, time.process_time() - t0)
 
@@ -209,6 +223,7 @@ class GlobalPlanner:
         return xy[keep]
 
     def _resample(self, xy: np.ndarray, goal_yaw_rad: float | None) -> np.ndarray:
+        xy = xy[np.concatenate([[True], np.hypot(*np.diff(xy, axis=0).T) > 1e-9])]
         seg = np.diff(xy, axis=0)
         seg_len = np.hypot(seg[:, 0], seg[:, 1])
         if len(seg_len) == 0 or seg_len.sum() < 1e-9:

@@ -1,10 +1,6 @@
-"""Progress and goal checkers (nav2's SimpleProgressChecker and SimpleGoalChecker).
-
-- :class:`ProgressChecker`: the robot must move ``radius_m`` from where it last did within
-  ``time_allowance_s``, or the controller has failed to make progress.
-- :func:`at_goal`: within ``xy_tolerance_m`` of the goal; the goal's yaw is then turned to in place
-  (:func:`amr_twin.navigation.kinematics.rotation_rate`) until within ``yaw_tolerance_rad``.
-"""
+"""The progress checker (nav2's SimpleProgressChecker): the robot must move ``radius_m`` from where it
+last did within ``time_allowance_s``, or the controller has failed to make progress. (The goal checker is
+the navigator's ``_arrived``.)"""
 
 from __future__ import annotations
 
@@ -28,7 +24,3 @@ class ProgressChecker:
             return True
         return t_s - self._ref[0] <= self.time_allowance_s
 
-
-def at_goal(x_m: float, y_m: float, goal_xy_m, xy_tolerance_m: float) -> bool:
-    """Within ``xy_tolerance_m`` of the goal's position."""
-    return math.hypot(x_m - goal_xy_m[0], y_m - goal_xy_m[1]) <= xy_tolerance_m

@@ -30,11 +30,20 @@ from amr_twin.navigation.people import PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner
 from amr_twin.navigation.progress import ProgressChecker
 from amr_twin.navigation.static_map import StaticMap, world_map, yaml_map
+from amr_twin.navigation.yielding import Yielding
 
 CONTROLLERS = ("mppi", "rpp")
 REST_S = 2.0
 """Standing still before the first goal: the gyro's rest calibration of the EKF (ekf.imu_rest_calibration_s)."""
 RESOLUTION_M = 0.05
+LIMIT_BASE_S = 60.0
+LIMIT_S_PER_M = 4.0
+"""The default time limit of a run's goals, s: ``LIMIT_BASE_S`` + ``LIMIT_S_PER_M`` per metre of their first plans,
+counted from the end of the rest (:func:`time_limit_s`)."""
+SETTLE_MAX_S = 5.0
+"""After the last goal ends, s: the navigator ramps the robot to a stop (0.8 s from 0.8 m/s at 1 m/s^2) within this."""
+STANDING_RAD_S = 0.05
+"""A wheel slower than this stands, rad/s (6 mm/s at the rim)."""
 
 
 @dataclass(frozen=True)
@@ -46,7 +55,7 @@ class NavigationOptions:
     localisation: str = "ekf"
     controller: str = "mppi"
     seed: int = 0
-    timeout_s: float | None = None   # None: 60 s + 4 s per metre of the first plans
+    timeout_s: float | None = None   # None: time_limit_s's default
 
 
 @dataclass
@@ -64,6 +73,7 @@ class NavigationRun:
     wall_s: float = 0.0
     timed_out: bool = False
     actor_poses: list = field(default_factory=list)  # (t_s, [(x_m, y_m, yaw_rad), ...]) of actors/poses, 10 Hz
+    final_errors: list = field(default_factory=list)  # each goal's :class:`~.goal_truth.FinalErrors`
 
 
 def robot_top_m(cfg) -> float:
@@ -109,7 +119,8 @@ def make_planner(costmap: Costmap, footprint: Footprint, nav) -> GlobalPlanner:
     people_m = nav.people.person_radius_m + nav.monitor.people_stop_m + footprint.inscribed_radius_m + p.people_margin_m
     return GlobalPlanner(costmap, downsample=p.downsample, cost_weight=p.cost_weight,
                          turn_room_m=footprint.circumscribed_radius_m, unmapped_pad_m=p.unmapped_pad_m,
-                         people_m=people_m)
+                         people_m=people_m, footprint=footprint, footprint_clearance_m=p.footprint_clearance_m,
+                         lead_m=p.lead_m)
 
 
 def make_controller(kind: str, costmap: Costmap, footprint: Footprint, nav, seed: int = 0):
@@ -165,6 +176,7 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
     limits = Limits(**nav.limits.model_dump())
     n, c, pl = nav.navigator, nav.costmap, nav.planner
     params = NavParams(controller_hz=n.controller_hz, planner_hz=pl.planner_hz, xy_tolerance_m=n.xy_tolerance_m,
+                       approach_m=n.approach_m, approach_s=n.approach_s,
                        yaw_tolerance_rad=n.yaw_tolerance_rad, rotate_to_path_rad=n.rotate_to_path_rad,
                        obstacle_range_m=c.obstacle_range_m, raytrace_range_m=c.raytrace_range_m,
                        unmapped_m=c.unmapped_m if options.map_yaml is None else c.unmapped_map_file_m,
@@ -174,6 +186,7 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
     controller = make_controller(options.controller, costmap, footprint, nav, options.seed)
     people = nav.people.model_dump()
     radius = people.pop("person_radius_m")
+    yielding = make_yielding(footprint, limits, nav, 1.0 / n.controller_hz, people.pop("yielding"))
     monitor = CollisionMonitor(footprint, limits.max_v_m_s, person_radius_m=radius, decel_m_s2=limits.decel_m_s2,
                                **nav.monitor.model_dump())
     r = nav.recoveries
@@ -185,7 +198,16 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
                      monitor=monitor, tracker=PeopleTracker(**people),
                      progress=ProgressChecker(n.progress_radius_m, n.progress_time_s),
                      recovery_settings=recovery_settings,
-                     matcher=make_matcher(costmap, nav, options.localisation))
+                     matcher=make_matcher(costmap, nav, options.localisation), yielding=yielding)
+
+
+def make_yielding(footprint: Footprint, limits: Limits, nav, dt_s: float, y: dict) -> Yielding | None:
+    """The robot's giving way to people (``navigation.people.yielding`` as ``y``), None when disabled."""
+    if not y.pop("enabled"):
+        return None
+    m, p = nav.monitor, nav.people
+    return Yielding(footprint, limits, dt_s, person_radius_m=p.person_radius_m, stop_m=m.people_stop_m,
+                    horizon_s=p.horizon_s, min_speed_m_s=p.min_speed_m_s, **y)
 
 
 def make_matcher(costmap: Costmap, nav, localisation: str) -> MapMatcher | None:
@@ -198,16 +220,39 @@ def make_matcher(costmap: Costmap, nav, localisation: str) -> MapMatcher | None:
     return MapMatcher(costmap, **m)
 
 
+def time_limit_s(timeout_s: float | None, plan_lengths_m) -> float:
+    """The run's time limit after the rest, s: ``timeout_s``, or (None) ``LIMIT_BASE_S`` plus ``LIMIT_S_PER_M`` per
+    metre of the goals' first plans (NaN: no plan yet)."""
+    if timeout_s is not None:
+        return timeout_s
+    return LIMIT_BASE_S + LIMIT_S_PER_M * sum(v for v in plan_lengths_m if not math.isnan(v))
+
+
+def _goal_pose_in_map(msg, start) -> tuple[float, float, float]:
+    """A ``geometry_msgs/PoseStamped`` goal in ``map`` (``odom``: placed by the start pose, where the wheel
+    odometry's frame starts)."""
+    p, yaw = msg.pose.position, msg.pose.orientation.yaw_rad()
+    if msg.header.frame_id.lstrip("/") != "odom":
+        return float(p.x), float(p.y), float(yaw)
+    c, s = math.cos(start[2]), math.sin(start[2])
+    return (float(start[0] + c * p.x - s * p.y), float(start[1] + s * p.x + c * p.y),
+            float(math.remainder(start[2] + yaw, 2 * math.pi)))
+
+
 def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | None = None,
              on_twin=None, progress=None, publish: bool = False, drive: bool = True) -> NavigationRun:
-    """Build the twin (``twin_options``, sensors on), attach the stack, run until every goal has an outcome.
+    """Build the twin (``twin_options``, sensors on), attach the stack, run until every goal has an outcome and
+    the robot stands; each goal the navigator reached is then judged by the true pose (:mod:`.goal_truth`).
 
     ``on_twin(twin)`` is called once the twin is built (a recording's capture attaches there);
-    ``progress(t_s)`` every simulated half second; ``publish``, ``drive``: as :func:`attach`. Raises nothing
-    for a failed goal: its outcome says it.
+    ``progress(navigator, t_s)`` every simulated half second (it may :meth:`Navigator.cancel` the goals);
+    ``publish``, ``drive``: as :func:`attach`. A ``geometry_msgs/PoseStamped`` on the bus' ``goal_pose``
+    (frame ``map``, or ``odom``) is a new goal that preempts the active one (nav2's ``/goal_pose``). Raises
+    nothing for a failed goal: its outcome says it.
     """
     from dataclasses import replace
 
+    from amr_twin.navigation.goal_truth import final_errors, judge
     from amr_twin.sim.loop import Twin
 
     wall0 = time.perf_counter()
@@ -217,30 +262,40 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
         on_twin(twin)
     nav = attach(twin, cfg, static, options, publish=publish, drive=drive)
     twin.navigator = nav
+    twin.bus.subscribe("goal_pose", lambda msg: nav.send_goal(_goal_pose_in_map(msg, twin.start_xy_yaw)))
     actor_poses = []
     twin.on_message(lambda _topic, msg, t_us: actor_poses.append(
         (t_us * 1e-6, [(p.position.x, p.position.y, p.orientation.yaw_rad()) for p in msg.poses])), ("actors/poses",))
     twin.advance(REST_S)
-    timeout = options.timeout_s
     while not nav.done and not twin.halted:
-        if timeout is None:
-            lengths = [o.first_plan_length_m for o in nav.outcomes if not math.isnan(o.first_plan_length_m)]
-            limit = REST_S + 60.0 + 4.0 * sum(lengths) if lengths else REST_S + 60.0
-        else:
-            limit = REST_S + timeout
-        if twin.t_s >= limit:
+        if twin.t_s >= REST_S + time_limit_s(options.timeout_s, [o.first_plan_length_m for o in nav.outcomes]):
             break
         twin.advance(0.5)
         if progress is not None:
-            progress(twin.t_s)
+            progress(nav, twin.t_s)
     timed_out = not nav.done and not twin.halted
-    if timed_out:
-        for out in nav.outcomes:
-            if out.status == "pending":
-                out.status, out.reason = "aborted", f"timed out at t = {twin.t_s:.1f} s"
-    twin.advance(0.5)  # the stop settles
+    if not nav.done:  # the robot stops; the goals end aborted
+        why = f"timed out at t = {twin.t_s:.1f} s" if timed_out else f"stopped by a collision at t = {twin.t_s:.1f} s"
+        ended = [o for o in nav.outcomes if o.status == "pending"]
+        nav.cancel(why)
+        for out in ended:
+            out.status = "aborted"
+    settle_end = twin.t_s + SETTLE_MAX_S
+    while not twin.halted and twin.t_s < settle_end and (
+            (nav.commands and nav.commands[-1][1:] != (0.0, 0.0))
+            or max(abs(w) for w in twin.observables.loop_sensors()[2:4]) > STANDING_RAD_S):
+        twin.advance(0.1)  # the navigator ramps the robot to a stop, the drive follows
+    if not twin.halted:
+        twin.advance(0.5)  # the stop settles
     series = twin.recorder.series()
+    errors = []
+    for i, out in enumerate(nav.outcomes):  # each goal at its end; the last one where the robot came to stand
+        last = i == len(nav.outcomes) - 1 or math.isnan(out.t_end_s)
+        k = len(series.t_s) - 1 if last else min(int(np.searchsorted(series.t_s, out.t_end_s)), len(series.t_s) - 1)
+        estimate = (tuple(nav.pose_source.pose()) if last and nav.pose_source.ready else out.pose_estimate_end)
+        errors.append(final_errors(out.goal, series.pose[k], estimate))
+        judge(out, errors[-1], nav.p.xy_tolerance_m, nav.p.yaw_tolerance_rad)
     cmds = np.array(nav.commands, float).reshape(-1, 3)
     return NavigationRun(nav.outcomes, series.t_s, series.pose, cmds, np.array(nav.controller_cpu_s),
                          twin.collisions.as_dicts(), dict(nav.monitor.actions), twin.t_s,
-                         time.perf_counter() - wall0, timed_out, actor_poses)
+                         time.perf_counter() - wall0, timed_out, actor_poses, errors)

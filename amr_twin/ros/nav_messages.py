@@ -87,6 +87,14 @@ def _pose(c: Cdr, p: Pose) -> None:
           p.orientation.w)
 
 
+def encode_pose_stamped(msg: PoseStamped) -> bytes:
+    """The CDR payload of a ``geometry_msgs/PoseStamped``."""
+    c = Cdr()
+    c.header(msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id)
+    _pose(c, msg.pose)
+    return bytes(c.b)
+
+
 def encode_path(msg: Path) -> bytes:
     """The CDR payload of a ``nav_msgs/Path``."""
     c = Cdr()

@@ -10,12 +10,21 @@ next physics step on, so a cast at an instant sees the actors where they were on
 before; the LiDAR casts every 20 ms while actors move (:class:`~amr_twin.sim.loop.Twin`), so a
 beam sees an actor within about 2 cm of where it was at the beam's own instant.
 
-An actor with ``stop_within_m`` does not walk on at an instant where the robot's footprint
+No actor walks into the robot: at each instant its step is cut where its colliding geoms would press
+into the robot's by more than ``actors.<kind>.touch_m`` (MuJoCo's ``mj_geomDistance`` between their geoms
+as they stand, the step's farthest move bounded by the centre's plus the turn's at the geoms' reach): a
+person who meets the robot stops against it, the touch is a reported collision, and its force is that of
+a press of at most ``touch_m`` (a mocap body is kinematic: walked on, it shoved the robot with whatever
+force it took, 275 kN into a wall). It walks on as soon as its step is free. The robot driving into a
+standing actor is stopped as by a wall.
+
+An actor with ``stop_within_m`` gives way: it does not walk on at an instant where the robot's footprint
 (``chassis.length_m`` long, as wide as its wheels' outer faces: ``TwinConfig.half_width_m``, the
-rectangle navigation and its metrics take for the robot; with the chassis' 0.20 m a person halting
-beside it stood 0.065 m nearer its wheels than ``stop_within_m`` said, docs/actors.md) is nearer than
-that to its centre and ahead of it (the footprint's nearest point in front of its heading); the others
-never wait: scripted actors do not avoid.
+rectangle navigation and its metrics take for the robot) is nearer than that to its centre and ahead of
+it (the footprint's nearest point in front of its heading), for at most ``actors.<kind>.give_way_s`` at a
+time: then it walks on (against the robot, it stops on touching it) until the robot is out of its way,
+when the wait starts afresh (a robot waiting for a person waiting for it deadlocked a door for 88 s). The
+others never wait: scripted actors do not avoid.
 
 The update runs in C when a compiler is at hand (``actors.c``: the loop's grid stays in C with
 actors); :meth:`ActorMotion.update_python` is its Python twin, the same operations in the same
@@ -41,13 +50,16 @@ import numpy as np
 
 from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actors import Actor, body_name
+from amr_twin.sim.actor_geoms import actor_geoms, gap_after, robot_geoms
 from amr_twin.sim.grid_steps import TIMED, GridRows, sampler
 from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import address, open_helper
+from amr_twin.sim.native_build import address, mujoco_address, open_helper
 
 PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("actors.c")
+ACTOR_GEOMS, BISECTIONS = 8, 12
+"""An actor's colliding geoms checked against the robot at most (more: never held); bisections of a step."""
 PUBLISH_PERIOD_US = 100_000
 """``actors/poses`` every 100 ms (10 Hz)."""
 TOPIC, FRAME = "actors/poses", "map"
@@ -59,14 +71,20 @@ class _State(ctypes.Structure):
 
     _fields_ = [("phases", ctypes.c_void_p), ("nphase", ctypes.c_int), ("mocap", ctypes.c_int),
                 ("period_s", ctypes.c_double), ("start_us", ctypes.c_int64), ("progress_us", ctypes.c_int64),
-                ("last_us", ctypes.c_int64), ("stop_m", ctypes.c_double), ("pose", ctypes.c_double * 3)]
+                ("last_us", ctypes.c_int64), ("stop_m", ctypes.c_double), ("pose", ctypes.c_double * 3),
+                ("geoms", ctypes.c_void_p), ("local", ctypes.c_void_p), ("ngeom", ctypes.c_int),
+                ("reach_m", ctypes.c_double),
+                ("give_way_us", ctypes.c_int64), ("waited_us", ctypes.c_int64), ("held_us", ctypes.c_int64),
+                ("touch_m", ctypes.c_double), ("touching", ctypes.c_int)]
 
 
 class _Ctx(ctypes.Structure):
     """``actors_ctx`` of actors.c."""
 
     _fields_ = [("n", ctypes.c_int), ("a", ctypes.POINTER(_State)), ("base_body", ctypes.c_int),
-                ("half_len_m", ctypes.c_double), ("half_wid_m", ctypes.c_double)]
+                ("half_len_m", ctypes.c_double), ("half_wid_m", ctypes.c_double), ("m", ctypes.c_void_p),
+                ("distance", ctypes.c_void_p), ("robot_geoms", ctypes.c_void_p), ("nrobot", ctypes.c_int),
+                ("robot_reach_m", ctypes.c_double)]
 
 
 register(C_SOURCE, actor_state=_State, actors_ctx=_Ctx)
@@ -88,13 +106,23 @@ class ActorMotion:
         self._phases = [np.ascontiguousarray(p.phases, np.float64) for p in self.paths]
         n = len(self.actors)
         self._states = (_State * max(n, 1))()
-        for s, a, path, phases, name in zip(self._states, self.actors, self.paths, self._phases, self.names):
+        robot, self._robot_reach_m = robot_geoms(physics)
+        self._geoms = [actor_geoms(physics, name) for name in self.names]
+        self._robot = np.asarray(robot, np.int32)
+        for s, a, path, phases, name, (geoms, local, reach) in zip(self._states, self.actors, self.paths,
+                                                                   self._phases, self.names, self._geoms):
             s.phases, s.nphase, s.mocap = address(phases), len(phases), physics.mocap_index(name)
             s.period_s, s.start_us = path.period_s, int(round(a.start_s * US))
             s.progress_us, s.last_us, s.stop_m = 0, 0, a.stop_within_m
             s.pose[0], s.pose[1], s.pose[2] = path.pose_at(0.0)
+            s.geoms, s.local, s.ngeom, s.reach_m = address(geoms), address(local), len(geoms), reach
+            kind = getattr(cfg.actors, a.kind)
+            s.give_way_us, s.touch_m = int(round(kind.give_way_s * US)), kind.touch_m
+            s.waited_us = s.held_us = s.touching = 0
         self._ctx = _Ctx(n=n, a=ctypes.cast(self._states, ctypes.POINTER(_State)), base_body=physics.base_body,
-                         half_len_m=cfg.chassis.length_m / 2, half_wid_m=cfg.half_width_m)
+                         half_len_m=cfg.chassis.length_m / 2, half_wid_m=cfg.half_width_m,
+                         m=physics.model._address, distance=mujoco_address("mj_geomDistance"),
+                         robot_geoms=address(self._robot), nrobot=len(self._robot), robot_reach_m=self._robot_reach_m)
         self._waits = any(a.stop_within_m > 0 for a in self.actors)
         self.update = self.update_python
         """The grid sampler: the C helper when built, else :meth:`update_python`."""
@@ -121,15 +149,61 @@ class ActorMotion:
         """Grid instant ``t_us``: the Python twin of ``actors_update`` (module notes)."""
         physics = self.physics
         base = physics.base_heading_xy() if self._waits else None
-        for s, path in zip(self._states, self.paths):
+        for s, path, (geoms, local, _) in zip(self._states, self.paths, self._geoms):
             start, last = s.start_us, s.last_us
             since = last if last > start else start
-            if t_us > since and not self._blocked(s, base):
-                s.progress_us += t_us - since
+            if t_us > since:
+                dt = t_us - since
+                if not self._blocked(s, base):
+                    s.waited_us = 0
+                elif s.waited_us < s.give_way_us:
+                    s.waited_us += dt
+                    dt = 0
+                if dt > 0:
+                    step = self._step(s, path, geoms.tolist(), local.tolist(), dt)
+                    s.held_us += dt - step
+                    s.progress_us += step
             s.last_us = t_us
             x, y, yaw = path.pose_at(s.progress_us / 1e6)
             s.pose[0], s.pose[1], s.pose[2] = x, y, yaw
             physics.set_mocap_pose(s.mocap, x, y, yaw)
+
+    def _step(self, s: _State, path, geoms: list, local: list, dt: int) -> int:
+        """``actor_step`` of actors.c: the walking time (us, at most ``dt``) that does not press the actor into
+        the robot by more than ``touch_m``; once touching it, none until a whole step is free."""
+        nx, ny, _ = path.pose_at((s.progress_us + dt) / 1e6)
+        mx, my = nx - s.pose[0], ny - s.pose[1]
+        d = self.physics.data
+        p = d.xpos[self._ctx.base_body]
+        bx, by = s.pose[0] - p[0], s.pose[1] - p[1]
+        reach = s.reach_m + self._ctx.robot_reach_m + math.sqrt(mx * mx + my * my) + 0.01
+        if len(geoms) > ACTOR_GEOMS or bx * bx + by * by > reach * reach:
+            s.touching = 0
+            return dt
+        keep = [(d.geom_xpos[g].copy(), d.geom_xmat[g].copy()) for g in geoms]
+        gap = gap_after(self.physics, self._robot, geoms, local, path.pose_at((s.progress_us + dt) / 1e6))
+        step = dt
+        if s.touching:
+            if gap < 0.0:
+                step = 0
+            else:
+                s.touching = 0
+        elif gap < -s.touch_m:
+            s.touching = 1
+            lo, hi = 0, dt
+            for _ in range(BISECTIONS):
+                if hi - lo <= 1:
+                    break
+                mid = lo + (hi - lo) // 2
+                if gap_after(self.physics, self._robot, geoms, local,
+                             path.pose_at((s.progress_us + mid) / 1e6)) >= -s.touch_m:
+                    lo = mid
+                else:
+                    hi = mid
+            step = lo
+        for g, (x, r) in zip(geoms, keep):
+            d.geom_xpos[g], d.geom_xmat[g] = x, r
+        return step
 
     def _blocked(self, s: _State, base) -> bool:
         """``actor_blocked`` of actors.c: the robot's footprint nearer than ``stop_m`` ahead of the actor."""
@@ -152,9 +226,21 @@ class ActorMotion:
         wx, wy = cs * gx - sn * gy, sn * gx + cs * gy
         return wx * math.cos(yaw) + wy * math.sin(yaw) > 0.0 or dist2 == 0.0
 
+    def reset(self, t_us: int) -> None:
+        """Each actor back at the start of its path at grid instant ``t_us`` (a waited start is not waited again)."""
+        for s, path in zip(self._states, self.paths):
+            s.progress_us, s.last_us = 0, t_us
+            x, y, yaw = path.pose_at(0.0)
+            s.pose[0], s.pose[1], s.pose[2] = x, y, yaw
+            self.physics.set_mocap_pose(s.mocap, x, y, yaw)
+
     def poses(self) -> list[tuple[float, float, float]]:
         """Each actor's pose as last placed: ``(x_m, y_m, yaw_rad)``."""
         return [tuple(s.pose) for s in self._states[:len(self.actors)]]
+
+    def held_s(self) -> list[float]:
+        """Each actor's walking time lost to touching the robot so far, s."""
+        return [s.held_us / US for s in self._states[:len(self.actors)]]
 
     def progress_s(self) -> list[float]:
         """Each actor's walking time so far, s (less than the time since its start when it waited)."""

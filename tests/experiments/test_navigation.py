@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from amr_twin.experiments import navigation as nv
+from amr_twin.experiments.navigation_episodes import CROSS_HALF_M
 from amr_twin.experiments.navigation_metrics import _sign_changes, summary
 from amr_twin.experiments.navigation_optimal import VisibilityGraph
 from amr_twin.model.config import load_config
@@ -30,7 +31,7 @@ def test_episodes_are_seeded_apart_and_placed_as_the_docstring_says(episodes):
         elif e.scenario == "person":  # walking (the default): an actor crossing, on no map
             assert e.obstacle is None and e.actor.kind == "person" and e.actor.speed_m_s == 1.3
             (ax, ay), (bx, by) = e.actor.waypoints_xy_m
-            assert math.hypot(bx - ax, by - ay) == pytest.approx(2 * nv.CROSS_HALF_M)
+            assert math.hypot(bx - ax, by - ay) == pytest.approx(2 * CROSS_HALF_M)
             for end in (e.start, e.goal):
                 assert math.hypot((ax + bx) / 2 - end[0], (ay + by) / 2 - end[1]) > 3.0
         else:

@@ -241,3 +241,131 @@ def test_a_longer_plan_does_not_replace_a_free_path_the_robot_is_on():
     assert nav._replan(pose) and nav.plan is planner.west          # the east path closed: the west one taken
     planner.free = True
     assert nav._replan(pose) and nav.plan is planner.east          # shorter: taken at once
+
+
+# -- the goal API: goals from outside while the navigator runs (a user, an action server) -------------------------
+
+class _Line:
+    """A planner of straight lines from the pose to the goal (0.05 m apart)."""
+
+    people_m, last_error = 0.865, ""
+
+    def plan(self, start, goal, yaw=None, people=None):
+        from amr_twin.navigation.planner import Plan
+
+        length = float(np.hypot(*(np.asarray(goal) - start)))
+        n = max(2, int(length / 0.05) + 1)
+        xy = np.linspace(start, goal, n)
+        heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
+        return Plan(np.column_stack([xy, np.full(n, heading)]), length, 0.001)
+
+    def path_free(self, xy_m, people_xy_m=None):
+        return True
+
+
+class _Cruise:
+    """A controller that drives at 0.5 m/s along the path, slowing to 0.1 m/s in its last 0.5 m."""
+
+    def command(self, pose, vel, path):
+        from types import SimpleNamespace
+
+        v = 0.5 if path.remaining_m > 0.5 else 0.1
+        return SimpleNamespace(v_m_s=v, w_rad_s=0.0, blocked=False)
+
+
+class _Robot:
+    """A unicycle on the bus: integrates ``cmd_vel`` every 10 ms and publishes its pose on ``ground_truth/odom``."""
+
+    def __init__(self, bus):
+        self.bus, self.pose, self.cmd, self.cmds = bus, np.zeros(3), (0.0, 0.0), []
+        bus.subscribe("cmd_vel", self._on_cmd)
+        bus.clock.schedule_every(0, 10_000, self._step)
+
+    def _on_cmd(self, msg):
+        self.cmd = (msg.linear.x, msg.angular.z)
+        self.cmds.append((self.bus.clock.now_s, *self.cmd))
+
+    def _step(self):
+        from amr_twin.ros.ros_state import ground_truth
+
+        v, w = self.cmd
+        x, y, yaw = self.pose
+        self.pose = np.array([x + 0.01 * v * math.cos(yaw), y + 0.01 * v * math.sin(yaw), yaw + 0.01 * w])
+        q = (math.cos(self.pose[2] / 2), 0.0, 0.0, math.sin(self.pose[2] / 2))
+        self.bus.publish("ground_truth/odom", ground_truth(self.bus.clock.now_us, (*self.pose[:2], 0.0), q,
+                                                          (v, 0.0, 0.0), (0.0, 0.0, w)))
+
+
+def _navigator(goals=()):
+    """A navigator with a straight-line planner and a cruising controller on a bus with a unicycle robot."""
+    from amr_twin.navigation.kinematics import Limits
+    from amr_twin.navigation.localisation import PoseSource
+    from amr_twin.navigation.navigator import Navigator
+    from amr_twin.ros.bus import Bus
+    from amr_twin.sim.clock import VirtualClock
+
+    bus = Bus(VirtualClock())
+    robot = _Robot(bus)
+    costmap = type("Costmap", (), {"version": 0, "clear": lambda self: None})()
+    nav = Navigator(bus, bus.clock, PoseSource(bus, "ground_truth/odom"), costmap, _Line(), _Cruise(), FP, Limits(),
+                    list(goals))
+    return nav, robot, bus.clock
+
+
+def _run(clock, until_s):
+    clock.run_until(int(round(until_s * 1e6)))
+
+
+def test_a_navigator_without_goals_idles_and_drives_to_a_goal_sent_later():
+    nav, robot, clock = _navigator()
+    _run(clock, 2.0)
+    assert nav.done and nav.active is None and math.isnan(nav.distance_left_m)
+    assert robot.cmds == []                        # idle: nothing on cmd_vel
+    out = nav.send_goal((3.0, 0.0, None))
+    assert nav.active is out and out.status == "pending"
+    _run(clock, 3.0)
+    assert 0.0 < nav.distance_left_m < 3.0         # the rest of the plan, as the robot drives it
+    _run(clock, 20.0)
+    assert out.status == "succeeded" and out.t_start_s >= 2.0
+    assert abs(robot.pose[0] - 3.0) <= 0.25
+    n = len(robot.cmds)
+    _run(clock, 25.0)
+    assert len(robot.cmds) == n and robot.cmd == (0.0, 0.0)   # stopped, then silent until the next goal
+    assert out.pose_estimate_end is not None and abs(out.pose_estimate_end[0] - 3.0) <= 0.25
+
+
+def test_a_new_goal_preempts_the_active_one_and_cancels_the_queued_ones():
+    nav, robot, clock = _navigator([(10.0, 0.0, None), (12.0, 0.0, None)])
+    _run(clock, 2.0)
+    first, queued = nav.outcomes
+    assert nav.active is first and 0.5 < robot.pose[0] < 1.5
+    new = nav.send_goal((3.0, 0.0, None))
+    assert first.status == "preempted" and first.t_end_s == pytest.approx(2.0) and "new goal" in first.reason
+    assert queued.status == "canceled" and nav.active is new and nav.outcomes[-1] is new
+    _run(clock, 20.0)
+    assert new.status == "succeeded" and abs(robot.pose[0] - 3.0) <= 0.25   # it went to the new goal
+    assert robot.pose[0] < 3.5                                              # and not on to the old one
+
+
+def test_cancel_ends_the_goals_and_the_robot_ramps_to_a_stop():
+    from amr_twin.navigation.kinematics import Limits
+
+    nav, robot, clock = _navigator([(10.0, 0.0, None), (12.0, 0.0, None)])
+    _run(clock, 3.0)
+    assert robot.cmd[0] == pytest.approx(0.5)
+    nav.cancel("canceled by the user")
+    assert [o.status for o in nav.outcomes] == ["canceled", "canceled"] and nav.done and nav.active is None
+    assert nav.outcomes[0].reason == "canceled by the user"
+    _run(clock, 6.0)
+    t, v = np.array([c[0] for c in robot.cmds]), np.array([c[1] for c in robot.cmds])
+    after = t >= 3.0
+    assert v[-1] == 0.0 and robot.cmd == (0.0, 0.0)
+    decel = -np.diff(v[after]) / np.diff(t[after])
+    assert decel.max() <= Limits().decel_m_s2 + 1e-9      # a ramp, not a jump to zero
+    stopped_at = t[after][np.argmax(v[after] == 0.0)]
+    assert stopped_at - 3.0 >= 0.5 / Limits().decel_m_s2 - 0.06
+    n = len(robot.cmds)
+    _run(clock, 8.0)
+    assert len(robot.cmds) == n                           # silent once stopped
+    nav.cancel("again")                                   # nothing to cancel: no change
+    assert nav.outcomes[0].reason == "canceled by the user"

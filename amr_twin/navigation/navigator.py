@@ -110,6 +110,7 @@ class Navigator:
         self._blocked_since: float | None = None
         self._rotating_to_goal = False
         self._inside_since: float | None = None   # when the estimate came within xy_tolerance_m of the goal
+        self._yaw_inside_since: float | None = None   # when the heading came within yaw_tolerance_rad of the goal's
         self._closest_m = math.inf
         self._scan_points = np.zeros((0, 2))
         self._unmapped = np.zeros(0, bool)
@@ -241,7 +242,7 @@ class Navigator:
         self._goal_i += 1
         self._path = self._plan = self._recovery = None
         self._failures, self._blocked_since, self._rotating_to_goal = 0, None, False
-        self._inside_since = None
+        self._inside_since = self._yaw_inside_since = None
         self._next_plan_s = self.clock.now_s
         self.progress.reset()
         if status == "aborted":  # the goals after it are not attempted
@@ -361,7 +362,16 @@ class Navigator:
             if abs(err) <= self.p.yaw_tolerance_rad and abs(vel[0]) < 0.05 and abs(vel[1]) < 0.1:
                 self._finish("succeeded")
                 return 0.0, 0.0
-            w = 0.0 if abs(err) <= self.p.yaw_tolerance_rad * 0.5 else rotation_rate(err, lim, vel[1], self.dt_s)
+            inside = abs(err) <= self.p.yaw_tolerance_rad
+            if not inside:
+                self._yaw_inside_since = None
+            elif self._yaw_inside_since is None:
+                self._yaw_inside_since = now
+            # inside the tolerance: on to half of it for at most approach_s (a drive that cannot turn slowly,
+            # as the thesis' firmware with its dead zone, would otherwise never end the goal)
+            settled = inside and (abs(err) <= 0.5 * self.p.yaw_tolerance_rad
+                                  or now - self._yaw_inside_since >= self.p.approach_s)
+            w = 0.0 if settled else rotation_rate(err, lim, vel[1], self.dt_s)
             return lim.ramp(0.0, w, *vel, self.dt_s)
         if self._path is None or (now >= self._next_plan_s and self._plan_stale(pose)):
             if not self._replan(pose):

@@ -369,3 +369,42 @@ def test_cancel_ends_the_goals_and_the_robot_ramps_to_a_stop():
     assert len(robot.cmds) == n                           # silent once stopped
     nav.cancel("again")                                   # nothing to cancel: no change
     assert nav.outcomes[0].reason == "canceled by the user"
+
+
+def test_the_robot_drives_on_to_approach_m_of_the_goal_by_its_estimate_before_it_stops():
+    """Stopping as soon as the estimate is within the 0.25 m tolerance leaves no room for the localisation's
+    error: the robot drives on to ``approach_m`` (0.1 m) of the goal."""
+    nav, robot, clock = _navigator([(3.0, 0.0, None)])
+    _run(clock, 20.0)
+    assert nav.outcomes[0].status == "succeeded"
+    assert abs(robot.pose[0] - 3.0) <= nav.p.approach_m + 0.02   # the ramp to a stop from 0.1 m/s: 5 mm
+
+
+class _DeadZoneRobot(_Robot):
+    """A drive that cannot turn slowly: turn rates under 1 rad/s do not move it (the thesis' firmware's dead zone
+    on a turn in place)."""
+
+    def _step(self):
+        if abs(self.cmd[1]) < 1.0:
+            self.cmd = (self.cmd[0], 0.0)
+        super()._step()
+
+
+def test_a_heading_inside_the_tolerance_that_the_drive_cannot_improve_ends_the_goal():
+    """The goal's yaw 0.2 rad off the way the robot arrives (inside the 0.25 rad tolerance, outside half of it):
+    a drive that cannot turn that slowly still ends the goal, ``approach_s`` later, not never."""
+    from amr_twin.navigation.kinematics import Limits
+    from amr_twin.navigation.localisation import PoseSource
+    from amr_twin.navigation.navigator import Navigator
+    from amr_twin.ros.bus import Bus
+    from amr_twin.sim.clock import VirtualClock
+
+    bus = Bus(VirtualClock())
+    robot = _DeadZoneRobot(bus)
+    costmap = type("Costmap", (), {"version": 0, "clear": lambda self: None})()
+    nav = Navigator(bus, bus.clock, PoseSource(bus, "ground_truth/odom"), costmap, _Line(), _Cruise(), FP, Limits(),
+                    [(3.0, 0.0, 0.2)])
+    _run(bus.clock, 40.0)
+    out = nav.outcomes[0]
+    assert out.status == "succeeded" and abs(robot.pose[2]) < 0.01   # it could not turn, and the goal ended
+    assert out.t_end_s < 20.0

@@ -39,16 +39,18 @@ def fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
-def _start_pose(text: Optional[str]) -> Optional[tuple[float, float, float]]:
-    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error otherwise."""
+def _start_pose(text: Optional[str], option: str = "--start",
+                hint: str = ", e.g. -7.5,0,0") -> Optional[tuple[float, float, float]]:
+    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error naming ``option``
+    otherwise (``hint`` after what is expected)."""
     if text is None:
         return None
     try:
         x_m, y_m, yaw_deg = (float(v) for v in text.split(","))
     except ValueError:
-        fail(f"--start {text!r}: expected X_M,Y_M,YAW_DEG, e.g. -7.5,0,0")
+        fail(f"{option} {text!r}: expected X_M,Y_M,YAW_DEG{hint}")
     if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x_m, y_m, yaw_deg)):
-        fail(f"--start {text!r}: each value must be finite and within +-10000")
+        fail(f"{option} {text!r}: each value must be finite and within +-10000")
     return x_m, y_m, math.radians(yaw_deg)
 
 

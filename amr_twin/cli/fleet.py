@@ -15,7 +15,7 @@ from typing import Optional
 
 import typer
 
-from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
 
@@ -23,15 +23,7 @@ def _starts(text: Optional[str], robots: int) -> list:
     """``X_M,Y_M,YAW_DEG[;...]`` as one (x_m, y_m, yaw_rad) a robot; None: the world's own start."""
     if text is None:
         return [None] * robots
-    out = []
-    for part in text.split(";"):
-        try:
-            x, y, yaw = (float(v) for v in part.split(","))
-        except ValueError:
-            fail(f"--starts {text!r}: expected X_M,Y_M,YAW_DEG for each robot (';' between robots)")
-        if not all(math.isfinite(v) and abs(v) <= 1e4 for v in (x, y, yaw)):
-            fail(f"--starts {text!r}: each value must be finite and within +-10000")
-        out.append((x, y, math.radians(yaw)))
+    out = [_start_pose(part, "--starts", " for each robot (';' between robots)") for part in text.split(";")]
     if len(out) != robots:
         fail(f"--starts {text!r}: {len(out)} poses for --robots {robots}: give one a robot")
     return out

@@ -202,7 +202,7 @@ class Mppi:
 
     def costs(self, x, y, yaw, u, path: PathHandler, people=None, t_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Critic cost (K,) of each trajectory (T, K) and whether it collides (K,) with what the costmap holds."""
-        w, cm, T = self.w, self.costmap, x.shape[0]
+        w, T = self.w, x.shape[0]
         horizon = self.limits.max_v_m_s * self.T * self.step_s
         ref = path.ahead(horizon + 0.5)[::2, :2]
         follow = path.remaining_m >= 1.0

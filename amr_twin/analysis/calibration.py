@@ -136,7 +136,7 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     targets = thesis_targets()
     count = [0]
     last: dict = {}
-    pool = worker_pool(jobs, warm_up) if jobs > 1 and log is None else None  # spawned, warm, die with this process
+    pool = worker_pool(jobs, warm_up) if jobs > 1 and log is None else None  # spawned, warm, die with us
 
     def cfg_at(u: np.ndarray) -> TwinConfig:
         return _with(base, dict(zip(keys, (lo + (hi - lo) * u).tolist())))

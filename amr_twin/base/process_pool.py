@@ -1,8 +1,9 @@
-"""A local pool of warm worker processes (:func:`amr_twin.experiments.executor.run_all` uses it).
+"""A local pool of warm worker processes (used by :func:`amr_twin.experiments.executor.run_all`).
 
 Workers are spawned (MuJoCo and its threads are never forked), die with their
-parent even when it is killed outright, and run the caller's ``warm`` function as they
-start (the twin's: :func:`amr_twin.sim.run.warm_up`), in parallel with the caller's own work; a pool is kept for the life of the process, so
+parent even when it is killed outright, and run the caller's ``warm`` function as
+they start (the twin's: :func:`amr_twin.sim.run.warm_up`), in parallel with the
+caller's own work; a pool is kept for the life of the process, so
 a second sweep or suite finds it warm. The calling process simulates too, taking the
 next item whenever it is free, and a worker is handed an item only once it is warm
 and idle: a worker that is slow to start never holds an item the caller could have
@@ -48,7 +49,8 @@ def check_jobs(jobs: int | None) -> int:
 
 def _warm_worker(parent_pid: int, warm: Warm) -> None:
     """Pool worker start-up: die with the parent, then run ``warm`` (the twin's imports: numpy,
-    MuJoCo, the model build and the loop) before the first item arrives. Ctrl-C is the parent's to handle (it
+    MuJoCo, the model build and the loop) before the first item arrives. Ctrl-C is the parent's
+    to handle (it
     stops the workers): a worker ignores SIGINT, which the terminal sends to every process of the
     command (each printed its traceback)."""
     import signal
@@ -65,8 +67,8 @@ def _ready() -> int:
 
 
 def worker_pool(workers: int, warm: Warm = None) -> ProcessPoolExecutor:
-    """A new pool of ``workers`` spawned, parent-death-guarded processes, each running ``warm`` as it
-    starts (the caller shuts it down). :func:`pool_results` keeps one per size and ``warm``."""
+    """A new pool of ``workers`` spawned, parent-death-guarded processes, each running ``warm``
+    as it starts (the caller shuts it down); :func:`pool_results` keeps one per size and warm-up."""
     context = multiprocessing.get_context("spawn")
     return ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_warm_worker,
                                initargs=(os.getpid(), warm))
@@ -120,7 +122,7 @@ def _watch_parent(parent_pid: int) -> None:
 
 def pool_results(func: Callable[[Any], Any], items: list, workers: int,
                  warm: Warm = None) -> Iterator[tuple[Any, Any]]:
-    """This process and ``workers`` pool workers warmed by ``warm`` take the items in turn (module notes).
+    """This process and ``workers`` workers warmed by ``warm`` take the items in turn (see above).
 
     A worker gets an item only when it is warm (its start-up task done) and has none; this
     process runs the next item whenever it has checked the workers.

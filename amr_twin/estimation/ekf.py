@@ -57,8 +57,9 @@ from amr_twin.estimation.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, line
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
 POSE_TOPIC = "map_match/pose"
-"""The EKF's pose input, where the navigator publishes the matched pose (``geometry_msgs/PoseWithCovarianceStamped``
-in ``map``; AMCL's ``amcl_pose``, which robot_localization fuses as ``pose0``)."""
+"""The EKF's pose input, where the navigator publishes the matched pose
+(``geometry_msgs/PoseWithCovarianceStamped`` in ``map``; AMCL's ``amcl_pose``, which
+robot_localization fuses as ``pose0``)."""
 _POSE_ROWS = np.ix_([0, 1, 5], [0, 1, 5])
 """x, y and yaw in a ``PoseWithCovariance``'s 6 x 6 covariance."""
 

@@ -168,5 +168,6 @@ def run_command(cfg: TwinConfig, command: Command, duration_s: float,
 
 
 def warm_up() -> None:
-    """A pool worker's start-up (:func:`amr_twin.base.process_pool.worker_pool`): nothing to run, as
-    unpickling it imports this module, and with it the model build and the loop, before the first item."""
+    """A pool worker's start-up (:func:`amr_twin.base.process_pool.worker_pool`): nothing to run,
+    as unpickling it imports this module, and with it the model build and the loop, before the
+    first item."""

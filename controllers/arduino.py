@@ -4,7 +4,7 @@ What a sketch sees: ``micros()``/``millis()`` (from :class:`VirtualClock`), a
 periodic timer interrupt (TimerOne-like), ``attachInterrupt``/``detachInterrupt``
 for the external interrupts on the SC pins, ``noInterrupts()``/``interrupts()``,
 ``delay()`` in main context, 8-bit ``analogWrite`` and ``digitalWrite`` onto the
-:class:`~amr_twin.sim.pins.DriverPins` of the two drivers.
+:class:`~amr_twin.base.pins.DriverPins` of the two drivers.
 
 Interrupt model (ATmega2560 datasheet §7.8, §15):
 
@@ -31,8 +31,8 @@ from __future__ import annotations
 from collections import deque
 from typing import Callable, Generator, Iterator
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW, DriverPins
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW, DriverPins
 
 from amr_twin.controllers.firmware_params import BoardParams
 

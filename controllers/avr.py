@@ -37,9 +37,9 @@ from collections import deque
 from functools import lru_cache
 from typing import Sequence
 
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
 from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, FrameParser, TopicInfo,
                                       deserialize_float64, frame, serialize_float64,

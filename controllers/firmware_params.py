@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Protocol, Sequence
 
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 
 Publish = Callable[[str, float], None]
 """``publish(topic, value)``: a std_msgs/Float64 leaving the Arduino over rosserial."""

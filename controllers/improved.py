@@ -31,8 +31,8 @@ import math
 from collections import deque
 from typing import Sequence
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW
 
 from amr_twin.controllers.arduino import ArduinoRuntime
 from amr_twin.controllers.firmware_params import ImprovedParams, Publish

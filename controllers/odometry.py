@@ -7,7 +7,7 @@ With ``signed_input=True`` the wheel topics are read as signed RPM and ``wheel_C
 
 Two poses (REP-105: ``odom -> base_link`` must be continuous): the *smoothed* pose corrects the past
 a window describes (it jumps when a sample arrives); the *published* one is integrated forward only,
-never revised (:mod:`amr_twin.controllers.published_pose`). ``odom`` (frame ``odom``, child
+never revised (:mod:`amr_twin.estimation.published_pose`). ``odom`` (frame ``odom``, child
 ``base_link``) and the ``odom -> base_link`` transform are published at ``publish_rate_hz``, the
 first at the node's start.
 
@@ -42,8 +42,8 @@ from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovar
                                             TransformStamped, Twist, TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.controllers.published_pose import PublishedPose
+from amr_twin.base.clock import VirtualClock
+from amr_twin.estimation.published_pose import PublishedPose
 from amr_twin.controllers.wheel_speed_samples import WheelSpeedSamples
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""

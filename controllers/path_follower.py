@@ -36,7 +36,7 @@ from typing import Callable
 import numpy as np
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.geometry_messages import Twist, Vector3
 
 from amr_twin.controllers.route import Route

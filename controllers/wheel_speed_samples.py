@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 
-from amr_twin.controllers.published_pose import PublishedPose
+from amr_twin.estimation.published_pose import PublishedPose
 from amr_twin.controllers.wheel_command import MAX_RPM
 
 SPEED_SAMPLES = ("window", "hold")

@@ -61,7 +61,7 @@ def command_timeline(firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int
     Python ports the command arrives when the link's frame ends (115200 baud); for ``avr`` its
     bytes start at t = 0 and every instruction is checked for a pin change.
     """
-    from amr_twin.sim.clock import VirtualClock
+    from amr_twin.base.clock import VirtualClock
     from amr_twin.controllers.firmware import SKETCH_EDGES_PER_REV, make_firmware
     from amr_twin.ros.messages import Float64MultiArray
     from amr_twin.ros.rosserial import frame_bytes, frame_time_us

@@ -1,6 +1,6 @@
 """Scan-to-map matching of the mapping drive: each scan fitted to the map of the scans before it.
 
-The mapping drive's poses (the pose graph's, controllers/pose_graph.py) hold the map frame to a few
+The mapping drive's poses (the pose graph's, amr_twin/estimation/pose_graph.py) hold the map frame to a few
 cm, but a few tenths of a degree of heading error move a rack face seen 5-15 m away by a few cm; SLAM front ends take that out by matching each scan against the map built so far (after
 the pose graph: 96.8-99.9 % of the occupied cells within 2 cells of the world -> 97.6-99.98 %,
 docs/navigation.md). This reconstructs the idea of Hector SLAM's scan matcher (Kohlbrecher et al.

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.controllers.dead_reckoning import arc
+from amr_twin.estimation.dead_reckoning import arc
 
 DIRECTIONS = ("cw", "ccw")
 MAX_MOTION_S = 60.0

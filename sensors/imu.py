@@ -36,7 +36,7 @@ level, uncalibrated: 10 deg/s on the gyro) and the quantisation, ``noise^2 +
 bias_sigma^2 + resolution^2 / 12``. A node that fuses ``imu/data_raw`` as it is
 thus trusts the gyro to 10 deg/s, not to its 0.05 deg/s noise; the calibration
 step that earns the noise level is the rest mean of the first seconds (the twin's
-EKF does it, ``ekf.imu_rest_calibration_s``, :mod:`amr_twin.controllers.ekf`).
+EKF does it, ``ekf.imu_rest_calibration_s``, :mod:`amr_twin.estimation.ekf`).
 This module does not import mujoco: it reads ``MjData.sensordata`` by address.
 
 Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads MuJoCo's accelerometer, gyro and
@@ -51,14 +51,14 @@ import numpy as np
 
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import IMU_FRAME
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config_sections import ImuCfg
 from amr_twin.ros.geometry_messages import Quaternion, Vector3
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Imu, MagneticField
 from amr_twin.sensors.imu_errors import ErrorStream, axis_models, covariances
 from amr_twin.sim.grid_steps import GridRows, gather
-from amr_twin.sim.native_build import address
+from amr_twin.base.native_build import address
 
 PHYSICS_LAYER = True
 
@@ -133,7 +133,7 @@ class ImuSensor:
             on its grid while it steps (a :class:`~amr_twin.sim.grid_steps.GridRows`,
             in C when the loop runs its grid there) and the messages go out
             from *publishing* clock events at the sample instants: the physics
-            is not stopped for them (:mod:`amr_twin.sim.clock`). Otherwise each
+            is not stopped for them (:mod:`amr_twin.base.clock`). Otherwise each
             sample is a clock event that reads ``MjData`` at its instant.
         samplers : list, optional
             The loop's list of grid samplers; the true values' keeper is appended to it.

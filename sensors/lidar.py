@@ -30,7 +30,7 @@ the present laser frame, and the nearer hit wins. Two ways to drive it:
   beams are cast when a rotation is complete (at the first pose sample after its
   last beam; also every ``loop_cast_us`` if shorter than a rotation), and the
   scan goes out from a publishing clock event at that instant
-  (:mod:`amr_twin.sim.clock`: it stops the physics only if a subscriber of ``scan``
+  (:mod:`amr_twin.base.clock`: it stops the physics only if a subscriber of ``scan``
   could act sooner).
 
 Rays see the world and a payload only (:data:`~amr_twin.sensors.lidar_beams.SEEN_GROUPS`). The cutoff is large and
@@ -54,7 +54,7 @@ import numpy as np
 
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import LASER_FRAME
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config_sections import LidarCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan

@@ -1,7 +1,7 @@
 """The LiDAR's per-beam work in C: directions and origins at the beams' instants, the rays, noise.
 
 :class:`BeamKernels` calls the C helper ``lidar_beams.c`` (built at first use by
-:mod:`amr_twin.sim.native_build`); :class:`PythonBeamKernels` is its Python twin, made of the
+:mod:`amr_twin.base.native_build`); :class:`PythonBeamKernels` is its Python twin, made of the
 numpy functions of :mod:`amr_twin.sensors.lidar_beams`: the same operations in the same
 order, so both give the same bits (tests/sensors/test_lidar_kernels.py). A rotation's
 arithmetic around the ray cast costs about 25 us in C against about 400 us of numpy on the
@@ -50,8 +50,8 @@ import mujoco
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import address, c_array, mujoco_address, open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import address, c_array, mujoco_address, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, quantised_ranges, world_directions
 
 PHYSICS_LAYER = True

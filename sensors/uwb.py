@@ -51,7 +51,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config_sections import UwbCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Range

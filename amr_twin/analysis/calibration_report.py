@@ -134,7 +134,7 @@ def read(path: str | Path) -> CalibrationReport:
 
 def write(report: CalibrationReport, path: str | Path) -> None:
     """Write a report atomically."""
-    from amr_twin.recording.atomic_file import write_text
+    from amr_twin.base.atomic_file import write_text
 
     write_text(Path(path), "# amr-twin calibration report (amr-twin calibrate --report): the fitted values, their\n"
                "# 1 sigma and correlations, and d fitted / d held for the parameters the fit held fixed\n"

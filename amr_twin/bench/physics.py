@@ -16,7 +16,7 @@ import time
 from amr_twin.model.build import build
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.physics import Physics
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 from amr_twin.sim.plant import Plant
 
 REPEATS = 5

@@ -1,7 +1,7 @@
 """Checks of the experiment and sweep commands' options, each refusal one line (``fail``, exit 2).
 
 Numbers and folders are checked before any model is built: the firmware and
-``--jobs`` (:func:`amr_twin.experiments.process_pool.check_jobs`), durations, recording
+``--jobs`` (:func:`amr_twin.base.process_pool.check_jobs`), durations, recording
 folders, every output (:mod:`amr_twin.recording.outputs`), repeated sweep values, the Dask
 scheduler.
 """
@@ -63,7 +63,7 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
 
     Returns the jobs to use and the firmware string (``avr:DIR`` with a sketch).
     """
-    from amr_twin.experiments.process_pool import check_jobs
+    from amr_twin.base.process_pool import check_jobs
 
     kind = checked_firmware(firmware, sketch, fail)
     try:

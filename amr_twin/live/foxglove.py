@@ -28,7 +28,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from amr_twin.live import inputs as live_inputs
-from amr_twin.sim.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
+from amr_twin.recording.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
 from amr_twin.live.rows import LiveRows
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.geometry_messages import TFMessage

@@ -35,7 +35,7 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from amr_twin.navigation.static_map import StaticMap
-from amr_twin.sim.native_build import address, c_array, open_helper
+from amr_twin.base.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("costmap_rays.c")
 

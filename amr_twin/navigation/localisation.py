@@ -20,7 +20,7 @@ from amr_twin.navigation.kinematics import wrap
 
 SOURCES = {"truth": "ground_truth/odom", "ekf": "odometry/filtered", "odom": "odom"}
 """Localisation choices and their topics: the twin's ground truth (a perfect localiser, as Gazebo's
-p3d plugin: isolates the planner), the EKF of odometry, gyro and UWB (controllers/ekf.py, frame
+p3d plugin: isolates the planner), the EKF of odometry, gyro and UWB (amr_twin/estimation/ekf.py, frame
 ``map``), the wheel odometry alone (frame ``odom``)."""
 HISTORY_S = 1.0
 

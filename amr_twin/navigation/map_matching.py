@@ -40,10 +40,6 @@ from amr_twin.navigation.kinematics import to_map
 from amr_twin.ros.geometry_messages import Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped, Quaternion
 from amr_twin.ros.messages import Header, Time
 
-POSE_TOPIC = "map_match/pose"
-"""Where the navigator publishes the matched pose for the EKF (``geometry_msgs/PoseWithCovarianceStamped``
-in ``map``; AMCL's ``amcl_pose``, which robot_localization fuses as ``pose0``)."""
-
 
 class MapMatcher:
     """Fits each scan to the static map of ``costmap`` and keeps the correction (module docstring)."""

@@ -33,7 +33,7 @@ Each control cycle, reconstructed from the papers' and nav2's descriptions:
    cost-regulated speed), for all the samples. Every sample colliding: stop, and report it (``blocked``); most of the
    weights on colliding samples: report it too.
 
-Steps 1 to 3 run in C (``mppi_critics.c``, built at first use by :mod:`amr_twin.sim.native_build`):
+Steps 1 to 3 run in C (``mppi_critics.c``, built at first use by :mod:`amr_twin.base.native_build`):
 some hundred NumPy calls on (T, K) arrays a cycle had cost more than their arithmetic. NumPy keeps
 the random draws and the cos and sin; the C helper does the same float32 and double operations in
 the same order as the NumPy code here, its twin (``native=False``, or without a compiler), so that
@@ -53,7 +53,7 @@ from amr_twin.navigation.footprint import Footprint
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.rpp import Twist2D
-from amr_twin.sim.native_build import address, c_array, open_helper
+from amr_twin.base.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("mppi_critics.c")
 PARAMS = ("cx0", "cx1", "r", "margin", "collision", "obstacle", "align", "progress", "goal", "forward", "social",

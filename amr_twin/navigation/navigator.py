@@ -33,9 +33,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from amr_twin.estimation.ekf import POSE_TOPIC
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.kinematics import Limits, rotation_rate, to_map, wrap
-from amr_twin.navigation.map_matching import POSE_TOPIC, MapMatcher
+from amr_twin.navigation.map_matching import MapMatcher
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
 from amr_twin.navigation.planner import GlobalPlanner

@@ -58,8 +58,8 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.ros import ros_state
-from amr_twin.recording.atomic_file import replacing
-from amr_twin.sim.event_log import mcap_items as event_items
+from amr_twin.base.atomic_file import replacing
+from amr_twin.recording.event_log import mcap_items as event_items
 from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
@@ -178,7 +178,7 @@ def write_mcap(capture, series, path: Path) -> Path:
     bus = capture.twin.bus
     items.append((0, -2, "/robot_description", "std_msgs/String", encode_string(String(capture.twin.urdf))))
     items.append((0, -1, "/tf_static", "tf2_msgs/TFMessage", encode_tf_message(TFMessage(bus.static_transforms()))))
-    items += event_items(capture.twin, len(items))  # /twin/collisions, /twin/faults (amr_twin/sim/event_log.py)
+    items += event_items(capture.twin, len(items))  # /twin/collisions, /twin/faults (amr_twin/recording/event_log.py)
     items.sort(key=lambda it: (it[0], it[1]))
     with replacing(path) as tmp:
         with open(tmp, "wb") as f:

@@ -27,7 +27,7 @@ Entities::
     world/uwb/anchors                   static Points3D of the anchors
     world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
     commands                            TextLog of wheel_Command and the client calls
-    events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/sim/event_log.py)
+    events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/recording/event_log.py)
     world/navigation/{map,plan,costmap,footprint}  the navigation stack's (amr_twin/recording/rerun_navigation.py)
 
 A default blueprint (3D view + time-series plots) is sent with the recording.
@@ -37,9 +37,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from amr_twin.recording.atomic_file import write_bytes
+from amr_twin.base.atomic_file import write_bytes
 from amr_twin.recording.rerun_navigation import _log_navigation
-from amr_twin.sim.event_log import has_events, log_events
+from amr_twin.recording.event_log import has_events, log_events
 from amr_twin.recording.rerun_capture import Capture, capture_of
 from amr_twin.recording.rerun_streams import (WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,
                                               _log_wheel_speeds)
@@ -79,7 +79,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
 
     Rerun encodes the recording into a byte stream (:meth:`RecordingStream.binary_stream`) that this
     process writes in one piece once everything is logged: a full disk or a file-size limit is an
-    ``OSError`` naming ``path`` (:func:`~amr_twin.recording.atomic_file.replacing`) and no half file is
+    ``OSError`` naming ``path`` (:func:`~amr_twin.base.atomic_file.replacing`) and no half file is
     left. Rerun's own file writer (``RecordingStream.save``) writes from a thread of its own and, on such
     an error, hangs in ``save`` or ``flush``, raises "File-writer thread shut down prematurely", or says
     nothing and leaves a truncated file (rerun-sdk 0.41). The stream is read once: reading it in pieces
@@ -106,7 +106,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     _log_commands(rec, series, result)
     _log_trajectory(rec, series)
     _log_navigation(rec, capture)  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
-    log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
+    log_events(rec, capture.twin)  # collisions and faults (amr_twin/recording/event_log.py)
     rec.disconnect()
     data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
     write_bytes(path, data)

@@ -4,7 +4,7 @@ Topics
     :meth:`Bus.publish` hands the message to every tap, then to each subscriber.
     A subscription with ``latency_us == 0`` runs its callback immediately, in
     subscription order, inside ``publish``. A subscription with a latency
-    schedules the delivery on the shared :class:`~amr_twin.sim.clock.VirtualClock`,
+    schedules the delivery on the shared :class:`~amr_twin.base.clock.VirtualClock`,
     so the callback runs with ``clock.now_us`` equal to the delivery time; at
     most ``queue_size`` messages can be in flight to it (the oldest is dropped
     beyond that, as a roscpp subscriber queue; ``queue_size=0`` is unbounded).
@@ -32,7 +32,7 @@ from __future__ import annotations
 from collections import deque
 from typing import Any, Callable
 
-from amr_twin.sim.clock import NEVER_US, EventHandle, VirtualClock
+from amr_twin.base.clock import NEVER_US, EventHandle, VirtualClock
 from amr_twin.ros.geometry_messages import TFMessage, TransformStamped
 from amr_twin.ros.tf_buffer import TfBuffer
 
@@ -175,9 +175,9 @@ class Bus:
         """Earliest delay after which a message published on ``topics`` reaches a subscriber, us.
 
         The smallest ``latency_us`` of the topics' subscribers,
-        :data:`~amr_twin.sim.clock.NEVER_US` when none subscribes: taps are observers
+        :data:`~amr_twin.base.clock.NEVER_US` when none subscribes: taps are observers
         and never act on the twin. The loop lets the physics run this far ahead of
-        a publishing clock event (:mod:`amr_twin.sim.clock`). Readers of :attr:`tf` pull
+        a publishing clock event (:mod:`amr_twin.base.clock`). Readers of :attr:`tf` pull
         it in their own events, which run after the publishing event in time order.
         """
         best = NEVER_US

@@ -33,7 +33,7 @@ import random
 from typing import Any, Callable
 
 from amr_twin.ros.messages import Float64, Float64MultiArray, MultiArrayLayout
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 
 FRAME_OVERHEAD_BYTES = 8
 """rosserial framing bytes added to each serialised message."""

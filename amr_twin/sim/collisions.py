@@ -12,7 +12,7 @@ jack's fork too; it is named by the actor's body (``person_0``), all its geoms o
 on every record-grid instant (10 ms) it reads MuJoCo's contact list of the last
 physics step. The pairs in contact rarely change, so the common case costs one
 read of the geom pairs and a comparison, in C when a compiler is at hand
-(``collisions.c``, :mod:`amr_twin.sim.native_build`: about 1 us against 11 us of Python on
+(``collisions.c``, :mod:`amr_twin.base.native_build`: about 1 us against 11 us of Python on
 the loop's cold caches, measured in a 8 s run); the pairs are only classified when the
 set changes. Contact with one world geom (or one actor) is one
 :class:`Collision` episode, from the first instant it is seen to the last, with
@@ -38,8 +38,8 @@ import mujoco
 import numpy as np
 
 from amr_twin.sim.grid_steps import CHANGED, sampler
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import open_helper
 
 PHYSICS_LAYER = True
 

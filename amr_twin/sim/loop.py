@@ -7,7 +7,7 @@ orders events in time:
 1. find the next *synced* clock event (a timer tick, the end of a ``delay()``, a
    rosserial frame arriving, a sensor reading the physics), the divergence check
    or the end of the run; *publishing* events (odometry, IMU and LiDAR messages,
-   :mod:`amr_twin.sim.clock`) do not stop the physics unless a subscriber could act on
+   :mod:`amr_twin.base.clock`) do not stop the physics unless a subscriber could act on
    what they publish before it (:meth:`amr_twin.ros.bus.Bus.lookahead_us`);
 2. step the physics in C up to that instant with the actuation held
    (:class:`~amr_twin.sim.grid_loop.GridLoop`), keeping the loop sensors' rows on the
@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.actuation import Actuation
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.sim.collisions import CollisionMonitor
 from amr_twin.sim.grid_loop import GridLoop
 from amr_twin.sim.hooks import Hooks
@@ -295,7 +295,7 @@ class Twin(Hooks):
         """The start pose, known to within :data:`PLACED_SIGMA`, on the EKF's pose input (``map_match/pose``)."""
         import numpy as np
 
-        from amr_twin.navigation.map_matching import POSE_TOPIC
+        from amr_twin.estimation.ekf import POSE_TOPIC
         from amr_twin.ros.geometry_messages import (Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped,
                                                     Quaternion)
         from amr_twin.ros.messages import Header, Time

@@ -1,6 +1,6 @@
 """The plant between the Arduino's pins and the wheels: battery, drivers, hub motors.
 
-Per wheel, a ZS-X11D1-like driver reads its pins (:class:`~amr_twin.sim.pins.DriverPins`)
+Per wheel, a ZS-X11D1-like driver reads its pins (:class:`~amr_twin.base.pins.DriverPins`)
 and powers a BLDC hub motor from the battery:
 
 - STOP low (disabled) or the e-stop relays open: phases open, zero current, the
@@ -35,7 +35,7 @@ from amr_twin.model.config import TwinConfig
 from amr_twin.model.config_sections import DriverBoardCfg, DriverCfg, MotorCfg
 from amr_twin.sim.battery import BRAKE, COAST, DRIVE, Battery
 from amr_twin.sim.physics import Physics
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 
 
 MODE_CODES = {"drive": DRIVE, "coast": COAST, "brake": BRAKE}

@@ -28,7 +28,7 @@ grid (every 10 ms), where the loads change little; the tyre friction acts in C a
 every step in between.
 
 The update runs in C when a compiler is at hand (``rolling_resistance.c``, built at first
-use by :mod:`amr_twin.sim.native_build`: ~1 us a call against ~9 us here); :meth:`__call__`
+use by :mod:`amr_twin.base.native_build`: ~1 us a call against ~9 us here); :meth:`__call__`
 is its Python twin, the same operations in the same order (same bits), which runs
 without a compiler and which the tests hold the C helper to.
 
@@ -46,8 +46,8 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.grid_steps import CALL4, GridRows, sampler
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import open_helper
 
 PHYSICS_LAYER = True
 

@@ -53,7 +53,7 @@ from pathlib import Path
 
 from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, FORMAT, NUMERIC, NUMERIC_FIELDS, STATE_FIELDS
 from amr_twin.sim.floor_friction import friction_at
-from amr_twin.sim.native_build import mujoco_address, open_helper
+from amr_twin.base.native_build import mujoco_address, open_helper
 
 PHYSICS_LAYER = True
 

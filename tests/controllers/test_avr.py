@@ -180,7 +180,7 @@ def test_cli_run_with_the_emulated_board(cfg):
 
 def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
     """Left PWM counts, on a bare clock: left wheel at 20 RPM of SC edges; commands at 0, 1.0, 1.1 s."""
-    from amr_twin.sim.clock import VirtualClock
+    from amr_twin.base.clock import VirtualClock
     from amr_twin.controllers.firmware import SKETCH_EDGES_PER_REV, make_firmware
 
     clock = VirtualClock()

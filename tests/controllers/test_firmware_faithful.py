@@ -9,8 +9,8 @@ from wheel_model import WHEEL, K_RPM, TAU_S  # noqa: F401
 import pytest
 
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW
 from amr_twin.controllers.firmware import BoardParams, FaithfulParams, make_firmware
 from amr_twin.sensors.hall import HallSensors
 

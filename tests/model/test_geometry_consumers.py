@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.controllers.ekf import EkfNode
+from amr_twin.estimation.ekf import EkfNode
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.sim.run import Command, run_command

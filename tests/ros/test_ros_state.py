@@ -16,7 +16,7 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
-from amr_twin.controllers.dead_reckoning import twist_step
+from amr_twin.estimation.dead_reckoning import twist_step
 
 from uwb_run import record_uwb_run
 

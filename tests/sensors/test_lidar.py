@@ -9,7 +9,7 @@ import pytest
 
 from amr_twin.model.build import build
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config import load_config
 from amr_twin.sensors.lidar import Lidar
 

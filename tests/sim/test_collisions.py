@@ -125,7 +125,7 @@ def test_the_c_pair_check_sees_any_change_of_the_pairs():
 
     import mujoco
 
-    from amr_twin.sim import native_build
+    from amr_twin.base import native_build
     from amr_twin.sim.collisions import C_SOURCE, _Memo
 
     if shutil.which("cc") is None and shutil.which("gcc") is None:

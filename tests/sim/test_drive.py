@@ -8,7 +8,7 @@ import pytest
 from amr_twin.model.build import build
 from amr_twin.model.config import load_config
 from amr_twin.sim.physics import DivergenceError, Physics
-from amr_twin.sim.pins import HIGH, LOW, DriverPins
+from amr_twin.base.pins import HIGH, LOW, DriverPins
 from amr_twin.sim.plant import Plant
 
 # the shipped right motor differs from the left (calibrated, §5.1.3); make them identical

@@ -1,6 +1,6 @@
 """The parameter table of ``models/amr/README.md``, generated from the parameter file.
 
-``python -m amr_twin.model.parameter_doc`` rewrites the README's table and mass summary
+``python -m amr_twin.analysis.parameter_doc`` rewrites the README's table and mass summary
 after a change of ``amr.yaml`` (a test fails when a parameter is missing from it).
 """
 

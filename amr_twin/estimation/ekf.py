@@ -5,7 +5,7 @@ extended Kalman filter; this node does it as robot_localization's ``ekf_node`` i
 ``two_d_mode`` with filterpy's :class:`~filterpy.kalman.ExtendedKalmanFilter`.
 
 State, prediction and measurement models
-    :mod:`amr_twin.controllers.ekf_model`: the state ``[x_m, y_m, yaw_rad, v_m_s,
+    :mod:`amr_twin.estimation.ekf_model`: the state ``[x_m, y_m, yaw_rad, v_m_s,
     w_rad_s, gyro_bias_rad_s]`` in the world frame (``odom``, or ``map`` when UWB is
     fused), constant velocity on a unicycle predicted to each measurement's stamp.
 Measurements (sigmas from the ``ekf:`` config, not from the messages)
@@ -41,7 +41,6 @@ import math
 import numpy as np
 
 from amr_twin.analysis import se2
-from amr_twin.navigation.map_matching import POSE_TOPIC
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.model.config_sections import EkfCfg, UwbCfg
@@ -51,12 +50,16 @@ from amr_twin.ros.messages import Header
 from amr_twin.ros.sensor_messages import Imu, Range
 from amr_twin.sensors.uwb import anchor_index
 
-from amr_twin.controllers.ekf_filter import UnicycleEkf
-from amr_twin.controllers.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
+from amr_twin.estimation.ekf_filter import UnicycleEkf
+from amr_twin.estimation.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
                         pose_difference_twist, process_noise, range_model, transition_jacobian)
 
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
+POSE_TOPIC = "map_match/pose"
+"""The EKF's pose input, where the navigator publishes the matched pose
+(``geometry_msgs/PoseWithCovarianceStamped`` in ``map``; AMCL's ``amcl_pose``, which
+robot_localization fuses as ``pose0``)."""
 _POSE_ROWS = np.ix_([0, 1, 5], [0, 1, 5])
 """x, y and yaw in a ``PoseWithCovariance``'s 6 x 6 covariance."""
 

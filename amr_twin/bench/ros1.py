@@ -1,4 +1,4 @@
-"""The ROS 1 path's figures of ``amr-twin bench --suites`` (issue 31), each measured in fresh child processes.
+"""The ROS 1 path's figures of ``amr-twin bench --suites``, each measured in fresh child processes.
 
 - ``ros1_bridge_ratio``: CPU time (every thread of the process) of the twin with sensors bridged to a
   private roscore, at full speed, while ``rosbag record`` subscribes to what a ROS 1 stack of the robot

@@ -1,4 +1,4 @@
-"""The twin live over the Foxglove WebSocket protocol (issue 17): ``amr-twin run ... --live``.
+"""The twin live over the Foxglove WebSocket protocol: ``amr-twin run ... --live``.
 
 A foxglove-sdk server (``ws://HOST:PORT``, subprotocol ``foxglove.sdk.v1``, the message format
 of the published ``foxglove.websocket.v1`` specification) advertising the channels of the

@@ -1,4 +1,4 @@
-"""Real-time pacing of a running twin, and the one door through which other threads act on it (issue 17).
+"""Real-time pacing of a running twin, and the one door through which other threads act on it.
 
 :class:`Pacer` is a synced clock event of its own, every ``tick_us`` (20 ms, a multiple of
 the record grid). At each tick, with the physics brought up to the tick's instant by the

@@ -1,4 +1,4 @@
-"""The twin's world and robot as a Foxglove ``SceneUpdate`` (issue 17), for ``/twin/scene``.
+"""The twin's world and robot as a Foxglove ``SceneUpdate``, for ``/twin/scene``.
 
 What no ROS message of the twin carries: the world's geometry and the robot's shape, and
 where the robot truly is against where its odometry puts it. Entities (MuJoCo's visual

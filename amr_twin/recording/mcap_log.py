@@ -1,4 +1,4 @@
-"""Record a run as ROS 2 messages in an ``.mcap`` file (issue 7, issue 13).
+"""Record a run as ROS 2 messages in an ``.mcap`` file.
 
 The same streams as :mod:`amr_twin.recording.rerun_log`, CDR-encoded (:mod:`amr_twin.ros.ros2_cdr`)
 with ROS 2 message definitions (schema encoding ``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`),

@@ -1,4 +1,4 @@
-"""Record a run to a Rerun ``.rrd`` file, headless (issue 7).
+"""Record a run to a Rerun ``.rrd`` file, headless.
 
 Two stages, so that a recorded run costs little while it runs:
 

@@ -1,4 +1,4 @@
-"""The project's rosserial host: a rospy node bridging a serial port to the ROS 1 graph (issue 31).
+"""The project's rosserial host: a rospy node bridging a serial port to the ROS 1 graph.
 
 No registry here ships rosserial, so this node speaks the protocol as upstream's
 ``rosserial_python/serial_node.py`` does, written from the protocol's description

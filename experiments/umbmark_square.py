@@ -8,7 +8,7 @@ every corner and heading in the frame of the wheel odometry node
 line by the odometry (pure pursuit ``lookahead_m`` ahead, the wheels' difference changed by at most
 the ramp's step a sample) and ends abreast of its corner; so a turn that ends a sample's crawl off
 its heading (1-2 degrees) is taken out by the next leg, and every run's square is the same by the
-odometry (``lookahead_m = 0``: legs straight by the wheels' command, as before issue 30's driver
+odometry (``lookahead_m = 0``: legs straight by the wheels' command, as before the driver
 change, where each turn's end error bent the rest of the square and the runs differed by it). The driver (:class:`SquareDriver`) is a
 node on the bus: it acts on each wheel speed sample the firmware publishes (``wheel1_Vel``, 10 Hz
 with the improved firmware), the instant the odometry has integrated it, and commands through

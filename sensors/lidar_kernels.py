@@ -19,7 +19,7 @@ rotation of 364 beams in the warehouse: 150 against 373 us in the twin (medians 
 two runs each; standing). A mesh, height field or SDF in view sends the cast to ``mj_multiRay``
 (``mj_ray`` per beam while the laser moves).
 
-Before (until issue 32's navigation runs showed its ghosts) each rotation was cast from the present
+Before (until the navigation runs showed its ghosts) each rotation was cast from the present
 origin in one call and each range corrected for the origin's motion on the plane of the surface hit
 (``r + n.(o_now - o_i) / n.u``): exact for an infinite plane only, it made returns 0.1-0.9 m off
 every surface beside thin uprights, braces and at grazing incidence (docs/lidar.md).

@@ -1,4 +1,4 @@
-"""The package layout (issue 19): no import circles, packages by role, tests mirroring them.
+"""The package layout: no import circles, packages by role, tests mirroring them.
 
 The import graph is read from the sources with ``ast`` (module-level and lazy imports
 alike), so a circle hidden in a function body counts too.
@@ -177,7 +177,7 @@ def test_the_docs_index_lists_every_page():
 
 
 def test_the_readme_stays_a_five_minute_read():
-    """Issue 34: set-up, a first run with its picture, the commands by task and links; figures live in docs/."""
+    """Set-up, a first run with its picture, the commands by task and links; figures live in docs/."""
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) <= 130
     assert "<!-- generated: " not in readme

@@ -7,6 +7,7 @@ alike), so a circle hidden in a function body counts too.
 import ast
 import importlib
 import re
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -197,3 +198,57 @@ def test_the_readme_set_up_commands_are_what_ci_runs():
     ci = (ROOT / ".ci" / "run").read_text().splitlines()
     assert {"python3 -m venv .venv", ". .venv/bin/activate", "python -m pytest -q"} <= set(ci)
     assert any(line.endswith('install --quiet -c constraints.txt -e ".[dev]"') for line in ci)
+
+
+MAX_DOCSTRING = 1500
+"""Characters a module, class or function docstring may hold (``ast.get_docstring``): what, args,
+returns, units and a source; reasons and measurements belong in docs/."""
+CODE_FILES = ("*.py", "*.c", "*.h", "*.ino", "*.yaml", "*.launch")
+_ISSUE = re.compile(r"\bissues? #?\d+", re.I)
+
+
+def long_docstrings(paths) -> list[str]:
+    """``path:line name (characters)`` of each docstring in ``paths`` over :data:`MAX_DOCSTRING`."""
+    found = []
+    for path in paths:
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+                doc = ast.get_docstring(node)
+                if doc and len(doc) > MAX_DOCSTRING:
+                    found.append(f"{path.relative_to(ROOT)}:{getattr(node, 'lineno', 1)} "
+                                 f"{getattr(node, 'name', '<module>')} ({len(doc)})")
+    return found
+
+
+def issue_numbers(paths) -> list[str]:
+    """``path:line`` of each mention of an issue number: "issue" or "issues", a space, maybe ``#``, digits."""
+    return [f"{path.relative_to(ROOT)}:{n}" for path in paths
+            for n, line in enumerate(path.read_text().splitlines(), 1) if _ISSUE.search(line)]
+
+
+def _code_files(patterns) -> list[Path]:
+    return sorted(p for folder in ("amr_twin", "controllers", "sensors", "experiments", "tests", "models", ".ci")
+                  for pattern in patterns for p in (ROOT / folder).rglob(pattern) if ".venv" not in p.parts)
+
+
+def test_docstrings_say_what_in_a_few_lines():
+    assert long_docstrings(_code_files(("*.py",))) == []
+
+
+def test_the_docstring_check_finds_a_long_one(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    (tmp_path / "m.py").write_text(f'"""{"x" * 1500}"""\n\nclass A:\n    """{"y" * 1501}"""\n')
+    assert long_docstrings([tmp_path / "m.py"]) == ["m.py:3 A (1501)"]
+
+
+def test_no_issue_numbers_in_code():
+    """The history is in the commit messages; code, tests, launch files and parameters cite sources."""
+    assert issue_numbers(_code_files(CODE_FILES)) == []
+
+
+def test_the_issue_number_check_finds_one(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    word = "issue"  # written apart, so that this file passes its own check
+    (tmp_path / "a.py").write_text(f"x = 1  # see {word} 19\ny = 2  # {word}s\n# {word.title()} #8: z\nt{word} 3\n")
+    assert issue_numbers([tmp_path / "a.py"]) == ["a.py:1", "a.py:3"]

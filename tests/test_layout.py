@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 FOLDERS = {"amr_twin": ROOT / "amr_twin", "amr_twin.controllers": ROOT / "controllers",
            "amr_twin.sensors": ROOT / "sensors", "amr_twin.experiments": ROOT / "experiments"}
 SUBPACKAGES = sorted(p.parent.name for p in (ROOT / "amr_twin").glob("*/__init__.py"))
-DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 """The README and the docs pages, whose links and shown imports are checked."""
 
 
@@ -115,7 +115,7 @@ def test_the_top_level_is_small_and_each_package_says_its_role():
 
 def test_the_layout_page_lists_every_package():
     """docs/layout.md (how it is built; the README links to it) names every package of amr_twin/."""
-    layout = (ROOT / "docs" / "layout.md").read_text()
+    layout = next((ROOT / "docs").rglob("layout.md")).read_text()
     for name in SUBPACKAGES:
         assert re.search(rf"`amr_twin/{name}/`", layout), f"docs/layout.md lacks amr_twin/{name}/"
 
@@ -172,8 +172,8 @@ def test_the_link_check_finds_a_broken_link(tmp_path):
 
 def test_the_docs_index_lists_every_page():
     index = (ROOT / "docs" / "index.md").read_text()
-    listed = set(re.findall(r"^- \[[^\]]+\]\(([\w-]+\.md)\): \S", index, re.M))
-    pages = {p.name for p in (ROOT / "docs").glob("*.md")} - {"index.md"}
+    listed = set(re.findall(r"^- \[[^\]]+\]\(([\w/-]+\.md)\): \S", index, re.M))
+    pages = {p.relative_to(ROOT / "docs").as_posix() for p in (ROOT / "docs").rglob("*.md")} - {"index.md"}
     assert pages <= listed, f"docs/index.md lacks {sorted(pages - listed)} (one line each)"
 
 

@@ -173,12 +173,13 @@ def test_the_link_check_finds_a_broken_link(tmp_path):
 def test_the_docs_index_lists_every_page():
     index = (ROOT / "docs" / "index.md").read_text()
     listed = set(re.findall(r"^- \[[^\]]+\]\(([\w/-]+\.md)\): \S", index, re.M))
-    pages = {p.relative_to(ROOT / "docs").as_posix() for p in (ROOT / "docs").rglob("*.md")} - {"index.md"}
+    docs = ROOT / "docs"
+    pages = {p.relative_to(docs).as_posix() for p in docs.rglob("*.md")} - {"index.md"}
     assert pages <= listed, f"docs/index.md lacks {sorted(pages - listed)} (one line each)"
 
 
 def test_the_readme_stays_a_five_minute_read():
-    """Set-up, a first run with its picture, the commands by task and links; figures live in docs/."""
+    """Set-up, a first run with its picture, the commands by task, links; figures live in docs/."""
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) <= 130
     assert "<!-- generated: " not in readme
@@ -222,14 +223,15 @@ def long_docstrings(paths) -> list[str]:
 
 
 def issue_numbers(paths) -> list[str]:
-    """``path:line`` of each mention of an issue number: "issue" or "issues", a space, maybe ``#``, digits."""
+    """``path:line`` of each issue number: "issue" or "issues", a space, maybe ``#``, digits."""
     return [f"{path.relative_to(ROOT)}:{n}" for path in paths
             for n, line in enumerate(path.read_text().splitlines(), 1) if _ISSUE.search(line)]
 
 
 def _code_files(patterns) -> list[Path]:
-    return sorted(p for folder in ("amr_twin", "controllers", "sensors", "experiments", "tests", "models", ".ci")
-                  for pattern in patterns for p in (ROOT / folder).rglob(pattern) if ".venv" not in p.parts)
+    folders = ("amr_twin", "controllers", "sensors", "experiments", "tests", "models", ".ci")
+    return sorted(p for folder in folders for pattern in patterns
+                  for p in (ROOT / folder).rglob(pattern) if ".venv" not in p.parts)
 
 
 def test_docstrings_say_what_in_a_few_lines():
@@ -243,12 +245,13 @@ def test_the_docstring_check_finds_a_long_one(tmp_path, monkeypatch):
 
 
 def test_no_issue_numbers_in_code():
-    """The history is in the commit messages; code, tests, launch files and parameters cite sources."""
+    """History lives in commit messages; code, tests, launch files and parameters cite sources."""
     assert issue_numbers(_code_files(CODE_FILES)) == []
 
 
 def test_the_issue_number_check_finds_one(tmp_path, monkeypatch):
     monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
     word = "issue"  # written apart, so that this file passes its own check
-    (tmp_path / "a.py").write_text(f"x = 1  # see {word} 19\ny = 2  # {word}s\n# {word.title()} #8: z\nt{word} 3\n")
+    text = f"x = 1  # see {word} 19\ny = 2  # {word}s\n# {word.title()} #8: z\nt{word} 3\n"
+    (tmp_path / "a.py").write_text(text)
     assert issue_numbers([tmp_path / "a.py"]) == ["a.py:1", "a.py:3"]

@@ -6,7 +6,7 @@ run numbers) and, per driven wheel, the k-th published sample of one with the k-
 :func:`markdown` renders the table of ``report.md``. Where the differences come from is
 explained in docs/firmware.md ("The emulated board against the faithful port").
 
-Acceptance (issue 20): the last published samples within :data:`FINAL_RPM_TOL` and the first
+Acceptance: the last published samples within :data:`FINAL_RPM_TOL` and the first
 published samples within :data:`FIRST_SAMPLE_TOL_S` of each other.
 
 The emulated board is brought up to the loop's time every millisecond, so the loop samples the

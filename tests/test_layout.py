@@ -1,4 +1,4 @@
-"""The package layout (issue 19): no import circles, packages by role, tests mirroring them.
+"""The package layout: no import circles, packages by role, tests mirroring them.
 
 The import graph is read from the sources with ``ast`` (module-level and lazy imports
 alike), so a circle hidden in a function body counts too.
@@ -7,13 +7,14 @@ alike), so a circle hidden in a function body counts too.
 import ast
 import importlib
 import re
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 FOLDERS = {"amr_twin": ROOT / "amr_twin", "amr_twin.controllers": ROOT / "controllers",
            "amr_twin.sensors": ROOT / "sensors", "amr_twin.experiments": ROOT / "experiments"}
 SUBPACKAGES = sorted(p.parent.name for p in (ROOT / "amr_twin").glob("*/__init__.py"))
-DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 """The README and the docs pages, whose links and shown imports are checked."""
 
 
@@ -194,7 +195,7 @@ def test_the_top_level_is_small_and_each_package_says_its_role():
 
 def test_the_layout_page_lists_every_package():
     """docs/layout.md (how it is built; the README links to it) names every package of amr_twin/."""
-    layout = (ROOT / "docs" / "layout.md").read_text()
+    layout = next((ROOT / "docs").rglob("layout.md")).read_text()
     for name in SUBPACKAGES:
         assert re.search(rf"`amr_twin/{name}/`", layout), f"docs/layout.md lacks amr_twin/{name}/"
 
@@ -251,13 +252,14 @@ def test_the_link_check_finds_a_broken_link(tmp_path):
 
 def test_the_docs_index_lists_every_page():
     index = (ROOT / "docs" / "index.md").read_text()
-    listed = set(re.findall(r"^- \[[^\]]+\]\(([\w-]+\.md)\): \S", index, re.M))
-    pages = {p.name for p in (ROOT / "docs").glob("*.md")} - {"index.md"}
+    listed = set(re.findall(r"^- \[[^\]]+\]\(([\w/-]+\.md)\): \S", index, re.M))
+    docs = ROOT / "docs"
+    pages = {p.relative_to(docs).as_posix() for p in docs.rglob("*.md")} - {"index.md"}
     assert pages <= listed, f"docs/index.md lacks {sorted(pages - listed)} (one line each)"
 
 
 def test_the_readme_stays_a_five_minute_read():
-    """Issue 34: set-up, a first run with its picture, the commands by task and links; figures live in docs/."""
+    """Set-up, a first run with its picture, the commands by task, links; figures live in docs/."""
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) <= 130
     assert "<!-- generated: " not in readme
@@ -277,3 +279,91 @@ def test_the_readme_set_up_commands_are_what_ci_runs():
     ci = (ROOT / ".ci" / "run").read_text().splitlines()
     assert {"python3 -m venv .venv", ". .venv/bin/activate", "python -m pytest -q"} <= set(ci)
     assert any(line.endswith('install --quiet -c constraints.txt -e ".[dev]"') for line in ci)
+
+
+MAX_DOCSTRING = 1500
+"""Characters a module, class or function docstring may hold (``ast.get_docstring``): what, args,
+returns, units and a source; reasons and measurements belong in docs/."""
+CODE_FILES = ("*.py", "*.c", "*.h", "*.ino", "*.yaml", "*.launch")
+_ISSUE = re.compile(r"\bissues? #?\d+", re.I)
+
+
+def long_docstrings(paths) -> list[str]:
+    """``path:line name (characters)`` of each docstring in ``paths`` over :data:`MAX_DOCSTRING`."""
+    found = []
+    for path in paths:
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+                doc = ast.get_docstring(node)
+                if doc and len(doc) > MAX_DOCSTRING:
+                    found.append(f"{path.relative_to(ROOT)}:{getattr(node, 'lineno', 1)} "
+                                 f"{getattr(node, 'name', '<module>')} ({len(doc)})")
+    return found
+
+
+def issue_numbers(paths) -> list[str]:
+    """``path:line`` of each issue number: "issue" or "issues", a space, maybe ``#``, digits."""
+    return [f"{path.relative_to(ROOT)}:{n}" for path in paths
+            for n, line in enumerate(path.read_text().splitlines(), 1) if _ISSUE.search(line)]
+
+
+def _code_files(patterns) -> list[Path]:
+    folders = ("amr_twin", "controllers", "sensors", "experiments", "tests", "models", ".ci")
+    return sorted(p for folder in folders for pattern in patterns
+                  for p in (ROOT / folder).rglob(pattern) if ".venv" not in p.parts)
+
+
+def test_docstrings_say_what_in_a_few_lines():
+    assert long_docstrings(_code_files(("*.py",))) == []
+
+
+def test_the_docstring_check_finds_a_long_one(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    (tmp_path / "m.py").write_text(f'"""{"x" * 1500}"""\n\nclass A:\n    """{"y" * 1501}"""\n')
+    assert long_docstrings([tmp_path / "m.py"]) == ["m.py:3 A (1501)"]
+
+
+def test_no_issue_numbers_in_code():
+    """History lives in commit messages; code, tests, launch files and parameters cite sources."""
+    assert issue_numbers(_code_files(CODE_FILES)) == []
+
+
+def test_the_issue_number_check_finds_one(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    word = "issue"  # written apart, so that this file passes its own check
+    text = f"x = 1  # see {word} 19\ny = 2  # {word}s\n# {word.title()} #8: z\nt{word} 3\n"
+    (tmp_path / "a.py").write_text(text)
+    assert issue_numbers([tmp_path / "a.py"]) == ["a.py:1", "a.py:3"]
+
+
+def heading_anchors(page: Path) -> set[str]:
+    """The anchors a markdown renderer gives ``page``'s headings (GitHub's rule: lower case, spaces to ``-``,
+    punctuation but ``_`` and ``-`` dropped)."""
+    return {re.sub(r"[^a-z0-9_ -]", "", h.strip().lower()).replace(" ", "-")
+            for h in re.findall(r"^#+ (.*)$", _FENCED.sub("", page.read_text()), re.M)}
+
+
+def broken_section_links(paths) -> list[str]:
+    """``path: docs/PAGE.md#ANCHOR`` of each link from code to a docs section that PAGE has no heading for."""
+    found = []
+    for path in paths:
+        for page, anchor in re.findall(r"(docs/[\w/.-]+\.md)#([\w-]+)", path.read_text()):
+            if not (ROOT / page).exists() or anchor not in heading_anchors(ROOT / page):
+                found.append(f"{path.relative_to(ROOT)}: {page}#{anchor}")
+    return found
+
+
+def test_code_links_to_docs_sections_resolve():
+    """A docstring's "Reasons and measurements: docs/PAGE.md#section" leads to that section."""
+    assert broken_section_links(_code_files(("*.py",))) == []
+
+
+def test_the_section_link_check_finds_a_stale_anchor(tmp_path, monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "p.md").write_text("# Page\n\n### amr_twin.estimation.ekf\n\n```\n# not a heading\n```\n")
+    (tmp_path / "m.py").write_text('"""See docs/p.md#amr_twinestimationekf and docs/p.md#amr_twincontrollersekf,\n'
+                                   'docs/p.md#not-a-heading, docs/gone.md#page."""\n')
+    assert broken_section_links([tmp_path / "m.py"]) == [
+        "m.py: docs/p.md#amr_twincontrollersekf", "m.py: docs/p.md#not-a-heading", "m.py: docs/gone.md#page"]

@@ -1,4 +1,4 @@
-"""``amr-twin run`` and ``amr-twin client``: the high-level control as in ROS (issue 4).
+"""``amr-twin run`` and ``amr-twin client``: the high-level control as in ROS.
 
 ``amr-twin run linear|angular|motor|stop`` sends one wheel_Command_Client call at
 t = 0 and runs the twin for ``--duration-s``; ``amr-twin run --mission FILE`` runs

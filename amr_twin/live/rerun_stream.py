@@ -1,4 +1,4 @@
-"""The twin live in Rerun (issue 17): ``amr-twin run ... --live rerun``.
+"""The twin live in Rerun: ``amr-twin run ... --live rerun``.
 
 The Rerun recording of :mod:`amr_twin.recording.rerun_log`, streamed as the twin runs: a gRPC server
 (``rerun+http://127.0.0.1:PORT/proxy``; it keeps what was sent for late viewers) and Rerun's

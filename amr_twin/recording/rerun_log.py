@@ -1,37 +1,6 @@
-"""Record a run to a Rerun ``.rrd`` file, headless (issue 7).
+"""Record a run to a Rerun ``.rrd`` file, headless.
 
-Two stages, so that a recorded run costs little while it runs:
-
-1. :class:`~amr_twin.recording.rerun_capture.Capture` (:func:`~amr_twin.recording.rerun_capture.attach`)
-   is attached to a :class:`~amr_twin.sim.loop.Twin` before it runs. It taps the bus and
-   samples the world pose of each robot body as a grid sampler of the loop, so the
-   run is unchanged.
-2. After the run :func:`write_rrd` (or :func:`record_run`, which also writes the
-   MCAP file of :mod:`amr_twin.recording.mcap_log`) turns the capture plus the finished
-   :class:`~amr_twin.recording.recorder.RunSeries` into Rerun columns, one ``_log_<stream>``
-   function per stream (:mod:`amr_twin.recording.rerun_world` for the 3D view,
-   :mod:`amr_twin.recording.rerun_streams` for the plots), all on the ``sim_time`` timeline.
-
-Entities::
-
-    world                               view coordinates (Z up)
-    world/bodies/<body>                 Transform3D over time (robot bodies)
-    world/bodies/<body>/geoms/<kind>    static Boxes3D / Ellipsoids3D / Cylinders3D
-    world/bodies/amr/laser/scan         LaserScan points in the laser frame
-    world/scan                          the same points in the world (deskewed per beam)
-    world/trajectory/{true,odom}/<k>    LineStrips3D, growing at 2 Hz, one entity per 10 s
-    wheels/{left,right}/{reference,published,true}_rpm   Scalars
-    duty/{left,right}                   analogWrite counts
-    imu/{accel,gyro,mag}                Scalars (x, y, z)
-    uwb/anchor_<i>/range_m              Scalars, one per received range (only with a UWB tag)
-    world/uwb/anchors                   static Points3D of the anchors
-    world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
-    commands                            TextLog of wheel_Command and the client calls
-    events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/recording/event_log.py)
-    world/navigation/{map,plan,costmap,footprint}  the navigation stack's (amr_twin/recording/rerun_navigation.py)
-
-A default blueprint (3D view + time-series plots) is sent with the recording.
-"""
+Reasons and measurements: docs/recordings.md#amr_twinrecordingrerun_log."""
 
 from __future__ import annotations
 

@@ -186,7 +186,7 @@ def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_pa
     occ = grid.cell_centres_xy(loaded.occupied[::-1])               # what map_server would load
     assert len(occ) > 1000
     dist_cells = distance_to_boxes_m(occ, boxes) / RES_M
-    assert np.mean(dist_cells <= 2.0) >= 0.99                        # issue #8: walls within 2 cells
+    assert np.mean(dist_cells <= 2.0) >= 0.99                        # walls within 2 cells
     # the surfaces seen are covered: every true beam end point has an occupied cell within 2 cells
     from scipy.spatial import cKDTree
 

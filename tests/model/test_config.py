@@ -16,7 +16,7 @@ def test_every_parameter_has_unit_and_source():
         assert unit, key
         assert len(source) > 8, f"{key}: source too short"
         assert any(w in source for w in ("thesis", "estimate", "datasheet", "calibrated", "robot-facts", "set per run", "standard",
-                                     "nav2", "measured", "issue 32")), key
+                                     "nav2", "measured", "acceptance")), key
 
 
 def test_thesis_geometry_loaded():

@@ -1,4 +1,4 @@
-"""Issue 13: a recording is a bag ROS 2 tools accept, checked with rosbags (and yourdfpy) only.
+"""A recording is a bag ROS 2 tools accept, checked with rosbags (and yourdfpy) only.
 
 The run of the issue, ``amr-twin run linear --speed-m-s 0.5 --duration-s 8 --sensors --mcap r.mcap
 --world empty``, read back with rosbags' rosbag2 Reader and its ROS 2 Humble deserializer:

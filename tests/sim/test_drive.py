@@ -101,7 +101,7 @@ def test_brake_is_the_shorted_motor():
 
 
 def test_hard_stop_keeps_every_support_on_the_floor():
-    """The end of the fusion route (issue 12): 0.41 m/s, then both wheels braked. The
+    """The end of the fusion route: 0.41 m/s, then both wheels braked. The
     shorted motors decelerate the robot at about 1 m/s^2: no wheel or caster lifts."""
     cfg, physics, plant = _robot()
     drive = DriverPins(7, HIGH, LOW, HIGH)  # about 0.4 m/s

@@ -356,7 +356,7 @@ def broken_section_links(paths) -> list[str]:
 
 def test_code_links_to_docs_sections_resolve():
     """A docstring's "Reasons and measurements: docs/PAGE.md#section" leads to that section."""
-    assert broken_section_links(_code_files(("*.py",))) == []
+    assert broken_section_links(p for p in _code_files(("*.py",)) if p != Path(__file__)) == []
 
 
 def test_the_section_link_check_finds_a_stale_anchor(tmp_path, monkeypatch):

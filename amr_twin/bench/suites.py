@@ -146,7 +146,7 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
 
     runs = {}
     for duration in RRD_DURATIONS_S:
-        options = TwinOptions(sensors=True)
+        options = TwinOptions(sensors=("imu", "lidar"))
         twin = Twin(cfg, options)
         capture = attach(twin)
         result = run_mission(cfg, [(0.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))], duration, options,

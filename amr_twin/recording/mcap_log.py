@@ -23,7 +23,7 @@ uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has 
                                                       base_link -> wheel and caster links, 50 Hz
     /joint_states      sensor_msgs/msg/JointState     the 6 moving joints (wheels rad, casters m), 50 Hz
     /odom              nav_msgs/msg/Odometry          odom -> base_link, 50 Hz, continuous
-    /scan              sensor_msgs/msg/LaserScan      (with TwinOptions(sensors=True))
+    /scan              sensor_msgs/msg/LaserScan      (with TwinOptions(sensors=("lidar",)))
     /imu/data_raw      sensor_msgs/msg/Imu            (idem)
     /imu/mag           sensor_msgs/msg/MagneticField  (idem)
     /uwb/range         sensor_msgs/msg/Range          one per anchor exchange, frame uwb_anchor_<i>

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.bounds import MAX_RUN_S
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.recording.recorder import RunSeries
+from amr_twin.recording.recorder import RunSeries, attach_recorder
 
 KINDS = ("linear", "angular", "motor", "stop")
 UNTIL_STOPPED_US = 1 << 62
@@ -140,6 +140,7 @@ def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s:
         raise ValueError(f"mission: command times must lie in [0, {duration_s}] s")
     wall0 = time.perf_counter()
     twin = twin or Twin(cfg, options)
+    recorder = attach_recorder(twin)
     codes, errors, last = [], [], None
     for t_s, command in steps:
         twin.advance_to_us(int(round(t_s * 1e6)))
@@ -153,7 +154,7 @@ def run_mission(cfg: TwinConfig, steps: list[tuple[float, Command]], duration_s:
             r = twin.client.last_request
             last = [r.motionL, r.speedL, r.motionR, r.speedR]
     twin.advance_to_us(int(round(duration_s * 1e6)) if duration_s != math.inf else UNTIL_STOPPED_US)
-    series = twin.recorder.series()
+    series = recorder.series()
     return RunResult(commands=steps[:len(codes)], codes=codes, wheel_command=last, series=series,
                      sim_s=twin.t_s if twin.halted or twin.stopped else duration_s, wall_s=time.perf_counter() - wall0,
                      errors=errors, collisions=twin.collisions.as_dicts(), halted=twin.halted,

@@ -31,7 +31,7 @@ def _run(options, live: bool):
     return result.series, capture
 
 
-@pytest.mark.parametrize("options", [TwinOptions(world="empty", sensors=True),
+@pytest.mark.parametrize("options", [TwinOptions(world="empty", sensors=("imu", "lidar")),
                                      TwinOptions(world="empty", firmware="improved", seed=3)],
                          ids=["faithful+sensors", "improved"])
 def test_a_live_run_computes_what_a_plain_run_does(options):

@@ -42,7 +42,7 @@ ACTORS = (Actor("person", ((2.0, -2.0), (2.0, 2.0)), 1.2, loop=True), Actor("pal
 def recorded(tmp_path_factory):
     """One 4 s run with IMU, LiDAR and two actors, its capture, and the ``.mcap`` file it wrote."""
     cfg = load_config()
-    options = TwinOptions(sensors=True, actors=ACTORS)
+    options = TwinOptions(sensors=("imu", "lidar"), actors=ACTORS)
     twin = Twin(cfg, options)
     capture = attach(twin)
     result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)

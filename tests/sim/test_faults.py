@@ -17,7 +17,7 @@ CFG = load_config()
 
 
 def _run(faults, firmware="improved", duration_s=4.0, speed=0.5, sensors=False, steps=None, seed=0):
-    options = TwinOptions(world="empty", firmware=firmware, sensors=sensors, seed=seed,
+    options = TwinOptions(world="empty", firmware=firmware, sensors=("imu", "lidar") if sensors else (), seed=seed,
                           faults=parse_faults(faults, sensors=sensors))
     return run_mission(CFG, steps or [(0.0, Command("linear", speed_m_s=speed))], duration_s, options)
 

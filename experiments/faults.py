@@ -65,7 +65,8 @@ def simulate(case: Case) -> dict:
 
     faults = parse_faults([case.fault]) if case.fault else ()
     sensors = any(KINDS[f.kind].needs_sensors for f in faults)
-    options = TwinOptions(firmware=case.firmware, world="empty", seed=case.seed, sensors=("imu", "lidar") if sensors else (), faults=faults)
+    options = TwinOptions(firmware=case.firmware, world="empty", seed=case.seed,
+                          sensors=("imu", "lidar") if sensors else (), faults=faults)
     steps = [(0.0, Command("linear", speed_m_s=SPEED_M_S)), (STOP_T_S, Command("stop"))]
     result = run_mission(case.cfg, steps, DURATION_S, options)
     s = result.series

@@ -132,7 +132,8 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         ctx = click.get_current_context(silent=True)
         if navigation is not None and not any(_given(c, "firmware") for c in (ctx, ctx and ctx.parent)):
             firmware = "improved"  # as run goto: the faithful one restarts its ramps on every cmd_vel
-    options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=("imu", "lidar") if opts.sensors else (), world=opts.world,
+    options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world,
+                          sensors=("imu", "lidar") if opts.sensors else (),
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None, firmware_params=avr_params,
                           actors=actors, odometry_calibration=calibration)

@@ -1,13 +1,14 @@
-"""A robot's parts on the loop: what a part is handed when it is built, and how it is built by name.
+"""A robot's parts on the loop: what a part is handed when it is built, how it is built by name.
 
-After dm_control's composer (an entity attaches itself to the hooks of the world it is added to) and
-kiss-icp (the configuration is unpacked where a part is built): a :class:`ComponentFactory` takes a
-:class:`Mount` and the run's :class:`~amr_twin.model.config.TwinConfig`, and builds its part from the
-plain values it needs (``cfg.imu``, a seed, a rate); the part then schedules itself on the clock,
-advertises on the bus and hooks the loop's grid. It does not reach into the twin.
+After dm_control's composer (an entity attaches itself to the hooks of the world it is added
+to) and kiss-icp (the configuration is unpacked where a part is built): a
+:class:`ComponentFactory` takes a :class:`Mount` and the run's
+:class:`~amr_twin.model.config.TwinConfig`, and builds its part from the plain values it needs
+(``cfg.imu``, a seed, a rate); the part then schedules itself on the clock, advertises on the
+bus and hooks the loop's grid. It does not reach into the twin.
 
-Sensors are components named in :attr:`amr_twin.sim.loop.TwinOptions.sensors` and registered in
-:data:`amr_twin.sensors.catalog.SENSORS`; a third party registers its own there from its module.
+Sensors are components named in :attr:`amr_twin.sim.loop.TwinOptions.sensors` and registered
+in :data:`amr_twin.sensors.catalog.SENSORS`; a third party registers its own there.
 """
 
 from __future__ import annotations
@@ -55,7 +56,8 @@ class Mount:
 
     @property
     def samplers(self) -> list:
-        """The loop's grid samplers (the ``on_grid`` hook's list), for a part that hands its own in C."""
+        """The loop's grid samplers (the ``on_grid`` hook's list), for a part whose sampler
+        keeps its rows in C (:class:`~amr_twin.sim.grid_steps.GridRows`)."""
         return self.hooks.samplers
 
 

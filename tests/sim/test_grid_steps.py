@@ -107,7 +107,7 @@ def test_rows_kept_in_c_are_the_python_rows():
     out = []
     for in_c in (True, False):
         twin = Twin(HEAVY_REAR, TwinOptions(world="empty", visuals=False))
-            support = twin.rolling.support_rows(30_000)
+        support = twin.rolling.support_rows(30_000)
         if not in_c:  # the same row in Python only: the twin's grid runs in Python
             support = GridRows(support.width, support.period_us, support._row)
         assert (support.grid_native is not None) == in_c

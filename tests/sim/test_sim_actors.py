@@ -22,7 +22,8 @@ START = (-6.0, 0.0, 0.0)  # the warehouse's: robot front at x = -5.65, laser at 
 
 
 def _twin(actors, sensors=False, **kw):
-    twin = Twin(CFG, TwinOptions(start_xy_yaw=START, sensors=("imu", "lidar") if sensors else (), actors=tuple(actors), visuals=False, **kw))
+    twin = Twin(CFG, TwinOptions(start_xy_yaw=START, sensors=("imu", "lidar") if sensors else (),
+                                 actors=tuple(actors), visuals=False, **kw))
     poses = []
     twin.bus.subscribe("actors/poses", poses.append, queue_size=1000)
     return twin, poses

@@ -79,7 +79,7 @@ def streamed(tmp_path_factory):
     folder = tmp_path_factory.mktemp("live_rerun")
     cfg = load_config()
     options = TwinOptions(world="warehouse", start_xy_yaw=None, sensors=("imu", "lidar"),
-                          faults=tuple(parse_faults(["imu-stuck@1:for=1"], duration_s=DURATION_S, sensors=("imu", "lidar"))))
+                          faults=tuple(parse_faults(["imu-stuck@1:for=1"], duration_s=DURATION_S, sensors=True)))
     twin = Twin(cfg, options)
     attach(twin)
     session = LiveSession(twin, LiveOptions(mode="rerun", port=0, web_port=0, rate=0.0), say=lambda _line: None)

@@ -19,7 +19,8 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import TwinOptions
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 SPEED_M_S = 0.5
 FAULT_T_S = 5.0

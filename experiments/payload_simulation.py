@@ -128,7 +128,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     s = recorder.series()
     if recording:
         from amr_twin.recording.rerun_log import record_run
-        from amr_twin.sim.run import RunResult
+        from amr_twin.recording.run import RunResult
 
         result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
                            sim_s=point.duration_s, wall_s=0.0)

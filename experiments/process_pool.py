@@ -53,7 +53,7 @@ def _warm_worker(parent_pid: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _watch_parent(parent_pid)
     import amr_twin.sim.loop  # noqa: F401
-    import amr_twin.sim.run  # noqa: F401
+    import amr_twin.recording.run  # noqa: F401
 
 
 def _ready() -> int:

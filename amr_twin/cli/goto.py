@@ -193,10 +193,11 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
         except KeyboardInterrupt:
             t = f" at t={held['twin'].t_s:.2f} s simulated" if "twin" in held else ""
             fail(f"interrupted{t}; no output written", code=130)
+        from amr_twin.recording.fault_effects import fault_effects
         from amr_twin.recording.recorder import recorder_of
 
         twin = held["twin"]  # each fault with its effect, as run linear reports it
-        return run, twin.faults.report(recorder_of(twin).series()) if twin.faults is not None else []
+        return run, fault_effects(twin.faults, recorder_of(twin).series()) if twin.faults is not None else []
 
     run, fault_report = _guard(work)
     report(run, opts.as_json, fault_report, clearance(cfg, opts.world, run))

@@ -117,7 +117,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
 def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> dict[str, Path]:
     """Write the recordings of a finished run (its twin was :func:`attach`-ed before running).
 
-    ``result`` (a :class:`~amr_twin.sim.run.RunResult`) adds the client calls; without it
+    ``result`` (a :class:`~amr_twin.recording.run.RunResult`) adds the client calls; without it
     the series is taken from the twin's recorder (:func:`~amr_twin.recording.recorder.attach_recorder`).
     Returns {"rrd": path, "mcap": path}.
     """

@@ -20,7 +20,8 @@ from amr_twin.controllers.firmware import AvrParams
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.ros.rosserial import PC_TO_ARDUINO
 from amr_twin.ros.rosserial_frame import MD5SUM
-from amr_twin.sim.run import Command, run_command
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_command
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 MISSING = missing_tools()

@@ -8,7 +8,7 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.run import Command
+from amr_twin.sim.command import Command
 
 SPEED_M_S = 0.3
 DRIVE_S = 5.0

@@ -123,33 +123,7 @@ class Twin(Hooks):
         self._init_hooks(self.bus)
         self.bus.send_transform(robot_static_transforms(self.physics.model), static=True)  # laser, imu_link, uwb_tag
         self._build_drive(cfg, options)
-        self.grid_every = max(1, int(options.record_every_steps)) * self.tyre_timestep.steps_per_configured_step
-        """Physics steps between two instants of the record grid (the ``on_grid`` hook's): ``record_every_steps``
-        of ``sim.timestep_s``, the same instants when the tyres' guard halved the timestep."""
-        self.grid_us = self.dt_us * self.grid_every
-        self.rolling = RollingResistance(self.physics, cfg)
-        # the twin's own grid samplers first: the rolling resistance from the present loads and
-        # the battery's accounting; then the actors, the collision monitor and the sensors' samplers
-        # (the on_grid hook: amr_twin/sim/hooks.py)
-        self.on_grid(self.rolling.update)
-        self.on_grid(self.plant.battery.account)
-        self.actuation = Actuation(self.plant, self.firmware, self._actuation_hooks)
-        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision,
-                                           listeners=self._collision_hooks)
-        self._grid = GridLoop(self.physics, self.samplers, self.grid_every, self.dt_us)
-        self.observables = Observables(self.physics, self._grid, self.actuation, self.plant.battery, self.collisions)
-        """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
-        self.halted = False
-        self.stopped = False
-        """:meth:`stop` was called: :meth:`advance` returns at once (a run ended from outside, e.g. a signal)."""
-        self.actors = None
-        """The actors' motion (:class:`amr_twin.sim.actors.ActorMotion`), None without actors."""
-        if options.actors:
-            from amr_twin.sim.actors import ActorMotion, ActorPoses
-            self.actors = ActorMotion(self.physics, tuple(options.actors), cfg)
-            self.on_grid(self.actors.update)
-            self._actor_poses = ActorPoses(self.actors, self.clock, self.bus, self.samplers)
-        self.on_grid(self.collisions)
+        self._build_loop(cfg, options)
         self._mount = Mount(self.physics, self.clock, self.bus, self, self.grid_us, options.seed, options.world,
                             bool(options.actors))
         self.sensors = {name: factory(self._mount, cfg) for name, factory in factories}
@@ -221,6 +195,35 @@ class Twin(Hooks):
                                        **({} if calibration is None else
                                           calibration.multipliers(wheel.radius_m, wheel.separation_m)))
                          if options.odometry else None)
+
+    def _build_loop(self, cfg: TwinConfig, options: TwinOptions) -> None:
+        """The record grid and the loop's own grid samplers, in the order they run: the rolling resistance
+        from the present loads, the battery's accounting, the actors, the collision monitor (the sensors'
+        come after them: the ``on_grid`` hook, amr_twin/sim/hooks.py); the actuation and the observables."""
+        self.grid_every = max(1, int(options.record_every_steps)) * self.tyre_timestep.steps_per_configured_step
+        """Physics steps between two instants of the record grid (the ``on_grid`` hook's): ``record_every_steps``
+        of ``sim.timestep_s``, the same instants when the tyres' guard halved the timestep."""
+        self.grid_us = self.dt_us * self.grid_every
+        self.rolling = RollingResistance(self.physics, cfg)
+        self.on_grid(self.rolling.update)
+        self.on_grid(self.plant.battery.account)
+        self.actuation = Actuation(self.plant, self.firmware, self._actuation_hooks)
+        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision,
+                                           listeners=self._collision_hooks)
+        self._grid = GridLoop(self.physics, self.samplers, self.grid_every, self.dt_us)
+        self.observables = Observables(self.physics, self._grid, self.actuation, self.plant.battery, self.collisions)
+        """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
+        self.halted = False
+        self.stopped = False
+        """:meth:`stop` was called: :meth:`advance` returns at once (a run ended from outside, e.g. a signal)."""
+        self.actors = None
+        """The actors' motion (:class:`amr_twin.sim.actors.ActorMotion`), None without actors."""
+        if options.actors:
+            from amr_twin.sim.actors import ActorMotion, ActorPoses
+            self.actors = ActorMotion(self.physics, tuple(options.actors), cfg)
+            self.on_grid(self.actors.update)
+            self._actor_poses = ActorPoses(self.actors, self.clock, self.bus, self.samplers)
+        self.on_grid(self.collisions)
 
     def add_sensor(self, name: str):
         """Build the sensor ``name`` of :data:`~amr_twin.sensors.catalog.SENSORS` on the twin as it is now; it

@@ -58,7 +58,7 @@ def twin_navigation_figures(cfg, sim_s: float) -> dict:
         factors, ratios, cycles = [], [], []
         for _ in range(REPEATS):
             twin = Twin(cfg, TwinOptions(firmware="improved", world=WORLD, start_xy_yaw=None, visuals=False,
-                                         sensors=True))
+                                         sensors=("imu", "lidar")))
             nav = attach(twin, cfg, static, NavigationOptions(goals=(GOAL,), localisation=loc, controller=ctl),
                          publish=False)
             twin.advance(REST_S)

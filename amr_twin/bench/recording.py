@@ -13,7 +13,8 @@ from pathlib import Path
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 DURATION_S = 16.0
 STEPS = [(0.0, Command("linear", speed_m_s=0.7))]

@@ -1,7 +1,7 @@
 """Cost of the IMU and the LiDAR: the twin with its sensors against bare physics.
 
 Scenario: the twin benchmark's (chapter 5 run 3: linear 0.7 m/s, faithful
-firmware, warehouse aisle, :data:`~amr_twin.bench.twin.BENCH_START`) with ``TwinOptions(sensors=True)``: IMU at 100 Hz and
+firmware, warehouse aisle, :data:`~amr_twin.bench.twin.BENCH_START`) with ``TwinOptions(sensors=("imu", "lidar"))``: IMU at 100 Hz and
 RPLIDAR A1 at 5.5 Hz (2000 samples/s, laser pose sampled every 20 ms on the
 record grid, the 364 beams of a rotation cast in one call, sensors/lidar.py).
 Figures: CPU time, medians of interleaved repeats (amr_twin/bench/physics.py).
@@ -90,5 +90,5 @@ def sensor_figures(cfg: TwinConfig, sim_s: float) -> dict:
         **paired_ratio("twin_no_sensors_ratio", without_t, bare_t),
         "lidar_scan_us": round(scan_groups_us, 1),
         "lidar_scan_one_call_us": round(scan_one_us, 1),
-        "lidar_beams_per_scan": twin.lidar.n_beams,
+        "lidar_beams_per_scan": twin.sensors["lidar"].n_beams,
     }

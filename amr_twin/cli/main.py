@@ -352,7 +352,8 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
     """
     from amr_twin.analysis.calibration_targets import LOG_TAIL_S
     from amr_twin.sim.loop import TwinOptions
-    from amr_twin.sim.run import Command, run_command
+    from amr_twin.sim.command import Command
+    from amr_twin.recording.run import run_command
 
     import logging
 

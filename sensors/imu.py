@@ -207,15 +207,17 @@ class ImuSensor:
         publish("imu/data_raw", imu)
         publish("imu/mag", mag)
 
-    def _messages(self, ts_us: list[int], ys: list[list[float]]) -> list[tuple[int, Imu, MagneticField]]:
-        """``(t_us, Imu, MagneticField)`` of the readings ``ys`` (9 each) stamped ``ts_us``, numbered on from :attr:`seq`."""
+    def _messages(self, ts_us: list[int], ys: list[list[float]]) -> list[tuple]:
+        """``(t_us, Imu, MagneticField)`` of the readings ``ys`` (9 each) stamped ``ts_us``,
+        numbered on from :attr:`seq`."""
         _publish, frame, orientation_cov, gyro_cov, accel_cov, mag_cov = self._fast
         out, from_us = [], Time.from_us
         for seq, (t_us, a) in enumerate(zip(ts_us, ys), self.seq + 1):
             stamp = from_us(t_us)
-            out.append((t_us, Imu(Header(seq, stamp, frame), Quaternion(), orientation_cov, Vector3(a[3], a[4], a[5]),
-                                  gyro_cov, Vector3(a[0], a[1], a[2]), accel_cov),
-                        MagneticField(Header(seq, stamp, frame), Vector3(a[6], a[7], a[8]), mag_cov)))
+            imu = Imu(Header(seq, stamp, frame), Quaternion(), orientation_cov,
+                      Vector3(a[3], a[4], a[5]), gyro_cov, Vector3(a[0], a[1], a[2]), accel_cov)
+            mag = MagneticField(Header(seq, stamp, frame), Vector3(a[6], a[7], a[8]), mag_cov)
+            out.append((t_us, imu, mag))
         return out
 
     def _tick(self) -> None:

@@ -1,4 +1,5 @@
-"""The benchmark's actors: the twin with four people and pallet jacks walking loops it never reaches.
+"""The benchmark's actors: the twin with four people and pallet jacks walking loops it never
+reaches.
 
 Scenario: the twin benchmark's (:mod:`amr_twin.bench.twin`) with :data:`BENCH_ACTORS` (two people
 and a jack in the side aisles, a person crossing the central aisle beyond the robot's 11 m): in
@@ -13,14 +14,18 @@ from amr_twin.model.actors import Actor
 from amr_twin.model.config import TwinConfig
 
 BENCH_ACTORS = (
-    Actor("person", ((-7.5, 5.5), (7.5, 5.5)), 1.3, loop=True),            # the north side aisle
+    Actor("person", ((-7.5, 5.5), (7.5, 5.5)), 1.3, loop=True),  # the north side aisle
     Actor("person", ((7.0, 5.0), (-7.0, 5.0)), 1.0, start_s=0.5, loop=True),
-    Actor("pallet_jack", ((-7.0, -5.5), (7.0, -5.5)), 1.0, loop=True),      # the south side aisle
-    Actor("person", ((6.0, 2.4), (6.0, -2.4)), 1.2, loop=True),             # across the aisle, beyond the robot
+    Actor("pallet_jack", ((-7.0, -5.5), (7.0, -5.5)), 1.0, loop=True),  # the south side aisle
+    Actor(
+        "person", ((6.0, 2.4), (6.0, -2.4)), 1.2, loop=True
+    ),  # across the aisle, beyond the robot
 )
 
 
-def actors_run(cfg: TwinConfig, sim_s: float, sensors: bool = True, actors: tuple = BENCH_ACTORS) -> Timed:
+def actors_run(
+    cfg: TwinConfig, sim_s: float, sensors: bool = True, actors: tuple = BENCH_ACTORS
+) -> Timed:
     """``sim_s`` of the scenario with ``actors`` (and the IMU and LiDAR with ``sensors``), timed."""
     timed = twin_run(cfg, sim_s, sensors=sensors, actors=actors)
     timed.info["engine"] = timed.twin.actors.engine

@@ -7,8 +7,8 @@
 - ``nav_<controller>_ms_p50`` / ``_p99``: CPU time of a control cycle at 20 Hz (mppi, rpp), measured
   in the twin runs of :func:`nav_run` (the navigator times each call).
 - the figures ``nav_<localisation>_<controller>``: the twin with its sensors and the whole navigation
-  stack in the aisles world (:func:`nav_run`), against the bench's one floor (the loop's model in the
-  warehouse: a different world, so the ratio includes the worlds' difference).
+  stack in the aisles world (:func:`nav_run`), against the bench's one floor (the loop's model in
+  the warehouse: a different world, so the ratio includes the worlds' difference).
 """
 
 from __future__ import annotations
@@ -42,8 +42,11 @@ def planning_figures(cfg) -> dict:
             t0 = timer()
             planner.plan(a, b)
             times.append(1e3 * (timer() - t0))
-    return {"nav_plan_ms_p50": round(float(np.median(times)), 2), "nav_plan_ms_p95": round(float(np.percentile(times, 95)), 2),
-            "nav_plans": PLANS}
+    return {
+        "nav_plan_ms_p50": round(float(np.median(times)), 2),
+        "nav_plan_ms_p95": round(float(np.percentile(times, 95)), 2),
+        "nav_plans": PLANS,
+    }
 
 
 def nav_run(cfg, sim_s: float, localisation: str, controller: str) -> Timed:
@@ -53,18 +56,31 @@ def nav_run(cfg, sim_s: float, localisation: str, controller: str) -> Timed:
     from amr_twin.navigation.stack import REST_S, NavigationOptions, attach, true_map
     from amr_twin.sim.loop import Twin, TwinOptions
 
-    twin = Twin(cfg, TwinOptions(firmware="improved", world=WORLD, start_xy_yaw=None, visuals=False, sensors=True))
-    nav = attach(twin, cfg, true_map(cfg, WORLD), NavigationOptions(goals=(GOAL,), localisation=localisation,
-                                                                    controller=controller), publish=False)
+    twin = Twin(
+        cfg,
+        TwinOptions(
+            firmware="improved", world=WORLD, start_xy_yaw=None, visuals=False, sensors=True
+        ),
+    )
+    nav = attach(
+        twin,
+        cfg,
+        true_map(cfg, WORLD),
+        NavigationOptions(goals=(GOAL,), localisation=localisation, controller=controller),
+        publish=False,
+    )
     twin.advance(REST_S)
     cpu, _path = timed_advance(twin, sim_s)
     return Timed(cpu, sim_s, twin, None, {"cycles": list(nav.controller_cpu_s)})
 
 
 def cycle_figures(controller: str, runs: list[Timed]) -> dict:
-    """``nav_<controller>_ms_p50`` and ``_p99`` of the cycles of ``runs`` (nothing without cycles)."""
+    """``nav_<controller>_ms_p50`` and ``_p99`` of the cycles of ``runs`` (none without
+    cycles)."""
     cycles = [c for run in runs for c in run.info["cycles"]]
     if not cycles:
         return {}
-    return {f"nav_{controller}_ms_p50": round(1e3 * float(np.median(cycles)), 3),
-            f"nav_{controller}_ms_p99": round(1e3 * float(np.percentile(cycles, 99)), 3)}
+    return {
+        f"nav_{controller}_ms_p50": round(1e3 * float(np.median(cycles)), 3),
+        f"nav_{controller}_ms_p99": round(1e3 * float(np.percentile(cycles, 99)), 3),
+    }

@@ -30,6 +30,7 @@ class PartTimer:
 
     def wrap(self, name: str, fn):
         """``fn`` timed as ``name``: its CPU s without that of the wrapped functions it calls."""
+
         def timed(*args, **kwargs):
             self._stack.append(0.0)
             t0 = timer()
@@ -42,6 +43,7 @@ class PartTimer:
                 self.calls[name] += 1
                 if self._stack:
                     self._stack[-1] += spent
+
         return timed
 
     def patch(self, cls, method: str, name: str | None = None) -> None:
@@ -55,8 +57,6 @@ class PartTimer:
 
 def instrument(parts: PartTimer) -> None:
     """Wrap the loop's parts (before any twin is built: clock events hold bound methods)."""
-    import mujoco
-
     from amr_twin.controllers.odometry import WheelOdometry
     from amr_twin.recording.recorder import Recorder
     from amr_twin.ros.bus import Bus
@@ -70,21 +70,31 @@ def instrument(parts: PartTimer) -> None:
     from amr_twin.sim.physics import Physics
 
     parts.patch(grid_steps.GridStepper, "run", "C chunks: mj_step and the C grid samplers")
-    parts.patch(grid_loop.GridLoop, "run", "GridLoop.run (its Python)")
-    step = parts.wrap("mj_step after the last grid instant", mujoco.mj_step)
-    grid_loop.mujoco = type("TimedMujoco", (), {"mj_step": staticmethod(step)})
+    parts.patch(grid_loop.GridLoop, "run", "GridLoop.run: Python, mj_step after the last instant")
     parts.patch(VirtualClock, "run_until", "clock events (firmware, rosserial, wheel topics)")
-    for cls, method in ((HallSensors, "edges_from_samples"), (Twin, "_deliver_edges"), (Twin, "_step_physics"),
-                        (WheelOdometry, "publish"), (Actuation, "apply"), (Physics, "check"), (Bus, "publish"),
-                        (ImuSensor, "_publish_next"), (Lidar, "_after_pose"), (Lidar, "_publish_next"),
-                        (Lidar, "cast"), (Lidar, "_finish"), (grid_steps.GridRows, "grid_resume")):
+    for cls, method in (
+        (HallSensors, "edges_from_samples"),
+        (Twin, "_deliver_edges"),
+        (Twin, "_step_physics"),
+        (WheelOdometry, "publish"),
+        (Actuation, "apply"),
+        (Physics, "check"),
+        (Bus, "publish"),
+        (ImuSensor, "_publish_next"),
+        (Lidar, "_after_pose"),
+        (Lidar, "_publish_next"),
+        (Lidar, "cast"),
+        (Lidar, "_finish"),
+        (grid_steps.GridRows, "grid_resume"),
+    ):
         parts.patch(cls, method)
     for method in [m for m in dir(Recorder) if m.startswith("_on")]:
         parts.patch(Recorder, method)
 
 
 def profile_parts(cfg, sim_s: float = 16.0, rounds: int = 5) -> dict:
-    """``{"loop" | "sensors": [{"total", "floor", "parts", "calls"} per round]}``: CPU s per simulated s of
+    """``{"loop" | "sensors": [{"total", "floor", "parts", "calls"} per round]}``: CPU s per
+    simulated s of
     the run, of its floor and of each part (``"(rest)"``: what no wrapper took)."""
     from amr_twin.bench.physics import floor_s
     from amr_twin.bench.twin import twin_run
@@ -101,22 +111,36 @@ def profile_parts(cfg, sim_s: float = 16.0, rounds: int = 5) -> dict:
             floor = floor_s(run.path) / sim_s
             each = {k: v / sim_s for k, v in parts.cpu_s.items()}
             each["(rest)"] = run.cpu_s / sim_s - sum(each.values())
-            out[name].append({"total": run.cpu_s / sim_s, "floor": floor, "parts": each, "calls": dict(parts.calls)})
+            out[name].append(
+                {
+                    "total": run.cpu_s / sim_s,
+                    "floor": floor,
+                    "parts": each,
+                    "calls": dict(parts.calls),
+                }
+            )
     return out
 
 
 def report(result: dict) -> list[str]:
-    """Lines per run kind: its total and floor, then each part's median ms per simulated s and share of the floor."""
+    """Lines per run kind: its total and floor, then each part's median ms per simulated s and
+    share of the floor."""
     lines = []
     for name, rows in result.items():
         floor = statistics.median(r["floor"] for r in rows)
-        lines.append(f"{name}: {1e3 * statistics.median(r['total'] for r in rows):.2f} ms per simulated s, floor "
-                     f"{1e3 * floor:.2f}, ratio {statistics.median(r['total'] / r['floor'] for r in rows):.3f}")
+        lines.append(
+            f"{name}: {1e3 * statistics.median(r['total'] for r in rows):.2f} ms per simulated s, "
+            "floor "
+            f"{1e3 * floor:.2f}, "
+            f"ratio {statistics.median(r['total'] / r['floor'] for r in rows):.3f}"
+        )
         names = {k for r in rows for k in r["parts"]}
         med = {k: statistics.median(r["parts"].get(k, 0.0) for r in rows) for k in names}
         for k in sorted(names, key=lambda k: -med[k]):
-            lines.append(f"  {k:48s} {1e3 * med[k]:7.3f} ms {100 * med[k] / floor:6.1f} % of floor, "
-                         f"{rows[0]['calls'].get(k, '-')} calls")
+            lines.append(
+                f"  {k:48s} {1e3 * med[k]:7.3f} ms {100 * med[k] / floor:6.1f} % of floor, "
+                f"{rows[0]['calls'].get(k, '-')} calls"
+            )
     return lines
 
 

@@ -1,4 +1,5 @@
-"""The floor of ``amr-twin bench``: bare MuJoCo physics along the loop's own path, and the figures' spread.
+"""The floor of ``amr-twin bench``: bare MuJoCo physics along the loop's own path; the figures'
+spread.
 
 Every figure of the bench is a ratio against one floor: ``mj_step`` alone on the loop
 scenario's model (the twin's own: world, robot, contact model, timestep), stepped over the
@@ -37,17 +38,21 @@ class Spread:
 
 
 def spread(values: list[float]) -> Spread:
-    """The :class:`Spread` of ``values`` (at least one); quartiles by ``statistics.quantiles`` (inclusive)."""
+    """The :class:`Spread` of ``values`` (at least one); quartiles by ``statistics.quantiles``
+    (inclusive)."""
     vals = [float(v) for v in values]
     if not vals:
         raise ValueError("spread: no values")
-    q1, _q2, q3 = statistics.quantiles(vals, n=4, method="inclusive") if len(vals) > 1 else (vals[0],) * 3
+    q1, _q2, q3 = (
+        statistics.quantiles(vals, n=4, method="inclusive") if len(vals) > 1 else (vals[0],) * 3
+    )
     return Spread(statistics.median(vals), min(vals), max(vals), q1, q3, tuple(vals))
 
 
 @dataclass
 class FloorPath:
-    """Snapshots of a twin's physics along a timed run: ``(clone, steps the twin then took)`` each."""
+    """Snapshots of a twin's physics along a timed run: ``(clone, steps the twin then took)``
+    each."""
 
     pieces: list[tuple[Physics, int]]
 
@@ -117,9 +122,13 @@ def _driving(cfg) -> Physics:
 def tyre_ratios(cfg, sim_s: float, repeats: int = REPEATS) -> list[float]:
     """Bare physics with the brush tyres (:mod:`amr_twin.sim.tyres`) over the rigid contact of the
     model before them (``wheel.tyre_slip`` off): each repeat steps a copy of each settled, driving
-    robot, interleaved; the repeats' ratios (a comparison of two bare physics, not against the floor)."""
+    robot, interleaved; the repeats' ratios (a comparison of two bare physics, not against the
+    floor)."""
     from amr_twin.model.config import with_values
 
     brush = _driving(with_values(cfg, {"wheel.tyre_slip": True}))
     rigid = _driving(with_values(cfg, {"wheel.tyre_slip": False}))
-    return [bare_steps_s(brush.clone(), sim_s) / bare_steps_s(rigid.clone(), sim_s) for _ in range(repeats)]
+    return [
+        bare_steps_s(brush.clone(), sim_s) / bare_steps_s(rigid.clone(), sim_s)
+        for _ in range(repeats)
+    ]

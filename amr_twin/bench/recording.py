@@ -71,8 +71,14 @@ def recording_figures(cfg: TwinConfig, repeats: int = 3) -> dict:
         rec_s = min(_timed(cfg, rrd) for _ in range(repeats))
         both_s = min(_timed(cfg, rrd, mcap) for _ in range(repeats))
         sizes = {"rrd_bytes": rrd.stat().st_size, "mcap_bytes": mcap.stat().st_size}
-    return {"run_s": run_s, "run_record_s": rec_s, "record_ratio": rec_s / run_s,
-            "run_record_mcap_s": both_s, "record_mcap_ratio": both_s / run_s, **sizes}
+    return {
+        "run_s": run_s,
+        "run_record_s": rec_s,
+        "record_ratio": rec_s / run_s,
+        "run_record_mcap_s": both_s,
+        "record_mcap_ratio": both_s / run_s,
+        **sizes,
+    }
 
 
 if __name__ == "__main__":  # python -m amr_twin.bench.recording

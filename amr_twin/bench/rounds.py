@@ -18,12 +18,13 @@ from amr_twin.bench.twin import Timed, loop_run
 from amr_twin.model.config import TwinConfig
 
 WARM_UP_S = 0.3
-"""Simulated s of each figure's untimed run before the rounds (imports, C helpers built, caches filled)."""
+"""Simulated s of each figure's untimed run before the rounds (imports, C helpers built, caches
+filled)."""
 
 
 @dataclass(frozen=True)
 class Figure:
-    """A figure of the bench: its ``name``, one line on ``what`` it runs, and ``run(cfg, sim_s)``."""
+    """A figure of the bench: its ``name``, one line on ``what`` it runs, ``run(cfg, sim_s)``."""
 
     name: str
     what: str
@@ -45,11 +46,20 @@ class Rounds:
         self.runs.setdefault(name, []).append(run)
 
 
-def run_rounds(cfg: TwinConfig, sim_s: float, figures: tuple[Figure, ...], repeats: int = REPEATS,
-               say: Callable[[str], None] = lambda text: None) -> Rounds:
-    """``repeats`` rounds of the loop and ``figures``, each run followed by the floor (module notes)."""
+def run_rounds(
+    cfg: TwinConfig,
+    sim_s: float,
+    figures: tuple[Figure, ...],
+    repeats: int = REPEATS,
+    say: Callable[[str], None] = lambda text: None,
+) -> Rounds:
+    """``repeats`` rounds of the loop and ``figures``, each run followed by the floor (module
+    notes)."""
     rounds = Rounds()
-    for fig in (Figure("loop", "", loop_run), *figures):  # warm-up, untimed: imports and first-use builds
+    for fig in (
+        Figure("loop", "", loop_run),
+        *figures,
+    ):  # warm-up, untimed: imports and first-use builds
         fig.run(cfg, min(sim_s, WARM_UP_S))
     for r in range(repeats):
         say(f"round {r + 1} of {repeats}")
@@ -78,21 +88,34 @@ def summary(rounds: Rounds, dt_s: float) -> dict:
     """``floor`` (its CPU s per simulated s over every measurement, and us a step) and per figure
     ``ratio`` (paired, against the floor) and ``s_per_sim_s``, each a :class:`Spread` as a dict."""
     floors = [f for name in rounds.floor for f in rounds.floor[name]]
-    out = {"floor": {"s_per_sim_s": spread_dict(spread(floors), 5),
-                     "us_per_step": spread_dict(spread([f * dt_s * 1e6 for f in floors]), 2)},
-           "figures": {}}
+    out = {
+        "floor": {
+            "s_per_sim_s": spread_dict(spread(floors), 5),
+            "us_per_step": spread_dict(spread([f * dt_s * 1e6 for f in floors]), 2),
+        },
+        "figures": {},
+    }
     for name, cpu in rounds.cpu.items():
-        out["figures"][name] = {"ratio": spread_dict(ratio_spread(cpu, rounds.floor[name]), 3),
-                                "s_per_sim_s": spread_dict(spread(cpu), 5)}
+        out["figures"][name] = {
+            "ratio": spread_dict(ratio_spread(cpu, rounds.floor[name]), 3),
+            "s_per_sim_s": spread_dict(spread(cpu), 5),
+        }
     return out
 
 
 def ratio_of(rounds: Rounds, top: str, bottom: str) -> dict:
-    """``top``'s CPU over ``bottom``'s paired round by round (e.g. actors over sensors), as a :func:`spread_dict`."""
+    """``top``'s CPU over ``bottom``'s paired round by round (e.g. actors over sensors), as a
+    :func:`spread_dict`."""
     return spread_dict(ratio_spread(rounds.cpu[top], rounds.cpu[bottom]), 3)
 
 
 def spread_dict(s: Spread, digits: int) -> dict:
     """``s`` as a JSON object, rounded to ``digits``: median, min, max, q1, q3 and the repeats."""
-    return {"median": round(s.median, digits), "min": round(s.low, digits), "max": round(s.high, digits),
-            "q1": round(s.q1, digits), "q3": round(s.q3, digits), "repeats": [round(v, digits) for v in s.values]}
+    return {
+        "median": round(s.median, digits),
+        "min": round(s.low, digits),
+        "max": round(s.high, digits),
+        "q1": round(s.q1, digits),
+        "q3": round(s.q3, digits),
+        "repeats": [round(v, digits) for v in s.values],
+    }

@@ -1,4 +1,5 @@
-"""The LiDAR's cost per rotation, us (the ``sensors`` figure itself is the twin's: :mod:`amr_twin.bench.twin`).
+"""The LiDAR's cost per rotation, us (the ``sensors`` figure itself is the twin's:
+:mod:`amr_twin.bench.twin`).
 
 The RPLIDAR A1 at 5.5 Hz: 2000 samples/s, the laser pose sampled every 20 ms on the record
 grid, the 364 beams of a rotation cast in one call (sensors/lidar.py). CPU time, best of
@@ -51,5 +52,8 @@ def lidar_figures(twin: Twin) -> dict:
     on ``twin`` (a twin with sensors, after its run)."""
     twin.physics.forward()
     scan_groups_us, scan_one_us = lidar_scan_cost_us(twin)
-    return {"lidar_scan_us": round(scan_groups_us, 1), "lidar_scan_one_call_us": round(scan_one_us, 1),
-            "lidar_beams_per_scan": twin.lidar.n_beams}
+    return {
+        "lidar_scan_us": round(scan_groups_us, 1),
+        "lidar_scan_one_call_us": round(scan_one_us, 1),
+        "lidar_beams_per_scan": twin.lidar.n_beams,
+    }

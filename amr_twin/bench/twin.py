@@ -1,4 +1,5 @@
-"""The benchmark's twin runs: the loop, with its sensors, with ``--firmware avr``, each timed by pieces.
+"""The benchmark's twin runs: the loop, with its sensors, with ``--firmware avr``, each timed by
+pieces.
 
 Scenario: chapter 5 run 3 (linear 0.7 m/s, faithful firmware) down the warehouse's central aisle
 from :data:`BENCH_START`: the faithful firmware veers right (as the thesis robot does), and this
@@ -17,13 +18,18 @@ from amr_twin.sim.loop import Twin, TwinOptions
 
 BENCH_START = (-8.0, 0.5, 0.5)
 """Start pose of the scenario, ``(x_m, y_m, yaw_rad)``: the west end of the central aisle, heading
-0.5 rad left of it (the veer turns the path back along the aisle; tests/bench check it stays clear)."""
-SCENARIO = "chapter 5 run 3: linear 0.7 m/s, faithful firmware, warehouse aisle from (-8, 0.5) heading 0.5 rad"
+0.5 rad left of it (the veer turns the path back along the aisle; tests/bench check it stays
+clear)."""
+SCENARIO = (
+    "chapter 5 run 3: linear 0.7 m/s, faithful firmware, warehouse aisle from (-8, 0.5) heading "
+    "0.5 rad"
+)
 
 
 @dataclass
 class Timed:
-    """One timed run: CPU s of ``sim_s`` simulated s, the twin afterwards, the floor's path (the loop's),
+    """One timed run: CPU s of ``sim_s`` simulated s, the twin afterwards, the floor's path (the
+    loop's),
     and what the figure adds (``info``)."""
 
     cpu_s: float
@@ -33,10 +39,19 @@ class Timed:
     info: dict = field(default_factory=dict)
 
 
-def twin_run(cfg: TwinConfig, sim_s: float, firmware: str = "faithful", sensors: bool = False,
-             actors: tuple = (), snapshot: bool = False) -> Timed:
+def twin_run(
+    cfg: TwinConfig,
+    sim_s: float,
+    firmware: str = "faithful",
+    sensors: bool = False,
+    actors: tuple = (),
+    snapshot: bool = False,
+) -> Timed:
     """``sim_s`` of the scenario, timed (and its :class:`FloorPath` with ``snapshot``)."""
-    twin = Twin(cfg, TwinOptions(firmware=firmware, sensors=sensors, start_xy_yaw=BENCH_START, actors=actors))
+    twin = Twin(
+        cfg,
+        TwinOptions(firmware=firmware, sensors=sensors, start_xy_yaw=BENCH_START, actors=actors),
+    )
     twin.client.linear(0.7)
     cpu, path = timed_advance(twin, sim_s, snapshot)
     return Timed(cpu, sim_s, twin, path, {"collisions": len(twin.collisions.collisions)})
@@ -48,7 +63,8 @@ def loop_run(cfg: TwinConfig, sim_s: float) -> Timed:
 
 
 def sensors_run(cfg: TwinConfig, sim_s: float) -> Timed:
-    """The loop with the IMU at 100 Hz and the RPLIDAR A1 at 5.5 Hz (their MuJoCo sensors in the model)."""
+    """The loop with the IMU at 100 Hz and the RPLIDAR A1 at 5.5 Hz (their MuJoCo sensors in the
+    model)."""
     return twin_run(cfg, sim_s, sensors=True)
 
 

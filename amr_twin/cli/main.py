@@ -223,7 +223,7 @@ def bench(
                                        "cores)."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Measure the twin against one bare-physics floor (CPU time, interleaved rounds, medians and spread)."""
+    """Measure the twin against one bare-physics floor (CPU time, interleaved rounds, spread)."""
     from amr_twin.bench.figures import report_lines, run_benchmarks
     from amr_twin.experiments.process_pool import check_jobs
 

@@ -7,7 +7,15 @@ import pytest
 from amr_twin.bench.figures import run_benchmarks
 from amr_twin.model.config import load_config
 
-FIGURES = ("loop", "sensors", "actors", "actors_no_sensors", "recording", "nav_truth_rpp", "nav_ekf_mppi")
+FIGURES = (
+    "loop",
+    "sensors",
+    "actors",
+    "actors_no_sensors",
+    "recording",
+    "nav_truth_rpp",
+    "nav_ekf_mppi",
+)
 
 
 def test_one_floor_and_every_figure_a_ratio_against_it_with_its_spread():
@@ -18,23 +26,42 @@ def test_one_floor_and_every_figure_a_ratio_against_it_with_its_spread():
     assert set(FIGURES) <= set(r["figures"]) and list(r["figures"])[0] == "loop"
     floor = r["floor"]["s_per_sim_s"]
     # one floor measurement after each figure in each round, all in the floor's spread
-    assert len(floor["repeats"]) == 2 * len(r["figures"]) and floor["min"] <= floor["median"] <= floor["max"]
+    assert (
+        len(floor["repeats"]) == 2 * len(r["figures"])
+        and floor["min"] <= floor["median"] <= floor["max"]
+    )
     assert r["floor"]["us_per_step"]["median"] == pytest.approx(floor["median"] * 1e3, rel=1e-3)
     for name, fig in r["figures"].items():
         ratio = fig["ratio"]
-        assert len(ratio["repeats"]) == 2 and ratio["min"] <= ratio["q1"] <= ratio["median"] <= ratio["q3"] <= ratio["max"]
+        assert (
+            len(ratio["repeats"]) == 2
+            and ratio["min"] <= ratio["q1"] <= ratio["median"] <= ratio["q3"] <= ratio["max"]
+        )
         assert ratio["median"] == pytest.approx(statistics.median(ratio["repeats"]), abs=1e-3), name
         assert fig["what"]
     assert all(len(v) == 3 for v in r["load_average"].values())
     d = r["details"]
     assert d["lidar_beams_per_scan"] == 364 and d["collisions"] == 0 and d["rrd_bytes"] > 0
-    assert set(d["native_engines"]) == {"grid_steps", "rolling_resistance", "battery", "collisions", "actors",
-                                        "hall_edges", "imu_errors", "lidar_beams", "tyres", "mppi_critics"}
+    assert set(d["native_engines"]) == {
+        "grid_steps",
+        "rolling_resistance",
+        "battery",
+        "collisions",
+        "actors",
+        "hall_edges",
+        "imu_errors",
+        "lidar_beams",
+        "tyres",
+        "mppi_critics",
+    }
     assert all(e == "C" or e.startswith("Python (") for e in d["native_engines"].values())
     assert d["actors_engine"] == d["native_engines"]["actors"]
     assert "avr_skipped" in d or "avr" in r["figures"]
     assert 0 < d["nav_plan_ms_p50"] <= d["nav_plan_ms_p95"] and d["nav_plans"] == 30
-    assert 0 < d["nav_mppi_ms_p50"] <= d["nav_mppi_ms_p99"] and 0 < d["nav_rpp_ms_p50"] <= d["nav_rpp_ms_p99"]
+    assert (
+        0 < d["nav_mppi_ms_p50"] <= d["nav_mppi_ms_p99"]
+        and 0 < d["nav_rpp_ms_p50"] <= d["nav_rpp_ms_p99"]
+    )
     text = report_lines(r)
     assert sum(line.startswith("floor:") for line in text) == 1 and "load average" in text[1]
     assert all(any(line.startswith(f"{name} ") for line in text) for name in r["figures"])
@@ -45,12 +72,18 @@ def test_spread_and_paired_ratios():
     from amr_twin.bench.rounds import ratio_spread
 
     s = spread([3.0, 1.0, 2.0, 10.0])
-    assert (s.median, s.low, s.high, s.q1, s.q3) == (2.5, 1.0, 10.0, 1.75, 4.75) and s.values == (3.0, 1.0, 2.0, 10.0)
+    assert (s.median, s.low, s.high, s.q1, s.q3) == (2.5, 1.0, 10.0, 1.75, 4.75) and s.values == (
+        3.0,
+        1.0,
+        2.0,
+        10.0,
+    )
     one = spread([4.0])
     assert (one.median, one.low, one.high, one.q1, one.q3) == (4.0,) * 5
     with pytest.raises(ValueError):
         spread([])
-    # paired: each run over the floor measured right after it, not the medians' ratio (here 2.0 / 1.0 vs 1.5)
+    # paired: each run over the floor measured right after it, not the medians' ratio
+    # (here 2.0 / 1.0 against 1.5)
     r = ratio_spread([2.0, 3.0, 6.0], [1.0, 3.0, 2.0])
     assert r.values == (2.0, 1.0, 3.0) and r.median == 2.0
     with pytest.raises(ValueError, match="3 runs against 2 floors"):
@@ -70,20 +103,30 @@ def test_rounds_interleave_each_figure_with_the_floor(monkeypatch):
     def run(name, cpu):
         def go(cfg, sim_s):
             order.append(name)
-            return Timed(cpu * sim_s, sim_s, type("T", (), {"physics": physics})(), FloorPath([(None, 1000)]))
+            return Timed(
+                cpu * sim_s, sim_s, type("T", (), {"physics": physics})(), FloorPath([(None, 1000)])
+            )
+
         return go
 
     monkeypatch.setattr(rd, "loop_run", run("loop", 3.0))
     monkeypatch.setattr(rd, "floor_s", lambda path: order.append("floor") or next(floors))
     figs = (rd.Figure("a", "", run("a", 4.0)),)
     got = rd.run_rounds(None, 2.0, figs, repeats=3)
-    assert order == ["loop", "a"] + ["loop", "floor", "a", "floor"] * 3  # the warm-up first, untimed
+    assert (
+        order == ["loop", "a"] + ["loop", "floor", "a", "floor"] * 3
+    )  # the warm-up first, untimed
     assert got.cpu == {"loop": [3.0, 3.0, 3.0], "a": [4.0, 4.0, 4.0]}
-    assert got.floor == {"loop": [1.0, 1.0, 4.0], "a": [2.0, 2.0, 4.0]}  # floor_s / (1000 steps * 1 ms)
+    assert got.floor == {
+        "loop": [1.0, 1.0, 4.0],
+        "a": [2.0, 2.0, 4.0],
+    }  # floor_s / (1000 steps * 1 ms)
     out = rd.summary(got, 0.001)
     assert out["figures"]["loop"]["ratio"]["repeats"] == [3.0, 3.0, 0.75]
     assert out["figures"]["a"]["ratio"]["median"] == 2.0
-    assert out["floor"]["s_per_sim_s"]["median"] == 2.0 and out["floor"]["s_per_sim_s"]["max"] == 4.0
+    assert (
+        out["floor"]["s_per_sim_s"]["median"] == 2.0 and out["floor"]["s_per_sim_s"]["max"] == 4.0
+    )
     assert out["floor"]["us_per_step"]["median"] == 2000.0
 
 
@@ -106,7 +149,9 @@ def test_the_floor_steps_the_loops_own_path():
     assert abs(clone.pose().x_m - path.pieces[1][0].pose().x_m) < 0.05
 
 
-@pytest.mark.parametrize("args, text", [(["--jobs", "0"], "--jobs 0"), (["--sim-s", "-1"], "--sim-s -1")])
+@pytest.mark.parametrize(
+    "args, text", [(["--jobs", "0"], "--jobs 0"), (["--sim-s", "-1"], "--sim-s -1")]
+)
 def test_bench_refuses_bad_options_in_one_line(args, text):
     from typer.testing import CliRunner
 
@@ -167,7 +212,11 @@ def test_timed_children_cache_their_bytecode_outside_the_tree(tmp_path, monkeypa
     tree = Path(amr_twin.__file__).parent
     before = sorted(tree.rglob("*.pyc"))
     cache = tmp_path / "pycache"
-    subprocess.run([sys.executable, "-c", "import amr_twin.bench.suites"], check=True, env=sb._child_env(str(cache)))
+    subprocess.run(
+        [sys.executable, "-c", "import amr_twin.bench.suites"],
+        check=True,
+        env=sb._child_env(str(cache)),
+    )
     cached = {p.name.split(".")[0] for p in cache.rglob("*.pyc") if "amr_twin" in p.parts}
     assert {"suites", "physics", "config"} <= cached
     assert sorted(tree.rglob("*.pyc")) == before
@@ -188,12 +237,20 @@ def test_sweep_rounds_run_in_fresh_processes_and_the_figure_is_their_median(monk
         return row
 
     monkeypatch.setattr(sb, "_sweep_round", spy)
-    spec = {"masses": [0.0, 10.0], "positions": ["center"], "commands": ["linear:0.7"], "duration_s": 0.3}
+    spec = {
+        "masses": [0.0, 10.0],
+        "positions": ["center"],
+        "commands": ["linear:0.7"],
+        "duration_s": 0.3,
+    }
     fig = sb.sweep_figures(load_config(), repeats=3, spec=spec)
     assert len(set(pids)) == 3 and os.getpid() not in pids
     rounds = fig["sweep_cpu_s_rounds"]
     assert len(rounds) == 3 and fig["sweep_cpu_s"] == sorted(rounds)[1] and fig["sweep_points"] == 2
-    assert fig["sweep_simulated"] == 2 and 0 < fig["sweep_point_bare_physics_s"] < fig["sweep_point_cpu_s"]
+    assert (
+        fig["sweep_simulated"] == 2
+        and 0 < fig["sweep_point_bare_physics_s"] < fig["sweep_point_cpu_s"]
+    )
 
 
 def test_the_suites_say_each_stage_as_it_starts(monkeypatch):
@@ -209,6 +266,7 @@ def test_the_suites_say_each_stage_as_it_starts(monkeypatch):
         def run(*args, **kwargs):
             ran.append((name, len(said)))
             return figures
+
         return run
 
     monkeypatch.setattr(sb, "startup_figures", stage("startup", {"help_cpu_s": 0.1}))

@@ -1,14 +1,14 @@
-"""Navigation figures of ``amr-twin bench``: planning, the controllers' cycles, the twin with navigation.
+"""Navigation figures of ``amr-twin bench``: planning, the controllers' cycles, the twin navigating.
 
-- ``nav_plan_ms_p50`` / ``_p95``: CPU time of a plan on the aisles world's true map (50 x 20 m, 0.05 m
-  cells, planned on 0.1 m): :data:`PLANS` seeded start/goal pairs 10-50 m apart, the planner of the
-  navigation stack (room to turn kept, shortening); the first plan pools the whole map, later ones
-  only what the costmap changed, as in a run.
-- ``nav_<controller>_ms_p50`` / ``_p99``: CPU time of a control cycle at 20 Hz (mppi, rpp), measured
-  in the twin runs of :func:`nav_run` (the navigator times each call).
-- the figures ``nav_<localisation>_<controller>``: the twin with its sensors and the whole navigation
-  stack in the aisles world (:func:`nav_run`), against the bench's one floor (the loop's model in
-  the warehouse: a different world, so the ratio includes the worlds' difference).
+- ``nav_plan_ms_p50`` / ``_p95``: CPU time of a plan on the aisles world's true map (50 x 20 m,
+  0.05 m cells, planned on 0.1 m): :data:`PLANS` seeded start/goal pairs 10-50 m apart, the planner
+  of the navigation stack (room to turn kept, shortening); the first plan pools the whole map, later
+  ones only what the costmap changed, as in a run.
+- ``nav_<controller>_ms_p50`` / ``_p99``: CPU time of a control cycle at 20 Hz (mppi, rpp),
+  measured in the twin runs of :func:`nav_run` (the navigator times each call).
+- the figures ``nav_<localisation>_<controller>``: the twin with its sensors and the whole
+  navigation stack in the aisles world (:func:`nav_run`), against the bench's one floor (the loop's
+  model in the warehouse: a different world, so the ratio includes the worlds' difference).
 """
 
 from __future__ import annotations

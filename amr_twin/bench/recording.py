@@ -61,7 +61,8 @@ def _timed(cfg: TwinConfig, rrd: Path | None = None, mcap: Path | None = None) -
 
 
 def recording_figures(cfg: TwinConfig, repeats: int = 3) -> dict:
-    """{"run_s", "run_record_s", "record_ratio", "run_record_mcap_s", "record_mcap_ratio", sizes}."""
+    """{"run_s", "run_record_s", "record_ratio", "run_record_mcap_s", "record_mcap_ratio",
+    sizes}."""
     import mcap.writer  # noqa: F401 - imports outside the timing
     import rerun  # noqa: F401
 

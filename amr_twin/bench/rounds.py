@@ -1,11 +1,12 @@
-"""The bench's rounds: every figure run once a round, each followed by the floor (A F B F C F ...).
+"""The bench's rounds: every figure run once a round, each between two floors (F A F B F C F ...).
 
-A round starts with the loop (:func:`~amr_twin.bench.twin.loop_run`), whose path the floor steps
-(:mod:`amr_twin.bench.physics`); then each other figure's run, the floor again right after each.
-Every figure runs once untimed before the first round (:data:`WARM_UP_S`).
-A figure's ratio in a round is its CPU s per simulated s over that of the floor measured right
-after it (a drift of the machine hits both sides alike); :func:`summary` gives each figure's
-median and spread over the rounds, and the floor's over all its measurements.
+The floor (:mod:`amr_twin.bench.physics`) steps the path of one untimed run of the loop
+(:func:`~amr_twin.bench.twin.loop_run`; every run of the scenario drives the same path to the
+bit); every other figure runs once untimed too (:data:`WARM_UP_S`). A round then measures the
+floor, the loop, the floor, the next figure, the floor, ... A figure's ratio in a round is its
+CPU s per simulated s over the mean of the floors measured just before and just after it (a drift
+of the machine hits both sides alike); :func:`summary` gives each figure's median and spread over
+the rounds, and the floor's over all its measurements.
 """
 
 from __future__ import annotations
@@ -33,12 +34,14 @@ class Figure:
 
 @dataclass
 class Rounds:
-    """Per figure (by name, the loop first): its runs' CPU s per simulated s and the floor's right
-    after each, and the :class:`Timed` runs; ``floor_steps``: steps of a floor measurement."""
+    """Per figure (by name, the loop first): its runs' CPU s per simulated s, the floor's beside
+    each (the mean of the two around it) and the :class:`Timed` runs; ``floors``: every floor
+    measurement, CPU s per simulated s, in the order measured."""
 
     cpu: dict[str, list[float]] = field(default_factory=dict)
     floor: dict[str, list[float]] = field(default_factory=dict)
     runs: dict[str, list[Timed]] = field(default_factory=dict)
+    floors: list[float] = field(default_factory=list)
 
     def add(self, name: str, run: Timed, floor_per_sim_s: float) -> None:
         self.cpu.setdefault(name, []).append(run.cpu_s / run.sim_s)
@@ -53,27 +56,27 @@ def run_rounds(
     repeats: int = REPEATS,
     say: Callable[[str], None] = lambda text: None,
 ) -> Rounds:
-    """``repeats`` rounds of the loop and ``figures``, each run followed by the floor (module
+    """``repeats`` rounds of the loop and ``figures``, each run between two floors (module
     notes)."""
-    rounds = Rounds()
-    for fig in (
-        Figure("loop", "", loop_run),
-        *figures,
-    ):  # warm-up, untimed: imports and first-use builds
+    path_run = loop_run(cfg, sim_s)  # untimed: the floor's path, and the loop's warm-up
+    path, dt_s = path_run.path, path_run.twin.physics.timestep_s
+    for fig in figures:  # warm-up, untimed: imports and first-use builds
         fig.run(cfg, min(sim_s, WARM_UP_S))
+    rounds = Rounds()
+
+    def floor() -> float:
+        rounds.floors.append(floor_s(path) / (path.steps * dt_s))
+        return rounds.floors[-1]
+
     for r in range(repeats):
         say(f"round {r + 1} of {repeats}")
-        loop = loop_run(cfg, sim_s)
-        path, dt_s = loop.path, loop.twin.physics.timestep_s
-
-        def floor() -> float:
-            return floor_s(path) / (path.steps * dt_s)
-
-        rounds.add("loop", loop, floor())
-        for fig in figures:
+        before = floor()
+        for fig in (Figure("loop", "", loop_run), *figures):
             run = fig.run(cfg, sim_s)
-            rounds.add(fig.name, run, floor())
-        loop.path = None  # the snapshots go with the round
+            run.path = None  # a loop run's snapshots: not needed
+            after = floor()
+            rounds.add(fig.name, run, 0.5 * (before + after))
+            before = after
     return rounds
 
 
@@ -87,7 +90,7 @@ def ratio_spread(cpu: list[float], floor: list[float]) -> Spread:
 def summary(rounds: Rounds, dt_s: float) -> dict:
     """``floor`` (its CPU s per simulated s over every measurement, and us a step) and per figure
     ``ratio`` (paired, against the floor) and ``s_per_sim_s``, each a :class:`Spread` as a dict."""
-    floors = [f for name in rounds.floor for f in rounds.floor[name]]
+    floors = rounds.floors
     out = {
         "floor": {
             "s_per_sim_s": spread_dict(spread(floors), 5),

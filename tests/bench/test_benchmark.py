@@ -25,9 +25,9 @@ def test_one_floor_and_every_figure_a_ratio_against_it_with_its_spread():
     assert r["timer"] == "process_time" and r["repeats"] == 2
     assert set(FIGURES) <= set(r["figures"]) and list(r["figures"])[0] == "loop"
     floor = r["floor"]["s_per_sim_s"]
-    # one floor measurement after each figure in each round, all in the floor's spread
+    # a floor before each round and after each figure in it, all in the floor's spread
     assert (
-        len(floor["repeats"]) == 2 * len(r["figures"])
+        len(floor["repeats"]) == 2 * (len(r["figures"]) + 1)
         and floor["min"] <= floor["median"] <= floor["max"]
     )
     assert r["floor"]["us_per_step"]["median"] == pytest.approx(floor["median"] * 1e3, rel=1e-3)
@@ -90,22 +90,22 @@ def test_spread_and_paired_ratios():
         ratio_spread([1.0, 2.0, 3.0], [1.0, 2.0])
 
 
-def test_rounds_interleave_each_figure_with_the_floor(monkeypatch):
-    """A F B F C F in every round, each ratio over the floor right after it; the floor's figure
-    spans all its measurements (stand-in runs and floors: no timing)."""
+def test_rounds_put_each_figure_between_two_floors(monkeypatch):
+    """F L F A F in every round, each ratio over the mean of the floors either side of it; the
+    floor's figure spans all its measurements (stand-in runs and floors: no timing)."""
     from amr_twin.bench import rounds as rd
     from amr_twin.bench.physics import FloorPath
     from amr_twin.bench.twin import Timed
 
-    order, floors = [], iter([1.0, 2.0, 1.0, 2.0, 4.0, 4.0] + [9.0] * 10)
+    order = []
+    floors = iter([1.0, 3.0, 5.0, 2.0, 2.0, 2.0, 4.0, 4.0, 8.0])
     physics = type("P", (), {"timestep_s": 0.001})()
 
     def run(name, cpu):
         def go(cfg, sim_s):
             order.append(name)
-            return Timed(
-                cpu * sim_s, sim_s, type("T", (), {"physics": physics})(), FloorPath([(None, 1000)])
-            )
+            twin = type("T", (), {"physics": physics})()
+            return Timed(cpu * sim_s, sim_s, twin, FloorPath([(None, 1000)]))
 
         return go
 
@@ -113,21 +113,18 @@ def test_rounds_interleave_each_figure_with_the_floor(monkeypatch):
     monkeypatch.setattr(rd, "floor_s", lambda path: order.append("floor") or next(floors))
     figs = (rd.Figure("a", "", run("a", 4.0)),)
     got = rd.run_rounds(None, 2.0, figs, repeats=3)
-    assert (
-        order == ["loop", "a"] + ["loop", "floor", "a", "floor"] * 3
-    )  # the warm-up first, untimed
+    # the path's loop run and the warm-up first, untimed
+    assert order == ["loop", "a"] + ["floor", "loop", "floor", "a", "floor"] * 3
     assert got.cpu == {"loop": [3.0, 3.0, 3.0], "a": [4.0, 4.0, 4.0]}
-    assert got.floor == {
-        "loop": [1.0, 1.0, 4.0],
-        "a": [2.0, 2.0, 4.0],
-    }  # floor_s / (1000 steps * 1 ms)
+    # each the mean of its two neighbours (floor_s / (1000 steps * 1 ms))
+    assert got.floor == {"loop": [2.0, 2.0, 4.0], "a": [4.0, 2.0, 6.0]}
     out = rd.summary(got, 0.001)
-    assert out["figures"]["loop"]["ratio"]["repeats"] == [3.0, 3.0, 0.75]
-    assert out["figures"]["a"]["ratio"]["median"] == 2.0
-    assert (
-        out["floor"]["s_per_sim_s"]["median"] == 2.0 and out["floor"]["s_per_sim_s"]["max"] == 4.0
-    )
-    assert out["floor"]["us_per_step"]["median"] == 2000.0
+    assert out["figures"]["loop"]["ratio"]["repeats"] == [1.5, 1.5, 0.75]
+    assert out["figures"]["a"]["ratio"]["repeats"] == [1.0, 2.0, 0.667]
+    assert out["figures"]["a"]["ratio"]["median"] == 1.0
+    floor = out["floor"]["s_per_sim_s"]
+    assert floor["median"] == 3.0 and floor["max"] == 8.0 and len(floor["repeats"]) == 9
+    assert out["floor"]["us_per_step"]["median"] == 3000.0
 
 
 def test_the_floor_steps_the_loops_own_path():

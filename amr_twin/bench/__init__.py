@@ -1,2 +1,1 @@
-"""Benchmarks: every figure against one bare-physics floor (``amr-twin bench``), and the
-user-facing suites (``bench --suites``)."""
+"""Benchmarks: every figure against one bare-physics floor, and the suites (bench --suites)."""

@@ -128,7 +128,8 @@ def test_rounds_put_each_figure_between_two_floors(monkeypatch):
 
 
 def test_the_floor_steps_the_loops_own_path():
-    """The snapshots cover every step the twin took, piece by piece, and stepping them leaves the twin as it was."""
+    """The snapshots cover every step the twin took, piece by piece, stepping them leaves the twin
+    as it was, and another run of the scenario drives the same path (one serves every round)."""
     from amr_twin.bench.physics import PIECES, floor_s
     from amr_twin.bench.twin import loop_run
 
@@ -142,8 +143,12 @@ def test_the_floor_steps_the_loops_own_path():
     clone = first.clone()
     clone.step(n)
     assert clone.time_s == pytest.approx(path.pieces[1][0].time_s, abs=1e-9)
-    # the floor drives where the loop drove: the held actuation keeps it within 5 cm of the loop's next snapshot
+    # the floor drives where the loop drove: held actuation, within 5 cm of the next snapshot
     assert abs(clone.pose().x_m - path.pieces[1][0].pose().x_m) < 0.05
+    again = loop_run(load_config(), 0.8).path
+    assert [n for _p, n in again.pieces] == [n for _p, n in path.pieces]
+    pairs = zip(again.pieces, path.pieces)
+    assert all((p.data.qpos == q.data.qpos).all() for (p, _), (q, _) in pairs)
 
 
 @pytest.mark.parametrize(
@@ -189,8 +194,8 @@ def test_the_actors_benchmark_touches_nothing_and_its_actors_move_in_the_lidars_
     assert twin.actors.progress_s() == [16.0, 15.5, 16.0, 16.0]  # none waited
     hit = {int(twin.physics.model.geom_bodyid[g]) for g in twin.lidar.last_hit_geom if g >= 0}
     bodies = {twin.physics.model.body(f"{a.kind}_{i}").id for i, a in enumerate(twin.actors.actors)}
-    # the person crossing the aisle ahead is in sight of the last scan (the side aisles' actors come and go
-    # behind the racks as the faithful firmware's dead zone lets the heading drift by 5-15 deg)
+    # the person crossing the aisle ahead is in sight of the last scan (the side aisles' actors come
+    # and go behind the racks as the faithful firmware's dead zone lets the heading drift 5-15 deg)
     assert twin.physics.model.body("person_3").id in hit & bodies
 
 
@@ -221,7 +226,8 @@ def test_timed_children_cache_their_bytecode_outside_the_tree(tmp_path, monkeypa
 
 def test_sweep_rounds_run_in_fresh_processes_and_the_figure_is_their_median(monkeypatch):
     """The sweep figure: each round a process of its own that sweeps and then steps bare physics;
-    the figures are the medians of the rounds (a stand-in sweep of two 0.3 s points, three rounds)."""
+    the figures are the medians of the rounds (a stand-in sweep of two 0.3 s points, three
+    rounds)."""
     import os
 
     from amr_twin.bench import suites as sb

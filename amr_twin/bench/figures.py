@@ -2,7 +2,7 @@
 rounds.
 
 :func:`run_benchmarks` runs the rounds (:mod:`amr_twin.bench.rounds`: the loop, its sensors, the
-actors, a recording, ``--firmware avr``, the navigation stack, each followed by the floor of
+actors, a recording, ``--firmware avr``, the navigation stack, each between two floors of
 :mod:`amr_twin.bench.physics`), then the figures that are not per simulated second (the LiDAR's
 scan, planning, the controllers' cycles, the tyres' bare physics against the rigid contact's);
 :func:`report_lines` is the command's text.
@@ -154,8 +154,8 @@ def report_lines(r: dict) -> list[str]:
     la = r["load_average"]
     lines = [
         f"CPU time ({r['timer']}), {r['repeats']} rounds of {r['sim_s']:g} simulated s, "
-        "each figure followed "
-        f"by the floor; scenario: {r['scenario']}",
+        "each figure between two floors "
+        f"(ratio over their mean); scenario: {r['scenario']}",
         f"load average (1, 5, 15 min) {' '.join(map(str, la['before']))} before, "
         f"{' '.join(map(str, la['after']))} after, on {r['cores']} cores",
         f"floor: {r['floor']['what']}",

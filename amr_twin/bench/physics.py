@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from amr_twin.sim.physics import Physics
 
 REPEATS = 5
-"""Rounds of every figure (each round runs every figure once, each followed by the floor)."""
+"""Rounds of every figure (each round runs every figure once, each between two floors)."""
 PIECES = 8
 """Pieces of a timed run: the floor's snapshots are taken between them."""
 timer = time.process_time

@@ -1,6 +1,6 @@
 """Offline pose-graph smoothing of a drive: LiDAR and wheel odometry between scans, UWB ranges to the anchors.
 
-The mapping drive's poses for the SLAM map (experiments/navigation_map.py). A filter (the EKF) gives
+The mapping drive's poses for the SLAM map (experiments/navigation/map.py). A filter (the EKF) gives
 each pose from the past alone, and its heading wanders where the UWB ranges are late behind racks
 (0.6-0.8 deg median, 2.4-4.0 deg p95 on the aisles' mapping drive); LiDAR odometry keeps the heading
 (0.3 deg median) but slides along look-alike aisles (1-1.5 m). A smoother uses the whole drive at

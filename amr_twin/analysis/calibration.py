@@ -120,7 +120,7 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     """
     from scipy.optimize import least_squares
 
-    from amr_twin.experiments.process_pool import worker_pool
+    from amr_twin.experiments.runner.process_pool import worker_pool
 
     base = base or load_config()
     parameters = parameters or PARAMETERS

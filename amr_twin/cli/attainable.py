@@ -1,6 +1,6 @@
 """``amr-twin experiment chapter5-attainable``: which chapter 5 findings a plant inside its ranges meets.
 
-The study is :mod:`amr_twin.experiments.chapter5_attainable`; this module checks the options before the
+The study is :mod:`amr_twin.experiments.chapter5.attainable`; this module checks the options before the
 first simulation, shows progress on stderr and writes the JSON summary atomically.
 """
 
@@ -25,7 +25,7 @@ def attainable(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Draw plants inside the sourced ranges and count where each thesis finding of §5.1.3-5.1.4 holds."""
-    from amr_twin.experiments import chapter5_attainable as study
+    from amr_twin.experiments.chapter5 import attainable as study
 
     if not 1 <= samples <= study.MAX_SAMPLES:
         fail(f"--samples {samples}: must be in 1..{study.MAX_SAMPLES}")
@@ -37,7 +37,7 @@ def attainable(
     cfg = _config(config, params, set_)
 
     def work():
-        from amr_twin.experiments.executor import write_json
+        from amr_twin.experiments.runner.executor import write_json
 
         def progress(i: int, n: int) -> None:
             typer.echo(f"draw {i}/{n}", err=True)

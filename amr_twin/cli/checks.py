@@ -1,7 +1,7 @@
 """Checks of the experiment and sweep commands' options, each refusal one line (``fail``, exit 2).
 
 Numbers and folders are checked before any model is built: the firmware and
-``--jobs`` (:func:`amr_twin.experiments.process_pool.check_jobs`), durations, recording
+``--jobs`` (:func:`amr_twin.experiments.runner.process_pool.check_jobs`), durations, recording
 folders, every output (:mod:`amr_twin.recording.outputs`), repeated sweep values, the Dask
 scheduler.
 """
@@ -63,7 +63,7 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
 
     Returns the jobs to use and the firmware string (``avr:DIR`` with a sketch).
     """
-    from amr_twin.experiments.process_pool import check_jobs
+    from amr_twin.experiments.runner.process_pool import check_jobs
 
     kind = checked_firmware(firmware, sketch, fail)
     try:
@@ -108,7 +108,7 @@ def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
     import math
 
     from amr_twin.cli.path_options import get_current_context
-    from amr_twin.experiments.executor import EXECUTORS
+    from amr_twin.experiments.runner.executor import EXECUTORS
 
     if executor not in EXECUTORS:
         fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
@@ -159,7 +159,7 @@ def unique(items: list, key) -> tuple[list, list]:
 
 def dask_client(scheduler: str, timeout_s: float, fail):
     """A connected ``distributed.Client``, or a one-line error and exit 2."""
-    from amr_twin.experiments.dask_cluster import ExecutorError, connect_dask
+    from amr_twin.experiments.runner.dask_cluster import ExecutorError, connect_dask
 
     try:
         return connect_dask(scheduler, timeout_s)

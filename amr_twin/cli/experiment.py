@@ -65,7 +65,7 @@ def chapter5(
     With --samples N the runs are repeated with N parameter draws: each metric's median and
     90 % interval beside the thesis' value, and how many draws meet its band.
     """
-    from amr_twin.experiments import chapter5
+    from amr_twin.experiments.chapter5 import experiment as chapter5
 
     jobs, firmware = check_common(jobs, firmware, fail, sketch)
     check_duration(duration_s, fail)
@@ -98,11 +98,11 @@ def chapter5(
                                    progress=progress, record_dir=record, mcap_dir=mcap,
                                    reference_firmware="faithful" if firmware.startswith("avr") else None)
             if numbers is None and duration_s is None and firmware == "faithful":  # the runs the study judged
-                from amr_twin.experiments.chapter5_attainable import committed
+                from amr_twin.experiments.chapter5.attainable import committed
 
                 results["attainable"] = committed(cfg)
             if draws is not None:
-                from amr_twin.experiments import chapter5_spread
+                from amr_twin.experiments.chapter5 import spread as chapter5_spread
 
                 results["spread"] = chapter5_spread.run(cfg, draws, jobs=jobs, firmware=firmware,
                                                         runs=numbers, duration_s=duration_s, progress=progress)
@@ -111,10 +111,10 @@ def chapter5(
             return chapter5.report(results, out)
 
     data = _guard(work)
-    from amr_twin.experiments.chapter5_findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, VALIDATION_DOC,
+    from amr_twin.experiments.chapter5.findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, VALIDATION_DOC,
                                                         VALIDATION_SECTION)
-    from amr_twin.experiments.chapter5_findings import lines as finding_lines
-    from amr_twin.experiments.chapter5_report import passed_by_metric
+    from amr_twin.experiments.chapter5.findings import lines as finding_lines
+    from amr_twin.experiments.chapter5.report import passed_by_metric
 
     written = data.as_json()
     typer.echo(f"chapter 5 findings ({firmware} firmware; details in {out}/report.md):")
@@ -158,7 +158,7 @@ def faults_experiment(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Inject each kind of fault under both firmwares and report what they do (docs/faults.md)."""
-    from amr_twin.experiments import faults, faults_report
+    from amr_twin.experiments.faults import experiment as faults, report as faults_report
 
     jobs, _ = check_common(jobs, "faithful", fail)
     check_outputs(fail, folders={"--out": out})

@@ -51,8 +51,8 @@ def fusion(
     """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
     from amr_twin.controllers.route import RouteError, load_route
     from amr_twin.model.build import BuildError
-    from amr_twin.experiments import fusion
-    from amr_twin.experiments.fusion_seeds import parse_seeds
+    from amr_twin.experiments.fusion import experiment as fusion
+    from amr_twin.experiments.fusion.seeds import parse_seeds
 
     jobs, firmware = check_common(jobs, firmware, fail)
     if seed is not None and seeds is not None:
@@ -99,7 +99,7 @@ def fusion(
 
 def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, progress: bool, record, mcap, out: Path,
          guard) -> None:
-    from amr_twin.experiments import fusion, fusion_report
+    from amr_twin.experiments.fusion import experiment as fusion, report as fusion_report
 
     def work():
         from amr_twin.recording.atomic_file import all_or_nothing
@@ -129,8 +129,8 @@ def _many(cfg, route_path: Path, seeds: list[int], firmware: str, robot_errors: 
           progress: bool, out: Path, guard) -> None:
     import time
 
-    from amr_twin.experiments import fusion_seeds
-    from amr_twin.experiments.fusion_seeds_report import cell
+    from amr_twin.experiments.fusion import seeds as fusion_seeds
+    from amr_twin.experiments.fusion.seeds_report import cell
 
     def work():
         from amr_twin.recording.atomic_file import all_or_nothing

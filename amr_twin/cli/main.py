@@ -225,7 +225,7 @@ def bench(
 ) -> None:
     """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
     from amr_twin.bench.figures import run_benchmarks
-    from amr_twin.experiments.process_pool import check_jobs
+    from amr_twin.experiments.runner.process_pool import check_jobs
 
     try:
         jobs = check_jobs(jobs)
@@ -282,7 +282,7 @@ def calibrate(
     from amr_twin.recording.outputs import OutputError, check_file
 
     from amr_twin.analysis.calibration import PARAMETERS, evaluations_per_step
-    from amr_twin.experiments.process_pool import check_jobs
+    from amr_twin.experiments.runner.process_pool import check_jobs
 
     if no_fit and report is None:
         fail("--no-fit needs --report FILE (without a fit, the report is the only result)")

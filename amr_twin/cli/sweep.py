@@ -76,7 +76,7 @@ def payload(
     every metric as median and 90 % interval, the highest safe payload per position as an
     interval, and the parameters that move each answer (summary.md, sensitivity.csv).
     """
-    from amr_twin.experiments import payload_point, payload_sweep, payload_sweep_report
+    from amr_twin.experiments.payload import point as payload_point, sweep as payload_sweep, sweep_report as payload_sweep_report
 
     jobs, firmware = check_common(jobs, firmware, fail, sketch)
     check_executor(executor, scheduler, fail)
@@ -130,7 +130,7 @@ def payload(
                                     jobs=jobs, firmware=firmware, progress=progress, client=client,
                                     record_dir=record, mcap_dir=mcap, draws=draws, before=estimate)
         if draws is not None:
-            from amr_twin.experiments import payload_spread_report as spread_report
+            from amr_twin.experiments.payload import spread_report
 
             spread_report.analyse(results)
             with all_or_nothing():

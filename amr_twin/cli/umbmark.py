@@ -37,8 +37,8 @@ def umbmark(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """UMBmark (4 m squares both ways) per robot, its calibration of the odometry, and the squares again."""
-    from amr_twin.experiments.fusion_seeds import parse_seeds
-    from amr_twin.experiments.umbmark_seeds import MAX_RUNS, SQUARE_S
+    from amr_twin.experiments.fusion.seeds import parse_seeds
+    from amr_twin.experiments.umbmark.seeds import MAX_RUNS, SQUARE_S
 
     jobs, _ = check_common(jobs, "improved", fail)
     try:
@@ -74,8 +74,8 @@ def _run(cfg, seeds: list[int], runs: int, tyres: bool, floor_field: bool, jobs:
          guard) -> None:
     import time
 
-    from amr_twin.experiments import umbmark_report, umbmark_seeds
-    from amr_twin.experiments.umbmark_square import Profile
+    from amr_twin.experiments.umbmark import report as umbmark_report, seeds as umbmark_seeds
+    from amr_twin.experiments.umbmark.square import Profile
     from amr_twin.model.config import with_values
 
     profile = Profile()

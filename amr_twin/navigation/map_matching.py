@@ -7,7 +7,7 @@ sensors/uwb.py) and, through the tag's 0.3 m lever arm, turn its heading by seve
 second (measured: 0.07 rad within 0.6 s beside a rack's end, the EKF's own sigma 0.02 rad). At 5 m a
 degree is 9 cm: rack faces land off the map, the costmap marks them, people are seen in them and
 the planner plans round them. This module is not a particle filter; like the mapping drive's
-matcher (:mod:`amr_twin.experiments.navigation_scan_match`, after Hector SLAM's Gauss-Newton scan
+matcher (:mod:`amr_twin.experiments.navigation.scan_match`, after Hector SLAM's Gauss-Newton scan
 matcher, Kohlbrecher et al. 2011) it fits each scan rigidly to the static layer's distance field:
 
 1. The scan's returns within ``max_range_m``, placed by the corrected poses, are moved by an

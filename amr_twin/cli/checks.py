@@ -2,8 +2,8 @@
 
 Numbers and folders are checked before any model is built: the firmware and
 ``--jobs`` (:func:`amr_twin.experiments.runner.process_pool.check_jobs`), durations, recording
-folders, every output (:mod:`amr_twin.recording.outputs`), repeated sweep values, the Dask
-scheduler.
+folders, every output (:mod:`amr_twin.recording.outputs`), the Dask scheduler. The payload sweep's
+own rules live in its spec (:mod:`amr_twin.experiments.payload.spec`).
 """
 
 from __future__ import annotations
@@ -14,9 +14,6 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.options import checked_firmware, checked_seed
-
-MAX_SWEEP_POINTS = 10_000
-"""Most points of one sweep: each is a simulation (~0.5 s of CPU for 8 s) and a file in runs/."""
 
 JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per usable core; at most that).")
 YesOpt = typer.Option(False, "--yes", help="Start without asking when the time estimated beforehand is above 10 min "
@@ -145,16 +142,6 @@ def check_outputs(fail, files: dict | None = None, folders: dict | None = None) 
         check(files=files, folders=folders)
     except OutputError as exc:
         fail(str(exc))
-
-
-def unique(items: list, key) -> tuple[list, list]:
-    """``items`` without repeats (by ``key``), in order; and the repeats dropped."""
-    seen, kept, dropped = set(), [], []
-    for item in items:
-        k = key(item)
-        (dropped if k in seen else kept).append(item)
-        seen.add(k)
-    return kept, dropped
 
 
 def dask_client(scheduler: str, timeout_s: float, fail):

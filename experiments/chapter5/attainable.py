@@ -4,7 +4,7 @@
 more or a loaded wheel leave the PI's dead zone, each inside its range: the right board's gain against
 the left's (:data:`BOARD_TOLERANCE`), each motor's winding resistance, the tyres' and the balls' rolling
 resistance (their ``range`` in ``models/amr/amr.yaml``). Each draw runs the eight runs
-(:func:`.chapter5.experiment.run`) and is judged by :func:`.chapter5.findings.findings`. :func:`summary` gives, per
+(:func:`.experiment.run`) and is judged by :func:`.findings.findings`. :func:`summary` gives, per
 finding, the draws where it holds and the best figure reached, and for each pair the draws where both
 hold: a finding no draw meets is out of reach; a pair no draw meets conflicts.
 """

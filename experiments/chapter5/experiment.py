@@ -2,8 +2,8 @@
 
 :func:`run` simulates the runs (§5.1.1-5.1.4), :func:`plot` draws one figure per run
 as in chapter 5, :func:`report` writes ``metrics.json`` (from the typed
-:class:`.chapter5.metrics.Chapter5Metrics`) and ``report.md``. The runs are
-judged against the thesis by :mod:`.chapter5.criteria` (published samples, settling band,
+:class:`.metrics.Chapter5Metrics`) and ``report.md``. The runs are
+judged against the thesis by :mod:`.criteria` (published samples, settling band,
 the 20 kg runs' oscillation).
 The runs use the empty world (the warehouse walls would stop a 16 s straight run).
 
@@ -143,11 +143,11 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     record_dir : folder for one Rerun recording per run, ``run<N>.rrd`` (created; None: none).
     mcap_dir : folder for one MCAP file per run, ``run<N>.mcap`` (may be ``record_dir``).
     study : with the whole suite, also run §5.1.4's rolling-resistance study
-        (:mod:`.chapter5.payload`, 8 more runs).
+        (:mod:`.payload`, 8 more runs).
     reference_firmware : also run this firmware (not recorded) and tabulate the differences
-        sample by sample in ``"firmware_comparison"`` (:mod:`.chapter5.firmware_comparison`); it is run
+        sample by sample in ``"firmware_comparison"`` (:mod:`.firmware_comparison`); it is run
         twice: as is, and with the physics sampled every millisecond as the emulated board's
-        loop samples it (:data:`~.chapter5.firmware_comparison.PACE_US`), which separates the firmware's
+        loop samples it (:data:`~.firmware_comparison.PACE_US`), which separates the firmware's
         differences from the loop's.
 
     Returns
@@ -219,7 +219,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
 
 
 def plot(results: dict, out_dir: Path) -> list[Path]:
-    """One PNG per run (``run<N>.png``), see :func:`.chapter5.figure.plot`."""
+    """One PNG per run (``run<N>.png``), see :func:`.figure.plot`."""
     from amr_twin.experiments.chapter5.figure import plot as plot_runs
 
     return plot_runs(results, out_dir)

@@ -1,6 +1,6 @@
 """The thesis' chapter 5 findings, each judged reproduced or not from the ``metrics.json`` object.
 
-:func:`findings` reads the object :meth:`.chapter5.metrics.Chapter5Metrics.as_json` writes (runs,
+:func:`findings` reads the object :meth:`.metrics.Chapter5Metrics.as_json` writes (runs,
 comparisons, payload_duty) and returns a :class:`Findings`: one :class:`Finding` per statement of
 §5.1.3/§5.1.4 with its verdict and a one-line why, the bound listing 4.12 puts on each published
 timing (:class:`TimingBound`), and the published checks split into attainable and unattainable

@@ -3,7 +3,7 @@
 §5.1.3 gives delay, rise, peak and settling times read off rqt_plot's lines of ``wheel0_Vel`` /
 ``wheel1_Vel``, which listing 4.12 publishes once per wheel revolution. How the author timed them is
 not said. Each :data:`READINGS` entry is one explicit hypothesis, applied to the same published samples
-of every run and judged against the same bands (:func:`.chapter5.criteria.judge`):
+of every run and judged against the same bands (:func:`.criteria.judge`):
 
 - ``command``: the step at the command, the wheel at rest until the first sample, the samples joined
   by straight lines (the report's own reading);
@@ -61,7 +61,7 @@ def samples_as_read(pub: np.ndarray, t_command_s: float, reading: str) -> tuple[
 
 
 def timings(pub: np.ndarray, t_command_s: float, reference_rpm: float, wheel: str, reading: str) -> dict:
-    """The timing checks (:func:`.chapter5.criteria.judge`) of one wheel's samples under ``reading``."""
+    """The timing checks (:func:`.criteria.judge`) of one wheel's samples under ``reading``."""
     if len(pub) < 2:
         return {}
     t, rpm, t0, initial = samples_as_read(pub, t_command_s, reading)
@@ -72,7 +72,7 @@ def timings(pub: np.ndarray, t_command_s: float, reference_rpm: float, wheel: st
 
 
 def score(runs: list[dict], reading: str) -> ReadingScore:
-    """``reading`` over the analysed runs of :func:`.chapter5.experiment.run` (each with its ``raw`` series)."""
+    """``reading`` over the analysed runs of :func:`.experiment.run` (each with its ``raw`` series)."""
     passed = {m: 0 for m in TIMINGS}
     values: dict[str, dict[str, list[float]]] = {m: {"small": [], "large": []} for m in TIMINGS}
     checks = 0

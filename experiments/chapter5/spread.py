@@ -2,17 +2,17 @@
 
 The eight runs (or those chosen) are simulated again with each configuration drawn by
 :meth:`amr_twin.analysis.uncertainty.ParameterSpace.draw`, and measured as the nominal runs are
-(:func:`.chapter5.experiment.analyse`). :func:`summarise` gives, per run, wheel and metric (published
+(:func:`.experiment.analyse`). :func:`summarise` gives, per run, wheel and metric (published
 samples and true speed), the nominal value, the median and 90 % interval over the draws,
 the thesis' value and band where §5.1.3 gives one, and in how many draws the metric lies in
 its band; each draw's scorecard (``draw_checks``: counted as the nominal run's, published and
-true speed, :func:`.chapter5.criteria.count_checks`; a setting no draw reads, such as
+true speed, :func:`.criteria.count_checks`; a setting no draw reads, such as
 ``wheel.tyre_slip``, leaves the draws as they are, so two runs of one seed compare draw by draw);
 the §5.1.4 answers (the PI raises the duty with 20 kg; the 20 kg runs oscillate more) as the
 number of draws in which they hold; and the parameters whose rank
 correlation with each banded metric is largest; and each draw's run whose physics timestep the tyres'
 guard halved (``tyre_timestep_halved``, :mod:`amr_twin.model.tyre_stability`). ``chapter5_spread_report.markdown`` writes the report's
-section (:mod:`.chapter5.spread_report`); the run plots get the 90 % band of the true wheel speed.
+section (:mod:`.spread_report`); the run plots get the 90 % band of the true wheel speed.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The chapter 5 report's section on the spread over parameter draws (from :func:`.chapter5.spread.summarise`)."""
+"""The chapter 5 report's section on the spread over parameter draws (from :func:`.spread.summarise`)."""
 
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ It runs the fault study into ``docs/`` (``amr-twin experiment faults --out docs`
 both routes (``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
 (``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture),
 the chapter 5 attainability study (``docs/chapter5_attainable.json``, 128 plants: a few minutes),
-then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.documents.texts`) from those
+then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.texts`) from those
 committed files and the calibration's report (``models/amr/calibration.yaml``: after a new fit,
 ``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text between
 ``<!-- generated: NAME ... -->`` and ``<!-- end: NAME -->``;

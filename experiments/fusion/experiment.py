@@ -17,7 +17,7 @@ run offline on the recorded messages, replayed in stamp order: the numbers are
 those an online run would give, and one drive serves all five.
 
 :func:`run` drives and estimates, :func:`plot` and :func:`report` (in
-:mod:`.fusion.report`) write the twin's own fig. 6.8, the map and the tables.
+:mod:`.report`) write the twin's own fig. 6.8, the map and the tables.
 """
 
 from __future__ import annotations
@@ -265,7 +265,7 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
         robot_errors: bool = True) -> FusionResults:
     """Drive the route, run the five architectures and score them against the truth.
 
-    ``robot_errors``: the seed also draws the robot's own errors (:mod:`.fusion.robot`);
+    ``robot_errors``: the seed also draws the robot's own errors (:mod:`.robot`);
     False drives the robot exactly as its odometry assumes it.
     """
     route = load_route(route_path)

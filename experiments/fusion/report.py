@@ -152,7 +152,7 @@ DEFINITIONS = [
 
 def report(results: FusionResults, out: Path, figures: bool = True) -> FusionMetrics:
     """Save the map and the TUM trajectories, write ``metrics.json`` (from the typed
-    :class:`~.fusion.metrics.FusionMetrics`) and ``report.md``; return the metrics.
+    :class:`~.metrics.FusionMetrics`) and ``report.md``; return the metrics.
 
     ``figures``: the report shows ``trajectories.png`` and ``errors.png`` (written by :func:`plot`).
     """

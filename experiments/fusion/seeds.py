@@ -1,13 +1,13 @@
 """The fusion experiment over many seeds: run in parallel, every seed kept, each metric's spread.
 
 ``amr-twin experiment fusion --seeds 0:9`` drives the route once per seed (each seed draws
-the sensors' noise and the robot's own errors, :mod:`.fusion.robot`) in a local process pool
+the sensors' noise and the robot's own errors, :mod:`.robot`) in a local process pool
 or on a Dask cluster (:func:`amr_twin.experiments.runner.executor.run_all`), scores the five
 architectures of each drive, and reports every metric as mean, standard deviation (n - 1)
 and range over the seeds, next to the per-seed values. Nothing is left out: a seed whose
 drive missed its goal is reported as such and counted in the spread.
 
-:func:`run` returns the per-seed :class:`~.fusion.experiment.FusionResults` (without their recorded
+:func:`run` returns the per-seed :class:`~.experiment.FusionResults` (without their recorded
 messages); :func:`write` writes ``seed<N>/`` (that seed's report, metrics, map and TUM
 trajectories), the summary ``report.md`` and ``metrics.json``, and ``seeds.png``.
 """

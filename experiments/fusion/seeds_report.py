@@ -1,4 +1,4 @@
-"""``report.md`` of the fusion experiment over many seeds (data from :func:`.fusion.seeds.write`)."""
+"""``report.md`` of the fusion experiment over many seeds (data from :func:`.seeds.write`)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def seed_text(seeds: list[int]) -> str:
 
 
 def cell(s: dict, decimals: int) -> str:
-    """``mean ± sd (min-max)`` of a :func:`~.fusion.seeds.spread`."""
+    """``mean ± sd (min-max)`` of a :func:`~.seeds.spread`."""
     if s["mean"] is None:
         return "-"
     f = f"{{:.{decimals}f}}"

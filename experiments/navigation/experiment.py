@@ -12,11 +12,11 @@ sees its whole footprint) in an aisle on the way, anywhere across it (it may lea
 or block the aisle). Neither is on any map.
 
 Each episode runs on the world's true map and on the SLAM map (a map built from the LiDAR's
-scans, :mod:`.navigation.map`), the same start, goal, obstacle and seed, with the localisation and
+scans, :mod:`.map`), the same start, goal, obstacle and seed, with the localisation and
 controller chosen (EKF of odometry, gyro and UWB, and MPPI, by default). :func:`run_episode` is the
 worker (picklable items, :func:`amr_twin.experiments.runner.executor.run_all`); the metrics are in
-:mod:`.navigation.metrics`, the report and plots in :mod:`.navigation.report`. Generated halls
-(``generated:SEED``): their episodes and doorways in :mod:`.navigation.generated`, several at once by
+:mod:`.metrics`, the report and plots in :mod:`.report`. Generated halls
+(``generated:SEED``): their episodes and doorways in :mod:`.generated`, several at once by
 :func:`run_halls` (the true map only).
 """
 
@@ -160,7 +160,7 @@ def run_halls(cfg, worlds: list[str], tuning: list[str], n: int, *, seed: int = 
               controller: str = "mppi", firmware: str = "improved", jobs: int = 1, client=None, progress: bool = True,
               people: str = "walking") -> dict:
     """``n`` episodes on the true map of each generated hall of ``worlds``, summed up for the ``tuning`` halls and
-    for the others (held out) apart (:mod:`.navigation.generated`); each with a walking person also run without
+    for the others (held out) apart (:mod:`.generated`); each with a walking person also run without
     them, for the time the people cost (``people`` of each group's summary, ``rows_without_people``)."""
     import time
 

@@ -5,7 +5,7 @@ are **door trips**, the start on one side of the inner wall and the goal on the 
 first drawn too), the others keep to one side (the rack section or the room); start and goal
 ``MIN_APART_M`` to ``MAX_APART_M`` apart, ``FREE_CLEARANCE_M`` from any obstacle, outside the
 cage, joined by the planner on the true map. The scenario is drawn as in the hand-made worlds
-(:mod:`.navigation.episodes`: clear, a person, a pallet jack), or ``clear`` only (``people`` ``none``);
+(:mod:`.episodes`: clear, a person, a pallet jack), or ``clear`` only (``people`` ``none``);
 a person or jack stands on the way where it is 0.9-1.6 m from the map's obstacles (aisles of
 uneven width), never in a doorway. ``crossing`` people walk across without giving way.
 

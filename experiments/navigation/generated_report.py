@@ -18,7 +18,7 @@ def world_folder(world: str) -> str:
 
 
 def write_worlds(cfg, data: dict, out: Path) -> None:
-    """Each hall's world files (:func:`~.navigation.generated.write_world`) and ``trajectories_true.png``."""
+    """Each hall's world files (:func:`~.generated.write_world`) and ``trajectories_true.png``."""
     from amr_twin.experiments.navigation.generated import write_world
 
     for world in data["worlds"]:
@@ -39,7 +39,7 @@ def _door_cells(d: dict) -> str:
 
 def _people_lines(data: dict) -> list[str]:
     """The people table: person episodes, their successes and contacts, the time they cost against the same
-    episodes without them (:func:`~.navigation.generated.people_penalty`)."""
+    episodes without them (:func:`~.generated.people_penalty`)."""
     lines = ["", f"People (`{data['people']}`): each episode with a walking person also run without them (same hall, "
              "start, goal and seeds); extra time to the goal over the pairs both reached. A contact: any touch of "
              "person and robot (a reported collision naming the person).", "",

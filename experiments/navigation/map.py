@@ -9,7 +9,7 @@ scans and every UWB range, the ranges late behind racks weighed down. Neither a 
 odometry alone makes a straight map there: the EKF's heading wanders where the ranges are late
 (0.6-0.8 deg median, up to 7 deg), which drew rows twice and slanted, and kiss-icp slides 1-1.5 m
 along look-alike aisles. Each scan is then matched to the map of the scans before it
-(:mod:`.navigation.scan_match`, a SLAM front end's scan matcher) before the grid is made; a ROS user
+(:mod:`.scan_match`, a SLAM front end's scan matcher) before the grid is made; a ROS user
 would get a comparable map from slam_toolbox with loop closures. What the map holds is what the
 scan plane (0.45 m) cuts: loose pallets lower than that are not on it (a collision risk the
 experiment reports, not one it hides). Its agreement with the world is measured as the fusion
@@ -78,7 +78,7 @@ def beam_poses(cfg, scans: list, t_s: np.ndarray, pose: np.ndarray) -> list:
 
 
 def save_slam_map(scans: list, beam_poses: list, boxes, cfg, stem: Path, ekf_beam_poses: list | None = None) -> dict:
-    """The map of ``scans`` at ``beam_poses`` after scan-to-map matching (:mod:`.navigation.scan_match`),
+    """The map of ``scans`` at ``beam_poses`` after scan-to-map matching (:mod:`.scan_match`),
     saved at ``stem``; its agreement with the world (``boxes``), and that of the maps the poses make
     unmatched (``unmatched_*``) and the EKF's poses make (``ekf_only_*``, when given; neither saved)."""
     from amr_twin.experiments.fusion.map import agreement, build_map

@@ -11,7 +11,7 @@ Per episode (:func:`measure`):
 - ``barn_score``: ``success * OT / clip(AT, 2 OT, 8 OT)`` with ``OT`` the optimal length over the
   top speed and ``AT`` the time (BARN challenge; 0.5 at best);
 - ``travelled_m``, ``optimal_m`` (the visibility graph's shortest path,
-  :mod:`.navigation.optimal`), their ratio;
+  :mod:`.optimal`), their ratio;
 - ``min_clearance_m``: the least distance from the true footprint (the rectangle at the true pose,
   10 Hz) to any obstacle of the true world, unmapped ones included; ``min_person_m``: to the person;
 - ``plan_ms`` (each plan's CPU), ``controller_ms`` (each control cycle's CPU): percentiles;

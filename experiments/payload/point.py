@@ -7,7 +7,7 @@ placements that still lie on the deck; ``X:Y`` gives the box centre in metres.
 A point's key names its file ``runs/<key>.json``; its fingerprint covers the
 configuration, the firmware, the duration and what a row means (:data:`ROWS`), so a
 resumed sweep redoes exactly the points whose inputs changed
-(:mod:`.payload.sweep`).
+(:mod:`.sweep`).
 """
 
 from __future__ import annotations

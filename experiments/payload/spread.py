@@ -1,12 +1,12 @@
 """The payload sweep's answers with their spread over the parameters' uncertainty (``--samples N``).
 
-From the rows of :func:`.payload.sweep.run` with ``draws`` (the nominal rows, then one
+From the rows of :func:`.sweep.run` with ``draws`` (the nominal rows, then one
 row per point and drawn configuration):
 
 - :func:`intervals`: per point and metric, the nominal value, the median and the 90 %
   interval over the draws (``intervals.csv``);
 - :func:`answers`: per position, the highest safe payload (as
-  :func:`.payload.sweep_report.summarise` decides it) for each draw; per position and
+  :func:`.sweep_report.summarise` decides it) for each draw; per position and
   command, the payload from which a drive wheel lifts off, the base tilts past 3
   degrees, the static tip margin falls below 2 cm and a motor's steady current
   exceeds the driver's continuous rating (the draw's own), each interpolated linearly
@@ -15,7 +15,7 @@ row per point and drawn configuration):
 - :func:`sensitivity`: the Spearman rank correlation of each drawn parameter with each
   answer, the answers' drivers (``sensitivity.csv``).
 
-:func:`.payload.spread_report.report` writes them with the band plots.
+:func:`.spread_report.report` writes them with the band plots.
 """
 
 from __future__ import annotations

@@ -9,8 +9,8 @@ position that puts the payload off the deck fails the configuration check and is
 recorded as invalid.
 
 The points (named positions, the parsers, keys and fingerprints) are in
-:mod:`.payload.point`; one point's simulation and when it is **safe** in
-:mod:`.payload.simulation`. The highest safe payload of a position is the largest
+:mod:`.point`; one point's simulation and when it is **safe** in
+:mod:`.simulation`. The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
 
 With ``draws`` (:class:`amr_twin.analysis.uncertainty.Draws`, ``--samples N``), every point is
@@ -18,7 +18,7 @@ also run once per drawn configuration: its key gains ``_s<i>_<id>`` (the sample'
 index and a hash of its drawn values) and its fingerprint covers the drawn
 configuration, so a resumed sweep redoes exactly the runs whose parameters changed.
 The nominal runs keep the keys of a sweep without samples (and are reused from one).
-:mod:`.payload.spread` reports medians, intervals and sensitivities.
+:mod:`.spread` reports medians, intervals and sensitivities.
 
 Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``<key>.rrd`` /
 ``<key>.mcap`` per point **simulated by this call**, written by the process that
@@ -140,7 +140,7 @@ def improved_beside(cfg: TwinConfig, out_dir: Path, results: dict, jobs: int = 1
                     client=None) -> dict | None:
     """The positions of a faithful-firmware sweep whose limit is a runaway (the firmware's: the
     wheels leave their references and the motor current follows;
-    :func:`.payload.sweep_report.limit_causes`), run again with the improved firmware on the same
+    :func:`.sweep_report.limit_causes`), run again with the improved firmware on the same
     masses and commands, into ``out_dir/improved`` (resumed like any sweep); None when there is
     none, or the sweep ran another firmware."""
     from amr_twin.experiments.payload.sweep_report import summarise

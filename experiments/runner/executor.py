@@ -2,14 +2,14 @@
 
 :func:`run_all` maps a picklable function over work items, in this process
 (``jobs=1``), in this process and ``jobs - 1`` warm worker processes, or on a Dask
-cluster (a ``distributed.Client`` from :func:`~.runner.dask_cluster.connect_dask`), with a rich progress
+cluster (a ``distributed.Client`` from :func:`~.dask_cluster.connect_dask`), with a rich progress
 bar on stderr. Results come back to the calling process whichever the executor, so
 the caller writes every file itself. The writers put a file in place with one
 ``os.replace``: a reader, or a rerun after an interruption, sees either the whole
 file or none.
 
-The local pool is in :mod:`.runner.process_pool` (:func:`~.runner.process_pool.worker_pool`), the Dask
-cluster in :mod:`.runner.dask_cluster` (:func:`~.runner.dask_cluster.connect_dask`).
+The local pool is in :mod:`.process_pool` (:func:`~.process_pool.worker_pool`), the Dask
+cluster in :mod:`.dask_cluster` (:func:`~.dask_cluster.connect_dask`).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
     jobs : worker processes of the local pool; 1 runs in this process. Ignored with ``client``.
     description : label of the progress bar.
     progress : show the rich progress bar (stderr).
-    client : a ``distributed.Client`` (see :func:`~.runner.dask_cluster.connect_dask`): run the items on
+    client : a ``distributed.Client`` (see :func:`~.dask_cluster.connect_dask`): run the items on
         its cluster instead of locally. The caller keeps ownership of it.
     size : how many runs an item holds (the progress bar counts runs); 1 each when None.
     """

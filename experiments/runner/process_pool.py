@@ -63,7 +63,7 @@ def _ready() -> int:
 
 def worker_pool(workers: int) -> ProcessPoolExecutor:
     """A new pool of ``workers`` spawned, warm, parent-death-guarded processes (the caller
-    shuts it down). :func:`~.runner.executor.run_all` keeps one per size for the life of the process."""
+    shuts it down). :func:`~.executor.run_all` keeps one per size for the life of the process."""
     context = multiprocessing.get_context("spawn")
     return ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_warm_worker,
                                initargs=(os.getpid(),))
@@ -73,7 +73,7 @@ _pools: dict[int, ProcessPoolExecutor] = {}
 
 
 def _shared_pool(workers: int) -> ProcessPoolExecutor:
-    """The process' pool of ``workers`` warm workers, made on first use (see :func:`~.runner.executor.run_all`)."""
+    """The process' pool of ``workers`` warm workers, made on first use (see :func:`~.executor.run_all`)."""
     pool = _pools.get(workers)
     if pool is None or getattr(pool, "_broken", False) or getattr(pool, "_shutdown_thread", False):
         pool = _pools[workers] = worker_pool(workers)

@@ -9,7 +9,7 @@ directions), and so is each part's. The *non-systematic spread* is the scatter o
 and Feng's list of error sources calls non-systematic, what the wheels do on the floor (here the tyres'
 slip); the odometry's sampling part (the encoder's limited resolution and sampling rate, systematic
 sources in that list, which no calibration removes) is reported beside it. Data come from
-:mod:`.umbmark.seeds`.
+:mod:`.seeds`.
 """
 
 from __future__ import annotations

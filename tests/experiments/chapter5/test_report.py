@@ -11,7 +11,7 @@ from amr_twin.experiments.chapter5.findings import (ATTAINABLE_COMMAND, ATTAINAB
 from amr_twin.experiments.chapter5.report import markdown
 from amr_twin.model.config import load_config
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope="module")

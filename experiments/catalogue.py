@@ -1,0 +1,13 @@
+"""The built-in experiments, registered: importing each package's spec module fills the registry."""
+
+from __future__ import annotations
+
+from amr_twin.base.registry import Registry
+from amr_twin.experiments.registry import EXPERIMENTS, Experiment
+
+
+def experiments() -> Registry[Experiment]:
+    """The registry with the built-in experiments in it (and any a third party registered)."""
+    from amr_twin.experiments.payload import spec  # noqa: F401  (registers ``payload``)
+
+    return EXPERIMENTS

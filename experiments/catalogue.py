@@ -8,6 +8,7 @@ from amr_twin.experiments.registry import EXPERIMENTS, Experiment
 
 def experiments() -> Registry[Experiment]:
     """The registry with the built-in experiments in it (and any a third party registered)."""
-    from amr_twin.experiments.payload import spec  # noqa: F401  (registers ``payload``)
+    from amr_twin.experiments.payload import spec as payload  # noqa: F401  (each registers itself)
+    from amr_twin.experiments.umbmark import spec as umbmark  # noqa: F401
 
     return EXPERIMENTS

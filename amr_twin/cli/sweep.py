@@ -19,7 +19,7 @@ import typer
 from amr_twin.cli.checks import (CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt, check_common,
                                  check_estimate, check_executor, check_memory, check_outputs, check_record_folder,
                                  dask_client, parameter_draws)
-from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.common import _config, _guard, checked, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, firmware_option, sketch_option
 
 app = typer.Typer(no_args_is_help=True, help="Parameter sweeps over many simulations.")
@@ -34,14 +34,6 @@ def _safe_interval(results: dict, position: str) -> str:
     kg = {float("-inf"): "none"}
     return (f"; over {answer['n']} draws: median {kg.get(answer['median'], answer['median'])} kg "
             f"(90 %: {kg.get(answer['low'], answer['low'])} - {kg.get(answer['high'], answer['high'])})")
-
-
-def _checked(check, *args):
-    """``check(*args)``'s value; its ValueError as the CLI's one-line refusal (exit 2)."""
-    try:
-        return check(*args)
-    except ValueError as exc:
-        fail(str(exc))
 
 
 @app.command("payload")
@@ -87,13 +79,13 @@ def payload(
     jobs, firmware = check_common(jobs, firmware, fail, sketch)
     check_executor(executor, scheduler, fail)
     spec = PayloadSweepSpec(masses, positions, commands, duration_s, samples)
-    _checked(spec.check_duration)
+    checked(spec.check_duration)
     cfg = _config(config, params, set_)
-    grid = _checked(spec.grid, cfg)
+    grid = checked(spec.grid, cfg)
     if grid.repeated:
         typer.echo("note: repeated sweep values are simulated once: " + ", ".join(str(v) for v in grid.repeated),
                    err=True)
-    _checked(spec.check_size, grid)
+    checked(spec.check_size, grid)
     n_points, runs = grid.points, spec.runs(grid)
     draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
     check_record_folder("--record", record, fail, "<key>.rrd")

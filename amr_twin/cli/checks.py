@@ -1,9 +1,9 @@
 """Checks of the experiment and sweep commands' options, each refusal one line (``fail``, exit 2).
 
 Numbers and folders are checked before any model is built: the firmware and
-``--jobs`` (:func:`amr_twin.experiments.runner.process_pool.check_jobs`), durations, recording
-folders, every output (:mod:`amr_twin.recording.outputs`), the Dask scheduler. The payload sweep's
-own rules live in its spec (:mod:`amr_twin.experiments.payload.spec`).
+``--jobs`` (:func:`amr_twin.experiments.runner.process_pool.check_jobs`), recording
+folders, every output (:mod:`amr_twin.recording.outputs`), the Dask scheduler. The experiments'
+own rules (durations, runs, seeds, routes, sweep sizes) live in their specs (``experiments/<name>/spec.py``).
 """
 
 from __future__ import annotations
@@ -67,14 +67,6 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
         return check_jobs(jobs), kind
     except ValueError as exc:
         fail(str(exc))
-
-
-def check_duration(duration_s: Optional[float], fail) -> None:
-    """``--duration-s`` of an experiment's runs: a run's length (:mod:`amr_twin.sim.bounds`)."""
-    from amr_twin.sim.bounds import duration_problem
-
-    if duration_s is not None and duration_problem(duration_s):
-        fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
 
 
 def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool = False, processes: int = 1,

@@ -1,0 +1,99 @@
+"""Chapter 5's spec: which runs, how long and on which firmware, checked before any simulation.
+
+:meth:`Chapter5Spec.validate` refuses bad input with a ValueError of one line naming the field (the
+CLI's option), from Python as from ``amr-twin experiment chapter5``; :func:`run` simulates and writes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from amr_twin.experiments.chapter5 import experiment as chapter5
+from amr_twin.experiments.chapter5.metrics import Chapter5Metrics
+from amr_twin.experiments.registry import EXPERIMENTS, Experiment
+from amr_twin.model.config import TwinConfig
+from amr_twin.recording.atomic_file import all_or_nothing
+from amr_twin.sim.bounds import duration_problem
+
+
+@dataclass(frozen=True)
+class Chapter5Spec:
+    """The eight step experiments of thesis chapter 5.
+
+    Args:
+        runs: run numbers to do, ``"1,3"`` (None: all eight).
+        duration_s: every run's duration, s (None: each run's own).
+        firmware: ``faithful``, ``improved`` or ``avr...`` (with avr also run with faithful and compared).
+    """
+
+    runs: str | None = None
+    duration_s: float | None = None
+    firmware: str = "faithful"
+
+    def numbers(self) -> list[int] | None:
+        """The run numbers (None: all), ValueError naming ``--runs``."""
+        if self.runs is None:
+            return None
+        try:
+            numbers = [int(v) for v in self.runs.split(",")]
+        except ValueError:
+            raise ValueError(f"--runs {self.runs!r}: expected run numbers 1..8 separated by commas") from None
+        if not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
+            raise ValueError(f"--runs {self.runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
+        if len(set(numbers)) != len(numbers):  # run once, silently
+            raise ValueError(f"--runs {self.runs!r}: a run is named twice")
+        return numbers
+
+    def check_duration(self) -> None:
+        """ValueError unless ``duration_s`` is None or a run's length (:mod:`amr_twin.sim.bounds`)."""
+        if self.duration_s is not None and duration_problem(self.duration_s):
+            raise ValueError(f"--duration-s {self.duration_s:g}: {duration_problem(self.duration_s)}")
+
+    def validate(self) -> list[int] | None:
+        """Every check (ValueError, one line naming the field); the run numbers (None: all)."""
+        self.check_duration()
+        return self.numbers()
+
+    def longest_run_s(self) -> float:
+        """The longest run's simulated seconds (each run is one process' memory)."""
+        return self.duration_s or max(r.duration_s for r in chapter5.RUNS)
+
+    def pass_s(self) -> float:
+        """Simulated seconds of one pass over the runs."""
+        numbers = self.numbers()
+        return sum(self.duration_s or r.duration_s for r in chapter5.RUNS if numbers is None or r.number in numbers)
+
+    def passes(self, samples: int = 0) -> int:
+        """Passes over the runs: the runs, ``samples`` parameter draws, the reference firmware's two with
+        avr, and the rolling-resistance study with every run at its own length (at most a pass)."""
+        return 1 + samples + (2 if self.firmware.startswith("avr") else 0) \
+            + (1 if self.runs is None and self.duration_s is None else 0)
+
+
+def run(spec: Chapter5Spec, cfg: TwinConfig, out_dir: Path, *, jobs: int = 1, progress: bool = False,
+        record_dir: Path | None = None, mcap_dir: Path | None = None, draws=None) -> Chapter5Metrics:
+    """Validate ``spec``, simulate its runs (``jobs`` processes; with ``draws``, an
+    :class:`amr_twin.analysis.uncertainty.Draws`, once more per draw), judge them and write ``out_dir``'s
+    report with the recordings, all or nothing; the metrics."""
+    numbers = spec.validate()
+    with all_or_nothing():
+        results = chapter5.run(cfg, jobs=jobs, firmware=spec.firmware, runs=numbers, duration_s=spec.duration_s,
+                               progress=progress, record_dir=record_dir, mcap_dir=mcap_dir,
+                               reference_firmware="faithful" if spec.firmware.startswith("avr") else None)
+        if numbers is None and spec.duration_s is None and spec.firmware == "faithful":  # the runs the study judged
+            from amr_twin.experiments.chapter5.attainable import committed
+
+            results["attainable"] = committed(cfg)
+        if draws is not None:
+            from amr_twin.experiments.chapter5 import spread
+
+            results["spread"] = spread.run(cfg, draws, jobs=jobs, firmware=spec.firmware, runs=numbers,
+                                           duration_s=spec.duration_s, progress=progress)
+            results["spread_summary"] = spread.summarise(results, results["spread"])
+        chapter5.plot(results, out_dir)
+        return chapter5.report(results, out_dir)
+
+
+EXPERIMENTS.register("chapter5", Experiment("chapter5", Chapter5Spec, run, Chapter5Metrics,
+                                            "thesis chapter 5's step experiments judged against its bands"))

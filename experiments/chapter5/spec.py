@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from amr_twin.experiments.chapter5 import experiment as chapter5
+from amr_twin.experiments.chapter5 import attainable, experiment as chapter5
 from amr_twin.experiments.chapter5.metrics import Chapter5Metrics
 from amr_twin.experiments.registry import EXPERIMENTS, Experiment
 from amr_twin.model.config import TwinConfig
@@ -82,9 +82,7 @@ def run(spec: Chapter5Spec, cfg: TwinConfig, out_dir: Path, *, jobs: int = 1, pr
                                progress=progress, record_dir=record_dir, mcap_dir=mcap_dir,
                                reference_firmware="faithful" if spec.firmware.startswith("avr") else None)
         if numbers is None and spec.duration_s is None and spec.firmware == "faithful":  # the runs the study judged
-            from amr_twin.experiments.chapter5.attainable import committed
-
-            results["attainable"] = committed(cfg)
+            results["attainable"] = attainable.committed(cfg)
         if draws is not None:
             from amr_twin.experiments.chapter5 import spread
 
@@ -95,5 +93,35 @@ def run(spec: Chapter5Spec, cfg: TwinConfig, out_dir: Path, *, jobs: int = 1, pr
         return chapter5.report(results, out_dir)
 
 
+@dataclass(frozen=True)
+class AttainableSpec:
+    """Which chapter 5 findings a plant inside the sourced ranges meets.
+
+    Args:
+        samples: plants drawn inside the ranges, 1 to ``MAX_SAMPLES`` (each runs the eight runs).
+        seed: seed of the draws, >= 0 (same seed, same plants and results).
+    """
+
+    samples: int = 64
+    seed: int = 0
+
+    def validate(self) -> None:
+        """Every check (ValueError, one line naming the field)."""
+        if not 1 <= self.samples <= attainable.MAX_SAMPLES:
+            raise ValueError(f"--samples {self.samples}: must be in 1..{attainable.MAX_SAMPLES}")
+        if self.seed < 0:
+            raise ValueError(f"--seed {self.seed}: must be >= 0")
+
+
+def run_attainable(spec: AttainableSpec, cfg: TwinConfig, *, jobs: int = 1, progress=None) -> dict:
+    """Validate ``spec``, draw its plants and run the study (``progress(i, n)`` after each draw); the
+    summary of :func:`amr_twin.experiments.chapter5.attainable.summary`."""
+    spec.validate()
+    return attainable.summary(attainable.study(cfg, spec.samples, spec.seed, jobs=jobs, progress=progress))
+
+
 EXPERIMENTS.register("chapter5", Experiment("chapter5", Chapter5Spec, run, Chapter5Metrics,
                                             "thesis chapter 5's step experiments judged against its bands"))
+EXPERIMENTS.register("chapter5-attainable", Experiment("chapter5-attainable", AttainableSpec, run_attainable, dict,
+                                                       "which chapter 5 findings a plant inside the sourced "
+                                                       "ranges meets"))

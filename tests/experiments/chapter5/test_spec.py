@@ -1,9 +1,11 @@
 """Chapter 5's spec checks its runs and duration from Python, without the CLI."""
 
+import re
+
 import pytest
 
 from amr_twin.experiments.catalogue import experiments
-from amr_twin.experiments.chapter5.spec import Chapter5Spec
+from amr_twin.experiments.chapter5.spec import AttainableSpec, Chapter5Spec
 
 
 def test_the_runs_named_and_their_simulated_time():
@@ -28,3 +30,14 @@ def test_each_bad_field_is_refused_in_one_line_naming_it(spec, named):
 def test_the_registry_holds_every_experiment_with_a_spec():
     assert experiments().get("chapter5").spec is Chapter5Spec
     assert set(experiments().names()) >= {"chapter5", "fusion", "payload", "umbmark"}
+
+
+@pytest.mark.parametrize("spec, named", [
+    (AttainableSpec(samples=0), "--samples 0: must be in 1..512"),
+    (AttainableSpec(samples=513), "--samples 513: must be in 1..512"),
+    (AttainableSpec(seed=-1), "--seed -1: must be >= 0"),
+])
+def test_the_attainable_study_refuses_bad_draws_naming_the_field(spec, named):
+    AttainableSpec().validate()
+    with pytest.raises(ValueError, match=f"^{re.escape(named)}$"):
+        spec.validate()

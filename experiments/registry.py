@@ -1,4 +1,4 @@
-"""The experiments' registry: each experiment package registers its spec, run entry point and result.
+"""The experiments' registry: each package registers its spec, run entry point and result.
 
 A Python user builds a spec, calls its ``validate()`` (ValueError, one line naming the field) and
 runs it without the CLI; the CLI is an adapter over the same spec. A third party registers its own
@@ -35,4 +35,4 @@ class Experiment:
 
 
 EXPERIMENTS: Registry[Experiment] = Registry("experiment")
-"""The experiments by name, in registration order (:func:`amr_twin.experiments.catalogue.experiments`)."""
+"""The experiments by name, in registration order (filled: :func:`.catalogue.experiments`)."""

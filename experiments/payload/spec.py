@@ -22,7 +22,7 @@ MAX_SWEEP_POINTS = 10_000
 
 @dataclass(frozen=True)
 class SweepGrid:
-    """The sweep's values once parsed and checked, each kept once (in order), and the repeats dropped."""
+    """The sweep's values parsed and checked, each kept once (in order), and the repeats dropped."""
 
     masses: list[float]
     positions: list[str]
@@ -57,11 +57,12 @@ class PayloadSweepSpec:
         """ValueError unless ``duration_s`` is a run's length (:mod:`amr_twin.sim.bounds`)."""
         if not math.isfinite(self.duration_s):
             raise ValueError(f"--duration-s {self.duration_s}: must be a finite number")
-        if duration_problem(self.duration_s):
-            raise ValueError(f"--duration-s {self.duration_s:g}: {duration_problem(self.duration_s)}")
+        problem = duration_problem(self.duration_s)
+        if problem:
+            raise ValueError(f"--duration-s {self.duration_s:g}: {problem}")
 
     def grid(self, cfg: TwinConfig) -> SweepGrid:
-        """The masses, positions and commands parsed and checked against ``cfg``, without repeats."""
+        """The masses, positions and commands parsed and checked against ``cfg``, no repeats."""
         masses = point.parse_masses(self.masses)
         point.check_masses(self.masses, masses)
         positions = [p.strip() for p in self.positions.split(",") if p.strip()]
@@ -85,12 +86,14 @@ class PayloadSweepSpec:
         """ValueError when the sweep has more than :data:`MAX_SWEEP_POINTS` runs."""
         runs = self.runs(grid)
         if runs > MAX_SWEEP_POINTS:
-            what = f" x (--samples + 1): {runs} runs" if self.samples > 1 else f": {grid.points} points"
-            raise ValueError(f"--masses x --positions x --commands{what}; at most {MAX_SWEEP_POINTS} per sweep "
-                             f"(each is a simulation of {self.duration_s:g} s and a file in runs/): split the sweep")
+            what = (f" x (--samples + 1): {runs} runs" if self.samples > 1
+                    else f": {grid.points} points")
+            raise ValueError(f"--masses x --positions x --commands{what}; at most "
+                             f"{MAX_SWEEP_POINTS} per sweep (each is a simulation of "
+                             f"{self.duration_s:g} s and a file in runs/): split the sweep")
 
     def validate(self, cfg: TwinConfig) -> SweepGrid:
-        """Every check of the spec against ``cfg`` (ValueError, one line naming the field); the grid."""
+        """Every check against ``cfg`` (ValueError, one line naming the field); the grid."""
         self.check_duration()
         grid = self.grid(cfg)
         self.check_size(grid)
@@ -103,8 +106,8 @@ def run(spec: PayloadSweepSpec, cfg: TwinConfig, out_dir: Path, **options) -> di
     from amr_twin.experiments.payload import sweep
 
     grid = spec.validate(cfg)
-    return sweep.run(cfg, out_dir, grid.masses, grid.positions, grid.commands, duration_s=spec.duration_s,
-                     **options)
+    return sweep.run(cfg, out_dir, grid.masses, grid.positions, grid.commands,
+                     duration_s=spec.duration_s, **options)
 
 
 def _unique(items: list, key) -> tuple[list, list]:
@@ -117,6 +120,6 @@ def _unique(items: list, key) -> tuple[list, list]:
     return kept, dropped
 
 
-EXPERIMENTS.register("payload", Experiment("payload", PayloadSweepSpec, run, PointResult,
-                                           "step response, duty, support loads, tilt and slip against payload "
-                                           "mass and position"))
+EXPERIMENTS.register("payload", Experiment(
+    "payload", PayloadSweepSpec, run, PointResult,
+    "step response, duty, support loads, tilt and slip against payload mass and position"))

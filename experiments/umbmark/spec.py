@@ -1,4 +1,4 @@
-"""UMBmark's spec: the robots, the squares and the contact as one typed record, checked before any square.
+"""UMBmark's spec: the robots, the squares and the contact, checked before any square.
 
 :meth:`UmbmarkSpec.validate` refuses bad input with a ValueError of one line naming the field (the
 CLI's option), from Python as from ``amr-twin experiment umbmark``; :func:`run` drives and writes.
@@ -19,7 +19,8 @@ from amr_twin.model.yaml_file import read_yaml
 from amr_twin.recording.atomic_file import all_or_nothing
 
 RESERVED = ("wheel.tyre_slip", "sim.floor_friction_field")
-"""Settings the spec's own fields choose (``tyres``, ``floor_field``): a ``--set`` or ``--params`` of them is refused."""
+"""Settings ``tyres`` and ``floor_field`` choose: a ``--set`` or ``--params`` of them is refused."""
+_CHOSEN = "chosen by this command's --tyres/--no-tyres and --floor-field/--no-floor-field"
 
 
 @dataclass(frozen=True)
@@ -29,7 +30,8 @@ class UmbmarkSpec:
     Args:
         seeds: robots, ``A:B`` (both included), ``a,b,c`` or one seed (each draws its errors).
         runs: squares per direction and phase (Borenstein: 5), at most ``MAX_RUNS``.
-        tyres: the brush tyres (the same robots also driven with the rigid contact) or the rigid contact only.
+        tyres: the brush tyres (the same robots also driven with the rigid contact) or the
+            rigid contact only.
         floor_field: the floor's friction field, drawn per square.
     """
 
@@ -39,17 +41,16 @@ class UmbmarkSpec:
     floor_field: bool = True
 
     def validate(self, sets: list[str] = (), params: Path | None = None) -> list[int]:
-        """Every check (ValueError, one line naming the field); the seeds. ``sets`` (``key=value``) and the
-        ``params`` file may not set what the spec chooses (:data:`RESERVED`)."""
+        """Every check (ValueError, one line naming the field); the seeds. ``sets`` (``key=value``)
+        and the ``params`` file may not set what the spec chooses (:data:`RESERVED`)."""
         seed_list = parse_seeds(self.seeds)
         if not 1 <= self.runs <= MAX_RUNS:
-            raise ValueError(f"--runs {self.runs}: must be in 1..{MAX_RUNS} (squares per direction and phase, "
-                             "~1 s of CPU each)")
+            raise ValueError(f"--runs {self.runs}: must be in 1..{MAX_RUNS} (squares per direction "
+                             "and phase, ~1 s of CPU each)")
         for item in sets:
             key = item.partition("=")[0].strip()
             if key in RESERVED:
-                raise ValueError(f"--set {key}: chosen by this command's --tyres/--no-tyres and "
-                                 "--floor-field/--no-floor-field")
+                raise ValueError(f"--set {key}: {_CHOSEN}")
         if params is not None:
             _check_params(params)
         return seed_list
@@ -59,31 +60,34 @@ class UmbmarkSpec:
         return {"wheel.tyre_slip": self.tyres, "sim.floor_friction_field": self.floor_field}
 
     def squares(self, seeds: int) -> int:
-        """Squares driven for ``seeds`` robots: each way, before and after; with tyres the rigid contact's too."""
+        """Squares driven for ``seeds`` robots: each way, before and after; with tyres the rigid
+        contact's too."""
         return seeds * self.runs * 2 * (3 if self.tyres else 2)
 
 
 def _check_params(params: Path) -> None:
-    tree = read_yaml(params, "--params", lambda text: ValueError(text)) if params.is_file() else None
+    tree = read_yaml(params, "--params", ValueError) if params.is_file() else None
     for key in RESERVED:
         section, name = key.split(".")
         if isinstance(tree, dict) and isinstance(tree.get(section), dict) and name in tree[section]:
-            raise ValueError(f"--params {params}: {key} is chosen by this command's --tyres/--no-tyres and "
-                             "--floor-field/--no-floor-field")
+            raise ValueError(f"--params {params}: {key} is {_CHOSEN}")
 
 
-def run(spec: UmbmarkSpec, cfg: TwinConfig, out_dir: Path, jobs: int = 1, progress: bool = False) -> dict:
-    """Validate ``spec``, drive every robot's squares before and after its calibration (``jobs`` worker
-    processes) and write ``out_dir``'s report (:func:`amr_twin.experiments.umbmark.report.write`); its data."""
+def run(spec: UmbmarkSpec, cfg: TwinConfig, out_dir: Path, jobs: int = 1,
+        progress: bool = False) -> dict:
+    """Validate ``spec``, drive every robot's squares before and after its calibration (``jobs``
+    worker processes) and write ``out_dir``'s report
+    (:func:`amr_twin.experiments.umbmark.report.write`); its data."""
     seed_list = spec.validate()
     if any(_value(cfg, key) != value for key, value in spec.values().items()):
         cfg = with_values(cfg, spec.values())
     profile = Profile()
     main = [seeds.SeedJob(cfg, s, spec.runs, profile) for s in seed_list]
-    rigid = ([seeds.SeedJob(with_values(cfg, {"wheel.tyre_slip": False}), s, spec.runs, profile, calibrate=False)
-              for s in seed_list] if spec.tyres else [])
-    meta = {"seeds": seed_list, "runs": spec.runs, "tyres": spec.tyres, "floor_field": spec.floor_field,
-            "side_m": profile.side_m, "profile": {k: getattr(profile, k) for k in profile.__dataclass_fields__},
+    rigid = [seeds.SeedJob(with_values(cfg, {"wheel.tyre_slip": False}), s, spec.runs, profile,
+                           calibrate=False) for s in seed_list] if spec.tyres else []
+    meta = {"seeds": seed_list, "runs": spec.runs, "tyres": spec.tyres,
+            "floor_field": spec.floor_field, "side_m": profile.side_m,
+            "profile": {k: getattr(profile, k) for k in profile.__dataclass_fields__},
             "firmware": "improved"}
     done = seeds.run(main + rigid, jobs=jobs, progress=progress)
     with all_or_nothing():
@@ -95,6 +99,6 @@ def _value(cfg: TwinConfig, key: str):
     return getattr(getattr(cfg, section), name)
 
 
-EXPERIMENTS.register("umbmark", Experiment("umbmark", UmbmarkSpec, run, dict,
-                                           "UMBmark's return errors per robot, its odometry calibration and the "
-                                           "squares again"))
+EXPERIMENTS.register("umbmark", Experiment(
+    "umbmark", UmbmarkSpec, run, dict,
+    "UMBmark's return errors per robot, its odometry calibration and the squares again"))

@@ -21,13 +21,14 @@ def test_the_default_sweep_is_valid_and_its_grid_counted(cfg):
 
 
 def test_a_sweep_over_the_most_runs_is_refused_naming_its_fields(cfg):
-    spec = PayloadSweepSpec(masses="0:99:1", positions="center", commands="linear:0.7", samples=100)
+    one = {"positions": "center", "commands": "linear:0.7", "samples": 100}
+    spec = PayloadSweepSpec(masses="0:99:1", **one)
     with pytest.raises(ValueError) as refused:
         spec.validate(cfg)
-    assert str(refused.value).startswith("--masses x --positions x --commands x (--samples + 1): 10100 runs; "
-                                         f"at most {MAX_SWEEP_POINTS} per sweep")
+    assert str(refused.value).startswith("--masses x --positions x --commands x (--samples + 1): "
+                                         f"10100 runs; at most {MAX_SWEEP_POINTS} per sweep")
     assert "\n" not in str(refused.value)
-    PayloadSweepSpec(masses="0:98:1", positions="center", commands="linear:0.7", samples=100).validate(cfg)
+    PayloadSweepSpec(masses="0:98:1", **one).validate(cfg)  # 9999 runs
 
 
 @pytest.mark.parametrize("field, value, named", [
@@ -45,8 +46,10 @@ def test_each_bad_field_is_refused_in_one_line_naming_it(cfg, field, value, name
 
 
 def test_repeated_values_are_kept_once(cfg):
-    grid = PayloadSweepSpec(masses="10,10.0,20", positions="center,0:0", commands="linear:0.7").validate(cfg)
-    assert grid.masses == [10.0, 20.0] and grid.positions == ["center"] and grid.repeated == [10.0, "0:0"]
+    spec = PayloadSweepSpec(masses="10,10.0,20", positions="center,0:0", commands="linear:0.7")
+    grid = spec.validate(cfg)
+    assert grid.masses == [10.0, 20.0] and grid.positions == ["center"]
+    assert grid.repeated == [10.0, "0:0"]
 
 
 def test_the_registry_names_the_sweep_and_refuses_an_unknown_experiment():

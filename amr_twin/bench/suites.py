@@ -177,7 +177,7 @@ def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
 
     ``progress(text)``, when given, is told each stage as it starts (the command line prints it
     on stderr)."""
-    from amr_twin.experiments import fusion
+    from amr_twin.experiments.fusion import experiment as fusion
 
     say = progress or (lambda text: None)
     load_before = os.getloadavg()[0]

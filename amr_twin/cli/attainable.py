@@ -1,6 +1,6 @@
 """``amr-twin experiment chapter5-attainable``: which chapter 5 findings a plant inside its ranges meets.
 
-The study is :mod:`amr_twin.experiments.chapter5_attainable`; this module checks the options before the
+The study is :mod:`amr_twin.experiments.chapter5.attainable`; this module checks the options before the
 first simulation, shows progress on stderr and writes the JSON summary atomically.
 """
 
@@ -12,7 +12,7 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import JobsOpt, check_common, check_outputs
-from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.common import _config, _guard, checked, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
 
@@ -25,24 +25,23 @@ def attainable(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Draw plants inside the sourced ranges and count where each thesis finding of §5.1.3-5.1.4 holds."""
-    from amr_twin.experiments import chapter5_attainable as study
+    from amr_twin.experiments.chapter5 import attainable as study
+    from amr_twin.experiments.chapter5.spec import AttainableSpec, run_attainable
 
-    if not 1 <= samples <= study.MAX_SAMPLES:
-        fail(f"--samples {samples}: must be in 1..{study.MAX_SAMPLES}")
-    if seed < 0:
-        fail(f"--seed {seed}: must be >= 0")
+    spec = AttainableSpec(samples, seed)
+    checked(spec.validate)
     jobs, _ = check_common(jobs, "faithful", fail)
     if out is not None:
         check_outputs(fail, files={"--out": out})
     cfg = _config(config, params, set_)
 
     def work():
-        from amr_twin.experiments.executor import write_json
+        from amr_twin.experiments.runner.executor import write_json
 
         def progress(i: int, n: int) -> None:
             typer.echo(f"draw {i}/{n}", err=True)
 
-        s = study.summary(study.study(cfg, samples, seed, jobs=jobs, progress=progress))
+        s = run_attainable(spec, cfg, jobs=jobs, progress=progress)
         if out is not None:
             write_json(out, {"seed": seed, "ranges": study.ranges(cfg), **s})
         return s

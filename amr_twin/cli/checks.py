@@ -1,9 +1,9 @@
 """Checks of the experiment and sweep commands' options, each refusal one line (``fail``, exit 2).
 
 Numbers and folders are checked before any model is built: the firmware and
-``--jobs`` (:func:`amr_twin.base.process_pool.check_jobs`), durations, recording
-folders, every output (:mod:`amr_twin.recording.outputs`), repeated sweep values, the Dask
-scheduler.
+``--jobs`` (:func:`amr_twin.base.process_pool.check_jobs`), recording
+folders, every output (:mod:`amr_twin.recording.outputs`), the Dask scheduler. The experiments'
+own rules (durations, runs, seeds, routes, sweep sizes) live in their specs (``experiments/<name>/spec.py``).
 """
 
 from __future__ import annotations
@@ -14,9 +14,6 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.options import checked_firmware, checked_seed
-
-MAX_SWEEP_POINTS = 10_000
-"""Most points of one sweep: each is a simulation (~0.5 s of CPU for 8 s) and a file in runs/."""
 
 JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per usable core; at most that).")
 YesOpt = typer.Option(False, "--yes", help="Start without asking when the time estimated beforehand is above 10 min "
@@ -72,14 +69,6 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
         fail(str(exc))
 
 
-def check_duration(duration_s: Optional[float], fail) -> None:
-    """``--duration-s`` of an experiment's runs: a run's length (:mod:`amr_twin.sim.bounds`)."""
-    from amr_twin.sim.bounds import duration_problem
-
-    if duration_s is not None and duration_problem(duration_s):
-        fail(f"--duration-s {duration_s:g}: {duration_problem(duration_s)}")
-
-
 def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool = False, processes: int = 1,
                  what: str = "the run", rerun: bool = False) -> None:
     """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`, one per
@@ -108,7 +97,7 @@ def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
     import math
 
     from amr_twin.cli.path_options import get_current_context
-    from amr_twin.experiments.executor import EXECUTORS
+    from amr_twin.experiments.runner.executor import EXECUTORS
 
     if executor not in EXECUTORS:
         fail(f"--executor {executor!r}: must be one of {', '.join(EXECUTORS)}")
@@ -147,19 +136,9 @@ def check_outputs(fail, files: dict | None = None, folders: dict | None = None) 
         fail(str(exc))
 
 
-def unique(items: list, key) -> tuple[list, list]:
-    """``items`` without repeats (by ``key``), in order; and the repeats dropped."""
-    seen, kept, dropped = set(), [], []
-    for item in items:
-        k = key(item)
-        (dropped if k in seen else kept).append(item)
-        seen.add(k)
-    return kept, dropped
-
-
 def dask_client(scheduler: str, timeout_s: float, fail):
     """A connected ``distributed.Client``, or a one-line error and exit 2."""
-    from amr_twin.experiments.dask_cluster import ExecutorError, connect_dask
+    from amr_twin.experiments.runner.dask_cluster import ExecutorError, connect_dask
 
     try:
         return connect_dask(scheduler, timeout_s)

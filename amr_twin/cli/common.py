@@ -39,6 +39,14 @@ def fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
+def checked(check, *args):
+    """``check(*args)``'s value; its ValueError (an experiment spec's refusal) as :func:`fail`'s one line."""
+    try:
+        return check(*args)
+    except ValueError as exc:
+        fail(str(exc))
+
+
 def _start_pose(text: Optional[str], option: str = "--start",
                 hint: str = ", e.g. -7.5,0,0") -> Optional[tuple[float, float, float]]:
     """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error naming ``option``

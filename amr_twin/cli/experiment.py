@@ -21,9 +21,8 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.checks import (CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt, check_common,
-                                 check_duration, check_estimate, check_memory, check_outputs, check_record_folder,
-                                 parameter_draws)
-from amr_twin.cli.common import _config, _guard, fail
+                                 check_estimate, check_memory, check_outputs, check_record_folder, parameter_draws)
+from amr_twin.cli.common import _config, _guard, checked, fail
 from amr_twin.cli.attainable import attainable
 from amr_twin.cli.fusion import fusion
 from amr_twin.cli.navigation import navigation
@@ -65,56 +64,30 @@ def chapter5(
     With --samples N the runs are repeated with N parameter draws: each metric's median and
     90 % interval beside the thesis' value, and how many draws meet its band.
     """
-    from amr_twin.experiments import chapter5
+    from amr_twin.experiments.chapter5.spec import Chapter5Spec, run
 
     jobs, firmware = check_common(jobs, firmware, fail, sketch)
-    check_duration(duration_s, fail)
-    try:
-        numbers = None if runs is None else [int(v) for v in runs.split(",")]
-    except ValueError:
-        fail(f"--runs {runs!r}: expected run numbers 1..8 separated by commas")
-    if numbers is not None and not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
-        fail(f"--runs {runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}")
-    if numbers is not None and len(set(numbers)) != len(numbers):  # run once, silently
-        fail(f"--runs {runs!r}: a run is named twice")
+    spec = Chapter5Spec(runs, duration_s, firmware)
+    checked(spec.validate)
     check_record_folder("--record", record, fail, "run<N>.rrd")
     check_record_folder("--mcap", mcap, fail, "run<N>.mcap")
-    check_memory(duration_s or max(r.duration_s for r in chapter5.RUNS), fail, recorded=bool(record or mcap),
-                 processes=jobs, what="each run", rerun=record is not None)
+    check_memory(spec.longest_run_s(), fail, recorded=bool(record or mcap), processes=jobs, what="each run",
+                 rerun=record is not None)
     check_outputs(fail, folders={"--out": out, "--record": record, "--mcap": mcap})
     cfg = _config(config, params, set_)
     draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
-    one_pass_s = sum(duration_s or r.duration_s for r in chapter5.RUNS if numbers is None or r.number in numbers)
-    passes = 1 + (samples if draws is not None else 0) + (2 if firmware.startswith("avr") else 0) \
-        + (1 if numbers is None and duration_s is None else 0)  # the rolling-resistance study: at most a pass
+    passes = spec.passes(samples if draws is not None else 0)
     check_estimate(f"experiment chapter5: {passes} pass{'es' if passes != 1 else ''} of the runs",
-                   one_pass_s * passes, "chapter5", jobs, firmware, yes, fail)
+                   spec.pass_s() * passes, "chapter5", jobs, firmware, yes, fail)
 
     def work():  # the recordings are renamed with the report, at the end: none if interrupted
-        from amr_twin.base.atomic_file import all_or_nothing
-
-        with all_or_nothing():
-            results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
-                                   progress=progress, record_dir=record, mcap_dir=mcap,
-                                   reference_firmware="faithful" if firmware.startswith("avr") else None)
-            if numbers is None and duration_s is None and firmware == "faithful":  # the runs the study judged
-                from amr_twin.experiments.chapter5_attainable import committed
-
-                results["attainable"] = committed(cfg)
-            if draws is not None:
-                from amr_twin.experiments import chapter5_spread
-
-                results["spread"] = chapter5_spread.run(cfg, draws, jobs=jobs, firmware=firmware,
-                                                        runs=numbers, duration_s=duration_s, progress=progress)
-                results["spread_summary"] = chapter5_spread.summarise(results, results["spread"])
-            chapter5.plot(results, out)
-            return chapter5.report(results, out)
+        return run(spec, cfg, out, jobs=jobs, progress=progress, record_dir=record, mcap_dir=mcap, draws=draws)
 
     data = _guard(work)
-    from amr_twin.experiments.chapter5_findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, VALIDATION_DOC,
+    from amr_twin.experiments.chapter5.findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, VALIDATION_DOC,
                                                         VALIDATION_SECTION)
-    from amr_twin.experiments.chapter5_findings import lines as finding_lines
-    from amr_twin.experiments.chapter5_report import passed_by_metric
+    from amr_twin.experiments.chapter5.findings import lines as finding_lines
+    from amr_twin.experiments.chapter5.report import passed_by_metric
 
     written = data.as_json()
     typer.echo(f"chapter 5 findings ({firmware} firmware; details in {out}/report.md):")
@@ -158,7 +131,7 @@ def faults_experiment(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Inject each kind of fault under both firmwares and report what they do (docs/faults.md)."""
-    from amr_twin.experiments import faults, faults_report
+    from amr_twin.experiments.faults import experiment as faults, report as faults_report
 
     jobs, _ = check_common(jobs, "faithful", fail)
     check_outputs(fail, folders={"--out": out})

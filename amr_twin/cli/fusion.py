@@ -16,8 +16,8 @@ import typer
 
 from amr_twin.cli.checks import (JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_memory,
                                  check_outputs, dask_client)
-from amr_twin.cli.common import _config, _guard, fail
-from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, checked_seed, firmware_option
+from amr_twin.cli.common import _config, _guard, checked, fail
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, firmware_option
 
 
 def fusion(
@@ -49,68 +49,42 @@ def fusion(
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Drive a route and compare raw odometry with the four fusion architectures of §6.2.2."""
-    from amr_twin.controllers.route import RouteError, load_route
-    from amr_twin.model.build import BuildError
-    from amr_twin.experiments import fusion
-    from amr_twin.experiments.fusion_seeds import parse_seeds
+    from amr_twin.experiments.fusion.experiment import drive_bound_s
+    from amr_twin.experiments.fusion.spec import FusionSpec
 
     jobs, firmware = check_common(jobs, firmware, fail)
-    if seed is not None and seeds is not None:
-        fail("--seed and --seeds: give one of them")
-    try:
-        seed_list = parse_seeds(seeds) if seeds is not None else [0 if seed is None else seed]
-    except ValueError as exc:
-        fail(str(exc))
-    checked_seed(seed, fail)
+    spec = FusionSpec(route, seed, seeds, firmware, robot_errors)
+    seed_list = checked(spec.seed_list)
     many = len(seed_list) > 1
     if many and (record is not None or mcap is not None):
         fail("--record/--mcap record one drive: use --seed N with them, not --seeds")
     check_executor(executor, scheduler, fail)
-    route_path = fusion.route_file(route)
-    try:
-        loaded = load_route(route_path)
-    except (RouteError, OSError) as exc:
-        known = ", ".join(fusion.route_names())
-        fail(f"--route {route}: {exc}" if route_path.exists() or route is None
-             else f"--route {route}: no such route file, nor a route of the twin ({known})")
+    loaded = checked(spec.load_route)
     check_outputs(fail, files={"--record": record, "--mcap": mcap}, folders={"--out": out})
     cfg = _config(config, params, set_)
-    try:  # the drive's simulated time bounded, every point in the world's free space
-        fusion.check_route(cfg, loaded)
-    except (RouteError, BuildError) as exc:
-        fail(f"--route {route_path}: {exc}")
+    checked(spec.check_route, cfg, loaded)
     client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
     workers = 1 if not many else jobs if client is None else max(1, sum(client.nthreads().values()))
-    drive_s = fusion.REST_S + fusion.route_length_m(loaded) / loaded.max_speed_m_s + fusion.TAIL_S
     try:
         # a drive keeps every sensor message for its estimators, as a recording does
-        check_memory(fusion.drive_bound_s(loaded), fail, recorded=True, sensors=True,
+        check_memory(drive_bound_s(loaded), fail, recorded=True, sensors=True,
                      processes=workers if client is None else 1, what="each drive")
-        check_estimate(f"experiment fusion: {len(seed_list)} drive{'s' if many else ''} of {route_path.stem}",
-                       drive_s * len(seed_list), "fusion", workers, firmware, yes, fail)
+        check_estimate(f"experiment fusion: {len(seed_list)} drive{'s' if many else ''} of "
+                       f"{spec.route_path().stem}", spec.drive_s(loaded) * len(seed_list), "fusion", workers,
+                       firmware, yes, fail)
         if many:
-            _many(cfg, route_path, seed_list, firmware, robot_errors, jobs, client, progress, out, _guard)
+            _many(spec, cfg, seed_list, jobs, client, progress, out, _guard)
         else:
-            _one(cfg, route_path, seed_list[0], firmware, robot_errors, progress, record, mcap, out, _guard)
+            _one(spec, cfg, seed_list, progress, record, mcap, out, _guard)
     finally:
         if client is not None:
             client.close()
 
 
-def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, progress: bool, record, mcap, out: Path,
-         guard) -> None:
-    from amr_twin.experiments import fusion, fusion_report
+def _one(spec, cfg, seeds: list[int], progress: bool, record, mcap, out: Path, guard) -> None:
+    from amr_twin.experiments.fusion.spec import drive
 
-    def work():
-        from amr_twin.base.atomic_file import all_or_nothing
-
-        results = fusion.run(cfg, route_path, seed=seed, firmware=firmware, progress=progress,
-                             rrd_path=record, mcap_path=mcap, robot_errors=robot_errors)
-        with all_or_nothing():
-            fusion_report.plot(results, out)
-            return fusion_report.report(results, out)
-
-    data = guard(work)
+    data = guard(lambda: drive(spec, cfg, out, seeds, progress=progress, record=record, mcap=mcap))
     typer.echo(f"{'architecture':14s} {'ATE m':>7s} {'aligned':>8s} {'RPE m/m':>8s} {'RPE deg/m':>9s} "
                f"{'final m':>8s} {'RMS yaw deg':>11s}")
     for name, a in data.architectures.items():
@@ -125,21 +99,15 @@ def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, pr
                f"truth.tum and one .tum per architecture (evo_ape tum {out}/truth.tum {out}/odom.tum)")
 
 
-def _many(cfg, route_path: Path, seeds: list[int], firmware: str, robot_errors: bool, jobs: int, client,
-          progress: bool, out: Path, guard) -> None:
+def _many(spec, cfg, seeds: list[int], jobs: int, client, progress: bool, out: Path, guard) -> None:
     import time
 
-    from amr_twin.experiments import fusion_seeds
-    from amr_twin.experiments.fusion_seeds_report import cell
+    from amr_twin.experiments.fusion.seeds_report import cell
+    from amr_twin.experiments.fusion.spec import drive
 
     def work():
-        from amr_twin.base.atomic_file import all_or_nothing
-
         t0 = time.perf_counter()
-        results = fusion_seeds.run(cfg, route_path, seeds, firmware=firmware, robot_errors=robot_errors,
-                                   jobs=jobs, client=client, progress=progress)
-        with all_or_nothing():
-            return fusion_seeds.write(results, out), time.perf_counter() - t0
+        return drive(spec, cfg, out, seeds, jobs=jobs, client=client, progress=progress), time.perf_counter() - t0
 
     data, wall_s = guard(work)
     typer.echo(f"{'architecture':14s} {'ATE m, mean ± sd (range)':32s} {'aligned':32s} {'RPE m / 1 m':32s}")

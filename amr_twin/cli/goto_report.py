@@ -14,7 +14,7 @@ def clearance(cfg, world: str, run) -> tuple[float | None, float | None]:
     ``(None, None)`` in a world without any."""
     import numpy as np
 
-    from amr_twin.experiments.navigation_metrics import footprint_clearance_m, world_obstacle_boxes
+    from amr_twin.experiments.navigation.metrics import footprint_clearance_m, world_obstacle_boxes
     from amr_twin.navigation.footprint import robot_footprint
 
     clearance = footprint_clearance_m(run.pose_true[::10], robot_footprint(cfg), world_obstacle_boxes(cfg, world))

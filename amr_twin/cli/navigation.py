@@ -96,7 +96,7 @@ def navigation(
         except MapError as exc:
             fail(f"--slam-map {exc}")
     elif "slam" in kinds:
-        from amr_twin.experiments.navigation_map import mapping_route
+        from amr_twin.experiments.navigation.map import mapping_route
         try:
             mapping_route(world)
         except ValueError as exc:
@@ -110,12 +110,12 @@ def navigation(
     client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
 
     def work():
-        from amr_twin.experiments import navigation, navigation_report
+        from amr_twin.experiments.navigation import experiment as navigation, report as navigation_report
         from amr_twin.base.atomic_file import all_or_nothing
 
         out.mkdir(parents=True, exist_ok=True)
         if halls:
-            from amr_twin.experiments import navigation_generated_report as hall_report
+            from amr_twin.experiments.navigation import generated_report as hall_report
 
             data = navigation.run_halls(cfg, halls, tuning, episodes, seed=seed, localisation=localisation,
                                         controller=controller, firmware=firmware, jobs=jobs, client=client,

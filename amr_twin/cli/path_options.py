@@ -76,7 +76,7 @@ def _mission_files(value) -> list[Path]:
 
 
 def _route_file(value) -> list[Path]:
-    from amr_twin.experiments.fusion import route_file
+    from amr_twin.experiments.fusion.experiment import route_file
 
     return [route_file(value)]
 

@@ -11,16 +11,15 @@ sweep records only the points it simulates.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Optional
 
 import typer
 
-from amr_twin.cli.checks import (MAX_SWEEP_POINTS, CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt,
-                                 check_common, check_duration, check_estimate, check_executor, check_memory,
-                                 check_outputs, check_record_folder, dask_client, parameter_draws, unique)
-from amr_twin.cli.common import _config, _guard, fail
+from amr_twin.cli.checks import (CalibrationOpt, JobsOpt, SamplerOpt, SamplesOpt, SeedOpt, YesOpt, check_common,
+                                 check_estimate, check_executor, check_memory, check_outputs, check_record_folder,
+                                 dask_client, parameter_draws)
+from amr_twin.cli.common import _config, _guard, checked, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, firmware_option, sketch_option
 
 app = typer.Typer(no_args_is_help=True, help="Parameter sweeps over many simulations.")
@@ -35,8 +34,6 @@ def _safe_interval(results: dict, position: str) -> str:
     kg = {float("-inf"): "none"}
     return (f"; over {answer['n']} draws: median {kg.get(answer['median'], answer['median'])} kg "
             f"(90 %: {kg.get(answer['low'], answer['low'])} - {kg.get(answer['high'], answer['high'])})")
-
-
 
 
 @app.command("payload")
@@ -76,39 +73,20 @@ def payload(
     every metric as median and 90 % interval, the highest safe payload per position as an
     interval, and the parameters that move each answer (summary.md, sensitivity.csv).
     """
-    from amr_twin.experiments import payload_point, payload_sweep, payload_sweep_report
+    from amr_twin.experiments.payload import sweep as payload_sweep, sweep_report as payload_sweep_report
+    from amr_twin.experiments.payload.spec import PayloadSweepSpec
 
     jobs, firmware = check_common(jobs, firmware, fail, sketch)
     check_executor(executor, scheduler, fail)
-    if not math.isfinite(duration_s):
-        fail(f"--duration-s {duration_s}: must be a finite number")
-    check_duration(duration_s, fail)
+    spec = PayloadSweepSpec(masses, positions, commands, duration_s, samples)
+    checked(spec.check_duration)
     cfg = _config(config, params, set_)
-    try:
-        mass_list = payload_point.parse_masses(masses)
-        payload_point.check_masses(masses, mass_list)
-        position_list = [p.strip() for p in positions.split(",") if p.strip()]
-        for p in position_list:
-            payload_point.check_on_deck(cfg, p)
-        command_list = [c.strip() for c in commands.split(",") if c.strip()]
-        for c in command_list:
-            payload_point.check_accepted(cfg, c)
-    except ValueError as exc:
-        fail(str(exc))
-    if not position_list or not command_list:
-        fail("--positions and --commands must name at least one item each")
-    mass_list, dup_m = unique(mass_list, float)
-    position_list, dup_p = unique(position_list, lambda p: payload_point.position_xy_m(cfg, p))
-    command_list, dup_c = unique(command_list, payload_point.parse_command)
-    if dup_m or dup_p or dup_c:
-        typer.echo("note: repeated sweep values are simulated once: "
-                   + ", ".join(str(v) for v in dup_m + dup_p + dup_c), err=True)
-    n_points = len(mass_list) * len(position_list) * len(command_list)
-    runs = n_points * (1 + samples if samples > 1 else 1)
-    if runs > MAX_SWEEP_POINTS:
-        what = f" x (--samples + 1): {runs} runs" if samples > 1 else f": {n_points} points"
-        fail(f"--masses x --positions x --commands{what}; at most {MAX_SWEEP_POINTS} per sweep "
-             f"(each is a simulation of {duration_s:g} s and a file in runs/): split the sweep")
+    grid = checked(spec.grid, cfg)
+    if grid.repeated:
+        typer.echo("note: repeated sweep values are simulated once: " + ", ".join(str(v) for v in grid.repeated),
+                   err=True)
+    checked(spec.check_size, grid)
+    n_points, runs = grid.points, spec.runs(grid)
     draws = parameter_draws(samples, seed, sampler, calibration, config, params, set_, fail)
     check_record_folder("--record", record, fail, "<key>.rrd")
     check_record_folder("--mcap", mcap, fail, "<key>.mcap")
@@ -126,11 +104,11 @@ def payload(
     def work():
         from amr_twin.base.atomic_file import all_or_nothing
 
-        results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
+        results = payload_sweep.run(cfg, out, grid.masses, grid.positions, grid.commands, duration_s=duration_s,
                                     jobs=jobs, firmware=firmware, progress=progress, client=client,
                                     record_dir=record, mcap_dir=mcap, draws=draws, before=estimate)
         if draws is not None:
-            from amr_twin.experiments import payload_spread_report as spread_report
+            from amr_twin.experiments.payload import spread_report
 
             spread_report.analyse(results)
             with all_or_nothing():

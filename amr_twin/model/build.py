@@ -103,7 +103,7 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
 
 def world_model(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
     """The world alone, compiled (no robot): where actors may walk (:mod:`amr_twin.model.actor_space`), where a
-    route may go (:func:`amr_twin.experiments.fusion.check_route`)."""
+    route may go (:func:`amr_twin.experiments.fusion.experiment.check_route`)."""
     try:
         return _world_spec(cfg, world).compile()
     except BuildError:

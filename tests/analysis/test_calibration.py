@@ -45,12 +45,18 @@ def test_fit_recovers_driver_gain_from_a_log(tmp_path):
 
 
 def test_shipped_plant_gives_the_residual_amr_yaml_records():
-    """The chi^2 written in the calibrated parameters' sources is what the shipped values give."""
+    """The chi^2 written where the calibrated parameters' sources lead (their section of
+    models/amr/sources.md) is what the shipped values give."""
     tree = yaml.safe_load((MODEL_DIR / "amr.yaml").read_text())
-    sources = [tree[s][k]["source"] for s, k in (("driver_left", "gain"), ("driver_right", "gain"), ("motor_left", "ke_v_s_rad"),
-                                                   ("motor_right", "friction_nm"))]
-    recorded = {float(re.search(r"chi\^2 ([0-9.]+)", s).group(1)) for s in sources}
-    assert len(recorded) == 1  # one fit
+    sources = {tree[s][k]["source"] for s, k in (("driver_left", "gain"), ("driver_right", "gain"),
+                                                  ("motor_left", "ke_v_s_rad"), ("motor_right", "friction_nm"))}
+    assert len(sources) == 1  # one fit, one section
+    anchor = re.search(r"sources\.md#([\w-]+)", sources.pop()).group(1)
+    text = (MODEL_DIR / "sources.md").read_text()
+    heading = next(h for h in re.findall(r"^#+ (.*)$", text, re.M) if h.lower().replace(" ", "-") == anchor)
+    section = text.split(heading, 1)[1].split("\n#", 1)[0]
+    recorded = {float(v) for v in re.findall(r"chi\^2 ([0-9.]+)", section)}
+    assert len(recorded) == 1
     assert thesis_residual(load_config()) == pytest.approx(recorded.pop(), abs=0.15)
 
 

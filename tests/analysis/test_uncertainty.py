@@ -150,7 +150,7 @@ def test_rank_correlations_and_intervals():
 def test_the_caster_set_up_drives_the_static_load_split(space):
     """20 kg at the rear edge: over 48 draws of the whole plant, the front casters' static load is
     moved most by caster.drop_m (the balls' height against the tyres)."""
-    from amr_twin.experiments.payload_point import position_xy_m
+    from amr_twin.experiments.payload.point import position_xy_m
 
     d = space.draw(48, seed=11)
     loads = []

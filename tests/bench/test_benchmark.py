@@ -261,7 +261,7 @@ def test_the_suites_say_each_stage_as_it_starts(monkeypatch):
     from types import SimpleNamespace
 
     from amr_twin.bench import suites as sb
-    from amr_twin.experiments import fusion
+    from amr_twin.experiments.fusion import experiment as fusion
 
     said, ran = [], []
 

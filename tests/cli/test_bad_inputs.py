@@ -83,7 +83,7 @@ def _route(tmp_path: Path, name: str, **changes) -> Path:
 
 
 def test_fusion_routes_outside_the_world_or_too_long_are_refused_before_the_drive(tmp_path, refused, monkeypatch):
-    monkeypatch.setattr("amr_twin.experiments.fusion.drive", None)  # were one not refused, it would fail at once
+    monkeypatch.setattr("amr_twin.experiments.fusion.experiment.drive", None)  # were one not refused, it would fail at once
     out = tmp_path / "never"
     goal = "  - [6.2, -1.4]\n"
     cases = {"outside": ("  - [60.0, -1.4]\n", "waypoints_xy_m[5] (60, -1.4) lies outside the world of warehouse"),
@@ -118,17 +118,17 @@ def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeyp
     def simulate(*_args, **_kwargs):
         raise Started
 
-    monkeypatch.setattr("amr_twin.experiments.executor.run_all", simulate)  # no point is simulated here
+    monkeypatch.setattr("amr_twin.experiments.runner.executor.run_all", simulate)  # no point is simulated here
     refused(args, "sweep payload: 9045 points to simulate (of 9045): about ", "add --yes")
     with pytest.raises(Started):  # with --yes the points start
         _call([*args, "--yes"])
     assert "note: sweep payload: 9045 points to simulate" in capsys.readouterr().err
-    monkeypatch.setattr("amr_twin.experiments.chapter5.run", simulate)
-    monkeypatch.setattr("amr_twin.experiments.fusion_seeds.run", simulate)
+    monkeypatch.setattr("amr_twin.experiments.chapter5.experiment.run", simulate)
+    monkeypatch.setattr("amr_twin.experiments.fusion.seeds.run", simulate)
     refused(["experiment", "chapter5", "--out", tmp_path / "c5", "--samples", 4096], "experiment chapter5: ",
             "add --yes")
     refused(["experiment", "fusion", "--out", tmp_path / "f", "--seeds", "0:999"], "1000 drives", "add --yes")
-    monkeypatch.setattr("amr_twin.experiments.navigation.run", simulate)
+    monkeypatch.setattr("amr_twin.experiments.navigation.experiment.run", simulate)
     refused(["experiment", "navigation", "--out", tmp_path / "n", "--episodes", 1000, "--maps", "true"],
             "experiment navigation: 1000 episode(s) on 1 map(s): about ", "add --yes")
 
@@ -301,9 +301,9 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path, tmp_path_fac
 
 
 @pytest.mark.parametrize("args, target", [
-    (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1", "--no-progress"], "amr_twin.experiments.chapter5.run"),
+    (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1", "--no-progress"], "amr_twin.experiments.chapter5.experiment.run"),
     (["sweep", "payload", "--out", "{tmp}/s", "--masses", "0", "--positions", "center", "--commands", "stop",
-      "--no-progress"], "amr_twin.experiments.payload_sweep.run"),
+      "--no-progress"], "amr_twin.experiments.payload.sweep.run"),
     (["run", "stop", "--duration-s", "1", "--csv", "{tmp}/r.csv"], "amr_twin.recording.run.run_mission"),
 ])
 def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refused, monkeypatch):
@@ -386,8 +386,8 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
     (["run", "stop", "--duration-s", "abc"], ["Invalid value for '--duration-s': expects a number"]),
 ])
 def test_refusals_name_the_option_and_what_is_allowed(args, words, tmp_path, refused, monkeypatch):
-    for work in ("amr_twin.experiments.navigation.run", "amr_twin.experiments.payload_sweep.run",
-                 "amr_twin.experiments.chapter5.run"):
+    for work in ("amr_twin.experiments.navigation.experiment.run", "amr_twin.experiments.payload.sweep.run",
+                 "amr_twin.experiments.chapter5.experiment.run"):
         monkeypatch.setattr(work, None)  # were the command not refused, its work would fail at once
     line = refused([str(a).format(tmp=tmp_path) for a in args], *words)
     assert not any(w in line for w in ("Input should", "NoneType", "could not convert", "expected non-negative"))
@@ -436,7 +436,7 @@ def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(tmp_pat
 
 
 def test_umbmark_refuses_a_params_file_setting_what_its_options_choose(tmp_path, refused, monkeypatch):
-    monkeypatch.setattr("amr_twin.experiments.umbmark_seeds.run", None)  # were it not refused, it would fail at once
+    monkeypatch.setattr("amr_twin.experiments.umbmark.seeds.run", None)  # were it not refused, it would fail at once
     params = _write(tmp_path / "p.yaml", "wheel:\n  tyre_slip: false\n")  # replaced by --tyres without a word
     refused(["experiment", "umbmark", "--out", tmp_path / "u", "--params", params],
             f"--params {params}: wheel.tyre_slip is chosen by this command's --tyres/--no-tyres")

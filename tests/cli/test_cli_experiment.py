@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
-from amr_twin.experiments import chapter5
+from amr_twin.experiments.chapter5 import experiment as chapter5
 
 CH5_RUNS, CH5_DURATION_S = [1, 3], 2.0
 
@@ -86,7 +86,7 @@ def test_chapter5_one_recording_per_run(chapter5_cli):
 def test_chapter5_terminal_opens_with_the_findings_then_the_counts(chapter5_cli):
     """The findings first, one line each as in report.md, the pointer to docs/validation.md, then one
     line of passes per metric instead of a MISS line per run and wheel."""
-    from amr_twin.experiments.chapter5_findings import VALIDATION_DOC, lines
+    from amr_twin.experiments.chapter5.findings import VALIDATION_DOC, lines
 
     base, res = chapter5_cli
     found = json.loads((base / "out" / "metrics.json").read_text())["findings"]

@@ -10,7 +10,8 @@ COUNT_THREADS = "import os, numpy; print(len(os.listdir('/proc/self/task')))"
 
 
 def _threads(code: str, **env) -> int:
-    base = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    base = {k: v for k, v in os.environ.items()  # what the caller (a Dask test before) exported
+            if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
     out = subprocess.run([sys.executable, "-c", code], env={**base, **env}, capture_output=True, text=True, check=True)
     return int(out.stdout.split()[-1])
 

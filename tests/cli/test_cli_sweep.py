@@ -9,8 +9,8 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
-from amr_twin.experiments import payload_sweep as ps
-from amr_twin.experiments.payload_point import Point
+from amr_twin.experiments.payload import sweep as ps
+from amr_twin.experiments.payload.point import Point
 from amr_twin.model.config import load_config
 from test_cli_experiment import _without_wall, rrd_summary
 

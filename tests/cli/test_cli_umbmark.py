@@ -5,7 +5,7 @@ What the case must show, each a figure a user reads off the report: the calibrat
 each robot's odometry reduces its E_max,syst (Borenstein's claim, here on every seed), UMBmark
 finds the robot's drawn wheel diameters, the files are there and agree (the YAML the odometry
 node reads is the JSON's), and the same robots are driven with the rigid contact. (The spreads
-need several runs a direction: tests/experiments/test_umbmark_seeds.py.)"""
+need several runs a direction: tests/experiments/umbmark/test_seeds.py.)"""
 
 import json
 
@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
 from amr_twin.controllers.odometry_calibration import load
-from amr_twin.experiments import fusion_robot
+from amr_twin.experiments.fusion import robot as fusion_robot
 from amr_twin.model.config import load_config
 
 SEEDS = [0, 1, 2]

@@ -76,7 +76,7 @@ def edges_published(pubs, topic="wheel0_Vel"):
 def test_published_means_count_every_edge():
     """Speeding up, slowing down, stopping, starting again: the samples add up to the edges, so the
     wheel odometry (which takes a sample for the mean since the previous one) counts every edge.
-    (tests/experiments/test_umbmark_square.py: what the odometry lost without it.)"""
+    (tests/experiments/umbmark/test_square.py: what the odometry lost without it.)"""
     clock, fw, pubs = make()
     for rpm, t_end in ((5.0, 600_000), (30.0, 1_300_000), (80.0, 2_100_000), (12.0, 2_800_000),
                        (3.0, 3_500_000)):

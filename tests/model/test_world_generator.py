@@ -18,7 +18,7 @@ SEEDS = (0, 3, 5, 8, 11, 17)  # tuning seeds 0-4 and held-out ones alike
 
 
 def test_the_same_seed_gives_the_same_bytes_in_another_process_and_other_seeds_differ(tmp_path):
-    from amr_twin.experiments.navigation_generated import write_world
+    from amr_twin.experiments.navigation.generated import write_world
 
     code = "from amr_twin.model.generated_world import mjcf; import sys; sys.stdout.write(mjcf('generated:7?door=0.9'))"
     other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout

@@ -37,7 +37,7 @@ def test_a_goal_without_yaw_is_judged_on_position_and_other_outcomes_are_kept():
 def test_the_experiment_counts_success_by_the_truth():
     """An episode the navigator (and its outcome) calls succeeded but whose true pose ended 0.3 m off is a failure
     in the experiment's metrics, with both final errors in its row."""
-    from amr_twin.experiments.navigation_metrics import measure
+    from amr_twin.experiments.navigation.metrics import measure
 
     cfg = load_config()
     t = np.arange(0.0, 10.0, 0.01)

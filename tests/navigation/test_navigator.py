@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from amr_twin.experiments.navigation_metrics import PERSON_HALF_M, footprint_clearance_m
+from amr_twin.experiments.navigation.metrics import PERSON_HALF_M, footprint_clearance_m
 from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
 from amr_twin.model.worlds import Obstacle, load_map, wall_boxes, world_path

@@ -167,7 +167,7 @@ def test_a_person_giving_way_beside_the_robot_keeps_their_body_0_3_m_from_its_fo
     body 0.275 m from the footprint at 65 deg."""
     from shapely.geometry import Polygon
 
-    from amr_twin.experiments.navigation_metrics import PERSON_HALF_M
+    from amr_twin.experiments.navigation.metrics import PERSON_HALF_M
     from amr_twin.navigation.footprint import robot_footprint
 
     stop_m = 0.6

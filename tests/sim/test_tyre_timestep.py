@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from amr_twin.experiments import chapter5
+from amr_twin.experiments.chapter5 import experiment as chapter5
 from amr_twin.model.config import load_config
 
 STIFF = ["wheel.slip_stiffness_per_n=25", "wheel.relaxation_length_longitudinal_m=0.02",

@@ -1,0 +1,1 @@
+"""The documents' generated figures and texts, written from committed results."""

@@ -1,0 +1,1 @@
+"""The fault study: what each firmware does under each fault."""

@@ -1,0 +1,1 @@
+"""Thesis chapter 6 in the twin: one warehouse drive, five localisation estimates."""

@@ -1,0 +1,232 @@
+"""Figures and tables of the fusion experiment: the twin's own fig. 6.8.
+
+:func:`plot` draws ``trajectories.png`` (the route, the true path and the five
+estimates over the warehouse) and ``errors.png`` (position and heading error
+against time); :func:`report` saves the map (``map.yaml``, ``map.pgm``,
+``map.png``), judges it, and writes ``metrics.json`` and ``report.md``. Every
+file goes through a temporary file and a rename.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from amr_twin.experiments.runner.executor import save_figure, write_json, write_text
+from amr_twin.experiments.fusion.experiment import ARCHITECTURES, FusionResults
+from amr_twin.experiments.fusion.metrics import LIDAR_ATE_MAX_M, FusionMetrics, metrics
+from amr_twin.experiments.fusion.map import agreement
+from amr_twin.analysis import se2, tum
+from amr_twin.base import atomic_file
+
+COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",
+           "odom+uwb+imu": "tab:blue"}
+
+
+def _draw_world(ax, results: FusionResults) -> None:
+    from matplotlib.patches import Rectangle
+    from matplotlib.transforms import Affine2D
+
+    b = results.boxes
+    for (cx, cy), (hx, hy), yaw in zip(b.centre_xy_m, b.half_xy_m, b.yaw_rad):
+        rect = Rectangle((-hx, -hy), 2 * hx, 2 * hy, color="0.75", lw=0)
+        rect.set_transform(Affine2D().rotate(yaw).translate(cx, cy) + ax.transData)
+        ax.add_patch(rect)
+
+
+def plot(results: FusionResults, out: Path) -> list[Path]:
+    """Write ``trajectories.png`` and ``errors.png`` into ``out``; return their paths."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(14, 7.5), layout="constrained")
+    _draw_world(ax, results)
+    route = np.vstack([np.asarray(results.route.start_xy_yaw[:2])[None], results.route.waypoints_xy_m])
+    ax.plot(route[:, 0], route[:, 1], ":", color="0.4", lw=1, label="route")
+    ax.plot(results.pose_true[:, 0], results.pose_true[:, 1], "k-", lw=2.2, label="true path")
+    for name in ARCHITECTURES:
+        est = results.estimates[name]
+        e = est.errors
+        ax.plot(est.pose[:, 0], est.pose[:, 1], "-", lw=1.1, color=COLOURS[name],
+                label=f"{name}: ATE {e.ate_m:.3f} m, final {e.final_pos_err_m:.2f} m")
+    anchors = results.anchors_xy_m
+    if anchors is not None and len(anchors):
+        ax.plot(anchors[:, 0], anchors[:, 1], "^", color="tab:purple", ms=9, label="UWB anchors")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x, m (map)")
+    ax.set_ylabel("y, m (map)")
+    ax.set_title(f"Fusion architectures on the {results.estimates['odom'].errors.length_m:.0f} m route "
+                 f"`{results.route.name}` (seed {results.seed}; grey: the world at LiDAR height)")
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
+    paths = [out / "trajectories.png"]
+    save_figure(fig, paths[0])
+
+    fig, (ax_p, ax_y) = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True, layout="constrained")
+    for name in ARCHITECTURES:
+        est = results.estimates[name]
+        t, ep, ey = _errors_in_time(results, est)
+        ax_p.plot(t, ep, color=COLOURS[name], lw=1, label=name)
+        ax_y.plot(t, np.degrees(ey), color=COLOURS[name], lw=1, label=name)
+    ax_p.set_ylabel("position error, m")
+    ax_y.set_ylabel("heading error, deg")
+    ax_y.set_xlabel("sim time, s")
+    ax_p.legend(fontsize=8, ncol=3)
+    ax_p.grid(alpha=0.3)
+    ax_y.grid(alpha=0.3)
+    paths.append(out / "errors.png")
+    save_figure(fig, paths[1])
+    return paths
+
+
+def _errors_in_time(results: FusionResults, est) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    truth = se2.interpolate(results.t_true_s, results.pose_true, est.t_s).reshape(-1, 3)
+    return (est.t_s, np.hypot(*(est.pose[:, :2] - truth[:, :2]).T),
+            se2.wrap_rad(est.pose[:, 2] - truth[:, 2]))
+
+
+def _save_map(results: FusionResults, out: Path):
+    """Save the grid as map.yaml/.pgm/.png in ``out`` via a staging folder; return its check.
+
+    The map is judged as saved (read back from the staging folder) and then moved
+    into ``out`` with the other outputs (:func:`amr_twin.base.atomic_file.all_or_nothing`).
+    """
+    staging = atomic_file.temporary_name(out / "map")
+    staging.mkdir(parents=True, exist_ok=True)
+    try:
+        written = results.grid.save(staging / "map")
+        map_check = agreement(staging / "map.yaml", results.boxes)
+        for path in written:
+            atomic_file.place(path, out / Path(path).name)
+    finally:
+        atomic_file.discard_after(staging)
+    return map_check
+
+
+def tum_name(name: str) -> str:
+    """File name of an architecture's TUM trajectory: ``odom+uwb+imu`` -> ``odom_uwb_imu.tum``."""
+    return name.replace("+", "_") + ".tum"
+
+
+def write_trajectories(results: FusionResults, out: Path) -> dict[str, str]:
+    """Write ``truth.tum`` and one TUM file per architecture into ``out``; return {architecture: file name}.
+
+    The truth is sampled at its 100 Hz record and at every estimate's stamps
+    (:func:`amr_twin.analysis.tum.truth_at`), so that evo's nearest-stamp association pairs each
+    estimate pose with the true pose of its own instant.
+    """
+    out = Path(out)
+    ests = [results.estimates[name] for name in ARCHITECTURES]
+    t_truth, pose_truth = tum.truth_at(results.t_true_s, results.pose_true, [e.t_s for e in ests])
+    tum.write(out / "truth.tum", t_truth, pose_truth)
+    for est in ests:
+        tum.write(out / tum_name(est.name), est.t_s, est.pose)
+    return {est.name: tum_name(est.name) for est in ests}
+
+
+def evo_commands(folder: str = "DIR", name: str = "odom_uwb_imu.tum") -> list[str]:
+    """The evo commands that reproduce an architecture's ATE (plain, aligned) and RPE from the TUM files."""
+    ref, est = f"{folder}/truth.tum", f"{folder}/{name}"
+    return [f"evo_ape tum {ref} {est}", f"evo_ape tum {ref} {est} --align",
+            f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference",
+            f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference -r angle_deg"]
+
+
+DEFINITIONS = [
+    "- **ATE m**: RMS of the position error |p_est(t) - p_true(t)| over the estimate's samples, the truth "
+    "interpolated at each stamp, **without alignment** (every estimate starts from the known start pose, "
+    "in the map frame); evo's `evo_ape` default (translation part, RMSE).",
+    "- **ATE aligned m**: the same after the least-squares SE(2) alignment of the estimate onto the truth "
+    "(Umeyama/Horn, no scale; `evo_ape --align`): what is left when a constant offset of the whole "
+    "trajectory is forgiven. It removes the effect of an early heading error and so favours drifting "
+    "estimates.",
+    "- **RPE m / 1 m, deg / 1 m**: RMS of the translation and rotation error of the relative motion over "
+    "every pair of samples about 1 m of true travel apart (the nearest, within 10 %; evo's `evo_rpe "
+    "--delta 1 --delta_unit m --all_pairs --pairs_from_reference`).",
+    "- **final** errors at the estimate's last sample; **RMS / max heading** over all samples.",
+]
+
+
+def report(results: FusionResults, out: Path, figures: bool = True) -> FusionMetrics:
+    """Save the map and the TUM trajectories, write ``metrics.json`` (from the typed
+    :class:`~.metrics.FusionMetrics`) and ``report.md``; return the metrics.
+
+    ``figures``: the report shows ``trajectories.png`` and ``errors.png`` (written by :func:`plot`).
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    map_check = _save_map(results, out)
+    files = write_trajectories(results, out)
+    data = metrics(results, map_check, files)
+    written = data.as_json()
+    write_json(out / "metrics.json", written)
+    write_text(out / "report.md", markdown(written, figures))
+    return data
+
+
+def _yaw(data: dict, name: str) -> str:
+    e = data["architectures"][name]
+    return (f"RMS {e['rms_yaw_err_deg']:.2f} deg, max {e['max_yaw_err_deg']:.2f} deg, "
+            f"final {e['final_yaw_err_deg']:.2f} deg")
+
+
+def robot_line(robot: dict | None) -> str:
+    """One sentence on the robot's own errors of this seed (``FusionResults.robot``)."""
+    if not robot:
+        return ""
+    what = "drawn for this seed" if robot["drawn"] else "none: the robot is exactly as its odometry assumes"
+    return (f"The robot's own errors ({what}): tyre radii {1e3 * robot['radius_error_left_m']:+.2f} mm left, "
+            f"{1e3 * robot['radius_error_right_m']:+.2f} mm right, track {1e3 * robot['separation_error_m']:+.2f} mm "
+            f"(the odometry assumes the nominal geometry: distance {100 * robot['odom_distance_error']:+.2f} %, "
+            f"heading drift {robot['odom_heading_drift_deg_per_m']:+.3f} deg per metre of straight, turns "
+            f"{100 * robot['odom_turn_error']:+.2f} %); hall sensors off by up to "
+            f"{max(abs(v) for row in robot['hall_misalignment_deg'] for v in row):.2f} deg, edge jitter "
+            f"{robot['hall_jitter_us']:.1f} us; gyro scale error {100 * robot['gyro_scale_z']:+.2f} %.")
+
+
+def markdown(data: dict, figures: bool = True) -> str:
+    """``report.md`` from the metrics (``figures``: link ``trajectories.png`` and ``errors.png``)."""
+    r, s, m, u = data["route"], data["summary"], data["map"], data["uwb"]
+    blocked = ", ".join(f"{100 * b / max(u['exchanges'] / len(u['blocked_per_anchor']), 1):.0f} %"
+                        for b in u["blocked_per_anchor"])
+    lines = [
+        "# Chapter 6 in the twin: localisation architectures compared (fig. 6.8)", "",
+        f"Route `{r['name']}` in world `{r['world']}`: {r['length_m']:.1f} m driven at up to "
+        f"{r['max_speed_m_s']:.1f} m/s in {data['sim_s']:.1f} simulated s (wall time {data['drive_wall_s']:.1f} s "
+        f"for the drive, {data['wall_s']:.1f} s in all); goal reached: {'yes' if r['reached_goal'] else 'NO'}; "
+        f"cross-track RMS {r['cross_track_rms_m']:.3f} m. Firmware `{data['firmware']}`, seed {data['seed']}. "
+        "Messages: " + ", ".join(f"{k} {v}" for k, v in data["messages"].items()) + ". UWB exchanges with a "
+        f"wall in the line, per anchor: {blocked}.", "", robot_line(data["robot"]), "",
+        "| architecture | ATE m | ATE aligned m | RPE m / 1 m | RPE deg / 1 m | final position error m "
+        "| final heading error deg | RMS heading error deg | max heading error deg | compute s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, e in data["architectures"].items():
+        lines.append(f"| {name} | {e['ate_m']:.3f} | {e['ate_aligned_m']:.3f} | {e['rpe_trans_m']:.3f} | "
+                     f"{e['rpe_rot_deg']:.2f} | {e['final_pos_err_m']:.3f} | {e['final_yaw_err_deg']:.2f} | "
+                     f"{e['rms_yaw_err_deg']:.2f} | {e['max_yaw_err_deg']:.2f} | {e['wall_s']:.2f} |")
+    lines += ["", *DEFINITIONS, "",
+              "Trajectories (TUM: `timestamp tx ty tz qx qy qz qw`, map frame): `truth.tum` and "
+              + ", ".join(f"`{e['tum']}`" for e in data["architectures"].values())
+              + ". Reproduce a row with [evo](https://github.com/MichaelGrupp/evo), e.g. for odom+uwb+imu: "
+              + "; ".join(f"`{c}`" for c in evo_commands(".")) + ".", ""]
+    if figures:
+        lines += ["![trajectories](trajectories.png)", "", "![errors](errors.png)", ""]
+    lines += [
+        "## Checks", "",
+        f"- Raw odometry drift: {s['odom_drift_final_m']:.3f} m at the end of the route "
+        f"({s['odom_drift_pct_of_length']:.2f} % of the distance).",
+        f"- Odometry + IMU against odometry alone on heading: {_yaw(data, 'odom+imu')} against {_yaw(data, 'odom')}.",
+        f"- LiDAR odometry ATE under {LIDAR_ATE_MAX_M:.2f} m: {'yes' if s['lidar_ate_under_0_10_m'] else 'NO'} "
+        f"({data['architectures']['odom+lidar']['ate_m']:.3f} m).",
+        f"- Map: {m['occupied_cells']} occupied cells, {100 * m['within_tolerance_frac']:.1f} % within "
+        f"{m['tolerance_cells']} cells of the world's walls (95th percentile {m['p95_distance_cells']:.2f} cells, "
+        f"max {m['max_distance_cells']:.1f}); {100 * m['outline_seen_frac']:.0f} % of the world's outline at "
+        "LiDAR height is mapped (racks' far sides are never seen).", "",
+        "![map](map.png)", "",
+        "The map is a map_server YAML + PGM (`map.yaml`): `amr-twin run --world map.yaml` drives in it.", "",
+    ]
+    return "\n".join(lines)

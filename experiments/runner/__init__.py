@@ -1,0 +1,1 @@
+"""Running many independent simulations: local process pool, Dask cluster, atomic files."""

@@ -1,0 +1,1 @@
+"""UMBmark: squares driven both ways, and the odometry calibration from them."""

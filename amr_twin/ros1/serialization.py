@@ -18,7 +18,7 @@ import numpy as np
 
 _I = struct.Struct("<I")
 _HEAD = struct.Struct("<III")
-_D3, _D4 = struct.Struct("<3d"), struct.Struct("<4d")
+_D3, _D6 = struct.Struct("<3d"), struct.Struct("<6d")
 _F7 = struct.Struct("<7f")
 _F8 = np.dtype("<f8")
 
@@ -34,8 +34,16 @@ def _header(h) -> bytes:
     return _HEAD.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec) + _string(h.frame_id)
 
 
+@functools.lru_cache(maxsize=1024)
+def _framed(frames: tuple, tail: str) -> tuple[struct.Struct, bytes]:
+    """A ``Struct`` of a header's seq and stamp, then the strings ``frames`` (the header's frame_id, maybe a child
+    frame's), then ``tail``; and those strings' bytes (a message's fixed part in one ``pack``)."""
+    blob = b"".join(_string(f) for f in frames)
+    return struct.Struct(f"<III{len(blob)}s{tail}"), blob
+
+
 def _f64s(values, count: bool) -> bytes:
-    if type(values) is np.ndarray and values.dtype == _F8:  # the twin's covariances and arrays: as they are
+    if type(values) is np.ndarray and values.dtype is _F8:  # the twin's covariances and arrays: as they are
         data = values.tobytes()
     else:
         data = np.asarray(values, dtype=_F8).tobytes()
@@ -46,32 +54,39 @@ def _vec(v) -> bytes:
     return _D3.pack(v.x, v.y, v.z)
 
 
-def _quat(q) -> bytes:
-    return _D4.pack(q.x, q.y, q.z, q.w)
-
-
 def imu(m) -> bytes:
-    return b"".join((_header(m.header), _quat(m.orientation), _f64s(m.orientation_covariance, False),
-                     _vec(m.angular_velocity), _f64s(m.angular_velocity_covariance, False),
-                     _vec(m.linear_acceleration), _f64s(m.linear_acceleration_covariance, False)))
+    h, o = m.header, m.orientation
+    head, blob = _framed((h.frame_id,), "4d")
+    return b"".join((head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, o.x, o.y, o.z, o.w),
+                     _f64s(m.orientation_covariance, False), _vec(m.angular_velocity),
+                     _f64s(m.angular_velocity_covariance, False), _vec(m.linear_acceleration),
+                     _f64s(m.linear_acceleration_covariance, False)))
 
 
 def magnetic_field(m) -> bytes:
-    return _header(m.header) + _vec(m.magnetic_field) + _f64s(m.magnetic_field_covariance, False)
+    h, v = m.header, m.magnetic_field
+    head, blob = _framed((h.frame_id,), "3d")
+    return head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, v.x, v.y, v.z) + _f64s(
+        m.magnetic_field_covariance, False)
 
 
 def odometry(m) -> bytes:
-    p, t = m.pose.pose, m.twist.twist
-    return b"".join((_header(m.header), _string(m.child_frame_id), _vec(p.position), _quat(p.orientation),
-                     _f64s(m.pose.covariance, False), _vec(t.linear), _vec(t.angular),
-                     _f64s(m.twist.covariance, False)))
+    h, p, t = m.header, m.pose.pose, m.twist.twist
+    x, q, lin, ang = p.position, p.orientation, t.linear, t.angular
+    head, blob = _framed((h.frame_id, m.child_frame_id), "7d")
+    return b"".join((head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z,
+                               q.w), _f64s(m.pose.covariance, False),
+                     _D6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z), _f64s(m.twist.covariance, False)))
 
 
 def tf_message(m) -> bytes:
     parts = [_I.pack(len(m.transforms))]
     for ts in m.transforms:
-        tr = ts.transform
-        parts += (_header(ts.header), _string(ts.child_frame_id), _vec(tr.translation), _quat(tr.rotation))
+        h, tr = ts.header, ts.transform
+        x, q = tr.translation, tr.rotation
+        head, blob = _framed((h.frame_id, ts.child_frame_id), "7d")
+        parts.append(head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z,
+                               q.w))
     return b"".join(parts)
 
 

@@ -5,8 +5,8 @@ recorder's columns: :class:`~amr_twin.ros1.row_feed.RowFeed`, kept from the firs
 topics wanted), ``/battery_state`` (``sensor_msgs/BatteryState``, 10 Hz) and ``/diagnostics``
 (``diagnostic_msgs/DiagnosticArray``: each collision and fault as it happens, the ``.mcap``'s ``/twin/collisions``
 and ``/twin/faults`` statuses, and the battery once a second), written into the bridge's outbox with their
-simulated instants (the rows and the battery a block a topic and tick: :mod:`amr_twin.ros1.frame_blocks`; ``/diagnostics``
-with genpy).
+simulated instants (the rows and the battery a block a topic and tick: :mod:`amr_twin.ros1.frame_blocks`;
+``/diagnostics`` with genpy).
 """
 
 from __future__ import annotations
@@ -65,9 +65,9 @@ class StatusTopics:
         cap = self.twin.cfg.battery.capacity_ah
         if want_battery:
             at = rows.index % BATTERY_EVERY_ROWS == 0
-            soc = rows.battery_soc[at]
-            self.out.put_block(self.battery_pub, rows.t_us[at].tolist(),
-                               battery_block(rows.t_us[at], rows.battery_v[at], -rows.battery_a[at], soc * cap, cap, soc))
+            t, soc = rows.t_us[at], rows.battery_soc[at]
+            self.out.put_block(self.battery_pub, t.tolist(),
+                               battery_block(t, rows.battery_v[at], -rows.battery_a[at], soc * cap, cap, soc))
         if want_diag:
             for i in np.flatnonzero(rows.index % DIAGNOSTICS_PERIOD_ROWS == 0).tolist():
                 t, volts, amps, soc = (int(rows.t_us[i]), float(rows.battery_v[i]), float(rows.battery_a[i]),

@@ -12,10 +12,11 @@ from amr_twin.recording.mcap_log import BUS_TOPICS, JOINT_STATE_PERIOD_US, REQUE
 from amr_twin.ros import ros_state
 from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
+from amr_twin.ros1.frame_blocks import StateBlocks, clock_block
 from amr_twin.ros1.map_transform import MapTransform
 from amr_twin.ros1.messages import InputError, Ros1Messages, twist_from_ros, wheel_command_from_ros
 from amr_twin.ros1.outbox import Outbox
-from amr_twin.ros1.serialization import WRITERS, StateFrames, clock_us
+from amr_twin.ros1.serialization import WRITERS
 from amr_twin.ros1.status_topics import StatusTopics
 
 LOG = logging.getLogger(__name__)
@@ -50,7 +51,7 @@ class Ros1Bridge:
         self._closed = False
         self._from_graph: str | None = None  # the bus topic of a message being handed over from the graph
         self._lock = threading.Lock()
-        sensors = getattr(twin, "lidar", None) is not None
+        sensors = "lidar" in twin.sensors
         skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
         if not firmware_topics:
             skip.update(FIRMWARE_TOPICS)
@@ -61,7 +62,7 @@ class Ros1Bridge:
                 return rospy.Publisher(topic, conv.ros_class(typ), queue_size=None, latch=latch)
 
         self.pubs = {bus: pub(topic.lstrip("/"), typ) for bus, (topic, typ, _enc) in BUS_TOPICS.items()
-                     if bus not in skip and not (bus == "uwb/range" and getattr(twin, "uwb", None) is None)}
+                     if bus not in skip and not (bus == "uwb/range" and "uwb" not in twin.sensors)}
         self.pubs["tf_static"] = pub("tf_static", "tf2_msgs/TFMessage", latch=True)
         self.tf = self.pubs["tf"]
         self.map_tf = MapTransform()
@@ -95,7 +96,7 @@ class Ros1Bridge:
         self._state = ros_state.StateSampler(twin.observables.model, twin.observables.named)
         twin.on_grid(self._state.sample)
         self._state.sample(twin.t_phys_us)
-        self._frames = StateFrames(self._state.joint_names, self._state.child_frames, ros_state.BASE_FRAME,
+        self._frames = StateBlocks(self._state.joint_names, self._state.child_frames, ros_state.BASE_FRAME,
                                    ros_state.WORLD_FRAME)
         twin.on_message(self._tap)
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
@@ -137,11 +138,12 @@ class Ros1Bridge:
 
     def _publish_clock(self, t_us: int) -> None:
         """``/clock`` at each multiple of the clock's period up to ``t_us``."""
-        period, wanted = self._clock_period_us, Outbox.wanted(self.clock_pub)
-        while self._next_clock_us <= t_us:
-            if wanted:
-                self.out.put(self.clock_pub, clock_us(self._next_clock_us), self._next_clock_us)
-            self._next_clock_us += period
+        if self._next_clock_us > t_us:
+            return
+        times = list(range(self._next_clock_us, t_us + 1, self._clock_period_us))
+        self._next_clock_us = times[-1] + self._clock_period_us
+        if Outbox.wanted(self.clock_pub):
+            self.out.put_block(self.clock_pub, times, clock_block(times))
 
     def release(self, t_us: int, wait) -> None:
         """Paced (the pacer's tick, before it sleeps): write what is due up to ``t_us`` at each clock
@@ -164,18 +166,18 @@ class Ros1Bridge:
         batch = self._state.split(t_us)
         gt, js, out = self.state_pubs["/twin/ground_truth"], self.state_pubs["/joint_states"], self.out
         want_gt, want_js, want_tf = Outbox.wanted(gt), Outbox.wanted(js), Outbox.wanted(self.tf)
-        if len(batch) and (want_gt or want_js or want_tf):
-            a = {key: v.tolist() for key, v in batch.arrays(0 if want_gt else JOINT_STATE_PERIOD_US, want_gt).items()}
-            for i, ts in enumerate(a["t_us"]):
-                if want_gt:
-                    out.put(gt, self._frames.ground_truth(ts, a["pos"][i], a["quat"][i], a["v_body"][i],
-                                                          a["w_body"][i]), ts)
-                if ts % JOINT_STATE_PERIOD_US == 0:
-                    if want_js:
-                        out.put(js, self._frames.joint_state(ts, a["q"][i], a["qd"][i]), ts)
-                    if want_tf:
-                        links = self._frames.link_transforms(ts, a["link_pos"][i], a["link_quat"][i])
-                        out.put(self.tf, links, ts)
+        if not (len(batch) and (want_gt or want_js or want_tf)):
+            return
+        a = batch.arrays(0 if want_gt else JOINT_STATE_PERIOD_US, want_gt)
+        t = a["t_us"]
+        if want_gt:
+            out.put_block(gt, t.tolist(), self._frames.ground_truth(t, a["pos"], a["quat"], a["v_body"], a["w_body"]))
+            keep = t % JOINT_STATE_PERIOD_US == 0
+            t, a = t[keep], {key: a[key][keep] for key in ("q", "qd", "link_pos", "link_quat")}
+        if want_js:
+            out.put_block(js, t.tolist(), self._frames.joint_states(t, a["q"], a["qd"]))
+        if want_tf:
+            out.put_block(self.tf, t.tolist(), self._frames.link_transforms(t, a["link_pos"], a["link_quat"]))
 
     # -- in (rospy's threads) ------------------------------------------------------------------
     def _own(self, msg) -> bool:

@@ -18,6 +18,7 @@ connection whose write fails is closed, as rospy's publish closes it (rospy then
 
 from __future__ import annotations
 
+import bisect
 import struct
 
 _LEN = struct.Struct("<I")
@@ -28,15 +29,40 @@ topic in a thread of its own: an IMU message written right after its clock was h
 the time here (queue_size=1, rospy), 1 ms later ~1.5 % (its clock thread woken late on a busy machine)."""
 
 
+class _Queue:
+    """One publisher's frames waiting, with their instants (in put order; ``ordered`` while never decreasing)."""
+
+    __slots__ = ("times", "frames", "ordered")
+
+    def __init__(self):
+        self.times: list[int] = []
+        self.frames: list = []
+        self.ordered = True
+
+    def take(self, until_us: int) -> tuple[int, list]:
+        """The first instant and the frames of the instants up to ``until_us`` (instant order, then put order),
+        removed."""
+        times, frames = self.times, self.frames
+        if not self.ordered:
+            order = sorted(range(len(times)), key=times.__getitem__)  # stable: put order within an instant
+            times[:] = [times[i] for i in order]
+            frames[:] = [frames[i] for i in order]
+            self.ordered = True
+        k = bisect.bisect_right(times, until_us)
+        first = times[0] if k else NEVER_US
+        due = frames[:k]
+        del times[:k], frames[:k]
+        return first, due
+
+
 class Outbox:
-    """Frames waiting to be written, by instant and rospy publisher (see the module notes)."""
+    """Frames waiting to be written, by rospy publisher, with their instants (see the module notes)."""
 
     def __init__(self, period_us: int = 10_000, lead=None, gap_us: int = GAP_US):
         self.period_us, self.gap_us = int(period_us), int(gap_us)
         self.lead = lead
         """The publisher written first at each release (``/clock``), or None."""
-        self._groups: dict = {}  # instant us -> {publisher impl: [length, bytes, ...]}
-        self._last: tuple = (None, None)  # the instant put last and its group (most puts share it)
+        self._queues: dict = {}  # publisher impl -> _Queue
         self.released_us = -1
         """The last instant :meth:`release` brought the wall clock to."""
         self.messages = 0
@@ -50,18 +76,36 @@ class Outbox:
         impl = pub.impl
         return impl is not None and bool(impl.connections)
 
+    def _queue(self, impl, t_us: int) -> _Queue:
+        """``impl``'s queue, about to take frames from instant ``t_us`` on."""
+        q = self._queues.get(impl)
+        if q is None:
+            q = self._queues[impl] = _Queue()
+        elif q.times and t_us < q.times[-1]:
+            q.ordered = False
+        return q
+
     def put(self, pub, payload: bytes, t_us: int = 0) -> None:
         """Queue ``payload`` (a message serialised in the ROS 1 format, of simulated instant ``t_us``)."""
-        last_t, group = self._last
-        if last_t != t_us:
-            group = self._groups.get(t_us)
-            if group is None:
-                group = self._groups[t_us] = {}
-            self._last = (t_us, group)
-        frames = group.get(pub.impl)
-        if frames is None:
-            frames = group[pub.impl] = []
-        frames += (_LEN.pack(len(payload)), payload)
+        q = self._queues.get(pub.impl)  # _queue's work, inlined: the tap's path, a few thousand a second
+        if q is None:
+            q = self._queues[pub.impl] = _Queue()
+        times = q.times
+        if times and t_us < times[-1]:
+            q.ordered = False
+        times.append(t_us)
+        q.frames.append(_LEN.pack(len(payload)) + payload)
+
+    def put_block(self, pub, t_us: list, block: bytes) -> None:
+        """Queue the frames of ``block`` (TCPROS frames of equal lengths, one after the other: a length, then a
+        message), the i-th of simulated instant ``t_us[i]`` (never decreasing), as that many :meth:`put` would."""
+        n = len(t_us)
+        if not n:
+            return
+        q = self._queue(pub.impl, t_us[0])
+        size, view = len(block) // n, memoryview(block)
+        q.times += t_us
+        q.frames += [view[i:i + size] for i in range(0, n * size, size)]
 
     def release(self, until_us: int, wait=None) -> None:
         """Write every message of an instant up to ``until_us``: at each ``period_us`` point after
@@ -93,28 +137,22 @@ class Outbox:
             self._send(frames, impl)
 
     def _take(self, until_us: int) -> dict:
-        """The frames of the instants up to ``until_us``, by publisher impl, the lead's first."""
-        due = sorted(t for t in self._groups if t <= until_us)
-        if not due:
-            return {}
-        self._last = (None, None)
-        merged: dict = {}
+        """The frames of the instants up to ``until_us``, by publisher impl: the lead's first, then the others in
+        the order of their earliest instant."""
         lead = getattr(self.lead, "impl", None)
-        if lead is not None:
-            merged[lead] = []
-        for t in due:
-            for impl, frames in self._groups.pop(t).items():
-                have = merged.get(impl)
-                if have is None:
-                    merged[impl] = frames
-                else:
-                    have += frames
-        return merged
+        due = []
+        for impl, q in self._queues.items():
+            if q.times and (q.times[0] <= until_us or not q.ordered):
+                first, frames = q.take(until_us)
+                if frames:
+                    due.append((-1 if impl is lead else first, len(due), impl, frames))
+        due.sort(key=lambda d: d[:2])
+        return {impl: frames for _first, _i, impl, frames in due}
 
     def _send(self, frames, impl) -> None:
         if not frames:
             return
-        self.messages += len(frames) // 2
+        self.messages += len(frames)
         if not impl.closed:
             data = b"".join(frames)
             for conn in impl.connections:

@@ -59,11 +59,11 @@ class RowFeed:
         rows = np.array(self._rows[:n], float)
         del self._t[:n], self._rows[:n]
         k = np.searchsorted(np.array(self._pin_t), times, side="left") - 1
-        pins = np.array(self._pins, float)[np.clip(k, 0, None)]
+        pins = np.array(self._pins, float)[np.maximum(k, 0)]
         keep = max(int(k[-1]), 0)  # the drive in force at the last row may be in force at the next ones
         del self._pin_t[:keep], self._pins[:keep]
         battery = self._battery.take_until(t_us)
-        at = np.clip(np.searchsorted(battery[:, 0], times, side="right") - 1, 0, None)
+        at = np.maximum(np.searchsorted(battery[:, 0], times, side="right") - 1, 0)
         mode, voltage = pins[:, 4:6].astype(int), pins[:, 6:8]
         return SimpleNamespace(t_us=times, true_rpm=rows[:, 2:4] * RAD_S_TO_RPM, pwm_counts=pins[:, 0:2].astype(int),
                                current_a=motor_currents_a(self.twin.cfg, voltage, rows[:, 2:4], mode),

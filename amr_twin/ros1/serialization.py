@@ -10,6 +10,7 @@ items; ``time`` is uint32 sec, uint32 nsec; ``std_msgs/Header`` is uint32 seq, t
 
 from __future__ import annotations
 
+import functools
 import struct
 from typing import Callable
 
@@ -17,11 +18,14 @@ import numpy as np
 
 _I = struct.Struct("<I")
 _HEAD = struct.Struct("<III")
-_D3, _D4 = struct.Struct("<3d"), struct.Struct("<4d")
+_D3, _D6 = struct.Struct("<3d"), struct.Struct("<6d")
 _F7 = struct.Struct("<7f")
+_F8 = np.dtype("<f8")
 
 
+@functools.lru_cache(maxsize=1024)
 def _string(text: str) -> bytes:
+    """A string's bytes (a frame's or a joint's name: a few, written again and again)."""
     data = text.encode()
     return _I.pack(len(data)) + data
 
@@ -30,8 +34,19 @@ def _header(h) -> bytes:
     return _HEAD.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec) + _string(h.frame_id)
 
 
+@functools.lru_cache(maxsize=1024)
+def _framed(frames: tuple, tail: str) -> tuple[struct.Struct, bytes]:
+    """A ``Struct`` of a header's seq and stamp, then the strings ``frames`` (the header's frame_id, maybe a child
+    frame's), then ``tail``; and those strings' bytes (a message's fixed part in one ``pack``)."""
+    blob = b"".join(_string(f) for f in frames)
+    return struct.Struct(f"<III{len(blob)}s{tail}"), blob
+
+
 def _f64s(values, count: bool) -> bytes:
-    data = np.asarray(values, dtype="<f8").tobytes()
+    if type(values) is np.ndarray and values.dtype is _F8:  # the twin's covariances and arrays: as they are
+        data = values.tobytes()
+    else:
+        data = np.asarray(values, dtype=_F8).tobytes()
     return (_I.pack(len(data) // 8) + data) if count else data
 
 
@@ -39,32 +54,39 @@ def _vec(v) -> bytes:
     return _D3.pack(v.x, v.y, v.z)
 
 
-def _quat(q) -> bytes:
-    return _D4.pack(q.x, q.y, q.z, q.w)
-
-
 def imu(m) -> bytes:
-    return b"".join((_header(m.header), _quat(m.orientation), _f64s(m.orientation_covariance, False),
-                     _vec(m.angular_velocity), _f64s(m.angular_velocity_covariance, False),
-                     _vec(m.linear_acceleration), _f64s(m.linear_acceleration_covariance, False)))
+    h, o = m.header, m.orientation
+    head, blob = _framed((h.frame_id,), "4d")
+    return b"".join((head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, o.x, o.y, o.z, o.w),
+                     _f64s(m.orientation_covariance, False), _vec(m.angular_velocity),
+                     _f64s(m.angular_velocity_covariance, False), _vec(m.linear_acceleration),
+                     _f64s(m.linear_acceleration_covariance, False)))
 
 
 def magnetic_field(m) -> bytes:
-    return _header(m.header) + _vec(m.magnetic_field) + _f64s(m.magnetic_field_covariance, False)
+    h, v = m.header, m.magnetic_field
+    head, blob = _framed((h.frame_id,), "3d")
+    return head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, v.x, v.y, v.z) + _f64s(
+        m.magnetic_field_covariance, False)
 
 
 def odometry(m) -> bytes:
-    p, t = m.pose.pose, m.twist.twist
-    return b"".join((_header(m.header), _string(m.child_frame_id), _vec(p.position), _quat(p.orientation),
-                     _f64s(m.pose.covariance, False), _vec(t.linear), _vec(t.angular),
-                     _f64s(m.twist.covariance, False)))
+    h, p, t = m.header, m.pose.pose, m.twist.twist
+    x, q, lin, ang = p.position, p.orientation, t.linear, t.angular
+    head, blob = _framed((h.frame_id, m.child_frame_id), "7d")
+    return b"".join((head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z,
+                               q.w), _f64s(m.pose.covariance, False),
+                     _D6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z), _f64s(m.twist.covariance, False)))
 
 
 def tf_message(m) -> bytes:
     parts = [_I.pack(len(m.transforms))]
     for ts in m.transforms:
-        tr = ts.transform
-        parts += (_header(ts.header), _string(ts.child_frame_id), _vec(tr.translation), _quat(tr.rotation))
+        h, tr = ts.header, ts.transform
+        x, q = tr.translation, tr.rotation
+        head, blob = _framed((h.frame_id, ts.child_frame_id), "7d")
+        parts.append(head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z,
+                               q.w))
     return b"".join(parts)
 
 
@@ -87,68 +109,8 @@ def float64_multi_array(m) -> bytes:
     return _I.pack(len(m.layout.dim)) + dims + _I.pack(m.layout.data_offset) + _f64s(m.data, True)
 
 
-_ROWS: dict[int, struct.Struct] = {}
-
-
-def float64_row(values) -> bytes:
-    """``std_msgs/Float64MultiArray`` of ``values`` (floats) with no dimensions: what :func:`float64_multi_array`
-    gives for ``Float64MultiArray(data=values)``, in one ``struct`` call."""
-    n = len(values)
-    packer = _ROWS.get(n)
-    if packer is None:
-        packer = _ROWS[n] = struct.Struct(f"<III{n}d")
-    return packer.pack(0, 0, n, *values)
-
-
 def float64(m) -> bytes:
     return struct.pack("<d", m.data)
-
-
-_TIME = struct.Struct("<II")
-
-
-def clock_us(t_us: int) -> bytes:
-    """``rosgraph_msgs/Clock`` at ``t_us`` (simulated us)."""
-    return _TIME.pack(t_us // 1_000_000, t_us % 1_000_000 * 1000)
-
-
-class StateFrames:
-    """``sensor_msgs/JointState``, the moving links' ``tf2_msgs/TFMessage`` and the ground truth's ``nav_msgs/Odometry``
-    written straight from a grid sample's values (one ``struct`` call each, no message objects): the bytes
-    :func:`joint_state`, :func:`tf_message` and :func:`odometry` give for :func:`amr_twin.ros.ros_state.joint_state`,
-    ``link_transforms`` and ``ground_truth``."""
-
-    def __init__(self, joint_names, child_frames, parent: str, world: str = "world"):
-        n = len(joint_names)
-        names = b"".join(_string(name) for name in joint_names)
-        self._names, self._n = names, n
-        self._js = struct.Struct(f"<IIIII{len(names)}sI{n}dI{n}dI")
-        self._links = [_string(parent) + _string(child) for child in child_frames]
-        self._tf = struct.Struct("<I" + "".join(f"III{len(b)}s7d" for b in self._links))
-        frames = _string(world) + _string(parent)
-        zeros = bytes(36 * 8)
-        self._gt = struct.Struct(f"<III{len(frames)}s7d{len(zeros)}s6d{len(zeros)}s")
-        self._gt_frames, self._zeros = frames, zeros
-
-    def joint_state(self, t_us: int, q, qd) -> bytes:
-        """Positions ``q`` and velocities ``qd`` (n,) at ``t_us``; no efforts."""
-        n, sec, nsec = self._n, t_us // 1_000_000, t_us % 1_000_000 * 1000
-        return self._js.pack(0, sec, nsec, 0, n, self._names, n, *q, n, *qd, 0)
-
-    def link_transforms(self, t_us: int, link_pos, link_quat) -> bytes:
-        """Each link's position (3,) and orientation (4,) w, x, y, z relative to the parent, at ``t_us``."""
-        sec, nsec = t_us // 1_000_000, t_us % 1_000_000 * 1000
-        args = [len(self._links)]
-        for blob, (x, y, z), (w, qx, qy, qz) in zip(self._links, link_pos, link_quat):
-            args += (0, sec, nsec, blob, x, y, z, qx, qy, qz, w)
-        return self._tf.pack(*args)
-
-    def ground_truth(self, t_us: int, pos, quat, v_body, w_body) -> bytes:
-        """``nav_msgs/Odometry`` of the true pose, ``world -> base_link``: position (3,), orientation (4,) w, x, y, z,
-        the twist in ``base_link`` (3,) and (3,), zero covariances (:func:`amr_twin.ros.ros_state.ground_truth`)."""
-        (x, y, z), (w, qx, qy, qz), zeros = pos, quat, self._zeros
-        return self._gt.pack(0, t_us // 1_000_000, t_us % 1_000_000 * 1000, self._gt_frames, x, y, z, qx, qy, qz, w,
-                             zeros, *v_body, *w_body, zeros)
 
 
 WRITERS: dict[str, Callable] = {

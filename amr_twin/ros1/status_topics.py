@@ -5,17 +5,20 @@ recorder's columns: :class:`~amr_twin.ros1.row_feed.RowFeed`, kept from the firs
 topics wanted), ``/battery_state`` (``sensor_msgs/BatteryState``, 10 Hz) and ``/diagnostics``
 (``diagnostic_msgs/DiagnosticArray``: each collision and fault as it happens, the ``.mcap``'s ``/twin/collisions``
 and ``/twin/faults`` statuses, and the battery once a second), written into the bridge's outbox with their
-simulated instants (the rows with ``struct``, the rest with genpy).
+simulated instants (the rows and the battery a block a topic and tick: :mod:`amr_twin.ros1.frame_blocks`;
+``/diagnostics`` with genpy).
 """
 
 from __future__ import annotations
 
 import io
 
+import numpy as np
+
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS
+from amr_twin.ros1.frame_blocks import battery_block, float64_rows_block
 from amr_twin.ros1.outbox import Outbox
 from amr_twin.ros1.row_feed import RowFeed
-from amr_twin.ros1.serialization import float64_row
 from amr_twin.recording.event_log import statuses
 
 ROW_TOPICS = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current")
@@ -55,24 +58,23 @@ class StatusTopics:
         for topic, column in zip(ROW_TOPICS, (rows.true_rpm, rows.pwm_counts, rows.current_a)):
             pub = self.row_pubs[topic]
             if Outbox.wanted(pub):
-                for t, values in zip(times, column.astype(float).tolist()):
-                    self.out.put(pub, float64_row(values), t)
+                self.out.put_block(pub, times, float64_rows_block(column))
         want_battery, want_diag = Outbox.wanted(self.battery_pub), Outbox.wanted(self.diag_pub)
         if not (want_battery or want_diag):
             return
         cap = self.twin.cfg.battery.capacity_ah
-        battery = self.conv.ros_class("sensor_msgs/BatteryState")
-        for i, (t, volts, amps, soc) in enumerate(zip(times, rows.battery_v.tolist(),
-                                                      rows.battery_a.tolist(), rows.battery_soc.tolist())):
-            stamp = self.rospy.Time(t // 1_000_000, t % 1_000_000 * 1000)
-            if want_battery and rows.index[i] % BATTERY_EVERY_ROWS == 0:
-                msg = battery(voltage=volts, current=-amps, charge=soc * cap, capacity=cap, design_capacity=cap,
-                              percentage=soc, present=True)
-                msg.header.stamp = stamp
-                self.put_ros(self.battery_pub, msg, t)
-            if want_diag and rows.index[i] % DIAGNOSTICS_PERIOD_ROWS == 0:
-                level = 0 if soc > 0.2 else 1
-                self._publish_status(t, stamp, level, "amr/battery", f"{volts:.2f} V, {soc * 100:.0f} %",
+        if want_battery:
+            at = rows.index % BATTERY_EVERY_ROWS == 0
+            t, soc = rows.t_us[at], rows.battery_soc[at]
+            self.out.put_block(self.battery_pub, t.tolist(),
+                               battery_block(t, rows.battery_v[at], -rows.battery_a[at], soc * cap, cap, soc))
+        if want_diag:
+            for i in np.flatnonzero(rows.index % DIAGNOSTICS_PERIOD_ROWS == 0).tolist():
+                t, volts, amps, soc = (int(rows.t_us[i]), float(rows.battery_v[i]), float(rows.battery_a[i]),
+                                       float(rows.battery_soc[i]))
+                stamp = self.rospy.Time(t // 1_000_000, t % 1_000_000 * 1000)
+                self._publish_status(t, stamp, 0 if soc > 0.2 else 1, "amr/battery",
+                                     f"{volts:.2f} V, {soc * 100:.0f} %",
                                      {"voltage_v": volts, "current_a": amps, "soc": soc})
 
     def _publish_events(self, t_us: int) -> None:

@@ -23,7 +23,9 @@ AMR_TWIN = str(Path(sys.executable).with_name("amr-twin"))
 URDF = ROOT / "models" / "amr" / "amr.urdf"
 TOPICS = ["/clock", "/tf", "/tf_static", "/odom", "/joint_states", "/scan", "/imu/data_raw", "/imu/mag",
           "/twin/ground_truth", "/wheel_Command", "/wheel0_Vel", "/wheel1_Vel", "/diagnostics", "/battery_state",
-          "/rsp_tf"]
+          "/rsp_tf", "/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current"]
+ROWS = {"/twin/true_rpm": "true_rpm", "/twin/pwm_counts": "pwm_counts", "/twin/motor_current": "current_a"}
+"""The row topics and their columns in the run's CSV."""
 RUN_S = 20.0
 
 
@@ -51,7 +53,7 @@ def bag(ros_env, tmp_path_factory):
                  and "/test_record" in connected_subscribers(ros_env, "/test_rsp", "/rsp_tf"),
                  "rosbag record and robot_state_publisher on the graph")
         run = subprocess.run([AMR_TWIN, "run", "linear", "--speed-m-s", "0.5", "--duration-s", str(RUN_S), "--world",
-                              "empty", "--sensors", "--ros1", "--rate", "5", "--json"], env=ros_env, capture_output=True, text=True,
+                              "empty", "--sensors", "--ros1", "--rate", "5", "--json", "--csv", str(out / "run.csv")], env=ros_env, capture_output=True, text=True,
                              timeout=120)
         assert run.returncode == 0, run.stderr
         wait_until_recorded(rec.pid)  # the twin's last messages are in the recorder
@@ -72,7 +74,8 @@ def test_rosbag_info_shows_every_topic_at_its_rate_on_sim_time(bag):
     counts = _counts(info)
     # the node's rates: IMU 100 Hz, LiDAR 5.5 Hz, odometry and joint states 50 Hz, clock 100 Hz (t = 0..20 s)
     for topic, hz in (("/imu/data_raw", 100), ("/imu/mag", 100), ("/odom", 50), ("/joint_states", 50),
-                      ("/clock", 100), ("/twin/ground_truth", 100), ("/battery_state", 10)):
+                      ("/clock", 100), ("/twin/ground_truth", 100), ("/battery_state", 10), ("/twin/true_rpm", 100),
+                      ("/twin/pwm_counts", 100), ("/twin/motor_current", 100)):
         assert counts[topic] == int(RUN_S * hz) + 1, topic
     assert abs(counts["/scan"] - RUN_S * 5.5) <= 1.5
     # odom -> base_link (odometry node) and the moving links, 50 Hz each; no map -> odom (no map in the empty world:
@@ -104,6 +107,32 @@ def test_the_rosbags_library_reads_the_same_counts_and_the_mcaps_types(bag):
     assert types["/wheel0_Vel"] == "std_msgs/msg/Float64" and types["/diagnostics"] == "diagnostic_msgs/msg/DiagnosticArray"
     assert scans[0].header.frame_id == "laser" and len(scans[0].ranges) > 300
     assert scans[0].time_increment < 0  # the A1 spins clockwise (the recordings' convention)
+
+
+def test_every_instant_is_recorded_once_and_in_order_and_the_rows_are_the_csvs(bag):
+    """Stamped topics: one message an instant of their period from 0 to the end, in stamp order; the row topics
+    (no stamps): the run's CSV columns, row by row (read with the rosbags library)."""
+    from rosbags.highlevel import AnyReader
+
+    path, _info, _run = bag
+    stamped = ("/clock", "/twin/ground_truth", "/joint_states", "/battery_state", "/imu/data_raw")
+    stamps, rows = {topic: [] for topic in stamped}, {topic: [] for topic in ROWS}
+    with AnyReader([path]) as reader:
+        for c, _t, raw in reader.messages(connections=[c for c in reader.connections if c.topic in (*stamped, *ROWS)]):
+            msg = reader.deserialize(raw, c.msgtype)
+            if c.topic in ROWS:
+                rows[c.topic].append(list(msg.data))
+            else:
+                stamp = msg.clock if c.topic == "/clock" else msg.header.stamp
+                stamps[c.topic].append(stamp.sec * 1_000_000 + stamp.nanosec // 1000)
+    for topic, period_us in (("/clock", 10_000), ("/twin/ground_truth", 10_000), ("/imu/data_raw", 10_000),
+                             ("/joint_states", 20_000), ("/battery_state", 100_000)):
+        assert stamps[topic] == list(range(0, int(RUN_S * 1e6) + 1, period_us)), topic
+    csv = np.genfromtxt(path.with_name("run.csv"), delimiter=",", names=True, skip_header=1)  # under the note
+    assert len(csv) == int(RUN_S * 100) + 1
+    for topic, column in ROWS.items():
+        want = np.column_stack([csv[f"{column}_left"], csv[f"{column}_right"]])
+        np.testing.assert_allclose(np.array(rows[topic]), want, rtol=1e-8, atol=1e-12, err_msg=topic)
 
 
 def _tf_buffer(path):

@@ -104,3 +104,42 @@ def test_paced_each_message_goes_at_its_clock_instant_after_that_clock_and_unpac
         ("clock", [struct.pack("<I", 30_000), struct.pack("<I", 40_000)]), ("imu", [b"i30000", b"i40000"])]
     out.flush()
     assert log[-1][1:] == ("imu", [b"next"]) and out.messages == 13
+
+
+def _block(payloads: list[bytes]) -> bytes:
+    return b"".join(struct.pack("<I", len(p)) + p for p in payloads)
+
+
+def test_a_block_is_filed_message_by_message_in_instant_order_with_single_puts():
+    a = _Connection()
+    imu = _publisher(a)
+    out = Outbox()
+    out.put(imu, b"a0", 0)
+    out.put(imu, b"c20", 20_000)
+    out.put_block(imu, [0, 10_000, 20_000], _block([b"x0", b"x1", b"x2"]))  # behind the last put: sorted in
+    out.put(imu, b"b10", 10_000)
+    out.release(10_000)
+    assert [_frames(d) for d in a.data] == [[b"a0", b"x0", b"x1", b"b10"]] and out.messages == 4
+    out.put_block(imu, [30_000, 40_000], _block([b"y3", b"y4"]))
+    out.flush()  # within an instant, put order: c20 before x2
+    assert _frames(a.data[1]) == [b"c20", b"x2", b"y3", b"y4"] and out.messages == 8 and out.writes == 2
+
+
+def test_paced_a_blocks_messages_go_each_at_its_own_clock_instant():
+    now = [0]
+    log = now
+    clock, imu = (_publisher(_Clocked(n, log)) for n in ("clock", "imu"))
+    out = Outbox(period_us=10_000, lead=clock, gap_us=1_000)
+    times = [0, 10_000, 20_000]
+    out.put_block(imu, times, _block([b"i%05d" % t for t in times]))  # frames of one length
+    out.put_block(clock, times, _block([struct.pack("<I", t) for t in times]))
+
+    def wait(t_us):
+        now[0] = t_us
+
+    out.release(10_000, wait)
+    assert log[1:] == [(0, "clock", [struct.pack("<I", 0)]), (1_000, "imu", [b"i00000"]),
+                       (10_000, "clock", [struct.pack("<I", 10_000)]), (11_000, "imu", [b"i10000"])]
+    out.release(20_000, wait)
+    assert log[-2:] == [(20_000, "clock", [struct.pack("<I", 20_000)]), (21_000, "imu", [b"i20000"])]
+    assert out.messages == 6

@@ -201,6 +201,7 @@ def make_yielding(footprint: Footprint, limits: Limits, nav, dt_s: float, y: dic
         return None
     m, p = nav.monitor, nav.people
     return Yielding(footprint, limits, dt_s, person_radius_m=p.person_radius_m, stop_m=m.people_stop_m,
+                    stop_lag_s=m.people_stop_lag_s,
                     horizon_s=p.horizon_s, min_speed_m_s=p.min_speed_m_s, **y)
 
 

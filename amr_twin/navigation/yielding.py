@@ -9,10 +9,21 @@ people are :class:`~amr_twin.navigation.people.People`, the footprint a
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from amr_twin.navigation.people import People
+
+
+@dataclass
+class CourtesyWait:
+    """A wait for someone standing beside the way: where they stand (m, ``map``), when the robot began to stop
+    for them and when it stood (s; None: not yet)."""
+
+    xy_m: np.ndarray
+    began_s: float
+    stood_s: float | None = None
 
 
 class Yielding:
@@ -32,7 +43,7 @@ class Yielding:
                  min_speed_m_s: float = 0.25, speeds_m_s: tuple = (-0.25, -0.12, 0.0, 0.15, 0.3, 0.5),
                  turns_rad_s: tuple = (-0.6, -0.3, 0.0, 0.3, 0.6), standoff_m: float = 0.8, standoff_s: float = 3.0,
                  back_s: float = 2.0, courtesy_m: float = 0.8, courtesy_s: float = 3.0,
-                 courtesy_forget_s: float = 30.0):
+                 courtesy_forget_s: float = 30.0, stop_lag_s: float = 0.0):
         self.footprint, self.limits, self.dt_s = footprint, limits, dt_s
         self.person_radius_m, self.stop_m, self.margin_m = person_radius_m, stop_m, margin_m
         self.n = max(1, int(round(horizon_s / step_s)))
@@ -41,9 +52,10 @@ class Yielding:
         self._grid = np.column_stack([v.ravel(), w.ravel()])
         self.standoff_m, self.standoff_s, self.back_s = standoff_m, standoff_s, back_s
         self.courtesy_m, self.courtesy_s, self.courtesy_forget_s = courtesy_m, courtesy_s, courtesy_forget_s
-        self._courtesy: list[tuple[np.ndarray, float]] = []
-        """Where (m, ``map``) and when (s) the robot began to wait for someone standing (``courtesy_s`` and
-        ``courtesy_forget_s`` after, that place is forgotten)."""
+        self.stop_lag_s = stop_lag_s
+        self._courtesy: list[CourtesyWait] = []
+        """The waits for someone standing: ``courtesy_s`` after the robot stood it passes, ``courtesy_forget_s``
+        later the place is forgotten."""
         self._standing_since: float | None = None
         self._back_until = -np.inf
         self.yields = 0
@@ -141,6 +153,7 @@ class Yielding:
         backing = now_s < self._back_until
         if not backing and not walking.any() and not waiting.any() and self._courtesy_wait(now_s, pose, vel, filtered,
                                                                                            people):
+            self._standing_since = None                               # waiting by choice, not a standoff
             self.yields += 1
             return 0.0, 0.0
         if not backing and not walking.any() and not waiting.any():
@@ -176,19 +189,35 @@ class Yielding:
     def _courtesy_wait(self, now_s: float, pose, vel, filtered, people: People) -> bool:
         """Whether to stand rather than pass within ``courtesy_m`` of a standing person's disc (they may step out
         into the robot's way as it passes): the ``filtered`` command held over the horizon would, the robot is
-        still coming nearer, and it has not yet waited ``courtesy_s`` for someone standing there."""
+        still coming nearer, and it would cross that line within its stopping distance (else it drives on and
+        stops later, at the line); once stopping for someone there it stands until it has stood ``courtesy_s``."""
         poses = self._rollout(pose, vel, np.asarray(filtered, float)[None])
         xy = people.xy_m
-        way = self._signed_m(self._local(poses, np.broadcast_to(xy, poses.shape[:2] + xy.shape)))[0].min(0)
+        gaps = self._signed_m(self._local(poses, np.broadcast_to(xy, poses.shape[:2] + xy.shape)))[0]   # (n, N)
+        way = gaps.min(0)
         now = self._signed_m(self._local(np.array(pose, float)[None, None], xy[None, None]))[0, 0]
         near = (way - self.person_radius_m < self.courtesy_m) & (now > way + 0.05)
-        self._courtesy = [(p, t0) for p, t0 in self._courtesy if now_s - t0 < self.courtesy_s + self.courtesy_forget_s]
+        steps = np.diff(np.vstack([np.asarray(pose, float)[None, :2], poses[0, :, :2]]), axis=0)
+        path = np.cumsum(np.hypot(steps[:, 0], steps[:, 1]))                   # (n,) along the way, m
+        inside = gaps - self.person_radius_m < self.courtesy_m
+        reach = np.where(inside.any(0), path[np.argmax(inside, axis=0)], np.inf)
+        v = abs(float(vel[0]))
+        due = (now - self.person_radius_m < self.courtesy_m) | (
+            reach <= v * self.stop_lag_s + v * v / (2.0 * self.limits.decel_m_s2) + v * self.dt_s)
+        stood = now_s if v < 1e-3 else None
+        self._courtesy = [c for c in self._courtesy if now_s - (c.began_s if c.stood_s is None else c.stood_s)
+                          < self.courtesy_s + self.courtesy_forget_s]
         for j in np.flatnonzero(near):
-            seen = [t0 for p, t0 in self._courtesy if np.hypot(*(p - xy[j])) < 0.5]
+            seen = [c for c in self._courtesy if np.hypot(*(c.xy_m - xy[j])) < 0.5]
             if not seen:
-                self._courtesy.append((xy[j].copy(), now_s))
+                if due[j]:
+                    self._courtesy.append(CourtesyWait(xy[j].copy(), now_s, stood))
+                    return True
+                continue
+            if seen[0].stood_s is None:
+                seen[0].stood_s = stood
                 return True
-            if now_s - seen[0] < self.courtesy_s:
+            if now_s - seen[0].stood_s < self.courtesy_s:
                 return True
         return False
 

@@ -50,9 +50,9 @@ import numpy as np
 
 from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint
+from amr_twin.navigation.interfaces import LocalController, Twist2D
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.path_handler import PathHandler
-from amr_twin.navigation.rpp import Twist2D
 from amr_twin.sim.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("mppi_critics.c")
@@ -79,7 +79,7 @@ def _declare(lib) -> None:
         raise RuntimeError(f"{C_SOURCE.name} takes {lib.mppi_params_size()} parameters, mppi.py {len(PARAMS)}")
 
 
-class Mppi:
+class Mppi(LocalController):
     """MPPI local controller (module docstring). ``seed``: the noise stream (same seed, same commands).
     ``native=False``: the NumPy critics rather than their C twin (:attr:`engine` says which run).
 

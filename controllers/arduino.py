@@ -4,35 +4,17 @@ What a sketch sees: ``micros()``/``millis()`` (from :class:`VirtualClock`), a
 periodic timer interrupt (TimerOne-like), ``attachInterrupt``/``detachInterrupt``
 for the external interrupts on the SC pins, ``noInterrupts()``/``interrupts()``,
 ``delay()`` in main context, 8-bit ``analogWrite`` and ``digitalWrite`` onto the
-:class:`~amr_twin.sim.pins.DriverPins` of the two drivers.
+:class:`~amr_twin.base.pins.DriverPins` of the two drivers.
 
-Interrupt model (ATmega2560 datasheet §7.8, §15):
-
-- One global flag I (SREG). Each source (external INT per SC pin, Timer1) has a
-  pending flag. An event sets the flag; the ISR runs when I = 1 and the source is
-  enabled. Several events while pending collapse into one (as on AVR).
-- Entering an ISR clears I; RETI sets I = 1 whatever the ISR did. An ISR that
-  calls ``interrupts()`` allows nesting: pending ISRs run inside it at once.
-- With ``BoardParams.latch_int_flag_while_detached`` an edge on a detached pin
-  (whose mode was set by an earlier attach) still sets its flag, and
-  ``attachInterrupt`` does not clear it: the ISR fires immediately on attach.
-- Among pending sources the lowest vector wins: INT4 (pin 2), INT5 (pin 3), then
-  Timer1.
-- ISRs take zero virtual time.
-
-Main context (``loop()`` and what it calls) runs as generator tasks: a task
-yields a number of milliseconds to ``delay()``; the runtime schedules its
-resumption on the clock. While a task is blocked, new main-context work
-(a rosserial message) is queued and runs when the task finishes.
-"""
+Reasons and measurements: docs/firmware.md#amr_twincontrollersarduino."""
 
 from __future__ import annotations
 
 from collections import deque
 from typing import Callable, Generator, Iterator
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW, DriverPins
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW, DriverPins
 
 from amr_twin.controllers.firmware_params import BoardParams
 

@@ -1,34 +1,6 @@
 """The firmware as the board runs it: an Arduino sketch compiled with avr-gcc on an emulated ATmega2560.
 
-:class:`AvrFirmware` implements :class:`~amr_twin.controllers.firmware_params.Firmware` with the
-sketch's ELF running on :class:`~amr_twin.controllers.avr_board.AvrBoard` (libsimavr):
-
-- time: the board is reset, runs its setup(), and t = 0 is the first call of loop() (the Python
-  ports run setup() at t = 0 in zero time): CPU cycle ``16 * t_us + lead`` with ``lead`` the
-  cycles setup() took (about 0.1 ms);
-- the board is run, cycle-accurately, up to each instant the loop stops the physics at, and at
-  least every ``sync_period_us`` (one physics step): a pin written at ``t`` acts from the first
-  physics step that starts at or after ``t``, as with the Python ports;
-- pins: PWM duty from the Timer4 compare registers (OCR4A/B when the output is connected by
-  ``analogWrite``, else 0 or 255 from the port), DIR/BRAKE/STOP from PORTA;
-- SC edges: each edge toggles pin 2 or 3 (INT4/INT5) at its microsecond;
-- rosserial: real frames (:mod:`amr_twin.ros.rosserial_frame`) over USART0 at the baud the sketch
-  set (115200 -> UBRR 16 with U2X: 117647 bit/s, 85 us a byte, both ways, since the Mega's
-  USB-serial chip runs the same divider). A frame from the PC enters the receiver byte by
-  byte from the instant it is published (plus the link's extra latency); a frame from the board
-  is delivered on the bus when its last byte has left the wire (write time, queued behind the
-  previous byte, plus 10 bit times, plus the extra latency). Lost frames (the link's
-  ``loss_prob``) are corrupted (PC -> board: the board's checksum test drops them) or dropped.
-
-Topic ids and types come from the sketch itself: before the run, the ELF is started on a second
-board and asked for its topics as rosserial_python does (:func:`topic_table`). The twin's PC side is
-the rosserial host: the sketch is built with ``AMR_TWIN_ROS_CONFIGURED_AT_START`` (ros_lib starts
-as if the host had negotiated before t = 0), and each time request the board sends is answered
-with the simulated time. With ``AvrParams(serial_pty=PATH)`` a real host is: USART0 is served on a
-pseudo-terminal paced to wall time (:mod:`amr_twin.controllers.avr_serial_port`), the sketch is
-built without that define (it waits for the host's negotiation), the bus' ``wheel_Command`` no
-longer reaches the board, and the board's frames still reach the bus (odometry, recordings).
-"""
+Reasons and measurements: docs/firmware.md#amr_twincontrollersavr."""
 
 from __future__ import annotations
 
@@ -37,9 +9,9 @@ from collections import deque
 from functools import lru_cache
 from typing import Sequence
 
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
 from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, FrameParser, TopicInfo,
                                       deserialize_float64, frame, serialize_float64,

@@ -1,4 +1,4 @@
-"""The emulated Mega's USART0 on a pseudo-terminal, as ``/dev/ttyACM0`` is on the robot (issue 31).
+"""The emulated Mega's USART0 on a pseudo-terminal, as ``/dev/ttyACM0`` is on the robot.
 
 With ``AvrParams(serial_pty=PATH)`` the board's serial port is served to a rosserial host (the
 project's ``amr_twin/ros1/serial_host.py``, or upstream's ``serial_node.py``) instead of the twin's

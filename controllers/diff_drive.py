@@ -23,7 +23,7 @@ import logging
 import math
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import EventHandle, VirtualClock
+from amr_twin.base.clock import EventHandle, VirtualClock
 from amr_twin.ros.geometry_messages import Twist
 
 from amr_twin.controllers.wheel_command import OK, WheelCommandClient

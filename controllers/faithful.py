@@ -17,8 +17,8 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW
 
 from amr_twin.controllers.arduino import ArduinoRuntime, MainTask
 from amr_twin.controllers.firmware_params import FaithfulParams, Publish

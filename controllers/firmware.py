@@ -3,7 +3,7 @@
 Three firmwares implement :class:`Firmware`: ``faithful`` (a port of the thesis
 listings 4.7-4.12, quirks included behind named switches) and ``improved`` run on
 :class:`~amr_twin.controllers.arduino.ArduinoRuntime`, which emulates the Arduino
-Mega 2560 on the shared :class:`~amr_twin.sim.clock.VirtualClock`; ``avr`` is the
+Mega 2560 on the shared :class:`~amr_twin.base.clock.VirtualClock`; ``avr`` is the
 same firmware as an Arduino sketch (``controllers/arduino/motor_control``, or a
 user's sketch folder) compiled with avr-gcc and run on an emulated ATmega2560
 (:mod:`~amr_twin.controllers.avr`). A firmware that speaks rosserial on its own
@@ -17,7 +17,7 @@ magnitude: the SC output carries no direction, and the thesis firmware publishes
 
 from __future__ import annotations
 
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 
 from amr_twin.controllers.firmware_params import (AvrParams, BoardParams, FaithfulParams, Firmware, ImprovedParams,
                               Publish)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable, Protocol, Sequence
 
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 
 Publish = Callable[[str, float], None]
 """``publish(topic, value)``: a std_msgs/Float64 leaving the Arduino over rosserial."""
@@ -91,7 +91,7 @@ class ImprovedParams:
     pi_period_us: int = 20_000  # PI tick (50 Hz), us
     publish_every_ticks: int = 5  # wheelN_Vel every 5 PI ticks (10 Hz)
     publish_mean: bool = True  # wheelN_Vel is the mean speed since the previous sample (edges counted);
-    # False: the PI's sliding-window estimate at that instant (before issue 30; the odometry then loses
+    # False: the PI's sliding-window estimate at that instant (the former default; the odometry then loses
     # about an edge per wheel at each start and stop, docs/umbmark.md)
     extrapolate_above_rpm: float = 15.0  # the mean counts the part of an edge rolled since the last edge
     # at this per-edge speed or more: braked from 15 RPM a wheel of the twin rolls 43 mm (5 edges) on, so

@@ -1,29 +1,6 @@
 """Improved wheel firmware, same interface and pin semantics as the thesis port.
 
-Differences from the faithful port (see docs/firmware.md):
-
-- Speed from every SC edge: the period over a sliding window of the latest edges
-  (at most ``window_edges`` intervals, none older than ``window_us``, a multiple
-  of 3 intervals so hall-sensor misalignment cancels), bounded above by the time
-  since the last edge and forced to 0 after ``zero_speed_timeout_us``.
-- PI at a fixed rate (Timer1 at 50 Hz) with feed-forward from the reference,
-  conditional-integration anti-windup (no integration while saturated against
-  the error, while the reference is still ramping, nor outside an error band:
-  the ramp's tracking lag would otherwise wind the integral up), no dead band, sigma-delta PWM dithering.
-- The reference is slew-limited in both directions (decelerations ramp too), by
-  the timer, so ``loop()`` never blocks in ``delay()``; a change of direction ramps
-  through zero and flips DIR there.
-- wheel0_Vel / wheel1_Vel published at a fixed rate (RPM, magnitude): the mean speed since the
-  previous sample (``publish_mean``), the SC edges counted since then, with the part of an edge
-  rolled since the last one at speeds where the next edge is sure to come (the PI keeps the
-  per-edge speed). That is what the wheel odometry node takes a
-  sample for (its window mode), so it counts every edge: its error stays within an edge (8.7 mm
-  of rim) instead of growing by about an edge per wheel at each start and stop, as it did
-  integrating the PI's estimate (which lags at low speeds and is 0 below 4.4 RPM;
-  ``publish_mean=False``; measured in docs/umbmark.md).
-- Same semantics: motion 0 brakes (BRAKE high), motion +-1 at speed 0 coasts
-  (STOP low) and the PI leaves that wheel alone.
-"""
+Reasons and measurements: docs/firmware.md#amr_twincontrollersimproved."""
 
 from __future__ import annotations
 
@@ -31,8 +8,8 @@ import math
 from collections import deque
 from typing import Sequence
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW
 
 from amr_twin.controllers.arduino import ArduinoRuntime
 from amr_twin.controllers.firmware_params import ImprovedParams, Publish

@@ -7,28 +7,11 @@ With ``signed_input=True`` the wheel topics are read as signed RPM and ``wheel_C
 
 Two poses (REP-105: ``odom -> base_link`` must be continuous): the *smoothed* pose corrects the past
 a window describes (it jumps when a sample arrives); the *published* one is integrated forward only,
-never revised (:mod:`amr_twin.controllers.published_pose`). ``odom`` (frame ``odom``, child
+never revised (:mod:`amr_twin.estimation.published_pose`). ``odom`` (frame ``odom``, child
 ``base_link``) and the ``odom -> base_link`` transform are published at ``publish_rate_hz``, the
 first at the node's start.
 
-What holds with the thesis firmware (``experiments/missions/stop_start.yaml``, ``stop_lengths.yaml``
-and three more stop-and-go runs in the empty world): while the robot stands the published pose moves
-under 1 mm and 0.01 degrees; from a restart to the next stop command its heading changes as the
-robot's within 5.0 degrees (5.6 over a turn in place at 90 deg/s after a 3 s stop), through that stop
-within 2.9 degrees (6.3 for that turn).
-
-Known limits, inherited from the hardware: a start is estimated at the commanded speed until its
-first sample, so a wheel slower than commanded (a turn in place at 14 RPM runs at 10) is ahead by up
-to 40 degrees of heading before that sample, then made up while it turns; a revolution across a stop
-is split by the estimate of the motion before it, so an error there (a brake that ends sooner in a
-turn) moves to the restart (``stop_lengths.yaml``: 0.03 revolution of one wheel, the 5.6 degrees of its
-turn in place); a wheel commanded from rest that never turns reads a revolution; a wheel that stops
-without a brake command (stalled, coasting at speed 0) reads as at rest after ``sample_gap_s + 60 /
-rest_rpm`` s (6.4 s), having moved up to ``1.4 + ln(rpm / rest_rpm)`` revolutions too far (3.1 at 53
-RPM); a wheel that really turns slower than ``rest_rpm`` reads as at rest between its samples and is
-made up by them; a motion sign change is applied at command time while the wheel is still spinning
-the old way.
-"""
+Reasons and measurements: docs/fusion.md#amr_twincontrollersodometry."""
 
 from __future__ import annotations
 
@@ -42,8 +25,8 @@ from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovar
                                             TransformStamped, Twist, TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.controllers.published_pose import PublishedPose
+from amr_twin.base.clock import VirtualClock
+from amr_twin.estimation.published_pose import PublishedPose
 from amr_twin.controllers.wheel_speed_samples import WheelSpeedSamples
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
@@ -59,50 +42,22 @@ def _covariance(diagonal: Sequence[float]) -> np.ndarray:
 class WheelOdometry:
     """Dead reckoning from the wheel speeds, published on ``odom`` and tf.
 
-    Parameters
-    ----------
-    bus, clock : Bus, VirtualClock
-        Shared bus and clock.
-    wheel_radius_m, wheel_separation_m : float
-        Nominal geometry, m (``wheel.radius_m``, ``wheel.separation_m``: the thesis' 0.125 and listing
-        4.2's L 0.48).
-    wheel_radius_multiplier, left_radius_multiplier, right_radius_multiplier : float
-        Calibration factors of the radii (global, then per wheel).
-    wheel_separation_multiplier : float
-        Calibration factor of the separation.
-    publish_rate_hz : float
-        Rate of ``odom`` and tf, Hz.
-    pose_covariance_diagonal, twist_covariance_diagonal : sequence of 6 float
-        Variances of (x, y, z, rot x, rot y, rot z), SI units squared.
-    signed_input : bool
-        Read the wheel topics as signed RPM (a firmware that knows the sign).
-    publish_tf : bool
-        Also broadcast ``odom -> base_link``.
-    speed_samples : {"window", "hold"}
-        Meaning of a speed sample (module docstring).
-    revolutions_per_sample : float
-        Wheel revolutions one sample measures in ``"window"`` mode (thesis: 1).
-    sample_latency_s : float
-        Delay from the end of a measurement to its receipt, s (rosserial: ~1.4 ms).
-    max_substep_s : float
-        Longest arc while a speed varies, s.
-    brake_stop_s, brake_friction_rpm_s : float
-        Time a fast braked wheel takes to stop (the speed falls linearly), s, and the constant deceleration
-        that stops a slow one sooner, RPM/s (0: all in ``brake_stop_s``).
-    catchup_time_s : float
-        Shortest time over which the difference to the smoothed pose is made up, s (> 0).
-    catchup_max_fraction : float
-        Largest correction as a fraction of the wheels' speed and yaw rate (>= 0), beyond the floors.
-    max_wheel_accel_m_s2 : float
-        Fastest change of each wheel's speed the published pose moves with, m/s^2 at
-        the rim (``inf``: none); what this costs is made up by the correction.
-    sample_gap_s : float
-        Longest wait of the firmware between a sample and the start of the next measurement, s
-        (``inf``: a sample holds until the next, no silence bound).
-    rest_rpm : float
-        Slowest speed the node believes a silent wheel turns at, RPM (below the silence bound: at rest).
-    start_s : float
-        Time a wheel started from rest takes to reach its speed, s (the linear ramp of an estimate).
+    Args (SI units unless named; in full: docs/fusion.md#amr_twincontrollersodometrywheelodometry):
+        bus, clock: the shared bus and clock.
+        wheel_radius_m, wheel_separation_m: nominal geometry (thesis 0.125, listing 4.2's 0.48).
+        wheel_radius_multiplier, left_radius_multiplier, right_radius_multiplier,
+        wheel_separation_multiplier: calibration factors (global, then per wheel; the separation).
+        publish_rate_hz: rate of ``odom`` and tf, Hz.
+        pose_covariance_diagonal, twist_covariance_diagonal: variances of (x, y, z, rot x, y, z).
+        signed_input: read the wheel topics as signed RPM. publish_tf: also broadcast the transform.
+        speed_samples: ``"window"`` or ``"hold"``, what a speed sample means (module docstring).
+        revolutions_per_sample: revolutions one ``"window"`` sample measures (thesis: 1).
+        sample_latency_s: measurement end to receipt (~1.4 ms). max_substep_s: longest arc.
+        brake_stop_s, brake_friction_rpm_s: a fast braked wheel's stop time; a slow one's RPM/s.
+        catchup_time_s (> 0), catchup_max_fraction (>= 0): how a pose difference is made up.
+        max_wheel_accel_m_s2: fastest wheel speed change the pose follows, at the rim (inf: none).
+        sample_gap_s: the firmware's longest wait between samples (``inf``: no silence bound).
+        rest_rpm: slowest speed a silent wheel is believed to turn at. start_s: a start's ramp.
     """
 
     def __init__(self, bus: Bus, clock: VirtualClock, *, wheel_radius_m: float, wheel_separation_m: float,

@@ -2,31 +2,7 @@
 
 Routes (:mod:`.route`, re-exported here) are polylines in the ``map`` frame.
 
-Pure pursuit (Coulter, CMU-RI-TR-92-01), with two additions that a crossing
-route needs:
-
-- *Progress along the path.* The follower keeps the arc length ``progress_m``
-  of its projection on the polyline and only searches ahead of it (at most
-  ``2 * lookahead_m + 1 m``), never behind: where the route crosses itself the
-  projection cannot jump to the other branch.
-- The lookahead point is the path point ``lookahead_m`` of arc length ahead of
-  the projection (clamped at the goal). With ``alpha`` its bearing in
-  ``base_link`` and ``d`` its distance, the curvature is ``2 sin(alpha) / d``.
-
-The linear speed is the least of ``max_speed_m_s``, ``max_angular_rad_s / |curvature|``,
-``sqrt(2 * decel * remaining path)`` (a stop at the goal) and ``sqrt(2 * decel * (path to the
-next sharp corner - lookahead / 2))``, and at least ``min_speed_m_s``. A sharp corner turns by
-more than ``sharp_corner_rad`` (120 deg): pure pursuit rounds a right angle, but at a sharper
-corner the lookahead point swings behind the robot, which turns in place about half a
-lookahead before the corner. It gets there at the least speed instead of at full speed, as a
-velocity smoother would have it (a wheel that reverses while still spinning is also what a
-direction-less wheel speed sensor counts wrong). If ``|alpha|`` exceeds ``turn_in_place_rad`` (60 deg) the
-robot turns in place (angular ``gain * alpha`` clipped to the limit) until
-``|alpha|`` falls under ``turn_in_place_exit_rad``. The follower is done when it
-is within ``goal_tolerance_m`` of the last waypoint after having made progress
-to within ``lookahead_m + goal_tolerance_m`` of the path's end; from then on it
-commands zero.
-"""
+Reasons and measurements: docs/navigation.md#amr_twincontrollerspath_follower."""
 
 from __future__ import annotations
 
@@ -36,7 +12,7 @@ from typing import Callable
 import numpy as np
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.geometry_messages import Twist, Vector3
 
 from amr_twin.controllers.route import Route

@@ -27,7 +27,7 @@ import numpy as np
 from amr_twin.model.yaml_file import read_yaml
 
 MAX_ROUTE_SPEED_M_S = 1.0
-"""Highest route speed accepted, m/s (issue #8: 'at up to 1 m/s')."""
+"""Highest route speed accepted, m/s ('at up to 1 m/s' was asked)."""
 ROUTE_FIELDS = ("name", "world", "start_xy_yaw", "waypoints_xy_m", "max_speed_m_s", "max_angular_rad_s",
                 "lookahead_m", "goal_tolerance_m")
 

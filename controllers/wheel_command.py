@@ -7,25 +7,7 @@ against ``[min_rpm, max_rpm]`` and calls the service; the service publishes
 
 Return codes (§4.2.1): 0 ok, 1 value error, -1 the service call failed.
 
-Decisions where the thesis is silent or self-contradictory
-----------------------------------------------------------
-- MIN_RPM/MAX_RPM are not printed. ``MIN_RPM = 0`` (a wheel at 0 RPM free-spins,
-  fig. 3.6) and ``MAX_RPM = MAX_VEL = 1054`` RPM: the firmware maps
-  ``duty = rpm / MAX_VEL`` so a larger set point cannot be produced.
-- ``checkSpeed`` tests the magnitude ``MIN_RPM <= |rpm| <= MAX_RPM``: listing 4.4
-  calls it on the signed rpm before ``abs()``, and the backward commands of
-  fig. 3.4 and experiment 4 are accepted.
-- ``angular`` follows REP-103: ``speed_deg_s`` is the signed yaw rate
-  (counter-clockwise positive) and ``icc_m`` is positive to the left; each wheel
-  whose speed comes out negative turns backward (motion -1, |speed|). Listing 4.5
-  instead forces both motions FORWARD when ``|icc| >= R``; pass
-  ``listing_motion_codes=True`` to reproduce that. Example: the clockwise
-  rotation about an ICC 1 m to the right (ch. 5) is ``angular(-60, -1)``;
-  ``angular(60, -1)`` gives the same RPMs with both wheels backward (forward in
-  listing mode).
-- The request fields are float32 (fig. 3.3 prints 38.19718551635742 =
-  float32(38.1971863...)); ``float32_request=True`` rounds the speeds likewise.
-"""
+Reasons and measurements: docs/firmware.md#amr_twincontrollerswheel_command."""
 
 from __future__ import annotations
 

@@ -5,30 +5,13 @@ sign is the wheel's last non-zero ``wheel_Command`` motion code. Under a brake (
 falls linearly to 0 over :meth:`WheelSpeedSamples.brake_us` (braked at 10 to 100 RPM, a hub wheel of
 the twin covers the distance of such a ramp of 0.29 to 0.55 s; the model 0.31 to 0.54 s).
 
-``speed_samples="window"`` (default): a sample of ``rpm`` received at ``t`` is the *mean* speed over
-``[t - revolutions_per_sample * 60 / rpm, t]`` (the thesis firmware times one revolution, 90 SC
-changes, and publishes at its end), clipped at the previous sample (the improved firmware, 10 Hz,
-gets the mean since it); held after the newest. ``"hold"``: zero-order hold from receipt (a naive
-node; it lags a revolution at a start). In ``"window"`` mode, from what the thesis firmware does:
-
-- *Silence bound.* Nothing is published while a wheel stands; after a sample the firmware waits up
-  to ``sample_gap`` before timing the next revolution. A silent wheel is held until its next sample
-  is due, then kept under ``60 * revolutions_per_sample / (elapsed - gap)`` RPM, at rest below
-  ``rest_rpm``. These knots are assumptions: a late sample replaces them.
-- *A start from rest* ramps over ``start`` to the commanded speeds until the first wheel has turned
-  what its open window allows (the rest of a revolution), then ramps down: no sample by then means
-  slower. A wheel whose own sample has not come moves as the other, scaled by their commands; one
-  measured before the other, scaled by their speeds at its newest sample.
-- *A revolution across a stop* is published after the restart (8.5 RPM for 7 s of which 6 stood):
-  its count is kept, the part the estimate does not place before the stop goes after the restart as
-  a ramp over ``start`` to a held speed.
-"""
+Reasons and measurements: docs/firmware.md#amr_twincontrollerswheel_speed_samples."""
 
 from __future__ import annotations
 
 import math
 
-from amr_twin.controllers.published_pose import PublishedPose
+from amr_twin.estimation.published_pose import PublishedPose
 from amr_twin.controllers.wheel_command import MAX_RPM
 
 SPEED_SAMPLES = ("window", "hold")

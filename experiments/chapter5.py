@@ -11,7 +11,7 @@ Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``run<N>.rrd`` /
 ``run<N>.mcap`` per run (:mod:`amr_twin.recording.rerun_log`, :mod:`amr_twin.recording.mcap_log`),
 written by the process that simulates the run to a temporary name of this process
 (``.run<N>.rrd.<pid>.tmp``), renamed only once every run is done (with the caller's
-:func:`~amr_twin.recording.atomic_file.all_or_nothing` batch, if one is open) and removed if the
+:func:`~amr_twin.base.atomic_file.all_or_nothing` batch, if one is open) and removed if the
 runs are interrupted or fail. Recording does not change the results.
 """
 
@@ -165,7 +165,7 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
                if folder is not None}
 
-    from amr_twin.recording.atomic_file import discard_after, place, temporary_name
+    from amr_twin.base.atomic_file import discard_after, place, temporary_name
 
     staged: list[tuple[Path, Path]] = []  # (temporary of this process, recording) renamed at the end
 

@@ -8,8 +8,8 @@ the caller writes every file itself. The writers put a file in place with one
 ``os.replace``: a reader, or a rerun after an interruption, sees either the whole
 file or none.
 
-The local pool is in :mod:`.process_pool` (:func:`~.process_pool.worker_pool`), the Dask
-cluster in :mod:`.dask_cluster` (:func:`~.dask_cluster.connect_dask`).
+The local pool is in :mod:`amr_twin.base.process_pool` (its workers warmed by
+:func:`amr_twin.sim.run.warm_up`), the Dask cluster in :mod:`.dask_cluster` (:func:`~.dask_cluster.connect_dask`).
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ import json
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
-from amr_twin.recording import atomic_file
+from amr_twin.base import atomic_file
+from amr_twin.base.process_pool import pool_results
 from amr_twin.experiments.dask_cluster import cluster_results
-from amr_twin.experiments.process_pool import pool_results
 
 EXECUTORS = ("local", "dask")
 
@@ -59,7 +59,9 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
                 bar.advance(task, size(item))
                 yield item, result
             return
-        for item, result in pool_results(func, items, min(jobs, len(items)) - 1):
+        from amr_twin.sim.run import warm_up  # the twin, imported by the workers as they start
+
+        for item, result in pool_results(func, items, min(jobs, len(items)) - 1, warm_up):
             bar.advance(task, size(item))
             yield item, result
 

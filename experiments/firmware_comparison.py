@@ -6,7 +6,7 @@ run numbers) and, per driven wheel, the k-th published sample of one with the k-
 :func:`markdown` renders the table of ``report.md``. Where the differences come from is
 explained in docs/firmware.md ("The emulated board against the faithful port").
 
-Acceptance (issue 20): the last published samples within :data:`FINAL_RPM_TOL` and the first
+Acceptance: the last published samples within :data:`FINAL_RPM_TOL` and the first
 published samples within :data:`FIRST_SAMPLE_TOL_S` of each other.
 
 The emulated board is brought up to the loop's time every millisecond, so the loop samples the
@@ -61,7 +61,7 @@ def command_timeline(firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int
     Python ports the command arrives when the link's frame ends (115200 baud); for ``avr`` its
     bytes start at t = 0 and every instruction is checked for a pin change.
     """
-    from amr_twin.sim.clock import VirtualClock
+    from amr_twin.base.clock import VirtualClock
     from amr_twin.controllers.firmware import SKETCH_EDGES_PER_REV, make_firmware
     from amr_twin.ros.messages import Float64MultiArray
     from amr_twin.ros.rosserial import frame_bytes, frame_time_us

@@ -31,8 +31,8 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.controllers.diff_drive import DiffDriveNode
-from amr_twin.controllers.ekf import EkfNode
-from amr_twin.controllers.lidar_odometry import LidarOdometry
+from amr_twin.estimation.ekf import EkfNode
+from amr_twin.estimation.lidar_odometry import LidarOdometry
 from amr_twin.controllers.path_follower import PathFollowerNode
 from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
 from amr_twin.sim.loop import Twin, TwinOptions

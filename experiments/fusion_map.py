@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.controllers.occupancy_grid import OccupancyGrid
+from amr_twin.estimation.occupancy_grid import OccupancyGrid
 from amr_twin.model.world_geometry import Footprints, distance_to_boxes_m, surface_samples_m
 from amr_twin.model.worlds import OccupancyMap, load_map
 

@@ -15,7 +15,7 @@ from amr_twin.analysis.trajectory import TrajectoryErrors
 from amr_twin.experiments.fusion import ARCHITECTURES, RPE_DELTA_M, FusionResults
 from amr_twin.experiments.fusion_map import TOLERANCE_CELLS, MapAgreement
 
-LIDAR_ATE_MAX_M = 0.10   # issue #8 acceptance
+LIDAR_ATE_MAX_M = 0.10   # the fusion acceptance
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,7 @@ class ArchitectureMetrics:
 
 @dataclass(frozen=True)
 class FusionVerdicts:
-    """The acceptance verdicts of issue #8: the odometry's final drift m and % of the route, the IMU
+    """The fusion acceptance verdicts: the odometry's final drift m and % of the route, the IMU
     improving the heading, the LiDAR odometry's ATE under :data:`LIDAR_ATE_MAX_M`, the share of the
     map's walls within 2 cells, the goal reached."""
 
@@ -99,7 +99,7 @@ class FusionMetrics:
 
 
 def verdicts(results: FusionResults, map_check: MapAgreement) -> FusionVerdicts:
-    """The acceptance verdicts of issue #8 on this run."""
+    """The fusion acceptance verdicts on this run."""
     e = {name: results.estimates[name].errors for name in ARCHITECTURES}
     return FusionVerdicts(
         odom_drift_final_m=e["odom"].final_pos_err_m,

@@ -18,7 +18,7 @@ from amr_twin.experiments.fusion import ARCHITECTURES, FusionResults
 from amr_twin.experiments.fusion_metrics import LIDAR_ATE_MAX_M, FusionMetrics, metrics
 from amr_twin.experiments.fusion_map import agreement
 from amr_twin.analysis import se2, tum
-from amr_twin.recording import atomic_file
+from amr_twin.base import atomic_file
 
 COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",
            "odom+uwb+imu": "tab:blue"}
@@ -92,7 +92,7 @@ def _save_map(results: FusionResults, out: Path):
     """Save the grid as map.yaml/.pgm/.png in ``out`` via a staging folder; return its check.
 
     The map is judged as saved (read back from the staging folder) and then moved
-    into ``out`` with the other outputs (:func:`amr_twin.recording.atomic_file.all_or_nothing`).
+    into ``out`` with the other outputs (:func:`amr_twin.base.atomic_file.all_or_nothing`).
     """
     staging = atomic_file.temporary_name(out / "map")
     staging.mkdir(parents=True, exist_ok=True)

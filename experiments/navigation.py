@@ -1,24 +1,6 @@
 """``amr-twin experiment navigation``: seeded episodes of start/goal pairs in the warehouse, measured as nav2 is.
 
-Each episode (:func:`episodes`) draws, from its own seed, a start and a goal pose 10 to 50 m apart
-(straight line) in the world's free space (at least ``FREE_CLEARANCE_M`` from any obstacle, both
-reachable), and a scenario: ``clear``; ``person``, a person crossing an aisle on the way (``people
-= "walking"``: an :class:`~amr_twin.model.actors.Actor` of amr_twin/model/actors.py walking across
-the aisle at 1.3 m/s, setting off when the robot should be about 3 m away, halting while the
-robot is within 0.6 m ahead of them (people give way), then standing at the
-aisle's side) or standing in it off its middle (``"static"``: a 0.45 x 0.3 x 1.7 m box); or
-``pallet_jack``, a loaded pallet jack (1.6 x 0.75 x 1.3 m, the load hides the forks, so the scan
-sees its whole footprint) in an aisle on the way, anywhere across it (it may leave room to pass,
-or block the aisle). Neither is on any map.
-
-Each episode runs on the world's true map and on the SLAM map (a map built from the LiDAR's
-scans, :mod:`.navigation_map`), the same start, goal, obstacle and seed, with the localisation and
-controller chosen (EKF of odometry, gyro and UWB, and MPPI, by default). :func:`run_episode` is the
-worker (picklable items, :func:`amr_twin.experiments.executor.run_all`); the metrics are in
-:mod:`.navigation_metrics`, the report and plots in :mod:`.navigation_report`. Generated halls
-(``generated:SEED``): their episodes and doorways in :mod:`.navigation_generated`, several at once by
-:func:`run_halls` (the true map only).
-"""
+Reasons and measurements: docs/navigation.md#amr_twinexperimentsnavigation."""
 
 from __future__ import annotations
 

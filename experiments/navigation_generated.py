@@ -205,7 +205,7 @@ def write_world(cfg, world: str, folder: Path) -> list[Path]:
     from amr_twin.model.generated_world import mjcf, parse
     from amr_twin.model.worlds import write_pgm
     from amr_twin.navigation.stack import true_map
-    from amr_twin.recording.atomic_file import replacing, write_text
+    from amr_twin.base.atomic_file import replacing, write_text
 
     seed, door = parse(world)
     stem = f"generated_{seed}" + ("" if door is None else f"_door{door:g}")

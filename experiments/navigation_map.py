@@ -2,9 +2,9 @@
 
 The fusion experiment's pipeline (:mod:`.fusion`): a pure-pursuit drive of a route through every
 aisle of the world (``experiments/routes/<world>_mapping.yaml``) with the LiDAR, IMU and UWB on,
-then the scans inserted into a log-odds grid (controllers/occupancy_grid.py), each beam at the
+then the scans inserted into a log-odds grid (amr_twin/estimation/occupancy_grid.py), each beam at the
 laser pose of its own instant, saved as map_server YAML + PGM. The poses are smoothed over the
-whole drive (controllers/pose_graph.py, GTSAM): kiss-icp's and the wheel odometry's motion between
+whole drive (amr_twin/estimation/pose_graph.py, GTSAM): kiss-icp's and the wheel odometry's motion between
 scans and every UWB range, the ranges late behind racks weighed down. Neither a filter nor LiDAR
 odometry alone makes a straight map there: the EKF's heading wanders where the ranges are late
 (0.6-0.8 deg median, up to 7 deg), which drew rows twice and slanted, and kiss-icp slides 1-1.5 m
@@ -39,7 +39,7 @@ def mapping_route(world: str) -> Path:
 def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = False) -> dict:
     """Drive the mapping route, smooth its poses, build the map matched scan to map (:func:`save_slam_map`),
     save ``<stem>.yaml/.pgm/.png``; its figures."""
-    from amr_twin.controllers.pose_graph import smooth
+    from amr_twin.estimation.pose_graph import smooth
     from amr_twin.controllers.route import load_route
     from amr_twin.experiments.fusion import drive, estimate_ekf, estimate_lidar, last_per_stamp, site_config
     from amr_twin.experiments.fusion_streams import odom_poses
@@ -69,7 +69,7 @@ def beam_poses(cfg, scans: list, t_s: np.ndarray, pose: np.ndarray) -> list:
     """Per scan, the laser pose (n_beams, 3) at each beam's instant, from base poses (N, 3) at ``t_s`` (N,)
     (the last of equal stamps kept)."""
     from amr_twin.analysis import se2
-    from amr_twin.controllers.lidar_odometry import beam_times_s
+    from amr_twin.estimation.lidar_odometry import beam_times_s
     from amr_twin.experiments.fusion import laser_in_base, last_per_stamp
 
     t_s, pose = last_per_stamp(t_s, pose)

@@ -1,27 +1,6 @@
 """Scan-to-map matching of the mapping drive: each scan fitted to the map of the scans before it.
 
-The mapping drive's poses (the pose graph's, controllers/pose_graph.py) hold the map frame to a few
-cm, but a few tenths of a degree of heading error move a rack face seen 5-15 m away by a few cm; SLAM front ends take that out by matching each scan against the map built so far (after
-the pose graph: 96.8-99.9 % of the occupied cells within 2 cells of the world -> 97.6-99.98 %,
-docs/navigation.md). This reconstructs the idea of Hector SLAM's scan matcher (Kohlbrecher et al.
-2011: Gauss-Newton on the map's gradient at the scan's end points) from its description, on a
-distance field instead of Hector's interpolated occupancy:
-
-1. The end points of the first ``warmup`` scans go into a hit map at the poses given.
-2. Each later scan is moved rigidly by a correction ``(dx, dy, dyaw)`` (the yaw about the laser at
-   the scan's middle beam) starting from the last scan's correction; Gauss-Newton minimises the
-   squared distance of its end points to the nearest hit cell (a Euclidean distance transform of
-   a window about the laser, bilinear samples and gradients), points farther than ``inlier_m``
-   (what the map has not seen yet) left out, with priors pulling the correction towards the
-   last one (``prior_m``, ``prior_rad``: the poses' error changes slowly) and towards none
-   (``ekf_m``, ``ekf_rad``: the poses given are good to about a decimetre; without it the
-   matches slid along the look-alike rack faces, 1 m in a few hundred scans, on the EKF's poses).
-3. Its end points go into the hit map at the corrected poses.
-
-The corrected beam poses then make the occupancy grid as before. No loop closure (the UWB bounds
-the drift). :func:`match_scans` returns the corrected beam poses and the
-corrections.
-"""
+Reasons and measurements: docs/navigation.md#amr_twinexperimentsnavigation_scan_match."""
 
 from __future__ import annotations
 

@@ -13,21 +13,7 @@ The points (named positions, the parsers, keys and fingerprints) are in
 :mod:`.payload_simulation`. The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
 
-With ``draws`` (:class:`amr_twin.analysis.uncertainty.Draws`, ``--samples N``), every point is
-also run once per drawn configuration: its key gains ``_s<i>_<id>`` (the sample's
-index and a hash of its drawn values) and its fingerprint covers the drawn
-configuration, so a resumed sweep redoes exactly the runs whose parameters changed.
-The nominal runs keep the keys of a sweep without samples (and are reused from one).
-:mod:`.payload_spread` reports medians, intervals and sensitivities.
-
-Recordings (``record_dir`` / ``mcap_dir`` of :func:`run`): one ``<key>.rrd`` /
-``<key>.mcap`` per point **simulated by this call**, written by the process that
-simulates it (the Dask workers with a cluster: the folder must be on storage they
-share with this machine), through a temporary name and a rename, before the
-point's JSON. A resumed sweep does not re-simulate a point that is already done
-only because its recording is missing: delete ``runs/<key>.json`` to record it
-again. Recording does not change the rows. Invalid positions are not recorded.
-"""
+Reasons and measurements: docs/results.md#amr_twinexperimentspayload_sweep."""
 
 from __future__ import annotations
 

@@ -6,21 +6,7 @@ REP-103 axes: start at the origin facing +x, a square of side ``L`` driven count
 turns) and clockwise, each run's return position error ``e = true - odometry`` in the start's
 frame (:class:`~amr_twin.experiments.umbmark_square.SquareRun`).
 
-- Centre of gravity of each direction's errors, ``r_cg = |(x_cg, y_cg)|``; systematic error
-  ``E_max,syst = max(r_cg,cw, r_cg,ccw)``; non-systematic: the spread of each cluster about its
-  centre of gravity (RMS and largest distance).
-- Two systematic errors, to first order: type A, each odometry 90-degree turn is ``90 + alpha``
-  in truth (unequal effective wheelbase); type B, each leg curves by ``beta`` (unequal wheel
-  diameters, ``+`` to the left). Summing the four legs' heading errors gives ``e_ccw =
-  (2L(alpha + beta), -2L(alpha + beta))`` and ``e_cw = (2L(alpha - beta), 2L(alpha - beta))``, so
-  ``alpha = (x_cw + x_ccw) / 4L = (y_cw - y_ccw) / 4L`` and ``beta = (x_ccw - x_cw) / 4L =
-  -(y_cw + y_ccw) / 4L`` (both estimates averaged, as Borenstein does; his signs differ by his
-  axes, not his result).
-- ``R = (L/2) / sin(beta/2)``, ``E_d = D_R / D_L = (R + b/2) / (R - b/2)``; ``E_b = 90 / (90 +
-  alpha)`` (degrees): the effective wheelbase is ``E_b b``. The odometry's radii become ``c_L r``,
-  ``c_R r`` with ``c_L = 2 / (E_d + 1)``, ``c_R = 2 / (1/E_d + 1)`` (their mean kept: UMBmark cannot
-  see a common scale error).
-"""
+Reasons and measurements: docs/umbmark.md#amr_twinexperimentsumbmark."""
 
 from __future__ import annotations
 

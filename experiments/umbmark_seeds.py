@@ -34,7 +34,7 @@ MAX_RUNS = 50
 SQUARE_S = 60.0
 """Simulated time of one square, s (four legs of 4 m at up to 0.4 m/s, four turns, the rests: 59-61 s)."""
 STREAM = 30
-"""First entry of every run's seed sequence (issue 30's squares): ``[STREAM, seed, phase, direction, run]``."""
+"""First entry of every run's seed sequence (the squares): ``[STREAM, seed, phase, direction, run]``."""
 
 
 @dataclass(frozen=True)

@@ -1,40 +1,6 @@
 """One UMBmark square driven by the twin on its own wheel odometry (Borenstein and Feng, 1996).
 
-The robot starts at rest and is programmed to traverse the square by its odometry, as UMBmark
-drives a real robot: it drives to the corner ``side_m`` ahead, comes to rest, turns in place to the
-next leg's heading (left for counter-clockwise, right for clockwise), comes to rest, four times,
-every corner and heading in the frame of the wheel odometry node
-(:class:`~amr_twin.controllers.odometry.WheelOdometry`, calibrated or not). A leg steers onto its
-line by the odometry (pure pursuit ``lookahead_m`` ahead, the wheels' difference changed by at most
-the ramp's step a sample) and ends abreast of its corner; so a turn that ends a sample's crawl off
-its heading (1-2 degrees) is taken out by the next leg, and every run's square is the same by the
-odometry (``lookahead_m = 0``: legs straight by the wheels' command, as before issue 30's driver
-change, where each turn's end error bent the rest of the square and the runs differed by it). The driver (:class:`SquareDriver`) is a
-node on the bus: it acts on each wheel speed sample the firmware publishes (``wheel1_Vel``, 10 Hz
-with the improved firmware), the instant the odometry has integrated it, and commands through
-the ``wheel_Command`` client as a user would. Its profile (:class:`Profile`):
-
-- a motion starts on a sample and its command ramps up by ``accel`` a sample (within the
-  firmware's own slew limit, 150 RPM/s = 1.96 m/s^2 at the rim);
-- it brakes on the sample whose stop lands nearest the end by the odometry (the odometry counts
-  ``brake_lead_s`` of the commanded speed after a brake);
-- it stands ``rest_s`` after each stop (the firmware's zero speed and the odometry's catch-up).
-
-Why these (measured, docs/umbmark.md): the odometry integrates 10 Hz speed samples that each
-describe the last ~100 ms of SC edges, 90 a revolution (8.7 mm of rim an edge), and none below
-about 4.4 RPM (no edge within 150 ms). What it misses is the travel at the low speeds of each
-start and stop, about one edge per wheel: slow ramps and crawling to the end make it larger
-(+1.9 deg of heading a turn crawling at 8 RPM), starting and braking on a sample makes it
-smallest and the same from run to run. The hard brake does not skid the tyres (at 0.4 m/s it
-asks 22 N of a wheel that can give 52 N).
-
-What is returned (:class:`SquareRun`) is the return pose by the odometry node, by the wheels'
-true angles integrated with the odometry's geometry (nominal, or its calibration) and with the
-true geometry (an ideal encoder, from the recorder's 100 Hz wheel angles) and in truth: ``true -
-node`` is UMBmark's return error; ``true - wheels(odometry's geometry)`` its geometry and slip
-part, ``true - wheels(true geometry)`` the slip alone; the rest, ``wheels - node``, is the
-odometry's sampling of the speeds.
-"""
+Reasons and measurements: docs/umbmark.md#amr_twinexperimentsumbmark_square."""
 
 from __future__ import annotations
 
@@ -43,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.controllers.dead_reckoning import arc
+from amr_twin.estimation.dead_reckoning import arc
 
 DIRECTIONS = ("cw", "ccw")
 MAX_MOTION_S = 60.0

@@ -5,7 +5,7 @@
  * Newton on the Hermite cubic as hall_edges.solve_hermite, round half to even as Python's
  * round), edges in the same order before the caller's stable sort by time, so both give the
  * same edges; tests/sensors/test_hall.py checks it. Built at first use
- * (amr_twin/sim/native_build.py).
+ * (amr_twin/base/native_build.py).
  */
 #include <math.h>
 #include <stdint.h>

@@ -5,7 +5,7 @@ angles and speeds; each lattice crossing is solved on it by Newton's method
 (:func:`solve_hermite`) and rounded to the microsecond. Intervals where a speed changes
 sign are first resampled (:func:`split_trajectory`). :class:`EdgeKernel` runs the
 crossing loop of :meth:`amr_twin.sensors.hall.HallSensors.edges_from_samples` in C
-(``hall_edges.c``, built at first use by :mod:`amr_twin.sim.native_build`; 14.5 us of
+(``hall_edges.c``, built at first use by :mod:`amr_twin.base.native_build`; 14.5 us of
 Python per 10 ms tick of the loop, measured in a 16 s run) with the same results: that
 method is its Python twin.
 """
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.sim.native_build import address, open_helper
+from amr_twin.base.native_build import address, open_helper
 
 C_SOURCE = Path(__file__).with_name("hall_edges.c")
 MAX_EDGES = 4096

@@ -7,41 +7,10 @@ come from MuJoCo's ``accelerometer``, ``gyro`` and ``magnetometer`` sensors on t
 ``amr/imu`` site (frame ``imu_link``, REP-103 axes): specific force (m/s^2, +9.81
 on z at rest), body rate (rad/s) and the world field ``opt.magnetic`` (T).
 
-Each axis of each sensor is corrupted as (:mod:`amr_twin.sensors.imu_errors`)::
-
-    y = quantise(clip((1 + s) * x + b0 + b_walk(t) + n, +-range), resolution)
-
-with a turn-on bias ``b0 ~ N(0, bias_sigma)`` and a scale error ``s ~ N(0,
-scale_sigma)`` drawn once, a bias random walk ``b_walk`` with increments
-``N(0, walk * sqrt(dt))``, and white noise ``n ~ N(0, density * sqrt(rate))``
-(the discrete-time convention of Kalibr's IMU noise model). The parameters and
-their datasheet sources are in the ``imu:`` section of ``models/amr/amr.yaml``.
-
-Published on the bus at ``rate_hz`` by clock events: ``sensor_msgs/Imu`` on
-``imu/data_raw`` (no orientation: ``orientation_covariance[0] = -1``) and
-``sensor_msgs/MagneticField`` on ``imu/mag``, both stamped with the sample time
-and delivered at that time (no latency is modelled: the sample instant, the stamp
-and the delivery coincide). Standalone, each sample is a clock event that reads
-``MjData`` at its instant. In the twin (:meth:`ImuSensor.start` with the loop's
-grid) the loop copies the true values on its record grid while the physics steps,
-the errors of the samples taken so far are drawn in one batch (same numbers as
-one by one), and each message goes out from a publishing clock event at its
-sample instant, which does not stop the physics unless a subscriber could act on
-it sooner (:meth:`amr_twin.ros.bus.Bus.lookahead_us`). The covariance arrays of the
-messages are shared and read-only.
-
-Covariances say what a reading's error is on the *raw* topic (:func:`covariances`):
-per axis the white noise, the turn-on bias (the datasheet's zero-rate / zero-g
-level, uncalibrated: 10 deg/s on the gyro) and the quantisation, ``noise^2 +
-bias_sigma^2 + resolution^2 / 12``. A node that fuses ``imu/data_raw`` as it is
-thus trusts the gyro to 10 deg/s, not to its 0.05 deg/s noise; the calibration
-step that earns the noise level is the rest mean of the first seconds (the twin's
-EKF does it, ``ekf.imu_rest_calibration_s``, :mod:`amr_twin.controllers.ekf`).
-This module does not import mujoco: it reads ``MjData.sensordata`` by address.
+Reasons and measurements: docs/fusion.md#amr_twinsensorsimu.
 
 Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads MuJoCo's accelerometer, gyro and
-magnetometer values where they lie in MjData (by address, in C on the loop's grid).
-"""
+magnetometer values where they lie in MjData (by address, in C on the loop's grid)."""
 
 from __future__ import annotations
 
@@ -51,14 +20,14 @@ import numpy as np
 
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import IMU_FRAME
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config_sections import ImuCfg
 from amr_twin.ros.geometry_messages import Quaternion, Vector3
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Imu, MagneticField
 from amr_twin.sensors.imu_errors import ErrorStream, axis_models, covariances
 from amr_twin.sim.grid_steps import GridRows, gather
-from amr_twin.sim.native_build import address
+from amr_twin.base.native_build import address
 
 PHYSICS_LAYER = True
 
@@ -133,7 +102,7 @@ class ImuSensor:
             on its grid while it steps (a :class:`~amr_twin.sim.grid_steps.GridRows`,
             in C when the loop runs its grid there) and the messages go out
             from *publishing* clock events at the sample instants: the physics
-            is not stopped for them (:mod:`amr_twin.sim.clock`). Otherwise each
+            is not stopped for them (:mod:`amr_twin.base.clock`). Otherwise each
             sample is a clock event that reads ``MjData`` at its instant.
         samplers : list, optional
             The loop's list of grid samplers; the true values' keeper is appended to it.

@@ -3,7 +3,7 @@
  * The C twin of ErrorStream.corrupt_python (amr_twin/sensors/imu_errors.py): the same
  * operations in the same order on IEEE doubles (compiled with -ffp-contract=off; round half
  * to even as numpy's round), so both give the same bits; tests/sensors/test_imu_errors.py
- * checks it. Built at first use (amr_twin/sim/native_build.py).
+ * checks it. Built at first use (amr_twin/base/native_build.py).
  */
 #include <math.h>
 #include "c_layout.h"

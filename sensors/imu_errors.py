@@ -9,7 +9,7 @@ the raw readings' covariances, and :class:`ErrorStream` corrupts the nine axes o
 consecutive samples at once: the errors that do not depend on the true values (the
 bias walk and the white noise) are drawn ahead in blocks of :data:`ERROR_BLOCK` samples,
 the same numbers as drawing per sample, and the rest runs in C when a compiler is at
-hand (``imu_errors.c``, :mod:`amr_twin.sim.native_build`: about 2 us for a batch
+hand (``imu_errors.c``, :mod:`amr_twin.base.native_build`: about 2 us for a batch
 against 40 us of numpy; 9 us per 10 ms tick of the loop measured in a 8 s run).
 :meth:`ErrorStream.corrupt_python` is its Python twin: the same operations in the same
 order, the same bits.
@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config_sections import ImuCfg
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import address, c_array, open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("imu_errors.c")
 ERROR_BLOCK = 256

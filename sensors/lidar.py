@@ -1,49 +1,9 @@
 """Slamtec RPLIDAR A1 on the ``amr/laser`` site: rotating 2D scans cast in MuJoCo.
 
-The A1's head spins clockwise seen from above (datasheet: the scan angle grows
-clockwise), while ROS wants a ``LaserScan`` counter-clockwise (REP-103). Beam ``i``
-of the message points at ``angle_min + i * angle_increment`` (counter-clockwise from
-``-pi``) and is acquired in the real order: a rotation starts at the last index,
-just clockwise of the back, and ends at index 0, so beam ``i`` is acquired at
-``t0 + (n - 1 - i) / sample_rate``. Each beam is cast from the laser pose at its
-own instant, so a scan taken while the robot moves is distorted as a real one
-(beam instants in :attr:`Lidar.beam_t_us` and :attr:`Lidar.last_beam_t_us`, in
-message order, for deskew). The message says so with the standard fields: its
-stamp is the instant of beam 0 (the last acquired, the end of the rotation) and
-``time_increment`` is negative (``-1 / sample_rate``), so that beam ``i`` was
-acquired at ``stamp + i * time_increment`` as ``laser_geometry`` and the twin's
-LiDAR odometry compute it. (``rplidar_ros`` reverses the array the same way but
-keeps a positive ``time_increment`` with the stamp at the rotation's start,
-which times every beam but the middle one wrongly.) The laser pose is sampled at regular instants; beams are cast in groups, each
-beam from the laser position at its own instant (MuJoCo's ray functions, :mod:`~amr_twin.sensors.lidar_kernels`), with the beam
-geometry and range noise of :mod:`amr_twin.sensors.lidar_beams`.
-Geoms that move with the robot (a payload, group 4) are cast in a second call in
-the present laser frame, and the nearer hit wins. Two ways to drive it:
-
-- standalone (:meth:`Lidar.start_motor` without arguments): a clock event at
-  every multiple of ``group_us`` (default 20 ms) samples the pose, casts the
-  beams acquired since the previous event and publishes a completed rotation;
-- in the twin (``start_motor(grid_us, samplers)``): the simulation loop keeps the
-  pose samples on its record grid while the physics steps (a
-  :class:`~amr_twin.sensors.lidar_beams.PoseSamples`, in C when the loop runs its grid
-  there; no clock event); the pose is sampled every ``group_us`` (rounded up to the grid), the
-  beams are cast when a rotation is complete (at the first pose sample after its
-  last beam; also every ``loop_cast_us`` if shorter than a rotation), and the
-  scan goes out from a publishing clock event at that instant
-  (:mod:`amr_twin.sim.clock`: it stops the physics only if a subscriber of ``scan``
-  could act sooner).
-
-Rays see the world and a payload only (:data:`~amr_twin.sensors.lidar_beams.SEEN_GROUPS`). The cutoff is large and
-ranges are clamped here (``mj_multiRay`` culls by bounding volume, stack-notes.md),
-then noised (``inf`` where invalid, as ``rplidar_ros`` publishes it).
-
-A ``sensor_msgs/LaserScan`` goes out on ``scan`` at the first pose sample at or
-after the last beam of its rotation (frame ``laser``, stamp = the last beam). ``start_motor`` / ``stop_motor`` services start and stop the
-rotation (the motor spin-up time is not modelled).
+Reasons and measurements: docs/lidar.md#amr_twinsensorslidar.
 
 Part of the physics layer (``PHYSICS_LAYER``): a sensor: casts its beams with ``mj_multiRay`` on
-MjData at each laser pose.
-"""
+MjData at each laser pose."""
 
 from __future__ import annotations
 
@@ -54,7 +14,7 @@ import numpy as np
 
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import LASER_FRAME
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config_sections import LidarCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan

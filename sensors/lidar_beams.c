@@ -8,7 +8,7 @@
  * directions, the rays (lb_rays: MuJoCo's mju_rayGeom per geom behind a cull of its own, azimuth
  * spans and nearest first, the hits of mj_multiRay to the bit; mj_multiRay itself when a mesh, height field or SDF is in
  * view; both through pointers taken from the loaded libmujoco) and the motion correction. Built
- * at first use (amr_twin/sim/native_build.py).
+ * at first use (amr_twin/base/native_build.py).
  */
 #include <math.h>
 #include <stdint.h>

@@ -3,34 +3,10 @@
 Pure numpy (no MuJoCo, no clock): the clock-driven sensor that casts the beams is
 :class:`amr_twin.sensors.lidar.Lidar`.
 
-Timing (:func:`scan_timing`)
-    One rotation takes ``n = round(sample_rate / scan_rate)`` samples, one every
-    ``1 / sample_rate`` s (2000 Hz at 5.5 Hz: 364 beams, 1 deg apart, 182 ms per
-    scan; RPLIDAR A1M8 datasheet v2.x).
-Directions (:func:`beam_angles_rad`, :func:`beam_directions`)
-    Beam ``i`` points at ``angle_min + i * increment`` in the ``laser`` frame
-    (REP-103, counter-clockwise from x, ``angle_min = -pi``).
-Beam instants of a message (:func:`beam_times_s`, :func:`scan_end_time_s`)
-    Beam ``i`` was acquired at ``stamp + i * time_increment``; ``time_increment``
-    is negative for a scanner that spins clockwise (the A1), whose stamp is then
-    the end of the rotation.
-Motion during a rotation (:class:`PoseSamples`, :func:`interpolate_poses`, :func:`world_directions`)
-    The laser pose is sampled at regular instants. A beam acquired between two
-    samples is cast from the laser pose at its own instant: from the laser
-    position there and along its own direction (linear interpolation of the
-    position and laser axes of the two samples around it, the direction then
-    normalised), in the world as it is when the beams are cast.
-Geom groups (:data:`SEEN_GROUPS`, :func:`group_masks`)
-    Rays see geom groups 0 (world) and 4 (payload) only, never the robot's own
-    wheels, casters or frame (groups 1, 2).
-Range noise (:func:`noisy_ranges`)
-    Gaussian with sigma ``max(floor, frac * r)``, then quantised to the 1/4 mm of
-    the A1 protocol. No hit, or a range outside ``[range_min, range_max]``, is
-    ``inf`` as ``rplidar_ros`` publishes it.
+Reasons and measurements: docs/lidar.md#amr_twinsensorslidar_beams.
 
 Part of the physics layer (``PHYSICS_LAYER``): keeps the laser site's pose from MjData on the loop's
-grid (views of ``site_xpos``/``site_xmat``).
-"""
+grid (views of ``site_xpos``/``site_xmat``)."""
 
 from __future__ import annotations
 
@@ -40,7 +16,7 @@ import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
 from amr_twin.sim.grid_steps import GridRows, gather
-from amr_twin.sim.native_build import address
+from amr_twin.base.native_build import address
 
 PHYSICS_LAYER = True
 

@@ -1,45 +1,9 @@
 """The LiDAR's per-beam work in C: directions and origins at the beams' instants, the rays, noise.
 
-:class:`BeamKernels` calls the C helper ``lidar_beams.c`` (built at first use by
-:mod:`amr_twin.sim.native_build`); :class:`PythonBeamKernels` is its Python twin, made of the
-numpy functions of :mod:`amr_twin.sensors.lidar_beams`: the same operations in the same
-order, so both give the same bits (tests/sensors/test_lidar_kernels.py). A rotation's
-arithmetic around the ray cast costs about 25 us in C against about 400 us of numpy on the
-loop's cold caches (measured in 8 and 16 s runs). Each beam is cast from the laser's position at
-its own instant (its own origin), with MuJoCo's ray functions: the Python twin calls
-``mj_multiRay`` once per run of beams with the same origin (``mj_ray`` for each while the laser moves);
-the helper calls MuJoCo's per-geom ``mju_rayGeom`` behind a cull of its own (``lb_rays``: a geom is tried by the rays whose
-azimuth falls in the span of its bounding box's corners seen from the laser, nearest bounding
-sphere first, until the geoms left are all farther than the hit; prepared once per cast from the
-present laser origin, each geom's span widened for a beam by how far its origin is from there; ``mj_multiRay`` tries every
-geom its angular bounds pass and tests each body's bounding sphere per ray, ~0.25 us a ray with
-nothing to hit), ties to the lower id, so that it returns the same geoms, distances and normals
-to the bit (tests/sensors/test_lidar_kernels.py, against ``mj_multiRay`` and ``mj_ray``). A
-rotation of 364 beams in the warehouse: 150 against 373 us in the twin (medians of 87 casts,
-two runs each; standing). A mesh, height field or SDF in view sends the cast to ``mj_multiRay``
-(``mj_ray`` per beam while the laser moves).
-
-Before (until issue 32's navigation runs showed its ghosts) each rotation was cast from the present
-origin in one call and each range corrected for the origin's motion on the plane of the surface hit
-(``r + n.(o_now - o_i) / n.u``): exact for an infinite plane only, it made returns 0.1-0.9 m off
-every surface beside thin uprights, braces and at grazing incidence (docs/lidar.md).
-
-Both classes take and return the same arrays:
-
-- :meth:`geometry`: beam instants ``t_us`` (k,) int64, laser-frame components ``lx``,
-  ``ly`` (k,) or (k, 1) and the pose samples ``rows`` (>= npose, 10) of
-  :class:`~amr_twin.sensors.lidar_beams.PoseSamples` -> ``(u, origin)``: unit directions in
-  the world (k, 3) and the laser position at each beam's instant (k, 3), m;
-- :meth:`cast`: a cast at the beams' own instants (:meth:`geometry`, then each ray from its
-  own origin) into ``dist`` and ``geomid`` (k,), after :meth:`bind` named the model, data,
-  laser site and geom groups (the C helper calls MuJoCo's functions itself, through pointers
-  into the loaded libmujoco);
-- :meth:`rays` (the helper only): the ray cast alone, unit directions from an origin;
-- :meth:`noise`: noisy ranges (n,) float32, m, inf where invalid, from standard normals.
+Reasons and measurements: docs/lidar.md#amr_twinsensorslidar_kernels.
 
 Part of the physics layer (``PHYSICS_LAYER``): the LiDAR's ray casts (``mj_multiRay`` on MjData) and
-their C arithmetic.
-"""
+their C arithmetic."""
 
 from __future__ import annotations
 
@@ -50,8 +14,8 @@ import mujoco
 import numpy as np
 
 from amr_twin.model.config_sections import LidarCfg
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import address, c_array, mujoco_address, open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import address, c_array, mujoco_address, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, quantised_ranges, world_directions
 
 PHYSICS_LAYER = True

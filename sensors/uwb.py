@@ -5,43 +5,10 @@ nothing of the hardware; the model is a DW1000 tag ranging to ``n`` anchors with
 double-sided two-way ranging (Decawave APS013). The parameters and their sources
 are in the ``uwb:`` section of ``models/amr/amr.yaml``.
 
-Geometry
-    Anchor ``i`` stands at ``(anchors_x_m[i], anchors_y_m[i], anchor_z_m)`` in the
-    world (``map``) frame; the tag is at ``tag_pos_m`` in ``base_link``. A range is
-    the 3D distance between them (the anchors hang above the tag).
-Schedule (round-robin)
-    Each anchor is ranged once per period ``1 / rate_hz``; the exchanges are spread
-    evenly over the period, anchor ``k % n`` at the ``k``-th slot of ``period / n``
-    (on the absolute time grid, so the events coincide with other periodic nodes).
-Errors (:func:`corrupt_ranges`), per exchange
-    ``r = d + n + b``: white noise ``n ~ N(0, range_noise_sigma_m)``; with
-    probability ``nlos_prob`` a non-line-of-sight bias ``b ~ Exp(mean nlos_bias_m)``
-    (positive: a blocked first path only arrives late, APS006 part 1; what the
-    world's geometry does not hold: people, forklifts, goods); the reading is
-    clipped at 0. With probability ``dropout_prob`` the exchange fails, and ranges
-    beyond ``max_range_m`` are never received: neither is published.
-Walls (:class:`UwbSensor`: physical NLOS)
-    The tag-anchor line is cast against the world's geoms (group 0, ``mj_ray``).
-    When a wall, rack or pallet stands in it, the direct path is blocked: the
-    exchange gets a further bias ``Exp(mean blocked_bias_m)`` and fails with
-    probability ``blocked_dropout_prob`` (through-wall delay and attenuation). This
-    is what makes an NLOS zone: a long corridor whose walls hide the anchors of the
-    hall next to it.
-Messages
-    ``sensor_msgs/Range`` on ``uwb/range``, one per successful exchange, stamped at
-    the exchange, ``header.frame_id = "uwb_anchor_<i>"``, ``radiation_type =
-    Range.INFRARED`` (ROS has no UWB type), ``field_of_view = 2 pi``: the range is
-    measured from that anchor to the tag (frame ``uwb_tag`` of the URDF). A
-    :class:`UwbSensor` sends the anchors as static frames ``map -> uwb_anchor_<i>``
-    (:mod:`amr_twin.ros.ros_state`).
-
-:func:`simulate_ranges` makes the same messages offline from tag positions (tests,
-replays); :class:`UwbSensor` samples the twin on the clock (it reads ``MjData.xpos``/``xmat``
-of the base body and casts one ray per exchange).
+Reasons and measurements: docs/fusion.md#amr_twinsensorsuwb.
 
 Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads the tag's pose from MjData and casts
-each tag-anchor line with ``mj_ray``.
-"""
+each tag-anchor line with ``mj_ray``."""
 
 from __future__ import annotations
 
@@ -51,7 +18,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config_sections import UwbCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Range

@@ -1,4 +1,4 @@
-"""A Foxglove WebSocket client written to the published protocol, for the live tests (issue 17).
+"""A Foxglove WebSocket client written to the published protocol, for the live tests.
 
 Independent of the server under test: the ``websockets`` package, the message layout of
 the Foxglove WebSocket protocol specification (``foxglove/ws-protocol``, docs/spec.md), and

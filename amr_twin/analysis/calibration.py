@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from amr_twin.recording.atomic_file import write_text
+from amr_twin.base.atomic_file import write_text
 from amr_twin.model.config import TwinConfig, load_config
 from amr_twin.analysis.calibration_targets import (BENCH_QUANTITY, log_residuals, read_log, thesis_features,
                                                    thesis_targets, weighted_residuals)
@@ -120,7 +120,8 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     """
     from scipy.optimize import least_squares
 
-    from amr_twin.experiments.process_pool import worker_pool
+    from amr_twin.base.process_pool import worker_pool
+    from amr_twin.sim.run import warm_up
 
     base = base or load_config()
     parameters = parameters or PARAMETERS
@@ -135,7 +136,7 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     targets = thesis_targets()
     count = [0]
     last: dict = {}
-    pool = worker_pool(jobs) if jobs > 1 and log is None else None  # spawned, warm, die with this process
+    pool = worker_pool(jobs, warm_up) if jobs > 1 and log is None else None  # spawned, warm, die with us
 
     def cfg_at(u: np.ndarray) -> TwinConfig:
         return _with(base, dict(zip(keys, (lo + (hi - lo) * u).tolist())))

@@ -1,25 +1,7 @@
 """The calibration's report: the fitted values, their 1-sigma uncertainty and correlations,
 and how the fit would follow the parameters it held at their sourced values.
 
-:func:`evaluate` linearises the calibration's weighted residuals ``r`` (the targets of
-:mod:`amr_twin.analysis.calibration_targets`, each ``(twin - target) / sigma``) at a configuration:
-
-- ``J_a``, the Jacobian in the fitted parameters, by forward differences in the fit's
-  own scaled variables (a step of 2 % of each parameter's bound span, toward the
-  inside, as ``least_squares`` takes it): the covariance is ``(J_a^T J_a)^-1``, whence
-  the 1-sigma uncertainties and the correlations (driver gain and ``Ke`` at 0.99);
-- ``J_b``, the Jacobian in the held parameters (:data:`HELD`: winding resistance,
-  iron-loss damping, rolling resistance, the wheel's inertia, the battery's voltage), one forward step each: ``follow = -(J_a^T J_a)^-1 J_a^T J_b`` is how the
-  best fit moves when a held parameter does (``d fitted / d held``; a damper 0.004 N m
-  s/rad stronger takes ``7.5 x 0.004`` N m off the fitted dry friction, since the bench
-  point pins their sum at 71.5 RPM).
-
-:mod:`amr_twin.analysis.uncertainty` draws the fitted parameters jointly from this normal and
-shifts each draw by ``follow`` times the held parameters' deviations, so that every
-draw stays a plant that fits the targets. The report is a YAML file
-(``models/amr/calibration.yaml`` for the shipped values), written by ``amr-twin calibrate
---report FILE`` (``--no-fit``: the report of the given values, without fitting).
-"""
+Reasons and measurements: docs/validation.md#amr_twinanalysiscalibration_report."""
 
 from __future__ import annotations
 
@@ -134,7 +116,7 @@ def read(path: str | Path) -> CalibrationReport:
 
 def write(report: CalibrationReport, path: str | Path) -> None:
     """Write a report atomically."""
-    from amr_twin.recording.atomic_file import write_text
+    from amr_twin.base.atomic_file import write_text
 
     write_text(Path(path), "# amr-twin calibration report (amr-twin calibrate --report): the fitted values, their\n"
                "# 1 sigma and correlations, and d fitted / d held for the parameters the fit held fixed\n"

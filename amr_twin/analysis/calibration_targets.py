@@ -1,29 +1,6 @@
 """The calibration's targets: what the twin must reproduce, and the twin's value of each.
 
-Two targets (:mod:`amr_twin.analysis.calibration` fits the drive's unknowns to either):
-
-- ``thesis``: weighted residuals, each ``(twin - thesis) / sigma``:
-
-  * the bench point of listing 4.1 (``0,38 Amp --> 71,5 RPM``, one wheel free on the
-    work station of fig. 5.1): each motor's current turning its free wheel at
-    71.5 RPM. Read as the motor (phase) current (:data:`BENCH_QUANTITY`; the reasons
-    are in docs/validation.md): steady, the torque ``Ke I`` balances the motor's
-    friction and damping, so the point pins the motor's own drag;
-  * chapter 5 runs 1-6 (faithful firmware, 10 s each, empty world): the published
-    speed's steady error of every wheel (the thesis: an "almost perfect track"), and in
-    runs 1-3 the overshoot (right about 4 RPM, left about 1.5) and the delay and rise times of the true
-    wheel speed against §5.1.3's figures (the time constant ``J R / Ke^2`` sets them,
-    which pins ``Ke`` given ``R``).
-
-- a log ``LOG.csv`` of real wheel speeds (columns ``t_s, wheel, rpm, command``;
-  ``command`` as in ``amr-twin sweep``: ``linear:0.7``, ``angular:-60:-1``,
-  ``motor:left:1.0`` or ``motor:left:forward:1.0``): each command's run is simulated
-  for the log's duration and the published speeds are compared with the log at the
-  log's times (1 RPM per sample).
-
-Residuals are weighted, ``(twin - target) / sigma`` (dimensionless), as (n,) arrays in the
-order of :func:`thesis_targets` or of the log's samples.
-"""
+Reasons and measurements: docs/validation.md#amr_twinanalysiscalibration_targets."""
 
 from __future__ import annotations
 

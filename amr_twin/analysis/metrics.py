@@ -1,52 +1,6 @@
 """Step-response metrics of a sampled signal: the time-domain specifications of fig. 5.3 and App. I.
 
-The thesis' fig. 5.3 lists Ogata's specifications (delay, rise, peak and settling time,
-maximum overshoot); :func:`step_info` measures them as Ogata defines them (K. Ogata, *Modern
-Control Engineering*, 5th ed., 2010, §5-3 "Transient-response specifications", fig. 5-8), with
-the steady-state error of §5-8 (e_ss = r - c(inf), reported here as c(inf) - r). MATLAB's
-``stepinfo`` uses the same definitions (overshoot relative to ``|y_final - y_init|``). It works
-on the dense true wheel speed (100 Hz) and on the sparse speed samples the firmware publishes
-(one per wheel revolution, about 1 s apart). All times are measured from the step instant
-``t0_s``:
-
-* the signal and the reference are sign-normalised (a step to -91.67 RPM is measured as a
-  step to +91.67 RPM); the **final value** ``c(inf)`` is the mean of the samples in the last
-  ``final_fraction`` of the record (at least the last sample), and the **step** is
-  ``final_value - initial_value``; the 10/50/90 % levels, the settling band's centre and the
-  overshoot are taken with respect to the **final value**, not the reference;
-* ``steady_error = final_value - reference``: the offset from the reference, on its own (a
-  permanent offset is not an overshoot);
-* between samples the signal is **interpolated linearly** (the thesis read its metrics off
-  rqt_plot curves, which join the published samples by lines); when the first sample comes
-  after ``t0_s`` the signal is taken to be at ``initial_value`` at ``t0_s`` (the wheel is at
-  rest before the step);
-* ``delay_s``: first crossing of 50 % of the final value; ``rise_s``: first crossing of 90 %
-  minus first crossing of 10 % (NaN when the final value does not lie beyond the initial
-  value in the reference's direction);
-* a **peak** exists when the response crosses its final value and comes back: its maximum
-  exceeds the final value, and a later sample lies below the maximum, each by more than
-  ``peak_tolerance`` (default 0.1 % of the step: the published speed's timing resolution is
-  about 1e-5 of it). Then, as Ogata defines them, ``peak_value`` is the **maximum** peak value
-  (its first sample), ``overshoot = peak_value - final_value`` in the signal's units and
-  ``overshoot_pct`` the same in % of ``|step|`` (M_p, "the maximum peak value of the response
-  curve"), and ``peak_s`` is the time of the **first** peak (t_p, "the time required for the
-  response to reach the first peak of the overshoot"): the first sample above the final value
-  by more than the tolerance from which the signal falls back by more than the tolerance before
-  it rises above it. On a response with one peak both are the same sample; on a rippled plateau
-  ``peak_s`` is its first ripple, not whichever ripple happens to be highest (MATLAB's
-  ``stepinfo`` gives the time of the maximum instead). Without a peak (a monotone approach,
-  or a record still rising at its end) ``peak_s`` and ``peak_value`` are NaN and the
-  overshoot is 0;
-* ``settling_s``: the time after which the interpolated signal stays within
-  ``final_value +- settling_band`` until the end of the record (the crossing into the band
-  after the last sample outside it); NaN if the last sample is outside;
-* ``oscillation``: **excess total variation** of the signal over the window from the first
-  90 % crossing to ``t0_s + oscillation_window_s`` (the record's end by default):
-  ``sum |y[i+1] - y[i]| - |y_end - y_start|``. It is zero for a monotone approach and twice
-  the summed swing amplitudes for an oscillating one, in the signal's units.
-
-A metric that cannot be measured (the level is never reached) is NaN.
-"""
+Reasons and measurements: docs/validation.md#amr_twinanalysismetrics."""
 
 from __future__ import annotations
 

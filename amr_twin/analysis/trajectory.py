@@ -6,26 +6,7 @@ estimate's stamps (x, y linearly; yaw linearly on the unwrapped angle, then
 wrapped to ``(-pi, pi]``); estimate samples outside the truth's time span are
 left out.
 
-ATE (absolute trajectory error)
-    RMSE of the position error ``|p_est(t_i) - p_true(t_i)|`` over the samples,
-    after an optional SE(2) alignment of the estimate onto the truth
-    (Umeyama/Horn least squares without scale, ``align=True``), as evo's
-    ``evo_ape --align`` and the TUM RGB-D benchmark (Sturm et al., IROS 2012)
-    compute it.
-RPE (relative pose error)
-    For every sample ``i`` the later sample ``j`` whose distance travelled along the
-    *true* path since ``i`` is nearest to ``rpe_delta_m`` (the first of equals), kept
-    if it is within 10 % of ``rpe_delta_m``; the error of the relative motion
-    ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` (``Q`` truth, ``P`` estimate, SE(2)).
-    ``rpe_trans_m`` is the RMSE of ``|t(E)|`` and ``rpe_rot_deg`` the RMSE of
-    ``|angle(E)|`` over all such pairs: evo's definition (``evo_rpe tum REF EST
-    --delta 1 --delta_unit m --all_pairs --pairs_from_reference``, and ``-r
-    angle_deg`` for the rotation; ``evo.core.filters.filter_pairs_by_path``). RPE
-    does not depend on the alignment. With no pair (a path shorter than
-    ``rpe_delta_m``) both are NaN.
-
-Pure numpy; no simulation imports.
-"""
+Reasons and measurements: docs/fusion.md#amr_twinanalysistrajectory."""
 
 from __future__ import annotations
 

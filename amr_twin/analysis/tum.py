@@ -25,7 +25,7 @@ import numpy as np
 
 from amr_twin.analysis import se2
 
-from amr_twin.recording import atomic_file
+from amr_twin.base import atomic_file
 
 HEADER = "# timestamp tx ty tz qx qy qz qw\n"
 

@@ -1,29 +1,6 @@
 """Monte Carlo over the parameters' uncertainty: drawn configurations and what moves the results.
 
-:class:`ParameterSpace` holds every parameter's spread (:mod:`amr_twin.model.parameter_spreads`:
-a leaf's ``range``/``sigma``/``follows``, or the default of its source's kind, or the
-calibration's report) and :meth:`~ParameterSpace.draw` draws ``n`` configurations:
-
-1. the unit hypercube, Latin hypercube (default) or scrambled Sobol points of
-   ``scipy.stats.qmc``, one dimension per drawn scalar or vector element, seeded;
-2. through each spread: ``lo + (hi - lo) u`` for a range, ``value + sigma Phi^-1(u)`` for
-   a normal; a follower takes its leader's relative deviation;
-3. the calibrated parameters jointly: ``mean + L z`` with ``L L^T`` the calibration's
-   covariance (conditioned on those fixed by ``--set``) and ``z = Phi^-1(u)``, the mean
-   shifted by ``follow (held - held_fit)`` for the held parameters of this draw;
-4. clipped to the schema's bounds (and the fit's for calibrated ones), counted per
-   dimension, rounded to 6 significant digits, and every configuration validated.
-
-The same seed gives the same bytes. ``include`` selects what varies (dotted keys or
-section prefixes; default :data:`PLANT`): drawing one calibrated parameter draws its
-whole fit. Another study reuses it as
-``ParameterSpace.load().draw(1, seed=s, include=("wheel.radius_m",)).config(cfg, 0)``.
-
-:func:`interval` and :func:`rank_correlations` summarise the results: medians with a
-90 % interval, and Spearman rank correlations of each drawn dimension with a result
-(|rho| above :func:`noise_level` for all the drawn parameters: about one chance in 20 that
-any unrelated one reaches it).
-"""
+Reasons and measurements: docs/uncertainty.md#amr_twinanalysisuncertainty."""
 
 from __future__ import annotations
 

@@ -41,7 +41,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     ``tyres_*`` and ``rigid_physics_us_per_step``: bare physics with the brush tyres against the
     rigid contact (:func:`~amr_twin.bench.physics.tyre_figures`).
     ``rolling_resistance_engine``: ``"C"`` or ``"Python (<why>)"``
-    (:mod:`amr_twin.sim.native_build`), which the figures were measured with;
+    (:mod:`amr_twin.base.native_build`), which the figures were measured with;
     ``native_engines``: the same for every C helper, by name; ``nav_*``: the navigation stack's
     (:mod:`amr_twin.bench.navigation`).
     """
@@ -49,7 +49,7 @@ def run_benchmarks(cfg: TwinConfig, sim_s: float = 16.0) -> dict:
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
     from amr_twin.navigation import mppi
     from amr_twin.sim import actors, battery, collisions, grid_steps, rolling_resistance, tyres
-    from amr_twin.sim.native_build import native_status
+    from amr_twin.base.native_build import native_status
 
     result = bare_physics(cfg, sim_s)
     result["straight_bare_physics_s_per_sim_s"] = result.pop("bare_physics_s_per_sim_s")

@@ -1,4 +1,4 @@
-"""Navigation figures of ``amr-twin bench`` (issue 32): planning, the controllers' cycles, the twin with navigation.
+"""Navigation figures of ``amr-twin bench``: planning, the controllers' cycles, the twin with navigation.
 
 - ``nav_plan_ms_p50`` / ``_p95``: CPU time of a plan on the aisles world's true map (50 x 20 m, 0.05 m
   cells, planned on 0.1 m): :data:`PLANS` seeded start/goal pairs 10-50 m apart, the planner of the

@@ -16,7 +16,7 @@ import time
 from amr_twin.model.build import build
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.physics import Physics
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 from amr_twin.sim.plant import Plant
 
 REPEATS = 5
@@ -93,7 +93,7 @@ def tyre_figures(cfg: TwinConfig, sim_s: float) -> dict:
     """Bare physics of the warehouse model with the brush tyres (:mod:`amr_twin.sim.tyres`) against
     the rigid contact of the model before them (``wheel.tyre_slip`` off), in the same run: each
     repeat steps a copy of each settled, driving robot (interleaved), ``tyres_physics_ratio`` the
-    median of the repeats' ratios. Issue 30's target: at most 1.10."""
+    median of the repeats' ratios. The target: at most 1.10."""
     from amr_twin.model.config import with_values
     from amr_twin.sim import tyres
 

@@ -1,4 +1,4 @@
-"""Cost of recording (issue 7): a chapter 5 run (16 s, linear 0.7 m/s) with and without ``--record``.
+"""Cost of recording: a chapter 5 run (16 s, linear 0.7 m/s) with and without ``--record``.
 
 ``run_record_s`` is the run with the capture attached plus writing the ``.rrd``;
 ``run_record_mcap_s`` also writes the ``.mcap``. Each figure is the best of

@@ -1,23 +1,6 @@
-"""The ROS 1 path's figures of ``amr-twin bench --suites`` (issue 31), each measured in fresh child processes.
+"""The ROS 1 path's figures of ``amr-twin bench --suites``, each measured in fresh child processes.
 
-- ``ros1_bridge_ratio``: CPU time (every thread of the process) of the twin with sensors bridged to a
-  private roscore, at full speed, while ``rosbag record`` subscribes to what a ROS 1 stack of the robot
-  reads (:data:`SUBSCRIBED`: clock, tf, odometry, joint states, scan, IMU), against the same twin
-  without the bridge; the benchmark's scenario
-  (:data:`~amr_twin.bench.twin.BENCH_START`, chapter 5 run 3 with IMU and LiDAR), medians of interleaved
-  repeats (target 1.25). Only the run is timed (the set-up, rospy's import and the wait for the
-  recorder's connections are not). With it: ``ros1_bridge_messages_per_sim_s`` (what the bridge wrote),
-  ``ros1_bridge_writes_per_sim_s`` (socket writes), ``ros1_bridge_us_per_message`` (the extra CPU over the
-  messages) and ``ros1_bridge_recorded`` (messages in the recorder's bag over messages written, the topics
-  it took; at full speed it may fall behind, which costs the twin nothing).
-- ``ros1_paced_sim_per_wall``: the same bridged twin paced at ``--rate 1`` for ``PACED_S`` simulated
-  seconds: simulated over wall seconds of the run (target within 1 % of 1).
-- ``ros1_serial_latency_ms``: the board's serial port on a pseudo-terminal (``--firmware avr
-  --serial-pty``): a host thread writes a ``wheel_Command`` frame at random instants; the delay from
-  its write to the simulated instant its first byte enters the board's receiver (on the wall clock the
-  twin is paced to), median and largest, against the frame's own time on the wire at 115200 baud
-  (``ros1_serial_frame_ms``; target: the largest delay within one frame time).
-"""
+Reasons and measurements: docs/speed.md#amr_twinbenchros1."""
 
 from __future__ import annotations
 

@@ -14,7 +14,7 @@ import statistics
 
 from amr_twin.bench.physics import REPEATS, bare_steps_s, paired_ratio, timer
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import Twin
 from amr_twin.sensors.lidar import Lidar

@@ -1,4 +1,4 @@
-"""Figures of the waits users see: ``amr-twin bench --suites`` (issue 15's acceptance figures).
+"""Figures of the waits users see: ``amr-twin bench --suites``.
 
 Each figure is the median of :data:`~amr_twin.bench.physics.REPEATS` interleaved repeats,
 except the fusion experiment (one run):
@@ -15,7 +15,7 @@ except the fusion experiment (one run):
 - ``rrd_write_60s_s``, ``rrd_write_240s_s``: CPU time of writing the ``.rrd`` of a 60 s and of
   a 240 s run with sensors (spinning in place in the warehouse), and their ratio;
 - ``fusion_wall_s``: the fusion experiment (wall), with the load average around it all.
-- ``ros1_*``: the ROS 1 path (issue 31, :mod:`amr_twin.bench.ros1`): the bridge against the same twin
+- ``ros1_*``: the ROS 1 path (:mod:`amr_twin.bench.ros1`): the bridge against the same twin
   without it, the pacing at ``--rate 1`` over 60 s, a ``wheel_Command``'s delay through the board's pseudo-terminal.
 """
 

@@ -26,7 +26,7 @@ SWEEP_COMMANDS = ["linear:0.7", "angular:60:-1"]           # 10 x 5 x 2 = 100 ru
 SWEEP_DURATION_S = 8.0
 SWEEP = {"masses": SWEEP_MASSES, "positions": SWEEP_POSITIONS, "commands": SWEEP_COMMANDS,
          "duration_s": SWEEP_DURATION_S}
-"""The benchmark's sweep: issue 15's 100 points of 8 s."""
+"""The benchmark's sweep: 100 points of 8 s."""
 
 
 def sweep_round(cfg, spec: dict = SWEEP) -> dict:

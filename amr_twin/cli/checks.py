@@ -1,7 +1,7 @@
 """Checks of the experiment and sweep commands' options, each refusal one line (``fail``, exit 2).
 
 Numbers and folders are checked before any model is built: the firmware and
-``--jobs`` (:func:`amr_twin.experiments.process_pool.check_jobs`), durations, recording
+``--jobs`` (:func:`amr_twin.base.process_pool.check_jobs`), durations, recording
 folders, every output (:mod:`amr_twin.recording.outputs`), repeated sweep values, the Dask
 scheduler.
 """
@@ -26,7 +26,7 @@ CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark":
 """CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table): a
 100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s on one
 job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark square (no
-sensors, the empty world): 0.73 s of CPU for its 60 simulated s (issue 30's ten robots, 300 squares). Navigation
+sensors, the empty world): 0.73 s of CPU for its 60 simulated s (ten robots, 300 squares). Navigation
 (sensors, EKF + MPPI, the episodes' people and the SLAM map's build): 368 s of CPU for the 32 runs of about 59
 simulated s of ``experiment navigation --episodes 16 --seed 1`` (docs/navigation.md)."""
 AVR_COST = 4.0
@@ -63,7 +63,7 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
 
     Returns the jobs to use and the firmware string (``avr:DIR`` with a sketch).
     """
-    from amr_twin.experiments.process_pool import check_jobs
+    from amr_twin.base.process_pool import check_jobs
 
     kind = checked_firmware(firmware, sketch, fail)
     try:

@@ -111,7 +111,7 @@ def _guard(func):
     simulation diverged: exit 3. A file could not be written (disk full, read-only):
     exit 1, naming the file.
     """
-    from amr_twin.recording.atomic_file import WriteError
+    from amr_twin.base.atomic_file import WriteError
     from amr_twin.model.build import BuildError
     from amr_twin.model.config import ConfigError
     from amr_twin.sim.physics import DivergenceError

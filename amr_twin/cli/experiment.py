@@ -4,7 +4,7 @@
 own modules (:mod:`amr_twin.cli.fusion`, :mod:`amr_twin.cli.navigation`, :mod:`amr_twin.cli.umbmark`)
 and added to :data:`app` below. Each simulates first and writes afterwards, every file through a
 temporary file and a rename, the report and its plots together
-(:func:`amr_twin.recording.atomic_file.all_or_nothing`): a full disk leaves the previous report,
+(:func:`amr_twin.base.atomic_file.all_or_nothing`): a full disk leaves the previous report,
 not half of a new one. Every output folder is checked before the first simulation
 (:mod:`amr_twin.recording.outputs`).
 
@@ -91,7 +91,7 @@ def chapter5(
                    one_pass_s * passes, "chapter5", jobs, firmware, yes, fail)
 
     def work():  # the recordings are renamed with the report, at the end: none if interrupted
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         with all_or_nothing():
             results = chapter5.run(cfg, jobs=jobs, firmware=firmware, runs=numbers, duration_s=duration_s,
@@ -165,7 +165,7 @@ def faults_experiment(
     cfg = _config(config, params, set_)
 
     def work():
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         results = faults.run(cfg, jobs=jobs, progress=progress)
         with all_or_nothing():

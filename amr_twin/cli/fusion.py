@@ -102,7 +102,7 @@ def _one(cfg, route_path: Path, seed: int, firmware: str, robot_errors: bool, pr
     from amr_twin.experiments import fusion, fusion_report
 
     def work():
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         results = fusion.run(cfg, route_path, seed=seed, firmware=firmware, progress=progress,
                              rrd_path=record, mcap_path=mcap, robot_errors=robot_errors)
@@ -133,7 +133,7 @@ def _many(cfg, route_path: Path, seeds: list[int], firmware: str, robot_errors: 
     from amr_twin.experiments.fusion_seeds_report import cell
 
     def work():
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         t0 = time.perf_counter()
         results = fusion_seeds.run(cfg, route_path, seeds, firmware=firmware, robot_errors=robot_errors,

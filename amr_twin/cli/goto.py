@@ -154,7 +154,7 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
 
     def work():
         from amr_twin.navigation.stack import NavigationOptions, navigate
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         held = {}
 
@@ -187,7 +187,7 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
                         from amr_twin.recording.rerun_log import record_run
                         record_run(held["twin"], rrd_path=opts.record, mcap_path=opts.mcap)
                     if opts.csv is not None:
-                        from amr_twin.recording.atomic_file import write_text
+                        from amr_twin.base.atomic_file import write_text
                         from amr_twin.recording.run_report import csv_text
                         write_text(opts.csv, csv_text(held["twin"].recorder.series()))
         except KeyboardInterrupt:

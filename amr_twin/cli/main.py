@@ -225,7 +225,7 @@ def bench(
 ) -> None:
     """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
     from amr_twin.bench.figures import run_benchmarks
-    from amr_twin.experiments.process_pool import check_jobs
+    from amr_twin.base.process_pool import check_jobs
 
     try:
         jobs = check_jobs(jobs)
@@ -282,7 +282,7 @@ def calibrate(
     from amr_twin.recording.outputs import OutputError, check_file
 
     from amr_twin.analysis.calibration import PARAMETERS, evaluations_per_step
-    from amr_twin.experiments.process_pool import check_jobs
+    from amr_twin.base.process_pool import check_jobs
 
     if no_fit and report is None:
         fail("--no-fit needs --report FILE (without a fit, the report is the only result)")
@@ -324,7 +324,7 @@ def calibrate(
             result = _guard(lambda: calibration_report.evaluate(
                 at, target, jobs=jobs, progress=lambda i, n: bar.update(task, total=n, completed=i)))
             fit = result.as_fit(fit)  # the override file carries the report's uncertainty
-    from amr_twin.recording.atomic_file import all_or_nothing
+    from amr_twin.base.atomic_file import all_or_nothing
 
     def write() -> None:
         with all_or_nothing():

@@ -111,7 +111,7 @@ def navigation(
 
     def work():
         from amr_twin.experiments import navigation, navigation_report
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         out.mkdir(parents=True, exist_ok=True)
         if halls:

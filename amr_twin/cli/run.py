@@ -1,4 +1,4 @@
-"""``amr-twin run`` and ``amr-twin client``: the high-level control as in ROS (issue 4).
+"""``amr-twin run`` and ``amr-twin client``: the high-level control as in ROS.
 
 ``amr-twin run linear|angular|motor|stop`` sends one wheel_Command_Client call at
 t = 0 and runs the twin for ``--duration-s``; ``amr-twin run --mission FILE`` runs
@@ -140,7 +140,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
 
     def work():
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
         from amr_twin.sim.loop import Twin
 
         twin = Twin(cfg, options)
@@ -172,7 +172,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
                 from amr_twin.recording.rerun_log import record_run
                 record_run(twin, rrd_path=opts.record, mcap_path=opts.mcap, result=res)
             if opts.csv is not None:
-                from amr_twin.recording.atomic_file import write_text
+                from amr_twin.base.atomic_file import write_text
                 write_text(opts.csv, csv_text(res.series))
         return res, twin.start_xy_yaw
 

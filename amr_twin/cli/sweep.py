@@ -3,7 +3,7 @@
 The sweep simulates first and writes afterwards, every file through a temporary file and a
 rename: an interrupted sweep keeps the per-point files already finished (``runs/<key>.json``),
 and a rerun only simulates the missing ones. The report and its plots are written together
-(:func:`amr_twin.recording.atomic_file.all_or_nothing`). Every output folder is checked before
+(:func:`amr_twin.base.atomic_file.all_or_nothing`). Every output folder is checked before
 the first simulation (:mod:`amr_twin.recording.outputs`). ``--record DIR`` / ``--mcap DIR``: one
 recording per point simulated (``<key>.rrd``), written by the worker that simulates it; a resumed
 sweep records only the points it simulates.
@@ -124,7 +124,7 @@ def payload(
                        workers, firmware, yes, fail)
 
     def work():
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         results = payload_sweep.run(cfg, out, mass_list, position_list, command_list, duration_s=duration_s,
                                     jobs=jobs, firmware=firmware, progress=progress, client=client,

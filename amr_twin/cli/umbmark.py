@@ -86,7 +86,7 @@ def _run(cfg, seeds: list[int], runs: int, tyres: bool, floor_field: bool, jobs:
             "profile": {k: getattr(profile, k) for k in profile.__dataclass_fields__}, "firmware": "improved"}
 
     def work():
-        from amr_twin.recording.atomic_file import all_or_nothing
+        from amr_twin.base.atomic_file import all_or_nothing
 
         t0 = time.perf_counter()
         done = umbmark_seeds.run(main + rigid, jobs=jobs, progress=progress)

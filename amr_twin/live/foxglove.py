@@ -1,24 +1,6 @@
-"""The twin live over the Foxglove WebSocket protocol (issue 17): ``amr-twin run ... --live``.
+"""The twin live over the Foxglove WebSocket protocol: ``amr-twin run ... --live``.
 
-A foxglove-sdk server (``ws://HOST:PORT``, subprotocol ``foxglove.sdk.v1``, the message format
-of the published ``foxglove.websocket.v1`` specification) advertising the channels of the
-``.mcap`` recording, with the same ROS 2 schemas (``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`)
-and the same CDR payloads (:mod:`amr_twin.recording.mcap_log`'s encoders and state messages), log
-times in simulated ns (``/actors/poses`` with actors). Added: ``/twin/scene`` (``foxglove.SceneUpdate``,
-:mod:`amr_twin.live.scene`: the world, the robot, the actors where they are). Capabilities: ``time`` (the simulated clock, as
-foxglove_bridge with ``use_sim_time``), ``clientPublish`` (``/cmd_vel``,
-``/wheel_Command_Service/request`` and ``/goal_pose``, :mod:`amr_twin.live.inputs`) and ``services``
-(``/wheel_Command_Service``). ``/tf_static``, ``/robot_description`` and ``/twin/scene``'s
-static entities are sent again whenever a client subscribes to them (latched, as
-transient-local topics are).
-
-Messages reach the clients at the pacer's ticks (:mod:`amr_twin.live.pacer`), in time
-order, once the simulated clock has passed them. A client's message is decoded and
-checked in the server's thread, then published on the twin's bus at the next tick;
-one that is refused is logged (one line) and counted in :attr:`FoxgloveSink.dropped`. ``/goal_pose``
-(``geometry_msgs/msg/PoseStamped``) is also advertised by the server, so that clients find the topic
-and its schema (Foxglove's publish tools) and see each goal taken, echoed at the tick it reached the bus.
-"""
+Reasons and measurements: docs/live.md#amr_twinlivefoxglove."""
 
 from __future__ import annotations
 
@@ -28,7 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from amr_twin.live import inputs as live_inputs
-from amr_twin.sim.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
+from amr_twin.recording.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
 from amr_twin.live.rows import LiveRows
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.geometry_messages import TFMessage

@@ -1,4 +1,4 @@
-"""What a live client may send the twin, decoded and checked before it reaches the bus (issue 17).
+"""What a live client may send the twin, decoded and checked before it reaches the bus.
 
 Two inputs, as a ROS 2 graph of the robot would take them:
 

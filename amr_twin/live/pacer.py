@@ -1,31 +1,10 @@
-"""Real-time pacing of a running twin, and the one door through which other threads act on it (issue 17).
+"""Real-time pacing of a running twin, and the one door through which other threads act on it.
 
 :class:`Pacer` is a synced clock event of its own, every ``tick_us`` (20 ms, a multiple of
 the record grid). At each tick, with the physics brought up to the tick's instant by the
 loop as for any synced event, it
 
-1. paced, lets each sink with a ``release(t_us, wait)`` method (the ROS 1 bridge) write what it
-   holds up to the tick in its own time order, ``wait(instant)`` (:meth:`Pacer.wait_until`) bringing
-   the wall clock to each instant first; then sleeps until the wall clock reaches the tick's
-   simulated time divided by ``rate`` (``rate = 0``: no release, no sleep, as fast as possible);
-2. runs the calls other threads queued (a Foxglove client's ``cmd_vel``, a menu choice):
-   they act at this simulated instant, through the bus like any node of the twin, so
-   the physics never runs ahead of a command;
-3. hands every live sink (:mod:`amr_twin.live.foxglove`, :mod:`amr_twin.live.rerun_stream`)
-   what happened up to this instant: ``sink.flush(t_us)``;
-4. paused (:meth:`Pacer.pause`, a ``pause_physics`` call), holds the twin at this instant: no physics,
-   no ``/clock``, while it goes on running the queued calls (every :data:`PAUSED_POLL_S`) until
-   :meth:`Pacer.resume` or the twin's stop (:meth:`~amr_twin.sim.loop.Twin.stop`); the wall-clock reference starts afresh after it.
-
-The loop is untouched: it still steps the physics in C from one clock event to the next.
-A tick only adds chunk boundaries on the record grid, where the loop samples the physics
-anyway, so a paced run computes exactly what an unpaced one does (``tests/live/test_live_pacer.py``
-compares them bit for bit); only the calls of other threads change a run, as a command does.
-
-A twin that cannot keep up (``--rate`` too high for the machine) runs as fast as it can;
-when it falls more than :data:`MAX_LAG_S` behind, the wall-clock reference is moved up
-(it does not race to catch up) and :attr:`Pacer.lag_resets` counts it.
-"""
+Reasons and measurements: docs/live.md#amr_twinlivepacer."""
 
 from __future__ import annotations
 

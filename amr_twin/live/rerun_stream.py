@@ -1,4 +1,4 @@
-"""The twin live in Rerun (issue 17): ``amr-twin run ... --live rerun``.
+"""The twin live in Rerun: ``amr-twin run ... --live rerun``.
 
 The Rerun recording of :mod:`amr_twin.recording.rerun_log`, streamed as the twin runs: a gRPC server
 (``rerun+http://127.0.0.1:PORT/proxy``; it keeps what was sent for late viewers) and Rerun's
@@ -7,7 +7,7 @@ with ``rerun rerun+http://127.0.0.1:PORT/proxy``. Same application id, entity pa
 ``sim_time`` timeline and default blueprint as the ``.rrd`` (:func:`amr_twin.recording.rerun_log._blueprint`; its time
 panel follows the newest data, and a viewer that connects late gets the newest data first),
 the streams logged by the same ``_log_<stream>`` functions (:mod:`amr_twin.recording.rerun_world`,
-:mod:`amr_twin.recording.rerun_streams`, :mod:`amr_twin.sim.event_log`), each flush handing them what the
+:mod:`amr_twin.recording.rerun_streams`, :mod:`amr_twin.recording.event_log`), each flush handing them what the
 simulated clock has passed since the last one. Two differences with the file:
 
 - ``world/trajectory/{true,odom}`` grow every 0.5 s from poses at 10 Hz (the file: 2 Hz
@@ -92,7 +92,7 @@ class RerunSink:
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_geoms(self.rec, m)
         if twin.faults is not None:
-            from amr_twin.sim.event_log import log_events
+            from amr_twin.recording.event_log import log_events
 
             log_events(self.rec, SimpleNamespace(collisions=None, faults=twin.faults))
         self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []  # t_us, xpos (nb, 3), xquat (nb, 4)
@@ -139,7 +139,7 @@ class RerunSink:
             self._flush(t_us)
 
     def _flush(self, t_us: int) -> None:
-        from amr_twin.sim.event_log import log_events
+        from amr_twin.recording.event_log import log_events
         from amr_twin.recording.rerun_streams import _log_commands, _log_duty, _log_electrics, _log_imu, _log_wheel_speeds
         from amr_twin.recording.rerun_world import _log_body_transforms, _log_scan
         from amr_twin.sensors.lidar_beams import scan_end_time_s

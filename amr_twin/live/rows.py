@@ -1,4 +1,4 @@
-"""The 100 Hz rows of a live twin, as :meth:`amr_twin.recording.recorder.Recorder.series` gives them (issue 17).
+"""The 100 Hz rows of a live twin, as :meth:`amr_twin.recording.recorder.Recorder.series` gives them.
 
 A grid sampler keeps, at each instant of the record grid, the loop's sensor row, the pin
 row the recorder will pair with it and the battery's state as its accounting left it (what

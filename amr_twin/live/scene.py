@@ -1,26 +1,6 @@
-"""The twin's world and robot as a Foxglove ``SceneUpdate`` (issue 17), for ``/twin/scene``.
+"""The twin's world and robot as a Foxglove ``SceneUpdate``, for ``/twin/scene``.
 
-What no ROS message of the twin carries: the world's geometry and the robot's shape, and
-where the robot truly is against where its odometry puts it. Entities (MuJoCo's visual
-geoms, groups 0, 1 and 4, as primitives: boxes, spheres and ellipsoids, cylinders; sizes
-in m, colours from the model)::
-
-    world           frame odom    the world's geoms (floor, walls, racks), placed by the
-                                  start pose: odom's origin is base_link at t = 0, so the
-                                  world is drawn where a perfect odometry would see it
-    robot/<link>    frame <link>  each robot link's geoms, frame-locked: the tf tree moves
-                                  them (odom -> base_link -> wheels, casters, laser, ...)
-    ground_truth    frame odom    the whole robot, translucent green, at its true pose (the
-                                  twin's ground truth, 10 Hz): its offset from robot/ is the
-                                  odometry's error
-    actors          frame odom    the people and pallet jacks at their true poses (actors/poses,
-                                  10 Hz; amr_twin.sim.actors), not in ``world``
-    collisions      frame odom    a red sphere at each collision's first contact
-
-Frame ``odom`` is the root of the twin's tf tree (REP-105; the twin publishes no
-``map -> odom``), so a 3D panel with display frame ``odom`` shows the scene, the scan and
-the tf frames together.
-"""
+Reasons and measurements: docs/live.md#amr_twinlivescene."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Watch and drive a running twin: the live session behind ``--live`` (issue 17).
+"""Watch and drive a running twin: the live session behind ``--live``.
 
 ``amr-twin run ... --live [foxglove|rerun] [--port P] [--rate R]`` and ``amr-twin client --live``:
 

@@ -8,21 +8,7 @@ first). Its timing is :mod:`amr_twin.model.actor_paths`; the loop moves it
 person (or a jack) halts while the robot's footprint is that close ahead of it, and walks on
 when it is not.
 
-:func:`add_actors` adds actor ``i`` to a world's MjSpec as the mocap body ``<kind>_<i>``
-(:func:`body_name`) at its pose at t = 0, its geoms in the world's group 0 (the LiDAR's,
-:data:`amr_twin.sensors.lidar_beams.SEEN_GROUPS`), those that can reach the robot colliding
-with it at contact priority 2 with the kind's compliance (``contact_timeconst_s``); a mocap body is
-kinematic, so :mod:`amr_twin.sim.actors` stops it where it touches the robot; it never touches the
-world's static geoms. Sizes from the ``actors:`` section of the parameter file; what a
-0.45 m scan plane cuts of each is in docs/actors.md:
-
-- ``person``: two vertical leg cylinders (the plane cuts them below the knee: two circles
-  about 0.12 m across), a torso box and a head sphere (above the plane, drawn and seen by
-  nothing below 0.8 m; they do not collide). The legs do not swing.
-- ``pallet_jack``: two forks (0.085 m high: below the plane), the steer frame, the pump
-  cylinder and the handle; the plane cuts the pump (about 0.2 m across) only. Forks lead
-  (+x of the body). The person who walks it is not part of it.
-"""
+Reasons and measurements: docs/actors.md#amr_twinmodelactors."""
 
 from __future__ import annotations
 

@@ -247,9 +247,9 @@ def robot_mjcf(result: Build) -> str:
 
 def export(cfg: TwinConfig, urdf_path: Path | None = None, mjcf_path: Path | None = None) -> Build:
     """Write the URDF and the robot MJCF (:func:`robot_mjcf`, with the twin's ``<option>``; the committed
-    files are made this way): both or neither (:func:`amr_twin.recording.atomic_file.all_or_nothing`),
+    files are made this way): both or neither (:func:`amr_twin.base.atomic_file.all_or_nothing`),
     never half of one."""
-    from amr_twin.recording.atomic_file import all_or_nothing, write_text
+    from amr_twin.base.atomic_file import all_or_nothing, write_text
 
     result = build(cfg)
     with all_or_nothing():

@@ -285,7 +285,7 @@ class UwbCfg(Section):
 
 
 class EkfCfg(Section):
-    """EKF of ``controllers/ekf.py`` (robot_localization ``ekf_node`` in two_d_mode), SI units.
+    """EKF of ``amr_twin/estimation/ekf.py`` (robot_localization ``ekf_node`` in two_d_mode), SI units.
 
     Process noise is white acceleration; measurement sigmas are those the filter
     assumes (not the simulated sensors' own), the Mahalanobis gate is in sigmas.
@@ -312,7 +312,7 @@ class EkfCfg(Section):
 
 
 class LidarOdometryCfg(Section):
-    """kiss-icp settings of ``controllers/lidar_odometry.py`` (plain keyword arguments)."""
+    """kiss-icp settings of ``amr_twin/estimation/lidar_odometry.py`` (plain keyword arguments)."""
 
     SETTINGS: ClassVar[bool] = True
 
@@ -329,7 +329,7 @@ class LidarOdometryCfg(Section):
 
 
 class PoseGraphCfg(Section):
-    """The mapping drive's smoother (``controllers/pose_graph.py``): sigmas of its factors."""
+    """The mapping drive's smoother (``amr_twin/estimation/pose_graph.py``): sigmas of its factors."""
 
     SETTINGS: ClassVar[bool] = True
 
@@ -344,7 +344,7 @@ class PoseGraphCfg(Section):
 
 
 class MappingCfg(Section):
-    """Occupancy grid of ``controllers/occupancy_grid.py`` and the mapping drive's smoother."""
+    """Occupancy grid of ``amr_twin/estimation/occupancy_grid.py`` and the mapping drive's smoother."""
 
     SETTINGS: ClassVar[bool] = True
 

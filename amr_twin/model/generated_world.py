@@ -101,7 +101,7 @@ def mjcf(world: str) -> str:
 
 
 def _folder() -> Path:
-    from amr_twin.model.disk_cache import cache_dir
+    from amr_twin.base.disk_cache import cache_dir
 
     folder = cache_dir("worlds")
     return folder if folder is not None else Path(tempfile.gettempdir()) / f"amr-twin-worlds-{os.getuid()}"
@@ -109,7 +109,7 @@ def _folder() -> Path:
 
 def world_file(world: str) -> Path:
     """The MJCF file of a ``generated:`` world, written (whole, by one rename) unless it holds these bytes."""
-    from amr_twin.model.disk_cache import read_entry, store
+    from amr_twin.base.disk_cache import read_entry, store
 
     seed, door = parse(world)
     text = mjcf(world).encode()

@@ -1,7 +1,7 @@
 """A parameter file read into its raw tree (values with units and sources), parsed once.
 
 :func:`read_tree` keeps each file version's tree in the process; :func:`read_yaml` keeps
-parsed trees on disk too (:mod:`amr_twin.model.disk_cache`, keyed by the file's bytes), so
+parsed trees on disk too (:mod:`amr_twin.base.disk_cache`, keyed by the file's bytes), so
 that a command's start-up imports PyYAML and parses the file only when it changed. Errors
 are :class:`~amr_twin.model.config_leaves.ConfigError` with one line naming the file.
 """
@@ -14,7 +14,7 @@ import pickle
 from pathlib import Path
 
 from amr_twin.model.config_leaves import ConfigError
-from amr_twin.model.disk_cache import cache_dir, read_entry, store
+from amr_twin.base.disk_cache import cache_dir, read_entry, store
 from amr_twin.model.paths import MODEL_DIR
 
 DEFAULT_CONFIG = MODEL_DIR / "amr.yaml"
@@ -61,7 +61,7 @@ def _parse_yaml(path: Path, raw: bytes) -> dict:
 
 
 def read_yaml(path: Path) -> dict:
-    """The parsed parameter file; from the disk cache (:mod:`amr_twin.model.disk_cache`, keyed by
+    """The parsed parameter file; from the disk cache (:mod:`amr_twin.base.disk_cache`, keyed by
     the file's bytes) when this content was parsed before: parsing and importing PyYAML are
     ~35 ms of a 1 s run's start-up. Entries are ``marshal`` data (plain values, nothing to run)."""
     raw = _read_text(path)

@@ -1,29 +1,6 @@
 """The brush tyres' explicit states against the physics timestep: stability number and guard.
 
-The tyre callback (:mod:`amr_twin.sim.tyres`, ``tyres.c``) advances each wheel's longitudinal
-deflection ``u`` by explicit Euler and applies ``F = k_x u_new + tau k_x u'`` from the slip
-velocity of the step's start; MuJoCo then integrates the wheel with that force (the callback's
-force is not in the implicit integrator's derivatives). Linearised for the wheel's rotation on
-its tyre (``M = J / r^2``, the rotor's inertia at the tread; the chassis far heavier; slip
-velocity ``s``, relaxation neglected), one step maps ``(u, s)`` by::
-
-    u_{n+1} = u_n - dt s_n
-    s_{n+1} = (dt k_x / M) u_n + (1 - S) s_n,      S = (k_x dt + tau k_x) dt / M
-
-with characteristic polynomial ``z^2 - (2 - S) z + (1 - b)``, ``b = tau k_x dt / M``,
-``a = k_x dt^2 / M`` (``S = a + b``). Jury's conditions: ``b < 2`` and ``a + 2 b < 4``, i.e.
-``S < 2 + a / 2`` (about 2: ``a / b = dt / tau`` is 0.1-0.5). Measured with the twin
-(chapter 5 run 3 and the turns, the stiff longitudinal corner of the sourced ranges, payload,
-loss time and timestep varied; docs/tyres.md): stable up to S = 1.94 at the static load, wrong
-from 1.97 on. The load the tyre sees moves with the ride: in chapter 5's 60 deg/s turns the
-outer wheel carries up to 1.30 times its static load (20 and 50 kg payloads).
-
-The guard: ``S`` of each wheel at :data:`LOAD_MARGIN` times its static load
-(:func:`amr_twin.model.statics.solve`, payload included) must stay below :data:`S_MAX`; the
-physics timestep is halved until it does (the model build sets it; the loop keeps the record
-grid's instants by stepping twice as often between them). A timestep that halving would take
-off the microsecond grid is refused (:class:`TyreTimestepError`, one line).
-"""
+Reasons and measurements: docs/tyres.md#amr_twinmodeltyre_stability."""
 
 from __future__ import annotations
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from amr_twin.model import mass
 from amr_twin.model.config import TwinConfig
-from amr_twin.model.disk_cache import cache_dir, read_entry, store
+from amr_twin.base.disk_cache import cache_dir, read_entry, store
 from amr_twin.model.paths import MODEL_DIR, ROOT
 
 XACRO_FILE = MODEL_DIR / "amr.urdf.xacro"
@@ -112,7 +112,7 @@ def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
 
 
 def urdf_cache_dir() -> Path | None:
-    """The URDF cache's folder (:data:`~amr_twin.model.disk_cache.CACHE_ENV`), or None when the disk cache is off."""
+    """The URDF cache's folder (:data:`~amr_twin.base.disk_cache.CACHE_ENV`), or None when the disk cache is off."""
     return cache_dir("urdf")
 
 

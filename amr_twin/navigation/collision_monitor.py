@@ -1,32 +1,6 @@
 """The collision monitor on raw scans (nav2's collision_monitor): approach and slowdown zones.
 
-It sits between the controller and the drive (``cmd_vel_nav`` -> ``cmd_vel`` in nav2), looks at
-the latest scan's returns in ``base_link`` (not at the costmap: it guards against whatever the
-planner and controller missed), and changes a command only to make it safer. Each return is
-either *mapped* (within a few cm of the static map: a rack, a wall) or *unmapped* (a person, a
-pallet jack); the caller says which. Zones are the footprint grown by a pad:
-
-- *approach*: the command is projected ``time_before_collision_s`` ahead; if the footprint grown
-  by ``pad_m`` (mapped returns) or, for unmapped ones, by ``people_pad_m`` at its front (its rear
-  when backing up; the clearance kept from people) and 0.1 m elsewhere (a turn in place) would reach a return within that time, the speeds are scaled so that it would reach it no earlier
-  than ``time_before_collision_s`` (nav2's approach model); a return already inside the grown
-  footprint stops the robot unless the command opens the gap to the nearest return (then slowly);
-- *slowdown*: an unmapped return inside the footprint grown by ``slow_pad_m`` ahead of the robot
-  (in the direction of travel) caps the linear speed at ``slow_ratio`` of the limit;
-- *people* (the tracked people of :mod:`amr_twin.navigation.people`, each a disc of
-  ``person_radius_m`` about its track): the approach model again, over ``people_time_s``, with
-  every person walking on at their velocity, the zone the footprint grown by ``people_stop_m``
-  (the clearance kept from a person, all round) plus the distance the drive rolls after a stop at the
-  commanded speed (:meth:`CollisionMonitor.stopping_m`: a protective field's stopping distance); a person already that close stops the robot
-  unless the command opens the gap by driving (a turn in place, slower than ``people_turn_m_s``, is
-  refused: it swings the rectangle's corners, and a disc about the legs misjudges how close they come to
-  the torso; traced in the experiment's seed 0 episode 13, 0.33 -> 0.27 m), at ``people_slow_m_s`` at
-  most with any of them ahead, at full speed when all are behind (a person walking on across the aisle
-  behind the robot: held to 0.3 m/s it was caught at 0.29 m, seed 0 episode 13); a person within ``people_slow_m`` of the footprint, ahead of
-  it or walking towards it, caps the linear speed at ``people_slow_m_s``.
-
-Every action is counted in :attr:`CollisionMonitor.actions`.
-"""
+Reasons and measurements: docs/navigation.md#amr_twinnavigationcollision_monitor."""
 
 from __future__ import annotations
 

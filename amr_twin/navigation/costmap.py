@@ -1,29 +1,6 @@
 """A layered costmap as nav2's: static layer, obstacle layer with marking and ray-traced clearing, inflation.
 
-Cells are those of the :class:`~amr_twin.navigation.static_map.StaticMap` (row 0 at the lowest
-y). Layers:
-
-- **static**: the map's occupied cells, and its unknown cells when ``unknown_is_lethal`` (nav2's
-  ``track_unknown_space`` with a planner that does not ``allow_unknown``).
-- **obstacle**: cells marked by the live scan. :meth:`Costmap.update_scan` first *clears* every
-  cell that a beam crossed (from the laser to half a cell before its end, up to
-  ``raytrace_range_m``; a beam without a return clears to that range), then *marks* the cell of
-  every return within ``obstacle_range_m``: a person who walked away is cleared by the first
-  beams that pass where they stood. A return within ``static_tolerance_m`` of a static obstacle
-  is not marked (the map already holds it; localisation error would otherwise paint a second,
-  flickering wall beside every wall: with the EKF's pose, 0.1 m left 300-400 cells marked 0.15-0.3
-  m from the racks on a 30 s drive down an empty aisle, each change a replan; 0.3 m, the
-  navigator's threshold of an unmapped return, leaves none).
-- **inflation**: :attr:`Costmap.dist_m`, each cell's distance to the nearest lethal cell of
-  either layer (Euclidean distance transform, capped at ``inflation_radius_m``), and its cost
-  as nav2's inflation layer gives it (:func:`inflation_cost`): 254 on a lethal cell, 253 within
-  the footprint's inscribed radius (a collision whatever the heading), then
-  ``252 exp(-cost_scaling (d - inscribed))`` out to ``inflation_radius_m``, 0 beyond.
-
-The static distances are computed once; a scan recomputes the distance transform only around
-the cells whose mark changed (a window grown by the inflation radius, where the capped distances
-are exact).
-"""
+Reasons and measurements: docs/navigation.md#amr_twinnavigationcostmap."""
 
 from __future__ import annotations
 
@@ -35,7 +12,7 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from amr_twin.navigation.static_map import StaticMap
-from amr_twin.sim.native_build import address, c_array, open_helper
+from amr_twin.base.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("costmap_rays.c")
 

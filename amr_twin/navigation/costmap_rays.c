@@ -5,7 +5,7 @@
  * as Costmap.cells finds them (the same double operations in the same order: the same cells), and the
  * flat index of every sample's cell that the layer holds marked is written out, in beam order (with
  * repeats; the caller keeps the distinct ones). One pass instead of some twenty NumPy calls on arrays of
- * every sample of the scan (about 50 000). Built at first use (amr_twin/sim/native_build.py).
+ * every sample of the scan (about 50 000). Built at first use (amr_twin/base/native_build.py).
  */
 #include <math.h>
 #include <stdint.h>

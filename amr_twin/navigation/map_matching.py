@@ -1,33 +1,6 @@
 """The localisation's pose held to the map: each scan fitted to the static map (AMCL's role in nav2).
 
-nav2 never drives on its odometry fusion alone: AMCL matches every scan against the map and
-publishes the ``map -> odom`` correction. The twin's EKF (odometry, gyro, UWB) keeps the map frame
-to a decimetre, but in the aisles its UWB ranges come late through the racks (physical NLOS,
-sensors/uwb.py) and, through the tag's 0.3 m lever arm, turn its heading by several degrees within a
-second (measured: 0.07 rad within 0.6 s beside a rack's end, the EKF's own sigma 0.02 rad). At 5 m a
-degree is 9 cm: rack faces land off the map, the costmap marks them, people are seen in them and
-the planner plans round them. This module is not a particle filter; like the mapping drive's
-matcher (:mod:`amr_twin.experiments.navigation_scan_match`, after Hector SLAM's Gauss-Newton scan
-matcher, Kohlbrecher et al. 2011) it fits each scan rigidly to the static layer's distance field:
-
-1. The scan's returns within ``max_range_m``, placed by the corrected poses, are moved by an
-   increment ``(dx, dy, dyaw)`` about the laser; Gauss-Newton minimises the squared distance of
-   those within ``inlier_m`` of the map (the rest: people, pallet jacks, what the map lacks) to
-   the nearest static obstacle's face, the costmap's distance field interpolated bilinearly,
-   damped by a prior on the increment (``step_m``, ``step_rad``), which also bound it (the EKF's
-   error changes slowly); the whole correction is bounded by ``total_m`` and ``total_rad`` at the
-   laser (the UWB bounds the EKF's error: a match that slid along look-alike rack faces stops there).
-2. With at least ``min_inliers`` returns the increment is composed into the correction, which
-   :class:`~amr_twin.navigation.localisation.PoseSource` applies to every pose it gives.
-3. With ``feedback`` the corrected pose goes back to the EKF as a measurement (robot_localization
-   fusing AMCL's ``amcl_pose``; the navigator publishes it, :meth:`MapMatcher.pose_covariance` gives
-   its covariance) and the correction keeps only what the EKF did not take: the EKF's own state then
-   follows the map, so its Mahalanobis gate turns away the UWB ranges that come late through the
-   racks instead of drifting with them, beyond what a bounded correction can hold.
-
-A correction is a rigid transform of the plane, ``(tx_m, ty_m, theta_rad)``: ``p -> R(theta) p + t``, a pose
-of :mod:`amr_twin.analysis.se2` (composed there; points moved by :func:`~amr_twin.navigation.kinematics.to_map`).
-"""
+Reasons and measurements: docs/navigation.md#amr_twinnavigationmap_matching."""
 
 from __future__ import annotations
 
@@ -39,10 +12,6 @@ from amr_twin.analysis import se2
 from amr_twin.navigation.kinematics import to_map
 from amr_twin.ros.geometry_messages import Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped, Quaternion
 from amr_twin.ros.messages import Header, Time
-
-POSE_TOPIC = "map_match/pose"
-"""Where the navigator publishes the matched pose for the EKF (``geometry_msgs/PoseWithCovarianceStamped``
-in ``map``; AMCL's ``amcl_pose``, which robot_localization fuses as ``pose0``)."""
 
 
 class MapMatcher:

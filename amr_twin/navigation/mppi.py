@@ -1,44 +1,6 @@
 """A sampling MPC in the MPPI style (Williams et al. 2017, "Information theoretic MPC"; nav2's MPPI critics).
 
-Each control cycle, reconstructed from the papers' and nav2's descriptions:
-
-1. ``samples`` control sequences of ``steps`` steps of ``step_s`` are drawn around the nominal
-   sequence (the last cycle's optimum shifted by one step), Gaussian noise of ``sigma_v``,
-   ``sigma_w``; one sample is the nominal itself and one brakes to rest. Each sequence is made
-   feasible from the present velocity: the speed limits and the ramps of :class:`Limits`.
-2. The unicycle rolls every sequence out (vectorised: headings and positions as cumulative sums).
-3. Critics score each trajectory (lower is better):
-
-   - *obstacles / footprint* (nav2's CostCritic with ``consider_footprint``): the footprint's
-     outline (a point every costmap cell) on a lethal cell is a collision (``collision_cost``,
-     larger the sooner), and its least distance to one (the clearance) within ``margin_m`` a
-     repulsion; the outline is looked at only where the centre is within the circumscribed radius
-     plus ``margin_m`` and a cell of an obstacle (farther, neither can be);
-   - *path*: the distance of the trajectory's points to the plan (alignment) and of its end to
-     the plan point it could reach (progress);
-   - *goal*: near the goal, the distance of the trajectory's points to it;
-   - *prefer forward*: backing up costs;
-   - *people* (the tracked people of :mod:`amr_twin.navigation.people`, each a disc of
-     ``person_radius_m``, walking on at constant velocity over the horizon): a trajectory whose
-     footprint circles come within ``person_clearance_m`` of where a person will be at that step
-     costs ``people_collision`` (larger the sooner; a robot already closer than that pays for
-     coming closer still), within ``person_margin_m`` a repulsion, and *speed near people*: the
-     square of the speed where a person will be within ``social_radius_m`` (what else the map
-     does not hold, a pallet jack, is the obstacle critic's and the collision monitor's).
-   The people critics see the footprint as two circles covering the rectangle.
-4. The weights ``exp(-(S - min S) / temperature)`` average the noise into the new nominal,
-   smoothed by a 3-step moving average (nav2 smooths with a Savitzky-Golay filter); its first
-   step is the command. A plan passing within ``narrow_m`` of an obstacle in the next metre (a
-   narrow passage: a door) caps the speed at ``narrow_v_m_s`` (nav2's speed filter, RPP's
-   cost-regulated speed), for all the samples. Every sample colliding: stop, and report it (``blocked``); most of the
-   weights on colliding samples: report it too.
-
-Steps 1 to 3 run in C (``mppi_critics.c``, built at first use by :mod:`amr_twin.sim.native_build`):
-some hundred NumPy calls on (T, K) arrays a cycle had cost more than their arithmetic. NumPy keeps
-the random draws and the cos and sin; the C helper does the same float32 and double operations in
-the same order as the NumPy code here, its twin (``native=False``, or without a compiler), so that
-both give the same costs, collisions and commands (tests/navigation/test_mppi.py).
-"""
+Reasons and measurements: docs/navigation.md#amr_twinnavigationmppi."""
 
 from __future__ import annotations
 
@@ -48,12 +10,12 @@ from pathlib import Path
 
 import numpy as np
 
+from amr_twin.base.native_build import address, c_array, open_helper
 from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint
 from amr_twin.navigation.interfaces import LocalController, Twist2D
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.path_handler import PathHandler
-from amr_twin.sim.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("mppi_critics.c")
 PARAMS = ("cx0", "cx1", "r", "margin", "collision", "obstacle", "align", "progress", "goal", "forward", "social",

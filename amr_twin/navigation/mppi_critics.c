@@ -9,7 +9,7 @@
  * people's and the path's distances in double (the same bits: a minimum of squares, then its square root,
  * is the minimum of the roots), and the means in the twin's precision and order; the costs agree with the
  * twin's to rounding. One pass over the samples instead of some hundred NumPy calls on (T, K) arrays.
- * Built at first use (amr_twin/sim/native_build.py); without it the NumPy twin runs.
+ * Built at first use (amr_twin/base/native_build.py); without it the NumPy twin runs.
  */
 #include <math.h>
 #include <stdint.h>

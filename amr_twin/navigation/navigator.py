@@ -1,29 +1,6 @@
 """The navigator node: goals in, ``cmd_vel`` out, on the twin's bus and clock (nav2's bt_navigator).
 
-It subscribes to ``scan`` and to the localisation's odometry topic
-(:class:`~amr_twin.navigation.localisation.PoseSource`) and publishes ``cmd_vel`` (the diff-drive
-node turns it into wheel commands for the firmware), ``plan`` (``nav_msgs/Path``) and, for the
-recordings, the costmap and the footprint (:mod:`amr_twin.navigation.outputs`). Its timers run on
-the virtual clock; it reads nothing of the twin but bus messages. nav2's default behaviour tree,
-reconstructed from its description (navigate_to_pose_w_replanning_and_recovery):
-
-- every scan updates the costmap's obstacle layer;
-- the plan is computed again at ``planner_hz`` (1 Hz) from the present pose when it could come out
-  different: the costmap changed since the last plan, or the robot is more than ``off_path_m``
-  off it (on an unchanged costmap the rest of a shortest path is the shortest path from each of
-  its points); a new plan no shorter than the rest of the present one, which the robot is on and
-  which is still free (:meth:`GlobalPlanner.path_free`), does not replace it;
-- every ``1 / controller_hz`` s the controller follows the plan, after a rotation in place to the
-  path's heading when it is more than ``rotate_to_path_rad`` off (nav2's RotationShimController);
-  within ``approach_m`` of the goal (or within ``xy_tolerance_m`` and no longer closing in) the robot
-  stops and turns in place to the goal's yaw, reached within ``xy_tolerance_m``; the
-  collision monitor filters every command;
-- a failure (no plan, the controller blocked for ``blocked_s``, no progress) starts the next
-  recovery of the round robin (clear costmaps, spin, wait, back up); after ``max_failures`` the
-  goal is aborted with a one-line reason (:attr:`GoalOutcome.reason`), and so are the goals after it;
-- a goal sent while one is active preempts it (:meth:`Navigator.send_goal`, nav2's and move_base's
-  preemption); :meth:`Navigator.cancel` ends the active goal and those queued, and the robot stops.
-"""
+Reasons and measurements: docs/navigation.md#amr_twinnavigationnavigator."""
 
 from __future__ import annotations
 
@@ -33,10 +10,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from amr_twin.estimation.ekf import POSE_TOPIC
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.interfaces import LocalController, Planner
 from amr_twin.navigation.kinematics import Limits, rotation_rate, to_map, wrap
-from amr_twin.navigation.map_matching import POSE_TOPIC, MapMatcher
+from amr_twin.navigation.map_matching import MapMatcher
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
 from amr_twin.navigation.progress import ProgressChecker

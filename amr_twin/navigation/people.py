@@ -1,32 +1,6 @@
 """People in the scan: clusters of unmapped returns tracked from scan to scan, their motion predicted.
 
-A 2D LiDAR at 0.45 m cuts a walking person's legs (two circles about 0.12 m across, 0.2 m apart:
-docs/actors.md); nav2 has no such layer (its costmaps mark where the last scan saw a person), the
-leg detectors of ROS 1 (leg_detector, Arras et al. 2007) and the social navigation layers do.
-Reconstructed from those descriptions, each scan:
-
-1. **Clusters.** The scan's *unmapped* returns (farther than a few cm from the static map: not a
-   rack, not a wall) within ``range_m`` are joined when closer than ``join_m`` (single linkage:
-   both legs of one person make one cluster); a cluster whose extent is at most ``max_size_m`` is
-   a person candidate (a loaded pallet jack, 1.6 m long, is not: the costmap holds it). Its
-   position is the mean of its points, its time the mean of their beams' instants.
-2. **Tracks.** Each cluster is given to the nearest track within ``gate_m`` plus what a person at
-   ``max_speed_m_s`` walks since that track's last update (greedy, nearest pairs first), or starts
-   a new one. A track's position and velocity follow an alpha-beta filter (``alpha``, ``beta``:
-   the textbook g-h filter), its speed capped at ``max_speed_m_s``. A track not seen for
-   ``keep_s`` is dropped.
-3. **People.** A track is a person once seen ``confirm`` times and once it has moved more than
-   ``moved_m`` from where it was first seen (with ``moved_m`` > 0 a cluster that never moved is taken
-   for an upright or a box the map lacks and left to the costmap; the twin's setting is 0, every
-   person-sized cluster is a person: people who wait at an aisle's side, or who crossed before the
-   robot came in range, were otherwise passed as obstacles are, 0.07 m away). People walk on at
-   constant velocity (:meth:`People.at`) for at most ``horizon_s``; a person slower than
-   ``min_speed_m_s`` is held where they stand (the filter's noise on a person standing still).
-
-:class:`People` is what the controller, the collision monitor and the robot's giving way
-(:mod:`amr_twin.navigation.yielding`) read: positions (N, 2), velocities (N, 2) in ``map``, m and m/s,
-at time ``t_s``, and each one's last walking velocity.
-"""
+Reasons and measurements: docs/navigation.md#amr_twinnavigationpeople."""
 
 from __future__ import annotations
 

@@ -1,38 +1,6 @@
 """The global planner: Dijkstra on the costmap's 8-connected grid, line-of-sight shortening, a dense path.
 
-As nav2's planner server with a grid planner (NavFn, Smac 2D with ``downsample_costmap``):
-
-1. The costmap is downsampled by ``downsample`` (a coarse cell takes its worst fine cell):
-   0.1 m cells cost a quarter of 0.05 m ones and lose nothing a 2 m aisle needs.
-2. Cells closer to an obstacle than ``turn_room_m`` (the footprint's circumscribed radius: room
-   to turn the rectangle anywhere on the path) cannot be entered; when that leaves no path, the
-   search is done again with only the inscribed radius kept (cost >= 253: a narrow gap the
-   rectangle may pass straight but not turn in); cells of the obstacle layer (people, pallet
-   jacks: what the map does not hold) are kept ``unmapped_pad_m`` farther still (the clearance
-   the collision monitor keeps from them), and when that leaves no path either, only the
-   inscribed radius (a jack beside an aisle that a map built from scans draws narrower than it
-   is: the robot fits, slowly, the monitor watching), and the cells within ``people_m`` of a person standing
-   in the way (a tracked person, :mod:`amr_twin.navigation.people`: their disc, the monitor's
-   people zone and the robot's half width) are blocked; a move between neighbours costs its length (1 or sqrt 2 cells) times the mean of
-   the two cells' ``1 + cost_weight * cost / 252`` (NavFn's neutral cost plus a share of the
-   inflation cost: paths keep to the middle of aisles). The start cell is always enterable (a
-   robot that backed up close to a rack can leave). scipy's Dijkstra (``scipy.sparse.csgraph``)
-   searches the grid graph: about 20 ms on the 50 x 20 m hall at 0.1 m.
-   (pyastar2d was measured first: as fast, but it charges a diagonal move like a straight one,
-   so among routes with as many moves it picks any, a 41 m route where one of 35 m exists, and
-   its float32 path bookkeeping crashed it once in 144 plans.)
-3. Narrow passages (:mod:`amr_twin.navigation.passages`, with a ``footprint``): where the robot cannot
-   turn in place, the path is moved to the passage's centre line and runs straight along it, from
-   where the robot can turn on one side to where it can on the other (a door: centred, aligned before
-   the footprint enters), when the footprint oriented along it keeps ``footprint_clearance_m``;
-4. Line-of-sight shortening of the rest: from each kept vertex the path jumps to the farthest later vertex
-   whose straight segment keeps at least the clearance the grid path had between them (or
-   ``clearance_m``, whichever is less) and stays out of the inscribed radius;
-5. the polyline is resampled every ``spacing_m`` with each point's heading along the path.
-
-:func:`goal_problem` says in one line why a goal cannot be planned to (off the map, inside an
-obstacle), or ''; :attr:`GlobalPlanner.last_error` why a plan failed.
-"""
+Reasons and measurements: docs/navigation.md#amr_twinnavigationplanner."""
 
 from __future__ import annotations
 

@@ -101,7 +101,7 @@ def _truth() -> OdometryTopic:
 def _ekf() -> OdometryTopic:
     """odometry + gyro + UWB, held to the map
 
-    The EKF of controllers/ekf.py in ``map``; it takes the scan-to-map match in."""
+    The EKF of amr_twin/estimation/ekf.py in ``map``; it takes the scan-to-map match in."""
     return OdometryTopic("odometry/filtered", takes_matches=True)
 
 

@@ -139,7 +139,7 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
         from amr_twin.sensors.ground_truth import GroundTruth
         twin.ground_truth = GroundTruth(twin.physics, twin.clock, twin.bus)
     elif options.localisation == "ekf":
-        from amr_twin.controllers.ekf import EkfNode
+        from amr_twin.estimation.ekf import EkfNode
         from amr_twin.model.worlds import uwb_anchors_xy_m
         from amr_twin.sensors.uwb import UwbSensor
 

@@ -18,26 +18,13 @@ from amr_twin.navigation.people import People
 class Yielding:
     """Keeps the robot out of people's predicted paths: social navigation's yield, as a last word on ``cmd_vel``.
 
-    Each control cycle (:meth:`command`), the command the robot is about to drive (after the collision
-    monitor) is rolled out over ``horizon_s`` (``step_s`` steps, the acceleration limits of ``limits``)
-    with every tracked person walking on at their velocity (:meth:`People.at`). If a *walking* person
-    would come within ``stop_m`` of the footprint (their disc of ``person_radius_m``), the robot is about
-    to stand (or crawl) in their lane: the monitor's approach model slows it to a stop there, and a person
-    who does not give way walks into it. Then constant commands of a small grid (``speeds_m_s`` x
-    ``turns_rad_s``, the present one among them) are rolled out the same way, each cut where the footprint
-    grown by ``pad_m`` would reach a scan return that is not a person's; the one keeping the largest
-    least gap to every person (capped at ``stop_m + margin_m``: beyond it, all are as good) wins, the
-    nearest to the controller's command among equals: driving on through the lane when that clears it,
-    backing off or stepping aside when not. Standing in the lane wins only when nothing does better. The
-    gap is signed (a person inside the footprint the more negative the nearer its middle).
-
-    A person standing within ``standoff_m`` of the footprint whose last walking velocity points at the robot
-    stopped for it: the robot leaves their lane (their way ahead over the horizon) the same way, judged by
-    the last pose of each roll-out. A standoff with a standing person never seen walking (the robot
-    standing, them within ``standoff_m`` ahead, for ``standoff_s``) is broken among the backing commands,
-    for ``back_s``. Before passing within ``courtesy_m`` of a standing person's disc the robot stands, for
-    at most ``courtesy_s`` at each place (they may step out into its way; the place forgotten
-    ``courtesy_forget_s`` later).
+    Each control cycle (:meth:`command`) the command about to be driven is rolled out over
+    ``horizon_s`` with every tracked person walking on (:meth:`People.at`). If a walking person
+    would come within ``stop_m`` of the footprint, constant commands of a small grid
+    (``speeds_m_s`` x ``turns_rad_s``) are rolled out the same way and the one keeping the largest
+    least gap to every person wins (the nearest to the controller's command among equals). People
+    who stopped for the robot, standoffs and courtesy stops:
+    docs/navigation.md#amr_twinnavigationyieldingyielding.
     """
 
     def __init__(self, footprint, limits, dt_s: float, *, person_radius_m: float = 0.25, stop_m: float = 0.3,

@@ -1,4 +1,4 @@
-"""Record a run as ROS 2 messages in an ``.mcap`` file (issue 7, issue 13).
+"""Record a run as ROS 2 messages in an ``.mcap`` file.
 
 The same streams as :mod:`amr_twin.recording.rerun_log`, CDR-encoded (:mod:`amr_twin.ros.ros2_cdr`)
 with ROS 2 message definitions (schema encoding ``ros2msg``, :mod:`amr_twin.ros.ros2_schemas`),
@@ -8,47 +8,7 @@ header stamps are the messages' own. Bus topics are the messages the nodes publi
 (as they were); the robot's state (joint states, link transforms, ground truth,
 clock) is built by :mod:`amr_twin.ros.ros_state` from the capture's samples.
 
-The bag holds what a ROS 2 graph of the robot would have recorded, so ``ros2 bag play
---clock`` into nav2, slam_toolbox, robot_localization or RViz needs no other node
-(do not run a second robot_state_publisher: /tf already has the joints' links).
-Frames (REP-105, :mod:`amr_twin.ros.ros_state`): ``odom -> base_link -> laser, imu_link,
-uwb_tag, wheel_*_link, caster_*_link``; ``map -> uwb_anchor_<i>``; ``odom`` has no parent
-(``map -> odom`` is a localiser's). Topics::
-
-    /clock             rosgraph_msgs/msg/Clock        simulation time, 100 Hz (record grid)
-    /robot_description std_msgs/msg/String            the URDF as built (transient local)
-    /tf_static         tf2_msgs/msg/TFMessage         base_link -> laser, imu_link, uwb_tag;
-                                                      map -> uwb_anchor_<i> (with a UWB tag)
-    /tf                tf2_msgs/msg/TFMessage         odom -> base_link, 50 Hz (the odometry node);
-                                                      base_link -> wheel and caster links, 50 Hz
-    /joint_states      sensor_msgs/msg/JointState     the 6 moving joints (wheels rad, casters m), 50 Hz
-    /odom              nav_msgs/msg/Odometry          odom -> base_link, 50 Hz, continuous
-    /scan              sensor_msgs/msg/LaserScan      (with TwinOptions(sensors=True))
-    /imu/data_raw      sensor_msgs/msg/Imu            (idem)
-    /imu/mag           sensor_msgs/msg/MagneticField  (idem)
-    /uwb/range         sensor_msgs/msg/Range          one per anchor exchange, frame uwb_anchor_<i>
-                                                      (only when a UwbSensor publishes, e.g. the fusion drive)
-    /cmd_vel           geometry_msgs/msg/Twist        when a node drives on cmd_vel (path follower)
-    /plan, /map, /local_costmap/costmap, /local_costmap/published_footprint
-                       nav_msgs/msg/Path, OccupancyGrid, geometry_msgs/msg/PolygonStamped: the navigation
-                                                      stack's (amr_twin/navigation/outputs.py), frame map
-    /ground_truth/odom, /odometry/filtered   nav_msgs/msg/Odometry: the localisation it used
-    /map_match/pose    geometry_msgs/msg/PoseWithCovarianceStamped: the scan-to-map match the EKF fuses
-                                                      (AMCL's amcl_pose), frame map, one a matched scan
-    /wheel_Command_Service/request  std_msgs/msg/Float64MultiArray  every service call
-                                                      [motionL, speedL, motionR, speedR] (labelled)
-    /wheel_Command     std_msgs/msg/Float64MultiArray [motionL, speedL, motionR, speedR]
-    /wheel0_Vel, /wheel1_Vel   std_msgs/msg/Float64   |RPM| as published by the firmware (no sign)
-    /twin/true_rpm     std_msgs/msg/Float64MultiArray [left, right], signed (+ rolling forward), 100 Hz
-    /twin/pwm_counts   std_msgs/msg/Float64MultiArray [left, right] analogWrite counts, 100 Hz
-    /twin/motor_current std_msgs/msg/Float64MultiArray [left, right] motor (phase) current, A, + driving
-                                                      forward, 100 Hz
-    /battery_state     sensor_msgs/msg/BatteryState   the pack: voltage, current (negative discharging,
-                                                      as ROS states it), charge, 10 Hz
-    /twin/ground_truth nav_msgs/msg/Odometry          world -> base_link: true pose, twist in base_link, 100 Hz
-    /actors/poses      geometry_msgs/msg/PoseArray    the people's and pallet jacks' true poses, frame map (the
-                                                      world), 10 Hz (with TwinOptions(actors=...))
-"""
+Reasons and measurements: docs/recordings.md#amr_twinrecordingmcap_log."""
 
 from __future__ import annotations
 
@@ -58,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.ros import ros_state
-from amr_twin.recording.atomic_file import replacing
-from amr_twin.sim.event_log import mcap_items as event_items
+from amr_twin.base.atomic_file import replacing
+from amr_twin.recording.event_log import mcap_items as event_items
 from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import String
 from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
@@ -178,7 +138,7 @@ def write_mcap(capture, series, path: Path) -> Path:
     bus = capture.twin.bus
     items.append((0, -2, "/robot_description", "std_msgs/String", encode_string(String(capture.twin.urdf))))
     items.append((0, -1, "/tf_static", "tf2_msgs/TFMessage", encode_tf_message(TFMessage(bus.static_transforms()))))
-    items += event_items(capture.twin, len(items))  # /twin/collisions, /twin/faults (amr_twin/sim/event_log.py)
+    items += event_items(capture.twin, len(items))  # /twin/collisions, /twin/faults (amr_twin/recording/event_log.py)
     items.sort(key=lambda it: (it[0], it[1]))
     with replacing(path) as tmp:
         with open(tmp, "wb") as f:

@@ -8,7 +8,7 @@ are caught, whatever ``os.access`` says), no two outputs name the same path, and
 output is one of the command's inputs (:func:`check_not_inputs`: the same file after
 resolving links, hard links included, or a folder holding an input).
 The temporaries that killed runs left for the same targets are removed
-(:func:`amr_twin.recording.atomic_file.remove_stale_temporaries`). Nothing is created: the
+(:func:`amr_twin.base.atomic_file.remove_stale_temporaries`). Nothing is created: the
 folders are made when the files are written.
 
 Failures raise :class:`OutputError` (a ``ValueError``) with one line naming the
@@ -21,7 +21,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from amr_twin.recording.atomic_file import remove_stale_temporaries
+from amr_twin.base.atomic_file import remove_stale_temporaries
 
 
 class OutputError(ValueError):

@@ -10,7 +10,7 @@ every grid instant for the ROS messages of :mod:`amr_twin.ros.ros_state` (joint 
 link transforms, ground truth). It reads the twin through its hooks and observables.
 
 Both writers write a temporary file next to the target and rename it when complete
-(:mod:`amr_twin.recording.atomic_file`); :func:`recording_folder` prepares a folder of per-run
+(:mod:`amr_twin.base.atomic_file`); :func:`recording_folder` prepares a folder of per-run
 recordings and removes the temporaries that killed writers left there.
 """
 
@@ -97,10 +97,10 @@ def capture_of(twin) -> Capture | None:
 def remove_stale_temporaries(folder: Path) -> list[Path]:
     """Delete the half-written recordings killed writers left in ``folder``; return them.
 
-    See :func:`amr_twin.recording.atomic_file.remove_stale_temporaries`: a temporary whose writer
+    See :func:`amr_twin.base.atomic_file.remove_stale_temporaries`: a temporary whose writer
     (the pid in its name) still runs is left alone.
     """
-    from amr_twin.recording.atomic_file import remove_stale_temporaries as remove_stale
+    from amr_twin.base.atomic_file import remove_stale_temporaries as remove_stale
 
     return remove_stale(folder)
 

@@ -1,45 +1,14 @@
-"""Record a run to a Rerun ``.rrd`` file, headless (issue 7).
+"""Record a run to a Rerun ``.rrd`` file, headless.
 
-Two stages, so that a recorded run costs little while it runs:
-
-1. :class:`~amr_twin.recording.rerun_capture.Capture` (:func:`~amr_twin.recording.rerun_capture.attach`)
-   is attached to a :class:`~amr_twin.sim.loop.Twin` before it runs. It taps the bus and
-   samples the world pose of each robot body as a grid sampler of the loop, so the
-   run is unchanged.
-2. After the run :func:`write_rrd` (or :func:`record_run`, which also writes the
-   MCAP file of :mod:`amr_twin.recording.mcap_log`) turns the capture plus the finished
-   :class:`~amr_twin.recording.recorder.RunSeries` into Rerun columns, one ``_log_<stream>``
-   function per stream (:mod:`amr_twin.recording.rerun_world` for the 3D view,
-   :mod:`amr_twin.recording.rerun_streams` for the plots), all on the ``sim_time`` timeline.
-
-Entities::
-
-    world                               view coordinates (Z up)
-    world/bodies/<body>                 Transform3D over time (robot bodies)
-    world/bodies/<body>/geoms/<kind>    static Boxes3D / Ellipsoids3D / Cylinders3D
-    world/bodies/amr/laser/scan         LaserScan points in the laser frame
-    world/scan                          the same points in the world (deskewed per beam)
-    world/trajectory/{true,odom}/<k>    LineStrips3D, growing at 2 Hz, one entity per 10 s
-    wheels/{left,right}/{reference,published,true}_rpm   Scalars
-    duty/{left,right}                   analogWrite counts
-    imu/{accel,gyro,mag}                Scalars (x, y, z)
-    uwb/anchor_<i>/range_m              Scalars, one per received range (only with a UWB tag)
-    world/uwb/anchors                   static Points3D of the anchors
-    world/uwb/anchor_<i>/ray            LineStrips3D tag -> anchor at each range
-    commands                            TextLog of wheel_Command and the client calls
-    events/{collisions,faults}, world/collisions   collisions and faults (amr_twin/sim/event_log.py)
-    world/navigation/{map,plan,costmap,footprint}  the navigation stack's (amr_twin/recording/rerun_navigation.py)
-
-A default blueprint (3D view + time-series plots) is sent with the recording.
-"""
+Reasons and measurements: docs/recordings.md#amr_twinrecordingrerun_log."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from amr_twin.recording.atomic_file import write_bytes
+from amr_twin.base.atomic_file import write_bytes
 from amr_twin.recording.rerun_navigation import _log_navigation
-from amr_twin.sim.event_log import has_events, log_events
+from amr_twin.recording.event_log import has_events, log_events
 from amr_twin.recording.rerun_capture import Capture, capture_of
 from amr_twin.recording.rerun_streams import (WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,
                                               _log_wheel_speeds)
@@ -79,7 +48,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
 
     Rerun encodes the recording into a byte stream (:meth:`RecordingStream.binary_stream`) that this
     process writes in one piece once everything is logged: a full disk or a file-size limit is an
-    ``OSError`` naming ``path`` (:func:`~amr_twin.recording.atomic_file.replacing`) and no half file is
+    ``OSError`` naming ``path`` (:func:`~amr_twin.base.atomic_file.replacing`) and no half file is
     left. Rerun's own file writer (``RecordingStream.save``) writes from a thread of its own and, on such
     an error, hangs in ``save`` or ``flush``, raises "File-writer thread shut down prematurely", or says
     nothing and leaves a truncated file (rerun-sdk 0.41). The stream is read once: reading it in pieces
@@ -106,7 +75,7 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     _log_commands(rec, series, result)
     _log_trajectory(rec, series)
     _log_navigation(rec, capture)  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
-    log_events(rec, capture.twin)  # collisions and faults (amr_twin/sim/event_log.py)
+    log_events(rec, capture.twin)  # collisions and faults (amr_twin/recording/event_log.py)
     rec.disconnect()
     data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
     write_bytes(path, data)

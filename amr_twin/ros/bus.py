@@ -1,38 +1,13 @@
 """In-process ROS-like bus on simulation time: topics, services, taps and a tf buffer.
 
-Topics
-    :meth:`Bus.publish` hands the message to every tap, then to each subscriber.
-    A subscription with ``latency_us == 0`` runs its callback immediately, in
-    subscription order, inside ``publish``. A subscription with a latency
-    schedules the delivery on the shared :class:`~amr_twin.sim.clock.VirtualClock`,
-    so the callback runs with ``clock.now_us`` equal to the delivery time; at
-    most ``queue_size`` messages can be in flight to it (the oldest is dropped
-    beyond that, as a roscpp subscriber queue; ``queue_size=0`` is unbounded).
-    A latched topic keeps its last message and delivers it to late subscribers
-    through a clock event at ``now + latency_us``.
-Services
-    :meth:`Bus.call_service` is synchronous (zero simulated time) and raises
-    :class:`ServiceCallError` when no server is advertised or the handler fails;
-    the thesis client maps that to code -1. Each request is handed to the taps as
-    a message on ``<service>/request`` first (as ROS 2's service introspection
-    does), so recorders keep the calls, failed ones included.
-tf
-    :attr:`Bus.tf` (:class:`~amr_twin.ros.tf_buffer.TfBuffer`) keeps the latest
-    transform of each child frame (REP-105 tree ``odom -> base_link -> {laser,
-    imu_link, uwb_tag}``; ``map -> uwb_anchor_<i>``); :meth:`Bus.send_transform` updates it and publishes
-    ``tf2_msgs/TFMessage`` on ``tf``, or on ``tf_static`` (latched) the whole set of
-    static transforms sent so far, as tf2's static broadcaster does, so recorders
-    see it through the taps (or :meth:`Bus.static_transforms`).
-
-Topic and service names are stored without a leading ``/``.
-"""
+Reasons and measurements: docs/ros1.md#amr_twinrosbus."""
 
 from __future__ import annotations
 
 from collections import deque
 from typing import Any, Callable
 
-from amr_twin.sim.clock import NEVER_US, EventHandle, VirtualClock
+from amr_twin.base.clock import NEVER_US, EventHandle, VirtualClock
 from amr_twin.ros.geometry_messages import TFMessage, TransformStamped
 from amr_twin.ros.tf_buffer import TfBuffer
 
@@ -175,9 +150,9 @@ class Bus:
         """Earliest delay after which a message published on ``topics`` reaches a subscriber, us.
 
         The smallest ``latency_us`` of the topics' subscribers,
-        :data:`~amr_twin.sim.clock.NEVER_US` when none subscribes: taps are observers
+        :data:`~amr_twin.base.clock.NEVER_US` when none subscribes: taps are observers
         and never act on the twin. The loop lets the physics run this far ahead of
-        a publishing clock event (:mod:`amr_twin.sim.clock`). Readers of :attr:`tf` pull
+        a publishing clock event (:mod:`amr_twin.base.clock`). Readers of :attr:`tf` pull
         it in their own events, which run after the publishing event in time order.
         """
         best = NEVER_US

@@ -1,30 +1,6 @@
 """The rosserial link between the mini PC and the Arduino Mega (launch file, listing 4.1).
 
-``serial_node.py`` of ``rosserial_arduino`` talks to the board over USB-serial at
-115200 baud. Each message travels as one rosserial frame::
-
-    0xff | 0xfe (protocol) | len lo | len hi | len checksum | topic id lo | topic id hi
-    | serialised message ... | message checksum
-
-so a frame is :data:`FRAME_OVERHEAD_BYTES` = 8 bytes plus the ROS 1 serialisation
-(:meth:`serialized_size` of :mod:`amr_twin.ros.messages`). The UART sends 10 bits per
-byte (start + 8 data + stop), so a frame occupies the wire for
-``ceil(bytes * 10 / baud)`` seconds, rounded up to whole microseconds.
-
-Each direction is a separate wire (full duplex) on which frames go one after
-another: a frame sent while the previous one is still on the wire starts when
-that one ends. A frame arrives ``extra_latency_us`` after its last byte (USB
-and OS scheduling, 0 by default). With ``loss_prob`` > 0 a frame is dropped
-(a checksum error: it still occupied the wire) with that probability, drawn
-from a generator seeded with ``seed`` so runs are reproducible.
-
-Not modelled: rosserial's time-sync and parameter traffic, the Arduino's
-finite in/out buffers (512 bytes on the Mega), and ``spinOnce`` polling delays
-on the Arduino (the firmware model decides when it reads its input). With
-``--firmware avr`` the emulated board's UART carries the frames byte by byte
-instead (:mod:`amr_twin.controllers.avr`); this link then only accounts and draws
-the losses (:meth:`RosserialLink.draw_loss`).
-"""
+Reasons and measurements: docs/ros1.md#amr_twinrosrosserial."""
 
 from __future__ import annotations
 
@@ -33,7 +9,7 @@ import random
 from typing import Any, Callable
 
 from amr_twin.ros.messages import Float64, Float64MultiArray, MultiArrayLayout
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 
 FRAME_OVERHEAD_BYTES = 8
 """rosserial framing bytes added to each serialised message."""

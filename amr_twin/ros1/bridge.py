@@ -1,39 +1,6 @@
 """The twin's bus and state on a ROS 1 graph, both ways: :class:`Ros1Bridge`.
 
-Out, with the ``.mcap``'s topics, types and frames (:mod:`amr_twin.recording.mcap_log`), every name but ``/clock``
-relative (in the node's namespace: ``ROS_NAMESPACE=r1`` gives ``/r1/odom``, ``/r1/tf``):
-
-- every bus message of :data:`~amr_twin.recording.mcap_log.BUS_TOPICS` as it is published (the twin's ``on_message`` hook):
-  ``/odom``, ``/tf`` (odom -> base_link; map -> odom from the localisation: :mod:`~amr_twin.ros1.map_transform`),
-  ``/scan``, ``/imu/data_raw``, ``/imu/mag``, ``/uwb/range``,
-  ``/cmd_vel``, ``/wheel_Command``, ``/wheel0_Vel``, ``/wheel1_Vel`` (as the firmware publishes them)
-  and ``/wheel_Command_Service/request``; ``/tf_static`` latched;
-- ``/clock`` every ``clock_period_us`` of simulated time (paced: at each instant's wall time, before that
-  instant's messages; the nodes run with ``/use_sim_time``, which the session sets);
-- from grid samples, handed over at the pacer's ticks (:mod:`amr_twin.live.pacer`): ``/joint_states``
-  and the joints' links on ``/tf`` (50 Hz: what robot_state_publisher would send), ``/twin/ground_truth``
-  (100 Hz); the rows and statuses, ``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current``,
-  ``/battery_state``, ``/diagnostics`` (:mod:`amr_twin.ros1.status_topics`);
-- ``/robot_description`` latched (and the ``robot_description`` parameter, set by the session).
-
-In: ``/wheel_Command`` (``std_msgs/Float64MultiArray``, the thesis' service's output) and ``/cmd_vel``
-(``geometry_msgs/Twist``, for the diff-drive node), checked as a live client's are
-(:mod:`amr_twin.live.inputs`) and published on the bus at the pacer's next tick; the LiDAR's
-``start_motor`` and ``stop_motor`` (``std_srvs/Empty``, §6.1.1) call the bus' services there. A message
-the bridge itself put on the graph is not taken back, and one taken from the graph is not put back.
-With ``firmware_topics=False`` (the board's serial port served to a rosserial host, which carries them)
-``wheel_Command``, ``wheel0_Vel`` and ``wheel1_Vel`` are left to the host.
-
-A message is built only for a topic someone subscribes to. Each is serialised here (``struct`` for the
-types of :data:`~amr_twin.ros1.serialization.WRITERS`, genpy for the rest) and kept, with its simulated
-instant, in an :class:`~amr_twin.ros1.outbox.Outbox`. Paced, the pacer's ticks hand it over
-(:meth:`Ros1Bridge.release`) and it is written as a ROS node writes: at each ``/clock`` instant's wall time,
-that ``/clock`` first, then the messages of that instant (those published between two clock instants at the
-next one). Unpaced, each tick (:data:`~amr_twin.ros1.session.UNPACED_TICK_US`) writes what is due at once,
-``/clock`` first, one write a topic. No stamp is written ahead of the ``/clock`` already written. Only the
-latched topics go through rospy's publishers. The writes block: none is dropped, and a twin running as fast
-as it can runs no faster than its subscribers' sockets take them.
-"""
+Reasons and measurements: docs/ros1.md#amr_twinros1bridge."""
 
 from __future__ import annotations
 

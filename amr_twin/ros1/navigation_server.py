@@ -1,25 +1,6 @@
 """The navigator on the ROS 1 graph as move_base: :class:`NavigationServer`.
 
-Relative names (under the twin's namespace, ``ROS_NAMESPACE``):
-
-- the action ``move_base`` (``move_base_msgs/MoveBaseAction``, actionlib's ``ActionServer``): a goal in frame
-  ``map`` is accepted, checked against the static map from the estimated pose (off the map, in or too near an
-  obstacle, cut off: ABORTED with the planner's reason) and sent to the navigator, which preempts the active
-  goal (PREEMPTED); feedback carries the estimated base pose in ``map`` (10 Hz simulated); the result is
-  SUCCEEDED only when the navigator says so, ABORTED with its reason, PREEMPTED on a cancel (the robot ramps
-  to a stop). A goal in another frame, or with an orientation that is not a rotation about z, is ABORTED
-  with a text naming the field; it ends the active goal too, as move_base's refusals do;
-- ``move_base_simple/goal`` (``geometry_msgs/PoseStamped``, rviz's "2D Nav Goal"): a goal of the action,
-  as move_base turns it into one;
-- the maps (:class:`~amr_twin.ros1.navigation_maps.NavigationMaps`): ``map`` latched, the global and
-  local costmaps under ``move_base/``; the plan is the bridge's ``plan``, ``map -> odom`` the bridge's
-  (:mod:`amr_twin.ros1.map_transform`).
-
-Everything the navigator does happens in the twin's thread: rospy's callbacks only post calls to the
-pacer (:meth:`amr_twin.live.pacer.Pacer.post`), whose ticks also call :meth:`flush`, where outcomes
-become action states. The twin's process keeps rospy's time on the simulated time (set at every tick),
-so the action's stamps and status timer run on it.
-"""
+Reasons and measurements: docs/ros1.md#amr_twinros1navigation_server."""
 
 from __future__ import annotations
 

@@ -1,26 +1,6 @@
-"""The project's rosserial host: a rospy node bridging a serial port to the ROS 1 graph (issue 31).
+"""The project's rosserial host: a rospy node bridging a serial port to the ROS 1 graph.
 
-No registry here ships rosserial, so this node speaks the protocol as upstream's
-``rosserial_python/serial_node.py`` does, written from the protocol's description
-(wiki.ros.org/rosserial/Overview/Protocol; frames and checksums in :mod:`amr_twin.ros.rosserial_frame`):
-
-- on start it asks the client for its topics (an empty frame on id 0) and, for each
-  ``rosserial_msgs/TopicInfo`` answered, advertises (id 0) or subscribes (id 1) the topic with the
-  type's rospy class, refusing a type whose md5sum differs from Debian's;
-- a frame on a configured publisher's id is deserialised and published; one on an id it does not
-  know makes it ask for the topics again (the client published before it was configured);
-- a time request (id 10) is answered with ``rospy.Time.now()`` (simulated time under ``/use_sim_time``);
-  the client's time requests keep the link in sync: after ``3 * timeout`` s without one the host
-  drops sync and asks for the topics again (a *renegotiation*, logged and counted);
-- on shutdown it tells the client to stop (TX_STOP, id 11);
-- a port that cannot be opened (not there yet) is tried again every :data:`RETRY_S`, as upstream's does.
-
-Parameters (private, as serial_node's): ``~port`` (``/dev/ttyACM0``), ``~baud`` (57600),
-``~timeout`` (5 s). Run with Debian's Python (``/usr/bin/python3``), e.g. through
-``amr_idea_bringup``'s ``rosserial_host`` (``roslaunch amr_idea_bringup amr_idea.launch
-serial_pkg:=amr_idea_bringup serial_type:=rosserial_host port:=...``). It imports nothing of the
-twin but :mod:`amr_twin.ros.rosserial_frame` (the standard library only).
-"""
+Reasons and measurements: docs/ros1.md#amr_twinros1serial_host."""
 
 from __future__ import annotations
 

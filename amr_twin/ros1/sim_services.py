@@ -1,23 +1,6 @@
 """The simulator's own interface on the graph, as gazebo_ros offers it, under the twin's node name: :class:`SimServices`.
 
-``gazebo_msgs`` is not in Debian, so the calls are ``std_srvs/Empty`` services and standard message topics,
-named after gazebo_ros' (which sit under ``/gazebo/``) but under the twin's node (``/amr_twin/...``;
-``/r1/amr_twin/...`` with ``ROS_NAMESPACE=r1``; ``__name:=`` renames it):
-
-- ``~pause_physics``: the twin holds at the pacer's next tick (no physics, no ``/clock``), still serving
-  these calls and the graph's inputs (:meth:`amr_twin.live.pacer.Pacer.pause`); ``~unpause_physics`` runs it on;
-- ``~reset_world``: the robot back at its start pose and the actors at the start of their paths, at rest
-  (:meth:`amr_twin.sim.loop.Twin.reset_world`); ``~reset_simulation``: that, and the robot's own state (the
-  wheels braked, the odometry at the origin of ``odom``: :meth:`~amr_twin.sim.loop.Twin.reset_simulation`).
-  Simulated time runs on in both (Gazebo's ``reset_simulation`` rewinds it: a ROS 1 node seeing ``/clock``
-  go back drops its tf buffers and timers);
-- ``~set_pose`` (``geometry_msgs/PoseStamped``, frame ``map``, ``world`` or empty: the world frame): the robot
-  teleported there at rest; a pose where it would overlap the world is refused (a warning) and it stays.
-
-Each call returns once the twin has acted (at the pacer's next tick); one it refuses returns an error.
-The robot's true pose and twist are on ``twin/ground_truth`` (``nav_msgs/Odometry``), the actors' on
-``actors/poses`` (``geometry_msgs/PoseArray``, frame ``map``).
-"""
+Reasons and measurements: docs/ros1.md#amr_twinros1sim_services."""
 
 from __future__ import annotations
 

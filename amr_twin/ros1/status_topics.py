@@ -16,7 +16,7 @@ from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS
 from amr_twin.ros1.outbox import Outbox
 from amr_twin.ros1.row_feed import RowFeed
 from amr_twin.ros1.serialization import float64_row
-from amr_twin.sim.event_log import statuses
+from amr_twin.recording.event_log import statuses
 
 ROW_TOPICS = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current")
 DIAGNOSTICS_PERIOD_ROWS = 100

@@ -8,7 +8,7 @@
  * same bits; tests/sim/test_actors.py runs the grid with each. Part of the physics layer: it
  * writes MjData's mocap_pos and mocap_quat and reads the robot base's pose. The state lives in
  * the structs, which the Python class reads and writes too.
- * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ * Built at first use against the installed MuJoCo's headers (amr_twin/base/native_build.py).
  */
 #include <math.h>
 #include <stdint.h>

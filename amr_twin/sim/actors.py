@@ -1,43 +1,9 @@
 """The actors in the running twin: moved on the loop's grid, their true poses on ``actors/poses``.
 
-:class:`ActorMotion` is a grid sampler of the loop (:attr:`amr_twin.sim.loop.Twin.samplers`): at
-every record-grid instant (10 ms) it advances each actor's walking time, poses it
-(:meth:`amr_twin.model.actor_paths.ActorPath.pose_at`) and writes the pose to its mocap body
-through the physics layer (:meth:`amr_twin.sim.physics.Physics.set_mocap_pose`). The body holds
-that pose until the next instant (MuJoCo moves a mocap body where it is told, no faster): a
-person at 1.5 m/s jumps 15 mm every 10 ms. The contacts and the LiDAR's rays see it from the
-next physics step on, so a cast at an instant sees the actors where they were one instant
-before; the LiDAR casts every 20 ms while actors move (:class:`~amr_twin.sim.loop.Twin`), so a
-beam sees an actor within about 2 cm of where it was at the beam's own instant.
-
-No actor walks into the robot: at each instant its step is cut where its colliding geoms would press
-into the robot's by more than ``actors.<kind>.touch_m`` (MuJoCo's ``mj_geomDistance`` between their geoms
-as they stand, the step's farthest move bounded by the centre's plus the turn's at the geoms' reach): a
-person who meets the robot stops against it, the touch is a reported collision, and its force is that of
-a press of at most ``touch_m`` (a mocap body is kinematic: walked on, it shoved the robot with whatever
-force it took, 275 kN into a wall). It walks on as soon as its step is free. The robot driving into a
-standing actor is stopped as by a wall.
-
-An actor with ``stop_within_m`` gives way: it does not walk on at an instant where the robot's footprint
-(``chassis.length_m`` long, as wide as its wheels' outer faces: ``TwinConfig.half_width_m``, the
-rectangle navigation and its metrics take for the robot) is nearer than that to its centre and ahead of
-it (the footprint's nearest point in front of its heading), for at most ``actors.<kind>.give_way_s`` at a
-time: then it walks on (against the robot, it stops on touching it) until the robot is out of its way,
-when the wait starts afresh (a robot waiting for a person waiting for it deadlocked a door for 88 s). The
-others never wait: scripted actors do not avoid.
-
-The update runs in C when a compiler is at hand (``actors.c``: the loop's grid stays in C with
-actors); :meth:`ActorMotion.update_python` is its Python twin, the same operations in the same
-order (same bits), on the same state (ctypes structs both read and write).
-
-:class:`ActorPoses` publishes the true poses as ``geometry_msgs/PoseArray`` on ``actors/poses``
-(frame ``map``: the world frame; one pose per actor in the order of ``TwinOptions.actors``, z = 0)
-every :data:`PUBLISH_PERIOD_US`, from rows a :class:`~amr_twin.sim.grid_steps.GridRows` keeps on
-the grid (in C with the motion): a publishing clock event that never stops the physics.
+Reasons and measurements: docs/actors.md#amr_twinsimactors.
 
 Part of the physics layer (``PHYSICS_LAYER``): a grid sampler in C: moves the actors' mocap bodies
-in MjData.
-"""
+in MjData."""
 
 from __future__ import annotations
 
@@ -52,8 +18,8 @@ from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actors import Actor, body_name
 from amr_twin.sim.actor_geoms import actor_geoms, gap_after, robot_geoms
 from amr_twin.sim.grid_steps import TIMED, GridRows, sampler
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import address, mujoco_address, open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import address, mujoco_address, open_helper
 
 PHYSICS_LAYER = True
 

@@ -4,7 +4,7 @@
  * order on IEEE doubles (compiled with -ffp-contract=off), so that both give the same bits;
  * tests/sim/test_battery.py checks a run of each. The state lives in the struct, which the
  * Python class reads and writes (its soc, current_a and sag_v are properties on it).
- * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ * Built at first use against the installed MuJoCo's headers (amr_twin/base/native_build.py).
  */
 #include <mujoco/mujoco.h>
 #include "c_layout.h"

@@ -11,7 +11,7 @@ the time since the last call; the terminal voltage that current leaves is kept w
 ``battery_soc`` at every grid instant).
 
 The accounting runs in C when a compiler is at hand (``battery.c``, built at first use by
-:mod:`amr_twin.sim.native_build`; measured in a 8 s run: about 13 us per 10 ms tick of
+:mod:`amr_twin.base.native_build`; measured in a 8 s run: about 13 us per 10 ms tick of
 Python on the loop's cold caches); :meth:`Battery.account_python` is its Python twin,
 the same operations in the same order (same bits), which the tests hold the C helper to.
 The state is one ctypes struct that both read and write: :attr:`Battery.soc`,
@@ -28,8 +28,8 @@ from pathlib import Path
 
 from amr_twin.model.config_sections import BatteryCfg
 from amr_twin.sim.grid_steps import CALL2, sampler
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import open_helper
 
 PHYSICS_LAYER = True
 

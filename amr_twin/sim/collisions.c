@@ -3,7 +3,7 @@
  *
  * Its Python twin is the monitor's own comparison of d.contact.geom with the pairs it kept;
  * tests/sim/test_collisions.py runs collisions with each and compares the episodes.
- * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ * Built at first use against the installed MuJoCo's headers (amr_twin/base/native_build.py).
  */
 #include <mujoco/mujoco.h>
 #include "c_layout.h"

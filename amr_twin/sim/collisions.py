@@ -8,23 +8,10 @@ lying on the floor after tipping over are collisions. Any contact with an actor 
 person or pallet jack, :mod:`amr_twin.model.actors`: a mocap body) is one, a wheel on a
 jack's fork too; it is named by the actor's body (``person_0``), all its geoms one episode.
 
-:class:`CollisionMonitor` is a grid sampler of the loop (:attr:`amr_twin.sim.loop.Twin.samplers`):
-on every record-grid instant (10 ms) it reads MuJoCo's contact list of the last
-physics step. The pairs in contact rarely change, so the common case costs one
-read of the geom pairs and a comparison, in C when a compiler is at hand
-(``collisions.c``, :mod:`amr_twin.sim.native_build`: about 1 us against 11 us of Python on
-the loop's cold caches, measured in a 8 s run); the pairs are only classified when the
-set changes. Contact with one world geom (or one actor) is one
-:class:`Collision` episode, from the first instant it is seen to the last, with
-the robot parts involved and the peak normal force (read when the contacts change
-and every :data:`FORCE_EVERY_S` while they persist); a contact lost for less than
-:data:`MERGE_GAP_S` does not end an episode. With ``stop=True`` the sampler asks
-the loop to stop at the first collision.
-The checks of a start pose use the same classification: :mod:`amr_twin.sim.start_pose`.
+Reasons and measurements: docs/actors.md#amr_twinsimcollisions.
 
 Part of the physics layer (``PHYSICS_LAYER``): a grid sampler: reads MjData's contacts and their
-forces (``mj_contactForce``) at each grid instant.
-"""
+forces (``mj_contactForce``) at each grid instant."""
 
 from __future__ import annotations
 
@@ -38,8 +25,8 @@ import mujoco
 import numpy as np
 
 from amr_twin.sim.grid_steps import CHANGED, sampler
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import open_helper
 
 PHYSICS_LAYER = True
 

@@ -1,26 +1,6 @@
 """Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running :class:`~amr_twin.sim.loop.Twin`.
 
-Each fault is a synced clock event at its time (the physics is brought to that
-instant first) and, with ``for=S``, another that clears it. The twin hands the injector
-the parts a fault acts on (:class:`FaultTargets`); the effects go through small handles of
-those parts, so that no component knows about faults, and the injector watches the sensor
-topics through the twin's ``on_message`` hook:
-
-=================  ================================================================
-hall-dead          ``HallSensors.set_stuck`` (sensors/hall.py): no SC changes
-hall-chatter       ``HallSensors.glitch_rate_hz``: spurious SC pulses
-motor-stall        ``Physics.jam_wheel``: the wheel's hinge limited to its present angle
-wheel-lifted       ``Physics.lift_wheel``: the tyre's contacts switched off
-rosserial-*        ``RosserialLink.loss_prob`` / ``extra_latency_us``
-lidar-dead         ``Bus.intercept("scan")``: every scan dropped
-imu-stuck          ``Bus.intercept("imu/...")``: the last sample repeated, new stamps
-battery-sag        ``Actuation.sag_battery`` (actuation.py): the terminal voltage lowered
-battery-cut        ``Actuation.cut_supply``: the drivers unpowered, the wheels coast
-estop              ``Actuation.press_estop``: the relays open the phases
-=================  ================================================================
-
-:meth:`FaultInjector.report` measures what each fault did from the run's series.
-"""
+Reasons and measurements: docs/architecture.md#amr_twinsimfault_injector."""
 
 from __future__ import annotations
 

@@ -14,7 +14,7 @@
  * mj_step is called through a pointer into the libmujoco the bindings loaded. MuJoCo's errors
  * are caught as the bindings catch them: mju_user_error points to a handler that jumps back
  * here for the length of the call (then restored); the call returns -1 with the message.
- * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ * Built at first use against the installed MuJoCo's headers (amr_twin/base/native_build.py).
  */
 #include <setjmp.h>
 #include <stdint.h>

@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import address, mujoco_address, open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import address, mujoco_address, open_helper
 
 PHYSICS_LAYER = True
 

@@ -1,40 +1,6 @@
 """The simulation loop's hooks: where recorders, live views, bridges, navigation and experiments attach.
 
-:class:`~amr_twin.sim.loop.Twin` is a :class:`Hooks`; what runs downstream of the loop subscribes
-here and reads the twin's :class:`~amr_twin.sim.observables.Observables`, instead of reaching into
-its physics, plant, hall sensors or firmware or tapping its bus (tests/sim/test_hooks.py holds the
-recorder, the fault injector, the live views and the ROS 1 bridge to it). A node (a PC-side program:
-odometry, teleop, the navigation stack) sits on the bus itself, as it would on a ROS graph.
-The hooks, in the order the loop calls them within one of its steps (:data:`HOOKS`):
-
-``on_grid(sampler)``
-    per record-grid instant (every 10 ms of simulated time, while the physics steps between two
-    events): ``sampler(t_us)`` with the physics at ``t_us``; a sampler returning True halts the
-    twin there. A sampler with a C form (``sampler.grid_native``, :mod:`amr_twin.sim.grid_steps`:
-    a :class:`~amr_twin.sim.grid_steps.GridRows`, e.g. :func:`amr_twin.sim.named_index.value_rows`)
-    keeps the grid loop in C; one without makes that loop run in Python, slower.
-``on_grid_rows(fn)``
-    after each chunk of physics: ``fn(t_us, rows)``, the chunk's grid instants (list of int, us) and
-    the loop sensors' rows there (lists of :data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM` floats:
-    what the ``loop_sensors`` observable reads); both lists are shared: read, do not change.
-``on_event(fn)``
-    at each instant the physics stopped at (a synced clock event: a timer tick, a rosserial frame, a
-    divergence check, the end of an ``advance``), after the clock's events up to it ran and the pins
-    were applied to the plant: ``fn(t_us)``, the physics time.
-``on_actuation(fn)``
-    when the plant took the pins anew (new levels, the periodic re-application with the battery's
-    voltage, a fault or the e-stop: :class:`~amr_twin.sim.actuation.Actuation`): ``fn(t_us)``; the
-    ``drive`` observable has the levels, modes and phase voltages then in force.
-``on_message(tap, topics=None)``
-    per message published on the bus: ``tap(topic, msg, t_us)`` (:meth:`amr_twin.ros.bus.Bus.add_tap`),
-    for ``topics`` only when given.
-``on_collision(fn)``
-    at the first contact of each collision (in a grid sampler: the physics at that instant):
-    ``fn(collision)``, a :class:`~amr_twin.sim.collisions.Collision`; the ``collisions`` observable
-    lists them all.
-
-:meth:`Hooks.unhook` removes a subscriber from whichever hook holds it.
-"""
+Reasons and measurements: docs/architecture.md#amr_twinsimhooks."""
 
 from __future__ import annotations
 

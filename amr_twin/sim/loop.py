@@ -1,36 +1,6 @@
 """The simulation loop: physics, plant, hall sensors, firmware and PC-side nodes on one clock.
 
-Roles (after dm_control's physics / task / loop): :class:`~amr_twin.sim.physics.Physics`
-owns MjData, the firmware and the nodes own their logic, and :class:`Twin` only
-orders events in time:
-
-1. find the next *synced* clock event (a timer tick, the end of a ``delay()``, a
-   rosserial frame arriving, a sensor reading the physics), the divergence check
-   or the end of the run; *publishing* events (odometry, IMU and LiDAR messages,
-   :mod:`amr_twin.sim.clock`) do not stop the physics unless a subscriber could act on
-   what they publish before it (:meth:`amr_twin.ros.bus.Bus.lookahead_us`);
-2. step the physics in C up to that instant with the actuation held
-   (:class:`~amr_twin.sim.grid_loop.GridLoop`), keeping the loop sensors' rows on the
-   record grid (every ``record_every_steps``) and handing the grid instants to the grid
-   samplers (the ``on_grid`` hook: the rolling resistance from the present contact loads,
-   the battery, the actors' poses, the IMU's true values, the LiDAR's poses and casts, and
-   what downstream hooked there), then the chunk's rows to ``on_grid_rows``;
-3. turn the angles into SC edges (interpolated to the microsecond) and deliver
-   them to the firmware's pin-change interrupt in time order, each at its time,
-   interleaved with the publishing events that fall in the chunk;
-4. run the clock's events; apply the pins to the plant when they changed
-   (:class:`~amr_twin.sim.actuation.Actuation`, the ``on_actuation`` hook); call ``on_event``.
-
-Downstream code subscribes to these hooks (:mod:`amr_twin.sim.hooks`) and reads
-:attr:`Twin.observables`; docs/architecture.md draws the whole.
-
-A grid sampler that returns True (the collision monitor with ``stop_on_collision``)
-ends the chunk at that grid instant and halts the twin: :meth:`Twin.advance` does
-nothing more (:attr:`Twin.halted`).
-
-A synced event at ``t`` acts from the first physics step that starts at or after
-``t``; a publishing event runs at its own time, possibly with the physics ahead.
-"""
+Reasons and measurements: docs/architecture.md#amr_twinsimloop."""
 
 from __future__ import annotations
 
@@ -39,7 +9,7 @@ from dataclasses import dataclass, field
 
 from amr_twin.ros.bus import Bus
 from amr_twin.sim.actuation import Actuation
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.sim.collisions import CollisionMonitor
 from amr_twin.sim.grid_loop import GridLoop
 from amr_twin.sim.hooks import Hooks
@@ -295,7 +265,7 @@ class Twin(Hooks):
         """The start pose, known to within :data:`PLACED_SIGMA`, on the EKF's pose input (``map_match/pose``)."""
         import numpy as np
 
-        from amr_twin.navigation.map_matching import POSE_TOPIC
+        from amr_twin.estimation.ekf import POSE_TOPIC
         from amr_twin.ros.geometry_messages import (Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped,
                                                     Quaternion)
         from amr_twin.ros.messages import Header, Time

@@ -1,40 +1,6 @@
 """Mission files: a timed list of wheel_Command_Client calls, run in one go.
 
-Format (YAML)::
-
-    duration_s: 14          # simulated seconds, in [0.1, 3600]
-    steps:                  # sent in time order; t_s in [0, duration_s]
-      - t_s: 0
-        linear: {speed_m_s: 0.5}              # negative: backward
-      - t_s: 2
-        angular: {speed_deg_s: 90, icc_m: 0}  # REP-103: CCW +, ICC + to the left
-      - t_s: 3
-        motor: {wheel: left, direction: forward, speed_m_s: 0.3}
-      - t_s: 4
-        stop: {}
-    faults:                 # optional: KIND@T[:ARGS] as --fault (amr_twin/sim/faults.py)
-      - hall-left-dead@3
-      - rosserial-loss@5:0.5,for=2
-    actors:                 # optional: people and pallet jacks (amr_twin/model/actors.py, docs/actors.md)
-      - {kind: person, waypoints_xy_m: [[-3, 2], [-3, -2]], speed_m_s: 1.2, start_s: 1, loop: true}
-
-Each step has ``t_s`` and exactly one command key. Unknown keys, missing or
-non-finite numbers raise :class:`MissionError` with a one-line message naming
-the step and the field. An actor needs its ``kind``, ``waypoints_xy_m`` and
-``speed_m_s`` (:meth:`amr_twin.model.actors.Actor.from_mapping`); its speed range and
-its path through the world are checked when the model is built (docs/actors.md). Speeds outside the thesis range are not checked here:
-the client refuses them at run time (code 1), as on the robot.
-
-A navigation mission has ``goals`` instead of ``steps`` (visited in order by the
-navigation stack, amr_twin/navigation/; ``duration_s`` is then optional, a time limit)::
-
-    goals:                  # x_m, y_m and optionally yaw_deg (REP-103), in the map frame
-      - [10.0, -4.8]
-      - {x_m: 20.0, y_m: 4.8, yaw_deg: 180}
-    map: my_map.yaml        # optional: a map_server map (default: the world's true map)
-    localisation: ekf       # optional: truth, ekf (default) or odom
-    controller: mppi        # optional: mppi (default) or rpp
-"""
+Reasons and measurements: docs/architecture.md#amr_twinsimmission."""
 
 from __future__ import annotations
 

@@ -26,7 +26,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.sim.grid_steps import GridRows, gather
-from amr_twin.sim.native_build import address
+from amr_twin.base.native_build import address
 
 PHYSICS_LAYER = True
 

@@ -1,31 +1,6 @@
 """The plant between the Arduino's pins and the wheels: battery, drivers, hub motors.
 
-Per wheel, a ZS-X11D1-like driver reads its pins (:class:`~amr_twin.sim.pins.DriverPins`)
-and powers a BLDC hub motor from the battery:
-
-- STOP low (disabled) or the e-stop relays open: phases open, zero current, the
-  wheel coasts.
-- BRAKE high: phases shorted through the low-side switches: zero phase voltage, so
-  the motor brakes with ``-Kt Ke / R * omega``, its current ``Ke omega / R`` bounded by
-  the switches' rating (``driver.brake_current_limit_a``); no torque at standstill
-  beyond the motor's own friction.
-- otherwise: phase voltage ``v = dir * V_batt * clip(gain * (duty - deadband) / (1 - deadband), 0, 1)``.
-  The driver treats the PWM input as a speed demand, hence a gain (calibrated), one per board
-  (``driver_left.gain``, ``driver_right.gain``: the robot has two ZS-X11D1 boards).
-
-The motor is the quasi-static DC model of MuJoCo's documentation, evaluated in C
-by an affine actuator: ``torque = Kt/R * v - Kt*Ke/R * omega``, clipped at
-``Kt * I_max`` (current limit). The battery (:mod:`amr_twin.sim.battery`: open-circuit
-voltage from state of charge, internal resistance) is updated on the loop's record grid (every 10 ms,
-whatever the events in between, so that a run does not depend on how the loop
-splits it), from the currents drawn at that instant: each
-driver's input current (``v_phase * i_phase / V_batt``, a lossless power stage, plus
-its quiescent current) and the auxiliary load (mini PC, electronics) at constant power.
-
-Currents, as the CSV and recordings name them: ``current_a_left``/``right`` is each
-motor's (DC-equivalent phase) current, the one that makes torque (``Kt * I``);
-``battery_a`` the pack's current; ``supply_a`` one driver's input current.
-"""
+Reasons and measurements: docs/architecture.md#amr_twinsimplant."""
 
 from __future__ import annotations
 
@@ -35,7 +10,7 @@ from amr_twin.model.config import TwinConfig
 from amr_twin.model.config_sections import DriverBoardCfg, DriverCfg, MotorCfg
 from amr_twin.sim.battery import BRAKE, COAST, DRIVE, Battery
 from amr_twin.sim.physics import Physics
-from amr_twin.sim.pins import DriverPins
+from amr_twin.base.pins import DriverPins
 
 
 MODE_CODES = {"drive": DRIVE, "coast": COAST, "brake": BRAKE}

@@ -3,7 +3,7 @@
  * The C twin of RollingResistance.__call__ (amr_twin/sim/rolling_resistance.py): the same
  * operations in the same order on IEEE doubles (compiled with -ffp-contract=off), so that
  * both give the same bits; tests/sim/test_rolling_resistance.py checks a run of each.
- * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ * Built at first use against the installed MuJoCo's headers (amr_twin/base/native_build.py).
  */
 #include <math.h>
 #include <mujoco/mujoco.h>

@@ -1,40 +1,9 @@
 """Load-dependent rolling resistance of the tyres and the ball casters.
 
-Each support resists rolling in proportion to its contact normal force ``N``:
-
-- a tyre: a torque ``Crr N r`` against the wheel's rotation (``wheel.rolling_resistance``),
-  the moment of the normal force shifted ahead in the contact patch. It is set as the
-  wheel hinge's dry friction (``dof_frictionloss``, on top of the motor's own friction),
-  so MuJoCo's constraint solver applies it in C every step, holds a wheel at rest
-  without jitter, and drops it when the wheel lifts (``N = 0``);
-- a ball transfer unit: a force ``Crr_ball N`` against the ball's velocity over the
-  floor, in any direction (``caster.rolling_resistance``), at the ball's contact point.
-  The four forces go to the chassis as one generalized force on its free joint
-  (``qfrc_applied``: their sum, and their moment about the base in the body frame);
-  body forces (``xfrc_applied``) would cost MuJoCo a Jacobian per ball and step, about
-  7 us a step. Below 5 mm/s a ball's force fades linearly to 0, so that a robot at rest
-  is not pushed about by a force held between updates.
-
-Why not MuJoCo's contact friction: rolling friction (condim 6) on the tyres and
-sliding friction on the balls made the stiff contacts of :mod:`amr_twin.model.robot_spec` chatter
-(normal loads swinging 0-200 N at 100-250 Hz while driving, with elliptic cones as
-with pyramidal ones); the frictionless balls and condim 3 tyres do not.
-
-The normal loads come from the springs that carry them: a tyre's ``k_t q + c_t q'``
-(its compression ``q``), a caster's preload, spring and damping plus the ball's
-weight while the spring is off its stop; a caster resting on its stop is read from
-the contact force of the last step. The resistances are updated on the loop's record
-grid (every 10 ms), where the loads change little; the tyre friction acts in C at
-every step in between.
-
-The update runs in C when a compiler is at hand (``rolling_resistance.c``, built at first
-use by :mod:`amr_twin.sim.native_build`: ~1 us a call against ~9 us here); :meth:`__call__`
-is its Python twin, the same operations in the same order (same bits), which runs
-without a compiler and which the tests hold the C helper to.
+Reasons and measurements: docs/tyres.md#amr_twinsimrolling_resistance.
 
 Part of the physics layer (``PHYSICS_LAYER``): a grid sampler in C: reads the contact loads and
-wheel speeds from MjData and writes ``qfrc_applied``.
-"""
+wheel speeds from MjData and writes ``qfrc_applied``."""
 
 from __future__ import annotations
 
@@ -46,8 +15,8 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.grid_steps import CALL4, GridRows, sampler
-from amr_twin.sim.c_layout import register
-from amr_twin.sim.native_build import open_helper
+from amr_twin.base.c_layout import register
+from amr_twin.base.native_build import open_helper
 
 PHYSICS_LAYER = True
 

@@ -91,7 +91,7 @@ class Command:
         the client after the call (``last_request``, ``last_error``)."""
         from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
         from amr_twin.ros.bus import Bus
-        from amr_twin.sim.clock import VirtualClock
+        from amr_twin.base.clock import VirtualClock
 
         bus = Bus(VirtualClock())
         WheelCommandService(bus)
@@ -165,3 +165,9 @@ def run_command(cfg: TwinConfig, command: Command, duration_s: float,
                 options: TwinOptions = TwinOptions()) -> RunResult:
     """Send one command at t = 0 and run for ``duration_s`` simulated seconds."""
     return run_mission(cfg, [(0.0, command)], duration_s, options)
+
+
+def warm_up() -> None:
+    """A pool worker's start-up (:func:`amr_twin.base.process_pool.worker_pool`): nothing to run,
+    as unpickling it imports this module, and with it the model build and the loop, before the
+    first item."""

@@ -8,7 +8,7 @@
  * amr_twin/model/build.py (parameters and the addresses it needs), and keeps each wheel's contact
  * patch deflections in d->userdata (a copy of MjData carries them). The state advances only when
  * d->time has moved on, so an extra mj_forward at the same instant changes nothing.
- * Built at first use against the installed MuJoCo's headers (amr_twin/sim/native_build.py).
+ * Built at first use against the installed MuJoCo's headers (amr_twin/base/native_build.py).
  */
 #include <math.h>
 #include <string.h>

@@ -1,49 +1,9 @@
 """The drive tyres on the floor: a brush model with relaxation, applied every physics step.
 
-Part of the physics layer. With ``wheel.tyre_slip`` on, the wheels' contacts with the floor
-carry only the normal force (condim 1, :func:`amr_twin.model.build.build`); the tangential
-forces come from this model, in MuJoCo's passive-force callback (``mjcb_passive``: every
-``mj_forward``, so every ``mj_step``, wherever it is called from). Per wheel, with ``N`` the
-tyre spring's load ``k_t q + c_t q'`` (the radial compliance of :mod:`amr_twin.model.robot_spec`),
-``V_x`` the hub's rolling speed, ``V_sx, V_sy`` the slip velocity of the wheel's material
-point at the contact, ``w_z`` its yaw rate (Pacejka, *Tire and Vehicle Dynamics*, 3rd ed.,
-ch. 3 the brush model, ch. 5/7 the single-point transient model):
-
-- patch: deflection ``delta = N / k_t``; half length ``a = sqrt(2 r delta)``, half width
-  ``b = sqrt(2 rho delta)`` (``rho`` the tread's crown radius);
-- stiffnesses grow with the load (brush: with the patch area): ``C_alpha = c_alpha N``,
-  ``C_kappa = c_kappa N``; carcass springs ``k_x = C_kappa / sigma_kappa``,
-  ``k_y = C_alpha / sigma_alpha``; spin ``k_psi = C_kappa b^2 / (3 sigma_kappa)`` (the
-  brush's longitudinal deflections across the width: ``M_z = -C_kappa b^2 phi / 3`` at a
-  turn slip ``phi = w_z / V_x``);
-- deflection states (``d->userdata``), relaxing over their lengths as the wheel rolls and
-  springs at standstill::
-
-      u'   = -V_sx - |V_x| u / sigma_kappa
-      v'   = -V_sy + (a / 3) w_z sgn(V_x) - |V_x| v / sigma_alpha     (turn slip: F_y = C_alpha a phi / 3)
-      psi' = -w_z - |V_x| psi / sigma_kappa
-
-  (explicit Euler over the time since the last call; ``sgn`` smoothed over 0.01 m/s);
-- forces: ``(k_x u + tau k_x u', k_y v + tau k_y v')`` times the brush's saturation
-  ``1 - q + q^2 / 3``, ``q = |(k_x u, k_y v)| / (3 mu N)``; beyond ``q = 1`` the patch slides:
-  ``mu N`` along the deflection, which is held at the limit; spin moment ``k_psi psi + tau k_psi psi'``
-  up to a Hertzian patch's full-slip torque ``(3 pi / 16) mu N sqrt(a b)`` (Johnson, *Contact
-  Mechanics*, 1985, §7.3), ``tau`` the rubber's loss time;
-- applied at the contact point ``r`` below the hub as generalized forces of the chassis' free
-  joint, the tyre slide and the wheel hinge (the Jacobians written out: no ``mj_applyFT``);
-- ``mu`` is ``wheel.friction``, or the floor's friction field at the contact point when the run
-  has one (:mod:`amr_twin.sim.floor_friction`).
-
-The callback is process-wide: :func:`install` sets it once (the C helper ``tyres.c`` when a
-compiler is at hand, else :func:`tyre_forces`, its Python twin: the same operations in the same
-order, the same bits, slower) and refuses to replace someone else's. It acts only on models that
-carry the numeric :data:`NUMERIC` (written by the model build), so other models in the process
-are not touched. The state advances only when ``d.time`` has moved on: an extra ``mj_forward`` at
-the same instant changes nothing; a copy of the data carries it.
+Reasons and measurements: docs/tyres.md#amr_twinsimtyres.
 
 Part of the physics layer (``PHYSICS_LAYER``): a MuJoCo passive callback: reads MjData and adds the
-tyres' forces to ``qfrc_passive`` inside ``mj_step``.
-"""
+tyres' forces to ``qfrc_passive`` inside ``mj_step``."""
 
 from __future__ import annotations
 
@@ -53,7 +13,7 @@ from pathlib import Path
 
 from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, FORMAT, NUMERIC, NUMERIC_FIELDS, STATE_FIELDS
 from amr_twin.sim.floor_friction import friction_at
-from amr_twin.sim.native_build import mujoco_address, open_helper
+from amr_twin.base.native_build import mujoco_address, open_helper
 
 PHYSICS_LAYER = True
 

@@ -64,7 +64,7 @@ def test_bench_point_is_met_as_a_motor_current():
 
 def test_a_scaled_motor_no_longer_fits():
     """Driver gain and Ke scaled together by 1.1 keep the no-load speed: the true-speed
-    timings and the bench point must tell them apart (issue 12: 19.4 against 19.9)."""
+    timings and the bench point must tell them apart (19.4 against 19.9)."""
     cfg = load_config()
     base = thesis_residual(cfg)
     scaled = load_config(sets=[f"driver_left.gain={cfg.driver_left.gain * 1.1}",
@@ -113,8 +113,8 @@ def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
 
 @pytest.mark.parametrize("budget", [7, 15])
 def test_the_fit_never_exceeds_its_evaluation_budget(tmp_path, budget):
-    """scipy's max_nfev counts steps, each with a Jacobian of one evaluation per parameter (issue 33: a
-    budget of 2 made 7): every evaluation is counted, and a budget below one step is refused."""
+    """scipy's max_nfev counts steps, each with a Jacobian of one evaluation per parameter (a
+    budget of 2 once made 7): every evaluation is counted, and a budget below one step is refused."""
     log = tmp_path / "real.csv"
     _write_log(log, gain=1.45)
     calls = []
@@ -126,7 +126,7 @@ def test_the_fit_never_exceeds_its_evaluation_budget(tmp_path, budget):
 
 
 def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
-    """Issue 33: calibrate printed one unformatted 4 KB JSON line. Now one line per parameter
+    """Calibrate printed one unformatted 4 KB JSON line. Now one line per parameter
     (value, 1 sigma) and per feature (a thesis target), the strong correlations named; --json
     for a program. The progress bar goes to stderr."""
     import json

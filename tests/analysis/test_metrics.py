@@ -89,7 +89,7 @@ def test_a_response_that_ends_short_is_timed_on_its_final_value_and_its_offset_s
 
 
 def test_a_permanent_offset_is_a_steady_error_not_an_overshoot():
-    """Chapter 5 run 6, right wheel: a monotone rise to 105.17 RPM against 99.20 (issue 30)."""
+    """Chapter 5 run 6, right wheel: a monotone rise to 105.17 RPM against 99.20."""
     y = first_order(T, k=105.17, tau=0.5)
     info = step_info(T, y, 99.20, settling_band=4.96)
     assert info.overshoot == 0.0 and info.overshoot_pct == 0.0

@@ -14,7 +14,7 @@ README_KEYS = ("physics_us_per_step", "twin_s_per_sim_s", "bare_physics_s_per_si
 def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     r = run_benchmarks(load_config(), sim_s=0.2)
     assert all(r[k] > 0 for k in README_KEYS), r
-    # issue 33: a `ratio` of 1.136 beside medians whose ratio was 0.91, unexplained. Each ratio is
+    # once: a `ratio` of 1.136 beside medians whose ratio was 0.91, unexplained. Each ratio is
     # the median of the repeats' paired ratios, listed, with the ratio of the medians beside it
     assert r["repeats"] >= 5 and "median over the repeats of a paired ratio" in r["ratios"]
     for name in ("ratio", "sensors_ratio", "twin_no_sensors_ratio"):
@@ -28,10 +28,10 @@ def test_figures_are_present_and_each_ratio_is_against_bare_physics():
     assert r["actors_ratio"] > 0 and r["actors_sensors_over_sensors"] > 0 and r["actors_over_twin"] > 0
     assert r["actors_collisions"] == 0 and r["actors_engine"] == r["native_engines"]["actors"]
     assert all(e == "C" or e.startswith("Python (") for e in r["native_engines"].values())
-    assert r["tyres_physics_ratio"] > 0 and r["rigid_physics_us_per_step"] > 0  # issue 30: brush against rigid
+    assert r["tyres_physics_ratio"] > 0 and r["rigid_physics_us_per_step"] > 0  # brush against rigid
     assert r["tyres_engine"] == r["native_engines"]["tyres"]
     assert "avr_skipped" in r or (r["avr_ratio"] > 1 and r["avr_realtime_factor"] > 0)  # --firmware avr
-    assert 0 < r["nav_plan_ms_p50"] <= r["nav_plan_ms_p95"] and r["nav_plans"] == 30  # issue 32's figures
+    assert 0 < r["nav_plan_ms_p50"] <= r["nav_plan_ms_p95"] and r["nav_plans"] == 30  # the navigation figures
     for setup in ("truth_rpp", "ekf_mppi"):
         assert r[f"nav_{setup}_realtime_factor"] > 0 and r[f"nav_{setup}_ratio"] > 1
     assert 0 < r["nav_mppi_ms_p50"] <= r["nav_mppi_ms_p99"] and 0 < r["nav_rpp_ms_p50"] <= r["nav_rpp_ms_p99"]

@@ -69,7 +69,7 @@ def test_firmware_choices_come_from_the_firmware_factory():
                                               (["experiment", "fusion"], "improved"),
                                               (["sweep", "payload"], "faithful")])
 def test_each_commands_default_firmware_is_in_its_help(command, default):
-    """Issue 33: `experiment fusion` runs the improved firmware unless told otherwise, and its
+    """`experiment fusion` runs the improved firmware unless told otherwise, and its
     --help did not say so."""
     res = runner.invoke(app, [*command, "--help"], terminal_width=200)
     text = " ".join(res.output.replace("│", " ").split())

@@ -123,7 +123,7 @@ def test_square_mission_runs(tmp_path):
 
 
 def test_square_mission_says_where_it_ended_and_that_its_speeds_are_old():
-    """Issue 33: after the stop the last published speeds are seconds old (nothing is
+    """After the stop the last published speeds are seconds old (nothing is
     published at rest), and the timed "square" does not close: both are said."""
     square = str(ROOT / "experiments/missions/square.yaml")
     info = _json("--mission", square, "--world", "empty")

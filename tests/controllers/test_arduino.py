@@ -2,8 +2,8 @@
 
 
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW
 from amr_twin.controllers.arduino import ArduinoRuntime
 from amr_twin.controllers.firmware import BoardParams
 

@@ -180,7 +180,7 @@ def test_cli_run_with_the_emulated_board(cfg):
 
 def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
     """Left PWM counts, on a bare clock: left wheel at 20 RPM of SC edges; commands at 0, 1.0, 1.1 s."""
-    from amr_twin.sim.clock import VirtualClock
+    from amr_twin.base.clock import VirtualClock
     from amr_twin.controllers.firmware import SKETCH_EDGES_PER_REV, make_firmware
 
     clock = VirtualClock()
@@ -207,7 +207,7 @@ def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
 @needs_avr
 def test_a_command_queued_during_a_ramp_waits_for_the_ramp_on_the_board_as_in_the_port():
     # listing 4.12 calls node.spinOnce() inside speedChangeInt; ros_lib's spinOnce() does nothing inside
-    # an interrupt (no frame read or written there, issue 31), so the third command, waiting in the serial
+    # an interrupt (no frame read or written there), so the third command, waiting in the serial
     # buffer while loop() sits in the second's ramp, runs in main context when that ramp ends (3.5 s), as
     # in the port; before, it ran inside the ISR at the next sample (~3.2 s) and its ramp to 300 RPM (72
     # counts) collapsed into milliseconds (docs/firmware.md)

@@ -6,7 +6,7 @@ import pytest
 
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.geometry_messages import Twist, Vector3
 from amr_twin.controllers.diff_drive import DiffDriveNode
 from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService

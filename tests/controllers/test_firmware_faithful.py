@@ -9,8 +9,8 @@ from wheel_model import WHEEL, K_RPM, TAU_S  # noqa: F401
 import pytest
 
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW
 from amr_twin.controllers.firmware import BoardParams, FaithfulParams, make_firmware
 from amr_twin.sensors.hall import HallSensors
 
@@ -180,8 +180,8 @@ def test_pi_raises_duty_when_the_wheel_is_slow():
 
 
 def test_integral_is_clamped_to_the_control_range():
-    """Listing 4.11 clamps the integral (total_error) to [min_control, max_control] (issue 30: a
-    removed clamp survived the suite). A wheel 10 RPM faster than its set point (beyond the 4 RPM
+    """Listing 4.11 clamps the integral (total_error) to [min_control, max_control] (a
+    removed clamp once survived the suite). A wheel 10 RPM faster than its set point (beyond the 4 RPM
     dead zone) cannot wind it below min_control = 0, so every PI action writes the same duty,
     sp + kp e - sp/10; a wheel far too slow winds it up only to max_control (here 40 RPM)."""
     clock, fw, pubs = make()

@@ -8,8 +8,8 @@ from wheel_model import WHEEL, K_RPM, TAU_S, simulate  # noqa: F401
 import pytest
 
 
-from amr_twin.sim.clock import VirtualClock
-from amr_twin.sim.pins import HIGH, LOW
+from amr_twin.base.clock import VirtualClock
+from amr_twin.base.pins import HIGH, LOW
 from amr_twin.controllers.firmware import BoardParams, ImprovedParams, make_firmware
 from amr_twin.sensors.hall import HallSensors
 
@@ -143,7 +143,7 @@ def test_anti_windup_keeps_the_integral_bounded_when_saturated():
 
 
 def test_anti_windup_stops_integrating_where_the_output_saturates():
-    """Conditional integration (issue 30: the condition flipped survived the suite): inside the
+    """Conditional integration (the condition flipped once survived the suite): inside the
     8 RPM band, after the ramp. Saturated high (max_control 60 RPM, set point 64, the wheel at
     60: error +4), the integral stops once the output reaches 60: at most one tick's ki e dt
     (0.24 RPM) beyond the room left, 60 - 0.9 x 64 - 0.5 x 4 = 0.4 RPM. Saturated low (min_control

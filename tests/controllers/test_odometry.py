@@ -9,11 +9,11 @@ import pytest
 
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.controllers.odometry import WheelOdometry
 from amr_twin.model.config import load_config
-from amr_twin.controllers.published_pose import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S
+from amr_twin.estimation.published_pose import CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S
 
 WHEEL = load_config().wheel
 GEOMETRY = {"wheel_radius_m": WHEEL.radius_m, "wheel_separation_m": WHEEL.separation_m}
@@ -209,7 +209,7 @@ def test_published_pose_is_continuous_and_its_twist_integrates_to_it(rig):
             <= (1 + odo.catchup_max_fraction) * 2 * rim_m / 0.48 + CATCHUP_FLOOR_RAD_S * 0.02 + 1e-9)
     assert step_m.max() > rim_m  # it did make up something
     # integrate the published twists (held over each period) with the SE(2) exponential
-    from amr_twin.controllers.dead_reckoning import twist_step
+    from amr_twin.estimation.dead_reckoning import twist_step
 
     pose = tuple(a[0, 1:4])
     for k in range(len(a) - 1):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.controllers.path_follower import PathFollowerNode, PurePursuit
 from amr_twin.controllers.route import Route, RouteError, distance_to_path_m, load_route, route_length_m
 from amr_twin.ros.geometry_messages import Twist

@@ -7,7 +7,7 @@ import pytest
 
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.controllers.wheel_command import (MAX_RPM, MIN_RPM, WheelCommandClient,
                                        WheelCommandRequest, WheelCommandService,
                                        wheel_Command_Client, wheel_Command_Service)

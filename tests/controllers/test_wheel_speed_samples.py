@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from amr_twin.controllers.published_pose import PublishedPose
+from amr_twin.estimation.published_pose import PublishedPose
 from amr_twin.controllers.wheel_speed_samples import WheelSpeedSamples
 
 S = 1_000_000  # us per s

@@ -62,7 +62,7 @@ def test_cli_rejects_bad_jobs_and_writes_nothing(tmp_path):
 
 
 def test_a_backward_run_has_one_sign_in_metrics_json_and_report_md(tmp_path):
-    """Issue 33: run 4's reference was -91.67 in report.md and +91.67 in metrics.json. Every signed
+    """Run 4's reference was -91.67 in report.md and +91.67 in metrics.json. Every signed
     value (reference, final value, steady error) carries the reference's sign in both."""
     results = chapter5.run(load_config(), runs=[4], duration_s=4.0, progress=False)
     data = chapter5.report(results, tmp_path).as_json()

@@ -19,7 +19,7 @@ def test_judge_uses_each_wheels_own_step_size():
 
 
 def test_a_steady_offset_is_judged_on_its_own():
-    """Run 6's right wheel (issue 30): a monotone rise to +5.97 RPM over 99.20 has no overshoot,
+    """Run 6's right wheel: a monotone rise to +5.97 RPM over 99.20 has no overshoot,
     which passes nothing for the right wheel (band 2-6 RPM), and its offset fails on its own;
     an offset inside the faithful PI's 4 RPM dead zone passes, either sign."""
     offset = criteria.judge("right", 99.2, {"overshoot": 0.0, "steady_error": 5.97})

@@ -22,7 +22,7 @@ def run5_figure():
 
 
 def test_published_samples_are_markers_from_the_first_sample(run5_figure):
-    """Issue 33: the samples were joined to (0, 0) by a line, so a wheel at rest until 1.6 s
+    """The samples were joined to (0, 0) by a line, so a wheel at rest until 1.6 s
     seemed to rise from t = 0 (runs 5 and 8)."""
     results, fig = run5_figure
     raw = results["runs"][0]["raw"]

@@ -1,4 +1,4 @@
-"""The main outcome under test (issue 12): the eight chapter 5 runs may not get worse against
+"""The main outcome under test: the eight chapter 5 runs may not get worse against
 the thesis than the committed scorecard; the right wheel tracks worse than the left (§5.1.3);
 a payload loads the motors (§5.1.4)."""
 
@@ -23,7 +23,7 @@ def suite():
 
 
 def test_the_header_counts_every_run_the_progress_bar_counts(suite):
-    """Issue 33: "8 runs, 132 simulated s" left out the 8 rolling-resistance study runs."""
+    """"8 runs, 132 simulated s" left out the 8 rolling-resistance study runs."""
     assert (len(suite["runs"]), suite["study_runs"]) == (8, 8)
     assert suite["sim_s"] == 132.0 and suite["study_sim_s"] == 128.0  # runs 3 and 7 (16 s) at four Crr
 
@@ -39,7 +39,7 @@ def test_no_check_worse_than_the_committed_scorecard(suite):
 
 def test_the_committed_scorecard_is_what_the_runs_give_now(suite):
     """The documents quote the scorecard (experiments/doc_figures.py): its values may not drift from
-    the code's, better or worse (issue 33). Within 1e-3: the runs are deterministic."""
+    the code's, better or worse. Within 1e-3: the runs are deterministic."""
     import math
 
     committed, now = json.loads(SCORECARD.read_text()), scorecard(suite)
@@ -86,7 +86,7 @@ def test_unloaded_wheels_end_in_the_dead_zone(suite):
 
 
 def test_motor_current_rises_with_payload():
-    """Acceptance (issue 12): empty world, improved firmware, 0.7 m/s for 16 s; the motor
+    """Acceptance: empty world, improved firmware, 0.7 m/s for 16 s; the motor
     current over the last 4 s, both wheels, rises 0 < 20 < 40 kg, by at least 0.3 A."""
     current = []
     for mass_kg in (0.0, 20.0, 40.0):

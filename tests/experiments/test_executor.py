@@ -15,9 +15,11 @@ from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
-from amr_twin.experiments import dask_cluster, executor, process_pool
+from amr_twin.experiments import dask_cluster, executor
+from amr_twin.base import process_pool
 from amr_twin.experiments import payload_sweep as ps
 from amr_twin.experiments.payload_point import Point
+from amr_twin.sim.run import warm_up
 
 DURATION_S = 1.5
 SWEEP = dict(positions=["center"], commands=["linear:0.7"], duration_s=DURATION_S, progress=False)
@@ -264,21 +266,8 @@ def test_the_caller_and_a_warm_worker_share_the_items(tmp_path, monkeypatch):
     assert sorted(item for item, _ in got) == list(range(6))
     assert all(item == value for item, (value, _pid) in got)
     assert got[0][1][1] == os.getpid()  # the caller started at once, whether the worker is warm or not
-    worker = process_pool._shared_pool(1).submit(process_pool._ready).result(timeout=120)  # warm by now
+    worker = process_pool._shared_pool(1, warm_up).submit(process_pool._ready).result(timeout=120)  # warm by now
     again = list(executor.run_all(who_runs.run, list(range(20, 28)), jobs=2, progress=False))
     assert sorted(item for item, _ in again) == list(range(20, 28))
     pids = {pid for _, (_, pid) in again}
     assert pids == {os.getpid(), worker}  # the warm worker took items at once, the caller too
-
-
-def _sigint_handler() -> str:
-    import signal
-
-    return "ignored" if signal.getsignal(signal.SIGINT) == signal.SIG_IGN else "handled"
-
-
-def test_a_pool_worker_leaves_ctrl_c_to_its_parent():
-    """The terminal sends Ctrl-C to every process of the command: a worker that took it printed its
-    KeyboardInterrupt traceback ("Process SpawnProcess-1: ..."); the parent stops the workers."""
-    worker = process_pool._shared_pool(1).submit(_sigint_handler).result(timeout=120)
-    assert worker == "ignored" and _sigint_handler() == "handled"

@@ -1,5 +1,5 @@
-"""docs/faults.md is what `amr-twin experiment faults --out docs` writes now (issue 33: its figures
-had drifted from the code's: 61.4 against 61.5 RPM, chatter 2.5 against 3.4 RPM, -88 against -89 deg)."""
+"""docs/faults.md is what `amr-twin experiment faults --out docs` writes now (its figures
+once drifted from the code's: 61.4 against 61.5 RPM, chatter 2.5 against 3.4 RPM, -88 against -89 deg)."""
 
 import json
 import math

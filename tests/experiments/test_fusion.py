@@ -1,4 +1,4 @@
-"""The fusion experiment (issue #8): one warehouse drive, five estimates, the map, the report."""
+"""The fusion experiment: one warehouse drive, five estimates, the map, the report."""
 
 import json
 import math
@@ -60,14 +60,14 @@ def test_acceptance_of_issue_8(default_run):
     a, s = data["architectures"], data["summary"]
     assert set(a) == set(fusion.ARCHITECTURES)
     assert s["odom_drift_final_m"] > 0.0 and math.isfinite(s["odom_drift_final_m"])
-    # with the robot's own tyre and track errors (issue 18) the gyro beats the odometry on
-    # heading, absolute and relative: on every seed of 0-9 of both routes (README). Issue 30: the
+    # with the robot's own tyre and track errors the gyro beats the odometry on
+    # heading, absolute and relative: on every seed of 0-9 of both routes (README). The
     # odometry counts every SC edge, so its heading error is the robot's (seed 0: 7.5 against the
     # gyro's 1.3 deg RMS); the edges it lost at each start and stop before had offset that drift
     # on this seed, by chance (1.3-3.3 deg RMS, with where they fell)
     assert a["odom+imu"]["rms_yaw_err_deg"] < a["odom"]["rms_yaw_err_deg"]
     assert a["odom+imu"]["rpe_rot_deg"] < a["odom"]["rpe_rot_deg"]
-    # on seeds 0-9 kiss-icp stays within 0.12 m (issue 8 asked 0.10: seed 8, the robot with the worst
+    # on seeds 0-9 kiss-icp stays within 0.12 m (0.10 was asked: seed 8, the robot with the worst
     # odometry prior, misses it) and beats the odometry; ranges and gyro together are best
     assert a["odom+lidar"]["ate_m"] < min(0.15, a["odom"]["ate_m"])
     assert a["odom+uwb+imu"]["ate_m"] == min(e["ate_m"] for e in a.values())
@@ -119,7 +119,7 @@ def test_evo_reproduces_every_architectures_ate_and_rpe_from_the_tum_files(defau
     with_rpe = {"odom", "odom+lidar", "odom+uwb+imu"}
     for name, e in data["architectures"].items():
         ate, ate_al, rpe_m, rpe_deg = _evo(out, e["tum"], name in with_rpe)
-        assert ate == pytest.approx(e["ate_m"], rel=0.02), name          # issue 18: within 2 %
+        assert ate == pytest.approx(e["ate_m"], rel=0.02), name          # within 2 %
         assert ate_al == pytest.approx(e["ate_aligned_m"], rel=0.02), name
         if name in with_rpe:
             assert rpe_m == pytest.approx(e["rpe_trans_m"], rel=0.02), name
@@ -185,7 +185,7 @@ def test_same_seed_same_numbers_other_seed_others(tmp_path):
     a, b, c = _short(tmp_path, 7), _short(tmp_path, 7), _short(tmp_path, 8)
     assert a == b
     assert a["odom+uwb"] != c["odom+uwb"] and a["odom+imu"] != c["odom+imu"]
-    assert a["odom"] != c["odom"]  # each seed is another robot (issue 18)
+    assert a["odom"] != c["odom"]  # each seed is another robot
 
 
 def test_without_robot_errors_the_odometry_is_the_same_on_every_seed(tmp_path):

@@ -31,7 +31,7 @@ def test_parsing():
 
 
 def test_a_points_fingerprint_covers_what_its_result_depends_on(cfg):
-    """A resumed sweep reuses a point's file only when its fingerprint matches (issue 30: one that
+    """A resumed sweep reuses a point's file only when its fingerprint matches (one that
     ignored the duration would have reused a point simulated for another duration)."""
     base = pp.Point(20.0, "rear", "linear:0.7", 8.0, "faithful", cfg)
     same = pp.Point(20.0, "rear", "linear:0.7", 8.0, "faithful", cfg, rrd_path="x.rrd", mcap_path="x.mcap")

@@ -1,5 +1,5 @@
 """The payload sweep's report: every answer a sentence (never "None kg"), the cause of each limit,
-the improved firmware beside the faithful one, and no empty plot (issues 30 and 33)."""
+the improved firmware beside the faithful one, and no empty plot."""
 
 import json
 import warnings
@@ -52,7 +52,7 @@ def test_a_safe_mass_at_which_a_wheel_leaves_its_reference_is_said():
 
 
 def test_an_overload_while_a_wheel_leaves_its_reference_is_a_runaway():
-    """Issue 30: 20 kg at the rear edge, the clockwise turn, faithful firmware: 12.3 A on the inner
+    """20 kg at the rear edge, the clockwise turn, faithful firmware: 12.3 A on the inner
     wheel, which turns backward instead of at 60.8 RPM: the firmware's runaway, not the rating."""
     runaway = _row(30.0, False, motor_overload=True, right_steady_current_a=12.3, tracks=False,
                    right_true_steady_error_rpm=-64.0)
@@ -96,7 +96,7 @@ def test_the_improved_firmware_runs_beside_where_the_faithful_one_runs_away(rear
 
 
 def test_no_empty_plot_is_drawn(tmp_path, monkeypatch):
-    """Issue 33: a command every point of which the client refuses drew 15 empty panels; a
+    """A command every point of which the client refuses drew 15 empty panels; a
     position off the deck made matplotlib warn. No PNG then, and the reason said. (The command line
     refuses such a command before the sweep, tests/cli/test_bad_inputs.py: let it through here, as a
     drawn wheel radius may make the client refuse some points.)"""

@@ -3,7 +3,7 @@
 The nominal robot (its odometry's geometry is the true one): with the rigid contact the wheels do
 not slip, so the return error is the odometry's own, what it makes of the firmware's speed samples;
 with the brush tyres the slip adds its part. The firmware publishing its PI's estimate instead of
-the mean since the previous sample (before issue 30) shows what that choice costs."""
+the mean since the previous sample (the former default) shows what that choice costs."""
 
 import math
 from dataclasses import replace

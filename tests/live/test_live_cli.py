@@ -1,4 +1,4 @@
-"""Issue 17: the live options of ``amr-twin run`` and ``amr-twin client``, checked before the work."""
+"""The live options of ``amr-twin run`` and ``amr-twin client``, checked before the work."""
 
 import json
 import socket

@@ -1,4 +1,4 @@
-"""Issue 17: the twin live over the Foxglove WebSocket protocol, checked by a client of our own
+"""The twin live over the Foxglove WebSocket protocol, checked by a client of our own
 writing (tests/foxglove_client.py: ``websockets`` + the published protocol) and rosbags' CDR.
 
 The two acceptance runs are the issue's commands, run by the CLI in a subprocess at real

@@ -1,4 +1,4 @@
-"""Issue 17: what a live client sends the twin. Good messages drive it through the bus; anything
+"""What a live client sends the twin. Good messages drive it through the bus; anything
 else is logged, counted and dropped, and the twin runs on.
 
 The decoders are checked on payloads made by rosbags' own CDR serializer; the server in-process,

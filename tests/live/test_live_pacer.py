@@ -1,4 +1,4 @@
-"""Issue 17: pacing a twin to the wall clock changes nothing it computes; other threads act on it
+"""Pacing a twin to the wall clock changes nothing it computes; other threads act on it
 only at the pacer's ticks, in its own thread, and cannot stop it."""
 
 import threading

@@ -1,4 +1,4 @@
-"""Issue 17: ``--live rerun``, the Rerun recording streamed while the twin runs, read back.
+"""``--live rerun``, the Rerun recording streamed while the twin runs, read back.
 
 The stream is read by Rerun's own viewer binary (``rerun URI --save FILE``: it connects to the
 gRPC server as any viewer does and writes what it receives), then compared with the ``.rrd``

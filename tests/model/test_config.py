@@ -16,7 +16,7 @@ def test_every_parameter_has_unit_and_source():
         assert unit, key
         assert len(source) > 8, f"{key}: source too short"
         assert any(w in source for w in ("thesis", "estimate", "datasheet", "calibrated", "robot-facts", "set per run", "standard",
-                                     "nav2", "measured", "issue 32")), key
+                                     "nav2", "measured", "acceptance")), key
 
 
 def test_thesis_geometry_loaded():
@@ -94,10 +94,10 @@ def test_model_readme_lists_every_parameter():
 
 
 def test_model_readme_is_current():
-    from amr_twin.model.parameter_doc import readme_text
+    from amr_twin.analysis.parameter_doc import readme_text
     from amr_twin.model.paths import MODEL_DIR
     assert (MODEL_DIR / "README.md").read_text() == readme_text(), \
-        "models/amr/README.md is stale: run python -m amr_twin.model.parameter_doc"
+        "models/amr/README.md is stale: run python -m amr_twin.analysis.parameter_doc"
 
 
 def test_a_parameter_file_that_is_a_folder_or_binary_is_named(tmp_path):

@@ -1,4 +1,4 @@
-"""The robot's geometry is read from the parameter file by every consumer (issue 34).
+"""The robot's geometry is read from the parameter file by every consumer.
 
 A robot with other wheels (radius 0.15 m instead of 0.125 m), a wider track (0.56 m instead
 of 0.48 m) and motors of 20 pole pairs (120 SC changes per revolution instead of 90) is
@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.controllers.ekf import EkfNode
+from amr_twin.estimation.ekf import EkfNode
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.sim.run import Command, run_command

@@ -8,7 +8,7 @@ from amr_twin.navigation.localisation import PoseSource
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.geometry_messages import Odometry, Point, Pose, PoseWithCovariance, Quaternion
 from amr_twin.ros.messages import Header, Time
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 
 
 def _odom(t_s, x, y, yaw):

@@ -197,7 +197,7 @@ def test_the_ekf_takes_the_match_in_and_stays_on_an_unseen_map(unseen_runs):
     """Without the feedback the EKF drifts with the UWB ranges that come late through the rows, 1.0-1.2 m
     within 25 s, beyond the correction's 0.3 m bound, and the goal is not reached (the experiment's
     episode timed out); fusing the matched pose the navigator's pose stays within 0.1 m and the goal is
-    reached in 25 s (issue 32's unseen maps, docs/navigation.md)."""
+    reached in 25 s (the unseen maps, docs/navigation.md)."""
     err_fb, status_fb, nav = unseen_runs[True]
     err_raw, status_raw, _ = unseen_runs[False]
     assert err_raw.max() > 0.6 and status_raw != "succeeded", (err_raw.max(), status_raw)

@@ -226,7 +226,7 @@ def test_a_longer_plan_does_not_replace_a_free_path_the_robot_is_on():
     from amr_twin.navigation.localisation import PoseSource
     from amr_twin.navigation.navigator import Navigator
     from amr_twin.ros.bus import Bus
-    from amr_twin.sim.clock import VirtualClock
+    from amr_twin.base.clock import VirtualClock
 
     bus = Bus(VirtualClock())
     planner = _TwoRoutes()
@@ -300,7 +300,7 @@ def _navigator(goals=()):
     from amr_twin.navigation.localisation import PoseSource
     from amr_twin.navigation.navigator import Navigator
     from amr_twin.ros.bus import Bus
-    from amr_twin.sim.clock import VirtualClock
+    from amr_twin.base.clock import VirtualClock
 
     bus = Bus(VirtualClock())
     robot = _Robot(bus)
@@ -395,7 +395,7 @@ def test_a_heading_inside_the_tolerance_that_the_drive_cannot_improve_ends_the_g
     from amr_twin.navigation.localisation import PoseSource
     from amr_twin.navigation.navigator import Navigator
     from amr_twin.ros.bus import Bus
-    from amr_twin.sim.clock import VirtualClock
+    from amr_twin.base.clock import VirtualClock
 
     bus = Bus(VirtualClock())
     robot = _DeadZoneRobot(bus)

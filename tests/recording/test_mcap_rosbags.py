@@ -1,4 +1,4 @@
-"""Issue 7: the ``--mcap`` recording read back with the ``rosbags`` library.
+"""The ``--mcap`` recording read back with the ``rosbags`` library.
 
 ``rosbags`` is a reader independent of the ``mcap`` package that wrote the file: its
 rosbag2 ``Reader`` opens a bare ``.mcap`` (rosbag2 MCAP storage, profile ``ros2``), and

@@ -8,8 +8,8 @@ import sys
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.recording import atomic_file
-from amr_twin.recording.atomic_file import WriteError, all_or_nothing, remove_stale_temporaries, write_text
+from amr_twin.base import atomic_file
+from amr_twin.base.atomic_file import WriteError, all_or_nothing, remove_stale_temporaries, write_text
 from amr_twin.cli.main import app
 from amr_twin.recording.outputs import OutputError, check_file, check_folder, check_outputs
 

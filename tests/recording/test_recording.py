@@ -1,4 +1,4 @@
-"""Issue 7: .rrd (Rerun) and .mcap (ROS 2) recordings, read back with the formats' own readers."""
+""".rrd (Rerun) and .mcap (ROS 2) recordings, read back with the formats' own readers."""
 
 import collections
 import json

@@ -7,7 +7,7 @@ import pytest
 
 from amr_twin.ros.bus import Bus, ServiceCallError
 from amr_twin.ros.tf_buffer import TransformError
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.geometry_messages import Quaternion, TFMessage, Transform, TransformStamped, Twist, Vector3
 from amr_twin.ros.messages import Float64, Header
 
@@ -194,7 +194,7 @@ def test_taps_see_service_requests_failed_calls_included(bus, clock):
 
 
 def test_lookahead_is_the_smallest_subscriber_latency_and_taps_do_not_count(bus):
-    from amr_twin.sim.clock import NEVER_US
+    from amr_twin.base.clock import NEVER_US
 
     bus.add_tap(lambda topic, msg, t_us: None)
     assert bus.lookahead_us(("odom", "tf")) == NEVER_US

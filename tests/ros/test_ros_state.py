@@ -1,4 +1,4 @@
-"""Issue 13: a recording is a bag ROS 2 tools accept, checked with rosbags (and yourdfpy) only.
+"""A recording is a bag ROS 2 tools accept, checked with rosbags (and yourdfpy) only.
 
 The run of the issue, ``amr-twin run linear --speed-m-s 0.5 --duration-s 8 --sensors --mcap r.mcap
 --world empty``, read back with rosbags' rosbag2 Reader and its ROS 2 Humble deserializer:
@@ -16,7 +16,7 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
-from amr_twin.controllers.dead_reckoning import twist_step
+from amr_twin.estimation.dead_reckoning import twist_step
 
 from uwb_run import record_uwb_run
 

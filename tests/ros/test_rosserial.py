@@ -5,7 +5,7 @@ import pytest
 
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from amr_twin.ros.rosserial import (ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink,
                                 frame_bytes, frame_time_us)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config import load_config
 from amr_twin.sensors.imu import ImuSensor
 from amr_twin.sensors.imu_errors import AxisModel, axis_models, corrupt

@@ -61,7 +61,7 @@ def test_c_helper_and_python_twin_give_the_same_bits(seed):
 @pytest.mark.parametrize("dt_s", [0.01, 0.0025])
 def test_bias_random_walk_spreads_as_the_square_root_of_time(dt_s):
     """A bias random walk of density q (unit / sqrt(s)) takes steps of q sqrt(dt), so that after t
-    seconds it has spread q sqrt(t) whatever the sample period (issue 30: steps of q dt survived
+    seconds it has spread q sqrt(t) whatever the sample period (steps of q dt once survived
     the suite). Noise, scale and turn-on bias off, so each reading is the bias itself; 4 s on 9
     axes and 3 seeds: the steps' spread is known to 0.6 %, the tolerance is 5 %."""
     q, n = 2.0, int(round(4.0 / dt_s))

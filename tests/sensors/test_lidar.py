@@ -9,7 +9,7 @@ import pytest
 
 from amr_twin.model.build import build
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config import load_config
 from amr_twin.sensors.lidar import Lidar
 
@@ -193,7 +193,7 @@ def _run_on_grid(rig, t_end_us, yaw_rate, grid_us=10_000):
 @pytest.mark.parametrize("speed_m_s, seed", [(0.0, 0)] + [(0.7, seed) for seed in range(20)])
 def test_twin_mode_scan_while_turning_and_driving_is_distorted_as_computed(room, speed_m_s, seed):
     """One cast per rotation (the twin's default): beam directions and origins at their own
-    instants. Driving, on 20 seeds of the range noise (issue 12: it held on seed 0 only)."""
+    instants. Driving, on 20 seeds of the range noise (it once held on seed 0 only)."""
     omega = math.radians(60.0)
     rig = Rig(room, seed=seed)
     off = rig.laser_offset()

@@ -32,7 +32,7 @@ def test_at_rest_it_drains_the_quiescent_and_auxiliary_current(monkeypatch, nati
     """Standing still, the pack gives 2 quiescent currents and the auxiliary power at its terminal
     voltage: I = 2 Iq + P / V, V = OCV(soc) - R I, solved here by hand (a quadratic in V). At rest
     nothing changes but the charge (1e-4 of it in 20 s), so the 10 ms the accounting's voltage lags
-    its current is worth about 1e-9 of it: the tolerances are 1e-7 and 1e-4 (issue 30: the R I
+    its current is worth about 1e-9 of it: the tolerances are 1e-7 and 1e-4 (the R I
     drop, 0.1-0.3 % of the current, hid inside the former 0.1 %)."""
     cfg = load_config()
     twin = _twin(monkeypatch, cfg, native)
@@ -49,7 +49,7 @@ def test_at_rest_it_drains_the_quiescent_and_auxiliary_current(monkeypatch, nati
 
 
 def test_battery_voltage_is_recorded_at_every_grid_instant(monkeypatch):
-    """Issue 30: the terminal voltage follows the current between pin changes (it was held from one
+    """The terminal voltage follows the current between pin changes (it was held from one
     pin change to the next: 39.505 V to 8.55 s while the current fell at 8.05 s). Every row: V =
     OCV(soc) - R I, and the state of charge drains by the current over each 10 ms."""
     cfg = load_config(overrides={"payload.mass_kg": 20.0})

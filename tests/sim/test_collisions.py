@@ -65,7 +65,7 @@ def test_a_low_kerb_is_hit_by_a_wheel_or_caster(tmp_path):
     assert first["hit"] == "kerb" and first["x_m"] == pytest.approx(1.45, abs=0.06)
     assert any(p.startswith(("caster_", "wheel_")) for p in first["robot_parts"])
     # the kerb lies across the path (4 m long): both front casters meet it, within one episode
-    # of contact with it, which names every part involved (issue 30: a dropped second part survived)
+    # of contact with it, which names every part involved (a dropped second part once survived)
     assert len(result.collisions) == 1
     assert {"caster_front_left_link", "caster_front_right_link"} <= set(first["robot_parts"])
 
@@ -125,7 +125,7 @@ def test_the_c_pair_check_sees_any_change_of_the_pairs():
 
     import mujoco
 
-    from amr_twin.sim import native_build
+    from amr_twin.base import native_build
     from amr_twin.sim.collisions import C_SOURCE, _Memo
 
     if shutil.which("cc") is None and shutil.which("gcc") is None:

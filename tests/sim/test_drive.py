@@ -8,7 +8,7 @@ import pytest
 from amr_twin.model.build import build
 from amr_twin.model.config import load_config
 from amr_twin.sim.physics import DivergenceError, Physics
-from amr_twin.sim.pins import HIGH, LOW, DriverPins
+from amr_twin.base.pins import HIGH, LOW, DriverPins
 from amr_twin.sim.plant import Plant
 
 # the shipped right motor differs from the left (calibrated, §5.1.3); make them identical
@@ -101,7 +101,7 @@ def test_brake_is_the_shorted_motor():
 
 
 def test_hard_stop_keeps_every_support_on_the_floor():
-    """The end of the fusion route (issue 12): 0.41 m/s, then both wheels braked. The
+    """The end of the fusion route: 0.41 m/s, then both wheels braked. The
     shorted motors decelerate the robot at about 1 m/s^2: no wheel or caster lifts."""
     cfg, physics, plant = _robot()
     drive = DriverPins(7, HIGH, LOW, HIGH)  # about 0.4 m/s

@@ -11,7 +11,7 @@ import pytest
 
 import amr_twin.sim.loop as loop_mod
 from amr_twin.model.config import load_config
-from amr_twin.sim import native_build
+from amr_twin.base import native_build
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.sim.rolling_resistance import C_SOURCE, RollingResistance
 
@@ -107,7 +107,7 @@ def test_a_damaged_build_is_replaced(tmp_path):
     """A built helper that does not load is removed, so that the next process builds it again."""
     source = tmp_path / "helper.c"
     source.write_text("int answer(void) { return 42; }\n")
-    code = ("import sys; from pathlib import Path; from amr_twin.sim import native_build as nb; "
+    code = ("import sys; from pathlib import Path; from amr_twin.base import native_build as nb; "
             "s = Path(sys.argv[1]); lib = nb.load_helper(s); print(nb.native_status(s), lib.answer() if lib else '-')")
     env = {**os.environ, "AMR_TWIN_CACHE_DIR": str(tmp_path / "cache")}
 

@@ -157,7 +157,7 @@ def test_a_person_told_to_wait_stops_short_of_the_robot_and_one_not_told_walks_i
 @pytest.mark.parametrize("side", [1.0, -1.0])
 @pytest.mark.parametrize("angle_deg", [0.0, 40.0, 65.0, -65.0])
 def test_a_person_giving_way_beside_the_robot_keeps_their_body_0_3_m_from_its_footprint(side, angle_deg):
-    """Issue 32's acceptance asks 0.3 m from a person's body (the navigation metric's 0.30 x 0.45 m box)
+    """The navigation's acceptance asks 0.3 m from a person's body (the navigation metric's 0.30 x 0.45 m box)
     to the robot's footprint (0.70 x 0.53 m: the wheels stick out of the 0.40 m chassis). A person
     walking at the robot's left or right side, square to it or at an angle (forwards or backwards;
     65 deg is seed 0 episode 13's), waiting within 0.6 m: halted within one grid step of 0.6 m from

@@ -43,7 +43,7 @@ def test_a_start_overlapping_many_geoms_names_five_and_counts_the_rest(tmp_path)
 
 
 def test_the_stand_holds_the_robot_and_gives_the_bench_point():
-    """The README's bench-point command (issue 30): the stand world's weld holds the chassis
+    """The README's bench-point command: the stand world's weld holds the chassis
     (fig. 5.1), so the start check lets it run with no wheel on the floor, and the free left
     wheel at listing 4.1's 71.5 RPM draws about its "0,38 Amp" of motor current."""
     res, info = _json("motor", "--wheel", "left", "--direction", "forward", "--speed-m-s", "0.936",

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.controllers.ekf_model import (N_STATE, W, YAW, predict_mean, process_noise, range_model,
+from amr_twin.estimation.ekf_model import (N_STATE, W, YAW, predict_mean, process_noise, range_model,
                                             transition_jacobian)
 
 STATES = [np.array([1.0, -2.0, 0.3, 0.8, 0.5, 0.01]), np.array([-3.0, 4.0, 3.1, -0.4, -1.2, -0.02]),

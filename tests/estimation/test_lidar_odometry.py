@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from amr_twin.analysis import se2
-from amr_twin.controllers.lidar_odometry import LidarOdometry, beam_times_s, scan_end_time_s, scan_points
+from amr_twin.estimation.lidar_odometry import LidarOdometry, beam_times_s, scan_end_time_s, scan_points
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 

@@ -18,7 +18,7 @@ Measurements
     ``r = sqrt(|p_tag - p_anchor|^2 + dz^2)`` with the tag ``p_tag = p + R(yaw) t``,
     Jacobian in x, y, yaw (:func:`range_model`).
 
-The node that runs the filter on these is :class:`amr_twin.controllers.ekf.EkfNode`.
+The node that runs the filter on these is :class:`amr_twin.estimation.ekf.EkfNode`.
 """
 
 from __future__ import annotations

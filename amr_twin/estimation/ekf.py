@@ -4,34 +4,7 @@ The thesis (§6.2.1, figs. 6.5 to 6.7) fuses odometry with the IMU and UWB in an
 extended Kalman filter; this node does it as robot_localization's ``ekf_node`` in
 ``two_d_mode`` with filterpy's :class:`~filterpy.kalman.ExtendedKalmanFilter`.
 
-State, prediction and measurement models
-    :mod:`amr_twin.controllers.ekf_model`: the state ``[x_m, y_m, yaw_rad, v_m_s,
-    w_rad_s, gyro_bias_rad_s]`` in the world frame (``odom``, or ``map`` when UWB is
-    fused), constant velocity on a unicycle predicted to each measurement's stamp.
-Measurements (sigmas from the ``ekf:`` config, not from the messages)
-    ``odom`` twist ``v`` and ``w`` (robot_localization's ``odom0_config`` with vx
-    and vyaw); ``imu/data_raw`` gyro z rate; ``uwb/range`` ranges, of which one
-    whose innovation exceeds ``mahalanobis_gate`` sigmas is rejected
-    (robot_localization's ``*_rejection_threshold``); with UWB (frame ``map``) also
-    ``map_match/pose`` (:data:`POSE_TOPIC`), a pose in ``map`` with the message's own
-    covariance of x, y and yaw, as robot_localization's ``pose0`` fuses AMCL's
-    ``amcl_pose`` (the navigation's scan-to-map match, :mod:`amr_twin.navigation.map_matching`).
-Gyro bias
-    The L3GD20's turn-on bias (10 deg/s) is removed by a rest calibration: the
-    gyro is averaged over its first ``imu_rest_calibration_s`` seconds while the
-    odometry says the robot stands (``|v|``, half the wheel separation times ``|w|`` at most
-    ``rest_speed_m_s``; at rest when no odometry has arrived), and the mean
-    initialises the bias state with variance ``gyro_w_sigma^2 / n``. The bias stays
-    a state, observable against the odometry's yaw rate. Gyro samples of the
-    calibration are not fused.
-
-Messages are handled in the order given; one older than the filter time is fused
-at the filter time (counted in :attr:`EkfNode.late_messages`), but a matched pose is
-carried to it (:meth:`EkfNode.on_pose`). With a bus the node
-subscribes to ``odom``, ``imu/data_raw``, ``uwb/range`` and ``map_match/pose`` (those in use) and
-publishes ``nav_msgs/Odometry`` on ``odometry/filtered`` after every odometry
-update (after every update when odometry is not fused).
-"""
+Reasons and measurements: docs/fusion.md#amr_twinestimationekf."""
 
 from __future__ import annotations
 
@@ -41,7 +14,6 @@ import math
 import numpy as np
 
 from amr_twin.analysis import se2
-from amr_twin.navigation.map_matching import POSE_TOPIC
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.model.config_sections import EkfCfg, UwbCfg
@@ -51,12 +23,16 @@ from amr_twin.ros.messages import Header
 from amr_twin.ros.sensor_messages import Imu, Range
 from amr_twin.sensors.uwb import anchor_index
 
-from amr_twin.controllers.ekf_filter import UnicycleEkf
-from amr_twin.controllers.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
+from amr_twin.estimation.ekf_filter import UnicycleEkf
+from amr_twin.estimation.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
                         pose_difference_twist, process_noise, range_model, transition_jacobian)
 
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
+POSE_TOPIC = "map_match/pose"
+"""The EKF's pose input, where the navigator publishes the matched pose
+(``geometry_msgs/PoseWithCovarianceStamped`` in ``map``; AMCL's ``amcl_pose``, which
+robot_localization fuses as ``pose0``)."""
 _POSE_ROWS = np.ix_([0, 1, 5], [0, 1, 5])
 """x, y and yaw in a ``PoseWithCovariance``'s 6 x 6 covariance."""
 

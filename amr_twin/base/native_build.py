@@ -1,7 +1,7 @@
 """Small C helpers of the loop, compiled at first use against the installed MuJoCo's headers.
 
 A helper (a ``.c`` file next to its Python twin) is built with the system's C compiler
-(``cc``) into the disk cache (:func:`amr_twin.model.disk_cache.cache_dir` ``native``), keyed
+(``cc``) into the disk cache (:func:`amr_twin.base.disk_cache.cache_dir` ``native``), keyed
 by the source, the MuJoCo version and the flags, written whole (temporary file, then
 rename), and loaded with ctypes. It takes MuJoCo's ``mjModel*`` and ``mjData*`` (the
 bindings' ``_address``) and reads and writes their arrays in place: one call instead of
@@ -29,8 +29,8 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from amr_twin.model.disk_cache import cache_dir
-from amr_twin.sim.c_layout import LAYOUT_HEADER, layout_problem
+from amr_twin.base.disk_cache import cache_dir
+from amr_twin.base.c_layout import LAYOUT_HEADER, layout_problem
 
 PHYSICS_LAYER = True
 
@@ -103,7 +103,7 @@ def load_helper(source: Path) -> ctypes.PyDLL | None:
     else:
         lib, why = _build_and_load(Path(source))
         why = layout_problem(source, lib) if lib is not None else why
-        if why and lib is not None:  # its structs are not those of the Python side (amr_twin.sim.c_layout)
+        if why and lib is not None:  # its structs are not those of the Python side (amr_twin.base.c_layout)
             lib = None
             warnings.warn(f"{why}: the Python twin runs instead", RuntimeWarning, stacklevel=2)
     _loaded[name], _why_not[name] = lib, why

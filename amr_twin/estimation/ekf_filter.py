@@ -1,6 +1,6 @@
 """The EKF's filter: filterpy's ExtendedKalmanFilter with the unicycle's prediction, without its bookkeeping.
 
-Used by :class:`amr_twin.controllers.ekf.EkfNode`; the state and models are :mod:`amr_twin.controllers.ekf_model`'s.
+Used by :class:`amr_twin.estimation.ekf.EkfNode`; the state and models are :mod:`amr_twin.estimation.ekf_model`'s.
 """
 
 from __future__ import annotations
@@ -10,14 +10,14 @@ from filterpy.kalman import ExtendedKalmanFilter
 from numpy import dot
 from scipy import linalg
 
-from amr_twin.controllers.ekf_model import predict_mean
+from amr_twin.estimation.ekf_model import predict_mean
 
 
 class UnicycleEkf(ExtendedKalmanFilter):
     """filterpy's EKF with the nonlinear constant-velocity prediction, minus its per-call bookkeeping.
 
     ``predict`` and ``update`` override filterpy's with the same equations, the same
-    NumPy products in the same order (so the same bits: ``tests/controllers/test_ekf.py``
+    NumPy products in the same order (so the same bits: ``tests/estimation/test_ekf.py``
     compares them with filterpy's own), without what the node never reads and what
     cost about 40 % of its CPU at about 200 messages a second (``amr-twin bench``'s
     ``nav_ekf_mppi`` figures): the copies ``x_prior``, ``P_prior``, ``x_post``, ``P_post``

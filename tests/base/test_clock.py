@@ -2,7 +2,7 @@
 
 import pytest
 
-from amr_twin.sim.clock import NEVER_US, VirtualClock
+from amr_twin.base.clock import NEVER_US, VirtualClock
 
 
 def test_both_kinds_run_in_time_order_ties_in_scheduling_order():

@@ -1,6 +1,6 @@
 """The pose the wheel odometry node publishes (REP-105: ``odom -> base_link`` must be continuous).
 
-The *smoothed* pose (:class:`~amr_twin.controllers.dead_reckoning.SmoothedPose`)
+The *smoothed* pose (:class:`~amr_twin.estimation.dead_reckoning.SmoothedPose`)
 integrates the wheels' speed estimates, and a window that arrives corrects the past it
 describes: the best estimate in hindsight, which jumps when a sample arrives
 (0.7 m after the first revolution of a start). The *published* pose is integrated
@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from typing import Callable, Sequence
 
-from amr_twin.controllers.dead_reckoning import SmoothedPose, arc, twist_step
+from amr_twin.estimation.dead_reckoning import SmoothedPose, arc, twist_step
 
 DEADBAND_M, DEADBAND_RAD = 5e-4, 5e-4
 """A difference to the smoothed pose below both is left alone, m and rad (the correction ends)."""

@@ -7,10 +7,10 @@ struct next to its definition::
 
     register(C_SOURCE, battery_state=_State)
 
-and :func:`amr_twin.sim.native_build.load_helper` compares the two when it loads the helper:
+and :func:`amr_twin.base.native_build.load_helper` compares the two when it loads the helper:
 the same field names in the same order, the same offsets and sizes, the same total size. A
 field added, removed, retyped or moved on one side is found, and the helper is not used: its
-Python twin runs, :func:`~amr_twin.sim.native_build.native_status` says why, and a
+Python twin runs, :func:`~amr_twin.base.native_build.native_status` says why, and a
 ``RuntimeWarning`` says so once. (A field squeezed into padding and listed on neither side
 escapes the check: then nothing in Python reads or writes it either.)
 """

@@ -7,11 +7,11 @@ import pytest
 from filterpy.kalman import ExtendedKalmanFilter
 
 from amr_twin.ros.bus import Bus
-from amr_twin.sim.clock import VirtualClock
+from amr_twin.base.clock import VirtualClock
 from amr_twin.model.config import load_config
-from amr_twin.controllers import ekf
-from amr_twin.controllers.ekf import EkfNode
-from amr_twin.controllers.ekf_model import predict_mean
+from amr_twin.estimation import ekf
+from amr_twin.estimation.ekf import EkfNode
+from amr_twin.estimation.ekf_model import predict_mean
 from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Twist,
                                             TwistWithCovariance, Vector3)
 from amr_twin.ros.messages import Header, Time

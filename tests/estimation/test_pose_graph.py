@@ -1,4 +1,4 @@
-"""The mapping drive's smoother (controllers/pose_graph.py) on synthetic drives with known truth.
+"""The mapping drive's smoother (amr_twin/estimation/pose_graph.py) on synthetic drives with known truth.
 
 A snake through a 24 x 12 m hall at 1 m/s; the wheel odometry with a 1 % scale and 0.5 deg/s of
 turn error in each U-turn; "LiDAR odometry" that slides along the legs (3 % of the distance) and
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from amr_twin.analysis import se2
-from amr_twin.controllers.pose_graph import smooth
+from amr_twin.estimation.pose_graph import smooth
 from amr_twin.model.config import load_config
 from amr_twin.sensors.uwb import simulate_ranges, tag_positions_m
 

@@ -1,27 +1,6 @@
 """Offline pose-graph smoothing of a drive: LiDAR and wheel odometry between scans, UWB ranges to the anchors.
 
-The mapping drive's poses for the SLAM map (experiments/navigation_map.py). A filter (the EKF) gives
-each pose from the past alone, and its heading wanders where the UWB ranges are late behind racks
-(0.6-0.8 deg median, 2.4-4.0 deg p95 on the aisles' mapping drive); LiDAR odometry keeps the heading
-(0.3 deg median) but slides along look-alike aisles (1-1.5 m). A smoother uses the whole drive at
-once, as slam_toolbox's or Cartographer's offline modes do; the factor graph is solved by GTSAM
-(Dellaert and Kaess, *Factor Graphs for Robot Perception*, 2017), with its own factors:
-
-- ``X_k``: a ``Pose2`` (base in the map frame) at each scan's end stamp ``t_k``, kiss-icp's poses.
-- ``BetweenFactorPose2(X_k, X_k+1)``: kiss-icp's motion between two scans (sigmas ``lidar_*``), and
-  the wheel odometry's motion over the same interval (sigmas ``odometry_*``).
-- ``RangeFactorWithTransform2D(X_k, L_a)``: a UWB range to anchor ``a`` measured at ``t`` between
-  ``t_k`` and ``t_k+1`` (the nearer one), the tag placed by the odometry's motion from ``t_k`` to
-  ``t`` and its lever arm on the base. The anchors stand ``dz_m`` above the tag: the factor takes
-  the horizontal range ``sqrt(r^2 - dz^2)`` with the sigma scaled by ``r / sqrt(r^2 - dz^2)``; a range
-  under ``1.05 dz`` (the tag nearly under its anchor, where that scale blows up) is left out. Each is
-  robust (Cauchy, ``uwb_cauchy_k`` sigmas): a range late behind a rack weighs little.
-- ``L_a``: the anchors, held at their surveyed positions by a prior of 0.1 mm.
-- A prior on ``X_0``: the start pose (``start_xy_sigma_m``, ``start_yaw_sigma_rad``).
-
-Levenberg-Marquardt from kiss-icp's poses. No loop closures: the anchors bound the drift.
-Poses are arrays (N, 3) ``x_m, y_m, yaw_rad`` (:mod:`amr_twin.analysis.se2`).
-"""
+Reasons and measurements: docs/fusion.md#amr_twinestimationpose_graph."""
 
 from __future__ import annotations
 

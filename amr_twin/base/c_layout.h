@@ -5,7 +5,7 @@
  *     AMR_LAYOUT(AMR_STRUCT(battery_state), AMR_FIELD(battery_state, soc), ...)
  *
  * which defines the exported table ``amr_layout``: the struct's size, then each field's
- * name, offset and size in bytes, ended by an empty row. amr_twin/sim/c_layout.py compares
+ * name, offset and size in bytes, ended by an empty row. amr_twin/base/c_layout.py compares
  * it with the ctypes Structure registered for the struct (names in order, offsets, sizes)
  * when the helper is loaded; a difference makes the Python twin run and says why, once.
  */

@@ -6,33 +6,7 @@ and is registered with :class:`kiss_icp.kiss_icp.KissICP` (its preprocessing,
 deskew, voxel map, adaptive threshold and point-to-point ICP, nothing
 re-implemented here).
 
-Time
-    Beam ``i`` was acquired at ``header.stamp + i * time_increment`` (the twin's
-    RPLIDAR spins clockwise as the A1 does: its ``time_increment`` is negative and
-    its stamp is the last beam, sensors/lidar.py). KISS-ICP 1.3 deskews to the end
-    of its timestamp span, so every estimate is the pose at the scan's last
-    acquired beam, ``t_end`` (:func:`scan_end_time_s`). Two sentinel points far beyond ``max_range_m``
-    (dropped by KISS-ICP's range filter after the deskew) carry the stamps
-    ``t_end`` of the previous scan and of this one, so that KISS-ICP's min-max
-    normalised time spans exactly the interval over which the motion prior is
-    given: the deskew is then constant-velocity motion along the prior.
-Motion prior
-    ``prior_base_delta`` is the motion of ``base_link`` over
-    :meth:`LidarOdometry.prior_interval_s`, from the previous scan's ``t_end`` to
-    this one's (e.g. wheel odometry interpolated at both stamps, :func:`amr_twin.analysis.se2.between`
-    of :func:`amr_twin.analysis.se2.interpolate`), expressed in the earlier ``base_link`` frame. For
-    the first scan it covers the rotation before its ``t_end`` and only deskews it
-    (the map starts from that scan: a distorted first scan biases every later
-    pose). It is moved to the laser frame, ``L^-1 D L`` with ``L`` the laser pose
-    in ``base_link``, and written into ``KissICP.last_delta``, which KISS-ICP uses
-    both to deskew and as the ICP initial guess. Without a prior KISS-ICP's own
-    constant-velocity model is used.
-Output
-    ``base_link`` poses ``(x_m, y_m, yaw_rad)`` in the odometry frame of the first
-    scan: ``base_link`` at the first scan's ``t_end`` is the origin. A scan with
-    fewer than :data:`MIN_POINTS` valid beams is not registered; the pose is
-    carried forward by the prior (or KISS-ICP's last delta).
-"""
+Reasons and measurements: docs/fusion.md#amr_twinestimationlidar_odometry."""
 
 from __future__ import annotations
 

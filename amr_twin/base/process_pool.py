@@ -1,8 +1,9 @@
-"""The local pool of worker processes that :func:`~amr_twin.experiments.executor.run_all` uses.
+"""A local pool of warm worker processes (used by :func:`amr_twin.experiments.executor.run_all`).
 
 Workers are spawned (MuJoCo and its threads are never forked), die with their
-parent even when it is killed outright, and import the twin as they start, in
-parallel with the caller's own work; a pool is kept for the life of the process, so
+parent even when it is killed outright, and run the caller's ``warm`` function as
+they start (the twin's: :func:`amr_twin.sim.run.warm_up`), in parallel with the
+caller's own work; a pool is kept for the life of the process, so
 a second sweep or suite finds it warm. The calling process simulates too, taking the
 next item whenever it is free, and a worker is handed an item only once it is warm
 and idle: a worker that is slow to start never holds an item the caller could have
@@ -18,6 +19,9 @@ import os
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Iterator
+
+Warm = Callable[[], None] | None
+"""A picklable module-level function a worker runs as it starts (imports), or None."""
 
 
 def usable_cores() -> int:
@@ -43,17 +47,18 @@ def check_jobs(jobs: int | None) -> int:
     return jobs
 
 
-def _warm_worker(parent_pid: int) -> None:
-    """Pool worker start-up: die with the parent, then import the twin (numpy, MuJoCo, the
-    model build and the loop) before the first item arrives. Ctrl-C is the parent's to handle (it
+def _warm_worker(parent_pid: int, warm: Warm) -> None:
+    """Pool worker start-up: die with the parent, then run ``warm`` (the twin's imports: numpy,
+    MuJoCo, the model build and the loop) before the first item arrives. Ctrl-C is the parent's
+    to handle (it
     stops the workers): a worker ignores SIGINT, which the terminal sends to every process of the
     command (each printed its traceback)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _watch_parent(parent_pid)
-    import amr_twin.sim.loop  # noqa: F401
-    import amr_twin.sim.run  # noqa: F401
+    if warm is not None:
+        warm()
 
 
 def _ready() -> int:
@@ -61,22 +66,22 @@ def _ready() -> int:
     return os.getpid()
 
 
-def worker_pool(workers: int) -> ProcessPoolExecutor:
-    """A new pool of ``workers`` spawned, warm, parent-death-guarded processes (the caller
-    shuts it down). :func:`~.executor.run_all` keeps one per size for the life of the process."""
+def worker_pool(workers: int, warm: Warm = None) -> ProcessPoolExecutor:
+    """A new pool of ``workers`` spawned, parent-death-guarded processes, each running ``warm``
+    as it starts (the caller shuts it down); :func:`pool_results` keeps one per size and warm-up."""
     context = multiprocessing.get_context("spawn")
     return ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_warm_worker,
-                               initargs=(os.getpid(),))
+                               initargs=(os.getpid(), warm))
 
 
-_pools: dict[int, ProcessPoolExecutor] = {}
+_pools: dict[tuple[int, Warm], ProcessPoolExecutor] = {}
 
 
-def _shared_pool(workers: int) -> ProcessPoolExecutor:
-    """The process' pool of ``workers`` warm workers, made on first use (see :func:`~.executor.run_all`)."""
-    pool = _pools.get(workers)
+def _shared_pool(workers: int, warm: Warm = None) -> ProcessPoolExecutor:
+    """The process' pool of ``workers`` workers warmed by ``warm``, made on first use."""
+    pool = _pools.get((workers, warm))
     if pool is None or getattr(pool, "_broken", False) or getattr(pool, "_shutdown_thread", False):
-        pool = _pools[workers] = worker_pool(workers)
+        pool = _pools[(workers, warm)] = worker_pool(workers, warm)
         if len(_pools) == 1:
             atexit.register(_close_pools)
     return pool
@@ -115,13 +120,14 @@ def _watch_parent(parent_pid: int) -> None:
         threading.Thread(target=poll, name="parent-watch", daemon=True).start()
 
 
-def pool_results(func: Callable[[Any], Any], items: list, workers: int) -> Iterator[tuple[Any, Any]]:
-    """This process and ``workers`` warm pool workers take the items in turn (module notes).
+def pool_results(func: Callable[[Any], Any], items: list, workers: int,
+                 warm: Warm = None) -> Iterator[tuple[Any, Any]]:
+    """This process and ``workers`` workers warmed by ``warm`` take the items in turn (see above).
 
     A worker gets an item only when it is warm (its start-up task done) and has none; this
     process runs the next item whenever it has checked the workers.
     """
-    pool = _shared_pool(workers)
+    pool = _shared_pool(workers, warm)
     todo = deque(items)
     idle: deque = deque()
     busy: dict = {}  # future -> item (None: a worker's start-up task)
@@ -148,12 +154,12 @@ def pool_results(func: Callable[[Any], Any], items: list, workers: int) -> Itera
     except BaseException:
         for future in busy:
             future.cancel()
-        _discard_pool(workers)  # a worker still on an item is stopped, not waited for
+        _discard_pool(workers, warm)  # a worker still on an item is stopped, not waited for
         raise
 
 
-def _discard_pool(workers: int) -> None:
-    pool = _pools.pop(workers, None)
+def _discard_pool(workers: int, warm: Warm) -> None:
+    pool = _pools.pop((workers, warm), None)
     if pool is None:
         return
     for process in list(getattr(pool, "_processes", {}).values()):

@@ -2,7 +2,7 @@
 
 import pytest
 
-from amr_twin.recording.atomic_file import replacing, temporary_name, write_text
+from amr_twin.base.atomic_file import replacing, temporary_name, write_text
 
 
 def test_write_replaces_and_leaves_no_temporary(tmp_path):
@@ -27,7 +27,7 @@ def test_an_error_keeps_the_old_file_and_removes_the_temporary(tmp_path):
 
 def test_a_failed_batch_removes_the_folders_it_made(tmp_path):
     """Chapter 5's --out when its PNG cannot be written: no empty folder is left (nor its parents)."""
-    from amr_twin.recording.atomic_file import all_or_nothing
+    from amr_twin.base.atomic_file import all_or_nothing
 
     with pytest.raises(OSError):
         with all_or_nothing():

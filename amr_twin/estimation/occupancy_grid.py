@@ -6,24 +6,7 @@ y, as the map frame; the saved image is flipped so its top row is the highest
 y, as map_server reads it). Each cell holds the log-odds ``l = ln(p / (1 - p))``
 of being occupied, 0 (p = 0.5) when nothing was seen.
 
-:meth:`OccupancyGrid.insert_scan` traces every beam of a ``sensor_msgs/LaserScan``
-from the laser position: points are sampled along all beams at once, every
-``resolution_m / 2``, from the laser to half a cell before the end point (numpy,
-no per-beam loop). Each cell crossed in the scan gets ``l_free`` once, each
-end-point cell ``l_occ`` once (and not ``l_free``: a hit wins inside one scan),
-then ``l`` is clamped. A beam counts as a hit when its range is finite, at least
-``range_min`` and below ``range_max``. A beam with no return (inf, NaN or at
-least ``range_max``) marks nothing by default; with ``free_on_no_return`` it marks
-the cells up to ``range_max`` free (right for a scanner whose no-return means
-"nothing within range", wrong for dark or glancing surfaces). A range below
-``range_min`` marks nothing.
-
-:meth:`OccupancyGrid.save` writes ``<stem>.yaml`` + ``<stem>.pgm`` as ROS
-map_saver does (P5, 254 free, 0 occupied, 205 unknown; ``mode: trinary``, ``negate: 0``,
-``occupied_thresh: 0.65``, ``free_thresh: 0.196``; ``origin`` the lower-left
-corner), which :func:`amr_twin.model.worlds.load_map` and map_server read, and
-``<stem>.png``, the same image (black occupied, white free, grey unknown).
-"""
+Reasons and measurements: docs/fusion.md#amr_twinestimationoccupancy_grid."""
 
 from __future__ import annotations
 

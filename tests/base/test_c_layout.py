@@ -1,4 +1,4 @@
-"""The C helpers' struct layouts against their ctypes twins (amr_twin/sim/c_layout.py)."""
+"""The C helpers' struct layouts against their ctypes twins (amr_twin/base/c_layout.py)."""
 
 import ctypes
 import importlib
@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.sim import battery, c_layout, native_build
+from amr_twin.sim import battery
+from amr_twin.base import c_layout, native_build
 from amr_twin.sim.loop import Twin, TwinOptions
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")

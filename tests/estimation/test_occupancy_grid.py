@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
-from amr_twin.controllers.occupancy_grid import FREE_THRESH, OccupancyGrid
+from amr_twin.estimation.occupancy_grid import FREE_THRESH, OccupancyGrid
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 from amr_twin.model.worlds import load_map, read_pgm
@@ -167,7 +167,7 @@ def warehouse_scans():
 
 def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_path):
     from amr_twin.analysis import se2
-    from amr_twin.controllers.lidar_odometry import beam_times_s
+    from amr_twin.estimation.lidar_odometry import beam_times_s
     from amr_twin.model.world_geometry import distance_to_boxes_m
 
     scans, t_true, pose_true, boxes, laser_xy_yaw = warehouse_scans
@@ -186,7 +186,7 @@ def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_pa
     occ = grid.cell_centres_xy(loaded.occupied[::-1])               # what map_server would load
     assert len(occ) > 1000
     dist_cells = distance_to_boxes_m(occ, boxes) / RES_M
-    assert np.mean(dist_cells <= 2.0) >= 0.99                        # issue #8: walls within 2 cells
+    assert np.mean(dist_cells <= 2.0) >= 0.99                        # walls within 2 cells
     # the surfaces seen are covered: every true beam end point has an occupied cell within 2 cells
     from scipy.spatial import cKDTree
 

@@ -17,16 +17,29 @@ magnitude: the SC output carries no direction, and the thesis firmware publishes
 
 from __future__ import annotations
 
+from typing import Protocol
+
+from amr_twin.base.registry import Registry
 from amr_twin.base.clock import VirtualClock
 
 from amr_twin.controllers.firmware_params import (AvrParams, BoardParams, FaithfulParams, Firmware, ImprovedParams,
                               Publish)
 
-__all__ = ["FIRMWARES", "AvrParams", "BoardParams", "FaithfulParams", "Firmware", "ImprovedParams",
-           "Publish", "check_avr", "firmware_identity", "firmware_kind", "make_firmware"]
+__all__ = ["FIRMWARES", "AvrParams", "BoardParams", "FaithfulParams", "Firmware", "FirmwareFactory",
+           "ImprovedParams", "Publish", "check_avr", "firmware_identity", "firmware_kind", "make_firmware"]
 
-FIRMWARES = ("faithful", "improved", "avr")
-"""Firmware kinds; ``avr:DIR`` names a sketch folder for ``avr`` (see :func:`firmware_kind`)."""
+
+class FirmwareFactory(Protocol):
+    """Builds a firmware on ``clock`` publishing through ``publish``: ``params`` (None: its defaults),
+    ``edges_per_rev`` SC changes per wheel revolution, ``sketch`` the text after ``KIND:`` (None without)."""
+
+    def __call__(self, clock: VirtualClock, publish: Publish, params, *, edges_per_rev: int,
+                 sketch: str | None) -> Firmware: ...
+
+
+FIRMWARES: Registry[FirmwareFactory] = Registry("--firmware")
+"""Firmware kinds by name (``faithful``, ``improved``, ``avr``); a third party registers its own
+:class:`FirmwareFactory`. ``avr:DIR`` names a sketch folder for ``avr`` (see :func:`firmware_kind`)."""
 
 
 def firmware_kind(firmware: str, sketch: str | None = None) -> str:
@@ -35,8 +48,7 @@ def firmware_kind(firmware: str, sketch: str | None = None) -> str:
     ``avr`` with a sketch becomes ``avr:/absolute/DIR``, a string that travels to worker
     processes and into reports like the other kinds.
     """
-    if firmware not in FIRMWARES:
-        raise ValueError(f"--firmware {firmware!r}: must be one of {', '.join(FIRMWARES)}")
+    FIRMWARES.get(firmware)
     if sketch is None:
         return firmware
     if firmware != "avr":
@@ -83,38 +95,42 @@ SKETCH_EDGES_PER_REV = 90
 def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
                   params: FaithfulParams | ImprovedParams | AvrParams | None = None, *,
                   edges_per_rev: int) -> Firmware:
-    """Build a firmware of ``kind`` on ``clock`` publishing through ``publish``.
+    """Build a firmware of ``kind`` (a name of :data:`FIRMWARES`, or ``avr:SKETCH_DIR``) on ``clock``
+    (shared, us) publishing through ``publish(topic, rpm)`` (``wheel0_Vel`` / ``wheel1_Vel``); ``params``
+    defaults to the thesis values; ``edges_per_rev``: SC changes per wheel revolution
+    (``wheel.sc_edges_per_rev``). ValueError (one line) for an unknown kind."""
+    name, _, sketch = kind.partition(":")
+    return FIRMWARES.get(name)(clock, publish, params, edges_per_rev=edges_per_rev, sketch=sketch or None)
 
-    Parameters
-    ----------
-    kind : {"faithful", "improved", "avr", "avr:SKETCH_DIR"}
-    clock : VirtualClock
-        Shared simulation clock (microseconds).
-    publish : callable
-        ``publish(topic, rpm)``, topics ``wheel0_Vel`` / ``wheel1_Vel``.
-    params : FaithfulParams, ImprovedParams or AvrParams, optional
-        Defaults to the thesis values (``avr:DIR`` sets ``AvrParams.sketch_dir``).
-    edges_per_rev : int
-        SC changes per wheel revolution (``wheel.sc_edges_per_rev``). The Python ports count
-        them; the thesis sketch has its count compiled in (:data:`SKETCH_EDGES_PER_REV`), so
-        ``avr`` with its default sketch refuses any other.
-    """
-    if kind == "avr" or kind.startswith("avr:"):
-        from amr_twin.controllers.avr import AvrFirmware
-        sketch = kind.partition(":")[2] or None
-        if sketch is None and edges_per_rev != SKETCH_EDGES_PER_REV:
-            raise ValueError(f"--firmware avr: the thesis sketch counts {SKETCH_EDGES_PER_REV} SC changes per "
-                             f"revolution, the configured wheel has {edges_per_rev} (wheel.hall_pole_pairs)")
-        if params is None:
-            params = AvrParams(sketch_dir=sketch)
-        elif sketch is not None:
-            from dataclasses import replace
-            params = replace(params, sketch_dir=sketch)
-        return AvrFirmware(clock, publish, params)
-    if kind == "faithful":
-        from amr_twin.controllers.faithful import FaithfulFirmware
-        return FaithfulFirmware(clock, publish, edges_per_rev, params or FaithfulParams())
-    if kind == "improved":
-        from amr_twin.controllers.improved import ImprovedFirmware
-        return ImprovedFirmware(clock, publish, edges_per_rev, params or ImprovedParams())
-    raise ValueError(f"unknown firmware kind {kind!r}")
+
+@FIRMWARES.register("faithful")
+def _faithful(clock: VirtualClock, publish: Publish, params: FaithfulParams | None, *, edges_per_rev: int,
+              sketch: str | None) -> Firmware:
+    """The port of the thesis listings 4.7-4.12, quirks included (:mod:`~amr_twin.controllers.faithful`)."""
+    from amr_twin.controllers.faithful import FaithfulFirmware
+    return FaithfulFirmware(clock, publish, edges_per_rev, params or FaithfulParams())
+
+
+@FIRMWARES.register("improved")
+def _improved(clock: VirtualClock, publish: Publish, params: ImprovedParams | None, *, edges_per_rev: int,
+              sketch: str | None) -> Firmware:
+    """The thesis firmware with its quirks fixed (:mod:`~amr_twin.controllers.improved`)."""
+    from amr_twin.controllers.improved import ImprovedFirmware
+    return ImprovedFirmware(clock, publish, edges_per_rev, params or ImprovedParams())
+
+
+@FIRMWARES.register("avr")
+def _avr(clock: VirtualClock, publish: Publish, params: AvrParams | None, *, edges_per_rev: int,
+         sketch: str | None) -> Firmware:
+    """The sketch (``sketch``, else the thesis' own) compiled with avr-gcc on an emulated ATmega2560; the
+    thesis sketch has its count compiled in (:data:`SKETCH_EDGES_PER_REV`) and refuses any other."""
+    from amr_twin.controllers.avr import AvrFirmware
+    if sketch is None and edges_per_rev != SKETCH_EDGES_PER_REV:
+        raise ValueError(f"--firmware avr: the thesis sketch counts {SKETCH_EDGES_PER_REV} SC changes per "
+                         f"revolution, the configured wheel has {edges_per_rev} (wheel.hall_pole_pairs)")
+    if params is None:
+        params = AvrParams(sketch_dir=sketch)
+    elif sketch is not None:
+        from dataclasses import replace
+        params = replace(params, sketch_dir=sketch)
+    return AvrFirmware(clock, publish, params)

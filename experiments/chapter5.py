@@ -26,7 +26,8 @@ from amr_twin.experiments import chapter5_payload as payload
 from amr_twin.model.config import TwinConfig, with_values
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.analysis.metrics import step_info
-from amr_twin.sim.run import Command, run_command
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_command
 from amr_twin.experiments.chapter5_criteria import (TRANSIENT_WINDOW_S, WHEELS, compare_oscillation, judge,
                                                     settling_band_rpm, step_class)
 from amr_twin.experiments.chapter5_metrics import Chapter5Metrics, metrics
@@ -84,7 +85,7 @@ def simulate(job: _Job) -> dict:
         from amr_twin.sim.loop import Twin
         from amr_twin.recording.rerun_capture import attach
         from amr_twin.recording.rerun_log import record_run
-        from amr_twin.sim.run import run_mission
+        from amr_twin.recording.run import run_mission
         from amr_twin.experiments.firmware_comparison import pace
 
         twin = Twin(cfg, options)

@@ -9,7 +9,7 @@ the caller writes every file itself. The writers put a file in place with one
 file or none.
 
 The local pool is in :mod:`amr_twin.base.process_pool` (its workers warmed by
-:func:`amr_twin.sim.run.warm_up`), the Dask cluster in :mod:`.dask_cluster` (:func:`~.dask_cluster.connect_dask`).
+:func:`amr_twin.recording.run.warm_up`), the Dask cluster in :mod:`.dask_cluster` (:func:`~.dask_cluster.connect_dask`).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
                 bar.advance(task, size(item))
                 yield item, result
             return
-        from amr_twin.sim.run import warm_up  # the twin, imported by the workers as they start
+        from amr_twin.recording.run import warm_up  # the twin, imported by the workers as they start
 
         for item, result in pool_results(func, items, min(jobs, len(items)) - 1, warm_up):
             bar.advance(task, size(item))

@@ -19,7 +19,8 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import TwinOptions
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 SPEED_M_S = 0.5
 FAULT_T_S = 5.0
@@ -65,7 +66,8 @@ def simulate(case: Case) -> dict:
 
     faults = parse_faults([case.fault]) if case.fault else ()
     sensors = any(KINDS[f.kind].needs_sensors for f in faults)
-    options = TwinOptions(firmware=case.firmware, world="empty", seed=case.seed, sensors=sensors, faults=faults)
+    options = TwinOptions(firmware=case.firmware, world="empty", seed=case.seed,
+                          sensors=("imu", "lidar") if sensors else (), faults=faults)
     steps = [(0.0, Command("linear", speed_m_s=SPEED_M_S)), (STOP_T_S, Command("stop"))]
     result = run_mission(case.cfg, steps, DURATION_S, options)
     s = result.series

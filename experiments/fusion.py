@@ -35,6 +35,7 @@ from amr_twin.estimation.ekf import EkfNode
 from amr_twin.estimation.lidar_odometry import LidarOdometry
 from amr_twin.controllers.path_follower import PathFollowerNode
 from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.analysis.trajectory import TrajectoryErrors, errors
 from amr_twin.model.world_geometry import Footprints, scan_plane_boxes
@@ -99,13 +100,12 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     keeps the nominal geometry of ``cfg``). ``rrd_path`` / ``mcap_path``: also write the
     drive as a Rerun / MCAP recording.
     """
-    from amr_twin.sensors.uwb import UwbSensor
-
     recording = rrd_path is not None or mcap_path is not None
     twin = Twin(robot.config(cfg), TwinOptions(firmware=firmware, world=route.world, seed=seed,
-                                               start_xy_yaw=route.start_xy_yaw, sensors=True, visuals=recording,
+                                               start_xy_yaw=route.start_xy_yaw, sensors=("imu", "lidar"), visuals=recording,
                                                **robot.twin_options()))
-    twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[seed, 3])
+    twin.add_sensor("uwb")
+    attach_recorder(twin)
     streams = Streams()
     twin.on_message(streams.tap)
     if recording:
@@ -275,14 +275,15 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
     t0 = time.perf_counter()
     twin, streams, reached = drive(cfg, route, seed=seed, firmware=firmware, progress=progress,
                                    rrd_path=rrd_path, mcap_path=mcap_path, robot=robot)
-    series = twin.recorder.series()
+    series = recorder_of(twin).series()
     res = FusionResults(route=route, seed=seed, firmware=firmware, t_true_s=series.t_s, pose_true=series.pose,
                         streams=streams, sim_s=twin.t_s, drive_wall_s=time.perf_counter() - t0,
                         reached_goal=reached, message_counts=streams.counts())
     res.cross_track_rms_m = float(np.sqrt(np.mean(distance_to_path_m(route, series.pose[:, :2]) ** 2)))
-    res.uwb_blocked = twin.uwb.blocked.tolist()
-    res.uwb_exchanges = int(twin.uwb.exchanges)
-    gyro = twin.imu.models["gyro"]
+    uwb = twin.sensors["uwb"]
+    res.uwb_blocked = uwb.blocked.tolist()
+    res.uwb_exchanges = int(uwb.exchanges)
+    gyro = twin.sensors["imu"].models["gyro"]
     res.robot = {**robot.as_dict(cfg), "drawn": bool(robot_errors), "gyro_scale_z": float(gyro.scale[2])}
     start = route.start_xy_yaw
     jobs = (  # in the order of ARCHITECTURES

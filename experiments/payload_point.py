@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass
 
 from amr_twin.model.config import TwinConfig, with_values
-from amr_twin.sim.run import Command
+from amr_twin.sim.command import Command
 
 POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
              "front-left-corner": (1, 1), "front-right-corner": (1, -1),

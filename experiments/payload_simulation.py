@@ -96,13 +96,15 @@ def _electrics(s, duration_s: float) -> Electrics:
 
 def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     """The run of ``point`` in the empty world, or None and why the command was refused."""
-    from amr_twin.sim.loop import Twin, TwinOptions
     from amr_twin.model.statics import CONTACT_MIN_N
+    from amr_twin.recording.recorder import attach_recorder
+    from amr_twin.sim.loop import Twin, TwinOptions
 
     recording = point.rrd_path is not None or point.mcap_path is not None
     # nothing here reads the wheel odometry or draws the robot: without them a point is the same to the bit,
     # ~12 % and ~15 % cheaper
     twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty", odometry=recording, visuals=recording))
+    recorder = attach_recorder(twin)
     if recording:
         from amr_twin.recording.rerun_capture import attach
 
@@ -123,10 +125,10 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     twin.advance_to_us(int(round(point.duration_s * 1e6)))
     rows = support.take()  # the instant, then the values
     loads, contact, up_z, vel = rows[:, 1:7], rows[:, 7:13], rows[:, 13], rows[:, 14:20]
-    s = twin.recorder.series()
+    s = recorder.series()
     if recording:
         from amr_twin.recording.rerun_log import record_run
-        from amr_twin.sim.run import RunResult
+        from amr_twin.recording.run import RunResult
 
         result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
                            sim_s=point.duration_s, wall_s=0.0)

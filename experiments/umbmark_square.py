@@ -183,7 +183,10 @@ def wheel_pose(angles_rad: np.ndarray, left_radius_m: float, right_radius_m: flo
 
 
 def drive_square(twin, direction: str, profile: Profile = Profile(), run: int = 0) -> SquareRun:
-    """Drive one square with ``twin`` (fresh: its recorder starts with it) from where it stands."""
+    """Drive one square with ``twin`` (fresh: the recorder attached here starts with it) from where it stands."""
+    from amr_twin.recording.recorder import attach_recorder
+
+    recorder = attach_recorder(twin)
     start = twin.physics.pose()
     driver = SquareDriver(twin, profile)
     try:
@@ -194,7 +197,7 @@ def drive_square(twin, direction: str, profile: Profile = Profile(), run: int = 
     c, s = math.cos(start.yaw_rad), math.sin(start.yaw_rad)
     dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
     true_xy = (c * dx + s * dy, -s * dx + c * dy)
-    angles = twin.recorder.series().wheel_angle_rad
+    angles = recorder.series().wheel_angle_rad
     w, odo = twin.cfg.wheel, twin.odometry
     assumed = wheel_pose(angles, odo.left_radius_m, odo.right_radius_m, odo.separation_m)
     exact = wheel_pose(angles, w.radius_m + w.radius_error_left_m, w.radius_m + w.radius_error_right_m,

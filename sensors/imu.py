@@ -80,7 +80,7 @@ class ImuSensor:
         self._start_us = 0
         self._native = native
         self._true: GridRows | None = None  # the true values (9) taken on the loop's grid, after their instants
-        self._ready: deque[tuple[int, list[float]]] = deque()  # (t_us, 9 readings) to publish
+        self._ready: deque[tuple[int, Imu, MagneticField]] = deque()  # (t_us, messages) to publish
         a = self._adr
         self._sd9 = data.sensordata[a[0]:a[0] + 9] if a[1] == a[0] + 3 and a[2] == a[0] + 6 else None
         self._true9_list = self._sd9.tolist if self._sd9 is not None else lambda: self._true9().tolist()
@@ -158,18 +158,36 @@ class ImuSensor:
         return y[0:3], y[3:6], y[6:9]
 
     def _publish_next(self) -> None:
-        """Publishing event: the sample taken on the grid at this instant goes out."""
+        """Publishing event: the sample taken on the grid at this instant goes out. The first event
+        after a chunk corrupts the chunk's samples in one batch and builds their messages (one
+        warm pass); each event then publishes its own pair."""
         now = self.clock.now_us
         if not self._ready:
             true = self._true.take() if self._true is not None else np.zeros((0, 10))
             if not len(true):
                 raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid")
             y = self.errors.corrupt_batch(np.ascontiguousarray(true[:, 1:]))
-            self._ready.extend(zip(true[:, 0].astype(np.int64).tolist(), y.tolist()))
-        t_us, y = self._ready.popleft()
+            self._ready.extend(self._messages(true[:, 0].astype(np.int64).tolist(), y.tolist()))
+        t_us, imu, mag = self._ready.popleft()
         if t_us != now:
             raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid (got {t_us})")
-        self._publish(y)
+        self.seq = imu.header.seq
+        publish = self._fast[0]
+        publish("imu/data_raw", imu)
+        publish("imu/mag", mag)
+
+    def _messages(self, ts_us: list[int], ys: list[list[float]]) -> list[tuple]:
+        """``(t_us, Imu, MagneticField)`` of the readings ``ys`` (9 each) stamped ``ts_us``,
+        numbered on from :attr:`seq`."""
+        _publish, frame, orientation_cov, gyro_cov, accel_cov, mag_cov = self._fast
+        out, from_us = [], Time.from_us
+        for seq, (t_us, a) in enumerate(zip(ts_us, ys), self.seq + 1):
+            stamp = from_us(t_us)
+            imu = Imu(Header(seq, stamp, frame), Quaternion(), orientation_cov,
+                      Vector3(a[3], a[4], a[5]), gyro_cov, Vector3(a[0], a[1], a[2]), accel_cov)
+            mag = MagneticField(Header(seq, stamp, frame), Vector3(a[6], a[7], a[8]), mag_cov)
+            out.append((t_us, imu, mag))
+        return out
 
     def _tick(self) -> None:
         self._publish(self.corrupt_batch(self._true9()[None, :])[0].tolist())

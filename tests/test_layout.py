@@ -115,6 +115,7 @@ def package_loops() -> set[tuple[str, str]]:
 
 
 KNOWN_PACKAGE_LOOPS = {
+    ("amr_twin.analysis", "amr_twin.recording"),
     ("amr_twin.analysis", "amr_twin.sim"),
     ("amr_twin.controllers", "amr_twin.estimation"),
     ("amr_twin.controllers", "amr_twin.ros"),
@@ -130,7 +131,6 @@ KNOWN_PACKAGE_LOOPS = {
     ("amr_twin.sensors", "amr_twin.sim"),
     ("amr_twin.sim", "amr_twin.controllers"),
     ("amr_twin.sim", "amr_twin.estimation"),
-    ("amr_twin.sim", "amr_twin.recording"),
     ("amr_twin.sim", "amr_twin.ros"),
     ("amr_twin.sim", "amr_twin.sensors"),
 }

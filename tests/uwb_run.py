@@ -11,7 +11,8 @@ from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
 from amr_twin.recording.rerun_log import record_run
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 UWB_S = 2.0
 """Duration of the run, s."""
@@ -33,12 +34,10 @@ def record_uwb_run(out_dir: Path, rrd: bool = True, mcap: bool = True):
         ``(cfg, capture, paths)``: the configuration, the :class:`~amr_twin.recording.rerun_capture.Capture`
         and ``{"rrd": path, "mcap": path}`` of the files written.
     """
-    from amr_twin.sensors.uwb import UwbSensor
-
     cfg = load_config()
     options = TwinOptions(world="empty")
     twin = Twin(cfg, options)
-    twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3])
+    twin.add_sensor("uwb")
     capture = attach(twin)
     result = run_mission(cfg, [(0.0, Command("linear", speed_m_s=0.5))], UWB_S, options, twin=twin)
     paths = record_run(twin, rrd_path=out_dir / "uwb.rrd" if rrd else None,

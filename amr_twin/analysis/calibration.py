@@ -121,7 +121,7 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     from scipy.optimize import least_squares
 
     from amr_twin.base.process_pool import worker_pool
-    from amr_twin.sim.run import warm_up
+    from amr_twin.recording.run import warm_up
 
     base = base or load_config()
     parameters = parameters or PARAMETERS

@@ -14,7 +14,8 @@ import numpy as np
 from amr_twin.model.config import TwinConfig
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.analysis.metrics import step_info
-from amr_twin.sim.run import Command, run_command
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_command
 
 BENCH_RPM = 71.5
 BENCH_CURRENT_A = 0.38

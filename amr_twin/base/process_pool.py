@@ -2,7 +2,7 @@
 
 Workers are spawned (MuJoCo and its threads are never forked), die with their
 parent even when it is killed outright, and run the caller's ``warm`` function as
-they start (the twin's: :func:`amr_twin.sim.run.warm_up`), in parallel with the
+they start (the twin's: :func:`amr_twin.recording.run.warm_up`), in parallel with the
 caller's own work; a pool is kept for the life of the process, so
 a second sweep or suite finds it warm. The calling process simulates too, taking the
 next item whenever it is free, and a worker is handed an item only once it is warm

@@ -1,1 +1,1 @@
-"""Benchmarks: the loop, sensors and recordings against bare MuJoCo physics, and the user-facing suites (bench --suites)."""
+"""Benchmarks: every figure against one bare-physics floor, and the suites (bench --suites)."""

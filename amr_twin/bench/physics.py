@@ -1,51 +1,96 @@
-"""Bare MuJoCo physics of the twin's model, the floor every ``amr-twin bench`` figure is quoted against.
+"""The floor of ``amr-twin bench``: bare MuJoCo physics along the loop's own path; the figures'
+spread.
 
-Times are the process' CPU time (:data:`timer`, ``time.process_time``), not wall
-time: on a shared machine other work delays a run without costing it CPU, which
-made wall-clock ratios swing by 2x. Each figure is the median of :data:`REPEATS`
-interleaved repeats (twin, bare, twin, bare, ...: a disturbance of the machine
-hits both), each ratio the median of the repeats' own ratios; on an idle machine
-CPU and wall time agree.
+Every figure of the bench is a ratio against one floor: ``mj_step`` alone on the loop
+scenario's model (the twin's own: world, robot, contact model, timestep), stepped over the
+path the twin drove. A timed twin run advances in :data:`PIECES` pieces; at each piece's
+start (untimed) its physics is cloned, and the floor steps a fresh clone of each for as many
+steps as the twin stepped in that piece, with the actuation held as it was there. Times are
+the process' CPU time (:data:`timer`).
 """
 
 from __future__ import annotations
 
 import statistics
 import time
+from dataclasses import dataclass
 
-from amr_twin.model.build import build
-from amr_twin.model.config import TwinConfig
 from amr_twin.sim.physics import Physics
-from amr_twin.base.pins import DriverPins
-from amr_twin.sim.plant import Plant
 
 REPEATS = 5
+"""Rounds of every figure (each round runs every figure once, each between two floors)."""
+PIECES = 8
+"""Pieces of a timed run: the floor's snapshots are taken between them."""
 timer = time.process_time
 """Clock of every benchmark figure, s (CPU time of this process)."""
 
 
-RATIOS = ("each *_ratio is the median over the repeats of a paired ratio: the loop's CPU s over bare "
-          "physics' CPU s measured right after it in the same repeat (a disturbance of the machine hits both); "
-          "*_ratio_repeats lists the paired ratios; *_ratio_of_medians divides the two medians (the *_s_per_sim_s "
-          "figures), which pairs numbers from different repeats and differs when the load changes between them")
-"""How ``amr-twin bench`` states its ratios (in its JSON as ``ratios``)."""
+@dataclass(frozen=True)
+class Spread:
+    """Median, extremes and quartiles of a figure's repeats (``values``, in the order measured)."""
+
+    median: float
+    low: float
+    high: float
+    q1: float
+    q3: float
+    values: tuple[float, ...]
 
 
-def paired_ratio(name: str, loop_s: list[float], bare_s: list[float], digits: int = 3) -> dict:
-    """``{name: median of the repeats' loop/bare ratios, name_repeats: each, name_of_medians: the
-    medians' ratio}`` (see :data:`RATIOS`)."""
-    pairs = [a / b for a, b in zip(loop_s, bare_s)]
-    return {name: round(statistics.median(pairs), digits), f"{name}_repeats": [round(r, digits) for r in pairs],
-            f"{name}_of_medians": round(statistics.median(loop_s) / statistics.median(bare_s), digits)}
+def spread(values: list[float]) -> Spread:
+    """The :class:`Spread` of ``values`` (at least one); quartiles by ``statistics.quantiles``
+    (inclusive)."""
+    vals = [float(v) for v in values]
+    if not vals:
+        raise ValueError("spread: no values")
+    q1, _q2, q3 = (
+        statistics.quantiles(vals, n=4, method="inclusive") if len(vals) > 1 else (vals[0],) * 3
+    )
+    return Spread(statistics.median(vals), min(vals), max(vals), q1, q3, tuple(vals))
 
 
-def _median_time(func, repeats: int = REPEATS) -> float:
-    times = []
-    for _ in range(repeats):
+@dataclass
+class FloorPath:
+    """Snapshots of a twin's physics along a timed run: ``(clone, steps the twin then took)``
+    each."""
+
+    pieces: list[tuple[Physics, int]]
+
+    @property
+    def steps(self) -> int:
+        """Physics steps of the whole path."""
+        return sum(n for _p, n in self.pieces)
+
+
+def timed_advance(twin, sim_s: float, snapshot: bool = False) -> tuple[float, FloorPath | None]:
+    """Advance ``twin`` by ``sim_s`` in :data:`PIECES` pieces: its CPU s, and with ``snapshot``
+    the :class:`FloorPath` it stepped (the clones are taken outside the timing)."""
+    ends_us = [twin.clock.now_us + round(sim_s * 1e6 * (i + 1) / PIECES) for i in range(PIECES)]
+    shots, cpu = [], 0.0
+    for end_us in ends_us:
+        if snapshot:
+            shots.append((twin.physics.clone(), twin.t_phys_us))
         t0 = timer()
-        func()
-        times.append(timer() - t0)
-    return statistics.median(times)
+        twin.advance_to_us(end_us)
+        cpu += timer() - t0
+    if not snapshot:
+        return cpu, None
+    marks = [t for _p, t in shots] + [twin.t_phys_us]
+    return cpu, FloorPath([(p, (b - a) // twin.dt_us) for (p, a), b in zip(shots, marks[1:])])
+
+
+def floor_s(path: FloorPath) -> float:
+    """CPU s of bare ``mj_step`` over ``path``: a fresh clone of each snapshot (untimed) stepped
+    as many steps as the twin took from it, in one C call each."""
+    cpu = 0.0
+    for physics, nstep in path.pieces:
+        if nstep <= 0:
+            continue
+        clone = physics.clone()
+        t0 = timer()
+        clone.step(nstep)
+        cpu += timer() - t0
+    return cpu
 
 
 def bare_steps_s(physics: Physics, sim_s: float) -> float:
@@ -56,32 +101,17 @@ def bare_steps_s(physics: Physics, sim_s: float) -> float:
     return timer() - t0
 
 
-def bare_physics(cfg: TwinConfig, sim_s: float) -> dict:
-    """A settled robot driving straight at a constant duty: mj_step only."""
-    physics = Physics(build(cfg, world="warehouse").model)
-    physics.settle(0.5)
-    plant = Plant(cfg, physics)
-    pins = (DriverPins(16, 1, 0, 1), DriverPins(16, 1, 0, 1))
-    plant.apply(pins)
-    physics.step(1000)
-    nstep = int(round(sim_s / physics.timestep_s))
-    wall = _median_time(lambda: physics.step(nstep))
-    physics.check()
-    return {
-        "physics_us_per_step": round(wall / nstep * 1e6, 2),
-        "bare_physics_s_per_sim_s": round(wall / sim_s, 5),
-        "realtime_factor_physics": round(sim_s / wall, 1),
-        "timestep_s": physics.timestep_s,
-    }
-
-
 TYRES_START = (-8.0, 0.0, 0.0)
 """Start of the tyre comparison: the west end of the warehouse's central aisle, heading along it."""
 
 
-def _driving(cfg: TwinConfig) -> Physics:
+def _driving(cfg) -> Physics:
     """The robot settled at :data:`TYRES_START` in the warehouse, then driven 1 s straight at a
     constant duty (about 0.5 m/s: 16 s stay in the aisle)."""
+    from amr_twin.model.build import build
+    from amr_twin.base.pins import DriverPins
+    from amr_twin.sim.plant import Plant
+
     physics = Physics(build(cfg, world="warehouse", start_xy_yaw=TYRES_START).model)
     physics.settle(0.5)
     Plant(cfg, physics).apply((DriverPins(8, 1, 0, 1), DriverPins(8, 1, 0, 1)))
@@ -89,24 +119,16 @@ def _driving(cfg: TwinConfig) -> Physics:
     return physics
 
 
-def tyre_figures(cfg: TwinConfig, sim_s: float) -> dict:
-    """Bare physics of the warehouse model with the brush tyres (:mod:`amr_twin.sim.tyres`) against
-    the rigid contact of the model before them (``wheel.tyre_slip`` off), in the same run: each
-    repeat steps a copy of each settled, driving robot (interleaved), ``tyres_physics_ratio`` the
-    median of the repeats' ratios. The target: at most 1.10."""
+def tyre_ratios(cfg, sim_s: float, repeats: int = REPEATS) -> list[float]:
+    """Bare physics with the brush tyres (:mod:`amr_twin.sim.tyres`) over the rigid contact of the
+    model before them (``wheel.tyre_slip`` off): each repeat steps a copy of each settled, driving
+    robot, interleaved; the repeats' ratios (a comparison of two bare physics, not against the
+    floor)."""
     from amr_twin.model.config import with_values
-    from amr_twin.sim import tyres
 
     brush = _driving(with_values(cfg, {"wheel.tyre_slip": True}))
     rigid = _driving(with_values(cfg, {"wheel.tyre_slip": False}))
-    brush_t, rigid_t = [], []
-    for _ in range(REPEATS):
-        brush_t.append(bare_steps_s(brush.clone(), sim_s))
-        rigid_t.append(bare_steps_s(rigid.clone(), sim_s))
-    nstep = int(round(sim_s / brush.timestep_s))
-    return {
-        "tyres_physics_us_per_step": round(statistics.median(brush_t) / nstep * 1e6, 2),
-        "rigid_physics_us_per_step": round(statistics.median(rigid_t) / nstep * 1e6, 2),
-        "tyres_physics_ratio": round(statistics.median(b / r for b, r in zip(brush_t, rigid_t)), 3),
-        "tyres_engine": tyres.engine(),
-    }
+    return [
+        bare_steps_s(brush.clone(), sim_s) / bare_steps_s(rigid.clone(), sim_s)
+        for _ in range(repeats)
+    ]

@@ -35,10 +35,11 @@ def _child(mode: str, sim_s: float, env: dict) -> dict:
 def _twin(sensors: bool = True, firmware: str = "faithful", params=None):
     from amr_twin.model.config import load_config
     from amr_twin.sim.loop import Twin, TwinOptions
-    from amr_twin.sim.run import Command
+    from amr_twin.sim.command import Command
 
-    twin = Twin(load_config(), TwinOptions(firmware=firmware, sensors=sensors, start_xy_yaw=BENCH_START,
-                                           firmware_params=params, visuals=False))  # as the command builds it
+    twin = Twin(load_config(), TwinOptions(firmware=firmware, sensors=("imu", "lidar") if sensors else (),
+                                           start_xy_yaw=BENCH_START, firmware_params=params,
+                                           visuals=False))  # as the command builds it
     Command("linear", speed_m_s=0.7).send(twin)
     return twin
 

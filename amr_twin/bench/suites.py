@@ -142,11 +142,12 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
     from amr_twin.sim.loop import Twin, TwinOptions
     from amr_twin.recording.rerun_capture import attach
     from amr_twin.recording.rerun_log import write_rrd
-    from amr_twin.sim.run import Command, run_mission
+    from amr_twin.sim.command import Command
+    from amr_twin.recording.run import run_mission
 
     runs = {}
     for duration in RRD_DURATIONS_S:
-        options = TwinOptions(sensors=True)
+        options = TwinOptions(sensors=("imu", "lidar"))
         twin = Twin(cfg, options)
         capture = attach(twin)
         result = run_mission(cfg, [(0.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))], duration, options,

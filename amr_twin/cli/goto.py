@@ -188,13 +188,17 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
                         record_run(held["twin"], rrd_path=opts.record, mcap_path=opts.mcap)
                     if opts.csv is not None:
                         from amr_twin.base.atomic_file import write_text
+                        from amr_twin.recording.recorder import recorder_of
                         from amr_twin.recording.run_report import csv_text
-                        write_text(opts.csv, csv_text(held["twin"].recorder.series()))
+                        write_text(opts.csv, csv_text(recorder_of(held["twin"]).series()))
         except KeyboardInterrupt:
             t = f" at t={held['twin'].t_s:.2f} s simulated" if "twin" in held else ""
             fail(f"interrupted{t}; no output written", code=130)
+        from amr_twin.recording.fault_effects import fault_effects
+        from amr_twin.recording.recorder import recorder_of
+
         twin = held["twin"]  # each fault with its effect, as run linear reports it
-        return run, twin.faults.report(twin.recorder.series()) if twin.faults is not None else []
+        return run, fault_effects(twin.faults, recorder_of(twin).series()) if twin.faults is not None else []
 
     run, fault_report = _guard(work)
     report(run, opts.as_json, fault_report, clearance(cfg, opts.world, run))

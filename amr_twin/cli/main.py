@@ -223,8 +223,8 @@ def bench(
                                        "cores)."),
     config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Measure the twin against bare physics (CPU time, medians of interleaved repeats)."""
-    from amr_twin.bench.figures import run_benchmarks
+    """Measure the twin against one bare-physics floor (CPU time, interleaved rounds, spread)."""
+    from amr_twin.bench.figures import report_lines, run_benchmarks
     from amr_twin.base.process_pool import check_jobs
 
     try:
@@ -237,20 +237,23 @@ def bench(
         fail(f"--sim-s {sim_s:g}: must be in [{MIN_RUN_S:g}, 1000] s")
     cfg = _config(config, params, set_)
 
+    def say(text: str) -> None:
+        typer.echo(f"bench: {text}", err=True)
+
     def measure() -> dict:
-        if suites:
-            typer.echo("bench: the loop against bare physics", err=True)
-        figures = run_benchmarks(cfg, sim_s=sim_s)
+        figures = run_benchmarks(cfg, sim_s=sim_s, say=say if suites else lambda text: None)
         if suites:
             from amr_twin.bench.suites import suite_figures
-            figures.update(suite_figures(cfg, jobs=jobs, progress=lambda text: typer.echo(f"bench: {text}", err=True)))
+            figures["suites"] = suite_figures(cfg, jobs=jobs, progress=say)
         return figures
 
     result = _guard(measure)
     if as_json:
         typer.echo(json.dumps(result))
     else:
-        for key, value in result.items():
+        for line in report_lines(result):
+            typer.echo(line)
+        for key, value in result.get("suites", {}).items():
             typer.echo(f"{key:32s} {value}")
 
 
@@ -352,7 +355,8 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
     """
     from amr_twin.analysis.calibration_targets import LOG_TAIL_S
     from amr_twin.sim.loop import TwinOptions
-    from amr_twin.sim.run import Command, run_command
+    from amr_twin.sim.command import Command
+    from amr_twin.recording.run import run_command
 
     import logging
 

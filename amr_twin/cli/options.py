@@ -31,8 +31,7 @@ SetOpt = typer.Option(None, "--set", help="Override one value: key=value (repeat
 
 def firmware_option(default: str = "faithful") -> typer.models.OptionInfo:
     """``--firmware``: its choices are the firmware factory's (:data:`~amr_twin.controllers.firmware.FIRMWARES`)."""
-    choices = ", ".join(FIRMWARES[:-1]) + " or " + FIRMWARES[-1]
-    return typer.Option(default, "--firmware", help=f"Arduino firmware: {choices}; default {default} "
+    return typer.Option(default, "--firmware", help=f"Arduino firmware: {FIRMWARES.choices()}; default {default} "
                         "(docs/firmware.md; avr: the sketch compiled with avr-gcc on an emulated ATmega2560).")
 
 

@@ -71,7 +71,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     from amr_twin.sim.faults import FaultError, parse_faults
     from amr_twin.sim.loop import TwinOptions
     from amr_twin.recording.outputs import OutputError, check_outputs
-    from amr_twin.sim.run import run_mission
+    from amr_twin.recording.run import run_mission
 
     duration_s = _duration(opts, default_s)
     last_s = max((t for t, _ in steps), default=0.0)
@@ -132,7 +132,8 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         ctx = click.get_current_context(silent=True)
         if navigation is not None and not any(_given(c, "firmware") for c in (ctx, ctx and ctx.parent)):
             firmware = "improved"  # as run goto: the faithful one restarts its ramps on every cmd_vel
-    options = TwinOptions(firmware=firmware, seed=opts.seed, sensors=opts.sensors, world=opts.world,
+    options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world,
+                          sensors=("imu", "lidar") if opts.sensors else (),
                           start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
                           visuals=recording or live is not None, firmware_params=avr_params,
                           actors=actors, odometry_calibration=calibration)
@@ -250,8 +251,8 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
                 typer.echo(f"{name}: {dropped} message(s) from clients dropped (see the warnings above)", err=True)
 
 
-def Command(*args, **kwargs):  # noqa: N802 - amr_twin.sim.run.Command, imported when a run starts
-    from amr_twin.sim.run import Command as RunCommand
+def Command(*args, **kwargs):  # noqa: N802 - amr_twin.sim.command.Command, imported when a run starts
+    from amr_twin.sim.command import Command as RunCommand
 
     return RunCommand(*args, **kwargs)
 

@@ -55,7 +55,7 @@ class FleetSession:
             broker_address(options.url)
         self.options, self.serial = options, serial
         self.twin = Twin(cfg, TwinOptions(firmware=options.firmware, world=options.world, seed=options.seed,
-                                          start_xy_yaw=options.start_xy_yaw, sensors=True, visuals=False))
+                                          start_xy_yaw=options.start_xy_yaw, sensors=("imu", "lidar"), visuals=False))
         static = load_static_map(cfg, options.world, None)
         self.navigator = attach(self.twin, cfg, static, NavigationOptions(
             goals=(), localisation=options.localisation, controller=options.controller, seed=options.seed),

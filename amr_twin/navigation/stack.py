@@ -140,14 +140,8 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
         twin.ground_truth = GroundTruth(twin.physics, twin.clock, twin.bus)
     elif options.localisation == "ekf":
         from amr_twin.estimation.ekf import EkfNode
-        from amr_twin.model.worlds import uwb_anchors_xy_m
-        from amr_twin.sensors.uwb import UwbSensor
 
-        uwb = cfg.uwb
-        anchors = uwb_anchors_xy_m(twin.options.world)
-        if anchors is not None:
-            uwb = uwb.model_copy(update={"anchors_x_m": tuple(anchors[:, 0]), "anchors_y_m": tuple(anchors[:, 1])})
-        twin.uwb = UwbSensor(twin.physics, twin.clock, twin.bus, uwb, seed=[twin.options.seed, 3])
+        uwb = (twin.sensors.get("uwb") or twin.add_sensor("uwb")).cfg  # the tag ranging to the world's anchors
         twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=True, uwb=uwb,
                            initial_pose=start, bus=twin.bus)
     source.attach(twin, cfg)   # a plug-in's estimator (the built-ins' are started above)
@@ -235,11 +229,13 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
     from dataclasses import replace
 
     from amr_twin.navigation.goal_truth import final_errors, judge
+    from amr_twin.recording.recorder import attach_recorder
     from amr_twin.sim.loop import Twin
 
     wall0 = time.perf_counter()
     static = static if static is not None else load_static_map(cfg, twin_options.world, options.map_yaml)
-    twin = Twin(cfg, replace(twin_options, sensors=True))
+    twin = Twin(cfg, replace(twin_options, sensors=("imu", "lidar")))
+    recorder = attach_recorder(twin)
     if on_twin is not None:
         on_twin(twin)
     nav = attach(twin, cfg, static, options, publish=publish, drive=drive)
@@ -269,7 +265,7 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
         twin.advance(0.1)  # the navigator ramps the robot to a stop, the drive follows
     if not twin.halted:
         twin.advance(0.5)  # the stop settles
-    series = twin.recorder.series()
+    series = recorder.series()
     errors = []
     for i, out in enumerate(nav.outcomes):  # each goal at its end; the last one where the robot came to stand
         last = i == len(nav.outcomes) - 1 or math.isnan(out.t_end_s)

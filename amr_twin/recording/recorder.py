@@ -6,11 +6,15 @@ hands over the loop sensors' rows on the record grid (wheel angles and speeds, b
 battery's accounting (``on_grid``, :attr:`Recorder.battery`) keeps the battery's state as the
 accounting left it (terminal voltage, current, charge); ``on_message`` keeps every published
 wheel speed, wheel command and odometry message with its delivery time.
+
+Whoever runs a twin and wants its series attaches a recorder (:func:`attach_recorder`) before the
+twin runs; the twin itself builds none.
 """
 
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -64,8 +68,23 @@ def yaw_from_quat(q: np.ndarray) -> np.ndarray:
     return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
+_recorders: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def attach_recorder(twin) -> "Recorder":
+    """The :class:`Recorder` of ``twin``: the one attached before, else one attached now (its series
+    starts at the present instant: attach before the twin runs)."""
+    return _recorders.get(twin) or Recorder(twin)
+
+
+def recorder_of(twin) -> "Recorder | None":
+    """The :class:`Recorder` attached to ``twin``, or None."""
+    return _recorders.get(twin)
+
+
 class Recorder:
-    """Collects a run's time series from the hooks of ``twin`` (a :class:`~amr_twin.sim.loop.Twin`)."""
+    """Collects a run's time series from the hooks of ``twin`` (a :class:`~amr_twin.sim.loop.Twin`) from
+    the present instant on; use :func:`attach_recorder` (one recorder a twin)."""
 
     def __init__(self, twin) -> None:
         self.twin = twin
@@ -85,6 +104,10 @@ class Recorder:
         twin.on_message(self._tap, topics=tuple(self._handlers))  # not called for IMU, scan, tf
         twin.on_actuation(self.pins_changed)
         twin.on_grid_rows(self.extend_grid)
+        _recorders[twin] = self
+        self.battery(twin.t_phys_us)  # the present instant: the battery, the drive in force, the loop sensors
+        self.pins_changed(twin.t_phys_us)
+        self.sample()
 
     def _tap(self, topic: str, msg, t_us: int) -> None:
         self._handlers[topic](msg, t_us * 1e-6)

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from amr_twin.recording.recorder import attach_recorder
+
 US = 1_000_000
 
 _captures: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -80,13 +82,16 @@ class Capture:
 
 
 def attach(twin, body_hz: float = 30.0) -> Capture:
-    """Start capturing ``twin`` (before it runs); returns the :class:`Capture`.
+    """Start capturing ``twin`` (before it runs), its series with it (its recorder); returns the
+    :class:`Capture`.
 
     Raises ValueError for a twin built without the robot's visuals (``TwinOptions(visuals=False)``).
     """
     if not twin.options.visuals:
         raise ValueError("a recording draws the robot: build the twin with TwinOptions(visuals=True)")
-    return _captures.get(twin) or Capture(twin, body_hz)
+    capture = _captures.get(twin) or Capture(twin, body_hz)
+    attach_recorder(twin)  # the series the recordings write
+    return capture
 
 
 def capture_of(twin) -> Capture | None:

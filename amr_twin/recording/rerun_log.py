@@ -9,6 +9,7 @@ from pathlib import Path
 from amr_twin.base.atomic_file import write_bytes
 from amr_twin.recording.rerun_navigation import _log_navigation
 from amr_twin.recording.event_log import has_events, log_events
+from amr_twin.recording.recorder import recorder_of
 from amr_twin.recording.rerun_capture import Capture, capture_of
 from amr_twin.recording.rerun_streams import (WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,
                                               _log_wheel_speeds)
@@ -85,13 +86,19 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
 def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> dict[str, Path]:
     """Write the recordings of a finished run (its twin was :func:`attach`-ed before running).
 
-    ``result`` (a :class:`~amr_twin.sim.run.RunResult`) adds the client calls; without it
-    the series is taken from the twin's recorder. Returns {"rrd": path, "mcap": path}.
+    ``result`` (a :class:`~amr_twin.recording.run.RunResult`) adds the client calls; without it
+    the series is taken from the twin's recorder (:func:`~amr_twin.recording.recorder.attach_recorder`).
+    Returns {"rrd": path, "mcap": path}.
     """
     capture = twin_or_capture if isinstance(twin_or_capture, Capture) else capture_of(twin_or_capture)
     if capture is None:
         raise ValueError("record_run: attach(twin) must be called before the twin runs")
-    series = result.series if result is not None else capture.twin.recorder.series()
+    if result is not None:
+        series = result.series
+    elif (recorder := recorder_of(capture.twin)) is not None:
+        series = recorder.series()
+    else:
+        raise ValueError("record_run: pass the run's result, or attach_recorder(twin) before the twin runs")
     out = {}
     if rrd_path is not None:
         out["rrd"] = write_rrd(capture, series, rrd_path, result)

@@ -192,9 +192,9 @@ def _log_scan(rec, m, capture: Capture) -> None:
 def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:
     """Anchor positions (K, 3) in the world and the tag position (3,) in ``base_link``, m.
 
-    From the twin's ``UwbSensor`` (``twin.uwb``) when it has one, else from ``twin.cfg.uwb``.
+    From the twin's UWB sensor (``twin.sensors["uwb"]``) when it has one, else from ``twin.cfg.uwb``.
     """
-    sensor = getattr(twin, "uwb", None)
+    sensor = twin.sensors.get("uwb")
     if sensor is not None:
         return np.asarray(sensor.anchors_xyz_m, float), np.asarray(sensor.tag_pos_m, float)
     u = twin.cfg.uwb

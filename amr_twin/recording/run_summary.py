@@ -1,6 +1,6 @@
 """The summary of a run (``amr-twin run --json``) as typed records, and the JSON written from them.
 
-:func:`summary` measures a :class:`amr_twin.sim.run.RunResult` into a :class:`RunSummary`;
+:func:`summary` measures a :class:`amr_twin.recording.run.RunResult` into a :class:`RunSummary`;
 :meth:`RunSummary.as_json` is the ``--json`` object (strict JSON: NaN and inf become null).
 Every RPM is signed, + = the wheel rolls forward (REP-103).
 """
@@ -142,7 +142,7 @@ def json_ready(value):
 
 
 def summary(result, single: bool, start_xy_yaw=None) -> RunSummary:
-    """Measure ``result`` (:class:`amr_twin.sim.run.RunResult`); ``single``: one command (its step
+    """Measure ``result`` (:class:`amr_twin.recording.run.RunResult`); ``single``: one command (its step
     metrics are measured) rather than a mission; ``start_xy_yaw``: the start pose, if known."""
     import numpy as np
 

@@ -11,6 +11,7 @@ from amr_twin.ros.bus import Bus
 from amr_twin.sim.actuation import Actuation
 from amr_twin.base.clock import VirtualClock
 from amr_twin.sim.collisions import CollisionMonitor
+from amr_twin.sim.component import Mount
 from amr_twin.sim.grid_loop import GridLoop
 from amr_twin.sim.hooks import Hooks
 from amr_twin.sim.observables import Observables
@@ -22,7 +23,6 @@ from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandS
 from amr_twin.ros.messages import Float64
 from amr_twin.sim.settled_physics import settled_physics
 from amr_twin.sim.plant import Plant
-from amr_twin.recording.recorder import Recorder
 from amr_twin.sim.rolling_resistance import RollingResistance
 from amr_twin.ros.ros_state import robot_static_transforms
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink
@@ -48,7 +48,8 @@ class TwinOptions:
     rosserial_extra_latency_us: int = 0
     rosserial_loss_prob: float = 0.0
     check_every_s: float = 0.5  # divergence check period
-    sensors: bool = False  # IMU (imu/data_raw, imu/mag) and LiDAR (scan) on the clock
+    sensors: tuple[str, ...] = ()  # sensors by name (amr_twin.sensors.catalog.SENSORS): "imu" (imu/data_raw,
+    # imu/mag), "lidar" (scan), "uwb" (uwb/range); () none
     stop_on_collision: bool = False  # halt the twin at the first collision (amr_twin.sim.collisions)
     odometry: bool = True  # the wheel odometry node (odom, tf); off for runs nothing reads it from (a sweep
     # point): it only publishes, so the drive is the same to the bit without it
@@ -62,6 +63,10 @@ class TwinOptions:
     odometry_calibration: object = None  # controllers/odometry_calibration.OdometryCalibration: the odometry
     # node's effective wheel radii and wheelbase (a UMBmark calibration); None: the nominal geometry
 
+    def __post_init__(self) -> None:
+        if type(self.sensors) is not tuple or not all(type(name) is str for name in self.sensors):
+            raise ValueError(f"sensors: {self.sensors!r} must be a tuple of sensor names, e.g. ('imu', 'lidar')")
+
 
 PLACED_SIGMA = 1e-4
 """Standard deviation of the pose a reset places the robot at, told to an EKF (m and rad): exact, but for the
@@ -74,19 +79,49 @@ class Twin(Hooks):
     Code downstream of the loop subscribes to its hooks (:class:`~amr_twin.sim.hooks.Hooks`:
     ``on_grid``, ``on_grid_rows``, ``on_event``, ``on_actuation``, ``on_message``) and reads
     :attr:`observables`; it does not reach into :attr:`physics`, :attr:`plant`, :attr:`hall`
-    or :attr:`firmware` (tests/sim/test_hooks.py)."""
+    or :attr:`firmware` (tests/sim/test_hooks.py). The sensors named in ``options.sensors`` are
+    built from :data:`amr_twin.sensors.catalog.SENSORS` (:mod:`amr_twin.sim.component`): :attr:`sensors`."""
 
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
+        from amr_twin.sensors.catalog import SENSORS
+
+        factories = [(name, SENSORS.get(name)) for name in options.sensors]  # an unknown name: before any work
+        self.cfg, self.options = cfg, options
+        self._build_physics(cfg, options)
+        self.clock = VirtualClock()
+        self.bus = Bus(self.clock)
+        self._init_hooks(self.bus)
+        self.bus.send_transform(robot_static_transforms(self.physics.model), static=True)  # laser, imu_link, uwb_tag
+        self._build_drive(cfg, options)
+        self._build_loop(cfg, options)
+        self._mount = Mount(self.physics, self.clock, self.bus, self, self.grid_us, options.seed, options.world,
+                            bool(options.actors))
+        self.sensors = {name: factory(self._mount, cfg) for name, factory in factories}
+        """The sensors built from ``options.sensors`` and by :meth:`add_sensor`, by name, in that order."""
+        self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
+        self._next_check_us = int(options.check_every_s * US)
+        for sampler in self.samplers:
+            sampler(0)
+        self.faults = None
+        if options.faults:
+            from amr_twin.sim.fault_injector import FaultInjector, FaultTargets
+            self.faults = FaultInjector(options.faults, self.clock, self, FaultTargets(
+                self.hall, self.physics, self.link, self.bus, self.actuation, lambda: self.t_phys_us))
+        self.firmware.start()
+        self.actuation.apply(0)
+
+    def _build_physics(self, cfg: TwinConfig, options: TwinOptions) -> None:
+        """The robot in its world at its start pose, settled; the floor's friction field; the timestep."""
         from amr_twin.model.worlds import default_start
 
-        self.cfg, self.options = cfg, options
         start = options.start_xy_yaw if options.start_xy_yaw is not None else default_start(options.world)
         self.start_xy_yaw = tuple(float(v) for v in start)
         pose = f"{start[0]:g},{start[1]:g},{math.degrees(start[2]):g}"
         where = (f"--start {pose} in world {options.world}" if options.start_xy_yaw is not None
                  else f"the start pose {pose} of world {options.world}")
-        physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals, options.sensors,
-                                        options.settle_s, where, tuple(options.actors), options.obstacles)
+        physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals,
+                                        "imu" in options.sensors, options.settle_s, where, tuple(options.actors),
+                                        options.obstacles)
         self.physics = physics
         self._rest = physics.positions()  # the robot settled at its start: how it stands after a teleport
         self.floor = None
@@ -105,40 +140,41 @@ class Twin(Hooks):
         announce(self.tyre_timestep)
         self.dt_us = int(round(self.physics.timestep_s * US))
         self.t_phys_us = 0
-        self.clock = VirtualClock()
-        self.bus = Bus(self.clock)
-        self._init_hooks(self.bus)
-        self.bus.send_transform(robot_static_transforms(self.physics.model), static=True)  # laser, imu_link, uwb_tag
+
+    def _build_drive(self, cfg: TwinConfig, options: TwinOptions) -> None:
+        """The plant, its hall sensors, the firmware behind its rosserial link and the PC side: the wheel
+        command service and client, the odometry node."""
         self.link = RosserialLink(self.clock, extra_latency_us=options.rosserial_extra_latency_us,
                                   loss_prob=options.rosserial_loss_prob, seed=options.seed)
         self.plant = Plant(cfg, self.physics)
-        self.hall = HallSensors(2, pole_pairs=cfg.wheel.hall_pole_pairs,
-                                misalignment_deg=options.hall_misalignment_deg,
+        wheel = cfg.wheel
+        self.hall = HallSensors(2, pole_pairs=wheel.hall_pole_pairs, misalignment_deg=options.hall_misalignment_deg,
                                 jitter_us=options.hall_jitter_us, seed=options.seed,
-                                hysteresis_deg=cfg.wheel.hall_hysteresis_deg)
+                                hysteresis_deg=wheel.hall_hysteresis_deg)
         self.hall.reset(self.physics.wheel_angles_rad())
         self.firmware = make_firmware(options.firmware, self.clock, self._arduino_publish,
-                                      options.firmware_params, edges_per_rev=cfg.wheel.sc_edges_per_rev)
-        # PC side (the mini PC): service, client, odometry; rosserial bridges to the Arduino
+                                      options.firmware_params, edges_per_rev=wheel.sc_edges_per_rev)
         self.service = WheelCommandService(self.bus)
-        self.client = WheelCommandClient(self.bus, wheel_radius_m=cfg.wheel.radius_m,
-                                         half_separation_m=cfg.wheel.separation_m / 2)
+        self.client = WheelCommandClient(self.bus, wheel_radius_m=wheel.radius_m,
+                                         half_separation_m=wheel.separation_m / 2)
         if not self.firmware.connect(self.bus, self.link):  # else it speaks rosserial on its own UART
             self.bus.subscribe("wheel_Command", self._to_arduino)
         calibration = options.odometry_calibration
-        self.odometry = (WheelOdometry(self.bus, self.clock, wheel_radius_m=cfg.wheel.radius_m,
-                                       wheel_separation_m=cfg.wheel.separation_m,
+        self.odometry = (WheelOdometry(self.bus, self.clock, wheel_radius_m=wheel.radius_m,
+                                       wheel_separation_m=wheel.separation_m,
                                        **({} if calibration is None else
-                                          calibration.multipliers(cfg.wheel.radius_m, cfg.wheel.separation_m)))
+                                          calibration.multipliers(wheel.radius_m, wheel.separation_m)))
                          if options.odometry else None)
+
+    def _build_loop(self, cfg: TwinConfig, options: TwinOptions) -> None:
+        """The record grid and the loop's own grid samplers, in the order they run: the rolling resistance
+        from the present loads, the battery's accounting, the actors, the collision monitor (the sensors'
+        come after them: the ``on_grid`` hook, amr_twin/sim/hooks.py); the actuation and the observables."""
         self.grid_every = max(1, int(options.record_every_steps)) * self.tyre_timestep.steps_per_configured_step
         """Physics steps between two instants of the record grid (the ``on_grid`` hook's): ``record_every_steps``
         of ``sim.timestep_s``, the same instants when the tyres' guard halved the timestep."""
         self.grid_us = self.dt_us * self.grid_every
         self.rolling = RollingResistance(self.physics, cfg)
-        # the twin's own grid samplers first: the rolling resistance from the present loads and
-        # the battery's accounting; then the recorder's copy of the battery's state, the collision
-        # monitor and the sensors' samplers (the on_grid hook: amr_twin/sim/hooks.py)
         self.on_grid(self.rolling.update)
         self.on_grid(self.plant.battery.account)
         self.actuation = Actuation(self.plant, self.firmware, self._actuation_hooks)
@@ -147,7 +183,6 @@ class Twin(Hooks):
         self._grid = GridLoop(self.physics, self.samplers, self.grid_every, self.dt_us)
         self.observables = Observables(self.physics, self._grid, self.actuation, self.plant.battery, self.collisions)
         """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
-        self.recorder = Recorder(self)
         self.halted = False
         self.stopped = False
         """:meth:`stop` was called: :meth:`advance` returns at once (a run ended from outside, e.g. a signal)."""
@@ -159,29 +194,20 @@ class Twin(Hooks):
             self.on_grid(self.actors.update)
             self._actor_poses = ActorPoses(self.actors, self.clock, self.bus, self.samplers)
         self.on_grid(self.collisions)
-        if options.sensors:  # Adafruit 9-DOF IMU and RPLIDAR A1 (sensors/imu.py, sensors/lidar.py)
-            from amr_twin.sensors.imu import ImuSensor
-            from amr_twin.sensors.lidar import Lidar
-            self.imu = ImuSensor(self.physics, self.clock, self.bus, cfg.imu, seed=[options.seed, 1],
-                                 autostart=False)
-            self.imu.start(grid_us=self.grid_us, samplers=self.samplers)
-            # with actors moving, a cast every 20 ms (each beam sees them within ~2 cm of where they
-            # were at its instant) rather than one a rotation (up to 0.27 m off for a walker)
-            self.lidar = Lidar(self.physics, self.clock, self.bus, cfg.lidar, seed=[options.seed, 2],
-                               autostart=False, **({"loop_cast_us": 20_000} if options.actors else {}))
-            self.lidar.start_motor(grid_us=self.grid_us, samplers=self.samplers)
-        self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
-        self._next_check_us = int(options.check_every_s * US)
-        for sampler in self.samplers:
-            sampler(0)
-        self.faults = None
-        if options.faults:
-            from amr_twin.sim.fault_injector import FaultInjector, FaultTargets
-            self.faults = FaultInjector(options.faults, self.clock, self, FaultTargets(
-                self.hall, self.physics, self.link, self.bus, self.actuation, lambda: self.t_phys_us))
-        self.firmware.start()
-        self.actuation.apply(0)
-        self.recorder.sample()
+
+    def add_sensor(self, name: str):
+        """Build the sensor ``name`` of :data:`~amr_twin.sensors.catalog.SENSORS` on the twin as it is now; it
+        samples from the present instant on (its grid samplers run once now). Returns the sensor; ValueError
+        (one line) for an unknown name or one the twin has already."""
+        from amr_twin.sensors.catalog import SENSORS
+
+        if name in self.sensors:
+            raise ValueError(f"sensor {name!r}: the twin has it already")
+        factory, n = SENSORS.get(name), len(self.samplers)
+        self.sensors[name] = sensor = factory(self._mount, self.cfg)
+        for sampler in self.samplers[n:]:
+            sampler(self.t_phys_us)
+        return sensor
 
     # -- rosserial bridge ---------------------------------------------------------
     def _to_arduino(self, msg) -> None:

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amr_twin.sim.bounds import duration_problem
-from amr_twin.sim.run import KINDS, Command
+from amr_twin.sim.command import KINDS, Command
 from amr_twin.model.yaml_file import read_yaml
 
 FIELDS = {

@@ -38,7 +38,7 @@ def main(out: Path) -> None:
     p, j = cfg.actors.person, cfg.actors.pallet_jack
     person = Actor("person", ((-3.5, 1.6), (-3.5, -1.6)), 1.2, start_s=0.3)
     jack = Actor("pallet_jack", ((-2.2, 1.6), (-3.2, 1.6)), 1.0, start_s=1e5)  # forks toward -x: toward the robot
-    twin = Twin(cfg, TwinOptions(start_xy_yaw=(-6.0, 0.0, 0.0), sensors=True, actors=(person, jack), visuals=False))
+    twin = Twin(cfg, TwinOptions(start_xy_yaw=(-6.0, 0.0, 0.0), sensors=("imu", "lidar"), actors=(person, jack), visuals=False))
     scans, poses = [], []
     twin.bus.subscribe("scan", scans.append, queue_size=100)
     twin.bus.subscribe("actors/poses", poses.append, queue_size=100)

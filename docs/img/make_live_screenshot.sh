@@ -45,7 +45,7 @@ from amr_twin.run import run_mission
 
 out, repo = Path(sys.argv[1]), Path(sys.argv[2])
 plan = load_mission_file(repo / "experiments/missions/square.yaml")
-cfg, options = load_config(), TwinOptions(sensors=True, start_xy_yaw=None)
+cfg, options = load_config(), TwinOptions(sensors=("imu", "lidar"), start_xy_yaw=None)
 twin = Twin(cfg, options)
 session = LiveSession(twin, LiveOptions(mode="rerun", port=0, web_port=0, rate=2.0))
 

@@ -40,7 +40,7 @@ from amr_twin.rerun_log import attach, record_run
 from amr_twin.run import Command, run_mission
 
 work = Path(sys.argv[1])
-cfg, options = load_config(), TwinOptions(sensors=True)
+cfg, options = load_config(), TwinOptions(sensors=("imu", "lidar"))
 twin = Twin(cfg, options)
 attach(twin)
 steps = [(0.0, Command("linear", speed_m_s=0.5)),

@@ -12,7 +12,8 @@ from amr_twin.analysis.calibration_targets import BENCH_CURRENT_A, bench_current
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.model.paths import MODEL_DIR
-from amr_twin.sim.run import Command, run_command
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_command
 
 LOG_COMMAND = "motor:left:forward:1.0"
 
@@ -134,7 +135,8 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
     from typer.testing import CliRunner
 
     from amr_twin.cli.main import app
-    from amr_twin.sim.run import Command, run_command
+    from amr_twin.sim.command import Command
+    from amr_twin.recording.run import run_command
 
     series = run_command(load_config(), Command("linear", speed_m_s=0.7), 4.0).series
     log = tmp_path / "log.csv"

@@ -136,7 +136,7 @@ def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeyp
 def test_a_run_larger_than_the_memory_available_is_refused(tmp_path, refused, monkeypatch):
     monkeypatch.setattr("amr_twin.sim.bounds.available_mb", lambda: 1000.0)
     with monkeypatch.context() as guard:
-        guard.setattr("amr_twin.sim.run.run_mission", None)  # were it not refused, it would fail at once
+        guard.setattr("amr_twin.recording.run.run_mission", None)  # were it not refused, it would fail at once
         refused(["run", "stop", "--duration-s", 3600, "--sensors", "--mcap", tmp_path / "r.mcap"],
                 "--duration-s 3600: the run would need about 4.8 GB of memory", "1.0 GB are available")
     assert _call(["run", "stop", "--duration-s", 5, "--sensors", "--mcap", tmp_path / "r.mcap"]) == 0
@@ -147,7 +147,7 @@ def test_a_memory_limit_is_checked_before_and_one_line_after(tmp_path, refused, 
     backtrace below that), and a MemoryError while writing was a traceback of 116 lines."""
     monkeypatch.setattr("amr_twin.sim.bounds.address_space_mb", lambda: 1200.0)
     with monkeypatch.context() as guard:
-        guard.setattr("amr_twin.sim.run.run_mission", None)  # were it not refused, it would fail at once
+        guard.setattr("amr_twin.recording.run.run_mission", None)  # were it not refused, it would fail at once
         refused(["run", "stop", "--duration-s", 60, "--record", tmp_path / "r.rrd"],
                 "--duration-s 60 with --record: the run would need about 3.2 GB of address space",
                 "the limit (ulimit -v) is 1.2 GB")
@@ -155,7 +155,7 @@ def test_a_memory_limit_is_checked_before_and_one_line_after(tmp_path, refused, 
     def exhausted(*_args, **_kwargs):
         raise MemoryError
 
-    monkeypatch.setattr("amr_twin.sim.run.run_mission", exhausted)
+    monkeypatch.setattr("amr_twin.recording.run.run_mission", exhausted)
     refused(["run", "stop", "--duration-s", 1, "--csv", tmp_path / "r.csv"], "out of memory (the limit, ulimit -v, "
             "is 1.2 GB); nothing written", code=1)
 
@@ -304,7 +304,7 @@ def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path, tmp_path_fac
     (["experiment", "chapter5", "--out", "{tmp}/c", "--runs", "1", "--no-progress"], "amr_twin.experiments.chapter5.run"),
     (["sweep", "payload", "--out", "{tmp}/s", "--masses", "0", "--positions", "center", "--commands", "stop",
       "--no-progress"], "amr_twin.experiments.payload_sweep.run"),
-    (["run", "stop", "--duration-s", "1", "--csv", "{tmp}/r.csv"], "amr_twin.sim.run.run_mission"),
+    (["run", "stop", "--duration-s", "1", "--csv", "{tmp}/r.csv"], "amr_twin.recording.run.run_mission"),
 ])
 def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refused, monkeypatch):
     """Ctrl-C: typer exited 130 without a word; now one line naming the command, nothing written."""

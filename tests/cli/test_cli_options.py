@@ -45,7 +45,7 @@ def test_repeatable_options_collect_both_places_and_conflicts_are_refused():
 @pytest.mark.parametrize("args, text", [
     (["--duration-s", "1e12"], "--duration-s 1e+12: must be in [0.1, 3600] s"),
     (["--duration-s", "0"], "must be in [0.1, 3600] s"),
-    (["--firmware", "avx"], f"--firmware 'avx': must be one of {', '.join(FIRMWARES)}"),
+    (["--firmware", "avx"], f"--firmware 'avx': must be one of {FIRMWARES.choices()}"),
     (["--fault", "hall-left-dead@30"], "not before the end of the run (10 s)"),
     (["--fault", "imu-stuck@1"], "needs the sensors"),
     (["--start", "1,2"], "--start '1,2': expected X_M,Y_M,YAW_DEG"),
@@ -59,10 +59,9 @@ def test_bounds_are_one_line_before_the_run(args, text, tmp_path):
 
 def test_firmware_choices_come_from_the_firmware_factory():
     res = runner.invoke(app, ["run", "--help"])
-    choices = ", ".join(FIRMWARES[:-1]) + " or " + FIRMWARES[-1]
-    assert choices in " ".join(res.output.replace("│", " ").split())
+    assert FIRMWARES.choices() in " ".join(res.output.replace("│", " ").split())
     res = runner.invoke(app, ["run", "stop", "--firmware", "avx"])
-    assert res.exit_code == 2 and f"must be one of {', '.join(FIRMWARES)}" in res.stderr
+    assert res.exit_code == 2 and f"must be one of {FIRMWARES.choices()}" in res.stderr
 
 
 @pytest.mark.parametrize("command, default", [(["run"], "faithful"), (["experiment", "chapter5"], "faithful"),

@@ -20,7 +20,9 @@ from amr_twin.controllers.firmware import AvrParams
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.ros.rosserial import PC_TO_ARDUINO
 from amr_twin.ros.rosserial_frame import MD5SUM
-from amr_twin.sim.run import Command, run_command
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_command
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 MISSING = missing_tools()
 needs_avr = pytest.mark.skipif(MISSING is not None, reason=MISSING or "")
@@ -228,9 +230,10 @@ def test_the_board_asks_the_time_every_5_s_and_keeps_publishing_while_answered(c
         if not answer:
             monkeypatch.setattr(AvrFirmware, "_answer_time", lambda self: None)
         twin = Twin(cfg, TwinOptions(firmware="avr", world="empty"))
+        attach_recorder(twin)
         Command("motor", wheel="left", speed_m_s=0.5).send(twin)
         twin.advance(19.0)
-        return twin.firmware.time_requests, twin.recorder.series().published[0][:, 0]
+        return twin.firmware.time_requests, recorder_of(twin).series().published[0][:, 0]
 
     requests, t_s = run(True)
     assert requests == 3  # at 5, 10 and 15 s (ros_lib's SYNC_PERIOD_MS), each answered with the sim time

@@ -14,6 +14,7 @@ from amr_twin.model.config import load_config
 from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, ID_TX_STOP, FrameParser, TopicInfo,
                                           frame, serialize_float64_multiarray, topic_request)
 from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 MISSING = missing_tools()
 pytestmark = pytest.mark.skipif(MISSING is not None, reason=MISSING or "")
@@ -24,6 +25,7 @@ def link(tmp_path_factory):
     path = tmp_path_factory.mktemp("pty") / "ttyACM0"
     twin = Twin(load_config(), TwinOptions(firmware="avr", world="empty",
                                            firmware_params=AvrParams(serial_pty=str(path))))
+    attach_recorder(twin)
     twin.firmware.pacer.rate = 50.0  # the pacing's rate: 50x real time keeps the test short
     fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
     parser = FrameParser()
@@ -64,7 +66,7 @@ def test_the_board_takes_commands_but_publishes_nothing_before_a_host_negotiates
     twin, exchange, _parser = link
     frames = exchange(4.0, frame(100, serialize_float64_multiarray([1.0, 40.0, 1.0, 40.0])))
     assert frames == []  # no wheel speed, no time request: the host has not configured the board
-    assert twin.recorder.series().true_rpm[-1] == pytest.approx([40.0, 40.0], abs=6.0)  # yet the command ran
+    assert recorder_of(twin).series().true_rpm[-1] == pytest.approx([40.0, 40.0], abs=6.0)  # yet the command ran
 
 
 def test_a_topic_request_is_answered_with_the_topics_and_a_time_request_then_speeds_flow(link):

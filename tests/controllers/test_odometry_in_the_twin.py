@@ -10,7 +10,8 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import TwinOptions
 from amr_twin.sim.mission import load_mission_file
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 
 def _mission(name):

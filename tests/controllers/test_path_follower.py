@@ -13,6 +13,7 @@ from amr_twin.base.clock import VirtualClock
 from amr_twin.controllers.path_follower import PathFollowerNode, PurePursuit
 from amr_twin.controllers.route import Route, RouteError, distance_to_path_m, load_route, route_length_m
 from amr_twin.ros.geometry_messages import Twist
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_ROUTE = ROOT / "experiments" / "routes" / "warehouse_60m.yaml"
@@ -286,6 +287,7 @@ def test_twin_rounds_the_first_rack_corners_without_touching_anything():
     route = replace(full, name="corner", start_xy_yaw=(3.0, 0.0, 0.0),
                     waypoints_xy_m=np.vstack([full.waypoints_xy_m[:2], [[3.0, 5.5]]]))
     twin = Twin(load_config(), TwinOptions(firmware="improved", world="warehouse", start_xy_yaw=route.start_xy_yaw))
+    attach_recorder(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)
     m, d = twin.physics.model, twin.physics.data
     floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
@@ -302,7 +304,7 @@ def test_twin_rounds_the_first_rack_corners_without_touching_anything():
     node = PathFollowerNode(twin.bus, twin.clock, route, pose_source=true_pose)
     while not node.done and twin.t_s < 30.0:
         twin.advance(1.0)
-    s = twin.recorder.series()
+    s = recorder_of(twin).series()
     assert node.done, f"not at the goal after {twin.t_s} s: {s.pose[-1]}"
     assert np.hypot(*(s.pose[-1, :2] - route.waypoints_xy_m[-1])) < 0.35
     xte = distance_to_path_m(route, s.pose[:, :2])

@@ -14,6 +14,7 @@ from amr_twin.analysis import se2
 from amr_twin.estimation.lidar_odometry import LidarOdometry, beam_times_s, scan_end_time_s, scan_points
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 ROOM = (-4.0, 6.0, -3.0, 2.5)  # inner faces x_min, x_max, y_min, y_max, m
 LASER = (0.30, 0.0, 0.0)
@@ -151,8 +152,9 @@ def warehouse_drive():
     from amr_twin.model.config import load_config
     from amr_twin.sim.loop import Twin, TwinOptions
 
-    twin = Twin(load_config(), TwinOptions(sensors=True, firmware="improved", world="warehouse",
+    twin = Twin(load_config(), TwinOptions(sensors=("imu", "lidar"), firmware="improved", world="warehouse",
                                            start_xy_yaw=(-6.5, -1.5, 0.0)))
+    attach_recorder(twin)
     scans, odom = [], []
     twin.bus.subscribe("scan", scans.append)
     twin.bus.subscribe("odom", odom.append)
@@ -161,7 +163,7 @@ def warehouse_drive():
         twin.advance_to_us(int(t_s * 1e6))
         assert send() == 0
     twin.advance_to_us(18_000_000)
-    series = twin.recorder.series()
+    series = recorder_of(twin).series()
     t_odom = np.array([m.header.stamp.to_sec() for m in odom])
     pose_odom = np.array([(m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.orientation.yaw_rad())
                           for m in odom])

@@ -10,6 +10,7 @@ from amr_twin.estimation.occupancy_grid import FREE_THRESH, OccupancyGrid
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 from amr_twin.model.worlds import load_map, read_pgm
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 HALF_M = 2.0  # the room's inner faces at x, y = +-2 m
 RES_M = 0.05
@@ -151,15 +152,16 @@ def warehouse_scans():
     from amr_twin.model.world_geometry import scan_plane_boxes
 
     cfg = load_config()
-    twin = Twin(cfg, TwinOptions(sensors=True, firmware="improved", world="warehouse", start_xy_yaw=(5.5, 0.5, 0.0)))
+    twin = Twin(cfg, TwinOptions(sensors=("imu", "lidar"), firmware="improved", world="warehouse", start_xy_yaw=(5.5, 0.5, 0.0)))
+    attach_recorder(twin)
     scans = []
     twin.bus.subscribe("scan", scans.append)
     assert twin.client.linear(0.6) == 0
     twin.advance(4.0)
     assert twin.client.angular(60.0, 0.0) == 0
     twin.advance(6.5)
-    series = twin.recorder.series()
-    laser_z_m = float(twin.physics.data.site_xpos[twin.lidar.site_id][2])
+    series = recorder_of(twin).series()
+    laser_z_m = float(twin.physics.data.site_xpos[twin.sensors["lidar"].site_id][2])
     boxes = scan_plane_boxes(twin.physics.model, laser_z_m)
     laser_xy_yaw = (cfg.components.lidar.pos_m[0], cfg.components.lidar.pos_m[1], 0.0)
     return scans, series.t_s, series.pose, boxes, laser_xy_yaw

@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments import chapter5
-from amr_twin.sim.run import run_command
+from amr_twin.recording.run import run_command
 
 CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
 

@@ -19,7 +19,7 @@ from amr_twin.experiments import dask_cluster, executor
 from amr_twin.base import process_pool
 from amr_twin.experiments import payload_sweep as ps
 from amr_twin.experiments.payload_point import Point
-from amr_twin.sim.run import warm_up
+from amr_twin.recording.run import warm_up
 
 DURATION_S = 1.5
 SWEEP = dict(positions=["center"], commands=["linear:0.7"], duration_s=DURATION_S, progress=False)

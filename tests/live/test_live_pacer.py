@@ -10,7 +10,8 @@ from amr_twin.model.config import load_config
 from amr_twin.live.pacer import Pacer, PacerClosed
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
 
@@ -31,7 +32,7 @@ def _run(options, live: bool):
     return result.series, capture
 
 
-@pytest.mark.parametrize("options", [TwinOptions(world="empty", sensors=True),
+@pytest.mark.parametrize("options", [TwinOptions(world="empty", sensors=("imu", "lidar")),
                                      TwinOptions(world="empty", firmware="improved", seed=3)],
                          ids=["faithful+sensors", "improved"])
 def test_a_live_run_computes_what_a_plain_run_does(options):

@@ -23,7 +23,8 @@ from amr_twin.sim.faults import parse_faults
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
 from amr_twin.recording.rerun_log import record_run
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 RERUN = str(Path(sys.executable).with_name("rerun"))
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (1.5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
@@ -78,7 +79,7 @@ def streamed(tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("live_rerun")
     cfg = load_config()
-    options = TwinOptions(world="warehouse", start_xy_yaw=None, sensors=True,
+    options = TwinOptions(world="warehouse", start_xy_yaw=None, sensors=("imu", "lidar"),
                           faults=tuple(parse_faults(["imu-stuck@1:for=1"], duration_s=DURATION_S, sensors=True)))
     twin = Twin(cfg, options)
     attach(twin)

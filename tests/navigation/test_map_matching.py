@@ -116,7 +116,7 @@ def _ekf_errors(matching: bool):
     from amr_twin.sim.loop import Twin, TwinOptions
 
     cfg = load_config(sets=[f"navigation.map_matching.enabled={str(matching).lower()}"])
-    twin = Twin(cfg, TwinOptions(firmware="improved", world="aisles", start_xy_yaw=None, visuals=False, sensors=True))
+    twin = Twin(cfg, TwinOptions(firmware="improved", world="aisles", start_xy_yaw=None, visuals=False, sensors=("imu", "lidar")))
     nav = attach(twin, cfg, true_map(cfg, "aisles"), NavigationOptions(goals=((10.0, -4.8, math.pi),)),
                  publish=False)
     twin.advance(REST_S)
@@ -177,7 +177,7 @@ def _unseen_drive(feedback: bool, tmp_path, sim_s: float = 26.0):
     world = str(write_map(tmp_path, "wh22", random_warehouse(22)))
     ep = episodes(cfg, world, 4, 22)[3]
     twin = Twin(cfg, TwinOptions(firmware="improved", world=world, seed=ep.seed * 100_003 + ep.index,
-                                 start_xy_yaw=ep.start, visuals=False, sensors=True))
+                                 start_xy_yaw=ep.start, visuals=False, sensors=("imu", "lidar")))
     nav = attach(twin, cfg, true_map(cfg, world), NavigationOptions(goals=(ep.goal,)), publish=False)
     twin.advance(REST_S)
     err = []

@@ -99,7 +99,7 @@ def test_the_stack_is_built_from_the_navigation_section_and_its_overrides(corrid
     cfg = load_config(sets=["navigation.mppi.samples=200", "navigation.monitor.people_stop_m=0.5",
                             "navigation.people.range_m=3.0", "navigation.planner.planner_hz=2",
                             "navigation.limits.max_v_m_s=0.6", "navigation.recoveries.wait_s=3"])
-    twin = Twin(cfg, TwinOptions(world=str(corridors), start_xy_yaw=(1.0, 2.5, 0.0), visuals=False, sensors=True))
+    twin = Twin(cfg, TwinOptions(world=str(corridors), start_xy_yaw=(1.0, 2.5, 0.0), visuals=False, sensors=("imu", "lidar")))
     nav = attach(twin, cfg, load_static_map(cfg, str(corridors), None),
                  NavigationOptions(goals=((11.0, 2.5, 0.0),)), publish=False)
     assert nav.controller.K == 200 and nav.monitor.people_stop_m == 0.5 and nav.tracker.range_m == 3.0

@@ -17,7 +17,8 @@ from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
 from amr_twin.recording.rerun_log import record_run
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 from uwb_run import UWB_S, record_uwb_run
 
@@ -42,7 +43,7 @@ ACTORS = (Actor("person", ((2.0, -2.0), (2.0, 2.0)), 1.2, loop=True), Actor("pal
 def recorded(tmp_path_factory):
     """One 4 s run with IMU, LiDAR and two actors, its capture, and the ``.mcap`` file it wrote."""
     cfg = load_config()
-    options = TwinOptions(sensors=True, actors=ACTORS)
+    options = TwinOptions(sensors=("imu", "lidar"), actors=ACTORS)
     twin = Twin(cfg, options)
     capture = attach(twin)
     result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)

@@ -15,7 +15,9 @@ from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
 from amr_twin.recording.rerun_log import record_run
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 from uwb_run import UWB_S, record_uwb_run
 
@@ -27,8 +29,9 @@ WALKER = Actor("person", ((3.0, -2.0), (3.0, 2.0)), 1.2, loop=True)
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
     cfg = load_config()
-    options = TwinOptions(sensors=True, actors=(WALKER,))
+    options = TwinOptions(sensors=("imu", "lidar"), actors=(WALKER,))
     twin = Twin(cfg, options)
+    attach_recorder(twin)
     capture = attach(twin)
     result = run_mission(cfg, STEPS, DURATION_S, options, twin=twin)
     out = tmp_path_factory.mktemp("rec")
@@ -220,12 +223,13 @@ def test_recording_does_not_change_a_run_advanced_in_small_steps():
 
     def drive(record: bool):
         twin = Twin(cfg, TwinOptions(world="empty"))
+        attach_recorder(twin)
         capture = attach(twin) if record else None
         twin.advance_to_us(0)
         Command("linear", speed_m_s=0.7).send(twin)
         for k in range(1, 51):
             twin.advance_to_us(k * 20_000)
-        return twin.recorder.series(), capture
+        return recorder_of(twin).series(), capture
 
     plain, _ = drive(False)
     recorded, capture = drive(True)
@@ -280,7 +284,7 @@ def test_rrd_uwb_ranges_per_anchor(uwb_recorded):
     # the last range to anchor 0 is the one published on the bus, and about the true distance
     last0 = [m for _t, m in msgs if m.header.frame_id == "uwb_anchor_0"][-1]
     assert per_anchor[0][1][-1] == last0.range
-    assert abs(last0.range - capture.twin.uwb.true_ranges_m()[0]) < 1.0
+    assert abs(last0.range - capture.twin.sensors["uwb"].true_ranges_m()[0]) < 1.0
     assert rows["/world/uwb/anchors"] == 1
     from rerun.chunk import RrdReader
 

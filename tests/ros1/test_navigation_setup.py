@@ -11,7 +11,8 @@ from amr_twin.model.config import load_config
 from amr_twin.navigation.stack import true_map
 from amr_twin.ros1.navigation_setup import RunNavigation
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.run import Command
+from amr_twin.sim.command import Command
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 START = (-6.0, 0.0, 0.0)
 GOAL = (-3.0, 0.0, 0.0)
@@ -20,7 +21,8 @@ GOAL = (-3.0, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def run():
     cfg = load_config()
-    twin = Twin(cfg, TwinOptions(firmware="improved", sensors=True, world="warehouse", start_xy_yaw=START))
+    twin = Twin(cfg, TwinOptions(firmware="improved", sensors=("imu", "lidar"), world="warehouse", start_xy_yaw=START))
+    attach_recorder(twin)
     navigation = RunNavigation(cfg, true_map(cfg, "warehouse"))
     nav = navigation.attach(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)  # the run's cmd_vel node (amr_twin/cli/run.py)
@@ -32,7 +34,7 @@ def run():
     while outcome.status == "pending" and twin.t_s < 40.0:
         twin.advance(0.5)
     twin.advance(2.0)
-    after_goal = twin.recorder.series().pose[-1]
+    after_goal = recorder_of(twin).series().pose[-1]
     code = step.send(twin)
     return outcome, during, after_goal, code, twin.client.last_request, lines, _fields(step.command.dry_run(cfg).last_request)
 

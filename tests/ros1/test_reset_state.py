@@ -8,7 +8,7 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.run import Command
+from amr_twin.sim.command import Command
 
 SPEED_M_S = 0.3
 DRIVE_S = 5.0
@@ -38,7 +38,7 @@ def test_ekf_after_reset_simulation_is_at_the_start_pose():
     from amr_twin.ros1.navigation_setup import RunNavigation
 
     cfg = load_config()
-    twin = Twin(cfg, TwinOptions(world="aisles", sensors=True))
+    twin = Twin(cfg, TwinOptions(world="aisles", sensors=("imu", "lidar")))
     RunNavigation(cfg, true_map(cfg, "aisles")).attach(twin)
     twin.advance(2.0)
     Command("linear", speed_m_s=SPEED_M_S).send(twin)

@@ -83,14 +83,14 @@ def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch
     out = []
     for native in (True, False):
         monkeypatch.setattr(lidar_mod, "Lidar", functools.partial(lidar_mod.Lidar, native=native))
-        twin = Twin(cfg, TwinOptions(sensors=True))
+        twin = Twin(cfg, TwinOptions(sensors=("imu", "lidar")))
         scans = []
         twin.bus.subscribe("scan", lambda msg: scans.append(msg.ranges.tobytes()))
         twin.client.linear(0.7)
         twin.advance(1.5)
         twin.client.angular(-60.0, 0.0)
         twin.advance(1.5)
-        out.append((twin.lidar.engine, scans, twin.lidar.dist_m.tobytes()))
+        out.append((twin.sensors["lidar"].engine, scans, twin.sensors["lidar"].dist_m.tobytes()))
     (c_engine, *c_scans), (py_engine, *py_scans) = out
     assert c_engine == "C" and py_engine == "Python (native=False)"
     assert len(c_scans[0]) >= 15 and c_scans == py_scans

@@ -123,7 +123,7 @@ def test_uwb_sensor_in_the_twin():
     from amr_twin.sensors.uwb import UwbSensor
 
     cfg = load_config(overrides={"uwb.nlos_prob": 0.0})
-    twin = Twin(cfg, TwinOptions(sensors=True, world="warehouse"))
+    twin = Twin(cfg, TwinOptions(sensors=("imu", "lidar"), world="warehouse"))
     msgs = []
     twin.bus.subscribe("uwb/range", msgs.append)
     uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3],

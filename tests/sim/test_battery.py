@@ -11,13 +11,16 @@ from amr_twin.model.config import load_config
 from amr_twin.sim.battery import Battery
 from amr_twin.sim.faults import parse_faults
 from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 HAVE_CC = shutil.which("cc") is not None or shutil.which("gcc") is not None
 
 
 def _twin(monkeypatch, cfg, native: bool, **options) -> Twin:
     monkeypatch.setattr(plant_mod, "Battery", functools.partial(Battery, native=native))
-    return Twin(cfg, TwinOptions(world="empty", **options))
+    twin = Twin(cfg, TwinOptions(world="empty", **options))
+    attach_recorder(twin)
+    return twin
 
 
 def _ocv_v(cfg, soc: np.ndarray) -> np.ndarray:
@@ -58,7 +61,7 @@ def test_battery_voltage_is_recorded_at_every_grid_instant(monkeypatch):
     twin.advance(6.0)
     twin.client.stop()
     twin.advance(3.0)
-    s = twin.recorder.series()
+    s = recorder_of(twin).series()
     ocv = _ocv_v(cfg, s.battery_soc)
     np.testing.assert_allclose(s.battery_v, ocv - cfg.battery.internal_resistance_ohm * s.battery_a, rtol=0, atol=1e-9)
     drained = -np.diff(s.battery_soc) * cfg.battery.capacity_ah * 3600  # A s per interval
@@ -76,7 +79,7 @@ def test_driving_draws_the_motors_power_from_the_pack(monkeypatch):
     twin = _twin(monkeypatch, cfg, True)
     twin.client.linear(0.7)
     twin.advance(4.0)
-    s = twin.recorder.series()
+    s = recorder_of(twin).series()
     late = s.t_s > 3.0
     rest_a = 2 * cfg.driver.quiescent_current_a + cfg.battery.auxiliary_power_w / s.battery_v[late]
     motors_w = (s.voltage_v[late] * s.current_a[late]).sum(axis=1)
@@ -96,7 +99,7 @@ def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch):
         twin.advance(3.0)
         twin.client.stop()
         twin.advance(2.0)
-        s, b = twin.recorder.series(), twin.plant.battery
+        s, b = recorder_of(twin).series(), twin.plant.battery
         out.append((b.engine, b.soc, b.current_a, s.battery_v.tobytes(), s.battery_a.tobytes(),
                     s.battery_soc.tobytes(), twin.physics.data.qpos.tobytes()))
     (c_engine, *c_state), (py_engine, *py_state) = out

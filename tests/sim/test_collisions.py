@@ -8,7 +8,8 @@ from typer.testing import CliRunner
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.run import Command, run_command
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_command
 
 CFG = load_config()
 runner = CliRunner()

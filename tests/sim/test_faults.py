@@ -11,13 +11,14 @@ from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.sim.faults import FaultError, kind_names, parse_fault, parse_faults
 from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.run import Command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_mission
 
 CFG = load_config()
 
 
 def _run(faults, firmware="improved", duration_s=4.0, speed=0.5, sensors=False, steps=None, seed=0):
-    options = TwinOptions(world="empty", firmware=firmware, sensors=sensors, seed=seed,
+    options = TwinOptions(world="empty", firmware=firmware, sensors=("imu", "lidar") if sensors else (), seed=seed,
                           faults=parse_faults(faults, sensors=sensors))
     return run_mission(CFG, steps or [(0.0, Command("linear", speed_m_s=speed))], duration_s, options)
 

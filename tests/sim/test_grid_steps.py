@@ -17,6 +17,7 @@ from amr_twin.model.config import load_config
 from amr_twin.sim.grid_steps import GridRows, gather, grid_stepper
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.base.native_build import address, mujoco_address
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None,
                                 reason="no C compiler")
@@ -38,10 +39,11 @@ def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
 
     monkeypatch.setattr(grid_steps.GridStepper, "run", run)
     twin = Twin(cfg or load_config(), options)
+    attach_recorder(twin)
     support = twin.rolling.support_rows(20_000)
     twin.samplers.append(support)
     script(twin)
-    d, s = twin.physics.data, twin.recorder.series()
+    d, s = twin.physics.data, recorder_of(twin).series()
     state = {"qpos": d.qpos.copy(), "qvel": d.qvel.copy(), "time": d.time, "t_phys_us": twin.t_phys_us,
              "halted": twin.halted, "soc": twin.plant.battery.soc, "t_s": s.t_s, "rows": support.take(),
              "angle": s.wheel_angle_rad, "rpm": s.true_rpm, "pose": s.pose, "pwm": s.pwm_counts,
@@ -151,7 +153,8 @@ def test_with_the_imu_and_lidar_the_grid_in_c_gives_the_same_messages(monkeypatc
         calls = []
         real = grid_steps.GridStepper.run
         monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])
-        twin = Twin(HEAVY_REAR, TwinOptions(sensors=True, visuals=False, start_xy_yaw=None))
+        twin = Twin(HEAVY_REAR, TwinOptions(sensors=("imu", "lidar"), visuals=False, start_xy_yaw=None))
+        attach_recorder(twin)
         msgs = []
         for topic, values in (("imu/data_raw", lambda m: (m.angular_velocity, m.linear_acceleration)),
                               ("imu/mag", lambda m: (m.magnetic_field,)),
@@ -310,7 +313,8 @@ def test_with_actors_the_grid_in_c_gives_the_python_loops_bits(monkeypatch):
         calls = []
         real = grid_steps.GridStepper.run
         monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])
-        twin = Twin(load_config(), TwinOptions(sensors=True, visuals=False, start_xy_yaw=None, actors=actors))
+        twin = Twin(load_config(), TwinOptions(sensors=("imu", "lidar"), visuals=False, start_xy_yaw=None, actors=actors))
+        attach_recorder(twin)
         assert twin.actors.engine == ("C" if native else "Python (native=False)")
         msgs = []
         twin.bus.subscribe("actors/poses", lambda m: msgs.append([(p.position.x, p.position.y, p.orientation.z,

@@ -14,7 +14,9 @@ from amr_twin.model.config import load_config
 from amr_twin.controllers.diff_drive import DiffDriveNode
 from amr_twin.sim.loop import Twin, TwinOptions
 from amr_twin.ros.geometry_messages import Twist, Vector3
-from amr_twin.sim.run import Command, run_command, run_mission
+from amr_twin.sim.command import Command
+from amr_twin.recording.run import run_command, run_mission
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 FIRMWARES = ("faithful", "improved")
 
@@ -55,10 +57,11 @@ def test_three_turns_in_place_odometry_yaw(cfg, firmware, tolerance_deg):
 
 def test_cmd_vel_timeout_stops_the_wheels_in_the_twin(cfg):
     twin = Twin(cfg, TwinOptions(firmware="improved"))
+    attach_recorder(twin)
     node = DiffDriveNode(twin.bus, twin.clock, client=twin.client, cmd_timeout_s=0.5)
     twin.bus.publish("cmd_vel", Twist(Vector3(0.5, 0.0, 0.0), Vector3(0.0, 0.0, 0.0)))
     twin.advance(2.0)
-    s = twin.recorder.series()
+    s = recorder_of(twin).series()
     assert node.timed_out
     (t0, first), (t1, last) = s.commands[0], s.commands[-1]
     assert first[0] == 1.0 and first[1] == pytest.approx(38.197, abs=1e-3)

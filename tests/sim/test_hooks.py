@@ -12,6 +12,7 @@ from amr_twin.model.config import load_config
 from amr_twin.recording.recorder import RAD_S_TO_RPM
 from amr_twin.sim.hooks import HOOKS
 from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 ROOT = Path(__file__).resolve().parents[2]
 CONSUMERS = ("amr_twin/recording", "amr_twin/live", "amr_twin/ros1", "amr_twin/sim/fault_injector.py")
@@ -85,7 +86,8 @@ def test_the_firmware_protocol_declares_what_the_loop_calls():
 @pytest.fixture(scope="module")
 def hooked():
     """A 1.2 s run with a subscriber on each hook, and the twin (its recorder subscribed first)."""
-    twin = Twin(load_config(), TwinOptions(world="empty", sensors=True))
+    twin = Twin(load_config(), TwinOptions(world="empty", sensors=("imu", "lidar")))
+    attach_recorder(twin)
     seen = {name: [] for name in HOOKS}
     twin.on_grid(lambda t_us: seen["on_grid"].append((t_us, twin.observables.loop_sensors())))
     twin.on_grid_rows(lambda t_us, rows: seen["on_grid_rows"].extend(zip(t_us, rows)))
@@ -101,7 +103,7 @@ def hooked():
 
 def test_grid_hooks_see_every_record_instant_with_the_recorder_rows(hooked):
     twin, seen = hooked
-    series = twin.recorder.series()
+    series = recorder_of(twin).series()
     grid = seen["on_grid"]
     assert [t for t, _ in grid] == list(range(10_000, 1_200_001, 10_000))
     assert [t for t, _ in seen["on_grid_rows"]] == [t for t, _ in grid]
@@ -116,7 +118,7 @@ def test_actuation_hook_fires_when_the_drive_changes_and_matches_the_recorder(ho
     acts = seen["on_actuation"]
     pwm = [row[0] for _, row in acts]
     assert max(pwm) > 0 and pwm[-1] == 0  # drove, then stopped
-    series = twin.recorder.series()
+    series = recorder_of(twin).series()
     act_t = np.array([t for t, _ in acts])
     for i, t_s in enumerate(series.t_s):  # the recorder pairs each grid row with the drive in force then
         k = np.searchsorted(act_t, round(t_s * 1e6), side="left") - 1

@@ -5,6 +5,7 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 SENSOR_TOPICS = ("odom", "tf", "imu/data_raw", "imu/mag", "scan")
 
@@ -15,7 +16,8 @@ def cfg():
 
 
 def _run(cfg, subscribe: bool, duration_s: float = 1.5):
-    twin = Twin(cfg, TwinOptions(sensors=True, world="empty"))
+    twin = Twin(cfg, TwinOptions(sensors=("imu", "lidar"), world="empty"))
+    attach_recorder(twin)
     taps = []
     twin.bus.add_tap(lambda topic, msg, t_us: taps.append((topic, t_us, msg)))
     if subscribe:  # zero-latency subscribers: every publishing event becomes a sync point
@@ -33,7 +35,7 @@ def test_subscribers_force_sync_points_but_the_run_is_bit_identical(cfg):
     free, free_taps, free_chunks = _run(cfg, subscribe=False)
     synced, synced_taps, synced_chunks = _run(cfg, subscribe=True)
     assert len(free_chunks) < len(synced_chunks) / 3  # odometry, IMU, LiDAR did not stop the physics
-    a, b = free.recorder.series(), synced.recorder.series()
+    a, b = recorder_of(free).series(), recorder_of(synced).series()
     for name in ("t_s", "true_rpm", "pose", "pwm_counts", "odom"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert [(t, u) for t, u, _ in free_taps] == [(t, u) for t, u, _ in synced_taps]
@@ -48,7 +50,7 @@ def test_sensor_messages_are_delivered_at_their_instants(cfg):
     imu = [(t_us, m.header.stamp.to_us()) for topic, t_us, m in taps if topic == "imu/data_raw"]
     assert [t for t, _ in imu] == [s for _, s in imu] == list(range(0, 500_001, 10_000))
     scans = [(t_us, m.header.stamp.to_us()) for topic, t_us, m in taps if topic == "scan"]
-    lidar = twin.lidar
+    lidar = twin.sensors["lidar"]
     # stamp = first beam; delivered at the first 20 ms pose sample at or after the last beam
     last_beam = lidar.scan_us - lidar.beam_dt_us  # stamped at the rotation's last beam (the A1 spins clockwise)
     assert scans == [(200_000, last_beam), (380_000, lidar.scan_us + last_beam)]
@@ -57,20 +59,22 @@ def test_sensor_messages_are_delivered_at_their_instants(cfg):
 def test_a_subscriber_acting_on_odometry_acts_at_its_time(cfg):
     def reacting():
         twin = Twin(cfg, TwinOptions(world="empty"))
+        attach_recorder(twin)
         def on_odom(msg):
             if msg.header.stamp.to_us() == 1_060_000:  # between firmware timer ticks
                 twin.client.linear(0.3)
         twin.bus.subscribe("odom", on_odom)
         twin.advance(2.0)
-        return twin.recorder.series()
+        return recorder_of(twin).series()
 
     def by_hand():
         twin = Twin(cfg, TwinOptions(world="empty"))
+        attach_recorder(twin)
         twin.bus.subscribe("odom", lambda msg: None)
         twin.advance(1.06)
         twin.client.linear(0.3)
         twin.advance(0.94)
-        return twin.recorder.series()
+        return recorder_of(twin).series()
 
     a, b = reacting(), by_hand()
     assert a.commands == b.commands and a.commands[0][0] == pytest.approx(1.06)
@@ -93,9 +97,10 @@ def test_without_the_odometry_node_the_drive_is_the_same_to_the_bit(cfg, firmwar
     series = {}
     for odometry in (True, False):
         twin = Twin(cfg, TwinOptions(world="empty", firmware=firmware, odometry=odometry))
+        attach_recorder(twin)
         twin.client.angular(60.0, -1.0)
         twin.advance(2.0)
-        series[odometry] = twin.recorder.series()
+        series[odometry] = recorder_of(twin).series()
     on, off = series[True], series[False]
     assert len(on.odom) > 50 and len(off.odom) == 0
     for name in ("pose", "pwm_counts", "current_a", "battery_v"):
@@ -113,6 +118,7 @@ def test_without_the_robot_visuals_the_run_is_the_same_to_the_bit(cfg):
     for visuals in (True, False):
         twin = Twin(load_config(overrides={"payload.mass_kg": 30.0}),
                     TwinOptions(world="warehouse", start_xy_yaw=(-8.0, 0.5, 0.5), visuals=visuals))
+        attach_recorder(twin)
         twin.client.linear(0.7)
         twin.advance(1.5)
         twin.client.angular(-60.0, 0.0)
@@ -122,7 +128,7 @@ def test_without_the_robot_visuals_the_run_is_the_same_to_the_bit(cfg):
     assert off.physics.model.ngeom < on.physics.model.ngeom - 30
     assert on.physics.data.ncon == off.physics.data.ncon >= 6
     for name in ("pose", "true_rpm", "pwm_counts", "current_a", "battery_v"):
-        np.testing.assert_array_equal(getattr(on.recorder.series(), name), getattr(off.recorder.series(), name),
+        np.testing.assert_array_equal(getattr(recorder_of(on).series(), name), getattr(recorder_of(off).series(), name),
                                       err_msg=name)
     np.testing.assert_array_equal(on.physics.data.qvel, off.physics.data.qvel)
     attach(on)
@@ -139,6 +145,7 @@ def test_without_island_discovery_the_run_is_the_same_to_the_bit():
     series = {}
     for islands in (False, True):
         twin = Twin(cfg, TwinOptions(world="empty", visuals=False))
+        attach_recorder(twin)
         flag = int(mujoco.mjtDisableBit.mjDSBL_ISLAND)
         assert twin.physics.model.opt.disableflags & flag
         if islands:
@@ -149,6 +156,6 @@ def test_without_island_discovery_the_run_is_the_same_to_the_bit():
         twin.advance(1.0)
         twin.client.stop()
         twin.advance(0.5)
-        series[islands] = twin.recorder.series()
+        series[islands] = recorder_of(twin).series()
     for name in ("pose", "true_rpm", "current_a"):
         np.testing.assert_array_equal(getattr(series[False], name), getattr(series[True], name), err_msg=name)

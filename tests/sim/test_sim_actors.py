@@ -22,7 +22,8 @@ START = (-6.0, 0.0, 0.0)  # the warehouse's: robot front at x = -5.65, laser at 
 
 
 def _twin(actors, sensors=False, **kw):
-    twin = Twin(CFG, TwinOptions(start_xy_yaw=START, sensors=sensors, actors=tuple(actors), visuals=False, **kw))
+    twin = Twin(CFG, TwinOptions(start_xy_yaw=START, sensors=("imu", "lidar") if sensors else (),
+                                 actors=tuple(actors), visuals=False, **kw))
     poses = []
     twin.bus.subscribe("actors/poses", poses.append, queue_size=1000)
     return twin, poses
@@ -109,9 +110,9 @@ def test_the_lidar_sees_a_jacks_pump_not_its_forks(forks_first):
     heading = -1.0 if forks_first else 1.0  # forks lead: its first segment's direction is where they point
     jack = Actor("pallet_jack", ((-3.5, 0.0), (-3.5 + heading, 0.0)), 1.0, start_s=1e5)
     twin, _ = _twin([jack], sensors=True)
-    ranges = twin.lidar.scan_now()
-    ahead = twin.lidar.n_beams // 2                          # angle 0: straight ahead
-    assert twin.lidar.angles_rad[ahead] == pytest.approx(0.0, abs=1e-12)
+    ranges = twin.sensors["lidar"].scan_now()
+    ahead = twin.sensors["lidar"].n_beams // 2                          # angle 0: straight ahead
+    assert twin.sensors["lidar"].angles_rad[ahead] == pytest.approx(0.0, abs=1e-12)
     laser_x = twin.physics.site_position_m("amr/laser")[0]
     pump_centre = -3.5 - heading * (J.length_m / 2 - J.pump_radius_m)
     want = pump_centre - J.pump_radius_m - laser_x

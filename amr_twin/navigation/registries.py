@@ -10,7 +10,6 @@ its module, e.g. ``CONTROLLERS.register("straight", factory)``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from amr_twin.base.registry import Registry
 from amr_twin.navigation.interfaces import (LocalController, LocalisationSource, Planner,
@@ -24,7 +23,7 @@ parameter file's ``navigation`` section)."""
 PLANNERS: Registry[Callable[..., Planner]] = Registry("planner")
 """Global planners: ``factory(costmap, footprint, nav) -> Planner``."""
 LOCALISATIONS: Registry[Callable[[], LocalisationSource]] = Registry("--localisation")
-"""Localisation sources: ``factory() -> LocalisationSource``."""
+"""Localisation sources: ``factory() -> LocalisationSource`` (a class that subclasses it)."""
 RECOVERIES: Registry[Callable[..., RecoveryBehaviour]] = Registry("recovery")
 """Recoveries: ``factory(costmap, footprint, limits, dt_s, **settings) -> RecoveryBehaviour``."""
 ROUND_ROBIN = ("clear_costmaps", "spin", "wait", "backup")
@@ -78,39 +77,45 @@ def _grid(costmap, footprint, nav):
                          footprint_clearance_m=p.footprint_clearance_m, lead_m=p.lead_m)
 
 
-@dataclass(frozen=True)
-class OdometryTopic(LocalisationSource):
-    """A localisation read from ``topic`` (a
-    :class:`~amr_twin.navigation.interfaces.LocalisationSource`)."""
-
-    topic: str
-    in_map: bool = True
-    exact: bool = False
-    takes_matches: bool = False
-
-
 @LOCALISATIONS.register("truth")
-def _truth() -> OdometryTopic:
+class GroundTruthSource(LocalisationSource):
     """the twin's ground truth
 
     A perfect localiser (as Gazebo's p3d plug-in): isolates the planner and the controller."""
-    return OdometryTopic("ground_truth/odom", exact=True)
+
+    topic, exact = "ground_truth/odom", True
+
+    def attach(self, twin, cfg) -> None:
+        """The twin's true pose on :attr:`topic` (sensors/ground_truth.py)."""
+        from amr_twin.sensors.ground_truth import GroundTruth
+
+        twin.ground_truth = GroundTruth(twin.physics, twin.clock, twin.bus)
 
 
 @LOCALISATIONS.register("ekf")
-def _ekf() -> OdometryTopic:
+class EkfSource(LocalisationSource):
     """odometry + gyro + UWB, held to the map
 
     The EKF of amr_twin/estimation/ekf.py in ``map``; it takes the scan-to-map match in."""
-    return OdometryTopic("odometry/filtered", takes_matches=True)
+
+    topic, takes_matches = "odometry/filtered", True
+
+    def attach(self, twin, cfg) -> None:
+        """The EKF on the bus, with the twin's UWB tag (added if the twin has none)."""
+        from amr_twin.estimation.ekf import EkfNode
+
+        uwb = (twin.sensors.get("uwb") or twin.add_sensor("uwb")).cfg  # ranges to the anchors
+        twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True,
+                           use_uwb=True, uwb=uwb, initial_pose=twin.start_xy_yaw, bus=twin.bus)
 
 
 @LOCALISATIONS.register("odom")
-def _odom() -> OdometryTopic:
+class WheelOdometrySource(LocalisationSource):
     """wheel odometry alone
 
-    In ``odom``, which starts at the start pose."""
-    return OdometryTopic("odom", in_map=False)
+    In ``odom``, which starts at the start pose; the diff-drive node publishes it."""
+
+    topic, in_map = "odom", False
 
 
 @RECOVERIES.register("clear_costmaps")

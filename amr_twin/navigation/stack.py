@@ -134,18 +134,8 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
     make_controller = CONTROLLERS.get(options.controller)
     if drive:
         DiffDriveNode(twin.bus, twin.clock, twin.client)
-    start = twin.start_xy_yaw
-    if options.localisation == "truth":
-        from amr_twin.sensors.ground_truth import GroundTruth
-        twin.ground_truth = GroundTruth(twin.physics, twin.clock, twin.bus)
-    elif options.localisation == "ekf":
-        from amr_twin.estimation.ekf import EkfNode
-
-        uwb = (twin.sensors.get("uwb") or twin.add_sensor("uwb")).cfg  # the tag ranging to the world's anchors
-        twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=True, uwb=uwb,
-                           initial_pose=start, bus=twin.bus)
-    source.attach(twin, cfg)   # a plug-in's estimator (the built-ins' are started above)
-    pose_source = PoseSource(twin.bus, source.topic, (0.0, 0.0, 0.0) if source.in_map else start)
+    source.attach(twin, cfg)   # the estimator that publishes its topic
+    pose_source = PoseSource(twin.bus, source.topic, (0.0, 0.0, 0.0) if source.in_map else twin.start_xy_yaw)
     nav, footprint = cfg.navigation, robot_footprint(cfg)
     costmap = make_costmap(static, footprint, nav)
     limits = Limits(**nav.limits.model_dump())

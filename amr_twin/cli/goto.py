@@ -26,6 +26,7 @@ from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.goto_console import EXIT_CANCELED, GotoConsole
 from amr_twin.cli.goto_report import clearance, report
 from amr_twin.cli.options import RunOptions, shared
+from amr_twin.navigation.registries import CONTROLLERS, LOCALISATIONS, help_text
 
 EXIT_NOT_REACHED = 5
 EXIT_COLLISION = 4
@@ -70,14 +71,14 @@ def _checked(cfg, opts, goals, nav: dict):
 
     from amr_twin.model.worlds import MapError, default_start
     from amr_twin.navigation.footprint import robot_footprint
-    from amr_twin.navigation.localisation import SOURCES
     from amr_twin.navigation.planner import GlobalPlanner
-    from amr_twin.navigation.stack import CONTROLLERS, load_static_map, make_costmap
+    from amr_twin.navigation.stack import load_static_map, make_costmap
 
-    if nav["localisation"] not in SOURCES:
-        fail(f"--localisation {nav['localisation']!r}: must be one of {', '.join(SOURCES)}")
-    if nav["controller"] not in CONTROLLERS:
-        fail(f"--controller {nav['controller']!r}: must be one of {', '.join(CONTROLLERS)}")
+    for registry, key in ((LOCALISATIONS, "localisation"), (CONTROLLERS, "controller")):
+        try:
+            registry.get(nav[key])
+        except ValueError as exc:
+            fail(str(exc))
     if nav.get("map") and not Path(nav["map"]).is_file():
         fail(f"--map {nav['map']}: no such file (a map_server YAML next to its PGM)")
     try:
@@ -220,9 +221,8 @@ def goto(opts: RunOptions, ctx: typer.Context,
          goal: Optional[str] = typer.Option(None, "--goal", help="X_M,Y_M[,YAW_DEG] in the map frame (REP-103)."),
          map_: Optional[Path] = typer.Option(None, "--map", help="A map_server YAML (a map the fusion experiment "
                                              "saved, an imported ROS map); default: the world's true map."),
-         localisation: str = typer.Option("ekf", "--localisation", help="truth (the twin's ground truth), ekf "
-                                          "(odometry + gyro + UWB, held to the map) or odom (wheel odometry alone)."),
-         controller: str = typer.Option("mppi", "--controller", help="mppi or rpp (regulated pure pursuit)."),
+         localisation: str = typer.Option("ekf", "--localisation", help=f"{help_text(LOCALISATIONS)}."),
+         controller: str = typer.Option("mppi", "--controller", help=f"{help_text(CONTROLLERS)}."),
          xy_tolerance_m: Optional[float] = typer.Option(
              None, "--xy-tolerance-m", help=f"Goal tolerance, m: the true pose must end this close to the goal "
              f"(default {GOTO_DEFAULTS['xy_tolerance_m']:g}, navigation.navigator.xy_tolerance_m)."),

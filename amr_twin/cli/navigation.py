@@ -14,6 +14,7 @@ import typer
 from amr_twin.cli.checks import JobsOpt, YesOpt, check_common, check_estimate, check_executor, check_outputs, dask_client
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, checked_seed, firmware_option
+from amr_twin.navigation.registries import CONTROLLERS, LOCALISATIONS
 
 MAX_EPISODES = 1000
 EPISODE_SIM_S = 70.0
@@ -42,8 +43,8 @@ def navigation(
     people: str = typer.Option("walking", "--people", help="The person scenario: static (standing in an aisle), "
                                "walking (an actor crossing the aisle ahead of the robot, amr_twin/model/actors.py), "
                                "crossing (the same, not giving way) or none (no person, no pallet jack)."),
-    localisation: str = typer.Option("ekf", "--localisation", help="truth, ekf or odom."),
-    controller: str = typer.Option("mppi", "--controller", help="mppi or rpp."),
+    localisation: str = typer.Option("ekf", "--localisation", help=f"{LOCALISATIONS.choices()}."),
+    controller: str = typer.Option("mppi", "--controller", help=f"{CONTROLLERS.choices()}."),
     firmware: str = firmware_option("improved"),
     jobs: Optional[int] = JobsOpt,
     executor: str = typer.Option("local", "--executor", help="local (process pool of --jobs) or dask."),
@@ -55,8 +56,6 @@ def navigation(
 ) -> None:
     """Navigate seeded start/goal pairs, some with an unmapped person or pallet jack, on the true and SLAM maps."""
     from amr_twin.model.worlds import world_path
-    from amr_twin.navigation.localisation import SOURCES
-    from amr_twin.navigation.stack import CONTROLLERS
 
     jobs, firmware = check_common(jobs, firmware, fail)
     checked_seed(seed, fail)  # -1 failed in numpy ("expected non-negative integer"), naming no option
@@ -71,10 +70,11 @@ def navigation(
         fail(f"--people {people!r}: static, walking, crossing or none")
     if halls and kinds != ("true",):
         fail(f"--maps {maps}: a generated hall has no mapping drive to build a SLAM map from: give --maps true")
-    if localisation not in SOURCES:
-        fail(f"--localisation {localisation!r}: must be one of {', '.join(SOURCES)}")
-    if controller not in CONTROLLERS:
-        fail(f"--controller {controller!r}: must be one of {', '.join(CONTROLLERS)}")
+    for registry, name in ((LOCALISATIONS, localisation), (CONTROLLERS, controller)):
+        try:
+            registry.get(name)
+        except ValueError as exc:
+            fail(str(exc))
     if not halls and (not world_path(world).is_file()
                       or world_path(world).suffix.lower() not in (".xml", ".yaml", ".yml")):
         fail(f"--world {world}: not a world of models/worlds/, an MJCF .xml file nor a ROS map .yaml")

@@ -1,8 +1,9 @@
 """Where the navigator thinks the robot is: the localisation the user picks, read from the bus.
 
 :class:`PoseSource` subscribes to a ``nav_msgs/Odometry`` topic of the fusion stack or the
-ground truth (:data:`SOURCES`), composes it with a fixed ``map -> frame`` transform when the
-topic's frame is not ``map`` (the wheel odometry's ``odom`` starts at the start pose), and keeps
+ground truth (a source of :data:`~amr_twin.navigation.registries.LOCALISATIONS`), composes it
+with a fixed ``map -> frame`` transform when the topic's frame is not ``map`` (the wheel
+odometry's ``odom`` starts at the start pose), and keeps
 a short history so that each beam of a scan can be placed at the pose of its own instant
 (:meth:`PoseSource.scan_in_map`; a rotation of the RPLIDAR takes 0.18 s, in which the robot moves
 up to 0.15 m).
@@ -18,10 +19,6 @@ import numpy as np
 from amr_twin.analysis import se2
 from amr_twin.navigation.kinematics import wrap
 
-SOURCES = {"truth": "ground_truth/odom", "ekf": "odometry/filtered", "odom": "odom"}
-"""Localisation choices and their topics: the twin's ground truth (a perfect localiser, as Gazebo's
-p3d plugin: isolates the planner), the EKF of odometry, gyro and UWB (amr_twin/estimation/ekf.py, frame
-``map``), the wheel odometry alone (frame ``odom``)."""
 HISTORY_S = 1.0
 
 

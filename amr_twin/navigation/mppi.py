@@ -10,12 +10,12 @@ from pathlib import Path
 
 import numpy as np
 
+from amr_twin.base.native_build import address, c_array, open_helper
 from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint
+from amr_twin.navigation.interfaces import LocalController, Twist2D
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.path_handler import PathHandler
-from amr_twin.navigation.rpp import Twist2D
-from amr_twin.base.native_build import address, c_array, open_helper
 
 C_SOURCE = Path(__file__).with_name("mppi_critics.c")
 PARAMS = ("cx0", "cx1", "r", "margin", "collision", "obstacle", "align", "progress", "goal", "forward", "social",
@@ -41,7 +41,7 @@ def _declare(lib) -> None:
         raise RuntimeError(f"{C_SOURCE.name} takes {lib.mppi_params_size()} parameters, mppi.py {len(PARAMS)}")
 
 
-class Mppi:
+class Mppi(LocalController):
     """MPPI local controller (module docstring). ``seed``: the noise stream (same seed, same commands).
     ``native=False``: the NumPy critics rather than their C twin (:attr:`engine` says which run).
 

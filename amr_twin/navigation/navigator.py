@@ -12,13 +12,13 @@ import numpy as np
 
 from amr_twin.estimation.ekf import POSE_TOPIC
 from amr_twin.navigation.collision_monitor import CollisionMonitor
+from amr_twin.navigation.interfaces import LocalController, Planner
 from amr_twin.navigation.kinematics import Limits, rotation_rate, to_map, wrap
 from amr_twin.navigation.map_matching import MapMatcher
 from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
-from amr_twin.navigation.planner import GlobalPlanner
 from amr_twin.navigation.progress import ProgressChecker
-from amr_twin.navigation.recoveries import ROUND_ROBIN
+from amr_twin.navigation.registries import RECOVERIES, ROUND_ROBIN
 from amr_twin.navigation.yielding import Yielding
 from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped, Twist, Vector3
 
@@ -62,11 +62,11 @@ class GoalOutcome:
 class Navigator:
     """Drive to each goal ``(x_m, y_m, yaw_rad or None)`` in turn (module docstring), from ``start_s``."""
 
-    def __init__(self, bus, clock, pose_source, costmap, planner: GlobalPlanner, controller, footprint,
+    def __init__(self, bus, clock, pose_source, costmap, planner: Planner, controller: LocalController, footprint,
                  limits: Limits, goals, params: NavParams = NavParams(), outputs=None, start_s: float = 0.0, *,
                  monitor: CollisionMonitor | None = None, tracker: PeopleTracker | None = None,
                  progress: ProgressChecker | None = None, recovery_settings: dict | None = None,
-                 matcher: MapMatcher | None = None, yielding: Yielding | None = None):
+                 matcher: MapMatcher | None = None, yielding: Yielding | None = None, recoveries: tuple = ROUND_ROBIN):
         self.bus, self.clock, self.pose_source = bus, clock, pose_source
         self.yielding = yielding
         """Keeps the robot out of people's predicted paths (:class:`~amr_twin.navigation.yielding.Yielding`), or None."""
@@ -78,6 +78,8 @@ class Navigator:
         self.progress = progress if progress is not None else ProgressChecker()
         self.recovery_settings = recovery_settings or {}
         """Each recovery's settings by its name (``spin``: ``angle_rad``, ...)."""
+        self.recoveries = tuple((name, RECOVERIES.get(name)) for name in recoveries)
+        """The recoveries' names and factories, in the round robin's order (:mod:`.registries`)."""
         self.outcomes = [GoalOutcome(tuple(g)) for g in goals]
         self.controller_cpu_s: list[float] = []
         self.commands: list[tuple] = []    # (t_s, v, w) published
@@ -131,8 +133,7 @@ class Navigator:
         for later in self.outcomes[self._goal_i:]:
             later.status, later.reason = queued, reason
         self._goal_i = len(self.outcomes)
-        if hasattr(self.controller, "reset"):
-            self.controller.reset()
+        self.controller.reset()
 
     @property
     def active(self) -> GoalOutcome | None:
@@ -237,16 +238,15 @@ class Navigator:
             self._finish("aborted", f"goal ({g[0]:.2f}, {g[1]:.2f}) not reached: {why} "
                                     f"(after {self.p.max_failures} recoveries)")
             return
-        kind = ROUND_ROBIN[self._rr % len(ROUND_ROBIN)]
+        name, make = self.recoveries[self._rr % len(self.recoveries)]
         self._rr += 1
-        self._recovery = kind(self.costmap, self.footprint, self.limits, self.dt_s,
-                              **self.recovery_settings.get(kind.name, {}))
+        self._recovery = make(self.costmap, self.footprint, self.limits, self.dt_s,
+                              **self.recovery_settings.get(name, {}))
         self._recovery.start(self.clock.now_s, self.pose_source.pose())
-        out.recoveries.append((self.clock.now_s, kind.name, why))
+        out.recoveries.append((self.clock.now_s, name, why))
         self._blocked_since = None
         self.progress.reset()
-        if hasattr(self.controller, "reset"):
-            self.controller.reset()
+        self.controller.reset()
 
     def _plan_stale(self, pose) -> bool:
         """Whether a new plan could differ: the costmap changed since the last one, or the robot left it by more
@@ -365,14 +365,11 @@ class Navigator:
         err = float(wrap(heading - pose[2]))
         if path.remaining_m > 0.3 and (abs(err) > self.p.rotate_to_path_rad or
                                        (abs(err) > 0.15 and abs(vel[0]) < 0.02 and vel[1] != 0.0)):
-            if hasattr(self.controller, "reset"):
-                self.controller.reset()
+            self.controller.reset()
             return lim.ramp(0.0, rotation_rate(err, lim, vel[1], self.dt_s), *vel, self.dt_s)
         t0 = time.process_time()
-        if getattr(self.controller, "sees_people", False):
-            cmd = self.controller.command(pose, vel, path, self.people, now)
-        else:  # RPP: the collision monitor's people zones alone
-            cmd = self.controller.command(pose, vel, path)
+        people = self.people if self.controller.sees_people else NOBODY  # else the monitor's people zones alone
+        cmd = self.controller.command(pose, vel, path, people, now)
         self.controller_cpu_s.append(time.process_time() - t0)
         if cmd.blocked:
             self._blocked_since = now if self._blocked_since is None else self._blocked_since

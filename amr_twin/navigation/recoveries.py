@@ -3,36 +3,25 @@
 Each is a small state machine: :meth:`start` it at the robot's pose, then call :meth:`step`
 every control cycle for a twist until it reports done (or failed). Spin and back-up check the
 footprint against the costmap before each step (nav2 checks ``simulate_ahead_time`` ahead) and
-stop, failed, rather than hit something: a recovery must not be the cause of a collision.
-:data:`ROUND_ROBIN` is the order nav2's ``RoundRobin`` node runs them in, one per failure.
+stop, failed, rather than hit something: a recovery must not be the cause of a collision. They are
+registered by name in :data:`~amr_twin.navigation.registries.RECOVERIES`, where
+:data:`~amr_twin.navigation.registries.ROUND_ROBIN` is the order nav2's ``RoundRobin`` node runs them in.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint
+from amr_twin.navigation.interfaces import RecoveryBehaviour, Step
 from amr_twin.navigation.kinematics import Limits, arc_poses, rotation_rate, to_map, wrap
 
 
-@dataclass
-class Step:
-    """One cycle of a recovery: the twist, and whether it has ended (and how)."""
-
-    v_m_s: float = 0.0
-    w_rad_s: float = 0.0
-    done: bool = False
-    failed: bool = False
-
-
-class Recovery:
-    """Base: a named behaviour on a costmap, with the robot's footprint and limits."""
-
-    name = "recovery"
+class Recovery(RecoveryBehaviour):
+    """Base: a behaviour on a costmap, with the robot's footprint and limits."""
 
     def __init__(self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, **settings):
         """``settings``: the class's own (``angle_rad``, ``duration_s``, ``distance_m``, ``speed_m_s``) for this one."""
@@ -58,8 +47,6 @@ class Recovery:
 class ClearCostmaps(Recovery):
     """nav2's ClearEntireCostmap (local and global): the obstacle layer forgotten, at once."""
 
-    name = "clear_costmaps"
-
     def step(self, t_s, pose, velocity) -> Step:
         self.costmap.clear()
         return Step(done=True)
@@ -68,7 +55,6 @@ class ClearCostmaps(Recovery):
 class Spin(Recovery):
     """nav2's Spin: turn in place by ``angle_rad`` (counter-clockwise), checking the footprint ahead."""
 
-    name = "spin"
     angle_rad = math.pi / 2
 
     def step(self, t_s, pose, velocity) -> Step:
@@ -86,7 +72,6 @@ class Spin(Recovery):
 class Wait(Recovery):
     """nav2's Wait: stand for ``duration_s`` (a person may walk on)."""
 
-    name = "wait"
     duration_s = 5.0
 
     def step(self, t_s, pose, velocity) -> Step:
@@ -97,7 +82,6 @@ class Wait(Recovery):
 class BackUp(Recovery):
     """nav2's BackUp: reverse ``distance_m`` at ``speed_m_s``, checking the footprint behind."""
 
-    name = "backup"
     distance_m, speed_m_s = 0.3, 0.1
 
     def step(self, t_s, pose, velocity) -> Step:
@@ -107,7 +91,3 @@ class BackUp(Recovery):
         if not self.free(arc_poses(*pose, -self.speed_m_s, 0.0, 0.1, 10)):
             return Step(*self.limits.ramp(0.0, 0.0, *velocity, self.dt_s), done=True, failed=True)
         return Step(*self.limits.ramp(-self.speed_m_s, 0.0, *velocity, self.dt_s))
-
-
-ROUND_ROBIN = (ClearCostmaps, Spin, Wait, BackUp)
-"""nav2's default recovery order."""

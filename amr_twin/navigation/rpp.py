@@ -19,27 +19,18 @@ Reconstructed from the paper's description and nav2's parameter documentation, n
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint
+from amr_twin.navigation.interfaces import LocalController, Twist2D
 from amr_twin.navigation.kinematics import Limits, arc_poses, rotation_rate, to_map
 from amr_twin.navigation.path_handler import PathHandler
 
 
-@dataclass(frozen=True)
-class Twist2D:
-    """A command ``(v_m_s, w_rad_s)`` and whether the controller saw a collision ahead."""
-
-    v_m_s: float
-    w_rad_s: float
-    blocked: bool = False
-
-
-class RegulatedPurePursuit:
-    """nav2's Regulated Pure Pursuit (module docstring) on a :class:`Costmap`."""
+class RegulatedPurePursuit(LocalController):
+    """nav2's Regulated Pure Pursuit (module docstring) on a :class:`Costmap`; it does not see people."""
 
     def __init__(self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, *,
                  lookahead_time_s: float = 1.5, min_lookahead_m: float = 0.4, max_lookahead_m: float = 1.0,
@@ -69,8 +60,9 @@ class RegulatedPurePursuit:
         pts = to_map(poses, self.outline).reshape(-1, 2)
         return bool((self.costmap.distance_at(pts) <= 0.0).any())
 
-    def command(self, pose, velocity, path: PathHandler) -> Twist2D:
-        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w)."""
+    def command(self, pose, velocity, path: PathHandler, people=None, t_s: float = 0.0) -> Twist2D:
+        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w); ``people``
+        and ``t_s`` are not used."""
         x, y, yaw = (float(v) for v in pose)
         v_prev, w_prev = (float(v) for v in velocity)
         lim = self.limits

@@ -3,9 +3,11 @@
 :func:`true_map` and :func:`load_static_map` give the static layer's map (the world's true map, or
 a map_server YAML: a map the fusion experiment saved, an imported ROS map). :func:`attach` puts
 on a running twin's bus what a ROS graph of the robot would run: the cmd_vel diff-drive node, the
-localisation the user picks (ground truth, the EKF of odometry + gyro + UWB with its UWB tag, or
-the wheel odometry alone) and the :class:`~amr_twin.navigation.navigator.Navigator`, which starts
-after ``REST_S`` standing still (the EKF's gyro calibration).
+localisation the user picks (ground truth, the EKF of odometry + gyro + UWB with its UWB tag, the
+wheel odometry alone, or a plug-in's) and the :class:`~amr_twin.navigation.navigator.Navigator` with
+the controller, planner and recoveries named in :class:`NavigationOptions`
+(:mod:`amr_twin.navigation.registries`), which starts after ``REST_S`` standing still (the EKF's
+gyro calibration).
 :func:`navigate` runs a twin through a list of goals and returns a :class:`NavigationRun`.
 """
 
@@ -22,17 +24,17 @@ from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.costmap import Costmap
 from amr_twin.navigation.footprint import Footprint, robot_footprint
 from amr_twin.navigation.kinematics import Limits
-from amr_twin.navigation.localisation import SOURCES, PoseSource
+from amr_twin.navigation.interfaces import LocalisationSource, Planner
+from amr_twin.navigation.localisation import PoseSource
 from amr_twin.navigation.map_matching import MapMatcher
 from amr_twin.navigation.navigator import GoalOutcome, Navigator, NavParams
 from amr_twin.navigation.outputs import NavOutputs
 from amr_twin.navigation.people import PeopleTracker
-from amr_twin.navigation.planner import GlobalPlanner
 from amr_twin.navigation.progress import ProgressChecker
+from amr_twin.navigation.registries import CONTROLLERS, LOCALISATIONS, PLANNERS, ROUND_ROBIN
 from amr_twin.navigation.static_map import StaticMap, world_map, yaml_map
 from amr_twin.navigation.yielding import Yielding
 
-CONTROLLERS = ("mppi", "rpp")
 REST_S = 2.0
 """Standing still before the first goal: the gyro's rest calibration of the EKF (ekf.imu_rest_calibration_s)."""
 RESOLUTION_M = 0.05
@@ -48,7 +50,8 @@ STANDING_RAD_S = 0.05
 
 @dataclass(frozen=True)
 class NavigationOptions:
-    """Goals ``(x_m, y_m, yaw_rad or None)``, the map (None: the world's true map), localisation, controller."""
+    """Goals ``(x_m, y_m, yaw_rad or None)``, the map (None: the world's true map), and the plug-ins by their
+    names in :mod:`amr_twin.navigation.registries`: localisation, controller, planner, recoveries."""
 
     goals: tuple
     map_yaml: str | None = None
@@ -56,6 +59,8 @@ class NavigationOptions:
     controller: str = "mppi"
     seed: int = 0
     timeout_s: float | None = None   # None: time_limit_s's default
+    planner: str = "grid"
+    recoveries: tuple = ROUND_ROBIN   # tried in turn, one per failure
 
 
 @dataclass
@@ -112,30 +117,10 @@ def make_costmap(static: StaticMap, footprint: Footprint, nav) -> Costmap:
                    unknown_is_lethal=False, static_tolerance_m=c.static_tolerance_m)
 
 
-def make_planner(costmap: Costmap, footprint: Footprint, nav) -> GlobalPlanner:
-    """The global planner of the stack on ``costmap``: room to turn the footprint kept, ``nav.planner``'s settings,
-    standing people kept the monitor's ``people_stop_m`` and ``people_margin_m`` more from the robot's sides."""
-    p = nav.planner
-    people_m = nav.people.person_radius_m + nav.monitor.people_stop_m + footprint.inscribed_radius_m + p.people_margin_m
-    return GlobalPlanner(costmap, downsample=p.downsample, cost_weight=p.cost_weight,
-                         turn_room_m=footprint.circumscribed_radius_m, unmapped_pad_m=p.unmapped_pad_m,
-                         people_m=people_m, footprint=footprint, footprint_clearance_m=p.footprint_clearance_m,
-                         lead_m=p.lead_m)
-
-
-def make_controller(kind: str, costmap: Costmap, footprint: Footprint, nav, seed: int = 0):
-    """The local controller ``kind`` (:data:`CONTROLLERS`) with ``nav``'s settings (MPPI's samples, horizon,
-    critics and people; RPP's nav2 defaults)."""
-    from amr_twin.navigation.mppi import Mppi
-    from amr_twin.navigation.rpp import RegulatedPurePursuit
-
-    limits, dt = Limits(**nav.limits.model_dump()), 1.0 / nav.navigator.controller_hz
-    if kind == "rpp":
-        return RegulatedPurePursuit(costmap, footprint, limits, dt)
-    m = nav.mppi.model_dump()
-    return Mppi(costmap, footprint, limits, dt, **{k: v for k, v in m.items() if k != "weights"},
-                weights=m["weights"], person_radius_m=nav.people.person_radius_m,
-                prediction_s=nav.people.horizon_s, seed=seed)
+def make_planner(costmap: Costmap, footprint: Footprint, nav, name: str = "grid") -> Planner:
+    """The global planner ``name`` (:data:`~amr_twin.navigation.registries.PLANNERS`) on ``costmap`` with
+    ``nav``'s settings (``cfg.navigation``)."""
+    return PLANNERS.get(name)(costmap, footprint, nav)
 
 
 def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bool = True,
@@ -145,26 +130,12 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
     messages (:mod:`amr_twin.navigation.outputs`) too."""
     from amr_twin.controllers.diff_drive import DiffDriveNode
 
-    if options.localisation not in SOURCES:
-        raise ValueError(f"localisation: {options.localisation!r} is not one of {', '.join(SOURCES)}")
-    if options.controller not in CONTROLLERS:
-        raise ValueError(f"controller: {options.controller!r} is not one of {', '.join(CONTROLLERS)}")
+    source = LOCALISATIONS.get(options.localisation)()
+    make_controller = CONTROLLERS.get(options.controller)
     if drive:
         DiffDriveNode(twin.bus, twin.clock, twin.client)
-    start = twin.start_xy_yaw
-    frame = (0.0, 0.0, 0.0)
-    if options.localisation == "truth":
-        from amr_twin.sensors.ground_truth import GroundTruth
-        twin.ground_truth = GroundTruth(twin.physics, twin.clock, twin.bus)
-    elif options.localisation == "ekf":
-        from amr_twin.estimation.ekf import EkfNode
-
-        uwb = (twin.sensors.get("uwb") or twin.add_sensor("uwb")).cfg  # the tag ranging to the world's anchors
-        twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=True, uwb=uwb,
-                           initial_pose=start, bus=twin.bus)
-    else:
-        frame = start
-    pose_source = PoseSource(twin.bus, SOURCES[options.localisation], frame)
+    source.attach(twin, cfg)   # the estimator that publishes its topic
+    pose_source = PoseSource(twin.bus, source.topic, (0.0, 0.0, 0.0) if source.in_map else twin.start_xy_yaw)
     nav, footprint = cfg.navigation, robot_footprint(cfg)
     costmap = make_costmap(static, footprint, nav)
     limits = Limits(**nav.limits.model_dump())
@@ -177,7 +148,7 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
                        blocked_s=n.blocked_s, off_path_m=pl.off_path_m,
                        max_failures=n.max_failures,
                        laser_xy_yaw=(float(cfg.components.lidar.pos_m[0]), float(cfg.components.lidar.pos_m[1]), 0.0))
-    controller = make_controller(options.controller, costmap, footprint, nav, options.seed)
+    controller = make_controller(costmap, footprint, nav, options.seed)
     people = nav.people.model_dump()
     radius = people.pop("person_radius_m")
     yielding = make_yielding(footprint, limits, nav, 1.0 / n.controller_hz, people.pop("yielding"))
@@ -187,12 +158,13 @@ def attach(twin, cfg, static: StaticMap, options: NavigationOptions, publish: bo
     recovery_settings = {"spin": {"angle_rad": r.spin_rad}, "wait": {"duration_s": r.wait_s},
                          "backup": {"distance_m": r.backup_m, "speed_m_s": r.backup_m_s}}
     outputs = NavOutputs(twin.bus, twin.clock, costmap, footprint) if publish else None
-    return Navigator(twin.bus, twin.clock, pose_source, costmap, make_planner(costmap, footprint, nav), controller,
-                     footprint, limits, options.goals, params, outputs=outputs, start_s=twin.t_s + REST_S,
+    planner = make_planner(costmap, footprint, nav, options.planner)
+    return Navigator(twin.bus, twin.clock, pose_source, costmap, planner, controller, footprint, limits, options.goals,
+                     params, outputs=outputs, start_s=twin.t_s + REST_S,
                      monitor=monitor, tracker=PeopleTracker(**people),
                      progress=ProgressChecker(n.progress_radius_m, n.progress_time_s),
                      recovery_settings=recovery_settings,
-                     matcher=make_matcher(costmap, nav, options.localisation), yielding=yielding)
+                     matcher=make_matcher(costmap, nav, source), yielding=yielding, recoveries=options.recoveries)
 
 
 def make_yielding(footprint: Footprint, limits: Limits, nav, dt_s: float, y: dict) -> Yielding | None:
@@ -205,13 +177,13 @@ def make_yielding(footprint: Footprint, limits: Limits, nav, dt_s: float, y: dic
                     horizon_s=p.horizon_s, min_speed_m_s=p.min_speed_m_s, **y)
 
 
-def make_matcher(costmap: Costmap, nav, localisation: str) -> MapMatcher | None:
-    """The scan-to-map correction of ``localisation``'s pose (``navigation.map_matching``); none for the
-    ground truth or when disabled."""
+def make_matcher(costmap: Costmap, nav, source: LocalisationSource) -> MapMatcher | None:
+    """The scan-to-map correction of ``source``'s pose (``navigation.map_matching``); none for the
+    true pose or when disabled; fed back only to a source that takes it in (the EKF)."""
     m = nav.map_matching.model_dump()
-    if localisation == "truth" or not m.pop("enabled"):
+    if source.exact or not m.pop("enabled"):
         return None
-    m["feedback"] = m["feedback"] and localisation == "ekf"   # only the EKF takes the match in
+    m["feedback"] = m["feedback"] and source.takes_matches
     return MapMatcher(costmap, **m)
 
 

@@ -17,6 +17,7 @@ from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
 from amr_twin.model.worlds import Obstacle, load_map, wall_boxes, world_path
 from amr_twin.navigation.footprint import robot_footprint
+from amr_twin.navigation.interfaces import LocalController, Twist2D
 from amr_twin.navigation.stack import NavigationOptions, navigate, robot_top_m
 from amr_twin.model.world_geometry import Footprints
 from amr_twin.navigation.static_map import obstacle_boxes, yaml_map
@@ -263,14 +264,11 @@ class _Line:
         return True
 
 
-class _Cruise:
+class _Cruise(LocalController):
     """A controller that drives at 0.5 m/s along the path, slowing to 0.1 m/s in its last 0.5 m."""
 
-    def command(self, pose, vel, path):
-        from types import SimpleNamespace
-
-        v = 0.5 if path.remaining_m > 0.5 else 0.1
-        return SimpleNamespace(v_m_s=v, w_rad_s=0.0, blocked=False)
+    def command(self, pose, vel, path, people, t_s):
+        return Twist2D(0.5 if path.remaining_m > 0.5 else 0.1, 0.0)
 
 
 class _Robot:

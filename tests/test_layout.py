@@ -204,7 +204,8 @@ def test_tests_mirror_the_packages():
     packages = set(SUBPACKAGES) | {"controllers", "sensors", "experiments"}
     folders = {p.name for p in (ROOT / "tests").iterdir() if p.is_dir() and not p.name.startswith((".", "_"))}
     assert folders <= packages, folders - packages
-    loose = sorted(p.name for p in (ROOT / "tests").glob("test_*.py") if p.name != Path(__file__).name)
+    loose = sorted(p.name for p in (ROOT / "tests").glob("test_*.py")
+                   if p.name not in (Path(__file__).name, "test_api.py"))  # test_api: amr_twin/__init__.py
     assert loose == [], f"tests outside the package folders: {loose}"
 
 

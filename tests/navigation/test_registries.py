@@ -6,12 +6,9 @@ import sys
 
 import pytest
 
-from amr_twin.model.config import load_config
-from amr_twin.navigation.interfaces import LocalController, Twist2D
-from amr_twin.navigation.registries import (CONTROLLERS, LOCALISATIONS, PLANNERS, RECOVERIES,
-                                           ROUND_ROBIN)
-from amr_twin.navigation.stack import NavigationOptions, navigate
-from amr_twin.sim.loop import TwinOptions
+from amr_twin import (CONTROLLERS, LOCALISATIONS, LocalController, NavigationOptions, Twist2D, TwinOptions,
+                      load_config, navigate)
+from amr_twin.navigation.registries import PLANNERS, RECOVERIES, ROUND_ROBIN
 
 CFG = load_config()
 TOP_M_S = 0.3

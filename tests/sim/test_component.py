@@ -1,16 +1,14 @@
-"""A third party's sensor: defined here, registered by name, listed in the options, built by the loop."""
+"""A third party's sensor: defined here, registered by name through the public API (amr_twin), listed in the
+options, built by the loop."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from amr_twin.model.config import load_config
-from amr_twin.recording.recorder import attach_recorder
+from amr_twin import SENSORS, Twin, TwinOptions, attach_recorder, load_config
+from amr_twin.sim.component import Mount  # the type of what a factory is handed
 from amr_twin.ros.messages import Float64MultiArray
-from amr_twin.sensors.catalog import SENSORS
-from amr_twin.sim.component import Mount
-from amr_twin.sim.loop import Twin, TwinOptions
 
 TOPIC = "wheel_angles"
 PERIOD_US = 20_000

@@ -10,7 +10,7 @@ from amr_twin.recording.recorder import attach_recorder
 from amr_twin.ros.messages import Float64MultiArray
 from amr_twin.sensors.catalog import SENSORS
 from amr_twin.sim.component import Mount
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 TOPIC = "wheel_angles"
 PERIOD_US = 20_000

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.analysis import calibration_report as cr
-from amr_twin.analysis.calibration import _with
-from amr_twin.analysis.calibration_targets import BENCH_RPM, thesis_residual
+from amr_twin.calibration import report as cr
+from amr_twin.calibration.fit import _with
+from amr_twin.calibration.targets import BENCH_RPM, thesis_residual
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.model.paths import MODEL_DIR

@@ -41,9 +41,9 @@ STATE_ITEM_TOPICS = ("/clock", "/twin/ground_truth", "/joint_states", "/tf")
 
 def live_topics(twin) -> dict[str, str]:
     """Topic -> type of the channels a live twin advertises: the ``.mcap``'s for this twin."""
-    sensors = getattr(twin, "lidar", None) is not None
-    skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
-    if getattr(twin, "uwb", None) is None:
+    built = twin.sensors
+    skip = (set() if "lidar" in built else {"scan"}) | (set() if "imu" in built else {"imu/data_raw", "imu/mag"})
+    if "uwb" not in built:
         skip.add("uwb/range")
     if getattr(twin, "actors", None) is None:
         skip.add("actors/poses")

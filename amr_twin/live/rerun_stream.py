@@ -76,8 +76,8 @@ class RerunSink:
         grid_us = twin.grid_us
         self.period_us = max(grid_us, int(round(1e6 / 30.0 / grid_us)) * grid_us)  # as rerun_capture.Capture's
         self._blueprint = _blueprint
-        self._has_imu = getattr(twin, "imu", None) is not None
-        self._has_uwb = getattr(twin, "uwb", None) is not None
+        self._has_imu = "imu" in twin.sensors
+        self._has_uwb = "uwb" in twin.sensors
         self._has_events = twin.faults is not None
         self.grpc_port = grpc_port or _free_port()
         self.web_port = web_port or _free_port()

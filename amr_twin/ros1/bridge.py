@@ -50,8 +50,8 @@ class Ros1Bridge:
         self._closed = False
         self._from_graph: str | None = None  # the bus topic of a message being handed over from the graph
         self._lock = threading.Lock()
-        sensors = getattr(twin, "lidar", None) is not None
-        skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
+        skip = (set() if "lidar" in twin.sensors else {"scan"}) | (set() if "imu" in twin.sensors
+                                                                    else {"imu/data_raw", "imu/mag"})
         if not firmware_topics:
             skip.update(FIRMWARE_TOPICS)
 
@@ -61,7 +61,7 @@ class Ros1Bridge:
                 return rospy.Publisher(topic, conv.ros_class(typ), queue_size=None, latch=latch)
 
         self.pubs = {bus: pub(topic.lstrip("/"), typ) for bus, (topic, typ, _enc) in BUS_TOPICS.items()
-                     if bus not in skip and not (bus == "uwb/range" and getattr(twin, "uwb", None) is None)}
+                     if bus not in skip and not (bus == "uwb/range" and "uwb" not in twin.sensors)}
         self.pubs["tf_static"] = pub("tf_static", "tf2_msgs/TFMessage", latch=True)
         self.tf = self.pubs["tf"]
         self.map_tf = MapTransform()

@@ -9,10 +9,10 @@ import importlib
 
 _WHERE = {
     "load_config": "amr_twin.model.config",
-    "Twin": "amr_twin.sim.loop",
-    "TwinOptions": "amr_twin.sim.loop",
-    "ParameterSpace": "amr_twin.analysis.uncertainty",
-    "Command": "amr_twin.sim.command",
+    "Twin": "amr_twin.assembly.twin",
+    "TwinOptions": "amr_twin.assembly.twin",
+    "ParameterSpace": "amr_twin.calibration.uncertainty",
+    "Command": "amr_twin.assembly.command",
     "run_command": "amr_twin.recording.run",
     "run_mission": "amr_twin.recording.run",
     "Actor": "amr_twin.model.actors",

@@ -12,7 +12,7 @@ diff_drive_controller, SI units)::
       wheel_separation_m: 0.4861
       source: "amr-twin experiment umbmark, seed 0 (E_d 1.00112, E_b 1.0127)"
 
-``amr-twin run --odometry FILE`` and :class:`~amr_twin.sim.loop.TwinOptions` (``odometry_calibration``)
+``amr-twin run --odometry FILE`` and :class:`~amr_twin.assembly.twin.TwinOptions` (``odometry_calibration``)
 take it; :func:`load` refuses a bad file in one line (ValueError), :func:`text` writes one.
 """
 

@@ -4,7 +4,7 @@ reaches.
 Scenario: the twin benchmark's (:mod:`amr_twin.bench.twin`) with :data:`BENCH_ACTORS` (two people
 and a jack in the side aisles, a person crossing the central aisle beyond the robot's 11 m): in
 the LiDAR's view, touching nothing. With actors the LiDAR casts every 20 ms instead of once a
-rotation (:class:`~amr_twin.sim.loop.Twin`): the ``actors`` figure includes that.
+rotation (:class:`~amr_twin.assembly.twin.Twin`): the ``actors`` figure includes that.
 """
 
 from __future__ import annotations

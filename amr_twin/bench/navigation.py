@@ -54,7 +54,7 @@ def nav_run(cfg, sim_s: float, localisation: str, controller: str) -> Timed:
     driving from the aisles world's start towards :data:`GOAL` after the EKF's rest (untimed),
     ``sim_s`` timed; ``info["cycles"]``: the controller's CPU s a cycle."""
     from amr_twin.navigation.stack import REST_S, NavigationOptions, attach, true_map
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     twin = Twin(
         cfg,

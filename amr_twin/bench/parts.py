@@ -66,7 +66,7 @@ def instrument(parts: PartTimer) -> None:
     from amr_twin.sim import grid_loop, grid_steps
     from amr_twin.sim.actuation import Actuation
     from amr_twin.base.clock import VirtualClock
-    from amr_twin.sim.loop import Twin
+    from amr_twin.assembly.twin import Twin
     from amr_twin.sim.physics import Physics
 
     parts.patch(grid_steps.GridStepper, "run", "C chunks: mj_step and the C grid samplers")

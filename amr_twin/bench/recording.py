@@ -16,8 +16,8 @@ from pathlib import Path
 from amr_twin.bench.physics import timed_advance, timer
 from amr_twin.bench.twin import BENCH_START, Timed
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 DURATION_S = 16.0

@@ -34,8 +34,8 @@ def _child(mode: str, sim_s: float, env: dict) -> dict:
 
 def _twin(sensors: bool = True, firmware: str = "faithful", params=None):
     from amr_twin.model.config import load_config
-    from amr_twin.sim.loop import Twin, TwinOptions
-    from amr_twin.sim.command import Command
+    from amr_twin.assembly.twin import Twin, TwinOptions
+    from amr_twin.assembly.command import Command
 
     twin = Twin(load_config(), TwinOptions(firmware=firmware, sensors=("imu", "lidar") if sensors else (),
                                            start_xy_yaw=BENCH_START, firmware_params=params,

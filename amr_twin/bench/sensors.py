@@ -12,7 +12,7 @@ from amr_twin.bench.physics import timer
 from amr_twin.ros.bus import Bus
 from amr_twin.sensors.lidar import Lidar
 from amr_twin.base.clock import VirtualClock
-from amr_twin.sim.loop import Twin
+from amr_twin.assembly.twin import Twin
 
 SCAN_REPEATS = 200
 

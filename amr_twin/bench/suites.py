@@ -139,10 +139,10 @@ def _sweep_round(args: list[str], env: dict) -> dict:
 
 def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
     """CPU of writing the ``.rrd`` of a 60 s and a 240 s run with sensors (interleaved writes)."""
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
     from amr_twin.recording.rerun_capture import attach
     from amr_twin.recording.rerun_log import write_rrd
-    from amr_twin.sim.command import Command
+    from amr_twin.assembly.command import Command
     from amr_twin.recording.run import run_mission
 
     runs = {}

@@ -33,7 +33,7 @@ def sweep_round(cfg, spec: dict = SWEEP) -> dict:
     """Time the sweep ``spec`` of ``cfg`` and then bare physics of one point of it, CPU s (module notes)."""
     from amr_twin.bench.physics import bare_steps_s, timer
     from amr_twin.experiments.payload import point as payload_point, sweep as payload_sweep
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
         t0 = timer()

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from amr_twin.bench.physics import FloorPath, timed_advance
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 BENCH_START = (-8.0, 0.5, 0.5)
 """Start pose of the scenario, ``(x_m, y_m, yaw_rad)``: the west end of the central aisle, heading

@@ -166,7 +166,7 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
     sample and field.
     """
     from amr_twin.model.config import ConfigError
-    from amr_twin.analysis.uncertainty import MAX_SAMPLES, SAMPLERS, ParameterSpace
+    from amr_twin.calibration.uncertainty import MAX_SAMPLES, SAMPLERS, ParameterSpace
 
     if not 1 <= samples <= MAX_SAMPLES:
         fail(f"--samples {samples}: must be in 1..{MAX_SAMPLES}")

@@ -111,7 +111,7 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     from amr_twin.cli.options import checked_firmware
     from amr_twin.recording.outputs import OutputError, check_outputs
     from amr_twin.sim.faults import FaultError, parse_faults
-    from amr_twin.sim.loop import TwinOptions
+    from amr_twin.assembly.twin import TwinOptions
 
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
     if opts.serial_pty:  # the board would be driven from ROS; here the navigation stack drives the twin

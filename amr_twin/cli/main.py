@@ -278,13 +278,13 @@ def calibrate(
     """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
     from rich.progress import Progress
 
-    from amr_twin.analysis.calibration import calibrate as fit_plant
-    from amr_twin.analysis.calibration import write_params
-    from amr_twin.analysis.calibration_targets import read_log
+    from amr_twin.calibration.fit import calibrate as fit_plant
+    from amr_twin.calibration.fit import write_params
+    from amr_twin.calibration.targets import read_log
 
     from amr_twin.recording.outputs import OutputError, check_file
 
-    from amr_twin.analysis.calibration import PARAMETERS, evaluations_per_step
+    from amr_twin.calibration.fit import PARAMETERS, evaluations_per_step
     from amr_twin.base.process_pool import check_jobs
 
     if no_fit and report is None:
@@ -320,7 +320,7 @@ def calibrate(
             fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
                                            progress=lambda i, n: bar.update(task, completed=min(i, n))))
         if report is not None:
-            from amr_twin.analysis import calibration_report
+            from amr_twin.calibration import report as calibration_report
 
             at = base if fit is None else _guard(lambda: fit.config(base))
             task = bar.add_task("uncertainty", total=1)
@@ -353,9 +353,9 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
     The fit compares the twin's published speeds with the log's over the log's span (plus
     ``LOG_TAIL_S``); a shorter log would only be scored by a fixed penalty, not fitted.
     """
-    from amr_twin.analysis.calibration_targets import LOG_TAIL_S
-    from amr_twin.sim.loop import TwinOptions
-    from amr_twin.sim.command import Command
+    from amr_twin.calibration.targets import LOG_TAIL_S
+    from amr_twin.assembly.twin import TwinOptions
+    from amr_twin.assembly.command import Command
     from amr_twin.recording.run import run_command
 
     import logging

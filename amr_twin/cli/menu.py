@@ -42,7 +42,7 @@ MENU = """
 
 
 class RealTimeTwin:
-    """A :class:`~amr_twin.sim.loop.Twin` advanced in a thread at ``rate`` x real time.
+    """A :class:`~amr_twin.assembly.twin.Twin` advanced in a thread at ``rate`` x real time.
 
     The pacing is :mod:`amr_twin.live.pacer`'s (a clock event every 20 ms that sleeps to the
     wall clock), so the run is the one an unpaced twin computes; a menu choice runs in the
@@ -218,7 +218,7 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
     """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time (--live: served to
     Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel; --ros1: on a ROS 1 graph)."""
     from amr_twin.sim.faults import FaultError, parse_faults
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     if not (math.isfinite(rate) and 0 < rate <= 1000):
         fail(f"--rate {rate}: must be a finite number in (0, 1000]")

@@ -2,7 +2,7 @@
 
 ``amr-twin run linear|angular|motor|stop`` sends one wheel_Command_Client call at
 t = 0 and runs the twin for ``--duration-s``; ``amr-twin run --mission FILE`` runs
-a timed list of them (format in :mod:`amr_twin.sim.mission`). The shared options
+a timed list of them (format in :mod:`amr_twin.assembly.mission`). The shared options
 (:mod:`amr_twin.cli.options`) go before or after the command kind. ``--csv`` writes
 the time series, ``--json`` prints one summary object, ``--fault`` injects faults
 (:mod:`amr_twin.sim.faults`), ``--stop-on-collision`` ends the run at the first
@@ -69,7 +69,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
             mission_faults: tuple[str, ...] = (), mission_actors: tuple = ()) -> None:
     """Check everything, run ``steps`` and report; exits non-zero on a refusal or a stop."""
     from amr_twin.sim.faults import FaultError, parse_faults
-    from amr_twin.sim.loop import TwinOptions
+    from amr_twin.assembly.twin import TwinOptions
     from amr_twin.recording.outputs import OutputError, check_outputs
     from amr_twin.recording.run import run_mission
 
@@ -142,7 +142,7 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 
     def work():
         from amr_twin.base.atomic_file import all_or_nothing
-        from amr_twin.sim.loop import Twin
+        from amr_twin.assembly.twin import Twin
 
         twin = Twin(cfg, options)
         if opts.serial_pty is not None:
@@ -251,8 +251,8 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
                 typer.echo(f"{name}: {dropped} message(s) from clients dropped (see the warnings above)", err=True)
 
 
-def Command(*args, **kwargs):  # noqa: N802 - amr_twin.sim.command.Command, imported when a run starts
-    from amr_twin.sim.command import Command as RunCommand
+def Command(*args, **kwargs):  # noqa: N802 - amr_twin.assembly.command.Command, imported when a run starts
+    from amr_twin.assembly.command import Command as RunCommand
 
     return RunCommand(*args, **kwargs)
 
@@ -275,7 +275,7 @@ app = typer.Typer(cls=LiveGroup, add_completion=False, no_args_is_help=False,
 @app.callback(invoke_without_command=True)
 @shared(fail)
 def run(opts: RunOptions, ctx: typer.Context,
-        mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/sim/mission.py); "
+        mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/assembly/mission.py); "
                                                "its faults: list adds to --fault, its actors: to --actor.")) -> None:
     """Run a command kind (linear, angular, motor, stop) or a --mission file."""
     if ctx.invoked_subcommand is not None:
@@ -284,7 +284,7 @@ def run(opts: RunOptions, ctx: typer.Context,
         return
     if mission is None:
         fail("give a command (linear, angular, motor, stop) or --mission FILE")
-    from amr_twin.sim.mission import MissionError, load_mission_file
+    from amr_twin.assembly.mission import MissionError, load_mission_file
 
     try:
         plan = load_mission_file(mission)

@@ -48,7 +48,7 @@ class FleetSession:
         from amr_twin.fleet.transport import MqttTransport, broker_address
         from amr_twin.live.pacer import Pacer
         from amr_twin.navigation.stack import NavigationOptions, attach, load_static_map
-        from amr_twin.sim.loop import Twin, TwinOptions
+        from amr_twin.assembly.twin import Twin, TwinOptions
 
         check_name("--interface", options.interface)
         if options.url is not None:

@@ -12,7 +12,7 @@ one of: ``range: [lo, hi]`` (drawn uniformly; the value inside, the bounds insid
 schema's), ``sigma: s`` (normal, same unit; a list of one sigma per element for a
 vector; ``sigma: 0`` holds the value exact) or ``follows: other.key`` (drawn with the
 same relative deviation as that parameter). Without any, the spread defaults from the
-source's kind (:mod:`amr_twin.analysis.uncertainty`). :func:`load_parameters` returns these
+source's kind (:mod:`amr_twin.calibration.uncertainty`). :func:`load_parameters` returns these
 leaf descriptions next to the configuration.
 
 The section classes (``SimCfg`` ... ``MappingCfg``) are declared in

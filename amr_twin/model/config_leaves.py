@@ -2,7 +2,7 @@
 
 :mod:`amr_twin.model.config` reads each leaf ``{value, unit, source}`` of the parameter file;
 a leaf may add one of ``range: [lo, hi]``, ``sigma: s`` or ``follows: section.key``
-with a ``reason:`` (see :mod:`amr_twin.analysis.uncertainty` for what they mean when drawing).
+with a ``reason:`` (see :mod:`amr_twin.calibration.uncertainty` for what they mean when drawing).
 This module checks them, one line per refusal naming the parameter.
 """
 

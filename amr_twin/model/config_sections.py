@@ -26,7 +26,7 @@ def P(default: Any = ..., *, unit: str, ge: float | None = None, le: float | Non
 
     ``setting``: a value the user or the twin chooses (a time step, a sensor mode, a filter's
     tuning), not a property of the robot measured with some uncertainty: never drawn by
-    :mod:`amr_twin.analysis.uncertainty`.
+    :mod:`amr_twin.calibration.uncertainty`.
     """
     extra: dict[str, Any] = {"unit": unit}
     if setting:

@@ -9,7 +9,7 @@ Each is one of:
 - otherwise by the source's kind (:data:`DEFAULT_TOLERANCE`): a figure of the thesis
   ±2 %, a datasheet's ±5 %, an estimate ±20 % (uniform; a vector, a zero or an
   integer stays exact unless its leaf says otherwise); **calibrated**: from
-  the calibration's report (:mod:`amr_twin.analysis.calibration_report`,
+  the calibration's report (:mod:`amr_twin.calibration.report`,
   ``models/amr/calibration.yaml`` beside the parameter file): drawn *jointly* from
   its normal (driver gain and both ``Ke`` correlate at 0.99: drawn independently they
   would make plants the thesis rules out), each draw shifted by how the fit follows
@@ -20,7 +20,7 @@ Each is one of:
   ``--set`` or a plain ``--params`` value (the user chose them; a calibrated
   parameter set so conditions the others of its fit on it).
 
-The draws themselves are :mod:`amr_twin.analysis.uncertainty`'s.
+The draws themselves are :mod:`amr_twin.calibration.uncertainty`'s.
 """
 
 from __future__ import annotations

@@ -221,7 +221,7 @@ def navigate(cfg, twin_options, options: NavigationOptions, static: StaticMap | 
 
     from amr_twin.navigation.goal_truth import final_errors, judge
     from amr_twin.recording.recorder import attach_recorder
-    from amr_twin.sim.loop import Twin
+    from amr_twin.assembly.twin import Twin
 
     wall0 = time.perf_counter()
     static = static if static is not None else load_static_map(cfg, twin_options.world, options.map_yaml)

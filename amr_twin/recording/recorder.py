@@ -83,7 +83,7 @@ def recorder_of(twin) -> "Recorder | None":
 
 
 class Recorder:
-    """Collects a run's time series from the hooks of ``twin`` (a :class:`~amr_twin.sim.loop.Twin`) from
+    """Collects a run's time series from the hooks of ``twin`` (a :class:`~amr_twin.assembly.twin.Twin`) from
     the present instant on; use :func:`attach_recorder` (one recorder a twin)."""
 
     def __init__(self, twin) -> None:

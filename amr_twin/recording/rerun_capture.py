@@ -2,7 +2,7 @@
 
 Stage 1 of a recording (stage 2, writing the files, is :mod:`amr_twin.recording.rerun_log` and
 :mod:`amr_twin.recording.mcap_log`): a :class:`Capture` is attached to a
-:class:`~amr_twin.sim.loop.Twin` before it runs. It taps the bus (keeps every published
+:class:`~amr_twin.assembly.twin.Twin` before it runs. It taps the bus (keeps every published
 message with its time, us) and samples the world pose of each robot body as a grid
 sampler of the loop (default ~30 Hz on the recorder's 10 ms grid; no clock event, so
 the physics chunks, hence the run, are unchanged), and the joint and base state on

@@ -2,7 +2,7 @@
 
 >>> from amr_twin.model.config import load_config
 >>> from amr_twin.recording.run import run_command
->>> from amr_twin.sim.command import Command
+>>> from amr_twin.assembly.command import Command
 >>> result = run_command(load_config(), Command("motor", wheel="left", speed_m_s=1.0), 18.0)
 >>> result.series.published[0]  # (k, 2): t_s, rpm as published on wheel0_Vel
 """
@@ -17,8 +17,8 @@ from amr_twin.model.config import TwinConfig
 from amr_twin.recording.fault_effects import fault_effects
 from amr_twin.recording.recorder import RunSeries, attach_recorder
 from amr_twin.sim.bounds import MAX_RUN_S
-from amr_twin.sim.command import Command
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 UNTIL_STOPPED_US = 1 << 62
 """The end of a run of ``duration_s = inf``, us (~146 000 years)."""

@@ -113,7 +113,7 @@ class StateSampler:
     :attr:`sample` is the grid sampler (``sample(t_us)``, the physics at ``t_us``): a
     :class:`~amr_twin.sim.grid_steps.GridRows` of the 67 values of a row (joint positions and speeds,
     the base's twist, the positions and orientations of base_link and the six moving links) read
-    through the physics' named views (:func:`amr_twin.sim.named_index.value_rows`): its C form
+    through the physics' named views (their ``value_rows``): its C form
     gathers them where they lie, so that a twin keeping this state (a ROS 1 or Foxglove bridge)
     still runs its grid loop in C.
 
@@ -121,7 +121,7 @@ class StateSampler:
     ----------
     model : mujoco.MjModel
         The compiled twin (robot names prefixed ``amr/``): ``twin.observables.model``.
-    named : amr_twin.sim.named_index.NamedIndex
+    named : NamedIndex of the physics (``amr_twin.sim.named_index``)
         Its named views: ``twin.observables.named``.
     native : bool
         Give the sampler its C form (False: Python only, the same values).
@@ -129,8 +129,6 @@ class StateSampler:
 
     def __init__(self, model, named, native: bool = True):
         import mujoco
-
-        from amr_twin.sim.named_index import value_rows
 
         self.joint_names = MOVING_JOINTS
         joints = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + j) for j in MOVING_JOINTS]
@@ -140,8 +138,8 @@ class StateSampler:
         bodies = [ROBOT + BASE_FRAME, *(ROBOT + f for f in self.child_frames)]
         root = named.data.qvel.index(ROBOT + "root")  # the free joint's six dofs
         d = named.data
-        self.sample = value_rows([(d.qpos, joint_names), (d.qvel, joint_names), (d.qvel, root),
-                                  (d.xpos, bodies), (d.xquat, bodies)], native=native)
+        self.sample = named.value_rows([(d.qpos, joint_names), (d.qvel, joint_names), (d.qvel, root),
+                                        (d.xpos, bodies), (d.xquat, bodies)], native=native)
         """The grid sampler: ``sample(t_us)`` keeps the state now (the physics at ``t_us``). Where the loop's
         grid runs in Python (a collision open) its row is the C form's too: one ctypes call (2 us against 8 us)."""
         self._taken: np.ndarray | None = None  # a split-off batch's rows (split)

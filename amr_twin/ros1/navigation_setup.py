@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 @dataclass(frozen=True)
 class YieldingCommand:
-    """A run's command (:class:`amr_twin.sim.command.Command`) that is not sent while the navigator drives to a goal.
+    """A run's command (:class:`amr_twin.assembly.command.Command`) that is not sent while the navigator drives to a goal.
 
     ``say(line)`` tells of a command left out; ``send`` returns 0 then (nothing was refused)."""
 

@@ -7,7 +7,7 @@ to) and kiss-icp (the configuration is unpacked where a part is built): a
 (``cfg.imu``, a seed, a rate); the part then schedules itself on the clock, advertises on the
 bus and hooks the loop's grid. It does not reach into the twin.
 
-Sensors are components named in :attr:`amr_twin.sim.loop.TwinOptions.sensors` and registered
+Sensors are components named in :attr:`amr_twin.assembly.twin.TwinOptions.sensors` and registered
 in :data:`amr_twin.sensors.catalog.SENSORS`; a third party registers its own there.
 """
 

@@ -1,4 +1,4 @@
-"""Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running :class:`~amr_twin.sim.loop.Twin`.
+"""Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running :class:`~amr_twin.assembly.twin.Twin`.
 
 Reasons and measurements: docs/architecture.md#amr_twinsimfault_injector."""
 

@@ -1,10 +1,10 @@
 """The physics stepped between two of the loop's events, sampled on the record grid: :class:`GridLoop`.
 
-:meth:`amr_twin.sim.loop.Twin.advance_to_us` brings the physics to each synced event with
+:meth:`amr_twin.assembly.twin.Twin.advance_to_us` brings the physics to each synced event with
 :meth:`GridLoop.run`: ``mj_step`` to each record-grid instant (every ``every`` steps, 10 ms),
 the loop sensors' row kept there (:data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM`: wheel
 angles and speeds, base position and orientation) and the grid samplers run
-(:attr:`amr_twin.sim.loop.Twin.samplers`, the loop's per-instant hook), then the remaining
+(:attr:`amr_twin.assembly.twin.Twin.samplers`, the loop's per-instant hook), then the remaining
 steps to the event. The grid loop runs in C (:mod:`amr_twin.sim.grid_steps`) when every grid
 sampler has a C form (:meth:`_grid_in_c`), else here (:meth:`_grid_in_python`, its Python
 twin: the same steps, rows and sampler calls, the same bits).

@@ -1,4 +1,4 @@
-"""A chunk of the loop's physics in one C call: the grid loop of :meth:`amr_twin.sim.loop.Twin._step_physics`.
+"""A chunk of the loop's physics in one C call: the grid loop of :meth:`amr_twin.assembly.twin.Twin._step_physics`.
 
 Between two events the loop steps the physics to each record-grid instant (every 10 ms),
 keeps the loop sensors' row there and runs the grid samplers. When every sampler of the

@@ -13,7 +13,7 @@ anything else (an int, a slice, an index array) indexes the array as it is. A fi
 width 1 per name (a hinge's ``qpos``, a one-value sensor) gives a scalar.
 
 :meth:`NamedArray.addresses` gives where the selected values lie (a C row keeper's
-pointers, :func:`amr_twin.sim.grid_steps.gather`); :func:`value_rows` keeps a selection of
+pointers, :func:`amr_twin.sim.grid_steps.gather`); :meth:`NamedIndex.value_rows` keeps a selection of
 them on the loop's grid.
 
 Part of the physics layer (``PHYSICS_LAYER``): this is the door through which the rest of
@@ -149,22 +149,22 @@ class NamedIndex:
         self.model = _Struct(model, model, in_data=False)
         self.data = _Struct(data, model, in_data=True)
 
+    @staticmethod
+    def value_rows(named_arrays: list[tuple[NamedArray, object]], native: bool = True) -> GridRows:
+        """A grid sampler (:class:`~amr_twin.sim.grid_steps.GridRows`) keeping at each grid instant the values
+        ``array[key]`` of each ``(array, key)`` in ``named_arrays``, in order: gathered in C where they lie
+        when the loop runs its grid there and (one ctypes call) in Python too, or read from the arrays
+        without the helper or with ``native=False``: the same values."""
+        pointers = [p for array, key in named_arrays for p in array.addresses(key)]
+        c_row = gather(pointers) if native else None
+        if c_row is not None:
+            row = _calling(c_row, len(pointers))
+        else:
+            views = [(array.array, array.index(key)) for array, key in named_arrays]
 
-def value_rows(named_arrays: list[tuple[NamedArray, object]], native: bool = True) -> GridRows:
-    """A grid sampler (:class:`~amr_twin.sim.grid_steps.GridRows`) keeping at each grid instant the values
-    ``array[key]`` of each ``(array, key)`` in ``named_arrays``, in order: gathered in C where they lie
-    when the loop runs its grid there and (one ctypes call) in Python too, or read from the arrays
-    without the helper or with ``native=False``: the same values."""
-    pointers = [p for array, key in named_arrays for p in array.addresses(key)]
-    c_row = gather(pointers) if native else None
-    if c_row is not None:
-        row = _calling(c_row, len(pointers))
-    else:
-        views = [(array.array, array.index(key)) for array, key in named_arrays]
-
-        def row() -> list[float]:
-            return np.concatenate([np.ravel(a[i]) for a, i in views]).tolist()
-    return GridRows(len(pointers), 1, row, c_row)
+            def row() -> list[float]:
+                return np.concatenate([np.ravel(a[i]) for a, i in views]).tolist()
+        return GridRows(len(pointers), 1, row, c_row)
 
 
 def _calling(c_row: tuple, width: int):

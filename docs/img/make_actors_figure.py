@@ -24,7 +24,7 @@ from matplotlib.patches import Circle, Polygon  # noqa: E402
 
 from amr_twin.model.actors import Actor  # noqa: E402
 from amr_twin.model.config import load_config  # noqa: E402
-from amr_twin.sim.loop import Twin, TwinOptions  # noqa: E402
+from amr_twin.assembly.twin import Twin, TwinOptions  # noqa: E402
 
 
 def _rect(x, y, yaw, x0, x1, y0, y1, **kw):

@@ -24,9 +24,9 @@ from pathlib import Path
 
 from amr_twin.experiments.chapter5 import payload
 from amr_twin.model.config import TwinConfig, with_values
-from amr_twin.sim.loop import TwinOptions
+from amr_twin.assembly.twin import TwinOptions
 from amr_twin.analysis.metrics import step_info
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 from amr_twin.experiments.chapter5.criteria import (TRANSIENT_WINDOW_S, WHEELS, compare_oscillation, judge,
                                                     settling_band_rpm, step_class)
@@ -82,7 +82,7 @@ def simulate(job: _Job) -> dict:
     if job.rrd_path is None and job.mcap_path is None and pace_us is None:
         result = run_command(cfg, job.spec.command, job.duration_s, options)
     else:
-        from amr_twin.sim.loop import Twin
+        from amr_twin.assembly.twin import Twin
         from amr_twin.recording.rerun_capture import attach
         from amr_twin.recording.rerun_log import record_run
         from amr_twin.recording.run import run_mission

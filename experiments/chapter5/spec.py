@@ -81,7 +81,7 @@ def run(spec: Chapter5Spec, cfg: TwinConfig, out_dir: Path, *, jobs: int = 1,
         progress: bool = False, record_dir: Path | None = None, mcap_dir: Path | None = None,
         draws=None) -> Chapter5Metrics:
     """Validate ``spec``, simulate its runs (``jobs`` processes; with ``draws``, an
-    :class:`amr_twin.analysis.uncertainty.Draws`, once more per draw), judge them and write
+    :class:`amr_twin.calibration.uncertainty.Draws`, once more per draw), judge them and write
     ``out_dir``'s report with the recordings, all or nothing; the metrics."""
     numbers = spec.validate()
     reference = "faithful" if spec.firmware.startswith("avr") else None

@@ -1,7 +1,7 @@
 """Chapter 5 over the parameters' uncertainty (``amr-twin experiment chapter5 --samples N``).
 
 The eight runs (or those chosen) are simulated again with each configuration drawn by
-:meth:`amr_twin.analysis.uncertainty.ParameterSpace.draw`, and measured as the nominal runs are
+:meth:`amr_twin.calibration.uncertainty.ParameterSpace.draw`, and measured as the nominal runs are
 (:func:`.experiment.analyse`). :func:`summarise` gives, per run, wheel and metric (published
 samples and true speed), the nominal value, the median and 90 % interval over the draws,
 the thesis' value and band where §5.1.3 gives one, and in how many draws the metric lies in
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from amr_twin.analysis.uncertainty import LEVEL, interval, noise_level, rank_correlations
+from amr_twin.calibration.uncertainty import LEVEL, interval, noise_level, rank_correlations
 from amr_twin.experiments.chapter5 import payload
 from amr_twin.experiments.chapter5.experiment import RUNS, _Job, analyse, simulate
 from amr_twin.experiments.chapter5.criteria import BANDS, compare_oscillation, count_checks, step_class

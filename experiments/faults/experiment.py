@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.loop import TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 SPEED_M_S = 0.5

@@ -36,7 +36,7 @@ from amr_twin.estimation.lidar_odometry import LidarOdometry
 from amr_twin.controllers.path_follower import PathFollowerNode
 from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
 from amr_twin.recording.recorder import attach_recorder, recorder_of
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.analysis.trajectory import TrajectoryErrors, errors
 from amr_twin.model.world_geometry import Footprints, scan_plane_boxes
 from amr_twin.experiments.fusion.map import build_map

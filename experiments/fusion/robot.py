@@ -47,7 +47,7 @@ class RobotErrors:
         return cfg.model_copy(update={"wheel": type(cfg.wheel).model_validate(wheel)})
 
     def twin_options(self) -> dict:
-        """The :class:`~amr_twin.sim.loop.TwinOptions` fields of the hall sensors."""
+        """The :class:`~amr_twin.assembly.twin.TwinOptions` fields of the hall sensors."""
         return {"hall_misalignment_deg": np.asarray(self.hall_misalignment_deg, float),
                 "hall_jitter_us": self.hall_jitter_us}
 

@@ -75,7 +75,7 @@ def run_episode(item: EpisodeRun) -> dict:
     from amr_twin.experiments.navigation.metrics import measure
     from amr_twin.model.generated_world import is_generated
     from amr_twin.navigation.stack import NavigationOptions, navigate
-    from amr_twin.sim.loop import TwinOptions
+    from amr_twin.assembly.twin import TwinOptions
 
     ep = item.episode
     obstacles = () if ep.obstacle is None else (ep.obstacle,)

@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass
 
 from amr_twin.model.config import TwinConfig, with_values
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 
 POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
              "front-left-corner": (1, 1), "front-right-corner": (1, -1),
@@ -133,7 +133,7 @@ class Point:
     rrd_path: str | None = None   # write the point's Rerun recording here (not part of the fingerprint)
     mcap_path: str | None = None  # write the point's ROS 2 topics here
     sample: int | None = None     # index of the drawn configuration ``cfg`` (None: the nominal one)
-    sample_id: str = ""           # hash of the sample's drawn values (amr_twin.analysis.uncertainty.Draws.sample_id)
+    sample_id: str = ""           # hash of the sample's drawn values (amr_twin.calibration.uncertainty.Draws.sample_id)
 
     @property
     def key(self) -> str:

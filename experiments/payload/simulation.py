@@ -98,7 +98,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     """The run of ``point`` in the empty world, or None and why the command was refused."""
     from amr_twin.model.statics import CONTACT_MIN_N
     from amr_twin.recording.recorder import attach_recorder
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     recording = point.rrd_path is not None or point.mcap_path is not None
     # nothing here reads the wheel odometry or draws the robot: without them a point is the same to the bit,

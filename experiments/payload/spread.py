@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from amr_twin.model.statics import CONTACT_MIN_N
-from amr_twin.analysis.uncertainty import interval, noise_level, rank_correlations
+from amr_twin.calibration.uncertainty import interval, noise_level, rank_correlations
 from amr_twin.experiments.chapter5.criteria import WHEELS
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 from amr_twin.experiments.payload.sweep_report import PANELS, _value, summarise
@@ -145,7 +145,7 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
     """Rank correlation of every drawn parameter with every answer of :func:`answers`.
 
     Returns one row per answer and parameter: ``position, command ('' for the highest safe
-    payload), answer, parameter, rho, notable`` (|rho| above :func:`~amr_twin.analysis.uncertainty.noise_level`
+    payload), answer, parameter, rho, notable`` (|rho| above :func:`~amr_twin.calibration.uncertainty.noise_level`
     for all the drawn parameters),
     sorted by answer, then |rho| descending.
     """

@@ -14,7 +14,7 @@ import io
 import math
 from pathlib import Path
 
-from amr_twin.analysis.uncertainty import LEVEL, noise_level
+from amr_twin.calibration.uncertainty import LEVEL, noise_level
 from amr_twin.experiments.payload import spread
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 from amr_twin.experiments.payload.sweep_report import PANELS, _csv, _lowest_wheel_loads, _value
@@ -101,7 +101,7 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
 def _band(samples: dict, mass, position, command, column) -> tuple[float, float, float]:
     import numpy as np
 
-    from amr_twin.analysis.uncertainty import interval
+    from amr_twin.calibration.uncertainty import interval
 
     values = [_value(r, column) for rows in samples.values() for r in rows
               if (r["mass_kg"], r["position"], r["command"]) == (mass, position, command) and r.get("valid", True)]

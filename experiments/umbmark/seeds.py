@@ -95,7 +95,7 @@ def run_seed_of(seed: int, phase: int, direction: str, run: int) -> int:
 
 def _phase(cfg: TwinConfig, robot: fusion_robot.RobotErrors, job: SeedJob, phase: int,
            odometry: OdometryCalibration | None) -> Phase:
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     runs = []
     for direction in DIRECTIONS:

@@ -10,7 +10,7 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.sim import battery
 from amr_twin.base import c_layout, native_build
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
 

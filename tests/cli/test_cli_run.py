@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
 from amr_twin.recording.run_report import CSV_COLUMNS, CSV_COMMENT
-from amr_twin.sim.mission import MissionError, parse_mission
+from amr_twin.assembly.mission import MissionError, parse_mission
 
 ROOT = Path(__file__).resolve().parents[2]
 runner = CliRunner()

@@ -17,10 +17,10 @@ from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
 from amr_twin.controllers.firmware import AvrParams
-from amr_twin.sim.loop import TwinOptions
+from amr_twin.assembly.twin import TwinOptions
 from amr_twin.ros.rosserial import PC_TO_ARDUINO
 from amr_twin.ros.rosserial_frame import MD5SUM
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
@@ -124,7 +124,7 @@ def test_published_speeds_are_the_boards_32_bit_doubles(cfg):
 
 @needs_avr
 def test_a_corrupted_command_frame_is_refused_by_the_boards_checksum(cfg):
-    from amr_twin.sim.loop import Twin
+    from amr_twin.assembly.twin import Twin
 
     twin = Twin(cfg, TwinOptions(firmware="avr", world="empty", rosserial_loss_prob=1.0))
     LINEAR.send(twin)
@@ -224,7 +224,7 @@ def test_a_command_queued_during_a_ramp_waits_for_the_ramp_on_the_board_as_in_th
 @needs_avr
 def test_the_board_asks_the_time_every_5_s_and_keeps_publishing_while_answered(cfg, monkeypatch):
     from amr_twin.controllers.avr import AvrFirmware
-    from amr_twin.sim.loop import Twin
+    from amr_twin.assembly.twin import Twin
 
     def run(answer: bool):
         if not answer:

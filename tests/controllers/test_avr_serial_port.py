@@ -13,7 +13,7 @@ from amr_twin.controllers.firmware import AvrParams
 from amr_twin.model.config import load_config
 from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, ID_TX_STOP, FrameParser, TopicInfo,
                                           frame, serialize_float64_multiarray, topic_request)
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 MISSING = missing_tools()

@@ -10,7 +10,7 @@ from amr_twin.controllers.improved import ImprovedFirmware, ImprovedParams
 from amr_twin.model.config import load_config
 from amr_twin.recording.recorder import attach_recorder
 from amr_twin.base.clock import VirtualClock
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 CALLS = []
 

@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 from amr_twin.cli.main import app
 from amr_twin.controllers.odometry_calibration import OdometryCalibration, load, text
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 GOOD = OdometryCalibration(0.1262, 0.1250, 0.4900, "a test")
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import TwinOptions
-from amr_twin.sim.mission import load_mission_file
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import TwinOptions
+from amr_twin.assembly.mission import load_mission_file
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 

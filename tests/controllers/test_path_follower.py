@@ -281,7 +281,7 @@ def test_twin_rounds_the_first_rack_corners_without_touching_anything():
     mujoco = pytest.importorskip("mujoco")
     from amr_twin.model.config import load_config
     from amr_twin.controllers.diff_drive import DiffDriveNode
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     full = load_route(DEFAULT_ROUTE)
     route = replace(full, name="corner", start_xy_yaw=(3.0, 0.0, 0.0),

@@ -150,7 +150,7 @@ def test_synthetic_drive_with_prior_and_deskew_is_accurate_and_deskew_matters():
 def warehouse_drive():
     """18 s in the warehouse: 0.8 m/s east along the south of the aisle, a U-turn of radius 1.5 m, back west."""
     from amr_twin.model.config import load_config
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     twin = Twin(load_config(), TwinOptions(sensors=("imu", "lidar"), firmware="improved", world="warehouse",
                                            start_xy_yaw=(-6.5, -1.5, 0.0)))

@@ -148,7 +148,7 @@ def test_save_writes_map_server_files_that_the_world_loader_reads(tmp_path):
 def warehouse_scans():
     """10 s near the east wall: 0.6 m/s east for 4 s, then one turn in place; scans and the true pose."""
     from amr_twin.model.config import load_config
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
     from amr_twin.model.world_geometry import scan_plane_boxes
 
     cfg = load_config()

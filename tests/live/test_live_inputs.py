@@ -94,7 +94,7 @@ def served():
     """An idle twin (stop at t = 0) served on a free port, unpaced; the test advances it."""
     from amr_twin.model.config import load_config
     from amr_twin.live.session import LiveOptions, LiveSession
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     twin = Twin(load_config(), TwinOptions(world="empty"))
     twin.client.stop()

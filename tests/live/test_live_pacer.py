@@ -8,9 +8,9 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.live.pacer import Pacer, PacerClosed
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]

@@ -20,10 +20,10 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.sim.faults import parse_faults
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
 from amr_twin.recording.rerun_log import record_run
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 RERUN = str(Path(sys.executable).with_name("rerun"))

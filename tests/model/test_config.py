@@ -94,10 +94,10 @@ def test_model_readme_lists_every_parameter():
 
 
 def test_model_readme_is_current():
-    from amr_twin.analysis.parameter_doc import readme_text
+    from amr_twin.calibration.parameter_doc import readme_text
     from amr_twin.model.paths import MODEL_DIR
     assert (MODEL_DIR / "README.md").read_text() == readme_text(), \
-        "models/amr/README.md is stale: run python -m amr_twin.analysis.parameter_doc"
+        "models/amr/README.md is stale: run python -m amr_twin.calibration.parameter_doc"
 
 
 def test_a_parameter_file_that_is_a_folder_or_binary_is_named(tmp_path):

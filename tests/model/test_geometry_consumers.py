@@ -15,8 +15,8 @@ import pytest
 
 from amr_twin.estimation.ekf import EkfNode
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
 OTHER = {"wheel.radius_m": 0.15, "wheel.separation_m": 0.56, "wheel.hall_pole_pairs": 20}

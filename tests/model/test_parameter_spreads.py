@@ -7,7 +7,7 @@ import yaml
 from amr_twin.model.config import ConfigError, load_parameters
 from amr_twin.model.parameter_tree import DEFAULT_CONFIG
 from amr_twin.model.parameter_spreads import CALIBRATED, EXACT, FOLLOWS, NORMAL, UNIFORM, source_kind
-from amr_twin.analysis.uncertainty import ParameterSpace
+from amr_twin.calibration.uncertainty import ParameterSpace
 
 
 @pytest.fixture(scope="module")

@@ -133,7 +133,7 @@ before the door: "failed to make progress (after 6 recoveries)")."""
 @pytest.fixture(scope="module", params=range(len(TRIPS)))
 def door_trip(request, tmp_path_factory):
     from amr_twin.navigation.stack import NavigationOptions, navigate
-    from amr_twin.sim.loop import TwinOptions
+    from amr_twin.assembly.twin import TwinOptions
 
     world = write_map(tmp_path_factory.mktemp("door"), "door", door_hall())
     start, goal = TRIPS[request.param]

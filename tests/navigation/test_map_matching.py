@@ -113,7 +113,7 @@ def _ekf_errors(matching: bool):
     from amr_twin.model.config import load_config
     from amr_twin.navigation.kinematics import wrap
     from amr_twin.navigation.stack import REST_S, NavigationOptions, attach, true_map
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     cfg = load_config(sets=[f"navigation.map_matching.enabled={str(matching).lower()}"])
     twin = Twin(cfg, TwinOptions(firmware="improved", world="aisles", start_xy_yaw=None, visuals=False, sensors=("imu", "lidar")))
@@ -169,7 +169,7 @@ def _unseen_drive(feedback: bool, tmp_path, sim_s: float = 26.0):
     from amr_twin.experiments.navigation import episodes
     from amr_twin.model.config import load_config
     from amr_twin.navigation.stack import REST_S, NavigationOptions, attach, true_map
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     from nav_grids import random_warehouse, write_map
 

@@ -21,7 +21,7 @@ from amr_twin.navigation.interfaces import LocalController, Twist2D
 from amr_twin.navigation.stack import NavigationOptions, navigate, robot_top_m
 from amr_twin.model.world_geometry import Footprints
 from amr_twin.navigation.static_map import obstacle_boxes, yaml_map
-from amr_twin.sim.loop import TwinOptions
+from amr_twin.assembly.twin import TwinOptions
 
 from nav_grids import random_warehouse, two_corridors, write_map
 
@@ -94,7 +94,7 @@ def test_a_blocked_aisle_leads_to_a_replan_through_another(blocked, corridors):
 
 def test_the_stack_is_built_from_the_navigation_section_and_its_overrides(corridors):
     from amr_twin.navigation.stack import attach, load_static_map
-    from amr_twin.sim.loop import Twin
+    from amr_twin.assembly.twin import Twin
 
     cfg = load_config(sets=["navigation.mppi.samples=200", "navigation.monitor.people_stop_m=0.5",
                             "navigation.people.range_m=3.0", "navigation.planner.planner_hz=2",

@@ -17,7 +17,7 @@ from amr_twin.model.config import load_config
 from amr_twin.navigation.footprint import robot_footprint
 from amr_twin.navigation.kinematics import to_map
 from amr_twin.navigation.stack import REST_S, NavigationOptions, navigate
-from amr_twin.sim.loop import TwinOptions
+from amr_twin.assembly.twin import TwinOptions
 
 from nav_grids import room, write_map
 

@@ -14,10 +14,10 @@ import pytest
 
 from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
 from amr_twin.recording.rerun_log import record_run
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 from uwb_run import UWB_S, record_uwb_run

@@ -12,10 +12,10 @@ from amr_twin.cli.main import app
 from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.rerun_capture import attach
 from amr_twin.recording.rerun_log import record_run
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 

@@ -7,8 +7,8 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.recording.run_summary import RunSummary, WheelSummary, summary
-from amr_twin.sim.loop import TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command, run_mission
 
 START = (-6.0, 0.0, 0.0)

@@ -204,7 +204,7 @@ def test_uwb_frames_exist_in_tf_static_on_the_map_side(uwb_bag):
 def test_cmd_vel_and_service_calls_are_in_the_bag(tmp_path):
     from amr_twin.model.config import load_config
     from amr_twin.controllers.diff_drive import DiffDriveNode
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
     from amr_twin.ros.geometry_messages import Twist, Vector3
     from amr_twin.recording.rerun_capture import attach
     from amr_twin.recording.rerun_log import record_run
@@ -228,7 +228,7 @@ def test_cmd_vel_and_service_calls_are_in_the_bag(tmp_path):
 def test_the_state_samplers_c_form_keeps_the_python_forms_values_and_arrays_take_a_period():
     from amr_twin.model.config import load_config
     from amr_twin.ros.ros_state import StateSampler
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     twin = Twin(load_config(), TwinOptions(world="empty"))
     native = StateSampler(twin.observables.model, twin.observables.named)

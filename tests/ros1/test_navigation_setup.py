@@ -10,8 +10,8 @@ from amr_twin.controllers.diff_drive import DiffDriveNode
 from amr_twin.model.config import load_config
 from amr_twin.navigation.stack import true_map
 from amr_twin.ros1.navigation_setup import RunNavigation
-from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 START = (-6.0, 0.0, 0.0)

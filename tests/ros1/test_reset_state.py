@@ -1,14 +1,14 @@
 """``reset_simulation`` (the graph's ``~reset_simulation``) starts the robot's estimators afresh: the wheel odometry
 forgets its wheel samples and commands, and the navigation stack's EKF is told the robot is at its start pose.
-In-process: the service only calls :meth:`amr_twin.sim.loop.Twin.reset_simulation` at the pacer's tick."""
+In-process: the service only calls :meth:`amr_twin.assembly.twin.Twin.reset_simulation` at the pacer's tick."""
 
 import math
 
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
+from amr_twin.assembly.command import Command
 
 SPEED_M_S = 0.3
 DRIVE_S = 5.0

@@ -6,8 +6,8 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.ros1.row_feed import RowFeed
-from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 

@@ -7,7 +7,7 @@ import numpy as np
 from amr_twin.model.config import load_config
 from amr_twin.model.worlds import uwb_anchors_xy_m
 from amr_twin.sensors.catalog import SENSORS
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 
 def test_the_built_in_sensors_are_registered_in_order():

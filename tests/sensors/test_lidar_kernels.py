@@ -77,7 +77,7 @@ def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch
     import functools
 
     import amr_twin.sensors.lidar as lidar_mod
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
 
     cfg = load_config(overrides={"payload.mass_kg": 20.0, "payload.xy_m": [-0.15, 0.0]})  # seen from the laser
     out = []

@@ -119,7 +119,7 @@ def test_bad_input_is_refused():
 
 
 def test_uwb_sensor_in_the_twin():
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
     from amr_twin.sensors.uwb import UwbSensor
 
     cfg = load_config(overrides={"uwb.nlos_prob": 0.0})
@@ -148,7 +148,7 @@ def test_walls_block_the_bays_anchors_in_the_corridor():
     """Physical NLOS: deep in the corridor world only the end anchor is in sight; the others read long."""
     from amr_twin.experiments.fusion.experiment import site_config
     from amr_twin.controllers.route import Route
-    from amr_twin.sim.loop import Twin, TwinOptions
+    from amr_twin.assembly.twin import Twin, TwinOptions
     from amr_twin.sensors.uwb import UwbSensor
 
     route = Route("here", (28.0, 0.0, 0.0), [[30.0, 0.0]], world="corridor")

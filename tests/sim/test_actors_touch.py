@@ -6,7 +6,7 @@ import pytest
 
 from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 CFG = load_config()
 START = (-6.0, 0.0, 0.0)   # the warehouse's main aisle

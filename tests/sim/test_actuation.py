@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.sim.plant import MODE_CODES
 
 

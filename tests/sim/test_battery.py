@@ -10,7 +10,7 @@ import amr_twin.sim.plant as plant_mod
 from amr_twin.model.config import load_config
 from amr_twin.sim.battery import Battery
 from amr_twin.sim.faults import parse_faults
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 HAVE_CC = shutil.which("cc") is not None or shutil.which("gcc") is not None

@@ -7,8 +7,8 @@ from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
 CFG = load_config()
@@ -100,7 +100,7 @@ def test_c_pair_check_and_python_give_the_same_episodes(monkeypatch):
     import functools
     import shutil
 
-    import amr_twin.sim.loop as loop_mod
+    import amr_twin.assembly.twin as loop_mod
     from amr_twin.sim.collisions import CollisionMonitor
 
     if shutil.which("cc") is None and shutil.which("gcc") is None:

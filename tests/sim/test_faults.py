@@ -10,8 +10,8 @@ from typer.testing import CliRunner
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.sim.faults import FaultError, kind_names, parse_fault, parse_faults
-from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 CFG = load_config()

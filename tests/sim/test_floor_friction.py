@@ -14,7 +14,7 @@ from scipy.interpolate import RegularGridInterpolator
 from amr_twin.model.config import load_config
 from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET
 from amr_twin.sim import floor_friction, settled_physics, tyres
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 FIELD_ON = ["sim.floor_friction_field=true"]
 

@@ -12,9 +12,9 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.controllers.diff_drive import DiffDriveNode
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.ros.geometry_messages import Twist, Vector3
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command, run_mission
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 

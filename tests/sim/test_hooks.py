@@ -11,7 +11,7 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.recording.recorder import RAD_S_TO_RPM
 from amr_twin.sim.hooks import HOOKS
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -73,7 +73,7 @@ def test_the_firmware_protocol_declares_what_the_loop_calls():
 
     declared = set(Firmware.__annotations__) | {n for n in vars(Firmware) if not n.startswith("_")}
     used = set()
-    for name in ("amr_twin/sim/loop.py", "amr_twin/sim/actuation.py"):
+    for name in ("amr_twin/assembly/twin.py", "amr_twin/sim/actuation.py"):
         for node in ast.walk(ast.parse((ROOT / name).read_text())):
             if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Attribute) \
                     and node.value.attr == "firmware":

@@ -9,7 +9,7 @@ import pytest
 from amr_twin.model.build import build
 from amr_twin.model.config import load_config
 from amr_twin.sim.physics import Physics
-from amr_twin.sim.named_index import value_rows
+from amr_twin.sim.named_index import NamedIndex
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +54,7 @@ def test_positional_keys_index_the_array_as_it_is(physics):
 @pytest.mark.parametrize("native", [True, False])
 def test_value_rows_keep_the_named_values_at_each_grid_instant(physics, native):
     d = physics.named.data
-    rows = value_rows([(d.qpos, ["amr/wheel_left_joint", "amr/wheel_right_joint"]), (d.xpos, ["amr/base_link"])],
+    rows = NamedIndex.value_rows([(d.qpos, ["amr/wheel_left_joint", "amr/wheel_right_joint"]), (d.xpos, ["amr/base_link"])],
                       native=native)
     kept = []
     for t_us in (1000, 2000, 3000):

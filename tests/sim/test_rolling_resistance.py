@@ -9,10 +9,10 @@ import sys
 import numpy as np
 import pytest
 
-import amr_twin.sim.loop as loop_mod
+import amr_twin.assembly.twin as loop_mod
 from amr_twin.model.config import load_config
 from amr_twin.base import native_build
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.sim.rolling_resistance import C_SOURCE, RollingResistance
 
 
@@ -94,7 +94,7 @@ def test_without_a_helper_the_python_twin_runs_and_says_why(tmp_path):
     broken.write_text("this is not C\n")
     status = native_build.native_status(broken)
     assert status.startswith("Python (broken.c did not compile"), status
-    code = ("from amr_twin.model.config import load_config; from amr_twin.sim.loop import Twin; "
+    code = ("from amr_twin.model.config import load_config; from amr_twin.assembly.twin import Twin; "
             "print(Twin(load_config()).rolling.engine)")
     env = {**os.environ, "AMR_TWIN_NATIVE": "0"}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)

@@ -4,7 +4,7 @@ import numpy as np
 
 from amr_twin.model.config import load_config
 from amr_twin.sim import settled_physics as settled_mod
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 

@@ -13,7 +13,7 @@ from amr_twin.model.actor_space import random_actors
 from amr_twin.model.actors import Actor
 from amr_twin.model.build import world_model
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 CFG = load_config()
 P = CFG.actors.person

@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.sim.start_pose import StartPoseError
 
 CFG = load_config()

@@ -14,8 +14,8 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.sim import settled_physics, tyres
-from amr_twin.sim.loop import Twin, TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import Twin, TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
 HAND_SIDE_SLIP_DEG = -1.32      # docs/tyres.md, steady turn (the axle slides outwards: to the right)

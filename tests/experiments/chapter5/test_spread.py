@@ -37,7 +37,7 @@ def test_chapter5_samples_report_the_spread_beside_the_thesis(tmp_path):
 def test_true_speed_bands_bracket_the_median():
     from amr_twin.model.config import load_config
     from amr_twin.experiments.chapter5 import spread as chapter5_spread
-    from amr_twin.analysis.uncertainty import ParameterSpace
+    from amr_twin.calibration.uncertainty import ParameterSpace
 
     draws = ParameterSpace.load().draw(3, seed=0, include=("driver_left.gain",))
     out = chapter5_spread.run(load_config(), draws, runs=[2], duration_s=2.0, progress=False)
@@ -54,7 +54,7 @@ def test_each_draws_scorecard_is_the_nominal_one_of_its_parameters():
     from amr_twin.model.config import load_config
     from amr_twin.experiments.chapter5 import experiment as chapter5, spread as chapter5_spread
     from amr_twin.experiments.chapter5.criteria import count_checks
-    from amr_twin.analysis.uncertainty import ParameterSpace
+    from amr_twin.calibration.uncertainty import ParameterSpace
 
     cfg, runs = load_config(), [3, 4]  # near their dead-zone edges: the draws' scorecards differ
     draws = ParameterSpace.load().draw(4, seed=1, include=("driver_left.gain", "motor_left.ke_v_s_rad"))

@@ -7,8 +7,8 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.experiments.fusion.robot import CLIP_SIGMA, NOMINAL, RobotErrors, draw
-from amr_twin.sim.loop import TwinOptions
-from amr_twin.sim.command import Command
+from amr_twin.assembly.twin import TwinOptions
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
 

@@ -96,7 +96,7 @@ def test_one_sample_is_the_plain_sweep(tmp_path):
 
 def test_samples_run_resume_and_report(cfg, tmp_path):
     from amr_twin.experiments.payload import spread_report
-    from amr_twin.analysis.uncertainty import ParameterSpace
+    from amr_twin.calibration.uncertainty import ParameterSpace
 
     space = ParameterSpace.load()
     args = dict(masses=[0.0, 20.0], positions=["center"], commands=["linear:0.7"], duration_s=DURATION_S,

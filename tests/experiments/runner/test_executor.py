@@ -68,7 +68,7 @@ def test_dask_sweep_equals_local_and_rerun_skips_finished(client, tmp_path):
 
 def test_dask_samples_equal_local_and_resume(client, tmp_path):
     """With drawn parameters the cluster gives the local numbers too; the run keys carry the draws."""
-    from amr_twin.analysis.uncertainty import ParameterSpace
+    from amr_twin.calibration.uncertainty import ParameterSpace
 
     cfg = load_config()
     draws = ParameterSpace.load().draw(2, seed=5)

@@ -14,7 +14,7 @@ import pytest
 from amr_twin.controllers.firmware_params import ImprovedParams
 from amr_twin.model.config import load_config
 from amr_twin.experiments.umbmark.square import Profile, drive_square, wheel_pose
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 
 RIGID = ["wheel.tyre_slip=false"]
 

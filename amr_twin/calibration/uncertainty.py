@@ -1,6 +1,6 @@
 """Monte Carlo over the parameters' uncertainty: drawn configurations and what moves the results.
 
-Reasons and measurements: docs/uncertainty.md#amr_twinanalysisuncertainty."""
+Reasons and measurements: docs/uncertainty.md#amr_twincalibrationuncertainty."""
 
 from __future__ import annotations
 
@@ -89,7 +89,7 @@ class ParameterSpace:
 
     cfg: TwinConfig
     spreads: dict[str, Spread]
-    calibration: Any = None          # amr_twin.analysis.calibration_report.CalibrationReport or None
+    calibration: Any = None          # amr_twin.calibration.report.CalibrationReport or None
     calibration_path: Path | None = None
 
     @classmethod
@@ -98,7 +98,7 @@ class ParameterSpace:
              calibration: str | Path | None = None) -> "ParameterSpace":
         """The parameter file with its overrides (as :func:`amr_twin.model.config.load_config`) and
         the calibration's report (default ``calibration.yaml`` beside the parameter file)."""
-        from amr_twin.analysis import calibration_report
+        from amr_twin.calibration import report as calibration_report
 
         cfg, meta = load_parameters(path, override_file=override_file, sets=sets, overrides=overrides)
         report_path = Path(calibration) if calibration is not None else Path(path or DEFAULT_CONFIG).parent / \

@@ -1,6 +1,6 @@
 """The calibration's targets: what the twin must reproduce, and the twin's value of each.
 
-Reasons and measurements: docs/validation.md#amr_twinanalysiscalibration_targets."""
+Reasons and measurements: docs/validation.md#amr_twincalibrationtargets."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.loop import TwinOptions
+from amr_twin.assembly.twin import TwinOptions
 from amr_twin.analysis.metrics import step_info
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
 BENCH_RPM = 71.5

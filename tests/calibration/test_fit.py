@@ -7,12 +7,12 @@ import re
 import pytest
 import yaml
 
-from amr_twin.analysis.calibration import calibrate, write_params
-from amr_twin.analysis.calibration_targets import BENCH_CURRENT_A, bench_current_a, read_log, thesis_residual
+from amr_twin.calibration.fit import calibrate, write_params
+from amr_twin.calibration.targets import BENCH_CURRENT_A, bench_current_a, read_log, thesis_residual
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import TwinOptions
+from amr_twin.assembly.twin import TwinOptions
 from amr_twin.model.paths import MODEL_DIR
-from amr_twin.sim.command import Command
+from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
 LOG_COMMAND = "motor:left:forward:1.0"
@@ -141,7 +141,7 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
     from typer.testing import CliRunner
 
     from amr_twin.cli.main import app
-    from amr_twin.sim.command import Command
+    from amr_twin.assembly.command import Command
     from amr_twin.recording.run import run_command
 
     series = run_command(load_config(), Command("linear", speed_m_s=0.7), 4.0).series
@@ -165,7 +165,7 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
 
 
 def test_the_summary_lists_each_feature_against_its_target():
-    from amr_twin.analysis.calibration import Fit
+    from amr_twin.calibration.fit import Fit
 
     fit = Fit(values={"driver_left.gain": 1.61}, sigma={"driver_left.gain": 0.14}, correlation={"driver_left.gain": {"driver_left.gain": 1}},
               residual=19.05, evaluations=40, target="the thesis",

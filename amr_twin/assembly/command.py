@@ -1,6 +1,6 @@
 """One wheel_Command_Client call, as in the terminal menu of fig. 3.2: what a run or mission sends.
 
->>> from amr_twin.sim.command import Command
+>>> from amr_twin.assembly.command import Command
 >>> Command.parse("angular:30:0.5").describe()
 {'kind': 'angular', 'speed_deg_s': 30.0, 'icc_m': 0.5}
 """
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from amr_twin.model.config import TwinConfig
 
 if TYPE_CHECKING:
-    from amr_twin.sim.loop import Twin
+    from amr_twin.assembly.twin import Twin
 
 KINDS = ("linear", "angular", "motor", "stop")
 

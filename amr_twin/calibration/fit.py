@@ -10,7 +10,7 @@ Two targets:
   the thesis' value with its sigma;
 - a log ``LOG.csv`` of real wheel speeds, compared sample by sample (1 RPM per sample).
 
-The targets and the twin's value of each are in :mod:`amr_twin.analysis.calibration_targets`.
+The targets and the twin's value of each are in :mod:`amr_twin.calibration.targets`.
 
 The fit is scipy's bounded ``least_squares`` (trust region reflective) in parameters
 scaled to their bounds; its Jacobian at the optimum gives each parameter's standard
@@ -29,7 +29,7 @@ import yaml
 
 from amr_twin.base.atomic_file import write_text
 from amr_twin.model.config import TwinConfig, load_config
-from amr_twin.analysis.calibration_targets import (BENCH_QUANTITY, log_residuals, read_log, thesis_features,
+from amr_twin.calibration.targets import (BENCH_QUANTITY, log_residuals, read_log, thesis_features,
                                                    thesis_targets, weighted_residuals)
 
 PARAMETERS = {  # dotted key: (lower, upper) bounds, physically plausible

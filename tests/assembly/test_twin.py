@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.sim.loop import Twin, TwinOptions
+from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 SENSOR_TOPICS = ("odom", "tf", "imu/data_raw", "imu/mag", "scan")

@@ -1,6 +1,6 @@
 """Mission files: a timed list of wheel_Command_Client calls, run in one go.
 
-Reasons and measurements: docs/architecture.md#amr_twinsimmission."""
+Reasons and measurements: docs/architecture.md#amr_twinassemblymission."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amr_twin.sim.bounds import duration_problem
-from amr_twin.sim.command import KINDS, Command
+from amr_twin.assembly.command import KINDS, Command
 from amr_twin.model.yaml_file import read_yaml
 
 FIELDS = {

@@ -13,7 +13,7 @@ import yaml
 from amr_twin.model.config import ConfigError
 from amr_twin.model.paths import MODEL_DIR
 from amr_twin.model.statics import solve
-from amr_twin.analysis.uncertainty import (ParameterSpace, interval, noise_level, rank_correlations, unit_samples,
+from amr_twin.calibration.uncertainty import (ParameterSpace, interval, noise_level, rank_correlations, unit_samples,
                                   with_values)
 
 
@@ -23,7 +23,7 @@ def space():
 
 
 def _draw_json(seed: int) -> str:
-    code = ("import json; from amr_twin.analysis.uncertainty import ParameterSpace; "
+    code = ("import json; from amr_twin.calibration.uncertainty import ParameterSpace; "
             f"d = ParameterSpace.load().draw(6, seed={seed}); print(json.dumps(d.overrides))")
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from amr_twin.analysis import calibration_report as cr
-from amr_twin.analysis.calibration import _with
-from amr_twin.analysis.calibration_targets import BENCH_RPM, thesis_residual
+from amr_twin.calibration import report as cr
+from amr_twin.calibration.fit import _with
+from amr_twin.calibration.targets import BENCH_RPM, thesis_residual
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.model.paths import MODEL_DIR
@@ -81,7 +81,7 @@ def test_no_fit_needs_a_report(tmp_path):
 def test_a_parameter_the_log_does_not_see_is_left_out(tmp_path):
     """A log of the left wheel says nothing of the right motor: the report leaves it out (the
     draws cannot take it from there) instead of giving it an infinite sigma."""
-    from test_calibration import _write_log
+    from test_fit import _write_log
 
     log = tmp_path / "left.csv"
     _write_log(log, gain=1.5)

@@ -1,6 +1,6 @@
 """The parameter table of ``models/amr/README.md``, generated from the parameter file.
 
-``python -m amr_twin.analysis.parameter_doc`` rewrites the README's table and mass summary
+``python -m amr_twin.calibration.parameter_doc`` rewrites the README's table and mass summary
 after a change of ``amr.yaml`` (a test fails when a parameter is missing from it).
 """
 
@@ -22,7 +22,7 @@ def _fmt(value) -> str:
 
 def readme_text() -> str:
     """The README: header, mass summary, statics, uncertainty and one table row per parameter."""
-    from amr_twin.analysis.uncertainty import ParameterSpace
+    from amr_twin.calibration.uncertainty import ParameterSpace
 
     cfg = load_config()
     space = ParameterSpace.load()
@@ -58,7 +58,7 @@ def _uncertainty_text(space) -> str:
     held = ", ".join(f"`{k}`" for k in rep.held_keys)
     defaults = ", ".join(f"{kind} ±{tol:.0%}" for kind, tol in DEFAULT_TOLERANCE.items())
     return ("\n## Uncertainty\n\n`--samples N` (`amr-twin sweep payload`, `amr-twin experiment chapter5`) draws the "
-            "robot's body and drive\nparameters from the spreads in the table below (`amr_twin/analysis/uncertainty.py`): a "
+            "robot's body and drive\nparameters from the spreads in the table below (`amr_twin/calibration/uncertainty.py`): a "
             "leaf's `range: [lo, hi]`\n(uniform), `sigma` (normal) or `follows` (the same relative deviation as "
             "another parameter), each\nwith its `reason`; without one, the source's kind sets it (uniform, "
             f"{defaults}; a vector, a zero or an\ninteger stays exact). Settings (time step, payload, sensor modes, "

@@ -1,7 +1,7 @@
 """The calibration's report: the fitted values, their 1-sigma uncertainty and correlations,
 and how the fit would follow the parameters it held at their sourced values.
 
-Reasons and measurements: docs/validation.md#amr_twinanalysiscalibration_report."""
+Reasons and measurements: docs/validation.md#amr_twincalibrationreport."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ HELD = {  # held parameter: forward step of its derivative (a fair part of its s
 }
 """Not held: ``wheel.radius_m``. Its derivative is lost in the 8-bit duty's steps (the radius sets
 the commanded RPM): steps of 1 and 2 mm gave the driver gain -68 and +4.7 per metre."""
-STEP_FRACTION = 0.02  # the fit's finite-difference step, in its scaled variables (amr_twin.analysis.calibration)
+STEP_FRACTION = 0.02  # the fit's finite-difference step, in its scaled variables (amr_twin.calibration.fit)
 
 
 @dataclass(frozen=True)
@@ -50,11 +50,11 @@ class CalibrationReport:
         return self.correlation * np.outer(self.sigma, self.sigma)
 
     def as_fit(self, fit=None):
-        """An :class:`amr_twin.analysis.calibration.Fit` with this report's uncertainty: ``fit``'s values
+        """An :class:`amr_twin.calibration.fit.Fit` with this report's uncertainty: ``fit``'s values
         and residuals when given (a fit this report was evaluated at), else the report's."""
         import dataclasses
 
-        from amr_twin.analysis.calibration import Fit
+        from amr_twin.calibration.fit import Fit
 
         sigma = dict(zip(self.keys, self.sigma.tolist()))
         corr = {a: dict(zip(self.keys, row.tolist())) for a, row in zip(self.keys, self.correlation)}
@@ -124,7 +124,7 @@ def write(report: CalibrationReport, path: str | Path) -> None:
 
 
 def _residual_function(target: str, pool) -> Callable[[TwinConfig], np.ndarray]:
-    from amr_twin.analysis import calibration_targets as ct
+    from amr_twin.calibration import targets as ct
 
     if target == "thesis":
         targets = ct.thesis_targets()
@@ -144,13 +144,13 @@ def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tupl
     Parameters
     ----------
     cfg : the configuration whose fitted values are reported (a fit's result, or the shipped file).
-    target : "thesis" or the path of a log (as :func:`amr_twin.analysis.calibration.calibrate`).
-    parameters : fitted parameters and their bounds (default :data:`amr_twin.analysis.calibration.PARAMETERS`).
+    target : "thesis" or the path of a log (as :func:`amr_twin.calibration.fit.calibrate`).
+    parameters : fitted parameters and their bounds (default :data:`amr_twin.calibration.fit.PARAMETERS`).
     held : held parameters and their forward steps (default :data:`HELD`).
     jobs : worker processes for a thesis evaluation's three runs.
     progress : ``progress(i, n)`` after each evaluation.
     """
-    from amr_twin.analysis import calibration as cal
+    from amr_twin.calibration import fit as cal
 
     parameters = parameters or cal.PARAMETERS
     held = dict(HELD if held is None else held)

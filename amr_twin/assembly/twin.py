@@ -1,6 +1,6 @@
-"""The simulation loop: physics, plant, hall sensors, firmware and PC-side nodes on one clock.
+"""The twin assembled: the simulation loop with its physics, plant, hall sensors, firmware and PC-side nodes on one clock.
 
-Reasons and measurements: docs/architecture.md#amr_twinsimloop."""
+Reasons and measurements: docs/architecture.md#amr_twinassemblytwin."""
 
 from __future__ import annotations
 

@@ -166,7 +166,7 @@ def _unseen_drive(feedback: bool, tmp_path, sim_s: float = 26.0):
     """Episode 3 of seed 22 on the generated warehouse 22 (a map the code has never seen, extruded into a world;
     its rows stand between the UWB anchors and the aisles): the navigator's pose against the truth every 0.5 s,
     m, and the goal's outcome after ``sim_s``."""
-    from amr_twin.experiments.navigation import episodes
+    from amr_twin.experiments.navigation.experiment import episodes
     from amr_twin.model.config import load_config
     from amr_twin.navigation.stack import REST_S, NavigationOptions, attach, true_map
     from amr_twin.assembly.twin import Twin, TwinOptions

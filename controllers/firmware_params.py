@@ -92,7 +92,7 @@ class ImprovedParams:
     publish_every_ticks: int = 5  # wheelN_Vel every 5 PI ticks (10 Hz)
     publish_mean: bool = True  # wheelN_Vel is the mean speed since the previous sample (edges counted);
     # False: the PI's sliding-window estimate at that instant (the former default; the odometry then loses
-    # about an edge per wheel at each start and stop, docs/umbmark.md)
+    # about an edge per wheel at each start and stop, docs/explanation/umbmark.md)
     extrapolate_above_rpm: float = 15.0  # the mean counts the part of an edge rolled since the last edge
     # at this per-edge speed or more: braked from 15 RPM a wheel of the twin rolls 43 mm (5 edges) on, so
     # the edge is sure to come; below, whole edges only (a sample then resolves one edge, 6.7 RPM at 10 Hz)

@@ -11,7 +11,7 @@ never revised (:mod:`amr_twin.estimation.published_pose`). ``odom`` (frame ``odo
 ``base_link``) and the ``odom -> base_link`` transform are published at ``publish_rate_hz``, the
 first at the node's start.
 
-Reasons and measurements: docs/fusion.md#amr_twincontrollersodometry."""
+Reasons and measurements: docs/explanation/fusion.md#amr_twincontrollersodometry."""
 
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ def _covariance(diagonal: Sequence[float]) -> np.ndarray:
 class WheelOdometry:
     """Dead reckoning from the wheel speeds, published on ``odom`` and tf.
 
-    Args (SI units unless named; in full: docs/fusion.md#amr_twincontrollersodometrywheelodometry):
+    Args (SI units unless named; in full: docs/explanation/fusion.md#amr_twincontrollersodometrywheelodometry):
         bus, clock: the shared bus and clock.
         wheel_radius_m, wheel_separation_m: nominal geometry (thesis 0.125, listing 4.2's 0.48).
         wheel_radius_multiplier, left_radius_multiplier, right_radius_multiplier,

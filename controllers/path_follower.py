@@ -2,7 +2,7 @@
 
 Routes (:mod:`.route`, re-exported here) are polylines in the ``map`` frame.
 
-Reasons and measurements: docs/navigation.md#amr_twincontrollerspath_follower."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twincontrollerspath_follower."""
 
 from __future__ import annotations
 

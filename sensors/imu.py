@@ -7,7 +7,7 @@ come from MuJoCo's ``accelerometer``, ``gyro`` and ``magnetometer`` sensors on t
 ``amr/imu`` site (frame ``imu_link``, REP-103 axes): specific force (m/s^2, +9.81
 on z at rest), body rate (rad/s) and the world field ``opt.magnetic`` (T).
 
-Reasons and measurements: docs/fusion.md#amr_twinsensorsimu.
+Reasons and measurements: docs/explanation/fusion.md#amr_twinsensorsimu.
 
 Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads MuJoCo's accelerometer, gyro and
 magnetometer values where they lie in MjData (by address, in C on the loop's grid)."""

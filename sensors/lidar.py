@@ -1,6 +1,6 @@
 """Slamtec RPLIDAR A1 on the ``amr/laser`` site: rotating 2D scans cast in MuJoCo.
 
-Reasons and measurements: docs/lidar.md#amr_twinsensorslidar.
+Reasons and measurements: docs/explanation/lidar.md#amr_twinsensorslidar.
 
 Part of the physics layer (``PHYSICS_LAYER``): a sensor: casts its beams with ``mj_multiRay`` on
 MjData at each laser pose."""

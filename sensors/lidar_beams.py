@@ -3,7 +3,7 @@
 Pure numpy (no MuJoCo, no clock): the clock-driven sensor that casts the beams is
 :class:`amr_twin.sensors.lidar.Lidar`.
 
-Reasons and measurements: docs/lidar.md#amr_twinsensorslidar_beams.
+Reasons and measurements: docs/explanation/lidar.md#amr_twinsensorslidar_beams.
 
 Part of the physics layer (``PHYSICS_LAYER``): keeps the laser site's pose from MjData on the loop's
 grid (views of ``site_xpos``/``site_xmat``)."""

@@ -1,6 +1,6 @@
 """The LiDAR's per-beam work in C: directions and origins at the beams' instants, the rays, noise.
 
-Reasons and measurements: docs/lidar.md#amr_twinsensorslidar_kernels.
+Reasons and measurements: docs/explanation/lidar.md#amr_twinsensorslidar_kernels.
 
 Part of the physics layer (``PHYSICS_LAYER``): the LiDAR's ray casts (``mj_multiRay`` on MjData) and
 their C arithmetic."""

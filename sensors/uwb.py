@@ -5,7 +5,7 @@ nothing of the hardware; the model is a DW1000 tag ranging to ``n`` anchors with
 double-sided two-way ranging (Decawave APS013). The parameters and their sources
 are in the ``uwb:`` section of ``models/amr/amr.yaml``.
 
-Reasons and measurements: docs/fusion.md#amr_twinsensorsuwb.
+Reasons and measurements: docs/explanation/fusion.md#amr_twinsensorsuwb.
 
 Part of the physics layer (``PHYSICS_LAYER``): a sensor: reads the tag's pose from MjData and casts
 each tag-anchor line with ``mj_ray``."""

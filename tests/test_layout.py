@@ -169,10 +169,10 @@ def test_the_top_level_is_small_and_each_package_says_its_role():
 
 
 def test_the_layout_page_lists_every_package():
-    """docs/layout.md (how it is built; the README links to it) names every package of amr_twin/."""
+    """docs/reference/layout.md (how it is built; the README links to it) names every package of amr_twin/."""
     layout = next((ROOT / "docs").rglob("layout.md")).read_text()
     for name in SUBPACKAGES:
-        assert re.search(rf"`amr_twin/{name}/`", layout), f"docs/layout.md lacks amr_twin/{name}/"
+        assert re.search(rf"`amr_twin/{name}/`", layout), f"docs/reference/layout.md lacks amr_twin/{name}/"
 
 
 def test_tests_mirror_the_packages():

@@ -1,6 +1,6 @@
 """Step-response metrics of a sampled signal: the time-domain specifications of fig. 5.3 and App. I.
 
-Reasons and measurements: docs/validation.md#amr_twinanalysismetrics."""
+Reasons and measurements: docs/explanation/validation.md#amr_twinanalysismetrics."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ estimate's stamps (x, y linearly; yaw linearly on the unwrapped angle, then
 wrapped to ``(-pi, pi]``); estimate samples outside the truth's time span are
 left out.
 
-Reasons and measurements: docs/fusion.md#amr_twinanalysistrajectory."""
+Reasons and measurements: docs/explanation/fusion.md#amr_twinanalysistrajectory."""
 
 from __future__ import annotations
 

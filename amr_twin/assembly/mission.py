@@ -1,6 +1,6 @@
 """Mission files: a timed list of wheel_Command_Client calls, run in one go.
 
-Reasons and measurements: docs/architecture.md#amr_twinassemblymission."""
+Reasons and measurements: docs/explanation/architecture.md#amr_twinassemblymission."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The twin assembled: the simulation loop with its physics, plant, hall sensors, firmware and PC-side nodes on one clock.
 
-Reasons and measurements: docs/architecture.md#amr_twinassemblytwin."""
+Reasons and measurements: docs/explanation/architecture.md#amr_twinassemblytwin."""
 
 from __future__ import annotations
 

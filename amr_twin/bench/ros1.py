@@ -1,6 +1,6 @@
 """The ROS 1 path's figures of ``amr-twin bench --suites``, each measured in fresh child processes.
 
-Reasons and measurements: docs/speed.md#amr_twinbenchros1."""
+Reasons and measurements: docs/reference/speed.md#amr_twinbenchros1."""
 
 from __future__ import annotations
 

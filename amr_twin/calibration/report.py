@@ -1,7 +1,7 @@
 """The calibration's report: the fitted values, their 1-sigma uncertainty and correlations,
 and how the fit would follow the parameters it held at their sourced values.
 
-Reasons and measurements: docs/validation.md#amr_twincalibrationreport."""
+Reasons and measurements: docs/explanation/validation.md#amr_twincalibrationreport."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The calibration's targets: what the twin must reproduce, and the twin's value of each.
 
-Reasons and measurements: docs/validation.md#amr_twincalibrationtargets."""
+Reasons and measurements: docs/explanation/validation.md#amr_twincalibrationtargets."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Monte Carlo over the parameters' uncertainty: drawn configurations and what moves the results.
 
-Reasons and measurements: docs/uncertainty.md#amr_twincalibrationuncertainty."""
+Reasons and measurements: docs/how-to/uncertainty.md#amr_twincalibrationuncertainty."""
 
 from __future__ import annotations
 

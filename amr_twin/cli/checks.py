@@ -25,7 +25,7 @@ CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark":
 job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark square (no
 sensors, the empty world): 0.73 s of CPU for its 60 simulated s (ten robots, 300 squares). Navigation
 (sensors, EKF + MPPI, the episodes' people and the SLAM map's build): 368 s of CPU for the 32 runs of about 59
-simulated s of ``experiment navigation --episodes 16 --seed 1`` (docs/navigation.md)."""
+simulated s of ``experiment navigation --episodes 16 --seed 1`` (docs/explanation/navigation.md)."""
 AVR_COST = 4.0
 """How much more the emulated ATmega2560 costs (the bench's avr_ratio, 5.5, against the loop's 1.3)."""
 CONFIRM_ABOVE_S = 600.0

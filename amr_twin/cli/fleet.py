@@ -1,4 +1,4 @@
-"""``amr-twin fleet``: the twin as a VDA 5050 2.0 vehicle on an MQTT broker (docs/fleet.md).
+"""``amr-twin fleet``: the twin as a VDA 5050 2.0 vehicle on an MQTT broker (docs/how-to/fleet.md).
 
 Every option is checked before the model is built; bad input is one line, exit 2. Without ``--vda5050`` an
 embedded broker (amqtt) serves on a free port of 127.0.0.1, printed at start. The run ends after

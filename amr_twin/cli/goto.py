@@ -37,7 +37,7 @@ RUN_OVERRIDES = {
     "duration_s": {"help": "Time limit of the goals, simulated s after the 2 s rest (default: 60 s + 4 s per metre of "
                            "the goals' first plans), at most 3600."},
     "firmware": {"default": "improved", "help": "Arduino firmware: improved, faithful or avr; default improved "
-                 "(the faithful one restarts its ramps on every cmd_vel: docs/navigation.md)."},
+                 "(the faithful one restarts its ramps on every cmd_vel: docs/explanation/navigation.md)."},
     "sensors": {"help": "Always on with goto: the LiDAR and IMU feed the navigation."},
     "seed": {"help": "Seed of the random draws: the sensors' noise, the MPPI's samples, --fault and --actors-random. "
              "Same seed, same run."},
@@ -45,7 +45,7 @@ RUN_OVERRIDES = {
              "geometry_msgs/msg/PoseStamped on /goal_pose, frame map or odom, for a new goal) or rerun."},
     "rate": {"help": "With --live or --ros1: simulated seconds per wall second (default 1 with --live; --ros1 alone: "
              "0, as fast as possible)."},
-    "ros1": {"help": "Join the ROS 1 graph at ROS_MASTER_URI (docs/ros1.md): the twin's topics, and the navigator as "
+    "ros1": {"help": "Join the ROS 1 graph at ROS_MASTER_URI (docs/how-to/ros1.md): the twin's topics, and the navigator as "
              "move_base (a goal of the action or on move_base_simple/goal preempts --goal)."},
     "serial_pty": {"help": "Not with goto (refused)."},
 }
@@ -234,7 +234,7 @@ def goto(opts: RunOptions, ctx: typer.Context,
              f"the robot nearer the middle of aisles (default {GOTO_DEFAULTS['inflation_radius_m']:g}, "
              "navigation.costmap.inflation_radius_m)."),
          ) -> None:
-    """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/navigation.md).
+    """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/explanation/navigation.md).
     Success is judged by the true pose; Ctrl-C stops the robot and writes the outputs (exit 6)."""
     if goal is None:
         fail("--goal is required (X_M,Y_M or X_M,Y_M,YAW_DEG)")

@@ -1,4 +1,4 @@
-"""``amr-twin experiment navigation``: seeded start/goal episodes on the true and the SLAM map (docs/navigation.md).
+"""``amr-twin experiment navigation``: seeded start/goal episodes on the true and the SLAM map (docs/explanation/navigation.md).
 
 Every option is checked before the first simulation: the counts, the world, the maps, the SLAM
 map file, the localisation and controller, the executor, the output folder.
@@ -18,7 +18,7 @@ from amr_twin.navigation.registries import CONTROLLERS, LOCALISATIONS
 
 MAX_EPISODES = 1000
 EPISODE_SIM_S = 70.0
-"""Simulated time of a typical episode, s: the median time to the goal of the 50 episodes in docs/navigation.md
+"""Simulated time of a typical episode, s: the median time to the goal of the 50 episodes in docs/explanation/navigation.md
 was 56-98 s by scenario (66 s on the true map, 74 s on the SLAM map)."""
 
 

@@ -143,7 +143,7 @@ def ros1_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
     return {
         "ros1": (bool, typer.Option(False, "--ros1", help="Join the ROS 1 graph at ROS_MASTER_URI (Debian's ROS 1) "
                  "and bridge the twin both ways: /clock (use_sim_time), /tf, /odom, /scan, /imu/*, /joint_states, "
-                 "... out; /wheel_Command and /cmd_vel in (docs/ros1.md). As fast as possible unless --rate.")),
+                 "... out; /wheel_Command and /cmd_vel in (docs/how-to/ros1.md). As fast as possible unless --rate.")),
         "roscore": (bool, typer.Option(False, "--roscore", help="With --ros1: start a private roscore on a free "
                     "port (its URI is printed) instead of joining ROS_MASTER_URI.")),
         "serial_pty": (Optional[str], typer.Option(None, "--serial-pty", metavar="PATH", help="With --firmware avr: "
@@ -252,7 +252,7 @@ def _run_option_infos(overrides: dict | None = None) -> dict[str, tuple[object, 
         "actor": (Optional[list[str]], typer.Option(None, "--actor", metavar="KIND:X1,Y1;X2,Y2[@V][+T][/loop][/stop=M]",
                   help="A person or pallet_jack walking these waypoints (m, world frame) at V m/s from T s "
                   "(repeatable; /loop: round again; /stop=M: halts while the robot is within M m ahead); "
-                  "docs/actors.md.")),
+                  "docs/explanation/actors.md.")),
         "actors_random": (Optional[str], typer.Option(None, "--actors-random", metavar="N[/stop=M]",
                           help="N people and pallet jacks on random loops of the world's free space, drawn "
                           "from --seed (at most 50).")),

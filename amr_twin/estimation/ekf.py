@@ -4,7 +4,7 @@ The thesis (§6.2.1, figs. 6.5 to 6.7) fuses odometry with the IMU and UWB in an
 extended Kalman filter; this node does it as robot_localization's ``ekf_node`` in
 ``two_d_mode`` with filterpy's :class:`~filterpy.kalman.ExtendedKalmanFilter`.
 
-Reasons and measurements: docs/fusion.md#amr_twinestimationekf."""
+Reasons and measurements: docs/explanation/fusion.md#amr_twinestimationekf."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ and is registered with :class:`kiss_icp.kiss_icp.KissICP` (its preprocessing,
 deskew, voxel map, adaptive threshold and point-to-point ICP, nothing
 re-implemented here).
 
-Reasons and measurements: docs/fusion.md#amr_twinestimationlidar_odometry."""
+Reasons and measurements: docs/explanation/fusion.md#amr_twinestimationlidar_odometry."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ y, as the map frame; the saved image is flipped so its top row is the highest
 y, as map_server reads it). Each cell holds the log-odds ``l = ln(p / (1 - p))``
 of being occupied, 0 (p = 0.5) when nothing was seen.
 
-Reasons and measurements: docs/fusion.md#amr_twinestimationoccupancy_grid."""
+Reasons and measurements: docs/explanation/fusion.md#amr_twinestimationoccupancy_grid."""
 
 from __future__ import annotations
 

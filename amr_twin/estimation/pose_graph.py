@@ -1,6 +1,6 @@
 """Offline pose-graph smoothing of a drive: LiDAR and wheel odometry between scans, UWB ranges to the anchors.
 
-Reasons and measurements: docs/fusion.md#amr_twinestimationpose_graph."""
+Reasons and measurements: docs/explanation/fusion.md#amr_twinestimationpose_graph."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The twin live over the Foxglove WebSocket protocol: ``amr-twin run ... --live``.
 
-Reasons and measurements: docs/live.md#amr_twinlivefoxglove."""
+Reasons and measurements: docs/how-to/live.md#amr_twinlivefoxglove."""
 
 from __future__ import annotations
 

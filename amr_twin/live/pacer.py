@@ -4,7 +4,7 @@
 the record grid). At each tick, with the physics brought up to the tick's instant by the
 loop as for any synced event, it
 
-Reasons and measurements: docs/live.md#amr_twinlivepacer."""
+Reasons and measurements: docs/how-to/live.md#amr_twinlivepacer."""
 
 from __future__ import annotations
 

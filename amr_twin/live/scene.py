@@ -1,6 +1,6 @@
 """The twin's world and robot as a Foxglove ``SceneUpdate``, for ``/twin/scene``.
 
-Reasons and measurements: docs/live.md#amr_twinlivescene."""
+Reasons and measurements: docs/how-to/live.md#amr_twinlivescene."""
 
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ first). Its timing is :mod:`amr_twin.model.actor_paths`; the loop moves it
 person (or a jack) halts while the robot's footprint is that close ahead of it, and walks on
 when it is not.
 
-Reasons and measurements: docs/actors.md#amr_twinmodelactors."""
+Reasons and measurements: docs/explanation/actors.md#amr_twinmodelactors."""
 
 from __future__ import annotations
 

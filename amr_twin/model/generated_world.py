@@ -73,7 +73,7 @@ def mjcf(world: str) -> str:
     W, H = h.size_m
     doors = "\n".join(f'    <numeric name="{d.name}_x_y_width_m" data="{_f(d.x_m, d.y_m, d.width_m)}"/>'
                       for d in h.doors)
-    lines = [f"<!-- {world}: drawn by amr_twin.model.world_generator (docs/navigation.md). "
+    lines = [f"<!-- {world}: drawn by amr_twin.model.world_generator (docs/explanation/navigation.md). "
              f"{W:g} x {H:g} m, {len(h.doors)} doorway(s) {', '.join(f'{d.width_m:g} m' for d in h.doors)}. -->",
              f'<mujoco model="{name(*parse(world)).replace(":", "_").replace("?", "_")}">',
              "  <custom>",

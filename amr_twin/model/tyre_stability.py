@@ -1,6 +1,6 @@
 """The brush tyres' explicit states against the physics timestep: stability number and guard.
 
-Reasons and measurements: docs/tyres.md#amr_twinmodeltyre_stability."""
+Reasons and measurements: docs/explanation/tyres.md#amr_twinmodeltyre_stability."""
 
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ class TyreTimestep:
         return (f"tyres: stability number S = {max(self.s_configured):.2f} > {self.s_max:g} at "
                 f"sim.timestep_s = {self.configured_s * 1e3:g} ms (static tyre load {max(self.load_n):.0f} N "
                 f"x {LOAD_MARGIN:g}); physics timestep halved to {self.timestep_s * 1e3:g} ms "
-                f"(S = {max(self.s):.2f}; docs/tyres.md)")
+                f"(S = {max(self.s):.2f}; docs/explanation/tyres.md)")
 
 
 def announce(step: TyreTimestep) -> None:

@@ -13,7 +13,7 @@ Every obstacle is a box standing on the floor, tall enough for the LiDAR's 0.45 
 (walls, uprights 2.5 m; pallets of goods 1.2 m fill each rack row's floor level, beams and braces at
 the scan plane).
 Same seed and width, same world (NumPy's ``default_rng``). :mod:`amr_twin.model.generated_world`
-writes it as MJCF; docs/navigation.md describes it.
+writes it as MJCF; docs/explanation/navigation.md describes it.
 """
 
 from __future__ import annotations

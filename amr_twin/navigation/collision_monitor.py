@@ -1,6 +1,6 @@
 """The collision monitor on raw scans (nav2's collision_monitor): approach and slowdown zones.
 
-Reasons and measurements: docs/navigation.md#amr_twinnavigationcollision_monitor."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationcollision_monitor."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """A layered costmap as nav2's: static layer, obstacle layer with marking and ray-traced clearing, inflation.
 
-Reasons and measurements: docs/navigation.md#amr_twinnavigationcostmap."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationcostmap."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The localisation's pose held to the map: each scan fitted to the static map (AMCL's role in nav2).
 
-Reasons and measurements: docs/navigation.md#amr_twinnavigationmap_matching."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationmap_matching."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """A sampling MPC in the MPPI style (Williams et al. 2017, "Information theoretic MPC"; nav2's MPPI critics).
 
-Reasons and measurements: docs/navigation.md#amr_twinnavigationmppi."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationmppi."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The navigator node: goals in, ``cmd_vel`` out, on the twin's bus and clock (nav2's bt_navigator).
 
-Reasons and measurements: docs/navigation.md#amr_twinnavigationnavigator."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationnavigator."""
 
 from __future__ import annotations
 

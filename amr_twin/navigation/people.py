@@ -1,6 +1,6 @@
 """People in the scan: clusters of unmapped returns tracked from scan to scan, their motion predicted.
 
-Reasons and measurements: docs/navigation.md#amr_twinnavigationpeople."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationpeople."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The global planner: Dijkstra on the costmap's 8-connected grid, line-of-sight shortening, a dense path.
 
-Reasons and measurements: docs/navigation.md#amr_twinnavigationplanner."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationplanner."""
 
 from __future__ import annotations
 

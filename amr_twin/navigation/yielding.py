@@ -1,5 +1,5 @@
 """The robot gives way to people: it keeps out of their predicted paths, clears the lane of someone who stopped for
-it, and waits before passing close to someone standing beside its way (docs/actors.md, "The robot gives way").
+it, and waits before passing close to someone standing beside its way (docs/explanation/actors.md, "The robot gives way").
 
 Social navigation's yield, reconstructed as a last word on ``cmd_vel`` after the collision monitor; the
 people are :class:`~amr_twin.navigation.people.People`, the footprint a
@@ -35,7 +35,7 @@ class Yielding:
     (``speeds_m_s`` x ``turns_rad_s``) are rolled out the same way and the one keeping the largest
     least gap to every person wins (the nearest to the controller's command among equals). People
     who stopped for the robot, standoffs and courtesy stops:
-    docs/navigation.md#amr_twinnavigationyieldingyielding.
+    docs/explanation/navigation.md#amr_twinnavigationyieldingyielding.
     """
 
     def __init__(self, footprint, limits, dt_s: float, *, person_radius_m: float = 0.25, stop_m: float = 0.3,

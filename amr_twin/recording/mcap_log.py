@@ -8,7 +8,7 @@ header stamps are the messages' own. Bus topics are the messages the nodes publi
 (as they were); the robot's state (joint states, link transforms, ground truth,
 clock) is built by :mod:`amr_twin.ros.ros_state` from the capture's samples.
 
-Reasons and measurements: docs/recordings.md#amr_twinrecordingmcap_log."""
+Reasons and measurements: docs/reference/recordings.md#amr_twinrecordingmcap_log."""
 
 from __future__ import annotations
 

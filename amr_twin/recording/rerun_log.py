@@ -1,6 +1,6 @@
 """Record a run to a Rerun ``.rrd`` file, headless.
 
-Reasons and measurements: docs/recordings.md#amr_twinrecordingrerun_log."""
+Reasons and measurements: docs/reference/recordings.md#amr_twinrecordingrerun_log."""
 
 from __future__ import annotations
 

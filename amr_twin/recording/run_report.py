@@ -82,7 +82,7 @@ def text_lines(result, info: RunSummary) -> list[str]:
     if step is not None:
         lines.append(f"physics timestep {step['timestep_s'] * 1e3:g} ms instead of {step['configured_timestep_s'] * 1e3:g} "
                      f"ms: the tyres' stability number {max(step['stability_number_configured']):.2f} exceeded "
-                     f"{step['stability_limit']:g} (docs/tyres.md)")
+                     f"{step['stability_limit']:g} (docs/explanation/tyres.md)")
     moved = info.from_start
     if moved is not None and len(result.commands) > 1:  # a mission: where it ended against where it began
         lines.append(f"ended {moved.distance_m:.2f} m from its start pose, heading {moved.heading_deg:+.1f} deg "

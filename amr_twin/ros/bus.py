@@ -1,6 +1,6 @@
 """In-process ROS-like bus on simulation time: topics, services, taps and a tf buffer.
 
-Reasons and measurements: docs/ros1.md#amr_twinrosbus."""
+Reasons and measurements: docs/how-to/ros1.md#amr_twinrosbus."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The rosserial link between the mini PC and the Arduino Mega (launch file, listing 4.1).
 
-Reasons and measurements: docs/ros1.md#amr_twinrosrosserial."""
+Reasons and measurements: docs/how-to/ros1.md#amr_twinrosrosserial."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The twin's bus and state on a ROS 1 graph, both ways: :class:`Ros1Bridge`.
 
-Reasons and measurements: docs/ros1.md#amr_twinros1bridge."""
+Reasons and measurements: docs/how-to/ros1.md#amr_twinros1bridge."""
 
 from __future__ import annotations
 

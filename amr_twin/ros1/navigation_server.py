@@ -1,6 +1,6 @@
 """The navigator on the ROS 1 graph as move_base: :class:`NavigationServer`.
 
-Reasons and measurements: docs/ros1.md#amr_twinros1navigation_server."""
+Reasons and measurements: docs/how-to/ros1.md#amr_twinros1navigation_server."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The project's rosserial host: a rospy node bridging a serial port to the ROS 1 graph.
 
-Reasons and measurements: docs/ros1.md#amr_twinros1serial_host."""
+Reasons and measurements: docs/how-to/ros1.md#amr_twinros1serial_host."""
 
 from __future__ import annotations
 

@@ -35,7 +35,7 @@ UNPACED_TICK_US = 400_000
 """The pacer's tick when the twin runs unpaced on the graph, us. Each tick stops the physics' grid loop and
 costs numpy's work on the state samples and a write per topic and subscriber, whatever their number (20 ms
 ticks cost 12 % of the twin's CPU without a subscriber; per tick, ~0.5 ms of the bridge's CPU and a write per
-topic and subscriber: docs/ros1.md); unpaced, nothing waits on the wall clock. A message from the graph acts
+topic and subscriber: docs/how-to/ros1.md); unpaced, nothing waits on the wall clock. A message from the graph acts
 at the next tick (400 ms of simulated time, ~8 ms of wall time at full speed)."""
 
 

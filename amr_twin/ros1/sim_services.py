@@ -1,6 +1,6 @@
 """The simulator's own interface on the graph, as gazebo_ros offers it, under the twin's node name: :class:`SimServices`.
 
-Reasons and measurements: docs/ros1.md#amr_twinros1sim_services."""
+Reasons and measurements: docs/how-to/ros1.md#amr_twinros1sim_services."""
 
 from __future__ import annotations
 

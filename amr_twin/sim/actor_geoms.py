@@ -1,6 +1,6 @@
 """The actors' and the robot's colliding geoms, and the gap between them at an actor's next pose.
 
-What :mod:`amr_twin.sim.actors` needs to stop an actor where it touches the robot (docs/actors.md): each
+What :mod:`amr_twin.sim.actors` needs to stop an actor where it touches the robot (docs/explanation/actors.md): each
 actor's colliding geoms with their frames in the actor's (to place them at a pose it has not reached), the
 robot's, the reach of each set in the floor's plane (to skip the distances when far), and
 :func:`gap_after`, the Python twin of ``gap_after`` of ``actors.c`` (the same operations, so the same bits).

@@ -1,6 +1,6 @@
 """The actors in the running twin: moved on the loop's grid, their true poses on ``actors/poses``.
 
-Reasons and measurements: docs/actors.md#amr_twinsimactors.
+Reasons and measurements: docs/explanation/actors.md#amr_twinsimactors.
 
 Part of the physics layer (``PHYSICS_LAYER``): a grid sampler in C: moves the actors' mocap bodies
 in MjData."""

@@ -8,7 +8,7 @@ lying on the floor after tipping over are collisions. Any contact with an actor 
 person or pallet jack, :mod:`amr_twin.model.actors`: a mocap body) is one, a wheel on a
 jack's fork too; it is named by the actor's body (``person_0``), all its geoms one episode.
 
-Reasons and measurements: docs/actors.md#amr_twinsimcollisions.
+Reasons and measurements: docs/explanation/actors.md#amr_twinsimcollisions.
 
 Part of the physics layer (``PHYSICS_LAYER``): a grid sampler: reads MjData's contacts and their
 forces (``mj_contactForce``) at each grid instant."""

@@ -1,6 +1,6 @@
 """Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running :class:`~amr_twin.assembly.twin.Twin`.
 
-Reasons and measurements: docs/architecture.md#amr_twinsimfault_injector."""
+Reasons and measurements: docs/explanation/architecture.md#amr_twinsimfault_injector."""
 
 from __future__ import annotations
 

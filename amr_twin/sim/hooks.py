@@ -1,13 +1,13 @@
 """The simulation loop's hooks: where recorders, live views, bridges, navigation and experiments attach.
 
-Reasons and measurements: docs/architecture.md#amr_twinsimhooks."""
+Reasons and measurements: docs/explanation/architecture.md#amr_twinsimhooks."""
 
 from __future__ import annotations
 
 from typing import Callable
 
 HOOKS = ("on_grid", "on_grid_rows", "on_event", "on_actuation", "on_message", "on_collision")
-"""Every hook the loop defines (docs/architecture.md names each; a test checks it)."""
+"""Every hook the loop defines (docs/explanation/architecture.md names each; a test checks it)."""
 
 
 class Hooks:

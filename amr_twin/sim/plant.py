@@ -1,6 +1,6 @@
 """The plant between the Arduino's pins and the wheels: battery, drivers, hub motors.
 
-Reasons and measurements: docs/architecture.md#amr_twinsimplant."""
+Reasons and measurements: docs/explanation/architecture.md#amr_twinsimplant."""
 
 from __future__ import annotations
 

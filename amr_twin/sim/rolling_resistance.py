@@ -1,6 +1,6 @@
 """Load-dependent rolling resistance of the tyres and the ball casters.
 
-Reasons and measurements: docs/tyres.md#amr_twinsimrolling_resistance.
+Reasons and measurements: docs/explanation/tyres.md#amr_twinsimrolling_resistance.
 
 Part of the physics layer (``PHYSICS_LAYER``): a grid sampler in C: reads the contact loads and
 wheel speeds from MjData and writes ``qfrc_applied``."""

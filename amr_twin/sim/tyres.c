@@ -1,7 +1,7 @@
 /* Brush tyres with relaxation: the drive wheels' floor forces, every physics step (mjcb_passive).
  *
  * The C twin of tyre_forces in amr_twin/sim/tyres.py (the model, its symbols and its sources are
- * described there and in docs/tyres.md): the same operations in the same order on IEEE doubles
+ * described there and in docs/explanation/tyres.md): the same operations in the same order on IEEE doubles
  * (compiled with -ffp-contract=off), so that both give the same bits; tests/sim/test_tyres.py runs
  * a twin with each. MuJoCo calls tyres_passive at the end of mj_passive in every mj_forward (so in
  * every mj_step); it acts only on a model that carries the numeric TYRE_NUMERIC written by

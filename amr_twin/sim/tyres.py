@@ -1,6 +1,6 @@
 """The drive tyres on the floor: a brush model with relaxation, applied every physics step.
 
-Reasons and measurements: docs/tyres.md#amr_twinsimtyres.
+Reasons and measurements: docs/explanation/tyres.md#amr_twinsimtyres.
 
 Part of the physics layer (``PHYSICS_LAYER``): a MuJoCo passive callback: reads MjData and adds the
 tyres' forces to ``qfrc_passive`` inside ``mj_step``."""

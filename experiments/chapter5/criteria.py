@@ -4,7 +4,7 @@ The metrics (:mod:`amr_twin.analysis.metrics`: Ogata's definitions, which the th
 lists) are judged on the **published** samples (``wheel0_Vel``/``wheel1_Vel``, what the
 thesis plotted), joined by straight lines and starting from rest at the command; the true
 wheel speed is judged against the same bands too, and counted apart (the thesis could not see
-it, but its timings describe it better: ``docs/validation.md``). Settling band:
+it, but its timings describe it better: ``docs/explanation/validation.md``). Settling band:
 ``max(5 % of the step, 4 RPM)`` around the final value; 4 RPM is the firmware's
 THRESHOLD_CONTROL, inside which the PI does not act. The overshoot is the peak above the
 final value (0 without a peak); the steady error, the final value's offset from the

@@ -34,7 +34,7 @@ BAND_STYLE = {"delay_s": ("tab:purple", None), "rise_s": ("tab:orange", None), "
 CAPTION = ("Grey hatching: listing 4.12 publishes one speed per wheel revolution, so no published sample "
            "comes before one revolution at the reference after the command (T = 60/|rpm| s). Whatever the "
            "plant, the published peak comes no earlier than T, the delay (50 %) no earlier than T/2, and the "
-           "rise (10-90 %) takes at least 0.8 T (report.md; docs/validation.md).")
+           "rise (10-90 %) takes at least 0.8 T (report.md; docs/explanation/validation.md).")
 
 
 def _bands(wheel: str, reference_rpm: float) -> dict:

@@ -30,7 +30,7 @@ RIGHT_MARGIN_RPM = 1.0     # "lower" left overshoot: at least this far below the
 MIXED_RUNS_SHARE = 4 / 6   # runs 3-8: the right wheel overshoots more in at least 4 of 6
 OSCILLATION_SHARE = 3 / 4  # 20 kg oscillates more in at least 3 of the 4 comparisons
 TIMINGS = {"delay_s": 0.5, "rise_s": 0.8, "peak_s": 1.0, "settling_s": None}  # bound / T (settling: band)
-VALIDATION_DOC = "docs/validation.md"
+VALIDATION_DOC = "docs/explanation/validation.md"
 """Where the chapter 5 findings and the bound are explained, relative to the repository's root."""
 VALIDATION_SECTION = "What the chapter 5 report states first"
 ATTAINABLE_SECTION = "Can a plant inside the sourced ranges meet the findings?"

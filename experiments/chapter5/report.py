@@ -86,7 +86,7 @@ def _oscillation(data: dict) -> list[str]:
     if v is None:
         return []
     lines = [f"Named measure: **{v['measure']}**, the {v['definition']}. Judged on the published samples; "
-             "the true wheel speed is shown for reference. The analysis is in `docs/validation.md`.", "",
+             "the true wheel speed is shown for reference. The analysis is in `docs/explanation/validation.md`.", "",
              "| run | payload kg | wheel | ref RPM | published RPM | true RPM |", "|---|---|---|---|---|---|"]
     for r in data["runs"]:
         for wheel, w in r["wheels"].items():

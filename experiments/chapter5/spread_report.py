@@ -51,7 +51,7 @@ def markdown(s: dict) -> list[str]:
     halved = s.get("tyre_timestep_halved") or []
     if halved:
         lines += ["", f"Physics timestep halved by the tyres' guard (stability number S > {halved[0]['stability_limit']:g}, "
-                  "docs/tyres.md) in " + ", ".join(f"draw {h['draw']} run {h['run']} ({h['timestep_s'] * 1e3:g} ms)"
+                  "docs/explanation/tyres.md) in " + ", ".join(f"draw {h['draw']} run {h['run']} ({h['timestep_s'] * 1e3:g} ms)"
                                                   for h in halved) + "."]
     if s["clipped"]:
         lines += ["", "Draws clipped to a bound: " + ", ".join(f"`{k}` {v}" for k, v in s["clipped"].items()) + "."]

@@ -5,7 +5,7 @@ After a change of the plant or the firmwares, one command regenerates them all:
     python -m amr_twin.experiments.documents.figures
 
 It runs the fault study into ``docs/`` (``amr-twin experiment faults --out docs``: ``faults.md``,
-``faults.json``, ``img/faults_*.png``), the payload sweep of ``docs/results.md``
+``faults.json``, ``img/faults_*.png``), the payload sweep of ``docs/reference/results.md``
 (``docs/payload_sweep.json``, ``docs/img/sweep_angular.png``), the fusion experiment's ten seeds on
 both routes (``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
 (``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture),
@@ -34,21 +34,21 @@ from amr_twin.model.paths import ROOT
 COMMAND = "python -m amr_twin.experiments.documents.figures"
 FAULTS_JSON = ROOT / "docs" / "faults.json"
 CALIBRATION = ROOT / "models" / "amr" / "calibration.yaml"
-DOCUMENTS = (ROOT / "docs" / "results.md", ROOT / "docs" / "validation.md", ROOT / "docs" / "fusion.md")
+DOCUMENTS = (ROOT / "docs" / "reference" / "results.md", ROOT / "docs" / "explanation" / "validation.md", ROOT / "docs" / "explanation" / "fusion.md")
 """The documents with generated blocks (``docs/faults.md`` is generated whole; the README has none: it
-links to ``docs/results.md``)."""
+links to ``docs/reference/results.md``)."""
 _BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w-]+) [^>]*-->\n)(?P<body>.*?)(<!-- end: (?P=name) -->)", re.S)
 
 PAYLOAD_SWEEP = {"masses": [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
                  "positions": ["center", "front", "rear", "front-left-corner"],
                  "commands": ["linear:0.7", "angular:-60:-1"]}
-"""The payload sweep of ``docs/results.md`` (``amr-twin sweep payload --masses 0:60:10 --positions
+"""The payload sweep of ``docs/reference/results.md`` (``amr-twin sweep payload --masses 0:60:10 --positions
 center,front,rear,front-left-corner --commands linear:0.7,angular:-60:-1``), 8 s a point."""
 PAYLOAD_JSON = ROOT / "docs" / "payload_sweep.json"
 
 
 def payload_figures(results: dict, improved: dict | None) -> dict:
-    """What ``docs/results.md`` quotes of the payload sweep (committed as :data:`PAYLOAD_JSON`)."""
+    """What ``docs/reference/results.md`` quotes of the payload sweep (committed as :data:`PAYLOAD_JSON`)."""
     from amr_twin.experiments.payload.sweep_report import summarise
 
     summary = summarise(results)
@@ -171,7 +171,7 @@ def parse_args(argv: list[str]) -> None:
 
     parser = argparse.ArgumentParser(prog=COMMAND, description="Rewrite the figures the documents quote from fresh "
                                      "runs (docs/faults.md, the payload sweep, fusion and chapter 5 results, the "
-                                     "generated blocks of README.md, docs/validation.md, docs/fusion.md); several "
+                                     "generated blocks of README.md, docs/explanation/validation.md, docs/explanation/fusion.md); several "
                                      "minutes.")
     _, extra = parser.parse_known_args(argv)
     if extra:

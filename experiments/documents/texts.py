@@ -32,7 +32,7 @@ def _counts(checks: dict, prefix: str = "") -> dict[str, tuple[int, int]]:
 
 
 def chapter5_summary(card: dict) -> str:
-    """``docs/results.md``'s chapter 5 paragraph, from the scorecard."""
+    """``docs/reference/results.md``'s chapter 5 paragraph, from the scorecard."""
     c, pub, true = card["checks"], _counts(card["checks"]), _counts(card["checks"], "true.")
     timing = ("delay_s", "rise_s", "peak_s", "settling_s")
     timed = [sum(true[m][i] for m in timing) for i in (0, 1)]
@@ -50,7 +50,7 @@ def chapter5_summary(card: dict) -> str:
     return (
         f"Chapter 5 (`amr-twin experiment chapter5`, faithful firmware, calibrated plant), scored with the "
         f"definitions of the thesis' fig. 5.3 (Ogata's: overshoot above the final value, the steady offset "
-        f"judged on its own; `docs/validation.md`): on the published samples **{card['passed']} of "
+        f"judged on its own; `docs/explanation/validation.md`): on the published samples **{card['passed']} of "
         f"{card['checks_total']} checks pass**. The steady offset lies within the faithful PI's 4 RPM dead "
         f"zone on {pub['steady_error'][0]} of {pub['steady_error'][1]} wheels (runs 1 and 2, 76.39 RPM: left "
         f"{_rpm(c['run1.left.steady_error']['twin'])}, right {_rpm(c['run2.right.steady_error']['twin'])} RPM)"
@@ -58,7 +58,7 @@ def chapter5_summary(card: dict) -> str:
         f"{pub['overshoot'][1]}, and the right wheel {more} (runs 1 and 2: {left:.2f} left, {right:.2f} RPM "
         f"right, against §5.1.3's 0-2 and 4 RPM); {times}: the firmware publishes once per wheel revolution, so "
         f"its first sample comes a revolution after the command (0.8 s at 76 RPM, plus the ramp), which puts the "
-        f"delay, rise and peak of the steps up to 75 RPM out of any plant's reach (`docs/validation.md`) and "
+        f"delay, rise and peak of the steps up to 75 RPM out of any plant's reach (`docs/explanation/validation.md`) and "
         f"leaves the rest to the ramp and the timer; and {card['oscillation_published_passed']} of the 4 oscillation "
         f"comparisons holds. The true wheel speed (100 Hz, which the thesis could not see) against the same "
         f"bands passes {card['true_passed']} of {card['true_checks_total']}, its timings {timed[0]} of {timed[1]} "
@@ -80,7 +80,7 @@ def _runs(checks: dict) -> list[tuple[str, str]]:
 
 
 def chapter5_table(card: dict) -> str:
-    """docs/validation.md's table of every check: the twin's value, published and true, against its band."""
+    """docs/explanation/validation.md's table of every check: the twin's value, published and true, against its band."""
     c = card["checks"]
     metrics = list(dict.fromkeys(b.metric for b in BANDS))
     rows = _runs(c)
@@ -103,7 +103,7 @@ def chapter5_table(card: dict) -> str:
 
 
 def faults_summary(data: dict) -> str:
-    """``docs/results.md``'s fault paragraph, from docs/faults.json."""
+    """``docs/reference/results.md``'s fault paragraph, from docs/faults.json."""
     rows = {(r["fault"], r["firmware"]): r for r in data["rows"]}
 
     def left(case: str, fw: str, key: str = "true_during_rpm") -> float:
@@ -162,7 +162,7 @@ def calibration_summary(report: dict) -> str:
 
 
 def payload_summary(data: dict) -> str:
-    """``docs/results.md``'s payload sweep paragraph, from :data:`PAYLOAD_JSON`."""
+    """``docs/reference/results.md``'s payload sweep paragraph, from :data:`PAYLOAD_JSON`."""
     low, energy = data["lowest_wheel"], data["center_energy_j_per_m"]
     answers = "; ".join(f"**{p}**: {s['answer']}" + (f"; with the improved firmware: {s['improved']['answer']}"
                                                      if "improved" in s else "")
@@ -176,17 +176,17 @@ def payload_summary(data: dict) -> str:
             f"its limit named: {answers}. A runaway is a limit of the speed control, not of the motors' rating at "
             f"what the payload demands: with the load behind the axle the robot oversteers in the clockwise turn, "
             f"and a firmware that does not hold the inner wheel's speed lets it pivot, the current rising with it "
-            f"(`docs/validation.md`). Energy per metre at 0.7 m/s, centre: {energy['0']:.0f} J/m empty, "
+            f"(`docs/explanation/validation.md`). Energy per metre at 0.7 m/s, centre: {energy['0']:.0f} J/m empty, "
             f"{energy['60']:.0f} J/m with 60 kg (pack and electronics).\n")
 
 
 SUMMARY_FUSION = ("ate_m", "ate_aligned_m", "rpe_trans_m", "rpe_rot_deg", "rms_yaw_err_deg")
-"""The columns of ``docs/results.md``'s fusion tables (``docs/fusion.md`` has them all)."""
+"""The columns of ``docs/reference/results.md``'s fusion tables (``docs/explanation/fusion.md`` has them all)."""
 
 
 def fusion_table(data: dict, keys: tuple[str, ...] | None = None) -> str:
     """A route's table of architectures (mean ± sd (min-max) over the seeds), all metrics or ``keys``;
-    with all, the map and UWB line and every seed's ATE (``docs/fusion.md``)."""
+    with all, the map and UWB line and every seed's ATE (``docs/explanation/fusion.md``)."""
     from amr_twin.experiments.fusion.seeds_report import METRICS, cell, per_seed_table, percent, table
 
     if keys is None:

@@ -1,7 +1,7 @@
 """The episodes' pieces: an :class:`Episode`, the scenarios and where an unmapped obstacle or a person goes.
 
 Shared by the drawing of the hand-made worlds' episodes (:func:`amr_twin.experiments.navigation.episodes`)
-and the generated halls' (:mod:`.generated`); docs/navigation.md describes the scenarios.
+and the generated halls' (:mod:`.generated`); docs/explanation/navigation.md describes the scenarios.
 """
 
 from __future__ import annotations

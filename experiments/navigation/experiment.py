@@ -1,6 +1,6 @@
 """``amr-twin experiment navigation``: seeded episodes of start/goal pairs in the warehouse, measured as nav2 is.
 
-Reasons and measurements: docs/navigation.md#amr_twinexperimentsnavigationexperiment."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinexperimentsnavigationexperiment."""
 
 from __future__ import annotations
 

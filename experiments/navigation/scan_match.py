@@ -1,6 +1,6 @@
 """Scan-to-map matching of the mapping drive: each scan fitted to the map of the scans before it.
 
-Reasons and measurements: docs/navigation.md#amr_twinexperimentsnavigationscan_match."""
+Reasons and measurements: docs/explanation/navigation.md#amr_twinexperimentsnavigationscan_match."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ The points (named positions, the parsers, keys and fingerprints) are in
 :mod:`.simulation`. The highest safe payload of a position is the largest
 mass whose every lighter point (all commands) is safe.
 
-Reasons and measurements: docs/results.md#amr_twinexperimentspayloadsweep."""
+Reasons and measurements: docs/reference/results.md#amr_twinexperimentspayloadsweep."""
 
 from __future__ import annotations
 

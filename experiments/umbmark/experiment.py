@@ -6,7 +6,7 @@ REP-103 axes: start at the origin facing +x, a square of side ``L`` driven count
 turns) and clockwise, each run's return position error ``e = true - odometry`` in the start's
 frame (:class:`~amr_twin.experiments.umbmark.square.SquareRun`).
 
-Reasons and measurements: docs/umbmark.md#amr_twinexperimentsumbmarkexperiment."""
+Reasons and measurements: docs/explanation/umbmark.md#amr_twinexperimentsumbmarkexperiment."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """One UMBmark square driven by the twin on its own wheel odometry (Borenstein and Feng, 1996).
 
-Reasons and measurements: docs/umbmark.md#amr_twinexperimentsumbmarksquare."""
+Reasons and measurements: docs/explanation/umbmark.md#amr_twinexperimentsumbmarksquare."""
 
 from __future__ import annotations
 

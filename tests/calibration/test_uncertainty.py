@@ -37,7 +37,7 @@ def test_same_seed_same_bytes_in_another_process(space):
 
 
 def test_a_setting_no_draw_reads_leaves_the_draws_as_they_are(space):
-    """The tyres on and off draw the same robots (chapter 5's paired comparison, docs/tyres.md);
+    """The tyres on and off draw the same robots (chapter 5's paired comparison, docs/explanation/tyres.md);
     a drawn parameter's value set by hand does change them."""
     here = space.draw(8, seed=3)
     rigid = ParameterSpace.load(sets=["wheel.tyre_slip=false"]).draw(8, seed=3)

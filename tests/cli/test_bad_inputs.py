@@ -1,4 +1,4 @@
-"""Bad inputs, each refused cleanly or answered correctly (the table: docs/bad_inputs.md).
+"""Bad inputs, each refused cleanly or answered correctly (the table: docs/reference/bad_inputs.md).
 
 A clean refusal: exit 2, one line on stderr naming the option or the file and what is allowed,
 nothing written (the folder the test works in is unchanged), before the work. The commands are

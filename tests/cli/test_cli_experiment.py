@@ -84,7 +84,7 @@ def test_chapter5_one_recording_per_run(chapter5_cli):
 
 
 def test_chapter5_terminal_opens_with_the_findings_then_the_counts(chapter5_cli):
-    """The findings first, one line each as in report.md, the pointer to docs/validation.md, then one
+    """The findings first, one line each as in report.md, the pointer to docs/explanation/validation.md, then one
     line of passes per metric instead of a MISS line per run and wheel."""
     from amr_twin.experiments.chapter5.findings import VALIDATION_DOC, lines
 

@@ -137,7 +137,7 @@ def ekf_runs():
 def test_the_ekf_pose_is_held_to_the_map_in_the_aisles(ekf_runs):
     """Beside a rack's end the UWB ranges come late through the racks and pull the EKF's pose off (0.09 m
     and 0.026 rad on this drive; more than 0.05 rad on the drive the LiDAR's old ghost returns made,
-    docs/lidar.md); matched to the map the pose stays within 9 cm (along the aisle, where only the
+    docs/explanation/lidar.md); matched to the map the pose stays within 9 cm (along the aisle, where only the
     uprights tell where it is) and 0.03 rad of the truth, every scan matched."""
     pos_m, yaw_rad, nav = ekf_runs[True]
     raw_pos_m, raw_yaw_rad, _ = ekf_runs[False]
@@ -197,7 +197,7 @@ def test_the_ekf_takes_the_match_in_and_stays_on_an_unseen_map(unseen_runs):
     """Without the feedback the EKF drifts with the UWB ranges that come late through the rows, 1.0-1.2 m
     within 25 s, beyond the correction's 0.3 m bound, and the goal is not reached (the experiment's
     episode timed out); fusing the matched pose the navigator's pose stays within 0.1 m and the goal is
-    reached in 25 s (the unseen maps, docs/navigation.md)."""
+    reached in 25 s (the unseen maps, docs/explanation/navigation.md)."""
     err_fb, status_fb, nav = unseen_runs[True]
     err_raw, status_raw, _ = unseen_runs[False]
     assert err_raw.max() > 0.6 and status_raw != "succeeded", (err_raw.max(), status_raw)

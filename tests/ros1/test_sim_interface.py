@@ -1,4 +1,4 @@
-"""The simulator's interface a ROS engineer scripts against (docs/ros1.md, "The simulator's interface"): pause,
+"""The simulator's interface a ROS engineer scripts against (docs/how-to/ros1.md, "The simulator's interface"): pause,
 reset and teleport services, namespaces, ROS command-line arguments, roslaunch, runs until stopped, /use_sim_time
 put back, and a master's restart. Each on a real master; skipped without Debian's ROS 1."""
 

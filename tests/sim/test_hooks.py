@@ -157,9 +157,9 @@ def test_unhook_removes_a_subscriber_from_its_hook():
 
 
 def test_the_architecture_document_names_every_hook():
-    doc = (ROOT / "docs" / "architecture.md").read_text()
+    doc = (ROOT / "docs" / "explanation" / "architecture.md").read_text()
     missing = [name for name in HOOKS if f"`{name}(" not in doc]
-    assert not missing, f"docs/architecture.md does not describe {missing}"
+    assert not missing, f"docs/explanation/architecture.md does not describe {missing}"
     from amr_twin.sim.hooks import Hooks
 
     defined = {n for n in vars(Hooks) if n.startswith("on_")}

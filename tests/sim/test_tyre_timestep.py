@@ -2,7 +2,7 @@
 
 The tyre's deflection and its rubber damping are advanced explicitly (amr_twin/sim/tyres.py), so
 the carcass is stable only while ``(k_x dt + tau k_x) dt / (J / r^2)`` stays below about 2
-(docs/tyres.md, "Not found: convergence to the rigid contact"). Chapter 5's 20 kg turn (run 8)
+(docs/explanation/tyres.md, "Not found: convergence to the rigid contact"). Chapter 5's 20 kg turn (run 8)
 with every tyre parameter at the stiff end of its sourced range (slip stiffness 25, cornering 17
 /rad, relaxation lengths 0.02 and 0.04 m, loss time 10 ms): at 1 ms and at 0.5 ms the true wheel
 speeds agree within 0.5 RPM from 4.5 s on (the ramp's and the PI's events fall on other steps before), and their final values within 0.1 RPM.

@@ -1,6 +1,6 @@
-"""The brush tyres (amr_twin/sim/tyres.py, tyres.c) against hand calculations (docs/tyres.md).
+"""The brush tyres (amr_twin/sim/tyres.py, tyres.c) against hand calculations (docs/explanation/tyres.md).
 
-The expected figures are the hand calculations of docs/tyres.md, written here as numbers (not
+The expected figures are the hand calculations of docs/explanation/tyres.md, written here as numbers (not
 computed with the code under test): a steady turn at 60 deg/s about an ICC 1 m to the left
 side-slips the axle outwards by 1.32 deg and turns 0.096 % slower than its wheels say (a slight
 understeer); a pivot (ICC 0) needs 0.079 A (left) and 0.080 A (right) more motor current than the
@@ -18,9 +18,9 @@ from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
-HAND_SIDE_SLIP_DEG = -1.32      # docs/tyres.md, steady turn (the axle slides outwards: to the right)
-HAND_UNDERSTEER = 0.00096       # 1 - yaw-rate gain, docs/tyres.md
-HAND_SCRUB_CURRENT_A = (0.0738, 0.0695)  # pivot: extra motor current, left and right, docs/tyres.md
+HAND_SIDE_SLIP_DEG = -1.32      # docs/explanation/tyres.md, steady turn (the axle slides outwards: to the right)
+HAND_UNDERSTEER = 0.00096       # 1 - yaw-rate gain, docs/explanation/tyres.md
+HAND_SCRUB_CURRENT_A = (0.0738, 0.0695)  # pivot: extra motor current, left and right, docs/explanation/tyres.md
 RIGID = ["wheel.tyre_slip=false"]
 
 

@@ -11,7 +11,7 @@ def test_halved_draws_are_named_and_nothing_said_without():
     assert not any("halved" in line for line in markdown({**BASE, "tyre_timestep_halved": []}))
     halved = [{"draw": 1, "run": 8, "timestep_s": 0.0005, "stability_limit": 1.5}]
     lines = [line for line in markdown({**BASE, "tyre_timestep_halved": halved}) if "halved" in line]
-    assert lines == ["Physics timestep halved by the tyres' guard (stability number S > 1.5, docs/tyres.md) in "
+    assert lines == ["Physics timestep halved by the tyres' guard (stability number S > 1.5, docs/explanation/tyres.md) in "
                      "draw 1 run 8 (0.5 ms)."]
 
 

@@ -19,10 +19,10 @@ def test_each_document_is_what_its_generator_writes(path):
 
 def test_every_document_with_generated_blocks_is_regenerated():
     """A block in a page the generator does not rewrite would drift unseen (the README has none:
-    its figures moved to docs/results.md)."""
+    its figures moved to docs/reference/results.md)."""
     from amr_twin.model.paths import ROOT
 
-    pages = [ROOT / "README.md", *(ROOT / "docs").glob("*.md")]
+    pages = [ROOT / "README.md", *(ROOT / "docs").rglob("*.md")]
     with_blocks = {p for p in pages if "<!-- generated: " in p.read_text()}
     assert with_blocks == set(doc_figures.DOCUMENTS)
 

@@ -185,10 +185,14 @@ def integrate(profiles: Sequence[SpeedProfile], start: tuple, t_end_us: int, max
         starts = [p.at(t, s) for p, s in zip(profiles, segs)]
         n = 1 if starts == ends else -(-(t_next - t) // max_substep_us)
         dt_us = (t_next - t) / n
+        dt_s = dt_us * 1e-6
+        (ta, ra, tb, rb), (tc, rc, td, rd) = segs  # SpeedProfile.at on them, spelled out (up to 50 a call)
+        rise_l, span_l, rise_r, span_r = rb - ra, tb - ta, rd - rc, td - tc
         for k in range(n):
             mid = t + (k + 0.5) * dt_us
-            rpm = [p.at(mid, s) for p, s in zip(profiles, segs)]
-            pose = arc(pose, *body(*rpm), dt_us * 1e-6)
+            left = ra if tb <= ta else ra + rise_l * (mid - ta) / span_l
+            right = rc if td <= tc else rc + rise_r * (mid - tc) / span_r
+            pose = arc(pose, *body(left, right), dt_s)
         t = t_next
     return (t_end_us, *pose)
 

@@ -185,10 +185,14 @@ def integrate(profiles: Sequence[SpeedProfile], start: tuple, t_end_us: int, max
         starts = [p.at(t, s) for p, s in zip(profiles, segs)]
         n = 1 if starts == ends else -(-(t_next - t) // max_substep_us)
         dt_us = (t_next - t) / n
+        dt_s = dt_us * 1e-6
+        (ta, ra, tb, rb), (tc, rc, td, rd) = segs  # SpeedProfile.at on them, spelled out (up to 50 a call)
+        rise_l, span_l, rise_r, span_r = rb - ra, tb - ta, rd - rc, td - tc
         for k in range(n):
             mid = t + (k + 0.5) * dt_us
-            rpm = [p.at(mid, s) for p, s in zip(profiles, segs)]
-            pose = arc(pose, *body(*rpm), dt_us * 1e-6)
+            left = ra if tb <= ta else ra + rise_l * (mid - ta) / span_l
+            right = rc if td <= tc else rc + rise_r * (mid - tc) / span_r
+            pose = arc(pose, *body(left, right), dt_s)
         t = t_next
     return (t_end_us, *pose)
 
@@ -235,7 +239,8 @@ class SmoothedPose:
         self.body, self.max_substep_us = body, max_substep_us
         self._anchor = (t_us, *pose)  # final: no sample can change the pose before it
         self._cache = self._anchor  # pose at the newest knot of either wheel (up to now)
-        self._hold = None  # (v, w) when both speeds are held from the cache on
+        self._hold = None  # (v, w) when both speeds are held from the cache on ...
+        self._hold_until_us = self._anchor[0]  # ... up to this instant
         self._dirty = False
 
     def changed(self) -> None:
@@ -245,6 +250,20 @@ class SmoothedPose:
     def speeds_rpm(self, t_us: float) -> list[float]:
         """Both wheels' estimated speeds at ``t_us``, RPM."""
         return [p.at(t_us, p.segment(t_us)) for p in self.profiles]
+
+    def _steady(self, t_us: int) -> tuple[tuple[float, float] | None, float]:
+        """Body twist (m/s, rad/s) both speeds hold from ``t_us`` to the instant returned (us, ``inf``:
+        the last knot), with the speeds :func:`integrate` uses there; ``None`` if one varies."""
+        until, rpm = math.inf, []
+        for p in self.profiles:
+            seg = p.segment(t_us)
+            t0, r0, t1, r1 = seg
+            if t0 > t_us or (t1 > t0 and r1 != r0):
+                return None, t_us
+            if t1 > t0:  # constant piece up to its end: integrate's speed at a mid-step instant
+                until = min(until, t1)
+            rpm.append(p.at(t1, seg))
+        return self.body(*rpm), until
 
     def pose_at(self, now_us: int) -> Pose2:
         """The pose at ``now_us`` (not before the previous call's instant), yaw unwrapped."""
@@ -260,12 +279,10 @@ class SmoothedPose:
             self._cache = integrate(self.profiles, self._anchor, max(newest, self._anchor[0]),
                                     self.max_substep_us, self.body)
             self._dirty = False
-            self._hold = None
-            if all(p.last_us <= self._cache[0] for p in self.profiles):  # speeds held after the cache
-                self._hold = self.body(self.profiles[0].last_rpm, self.profiles[1].last_rpm)
+            self._hold, self._hold_until_us = self._steady(self._cache[0])
         cache, hold = self._cache, self._hold
         if now_us <= cache[0]:
             return cache[1:]
-        if hold is not None:  # one arc at the held speeds: what integrate computes, cheaper
+        if hold is not None and now_us <= self._hold_until_us:  # one arc: what integrate computes, cheaper
             return arc(cache[1:], hold[0], hold[1], float(now_us - cache[0]) * 1e-6)
         return tuple(integrate(self.profiles, cache, now_us, self.max_substep_us, self.body)[1:])

@@ -112,8 +112,9 @@ class ArduinoRuntime:
 
     def external_edge(self, number: int) -> None:
         """A logic change on the pin of external interrupt ``number`` at ``clock.now_us``."""
-        if self._ext_enabled[number] or (self._ext_mode_set[number]
-                                         and self.board.latch_int_flag_while_detached):
+        if self._ext_enabled[number] or (
+            self._ext_mode_set[number] and self.board.latch_int_flag_while_detached
+        ):
             self._ext_flag[number] = True
             self._service()
 

@@ -13,9 +13,18 @@ from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.base.pins import DriverPins
 from amr_twin.ros.rosserial import ARDUINO_TO_PC, PC_TO_ARDUINO
-from amr_twin.ros.rosserial_frame import (ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, FrameParser, TopicInfo,
-                                      deserialize_float64, frame, serialize_float64,
-                                      serialize_float64_multiarray, topic_request)
+from amr_twin.ros.rosserial_frame import (
+    ID_PUBLISHER,
+    ID_SUBSCRIBER,
+    ID_TIME,
+    FrameParser,
+    TopicInfo,
+    deserialize_float64,
+    frame,
+    serialize_float64,
+    serialize_float64_multiarray,
+    topic_request,
+)
 
 from amr_twin.controllers.avr_board import AvrBoard, BoardError, symbol_address
 from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch
@@ -59,18 +68,24 @@ def topic_table(elf: str) -> tuple[tuple[TopicInfo, ...], tuple[TopicInfo, ...]]
             board.run_to(ms * 1000 * CYCLES_PER_US)
             for f in parser.feed(bytes(b for _, b in board.take_tx())):
                 if f.topic_id in (ID_PUBLISHER, ID_SUBSCRIBER):
-                    (pubs if f.topic_id == ID_PUBLISHER else subs).append(TopicInfo.deserialize(f.message))
+                    (pubs if f.topic_id == ID_PUBLISHER else subs).append(
+                        TopicInfo.deserialize(f.message)
+                    )
             if (pubs or subs) and parser.pending[0] == 0 and ms >= 50:
                 break
     finally:
         board.close()
     if not pubs and not subs:
-        raise SketchError(f"{elf}: the sketch did not answer rosserial's topic request within 0.5 s "
-                          "(does setup() call node.initNode() and loop() node.spinOnce()?)")
+        raise SketchError(
+            f"{elf}: the sketch did not answer rosserial's topic request within 0.5 s "
+            "(does setup() call node.initNode() and loop() node.spinOnce()?)"
+        )
     for info in pubs + subs:
         if info.message_type not in KNOWN_TYPES:
-            raise SketchError(f"topic {info.topic_name}: type {info.message_type} is not carried by the "
-                              f"twin's rosserial bridge ({', '.join(KNOWN_TYPES)})")
+            raise SketchError(
+                f"topic {info.topic_name}: type {info.message_type} is not carried by the "
+                f"twin's rosserial bridge ({', '.join(KNOWN_TYPES)})"
+            )
     return tuple(pubs), tuple(subs)
 
 
@@ -90,14 +105,20 @@ class AvrFirmware:
         self.p = p = params or AvrParams()
         b = p.board
         if b.latch_int_flag_while_detached or b.record_pin_log:
-            raise ValueError("AvrParams.board: latch_int_flag_while_detached and record_pin_log belong to the "
-                             "Python ports' board; simavr decides the first, and the emulated board keeps no pin log")
+            raise ValueError(
+                "AvrParams.board: latch_int_flag_while_detached and record_pin_log belong to the "
+                "Python ports' board; simavr decides the first, and the emulated board keeps no pin log"
+            )
         sketch = DEFAULT_SKETCH if p.sketch_dir is None else p.sketch_dir
         self.elf = str(build_sketch(sketch, sketch_defines(p)))
         publishers, subscribers = topic_table(self.elf)
         self.publishers = {info.topic_id: info for info in publishers}
         self.subscribers = {info.topic_name: info for info in subscribers}
-        outputs = [pin for w in range(2) for pin in (b.pwm_pins[w], b.dir_pins[w], b.brake_pins[w], b.stop_pins[w])]
+        outputs = [
+            pin
+            for w in range(2)
+            for pin in (b.pwm_pins[w], b.dir_pins[w], b.brake_pins[w], b.stop_pins[w])
+        ]
         self.board = AvrBoard(self.elf, outputs, {b.speed_pins[0]: 0, b.speed_pins[1]: 0})
         if not self.board.run_to_symbol(symbol_address(self.elf, "loop"), 16_000_000):
             raise SketchError(f"{sketch}: setup() did not return within 1 s")
@@ -108,10 +129,10 @@ class AvrFirmware:
         self._speed_pins = b.speed_pins
         self._key = -1
         self._parser = FrameParser()
-        self._wire_end: list[int] = []   # end cycle of each received board byte, by stream index
-        self._wire_base = 0              # stream index of _wire_end[0]
-        self._tx_free = 0                # cycle at which the board's TX wire is free
-        self._rx_free = 0                # cycle at which the PC -> board wire is free
+        self._wire_end: list[int] = []  # end cycle of each received board byte, by stream index
+        self._wire_base = 0  # stream index of _wire_end[0]
+        self._tx_free = 0  # cycle at which the board's TX wire is free
+        self._rx_free = 0  # cycle at which the PC -> board wire is free
         self._bus = self._link = None
         self._extra_sync: int | None = None
         self.frames_dropped = 0
@@ -121,7 +142,9 @@ class AvrFirmware:
         self.negotiations = 0
         """Topic negotiations the board answered (one per topic request of a host)."""
         self.serial = self.pacer = None
-        self._serial_out: deque[tuple[int, int]] = deque()  # (cycle its last bit leaves the wire, byte)
+        self._serial_out: deque[tuple[int, int]] = (
+            deque()
+        )  # (cycle its last bit leaves the wire, byte)
         if p.serial_pty is not None:
             from amr_twin.controllers.avr_serial_port import PtySerialPort, WallPacer
 
@@ -152,7 +175,9 @@ class AvrFirmware:
 
     def on_sc_edge(self, wheel: int) -> None:
         """An SC change of ``wheel`` now: toggle its pin at this microsecond."""
-        self.board.queue_edge(self.clock.now_us * CYCLES_PER_US + self.lead_cycles, self._speed_pins[wheel])
+        self.board.queue_edge(
+            self.clock.now_us * CYCLES_PER_US + self.lead_cycles, self._speed_pins[wheel]
+        )
 
     # -- board in step with the clock ---------------------------------------------------
     def _tick(self) -> None:
@@ -207,7 +232,9 @@ class AvrFirmware:
             if self.serial is not None:
                 self._serial_out.append((self._tx_free, byte))
         for f in self._parser.feed(bytes(b for _, b in tx)):
-            arrival = -(-(self._wire_end[f.last - self._wire_base] - self.lead_cycles) // CYCLES_PER_US)
+            arrival = -(
+                -(self._wire_end[f.last - self._wire_base] - self.lead_cycles) // CYCLES_PER_US
+            )
             self._deliver(f.topic_id, f.message, arrival)
         self.frames_dropped = self._parser.dropped
         got, total = self._parser.pending
@@ -225,7 +252,9 @@ class AvrFirmware:
         self.clock.schedule(t_us, self._sync)
 
     def _deliver(self, topic_id: int, message: bytes, arrival_us: int) -> None:
-        if topic_id == ID_PUBLISHER:  # the board answers a topic request: its first publisher opens the answer
+        if (
+            topic_id == ID_PUBLISHER
+        ):  # the board answers a topic request: its first publisher opens the answer
             if self.publishers and TopicInfo.deserialize(message).topic_id == min(self.publishers):
                 self.negotiations += 1
             return
@@ -254,7 +283,9 @@ class AvrFirmware:
     def _answer_time(self) -> None:
         """The host's answer to a time request: std_msgs/Time of the simulated clock, now."""
         now = self.clock.now_us
-        self._send_frame(frame(ID_TIME, struct.pack("<II", now // 1_000_000, now % 1_000_000 * 1000)))
+        self._send_frame(
+            frame(ID_TIME, struct.pack("<II", now // 1_000_000, now % 1_000_000 * 1000))
+        )
 
     def _send(self, info: TopicInfo, msg) -> None:
         """Put ``msg`` on the PC -> board wire as a rosserial frame on the sketch's topic id."""
@@ -270,7 +301,9 @@ class AvrFirmware:
         if self._link is not None:
             start_us += self._link.extra_latency_us
             if self._link.draw_loss(PC_TO_ARDUINO, len(data)):
-                data = data[:-1] + bytes(((data[-1] + 1) & 0xFF,))  # the checksum fails on the board
+                data = data[:-1] + bytes(
+                    ((data[-1] + 1) & 0xFF,)
+                )  # the checksum fails on the board
         self._queue_rx(start_us, data)
 
     def _queue_rx(self, start_us: int, data: bytes) -> None:
@@ -285,4 +318,3 @@ class AvrFirmware:
         if self.serial is not None:
             self.serial.close()
         self.board.close()
-

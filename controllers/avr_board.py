@@ -25,16 +25,42 @@ from amr_twin.controllers.avr_build import ARDUINO_AVR, F_CPU_HZ, MCU, cache_dir
 
 BRIDGE_SOURCE = Path(__file__).resolve().parent / "arduino" / "cosim" / "avr_cosim.c"
 
-PORT_ADDR = {"A": 0x22, "B": 0x25, "C": 0x28, "D": 0x2B, "E": 0x2E, "F": 0x31, "G": 0x34,
-             "H": 0x102, "J": 0x105, "K": 0x108, "L": 0x10B}
+PORT_ADDR = {
+    "A": 0x22,
+    "B": 0x25,
+    "C": 0x28,
+    "D": 0x2B,
+    "E": 0x2E,
+    "F": 0x31,
+    "G": 0x34,
+    "H": 0x102,
+    "J": 0x105,
+    "K": 0x108,
+    "L": 0x10B,
+}
 """Data-space address of PORTx on the ATmega2560 (PINx = PORTx - 2, DDRx = PORTx - 1)."""
 
 TIMER_TCCRA = {0: 0x44, 1: 0x80, 2: 0xB0, 3: 0x90, 4: 0xA0, 5: 0x120}
 """TCCRnA address per timer."""
 
-OCR_ADDR = {"0A": 0x47, "0B": 0x48, "1A": 0x88, "1B": 0x8A, "1C": 0x8C, "2A": 0xB3, "2B": 0xB4,
-            "3A": 0x98, "3B": 0x9A, "3C": 0x9C, "4A": 0xA8, "4B": 0xAA, "4C": 0xAC,
-            "5A": 0x128, "5B": 0x12A, "5C": 0x12C}
+OCR_ADDR = {
+    "0A": 0x47,
+    "0B": 0x48,
+    "1A": 0x88,
+    "1B": 0x8A,
+    "1C": 0x8C,
+    "2A": 0xB3,
+    "2B": 0xB4,
+    "3A": 0x98,
+    "3B": 0x9A,
+    "3C": 0x9C,
+    "4A": 0xA8,
+    "4B": 0xAA,
+    "4C": 0xAC,
+    "5A": 0x128,
+    "5B": 0x12A,
+    "5C": 0x12C,
+}
 """OCRnx (low byte) address per timer channel."""
 
 COM_BIT = {"A": 7, "B": 5, "C": 3}
@@ -62,8 +88,14 @@ def mega_pins() -> dict[int, PinInfo]:
         body = re.search(name + r"\[\]\s*=\s*\{(.*?)\n\};", text, re.S).group(1)
         return re.findall(r"^\s*([A-Z_]+[0-9A-Z_]*|_BV\(\s*\d+\s*\))\s*,", body, re.M)
 
-    ports, masks, timers = (table(n) for n in ("digital_pin_to_port_PGM", "digital_pin_to_bit_mask_PGM",
-                                               "digital_pin_to_timer_PGM"))
+    ports, masks, timers = (
+        table(n)
+        for n in (
+            "digital_pin_to_port_PGM",
+            "digital_pin_to_bit_mask_PGM",
+            "digital_pin_to_timer_PGM",
+        )
+    )
     pins = {}
     for pin, (port, mask, timer) in enumerate(zip(ports, masks, timers)):
         bit = int(re.search(r"\d+", mask).group())
@@ -97,14 +129,25 @@ def _library() -> ctypes.CDLL:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".so", delete=False) as tmp:
             pass
-        run = subprocess.run(["cc", "-O2", "-shared", "-fPIC", "-o", tmp.name, str(BRIDGE_SOURCE),
-                              "-lsimavr"], capture_output=True, text=True)
+        run = subprocess.run(
+            ["cc", "-O2", "-shared", "-fPIC", "-o", tmp.name, str(BRIDGE_SOURCE), "-lsimavr"],
+            capture_output=True,
+            text=True,
+        )
         if run.returncode != 0:
             Path(tmp.name).unlink(missing_ok=True)
-            raise RuntimeError(f"building {BRIDGE_SOURCE.name} failed: {run.stderr.strip().splitlines()[0]}")
+            raise RuntimeError(
+                f"building {BRIDGE_SOURCE.name} failed: {run.stderr.strip().splitlines()[0]}"
+            )
         Path(tmp.name).replace(path)
     lib = ctypes.CDLL(str(path))
-    p, u8, u16, u32, u64 = ctypes.c_void_p, ctypes.c_uint8, ctypes.c_uint16, ctypes.c_uint32, ctypes.c_uint64
+    p, u8, u16, u32, u64 = (
+        ctypes.c_void_p,
+        ctypes.c_uint8,
+        ctypes.c_uint16,
+        ctypes.c_uint32,
+        ctypes.c_uint64,
+    )
     sig = {
         "cosim_open": (p, [ctypes.c_char_p, ctypes.c_char_p, u32, ctypes.c_char_p, ctypes.c_int]),
         "cosim_close": (None, [p]),
@@ -155,7 +198,11 @@ class AvrBoard:
             info = pins[pin]
             if info.timer is not None:
                 timer, channel = int(info.timer[0]), info.timer[-1]
-                tccr, com, ocr = TIMER_TCCRA[timer], 1 << COM_BIT.get(channel, 7), OCR_ADDR[info.timer]
+                tccr, com, ocr = (
+                    TIMER_TCCRA[timer],
+                    1 << COM_BIT.get(channel, 7),
+                    OCR_ADDR[info.timer],
+                )
             else:
                 tccr = com = ocr = 0
             lib.cosim_add_output(self._s, PORT_ADDR[info.port], info.bit, tccr, com, ocr)
@@ -193,8 +240,10 @@ class AvrBoard:
         if state:
             what = "crashed" if state == CPU_CRASHED else "stopped (sleep with interrupts off)"
             log = self._lib.cosim_last_log().decode(errors="replace").strip()
-            raise BoardError(f"the AVR {what} at {self.cycle / (self.cycles_per_us * 1e6):.6f} s"
-                             + (f": {log}" if log else ""))
+            raise BoardError(
+                f"the AVR {what} at {self.cycle / (self.cycles_per_us * 1e6):.6f} s"
+                + (f": {log}" if log else "")
+            )
 
     def run_until_change(self, cycle: int) -> bool:
         """Execute until an output pin changes (True) or the count reaches ``cycle`` (False)."""

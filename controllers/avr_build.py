@@ -43,11 +43,25 @@ DEBIAN_PACKAGES = ("gcc-avr", "avr-libc", "arduino-core-avr", "simavr", "libsima
 
 MCU = "atmega2560"
 F_CPU_HZ = 16_000_000
-COMMON = [f"-mmcu={MCU}", f"-DF_CPU={F_CPU_HZ}L", "-DARDUINO=10807", "-DARDUINO_AVR_MEGA2560",
-          "-DARDUINO_ARCH_AVR", "-Os", "-g", "-ffunction-sections", "-fdata-sections"]
+COMMON = [
+    f"-mmcu={MCU}",
+    f"-DF_CPU={F_CPU_HZ}L",
+    "-DARDUINO=10807",
+    "-DARDUINO_AVR_MEGA2560",
+    "-DARDUINO_ARCH_AVR",
+    "-Os",
+    "-g",
+    "-ffunction-sections",
+    "-fdata-sections",
+]
 C_FLAGS = ["-std=gnu11"]
-CXX_FLAGS = ["-std=gnu++11", "-fpermissive", "-fno-exceptions", "-fno-threadsafe-statics",
-             "-Wno-error=narrowing"]
+CXX_FLAGS = [
+    "-std=gnu++11",
+    "-fpermissive",
+    "-fno-exceptions",
+    "-fno-threadsafe-statics",
+    "-Wno-error=narrowing",
+]
 LINK_FLAGS = [f"-mmcu={MCU}", "-Os", "-Wl,--gc-sections"]
 SOURCE_SUFFIXES = (".c", ".cpp", ".S")
 
@@ -58,15 +72,20 @@ class SketchError(ValueError):
 
 def missing_tools() -> str | None:
     """Why the AVR path cannot run here, or None when everything it needs is installed."""
-    missing = [tool for tool in ("avr-gcc", "avr-g++", "avr-ar", "avr-nm", "cc") if shutil.which(tool) is None]
+    missing = [
+        tool
+        for tool in ("avr-gcc", "avr-g++", "avr-ar", "avr-nm", "cc")
+        if shutil.which(tool) is None
+    ]
     if not (ARDUINO_AVR / "cores" / "arduino" / "Arduino.h").exists():
         missing.append(f"{ARDUINO_AVR}/cores/arduino")
     if not Path("/usr/include/simavr/sim_avr.h").exists():
         missing.append("/usr/include/simavr/sim_avr.h")
     if not missing:
         return None
-    return (f"the AVR firmware needs {', '.join(missing)}: apt-get install "
-            + " ".join(DEBIAN_PACKAGES))
+    return f"the AVR firmware needs {', '.join(missing)}: apt-get install " + " ".join(
+        DEBIAN_PACKAGES
+    )
 
 
 def cache_dir() -> Path:
@@ -84,14 +103,18 @@ def check_sketch(sketch_dir: Path) -> Path:
     if not main.is_file():
         inos = sorted(sketch_dir.glob("*.ino"))
         if len(inos) != 1:
-            raise SketchError(f"--sketch {sketch_dir}: needs {main.name} (an Arduino sketch folder holds "
-                              "FOLDER/FOLDER.ino)")
+            raise SketchError(
+                f"--sketch {sketch_dir}: needs {main.name} (an Arduino sketch folder holds "
+                "FOLDER/FOLDER.ino)"
+            )
         main = inos[0]
     return main
 
 
 def _compiler_id() -> str:
-    out = subprocess.run(["avr-gcc", "--version"], capture_output=True, text=True, check=True).stdout
+    out = subprocess.run(
+        ["avr-gcc", "--version"], capture_output=True, text=True, check=True
+    ).stdout
     return out.splitlines()[0]
 
 
@@ -106,11 +129,17 @@ def _hash_files(h, files: list[Path], root: Path) -> None:
 
 
 def _tree_files(folder: Path) -> list[Path]:
-    return sorted(p for p in folder.rglob("*") if p.is_file() and p.suffix in SOURCE_SUFFIXES + (".h", ".hpp", ".ino"))
+    return sorted(
+        p
+        for p in folder.rglob("*")
+        if p.is_file() and p.suffix in SOURCE_SUFFIXES + (".h", ".hpp", ".ino")
+    )
 
 
 def _compile(src: Path, obj: Path, includes: list[Path], extra: list[str] = ()) -> None:
-    cmd = ["avr-g++", *COMMON, *CXX_FLAGS] if src.suffix == ".cpp" else ["avr-gcc", *COMMON, *C_FLAGS]
+    cmd = (
+        ["avr-g++", *COMMON, *CXX_FLAGS] if src.suffix == ".cpp" else ["avr-gcc", *COMMON, *C_FLAGS]
+    )
     if src.suffix == ".S":
         cmd = ["avr-gcc", *COMMON, "-x", "assembler-with-cpp"]
     cmd += [*extra, *(f"-I{i}" for i in includes), "-c", str(src), "-o", str(obj)]
@@ -154,8 +183,9 @@ def _library_dirs() -> list[Path]:
     return dirs
 
 
-def _build_archive(name: str, sources: list[Path], includes: list[Path], key: str,
-                   skip_failures: bool = False) -> Path:
+def _build_archive(
+    name: str, sources: list[Path], includes: list[Path], key: str, skip_failures: bool = False
+) -> Path:
     final = cache_dir() / f"{name}-{key}"
     target = final / f"{name}.a"
     if target.exists():
@@ -191,7 +221,9 @@ def build_sketch(sketch_dir: Path = DEFAULT_SKETCH, defines: tuple[str, ...] = (
         raise RuntimeError(problem)
     sketch_dir = Path(sketch_dir).resolve()
     main = check_sketch(sketch_dir)
-    toolchain = hashlib.sha256((_compiler_id() + "|" + " ".join(COMMON + C_FLAGS + CXX_FLAGS)).encode())
+    toolchain = hashlib.sha256(
+        (_compiler_id() + "|" + " ".join(COMMON + C_FLAGS + CXX_FLAGS)).encode()
+    )
     core_src = _sources(ARDUINO_AVR / "cores" / "arduino", recursive=False)
     _hash_files(toolchain, core_src, ARDUINO_AVR)
     core_key = toolchain.hexdigest()[:16]
@@ -202,8 +234,9 @@ def build_sketch(sketch_dir: Path = DEFAULT_SKETCH, defines: tuple[str, ...] = (
     lib_hash = hashlib.sha256(core_key.encode())
     for root in (LIBRARIES, ARDUINO_AVR / "libraries"):
         _hash_files(lib_hash, _tree_files(root), root)
-    libs = _build_archive("libs", lib_src, _core_includes() + lib_dirs, lib_hash.hexdigest()[:16],
-                          skip_failures=True)
+    libs = _build_archive(
+        "libs", lib_src, _core_includes() + lib_dirs, lib_hash.hexdigest()[:16], skip_failures=True
+    )
 
     flags = [f"-D{d}" for d in defines]
     h = hashlib.sha256((lib_hash.hexdigest() + " ".join(LINK_FLAGS + flags)).encode())
@@ -226,8 +259,20 @@ def build_sketch(sketch_dir: Path = DEFAULT_SKETCH, defines: tuple[str, ...] = (
             obj = tmp / f"{i:03d}_{src.name}.o"
             _compile(src, obj, includes, flags)
             objs.append(obj)
-        link = subprocess.run(["avr-gcc", *LINK_FLAGS, "-o", str(tmp / elf.name), *map(str, objs),
-                               str(libs), str(core), "-lm"], capture_output=True, text=True)
+        link = subprocess.run(
+            [
+                "avr-gcc",
+                *LINK_FLAGS,
+                "-o",
+                str(tmp / elf.name),
+                *map(str, objs),
+                str(libs),
+                str(core),
+                "-lm",
+            ],
+            capture_output=True,
+            text=True,
+        )
         if link.returncode != 0:
             raise SketchError(_first_link_error(link.stderr))
     except BaseException:

@@ -52,9 +52,16 @@ class DiffDriveNode:
         Input topic name.
     """
 
-    def __init__(self, bus: Bus, clock: VirtualClock, client: WheelCommandClient,
-                 cmd_timeout_s: float = 0.5, saturate: bool = True,
-                 resend_identical: bool = False, topic: str = "cmd_vel"):
+    def __init__(
+        self,
+        bus: Bus,
+        clock: VirtualClock,
+        client: WheelCommandClient,
+        cmd_timeout_s: float = 0.5,
+        saturate: bool = True,
+        resend_identical: bool = False,
+        topic: str = "cmd_vel",
+    ):
         self.bus, self.clock = bus, clock
         self.client = client
         self.cmd_timeout_us = int(round(cmd_timeout_s * 1e6))

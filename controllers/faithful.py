@@ -138,8 +138,13 @@ class FaithfulFirmware:
         Thesis constants and quirk switches.
     """
 
-    def __init__(self, clock: VirtualClock, publish: Publish, edges_per_rev: int,
-                 params: FaithfulParams | None = None):
+    def __init__(
+        self,
+        clock: VirtualClock,
+        publish: Publish,
+        edges_per_rev: int,
+        params: FaithfulParams | None = None,
+    ):
         self.p = p = params or FaithfulParams()
         self.edges_per_rev = int(edges_per_rev)
         self.clock, self._publish = clock, publish
@@ -155,8 +160,9 @@ class FaithfulFirmware:
         self.total_error = [0.0, 0.0]
         self.previousSetPoint = [0.0, 0.0]
         self._isr = (lambda: self.speedChangeInt(0), lambda: self.speedChangeInt(1))
-        self.sample_edges = self.edges_per_rev if p.quirk_first_sample_after_full_rev \
-            else p.short_sample_edges
+        self.sample_edges = (
+            self.edges_per_rev if p.quirk_first_sample_after_full_rev else p.short_sample_edges
+        )
 
     # -- Firmware protocol ---------------------------------------------------------
     def connect(self, bus, link) -> bool:
@@ -231,8 +237,11 @@ class FaithfulFirmware:
                 self.total_error[index] = total
                 delta_error = error - self.last_error[index]
                 bias = setPoint / p.bias_divisor
-                controlSpeed = setPoint + (p.kp * error + (p.ki * p.t_s) * total
-                                           + (p.kd / p.t_s) * delta_error) - bias
+                controlSpeed = (
+                    setPoint
+                    + (p.kp * error + (p.ki * p.t_s) * total + (p.kd / p.t_s) * delta_error)
+                    - bias
+                )
                 controlSpeed = min(max(controlSpeed, p.min_control_rpm), p.max_control_rpm)
                 self.last_error[index] = error
                 self.last_time[index] = current_time

@@ -22,19 +22,44 @@ from typing import Protocol
 from amr_twin.base.registry import Registry
 from amr_twin.base.clock import VirtualClock
 
-from amr_twin.controllers.firmware_params import (AvrParams, BoardParams, FaithfulParams, Firmware, ImprovedParams,
-                              Publish)
+from amr_twin.controllers.firmware_params import (
+    AvrParams,
+    BoardParams,
+    FaithfulParams,
+    Firmware,
+    ImprovedParams,
+    Publish,
+)
 
-__all__ = ["FIRMWARES", "AvrParams", "BoardParams", "FaithfulParams", "Firmware", "FirmwareFactory",
-           "ImprovedParams", "Publish", "check_avr", "firmware_identity", "firmware_kind", "make_firmware"]
+__all__ = [
+    "FIRMWARES",
+    "AvrParams",
+    "BoardParams",
+    "FaithfulParams",
+    "Firmware",
+    "FirmwareFactory",
+    "ImprovedParams",
+    "Publish",
+    "check_avr",
+    "firmware_identity",
+    "firmware_kind",
+    "make_firmware",
+]
 
 
 class FirmwareFactory(Protocol):
     """Builds a firmware on ``clock`` publishing through ``publish``: ``params`` (None: its defaults),
     ``edges_per_rev`` SC changes per wheel revolution, ``sketch`` the text after ``KIND:`` (None without)."""
 
-    def __call__(self, clock: VirtualClock, publish: Publish, params, *, edges_per_rev: int,
-                 sketch: str | None) -> Firmware: ...
+    def __call__(
+        self,
+        clock: VirtualClock,
+        publish: Publish,
+        params,
+        *,
+        edges_per_rev: int,
+        sketch: str | None,
+    ) -> Firmware: ...
 
 
 FIRMWARES: Registry[FirmwareFactory] = Registry("--firmware")
@@ -77,13 +102,25 @@ def check_avr(firmware: str, params: AvrParams | None = None) -> None:
     if not firmware.startswith("avr"):
         return
     from amr_twin.controllers.avr import sketch_defines, topic_table
-    from amr_twin.controllers.avr_build import DEFAULT_SKETCH, SketchError, build_sketch, missing_tools
+    from amr_twin.controllers.avr_build import (
+        DEFAULT_SKETCH,
+        SketchError,
+        build_sketch,
+        missing_tools,
+    )
 
     problem = missing_tools()
     if problem:
         raise ValueError(f"--firmware avr: {problem}")
     try:
-        topic_table(str(build_sketch(firmware.partition(":")[2] or DEFAULT_SKETCH, sketch_defines(params or AvrParams()))))
+        topic_table(
+            str(
+                build_sketch(
+                    firmware.partition(":")[2] or DEFAULT_SKETCH,
+                    sketch_defines(params or AvrParams()),
+                )
+            )
+        )
     except SketchError as exc:
         raise ValueError(f"--firmware {firmware}: {exc}") from None
 
@@ -92,45 +129,76 @@ SKETCH_EDGES_PER_REV = 90
 """SC changes per revolution the thesis sketch counts (``counter[index] == 90``, motor_control.ino)."""
 
 
-def make_firmware(kind: str, clock: VirtualClock, publish: Publish,
-                  params: FaithfulParams | ImprovedParams | AvrParams | None = None, *,
-                  edges_per_rev: int) -> Firmware:
+def make_firmware(
+    kind: str,
+    clock: VirtualClock,
+    publish: Publish,
+    params: FaithfulParams | ImprovedParams | AvrParams | None = None,
+    *,
+    edges_per_rev: int,
+) -> Firmware:
     """Build a firmware of ``kind`` (a name of :data:`FIRMWARES`, or ``avr:SKETCH_DIR``) on ``clock``
     (shared, us) publishing through ``publish(topic, rpm)`` (``wheel0_Vel`` / ``wheel1_Vel``); ``params``
     defaults to the thesis values; ``edges_per_rev``: SC changes per wheel revolution
     (``wheel.sc_edges_per_rev``). ValueError (one line) for an unknown kind."""
     name, _, sketch = kind.partition(":")
-    return FIRMWARES.get(name)(clock, publish, params, edges_per_rev=edges_per_rev, sketch=sketch or None)
+    return FIRMWARES.get(name)(
+        clock, publish, params, edges_per_rev=edges_per_rev, sketch=sketch or None
+    )
 
 
 @FIRMWARES.register("faithful")
-def _faithful(clock: VirtualClock, publish: Publish, params: FaithfulParams | None, *, edges_per_rev: int,
-              sketch: str | None) -> Firmware:
+def _faithful(
+    clock: VirtualClock,
+    publish: Publish,
+    params: FaithfulParams | None,
+    *,
+    edges_per_rev: int,
+    sketch: str | None,
+) -> Firmware:
     """The port of the thesis listings 4.7-4.12, quirks included (:mod:`~amr_twin.controllers.faithful`)."""
     from amr_twin.controllers.faithful import FaithfulFirmware
+
     return FaithfulFirmware(clock, publish, edges_per_rev, params or FaithfulParams())
 
 
 @FIRMWARES.register("improved")
-def _improved(clock: VirtualClock, publish: Publish, params: ImprovedParams | None, *, edges_per_rev: int,
-              sketch: str | None) -> Firmware:
+def _improved(
+    clock: VirtualClock,
+    publish: Publish,
+    params: ImprovedParams | None,
+    *,
+    edges_per_rev: int,
+    sketch: str | None,
+) -> Firmware:
     """The thesis firmware with its quirks fixed (:mod:`~amr_twin.controllers.improved`)."""
     from amr_twin.controllers.improved import ImprovedFirmware
+
     return ImprovedFirmware(clock, publish, edges_per_rev, params or ImprovedParams())
 
 
 @FIRMWARES.register("avr")
-def _avr(clock: VirtualClock, publish: Publish, params: AvrParams | None, *, edges_per_rev: int,
-         sketch: str | None) -> Firmware:
+def _avr(
+    clock: VirtualClock,
+    publish: Publish,
+    params: AvrParams | None,
+    *,
+    edges_per_rev: int,
+    sketch: str | None,
+) -> Firmware:
     """The sketch (``sketch``, else the thesis' own) compiled with avr-gcc on an emulated ATmega2560; the
     thesis sketch has its count compiled in (:data:`SKETCH_EDGES_PER_REV`) and refuses any other."""
     from amr_twin.controllers.avr import AvrFirmware
+
     if sketch is None and edges_per_rev != SKETCH_EDGES_PER_REV:
-        raise ValueError(f"--firmware avr: the thesis sketch counts {SKETCH_EDGES_PER_REV} SC changes per "
-                         f"revolution, the configured wheel has {edges_per_rev} (wheel.hall_pole_pairs)")
+        raise ValueError(
+            f"--firmware avr: the thesis sketch counts {SKETCH_EDGES_PER_REV} SC changes per "
+            f"revolution, the configured wheel has {edges_per_rev} (wheel.hall_pole_pairs)"
+        )
     if params is None:
         params = AvrParams(sketch_dir=sketch)
     elif sketch is not None:
         from dataclasses import replace
+
         params = replace(params, sketch_dir=sketch)
     return AvrFirmware(clock, publish, params)

@@ -42,11 +42,16 @@ class BoardParams:
     """Arduino Mega 2560 wiring and hardware behaviour."""
 
     speed_pins: tuple[int, int] = (2, 3)  # SC inputs, left/right; §3.2.3 "digital pins 2 and 3"
-    pwm_pins: tuple[int, int] = (6, 7)  # PWM outputs; assumed (thesis silent; avoids Timer1 pins 11/12)
+    pwm_pins: tuple[int, int] = (
+        6,
+        7,
+    )  # PWM outputs; assumed (thesis silent; avoids Timer1 pins 11/12)
     dir_pins: tuple[int, int] = (26, 27)  # DIR outputs; assumed
     brake_pins: tuple[int, int] = (24, 25)  # BRAKE outputs; assumed
     stop_pins: tuple[int, int] = (22, 23)  # STOP outputs; assumed
-    latch_int_flag_while_detached: bool = False  # True: AVR sets INTFn on an edge even when EIMSK masks it,
+    latch_int_flag_while_detached: bool = (
+        False  # True: AVR sets INTFn on an edge even when EIMSK masks it,
+    )
     # and attachInterrupt() does not clear it: a stale edge fires on attach (ArduinoCore-avr #244)
     record_pin_log: bool = False  # keep (t_us, wheel, counts) of every analogWrite, for tests
 
@@ -75,7 +80,9 @@ class FaithfulParams:
     quirk_signed_ramp_test: bool = True  # `deltaDuty >= THRESHOLD_SMALL_ACC`: decelerations jump
     quirk_pi_early_return_keeps_interrupts_off: bool = True  # PI_Control returns w/o interrupts()
     quirk_int_ms_delta_vs_T: bool = True  # 16-bit int ms delta compared with T = 0.2 (s)
-    quirk_first_sample_after_full_rev: bool = True  # a revolution of changes per sample (90, §2.2.1)
+    quirk_first_sample_after_full_rev: bool = (
+        True  # a revolution of changes per sample (90, §2.2.1)
+    )
     short_sample_edges: int = 18  # SC changes per sample when the quirk above is off (1/5 rev)
     board: BoardParams = field(default_factory=BoardParams)
 
@@ -90,10 +97,14 @@ class ImprovedParams:
     zero_speed_timeout_us: int = 150_000  # no edge for this long -> speed 0, us
     pi_period_us: int = 20_000  # PI tick (50 Hz), us
     publish_every_ticks: int = 5  # wheelN_Vel every 5 PI ticks (10 Hz)
-    publish_mean: bool = True  # wheelN_Vel is the mean speed since the previous sample (edges counted);
+    publish_mean: bool = (
+        True  # wheelN_Vel is the mean speed since the previous sample (edges counted);
+    )
     # False: the PI's sliding-window estimate at that instant (the former default; the odometry then loses
     # about an edge per wheel at each start and stop, docs/explanation/umbmark.md)
-    extrapolate_above_rpm: float = 15.0  # the mean counts the part of an edge rolled since the last edge
+    extrapolate_above_rpm: float = (
+        15.0  # the mean counts the part of an edge rolled since the last edge
+    )
     # at this per-edge speed or more: braked from 15 RPM a wheel of the twin rolls 43 mm (5 edges) on, so
     # the edge is sure to come; below, whole edges only (a sample then resolves one edge, 6.7 RPM at 10 Hz)
     kp: float = 0.5  # proportional gain, RPM of command per RPM of error
@@ -111,10 +122,16 @@ class ImprovedParams:
 class AvrParams:
     """The firmware as a sketch on an emulated ATmega2560 (controllers/avr.py)."""
 
-    sketch_dir: str | None = None  # sketch folder (FOLDER/FOLDER.ino); None: controllers/arduino/motor_control
-    idle_sleep: bool = True  # rosserial spinOnce() sleeps until the next interrupt when it finds nothing
+    sketch_dir: str | None = (
+        None  # sketch folder (FOLDER/FOLDER.ino); None: controllers/arduino/motor_control
+    )
+    idle_sleep: bool = (
+        True  # rosserial spinOnce() sleeps until the next interrupt when it finds nothing
+    )
     # to read (ros_lib/ArduinoHardware.h); False: busy loop as rosserial_arduino (same results, ~3x slower)
     sync_period_us: int = 1000  # the board is brought up to the loop's time at least this often, us
     board: BoardParams = field(default_factory=BoardParams)  # pins the sketch must use (its wiring)
-    serial_pty: str | None = None  # serve USART0 on a pseudo-terminal linked at this path, paced to wall
+    serial_pty: str | None = (
+        None  # serve USART0 on a pseudo-terminal linked at this path, paced to wall
+    )
     # time, for a rosserial host (controllers/avr_serial_port.py); None: the twin's own PC side is the host

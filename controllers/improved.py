@@ -32,8 +32,13 @@ class ImprovedFirmware:
         Gains, rates and windows.
     """
 
-    def __init__(self, clock: VirtualClock, publish: Publish, edges_per_rev: int,
-                 params: ImprovedParams | None = None):
+    def __init__(
+        self,
+        clock: VirtualClock,
+        publish: Publish,
+        edges_per_rev: int,
+        params: ImprovedParams | None = None,
+    ):
         self.p = p = params or ImprovedParams()
         self.edges_per_rev = int(edges_per_rev)
         self.clock, self._publish = clock, publish

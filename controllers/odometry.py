@@ -21,16 +21,26 @@ from typing import Sequence
 import numpy as np
 
 from amr_twin.ros.bus import Bus
-from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Transform,
-                                            TransformStamped, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (
+    Odometry,
+    Point,
+    Pose,
+    PoseWithCovariance,
+    Quaternion,
+    Transform,
+    TransformStamped,
+    Twist,
+    TwistWithCovariance,
+    Vector3,
+)
 from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.base.clock import VirtualClock
 from amr_twin.estimation.published_pose import PublishedPose
 from amr_twin.controllers.wheel_speed_samples import WheelSpeedSamples
+
 DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
 """(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
-
 
 
 def _covariance(diagonal: Sequence[float]) -> np.ndarray:
@@ -60,33 +70,59 @@ class WheelOdometry:
         rest_rpm: slowest speed a silent wheel is believed to turn at. start_s: a start's ramp.
     """
 
-    def __init__(self, bus: Bus, clock: VirtualClock, *, wheel_radius_m: float, wheel_separation_m: float,
-                 wheel_radius_multiplier: float = 1.0, left_radius_multiplier: float = 1.0,
-                 right_radius_multiplier: float = 1.0, wheel_separation_multiplier: float = 1.0,
-                 publish_rate_hz: float = 50.0,
-                 pose_covariance_diagonal: Sequence[float] = DEFAULT_COVARIANCE_DIAGONAL,
-                 twist_covariance_diagonal: Sequence[float] = DEFAULT_COVARIANCE_DIAGONAL,
-                 signed_input: bool = False, publish_tf: bool = True,
-                 frame_id: str = ODOM_FRAME, child_frame_id: str = BASE_FRAME,
-                 speed_samples: str = "window", revolutions_per_sample: float = 1.0,
-                 sample_latency_s: float = 0.0, max_substep_s: float = 0.01,
-                 brake_stop_s: float = 0.62, brake_friction_rpm_s: float = 13.0, catchup_time_s: float = 0.1,
-                 catchup_max_fraction: float = 0.4, max_wheel_accel_m_s2: float = 4.0,
-                 sample_gap_s: float = 0.45, rest_rpm: float = 10.0, start_s: float = 0.5):
+    def __init__(
+        self,
+        bus: Bus,
+        clock: VirtualClock,
+        *,
+        wheel_radius_m: float,
+        wheel_separation_m: float,
+        wheel_radius_multiplier: float = 1.0,
+        left_radius_multiplier: float = 1.0,
+        right_radius_multiplier: float = 1.0,
+        wheel_separation_multiplier: float = 1.0,
+        publish_rate_hz: float = 50.0,
+        pose_covariance_diagonal: Sequence[float] = DEFAULT_COVARIANCE_DIAGONAL,
+        twist_covariance_diagonal: Sequence[float] = DEFAULT_COVARIANCE_DIAGONAL,
+        signed_input: bool = False,
+        publish_tf: bool = True,
+        frame_id: str = ODOM_FRAME,
+        child_frame_id: str = BASE_FRAME,
+        speed_samples: str = "window",
+        revolutions_per_sample: float = 1.0,
+        sample_latency_s: float = 0.0,
+        max_substep_s: float = 0.01,
+        brake_stop_s: float = 0.62,
+        brake_friction_rpm_s: float = 13.0,
+        catchup_time_s: float = 0.1,
+        catchup_max_fraction: float = 0.4,
+        max_wheel_accel_m_s2: float = 4.0,
+        sample_gap_s: float = 0.45,
+        rest_rpm: float = 10.0,
+        start_s: float = 0.5,
+    ):
         if publish_rate_hz <= 0:
             raise ValueError(f"publish_rate_hz must be positive, got {publish_rate_hz}")
         if not (catchup_time_s > 0 and math.isfinite(catchup_time_s)):
             raise ValueError(f"catchup_time_s: {catchup_time_s} must be a finite number > 0")
         if not (catchup_max_fraction >= 0 and math.isfinite(catchup_max_fraction)):
-            raise ValueError(f"catchup_max_fraction: {catchup_max_fraction} must be a finite number >= 0")
+            raise ValueError(
+                f"catchup_max_fraction: {catchup_max_fraction} must be a finite number >= 0"
+            )
         if not sample_gap_s >= 0:
-            raise ValueError(f"sample_gap_s: {sample_gap_s} must be >= 0 (inf: samples held until the next)")
+            raise ValueError(
+                f"sample_gap_s: {sample_gap_s} must be >= 0 (inf: samples held until the next)"
+            )
         if not (rest_rpm >= 0 and math.isfinite(rest_rpm)):
             raise ValueError(f"rest_rpm: {rest_rpm} must be a finite number >= 0")
         if not (brake_friction_rpm_s >= 0 and math.isfinite(brake_friction_rpm_s)):
-            raise ValueError(f"brake_friction_rpm_s: {brake_friction_rpm_s} must be a finite number >= 0")
+            raise ValueError(
+                f"brake_friction_rpm_s: {brake_friction_rpm_s} must be a finite number >= 0"
+            )
         if not max_wheel_accel_m_s2 > 0:
-            raise ValueError(f"max_wheel_accel_m_s2: {max_wheel_accel_m_s2} must be > 0 (inf: no limit)")
+            raise ValueError(
+                f"max_wheel_accel_m_s2: {max_wheel_accel_m_s2} must be > 0 (inf: no limit)"
+            )
         self.bus, self.clock = bus, clock
         radius_m = wheel_radius_m * wheel_radius_multiplier
         self.left_radius_m = radius_m * left_radius_multiplier
@@ -101,28 +137,45 @@ class WheelOdometry:
         self.frame_id, self.child_frame_id = frame_id, child_frame_id
         self.max_substep_us = max(1, int(round(max_substep_s * 1e6)))
         # m/s per RPM
-        self._rim = tuple(2.0 * math.pi / 60.0 * r for r in (self.left_radius_m, self.right_radius_m))
-        self.published = PublishedPose(self._body, self.max_substep_us,
-                                       tuple(max_wheel_accel_m_s2 * 1e-6 / k for k in self._rim),
-                                       float(catchup_time_s), float(catchup_max_fraction))
+        self._rim = tuple(
+            2.0 * math.pi / 60.0 * r for r in (self.left_radius_m, self.right_radius_m)
+        )
+        self.published = PublishedPose(
+            self._body,
+            self.max_substep_us,
+            tuple(max_wheel_accel_m_s2 * 1e-6 / k for k in self._rim),
+            float(catchup_time_s),
+            float(catchup_max_fraction),
+        )
         gap_us = sample_gap_s * 1e6
         self.samples = WheelSpeedSamples(
-            self.published, clock.now_us, signed_input=signed_input, speed_samples=speed_samples,
+            self.published,
+            clock.now_us,
+            signed_input=signed_input,
+            speed_samples=speed_samples,
             revolutions_per_sample=revolutions_per_sample,
             sample_latency_us=int(round(sample_latency_s * 1e6)),
-            brake_stop_us=max(0, int(round(brake_stop_s * 1e6))), brake_friction_rpm_s=brake_friction_rpm_s,
+            brake_stop_us=max(0, int(round(brake_stop_s * 1e6))),
+            brake_friction_rpm_s=brake_friction_rpm_s,
             start_us=max(0, int(round(start_s * 1e6))),
-            sample_gap_us=gap_us if math.isinf(gap_us) else int(round(gap_us)), rest_rpm=rest_rpm)
+            sample_gap_us=gap_us if math.isinf(gap_us) else int(round(gap_us)),
+            rest_rpm=rest_rpm,
+        )
         self._seq = 0
         self.published.restart(clock.now_us, (0.0, 0.0, 0.0), (0.0, 0.0))
-        bus.advertise("odom", Odometry)  # declares the type; publish() hands messages to bus.publish
-        self._subs = [bus.subscribe("wheel0_Vel", lambda m: self._on_speed(0, m)),
-                      bus.subscribe("wheel1_Vel", lambda m: self._on_speed(1, m))]
+        bus.advertise(
+            "odom", Odometry
+        )  # declares the type; publish() hands messages to bus.publish
+        self._subs = [
+            bus.subscribe("wheel0_Vel", lambda m: self._on_speed(0, m)),
+            bus.subscribe("wheel1_Vel", lambda m: self._on_speed(1, m)),
+        ]
         if not signed_input:
             self._subs.append(bus.subscribe("wheel_Command", self._on_command))
         self._topics = ("odom", "tf") if publish_tf else ("odom",)
-        self._timer = clock.schedule_every(clock.now_us, self.period_us, self._on_timer,
-                                           publishes=self._topics)
+        self._timer = clock.schedule_every(
+            clock.now_us, self.period_us, self._on_timer, publishes=self._topics
+        )
 
     @property
     def x_m(self) -> float:
@@ -159,8 +212,9 @@ class WheelOdometry:
     def _on_command(self, msg: Float64MultiArray) -> None:
         self.update()
         data = msg.data
-        self.samples.command((int(data[0]), int(data[2])), (float(data[1]), float(data[3])),
-                             self.clock.now_us)
+        self.samples.command(
+            (int(data[0]), int(data[2])), (float(data[1]), float(data[3])), self.clock.now_us
+        )
         self.published.changed()
 
     def set_wheel_speeds_rpm(self, left_rpm: float, right_rpm: float) -> None:
@@ -198,7 +252,9 @@ class WheelOdometry:
         x, y, yaw = self.published.smoothed.pose_at(self.published.t_us)
         return x, y, math.atan2(math.sin(yaw), math.cos(yaw))
 
-    def reset(self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0, standing: bool = False) -> None:
+    def reset(
+        self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0, standing: bool = False
+    ) -> None:
         """Set the pose in ``odom``: the speeds in force are kept, or, ``standing``, the node starts afresh
         (both wheels at rest, every earlier sample and command forgotten: a robot reset)."""
         self.update()
@@ -221,22 +277,34 @@ class WheelOdometry:
         directly: this runs at 50 Hz on the loop's cold caches."""
         now = self.clock.now_us
         published = self.published
-        published.advance(now)  # update(), once: body_twist() and the pose properties read its result
+        published.advance(
+            now
+        )  # update(), once: body_twist() and the pose properties read its result
         stamp = Time.from_us(now)
         vx_m_s, vy_m_s, w_rad_s = published.twist()
         x_m, y_m, yaw = published.pose
-        orientation = Quaternion.from_yaw(math.atan2(math.sin(yaw), math.cos(yaw)))  # yaw_rad: wrapped
+        orientation = Quaternion.from_yaw(
+            math.atan2(math.sin(yaw), math.cos(yaw))
+        )  # yaw_rad: wrapped
         frame, child = self.frame_id, self.child_frame_id
-        msg = Odometry(Header(self._seq, stamp, frame), child,
-                       PoseWithCovariance(Pose(Point(x_m, y_m, 0.0), orientation), self.pose_covariance),
-                       TwistWithCovariance(Twist(Vector3(vx_m_s, vy_m_s, 0.0), Vector3(0.0, 0.0, w_rad_s)),
-                                           self.twist_covariance))
+        msg = Odometry(
+            Header(self._seq, stamp, frame),
+            child,
+            PoseWithCovariance(Pose(Point(x_m, y_m, 0.0), orientation), self.pose_covariance),
+            TwistWithCovariance(
+                Twist(Vector3(vx_m_s, vy_m_s, 0.0), Vector3(0.0, 0.0, w_rad_s)),
+                self.twist_covariance,
+            ),
+        )
         self._seq += 1
         bus = self.bus
         bus.publish("odom", msg)
         if self.publish_tf:
-            bus.send_transform(TransformStamped(Header(0, stamp, frame), child,
-                                                Transform(Vector3(x_m, y_m, 0.0), orientation)))
+            bus.send_transform(
+                TransformStamped(
+                    Header(0, stamp, frame), child, Transform(Vector3(x_m, y_m, 0.0), orientation)
+                )
+            )
         return msg
 
     def shutdown(self) -> None:

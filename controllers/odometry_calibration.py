@@ -25,7 +25,11 @@ from pathlib import Path
 
 KEY = "wheel_odometry"
 FIELDS = ("left_wheel_radius_m", "right_wheel_radius_m", "wheel_separation_m")
-BOUNDS = {"left_wheel_radius_m": (0.05, 0.3), "right_wheel_radius_m": (0.05, 0.3), "wheel_separation_m": (0.2, 1.0)}
+BOUNDS = {
+    "left_wheel_radius_m": (0.05, 0.3),
+    "right_wheel_radius_m": (0.05, 0.3),
+    "wheel_separation_m": (0.2, 1.0),
+}
 """Allowed values, m (those of ``wheel.radius_m`` and ``wheel.separation_m`` in the parameter schema)."""
 
 
@@ -40,9 +44,11 @@ class OdometryCalibration:
 
     def multipliers(self, radius_m: float, separation_m: float) -> dict:
         """The node's keyword arguments that turn the nominal ``radius_m`` / ``separation_m`` into these."""
-        return {"left_radius_multiplier": self.left_wheel_radius_m / radius_m,
-                "right_radius_multiplier": self.right_wheel_radius_m / radius_m,
-                "wheel_separation_multiplier": self.wheel_separation_m / separation_m}
+        return {
+            "left_radius_multiplier": self.left_wheel_radius_m / radius_m,
+            "right_radius_multiplier": self.right_wheel_radius_m / radius_m,
+            "wheel_separation_multiplier": self.wheel_separation_m / separation_m,
+        }
 
 
 def load(path: Path | str) -> OdometryCalibration:
@@ -51,21 +57,33 @@ def load(path: Path | str) -> OdometryCalibration:
 
     path = Path(path)
     if not path.exists():
-        raise ValueError(f"--odometry {path}: no such file (amr-twin experiment umbmark writes one)")
-    data = read_yaml(path, "--odometry", ValueError)  # a device, a pipe, binary or bad YAML: one line
+        raise ValueError(
+            f"--odometry {path}: no such file (amr-twin experiment umbmark writes one)"
+        )
+    data = read_yaml(
+        path, "--odometry", ValueError
+    )  # a device, a pipe, binary or bad YAML: one line
     node = data.get(KEY) if isinstance(data, dict) else None
     if not isinstance(node, dict):
         raise ValueError(f"--odometry {path}: expected a '{KEY}:' mapping with {', '.join(FIELDS)}")
     unknown = set(node) - set(FIELDS) - {"source"}
     if unknown:
-        raise ValueError(f"--odometry {path}: {KEY}.{sorted(unknown)[0]}: unknown key (allowed: {', '.join(FIELDS)}, source)")
+        raise ValueError(
+            f"--odometry {path}: {KEY}.{sorted(unknown)[0]}: unknown key (allowed: {', '.join(FIELDS)}, source)"
+        )
     values = {}
     for name in FIELDS:
         value = node.get(name)
         lo, hi = BOUNDS[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                or not lo <= value <= hi:
-            raise ValueError(f"--odometry {path}: {KEY}.{name}: {value!r}, expected a number in [{lo}, {hi}] m")
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not math.isfinite(value)
+            or not lo <= value <= hi
+        ):
+            raise ValueError(
+                f"--odometry {path}: {KEY}.{name}: {value!r}, expected a number in [{lo}, {hi}] m"
+            )
         values[name] = float(value)
     return OdometryCalibration(**values, source=str(node.get("source", "")))
 

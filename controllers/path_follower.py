@@ -37,9 +37,17 @@ class PurePursuit:
         Corners turning by more than this are approached slowing down to the least speed, rad.
     """
 
-    def __init__(self, route: Route, *, min_speed_m_s: float = 0.1, decel_m_s2: float = 0.5,
-                 turn_in_place_rad: float = math.radians(60.0), turn_in_place_exit_rad: float = math.radians(20.0),
-                 turn_gain_per_s: float = 1.5, sharp_corner_rad: float = math.radians(120.0)):
+    def __init__(
+        self,
+        route: Route,
+        *,
+        min_speed_m_s: float = 0.1,
+        decel_m_s2: float = 0.5,
+        turn_in_place_rad: float = math.radians(60.0),
+        turn_in_place_exit_rad: float = math.radians(20.0),
+        turn_gain_per_s: float = 1.5,
+        sharp_corner_rad: float = math.radians(120.0),
+    ):
         self.route = route
         self.path = route.path_xy_m()
         self._seg = seg = np.diff(self.path, axis=0)
@@ -48,10 +56,15 @@ class PurePursuit:
         self.length_m = float(self._s0[-1])
         self.min_speed_m_s = min(float(min_speed_m_s), route.max_speed_m_s)
         self.decel_m_s2 = float(decel_m_s2)
-        self.turn_in_place_rad, self.turn_in_place_exit_rad = float(turn_in_place_rad), float(turn_in_place_exit_rad)
+        self.turn_in_place_rad, self.turn_in_place_exit_rad = (
+            float(turn_in_place_rad),
+            float(turn_in_place_exit_rad),
+        )
         self.turn_gain_per_s = float(turn_gain_per_s)
         self.search_m = 2.0 * route.lookahead_m + 1.0
-        turn = np.abs(np.angle(np.exp(1j * np.diff(np.arctan2(seg[:, 1], seg[:, 0])))))  # at interior vertices
+        turn = np.abs(
+            np.angle(np.exp(1j * np.diff(np.arctan2(seg[:, 1], seg[:, 0]))))
+        )  # at interior vertices
         self._sharp_s = self._s0[1:-1][turn > float(sharp_corner_rad)]
         """Arc lengths of the corners the robot will turn in place at, m."""
         self.progress_m = 0.0
@@ -74,11 +87,20 @@ class PurePursuit:
         n = len(self._seg)
         first = min(max(int(np.searchsorted(self._s0, lo, side="right")) - 1, 0), n - 1)
         last = max(min(int(np.searchsorted(self._s0, hi, side="right")), n), first + 1)
-        a, ab, s0, length = self.path[first:last], self._seg[first:last], self._s0[first:last], self._seg_len[first:last]
+        a, ab, s0, length = (
+            self.path[first:last],
+            self._seg[first:last],
+            self._s0[first:last],
+            self._seg_len[first:last],
+        )
         u = ((xy - a) * ab).sum(1) / (length * length)
-        u = np.minimum(np.maximum(u, np.maximum((lo - s0) / length, 0.0)), np.minimum((hi - s0) / length, 1.0))
+        u = np.minimum(
+            np.maximum(u, np.maximum((lo - s0) / length, 0.0)), np.minimum((hi - s0) / length, 1.0)
+        )
         dist = np.hypot(*(a + u[:, None] * ab - xy).T)
-        k = int(np.argmax(dist <= dist.min() + 1e-6))  # the nearest; of a path doubling back, the earlier leg
+        k = int(
+            np.argmax(dist <= dist.min() + 1e-6)
+        )  # the nearest; of a path doubling back, the earlier leg
         return float(s0[k] + u[k] * length[k]), float(dist[k])
 
     def command(self, x_m: float, y_m: float, yaw_rad: float) -> tuple[float, float, bool]:
@@ -93,7 +115,10 @@ class PurePursuit:
         self.progress_m = max(self.progress_m, s)
         goal = self.path[-1]
         remaining_m = self.length_m - self.progress_m
-        if math.hypot(*(goal - xy)) <= r.goal_tolerance_m and remaining_m <= r.lookahead_m + r.goal_tolerance_m:
+        if (
+            math.hypot(*(goal - xy)) <= r.goal_tolerance_m
+            and remaining_m <= r.lookahead_m + r.goal_tolerance_m
+        ):
             self.done = True
             return 0.0, 0.0, True
         target = self.point_at(self.progress_m + r.lookahead_m)
@@ -110,8 +135,11 @@ class PurePursuit:
             return 0.0, w, False
         curvature = 2.0 * math.sin(alpha) / dist
         ahead = self._sharp_s[self._sharp_s > self.progress_m - 1e-9]
-        to_stop_m = min(remaining_m, float(ahead[0]) - self.progress_m - 0.5 * r.lookahead_m) if ahead.size \
+        to_stop_m = (
+            min(remaining_m, float(ahead[0]) - self.progress_m - 0.5 * r.lookahead_m)
+            if ahead.size
             else remaining_m
+        )
         v = min(r.max_speed_m_s, math.sqrt(2.0 * self.decel_m_s2 * max(to_stop_m, 0.0)))
         if abs(curvature) > 1e-9:
             v = min(v, r.max_angular_rad_s / abs(curvature))
@@ -141,9 +169,16 @@ class PathFollowerNode:
     ``history()`` returns what was commanded.
     """
 
-    def __init__(self, bus: Bus, clock: VirtualClock, route: Route,
-                 pose_source: Callable[[], tuple[float, float, float]], rate_hz: float = 20.0,
-                 topic: str = "cmd_vel", **pursuit):
+    def __init__(
+        self,
+        bus: Bus,
+        clock: VirtualClock,
+        route: Route,
+        pose_source: Callable[[], tuple[float, float, float]],
+        rate_hz: float = 20.0,
+        topic: str = "cmd_vel",
+        **pursuit,
+    ):
         if not (math.isfinite(rate_hz) and rate_hz > 0):
             raise ValueError(f"rate_hz: {rate_hz} must be a finite number > 0")
         self.bus, self.clock, self.route = bus, clock, route
@@ -163,13 +198,17 @@ class PathFollowerNode:
         self._timer = self.clock.schedule_in(self.period_us, self._on_timer)
         x_m, y_m, yaw_rad = self.pose_source()
         v, w, _ = self.pursuit.command(x_m, y_m, yaw_rad)
-        self._rows.append((self.clock.now_us * 1e-6, v, w, self.pursuit.cross_track_m, self.pursuit.progress_m))
+        self._rows.append(
+            (self.clock.now_us * 1e-6, v, w, self.pursuit.cross_track_m, self.pursuit.progress_m)
+        )
         self._pub.publish(Twist(Vector3(v, 0.0, 0.0), Vector3(0.0, 0.0, w)))
 
     def history(self) -> dict[str, np.ndarray]:
         """Commands so far: ``t_s``, ``linear_m_s``, ``angular_rad_s``, ``cross_track_m``, ``progress_m`` (each (K,))."""
         rows = np.array(self._rows, dtype=float).reshape(-1, 5)
-        return dict(zip(("t_s", "linear_m_s", "angular_rad_s", "cross_track_m", "progress_m"), rows.T))
+        return dict(
+            zip(("t_s", "linear_m_s", "angular_rad_s", "cross_track_m", "progress_m"), rows.T)
+        )
 
     def shutdown(self) -> None:
         """Stop publishing."""

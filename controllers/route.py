@@ -28,8 +28,16 @@ from amr_twin.model.yaml_file import read_yaml
 
 MAX_ROUTE_SPEED_M_S = 1.0
 """Highest route speed accepted, m/s ('at up to 1 m/s' was asked)."""
-ROUTE_FIELDS = ("name", "world", "start_xy_yaw", "waypoints_xy_m", "max_speed_m_s", "max_angular_rad_s",
-                "lookahead_m", "goal_tolerance_m")
+ROUTE_FIELDS = (
+    "name",
+    "world",
+    "start_xy_yaw",
+    "waypoints_xy_m",
+    "max_speed_m_s",
+    "max_angular_rad_s",
+    "lookahead_m",
+    "goal_tolerance_m",
+)
 
 
 class RouteError(ValueError):
@@ -75,7 +83,9 @@ class Route:
         except (TypeError, ValueError):
             start = ()
         if len(start) != 3 or not all(math.isfinite(v) for v in start):
-            raise RouteError(f"start_xy_yaw: {self.start_xy_yaw!r} must be 3 finite numbers [x_m, y_m, yaw_rad]")
+            raise RouteError(
+                f"start_xy_yaw: {self.start_xy_yaw!r} must be 3 finite numbers [x_m, y_m, yaw_rad]"
+            )
         object.__setattr__(self, "start_xy_yaw", start)
         try:
             pts = np.array(self.waypoints_xy_m, dtype=float)
@@ -90,12 +100,20 @@ class Route:
             raise RouteError("waypoints_xy_m: consecutive points (start included) must differ")
         pts.setflags(write=False)
         object.__setattr__(self, "waypoints_xy_m", pts)
-        limits = (("max_speed_m_s", 0.0, MAX_ROUTE_SPEED_M_S), ("max_angular_rad_s", 0.0, math.inf),
-                  ("lookahead_m", 0.0, math.inf), ("goal_tolerance_m", 0.0, math.inf))
+        limits = (
+            ("max_speed_m_s", 0.0, MAX_ROUTE_SPEED_M_S),
+            ("max_angular_rad_s", 0.0, math.inf),
+            ("lookahead_m", 0.0, math.inf),
+            ("goal_tolerance_m", 0.0, math.inf),
+        )
         for name, low, high in limits:
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                    or not low < value <= high:
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not math.isfinite(value)
+                or not low < value <= high
+            ):
                 allowed = f"({low:g}, {high:g}]" if math.isfinite(high) else f"> {low:g}"
                 raise RouteError(f"{name}: {value!r} must be a finite number in {allowed}")
             object.__setattr__(self, name, float(value))
@@ -113,7 +131,9 @@ def load_route(path: str | Path) -> Route:
         raise RouteError(f"route {path.name}: expected a mapping with {', '.join(ROUTE_FIELDS)}")
     unknown = [k for k in tree if k not in ROUTE_FIELDS]
     if unknown:
-        raise RouteError(f"route {path.name}: unknown key {unknown[0]!r} (expected {', '.join(ROUTE_FIELDS)})")
+        raise RouteError(
+            f"route {path.name}: unknown key {unknown[0]!r} (expected {', '.join(ROUTE_FIELDS)})"
+        )
     for key in ("start_xy_yaw", "waypoints_xy_m"):
         if key not in tree:
             raise RouteError(f"route {path.name}: {key} is missing")
@@ -135,8 +155,10 @@ def _world_of(world: str, route_path: Path) -> str:
     if Path(world).suffix:
         path = path if path.is_absolute() else (route_path.parent / path)
     if not path.is_file():
-        raise RouteError(f"route {route_path.name}: world: {world!r} is not a world of models/worlds/ nor a file "
-                         f"({path} does not exist)")
+        raise RouteError(
+            f"route {route_path.name}: world: {world!r} is not a world of models/worlds/ nor a file "
+            f"({path} does not exist)"
+        )
     return world if not Path(world).suffix else str(path)
 
 
@@ -167,23 +189,34 @@ def check_in_free_space(route: Route, boxes, half_width_m: float, world: str = "
         return
     c, s = np.abs(np.cos(boxes.yaw_rad)), np.abs(np.sin(boxes.yaw_rad))
     hx, hy = boxes.half_xy_m.T
-    reach = np.stack([c * hx + s * hy, s * hx + c * hy], axis=1)  # (K, 2): each box's half extent along x, y
+    reach = np.stack(
+        [c * hx + s * hy, s * hx + c * hy], axis=1
+    )  # (K, 2): each box's half extent along x, y
     lo, hi = (boxes.centre_xy_m - reach).min(0), (boxes.centre_xy_m + reach).max(0)
     names = ["start_xy_yaw"] + [f"waypoints_xy_m[{i}]" for i in range(len(route.waypoints_xy_m))]
     where = f" of {world}" if world else ""
     for name, (x, y) in zip(names, route.path_xy_m()):
         if not (lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]):
-            raise RouteError(f"route {route.name}: {name} ({x:g}, {y:g}) lies outside the world{where}: its walls "
-                             f"span x {lo[0]:.1f} to {hi[0]:.1f} m, y {lo[1]:.1f} to {hi[1]:.1f} m")
-        gaps = [float(distance_to_boxes_m(np.array([[x, y]]), boxes[k:k + 1])[0]) for k in range(len(boxes))]
+            raise RouteError(
+                f"route {route.name}: {name} ({x:g}, {y:g}) lies outside the world{where}: its walls "
+                f"span x {lo[0]:.1f} to {hi[0]:.1f} m, y {lo[1]:.1f} to {hi[1]:.1f} m"
+            )
+        gaps = [
+            float(distance_to_boxes_m(np.array([[x, y]]), boxes[k : k + 1])[0])
+            for k in range(len(boxes))
+        ]
         k = int(np.argmin(gaps))
         if gaps[k] < half_width_m:
-            raise RouteError(f"route {route.name}: {name} ({x:g}, {y:g}) is {gaps[k]:.2f} m from {boxes.names[k]}"
-                             f"{where}; the robot needs {half_width_m:.2f} m (its half width)")
+            raise RouteError(
+                f"route {route.name}: {name} ({x:g}, {y:g}) is {gaps[k]:.2f} m from {boxes.names[k]}"
+                f"{where}; the robot needs {half_width_m:.2f} m (its half width)"
+            )
     path = route.path_xy_m()
     for i, (a, b) in enumerate(zip(path[:-1], path[1:])):
         n = max(2, int(np.ceil(np.hypot(*(b - a)) / 0.05)) + 1)
         points = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
         if (distance_to_boxes_m(points, boxes) == 0.0).any():
-            raise RouteError(f"route {route.name}: the leg to {names[i + 1]} ({b[0]:g}, {b[1]:g}) crosses a "
-                             f"geom{where}")
+            raise RouteError(
+                f"route {route.name}: the leg to {names[i + 1]} ({b[0]:g}, {b[1]:g}) crosses a "
+                f"geom{where}"
+            )

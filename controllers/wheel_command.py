@@ -53,8 +53,9 @@ class WheelCommandResponse:
 class WheelCommandService:
     """Service server ``wheel_Command_Service`` publishing ``wheel_Command`` (listing 4.3)."""
 
-    def __init__(self, bus: Bus, service_name: str = SERVICE_NAME, topic: str = TOPIC,
-                 queue_size: int = 100):
+    def __init__(
+        self, bus: Bus, service_name: str = SERVICE_NAME, topic: str = TOPIC, queue_size: int = 100
+    ):
         self.bus = bus
         self.service_name = service_name
         self._pub = bus.advertise(topic, Float64MultiArray, queue_size=queue_size)
@@ -62,8 +63,11 @@ class WheelCommandService:
 
     def send_command(self, motionL: int, speedL: float, motionR: int, speedR: float) -> None:
         """Publish ``[motionL, speedL, motionR, speedR]`` on ``wheel_Command``."""
-        self._pub.publish(Float64MultiArray(data=[float(int(motionL)), float(speedL),
-                                                  float(int(motionR)), float(speedR)]))
+        self._pub.publish(
+            Float64MultiArray(
+                data=[float(int(motionL)), float(speedL), float(int(motionR)), float(speedR)]
+            )
+        )
 
     def request_command(self, req: WheelCommandRequest) -> WheelCommandResponse:
         """Service handler: forward the request to :meth:`send_command`."""
@@ -94,9 +98,18 @@ class WheelCommandClient:
         Round speeds to float32 as the request fields are.
     """
 
-    def __init__(self, bus: Bus, *, wheel_radius_m: float, half_separation_m: float, min_rpm: float = MIN_RPM,
-                 max_rpm: float = MAX_RPM, listing_motion_codes: bool = False,
-                 float32_request: bool = True, service_name: str = SERVICE_NAME):
+    def __init__(
+        self,
+        bus: Bus,
+        *,
+        wheel_radius_m: float,
+        half_separation_m: float,
+        min_rpm: float = MIN_RPM,
+        max_rpm: float = MAX_RPM,
+        listing_motion_codes: bool = False,
+        float32_request: bool = True,
+        service_name: str = SERVICE_NAME,
+    ):
         self.bus = bus
         self.wheel_radius_m = float(wheel_radius_m)
         self.half_separation_m = float(half_separation_m)
@@ -205,8 +218,9 @@ class WheelCommandClient:
         LOG.error(self.last_error)
         return VALUE_ERROR
 
-    def _call(self, motion_l: int, speed_l: float, motion_r: int, speed_r: float,
-              failure_text: str) -> int:
+    def _call(
+        self, motion_l: int, speed_l: float, motion_r: int, speed_r: float, failure_text: str
+    ) -> int:
         if self.float32_request:
             speed_l, speed_r = float(np.float32(speed_l)), float(np.float32(speed_r))
         req = WheelCommandRequest(motion_l, speed_l, motion_r, speed_r)

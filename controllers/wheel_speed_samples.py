@@ -48,15 +48,31 @@ class WheelSpeedSamples:
         Slowest speed a silent wheel is believed to turn at, RPM.
     """
 
-    def __init__(self, published: PublishedPose, now_us: int, *, signed_input: bool, speed_samples: str,
-                 revolutions_per_sample: float, sample_latency_us: int, brake_stop_us: int,
-                 brake_friction_rpm_s: float, start_us: int, sample_gap_us: float, rest_rpm: float):
+    def __init__(
+        self,
+        published: PublishedPose,
+        now_us: int,
+        *,
+        signed_input: bool,
+        speed_samples: str,
+        revolutions_per_sample: float,
+        sample_latency_us: int,
+        brake_stop_us: int,
+        brake_friction_rpm_s: float,
+        start_us: int,
+        sample_gap_us: float,
+        rest_rpm: float,
+    ):
         if speed_samples not in SPEED_SAMPLES:
             raise ValueError(f"speed_samples: {speed_samples!r} is not one of {SPEED_SAMPLES}")
         self.published = published
         self.signed_input, self.speed_samples = signed_input, speed_samples
         self.revolutions_per_sample = float(revolutions_per_sample)
-        self.sample_latency_us, self.brake_stop_us, self.start_us = sample_latency_us, brake_stop_us, start_us
+        self.sample_latency_us, self.brake_stop_us, self.start_us = (
+            sample_latency_us,
+            brake_stop_us,
+            start_us,
+        )
         self.sample_gap_us, self.rest_rpm = sample_gap_us, float(rest_rpm)
         self.brake_friction_rpm_s = float(brake_friction_rpm_s)
         self.reset(now_us)
@@ -64,7 +80,10 @@ class WheelSpeedSamples:
     def reset(self, now_us: int) -> None:
         """Forget every sample and command: both wheels standing, never commanded, from ``now_us``."""
         self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
-        self._sample_us: list[int | None] = [None, None]  # end of each wheel's newest measurement window
+        self._sample_us: list[int | None] = [
+            None,
+            None,
+        ]  # end of each wheel's newest measurement window
         self._command_rpm = [0.0, 0.0]  # each wheel's speed in the last wheel_Command, RPM
         self._brake_end_us = [0, 0]  # where each wheel's assumed brake ramp reaches 0
         self._motion_us = [now_us, now_us]  # each wheel's last change of motion code
@@ -87,17 +106,21 @@ class WheelSpeedSamples:
         t0, held = t1 - length_us, rpm
         last_us = self._sample_us[wheel]
         done = abs(profile.revolutions(t0, known_us)) if rpm and t0 < known_us < t1 else 0.0
-        if (done > 0.0 if last_us is None else rpm and t0 < known_us < t1 and last_us <= t0):
+        if done > 0.0 if last_us is None else rpm and t0 < known_us < t1 and last_us <= t0:
             # the revolution began before the node's last knowledge of the wheel (a command, a brake,
             # the silence bound): keep its count (the SC output counts either way), place the rest after it
-            mean = min(max(self.revolutions_per_sample - done, 0.0) * 60e6 / (t1 - known_us), MAX_RPM)
+            mean = min(
+                max(self.revolutions_per_sample - done, 0.0) * 60e6 / (t1 - known_us), MAX_RPM
+            )
             if profile.at(known_us, profile.segment(known_us)) == 0.0 and mean > 0.0:
                 self._start_ramp(wheel, known_us, t1, math.copysign(mean, rpm))
                 self._sample_us[wheel] = t1
                 self._silence(wheel)
                 self._mirror(wheel, now_us)
                 return
-            braked = self._motion[wheel] == 0 and not self.signed_input  # slowing down: no faster after
+            braked = (
+                self._motion[wheel] == 0 and not self.signed_input
+            )  # slowing down: no faster after
             held = math.copysign(mean if braked else max(mean, abs(rpm)), rpm)
             rpm = math.copysign(mean, rpm)
         profile.cut(max(t0, known_us))
@@ -107,8 +130,12 @@ class WheelSpeedSamples:
         if held != rpm:
             profile.step(t1, held)
         self._sample_us[wheel] = t1
-        if (self._motion[wheel] == 0 and not self.signed_input and self.brake_stop_us > 0
-                and (last_us is None or last_us <= t0)):
+        if (
+            self._motion[wheel] == 0
+            and not self.signed_input
+            and self.brake_stop_us > 0
+            and (last_us is None or last_us <= t0)
+        ):
             # a revolution published under a brake: the wheel stops by the ramp's end, or now
             profile.point(max(self._brake_end_us[wheel], t1), 0.0)
         else:
@@ -150,7 +177,9 @@ class WheelSpeedSamples:
         tau_s, speed, friction = 0.5e-6 * self.brake_stop_us, abs(rpm), self.brake_friction_rpm_s
         if speed == 0.0 or friction == 0.0 or tau_s == 0.0:
             return self.brake_stop_us
-        distance = tau_s * speed - friction * tau_s ** 2 * math.log1p(speed / (friction * tau_s))  # RPM s
+        distance = tau_s * speed - friction * tau_s**2 * math.log1p(
+            speed / (friction * tau_s)
+        )  # RPM s
         return int(round(2e6 * distance / speed))
 
     def restarted(self) -> None:
@@ -170,14 +199,21 @@ class WheelSpeedSamples:
         wheels = [w for w in wheels if self._command_rpm[w] > 0.0]
         if self.speed_samples != "window" or self.signed_input or not wheels:
             return
-        full_us = min(self._allowed(w, now_us) * 60e6 / self._command_rpm[w] for w in wheels)  # at full speed
+        full_us = min(
+            self._allowed(w, now_us) * 60e6 / self._command_rpm[w] for w in wheels
+        )  # at full speed
         if full_us <= 0.0:
             return
         ramp_us = self.start_us
-        fraction = min(1.0, full_us / ramp_us) if ramp_us > 0 else 1.0  # of the commanded speed reached
+        fraction = (
+            min(1.0, full_us / ramp_us) if ramp_us > 0 else 1.0
+        )  # of the commanded speed reached
         hold_us = max(full_us - ramp_us, 0.0)
         for wheel in wheels:
-            profile, peak = self.published.profiles[wheel], self._direction[wheel] * self._command_rpm[wheel]
+            profile, peak = (
+                self.published.profiles[wheel],
+                self._direction[wheel] * self._command_rpm[wheel],
+            )
             profile.step(now_us, 0.0)
             profile.point(now_us + ramp_us, fraction * peak)
             if math.isfinite(full_us):
@@ -192,7 +228,9 @@ class WheelSpeedSamples:
             return math.inf  # no silence bound: held until the sample
         if last_us is None:
             return self.revolutions_per_sample
-        opened_us = min(last_us + self.sample_gap_us // 2, now_us)  # the window opened within the gap
+        opened_us = min(
+            last_us + self.sample_gap_us // 2, now_us
+        )  # the window opened within the gap
         done = abs(self.published.profiles[wheel].revolutions(opened_us, now_us))
         return max(self.revolutions_per_sample - done, 0.0)
 
@@ -212,21 +250,35 @@ class WheelSpeedSamples:
         if since_us is None or since_us < self._motion_us[other]:
             if self._command_rpm[wheel] <= 0.0:
                 return
-            scale = (self._command_rpm[other] / self._command_rpm[wheel]
-                     * self._direction[other] * self._direction[wheel])
+            scale = (
+                self._command_rpm[other]
+                / self._command_rpm[wheel]
+                * self._direction[other]
+                * self._direction[wheel]
+            )
             start_us = self._motion_us[other]
         else:
-            if (since_us >= self._sample_us[wheel] or dst.assumed_us is None
-                    or since_us - max(self._motion_us) < self.start_us):  # a ratio of speeds after the start
+            if (
+                since_us >= self._sample_us[wheel]
+                or dst.assumed_us is None
+                or since_us - max(self._motion_us) < self.start_us
+            ):  # a ratio of speeds after the start
                 return
-            here, there = src.at(since_us, src.segment(since_us)), dst.at(since_us, dst.segment(since_us))
+            here, there = (
+                src.at(since_us, src.segment(since_us)),
+                dst.at(since_us, dst.segment(since_us)),
+            )
             if here == 0.0 or there == 0.0:
                 return
             scale, start_us = there / here, since_us
         t_cut = max(start_us, dst.t_us[0])
         # silent for longer than a revolution at rest_rpm takes: at rest from then on
         rev_us = self.revolutions_per_sample * 60e6
-        rest_us = start_us + self.sample_gap_us + rev_us / self.rest_rpm if self.rest_rpm > 0 else math.inf
+        rest_us = (
+            start_us + self.sample_gap_us + rev_us / self.rest_rpm
+            if self.rest_rpm > 0
+            else math.inf
+        )
         dst.cut(t_cut)
         dst.assumed_us = t_cut if now_us < rest_us else None
         for t_us, rpm in zip(src.t_us, src.rpm):
@@ -252,7 +304,9 @@ class WheelSpeedSamples:
             return
         profile.point(t1_us, 2.0 * mean_rpm)
         commanded = self._command_rpm[wheel]
-        if commanded > 2.0 * abs(mean_rpm) > 0.0:  # still starting: on at that rate to the commanded speed
+        if (
+            commanded > 2.0 * abs(mean_rpm) > 0.0
+        ):  # still starting: on at that rate to the commanded speed
             reached_us = t0_us + duration_us * commanded / (2.0 * abs(mean_rpm))
             profile.point(reached_us, math.copysign(commanded, mean_rpm))
 
@@ -267,14 +321,22 @@ class WheelSpeedSamples:
         """
         profile, t_us = self.published.profiles[wheel], self._sample_us[wheel]
         held = profile.last_rpm
-        if (self.speed_samples != "window" or t_us is None or held == 0.0
-                or not math.isfinite(self.sample_gap_us)):
+        if (
+            self.speed_samples != "window"
+            or t_us is None
+            or held == 0.0
+            or not math.isfinite(self.sample_gap_us)
+        ):
             return
-        if profile.assumed_us is None:  # what follows is assumed: a sample after its due time is not clipped
+        if (
+            profile.assumed_us is None
+        ):  # what follows is assumed: a sample after its due time is not clipped
             profile.assumed_us = profile.last_us
         rev_us, start = self.revolutions_per_sample * 60e6, t_us + self.sample_gap_us
         speed, sign = abs(held), math.copysign(1.0, held)
-        t = max(start + rev_us / speed, profile.last_us)  # the next sample at this speed is due by then
+        t = max(
+            start + rev_us / speed, profile.last_us
+        )  # the next sample at this speed is due by then
         rest_us = start + rev_us / self.rest_rpm if self.rest_rpm > 0 else math.inf
         for _ in range(SILENCE_KNOTS):
             if t >= rest_us:

@@ -32,8 +32,9 @@ def imu(mount: Mount, cfg: TwinConfig):
     seed ``[seed, 1]``."""
     from amr_twin.sensors.imu import ImuSensor
 
-    sensor = ImuSensor(mount.physics, mount.clock, mount.bus, cfg.imu, seed=[mount.seed, 1],
-                       autostart=False)
+    sensor = ImuSensor(
+        mount.physics, mount.clock, mount.bus, cfg.imu, seed=[mount.seed, 1], autostart=False
+    )
     sensor.start(grid_us=mount.grid_us, samplers=mount.samplers)
     return sensor
 
@@ -45,8 +46,15 @@ def lidar(mount: Mount, cfg: TwinConfig):
     from amr_twin.sensors.lidar import Lidar
 
     cast = {"loop_cast_us": ACTOR_CAST_US} if mount.actors else {}
-    sensor = Lidar(mount.physics, mount.clock, mount.bus, cfg.lidar, seed=[mount.seed, 2],
-                   autostart=False, **cast)
+    sensor = Lidar(
+        mount.physics,
+        mount.clock,
+        mount.bus,
+        cfg.lidar,
+        seed=[mount.seed, 2],
+        autostart=False,
+        **cast,
+    )
     sensor.start_motor(grid_us=mount.grid_us, samplers=mount.samplers)
     return sensor
 
@@ -61,6 +69,7 @@ def uwb(mount: Mount, cfg: TwinConfig):
 
     site, anchors = cfg.uwb, uwb_anchors_xy_m(mount.world)
     if anchors is not None:
-        site = site.model_copy(update={"anchors_x_m": tuple(anchors[:, 0]),
-                                       "anchors_y_m": tuple(anchors[:, 1])})
+        site = site.model_copy(
+            update={"anchors_x_m": tuple(anchors[:, 0]), "anchors_y_m": tuple(anchors[:, 1])}
+        )
     return UwbSensor(mount.physics, mount.clock, mount.bus, site, seed=[mount.seed, 3])

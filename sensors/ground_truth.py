@@ -10,8 +10,16 @@ from __future__ import annotations
 
 import math
 
-from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, Twist,
-                                            TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (
+    Odometry,
+    Point,
+    Pose,
+    PoseWithCovariance,
+    Quaternion,
+    Twist,
+    TwistWithCovariance,
+    Vector3,
+)
 from amr_twin.ros.messages import Header, Time
 
 TOPIC = "ground_truth/odom"
@@ -33,11 +41,20 @@ class GroundTruth:
         vel = self.physics.base_velocity()  # linear in the world, angular in the body
         c, s = math.cos(p.yaw_rad), math.sin(p.yaw_rad)
         self._seq += 1
-        self._pub.publish(Odometry(
-            header=Header(self._seq, Time.from_us(self.clock.now_us), "map"), child_frame_id="base_link",
-            pose=PoseWithCovariance(Pose(Point(p.x_m, p.y_m, 0.0), Quaternion.from_yaw(p.yaw_rad))),
-            twist=TwistWithCovariance(Twist(Vector3(c * vel[0] + s * vel[1], 0.0, 0.0),
-                                            Vector3(0.0, 0.0, float(vel[5]))))))
+        self._pub.publish(
+            Odometry(
+                header=Header(self._seq, Time.from_us(self.clock.now_us), "map"),
+                child_frame_id="base_link",
+                pose=PoseWithCovariance(
+                    Pose(Point(p.x_m, p.y_m, 0.0), Quaternion.from_yaw(p.yaw_rad))
+                ),
+                twist=TwistWithCovariance(
+                    Twist(
+                        Vector3(c * vel[0] + s * vel[1], 0.0, 0.0), Vector3(0.0, 0.0, float(vel[5]))
+                    )
+                ),
+            )
+        )
 
     def stop(self) -> None:
         self._handle.cancel()

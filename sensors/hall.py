@@ -53,13 +53,21 @@ class HallSensors:
         :attr:`engine` says which.
     """
 
-    def __init__(self, n_wheels: int = 2, *, pole_pairs: int, misalignment_deg=0.0, jitter_us: float = 0.0,
-                 seed: int | None = None, native: bool = True, hysteresis_deg: float = 0.0):
+    def __init__(
+        self,
+        n_wheels: int = 2,
+        *,
+        pole_pairs: int,
+        misalignment_deg=0.0,
+        jitter_us: float = 0.0,
+        seed: int | None = None,
+        native: bool = True,
+        hysteresis_deg: float = 0.0,
+    ):
         self.n_wheels = int(n_wheels)
         pitch_deg = 360.0 / (2 * int(pole_pairs))
         nominal_deg = pitch_deg / N_SENSORS * np.arange(N_SENSORS)
-        mis = np.broadcast_to(np.asarray(misalignment_deg, dtype=float),
-                              (self.n_wheels, N_SENSORS))
+        mis = np.broadcast_to(np.asarray(misalignment_deg, dtype=float), (self.n_wheels, N_SENSORS))
         self.offset_rad = np.deg2rad(nominal_deg + mis)  # (n_wheels, 3)
         self.pitch_rad = np.deg2rad(pitch_deg)
         """Wheel angle between two toggles of one hall sensor, rad."""
@@ -73,7 +81,9 @@ class HallSensors:
         self.stuck = [[False] * N_SENSORS for _ in range(self.n_wheels)]
         self.glitch_rate_hz = [0.0] * self.n_wheels
         self._glitch_rng = np.random.default_rng([0 if seed is None else seed, 3])
-        self._kernel, self.engine = edge_kernel(self.offset_rad, self.pitch_rad, self.half_band_rad, native)
+        self._kernel, self.engine = edge_kernel(
+            self.offset_rad, self.pitch_rad, self.half_band_rad, native
+        )
 
     def _lattice_index(self, angle_rad: np.ndarray) -> np.ndarray:
         """Toggle count of every sensor, shape ``angle_rad.shape + (3,)``."""
@@ -112,10 +122,12 @@ class HallSensors:
             Wheel index of each edge.
         """
         if self.half_band_rad:
-            raise ValueError("HallSensors.edges: the dense path has no hysteresis; use edges_from_samples")
+            raise ValueError(
+                "HallSensors.edges: the dense path has no hysteresis; use edges_from_samples"
+            )
         t_us = np.asarray(t_us, dtype=np.int64)
         angle = np.asarray(angle_rad, dtype=float).reshape(len(t_us), self.n_wheels)
-        count = self._lattice_index(angle)                 # (n+1, W, 3)
+        count = self._lattice_index(angle)  # (n+1, W, 3)
         self._count = count[-1].copy()
         found = self._crossings(count)
         if found is None:
@@ -130,16 +142,17 @@ class HallSensors:
 
         Returns ``(step, wheel, theta_rad)`` of every crossing, or None.
         """
-        n0, n1 = count[:-1], count[1:]                      # (n, W, 3)
+        n0, n1 = count[:-1], count[1:]  # (n, W, 3)
         crossings = np.abs(n1 - n0).ravel()
         total = int(crossings.sum())
         if total == 0:
             return None
         n_steps = len(count) - 1
-        step, wheel, sensor = np.unravel_index(np.repeat(np.arange(crossings.size), crossings),
-                                               (n_steps, self.n_wheels, N_SENSORS))
+        step, wheel, sensor = np.unravel_index(
+            np.repeat(np.arange(crossings.size), crossings), (n_steps, self.n_wheels, N_SENSORS)
+        )
         first = np.repeat(np.cumsum(crossings) - crossings, crossings)
-        k = np.arange(total) - first                        # 0.. within each (step, sensor)
+        k = np.arange(total) - first  # 0.. within each (step, sensor)
         start = n0[step, wheel, sensor]
         forward = n1[step, wheel, sensor] > start
         lattice = np.where(forward, start + 1 + k, start - k)
@@ -177,7 +190,9 @@ class HallSensors:
         nw = self.n_wheels
         jitter = self.jitter_us > 0.0
         if self._kernel is not None and not jitter and not any(self.glitch_rate_hz):
-            edges = self._kernel.edges(ts, rows, self.stuck, self._count)  # resamples as below, in C
+            edges = self._kernel.edges(
+                ts, rows, self.stuck, self._count
+            )  # resamples as below, in C
             if edges is not None:
                 edges.sort(key=_edge_time)
                 return edges
@@ -185,10 +200,17 @@ class HallSensors:
             speeds = [r[nw + w] for r in rows]
             if any(a * b < 0 for a, b in zip(speeds, speeds[1:])):
                 samples = np.array(rows)
-                t_arr, q, v = split_trajectory(np.array(ts, np.int64), samples[:, :nw], samples[:, nw:2 * nw], 8)
+                t_arr, q, v = split_trajectory(
+                    np.array(ts, np.int64), samples[:, :nw], samples[:, nw : 2 * nw], 8
+                )
                 ts, rows = t_arr.tolist(), np.hstack([q, v]).tolist()
                 break
-        pitch, offsets, floor, hb = self.pitch_rad, self.offset_rad.tolist(), math.floor, self.half_band_rad
+        pitch, offsets, floor, hb = (
+            self.pitch_rad,
+            self.offset_rad.tolist(),
+            math.floor,
+            self.half_band_rad,
+        )
         t_first, t_last = ts[0] + 1, ts[-1]
         intervals = range(len(ts) - 1)
         edges: list[tuple[int, int]] = []
@@ -211,7 +233,7 @@ class HallSensors:
                     h = span * 1e-6
                     m0, m1 = speeds[i] * h, speeds[i + 1] * h
                     shift = hb if up else -hb
-                    for lattice in (range(count + 1, c1 + 1) if up else range(count, c1, -1)):
+                    for lattice in range(count + 1, c1 + 1) if up else range(count, c1, -1):
                         s = solve_hermite(q0, q1, m0, m1, off + pitch * lattice + shift)
                         t = t0 + s * span
                         if jitter:
@@ -234,7 +256,9 @@ class HallSensors:
         """
         self.stuck[wheel][sensor] = bool(stuck)
         if not stuck:
-            self._count[wheel, sensor] = math.floor((angle_rad - self.offset_rad[wheel, sensor]) / self.pitch_rad)
+            self._count[wheel, sensor] = math.floor(
+                (angle_rad - self.offset_rad[wheel, sensor]) / self.pitch_rad
+            )
 
     def _glitches(self, wheel: int, t_first: int, t_last: int) -> list[tuple[int, int]]:
         """Spurious SC pulses of ``wheel`` in [t_first, t_last] us: Poisson at ``glitch_rate_hz``.

@@ -28,7 +28,9 @@ MAX_EDGES = 4096
 class EdgeKernel:
     """The C crossing loop for ``n_wheels`` wheels with hall ``offsets_rad`` (n_wheels, 3) and ``pitch_rad``."""
 
-    def __init__(self, lib: ctypes.PyDLL, offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float):
+    def __init__(
+        self, lib: ctypes.PyDLL, offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float
+    ):
         fn = self._fn = lib.hall_edges
         p, i, d = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
         fn.restype, fn.argtypes = i, [i, p, p, i, i, p, p, d, d, p, p, p, i]
@@ -42,11 +44,20 @@ class EdgeKernel:
         self._any_stuck = False
         self._count = np.zeros(self._offsets.shape, np.int64)
         self._t, self._w = np.zeros(MAX_EDGES, np.int64), np.zeros(MAX_EDGES, np.intc)
-        self._fixed = (address(self._offsets), address(self._stuck), self._pitch, float(half_band_rad),
-                       address(self._count), address(self._t), address(self._w), MAX_EDGES)
+        self._fixed = (
+            address(self._offsets),
+            address(self._stuck),
+            self._pitch,
+            float(half_band_rad),
+            address(self._count),
+            address(self._t),
+            address(self._w),
+            MAX_EDGES,
+        )
 
-    def edges(self, ts: list[int], rows: list[list[float]], stuck: list[list[bool]],
-              count: np.ndarray) -> list[tuple[int, int]] | None:
+    def edges(
+        self, ts: list[int], rows: list[list[float]], stuck: list[list[bool]], count: np.ndarray
+    ) -> list[tuple[int, int]] | None:
         """``(t_us, wheel)`` edges in the order wheel, sensor, interval, crossing (not sorted), from
         the toggle counts ``count`` (n_wheels, 3), the free sensors' final ones written back; None beyond
         :data:`MAX_EDGES` edges. ``rows`` as :meth:`amr_twin.sensors.hall.HallSensors.edges_from_samples`
@@ -63,7 +74,9 @@ class EdgeKernel:
         r = array("d", flat)
         if self._reverses(len(t) - 1, address(r), ncol, nw):
             samples = np.frombuffer(r).reshape(len(t), ncol)
-            t_new, q, v = split_trajectory(np.frombuffer(t, np.int64), samples[:, :nw], samples[:, nw:], 8)
+            t_new, q, v = split_trajectory(
+                np.frombuffer(t, np.int64), samples[:, :nw], samples[:, nw:], 8
+            )
             t, r = t_new, np.ascontiguousarray(np.hstack([q, v]))
         if stuck != self._stuck_as:
             self._stuck[:] = stuck
@@ -71,8 +84,21 @@ class EdgeKernel:
             self._any_stuck = any(map(any, stuck))
         offsets_at, stuck_at, pitch, half_band, count_at, t_at, w_at, cap = self._fixed
         self._count[:] = count
-        n = self._fn(len(t) - 1, address(t), address(r), ncol, nw, offsets_at, stuck_at, pitch, half_band,
-                     count_at, t_at, w_at, cap)
+        n = self._fn(
+            len(t) - 1,
+            address(t),
+            address(r),
+            ncol,
+            nw,
+            offsets_at,
+            stuck_at,
+            pitch,
+            half_band,
+            count_at,
+            t_at,
+            w_at,
+            cap,
+        )
         if n < 0:
             return None
         if self._any_stuck:
@@ -83,11 +109,14 @@ class EdgeKernel:
         return list(zip(self._t[:n].tolist(), self._w[:n].tolist()))
 
 
-def edge_kernel(offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float = 0.0,
-                native: bool = True) -> tuple[EdgeKernel | None, str]:
+def edge_kernel(
+    offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float = 0.0, native: bool = True
+) -> tuple[EdgeKernel | None, str]:
     """``(kernel, engine)``: the C crossing loop (None without the helper) and ``"C"`` or ``"Python (<why>)"``."""
     lib, engine = open_helper(C_SOURCE, native)
-    return (EdgeKernel(lib, offsets_rad, pitch_rad, half_band_rad) if lib is not None else None), engine
+    return (
+        EdgeKernel(lib, offsets_rad, pitch_rad, half_band_rad) if lib is not None else None
+    ), engine
 
 
 def solve_hermite(q0: float, q1: float, m0: float, m1: float, theta: float) -> float:
@@ -134,8 +163,16 @@ def split_trajectory(t_us: np.ndarray, q: np.ndarray, v: np.ndarray, parts: int)
     h = ((t_us[i + 1] - t_us[i]) * 1e-6)[:, None]
     s = ((t_new - t_us[i]) * 1e-6)[:, None] / h
     s2, s3 = s * s, s * s * s
-    q_new = ((2 * s3 - 3 * s2 + 1) * q[i] + (s3 - 2 * s2 + s) * h * v[i]
-             + (-2 * s3 + 3 * s2) * q[i + 1] + (s3 - s2) * h * v[i + 1])
-    v_new = ((6 * s2 - 6 * s) * q[i] / h + (3 * s2 - 4 * s + 1) * v[i]
-             + (-6 * s2 + 6 * s) * q[i + 1] / h + (3 * s2 - 2 * s) * v[i + 1])
+    q_new = (
+        (2 * s3 - 3 * s2 + 1) * q[i]
+        + (s3 - 2 * s2 + s) * h * v[i]
+        + (-2 * s3 + 3 * s2) * q[i + 1]
+        + (s3 - s2) * h * v[i + 1]
+    )
+    v_new = (
+        (6 * s2 - 6 * s) * q[i] / h
+        + (3 * s2 - 4 * s + 1) * v[i]
+        + (-6 * s2 + 6 * s) * q[i + 1] / h
+        + (3 * s2 - 2 * s) * v[i + 1]
+    )
     return t_new, q_new, v_new

@@ -57,8 +57,17 @@ class ImuSensor:
         Corrupt the samples in C when the helper builds (same bits; :attr:`engine` says which runs).
     """
 
-    def __init__(self, physics, clock: VirtualClock, bus: Bus, cfg: ImuCfg, seed: int | None = 0,
-                 frame_id: str = IMU_FRAME, autostart: bool = True, native: bool = True):
+    def __init__(
+        self,
+        physics,
+        clock: VirtualClock,
+        bus: Bus,
+        cfg: ImuCfg,
+        seed: int | None = 0,
+        frame_id: str = IMU_FRAME,
+        autostart: bool = True,
+        native: bool = True,
+    ):
         model, data = physics.model, physics.data
         self.data, self.clock, self.bus, self.cfg, self.frame_id = data, clock, bus, cfg, frame_id
         self._adr = [int(model.sensor(name).adr[0]) for name in SENSOR_NAMES]
@@ -79,15 +88,27 @@ class ImuSensor:
         self._samplers: list | None = None  # the loop's grid samplers while fed by the loop
         self._start_us = 0
         self._native = native
-        self._true: GridRows | None = None  # the true values (9) taken on the loop's grid, after their instants
+        self._true: GridRows | None = (
+            None  # the true values (9) taken on the loop's grid, after their instants
+        )
         self._ready: deque[tuple[int, Imu, MagneticField]] = deque()  # (t_us, messages) to publish
         a = self._adr
-        self._sd9 = data.sensordata[a[0]:a[0] + 9] if a[1] == a[0] + 3 and a[2] == a[0] + 6 else None
-        self._true9_list = self._sd9.tolist if self._sd9 is not None else lambda: self._true9().tolist()
+        self._sd9 = (
+            data.sensordata[a[0] : a[0] + 9] if a[1] == a[0] + 3 and a[2] == a[0] + 6 else None
+        )
+        self._true9_list = (
+            self._sd9.tolist if self._sd9 is not None else lambda: self._true9().tolist()
+        )
         for cov in (*self._cov.values(), self._orientation_cov):
             cov.flags.writeable = False  # shared by every message: read-only
-        self._fast = (bus.publish, frame_id, self._orientation_cov, self._cov["gyro"], self._cov["accel"],
-                      self._cov["mag"])
+        self._fast = (
+            bus.publish,
+            frame_id,
+            self._orientation_cov,
+            self._cov["gyro"],
+            self._cov["accel"],
+            self._cov["mag"],
+        )
         if autostart:
             self.start()
 
@@ -112,12 +133,20 @@ class ImuSensor:
         first_us = self._start_us = -(-self.clock.now_us // self.period_us) * self.period_us
         if grid_us and samplers is not None and self.period_us % int(grid_us) == 0:
             self._samplers = samplers
-            at, a = address(self.data.sensordata), self._adr  # the three vectors' values, where they lie
-            c_row = gather([at + 8 * (a[v] + k) for v in range(3) for k in range(3)]) if self._native else None
+            at, a = (
+                address(self.data.sensordata),
+                self._adr,
+            )  # the three vectors' values, where they lie
+            c_row = (
+                gather([at + 8 * (a[v] + k) for v in range(3) for k in range(3)])
+                if self._native
+                else None
+            )
             self._true = GridRows(9, self.period_us, self._true9_list, c_row, start_us=first_us)
             samplers.append(self._true)
-            self._handle = self.clock.schedule_every(first_us, self.period_us, self._publish_next,
-                                                     publishes=("imu/data_raw", "imu/mag"))
+            self._handle = self.clock.schedule_every(
+                first_us, self.period_us, self._publish_next, publishes=("imu/data_raw", "imu/mag")
+            )
         else:
             self._handle = self.clock.schedule_every(first_us, self.period_us, self._tick)
 
@@ -135,13 +164,13 @@ class ImuSensor:
     def true_values(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(accel m/s^2, gyro rad/s, mag T), each shape (3,), without errors."""
         sd = self.data.sensordata
-        return tuple(sd[a:a + 3].copy() for a in self._adr)
+        return tuple(sd[a : a + 3].copy() for a in self._adr)
 
     def _true9(self) -> np.ndarray:
         if self._sd9 is not None:
             return self._sd9.copy()
         sd, a = self.data.sensordata, self._adr
-        return np.concatenate((sd[a[0]:a[0] + 3], sd[a[1]:a[1] + 3], sd[a[2]:a[2] + 3]))
+        return np.concatenate((sd[a[0] : a[0] + 3], sd[a[1] : a[1] + 3], sd[a[2] : a[2] + 3]))
 
     def corrupt_batch(self, true: np.ndarray) -> np.ndarray:
         """Corrupt ``n`` consecutive samples (n, 9), advancing the error state by ``n`` periods.
@@ -170,7 +199,9 @@ class ImuSensor:
             self._ready.extend(self._messages(true[:, 0].astype(np.int64).tolist(), y.tolist()))
         t_us, imu, mag = self._ready.popleft()
         if t_us != now:
-            raise RuntimeError(f"IMU sample at t_us={now} was not taken on the loop's grid (got {t_us})")
+            raise RuntimeError(
+                f"IMU sample at t_us={now} was not taken on the loop's grid (got {t_us})"
+            )
         self.seq = imu.header.seq
         publish = self._fast[0]
         publish("imu/data_raw", imu)
@@ -183,8 +214,15 @@ class ImuSensor:
         out, from_us = [], Time.from_us
         for seq, (t_us, a) in enumerate(zip(ts_us, ys), self.seq + 1):
             stamp = from_us(t_us)
-            imu = Imu(Header(seq, stamp, frame), Quaternion(), orientation_cov,
-                      Vector3(a[3], a[4], a[5]), gyro_cov, Vector3(a[0], a[1], a[2]), accel_cov)
+            imu = Imu(
+                Header(seq, stamp, frame),
+                Quaternion(),
+                orientation_cov,
+                Vector3(a[3], a[4], a[5]),
+                gyro_cov,
+                Vector3(a[0], a[1], a[2]),
+                accel_cov,
+            )
             mag = MagneticField(Header(seq, stamp, frame), Vector3(a[6], a[7], a[8]), mag_cov)
             out.append((t_us, imu, mag))
         return out
@@ -199,6 +237,18 @@ class ImuSensor:
         # positional fields (ROS order): header, orientation, covariances and vectors; the covariance
         # arrays are shared, read-only (one tuple read: this runs at 100 Hz on cold caches)
         publish, frame, orientation_cov, gyro_cov, accel_cov, mag_cov = self._fast
-        publish("imu/data_raw", Imu(Header(seq, stamp, frame), Quaternion(), orientation_cov,
-                                    Vector3(a[3], a[4], a[5]), gyro_cov, Vector3(a[0], a[1], a[2]), accel_cov))
-        publish("imu/mag", MagneticField(Header(seq, stamp, frame), Vector3(a[6], a[7], a[8]), mag_cov))
+        publish(
+            "imu/data_raw",
+            Imu(
+                Header(seq, stamp, frame),
+                Quaternion(),
+                orientation_cov,
+                Vector3(a[3], a[4], a[5]),
+                gyro_cov,
+                Vector3(a[0], a[1], a[2]),
+                accel_cov,
+            ),
+        )
+        publish(
+            "imu/mag", MagneticField(Header(seq, stamp, frame), Vector3(a[6], a[7], a[8]), mag_cov)
+        )

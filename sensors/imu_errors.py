@@ -44,7 +44,9 @@ class AxisModel:
     resolution: np.ndarray
 
 
-def corrupt(true: np.ndarray, model: AxisModel, rng: np.random.Generator, dt_s: float) -> np.ndarray:
+def corrupt(
+    true: np.ndarray, model: AxisModel, rng: np.random.Generator, dt_s: float
+) -> np.ndarray:
     """Advance the bias random walk by ``dt_s`` and return one corrupted sample.
 
     Parameters
@@ -75,15 +77,30 @@ def axis_models(cfg: ImuCfg, rng: np.random.Generator) -> dict[str, AxisModel]:
     """Draw the turn-on biases and scale errors of accel, gyro and mag (in that order)."""
     rate = cfg.rate_hz
     return {
-        "accel": AxisModel(rng.normal(0.0, cfg.accel_bias_sigma_m_s2, 3), rng.normal(0.0, cfg.accel_scale_sigma, 3),
-                           cfg.accel_noise_density_m_s2_sqrt_hz * np.sqrt(rate), cfg.accel_bias_walk_m_s2_sqrt_s,
-                           cfg.accel_range_m_s2, np.full(3, cfg.accel_resolution_m_s2)),
-        "gyro": AxisModel(rng.normal(0.0, cfg.gyro_bias_sigma_rad_s, 3), rng.normal(0.0, cfg.gyro_scale_sigma, 3),
-                          cfg.gyro_noise_density_rad_s_sqrt_hz * np.sqrt(rate), cfg.gyro_bias_walk_rad_s_sqrt_s,
-                          cfg.gyro_range_rad_s, np.full(3, cfg.gyro_resolution_rad_s)),
-        "mag": AxisModel(rng.normal(0.0, cfg.mag_bias_sigma_t, 3), np.zeros(3), cfg.mag_noise_t, 0.0,
-                         cfg.mag_range_t,
-                         np.array([cfg.mag_resolution_xy_t, cfg.mag_resolution_xy_t, cfg.mag_resolution_z_t])),
+        "accel": AxisModel(
+            rng.normal(0.0, cfg.accel_bias_sigma_m_s2, 3),
+            rng.normal(0.0, cfg.accel_scale_sigma, 3),
+            cfg.accel_noise_density_m_s2_sqrt_hz * np.sqrt(rate),
+            cfg.accel_bias_walk_m_s2_sqrt_s,
+            cfg.accel_range_m_s2,
+            np.full(3, cfg.accel_resolution_m_s2),
+        ),
+        "gyro": AxisModel(
+            rng.normal(0.0, cfg.gyro_bias_sigma_rad_s, 3),
+            rng.normal(0.0, cfg.gyro_scale_sigma, 3),
+            cfg.gyro_noise_density_rad_s_sqrt_hz * np.sqrt(rate),
+            cfg.gyro_bias_walk_rad_s_sqrt_s,
+            cfg.gyro_range_rad_s,
+            np.full(3, cfg.gyro_resolution_rad_s),
+        ),
+        "mag": AxisModel(
+            rng.normal(0.0, cfg.mag_bias_sigma_t, 3),
+            np.zeros(3),
+            cfg.mag_noise_t,
+            0.0,
+            cfg.mag_range_t,
+            np.array([cfg.mag_resolution_xy_t, cfg.mag_resolution_xy_t, cfg.mag_resolution_z_t]),
+        ),
     }
 
 
@@ -93,10 +110,14 @@ def covariances(models: dict[str, AxisModel], cfg: ImuCfg) -> dict[str, np.ndarr
     Diagonal: ``noise_sigma^2 + bias_sigma^2 + resolution^2 / 12`` per axis (SI units
     squared), the error of one uncalibrated reading (module docstring).
     """
-    bias = {"accel": cfg.accel_bias_sigma_m_s2, "gyro": cfg.gyro_bias_sigma_rad_s, "mag": cfg.mag_bias_sigma_t}
+    bias = {
+        "accel": cfg.accel_bias_sigma_m_s2,
+        "gyro": cfg.gyro_bias_sigma_rad_s,
+        "mag": cfg.mag_bias_sigma_t,
+    }
     out = {}
     for name, m in models.items():
-        variance = m.noise_sigma ** 2 + bias[name] ** 2 + np.asarray(m.resolution, float) ** 2 / 12.0
+        variance = m.noise_sigma**2 + bias[name] ** 2 + np.asarray(m.resolution, float) ** 2 / 12.0
         out[name] = np.diag(np.broadcast_to(variance, (3,))).ravel()
     return out
 
@@ -104,8 +125,13 @@ def covariances(models: dict[str, AxisModel], cfg: ImuCfg) -> dict[str, np.ndarr
 class _Axes(ctypes.Structure):
     """``imu_axes`` of imu_errors.c."""
 
-    _fields_ = [("scale1", ctypes.c_double * 9), ("range", ctypes.c_double * 9), ("res", ctypes.c_double * 9),
-                ("inv_res", ctypes.c_double * 9), ("quantised", ctypes.c_int * 9)]
+    _fields_ = [
+        ("scale1", ctypes.c_double * 9),
+        ("range", ctypes.c_double * 9),
+        ("res", ctypes.c_double * 9),
+        ("inv_res", ctypes.c_double * 9),
+        ("quantised", ctypes.c_int * 9),
+    ]
 
 
 register(C_SOURCE, imu_axes=_Axes)
@@ -127,14 +153,22 @@ class ErrorStream:
         Use the C helper when it builds (:attr:`engine` says which runs).
     """
 
-    def __init__(self, models: dict[str, AxisModel], dt_s: float, rng: np.random.Generator, native: bool = True):
+    def __init__(
+        self,
+        models: dict[str, AxisModel],
+        dt_s: float,
+        rng: np.random.Generator,
+        native: bool = True,
+    ):
         ms = [models[k] for k in ("accel", "gyro", "mag")]
         self.rng = rng
         self.bias = np.concatenate([m.bias for m in ms])
         """(9,) the biases of the last sample taken (turn-on bias plus walk)."""
         for i, m in enumerate(ms):
-            m.bias = self.bias[3 * i:3 * i + 3]
-        self._block: tuple[np.ndarray, np.ndarray] | None = None  # biases and noise drawn ahead (m, 9) x 2
+            m.bias = self.bias[3 * i : 3 * i + 3]
+        self._block: tuple[np.ndarray, np.ndarray] | None = (
+            None  # biases and noise drawn ahead (m, 9) x 2
+        )
         self._pos = 0  # rows of _block used
         self._scale = np.concatenate([m.scale for m in ms])
         self._noise = np.repeat([m.noise_sigma for m in ms], 3)
@@ -154,7 +188,10 @@ class ErrorStream:
         axes = self._axes = _Axes()
         axes.scale1[:] = (1.0 + self._scale).tolist()
         axes.range[:], axes.res[:] = self._range.tolist(), self._res.tolist()
-        axes.inv_res[:], axes.quantised[:] = self._inv_res.tolist(), [int(q) for q in self._quantised]
+        axes.inv_res[:], axes.quantised[:] = (
+            self._inv_res.tolist(),
+            [int(q) for q in self._quantised],
+        )
         fn = lib.imu_corrupt
         fn.restype = None
         fn.argtypes = [ctypes.c_int] + [ctypes.c_void_p] * 5
@@ -193,13 +230,18 @@ class ErrorStream:
             m = max(n, ERROR_BLOCK)
             z = self.rng.standard_normal((m, 18))
             steps = np.empty((m + 1, 9))
-            steps[0] = self.bias if block is None else block[0][-1]  # turn-on bias, then the walk's end
+            steps[0] = (
+                self.bias if block is None else block[0][-1]
+            )  # turn-on bias, then the walk's end
             steps[1:] = self._walk * z[:, :9]
-            fresh = (np.cumsum(steps, axis=0)[1:], self._noise * z[:, 9:])  # bias_k = bias_(k-1) + walk_k
+            fresh = (
+                np.cumsum(steps, axis=0)[1:],
+                self._noise * z[:, 9:],
+            )  # bias_k = bias_(k-1) + walk_k
             if block is not None and pos < len(block[0]):  # the rows not used yet come first
                 fresh = tuple(np.concatenate([old[pos:], new]) for old, new in zip(block, fresh))
             block, pos = self._block, self._pos = fresh, 0
-        bias, noise = block[0][pos:pos + n], block[1][pos:pos + n]
+        bias, noise = block[0][pos : pos + n], block[1][pos : pos + n]
         self._pos = pos + n
         self.bias[:] = bias[-1]
         return bias, noise

@@ -20,11 +20,17 @@ from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 
 from amr_twin.sim.grid_steps import NEVER_BEFORE
-from amr_twin.sensors.lidar_beams import US, PoseSamples, beam_angles_rad, beam_directions, group_masks, scan_timing
+from amr_twin.sensors.lidar_beams import (
+    US,
+    PoseSamples,
+    beam_angles_rad,
+    beam_directions,
+    group_masks,
+    scan_timing,
+)
 from amr_twin.sensors.lidar_kernels import CUTOFF_M, beam_kernels
 
 PHYSICS_LAYER = True
-
 
 
 class Lidar:
@@ -55,9 +61,20 @@ class Lidar:
         :attr:`engine` says which runs.
     """
 
-    def __init__(self, physics, clock: VirtualClock, bus: Bus, cfg: LidarCfg, seed: int | None = 0,
-                 group_us: int = 20000, frame_id: str = LASER_FRAME, site: str = "amr/laser",
-                 autostart: bool = True, loop_cast_us: int = 200000, native: bool = True):
+    def __init__(
+        self,
+        physics,
+        clock: VirtualClock,
+        bus: Bus,
+        cfg: LidarCfg,
+        seed: int | None = 0,
+        group_us: int = 20000,
+        frame_id: str = LASER_FRAME,
+        site: str = "amr/laser",
+        autostart: bool = True,
+        loop_cast_us: int = 200000,
+        native: bool = True,
+    ):
         model, data = physics.model, physics.data
         if group_us <= 0 or loop_cast_us <= 0:
             raise ValueError(f"group_us {group_us}, loop_cast_us {loop_cast_us}: must be > 0")
@@ -73,16 +90,29 @@ class Lidar:
         """Which runs the beams' arithmetic: ``"C"`` or ``"Python (<why>)"``."""
         # negative (clockwise); float32 on the wire: the float32 next to -1/sample_rate toward 0, so
         # that stamp + i * time_increment never falls before the beam's true instant (by ~10 ns)
-        self._time_increment = float(np.nextafter(np.float32(-self.beam_dt_us / US), np.float32(0.0)))
+        self._time_increment = float(
+            np.nextafter(np.float32(-self.beam_dt_us / US), np.float32(0.0))
+        )
         self.group_us, self.loop_cast_us = int(group_us), int(loop_cast_us)
         self.cast_period_us = self.group_us  # pose sample period (the loop's grid in the twin)
         self.cast_every_us = self.group_us  # longest time between casts
         moving = model.body_rootid[model.geom_bodyid] != 0  # cast what moves with the robot apart
-        self.geomgroup, self._world_groups, self._payload_groups = group_masks(model.geom_group, moving)
-        self._kernels.bind(model, data, self.site_id,
-                           self.geomgroup if self._world_groups is None else self._world_groups)
-        self._no_dist, self._no_hit = np.full(self.n_beams, -1.0), np.full(self.n_beams, -1, np.int32)
-        self._beam_offsets_us = self.beam_dt_us * np.arange(self.n_beams - 1, -1, -1, dtype=np.int64)
+        self.geomgroup, self._world_groups, self._payload_groups = group_masks(
+            model.geom_group, moving
+        )
+        self._kernels.bind(
+            model,
+            data,
+            self.site_id,
+            self.geomgroup if self._world_groups is None else self._world_groups,
+        )
+        self._no_dist, self._no_hit = (
+            np.full(self.n_beams, -1.0),
+            np.full(self.n_beams, -1, np.int32),
+        )
+        self._beam_offsets_us = self.beam_dt_us * np.arange(
+            self.n_beams - 1, -1, -1, dtype=np.int64
+        )
         self.dist_m = np.full(self.n_beams, -1.0)
         """True distances of the rotation in progress, m (-1: no hit)."""
         self._normal = np.zeros(3 * self.n_beams)
@@ -103,7 +133,10 @@ class Lidar:
         self._samplers: list | None = None  # the loop's grid samplers (in the twin)
         self._grid: tuple[int, list] | None = None
         self._poses = PoseSamples(data, self.site_id, self.cast_period_us, self._after_pose, native)
-        self._lx, self._ly = self.local_dirs[:, 0:1].copy(), self.local_dirs[:, 1:2].copy()  # (n, 1) each
+        self._lx, self._ly = (
+            self.local_dirs[:, 0:1].copy(),
+            self.local_dirs[:, 1:2].copy(),
+        )  # (n, 1) each
         self._done: deque = deque()  # (t_us, scan, beam_t_us, hit_geom) cast, not yet published
         self.running = False
         self._new_rotation(clock.now_us)
@@ -111,7 +144,9 @@ class Lidar:
             self.start_motor()
 
     # -- services ------------------------------------------------------------------
-    def start_motor(self, request=None, grid_us: int | None = None, samplers: list | None = None) -> None:
+    def start_motor(
+        self, request=None, grid_us: int | None = None, samplers: list | None = None
+    ) -> None:
         """Start rotating: the first beam of a new scan is acquired now.
 
         With ``grid_us`` and ``samplers`` (the simulation loop's record grid and
@@ -131,7 +166,9 @@ class Lidar:
             self.cast_period_us = -(-self.group_us // grid) * grid
             self.cast_every_us = self.loop_cast_us
             self._samplers.append(self._poses)
-            self._handle = self.clock.schedule(self._publish_time_us(now), self._publish_next, publishes=("scan",))
+            self._handle = self.clock.schedule(
+                self._publish_time_us(now), self._publish_next, publishes=("scan",)
+            )
         else:
             self.cast_period_us = self.cast_every_us = self.group_us
             grid = self.group_us
@@ -223,19 +260,50 @@ class Lidar:
         geomid, dist = self.hit_geom[start:stop], self.dist_m[start:stop]
         poses = self._poses
         if at_own_instants and poses.n > 0:  # origins and directions at the beams' instants
-            self._kernels.cast(self.beam_t_us[start:stop], self._lx[start:stop], self._ly[start:stop], poses.rows,
-                               poses.n, dist, geomid)
+            self._kernels.cast(
+                self.beam_t_us[start:stop],
+                self._lx[start:stop],
+                self._ly[start:stop],
+                poses.rows,
+                poses.n,
+                dist,
+                geomid,
+            )
         else:
             u = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
             groups = self.geomgroup if self._world_groups is None else self._world_groups
-            mujoco.mj_multiRay(m, d, d.site_xpos[s], u.ravel(), groups, 1, -1, geomid, dist, self._normal[:3 * k], k,
-                               CUTOFF_M)
+            mujoco.mj_multiRay(
+                m,
+                d,
+                d.site_xpos[s],
+                u.ravel(),
+                groups,
+                1,
+                -1,
+                geomid,
+                dist,
+                self._normal[: 3 * k],
+                k,
+                CUTOFF_M,
+            )
         if self._payload_groups is not None:
             origin = d.site_xpos[s]  # what moves with the robot: the present frame
             u_now = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
             pgeom, pdist = self._pgeom[:k], self._pdist[:k]
-            mujoco.mj_multiRay(m, d, origin, u_now.ravel(), self._payload_groups, 1, -1, pgeom, pdist,
-                               None, k, CUTOFF_M)
+            mujoco.mj_multiRay(
+                m,
+                d,
+                origin,
+                u_now.ravel(),
+                self._payload_groups,
+                1,
+                -1,
+                pgeom,
+                pdist,
+                None,
+                k,
+                CUTOFF_M,
+            )
             near = (pgeom >= 0) & ((geomid < 0) | (pdist < dist))
             geomid[near], dist[near] = pgeom[near], pdist[near]
 
@@ -250,10 +318,16 @@ class Lidar:
         self.seq += 1
         scan = LaserScan(
             header=Header(self.seq, Time.from_us(int(self.beam_t_us[0])), self.frame_id),
-            angle_min=self.angle_min, angle_max=float(self.angles_rad[-1]),
-            angle_increment=self.angle_increment, time_increment=self._time_increment,
-            scan_time=self.scan_us / US, range_min=self.cfg.range_min_m, range_max=self.cfg.range_max_m,
-            ranges=self.noisy_ranges(self.dist_m, self.hit_geom), intensities=np.zeros(0, np.float32))
+            angle_min=self.angle_min,
+            angle_max=float(self.angles_rad[-1]),
+            angle_increment=self.angle_increment,
+            time_increment=self._time_increment,
+            scan_time=self.scan_us / US,
+            range_min=self.cfg.range_min_m,
+            range_max=self.cfg.range_max_m,
+            ranges=self.noisy_ranges(self.dist_m, self.hit_geom),
+            intensities=np.zeros(0, np.float32),
+        )
         if self._samplers is None:  # standalone: this is the clock event at t_us
             self._publish(scan, self.beam_t_us, self.hit_geom)
         else:
@@ -271,7 +345,9 @@ class Lidar:
             raise RuntimeError(f"LiDAR scan due at t_us={now} was not cast on the loop's grid")
         _t, scan, beam_t_us, hit_geom = self._done.popleft()
         t0 = beam_t_us[-1] + self.scan_us  # the next rotation starts one rotation after this one
-        self._handle = self.clock.schedule(self._publish_time_us(t0), self._publish_next, publishes=("scan",))
+        self._handle = self.clock.schedule(
+            self._publish_time_us(t0), self._publish_next, publishes=("scan",)
+        )
         self._publish(scan, beam_t_us, hit_geom)
 
     def _publish(self, scan: LaserScan, beam_t_us: np.ndarray, hit_geom: np.ndarray) -> None:

@@ -54,8 +54,9 @@ def beam_directions(angles_rad: np.ndarray) -> np.ndarray:
     return np.stack([np.cos(angles_rad), np.sin(angles_rad), np.zeros(len(angles_rad))], axis=1)
 
 
-def group_masks(geom_group: np.ndarray, geom_moving: np.ndarray) -> tuple[np.ndarray, np.ndarray | None,
-                                                                          np.ndarray | None]:
+def group_masks(
+    geom_group: np.ndarray, geom_moving: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
     """``mj_multiRay`` geom group masks (6,) uint8: ``(seen, world, payload)``.
 
     Parameters
@@ -97,7 +98,10 @@ class PoseSamples(GridRows):
     """
 
     def __init__(self, data, site_id: int, period_us: int, after, native: bool = True):
-        pos, mat = data.site_xpos[site_id], data.site_xmat[site_id]  # views: MjData's buffers stay put
+        pos, mat = (
+            data.site_xpos[site_id],
+            data.site_xmat[site_id],
+        )  # views: MjData's buffers stay put
 
         def row() -> list[float]:
             x, y, z = pos.tolist()
@@ -105,7 +109,11 @@ class PoseSamples(GridRows):
             return [x, y, z, m[0], m[3], m[6], m[1], m[4], m[7]]  # the laser x axis, y axis
 
         at = address(data.site_xpos) + 8 * 3 * site_id, address(data.site_xmat) + 8 * 9 * site_id
-        c_row = gather([at[0] + 8 * k for k in range(3)] + [at[1] + 8 * k for k in (0, 3, 6, 1, 4, 7)]) if native else None
+        c_row = (
+            gather([at[0] + 8 * k for k in range(3)] + [at[1] + 8 * k for k in (0, 3, 6, 1, 4, 7)])
+            if native
+            else None
+        )
         super().__init__(9, period_us, row, c_row, after=after)
 
     @property
@@ -120,7 +128,7 @@ class PoseSamples(GridRows):
         n = self.n
         k = max(int(np.searchsorted(self._buf[:n, 0], t_us, side="right")) - 1, 0)
         if k:
-            self._buf[:n - k] = self._buf[k:n]
+            self._buf[: n - k] = self._buf[k:n]
             self._set_n(n - k)
 
 
@@ -143,11 +151,15 @@ def interpolate_poses(rows: np.ndarray, n: int, t_us: np.ndarray) -> np.ndarray:
 def world_directions(pose: np.ndarray, lx: np.ndarray, ly: np.ndarray) -> np.ndarray:
     """Unit beam directions in the world (k, 3) from laser poses (k, 9) and laser-frame components (k, 1) x 2."""
     u = pose[:, 3:6] * lx + pose[:, 6:9] * ly  # R l with l_z = 0
-    u /= np.sqrt(u[:, 0] * u[:, 0] + u[:, 1] * u[:, 1] + u[:, 2] * u[:, 2])[:, None]  # the C helper's order
+    u /= np.sqrt(u[:, 0] * u[:, 0] + u[:, 1] * u[:, 1] + u[:, 2] * u[:, 2])[
+        :, None
+    ]  # the C helper's order
     return u
 
 
-def noisy_ranges(dist: np.ndarray, geomid: np.ndarray, cfg: LidarCfg, rng: np.random.Generator) -> np.ndarray:
+def noisy_ranges(
+    dist: np.ndarray, geomid: np.ndarray, cfg: LidarCfg, rng: np.random.Generator
+) -> np.ndarray:
     """Range noise, 1/4 mm quantisation and validity of true distances.
 
     Parameters
@@ -169,7 +181,9 @@ def noisy_ranges(dist: np.ndarray, geomid: np.ndarray, cfg: LidarCfg, rng: np.ra
     return quantised_ranges(dist, geomid, rng.standard_normal(len(dist)), cfg)
 
 
-def quantised_ranges(dist: np.ndarray, geomid: np.ndarray, z: np.ndarray, cfg: LidarCfg) -> np.ndarray:
+def quantised_ranges(
+    dist: np.ndarray, geomid: np.ndarray, z: np.ndarray, cfg: LidarCfg
+) -> np.ndarray:
     """:func:`noisy_ranges` with the ``n`` standard normals ``z`` (n,) given: ranges (n,) float32, m."""
     sigma = np.maximum(cfg.range_noise_floor_m, cfg.range_noise_frac * dist)
     r = dist + sigma * z

@@ -38,8 +38,16 @@ class PythonBeamKernels:
     def bind(self, model, data, site: int, groups: np.ndarray) -> None:
         self._bound = (model, data, int(site), groups)
 
-    def cast(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
-             dist: np.ndarray, geomid: np.ndarray) -> None:
+    def cast(
+        self,
+        t_us: np.ndarray,
+        lx: np.ndarray,
+        ly: np.ndarray,
+        rows: np.ndarray,
+        npose: int,
+        dist: np.ndarray,
+        geomid: np.ndarray,
+    ) -> None:
         m, d, _site, groups = self._bound
         u, origin = self.geometry(t_us, lx, ly, rows, npose)
         # one mj_multiRay per run of beams with the same origin (bit for bit: the laser stood still),
@@ -48,13 +56,28 @@ class PythonBeamKernels:
         normal = self._normal
         for a, b in zip([0, *change.tolist()], [*change.tolist(), len(u)]):
             if b - a == 1:
-                dist[a] = mujoco.mj_ray(m, d, origin[a], u[a], groups, 1, -1, geomid[a:b], normal[:3])
+                dist[a] = mujoco.mj_ray(
+                    m, d, origin[a], u[a], groups, 1, -1, geomid[a:b], normal[:3]
+                )
             else:
-                mujoco.mj_multiRay(m, d, origin[a], u[a:b].ravel(), groups, 1, -1, geomid[a:b], dist[a:b],
-                                   normal[:3 * (b - a)], b - a, CUTOFF_M)
+                mujoco.mj_multiRay(
+                    m,
+                    d,
+                    origin[a],
+                    u[a:b].ravel(),
+                    groups,
+                    1,
+                    -1,
+                    geomid[a:b],
+                    dist[a:b],
+                    normal[: 3 * (b - a)],
+                    b - a,
+                    CUTOFF_M,
+                )
 
-    def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray,
-                 npose: int) -> tuple[np.ndarray, np.ndarray]:
+    def geometry(
+        self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int
+    ) -> tuple[np.ndarray, np.ndarray]:
         pose = interpolate_poses(rows, npose, t_us)
         return world_directions(pose, lx, ly), np.ascontiguousarray(pose[:, 0:3])
 
@@ -89,8 +112,13 @@ class BeamKernels:
         self._origin = np.zeros((n_beams, 3))
         self._normal = np.zeros((n_beams, 3))
         self._u_at, self._origin_at = address(self._u), address(self._origin)
-        self._noise_args = (float(cfg.range_noise_floor_m), float(cfg.range_noise_frac),
-                            float(cfg.range_resolution_m), float(cfg.range_min_m), float(cfg.range_max_m))
+        self._noise_args = (
+            float(cfg.range_noise_floor_m),
+            float(cfg.range_noise_frac),
+            float(cfg.range_resolution_m),
+            float(cfg.range_min_m),
+            float(cfg.range_max_m),
+        )
 
     def bind(self, model, data, site: int, groups: np.ndarray) -> None:
         """Cast in ``model`` and ``data`` from the laser ``site``, seeing the geom ``groups`` (6,) uint8."""
@@ -107,15 +135,34 @@ class BeamKernels:
         self._cast_head = (ctypes.addressof(caster), model._address, data._address)
         self._bound = (model, data, int(site), self._groups)
 
-    def cast(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int,
-             dist: np.ndarray, geomid: np.ndarray) -> None:
+    def cast(
+        self,
+        t_us: np.ndarray,
+        lx: np.ndarray,
+        ly: np.ndarray,
+        rows: np.ndarray,
+        npose: int,
+        dist: np.ndarray,
+        geomid: np.ndarray,
+    ) -> None:
         _check_outputs(dist, geomid, len(t_us))
         t_us, lx, ly = c_array(t_us, np.int64), c_array(lx, np.float64), c_array(ly, np.float64)
         rows = c_array(rows, np.float64)
-        self._cast(*self._cast_head, len(t_us), address(t_us), address(lx), address(ly), address(rows), int(npose),
-                   address(dist), address(geomid))
+        self._cast(
+            *self._cast_head,
+            len(t_us),
+            address(t_us),
+            address(lx),
+            address(ly),
+            address(rows),
+            int(npose),
+            address(dist),
+            address(geomid),
+        )
 
-    def rays(self, origin: np.ndarray, u: np.ndarray, dist: np.ndarray, geomid: np.ndarray) -> np.ndarray:
+    def rays(
+        self, origin: np.ndarray, u: np.ndarray, dist: np.ndarray, geomid: np.ndarray
+    ) -> np.ndarray:
         """Cast unit directions ``u`` (k, 3) from ``origin`` (3,), m, as :meth:`cast` does (no instants,
         no correction): ``dist`` (k,) m, -1 for none, and ``geomid`` (k,) written in place; returns
         the hit normals (k, 3), a view of a reused buffer."""
@@ -127,45 +174,76 @@ class BeamKernels:
         self._rays(*self._cast_head, address(origin), k, address(u), address(dist), address(geomid))
         return self._normal[:k]
 
-    def geometry(self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray,
-                 npose: int) -> tuple[np.ndarray, np.ndarray]:
+    def geometry(
+        self, t_us: np.ndarray, lx: np.ndarray, ly: np.ndarray, rows: np.ndarray, npose: int
+    ) -> tuple[np.ndarray, np.ndarray]:
         k = len(t_us)
         u, origin = self._u[:k], self._origin[:k]
         t_us, lx, ly = c_array(t_us, np.int64), c_array(lx, np.float64), c_array(ly, np.float64)
         rows = c_array(rows, np.float64)
-        self._geometry(k, address(t_us), address(lx), address(ly), address(rows), int(npose), self._u_at,
-                       self._origin_at)
+        self._geometry(
+            k,
+            address(t_us),
+            address(lx),
+            address(ly),
+            address(rows),
+            int(npose),
+            self._u_at,
+            self._origin_at,
+        )
         return u, origin
 
     def noise(self, dist: np.ndarray, geomid: np.ndarray, z: np.ndarray) -> np.ndarray:
         n = len(dist)
         out = np.empty(n, np.float32)
-        dist, geomid, z = c_array(dist, np.float64), c_array(geomid, np.int32), c_array(z, np.float64)
+        dist, geomid, z = (
+            c_array(dist, np.float64),
+            c_array(geomid, np.int32),
+            c_array(z, np.float64),
+        )
         self._noise(n, address(dist), address(geomid), address(z), *self._noise_args, address(out))
         return out
 
 
 def _check_outputs(dist: np.ndarray, geomid: np.ndarray, k: int) -> None:
     """``dist`` and ``geomid``, written in place by the helper: C-contiguous float64 and int32 of length ``k``."""
-    if not (len(dist) == len(geomid) == k and dist.flags.c_contiguous and dist.dtype == np.float64
-            and geomid.flags.c_contiguous and geomid.dtype == np.int32):
-        raise ValueError(f"dist, geomid: C-contiguous float64 and int32 arrays of length {k} are written in place")
+    if not (
+        len(dist) == len(geomid) == k
+        and dist.flags.c_contiguous
+        and dist.dtype == np.float64
+        and geomid.flags.c_contiguous
+        and geomid.dtype == np.int32
+    ):
+        raise ValueError(
+            f"dist, geomid: C-contiguous float64 and int32 arrays of length {k} are written in place"
+        )
 
 
 class _Caster(ctypes.Structure):
     """``lb_caster`` of lidar_beams.c."""
 
-    _fields_ = [("multiray", _P), ("groups", _P), ("site", ctypes.c_int), ("cutoff", ctypes.c_double),
-                ("u", _P), ("org", _P), ("normal", _P), ("raygeom", _P), ("seen", _P), ("ray", _P)]
+    _fields_ = [
+        ("multiray", _P),
+        ("groups", _P),
+        ("site", ctypes.c_int),
+        ("cutoff", ctypes.c_double),
+        ("u", _P),
+        ("org", _P),
+        ("normal", _P),
+        ("raygeom", _P),
+        ("seen", _P),
+        ("ray", _P),
+    ]
 
 
 register(C_SOURCE, lb_caster=_Caster)
 
 
-def beam_kernels(n_beams: int, cfg: LidarCfg, native: bool = True) -> BeamKernels | PythonBeamKernels:
+def beam_kernels(
+    n_beams: int, cfg: LidarCfg, native: bool = True
+) -> BeamKernels | PythonBeamKernels:
     """The C helper when it builds and loads (and ``native``), else its Python twin; ``.engine`` says which."""
     lib, engine = open_helper(C_SOURCE, native)
     if lib is None:
-        return PythonBeamKernels(n_beams, cfg, engine[len("Python ("):-1])
+        return PythonBeamKernels(n_beams, cfg, engine[len("Python (") : -1])
     return BeamKernels(lib, n_beams, cfg)
-

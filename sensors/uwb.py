@@ -39,9 +39,9 @@ def anchor_frame(index: int) -> str:
 
 def anchor_index(frame_id: str) -> int:
     """Anchor index from a ``"uwb_anchor_<i>"`` frame id; ValueError otherwise."""
-    if not frame_id.startswith(FRAME_PREFIX) or not frame_id[len(FRAME_PREFIX):].isdigit():
+    if not frame_id.startswith(FRAME_PREFIX) or not frame_id[len(FRAME_PREFIX) :].isdigit():
         raise ValueError(f"header.frame_id: {frame_id!r} is not '{FRAME_PREFIX}<i>'")
-    return int(frame_id[len(FRAME_PREFIX):])
+    return int(frame_id[len(FRAME_PREFIX) :])
 
 
 def tag_positions_m(pose: np.ndarray, tag_pos_m) -> np.ndarray:
@@ -65,8 +65,12 @@ def tag_positions_m(pose: np.ndarray, tag_pos_m) -> np.ndarray:
     return np.column_stack((pose[:, 0] + c * tx - s * ty, pose[:, 1] + s * tx + c * ty))
 
 
-def corrupt_ranges(true_range_m: np.ndarray, cfg: UwbCfg, rng: np.random.Generator,
-                   blocked: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def corrupt_ranges(
+    true_range_m: np.ndarray,
+    cfg: UwbCfg,
+    rng: np.random.Generator,
+    blocked: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Noise, NLOS bias and dropouts of a batch of exchanges.
 
     Parameters
@@ -105,7 +109,9 @@ def corrupt_ranges(true_range_m: np.ndarray, cfg: UwbCfg, rng: np.random.Generat
     return np.maximum(r, 0.0), received
 
 
-def corrupt_range(d_m: float, cfg: UwbCfg, rng: np.random.Generator, blocked: bool | None = None) -> tuple[float, bool]:
+def corrupt_range(
+    d_m: float, cfg: UwbCfg, rng: np.random.Generator, blocked: bool | None = None
+) -> tuple[float, bool]:
     """One exchange of :func:`corrupt_ranges` (the same draws in the same order, the same sums): the
     sensor's path at 60 Hz, where NumPy's per-call cost on arrays of one dominated. Returns
     ``(range_m, received)``."""
@@ -123,13 +129,24 @@ def corrupt_range(d_m: float, cfg: UwbCfg, rng: np.random.Generator, blocked: bo
 
 
 def _message(seq: int, stamp: Time, index: int, range_m: float, cfg: UwbCfg) -> Range:
-    return Range(header=Header(seq, stamp, anchor_frame(index)), radiation_type=Range.INFRARED,
-                 field_of_view=FIELD_OF_VIEW_RAD, min_range=0.0, max_range=cfg.max_range_m,
-                 range=float(range_m))
+    return Range(
+        header=Header(seq, stamp, anchor_frame(index)),
+        radiation_type=Range.INFRARED,
+        field_of_view=FIELD_OF_VIEW_RAD,
+        min_range=0.0,
+        max_range=cfg.max_range_m,
+        range=float(range_m),
+    )
 
 
-def simulate_ranges(t_s: np.ndarray, tag_xy_m: np.ndarray, anchors_xy_m: np.ndarray, cfg: UwbCfg,
-                    rng: np.random.Generator, anchor: np.ndarray | None = None) -> list[Range]:
+def simulate_ranges(
+    t_s: np.ndarray,
+    tag_xy_m: np.ndarray,
+    anchors_xy_m: np.ndarray,
+    cfg: UwbCfg,
+    rng: np.random.Generator,
+    anchor: np.ndarray | None = None,
+) -> list[Range]:
     """UWB range messages for known tag positions, offline.
 
     Parameters
@@ -169,8 +186,9 @@ def simulate_ranges(t_s: np.ndarray, tag_xy_m: np.ndarray, anchors_xy_m: np.ndar
     dz = cfg.anchor_z_m - cfg.tag_pos_m[2]
     d = np.sqrt(np.sum((tag[rows] - anchors[idx]) ** 2, axis=1) + dz * dz)
     r, ok = corrupt_ranges(d, cfg, rng)
-    return [_message(k, Time.from_sec(t_s[rows[k]]), int(idx[k]), r[k], cfg)
-            for k in np.flatnonzero(ok)]
+    return [
+        _message(k, Time.from_sec(t_s[rows[k]]), int(idx[k]), r[k], cfg) for k in np.flatnonzero(ok)
+    ]
 
 
 class UwbSensor:
@@ -199,8 +217,17 @@ class UwbSensor:
     ``blocked`` counts the exchanges per anchor whose line a wall blocked.
     """
 
-    def __init__(self, physics, clock: VirtualClock, bus: Bus, cfg: UwbCfg, seed=0,
-                 body: str = "amr/base_link", autostart: bool = True, walls: bool = True):
+    def __init__(
+        self,
+        physics,
+        clock: VirtualClock,
+        bus: Bus,
+        cfg: UwbCfg,
+        seed=0,
+        body: str = "amr/base_link",
+        autostart: bool = True,
+        walls: bool = True,
+    ):
         model, data = physics.model, physics.data
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
         self.walls = bool(walls)
@@ -209,7 +236,9 @@ class UwbSensor:
         self._geomid = np.zeros(1, dtype=np.int32)
         self.body_id = int(model.body(body).id)
         self.rng = np.random.default_rng(seed)
-        self.anchors_xyz_m = np.column_stack((cfg.anchors_xy_m, np.full(len(cfg.anchors_x_m), cfg.anchor_z_m)))
+        self.anchors_xyz_m = np.column_stack(
+            (cfg.anchors_xy_m, np.full(len(cfg.anchors_x_m), cfg.anchor_z_m))
+        )
         self.tag_pos_m = np.asarray(cfg.tag_pos_m, dtype=np.float64)
         self.n_anchors = self.anchors_xyz_m.shape[0]
         self.slot_us = int(round(US / (cfg.rate_hz * self.n_anchors)))
@@ -225,7 +254,9 @@ class UwbSensor:
     def start(self) -> None:
         """Start ranging at the next multiple of the slot time, then every slot."""
         if self._handle is None:
-            self._handle = self.clock.schedule(-(-self.clock.now_us // self.slot_us) * self.slot_us, self._tick)
+            self._handle = self.clock.schedule(
+                -(-self.clock.now_us // self.slot_us) * self.slot_us, self._tick
+            )
 
     def stop(self) -> None:
         """Stop ranging."""
@@ -252,9 +283,13 @@ class UwbSensor:
         blocked = None
         if self.walls:
             hit = mujoco.mj_ray(self.model, self.data, tag, line, self._groups, 1, -1, self._geomid)
-            blocked = 0.0 <= hit < 1.0  # a surface between tag and anchor (hit in units of the line)
+            blocked = (
+                0.0 <= hit < 1.0
+            )  # a surface between tag and anchor (hit in units of the line)
             self.blocked[index] += int(blocked)
         r, ok = corrupt_range(d, self.cfg, self.rng, blocked)
         if ok:
-            self.pub.publish(_message(self.seq, Time.from_us(self.clock.now_us), index, r, self.cfg))
+            self.pub.publish(
+                _message(self.seq, Time.from_us(self.clock.now_us), index, r, self.cfg)
+            )
             self.seq += 1

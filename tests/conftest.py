@@ -20,7 +20,9 @@ _made: list[str] = []
 
 
 def pytest_configure(config):
-    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # a handled signal is the default again after exec
+    if (
+        signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    ):  # a handled signal is the default again after exec
         signal.signal(signal.SIGINT, signal.default_int_handler)
     if "AMR_TWIN_CACHE_DIR" not in os.environ:
         _made.append(tempfile.mkdtemp(prefix="amr-twin-test-cache-"))

@@ -34,7 +34,9 @@ class FoxgloveClient:
         deadline = time.monotonic() + timeout_s
         while True:
             try:
-                self._connection = connect(url, subprotocols=[SUBPROTOCOL], open_timeout=5, max_size=None)
+                self._connection = connect(
+                    url, subprotocols=[SUBPROTOCOL], open_timeout=5, max_size=None
+                )
                 self.ws = self._connection.__enter__()
                 break
             except OSError:
@@ -89,7 +91,7 @@ class FoxgloveClient:
             self.times_ns.append(struct.unpack_from("<Q", frame, 1)[0])
         elif opcode == 0x03:
             _service, call_id, n = struct.unpack_from("<III", frame, 1)
-            self._responses[call_id] = (frame[13:13 + n].decode(), bytes(frame[13 + n:]))
+            self._responses[call_id] = (frame[13 : 13 + n].decode(), bytes(frame[13 + n :]))
 
     def pump(self, duration_s: float, out: list | None = None, until=None) -> list:
         """Read frames for ``duration_s`` (or until ``until()`` is true); data messages go to ``out``."""
@@ -123,30 +125,56 @@ class FoxgloveClient:
             subs.append({"id": sub_id, "channelId": self.channels[topic]["id"]})
         self.ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
 
-    def advertise(self, topic: str, schema_name: str, encoding: str = "cdr", channel_id: int | None = None) -> int:
+    def advertise(
+        self, topic: str, schema_name: str, encoding: str = "cdr", channel_id: int | None = None
+    ) -> int:
         channel_id = channel_id if channel_id is not None else 100 + self._next_id
         self._next_id += 1
-        self.ws.send(json.dumps({"op": "advertise", "channels": [
-            {"id": channel_id, "topic": topic, "encoding": encoding, "schemaName": schema_name}]}))
+        self.ws.send(
+            json.dumps(
+                {
+                    "op": "advertise",
+                    "channels": [
+                        {
+                            "id": channel_id,
+                            "topic": topic,
+                            "encoding": encoding,
+                            "schemaName": schema_name,
+                        }
+                    ],
+                }
+            )
+        )
         return channel_id
 
     def publish(self, channel_id: int, payload: bytes) -> None:
         self.ws.send(b"\x01" + struct.pack("<I", channel_id) + payload)
 
-    def call_service(self, name: str, payload: bytes, encoding: str = "cdr", timeout_s: float = 10.0):
+    def call_service(
+        self, name: str, payload: bytes, encoding: str = "cdr", timeout_s: float = 10.0
+    ):
         """(encoding, payload) of the response, or None on a failure (see :attr:`failures`)."""
         call_id = self._next_id
         self._next_id += 1
         enc = encoding.encode()
-        self.ws.send(b"\x02" + struct.pack("<III", self.services[name]["id"], call_id, len(enc)) + enc + payload)
+        self.ws.send(
+            b"\x02"
+            + struct.pack("<III", self.services[name]["id"], call_id, len(enc))
+            + enc
+            + payload
+        )
         n_fail = len(self.failures)
-        self.pump(timeout_s, until=lambda: call_id in self._responses or len(self.failures) > n_fail)
+        self.pump(
+            timeout_s, until=lambda: call_id in self._responses or len(self.failures) > n_fail
+        )
         return self._responses.get(call_id)
 
 
 def start_cli(args: list[str], amr_twin: str) -> tuple[subprocess.Popen, str]:
     """Start ``amr-twin ARGS`` (with ``--live --port 0``) and return it with the server's URL from stderr."""
-    proc = subprocess.Popen([amr_twin, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [amr_twin, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     lines = []
     for line in proc.stderr:
         lines.append(line)
@@ -154,4 +182,6 @@ def start_cli(args: list[str], amr_twin: str) -> tuple[subprocess.Popen, str]:
         if found:
             return proc, found.group(1)
     proc.wait(timeout=30)
-    raise AssertionError(f"no server address printed; exit {proc.returncode}: {''.join(lines)[-2000:]}")
+    raise AssertionError(
+        f"no server address printed; exit {proc.returncode}: {''.join(lines)[-2000:]}"
+    )

@@ -14,13 +14,17 @@ def room(width_m: float = 12.0, height_m: float = 8.0, walls=()) -> StaticMap:
     occ = np.zeros((rows, cols), bool)
     occ[:2], occ[-2:], occ[:, :2], occ[:, -2:] = True, True, True, True
     for x0, y0, x1, y1 in walls:
-        occ[int(round(y0 / RES)):int(round(y1 / RES)), int(round(x0 / RES)):int(round(x1 / RES))] = True
+        occ[
+            int(round(y0 / RES)) : int(round(y1 / RES)), int(round(x0 / RES)) : int(round(x1 / RES))
+        ] = True
     return StaticMap(occ, np.zeros_like(occ), RES, (0.0, 0.0), "synthetic room")
 
 
 def two_corridors() -> StaticMap:
     """A 12 x 8 m room split by a wall at y = 3.5..4.5 from x = 2 to 10: two 2 m wide corridors joined at both ends."""
-    return room(12.0, 8.0, walls=[(2.0, 3.5, 10.0, 4.5), (2.0, 0.0, 10.0, 1.5), (2.0, 6.5, 10.0, 8.0)])
+    return room(
+        12.0, 8.0, walls=[(2.0, 3.5, 10.0, 4.5), (2.0, 0.0, 10.0, 1.5), (2.0, 6.5, 10.0, 8.0)]
+    )
 
 
 def write_map(folder, name: str, static: StaticMap):
@@ -31,9 +35,14 @@ def write_map(folder, name: str, static: StaticMap):
 
     image = np.where(static.occupied, 0, 254).astype(np.uint8)[::-1]
     write_pgm(folder / f"{name}.pgm", image)
-    meta = {"image": f"{name}.pgm", "resolution": static.resolution_m,
-            "origin": [static.origin_xy_m[0], static.origin_xy_m[1], 0.0], "occupied_thresh": 0.65,
-            "free_thresh": 0.196, "negate": 0}
+    meta = {
+        "image": f"{name}.pgm",
+        "resolution": static.resolution_m,
+        "origin": [static.origin_xy_m[0], static.origin_xy_m[1], 0.0],
+        "occupied_thresh": 0.65,
+        "free_thresh": 0.196,
+        "negate": 0,
+    }
     path = folder / f"{name}.yaml"
     path.write_text(yaml.safe_dump(meta))
     return path
@@ -52,7 +61,10 @@ def random_warehouse(seed: int) -> StaticMap:
     x0, x1 = -10.0 + rng.uniform(2.5, 3.5), 10.0 - rng.uniform(2.5, 3.5)
     for k in range(n_rows):
         gap = rng.uniform(x0 + 3.0, x1 - 3.0)  # a cross aisle through the row, 2.2 m wide
-        walls += [(x0 + 10, y - depth[k] + 7, gap - 1.1 + 10, y + 7), (gap + 1.1 + 10, y - depth[k] + 7, x1 + 10, y + 7)]
+        walls += [
+            (x0 + 10, y - depth[k] + 7, gap - 1.1 + 10, y + 7),
+            (gap + 1.1 + 10, y - depth[k] + 7, x1 + 10, y + 7),
+        ]
         y -= depth[k] + aisle[k + 1]
     hall = room(20.0, 14.0, walls=walls)
     return StaticMap(hall.occupied, hall.unknown, RES, (-10.0, -7.0), f"random warehouse {seed}")

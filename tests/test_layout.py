@@ -6,13 +6,21 @@ alike), so a circle hidden in a function body counts too.
 
 import ast
 import importlib
+import importlib.util
 import re
+import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
-FOLDERS = {"amr_twin": ROOT / "amr_twin", "amr_twin.controllers": ROOT / "controllers",
-           "amr_twin.sensors": ROOT / "sensors", "amr_twin.experiments": ROOT / "experiments"}
+FOLDERS = {
+    "amr_twin": ROOT / "amr_twin",
+    "amr_twin.controllers": ROOT / "controllers",
+    "amr_twin.sensors": ROOT / "sensors",
+    "amr_twin.experiments": ROOT / "experiments",
+}
 SUBPACKAGES = sorted(p.parent.name for p in (ROOT / "amr_twin").glob("*/__init__.py"))
 DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 """The README and the docs pages, whose links and shown imports are checked."""
@@ -25,7 +33,11 @@ def _modules() -> dict[str, Path]:
             parts = list(path.relative_to(folder).with_suffix("").parts)
             if parts[-1] == "__init__":
                 parts = parts[:-1]
-            if package == "amr_twin" and parts and parts[0] in ("controllers", "sensors", "experiments"):
+            if (
+                package == "amr_twin"
+                and parts
+                and parts[0] in ("controllers", "sensors", "experiments")
+            ):
                 continue
             out[".".join([package] + parts)] = path
     return out
@@ -38,13 +50,18 @@ def _imports(name: str, path: Path, modules: dict) -> set[str]:
         if isinstance(node, ast.Import):
             found.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
-            module = (".".join(base[: len(base) - node.level + 1] + [node.module or ""]).rstrip(".")
-                      if node.level else node.module)
+            module = (
+                ".".join(base[: len(base) - node.level + 1] + [node.module or ""]).rstrip(".")
+                if node.level
+                else node.module
+            )
             found.add(module)
             found.update(f"{module}.{a.name}" for a in node.names)
     deps = set()
     for target in found:
-        while target:  # the longest prefix that is one of ours: a name imported from a module is the module
+        while (
+            target
+        ):  # the longest prefix that is one of ours: a name imported from a module is the module
             if target in modules:
                 if target != name:
                     deps.add(target)
@@ -95,7 +112,8 @@ def import_circles() -> list[list[str]]:
 
 
 def _package(module: str) -> str:
-    """``amr_twin.sim.loop`` -> ``amr_twin.sim``; ``amr_twin`` (the top level) is a package of its own."""
+    """``amr_twin.sim.loop`` -> ``amr_twin.sim``; ``amr_twin`` (the top level) is a package of its
+    own."""
     return ".".join(module.split(".")[:2])
 
 
@@ -119,19 +137,25 @@ def test_the_ground_floor_imports_no_other_package():
 
 
 def test_no_package_imports_one_that_imports_it_back():
-    """Packages form layers: base, model, ros, sim, sensors, estimation, controllers, assembly (the twin
-    built from them), recording, calibration, then the applications; no import, lazy or not, goes back."""
+    """Packages form layers: base, model, ros, sim, sensors, estimation, controllers, assembly (the
+    twin built from them), recording, calibration, then the applications; no import, lazy or not,
+    goes back."""
     assert package_loops() == set()
 
 
 def test_the_package_loop_finder_finds_a_lazy_loop(tmp_path, monkeypatch):
-    """A module of base/ importing one of sim/ inside a function, while sim/ imports base/: a loop (sim/'s import
-    of ros/, which imports none of them, is on no loop)."""
+    """A module of base/ importing one of sim/ inside a function, while sim/ imports base/: a loop
+    (sim/'s import of ros/, which imports none of them, is on no loop)."""
     pkg = tmp_path / "amr_twin"
-    for name, text in {"__init__": "", "base/__init__": "", "sim/__init__": "", "ros/__init__": "",
-                       "base/clock": "def now():\n    from amr_twin.sim.loop import Twin\n",
-                       "sim/loop": "from amr_twin.base.clock import now\nfrom amr_twin.ros import bus\n",
-                       "ros/bus": "TOPIC = 'cmd_vel'\n"}.items():
+    for name, text in {
+        "__init__": "",
+        "base/__init__": "",
+        "sim/__init__": "",
+        "ros/__init__": "",
+        "base/clock": "def now():\n    from amr_twin.sim.loop import Twin\n",
+        "sim/loop": "from amr_twin.base.clock import now\nfrom amr_twin.ros import bus\n",
+        "ros/bus": "TOPIC = 'cmd_vel'\n",
+    }.items():
         (pkg / f"{name}.py").parent.mkdir(parents=True, exist_ok=True)
         (pkg / f"{name}.py").write_text(text)
     monkeypatch.setitem(FOLDERS, "amr_twin", pkg)
@@ -165,28 +189,43 @@ def test_the_top_level_is_small_and_each_package_says_its_role():
     assert len(SUBPACKAGES) >= 6, SUBPACKAGES
     for name in SUBPACKAGES:
         doc = ast.get_docstring(ast.parse((ROOT / "amr_twin" / name / "__init__.py").read_text()))
-        assert doc and len(doc.splitlines()) == 1, f"amr_twin/{name}/__init__.py: one line saying its role"
+        assert doc and len(doc.splitlines()) == 1, (
+            f"amr_twin/{name}/__init__.py: one line saying its role"
+        )
 
 
 def test_the_layout_page_lists_every_package():
-    """docs/reference/layout.md (how it is built; the README links to it) names every package of amr_twin/."""
+    """docs/reference/layout.md (how it is built; the README links to it) names every package of
+    amr_twin/."""
     layout = next((ROOT / "docs").rglob("layout.md")).read_text()
     for name in SUBPACKAGES:
-        assert re.search(rf"`amr_twin/{name}/`", layout), f"docs/reference/layout.md lacks amr_twin/{name}/"
+        assert re.search(rf"`amr_twin/{name}/`", layout), (
+            f"docs/reference/layout.md lacks amr_twin/{name}/"
+        )
 
 
 def test_tests_mirror_the_packages():
     packages = set(SUBPACKAGES) | {"controllers", "sensors", "experiments"}
-    folders = {p.name for p in (ROOT / "tests").iterdir() if p.is_dir() and not p.name.startswith((".", "_"))}
+    folders = {
+        p.name
+        for p in (ROOT / "tests").iterdir()
+        if p.is_dir() and not p.name.startswith((".", "_"))
+    }
     assert folders <= packages, folders - packages
-    loose = sorted(p.name for p in (ROOT / "tests").glob("test_*.py")
-                   if p.name not in (Path(__file__).name, "test_api.py"))  # test_api: amr_twin/__init__.py
+    loose = sorted(
+        p.name
+        for p in (ROOT / "tests").glob("test_*.py")
+        if p.name not in (Path(__file__).name, "test_api.py")
+    )  # test_api: amr_twin/__init__.py
     assert loose == [], f"tests outside the package folders: {loose}"
 
 
 def test_the_names_the_readme_and_docs_show_import():
-    shown = [found for page in DOCUMENTS
-             for found in re.findall(r"^from (amr_twin[\w.]*) import ([\w, ]+)$", page.read_text(), re.M)]
+    shown = [
+        found
+        for page in DOCUMENTS
+        for found in re.findall(r"^from (amr_twin[\w.]*) import ([\w, ]+)$", page.read_text(), re.M)
+    ]
     assert len(shown) >= 5
     for module, names in shown:
         mod = importlib.import_module(module)
@@ -197,12 +236,15 @@ def test_the_names_the_readme_and_docs_show_import():
 _FENCED = re.compile(r"^```.*?^```", re.M | re.S)
 _CODE = re.compile(r"`([^`\n]+)`")
 _LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
-_REPO_PATH = re.compile(r"^(?:docs|models|controllers|experiments|sensors|amr_twin|tests|\.ci)/[\w./-]*$")
+_REPO_PATH = re.compile(
+    r"^(?:docs|models|controllers|experiments|sensors|amr_twin|tests|\.ci)/[\w./-]*$"
+)
 
 
 def broken_links(page: Path) -> list[str]:
-    """``page``'s relative markdown links (resolved from its folder) and quoted repository paths such as
-    `docs/faults.md` (resolved from the root) that name no file or folder; code blocks are skipped."""
+    """``page``'s relative markdown links (resolved from its folder) and quoted repository paths
+    such as `docs/faults.md` (resolved from the root) that name no file or folder; code blocks are
+    skipped."""
     text = _FENCED.sub("", page.read_text())
     broken = []
     for target in _LINK.findall(_CODE.sub("", text)):
@@ -210,19 +252,29 @@ def broken_links(page: Path) -> list[str]:
             continue  # a web address or an anchor in the page
         if not (page.parent / target.split("#")[0]).exists():
             broken.append(target)
-    return broken + [path for path in _CODE.findall(text) if _REPO_PATH.match(path) and not (ROOT / path).exists()]
+    return broken + [
+        path
+        for path in _CODE.findall(text)
+        if _REPO_PATH.match(path) and not (ROOT / path).exists()
+    ]
 
 
 def test_every_link_in_the_readme_and_docs_resolves():
-    broken = {page.relative_to(ROOT).as_posix(): found for page in DOCUMENTS if (found := broken_links(page))}
+    broken = {
+        page.relative_to(ROOT).as_posix(): found
+        for page in DOCUMENTS
+        if (found := broken_links(page))
+    }
     assert not broken, broken
 
 
 def test_the_link_check_finds_a_broken_link(tmp_path):
     (tmp_path / "there.md").write_text("x")
     page = tmp_path / "page.md"
-    page.write_text("[ok](there.md) [ok](there.md#part) [web](https://rerun.io) `docs/index.md`\n"
-                    "[gone](gone.md) ![gone](img/gone.png) `docs/gone.md`\n```\n[in code](nowhere.md)\n```\n")
+    page.write_text(
+        "[ok](there.md) [ok](there.md#part) [web](https://rerun.io) `docs/index.md`\n"
+        "[gone](gone.md) ![gone](img/gone.png) `docs/gone.md`\n```\n[in code](nowhere.md)\n```\n"
+    )
     assert broken_links(page) == ["gone.md", "img/gone.png", "docs/gone.md"]
 
 
@@ -244,14 +296,23 @@ def test_the_readme_stays_a_five_minute_read():
 
 
 def test_the_readme_set_up_commands_are_what_ci_runs():
-    """The README's two set-up commands (install + chapter 5, install + tests) are the ones .ci/run proves on a
-    fresh clone: the same venv, the same constrained install, the same test command."""
+    """The README's two set-up commands (install + chapter 5, install + tests) are the ones .ci/run
+    proves on a fresh clone: the same venv, the same constrained install, the same test command."""
     readme = (ROOT / "README.md").read_text()
-    setup = readme[readme.index("## Set up on a fresh machine"):readme.index("\n## ", readme.index("## Set up") + 3)]
+    setup = readme[
+        readme.index("## Set up on a fresh machine") : readme.index(
+            "\n## ", readme.index("## Set up") + 3
+        )
+    ]
     commands = re.findall(r"^```\n(.+)\n```$", setup, re.M)
-    install = 'python3 -m venv .venv && . .venv/bin/activate && pip install -c constraints.txt -e ".[dev]"'
-    assert commands == [f"{install} && amr-twin experiment chapter5 --out results/chapter5",
-                        f"{install} && python -m pytest -q"]
+    install = (
+        "python3 -m venv .venv && . .venv/bin/activate && pip install -c constraints.txt -e "
+        '".[dev]"'
+    )
+    assert commands == [
+        f"{install} && amr-twin experiment chapter5 --out results/chapter5",
+        f"{install} && python -m pytest -q",
+    ]
     ci = (ROOT / ".ci" / "run").read_text().splitlines()
     assert {"python3 -m venv .venv", ". .venv/bin/activate", "python -m pytest -q"} <= set(ci)
     assert any(line.endswith('install --quiet -c constraints.txt -e ".[dev]"') for line in ci)
@@ -273,21 +334,32 @@ def long_docstrings(paths) -> list[str]:
             if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
                 doc = ast.get_docstring(node)
                 if doc and len(doc) > MAX_DOCSTRING:
-                    found.append(f"{path.relative_to(ROOT)}:{getattr(node, 'lineno', 1)} "
-                                 f"{getattr(node, 'name', '<module>')} ({len(doc)})")
+                    found.append(
+                        f"{path.relative_to(ROOT)}:{getattr(node, 'lineno', 1)} "
+                        f"{getattr(node, 'name', '<module>')} ({len(doc)})"
+                    )
     return found
 
 
 def issue_numbers(paths) -> list[str]:
     """``path:line`` of each issue number: "issue" or "issues", a space, maybe ``#``, digits."""
-    return [f"{path.relative_to(ROOT)}:{n}" for path in paths
-            for n, line in enumerate(path.read_text().splitlines(), 1) if _ISSUE.search(line)]
+    return [
+        f"{path.relative_to(ROOT)}:{n}"
+        for path in paths
+        for n, line in enumerate(path.read_text().splitlines(), 1)
+        if _ISSUE.search(line)
+    ]
 
 
 def _code_files(patterns) -> list[Path]:
     folders = ("amr_twin", "controllers", "sensors", "experiments", "tests", "models", ".ci")
-    return sorted(p for folder in folders for pattern in patterns
-                  for p in (ROOT / folder).rglob(pattern) if ".venv" not in p.parts)
+    return sorted(
+        p
+        for folder in folders
+        for pattern in patterns
+        for p in (ROOT / folder).rglob(pattern)
+        if ".venv" not in p.parts
+    )
 
 
 def test_docstrings_say_what_in_a_few_lines():
@@ -314,14 +386,17 @@ def test_the_issue_number_check_finds_one(tmp_path, monkeypatch):
 
 
 def heading_anchors(page: Path) -> set[str]:
-    """The anchors a markdown renderer gives ``page``'s headings (GitHub's rule: lower case, spaces to ``-``,
-    punctuation but ``_`` and ``-`` dropped)."""
-    return {re.sub(r"[^a-z0-9_ -]", "", h.strip().lower()).replace(" ", "-")
-            for h in re.findall(r"^#+ (.*)$", _FENCED.sub("", page.read_text()), re.M)}
+    """The anchors a markdown renderer gives ``page``'s headings (GitHub's rule: lower case, spaces
+    to ``-``, punctuation but ``_`` and ``-`` dropped)."""
+    return {
+        re.sub(r"[^a-z0-9_ -]", "", h.strip().lower()).replace(" ", "-")
+        for h in re.findall(r"^#+ (.*)$", _FENCED.sub("", page.read_text()), re.M)
+    }
 
 
 def broken_section_links(paths) -> list[str]:
-    """``path: docs/PAGE.md#ANCHOR`` of each link from code to a docs section that PAGE has no heading for."""
+    """``path: docs/PAGE.md#ANCHOR`` of each link from code to a docs section that PAGE has no
+    heading for."""
     found = []
     for path in paths:
         for page, anchor in re.findall(r"(docs/[\w/.-]+\.md)#([\w-]+)", path.read_text()):
@@ -338,8 +413,30 @@ def test_code_links_to_docs_sections_resolve():
 def test_the_section_link_check_finds_a_stale_anchor(tmp_path, monkeypatch):
     monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
     (tmp_path / "docs").mkdir()
-    (tmp_path / "docs" / "p.md").write_text("# Page\n\n### amr_twin.estimation.ekf\n\n```\n# not a heading\n```\n")
-    (tmp_path / "m.py").write_text('"""See docs/p.md#amr_twinestimationekf and docs/p.md#amr_twincontrollersekf,\n'
-                                   'docs/p.md#not-a-heading, docs/gone.md#page."""\n')
+    (tmp_path / "docs" / "p.md").write_text(
+        "# Page\n\n### amr_twin.estimation.ekf\n\n```\n# not a heading\n```\n"
+    )
+    (tmp_path / "m.py").write_text(
+        '"""See docs/p.md#amr_twinestimationekf and docs/p.md#amr_twincontrollersekf,\n'
+        'docs/p.md#not-a-heading, docs/gone.md#page."""\n'
+    )
     assert broken_section_links([tmp_path / "m.py"]) == [
-        "m.py: docs/p.md#amr_twincontrollersekf", "m.py: docs/p.md#not-a-heading", "m.py: docs/gone.md#page"]
+        "m.py: docs/p.md#amr_twincontrollersekf",
+        "m.py: docs/p.md#not-a-heading",
+        "m.py: docs/gone.md#page",
+    ]
+
+
+def test_ruff_passes_with_lines_of_at_most_100_characters():
+    """``ruff check`` (pyproject.toml's rules, 100-character lines) and ``ruff format --check``
+    pass on the repository."""
+    if importlib.util.find_spec("ruff") is None:
+        pytest.skip("ruff is not installed (pip install -e '.[dev]')")
+    for args in (["check", "--no-cache"], ["format", "--check", "--no-cache"]):
+        done = subprocess.run(
+            [sys.executable, "-m", "ruff", *args, str(ROOT)],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+        )
+        assert done.returncode == 0, f"ruff {' '.join(args)}:\n{done.stdout[-3000:]}{done.stderr}"

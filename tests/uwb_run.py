@@ -40,6 +40,10 @@ def record_uwb_run(out_dir: Path, rrd: bool = True, mcap: bool = True):
     twin.add_sensor("uwb")
     capture = attach(twin)
     result = run_mission(cfg, [(0.0, Command("linear", speed_m_s=0.5))], UWB_S, options, twin=twin)
-    paths = record_run(twin, rrd_path=out_dir / "uwb.rrd" if rrd else None,
-                       mcap_path=out_dir / "uwb.mcap" if mcap else None, result=result)
+    paths = record_run(
+        twin,
+        rrd_path=out_dir / "uwb.rrd" if rrd else None,
+        mcap_path=out_dir / "uwb.mcap" if mcap else None,
+        result=result,
+    )
     return cfg, capture, paths

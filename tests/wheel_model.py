@@ -19,7 +19,11 @@ TAU_S = 0.25  # time constant, s
 
 def simulate(fw, clock, t_end_us, state=None):
     """First-order wheel model (speed' = (k*duty*dir - speed)/tau) with hall edges."""
-    hall, speed, angle = state or (HallSensors(pole_pairs=WHEEL.hall_pole_pairs), np.zeros(2), np.zeros(2))
+    hall, speed, angle = state or (
+        HallSensors(pole_pairs=WHEEL.hall_pole_pairs),
+        np.zeros(2),
+        np.zeros(2),
+    )
     while clock.now_us < t_end_us:
         t0 = clock.now_us
         t1 = min(t0 - t0 % 1000 + 1000, clock.next_event_us(), t_end_us)

@@ -36,8 +36,14 @@ class StepInfo:
         """JSON-ready dict; NaN becomes None. With ``sign`` -1 (a step to a negative
         reference) the values of :data:`SIGNED_METRICS` carry the reference's sign; the
         others are magnitudes or times."""
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else (sign * v if k in SIGNED_METRICS else v))
-                for k, v in asdict(self).items()}
+        return {
+            k: (
+                None
+                if isinstance(v, float) and not math.isfinite(v)
+                else (sign * v if k in SIGNED_METRICS else v)
+            )
+            for k, v in asdict(self).items()
+        }
 
 
 def first_crossing_s(t: np.ndarray, y: np.ndarray, level: float) -> float:
@@ -72,7 +78,7 @@ def _peak(y: np.ndarray, final_value: float, tolerance: float) -> int | None:
     i = int(np.argmax(y))
     if y[i] - final_value <= tolerance or i == len(y) - 1:
         return None
-    return i if float(np.min(y[i + 1:])) < y[i] - tolerance else None
+    return i if float(np.min(y[i + 1 :])) < y[i] - tolerance else None
 
 
 def _first_peak(y: np.ndarray, final_value: float, tolerance: float, last: int) -> int:
@@ -80,7 +86,7 @@ def _first_peak(y: np.ndarray, final_value: float, tolerance: float, last: int) 
     ``final_value + tolerance`` from which ``y`` falls by more than ``tolerance`` before it
     exceeds that sample (Ogata's t_p; the maximum peak itself qualifies)."""
     for i in np.nonzero(y[:last] > final_value + tolerance)[0]:
-        after = y[i + 1:]
+        after = y[i + 1 :]
         back = np.nonzero(after < y[i] - tolerance)[0]
         over = np.nonzero(after > y[i])[0]
         if len(back) and (not len(over) or back[0] < over[0]):
@@ -98,9 +104,17 @@ def _excess_variation(t: np.ndarray, y: np.ndarray, t_start_s: float, t_end_s: f
     return float(np.sum(np.abs(np.diff(yw))) - abs(yw[-1] - yw[0]))
 
 
-def step_info(t_s, y, reference: float, t0_s: float = 0.0, settling_band: float | None = None,
-              initial_value: float | None = 0.0, final_fraction: float = 0.2,
-              oscillation_window_s: float | None = None, peak_tolerance: float | None = None) -> StepInfo:
+def step_info(
+    t_s,
+    y,
+    reference: float,
+    t0_s: float = 0.0,
+    settling_band: float | None = None,
+    initial_value: float | None = 0.0,
+    final_fraction: float = 0.2,
+    oscillation_window_s: float | None = None,
+    peak_tolerance: float | None = None,
+) -> StepInfo:
     """Step-response metrics of a sampled signal (see the module docstring).
 
     Parameters
@@ -152,9 +166,16 @@ def step_info(t_s, y, reference: float, t0_s: float = 0.0, settling_band: float 
     overshoot = 0.0 if i_peak is None else float(y[i_peak]) - final_value
     t_end = t[-1] if oscillation_window_s is None else min(t[-1], oscillation_window_s)
     return StepInfo(
-        reference=ref, final_value=final_value, delay_s=t50, rise_s=t90 - t10,
+        reference=ref,
+        final_value=final_value,
+        delay_s=t50,
+        rise_s=t90 - t10,
         peak_s=math.nan if i_first is None else float(t[i_first]),
-        peak_value=math.nan if i_peak is None else float(y[i_peak]), overshoot=overshoot,
+        peak_value=math.nan if i_peak is None else float(y[i_peak]),
+        overshoot=overshoot,
         overshoot_pct=100.0 * overshoot / abs(step) if step else math.nan,
-        settling_s=_settling_s(t, y, final_value, band), settling_band=band,
-        steady_error=final_value - ref, oscillation=_excess_variation(t, y, t90, t_end))
+        settling_s=_settling_s(t, y, final_value, band),
+        settling_band=band,
+        steady_error=final_value - ref,
+        oscillation=_excess_variation(t, y, t90, t_end),
+    )

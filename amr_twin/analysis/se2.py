@@ -21,8 +21,14 @@ def compose(a, b) -> np.ndarray:
     """``a (+) b``: pose(s) ``b`` given in the frame of ``a``, returned in ``a``'s parent frame (broadcast)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([a[..., 0] + c * b[..., 0] - s * b[..., 1], a[..., 1] + s * b[..., 0] + c * b[..., 1],
-                     wrap_rad(a[..., 2] + b[..., 2])], axis=-1)
+    return np.stack(
+        [
+            a[..., 0] + c * b[..., 0] - s * b[..., 1],
+            a[..., 1] + s * b[..., 0] + c * b[..., 1],
+            wrap_rad(a[..., 2] + b[..., 2]),
+        ],
+        axis=-1,
+    )
 
 
 def between(a, b) -> np.ndarray:
@@ -46,7 +52,9 @@ def interpolate(t_s: np.ndarray, pose: np.ndarray, t_query_s) -> np.ndarray:
     t_s, pose = np.asarray(t_s, float), np.asarray(pose, float)
     q = np.atleast_1d(np.asarray(t_query_s, float))
     yaw = np.interp(q, t_s, np.unwrap(pose[:, 2]))
-    out = np.column_stack([np.interp(q, t_s, pose[:, 0]), np.interp(q, t_s, pose[:, 1]), wrap_rad(yaw)])
+    out = np.column_stack(
+        [np.interp(q, t_s, pose[:, 0]), np.interp(q, t_s, pose[:, 1]), wrap_rad(yaw)]
+    )
     return out[0] if np.ndim(t_query_s) == 0 else out
 
 

@@ -61,7 +61,9 @@ def _checked(name_t: str, t_s, name_pose: str, pose) -> tuple[np.ndarray, np.nda
     if t.ndim != 1 or t.size < 2:
         raise ValueError(f"{name_t}: shape {t.shape} must be (N,) with N >= 2")
     if p.shape != (t.size, 3):
-        raise ValueError(f"{name_pose}: shape {p.shape} must be (N, 3) = ({t.size}, 3), rows [x_m, y_m, yaw_rad]")
+        raise ValueError(
+            f"{name_pose}: shape {p.shape} must be (N, 3) = ({t.size}, 3), rows [x_m, y_m, yaw_rad]"
+        )
     if not np.isfinite(t).all():
         raise ValueError(f"{name_t}: all stamps must be finite")
     if not np.isfinite(p).all():
@@ -88,10 +90,14 @@ def _relative(pose: np.ndarray, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarra
     """Relative motions ``pose_i^-1 pose_j``: translation (K, 2) in frame i and rotation (K,)."""
     d = pose[j, :2] - pose[i, :2]
     c, s = np.cos(pose[i, 2]), np.sin(pose[i, 2])
-    return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]), pose[j, 2] - pose[i, 2]
+    return np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]), pose[
+        j, 2
+    ] - pose[i, 2]
 
 
-def rpe_pairs(pose_true: np.ndarray, rpe_delta_m: float, rel_tol: float = RPE_REL_TOL) -> tuple[np.ndarray, np.ndarray]:
+def rpe_pairs(
+    pose_true: np.ndarray, rpe_delta_m: float, rel_tol: float = RPE_REL_TOL
+) -> tuple[np.ndarray, np.ndarray]:
     """Index pairs ``(i, j)`` of the RPE: for each ``i`` the later ``j`` travelled nearest ``rpe_delta_m``.
 
     As ``evo.core.filters.filter_pairs_by_path(..., all_pairs=True)`` with ``tol =
@@ -103,11 +109,13 @@ def rpe_pairs(pose_true: np.ndarray, rpe_delta_m: float, rel_tol: float = RPE_RE
     n = len(d)
     i = np.arange(n - 1)
     target = d[i] + rpe_delta_m
-    hi = np.searchsorted(d, target, side="left")            # first with d >= target (n: none)
-    lo = np.maximum(np.searchsorted(d, d[np.maximum(hi - 1, 0)], side="left"), i + 1)  # first of the run below
+    hi = np.searchsorted(d, target, side="left")  # first with d >= target (n: none)
+    lo = np.maximum(
+        np.searchsorted(d, d[np.maximum(hi - 1, 0)], side="left"), i + 1
+    )  # first of the run below
     hi_ok = hi < n
     err_hi = np.where(hi_ok, np.abs(d[np.minimum(hi, n - 1)] - d[i] - rpe_delta_m), np.inf)
-    lo_ok = (hi - 1 >= i + 1)
+    lo_ok = hi - 1 >= i + 1
     err_lo = np.where(lo_ok, np.abs(d[np.minimum(lo, n - 1)] - d[i] - rpe_delta_m), np.inf)
     use_lo = err_lo <= err_hi
     j = np.where(use_lo, lo, hi)
@@ -126,11 +134,12 @@ def rpe(pose_est: np.ndarray, pose_true: np.ndarray, rpe_delta_m: float) -> tupl
     # E = rel_true^-1 rel_est has translation R_true^T (t_est - t_true): its norm is |t_est - t_true|
     err_t = np.hypot(*(t_est - t_true).T)
     err_r = np.abs(se2.wrap_rad(r_est - r_true))
-    return float(np.sqrt(np.mean(err_t ** 2))), float(np.degrees(np.sqrt(np.mean(err_r ** 2))))
+    return float(np.sqrt(np.mean(err_t**2))), float(np.degrees(np.sqrt(np.mean(err_r**2))))
 
 
-def errors(t_est_s, pose_est, t_true_s, pose_true, rpe_delta_m: float = 1.0,
-           align: bool = False) -> TrajectoryErrors:
+def errors(
+    t_est_s, pose_est, t_true_s, pose_true, rpe_delta_m: float = 1.0, align: bool = False
+) -> TrajectoryErrors:
     """Errors of an estimate against the truth.
 
     Parameters
@@ -165,8 +174,10 @@ def errors(t_est_s, pose_est, t_true_s, pose_true, rpe_delta_m: float = 1.0,
         raise ValueError(f"rpe_delta_m: {rpe_delta_m} must be a finite number > 0")
     inside = (t_est >= t_true[0]) & (t_est <= t_true[-1])
     if inside.sum() < 2:
-        raise ValueError(f"t_est_s: only {int(inside.sum())} stamps lie inside the truth's span "
-                         f"[{t_true[0]:g}, {t_true[-1]:g}] s; need >= 2")
+        raise ValueError(
+            f"t_est_s: only {int(inside.sum())} stamps lie inside the truth's span "
+            f"[{t_true[0]:g}, {t_true[-1]:g}] s; need >= 2"
+        )
     t_est, p_est = t_est[inside], p_est[inside].copy()
     q = se2.interpolate(t_true, p_true, t_est)
     if align:
@@ -178,8 +189,12 @@ def errors(t_est_s, pose_est, t_true_s, pose_true, rpe_delta_m: float = 1.0,
     yaw_err = np.abs(se2.wrap_rad(p_est[:, 2] - q[:, 2]))
     rpe_t, rpe_r = rpe(p_est, q, rpe_delta_m)
     return TrajectoryErrors(
-        ate_m=float(np.sqrt(np.mean(pos_err ** 2))), rpe_trans_m=rpe_t, rpe_rot_deg=rpe_r,
-        final_pos_err_m=float(pos_err[-1]), final_yaw_err_deg=float(np.degrees(yaw_err[-1])),
-        rms_yaw_err_deg=float(np.degrees(np.sqrt(np.mean(yaw_err ** 2)))),
+        ate_m=float(np.sqrt(np.mean(pos_err**2))),
+        rpe_trans_m=rpe_t,
+        rpe_rot_deg=rpe_r,
+        final_pos_err_m=float(pos_err[-1]),
+        final_yaw_err_deg=float(np.degrees(yaw_err[-1])),
+        rms_yaw_err_deg=float(np.degrees(np.sqrt(np.mean(yaw_err**2)))),
         max_yaw_err_deg=float(np.degrees(yaw_err.max())),
-        length_m=float(np.sum(np.hypot(*np.diff(q[:, :2], axis=0).T))))
+        length_m=float(np.sum(np.hypot(*np.diff(q[:, :2], axis=0).T))),
+    )

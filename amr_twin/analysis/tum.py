@@ -39,10 +39,22 @@ def text(t_s: np.ndarray, pose: np.ndarray) -> str:
     if not (np.isfinite(t).all() and np.isfinite(p).all()):
         raise ValueError("t_s, pose: every value must be finite")
     half = 0.5 * p[:, 2]
-    rows = np.column_stack([t, p[:, 0], p[:, 1], np.zeros_like(t), np.zeros_like(t), np.zeros_like(t),
-                            np.sin(half), np.cos(half)])
-    body = "\n".join(f"{r[0]:.6f} {r[1]:.6f} {r[2]:.6f} {r[3]:.1f} {r[4]:.1f} {r[5]:.1f} {r[6]:.9f} {r[7]:.9f}"
-                     for r in rows)
+    rows = np.column_stack(
+        [
+            t,
+            p[:, 0],
+            p[:, 1],
+            np.zeros_like(t),
+            np.zeros_like(t),
+            np.zeros_like(t),
+            np.sin(half),
+            np.cos(half),
+        ]
+    )
+    body = "\n".join(
+        f"{r[0]:.6f} {r[1]:.6f} {r[2]:.6f} {r[3]:.1f} {r[4]:.1f} {r[5]:.1f} {r[6]:.9f} {r[7]:.9f}"
+        for r in rows
+    )
     return HEADER + body + ("\n" if len(rows) else "")
 
 
@@ -55,15 +67,18 @@ def read(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Stamps ``(N,)`` s and planar poses ``(N, 3)`` of a TUM file (yaw from the quaternion about z)."""
     rows = np.loadtxt(path, comments="#", ndmin=2)
     if rows.shape[1] != 8:
-        raise ValueError(f"{path}: {rows.shape[1]} columns per line, a TUM file has 8 "
-                         "(timestamp tx ty tz qx qy qz qw)")
+        raise ValueError(
+            f"{path}: {rows.shape[1]} columns per line, a TUM file has 8 "
+            "(timestamp tx ty tz qx qy qz qw)"
+        )
     qx, qy, qz, qw = rows[:, 4], rows[:, 5], rows[:, 6], rows[:, 7]
     yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
     return rows[:, 0], np.column_stack([rows[:, 1], rows[:, 2], yaw])
 
 
-def truth_at(t_true_s: np.ndarray, pose_true: np.ndarray,
-             stamps: Iterable[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def truth_at(
+    t_true_s: np.ndarray, pose_true: np.ndarray, stamps: Iterable[np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
     """The truth at its own stamps and at every stamp of ``stamps`` inside its span.
 
     Returns stamps ``(M,)`` s, sorted and unique to the microsecond, and poses ``(M, 3)``.

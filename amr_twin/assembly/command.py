@@ -62,15 +62,22 @@ class Command:
                 return cls("angular", speed_deg_s=float(parts[1]), icc_m=float(parts[2]))
             if parts[0] == "motor" and len(parts) == 3:
                 v = float(parts[2])
-                return cls("motor", wheel=parts[1], direction="forward" if v >= 0 else "backward", speed_m_s=abs(v))
+                return cls(
+                    "motor",
+                    wheel=parts[1],
+                    direction="forward" if v >= 0 else "backward",
+                    speed_m_s=abs(v),
+                )
             if parts[0] == "motor" and len(parts) == 4:
                 return cls("motor", wheel=parts[1], direction=parts[2], speed_m_s=float(parts[3]))
             if parts[0] == "stop" and len(parts) == 1:
                 return cls("stop")
         except ValueError as exc:
             raise ValueError(f"{what} {text!r}: {exc}") from None
-        raise ValueError(f"{what} {text!r}: expected linear:V, angular:DEG_S:ICC_M, motor:WHEEL:V, "
-                         "motor:WHEEL:DIR:V or stop")
+        raise ValueError(
+            f"{what} {text!r}: expected linear:V, angular:DEG_S:ICC_M, motor:WHEEL:V, "
+            "motor:WHEEL:DIR:V or stop"
+        )
 
     def send(self, twin: Twin) -> int:
         """Call the client as the menu would; return its code (0 ok, 1 value error, -1 failed)."""
@@ -92,7 +99,9 @@ class Command:
 
         bus = Bus(VirtualClock())
         WheelCommandService(bus)
-        client = WheelCommandClient(bus, wheel_radius_m=cfg.wheel.radius_m, half_separation_m=cfg.wheel.separation_m / 2)
+        client = WheelCommandClient(
+            bus, wheel_radius_m=cfg.wheel.radius_m, half_separation_m=cfg.wheel.separation_m / 2
+        )
         self.send(type("Twinless", (), {"client": client})())
         return client
 

@@ -44,17 +44,23 @@ def parse_step(index: int, step) -> tuple[float, Command]:
     kinds = [k for k in step if k != "t_s"]
     unknown = [k for k in kinds if k not in FIELDS]
     if unknown:
-        raise MissionError(f"{where}: unknown key {unknown[0]!r} (expected t_s and one of {', '.join(KINDS)})")
+        raise MissionError(
+            f"{where}: unknown key {unknown[0]!r} (expected t_s and one of {', '.join(KINDS)})"
+        )
     if len(kinds) != 1:
         raise MissionError(f"{where}: needs exactly one of {', '.join(KINDS)}, got {len(kinds)}")
     kind = kinds[0]
     args = step[kind] if step[kind] is not None else {}
     if not isinstance(args, dict):
-        raise MissionError(f"{where}.{kind}: expected a mapping of {', '.join(FIELDS[kind]) or 'nothing'}")
+        raise MissionError(
+            f"{where}.{kind}: expected a mapping of {', '.join(FIELDS[kind]) or 'nothing'}"
+        )
     for name in args:
         if name not in FIELDS[kind]:
-            raise MissionError(f"{where}.{kind}: unknown field {name!r} "
-                               f"(expected {', '.join(FIELDS[kind]) or 'none'})")
+            raise MissionError(
+                f"{where}.{kind}: unknown field {name!r} "
+                f"(expected {', '.join(FIELDS[kind]) or 'none'})"
+            )
     values = {}
     for name, required in FIELDS[kind].items():
         if name not in args:
@@ -97,7 +103,9 @@ def parse_goal(where: str, goal) -> tuple[float, float, float | None]:
     elif isinstance(goal, list) and len(goal) in (2, 3):
         values = goal
     else:
-        raise MissionError(f"{where}: expected [x_m, y_m], [x_m, y_m, yaw_deg] or a mapping of them")
+        raise MissionError(
+            f"{where}: expected [x_m, y_m], [x_m, y_m, yaw_deg] or a mapping of them"
+        )
     numbers = [_number(f"{where}[{i}]", v) for i, v in enumerate(values)]
     if any(abs(v) > 1e4 for v in numbers):
         raise MissionError(f"{where}: each value must lie within +-10000")
@@ -121,8 +129,14 @@ def _goals_plan(tree: dict) -> Mission:
             if not isinstance(tree[key], str) or not tree[key]:
                 raise MissionError(f"{key}: {tree[key]!r} must be a name or a file path")
             nav[key] = tree[key]
-    return Mission(duration_s, [], _faults(tree), _actors(tree),
-                   tuple(parse_goal(f"goals[{i}]", g) for i, g in enumerate(goals)), nav)
+    return Mission(
+        duration_s,
+        [],
+        _faults(tree),
+        _actors(tree),
+        tuple(parse_goal(f"goals[{i}]", g) for i, g in enumerate(goals)),
+        nav,
+    )
 
 
 def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
@@ -136,9 +150,13 @@ def _faults(tree) -> tuple[str, ...]:
 
     faults = tree.get("faults") or []
     if not isinstance(faults, list) or not all(isinstance(f, str) for f in faults):
-        raise MissionError("faults: expected a list of KIND@T[:ARGS] strings, e.g. [hall-left-dead@3]")
+        raise MissionError(
+            "faults: expected a list of KIND@T[:ARGS] strings, e.g. [hall-left-dead@3]"
+        )
     try:
-        parse_faults(faults, where="faults")  # the run checks them again against its duration and sensors
+        parse_faults(
+            faults, where="faults"
+        )  # the run checks them again against its duration and sensors
     except FaultError as exc:
         raise MissionError(str(exc)) from None
     return tuple(faults)
@@ -149,7 +167,9 @@ def _actors(tree) -> tuple:
 
     actors = tree.get("actors") or []
     if not isinstance(actors, list):
-        raise MissionError("actors: expected a list of {kind, waypoints_xy_m, speed_m_s, ...} mappings")
+        raise MissionError(
+            "actors: expected a list of {kind, waypoints_xy_m, speed_m_s, ...} mappings"
+        )
     try:
         return tuple(Actor.from_mapping(a, f"actors[{i}]") for i, a in enumerate(actors))
     except ActorError as exc:
@@ -160,10 +180,14 @@ def parse_mission_plan(tree) -> Mission:
     """A loaded mission mapping to a :class:`Mission`."""
     if not isinstance(tree, dict):
         raise MissionError("mission: expected a mapping with duration_s and steps (or goals)")
-    unknown = [k for k in tree if k not in ("duration_s", "steps", "faults", "actors", "goals") + NAV_KEYS]
+    unknown = [
+        k for k in tree if k not in ("duration_s", "steps", "faults", "actors", "goals") + NAV_KEYS
+    ]
     if unknown:
-        raise MissionError(f"mission: unknown key {unknown[0]!r} (expected duration_s, steps, faults, actors; "
-                           f"or goals, {', '.join(NAV_KEYS)})")
+        raise MissionError(
+            f"mission: unknown key {unknown[0]!r} (expected duration_s, steps, faults, actors; "
+            f"or goals, {', '.join(NAV_KEYS)})"
+        )
     if "goals" in tree:
         return _goals_plan(tree)
     extra = [k for k in NAV_KEYS if k in tree]
@@ -192,6 +216,12 @@ def load_mission_file(path: str | Path) -> Mission:
         plan = parse_mission_plan(tree)
     except MissionError as exc:
         raise MissionError(f"mission {path}: {exc}") from None
-    if plan.navigation and "map" in plan.navigation and not Path(plan.navigation["map"]).is_absolute():
-        plan.navigation["map"] = str(path.parent / plan.navigation["map"])  # beside the mission file
+    if (
+        plan.navigation
+        and "map" in plan.navigation
+        and not Path(plan.navigation["map"]).is_absolute()
+    ):
+        plan.navigation["map"] = str(
+            path.parent / plan.navigation["map"]
+        )  # beside the mission file
     return plan

@@ -38,34 +38,52 @@ class TwinOptions:
     firmware: str = "faithful"
     world: str = "warehouse"
     seed: int = 0
-    start_xy_yaw: tuple[float, float, float] | None = (0.0, 0.0, 0.0)  # x_m, y_m, yaw_rad; None: the world's
+    start_xy_yaw: tuple[float, float, float] | None = (
+        0.0,
+        0.0,
+        0.0,
+    )  # x_m, y_m, yaw_rad; None: the world's
     # own start (amr_twin.model.worlds.default_start: the warehouse's is the west end of its central aisle; the CLI's default)
     settle_s: float = 0.5
-    record_every_steps: int = 10  # time series at 100 Hz with 1 ms steps (steps of sim.timestep_s: twice as
+    record_every_steps: int = (
+        10  # time series at 100 Hz with 1 ms steps (steps of sim.timestep_s: twice as
+    )
     # many physics steps when the tyres' guard halved it, amr_twin.model.tyre_stability)
     hall_jitter_us: float = 0.0
     hall_misalignment_deg: float = 0.0
     rosserial_extra_latency_us: int = 0
     rosserial_loss_prob: float = 0.0
     check_every_s: float = 0.5  # divergence check period
-    sensors: tuple[str, ...] = ()  # sensors by name (amr_twin.sensors.catalog.SENSORS): "imu" (imu/data_raw,
+    sensors: tuple[
+        str, ...
+    ] = ()  # sensors by name (amr_twin.sensors.catalog.SENSORS): "imu" (imu/data_raw,
     # imu/mag), "lidar" (scan), "uwb" (uwb/range); () none
-    stop_on_collision: bool = False  # halt the twin at the first collision (amr_twin.sim.collisions)
-    odometry: bool = True  # the wheel odometry node (odom, tf); off for runs nothing reads it from (a sweep
+    stop_on_collision: bool = (
+        False  # halt the twin at the first collision (amr_twin.sim.collisions)
+    )
+    odometry: bool = (
+        True  # the wheel odometry node (odom, tf); off for runs nothing reads it from (a sweep
+    )
     # point): it only publishes, so the drive is the same to the bit without it
     faults: tuple = ()  # amr_twin.sim.faults.Fault items, injected at their times
     obstacles: tuple = ()  # amr_twin.model.worlds.Obstacle boxes added to the world (unmapped: no map holds them)
-    visuals: bool = True  # the robot's visual geoms in the model; off for runs nothing draws (no .rrd, no live
+    visuals: bool = (
+        True  # the robot's visual geoms in the model; off for runs nothing draws (no .rrd, no live
+    )
     # view): they collide with nothing and weigh nothing, so the dynamics are the same to the bit, ~15 % cheaper
     actors: tuple = ()  # amr_twin.model.actors.Actor items: people and pallet jacks moved on the grid
     # (amr_twin.sim.actors), their true poses on actors/poses
     firmware_params: object = field(default=None, compare=False)
-    odometry_calibration: object = None  # controllers/odometry_calibration.OdometryCalibration: the odometry
+    odometry_calibration: object = (
+        None  # controllers/odometry_calibration.OdometryCalibration: the odometry
+    )
     # node's effective wheel radii and wheelbase (a UMBmark calibration); None: the nominal geometry
 
     def __post_init__(self) -> None:
         if type(self.sensors) is not tuple or not all(type(name) is str for name in self.sensors):
-            raise ValueError(f"sensors: {self.sensors!r} must be a tuple of sensor names, e.g. ('imu', 'lidar')")
+            raise ValueError(
+                f"sensors: {self.sensors!r} must be a tuple of sensor names, e.g. ('imu', 'lidar')"
+            )
 
 
 PLACED_SIGMA = 1e-4
@@ -85,17 +103,29 @@ class Twin(Hooks):
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
         from amr_twin.sensors.catalog import SENSORS
 
-        factories = [(name, SENSORS.get(name)) for name in options.sensors]  # an unknown name: before any work
+        factories = [
+            (name, SENSORS.get(name)) for name in options.sensors
+        ]  # an unknown name: before any work
         self.cfg, self.options = cfg, options
         self._build_physics(cfg, options)
         self.clock = VirtualClock()
         self.bus = Bus(self.clock)
         self._init_hooks(self.bus)
-        self.bus.send_transform(robot_static_transforms(self.physics.model), static=True)  # laser, imu_link, uwb_tag
+        self.bus.send_transform(
+            robot_static_transforms(self.physics.model), static=True
+        )  # laser, imu_link, uwb_tag
         self._build_drive(cfg, options)
         self._build_loop(cfg, options)
-        self._mount = Mount(self.physics, self.clock, self.bus, self, self.grid_us, options.seed, options.world,
-                            bool(options.actors))
+        self._mount = Mount(
+            self.physics,
+            self.clock,
+            self.bus,
+            self,
+            self.grid_us,
+            options.seed,
+            options.world,
+            bool(options.actors),
+        )
         self.sensors = {name: factory(self._mount, cfg) for name, factory in factories}
         """The sensors built from ``options.sensors`` and by :meth:`add_sensor`, by name, in that order."""
         self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
@@ -105,8 +135,20 @@ class Twin(Hooks):
         self.faults = None
         if options.faults:
             from amr_twin.sim.fault_injector import FaultInjector, FaultTargets
-            self.faults = FaultInjector(options.faults, self.clock, self, FaultTargets(
-                self.hall, self.physics, self.link, self.bus, self.actuation, lambda: self.t_phys_us))
+
+            self.faults = FaultInjector(
+                options.faults,
+                self.clock,
+                self,
+                FaultTargets(
+                    self.hall,
+                    self.physics,
+                    self.link,
+                    self.bus,
+                    self.actuation,
+                    lambda: self.t_phys_us,
+                ),
+            )
         self.firmware.start()
         self.actuation.apply(0)
 
@@ -114,16 +156,33 @@ class Twin(Hooks):
         """The robot in its world at its start pose, settled; the floor's friction field; the timestep."""
         from amr_twin.model.worlds import default_start
 
-        start = options.start_xy_yaw if options.start_xy_yaw is not None else default_start(options.world)
+        start = (
+            options.start_xy_yaw
+            if options.start_xy_yaw is not None
+            else default_start(options.world)
+        )
         self.start_xy_yaw = tuple(float(v) for v in start)
         pose = f"{start[0]:g},{start[1]:g},{math.degrees(start[2]):g}"
-        where = (f"--start {pose} in world {options.world}" if options.start_xy_yaw is not None
-                 else f"the start pose {pose} of world {options.world}")
-        physics, urdf = settled_physics(cfg, options.world, self.start_xy_yaw, options.visuals,
-                                        "imu" in options.sensors, options.settle_s, where, tuple(options.actors),
-                                        options.obstacles)
+        where = (
+            f"--start {pose} in world {options.world}"
+            if options.start_xy_yaw is not None
+            else f"the start pose {pose} of world {options.world}"
+        )
+        physics, urdf = settled_physics(
+            cfg,
+            options.world,
+            self.start_xy_yaw,
+            options.visuals,
+            "imu" in options.sensors,
+            options.settle_s,
+            where,
+            tuple(options.actors),
+            options.obstacles,
+        )
         self.physics = physics
-        self._rest = physics.positions()  # the robot settled at its start: how it stands after a teleport
+        self._rest = (
+            physics.positions()
+        )  # the robot settled at its start: how it stands after a teleport
         self.floor = None
         """The floor's friction field of this run (:mod:`amr_twin.sim.floor_friction`), drawn from the
         seed with ``sim.floor_friction_field`` and the brush tyres; None otherwise."""
@@ -144,33 +203,62 @@ class Twin(Hooks):
     def _build_drive(self, cfg: TwinConfig, options: TwinOptions) -> None:
         """The plant, its hall sensors, the firmware behind its rosserial link and the PC side: the wheel
         command service and client, the odometry node."""
-        self.link = RosserialLink(self.clock, extra_latency_us=options.rosserial_extra_latency_us,
-                                  loss_prob=options.rosserial_loss_prob, seed=options.seed)
+        self.link = RosserialLink(
+            self.clock,
+            extra_latency_us=options.rosserial_extra_latency_us,
+            loss_prob=options.rosserial_loss_prob,
+            seed=options.seed,
+        )
         self.plant = Plant(cfg, self.physics)
         wheel = cfg.wheel
-        self.hall = HallSensors(2, pole_pairs=wheel.hall_pole_pairs, misalignment_deg=options.hall_misalignment_deg,
-                                jitter_us=options.hall_jitter_us, seed=options.seed,
-                                hysteresis_deg=wheel.hall_hysteresis_deg)
+        self.hall = HallSensors(
+            2,
+            pole_pairs=wheel.hall_pole_pairs,
+            misalignment_deg=options.hall_misalignment_deg,
+            jitter_us=options.hall_jitter_us,
+            seed=options.seed,
+            hysteresis_deg=wheel.hall_hysteresis_deg,
+        )
         self.hall.reset(self.physics.wheel_angles_rad())
-        self.firmware = make_firmware(options.firmware, self.clock, self._arduino_publish,
-                                      options.firmware_params, edges_per_rev=wheel.sc_edges_per_rev)
+        self.firmware = make_firmware(
+            options.firmware,
+            self.clock,
+            self._arduino_publish,
+            options.firmware_params,
+            edges_per_rev=wheel.sc_edges_per_rev,
+        )
         self.service = WheelCommandService(self.bus)
-        self.client = WheelCommandClient(self.bus, wheel_radius_m=wheel.radius_m,
-                                         half_separation_m=wheel.separation_m / 2)
-        if not self.firmware.connect(self.bus, self.link):  # else it speaks rosserial on its own UART
+        self.client = WheelCommandClient(
+            self.bus, wheel_radius_m=wheel.radius_m, half_separation_m=wheel.separation_m / 2
+        )
+        if not self.firmware.connect(
+            self.bus, self.link
+        ):  # else it speaks rosserial on its own UART
             self.bus.subscribe("wheel_Command", self._to_arduino)
         calibration = options.odometry_calibration
-        self.odometry = (WheelOdometry(self.bus, self.clock, wheel_radius_m=wheel.radius_m,
-                                       wheel_separation_m=wheel.separation_m,
-                                       **({} if calibration is None else
-                                          calibration.multipliers(wheel.radius_m, wheel.separation_m)))
-                         if options.odometry else None)
+        self.odometry = (
+            WheelOdometry(
+                self.bus,
+                self.clock,
+                wheel_radius_m=wheel.radius_m,
+                wheel_separation_m=wheel.separation_m,
+                **(
+                    {}
+                    if calibration is None
+                    else calibration.multipliers(wheel.radius_m, wheel.separation_m)
+                ),
+            )
+            if options.odometry
+            else None
+        )
 
     def _build_loop(self, cfg: TwinConfig, options: TwinOptions) -> None:
         """The record grid and the loop's own grid samplers, in the order they run: the rolling resistance
         from the present loads, the battery's accounting, the actors, the collision monitor (the sensors'
         come after them: the ``on_grid`` hook, amr_twin/sim/hooks.py); the actuation and the observables."""
-        self.grid_every = max(1, int(options.record_every_steps)) * self.tyre_timestep.steps_per_configured_step
+        self.grid_every = (
+            max(1, int(options.record_every_steps)) * self.tyre_timestep.steps_per_configured_step
+        )
         """Physics steps between two instants of the record grid (the ``on_grid`` hook's): ``record_every_steps``
         of ``sim.timestep_s``, the same instants when the tyres' guard halved the timestep."""
         self.grid_us = self.dt_us * self.grid_every
@@ -178,10 +266,13 @@ class Twin(Hooks):
         self.on_grid(self.rolling.update)
         self.on_grid(self.plant.battery.account)
         self.actuation = Actuation(self.plant, self.firmware, self._actuation_hooks)
-        self.collisions = CollisionMonitor(self.physics, stop=options.stop_on_collision,
-                                           listeners=self._collision_hooks)
+        self.collisions = CollisionMonitor(
+            self.physics, stop=options.stop_on_collision, listeners=self._collision_hooks
+        )
         self._grid = GridLoop(self.physics, self.samplers, self.grid_every, self.dt_us)
-        self.observables = Observables(self.physics, self._grid, self.actuation, self.plant.battery, self.collisions)
+        self.observables = Observables(
+            self.physics, self._grid, self.actuation, self.plant.battery, self.collisions
+        )
         """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
         self.halted = False
         self.stopped = False
@@ -190,6 +281,7 @@ class Twin(Hooks):
         """The actors' motion (:class:`amr_twin.sim.actors.ActorMotion`), None without actors."""
         if options.actors:
             from amr_twin.sim.actors import ActorMotion, ActorPoses
+
             self.actors = ActorMotion(self.physics, tuple(options.actors), cfg)
             self.on_grid(self.actors.update)
             self._actor_poses = ActorPoses(self.actors, self.clock, self.bus, self.samplers)
@@ -211,8 +303,12 @@ class Twin(Hooks):
 
     # -- rosserial bridge ---------------------------------------------------------
     def _to_arduino(self, msg) -> None:
-        self.link.send(PC_TO_ARDUINO, "wheel_Command", msg,
-                       lambda _topic, m: self.firmware.on_wheel_command(list(m.data)))
+        self.link.send(
+            PC_TO_ARDUINO,
+            "wheel_Command",
+            msg,
+            lambda _topic, m: self.firmware.on_wheel_command(list(m.data)),
+        )
 
     def _arduino_publish(self, topic: str, value: float) -> None:
         self.link.send(ARDUINO_TO_PC, topic, Float64(data=float(value)), self.bus.publish)
@@ -292,16 +388,27 @@ class Twin(Hooks):
         import numpy as np
 
         from amr_twin.estimation.ekf import POSE_TOPIC
-        from amr_twin.ros.geometry_messages import (Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped,
-                                                    Quaternion)
+        from amr_twin.ros.geometry_messages import (
+            Point,
+            Pose,
+            PoseWithCovariance,
+            PoseWithCovarianceStamped,
+            Quaternion,
+        )
         from amr_twin.ros.messages import Header, Time
 
         x, y, yaw = self.start_xy_yaw
         cov = np.zeros(36)
-        cov[[0, 7, 35]] = PLACED_SIGMA ** 2
-        self.bus.publish(POSE_TOPIC, PoseWithCovarianceStamped(
-            Header(0, Time.from_us(self.clock.now_us), "map"),
-            PoseWithCovariance(Pose(Point(float(x), float(y), 0.0), Quaternion.from_yaw(float(yaw))), cov)))
+        cov[[0, 7, 35]] = PLACED_SIGMA**2
+        self.bus.publish(
+            POSE_TOPIC,
+            PoseWithCovarianceStamped(
+                Header(0, Time.from_us(self.clock.now_us), "map"),
+                PoseWithCovariance(
+                    Pose(Point(float(x), float(y), 0.0), Quaternion.from_yaw(float(yaw))), cov
+                ),
+            ),
+        )
 
     def _step_physics(self, nstep: int) -> None:
         """Step ``nstep`` times, sampling the loop sensors on the record grid (:class:`~amr_twin.sim.grid_loop.GridLoop`).

@@ -26,7 +26,9 @@ from pathlib import Path
 from typing import Iterator
 
 _batch: list[list] = []  # stack of open all_or_nothing() batches: [(tmp, target) renames, cleanups]
-_made: list[list[Path]] = []  # per open batch: the folders its writers created (removed if it fails)
+_made: list[
+    list[Path]
+] = []  # per open batch: the folders its writers created (removed if it fails)
 
 
 def temporary_name(path: str | Path) -> Path:
@@ -189,9 +191,14 @@ def remove_stale_temporaries(folder: str | Path, name: str | None = None) -> lis
         return []
     removed = []
     for tmp in folder.glob(f".{name}.*.tmp" if name else ".*.tmp"):
-        stem, _, pid = tmp.name[1:-len(".tmp")].rpartition(".")
-        if stem and (name is None or stem == name) and pid.isdigit() and int(pid) != os.getpid() \
-                and not _alive(int(pid)):
+        stem, _, pid = tmp.name[1 : -len(".tmp")].rpartition(".")
+        if (
+            stem
+            and (name is None or stem == name)
+            and pid.isdigit()
+            and int(pid) != os.getpid()
+            and not _alive(int(pid))
+        ):
             _remove(tmp)
             removed.append(tmp)
     return removed

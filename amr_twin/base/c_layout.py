@@ -33,8 +33,12 @@ _registered: dict[str, dict[str, type[ctypes.Structure]]] = {}
 class _Entry(ctypes.Structure):
     """``amr_layout_entry`` of c_layout.h (fixed: the check cannot check itself)."""
 
-    _fields_ = [("type", ctypes.c_char_p), ("field", ctypes.c_char_p), ("offset", ctypes.c_size_t),
-                ("size", ctypes.c_size_t)]
+    _fields_ = [
+        ("type", ctypes.c_char_p),
+        ("field", ctypes.c_char_p),
+        ("offset", ctypes.c_size_t),
+        ("size", ctypes.c_size_t),
+    ]
 
 
 Layout = tuple[int, tuple[tuple[str, int, int], ...]]
@@ -54,8 +58,10 @@ def registered(source: Path) -> dict[str, type[ctypes.Structure]]:
 
 def ctypes_layout(struct: type[ctypes.Structure]) -> Layout:
     """The layout ctypes gives ``struct``."""
-    fields = tuple((name, getattr(struct, name).offset, getattr(struct, name).size)
-                   for name, *_ in struct._fields_)
+    fields = tuple(
+        (name, getattr(struct, name).offset, getattr(struct, name).size)
+        for name, *_ in struct._fields_
+    )
     return ctypes.sizeof(struct), fields
 
 
@@ -79,7 +85,10 @@ def c_layouts(lib: ctypes.CDLL) -> dict[str, Layout] | None:
             fields.setdefault(name, []).append((row.field.decode(), int(row.offset), int(row.size)))
     else:
         raise ValueError(f"{TABLE}: no end row within {MAX_ROWS} rows")
-    return {name: (sizes.get(name, -1), tuple(fields.get(name, ()))) for name in sizes.keys() | fields.keys()}
+    return {
+        name: (sizes.get(name, -1), tuple(fields.get(name, ())))
+        for name in sizes.keys() | fields.keys()
+    }
 
 
 def layout_problem(source: Path, lib: ctypes.CDLL) -> str:

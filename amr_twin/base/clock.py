@@ -38,8 +38,13 @@ NEVER_US = 2**62
 class _Event:
     __slots__ = ("t_us", "callback", "publishes", "cancelled", "period_us")
 
-    def __init__(self, t_us: int, callback: Callable[[], None], publishes: tuple[str, ...] | None,
-                 period_us: int = 0):
+    def __init__(
+        self,
+        t_us: int,
+        callback: Callable[[], None],
+        publishes: tuple[str, ...] | None,
+        period_us: int = 0,
+    ):
         self.t_us, self.callback, self.publishes, self.cancelled = t_us, callback, publishes, False
         self.period_us = period_us
 
@@ -96,8 +101,9 @@ class VirtualClock:
         return self.now_us * 1e-6
 
     # -- scheduling ---------------------------------------------------------------
-    def schedule(self, t_us: int, callback: Callable[[], None],
-                 publishes: Sequence[str] | None = None) -> EventHandle:
+    def schedule(
+        self, t_us: int, callback: Callable[[], None], publishes: Sequence[str] | None = None
+    ) -> EventHandle:
         """Run ``callback`` at absolute time ``t_us`` (not before ``now_us``).
 
         Parameters
@@ -119,11 +125,18 @@ class VirtualClock:
         if topics is not None and type(topics) is not tuple:
             topics = tuple(p.lstrip("/") for p in topics)
         event = _Event(t_us, callback, topics)
-        heapq.heappush(self._queue if topics is None else self._free, (t_us, next(self._seq), event))
+        heapq.heappush(
+            self._queue if topics is None else self._free, (t_us, next(self._seq), event)
+        )
         return EventHandle(event)
 
-    def schedule_every(self, first_us: int, period_us: int, callback: Callable[[], None],
-                       publishes: Sequence[str] | None = None) -> EventHandle:
+    def schedule_every(
+        self,
+        first_us: int,
+        period_us: int,
+        callback: Callable[[], None],
+        publishes: Sequence[str] | None = None,
+    ) -> EventHandle:
         """Run ``callback`` at ``first_us`` and then every ``period_us`` until the handle is cancelled.
 
         Each occurrence is queued as the previous one fires, before its callback runs (see
@@ -136,8 +149,9 @@ class VirtualClock:
         handle._event.period_us = period_us
         return handle
 
-    def schedule_in(self, delay_us: int, callback: Callable[[], None],
-                    publishes: Sequence[str] | None = None) -> EventHandle:
+    def schedule_in(
+        self, delay_us: int, callback: Callable[[], None], publishes: Sequence[str] | None = None
+    ) -> EventHandle:
         """Run ``callback`` ``delay_us`` microseconds from now (see :meth:`schedule`)."""
         return self.schedule(self.now_us + int(delay_us), callback, publishes)
 

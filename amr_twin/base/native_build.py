@@ -103,7 +103,9 @@ def load_helper(source: Path) -> ctypes.PyDLL | None:
     else:
         lib, why = _build_and_load(Path(source))
         why = layout_problem(source, lib) if lib is not None else why
-        if why and lib is not None:  # its structs are not those of the Python side (amr_twin.base.c_layout)
+        if (
+            why and lib is not None
+        ):  # its structs are not those of the Python side (amr_twin.base.c_layout)
             lib = None
             warnings.warn(f"{why}: the Python twin runs instead", RuntimeWarning, stacklevel=2)
     _loaded[name], _why_not[name] = lib, why
@@ -135,9 +137,14 @@ def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
         text = source.read_bytes() + LAYOUT_HEADER.read_bytes()
     except OSError as exc:
         return None, f"{source.name}: {exc.strerror or exc}"
-    machine = f"{sys.platform} {platform.machine()} {sys.implementation.cache_tag}".encode()  # a shared home
-    key = hashlib.sha256(b"\0".join([text, version.encode(), " ".join(FLAGS).encode(), machine,
-                                      str(BUILD_FORMAT).encode()])).hexdigest()[:24]
+    machine = (
+        f"{sys.platform} {platform.machine()} {sys.implementation.cache_tag}".encode()
+    )  # a shared home
+    key = hashlib.sha256(
+        b"\0".join(
+            [text, version.encode(), " ".join(FLAGS).encode(), machine, str(BUILD_FORMAT).encode()]
+        )
+    ).hexdigest()[:24]
     target = folder / f"{source.stem}-{key}.so"
     if not target.exists():
         compiler = shutil.which("cc") or shutil.which("gcc")
@@ -148,8 +155,18 @@ def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
             folder.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=".tmp")
             os.close(fd)
-            command = [compiler, *FLAGS, "-I", str(include), "-I", str(LAYOUT_HEADER.parent), str(source), "-o", tmp,
-                       "-lm"]
+            command = [
+                compiler,
+                *FLAGS,
+                "-I",
+                str(include),
+                "-I",
+                str(LAYOUT_HEADER.parent),
+                str(source),
+                "-o",
+                tmp,
+                "-lm",
+            ]
             out = subprocess.run(command, capture_output=True, text=True, timeout=120)
             if out.returncode != 0:
                 first = (out.stderr.strip().splitlines() or ["failed"])[0]
@@ -162,7 +179,9 @@ def _build_and_load(source: Path) -> tuple[ctypes.PyDLL | None, str]:
             if tmp is not None:
                 Path(tmp).unlink(missing_ok=True)
     try:
-        return ctypes.PyDLL(str(target)), ""  # PyDLL: the call holds the GIL, as its Python twin does
+        return ctypes.PyDLL(
+            str(target)
+        ), ""  # PyDLL: the call holds the GIL, as its Python twin does
     except OSError as exc:
         target.unlink(missing_ok=True)  # the next process builds it again
         return None, f"{target.name} could not be loaded: {exc}"

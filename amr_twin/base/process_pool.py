@@ -42,8 +42,10 @@ def check_jobs(jobs: int | None) -> int:
     if jobs is None:
         return cores
     if not 1 <= jobs <= cores:
-        raise ValueError(f"--jobs {jobs}: must be in 1..{cores} on this machine ({cores} usable cores; each "
-                         "worker is a ~170 MB process simulating on one core, more only add memory)")
+        raise ValueError(
+            f"--jobs {jobs}: must be in 1..{cores} on this machine ({cores} usable cores; each "
+            "worker is a ~170 MB process simulating on one core, more only add memory)"
+        )
     return jobs
 
 
@@ -70,8 +72,12 @@ def worker_pool(workers: int, warm: Warm = None) -> ProcessPoolExecutor:
     """A new pool of ``workers`` spawned, parent-death-guarded processes, each running ``warm``
     as it starts (the caller shuts it down); :func:`pool_results` keeps one per size and warm-up."""
     context = multiprocessing.get_context("spawn")
-    return ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_warm_worker,
-                               initargs=(os.getpid(), warm))
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=context,
+        initializer=_warm_worker,
+        initargs=(os.getpid(), warm),
+    )
 
 
 _pools: dict[tuple[int, Warm], ProcessPoolExecutor] = {}
@@ -113,15 +119,18 @@ def _watch_parent(parent_pid: int) -> None:
     if os.getppid() != parent_pid:  # the parent died before the signal was armed
         os._exit(1)
     if not armed:
+
         def poll() -> None:
             while os.getppid() == parent_pid:
                 time.sleep(1.0)
             os._exit(1)
+
         threading.Thread(target=poll, name="parent-watch", daemon=True).start()
 
 
-def pool_results(func: Callable[[Any], Any], items: list, workers: int,
-                 warm: Warm = None) -> Iterator[tuple[Any, Any]]:
+def pool_results(
+    func: Callable[[Any], Any], items: list, workers: int, warm: Warm = None
+) -> Iterator[tuple[Any, Any]]:
     """This process and ``workers`` workers warmed by ``warm`` take the items in turn (see above).
 
     A worker gets an item only when it is warm (its start-up task done) and has none; this
@@ -135,8 +144,11 @@ def pool_results(func: Callable[[Any], Any], items: list, workers: int,
         busy[pool.submit(_ready)] = None
     try:
         while todo or any(item is not None for item in busy.values()):
-            done = [f for f in busy if f.done()] if todo else \
-                list(wait(list(busy), return_when=FIRST_COMPLETED).done)
+            done = (
+                [f for f in busy if f.done()]
+                if todo
+                else list(wait(list(busy), return_when=FIRST_COMPLETED).done)
+            )
             for future in done:
                 item = busy.pop(future)
                 idle.append(future)
@@ -165,4 +177,3 @@ def _discard_pool(workers: int, warm: Warm) -> None:
     for process in list(getattr(pool, "_processes", {}).values()):
         process.terminate()
     pool.shutdown(wait=False, cancel_futures=True)
-

@@ -36,7 +36,9 @@ class Registry(Generic[T]):
             replace: allow a name that is already taken (else ValueError).
         """
         if not name or not all(c.islower() or c.isdigit() or c in "-_" for c in name):
-            raise ValueError(f"{self.kind} name {name!r}: use lower-case letters, digits, '-' and '_'")
+            raise ValueError(
+                f"{self.kind} name {name!r}: use lower-case letters, digits, '-' and '_'"
+            )
         if entry is None:
             return lambda wrapped: self.register(name, wrapped, replace=replace)
         if name in self._entries and not replace:
@@ -72,4 +74,3 @@ class Registry(Generic[T]):
 
     def __len__(self) -> int:
         return len(self._entries)
-

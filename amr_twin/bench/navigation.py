@@ -59,7 +59,11 @@ def nav_run(cfg, sim_s: float, localisation: str, controller: str) -> Timed:
     twin = Twin(
         cfg,
         TwinOptions(
-            firmware="improved", world=WORLD, start_xy_yaw=None, visuals=False, sensors=("imu", "lidar")
+            firmware="improved",
+            world=WORLD,
+            start_xy_yaw=None,
+            visuals=False,
+            sensors=("imu", "lidar"),
         ),
     )
     nav = attach(

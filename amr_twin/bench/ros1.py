@@ -18,15 +18,29 @@ from amr_twin.bench.twin import BENCH_START
 REPEATS = 5
 SIM_S = 20.0
 PACED_S = 60.0
-SUBSCRIBED = ("/clock", "/tf", "/tf_static", "/odom", "/joint_states", "/scan", "/imu/data_raw", "/imu/mag")
+SUBSCRIBED = (
+    "/clock",
+    "/tf",
+    "/tf_static",
+    "/odom",
+    "/joint_states",
+    "/scan",
+    "/imu/data_raw",
+    "/imu/mag",
+)
 """The topics the bridge figure's recorder takes (each costs a socket write a message in the twin's process)."""
 COMMANDS = 40
 """wheel_Command frames written by the serial latency figure's host thread."""
 
 
 def _child(mode: str, sim_s: float, env: dict) -> dict:
-    out = subprocess.run([sys.executable, "-m", "amr_twin.bench.ros1", mode, str(sim_s)], env=env,
-                         capture_output=True, text=True, timeout=600)
+    out = subprocess.run(
+        [sys.executable, "-m", "amr_twin.bench.ros1", mode, str(sim_s)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     if out.returncode != 0:
         raise RuntimeError(f"bench ros1 {mode}: {out.stderr.strip().splitlines()[-1:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -37,9 +51,16 @@ def _twin(sensors: bool = True, firmware: str = "faithful", params=None):
     from amr_twin.assembly.twin import Twin, TwinOptions
     from amr_twin.assembly.command import Command
 
-    twin = Twin(load_config(), TwinOptions(firmware=firmware, sensors=("imu", "lidar") if sensors else (),
-                                           start_xy_yaw=BENCH_START, firmware_params=params,
-                                           visuals=False))  # as the command builds it
+    twin = Twin(
+        load_config(),
+        TwinOptions(
+            firmware=firmware,
+            sensors=("imu", "lidar") if sensors else (),
+            start_xy_yaw=BENCH_START,
+            firmware_params=params,
+            visuals=False,
+        ),
+    )  # as the command builds it
     Command("linear", speed_m_s=0.7).send(twin)
     return twin
 
@@ -63,7 +84,11 @@ def _measure(mode: str, sim_s: float) -> dict:
         session = Ros1Session(twin, pacer, Ros1Options(), say=lambda line: None)
     cpu0, wall0 = time.process_time(), time.perf_counter()
     twin.advance(sim_s)
-    out = {"cpu_s": time.process_time() - cpu0, "wall_s": time.perf_counter() - wall0, "sim_s": sim_s}
+    out = {
+        "cpu_s": time.process_time() - cpu0,
+        "wall_s": time.perf_counter() - wall0,
+        "sim_s": sim_s,
+    }
     if session is not None:
         pacer.close()
         session.close()
@@ -110,7 +135,11 @@ def _serial_latency(sim_s: float) -> dict:
     os.close(fd)
     delays = [fw.pacer.wall_of(t) - w for w, t in zip(writes, arrivals)]
     fw.close()
-    return {"delays_ms": [d * 1e3 for d in delays], "frame_bytes": len(data), "matched": len(delays) == len(writes)}
+    return {
+        "delays_ms": [d * 1e3 for d in delays],
+        "frame_bytes": len(data),
+        "matched": len(delays) == len(writes),
+    }
 
 
 def _bag_messages(path: str) -> int:
@@ -137,9 +166,20 @@ def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
     env = dict(os.environ, ROS_MASTER_URI=master.uri, ROS_IP="127.0.0.1")
     out: dict = {}
     folder = tempfile.mkdtemp(prefix="amr-twin-bench-bag-")
-    rec = subprocess.Popen(["rosbag", "record", "-O", os.path.join(folder, "bench.bag"), *SUBSCRIBED,
-                            "__name:=bench_record"], env=env, cwd=folder, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL)
+    rec = subprocess.Popen(
+        [
+            "rosbag",
+            "record",
+            "-O",
+            os.path.join(folder, "bench.bag"),
+            *SUBSCRIBED,
+            "__name:=bench_record",
+        ],
+        env=env,
+        cwd=folder,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         time.sleep(1.0)
         plain, bridged, runs = [], [], []
@@ -149,14 +189,18 @@ def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
             runs.append(_child("bridge", SIM_S, env))
             bridged.append(runs[-1]["cpu_s"])
         messages = statistics.median(r["messages"] for r in runs)
-        out.update(ros1_bridge_ratio=statistics.median(b / p for b, p in zip(bridged, plain)),
-                   ros1_bridge_cpu_s=statistics.median(bridged), ros1_plain_cpu_s=statistics.median(plain),
-                   ros1_bridge_messages_per_sim_s=messages / SIM_S,
-                   ros1_bridge_writes_per_sim_s=statistics.median(r["writes"] for r in runs) / SIM_S,
-                   ros1_bridge_us_per_message=statistics.median(
-                       (b - p) / r["messages"] * 1e6 for b, p, r in zip(bridged, plain, runs)),
-                   ros1_scenario=f"chapter 5 run 3 with sensors, {SIM_S:g} s, full speed, rosbag record of "
-                                 f"{' '.join(SUBSCRIBED)}")
+        out.update(
+            ros1_bridge_ratio=statistics.median(b / p for b, p in zip(bridged, plain)),
+            ros1_bridge_cpu_s=statistics.median(bridged),
+            ros1_plain_cpu_s=statistics.median(plain),
+            ros1_bridge_messages_per_sim_s=messages / SIM_S,
+            ros1_bridge_writes_per_sim_s=statistics.median(r["writes"] for r in runs) / SIM_S,
+            ros1_bridge_us_per_message=statistics.median(
+                (b - p) / r["messages"] * 1e6 for b, p, r in zip(bridged, plain, runs)
+            ),
+            ros1_scenario=f"chapter 5 run 3 with sensors, {SIM_S:g} s, full speed, rosbag record of "
+            f"{' '.join(SUBSCRIBED)}",
+        )
         say(f"ROS 1 bridge paced at --rate 1 for {PACED_S:g} s")
         paced = _child("paced", PACED_S, env)
         out["ros1_paced_sim_per_wall"] = paced["sim_s"] / paced["wall_s"]
@@ -177,9 +221,12 @@ def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
     say("the board's serial port on a pseudo-terminal: wheel_Command latency")
     serial = _child("serial", 10.0, dict(os.environ))
     delays = serial["delays_ms"]
-    out.update(ros1_serial_latency_ms=statistics.median(delays), ros1_serial_latency_max_ms=max(delays),
-               ros1_serial_frame_ms=frame_time_us(serial["frame_bytes"], 115200) / 1000,
-               ros1_serial_commands=len(delays) if serial["matched"] else f"{len(delays)} (unmatched)")
+    out.update(
+        ros1_serial_latency_ms=statistics.median(delays),
+        ros1_serial_latency_max_ms=max(delays),
+        ros1_serial_frame_ms=frame_time_us(serial["frame_bytes"], 115200) / 1000,
+        ros1_serial_commands=len(delays) if serial["matched"] else f"{len(delays)} (unmatched)",
+    )
     return out
 
 

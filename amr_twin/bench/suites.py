@@ -60,8 +60,13 @@ def _child_env(pycache: str) -> dict:
 
 def _child_cpu_s(args: list[str], env: dict | None = None) -> float:
     """CPU time (user + sys) of a child process running ``args`` to its end, s."""
-    proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
-                            env=env)
+    proc = subprocess.Popen(
+        args,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        stdin=subprocess.DEVNULL,
+        env=env,
+    )
     _pid, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode != 0:
@@ -71,15 +76,24 @@ def _child_cpu_s(args: list[str], env: dict | None = None) -> float:
 
 def _child_wall_s(args: list[str], env: dict | None = None) -> float:
     t0 = time.perf_counter()
-    subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, check=True,
-                   env=env)
+    subprocess.run(
+        args,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        stdin=subprocess.DEVNULL,
+        check=True,
+        env=env,
+    )
     return time.perf_counter() - t0
 
 
 def startup_figures(repeats: int = REPEATS) -> dict:
     """``help_cpu_s`` and ``run_1s_cpu_s``: medians of interleaved fresh processes (after a warm-up)."""
     cli = _cli()
-    help_args, run_args = [cli, "--help"], [cli, "run", "linear", "--speed-m-s", "0.5", "--duration-s", "1"]
+    help_args, run_args = (
+        [cli, "--help"],
+        [cli, "run", "linear", "--speed-m-s", "0.5", "--duration-s", "1"],
+    )
     help_t, run_t = [], []
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-pycache-") as pycache:
         env = _child_env(pycache)
@@ -88,7 +102,10 @@ def startup_figures(repeats: int = REPEATS) -> dict:
         for _ in range(repeats):
             help_t.append(_child_cpu_s(help_args, env))
             run_t.append(_child_cpu_s(run_args, env))
-    return {"help_cpu_s": round(statistics.median(help_t), 3), "run_1s_cpu_s": round(statistics.median(run_t), 3)}
+    return {
+        "help_cpu_s": round(statistics.median(help_t), 3),
+        "run_1s_cpu_s": round(statistics.median(run_t), 3),
+    }
 
 
 def chapter5_jobs_figures(jobs: int, repeats: int = REPEATS) -> dict:
@@ -96,17 +113,48 @@ def chapter5_jobs_figures(jobs: int, repeats: int = REPEATS) -> dict:
     cli, walls = _cli(), {1: [], jobs: []}
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
         env = _child_env(str(Path(tmp) / "pycache"))
-        _child_wall_s([cli, "experiment", "chapter5", "--runs", "1,2", "--jobs", str(jobs), "--no-progress",
-                       "--out", str(Path(tmp) / "warm")], env)  # untimed: fills the bytecode cache (workers' too)
+        _child_wall_s(
+            [
+                cli,
+                "experiment",
+                "chapter5",
+                "--runs",
+                "1,2",
+                "--jobs",
+                str(jobs),
+                "--no-progress",
+                "--out",
+                str(Path(tmp) / "warm"),
+            ],
+            env,
+        )  # untimed: fills the bytecode cache (workers' too)
         for _ in range(repeats):
             for n in walls:
                 out = Path(tmp) / f"ch5_{n}"
-                walls[n].append(_child_wall_s([cli, "experiment", "chapter5", "--runs", "1,2,3,4,5,6,7,8",
-                                               "--jobs", str(n), "--no-progress", "--out", str(out)], env))
+                walls[n].append(
+                    _child_wall_s(
+                        [
+                            cli,
+                            "experiment",
+                            "chapter5",
+                            "--runs",
+                            "1,2,3,4,5,6,7,8",
+                            "--jobs",
+                            str(n),
+                            "--no-progress",
+                            "--out",
+                            str(out),
+                        ],
+                        env,
+                    )
+                )
                 shutil.rmtree(out, ignore_errors=True)
     one, many = statistics.median(walls[1]), statistics.median(walls[jobs])
-    return {"chapter5_wall_s_jobs1": round(one, 2), f"chapter5_wall_s_jobs{jobs}": round(many, 2),
-            "chapter5_parallel_speedup": round(one / many, 2)}
+    return {
+        "chapter5_wall_s_jobs1": round(one, 2),
+        f"chapter5_wall_s_jobs{jobs}": round(many, 2),
+        "chapter5_parallel_speedup": round(one / many, 2),
+    }
 
 
 def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS, spec: dict = SWEEP) -> dict:
@@ -118,14 +166,20 @@ def sweep_figures(cfg: TwinConfig, repeats: int = REPEATS, spec: dict = SWEEP) -
         path.write_bytes(pickle.dumps((cfg, spec)))
         env = _child_env(str(Path(tmp) / "pycache"))
         for _ in range(repeats):
-            rounds.append(_sweep_round([sys.executable, "-m", "amr_twin.bench.sweep_round", str(path)], env))
+            rounds.append(
+                _sweep_round([sys.executable, "-m", "amr_twin.bench.sweep_round", str(path)], env)
+            )
     cpu, bare = [r["sweep_cpu_s"] for r in rounds], [r["bare_point_s"] for r in rounds]
     n = rounds[0]["points"]
-    return {"sweep_points": n, "sweep_simulated": rounds[0]["simulated"],
-            "sweep_cpu_s": round(statistics.median(cpu), 2), "sweep_cpu_s_rounds": [round(c, 2) for c in cpu],
-            "sweep_point_cpu_s": round(statistics.median(cpu) / n, 3),
-            "sweep_point_bare_physics_s": round(statistics.median(bare), 3),
-            "sweep_point_ratio": round(statistics.median(c / n / b for c, b in zip(cpu, bare)), 2)}
+    return {
+        "sweep_points": n,
+        "sweep_simulated": rounds[0]["simulated"],
+        "sweep_cpu_s": round(statistics.median(cpu), 2),
+        "sweep_cpu_s_rounds": [round(c, 2) for c in cpu],
+        "sweep_point_cpu_s": round(statistics.median(cpu) / n, 3),
+        "sweep_point_bare_physics_s": round(statistics.median(bare), 3),
+        "sweep_point_ratio": round(statistics.median(c / n / b for c, b in zip(cpu, bare)), 2),
+    }
 
 
 def _sweep_round(args: list[str], env: dict) -> dict:
@@ -150,8 +204,13 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
         options = TwinOptions(sensors=("imu", "lidar"))
         twin = Twin(cfg, options)
         capture = attach(twin)
-        result = run_mission(cfg, [(0.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))], duration, options,
-                             twin=twin)
+        result = run_mission(
+            cfg,
+            [(0.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))],
+            duration,
+            options,
+            twin=twin,
+        )
         runs[duration] = (capture, result)
     times = {d: [] for d in RRD_DURATIONS_S}
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
@@ -161,8 +220,11 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
                 write_rrd(capture, result.series, Path(tmp) / "run.rrd", result)
                 times[duration].append(timer() - t0)
     short, long = (statistics.median(times[d]) for d in RRD_DURATIONS_S)
-    return {"rrd_write_60s_s": round(short, 3), "rrd_write_240s_s": round(long, 3),
-            "rrd_write_ratio_240_60": round(long / short, 2)}
+    return {
+        "rrd_write_60s_s": round(short, 3),
+        "rrd_write_240s_s": round(long, 3),
+        "rrd_write_ratio_240_60": round(long / short, 2),
+    }
 
 
 def ros1_stage(progress=None) -> dict:
@@ -195,7 +257,12 @@ def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
     t0 = time.perf_counter()
     fus = fusion.run(cfg, progress=False)
     out.update(fusion_sim_s=round(fus.sim_s, 1), fusion_wall_s=round(time.perf_counter() - t0, 2))
-    say("ROS 1: the bridge against no bridge, --rate 1 for 60 s, the serial port's latency (about 3 min)")
+    say(
+        "ROS 1: the bridge against no bridge, --rate 1 for 60 s, the serial port's latency (about 3 min)"
+    )
     out.update(ros1_stage(progress=say))
-    out.update(load_average_1min_before=round(load_before, 2), load_average_1min_after=round(os.getloadavg()[0], 2))
+    out.update(
+        load_average_1min_before=round(load_before, 2),
+        load_average_1min_after=round(os.getloadavg()[0], 2),
+    )
     return out

@@ -20,12 +20,16 @@ import sys
 import tempfile
 from pathlib import Path
 
-SWEEP_MASSES = [5.0 * i for i in range(10)]                # 0..45 kg
+SWEEP_MASSES = [5.0 * i for i in range(10)]  # 0..45 kg
 SWEEP_POSITIONS = ["center", "front", "rear", "left", "right"]
-SWEEP_COMMANDS = ["linear:0.7", "angular:60:-1"]           # 10 x 5 x 2 = 100 runs
+SWEEP_COMMANDS = ["linear:0.7", "angular:60:-1"]  # 10 x 5 x 2 = 100 runs
 SWEEP_DURATION_S = 8.0
-SWEEP = {"masses": SWEEP_MASSES, "positions": SWEEP_POSITIONS, "commands": SWEEP_COMMANDS,
-         "duration_s": SWEEP_DURATION_S}
+SWEEP = {
+    "masses": SWEEP_MASSES,
+    "positions": SWEEP_POSITIONS,
+    "commands": SWEEP_COMMANDS,
+    "duration_s": SWEEP_DURATION_S,
+}
 """The benchmark's sweep: 100 points of 8 s."""
 
 
@@ -37,15 +41,30 @@ def sweep_round(cfg, spec: dict = SWEEP) -> dict:
 
     with tempfile.TemporaryDirectory(prefix="amr-twin-bench-") as tmp:
         t0 = timer()
-        sweep = payload_sweep.run(cfg, Path(tmp), spec["masses"], spec["positions"], spec["commands"],
-                                  duration_s=spec["duration_s"], jobs=1, progress=False)
+        sweep = payload_sweep.run(
+            cfg,
+            Path(tmp),
+            spec["masses"],
+            spec["positions"],
+            spec["commands"],
+            duration_s=spec["duration_s"],
+            jobs=1,
+            progress=False,
+        )
         cpu = timer() - t0
-    twin = Twin(payload_point.with_payload(cfg, 20.0, (0.0, 0.0)), TwinOptions(world="empty", visuals=False))
+    twin = Twin(
+        payload_point.with_payload(cfg, 20.0, (0.0, 0.0)), TwinOptions(world="empty", visuals=False)
+    )
     twin.client.linear(0.7)
     twin.advance(1.0)  # the model a sweep point runs, moving
     bare = bare_steps_s(twin.physics, spec["duration_s"])
-    return {"sweep_cpu_s": cpu, "bare_point_s": bare, "points": len(sweep["rows"]), "simulated": sweep["simulated"],
-            "pid": os.getpid()}
+    return {
+        "sweep_cpu_s": cpu,
+        "bare_point_s": bare,
+        "points": len(sweep["rows"]),
+        "simulated": sweep["simulated"],
+        "pid": os.getpid(),
+    }
 
 
 def main(argv: list[str]) -> int:

@@ -50,8 +50,12 @@ def twin_run(
     """``sim_s`` of the scenario, timed (and its :class:`FloorPath` with ``snapshot``)."""
     twin = Twin(
         cfg,
-        TwinOptions(firmware=firmware, sensors=("imu", "lidar") if sensors else (), start_xy_yaw=BENCH_START,
-                    actors=actors),
+        TwinOptions(
+            firmware=firmware,
+            sensors=("imu", "lidar") if sensors else (),
+            start_xy_yaw=BENCH_START,
+            actors=actors,
+        ),
     )
     twin.client.linear(0.7)
     cpu, path = timed_advance(twin, sim_s, snapshot)

@@ -29,13 +29,19 @@ import yaml
 
 from amr_twin.base.atomic_file import write_text
 from amr_twin.model.config import TwinConfig, load_config
-from amr_twin.calibration.targets import (BENCH_QUANTITY, log_residuals, read_log, thesis_features,
-                                                   thesis_targets, weighted_residuals)
+from amr_twin.calibration.targets import (
+    BENCH_QUANTITY,
+    log_residuals,
+    read_log,
+    thesis_features,
+    thesis_targets,
+    weighted_residuals,
+)
 
 PARAMETERS = {  # dotted key: (lower, upper) bounds, physically plausible
     "driver_left.gain": (0.8, 4.0),
     "driver_right.gain": (0.8, 4.0),
-    "motor_left.ke_v_s_rad": (0.35, 0.70),   # 36 V hub motors with 500-1000 RPM no load
+    "motor_left.ke_v_s_rad": (0.35, 0.70),  # 36 V hub motors with 500-1000 RPM no load
     "motor_right.ke_v_s_rad": (0.35, 0.70),
     "motor_left.friction_nm": (0.0, 2.0),
     "motor_right.friction_nm": (0.0, 2.0),
@@ -49,7 +55,7 @@ class Fit:
     values: dict[str, float]
     sigma: dict[str, float]
     correlation: dict[str, dict[str, float]]
-    residual: float                 # sum of squared weighted residuals (chi^2)
+    residual: float  # sum of squared weighted residuals (chi^2)
     evaluations: int
     target: str
     features: list[dict] = field(default_factory=list)  # name, twin, target, sigma, unit, weighted
@@ -63,9 +69,11 @@ class Fit:
         for key, value in self.values.items():
             section, name = key.split(".")
             tree.setdefault(section, {})[name] = {
-                "value": round(float(value), 5), "unit": units[key],
+                "value": round(float(value), 5),
+                "unit": units[key],
                 "source": f"calibrated: against {self.target}, 1 sigma {self.sigma[key]:.2g}, residual "
-                          f"{self.residual:.3g} ({self.evaluations} evaluations, amr-twin calibrate)"}
+                f"{self.residual:.3g} ({self.evaluations} evaluations, amr-twin calibrate)",
+            }
         return tree
 
     def config(self, base: TwinConfig) -> TwinConfig:
@@ -74,25 +82,50 @@ class Fit:
 
     def report(self) -> dict:
         """JSON-ready summary."""
-        return {"target": self.target, "residual": self.residual, "evaluations": self.evaluations,
-                "values": self.values, "sigma": self.sigma, "correlation": self.correlation,
-                "features": self.features}
+        return {
+            "target": self.target,
+            "residual": self.residual,
+            "evaluations": self.evaluations,
+            "values": self.values,
+            "sigma": self.sigma,
+            "correlation": self.correlation,
+            "features": self.features,
+        }
 
     def text_lines(self, strong: float = 0.9) -> list[str]:
         """The summary a person reads (``amr-twin calibrate`` without ``--json``): chi^2, each value
         with its 1 sigma, the correlations above ``strong`` in magnitude, each feature against its target."""
         over = f" over {len(self.features)} targets" if self.features else ""
-        lines = [f"calibrated against {self.target}: chi^2 {self.residual:.2f}{over}, {self.evaluations} evaluations",
-                 "", f"{'parameter':28s} {'value':>10s} {'1 sigma':>10s}"]
-        lines += [f"{k:28s} {v:10.4g} {self.sigma.get(k, math.nan):10.2g}" for k, v in self.values.items()]
+        lines = [
+            f"calibrated against {self.target}: chi^2 {self.residual:.2f}{over}, {self.evaluations} evaluations",
+            "",
+            f"{'parameter':28s} {'value':>10s} {'1 sigma':>10s}",
+        ]
+        lines += [
+            f"{k:28s} {v:10.4g} {self.sigma.get(k, math.nan):10.2g}" for k, v in self.values.items()
+        ]
         keys = list(self.values)
-        pairs = [f"{a} ~ {b} {self.correlation[a][b]:+.2f}" for i, a in enumerate(keys) for b in keys[i + 1:]
-                 if abs(self.correlation.get(a, {}).get(b, 0.0)) >= strong]
-        lines += ["", f"correlated (|r| >= {strong:g}):" + ("" if pairs else " none"), *(f"  {p}" for p in pairs)]
+        pairs = [
+            f"{a} ~ {b} {self.correlation[a][b]:+.2f}"
+            for i, a in enumerate(keys)
+            for b in keys[i + 1 :]
+            if abs(self.correlation.get(a, {}).get(b, 0.0)) >= strong
+        ]
+        lines += [
+            "",
+            f"correlated (|r| >= {strong:g}):" + ("" if pairs else " none"),
+            *(f"  {p}" for p in pairs),
+        ]
         if self.features:
-            lines += ["", f"{'feature':28s} {'twin':>10s} {'target':>10s} {'sigma':>8s} {'unit':5s} {'(twin-target)/sigma':>20s}"]
-            lines += [f"{f['name']:28s} {_num(f['twin']):>10s} {f['target']:10.4g} {f['sigma']:8.3g} {f['unit']:5s} "
-                      f"{_num(f['weighted'], '+.2f'):>20s}" for f in self.features]
+            lines += [
+                "",
+                f"{'feature':28s} {'twin':>10s} {'target':>10s} {'sigma':>8s} {'unit':5s} {'(twin-target)/sigma':>20s}",
+            ]
+            lines += [
+                f"{f['name']:28s} {_num(f['twin']):>10s} {f['target']:10.4g} {f['sigma']:8.3g} {f['unit']:5s} "
+                f"{_num(f['weighted'], '+.2f'):>20s}"
+                for f in self.features
+            ]
         return lines
 
 
@@ -107,9 +140,15 @@ def evaluations_per_step(parameters: dict[str, tuple[float, float]] | None = Non
     return len(parameters or PARAMETERS) + 1
 
 
-def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int = 60,
-              parameters: dict[str, tuple[float, float]] | None = None, progress=None, jobs: int = 1,
-              bench: str = BENCH_QUANTITY) -> Fit:
+def calibrate(
+    target: str,
+    base: TwinConfig | None = None,
+    max_evaluations: int = 60,
+    parameters: dict[str, tuple[float, float]] | None = None,
+    progress=None,
+    jobs: int = 1,
+    bench: str = BENCH_QUANTITY,
+) -> Fit:
     """Fit ``parameters`` (default :data:`PARAMETERS`) to ``target`` ("thesis" or a CSV path).
 
     ``base`` is the starting configuration (the parameter file with its overrides);
@@ -128,15 +167,19 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     keys = list(parameters)
     per_step = evaluations_per_step(parameters)
     if max_evaluations < per_step:
-        raise ValueError(f"max_evaluations {max_evaluations}: at least {per_step} (the starting point and one per "
-                         f"parameter for the Jacobian)")
+        raise ValueError(
+            f"max_evaluations {max_evaluations}: at least {per_step} (the starting point and one per "
+            f"parameter for the Jacobian)"
+        )
     lo, hi = np.array([parameters[k][0] for k in keys]), np.array([parameters[k][1] for k in keys])
     x0 = np.clip(np.array([_get(base, k) for k in keys]), lo, hi)
     log = read_log(Path(target)) if target != "thesis" else None
     targets = thesis_targets()
     count = [0]
     last: dict = {}
-    pool = worker_pool(jobs, warm_up) if jobs > 1 and log is None else None  # spawned, warm, die with us
+    pool = (
+        worker_pool(jobs, warm_up) if jobs > 1 and log is None else None
+    )  # spawned, warm, die with us
 
     def cfg_at(u: np.ndarray) -> TwinConfig:
         return _with(base, dict(zip(keys, (lo + (hi - lo) * u).tolist())))
@@ -154,8 +197,15 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
 
     try:
         # max_nfev counts the steps, not the finite differences: at most n + 1 evaluations per step
-        res = least_squares(f, (x0 - lo) / (hi - lo), bounds=(0.0, 1.0), method="trf", diff_step=0.02,
-                            max_nfev=max_evaluations // per_step, x_scale=1.0)
+        res = least_squares(
+            f,
+            (x0 - lo) / (hi - lo),
+            bounds=(0.0, 1.0),
+            method="trf",
+            diff_step=0.02,
+            max_nfev=max_evaluations // per_step,
+            x_scale=1.0,
+        )
         features = last.get(tuple(res.x)) if log is None else None
     finally:
         if pool is not None:
@@ -165,12 +215,30 @@ def calibrate(target: str, base: TwinConfig | None = None, max_evaluations: int 
     table = []
     if features is not None:
         for t, r in zip(targets, res.fun):
-            table.append({"name": t.name, "twin": features.get(t.name), "target": t.value, "sigma": t.sigma,
-                          "unit": t.unit, "weighted": float(r)})
-    name = f"the thesis (bench point as {bench} current; ch. 5 runs 1-6)" if log is None else str(target)
-    return Fit(values=dict(zip(keys, values.tolist())), sigma=dict(zip(keys, sigma.tolist())),
-               correlation={a: dict(zip(keys, row.tolist())) for a, row in zip(keys, corr)},
-               residual=float(np.sum(res.fun ** 2)), evaluations=count[0], target=name, features=table)
+            table.append(
+                {
+                    "name": t.name,
+                    "twin": features.get(t.name),
+                    "target": t.value,
+                    "sigma": t.sigma,
+                    "unit": t.unit,
+                    "weighted": float(r),
+                }
+            )
+    name = (
+        f"the thesis (bench point as {bench} current; ch. 5 runs 1-6)"
+        if log is None
+        else str(target)
+    )
+    return Fit(
+        values=dict(zip(keys, values.tolist())),
+        sigma=dict(zip(keys, sigma.tolist())),
+        correlation={a: dict(zip(keys, row.tolist())) for a, row in zip(keys, corr)},
+        residual=float(np.sum(res.fun**2)),
+        evaluations=count[0],
+        target=name,
+        features=table,
+    )
 
 
 def _uncertainty(jac: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -207,5 +275,8 @@ def _get(cfg: TwinConfig, key: str) -> float:
 
 def write_params(fit: Fit, path: Path) -> None:
     """Write the fitted values as an override file, atomically."""
-    write_text(path, "# amr-twin calibration result: use with --params\n"
-               + yaml.safe_dump(fit.override_tree(), sort_keys=False))
+    write_text(
+        path,
+        "# amr-twin calibration result: use with --params\n"
+        + yaml.safe_dump(fit.override_tree(), sort_keys=False),
+    )

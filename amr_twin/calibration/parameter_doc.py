@@ -26,14 +26,24 @@ def readme_text() -> str:
 
     cfg = load_config()
     space = ParameterSpace.load()
-    rows = "\n".join(f"| `{k}` | {_fmt(v)} | {u} | {s.replace('|', '/')} | {_spread_cell(space, k)} |"
-                     for k, v, u, s in parameter_table())
-    summary = (f"Chassis link from the estimate: {mass.chassis_inertial(cfg).mass_kg:.2f} kg (frame "
-               f"{mass.frame_inertial(cfg).mass_kg:.2f} kg of AISI304 tube); whole robot "
-               f"{mass.robot_mass_kg(cfg):.2f} kg without payload.\n")
-    return (HEADER + summary + _statics_text(cfg) + _uncertainty_text(space)
-            + "\n## Parameters\n\n| key | value | unit | source | spread (`--samples`) |\n|---|---|---|---|---|\n"
-            + rows + "\n")
+    rows = "\n".join(
+        f"| `{k}` | {_fmt(v)} | {u} | {s.replace('|', '/')} | {_spread_cell(space, k)} |"
+        for k, v, u, s in parameter_table()
+    )
+    summary = (
+        f"Chassis link from the estimate: {mass.chassis_inertial(cfg).mass_kg:.2f} kg (frame "
+        f"{mass.frame_inertial(cfg).mass_kg:.2f} kg of AISI304 tube); whole robot "
+        f"{mass.robot_mass_kg(cfg):.2f} kg without payload.\n"
+    )
+    return (
+        HEADER
+        + summary
+        + _statics_text(cfg)
+        + _uncertainty_text(space)
+        + "\n## Parameters\n\n| key | value | unit | source | spread (`--samples`) |\n|---|---|---|---|---|\n"
+        + rows
+        + "\n"
+    )
 
 
 def _spread_cell(space, key: str) -> str:
@@ -41,9 +51,13 @@ def _spread_cell(space, key: str) -> str:
     if s.kind == "calibrated":
         rep = space.calibration
         i = rep.keys.index(key)
-        j = max((j for j in range(len(rep.keys)) if j != i), key=lambda j: abs(rep.correlation[i, j]))
-        return (f"σ {s.sigma[0]:.3g}, jointly with the fit (r {rep.correlation[i, j]:+.3f} with "
-                f"`{rep.keys[j]}`; `calibration.yaml`)")
+        j = max(
+            (j for j in range(len(rep.keys)) if j != i), key=lambda j: abs(rep.correlation[i, j])
+        )
+        return (
+            f"σ {s.sigma[0]:.3g}, jointly with the fit (r {rep.correlation[i, j]:+.3f} with "
+            f"`{rep.keys[j]}`; `calibration.yaml`)"
+        )
     return f"{s.describe()}: {s.reason}".replace("|", "/")
 
 
@@ -52,38 +66,56 @@ def _uncertainty_text(space) -> str:
     from amr_twin.model.parameter_spreads import DEFAULT_TOLERANCE
 
     rep = space.calibration
-    head = "| | " + " | ".join(f"`{k}`" for k in rep.keys) + " |\n|---|" + "---|" * len(rep.keys) + "\n"
-    corr = "".join(f"| `{k}` (σ {s:.3g}) | " + " | ".join(f"{c:+.3f}" for c in row) + " |\n"
-                   for k, s, row in zip(rep.keys, rep.sigma, rep.correlation))
+    head = (
+        "| | "
+        + " | ".join(f"`{k}`" for k in rep.keys)
+        + " |\n|---|"
+        + "---|" * len(rep.keys)
+        + "\n"
+    )
+    corr = "".join(
+        f"| `{k}` (σ {s:.3g}) | " + " | ".join(f"{c:+.3f}" for c in row) + " |\n"
+        for k, s, row in zip(rep.keys, rep.sigma, rep.correlation)
+    )
     held = ", ".join(f"`{k}`" for k in rep.held_keys)
     defaults = ", ".join(f"{kind} ±{tol:.0%}" for kind, tol in DEFAULT_TOLERANCE.items())
-    return ("\n## Uncertainty\n\n`--samples N` (`amr-twin sweep payload`, `amr-twin experiment chapter5`) draws the "
-            "robot's body and drive\nparameters from the spreads in the table below (`amr_twin/calibration/uncertainty.py`): a "
-            "leaf's `range: [lo, hi]`\n(uniform), `sigma` (normal) or `follows` (the same relative deviation as "
-            "another parameter), each\nwith its `reason`; without one, the source's kind sets it (uniform, "
-            f"{defaults}; a vector, a zero or an\ninteger stays exact). Settings (time step, payload, sensor modes, "
-            "estimator tuning) are never drawn.\n\nThe calibrated parameters are drawn jointly from the calibration's "
-            f"report (`calibration.yaml`, {rep.target},\nchi^2 {rep.chi2:.1f}; written by `amr-twin calibrate --no-fit "
-            "--report models/amr/calibration.yaml`):\n\n" + head + corr +
-            f"\nand each draw is shifted by how the fit follows the parameters it held: {held}\n"
-            "(`follow` in `calibration.yaml`; e.g. a damper 0.004 N m s/rad stronger takes 0.03 N m off the dry "
-            "friction,\nsince the bench point pins their sum), so that every drawn plant still fits the thesis.\n")
+    return (
+        "\n## Uncertainty\n\n`--samples N` (`amr-twin sweep payload`, `amr-twin experiment chapter5`) draws the "
+        "robot's body and drive\nparameters from the spreads in the table below (`amr_twin/calibration/uncertainty.py`): a "
+        "leaf's `range: [lo, hi]`\n(uniform), `sigma` (normal) or `follows` (the same relative deviation as "
+        "another parameter), each\nwith its `reason`; without one, the source's kind sets it (uniform, "
+        f"{defaults}; a vector, a zero or an\ninteger stays exact). Settings (time step, payload, sensor modes, "
+        "estimator tuning) are never drawn.\n\nThe calibrated parameters are drawn jointly from the calibration's "
+        f"report (`calibration.yaml`, {rep.target},\nchi^2 {rep.chi2:.1f}; written by `amr-twin calibrate --no-fit "
+        "--report models/amr/calibration.yaml`):\n\n"
+        + head
+        + corr
+        + f"\nand each draw is shifted by how the fit follows the parameters it held: {held}\n"
+        "(`follow` in `calibration.yaml`; e.g. a damper 0.004 N m s/rad stronger takes 0.03 N m off the dry "
+        "friction,\nsince the bench point pins their sum), so that every drawn plant still fits the thesis.\n"
+    )
 
 
 def _statics_text(cfg) -> str:
     """Static loads (``amr-twin model --json``) and their sensitivity to the caster set-up."""
     st = solve(cfg)
     loads = ", ".join(f"{k} {v:.1f} N" for k, v in st.loads_n.items())
-    rows = "\n".join(f"| {r['case']} | {r['variant']} | {r['wheel_left']:.1f} | {r['caster_front_left']:.1f} | "
-                     f"{r['caster_rear_left']:.1f} | {', '.join(r['lifted']) or '-'} |" for r in sensitivity(cfg))
-    return ("\n## Static loads\n\nFrom the springs that carry them (`amr_twin/model/statics.py`, a hand calculation that "
-            "a test checks against\na free settle of `amr.xml` on a plane): tyres of radial stiffness "
-            "`wheel.tyre_stiffness_n_m`, casters\nwith their preload and spring, whose balls at the lower stop reach "
-            "`caster.drop_m` below the unloaded\ntyres. Without payload: " + loads + ".\n\n"
-            "The chassis stands on six supports, so the split depends on millimetres: a tyre 2 mm larger\n"
-            "on the same chassis lifts the casters by 2 mm. Sensitivity (left side; the right mirrors it):\n\n"
-            "| case | variant | wheel N | front caster N | rear caster N | lifted |\n|---|---|---|---|---|---|\n"
-            + rows + "\n")
+    rows = "\n".join(
+        f"| {r['case']} | {r['variant']} | {r['wheel_left']:.1f} | {r['caster_front_left']:.1f} | "
+        f"{r['caster_rear_left']:.1f} | {', '.join(r['lifted']) or '-'} |"
+        for r in sensitivity(cfg)
+    )
+    return (
+        "\n## Static loads\n\nFrom the springs that carry them (`amr_twin/model/statics.py`, a hand calculation that "
+        "a test checks against\na free settle of `amr.xml` on a plane): tyres of radial stiffness "
+        "`wheel.tyre_stiffness_n_m`, casters\nwith their preload and spring, whose balls at the lower stop reach "
+        "`caster.drop_m` below the unloaded\ntyres. Without payload: " + loads + ".\n\n"
+        "The chassis stands on six supports, so the split depends on millimetres: a tyre 2 mm larger\n"
+        "on the same chassis lifts the casters by 2 mm. Sensitivity (left side; the right mirrors it):\n\n"
+        "| case | variant | wheel N | front caster N | rear caster N | lifted |\n|---|---|---|---|---|---|\n"
+        + rows
+        + "\n"
+    )
 
 
 if __name__ == "__main__":

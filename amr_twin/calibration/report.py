@@ -16,16 +16,24 @@ import yaml
 from amr_twin.model.config import ConfigError, TwinConfig
 
 HELD = {  # held parameter: forward step of its derivative (a fair part of its spread, above the features' noise)
-    "motor_left.resistance_ohm": 0.03, "motor_right.resistance_ohm": 0.03,
-    "motor_left.damping_nm_s_rad": 0.004, "motor_right.damping_nm_s_rad": 0.004,
-    "wheel.rolling_resistance": 0.003, "caster.rolling_resistance": 0.005,
-    "wheel.mass_kg": 0.3, "wheel.rotor_fraction": 0.06,
-    "battery.soc_initial": 0.1, "battery.v_nominal_v": 0.7, "battery.v_full_v": 0.8,
+    "motor_left.resistance_ohm": 0.03,
+    "motor_right.resistance_ohm": 0.03,
+    "motor_left.damping_nm_s_rad": 0.004,
+    "motor_right.damping_nm_s_rad": 0.004,
+    "wheel.rolling_resistance": 0.003,
+    "caster.rolling_resistance": 0.005,
+    "wheel.mass_kg": 0.3,
+    "wheel.rotor_fraction": 0.06,
+    "battery.soc_initial": 0.1,
+    "battery.v_nominal_v": 0.7,
+    "battery.v_full_v": 0.8,
     "battery.internal_resistance_ohm": 0.03,
 }
 """Not held: ``wheel.radius_m``. Its derivative is lost in the 8-bit duty's steps (the radius sets
 the commanded RPM): steps of 1 and 2 mm gave the driver gain -68 and +4.7 per metre."""
-STEP_FRACTION = 0.02  # the fit's finite-difference step, in its scaled variables (amr_twin.calibration.fit)
+STEP_FRACTION = (
+    0.02  # the fit's finite-difference step, in its scaled variables (amr_twin.calibration.fit)
+)
 
 
 @dataclass(frozen=True)
@@ -34,15 +42,17 @@ class CalibrationReport:
 
     target: str
     chi2: float
-    keys: tuple[str, ...]           # fitted parameters, in the fit's order
-    values: np.ndarray              # (k,)
-    sigma: np.ndarray               # (k,) 1 sigma
-    correlation: np.ndarray         # (k, k)
-    bounds: np.ndarray              # (k, 2) the fit's bounds
-    held_keys: tuple[str, ...]      # parameters held at their sourced values
-    held_values: np.ndarray         # (h,) at which the fit was made
-    follow: np.ndarray              # (k, h) d fitted / d held
-    undetermined: tuple[str, ...] = ()  # fitted parameters whose 1 sigma would exceed their bounds (left out)
+    keys: tuple[str, ...]  # fitted parameters, in the fit's order
+    values: np.ndarray  # (k,)
+    sigma: np.ndarray  # (k,) 1 sigma
+    correlation: np.ndarray  # (k, k)
+    bounds: np.ndarray  # (k, 2) the fit's bounds
+    held_keys: tuple[str, ...]  # parameters held at their sourced values
+    held_values: np.ndarray  # (h,) at which the fit was made
+    follow: np.ndarray  # (k, h) d fitted / d held
+    undetermined: tuple[
+        str, ...
+    ] = ()  # fitted parameters whose 1 sigma would exceed their bounds (left out)
 
     @property
     def covariance(self) -> np.ndarray:
@@ -57,24 +67,43 @@ class CalibrationReport:
         from amr_twin.calibration.fit import Fit
 
         sigma = dict(zip(self.keys, self.sigma.tolist()))
-        corr = {a: dict(zip(self.keys, row.tolist())) for a, row in zip(self.keys, self.correlation)}
-        if fit is not None:  # parameters the report leaves out (undetermined) keep the fit's own figures
-            return dataclasses.replace(fit, sigma={**fit.sigma, **sigma},
-                                       correlation={k: {**fit.correlation.get(k, {}), **corr.get(k, {})}
-                                                    for k in fit.correlation})
-        return Fit(values=dict(zip(self.keys, self.values.tolist())), sigma=sigma, correlation=corr,
-                   residual=self.chi2, evaluations=1 + len(self.keys) + len(self.held_keys), target=self.target)
+        corr = {
+            a: dict(zip(self.keys, row.tolist())) for a, row in zip(self.keys, self.correlation)
+        }
+        if (
+            fit is not None
+        ):  # parameters the report leaves out (undetermined) keep the fit's own figures
+            return dataclasses.replace(
+                fit,
+                sigma={**fit.sigma, **sigma},
+                correlation={
+                    k: {**fit.correlation.get(k, {}), **corr.get(k, {})} for k in fit.correlation
+                },
+            )
+        return Fit(
+            values=dict(zip(self.keys, self.values.tolist())),
+            sigma=sigma,
+            correlation=corr,
+            residual=self.chi2,
+            evaluations=1 + len(self.keys) + len(self.held_keys),
+            target=self.target,
+        )
 
     def as_dict(self) -> dict:
         """The YAML tree of the report."""
         r = lambda v: float(f"{float(v):.6g}")  # noqa: E731
         return {
-            "target": self.target, "chi2": r(self.chi2),
-            "parameters": {k: {"value": r(v), "sigma": r(s), "bounds": [r(b) for b in bd]}
-                           for k, v, s, bd in zip(self.keys, self.values, self.sigma, self.bounds)},
+            "target": self.target,
+            "chi2": r(self.chi2),
+            "parameters": {
+                k: {"value": r(v), "sigma": r(s), "bounds": [r(b) for b in bd]}
+                for k, v, s, bd in zip(self.keys, self.values, self.sigma, self.bounds)
+            },
             "correlation": [[r(c) for c in row] for row in self.correlation],
-            "held": {k: {"value": r(v), "follow": {f: r(d) for f, d in zip(self.keys, col)}}
-                     for k, v, col in zip(self.held_keys, self.held_values, self.follow.T)},
+            "held": {
+                k: {"value": r(v), "follow": {f: r(d) for f, d in zip(self.keys, col)}}
+                for k, v, col in zip(self.held_keys, self.held_values, self.follow.T)
+            },
             **({"undetermined": list(self.undetermined)} if self.undetermined else {}),
         }
 
@@ -85,21 +114,35 @@ class CalibrationReport:
             keys = tuple(params)
             held = tree.get("held") or {}
             report = cls(
-                target=str(tree["target"]), chi2=float(tree["chi2"]), keys=keys,
+                target=str(tree["target"]),
+                chi2=float(tree["chi2"]),
+                keys=keys,
                 values=np.array([float(params[k]["value"]) for k in keys]),
                 sigma=np.array([float(params[k]["sigma"]) for k in keys]),
                 correlation=np.array(tree["correlation"], dtype=float),
-                bounds=np.array([params[k]["bounds"] for k in keys], dtype=float).reshape(len(keys), 2),
-                held_keys=tuple(held), held_values=np.array([float(h["value"]) for h in held.values()]),
-                follow=np.array([[float(h["follow"][k]) for h in held.values()] for k in keys]).reshape(len(keys),
-                                                                                                         len(held)),
-                undetermined=tuple(tree.get("undetermined") or ()))
+                bounds=np.array([params[k]["bounds"] for k in keys], dtype=float).reshape(
+                    len(keys), 2
+                ),
+                held_keys=tuple(held),
+                held_values=np.array([float(h["value"]) for h in held.values()]),
+                follow=np.array(
+                    [[float(h["follow"][k]) for h in held.values()] for k in keys]
+                ).reshape(len(keys), len(held)),
+                undetermined=tuple(tree.get("undetermined") or ()),
+            )
         except (KeyError, TypeError, ValueError) as exc:
-            why = f"no {exc.args[0]!r} key" if isinstance(exc, KeyError) else str(exc).splitlines()[0]
-            raise ConfigError(f"{where}: not a calibration report ({why}); "
-                              "amr-twin calibrate --report writes one") from None
-        if report.correlation.shape != (len(keys), len(keys)) or not np.all(np.isfinite(report.sigma)):
-            raise ConfigError(f"{where}: the correlation must be {len(keys)} x {len(keys)} and every sigma finite")
+            why = (
+                f"no {exc.args[0]!r} key" if isinstance(exc, KeyError) else str(exc).splitlines()[0]
+            )
+            raise ConfigError(
+                f"{where}: not a calibration report ({why}); amr-twin calibrate --report writes one"
+            ) from None
+        if report.correlation.shape != (len(keys), len(keys)) or not np.all(
+            np.isfinite(report.sigma)
+        ):
+            raise ConfigError(
+                f"{where}: the correlation must be {len(keys)} x {len(keys)} and every sigma finite"
+            )
         return report
 
 
@@ -110,7 +153,9 @@ def read(path: str | Path) -> CalibrationReport:
     path = Path(path)
     if not path.exists():
         raise ConfigError(f"{path}: no such calibration report")
-    tree = read_yaml(path, "calibration report", ConfigError)  # a device, a pipe, binary or bad YAML: one line
+    tree = read_yaml(
+        path, "calibration report", ConfigError
+    )  # a device, a pipe, binary or bad YAML: one line
     return CalibrationReport.from_dict(tree if isinstance(tree, dict) else {}, str(path))
 
 
@@ -118,9 +163,12 @@ def write(report: CalibrationReport, path: str | Path) -> None:
     """Write a report atomically."""
     from amr_twin.base.atomic_file import write_text
 
-    write_text(Path(path), "# amr-twin calibration report (amr-twin calibrate --report): the fitted values, their\n"
-               "# 1 sigma and correlations, and d fitted / d held for the parameters the fit held fixed\n"
-               + yaml.safe_dump(report.as_dict(), sort_keys=False, width=120, default_flow_style=None))
+    write_text(
+        Path(path),
+        "# amr-twin calibration report (amr-twin calibrate --report): the fitted values, their\n"
+        "# 1 sigma and correlations, and d fitted / d held for the parameters the fit held fixed\n"
+        + yaml.safe_dump(report.as_dict(), sort_keys=False, width=120, default_flow_style=None),
+    )
 
 
 def _residual_function(target: str, pool) -> Callable[[TwinConfig], np.ndarray]:
@@ -133,8 +181,14 @@ def _residual_function(target: str, pool) -> Callable[[TwinConfig], np.ndarray]:
     return lambda cfg: ct.log_residuals(cfg, log)
 
 
-def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tuple[float, float]] | None = None,
-             held: dict[str, float] | None = None, jobs: int = 1, progress=None) -> CalibrationReport:
+def evaluate(
+    cfg: TwinConfig,
+    target: str = "thesis",
+    parameters: dict[str, tuple[float, float]] | None = None,
+    held: dict[str, float] | None = None,
+    jobs: int = 1,
+    progress=None,
+) -> CalibrationReport:
     """Linearise the calibration at ``cfg`` (see the module notes): ``1 + k + h`` evaluations.
 
     A fitted parameter the targets cannot place within its bounds (1 sigma above the bounds'
@@ -188,16 +242,38 @@ def evaluate(cfg: TwinConfig, target: str = "thesis", parameters: dict[str, tupl
         if pool is not None:
             pool.shutdown()
     sigma_all, _ = cal._uncertainty(jac_u, span)
-    keep = sigma_all <= span  # the targets place it within its bounds (not so: the right motor in a left-wheel log)
+    keep = (
+        sigma_all <= span
+    )  # the targets place it within its bounds (not so: the right motor in a left-wheel log)
     undetermined = tuple(k for k, ok in zip(keys, keep) if not ok)
-    keys, jac_u, span, x0, lo, hi = ([k for k, ok in zip(keys, keep) if ok], jac_u[:, keep], span[keep], x0[keep],
-                                     lo[keep], hi[keep])
+    keys, jac_u, span, x0, lo, hi = (
+        [k for k, ok in zip(keys, keep) if ok],
+        jac_u[:, keep],
+        span[keep],
+        x0[keep],
+        lo[keep],
+        hi[keep],
+    )
     if not keys:
         raise ValueError("the targets determine none of the fitted parameters")
     sigma, corr = cal._uncertainty(jac_u, span)
     jac_a = jac_u / span  # d r / d x in the parameters' own units
     follow = -np.linalg.pinv(jac_a.T @ jac_a) @ jac_a.T @ jac_b
-    name = "the thesis (bench point as motor current; ch. 5 runs 1-6)" if target == "thesis" else str(target)
-    return CalibrationReport(target=name, chi2=float(np.sum(r0 ** 2)), keys=tuple(keys), values=x0, sigma=sigma,
-                             correlation=corr, bounds=np.column_stack([lo, hi]), held_keys=tuple(held_keys),
-                             held_values=b0, follow=follow, undetermined=undetermined)
+    name = (
+        "the thesis (bench point as motor current; ch. 5 runs 1-6)"
+        if target == "thesis"
+        else str(target)
+    )
+    return CalibrationReport(
+        target=name,
+        chi2=float(np.sum(r0**2)),
+        keys=tuple(keys),
+        values=x0,
+        sigma=sigma,
+        correlation=corr,
+        bounds=np.column_stack([lo, hi]),
+        held_keys=tuple(held_keys),
+        held_values=b0,
+        follow=follow,
+        undetermined=undetermined,
+    )

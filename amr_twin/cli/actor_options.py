@@ -22,8 +22,14 @@ def checked_actors(opts: RunOptions, mission_actors: tuple, cfg, start) -> tuple
         actors = list(mission_actors) + [Actor.parse(text, cfg) for text in opts.actor]
         if opts.actors_random is not None:
             count, _, flag = opts.actors_random.partition("/")
-            if not count.isdigit() or not 1 <= int(count) <= MAX_ACTORS or (flag and not flag.startswith("stop=")):
-                fail(f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}")
+            if (
+                not count.isdigit()
+                or not 1 <= int(count) <= MAX_ACTORS
+                or (flag and not flag.startswith("stop="))
+            ):
+                fail(
+                    f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}"
+                )
             stop = _stop_distance(opts.actors_random, flag[5:]) if flag else 0.0
             actors += list(_guard(lambda: _random_actors(cfg, opts, int(count), start, stop)))
         check_speeds(tuple(actors), cfg)
@@ -54,4 +60,6 @@ def _random_actors(cfg, opts: RunOptions, count: int, start, stop_m: float) -> t
     from amr_twin.model.worlds import default_start
 
     x, y, _yaw = start if start is not None else default_start(opts.world)
-    return random_actors(world_model(cfg, opts.world), count, opts.seed, cfg, (x, y), stop_within_m=stop_m)
+    return random_actors(
+        world_model(cfg, opts.world), count, opts.seed, cfg, (x, y), stop_within_m=stop_m
+    )

@@ -17,12 +17,22 @@ from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 
 
 def attainable(
-    samples: int = typer.Option(64, "--samples", help="Plants drawn inside the ranges, 1 to 512 (each runs the "
-                                "eight chapter 5 runs, about 2 s of wall on 2 cores)."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the draws, >= 0 (same seed, same plants and results)."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Write the summary and every draw here (JSON)."),
+    samples: int = typer.Option(
+        64,
+        "--samples",
+        help="Plants drawn inside the ranges, 1 to 512 (each runs the "
+        "eight chapter 5 runs, about 2 s of wall on 2 cores).",
+    ),
+    seed: int = typer.Option(
+        0, "--seed", help="Seed of the draws, >= 0 (same seed, same plants and results)."
+    ),
+    out: Optional[Path] = typer.Option(
+        None, "--out", help="Write the summary and every draw here (JSON)."
+    ),
     jobs: Optional[int] = JobsOpt,
-    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    config: Optional[Path] = ConfigOpt,
+    params: Optional[Path] = ParamsOpt,
+    set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Draw plants inside the sourced ranges and count where each thesis finding of §5.1.3-5.1.4 holds."""
     from amr_twin.experiments.chapter5 import attainable as study

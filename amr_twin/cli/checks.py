@@ -15,11 +15,23 @@ import typer
 
 from amr_twin.cli.options import checked_firmware, checked_seed
 
-JobsOpt = typer.Option(None, "--jobs", help="Worker processes (default: one per usable core; at most that).")
-YesOpt = typer.Option(False, "--yes", help="Start without asking when the time estimated beforehand is above 10 min "
-                      "(without it such a run is refused, its estimate named).")
+JobsOpt = typer.Option(
+    None, "--jobs", help="Worker processes (default: one per usable core; at most that)."
+)
+YesOpt = typer.Option(
+    False,
+    "--yes",
+    help="Start without asking when the time estimated beforehand is above 10 min "
+    "(without it such a run is refused, its estimate named).",
+)
 
-CPU_S_PER_SIM_S = {"sweep": 0.021, "chapter5": 0.045, "fusion": 0.16, "umbmark": 0.012, "navigation": 0.19}
+CPU_S_PER_SIM_S = {
+    "sweep": 0.021,
+    "chapter5": 0.045,
+    "fusion": 0.16,
+    "umbmark": 0.012,
+    "navigation": 0.19,
+}
 """CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table): a
 100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s on one
 job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark square (no
@@ -40,22 +52,30 @@ def _minutes(seconds: float) -> str:
     return f"{seconds / 3600:.1f} h"
 
 
-def check_estimate(what: str, sim_s: float, kind: str, workers: int, firmware: str, yes: bool, fail) -> float:
+def check_estimate(
+    what: str, sim_s: float, kind: str, workers: int, firmware: str, yes: bool, fail
+) -> float:
     """Estimate the wall time of ``sim_s`` simulated seconds on ``workers`` processes; above
     :data:`CONFIRM_ABOVE_S` refuse (one line naming the estimate and --yes) unless ``yes``; say it on
     stderr when above a minute. Returns the estimate, s."""
     cost = CPU_S_PER_SIM_S[kind] * (AVR_COST if firmware.startswith("avr") else 1.0)
     wall_s = sim_s * cost / max(1, workers)
-    text = (f"{what}: about {_minutes(wall_s)} with {workers} worker{'s' if workers != 1 else ''} "
-            f"({sim_s:.0f} simulated s at {cost:g} s of CPU each, as measured)")
+    text = (
+        f"{what}: about {_minutes(wall_s)} with {workers} worker{'s' if workers != 1 else ''} "
+        f"({sim_s:.0f} simulated s at {cost:g} s of CPU each, as measured)"
+    )
     if wall_s > CONFIRM_ABOVE_S and not yes:
-        fail(f"{text}; above {CONFIRM_ABOVE_S / 60:.0f} min: add --yes to start it, or ask for less")
+        fail(
+            f"{text}; above {CONFIRM_ABOVE_S / 60:.0f} min: add --yes to start it, or ask for less"
+        )
     if wall_s > 60:
         typer.echo(f"note: {text}", err=True)
     return wall_s
 
 
-def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path] = None) -> tuple[int, str]:
+def check_common(
+    jobs: Optional[int], firmware: str, fail, sketch: Optional[Path] = None
+) -> tuple[int, str]:
     """Firmware (and --sketch; an avr sketch is built now) and --jobs (None -> the usable cores).
 
     Returns the jobs to use and the firmware string (``avr:DIR`` with a sketch).
@@ -69,26 +89,42 @@ def check_common(jobs: Optional[int], firmware: str, fail, sketch: Optional[Path
         fail(str(exc))
 
 
-def check_memory(duration_s: float, fail, recorded: bool = False, sensors: bool = False, processes: int = 1,
-                 what: str = "the run", rerun: bool = False) -> None:
+def check_memory(
+    duration_s: float,
+    fail,
+    recorded: bool = False,
+    sensors: bool = False,
+    processes: int = 1,
+    what: str = "the run",
+    rerun: bool = False,
+) -> None:
     """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`, one per
     process) exceeds what the machine has available now, or, with the Rerun recording (``rerun``), the
     address space it reserves, the process' limit (``ulimit -v``); nothing is refused where unknown."""
-    from amr_twin.sim.bounds import RERUN_ADDRESS_SPACE_MB, address_space_mb, available_mb, memory_mb
+    from amr_twin.sim.bounds import (
+        RERUN_ADDRESS_SPACE_MB,
+        address_space_mb,
+        available_mb,
+        memory_mb,
+    )
 
     limit = address_space_mb()
     space = memory_mb(duration_s, recorded, sensors) + (RERUN_ADDRESS_SPACE_MB if rerun else 0.0)
     if limit is not None and space > limit:
-        fail(f"--duration-s {duration_s:g}{' with --record' if rerun else ''}: {what} would need about "
-             f"{space / 1024:.1f} GB of address space{' (the Rerun recording reserves ~3 GB)' if rerun else ''}; "
-             "the limit (ulimit -v) is "
-             f"{limit / 1024:.1f} GB: raise it, or ask for less (a shorter run, no recording)")
+        fail(
+            f"--duration-s {duration_s:g}{' with --record' if rerun else ''}: {what} would need about "
+            f"{space / 1024:.1f} GB of address space{' (the Rerun recording reserves ~3 GB)' if rerun else ''}; "
+            "the limit (ulimit -v) is "
+            f"{limit / 1024:.1f} GB: raise it, or ask for less (a shorter run, no recording)"
+        )
     need, have = memory_mb(duration_s, recorded, sensors) * processes, available_mb()
     if have is not None and need > have:
         kept = "its messages until they are written" if recorded else "its 100 Hz series"
-        fail(f"--duration-s {duration_s:g}: {what} would need about {need / 1024:.1f} GB of memory (it keeps {kept}"
-             f"{f', {processes} processes' if processes > 1 else ''}); {have / 1024:.1f} GB are available: "
-             "ask for less (a shorter run, fewer --jobs, no recording)")
+        fail(
+            f"--duration-s {duration_s:g}: {what} would need about {need / 1024:.1f} GB of memory (it keeps {kept}"
+            f"{f', {processes} processes' if processes > 1 else ''}); {have / 1024:.1f} GB are available: "
+            "ask for less (a shorter run, fewer --jobs, no recording)"
+        )
 
 
 def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
@@ -108,7 +144,10 @@ def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
     ctx = get_current_context(silent=True)
     if ctx is None or "scheduler_timeout_s" not in ctx.params:
         return
-    timeout_s, source = ctx.params["scheduler_timeout_s"], ctx.get_parameter_source("scheduler_timeout_s")
+    timeout_s, source = (
+        ctx.params["scheduler_timeout_s"],
+        ctx.get_parameter_source("scheduler_timeout_s"),
+    )
     if executor == "local" and source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP"):
         fail("--scheduler-timeout-s is only used with --executor dask")
     if not (math.isfinite(timeout_s) and 0 < timeout_s < 3600):
@@ -120,9 +159,13 @@ def check_record_folder(option: str, folder: Optional[Path], fail, name: str) ->
     if folder is None or folder.is_dir():
         return
     if folder.exists():
-        fail(f"{option} {folder}: exists and is not a folder (one {name} per run is written inside)")
+        fail(
+            f"{option} {folder}: exists and is not a folder (one {name} per run is written inside)"
+        )
     if folder.suffix.lower() in (".rrd", ".mcap"):
-        fail(f"{option} {folder}: give a folder, not a file name (one {name} per run is written inside)")
+        fail(
+            f"{option} {folder}: give a folder, not a file name (one {name} per run is written inside)"
+        )
 
 
 def check_outputs(fail, files: dict | None = None, folders: dict | None = None) -> None:
@@ -146,20 +189,42 @@ def dask_client(scheduler: str, timeout_s: float, fail):
         fail(str(exc))
 
 
-SamplesOpt = typer.Option(1, "--samples", help="Runs per point with parameters drawn from their spreads (the "
-                          "ranges and sigmas in models/amr/README.md): medians, 90 % intervals and sensitivities. "
-                          "1: the nominal parameters only.")
-SeedOpt = typer.Option(None, "--seed", help="Seed of the parameter draws with --samples (default 0; same seed, "
-                       "same draws).")
-SamplerOpt = typer.Option(None, "--sampler", help="lhs (Latin hypercube, default) or sobol (N a power of 2), with "
-                          "--samples.")
-CalibrationOpt = typer.Option(None, "--calibration", help="Calibration report the calibrated parameters are drawn "
-                              "from, with --samples (default: calibration.yaml beside the parameter file; "
-                              "amr-twin calibrate --report writes one).")
+SamplesOpt = typer.Option(
+    1,
+    "--samples",
+    help="Runs per point with parameters drawn from their spreads (the "
+    "ranges and sigmas in models/amr/README.md): medians, 90 % intervals and sensitivities. "
+    "1: the nominal parameters only.",
+)
+SeedOpt = typer.Option(
+    None,
+    "--seed",
+    help="Seed of the parameter draws with --samples (default 0; same seed, same draws).",
+)
+SamplerOpt = typer.Option(
+    None,
+    "--sampler",
+    help="lhs (Latin hypercube, default) or sobol (N a power of 2), with --samples.",
+)
+CalibrationOpt = typer.Option(
+    None,
+    "--calibration",
+    help="Calibration report the calibrated parameters are drawn "
+    "from, with --samples (default: calibration.yaml beside the parameter file; "
+    "amr-twin calibrate --report writes one).",
+)
 
 
-def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], calibration: Optional[Path],
-                    config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], fail):
+def parameter_draws(
+    samples: int,
+    seed: Optional[int],
+    sampler: Optional[str],
+    calibration: Optional[Path],
+    config: Optional[Path],
+    params: Optional[Path],
+    sets: Optional[list[str]],
+    fail,
+):
     """``--samples`` and its options checked, and the drawn configurations (None for 1 sample).
 
     Everything is checked before any simulation: a draw the schema refuses names its
@@ -171,8 +236,15 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
     if not 1 <= samples <= MAX_SAMPLES:
         fail(f"--samples {samples}: must be in 1..{MAX_SAMPLES}")
     if samples == 1:
-        given = [name for name, v in (("--seed", seed), ("--sampler", sampler), ("--calibration", calibration))
-                 if v is not None]
+        given = [
+            name
+            for name, v in (
+                ("--seed", seed),
+                ("--sampler", sampler),
+                ("--calibration", calibration),
+            )
+            if v is not None
+        ]
         if given:
             fail(f"{', '.join(given)}: only used with --samples N (N >= 2)")
         return None
@@ -182,9 +254,14 @@ def parameter_draws(samples: int, seed: Optional[int], sampler: Optional[str], c
     if calibration is not None and not calibration.exists():
         fail(f"--calibration {calibration}: no such file (amr-twin calibrate --report writes one)")
     try:
-        space = ParameterSpace.load(config, override_file=params, sets=sets or [], calibration=calibration)
+        space = ParameterSpace.load(
+            config, override_file=params, sets=sets or [], calibration=calibration
+        )
         return space.draw(samples, seed=seed or 0, sampler=sampler or "lhs")
     except (ConfigError, ValueError) as exc:
         head, _, rest = str(exc).partition(":")
-        fail(f"--calibration {calibration}:{rest}" if calibration is not None and head.endswith(str(calibration))
-             else str(exc))
+        fail(
+            f"--calibration {calibration}:{rest}"
+            if calibration is not None and head.endswith(str(calibration))
+            else str(exc)
+        )

@@ -47,8 +47,9 @@ def checked(check, *args):
         fail(str(exc))
 
 
-def _start_pose(text: Optional[str], option: str = "--start",
-                hint: str = ", e.g. -7.5,0,0") -> Optional[tuple[float, float, float]]:
+def _start_pose(
+    text: Optional[str], option: str = "--start", hint: str = ", e.g. -7.5,0,0"
+) -> Optional[tuple[float, float, float]]:
     """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error naming ``option``
     otherwise (``hint`` after what is expected)."""
     if text is None:
@@ -62,9 +63,12 @@ def _start_pose(text: Optional[str], option: str = "--start",
     return x_m, y_m, math.radians(yaw_deg)
 
 
-OPTION_OF = {"payload.mass_kg": "--payload-kg", "payload.xy_m": "--payload-xy",
-             "navigation.navigator.xy_tolerance_m": "--xy-tolerance-m",
-             "navigation.costmap.inflation_radius_m": "--inflation-radius-m"}
+OPTION_OF = {
+    "payload.mass_kg": "--payload-kg",
+    "payload.xy_m": "--payload-xy",
+    "navigation.navigator.xy_tolerance_m": "--xy-tolerance-m",
+    "navigation.costmap.inflation_radius_m": "--inflation-radius-m",
+}
 """The parameter each command option sets (the ``extra`` of :func:`_config`)."""
 
 
@@ -83,17 +87,30 @@ def _check_set_against_options(sets: list[str], extra: dict) -> None:
             continue
         given = extra[key]
         try:  # a value of the wrong kind is named by the parameter's own check
-            same = [float(v) for v in value] == [float(v) for v in given] \
-                if isinstance(value, (list, tuple)) else float(value) == float(given)
+            same = (
+                [float(v) for v in value] == [float(v) for v in given]
+                if isinstance(value, (list, tuple))
+                else float(value) == float(given)
+            )
         except (TypeError, ValueError):
             continue
         if not same:
-            fail(f"--set {text!r} and {OPTION_OF[key]} {_shown(given)} both set {key}, to different values: "
-                 "give one of them")
+            fail(
+                f"--set {text!r} and {OPTION_OF[key]} {_shown(given)} both set {key}, to different values: "
+                "give one of them"
+            )
 
 
-def _config(config: Optional[Path], params: Optional[Path], sets: Optional[list[str]], extra: dict | None = None):
-    from amr_twin.model.config import ConfigError, load_config  # pydantic and numpy: not on the path of --help
+def _config(
+    config: Optional[Path],
+    params: Optional[Path],
+    sets: Optional[list[str]],
+    extra: dict | None = None,
+):
+    from amr_twin.model.config import (
+        ConfigError,
+        load_config,
+    )  # pydantic and numpy: not on the path of --help
 
     try:
         _check_set_against_options(sets or [], extra or {})
@@ -132,11 +149,17 @@ def _guard(func):
         fail(str(exc), code=3)
     except WriteError as exc:
         fail(f"cannot write {exc.filename}: {exc.strerror}", code=1)
-    except MemoryError:  # a traceback of 116 lines under ulimit -v; the outputs are written whole or not at all
+    except (
+        MemoryError
+    ):  # a traceback of 116 lines under ulimit -v; the outputs are written whole or not at all
         from amr_twin.sim.bounds import address_space_mb
 
         limit = address_space_mb()
-        fail("out of memory" + (f" (the limit, ulimit -v, is {limit / 1024:.1f} GB)" if limit else "")
-             + "; nothing written: ask for less (a shorter run, no recording, fewer --jobs)", code=1)
+        fail(
+            "out of memory"
+            + (f" (the limit, ulimit -v, is {limit / 1024:.1f} GB)" if limit else "")
+            + "; nothing written: ask for less (a shorter run, no recording, fewer --jobs)",
+            code=1,
+        )
     except OSError as exc:
         fail(f"{exc.filename + ': ' if exc.filename else ''}{exc.strerror or exc}", code=1)

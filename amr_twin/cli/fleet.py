@@ -23,7 +23,10 @@ def _starts(text: Optional[str], robots: int) -> list:
     """``X_M,Y_M,YAW_DEG[;...]`` as one (x_m, y_m, yaw_rad) a robot; None: the world's own start."""
     if text is None:
         return [None] * robots
-    out = [_start_pose(part, "--starts", " for each robot (';' between robots)") for part in text.split(";")]
+    out = [
+        _start_pose(part, "--starts", " for each robot (';' between robots)")
+        for part in text.split(";")
+    ]
     if len(out) != robots:
         fail(f"--starts {text!r}: {len(out)} poses for --robots {robots}: give one a robot")
     return out
@@ -31,16 +34,30 @@ def _starts(text: Optional[str], robots: int) -> list:
 
 def fleet(
     robots: int = typer.Option(1, "--robots", help="How many robots (1 for now)."),
-    world: str = typer.Option("aisles", "--world", help="The world (its name is the VDA 5050 mapId)."),
-    starts: Optional[str] = typer.Option(None, "--starts", help="X_M,Y_M,YAW_DEG of each robot, ';' between "
-                                         "robots (default: the world's start)."),
-    vda5050: Optional[str] = typer.Option(None, "--vda5050", help="The broker, mqtt://HOST:PORT (default: an "
-                                          "embedded broker on a free port of 127.0.0.1)."),
+    world: str = typer.Option(
+        "aisles", "--world", help="The world (its name is the VDA 5050 mapId)."
+    ),
+    starts: Optional[str] = typer.Option(
+        None,
+        "--starts",
+        help="X_M,Y_M,YAW_DEG of each robot, ';' between robots (default: the world's start).",
+    ),
+    vda5050: Optional[str] = typer.Option(
+        None,
+        "--vda5050",
+        help="The broker, mqtt://HOST:PORT (default: an "
+        "embedded broker on a free port of 127.0.0.1).",
+    ),
     interface: str = typer.Option("uagv", "--interface", help="The topics' interfaceName."),
-    duration_s: Optional[float] = typer.Option(None, "--duration-s", help="Simulated seconds to run (default: "
-                                               "until Ctrl-C)."),
-    rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per wall second (0: as fast as possible)."),
-    as_json: bool = typer.Option(False, "--json", help="Print what the run did as one JSON object."),
+    duration_s: Optional[float] = typer.Option(
+        None, "--duration-s", help="Simulated seconds to run (default: until Ctrl-C)."
+    ),
+    rate: float = typer.Option(
+        1.0, "--rate", help="Simulated seconds per wall second (0: as fast as possible)."
+    ),
+    as_json: bool = typer.Option(
+        False, "--json", help="Print what the run did as one JSON object."
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of the sensors' noise."),
     config: Optional[Path] = ConfigOpt,
     params: Optional[Path] = ParamsOpt,
@@ -53,8 +70,10 @@ def fleet(
     if robots != 1:
         fail(f"--robots {robots}: only 1 for now (the multi-robot world is not built yet)")
     poses = _starts(starts, robots)
-    for check in (lambda: check_name("--interface", interface),
-                  lambda: vda5050 is not None and broker_address(vda5050)):
+    for check in (
+        lambda: check_name("--interface", interface),
+        lambda: vda5050 is not None and broker_address(vda5050),
+    ):
         try:
             check()
         except ValueError as exc:
@@ -69,10 +88,21 @@ def fleet(
         from amr_twin.fleet.session import FleetOptions, FleetSession
         from amr_twin.fleet.protocol import topic
 
-        session = FleetSession(cfg, FleetOptions(world=world, start_xy_yaw=poses[0], url=vda5050,
-                                                 interface=interface, rate=rate, seed=seed))
-        typer.echo(f"vehicle amr-1 on {session.url}: {topic(interface, 'amr-1', '{order,instantActions,state,...}')}",
-                   err=True)
+        session = FleetSession(
+            cfg,
+            FleetOptions(
+                world=world,
+                start_xy_yaw=poses[0],
+                url=vda5050,
+                interface=interface,
+                rate=rate,
+                seed=seed,
+            ),
+        )
+        typer.echo(
+            f"vehicle amr-1 on {session.url}: {topic(interface, 'amr-1', '{order,instantActions,state,...}')}",
+            err=True,
+        )
         try:
             left = math.inf if duration_s is None else duration_s
             while left > 1e-9:

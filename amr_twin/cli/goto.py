@@ -34,19 +34,32 @@ GOTO_DEFAULTS = {"xy_tolerance_m": 0.25, "yaw_tolerance_deg": 14.3, "inflation_r
 """The parameter file's navigation.navigator.xy_tolerance_m, yaw_tolerance_rad (0.25 rad) and
 navigation.costmap.inflation_radius_m, as goto's help states them (a test holds them to the file)."""
 RUN_OVERRIDES = {
-    "duration_s": {"help": "Time limit of the goals, simulated s after the 2 s rest (default: 60 s + 4 s per metre of "
-                           "the goals' first plans), at most 3600."},
-    "firmware": {"default": "improved", "help": "Arduino firmware: improved, faithful or avr; default improved "
-                 "(the faithful one restarts its ramps on every cmd_vel: docs/explanation/navigation.md)."},
+    "duration_s": {
+        "help": "Time limit of the goals, simulated s after the 2 s rest (default: 60 s + 4 s per metre of "
+        "the goals' first plans), at most 3600."
+    },
+    "firmware": {
+        "default": "improved",
+        "help": "Arduino firmware: improved, faithful or avr; default improved "
+        "(the faithful one restarts its ramps on every cmd_vel: docs/explanation/navigation.md).",
+    },
     "sensors": {"help": "Always on with goto: the LiDAR and IMU feed the navigation."},
-    "seed": {"help": "Seed of the random draws: the sensors' noise, the MPPI's samples, --fault and --actors-random. "
-             "Same seed, same run."},
-    "live": {"help": "Serve the twin live while it runs, paced to --rate: foxglove (the default; publish a "
-             "geometry_msgs/msg/PoseStamped on /goal_pose, frame map or odom, for a new goal) or rerun."},
-    "rate": {"help": "With --live or --ros1: simulated seconds per wall second (default 1 with --live; --ros1 alone: "
-             "0, as fast as possible)."},
-    "ros1": {"help": "Join the ROS 1 graph at ROS_MASTER_URI (docs/how-to/ros1.md): the twin's topics, and the navigator as "
-             "move_base (a goal of the action or on move_base_simple/goal preempts --goal)."},
+    "seed": {
+        "help": "Seed of the random draws: the sensors' noise, the MPPI's samples, --fault and --actors-random. "
+        "Same seed, same run."
+    },
+    "live": {
+        "help": "Serve the twin live while it runs, paced to --rate: foxglove (the default; publish a "
+        "geometry_msgs/msg/PoseStamped on /goal_pose, frame map or odom, for a new goal) or rerun."
+    },
+    "rate": {
+        "help": "With --live or --ros1: simulated seconds per wall second (default 1 with --live; --ros1 alone: "
+        "0, as fast as possible)."
+    },
+    "ros1": {
+        "help": "Join the ROS 1 graph at ROS_MASTER_URI (docs/how-to/ros1.md): the twin's topics, and the navigator as "
+        "move_base (a goal of the action or on move_base_simple/goal preempts --goal)."
+    },
     "serial_pty": {"help": "Not with goto (refused)."},
 }
 """The run options whose default or meaning differs for goto (:func:`amr_twin.cli.options.shared`)."""
@@ -90,7 +103,9 @@ def _checked(cfg, opts, goals, nav: dict):
     here = np.array(start[:2], float)
     if not planner.costmap.cells(here[None])[2][0]:
         of = f"--map {nav['map']}" if nav.get("map") else f"--world {opts.world}"
-        fail(f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of {of}: give --start X_M,Y_M,YAW_DEG on it")
+        fail(
+            f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of {of}: give --start X_M,Y_M,YAW_DEG on it"
+        )
     for x, y, yaw in goals:
         name = f"goal {x:g},{y:g}"
         if planner.plan(here, np.array([x, y])) is None:
@@ -99,8 +114,15 @@ def _checked(cfg, opts, goals, nav: dict):
     return static
 
 
-def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_faults: tuple = (),
-              mission_actors: tuple = (), settings: dict | None = None) -> None:
+def run_goals(
+    opts,
+    goals,
+    nav: dict,
+    duration_s: Optional[float],
+    mission_faults: tuple = (),
+    mission_actors: tuple = (),
+    settings: dict | None = None,
+) -> None:
     """Check, navigate to ``goals`` in turn, print and write the outputs, exit as the module docstring says.
 
     ``mission_actors``: the mission's people and pallet jacks (``--actor`` and ``--actors-random``
@@ -114,22 +136,35 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
     from amr_twin.assembly.twin import TwinOptions
 
     firmware = checked_firmware(opts.firmware, opts.sketch, fail)
-    if opts.serial_pty:  # the board would be driven from ROS; here the navigation stack drives the twin
-        fail("--serial-pty is not available with goals (run goto, a mission's goals:): use it with a command kind "
-             "or a mission's steps")
+    if (
+        opts.serial_pty
+    ):  # the board would be driven from ROS; here the navigation stack drives the twin
+        fail(
+            "--serial-pty is not available with goals (run goto, a mission's goals:): use it with a command kind "
+            "or a mission's steps"
+        )
     if duration_s is not None and not (math.isfinite(duration_s) and 0.1 <= duration_s <= 3600):
         fail(f"--duration-s {duration_s:g}: must be in [0.1, 3600] s (the time limit of the goals)")
     try:
-        faults = parse_faults(list(mission_faults) + list(opts.fault), duration_s=duration_s or 3600.0, sensors=True)
+        faults = parse_faults(
+            list(mission_faults) + list(opts.fault), duration_s=duration_s or 3600.0, sensors=True
+        )
         check_outputs(files={"--csv": opts.csv, "--record": opts.record, "--mcap": opts.mcap})
     except (FaultError, OutputError) as exc:
         fail(str(exc))
     from amr_twin.cli.options import checked_live
-    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail, paced=opts.ros1)
+
+    live = checked_live(
+        opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail, paced=opts.ros1
+    )
     from amr_twin.cli.options import checked_ros1
-    ros1, _avr, rate = checked_ros1(opts.ros1, opts.roscore, None, firmware, live is not None, opts.rate, fail)
+
+    ros1, _avr, rate = checked_ros1(
+        opts.ros1, opts.roscore, None, firmware, live is not None, opts.rate, fail
+    )
     if ros1 is not None:
         from amr_twin.ros1.navigation_server import missing
+
         if missing():
             fail(f"--ros1 with goals: {missing()}")
     extra = {"payload.mass_kg": opts.payload_kg} if opts.payload_kg is not None else {}
@@ -146,9 +181,17 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
             calibration = load(opts.odometry)
         except ValueError as exc:
             fail(str(exc))
-    options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world, start_xy_yaw=start,
-                          faults=faults, stop_on_collision=opts.stop_on_collision, visuals=recording or live is not None,
-                          actors=actors, odometry_calibration=calibration)
+    options = TwinOptions(
+        firmware=firmware,
+        seed=opts.seed,
+        world=opts.world,
+        start_xy_yaw=start,
+        faults=faults,
+        stop_on_collision=opts.stop_on_collision,
+        visuals=recording or live is not None,
+        actors=actors,
+        odometry_calibration=calibration,
+    )
     say = lambda line: typer.echo(line, err=True)  # noqa: E731
     console = GotoConsole(say)
 
@@ -162,21 +205,42 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
             held["twin"] = twin
             if recording:
                 from amr_twin.recording.rerun_capture import attach
+
                 attach(twin)
             if live is not None:  # the live session brings its cmd_vel node (and the pacing)
                 from amr_twin.live.session import LiveSession
-                held["live"] = LiveSession(twin, live, say=say)
-            if ros1 is not None:  # the graph, and the navigator as move_base (amr_twin/ros1/navigation_setup.py)
-                from amr_twin.ros1.navigation_setup import GoalsOnGraph
-                held["ros1"] = GoalsOnGraph(twin, cfg, static, ros1, rate, held["live"].pacer if live else None, say)
 
-        nav_opts = NavigationOptions(goals=tuple(goals), map_yaml=nav.get("map"), localisation=nav["localisation"],
-                                     controller=nav["controller"], seed=opts.seed, timeout_s=duration_s)
+                held["live"] = LiveSession(twin, live, say=say)
+            if (
+                ros1 is not None
+            ):  # the graph, and the navigator as move_base (amr_twin/ros1/navigation_setup.py)
+                from amr_twin.ros1.navigation_setup import GoalsOnGraph
+
+                held["ros1"] = GoalsOnGraph(
+                    twin, cfg, static, ros1, rate, held["live"].pacer if live else None, say
+                )
+
+        nav_opts = NavigationOptions(
+            goals=tuple(goals),
+            map_yaml=nav.get("map"),
+            localisation=nav["localisation"],
+            controller=nav["controller"],
+            seed=opts.seed,
+            timeout_s=duration_s,
+        )
         try:
             with console:
                 try:
-                    run = navigate(cfg, replace(options), nav_opts, static=static, on_twin=on_twin, progress=console,
-                                   publish=recording or live is not None or ros1 is not None, drive=live is None)
+                    run = navigate(
+                        cfg,
+                        replace(options),
+                        nav_opts,
+                        static=static,
+                        on_twin=on_twin,
+                        progress=console,
+                        publish=recording or live is not None or ros1 is not None,
+                        drive=live is None,
+                    )
                 finally:
                     if "live" in held:
                         held["live"].close()
@@ -185,11 +249,13 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
                 with all_or_nothing():
                     if recording:
                         from amr_twin.recording.rerun_log import record_run
+
                         record_run(held["twin"], rrd_path=opts.record, mcap_path=opts.mcap)
                     if opts.csv is not None:
                         from amr_twin.base.atomic_file import write_text
                         from amr_twin.recording.recorder import recorder_of
                         from amr_twin.recording.run_report import csv_text
+
                         write_text(opts.csv, csv_text(recorder_of(held["twin"]).series()))
         except KeyboardInterrupt:
             t = f" at t={held['twin'].t_s:.2f} s simulated" if "twin" in held else ""
@@ -198,15 +264,23 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
         from amr_twin.recording.recorder import recorder_of
 
         twin = held["twin"]  # each fault with its effect, as run linear reports it
-        return run, fault_effects(twin.faults, recorder_of(twin).series()) if twin.faults is not None else []
+        return run, fault_effects(
+            twin.faults, recorder_of(twin).series()
+        ) if twin.faults is not None else []
 
     run, fault_report = _guard(work)
     report(run, opts.as_json, fault_report, clearance(cfg, opts.world, run))
     if run.collisions:
-        typer.echo(f"warning: {len(run.collisions)} collision(s), the first at t = {run.collisions[0]['t_s']:.2f} s "
-                   f"with {run.collisions[0].get('world', '?')}", err=True)
+        typer.echo(
+            f"warning: {len(run.collisions)} collision(s), the first at t = {run.collisions[0]['t_s']:.2f} s "
+            f"with {run.collisions[0].get('world', '?')}",
+            err=True,
+        )
     if console.canceled_at_s is not None:
-        typer.echo(f"canceled by Ctrl-C at t = {console.canceled_at_s:.1f} s; the outputs are written", err=True)
+        typer.echo(
+            f"canceled by Ctrl-C at t = {console.canceled_at_s:.1f} s; the outputs are written",
+            err=True,
+        )
         raise typer.Exit(EXIT_CANCELED)
     if opts.stop_on_collision and run.collisions:
         raise typer.Exit(EXIT_COLLISION)
@@ -217,23 +291,40 @@ def run_goals(opts, goals, nav: dict, duration_s: Optional[float], mission_fault
 
 
 @shared(fail, overrides=RUN_OVERRIDES)
-def goto(opts: RunOptions, ctx: typer.Context,
-         goal: Optional[str] = typer.Option(None, "--goal", help="X_M,Y_M[,YAW_DEG] in the map frame (REP-103)."),
-         map_: Optional[Path] = typer.Option(None, "--map", help="A map_server YAML (a map the fusion experiment "
-                                             "saved, an imported ROS map); default: the world's true map."),
-         localisation: str = typer.Option("ekf", "--localisation", help=f"{help_text(LOCALISATIONS)}."),
-         controller: str = typer.Option("mppi", "--controller", help=f"{help_text(CONTROLLERS)}."),
-         xy_tolerance_m: Optional[float] = typer.Option(
-             None, "--xy-tolerance-m", help=f"Goal tolerance, m: the true pose must end this close to the goal "
-             f"(default {GOTO_DEFAULTS['xy_tolerance_m']:g}, navigation.navigator.xy_tolerance_m)."),
-         yaw_tolerance_deg: Optional[float] = typer.Option(
-             None, "--yaw-tolerance-deg", help=f"Goal heading tolerance, deg, for a goal with a yaw (default "
-             f"{GOTO_DEFAULTS['yaw_tolerance_deg']:g}, navigation.navigator.yaw_tolerance_rad 0.25)."),
-         inflation_radius_m: Optional[float] = typer.Option(
-             None, "--inflation-radius-m", help=f"How far from obstacles the costmap's cost spreads, m: larger keeps "
-             f"the robot nearer the middle of aisles (default {GOTO_DEFAULTS['inflation_radius_m']:g}, "
-             "navigation.costmap.inflation_radius_m)."),
-         ) -> None:
+def goto(
+    opts: RunOptions,
+    ctx: typer.Context,
+    goal: Optional[str] = typer.Option(
+        None, "--goal", help="X_M,Y_M[,YAW_DEG] in the map frame (REP-103)."
+    ),
+    map_: Optional[Path] = typer.Option(
+        None,
+        "--map",
+        help="A map_server YAML (a map the fusion experiment "
+        "saved, an imported ROS map); default: the world's true map.",
+    ),
+    localisation: str = typer.Option("ekf", "--localisation", help=f"{help_text(LOCALISATIONS)}."),
+    controller: str = typer.Option("mppi", "--controller", help=f"{help_text(CONTROLLERS)}."),
+    xy_tolerance_m: Optional[float] = typer.Option(
+        None,
+        "--xy-tolerance-m",
+        help=f"Goal tolerance, m: the true pose must end this close to the goal "
+        f"(default {GOTO_DEFAULTS['xy_tolerance_m']:g}, navigation.navigator.xy_tolerance_m).",
+    ),
+    yaw_tolerance_deg: Optional[float] = typer.Option(
+        None,
+        "--yaw-tolerance-deg",
+        help=f"Goal heading tolerance, deg, for a goal with a yaw (default "
+        f"{GOTO_DEFAULTS['yaw_tolerance_deg']:g}, navigation.navigator.yaw_tolerance_rad 0.25).",
+    ),
+    inflation_radius_m: Optional[float] = typer.Option(
+        None,
+        "--inflation-radius-m",
+        help=f"How far from obstacles the costmap's cost spreads, m: larger keeps "
+        f"the robot nearer the middle of aisles (default {GOTO_DEFAULTS['inflation_radius_m']:g}, "
+        "navigation.costmap.inflation_radius_m).",
+    ),
+) -> None:
     """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/explanation/navigation.md).
     Success is judged by the true pose; Ctrl-C stops the robot and writes the outputs (exit 6)."""
     if goal is None:
@@ -247,5 +338,9 @@ def goto(opts: RunOptions, ctx: typer.Context,
         settings["navigation.navigator.yaw_tolerance_rad"] = math.radians(yaw_tolerance_deg)
     if inflation_radius_m is not None:
         settings["navigation.costmap.inflation_radius_m"] = inflation_radius_m
-    nav = {"map": None if map_ is None else str(map_), "localisation": localisation, "controller": controller}
+    nav = {
+        "map": None if map_ is None else str(map_),
+        "localisation": localisation,
+        "controller": controller,
+    }
     run_goals(opts, [parse_goal(goal)], nav, opts.duration_s, settings=settings)

@@ -37,7 +37,7 @@ class GotoConsole:
         self.canceled_at_s: float | None = None
         """Simulated time the goals were cancelled at (None: they were not)."""
         self._next_line = wall() + self.period_s
-        self._left: deque = deque()   # (t_s, goal index, distance left m)
+        self._left: deque = deque()  # (t_s, goal index, distance left m)
         self._previous = None
 
     # -- SIGINT ------------------------------------------------------------------------------
@@ -55,8 +55,10 @@ class GotoConsole:
         self.interrupts += 1
         if self.interrupts > 1:
             raise KeyboardInterrupt
-        self.say("goto: Ctrl-C: stopping the robot and writing the outputs (Ctrl-C again to quit at once, "
-                 "writing nothing)")
+        self.say(
+            "goto: Ctrl-C: stopping the robot and writing the outputs (Ctrl-C again to quit at once, "
+            "writing nothing)"
+        )
 
     # -- each simulated half second ----------------------------------------------------------------
     def __call__(self, nav, t_s: float) -> None:
@@ -91,5 +93,7 @@ class GotoConsole:
             rate = (left0 - left1) / (t1 - t0)
             if rate > 0.05:
                 eta = f"about {left / rate:.0f} s left"
-        return (f"goto: t {t_s:.1f} s, goal {index + 1} of {len(nav.outcomes)} ({x:g}, {y:g}): {where}, "
-                f"{speed:.2f} m/s, {recoveries} recover{'y' if recoveries == 1 else 'ies'}, {eta}")
+        return (
+            f"goto: t {t_s:.1f} s, goal {index + 1} of {len(nav.outcomes)} ({x:g}, {y:g}): {where}, "
+            f"{speed:.2f} m/s, {recoveries} recover{'y' if recoveries == 1 else 'ies'}, {eta}"
+        )

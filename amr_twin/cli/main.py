@@ -71,7 +71,9 @@ class _App(typer.Typer):
         if bad:
             typer.echo(f"error: {bad}", err=True)
             sys.exit(2)
-        remapping.keep(ros_args)  # roslaunch's __name:=, __log:=, remaps: for the ROS 1 node (amr_twin.ros1.remapping)
+        remapping.keep(
+            ros_args
+        )  # roslaunch's __name:=, __log:=, remaps: for the ROS 1 node (amr_twin.ros1.remapping)
         kwargs["args"], args = argv, ()
         try:
             with self._only_group(argv):
@@ -79,8 +81,10 @@ class _App(typer.Typer):
         except _click_errors.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
             hint = _misplaced(exc) or f" (see {where} --help)"
-            typer.echo(f"error: {where}: {_missing_command(exc) or _plain(' '.join(exc.format_message().split()))}{hint}",
-                       err=True)
+            typer.echo(
+                f"error: {where}: {_missing_command(exc) or _plain(' '.join(exc.format_message().split()))}{hint}",
+                err=True,
+            )
             sys.exit(2)
         except _click_errors.ClickException as exc:
             typer.echo(f"error: {' '.join(exc.format_message().split())}", err=True)
@@ -111,10 +115,12 @@ class _App(typer.Typer):
             self.registered_commands, self.registered_groups = saved
 
 
-_PARSER_WORDS = {"Input should be a valid integer, unable to parse string as an integer": "expects a whole number",
-                 "Input should be a valid integer, got a number with a fractional part": "expects a whole number",
-                 "Input should be a valid number, unable to parse string as a number": "expects a number",
-                 "Input should be a valid boolean, unable to interpret input": "expects true or false"}
+_PARSER_WORDS = {
+    "Input should be a valid integer, unable to parse string as an integer": "expects a whole number",
+    "Input should be a valid integer, got a number with a fractional part": "expects a whole number",
+    "Input should be a valid number, unable to parse string as a number": "expects a number",
+    "Input should be a valid boolean, unable to interpret input": "expects true or false",
+}
 """typer's (pydantic's) words for a value of the wrong type, and the project's."""
 
 
@@ -136,24 +142,40 @@ def _missing_command(exc) -> str | None:
 def _misplaced(exc) -> str | None:
     """For an option given to a group that belongs to its commands: where it goes."""
     name = getattr(exc, "option_name", None)
-    if "given twice" in exc.format_message():  # amr_twin.cli.path_options._once: the option is in its place
+    if (
+        "given twice" in exc.format_message()
+    ):  # amr_twin.cli.path_options._once: the option is in its place
         return None
     group = getattr(exc.ctx, "command", None) if exc.ctx is not None else None
     parent = exc.ctx.parent if exc.ctx is not None else None
-    if name and parent is not None and any(name in p.opts for p in getattr(parent.command, "params", [])):
-        return f": {name} is an option of {parent.command_path}; put it before {exc.ctx.info_name!r}"
+    if (
+        name
+        and parent is not None
+        and any(name in p.opts for p in getattr(parent.command, "params", []))
+    ):
+        return (
+            f": {name} is an option of {parent.command_path}; put it before {exc.ctx.info_name!r}"
+        )
     commands = getattr(group, "commands", None)
     if not name or not commands:
         return None
-    owners = sorted(cmd for cmd, c in commands.items() if any(name in p.opts for p in getattr(c, "params", [])))
+    owners = sorted(
+        cmd for cmd, c in commands.items() if any(name in p.opts for p in getattr(c, "params", []))
+    )
     if not owners:
         return None
-    return (f": {name} is an option of {' and '.join(owners)}; put it after the command, "
-            f"e.g. {exc.ctx.command_path} {owners[0]} {name} ...")
+    return (
+        f": {name} is an option of {' and '.join(owners)}; put it after the command, "
+        f"e.g. {exc.ctx.command_path} {owners[0]} {name} ..."
+    )
 
 
-app = _App(cls=CheckedGroup, add_completion=False, no_args_is_help=True,
-           help="amr-twin: headless MuJoCo digital twin of the thesis AMR.")
+app = _App(
+    cls=CheckedGroup,
+    add_completion=False,
+    no_args_is_help=True,
+    help="amr-twin: headless MuJoCo digital twin of the thesis AMR.",
+)
 
 
 def _parse_xy(text: Optional[str]) -> Optional[list[float]]:
@@ -171,11 +193,17 @@ def _parse_xy(text: Optional[str]) -> Optional[list[float]]:
 @app.command()
 def model(
     payload_kg: Optional[float] = typer.Option(None, help="Payload mass, kg (0: none)."),
-    payload_xy: Optional[str] = typer.Option(None, help="Payload centre on the deck, X,Y in metres."),
+    payload_xy: Optional[str] = typer.Option(
+        None, help="Payload centre on the deck, X,Y in metres."
+    ),
     export_urdf: Optional[Path] = typer.Option(None, help="Write the generated URDF here."),
     export_mjcf: Optional[Path] = typer.Option(None, help="Write the generated robot MJCF here."),
-    as_json: bool = typer.Option(False, "--json", help="Print the model summary as one JSON object."),
-    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    as_json: bool = typer.Option(
+        False, "--json", help="Print the model summary as one JSON object."
+    ),
+    config: Optional[Path] = ConfigOpt,
+    params: Optional[Path] = ParamsOpt,
+    set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Build the robot model; export URDF/MJCF; print mass, static loads and tip margin."""
     from amr_twin.model import build as build_mod
@@ -196,8 +224,12 @@ def model(
     except OutputError as exc:
         fail(str(exc))
     cfg = _config(config, params, set_, extra)
-    if xy is not None and cfg.payload.mass_kg == 0:  # ignored (and not checked against the deck), exit 0
-        fail(f"--payload-xy {payload_xy}: there is no payload to place (payload.mass_kg is 0): give --payload-kg")
+    if (
+        xy is not None and cfg.payload.mass_kg == 0
+    ):  # ignored (and not checked against the deck), exit 0
+        fail(
+            f"--payload-xy {payload_xy}: there is no payload to place (payload.mass_kg is 0): give --payload-kg"
+        )
 
     def work():
         if export_urdf or export_mjcf:
@@ -206,7 +238,9 @@ def model(
         if as_json:
             typer.echo(json.dumps(info))
         else:
-            typer.echo(f"total mass {info['total_mass_kg']:.2f} kg, tip margin {info['tip_margin_m']:.3f} m")
+            typer.echo(
+                f"total mass {info['total_mass_kg']:.2f} kg, tip margin {info['tip_margin_m']:.3f} m"
+            )
             for name, load in info["static_load_n"].items():
                 typer.echo(f"  {name:20s} {load:8.2f} N")
 
@@ -217,11 +251,18 @@ def model(
 def bench(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     sim_s: float = typer.Option(16.0, help="Simulated seconds per measurement."),
-    suites: bool = typer.Option(False, "--suites", help="Also time what users wait for: start-up, chapter 5 "
-                                "with --jobs 1 and N, a 100-point sweep, .rrd writing, fusion (several minutes)."),
-    jobs: Optional[int] = typer.Option(None, "--jobs", help="Worker processes for --suites (default: the usable "
-                                       "cores)."),
-    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    suites: bool = typer.Option(
+        False,
+        "--suites",
+        help="Also time what users wait for: start-up, chapter 5 "
+        "with --jobs 1 and N, a 100-point sweep, .rrd writing, fusion (several minutes).",
+    ),
+    jobs: Optional[int] = typer.Option(
+        None, "--jobs", help="Worker processes for --suites (default: the usable cores)."
+    ),
+    config: Optional[Path] = ConfigOpt,
+    params: Optional[Path] = ParamsOpt,
+    set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Measure the twin against one bare-physics floor (CPU time, interleaved rounds, spread)."""
     from amr_twin.bench.figures import report_lines, run_benchmarks
@@ -244,6 +285,7 @@ def bench(
         figures = run_benchmarks(cfg, sim_s=sim_s, say=say if suites else lambda text: None)
         if suites:
             from amr_twin.bench.suites import suite_figures
+
             figures["suites"] = suite_figures(cfg, jobs=jobs, progress=say)
         return figures
 
@@ -259,21 +301,47 @@ def bench(
 
 @app.command()
 def calibrate(
-    target: str = typer.Option("thesis", help="'thesis' (bench point and chapter 5) or a CSV log with columns "
-                               "t_s, wheel, rpm, command."),
-    out: Path = typer.Option(Path("params.yaml"), help="Override file to write (use it with --params)."),
-    report: Optional[Path] = typer.Option(None, "--report", help="Also write the calibration report: values, 1 "
-                                          "sigma, correlations and how the fit follows the held parameters "
-                                          "(what `--samples` draws from; models/amr/calibration.yaml)."),
-    no_fit: bool = typer.Option(False, "--no-fit", help="Do not fit: report the uncertainty of the given values "
-                                "(with --report; --out then holds them unchanged)."),
-    max_evaluations: int = typer.Option(90, help="Most twin evaluations of the fit, 7 to 2000 (a step costs one "
-                                        "per fitted parameter and one more: the fit takes at most this // 6 steps)."),
-    jobs: Optional[int] = typer.Option(None, "--jobs", help="Worker processes for a thesis evaluation's three runs "
-                                       "(default: the usable cores, at most 3; at most the usable cores)."),
-    as_json: bool = typer.Option(False, "--json", help="Print the result as one JSON object (values, sigma, "
-                                 "correlations, features) instead of the summary."),
-    config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt, set_: Optional[list[str]] = SetOpt,
+    target: str = typer.Option(
+        "thesis",
+        help="'thesis' (bench point and chapter 5) or a CSV log with columns "
+        "t_s, wheel, rpm, command.",
+    ),
+    out: Path = typer.Option(
+        Path("params.yaml"), help="Override file to write (use it with --params)."
+    ),
+    report: Optional[Path] = typer.Option(
+        None,
+        "--report",
+        help="Also write the calibration report: values, 1 "
+        "sigma, correlations and how the fit follows the held parameters "
+        "(what `--samples` draws from; models/amr/calibration.yaml).",
+    ),
+    no_fit: bool = typer.Option(
+        False,
+        "--no-fit",
+        help="Do not fit: report the uncertainty of the given values "
+        "(with --report; --out then holds them unchanged).",
+    ),
+    max_evaluations: int = typer.Option(
+        90,
+        help="Most twin evaluations of the fit, 7 to 2000 (a step costs one "
+        "per fitted parameter and one more: the fit takes at most this // 6 steps).",
+    ),
+    jobs: Optional[int] = typer.Option(
+        None,
+        "--jobs",
+        help="Worker processes for a thesis evaluation's three runs "
+        "(default: the usable cores, at most 3; at most the usable cores).",
+    ),
+    as_json: bool = typer.Option(
+        False,
+        "--json",
+        help="Print the result as one JSON object (values, sigma, "
+        "correlations, features) instead of the summary.",
+    ),
+    config: Optional[Path] = ConfigOpt,
+    params: Optional[Path] = ParamsOpt,
+    set_: Optional[list[str]] = SetOpt,
 ) -> None:
     """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
     from rich.progress import Progress
@@ -290,8 +358,10 @@ def calibrate(
     if no_fit and report is None:
         fail("--no-fit needs --report FILE (without a fit, the report is the only result)")
     if not evaluations_per_step() <= max_evaluations <= MAX_EVALUATIONS:
-        fail(f"--max-evaluations {max_evaluations}: must be in {evaluations_per_step()}..{MAX_EVALUATIONS} (a fit "
-             f"evaluates the starting point and once more per fitted parameter, {len(PARAMETERS)}, for its Jacobian)")
+        fail(
+            f"--max-evaluations {max_evaluations}: must be in {evaluations_per_step()}..{MAX_EVALUATIONS} (a fit "
+            f"evaluates the starting point and once more per fitted parameter, {len(PARAMETERS)}, for its Jacobian)"
+        )
     try:
         jobs = min(check_jobs(jobs), 3) if jobs is None else check_jobs(jobs)
     except ValueError as exc:
@@ -317,15 +387,28 @@ def calibrate(
         fit = None
         if not no_fit:
             task = bar.add_task("calibrating", total=max_evaluations)
-            fit = _guard(lambda: fit_plant(target, base=base, max_evaluations=max_evaluations, jobs=jobs,
-                                           progress=lambda i, n: bar.update(task, completed=min(i, n))))
+            fit = _guard(
+                lambda: fit_plant(
+                    target,
+                    base=base,
+                    max_evaluations=max_evaluations,
+                    jobs=jobs,
+                    progress=lambda i, n: bar.update(task, completed=min(i, n)),
+                )
+            )
         if report is not None:
             from amr_twin.calibration import report as calibration_report
 
             at = base if fit is None else _guard(lambda: fit.config(base))
             task = bar.add_task("uncertainty", total=1)
-            result = _guard(lambda: calibration_report.evaluate(
-                at, target, jobs=jobs, progress=lambda i, n: bar.update(task, total=n, completed=i)))
+            result = _guard(
+                lambda: calibration_report.evaluate(
+                    at,
+                    target,
+                    jobs=jobs,
+                    progress=lambda i, n: bar.update(task, total=n, completed=i),
+                )
+            )
             fit = result.as_fit(fit)  # the override file carries the report's uncertainty
     from amr_twin.base.atomic_file import all_or_nothing
 
@@ -337,9 +420,16 @@ def calibrate(
 
     _guard(write)
     if as_json:
-        typer.echo(json.dumps({**fit.report(), "out": str(out), **({"report": str(report)} if report else {})}))
+        typer.echo(
+            json.dumps(
+                {**fit.report(), "out": str(out), **({"report": str(report)} if report else {})}
+            )
+        )
         return
-    for line in fit.text_lines() + ["", f"wrote {out}" + (f" and the report {report}" if report else "")]:
+    for line in fit.text_lines() + [
+        "",
+        f"wrote {out}" + (f" and the report {report}" if report else ""),
+    ]:
         typer.echo(line)
 
 
@@ -360,18 +450,26 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
 
     import logging
 
-    logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())  # said below
+    logging.getLogger("amr_twin.controllers.wheel_command").addHandler(
+        logging.NullHandler()
+    )  # said below
     for text, wheels in log.items():
         refused = Command.parse(text).dry_run(base).last_error  # was blamed on the log's length
         if refused:
-            raise ValueError(f"--target {target}: command {text}: the client refuses it ({refused})")
+            raise ValueError(
+                f"--target {target}: command {text}: the client refuses it ({refused})"
+            )
         duration = max(float(v[:, 0].max()) for v in wheels.values()) + LOG_TAIL_S
-        series = run_command(base, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)).series
+        series = run_command(
+            base, Command.parse(text), duration, TwinOptions(world="empty", visuals=False)
+        ).series
         for w, samples in wheels.items():
             if len(series.published[w]) < 2:
-                raise ValueError(f"--target {target}: command {text}: in the log's {duration:g} s the twin publishes "
-                                 f"{len(series.published[w])} speed(s) of the {('left', 'right')[w]} wheel, 2 are "
-                                 "needed to compare: the log must be longer")
+                raise ValueError(
+                    f"--target {target}: command {text}: in the log's {duration:g} s the twin publishes "
+                    f"{len(series.published[w])} speed(s) of the {('left', 'right')[w]} wheel, 2 are "
+                    "needed to compare: the log must be longer"
+                )
 
 
 app.add_typer(run_group.app, name="run")

@@ -25,8 +25,17 @@ if TYPE_CHECKING:
 
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
-from amr_twin.cli.options import (checked_firmware, checked_live, checked_ros1, checked_seed, firmware_option,
-                                  live_options, ros1_options, sketch_option, _run_option_infos)
+from amr_twin.cli.options import (
+    checked_firmware,
+    checked_live,
+    checked_ros1,
+    checked_seed,
+    firmware_option,
+    live_options,
+    ros1_options,
+    sketch_option,
+    _run_option_infos,
+)
 
 _LIVE = live_options()
 _WORLD = _run_option_infos()["world"]  # as the run commands have it
@@ -103,9 +112,13 @@ class RealTimeTwin:
 
         try:
             while not self._stop.is_set():
-                if self.twin.t_s + self.PIECE_S > MAX_RUN_S + 1e-9:  # a run keeps its series in memory
-                    raise RuntimeError(f"it reached the bound of a run, {MAX_RUN_S:g} simulated s (its 100 Hz "
-                                       "series are kept in memory): start the client again")
+                if (
+                    self.twin.t_s + self.PIECE_S > MAX_RUN_S + 1e-9
+                ):  # a run keeps its series in memory
+                    raise RuntimeError(
+                        f"it reached the bound of a run, {MAX_RUN_S:g} simulated s (its 100 Hz "
+                        "series are kept in memory): start the client again"
+                    )
                 self.twin.advance(self.PIECE_S)
         except Exception as exc:  # noqa: BLE001 - reported to the user by the menu
             self.error = exc
@@ -147,7 +160,9 @@ def read_line(console: Console, prompt: str, stdin=None) -> str:
     if not line:
         raise EOFError
     if len(line) > MAX_LINE or "\0" in line:
-        fail(f"standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)")
+        fail(
+            f"standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)"
+        )
     return line
 
 
@@ -193,28 +208,42 @@ def _choice(console: Console, rt: RealTimeTwin, choice: str) -> bool:
     code = rt.call(call)
     if code == 0:
         r = client.last_request
-        console.print(escape(f"sent wheel_Command [{r.motionL}, {r.speedL:.5f}, {r.motionR}, {r.speedR:.5f}]"
-                             " (code 0)"))
+        console.print(
+            escape(
+                f"sent wheel_Command [{r.motionL}, {r.speedL:.5f}, {r.motionR}, {r.speedR:.5f}]"
+                " (code 0)"
+            )
+        )
     else:
         console.print(f"[red]{escape(client.last_error or '')}[/red] (code {code})")
     return True
 
 
-def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per wall second."),
-           firmware: str = firmware_option(),
-           sketch: Optional[Path] = sketch_option(),
-           payload_kg: Optional[float] = typer.Option(None, "--payload-kg", help="Payload mass, kg."),
-           seed: int = typer.Option(0, "--seed", help="Seed of the random draws (rosserial loss and hall chatter "
-                                    "of --fault)."),
-           fault: Optional[list[str]] = typer.Option(None, "--fault", metavar="KIND@T[:ARGS]",
-                                                     help="Inject a fault T s after the start (repeatable; "
-                                                          "docs/faults.md)."),
-           world: str = _WORLD[1],
-           config: Optional[Path] = ConfigOpt, params: Optional[Path] = ParamsOpt,
-           set_: Optional[list[str]] = SetOpt,
-           live: Optional[str] = _LIVE["live"][1], host: str = _LIVE["host"][1],
-           port: Optional[int] = _LIVE["port"][1], web_port: Optional[int] = _LIVE["web_port"][1],
-           ros1: bool = _ROS1["ros1"][1], roscore: bool = _ROS1["roscore"][1]) -> None:
+def client(
+    rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per wall second."),
+    firmware: str = firmware_option(),
+    sketch: Optional[Path] = sketch_option(),
+    payload_kg: Optional[float] = typer.Option(None, "--payload-kg", help="Payload mass, kg."),
+    seed: int = typer.Option(
+        0, "--seed", help="Seed of the random draws (rosserial loss and hall chatter of --fault)."
+    ),
+    fault: Optional[list[str]] = typer.Option(
+        None,
+        "--fault",
+        metavar="KIND@T[:ARGS]",
+        help="Inject a fault T s after the start (repeatable; docs/faults.md).",
+    ),
+    world: str = _WORLD[1],
+    config: Optional[Path] = ConfigOpt,
+    params: Optional[Path] = ParamsOpt,
+    set_: Optional[list[str]] = SetOpt,
+    live: Optional[str] = _LIVE["live"][1],
+    host: str = _LIVE["host"][1],
+    port: Optional[int] = _LIVE["port"][1],
+    web_port: Optional[int] = _LIVE["web_port"][1],
+    ros1: bool = _ROS1["ros1"][1],
+    roscore: bool = _ROS1["roscore"][1],
+) -> None:
     """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time (--live: served to
     Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel; --ros1: on a ROS 1 graph)."""
     from amr_twin.sim.faults import FaultError, parse_faults
@@ -240,24 +269,44 @@ def client(rate: float = typer.Option(1.0, "--rate", help="Simulated seconds per
 
     console = Console(highlight=False)
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
-    twin = _guard(lambda: Twin(cfg, TwinOptions(firmware=firmware, seed=seed, faults=faults, world=world,
-                                                start_xy_yaw=None)))
+    twin = _guard(
+        lambda: Twin(
+            cfg,
+            TwinOptions(
+                firmware=firmware, seed=seed, faults=faults, world=world, start_xy_yaw=None
+            ),
+        )
+    )
 
     def show(topic: str, msg, t_us: int) -> None:
         if topic in ("wheel0_Vel", "wheel1_Vel"):
             side = "left " if topic == "wheel0_Vel" else "right"
-            console.print(f"[dim]t={t_us * 1e-6:8.3f} s[/dim]  {topic} ({side}) {msg.data:8.3f} RPM")
+            console.print(
+                f"[dim]t={t_us * 1e-6:8.3f} s[/dim]  {topic} ({side}) {msg.data:8.3f} RPM"
+            )
 
     twin.on_message(show)
-    twin.on_collision(lambda c: console.print(escape(
-        f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m")))
-    rt = _guard(lambda: RealTimeTwin(twin, rate, live_opts, say=lambda line: console.print(escape(line)),
-                                     ros1=ros1_opts))
+    twin.on_collision(
+        lambda c: console.print(
+            escape(
+                f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m"
+            )
+        )
+    )
+    rt = _guard(
+        lambda: RealTimeTwin(
+            twin, rate, live_opts, say=lambda line: console.print(escape(line)), ros1=ros1_opts
+        )
+    )
     rt.start()
     x, y, yaw = twin.start_xy_yaw
     hint = "; --world empty: no walls" if world != "empty" else ""
-    console.print(escape(f"twin running at {rate:g}x real time, firmware {firmware}, world {world} "
-                         f"(start x {x:g} m, y {y:g} m, facing {math.degrees(yaw):g} deg{hint})"))
+    console.print(
+        escape(
+            f"twin running at {rate:g}x real time, firmware {firmware}, world {world} "
+            f"(start x {x:g} m, y {y:g} m, facing {math.degrees(yaw):g} deg{hint})"
+        )
+    )
     for f in faults:
         console.print(escape(f"fault {f.name} at {f.t_s:g} s: {f.describe()['description']}"))
     try:

@@ -82,22 +82,30 @@ def _route_file(value) -> list[Path]:
 
 
 INPUTS: dict[str, Callable[[object], list[Path]]] = {
-    "--config": _config_file,       # none given: the robot's parameter file
+    "--config": _config_file,  # none given: the robot's parameter file
     "--params": _given,
-    "--mission": _mission_files,     # with a navigation mission's map (YAML + image)
+    "--mission": _mission_files,  # with a navigation mission's map (YAML + image)
     "--calibration": _given,
-    "--sketch": _given,              # a folder
-    "--target": _target_file,        # 'thesis' or a CSV log
-    "--world": _world_files,         # a name of models/worlds/, an MJCF file or a map YAML (+ its image)
-    "--route": _route_file,          # a name of experiments/routes/ or a route YAML
-    "--map": _world_files,           # a map_server YAML (+ its image): the navigation commands'
+    "--sketch": _given,  # a folder
+    "--target": _target_file,  # 'thesis' or a CSV log
+    "--world": _world_files,  # a name of models/worlds/, an MJCF file or a map YAML (+ its image)
+    "--route": _route_file,  # a name of experiments/routes/ or a route YAML
+    "--map": _world_files,  # a map_server YAML (+ its image): the navigation commands'
     "--slam-map": _world_files,
-    "--odometry": _given,            # the wheel odometry's calibration (run; experiment umbmark writes them)
+    "--odometry": _given,  # the wheel odometry's calibration (run; experiment umbmark writes them)
 }
 """Options whose value names what the command reads: flag -> the files (or folders) it reads."""
 
-OUTPUTS = ("--out", "--csv", "--record", "--mcap", "--report", "--export-urdf", "--export-mjcf",
-           "--serial-pty")  # the last: a link made to the emulated board's pseudo-terminal
+OUTPUTS = (
+    "--out",
+    "--csv",
+    "--record",
+    "--mcap",
+    "--report",
+    "--export-urdf",
+    "--export-mjcf",
+    "--serial-pty",
+)  # the last: a link made to the emulated board's pseudo-terminal
 """Options whose value names a file or folder the command writes."""
 
 PATH_METAVARS = ("PATH", "FILE", "DIR")
@@ -107,8 +115,10 @@ def is_path_option(param) -> bool:
     """A command-line option whose value is a path: typer's ``Path`` annotation, or a metavar saying so."""
     descriptor = getattr(param, "type_descriptor", None)
     return getattr(param, "param_type_name", "") == "option" and bool(
-        getattr(descriptor, "is_path", False) or type(getattr(param, "type", None)).__name__ == "Path"
-        or (param.metavar or "").upper() in PATH_METAVARS)
+        getattr(descriptor, "is_path", False)
+        or type(getattr(param, "type", None)).__name__ == "Path"
+        or (param.metavar or "").upper() in PATH_METAVARS
+    )
 
 
 def role(param) -> str | None:
@@ -147,7 +157,9 @@ def paths_of(ctx) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
     outputs, inputs = [], []
     for flag, (kind, items) in values.items():
         given = [v for v, default in items if not default]
-        chosen = list(dict.fromkeys(given)) if given else list(dict.fromkeys(v for v, _ in items))[:1]
+        chosen = (
+            list(dict.fromkeys(given)) if given else list(dict.fromkeys(v for v, _ in items))[:1]
+        )
         label = flag if given else f"{flag} (default)"
         for value in chosen:
             if kind == "input":
@@ -177,7 +189,9 @@ def _refuse_empty(param) -> None:
 
     def process_value(ctx, value):
         if isinstance(value, str) and not value.strip():
-            raise _click_errors.BadParameter("an empty path: give a file or folder name", ctx=ctx, param=param)
+            raise _click_errors.BadParameter(
+                "an empty path: give a file or folder name", ctx=ctx, param=param
+            )
         return process(ctx, value)
 
     param.process_value = process_value
@@ -186,6 +200,7 @@ def _refuse_empty(param) -> None:
 def _checked(callback):
     """``callback`` preceded by :func:`check_paths` and run holding its outputs' locks
     (:mod:`amr_twin.recording.output_lock`); a group whose command follows leaves both to the command."""
+
     @functools.wraps(callback)
     def checked(*args, **kwargs):
         from amr_twin.cli.common import fail
@@ -201,7 +216,11 @@ def _checked(callback):
         except OutputBusy as exc:
             fail(str(exc))
         except KeyboardInterrupt:  # typer would exit 130 without a word
-            kept = " (the points finished are kept in runs/: a rerun resumes from them)" if "sweep" in ctx.command_path else ""
+            kept = (
+                " (the points finished are kept in runs/: a rerun resumes from them)"
+                if "sweep" in ctx.command_path
+                else ""
+            )
             fail(f"{ctx.command_path}: interrupted; no output written{kept}", code=130)
 
     checked.paths_checked = True
@@ -221,7 +240,9 @@ def _once(command) -> None:
 
     def checked_parser(ctx):
         parser = make_parser(ctx)
-        for option in {id(o): o for o in (*parser._long_opt.values(), *parser._short_opt.values())}.values():
+        for option in {
+            id(o): o for o in (*parser._long_opt.values(), *parser._short_opt.values())
+        }.values():
             if option.action not in ("store", "store_const"):
                 continue
             process = option.process
@@ -231,8 +252,12 @@ def _once(command) -> None:
                 if option.dest in state.opts and state.opts[option.dest] != new:
                     flags = "/".join(option.obj.opts + option.obj.secondary_opts)
                     old = state.opts[option.dest]
-                    raise _click_errors.BadOptionUsage(flags, f"{flags} given twice with different values ({old} and "
-                                                       f"{new}): give it once", ctx=ctx)
+                    raise _click_errors.BadOptionUsage(
+                        flags,
+                        f"{flags} given twice with different values ({old} and "
+                        f"{new}): give it once",
+                        ctx=ctx,
+                    )
                 process(value, state)
 
             option.process = once
@@ -256,5 +281,7 @@ class CheckedGroup(TyperGroup):
             for param in command.params:
                 if role(param) is not None:
                     _refuse_empty(param)
-            if command.callback is not None and not getattr(command.callback, "paths_checked", False):
+            if command.callback is not None and not getattr(
+                command.callback, "paths_checked", False
+            ):
                 command.callback = _checked(command.callback)

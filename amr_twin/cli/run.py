@@ -30,8 +30,16 @@ import typer
 from amr_twin.cli.actor_options import checked_actors
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.goto import goto, run_goals
-from amr_twin.cli.options import (LiveGroup, RunOptions, _given, checked_firmware, checked_live,
-                                  checked_ros1, checked_seed, shared)
+from amr_twin.cli.options import (
+    LiveGroup,
+    RunOptions,
+    _given,
+    checked_firmware,
+    checked_live,
+    checked_ros1,
+    checked_seed,
+    shared,
+)
 from amr_twin.sim.bounds import duration_problem
 from amr_twin.recording.run_report import collision_warning, csv_text, text_lines
 from amr_twin.recording.run_summary import summary
@@ -53,10 +61,14 @@ def _finite(name: str, value: Optional[float], required: bool = True) -> Optiona
 def _duration(opts: RunOptions, default_s: float) -> float:
     if opts.duration_s == math.inf:  # until stopped: Ctrl-C, SIGTERM (roslaunch), _run_live
         if not (opts.ros1 or opts.live is not None):
-            fail("--duration-s inf: a run until stopped is for the graph or a live view: give --ros1 or --live")
+            fail(
+                "--duration-s inf: a run until stopped is for the graph or a live view: give --ros1 or --live"
+            )
         if opts.record is not None or opts.mcap is not None:
-            fail("--duration-s inf: --record and --mcap keep every message until the run ends: give a finite "
-                 "--duration-s")
+            fail(
+                "--duration-s inf: --record and --mcap keep every message until the run ends: give a finite "
+                "--duration-s"
+            )
         return math.inf
     duration_s = _finite("--duration-s", opts.duration_s, required=False)
     duration_s = default_s if duration_s is None else duration_s
@@ -65,8 +77,14 @@ def _duration(opts: RunOptions, default_s: float) -> float:
     return duration_s
 
 
-def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RUN_S,
-            mission_faults: tuple[str, ...] = (), mission_actors: tuple = ()) -> None:
+def execute(
+    opts: RunOptions,
+    steps,
+    single: bool,
+    default_s: float = DEFAULT_RUN_S,
+    mission_faults: tuple[str, ...] = (),
+    mission_actors: tuple = (),
+) -> None:
     """Check everything, run ``steps`` and report; exits non-zero on a refusal or a stop."""
     from amr_twin.sim.faults import FaultError, parse_faults
     from amr_twin.assembly.twin import TwinOptions
@@ -84,7 +102,9 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
         extra["payload.mass_kg"] = opts.payload_kg
     start = _start_pose(opts.start)
     try:
-        faults = parse_faults(list(mission_faults) + list(opts.fault), duration_s=duration_s, sensors=opts.sensors)
+        faults = parse_faults(
+            list(mission_faults) + list(opts.fault), duration_s=duration_s, sensors=opts.sensors
+        )
     except FaultError as exc:
         fail(str(exc))
     try:
@@ -92,13 +112,18 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     except OutputError as exc:
         fail(str(exc))
     paced = opts.ros1 or opts.serial_pty is not None
-    live = checked_live(opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail, paced=paced)
-    ros1, avr_params, rate = checked_ros1(opts.ros1, opts.roscore, opts.serial_pty, firmware, live is not None,
-                                          opts.rate, fail)
+    live = checked_live(
+        opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail, paced=paced
+    )
+    ros1, avr_params, rate = checked_ros1(
+        opts.ros1, opts.roscore, opts.serial_pty, firmware, live is not None, opts.rate, fail
+    )
     if opts.serial_pty is not None:
         if not (single and len(steps) == 1 and steps[0][1].kind == "stop"):
-            fail("--serial-pty: the board's serial port is your rosserial host's: drive it from ROS and give "
-                 "`run stop` (the board starts braked)")
+            fail(
+                "--serial-pty: the board's serial port is your rosserial host's: drive it from ROS and give "
+                "`run stop` (the board starts braked)"
+            )
         from amr_twin.controllers.firmware import check_avr
 
         try:
@@ -118,7 +143,13 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
     from amr_twin.cli.checks import check_memory
 
     if duration_s != math.inf:  # until stopped: ~0.11 MB a simulated second, amr_twin.sim.bounds
-        check_memory(duration_s, fail, recorded=recording, sensors=opts.sensors, rerun=opts.record is not None)
+        check_memory(
+            duration_s,
+            fail,
+            recorded=recording,
+            sensors=opts.sensors,
+            rerun=opts.record is not None,
+        )
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     actors = checked_actors(opts, mission_actors, cfg, start)
     navigation = None  # --ros1 --sensors: the navigation stack as move_base (amr_twin/ros1/navigation_setup.py)
@@ -127,16 +158,30 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 
         try:
             navigation = RunNavigation.checked(cfg, opts.world, start)
-        except ValueError as exc:  # a world without a map, ROS 1 without actionlib: the run goes on without it
+        except (
+            ValueError
+        ) as exc:  # a world without a map, ROS 1 without actionlib: the run goes on without it
             typer.echo(f"ros1: no move_base on this run: {exc}", err=True)
         ctx = click.get_current_context(silent=True)
-        if navigation is not None and not any(_given(c, "firmware") for c in (ctx, ctx and ctx.parent)):
-            firmware = "improved"  # as run goto: the faithful one restarts its ramps on every cmd_vel
-    options = TwinOptions(firmware=firmware, seed=opts.seed, world=opts.world,
-                          sensors=("imu", "lidar") if opts.sensors else (),
-                          start_xy_yaw=start, faults=faults, stop_on_collision=opts.stop_on_collision,
-                          visuals=recording or live is not None, firmware_params=avr_params,
-                          actors=actors, odometry_calibration=calibration)
+        if navigation is not None and not any(
+            _given(c, "firmware") for c in (ctx, ctx and ctx.parent)
+        ):
+            firmware = (
+                "improved"  # as run goto: the faithful one restarts its ramps on every cmd_vel
+            )
+    options = TwinOptions(
+        firmware=firmware,
+        seed=opts.seed,
+        world=opts.world,
+        sensors=("imu", "lidar") if opts.sensors else (),
+        start_xy_yaw=start,
+        faults=faults,
+        stop_on_collision=opts.stop_on_collision,
+        visuals=recording or live is not None,
+        firmware_params=avr_params,
+        actors=actors,
+        odometry_calibration=calibration,
+    )
     # the client's refusals are printed below, once
     logging.getLogger("amr_twin.controllers.wheel_command").addHandler(logging.NullHandler())
 
@@ -146,11 +191,15 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
 
         twin = Twin(cfg, options)
         if opts.serial_pty is not None:
-            typer.echo(f"serial-pty: the board's serial port is {opts.serial_pty} (-> {twin.firmware.serial.device}), "
-                       f"paced at {rate:g}x real time", err=True)
+            typer.echo(
+                f"serial-pty: the board's serial port is {opts.serial_pty} (-> {twin.firmware.serial.device}), "
+                f"paced at {rate:g}x real time",
+                err=True,
+            )
         try:
             if recording:
                 from amr_twin.recording.rerun_capture import attach
+
                 attach(twin)
             run_steps = steps
             if navigation is not None:
@@ -159,21 +208,32 @@ def execute(opts: RunOptions, steps, single: bool, default_s: float = DEFAULT_RU
             if live is None and ros1 is None:
                 res = run_mission(cfg, steps, duration_s, options, twin=twin)
             else:
-                res = _run_live(twin, live, lambda: run_mission(cfg, run_steps, duration_s, options, twin=twin), ros1,
-                                rate, navigation)
+                res = _run_live(
+                    twin,
+                    live,
+                    lambda: run_mission(cfg, run_steps, duration_s, options, twin=twin),
+                    ros1,
+                    rate,
+                    navigation,
+                )
         finally:
             if opts.serial_pty is not None:
                 fw = twin.firmware
-                typer.echo(f"serial-pty: the board answered {fw.negotiations} topic negotiation(s) and asked the "
-                           f"time {fw.time_requests} time(s); {fw.serial.bytes_in} bytes in, {fw.serial.bytes_out} out, "
-                           f"{fw.serial.bytes_dropped} dropped; {fw.pacer.lag_resets} lag reset(s)", err=True)
+                typer.echo(
+                    f"serial-pty: the board answered {fw.negotiations} topic negotiation(s) and asked the "
+                    f"time {fw.time_requests} time(s); {fw.serial.bytes_in} bytes in, {fw.serial.bytes_out} out, "
+                    f"{fw.serial.bytes_dropped} dropped; {fw.pacer.lag_resets} lag reset(s)",
+                    err=True,
+                )
                 fw.close()  # the pseudo-terminal's link goes with the run
         with all_or_nothing():
             if recording:
                 from amr_twin.recording.rerun_log import record_run
+
                 record_run(twin, rrd_path=opts.record, mcap_path=opts.mcap, result=res)
             if opts.csv is not None:
                 from amr_twin.base.atomic_file import write_text
+
                 write_text(opts.csv, csv_text(res.series))
         return res, twin.start_xy_yaw
 
@@ -210,6 +270,7 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
             raise KeyboardInterrupt
         signals.append(signum)
         twin.stop()
+
     before = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     session = ros = None
     if live is not None:
@@ -235,7 +296,9 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
                 navigation.serve(twin, pacer, say=say)
         result = run()
         if signals:
-            say(f"stopped by {signal.Signals(signals[0]).name} at t={twin.t_s:.2f} s simulated; writing the outputs")
+            say(
+                f"stopped by {signal.Signals(signals[0]).name} at t={twin.t_s:.2f} s simulated; writing the outputs"
+            )
         return result
     except KeyboardInterrupt:
         fail(f"interrupted at t={twin.t_s:.2f} s simulated; no output written", code=130)
@@ -245,10 +308,16 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
         (session or pacer).close()
         if ros is not None:
             ros.close()
-        for name, sink in (("live", session.sink if session else None), ("ros1", ros.bridge if ros else None)):
+        for name, sink in (
+            ("live", session.sink if session else None),
+            ("ros1", ros.bridge if ros else None),
+        ):
             dropped = getattr(sink, "dropped", 0)
             if dropped:
-                typer.echo(f"{name}: {dropped} message(s) from clients dropped (see the warnings above)", err=True)
+                typer.echo(
+                    f"{name}: {dropped} message(s) from clients dropped (see the warnings above)",
+                    err=True,
+                )
 
 
 def Command(*args, **kwargs):  # noqa: N802 - amr_twin.assembly.command.Command, imported when a run starts
@@ -266,17 +335,28 @@ def one(opts: RunOptions, command_factory) -> None:
     execute(opts, [(0.0, command)], True)
 
 
-app = typer.Typer(cls=LiveGroup, add_completion=False, no_args_is_help=False,
-                  help="Run wheel commands on the twin, as wheel_Command_Client does. The options "
-                       "below go before or after the command kind.")
+app = typer.Typer(
+    cls=LiveGroup,
+    add_completion=False,
+    no_args_is_help=False,
+    help="Run wheel commands on the twin, as wheel_Command_Client does. The options "
+    "below go before or after the command kind.",
+)
 """``amr-twin run``: linear, angular, motor, stop, goto (:func:`amr_twin.cli.goto.goto`) or --mission."""
 
 
 @app.callback(invoke_without_command=True)
 @shared(fail)
-def run(opts: RunOptions, ctx: typer.Context,
-        mission: Optional[Path] = typer.Option(None, "--mission", help="Mission YAML (see amr_twin/assembly/mission.py); "
-                                               "its faults: list adds to --fault, its actors: to --actor.")) -> None:
+def run(
+    opts: RunOptions,
+    ctx: typer.Context,
+    mission: Optional[Path] = typer.Option(
+        None,
+        "--mission",
+        help="Mission YAML (see amr_twin/assembly/mission.py); "
+        "its faults: list adds to --fault, its actors: to --actor.",
+    ),
+) -> None:
     """Run a command kind (linear, angular, motor, stop) or a --mission file."""
     if ctx.invoked_subcommand is not None:
         if mission is not None:
@@ -294,16 +374,24 @@ def run(opts: RunOptions, ctx: typer.Context,
         nav = {"map": None, "localisation": "ekf", "controller": "mppi", **plan.navigation}
         if not _given(ctx, "firmware"):
             opts.firmware = "improved"  # as run goto (amr_twin/cli/goto.py)
-        run_goals(opts, plan.goals, nav, opts.duration_s if opts.duration_s is not None else plan.duration_s,
-                  plan.faults, plan.actors)
+        run_goals(
+            opts,
+            plan.goals,
+            nav,
+            opts.duration_s if opts.duration_s is not None else plan.duration_s,
+            plan.faults,
+            plan.actors,
+        )
         return
     execute(opts, plan.steps, False, plan.duration_s, plan.faults, plan.actors)
 
 
 @app.command()
 @shared(fail)
-def linear(opts: RunOptions,
-           speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="m/s; negative: backward.")) -> None:
+def linear(
+    opts: RunOptions,
+    speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="m/s; negative: backward."),
+) -> None:
     """Linear motion: both wheels at the same speed (listing 4.4)."""
     speed = _finite("--speed-m-s", speed_m_s)
     one(opts, lambda: Command("linear", speed_m_s=speed))
@@ -311,9 +399,11 @@ def linear(opts: RunOptions,
 
 @app.command()
 @shared(fail)
-def angular(opts: RunOptions,
-            speed_deg_s: Optional[float] = typer.Option(None, "--speed-deg-s", help="deg/s, CCW +."),
-            icc_m: Optional[float] = typer.Option(None, "--icc-m", help="ICC distance, m, + to the left.")) -> None:
+def angular(
+    opts: RunOptions,
+    speed_deg_s: Optional[float] = typer.Option(None, "--speed-deg-s", help="deg/s, CCW +."),
+    icc_m: Optional[float] = typer.Option(None, "--icc-m", help="ICC distance, m, + to the left."),
+) -> None:
     """Rotation about an ICC (listing 4.5; REP-103 signs)."""
     speed, icc = _finite("--speed-deg-s", speed_deg_s), _finite("--icc-m", icc_m)
     one(opts, lambda: Command("angular", speed_deg_s=speed, icc_m=icc))
@@ -321,10 +411,12 @@ def angular(opts: RunOptions,
 
 @app.command()
 @shared(fail)
-def motor(opts: RunOptions,
-          wheel: Optional[str] = typer.Option(None, "--wheel", help="left or right."),
-          direction: Optional[str] = typer.Option(None, "--direction", help="forward or backward."),
-          speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="Rim speed, m/s, >= 0.")) -> None:
+def motor(
+    opts: RunOptions,
+    wheel: Optional[str] = typer.Option(None, "--wheel", help="left or right."),
+    direction: Optional[str] = typer.Option(None, "--direction", help="forward or backward."),
+    speed_m_s: Optional[float] = typer.Option(None, "--speed-m-s", help="Rim speed, m/s, >= 0."),
+) -> None:
     """One wheel driven, the other free-spinning (fig. 3.6)."""
     if wheel is None:
         fail("--wheel is required (left or right)")

@@ -31,7 +31,9 @@ class SpeedProfile:
     def __init__(self, t_us: int, rpm: float = 0.0):
         self.t_us: list[int] = [int(t_us)]
         self.rpm: list[float] = [float(rpm)]
-        self._past: list[tuple[int, float, float]] = []  # trimmed knots: (t_us, rpm, revolutions up to t_us)
+        self._past: list[
+            tuple[int, float, float]
+        ] = []  # trimmed knots: (t_us, rpm, revolutions up to t_us)
         self._revs0 = 0.0  # revolutions from the start up to t_us[0]
         self.assumed_us: int | None = None  # knots after this instant are a stand-in, not knowledge
 
@@ -97,12 +99,14 @@ class SpeedProfile:
             revs = self._revs0
             for k in range(i + 1):
                 self._past.append((self.t_us[k], self.rpm[k], revs))
-                t_next, r_next = (self.t_us[k + 1], self.rpm[k + 1]) if k < i else (int(t_us), value)
+                t_next, r_next = (
+                    (self.t_us[k + 1], self.rpm[k + 1]) if k < i else (int(t_us), value)
+                )
                 revs += (t_next - self.t_us[k]) * (self.rpm[k] + r_next) / 120e6
             self._revs0 = revs
             del self._past[:-PAST_KNOTS]
-        self.t_us = [int(t_us)] + self.t_us[i + 1:]
-        self.rpm = [value] + self.rpm[i + 1:]
+        self.t_us = [int(t_us)] + self.t_us[i + 1 :]
+        self.rpm = [value] + self.rpm[i + 1 :]
 
     def revolutions(self, t0_us: float, t1_us: float) -> float:
         """Signed revolutions the profile implies over ``[t0_us, t1_us]`` (trimmed knots included, as far
@@ -150,12 +154,20 @@ def arc(pose: Pose2, v_m_s: float, w_rad_s: float, dt_s: float) -> Pose2:
         mid = yaw0 + 0.5 * dyaw
         return x + v_m_s * dt_s * math.cos(mid), y + v_m_s * dt_s * math.sin(mid), yaw0 + dyaw
     radius_m = v_m_s / w_rad_s
-    return (x + radius_m * (math.sin(yaw0 + dyaw) - math.sin(yaw0)),
-            y - radius_m * (math.cos(yaw0 + dyaw) - math.cos(yaw0)), yaw0 + dyaw)
+    return (
+        x + radius_m * (math.sin(yaw0 + dyaw) - math.sin(yaw0)),
+        y - radius_m * (math.cos(yaw0 + dyaw) - math.cos(yaw0)),
+        yaw0 + dyaw,
+    )
 
 
-def integrate(profiles: Sequence[SpeedProfile], start: tuple, t_end_us: int, max_substep_us: int,
-              body: Callable[[float, float], tuple[float, float]]) -> tuple:
+def integrate(
+    profiles: Sequence[SpeedProfile],
+    start: tuple,
+    t_end_us: int,
+    max_substep_us: int,
+    body: Callable[[float, float], tuple[float, float]],
+) -> tuple:
     """Pose ``(t_us, x_m, y_m, yaw_rad)`` at ``t_end_us`` from ``start`` along the speed profiles.
 
     Parameters
@@ -186,7 +198,9 @@ def integrate(profiles: Sequence[SpeedProfile], start: tuple, t_end_us: int, max
         n = 1 if starts == ends else -(-(t_next - t) // max_substep_us)
         dt_us = (t_next - t) / n
         dt_s = dt_us * 1e-6
-        (ta, ra, tb, rb), (tc, rc, td, rd) = segs  # SpeedProfile.at on them, spelled out (up to 50 a call)
+        (ta, ra, tb, rb), (tc, rc, td, rd) = (
+            segs  # SpeedProfile.at on them, spelled out (up to 50 a call)
+        )
         rise_l, span_l, rise_r, span_r = rb - ra, tb - ta, rd - rc, td - tc
         for k in range(n):
             mid = t + (k + 0.5) * dt_us
@@ -233,8 +247,14 @@ class SmoothedPose:
         Longest arc while a speed varies, us.
     """
 
-    def __init__(self, t_us: int, pose: Pose2, rpm: Sequence[float],
-                 body: Callable[[float, float], tuple[float, float]], max_substep_us: int):
+    def __init__(
+        self,
+        t_us: int,
+        pose: Pose2,
+        rpm: Sequence[float],
+        body: Callable[[float, float], tuple[float, float]],
+        max_substep_us: int,
+    ):
         self.profiles = [SpeedProfile(t_us, rpm[0]), SpeedProfile(t_us, rpm[1])]
         self.body, self.max_substep_us = body, max_substep_us
         self._anchor = (t_us, *pose)  # final: no sample can change the pose before it
@@ -272,17 +292,26 @@ class SmoothedPose:
             # clipped there (knots after now are assumptions, e.g. a brake ramp)
             horizon = min(p.known_us(now_us) for p in self.profiles)
             if horizon > self._anchor[0]:
-                self._anchor = integrate(self.profiles, self._anchor, horizon, self.max_substep_us, self.body)
+                self._anchor = integrate(
+                    self.profiles, self._anchor, horizon, self.max_substep_us, self.body
+                )
                 for p in self.profiles:
                     p.trim(horizon)
             newest = min(max(p.last_us for p in self.profiles), now_us)
-            self._cache = integrate(self.profiles, self._anchor, max(newest, self._anchor[0]),
-                                    self.max_substep_us, self.body)
+            self._cache = integrate(
+                self.profiles,
+                self._anchor,
+                max(newest, self._anchor[0]),
+                self.max_substep_us,
+                self.body,
+            )
             self._dirty = False
             self._hold, self._hold_until_us = self._steady(self._cache[0])
         cache, hold = self._cache, self._hold
         if now_us <= cache[0]:
             return cache[1:]
-        if hold is not None and now_us <= self._hold_until_us:  # one arc: what integrate computes, cheaper
+        if (
+            hold is not None and now_us <= self._hold_until_us
+        ):  # one arc: what integrate computes, cheaper
             return arc(cache[1:], hold[0], hold[1], float(now_us - cache[0]) * 1e-6)
         return tuple(integrate(self.profiles, cache, now_us, self.max_substep_us, self.body)[1:])

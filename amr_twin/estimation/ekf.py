@@ -17,15 +17,37 @@ from amr_twin.analysis import se2
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.model.config_sections import EkfCfg, UwbCfg
-from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped,
-                                            Quaternion, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (
+    Odometry,
+    Point,
+    Pose,
+    PoseWithCovariance,
+    PoseWithCovarianceStamped,
+    Quaternion,
+    Twist,
+    TwistWithCovariance,
+    Vector3,
+)
 from amr_twin.ros.messages import Header
 from amr_twin.ros.sensor_messages import Imu, Range
 from amr_twin.sensors.uwb import anchor_index
 
 from amr_twin.estimation.ekf_filter import UnicycleEkf
-from amr_twin.estimation.ekf_model import (BG, V, W, X, Y, YAW, gyro_model, linear_model, odometry_covariances,
-                        pose_difference_twist, process_noise, range_model, transition_jacobian)
+from amr_twin.estimation.ekf_model import (
+    BG,
+    V,
+    W,
+    X,
+    Y,
+    YAW,
+    gyro_model,
+    linear_model,
+    odometry_covariances,
+    pose_difference_twist,
+    process_noise,
+    range_model,
+    transition_jacobian,
+)
 
 MAP_FRAME = "map"
 TOPIC = "odometry/filtered"
@@ -62,22 +84,43 @@ class EkfNode:
         Tag position in ``base_link``, m (default: ``uwb``'s, else the origin).
     """
 
-    def __init__(self, cfg: EkfCfg, *, wheel_separation_m: float, use_odom: bool = True, use_imu: bool, use_uwb: bool,
-                 anchors_xy_m: np.ndarray | None = None, initial_pose=(0.0, 0.0, 0.0),
-                 bus: Bus | None = None, uwb: UwbCfg | None = None,
-                 anchor_z_m: float | None = None, tag_pos_m=None):
+    def __init__(
+        self,
+        cfg: EkfCfg,
+        *,
+        wheel_separation_m: float,
+        use_odom: bool = True,
+        use_imu: bool,
+        use_uwb: bool,
+        anchors_xy_m: np.ndarray | None = None,
+        initial_pose=(0.0, 0.0, 0.0),
+        bus: Bus | None = None,
+        uwb: UwbCfg | None = None,
+        anchor_z_m: float | None = None,
+        tag_pos_m=None,
+    ):
         if not (use_odom or use_imu or use_uwb):
             raise ValueError("use_odom, use_imu, use_uwb: at least one must be True")
         pose = np.asarray(initial_pose, dtype=np.float64).ravel()
         if pose.shape != (3,) or not np.all(np.isfinite(pose)):
-            raise ValueError(f"initial_pose: expected 3 finite numbers (x_m, y_m, yaw_rad), got {initial_pose!r}")
+            raise ValueError(
+                f"initial_pose: expected 3 finite numbers (x_m, y_m, yaw_rad), got {initial_pose!r}"
+            )
         self.cfg, self.use_odom, self.use_imu, self.use_uwb = cfg, use_odom, use_imu, use_uwb
         self.half_track_m = 0.5 * float(wheel_separation_m)
         if anchors_xy_m is None and uwb is not None:
             anchors_xy_m = uwb.anchors_xy_m
-        tag = tag_pos_m if tag_pos_m is not None else (uwb.tag_pos_m if uwb is not None else (0.0, 0.0, 0.0))
+        tag = (
+            tag_pos_m
+            if tag_pos_m is not None
+            else (uwb.tag_pos_m if uwb is not None else (0.0, 0.0, 0.0))
+        )
         self.tag_xy_m = np.asarray(tag, dtype=np.float64)[:2]
-        z_anchor = anchor_z_m if anchor_z_m is not None else (uwb.anchor_z_m if uwb is not None else tag[2])
+        z_anchor = (
+            anchor_z_m
+            if anchor_z_m is not None
+            else (uwb.anchor_z_m if uwb is not None else tag[2])
+        )
         self.dz_m = float(z_anchor) - float(tag[2])
         self.anchors_xy_m = None
         if use_uwb:
@@ -88,14 +131,21 @@ class EkfNode:
 
         f = self.filter = UnicycleEkf(dim_x=6, dim_z=1)
         f.x = np.array([[pose[0]], [pose[1]], [pose[2]], [0.0], [0.0], [0.0]])
-        f.P = np.diag([cfg.initial_xy_sigma_m ** 2, cfg.initial_xy_sigma_m ** 2, cfg.initial_yaw_sigma_rad ** 2,
-                       cfg.initial_v_sigma_m_s ** 2, cfg.initial_w_sigma_rad_s ** 2,
-                       cfg.initial_gyro_bias_sigma_rad_s ** 2])
+        f.P = np.diag(
+            [
+                cfg.initial_xy_sigma_m**2,
+                cfg.initial_xy_sigma_m**2,
+                cfg.initial_yaw_sigma_rad**2,
+                cfg.initial_v_sigma_m_s**2,
+                cfg.initial_w_sigma_rad_s**2,
+                cfg.initial_gyro_bias_sigma_rad_s**2,
+            ]
+        )
         self._odom_h = linear_model([V, W])
-        self._odom_R = np.diag([cfg.odom_v_sigma_m_s ** 2, cfg.odom_w_sigma_rad_s ** 2])
+        self._odom_R = np.diag([cfg.odom_v_sigma_m_s**2, cfg.odom_w_sigma_rad_s**2])
         self._gyro_h = gyro_model()
-        self._gyro_R = np.array([[cfg.gyro_w_sigma_rad_s ** 2]])
-        self._uwb_R = np.array([[cfg.uwb_range_sigma_m ** 2]])
+        self._gyro_R = np.array([[cfg.gyro_w_sigma_rad_s**2]])
+        self._uwb_R = np.array([[cfg.uwb_range_sigma_m**2]])
         self._pose_h = linear_model([X, Y, YAW])
 
         self.t_s: float | None = None
@@ -175,7 +225,10 @@ class EkfNode:
 
     def _at_rest(self) -> bool:
         v, w = self._last_twist
-        return abs(v) <= self.cfg.rest_speed_m_s and abs(w) * self.half_track_m <= self.cfg.rest_speed_m_s
+        return (
+            abs(v) <= self.cfg.rest_speed_m_s
+            and abs(w) * self.half_track_m <= self.cfg.rest_speed_m_s
+        )
 
     def _finish_calibration(self) -> None:
         f = self.filter
@@ -183,7 +236,7 @@ class EkfNode:
             f.x[BG, 0] = float(np.mean(self._calib))
             f.P[BG, :] = 0.0
             f.P[:, BG] = 0.0
-            f.P[BG, BG] = self.cfg.gyro_w_sigma_rad_s ** 2 / len(self._calib)
+            f.P[BG, BG] = self.cfg.gyro_w_sigma_rad_s**2 / len(self._calib)
         self.calibrated = True
 
     def on_imu(self, msg: Imu) -> None:
@@ -216,7 +269,9 @@ class EkfNode:
             return
         index = anchor_index(msg.header.frame_id)
         if index >= self.anchors_xy_m.shape[0]:
-            raise ValueError(f"header.frame_id: anchor {index} not in [0, {self.anchors_xy_m.shape[0] - 1}]")
+            raise ValueError(
+                f"header.frame_id: anchor {index} not in [0, {self.anchors_xy_m.shape[0] - 1}]"
+            )
         z = float(msg.range)
         if not (msg.min_range <= z <= msg.max_range) or not math.isfinite(z):
             return
@@ -227,8 +282,12 @@ class EkfNode:
         if abs(z - r) > self.cfg.mahalanobis_gate * math.sqrt(S):
             self.rejected_ranges += 1
             return
-        f.update(np.array([[z]]), lambda x: self.range_model(x[:, 0], index)[1],
-                 lambda x: np.array([[self.range_model(x[:, 0], index)[0]]]), R=self._uwb_R)
+        f.update(
+            np.array([[z]]),
+            lambda x: self.range_model(x[:, 0], index)[1],
+            lambda x: np.array([[self.range_model(x[:, 0], index)[0]]]),
+            R=self._uwb_R,
+        )
         self.fused["uwb"] += 1
         self._record()
         if not self.use_odom:
@@ -241,7 +300,9 @@ class EkfNode:
         to the filter's time by the filter's own motion since, and the result published at the pose's stamp,
         carried back: the receiver sees the jump the fusion made at the instant it knows."""
         if msg.header.frame_id != MAP_FRAME:
-            raise ValueError(f"{POSE_TOPIC}: header.frame_id must be {MAP_FRAME!r}, got {msg.header.frame_id!r}")
+            raise ValueError(
+                f"{POSE_TOPIC}: header.frame_id must be {MAP_FRAME!r}, got {msg.header.frame_id!r}"
+            )
         p = msg.pose.pose
         z = np.array([p.position.x, p.position.y, p.orientation.yaw_rad()])
         R = np.asarray(msg.pose.covariance, dtype=np.float64).reshape(6, 6)[_POSE_ROWS]
@@ -249,13 +310,15 @@ class EkfNode:
         k = bisect.bisect_right(self._t_hist, t_s) - 1
         since = None
         if self.t_s is not None and t_s < self.t_s and k >= 0:
-            since = se2.between(self._pose_hist[k], self.filter.x[:3, 0])   # the motion from then to now
+            since = se2.between(
+                self._pose_hist[k], self.filter.x[:3, 0]
+            )  # the motion from then to now
             z = se2.compose(z, since)
         else:
             self._predict_to(t_s)
         HJ, Hx, _ = self._pose_h
         yaw = float(self.filter.x[YAW, 0])
-        z[2] = yaw + math.remainder(z[2] - yaw, math.tau)   # the innovation's yaw in (-pi, pi]
+        z[2] = yaw + math.remainder(z[2] - yaw, math.tau)  # the innovation's yaw in (-pi, pi]
         self.filter.update(z.reshape(3, 1), HJ, Hx, R=R)
         self.fused["pose"] += 1
         self._record()
@@ -287,11 +350,15 @@ class EkfNode:
         pose_cov, twist_cov = odometry_covariances(self.filter.P)
         self._seq += 1
         return Odometry(
-            header=Header(self._seq, stamp, self.frame_id), child_frame_id=BASE_FRAME,
-            pose=PoseWithCovariance(Pose(Point(float(px), float(py), 0.0), Quaternion.from_yaw(float(pyaw))),
-                                    pose_cov),
-            twist=TwistWithCovariance(Twist(Vector3(float(x[V]), 0.0, 0.0), Vector3(0.0, 0.0, float(x[W]))),
-                                      twist_cov))
+            header=Header(self._seq, stamp, self.frame_id),
+            child_frame_id=BASE_FRAME,
+            pose=PoseWithCovariance(
+                Pose(Point(float(px), float(py), 0.0), Quaternion.from_yaw(float(pyaw))), pose_cov
+            ),
+            twist=TwistWithCovariance(
+                Twist(Vector3(float(x[V]), 0.0, 0.0), Vector3(0.0, 0.0, float(x[W]))), twist_cov
+            ),
+        )
 
     def _publish(self, stamp) -> None:
         if self._pub is not None:

@@ -48,12 +48,16 @@ def transition_jacobian(x: np.ndarray, dt_s: float) -> np.ndarray:
     c = math.cos(yaw + 0.5 * w * dt_s)
     s = math.sin(yaw + 0.5 * w * dt_s)
     vdt = v * dt_s
-    return np.array([[1.0, 0.0, -vdt * s, dt_s * c, -vdt * s * 0.5 * dt_s, 0.0],
-                     [0.0, 1.0, vdt * c, dt_s * s, vdt * c * 0.5 * dt_s, 0.0],
-                     [0.0, 0.0, 1.0, 0.0, dt_s, 0.0],
-                     [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
-                     [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-                     [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
+    return np.array(
+        [
+            [1.0, 0.0, -vdt * s, dt_s * c, -vdt * s * 0.5 * dt_s, 0.0],
+            [0.0, 1.0, vdt * c, dt_s * s, vdt * c * 0.5 * dt_s, 0.0],
+            [0.0, 0.0, 1.0, 0.0, dt_s, 0.0],
+            [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        ]
+    )
 
 
 def process_noise(x: np.ndarray, dt_s: float, cfg: EkfCfg) -> np.ndarray:
@@ -67,15 +71,19 @@ def process_noise(x: np.ndarray, dt_s: float, cfg: EkfCfg) -> np.ndarray:
     yaw, w = float(x[YAW]), float(x[W])
     c = math.cos(yaw + 0.5 * w * dt_s)
     s = math.sin(yaw + 0.5 * w * dt_s)
-    qa, qw = cfg.accel_sigma_m_s2 ** 2, cfg.alpha_sigma_rad_s2 ** 2
-    d2, d3 = dt_s * dt_s / 2.0, dt_s ** 3 / 3.0
+    qa, qw = cfg.accel_sigma_m_s2**2, cfg.alpha_sigma_rad_s2**2
+    d2, d3 = dt_s * dt_s / 2.0, dt_s**3 / 3.0
     qxy, qxv, qyv, qyw = qa * d3 * c * s, qa * d2 * c, qa * d2 * s, qw * d2
-    return np.array([[qa * d3 * c * c + 1e-12 * dt_s, qxy, 0.0, qxv, 0.0, 0.0],
-                     [qxy, qa * d3 * s * s + 1e-12 * dt_s, 0.0, qyv, 0.0, 0.0],
-                     [0.0, 0.0, qw * d3, 0.0, qyw, 0.0],
-                     [qxv, qyv, 0.0, qa * dt_s, 0.0, 0.0],
-                     [0.0, 0.0, qyw, 0.0, qw * dt_s, 0.0],
-                     [0.0, 0.0, 0.0, 0.0, 0.0, cfg.gyro_bias_walk_rad_s_sqrt_s ** 2 * dt_s]])
+    return np.array(
+        [
+            [qa * d3 * c * c + 1e-12 * dt_s, qxy, 0.0, qxv, 0.0, 0.0],
+            [qxy, qa * d3 * s * s + 1e-12 * dt_s, 0.0, qyv, 0.0, 0.0],
+            [0.0, 0.0, qw * d3, 0.0, qyw, 0.0],
+            [qxv, qyv, 0.0, qa * dt_s, 0.0, 0.0],
+            [0.0, 0.0, qyw, 0.0, qw * dt_s, 0.0],
+            [0.0, 0.0, 0.0, 0.0, 0.0, cfg.gyro_bias_walk_rad_s_sqrt_s**2 * dt_s],
+        ]
+    )
 
 
 def linear_model(rows: Sequence[int], n: int = N_STATE) -> tuple[Callable, Callable, np.ndarray]:
@@ -97,8 +105,9 @@ def gyro_model() -> tuple[Callable, Callable]:
     return (lambda x: H_gyro), (lambda x: H_gyro @ x)
 
 
-def range_model(x: np.ndarray, anchor_xy_m: np.ndarray, tag_xy_m: np.ndarray,
-                dz_m: float) -> tuple[float, np.ndarray]:
+def range_model(
+    x: np.ndarray, anchor_xy_m: np.ndarray, tag_xy_m: np.ndarray, dz_m: float
+) -> tuple[float, np.ndarray]:
     """Predicted UWB range and its Jacobian.
 
     Parameters
@@ -132,8 +141,9 @@ def range_model(x: np.ndarray, anchor_xy_m: np.ndarray, tag_xy_m: np.ndarray,
     return r, H
 
 
-def pose_difference_twist(prev: tuple[float, float, float, float],
-                          now: tuple[float, float, float, float]) -> tuple[float, float]:
+def pose_difference_twist(
+    prev: tuple[float, float, float, float], now: tuple[float, float, float, float]
+) -> tuple[float, float]:
     """``(v_m_s, w_rad_s)`` between two poses ``(t_s, x_m, y_m, yaw_rad)``, ``now[0] > prev[0]``.
 
     The forward speed is the displacement projected on the mid-heading; the yaw

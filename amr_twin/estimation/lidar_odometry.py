@@ -42,7 +42,9 @@ def scan_points(scan: LaserScan) -> tuple[np.ndarray, np.ndarray]:
         ok = np.isfinite(r) & (r >= scan.range_min) & (r <= scan.range_max)
     index = np.flatnonzero(ok)
     angle = scan.angle_min + scan.angle_increment * index
-    points = np.column_stack([r[index] * np.cos(angle), r[index] * np.sin(angle), np.zeros(len(index))])
+    points = np.column_stack(
+        [r[index] * np.cos(angle), r[index] * np.sin(angle), np.zeros(len(index))]
+    )
     return points, index
 
 
@@ -64,16 +66,29 @@ class LidarOdometry:
         KISS-ICP worker threads (0: as many as cores).
     """
 
-    def __init__(self, *, voxel_size_m: float = 0.15, max_range_m: float = 12.0, min_range_m: float = 0.15,
-                 laser_in_base_xy_yaw: tuple[float, float, float] = (0.30, 0.0, 0.0), deskew: bool = True,
-                 max_threads: int = 1):
+    def __init__(
+        self,
+        *,
+        voxel_size_m: float = 0.15,
+        max_range_m: float = 12.0,
+        min_range_m: float = 0.15,
+        laser_in_base_xy_yaw: tuple[float, float, float] = (0.30, 0.0, 0.0),
+        deskew: bool = True,
+        max_threads: int = 1,
+    ):
         if not (math.isfinite(voxel_size_m) and 0.0 < voxel_size_m <= 1.0):
             raise ValueError(f"voxel_size_m: {voxel_size_m} must lie in (0, 1] m")
         if not (math.isfinite(max_range_m) and 0.0 <= min_range_m < max_range_m):
-            raise ValueError(f"min_range_m, max_range_m: ({min_range_m}, {max_range_m}) must satisfy "
-                             "0 <= min_range_m < max_range_m < inf")
-        if len(laser_in_base_xy_yaw) != 3 or not all(math.isfinite(v) for v in laser_in_base_xy_yaw):
-            raise ValueError(f"laser_in_base_xy_yaw: {laser_in_base_xy_yaw} must be 3 finite numbers")
+            raise ValueError(
+                f"min_range_m, max_range_m: ({min_range_m}, {max_range_m}) must satisfy "
+                "0 <= min_range_m < max_range_m < inf"
+            )
+        if len(laser_in_base_xy_yaw) != 3 or not all(
+            math.isfinite(v) for v in laser_in_base_xy_yaw
+        ):
+            raise ValueError(
+                f"laser_in_base_xy_yaw: {laser_in_base_xy_yaw} must be 3 finite numbers"
+            )
         if int(max_threads) < 0:
             raise ValueError(f"max_threads: {max_threads} must be >= 0")
         config = KISSConfig()
@@ -102,12 +117,15 @@ class LidarOdometry:
         t_end = scan_end_time_s(scan)
         if self._t_s:
             return self._t_s[-1], t_end
-        period_s = scan.scan_time if scan.scan_time > 0 else len(scan.ranges) * abs(scan.time_increment)
+        period_s = (
+            scan.scan_time if scan.scan_time > 0 else len(scan.ranges) * abs(scan.time_increment)
+        )
         t0 = min(t_end - period_s, float(beam_times_s(scan).min()) if len(scan.ranges) else t_end)
         return (t0 if t0 < t_end else t_end - 1e-3), t_end
 
-    def register(self, scan: LaserScan,
-                 prior_base_delta: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
+    def register(
+        self, scan: LaserScan, prior_base_delta: tuple[float, float, float] | None = None
+    ) -> tuple[float, float, float]:
         """Register one scan; return the ``base_link`` pose at its last beam.
 
         Parameters
@@ -128,12 +146,18 @@ class LidarOdometry:
         t_start, t_end = self.prior_interval_s(scan)
         first = not self._t_s
         if not first and t_end <= t_start:
-            raise ValueError(f"scan stamp: t_end {t_end:.6f} s must be after the previous {t_start:.6f} s")
+            raise ValueError(
+                f"scan stamp: t_end {t_end:.6f} s must be after the previous {t_start:.6f} s"
+            )
         delta = None
         if prior_base_delta is not None:
             if len(prior_base_delta) != 3 or not all(math.isfinite(v) for v in prior_base_delta):
-                raise ValueError(f"prior_base_delta: {prior_base_delta} must be 3 finite numbers (m, m, rad)")
-            delta = self._laser_inv @ se2.matrix(*(float(v) for v in prior_base_delta)) @ self._laser
+                raise ValueError(
+                    f"prior_base_delta: {prior_base_delta} must be 3 finite numbers (m, m, rad)"
+                )
+            delta = (
+                self._laser_inv @ se2.matrix(*(float(v) for v in prior_base_delta)) @ self._laser
+            )
         if first:  # deskew along the prior, but start at the origin: initial guess inv(D) @ D = I
             self.kiss.last_delta = delta if delta is not None else np.eye(4)
             self.kiss.last_pose = np.linalg.inv(self.kiss.last_delta)
@@ -143,8 +167,9 @@ class LidarOdometry:
         if len(index) >= MIN_POINTS:
             stamps = scan.header.stamp.to_sec() + scan.time_increment * index
             sentinel = np.array([[SENTINEL_RANGE_M, 0.0, 0.0]] * 2)
-            self.kiss.register_frame(np.vstack([points, sentinel]),
-                                     np.concatenate([stamps, [t_start, t_end]]))
+            self.kiss.register_frame(
+                np.vstack([points, sentinel]), np.concatenate([stamps, [t_start, t_end]])
+            )
         else:  # too few points: carry the pose forward along the prior
             self.skipped += 1
             self.kiss.last_pose = self.kiss.last_pose @ self.kiss.last_delta
@@ -154,7 +179,9 @@ class LidarOdometry:
         self.register_wall_s.append(time.perf_counter() - wall0)
         return pose
 
-    def poses(self, origin_xy_yaw: tuple[float, float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def poses(
+        self, origin_xy_yaw: tuple[float, float, float] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """History of the estimates.
 
         Parameters
@@ -175,8 +202,9 @@ class LidarOdometry:
             pose = se2.compose(np.asarray(origin_xy_yaw, float), pose).reshape(-1, 3)
         return np.array(self._t_s, float), pose
 
-    def beam_laser_poses(self, scan: LaserScan,
-                         origin_xy_yaw: tuple[float, float, float] | None = None) -> np.ndarray:
+    def beam_laser_poses(
+        self, scan: LaserScan, origin_xy_yaw: tuple[float, float, float] | None = None
+    ) -> np.ndarray:
         """``laser`` pose at every beam of a registered scan, for mapping a moving scan.
 
         The ``base_link`` poses of :meth:`poses` are interpolated (linearly, yaw unwrapped)

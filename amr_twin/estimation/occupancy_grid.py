@@ -48,10 +48,23 @@ class OccupancyGrid:
         Trace beams without a return as free up to ``range_max``.
     """
 
-    def __init__(self, resolution_m: float, width_m: float, height_m: float,
-                 origin_xy_m: tuple[float, float], *, hit_prob: float = 0.7, miss_prob: float = 0.4,
-                 clamp_prob: tuple[float, float] = (0.12, 0.97), free_on_no_return: bool = False):
-        for name, value in (("resolution_m", resolution_m), ("width_m", width_m), ("height_m", height_m)):
+    def __init__(
+        self,
+        resolution_m: float,
+        width_m: float,
+        height_m: float,
+        origin_xy_m: tuple[float, float],
+        *,
+        hit_prob: float = 0.7,
+        miss_prob: float = 0.4,
+        clamp_prob: tuple[float, float] = (0.12, 0.97),
+        free_on_no_return: bool = False,
+    ):
+        for name, value in (
+            ("resolution_m", resolution_m),
+            ("width_m", width_m),
+            ("height_m", height_m),
+        ):
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name}: {value} must be a finite number > 0 m")
         if len(origin_xy_m) != 2 or not all(math.isfinite(v) for v in origin_xy_m):
@@ -98,12 +111,20 @@ class OccupancyGrid:
     def cell_centres_xy(self, mask: np.ndarray) -> np.ndarray:
         """Map-frame centres (k, 2), m, of the cells where ``mask`` (n_rows, n_cols) is true."""
         row, col = np.nonzero(mask)
-        return np.column_stack([self.origin_xy_m[0] + (col + 0.5) * self.resolution_m,
-                                self.origin_xy_m[1] + (row + 0.5) * self.resolution_m])
+        return np.column_stack(
+            [
+                self.origin_xy_m[0] + (col + 0.5) * self.resolution_m,
+                self.origin_xy_m[1] + (row + 0.5) * self.resolution_m,
+            ]
+        )
 
     # -- update ---------------------------------------------------------------------
-    def insert_scan(self, laser_pose_xy_yaw: tuple[float, float, float], scan: LaserScan,
-                    beam_poses: np.ndarray | None = None) -> None:
+    def insert_scan(
+        self,
+        laser_pose_xy_yaw: tuple[float, float, float],
+        scan: LaserScan,
+        beam_poses: np.ndarray | None = None,
+    ) -> None:
         """Update the grid with one scan.
 
         Parameters
@@ -143,9 +164,13 @@ class OccupancyGrid:
         ray = np.repeat(beams, counts)
         first = np.repeat(np.cumsum(counts) - counts, counts)
         dist = (np.arange(len(ray)) - first) * step
-        free_xy = np.column_stack([poses[ray, 0] + dist * cos_t[ray], poses[ray, 1] + dist * sin_t[ray]])
+        free_xy = np.column_stack(
+            [poses[ray, 0] + dist * cos_t[ray], poses[ray, 1] + dist * sin_t[ray]]
+        )
         hits = np.flatnonzero(hit)
-        hit_xy = np.column_stack([poses[hits, 0] + r[hits] * cos_t[hits], poses[hits, 1] + r[hits] * sin_t[hits]])
+        hit_xy = np.column_stack(
+            [poses[hits, 0] + r[hits] * cos_t[hits], poses[hits, 1] + r[hits] * sin_t[hits]]
+        )
 
         touched, hit_mask = self._touched, self._hit
         row, col, inside = self.cell_index(free_xy)
@@ -189,13 +214,22 @@ class OccupancyGrid:
         """
         stem = Path(stem)
         stem.parent.mkdir(parents=True, exist_ok=True)
-        yaml_path, pgm_path, png_path = (stem.parent / (stem.name + ext) for ext in (".yaml", ".pgm", ".png"))
+        yaml_path, pgm_path, png_path = (
+            stem.parent / (stem.name + ext) for ext in (".yaml", ".pgm", ".png")
+        )
         image = self.image()
         write_pgm(pgm_path, image)
-        meta = {"image": pgm_path.name, "resolution": self.resolution_m,
-                "origin": [self.origin_xy_m[0], self.origin_xy_m[1], 0.0], "mode": "trinary", "negate": 0,
-                "occupied_thresh": OCCUPIED_THRESH, "free_thresh": FREE_THRESH}
+        meta = {
+            "image": pgm_path.name,
+            "resolution": self.resolution_m,
+            "origin": [self.origin_xy_m[0], self.origin_xy_m[1], 0.0],
+            "mode": "trinary",
+            "negate": 0,
+            "occupied_thresh": OCCUPIED_THRESH,
+            "free_thresh": FREE_THRESH,
+        }
         yaml_path.write_text(yaml.safe_dump(meta, sort_keys=False))
         import matplotlib.image
+
         matplotlib.image.imsave(png_path, image, cmap="gray", vmin=0, vmax=255)
         return yaml_path, pgm_path, png_path

@@ -12,7 +12,7 @@ from amr_twin.analysis import se2
 from amr_twin.model.config_sections import PoseGraphCfg
 from amr_twin.sensors.uwb import anchor_index
 
-ANCHOR_KEY = 10 ** 7          # key of anchor 0; poses are keyed 0..N-1
+ANCHOR_KEY = 10**7  # key of anchor 0; poses are keyed 0..N-1
 ANCHOR_SIGMA_M = 1e-4
 MIN_RANGE_OVER_DZ = 1.05
 
@@ -33,10 +33,13 @@ class SmoothedTrajectory:
 
 def _pose2(p):
     import gtsam
+
     return gtsam.Pose2(float(p[0]), float(p[1]), float(p[2]))
 
 
-def _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz_m, sigma_m, cauchy_k) -> int:
+def _range_factors(
+    graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz_m, sigma_m, cauchy_k
+) -> int:
     """Add a robust range factor per usable ``sensor_msgs/Range`` (module notes), ``anchor`` (M,) the index
     of each one's anchor; how many were added."""
     import gtsam
@@ -44,7 +47,12 @@ def _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz
     stamps = np.array([m.header.stamp.to_sec() for m in ranges], float)
     z = np.array([m.range for m in ranges], float)
     with np.errstate(invalid="ignore"):
-        ok = np.isfinite(z) & (stamps >= t_s[0]) & (stamps <= t_s[-1]) & (z > MIN_RANGE_OVER_DZ * dz_m)
+        ok = (
+            np.isfinite(z)
+            & (stamps >= t_s[0])
+            & (stamps <= t_s[-1])
+            & (z > MIN_RANGE_OVER_DZ * dz_m)
+        )
     idx = np.flatnonzero(ok)
     if not len(idx):
         return 0
@@ -53,19 +61,37 @@ def _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz
     at_node = se2.interpolate(odom_t_s, odom_pose, t_s[k]).reshape(-1, 3)
     at_range = se2.interpolate(odom_t_s, odom_pose, stamps[idx]).reshape(-1, 3)
     sensor = se2.compose(se2.between(at_node, at_range), np.array([tag_xy_m[0], tag_xy_m[1], 0.0]))
-    horizontal = np.sqrt(z[idx] ** 2 - dz_m ** 2)
+    horizontal = np.sqrt(z[idx] ** 2 - dz_m**2)
     robust = gtsam.noiseModel.mEstimator.Cauchy.Create(cauchy_k)
     for j, i in enumerate(idx):
         noise = gtsam.noiseModel.Robust.Create(
-            robust, gtsam.noiseModel.Isotropic.Sigma(1, sigma_m * z[i] / horizontal[j]))
-        graph.add(gtsam.RangeFactorWithTransform2D(int(k[j]), ANCHOR_KEY + int(anchor[i]),
-                                                   float(horizontal[j]), noise, _pose2(sensor[j])))
+            robust, gtsam.noiseModel.Isotropic.Sigma(1, sigma_m * z[i] / horizontal[j])
+        )
+        graph.add(
+            gtsam.RangeFactorWithTransform2D(
+                int(k[j]),
+                ANCHOR_KEY + int(anchor[i]),
+                float(horizontal[j]),
+                noise,
+                _pose2(sensor[j]),
+            )
+        )
     return len(idx)
 
 
-def smooth(t_s: np.ndarray, lidar_pose: np.ndarray, odom_t_s: np.ndarray, odom_pose: np.ndarray, ranges: list,
-           anchors_xy_m: np.ndarray, tag_xy_m, dz_m: float, start_pose, range_sigma_m: float,
-           cfg: PoseGraphCfg) -> SmoothedTrajectory:
+def smooth(
+    t_s: np.ndarray,
+    lidar_pose: np.ndarray,
+    odom_t_s: np.ndarray,
+    odom_pose: np.ndarray,
+    ranges: list,
+    anchors_xy_m: np.ndarray,
+    tag_xy_m,
+    dz_m: float,
+    start_pose,
+    range_sigma_m: float,
+    cfg: PoseGraphCfg,
+) -> SmoothedTrajectory:
     """Smooth a drive (module notes).
 
     ``t_s`` (N,), ``lidar_pose`` (N, 3): kiss-icp's poses at the scans' ends, in the map frame;
@@ -84,13 +110,26 @@ def smooth(t_s: np.ndarray, lidar_pose: np.ndarray, odom_t_s: np.ndarray, odom_p
     graph, values = gtsam.NonlinearFactorGraph(), gtsam.Values()
     for k in range(n):
         values.insert(k, _pose2(lidar_pose[k]))
-    graph.add(gtsam.PriorFactorPose2(0, _pose2(start_pose), gtsam.noiseModel.Diagonal.Sigmas(
-        np.array([cfg.start_xy_sigma_m, cfg.start_xy_sigma_m, cfg.start_yaw_sigma_rad]))))
-    lidar = gtsam.noiseModel.Diagonal.Sigmas(np.array([cfg.lidar_sigma_m, cfg.lidar_sigma_m, cfg.lidar_yaw_sigma_rad]))
+    graph.add(
+        gtsam.PriorFactorPose2(
+            0,
+            _pose2(start_pose),
+            gtsam.noiseModel.Diagonal.Sigmas(
+                np.array([cfg.start_xy_sigma_m, cfg.start_xy_sigma_m, cfg.start_yaw_sigma_rad])
+            ),
+        )
+    )
+    lidar = gtsam.noiseModel.Diagonal.Sigmas(
+        np.array([cfg.lidar_sigma_m, cfg.lidar_sigma_m, cfg.lidar_yaw_sigma_rad])
+    )
     wheels = gtsam.noiseModel.Diagonal.Sigmas(
-        np.array([cfg.odometry_sigma_m, cfg.odometry_sigma_m, cfg.odometry_yaw_sigma_rad]))
+        np.array([cfg.odometry_sigma_m, cfg.odometry_sigma_m, cfg.odometry_yaw_sigma_rad])
+    )
     odom_at = se2.interpolate(odom_t_s, odom_pose, t_s).reshape(-1, 3)
-    lidar_step, odom_step = se2.between(lidar_pose[:-1], lidar_pose[1:]), se2.between(odom_at[:-1], odom_at[1:])
+    lidar_step, odom_step = (
+        se2.between(lidar_pose[:-1], lidar_pose[1:]),
+        se2.between(odom_at[:-1], odom_at[1:]),
+    )
     for k in range(n - 1):
         graph.add(gtsam.BetweenFactorPose2(k, k + 1, _pose2(lidar_step[k]), lidar))
         graph.add(gtsam.BetweenFactorPose2(k, k + 1, _pose2(odom_step[k]), wheels))
@@ -102,13 +141,35 @@ def smooth(t_s: np.ndarray, lidar_pose: np.ndarray, odom_t_s: np.ndarray, odom_p
     if np.any(anchor >= len(anchors)):
         bad = ranges[int(np.argmax(anchor >= len(anchors)))].header.frame_id
         raise ValueError(f"uwb/range: {bad} is not one of the {len(anchors)} anchors")
-    used = _range_factors(graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz_m, range_sigma_m,
-                          cfg.uwb_cauchy_k)
+    used = _range_factors(
+        graph,
+        t_s,
+        odom_t_s,
+        odom_pose,
+        ranges,
+        anchor,
+        tag_xy_m,
+        dz_m,
+        range_sigma_m,
+        cfg.uwb_cauchy_k,
+    )
     params = gtsam.LevenbergMarquardtParams()
     params.setMaxIterations(cfg.max_iterations)
     optimizer = gtsam.LevenbergMarquardtOptimizer(graph, values, params)
     before = graph.error(values)
     result = optimizer.optimize()
-    pose = np.array([[result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()] for k in range(n)])
-    return SmoothedTrajectory(t_s, pose, used, len(ranges) - used, int(optimizer.iterations()), float(before),
-                              float(graph.error(result)))
+    pose = np.array(
+        [
+            [result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()]
+            for k in range(n)
+        ]
+    )
+    return SmoothedTrajectory(
+        t_s,
+        pose,
+        used,
+        len(ranges) - used,
+        int(optimizer.iterations()),
+        float(before),
+        float(graph.error(result)),
+    )

@@ -52,8 +52,14 @@ class PublishedPose:
     Call :meth:`restart` before use.
     """
 
-    def __init__(self, body: Callable[[float, float], tuple[float, float]], max_substep_us: int,
-                 accel_rpm_per_us: tuple[float, float], catchup_s: float, catchup_max_fraction: float):
+    def __init__(
+        self,
+        body: Callable[[float, float], tuple[float, float]],
+        max_substep_us: int,
+        accel_rpm_per_us: tuple[float, float],
+        catchup_s: float,
+        catchup_max_fraction: float,
+    ):
         self._body, self.max_substep_us = body, max_substep_us
         self.accel_rpm_per_us = accel_rpm_per_us
         self.catchup_s, self.catchup_max_fraction = catchup_s, catchup_max_fraction
@@ -88,10 +94,16 @@ class PublishedPose:
         v, w = self._body(*self.used)
         k = self.catchup_max_fraction
         # yaw: within the fraction of the yaw rate, or of the one the wheels' speed gives turning in place
-        w_wheels = max(abs(w), abs(self._body(-self.used[0], self.used[0])[1]),
-                       abs(self._body(self.used[1], -self.used[1])[1]))
-        t_s = max(self.catchup_s, e_xy / (k * abs(v) + CATCHUP_FLOOR_M_S),
-                  abs(eyaw) / (k * w_wheels + CATCHUP_FLOOR_RAD_S))
+        w_wheels = max(
+            abs(w),
+            abs(self._body(-self.used[0], self.used[0])[1]),
+            abs(self._body(self.used[1], -self.used[1])[1]),
+        )
+        t_s = max(
+            self.catchup_s,
+            e_xy / (k * abs(v) + CATCHUP_FLOOR_M_S),
+            abs(eyaw) / (k * w_wheels + CATCHUP_FLOOR_RAD_S),
+        )
         self.correction = (ex / t_s, ey / t_s, eyaw / t_s)
 
     def twist(self) -> tuple[float, float, float]:
@@ -130,7 +142,9 @@ class PublishedPose:
                 dt = t1 - t
                 mean = [0.0, 0.0]
                 for w in (0, 1):
-                    s0, r0, s1, r1 = segs[w]  # SpeedProfile.at(t1, segs[w]), spelled out (it runs at 100 Hz)
+                    s0, r0, s1, r1 = segs[
+                        w
+                    ]  # SpeedProfile.at(t1, segs[w]), spelled out (it runs at 100 Hz)
                     goal = r0 if s1 <= s0 else r0 + (r1 - r0) * (t1 - s0) / (s1 - s0)
                     step = accel[w] * dt
                     new = min(max(goal, used[w] - step), used[w] + step)

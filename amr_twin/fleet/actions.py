@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-INSTANT_ACTIONS = frozenset({"cancelOrder", "startPause", "stopPause", "initPosition", "stateRequest",
-                             "factsheetRequest"})
+INSTANT_ACTIONS = frozenset(
+    {"cancelOrder", "startPause", "stopPause", "initPosition", "stateRequest", "factsheetRequest"}
+)
 """The instant actions this vehicle performs."""
 NODE_ACTIONS: frozenset = frozenset()
 """The node actions it performs (pick, drop and charging are not built yet: an order carrying them is refused)."""
@@ -26,7 +27,11 @@ class ActionState:
 
     def message(self) -> dict:
         """The state's ``actionStates`` entry."""
-        out = {"actionId": self.action_id, "actionType": self.action_type, "actionStatus": self.status}
+        out = {
+            "actionId": self.action_id,
+            "actionType": self.action_type,
+            "actionStatus": self.status,
+        }
         if self.result is not None:
             out["resultDescription"] = self.result
         return out
@@ -39,7 +44,9 @@ class ActionStates:
         self._states: dict[str, ActionState] = {}
         self.changed = False
 
-    def add(self, action_id: str, action_type: str, status: str = "WAITING", order: bool = False) -> ActionState:
+    def add(
+        self, action_id: str, action_type: str, status: str = "WAITING", order: bool = False
+    ) -> ActionState:
         state = self._states[action_id] = ActionState(action_id, action_type, status, order=order)
         self.changed = True
         return state
@@ -56,7 +63,11 @@ class ActionStates:
 
     def running(self, action_type: str) -> list[ActionState]:
         """The actions of ``action_type`` not yet finished or failed."""
-        return [s for s in self._states.values() if s.action_type == action_type and s.status not in DONE]
+        return [
+            s
+            for s in self._states.values()
+            if s.action_type == action_type and s.status not in DONE
+        ]
 
     def fail_order_actions(self, reason: str) -> None:
         """Every order action not finished fails (a cancelled order)."""

@@ -29,18 +29,20 @@ class VehicleAdapter:
     ``stamper`` (:class:`~amr_twin.fleet.protocol.Stamper`) heads each message, ``factsheet`` is the factsheet's
     body; ``xy_tolerance_m``: the vehicle's own tolerance at a node (allowedDeviationXY 0)."""
 
-    def __init__(self, vehicle, clock, send, stamper, factsheet: dict, xy_tolerance_m: float = 0.25):
+    def __init__(
+        self, vehicle, clock, send, stamper, factsheet: dict, xy_tolerance_m: float = 0.25
+    ):
         self.vehicle, self.clock, self.send, self.stamper = vehicle, clock, send, stamper
         self.factsheet_body, self.xy_tolerance_m = factsheet, xy_tolerance_m
         self.order: Order | None = None
-        self.nodes: list = []          # node states left, in sequence
+        self.nodes: list = []  # node states left, in sequence
         self.edges: list = []
         self.last_node = ("", 0)
         self._last_node_obj = None
         self.actions = ActionStates()
         self.errors: list[dict] = []
         self.paused = False
-        self._goal = None              # (node, outcome) sent to the vehicle
+        self._goal = None  # (node, outcome) sent to the vehicle
         self._last_order_header: int | None = None
         self._changed, self._last_state_s, self._driving = True, -1e9, False
         self.log: list[tuple[float, str, dict]] = []
@@ -53,7 +55,11 @@ class VehicleAdapter:
         try:
             msg = json.loads(payload)
         except (ValueError, UnicodeDecodeError) as exc:
-            self._error(Rejection("validationError", f"{subtopic}: not JSON ({exc})", (("topic", subtopic),)))
+            self._error(
+                Rejection(
+                    "validationError", f"{subtopic}: not JSON ({exc})", (("topic", subtopic),)
+                )
+            )
             return
         if subtopic == "order":
             self._on_order(msg)
@@ -67,10 +73,19 @@ class VehicleAdapter:
 
     def _on_order(self, msg) -> None:
         header = msg.get("headerId") if isinstance(msg, dict) else None
-        if isinstance(header, int) and self._last_order_header is not None and 0 < header <= self._last_order_header:
-            self._error(Rejection("validationError", f"order: headerId {header} is not after the last order's "
-                                  f"{self._last_order_header} (a late or repeated message)",
-                                  (("topic", "order"), ("headerId", header))))
+        if (
+            isinstance(header, int)
+            and self._last_order_header is not None
+            and 0 < header <= self._last_order_header
+        ):
+            self._error(
+                Rejection(
+                    "validationError",
+                    f"order: headerId {header} is not after the last order's "
+                    f"{self._last_order_header} (a late or repeated message)",
+                    (("topic", "order"), ("headerId", header)),
+                )
+            )
             return
         if isinstance(header, int):
             self._last_order_header = header
@@ -88,28 +103,54 @@ class VehicleAdapter:
         current = self.order
         if current is not None and order.order_id == current.order_id:
             if order.update_id < current.update_id:
-                raise Rejection("orderUpdateError", f"order {order.order_id}: orderUpdateId {order.update_id} is "
-                                f"lower than the present {current.update_id}",
-                                (("topic", "order"), ("orderId", order.order_id), ("orderUpdateId", order.update_id)))
+                raise Rejection(
+                    "orderUpdateError",
+                    f"order {order.order_id}: orderUpdateId {order.update_id} is "
+                    f"lower than the present {current.update_id}",
+                    (
+                        ("topic", "order"),
+                        ("orderId", order.order_id),
+                        ("orderUpdateId", order.update_id),
+                    ),
+                )
             if order.update_id == current.update_id:
-                return   # the same message again: ignored (section 6.6.4.3)
+                return  # the same message again: ignored (section 6.6.4.3)
         stitched = current is not None and (bool(self.nodes) or order.order_id == current.order_id)
         if stitched:
             self.nodes, self.edges = stitch(self.nodes, self.edges, self._last_base(), order)
         else:
             first = order.nodes[0]
-            if not within(self.vehicle.pose(), first.x_m, first.y_m, None,
-                          max(first.deviation_xy_m, self.xy_tolerance_m), 0.0):
-                raise Rejection("noRouteError", f"order {order.order_id}: the first node {first.node_id} is not where "
-                                "the vehicle stands (nor within its allowed deviation)",
-                                (("topic", "order"), ("orderId", order.order_id), ("nodeId", first.node_id)))
+            if not within(
+                self.vehicle.pose(),
+                first.x_m,
+                first.y_m,
+                None,
+                max(first.deviation_xy_m, self.xy_tolerance_m),
+                0.0,
+            ):
+                raise Rejection(
+                    "noRouteError",
+                    f"order {order.order_id}: the first node {first.node_id} is not where "
+                    "the vehicle stands (nor within its allowed deviation)",
+                    (("topic", "order"), ("orderId", order.order_id), ("nodeId", first.node_id)),
+                )
             self.nodes, self.edges = list(order.nodes), list(order.edges)
         if current is None or order.order_id != current.order_id:
             self.actions.new_order()
         self.order = order
-        self.errors = [e for e in self.errors if e["errorType"] not in
-                       ("validationError", "orderError", "orderUpdateError", "noRouteError", "navigationError")]
-        if not stitched:                 # the first node is where the vehicle stands: traversed now
+        self.errors = [
+            e
+            for e in self.errors
+            if e["errorType"]
+            not in (
+                "validationError",
+                "orderError",
+                "orderUpdateError",
+                "noRouteError",
+                "navigationError",
+            )
+        ]
+        if not stitched:  # the first node is where the vehicle stands: traversed now
             self._traverse(self.nodes[0], first=True)
         elif self._goal is not None and self._goal[0] not in self.nodes:
             self._goal = None
@@ -122,30 +163,60 @@ class VehicleAdapter:
     def _on_instant_actions(self, msg) -> None:
         actions = msg.get("actions") if isinstance(msg, dict) else None
         if not isinstance(actions, list):
-            self._error(Rejection("validationError", "instantActions: field actions missing or not an array",
-                                  (("topic", "instantActions"),)))
+            self._error(
+                Rejection(
+                    "validationError",
+                    "instantActions: field actions missing or not an array",
+                    (("topic", "instantActions"),),
+                )
+            )
             return
         for a in actions:
             kind = a.get("actionType", a.get("actionName")) if isinstance(a, dict) else None
             action_id = a.get("actionId") if isinstance(a, dict) else None
             if not isinstance(kind, str) or not isinstance(action_id, str):
-                self._error(Rejection("validationError", "instantActions: an action without actionId or actionType",
-                                      (("topic", "instantActions"),)))
+                self._error(
+                    Rejection(
+                        "validationError",
+                        "instantActions: an action without actionId or actionType",
+                        (("topic", "instantActions"),),
+                    )
+                )
                 continue
             self.actions.add(action_id, kind, "INITIALIZING")
             if kind not in INSTANT_ACTIONS:
                 self.actions.set(action_id, "FAILED", "not an instant action of this vehicle")
-                self._error(Rejection("actionError", f"instant action {kind} is not one this vehicle performs",
-                                      (("topic", "instantActions"), ("actionId", action_id), ("actionType", kind))))
+                self._error(
+                    Rejection(
+                        "actionError",
+                        f"instant action {kind} is not one this vehicle performs",
+                        (
+                            ("topic", "instantActions"),
+                            ("actionId", action_id),
+                            ("actionType", kind),
+                        ),
+                    )
+                )
                 continue
-            getattr(self, f"_instant_{kind}")(action_id, {p.get("key"): p.get("value") for p in
-                                                          a.get("actionParameters") or [] if isinstance(p, dict)})
+            getattr(self, f"_instant_{kind}")(
+                action_id,
+                {
+                    p.get("key"): p.get("value")
+                    for p in a.get("actionParameters") or []
+                    if isinstance(p, dict)
+                },
+            )
 
     def _instant_cancelOrder(self, action_id: str, _params) -> None:
         if not self.nodes and self._goal is None:
             self.actions.set(action_id, "FAILED", "no order to cancel")
-            self._error(Rejection("noOrderToCancel", "cancelOrder: the vehicle has no order",
-                                  (("topic", "instantActions"), ("actionId", action_id))))
+            self._error(
+                Rejection(
+                    "noOrderToCancel",
+                    "cancelOrder: the vehicle has no order",
+                    (("topic", "instantActions"), ("actionId", action_id)),
+                )
+            )
             return
         self.vehicle.cancel()
         self.nodes, self.edges, self._goal = [], [], None
@@ -166,15 +237,29 @@ class VehicleAdapter:
     def _instant_initPosition(self, action_id: str, params: dict) -> None:
         x, y, theta = (params.get(k) for k in ("x", "y", "theta"))
         ok = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (x, y, theta))
-        if ok and params.get("mapId", self.vehicle.map_id) == self.vehicle.map_id and \
-                within(self.vehicle.pose(), x, y, theta, 2 * self.xy_tolerance_m, 0.35):
+        if (
+            ok
+            and params.get("mapId", self.vehicle.map_id) == self.vehicle.map_id
+            and within(self.vehicle.pose(), x, y, theta, 2 * self.xy_tolerance_m, 0.35)
+        ):
             self.last_node = (str(params.get("lastNodeId", self.last_node[0])), self.last_node[1])
-            self.actions.set(action_id, "FINISHED", "the pose agrees with the vehicle's localisation")
+            self.actions.set(
+                action_id, "FINISHED", "the pose agrees with the vehicle's localisation"
+            )
             return
-        self.actions.set(action_id, "FAILED", "the twin's pose cannot be overridden: x, y, theta (and mapId) must "
-                         "agree with its localisation")
-        self._error(Rejection("actionError", "initPosition: the given pose is not where the vehicle is",
-                              (("topic", "instantActions"), ("actionId", action_id))))
+        self.actions.set(
+            action_id,
+            "FAILED",
+            "the twin's pose cannot be overridden: x, y, theta (and mapId) must "
+            "agree with its localisation",
+        )
+        self._error(
+            Rejection(
+                "actionError",
+                "initPosition: the given pose is not where the vehicle is",
+                (("topic", "instantActions"), ("actionId", action_id)),
+            )
+        )
 
     def _instant_stateRequest(self, action_id: str, _params) -> None:
         self.actions.set(action_id, "FINISHED")
@@ -202,12 +287,26 @@ class VehicleAdapter:
         outcome = self._goal[1]
         drives_on = len(self.nodes) > 1 and self.nodes[1].released
         tol = max(node.deviation_xy_m, self.xy_tolerance_m)
-        if outcome.status == "succeeded" or (drives_on and within(self.vehicle.pose(), node.x_m, node.y_m,
-                                                                  node.theta_rad, tol, node.deviation_theta_rad)):
+        if outcome.status == "succeeded" or (
+            drives_on
+            and within(
+                self.vehicle.pose(),
+                node.x_m,
+                node.y_m,
+                node.theta_rad,
+                tol,
+                node.deviation_theta_rad,
+            )
+        ):
             self._traverse(node)
         elif outcome.status == "aborted":
-            self._error(Rejection("navigationError", f"node {node.node_id} not reached: {outcome.reason}",
-                                  (("nodeId", node.node_id), ("sequenceId", node.sequence_id))))
+            self._error(
+                Rejection(
+                    "navigationError",
+                    f"node {node.node_id} not reached: {outcome.reason}",
+                    (("nodeId", node.node_id), ("sequenceId", node.sequence_id)),
+                )
+            )
             self.nodes, self.edges, self._goal = [], [], None
 
     def _tick(self) -> None:
@@ -222,7 +321,11 @@ class VehicleAdapter:
                     self.actions.set(s.action_id, "FINISHED")
         self._publish_visualization()
         now = self.clock.now_s
-        if self._changed or self.actions.changed or now - self._last_state_s >= STATE_PERIOD_S - 1e-9:
+        if (
+            self._changed
+            or self.actions.changed
+            or now - self._last_state_s >= STATE_PERIOD_S - 1e-9
+        ):
             self._publish_state()
 
     # -- out ----------------------------------------------------------------------------------
@@ -236,10 +339,20 @@ class VehicleAdapter:
     def _position(self) -> dict:
         pose = self.vehicle.pose()
         if pose is None:
-            return {"x": 0.0, "y": 0.0, "theta": 0.0, "mapId": self.vehicle.map_id, "positionInitialized": False}
-        return {"x": pose[0], "y": pose[1], "theta": float(((pose[2] + 3.141592653589793) % 6.283185307179586)
-                                                           - 3.141592653589793),
-                "mapId": self.vehicle.map_id, "positionInitialized": True}
+            return {
+                "x": 0.0,
+                "y": 0.0,
+                "theta": 0.0,
+                "mapId": self.vehicle.map_id,
+                "positionInitialized": False,
+            }
+        return {
+            "x": pose[0],
+            "y": pose[1],
+            "theta": float(((pose[2] + 3.141592653589793) % 6.283185307179586) - 3.141592653589793),
+            "mapId": self.vehicle.map_id,
+            "positionInitialized": True,
+        }
 
     def _velocity(self) -> dict:
         v, w = self.vehicle.velocity()
@@ -252,20 +365,36 @@ class VehicleAdapter:
         volt, soc = self.vehicle.battery()
         violated = self.vehicle.field_violated()
         load = self.vehicle.payload_kg()
-        self._emit("state", {
-            "orderId": self.order.order_id if self.order else "",
-            "orderUpdateId": self.order.update_id if self.order else 0,
-            "lastNodeId": self.last_node[0], "lastNodeSequenceId": self.last_node[1],
-            "nodeStates": [n.state() for n in self.nodes], "edgeStates": [e.state() for e in self.edges],
-            "agvPosition": self._position(), "velocity": self._velocity(),
-            "loads": [{"weight": load}] if load > 0 else [],
-            "driving": self._driving, "paused": self.paused,
-            "newBaseRequest": bool(self.nodes) and not self.nodes[0].released,
-            "actionStates": self.actions.messages(),
-            "batteryState": {"batteryCharge": 100.0 * soc, "batteryVoltage": volt, "charging": False},
-            "operatingMode": "AUTOMATIC", "errors": list(self.errors), "information": [],
-            "safetyState": {"eStop": "MANUAL" if self.vehicle.estop_pressed() else "NONE",
-                            "fieldViolation": violated}})
+        self._emit(
+            "state",
+            {
+                "orderId": self.order.order_id if self.order else "",
+                "orderUpdateId": self.order.update_id if self.order else 0,
+                "lastNodeId": self.last_node[0],
+                "lastNodeSequenceId": self.last_node[1],
+                "nodeStates": [n.state() for n in self.nodes],
+                "edgeStates": [e.state() for e in self.edges],
+                "agvPosition": self._position(),
+                "velocity": self._velocity(),
+                "loads": [{"weight": load}] if load > 0 else [],
+                "driving": self._driving,
+                "paused": self.paused,
+                "newBaseRequest": bool(self.nodes) and not self.nodes[0].released,
+                "actionStates": self.actions.messages(),
+                "batteryState": {
+                    "batteryCharge": 100.0 * soc,
+                    "batteryVoltage": volt,
+                    "charging": False,
+                },
+                "operatingMode": "AUTOMATIC",
+                "errors": list(self.errors),
+                "information": [],
+                "safetyState": {
+                    "eStop": "MANUAL" if self.vehicle.estop_pressed() else "NONE",
+                    "fieldViolation": violated,
+                },
+            },
+        )
         self._changed, self.actions.changed, self._last_state_s = False, False, self.clock.now_s
 
     def publish_factsheet(self) -> None:

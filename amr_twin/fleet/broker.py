@@ -32,10 +32,16 @@ class EmbeddedBroker:
         """Start serving; OSError if it could not within ``timeout_s``."""
         from amqtt.broker import Broker
 
-        logging.getLogger("amqtt").setLevel(logging.ERROR)   # its per-message notes are not the run's
+        logging.getLogger("amqtt").setLevel(
+            logging.ERROR
+        )  # its per-message notes are not the run's
         ready, failed = threading.Event(), []
-        config = {"listeners": {"default": {"type": "tcp", "bind": f"{self.host}:{self.port}"}},
-                  "plugins": {"amqtt.plugins.authentication.AnonymousAuthPlugin": {"allow_anonymous": True}}}
+        config = {
+            "listeners": {"default": {"type": "tcp", "bind": f"{self.host}:{self.port}"}},
+            "plugins": {
+                "amqtt.plugins.authentication.AnonymousAuthPlugin": {"allow_anonymous": True}
+            },
+        }
 
         def serve() -> None:
             asyncio.set_event_loop(self._loop)
@@ -56,8 +62,10 @@ class EmbeddedBroker:
         self._thread = threading.Thread(target=serve, name="amqtt-broker", daemon=True)
         self._thread.start()
         if not ready.wait(timeout_s) or failed:
-            raise OSError(f"the embedded MQTT broker could not listen on {self.host}:{self.port}"
-                          + (f" ({failed[0]})" if failed else ""))
+            raise OSError(
+                f"the embedded MQTT broker could not listen on {self.host}:{self.port}"
+                + (f" ({failed[0]})" if failed else "")
+            )
         return self
 
     def stop(self) -> None:

@@ -21,35 +21,87 @@ def factsheet(cfg) -> dict:
 
     lim, wheel, caster = cfg.navigation.limits, cfg.wheel, cfg.caster
     footprint = robot_footprint(cfg)
-    wheels = [{"type": "DRIVE", "isActiveDriven": True, "isActiveSteered": False,
-               "position": {"x": 0.0, "y": side * wheel.separation_m / 2}, "diameter": 2 * wheel.radius_m,
-               "width": wheel.width_m} for side in (1, -1)]
-    wheels += [{"type": "CASTER", "isActiveDriven": False, "isActiveSteered": False,
-                "position": {"x": sx * caster.x_m, "y": sy * caster.y_m}, "diameter": caster.ball_diameter_m,
-                "width": caster.ball_diameter_m} for sx in (1, -1) for sy in (1, -1)]
+    wheels = [
+        {
+            "type": "DRIVE",
+            "isActiveDriven": True,
+            "isActiveSteered": False,
+            "position": {"x": 0.0, "y": side * wheel.separation_m / 2},
+            "diameter": 2 * wheel.radius_m,
+            "width": wheel.width_m,
+        }
+        for side in (1, -1)
+    ]
+    wheels += [
+        {
+            "type": "CASTER",
+            "isActiveDriven": False,
+            "isActiveSteered": False,
+            "position": {"x": sx * caster.x_m, "y": sy * caster.y_m},
+            "diameter": caster.ball_diameter_m,
+            "width": caster.ball_diameter_m,
+        }
+        for sx in (1, -1)
+        for sy in (1, -1)
+    ]
     outline = [{"x": float(x), "y": float(y)} for x, y in footprint.corners_xy_m()]
     scopes = {}
-    for scope, names in (("INSTANT", INSTANT_ACTIONS), ("NODE", NODE_ACTIONS), ("EDGE", EDGE_ACTIONS)):
+    for scope, names in (
+        ("INSTANT", INSTANT_ACTIONS),
+        ("NODE", NODE_ACTIONS),
+        ("EDGE", EDGE_ACTIONS),
+    ):
         for name in names:
             scopes.setdefault(name, []).append(scope)
     return {
-        "typeSpecification": {"seriesName": "amr-twin", "seriesDescription": "the thesis' differential-drive "
-                              "warehouse AMR, as its MuJoCo twin", "agvKinematic": "DIFF", "agvClass": "CARRIER",
-                              "maxLoadMass": MAX_LOAD_KG, "localizationTypes": ["NATURAL"],
-                              "navigationTypes": ["AUTONOMOUS"]},
-        "physicalParameters": {"speedMin": 0.0, "speedMax": lim.max_v_m_s, "accelerationMax": lim.accel_m_s2,
-                               "decelerationMax": lim.decel_m_s2, "heightMax": robot_top_m(cfg),
-                               "width": 2 * footprint.half_width_m, "length": cfg.chassis.length_m},
-        "protocolLimits": {"maxStringLens": {}, "maxArrayLens": {},
-                           "timing": {"minOrderInterval": 0.0, "minStateInterval": 0.0,
-                                      "defaultStateInterval": STATE_PERIOD_S}},
+        "typeSpecification": {
+            "seriesName": "amr-twin",
+            "seriesDescription": "the thesis' differential-drive warehouse AMR, as its MuJoCo twin",
+            "agvKinematic": "DIFF",
+            "agvClass": "CARRIER",
+            "maxLoadMass": MAX_LOAD_KG,
+            "localizationTypes": ["NATURAL"],
+            "navigationTypes": ["AUTONOMOUS"],
+        },
+        "physicalParameters": {
+            "speedMin": 0.0,
+            "speedMax": lim.max_v_m_s,
+            "accelerationMax": lim.accel_m_s2,
+            "decelerationMax": lim.decel_m_s2,
+            "heightMax": robot_top_m(cfg),
+            "width": 2 * footprint.half_width_m,
+            "length": cfg.chassis.length_m,
+        },
+        "protocolLimits": {
+            "maxStringLens": {},
+            "maxArrayLens": {},
+            "timing": {
+                "minOrderInterval": 0.0,
+                "minStateInterval": 0.0,
+                "defaultStateInterval": STATE_PERIOD_S,
+            },
+        },
         "protocolFeatures": {
-            "optionalParameters": [{"parameter": "order.nodes.nodePosition", "support": "REQUIRED"},
-                                   {"parameter": "order.nodes.nodePosition.theta", "support": "SUPPORTED"},
-                                   {"parameter": "order.nodes.nodePosition.allowedDeviationXY", "support": "SUPPORTED"},
-                                   {"parameter": "order.nodes.nodePosition.allowedDeviationTheta",
-                                    "support": "SUPPORTED"}],
-            "agvActions": [{"actionType": name, "actionScopes": sorted(s)} for name, s in sorted(scopes.items())]},
-        "agvGeometry": {"wheelDefinitions": wheels, "envelopes2d": [{"set": "default", "polygonPoints": outline}]},
+            "optionalParameters": [
+                {"parameter": "order.nodes.nodePosition", "support": "REQUIRED"},
+                {"parameter": "order.nodes.nodePosition.theta", "support": "SUPPORTED"},
+                {
+                    "parameter": "order.nodes.nodePosition.allowedDeviationXY",
+                    "support": "SUPPORTED",
+                },
+                {
+                    "parameter": "order.nodes.nodePosition.allowedDeviationTheta",
+                    "support": "SUPPORTED",
+                },
+            ],
+            "agvActions": [
+                {"actionType": name, "actionScopes": sorted(s)}
+                for name, s in sorted(scopes.items())
+            ],
+        },
+        "agvGeometry": {
+            "wheelDefinitions": wheels,
+            "envelopes2d": [{"set": "default", "polygonPoints": outline}],
+        },
         "loadSpecification": {"loadPositions": []},
     }

@@ -18,12 +18,22 @@ class Rejection(Exception):
 
     def __init__(self, error_type: str, description: str, references: tuple = ()):
         super().__init__(description)
-        self.error_type, self.description, self.references = error_type, description, tuple(references)
+        self.error_type, self.description, self.references = (
+            error_type,
+            description,
+            tuple(references),
+        )
 
     def error(self) -> dict:
         """The state's ``errors`` entry (level WARNING: the vehicle stays ready for a new order)."""
-        return {"errorType": self.error_type, "errorLevel": "WARNING", "errorDescription": self.description,
-                "errorReferences": [{"referenceKey": k, "referenceValue": str(v)} for k, v in self.references]}
+        return {
+            "errorType": self.error_type,
+            "errorLevel": "WARNING",
+            "errorDescription": self.description,
+            "errorReferences": [
+                {"referenceKey": k, "referenceValue": str(v)} for k, v in self.references
+            ],
+        }
 
 
 @dataclass(frozen=True)
@@ -48,7 +58,12 @@ class Node:
         if self.description is not None:
             out["nodeDescription"] = self.description
         if self.theta_rad is not None:
-            out["nodePosition"] = {"x": self.x_m, "y": self.y_m, "theta": self.theta_rad, "mapId": self.map_id}
+            out["nodePosition"] = {
+                "x": self.x_m,
+                "y": self.y_m,
+                "theta": self.theta_rad,
+                "mapId": self.map_id,
+            }
         return out
 
 
@@ -85,11 +100,17 @@ class Order:
 
 def _get(msg: dict, key: str, kind, where: str, refs: tuple):
     value = msg.get(key)
-    ok = isinstance(value, kind) and not isinstance(value, bool) if kind in (int, float, (int, float)) \
+    ok = (
+        isinstance(value, kind) and not isinstance(value, bool)
+        if kind in (int, float, (int, float))
         else isinstance(value, kind)
+    )
     if not ok:
-        raise Rejection("validationError", f"{where}: field {key} missing or not a {getattr(kind, '__name__', 'number')}",
-                        refs)
+        raise Rejection(
+            "validationError",
+            f"{where}: field {key} missing or not a {getattr(kind, '__name__', 'number')}",
+            refs,
+        )
     if isinstance(value, float) and not math.isfinite(value):
         raise Rejection("validationError", f"{where}: field {key} is not finite", refs)
     return value
@@ -100,11 +121,20 @@ def _actions(owner: dict, where: str, refs: tuple, supported: frozenset) -> None
     if not isinstance(actions, list):
         raise Rejection("validationError", f"{where}: field actions missing or not an array", refs)
     for a in actions:
-        if not isinstance(a, dict) or not isinstance(a.get("actionId"), str) or not isinstance(a.get("actionType"), str):
-            raise Rejection("validationError", f"{where}: an action without actionId or actionType", refs)
+        if (
+            not isinstance(a, dict)
+            or not isinstance(a.get("actionId"), str)
+            or not isinstance(a.get("actionType"), str)
+        ):
+            raise Rejection(
+                "validationError", f"{where}: an action without actionId or actionType", refs
+            )
         if a["actionType"] not in supported:
-            raise Rejection("orderError", f"{where}: action {a['actionType']} is not one this vehicle performs",
-                            refs + (("actionId", a["actionId"]), ("actionType", a["actionType"])))
+            raise Rejection(
+                "orderError",
+                f"{where}: action {a['actionType']} is not one this vehicle performs",
+                refs + (("actionId", a["actionId"]), ("actionType", a["actionType"])),
+            )
 
 
 def _node(n, i: int, map_id: str, refs: tuple, supported: frozenset) -> Node:
@@ -117,24 +147,47 @@ def _node(n, i: int, map_id: str, refs: tuple, supported: frozenset) -> Node:
     _actions(n, f"node {node_id}", refs, supported)
     pos = n.get("nodePosition")
     if not isinstance(pos, dict):
-        raise Rejection("orderError", f"node {node_id}: no nodePosition (this vehicle plans its own way to a position)",
-                        refs)
+        raise Rejection(
+            "orderError",
+            f"node {node_id}: no nodePosition (this vehicle plans its own way to a position)",
+            refs,
+        )
     x = _get(pos, "x", (int, float), f"node {node_id}", refs)
     y = _get(pos, "y", (int, float), f"node {node_id}", refs)
     node_map = _get(pos, "mapId", str, f"node {node_id}", refs)
     if node_map != map_id:
-        raise Rejection("orderError", f"node {node_id}: mapId {node_map!r} is not this vehicle's map {map_id!r}",
-                        refs + (("mapId", node_map),))
+        raise Rejection(
+            "orderError",
+            f"node {node_id}: mapId {node_map!r} is not this vehicle's map {map_id!r}",
+            refs + (("mapId", node_map),),
+        )
     theta = pos.get("theta")
     if theta is not None:
         theta = _get(pos, "theta", (int, float), f"node {node_id}", refs)
         if abs(theta) > math.pi + 1e-9:
-            raise Rejection("validationError", f"node {node_id}: theta {theta} is outside [-pi, pi]", refs)
+            raise Rejection(
+                "validationError", f"node {node_id}: theta {theta} is outside [-pi, pi]", refs
+            )
     dev = [pos.get(k, 0.0) for k in ("allowedDeviationXY", "allowedDeviationTheta")]
-    if not all(isinstance(d, (int, float)) and not isinstance(d, bool) and math.isfinite(d) and d >= 0 for d in dev):
-        raise Rejection("validationError", f"node {node_id}: allowed deviations must be numbers >= 0", refs)
-    return Node(node_id, seq, released, float(x), float(y), None if theta is None else float(theta), node_map,
-                float(dev[0]), float(dev[1]), n.get("nodeDescription"))
+    if not all(
+        isinstance(d, (int, float)) and not isinstance(d, bool) and math.isfinite(d) and d >= 0
+        for d in dev
+    ):
+        raise Rejection(
+            "validationError", f"node {node_id}: allowed deviations must be numbers >= 0", refs
+        )
+    return Node(
+        node_id,
+        seq,
+        released,
+        float(x),
+        float(y),
+        None if theta is None else float(theta),
+        node_map,
+        float(dev[0]),
+        float(dev[1]),
+        n.get("nodeDescription"),
+    )
 
 
 def _edge(e, i: int, refs: tuple, supported: frozenset) -> Edge:
@@ -148,16 +201,33 @@ def _edge(e, i: int, refs: tuple, supported: frozenset) -> Edge:
     start, end = _get(e, "startNodeId", str, where, refs), _get(e, "endNodeId", str, where, refs)
     _actions(e, where, refs, supported)
     if e.get("trajectory") is not None:
-        raise Rejection("orderError", f"{where}: a trajectory (this vehicle plans its own path)",
-                        refs + (("trajectory", "edge"),))
+        raise Rejection(
+            "orderError",
+            f"{where}: a trajectory (this vehicle plans its own path)",
+            refs + (("trajectory", "edge"),),
+        )
     speed = e.get("maxSpeed")
-    if speed is not None and not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
+    if speed is not None and not (
+        isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0
+    ):
         raise Rejection("validationError", f"{where}: maxSpeed must be a number > 0", refs)
-    return Edge(edge_id, seq, released, start, end, None if speed is None else float(speed), e.get("edgeDescription"))
+    return Edge(
+        edge_id,
+        seq,
+        released,
+        start,
+        end,
+        None if speed is None else float(speed),
+        e.get("edgeDescription"),
+    )
 
 
-def parse_order(msg: dict, map_id: str, node_actions: frozenset = frozenset(),
-                edge_actions: frozenset = frozenset()) -> Order:
+def parse_order(
+    msg: dict,
+    map_id: str,
+    node_actions: frozenset = frozenset(),
+    edge_actions: frozenset = frozenset(),
+) -> Order:
     """The :class:`Order` of an ``order`` message for a vehicle on ``map_id`` that performs ``node_actions`` and
     ``edge_actions``; raises :class:`Rejection` (module docstring)."""
     if not isinstance(msg, dict):
@@ -172,51 +242,85 @@ def parse_order(msg: dict, map_id: str, node_actions: frozenset = frozenset(),
     refs += (("orderUpdateId", update_id),)
     nodes, edges = msg.get("nodes"), msg.get("edges")
     if not isinstance(nodes, list) or not nodes or not isinstance(edges, list):
-        raise Rejection("validationError", "order: nodes must be a non-empty array and edges an array", refs)
+        raise Rejection(
+            "validationError", "order: nodes must be a non-empty array and edges an array", refs
+        )
     if len(edges) != len(nodes) - 1:
-        raise Rejection("validationError", f"order: {len(edges)} edges for {len(nodes)} nodes (one fewer is needed)",
-                        refs)
+        raise Rejection(
+            "validationError",
+            f"order: {len(edges)} edges for {len(nodes)} nodes (one fewer is needed)",
+            refs,
+        )
     nodes = [_node(n, i, map_id, refs, node_actions) for i, n in enumerate(nodes)]
     edges = [_edge(e, i, refs, edge_actions) for i, e in enumerate(edges)]
     seq0 = nodes[0].sequence_id
     for i, n in enumerate(nodes):
         if n.sequence_id != seq0 + 2 * i:
-            raise Rejection("validationError", f"node {n.node_id}: sequenceId {n.sequence_id}, expected {seq0 + 2 * i}",
-                            refs + (("nodeId", n.node_id), ("sequenceId", n.sequence_id)))
+            raise Rejection(
+                "validationError",
+                f"node {n.node_id}: sequenceId {n.sequence_id}, expected {seq0 + 2 * i}",
+                refs + (("nodeId", n.node_id), ("sequenceId", n.sequence_id)),
+            )
     for i, e in enumerate(edges):
         a, b = nodes[i], nodes[i + 1]
         if e.sequence_id != seq0 + 2 * i + 1:
-            raise Rejection("validationError", f"edge {e.edge_id}: sequenceId {e.sequence_id}, expected "
-                            f"{seq0 + 2 * i + 1}", refs + (("edgeId", e.edge_id), ("sequenceId", e.sequence_id)))
-        for key, given, want in (("startNodeId", e.start_node_id, a.node_id), ("endNodeId", e.end_node_id, b.node_id)):
+            raise Rejection(
+                "validationError",
+                f"edge {e.edge_id}: sequenceId {e.sequence_id}, expected {seq0 + 2 * i + 1}",
+                refs + (("edgeId", e.edge_id), ("sequenceId", e.sequence_id)),
+            )
+        for key, given, want in (
+            ("startNodeId", e.start_node_id, a.node_id),
+            ("endNodeId", e.end_node_id, b.node_id),
+        ):
             if given != want:
-                raise Rejection("validationError", f"edge {e.edge_id}: {key} {given!r} is not the node beside it in "
-                                f"the order ({want!r})", refs + (("edgeId", e.edge_id), (key, given)))
+                raise Rejection(
+                    "validationError",
+                    f"edge {e.edge_id}: {key} {given!r} is not the node beside it in "
+                    f"the order ({want!r})",
+                    refs + (("edgeId", e.edge_id), (key, given)),
+                )
         if e.released and not (a.released and b.released):
-            raise Rejection("validationError", f"edge {e.edge_id}: released between nodes not both released",
-                            refs + (("edgeId", e.edge_id),))
+            raise Rejection(
+                "validationError",
+                f"edge {e.edge_id}: released between nodes not both released",
+                refs + (("edgeId", e.edge_id),),
+            )
     sequence = [x for pair in zip(nodes, edges + [None]) for x in pair if x is not None]
     released = [x.released for x in sequence]
     if not released[0]:
         raise Rejection("validationError", "order: the first node is not released", refs)
-    if False in released and any(released[released.index(False):]):
-        raise Rejection("validationError", "order: a released node or edge after an unreleased one", refs)
+    if False in released and any(released[released.index(False) :]):
+        raise Rejection(
+            "validationError", "order: a released node or edge after an unreleased one", refs
+        )
     return Order(order_id, update_id, header_id, nodes, edges)
 
 
-def stitch(remaining_nodes: list, remaining_edges: list, last_base: Node, update: Order) -> tuple[list, list]:
+def stitch(
+    remaining_nodes: list, remaining_edges: list, last_base: Node, update: Order
+) -> tuple[list, list]:
     """The nodes and edges left to drive after ``update`` (an order update, or a new order continuing this one)
     is stitched onto the base: ``update``'s first node must be ``last_base`` (nodeId and sequenceId), whose own
     actions and position stay; what followed it before (the old horizon) is replaced. Raises :class:`Rejection`
     (``orderUpdateError``)."""
     first = update.nodes[0]
     if (first.node_id, first.sequence_id) != (last_base.node_id, last_base.sequence_id):
-        raise Rejection("orderUpdateError", f"order update: its first node {first.node_id} "
-                        f"(sequenceId {first.sequence_id}) is not the last base node {last_base.node_id} "
-                        f"(sequenceId {last_base.sequence_id})",
-                        (("topic", "order"), ("orderId", update.order_id), ("orderUpdateId", update.update_id),
-                         ("nodeId", first.node_id)))
+        raise Rejection(
+            "orderUpdateError",
+            f"order update: its first node {first.node_id} "
+            f"(sequenceId {first.sequence_id}) is not the last base node {last_base.node_id} "
+            f"(sequenceId {last_base.sequence_id})",
+            (
+                ("topic", "order"),
+                ("orderId", update.order_id),
+                ("orderUpdateId", update.update_id),
+                ("nodeId", first.node_id),
+            ),
+        )
     keep = [n for n in remaining_nodes if n.released and n.sequence_id < last_base.sequence_id]
-    keep_edges = [e for e in remaining_edges if e.released and e.sequence_id < last_base.sequence_id]
+    keep_edges = [
+        e for e in remaining_edges if e.released and e.sequence_id < last_base.sequence_id
+    ]
     head = [n for n in remaining_nodes if n.sequence_id == last_base.sequence_id]
     return keep + head + update.nodes[1:], keep_edges + update.edges

@@ -15,7 +15,14 @@ MAJOR = "v2"
 MANUFACTURER = "amr-twin"
 INTERFACE = "uagv"
 SUBTOPICS = ("order", "instantActions", "state", "visualization", "connection", "factsheet")
-QOS = {"order": 0, "instantActions": 0, "state": 0, "visualization": 0, "connection": 1, "factsheet": 0}
+QOS = {
+    "order": 0,
+    "instantActions": 0,
+    "state": 0,
+    "visualization": 0,
+    "connection": 1,
+    "factsheet": 0,
+}
 """Quality of service by subtopic: 0 for order, state and visualization, 1 for connection (section 6.2)."""
 _NAME = re.compile(r"^[A-Za-z0-9_.:-]+$")
 
@@ -23,7 +30,9 @@ _NAME = re.compile(r"^[A-Za-z0-9_.:-]+$")
 def check_name(what: str, value: str) -> str:
     """``value`` if it may stand as a topic level (A-Z a-z 0-9 _ . : -, section 6.3); ValueError naming ``what``."""
     if not _NAME.match(value):
-        raise ValueError(f"{what} {value!r}: only letters, digits and _ . : - are allowed (VDA 5050 topic level)")
+        raise ValueError(
+            f"{what} {value!r}: only letters, digits and _ . : - are allowed (VDA 5050 topic level)"
+        )
     return value
 
 
@@ -40,7 +49,9 @@ def serial_numbers(robots: int) -> list[str]:
 class Stamper:
     """Headers of one vehicle's messages: ``headerId`` per topic from 0, the timestamp from the twin's clock."""
 
-    def __init__(self, serial: str, epoch: datetime | None = None, manufacturer: str = MANUFACTURER):
+    def __init__(
+        self, serial: str, epoch: datetime | None = None, manufacturer: str = MANUFACTURER
+    ):
         self.serial, self.manufacturer = serial, manufacturer
         self.epoch = epoch if epoch is not None else datetime.now(timezone.utc)
         self._ids: dict[str, int] = {}
@@ -54,5 +65,10 @@ class Stamper:
         """The next header of ``subtopic`` at simulated time ``t_s``."""
         n = self._ids.get(subtopic, 0)
         self._ids[subtopic] = n + 1
-        return {"headerId": n, "timestamp": self.timestamp(t_s), "version": VERSION,
-                "manufacturer": self.manufacturer, "serialNumber": self.serial}
+        return {
+            "headerId": n,
+            "timestamp": self.timestamp(t_s),
+            "version": VERSION,
+            "manufacturer": self.manufacturer,
+            "serialNumber": self.serial,
+        }

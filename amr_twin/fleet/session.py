@@ -54,22 +54,54 @@ class FleetSession:
         if options.url is not None:
             broker_address(options.url)
         self.options, self.serial = options, serial
-        self.twin = Twin(cfg, TwinOptions(firmware=options.firmware, world=options.world, seed=options.seed,
-                                          start_xy_yaw=options.start_xy_yaw, sensors=("imu", "lidar"), visuals=False))
+        self.twin = Twin(
+            cfg,
+            TwinOptions(
+                firmware=options.firmware,
+                world=options.world,
+                seed=options.seed,
+                start_xy_yaw=options.start_xy_yaw,
+                sensors=("imu", "lidar"),
+                visuals=False,
+            ),
+        )
         static = load_static_map(cfg, options.world, None)
-        self.navigator = attach(self.twin, cfg, static, NavigationOptions(
-            goals=(), localisation=options.localisation, controller=options.controller, seed=options.seed),
-            publish=False)
-        self.vehicle = TwinVehicle(self.twin, self.navigator, map_id(options.world), cfg.payload.mass_kg)
+        self.navigator = attach(
+            self.twin,
+            cfg,
+            static,
+            NavigationOptions(
+                goals=(),
+                localisation=options.localisation,
+                controller=options.controller,
+                seed=options.seed,
+            ),
+            publish=False,
+        )
+        self.vehicle = TwinVehicle(
+            self.twin, self.navigator, map_id(options.world), cfg.payload.mass_kg
+        )
         self.transport = None
-        self.adapter = VehicleAdapter(self.vehicle, self.twin.clock, self._send, Stamper(serial, epoch, MANUFACTURER),
-                                      factsheet(cfg), xy_tolerance_m=cfg.navigation.navigator.xy_tolerance_m)
+        self.adapter = VehicleAdapter(
+            self.vehicle,
+            self.twin.clock,
+            self._send,
+            Stamper(serial, epoch, MANUFACTURER),
+            factsheet(cfg),
+            xy_tolerance_m=cfg.navigation.navigator.xy_tolerance_m,
+        )
         self.pacer = Pacer(self.twin, options.rate)
         self.broker = EmbeddedBroker().start() if options.url is None else None
         url = options.url if options.url is not None else self.broker.url
         try:
-            transport = MqttTransport(url, options.interface, serial, self._received,
-                                      self.adapter.connection("CONNECTIONBROKEN"), MANUFACTURER)
+            transport = MqttTransport(
+                url,
+                options.interface,
+                serial,
+                self._received,
+                self.adapter.connection("CONNECTIONBROKEN"),
+                MANUFACTURER,
+            )
             transport.connect()
         except OSError:
             self._stop_broker()
@@ -94,7 +126,11 @@ class FleetSession:
         """The robot's true pose now (x_m, y_m, yaw_rad), from the physics."""
         row = self.twin.observables.loop_sensors()
         w, x, y, z = row[7:11]
-        return float(row[4]), float(row[5]), math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return (
+            float(row[4]),
+            float(row[5]),
+            math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
+        )
 
     def summary(self) -> dict:
         """What the run did: the vehicle, the broker, the messages sent by topic, the last state, the true pose."""
@@ -103,10 +139,18 @@ class FleetSession:
             counts[sub] = counts.get(sub, 0) + 1
         states = [m for _t, sub, m in self.adapter.log if sub == "state"]
         x, y, yaw = self.true_pose()
-        return {"serialNumber": self.serial, "manufacturer": MANUFACTURER, "interfaceName": self.options.interface,
-                "broker": self.url, "embedded_broker": self.broker is not None, "sim_s": self.twin.t_s,
-                "messages_sent": counts, "messages_received": self.transport.messages_in if self.transport else 0,
-                "true_pose": {"x_m": x, "y_m": y, "yaw_rad": yaw}, "last_state": states[-1] if states else None}
+        return {
+            "serialNumber": self.serial,
+            "manufacturer": MANUFACTURER,
+            "interfaceName": self.options.interface,
+            "broker": self.url,
+            "embedded_broker": self.broker is not None,
+            "sim_s": self.twin.t_s,
+            "messages_sent": counts,
+            "messages_received": self.transport.messages_in if self.transport else 0,
+            "true_pose": {"x_m": x, "y_m": y, "yaw_rad": yaw},
+            "last_state": states[-1] if states else None,
+        }
 
     def close(self) -> None:
         """Say OFFLINE, disconnect, stop the pacer and the embedded broker."""
@@ -121,6 +165,3 @@ class FleetSession:
         if self.broker is not None:
             self.broker.stop()
             self.broker = None
-
-
-

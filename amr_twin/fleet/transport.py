@@ -21,7 +21,12 @@ def broker_address(url: str) -> tuple[str, int]:
         port = parsed.port or 1883
     except ValueError:
         port = None
-    if parsed.scheme != "mqtt" or not parsed.hostname or port is None or parsed.path not in ("", "/"):
+    if (
+        parsed.scheme != "mqtt"
+        or not parsed.hostname
+        or port is None
+        or parsed.path not in ("", "/")
+    ):
         raise ValueError(f"--vda5050 {url!r}: expected mqtt://HOST:PORT (a plain TCP MQTT broker)")
     return parsed.hostname, port
 
@@ -29,7 +34,9 @@ def broker_address(url: str) -> tuple[str, int]:
 class MqttTransport:
     """One vehicle's MQTT client. ``on_message(subtopic, payload)`` is called in paho's network thread."""
 
-    def __init__(self, url: str, interface: str, serial: str, on_message, will: dict, manufacturer: str):
+    def __init__(
+        self, url: str, interface: str, serial: str, on_message, will: dict, manufacturer: str
+    ):
         import paho.mqtt.client as mqtt
 
         self.host, self.port = broker_address(url)
@@ -37,9 +44,14 @@ class MqttTransport:
         self.messages_in = 0
         """Messages received so far (order and instantActions)."""
         self._on_message, self._connected = on_message, threading.Event()
-        self.client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=f"{interface}-{manufacturer}-{serial}",
-                                  protocol=mqtt.MQTTv311)
-        self.client.will_set(self._topic("connection"), json.dumps(will), qos=QOS["connection"], retain=True)
+        self.client = mqtt.Client(
+            mqtt.CallbackAPIVersion.VERSION2,
+            client_id=f"{interface}-{manufacturer}-{serial}",
+            protocol=mqtt.MQTTv311,
+        )
+        self.client.will_set(
+            self._topic("connection"), json.dumps(will), qos=QOS["connection"], retain=True
+        )
         self.client.on_connect = self._connect_cb
         self.client.on_message = self._message_cb
         self._subs = {self._topic(s): s for s in ("order", "instantActions")}
@@ -61,22 +73,32 @@ class MqttTransport:
         try:
             self.client.connect(self.host, self.port, keepalive=KEEPALIVE_S)
         except OSError as exc:
-            raise OSError(f"--vda5050 mqtt://{self.host}:{self.port}: cannot connect ({exc.strerror or exc})") from None
+            raise OSError(
+                f"--vda5050 mqtt://{self.host}:{self.port}: cannot connect ({exc.strerror or exc})"
+            ) from None
         self.client.loop_start()
         if not self._connected.wait(timeout_s):
             self.client.loop_stop()
-            raise OSError(f"--vda5050 mqtt://{self.host}:{self.port}: the broker did not accept the connection "
-                          f"within {timeout_s:g} s")
+            raise OSError(
+                f"--vda5050 mqtt://{self.host}:{self.port}: the broker did not accept the connection "
+                f"within {timeout_s:g} s"
+            )
 
     def publish(self, subtopic: str, msg: dict) -> None:
         """Send ``msg`` on the vehicle's ``subtopic`` (QoS of the specification; connection retained)."""
-        self.client.publish(self._topic(subtopic), json.dumps(msg), qos=QOS.get(subtopic, 0),
-                            retain=subtopic == "connection")
+        self.client.publish(
+            self._topic(subtopic),
+            json.dumps(msg),
+            qos=QOS.get(subtopic, 0),
+            retain=subtopic == "connection",
+        )
 
     def close(self, offline: dict | None = None) -> None:
         """Send ``offline`` (connection OFFLINE) and disconnect cleanly (no last will)."""
         if offline is not None and self.client.is_connected():
-            info = self.client.publish(self._topic("connection"), json.dumps(offline), qos=1, retain=True)
+            info = self.client.publish(
+                self._topic("connection"), json.dumps(offline), qos=1, retain=True
+            )
             info.wait_for_publish(5.0)
         self.client.disconnect()
         self.client.loop_stop()

@@ -83,13 +83,17 @@ class TwinVehicle:
         return hit
 
     def send_goal(self, x_m, y_m, yaw_rad):
-        return self.navigator.send_goal((float(x_m), float(y_m), None if yaw_rad is None else float(yaw_rad)))
+        return self.navigator.send_goal(
+            (float(x_m), float(y_m), None if yaw_rad is None else float(yaw_rad))
+        )
 
     def cancel(self) -> None:
         self.navigator.cancel("canceled by the fleet manager")
 
 
-def within(pose, x_m: float, y_m: float, theta_rad: float | None, xy_m: float, theta_tol_rad: float) -> bool:
+def within(
+    pose, x_m: float, y_m: float, theta_rad: float | None, xy_m: float, theta_tol_rad: float
+) -> bool:
     """Whether ``pose`` lies within ``xy_m`` of (x_m, y_m) and, with a theta and ``theta_tol_rad`` > 0, within
     that angle of it."""
     if pose is None or math.hypot(pose[0] - x_m, pose[1] - y_m) > xy_m:

@@ -15,7 +15,12 @@ from amr_twin.live.rows import LiveRows
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import String
-from amr_twin.ros.ros2_cdr import encode_battery_state, encode_float64_multi_array, encode_string, encode_tf_message
+from amr_twin.ros.ros2_cdr import (
+    encode_battery_state,
+    encode_float64_multi_array,
+    encode_string,
+    encode_tf_message,
+)
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 from amr_twin.ros.ros_state import StateSampler
 
@@ -27,12 +32,20 @@ GOAL_TYPE = "geometry_msgs/PoseStamped"
 GHOST_PERIOD_US = 100_000
 """Period of the scene's ground-truth robot, us (10 Hz)."""
 SERVICE = "/wheel_Command_Service"
-STATE_TOPICS = {"/clock": "rosgraph_msgs/Clock", "/twin/ground_truth": "nav_msgs/Odometry",
-                "/joint_states": "sensor_msgs/JointState", "/tf": "tf2_msgs/TFMessage",
-                "/twin/true_rpm": "std_msgs/Float64MultiArray", "/twin/pwm_counts": "std_msgs/Float64MultiArray",
-                "/twin/motor_current": "std_msgs/Float64MultiArray", "/battery_state": "sensor_msgs/BatteryState",
-                "/robot_description": "std_msgs/String", "/tf_static": "tf2_msgs/TFMessage",
-                "/twin/collisions": DIAGNOSTIC_ARRAY, "/twin/faults": DIAGNOSTIC_ARRAY}
+STATE_TOPICS = {
+    "/clock": "rosgraph_msgs/Clock",
+    "/twin/ground_truth": "nav_msgs/Odometry",
+    "/joint_states": "sensor_msgs/JointState",
+    "/tf": "tf2_msgs/TFMessage",
+    "/twin/true_rpm": "std_msgs/Float64MultiArray",
+    "/twin/pwm_counts": "std_msgs/Float64MultiArray",
+    "/twin/motor_current": "std_msgs/Float64MultiArray",
+    "/battery_state": "sensor_msgs/BatteryState",
+    "/robot_description": "std_msgs/String",
+    "/tf_static": "tf2_msgs/TFMessage",
+    "/twin/collisions": DIAGNOSTIC_ARRAY,
+    "/twin/faults": DIAGNOSTIC_ARRAY,
+}
 """The recording's topics that are not bus topics (mcap_log, event_log), with their types."""
 LATCHED = ("/tf_static", "/robot_description", SCENE_TOPIC)
 STATE_ITEM_TOPICS = ("/clock", "/twin/ground_truth", "/joint_states", "/tf")
@@ -47,7 +60,9 @@ def live_topics(twin) -> dict[str, str]:
         skip.add("uwb/range")
     if getattr(twin, "actors", None) is None:
         skip.add("actors/poses")
-    topics = {topic: typ for bus_topic, (topic, typ, _enc) in BUS_TOPICS.items() if bus_topic not in skip}
+    topics = {
+        topic: typ for bus_topic, (topic, typ, _enc) in BUS_TOPICS.items() if bus_topic not in skip
+    }
     topics.update(STATE_TOPICS)
     return topics
 
@@ -97,17 +112,29 @@ class FoxgloveSink:
         self._ctx = foxglove.Context()
         self.channels = {}
         for topic, typ in live_topics(twin).items():
-            schema = foxglove.Schema(name=ros2_type(typ), encoding="ros2msg", data=msgdef(typ).encode())
-            self.channels[topic] = foxglove.Channel(topic, message_encoding="cdr", schema=schema, context=self._ctx)
+            schema = foxglove.Schema(
+                name=ros2_type(typ), encoding="ros2msg", data=msgdef(typ).encode()
+            )
+            self.channels[topic] = foxglove.Channel(
+                topic, message_encoding="cdr", schema=schema, context=self._ctx
+            )
         self.scene_channel = SceneUpdateChannel(SCENE_TOPIC, context=self._ctx)
-        self.goal_channel = foxglove.Channel(GOAL_TOPIC, message_encoding="cdr", context=self._ctx, schema=foxglove.Schema(
-            name=ros2_type(GOAL_TYPE), encoding="ros2msg", data=msgdef(GOAL_TYPE).encode()))
+        self.goal_channel = foxglove.Channel(
+            GOAL_TOPIC,
+            message_encoding="cdr",
+            context=self._ctx,
+            schema=foxglove.Schema(
+                name=ros2_type(GOAL_TYPE), encoding="ros2msg", data=msgdef(GOAL_TYPE).encode()
+            ),
+        )
         self.scene = SceneBuilder(twin.observables.model, twin.observables.named)
         self._bus_out: list[tuple[int, int, object, bytes]] = []  # t_ns, seq, channel, payload
         self._actor_scenes: list[tuple[int, list]] = []  # t_ns, actor poses for the scene
         self._seq = 0
         self._state = StateSampler(twin.observables.model, twin.observables.named)
-        self._rows = LiveRows(twin)  # true wheel speeds, PWM, currents, battery: the recorder's columns
+        self._rows = LiveRows(
+            twin
+        )  # true wheel speeds, PWM, currents, battery: the recorder's columns
         self._events_sent: set[tuple[str, int]] = set()
         self._collisions_sent = 0
         self._latched_due: set[str] = set(LATCHED)
@@ -115,13 +142,21 @@ class FoxgloveSink:
         twin.on_grid(self._on_grid)
         self._on_grid(twin.t_phys_us)
         self._capacity_ah = twin.cfg.battery.capacity_ah
-        service = foxglove.Service(SERVICE, schema=self._service_schema(foxglove), handler=self._on_service_call)
+        service = foxglove.Service(
+            SERVICE, schema=self._service_schema(foxglove), handler=self._on_service_call
+        )
         caps = foxglove.Capability
         try:
             self.server = foxglove.start_server(
-                name="amr-twin", host=host, port=port, context=self._ctx, server_listener=_listener(foxglove, self),
-                capabilities=[caps.ClientPublish, caps.Services, caps.Time], supported_encodings=["cdr", "json"],
-                services=[service])
+                name="amr-twin",
+                host=host,
+                port=port,
+                context=self._ctx,
+                server_listener=_listener(foxglove, self),
+                capabilities=[caps.ClientPublish, caps.Services, caps.Time],
+                supported_encodings=["cdr", "json"],
+                services=[service],
+            )
         except RuntimeError as exc:  # foxglove's FoxgloveError, e.g. the port taken since the check
             twin.unhook(self._tap)
             twin.unhook(self._on_grid)
@@ -136,13 +171,16 @@ class FoxgloveSink:
     @staticmethod
     def _service_schema(foxglove):
         def message(name: str, text: str):
-            return foxglove.MessageSchema(encoding="cdr", schema=foxglove.Schema(
-                name=name, encoding="ros2msg", data=text.encode()))
+            return foxglove.MessageSchema(
+                encoding="cdr",
+                schema=foxglove.Schema(name=name, encoding="ros2msg", data=text.encode()),
+            )
 
-        return foxglove.ServiceSchema(live_inputs.SERVICE_TYPE,
-                                      request=message(live_inputs.SERVICE_TYPE + "_Request",
-                                                      live_inputs.SERVICE_REQUEST_DEF),
-                                      response=message(live_inputs.SERVICE_TYPE + "_Response", ""))
+        return foxglove.ServiceSchema(
+            live_inputs.SERVICE_TYPE,
+            request=message(live_inputs.SERVICE_TYPE + "_Request", live_inputs.SERVICE_REQUEST_DEF),
+            response=message(live_inputs.SERVICE_TYPE + "_Response", ""),
+        )
 
     # -- the twin's side (its thread) ---------------------------------------------------
     def _tap(self, topic: str, msg, t_us: int) -> None:
@@ -170,7 +208,9 @@ class FoxgloveSink:
         self._latched_due.clear()
         items = [(t, 0, s, ch, data) for t, s, ch, data in self._bus_out]
         self._bus_out = []
-        batch = self._state.split(t_us)  # taken in any case; turned into messages only for a subscriber
+        batch = self._state.split(
+            t_us
+        )  # taken in any case; turned into messages only for a subscriber
         if batch.t_us and any(self.channels[t].has_sinks() for t in STATE_ITEM_TOPICS):
             order = 0
             for t, _k, topic, _typ, data in _state_items(SimpleNamespace(state=batch), 0):
@@ -180,7 +220,9 @@ class FoxgloveSink:
             for i, tb in enumerate(batch.t_us):
                 if tb % GHOST_PERIOD_US == 0:
                     pos, quat = self._state_pose(batch, i)
-                    self.scene_channel.log(self.scene.ghost_update(tb * 1000, pos, quat), log_time=tb * 1000)
+                    self.scene_channel.log(
+                        self.scene.ghost_update(tb * 1000, pos, quat), log_time=tb * 1000
+                    )
         for t, poses in self._actor_scenes:
             self.scene_channel.log(self.scene.actors_update(t, poses), log_time=t)
         self._actor_scenes = []
@@ -199,18 +241,37 @@ class FoxgloveSink:
         mcap_log writes them, for the channels someone subscribed to."""
         out = []
         t_ns = (rows.t_us * 1000).tolist()
-        for name, column in (("/twin/true_rpm", rows.true_rpm), ("/twin/pwm_counts", rows.pwm_counts),
-                             ("/twin/motor_current", rows.current_a)):
+        for name, column in (
+            ("/twin/true_rpm", rows.true_rpm),
+            ("/twin/pwm_counts", rows.pwm_counts),
+            ("/twin/motor_current", rows.current_a),
+        ):
             channel = self.channels[name]
             if channel.has_sinks():
                 values = column.tolist()
-                out += [(t, 2, i, channel, encode_float64_multi_array(v)) for i, (t, v) in enumerate(zip(t_ns, values))]
+                out += [
+                    (t, 2, i, channel, encode_float64_multi_array(v))
+                    for i, (t, v) in enumerate(zip(t_ns, values))
+                ]
         channel = self.channels["/battery_state"]
         if channel.has_sinks():
             cap = self._capacity_ah
-            volts, amps, soc = rows.battery_v.tolist(), rows.battery_a.tolist(), rows.battery_soc.tolist()
-            out += [(t, 2, i, channel, encode_battery_state(t, volts[i], -amps[i], soc[i] * cap, cap, soc[i]))
-                    for i, t in enumerate(t_ns) if rows.index[i] % BATTERY_EVERY_ROWS == 0]
+            volts, amps, soc = (
+                rows.battery_v.tolist(),
+                rows.battery_a.tolist(),
+                rows.battery_soc.tolist(),
+            )
+            out += [
+                (
+                    t,
+                    2,
+                    i,
+                    channel,
+                    encode_battery_state(t, volts[i], -amps[i], soc[i] * cap, cap, soc[i]),
+                )
+                for i, t in enumerate(t_ns)
+                if rows.index[i] % BATTERY_EVERY_ROWS == 0
+            ]
         return out
 
     @staticmethod
@@ -236,7 +297,9 @@ class FoxgloveSink:
         if topic == "/robot_description":
             self.channels[topic].log(encode_string(String(self.twin.urdf)), log_time=t_ns)
         elif topic == "/tf_static":
-            self.channels[topic].log(encode_tf_message(TFMessage(self.bus.static_transforms())), log_time=t_ns)
+            self.channels[topic].log(
+                encode_tf_message(TFMessage(self.bus.static_transforms())), log_time=t_ns
+            )
         elif topic == SCENE_TOPIC:
             self.scene_channel.log(self.scene.static_update(t_ns), log_time=t_ns)
 
@@ -261,14 +324,20 @@ class FoxgloveSink:
             decoder = live_inputs.input_for(channel.topic, channel.schema_name, channel.encoding)
         except live_inputs.InputError as exc:
             decoder = exc
-            LOG.warning("live: client %d advertises %s; its messages will be dropped: %s", client_id,
-                        channel.topic, exc)
+            LOG.warning(
+                "live: client %d advertises %s; its messages will be dropped: %s",
+                client_id,
+                channel.topic,
+                exc,
+            )
         self._client_channels[(client_id, channel.id)] = (channel.topic, channel.encoding, decoder)
 
     def _on_client_message(self, client_id: int, channel_id: int, data: bytes) -> None:
         entry = self._client_channels.get((client_id, channel_id))
         if entry is None:
-            return self._drop(client_id, f"a message on channel {channel_id}", "the channel was not advertised")
+            return self._drop(
+                client_id, f"a message on channel {channel_id}", "the channel was not advertised"
+            )
         topic, encoding, decoder = entry
         if isinstance(decoder, Exception):
             return self._drop(client_id, f"a message on {topic}", str(decoder))

@@ -47,8 +47,12 @@ SERVICE_REQUEST_DEF = "int32 motionL\nfloat32 speedL\nint32 motionR\nfloat32 spe
 codes int, speeds float, fig. 3.3 prints float32 values); the .srv file is not printed. Its
 response is empty."""
 EMPTY_RESPONSE_CDR = b"\x00\x01\x00\x00\x00"
-MAX_BYTES = {"geometry_msgs/Twist": 64, "std_msgs/Float64MultiArray": 4096, SERVICE_TYPE: 4096,
-             "geometry_msgs/PoseStamped": 4096}
+MAX_BYTES = {
+    "geometry_msgs/Twist": 64,
+    "std_msgs/Float64MultiArray": 4096,
+    SERVICE_TYPE: 4096,
+    "geometry_msgs/PoseStamped": 4096,
+}
 """Largest payload taken per type, bytes: a Twist is 52 in CDR (a few more with padding or JSON
 spacing would still fit 64 in CDR; JSON gets 4096 throughout); a request of 4 values is under 100."""
 """An empty ROS 2 message in CDR: the header and rosidl's one placeholder byte."""
@@ -68,7 +72,9 @@ def _cdr_decoder(ros_type: str) -> Callable[[bytes], Any]:
         from mcap_ros2.decoder import DecoderFactory
 
         pkg, name = ros_type.split("/")
-        schema = Schema(id=1, name=f"{pkg}/msg/{name}", encoding="ros2msg", data=msgdef(ros_type).encode())
+        schema = Schema(
+            id=1, name=f"{pkg}/msg/{name}", encoding="ros2msg", data=msgdef(ros_type).encode()
+        )
         decoder = _DECODERS[ros_type] = DecoderFactory().decoder_for("cdr", schema)
     return decoder
 
@@ -77,7 +83,9 @@ def _decode(data: bytes, encoding: str, ros_type: str):
     """A CDR payload as a namespace, or a JSON one as a dict."""
     limit = MAX_BYTES[ros_type] if encoding == "cdr" else 4096
     if len(data) > limit:
-        raise InputError(f"{encoding} payload of {len(data)} bytes: more than a {ros_type} can take ({limit})")
+        raise InputError(
+            f"{encoding} payload of {len(data)} bytes: more than a {ros_type} can take ({limit})"
+        )
     try:
         if encoding == "cdr":
             return _cdr_decoder(ros_type)(bytes(data))
@@ -87,7 +95,9 @@ def _decode(data: bytes, encoding: str, ros_type: str):
                 raise ValueError("not a JSON object")
             return value
     except Exception as exc:  # noqa: BLE001 - any decoding failure is the client's
-        raise InputError(f"{encoding} payload of {len(data)} bytes does not decode as {ros_type}: {exc}") from None
+        raise InputError(
+            f"{encoding} payload of {len(data)} bytes does not decode as {ros_type}: {exc}"
+        ) from None
     raise InputError(f"encoding {encoding!r}: the twin takes {' or '.join(ENCODINGS)}")
 
 
@@ -124,24 +134,36 @@ def decode_goal_pose(data: bytes, encoding: str) -> PoseStamped:
     pose = _field(msg, "pose", {})
     xyz = [_finite(_field(_field(pose, "position", {}), k), f"pose.position.{k}") for k in "xyz"]
     if max(abs(v) for v in xyz) > GOAL_LIMIT_M:
-        raise InputError(f"goal_pose at ({xyz[0]:g}, {xyz[1]:g}): each coordinate must be within +-{GOAL_LIMIT_M:g} m")
-    q = [_finite(_field(_field(pose, "orientation", {}), k, 1.0 if k == "w" else 0.0), f"pose.orientation.{k}")
-         for k in "xyzw"]
+        raise InputError(
+            f"goal_pose at ({xyz[0]:g}, {xyz[1]:g}): each coordinate must be within +-{GOAL_LIMIT_M:g} m"
+        )
+    q = [
+        _finite(
+            _field(_field(pose, "orientation", {}), k, 1.0 if k == "w" else 0.0),
+            f"pose.orientation.{k}",
+        )
+        for k in "xyzw"
+    ]
     norm = math.sqrt(sum(v * v for v in q))
     if norm < 1e-6:
         raise InputError("goal_pose: pose.orientation is a zero quaternion")
     x, y, z, w = (v / norm for v in q)
     yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return PoseStamped(Header(0, Time(), frame), Pose(Point(xyz[0], xyz[1], 0.0), Quaternion.from_yaw(yaw)))
+    return PoseStamped(
+        Header(0, Time(), frame), Pose(Point(xyz[0], xyz[1], 0.0), Quaternion.from_yaw(yaw))
+    )
 
 
 def check_request(values) -> WheelCommandRequest:
     """``[motionL, speedL, motionR, speedR]`` checked: motions -1, 0 or 1; speeds in [0, MAX_RPM] RPM."""
     values = list(values)
     if len(values) != 4:
-        raise InputError(f"wheel_Command request: {len(values)} values, expected 4 [motionL, speedL, motionR, speedR]")
-    motion_l, speed_l, motion_r, speed_r = (_finite(v, n) for v, n in zip(values, ("motionL", "speedL", "motionR",
-                                                                                    "speedR")))
+        raise InputError(
+            f"wheel_Command request: {len(values)} values, expected 4 [motionL, speedL, motionR, speedR]"
+        )
+    motion_l, speed_l, motion_r, speed_r = (
+        _finite(v, n) for v, n in zip(values, ("motionL", "speedL", "motionR", "speedR"))
+    )
     for name, motion in (("motionL", motion_l), ("motionR", motion_r)):
         if motion not in (-1.0, 0.0, 1.0):
             raise InputError(f"{name}={motion:g}: must be 1 (forward), -1 (backward) or 0 (brake)")
@@ -167,7 +189,9 @@ def decode_service_request(data: bytes, encoding: str) -> WheelCommandRequest:
 
         payload = bytes(data)
         if len(payload) < 20 or len(payload) > 64 or payload[1] not in (0, 1):
-            raise InputError(f"cdr request of {len(payload)} bytes: expected 20 (int32, float32, int32, float32)")
+            raise InputError(
+                f"cdr request of {len(payload)} bytes: expected 20 (int32, float32, int32, float32)"
+            )
         order = "<" if payload[1] == 1 else ">"
         values = struct.unpack_from(order + "ifif", payload, 4)
     else:
@@ -199,11 +223,15 @@ def input_for(topic: str, schema_name: str, encoding: str) -> Callable[[bytes, s
     name = topic.lstrip("/")
     entry = INPUT_TOPICS.get(name)
     if entry is None:
-        raise InputError(f"topic {topic!r}: the twin takes /cmd_vel ({TWIST_TYPES[0]}), "
-                         f"/wheel_Command_Service/request ({REQUEST_TYPES[0]}) and /goal_pose ({POSE_TYPES[0]})")
+        raise InputError(
+            f"topic {topic!r}: the twin takes /cmd_vel ({TWIST_TYPES[0]}), "
+            f"/wheel_Command_Service/request ({REQUEST_TYPES[0]}) and /goal_pose ({POSE_TYPES[0]})"
+        )
     types, decoder = entry
     if schema_name not in types:
         raise InputError(f"topic {topic!r} with type {schema_name!r}: expected {types[0]}")
     if encoding not in ENCODINGS:
-        raise InputError(f"topic {topic!r} with encoding {encoding!r}: expected {' or '.join(ENCODINGS)}")
+        raise InputError(
+            f"topic {topic!r} with encoding {encoding!r}: expected {' or '.join(ENCODINGS)}"
+        )
     return decoder

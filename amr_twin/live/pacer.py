@@ -46,7 +46,9 @@ class Pacer:
         if not rate >= 0 or rate == float("inf"):
             raise ValueError(f"rate: {rate} must be a finite number >= 0 (0: as fast as possible)")
         if tick_us <= 0 or tick_us % twin.grid_us:
-            raise ValueError(f"tick_us: {tick_us} must be a positive multiple of the record grid ({twin.grid_us} us)")
+            raise ValueError(
+                f"tick_us: {tick_us} must be a positive multiple of the record grid ({twin.grid_us} us)"
+            )
         self.twin, self.rate, self.tick_us = twin, float(rate), int(tick_us)
         self.sinks: list = []
         """Objects with ``flush(t_us)`` (and ``close()``), called at every tick."""
@@ -75,7 +77,9 @@ class Pacer:
                     try:
                         release(now_us, self.wait_until)
                     except Exception:  # noqa: BLE001 - as flush: a sink's failure must not stop the twin
-                        LOG.exception("live sink %s failed at t=%.3f s", type(sink).__name__, now_us * 1e-6)
+                        LOG.exception(
+                            "live sink %s failed at t=%.3f s", type(sink).__name__, now_us * 1e-6
+                        )
         self.wait_until(now_us)
         self.run_calls()
         self.flush(now_us)
@@ -113,8 +117,12 @@ class Pacer:
             time.sleep(target - wall)
         elif wall - target > MAX_LAG_S:
             if not self.lag_resets:
-                LOG.warning("the twin runs behind --rate %g (%.1f s late at t=%.2f s); pacing from now on",
-                            self.rate, wall - target, t_us * 1e-6)
+                LOG.warning(
+                    "the twin runs behind --rate %g (%.1f s late at t=%.2f s); pacing from now on",
+                    self.rate,
+                    wall - target,
+                    t_us * 1e-6,
+                )
             self.lag_resets += 1
             self._wall0, self._sim0_us = wall, t_us
 
@@ -157,7 +165,11 @@ class Pacer:
             try:
                 future.set_result(func())
             except Exception as exc:  # noqa: BLE001 - nothing another thread sends may stop the twin
-                LOG.error("call from another thread failed at t=%.3f s: %s", self.twin.clock.now_us * 1e-6, exc)
+                LOG.error(
+                    "call from another thread failed at t=%.3f s: %s",
+                    self.twin.clock.now_us * 1e-6,
+                    exc,
+                )
                 future.set_exception(exc)
 
     def close(self) -> None:

@@ -43,8 +43,11 @@ class _Window:
 
     def __init__(self, twin, body_ids, t_s, pos, quat, messages):
         self.twin, self.body_ids, self.messages = twin, body_ids, messages
-        self._poses = (np.asarray(t_s, float), np.asarray(pos).reshape(len(t_s), len(body_ids), 3),
-                       np.asarray(quat).reshape(len(t_s), len(body_ids), 4))
+        self._poses = (
+            np.asarray(t_s, float),
+            np.asarray(pos).reshape(len(t_s), len(body_ids), 3),
+            np.asarray(quat).reshape(len(t_s), len(body_ids), 4),
+        )
 
     def body_poses(self):
         return self._poses
@@ -72,9 +75,14 @@ class RerunSink:
         self.twin, self.rr = twin, rr
         m = twin.observables.model
         self.body_ids = np.arange(1, m.nbody)
-        self._xpos, self._xquat = twin.observables.named.data.xpos, twin.observables.named.data.xquat
+        self._xpos, self._xquat = (
+            twin.observables.named.data.xpos,
+            twin.observables.named.data.xquat,
+        )
         grid_us = twin.grid_us
-        self.period_us = max(grid_us, int(round(1e6 / 30.0 / grid_us)) * grid_us)  # as rerun_capture.Capture's
+        self.period_us = max(
+            grid_us, int(round(1e6 / 30.0 / grid_us)) * grid_us
+        )  # as rerun_capture.Capture's
         self._blueprint = _blueprint
         self._has_imu = "imu" in twin.sensors
         self._has_uwb = "uwb" in twin.sensors
@@ -82,7 +90,9 @@ class RerunSink:
         self.grpc_port = grpc_port or _free_port()
         self.web_port = web_port or _free_port()
         self.rec = rr.RecordingStream("amr_twin")
-        self.uri = self.rec.serve_grpc(grpc_port=self.grpc_port, default_blueprint=self._layout(), newest_first=True)
+        self.uri = self.rec.serve_grpc(
+            grpc_port=self.grpc_port, default_blueprint=self._layout(), newest_first=True
+        )
         self.web_url = None
         if web_viewer:
             rr.serve_web_viewer(web_port=self.web_port, open_browser=False, connect_to=self.uri)
@@ -95,7 +105,9 @@ class RerunSink:
             from amr_twin.recording.event_log import log_events
 
             log_events(self.rec, SimpleNamespace(collisions=None, faults=twin.faults))
-        self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []  # t_us, xpos (nb, 3), xquat (nb, 4)
+        self._poses: list[
+            tuple[int, np.ndarray, np.ndarray]
+        ] = []  # t_us, xpos (nb, 3), xquat (nb, 4)
         self._sent_pose_us = -1
         from amr_twin.live.rows import LiveRows
 
@@ -119,7 +131,9 @@ class RerunSink:
         import rerun.blueprint as rrb
 
         layout = self._blueprint(self._has_imu, self._has_uwb, self._has_events)
-        layout.time_panel = rrb.TimePanel(timeline="sim_time", play_state="following", state="collapsed")
+        layout.time_panel = rrb.TimePanel(
+            timeline="sim_time", play_state="following", state="collapsed"
+        )
         return layout
 
     # -- the twin's side ------------------------------------------------------------------
@@ -129,7 +143,9 @@ class RerunSink:
 
     def _on_grid(self, t_us: int) -> None:
         if t_us % self.period_us == 0:
-            self._poses.append((t_us, self._xpos[self.body_ids].copy(), self._xquat[self.body_ids].copy()))
+            self._poses.append(
+                (t_us, self._xpos[self.body_ids].copy(), self._xquat[self.body_ids].copy())
+            )
 
     def flush(self, t_us: int) -> None:
         """Log everything up to ``t_us`` (simulated) to the stream, every :data:`FLUSH_US`."""
@@ -140,7 +156,13 @@ class RerunSink:
 
     def _flush(self, t_us: int) -> None:
         from amr_twin.recording.event_log import log_events
-        from amr_twin.recording.rerun_streams import _log_commands, _log_duty, _log_electrics, _log_imu, _log_wheel_speeds
+        from amr_twin.recording.rerun_streams import (
+            _log_commands,
+            _log_duty,
+            _log_electrics,
+            _log_imu,
+            _log_wheel_speeds,
+        )
         from amr_twin.recording.rerun_world import _log_body_transforms, _log_scan
         from amr_twin.sensors.lidar_beams import scan_end_time_s
 
@@ -165,7 +187,9 @@ class RerunSink:
         self._poses = [p for p in self._poses if p[0] >= keep_from]
         _log_imu(rec, self._window([], messages))
         rows = self._rows.take(t_us)
-        new_commands = [(t * 1e-6, [float(v) for v in msg.data]) for t, msg in messages.get("wheel_Command", [])]
+        new_commands = [
+            (t * 1e-6, [float(v) for v in msg.data]) for t, msg in messages.get("wheel_Command", [])
+        ]
         self._commands += new_commands
         if rows is not None:
             series = self._series(rows, messages)
@@ -180,19 +204,25 @@ class RerunSink:
             if not self._has_events:
                 self._has_events = True
                 rec.send_blueprint(self._layout(), make_active=False, make_default=True)
-            new = SimpleNamespace(collisions=collisions[self._collisions_sent:])
+            new = SimpleNamespace(collisions=collisions[self._collisions_sent :])
             log_events(rec, SimpleNamespace(collisions=new, faults=None))
             self._collisions_sent = len(collisions)
 
     def _window(self, poses, messages) -> _Window:
         t = [p[0] * 1e-6 for p in poses]
-        return _Window(self.twin, self.body_ids, t, [p[1] for p in poses], [p[2] for p in poses], messages)
+        return _Window(
+            self.twin, self.body_ids, t, [p[1] for p in poses], [p[2] for p in poses], messages
+        )
 
     def _series(self, rows, messages) -> SimpleNamespace:
         """The rows as the series the ``.rrd`` writers read, with the wheel speeds published meanwhile and
         every command so far (the references are held from them)."""
-        published = {w: np.array([(t * 1e-6, msg.data) for t, msg in messages.get(f"wheel{w}_Vel", [])],
-                                 float).reshape(-1, 2) for w in (0, 1)}
+        published = {
+            w: np.array(
+                [(t * 1e-6, msg.data) for t, msg in messages.get(f"wheel{w}_Vel", [])], float
+            ).reshape(-1, 2)
+            for w in (0, 1)
+        }
         return SimpleNamespace(**vars(rows), published=published, commands=self._commands)
 
     def _trajectory(self, series, odom, t_us: int) -> None:
@@ -214,7 +244,9 @@ class RerunSink:
             trail = self._trail[name] = self._trail[name][-TRAIL_POINTS:]
             if len(trail) >= 2:
                 pts = np.column_stack([np.array(trail), np.full(len(trail), 0.01)])
-                self.rec.log(f"world/trajectory/{name}", rr.LineStrips3D([pts], colors=[color], radii=[0.01]))
+                self.rec.log(
+                    f"world/trajectory/{name}", rr.LineStrips3D([pts], colors=[color], radii=[0.01])
+                )
 
     def _add_point(self, name: str, t_us: int, xy) -> None:
         if t_us - self._trail_t[name] >= TRAIL_PERIOD_US:

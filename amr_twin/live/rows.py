@@ -22,7 +22,9 @@ class LiveRows:
 
     def __init__(self, twin):
         self.twin = twin
-        self._rows: list[tuple[int, np.ndarray, np.ndarray, list]] = []  # t_us, sensors, pins, battery
+        self._rows: list[
+            tuple[int, np.ndarray, np.ndarray, list]
+        ] = []  # t_us, sensors, pins, battery
         self.count = 0
         """Rows taken so far (the index of the next row in the run's series)."""
         self._observables = twin.observables
@@ -53,7 +55,14 @@ class LiveRows:
         index = np.arange(self.count, self.count + n)
         self.count += n
         return SimpleNamespace(
-            t_us=t_us_arr, t_s=t, true_rpm=sensors[:, 2:4] * RAD_S_TO_RPM,
+            t_us=t_us_arr,
+            t_s=t,
+            true_rpm=sensors[:, 2:4] * RAD_S_TO_RPM,
             pose=np.column_stack([sensors[:, 4], sensors[:, 5], yaw_from_quat(sensors[:, 7:11])]),
-            pwm_counts=pins[:, 0:2].astype(int), current_a=current, battery_v=battery[:, 0], battery_a=battery[:, 1],
-            battery_soc=battery[:, 2], index=index)
+            pwm_counts=pins[:, 0:2].astype(int),
+            current_a=current,
+            battery_v=battery[:, 0],
+            battery_a=battery[:, 1],
+            battery_soc=battery[:, 2],
+            index=index,
+        )

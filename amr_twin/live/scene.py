@@ -11,7 +11,11 @@ import numpy as np
 
 from amr_twin.ros.ros_state import ROBOT
 
-VISUAL_GROUPS = (0, 1, 4)  # world, robot visuals, payload (as in the .rrd: rerun_world.VISUAL_GROUPS)
+VISUAL_GROUPS = (
+    0,
+    1,
+    4,
+)  # world, robot visuals, payload (as in the .rrd: rerun_world.VISUAL_GROUPS)
 GHOST_RGBA = (0.2, 0.75, 0.25, 0.35)
 COLLISION_RGBA = (0.9, 0.1, 0.1, 0.9)
 FLOOR_HALF_M = 15.0
@@ -78,10 +82,12 @@ class SceneBuilder:
         self._odom_in_world = planar_origin(d.xpos[base], d.xquat[base])
         world_from_odom_inv = _inverse(*self._odom_in_world)
         base_inv = _inverse(d.xpos[base], d.xquat[base])
-        self._world: list[tuple] = []   # (kind, pos, quat, size, rgba) in odom
+        self._world: list[tuple] = []  # (kind, pos, quat, size, rgba) in odom
         self._links: dict[str, list[tuple]] = {}  # link -> geoms in the link's frame
-        self._ghost: list[tuple] = []   # robot geoms in base_link's frame (the start configuration)
-        self._actors: list[list[tuple]] = [[] for _ in range(model.nmocap)]  # per mocap body: geoms in its frame
+        self._ghost: list[tuple] = []  # robot geoms in base_link's frame (the start configuration)
+        self._actors: list[list[tuple]] = [
+            [] for _ in range(model.nmocap)
+        ]  # per mocap body: geoms in its frame
         for g in range(model.ngeom):
             if model.geom_group[g] not in VISUAL_GROUPS or model.geom_rgba[g][3] == 0:
                 continue
@@ -95,10 +101,12 @@ class SceneBuilder:
             gpos, gquat = d.geom_xpos[g], _mat_quat(d.geom_xmat[g])
             if model.body_mocapid[body] >= 0:  # an actor: drawn where actors/poses puts it
                 self._actors[model.body_mocapid[body]].append(
-                    (kind, model.geom_pos[g].copy(), model.geom_quat[g].copy(), size, rgba))
+                    (kind, model.geom_pos[g].copy(), model.geom_quat[g].copy(), size, rgba)
+                )
             elif name.startswith(ROBOT):
-                self._links.setdefault(name[len(ROBOT):], []).append(
-                    (kind, model.geom_pos[g].copy(), model.geom_quat[g].copy(), size, rgba))
+                self._links.setdefault(name[len(ROBOT) :], []).append(
+                    (kind, model.geom_pos[g].copy(), model.geom_quat[g].copy(), size, rgba)
+                )
                 p, q = _compose(*base_inv, gpos, gquat)
                 self._ghost.append((kind, p, q, size, GHOST_RGBA))
             else:
@@ -127,10 +135,14 @@ class SceneBuilder:
     # -- foxglove messages ----------------------------------------------------------
     def _pose(self, p, q):
         fm = self.fm
-        return fm.Pose(position=fm.Vector3(x=float(p[0]), y=float(p[1]), z=float(p[2])),
-                       orientation=fm.Quaternion(x=float(q[1]), y=float(q[2]), z=float(q[3]), w=float(q[0])))
+        return fm.Pose(
+            position=fm.Vector3(x=float(p[0]), y=float(p[1]), z=float(p[2])),
+            orientation=fm.Quaternion(x=float(q[1]), y=float(q[2]), z=float(q[3]), w=float(q[0])),
+        )
 
-    def _entity(self, entity_id: str, frame: str, geoms, t_ns: int, frame_locked: bool = False, offset=None):
+    def _entity(
+        self, entity_id: str, frame: str, geoms, t_ns: int, frame_locked: bool = False, offset=None
+    ):
         fm = self.fm
         cubes, spheres, cylinders = [], [], []
         for kind, p, q, size, rgba in geoms:
@@ -144,24 +156,37 @@ class SceneBuilder:
             elif kind == "sphere":
                 spheres.append(fm.SpherePrimitive(pose=pose, size=sz, color=color))
             else:
-                cylinders.append(fm.CylinderPrimitive(pose=pose, size=sz, bottom_scale=1.0, top_scale=1.0,
-                                                      color=color))
-        return fm.SceneEntity(timestamp=fm.Timestamp(t_ns // 1_000_000_000, t_ns % 1_000_000_000), frame_id=frame,
-                              id=entity_id, frame_locked=frame_locked, cubes=cubes, spheres=spheres,
-                              cylinders=cylinders)
+                cylinders.append(
+                    fm.CylinderPrimitive(
+                        pose=pose, size=sz, bottom_scale=1.0, top_scale=1.0, color=color
+                    )
+                )
+        return fm.SceneEntity(
+            timestamp=fm.Timestamp(t_ns // 1_000_000_000, t_ns % 1_000_000_000),
+            frame_id=frame,
+            id=entity_id,
+            frame_locked=frame_locked,
+            cubes=cubes,
+            spheres=spheres,
+            cylinders=cylinders,
+        )
 
     def static_update(self, t_ns: int = 0):
         """The world (in ``odom``) and each robot link (in its own frame): sent once and to late subscribers."""
         entities = [self._entity("world", "odom", self._world, t_ns)]
-        entities += [self._entity(f"robot/{link}", link, geoms, t_ns, frame_locked=True)
-                     for link, geoms in sorted(self._links.items())]
+        entities += [
+            self._entity(f"robot/{link}", link, geoms, t_ns, frame_locked=True)
+            for link, geoms in sorted(self._links.items())
+        ]
         return self.fm.SceneUpdate(entities=entities)
 
     def ghost_update(self, t_ns: int, pos, quat):
         """The robot at its true world pose ``pos`` (3,), ``quat`` (4,) w, x, y, z, drawn in ``odom``."""
         odom_inv = _inverse(*self._odom_in_world)
         offset = _compose(*odom_inv, pos, quat)
-        return self.fm.SceneUpdate(entities=[self._entity("ground_truth", "odom", self._ghost, t_ns, offset=offset)])
+        return self.fm.SceneUpdate(
+            entities=[self._entity("ground_truth", "odom", self._ghost, t_ns, offset=offset)]
+        )
 
     def actors_update(self, t_ns: int, poses_world):
         """The actors at their world poses ``poses_world`` ((x_m, y_m, yaw_rad) each, in the order of
@@ -169,16 +194,22 @@ class SceneBuilder:
         odom_inv = _inverse(*self._odom_in_world)
         geoms = []
         for (x, y, yaw), parts in zip(poses_world, self._actors):
-            pose = _compose(*odom_inv, [x, y, 0.0], [math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
-            geoms += [(kind, *_compose(*pose, p, q), size, rgba) for kind, p, q, size, rgba in parts]
+            pose = _compose(
+                *odom_inv, [x, y, 0.0], [math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)]
+            )
+            geoms += [
+                (kind, *_compose(*pose, p, q), size, rgba) for kind, p, q, size, rgba in parts
+            ]
         return self.fm.SceneUpdate(entities=[self._entity("actors", "odom", geoms, t_ns)])
 
     def collisions_update(self, t_ns: int, points_world):
         """Red spheres (0.1 m) at the collisions' first contacts (world points (n, 3), m), in ``odom``."""
         odom_inv = _inverse(*self._odom_in_world)
         unit = np.array([1.0, 0.0, 0.0, 0.0])
-        geoms = [("sphere", _compose(*odom_inv, p, unit)[0], unit, np.full(3, 0.1), COLLISION_RGBA)
-                 for p in np.asarray(points_world, float).reshape(-1, 3)]
+        geoms = [
+            ("sphere", _compose(*odom_inv, p, unit)[0], unit, np.full(3, 0.1), COLLISION_RGBA)
+            for p in np.asarray(points_world, float).reshape(-1, 3)
+        ]
         return self.fm.SceneUpdate(entities=[self._entity("collisions", "odom", geoms, t_ns)])
 
 

@@ -42,30 +42,46 @@ class LiveOptions:
     def check(self) -> None:
         """Raise ValueError (one line naming the option) on a bad value."""
         if self.mode not in MODES:
-            raise ValueError(f"--live {self.mode!r}: must be one of {', '.join(MODES)} (a bare --live is foxglove)")
+            raise ValueError(
+                f"--live {self.mode!r}: must be one of {', '.join(MODES)} (a bare --live is foxglove)"
+            )
         for flag, port in (("--port", self.port), ("--web-port", self.web_port)):
             if port is not None and not 0 <= port <= 65535:
                 raise ValueError(f"{flag} {port}: must be in [0, 65535] (0: a free port)")
         if not (0 <= self.rate <= 1000):
-            raise ValueError(f"--rate {self.rate}: must be a finite number in [0, 1000] (0: as fast as possible)")
+            raise ValueError(
+                f"--rate {self.rate}: must be a finite number in [0, 1000] (0: as fast as possible)"
+            )
         if self.web_port is not None and self.mode != "rerun":
             raise ValueError("--web-port is the Rerun web viewer's: give it with --live rerun")
         if self.mode == "rerun" and self.host != "127.0.0.1":
-            raise ValueError("--host is the Foxglove server's: Rerun's servers listen on every interface")
+            raise ValueError(
+                "--host is the Foxglove server's: Rerun's servers listen on every interface"
+            )
         if self.mode == "foxglove":
             ports = (("--port", self.host, FOXGLOVE_PORT if self.port is None else self.port),)
         else:  # Rerun's servers listen on every interface
-            ports = (("--port", "0.0.0.0", RERUN_PORT if self.port is None else self.port),
-                     ("--web-port", "0.0.0.0", RERUN_WEB_PORT if self.web_port is None else self.web_port))
+            ports = (
+                ("--port", "0.0.0.0", RERUN_PORT if self.port is None else self.port),
+                (
+                    "--web-port",
+                    "0.0.0.0",
+                    RERUN_WEB_PORT if self.web_port is None else self.web_port,
+                ),
+            )
         problem = host_problem(self.host) if self.mode == "foxglove" else None
         if problem:
-            raise ValueError(f"--host {self.host}: {problem}; give an address of this machine (127.0.0.1: this "
-                             "machine only, 0.0.0.0: every interface)")
+            raise ValueError(
+                f"--host {self.host}: {problem}; give an address of this machine (127.0.0.1: this "
+                "machine only, 0.0.0.0: every interface)"
+            )
         for flag, host, port in ports:
             problem = port_problem(host, port) if port else None
             if problem:
-                raise ValueError(f"{flag} {port}: cannot listen on {host}:{port} ({problem}); "
-                                 "give another port, or 0 for a free one")
+                raise ValueError(
+                    f"{flag} {port}: cannot listen on {host}:{port} ({problem}); "
+                    "give another port, or 0 for a free one"
+                )
 
 
 def host_problem(host: str) -> str | None:
@@ -121,9 +137,13 @@ class LiveSession:
 
         options.check()
         if not twin.options.visuals:
-            raise ValueError("a live view draws the robot: build the twin with TwinOptions(visuals=True)")
+            raise ValueError(
+                "a live view draws the robot: build the twin with TwinOptions(visuals=True)"
+            )
         self.twin, self.options = twin, options
-        self.diff_drive = DiffDriveNode(twin.bus, twin.clock, twin.client, cmd_timeout_s=CMD_TIMEOUT_S)
+        self.diff_drive = DiffDriveNode(
+            twin.bus, twin.clock, twin.client, cmd_timeout_s=CMD_TIMEOUT_S
+        )
         self.pacer = Pacer(twin, options.rate)
         rate = "as fast as possible" if options.rate == 0 else f"at {options.rate:g}x real time"
         if options.mode == "foxglove":
@@ -131,14 +151,21 @@ class LiveSession:
 
             port = FOXGLOVE_PORT if options.port is None else options.port
             self.sink = FoxgloveSink(twin, self.pacer, options.host, port)
-            say(f"live: Foxglove WebSocket server on {self.sink.url} (the twin runs {rate}; "
-                "publish geometry_msgs/msg/Twist on /cmd_vel to drive it)")
+            say(
+                f"live: Foxglove WebSocket server on {self.sink.url} (the twin runs {rate}; "
+                "publish geometry_msgs/msg/Twist on /cmd_vel to drive it)"
+            )
         else:
             from amr_twin.live.rerun_stream import RerunSink
 
-            self.sink = RerunSink(twin, RERUN_PORT if options.port is None else options.port,
-                                  RERUN_WEB_PORT if options.web_port is None else options.web_port)
-            say(f"live: Rerun gRPC stream {self.sink.uri}, web viewer {self.sink.web_url} (the twin runs {rate})")
+            self.sink = RerunSink(
+                twin,
+                RERUN_PORT if options.port is None else options.port,
+                RERUN_WEB_PORT if options.web_port is None else options.web_port,
+            )
+            say(
+                f"live: Rerun gRPC stream {self.sink.uri}, web viewer {self.sink.web_url} (the twin runs {rate})"
+            )
         self.pacer.sinks.append(self.sink)
 
     def call(self, func, timeout_s: float = 10.0):

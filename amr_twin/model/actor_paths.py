@@ -86,7 +86,9 @@ def actor_path(actor, cfg) -> ActorPath:
         dx, dy = x1 - x0, y1 - y0
         length = math.hypot(dx, dy)
         turn(x0, y0, math.atan2(dy, dx))
-        rows.append((t, x0, y0, actor.speed_m_s * dx / length, actor.speed_m_s * dy / length, yaw, 0.0))
+        rows.append(
+            (t, x0, y0, actor.speed_m_s * dx / length, actor.speed_m_s * dy / length, yaw, 0.0)
+        )
         t += length / actor.speed_m_s
     x_end, y_end = points[-1]
     if actor.loop:

@@ -50,8 +50,12 @@ def obstacle_boxes(model, z_top_m: float) -> Footprints:
     names, centres, halves, yaws = [], [], [], []
     for g in range(model.ngeom):
         b = model.geom_bodyid[g]
-        if (model.geom_group[g] != WORLD_GROUP or model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
-                or model.body_weldid[b] != 0 or model.body_mocapid[b] >= 0):
+        if (
+            model.geom_group[g] != WORLD_GROUP
+            or model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
+            or model.body_weldid[b] != 0
+            or model.body_mocapid[b] >= 0
+        ):
             continue
         R, box = data.geom_xmat[g].reshape(3, 3), model.geom_aabb[g]
         centre = data.geom_xpos[g] + R @ box[:3]
@@ -66,16 +70,24 @@ def obstacle_boxes(model, z_top_m: float) -> Footprints:
         else:  # tilted: the plan-view extent of its box, axis-aligned
             halves.append([np.abs(R[0]) @ box[3:], np.abs(R[1]) @ box[3:]])
             yaws.append(0.0)
-    return Footprints(np.array(centres, float).reshape(-1, 2), np.array(halves, float).reshape(-1, 2),
-                      np.array(yaws, float), tuple(names))
+    return Footprints(
+        np.array(centres, float).reshape(-1, 2),
+        np.array(halves, float).reshape(-1, 2),
+        np.array(yaws, float),
+        tuple(names),
+    )
 
 
 def floor_bounds(model) -> tuple[float, float, float, float] | None:
     """``(x_min, x_max, y_min, y_max)`` of the world's finite floor planes, m; None for an infinite one or none."""
     import mujoco
 
-    planes = [g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
-              and model.body_weldid[model.geom_bodyid[g]] == 0]
+    planes = [
+        g
+        for g in range(model.ngeom)
+        if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
+        and model.body_weldid[model.geom_bodyid[g]] == 0
+    ]
     if not planes or any(model.geom_size[g][0] <= 0 or model.geom_size[g][1] <= 0 for g in planes):
         return None
     x = [model.geom_pos[g][0] + s * model.geom_size[g][0] for g in planes for s in (-1, 1)]
@@ -97,8 +109,13 @@ def path_poses(actor: Actor, cfg) -> np.ndarray:
     return np.vstack(out)
 
 
-def overlapping(poses: np.ndarray, half_m: tuple[float, float], boxes: Footprints, margin_m: float = 0.0,
-                chunk: int = 4096) -> np.ndarray:
+def overlapping(
+    poses: np.ndarray,
+    half_m: tuple[float, float],
+    boxes: Footprints,
+    margin_m: float = 0.0,
+    chunk: int = 4096,
+) -> np.ndarray:
     """Index (P,) of the first box each pose's footprint (half length, half width, grown by
     ``margin_m``) overlaps, -1 where none (separating-axis test of the two rectangles)."""
     out = np.full(len(poses), -1)
@@ -108,17 +125,22 @@ def overlapping(poses: np.ndarray, half_m: tuple[float, float], boxes: Footprint
     hb0, hb1 = boxes.half_xy_m[:, 0], boxes.half_xy_m[:, 1]
     cb, sb = np.cos(boxes.yaw_rad), np.sin(boxes.yaw_rad)
     for i in range(0, len(poses), chunk):
-        p = poses[i:i + chunk]
+        p = poses[i : i + chunk]
         ca, sa = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
-        tx, ty = boxes.centre_xy_m[None, :, 0] - p[:, 0:1], boxes.centre_xy_m[None, :, 1] - p[:, 1:2]  # (P, K)
-        c = np.abs(ca * cb + sa * sb)  # |cos| and |sin| of the angle between the two rectangles' axes
+        tx, ty = (
+            boxes.centre_xy_m[None, :, 0] - p[:, 0:1],
+            boxes.centre_xy_m[None, :, 1] - p[:, 1:2],
+        )  # (P, K)
+        c = np.abs(
+            ca * cb + sa * sb
+        )  # |cos| and |sin| of the angle between the two rectangles' axes
         s = np.abs(sa * cb - ca * sb)
-        sep = np.abs(tx * ca + ty * sa) > ha0 + c * hb0 + s * hb1       # along the footprint's axes
+        sep = np.abs(tx * ca + ty * sa) > ha0 + c * hb0 + s * hb1  # along the footprint's axes
         sep |= np.abs(ty * ca - tx * sa) > ha1 + s * hb0 + c * hb1
-        sep |= np.abs(tx * cb + ty * sb) > hb0 + c * ha0 + s * ha1      # along the box's
+        sep |= np.abs(tx * cb + ty * sb) > hb0 + c * ha0 + s * ha1  # along the box's
         sep |= np.abs(ty * cb - tx * sb) > hb1 + s * ha0 + c * ha1
         hit = ~sep
-        out[i:i + chunk] = np.where(hit.any(1), hit.argmax(1), -1)
+        out[i : i + chunk] = np.where(hit.any(1), hit.argmax(1), -1)
     return out
 
 
@@ -128,11 +150,18 @@ def _outside(poses: np.ndarray, half_m, bounds) -> np.ndarray:
         return np.zeros(len(poses), bool)
     r = math.hypot(*half_m)  # a circle round the footprint: enough for a floor's edge
     x0, x1, y0, y1 = bounds
-    return (poses[:, 0] - r < x0) | (poses[:, 0] + r > x1) | (poses[:, 1] - r < y0) | (poses[:, 1] + r > y1)
+    return (
+        (poses[:, 0] - r < x0)
+        | (poses[:, 0] + r > x1)
+        | (poses[:, 1] - r < y0)
+        | (poses[:, 1] + r > y1)
+    )
 
 
 def _height_m(kind: str, cfg) -> float:
-    return cfg.actors.person.height_m if kind == "person" else cfg.actors.pallet_jack.handle_height_m
+    return (
+        cfg.actors.person.height_m if kind == "person" else cfg.actors.pallet_jack.handle_height_m
+    )
 
 
 def check_paths(model, actors: tuple[Actor, ...], cfg) -> None:
@@ -149,12 +178,21 @@ def check_paths(model, actors: tuple[Actor, ...], cfg) -> None:
             j = int(bad[0])
             x, y = poses[j, :2]
             what = f"runs into {boxes.names[hit[j]]}" if hit[j] >= 0 else "leaves the floor"
-            raise ActorError(f"actor {i} ({body_name(i, actor)}): its path {what} near ({x:.2f}, {y:.2f}) m; its "
-                             f"{2 * half[0]:.2f} x {2 * half[1]:.2f} m footprint must stay in the world's free space")
+            raise ActorError(
+                f"actor {i} ({body_name(i, actor)}): its path {what} near ({x:.2f}, {y:.2f}) m; its "
+                f"{2 * half[0]:.2f} x {2 * half[1]:.2f} m footprint must stay in the world's free space"
+            )
 
 
-def random_actors(model, n: int, seed: int, cfg, robot_xy_m: tuple[float, float], kinds: tuple[str, ...] = KINDS,
-                  stop_within_m: float = 0.0) -> tuple[Actor, ...]:
+def random_actors(
+    model,
+    n: int,
+    seed: int,
+    cfg,
+    robot_xy_m: tuple[float, float],
+    kinds: tuple[str, ...] = KINDS,
+    stop_within_m: float = 0.0,
+) -> tuple[Actor, ...]:
     """``n`` actors drawn on ``model``'s free space from ``seed`` (module notes)."""
     if not all(k in KINDS for k in kinds) or not kinds:
         raise ActorError(f"random actors: kinds must be among {', '.join(KINDS)}")
@@ -168,7 +206,9 @@ def random_actors(model, n: int, seed: int, cfg, robot_xy_m: tuple[float, float]
         boxes = obstacle_boxes(model, _height_m(kind, cfg))
         area = _area(boxes, floor, robot_xy_m)
         speed = float(rng.uniform(k.speed_min_m_s, k.speed_max_m_s))
-        out.append(_draw(rng, kind, speed, half, boxes, floor, area, robot_xy_m, cfg, stop_within_m, i))
+        out.append(
+            _draw(rng, kind, speed, half, boxes, floor, area, robot_xy_m, cfg, stop_within_m, i)
+        )
     return tuple(out)
 
 
@@ -181,21 +221,32 @@ def _area(boxes: Footprints, floor, robot_xy_m) -> tuple[float, float, float, fl
         x, y = robot_xy_m
         area = [x - 10.0, x + 10.0, y - 10.0, y + 10.0]
     if floor is not None:
-        area = [max(area[0], floor[0]), min(area[1], floor[1]), max(area[2], floor[2]), min(area[3], floor[3])]
+        area = [
+            max(area[0], floor[0]),
+            min(area[1], floor[1]),
+            max(area[2], floor[2]),
+            min(area[3], floor[3]),
+        ]
     return tuple(float(v) for v in area)
 
 
 def _clear(actor: Actor, half, boxes, floor, cfg) -> bool:
     poses = path_poses(actor, cfg)
-    return not ((overlapping(poses, half, boxes, RANDOM_CLEARANCE_M) >= 0) | _outside(poses, half, floor)).any()
+    return not (
+        (overlapping(poses, half, boxes, RANDOM_CLEARANCE_M) >= 0) | _outside(poses, half, floor)
+    ).any()
 
 
-def _draw(rng, kind, speed, half, boxes, floor, area, robot_xy_m, cfg, stop_within_m, index) -> Actor:
+def _draw(
+    rng, kind, speed, half, boxes, floor, area, robot_xy_m, cfg, stop_within_m, index
+) -> Actor:
     x0, x1, y0, y1 = area
     r_start = math.hypot(*half) + 0.45 + ROBOT_CLEAR_M  # the robot's footprint circle: about 0.4 m
     for _ in range(RANDOM_TRIES):
         first = (float(rng.uniform(x0, x1)), float(rng.uniform(y0, y1)))
-        if math.dist(first, robot_xy_m) < r_start or not _clear(Actor(kind, (first,), speed), half, boxes, floor, cfg):
+        if math.dist(first, robot_xy_m) < r_start or not _clear(
+            Actor(kind, (first,), speed), half, boxes, floor, cfg
+        ):
             continue
         points = [first]
         for _ in range(RANDOM_TRIES):
@@ -210,5 +261,7 @@ def _draw(rng, kind, speed, half, boxes, floor, area, robot_xy_m, cfg, stop_with
                 if last:
                     return actor
         # this start led nowhere: draw another
-    raise ActorError(f"random actors: could not place actor {index} ({kind}) on the world's free space in "
-                     f"{RANDOM_TRIES} draws (a world too cluttered for its footprint?)")
+    raise ActorError(
+        f"random actors: could not place actor {index} ({kind}) on the world's free space in "
+        f"{RANDOM_TRIES} draws (a world too cluttered for its footprint?)"
+    )

@@ -57,14 +57,18 @@ class Actor:
         try:
             points = tuple((float(x), float(y)) for x, y in self.waypoints_xy_m)
         except (TypeError, ValueError):
-            raise ActorError(f"{self.kind}: waypoints_xy_m must be a list of (x, y) pairs in m") from None
+            raise ActorError(
+                f"{self.kind}: waypoints_xy_m must be a list of (x, y) pairs in m"
+            ) from None
         if not points:
             raise ActorError(f"{self.kind}: waypoints_xy_m needs at least one (x, y) point")
         for i, (x, y) in enumerate(points):
             _finite(f"{self.kind}: waypoint {i} x", x, -MAX_COORD_M, MAX_COORD_M)
             _finite(f"{self.kind}: waypoint {i} y", y, -MAX_COORD_M, MAX_COORD_M)
             if i and points[i - 1] == (x, y):
-                raise ActorError(f"{self.kind}: waypoints {i - 1} and {i} coincide at ({x:g}, {y:g})")
+                raise ActorError(
+                    f"{self.kind}: waypoints {i - 1} and {i} coincide at ({x:g}, {y:g})"
+                )
         if self.loop and (len(points) < 2 or (len(points) == 2 and points[0] == points[1])):
             raise ActorError(f"{self.kind}: a loop needs at least two distinct waypoints")
         object.__setattr__(self, "waypoints_xy_m", points)
@@ -83,8 +87,10 @@ class Actor:
         where = f"--actor {text!r}"
         kind, sep, rest = text.strip().partition(":")
         if not sep or kind not in KINDS:
-            raise ActorError(f"{where}: expected KIND:X1,Y1;X2,Y2[@SPEED][+START][/loop][/stop=M] "
-                             f"with KIND one of {', '.join(KINDS)}")
+            raise ActorError(
+                f"{where}: expected KIND:X1,Y1;X2,Y2[@SPEED][+START][/loop][/stop=M] "
+                f"with KIND one of {', '.join(KINDS)}"
+            )
         rest, *flags = rest.split("/")
         loop, stop = False, 0.0
         try:
@@ -110,8 +116,10 @@ class Actor:
         except ValueError as exc:
             if isinstance(exc, ActorError):
                 raise
-            raise ActorError(f"{where}: expected KIND:X1,Y1;X2,Y2[@SPEED][+START][/loop][/stop=M], "
-                             "numbers in m, m/s and s") from None
+            raise ActorError(
+                f"{where}: expected KIND:X1,Y1;X2,Y2[@SPEED][+START][/loop][/stop=M], "
+                "numbers in m, m/s and s"
+            ) from None
         try:
             return cls(kind, tuple(points), speed, start, loop, stop)
         except ActorError as exc:
@@ -132,15 +140,22 @@ class Actor:
         if tree["kind"] not in KINDS:
             raise ActorError(f"{where}.kind: {tree['kind']!r} must be one of {', '.join(KINDS)}")
         points = tree["waypoints_xy_m"]
-        if not isinstance(points, list) or not all(isinstance(p, list) and len(p) == 2 for p in points):
+        if not isinstance(points, list) or not all(
+            isinstance(p, list) and len(p) == 2 for p in points
+        ):
             raise ActorError(f"{where}.waypoints_xy_m: expected a list of [x, y] pairs in m")
         loop = tree.get("loop", False)
         if not isinstance(loop, bool):
             raise ActorError(f"{where}.loop: {loop!r} must be true or false")
         try:
-            return cls(tree["kind"], tuple(tuple(p) for p in points), _finite(f"{where}.speed_m_s", tree["speed_m_s"]),
-                       _finite(f"{where}.start_s", tree.get("start_s", 0.0)), loop,
-                       _finite(f"{where}.stop_within_m", tree.get("stop_within_m", 0.0)))
+            return cls(
+                tree["kind"],
+                tuple(tuple(p) for p in points),
+                _finite(f"{where}.speed_m_s", tree["speed_m_s"]),
+                _finite(f"{where}.start_s", tree.get("start_s", 0.0)),
+                loop,
+                _finite(f"{where}.stop_within_m", tree.get("stop_within_m", 0.0)),
+            )
         except ActorError as exc:
             raise ActorError(f"{where}: {exc}") from None
 
@@ -155,9 +170,11 @@ def check_speeds(actors: tuple[Actor, ...], cfg) -> None:
     for i, a in enumerate(actors):
         k = getattr(cfg.actors, a.kind)
         if not k.speed_min_m_s <= a.speed_m_s <= k.speed_max_m_s:
-            raise ActorError(f"actor {i} ({body_name(i, a)}): speed {a.speed_m_s:g} m/s outside the {a.kind}'s "
-                             f"[{k.speed_min_m_s:g}, {k.speed_max_m_s:g}] m/s (actors.{a.kind}.speed_min_m_s, "
-                             "speed_max_m_s)")
+            raise ActorError(
+                f"actor {i} ({body_name(i, a)}): speed {a.speed_m_s:g} m/s outside the {a.kind}'s "
+                f"[{k.speed_min_m_s:g}, {k.speed_max_m_s:g}] m/s (actors.{a.kind}.speed_min_m_s, "
+                "speed_max_m_s)"
+            )
 
 
 def footprint_half_m(kind: str, cfg) -> tuple[float, float]:
@@ -165,13 +182,20 @@ def footprint_half_m(kind: str, cfg) -> tuple[float, float]:
     that stands on the floor (a person's torso, wider than the legs; a jack's outline)."""
     if kind == "person":
         p = cfg.actors.person
-        return max(p.torso_depth_m, 2 * p.leg_radius_m) / 2, max(p.torso_width_m, p.leg_spacing_m + 2 * p.leg_radius_m) / 2
+        return max(p.torso_depth_m, 2 * p.leg_radius_m) / 2, max(
+            p.torso_width_m, p.leg_spacing_m + 2 * p.leg_radius_m
+        ) / 2
     j = cfg.actors.pallet_jack
     return j.length_m / 2, j.width_m / 2
 
 
-_RGBA = {"legs": [0.15, 0.20, 0.35, 1.0], "torso": [1.0, 0.55, 0.05, 1.0], "head": [0.85, 0.70, 0.55, 1.0],
-         "jack": [0.80, 0.10, 0.10, 1.0], "handle": [0.15, 0.15, 0.15, 1.0]}
+_RGBA = {
+    "legs": [0.15, 0.20, 0.35, 1.0],
+    "torso": [1.0, 0.55, 0.05, 1.0],
+    "head": [0.85, 0.70, 0.55, 1.0],
+    "jack": [0.80, 0.10, 0.10, 1.0],
+    "handle": [0.15, 0.15, 0.15, 1.0],
+}
 
 
 PRIORITY = 2
@@ -187,17 +211,41 @@ def _touching(k) -> dict:
 def _person(body, name: str, p) -> None:
     import mujoco
 
-    cyl, box, sphere = mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_SPHERE
+    cyl, box, sphere = (
+        mujoco.mjtGeom.mjGEOM_CYLINDER,
+        mujoco.mjtGeom.mjGEOM_BOX,
+        mujoco.mjtGeom.mjGEOM_SPHERE,
+    )
     half_leg = p.leg_length_m / 2
     for side, y in (("left", p.leg_spacing_m / 2), ("right", -p.leg_spacing_m / 2)):
-        body.add_geom(name=f"{name}/leg_{side}", type=cyl, size=[p.leg_radius_m, half_leg, 0],
-                      pos=[0, y, half_leg], rgba=_RGBA["legs"], **_touching(p))
+        body.add_geom(
+            name=f"{name}/leg_{side}",
+            type=cyl,
+            size=[p.leg_radius_m, half_leg, 0],
+            pos=[0, y, half_leg],
+            rgba=_RGBA["legs"],
+            **_touching(p),
+        )
     head_r = 0.1 * p.height_m / 1.7
     torso_h = p.height_m - 2 * head_r - p.leg_length_m
-    body.add_geom(name=f"{name}/torso", type=box, size=[p.torso_depth_m / 2, p.torso_width_m / 2, torso_h / 2],
-                  pos=[0, 0, p.leg_length_m + torso_h / 2], rgba=_RGBA["torso"], contype=0, conaffinity=0)
-    body.add_geom(name=f"{name}/head", type=sphere, size=[head_r, 0, 0], pos=[0, 0, p.height_m - head_r],
-                  rgba=_RGBA["head"], contype=0, conaffinity=0)
+    body.add_geom(
+        name=f"{name}/torso",
+        type=box,
+        size=[p.torso_depth_m / 2, p.torso_width_m / 2, torso_h / 2],
+        pos=[0, 0, p.leg_length_m + torso_h / 2],
+        rgba=_RGBA["torso"],
+        contype=0,
+        conaffinity=0,
+    )
+    body.add_geom(
+        name=f"{name}/head",
+        type=sphere,
+        size=[head_r, 0, 0],
+        pos=[0, 0, p.height_m - head_r],
+        rgba=_RGBA["head"],
+        contype=0,
+        conaffinity=0,
+    )
 
 
 def _pallet_jack(body, name: str, j) -> None:
@@ -206,20 +254,53 @@ def _pallet_jack(body, name: str, j) -> None:
     box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
     front, back = j.length_m / 2, -j.length_m / 2
     heel = front - j.fork_length_m  # the forks' back end: the steer frame behind it
-    for side, y in (("left", (j.width_m - j.fork_width_m) / 2), ("right", -(j.width_m - j.fork_width_m) / 2)):
-        body.add_geom(name=f"{name}/fork_{side}", type=box,
-                      size=[j.fork_length_m / 2, j.fork_width_m / 2, j.fork_height_m / 2],
-                      pos=[(front + heel) / 2, y, j.fork_height_m / 2], rgba=_RGBA["jack"], **_touching(j))
-    body.add_geom(name=f"{name}/frame", type=box, size=[(heel - back) / 2, j.width_m / 2, j.frame_height_m / 2],
-                  pos=[(heel + back) / 2, 0, j.frame_height_m / 2], rgba=_RGBA["jack"], **_touching(j))
+    for side, y in (
+        ("left", (j.width_m - j.fork_width_m) / 2),
+        ("right", -(j.width_m - j.fork_width_m) / 2),
+    ):
+        body.add_geom(
+            name=f"{name}/fork_{side}",
+            type=box,
+            size=[j.fork_length_m / 2, j.fork_width_m / 2, j.fork_height_m / 2],
+            pos=[(front + heel) / 2, y, j.fork_height_m / 2],
+            rgba=_RGBA["jack"],
+            **_touching(j),
+        )
+    body.add_geom(
+        name=f"{name}/frame",
+        type=box,
+        size=[(heel - back) / 2, j.width_m / 2, j.frame_height_m / 2],
+        pos=[(heel + back) / 2, 0, j.frame_height_m / 2],
+        rgba=_RGBA["jack"],
+        **_touching(j),
+    )
     x_pump = back + j.pump_radius_m
-    body.add_geom(name=f"{name}/pump", type=cyl, size=[j.pump_radius_m, j.pump_height_m / 2, 0],
-                  pos=[x_pump, 0, j.pump_height_m / 2], rgba=_RGBA["jack"], **_touching(j))
+    body.add_geom(
+        name=f"{name}/pump",
+        type=cyl,
+        size=[j.pump_radius_m, j.pump_height_m / 2, 0],
+        pos=[x_pump, 0, j.pump_height_m / 2],
+        rgba=_RGBA["jack"],
+        **_touching(j),
+    )
     half = (j.handle_height_m - j.pump_height_m) / 2
-    body.add_geom(name=f"{name}/handle", type=cyl, size=[0.015, half, 0], pos=[x_pump, 0, j.pump_height_m + half],
-                  rgba=_RGBA["handle"], **_touching(j))
-    body.add_geom(name=f"{name}/grip", type=box, size=[0.02, 0.18, 0.02], pos=[x_pump, 0, j.handle_height_m],
-                  rgba=_RGBA["handle"], contype=0, conaffinity=0)
+    body.add_geom(
+        name=f"{name}/handle",
+        type=cyl,
+        size=[0.015, half, 0],
+        pos=[x_pump, 0, j.pump_height_m + half],
+        rgba=_RGBA["handle"],
+        **_touching(j),
+    )
+    body.add_geom(
+        name=f"{name}/grip",
+        type=box,
+        size=[0.02, 0.18, 0.02],
+        pos=[x_pump, 0, j.handle_height_m],
+        rgba=_RGBA["handle"],
+        contype=0,
+        conaffinity=0,
+    )
 
 
 def add_actors(spec, actors: tuple[Actor, ...], cfg) -> None:
@@ -230,6 +311,12 @@ def add_actors(spec, actors: tuple[Actor, ...], cfg) -> None:
     for i, actor in enumerate(actors):
         name = body_name(i, actor)
         x, y, yaw = actor_path(actor, cfg).pose_at(0.0)
-        body = spec.worldbody.add_body(name=name, mocap=True, pos=[x, y, 0.0],
-                                       quat=[math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)])
-        (_person if actor.kind == "person" else _pallet_jack)(body, name, getattr(cfg.actors, actor.kind))
+        body = spec.worldbody.add_body(
+            name=name,
+            mocap=True,
+            pos=[x, y, 0.0],
+            quat=[math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)],
+        )
+        (_person if actor.kind == "person" else _pallet_jack)(
+            body, name, getattr(cfg.actors, actor.kind)
+        )

@@ -52,8 +52,10 @@ def world_file(world: str | Path) -> Path:
     urdf = suffix == ".urdf" or (suffix == ".xml" and _root_tag(path) == "robot")
     if urdf or suffix not in (".xml", ".yaml", ".yml"):
         what = "a URDF describes a robot, not a world" if urdf else "not a world file"
-        raise BuildError(f"--world {world}: {what}: give a world ({names}), an MJCF world file (.xml) or a "
-                         "map_server map (.yaml)")
+        raise BuildError(
+            f"--world {world}: {what}: give a world ({names}), an MJCF world file (.xml) or a "
+            "map_server map (.yaml)"
+        )
     return path
 
 
@@ -79,6 +81,7 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
     path = world_file(world)
     if path.suffix in (".yaml", ".yml"):  # a ROS map_server map: walls extruded from the image
         from amr_twin.model.worlds import world_xml
+
         spec = mujoco.MjSpec.from_string(world_xml(path))
     else:
         try:
@@ -93,7 +96,11 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
     # discovery (on by default) costs ~2 us a step for nothing; the solution is the same to the bit.
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     spec.option.gravity = [0.0, 0.0, -cfg.sim.gravity_m_s2]
-    spec.option.magnetic = [0.0, 2.2e-5, -4.3e-5]  # ~48 uT, northern-Italy inclination (WMM estimate)
+    spec.option.magnetic = [
+        0.0,
+        2.2e-5,
+        -4.3e-5,
+    ]  # ~48 uT, northern-Italy inclination (WMM estimate)
     for geom in spec.geoms:
         geom.group = GROUP_WORLD
         if geom.type == mujoco.mjtGeom.mjGEOM_PLANE:
@@ -160,9 +167,16 @@ def _tyre_contacts(scene: mujoco.MjSpec, cfg: TwinConfig) -> None:
     scene.nuserdata += tyres.USERDATA_SIZE
 
 
-def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
-          xacro_file: Path = XACRO_FILE, visuals: bool = True, imu: bool = True, actors: tuple = (),
-          obstacles: tuple = ()) -> Build:
+def build(
+    cfg: TwinConfig,
+    world: str | Path = "warehouse",
+    start_xy_yaw: tuple[float, float, float] = (0, 0, 0),
+    xacro_file: Path = XACRO_FILE,
+    visuals: bool = True,
+    imu: bool = True,
+    actors: tuple = (),
+    obstacles: tuple = (),
+) -> Build:
     """Build the robot in a world and compile it (the URDF from :func:`robot_urdf`'s cache).
 
     ``actors`` (:class:`~amr_twin.model.actors.Actor`) are added as mocap bodies at their poses at
@@ -181,20 +195,30 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
     scene = _world_spec(cfg, world)
     scene.option.timestep = tyre_timestep(cfg).timestep_s  # the brush tyres' explicit states stable
     for ob in obstacles:
-        scene.worldbody.add_geom(name=f"obstacle_{ob.name}", type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
-                                 pos=[ob.x_m, ob.y_m, ob.size_m[2] / 2],
-                                 size=[ob.size_m[0] / 2, ob.size_m[1] / 2, ob.size_m[2] / 2],
-                                 quat=[math.cos(ob.yaw_rad / 2), 0, 0, math.sin(ob.yaw_rad / 2)],
-                                 rgba=[0.9, 0.75, 0.1, 1])
+        scene.worldbody.add_geom(
+            name=f"obstacle_{ob.name}",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            group=GROUP_WORLD,
+            pos=[ob.x_m, ob.y_m, ob.size_m[2] / 2],
+            size=[ob.size_m[0] / 2, ob.size_m[1] / 2, ob.size_m[2] / 2],
+            quat=[math.cos(ob.yaw_rad / 2), 0, 0, math.sin(ob.yaw_rad / 2)],
+            rgba=[0.9, 0.75, 0.1, 1],
+        )
     x, y, yaw = start_xy_yaw
     held = Path(world).stem == "stand"
     z = STAND_HEIGHT_M if held else 0.0
-    frame = scene.worldbody.add_frame(pos=[x, y, z], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
+    frame = scene.worldbody.add_frame(
+        pos=[x, y, z], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
+    )
     attached = mujoco.MjSpec.from_string(robot_xml)
     scene.attach(attached if imu else _without_imu(attached), prefix=ROBOT_PREFIX, frame=frame)
     if held:  # the work station of fig. 5.1: the chassis welded where it stands
-        scene.add_equality(type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                           name1=ROBOT_PREFIX + "base_link", name="stand")
+        scene.add_equality(
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=ROBOT_PREFIX + "base_link",
+            name="stand",
+        )
     if cfg.wheel.tyre_slip:
         _tyre_contacts(scene, cfg)
     if actors:
@@ -223,7 +247,9 @@ def build(cfg: TwinConfig, world: str | Path = "warehouse", start_xy_yaw: tuple[
 
 def _option_fields(opt) -> list[str]:
     """The names of ``mjOption``'s fields (the same on an MjSpec's option and a model's ``opt``)."""
-    return [name for name in dir(opt) if not name.startswith("_") and not callable(getattr(opt, name))]
+    return [
+        name for name in dir(opt) if not name.startswith("_") and not callable(getattr(opt, name))
+    ]
 
 
 def robot_mjcf(result: Build) -> str:

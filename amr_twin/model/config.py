@@ -28,14 +28,36 @@ from typing import Any, Iterator
 
 from pydantic import BaseModel, ValidationError, model_validator
 
-from amr_twin.model.config_sections import (BatteryCfg, CasterCfg, ChassisCfg, ComponentsCfg, DeckCfg,
-                              DriverBoardCfg, DriverCfg,
-                              EkfCfg, ImuCfg, LidarCfg, LidarOdometryCfg, MappingCfg, MotorCfg,
-                              PayloadCfg, Section, SimCfg, UwbCfg, WheelCfg)
+from amr_twin.model.config_sections import (
+    BatteryCfg,
+    CasterCfg,
+    ChassisCfg,
+    ComponentsCfg,
+    DeckCfg,
+    DriverBoardCfg,
+    DriverCfg,
+    EkfCfg,
+    ImuCfg,
+    LidarCfg,
+    LidarOdometryCfg,
+    MappingCfg,
+    MotorCfg,
+    PayloadCfg,
+    Section,
+    SimCfg,
+    UwbCfg,
+    WheelCfg,
+)
 from amr_twin.model.config_actors import ActorsCfg
 from amr_twin.model.config_navigation import NavigationCfg
 from amr_twin.model.config_leaves import ConfigError  # noqa: F401 - the parameter files' error, raised here too
-from amr_twin.model.config_leaves import LEAF_KEYS, SPREAD_KEYS, check_follows, leaf_spread, value_at
+from amr_twin.model.config_leaves import (
+    LEAF_KEYS,
+    SPREAD_KEYS,
+    check_follows,
+    leaf_spread,
+    value_at,
+)
 from amr_twin.model.config_leaves import field_range as _field_range
 from amr_twin.model.config_overrides import Blame, check_assignment, check_kind, parse_assignment
 from amr_twin.model.config_overrides import set_path as _set_path
@@ -81,11 +103,15 @@ class TwinConfig(Section):
         c, w, k, p = self.chassis, self.wheel, self.caster, self.payload
         inner_y = w.separation_m / 2 - w.width_m / 2
         if c.width_m / 2 > inner_y - 0.002:
-            raise ValueError(f"chassis.width_m: must be < {2 * (inner_y - 0.002):.3f} m "
-                             "(the frame must clear the wheels)")
+            raise ValueError(
+                f"chassis.width_m: must be < {2 * (inner_y - 0.002):.3f} m "
+                "(the frame must clear the wheels)"
+            )
         if k.x_m > c.length_m / 2 or k.y_m > c.width_m / 2:
-            raise ValueError(f"caster.x_m, caster.y_m: must be within [0, {c.length_m / 2}] x [0, {c.width_m / 2}] m "
-                             "(the chassis footprint)")
+            raise ValueError(
+                f"caster.x_m, caster.y_m: must be within [0, {c.length_m / 2}] x [0, {c.width_m / 2}] m "
+                "(the chassis footprint)"
+            )
         if p.mass_kg > 0:
             hx, hy = c.length_m / 2, c.width_m / 2
             x, y = p.xy_m
@@ -93,7 +119,8 @@ class TwinConfig(Section):
             if abs(x) + sx > hx + 1e-9 or abs(y) + sy > hy + 1e-9:
                 raise ValueError(
                     f"payload.xy_m: ({x}, {y}) with size {p.size_m[:2]} is outside the deck: "
-                    f"|x| must be <= {hx - sx:.3f} m and |y| <= {hy - sy:.3f} m")
+                    f"|x| must be <= {hx - sx:.3f} m and |y| <= {hy - sy:.3f} m"
+                )
         return self
 
 
@@ -120,13 +147,19 @@ def _strip(node: dict, model: type[BaseModel], prefix: str, meta: dict) -> dict:
         if _is_leaf(sub):
             extra = set(sub) - set(LEAF_KEYS)
             if extra:
-                raise ConfigError(f"{path}: unknown leaf key(s) {sorted(extra)} (allowed: {', '.join(LEAF_KEYS)})")
+                raise ConfigError(
+                    f"{path}: unknown leaf key(s) {sorted(extra)} (allowed: {', '.join(LEAF_KEYS)})"
+                )
             unit = _schema_unit(model, key)
             if "unit" not in sub or "source" not in sub:
                 raise ConfigError(f"{path}: a parameter needs value, unit and source")
             if unit is not None and sub["unit"] != unit:
                 raise ConfigError(f"{path}: unit '{sub['unit']}' but the schema's is '{unit}'")
-            meta[path] = {"unit": sub["unit"], "source": sub["source"], **leaf_spread(sub, path, model, key)}
+            meta[path] = {
+                "unit": sub["unit"],
+                "source": sub["source"],
+                **leaf_spread(sub, path, model, key),
+            }
             out[key] = sub["value"]
         elif isinstance(sub, dict):
             sub_model = field.annotation
@@ -172,16 +205,29 @@ def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
         msg = f"{list(value)!r} has {len(value)} value(s); it takes {size}" if size else msg
     elif err["type"] == "missing":  # pydantic's "Field required"
         msg = "missing: give its {value, unit, source} leaf"
-    elif err["type"] in ("dict_type", "model_type", "model_attributes_type"):  # "a valid dictionary or instance of"
+    elif err["type"] in (
+        "dict_type",
+        "model_type",
+        "model_attributes_type",
+    ):  # "a valid dictionary or instance of"
         msg = f"{value!r} is not a section: give its parameters as keys"
     elif err["type"] in _KINDS:  # "Input should be a valid number, unable to parse ..."
         msg = f"{value!r} is not {_KINDS[err['type']]}"
     return f"{'.'.join(loc)}: {msg}" if loc else msg
 
 
-_KINDS = {"float_parsing": "a number", "float_type": "a number", "int_parsing": "a whole number",
-          "int_type": "a whole number", "int_from_float": "a whole number", "bool_parsing": "true or false",
-          "bool_type": "true or false", "string_type": "a word", "tuple_type": "a list", "list_type": "a list"}
+_KINDS = {
+    "float_parsing": "a number",
+    "float_type": "a number",
+    "int_parsing": "a whole number",
+    "int_type": "a whole number",
+    "int_from_float": "a whole number",
+    "bool_parsing": "true or false",
+    "bool_type": "true or false",
+    "string_type": "a word",
+    "tuple_type": "a list",
+    "list_type": "a list",
+}
 """pydantic's error types of a value of the wrong kind, and the kind in the project's words."""
 
 
@@ -196,8 +242,10 @@ def _open_ends(model: type[BaseModel], loc: list[str], ctx: dict) -> tuple[bool,
             return "gt" in ctx, "lt" in ctx
         model = field.annotation
     metadata = getattr(field, "metadata", ())
-    return (any(getattr(m, "gt", None) is not None for m in metadata) or "gt" in ctx,
-            any(getattr(m, "lt", None) is not None for m in metadata) or "lt" in ctx)
+    return (
+        any(getattr(m, "gt", None) is not None for m in metadata) or "gt" in ctx,
+        any(getattr(m, "lt", None) is not None for m in metadata) or "lt" in ctx,
+    )
 
 
 def _tuple_size(model: type[BaseModel], loc: list[str]) -> int | None:
@@ -211,12 +259,20 @@ def _tuple_size(model: type[BaseModel], loc: list[str]) -> int | None:
             return None
         annotation = fields[key].annotation
     args = typing.get_args(annotation)
-    return len(args) if typing.get_origin(annotation) is tuple and args and Ellipsis not in args else None
+    return (
+        len(args)
+        if typing.get_origin(annotation) is tuple and args and Ellipsis not in args
+        else None
+    )
 
 
-def load_config(path: str | Path | None = None, *, override_file: str | Path | None = None,
-                sets: list[str] | tuple[str, ...] = (), overrides: dict[str, Any] | None = None,
-                ) -> TwinConfig:
+def load_config(
+    path: str | Path | None = None,
+    *,
+    override_file: str | Path | None = None,
+    sets: list[str] | tuple[str, ...] = (),
+    overrides: dict[str, Any] | None = None,
+) -> TwinConfig:
     """Load, override and validate the parameter file.
 
     Parameters
@@ -230,9 +286,13 @@ def load_config(path: str | Path | None = None, *, override_file: str | Path | N
     return load_parameters(path, override_file=override_file, sets=sets, overrides=overrides)[0]
 
 
-def load_parameters(path: str | Path | None = None, *, override_file: str | Path | None = None,
-                    sets: list[str] | tuple[str, ...] = (), overrides: dict[str, Any] | None = None,
-                    ) -> tuple[TwinConfig, dict[str, dict]]:
+def load_parameters(
+    path: str | Path | None = None,
+    *,
+    override_file: str | Path | None = None,
+    sets: list[str] | tuple[str, ...] = (),
+    overrides: dict[str, Any] | None = None,
+) -> tuple[TwinConfig, dict[str, dict]]:
     """:func:`load_config`, and what the files say of each leaf.
 
     Returns
@@ -266,8 +326,10 @@ def load_parameters(path: str | Path | None = None, *, override_file: str | Path
     for text in sets:
         key, value = parse_assignment(text)
         if key in given and given[key][1] != value:  # the last one won, the first was ignored
-            raise ConfigError(f"--set {key}: given twice with different values ({given[key][0]!r} and {text!r}); "
-                              "give it once")
+            raise ConfigError(
+                f"--set {key}: given twice with different values ({given[key][0]!r} and {text!r}); "
+                "give it once"
+            )
         given[key] = (text, value)
         check_assignment(text, key, value, meta, tree_values)
         _set_path(plain, key, value)
@@ -314,9 +376,14 @@ def _override_meta(meta: dict, key: str, leaf: Any, by: str) -> None:
             model = model.model_fields[part].annotation
         extra = set(leaf) - set(LEAF_KEYS)
         if extra:
-            raise ConfigError(f"{key}: unknown leaf key(s) {sorted(extra)} (allowed: {', '.join(LEAF_KEYS)})")
-        meta[key] = {"unit": base["unit"], "source": leaf.get("source", base["source"]),
-                     **leaf_spread(leaf, key, model, name)}
+            raise ConfigError(
+                f"{key}: unknown leaf key(s) {sorted(extra)} (allowed: {', '.join(LEAF_KEYS)})"
+            )
+        meta[key] = {
+            "unit": base["unit"],
+            "source": leaf.get("source", base["source"]),
+            **leaf_spread(leaf, key, model, name),
+        }
     else:
         meta[key] = {"unit": base["unit"], "source": base["source"], "set_by": by}
 

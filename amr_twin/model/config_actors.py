@@ -46,9 +46,13 @@ class PersonCfg(_Moving):
     @model_validator(mode="after")
     def _fits(self) -> "PersonCfg":
         if self.leg_spacing_m < 2 * self.leg_radius_m:
-            raise ValueError("actors.person.leg_spacing_m: must be >= 2 x leg_radius_m (the legs would overlap)")
+            raise ValueError(
+                "actors.person.leg_spacing_m: must be >= 2 x leg_radius_m (the legs would overlap)"
+            )
         if self.leg_length_m > self.height_m - 0.3:
-            raise ValueError("actors.person.leg_length_m: must leave at least 0.3 m of height_m for torso and head")
+            raise ValueError(
+                "actors.person.leg_length_m: must leave at least 0.3 m of height_m for torso and head"
+            )
         return self
 
 
@@ -68,13 +72,17 @@ class PalletJackCfg(_Moving):
     @model_validator(mode="after")
     def _fits(self) -> "PalletJackCfg":
         if self.fork_length_m >= self.length_m - 2 * self.pump_radius_m:
-            raise ValueError("actors.pallet_jack.fork_length_m: must leave room for the pump "
-                             "(< length_m - 2 x pump_radius_m)")
+            raise ValueError(
+                "actors.pallet_jack.fork_length_m: must leave room for the pump "
+                "(< length_m - 2 x pump_radius_m)"
+            )
         if 2 * self.fork_width_m > self.width_m:
             raise ValueError("actors.pallet_jack.fork_width_m: two forks must fit in width_m")
         if not self.fork_height_m < self.frame_height_m < self.pump_height_m < self.handle_height_m:
-            raise ValueError("actors.pallet_jack: fork_height_m < frame_height_m < pump_height_m < handle_height_m "
-                             "must hold")
+            raise ValueError(
+                "actors.pallet_jack: fork_height_m < frame_height_m < pump_height_m < handle_height_m "
+                "must hold"
+            )
         return self
 
 

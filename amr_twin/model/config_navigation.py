@@ -48,8 +48,10 @@ class NavCostmapCfg(_Settings):
     @model_validator(mode="after")
     def _ranges(self) -> "NavCostmapCfg":
         if self.raytrace_range_m < self.obstacle_range_m:
-            raise ValueError("navigation.costmap.raytrace_range_m: must be >= obstacle_range_m "
-                             "(what is marked must be cleared too)")
+            raise ValueError(
+                "navigation.costmap.raytrace_range_m: must be >= obstacle_range_m "
+                "(what is marked must be cleared too)"
+            )
         return self
 
 
@@ -212,7 +214,11 @@ class NavigationCfg(_Settings):
     @model_validator(mode="after")
     def _fits(self) -> "NavigationCfg":
         if -self.limits.min_v_m_s > self.limits.max_v_m_s:
-            raise ValueError("navigation.limits.min_v_m_s: backing up must not be faster than max_v_m_s")
+            raise ValueError(
+                "navigation.limits.min_v_m_s: backing up must not be faster than max_v_m_s"
+            )
         if self.recoveries.backup_m_s > -self.limits.min_v_m_s:
-            raise ValueError("navigation.recoveries.backup_m_s: must be <= -navigation.limits.min_v_m_s")
+            raise ValueError(
+                "navigation.recoveries.backup_m_s: must be <= -navigation.limits.min_v_m_s"
+            )
         return self

@@ -20,15 +20,19 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     """Parse ``key=value`` (value in YAML syntax, e.g. ``payload.xy_m=[0.1,0]``)."""
     key, sep, raw = text.partition("=")
     if not sep or not key.strip():
-        raise ConfigError(f"--set {text!r}: expected KEY=VALUE with a parameter's dotted key, e.g. "
-                          "--set wheel.radius_m=0.1")
+        raise ConfigError(
+            f"--set {text!r}: expected KEY=VALUE with a parameter's dotted key, e.g. "
+            "--set wheel.radius_m=0.1"
+        )
     import yaml  # only for --set: off the start-up of the other commands
 
     try:
         value = yaml.safe_load(raw)
     except yaml.YAMLError:
-        raise ConfigError(f"--set {text!r}: cannot read the value {raw!r} (YAML: a number, true/false, "
-                          "[a, b] or a word)") from None
+        raise ConfigError(
+            f"--set {text!r}: cannot read the value {raw!r} (YAML: a number, true/false, "
+            "[a, b] or a word)"
+        ) from None
     if isinstance(value, str):  # YAML 1.1 reads 1e6 as a word
         try:
             value = float(value)
@@ -55,11 +59,19 @@ def _kind(value: Any) -> str:
         return "true or false"
     if isinstance(value, (int, float)):  # NaN and infinities too: refused later as not finite
         return "a number"
-    if isinstance(value, (list, tuple)):  # its length is the schema's to judge (some vectors have any)
+    if isinstance(
+        value, (list, tuple)
+    ):  # its length is the schema's to judge (some vectors have any)
         return "a list of numbers" if all(_kind(v) == "a number" for v in value) else "a list"
     if value is None:
         return "nothing"  # --set key= (was "NoneType")
-    return "a word" if isinstance(value, str) else "a mapping" if isinstance(value, dict) else type(value).__name__
+    return (
+        "a word"
+        if isinstance(value, str)
+        else "a mapping"
+        if isinstance(value, dict)
+        else type(value).__name__
+    )
 
 
 def check_assignment(text: str, key: str, value: Any, meta: dict[str, dict], plain: dict) -> None:
@@ -71,13 +83,17 @@ def check_assignment(text: str, key: str, value: Any, meta: dict[str, dict], pla
         inside = [k for k in meta if k.startswith(key + ".")]
         if inside:
             shown = ", ".join(inside[:4]) + (", ..." if len(inside) > 4 else "")
-            raise ConfigError(f"--set {text!r}: {key} is a section, not a parameter; set one of its parameters "
-                              f"({shown})")
+            raise ConfigError(
+                f"--set {text!r}: {key} is a section, not a parameter; set one of its parameters "
+                f"({shown})"
+            )
         names = {k: k for k in meta} | {k.rsplit(".", 1)[-1]: k for k in meta}
         near = [names[n] for n in difflib.get_close_matches(key, list(names), n=3, cutoff=0.6)]
         hint = f"; did you mean {' or '.join(dict.fromkeys(near))}?" if near else ""
-        raise ConfigError(f"--set {text!r}: {key!r} is not a parameter{hint} (the keys: models/amr/amr.yaml, "
-                          "e.g. wheel.radius_m)")
+        raise ConfigError(
+            f"--set {text!r}: {key!r} is not a parameter{hint} (the keys: models/amr/amr.yaml, "
+            "e.g. wheel.radius_m)"
+        )
     node: Any = plain
     for part in key.split("."):
         node = node[part]
@@ -93,8 +109,12 @@ def check_kind(key: str, value: Any, meta: dict[str, dict], current: Any) -> Non
     want, got = _kind(current), _kind(value)
     if want != got:
         unit = meta[key].get("unit")
-        raise ConfigError(f"{key} takes {want}" + (f" ({unit})" if unit and unit != "-" else "") + f", not {got}"
-                          + (f" ({value!r})" if got in ("a word", "true or false") else ""))
+        raise ConfigError(
+            f"{key} takes {want}"
+            + (f" ({unit})" if unit and unit != "-" else "")
+            + f", not {got}"
+            + (f" ({value!r})" if got in ("a word", "true or false") else "")
+        )
 
 
 class Blame:
@@ -111,7 +131,13 @@ class Blame:
         ...``), who set the parameter of that section it names; when nobody did, by the parameter ``file``
         (None: the robot's own, unnamed)."""
         key = text.split(":", 1)[0].split(",")[0].strip()
-        who = self.by.get(key) or next((w for k, w in self.by.items() if k.startswith(key + ".")
-                                        and k.rsplit(".", 1)[-1] in text), None)
+        who = self.by.get(key) or next(
+            (
+                w
+                for k, w in self.by.items()
+                if k.startswith(key + ".") and k.rsplit(".", 1)[-1] in text
+            ),
+            None,
+        )
         who = who or (str(file) if file is not None else None)
         return f"{who}: {text}" if who else text

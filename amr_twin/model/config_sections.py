@@ -20,8 +20,16 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 
-def P(default: Any = ..., *, unit: str, ge: float | None = None, le: float | None = None,
-      gt: float | None = None, lt: float | None = None, setting: bool = False) -> Any:
+def P(
+    default: Any = ...,
+    *,
+    unit: str,
+    ge: float | None = None,
+    le: float | None = None,
+    gt: float | None = None,
+    lt: float | None = None,
+    setting: bool = False,
+) -> Any:
     """A physical parameter field: its unit and range travel with the schema.
 
     ``setting``: a value the user or the twin chooses (a time step, a sensor mode, a filter's
@@ -74,7 +82,9 @@ class ChassisCfg(Section):
     @model_validator(mode="after")
     def _floors_ordered(self) -> "ChassisCfg":
         if not self.floor_a_z_m < self.floor_b_z_m < self.floor_c_z_m:
-            raise ValueError("chassis.floor_*_z_m: floor_a_z_m < floor_b_z_m < floor_c_z_m must hold")
+            raise ValueError(
+                "chassis.floor_*_z_m: floor_a_z_m < floor_b_z_m < floor_c_z_m must hold"
+            )
         if self.tube_wall_m * 2 >= self.tube_outer_m:
             raise ValueError("chassis.tube_wall_m: must be less than half of tube_outer_m")
         return self
@@ -139,7 +149,9 @@ class WheelCfg(Section):
 
     def radius_of(self, side: str) -> float:
         """The ``left`` or ``right`` tyre's true rolling radius, m: ``radius_m`` plus its error."""
-        return self.radius_m + (self.radius_error_left_m if side == "left" else self.radius_error_right_m)
+        return self.radius_m + (
+            self.radius_error_left_m if side == "left" else self.radius_error_right_m
+        )
 
 
 class CasterCfg(Section):
@@ -240,7 +252,9 @@ class LidarCfg(Section):
     @model_validator(mode="after")
     def _sample_rate_is_a_mode(self) -> "LidarCfg":
         if self.sample_rate_hz not in (2000, 4000, 8000):
-            raise ValueError("lidar.sample_rate_hz: must be 2000, 4000 or 8000 (A1 standard/express/boost)")
+            raise ValueError(
+                "lidar.sample_rate_hz: must be 2000, 4000 or 8000 (A1 standard/express/boost)"
+            )
         return self
 
 
@@ -351,4 +365,3 @@ class MappingCfg(Section):
     resolution_m: float = P(unit="m", ge=0.01, le=1.0)
     margin_m: float = P(unit="m", ge=0.0, le=20.0)
     pose_graph: PoseGraphCfg
-

@@ -33,9 +33,11 @@ def is_generated(world) -> bool:
 
 def parse(world: str) -> tuple[int, float | None]:
     """``(seed, door_width_m or None)`` of ``generated:SEED[?door=W]``; raises :class:`GeneratedWorldError`."""
-    usage = f"--world {world}: expected generated:SEED or generated:SEED?door=W (SEED an integer in [0, {MAX_SEED}], " \
-            f"W in [{FORCED_DOOR_RANGE_M[0]:g}, {FORCED_DOOR_RANGE_M[1]:g}] m)"
-    body = world[len(PREFIX):]
+    usage = (
+        f"--world {world}: expected generated:SEED or generated:SEED?door=W (SEED an integer in [0, {MAX_SEED}], "
+        f"W in [{FORCED_DOOR_RANGE_M[0]:g}, {FORCED_DOOR_RANGE_M[1]:g}] m)"
+    )
+    body = world[len(PREFIX) :]
     seed_text, _, query = body.partition("?")
     if not seed_text.isdigit() or int(seed_text) > MAX_SEED:
         raise GeneratedWorldError(usage)
@@ -71,31 +73,38 @@ def mjcf(world: str) -> str:
     """The MJCF text of a ``generated:`` world (module docstring)."""
     h = hall(world)
     W, H = h.size_m
-    doors = "\n".join(f'    <numeric name="{d.name}_x_y_width_m" data="{_f(d.x_m, d.y_m, d.width_m)}"/>'
-                      for d in h.doors)
-    lines = [f"<!-- {world}: drawn by amr_twin.model.world_generator (docs/explanation/navigation.md). "
-             f"{W:g} x {H:g} m, {len(h.doors)} doorway(s) {', '.join(f'{d.width_m:g} m' for d in h.doors)}. -->",
-             f'<mujoco model="{name(*parse(world)).replace(":", "_").replace("?", "_")}">',
-             "  <custom>",
-             f'    <numeric name="start_xy_yaw" data="{_f(*h.start_xy_yaw)}"/>',
-             f'    <numeric name="uwb_anchors_xy_m" data="{_f(*(v for a in h.anchors_xy_m for v in a))}"/>',
-             doors,
-             "  </custom>",
-             '  <visual><headlight ambient="0.35 0.35 0.35" diffuse="0.5 0.5 0.5"/></visual>',
-             "  <asset>",
-             '    <material name="concrete" rgba="0.55 0.55 0.55 1" reflectance="0.05"/>',
-             '    <material name="wall" rgba="0.85 0.84 0.80 1"/>',
-             '    <material name="rack" rgba="0.15 0.30 0.65 1"/>',
-             '    <material name="beam" rgba="0.95 0.50 0.10 1"/>',
-             '    <material name="goods" rgba="0.80 0.72 0.55 1"/>',
-             '    <material name="pillar" rgba="0.65 0.65 0.62 1"/>',
-             '    <material name="cage" rgba="0.35 0.35 0.35 0.6"/>',
-             "  </asset>",
-             "  <worldbody>",
-             '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
-             f'    <geom name="floor" type="plane" size="{_f(W / 2 + 1, H / 2 + 1, 0.1)}" material="concrete"/>']
-    lines += [f'    <geom name="{b.name}" type="box" pos="{_f(*b.centre_m)}" size="{_f(*b.half_m)}" '
-              f'material="{b.material}"/>' for b in h.boxes]
+    doors = "\n".join(
+        f'    <numeric name="{d.name}_x_y_width_m" data="{_f(d.x_m, d.y_m, d.width_m)}"/>'
+        for d in h.doors
+    )
+    lines = [
+        f"<!-- {world}: drawn by amr_twin.model.world_generator (docs/explanation/navigation.md). "
+        f"{W:g} x {H:g} m, {len(h.doors)} doorway(s) {', '.join(f'{d.width_m:g} m' for d in h.doors)}. -->",
+        f'<mujoco model="{name(*parse(world)).replace(":", "_").replace("?", "_")}">',
+        "  <custom>",
+        f'    <numeric name="start_xy_yaw" data="{_f(*h.start_xy_yaw)}"/>',
+        f'    <numeric name="uwb_anchors_xy_m" data="{_f(*(v for a in h.anchors_xy_m for v in a))}"/>',
+        doors,
+        "  </custom>",
+        '  <visual><headlight ambient="0.35 0.35 0.35" diffuse="0.5 0.5 0.5"/></visual>',
+        "  <asset>",
+        '    <material name="concrete" rgba="0.55 0.55 0.55 1" reflectance="0.05"/>',
+        '    <material name="wall" rgba="0.85 0.84 0.80 1"/>',
+        '    <material name="rack" rgba="0.15 0.30 0.65 1"/>',
+        '    <material name="beam" rgba="0.95 0.50 0.10 1"/>',
+        '    <material name="goods" rgba="0.80 0.72 0.55 1"/>',
+        '    <material name="pillar" rgba="0.65 0.65 0.62 1"/>',
+        '    <material name="cage" rgba="0.35 0.35 0.35 0.6"/>',
+        "  </asset>",
+        "  <worldbody>",
+        '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
+        f'    <geom name="floor" type="plane" size="{_f(W / 2 + 1, H / 2 + 1, 0.1)}" material="concrete"/>',
+    ]
+    lines += [
+        f'    <geom name="{b.name}" type="box" pos="{_f(*b.centre_m)}" size="{_f(*b.half_m)}" '
+        f'material="{b.material}"/>'
+        for b in h.boxes
+    ]
     lines += ["  </worldbody>", "</mujoco>", ""]
     return "\n".join(lines)
 
@@ -104,7 +113,11 @@ def _folder() -> Path:
     from amr_twin.base.disk_cache import cache_dir
 
     folder = cache_dir("worlds")
-    return folder if folder is not None else Path(tempfile.gettempdir()) / f"amr-twin-worlds-{os.getuid()}"
+    return (
+        folder
+        if folder is not None
+        else Path(tempfile.gettempdir()) / f"amr-twin-worlds-{os.getuid()}"
+    )
 
 
 def world_file(world: str) -> Path:

@@ -43,19 +43,24 @@ class Inertial:
 def box_inertia(extents, mass_kg: float) -> np.ndarray:
     """(3, 3) inertia of a solid box of ``extents`` (a, b, c) m about its centre, kg m^2."""
     a, b, c = (float(e) for e in extents)
-    return np.diag([mass_kg * (b * b + c * c) / 12.0, mass_kg * (a * a + c * c) / 12.0,
-                    mass_kg * (a * a + b * b) / 12.0])
+    return np.diag(
+        [
+            mass_kg * (b * b + c * c) / 12.0,
+            mass_kg * (a * a + c * c) / 12.0,
+            mass_kg * (a * a + b * b) / 12.0,
+        ]
+    )
 
 
 def cylinder_inertia(radius_m: float, height_m: float, mass_kg: float) -> np.ndarray:
     """(3, 3) inertia of a solid cylinder about its centre, axis along z, kg m^2."""
-    across = mass_kg * (3.0 * radius_m ** 2 + height_m ** 2) / 12.0
-    return np.diag([across, across, 0.5 * mass_kg * radius_m ** 2])
+    across = mass_kg * (3.0 * radius_m**2 + height_m**2) / 12.0
+    return np.diag([across, across, 0.5 * mass_kg * radius_m**2])
 
 
 def sphere_inertia(radius_m: float, mass_kg: float) -> np.ndarray:
     """(3, 3) inertia of a solid sphere about its centre, kg m^2."""
-    return np.eye(3) * (0.4 * mass_kg * radius_m ** 2)
+    return np.eye(3) * (0.4 * mass_kg * radius_m**2)
 
 
 def _box(extents, center, mass_kg: float | None = None, density: float | None = None) -> Inertial:
@@ -70,7 +75,9 @@ def _tube(extents, center, axis: int, wall_m: float, density: float) -> Inertial
     outer = _box(extents, center, density=density)
     bore_extents = [e - 2 * wall_m if k != axis else e for k, e in enumerate(extents)]
     bore = _box(bore_extents, center, density=density)
-    return Inertial(outer.mass_kg - bore.mass_kg, outer.com_m, outer.inertia_kg_m2 - bore.inertia_kg_m2)
+    return Inertial(
+        outer.mass_kg - bore.mass_kg, outer.com_m, outer.inertia_kg_m2 - bore.inertia_kg_m2
+    )
 
 
 def combine(parts: list[Inertial]) -> Inertial:
@@ -84,7 +91,9 @@ def combine(parts: list[Inertial]) -> Inertial:
     return Inertial(mass, com, inertia)
 
 
-def frame_members(cfg: TwinConfig) -> list[tuple[str, tuple[float, float, float], tuple[float, float, float], int]]:
+def frame_members(
+    cfg: TwinConfig,
+) -> list[tuple[str, tuple[float, float, float], tuple[float, float, float], int]]:
     """The frame's tubes as ``(name, center_m, extents_m, axis)`` in base_link.
 
     Rails sit under their floor (top face at the floor height); posts join the
@@ -101,25 +110,42 @@ def frame_members(cfg: TwinConfig) -> list[tuple[str, tuple[float, float, float]
             members.append((f"rail_{tag}_{end}", (x, 0.0, z), (t, W - 2 * t, t), 1))
     z0, z1 = c.floor_a_z_m - t, c.floor_c_z_m
     for name, x, y in (("fl", 1, 1), ("fr", 1, -1), ("rl", -1, 1), ("rr", -1, -1)):
-        members.append((f"post_{name}", (x * (L / 2 - t / 2), y * (W / 2 - t / 2), (z0 + z1) / 2),
-                        (t, t, z1 - z0), 2))
+        members.append(
+            (
+                f"post_{name}",
+                (x * (L / 2 - t / 2), y * (W / 2 - t / 2), (z0 + z1) / 2),
+                (t, t, z1 - z0),
+                2,
+            )
+        )
     return members
 
 
 def frame_inertial(cfg: TwinConfig) -> Inertial:
     """The bare AISI304 tube frame."""
     c = cfg.chassis
-    return combine([_tube(ext, ctr, axis, c.tube_wall_m, c.steel_density_kg_m3)
-                    for _, ctr, ext, axis in frame_members(cfg)])
+    return combine(
+        [
+            _tube(ext, ctr, axis, c.tube_wall_m, c.steel_density_kg_m3)
+            for _, ctr, ext, axis in frame_members(cfg)
+        ]
+    )
 
 
-def plates(cfg: TwinConfig) -> list[tuple[str, tuple[float, float, float], tuple[float, float, float], float]]:
+def plates(
+    cfg: TwinConfig,
+) -> list[tuple[str, tuple[float, float, float], tuple[float, float, float], float]]:
     """Floor plates as ``(name, center_m, extents_m, density_kg_m3)``."""
     c, d = cfg.chassis, cfg.deck
     L, W, s = c.length_m, c.width_m, c.sheet_thickness_m
     return [
         ("floor_a", (0.0, 0.0, c.floor_a_z_m + s / 2), (L, W, s), c.steel_density_kg_m3),
-        ("floor_b", (0.0, 0.0, c.floor_b_z_m + d.thickness_m / 2), (L, W, d.thickness_m), d.density_kg_m3),
+        (
+            "floor_b",
+            (0.0, 0.0, c.floor_b_z_m + d.thickness_m / 2),
+            (L, W, d.thickness_m),
+            d.density_kg_m3,
+        ),
         ("floor_c", (0.0, 0.0, c.floor_c_z_m + s / 2), (L, W, s), c.steel_density_kg_m3),
     ]
 
@@ -138,8 +164,11 @@ def sensor_link_inertials(cfg: TwinConfig) -> dict[str, Inertial]:
     """
     lidar, imu, uwb = cfg.components.lidar, cfg.components.imu, cfg.uwb
     return {
-        "laser": _box(lidar.size_m, (0.0, 0.0, lidar.size_m[2] / 2 - LIDAR_BASE_BELOW_OPTICS_M),
-                      mass_kg=lidar.mass_kg),
+        "laser": _box(
+            lidar.size_m,
+            (0.0, 0.0, lidar.size_m[2] / 2 - LIDAR_BASE_BELOW_OPTICS_M),
+            mass_kg=lidar.mass_kg,
+        ),
         "imu_link": _box(imu.size_m, (0.0, 0.0, 0.0), mass_kg=imu.mass_kg),
         "uwb_tag": _box(uwb.tag_size_m, (0.0, 0.0, 0.0), mass_kg=uwb.tag_mass_kg),
     }
@@ -148,9 +177,15 @@ def sensor_link_inertials(cfg: TwinConfig) -> dict[str, Inertial]:
 def sensor_inertials_in_base(cfg: TwinConfig) -> list[Inertial]:
     """:func:`sensor_link_inertials` moved into ``base_link`` (the links' fixed joints: LiDAR,
     IMU and UWB tag positions)."""
-    at = {"laser": cfg.components.lidar.pos_m, "imu_link": cfg.components.imu.pos_m, "uwb_tag": cfg.uwb.tag_pos_m}
-    return [Inertial(i.mass_kg, i.com_m + np.asarray(at[name], float), i.inertia_kg_m2)
-            for name, i in sensor_link_inertials(cfg).items()]
+    at = {
+        "laser": cfg.components.lidar.pos_m,
+        "imu_link": cfg.components.imu.pos_m,
+        "uwb_tag": cfg.uwb.tag_pos_m,
+    }
+    return [
+        Inertial(i.mass_kg, i.com_m + np.asarray(at[name], float), i.inertia_kg_m2)
+        for name, i in sensor_link_inertials(cfg).items()
+    ]
 
 
 def chassis_inertial(cfg: TwinConfig) -> Inertial:
@@ -158,13 +193,21 @@ def chassis_inertial(cfg: TwinConfig) -> Inertial:
     parts = [frame_inertial(cfg)]
     parts += [_box(ext, ctr, density=rho) for _, ctr, ext, rho in plates(cfg)]
     on_links = set(SENSOR_LINKS.values())
-    parts += [_box(comp.size_m, comp.pos_m, mass_kg=comp.mass_kg)
-              for name, comp in cfg.components.items() if comp.mass_kg > 0 and name not in on_links]
+    parts += [
+        _box(comp.size_m, comp.pos_m, mass_kg=comp.mass_kg)
+        for name, comp in cfg.components.items()
+        if comp.mass_kg > 0 and name not in on_links
+    ]
     w = cfg.wheel
     stator_kg = w.mass_kg * (1 - w.rotor_fraction)
     for sign in (1, -1):
-        parts.append(_box((0.8 * w.radius_m,) * 3, (0.0, sign * w.separation_m / 2, w.radius_m),
-                          mass_kg=stator_kg))
+        parts.append(
+            _box(
+                (0.8 * w.radius_m,) * 3,
+                (0.0, sign * w.separation_m / 2, w.radius_m),
+                mass_kg=stator_kg,
+            )
+        )
     return combine(parts)
 
 
@@ -185,8 +228,12 @@ def caster_inertial(cfg: TwinConfig) -> Inertial:
 
 def robot_mass_kg(cfg: TwinConfig) -> float:
     """Total mass without payload."""
-    return (chassis_inertial(cfg).mass_kg + 2 * wheel_inertial(cfg).mass_kg
-            + 4 * caster_inertial(cfg).mass_kg + sum(i.mass_kg for i in sensor_link_inertials(cfg).values()))
+    return (
+        chassis_inertial(cfg).mass_kg
+        + 2 * wheel_inertial(cfg).mass_kg
+        + 4 * caster_inertial(cfg).mass_kg
+        + sum(i.mass_kg for i in sensor_link_inertials(cfg).values())
+    )
 
 
 _unloaded_memo: dict[tuple, tuple] = {}
@@ -207,12 +254,20 @@ def _unloaded_parts(cfg: TwinConfig) -> tuple:
     w, k = cfg.wheel, cfg.caster
     parts = [chassis_inertial(cfg), *sensor_inertials_in_base(cfg)]
     rotor = wheel_inertial(cfg)
-    parts += [Inertial(rotor.mass_kg, np.array([0.0, s * w.separation_m / 2, w.radius_m]), rotor.inertia_kg_m2)
-              for s in (1, -1)]
+    parts += [
+        Inertial(
+            rotor.mass_kg, np.array([0.0, s * w.separation_m / 2, w.radius_m]), rotor.inertia_kg_m2
+        )
+        for s in (1, -1)
+    ]
     ball = caster_inertial(cfg)
     r_ball = k.ball_diameter_m / 2
-    parts += [Inertial(ball.mass_kg, np.array([sx * k.x_m, sy * k.y_m, r_ball - k.drop_m]), ball.inertia_kg_m2)
-              for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    parts += [
+        Inertial(
+            ball.mass_kg, np.array([sx * k.x_m, sy * k.y_m, r_ball - k.drop_m]), ball.inertia_kg_m2
+        )
+        for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))
+    ]
     for part in parts:
         part.com_m.setflags(write=False)
         part.inertia_kg_m2.setflags(write=False)

@@ -64,7 +64,9 @@ class Spread:
 
     @property
     def drawn(self) -> bool:
-        return self.kind in (UNIFORM, CALIBRATED, FOLLOWS) or (self.kind == NORMAL and any(self.sigma))
+        return self.kind in (UNIFORM, CALIBRATED, FOLLOWS) or (
+            self.kind == NORMAL and any(self.sigma)
+        )
 
     def describe(self) -> str:
         """Short text for tables: ``[lo, hi]``, ``σ s``, ``follows k`` or ``exact``."""
@@ -101,7 +103,9 @@ def _is_setting(key: str) -> bool:
     return bool(model.SETTINGS or (isinstance(extra, dict) and extra.get("setting")))
 
 
-def spread_of(key: str, value: Any, meta: dict, calibrated: dict[str, float] | None = None) -> Spread:
+def spread_of(
+    key: str, value: Any, meta: dict, calibrated: dict[str, float] | None = None
+) -> Spread:
     """A parameter's :class:`Spread` from its leaf description (``meta`` of
     :func:`amr_twin.model.config.load_parameters`). ``calibrated``: 1 sigma of the calibration's
     parameters (their correlations are the report's)."""
@@ -120,14 +124,28 @@ def spread_of(key: str, value: Any, meta: dict, calibrated: dict[str, float] | N
     kind = source_kind(meta["source"])
     if kind == "calibrated":
         if calibrated is None or key not in calibrated:
-            return Spread(key, CALIBRATED, value, "calibrated: no calibration report covers it", sigma=None,
-                          bounds=bounds)
-        return Spread(key, CALIBRATED, value, "the calibration's report (joint normal)", sigma=(calibrated[key],),
-                      bounds=bounds)
+            return Spread(
+                key,
+                CALIBRATED,
+                value,
+                "calibrated: no calibration report covers it",
+                sigma=None,
+                bounds=bounds,
+            )
+        return Spread(
+            key,
+            CALIBRATED,
+            value,
+            "the calibration's report (joint normal)",
+            sigma=(calibrated[key],),
+            bounds=bounds,
+        )
     if kind not in DEFAULT_TOLERANCE:
         return Spread(key, EXACT, value, f"exact ({meta['source'].split(':')[0]})")
     if isinstance(value, bool) or not isinstance(value, float) or value == 0.0:
-        what = "a vector" if isinstance(value, list) else "zero" if value == 0 else "not a real number"
+        what = (
+            "a vector" if isinstance(value, list) else "zero" if value == 0 else "not a real number"
+        )
         return Spread(key, EXACT, value, f"{kind} default: {what}, no relative tolerance")
     tol = DEFAULT_TOLERANCE[kind]
     lo, hi = sorted((value * (1 - tol), value * (1 + tol)))

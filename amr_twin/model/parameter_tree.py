@@ -29,14 +29,20 @@ MAX_PARAMETER_FILE_BYTES = 16 * 1024 * 1024
 
 
 def _read_text(path: Path) -> bytes:
-    if path.exists() and not path.is_dir() and not path.is_file():  # opening a pipe would wait for a writer
-        raise ConfigError(f"{path}: not a regular file (a device or a pipe), not a parameter file (YAML)")
+    if (
+        path.exists() and not path.is_dir() and not path.is_file()
+    ):  # opening a pipe would wait for a writer
+        raise ConfigError(
+            f"{path}: not a regular file (a device or a pipe), not a parameter file (YAML)"
+        )
     try:
         with open(path, "rb") as fh:
             raw = fh.read(MAX_PARAMETER_FILE_BYTES + 1)
         if len(raw) > MAX_PARAMETER_FILE_BYTES:
-            raise ConfigError(f"{path}: larger than {MAX_PARAMETER_FILE_BYTES // 1024 // 1024} MB, not a parameter "
-                              "file")
+            raise ConfigError(
+                f"{path}: larger than {MAX_PARAMETER_FILE_BYTES // 1024 // 1024} MB, not a parameter "
+                "file"
+            )
         return raw
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such parameter file") from None

@@ -40,7 +40,9 @@ def robot_spec(cfg: TwinConfig, urdf: str, visuals: bool = True) -> mujoco.MjSpe
     discard = "false" if visuals else "true"
     options = f'<mujoco><compiler discardvisual="{discard}" fusestatic="false" strippath="true"/></mujoco>'
     spec = mujoco.MjSpec.from_string(urdf.replace("</robot>", options + "</robot>", 1))
-    spec.compiler.discardvisual = False  # at compile it would drop every contype-0 geom, the payload's too
+    spec.compiler.discardvisual = (
+        False  # at compile it would drop every contype-0 geom, the payload's too
+    )
     spec.modelname = "amr"
     # Elliptic friction cones: the contact's first constraint row is its normal force
     # (read by Physics.support_normal_forces_n); exported with the robot.
@@ -52,7 +54,9 @@ def robot_spec(cfg: TwinConfig, urdf: str, visuals: bool = True) -> mujoco.MjSpe
     _add_wheels(spec, cfg)
     _add_payload(spec, base, cfg)
     imu = spec.body("imu_link")
-    imu.add_site(name="imu", size=[0.01, 0.01, 0.002], type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_VISUAL)
+    imu.add_site(
+        name="imu", size=[0.01, 0.01, 0.002], type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_VISUAL
+    )
     spec.body("laser").add_site(name="laser", size=[0.01, 0, 0], group=GROUP_VISUAL)
     base.add_site(name="base", size=[0.01, 0, 0], group=GROUP_VISUAL)
     _add_sensors(spec)
@@ -111,11 +115,15 @@ def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         # compression is N / k as for a real tyre, and a lifted wheel hangs at q = 0.
         hinge = spec.joint(f"wheel_{side}_joint")
         spec.delete(hinge)
-        tyre = body.add_joint(name=f"wheel_{side}_tyre", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
+        tyre = body.add_joint(
+            name=f"wheel_{side}_tyre", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1]
+        )
         tyre.stiffness[0] = w.tyre_stiffness_n_m
         tyre.damping[0] = w.tyre_damping_n_s_m
         tyre.springref = rotor_kg * g / w.tyre_stiffness_n_m
-        joint = body.add_joint(name=f"wheel_{side}_joint", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0])
+        joint = body.add_joint(
+            name=f"wheel_{side}_joint", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 1, 0]
+        )
         # The URDF effort limit would become a joint-level clamp of all actuator torque in
         # MuJoCo; the driver's current limit is the actuator's forcerange instead, so
         # that a shorted (braking) motor is limited by its own current, not the driver's.
@@ -123,8 +131,9 @@ def _add_wheels(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         joint.damping[0] = motor.damping_nm_s_rad
         joint.frictionloss = motor.friction_nm
         kt_over_r = motor.ke_v_s_rad / motor.resistance_ohm  # Kt = Ke in SI units
-        act = spec.add_actuator(name=f"motor_{side}", target=joint.name,
-                                trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act = spec.add_actuator(
+            name=f"motor_{side}", target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT
+        )
         # Quasi-static DC motor in C: torque = Kt/R * v - Kt*Ke/R * omega (ctrl = phase voltage, V)
         act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         act.biastype = mujoco.mjtBias.mjBIAS_AFFINE
@@ -163,22 +172,50 @@ def _add_payload(spec: mujoco.MjSpec, base: mujoco.MjsBody, cfg: TwinConfig) -> 
         return
     z = cfg.chassis.floor_c_z_m + cfg.chassis.sheet_thickness_m + p.size_m[2] / 2
     body = base.add_body(name="payload", pos=[p.xy_m[0], p.xy_m[1], z])
-    body.add_geom(name="payload_box", type=mujoco.mjtGeom.mjGEOM_BOX, size=[s / 2 for s in p.size_m],
-                  mass=p.mass_kg, group=GROUP_PAYLOAD, rgba=[0.80, 0.55, 0.25, 1.0],
-                  contype=0, conaffinity=0)
+    body.add_geom(
+        name="payload_box",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[s / 2 for s in p.size_m],
+        mass=p.mass_kg,
+        group=GROUP_PAYLOAD,
+        rgba=[0.80, 0.55, 0.25, 1.0],
+        contype=0,
+        conaffinity=0,
+    )
 
 
 def _add_sensors(spec: mujoco.MjSpec) -> None:
     # the first four sensor values are read every step by the loop: angle L, R, speed L, R
-    for kind, suffix in ((mujoco.mjtSensor.mjSENS_JOINTPOS, "angle"), (mujoco.mjtSensor.mjSENS_JOINTVEL, "speed")):
+    for kind, suffix in (
+        (mujoco.mjtSensor.mjSENS_JOINTPOS, "angle"),
+        (mujoco.mjtSensor.mjSENS_JOINTVEL, "speed"),
+    ):
         for side in WHEELS:
-            spec.add_sensor(name=f"wheel_{side}_{suffix}", type=kind,
-                            objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=f"wheel_{side}_joint")
+            spec.add_sensor(
+                name=f"wheel_{side}_{suffix}",
+                type=kind,
+                objtype=mujoco.mjtObj.mjOBJ_JOINT,
+                objname=f"wheel_{side}_joint",
+            )
     # then the base pose (world): position (3) and orientation quaternion w, x, y, z (4)
-    spec.add_sensor(name="base_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
-                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname="base")
-    spec.add_sensor(name="base_quat", type=mujoco.mjtSensor.mjSENS_FRAMEQUAT,
-                    objtype=mujoco.mjtObj.mjOBJ_SITE, objname="base")
-    for name, kind in zip(IMU_SENSORS, (mujoco.mjtSensor.mjSENS_ACCELEROMETER, mujoco.mjtSensor.mjSENS_GYRO,
-                                        mujoco.mjtSensor.mjSENS_MAGNETOMETER)):
+    spec.add_sensor(
+        name="base_pos",
+        type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
+        objtype=mujoco.mjtObj.mjOBJ_SITE,
+        objname="base",
+    )
+    spec.add_sensor(
+        name="base_quat",
+        type=mujoco.mjtSensor.mjSENS_FRAMEQUAT,
+        objtype=mujoco.mjtObj.mjOBJ_SITE,
+        objname="base",
+    )
+    for name, kind in zip(
+        IMU_SENSORS,
+        (
+            mujoco.mjtSensor.mjSENS_ACCELEROMETER,
+            mujoco.mjtSensor.mjSENS_GYRO,
+            mujoco.mjtSensor.mjSENS_MAGNETOMETER,
+        ),
+    ):
         spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="imu")

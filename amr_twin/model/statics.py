@@ -43,15 +43,15 @@ CASTER_NAMES = ("caster_front_left", "caster_front_right", "caster_rear_left", "
 class Statics:
     """Solution of :func:`solve`. Loads in N, compressions in m, angles in rad."""
 
-    loads_n: dict[str, float]          # floor reaction on each support
-    regimes: dict[str, str]            # lifted, at stop, sprung or solid
-    compression_m: dict[str, float]    # tyre deflection or caster spring travel from its stop
+    loads_n: dict[str, float]  # floor reaction on each support
+    regimes: dict[str, str]  # lifted, at stop, sprung or solid
+    compression_m: dict[str, float]  # tyre deflection or caster spring travel from its stop
     points_xy_m: dict[str, np.ndarray]  # (2,) contact point in base_link
-    sink_m: float                      # chassis sink at the base_link origin
-    pitch_rad: float                   # nose down positive
-    roll_rad: float                    # left side down positive
+    sink_m: float  # chassis sink at the base_link origin
+    pitch_rad: float  # nose down positive
+    roll_rad: float  # left side down positive
     mass_kg: float
-    com_m: np.ndarray                  # (3,) robot with payload, base_link (standing unloaded)
+    com_m: np.ndarray  # (3,) robot with payload, base_link (standing unloaded)
 
 
 def support_points_xy(cfg: TwinConfig) -> dict[str, np.ndarray]:
@@ -85,8 +85,14 @@ def solve(cfg: TwinConfig, accel_m_s2: tuple[float, float] = (0.0, 0.0)) -> Stat
         if len(_solved) >= SOLVED_KEPT:
             del _solved[next(iter(_solved))]  # the least recently asked
     _solved[key] = st
-    return replace(st, loads_n=dict(st.loads_n), regimes=dict(st.regimes), compression_m=dict(st.compression_m),
-                   points_xy_m={n: v.copy() for n, v in st.points_xy_m.items()}, com_m=st.com_m.copy())
+    return replace(
+        st,
+        loads_n=dict(st.loads_n),
+        regimes=dict(st.regimes),
+        compression_m=dict(st.compression_m),
+        points_xy_m={n: v.copy() for n, v in st.points_xy_m.items()},
+        com_m=st.com_m.copy(),
+    )
 
 
 def _solve(cfg: TwinConfig, accel_m_s2: tuple[float, float]) -> Statics:
@@ -102,11 +108,19 @@ def _solve(cfg: TwinConfig, accel_m_s2: tuple[float, float]) -> Statics:
     ball_n = mass.caster_inertial(cfg).mass_kg * g
     # per support: offset d (overlap at u = 0), stiffness, force at s = 0+ and travel
     spec = {name: (0.0, k_t, 0.0, math.inf) for name in WHEEL_NAMES}
-    spec.update({name: (k.drop_m, k.stiffness_n_m, k.preload_n + ball_n, k.travel_m) for name in CASTER_NAMES})
+    spec.update(
+        {
+            name: (k.drop_m, k.stiffness_n_m, k.preload_n + ball_n, k.travel_m)
+            for name in CASTER_NAMES
+        }
+    )
     names = list(points)
     # the likely regimes first; a support exactly at its stop before a lifted one, so that a
     # degenerate case (several balls just touching) shares the load (least-norm forces)
-    options = {name: ((SPRUNG, LIFTED) if name in WHEEL_NAMES else (SPRUNG, STOP, LIFTED, SOLID)) for name in names}
+    options = {
+        name: ((SPRUNG, LIFTED) if name in WHEEL_NAMES else (SPRUNG, STOP, LIFTED, SOLID))
+        for name in names
+    }
     guesses = _active_set_guesses(names, points, spec, weight, com)
     for combo in itertools.chain(guesses, itertools.product(*(options[n] for n in names))):
         result = _try(dict(zip(names, combo)), names, points, spec, weight, com)
@@ -114,9 +128,17 @@ def _solve(cfg: TwinConfig, accel_m_s2: tuple[float, float]) -> Statics:
             x, forces, overlaps = result
             regimes = dict(zip(names, combo))
             compression = {n: max(0.0, overlaps[n]) for n in names}
-            return Statics(loads_n=forces, regimes=regimes, compression_m=compression, points_xy_m=points,
-                           sink_m=float(x[0]), pitch_rad=float(x[1]), roll_rad=float(x[2]),
-                           mass_kg=m_kg, com_m=com)
+            return Statics(
+                loads_n=forces,
+                regimes=regimes,
+                compression_m=compression,
+                points_xy_m=points,
+                sink_m=float(x[0]),
+                pitch_rad=float(x[1]),
+                roll_rad=float(x[2]),
+                mass_kg=m_kg,
+                com_m=com,
+            )
     raise ValueError("statics: the robot has no equilibrium on its supports (it tips over)")
 
 
@@ -134,7 +156,9 @@ def _active_set_guesses(names, points, spec, weight, com, iterations: int = 12):
         x = _solve_unchecked(regime, names, points, spec, weight, com)
         if x is None:
             return
-        fixed = [m for m in names if regime[m] in (STOP, SOLID)]  # x's force unknowns, before this round's moves
+        fixed = [
+            m for m in names if regime[m] in (STOP, SOLID)
+        ]  # x's force unknowns, before this round's moves
         for n in names:
             d, stiff, f0, travel = spec[n]
             s_n = d + x[0] + x[1] * points[n][0] + x[2] * points[n][1]
@@ -174,13 +198,13 @@ def _system(regime, names, points, spec, weight, com):
         x, y = points[n]
         arm = np.array([1.0, x, y])  # force, moment about y (x F), moment about x (y F)
         d, stiff, f0, travel = spec[n]
-        if regime[n] == SPRUNG:   # F = f0 + stiff (d + u + theta x + phi y)
+        if regime[n] == SPRUNG:  # F = f0 + stiff (d + u + theta x + phi y)
             a[:3, :3] += np.outer(arm, stiff * arm)
             b[:3] -= arm * (f0 + stiff * d)
         elif regime[n] in (STOP, SOLID):
             j = 3 + fixed.index(n)
-            a[:3, j] += arm       # unknown force
-            a[j, :3] = arm        # overlap fixed: d + u + theta x + phi y = s_fixed
+            a[:3, j] += arm  # unknown force
+            a[j, :3] = arm  # overlap fixed: d + u + theta x + phi y = s_fixed
             b[j] = (0.0 if regime[n] == STOP else travel) - d
     return a, b
 
@@ -190,7 +214,9 @@ def _try(regime: dict[str, str], names, points, spec, weight: float, com: np.nda
     fixed = [n for n in names if regime[n] in (STOP, SOLID)]
     a, b = _system(regime, names, points, spec, weight, com)
     x = np.linalg.lstsq(a, b, rcond=None)[0]  # least-norm forces where the stops are redundant
-    if not np.all(np.isfinite(x)) or not np.allclose(a @ x, b, rtol=1e-9, atol=1e-9 * max(1.0, weight)):
+    if not np.all(np.isfinite(x)) or not np.allclose(
+        a @ x, b, rtol=1e-9, atol=1e-9 * max(1.0, weight)
+    ):
         return None
     if not _stable(a[:3, :3], a[3:, :3]):
         return None
@@ -257,8 +283,10 @@ def describe(cfg: TwinConfig) -> dict:
     }
 
 
-SENSITIVITY_CASES = (("no payload", {}), ("20 kg at the deck's rear edge", {"payload.mass_kg": 20.0,
-                                                                        "payload.xy_m": [-0.2, 0.0]}))
+SENSITIVITY_CASES = (
+    ("no payload", {}),
+    ("20 kg at the deck's rear edge", {"payload.mass_kg": 20.0, "payload.xy_m": [-0.2, 0.0]}),
+)
 SENSITIVITY_VARIANTS = (
     ("as in amr.yaml", {}),
     ("wheel radius +2 mm (same chassis: casters 2 mm higher)", {"caster.drop_m": -0.002}),
@@ -283,10 +311,23 @@ def sensitivity(cfg: TwinConfig) -> list[dict]:
             for key, value in {**payload, **change}.items():
                 section, name = key.split(".")
                 base = data[section][name]
-                data[section][name] = (base + value if key == "caster.drop_m"
-                                       else base * value if key == "caster.stiffness_n_m" else value)
+                data[section][name] = (
+                    base + value
+                    if key == "caster.drop_m"
+                    else base * value
+                    if key == "caster.stiffness_n_m"
+                    else value
+                )
             st = solve(TwinConfig.model_validate(data))
-            rows.append({"case": case, "variant": variant,
-                         **{k: st.loads_n[k] for k in ("wheel_left", "caster_front_left", "caster_rear_left")},
-                         "lifted": [k for k, r in st.regimes.items() if r == LIFTED]})
+            rows.append(
+                {
+                    "case": case,
+                    "variant": variant,
+                    **{
+                        k: st.loads_n[k]
+                        for k in ("wheel_left", "caster_front_left", "caster_rear_left")
+                    },
+                    "lifted": [k for k, r in st.regimes.items() if r == LIFTED],
+                }
+            )
     return rows

@@ -54,5 +54,7 @@ def tip_margin_m(points_xy: np.ndarray, com_xy: np.ndarray) -> float:
     if len(corners) < 3:
         return -float("inf")
     edge = np.roll(corners, -1, axis=0) - corners  # counter-clockwise: the inside is on the left
-    normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.hypot(edge[:, 0], edge[:, 1])[:, None]  # outward
+    normal = (
+        np.column_stack([edge[:, 1], -edge[:, 0]]) / np.hypot(edge[:, 0], edge[:, 1])[:, None]
+    )  # outward
     return float(np.min(np.einsum("ij,ij->i", normal, corners - np.asarray(com_xy, float))))

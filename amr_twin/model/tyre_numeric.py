@@ -13,9 +13,28 @@ from __future__ import annotations
 NUMERIC = "amr_tyres"
 """Name of the model's numeric holding the tyre parameters and addresses."""
 FORMAT = 1.0
-NUMERIC_FIELDS = ("format", "userdata", "root_dof", "base", "mu", "c_alpha", "c_kappa", "sigma_alpha",
-                  "sigma_kappa", "crown", "loss", "k_t", "c_t", "v_sign",
-                  "slide_l", "hinge_l", "geom_l", "slide_r", "hinge_r", "geom_r")
+NUMERIC_FIELDS = (
+    "format",
+    "userdata",
+    "root_dof",
+    "base",
+    "mu",
+    "c_alpha",
+    "c_kappa",
+    "sigma_alpha",
+    "sigma_kappa",
+    "crown",
+    "loss",
+    "k_t",
+    "c_t",
+    "v_sign",
+    "slide_l",
+    "hinge_l",
+    "geom_l",
+    "slide_r",
+    "hinge_r",
+    "geom_r",
+)
 """The numeric's values, in order (tyres.c's enums)."""
 STATE_FIELDS = ("u_m", "v_m", "psi_rad", "fx_n", "fy_n", "mz_nm", "load_n")
 """Per wheel in ``d.userdata`` after the time stamp: deflections (state), then the last output."""
@@ -33,10 +52,20 @@ V_SIGN_M_S = 0.01
 def numeric_values(cfg, userdata_adr: int = 0) -> list[float]:
     """The numeric :data:`NUMERIC` of ``cfg``'s tyres; the addresses are 0 until :func:`set_addresses`."""
     w = cfg.wheel
-    values = dict(format=FORMAT, userdata=float(userdata_adr), mu=w.friction, c_alpha=w.cornering_stiffness_per_n,
-                  c_kappa=w.slip_stiffness_per_n, sigma_alpha=w.relaxation_length_lateral_m,
-                  sigma_kappa=w.relaxation_length_longitudinal_m, crown=w.tyre_crown_radius_m,
-                  loss=w.tyre_loss_time_s, k_t=w.tyre_stiffness_n_m, c_t=w.tyre_damping_n_s_m, v_sign=V_SIGN_M_S)
+    values = dict(
+        format=FORMAT,
+        userdata=float(userdata_adr),
+        mu=w.friction,
+        c_alpha=w.cornering_stiffness_per_n,
+        c_kappa=w.slip_stiffness_per_n,
+        sigma_alpha=w.relaxation_length_lateral_m,
+        sigma_kappa=w.relaxation_length_longitudinal_m,
+        crown=w.tyre_crown_radius_m,
+        loss=w.tyre_loss_time_s,
+        k_t=w.tyre_stiffness_n_m,
+        c_t=w.tyre_damping_n_s_m,
+        v_sign=V_SIGN_M_S,
+    )
     return [float(values.get(name, 0.0)) for name in NUMERIC_FIELDS]
 
 

@@ -49,21 +49,29 @@ class TyreTimestep:
     @property
     def steps_per_configured_step(self) -> int:
         """Physics steps the twin takes where ``sim.timestep_s`` would take one."""
-        return 2 ** self.halvings
+        return 2**self.halvings
 
     def as_dict(self) -> dict:
         """The run summary's / metrics' record (only written when the timestep was halved)."""
-        return {"configured_timestep_s": self.configured_s, "timestep_s": self.timestep_s,
-                "halvings": self.halvings, "static_load_n": [round(v, 3) for v in self.load_n],
-                "load_margin": LOAD_MARGIN, "stability_number_configured": [round(v, 4) for v in self.s_configured],
-                "stability_number": [round(v, 4) for v in self.s], "stability_limit": self.s_max}
+        return {
+            "configured_timestep_s": self.configured_s,
+            "timestep_s": self.timestep_s,
+            "halvings": self.halvings,
+            "static_load_n": [round(v, 3) for v in self.load_n],
+            "load_margin": LOAD_MARGIN,
+            "stability_number_configured": [round(v, 4) for v in self.s_configured],
+            "stability_number": [round(v, 4) for v in self.s],
+            "stability_limit": self.s_max,
+        }
 
     def message(self) -> str:
         """One line for stderr."""
-        return (f"tyres: stability number S = {max(self.s_configured):.2f} > {self.s_max:g} at "
-                f"sim.timestep_s = {self.configured_s * 1e3:g} ms (static tyre load {max(self.load_n):.0f} N "
-                f"x {LOAD_MARGIN:g}); physics timestep halved to {self.timestep_s * 1e3:g} ms "
-                f"(S = {max(self.s):.2f}; docs/explanation/tyres.md)")
+        return (
+            f"tyres: stability number S = {max(self.s_configured):.2f} > {self.s_max:g} at "
+            f"sim.timestep_s = {self.configured_s * 1e3:g} ms (static tyre load {max(self.load_n):.0f} N "
+            f"x {LOAD_MARGIN:g}); physics timestep halved to {self.timestep_s * 1e3:g} ms "
+            f"(S = {max(self.s):.2f}; docs/explanation/tyres.md)"
+        )
 
 
 def announce(step: TyreTimestep) -> None:
@@ -79,10 +87,12 @@ def rotating_mass_kg(cfg: TwinConfig) -> float:
     """``J / r^2``: the wheel's rotating inertia about its axle over the radius squared, kg."""
     from amr_twin.model.mass import wheel_inertial
 
-    return float(wheel_inertial(cfg).inertia_kg_m2[1, 1]) / cfg.wheel.radius_m ** 2
+    return float(wheel_inertial(cfg).inertia_kg_m2[1, 1]) / cfg.wheel.radius_m**2
 
 
-def stability_number(k_x_n_m: float, loss_time_s: float, timestep_s: float, mass_kg: float) -> float:
+def stability_number(
+    k_x_n_m: float, loss_time_s: float, timestep_s: float, mass_kg: float
+) -> float:
     """``S = (k_x dt + tau k_x) dt / M`` (module docstring), dimensionless."""
     return (k_x_n_m * timestep_s + loss_time_s * k_x_n_m) * timestep_s / mass_kg
 
@@ -100,14 +110,21 @@ def tyre_timestep(cfg: TwinConfig) -> TyreTimestep:
     mass = rotating_mass_kg(cfg)
 
     def numbers(dt: float) -> tuple[float, float]:
-        return tuple(stability_number(w.slip_stiffness_per_n * LOAD_MARGIN * n / w.relaxation_length_longitudinal_m,
-                                      w.tyre_loss_time_s, dt, mass) for n in load)
+        return tuple(
+            stability_number(
+                w.slip_stiffness_per_n * LOAD_MARGIN * n / w.relaxation_length_longitudinal_m,
+                w.tyre_loss_time_s,
+                dt,
+                mass,
+            )
+            for n in load
+        )
 
     first = numbers(dt0)
     halvings, dt, s = 0, dt0, first
     while max(s) >= S_MAX:
         halvings += 1
-        dt = dt0 / 2 ** halvings
+        dt = dt0 / 2**halvings
         s = numbers(dt)
         if halvings > MAX_HALVINGS or abs(dt * 1e6 - round(dt * 1e6)) > 1e-6:
             raise TyreTimestepError(
@@ -115,7 +132,8 @@ def tyre_timestep(cfg: TwinConfig) -> TyreTimestep:
                 f"{w.slip_stiffness_per_n:g}, wheel.relaxation_length_longitudinal_m "
                 f"{w.relaxation_length_longitudinal_m:g}, wheel.tyre_loss_time_s {w.tyre_loss_time_s:g}, static "
                 f"load {max(load):.0f} N: S = {max(first):.2f}, allowed < {S_MAX:g}) on whole microseconds; "
-                f"set sim.timestep_s to {_largest_stable_us(max(load) * LOAD_MARGIN, cfg, mass) / 1e6:g} or less")
+                f"set sim.timestep_s to {_largest_stable_us(max(load) * LOAD_MARGIN, cfg, mass) / 1e6:g} or less"
+            )
     return TyreTimestep(dt0, dt, halvings, load, first, s)
 
 

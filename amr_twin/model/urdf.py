@@ -58,35 +58,58 @@ def derived_params(cfg: TwinConfig) -> dict:
 def _derived_params(cfg: TwinConfig) -> dict:
     c, w, k = cfg.chassis, cfg.wheel, cfg.caster
     p = {
-        "chassis_length_m": c.length_m, "chassis_width_m": c.width_m,
-        "floor_a_z_m": c.floor_a_z_m, "floor_b_z_m": c.floor_b_z_m, "floor_c_z_m": c.floor_c_z_m,
-        "tube_outer_m": c.tube_outer_m, "sheet_thickness_m": c.sheet_thickness_m,
+        "chassis_length_m": c.length_m,
+        "chassis_width_m": c.width_m,
+        "floor_a_z_m": c.floor_a_z_m,
+        "floor_b_z_m": c.floor_b_z_m,
+        "floor_c_z_m": c.floor_c_z_m,
+        "tube_outer_m": c.tube_outer_m,
+        "sheet_thickness_m": c.sheet_thickness_m,
         "deck_thickness_m": cfg.deck.thickness_m,
         # the true geometry: the nominal radius and separation plus the tyres' errors (wheel.*_error_*)
-        "wheel_radius_m": w.radius_m, "wheel_width_m": w.width_m,
+        "wheel_radius_m": w.radius_m,
+        "wheel_width_m": w.width_m,
         "wheel_separation_m": w.separation_m + w.separation_error_m,
-        "wheel_left_radius_m": w.radius_of("left"), "wheel_right_radius_m": w.radius_of("right"),
-        "wheel_torque_limit_nm": max(m.ke_v_s_rad * m.current_limit_a for m in (cfg.motor_left, cfg.motor_right)),
-        "wheel_speed_limit_rad_s": cfg.battery.v_full_v / min(cfg.motor_left.ke_v_s_rad, cfg.motor_right.ke_v_s_rad),
-        "caster_ball_diameter_m": k.ball_diameter_m, "caster_x_m": k.x_m, "caster_y_m": k.y_m,
-        "caster_travel_m": k.travel_m, "caster_drop_m": k.drop_m,
+        "wheel_left_radius_m": w.radius_of("left"),
+        "wheel_right_radius_m": w.radius_of("right"),
+        "wheel_torque_limit_nm": max(
+            m.ke_v_s_rad * m.current_limit_a for m in (cfg.motor_left, cfg.motor_right)
+        ),
+        "wheel_speed_limit_rad_s": cfg.battery.v_full_v
+        / min(cfg.motor_left.ke_v_s_rad, cfg.motor_right.ke_v_s_rad),
+        "caster_ball_diameter_m": k.ball_diameter_m,
+        "caster_x_m": k.x_m,
+        "caster_y_m": k.y_m,
+        "caster_travel_m": k.travel_m,
+        "caster_drop_m": k.drop_m,
         # what URDF can say of the MJCF's joint dynamics (<dynamics>, <limit>): set again on the MjSpec (robot_spec)
-        "wheel_left_damping": cfg.motor_left.damping_nm_s_rad, "wheel_left_friction": cfg.motor_left.friction_nm,
-        "wheel_right_damping": cfg.motor_right.damping_nm_s_rad, "wheel_right_friction": cfg.motor_right.friction_nm,
-        "caster_damping_n_s_m": k.damping_n_s_m, "caster_effort_n": k.preload_n + k.stiffness_n_m * k.travel_m,
-        "uwb_tag_pos_m": list(cfg.uwb.tag_pos_m), "uwb_tag_size_m": list(cfg.uwb.tag_size_m),
+        "wheel_left_damping": cfg.motor_left.damping_nm_s_rad,
+        "wheel_left_friction": cfg.motor_left.friction_nm,
+        "wheel_right_damping": cfg.motor_right.damping_nm_s_rad,
+        "wheel_right_friction": cfg.motor_right.friction_nm,
+        "caster_damping_n_s_m": k.damping_n_s_m,
+        "caster_effort_n": k.preload_n + k.stiffness_n_m * k.travel_m,
+        "uwb_tag_pos_m": list(cfg.uwb.tag_pos_m),
+        "uwb_tag_size_m": list(cfg.uwb.tag_size_m),
     }
     for name, comp in cfg.components.items():
         p[f"{name}_size_m"] = list(comp.size_m)
         p[f"{name}_pos_m"] = list(comp.pos_m)
     sensors = mass.sensor_link_inertials(cfg)
-    for prefix, inertial in (("chassis", mass.chassis_inertial(cfg)), ("wheel", mass.wheel_inertial(cfg)),
-                             ("caster", mass.caster_inertial(cfg)), ("laser", sensors["laser"]),
-                             ("imu_link", sensors["imu_link"]), ("uwb_tag", sensors["uwb_tag"])):
+    for prefix, inertial in (
+        ("chassis", mass.chassis_inertial(cfg)),
+        ("wheel", mass.wheel_inertial(cfg)),
+        ("caster", mass.caster_inertial(cfg)),
+        ("laser", sensors["laser"]),
+        ("imu_link", sensors["imu_link"]),
+        ("uwb_tag", sensors["uwb_tag"]),
+    ):
         p[f"{prefix}_mass_kg"] = inertial.mass_kg
         p[f"{prefix}_com_m"] = [float(v) for v in inertial.com_m]
         p[f"{prefix}_inertia"] = [float(v) for v in inertial.diag()]
-    return {key: (float(v) if isinstance(v, (int, float, np.floating)) else v) for key, v in p.items()}
+    return {
+        key: (float(v) if isinstance(v, (int, float, np.floating)) else v) for key, v in p.items()
+    }
 
 
 def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
@@ -122,7 +145,12 @@ def urdf_fingerprint(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
     text = Path(xacro_file).read_text()
     digest = hashlib.sha256()
     builder = Path(__file__).read_bytes()  # this module makes the URDF from the xacro's output
-    for part in (f"format {CACHE_FORMAT}", str(xacro_file), text, json.dumps(derived_params(cfg), sort_keys=True)):
+    for part in (
+        f"format {CACHE_FORMAT}",
+        str(xacro_file),
+        text,
+        json.dumps(derived_params(cfg), sort_keys=True),
+    ):
         digest.update(part.encode())
         digest.update(b"\0")
     digest.update(builder)

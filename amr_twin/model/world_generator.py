@@ -77,11 +77,27 @@ def _r(v: float) -> float:
     return round(float(v), 3)
 
 
-def _box(out: list, name: str, x0: float, y0: float, x1: float, y1: float, z0: float, z1: float, material: str):
+def _box(
+    out: list,
+    name: str,
+    x0: float,
+    y0: float,
+    x1: float,
+    y1: float,
+    z0: float,
+    z1: float,
+    material: str,
+):
     """A box by its faces, rounded to the millimetre (centre and half sizes then hold them exactly)."""
     lo, hi = (_r(x0), _r(y0), _r(z0)), (_r(x1), _r(y1), _r(z1))
-    out.append(Box(name, tuple(round((a + b) / 2, 4) for a, b in zip(lo, hi)),
-                   tuple(round((b - a) / 2, 4) for a, b in zip(lo, hi)), material))
+    out.append(
+        Box(
+            name,
+            tuple(round((a + b) / 2, 4) for a, b in zip(lo, hi)),
+            tuple(round((b - a) / 2, 4) for a, b in zip(lo, hi)),
+            material,
+        )
+    )
 
 
 def _rack_row(out: list, name: str, x0: float, x1: float, y0: float, y1: float) -> None:
@@ -96,7 +112,17 @@ def _rack_row(out: list, name: str, x0: float, x1: float, y0: float, y1: float) 
         _box(out, f"{name}_brace{i}", x - 0.03, y0 + 2 * u, x + 0.03, y1 - 2 * u, 0.4, 0.5, "rack")
     for z in BEAM_Z_M:
         for face, y in (("s", y0 + u), ("n", y1 - u)):
-            _box(out, f"{name}_{face}beam{z:g}", x0, y - 0.04, x1, y + 0.04, z - 0.05, z + 0.05, "beam")
+            _box(
+                out,
+                f"{name}_{face}beam{z:g}",
+                x0,
+                y - 0.04,
+                x1,
+                y + 0.04,
+                z - 0.05,
+                z + 0.05,
+                "beam",
+            )
 
 
 def _aisles(rng, inner_m: float) -> np.ndarray:
@@ -122,7 +148,9 @@ def _pillars(rng, x0, y0, x1, y1, keep_out) -> list[tuple[float, float, float]]:
             m = PILLAR_GAP_M + half
             if not (x0 + m <= px <= x1 - m and y0 + m <= py <= y1 - m):
                 continue
-            if any(px > a - m and px < c + m and py > b - m and py < d + m for a, b, c, d in keep_out):
+            if any(
+                px > a - m and px < c + m and py > b - m and py < d + m for a, b, c, d in keep_out
+            ):
                 continue
             if any(max(abs(px - qx), abs(py - qy)) < m + h for qx, qy, h in out):
                 continue
@@ -143,11 +171,13 @@ def generate(seed: int, door_width_m: float | None = None) -> GeneratedWorld:
     _box(boxes, "wall_east", hw, -hh, hw + t, hh, 0, WALL_H_M, "wall")
     # the inner wall and its doorways
     room_w = rng.uniform(6.5, 8.5)
-    xw1 = _r(hw - room_w)          # the inner wall's east face
+    xw1 = _r(hw - room_w)  # the inner wall's east face
     xw0 = _r(xw1 - t)
     n_doors = int(rng.integers(1, 3))
-    widths = [_r(door_width_m) if door_width_m is not None else _r(rng.uniform(*DOOR_WIDTH_RANGE_M))
-              for _ in range(n_doors)]
+    widths = [
+        _r(door_width_m) if door_width_m is not None else _r(rng.uniform(*DOOR_WIDTH_RANGE_M))
+        for _ in range(n_doors)
+    ]
     while True:
         ys = np.sort(rng.uniform(-hh + 1.8, hh - 1.8, n_doors))
         if n_doors == 1 or ys[1] - ys[0] >= 4.0:
@@ -157,7 +187,9 @@ def generate(seed: int, door_width_m: float | None = None) -> GeneratedWorld:
         y = _r(y)
         _box(boxes, f"inner_wall_{k}", xw0, y_from, xw1, y - w / 2, 0, WALL_H_M, "wall")
         _box(boxes, f"door{k}_lintel", xw0, y - w / 2, xw1, y + w / 2, 2.1, WALL_H_M, "wall")
-        doors.append(Door(f"door{k}", _r((xw0 + xw1) / 2), y, w, (f"inner_wall_{k}", f"inner_wall_{k + 1}")))
+        doors.append(
+            Door(f"door{k}", _r((xw0 + xw1) / 2), y, w, (f"inner_wall_{k}", f"inner_wall_{k + 1}"))
+        )
         y_from = y + w / 2
     _box(boxes, f"inner_wall_{n_doors}", xw0, y_from, xw1, hh, 0, WALL_H_M, "wall")
     # the rack section: three rows at uneven spacing, one aisle between them a dead end
@@ -171,7 +203,7 @@ def generate(seed: int, door_width_m: float | None = None) -> GeneratedWorld:
         faces.append((_r(y), _r(y + depth[k])))
         _rack_row(boxes, f"rack{k}", xa, xb, *faces[-1])
         y += depth[k]
-    gap = int(rng.integers(1, 3))   # the aisle between rows gap-1 and gap
+    gap = int(rng.integers(1, 3))  # the aisle between rows gap-1 and gap
     dead_len = min(rng.uniform(7.0, 10.0), xb - xa - 2.0)
     xd = _r(xb - dead_len)
     ya, yb = faces[gap - 1][1], faces[gap][0]
@@ -184,13 +216,51 @@ def generate(seed: int, door_width_m: float | None = None) -> GeneratedWorld:
     p = 0.03
     _box(boxes, "cage_west", cage[0], cage[1], cage[0] + 2 * p, cage[3], 0, 2.0, "cage")
     _box(boxes, "cage_east", cage[2] - 2 * p, cage[1], cage[2], cage[3], 0, 2.0, "cage")
-    _box(boxes, "cage_south", cage[0] + 2 * p, cage[1], cage[2] - 2 * p, cage[1] + 2 * p, 0, 2.0, "cage")
-    _box(boxes, "cage_north", cage[0] + 2 * p, cage[3] - 2 * p, cage[2] - 2 * p, cage[3], 0, 2.0, "cage")
-    keep_out = [cage] + [(xw1, d.y_m - d.width_m / 2 - 1.0, xw1 + 1.8, d.y_m + d.width_m / 2 + 1.0) for d in doors]
+    _box(
+        boxes,
+        "cage_south",
+        cage[0] + 2 * p,
+        cage[1],
+        cage[2] - 2 * p,
+        cage[1] + 2 * p,
+        0,
+        2.0,
+        "cage",
+    )
+    _box(
+        boxes,
+        "cage_north",
+        cage[0] + 2 * p,
+        cage[3] - 2 * p,
+        cage[2] - 2 * p,
+        cage[3],
+        0,
+        2.0,
+        "cage",
+    )
+    keep_out = [cage] + [
+        (xw1, d.y_m - d.width_m / 2 - 1.0, xw1 + 1.8, d.y_m + d.width_m / 2 + 1.0) for d in doors
+    ]
     for i, (px, py, h) in enumerate(_pillars(rng, xw1, -hh, hw, hh, keep_out)):
         _box(boxes, f"pillar{i}", px - h, py - h, px + h, py + h, 0, WALL_H_M, "pillar")
     inset = 0.5
-    anchors = ((hw - inset, hh - inset), (0.0, hh - inset), (-hw + inset, hh - inset),
-               (-hw + inset, -hh + inset), (0.0, -hh + inset), (hw - inset, -hh + inset))
-    return GeneratedWorld(int(seed), (W, H), tuple(boxes), tuple(doors), (cage,), (xd, ya, xb, yb), xw0, xw1,
-                          (_r(-hw + cw / 2), 0.0, 0.0), tuple((_r(x), _r(y)) for x, y in anchors))
+    anchors = (
+        (hw - inset, hh - inset),
+        (0.0, hh - inset),
+        (-hw + inset, hh - inset),
+        (-hw + inset, -hh + inset),
+        (0.0, -hh + inset),
+        (hw - inset, -hh + inset),
+    )
+    return GeneratedWorld(
+        int(seed),
+        (W, H),
+        tuple(boxes),
+        tuple(doors),
+        (cage,),
+        (xd, ya, xb, yb),
+        xw0,
+        xw1,
+        (_r(-hw + cw / 2), 0.0, 0.0),
+        tuple((_r(x), _r(y)) for x, y in anchors),
+    )

@@ -36,7 +36,9 @@ class Footprints:
 
     def __getitem__(self, index: slice) -> "Footprints":
         """The footprints of a slice (e.g. ``boxes[k:k + 1]``: one of them)."""
-        return Footprints(self.centre_xy_m[index], self.half_xy_m[index], self.yaw_rad[index], self.names[index])
+        return Footprints(
+            self.centre_xy_m[index], self.half_xy_m[index], self.yaw_rad[index], self.names[index]
+        )
 
 
 def scan_plane_boxes(model, z_m: float) -> Footprints:
@@ -50,11 +52,16 @@ def scan_plane_boxes(model, z_m: float) -> Footprints:
     mujoco.mj_forward(model, data)
     keep = []
     for g in range(model.ngeom):
-        if (model.geom_group[g] != WORLD_GROUP or model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX
-                or model.body_mocapid[model.geom_bodyid[g]] >= 0):
+        if (
+            model.geom_group[g] != WORLD_GROUP
+            or model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX
+            or model.body_mocapid[model.geom_bodyid[g]] >= 0
+        ):
             continue
         R = data.geom_xmat[g].reshape(3, 3)
-        half_z = np.abs(R[2]) @ model.geom_size[g]  # vertical half extent of the (possibly rotated) box
+        half_z = (
+            np.abs(R[2]) @ model.geom_size[g]
+        )  # vertical half extent of the (possibly rotated) box
         if abs(data.geom_xpos[g][2] - z_m) <= half_z:
             keep.append(g)
     centre = np.array([data.geom_xpos[g][:2] for g in keep]).reshape(-1, 2)
@@ -69,11 +76,11 @@ def distance_to_boxes_m(xy_m: np.ndarray, boxes: Footprints) -> np.ndarray:
     xy = np.asarray(xy_m, float).reshape(-1, 2)
     if len(boxes) == 0:
         return np.full(len(xy), np.inf)
-    d = xy[:, None, :] - boxes.centre_xy_m[None]          # (N, K, 2)
+    d = xy[:, None, :] - boxes.centre_xy_m[None]  # (N, K, 2)
     c, s = np.cos(boxes.yaw_rad), np.sin(boxes.yaw_rad)
     local = np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1]], axis=-1)
     out = np.maximum(np.abs(local) - boxes.half_xy_m[None], 0.0)
-    return np.sqrt((out ** 2).sum(-1)).min(axis=1)
+    return np.sqrt((out**2).sum(-1)).min(axis=1)
 
 
 def surface_samples_m(boxes: Footprints, spacing_m: float) -> np.ndarray:
@@ -85,5 +92,9 @@ def surface_samples_m(boxes: Footprints, spacing_m: float) -> np.ndarray:
             n = max(2, int(np.ceil(np.linalg.norm(b - a) / spacing_m)) + 1)
             seg = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
             c, s = np.cos(yaw), np.sin(yaw)
-            pts.append(np.column_stack([cx + c * seg[:, 0] - s * seg[:, 1], cy + s * seg[:, 0] + c * seg[:, 1]]))
+            pts.append(
+                np.column_stack(
+                    [cx + c * seg[:, 0] - s * seg[:, 1], cy + s * seg[:, 0] + c * seg[:, 1]]
+                )
+            )
     return np.vstack(pts) if pts else np.zeros((0, 2))

@@ -86,7 +86,11 @@ def default_start(world: str | Path) -> tuple[float, float, float]:
     a file that cannot be read gives the origin (the model build reports the error).
     """
     values = _numeric(world, START_NUMERIC)
-    return (values[0], values[1], values[2]) if values is not None and len(values) == 3 else (0.0, 0.0, 0.0)
+    return (
+        (values[0], values[1], values[2])
+        if values is not None and len(values) == 3
+        else (0.0, 0.0, 0.0)
+    )
 
 
 def uwb_anchors_xy_m(world: str | Path) -> np.ndarray | None:
@@ -99,9 +103,15 @@ def uwb_anchors_xy_m(world: str | Path) -> np.ndarray | None:
     values = _numeric(world, ANCHORS_NUMERIC)
     if values is None:
         return None
-    if len(values) % 2 or not 3 <= len(values) // 2 <= 16 or not all(math.isfinite(v) for v in values):
-        raise MapError(f"{world_path(world)}: numeric {ANCHORS_NUMERIC} must hold 3 to 16 finite x y pairs, "
-                       f"got {len(values)} values")
+    if (
+        len(values) % 2
+        or not 3 <= len(values) // 2 <= 16
+        or not all(math.isfinite(v) for v in values)
+    ):
+        raise MapError(
+            f"{world_path(world)}: numeric {ANCHORS_NUMERIC} must hold 3 to 16 finite x y pairs, "
+            f"got {len(values)} values"
+        )
     return np.asarray(values, dtype=float).reshape(-1, 2)
 
 
@@ -122,9 +132,15 @@ class Obstacle:
 
     def __post_init__(self) -> None:
         values = (self.x_m, self.y_m, self.yaw_rad, *self.size_m)
-        if len(self.size_m) != 3 or not all(math.isfinite(v) for v in values) or min(self.size_m) <= 0:
-            raise ValueError(f"obstacle {self.name!r}: position and yaw finite, size_m three lengths > 0 "
-                             f"(got {self.x_m}, {self.y_m}, {self.size_m}, {self.yaw_rad})")
+        if (
+            len(self.size_m) != 3
+            or not all(math.isfinite(v) for v in values)
+            or min(self.size_m) <= 0
+        ):
+            raise ValueError(
+                f"obstacle {self.name!r}: position and yaw finite, size_m three lengths > 0 "
+                f"(got {self.x_m}, {self.y_m}, {self.size_m}, {self.yaw_rad})"
+            )
 
 
 @dataclass(frozen=True)
@@ -162,18 +178,18 @@ def _pgm_tokens(data: bytes, path) -> tuple[list[bytes], int]:
     tokens: list[bytes] = []
     pos, n = 0, len(data)
     while len(tokens) < 4:  # magic, width, height, maxval (comments start with #)
-        while pos < n and data[pos:pos + 1].isspace():
+        while pos < n and data[pos : pos + 1].isspace():
             pos += 1
         if pos >= n:
             raise MapError(f"{path}: not a PGM image (header ends after {len(tokens)} of 4 fields)")
-        if data[pos:pos + 1] == b"#":
+        if data[pos : pos + 1] == b"#":
             newline = data.find(b"\n", pos)
             if newline < 0:
                 raise MapError(f"{path}: not a PGM image (unterminated comment in the header)")
             pos = newline + 1
             continue
         end = pos
-        while end < n and not data[end:end + 1].isspace():
+        while end < n and not data[end : end + 1].isspace():
             end += 1
         tokens.append(data[pos:end])
         pos = end
@@ -198,15 +214,23 @@ def read_pgm(path: str | Path) -> np.ndarray:
     try:
         width, height, maxval = (int(t) for t in tokens[1:])
     except ValueError:
-        raise MapError(f"{path}: not a PGM image (width, height and maxval must be integers)") from None
+        raise MapError(
+            f"{path}: not a PGM image (width, height and maxval must be integers)"
+        ) from None
     if width <= 0 or height <= 0 or not 0 < maxval <= 255:
-        raise MapError(f"{path}: only 8-bit PGM images with a positive size are supported "
-                       f"({width} x {height}, maxval {maxval})")
+        raise MapError(
+            f"{path}: only 8-bit PGM images with a positive size are supported "
+            f"({width} x {height}, maxval {maxval})"
+        )
     if width * height > MAX_MAP_PIXELS:
-        raise MapError(f"{path}: {width} x {height} pixels; at most {MAX_MAP_PIXELS:,} (each wall run is a geom)")
+        raise MapError(
+            f"{path}: {width} x {height} pixels; at most {MAX_MAP_PIXELS:,} (each wall run is a geom)"
+        )
     if magic == b"P5":
         if len(data) < pos + 1 + width * height:
-            raise MapError(f"{path}: truncated PGM ({len(data) - pos - 1} of {width * height} pixel bytes)")
+            raise MapError(
+                f"{path}: truncated PGM ({len(data) - pos - 1} of {width * height} pixel bytes)"
+            )
         pixels = np.frombuffer(data, np.uint8, width * height, pos + 1)
     else:
         try:
@@ -215,7 +239,7 @@ def read_pgm(path: str | Path) -> np.ndarray:
             raise MapError(f"{path}: ASCII PGM pixels must be integers") from None
         if len(values) < width * height or (values < 0).any() or (values > maxval).any():
             raise MapError(f"{path}: ASCII PGM needs {width * height} pixels in 0..{maxval}")
-        pixels = values[:width * height].astype(np.uint8)
+        pixels = values[: width * height].astype(np.uint8)
     return pixels.reshape(height, width).copy()
 
 
@@ -229,15 +253,28 @@ MAP_MODES = ("trinary", "scale", "raw")
 """map_server's ``mode`` values (trinary when absent); trinary and scale give the same walls."""
 
 
-def _map_number(path, meta: dict, key: str, default=None, low: float | None = None, high: float | None = None,
-                open_low: bool = False) -> float:
+def _map_number(
+    path,
+    meta: dict,
+    key: str,
+    default=None,
+    low: float | None = None,
+    high: float | None = None,
+    open_low: bool = False,
+) -> float:
     value = meta.get(key, default)
     if value is None:
-        raise MapError(f"{path}: {key} is missing (map_server YAML: image, resolution, origin, ...)")
+        raise MapError(
+            f"{path}: {key} is missing (map_server YAML: image, resolution, origin, ...)"
+        )
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise MapError(f"{path}: {key}: {value!r} must be a finite number")
-    if (low is not None and (value <= low if open_low else value < low)) or (high is not None and value > high):
-        bound = f"{'(' if open_low else '['}{low:g}, {high:g}]" if high is not None else f"> {low:g}"
+    if (low is not None and (value <= low if open_low else value < low)) or (
+        high is not None and value > high
+    ):
+        bound = (
+            f"{'(' if open_low else '['}{low:g}, {high:g}]" if high is not None else f"> {low:g}"
+        )
         raise MapError(f"{path}: {key}: {value} must be in {bound}")
     return float(value)
 
@@ -253,25 +290,41 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
     yaml_path = Path(yaml_path)
     meta = read_yaml(yaml_path, "map", MapError)
     if not isinstance(meta, dict):
-        raise MapError(f"{yaml_path}: expected a map_server mapping (image, resolution, origin, ...)")
+        raise MapError(
+            f"{yaml_path}: expected a map_server mapping (image, resolution, origin, ...)"
+        )
     mode = meta.get("mode", "trinary")
     if mode not in MAP_MODES:
-        raise MapError(f"{yaml_path}: mode {mode!r} is not one of {', '.join(MAP_MODES)} (map_server)")
+        raise MapError(
+            f"{yaml_path}: mode {mode!r} is not one of {', '.join(MAP_MODES)} (map_server)"
+        )
     image_name = meta.get("image")
     if not isinstance(image_name, str) or not image_name:
         raise MapError(f"{yaml_path}: image is missing (the PGM file name, relative to the YAML)")
     resolution = _map_number(yaml_path, meta, "resolution", low=0.0, high=100.0, open_low=True)
     origin = meta.get("origin", [0.0, 0.0, 0.0])
-    if not isinstance(origin, (list, tuple)) or len(origin) != 3 or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in origin):
-        raise MapError(f"{yaml_path}: origin: {origin!r} must be [x_m, y_m, yaw_rad], three finite numbers")
+    if (
+        not isinstance(origin, (list, tuple))
+        or len(origin) != 3
+        or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in origin
+        )
+    ):
+        raise MapError(
+            f"{yaml_path}: origin: {origin!r} must be [x_m, y_m, yaw_rad], three finite numbers"
+        )
     if not all(abs(v) <= MAX_ORIGIN for v in origin):
-        raise MapError(f"{yaml_path}: origin: {origin!r}: each value must lie within +-{MAX_ORIGIN:g} (m, m, rad)")
+        raise MapError(
+            f"{yaml_path}: origin: {origin!r}: each value must lie within +-{MAX_ORIGIN:g} (m, m, rad)"
+        )
     origin = tuple(float(v) for v in origin)
     occupied = _map_number(yaml_path, meta, "occupied_thresh", 0.65, 0.0, 1.0)
     free = _map_number(yaml_path, meta, "free_thresh", 0.196, 0.0, 1.0)
     if free >= occupied:
-        raise MapError(f"{yaml_path}: free_thresh {free:g} must be below occupied_thresh {occupied:g} (map_server)")
+        raise MapError(
+            f"{yaml_path}: free_thresh {free:g} must be below occupied_thresh {occupied:g} (map_server)"
+        )
     negate = meta.get("negate", 0)
     if negate not in (0, 1, True, False):
         raise MapError(f"{yaml_path}: negate: {negate!r} must be 0 or 1")
@@ -281,7 +334,9 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
         raise MapError(f"{yaml_path}: image {exc}") from None
     if mode == "raw":  # the pixel is the occupancy in percent (255 unknown)
         known = image != 255
-        return OccupancyMap(known & (image / 100.0 > occupied), resolution, origin, known & (image / 100.0 < free))
+        return OccupancyMap(
+            known & (image / 100.0 > occupied), resolution, origin, known & (image / 100.0 < free)
+        )
     p = image / 255.0 if int(negate) else (255 - image.astype(float)) / 255.0
     return OccupancyMap(p > occupied, resolution, origin, p < free)
 
@@ -311,7 +366,9 @@ def merge_boxes(occupied: np.ndarray) -> list[tuple[int, int, int, int]]:
     return sorted(done)
 
 
-def wall_boxes(grid: OccupancyMap, wall_height_m: float = WALL_HEIGHT_M) -> list[tuple[np.ndarray, np.ndarray, float]]:
+def wall_boxes(
+    grid: OccupancyMap, wall_height_m: float = WALL_HEIGHT_M
+) -> list[tuple[np.ndarray, np.ndarray, float]]:
     """Boxes ``(centre_xyz (3,), half_size (3,), yaw_rad)`` in the world frame, m."""
     res, (ox, oy, yaw) = grid.resolution_m, grid.origin_xyyaw
     rows = grid.occupied.shape[0]
@@ -322,7 +379,9 @@ def wall_boxes(grid: OccupancyMap, wall_height_m: float = WALL_HEIGHT_M) -> list
         mx = (col0 + n_cols / 2) * res
         my = (rows - row0 - n_rows / 2) * res
         centre = np.array([ox + c * mx - s * my, oy + s * mx + c * my, wall_height_m / 2])
-        boxes.append((centre, np.array([n_cols * res / 2, n_rows * res / 2, wall_height_m / 2]), yaw))
+        boxes.append(
+            (centre, np.array([n_cols * res / 2, n_rows * res / 2, wall_height_m / 2]), yaw)
+        )
     return boxes
 
 
@@ -331,23 +390,36 @@ def world_xml(yaml_path: str | Path, wall_height_m: float = WALL_HEIGHT_M) -> st
     grid = load_map(yaml_path)
     rows, cols = grid.occupied.shape
     padded = np.pad(grid.occupied, ((0, 0), (1, 0))).astype(np.int8)
-    runs = int(np.count_nonzero(np.diff(padded, axis=1) == 1))  # counted before the merge, which loops over them
+    runs = int(
+        np.count_nonzero(np.diff(padded, axis=1) == 1)
+    )  # counted before the merge, which loops over them
     if runs > MAX_WALL_RUNS:
-        raise MapError(f"{yaml_path}: {runs:,} runs of occupied cells; at most {MAX_WALL_RUNS:,} (a map this "
-                       "fragmented, noise or a checkerboard, would be a world of too many walls)")
+        raise MapError(
+            f"{yaml_path}: {runs:,} runs of occupied cells; at most {MAX_WALL_RUNS:,} (a map this "
+            "fragmented, noise or a checkerboard, would be a world of too many walls)"
+        )
     boxes = wall_boxes(grid, wall_height_m)
     if len(boxes) > MAX_WALL_BOXES:
-        raise MapError(f"{yaml_path}: {len(boxes):,} wall boxes after merging its occupied cells; at most "
-                       f"{MAX_WALL_BOXES:,} (each is a MuJoCo geom: 45,000 took 9 s to build; a SLAM map of the aisles "
-                       "world has about 5,000)")
-    span = max(rows, cols) * grid.resolution_m + abs(grid.origin_xyyaw[0]) + abs(grid.origin_xyyaw[1])
-    lines = [f'<mujoco model="{Path(yaml_path).stem}">', "  <worldbody>",
-             '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
-             f'    <geom name="floor" type="plane" size="{span:.3f} {span:.3f} 0.1" rgba="0.55 0.55 0.55 1"/>']
+        raise MapError(
+            f"{yaml_path}: {len(boxes):,} wall boxes after merging its occupied cells; at most "
+            f"{MAX_WALL_BOXES:,} (each is a MuJoCo geom: 45,000 took 9 s to build; a SLAM map of the aisles "
+            "world has about 5,000)"
+        )
+    span = (
+        max(rows, cols) * grid.resolution_m + abs(grid.origin_xyyaw[0]) + abs(grid.origin_xyyaw[1])
+    )
+    lines = [
+        f'<mujoco model="{Path(yaml_path).stem}">',
+        "  <worldbody>",
+        '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
+        f'    <geom name="floor" type="plane" size="{span:.3f} {span:.3f} 0.1" rgba="0.55 0.55 0.55 1"/>',
+    ]
     for i, (centre, half, yaw) in enumerate(boxes):
         pos = " ".join(f"{v:.6g}" for v in centre)
         size = " ".join(f"{v:.6g}" for v in half)
-        lines.append(f'    <geom name="wall_{i}" type="box" pos="{pos}" size="{size}" '
-                     f'euler="0 0 {math.degrees(yaw):.6g}" rgba="0.85 0.84 0.80 1"/>')
+        lines.append(
+            f'    <geom name="wall_{i}" type="box" pos="{pos}" size="{size}" '
+            f'euler="0 0 {math.degrees(yaw):.6g}" rgba="0.85 0.84 0.80 1"/>'
+        )
     lines += ["  </worldbody>", "</mujoco>", ""]
     return "\n".join(lines)

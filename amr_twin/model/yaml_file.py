@@ -23,22 +23,29 @@ class Loader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[mis
     """PyYAML's safe loader, with exponent numbers without a dot (``1e-9``) read as floats."""
 
 
-Loader.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-                             list("-+0123456789"))
+Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
 
 
 MAX_YAML_BYTES = 16 * 1024 * 1024
 """Largest YAML input read, bytes (a mission of a million steps is ~40 MB of YAML and a long parse)."""
 
 
-def read_bytes(path: str | Path, kind: str, error: type[Exception], limit: int = MAX_YAML_BYTES) -> bytes:
+def read_bytes(
+    path: str | Path, kind: str, error: type[Exception], limit: int = MAX_YAML_BYTES
+) -> bytes:
     """The bytes of a regular file of at most ``limit`` bytes; ``error(f"{kind} {path}: ...")`` otherwise
     (``f"{path}: ..."`` with no ``kind``)."""
     path = Path(path)
     where = f"{kind} {path}" if kind else str(path)
     if path.is_dir():
         raise error(f"{where}: is a folder, not a file")
-    if path.exists() and not path.is_file():  # checked before opening: opening a pipe waits for a writer
+    if (
+        path.exists() and not path.is_file()
+    ):  # checked before opening: opening a pipe waits for a writer
         raise error(f"{where}: not a regular file (a device or a pipe)")
     try:
         with open(path, "rb") as fh:
@@ -50,7 +57,9 @@ def read_bytes(path: str | Path, kind: str, error: type[Exception], limit: int =
     return data
 
 
-def read_text(path: str | Path, kind: str, error: type[Exception], limit: int = MAX_YAML_BYTES) -> str:
+def read_text(
+    path: str | Path, kind: str, error: type[Exception], limit: int = MAX_YAML_BYTES
+) -> str:
     """The UTF-8 text of a regular file of at most ``limit`` bytes (:func:`read_bytes`)."""
     data = read_bytes(path, kind, error, limit)
     where = f"{kind} {path}" if kind else str(path)

@@ -20,11 +20,14 @@ LETHAL, INSCRIBED, NO_INFORMATION = 254, 253, 255
 KEEP_CHANGES = 256
 
 
-def inflation_cost(dist_m: np.ndarray, inscribed_m: float, inflation_radius_m: float,
-                   cost_scaling_per_m: float) -> np.ndarray:
+def inflation_cost(
+    dist_m: np.ndarray, inscribed_m: float, inflation_radius_m: float, cost_scaling_per_m: float
+) -> np.ndarray:
     """nav2's inflation cost (uint8) of cells at ``dist_m`` from the nearest lethal cell."""
     d = np.asarray(dist_m, np.float32)
-    cost = np.where(d <= inflation_radius_m, 252.0 * np.exp(-cost_scaling_per_m * (d - inscribed_m)), 0.0)
+    cost = np.where(
+        d <= inflation_radius_m, 252.0 * np.exp(-cost_scaling_per_m * (d - inscribed_m)), 0.0
+    )
     cost = np.where(d <= inscribed_m, INSCRIBED, np.minimum(cost, 252.0))
     return np.where(d <= 0.0, LETHAL, cost).astype(np.uint8)
 
@@ -47,9 +50,16 @@ class Costmap:
         False: the clearing march by NumPy rather than its C twin (``costmap_rays.c``; :attr:`engine` says which).
     """
 
-    def __init__(self, static: StaticMap, inscribed_radius_m: float, inflation_radius_m: float,
-                 cost_scaling_per_m: float, unknown_is_lethal: bool = True, static_tolerance_m: float = 0.15,
-                 native: bool = True):
+    def __init__(
+        self,
+        static: StaticMap,
+        inscribed_radius_m: float,
+        inflation_radius_m: float,
+        cost_scaling_per_m: float,
+        unknown_is_lethal: bool = True,
+        static_tolerance_m: float = 0.15,
+        native: bool = True,
+    ):
         self.static = static
         self.resolution_m = static.resolution_m
         self.origin_xy_m = np.asarray(static.origin_xy_m, float)
@@ -68,9 +78,20 @@ class Costmap:
         self._lib, self.engine = open_helper(C_SOURCE, native)
         if self._lib is not None:
             ptr = ctypes.c_void_p
-            self._lib.costmap_crossed.argtypes = [ctypes.c_int, ptr, ptr, ptr, ctypes.c_double, ctypes.c_double,
-                                                  ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_int, ptr,
-                                                  ptr]
+            self._lib.costmap_crossed.argtypes = [
+                ctypes.c_int,
+                ptr,
+                ptr,
+                ptr,
+                ctypes.c_double,
+                ctypes.c_double,
+                ctypes.c_double,
+                ctypes.c_double,
+                ctypes.c_int,
+                ctypes.c_int,
+                ptr,
+                ptr,
+            ]
             self._lib.costmap_crossed.restype = ctypes.c_int64
         self.dist_m = self.static_dist_m.copy()
         """Distance from each cell to the nearest lethal cell of either layer, capped, m (float32)."""
@@ -125,11 +146,19 @@ class Costmap:
 
     def cost(self) -> np.ndarray:
         """The combined cost of every cell, (rows, cols) uint8 (nav2's values)."""
-        return inflation_cost(self.dist_m, self.inscribed_m, self.inflation_radius_m, self.cost_scaling_per_m)
+        return inflation_cost(
+            self.dist_m, self.inscribed_m, self.inflation_radius_m, self.cost_scaling_per_m
+        )
 
     # -- obstacle layer ----------------------------------------------------------------
-    def update_scan(self, origins_xy_m: np.ndarray, ends_xy_m: np.ndarray, hit: np.ndarray,
-                    obstacle_range_m: float, raytrace_range_m: float) -> int:
+    def update_scan(
+        self,
+        origins_xy_m: np.ndarray,
+        ends_xy_m: np.ndarray,
+        hit: np.ndarray,
+        obstacle_range_m: float,
+        raytrace_range_m: float,
+    ) -> int:
         """Clear along the beams, then mark their returns; return how many cells changed.
 
         ``origins_xy_m`` (K, 2): the laser's position at each beam's instant; ``ends_xy_m`` (K, 2):
@@ -141,9 +170,13 @@ class Costmap:
         v = e - o
         length = np.hypot(v[:, 0], v[:, 1])
         u = v / np.maximum(length, 1e-9)[:, None]
-        free_len = np.where(hit, np.minimum(length - 0.5 * self.resolution_m, raytrace_range_m), raytrace_range_m)
-        marked = self.marked.reshape(-1)                        # a view: writes go to the layer
-        cleared = np.unique(self._crossed(o, u, free_len))      # few: the cells marked before and crossed now
+        free_len = np.where(
+            hit, np.minimum(length - 0.5 * self.resolution_m, raytrace_range_m), raytrace_range_m
+        )
+        marked = self.marked.reshape(-1)  # a view: writes go to the layer
+        cleared = np.unique(
+            self._crossed(o, u, free_len)
+        )  # few: the cells marked before and crossed now
         marked[cleared] = False
         near = hit & (length <= obstacle_range_m)
         row, col, inside = self.cells(e[near])
@@ -168,8 +201,18 @@ class Costmap:
         if self._lib is not None:
             out = np.empty(int(counts.sum()), np.int64)
             o, u, free_len = (c_array(a, np.float64) for a in (o, u, free_len))
-            n = self._lib.costmap_crossed(len(o), address(o), address(u), address(free_len), step, *self.origin_xy_m,
-                                          self.resolution_m, *self.shape, address(self._marked_u8), address(out))
+            n = self._lib.costmap_crossed(
+                len(o),
+                address(o),
+                address(u),
+                address(free_len),
+                step,
+                *self.origin_xy_m,
+                self.resolution_m,
+                *self.shape,
+                address(self._marked_u8),
+                address(out),
+            )
             return out[:n]
         ray = np.repeat(beams, counts)
         first = np.repeat(np.cumsum(counts) - counts, counts)
@@ -183,10 +226,13 @@ class Costmap:
         p = self._pad
         R0, R1 = max(r0 - p, 0), min(r1 + p + 1, self.shape[0])
         C0, C1 = max(c0 - p, 0), min(c1 + p + 1, self.shape[1])
-        S0, S1 = max(R0 - p, 0), min(R1 + p, self.shape[0])  # the window's own surroundings count too
+        S0, S1 = (
+            max(R0 - p, 0),
+            min(R1 + p, self.shape[0]),
+        )  # the window's own surroundings count too
         T0, T1 = max(C0 - p, 0), min(C1 + p, self.shape[1])
         marked = self.marked[S0:S1, T0:T1]
-        core = np.s_[R0 - S0:R1 - S0, C0 - T0:C1 - T0]
+        core = np.s_[R0 - S0 : R1 - S0, C0 - T0 : C1 - T0]
         self.dist_m[R0:R1, C0:C1] = self._distance(self.static_lethal[S0:S1, T0:T1] | marked)[core]
         self.obstacle_dist_m[R0:R1, C0:C1] = self._distance(marked)[core]
         self._changed((R0, R1, C0, C1))

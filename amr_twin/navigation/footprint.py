@@ -64,7 +64,11 @@ class Footprint:
     def contains(self, xy_m: np.ndarray) -> np.ndarray:
         """Which points (K, 2) in ``base_link`` lie inside the rectangle, (K,) bool."""
         xy = np.asarray(xy_m, float).reshape(-1, 2)
-        return (xy[:, 0] >= self.x_min_m) & (xy[:, 0] <= self.x_max_m) & (np.abs(xy[:, 1]) <= self.half_width_m)
+        return (
+            (xy[:, 0] >= self.x_min_m)
+            & (xy[:, 0] <= self.x_max_m)
+            & (np.abs(xy[:, 1]) <= self.half_width_m)
+        )
 
 
 def robot_footprint(cfg) -> Footprint:

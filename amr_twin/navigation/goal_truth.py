@@ -25,14 +25,19 @@ class FinalErrors:
 
     def within(self, xy_tolerance_m: float, yaw_tolerance_rad: float) -> bool:
         """Whether the TRUE pose is within the tolerances."""
-        return self.true_xy_m <= xy_tolerance_m and (self.true_yaw_rad is None or
-                                                     self.true_yaw_rad <= yaw_tolerance_rad)
+        return self.true_xy_m <= xy_tolerance_m and (
+            self.true_yaw_rad is None or self.true_yaw_rad <= yaw_tolerance_rad
+        )
 
     def as_json(self) -> dict:
         """The errors with yaw in degrees (JSON keys name their units)."""
         deg = lambda v: None if v is None else math.degrees(v)  # noqa: E731
-        return {"true_xy_m": self.true_xy_m, "true_yaw_deg": deg(self.true_yaw_rad),
-                "estimate_xy_m": self.estimate_xy_m, "estimate_yaw_deg": deg(self.estimate_yaw_rad)}
+        return {
+            "true_xy_m": self.true_xy_m,
+            "true_yaw_deg": deg(self.true_yaw_rad),
+            "estimate_xy_m": self.estimate_xy_m,
+            "estimate_yaw_deg": deg(self.estimate_yaw_rad),
+        }
 
 
 def _errors(goal, pose) -> tuple[float | None, float | None]:
@@ -56,8 +61,12 @@ def judge(outcome, errors: FinalErrors, xy_tolerance_m: float, yaw_tolerance_rad
     if outcome.status != "succeeded" or errors.within(xy_tolerance_m, yaw_tolerance_rad):
         return
     if errors.true_xy_m > xy_tolerance_m:
-        miss = f"true pose {errors.true_xy_m:.3f} m from the goal (tolerance {xy_tolerance_m:.3f} m)"
+        miss = (
+            f"true pose {errors.true_xy_m:.3f} m from the goal (tolerance {xy_tolerance_m:.3f} m)"
+        )
     else:
-        miss = (f"true heading {math.degrees(errors.true_yaw_rad):.0f} deg off the goal's (tolerance "
-                f"{math.degrees(yaw_tolerance_rad):.0f} deg)")
+        miss = (
+            f"true heading {math.degrees(errors.true_yaw_rad):.0f} deg off the goal's (tolerance "
+            f"{math.degrees(yaw_tolerance_rad):.0f} deg)"
+        )
     outcome.status, outcome.reason = "aborted", f"reached by the estimate, {miss}"

@@ -19,8 +19,14 @@ if TYPE_CHECKING:
     from amr_twin.navigation.people import People
     from amr_twin.navigation.planner import Plan
 
-__all__ = ["LocalController", "LocalisationSource", "Planner", "RecoveryBehaviour", "Step",
-           "Twist2D"]
+__all__ = [
+    "LocalController",
+    "LocalisationSource",
+    "Planner",
+    "RecoveryBehaviour",
+    "Step",
+    "Twist2D",
+]
 
 
 @dataclass(frozen=True)
@@ -54,8 +60,14 @@ class LocalController(Protocol):
     """Whether it steers round the tracked people itself; if not, it is given none (the collision
     monitor's people zones keep the robot from them)."""
 
-    def command(self, pose: np.ndarray, velocity: tuple[float, float], path: PathHandler,
-                people: People, t_s: float) -> Twist2D:
+    def command(
+        self,
+        pose: np.ndarray,
+        velocity: tuple[float, float],
+        path: PathHandler,
+        people: People,
+        t_s: float,
+    ) -> Twist2D:
         """The twist for the robot at ``pose`` moving at ``velocity`` along ``path`` at ``t_s``,
         with the tracked ``people`` about; ``blocked`` when the way ahead is."""
         ...
@@ -77,8 +89,13 @@ class Planner(Protocol):
     last_error: str = ""
     """Why the last plan failed, in one line."""
 
-    def plan(self, start_xy_m: np.ndarray, goal_xy_m: np.ndarray, goal_yaw_rad: float | None = None,
-             people_xy_m: np.ndarray | None = None) -> Plan | None:
+    def plan(
+        self,
+        start_xy_m: np.ndarray,
+        goal_xy_m: np.ndarray,
+        goal_yaw_rad: float | None = None,
+        people_xy_m: np.ndarray | None = None,
+    ) -> Plan | None:
         """A plan (:class:`~amr_twin.navigation.planner.Plan`) keeping clear of the people
         standing at ``people_xy_m`` (N, 2), or None (:attr:`last_error` says why)."""
         ...

@@ -25,7 +25,9 @@ class Limits:
     decel_m_s2: float = 1.0
     angular_accel_rad_s2: float = 2.0
 
-    def ramp(self, v: float, w: float, v_prev: float, w_prev: float, dt_s: float) -> tuple[float, float]:
+    def ramp(
+        self, v: float, w: float, v_prev: float, w_prev: float, dt_s: float
+    ) -> tuple[float, float]:
         """``(v, w)`` clipped to the limits and to the accelerations from ``(v_prev, w_prev)`` over ``dt_s``."""
         v = min(max(v, self.min_v_m_s), self.max_v_m_s)
         w = min(max(w, -self.max_w_rad_s), self.max_w_rad_s)
@@ -42,8 +44,14 @@ def wrap(angle_rad):
     return (np.asarray(angle_rad) + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def rotation_rate(error_rad: float, limits: Limits, w_prev: float, dt_s: float, gain_per_s: float = 1.5,
-                  min_rate_rad_s: float = 0.15) -> float:
+def rotation_rate(
+    error_rad: float,
+    limits: Limits,
+    w_prev: float,
+    dt_s: float,
+    gain_per_s: float = 1.5,
+    min_rate_rad_s: float = 0.15,
+) -> float:
     """Yaw rate that turns in place through ``error_rad`` and stops there: proportional, at least
     ``min_rate_rad_s`` (the drive cannot hold a crawl), at most what decelerates to rest at the target."""
     stop_rate = math.sqrt(2.0 * limits.angular_accel_rad_s2 * 0.8 * abs(error_rad))
@@ -53,7 +61,9 @@ def rotation_rate(error_rad: float, limits: Limits, w_prev: float, dt_s: float, 
     return min(max(w, w_prev - dw), w_prev + dw)
 
 
-def arc_poses(x_m: float, y_m: float, yaw_rad: float, v: float, w: float, dt_s: float, n: int) -> np.ndarray:
+def arc_poses(
+    x_m: float, y_m: float, yaw_rad: float, v: float, w: float, dt_s: float, n: int
+) -> np.ndarray:
     """Poses (n, 3) after 1..n steps of ``dt_s`` at the constant twist ``(v, w)`` (exact unicycle)."""
     t = dt_s * np.arange(1, n + 1)
     yaw = yaw_rad + w * t

@@ -62,8 +62,13 @@ class PoseSource:
         """Poses (K, 3) at times ``t_s`` (K,), interpolated in the history (held at its ends)."""
         h = np.array(self._hist)
         yaw = np.unwrap(h[:, 3])
-        out = np.column_stack([np.interp(t_s, h[:, 0], h[:, 1]), np.interp(t_s, h[:, 0], h[:, 2]),
-                               np.interp(t_s, h[:, 0], yaw)])
+        out = np.column_stack(
+            [
+                np.interp(t_s, h[:, 0], h[:, 1]),
+                np.interp(t_s, h[:, 0], h[:, 2]),
+                np.interp(t_s, h[:, 0], yaw),
+            ]
+        )
         out[:, 2] = wrap(out[:, 2])
         return self._corrected(out)
 
@@ -90,7 +95,9 @@ class PoseSource:
             h = np.array(hist)
             moved = se2.compose(delta, h[:, 1:])
             hist.clear()
-            hist.extend((float(t), float(x), float(y), float(yaw)) for t, (x, y, yaw) in zip(h[:, 0], moved))
+            hist.extend(
+                (float(t), float(x), float(y), float(yaw)) for t, (x, y, yaw) in zip(h[:, 0], moved)
+            )
         hist.append(last)
         self.correction = tuple(float(v) for v in se2.compose(self.correction, se2.inverse(delta)))
 

@@ -10,24 +10,54 @@ import numpy as np
 
 from amr_twin.analysis import se2
 from amr_twin.navigation.kinematics import to_map
-from amr_twin.ros.geometry_messages import Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped, Quaternion
+from amr_twin.ros.geometry_messages import (
+    Point,
+    Pose,
+    PoseWithCovariance,
+    PoseWithCovarianceStamped,
+    Quaternion,
+)
 from amr_twin.ros.messages import Header, Time
 
 
 class MapMatcher:
     """Fits each scan to the static map of ``costmap`` and keeps the correction (module docstring)."""
 
-    def __init__(self, costmap, *, inlier_m: float = 0.3, iterations: int = 4, min_inliers: int = 40,
-                 max_range_m: float = 8.0, sigma_m: float = 0.05, step_m: float = 0.05,
-                 step_rad: float = 0.02, total_m: float = 0.5, total_rad: float = 0.2, feedback: bool = False,
-                 feedback_inflation: float = 1.0, feedback_floor_m: float = 0.05,
-                 feedback_floor_rad: float = 0.01):
+    def __init__(
+        self,
+        costmap,
+        *,
+        inlier_m: float = 0.3,
+        iterations: int = 4,
+        min_inliers: int = 40,
+        max_range_m: float = 8.0,
+        sigma_m: float = 0.05,
+        step_m: float = 0.05,
+        step_rad: float = 0.02,
+        total_m: float = 0.5,
+        total_rad: float = 0.2,
+        feedback: bool = False,
+        feedback_inflation: float = 1.0,
+        feedback_floor_m: float = 0.05,
+        feedback_floor_rad: float = 0.01,
+    ):
         self.costmap = costmap
-        self.inlier_m, self.iterations, self.min_inliers = inlier_m, int(iterations), int(min_inliers)
+        self.inlier_m, self.iterations, self.min_inliers = (
+            inlier_m,
+            int(iterations),
+            int(min_inliers),
+        )
         self.max_range_m, self.sigma_m = max_range_m, sigma_m
-        self.step_m, self.step_rad, self.total_m, self.total_rad = step_m, step_rad, total_m, total_rad
+        self.step_m, self.step_rad, self.total_m, self.total_rad = (
+            step_m,
+            step_rad,
+            total_m,
+            total_rad,
+        )
         self.feedback, self.feedback_inflation = bool(feedback), feedback_inflation
-        self.feedback_floor = np.array([feedback_floor_m, feedback_floor_m, feedback_floor_rad]) ** 2
+        self.feedback_floor = (
+            np.array([feedback_floor_m, feedback_floor_m, feedback_floor_rad]) ** 2
+        )
         self.correction = (0.0, 0.0, 0.0)
         """``map`` from the localisation's frame: ``(tx_m, ty_m, theta_rad)``."""
         self.information = np.zeros((3, 3))
@@ -49,10 +79,22 @@ class MapMatcher:
         inside = (i >= 0) & (i < D.shape[0] - 1) & (j >= 0) & (j < D.shape[1] - 1)
         i, j = np.where(inside, i, 0), np.where(inside, j, 0)
         fu, fv = u - j, v - i
-        d00, d01, d10, d11 = (D[i, j].astype(float), D[i, j + 1].astype(float), D[i + 1, j].astype(float),
-                              D[i + 1, j + 1].astype(float))
+        d00, d01, d10, d11 = (
+            D[i, j].astype(float),
+            D[i, j + 1].astype(float),
+            D[i + 1, j].astype(float),
+            D[i + 1, j + 1].astype(float),
+        )
         d = (1 - fv) * ((1 - fu) * d00 + fu * d01) + fv * ((1 - fu) * d10 + fu * d11) - 0.5 * res
-        g = np.column_stack([(1 - fv) * (d01 - d00) + fv * (d11 - d10), (1 - fu) * (d10 - d00) + fu * (d11 - d01)]) / res
+        g = (
+            np.column_stack(
+                [
+                    (1 - fv) * (d01 - d00) + fv * (d11 - d10),
+                    (1 - fu) * (d10 - d00) + fu * (d11 - d01),
+                ]
+            )
+            / res
+        )
         return np.where(inside, d, np.inf), g
 
     def update(self, laser_xy_m, points_xy_m: np.ndarray) -> tuple[float, float, float]:
@@ -67,7 +109,9 @@ class MapMatcher:
             return (0.0, 0.0, 0.0)
         w_step = np.array([self.step_m, self.step_m, self.step_rad]) ** -2
         x = np.zeros(3)
-        at_laser = to_map(np.array([self.correction]), c[None])[0, 0] - c   # the correction's move of the laser
+        at_laser = (
+            to_map(np.array([self.correction]), c[None])[0, 0] - c
+        )  # the correction's move of the laser
         total = np.array([at_laser[0], at_laser[1], self.correction[2]])
         for _ in range(self.iterations):
             cs, sn = math.cos(x[2]), math.sin(x[2])
@@ -77,10 +121,12 @@ class MapMatcher:
             if inlier.sum() < self.min_inliers:
                 self.skipped += 1
                 return (0.0, 0.0, 0.0)
-            J = np.column_stack([g[inlier], g[inlier, 1] * q[inlier, 0] - g[inlier, 0] * q[inlier, 1]])
-            info = J.T @ J / self.sigma_m ** 2
+            J = np.column_stack(
+                [g[inlier], g[inlier, 1] * q[inlier, 0] - g[inlier, 0] * q[inlier, 1]]
+            )
+            info = J.T @ J / self.sigma_m**2
             A = info + np.diag(w_step)
-            b = -J.T @ d[inlier] / self.sigma_m ** 2 - w_step * x
+            b = -J.T @ d[inlier] / self.sigma_m**2 - w_step * x
             x = x + np.linalg.solve(A, b)
         # bounds: the step of a scan, then the whole correction (a match slid along look-alike racks stops there)
         x[:2] *= min(1.0, self.step_m / max(float(np.hypot(*x[:2])), 1e-12))
@@ -91,7 +137,11 @@ class MapMatcher:
         x = new - total
         # the increment about the laser, as a transform of the map: p -> R (p - c) + c + x[:2]
         cs, sn = math.cos(x[2]), math.sin(x[2])
-        step = (c[0] - (cs * c[0] - sn * c[1]) + x[0], c[1] - (sn * c[0] + cs * c[1]) + x[1], float(x[2]))
+        step = (
+            c[0] - (cs * c[0] - sn * c[1]) + x[0],
+            c[1] - (sn * c[0] + cs * c[1]) + x[1],
+            float(x[2]),
+        )
         self.correction = tuple(float(v) for v in se2.compose(step, self.correction))
         self.information, self.centre_xy_m = info, c
         self.matches += 1
@@ -112,6 +162,13 @@ class MapMatcher:
         message of that instant) with :meth:`pose_covariance`."""
         cov6 = np.zeros((6, 6))
         cov6[np.ix_([0, 1, 5], [0, 1, 5])] = self.pose_covariance(pose[:2])
-        cov6[2, 2] = cov6[3, 3] = cov6[4, 4] = 1e6   # z, roll, pitch: not measured (two_d_mode)
-        return PoseWithCovarianceStamped(Header(seq, Time.from_sec(stamp_s), "map"), PoseWithCovariance(
-            Pose(Point(float(pose[0]), float(pose[1]), 0.0), Quaternion.from_yaw(float(pose[2]))), cov6.ravel()))
+        cov6[2, 2] = cov6[3, 3] = cov6[4, 4] = 1e6  # z, roll, pitch: not measured (two_d_mode)
+        return PoseWithCovarianceStamped(
+            Header(seq, Time.from_sec(stamp_s), "map"),
+            PoseWithCovariance(
+                Pose(
+                    Point(float(pose[0]), float(pose[1]), 0.0), Quaternion.from_yaw(float(pose[2]))
+                ),
+                cov6.ravel(),
+            ),
+        )

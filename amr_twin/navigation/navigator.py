@@ -22,6 +22,7 @@ from amr_twin.navigation.registries import RECOVERIES, ROUND_ROBIN
 from amr_twin.navigation.yielding import Yielding
 from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped, Twist, Vector3
 
+
 @dataclass(frozen=True)
 class NavParams:
     """Rates, tolerances and ranges of the navigator (``navigation.navigator``, ``.costmap`` and ``.planner`` of
@@ -53,20 +54,38 @@ class GoalOutcome:
     reason: str = ""
     t_start_s: float = math.nan
     t_end_s: float = math.nan
-    recoveries: list = field(default_factory=list)   # (t_s, name)
+    recoveries: list = field(default_factory=list)  # (t_s, name)
     plan_cpu_s: list = field(default_factory=list)
     first_plan_length_m: float = math.nan
-    pose_estimate_end: tuple | None = None   # the navigator's pose (x_m, y_m, yaw_rad) when it ended
+    pose_estimate_end: tuple | None = None  # the navigator's pose (x_m, y_m, yaw_rad) when it ended
 
 
 class Navigator:
     """Drive to each goal ``(x_m, y_m, yaw_rad or None)`` in turn (module docstring), from ``start_s``."""
 
-    def __init__(self, bus, clock, pose_source, costmap, planner: Planner, controller: LocalController, footprint,
-                 limits: Limits, goals, params: NavParams = NavParams(), outputs=None, start_s: float = 0.0, *,
-                 monitor: CollisionMonitor | None = None, tracker: PeopleTracker | None = None,
-                 progress: ProgressChecker | None = None, recovery_settings: dict | None = None,
-                 matcher: MapMatcher | None = None, yielding: Yielding | None = None, recoveries: tuple = ROUND_ROBIN):
+    def __init__(
+        self,
+        bus,
+        clock,
+        pose_source,
+        costmap,
+        planner: Planner,
+        controller: LocalController,
+        footprint,
+        limits: Limits,
+        goals,
+        params: NavParams = NavParams(),
+        outputs=None,
+        start_s: float = 0.0,
+        *,
+        monitor: CollisionMonitor | None = None,
+        tracker: PeopleTracker | None = None,
+        progress: ProgressChecker | None = None,
+        recovery_settings: dict | None = None,
+        matcher: MapMatcher | None = None,
+        yielding: Yielding | None = None,
+        recoveries: tuple = ROUND_ROBIN,
+    ):
         self.bus, self.clock, self.pose_source = bus, clock, pose_source
         self.yielding = yielding
         """Keeps the robot out of people's predicted paths (:class:`~amr_twin.navigation.yielding.Yielding`), or None."""
@@ -74,7 +93,9 @@ class Navigator:
         self.costmap, self.planner, self.controller = costmap, planner, controller
         self.footprint, self.limits, self.p = footprint, limits, params
         self.dt_s = 1.0 / params.controller_hz
-        self.monitor = monitor if monitor is not None else CollisionMonitor(footprint, limits.max_v_m_s)
+        self.monitor = (
+            monitor if monitor is not None else CollisionMonitor(footprint, limits.max_v_m_s)
+        )
         self.progress = progress if progress is not None else ProgressChecker()
         self.recovery_settings = recovery_settings or {}
         """Each recovery's settings by its name (``spin``: ``angle_rad``, ...)."""
@@ -82,15 +103,19 @@ class Navigator:
         """The recoveries' names and factories, in the round robin's order (:mod:`.registries`)."""
         self.outcomes = [GoalOutcome(tuple(g)) for g in goals]
         self.controller_cpu_s: list[float] = []
-        self.commands: list[tuple] = []    # (t_s, v, w) published
+        self.commands: list[tuple] = []  # (t_s, v, w) published
         self.outputs = outputs
         self._goal_i, self._path, self._plan = 0, None, None
         self._next_plan_s, self._plan_version = 0.0, -1
         self._recovery, self._failures, self._rr = None, 0, 0
         self._blocked_since: float | None = None
         self._rotating_to_goal = False
-        self._inside_since: float | None = None   # when the estimate came within xy_tolerance_m of the goal
-        self._yaw_inside_since: float | None = None   # when the heading came within yaw_tolerance_rad of the goal's
+        self._inside_since: float | None = (
+            None  # when the estimate came within xy_tolerance_m of the goal
+        )
+        self._yaw_inside_since: float | None = (
+            None  # when the heading came within yaw_tolerance_rad of the goal's
+        )
         self._closest_m = math.inf
         self._scan_points = np.zeros((0, 2))
         self._unmapped = np.zeros(0, bool)
@@ -98,8 +123,11 @@ class Navigator:
         self.people = NOBODY
         """The tracked people (:class:`~amr_twin.navigation.people.People`) after the last scan."""
         self._cmd = bus.advertise("cmd_vel", Twist)
-        self._matched = (bus.advertise(POSE_TOPIC, PoseWithCovarianceStamped)
-                         if matcher is not None and matcher.feedback else None)
+        self._matched = (
+            bus.advertise(POSE_TOPIC, PoseWithCovarianceStamped)
+            if matcher is not None and matcher.feedback
+            else None
+        )
         bus.subscribe("scan", self._on_scan)
         self._start_us = max(clock.now_us, int(round(start_s * 1e6)))
         self._timer = None
@@ -130,7 +158,7 @@ class Navigator:
         if self.done:
             return
         self._finish(active, reason)
-        for later in self.outcomes[self._goal_i:]:
+        for later in self.outcomes[self._goal_i :]:
             later.status, later.reason = queued, reason
         self._goal_i = len(self.outcomes)
         self.controller.reset()
@@ -158,24 +186,33 @@ class Navigator:
     def _on_scan(self, scan) -> None:
         if not self.pose_source.ready:
             return
-        origin, end, hit = self.pose_source.scan_in_map(scan, self.p.laser_xy_yaw, self.p.raytrace_range_m)
+        origin, end, hit = self.pose_source.scan_in_map(
+            scan, self.p.laser_xy_yaw, self.p.raytrace_range_m
+        )
         if self.matcher is not None:
             matches = self.matcher.matches
             step = self.matcher.update(origin[len(origin) // 2], end[hit])
             if step[2] or step[0] or step[1]:
                 origin, end = to_map(np.array([step]), origin)[0], to_map(np.array([step]), end)[0]
                 self.pose_source.correction = self.matcher.correction
-            if self._matched is not None and self.matcher.matches > matches:   # to the EKF, which takes it in
+            if (
+                self._matched is not None and self.matcher.matches > matches
+            ):  # to the EKF, which takes it in
                 before = self.pose_source.raw_pose()
-                self._matched.publish(self.matcher.pose_message(self.pose_source.pose(), self.pose_source.stamp_s,
-                                                                self.matcher.matches))
+                self._matched.publish(
+                    self.matcher.pose_message(
+                        self.pose_source.pose(), self.pose_source.stamp_s, self.matcher.matches
+                    )
+                )
                 self.pose_source.rebase(before)
                 self.matcher.correction = self.pose_source.correction
         self.costmap.update_scan(origin, end, hit, self.p.obstacle_range_m, self.p.raytrace_range_m)
         self._scan_points = end[hit]
         self._unmapped = self.costmap.static_distance_at(self._scan_points) > self.p.unmapped_m
         t = scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(hit))
-        self.tracker.update(self._scan_points[self._unmapped], t[hit][self._unmapped], origin[0], t[-1])
+        self.tracker.update(
+            self._scan_points[self._unmapped], t[hit][self._unmapped], origin[0], t[-1]
+        )
         self.people = self.tracker.people()
 
     def _publish(self, v: float, w: float) -> None:
@@ -192,9 +229,12 @@ class Navigator:
         """What the collision monitor takes, in the base frame: the scan's points (n, 2), which of them are
         unmapped, and (``people``) the people's predicted positions and velocities (or None)."""
         c, s = math.cos(pose[2]), math.sin(pose[2])
-        rot = np.array([[c, -s], [s, c]])   # map -> base: row vectors times this
+        rot = np.array([[c, -s], [s, c]])  # map -> base: row vectors times this
         if people and len(self.people):
-            xy = self.people.at(np.array([self.clock.now_s]), self.tracker.horizon_s)[:, 0] - pose[:2]
+            xy = (
+                self.people.at(np.array([self.clock.now_s]), self.tracker.horizon_s)[:, 0]
+                - pose[:2]
+            )
             people = (xy @ rot, self.people.v_m_s @ rot)
         else:
             people = None
@@ -205,7 +245,9 @@ class Navigator:
         path (:class:`~amr_twin.navigation.yielding.Yielding`), ramped, through the monitor's zones of returns
         (not its people zones: they would stop the way out)."""
         vel = self._velocity()
-        out = self.yielding.command(self.clock.now_s, pose, vel, wanted, filtered, self.people, self._scan_points)
+        out = self.yielding.command(
+            self.clock.now_s, pose, vel, wanted, filtered, self.people, self._scan_points
+        )
         if out is None:
             return filtered
         v, w = self.limits.ramp(*out, *vel, self.dt_s)
@@ -225,8 +267,11 @@ class Navigator:
         self._next_plan_s = self.clock.now_s
         self.progress.reset()
         if status == "aborted":  # the goals after it are not attempted
-            for later in self.outcomes[self._goal_i:]:
-                later.status, later.reason = "aborted", f"not attempted: an earlier goal failed ({reason})"
+            for later in self.outcomes[self._goal_i :]:
+                later.status, later.reason = (
+                    "aborted",
+                    f"not attempted: an earlier goal failed ({reason})",
+                )
             self._goal_i = len(self.outcomes)
 
     def _fail(self, why: str) -> None:
@@ -235,13 +280,21 @@ class Navigator:
         out = self.outcomes[self._goal_i]
         if self._failures > self.p.max_failures:
             g = out.goal
-            self._finish("aborted", f"goal ({g[0]:.2f}, {g[1]:.2f}) not reached: {why} "
-                                    f"(after {self.p.max_failures} recoveries)")
+            self._finish(
+                "aborted",
+                f"goal ({g[0]:.2f}, {g[1]:.2f}) not reached: {why} "
+                f"(after {self.p.max_failures} recoveries)",
+            )
             return
         name, make = self.recoveries[self._rr % len(self.recoveries)]
         self._rr += 1
-        self._recovery = make(self.costmap, self.footprint, self.limits, self.dt_s,
-                              **self.recovery_settings.get(name, {}))
+        self._recovery = make(
+            self.costmap,
+            self.footprint,
+            self.limits,
+            self.dt_s,
+            **self.recovery_settings.get(name, {}),
+        )
         self._recovery.start(self.clock.now_s, self.pose_source.pose())
         out.recoveries.append((self.clock.now_s, name, why))
         self._blocked_since = None
@@ -261,20 +314,27 @@ class Navigator:
         g = out.goal
         self._plan_version = self.costmap.version
         ppl = self.people
-        standing = ppl.xy_m[(np.hypot(*ppl.v_m_s.T) == 0.0) &
-                            (np.hypot(*(ppl.xy_m - pose[:2]).T) > self.planner.people_m + 0.1)]  # not those at the robot
+        standing = ppl.xy_m[
+            (np.hypot(*ppl.v_m_s.T) == 0.0)
+            & (np.hypot(*(ppl.xy_m - pose[:2]).T) > self.planner.people_m + 0.1)
+        ]  # not those at the robot
         plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
         if plan is None:  # nav2: clear the global costmap and try once more before failing
             self.costmap.clear()
-            plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
+            plan = self.planner.plan(
+                pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing
+            )
         self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
         if plan is None:
             return False
         out.plan_cpu_s.append(plan.cpu_s)
         old = self._path
-        if (old is not None and plan.length_m >= old.remaining_m
-                and old.distance_to_path_m(pose[0], pose[1]) <= self.p.off_path_m
-                and self.planner.path_free(old.poses[old.index:, :2], standing)):
+        if (
+            old is not None
+            and plan.length_m >= old.remaining_m
+            and old.distance_to_path_m(pose[0], pose[1]) <= self.p.off_path_m
+            and self.planner.path_free(old.poses[old.index :, :2], standing)
+        ):
             # nav2's replanning only if the path becomes invalid: a longer plan leaves a free path as it
             # is (a tier's margin flickering with what the scans show of a pallet jack turned the robot
             # back and forth between two routes, the path's heading each time)
@@ -290,7 +350,7 @@ class Navigator:
     def _on_timer(self) -> None:
         if self.done or not self.pose_source.ready:
             vel = self._velocity()
-            if self.done and vel == (0.0, 0.0):   # stopped: nothing more until a new goal
+            if self.done and vel == (0.0, 0.0):  # stopped: nothing more until a new goal
                 self._timer.cancel()
                 self._timer = None
                 return
@@ -347,8 +407,10 @@ class Navigator:
                 self._yaw_inside_since = now
             # inside the tolerance: on to half of it for at most approach_s (a drive that cannot turn slowly,
             # as the thesis' firmware with its dead zone, would otherwise never end the goal)
-            settled = inside and (abs(err) <= 0.5 * self.p.yaw_tolerance_rad
-                                  or now - self._yaw_inside_since >= self.p.approach_s)
+            settled = inside and (
+                abs(err) <= 0.5 * self.p.yaw_tolerance_rad
+                or now - self._yaw_inside_since >= self.p.approach_s
+            )
             w = 0.0 if settled else rotation_rate(err, lim, vel[1], self.dt_s)
             return lim.ramp(0.0, w, *vel, self.dt_s)
         if self._path is None or (now >= self._next_plan_s and self._plan_stale(pose)):
@@ -363,12 +425,16 @@ class Navigator:
         ahead = path.ahead(0.6)[-1]
         heading = math.atan2(ahead[1] - pose[1], ahead[0] - pose[0])
         err = float(wrap(heading - pose[2]))
-        if path.remaining_m > 0.3 and (abs(err) > self.p.rotate_to_path_rad or
-                                       (abs(err) > 0.15 and abs(vel[0]) < 0.02 and vel[1] != 0.0)):
+        if path.remaining_m > 0.3 and (
+            abs(err) > self.p.rotate_to_path_rad
+            or (abs(err) > 0.15 and abs(vel[0]) < 0.02 and vel[1] != 0.0)
+        ):
             self.controller.reset()
             return lim.ramp(0.0, rotation_rate(err, lim, vel[1], self.dt_s), *vel, self.dt_s)
         t0 = time.process_time()
-        people = self.people if self.controller.sees_people else NOBODY  # else the monitor's people zones alone
+        people = (
+            self.people if self.controller.sees_people else NOBODY
+        )  # else the monitor's people zones alone
         cmd = self.controller.command(pose, vel, path, people, now)
         self.controller_cpu_s.append(time.process_time() - t0)
         if cmd.blocked:

@@ -21,8 +21,14 @@ from amr_twin.navigation.footprint import Footprint
 from amr_twin.navigation.kinematics import to_map
 from amr_twin.ros.geometry_messages import Point, Pose, Quaternion
 from amr_twin.ros.messages import Header, Time
-from amr_twin.ros.nav_messages import (MapMetaData, OccupancyGrid, Path, Point32, PolygonStamped,
-                                       PoseStamped)
+from amr_twin.ros.nav_messages import (
+    MapMetaData,
+    OccupancyGrid,
+    Path,
+    Point32,
+    PolygonStamped,
+    PoseStamped,
+)
 
 FRAME = "map"
 
@@ -38,8 +44,16 @@ def cost_to_grid(cost: np.ndarray) -> np.ndarray:
 class NavOutputs:
     """Publishers of the navigator's plan, map, local costmap and footprint (module docstring)."""
 
-    def __init__(self, bus, clock, costmap: Costmap, footprint: Footprint, window_m: float = 6.0,
-                 costmap_hz: float = 2.0, footprint_hz: float = 5.0):
+    def __init__(
+        self,
+        bus,
+        clock,
+        costmap: Costmap,
+        footprint: Footprint,
+        window_m: float = 6.0,
+        costmap_hz: float = 2.0,
+        footprint_hz: float = 5.0,
+    ):
         self.clock, self.costmap = clock, costmap
         self._plan = bus.advertise("plan", Path)
         self._local = bus.advertise("local_costmap/costmap", OccupancyGrid)
@@ -52,7 +66,8 @@ class NavOutputs:
         static = costmap.static
         grid = np.where(static.occupied, 100, np.where(static.unknown, -1, 0)).astype(np.int8)
         bus.advertise("map", OccupancyGrid, latch=True).publish(
-            self._grid(grid, static.origin_xy_m))
+            self._grid(grid, static.origin_xy_m)
+        )
 
     def _header(self) -> Header:
         self._seq += 1
@@ -60,15 +75,22 @@ class NavOutputs:
 
     def _grid(self, data: np.ndarray, origin_xy) -> OccupancyGrid:
         h, w = data.shape
-        info = MapMetaData(Time.from_us(self.clock.now_us), self.costmap.resolution_m, w, h,
-                           Pose(Point(float(origin_xy[0]), float(origin_xy[1]), 0.0), Quaternion()))
+        info = MapMetaData(
+            Time.from_us(self.clock.now_us),
+            self.costmap.resolution_m,
+            w,
+            h,
+            Pose(Point(float(origin_xy[0]), float(origin_xy[1]), 0.0), Quaternion()),
+        )
         return OccupancyGrid(self._header(), info, data.reshape(-1))
 
     def plan(self, plan) -> None:
         """Publish a new plan."""
         head = self._header()
-        poses = [PoseStamped(head, Pose(Point(float(x), float(y), 0.0), Quaternion.from_yaw(float(yaw))))
-                 for x, y, yaw in plan.poses]
+        poses = [
+            PoseStamped(head, Pose(Point(float(x), float(y), 0.0), Quaternion.from_yaw(float(yaw))))
+            for x, y, yaw in plan.poses
+        ]
         self._plan.publish(Path(head, poses))
 
     def cycle(self, now_s: float, pose, costmap: Costmap) -> None:
@@ -77,12 +99,19 @@ class NavOutputs:
         if now >= self._next_fp:
             self._next_fp = now + self._footprint_us
             corners = to_map(np.asarray(pose, float)[None], self._corners)[0]
-            self._fp.publish(PolygonStamped(self._header(), [Point32(float(x), float(y), 0.0) for x, y in corners]))
+            self._fp.publish(
+                PolygonStamped(
+                    self._header(), [Point32(float(x), float(y), 0.0) for x, y in corners]
+                )
+            )
         if now >= self._next_costmap:
             self._next_costmap = now + self._costmap_us
             r, c, _ = costmap.cells(np.asarray(pose, float)[None, :2])
             n, (rows, cols) = self._cells, costmap.shape
-            r0, c0 = int(np.clip(r[0] - n // 2, 0, max(rows - n, 0))), int(np.clip(c[0] - n // 2, 0, max(cols - n, 0)))
+            r0, c0 = (
+                int(np.clip(r[0] - n // 2, 0, max(rows - n, 0))),
+                int(np.clip(c[0] - n // 2, 0, max(cols - n, 0))),
+            )
             window = self._window_cost(r0, c0, n)
             origin = costmap.origin_xy_m + np.array([c0, r0]) * costmap.resolution_m
             self._local.publish(self._grid(cost_to_grid(window), origin))
@@ -91,5 +120,9 @@ class NavOutputs:
         from amr_twin.navigation.costmap import inflation_cost
 
         cm = self.costmap
-        return inflation_cost(cm.dist_m[r0:r0 + n, c0:c0 + n], cm.inscribed_m, cm.inflation_radius_m,
-                              cm.cost_scaling_per_m)
+        return inflation_cost(
+            cm.dist_m[r0 : r0 + n, c0 : c0 + n],
+            cm.inscribed_m,
+            cm.inflation_radius_m,
+            cm.cost_scaling_per_m,
+        )

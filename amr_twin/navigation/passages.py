@@ -81,8 +81,9 @@ def _lead(costmap: Costmap, p: np.ndarray, u: np.ndarray, turn_m: float, lead_m:
     return float(min(s[free[0]] + lead_m, REACH_M)) if len(free) else REACH_M
 
 
-def split(costmap: Costmap, footprint: Footprint, xy: np.ndarray, clearance_m: float,
-          lead_m: float) -> list[tuple[bool, np.ndarray]]:
+def split(
+    costmap: Costmap, footprint: Footprint, xy: np.ndarray, clearance_m: float, lead_m: float
+) -> list[tuple[bool, np.ndarray]]:
     """The grid path ``xy`` (N, 2) as pieces ``(fixed, points)``: a fixed piece is a passage's axis (two points,
     driven straight), the others are to be shortened; consecutive pieces share their end points."""
     turn_m = footprint.circumscribed_radius_m + clearance_m
@@ -91,12 +92,12 @@ def split(costmap: Costmap, footprint: Footprint, xy: np.ndarray, clearance_m: f
     narrow[[0, -1]] = False
     pieces, start, head = [], 0, xy[0]
     for a, b in _runs(narrow):
-        k = a + int(np.argmin(d[a:b + 1]))
+        k = a + int(np.argmin(d[a : b + 1]))
         found = throat(costmap, xy[k])
         if found is None:
             continue
         c, u, width = found
-        if width > 2.0 * turn_m:   # a wide gap: room to turn
+        if width > 2.0 * turn_m:  # a wide gap: room to turn
             continue
         u = u if float(u @ (xy[min(b + 1, len(xy) - 1)] - xy[max(a - 1, 0)])) >= 0.0 else -u
         l_in, l_out = _lead(costmap, c, -u, turn_m, lead_m), _lead(costmap, c, u, turn_m, lead_m)
@@ -106,17 +107,22 @@ def split(costmap: Costmap, footprint: Footprint, xy: np.ndarray, clearance_m: f
         i = int(before[-1]) if len(before) else -1
         j = int(after[0]) if len(after) else len(xy)
         e_in, e_out = c - l_in * u, c + l_out * u
-        if i < start:              # the robot starts on the lead: the axis from its foot there
+        if i < start:  # the robot starts on the lead: the axis from its foot there
             i, e_in = start, c + min(float((head - c) @ u), 0.0) * u
-        if j > len(xy) - 1:        # the goal lies on the lead: the axis to its foot there
+        if j > len(xy) - 1:  # the goal lies on the lead: the axis to its foot there
             j, e_out = len(xy) - 1, c + max(float((xy[-1] - c) @ u), 0.0) * u
-        n = max(2, int(math.ceil(float(np.hypot(*(e_out - e_in))) / (0.5 * costmap.resolution_m))) + 1)
+        n = max(
+            2, int(math.ceil(float(np.hypot(*(e_out - e_in))) / (0.5 * costmap.resolution_m))) + 1
+        )
         line = e_in + np.linspace(0.0, 1.0, n)[:, None] * (e_out - e_in)
         poses = np.column_stack([line, np.full(n, math.atan2(u[1], u[0]))])
         need = min(clearance_m, 0.5 * width - footprint.half_width_m - costmap.resolution_m)
         if (footprint_clearance_m(costmap, footprint, poses) < need).any():
             continue
-        pieces += [(False, np.vstack([head, xy[start + 1:i + 1], e_in])), (True, np.array([e_in, e_out]))]
-        head, start = e_out, j - 1   # the next piece: from the axis' end on
-    pieces.append((False, np.vstack([head, xy[start + 1:]])))
+        pieces += [
+            (False, np.vstack([head, xy[start + 1 : i + 1], e_in])),
+            (True, np.array([e_in, e_out])),
+        ]
+        head, start = e_out, j - 1  # the next piece: from the axis' end on
+    pieces.append((False, np.vstack([head, xy[start + 1 :]])))
     return pieces

@@ -26,20 +26,20 @@ class PathHandler:
     def update(self, x_m: float, y_m: float) -> int:
         """Move the progress to the nearest point within ``search_m`` ahead of it; return its index."""
         hi = int(np.searchsorted(self.s_m, self.s_m[self.index] + self.search_m, side="right"))
-        window = self.poses[self.index:hi, :2]
+        window = self.poses[self.index : hi, :2]
         d = np.hypot(window[:, 0] - x_m, window[:, 1] - y_m)
         self.index += int(np.argmin(d))
         return self.index
 
     def distance_to_path_m(self, x_m: float, y_m: float) -> float:
         """Distance from a point to the nearest plan point from the progress on, m."""
-        p = self.poses[self.index:, :2]
+        p = self.poses[self.index :, :2]
         return float(np.hypot(p[:, 0] - x_m, p[:, 1] - y_m).min())
 
     def ahead(self, horizon_m: float) -> np.ndarray:
         """Plan points (M, 3) from the progress out to ``horizon_m`` of arc length (at least one)."""
         hi = int(np.searchsorted(self.s_m, self.s_m[self.index] + horizon_m, side="right"))
-        return self.poses[self.index:max(hi, self.index + 1)]
+        return self.poses[self.index : max(hi, self.index + 1)]
 
     @property
     def remaining_m(self) -> float:

@@ -47,10 +47,28 @@ def clusters(points_xy_m: np.ndarray, join_m: float) -> np.ndarray:
 class PeopleTracker:
     """Tracks of person-sized clusters of unmapped returns (module docstring)."""
 
-    def __init__(self, *, join_m: float = 0.3, max_size_m: float = 0.6, range_m: float = 3.5, gate_m: float = 0.3,
-                 max_speed_m_s: float = 2.5, alpha: float = 0.6, beta: float = 0.25, keep_s: float = 0.6,
-                 confirm: int = 2, min_speed_m_s: float = 0.25, horizon_s: float = 2.5, moved_m: float = 0.5):
-        self.join_m, self.max_size_m, self.range_m, self.gate_m = join_m, max_size_m, range_m, gate_m
+    def __init__(
+        self,
+        *,
+        join_m: float = 0.3,
+        max_size_m: float = 0.6,
+        range_m: float = 3.5,
+        gate_m: float = 0.3,
+        max_speed_m_s: float = 2.5,
+        alpha: float = 0.6,
+        beta: float = 0.25,
+        keep_s: float = 0.6,
+        confirm: int = 2,
+        min_speed_m_s: float = 0.25,
+        horizon_s: float = 2.5,
+        moved_m: float = 0.5,
+    ):
+        self.join_m, self.max_size_m, self.range_m, self.gate_m = (
+            join_m,
+            max_size_m,
+            range_m,
+            gate_m,
+        )
         self.max_speed_m_s, self.alpha, self.beta, self.keep_s = max_speed_m_s, alpha, beta, keep_s
         self.confirm, self.min_speed_m_s, self.horizon_s = int(confirm), min_speed_m_s, horizon_s
         self.moved_m = moved_m
@@ -63,7 +81,9 @@ class PeopleTracker:
             return np.zeros((0, 2)), np.zeros(0)
         n = labels.max() + 1
         count = np.bincount(labels, minlength=n)
-        centre = np.column_stack([np.bincount(labels, points_xy_m[:, k], n) / count for k in range(2)])
+        centre = np.column_stack(
+            [np.bincount(labels, points_xy_m[:, k], n) / count for k in range(2)]
+        )
         t = np.bincount(labels, t_s, n) / count
         lo = np.full((n, 2), np.inf)
         hi = np.full((n, 2), -np.inf)
@@ -72,7 +92,9 @@ class PeopleTracker:
         small = np.hypot(*(hi - lo).T) <= self.max_size_m
         return centre[small], t[small]
 
-    def update(self, points_xy_m: np.ndarray, t_s: np.ndarray, origin_xy_m, scan_end_s: float) -> None:
+    def update(
+        self, points_xy_m: np.ndarray, t_s: np.ndarray, origin_xy_m, scan_end_s: float
+    ) -> None:
         """One scan's unmapped returns ``points_xy_m`` (P, 2) in ``map``, their instants ``t_s`` (P,), seen
         from ``origin_xy_m`` (the laser, to keep those within ``range_m``) by the scan that ended at
         ``scan_end_s`` (a track unseen since ``keep_s`` before it is dropped)."""

@@ -33,16 +33,34 @@ class Plan:
 class GlobalPlanner:
     """A* on a :class:`Costmap` with shortening (module docstring)."""
 
-    def __init__(self, costmap: Costmap, downsample: int = 2, cost_weight: float = 1.0,
-                 clearance_m: float = 0.6, spacing_m: float = 0.05, turn_room_m: float = 0.0,
-                 unmapped_pad_m: float = 0.0, people_m: float = 0.0, footprint: Footprint | None = None,
-                 footprint_clearance_m: float = 0.1, lead_m: float = 0.35):
+    def __init__(
+        self,
+        costmap: Costmap,
+        downsample: int = 2,
+        cost_weight: float = 1.0,
+        clearance_m: float = 0.6,
+        spacing_m: float = 0.05,
+        turn_room_m: float = 0.0,
+        unmapped_pad_m: float = 0.0,
+        people_m: float = 0.0,
+        footprint: Footprint | None = None,
+        footprint_clearance_m: float = 0.1,
+        lead_m: float = 0.35,
+    ):
         self.costmap, self.downsample = costmap, int(downsample)
-        self.footprint, self.footprint_clearance_m, self.lead_m = footprint, float(footprint_clearance_m), float(lead_m)
+        self.footprint, self.footprint_clearance_m, self.lead_m = (
+            footprint,
+            float(footprint_clearance_m),
+            float(lead_m),
+        )
         self.unmapped_pad_m, self.people_m = float(unmapped_pad_m), float(people_m)
         self._coarse, self._seen, self._graph = None, -1, None
         self.turn_room_m = float(turn_room_m)
-        self.cost_weight, self.clearance_m, self.spacing_m = float(cost_weight), float(clearance_m), float(spacing_m)
+        self.cost_weight, self.clearance_m, self.spacing_m = (
+            float(cost_weight),
+            float(clearance_m),
+            float(spacing_m),
+        )
         self.last_error = ""
 
     def _pooled(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -51,10 +69,15 @@ class GlobalPlanner:
         k, cm = self.downsample, self.costmap
         rows, cols = cm.shape[0] // k * k, cm.shape[1] // k * k
         seen = self._seen
-        if self._coarse is None or (cm.changes and seen < cm.changes[0][0] - 1) or \
-                any(w is None for v, w in cm.changes if v > seen):
+        if (
+            self._coarse is None
+            or (cm.changes and seen < cm.changes[0][0] - 1)
+            or any(w is None for v, w in cm.changes if v > seen)
+        ):
             windows = [(0, rows, 0, cols)]
-            self._coarse = [np.zeros((rows // k, cols // k), t) for t in (np.uint8, np.float32, np.float32)]
+            self._coarse = [
+                np.zeros((rows // k, cols // k), t) for t in (np.uint8, np.float32, np.float32)
+            ]
         else:
             windows = [w for v, w in cm.changes if v > seen]
         for r0, r1, c0, c1 in windows:
@@ -63,11 +86,20 @@ class GlobalPlanner:
             if r1 <= r0 or c1 <= c0:
                 continue
             dist = cm.dist_m[r0:r1, c0:c1]
-            for i, (a, how) in enumerate(((inflation_cost(dist, cm.inscribed_m, cm.inflation_radius_m,
-                                                           cm.cost_scaling_per_m), np.max), (dist, np.min),
-                                          (cm.obstacle_dist_m[r0:r1, c0:c1], np.min))):
+            for i, (a, how) in enumerate(
+                (
+                    (
+                        inflation_cost(
+                            dist, cm.inscribed_m, cm.inflation_radius_m, cm.cost_scaling_per_m
+                        ),
+                        np.max,
+                    ),
+                    (dist, np.min),
+                    (cm.obstacle_dist_m[r0:r1, c0:c1], np.min),
+                )
+            ):
                 pooled = how(a.reshape((r1 - r0) // k, k, (c1 - c0) // k, k), axis=(1, 3))
-                self._coarse[i][r0 // k:r1 // k, c0 // k:c1 // k] = pooled
+                self._coarse[i][r0 // k : r1 // k, c0 // k : c1 // k] = pooled
         self._seen = cm.version
         return self._coarse
 
@@ -82,15 +114,28 @@ class GlobalPlanner:
             blocked |= near_obstacle < max(keep_m, cm.inscribed_m) + pad_m
         size = cm.resolution_m * self.downsample
         for x, y in np.zeros((0, 2)) if people_xy_m is None else people_xy_m:
-            c0, r0 = int((x - self.people_m - cm.origin_xy_m[0]) // size), int((y - self.people_m - cm.origin_xy_m[1]) // size)
+            c0, r0 = (
+                int((x - self.people_m - cm.origin_xy_m[0]) // size),
+                int((y - self.people_m - cm.origin_xy_m[1]) // size),
+            )
             n = int(2 * self.people_m // size) + 2
-            rr, cc = np.mgrid[max(r0, 0):min(r0 + n, w.shape[0]), max(c0, 0):min(c0 + n, w.shape[1])]
-            inside = np.hypot(cm.origin_xy_m[0] + (cc + 0.5) * size - x, cm.origin_xy_m[1] + (rr + 0.5) * size - y) < self.people_m
+            rr, cc = np.mgrid[
+                max(r0, 0) : min(r0 + n, w.shape[0]), max(c0, 0) : min(c0 + n, w.shape[1])
+            ]
+            inside = (
+                np.hypot(
+                    cm.origin_xy_m[0] + (cc + 0.5) * size - x,
+                    cm.origin_xy_m[1] + (rr + 0.5) * size - y,
+                )
+                < self.people_m
+            )
             blocked[rr[inside], cc[inside]] = True
         w[blocked] = np.inf
         return w
 
-    def plan(self, start_xy_m, goal_xy_m, goal_yaw_rad: float | None = None, people_xy_m=None) -> Plan | None:
+    def plan(
+        self, start_xy_m, goal_xy_m, goal_yaw_rad: float | None = None, people_xy_m=None
+    ) -> Plan | None:
         """A plan from ``start_xy_m`` to ``goal_xy_m`` (the last heading ``goal_yaw_rad`` if given) keeping the
         robot's centre ``people_m`` from the people standing at ``people_xy_m`` (N, 2), or None
         (:attr:`last_error` says why)."""
@@ -100,7 +145,11 @@ class GlobalPlanner:
             self.last_error = problem
             return None
         cm, k = self.costmap, self.downsample
-        for keep_m, pad_m in ((self.turn_room_m, self.unmapped_pad_m), (0.0, self.unmapped_pad_m), (0.0, 0.0)):
+        for keep_m, pad_m in (
+            (self.turn_room_m, self.unmapped_pad_m),
+            (0.0, self.unmapped_pad_m),
+            (0.0, 0.0),
+        ):
             path = self._search(start_xy_m, goal_xy_m, keep_m, people_xy_m, pad_m)
             if path is not None and not isinstance(path, str):
                 break
@@ -108,17 +157,27 @@ class GlobalPlanner:
             self.last_error = path
             return None
         if path is None:
-            self.last_error = (f"no path from ({start_xy_m[0]:.2f}, {start_xy_m[1]:.2f}) to "
-                               f"({goal_xy_m[0]:.2f}, {goal_xy_m[1]:.2f}): the goal is cut off")
+            self.last_error = (
+                f"no path from ({start_xy_m[0]:.2f}, {start_xy_m[1]:.2f}) to "
+                f"({goal_xy_m[0]:.2f}, {goal_xy_m[1]:.2f}): the goal is cut off"
+            )
             return None
         xy = cm.origin_xy_m + (path[:, ::-1] + 0.5) * cm.resolution_m * k
         xy[0], xy[-1] = start_xy_m[:2], goal_xy_m[:2]
-        people = np.zeros((0, 2)) if people_xy_m is None else np.asarray(people_xy_m, float).reshape(-1, 2)
+        people = (
+            np.zeros((0, 2))
+            if people_xy_m is None
+            else np.asarray(people_xy_m, float).reshape(-1, 2)
+        )
         if self.footprint is None:
             xy = self._shorten(xy, people)
         else:
-            parts = [piece if fixed else self._shorten(piece, people)
-                     for fixed, piece in split(cm, self.footprint, xy, self.footprint_clearance_m, self.lead_m)]
+            parts = [
+                piece if fixed else self._shorten(piece, people)
+                for fixed, piece in split(
+                    cm, self.footprint, xy, self.footprint_clearance_m, self.lead_m
+                )
+            ]
             xy = np.vstack([parts[0]] + [p[1:] for p in parts[1:]])
         poses = self._resample(xy, goal_yaw_rad)
         length = float(np.hypot(*np.diff(poses[:, :2], axis=0).T).sum())
@@ -131,8 +190,11 @@ class GlobalPlanner:
         cm, k = self.costmap, self.downsample
         w = self._weights(0.0, people_xy_m, self.unmapped_pad_m)
         r, c, inside = cm.cells(np.asarray(xy_m, float)[:-1])
-        return bool(inside.all()) and bool(np.isfinite(w[np.minimum(r // k, w.shape[0] - 1),
-                                                         np.minimum(c // k, w.shape[1] - 1)]).all())
+        return bool(inside.all()) and bool(
+            np.isfinite(
+                w[np.minimum(r // k, w.shape[0] - 1), np.minimum(c // k, w.shape[1] - 1)]
+            ).all()
+        )
 
     def _search(self, start_xy_m, goal_xy_m, keep_m: float, people_xy_m=None, pad_m: float = 0.0):
         """Coarse cells of the cheapest path keeping ``keep_m`` from obstacles, ``pad_m`` more from those of the
@@ -145,24 +207,35 @@ class GlobalPlanner:
             if not inside[0]:
                 return f"{name} ({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"
             cell.append((min(int(r[0]) // k, w.shape[0] - 1), min(int(c[0]) // k, w.shape[1] - 1)))
-        w[cell[0]] = min(w[cell[0]], 1.0 + self.cost_weight) if np.isfinite(w[cell[0]]) else 1.0 + self.cost_weight
+        w[cell[0]] = (
+            min(w[cell[0]], 1.0 + self.cost_weight)
+            if np.isfinite(w[cell[0]])
+            else 1.0 + self.cost_weight
+        )
         if not np.isfinite(w[cell[1]]):
             w[cell[1]] = 1.0 + self.cost_weight  # a goal cell shared with an obstacle's coarse cell
         if self._graph is None or self._graph.shape != w.shape:
             self._graph = GridGraph(w.shape)
         return self._graph.shortest(w, cell[0], cell[1])
 
-    def _clearance(self, a: np.ndarray, b: np.ndarray, people_xy_m: np.ndarray) -> tuple[float, float]:
+    def _clearance(
+        self, a: np.ndarray, b: np.ndarray, people_xy_m: np.ndarray
+    ) -> tuple[float, float]:
         """Least clearance along the segment a-b to an obstacle, and to a person less ``people_m`` (may be < 0)."""
         n = max(2, int(math.ceil(np.hypot(*(b - a)) / (0.5 * self.costmap.resolution_m))) + 1)
         pts = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
-        return float(self.costmap.distance_at(pts).min()), float(self._people_clearance(pts, people_xy_m).min())
+        return float(self.costmap.distance_at(pts).min()), float(
+            self._people_clearance(pts, people_xy_m).min()
+        )
 
     def _people_clearance(self, xy: np.ndarray, people_xy_m: np.ndarray) -> np.ndarray:
         """Distance (K,) of points to the nearest person less ``people_m`` (inf without people), m."""
         if len(people_xy_m) == 0:
             return np.full(len(xy), np.inf)
-        return np.hypot(xy[:, None, 0] - people_xy_m[:, 0], xy[:, None, 1] - people_xy_m[:, 1]).min(1) - self.people_m
+        return (
+            np.hypot(xy[:, None, 0] - people_xy_m[:, 0], xy[:, None, 1] - people_xy_m[:, 1]).min(1)
+            - self.people_m
+        )
 
     def _shorten(self, xy: np.ndarray, people_xy_m: np.ndarray) -> np.ndarray:
         """Line-of-sight shortening (module docstring, step 3), keeping as far from people as the grid path did."""
@@ -171,9 +244,9 @@ class GlobalPlanner:
         keep, i, n = [0], 0, len(xy)
 
         def clear(j: int) -> bool:
-            need = max(min(float(d[i:j + 1].min()), self.clearance_m) - half, floor)
+            need = max(min(float(d[i : j + 1].min()), self.clearance_m) - half, floor)
             obstacle, person = self._clearance(xy[i], xy[j], people_xy_m)
-            return obstacle >= need and person >= min(float(dp[i:j + 1].min()), 0.0) - half
+            return obstacle >= need and person >= min(float(dp[i : j + 1].min()), 0.0) - half
 
         while i < n - 1:
             good, step = i + 1, 1
@@ -216,9 +289,14 @@ class GridGraph:
         self.shape = shape
         idx = np.arange(h * wd).reshape(h, wd)
         a, b, length = [], [], []
-        for dr, dc, step in ((0, 1, 1.0), (1, 0, 1.0), (1, 1, math.sqrt(2.0)), (1, -1, math.sqrt(2.0))):
-            p = idx[:h - dr, max(-dc, 0):wd - max(dc, 0)].ravel()
-            q = idx[dr:, max(dc, 0):wd + min(dc, 0)].ravel()
+        for dr, dc, step in (
+            (0, 1, 1.0),
+            (1, 0, 1.0),
+            (1, 1, math.sqrt(2.0)),
+            (1, -1, math.sqrt(2.0)),
+        ):
+            p = idx[: h - dr, max(-dc, 0) : wd - max(dc, 0)].ravel()
+            q = idx[dr:, max(dc, 0) : wd + min(dc, 0)].ravel()
             a += [p, q]
             b += [q, p]
             length += [np.full(len(p), step)] * 2
@@ -227,12 +305,16 @@ class GridGraph:
         self.a, self.b, self.length = a[order], b[order], length[order]
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.a, minlength=h * wd))])
 
-    def shortest(self, w: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np.ndarray | None:
+    def shortest(
+        self, w: np.ndarray, start: tuple[int, int], goal: tuple[int, int]
+    ) -> np.ndarray | None:
         """Cells (N, 2) row, col of the cheapest path on cell weights ``w`` (inf: blocked), or None; a move
         costs its length times the mean of its two cells' weights."""
         flat = w.ravel()
-        graph = csr_matrix((self.length * 0.5 * (flat[self.a] + flat[self.b]), self.b, self.indptr),
-                           shape=(flat.size, flat.size))
+        graph = csr_matrix(
+            (self.length * 0.5 * (flat[self.a] + flat[self.b]), self.b, self.indptr),
+            shape=(flat.size, flat.size),
+        )
         s, g = np.ravel_multi_index(start, self.shape), np.ravel_multi_index(goal, self.shape)
         dist, pred = dijkstra(graph, directed=True, indices=s, return_predecessors=True)
         if not np.isfinite(dist[g]):
@@ -250,12 +332,16 @@ def goal_problem(costmap: Costmap, goal_xy_m) -> str:
     if not inside[0]:
         lo = costmap.origin_xy_m
         hi = lo + np.array(costmap.shape[::-1]) * costmap.resolution_m
-        return (f"goal ({gx:.2f}, {gy:.2f}) lies outside the map "
-                f"(x {lo[0]:.2f} to {hi[0]:.2f}, y {lo[1]:.2f} to {hi[1]:.2f} m)")
+        return (
+            f"goal ({gx:.2f}, {gy:.2f}) lies outside the map "
+            f"(x {lo[0]:.2f} to {hi[0]:.2f}, y {lo[1]:.2f} to {hi[1]:.2f} m)"
+        )
     d = float(costmap.dist_m[r[0], c[0]])
     if d <= 0.0:
         return f"goal ({gx:.2f}, {gy:.2f}) lies inside an obstacle of the map"
     if d <= costmap.inscribed_m:
-        return (f"goal ({gx:.2f}, {gy:.2f}) lies {d:.2f} m from an obstacle of the map, closer than the "
-                f"robot's half width ({costmap.inscribed_m:.3f} m)")
+        return (
+            f"goal ({gx:.2f}, {gy:.2f}) lies {d:.2f} m from an obstacle of the map, closer than the "
+            f"robot's half width ({costmap.inscribed_m:.3f} m)"
+        )
     return ""

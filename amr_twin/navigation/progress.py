@@ -23,4 +23,3 @@ class ProgressChecker:
             self._ref = (t_s, x_m, y_m)
             return True
         return t_s - self._ref[0] <= self.time_allowance_s
-

@@ -23,7 +23,9 @@ from amr_twin.navigation.kinematics import Limits, arc_poses, rotation_rate, to_
 class Recovery(RecoveryBehaviour):
     """Base: a behaviour on a costmap, with the robot's footprint and limits."""
 
-    def __init__(self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, **settings):
+    def __init__(
+        self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, **settings
+    ):
         """``settings``: the class's own (``angle_rad``, ``duration_s``, ``distance_m``, ``speed_m_s``) for this one."""
         for key, value in settings.items():
             if not hasattr(type(self), key):
@@ -38,7 +40,9 @@ class Recovery(RecoveryBehaviour):
 
     def free(self, poses: np.ndarray) -> bool:
         """No footprint of ``poses`` (n, 3) touches a lethal cell."""
-        return bool((self.costmap.distance_at(to_map(poses, self.outline).reshape(-1, 2)) > 0.0).all())
+        return bool(
+            (self.costmap.distance_at(to_map(poses, self.outline).reshape(-1, 2)) > 0.0).all()
+        )
 
     def step(self, t_s: float, pose, velocity) -> Step:
         raise NotImplementedError
@@ -63,7 +67,9 @@ class Spin(Recovery):
         if left <= 0.05 or t_s - self.t0_s > 10.0:
             return Step(*self.limits.ramp(0.0, 0.0, *velocity, self.dt_s), done=True)
         w = rotation_rate(left, self.limits, velocity[1], self.dt_s)
-        ahead = np.column_stack([np.full(5, pose[0]), np.full(5, pose[1]), pose[2] + np.linspace(0.1, 0.4, 5)])
+        ahead = np.column_stack(
+            [np.full(5, pose[0]), np.full(5, pose[1]), pose[2] + np.linspace(0.1, 0.4, 5)]
+        )
         if not self.free(ahead):
             return Step(done=True, failed=True)
         return Step(*self.limits.ramp(0.0, w, *velocity, self.dt_s))

@@ -12,8 +12,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from amr_twin.base.registry import Registry
-from amr_twin.navigation.interfaces import (LocalController, LocalisationSource, Planner,
-                                           RecoveryBehaviour)
+from amr_twin.navigation.interfaces import (
+    LocalController,
+    LocalisationSource,
+    Planner,
+    RecoveryBehaviour,
+)
 
 __all__ = ["CONTROLLERS", "LOCALISATIONS", "PLANNERS", "RECOVERIES", "ROUND_ROBIN", "help_text"]
 
@@ -32,8 +36,12 @@ ROUND_ROBIN = ("clear_costmaps", "spin", "wait", "backup")
 
 def help_text(registry: Registry) -> str:
     """The names with the first line of each factory's docstring: ``a (what a is) or b (...)``."""
-    said = [f"{name} ({(registry.get(name).__doc__ or '').strip().splitlines()[0].rstrip('.')})"
-            if registry.get(name).__doc__ else name for name in registry]
+    said = [
+        f"{name} ({(registry.get(name).__doc__ or '').strip().splitlines()[0].rstrip('.')})"
+        if registry.get(name).__doc__
+        else name
+        for name in registry
+    ]
     return said[0] if len(said) == 1 else ", ".join(said[:-1]) + " or " + said[-1]
 
 
@@ -45,9 +53,17 @@ def _mppi(costmap, footprint, nav, seed: int = 0):
 
     m = nav.mppi.model_dump()
     limits, dt_s = Limits(**nav.limits.model_dump()), 1.0 / nav.navigator.controller_hz
-    return Mppi(costmap, footprint, limits, dt_s, **{k: v for k, v in m.items() if k != "weights"},
-                weights=m["weights"], person_radius_m=nav.people.person_radius_m,
-                prediction_s=nav.people.horizon_s, seed=seed)
+    return Mppi(
+        costmap,
+        footprint,
+        limits,
+        dt_s,
+        **{k: v for k, v in m.items() if k != "weights"},
+        weights=m["weights"],
+        person_radius_m=nav.people.person_radius_m,
+        prediction_s=nav.people.horizon_s,
+        seed=seed,
+    )
 
 
 @CONTROLLERS.register("rpp")
@@ -56,8 +72,9 @@ def _rpp(costmap, footprint, nav, seed: int = 0):
     from amr_twin.navigation.kinematics import Limits
     from amr_twin.navigation.rpp import RegulatedPurePursuit
 
-    return RegulatedPurePursuit(costmap, footprint, Limits(**nav.limits.model_dump()),
-                                1.0 / nav.navigator.controller_hz)
+    return RegulatedPurePursuit(
+        costmap, footprint, Limits(**nav.limits.model_dump()), 1.0 / nav.navigator.controller_hz
+    )
 
 
 @PLANNERS.register("grid")
@@ -71,10 +88,17 @@ def _grid(costmap, footprint, nav):
     p = nav.planner
     r_in = footprint.inscribed_radius_m
     people_m = nav.people.person_radius_m + nav.monitor.people_stop_m + r_in + p.people_margin_m
-    return GlobalPlanner(costmap, downsample=p.downsample, cost_weight=p.cost_weight,
-                         turn_room_m=footprint.circumscribed_radius_m,
-                         unmapped_pad_m=p.unmapped_pad_m, people_m=people_m, footprint=footprint,
-                         footprint_clearance_m=p.footprint_clearance_m, lead_m=p.lead_m)
+    return GlobalPlanner(
+        costmap,
+        downsample=p.downsample,
+        cost_weight=p.cost_weight,
+        turn_room_m=footprint.circumscribed_radius_m,
+        unmapped_pad_m=p.unmapped_pad_m,
+        people_m=people_m,
+        footprint=footprint,
+        footprint_clearance_m=p.footprint_clearance_m,
+        lead_m=p.lead_m,
+    )
 
 
 @LOCALISATIONS.register("truth")
@@ -105,8 +129,15 @@ class EkfSource(LocalisationSource):
         from amr_twin.estimation.ekf import EkfNode
 
         uwb = (twin.sensors.get("uwb") or twin.add_sensor("uwb")).cfg  # ranges to the anchors
-        twin.ekf = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True,
-                           use_uwb=True, uwb=uwb, initial_pose=twin.start_xy_yaw, bus=twin.bus)
+        twin.ekf = EkfNode(
+            cfg.ekf,
+            wheel_separation_m=cfg.wheel.separation_m,
+            use_imu=True,
+            use_uwb=True,
+            uwb=uwb,
+            initial_pose=twin.start_xy_yaw,
+            bus=twin.bus,
+        )
 
 
 @LOCALISATIONS.register("odom")

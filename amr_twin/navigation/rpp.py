@@ -32,15 +32,30 @@ from amr_twin.navigation.path_handler import PathHandler
 class RegulatedPurePursuit(LocalController):
     """nav2's Regulated Pure Pursuit (module docstring) on a :class:`Costmap`; it does not see people."""
 
-    def __init__(self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, *,
-                 lookahead_time_s: float = 1.5, min_lookahead_m: float = 0.4, max_lookahead_m: float = 1.0,
-                 min_radius_m: float = 0.9, cost_scaling_dist_m: float = 0.6, approach_dist_m: float = 0.8,
-                 min_approach_v_m_s: float = 0.1, rotate_min_angle_rad: float = math.radians(45.0),
-                 collision_time_s: float = 1.0):
+    def __init__(
+        self,
+        costmap: Costmap,
+        footprint: Footprint,
+        limits: Limits,
+        dt_s: float,
+        *,
+        lookahead_time_s: float = 1.5,
+        min_lookahead_m: float = 0.4,
+        max_lookahead_m: float = 1.0,
+        min_radius_m: float = 0.9,
+        cost_scaling_dist_m: float = 0.6,
+        approach_dist_m: float = 0.8,
+        min_approach_v_m_s: float = 0.1,
+        rotate_min_angle_rad: float = math.radians(45.0),
+        collision_time_s: float = 1.0,
+    ):
         self.costmap, self.limits, self.dt_s = costmap, limits, float(dt_s)
         self.outline = footprint.outline_xy_m(0.5 * costmap.resolution_m)
-        self.lookahead_time_s, self.min_lookahead_m, self.max_lookahead_m = lookahead_time_s, min_lookahead_m, \
-            max_lookahead_m
+        self.lookahead_time_s, self.min_lookahead_m, self.max_lookahead_m = (
+            lookahead_time_s,
+            min_lookahead_m,
+            max_lookahead_m,
+        )
         self.min_radius_m, self.cost_scaling_dist_m = min_radius_m, cost_scaling_dist_m
         self.approach_dist_m, self.min_approach_v_m_s = approach_dist_m, min_approach_v_m_s
         self.rotate_min_angle_rad, self.collision_time_s = rotate_min_angle_rad, collision_time_s
@@ -49,7 +64,7 @@ class RegulatedPurePursuit(LocalController):
     def carrot(self, path: PathHandler, lookahead_m: float) -> np.ndarray:
         """The plan point ``lookahead_m`` ahead of the progress (the goal beyond the end), (3,)."""
         ahead = path.ahead(lookahead_m + 0.1)
-        s = path.s_m[path.index:path.index + len(ahead)] - path.s_m[path.index]
+        s = path.s_m[path.index : path.index + len(ahead)] - path.s_m[path.index]
         i = min(int(np.searchsorted(s, lookahead_m)), len(ahead) - 1)
         return ahead[i] if i < len(ahead) - 1 or s[-1] >= lookahead_m else path.goal
 
@@ -66,7 +81,9 @@ class RegulatedPurePursuit(LocalController):
         x, y, yaw = (float(v) for v in pose)
         v_prev, w_prev = (float(v) for v in velocity)
         lim = self.limits
-        lookahead = min(max(abs(v_prev) * self.lookahead_time_s, self.min_lookahead_m), self.max_lookahead_m)
+        lookahead = min(
+            max(abs(v_prev) * self.lookahead_time_s, self.min_lookahead_m), self.max_lookahead_m
+        )
         cx, cy, _ = self.carrot(path, lookahead)
         c, s = math.cos(yaw), math.sin(yaw)
         lx, ly = c * (cx - x) + s * (cy - y), -s * (cx - x) + c * (cy - y)
@@ -74,7 +91,9 @@ class RegulatedPurePursuit(LocalController):
         threshold = math.radians(10.0) if self.rotating else self.rotate_min_angle_rad
         self.rotating = abs(alpha) > threshold and path.remaining_m > 0.3
         if self.rotating:
-            v, w = lim.ramp(0.0, rotation_rate(alpha, lim, w_prev, self.dt_s), v_prev, w_prev, self.dt_s)
+            v, w = lim.ramp(
+                0.0, rotation_rate(alpha, lim, w_prev, self.dt_s), v_prev, w_prev, self.dt_s
+            )
             return Twist2D(v, w, self.collides((x, y, yaw), v, w))
         d2 = max(lx * lx + ly * ly, 1e-6)
         kappa = 2.0 * ly / d2
@@ -82,7 +101,9 @@ class RegulatedPurePursuit(LocalController):
         radius = 1.0 / max(abs(kappa), 1e-9)
         if radius < self.min_radius_m:
             v *= radius / self.min_radius_m
-        clearance = float(self.costmap.distance_at(np.array([[x, y]]))[0]) - self.costmap.inscribed_m
+        clearance = (
+            float(self.costmap.distance_at(np.array([[x, y]]))[0]) - self.costmap.inscribed_m
+        )
         if clearance < self.cost_scaling_dist_m:
             v *= max(clearance, 0.0) / self.cost_scaling_dist_m
         if path.remaining_m < self.approach_dist_m:

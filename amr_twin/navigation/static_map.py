@@ -48,7 +48,6 @@ class StaticMap:
         return self.occupied.shape
 
 
-
 def obstacle_boxes(model, z_low_m: float, z_high_m: float) -> Footprints:
     """The world geoms of a compiled ``model`` whose height range meets ``[z_low_m, z_high_m]``.
 
@@ -60,8 +59,11 @@ def obstacle_boxes(model, z_low_m: float, z_high_m: float) -> Footprints:
     mujoco.mj_forward(model, data)
     centre, half, yaw, names = [], [], [], []
     for g in range(model.ngeom):
-        if model.geom_group[g] != WORLD_GROUP or model.geom_bodyid[g] != 0 \
-                or model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE:
+        if (
+            model.geom_group[g] != WORLD_GROUP
+            or model.geom_bodyid[g] != 0
+            or model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
+        ):
             continue
         R = data.geom_xmat[g].reshape(3, 3)
         pos = data.geom_xpos[g]
@@ -80,11 +82,14 @@ def obstacle_boxes(model, z_low_m: float, z_high_m: float) -> Footprints:
         half.append(np.asarray(h, float))
         yaw.append(a)
         names.append(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}")
-    return Footprints(np.array(centre).reshape(-1, 2), np.array(half).reshape(-1, 2), np.array(yaw), tuple(names))
+    return Footprints(
+        np.array(centre).reshape(-1, 2), np.array(half).reshape(-1, 2), np.array(yaw), tuple(names)
+    )
 
 
-def rasterise(boxes: Footprints, resolution_m: float, origin_xy_m: tuple[float, float],
-              shape: tuple[int, int]) -> np.ndarray:
+def rasterise(
+    boxes: Footprints, resolution_m: float, origin_xy_m: tuple[float, float], shape: tuple[int, int]
+) -> np.ndarray:
     """Cells (rows, cols) overlapped by any of ``boxes`` (a cell's centre within the box grown by half a cell)."""
     occ = np.zeros(shape, bool)
     res = resolution_m
@@ -106,17 +111,27 @@ def rasterise(boxes: Footprints, resolution_m: float, origin_xy_m: tuple[float, 
     return occ
 
 
-def world_map(model, resolution_m: float, z_low_m: float, z_high_m: float, source: str = "world") -> StaticMap:
+def world_map(
+    model, resolution_m: float, z_low_m: float, z_high_m: float, source: str = "world"
+) -> StaticMap:
     """The true map of the world of a compiled ``model``: its obstacles in the robot's height range."""
     boxes = obstacle_boxes(model, z_low_m, z_high_m)
     if not len(boxes.names):
         raise ValueError(f"{source}: no obstacle in the robot's height range to make a map of")
-    ext = np.abs(np.cos(boxes.yaw_rad))[:, None] * boxes.half_xy_m + \
-        np.abs(np.sin(boxes.yaw_rad))[:, None] * boxes.half_xy_m[:, ::-1]
+    ext = (
+        np.abs(np.cos(boxes.yaw_rad))[:, None] * boxes.half_xy_m
+        + np.abs(np.sin(boxes.yaw_rad))[:, None] * boxes.half_xy_m[:, ::-1]
+    )
     lo = (boxes.centre_xy_m - ext).min(0) - MARGIN_M
     hi = (boxes.centre_xy_m + ext).max(0) + MARGIN_M
-    origin = (float(np.floor(lo[0] / resolution_m) * resolution_m), float(np.floor(lo[1] / resolution_m) * resolution_m))
-    shape = (int(math.ceil((hi[1] - origin[1]) / resolution_m)), int(math.ceil((hi[0] - origin[0]) / resolution_m)))
+    origin = (
+        float(np.floor(lo[0] / resolution_m) * resolution_m),
+        float(np.floor(lo[1] / resolution_m) * resolution_m),
+    )
+    shape = (
+        int(math.ceil((hi[1] - origin[1]) / resolution_m)),
+        int(math.ceil((hi[0] - origin[0]) / resolution_m)),
+    )
     occ = rasterise(boxes, resolution_m, origin, shape)
     return StaticMap(occ, np.zeros(shape, bool), float(resolution_m), origin, source)
 
@@ -127,7 +142,11 @@ def yaml_map(path: str | Path) -> StaticMap:
 
     grid = load_map(path)
     if abs(grid.origin_xyyaw[2]) > 1e-9:
-        raise MapError(f"{path}: origin yaw {grid.origin_xyyaw[2]} must be 0 for navigation (as nav2's costmap)")
+        raise MapError(
+            f"{path}: origin yaw {grid.origin_xyyaw[2]} must be 0 for navigation (as nav2's costmap)"
+        )
     occ = grid.occupied[::-1].copy()
     unknown = ~(occ | grid.free[::-1])
-    return StaticMap(occ, unknown, grid.resolution_m, (grid.origin_xyyaw[0], grid.origin_xyyaw[1]), str(path))
+    return StaticMap(
+        occ, unknown, grid.resolution_m, (grid.origin_xyyaw[0], grid.origin_xyyaw[1]), str(path)
+    )

@@ -38,12 +38,29 @@ class Yielding:
     docs/explanation/navigation.md#amr_twinnavigationyieldingyielding.
     """
 
-    def __init__(self, footprint, limits, dt_s: float, *, person_radius_m: float = 0.25, stop_m: float = 0.3,
-                 margin_m: float = 0.3, horizon_s: float = 2.5, step_s: float = 0.1, pad_m: float = 0.05,
-                 min_speed_m_s: float = 0.25, speeds_m_s: tuple = (-0.25, -0.12, 0.0, 0.15, 0.3, 0.5),
-                 turns_rad_s: tuple = (-0.6, -0.3, 0.0, 0.3, 0.6), standoff_m: float = 0.8, standoff_s: float = 3.0,
-                 back_s: float = 2.0, courtesy_m: float = 0.8, courtesy_s: float = 3.0,
-                 courtesy_forget_s: float = 30.0, stop_lag_s: float = 0.0):
+    def __init__(
+        self,
+        footprint,
+        limits,
+        dt_s: float,
+        *,
+        person_radius_m: float = 0.25,
+        stop_m: float = 0.3,
+        margin_m: float = 0.3,
+        horizon_s: float = 2.5,
+        step_s: float = 0.1,
+        pad_m: float = 0.05,
+        min_speed_m_s: float = 0.25,
+        speeds_m_s: tuple = (-0.25, -0.12, 0.0, 0.15, 0.3, 0.5),
+        turns_rad_s: tuple = (-0.6, -0.3, 0.0, 0.3, 0.6),
+        standoff_m: float = 0.8,
+        standoff_s: float = 3.0,
+        back_s: float = 2.0,
+        courtesy_m: float = 0.8,
+        courtesy_s: float = 3.0,
+        courtesy_forget_s: float = 30.0,
+        stop_lag_s: float = 0.0,
+    ):
         self.footprint, self.limits, self.dt_s = footprint, limits, dt_s
         self.person_radius_m, self.stop_m, self.margin_m = person_radius_m, stop_m, margin_m
         self.n = max(1, int(round(horizon_s / step_s)))
@@ -51,7 +68,11 @@ class Yielding:
         v, w = np.meshgrid(np.asarray(speeds_m_s, float), np.asarray(turns_rad_s, float))
         self._grid = np.column_stack([v.ravel(), w.ravel()])
         self.standoff_m, self.standoff_s, self.back_s = standoff_m, standoff_s, back_s
-        self.courtesy_m, self.courtesy_s, self.courtesy_forget_s = courtesy_m, courtesy_s, courtesy_forget_s
+        self.courtesy_m, self.courtesy_s, self.courtesy_forget_s = (
+            courtesy_m,
+            courtesy_s,
+            courtesy_forget_s,
+        )
         self.stop_lag_s = stop_lag_s
         self._courtesy: list[CourtesyWait] = []
         """The waits for someone standing: ``courtesy_s`` after the robot stood it passes, ``courtesy_forget_s``
@@ -66,13 +87,19 @@ class Yielding:
         lim, dt = self.limits, self.step_s
         c = len(cmds)
         v, w = np.full(c, float(vel[0])), np.full(c, float(vel[1]))
-        x, y, yaw = np.full(c, float(pose[0])), np.full(c, float(pose[1])), np.full(c, float(pose[2]))
+        x, y, yaw = (
+            np.full(c, float(pose[0])),
+            np.full(c, float(pose[1])),
+            np.full(c, float(pose[2])),
+        )
         out = np.empty((c, self.n, 3))
         for k in range(self.n):
             slowing = np.abs(cmds[:, 0]) < np.abs(v)
             dv = np.where(slowing, lim.decel_m_s2, lim.accel_m_s2) * dt
             v = v + np.clip(cmds[:, 0] - v, -dv, dv)
-            w = w + np.clip(cmds[:, 1] - w, -lim.angular_accel_rad_s2 * dt, lim.angular_accel_rad_s2 * dt)
+            w = w + np.clip(
+                cmds[:, 1] - w, -lim.angular_accel_rad_s2 * dt, lim.angular_accel_rad_s2 * dt
+            )
             yaw = yaw + w * dt
             x, y = x + v * dt * np.cos(yaw), y + v * dt * np.sin(yaw)
             out[:, k, 0], out[:, k, 1], out[:, k, 2] = x, y, yaw
@@ -88,7 +115,7 @@ class Yielding:
         """Least gap (C, n) from the footprint at each pose to the people walking on, m: negative inside it, the
         deeper the centre the more (a person walking through the robot's middle is worse than past its edge)."""
         t = now_s + self.step_s * np.arange(1, self.n + 1)
-        future = people.at(t, self.n * self.step_s).transpose(1, 0, 2)          # (n, N, 2)
+        future = people.at(t, self.n * self.step_s).transpose(1, 0, 2)  # (n, N, 2)
         local = self._local(poses, np.broadcast_to(future, poses.shape[:2] + future.shape[1:]))
         return self._signed_m(local).min(-1) - self.person_radius_m
 
@@ -96,7 +123,10 @@ class Yielding:
         """Distance (...) of points ``local`` (..., 2) in ``base_link`` to the footprint, minus their depth inside."""
         xy = local.reshape(-1, 2)
         fp = self.footprint
-        depth = np.minimum(np.minimum(xy[:, 0] - fp.x_min_m, fp.x_max_m - xy[:, 0]), fp.half_width_m - np.abs(xy[:, 1]))
+        depth = np.minimum(
+            np.minimum(xy[:, 0] - fp.x_min_m, fp.x_max_m - xy[:, 0]),
+            fp.half_width_m - np.abs(xy[:, 1]),
+        )
         return np.where(depth > 0.0, -depth, fp.distance_m(xy)).reshape(local.shape[:-1])
 
     def _lane_gaps(self, poses: np.ndarray, people: People) -> np.ndarray:
@@ -105,7 +135,9 @@ class Yielding:
         if len(people) == 0:
             return np.full(len(poses), np.inf)
         way = np.arange(0.0, self.n * self.step_s + 1e-9, 0.1)
-        lane = (people.xy_m[:, None, :] + people.v_m_s[:, None, :] * way[None, :, None]).reshape(-1, 2)
+        lane = (people.xy_m[:, None, :] + people.v_m_s[:, None, :] * way[None, :, None]).reshape(
+            -1, 2
+        )
         last = poses[:, -1:, :]
         local = self._local(last, np.broadcast_to(lane, (len(poses), 1) + lane.shape))
         return self._signed_m(local).min(-1)[:, 0] - self.person_radius_m
@@ -127,20 +159,33 @@ class Yielding:
     def _blocked(self, poses: np.ndarray, points_xy_m: np.ndarray, people: People) -> np.ndarray:
         """(C, n) bool: from this step on the footprint grown by ``pad_m`` has reached a return no person's."""
         if len(points_xy_m) and len(people):
-            near = np.hypot(*(points_xy_m[:, None, :] - people.xy_m[None]).transpose(2, 0, 1)).min(1)
+            near = np.hypot(*(points_xy_m[:, None, :] - people.xy_m[None]).transpose(2, 0, 1)).min(
+                1
+            )
             points_xy_m = points_xy_m[near > self.person_radius_m + 0.1]
         if len(points_xy_m) == 0:
             return np.zeros(poses.shape[:2], bool)
         reach = self.footprint.circumscribed_radius_m + self.pad_m + 1.0
         start = poses[0, 0, :2]
-        points_xy_m = points_xy_m[np.hypot(*(points_xy_m - start).T) <= reach + self.n * self.step_s * 0.8]
+        points_xy_m = points_xy_m[
+            np.hypot(*(points_xy_m - start).T) <= reach + self.n * self.step_s * 0.8
+        ]
         if len(points_xy_m) == 0:
             return np.zeros(poses.shape[:2], bool)
-        local = self._local(poses, np.broadcast_to(points_xy_m, poses.shape[:2] + points_xy_m.shape))
-        hit = self.footprint.padded(self.pad_m).contains(local.reshape(-1, 2)).reshape(local.shape[:-1]).any(-1)
+        local = self._local(
+            poses, np.broadcast_to(points_xy_m, poses.shape[:2] + points_xy_m.shape)
+        )
+        hit = (
+            self.footprint.padded(self.pad_m)
+            .contains(local.reshape(-1, 2))
+            .reshape(local.shape[:-1])
+            .any(-1)
+        )
         return np.maximum.accumulate(hit, axis=1)
 
-    def command(self, now_s: float, pose, vel, wanted, filtered, people: People, points_xy_m: np.ndarray):
+    def command(
+        self, now_s: float, pose, vel, wanted, filtered, people: People, points_xy_m: np.ndarray
+    ):
         """The command to drive instead of ``filtered`` (the monitor's ``(v, w)``; ``wanted`` the controller's),
         or None to drive it: ``pose`` (x_m, y_m, yaw_rad) and returns ``points_xy_m`` (P, 2) in ``map``,
         ``vel`` the last command."""
@@ -151,31 +196,40 @@ class Yielding:
         walking = (np.hypot(*people.v_m_s.T) >= self.min_speed_m_s) & ~waiting
         grid = self._grid
         backing = now_s < self._back_until
-        if not backing and not walking.any() and not waiting.any() and self._courtesy_wait(now_s, pose, vel, filtered,
-                                                                                           people):
-            self._standing_since = None                               # waiting by choice, not a standoff
+        if (
+            not backing
+            and not walking.any()
+            and not waiting.any()
+            and self._courtesy_wait(now_s, pose, vel, filtered, people)
+        ):
+            self._standing_since = None  # waiting by choice, not a standoff
             self.yields += 1
             return 0.0, 0.0
         if not backing and not walking.any() and not waiting.any():
             if not self._standoff(now_s, pose, vel, people):
                 return None
             self._back_until, backing = now_s + self.back_s, True
-        if backing:                                                   # back off, straight when that is as good
-            cmds, wanted = np.vstack([[0.0, 0.0], grid[grid[:, 0] < 0.0]]), (self.limits.min_v_m_s, 0.0)
+        if backing:  # back off, straight when that is as good
+            cmds, wanted = (
+                np.vstack([[0.0, 0.0], grid[grid[:, 0] < 0.0]]),
+                (self.limits.min_v_m_s, 0.0),
+            )
         else:
             cmds = np.vstack([np.asarray(filtered, float)[None], grid])
         poses = self._rollout(pose, vel, cmds)
         blocked = self._blocked(poses, np.asarray(points_xy_m, float).reshape(-1, 2), people)
         stuck, k = poses.copy(), np.argmax(blocked, axis=1)
-        for i in np.flatnonzero(blocked.any(1)):                      # a blocked roll-out stands where it was cut
-            stuck[i, k[i]:] = poses[i, k[i] - 1] if k[i] > 0 else np.array(pose, float)
+        for i in np.flatnonzero(blocked.any(1)):  # a blocked roll-out stands where it was cut
+            stuck[i, k[i] :] = poses[i, k[i] - 1] if k[i] > 0 else np.array(pose, float)
         others = People(people.t_s, people.xy_m[~waiting], people.v_m_s[~waiting])
-        gaps = self._gaps(stuck, others, now_s).min(1) if len(others) else np.full(len(cmds), np.inf)
+        gaps = (
+            self._gaps(stuck, others, now_s).min(1) if len(others) else np.full(len(cmds), np.inf)
+        )
         if waiting.any():
             lanes = People(people.t_s, people.xy_m[waiting], people.intent_m_s[waiting])
             gaps = np.minimum(gaps, self._lane_gaps(stuck, lanes))
         if not backing and gaps[0] >= self.stop_m:
-            return None                                               # the command keeps clear of everyone
+            return None  # the command keeps clear of everyone
         score = np.minimum(gaps, self.stop_m + self.margin_m)
         best = score.max()
         if best <= score[0] + 1e-6:
@@ -193,20 +247,27 @@ class Yielding:
         stops later, at the line); once stopping for someone there it stands until it has stood ``courtesy_s``."""
         poses = self._rollout(pose, vel, np.asarray(filtered, float)[None])
         xy = people.xy_m
-        gaps = self._signed_m(self._local(poses, np.broadcast_to(xy, poses.shape[:2] + xy.shape)))[0]   # (n, N)
+        gaps = self._signed_m(self._local(poses, np.broadcast_to(xy, poses.shape[:2] + xy.shape)))[
+            0
+        ]  # (n, N)
         way = gaps.min(0)
         now = self._signed_m(self._local(np.array(pose, float)[None, None], xy[None, None]))[0, 0]
         near = (way - self.person_radius_m < self.courtesy_m) & (now > way + 0.05)
         steps = np.diff(np.vstack([np.asarray(pose, float)[None, :2], poses[0, :, :2]]), axis=0)
-        path = np.cumsum(np.hypot(steps[:, 0], steps[:, 1]))                   # (n,) along the way, m
+        path = np.cumsum(np.hypot(steps[:, 0], steps[:, 1]))  # (n,) along the way, m
         inside = gaps - self.person_radius_m < self.courtesy_m
         reach = np.where(inside.any(0), path[np.argmax(inside, axis=0)], np.inf)
         v = abs(float(vel[0]))
         due = (now - self.person_radius_m < self.courtesy_m) | (
-            reach <= v * self.stop_lag_s + v * v / (2.0 * self.limits.decel_m_s2) + v * self.dt_s)
+            reach <= v * self.stop_lag_s + v * v / (2.0 * self.limits.decel_m_s2) + v * self.dt_s
+        )
         stood = now_s if v < 1e-3 else None
-        self._courtesy = [c for c in self._courtesy if now_s - (c.began_s if c.stood_s is None else c.stood_s)
-                          < self.courtesy_s + self.courtesy_forget_s]
+        self._courtesy = [
+            c
+            for c in self._courtesy
+            if now_s - (c.began_s if c.stood_s is None else c.stood_s)
+            < self.courtesy_s + self.courtesy_forget_s
+        ]
         for j in np.flatnonzero(near):
             seen = [c for c in self._courtesy if np.hypot(*(c.xy_m - xy[j])) < 0.5]
             if not seen:
@@ -226,7 +287,9 @@ class Yielding:
         c, s = math.cos(pose[2]), math.sin(pose[2])
         d = people.xy_m - np.asarray(pose[:2], float)
         local = np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])
-        near = (self.footprint.distance_m(local) - self.person_radius_m < self.standoff_m) & (local[:, 0] > 0.0)
+        near = (self.footprint.distance_m(local) - self.person_radius_m < self.standoff_m) & (
+            local[:, 0] > 0.0
+        )
         if not near.any() or abs(vel[0]) > 0.02:
             self._standing_since = None
             return False

@@ -63,22 +63,40 @@ def statuses(twin) -> list[tuple[int, str, int, str, str, dict]]:
         values = {k: v for k, v in c.as_dict().items() if k != "robot_pose"}
         values["robot_parts"] = ",".join(c.robot_parts)
         values.update({f"robot_{k}": v for k, v in c.as_dict()["robot_pose"].items()})
-        out.append((int(round(c.t_s * 1e9)), "/twin/collisions", ERROR, "twin/collision",
-                    f"{', '.join(c.robot_parts)} hit {c.hit}", values))
+        out.append(
+            (
+                int(round(c.t_s * 1e9)),
+                "/twin/collisions",
+                ERROR,
+                "twin/collision",
+                f"{', '.join(c.robot_parts)} hit {c.hit}",
+                values,
+            )
+        )
     for f in _faults(twin):
         d = f.describe()
         values = {k: v for k, v in d.items() if k != "description" and v is not None}
         for t_s, level, what in ((f.t_s, WARN, "injected"), (f.until_s, OK, "cleared")):
             if t_s is not None:
-                out.append((int(round(t_s * 1e9)), "/twin/faults", level, f"twin/fault/{f.name}",
-                            f"{f.text} {what}: {d['description']}", values))
+                out.append(
+                    (
+                        int(round(t_s * 1e9)),
+                        "/twin/faults",
+                        level,
+                        f"twin/fault/{f.name}",
+                        f"{f.text} {what}: {d['description']}",
+                        values,
+                    )
+                )
     return out
 
 
 def mcap_items(twin, order: int) -> list[tuple[int, int, str, str, bytes]]:
     """``(t_ns, order, topic, type, CDR payload)`` of the twin's collisions and faults (see the module notes)."""
-    return [(t_ns, order + i, topic, DIAGNOSTIC_ARRAY, _diagnostic(t_ns, level, name, message, values))
-            for i, (t_ns, topic, level, name, message, values) in enumerate(statuses(twin))]
+    return [
+        (t_ns, order + i, topic, DIAGNOSTIC_ARRAY, _diagnostic(t_ns, level, name, message, values))
+        for i, (t_ns, topic, level, name, message, values) in enumerate(statuses(twin))
+    ]
 
 
 def log_events(rec, twin) -> None:
@@ -91,11 +109,18 @@ def log_events(rec, twin) -> None:
     points = []
     for c in _collisions(twin):
         rec.set_time(TIMELINE, duration=float(c.t_s))
-        rec.log("events/collisions", rr.TextLog(
-            f"collision: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m, "
-            f"until {c.until_s:.2f} s, peak force {c.peak_force_n:.0f} N", level="WARN"))
+        rec.log(
+            "events/collisions",
+            rr.TextLog(
+                f"collision: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m, "
+                f"until {c.until_s:.2f} s, peak force {c.peak_force_n:.0f} N",
+                level="WARN",
+            ),
+        )
         points.append((c.x_m, c.y_m, c.z_m))
-        rec.log("world/collisions", rr.Points3D(np.array(points), colors=[(230, 30, 30)], radii=[0.05]))
+        rec.log(
+            "world/collisions", rr.Points3D(np.array(points), colors=[(230, 30, 30)], radii=[0.05])
+        )
     for f in _faults(twin):
         for t_s, what in ((f.t_s, "injected"), (f.until_s, "cleared")):
             if t_s is not None:

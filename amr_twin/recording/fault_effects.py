@@ -36,7 +36,8 @@ def fault_effects(injector: FaultInjector, series: RunSeries) -> list[dict]:
             pub_after = pub[pub[:, 0] >= fault.t_s] if len(pub) else pub
             peak = rpm[after][np.argmax(np.abs(rpm[after]))] if after.any() else float("nan")
             wheels[name] = {
-                "true_rpm_before": _mean(rpm[before]), "true_rpm_end": _mean(rpm[end]),
+                "true_rpm_before": _mean(rpm[before]),
+                "true_rpm_end": _mean(rpm[end]),
                 "true_rpm_peak_after": round(float(peak), 3),
                 "published_after": int(len(pub_after)),
                 "last_published_rpm": round(float(pub[-1, 1]), 3) if len(pub) else None,
@@ -44,8 +45,12 @@ def fault_effects(injector: FaultInjector, series: RunSeries) -> list[dict]:
                 "pwm_counts_end": int(series.pwm_counts[-1, w]),
             }
         xy = series.pose[after, :2]
-        effect = {"wheels": wheels,
-                  "moved_after_m": round(float(np.sum(np.hypot(*np.diff(xy, axis=0).T))), 4) if len(xy) > 1 else 0.0}
+        effect = {
+            "wheels": wheels,
+            "moved_after_m": round(float(np.sum(np.hypot(*np.diff(xy, axis=0).T))), 4)
+            if len(xy) > 1
+            else 0.0,
+        }
         for topic in ("scan", "imu/data_raw"):
             if topic in injector.sensor_times:
                 times = np.array(injector.sensor_times[topic]) * 1e-6

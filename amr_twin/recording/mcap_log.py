@@ -22,9 +22,24 @@ from amr_twin.base.atomic_file import replacing
 from amr_twin.recording.event_log import mcap_items as event_items
 from amr_twin.ros.geometry_messages import TFMessage
 from amr_twin.ros.messages import String
-from amr_twin.ros.ros2_cdr import (encode_battery_state, encode_clock, encode_float64, encode_float64_multi_array, encode_float64_multi_array_msg,
-                       encode_imu, encode_joint_state, encode_laser_scan, encode_magnetic_field, encode_odometry,
-                       encode_pose_array, encode_pose_with_covariance_stamped, encode_range, encode_string, encode_tf_message, encode_twist)
+from amr_twin.ros.ros2_cdr import (
+    encode_battery_state,
+    encode_clock,
+    encode_float64,
+    encode_float64_multi_array,
+    encode_float64_multi_array_msg,
+    encode_imu,
+    encode_joint_state,
+    encode_laser_scan,
+    encode_magnetic_field,
+    encode_odometry,
+    encode_pose_array,
+    encode_pose_with_covariance_stamped,
+    encode_range,
+    encode_string,
+    encode_tf_message,
+    encode_twist,
+)
 from amr_twin.ros.nav_messages import encode_occupancy_grid, encode_path, encode_polygon_stamped
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 
@@ -39,8 +54,10 @@ LATCHED = ("/tf_static", "/robot_description", "/map")
 
 
 def _encode_request(req) -> bytes:
-    return encode_float64_multi_array([float(req.motionL), float(req.speedL), float(req.motionR),
-                                       float(req.speedR)], REQUEST_FIELDS)
+    return encode_float64_multi_array(
+        [float(req.motionL), float(req.speedL), float(req.motionR), float(req.speedR)],
+        REQUEST_FIELDS,
+    )
 
 
 # bus topic -> (ROS 2 topic, type, encoder); the order breaks ties of equal log times
@@ -48,9 +65,16 @@ BUS_TOPICS = {
     "odom": ("/odom", "nav_msgs/Odometry", encode_odometry),
     "tf": ("/tf", "tf2_msgs/TFMessage", encode_tf_message),
     "cmd_vel": ("/cmd_vel", "geometry_msgs/Twist", encode_twist),
-    "wheel_Command_Service/request": ("/wheel_Command_Service/request", "std_msgs/Float64MultiArray",
-                                      _encode_request),
-    "wheel_Command": ("/wheel_Command", "std_msgs/Float64MultiArray", encode_float64_multi_array_msg),
+    "wheel_Command_Service/request": (
+        "/wheel_Command_Service/request",
+        "std_msgs/Float64MultiArray",
+        _encode_request,
+    ),
+    "wheel_Command": (
+        "/wheel_Command",
+        "std_msgs/Float64MultiArray",
+        encode_float64_multi_array_msg,
+    ),
     "wheel0_Vel": ("/wheel0_Vel", "std_msgs/Float64", encode_float64),
     "wheel1_Vel": ("/wheel1_Vel", "std_msgs/Float64", encode_float64),
     "scan": ("/scan", "sensor_msgs/LaserScan", encode_laser_scan),
@@ -59,13 +83,23 @@ BUS_TOPICS = {
     "uwb/range": ("/uwb/range", "sensor_msgs/Range", encode_range),
     "ground_truth/odom": ("/ground_truth/odom", "nav_msgs/Odometry", encode_odometry),
     "odometry/filtered": ("/odometry/filtered", "nav_msgs/Odometry", encode_odometry),
-    "map_match/pose": ("/map_match/pose", "geometry_msgs/PoseWithCovarianceStamped",
-                       encode_pose_with_covariance_stamped),
+    "map_match/pose": (
+        "/map_match/pose",
+        "geometry_msgs/PoseWithCovarianceStamped",
+        encode_pose_with_covariance_stamped,
+    ),
     "plan": ("/plan", "nav_msgs/Path", encode_path),
     "map": ("/map", "nav_msgs/OccupancyGrid", encode_occupancy_grid),
-    "local_costmap/costmap": ("/local_costmap/costmap", "nav_msgs/OccupancyGrid", encode_occupancy_grid),
-    "local_costmap/published_footprint": ("/local_costmap/published_footprint", "geometry_msgs/PolygonStamped",
-                                          encode_polygon_stamped),
+    "local_costmap/costmap": (
+        "/local_costmap/costmap",
+        "nav_msgs/OccupancyGrid",
+        encode_occupancy_grid,
+    ),
+    "local_costmap/published_footprint": (
+        "/local_costmap/published_footprint",
+        "geometry_msgs/PolygonStamped",
+        encode_polygon_stamped,
+    ),
     "actors/poses": ("/actors/poses", "geometry_msgs/PoseArray", encode_pose_array),
 }
 
@@ -78,20 +112,53 @@ def _state_items(capture, k0: int) -> list[tuple[int, int, str, str, bytes]]:
     for i, t_us in enumerate(a["t_us"]):
         t = t_us * 1000
         items.append((t, k, "/clock", "rosgraph_msgs/Clock", encode_clock(ros_state.clock(t_us))))
-        items.append((t, k + 1, "/twin/ground_truth", "nav_msgs/Odometry", encode_odometry(
-            ros_state.ground_truth(t_us, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i]))))
+        items.append(
+            (
+                t,
+                k + 1,
+                "/twin/ground_truth",
+                "nav_msgs/Odometry",
+                encode_odometry(
+                    ros_state.ground_truth(
+                        t_us, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i]
+                    )
+                ),
+            )
+        )
         if t_us % JOINT_STATE_PERIOD_US == 0:
-            items.append((t, k + 2, "/joint_states", "sensor_msgs/JointState", encode_joint_state(
-                ros_state.joint_state(t_us, st.joint_names, a["q"][i], a["qd"][i]))))
-            items.append((t, k + 3, "/tf", "tf2_msgs/TFMessage", encode_tf_message(
-                ros_state.link_transforms(t_us, st.child_frames, a["link_pos"][i], a["link_quat"][i]))))
+            items.append(
+                (
+                    t,
+                    k + 2,
+                    "/joint_states",
+                    "sensor_msgs/JointState",
+                    encode_joint_state(
+                        ros_state.joint_state(t_us, st.joint_names, a["q"][i], a["qd"][i])
+                    ),
+                )
+            )
+            items.append(
+                (
+                    t,
+                    k + 3,
+                    "/tf",
+                    "tf2_msgs/TFMessage",
+                    encode_tf_message(
+                        ros_state.link_transforms(
+                            t_us, st.child_frames, a["link_pos"][i], a["link_quat"][i]
+                        )
+                    ),
+                )
+            )
         k += 4
     return items
 
 
-_QOS = ("- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n"
-        "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n"
-        "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n  avoid_ros_namespace_conventions: false")
+_QOS = (
+    "- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n"
+    "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n"
+    "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n  avoid_ros_namespace_conventions: false"
+)
 
 
 def qos_profile(topic: str) -> str:
@@ -120,25 +187,75 @@ def write_mcap(capture, series, path: Path) -> Path:
             items.append((int(t_us) * 1000, k, topic, typ, encode(msg)))
             k += 1
     t_ns = np.round(series.t_s * 1e9).astype(np.int64).tolist()
-    true_rpm, pwm, current = series.true_rpm.tolist(), series.pwm_counts.tolist(), series.current_a.tolist()
-    volts, amps, soc = series.battery_v.tolist(), series.battery_a.tolist(), series.battery_soc.tolist()
+    true_rpm, pwm, current = (
+        series.true_rpm.tolist(),
+        series.pwm_counts.tolist(),
+        series.current_a.tolist(),
+    )
+    volts, amps, soc = (
+        series.battery_v.tolist(),
+        series.battery_a.tolist(),
+        series.battery_soc.tolist(),
+    )
     capacity = capture.twin.cfg.battery.capacity_ah
     for i, t in enumerate(t_ns):
-        items.append((t, k, "/twin/true_rpm", "std_msgs/Float64MultiArray",
-                      encode_float64_multi_array(true_rpm[i])))
-        items.append((t, k + 1, "/twin/pwm_counts", "std_msgs/Float64MultiArray",
-                      encode_float64_multi_array(pwm[i])))
-        items.append((t, k + 2, "/twin/motor_current", "std_msgs/Float64MultiArray",
-                      encode_float64_multi_array(current[i])))
+        items.append(
+            (
+                t,
+                k,
+                "/twin/true_rpm",
+                "std_msgs/Float64MultiArray",
+                encode_float64_multi_array(true_rpm[i]),
+            )
+        )
+        items.append(
+            (
+                t,
+                k + 1,
+                "/twin/pwm_counts",
+                "std_msgs/Float64MultiArray",
+                encode_float64_multi_array(pwm[i]),
+            )
+        )
+        items.append(
+            (
+                t,
+                k + 2,
+                "/twin/motor_current",
+                "std_msgs/Float64MultiArray",
+                encode_float64_multi_array(current[i]),
+            )
+        )
         if i % BATTERY_EVERY_ROWS == 0:
-            items.append((t, k + 3, "/battery_state", "sensor_msgs/BatteryState", encode_battery_state(
-                t, volts[i], -amps[i], soc[i] * capacity, capacity, soc[i])))
+            items.append(
+                (
+                    t,
+                    k + 3,
+                    "/battery_state",
+                    "sensor_msgs/BatteryState",
+                    encode_battery_state(
+                        t, volts[i], -amps[i], soc[i] * capacity, capacity, soc[i]
+                    ),
+                )
+            )
         k += 4
     items += _state_items(capture, k)
     bus = capture.twin.bus
-    items.append((0, -2, "/robot_description", "std_msgs/String", encode_string(String(capture.twin.urdf))))
-    items.append((0, -1, "/tf_static", "tf2_msgs/TFMessage", encode_tf_message(TFMessage(bus.static_transforms()))))
-    items += event_items(capture.twin, len(items))  # /twin/collisions, /twin/faults (amr_twin/recording/event_log.py)
+    items.append(
+        (0, -2, "/robot_description", "std_msgs/String", encode_string(String(capture.twin.urdf)))
+    )
+    items.append(
+        (
+            0,
+            -1,
+            "/tf_static",
+            "tf2_msgs/TFMessage",
+            encode_tf_message(TFMessage(bus.static_transforms())),
+        )
+    )
+    items += event_items(
+        capture.twin, len(items)
+    )  # /twin/collisions, /twin/faults (amr_twin/recording/event_log.py)
     items.sort(key=lambda it: (it[0], it[1]))
     with replacing(path) as tmp:
         with open(tmp, "wb") as f:
@@ -148,15 +265,20 @@ def write_mcap(capture, series, path: Path) -> Path:
             schemas, channels, seq = {}, {}, collections.Counter()
             for _t, _k, topic, typ, _data in items:
                 if typ not in schemas:
-                    schemas[typ] = writer.register_schema(name=ros2_type(typ), encoding="ros2msg",
-                                                          data=msgdef(typ).encode())
+                    schemas[typ] = writer.register_schema(
+                        name=ros2_type(typ), encoding="ros2msg", data=msgdef(typ).encode()
+                    )
                 if topic not in channels:
-                    channels[topic] = writer.register_channel(topic=topic, message_encoding="cdr",
-                                                              schema_id=schemas[typ],
-                                                              metadata={"offered_qos_profiles": qos_profile(topic)})
+                    channels[topic] = writer.register_channel(
+                        topic=topic,
+                        message_encoding="cdr",
+                        schema_id=schemas[typ],
+                        metadata={"offered_qos_profiles": qos_profile(topic)},
+                    )
             for t, _k, topic, _typ, data in items:
                 seq[topic] += 1
-                writer.add_message(channels[topic], log_time=t, data=data, publish_time=t,
-                                   sequence=seq[topic])
+                writer.add_message(
+                    channels[topic], log_time=t, data=data, publish_time=t, sequence=seq[topic]
+                )
             writer.finish()
     return path

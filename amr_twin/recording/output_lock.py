@@ -87,8 +87,10 @@ class OutputLock:
                 os.close(fd)
                 pid = holder[0] if holder else "unknown"
                 since = f", since {holder[1]}" if len(holder) > 1 else ""
-                raise OutputBusy(f"{self.option} {self.path}: in use by another amr-twin command (pid {pid}{since}); "
-                                 "wait for it to end, or give another path") from None
+                raise OutputBusy(
+                    f"{self.option} {self.path}: in use by another amr-twin command (pid {pid}{since}); "
+                    "wait for it to end, or give another path"
+                ) from None
             try:
                 same = os.fstat(fd).st_ino == os.stat(self.file).st_ino
             except FileNotFoundError:  # the holder removed it between our open and our lock
@@ -97,7 +99,10 @@ class OutputLock:
                 break
             os.close(fd)
         os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()} {time.strftime('%Y-%m-%dT%H:%M:%S')} {Path(self.path).resolve()}\n".encode())
+        os.write(
+            fd,
+            f"{os.getpid()} {time.strftime('%Y-%m-%dT%H:%M:%S')} {Path(self.path).resolve()}\n".encode(),
+        )
         self.fd = fd
         return True
 
@@ -105,7 +110,9 @@ class OutputLock:
         if self.fd is None:
             return
         try:
-            self.file.unlink(missing_ok=True)  # while held: a newcomer's lock on it is checked by inode
+            self.file.unlink(
+                missing_ok=True
+            )  # while held: a newcomer's lock on it is checked by inode
         finally:
             os.close(self.fd)
             self.fd = None

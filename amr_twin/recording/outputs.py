@@ -42,7 +42,9 @@ def _probe(option: str, path: Path, folder: Path) -> None:
         os.close(fd)
         os.unlink(name)
     except OSError as exc:
-        raise OutputError(f"{option} {path}: cannot write in {folder} ({exc.strerror or exc})") from None
+        raise OutputError(
+            f"{option} {path}: cannot write in {folder} ({exc.strerror or exc})"
+        ) from None
 
 
 def _parent_folder(option: str, path: Path) -> Path:
@@ -90,12 +92,16 @@ def check_distinct(outputs: dict[str, Path | str | None]) -> None:
         resolved = Path(path).resolve()
         for other_path, other in seen.items():
             if resolved == other_path:
-                raise OutputError(f"{other} and {option} both name {path}: give each output its own path")
+                raise OutputError(
+                    f"{other} and {option} both name {path}: give each output its own path"
+                )
         seen[resolved] = option
 
 
-def check_outputs(files: dict[str, Path | str | None] | None = None,
-                  folders: dict[str, Path | str | None] | None = None) -> None:
+def check_outputs(
+    files: dict[str, Path | str | None] | None = None,
+    folders: dict[str, Path | str | None] | None = None,
+) -> None:
     """Check file and folder outputs (option -> path, None = not given) and that they differ."""
     files, folders = files or {}, folders or {}
     for option, path in files.items():
@@ -107,8 +113,14 @@ def check_outputs(files: dict[str, Path | str | None] | None = None,
     check_distinct(files)  # two files on one path: the last write would win
     for f_option, f_path in files.items():  # a file where a folder output goes
         for d_option, d_path in folders.items():
-            if f_path is not None and d_path is not None and Path(f_path).resolve() == Path(d_path).resolve():
-                raise OutputError(f"{f_option} and {d_option} both name {f_path}: give each output its own path")
+            if (
+                f_path is not None
+                and d_path is not None
+                and Path(f_path).resolve() == Path(d_path).resolve()
+            ):
+                raise OutputError(
+                    f"{f_option} and {d_option} both name {f_path}: give each output its own path"
+                )
 
 
 def same_file(a: Path | str, b: Path | str) -> bool:
@@ -136,8 +148,10 @@ def _pairs(items) -> list:
     return list(items.items()) if isinstance(items, dict) else list(items)
 
 
-def check_not_inputs(outputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]],
-                     inputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]]) -> None:
+def check_not_inputs(
+    outputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]],
+    inputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]],
+) -> None:
     """Refuse an output that is an input, or a folder output that holds one (its files could replace it).
 
     ``outputs`` and ``inputs``: option (``--csv``; ``--config (default)`` for an input the command reads
@@ -151,9 +165,17 @@ def check_not_inputs(outputs: dict[str, Path | str | None] | list[tuple[str, Pat
             if i_path is None:
                 continue
             if same_file(o_path, i_path):
-                how = "" if Path(o_path).resolve() == Path(i_path).resolve() else " (the same file by another name)"
-                raise OutputError(f"{o_label} {o_path}: is the input {i_label} {i_path}{how}; writing it would "
-                                  f"destroy it: give {o_label} another path")
+                how = (
+                    ""
+                    if Path(o_path).resolve() == Path(i_path).resolve()
+                    else " (the same file by another name)"
+                )
+                raise OutputError(
+                    f"{o_label} {o_path}: is the input {i_label} {i_path}{how}; writing it would "
+                    f"destroy it: give {o_label} another path"
+                )
             if _holds(Path(o_path), Path(i_path)):
-                raise OutputError(f"{o_label} {o_path}: holds the input {i_label} {i_path}; the files written there "
-                                  f"could replace it: give {o_label} a folder of its own")
+                raise OutputError(
+                    f"{o_label} {o_path}: holds the input {i_label} {i_path}; the files written there "
+                    f"could replace it: give {o_label} a folder of its own"
+                )

@@ -28,20 +28,22 @@ RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
 class RunSeries:
     """Arrays of one run. Shapes: n recorded rows; k published samples."""
 
-    t_s: np.ndarray              # (n,)
+    t_s: np.ndarray  # (n,)
     wheel_angle_rad: np.ndarray  # (n, 2) left, right
-    true_rpm: np.ndarray         # (n, 2) signed, + rolling forward
-    pose: np.ndarray             # (n, 3) x_m, y_m, yaw_rad (world)
-    pwm_counts: np.ndarray       # (n, 2) analogWrite value on the driver's PWM pin
-    direction: np.ndarray        # (n, 2) +1 DIR high (forward), -1 low
-    mode: np.ndarray             # (n, 2) 0 drive, 1 coast, 2 brake
-    battery_v: np.ndarray        # (n,) terminal voltage at the instant (the battery's accounting)
-    voltage_v: np.ndarray        # (n, 2) phase voltage the driver applies (0 braking or coasting)
-    current_a: np.ndarray        # (n, 2) motor (phase) current, + driving forward
-    battery_a: np.ndarray        # (n,) the pack's current: drivers and auxiliary load (the accounting's)
-    battery_soc: np.ndarray      # (n,) state of charge, 0..1 (the grid's accounting)
-    published: dict[int, np.ndarray]  # wheel -> (k, 2) rows t_s, |rpm| as received on the PC (signed_published)
-    odom: np.ndarray             # (k, 4) t_s, x_m, y_m, yaw_rad (odom frame)
+    true_rpm: np.ndarray  # (n, 2) signed, + rolling forward
+    pose: np.ndarray  # (n, 3) x_m, y_m, yaw_rad (world)
+    pwm_counts: np.ndarray  # (n, 2) analogWrite value on the driver's PWM pin
+    direction: np.ndarray  # (n, 2) +1 DIR high (forward), -1 low
+    mode: np.ndarray  # (n, 2) 0 drive, 1 coast, 2 brake
+    battery_v: np.ndarray  # (n,) terminal voltage at the instant (the battery's accounting)
+    voltage_v: np.ndarray  # (n, 2) phase voltage the driver applies (0 braking or coasting)
+    current_a: np.ndarray  # (n, 2) motor (phase) current, + driving forward
+    battery_a: np.ndarray  # (n,) the pack's current: drivers and auxiliary load (the accounting's)
+    battery_soc: np.ndarray  # (n,) state of charge, 0..1 (the grid's accounting)
+    published: dict[
+        int, np.ndarray
+    ]  # wheel -> (k, 2) rows t_s, |rpm| as received on the PC (signed_published)
+    odom: np.ndarray  # (k, 4) t_s, x_m, y_m, yaw_rad (odom frame)
     commands: list[tuple[float, list[float]]] = field(default_factory=list)
 
 
@@ -99,13 +101,19 @@ class Recorder:
         self.battery = twin.on_grid(twin.observables.battery_rows())
         """Grid sampler (hooked after the battery's accounting): rows ``t_us, terminal_v, current_a, soc``
         (:meth:`amr_twin.sim.observables.Observables.battery`)."""
-        self._handlers = {"wheel0_Vel": self._on_wheel0, "wheel1_Vel": self._on_wheel1,
-                          "wheel_Command": self._on_command, "odom": self._on_odom}
+        self._handlers = {
+            "wheel0_Vel": self._on_wheel0,
+            "wheel1_Vel": self._on_wheel1,
+            "wheel_Command": self._on_command,
+            "odom": self._on_odom,
+        }
         twin.on_message(self._tap, topics=tuple(self._handlers))  # not called for IMU, scan, tf
         twin.on_actuation(self.pins_changed)
         twin.on_grid_rows(self.extend_grid)
         _recorders[twin] = self
-        self.battery(twin.t_phys_us)  # the present instant: the battery, the drive in force, the loop sensors
+        self.battery(
+            twin.t_phys_us
+        )  # the present instant: the battery, the drive in force, the loop sensors
         self.pins_changed(twin.t_phys_us)
         self.sample()
 
@@ -161,8 +169,19 @@ class Recorder:
         at = np.clip(np.searchsorted(kept[:, 0], t_us, side="right") - 1, 0, None)
         battery_v, battery_a, soc = kept[at, 1], kept[at, 2], kept[at, 3]
         return RunSeries(
-            t_s=t, wheel_angle_rad=rows[:, 0:2], true_rpm=rows[:, 2:4] * RAD_S_TO_RPM, pose=pose,
-            pwm_counts=pins[:, 0:2].astype(int), direction=pins[:, 2:4].astype(int),
-            mode=mode, battery_v=battery_v, voltage_v=voltage, current_a=current,
-            battery_a=battery_a, battery_soc=soc, published=published,
-            odom=np.array(self._odom, float).reshape(-1, 4), commands=list(self.commands))
+            t_s=t,
+            wheel_angle_rad=rows[:, 0:2],
+            true_rpm=rows[:, 2:4] * RAD_S_TO_RPM,
+            pose=pose,
+            pwm_counts=pins[:, 0:2].astype(int),
+            direction=pins[:, 2:4].astype(int),
+            mode=mode,
+            battery_v=battery_v,
+            voltage_v=voltage,
+            current_a=current,
+            battery_a=battery_a,
+            battery_soc=soc,
+            published=published,
+            odom=np.array(self._odom, float).reshape(-1, 4),
+            commands=list(self.commands),
+        )

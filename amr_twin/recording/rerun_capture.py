@@ -42,13 +42,17 @@ class Capture:
         self.messages: dict[str, list[tuple[int, object]]] = {}
         m = twin.observables.model
         self.body_ids = np.array([b for b in range(1, m.nbody)], dtype=int)
-        self._xpos, self._xquat = twin.observables.named.data.xpos, twin.observables.named.data.xquat
+        self._xpos, self._xquat = (
+            twin.observables.named.data.xpos,
+            twin.observables.named.data.xquat,
+        )
         grid_us = twin.grid_us
         self.period_us = max(grid_us, int(round(US / body_hz / grid_us)) * grid_us)
         self._t: list[int] = []
         self._pos: list[np.ndarray] = []
         self._quat: list[np.ndarray] = []
         from amr_twin.ros.ros_state import StateSampler
+
         self.state = StateSampler(m, twin.observables.named)
         """Joint and base state on every grid instant (:mod:`amr_twin.ros.ros_state`)."""
         twin.on_message(self._tap)
@@ -77,8 +81,11 @@ class Capture:
 
     def body_poses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """t_s (n,), positions (n, nb, 3), quaternions w x y z (n, nb, 4)."""
-        return (np.array(self._t, float) / US, np.array(self._pos).reshape(-1, len(self.body_ids), 3),
-                np.array(self._quat).reshape(-1, len(self.body_ids), 4))
+        return (
+            np.array(self._t, float) / US,
+            np.array(self._pos).reshape(-1, len(self.body_ids), 3),
+            np.array(self._quat).reshape(-1, len(self.body_ids), 4),
+        )
 
 
 def attach(twin, body_hz: float = 30.0) -> Capture:
@@ -88,7 +95,9 @@ def attach(twin, body_hz: float = 30.0) -> Capture:
     Raises ValueError for a twin built without the robot's visuals (``TwinOptions(visuals=False)``).
     """
     if not twin.options.visuals:
-        raise ValueError("a recording draws the robot: build the twin with TwinOptions(visuals=True)")
+        raise ValueError(
+            "a recording draws the robot: build the twin with TwinOptions(visuals=True)"
+        )
     capture = _captures.get(twin) or Capture(twin, body_hz)
     attach_recorder(twin)  # the series the recordings write
     return capture

@@ -11,9 +11,21 @@ from amr_twin.recording.rerun_navigation import _log_navigation
 from amr_twin.recording.event_log import has_events, log_events
 from amr_twin.recording.recorder import recorder_of
 from amr_twin.recording.rerun_capture import Capture, capture_of
-from amr_twin.recording.rerun_streams import (WHEELS, _log_commands, _log_duty, _log_electrics, _log_imu,
-                                              _log_wheel_speeds)
-from amr_twin.recording.rerun_world import _log_body_transforms, _log_geoms, _log_scan, _log_trajectory, _log_uwb
+from amr_twin.recording.rerun_streams import (
+    WHEELS,
+    _log_commands,
+    _log_duty,
+    _log_electrics,
+    _log_imu,
+    _log_wheel_speeds,
+)
+from amr_twin.recording.rerun_world import (
+    _log_body_transforms,
+    _log_geoms,
+    _log_scan,
+    _log_trajectory,
+    _log_uwb,
+)
 
 TRACKED = "world/bodies/amr/base_link"
 """The 3D view's camera follows the robot's base."""
@@ -30,21 +42,35 @@ def _blueprint(has_imu: bool, has_uwb: bool = False, has_events: bool = False):
     if has_uwb:
         plots.append(rrb.TimeSeriesView(origin="uwb", name="UWB ranges, m"))
     return rrb.Blueprint(
-        rrb.Horizontal(rrb.Vertical(rrb.Spatial3DView(origin="world", name="twin",
-                                                      eye_controls=rrb.EyeControls3D(tracking_entity=TRACKED)),
-                                    rrb.TextLogView(origin="commands", name="commands"),
-                                    *([rrb.TextLogView(origin="events", name="collisions and faults")]
-                                      if has_events else []),
-                                    row_shares=[4, 1, 1] if has_events else [4, 1]),
-                       rrb.Vertical(*plots), column_shares=[3, 2]),
-        collapse_panels=True)
+        rrb.Horizontal(
+            rrb.Vertical(
+                rrb.Spatial3DView(
+                    origin="world",
+                    name="twin",
+                    eye_controls=rrb.EyeControls3D(tracking_entity=TRACKED),
+                ),
+                rrb.TextLogView(origin="commands", name="commands"),
+                *(
+                    [rrb.TextLogView(origin="events", name="collisions and faults")]
+                    if has_events
+                    else []
+                ),
+                row_shares=[4, 1, 1] if has_events else [4, 1],
+            ),
+            rrb.Vertical(*plots),
+            column_shares=[3, 2],
+        ),
+        collapse_panels=True,
+    )
 
 
 ENCODE_TIMEOUT_S = 600.0
 """Longest wait for Rerun to encode what was logged, s (no file is involved: it does not fail on a full disk)."""
 
 
-def write_rrd(capture: Capture, series, path: Path, result=None, application_id: str = "amr_twin") -> Path:
+def write_rrd(
+    capture: Capture, series, path: Path, result=None, application_id: str = "amr_twin"
+) -> Path:
     """Write the capture and ``series`` to ``path`` (.rrd), through a temporary file.
 
     Rerun encodes the recording into a byte stream (:meth:`RecordingStream.binary_stream`) that this
@@ -62,8 +88,15 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     m = capture.twin.observables.model
     rec = rr.RecordingStream(application_id)
     stream = rec.binary_stream()
-    rec.send_blueprint(_blueprint(bool(capture.messages.get("imu/data_raw")), bool(capture.messages.get("uwb/range")),
-                                  has_events(capture.twin)), make_active=False, make_default=True)
+    rec.send_blueprint(
+        _blueprint(
+            bool(capture.messages.get("imu/data_raw")),
+            bool(capture.messages.get("uwb/range")),
+            has_events(capture.twin),
+        ),
+        make_active=False,
+        make_default=True,
+    )
     rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     _log_geoms(rec, m)
     _log_body_transforms(rec, m, capture)
@@ -75,7 +108,9 @@ def write_rrd(capture: Capture, series, path: Path, result=None, application_id:
     _log_electrics(rec, series)
     _log_commands(rec, series, result)
     _log_trajectory(rec, series)
-    _log_navigation(rec, capture)  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
+    _log_navigation(
+        rec, capture
+    )  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
     log_events(rec, capture.twin)  # collisions and faults (amr_twin/recording/event_log.py)
     rec.disconnect()
     data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
@@ -90,7 +125,9 @@ def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> d
     the series is taken from the twin's recorder (:func:`~amr_twin.recording.recorder.attach_recorder`).
     Returns {"rrd": path, "mcap": path}.
     """
-    capture = twin_or_capture if isinstance(twin_or_capture, Capture) else capture_of(twin_or_capture)
+    capture = (
+        twin_or_capture if isinstance(twin_or_capture, Capture) else capture_of(twin_or_capture)
+    )
     if capture is None:
         raise ValueError("record_run: attach(twin) must be called before the twin runs")
     if result is not None:
@@ -98,7 +135,9 @@ def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> d
     elif (recorder := recorder_of(capture.twin)) is not None:
         series = recorder.series()
     else:
-        raise ValueError("record_run: pass the run's result, or attach_recorder(twin) before the twin runs")
+        raise ValueError(
+            "record_run: pass the run's result, or attach_recorder(twin) before the twin runs"
+        )
     out = {}
     if rrd_path is not None:
         out["rrd"] = write_rrd(capture, series, rrd_path, result)

@@ -21,8 +21,12 @@ def _cells(msg, keep) -> tuple[np.ndarray, np.ndarray]:
     i = msg.info
     data = np.asarray(msg.data).reshape(i.height, i.width)
     rows, cols = np.nonzero(keep(data))
-    xy = np.column_stack([i.origin.position.x + (cols + 0.5) * i.resolution,
-                          i.origin.position.y + (rows + 0.5) * i.resolution])
+    xy = np.column_stack(
+        [
+            i.origin.position.x + (cols + 0.5) * i.resolution,
+            i.origin.position.y + (rows + 0.5) * i.resolution,
+        ]
+    )
     return xy, data[rows, cols]
 
 
@@ -32,8 +36,13 @@ def _log_navigation(rec, capture) -> None:
     msgs = capture.messages
     for _t, m in msgs.get("map", [])[:1]:
         xy, _ = _cells(m, lambda d: d == 100)
-        rec.log("world/navigation/map", rr.Points3D(np.column_stack([xy, np.full(len(xy), 0.01)]), radii=0.025,
-                                                    colors=(60, 60, 60)), static=True)
+        rec.log(
+            "world/navigation/map",
+            rr.Points3D(
+                np.column_stack([xy, np.full(len(xy), 0.01)]), radii=0.025, colors=(60, 60, 60)
+            ),
+            static=True,
+        )
     for t_us, m in msgs.get("plan", []):
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         pts = np.array([[p.pose.position.x, p.pose.position.y, 0.03] for p in m.poses])
@@ -41,10 +50,22 @@ def _log_navigation(rec, capture) -> None:
     for t_us, m in msgs.get("local_costmap/costmap", []):
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         xy, v = _cells(m, lambda d: d > 0)
-        colour = np.column_stack([np.full(len(v), 255), 255 - 2.5 * np.clip(v, 0, 100), np.full(len(v), 40)])
-        rec.log("world/navigation/costmap", rr.Points3D(np.column_stack([xy, np.full(len(xy), 0.02)]),
-                                                        radii=0.025, colors=colour.astype(np.uint8)))
+        colour = np.column_stack(
+            [np.full(len(v), 255), 255 - 2.5 * np.clip(v, 0, 100), np.full(len(v), 40)]
+        )
+        rec.log(
+            "world/navigation/costmap",
+            rr.Points3D(
+                np.column_stack([xy, np.full(len(xy), 0.02)]),
+                radii=0.025,
+                colors=colour.astype(np.uint8),
+            ),
+        )
     for t_us, m in msgs.get("local_costmap/published_footprint", []):
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
-        pts = np.array([[p.x, p.y, 0.05] for p in m.points] + [[m.points[0].x, m.points[0].y, 0.05]])
-        rec.log("world/navigation/footprint", rr.LineStrips3D([pts], colors=(0, 200, 200), radii=0.01))
+        pts = np.array(
+            [[p.x, p.y, 0.05] for p in m.points] + [[m.points[0].x, m.points[0].y, 0.05]]
+        )
+        rec.log(
+            "world/navigation/footprint", rr.LineStrips3D([pts], colors=(0, 200, 200), radii=0.01)
+        )

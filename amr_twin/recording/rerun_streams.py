@@ -43,7 +43,11 @@ def reference_rpm(series) -> np.ndarray:
     cmd_t = np.array([c[0] for c in series.commands], float)
     cmd = np.array([c[1] for c in series.commands], float).reshape(-1, 4)
     idx = np.searchsorted(cmd_t, series.t_s, side="right") - 1
-    ref = np.column_stack([cmd[:, 0] * cmd[:, 1], cmd[:, 2] * cmd[:, 3]]) if len(cmd) else np.zeros((1, 2))
+    ref = (
+        np.column_stack([cmd[:, 0] * cmd[:, 1], cmd[:, 2] * cmd[:, 3]])
+        if len(cmd)
+        else np.zeros((1, 2))
+    )
     return np.where((idx >= 0)[:, None], ref[np.clip(idx, 0, None)], 0.0)
 
 
@@ -71,25 +75,42 @@ def _log_electrics(rec, series) -> None:
 def _log_commands(rec, series, result=None) -> None:
     import rerun as rr
 
-    for t_s, command in (result.commands if result is not None else []):
+    for t_s, command in result.commands if result is not None else []:
         rec.set_time(TIMELINE, duration=float(t_s))
         rec.log("commands", rr.TextLog(f"client {command.describe()}", level="INFO"))
     for t_s, data in series.commands:
         rec.set_time(TIMELINE, duration=float(t_s))
-        rec.log("commands", rr.TextLog("wheel_Command [" + ", ".join(f"{v:g}" for v in data) + "]",
-                                       level="INFO"))
+        rec.log(
+            "commands",
+            rr.TextLog("wheel_Command [" + ", ".join(f"{v:g}" for v in data) + "]", level="INFO"),
+        )
 
 
 def _log_imu(rec, capture: Capture) -> None:
     imu = capture.messages.get("imu/data_raw", [])
     if imu:
         t = [msg.header.stamp.to_sec() for _, msg in imu]
-        _scalars(rec, "imu/accel", t, [(m.linear_acceleration.x, m.linear_acceleration.y,
-                                        m.linear_acceleration.z) for _, m in imu])
-        _scalars(rec, "imu/gyro", t, [(m.angular_velocity.x, m.angular_velocity.y,
-                                       m.angular_velocity.z) for _, m in imu])
+        _scalars(
+            rec,
+            "imu/accel",
+            t,
+            [
+                (m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z)
+                for _, m in imu
+            ],
+        )
+        _scalars(
+            rec,
+            "imu/gyro",
+            t,
+            [(m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z) for _, m in imu],
+        )
     mag = capture.messages.get("imu/mag", [])
     if mag:
         t = [msg.header.stamp.to_sec() for _, msg in mag]
-        _scalars(rec, "imu/mag", t, [(m.magnetic_field.x, m.magnetic_field.y, m.magnetic_field.z)
-                                     for _, m in mag])
+        _scalars(
+            rec,
+            "imu/mag",
+            t,
+            [(m.magnetic_field.x, m.magnetic_field.y, m.magnetic_field.z) for _, m in mag],
+        )

@@ -57,8 +57,9 @@ def _log_geoms(rec, m: mujoco.MjModel) -> None:
                 kinds["boxes"].append((pos, xyzw, 2 * size, _rgba(m, g)))
             elif typ == T.mjGEOM_PLANE:
                 half = [s if s > 0 else 15.0 for s in size[:2]]
-                kinds["boxes"].append((pos - [0, 0, 0.001], xyzw, [2 * half[0], 2 * half[1], 0.002],
-                                       _rgba(m, g)))
+                kinds["boxes"].append(
+                    (pos - [0, 0, 0.001], xyzw, [2 * half[0], 2 * half[1], 0.002], _rgba(m, g))
+                )
             elif typ == T.mjGEOM_SPHERE:
                 kinds["ellipsoids"].append((pos, xyzw, [size[0]] * 3, _rgba(m, g)))
             elif typ == T.mjGEOM_ELLIPSOID:
@@ -73,16 +74,31 @@ def _log_geoms(rec, m: mujoco.MjModel) -> None:
             quats = np.array([i[1] for i in items])
             colors = np.array([i[3] for i in items])
             if kind == "boxes":
-                arch = rr.Boxes3D(centers=centers, quaternions=quats, sizes=np.array([i[2] for i in items]),
-                                  colors=colors, fill_mode="solid")
+                arch = rr.Boxes3D(
+                    centers=centers,
+                    quaternions=quats,
+                    sizes=np.array([i[2] for i in items]),
+                    colors=colors,
+                    fill_mode="solid",
+                )
             elif kind == "ellipsoids":
-                arch = rr.Ellipsoids3D(centers=centers, quaternions=quats,
-                                       half_sizes=np.array([i[2] for i in items]), colors=colors,
-                                       fill_mode="solid")
+                arch = rr.Ellipsoids3D(
+                    centers=centers,
+                    quaternions=quats,
+                    half_sizes=np.array([i[2] for i in items]),
+                    colors=colors,
+                    fill_mode="solid",
+                )
             else:
                 rl = np.array([i[2] for i in items])
-                arch = rr.Cylinders3D(centers=centers, quaternions=quats, radii=rl[:, 0], lengths=rl[:, 1],
-                                      colors=colors, fill_mode="solid")
+                arch = rr.Cylinders3D(
+                    centers=centers,
+                    quaternions=quats,
+                    radii=rl[:, 0],
+                    lengths=rl[:, 1],
+                    colors=colors,
+                    fill_mode="solid",
+                )
             rec.log(base + kind, arch, static=True)
 
 
@@ -92,9 +108,11 @@ def _log_body_transforms(rec, m, capture: Capture) -> None:
     t, pos, quat = capture.body_poses()
     for j, b in enumerate(capture.body_ids):
         q = quat[:, j]
-        rec.send_columns(body_entity(m, b), indexes=_time(t),
-                         columns=rr.Transform3D.columns(translation=pos[:, j],
-                                                        quaternion=q[:, [1, 2, 3, 0]]))
+        rec.send_columns(
+            body_entity(m, b),
+            indexes=_time(t),
+            columns=rr.Transform3D.columns(translation=pos[:, j], quaternion=q[:, [1, 2, 3, 0]]),
+        )
 
 
 TRAJECTORY_BLOCK_S = 10.0
@@ -115,28 +133,43 @@ def _log_trajectory(rec, series, rate_hz: float = 2.0) -> None:
     x0, y0, yaw0 = series.pose[0]
     c, s = math.cos(yaw0), math.sin(yaw0)
     odom = series.odom
-    odom_xy = np.column_stack([x0 + c * odom[:, 1] - s * odom[:, 2], y0 + s * odom[:, 1] + c * odom[:, 2]])
+    odom_xy = np.column_stack(
+        [x0 + c * odom[:, 1] - s * odom[:, 2], y0 + s * odom[:, 1] + c * odom[:, 2]]
+    )
     end = float(series.t_s[-1]) if len(series.t_s) else 0.0
     for t in np.append(np.arange(0.0, end, 1.0 / rate_hz), end):
         rec.set_time(TIMELINE, duration=float(t))
         block = int(t // TRAJECTORY_BLOCK_S)
         t_block = block * TRAJECTORY_BLOCK_S
-        for name, tt, xy, color in (("true", series.t_s, true_xy, (40, 160, 40)),
-                                    ("odom", odom[:, 0], odom_xy, (220, 60, 60))):
+        for name, tt, xy, color in (
+            ("true", series.t_s, true_xy, (40, 160, 40)),
+            ("odom", odom[:, 0], odom_xy, (220, 60, 60)),
+        ):
             n = int(np.searchsorted(tt, t, side="right"))
-            first = max(0, int(np.searchsorted(tt, t_block, side="left")) - 1)  # joins the block before
+            first = max(
+                0, int(np.searchsorted(tt, t_block, side="left")) - 1
+            )  # joins the block before
             if n - first >= 2:
-                pts = np.vstack([xy[first:n:5], xy[n - 1:n]])
+                pts = np.vstack([xy[first:n:5], xy[n - 1 : n]])
                 pts = np.column_stack([pts, np.full(len(pts), 0.01)])
-                rec.log(f"world/trajectory/{name}/{block:04d}", rr.LineStrips3D([pts], colors=[color], radii=[0.01]))
+                rec.log(
+                    f"world/trajectory/{name}/{block:04d}",
+                    rr.LineStrips3D([pts], colors=[color], radii=[0.01]),
+                )
 
 
 def _pose_track(capture: Capture, m, body: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sample times (n,), s, positions (n, 3), m, and unwrapped yaw (n,), rad, of ``body``."""
-    j = int(np.nonzero(capture.body_ids == mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body))[0][0])
+    j = int(
+        np.nonzero(capture.body_ids == mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body))[0][0]
+    )
     t, pos, quat = capture.body_poses()
     q = quat[:, j]
-    yaw = np.unwrap(np.arctan2(2 * (q[:, 0] * q[:, 3] + q[:, 1] * q[:, 2]), 1 - 2 * (q[:, 2] ** 2 + q[:, 3] ** 2)))
+    yaw = np.unwrap(
+        np.arctan2(
+            2 * (q[:, 0] * q[:, 3] + q[:, 1] * q[:, 2]), 1 - 2 * (q[:, 2] ** 2 + q[:, 3] ** 2)
+        )
+    )
     return t, pos[:, j], yaw
 
 
@@ -177,16 +210,28 @@ def _log_scan(rec, m, capture: Capture) -> None:
     local = np.column_stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(r)])
     p, yaw = _interp_pose(_pose_track(capture, m, "amr/laser"), t_all)
     c, s = np.cos(yaw), np.sin(yaw)
-    world = np.column_stack([p[:, 0] + c * local[:, 0] - s * local[:, 1],
-                             p[:, 1] + s * local[:, 0] + c * local[:, 1], p[:, 2]])
+    world = np.column_stack(
+        [
+            p[:, 0] + c * local[:, 0] - s * local[:, 1],
+            p[:, 1] + s * local[:, 0] + c * local[:, 1],
+            p[:, 2],
+        ]
+    )
     # one row per scan at the end of its rotation, its beams with a return: two columnar sends
     bounds = np.r_[0, np.cumsum(sizes)]
     kept = np.diff(np.r_[0, np.cumsum(ok)][bounds])  # beams with a return, per scan
-    for entity, points, colour, radius in (("world/bodies/amr/laser/scan", local, (250, 200, 40), 0.01),
-                                           ("world/scan", world, (40, 120, 250), 0.015)):
-        style = rr.Points3D.columns(colors=np.tile(colour, (len(sizes), 1)), radii=np.full(len(sizes), radius))
-        rec.send_columns(entity, indexes=_time(ends),
-                         columns=[*rr.Points3D.columns(positions=points[ok]).partition(kept), *style])
+    for entity, points, colour, radius in (
+        ("world/bodies/amr/laser/scan", local, (250, 200, 40), 0.01),
+        ("world/scan", world, (40, 120, 250), 0.015),
+    ):
+        style = rr.Points3D.columns(
+            colors=np.tile(colour, (len(sizes), 1)), radii=np.full(len(sizes), radius)
+        )
+        rec.send_columns(
+            entity,
+            indexes=_time(ends),
+            columns=[*rr.Points3D.columns(positions=points[ok]).partition(kept), *style],
+        )
 
 
 def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:
@@ -198,7 +243,9 @@ def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:
     if sensor is not None:
         return np.asarray(sensor.anchors_xyz_m, float), np.asarray(sensor.tag_pos_m, float)
     u = twin.cfg.uwb
-    anchors = np.column_stack([np.asarray(u.anchors_xy_m, float), np.full(len(u.anchors_x_m), u.anchor_z_m)])
+    anchors = np.column_stack(
+        [np.asarray(u.anchors_xy_m, float), np.full(len(u.anchors_x_m), u.anchor_z_m)]
+    )
     return anchors, np.asarray(u.tag_pos_m, float)
 
 
@@ -226,18 +273,33 @@ def _log_uwb(rec, m, capture: Capture) -> None:
     if not ranges:
         return
     anchors, tag = uwb_geometry(capture.twin)
-    rec.log("world/uwb/anchors", rr.Points3D(anchors, radii=[0.08], colors=[(200, 60, 200)],
-                                             labels=[f"anchor_{i}" for i in range(len(anchors))]), static=True)
+    rec.log(
+        "world/uwb/anchors",
+        rr.Points3D(
+            anchors,
+            radii=[0.08],
+            colors=[(200, 60, 200)],
+            labels=[f"anchor_{i}" for i in range(len(anchors))],
+        ),
+        static=True,
+    )
     for i, (t_s, range_m) in ranges.items():
         _scalars(rec, f"uwb/anchor_{i}/range_m", t_s, range_m)
         if i >= len(anchors):
             continue
         p, yaw = _body_pose_at(capture, m, "amr/base_link", t_s)
         c, s = np.cos(yaw), np.sin(yaw)
-        tag_w = np.column_stack([p[:, 0] + c * tag[0] - s * tag[1], p[:, 1] + s * tag[0] + c * tag[1],
-                                 p[:, 2] + tag[2]])
+        tag_w = np.column_stack(
+            [p[:, 0] + c * tag[0] - s * tag[1], p[:, 1] + s * tag[0] + c * tag[1], p[:, 2] + tag[2]]
+        )
         strips = np.stack([tag_w, np.broadcast_to(anchors[i], tag_w.shape)], axis=1)  # (n, 2, 3)
-        rec.send_columns(f"world/uwb/anchor_{i}/ray", indexes=_time(t_s),
-                         columns=rr.LineStrips3D.columns(strips=strips))
-        rec.log(f"world/uwb/anchor_{i}/ray", rr.LineStrips3D.from_fields(colors=[(200, 60, 200)], radii=[0.005]),
-                static=True)
+        rec.send_columns(
+            f"world/uwb/anchor_{i}/ray",
+            indexes=_time(t_s),
+            columns=rr.LineStrips3D.columns(strips=strips),
+        )
+        rec.log(
+            f"world/uwb/anchor_{i}/ray",
+            rr.LineStrips3D.from_fields(colors=[(200, 60, 200)], radii=[0.005]),
+            static=True,
+        )

@@ -5,29 +5,52 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # numpy and the recorder (the model build) stay off the CLI's start-up path (--help)
+if (
+    TYPE_CHECKING
+):  # numpy and the recorder (the model build) stay off the CLI's start-up path (--help)
     import numpy as np
 
     from amr_twin.recording.recorder import RunSeries
     from amr_twin.recording.run_summary import RunSummary, WheelSummary
 
-CSV_COLUMNS = ("t_s", "ref_rpm_left", "ref_rpm_right", "pub_rpm_left", "pub_rpm_right",
-               "true_rpm_left", "true_rpm_right", "pwm_counts_left", "pwm_counts_right",
-               "x_m", "y_m", "yaw_rad", "odom_x_m", "odom_y_m", "odom_yaw_rad",
-               "current_a_left", "current_a_right", "battery_a", "battery_v")
+CSV_COLUMNS = (
+    "t_s",
+    "ref_rpm_left",
+    "ref_rpm_right",
+    "pub_rpm_left",
+    "pub_rpm_right",
+    "true_rpm_left",
+    "true_rpm_right",
+    "pwm_counts_left",
+    "pwm_counts_right",
+    "x_m",
+    "y_m",
+    "yaw_rad",
+    "odom_x_m",
+    "odom_y_m",
+    "odom_yaw_rad",
+    "current_a_left",
+    "current_a_right",
+    "battery_a",
+    "battery_v",
+)
 """Columns of ``--csv``: reference RPM (motion x speed of wheel_Command), published RPM
 (|wheelN_Vel| x the wheel's commanded direction, held between samples, 0 before the
 first), true RPM, analogWrite counts, true pose (world) and odometry pose (odom frame,
 held), each motor's (phase) current (+ driving forward), the battery's current and
 voltage. Every RPM, here and in ``--json``, is signed: + = the wheel rolls forward."""
-CSV_COMMENT = ("# amr-twin run: every rpm column is signed, + = the wheel rolls forward (REP-103); ref_rpm = "
-               "motion x speed of wheel_Command, pub_rpm = |wheelN_Vel| x the commanded direction; "
-               "x_m, y_m, yaw_rad in the world, odom_* in odom; current_a + driving forward")
+CSV_COMMENT = (
+    "# amr-twin run: every rpm column is signed, + = the wheel rolls forward (REP-103); ref_rpm = "
+    "motion x speed of wheel_Command, pub_rpm = |wheelN_Vel| x the commanded direction; "
+    "x_m, y_m, yaw_rad in the world, odom_* in odom; current_a + driving forward"
+)
 """First line of ``--csv``: ``pandas.read_csv(path, comment="#")``, ``numpy.genfromtxt(path, delimiter=",",
 names=True, skip_header=1)``."""
 
 
-def _held(t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before: float = 0.0) -> np.ndarray:
+def _held(
+    t_query: np.ndarray, t_sample: np.ndarray, values: np.ndarray, before: float = 0.0
+) -> np.ndarray:
     """Zero-order hold of samples (t_sample, values) at ``t_query``."""
     import numpy as np
 
@@ -48,8 +71,20 @@ def series_table(series: RunSeries) -> np.ndarray:
     ref = [_held(t, cmd_t, cmd[:, 0] * cmd[:, 1]), _held(t, cmd_t, cmd[:, 2] * cmd[:, 3])]
     pub = [_held(t, p[:, 0], p[:, 1]) for p in (signed_published(series, w) for w in (0, 1))]
     odom = [_held(t, series.odom[:, 0], series.odom[:, k]) for k in (1, 2, 3)]
-    return np.column_stack([t, *ref, *pub, series.true_rpm, series.pwm_counts, series.pose, *odom,
-                            series.current_a, series.battery_a, series.battery_v])
+    return np.column_stack(
+        [
+            t,
+            *ref,
+            *pub,
+            series.true_rpm,
+            series.pwm_counts,
+            series.pose,
+            *odom,
+            series.current_a,
+            series.battery_a,
+            series.battery_v,
+        ]
+    )
 
 
 def csv_text(series: RunSeries) -> str:
@@ -67,26 +102,36 @@ def text_lines(result, info: RunSummary) -> list[str]:
     if wc:
         lines.append(f"wheel_Command [{wc[0]:g}, {wc[1]:.5f}, {wc[2]:g}, {wc[3]:.5f}]")
     for name, entry in info.wheels.items():
-        lines.append(f"{name:5s} reference {entry.reference_rpm:8.3f} RPM, true {entry.true_final_rpm:8.3f} RPM, "
-                     + _published(entry, result.sim_s))
+        lines.append(
+            f"{name:5s} reference {entry.reference_rpm:8.3f} RPM, true {entry.true_final_rpm:8.3f} RPM, "
+            + _published(entry, result.sim_s)
+        )
     lines.extend(fault_lines(info.faults))
     for c in info.collisions:
         lines.append(_collision_line(c))
     if not info.collisions:
         lines.append("no collision")
     pose = info.final_pose
-    lines.append(f"pose x {pose.x_m:.3f} m, y {pose.y_m:.3f} m, yaw {pose.yaw_rad:.3f} rad "
-                 f"after {result.sim_s:g} s simulated ({result.wall_s:.2f} s wall)"
-                 + (", stopped by the collision" if result.halted else ""))
+    lines.append(
+        f"pose x {pose.x_m:.3f} m, y {pose.y_m:.3f} m, yaw {pose.yaw_rad:.3f} rad "
+        f"after {result.sim_s:g} s simulated ({result.wall_s:.2f} s wall)"
+        + (", stopped by the collision" if result.halted else "")
+    )
     step = info.tyre_timestep
     if step is not None:
-        lines.append(f"physics timestep {step['timestep_s'] * 1e3:g} ms instead of {step['configured_timestep_s'] * 1e3:g} "
-                     f"ms: the tyres' stability number {max(step['stability_number_configured']):.2f} exceeded "
-                     f"{step['stability_limit']:g} (docs/explanation/tyres.md)")
+        lines.append(
+            f"physics timestep {step['timestep_s'] * 1e3:g} ms instead of {step['configured_timestep_s'] * 1e3:g} "
+            f"ms: the tyres' stability number {max(step['stability_number_configured']):.2f} exceeded "
+            f"{step['stability_limit']:g} (docs/explanation/tyres.md)"
+        )
     moved = info.from_start
-    if moved is not None and len(result.commands) > 1:  # a mission: where it ended against where it began
-        lines.append(f"ended {moved.distance_m:.2f} m from its start pose, heading {moved.heading_deg:+.1f} deg "
-                     "from its start heading (a mission's commands are timed: nothing steers by the pose)")
+    if (
+        moved is not None and len(result.commands) > 1
+    ):  # a mission: where it ended against where it began
+        lines.append(
+            f"ended {moved.distance_m:.2f} m from its start pose, heading {moved.heading_deg:+.1f} deg "
+            "from its start heading (a mission's commands are timed: nothing steers by the pose)"
+        )
     return lines
 
 
@@ -98,7 +143,9 @@ def _published(entry: WheelSummary, end_s: float) -> str:
         return "nothing published"
     text = f"last published {entry.final_rpm:8.3f} RPM at {t:.2f} s"
     if abs(entry.true_final_rpm) < 0.5 and entry.final_rpm != 0.0:
-        text += f", {end_s - t:.2f} s before the end (the wheel stands: nothing is published at rest)"
+        text += (
+            f", {end_s - t:.2f} s before the end (the wheel stands: nothing is published at rest)"
+        )
     return text
 
 
@@ -116,19 +163,26 @@ def _fault_effect(fault: dict) -> str:
     wheels = fault["effect"]["wheels"]
     parts = []
     for name, w in wheels.items():
-        parts.append(f"{name} true {w['true_rpm_before'] if w['true_rpm_before'] is not None else float('nan'):.1f} -> "
-                     f"{w['true_rpm_end'] if w['true_rpm_end'] is not None else float('nan'):.1f} RPM, "
-                     f"{w['published_after']} published after")
-    sensors = "".join(f"; {fault['effect'][f'{topic}_published_after']} {topic} published after"
-                      for topic in ("scan", "imu/data_raw") if f"{topic}_published_after" in fault["effect"])
+        parts.append(
+            f"{name} true {w['true_rpm_before'] if w['true_rpm_before'] is not None else float('nan'):.1f} -> "
+            f"{w['true_rpm_end'] if w['true_rpm_end'] is not None else float('nan'):.1f} RPM, "
+            f"{w['published_after']} published after"
+        )
+    sensors = "".join(
+        f"; {fault['effect'][f'{topic}_published_after']} {topic} published after"
+        for topic in ("scan", "imu/data_raw")
+        if f"{topic}_published_after" in fault["effect"]
+    )
     return "; ".join(parts) + f"; moved {fault['effect']['moved_after_m']:.2f} m after" + sensors
 
 
 def _collision_line(c: dict) -> str:
     pose = c["robot_pose"]
-    return (f"collision at t = {c['t_s']:.2f} s: {', '.join(c['robot_parts'])} hit {c['hit']} at "
-            f"({c['x_m']:.2f}, {c['y_m']:.2f}) m, robot at ({pose['x_m']:.2f}, {pose['y_m']:.2f}) m; "
-            f"in contact until {c['until_s']:.2f} s, peak force {c['peak_force_n']:.0f} N")
+    return (
+        f"collision at t = {c['t_s']:.2f} s: {', '.join(c['robot_parts'])} hit {c['hit']} at "
+        f"({c['x_m']:.2f}, {c['y_m']:.2f}) m, robot at ({pose['x_m']:.2f}, {pose['y_m']:.2f}) m; "
+        f"in contact until {c['until_s']:.2f} s, peak force {c['peak_force_n']:.0f} N"
+    )
 
 
 def collision_warning(info: RunSummary) -> str | None:
@@ -138,6 +192,8 @@ def collision_warning(info: RunSummary) -> str | None:
         return None
     first = hits[0]
     more = f" and {len(hits) - 1} more" if len(hits) > 1 else ""
-    return (f"warning: collision at t = {first['t_s']:.2f} s with {first['hit']} at "
-            f"({first['x_m']:.2f}, {first['y_m']:.2f}) m{more}" + (" (run stopped)" if info.stopped_by_collision
-                                                                  else ""))
+    return (
+        f"warning: collision at t = {first['t_s']:.2f} s with {first['hit']} at "
+        f"({first['x_m']:.2f}, {first['y_m']:.2f}) m{more}"
+        + (" (run stopped)" if info.stopped_by_collision else "")
+    )

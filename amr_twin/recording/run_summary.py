@@ -11,7 +11,9 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Optional, Union
 
-if TYPE_CHECKING:  # numpy and the recorder (the model build) stay off the CLI's start-up path (--help)
+if (
+    TYPE_CHECKING
+):  # numpy and the recorder (the model build) stay off the CLI's start-up path (--help)
     from amr_twin.analysis.metrics import StepInfo
     from amr_twin.recording.recorder import RunSeries
 
@@ -52,9 +54,16 @@ class WheelSummary:
     step_sign: float = 1.0
 
     def as_json(self) -> dict:
-        out = {"motion": self.motion, "reference_rpm": self.reference_rpm, "final_rpm": self.final_rpm,
-               "final_rpm_t_s": self.final_rpm_t_s, "true_final_rpm": self.true_final_rpm, "samples": self.samples,
-               "current_a_final": self.current_a_final, "current_a_peak": self.current_a_peak}
+        out = {
+            "motion": self.motion,
+            "reference_rpm": self.reference_rpm,
+            "final_rpm": self.final_rpm,
+            "final_rpm_t_s": self.final_rpm_t_s,
+            "true_final_rpm": self.true_final_rpm,
+            "samples": self.samples,
+            "current_a_final": self.current_a_final,
+            "current_a_peak": self.current_a_peak,
+        }
         if self.step is not None:
             out.update(self.step.as_dict(sign=self.step_sign))
         return out
@@ -115,12 +124,22 @@ class RunSummary:
         """The ``--json`` object (keys in this order; start_pose and from_start only when known)."""
         from dataclasses import asdict
 
-        out = {"command": self.command, "wheel_command": self.wheel_command, "code": self.code, "codes": self.codes,
-               "errors": self.errors, "wheels": {k: w.as_json() for k, w in self.wheels.items()},
-               "final_pose": asdict(self.final_pose), "final_odom_pose": asdict(self.final_odom_pose),
-               "battery": asdict(self.battery), "collisions": self.collisions,
-               "stopped_by_collision": self.stopped_by_collision, "faults": self.faults, "sim_s": self.sim_s,
-               "wall_s": self.wall_s}
+        out = {
+            "command": self.command,
+            "wheel_command": self.wheel_command,
+            "code": self.code,
+            "codes": self.codes,
+            "errors": self.errors,
+            "wheels": {k: w.as_json() for k, w in self.wheels.items()},
+            "final_pose": asdict(self.final_pose),
+            "final_odom_pose": asdict(self.final_odom_pose),
+            "battery": asdict(self.battery),
+            "collisions": self.collisions,
+            "stopped_by_collision": self.stopped_by_collision,
+            "faults": self.faults,
+            "sim_s": self.sim_s,
+            "wall_s": self.wall_s,
+        }
         if self.start_pose is not None:
             out["start_pose"] = asdict(self.start_pose)
         if self.from_start is not None:
@@ -156,12 +175,17 @@ def summary(result, single: bool, start_xy_yaw=None) -> RunSummary:
         pub = signed_published(series, w)
         step = _step(pub, reference) if single else None
         wheels[name] = WheelSummary(
-            motion=int(wc[2 * w]) if wc else 0, reference_rpm=reference,
-            final_rpm=float(pub[-1, 1]) if len(pub) else 0.0, final_rpm_t_s=float(pub[-1, 0]) if len(pub) else None,
-            true_final_rpm=float(series.true_rpm[-1, w]), samples=int(len(pub)),
+            motion=int(wc[2 * w]) if wc else 0,
+            reference_rpm=reference,
+            final_rpm=float(pub[-1, 1]) if len(pub) else 0.0,
+            final_rpm_t_s=float(pub[-1, 0]) if len(pub) else None,
+            true_final_rpm=float(series.true_rpm[-1, w]),
+            samples=int(len(pub)),
             current_a_final=float(series.current_a[last_s, w].mean()),
             current_a_peak=float(np.abs(series.current_a[:, w]).max()),
-            step=step, step_sign=1.0 if reference > 0 else -1.0)
+            step=step,
+            step_sign=1.0 if reference > 0 else -1.0,
+        )
     commands = [dict(c.describe(), t_s=t) for t, c in result.commands]
     x, y, yaw = (float(v) for v in series.pose[-1])
     odom = series.odom[-1, 1:] if len(series.odom) else np.zeros(3)
@@ -169,15 +193,28 @@ def summary(result, single: bool, start_xy_yaw=None) -> RunSummary:
     if start_xy_yaw is not None:
         sx, sy, syaw = start_xy_yaw
         start = Pose2(sx, sy, syaw)
-        moved = FromStart(math.hypot(x - sx, y - sy), math.degrees(math.remainder(yaw - syaw, math.tau)))
+        moved = FromStart(
+            math.hypot(x - sx, y - sy), math.degrees(math.remainder(yaw - syaw, math.tau))
+        )
     return RunSummary(
-        command=(commands[0] if commands else None) if single else commands, wheel_command=wc,
-        code=next((c for c in result.codes if c != 0), 0), codes=result.codes, errors=result.errors,
-        wheels=wheels, final_pose=Pose2(x, y, yaw),
-        final_odom_pose=Pose2(float(odom[0]), float(odom[1]), float(odom[2])), battery=_battery(series),
-        collisions=result.collisions, stopped_by_collision=result.halted, faults=result.faults,
-        sim_s=result.sim_s, wall_s=result.wall_s, start_pose=start, from_start=moved,
-        tyre_timestep=result.tyre_timestep)
+        command=(commands[0] if commands else None) if single else commands,
+        wheel_command=wc,
+        code=next((c for c in result.codes if c != 0), 0),
+        codes=result.codes,
+        errors=result.errors,
+        wheels=wheels,
+        final_pose=Pose2(x, y, yaw),
+        final_odom_pose=Pose2(float(odom[0]), float(odom[1]), float(odom[2])),
+        battery=_battery(series),
+        collisions=result.collisions,
+        stopped_by_collision=result.halted,
+        faults=result.faults,
+        sim_s=result.sim_s,
+        wall_s=result.wall_s,
+        start_pose=start,
+        from_start=moved,
+        tyre_timestep=result.tyre_timestep,
+    )
 
 
 def _step(pub, reference_rpm: float) -> Optional[StepInfo]:
@@ -196,5 +233,10 @@ def _battery(series: RunSeries) -> BatterySummary:
     power = series.battery_v * series.battery_a
     energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(series.t_s)))
     distance = float(np.sum(np.hypot(*np.diff(series.pose[:, :2], axis=0).T)))
-    return BatterySummary(float(series.battery_a.mean()), float(series.battery_v[-1]), energy, distance,
-                          energy / distance if distance > 0.05 else None)
+    return BatterySummary(
+        float(series.battery_a.mean()),
+        float(series.battery_v[-1]),
+        energy,
+        distance,
+        energy / distance if distance > 0.05 else None,
+    )

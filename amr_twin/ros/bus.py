@@ -25,8 +25,14 @@ def _name(name: str) -> str:
 class Subscription:
     """One subscriber of a topic; created by :meth:`Bus.subscribe`."""
 
-    def __init__(self, bus: Bus, topic: str, callback: Callable[[Any], None],
-                 queue_size: int, latency_us: int):
+    def __init__(
+        self,
+        bus: Bus,
+        topic: str,
+        callback: Callable[[Any], None],
+        queue_size: int,
+        latency_us: int,
+    ):
         self.bus, self.topic, self.callback = bus, topic, callback
         self.queue_size, self.latency_us = int(queue_size), int(latency_us)
         self.dropped = 0
@@ -87,35 +93,43 @@ class Bus:
         self._latched: dict[str, Any] = {}
         self._services: dict[str, Callable[[Any], Any]] = {}
         self._taps: list[tuple[Tap, frozenset[str] | None]] = []  # (tap, its topics or None: all)
-        self._taps_by_topic: dict[str, tuple[Tap, ...]] = {}  # each topic's taps, in the order added
+        self._taps_by_topic: dict[
+            str, tuple[Tap, ...]
+        ] = {}  # each topic's taps, in the order added
         self._static: dict[str, TransformStamped] = {}
         self._intercepts: dict[str, Callable[[Any], Any]] = {}
         self.tf = TfBuffer()
 
     # -- topics -----------------------------------------------------------------
-    def advertise(self, topic: str, msg_type: type | None = None, queue_size: int = 10,
-                  latch: bool = False) -> Publisher:
+    def advertise(
+        self, topic: str, msg_type: type | None = None, queue_size: int = 10, latch: bool = False
+    ) -> Publisher:
         """Declare a topic; with ``msg_type`` set, later publishes are type-checked."""
         topic = _name(topic)
         if msg_type is not None:
             known = self._types.setdefault(topic, msg_type)
             if known is not msg_type:
-                raise TypeError(f"topic {topic!r} carries {known.__name__}, not {msg_type.__name__}")
+                raise TypeError(
+                    f"topic {topic!r} carries {known.__name__}, not {msg_type.__name__}"
+                )
         if latch:
             self._latched.setdefault(topic, None)
         return Publisher(self, topic, msg_type, queue_size)
 
-    def subscribe(self, topic: str, callback: Callable[[Any], None], queue_size: int = 10,
-                  latency_us: int = 0) -> Subscription:
+    def subscribe(
+        self, topic: str, callback: Callable[[Any], None], queue_size: int = 10, latency_us: int = 0
+    ) -> Subscription:
         """Call ``callback(msg)`` for each message on ``topic``, ``latency_us`` after publication."""
         topic = _name(topic)
         sub = Subscription(self, topic, callback, queue_size, latency_us)
         self._subs.setdefault(topic, []).append(sub)
         latched = self._latched.get(topic)
         if latched is not None:
+
             def deliver_latched() -> None:
                 if sub.active:
                     sub.callback(latched)
+
             self.clock.schedule_in(max(sub.latency_us, 0), deliver_latched)
         return sub
 
@@ -175,7 +189,9 @@ class Bus:
         self._taps_by_topic.clear()
 
     def _taps_of(self, topic: str) -> tuple[Tap, ...]:
-        taps = self._taps_by_topic[topic] = tuple(t for t, topics in self._taps if topics is None or topic in topics)
+        taps = self._taps_by_topic[topic] = tuple(
+            t for t, topics in self._taps if topics is None or topic in topics
+        )
         return taps
 
     def intercept(self, topic: str, func: Callable[[Any], Any] | None) -> None:
@@ -248,8 +264,9 @@ class Bus:
             raise ServiceCallError(f"service {_name(name)!r} failed: {exc}") from exc
 
     # -- tf ---------------------------------------------------------------------
-    def send_transform(self, transforms: TransformStamped | list[TransformStamped],
-                       static: bool = False) -> None:
+    def send_transform(
+        self, transforms: TransformStamped | list[TransformStamped], static: bool = False
+    ) -> None:
         """Store transforms in :attr:`tf` and publish them on ``tf`` (``tf_static`` if static).
 
         Static: the message carries every static transform sent so far (one per child frame).

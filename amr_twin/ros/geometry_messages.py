@@ -59,8 +59,10 @@ class Quaternion(_Fixed):
 
     def yaw_rad(self) -> float:
         """Heading about +z in (-pi, pi], radians."""
-        return math.atan2(2.0 * (self.w * self.z + self.x * self.y),
-                          1.0 - 2.0 * (self.y * self.y + self.z * self.z))
+        return math.atan2(
+            2.0 * (self.w * self.z + self.x * self.y),
+            1.0 - 2.0 * (self.y * self.y + self.z * self.z),
+        )
 
 
 @dataclass(slots=True)
@@ -173,6 +175,9 @@ class Odometry:
     twist: TwistWithCovariance = field(default_factory=TwistWithCovariance)
 
     def serialized_size(self) -> int:
-        return (self.header.serialized_size() + _string_size(self.child_frame_id)
-                + self.pose.serialized_size() + self.twist.serialized_size())
-
+        return (
+            self.header.serialized_size()
+            + _string_size(self.child_frame_id)
+            + self.pose.serialized_size()
+            + self.twist.serialized_size()
+        )

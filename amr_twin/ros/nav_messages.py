@@ -83,8 +83,15 @@ _POSE = struct.Struct("<7d")
 
 
 def _pose(c: Cdr, p: Pose) -> None:
-    c.f64(p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y, p.orientation.z,
-          p.orientation.w)
+    c.f64(
+        p.position.x,
+        p.position.y,
+        p.position.z,
+        p.orientation.x,
+        p.orientation.y,
+        p.orientation.z,
+        p.orientation.w,
+    )
 
 
 def encode_pose_stamped(msg: PoseStamped) -> bytes:

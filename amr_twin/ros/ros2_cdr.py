@@ -127,6 +127,8 @@ def encode_odometry(msg) -> bytes:
     b += _F64X6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
     b += _f64_bytes(msg.twist.covariance)
     return bytes(b)
+
+
 def encode_tf_message(msg) -> bytes:
     """The CDR payload of a ``tf2_msgs/TFMessage`` message."""
     b = bytearray(_ENCAPSULATION)
@@ -141,6 +143,8 @@ def encode_tf_message(msg) -> bytes:
         t, r = ts.transform.translation, ts.transform.rotation
         b += _F64X7.pack(t.x, t.y, t.z, r.x, r.y, r.z, r.w)
     return bytes(b)
+
+
 def encode_imu(msg) -> bytes:
     """The CDR payload of a ``sensor_msgs/Imu`` message."""
     b = _header(msg.header)
@@ -153,6 +157,8 @@ def encode_imu(msg) -> bytes:
     b += _F64X3.pack(a.x, a.y, a.z)
     b += _f64_bytes(msg.linear_acceleration_covariance)
     return bytes(b)
+
+
 def encode_magnetic_field(msg) -> bytes:
     """The CDR payload of a ``sensor_msgs/MagneticField`` message."""
     b = _header(msg.header)
@@ -161,12 +167,21 @@ def encode_magnetic_field(msg) -> bytes:
     b += _F64X3.pack(f.x, f.y, f.z)
     b += _f64_bytes(msg.magnetic_field_covariance)
     return bytes(b)
+
+
 def encode_laser_scan(msg) -> bytes:
     """The CDR payload of a ``sensor_msgs/LaserScan`` message."""
     c = Cdr()
     _hdr(c, msg.header)
-    c.f32(msg.angle_min, msg.angle_max, msg.angle_increment, msg.time_increment, msg.scan_time,
-          msg.range_min, msg.range_max)
+    c.f32(
+        msg.angle_min,
+        msg.angle_max,
+        msg.angle_increment,
+        msg.time_increment,
+        msg.scan_time,
+        msg.range_min,
+        msg.range_max,
+    )
     c.f32_seq(msg.ranges)
     c.f32_seq(msg.intensities)
     return bytes(c.b)
@@ -181,8 +196,14 @@ def encode_range(msg) -> bytes:
     return bytes(c.b)
 
 
-def encode_battery_state(t_ns: int, voltage_v: float, current_a: float, charge_ah: float,
-                         capacity_ah: float, percentage: float) -> bytes:
+def encode_battery_state(
+    t_ns: int,
+    voltage_v: float,
+    current_a: float,
+    charge_ah: float,
+    capacity_ah: float,
+    percentage: float,
+) -> bytes:
     """The CDR payload of a ``sensor_msgs/BatteryState`` of the lithium pack (frame ``base_link``).
 
     ``current_a`` as ROS states it: negative while discharging. Temperature and cell
@@ -216,8 +237,11 @@ def encode_float64_multi_array(values, labels: str | None = None) -> bytes:
     """
     if labels is None:  # dim count 0, data_offset 0, n, then the doubles from offset 16
         n = len(values)
-        return _EMPTY_LAYOUT + _U32.pack(n) + b"\x00\x00\x00\x00" + _f64_bytes(values) if n else \
-            _EMPTY_LAYOUT + _U32.pack(0)
+        return (
+            _EMPTY_LAYOUT + _U32.pack(n) + b"\x00\x00\x00\x00" + _f64_bytes(values)
+            if n
+            else _EMPTY_LAYOUT + _U32.pack(0)
+        )
     c = Cdr()
     c.u32(1)
     c.string(labels)
@@ -226,6 +250,8 @@ def encode_float64_multi_array(values, labels: str | None = None) -> bytes:
     c.u32(0)  # layout.data_offset
     c.f64_seq(values)
     return bytes(c.b)
+
+
 def encode_float64_multi_array_msg(msg) -> bytes:
     """The CDR payload of a ``std_msgs/Float64MultiArray`` message (its first dimension's label kept)."""
     dim = msg.layout.dim
@@ -242,6 +268,8 @@ def encode_string(msg) -> bytes:
 def encode_clock(msg) -> bytes:
     """The CDR payload of a ``rosgraph_msgs/Clock`` message."""
     return _ENCAPSULATION + _STAMP.pack(msg.clock.sec, msg.clock.nanosec)
+
+
 def encode_twist(msg) -> bytes:
     """The CDR payload of a ``geometry_msgs/Twist`` message."""
     c = Cdr()

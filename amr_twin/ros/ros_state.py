@@ -29,8 +29,19 @@ import copy
 import numpy as np
 
 from amr_twin.ros.tf_buffer import BASE_FRAME
-from amr_twin.ros.geometry_messages import (Odometry, Point, Pose, PoseWithCovariance, Quaternion, TFMessage, Transform,
-                                            TransformStamped, Twist, TwistWithCovariance, Vector3)
+from amr_twin.ros.geometry_messages import (
+    Odometry,
+    Point,
+    Pose,
+    PoseWithCovariance,
+    Quaternion,
+    TFMessage,
+    Transform,
+    TransformStamped,
+    Twist,
+    TwistWithCovariance,
+    Vector3,
+)
 from amr_twin.ros.messages import Clock, Header, Time
 from amr_twin.ros.sensor_messages import JointState
 
@@ -40,8 +51,14 @@ WORLD_FRAME = "world"
 MAP_FRAME = "map"
 FIXED_LINKS = ("laser", "imu_link", "uwb_tag")
 """Links on fixed joints of base_link (static transforms)."""
-MOVING_JOINTS = ("wheel_left_joint", "wheel_right_joint", "caster_front_left_joint", "caster_front_right_joint",
-                 "caster_rear_left_joint", "caster_rear_right_joint")
+MOVING_JOINTS = (
+    "wheel_left_joint",
+    "wheel_right_joint",
+    "caster_front_left_joint",
+    "caster_front_right_joint",
+    "caster_rear_left_joint",
+    "caster_rear_right_joint",
+)
 """The URDF's non-fixed joints, in ``sensor_msgs/JointState`` order."""
 _ZERO36 = np.zeros(36)
 _ZERO36.flags.writeable = False
@@ -54,8 +71,11 @@ def _quat(wxyz) -> Quaternion:
 
 def _stamped(parent: str, child: str, xyz, wxyz, stamp: Time = Time()) -> TransformStamped:
     x, y, z = xyz
-    return TransformStamped(Header(0, stamp, parent), child, Transform(Vector3(float(x), float(y), float(z)),
-                                                                       _quat(wxyz)))
+    return TransformStamped(
+        Header(0, stamp, parent),
+        child,
+        Transform(Vector3(float(x), float(y), float(z)), _quat(wxyz)),
+    )
 
 
 def robot_static_transforms(model) -> list[TransformStamped]:
@@ -71,10 +91,14 @@ def robot_static_transforms(model) -> list[TransformStamped]:
     return out
 
 
-def anchor_transforms(anchors_xyz_m: np.ndarray, frame: str = "uwb_anchor_{}") -> list[TransformStamped]:
+def anchor_transforms(
+    anchors_xyz_m: np.ndarray, frame: str = "uwb_anchor_{}"
+) -> list[TransformStamped]:
     """``map -> uwb_anchor_<i>`` at the anchors' positions (K, 3), m, axes as the map's."""
-    return [_stamped(MAP_FRAME, frame.format(i), xyz, (1.0, 0.0, 0.0, 0.0))
-            for i, xyz in enumerate(np.asarray(anchors_xyz_m, float).reshape(-1, 3))]
+    return [
+        _stamped(MAP_FRAME, frame.format(i), xyz, (1.0, 0.0, 0.0, 0.0))
+        for i, xyz in enumerate(np.asarray(anchors_xyz_m, float).reshape(-1, 3))
+    ]
 
 
 def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -131,15 +155,27 @@ class StateSampler:
         import mujoco
 
         self.joint_names = MOVING_JOINTS
-        joints = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + j) for j in MOVING_JOINTS]
-        self.child_frames = tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])[len(ROBOT):]
-                                  for j in joints)
+        joints = [
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + j) for j in MOVING_JOINTS
+        ]
+        self.child_frames = tuple(
+            mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])[len(ROBOT) :]
+            for j in joints
+        )
         joint_names = [ROBOT + j for j in MOVING_JOINTS]
         bodies = [ROBOT + BASE_FRAME, *(ROBOT + f for f in self.child_frames)]
         root = named.data.qvel.index(ROBOT + "root")  # the free joint's six dofs
         d = named.data
-        self.sample = named.value_rows([(d.qpos, joint_names), (d.qvel, joint_names), (d.qvel, root),
-                                        (d.xpos, bodies), (d.xquat, bodies)], native=native)
+        self.sample = named.value_rows(
+            [
+                (d.qpos, joint_names),
+                (d.qvel, joint_names),
+                (d.qvel, root),
+                (d.xpos, bodies),
+                (d.xquat, bodies),
+            ],
+            native=native,
+        )
         """The grid sampler: ``sample(t_us)`` keeps the state now (the physics at ``t_us``). Where the loop's
         grid runs in Python (a collision open) its row is the C form's too: one ctypes call (2 us against 8 us)."""
         self._taken: np.ndarray | None = None  # a split-off batch's rows (split)
@@ -174,36 +210,56 @@ class StateSampler:
         rows = table[:, 1:]
         nj, nb = len(self.joint_names), 1 + len(self.child_frames)
         k = 2 * nj + 6
-        pos = rows[:, k:k + 3 * nb].reshape(-1, nb, 3)
-        quat = rows[:, k + 3 * nb:].reshape(-1, nb, 4)
+        pos = rows[:, k : k + 3 * nb].reshape(-1, nb, 3)
+        quat = rows[:, k + 3 * nb :].reshape(-1, nb, 4)
         base_q = quat[:, :1]
         inv = base_q * np.array([1.0, -1.0, -1.0, -1.0])
-        out = {"t_us": table[:, 0].astype(np.int64), "q": rows[:, :nj], "qd": rows[:, nj:2 * nj],
-               "link_pos": _rotate_inv(base_q, pos[:, 1:] - pos[:, :1]), "link_quat": _qmul(inv, quat[:, 1:])}
+        out = {
+            "t_us": table[:, 0].astype(np.int64),
+            "q": rows[:, :nj],
+            "qd": rows[:, nj : 2 * nj],
+            "link_pos": _rotate_inv(base_q, pos[:, 1:] - pos[:, :1]),
+            "link_quat": _qmul(inv, quat[:, 1:]),
+        }
         if base:
-            vel = rows[:, 2 * nj:2 * nj + 6]
-            out.update(v_world=vel[:, :3], v_body=_rotate_inv(quat[:, 0], vel[:, :3]), w_body=vel[:, 3:],
-                       pos=pos[:, 0], quat=quat[:, 0])
+            vel = rows[:, 2 * nj : 2 * nj + 6]
+            out.update(
+                v_world=vel[:, :3],
+                v_body=_rotate_inv(quat[:, 0], vel[:, :3]),
+                w_body=vel[:, 3:],
+                pos=pos[:, 0],
+                quat=quat[:, 0],
+            )
         return out
 
 
 def joint_state(t_us: int, names, q, qd) -> JointState:
     """``sensor_msgs/JointState`` of the moving joints: positions (rad, m) and velocities (rad/s, m/s)."""
-    return JointState(Header(0, Time.from_us(t_us), ""), list(names), np.asarray(q, float),
-                      np.asarray(qd, float), np.zeros(0))
+    return JointState(
+        Header(0, Time.from_us(t_us), ""),
+        list(names),
+        np.asarray(q, float),
+        np.asarray(qd, float),
+        np.zeros(0),
+    )
 
 
 def link_transforms(t_us: int, children, link_pos, link_quat) -> TFMessage:
     """``base_link -> <child>`` of the moving joints' links (what robot_state_publisher sends on /tf)."""
     stamp = Time.from_us(t_us)
-    return TFMessage([_stamped(BASE_FRAME, c, p, q, stamp) for c, p, q in zip(children, link_pos, link_quat)])
+    return TFMessage(
+        [_stamped(BASE_FRAME, c, p, q, stamp) for c, p, q in zip(children, link_pos, link_quat)]
+    )
 
 
 def ground_truth(t_us: int, pos, quat, v_body, w_body) -> Odometry:
     """The true pose of ``base_link`` in ``world`` and its twist in ``base_link`` (``nav_msgs/Odometry``)."""
-    return Odometry(Header(0, Time.from_us(t_us), WORLD_FRAME), BASE_FRAME,
-                    PoseWithCovariance(Pose(Point(*pos), _quat(quat)), _ZERO36),
-                    TwistWithCovariance(Twist(Vector3(*v_body), Vector3(*w_body)), _ZERO36))
+    return Odometry(
+        Header(0, Time.from_us(t_us), WORLD_FRAME),
+        BASE_FRAME,
+        PoseWithCovariance(Pose(Point(*pos), _quat(quat)), _ZERO36),
+        TwistWithCovariance(Twist(Vector3(*v_body), Vector3(*w_body)), _ZERO36),
+    )
 
 
 def clock(t_us: int) -> Clock:

@@ -38,7 +38,9 @@ def snapshot(msg: Any) -> Any:
     if kind is Float64:
         return Float64(msg.data)
     if kind is Float64MultiArray and not msg.layout.dim:
-        return Float64MultiArray(MultiArrayLayout(data_offset=msg.layout.data_offset), list(msg.data))
+        return Float64MultiArray(
+            MultiArrayLayout(data_offset=msg.layout.data_offset), list(msg.data)
+        )
     return copy.deepcopy(msg)
 
 
@@ -70,8 +72,14 @@ class RosserialLink:
         Seed of the loss draws.
     """
 
-    def __init__(self, clock: VirtualClock, baud: int = 115200, extra_latency_us: int = 0,
-                 loss_prob: float = 0.0, seed: int = 0):
+    def __init__(
+        self,
+        clock: VirtualClock,
+        baud: int = 115200,
+        extra_latency_us: int = 0,
+        loss_prob: float = 0.0,
+        seed: int = 0,
+    ):
         if baud <= 0:
             raise ValueError(f"baud must be positive, got {baud}")
         if not 0.0 <= loss_prob <= 1.0:
@@ -116,7 +124,9 @@ class RosserialLink:
             Arrival time in microseconds, or ``None`` if the frame is lost.
         """
         if direction not in self._busy_until_us:
-            raise ValueError(f"unknown direction {direction!r}; use {PC_TO_ARDUINO!r} or {ARDUINO_TO_PC!r}")
+            raise ValueError(
+                f"unknown direction {direction!r}; use {PC_TO_ARDUINO!r} or {ARDUINO_TO_PC!r}"
+            )
         n_bytes = frame_bytes(msg)
         start_us = self.busy_until_us(direction)
         end_us = start_us + frame_time_us(n_bytes, self.baud)

@@ -41,8 +41,12 @@ def frame(topic_id: int, message: bytes) -> bytes:
         raise ValueError(f"a rosserial message holds at most 65535 bytes, got {n}")
     lo, hi = n & 0xFF, n >> 8
     tid = struct.pack("<H", topic_id)
-    return (bytes((0xFF, PROTOCOL_VERSION, lo, hi, 255 - (lo + hi) % 256)) + tid + message
-            + bytes((255 - (sum(tid) + sum(message)) % 256,)))
+    return (
+        bytes((0xFF, PROTOCOL_VERSION, lo, hi, 255 - (lo + hi) % 256))
+        + tid
+        + message
+        + bytes((255 - (sum(tid) + sum(message)) % 256,))
+    )
 
 
 def topic_request() -> bytes:
@@ -91,7 +95,7 @@ class TopicInfo:
         strings = []
         for _ in range(3):
             (n,) = struct.unpack_from("<I", message, o)
-            strings.append(message[o + 4:o + 4 + n].decode())
+            strings.append(message[o + 4 : o + 4 + n].decode())
             o += 4 + n
         (buffer_size,) = struct.unpack_from("<i", message, o)
         return cls(topic_id, *strings, buffer_size)
@@ -157,7 +161,7 @@ class FrameParser:
                 if (sum(b[5:]) % 256) != 255:
                     return self._restart(True)
                 first = self._start - n
-                done = Frame(b[5] | b[6] << 8, bytes(b[7:7 + length]), first, self._start - 1)
+                done = Frame(b[5] | b[6] << 8, bytes(b[7 : 7 + length]), first, self._start - 1)
                 b.clear()
                 return [done]
         return []

@@ -65,8 +65,14 @@ class LaserScan:
     intensities: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32))
 
     def serialized_size(self) -> int:
-        return (self.header.serialized_size() + 7 * 4
-                + 4 + 4 * len(self.ranges) + 4 + 4 * len(self.intensities))
+        return (
+            self.header.serialized_size()
+            + 7 * 4
+            + 4
+            + 4 * len(self.ranges)
+            + 4
+            + 4 * len(self.intensities)
+        )
 
 
 @dataclass(slots=True, eq=False)
@@ -84,8 +90,13 @@ class JointState:
     effort: np.ndarray = field(default_factory=_zeros(0))
 
     def serialized_size(self) -> int:
-        return (self.header.serialized_size() + 4 + sum(_string_size(n) for n in self.name)
-                + 12 + 8 * (len(self.position) + len(self.velocity) + len(self.effort)))
+        return (
+            self.header.serialized_size()
+            + 4
+            + sum(_string_size(n) for n in self.name)
+            + 12
+            + 8 * (len(self.position) + len(self.velocity) + len(self.effort))
+        )
 
 
 @dataclass(slots=True)

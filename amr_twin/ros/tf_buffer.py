@@ -22,10 +22,12 @@ class TransformError(LookupError):
 
 
 def _qmul(a: Quaternion, b: Quaternion) -> Quaternion:
-    return Quaternion(a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-                      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-                      a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
-                      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z)
+    return Quaternion(
+        a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+        a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+        a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
+        a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
+    )
 
 
 def _rotate(q: Quaternion, v: Vector3) -> Vector3:
@@ -36,8 +38,10 @@ def _rotate(q: Quaternion, v: Vector3) -> Vector3:
 def _compose(a: Transform, b: Transform) -> Transform:
     """Transform ``a * b`` (apply ``b`` first, then ``a``)."""
     t = _rotate(a.rotation, b.translation)
-    return Transform(Vector3(a.translation.x + t.x, a.translation.y + t.y, a.translation.z + t.z),
-                     _qmul(a.rotation, b.rotation))
+    return Transform(
+        Vector3(a.translation.x + t.x, a.translation.y + t.y, a.translation.z + t.z),
+        _qmul(a.rotation, b.rotation),
+    )
 
 
 def _inverse(a: Transform) -> Transform:

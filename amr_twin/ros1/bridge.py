@@ -24,7 +24,6 @@ LOG = logging.getLogger(__name__)
 FIRMWARE_TOPICS = ("wheel_Command", "wheel0_Vel", "wheel1_Vel")
 
 
-
 class Ros1Bridge:
     """Publish ``twin`` on the ROS 1 graph rospy joined, and take its inputs; a sink of ``pacer``.
 
@@ -49,7 +48,9 @@ class Ros1Bridge:
         self._clock_period_us = int(clock_period_us)
         self.out = Outbox(self._clock_period_us)
         self._closed = False
-        self._from_graph: str | None = None  # the bus topic of a message being handed over from the graph
+        self._from_graph: str | None = (
+            None  # the bus topic of a message being handed over from the graph
+        )
         self._lock = threading.Lock()
         sensors = "lidar" in twin.sensors
         skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
@@ -57,22 +58,34 @@ class Ros1Bridge:
             skip.update(FIRMWARE_TOPICS)
 
         def pub(topic, typ, latch=False):
-            with warnings.catch_warnings():  # rospy warns of a publisher without a queue: this one is meant
+            with (
+                warnings.catch_warnings()
+            ):  # rospy warns of a publisher without a queue: this one is meant
                 warnings.simplefilter("ignore")
                 return rospy.Publisher(topic, conv.ros_class(typ), queue_size=None, latch=latch)
 
-        self.pubs = {bus: pub(topic.lstrip("/"), typ) for bus, (topic, typ, _enc) in BUS_TOPICS.items()
-                     if bus not in skip and not (bus == "uwb/range" and "uwb" not in twin.sensors)}
+        self.pubs = {
+            bus: pub(topic.lstrip("/"), typ)
+            for bus, (topic, typ, _enc) in BUS_TOPICS.items()
+            if bus not in skip and not (bus == "uwb/range" and "uwb" not in twin.sensors)
+        }
         self.pubs["tf_static"] = pub("tf_static", "tf2_msgs/TFMessage", latch=True)
         self.tf = self.pubs["tf"]
         self.map_tf = MapTransform()
         """``map -> odom`` on ``/tf`` from the localisation's pose in ``map`` (:mod:`amr_twin.ros1.map_transform`)."""
-        self._fast = {bus: (p, WRITERS[BUS_TOPICS[bus][1]]) for bus, p in self.pubs.items()
-                      if bus in BUS_TOPICS and BUS_TOPICS[bus][1] in WRITERS and bus != "wheel_Command_Service/request"}
+        self._fast = {
+            bus: (p, WRITERS[BUS_TOPICS[bus][1]])
+            for bus, p in self.pubs.items()
+            if bus in BUS_TOPICS
+            and BUS_TOPICS[bus][1] in WRITERS
+            and bus != "wheel_Command_Service/request"
+        }
         """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to the outbox."""
         self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
-        self.state_pubs = {"/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
-                           "/joint_states": pub("joint_states", "sensor_msgs/JointState")}
+        self.state_pubs = {
+            "/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
+            "/joint_states": pub("joint_states", "sensor_msgs/JointState"),
+        }
         self.status = StatusTopics(twin, conv, self.out, pub)
         """``/twin/*`` rows, ``/battery_state``, ``/diagnostics`` (:mod:`amr_twin.ros1.status_topics`)."""
         self.description_pub = pub("robot_description", "std_msgs/String", latch=True)
@@ -80,24 +93,39 @@ class Ros1Bridge:
         self.pubs["tf_static"].publish(conv.to_ros(TFMessage(self.bus.static_transforms())))
         self._subs = []
         if firmware_topics:
-            self._subs.append(rospy.Subscriber("wheel_Command", conv.ros_class("std_msgs/Float64MultiArray"),
-                                               self._on_wheel_command, queue_size=100))
-        self._subs.append(rospy.Subscriber("cmd_vel", conv.ros_class("geometry_msgs/Twist"), self._on_cmd_vel,
-                                           queue_size=100))
+            self._subs.append(
+                rospy.Subscriber(
+                    "wheel_Command",
+                    conv.ros_class("std_msgs/Float64MultiArray"),
+                    self._on_wheel_command,
+                    queue_size=100,
+                )
+            )
+        self._subs.append(
+            rospy.Subscriber(
+                "cmd_vel", conv.ros_class("geometry_msgs/Twist"), self._on_cmd_vel, queue_size=100
+            )
+        )
         self._services = []
         if self.bus.has_service("start_motor"):
             from std_srvs.srv import Empty, EmptyResponse
 
             for name in ("start_motor", "stop_motor"):
+
                 def handler(_req, name=name):
                     self.pacer.call(lambda: self.bus.call_service(name, None))
                     return EmptyResponse()
+
                 self._services.append(rospy.Service(name, Empty, handler))
         self._state = ros_state.StateSampler(twin.observables.model, twin.observables.named)
         twin.on_grid(self._state.sample)
         self._state.sample(twin.t_phys_us)
-        self._frames = StateBlocks(self._state.joint_names, self._state.child_frames, ros_state.BASE_FRAME,
-                                   ros_state.WORLD_FRAME)
+        self._frames = StateBlocks(
+            self._state.joint_names,
+            self._state.child_frames,
+            ros_state.BASE_FRAME,
+            ros_state.WORLD_FRAME,
+        )
         twin.on_message(self._tap)
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
@@ -128,8 +156,10 @@ class Ros1Bridge:
         if not Outbox.wanted(pub):
             return
         if topic == "wheel_Command_Service/request":
-            msg = Float64MultiArray(MultiArrayLayout([MultiArrayDimension(REQUEST_FIELDS, 4, 4)]),
-                                    [float(msg.motionL), float(msg.speedL), float(msg.motionR), float(msg.speedR)])
+            msg = Float64MultiArray(
+                MultiArrayLayout([MultiArrayDimension(REQUEST_FIELDS, 4, 4)]),
+                [float(msg.motionL), float(msg.speedL), float(msg.motionR), float(msg.speedR)],
+            )
         writer = WRITERS.get(msg._type)
         if writer is None:
             self.status.put_ros(pub, self.conv.to_ros(msg), t_us)
@@ -164,20 +194,30 @@ class Ros1Bridge:
 
     def _publish_state(self, t_us: int) -> None:
         batch = self._state.split(t_us)
-        gt, js, out = self.state_pubs["/twin/ground_truth"], self.state_pubs["/joint_states"], self.out
+        gt, js, out = (
+            self.state_pubs["/twin/ground_truth"],
+            self.state_pubs["/joint_states"],
+            self.out,
+        )
         want_gt, want_js, want_tf = Outbox.wanted(gt), Outbox.wanted(js), Outbox.wanted(self.tf)
         if not (len(batch) and (want_gt or want_js or want_tf)):
             return
         a = batch.arrays(0 if want_gt else JOINT_STATE_PERIOD_US, want_gt)
         t = a["t_us"]
         if want_gt:
-            out.put_block(gt, t.tolist(), self._frames.ground_truth(t, a["pos"], a["quat"], a["v_body"], a["w_body"]))
+            out.put_block(
+                gt,
+                t.tolist(),
+                self._frames.ground_truth(t, a["pos"], a["quat"], a["v_body"], a["w_body"]),
+            )
             keep = t % JOINT_STATE_PERIOD_US == 0
             t, a = t[keep], {key: a[key][keep] for key in ("q", "qd", "link_pos", "link_quat")}
         if want_js:
             out.put_block(js, t.tolist(), self._frames.joint_states(t, a["q"], a["qd"]))
         if want_tf:
-            out.put_block(self.tf, t.tolist(), self._frames.link_transforms(t, a["link_pos"], a["link_quat"]))
+            out.put_block(
+                self.tf, t.tolist(), self._frames.link_transforms(t, a["link_pos"], a["link_quat"])
+            )
 
     # -- in (rospy's threads) ------------------------------------------------------------------
     def _own(self, msg) -> bool:
@@ -191,7 +231,9 @@ class Ros1Bridge:
         except InputError as exc:
             with self._lock:
                 self.dropped += 1
-            LOG.warning("ros1: dropped %s from %s: %s", what, msg._connection_header.get("callerid"), exc)
+            LOG.warning(
+                "ros1: dropped %s from %s: %s", what, msg._connection_header.get("callerid"), exc
+            )
             return
 
         def act():
@@ -200,6 +242,7 @@ class Ros1Bridge:
                 self.bus.publish(topic, value)
             finally:
                 self._from_graph = None
+
         try:
             self.pacer.post(act)
         except RuntimeError:  # the twin has stopped
@@ -222,6 +265,11 @@ class Ros1Bridge:
             sub.unregister()
         for srv in self._services:
             srv.shutdown()
-        for pub in [*self.pubs.values(), self.clock_pub, *self.state_pubs.values(), *self.status.publishers,
-                    self.description_pub]:
+        for pub in [
+            *self.pubs.values(),
+            self.clock_pub,
+            *self.state_pubs.values(),
+            *self.status.publishers,
+            self.description_pub,
+        ]:
             pub.unregister()

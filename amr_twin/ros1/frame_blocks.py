@@ -52,20 +52,45 @@ class StateBlocks:
     def __init__(self, joint_names, child_frames, parent: str, world: str = "world"):
         n = len(joint_names)
         names = b"".join(_string(name) for name in joint_names)
-        head = np.void(_I.pack(0) + _I.pack(n) + names + _I.pack(n))  # frame_id "", the names, q's count
-        self._js = _Layout([("seq", _U4), ("stamp", _U4, (2,)), ("head", head.dtype), ("q", _F8, (n,)),
-                            ("nqd", _U4), ("qd", _F8, (n,)), ("neffort", _U4)], {"head": head, "nqd": n})
+        head = np.void(
+            _I.pack(0) + _I.pack(n) + names + _I.pack(n)
+        )  # frame_id "", the names, q's count
+        self._js = _Layout(
+            [
+                ("seq", _U4),
+                ("stamp", _U4, (2,)),
+                ("head", head.dtype),
+                ("q", _F8, (n,)),
+                ("nqd", _U4),
+                ("qd", _F8, (n,)),
+                ("neffort", _U4),
+            ],
+            {"head": head, "nqd": n},
+        )
         self._k = len(child_frames)
         fields, constants = [("count", _U4)], {"count": self._k}
         for i, child in enumerate(child_frames):
             blob = np.void(_string(parent) + _string(child))
-            fields += [(f"stamp{i}", _U4, (3,)), (f"frames{i}", blob.dtype), (f"pose{i}", _F8, (7,))]
+            fields += [
+                (f"stamp{i}", _U4, (3,)),
+                (f"frames{i}", blob.dtype),
+                (f"pose{i}", _F8, (7,)),
+            ]
             constants[f"frames{i}"] = blob
         self._tf = _Layout(fields, constants)
         frames = np.void(_string(world) + _string(parent))
-        self._gt = _Layout([("seq", _U4), ("stamp", _U4, (2,)), ("frames", frames.dtype), ("pose", _F8, (7,)),
-                            ("pose_cov", _F8, (36,)), ("twist", _F8, (6,)), ("twist_cov", _F8, (36,))],
-                           {"frames": frames})
+        self._gt = _Layout(
+            [
+                ("seq", _U4),
+                ("stamp", _U4, (2,)),
+                ("frames", frames.dtype),
+                ("pose", _F8, (7,)),
+                ("pose_cov", _F8, (36,)),
+                ("twist", _F8, (6,)),
+                ("twist_cov", _F8, (36,)),
+            ],
+            {"frames": frames},
+        )
 
     def joint_states(self, t_us, q, qd) -> bytes:
         """Positions ``q`` and velocities ``qd`` (m, n) at instants ``t_us`` (m,); no efforts."""
@@ -120,8 +145,18 @@ def float64_rows_block(rows) -> bytes:
     return rec.tobytes()
 
 
-_BATTERY = _Layout([("seq", _U4), ("stamp", _U4, (2,)), ("frame_id", _U4), ("values", "<f4", (7,)),
-                    ("enums", "u1", (3,)), ("present", "u1"), ("tail", _U4, (4,))], {"present": 1})
+_BATTERY = _Layout(
+    [
+        ("seq", _U4),
+        ("stamp", _U4, (2,)),
+        ("frame_id", _U4),
+        ("values", "<f4", (7,)),
+        ("enums", "u1", (3,)),
+        ("present", "u1"),
+        ("tail", _U4, (4,)),
+    ],
+    {"present": 1},
+)
 
 
 def battery_block(t_us, voltage_v, current_a, charge_ah, capacity_ah: float, soc) -> bytes:

@@ -15,8 +15,19 @@ import sys
 from pathlib import Path
 
 DIST_PACKAGES = "/usr/lib/python3/dist-packages"
-PYTHON_MODULES = ("rospy", "rosgraph", "rosbag", "std_msgs", "std_srvs", "sensor_msgs", "nav_msgs", "geometry_msgs",
-                  "tf2_msgs", "rosgraph_msgs", "diagnostic_msgs")
+PYTHON_MODULES = (
+    "rospy",
+    "rosgraph",
+    "rosbag",
+    "std_msgs",
+    "std_srvs",
+    "sensor_msgs",
+    "nav_msgs",
+    "geometry_msgs",
+    "tf2_msgs",
+    "rosgraph_msgs",
+    "diagnostic_msgs",
+)
 """The Python packages of Debian's ROS 1 the bridge imports."""
 TOOLS = ("roscore", "rosmaster")
 
@@ -39,8 +50,10 @@ def missing() -> str | None:
     absent += [m for m in PYTHON_MODULES if not (Path(DIST_PACKAGES) / m).is_dir()]
     if not absent:
         return None
-    return (f"ROS 1 is not installed ({', '.join(absent)} missing): install Debian's packages "
-            f"{' '.join(debian_packages())} (bash {ros_folder() / 'install.sh'})")
+    return (
+        f"ROS 1 is not installed ({', '.join(absent)} missing): install Debian's packages "
+        f"{' '.join(debian_packages())} (bash {ros_folder() / 'install.sh'})"
+    )
 
 
 def import_rospy():

@@ -40,7 +40,9 @@ class MapTransform:
 
     TOPICS = frozenset((ODOM_TOPIC, *SOURCES))
 
-    def __init__(self, parent: str = MAP_FRAME, child: str = ODOM_FRAME, period_us: int = PERIOD_US):
+    def __init__(
+        self, parent: str = MAP_FRAME, child: str = ODOM_FRAME, period_us: int = PERIOD_US
+    ):
         self.period_us = int(period_us)
         self.source: str | None = None
         """The bus topic the map pose is taken from (the first to publish one in ``map``)."""
@@ -74,8 +76,20 @@ class MapTransform:
         x, y, yaw_rad = _map_from_odom((p.position.x, p.position.y, yaw), self._odom)
         self.sent += 1
         half = 0.5 * yaw_rad
-        return t_us, self._frames.pack(1, 0, stamp.sec, stamp.nanosec, self._names, x, y, 0.0, 0.0, 0.0,
-                                       math.sin(half), math.cos(half))
+        return t_us, self._frames.pack(
+            1,
+            0,
+            stamp.sec,
+            stamp.nanosec,
+            self._names,
+            x,
+            y,
+            0.0,
+            0.0,
+            0.0,
+            math.sin(half),
+            math.cos(half),
+        )
 
 
 def _map_from_odom(map_base, odom_base) -> tuple[float, float, float]:

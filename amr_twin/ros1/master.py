@@ -56,7 +56,9 @@ def master_pid(uri: str, timeout_s: float = 1.0) -> int | None:
     """The pid of the master answering at ``uri`` within ``timeout_s`` (None: none answers): a new pid is a new
     master, which knows nothing of the nodes registered with the one before."""
     try:
-        code, _msg, pid = xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport(timeout_s)).getPid("/amr_twin_check")
+        code, _msg, pid = xmlrpc.client.ServerProxy(
+            uri, transport=_TimeoutTransport(timeout_s)
+        ).getPid("/amr_twin_check")
     except (OSError, xmlrpc.client.Error):
         return None
     return int(pid) if code == 1 else None
@@ -94,7 +96,9 @@ class Master:
             proc.wait()
 
 
-def start_roscore(timeout_s: float = 30.0, log_dir: str | None = None, port: int | None = None) -> Master:
+def start_roscore(
+    timeout_s: float = 30.0, log_dir: str | None = None, port: int | None = None
+) -> Master:
     """``roscore -p PORT`` on ``port`` (None: a free one), once its master answers (RuntimeError, one line, if it
     does not)."""
     port = free_port() if port is None else port
@@ -104,9 +108,15 @@ def start_roscore(timeout_s: float = 30.0, log_dir: str | None = None, port: int
     if log_dir is not None:
         env["ROS_LOG_DIR"] = log_dir
     err = tempfile.TemporaryFile()  # roscore's own messages, read only if it fails to start
-    proc = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=err, preexec_fn=_die_with_parent,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        ["roscore", "-p", str(port)],
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=err,
+        preexec_fn=_die_with_parent,
+        start_new_session=True,
+    )
     master = Master(uri, proc)
     deadline = time.monotonic() + timeout_s
     while master_problem(uri, 1.0) is not None:

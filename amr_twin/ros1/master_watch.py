@@ -28,7 +28,13 @@ class MasterWatch:
     with the registrations; ``say`` prints one line at a loss and at each registration."""
 
     def __init__(self, uri: str, rospy, params: dict, say=print, period_s: float = PERIOD_S):
-        self.uri, self.rospy, self.params, self.say, self.period_s = uri, rospy, dict(params), say, period_s
+        self.uri, self.rospy, self.params, self.say, self.period_s = (
+            uri,
+            rospy,
+            dict(params),
+            say,
+            period_s,
+        )
         self.pid = master_pid(uri, TIMEOUT_S)
         self.lost = False
         self.losses = 0
@@ -45,8 +51,10 @@ class MasterWatch:
             if pid is None:
                 if not self.lost:
                     self.lost, self.losses = True, self.losses + 1
-                    self.say(f"ros1: the ROS master at {self.uri} does not answer: the twin simulates on (its "
-                             "subscribers stay connected) and registers again when a master answers there")
+                    self.say(
+                        f"ros1: the ROS master at {self.uri} does not answer: the twin simulates on (its "
+                        "subscribers stay connected) and registers again when a master answers there"
+                    )
                 continue
             if self.lost or pid != self.pid:
                 try:
@@ -54,8 +62,10 @@ class MasterWatch:
                 except (OSError, xmlrpc.client.Error):
                     continue  # the master is still starting: the next look tries again
                 self.pid, self.lost, self.registrations = pid, False, self.registrations + 1
-                self.say(f"ros1: registered again with the ROS master at {self.uri} (pid {pid}): "
-                         f"{counts[0]} publishers, {counts[1]} subscribers, {counts[2]} services")
+                self.say(
+                    f"ros1: registered again with the ROS master at {self.uri} (pid {pid}): "
+                    f"{counts[0]} publishers, {counts[1]} subscribers, {counts[2]} services"
+                )
 
     def register(self) -> tuple[int, int, int]:
         """Register the node's publishers, subscribers and services and set the parameters; their counts."""
@@ -68,7 +78,11 @@ class MasterWatch:
         for key, value in self.params.items():
             master.setParam(me, key, value)
         topics = get_topic_manager()
-        pubs, subs, services = topics.get_publications(), topics.get_subscriptions(), get_service_manager().get_services()
+        pubs, subs, services = (
+            topics.get_publications(),
+            topics.get_subscriptions(),
+            get_service_manager().get_services(),
+        )
         for name, data_type in pubs:
             master.registerPublisher(me, name, data_type, api)
         for name, data_type in subs:

@@ -39,7 +39,9 @@ class Ros1Messages:
         if cls is None:
             cls = self._get_class(type_name)
             if cls is None:
-                raise ValueError(f"no ROS 1 message class {type_name} (install its python3-*-msgs package)")
+                raise ValueError(
+                    f"no ROS 1 message class {type_name} (install its python3-*-msgs package)"
+                )
             self._classes[type_name] = cls
         return cls
 
@@ -48,8 +50,9 @@ class Ros1Messages:
         cls = self.ros_class(msg._type)
         plan = self._plans.get(type(msg))
         if plan is None:
-            plan = self._plans[type(msg)] = [(name, self._converter(typ)) for name, typ in
-                                             zip(cls.__slots__, cls._slot_types)]
+            plan = self._plans[type(msg)] = [
+                (name, self._converter(typ)) for name, typ in zip(cls.__slots__, cls._slot_types)
+            ]
         out = cls()
         for name, convert in plan:
             setattr(out, name, convert(getattr(msg, name)))
@@ -62,7 +65,7 @@ class Ros1Messages:
         if typ == "duration":
             return lambda t: rospy.Duration(t.sec, t.nanosec)
         if "[" in typ:
-            base = typ[:typ.index("[")]
+            base = typ[: typ.index("[")]
             if "/" in base or base == "Header":
                 return lambda values: [self.to_ros(v) for v in values]
             return lambda values: values.tolist() if hasattr(values, "tolist") else list(values)
@@ -73,15 +76,19 @@ class Ros1Messages:
 
 def twist_from_ros(msg) -> Twist:
     """A rospy ``geometry_msgs/Twist`` as the twin's (m/s, rad/s); InputError if a value is not finite."""
-    return Twist(Vector3(*(_finite(getattr(msg.linear, a), f"linear.{a}") for a in "xyz")),
-                 Vector3(*(_finite(getattr(msg.angular, a), f"angular.{a}") for a in "xyz")))
+    return Twist(
+        Vector3(*(_finite(getattr(msg.linear, a), f"linear.{a}") for a in "xyz")),
+        Vector3(*(_finite(getattr(msg.angular, a), f"angular.{a}") for a in "xyz")),
+    )
 
 
 def wheel_command_from_ros(msg) -> Float64MultiArray:
     """A rospy ``std_msgs/Float64MultiArray`` on ``wheel_Command`` as the twin's, checked as a request
     ``[motion, RPM, motion, RPM]`` (InputError naming the field otherwise)."""
     req = check_request(list(msg.data))
-    return Float64MultiArray(data=[float(req.motionL), float(req.speedL), float(req.motionR), float(req.speedR)])
+    return Float64MultiArray(
+        data=[float(req.motionL), float(req.speedL), float(req.motionR), float(req.speedR)]
+    )
 
 
 __all__ = ["InputError", "Ros1Messages", "twist_from_ros", "wheel_command_from_ros"]

@@ -42,7 +42,9 @@ class NavigationMaps:
         with warnings.catch_warnings():  # a latched map without a queue: published once
             warnings.simplefilter("ignore")
             self.map_pub = rospy.Publisher("map", grid_cls, latch=True, queue_size=None)
-        self.global_pub = rospy.Publisher("move_base/global_costmap/costmap", grid_cls, queue_size=2)
+        self.global_pub = rospy.Publisher(
+            "move_base/global_costmap/costmap", grid_cls, queue_size=2
+        )
         self.local_pub = rospy.Publisher("move_base/local_costmap/costmap", grid_cls, queue_size=2)
         static = navigator.costmap.static
         grid = np.where(static.occupied, 100, np.where(static.unknown, -1, 0)).astype(np.int8)
@@ -54,8 +56,13 @@ class NavigationMaps:
         cm = self.nav.costmap
         stamp = Time.from_us(t_us)
         h, w = data.shape
-        info = MapMetaData(stamp, cm.resolution_m, w, h,
-                           Pose(Point(float(origin_xy[0]), float(origin_xy[1]), 0.0), Quaternion()))
+        info = MapMetaData(
+            stamp,
+            cm.resolution_m,
+            w,
+            h,
+            Pose(Point(float(origin_xy[0]), float(origin_xy[1]), 0.0), Quaternion()),
+        )
         return OccupancyGrid(Header(0, stamp, MAP_FRAME), info, data.reshape(-1))
 
     def _on_local(self, _topic: str, msg, _t_us: int) -> None:
@@ -68,7 +75,9 @@ class NavigationMaps:
             return
         self._next_global_us = t_us + GLOBAL_PERIOD_US
         cm = self.nav.costmap
-        self.global_pub.publish(self.conv.to_ros(self._grid(cost_to_grid(cm.cost()), cm.origin_xy_m, t_us)))
+        self.global_pub.publish(
+            self.conv.to_ros(self._grid(cost_to_grid(cm.cost()), cm.origin_xy_m, t_us))
+        )
 
     def close(self) -> None:
         """Stop publishing."""

@@ -30,8 +30,10 @@ def missing() -> str | None:
     absent = [m for m in PYTHON_MODULES if not (Path(DIST_PACKAGES) / m).is_dir()]
     if not absent:
         return None
-    return (f"the move_base action server needs {', '.join(absent)}: install Debian's "
-            f"{' '.join(DEBIAN_PACKAGES)}")
+    return (
+        f"the move_base action server needs {', '.join(absent)}: install Debian's "
+        f"{' '.join(DEBIAN_PACKAGES)}"
+    )
 
 
 def pose_problem(pose_stamped) -> tuple[str, tuple | None]:
@@ -39,8 +41,10 @@ def pose_problem(pose_stamped) -> tuple[str, tuple | None]:
     ``(x_m, y_m, yaw_rad)``; move_base's checks: its frame, finite numbers, a rotation about z alone."""
     frame = pose_stamped.header.frame_id.lstrip("/")
     if frame != GLOBAL_FRAME:
-        return (f"target_pose.header.frame_id {pose_stamped.header.frame_id!r}: goals are taken in "
-                f"{GLOBAL_FRAME!r} only (the global frame)"), None
+        return (
+            f"target_pose.header.frame_id {pose_stamped.header.frame_id!r}: goals are taken in "
+            f"{GLOBAL_FRAME!r} only (the global frame)"
+        ), None
     p, q = pose_stamped.pose.position, pose_stamped.pose.orientation
     if not all(math.isfinite(v) for v in (p.x, p.y, p.z, q.x, q.y, q.z, q.w)):
         return "target_pose.pose: every value must be finite", None
@@ -49,8 +53,15 @@ def pose_problem(pose_stamped) -> tuple[str, tuple | None]:
         return "target_pose.pose.orientation: a quaternion of length 0 is no rotation", None
     x, y, z, w = q.x / norm, q.y / norm, q.z / norm, q.w / norm
     if 1.0 - 2.0 * (x * x + y * y) < 1.0 - 1e-3:  # the rotated z axis' vertical component
-        return "target_pose.pose.orientation: must be a rotation about z (the goal is on the floor)", None
-    return "", (float(p.x), float(p.y), math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
+        return (
+            "target_pose.pose.orientation: must be a rotation about z (the goal is on the floor)",
+            None,
+        )
+    return "", (
+        float(p.x),
+        float(p.y),
+        math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)),
+    )
 
 
 class NavigationServer:
@@ -67,10 +78,19 @@ class NavigationServer:
         self.rospy = rospy = import_rospy()
         import actionlib
         from geometry_msgs.msg import PoseStamped
-        from move_base_msgs.msg import MoveBaseAction, MoveBaseActionGoal, MoveBaseFeedback, MoveBaseResult
+        from move_base_msgs.msg import (
+            MoveBaseAction,
+            MoveBaseActionGoal,
+            MoveBaseFeedback,
+            MoveBaseResult,
+        )
 
         self.twin, self.pacer, self.nav, self.checker = twin, pacer, navigator, checker
-        self._feedback_cls, self._result_cls, self._action_goal_cls = MoveBaseFeedback, MoveBaseResult, MoveBaseActionGoal
+        self._feedback_cls, self._result_cls, self._action_goal_cls = (
+            MoveBaseFeedback,
+            MoveBaseResult,
+            MoveBaseActionGoal,
+        )
         self._pose_cls = PoseStamped
         self._ids = actionlib.GoalIDGenerator()
         self._goals: list = []
@@ -79,12 +99,18 @@ class NavigationServer:
         self._closed = False
         self.set_time(twin.clock.now_us)
         self.maps = NavigationMaps(twin, navigator)
-        self.server = actionlib.ActionServer(ACTION, MoveBaseAction, self._on_goal, self._on_cancel, auto_start=False)
+        self.server = actionlib.ActionServer(
+            ACTION, MoveBaseAction, self._on_goal, self._on_cancel, auto_start=False
+        )
         self.server.start()
-        self._simple = rospy.Subscriber(SIMPLE_GOAL, PoseStamped, self._on_simple_goal, queue_size=10)
+        self._simple = rospy.Subscriber(
+            SIMPLE_GOAL, PoseStamped, self._on_simple_goal, queue_size=10
+        )
         pacer.sinks.append(self)
-        say(f"ros1: move_base on {rospy.resolve_name(ACTION)} (goals in frame {GLOBAL_FRAME!r}; "
-            f"{rospy.resolve_name(SIMPLE_GOAL)}), maps on {rospy.resolve_name('map')}")
+        say(
+            f"ros1: move_base on {rospy.resolve_name(ACTION)} (goals in frame {GLOBAL_FRAME!r}; "
+            f"{rospy.resolve_name(SIMPLE_GOAL)}), maps on {rospy.resolve_name('map')}"
+        )
 
     def set_time(self, t_us: int) -> None:
         """rospy's time in the twin's process: simulated ``t_us`` (the twin does not read its own ``/clock``)."""
@@ -120,7 +146,11 @@ class NavigationServer:
     # -- the twin's thread ---------------------------------------------------------------------------------
     def _start(self, handle, goal, problem: str) -> None:
         if not problem:
-            here = self.nav.pose_source.pose() if self.nav.pose_source.ready else self.twin.start_xy_yaw
+            here = (
+                self.nav.pose_source.pose()
+                if self.nav.pose_source.ready
+                else self.twin.start_xy_yaw
+            )
             if self.checker.plan(here[:2], goal[:2]) is None:
                 problem = self.checker.last_error
         if problem:
@@ -178,8 +208,10 @@ class NavigationServer:
         self._closed = True
         t_s = self.twin.clock.now_s
         for handle, outcome in self._goals:
-            handle.set_aborted(self._result_cls(), f"the twin's run ended at t = {t_s:.2f} s before the goal "
-                                                   f"had an outcome")
+            handle.set_aborted(
+                self._result_cls(),
+                f"the twin's run ended at t = {t_s:.2f} s before the goal had an outcome",
+            )
         self._goals.clear()
         self._simple.unregister()
         self.maps.close()

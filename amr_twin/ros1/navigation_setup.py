@@ -29,8 +29,10 @@ class YieldingCommand:
     def send(self, twin) -> int:
         if self.navigator.active is None:
             return self.command.send(twin)
-        self.say(f"ros1: the run's {self.command.kind} command at t = {twin.t_s:.2f} s not sent: a move_base goal "
-                 "is active (the navigator drives)")
+        self.say(
+            f"ros1: the run's {self.command.kind} command at t = {twin.t_s:.2f} s not sent: a move_base goal "
+            "is active (the navigator drives)"
+        )
         return 0
 
     def describe(self) -> dict:
@@ -66,8 +68,10 @@ class RunNavigation:
         nav = cls(cfg, static)
         here = np.array((start or default_start(world))[:2], float)
         if not nav._checker().costmap.cells(here[None])[2][0]:
-            raise ValueError(f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of --world {world}: give "
-                             "--start X_M,Y_M,YAW_DEG on it")
+            raise ValueError(
+                f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of --world {world}: give "
+                "--start X_M,Y_M,YAW_DEG on it"
+            )
         return nav
 
     def _checker(self):
@@ -77,15 +81,23 @@ class RunNavigation:
         from amr_twin.navigation.stack import make_costmap
 
         if self.checker is None:
-            self.checker = GlobalPlanner(make_costmap(self.static, robot_footprint(self.cfg), self.cfg.navigation))
+            self.checker = GlobalPlanner(
+                make_costmap(self.static, robot_footprint(self.cfg), self.cfg.navigation)
+            )
         return self.checker
 
     def attach(self, twin, seed: int = 0):
         """Put the stack on ``twin``'s bus, idle; returns the navigator."""
         from amr_twin.navigation.stack import NavigationOptions, attach
 
-        self.navigator = attach(twin, self.cfg, self.static, NavigationOptions(goals=(), seed=seed), publish=True,
-                                drive=False)
+        self.navigator = attach(
+            twin,
+            self.cfg,
+            self.static,
+            NavigationOptions(goals=(), seed=seed),
+            publish=True,
+            drive=False,
+        )
         return self.navigator
 
     def yielding(self, steps, say=print) -> list:

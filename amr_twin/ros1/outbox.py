@@ -44,7 +44,9 @@ class _Queue:
         removed."""
         times, frames = self.times, self.frames
         if not self.ordered:
-            order = sorted(range(len(times)), key=times.__getitem__)  # stable: put order within an instant
+            order = sorted(
+                range(len(times)), key=times.__getitem__
+            )  # stable: put order within an instant
             times[:] = [times[i] for i in order]
             frames[:] = [frames[i] for i in order]
             self.ordered = True
@@ -87,7 +89,9 @@ class Outbox:
 
     def put(self, pub, payload: bytes, t_us: int = 0) -> None:
         """Queue ``payload`` (a message serialised in the ROS 1 format, of simulated instant ``t_us``)."""
-        q = self._queues.get(pub.impl)  # _queue's work, inlined: the tap's path, a few thousand a second
+        q = self._queues.get(
+            pub.impl
+        )  # _queue's work, inlined: the tap's path, a few thousand a second
         if q is None:
             q = self._queues[pub.impl] = _Queue()
         times = q.times
@@ -105,7 +109,7 @@ class Outbox:
         q = self._queue(pub.impl, t_us[0])
         size, view = len(block) // n, memoryview(block)
         q.times += t_us
-        q.frames += [view[i:i + size] for i in range(0, n * size, size)]
+        q.frames += [view[i : i + size] for i in range(0, n * size, size)]
 
     def release(self, until_us: int, wait=None) -> None:
         """Write every message of an instant up to ``until_us``: at each ``period_us`` point after

@@ -14,7 +14,12 @@ import os
 import re
 
 REMAP = ":="
-ENVIRONMENT = {"__master": "ROS_MASTER_URI", "__ip": "ROS_IP", "__hostname": "ROS_HOSTNAME", "__ns": "ROS_NAMESPACE"}
+ENVIRONMENT = {
+    "__master": "ROS_MASTER_URI",
+    "__ip": "ROS_IP",
+    "__hostname": "ROS_HOSTNAME",
+    "__ns": "ROS_NAMESPACE",
+}
 """The special keys that ROS 1 client libraries read as these environment variables."""
 _NAME = re.compile(r"^(~|/)?[A-Za-z_][\w/]*$")
 
@@ -31,8 +36,10 @@ def problem(arg: str) -> str | None:
     """Why ``arg`` is no ROS argument (None: it is one): ``NAME:=VALUE`` with a legal name, a value."""
     name, _sep, value = arg.partition(REMAP)
     if not _NAME.match(name) or not value:
-        return (f"ROS argument {arg!r}: expected NAME:=VALUE (a remap from:=to, __name:=, __ns:=, __log:=, "
-                "__master:=, __ip:=, __hostname:= or _param:=value)")
+        return (
+            f"ROS argument {arg!r}: expected NAME:=VALUE (a remap from:=to, __name:=, __ns:=, __log:=, "
+            "__master:=, __ip:=, __hostname:= or _param:=value)"
+        )
     if name == "__name" and not re.match(r"^[A-Za-z][\w]*$", value):
         return f"ROS argument {arg!r}: a node name is a letter then letters, digits or _ (no namespace)"
     return None

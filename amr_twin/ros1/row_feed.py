@@ -31,7 +31,9 @@ class RowFeed:
         self._rows: list = [seen.loop_sensors()]
         self._pin_t: list[int] = [twin.t_phys_us]
         self._pins: list[list[float]] = [list(seen.drive())]
-        self._battery = twin.on_grid(seen.battery_rows())  # a row at each grid instant, as the loop's
+        self._battery = twin.on_grid(
+            seen.battery_rows()
+        )  # a row at each grid instant, as the loop's
         self._battery(twin.t_phys_us)
         twin.on_grid_rows(self._extend)
         twin.on_actuation(self._pins_changed)
@@ -60,12 +62,20 @@ class RowFeed:
         del self._t[:n], self._rows[:n]
         k = np.searchsorted(np.array(self._pin_t), times, side="left") - 1
         pins = np.array(self._pins, float)[np.maximum(k, 0)]
-        keep = max(int(k[-1]), 0)  # the drive in force at the last row may be in force at the next ones
+        keep = max(
+            int(k[-1]), 0
+        )  # the drive in force at the last row may be in force at the next ones
         del self._pin_t[:keep], self._pins[:keep]
         battery = self._battery.take_until(t_us)
         at = np.maximum(np.searchsorted(battery[:, 0], times, side="right") - 1, 0)
         mode, voltage = pins[:, 4:6].astype(int), pins[:, 6:8]
-        return SimpleNamespace(t_us=times, true_rpm=rows[:, 2:4] * RAD_S_TO_RPM, pwm_counts=pins[:, 0:2].astype(int),
-                               current_a=motor_currents_a(self.twin.cfg, voltage, rows[:, 2:4], mode),
-                               battery_v=battery[at, 1], battery_a=battery[at, 2], battery_soc=battery[at, 3],
-                               index=times // self._grid_us)
+        return SimpleNamespace(
+            t_us=times,
+            true_rpm=rows[:, 2:4] * RAD_S_TO_RPM,
+            pwm_counts=pins[:, 0:2].astype(int),
+            current_a=motor_currents_a(self.twin.cfg, voltage, rows[:, 2:4], mode),
+            battery_v=battery[at, 1],
+            battery_a=battery[at, 2],
+            battery_soc=battery[at, 3],
+            index=times // self._grid_us,
+        )

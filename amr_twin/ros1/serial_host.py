@@ -13,7 +13,15 @@ import threading
 import time
 import tty
 
-from amr_twin.ros.rosserial_frame import ID_PUBLISHER, ID_SUBSCRIBER, ID_TIME, ID_TX_STOP, FrameParser, TopicInfo, frame
+from amr_twin.ros.rosserial_frame import (
+    ID_PUBLISHER,
+    ID_SUBSCRIBER,
+    ID_TIME,
+    ID_TX_STOP,
+    FrameParser,
+    TopicInfo,
+    frame,
+)
 
 ID_LOG, ID_PARAMETER_REQUEST = 7, 6
 RETRY_S = 0.5
@@ -64,17 +72,27 @@ class SerialHost:
     def _message_class(self, info: TopicInfo):
         cls = self._get_class(info.message_type)
         if cls is None:
-            self.rospy.logerr("rosserial: topic %s: no message class %s", info.topic_name, info.message_type)
+            self.rospy.logerr(
+                "rosserial: topic %s: no message class %s", info.topic_name, info.message_type
+            )
         elif cls._md5sum != info.md5sum:
-            self.rospy.logerr("rosserial: topic %s: md5sum %s of %s differs from the client's %s", info.topic_name,
-                              cls._md5sum, info.message_type, info.md5sum)
+            self.rospy.logerr(
+                "rosserial: topic %s: md5sum %s of %s differs from the client's %s",
+                info.topic_name,
+                cls._md5sum,
+                info.message_type,
+                info.md5sum,
+            )
             cls = None
         return cls
 
     def _setup_publisher(self, info: TopicInfo) -> None:
         cls = self._message_class(info)
         if cls is not None and info.topic_id not in self.publishers:
-            self.publishers[info.topic_id] = (self.rospy.Publisher(info.topic_name, cls, queue_size=100), cls)
+            self.publishers[info.topic_id] = (
+                self.rospy.Publisher(info.topic_name, cls, queue_size=100),
+                cls,
+            )
             self.rospy.loginfo("rosserial: publishing %s [%s]", info.topic_name, info.message_type)
 
     def _setup_subscriber(self, info: TopicInfo) -> None:
@@ -87,7 +105,9 @@ class SerialHost:
             msg.serialize(buff)
             self.write(topic_id, buff.getvalue())
 
-        self.subscribers[info.topic_id] = self.rospy.Subscriber(info.topic_name, cls, forward, queue_size=100)
+        self.subscribers[info.topic_id] = self.rospy.Subscriber(
+            info.topic_name, cls, forward, queue_size=100
+        )
         self.rospy.loginfo("rosserial: subscribing %s [%s]", info.topic_name, info.message_type)
 
     def handle(self, topic_id: int, message: bytes) -> None:
@@ -106,15 +126,21 @@ class SerialHost:
             pub, cls = self.publishers[topic_id]
             pub.publish(cls().deserialize(message))
         elif topic_id >= 100:
-            rospy.logwarn("rosserial: the client published on topic id %d before it was configured", topic_id)
+            rospy.logwarn(
+                "rosserial: the client published on topic id %d before it was configured", topic_id
+            )
             self.request_topics()
         elif topic_id in (ID_LOG, ID_PARAMETER_REQUEST):
-            rospy.logwarn_once("rosserial: the client's logging and parameters are not served by this host")
+            rospy.logwarn_once(
+                "rosserial: the client's logging and parameters are not served by this host"
+            )
 
     def check_sync(self) -> None:
         """Drop sync and ask for the topics again after ``3 * timeout`` without a time request."""
         now = self.rospy.Time.now()
-        if self.last_sync.is_zero():  # started before the first /clock (use_sim_time): count from the first
+        if (
+            self.last_sync.is_zero()
+        ):  # started before the first /clock (use_sim_time): count from the first
             self.last_sync = now
         elif (now - self.last_sync).to_sec() > 3 * self.timeout_s:
             if self.synced:
@@ -164,7 +190,12 @@ def main() -> None:
             raise SystemExit(1)
         except OSError as exc:  # not there (yet): a board plugged in later, a twin started later
             if not said:
-                rospy.logerr("rosserial: cannot open %s (%s); trying again every %g s", port, exc.strerror, RETRY_S)
+                rospy.logerr(
+                    "rosserial: cannot open %s (%s); trying again every %g s",
+                    port,
+                    exc.strerror,
+                    RETRY_S,
+                )
                 said = True
             if rospy.is_shutdown():
                 return
@@ -172,8 +203,12 @@ def main() -> None:
     rospy.loginfo("rosserial: connected to %s at %d baud", port, baud)
     host = SerialHost(rospy, fd, timeout_s)
     host.spin()
-    rospy.loginfo("rosserial: %d topic request(s), %d renegotiation(s), %d time request(s)", host.topic_requests,
-                  host.renegotiations, host.time_requests)
+    rospy.loginfo(
+        "rosserial: %d topic request(s), %d renegotiation(s), %d time request(s)",
+        host.topic_requests,
+        host.renegotiations,
+        host.time_requests,
+    )
 
 
 if __name__ == "__main__":

@@ -43,7 +43,9 @@ def _framed(frames: tuple, tail: str) -> tuple[struct.Struct, bytes]:
 
 
 def _f64s(values, count: bool) -> bytes:
-    if type(values) is np.ndarray and values.dtype is _F8:  # the twin's covariances and arrays: as they are
+    if (
+        type(values) is np.ndarray and values.dtype is _F8
+    ):  # the twin's covariances and arrays: as they are
         data = values.tobytes()
     else:
         data = np.asarray(values, dtype=_F8).tobytes()
@@ -57,26 +59,50 @@ def _vec(v) -> bytes:
 def imu(m) -> bytes:
     h, o = m.header, m.orientation
     head, blob = _framed((h.frame_id,), "4d")
-    return b"".join((head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, o.x, o.y, o.z, o.w),
-                     _f64s(m.orientation_covariance, False), _vec(m.angular_velocity),
-                     _f64s(m.angular_velocity_covariance, False), _vec(m.linear_acceleration),
-                     _f64s(m.linear_acceleration_covariance, False)))
+    return b"".join(
+        (
+            head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, o.x, o.y, o.z, o.w),
+            _f64s(m.orientation_covariance, False),
+            _vec(m.angular_velocity),
+            _f64s(m.angular_velocity_covariance, False),
+            _vec(m.linear_acceleration),
+            _f64s(m.linear_acceleration_covariance, False),
+        )
+    )
 
 
 def magnetic_field(m) -> bytes:
     h, v = m.header, m.magnetic_field
     head, blob = _framed((h.frame_id,), "3d")
     return head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, v.x, v.y, v.z) + _f64s(
-        m.magnetic_field_covariance, False)
+        m.magnetic_field_covariance, False
+    )
 
 
 def odometry(m) -> bytes:
     h, p, t = m.header, m.pose.pose, m.twist.twist
     x, q, lin, ang = p.position, p.orientation, t.linear, t.angular
     head, blob = _framed((h.frame_id, m.child_frame_id), "7d")
-    return b"".join((head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z,
-                               q.w), _f64s(m.pose.covariance, False),
-                     _D6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z), _f64s(m.twist.covariance, False)))
+    return b"".join(
+        (
+            head.pack(
+                h.seq & 0xFFFFFFFF,
+                h.stamp.sec,
+                h.stamp.nanosec,
+                blob,
+                x.x,
+                x.y,
+                x.z,
+                q.x,
+                q.y,
+                q.z,
+                q.w,
+            ),
+            _f64s(m.pose.covariance, False),
+            _D6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z),
+            _f64s(m.twist.covariance, False),
+        )
+    )
 
 
 def tf_message(m) -> bytes:
@@ -85,23 +111,59 @@ def tf_message(m) -> bytes:
         h, tr = ts.header, ts.transform
         x, q = tr.translation, tr.rotation
         head, blob = _framed((h.frame_id, ts.child_frame_id), "7d")
-        parts.append(head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z,
-                               q.w))
+        parts.append(
+            head.pack(
+                h.seq & 0xFFFFFFFF,
+                h.stamp.sec,
+                h.stamp.nanosec,
+                blob,
+                x.x,
+                x.y,
+                x.z,
+                q.x,
+                q.y,
+                q.z,
+                q.w,
+            )
+        )
     return b"".join(parts)
 
 
 def joint_state(m) -> bytes:
     names = b"".join(_string(n) for n in m.name)
-    return b"".join((_header(m.header), _I.pack(len(m.name)), names, _f64s(m.position, True),
-                     _f64s(m.velocity, True), _f64s(m.effort, True)))
+    return b"".join(
+        (
+            _header(m.header),
+            _I.pack(len(m.name)),
+            names,
+            _f64s(m.position, True),
+            _f64s(m.velocity, True),
+            _f64s(m.effort, True),
+        )
+    )
 
 
 def laser_scan(m) -> bytes:
     ranges = np.asarray(m.ranges, dtype="<f4").tobytes()
     intensities = np.asarray(m.intensities, dtype="<f4").tobytes()
-    return b"".join((_header(m.header), _F7.pack(m.angle_min, m.angle_max, m.angle_increment, m.time_increment,
-                                                 m.scan_time, m.range_min, m.range_max),
-                     _I.pack(len(ranges) // 4), ranges, _I.pack(len(intensities) // 4), intensities))
+    return b"".join(
+        (
+            _header(m.header),
+            _F7.pack(
+                m.angle_min,
+                m.angle_max,
+                m.angle_increment,
+                m.time_increment,
+                m.scan_time,
+                m.range_min,
+                m.range_max,
+            ),
+            _I.pack(len(ranges) // 4),
+            ranges,
+            _I.pack(len(intensities) // 4),
+            intensities,
+        )
+    )
 
 
 def float64_multi_array(m) -> bytes:
@@ -114,8 +176,13 @@ def float64(m) -> bytes:
 
 
 WRITERS: dict[str, Callable] = {
-    "sensor_msgs/Imu": imu, "sensor_msgs/MagneticField": magnetic_field, "nav_msgs/Odometry": odometry,
-    "tf2_msgs/TFMessage": tf_message, "sensor_msgs/JointState": joint_state, "sensor_msgs/LaserScan": laser_scan,
-    "std_msgs/Float64MultiArray": float64_multi_array, "std_msgs/Float64": float64,
+    "sensor_msgs/Imu": imu,
+    "sensor_msgs/MagneticField": magnetic_field,
+    "nav_msgs/Odometry": odometry,
+    "tf2_msgs/TFMessage": tf_message,
+    "sensor_msgs/JointState": joint_state,
+    "sensor_msgs/LaserScan": laser_scan,
+    "std_msgs/Float64MultiArray": float64_multi_array,
+    "std_msgs/Float64": float64,
 }
 """ROS type -> writer of the twin's message of that type."""

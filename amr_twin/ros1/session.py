@@ -82,7 +82,9 @@ class Ros1Options:
         if not self.roscore:
             problem = master_problem(master_uri(), 3.0)
             if problem:
-                raise ValueError(f"--ros1: {problem} (start roscore, or give --roscore for a private one)")
+                raise ValueError(
+                    f"--ros1: {problem} (start roscore, or give --roscore for a private one)"
+                )
 
 
 class Ros1Session:
@@ -99,8 +101,13 @@ class Ros1Session:
                 os.environ["ROS_MASTER_URI"] = self.master.uri
                 os.environ.setdefault("ROS_IP", "127.0.0.1")
             rospy = self.rospy = import_rospy()
-            rospy.init_node(NODE_NAME, argv=remapping.node_argv(), anonymous=False, disable_signals=True,
-                            log_level=rospy.WARN)
+            rospy.init_node(
+                NODE_NAME,
+                argv=remapping.node_argv(),
+                anonymous=False,
+                disable_signals=True,
+                log_level=rospy.WARN,
+            )
             _leave_own_clock(rospy)
             self._sim_time_before = rospy.get_param("/use_sim_time", _ABSENT)
             rospy.set_param("/use_sim_time", True)
@@ -113,20 +120,38 @@ class Ros1Session:
             self.master.stop()
             raise
         pacer.sinks.append(self.bridge)
-        self.watch = MasterWatch(self.master.uri, rospy, {"/use_sim_time": True,
-                                                          rospy.resolve_name("robot_description"): twin.urdf}, say)
-        where = f"a private roscore at {self.master.uri}" if options.roscore else f"the master at {self.master.uri}"
-        say(f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; publish "
+        self.watch = MasterWatch(
+            self.master.uri,
+            rospy,
+            {"/use_sim_time": True, rospy.resolve_name("robot_description"): twin.urdf},
+            say,
+        )
+        where = (
+            f"a private roscore at {self.master.uri}"
+            if options.roscore
+            else f"the master at {self.master.uri}"
+        )
+        say(
+            f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; publish "
             f"{rospy.resolve_name('wheel_Command')} or {rospy.resolve_name('cmd_vel')} to drive it; "
-            f"{rospy.get_name()}/pause_physics, ...)")
+            f"{rospy.get_name()}/pause_physics, ...)"
+        )
         if not self.settle():
-            say(f"ros1: not every node the master lists on the twin's topics connected within {SETTLE_MAX_S:g} s; "
-                "the run starts without them")
+            say(
+                f"ros1: not every node the master lists on the twin's topics connected within {SETTLE_MAX_S:g} s; "
+                "the run starts without them"
+            )
         self.bridge.start()
 
     def _publishers(self) -> list:
         b = self.bridge
-        return [*b.pubs.values(), b.clock_pub, *b.state_pubs.values(), *b.status.publishers, b.description_pub]
+        return [
+            *b.pubs.values(),
+            b.clock_pub,
+            *b.state_pubs.values(),
+            *b.status.publishers,
+            b.description_pub,
+        ]
 
     def settle(self, max_s: float = SETTLE_MAX_S) -> bool:
         """Wait until the twin is connected to each subscriber of its topics and each publisher of its inputs
@@ -139,8 +164,13 @@ class Ros1Session:
         sources = {topic: sum(1 for node in nodes if node != me) for topic, nodes in pubs}
         deadline = time.monotonic() + max_s
         while True:
-            if (all(p.get_num_connections() >= others.get(p.resolved_name, 0) for p in self._publishers())
-                    and all(s.get_num_connections() >= sources.get(s.resolved_name, 0) for s in self.bridge._subs)):
+            if all(
+                p.get_num_connections() >= others.get(p.resolved_name, 0)
+                for p in self._publishers()
+            ) and all(
+                s.get_num_connections() >= sources.get(s.resolved_name, 0)
+                for s in self.bridge._subs
+            ):
                 return True
             if time.monotonic() > deadline:
                 return False

@@ -24,9 +24,15 @@ class SimServices:
         self.twin, self.pacer, self.rospy = twin, pacer, rospy
         self.refused = 0
         """``set_pose`` messages refused (each logged)."""
-        acts = {"pause_physics": pacer.pause, "unpause_physics": pacer.resume,
-                "reset_world": twin.reset_world, "reset_simulation": twin.reset_simulation}
-        self.services = [rospy.Service("~" + name, Empty, self._handler(acts[name])) for name in SERVICES]
+        acts = {
+            "pause_physics": pacer.pause,
+            "unpause_physics": pacer.resume,
+            "reset_world": twin.reset_world,
+            "reset_simulation": twin.reset_simulation,
+        }
+        self.services = [
+            rospy.Service("~" + name, Empty, self._handler(acts[name])) for name in SERVICES
+        ]
         self.set_pose = rospy.Subscriber("~set_pose", PoseStamped, self._on_set_pose, queue_size=10)
 
     def _handler(self, act):
@@ -38,6 +44,7 @@ class SimServices:
             except Exception as exc:  # noqa: BLE001 - the caller gets it as the service's error
                 raise self.rospy.ServiceException(str(exc)) from None
             return EmptyResponse()
+
         return handle
 
     def _on_set_pose(self, msg) -> None:
@@ -46,12 +53,16 @@ class SimServices:
         frame = msg.header.frame_id.lstrip("/")
         if frame not in POSE_FRAMES or not all(math.isfinite(v) for v in values):
             self.refused += 1
-            LOG.warning("ros1: set_pose refused: frame %r (allowed: map, world or empty) with finite values",
-                        msg.header.frame_id)
+            LOG.warning(
+                "ros1: set_pose refused: frame %r (allowed: map, world or empty) with finite values",
+                msg.header.frame_id,
+            )
             return
         yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
         try:
-            self.pacer.post(lambda: self.twin.set_robot_pose(p.x, p.y, yaw))  # a refusal is logged by the pacer
+            self.pacer.post(
+                lambda: self.twin.set_robot_pose(p.x, p.y, yaw)
+            )  # a refusal is logged by the pacer
         except RuntimeError:  # the twin has stopped
             pass
 

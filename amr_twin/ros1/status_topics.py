@@ -66,16 +66,28 @@ class StatusTopics:
         if want_battery:
             at = rows.index % BATTERY_EVERY_ROWS == 0
             t, soc = rows.t_us[at], rows.battery_soc[at]
-            self.out.put_block(self.battery_pub, t.tolist(),
-                               battery_block(t, rows.battery_v[at], -rows.battery_a[at], soc * cap, cap, soc))
+            self.out.put_block(
+                self.battery_pub,
+                t.tolist(),
+                battery_block(t, rows.battery_v[at], -rows.battery_a[at], soc * cap, cap, soc),
+            )
         if want_diag:
             for i in np.flatnonzero(rows.index % DIAGNOSTICS_PERIOD_ROWS == 0).tolist():
-                t, volts, amps, soc = (int(rows.t_us[i]), float(rows.battery_v[i]), float(rows.battery_a[i]),
-                                       float(rows.battery_soc[i]))
+                t, volts, amps, soc = (
+                    int(rows.t_us[i]),
+                    float(rows.battery_v[i]),
+                    float(rows.battery_a[i]),
+                    float(rows.battery_soc[i]),
+                )
                 stamp = self.rospy.Time(t // 1_000_000, t % 1_000_000 * 1000)
-                self._publish_status(t, stamp, 0 if soc > 0.2 else 1, "amr/battery",
-                                     f"{volts:.2f} V, {soc * 100:.0f} %",
-                                     {"voltage_v": volts, "current_a": amps, "soc": soc})
+                self._publish_status(
+                    t,
+                    stamp,
+                    0 if soc > 0.2 else 1,
+                    "amr/battery",
+                    f"{volts:.2f} V, {soc * 100:.0f} %",
+                    {"voltage_v": volts, "current_a": amps, "soc": soc},
+                )
 
     def _publish_events(self, t_us: int) -> None:
         for t_ns, _topic, level, name, message, values in statuses(self.twin):
@@ -85,11 +97,22 @@ class StatusTopics:
                 stamp = self.rospy.Time(t_ns // 1_000_000_000, t_ns % 1_000_000_000)
                 self._publish_status(-(-t_ns // 1000), stamp, level, name, message, values)
 
-    def _publish_status(self, t_us: int, stamp, level: int, name: str, message: str, values: dict) -> None:
+    def _publish_status(
+        self, t_us: int, stamp, level: int, name: str, message: str, values: dict
+    ) -> None:
         from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
-        array = DiagnosticArray(status=[DiagnosticStatus(level=level, name=name, message=message, hardware_id="amr",
-                                                         values=[KeyValue(str(k), str(v)) for k, v in values.items()])])
+        array = DiagnosticArray(
+            status=[
+                DiagnosticStatus(
+                    level=level,
+                    name=name,
+                    message=message,
+                    hardware_id="amr",
+                    values=[KeyValue(str(k), str(v)) for k, v in values.items()],
+                )
+            ]
+        )
         array.header.stamp = stamp
         self.put_ros(self.diag_pub, array, t_us)
 

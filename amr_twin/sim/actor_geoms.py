@@ -37,7 +37,11 @@ def actor_geoms(physics, body: str) -> tuple[np.ndarray, np.ndarray, float]:
 
     m = physics.model
     b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
-    geoms = [g for g in range(m.ngeom) if m.geom_bodyid[g] == b and (m.geom_contype[g] or m.geom_conaffinity[g])]
+    geoms = [
+        g
+        for g in range(m.ngeom)
+        if m.geom_bodyid[g] == b and (m.geom_contype[g] or m.geom_conaffinity[g])
+    ]
     local = np.zeros((len(geoms), 12))
     for row, g in zip(local, geoms):
         row[:3] = m.geom_pos[g]
@@ -51,10 +55,15 @@ def robot_geoms(physics) -> tuple[list[int], float]:
     m, with 0.05 m for the wheels' turning and the casters' swivel."""
     m, d = physics.model, physics.data
     root = m.body_rootid[physics.base_body]
-    geoms = [g for g in range(m.ngeom)
-             if m.body_rootid[m.geom_bodyid[g]] == root and (m.geom_contype[g] or m.geom_conaffinity[g])]
+    geoms = [
+        g
+        for g in range(m.ngeom)
+        if m.body_rootid[m.geom_bodyid[g]] == root and (m.geom_contype[g] or m.geom_conaffinity[g])
+    ]
     base = d.xpos[physics.base_body]
-    reach = max((math.hypot(*(d.geom_xpos[g][:2] - base[:2])) + _radius_m(m, g) for g in geoms), default=0.0)
+    reach = max(
+        (math.hypot(*(d.geom_xpos[g][:2] - base[:2])) + _radius_m(m, g) for g in geoms), default=0.0
+    )
     return geoms, reach + 0.05
 
 
@@ -69,8 +78,11 @@ def gap_after(physics, robot: np.ndarray, geoms: list, local: list, pose) -> flo
     m, d = physics.model, physics.data
     for g, l in zip(geoms, local):
         d.geom_xpos[g] = (x + (cs * l[0] - sn * l[1]), y + (sn * l[0] + cs * l[1]), l[2])
-        d.geom_xmat[g] = [cs * l[3 + j] - sn * l[6 + j] for j in range(3)] + \
-                         [sn * l[3 + j] + cs * l[6 + j] for j in range(3)] + [l[9 + j] for j in range(3)]
+        d.geom_xmat[g] = (
+            [cs * l[3 + j] - sn * l[6 + j] for j in range(3)]
+            + [sn * l[3 + j] + cs * l[6 + j] for j in range(3)]
+            + [l[9 + j] for j in range(3)]
+        )
     gap = CUTOFF_M
     for g in geoms:
         for k in robot.tolist():

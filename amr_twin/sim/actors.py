@@ -35,22 +35,43 @@ US = 1_000_000
 class _State(ctypes.Structure):
     """``actor_state`` of actors.c."""
 
-    _fields_ = [("phases", ctypes.c_void_p), ("nphase", ctypes.c_int), ("mocap", ctypes.c_int),
-                ("period_s", ctypes.c_double), ("start_us", ctypes.c_int64), ("progress_us", ctypes.c_int64),
-                ("last_us", ctypes.c_int64), ("stop_m", ctypes.c_double), ("pose", ctypes.c_double * 3),
-                ("geoms", ctypes.c_void_p), ("local", ctypes.c_void_p), ("ngeom", ctypes.c_int),
-                ("reach_m", ctypes.c_double),
-                ("give_way_us", ctypes.c_int64), ("waited_us", ctypes.c_int64), ("held_us", ctypes.c_int64),
-                ("touch_m", ctypes.c_double), ("touching", ctypes.c_int)]
+    _fields_ = [
+        ("phases", ctypes.c_void_p),
+        ("nphase", ctypes.c_int),
+        ("mocap", ctypes.c_int),
+        ("period_s", ctypes.c_double),
+        ("start_us", ctypes.c_int64),
+        ("progress_us", ctypes.c_int64),
+        ("last_us", ctypes.c_int64),
+        ("stop_m", ctypes.c_double),
+        ("pose", ctypes.c_double * 3),
+        ("geoms", ctypes.c_void_p),
+        ("local", ctypes.c_void_p),
+        ("ngeom", ctypes.c_int),
+        ("reach_m", ctypes.c_double),
+        ("give_way_us", ctypes.c_int64),
+        ("waited_us", ctypes.c_int64),
+        ("held_us", ctypes.c_int64),
+        ("touch_m", ctypes.c_double),
+        ("touching", ctypes.c_int),
+    ]
 
 
 class _Ctx(ctypes.Structure):
     """``actors_ctx`` of actors.c."""
 
-    _fields_ = [("n", ctypes.c_int), ("a", ctypes.POINTER(_State)), ("base_body", ctypes.c_int),
-                ("half_len_m", ctypes.c_double), ("half_wid_m", ctypes.c_double), ("m", ctypes.c_void_p),
-                ("distance", ctypes.c_void_p), ("robot_geoms", ctypes.c_void_p), ("nrobot", ctypes.c_int),
-                ("robot_reach_m", ctypes.c_double)]
+    _fields_ = [
+        ("n", ctypes.c_int),
+        ("a", ctypes.POINTER(_State)),
+        ("base_body", ctypes.c_int),
+        ("half_len_m", ctypes.c_double),
+        ("half_wid_m", ctypes.c_double),
+        ("m", ctypes.c_void_p),
+        ("distance", ctypes.c_void_p),
+        ("robot_geoms", ctypes.c_void_p),
+        ("nrobot", ctypes.c_int),
+        ("robot_reach_m", ctypes.c_double),
+    ]
 
 
 register(C_SOURCE, actor_state=_State, actors_ctx=_Ctx)
@@ -75,8 +96,9 @@ class ActorMotion:
         robot, self._robot_reach_m = robot_geoms(physics)
         self._geoms = [actor_geoms(physics, name) for name in self.names]
         self._robot = np.asarray(robot, np.int32)
-        for s, a, path, phases, name, (geoms, local, reach) in zip(self._states, self.actors, self.paths,
-                                                                   self._phases, self.names, self._geoms):
+        for s, a, path, phases, name, (geoms, local, reach) in zip(
+            self._states, self.actors, self.paths, self._phases, self.names, self._geoms
+        ):
             s.phases, s.nphase, s.mocap = address(phases), len(phases), physics.mocap_index(name)
             s.period_s, s.start_us = path.period_s, int(round(a.start_s * US))
             s.progress_us, s.last_us, s.stop_m = 0, 0, a.stop_within_m
@@ -85,10 +107,18 @@ class ActorMotion:
             kind = getattr(cfg.actors, a.kind)
             s.give_way_us, s.touch_m = int(round(kind.give_way_s * US)), kind.touch_m
             s.waited_us = s.held_us = s.touching = 0
-        self._ctx = _Ctx(n=n, a=ctypes.cast(self._states, ctypes.POINTER(_State)), base_body=physics.base_body,
-                         half_len_m=cfg.chassis.length_m / 2, half_wid_m=cfg.half_width_m,
-                         m=physics.model._address, distance=mujoco_address("mj_geomDistance"),
-                         robot_geoms=address(self._robot), nrobot=len(self._robot), robot_reach_m=self._robot_reach_m)
+        self._ctx = _Ctx(
+            n=n,
+            a=ctypes.cast(self._states, ctypes.POINTER(_State)),
+            base_body=physics.base_body,
+            half_len_m=cfg.chassis.length_m / 2,
+            half_wid_m=cfg.half_width_m,
+            m=physics.model._address,
+            distance=mujoco_address("mj_geomDistance"),
+            robot_geoms=address(self._robot),
+            nrobot=len(self._robot),
+            robot_reach_m=self._robot_reach_m,
+        )
         self._waits = any(a.stop_within_m > 0 for a in self.actors)
         self.update = self.update_python
         """The grid sampler: the C helper when built, else :meth:`update_python`."""
@@ -147,7 +177,9 @@ class ActorMotion:
             s.touching = 0
             return dt
         keep = [(d.geom_xpos[g].copy(), d.geom_xmat[g].copy()) for g in geoms]
-        gap = gap_after(self.physics, self._robot, geoms, local, path.pose_at((s.progress_us + dt) / 1e6))
+        gap = gap_after(
+            self.physics, self._robot, geoms, local, path.pose_at((s.progress_us + dt) / 1e6)
+        )
         step = dt
         if s.touching:
             if gap < 0.0:
@@ -161,8 +193,16 @@ class ActorMotion:
                 if hi - lo <= 1:
                     break
                 mid = lo + (hi - lo) // 2
-                if gap_after(self.physics, self._robot, geoms, local,
-                             path.pose_at((s.progress_us + mid) / 1e6)) >= -s.touch_m:
+                if (
+                    gap_after(
+                        self.physics,
+                        self._robot,
+                        geoms,
+                        local,
+                        path.pose_at((s.progress_us + mid) / 1e6),
+                    )
+                    >= -s.touch_m
+                ):
                     lo = mid
                 else:
                     hi = mid
@@ -202,21 +242,22 @@ class ActorMotion:
 
     def poses(self) -> list[tuple[float, float, float]]:
         """Each actor's pose as last placed: ``(x_m, y_m, yaw_rad)``."""
-        return [tuple(s.pose) for s in self._states[:len(self.actors)]]
+        return [tuple(s.pose) for s in self._states[: len(self.actors)]]
 
     def held_s(self) -> list[float]:
         """Each actor's walking time lost to touching the robot so far, s."""
-        return [s.held_us / US for s in self._states[:len(self.actors)]]
+        return [s.held_us / US for s in self._states[: len(self.actors)]]
 
     def progress_s(self) -> list[float]:
         """Each actor's walking time so far, s (less than the time since its start when it waited)."""
-        return [s.progress_us / US for s in self._states[:len(self.actors)]]
+        return [s.progress_us / US for s in self._states[: len(self.actors)]]
 
     def pose_rows(self, period_us: int = PUBLISH_PERIOD_US) -> GridRows:
         """A grid sampler keeping every ``period_us`` the poses (x_m, y_m, yaw_rad per actor) just
         placed (``actors_row`` in C, the same values); put it after :attr:`update`."""
+
         def row() -> list[float]:
-            return [v for s in self._states[:len(self.actors)] for v in s.pose]
+            return [v for s in self._states[: len(self.actors)] for v in s.pose]
 
         return GridRows(3 * len(self.actors), period_us, row, self._row_c, start_us=0)
 
@@ -225,7 +266,9 @@ class ActorPoses:
     """Publishes ``actors/poses`` (module notes) from ``motion``'s pose rows; appends the rows'
     keeper to ``samplers`` (after the motion's sampler, which must be in it already)."""
 
-    def __init__(self, motion: ActorMotion, clock, bus, samplers: list, period_us: int = PUBLISH_PERIOD_US):
+    def __init__(
+        self, motion: ActorMotion, clock, bus, samplers: list, period_us: int = PUBLISH_PERIOD_US
+    ):
         from amr_twin.ros.geometry_messages import PoseArray
 
         self.clock, self.bus, self.n = clock, bus, len(motion.actors)
@@ -235,7 +278,9 @@ class ActorPoses:
         self.seq = 0
         bus.advertise(TOPIC, PoseArray)
         first = -(-clock.now_us // period_us) * period_us
-        self._handle = clock.schedule_every(first, period_us, self._publish_next, publishes=(TOPIC,))
+        self._handle = clock.schedule_every(
+            first, period_us, self._publish_next, publishes=(TOPIC,)
+        )
 
     def _publish_next(self) -> None:
         from amr_twin.ros.geometry_messages import Point, Pose, PoseArray, Quaternion
@@ -244,12 +289,16 @@ class ActorPoses:
         now = self.clock.now_us
         if not self._ready:
             self._ready.extend(self.rows.take().tolist())
-        while self._ready and self._ready[0][0] < now:  # rows of instants no event publishes (a late start)
+        while (
+            self._ready and self._ready[0][0] < now
+        ):  # rows of instants no event publishes (a late start)
             self._ready.popleft()
         if not self._ready or self._ready[0][0] != now:
             raise RuntimeError(f"actor poses at t_us={now} were not kept on the loop's grid")
         row = self._ready.popleft()
         self.seq += 1
-        poses = [Pose(Point(row[1 + 3 * i], row[2 + 3 * i], 0.0), Quaternion.from_yaw(row[3 + 3 * i]))
-                 for i in range(self.n)]
+        poses = [
+            Pose(Point(row[1 + 3 * i], row[2 + 3 * i], 0.0), Quaternion.from_yaw(row[3 + 3 * i]))
+            for i in range(self.n)
+        ]
         self.bus.publish(TOPIC, PoseArray(Header(self.seq, Time.from_us(now), FRAME), poses))

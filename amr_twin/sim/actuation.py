@@ -27,8 +27,16 @@ class Actuation:
     def levels(self) -> tuple:
         """The firmware's pin levels now (PWM, DIR, BRAKE, STOP of each driver): equal keys, same drive."""
         p0, p1 = self.firmware.pins
-        return (p0.pwm_counts, p0.dir_level, p0.brake_level, p0.stop_level,
-                p1.pwm_counts, p1.dir_level, p1.brake_level, p1.stop_level)
+        return (
+            p0.pwm_counts,
+            p0.dir_level,
+            p0.brake_level,
+            p0.stop_level,
+            p1.pwm_counts,
+            p1.dir_level,
+            p1.brake_level,
+            p1.stop_level,
+        )
 
     def apply(self, t_us: int) -> None:
         """Set both motors from the firmware's pins now (physics time ``t_us``) and tell the subscribers."""
@@ -38,8 +46,16 @@ class Actuation:
 
     def _changed(self, t_us: int) -> None:
         pins, plant = self.firmware.pins, self.plant
-        self.row = [pins[0].pwm_counts, pins[1].pwm_counts, pins[0].direction, pins[1].direction,
-                    MODE_CODES[plant.mode[0]], MODE_CODES[plant.mode[1]], plant.voltage_v[0], plant.voltage_v[1]]
+        self.row = [
+            pins[0].pwm_counts,
+            pins[1].pwm_counts,
+            pins[0].direction,
+            pins[1].direction,
+            MODE_CODES[plant.mode[0]],
+            MODE_CODES[plant.mode[1]],
+            plant.voltage_v[0],
+            plant.voltage_v[1],
+        ]
         for fn in self._hooks:
             fn(t_us)
 
@@ -47,7 +63,9 @@ class Actuation:
     def sag_battery(self, sag_v: float, t_us: int) -> None:
         """Lower the battery's terminal voltage by ``sag_v`` V (at most to 1 V above nothing), 0 to clear."""
         battery = self.plant.battery
-        battery.sag_v = min(float(sag_v), battery.ocv_v() - 1.0) if sag_v else 0.0  # the drivers never see < 0 V
+        battery.sag_v = (
+            min(float(sag_v), battery.ocv_v() - 1.0) if sag_v else 0.0
+        )  # the drivers never see < 0 V
         self.apply(t_us)
 
     def cut_supply(self, cut: bool, t_us: int) -> None:

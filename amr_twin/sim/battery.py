@@ -44,13 +44,28 @@ DRIVE, COAST, BRAKE = 0, 1, 2
 class _State(ctypes.Structure):
     """``battery_state`` of battery.c."""
 
-    _fields_ = [("soc", ctypes.c_double), ("current_a", ctypes.c_double), ("sag_v", ctypes.c_double),
-                ("t_last_s", ctypes.c_double), ("terminal_v", ctypes.c_double),
-                ("empty_v", ctypes.c_double), ("nominal_v", ctypes.c_double), ("low_span_v", ctypes.c_double),
-                ("high_span_v", ctypes.c_double), ("r_ohm", ctypes.c_double), ("capacity_as", ctypes.c_double),
-                ("volt", _D2), ("mode", _I2), ("ke", _D2), ("r_ohm_motor", _D2), ("limit_a", _D2),
-                ("brake_limit_a", ctypes.c_double), ("quiescent2_a", ctypes.c_double), ("aux_w", ctypes.c_double),
-                ("dof", _I2)]
+    _fields_ = [
+        ("soc", ctypes.c_double),
+        ("current_a", ctypes.c_double),
+        ("sag_v", ctypes.c_double),
+        ("t_last_s", ctypes.c_double),
+        ("terminal_v", ctypes.c_double),
+        ("empty_v", ctypes.c_double),
+        ("nominal_v", ctypes.c_double),
+        ("low_span_v", ctypes.c_double),
+        ("high_span_v", ctypes.c_double),
+        ("r_ohm", ctypes.c_double),
+        ("capacity_as", ctypes.c_double),
+        ("volt", _D2),
+        ("mode", _I2),
+        ("ke", _D2),
+        ("r_ohm_motor", _D2),
+        ("limit_a", _D2),
+        ("brake_limit_a", ctypes.c_double),
+        ("quiescent2_a", ctypes.c_double),
+        ("aux_w", ctypes.c_double),
+        ("dof", _I2),
+    ]
 
 
 register(C_SOURCE, battery_state=_State)
@@ -85,7 +100,10 @@ class Battery:
         s = self._s = _State()
         s.soc = cfg.soc_initial
         s.empty_v, s.nominal_v = cfg.v_empty_v, cfg.v_nominal_v
-        s.low_span_v, s.high_span_v = cfg.v_nominal_v - cfg.v_empty_v, cfg.v_full_v - cfg.v_nominal_v
+        s.low_span_v, s.high_span_v = (
+            cfg.v_nominal_v - cfg.v_empty_v,
+            cfg.v_full_v - cfg.v_nominal_v,
+        )
         s.r_ohm, s.capacity_as = cfg.internal_resistance_ohm, cfg.capacity_ah * 3600.0
         s.mode[0] = s.mode[1] = COAST
         s.terminal_v = self.ocv_v()
@@ -112,7 +130,9 @@ class Battery:
         self._s.soc -= current_a * duration_s / self._s.capacity_as
 
     # -- the 10 ms accounting ----------------------------------------------------------
-    def connect(self, physics, wheel_dof, motors, brake_limit_a: float, quiescent2_a: float, aux_w: float) -> None:
+    def connect(
+        self, physics, wheel_dof, motors, brake_limit_a: float, quiescent2_a: float, aux_w: float
+    ) -> None:
         """Account for two drivers and motors on ``physics`` (its MjData) from its present time on.
 
         ``wheel_dof``: the wheel hinges' dof addresses (2,); ``motors``: per wheel
@@ -126,7 +146,11 @@ class Battery:
         for w in range(2):
             s.dof[w] = int(wheel_dof[w])
             s.ke[w], s.r_ohm_motor[w], s.limit_a[w] = (float(v) for v in motors[w])
-        s.brake_limit_a, s.quiescent2_a, s.aux_w = float(brake_limit_a), float(quiescent2_a), float(aux_w)
+        s.brake_limit_a, s.quiescent2_a, s.aux_w = (
+            float(brake_limit_a),
+            float(quiescent2_a),
+            float(aux_w),
+        )
         lib, self.engine = open_helper(C_SOURCE, self._native)
         self.account = self.account_python
         if lib is not None:
@@ -138,7 +162,9 @@ class Battery:
             def account(t_us: int = 0, _fn=fn, _args=args) -> None:
                 _fn(*_args)
 
-            account.grid_native = sampler(CALL2, fn, data._address, s)  # the loop's grid in C calls it itself
+            account.grid_native = sampler(
+                CALL2, fn, data._address, s
+            )  # the loop's grid in C calls it itself
             self.account = account
 
     def set_motor(self, wheel: int, mode: int, voltage_v: float) -> None:
@@ -154,8 +180,11 @@ class Battery:
         s = b.soc
         s = s if s > 0.0 else 0.0
         s = s if s < 1.0 else 1.0
-        ocv = (b.empty_v + b.low_span_v * s / 0.5 if s < 0.5
-               else b.nominal_v + b.high_span_v * (s - 0.5) / 0.5)
+        ocv = (
+            b.empty_v + b.low_span_v * s / 0.5
+            if s < 0.5
+            else b.nominal_v + b.high_span_v * (s - 0.5) / 0.5
+        )
         v_batt = ocv - b.r_ohm * b.current_a - b.sag_v
         v_batt = v_batt if v_batt > 1.0 else 1.0
         qvel = d.qvel
@@ -176,8 +205,11 @@ class Battery:
         s = b.soc
         s = s if s > 0.0 else 0.0
         s = s if s < 1.0 else 1.0
-        ocv = (b.empty_v + b.low_span_v * s / 0.5 if s < 0.5
-               else b.nominal_v + b.high_span_v * (s - 0.5) / 0.5)
+        ocv = (
+            b.empty_v + b.low_span_v * s / 0.5
+            if s < 0.5
+            else b.nominal_v + b.high_span_v * (s - 0.5) / 0.5
+        )
         b.terminal_v = ocv - b.r_ohm * current - b.sag_v
 
     # -- what the accounting leaves, for the recorder ---------------------------------

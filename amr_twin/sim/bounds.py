@@ -35,8 +35,10 @@ backtrace)."""
 def duration_problem(duration_s: float) -> str | None:
     """Why ``duration_s`` is no run's length (None: it is one): ``"must be in [0.1, 3600] s ..."``."""
     if not MIN_RUN_S <= duration_s <= MAX_RUN_S:  # NaN fails too
-        return (f"must be in [{MIN_RUN_S:g}, {MAX_RUN_S:g}] s (a run keeps its 100 Hz series in memory, ~0.1 MB "
-                "per simulated second: run a longer study as several runs)")
+        return (
+            f"must be in [{MIN_RUN_S:g}, {MAX_RUN_S:g}] s (a run keeps its 100 Hz series in memory, ~0.1 MB "
+            "per simulated second: run a longer study as several runs)"
+        )
     return None
 
 

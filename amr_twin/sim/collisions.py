@@ -72,11 +72,17 @@ class Collision:
     def as_dict(self) -> dict:
         """JSON-ready form (times s, positions m, force N)."""
         x, y, yaw = self.robot_pose
-        return {"t_s": round(self.t_s, 4), "until_s": round(self.until_s, 4), "hit": self.hit,
-                "robot_parts": list(self.robot_parts),
-                "x_m": round(self.x_m, 4), "y_m": round(self.y_m, 4), "z_m": round(self.z_m, 4),
-                "robot_pose": {"x_m": round(x, 4), "y_m": round(y, 4), "yaw_rad": round(yaw, 4)},
-                "peak_force_n": round(self.peak_force_n, 2)}
+        return {
+            "t_s": round(self.t_s, 4),
+            "until_s": round(self.until_s, 4),
+            "hit": self.hit,
+            "robot_parts": list(self.robot_parts),
+            "x_m": round(self.x_m, 4),
+            "y_m": round(self.y_m, 4),
+            "z_m": round(self.z_m, 4),
+            "robot_pose": {"x_m": round(x, 4), "y_m": round(y, 4), "yaw_rad": round(yaw, 4)},
+            "peak_force_n": round(self.peak_force_n, 2),
+        }
 
 
 def _name(m: mujoco.MjModel, kind: mujoco.mjtObj, i: int, fallback: str) -> str:
@@ -89,11 +95,13 @@ class GeomRoles:
     def __init__(self, physics):
         m = self.model = physics.model
         root = m.body_rootid[physics.base_body]
-        self.robot = m.body_rootid[m.geom_bodyid] == root          # (ngeom,) bool
+        self.robot = m.body_rootid[m.geom_bodyid] == root  # (ngeom,) bool
         self.support = np.zeros(m.ngeom, bool)
         self.support[list(physics.support_geoms.values())] = True
         self.floor = np.isin(m.geom_type, _FLOOR_TYPES) & ~self.robot
-        self.actor = (m.body_mocapid[m.geom_bodyid] >= 0) & ~self.robot  # (ngeom,) bool: a person's, a jack's
+        self.actor = (
+            m.body_mocapid[m.geom_bodyid] >= 0
+        ) & ~self.robot  # (ngeom,) bool: a person's, a jack's
         self._pair: dict[tuple[int, int], int] = {}
         self._part: dict[int, str] = {}
         self._world: dict[int, str] = {}
@@ -121,7 +129,9 @@ class GeomRoles:
         if part is None:
             m = self.model
             body = int(m.geom_bodyid[g])
-            part = self._part[g] = _name(m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}").removeprefix("amr/")
+            part = self._part[g] = _name(
+                m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}"
+            ).removeprefix("amr/")
         return part
 
     def world_name(self, g: int) -> str:
@@ -139,7 +149,9 @@ class GeomRoles:
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)
         if name:
             return name
-        return f"geom {g}" + (f" of body {_name(m, mujoco.mjtObj.mjOBJ_BODY, body, str(body))}" if body else "")
+        return f"geom {g}" + (
+            f" of body {_name(m, mujoco.mjtObj.mjOBJ_BODY, body, str(body))}" if body else ""
+        )
 
 
 _COS_SUPPORT = math.cos(math.radians(SUPPORT_TILT_DEG))
@@ -174,8 +186,12 @@ def collision_contacts(roles: GeomRoles, data: mujoco.MjData, pairs: list | None
 class _Memo(ctypes.Structure):
     """``contact_memo`` of collisions.c."""
 
-    _fields_ = [("valid", ctypes.c_int), ("n", ctypes.c_int), ("cap", ctypes.c_int),
-                ("pairs", ctypes.POINTER(ctypes.c_int))]
+    _fields_ = [
+        ("valid", ctypes.c_int),
+        ("n", ctypes.c_int),
+        ("cap", ctypes.c_int),
+        ("pairs", ctypes.POINTER(ctypes.c_int)),
+    ]
 
 
 register(C_SOURCE, contact_memo=_Memo)
@@ -195,14 +211,18 @@ class CollisionMonitor:
         Callables ``f(collision)`` to tell of each new episode (a live list: the twin's ``on_collision`` hook's).
     """
 
-    def __init__(self, physics, stop: bool = False, native: bool = True, listeners: list | None = None):
+    def __init__(
+        self, physics, stop: bool = False, native: bool = True, listeners: list | None = None
+    ):
         self.physics, self.stop = physics, stop
         self._data = physics.data
         self.roles = GeomRoles(physics)
         self.collisions: list[Collision] = []
         self.listeners: list = [] if listeners is None else listeners
         """Callables ``f(collision)`` told of each new episode as it begins (the twin's ``on_collision`` hook)."""
-        self._open: dict[str, Collision] = {}  # what was hit (a world geom's name, an actor's) -> its episode
+        self._open: dict[
+            str, Collision
+        ] = {}  # what was hit (a world geom's name, an actor's) -> its episode
         self._last_pairs: list | None = None
         self._last_full_us = -(1 << 62)
         self._force = np.zeros(6)
@@ -216,9 +236,15 @@ class CollisionMonitor:
         self._pairs = (ctypes.c_int * (2 * MEMO_PAIRS))()
         memo = self._memo = _Memo(cap=MEMO_PAIRS, pairs=self._pairs)
         fn = lib.contacts_changed
-        fn.restype, fn.argtypes = ctypes.c_int, [ctypes.c_void_p, ctypes.c_void_p]  # self._data outlives it
-        self._changed = functools.partial(fn, ctypes.c_void_p(self._data._address),
-                                          ctypes.cast(ctypes.pointer(memo), ctypes.c_void_p))
+        fn.restype, fn.argtypes = (
+            ctypes.c_int,
+            [ctypes.c_void_p, ctypes.c_void_p],
+        )  # self._data outlives it
+        self._changed = functools.partial(
+            fn,
+            ctypes.c_void_p(self._data._address),
+            ctypes.cast(ctypes.pointer(memo), ctypes.c_void_p),
+        )
         self._native = sampler(CHANGED, fn, self._data._address, memo)
 
     @property
@@ -274,8 +300,16 @@ class CollisionMonitor:
         if ep is None:
             pos = d.contact.pos[i]
             pose = self.physics.pose()
-            ep = Collision(t_us * 1e-6, float(pos[0]), float(pos[1]), float(pos[2]),
-                           hit, [part], (pose.x_m, pose.y_m, pose.yaw_rad), until_s=t_us * 1e-6)
+            ep = Collision(
+                t_us * 1e-6,
+                float(pos[0]),
+                float(pos[1]),
+                float(pos[2]),
+                hit,
+                [part],
+                (pose.x_m, pose.y_m, pose.yaw_rad),
+                until_s=t_us * 1e-6,
+            )
             self._open[hit] = ep
             self.collisions.append(ep)
             for listener in self.listeners:

@@ -16,11 +16,11 @@ US = 1_000_000
 class FaultTargets:
     """What the faults act on, handed over by the twin that owns them."""
 
-    hall: object        # sensors.hall.HallSensors
-    physics: object     # amr_twin.sim.physics.Physics: jam_wheel, lift_wheel, wheel_angles_rad
-    link: object        # amr_twin.ros.rosserial.RosserialLink
-    bus: object         # amr_twin.ros.bus.Bus: intercept
-    actuation: object   # amr_twin.sim.actuation.Actuation
+    hall: object  # sensors.hall.HallSensors
+    physics: object  # amr_twin.sim.physics.Physics: jam_wheel, lift_wheel, wheel_angles_rad
+    link: object  # amr_twin.ros.rosserial.RosserialLink
+    bus: object  # amr_twin.ros.bus.Bus: intercept
+    actuation: object  # amr_twin.sim.actuation.Actuation
     t_us: Callable[[], int]  # the physics time now, us
 
 
@@ -32,7 +32,7 @@ class FaultInjector:
         self.targets = targets
         self.faults = tuple(faults)
         self._saved: dict[int, object] = {}
-        self._last: dict[str, object] = {}        # last IMU messages published (imu-stuck)
+        self._last: dict[str, object] = {}  # last IMU messages published (imu-stuck)
         self.sensor_times: dict[str, list[int]] = {}  # publication times of the sensor topics, us
         self.imu_values: list[tuple] = []  # (gyro, accel) of each imu/data_raw message
         if any(f.kind in ("imu-stuck", "lidar-dead") for f in self.faults):
@@ -96,6 +96,8 @@ class FaultInjector:
 
 def _repeat(held):
     """An interception that publishes ``held``'s values under each new message's header."""
+
     def stuck(msg):
         return dataclasses.replace(held, header=msg.header)
+
     return stuck

@@ -37,37 +37,98 @@ class KindSpec:
 
 
 KINDS: dict[str, KindSpec] = {
-    "hall-dead": KindSpec(True, "sensor", "all", ("all", "a", "b", "c"), False,
-                          "the wheel's SC speed signal stops changing at the Arduino (a broken SC wire or "
-                          "hall supply; with a, b or c one hall sensor is stuck and SC changes 60 times per "
-                          "revolution instead of 90); the motor itself keeps running"),
-    "hall-chatter": KindSpec(True, "rate_hz", 200.0, (1.0, 20000.0), False,
-                             "spurious 20 us pulses on the wheel's SC line at RATE_HZ on average (Poisson, "
-                             "seeded): each adds two changes the firmware counts"),
-    "motor-stall": KindSpec(True, None, None, None, False,
-                            "the wheel jams (a seized hub, a stone): it cannot turn, whatever the motor and the "
-                            "ground do, until the fault clears"),
-    "wheel-lifted": KindSpec(True, None, None, None, False,
-                             "the wheel loses the ground (its tyre touches nothing): it spins freely, the "
-                             "casters carry the robot"),
-    "rosserial-loss": KindSpec(False, "p", 1.0, (0.0, 1.0), False,
-                               "each rosserial frame (wheel_Command down, wheelN_Vel up) is lost with "
-                               "probability P (seeded); 1 cuts the link"),
-    "rosserial-latency": KindSpec(False, "latency_ms", 100.0, (0.0, 10000.0), False,
-                                  "every rosserial frame arrives LATENCY_MS later (USB/OS stalls)"),
-    "lidar-dead": KindSpec(False, None, None, None, True,
-                           "the LiDAR stops publishing scan (needs --sensors)"),
-    "imu-stuck": KindSpec(False, None, None, None, True,
-                          "imu/data_raw and imu/mag repeat the last sample before the fault, with new stamps "
-                          "(a hung I2C read; needs --sensors)"),
-    "battery-sag": KindSpec(False, "drop_v", 10.0, (0.1, 42.0), False,
-                            "the battery's terminal voltage drops by DROP_V (a failing cell group, cold); the "
-                            "drivers' output scales with it"),
-    "battery-cut": KindSpec(False, None, None, None, False,
-                            "the drivers lose their supply (motor power line open): both wheels coast; the "
-                            "mini PC and the Arduino keep running"),
-    "estop": KindSpec(False, None, None, None, False,
-                      "the e-stop is pressed: its relays open both motors' phases, the wheels coast"),
+    "hall-dead": KindSpec(
+        True,
+        "sensor",
+        "all",
+        ("all", "a", "b", "c"),
+        False,
+        "the wheel's SC speed signal stops changing at the Arduino (a broken SC wire or "
+        "hall supply; with a, b or c one hall sensor is stuck and SC changes 60 times per "
+        "revolution instead of 90); the motor itself keeps running",
+    ),
+    "hall-chatter": KindSpec(
+        True,
+        "rate_hz",
+        200.0,
+        (1.0, 20000.0),
+        False,
+        "spurious 20 us pulses on the wheel's SC line at RATE_HZ on average (Poisson, "
+        "seeded): each adds two changes the firmware counts",
+    ),
+    "motor-stall": KindSpec(
+        True,
+        None,
+        None,
+        None,
+        False,
+        "the wheel jams (a seized hub, a stone): it cannot turn, whatever the motor and the "
+        "ground do, until the fault clears",
+    ),
+    "wheel-lifted": KindSpec(
+        True,
+        None,
+        None,
+        None,
+        False,
+        "the wheel loses the ground (its tyre touches nothing): it spins freely, the "
+        "casters carry the robot",
+    ),
+    "rosserial-loss": KindSpec(
+        False,
+        "p",
+        1.0,
+        (0.0, 1.0),
+        False,
+        "each rosserial frame (wheel_Command down, wheelN_Vel up) is lost with "
+        "probability P (seeded); 1 cuts the link",
+    ),
+    "rosserial-latency": KindSpec(
+        False,
+        "latency_ms",
+        100.0,
+        (0.0, 10000.0),
+        False,
+        "every rosserial frame arrives LATENCY_MS later (USB/OS stalls)",
+    ),
+    "lidar-dead": KindSpec(
+        False, None, None, None, True, "the LiDAR stops publishing scan (needs --sensors)"
+    ),
+    "imu-stuck": KindSpec(
+        False,
+        None,
+        None,
+        None,
+        True,
+        "imu/data_raw and imu/mag repeat the last sample before the fault, with new stamps "
+        "(a hung I2C read; needs --sensors)",
+    ),
+    "battery-sag": KindSpec(
+        False,
+        "drop_v",
+        10.0,
+        (0.1, 42.0),
+        False,
+        "the battery's terminal voltage drops by DROP_V (a failing cell group, cold); the "
+        "drivers' output scales with it",
+    ),
+    "battery-cut": KindSpec(
+        False,
+        None,
+        None,
+        None,
+        False,
+        "the drivers lose their supply (motor power line open): both wheels coast; the "
+        "mini PC and the Arduino keep running",
+    ),
+    "estop": KindSpec(
+        False,
+        None,
+        None,
+        None,
+        False,
+        "the e-stop is pressed: its relays open both motors' phases, the wheels coast",
+    ),
 }
 """Fault kinds. Per-wheel kinds are written with the wheel: ``hall-left-dead``, ``motor-right-stall``."""
 
@@ -171,8 +232,10 @@ def parse_fault(text: str, where: str = "--fault") -> Fault:
         if not eq:
             key, raw = spec.param, item
             if key is None or bare_seen:
-                raise FaultError(f"{at}: unexpected argument {item!r}"
-                                 + (f" ({name} takes only for=S)" if spec.param is None else ""))
+                raise FaultError(
+                    f"{at}: unexpected argument {item!r}"
+                    + (f" ({name} takes only for=S)" if spec.param is None else "")
+                )
             bare_seen = True
         key = key.strip()
         if key == "for":
@@ -201,8 +264,9 @@ def _value(at: str, spec: KindSpec, raw: str) -> float | str:
     return value
 
 
-def parse_faults(texts, where: str = "--fault", duration_s: float | None = None,
-                 sensors: bool = True) -> tuple[Fault, ...]:
+def parse_faults(
+    texts, where: str = "--fault", duration_s: float | None = None, sensors: bool = True
+) -> tuple[Fault, ...]:
     """Parse several specifications and check them against the run.
 
     ``duration_s``: a fault must start before the end of the run. ``sensors``:
@@ -214,7 +278,9 @@ def parse_faults(texts, where: str = "--fault", duration_s: float | None = None,
     faults = tuple(parse_fault(t, where) for t in texts)
     for f in faults:
         if duration_s is not None and f.t_s >= duration_s:
-            raise FaultError(f"{where} {f.text!r}: T={f.t_s:g} s is not before the end of the run ({duration_s:g} s)")
+            raise FaultError(
+                f"{where} {f.text!r}: T={f.t_s:g} s is not before the end of the run ({duration_s:g} s)"
+            )
         if KINDS[f.kind].needs_sensors and not sensors:
             raise FaultError(f"{where} {f.text!r}: {f.name} needs the sensors (add --sensors)")
     return faults

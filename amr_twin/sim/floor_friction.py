@@ -68,11 +68,11 @@ def set_friction_field(model, data, spacing_m: float, values) -> None:
         raise ValueError("friction field: the model has no brush tyres (wheel.tyre_slip is off)")
     at = start + FIELD_OFFSET
     if values is None:
-        data.userdata[at:at + 2 + FIELD_CELLS ** 2] = 0.0
+        data.userdata[at : at + 2 + FIELD_CELLS**2] = 0.0
         return
     data.userdata[at] = float(FIELD_CELLS)
     data.userdata[at + 1] = float(spacing_m)
-    data.userdata[at + 2:at + 2 + FIELD_CELLS ** 2] = [float(v) for row in values for v in row]
+    data.userdata[at + 2 : at + 2 + FIELD_CELLS**2] = [float(v) for row in values for v in row]
 
 
 def friction_at(field, x: float, y: float) -> float:

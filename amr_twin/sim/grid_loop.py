@@ -40,7 +40,9 @@ class GridLoop:
         self._m, self._d = physics.model, physics.data
         self._stepper = grid_stepper(physics, LOOP_SENSOR_DIM, self.every, self.dt_us)
         """The grid loop in C (:mod:`amr_twin.sim.grid_steps`), None without its helper."""
-        self._sensors = physics.data.sensordata[:LOOP_SENSOR_DIM]  # a view: MjData's buffers stay put
+        self._sensors = physics.data.sensordata[
+            :LOOP_SENSOR_DIM
+        ]  # a view: MjData's buffers stay put
         self.last_row = self._sensors.tolist()
         """The loop sensors' row where the last chunk ended (at the twin's start: the start's)."""
 
@@ -115,7 +117,9 @@ class GridLoop:
             if handoff >= 0:
                 t = k * dt
                 stop = bool(stepper.resume[handoff](t))
-                for sampler in islice(self.samplers, handoff + 1, None):  # the live list, as the Python loop walks it
+                for sampler in islice(
+                    self.samplers, handoff + 1, None
+                ):  # the live list, as the Python loop walks it
                     if sampler(t):
                         stop = True
                 if stop:

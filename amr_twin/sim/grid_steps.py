@@ -42,9 +42,18 @@ NEVER_BEFORE, NEVER_DUE = -(1 << 62), 1 << 62
 class Sampler(ctypes.Structure):
     """``gs_sampler`` of grid_steps.c: a grid sampler's C form."""
 
-    _fields_ = [("kind", ctypes.c_int), ("width", ctypes.c_int), ("cap", ctypes.c_int), ("n", ctypes.c_int),
-                ("period_us", ctypes.c_int64), ("start_us", ctypes.c_int64), ("due_us", ctypes.c_int64),
-                ("fn", _P), ("a", _P * 4), ("out", _P)]
+    _fields_ = [
+        ("kind", ctypes.c_int),
+        ("width", ctypes.c_int),
+        ("cap", ctypes.c_int),
+        ("n", ctypes.c_int),
+        ("period_us", ctypes.c_int64),
+        ("start_us", ctypes.c_int64),
+        ("due_us", ctypes.c_int64),
+        ("fn", _P),
+        ("a", _P * 4),
+        ("out", _P),
+    ]
 
 
 def sampler(kind: int, function, *args, period_us: int = 1) -> Sampler:
@@ -53,8 +62,13 @@ def sampler(kind: int, function, *args, period_us: int = 1) -> Sampler:
     multiples of ``period_us``."""
     if int(period_us) < 1:
         raise ValueError(f"grid sampler: period_us {period_us} must be >= 1")
-    s = Sampler(kind=kind, period_us=int(period_us), start_us=NEVER_BEFORE, due_us=NEVER_DUE,
-                fn=ctypes.cast(function, _P).value)
+    s = Sampler(
+        kind=kind,
+        period_us=int(period_us),
+        start_us=NEVER_BEFORE,
+        due_us=NEVER_DUE,
+        fn=ctypes.cast(function, _P).value,
+    )
     for i, arg in enumerate(args):
         s.a[i] = arg if isinstance(arg, int) else ctypes.addressof(arg)
     s._keep = args  # the arguments outlive the sampler
@@ -62,10 +76,22 @@ def sampler(kind: int, function, *args, period_us: int = 1) -> Sampler:
 
 
 class _Context(ctypes.Structure):
-    _fields_ = [("step", _P), ("user_error", _P), ("m", _P), ("d", _P), ("sensors", _P),
-                ("ncol", ctypes.c_int), ("rows_cap", ctypes.c_int), ("rows", _P), ("every", ctypes.c_int),
-                ("grid_us", ctypes.c_int64), ("s", ctypes.POINTER(ctypes.POINTER(Sampler))), ("ns", ctypes.c_int),
-                ("handoff", ctypes.c_int), ("message", ctypes.c_char * 256)]
+    _fields_ = [
+        ("step", _P),
+        ("user_error", _P),
+        ("m", _P),
+        ("d", _P),
+        ("sensors", _P),
+        ("ncol", ctypes.c_int),
+        ("rows_cap", ctypes.c_int),
+        ("rows", _P),
+        ("every", ctypes.c_int),
+        ("grid_us", ctypes.c_int64),
+        ("s", ctypes.POINTER(ctypes.POINTER(Sampler))),
+        ("ns", ctypes.c_int),
+        ("handoff", ctypes.c_int),
+        ("message", ctypes.c_char * 256),
+    ]
 
 
 register(C_SOURCE, gs_sampler=Sampler, gs_ctx=_Context)
@@ -82,10 +108,21 @@ class GridStepper:
     def __init__(self, lib: ctypes.PyDLL, physics, ncol: int, every: int, dt_us: int):
         m, d = physics.model, physics.data
         self._run = lib.gs_run
-        self._run.restype, self._run.argtypes = ctypes.c_int, [_P, ctypes.c_int, ctypes.c_int, ctypes.c_int64]
-        c = self._ctx = _Context(step=mujoco_address("mj_step"), user_error=mujoco_address("mju_user_error"),
-                                 m=m._address, d=d._address, sensors=address(d.sensordata), ncol=ncol,
-                                 every=every, grid_us=every * dt_us, handoff=-1)
+        self._run.restype, self._run.argtypes = (
+            ctypes.c_int,
+            [_P, ctypes.c_int, ctypes.c_int, ctypes.c_int64],
+        )
+        c = self._ctx = _Context(
+            step=mujoco_address("mj_step"),
+            user_error=mujoco_address("mju_user_error"),
+            m=m._address,
+            d=d._address,
+            sensors=address(d.sensordata),
+            ncol=ncol,
+            every=every,
+            grid_us=every * dt_us,
+            handoff=-1,
+        )
         self._ctx_at = ctypes.addressof(c)
         self._keep = (m, d)  # the model and data outlive every call
         self.rows = np.zeros((0, ncol))
@@ -105,7 +142,9 @@ class GridStepper:
         if kept is None:
             if len(self._sets) > 16:
                 self._sets.clear()
-            pointers = (ctypes.POINTER(Sampler) * len(natives))(*(ctypes.pointer(s) for s in natives))
+            pointers = (ctypes.POINTER(Sampler) * len(natives))(
+                *(ctypes.pointer(s) for s in natives)
+            )
             resume = [getattr(s, "grid_resume", s) for s in samplers]
             kept = self._sets[key] = (pointers, resume, natives)  # natives: their ids stay theirs
         pointers, self.resume, _ = kept
@@ -131,7 +170,9 @@ class GridStepper:
         return reached, c.handoff
 
 
-def grid_stepper(physics, ncol: int, every: int, dt_us: int, native: bool = True) -> GridStepper | None:
+def grid_stepper(
+    physics, ncol: int, every: int, dt_us: int, native: bool = True
+) -> GridStepper | None:
     """The C grid loop for ``physics`` when its helper builds and loads (and ``native``), else None."""
     lib, _engine = open_helper(C_SOURCE, native)
     return GridStepper(lib, physics, ncol, every, dt_us) if lib is not None else None
@@ -154,8 +195,15 @@ class GridRows:
     both must give the same values. After a row at or after :attr:`due_us`, ``after(t_us)`` runs
     (in Python: the LiDAR casts there). :attr:`rows` are the rows kept."""
 
-    def __init__(self, width: int, period_us: int, row, c_row: tuple | None = None, after=None,
-                 start_us: int = NEVER_BEFORE):
+    def __init__(
+        self,
+        width: int,
+        period_us: int,
+        row,
+        c_row: tuple | None = None,
+        after=None,
+        start_us: int = NEVER_BEFORE,
+    ):
         self.width, self._row, self._after = int(width), row, after
         self._buf = np.zeros((64, self.width + 1))
         self._n = 0
@@ -250,11 +298,11 @@ class GridRows:
     @property
     def rows(self) -> np.ndarray:
         """(n, 1 + width) the rows kept, in time order: a view, valid until the next row."""
-        return self._buf[:self.n]
+        return self._buf[: self.n]
 
     def take(self) -> np.ndarray:
         """The rows kept (a copy), forgetting them."""
-        out = self._buf[:self.n].copy()
+        out = self._buf[: self.n].copy()
         self._set_n(0)
         return out
 
@@ -274,6 +322,6 @@ class GridRows:
         n = self.n
         k = int(np.searchsorted(self._buf[:n, 0], t_us, side="right"))
         out = self._buf[:k].copy()
-        self._buf[:n - k] = self._buf[k:n]
+        self._buf[: n - k] = self._buf[k:n]
         self._set_n(n - k)
         return out

@@ -42,7 +42,9 @@ class Hooks:
         self._actuation_hooks.append(fn)
         return fn
 
-    def on_message(self, tap: Callable[[str, object, int], None], topics: tuple[str, ...] | None = None) -> Callable:
+    def on_message(
+        self, tap: Callable[[str, object, int], None], topics: tuple[str, ...] | None = None
+    ) -> Callable:
         """Call ``tap(topic, msg, t_us)`` for each message published on the bus (``topics`` only); returns it."""
         self._bus.add_tap(tap, topics=topics)
         return tap
@@ -55,8 +57,13 @@ class Hooks:
     def unhook(self, fn: Callable) -> None:
         """Remove ``fn`` from every hook that holds it (ValueError if none does)."""
         found = False
-        for hooks in (self.samplers, self._grid_row_hooks, self._event_hooks, self._actuation_hooks,
-                      self._collision_hooks):
+        for hooks in (
+            self.samplers,
+            self._grid_row_hooks,
+            self._event_hooks,
+            self._actuation_hooks,
+            self._collision_hooks,
+        ):
             while fn in hooks:
                 hooks.remove(fn)
                 found = True

@@ -31,23 +31,58 @@ from amr_twin.base.native_build import address
 PHYSICS_LAYER = True
 
 _O = mujoco.mjtObj
-_BODY_FIELDS = ("xpos", "xquat", "xmat", "xipos", "ximat", "xiquat", "subtree_com", "subtree_linvel",
-                "subtree_angmom", "cinert", "cvel", "cacc", "cfrc_int", "cfrc_ext", "xfrc_applied", "crb")
+_BODY_FIELDS = (
+    "xpos",
+    "xquat",
+    "xmat",
+    "xipos",
+    "ximat",
+    "xiquat",
+    "subtree_com",
+    "subtree_linvel",
+    "subtree_angmom",
+    "cinert",
+    "cvel",
+    "cacc",
+    "cfrc_int",
+    "cfrc_ext",
+    "xfrc_applied",
+    "crb",
+)
 _DOF_FIELDS = ("qvel", "qacc", "qacc_smooth", "qacc_warmstart")
-_DATA_OBJECTS = {"ctrl": _O.mjOBJ_ACTUATOR, "act": _O.mjOBJ_ACTUATOR, "eq_active": _O.mjOBJ_EQUALITY,
-                 "xanchor": _O.mjOBJ_JOINT, "xaxis": _O.mjOBJ_JOINT}
-_PREFIXES = (("body_", _O.mjOBJ_BODY), ("jnt_", _O.mjOBJ_JOINT), ("geom_", _O.mjOBJ_GEOM),
-             ("site_", _O.mjOBJ_SITE), ("cam_", _O.mjOBJ_CAMERA), ("light_", _O.mjOBJ_LIGHT),
-             ("actuator_", _O.mjOBJ_ACTUATOR), ("sensor_", _O.mjOBJ_SENSOR), ("eq_", _O.mjOBJ_EQUALITY),
-             ("tendon_", _O.mjOBJ_TENDON), ("ten_", _O.mjOBJ_TENDON), ("mat_", _O.mjOBJ_MATERIAL),
-             ("mesh_", _O.mjOBJ_MESH), ("numeric_", _O.mjOBJ_NUMERIC), ("hfield_", _O.mjOBJ_HFIELD),
-             ("tex_", _O.mjOBJ_TEXTURE), ("key_", _O.mjOBJ_KEY))
+_DATA_OBJECTS = {
+    "ctrl": _O.mjOBJ_ACTUATOR,
+    "act": _O.mjOBJ_ACTUATOR,
+    "eq_active": _O.mjOBJ_EQUALITY,
+    "xanchor": _O.mjOBJ_JOINT,
+    "xaxis": _O.mjOBJ_JOINT,
+}
+_PREFIXES = (
+    ("body_", _O.mjOBJ_BODY),
+    ("jnt_", _O.mjOBJ_JOINT),
+    ("geom_", _O.mjOBJ_GEOM),
+    ("site_", _O.mjOBJ_SITE),
+    ("cam_", _O.mjOBJ_CAMERA),
+    ("light_", _O.mjOBJ_LIGHT),
+    ("actuator_", _O.mjOBJ_ACTUATOR),
+    ("sensor_", _O.mjOBJ_SENSOR),
+    ("eq_", _O.mjOBJ_EQUALITY),
+    ("tendon_", _O.mjOBJ_TENDON),
+    ("ten_", _O.mjOBJ_TENDON),
+    ("mat_", _O.mjOBJ_MATERIAL),
+    ("mesh_", _O.mjOBJ_MESH),
+    ("numeric_", _O.mjOBJ_NUMERIC),
+    ("hfield_", _O.mjOBJ_HFIELD),
+    ("tex_", _O.mjOBJ_TEXTURE),
+    ("key_", _O.mjOBJ_KEY),
+)
 _QPOS_WIDTH = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4}
 _DOF_WIDTH = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3}
 
 
 def _rows(model: mujoco.MjModel, field: str, in_data: bool):
     """``index(name)`` of ``field``'s rows: an int, or a slice for a joint's or a sensor's several values."""
+
     def object_id(kind, name: str) -> int:
         i = mujoco.mj_name2id(model, kind, name)
         if i < 0:
@@ -64,17 +99,21 @@ def _rows(model: mujoco.MjModel, field: str, in_data: bool):
     if field in _DOF_FIELDS or field.startswith(("qfrc_", "dof_")):
         return lambda name: joint_values(name, model.jnt_dofadr, _DOF_WIDTH)
     if field == "sensordata":
+
         def sensor(name: str) -> int | slice:
             s = object_id(_O.mjOBJ_SENSOR, name)
             start, dim = int(model.sensor_adr[s]), int(model.sensor_dim[s])
             return start if dim == 1 else slice(start, start + dim)
+
         return sensor
     if field.startswith("mocap_"):
+
         def mocap(name: str) -> int:
             i = int(model.body_mocapid[object_id(_O.mjOBJ_BODY, name)])
             if i < 0:
                 raise KeyError(f"{field}: body {name!r} is not a mocap body")
             return i
+
         return mocap
     kind = _DATA_OBJECTS.get(field) if in_data else None
     if kind is None and in_data and (field in _BODY_FIELDS):
@@ -106,7 +145,9 @@ class NamedArray:
             parts = [self.index(k) for k in key]
             if all(isinstance(p, int) for p in parts):
                 return np.array(parts, dtype=np.intp)
-            return np.concatenate([np.arange(p.start, p.stop) if isinstance(p, slice) else [p] for p in parts])
+            return np.concatenate(
+                [np.arange(p.start, p.stop) if isinstance(p, slice) else [p] for p in parts]
+            )
         return key
 
     def __getitem__(self, key):
@@ -138,7 +179,9 @@ class _Struct:
             array = getattr(self._struct, field)
             if not isinstance(array, np.ndarray):
                 raise AttributeError(f"{field} is not an array field")
-            named = self._fields[field] = NamedArray(array, field, _rows(self._model, field, self._in_data))
+            named = self._fields[field] = NamedArray(
+                array, field, _rows(self._model, field, self._in_data)
+            )
         return named
 
 
@@ -164,6 +207,7 @@ class NamedIndex:
 
             def row() -> list[float]:
                 return np.concatenate([np.ravel(a[i]) for a, i in views]).tolist()
+
         return GridRows(len(pointers), 1, row, c_row)
 
 
@@ -180,5 +224,6 @@ def _calling(c_row: tuple, width: int):
     def row() -> list[float]:
         call(a0, a1, a2, out)
         return values.tolist()
+
     row.keep = (c_row, values)  # what the addresses point into outlives the function
     return row

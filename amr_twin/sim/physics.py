@@ -70,8 +70,12 @@ class Physics:
         self._wheel_limited = [int(m.jnt_limited[j]) for j in self.wheel_joint]
         self._wheel_range = [m.jnt_range[j].copy() for j in self.wheel_joint]
         self._wheel_dof_l, self._wheel_dof_r = (int(v) for v in self.wheel_dof)
-        self.caster_qpos = np.array([m.jnt_qposadr[_id(m, J, f"caster_{c}_joint")] for c in CASTERS])
-        self.actuator = np.array([_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"motor_{s}") for s in WHEELS])
+        self.caster_qpos = np.array(
+            [m.jnt_qposadr[_id(m, J, f"caster_{c}_joint")] for c in CASTERS]
+        )
+        self.actuator = np.array(
+            [_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, f"motor_{s}") for s in WHEELS]
+        )
         self.base_body = _id(m, mujoco.mjtObj.mjOBJ_BODY, "base_link")
         G = mujoco.mjtObj.mjOBJ_GEOM
         self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
@@ -80,8 +84,10 @@ class Physics:
         """(ngeom,) index of each geom in :attr:`support_geoms` (0-5), -1 for the others."""
         for i, g in enumerate(self.support_geoms.values()):
             self.support_of_geom[g] = i
-        self._support_contype = {g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
-                                 for g in self.support_geoms.values()}
+        self._support_contype = {
+            g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
+            for g in self.support_geoms.values()
+        }
         self._drive_range = m.actuator_forcerange[self.actuator].copy()
         self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
         self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
@@ -99,8 +105,11 @@ class Physics:
         or None for ``wheel.friction`` everywhere); ValueError with the rigid contact."""
         from amr_twin.sim.floor_friction import set_friction_field
 
-        set_friction_field(self.model, self.data, *((None, None) if field is None
-                                                    else (field.spacing_m, field.values.tolist())))
+        set_friction_field(
+            self.model,
+            self.data,
+            *((None, None) if field is None else (field.spacing_m, field.values.tolist())),
+        )
 
     def clone(self) -> "Physics":
         """An independent copy in its present state: the model and the data (contacts and
@@ -166,7 +175,7 @@ class Physics:
 
     def pose(self) -> Pose2D:
         """Base pose in the world plane."""
-        q = self.data.qpos[self.root_qpos:self.root_qpos + 7]
+        q = self.data.qpos[self.root_qpos : self.root_qpos + 7]
         w, x, y, z = q[3:7]
         yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
         return Pose2D(float(q[0]), float(q[1]), yaw)
@@ -177,7 +186,7 @@ class Physics:
 
     def base_velocity(self) -> np.ndarray:
         """(6,) free-joint velocity: linear (world, m/s), angular (body, rad/s)."""
-        return self.data.qvel[self.root_dof:self.root_dof + 6].copy()
+        return self.data.qvel[self.root_dof : self.root_dof + 6].copy()
 
     def base_tilt_rad(self) -> float:
         """Angle between the base z axis and the world vertical."""
@@ -189,7 +198,7 @@ class Physics:
 
     def base_velocity_list(self) -> list[float]:
         """:meth:`base_velocity` as a plain list (a sampler's 50 Hz read)."""
-        return self.data.qvel[self.root_dof:self.root_dof + 6].tolist()
+        return self.data.qvel[self.root_dof : self.root_dof + 6].tolist()
 
     def robot_mass_kg(self) -> float:
         return float(self.model.body_subtreemass[self.base_body])
@@ -206,7 +215,9 @@ class Physics:
         """
         d = self.data
         out = [0.0] * len(self.support_geoms)
-        if d.ncon:  # a handful of contacts: plain Python, in contact order (~5 us against ~30 with numpy)
+        if (
+            d.ncon
+        ):  # a handful of contacts: plain Python, in contact order (~5 us against ~30 with numpy)
             con, lut, force = d.contact, self.support_of_geom, d.efc_force
             for (g1, g2), adr in zip(con.geom.tolist(), con.efc_address.tolist()):
                 k = max(lut[g1], lut[g2])
@@ -229,7 +240,12 @@ class Physics:
     def base_heading_xy(self) -> tuple[float, float, float, float]:
         """Base origin x, y (m) and the world x, y of its x axis (unnormalised when tilted), plain floats."""
         b, d = self.base_body, self.data
-        return (d.xpos.item(3 * b), d.xpos.item(3 * b + 1), d.xmat.item(9 * b), d.xmat.item(9 * b + 3))
+        return (
+            d.xpos.item(3 * b),
+            d.xpos.item(3 * b + 1),
+            d.xmat.item(9 * b),
+            d.xmat.item(9 * b + 3),
+        )
 
     # -- things that move in the world (amr_twin/sim/actors.py) ----------------------------
     def mocap_index(self, body: str) -> int:
@@ -263,12 +279,14 @@ class Physics:
         wheels = d.qpos[self.wheel_qpos].copy()
         d.qpos[:] = rest
         d.qpos[self.wheel_qpos] = wheels
-        w, x, y, z = rest[a + 3:a + 7]
+        w, x, y, z = rest[a + 3 : a + 7]
         turn = 0.5 * (yaw_rad - math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
         quat = np.empty(4)
-        mujoco.mju_mulQuat(quat, np.array([math.cos(turn), 0.0, 0.0, math.sin(turn)]), rest[a + 3:a + 7])
-        d.qpos[a:a + 3] = (x_m, y_m, rest[a + 2])
-        d.qpos[a + 3:a + 7] = quat
+        mujoco.mju_mulQuat(
+            quat, np.array([math.cos(turn), 0.0, 0.0, math.sin(turn)]), rest[a + 3 : a + 7]
+        )
+        d.qpos[a : a + 3] = (x_m, y_m, rest[a + 2])
+        d.qpos[a + 3 : a + 7] = quat
         self._at_rest()
         return before
 
@@ -284,14 +302,20 @@ class Physics:
         mujoco.mj_forward(self.model, d)
 
     # -- actuation --------------------------------------------------------------------
-    def set_motor(self, wheel: int, mode: str, voltage_v: float = 0.0, torque_limit_nm: float | None = None) -> None:
+    def set_motor(
+        self, wheel: int, mode: str, voltage_v: float = 0.0, torque_limit_nm: float | None = None
+    ) -> None:
         """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``.
 
         ``torque_limit_nm`` bounds the torque (the driver's current limit times Kt; for
         ``"brake"``, the shorted phases' own limit); default: the drive limit.
         """
         m, a = self.model, self.actuator[wheel]
-        limit = self._drive_range[wheel] if torque_limit_nm is None else (-torque_limit_nm, torque_limit_nm)
+        limit = (
+            self._drive_range[wheel]
+            if torque_limit_nm is None
+            else (-torque_limit_nm, torque_limit_nm)
+        )
         m.actuator_forcerange[a] = limit
         if mode in ("drive", "brake"):  # brake: phases shorted, i.e. zero phase voltage
             m.actuator_gainprm[a, 0] = self._drive_gain[wheel]

@@ -17,8 +17,9 @@ MODE_CODES = {"drive": DRIVE, "coast": COAST, "brake": BRAKE}
 """Motor modes as recorded (:attr:`amr_twin.recording.recorder.RunSeries.mode`)."""
 
 
-def motor_currents_a(cfg: TwinConfig, voltage_v: np.ndarray, speed_rad_s: np.ndarray,
-                     mode: np.ndarray) -> np.ndarray:
+def motor_currents_a(
+    cfg: TwinConfig, voltage_v: np.ndarray, speed_rad_s: np.ndarray, mode: np.ndarray
+) -> np.ndarray:
     """Phase currents of both motors from recorded states, A.
 
     Parameters
@@ -33,7 +34,9 @@ def motor_currents_a(cfg: TwinConfig, voltage_v: np.ndarray, speed_rad_s: np.nda
     out = np.zeros(np.shape(speed_rad_s))
     for w, m in enumerate((cfg.motor_left, cfg.motor_right)):
         i = (voltage_v[:, w] - m.ke_v_s_rad * speed_rad_s[:, w]) / m.resistance_ohm
-        limit = np.where(mode[:, w] == MODE_CODES["brake"], cfg.driver.brake_current_limit_a, m.current_limit_a)
+        limit = np.where(
+            mode[:, w] == MODE_CODES["brake"], cfg.driver.brake_current_limit_a, m.current_limit_a
+        )
         out[:, w] = np.where(mode[:, w] == MODE_CODES["coast"], 0.0, np.clip(i, -limit, limit))
     return out
 
@@ -48,15 +51,25 @@ class Plant:
         self.motors: tuple[MotorCfg, MotorCfg] = (cfg.motor_left, cfg.motor_right)
         self.battery = Battery(cfg.battery)
         self.estop = False
-        self.supply_cut = False  # fault injection (amr_twin/sim/fault_injector.py): drivers unpowered, coast
+        self.supply_cut = (
+            False  # fault injection (amr_twin/sim/fault_injector.py): drivers unpowered, coast
+        )
         self.voltage_v = [0.0, 0.0]
         self.mode = ["coast", "coast"]
         # per wheel, plain floats: Ke, R, current limit
-        self._motor_consts = [(m.ke_v_s_rad, m.resistance_ohm, m.current_limit_a) for m in self.motors]
+        self._motor_consts = [
+            (m.ke_v_s_rad, m.resistance_ohm, m.current_limit_a) for m in self.motors
+        ]
         self._quiescent2_a = 2 * self.driver.quiescent_current_a
         self._aux_w = cfg.battery.auxiliary_power_w
-        self.battery.connect(physics, physics.wheel_dof, self._motor_consts, self.driver.brake_current_limit_a,
-                             self._quiescent2_a, self._aux_w)
+        self.battery.connect(
+            physics,
+            physics.wheel_dof,
+            self._motor_consts,
+            self.driver.brake_current_limit_a,
+            self._quiescent2_a,
+            self._aux_w,
+        )
 
     def phase_voltage_v(self, pins: DriverPins, wheel: int) -> float:
         """Signed phase voltage, V, that wheel ``wheel``'s driver (0 left, 1 right) applies for these pins."""
@@ -91,7 +104,9 @@ class Plant:
         speeds = self.physics.wheel_speeds_list()
         brake_limit_a = self.driver.brake_current_limit_a
         out = []
-        for mode, volt, speed, (ke, r_ohm, limit) in zip(self.mode, self.voltage_v, speeds, self._motor_consts):
+        for mode, volt, speed, (ke, r_ohm, limit) in zip(
+            self.mode, self.voltage_v, speeds, self._motor_consts
+        ):
             if mode == "coast":
                 out.append(0.0)
                 continue

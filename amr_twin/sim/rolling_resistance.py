@@ -31,15 +31,27 @@ BALL_SPEED_EPS_M_S = 0.005
 class _Params(ctypes.Structure):
     """``rr_params`` of rolling_resistance.c."""
 
-    _fields_ = [("tyre_qpos", ctypes.c_int * 2), ("tyre_dof", ctypes.c_int * 2),
-                ("caster_qpos", ctypes.c_int * 4), ("caster_dof", ctypes.c_int * 4),
-                ("ball_body", ctypes.c_int * 4), ("base", ctypes.c_int), ("root_dof", ctypes.c_int),
-                ("wheel_dof", ctypes.c_int * 2), ("ngeom", ctypes.c_int),
-                ("support_of_geom", ctypes.POINTER(ctypes.c_int)),
-                ("k_t", ctypes.c_double), ("c_t", ctypes.c_double), ("f0_c", ctypes.c_double),
-                ("k_c", ctypes.c_double), ("c_c", ctypes.c_double), ("tyre_arm_m", ctypes.c_double),
-                ("motor_friction", ctypes.c_double * 2), ("ball_crr", ctypes.c_double),
-                ("ball_speed_eps", ctypes.c_double)]
+    _fields_ = [
+        ("tyre_qpos", ctypes.c_int * 2),
+        ("tyre_dof", ctypes.c_int * 2),
+        ("caster_qpos", ctypes.c_int * 4),
+        ("caster_dof", ctypes.c_int * 4),
+        ("ball_body", ctypes.c_int * 4),
+        ("base", ctypes.c_int),
+        ("root_dof", ctypes.c_int),
+        ("wheel_dof", ctypes.c_int * 2),
+        ("ngeom", ctypes.c_int),
+        ("support_of_geom", ctypes.POINTER(ctypes.c_int)),
+        ("k_t", ctypes.c_double),
+        ("c_t", ctypes.c_double),
+        ("f0_c", ctypes.c_double),
+        ("k_c", ctypes.c_double),
+        ("c_c", ctypes.c_double),
+        ("tyre_arm_m", ctypes.c_double),
+        ("motor_friction", ctypes.c_double * 2),
+        ("ball_crr", ctypes.c_double),
+        ("ball_speed_eps", ctypes.c_double),
+    ]
 
 
 register(C_SOURCE, rr_params=_Params)
@@ -81,12 +93,32 @@ class RollingResistance:
         self._ball_crr = k.rolling_resistance
         self._base = physics.base_body
         self._root_dof = int(physics.root_dof)
-        self._support_of_geom = physics.support_of_geom  # support index (0-5) of every geom, -1 for the others
+        self._support_of_geom = (
+            physics.support_of_geom
+        )  # support index (0-5) of every geom, -1 for the others
         self._loads = [0.0] * 6
-        self._fast = (d.qpos, d.qvel, d.xmat[self._base], d.xpos, m.dof_frictionloss, d.qfrc_applied,
-                      *self._tyres, tuple(self._casters), tuple(self._ball_body), self._base,
-                      self._k_t, self._c_t, self._f0_c, self._k_c, self._c_c, self._tyre_arm_m,
-                      tuple(self._motor_friction), tuple(self._wheel_dof), self._ball_crr, self._root_dof)
+        self._fast = (
+            d.qpos,
+            d.qvel,
+            d.xmat[self._base],
+            d.xpos,
+            m.dof_frictionloss,
+            d.qfrc_applied,
+            *self._tyres,
+            tuple(self._casters),
+            tuple(self._ball_body),
+            self._base,
+            self._k_t,
+            self._c_t,
+            self._f0_c,
+            self._k_c,
+            self._c_c,
+            self._tyre_arm_m,
+            tuple(self._motor_friction),
+            tuple(self._wheel_dof),
+            self._ball_crr,
+            self._root_dof,
+        )
         """Everything :meth:`__call__` reads, in one tuple (MjData's arrays are views: they stay put)."""
         self.update = self.__call__
         """The grid sampler: the C helper when built, else :meth:`__call__`."""
@@ -120,14 +152,20 @@ class RollingResistance:
         fn = lib.rr_update
         fn.restype = None
         fn.argtypes = [ctypes.c_void_p] * 4
-        args = (ctypes.c_void_p(m._address), ctypes.c_void_p(d._address), ctypes.byref(p),
-                ctypes.cast(self._loads_c, ctypes.c_void_p))
+        args = (
+            ctypes.c_void_p(m._address),
+            ctypes.c_void_p(d._address),
+            ctypes.byref(p),
+            ctypes.cast(self._loads_c, ctypes.c_void_p),
+        )
         self._keep = (m, d, args)  # the model and data outlive every call
 
         def update(t_us: int = 0, _fn=fn, _args=args) -> None:
             _fn(*_args)
 
-        update.grid_native = sampler(CALL4, fn, m._address, d._address, p, self._loads_c)  # the loop's grid in C
+        update.grid_native = sampler(
+            CALL4, fn, m._address, d._address, p, self._loads_c
+        )  # the loop's grid in C
         self.update = update
         self._row_fn = lib.rr_support_row
         contact = lib.rr_contact_loads
@@ -151,7 +189,12 @@ class RollingResistance:
         physics = self.physics
 
         def row() -> list[float]:
-            return [*self.loads, *self.contact_loads(), physics.base_up_z(), *physics.base_velocity_list()]
+            return [
+                *self.loads,
+                *self.contact_loads(),
+                physics.base_up_z(),
+                *physics.base_velocity_list(),
+            ]
 
         c_row = None
         if self._loads_c is not None:
@@ -161,13 +204,36 @@ class RollingResistance:
     @property
     def loads(self) -> list[float]:
         """(6,) normal loads at the last update, N: wheel left, right, casters fl, fr, rl, rr."""
-        return self._loads_c[:] if self._loads_c is not None else list(self._loads)  # a slice: a sixth of list()'s cost
+        return (
+            self._loads_c[:] if self._loads_c is not None else list(self._loads)
+        )  # a slice: a sixth of list()'s cost
 
     def __call__(self, t_us: int = 0) -> None:
         # Plain floats and locals (one attribute read of a tuple of constants): this runs on
         # cold caches every 10 ms, where each attribute lookup and MjData access counts.
-        (qpos_v, qvel_v, xmat_base, xpos_v, fl, qfrc, (qa, va), (qb, vb), casters, balls, base,
-         k_t, c_t, f0, k_c, c_c, arm, (fric_l, fric_r), (dof_l, dof_r), crr, r0) = self._fast
+        (
+            qpos_v,
+            qvel_v,
+            xmat_base,
+            xpos_v,
+            fl,
+            qfrc,
+            (qa, va),
+            (qb, vb),
+            casters,
+            balls,
+            base,
+            k_t,
+            c_t,
+            f0,
+            k_c,
+            c_c,
+            arm,
+            (fric_l, fric_r),
+            (dof_l, dof_r),
+            crr,
+            r0,
+        ) = self._fast
         qpos, qvel = qpos_v.tolist(), qvel_v.tolist()
         loads = self._loads
         load = k_t * qpos[qa] + c_t * qvel[va]
@@ -204,11 +270,13 @@ class RollingResistance:
             px, py, _ = xpos[body]
             rx, ry = px - bx, py - by  # contact point, on the floor under the ball
             ux, uy = vx - wz * ry, vy + wz * rx
-            speed = sqrt(ux * ux + uy * uy)  # as the C helper (libm's hypot and Python's differ in the last bit)
+            speed = sqrt(
+                ux * ux + uy * uy
+            )  # as the C helper (libm's hypot and Python's differ in the last bit)
             scale = crr * loads[i] / (eps if eps > speed else speed)  # max(speed, eps)
             fx_i, fy_i = -scale * ux, -scale * uy
             fx, fy, tz = fx + fx_i, fy + fy_i, tz + rx * fy_i - ry * fx_i
             i += 1
         # the free joint's generalized force: world force, then the moment in the body frame
         # (R^T (0, 0, tz): the third column of the rotation's transpose is its third row)
-        qfrc[r0:r0 + 6] = (fx, fy, 0.0, x6 * tz, x7 * tz, x8 * tz)
+        qfrc[r0 : r0 + 6] = (fx, fy, 0.0, x6 * tz, x7 * tz, x8 * tz)

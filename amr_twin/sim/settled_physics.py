@@ -34,9 +34,17 @@ KEEP = 2
 _kept: OrderedDict = OrderedDict()
 
 
-def settled_physics(cfg: TwinConfig, world: str, start_xy_yaw: tuple[float, float, float], visuals: bool,
-                    imu: bool, settle_s: float, where: str, actors: tuple = (),
-                    obstacles: tuple = ()) -> tuple[Physics, str]:
+def settled_physics(
+    cfg: TwinConfig,
+    world: str,
+    start_xy_yaw: tuple[float, float, float],
+    visuals: bool,
+    imu: bool,
+    settle_s: float,
+    where: str,
+    actors: tuple = (),
+    obstacles: tuple = (),
+) -> tuple[Physics, str]:
     """``(physics, urdf)``: the robot built in ``world`` at ``start_xy_yaw`` (x_m, y_m, yaw_rad) with
     ``actors`` (:class:`~amr_twin.model.actors.Actor`, standing at their poses at t = 0) and ``obstacles``
     (:class:`~amr_twin.model.worlds.Obstacle`, unmapped boxes),
@@ -45,8 +53,16 @@ def settled_physics(cfg: TwinConfig, world: str, start_xy_yaw: tuple[float, floa
     the same was settled before."""
     key = None
     if not Path(str(world)).suffix:
-        key = (cfg, str(world), tuple(start_xy_yaw), bool(visuals), bool(imu), float(settle_s), tuple(actors),
-               tuple(obstacles))
+        key = (
+            cfg,
+            str(world),
+            tuple(start_xy_yaw),
+            bool(visuals),
+            bool(imu),
+            float(settle_s),
+            tuple(actors),
+            tuple(obstacles),
+        )
         try:
             kept = _kept.get(key)
         except TypeError:  # an unhashable configuration: build it
@@ -54,8 +70,15 @@ def settled_physics(cfg: TwinConfig, world: str, start_xy_yaw: tuple[float, floa
         if kept is not None:
             _kept.move_to_end(key)
             return kept[0].clone(), kept[1]
-    built = build(cfg, world, start_xy_yaw, visuals=visuals, imu=imu, actors=tuple(actors),
-                  obstacles=tuple(obstacles))
+    built = build(
+        cfg,
+        world,
+        start_xy_yaw,
+        visuals=visuals,
+        imu=imu,
+        actors=tuple(actors),
+        obstacles=tuple(obstacles),
+    )
     physics = Physics(built.model)
     check_start(physics, where)
     physics.settle(settle_s)

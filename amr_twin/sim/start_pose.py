@@ -35,8 +35,10 @@ def check_start(physics, where: str) -> None:
     if hits:
         names = sorted({roles.world_name(w) for _i, _r, w in hits})
         shown = ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
-        raise StartPoseError(f"{where}: the robot overlaps {shown} there; "
-                             "choose a free start pose (--start X_M,Y_M,YAW_DEG)")
+        raise StartPoseError(
+            f"{where}: the robot overlaps {shown} there; "
+            "choose a free start pose (--start X_M,Y_M,YAW_DEG)"
+        )
 
 
 def held_by_fixture(physics) -> bool:
@@ -44,8 +46,12 @@ def held_by_fixture(physics) -> bool:
     fixture, the work station of fig. 5.1: chassis held, wheels free)."""
     m, d = physics.model, physics.data
     weld = mujoco.mjtEq.mjEQ_WELD
-    return any(m.eq_type[i] == weld and d.eq_active[i] and physics.base_body in (m.eq_obj1id[i], m.eq_obj2id[i])
-               for i in range(m.neq))
+    return any(
+        m.eq_type[i] == weld
+        and d.eq_active[i]
+        and physics.base_body in (m.eq_obj1id[i], m.eq_obj2id[i])
+        for i in range(m.neq)
+    )
 
 
 def check_supported(physics, where: str) -> None:
@@ -55,8 +61,14 @@ def check_supported(physics, where: str) -> None:
         return
     d = physics.data
     support = set(physics.support_geoms.values())
-    touching = any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist()) if d.ncon else False
+    touching = (
+        any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist())
+        if d.ncon
+        else False
+    )
     if not touching:
         z = float(physics.data.qpos[physics.root_qpos + 2])
-        raise StartPoseError(f"{where}: nothing holds the robot up (no wheel or caster touches the ground "
-                             f"after settling, base at z = {z:.2f} m): the world has no floor there")
+        raise StartPoseError(
+            f"{where}: nothing holds the robot up (no wheel or caster touches the ground "
+            f"after settling, base at z = {z:.2f} m): the world has no floor there"
+        )

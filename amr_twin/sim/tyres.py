@@ -11,7 +11,14 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, FORMAT, NUMERIC, NUMERIC_FIELDS, STATE_FIELDS
+from amr_twin.model.tyre_numeric import (
+    FIELD_CELLS,
+    FIELD_OFFSET,
+    FORMAT,
+    NUMERIC,
+    NUMERIC_FIELDS,
+    STATE_FIELDS,
+)
 from amr_twin.sim.floor_friction import friction_at
 from amr_twin.base.native_build import mujoco_address, open_helper
 
@@ -38,12 +45,18 @@ def install(native: bool | None = None) -> str:
     if native is None:
         native = not _installed or _installed[1] is not None
     lib, engine = open_helper(C_SOURCE, native)
-    if _installed and _installed[0] == engine and _installed[2] == (slot.value, mujoco.get_mjcb_passive()):
+    if (
+        _installed
+        and _installed[0] == engine
+        and _installed[2] == (slot.value, mujoco.get_mjcb_passive())
+    ):
         return engine
     ours = _installed and _installed[2] == (slot.value, mujoco.get_mjcb_passive())
     if not ours and (slot.value or mujoco.get_mjcb_passive() is not None):
-        raise RuntimeError("tyres: MuJoCo's mjcb_passive is already set by another library; the tyre model "
-                           "needs it (set wheel.tyre_slip=false for the rigid contact)")
+        raise RuntimeError(
+            "tyres: MuJoCo's mjcb_passive is already set by another library; the tyre model "
+            "needs it (set wheel.tyre_slip=false for the rigid contact)"
+        )
     mujoco.set_mjcb_passive(None)
     if lib is not None:
         slot.value = ctypes.cast(lib.tyres_passive, ctypes.c_void_p).value
@@ -81,7 +94,7 @@ def contacts(model, data) -> tuple[WheelContact, WheelContact] | None:
         return None
     start = int(model.numeric_data[int(model.numeric_adr[n]) + 1]) + 1
     size = len(STATE_FIELDS)
-    values = data.userdata[start:start + 2 * size].tolist()
+    values = data.userdata[start : start + 2 * size].tolist()
     return WheelContact(*values[:size]), WheelContact(*values[size:])
 
 
@@ -99,10 +112,26 @@ def tyre_forces(m, d) -> None:
     if n < 0:
         return
     adr = int(m.numeric_adr[n])
-    p = m.numeric_data[adr:adr + len(NUMERIC_FIELDS)].tolist()
+    p = m.numeric_data[adr : adr + len(NUMERIC_FIELDS)].tolist()
     if p[0] != FORMAT:
         return
-    (_, ud, r0, base, mu, c_alpha, c_kappa, s_alpha, s_kappa, crown, loss, k_t, c_t, v0, *wheels) = p
+    (
+        _,
+        ud,
+        r0,
+        base,
+        mu,
+        c_alpha,
+        c_kappa,
+        s_alpha,
+        s_kappa,
+        crown,
+        loss,
+        k_t,
+        c_t,
+        v0,
+        *wheels,
+    ) = p
     ud, r0, base = int(ud), int(r0), int(base)
     st = d.userdata
     t = float(d.time)
@@ -113,23 +142,25 @@ def tyre_forces(m, d) -> None:
     qvel, qpos = d.qvel.tolist(), d.qpos
     xm = d.xmat[base].tolist()
     xb = d.xpos[base].tolist()
-    wl = qvel[r0 + 3:r0 + 6]
-    w = (xm[0] * wl[0] + xm[1] * wl[1] + xm[2] * wl[2],
-         xm[3] * wl[0] + xm[4] * wl[1] + xm[5] * wl[2],
-         xm[6] * wl[0] + xm[7] * wl[1] + xm[8] * wl[2])
+    wl = qvel[r0 + 3 : r0 + 6]
+    w = (
+        xm[0] * wl[0] + xm[1] * wl[1] + xm[2] * wl[2],
+        xm[3] * wl[0] + xm[4] * wl[1] + xm[5] * wl[2],
+        xm[6] * wl[0] + xm[7] * wl[1] + xm[8] * wl[2],
+    )
     ft0 = ft1 = 0.0
     tau0 = tau1 = tau2 = 0.0
     qf = d.qfrc_passive
     size = len(STATE_FIELDS)
     at = ud + FIELD_OFFSET
-    field = st[at:at + 2 + FIELD_CELLS ** 2].tolist() if st[at] > 0.0 else None
+    field = st[at : at + 2 + FIELD_CELLS**2].tolist() if st[at] > 0.0 else None
     for k in range(2):
-        slide, hinge, geom = (int(v) for v in wheels[3 * k:3 * k + 3])
+        slide, hinge, geom = (int(v) for v in wheels[3 * k : 3 * k + 3])
         s0 = ud + 1 + size * k
         qs, vs, vh = int(m.jnt_qposadr[slide]), int(m.jnt_dofadr[slide]), int(m.jnt_dofadr[hinge])
         load = k_t * float(qpos[qs]) + c_t * qvel[vs]
         if not load > 0.0:
-            st[s0:s0 + size] = 0.0
+            st[s0 : s0 + size] = 0.0
             continue
         r = float(m.geom_size[geom, 0])
         anchor = d.xanchor[hinge].tolist()
@@ -190,7 +221,7 @@ def tyre_forces(m, d) -> None:
             mz = kpsi * psi
         else:
             mz = mz + loss * kpsi * dpsi
-        st[s0:s0 + size] = (u, v, psi, fx, fy, mz, load)
+        st[s0 : s0 + size] = (u, v, psi, fx, fy, mz, load)
         f = (fx * ex0 + fy * ey0, fx * ex1 + fy * ey1, 0.0)
         qf[vs] += a_s[0] * f[0] + a_s[1] * f[1]
         arm = _cross(dc, f)

@@ -29,7 +29,9 @@ from amr_twin.assembly.twin import Twin, TwinOptions  # noqa: E402
 
 def _rect(x, y, yaw, x0, x1, y0, y1, **kw):
     c, s = math.cos(yaw), math.sin(yaw)
-    pts = [(x + c * a - s * b, y + s * a + c * b) for a, b in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))]
+    pts = [
+        (x + c * a - s * b, y + s * a + c * b) for a, b in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))
+    ]
     return Polygon(pts, closed=True, fill=False, **kw)
 
 
@@ -37,8 +39,18 @@ def main(out: Path) -> None:
     cfg = load_config()
     p, j = cfg.actors.person, cfg.actors.pallet_jack
     person = Actor("person", ((-3.5, 1.6), (-3.5, -1.6)), 1.2, start_s=0.3)
-    jack = Actor("pallet_jack", ((-2.2, 1.6), (-3.2, 1.6)), 1.0, start_s=1e5)  # forks toward -x: toward the robot
-    twin = Twin(cfg, TwinOptions(start_xy_yaw=(-6.0, 0.0, 0.0), sensors=("imu", "lidar"), actors=(person, jack), visuals=False))
+    jack = Actor(
+        "pallet_jack", ((-2.2, 1.6), (-3.2, 1.6)), 1.0, start_s=1e5
+    )  # forks toward -x: toward the robot
+    twin = Twin(
+        cfg,
+        TwinOptions(
+            start_xy_yaw=(-6.0, 0.0, 0.0),
+            sensors=("imu", "lidar"),
+            actors=(person, jack),
+            visuals=False,
+        ),
+    )
     scans, poses = [], []
     twin.bus.subscribe("scan", scans.append, queue_size=100)
     twin.bus.subscribe("actors/poses", poses.append, queue_size=100)
@@ -50,29 +62,93 @@ def main(out: Path) -> None:
     ok = np.isfinite(r)
     xy = laser + np.column_stack([r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok])])
     t_end = scan.header.stamp.to_sec()
-    (px, py, pyaw), (jx, jy, jyaw) = [(q.position.x, q.position.y, q.orientation.yaw_rad())
-                                      for q in poses[int(round(t_end * 10))].poses]
+    (px, py, pyaw), (jx, jy, jyaw) = [
+        (q.position.x, q.position.y, q.orientation.yaw_rad())
+        for q in poses[int(round(t_end * 10))].poses
+    ]
 
     fig, ax = plt.subplots(figsize=(8, 7.2))
-    ax.plot(xy[:, 0], xy[:, 1], ".", ms=3, color="tab:blue", label=f"scan (one rotation, ending {t_end:.2f} s)")
-    track = np.array([[q.poses[0].position.x, q.poses[0].position.y] for q in poses
-                      if q.header.stamp.to_sec() <= t_end + 1e-9])
-    ax.plot(track[:, 0], track[:, 1], "o", ms=2.5, color="tab:orange", label="person on actors/poses, every 0.1 s")
+    ax.plot(
+        xy[:, 0],
+        xy[:, 1],
+        ".",
+        ms=3,
+        color="tab:blue",
+        label=f"scan (one rotation, ending {t_end:.2f} s)",
+    )
+    track = np.array(
+        [
+            [q.poses[0].position.x, q.poses[0].position.y]
+            for q in poses
+            if q.header.stamp.to_sec() <= t_end + 1e-9
+        ]
+    )
+    ax.plot(
+        track[:, 0],
+        track[:, 1],
+        "o",
+        ms=2.5,
+        color="tab:orange",
+        label="person on actors/poses, every 0.1 s",
+    )
     half = p.leg_spacing_m / 2
     for s in (1, -1):  # legs: the plane cuts them
-        ax.add_patch(Circle((px - s * math.sin(pyaw) * half, py + s * math.cos(pyaw) * half), p.leg_radius_m,
-                            fill=False, color="k", lw=1.2))
-    ax.add_patch(_rect(px, py, pyaw, -p.torso_depth_m / 2, p.torso_depth_m / 2, -p.torso_width_m / 2,
-                       p.torso_width_m / 2, ls="--", color="grey", lw=0.8))
+        ax.add_patch(
+            Circle(
+                (px - s * math.sin(pyaw) * half, py + s * math.cos(pyaw) * half),
+                p.leg_radius_m,
+                fill=False,
+                color="k",
+                lw=1.2,
+            )
+        )
+    ax.add_patch(
+        _rect(
+            px,
+            py,
+            pyaw,
+            -p.torso_depth_m / 2,
+            p.torso_depth_m / 2,
+            -p.torso_width_m / 2,
+            p.torso_width_m / 2,
+            ls="--",
+            color="grey",
+            lw=0.8,
+        )
+    )
     front, heel, back = j.length_m / 2, j.length_m / 2 - j.fork_length_m, -j.length_m / 2
     for y0 in (j.width_m / 2 - j.fork_width_m, -j.width_m / 2):  # forks, frame: below the plane
-        ax.add_patch(_rect(jx, jy, jyaw, heel, front, y0, y0 + j.fork_width_m, ls="--", color="grey", lw=0.8))
-    ax.add_patch(_rect(jx, jy, jyaw, back, heel, -j.width_m / 2, j.width_m / 2, ls="--", color="grey", lw=0.8))
+        ax.add_patch(
+            _rect(jx, jy, jyaw, heel, front, y0, y0 + j.fork_width_m, ls="--", color="grey", lw=0.8)
+        )
+    ax.add_patch(
+        _rect(
+            jx, jy, jyaw, back, heel, -j.width_m / 2, j.width_m / 2, ls="--", color="grey", lw=0.8
+        )
+    )
     cx = back + j.pump_radius_m
-    ax.add_patch(Circle((jx + math.cos(jyaw) * cx, jy + math.sin(jyaw) * cx), j.pump_radius_m, fill=False,
-                        color="k", lw=1.2))
-    ax.add_patch(_rect(-6.0, 0.0, 0.0, -cfg.chassis.length_m / 2, cfg.chassis.length_m / 2, -cfg.chassis.width_m / 2,
-                       cfg.chassis.width_m / 2, color="tab:green", lw=1.2))
+    ax.add_patch(
+        Circle(
+            (jx + math.cos(jyaw) * cx, jy + math.sin(jyaw) * cx),
+            j.pump_radius_m,
+            fill=False,
+            color="k",
+            lw=1.2,
+        )
+    )
+    ax.add_patch(
+        _rect(
+            -6.0,
+            0.0,
+            0.0,
+            -cfg.chassis.length_m / 2,
+            cfg.chassis.length_m / 2,
+            -cfg.chassis.width_m / 2,
+            cfg.chassis.width_m / 2,
+            color="tab:green",
+            lw=1.2,
+        )
+    )
     ax.plot([], [], "k-", label="cut by the 0.45 m scan plane (legs, pump)")
     ax.plot([], [], "--", color="grey", label="out of the plane (torso; forks 0.085 m, frame)")
     ax.plot([], [], "-", color="tab:green", label="robot footprint")

@@ -29,8 +29,13 @@ COMMITTED_JSON = ROOT / "docs" / "chapter5_attainable.json"
 """The study the documents and the chapter 5 report quote (``python -m amr_twin.experiments.documents.figures``)."""
 COMMITTED_SEEDS = (1, 2)
 COMMITTED_SAMPLES = 64
-HELD = ("driver_left.gain", "motor_left.ke_v_s_rad", "motor_right.ke_v_s_rad", "motor_left.friction_nm",
-        "motor_right.friction_nm")
+HELD = (
+    "driver_left.gain",
+    "motor_left.ke_v_s_rad",
+    "motor_right.ke_v_s_rad",
+    "motor_left.friction_nm",
+    "motor_right.friction_nm",
+)
 """The calibrated values the drawn plants keep, named in the committed study (the whole configuration but
 the drawn values is held to it by a hash)."""
 
@@ -42,16 +47,20 @@ class Draw:
     values: dict[str, float]
     holds: dict[str, bool]
     overshoot_rpm: tuple[float, float]  # runs 2 / 1: right and left published overshoot, RPM
-    raised_wheels: int                 # of the 4 wheels of runs 7 and 8
-    oscillation_more: tuple[int, int]  # 20 kg comparisons oscillating more: published, true speed (of 4)
-    worst_steady_error_rpm: float      # largest |steady error| of an unloaded wheel, published, RPM
+    raised_wheels: int  # of the 4 wheels of runs 7 and 8
+    oscillation_more: tuple[
+        int, int
+    ]  # 20 kg comparisons oscillating more: published, true speed (of 4)
+    worst_steady_error_rpm: float  # largest |steady error| of an unloaded wheel, published, RPM
 
 
 def ranges(cfg: TwinConfig) -> dict[str, tuple[float, float]]:
     """Each drawn parameter's bounds: the sourced ``range`` of :data:`RANGED`, the board tolerance."""
     _, meta = load_parameters()
     out = {key: tuple(meta[key]["range"]) for key in RANGED}
-    out["motor_right.resistance_ohm"] = out["motor_left.resistance_ohm"]  # a unit of its own, same range
+    out["motor_right.resistance_ohm"] = out[
+        "motor_left.resistance_ohm"
+    ]  # a unit of its own, same range
     left = cfg.driver_left.gain
     out["driver_right.gain"] = (left * (1 - BOARD_TOLERANCE), left * (1 + BOARD_TOLERANCE))
     return out
@@ -63,7 +72,9 @@ def draw_values(cfg: TwinConfig, samples: int, seed: int) -> list[dict[str, floa
         raise ValueError(f"samples {samples}: must be in 1..{MAX_SAMPLES}")
     bounds = ranges(cfg)
     rng = np.random.default_rng(seed)
-    return [{k: float(rng.uniform(lo, hi)) for k, (lo, hi) in bounds.items()} for _ in range(samples)]
+    return [
+        {k: float(rng.uniform(lo, hi)) for k, (lo, hi) in bounds.items()} for _ in range(samples)
+    ]
 
 
 def judge(data: dict, values: dict[str, float]) -> Draw:
@@ -74,9 +85,16 @@ def judge(data: dict, values: dict[str, float]) -> Draw:
     left = runs[1]["wheels"]["left"]["published"]["overshoot"]
     raised = sum(bool(c["raised"]) for c in data["payload_duty"])
     comparisons = data["comparisons"]
-    more = (sum(c["verdict"] == "pass" for c in comparisons), sum(c["true_verdict"] == "pass" for c in comparisons))
-    worst = max(abs(w["published"]["steady_error"]) for r in data["runs"] if r["payload_kg"] == 0
-                for w in r["wheels"].values())
+    more = (
+        sum(c["verdict"] == "pass" for c in comparisons),
+        sum(c["true_verdict"] == "pass" for c in comparisons),
+    )
+    worst = max(
+        abs(w["published"]["steady_error"])
+        for r in data["runs"]
+        if r["payload_kg"] == 0
+        for w in r["wheels"].values()
+    )
     return Draw(values, {k: verdicts[k] for k in FINDINGS}, (right, left), raised, more, worst)
 
 
@@ -98,15 +116,23 @@ def study(cfg: TwinConfig, samples: int, seed: int, jobs: int = 1, progress=None
 def summary(draws: list[Draw]) -> dict:
     """Per finding: draws where it holds; per pair: draws where both hold; the best overshoot and duty."""
     held = {k: sum(d.holds[k] for d in draws) for k in FINDINGS}
-    pairs = {f"{a}+{b}": sum(d.holds[a] and d.holds[b] for d in draws) for a, b in combinations(FINDINGS, 2)}
+    pairs = {
+        f"{a}+{b}": sum(d.holds[a] and d.holds[b] for d in draws)
+        for a, b in combinations(FINDINGS, 2)
+    }
     gap = max(draws, key=lambda d: d.overshoot_rpm[0] - d.overshoot_rpm[1])
-    return {"samples": len(draws), "held": held, "pairs": pairs, "all": sum(all(d.holds.values()) for d in draws),
-            "best_right_minus_left_rpm": gap.overshoot_rpm[0] - gap.overshoot_rpm[1],
-            "best_right_overshoot_rpm": max(d.overshoot_rpm[0] for d in draws),
-            "most_raised_wheels": max(d.raised_wheels for d in draws),
-            "most_oscillating_more": max(min(d.oscillation_more) for d in draws),
-            "least_worst_steady_error_rpm": min(d.worst_steady_error_rpm for d in draws),
-            "draws": [asdict(d) for d in draws]}
+    return {
+        "samples": len(draws),
+        "held": held,
+        "pairs": pairs,
+        "all": sum(all(d.holds.values()) for d in draws),
+        "best_right_minus_left_rpm": gap.overshoot_rpm[0] - gap.overshoot_rpm[1],
+        "best_right_overshoot_rpm": max(d.overshoot_rpm[0] for d in draws),
+        "most_raised_wheels": max(d.raised_wheels for d in draws),
+        "most_oscillating_more": max(min(d.oscillation_more) for d in draws),
+        "least_worst_steady_error_rpm": min(d.worst_steady_error_rpm for d in draws),
+        "draws": [asdict(d) for d in draws],
+    }
 
 
 UNUSED_SECTIONS = ("navigation", "actors")
@@ -127,7 +153,11 @@ def plant(cfg: TwinConfig) -> dict:
         del data[section][name]
     digest = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
     kept = {key: getattr(getattr(cfg, key.split(".")[0]), key.split(".")[1]) for key in HELD}
-    return {"config_sha256": digest, "held": kept, "ranges": {k: list(v) for k, v in bounds.items()}}
+    return {
+        "config_sha256": digest,
+        "held": kept,
+        "ranges": {k: list(v) for k, v in bounds.items()},
+    }
 
 
 def committed(cfg: TwinConfig) -> dict | None:
@@ -144,9 +174,15 @@ def committed_write(cfg: TwinConfig, jobs: int = 2) -> dict:
     """Run the study on :data:`COMMITTED_SEEDS` and write :data:`COMMITTED_JSON` (minutes)."""
     from amr_twin.experiments.runner.executor import write_json
 
-    data = {"command": "amr-twin experiment chapter5-attainable", "samples": COMMITTED_SAMPLES,
-            "plant": plant(cfg),
-            "seeds": {str(seed): summary(study(cfg, COMMITTED_SAMPLES, seed, jobs=jobs)) for seed in COMMITTED_SEEDS}}
+    data = {
+        "command": "amr-twin experiment chapter5-attainable",
+        "samples": COMMITTED_SAMPLES,
+        "plant": plant(cfg),
+        "seeds": {
+            str(seed): summary(study(cfg, COMMITTED_SAMPLES, seed, jobs=jobs))
+            for seed in COMMITTED_SEEDS
+        },
+    }
     write_json(COMMITTED_JSON, data)
     return data
 
@@ -156,9 +192,11 @@ def lines(s: dict) -> list[str]:
     n = s["samples"]
     out = [f"{k}: holds in {v} of {n} draws" for k, v in s["held"].items()]
     out += [f"both {k.replace('+', ' and ')}: {v} of {n}" for k, v in s["pairs"].items()]
-    out += [f"all four: {s['all']} of {n}; best right-minus-left overshoot {s['best_right_minus_left_rpm']:.2f} "
-            f"RPM (right at most {s['best_right_overshoot_rpm']:.2f}); the PI raised the duty on at most "
-            f"{s['most_raised_wheels']} of 4 loaded wheels; the 20 kg runs oscillated more in at most "
-            f"{s['most_oscillating_more']} of 4 comparisons on both the samples and the true speed; the best "
-            f"draw's worst unloaded steady error {s['least_worst_steady_error_rpm']:.2f} RPM"]
+    out += [
+        f"all four: {s['all']} of {n}; best right-minus-left overshoot {s['best_right_minus_left_rpm']:.2f} "
+        f"RPM (right at most {s['best_right_overshoot_rpm']:.2f}); the PI raised the duty on at most "
+        f"{s['most_raised_wheels']} of 4 loaded wheels; the 20 kg runs oscillated more in at most "
+        f"{s['most_oscillating_more']} of 4 comparisons on both the samples and the true speed; the best "
+        f"draw's worst unloaded steady error {s['least_worst_steady_error_rpm']:.2f} RPM"
+    ]
     return out

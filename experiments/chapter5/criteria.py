@@ -35,10 +35,10 @@ class Band:
 
     metric: str
     step_class: str  # "small" (<= 75 RPM), "large" (> 75 RPM) or "any"
-    wheel: str       # "left", "right" or "any"
+    wheel: str  # "left", "right" or "any"
     low: float
     high: float
-    thesis: float    # the value the thesis reports
+    thesis: float  # the value the thesis reports
 
 
 BANDS = (
@@ -53,25 +53,34 @@ BANDS = (
     Band("overshoot", "any", "left", 0.0, 3.0, 2.0),
     Band("steady_error", "any", "any", -THRESHOLD_CONTROL_RPM, THRESHOLD_CONTROL_RPM, 0.0),
 )
-SOURCES = {"delay_s": "§5.1.3, fig. 5.3", "rise_s": "§5.1.3, fig. 5.3", "peak_s": "§5.1.3, fig. 5.3",
-           "settling_s": "§5.1.3, fig. 5.3", "overshoot": "§5.1.3, fig. 5.3",
-           "steady_error": "§5.1.3 (\"almost perfect track\"), listing 4.11's THRESHOLD_CONTROL"}
+SOURCES = {
+    "delay_s": "§5.1.3, fig. 5.3",
+    "rise_s": "§5.1.3, fig. 5.3",
+    "peak_s": "§5.1.3, fig. 5.3",
+    "settling_s": "§5.1.3, fig. 5.3",
+    "overshoot": "§5.1.3, fig. 5.3",
+    "steady_error": '§5.1.3 ("almost perfect track"), listing 4.11\'s THRESHOLD_CONTROL',
+}
 """Where each band's thesis value is stated."""
-DEFINITIONS = ("Ogata, Modern Control Engineering, 5th ed., §5-3 (the specifications of the thesis' fig. 5.3): "
-               "delay = first 50 % of the final value, rise = 10 → 90 % of the final value, peak time = first peak "
-               "when the response crosses its final value and comes back (each by more than 0.1 % of the step), "
-               "overshoot = maximum peak − final value (0 without a peak), settling = last entry into the band around the final value; steady error "
-               "= final value − reference (§5-8), the final value the mean of the last 20 % of the record")
+DEFINITIONS = (
+    "Ogata, Modern Control Engineering, 5th ed., §5-3 (the specifications of the thesis' fig. 5.3): "
+    "delay = first 50 % of the final value, rise = 10 → 90 % of the final value, peak time = first peak "
+    "when the response crosses its final value and comes back (each by more than 0.1 % of the step), "
+    "overshoot = maximum peak − final value (0 without a peak), settling = last entry into the band around the final value; steady error "
+    "= final value − reference (§5-8), the final value the mean of the last 20 % of the record"
+)
 OSCILLATION_PAIRS = ((7, 3), (8, 5))  # (loaded, unloaded): "more oscillation" with 20 kg (§5.1.4)
 OSCILLATION_MEASURE = "excess total variation"
-OSCILLATION_DEFINITION = (f"excess total variation of the wheel speed from its first 90 % crossing to "
-                          f"{TRANSIENT_WINDOW_S:g} s after the command: sum |y[i+1] - y[i]| - |y_end - y_start| "
-                          "on the linearly interpolated signal, RPM (0 for a monotone approach, twice the summed "
-                          "swing amplitudes otherwise)")
+OSCILLATION_DEFINITION = (
+    f"excess total variation of the wheel speed from its first 90 % crossing to "
+    f"{TRANSIENT_WINDOW_S:g} s after the command: sum |y[i+1] - y[i]| - |y_end - y_start| "
+    "on the linearly interpolated signal, RPM (0 for a monotone approach, twice the summed "
+    "swing amplitudes otherwise)"
+)
 
 
 def step_class(step_rpm: float) -> str:
-    """"small" for steps of at most 75 RPM, "large" above."""
+    """ "small" for steps of at most 75 RPM, "large" above."""
     return "small" if abs(step_rpm) <= STEP_SPLIT_RPM else "large"
 
 
@@ -92,8 +101,12 @@ def judge(wheel: str, step_rpm: float, metrics: dict) -> dict:
             continue
         value = metrics.get(band.metric)
         ok = value is not None and math.isfinite(value) and band.low <= value <= band.high
-        out[band.metric] = {"twin": value, "thesis": band.thesis, "band": [band.low, band.high],
-                            "verdict": "pass" if ok else "fail"}
+        out[band.metric] = {
+            "twin": value,
+            "thesis": band.thesis,
+            "band": [band.low, band.high],
+            "verdict": "pass" if ok else "fail",
+        }
     return out
 
 
@@ -124,9 +137,20 @@ def compare_oscillation(results: list[dict]) -> list[dict]:
                 continue
             va, vb = ((w.get("published") or {}).get("oscillation") for w in (a, b))
             ta, tb = ((w.get("true") or {}).get("oscillation") for w in (a, b))
-            out.append({"loaded_run": loaded, "unloaded_run": unloaded, "wheel": wheel,
-                        "measure": OSCILLATION_MEASURE, "loaded": va, "unloaded": vb, "verdict": _more(va, vb),
-                        "true_loaded": ta, "true_unloaded": tb, "true_verdict": _more(ta, tb)})
+            out.append(
+                {
+                    "loaded_run": loaded,
+                    "unloaded_run": unloaded,
+                    "wheel": wheel,
+                    "measure": OSCILLATION_MEASURE,
+                    "loaded": va,
+                    "unloaded": vb,
+                    "verdict": _more(va, vb),
+                    "true_loaded": ta,
+                    "true_unloaded": tb,
+                    "true_verdict": _more(ta, tb),
+                }
+            )
     return out
 
 
@@ -140,9 +164,14 @@ def oscillation_verdict(comparisons: list[dict]) -> dict:
     """
     n = len(comparisons)
     passed = sum(c["verdict"] == "pass" for c in comparisons)
-    return {"measure": OSCILLATION_MEASURE, "definition": OSCILLATION_DEFINITION, "comparisons": n,
-            "published_passed": passed, "true_passed": sum(c.get("true_verdict") == "pass" for c in comparisons),
-            "verdict": "pass" if n and passed == n else "fail"}
+    return {
+        "measure": OSCILLATION_MEASURE,
+        "definition": OSCILLATION_DEFINITION,
+        "comparisons": n,
+        "published_passed": passed,
+        "true_passed": sum(c.get("true_verdict") == "pass" for c in comparisons),
+        "verdict": "pass" if n and passed == n else "fail",
+    }
 
 
 def count_checks(runs: list[dict], comparisons: list[dict]) -> tuple[int, int, int, int]:
@@ -156,6 +185,12 @@ def count_checks(runs: list[dict], comparisons: list[dict]) -> tuple[int, int, i
     """
     checks = [c for r in runs for w in r["wheels"].values() for c in w["checks"].values()]
     true_checks = [c for r in runs for w in r["wheels"].values() for c in w["true_checks"].values()]
-    passed = sum(c["verdict"] == "pass" for c in checks) + sum(c["verdict"] == "pass" for c in comparisons)
-    return (len(checks) + len(comparisons), passed, len(true_checks),
-            sum(c["verdict"] == "pass" for c in true_checks))
+    passed = sum(c["verdict"] == "pass" for c in checks) + sum(
+        c["verdict"] == "pass" for c in comparisons
+    )
+    return (
+        len(checks) + len(comparisons),
+        passed,
+        len(true_checks),
+        sum(c["verdict"] == "pass" for c in true_checks),
+    )

@@ -28,8 +28,14 @@ from amr_twin.assembly.twin import TwinOptions
 from amr_twin.analysis.metrics import step_info
 from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
-from amr_twin.experiments.chapter5.criteria import (TRANSIENT_WINDOW_S, WHEELS, compare_oscillation, judge,
-                                                    settling_band_rpm, step_class)
+from amr_twin.experiments.chapter5.criteria import (
+    TRANSIENT_WINDOW_S,
+    WHEELS,
+    compare_oscillation,
+    judge,
+    settling_band_rpm,
+    step_class,
+)
 from amr_twin.experiments.chapter5.metrics import Chapter5Metrics, metrics
 
 
@@ -45,15 +51,37 @@ class RunSpec:
 
 
 RUNS = (
-    RunSpec(1, "left wheel forward 1 m/s (76.39 RPM)", Command("motor", wheel="left", speed_m_s=1.0), 18.0),
-    RunSpec(2, "right wheel forward 1 m/s (76.39 RPM)", Command("motor", wheel="right", speed_m_s=1.0), 18.0),
+    RunSpec(
+        1,
+        "left wheel forward 1 m/s (76.39 RPM)",
+        Command("motor", wheel="left", speed_m_s=1.0),
+        18.0,
+    ),
+    RunSpec(
+        2,
+        "right wheel forward 1 m/s (76.39 RPM)",
+        Command("motor", wheel="right", speed_m_s=1.0),
+        18.0,
+    ),
     RunSpec(3, "linear forward 0.7 m/s (53.47 RPM)", Command("linear", speed_m_s=0.7), 16.0),
     RunSpec(4, "linear backward 1.2 m/s (91.67 RPM)", Command("linear", speed_m_s=-1.2), 16.0),
-    RunSpec(5, "rotation 60 deg/s, ICC 1 m right", Command("angular", speed_deg_s=-60.0, icc_m=-1.0), 16.0),
-    RunSpec(6, "rotation 60 deg/s, ICC 1 m left", Command("angular", speed_deg_s=60.0, icc_m=1.0), 16.0),
+    RunSpec(
+        5,
+        "rotation 60 deg/s, ICC 1 m right",
+        Command("angular", speed_deg_s=-60.0, icc_m=-1.0),
+        16.0,
+    ),
+    RunSpec(
+        6, "rotation 60 deg/s, ICC 1 m left", Command("angular", speed_deg_s=60.0, icc_m=1.0), 16.0
+    ),
     RunSpec(7, "linear forward 0.7 m/s, 20 kg", Command("linear", speed_m_s=0.7), 16.0, 20.0),
-    RunSpec(8, "rotation 60 deg/s, ICC 1 m right, 20 kg", Command("angular", speed_deg_s=-60.0, icc_m=-1.0),
-            16.0, 20.0),
+    RunSpec(
+        8,
+        "rotation 60 deg/s, ICC 1 m right, 20 kg",
+        Command("angular", speed_deg_s=-60.0, icc_m=-1.0),
+        16.0,
+        20.0,
+    ),
 )
 
 
@@ -65,7 +93,7 @@ class _Job:
     duration_s: float
     seed: int = 0
     extra: dict = field(default_factory=dict)
-    rrd_path: str | None = None   # write the run's Rerun recording here
+    rrd_path: str | None = None  # write the run's Rerun recording here
     mcap_path: str | None = None  # write the run's ROS 2 topics here
 
 
@@ -97,11 +125,22 @@ def simulate(job: _Job) -> dict:
         if job.rrd_path is not None or job.mcap_path is not None:
             record_run(twin, rrd_path=job.rrd_path, mcap_path=job.mcap_path, result=result)
     s = result.series
-    return {"run": job.spec.number, "codes": result.codes, "errors": result.errors,
-            "wheel_command": result.wheel_command, "t_command_s": s.commands[0][0] if s.commands else 0.0,
-            "t_s": s.t_s, "true_rpm": s.true_rpm, "published": s.published, "pwm_counts": s.pwm_counts,
-            "current_a": s.current_a, "battery_a": s.battery_a,
-            "sim_s": result.sim_s, "wall_s": result.wall_s, "tyre_timestep": result.tyre_timestep}
+    return {
+        "run": job.spec.number,
+        "codes": result.codes,
+        "errors": result.errors,
+        "wheel_command": result.wheel_command,
+        "t_command_s": s.commands[0][0] if s.commands else 0.0,
+        "t_s": s.t_s,
+        "true_rpm": s.true_rpm,
+        "published": s.published,
+        "pwm_counts": s.pwm_counts,
+        "current_a": s.current_a,
+        "battery_a": s.battery_a,
+        "sim_s": result.sim_s,
+        "wall_s": result.wall_s,
+        "tyre_timestep": result.tyre_timestep,
+    }
 
 
 def analyse(spec: RunSpec, raw: dict) -> dict:
@@ -117,20 +156,49 @@ def analyse(spec: RunSpec, raw: dict) -> dict:
         pub = raw["published"][w]
         kw = dict(t0_s=t0, settling_band=band, oscillation_window_s=TRANSIENT_WINDOW_S)
         sign = 1.0 if reference > 0 else -1.0  # the published speeds are magnitudes (|wheelN_Vel|)
-        published = (step_info(pub[:, 0], pub[:, 1], abs(reference), **kw).as_dict(sign) if len(pub) else None)
+        published = (
+            step_info(pub[:, 0], pub[:, 1], abs(reference), **kw).as_dict(sign)
+            if len(pub)
+            else None
+        )
         true = step_info(raw["t_s"], raw["true_rpm"][:, w], reference, **kw).as_dict(sign)
-        wheels[name] = {"reference_rpm": reference, "step_class": step_class(reference),
-                        "samples": len(pub), "published": published, "true": true,
-                        "checks": judge(name, reference, published or {}), "true_checks": judge(name, reference, true)}
-    return {"run": spec.number, "title": spec.title, "command": spec.command.describe(),
-            "payload_kg": spec.payload_kg, "duration_s": raw["sim_s"], "wheel_command": raw["wheel_command"],
-            "codes": raw["codes"], "errors": raw["errors"], "wall_s": raw["wall_s"], "wheels": wheels,
-            "tyre_timestep": raw.get("tyre_timestep"), "raw": raw}
+        wheels[name] = {
+            "reference_rpm": reference,
+            "step_class": step_class(reference),
+            "samples": len(pub),
+            "published": published,
+            "true": true,
+            "checks": judge(name, reference, published or {}),
+            "true_checks": judge(name, reference, true),
+        }
+    return {
+        "run": spec.number,
+        "title": spec.title,
+        "command": spec.command.describe(),
+        "payload_kg": spec.payload_kg,
+        "duration_s": raw["sim_s"],
+        "wheel_command": raw["wheel_command"],
+        "codes": raw["codes"],
+        "errors": raw["errors"],
+        "wall_s": raw["wall_s"],
+        "wheels": wheels,
+        "tyre_timestep": raw.get("tyre_timestep"),
+        "raw": raw,
+    }
 
 
-def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,
-        duration_s: float | None = None, progress: bool = True, record_dir: Path | None = None,
-        mcap_dir: Path | None = None, study: bool = True, reference_firmware: str | None = None) -> dict:
+def run(
+    cfg: TwinConfig,
+    jobs: int = 1,
+    firmware: str = "faithful",
+    runs: list[int] | None = None,
+    duration_s: float | None = None,
+    progress: bool = True,
+    record_dir: Path | None = None,
+    mcap_dir: Path | None = None,
+    study: bool = True,
+    reference_firmware: str | None = None,
+) -> dict:
     """Simulate the chapter 5 runs and measure them.
 
     Parameters
@@ -163,12 +231,17 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     wall0 = time.perf_counter()
     from amr_twin.recording.rerun_capture import recording_folder
 
-    folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
-               if folder is not None}
+    folders = {
+        kind: recording_folder(folder)
+        for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
+        if folder is not None
+    }
 
     from amr_twin.base.atomic_file import discard_after, place, temporary_name
 
-    staged: list[tuple[Path, Path]] = []  # (temporary of this process, recording) renamed at the end
+    staged: list[
+        tuple[Path, Path]
+    ] = []  # (temporary of this process, recording) renamed at the end
 
     def target(kind: str, spec: RunSpec) -> str | None:
         if kind not in folders:
@@ -177,15 +250,34 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
         staged.append((temporary_name(final), final))
         return str(staged[-1][0])
 
-    todo = [_Job(s, cfg, firmware, duration_s or s.duration_s, rrd_path=target("rrd", s),
-                 mcap_path=target("mcap", s)) for s in specs]
+    todo = [
+        _Job(
+            s,
+            cfg,
+            firmware,
+            duration_s or s.duration_s,
+            rrd_path=target("rrd", s),
+            mcap_path=target("mcap", s),
+        )
+        for s in specs
+    ]
     # §5.1.4's rolling-resistance study runs in the same pool, with the whole suite only
-    study = [(crr, _Job(s, c, firmware, s.duration_s)) for crr, c in payload.study_configs(cfg)
-             for s in RUNS if s.number in payload.STUDY_RUNS] if study and runs is None and duration_s is None else []
+    study = (
+        [
+            (crr, _Job(s, c, firmware, s.duration_s))
+            for crr, c in payload.study_configs(cfg)
+            for s in RUNS
+            if s.number in payload.STUDY_RUNS
+        ]
+        if study and runs is None and duration_s is None
+        else []
+    )
     crr_of = {id(job): crr for crr, job in study}
     done, analysed = {}, []
     try:
-        for job, raw in run_all(simulate, todo + [job for _, job in study], jobs, "chapter 5 runs", progress):
+        for job, raw in run_all(
+            simulate, todo + [job for _, job in study], jobs, "chapter 5 runs", progress
+        ):
             if id(job) in crr_of:
                 analysed.append((crr_of[id(job)], analyse(job.spec, raw)))
             else:
@@ -197,24 +289,48 @@ def run(cfg: TwinConfig, jobs: int = 1, firmware: str = "faithful", runs: list[i
     for tmp, final in staged:
         place(tmp, final)
     results = [done[s.number] for s in specs]
-    out = {"firmware": firmware, "jobs": jobs, "sim_s": sum(r["duration_s"] for r in results), "runs": results,
-           "study_runs": len(analysed), "study_sim_s": sum(a["duration_s"] for _, a in analysed),
-           "comparisons": compare_oscillation(results),
-           "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
-           "payload_duty": payload.duty_comparison(results),
-           "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else []}
+    out = {
+        "firmware": firmware,
+        "jobs": jobs,
+        "sim_s": sum(r["duration_s"] for r in results),
+        "runs": results,
+        "study_runs": len(analysed),
+        "study_sim_s": sum(a["duration_s"] for _, a in analysed),
+        "comparisons": compare_oscillation(results),
+        "crr": {"tyres": cfg.wheel.rolling_resistance, "balls": cfg.caster.rolling_resistance},
+        "payload_duty": payload.duty_comparison(results),
+        "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else [],
+    }
     if reference_firmware is not None:
-        from amr_twin.experiments.chapter5.firmware_comparison import PACE_US, command_timeline, compare, timeline_table
+        from amr_twin.experiments.chapter5.firmware_comparison import (
+            PACE_US,
+            command_timeline,
+            compare,
+            timeline_table,
+        )
 
-        ref = [_Job(s, cfg, reference_firmware, duration_s or s.duration_s, extra=extra)
-               for extra in ({}, {"pace_us": PACE_US}) for s in specs]
-        ref_done = [analyse(job.spec, raw) for job, raw in
-                    run_all(simulate, ref, jobs, f"chapter 5 runs, {reference_firmware}", progress)]
-        out["firmware_comparison"] = compare(results, ref_done[:len(specs)], firmware, reference_firmware,
-                                             paced=ref_done[len(specs):])
+        ref = [
+            _Job(s, cfg, reference_firmware, duration_s or s.duration_s, extra=extra)
+            for extra in ({}, {"pace_us": PACE_US})
+            for s in specs
+        ]
+        ref_done = [
+            analyse(job.spec, raw)
+            for job, raw in run_all(
+                simulate, ref, jobs, f"chapter 5 runs, {reference_firmware}", progress
+            )
+        ]
+        out["firmware_comparison"] = compare(
+            results,
+            ref_done[: len(specs)],
+            firmware,
+            reference_firmware,
+            paced=ref_done[len(specs) :],
+        )
         if firmware.startswith("avr"):
-            out["firmware_comparison"]["timeline"] = timeline_table(command_timeline(reference_firmware),
-                                                                    command_timeline(firmware))
+            out["firmware_comparison"]["timeline"] = timeline_table(
+                command_timeline(reference_firmware), command_timeline(firmware)
+            )
     out["wall_s"] = time.perf_counter() - wall0
     return out
 

@@ -26,10 +26,15 @@ from amr_twin.experiments.chapter5.criteria import BANDS, settling_band_rpm
 
 REPRODUCED, NOT_REPRODUCED, NOT_JUDGED = "reproduced", "not reproduced", "not judged"
 DEAD_ZONE_RPM = FaithfulParams.threshold_control_rpm  # listing 4.11's THRESHOLD_CONTROL
-RIGHT_MARGIN_RPM = 1.0     # "lower" left overshoot: at least this far below the right's
-MIXED_RUNS_SHARE = 4 / 6   # runs 3-8: the right wheel overshoots more in at least 4 of 6
+RIGHT_MARGIN_RPM = 1.0  # "lower" left overshoot: at least this far below the right's
+MIXED_RUNS_SHARE = 4 / 6  # runs 3-8: the right wheel overshoots more in at least 4 of 6
 OSCILLATION_SHARE = 3 / 4  # 20 kg oscillates more in at least 3 of the 4 comparisons
-TIMINGS = {"delay_s": 0.5, "rise_s": 0.8, "peak_s": 1.0, "settling_s": None}  # bound / T (settling: band)
+TIMINGS = {
+    "delay_s": 0.5,
+    "rise_s": 0.8,
+    "peak_s": 1.0,
+    "settling_s": None,
+}  # bound / T (settling: band)
 VALIDATION_DOC = "docs/explanation/validation.md"
 """Where the chapter 5 findings and the bound are explained, relative to the repository's root."""
 VALIDATION_SECTION = "What the chapter 5 report states first"
@@ -115,19 +120,35 @@ def overshoot_finding(runs: dict) -> Finding:
     """§5.1.3: the right wheel overshoots about 4 RPM, the left less or not at all (runs 1-8)."""
     claim, source = "right wheel overshoots ≈4 RPM, left less (≈2)", "§5.1.3"
     r, l = _value(runs, 2, "right", "overshoot"), _value(runs, 1, "left", "overshoot")
-    rt, lt = _value(runs, 2, "right", "overshoot", "true"), _value(runs, 1, "left", "overshoot", "true")
+    rt, lt = (
+        _value(runs, 2, "right", "overshoot", "true"),
+        _value(runs, 1, "left", "overshoot", "true"),
+    )
     if r is None or l is None or rt is None or lt is None:
-        return Finding("overshoot_right", claim, source, NOT_JUDGED, "runs 1 and 2 not both measured")
+        return Finding(
+            "overshoot_right", claim, source, NOT_JUDGED, "runs 1 and 2 not both measured"
+        )
     (rlo, rhi), (llo, lhi) = _band("overshoot", "right"), _band("overshoot", "left")
     mixed = [n for n in range(3, 9) if n in runs and {"left", "right"} <= set(runs[n]["wheels"])]
-    more = [n for n in mixed if (_value(runs, n, "right", "overshoot") or 0.0)
-            > (_value(runs, n, "left", "overshoot") or 0.0)]
+    more = [
+        n
+        for n in mixed
+        if (_value(runs, n, "right", "overshoot") or 0.0)
+        > (_value(runs, n, "left", "overshoot") or 0.0)
+    ]
     needed = math.ceil(MIXED_RUNS_SHARE * len(mixed) - 1e-9)
-    ok = (rlo <= r <= rhi and llo <= l <= lhi and r >= l + RIGHT_MARGIN_RPM and rt >= lt + RIGHT_MARGIN_RPM
-          and len(more) >= needed)
-    why = (f"runs 2/1 published right {r:.2f} vs left {l:.2f} RPM (needs right {rlo:g}-{rhi:g}, "
-           f"left {llo:g}-{lhi:g}, right >= left + {RIGHT_MARGIN_RPM:g}); true {rt:.2f} vs {lt:.2f}; "
-           f"runs 3-8: right above left in {len(more)} of {len(mixed)} (needs {needed})")
+    ok = (
+        rlo <= r <= rhi
+        and llo <= l <= lhi
+        and r >= l + RIGHT_MARGIN_RPM
+        and rt >= lt + RIGHT_MARGIN_RPM
+        and len(more) >= needed
+    )
+    why = (
+        f"runs 2/1 published right {r:.2f} vs left {l:.2f} RPM (needs right {rlo:g}-{rhi:g}, "
+        f"left {llo:g}-{lhi:g}, right >= left + {RIGHT_MARGIN_RPM:g}); true {rt:.2f} vs {lt:.2f}; "
+        f"runs 3-8: right above left in {len(more)} of {len(mixed)} (needs {needed})"
+    )
     return Finding("overshoot_right", claim, source, _verdict(ok), why)
 
 
@@ -135,14 +156,20 @@ def tracking_finding(runs: dict) -> Finding:
     """§5.1.3: unloaded runs track "almost perfectly", i.e. end within the PI's dead zone."""
     claim = f"unloaded runs track the reference (±{DEAD_ZONE_RPM:g} RPM dead zone)"
     source = "§5.1.3, listing 4.11"
-    errors = [(r["run"], name, _value(runs, r["run"], name, "steady_error"))
-              for r in runs.values() if r["payload_kg"] == 0 for name in r["wheels"]]
+    errors = [
+        (r["run"], name, _value(runs, r["run"], name, "steady_error"))
+        for r in runs.values()
+        if r["payload_kg"] == 0
+        for name in r["wheels"]
+    ]
     if not errors:
         return Finding("tracking", claim, source, NOT_JUDGED, "no unloaded run")
     inside = [e for e in errors if e[2] is not None and abs(e[2]) <= DEAD_ZONE_RPM]
     run, wheel, worst = max(errors, key=lambda e: math.inf if e[2] is None else abs(e[2]))
-    why = (f"{len(inside)} of {len(errors)} unloaded wheels end within ±{DEAD_ZONE_RPM:g} RPM (published); "
-           f"worst run {run} {wheel} {_num(worst, '+.2f')} RPM")
+    why = (
+        f"{len(inside)} of {len(errors)} unloaded wheels end within ±{DEAD_ZONE_RPM:g} RPM (published); "
+        f"worst run {run} {wheel} {_num(worst, '+.2f')} RPM"
+    )
     return Finding("tracking", claim, source, _verdict(len(inside) == len(errors)), why)
 
 
@@ -150,10 +177,14 @@ def duty_finding(payload_duty: list[dict]) -> Finding:
     """§5.1.4: with 20 kg the PI raises the duty on both wheels of runs 7 and 8."""
     claim, source = "20 kg: the PI raises the duty (runs 7, 8)", "§5.1.4"
     if not payload_duty:
-        return Finding("duty_raised", claim, source, NOT_JUDGED, "no 20 kg run with its unloaded twin")
+        return Finding(
+            "duty_raised", claim, source, NOT_JUDGED, "no 20 kg run with its unloaded twin"
+        )
     raised = sum(bool(c["raised"]) for c in payload_duty)
-    counts = ", ".join(f"{c['loaded_run']} {c['wheel']} {c['loaded']['counts']:.1f}/"
-                       f"{c['unloaded']['counts']:.1f}" for c in payload_duty)
+    counts = ", ".join(
+        f"{c['loaded_run']} {c['wheel']} {c['loaded']['counts']:.1f}/{c['unloaded']['counts']:.1f}"
+        for c in payload_duty
+    )
     why = f"raised on {raised} of {len(payload_duty)} wheels (counts 20 kg/unloaded: {counts})"
     return Finding("duty_raised", claim, source, _verdict(raised == len(payload_duty)), why)
 
@@ -163,12 +194,16 @@ def oscillation_finding(comparisons: list[dict]) -> Finding:
     claim, source = "20 kg: more oscillation in the transient", "§5.1.4"
     n = len(comparisons)
     if not n:
-        return Finding("oscillation", claim, source, NOT_JUDGED, "no 20 kg run with its unloaded twin")
+        return Finding(
+            "oscillation", claim, source, NOT_JUDGED, "no 20 kg run with its unloaded twin"
+        )
     needed = math.ceil(OSCILLATION_SHARE * n - 1e-9)
     pub = sum(c["verdict"] == "pass" for c in comparisons)
     true = sum(c.get("true_verdict") == "pass" for c in comparisons)
-    why = (f"20 kg oscillates more in {pub} of {n} comparisons on the published samples, {true} of {n} "
-           f"on the true speed (needs {needed} on each; excess total variation)")
+    why = (
+        f"20 kg oscillates more in {pub} of {n} comparisons on the published samples, {true} of {n} "
+        f"on the true speed (needs {needed} on each; excess total variation)"
+    )
     return Finding("oscillation", claim, source, _verdict(pub >= needed and true >= needed), why)
 
 
@@ -188,8 +223,18 @@ def timing_bounds(runs: dict, per_revolution: bool = True) -> list[TimingBound]:
                     share = max(0.0, 1.0 - settling_band_rpm(ref) / ref)
                 bound = share * rev_s if per_revolution else 0.0
                 high = check["band"][1]
-                out.append(TimingBound(r["run"], name, w["reference_rpm"], metric, bound, high, check["twin"],
-                                       bound <= high))
+                out.append(
+                    TimingBound(
+                        r["run"],
+                        name,
+                        w["reference_rpm"],
+                        metric,
+                        bound,
+                        high,
+                        check["twin"],
+                        bound <= high,
+                    )
+                )
     return out
 
 
@@ -199,15 +244,26 @@ def timing_finding(runs: dict, bounds: list[TimingBound]) -> Finding:
     claim, source = "delay, rise, peak, settling times", "§5.1.3, fig. 5.3"
     if not bounds:
         return Finding("timings", claim, source, NOT_JUDGED, "no driven wheel")
-    verdict = {(r["run"], name, m): c["verdict"] for r in runs.values() for name, w in r["wheels"].items()
-               for m, c in w["checks"].items()}
+    verdict = {
+        (r["run"], name, m): c["verdict"]
+        for r in runs.values()
+        for name, w in r["wheels"].items()
+        for m, c in w["checks"].items()
+    }
     reach = [b for b in bounds if b.attainable]
     passed = sum(verdict[(b.run, b.wheel, b.metric)] == "pass" for b in reach)
-    true = [c for r in runs.values() for w in r["wheels"].values() for m, c in w["true_checks"].items()
-            if m in TIMINGS]
+    true = [
+        c
+        for r in runs.values()
+        for w in r["wheels"].values()
+        for m, c in w["true_checks"].items()
+        if m in TIMINGS
+    ]
     true_passed = sum(c["verdict"] == "pass" for c in true)
-    why = (f"{len(bounds) - len(reach)} of {len(bounds)} published timing checks out of reach under "
-           f"listing 4.12; attainable {passed} of {len(reach)} pass; true speed {true_passed} of {len(true)}")
+    why = (
+        f"{len(bounds) - len(reach)} of {len(bounds)} published timing checks out of reach under "
+        f"listing 4.12; attainable {passed} of {len(reach)} pass; true speed {true_passed} of {len(true)}"
+    )
     return Finding("timings", claim, source, _verdict(passed == len(reach)), why)
 
 
@@ -215,17 +271,33 @@ def findings(data: dict) -> Findings:
     """The findings of the ``metrics.json`` object ``data`` (without its ``findings`` key)."""
     runs = {r["run"]: r for r in data["runs"]}
     bounds = timing_bounds(runs, per_revolution=data.get("firmware") != "improved")
-    out = [overshoot_finding(runs), tracking_finding(runs), duty_finding(data.get("payload_duty") or []),
-           oscillation_finding(data.get("comparisons") or []), timing_finding(runs, bounds)]
+    out = [
+        overshoot_finding(runs),
+        tracking_finding(runs),
+        duty_finding(data.get("payload_duty") or []),
+        oscillation_finding(data.get("comparisons") or []),
+        timing_finding(runs, bounds),
+    ]
     unreachable = {(b.run, b.wheel, b.metric) for b in bounds if not b.attainable}
-    checks = [((r["run"], name, m), c["verdict"] == "pass") for r in runs.values()
-              for name, w in r["wheels"].items() for m, c in w["checks"].items()]
+    checks = [
+        ((r["run"], name, m), c["verdict"] == "pass")
+        for r in runs.values()
+        for name, w in r["wheels"].items()
+        for m, c in w["checks"].items()
+    ]
     checks += [(None, c["verdict"] == "pass") for c in data.get("comparisons") or []]
     off = [ok for key, ok in checks if key in unreachable]
     on = [ok for key, ok in checks if key not in unreachable]
-    true = [c["verdict"] == "pass" for r in runs.values() for w in r["wheels"].values()
-            for m, c in w["true_checks"].items() if m in TIMINGS]
-    return Findings(out, bounds, CheckSplit(len(on), sum(on), len(off), sum(off), len(true), sum(true)))
+    true = [
+        c["verdict"] == "pass"
+        for r in runs.values()
+        for w in r["wheels"].values()
+        for m, c in w["true_checks"].items()
+        if m in TIMINGS
+    ]
+    return Findings(
+        out, bounds, CheckSplit(len(on), sum(on), len(off), sum(off), len(true), sum(true))
+    )
 
 
 def lines(found: dict) -> list[str]:
@@ -234,9 +306,11 @@ def lines(found: dict) -> list[str]:
     :data:`VALIDATION_DOC`."""
     out = [f"[{f['verdict']}] {f['claim']} ({f['source']}): {f['why']}" for f in found["findings"]]
     c = found["checks"]
-    out.append(f"attainable checks passed {c['attainable_passed']}/{c['attainable']} on the published "
-               "samples (overshoot, steady error, oscillation comparisons and the timings listing 4.12 "
-               f"leaves in reach); true-speed timings {c['true_timing_passed']}/{c['true_timing']}")
+    out.append(
+        f"attainable checks passed {c['attainable_passed']}/{c['attainable']} on the published "
+        "samples (overshoot, steady error, oscillation comparisons and the timings listing 4.12 "
+        f"leaves in reach); true-speed timings {c['true_timing_passed']}/{c['true_timing']}"
+    )
     groups: dict[float, list[dict]] = {}
     for b in found["bounds"]:
         if not b["attainable"]:
@@ -245,10 +319,14 @@ def lines(found: dict) -> list[str]:
     for ref, bs in sorted(groups.items()):
         runs = ", ".join(str(n) for n in sorted({b["run"] for b in bs}))
         seen = {b["metric"]: b for b in bs}
-        limits = ", ".join(f"{m.removesuffix('_s')} >= {b['bound_s']:.2f} > {b['band_high_s']:g}"
-                           for m, b in seen.items())
+        limits = ", ".join(
+            f"{m.removesuffix('_s')} >= {b['bound_s']:.2f} > {b['band_high_s']:g}"
+            for m, b in seen.items()
+        )
         parts.append(f"T = {60.0 / ref:.2f} s at {ref:.2f} RPM (runs {runs}: {limits} s)")
-    out.append("unattainable under listing 4.12 (one speed per wheel revolution, the first >= T = "
-               f"60/|rpm| s after the command): {c['unattainable']} checks, {c['unattainable_passed']} pass"
-               + (f"; {'; '.join(parts)}" if parts else ""))
+    out.append(
+        "unattainable under listing 4.12 (one speed per wheel revolution, the first >= T = "
+        f"60/|rpm| s after the command): {c['unattainable']} checks, {c['unattainable_passed']} pass"
+        + (f"; {'; '.join(parts)}" if parts else "")
+    )
     return out

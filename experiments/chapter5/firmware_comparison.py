@@ -50,10 +50,17 @@ def _pin_state(pins) -> tuple:
 
 def _changes(t_us: int, before: tuple, after: tuple) -> list[tuple[int, int, str, int]]:
     names = ("pwm", "brake", "stop", "dir")
-    return [(t_us, w, names[k], after[w][k]) for w in range(2) for k in range(4) if before[w][k] != after[w][k]]
+    return [
+        (t_us, w, names[k], after[w][k])
+        for w in range(2)
+        for k in range(4)
+        if before[w][k] != after[w][k]
+    ]
 
 
-def command_timeline(firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int = 2_500_000) -> list:
+def command_timeline(
+    firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int = 2_500_000
+) -> list:
     """``(t_us, wheel, pin, value)`` of every pin change after one wheel_Command, wheels at rest.
 
     No physics: the wheels never turn, so no speed is sampled and the PI stays idle; what is left
@@ -67,7 +74,9 @@ def command_timeline(firmware: str = "avr", data=TIMELINE_COMMAND, until_us: int
     from amr_twin.ros.rosserial import frame_bytes, frame_time_us
 
     clock = VirtualClock()
-    fw = make_firmware(firmware, clock, lambda topic, value: None, edges_per_rev=SKETCH_EDGES_PER_REV)  # never turn
+    fw = make_firmware(
+        firmware, clock, lambda topic, value: None, edges_per_rev=SKETCH_EDGES_PER_REV
+    )  # never turn
     events = []
     if firmware.startswith("avr"):
         board, lead = fw.board, fw.lead_cycles
@@ -101,11 +110,29 @@ def timeline_table(port: list, board: list) -> dict:
             a = [e for e in port if e[1] == w and e[2] == pin]
             b = [e for e in board if e[1] == w and e[2] == pin]
             for k, (ea, eb) in enumerate(zip(a, b)):
-                rows.append({"wheel": ("left", "right")[w], "pin": pin, "k": k + 1, "value": [ea[3], eb[3]],
-                             "t_port_ms": ea[0] / 1e3, "t_board_ms": eb[0] / 1e3, "dt_us": eb[0] - ea[0]})
+                rows.append(
+                    {
+                        "wheel": ("left", "right")[w],
+                        "pin": pin,
+                        "k": k + 1,
+                        "value": [ea[3], eb[3]],
+                        "t_port_ms": ea[0] / 1e3,
+                        "t_board_ms": eb[0] / 1e3,
+                        "dt_us": eb[0] - ea[0],
+                    }
+                )
             if len(a) != len(b):
-                rows.append({"wheel": ("left", "right")[w], "pin": pin, "k": None, "value": [len(a), len(b)],
-                             "t_port_ms": None, "t_board_ms": None, "dt_us": None})
+                rows.append(
+                    {
+                        "wheel": ("left", "right")[w],
+                        "pin": pin,
+                        "k": None,
+                        "value": [len(a), len(b)],
+                        "t_port_ms": None,
+                        "t_board_ms": None,
+                        "dt_us": None,
+                    }
+                )
     return {"command": list(TIMELINE_COMMAND), "rows": rows}
 
 
@@ -115,24 +142,43 @@ def _wheel(raw_a: dict, raw_b: dict, w: int) -> dict:
     out = {"samples": [int(len(pa)), int(len(pb))]}
     if n:
         dt, dv = pa[:n, 0] - pb[:n, 0], pa[:n, 1] - pb[:n, 1]
-        out.update(first_t_s=[float(pa[0, 0]), float(pb[0, 0])], first_dt_ms=float(dt[0] * 1e3),
-                   first_drpm=float(dv[0]), max_abs_dt_ms=float(np.max(np.abs(dt)) * 1e3),
-                   max_abs_drpm=float(np.max(np.abs(dv))), final_rpm=[float(pa[-1, 1]), float(pb[-1, 1])],
-                   final_drpm=float(pa[-1, 1] - pb[-1, 1]))
+        out.update(
+            first_t_s=[float(pa[0, 0]), float(pb[0, 0])],
+            first_dt_ms=float(dt[0] * 1e3),
+            first_drpm=float(dv[0]),
+            max_abs_dt_ms=float(np.max(np.abs(dt)) * 1e3),
+            max_abs_drpm=float(np.max(np.abs(dv))),
+            final_rpm=[float(pa[-1, 1]), float(pb[-1, 1])],
+            final_drpm=float(pa[-1, 1] - pb[-1, 1]),
+        )
     m = min(len(raw_a["t_s"]), len(raw_b["t_s"]))
     tv = np.asarray(raw_a["true_rpm"])[:m, w] - np.asarray(raw_b["true_rpm"])[:m, w]
     pwm = np.asarray(raw_a["pwm_counts"])[:m, w] - np.asarray(raw_b["pwm_counts"])[:m, w]
-    out.update(true_rms_drpm=float(np.sqrt(np.mean(tv ** 2))), true_max_abs_drpm=float(np.max(np.abs(tv))),
-               true_final_drpm=float(tv[-1]), pwm_differs_pct=float(100 * np.mean(pwm != 0)),
-               pwm_max_abs_diff=int(np.max(np.abs(pwm))))
-    ok = (n > 0 and len(pa) > 0 and len(pb) > 0 and abs(out["final_drpm"]) <= FINAL_RPM_TOL
-          and abs(out["first_dt_ms"]) <= FIRST_SAMPLE_TOL_S * 1e3)
+    out.update(
+        true_rms_drpm=float(np.sqrt(np.mean(tv**2))),
+        true_max_abs_drpm=float(np.max(np.abs(tv))),
+        true_final_drpm=float(tv[-1]),
+        pwm_differs_pct=float(100 * np.mean(pwm != 0)),
+        pwm_max_abs_diff=int(np.max(np.abs(pwm))),
+    )
+    ok = (
+        n > 0
+        and len(pa) > 0
+        and len(pb) > 0
+        and abs(out["final_drpm"]) <= FINAL_RPM_TOL
+        and abs(out["first_dt_ms"]) <= FIRST_SAMPLE_TOL_S * 1e3
+    )
     out["verdict"] = "pass" if ok else "fail"
     return out
 
 
-def compare(runs_a: list[dict], runs_b: list[dict], firmware_a: str, firmware_b: str,
-            paced: list[dict] | None = None) -> dict:
+def compare(
+    runs_a: list[dict],
+    runs_b: list[dict],
+    firmware_a: str,
+    firmware_b: str,
+    paced: list[dict] | None = None,
+) -> dict:
     """Differences of ``runs_a`` against ``runs_b`` (analysed chapter 5 runs with their ``raw``).
 
     ``paced``: the reference runs again, paced (:func:`pace`); each row then has ``paced``, the
@@ -148,16 +194,28 @@ def compare(runs_a: list[dict], runs_b: list[dict], firmware_a: str, firmware_b:
         for w, name in enumerate(("left", "right")):
             if name not in ra["wheels"]:
                 continue
-            row = {"run": ra["run"], "wheel": name, "reference_rpm": ra["wheels"][name]["reference_rpm"],
-                   **_wheel(ra["raw"], rb["raw"], w)}
+            row = {
+                "run": ra["run"],
+                "wheel": name,
+                "reference_rpm": ra["wheels"][name]["reference_rpm"],
+                **_wheel(ra["raw"], rb["raw"], w),
+            }
             if ra["run"] in paced_by_number:
                 row["paced"] = _wheel(ra["raw"], paced_by_number[ra["run"]]["raw"], w)
             rows.append(row)
-    worst = {key: max((abs(r[key]) for r in rows if key in r), default=None)
-             for key in ("first_dt_ms", "max_abs_dt_ms", "max_abs_drpm", "final_drpm", "true_rms_drpm")}
-    return {"firmware": firmware_a, "reference": firmware_b, "final_rpm_tolerance": FINAL_RPM_TOL,
-            "first_sample_tolerance_s": FIRST_SAMPLE_TOL_S, "rows": rows, "worst": worst,
-            "verdict": "pass" if rows and all(r["verdict"] == "pass" for r in rows) else "fail"}
+    worst = {
+        key: max((abs(r[key]) for r in rows if key in r), default=None)
+        for key in ("first_dt_ms", "max_abs_dt_ms", "max_abs_drpm", "final_drpm", "true_rms_drpm")
+    }
+    return {
+        "firmware": firmware_a,
+        "reference": firmware_b,
+        "final_rpm_tolerance": FINAL_RPM_TOL,
+        "first_sample_tolerance_s": FIRST_SAMPLE_TOL_S,
+        "rows": rows,
+        "worst": worst,
+        "verdict": "pass" if rows and all(r["verdict"] == "pass" for r in rows) else "fail",
+    }
 
 
 def _n(value, digits: int = 2) -> str:
@@ -166,52 +224,72 @@ def _n(value, digits: int = 2) -> str:
 
 def _row(r: dict) -> str:
     last = "—" if "final_rpm" not in r else f"{r['final_rpm'][0]:.3f} / {r['final_rpm'][1]:.3f}"
-    return (f"{r['samples'][0]} / {r['samples'][1]} | {_n(r.get('first_dt_ms'), 1)} | {_n(r.get('first_drpm'), 3)} | "
-            f"{_n(r.get('max_abs_dt_ms'), 1)} | {_n(r.get('max_abs_drpm'), 3)} | {last} | {_n(r.get('final_drpm'), 3)} | "
-            f"{_n(r['true_rms_drpm'], 3)} | {r['pwm_differs_pct']:.1f} | {r['verdict']} |")
+    return (
+        f"{r['samples'][0]} / {r['samples'][1]} | {_n(r.get('first_dt_ms'), 1)} | {_n(r.get('first_drpm'), 3)} | "
+        f"{_n(r.get('max_abs_dt_ms'), 1)} | {_n(r.get('max_abs_drpm'), 3)} | {last} | {_n(r.get('final_drpm'), 3)} | "
+        f"{_n(r['true_rms_drpm'], 3)} | {r['pwm_differs_pct']:.1f} | {r['verdict']} |"
+    )
 
 
 def markdown(comp: dict) -> list[str]:
     """The report section: one row per run and wheel (and the paced reference's table)."""
-    lines = [f"`{comp['firmware']}` against `{comp['reference']}` on the same runs, sample by sample (k-th "
-             "published sample against k-th; true speed and PWM counts on the 100 Hz grid). Δ = "
-             f"{comp['firmware']} − {comp['reference']}. Accepted: last published speeds within "
-             f"{comp['final_rpm_tolerance']:g} RPM, first published samples within "
-             f"{comp['first_sample_tolerance_s'] * 1e3:g} ms. Where the differences come from: docs/firmware.md, "
-             "\"The emulated board against the faithful port\".", "",
-             "| run | wheel | ref RPM | samples | first sample Δt ms | first Δ RPM | max \\|Δt\\| ms | "
-             "max \\|Δ\\| RPM | last RPM | last Δ RPM | true RMS Δ RPM | PWM differs % | verdict |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"`{comp['firmware']}` against `{comp['reference']}` on the same runs, sample by sample (k-th "
+        "published sample against k-th; true speed and PWM counts on the 100 Hz grid). Δ = "
+        f"{comp['firmware']} − {comp['reference']}. Accepted: last published speeds within "
+        f"{comp['final_rpm_tolerance']:g} RPM, first published samples within "
+        f"{comp['first_sample_tolerance_s'] * 1e3:g} ms. Where the differences come from: docs/firmware.md, "
+        '"The emulated board against the faithful port".',
+        "",
+        "| run | wheel | ref RPM | samples | first sample Δt ms | first Δ RPM | max \\|Δt\\| ms | "
+        "max \\|Δ\\| RPM | last RPM | last Δ RPM | true RMS Δ RPM | PWM differs % | verdict |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in comp["rows"]:
         lines.append(f"| {r['run']} | {r['wheel']} | {r['reference_rpm']:.2f} | " + _row(r))
     w = comp["worst"]
-    lines += ["", f"**Verdict: {comp['verdict']}** — worst first-sample Δt {_n(w['first_dt_ms'], 1)} ms, worst "
-                  f"last-sample Δ {_n(w['final_drpm'], 3)} RPM, worst sample Δ {_n(w['max_abs_drpm'], 3)} RPM, "
-                  f"worst sample Δt {_n(w['max_abs_dt_ms'], 1)} ms."]
+    lines += [
+        "",
+        f"**Verdict: {comp['verdict']}** — worst first-sample Δt {_n(w['first_dt_ms'], 1)} ms, worst "
+        f"last-sample Δ {_n(w['final_drpm'], 3)} RPM, worst sample Δ {_n(w['max_abs_drpm'], 3)} RPM, "
+        f"worst sample Δt {_n(w['max_abs_dt_ms'], 1)} ms.",
+    ]
     paced = [r["paced"] for r in comp["rows"] if "paced" in r]
     if paced:
+
         def worst(key):
             return max((abs(p[key]) for p in paced if key in p), default=None)
 
         same = sum(p.get("samples", [0])[0] == p.get("samples", [0, 1])[1] for p in paced)
-        lines += ["", f"Against `{comp['reference']}` *paced* (its loop stops the physics every {PACE_US} us, as "
-                      "the emulated board's does, so both sample the physics at the same instants): worst "
-                      f"first-sample Δt {_n(worst('first_dt_ms'), 1)} ms, worst last-sample Δ "
-                      f"{_n(worst('final_drpm'), 3)} RPM, worst sample Δ {_n(worst('max_abs_drpm'), 3)} RPM, worst "
-                      f"true-speed RMS Δ {_n(worst('true_rms_drpm'), 3)} RPM, equal sample counts in {same} of "
-                      f"{len(paced)} rows: what is left is the firmwares' own difference."]
+        lines += [
+            "",
+            f"Against `{comp['reference']}` *paced* (its loop stops the physics every {PACE_US} us, as "
+            "the emulated board's does, so both sample the physics at the same instants): worst "
+            f"first-sample Δt {_n(worst('first_dt_ms'), 1)} ms, worst last-sample Δ "
+            f"{_n(worst('final_drpm'), 3)} RPM, worst sample Δ {_n(worst('max_abs_drpm'), 3)} RPM, worst "
+            f"true-speed RMS Δ {_n(worst('true_rms_drpm'), 3)} RPM, equal sample counts in {same} of "
+            f"{len(paced)} rows: what is left is the firmwares' own difference.",
+        ]
     if "timeline" in comp:
         tl = comp["timeline"]
-        lines += ["", f"One wheel_Command {tl['command']} with the wheels at rest (no physics, so no sample and no "
-                      "PI action): when each pin changes, the k-th change of each pin paired. The port acts when "
-                      "the link's frame ends (115200 baud); the board's time is that of the instruction that wrote "
-                      "the pin (its UART runs at 117647 baud: UBRR 16 with U2X).", "",
-                  "| wheel | pin | k | value port / board | port ms | board ms | board − port us |",
-                  "|---|---|---|---|---|---|---|"]
+        lines += [
+            "",
+            f"One wheel_Command {tl['command']} with the wheels at rest (no physics, so no sample and no "
+            "PI action): when each pin changes, the k-th change of each pin paired. The port acts when "
+            "the link's frame ends (115200 baud); the board's time is that of the instruction that wrote "
+            "the pin (its UART runs at 117647 baud: UBRR 16 with U2X).",
+            "",
+            "| wheel | pin | k | value port / board | port ms | board ms | board − port us |",
+            "|---|---|---|---|---|---|---|",
+        ]
         for r in tl["rows"]:
             if r["k"] is None:
-                lines.append(f"| {r['wheel']} | {r['pin']} | — | changes {r['value'][0]} / {r['value'][1]} | | | |")
+                lines.append(
+                    f"| {r['wheel']} | {r['pin']} | — | changes {r['value'][0]} / {r['value'][1]} | | | |"
+                )
             else:
-                lines.append(f"| {r['wheel']} | {r['pin']} | {r['k']} | {r['value'][0]} / {r['value'][1]} | "
-                             f"{r['t_port_ms']:.3f} | {r['t_board_ms']:.3f} | {r['dt_us']} |")
+                lines.append(
+                    f"| {r['wheel']} | {r['pin']} | {r['k']} | {r['value'][0]} / {r['value'][1]} | "
+                    f"{r['t_port_ms']:.3f} | {r['t_board_ms']:.3f} | {r['dt_us']} |"
+                )
     return lines

@@ -16,8 +16,14 @@ from typing import Optional
 from amr_twin.experiments.chapter5 import payload
 from amr_twin.experiments.chapter5.findings import Findings, findings
 from amr_twin.experiments.chapter5.readings import readings
-from amr_twin.experiments.chapter5.criteria import (BANDS, DEFINITIONS, SOURCES, TRANSIENT_WINDOW_S,
-                                                    count_checks, oscillation_verdict)
+from amr_twin.experiments.chapter5.criteria import (
+    BANDS,
+    DEFINITIONS,
+    SOURCES,
+    TRANSIENT_WINDOW_S,
+    count_checks,
+    oscillation_verdict,
+)
 
 
 @dataclass(frozen=True)
@@ -67,7 +73,9 @@ class RunMetrics:
     errors: list
     wall_s: float
     wheels: dict[str, WheelMetrics]
-    tyre_timestep: Optional[dict] = None  # the tyres' guard halved the timestep (amr_twin.model.tyre_stability)
+    tyre_timestep: Optional[dict] = (
+        None  # the tyres' guard halved the timestep (amr_twin.model.tyre_stability)
+    )
 
 
 @dataclass(frozen=True)
@@ -142,7 +150,10 @@ class Chapter5Metrics:
     def as_json(self) -> dict:
         """The ``metrics.json`` object (``firmware_comparison`` and ``spread`` only when made)."""
         out = {f.name: getattr(self, f.name) for f in fields(self)}
-        out["runs"] = [{k: v for k, v in asdict(r).items() if k != "tyre_timestep" or v is not None} for r in self.runs]
+        out["runs"] = [
+            {k: v for k, v in asdict(r).items() if k != "tyre_timestep" or v is not None}
+            for r in self.runs
+        ]
         out["comparisons"] = [asdict(c) for c in self.comparisons]
         out["summary"] = asdict(self.summary)
         if self.findings is not None:
@@ -155,32 +166,62 @@ class Chapter5Metrics:
 
 
 def _wheel(w: dict) -> WheelMetrics:
-    return WheelMetrics(w["reference_rpm"], w["step_class"], w["samples"], w["published"], w["true"],
-                        {k: Check(**c) for k, c in w["checks"].items()},
-                        {k: Check(**c) for k, c in w["true_checks"].items()})
+    return WheelMetrics(
+        w["reference_rpm"],
+        w["step_class"],
+        w["samples"],
+        w["published"],
+        w["true"],
+        {k: Check(**c) for k, c in w["checks"].items()},
+        {k: Check(**c) for k, c in w["true_checks"].items()},
+    )
 
 
 def metrics(results: dict) -> Chapter5Metrics:
     """The typed metrics of :func:`amr_twin.experiments.chapter5.experiment.run`'s ``results``."""
-    runs = [RunMetrics(r["run"], r["title"], r["command"], r["payload_kg"], r["duration_s"], r["wheel_command"],
-                       r["codes"], r["errors"], r["wall_s"], {name: _wheel(w) for name, w in r["wheels"].items()},
-                       r.get("tyre_timestep"))
-            for r in results["runs"]]
+    runs = [
+        RunMetrics(
+            r["run"],
+            r["title"],
+            r["command"],
+            r["payload_kg"],
+            r["duration_s"],
+            r["wheel_command"],
+            r["codes"],
+            r["errors"],
+            r["wall_s"],
+            {name: _wheel(w) for name, w in r["wheels"].items()},
+            r.get("tyre_timestep"),
+        )
+        for r in results["runs"]
+    ]
     comparisons = [OscillationComparison(**c) for c in results["comparisons"]]
     data = Chapter5Metrics(
-        firmware=results["firmware"], jobs=results["jobs"], wall_s=round(results["wall_s"], 3),
-        sim_s=results["sim_s"], study_runs=results.get("study_runs", 0), study_sim_s=results.get("study_sim_s", 0.0),
-        judged_on="published samples, linear interpolation from rest at the command", definitions=DEFINITIONS,
+        firmware=results["firmware"],
+        jobs=results["jobs"],
+        wall_s=round(results["wall_s"], 3),
+        sim_s=results["sim_s"],
+        study_runs=results.get("study_runs", 0),
+        study_sim_s=results.get("study_sim_s", 0.0),
+        judged_on="published samples, linear interpolation from rest at the command",
+        definitions=DEFINITIONS,
         settling_band="max(5 % of the step, 4 RPM) around the final value",
         oscillation=f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S:g} s",
         oscillation_verdict=oscillation_verdict(results["comparisons"]),
-        bands=[dict(vars(b), source=SOURCES[b.metric]) for b in BANDS], runs=runs, comparisons=comparisons,
-        crr=results["crr"], payload_duty=results["payload_duty"],
+        bands=[dict(vars(b), source=SOURCES[b.metric]) for b in BANDS],
+        runs=runs,
+        comparisons=comparisons,
+        crr=results["crr"],
+        payload_duty=results["payload_duty"],
         rolling_resistance_study=results["rolling_resistance_study"],
-        threshold_crr=payload.threshold_crr(results["payload_duty"], results["rolling_resistance_study"],
-                                            results["crr"]["tyres"]), findings=None,
+        threshold_crr=payload.threshold_crr(
+            results["payload_duty"], results["rolling_resistance_study"], results["crr"]["tyres"]
+        ),
+        findings=None,
         summary=CheckCount(*count_checks(results["runs"], results["comparisons"])),
-        firmware_comparison=results.get("firmware_comparison"), spread=results.get("spread_summary"),
+        firmware_comparison=results.get("firmware_comparison"),
+        spread=results.get("spread_summary"),
         readings=readings(results) if all("raw" in r for r in results["runs"]) else None,
-        attainable=results.get("attainable"))
+        attainable=results.get("attainable"),
+    )
     return replace(data, findings=findings(data.as_json()))

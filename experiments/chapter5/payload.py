@@ -30,10 +30,12 @@ def steady(raw: dict, wheel: int) -> dict:
     tail = t >= t[-1] * (1 - STEADY_FRACTION)
     pub = raw["published"][wheel]
     late = pub[pub[:, 0] >= t[-1] * (1 - STEADY_FRACTION), 1] if len(pub) else np.zeros(0)
-    return {"counts": float(np.mean(raw["pwm_counts"][tail, wheel])),
-            "current_a": float(np.mean(raw["current_a"][tail, wheel])),
-            "published_rpm": float(late.mean()) if len(late) else None,
-            "first_count_change_s": _last_change_s(t, raw["pwm_counts"][:, wheel])}
+    return {
+        "counts": float(np.mean(raw["pwm_counts"][tail, wheel])),
+        "current_a": float(np.mean(raw["current_a"][tail, wheel])),
+        "published_rpm": float(late.mean()) if len(late) else None,
+        "first_count_change_s": _last_change_s(t, raw["pwm_counts"][:, wheel]),
+    }
 
 
 def _last_change_s(t: np.ndarray, counts: np.ndarray) -> float | None:
@@ -53,9 +55,17 @@ def duty_comparison(runs: list[dict]) -> list[dict]:
             if name not in by_number[loaded]["wheels"]:
                 continue
             a, b = steady(by_number[loaded]["raw"], w), steady(by_number[unloaded]["raw"], w)
-            out.append({"loaded_run": loaded, "unloaded_run": unloaded, "wheel": name,
-                        "reference_rpm": by_number[loaded]["wheels"][name]["reference_rpm"],
-                        "loaded": a, "unloaded": b, "raised": a["counts"] > b["counts"]})
+            out.append(
+                {
+                    "loaded_run": loaded,
+                    "unloaded_run": unloaded,
+                    "wheel": name,
+                    "reference_rpm": by_number[loaded]["wheels"][name]["reference_rpm"],
+                    "loaded": a,
+                    "unloaded": b,
+                    "raised": a["counts"] > b["counts"],
+                }
+            )
     return out
 
 
@@ -81,7 +91,9 @@ def rolling_resistance_study(analysed: list[tuple[float, dict]]) -> list[dict]:
 def threshold_crr(shipped: list[dict], study: list[dict], shipped_crr: float) -> float | None:
     """Lowest coefficient at which every wheel of the linear pair (runs 7/3) gets a raised duty."""
     rows = [(shipped_crr, [c for c in shipped if c["loaded_run"] == 7])]
-    rows += [(crr, [c for c in study if c["crr"] == crr and c["loaded_run"] == 7]) for crr in CRR_STUDY]
+    rows += [
+        (crr, [c for c in study if c["crr"] == crr and c["loaded_run"] == 7]) for crr in CRR_STUDY
+    ]
     for crr, comps in sorted(rows, key=lambda r: r[0]):
         if comps and all(c["raised"] for c in comps):
             return crr
@@ -97,33 +109,55 @@ def markdown(data: dict) -> list[str]:
     def num(v, d=2):
         return "—" if v is None else f"{v:.{d}f}"
 
-    lines = [f"Steady values over the last {STEADY_FRACTION:.0%} of each run; rolling resistance as shipped "
-             f"(tyres {data['crr']['tyres']:g}, balls {data['crr']['balls']:g}).", "",
-             "| 20 kg run / unloaded | wheel | ref RPM | counts 20 kg / unloaded | current A 20 kg / unloaded | "
-             "published RPM 20 kg / unloaded | duty raised |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        f"Steady values over the last {STEADY_FRACTION:.0%} of each run; rolling resistance as shipped "
+        f"(tyres {data['crr']['tyres']:g}, balls {data['crr']['balls']:g}).",
+        "",
+        "| 20 kg run / unloaded | wheel | ref RPM | counts 20 kg / unloaded | current A 20 kg / unloaded | "
+        "published RPM 20 kg / unloaded | duty raised |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for c in duty:
         a, b = c["loaded"], c["unloaded"]
-        lines.append(f"| {c['loaded_run']} / {c['unloaded_run']} | {c['wheel']} | {c['reference_rpm']:.2f} | "
-                     f"{num(a['counts'], 1)} / {num(b['counts'], 1)} | {num(a['current_a'])} / {num(b['current_a'])} | "
-                     f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | {'yes' if c['raised'] else 'no'} |")
+        lines.append(
+            f"| {c['loaded_run']} / {c['unloaded_run']} | {c['wheel']} | {c['reference_rpm']:.2f} | "
+            f"{num(a['counts'], 1)} / {num(b['counts'], 1)} | {num(a['current_a'])} / {num(b['current_a'])} | "
+            f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | {'yes' if c['raised'] else 'no'} |"
+        )
     raised = all(c["raised"] for c in duty)
-    lines += ["", f"**With the shipped plant the faithful firmware {'raises' if raised else 'does not raise'} the "
-                  f"duty with 20 kg** ({sum(c['raised'] for c in duty)} of {len(duty)} wheels)."]
+    lines += [
+        "",
+        f"**With the shipped plant the faithful firmware {'raises' if raised else 'does not raise'} the "
+        f"duty with 20 kg** ({sum(c['raised'] for c in duty)} of {len(duty)} wheels).",
+    ]
     if study:
-        lines += ["", "Rolling-resistance study (runs 7 / 3, tyres and balls at the same coefficient):", "",
-                  "| Crr | wheel | counts 20 kg / unloaded | published RPM 20 kg / unloaded | raised | "
-                  "last change of the 20 kg duty s |", "|---|---|---|---|---|---|"]
+        lines += [
+            "",
+            "Rolling-resistance study (runs 7 / 3, tyres and balls at the same coefficient):",
+            "",
+            "| Crr | wheel | counts 20 kg / unloaded | published RPM 20 kg / unloaded | raised | "
+            "last change of the 20 kg duty s |",
+            "|---|---|---|---|---|---|",
+        ]
         for c in study:
             a, b = c["loaded"], c["unloaded"]
-            lines.append(f"| {c['crr']:g} | {c['wheel']} | {num(a['counts'], 1)} / {num(b['counts'], 1)} | "
-                         f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | {'yes' if c['raised'] else 'no'} | "
-                         f"{num(a['first_count_change_s'])} |")
+            lines.append(
+                f"| {c['crr']:g} | {c['wheel']} | {num(a['counts'], 1)} / {num(b['counts'], 1)} | "
+                f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | {'yes' if c['raised'] else 'no'} | "
+                f"{num(a['first_count_change_s'])} |"
+            )
         t = data.get("threshold_crr")
         lo_t, hi_t = PLAUSIBLE["tyres"]
         lo_b, hi_b = PLAUSIBLE["balls"]
-        lines += ["", (f"The faithful PI raises the duty on both wheels of run 7 from **Crr = {t:g}**; the sourced "
-                       f"ranges are {lo_t:g}-{hi_t:g} for the tyres and {lo_b:g}-{hi_b:g} for the balls, so this "
-                       f"is {'within' if t <= hi_t else 'beyond'} what the tyres make plausible.")
-                      if t is not None else "No coefficient of the study makes the faithful PI raise the duty on "
-                                            "both wheels of run 7."]
+        lines += [
+            "",
+            (
+                f"The faithful PI raises the duty on both wheels of run 7 from **Crr = {t:g}**; the sourced "
+                f"ranges are {lo_t:g}-{hi_t:g} for the tyres and {lo_b:g}-{hi_b:g} for the balls, so this "
+                f"is {'within' if t <= hi_t else 'beyond'} what the tyres make plausible."
+            )
+            if t is not None
+            else "No coefficient of the study makes the faithful PI raise the duty on "
+            "both wheels of run 7.",
+        ]
     return lines

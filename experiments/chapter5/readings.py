@@ -46,8 +46,9 @@ class ReadingScore:
         return all(n == self.checks for n in self.passed.values())
 
 
-def samples_as_read(pub: np.ndarray, t_command_s: float, reading: str) -> tuple[np.ndarray, np.ndarray, float,
-                                                                                float | None]:
+def samples_as_read(
+    pub: np.ndarray, t_command_s: float, reading: str
+) -> tuple[np.ndarray, np.ndarray, float, float | None]:
     """``(t_s, rpm, t0_s, initial_value)`` of the published ``(k, 2)`` samples under ``reading``."""
     t, rpm = pub[:, 0], np.abs(pub[:, 1])
     if reading == "command":
@@ -60,13 +61,22 @@ def samples_as_read(pub: np.ndarray, t_command_s: float, reading: str) -> tuple[
     raise ValueError(f"reading: {reading!r} must be one of {', '.join(READINGS)}")
 
 
-def timings(pub: np.ndarray, t_command_s: float, reference_rpm: float, wheel: str, reading: str) -> dict:
+def timings(
+    pub: np.ndarray, t_command_s: float, reference_rpm: float, wheel: str, reading: str
+) -> dict:
     """The timing checks (:func:`.criteria.judge`) of one wheel's samples under ``reading``."""
     if len(pub) < 2:
         return {}
     t, rpm, t0, initial = samples_as_read(pub, t_command_s, reading)
-    info = step_info(t, rpm, abs(reference_rpm), t0_s=t0, initial_value=initial,
-                     settling_band=settling_band_rpm(reference_rpm), oscillation_window_s=TRANSIENT_WINDOW_S)
+    info = step_info(
+        t,
+        rpm,
+        abs(reference_rpm),
+        t0_s=t0,
+        initial_value=initial,
+        settling_band=settling_band_rpm(reference_rpm),
+        oscillation_window_s=TRANSIENT_WINDOW_S,
+    )
     checks = judge(wheel, reference_rpm, info.as_dict(1.0))
     return {k: v for k, v in checks.items() if k in TIMINGS}
 
@@ -80,7 +90,9 @@ def score(runs: list[dict], reading: str) -> ReadingScore:
         raw = r["raw"]
         for name, wheel in r["wheels"].items():
             index = 0 if name == "left" else 1
-            found = timings(raw["published"][index], raw["t_command_s"], wheel["reference_rpm"], name, reading)
+            found = timings(
+                raw["published"][index], raw["t_command_s"], wheel["reference_rpm"], name, reading
+            )
             checks += 1
             for m in TIMINGS:
                 c = found.get(m)
@@ -89,7 +101,10 @@ def score(runs: list[dict], reading: str) -> ReadingScore:
                 passed[m] += c["verdict"] == "pass"
                 if c["twin"] is not None and math.isfinite(c["twin"]):
                     values[m][wheel["step_class"]].append(c["twin"])
-    median = {m: {k: (float(np.median(v)) if v else None) for k, v in cls.items()} for m, cls in values.items()}
+    median = {
+        m: {k: (float(np.median(v)) if v else None) for k, v in cls.items()}
+        for m, cls in values.items()
+    }
     return ReadingScore(reading, passed, checks, median)
 
 
@@ -104,27 +119,44 @@ def readings(results: dict) -> list[dict]:
 
 def markdown(rows: list[dict]) -> list[str]:
     """The report's section: one row per reading, the thesis' values beside the medians."""
+
     def cell(m: str, row: dict) -> str:
         med = row["median_s"][m]
         text = "/".join("—" if med[k] is None else f"{med[k]:.2f}" for k in ("small", "large"))
         return f"{row['passed'][m]}/{row['checks']} ({text})"
 
-    lines = ["| reading | delay s | rise s | peak s | settling s | reproduces |", "|---|---|---|---|---|---|",
-             "| thesis (≤ 75 / > 75 RPM) | 0.2/0.5 | 0.5/1.0 | 0.6/1.1 | ≤ 1.3 | |"]
+    lines = [
+        "| reading | delay s | rise s | peak s | settling s | reproduces |",
+        "|---|---|---|---|---|---|",
+        "| thesis (≤ 75 / > 75 RPM) | 0.2/0.5 | 0.5/1.0 | 0.6/1.1 | ≤ 1.3 | |",
+    ]
     for row in rows:
-        lines.append(f"| {row['reading']} | " + " | ".join(cell(m, row) for m in TIMINGS)
-                     + f" | {'yes' if row['reproduces'] else 'no'} |")
-    lines += ["", "Each cell: checks passed of the driven wheels, then the median twin value for steps of at most "
-                  "75 RPM / above. A reading is a hypothesis about how §5.1.3 was timed, not the score.", ""]
+        lines.append(
+            f"| {row['reading']} | "
+            + " | ".join(cell(m, row) for m in TIMINGS)
+            + f" | {'yes' if row['reproduces'] else 'no'} |"
+        )
+    lines += [
+        "",
+        "Each cell: checks passed of the driven wheels, then the median twin value for steps of at most "
+        "75 RPM / above. A reading is a hypothesis about how §5.1.3 was timed, not the score.",
+        "",
+    ]
     found = [row["reading"] for row in rows if row["reproduces"]]
     ordered = [row["reading"] for row in rows if slower_for_larger_steps(row)]
-    lines.append(f"Reproduces every timing: {', '.join(found) or 'no reading'}. Larger steps slower in delay, rise "
-                 f"and peak, as §5.1.3 says (the ramp's order): {', '.join(ordered) or 'no reading'}.")
+    lines.append(
+        f"Reproduces every timing: {', '.join(found) or 'no reading'}. Larger steps slower in delay, rise "
+        f"and peak, as §5.1.3 says (the ramp's order): {', '.join(ordered) or 'no reading'}."
+    )
     return lines
 
 
 def slower_for_larger_steps(row: dict) -> bool:
     """Whether the reading's medians order delay, rise and peak as §5.1.3 does: above 75 RPM slower."""
     med = row["median_s"]
-    return all(med[m]["small"] is not None and med[m]["large"] is not None and med[m]["large"] > med[m]["small"]
-               for m in ("delay_s", "rise_s", "peak_s"))
+    return all(
+        med[m]["small"] is not None
+        and med[m]["large"] is not None
+        and med[m]["large"] > med[m]["small"]
+        for m in ("delay_s", "rise_s", "peak_s")
+    )

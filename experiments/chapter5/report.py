@@ -3,16 +3,29 @@
 from __future__ import annotations
 
 
-from amr_twin.experiments.chapter5.findings import (ATTAINABLE_COMMAND, ATTAINABLE_SECTION, TIMINGS, VALIDATION_DOC,
-                                                    VALIDATION_SECTION, lines)
+from amr_twin.experiments.chapter5.findings import (
+    ATTAINABLE_COMMAND,
+    ATTAINABLE_SECTION,
+    TIMINGS,
+    VALIDATION_DOC,
+    VALIDATION_SECTION,
+    lines,
+)
 from amr_twin.experiments.chapter5.payload import markdown as payload_markdown
 from amr_twin.experiments.documents.texts import attainable_table
 from amr_twin.experiments.chapter5.readings import markdown as readings_markdown
 from amr_twin.experiments.chapter5.spread_report import markdown as spread_markdown
 from amr_twin.experiments.chapter5.firmware_comparison import markdown as comparison_markdown
 
-COLUMNS = (("delay_s", "delay s"), ("rise_s", "rise s"), ("peak_s", "peak s"), ("settling_s", "settling s"),
-           ("overshoot", "overshoot RPM"), ("steady_error", "steady err RPM"), ("oscillation", "oscillation RPM"))
+COLUMNS = (
+    ("delay_s", "delay s"),
+    ("rise_s", "rise s"),
+    ("peak_s", "peak s"),
+    ("settling_s", "settling s"),
+    ("overshoot", "overshoot RPM"),
+    ("steady_error", "steady err RPM"),
+    ("oscillation", "oscillation RPM"),
+)
 
 
 def _num(value, digits: int = 2) -> str:
@@ -30,15 +43,21 @@ def _cell(metrics: dict | None, checks: dict, key: str) -> str:
 def _table(data: dict, source: str, checks_key: str) -> list[str]:
     """One row per run and wheel; the published table lists the samples each metric rests on."""
     published = source == "published"
-    head = ("| run | wheel | ref RPM | step | " + ("samples | " if published else "") + " | ".join(h for _, h in COLUMNS)
-            + " |")
+    head = (
+        "| run | wheel | ref RPM | step | "
+        + ("samples | " if published else "")
+        + " | ".join(h for _, h in COLUMNS)
+        + " |"
+    )
     lines = [head, "|" + "---|" * ((5 if published else 4) + len(COLUMNS))]
     for r in data["runs"]:
         for wheel, w in r["wheels"].items():
             cells = " | ".join(_cell(w[source], w[checks_key], k) for k, _ in COLUMNS)
             step = "≤ 75" if w["step_class"] == "small" else "> 75"
             samples = f"{w['samples']} | " if published else ""
-            lines.append(f"| {r['run']} | {wheel} | {w['reference_rpm']:.2f} | {step} | {samples}{cells} |")
+            lines.append(
+                f"| {r['run']} | {wheel} | {w['reference_rpm']:.2f} | {step} | {samples}{cells} |"
+            )
     return lines
 
 
@@ -46,8 +65,10 @@ def _band_table(data: dict) -> list[str]:
     lines = ["| metric | step | wheel | thesis | band | source |", "|---|---|---|---|---|---|"]
     for b in data["bands"]:
         step = {"small": "≤ 75 RPM", "large": "> 75 RPM", "any": "any"}[b["step_class"]]
-        lines.append(f"| {b['metric']} | {step} | {b['wheel']} | {b['thesis']} | {b['low']} – {b['high']} | "
-                     f"{b.get('source', '')} |")
+        lines.append(
+            f"| {b['metric']} | {step} | {b['wheel']} | {b['thesis']} | {b['low']} – {b['high']} | "
+            f"{b.get('source', '')} |"
+        )
     return lines
 
 
@@ -69,14 +90,18 @@ def _misses(data: dict) -> list[str]:
         for wheel, w in r["wheels"].items():
             for metric, c in w["checks"].items():
                 if c["verdict"] != "pass":
-                    lines.append(f"- run {r['run']} {wheel} wheel: {metric} = {_num(c['twin'])}, "
-                                 f"band {c['band'][0]} – {c['band'][1]} (thesis ≈ {c['thesis']})")
+                    lines.append(
+                        f"- run {r['run']} {wheel} wheel: {metric} = {_num(c['twin'])}, "
+                        f"band {c['band'][0]} – {c['band'][1]} (thesis ≈ {c['thesis']})"
+                    )
         if r["errors"]:
             lines.append(f"- run {r['run']}: command refused: {'; '.join(r['errors'])}")
     for c in data["comparisons"]:
         if c["verdict"] != "pass":
-            lines.append(f"- run {c['loaded_run']} (20 kg) {c['wheel']} wheel oscillates "
-                         f"{_num(c['loaded'])} RPM, not more than run {c['unloaded_run']} ({_num(c['unloaded'])} RPM)")
+            lines.append(
+                f"- run {c['loaded_run']} (20 kg) {c['wheel']} wheel oscillates "
+                f"{_num(c['loaded'])} RPM, not more than run {c['unloaded_run']} ({_num(c['unloaded'])} RPM)"
+            )
     return lines or ["- none"]
 
 
@@ -85,26 +110,44 @@ def _oscillation(data: dict) -> list[str]:
     v = data.get("oscillation_verdict")
     if v is None:
         return []
-    lines = [f"Named measure: **{v['measure']}**, the {v['definition']}. Judged on the published samples; "
-             "the true wheel speed is shown for reference. The analysis is in `docs/explanation/validation.md`.", "",
-             "| run | payload kg | wheel | ref RPM | published RPM | true RPM |", "|---|---|---|---|---|---|"]
+    lines = [
+        f"Named measure: **{v['measure']}**, the {v['definition']}. Judged on the published samples; "
+        "the true wheel speed is shown for reference. The analysis is in `docs/explanation/validation.md`.",
+        "",
+        "| run | payload kg | wheel | ref RPM | published RPM | true RPM |",
+        "|---|---|---|---|---|---|",
+    ]
     for r in data["runs"]:
         for wheel, w in r["wheels"].items():
             pub = (w["published"] or {}).get("oscillation")
-            lines.append(f"| {r['run']} | {r['payload_kg']:g} | {wheel} | {w['reference_rpm']:.2f} | {_num(pub)} | "
-                         f"{_num(w['true'].get('oscillation'))} |")
-    lines += ["", "| 20 kg run | unloaded run | wheel | published 20 kg / unloaded | verdict | "
-                  "true 20 kg / unloaded | true verdict |", "|---|---|---|---|---|---|---|"]
+            lines.append(
+                f"| {r['run']} | {r['payload_kg']:g} | {wheel} | {w['reference_rpm']:.2f} | {_num(pub)} | "
+                f"{_num(w['true'].get('oscillation'))} |"
+            )
+    lines += [
+        "",
+        "| 20 kg run | unloaded run | wheel | published 20 kg / unloaded | verdict | "
+        "true 20 kg / unloaded | true verdict |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for c in data["comparisons"]:
-        lines.append(f"| {c['loaded_run']} | {c['unloaded_run']} | {c['wheel']} | {_num(c['loaded'])} / "
-                     f"{_num(c['unloaded'])} | {c['verdict']} | {_num(c.get('true_loaded'))} / "
-                     f"{_num(c.get('true_unloaded'))} | {c.get('true_verdict', '—')} |")
+        lines.append(
+            f"| {c['loaded_run']} | {c['unloaded_run']} | {c['wheel']} | {_num(c['loaded'])} / "
+            f"{_num(c['unloaded'])} | {c['verdict']} | {_num(c.get('true_loaded'))} / "
+            f"{_num(c.get('true_unloaded'))} | {c.get('true_verdict', '—')} |"
+        )
     if not v["comparisons"]:
-        return lines + ["", "**Verdict:** not judged (the runs do not include a 20 kg run and its unloaded twin)."]
+        return lines + [
+            "",
+            "**Verdict:** not judged (the runs do not include a 20 kg run and its unloaded twin).",
+        ]
     holds = "holds" if v["verdict"] == "pass" else "does not hold"
-    lines += ["", f"**Verdict: \"the 20 kg runs oscillate more\" {holds}** — the 20 kg wheel oscillates more in "
-                  f"{v['published_passed']} of {v['comparisons']} comparisons on the published samples "
-                  f"({v['true_passed']} of {v['comparisons']} on the true speed); the claim needs all of them."]
+    lines += [
+        "",
+        f'**Verdict: "the 20 kg runs oscillate more" {holds}** — the 20 kg wheel oscillates more in '
+        f"{v['published_passed']} of {v['comparisons']} comparisons on the published samples "
+        f"({v['true_passed']} of {v['comparisons']} on the true speed); the claim needs all of them.",
+    ]
     return lines
 
 
@@ -113,21 +156,33 @@ def _findings(data: dict) -> list[str]:
     found = data.get("findings")
     if found is None:
         return []
-    return ["## What the twin reproduces (read this first)", "", *[f"- {line}" for line in lines(found)], "",
-            f"Why, and how the bound is derived: [{VALIDATION_DOC}]({VALIDATION_DOC}) (the path is relative "
-            f"to the amr-twin repository's root), section \"{VALIDATION_SECTION}\". Whether any plant inside the "
-            f"sourced ranges meets the findings not reproduced: `{ATTAINABLE_COMMAND}`, the same page, section "
-            f"\"{ATTAINABLE_SECTION}\".", ""]
+    return [
+        "## What the twin reproduces (read this first)",
+        "",
+        *[f"- {line}" for line in lines(found)],
+        "",
+        f"Why, and how the bound is derived: [{VALIDATION_DOC}]({VALIDATION_DOC}) (the path is relative "
+        f'to the amr-twin repository\'s root), section "{VALIDATION_SECTION}". Whether any plant inside the '
+        f"sourced ranges meets the findings not reproduced: `{ATTAINABLE_COMMAND}`, the same page, section "
+        f'"{ATTAINABLE_SECTION}".',
+        "",
+    ]
 
 
 def _attainable(data: dict) -> list[str]:
     """The committed study of plants inside the sourced ranges, when it was drawn around this plant."""
     study = data.get("attainable")
     if study is None:
-        return [f"The committed study (`docs/chapter5_attainable.json`) was drawn around another plant, firmware or run "
-                f"set than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for this plant."]
-    return [f"Plants drawn uniformly inside the sourced ranges around this plant (`{ATTAINABLE_COMMAND}`, "
-            f"{VALIDATION_DOC}): per finding, in how many it holds.", "", *attainable_table(study).splitlines()]
+        return [
+            f"The committed study (`docs/chapter5_attainable.json`) was drawn around another plant, firmware or run "
+            f"set than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for this plant."
+        ]
+    return [
+        f"Plants drawn uniformly inside the sourced ranges around this plant (`{ATTAINABLE_COMMAND}`, "
+        f"{VALIDATION_DOC}): per finding, in how many it holds.",
+        "",
+        *attainable_table(study).splitlines(),
+    ]
 
 
 def _bound_table(data: dict) -> list[str]:
@@ -139,15 +194,25 @@ def _bound_table(data: dict) -> list[str]:
     for b in bounds:
         rows.setdefault((b["run"], b["wheel"], b["reference_rpm"]), {})[b["metric"]] = b
     head = " | ".join(f"{m} ≥ / band ≤" for m in TIMINGS)
-    lines_ = ["## Listing 4.12's bound on the published timings", "",
-              "One speed per wheel revolution, each the mean over its revolution: no plant whose samples "
-              "stay at or below the reference while they climb can bring a published timing below its "
-              "bound (T = 60/|rpm|: delay 0.5 T, rise 0.8 T, peak T, settling T less the band's share). "
-              "✗ marks a check out of reach of any such plant.", "",
-              f"| run | wheel | ref RPM | T s | {head} |", "|" + "---|" * (4 + len(TIMINGS))]
+    lines_ = [
+        "## Listing 4.12's bound on the published timings",
+        "",
+        "One speed per wheel revolution, each the mean over its revolution: no plant whose samples "
+        "stay at or below the reference while they climb can bring a published timing below its "
+        "bound (T = 60/|rpm|: delay 0.5 T, rise 0.8 T, peak T, settling T less the band's share). "
+        "✗ marks a check out of reach of any such plant.",
+        "",
+        f"| run | wheel | ref RPM | T s | {head} |",
+        "|" + "---|" * (4 + len(TIMINGS)),
+    ]
     for (run, wheel, ref), by in rows.items():
-        cells = " | ".join("—" if m not in by else f"{by[m]['bound_s']:.2f} / {by[m]['band_high_s']:g}"
-                           + ("" if by[m]["attainable"] else " ✗") for m in TIMINGS)
+        cells = " | ".join(
+            "—"
+            if m not in by
+            else f"{by[m]['bound_s']:.2f} / {by[m]['band_high_s']:g}"
+            + ("" if by[m]["attainable"] else " ✗")
+            for m in TIMINGS
+        )
         lines_.append(f"| {run} | {wheel} | {ref:.2f} | {60.0 / abs(ref):.2f} | {cells} |")
     return lines_ + [""]
 
@@ -156,39 +221,86 @@ def markdown(data: dict) -> str:
     """The whole ``report.md``."""
     s = data["summary"]
     study = data.get("study_runs", 0)
-    runs = (f"{len(data['runs'])} runs ({data['sim_s']:.0f} simulated s)"
-            + (f" and {study} rolling-resistance study runs ({data['study_sim_s']:.0f} s), "
-               f"{len(data['runs']) + study} runs and {data['sim_s'] + data['study_sim_s']:.0f} simulated s in all,"
-               if study else ""))
+    runs = f"{len(data['runs'])} runs ({data['sim_s']:.0f} simulated s)" + (
+        f" and {study} rolling-resistance study runs ({data['study_sim_s']:.0f} s), "
+        f"{len(data['runs']) + study} runs and {data['sim_s'] + data['study_sim_s']:.0f} simulated s in all,"
+        if study
+        else ""
+    )
     out = [
-        "# Chapter 5 step experiments: twin against thesis", "",
+        "# Chapter 5 step experiments: twin against thesis",
+        "",
         *_findings(data),
-        f"## {ATTAINABLE_SECTION}", "", *_attainable(data), "",
+        f"## {ATTAINABLE_SECTION}",
+        "",
+        *_attainable(data),
+        "",
         f"Firmware: **{data['firmware']}**; {runs} in {data['wall_s']:.1f} s wall time with {data['jobs']} job(s). "
         f"All checks on the published samples, attainable or not: {s['passed']} / {s['checks']}; the true "
-        f"wheel speed against the same bands: {s['true_passed']} / {s['true_checks']}.", "",
+        f"wheel speed against the same bands: {s['true_passed']} / {s['true_checks']}.",
+        "",
         f"Judged on the {data['judged_on']}; settling band: {data['settling_band']}. Definitions: "
         f"{data['definitions']}; oscillation = {data['oscillation']} after the command (0 for a monotone "
         "approach). Signed values (reference, final value, steady error) carry the reference's sign: a wheel "
-        "commanded backward has a negative reference. ✓ inside the band, ✗ outside.", "",
-        "## Bands (§5.1.3, §5.1.4)", "", *_band_table(data), "",
-        "## Published samples (wheel0_Vel / wheel1_Vel), judged", "",
-        f"Passed by metric: {passed_by_metric(data, 'checks')}.", "", *_table(data, "published", "checks"), "",
+        "commanded backward has a negative reference. ✓ inside the band, ✗ outside.",
+        "",
+        "## Bands (§5.1.3, §5.1.4)",
+        "",
+        *_band_table(data),
+        "",
+        "## Published samples (wheel0_Vel / wheel1_Vel), judged",
+        "",
+        f"Passed by metric: {passed_by_metric(data, 'checks')}.",
+        "",
+        *_table(data, "published", "checks"),
+        "",
         *_bound_table(data),
-        *(["## How the thesis may have timed its plots: readings of the same samples", "",
-            *readings_markdown(data["readings"]), ""] if "readings" in data else []),
-        "## True wheel speed (100 Hz), against the same bands", "",
+        *(
+            [
+                "## How the thesis may have timed its plots: readings of the same samples",
+                "",
+                *readings_markdown(data["readings"]),
+                "",
+            ]
+            if "readings" in data
+            else []
+        ),
+        "## True wheel speed (100 Hz), against the same bands",
+        "",
         f"Not visible on the thesis' topics; shown because its timings are not limited by one sample per "
-        f"revolution. Passed by metric: {passed_by_metric(data, 'true_checks')}.", "",
-        *_table(data, "true", "true_checks"), "",
-        "## The PI's duty with 20 kg (§5.1.4)", "", *payload_markdown(data), "",
-        "## Oscillation during the transient: 20 kg against unloaded (§5.1.4)", "", *_oscillation(data), "",
-        "## Bands missed", "", *_misses(data), "",
-        *(["## Firmware against firmware, sample by sample", "", *comparison_markdown(data["firmware_comparison"]), ""]
-          if "firmware_comparison" in data else []),
-        *(["## Spread over the parameters' uncertainty", "", *spread_markdown(data["spread"]), ""]
-          if "spread" in data else []),
-        "## Figures", "",
+        f"revolution. Passed by metric: {passed_by_metric(data, 'true_checks')}.",
+        "",
+        *_table(data, "true", "true_checks"),
+        "",
+        "## The PI's duty with 20 kg (§5.1.4)",
+        "",
+        *payload_markdown(data),
+        "",
+        "## Oscillation during the transient: 20 kg against unloaded (§5.1.4)",
+        "",
+        *_oscillation(data),
+        "",
+        "## Bands missed",
+        "",
+        *_misses(data),
+        "",
+        *(
+            [
+                "## Firmware against firmware, sample by sample",
+                "",
+                *comparison_markdown(data["firmware_comparison"]),
+                "",
+            ]
+            if "firmware_comparison" in data
+            else []
+        ),
+        *(
+            ["## Spread over the parameters' uncertainty", "", *spread_markdown(data["spread"]), ""]
+            if "spread" in data
+            else []
+        ),
+        "## Figures",
+        "",
         *[f"![run {r['run']}: {r['title']}](run{r['run']}.png)\n" for r in data["runs"]],
     ]
     return "\n".join(out) + "\n"

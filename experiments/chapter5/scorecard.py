@@ -36,15 +36,28 @@ def scorecard(data: dict) -> dict:
             for kind, prefix in (("checks", ""), ("true_checks", "true.")):
                 for metric, c in w[kind].items():
                     checks[f"run{r['run']}.{wheel}.{prefix}{metric}"] = {
-                        "twin": c["twin"], "band": c["band"], "thesis": c["thesis"], "unit": _unit(metric)}
-    overshoot = {f"run{r['run']}.{wheel}": (w["published"] or {}).get("overshoot")
-                 for r in data["runs"] for wheel, w in r["wheels"].items()}
+                        "twin": c["twin"],
+                        "band": c["band"],
+                        "thesis": c["thesis"],
+                        "unit": _unit(metric),
+                    }
+    overshoot = {
+        f"run{r['run']}.{wheel}": (w["published"] or {}).get("overshoot")
+        for r in data["runs"]
+        for wheel, w in r["wheels"].items()
+    }
     s = data["summary"]
-    return {"firmware": data["firmware"], "passed": s["passed"], "checks_total": s["checks"],
-            "true_passed": s["true_passed"], "true_checks_total": s["true_checks"],
-            "checks": checks, "published_overshoot_rpm": overshoot,
-            "oscillation_published_passed": data["oscillation_verdict"]["published_passed"],
-            "duty_raised_with_20kg": [c["raised"] for c in data.get("payload_duty", [])]}
+    return {
+        "firmware": data["firmware"],
+        "passed": s["passed"],
+        "checks_total": s["checks"],
+        "true_passed": s["true_passed"],
+        "true_checks_total": s["true_checks"],
+        "checks": checks,
+        "published_overshoot_rpm": overshoot,
+        "oscillation_published_passed": data["oscillation_verdict"]["published_passed"],
+        "duty_raised_with_20kg": [c["raised"] for c in data.get("payload_duty", [])],
+    }
 
 
 def miss(value, band) -> float:
@@ -65,8 +78,10 @@ def worse(committed: dict, new: dict) -> list[str]:
             continue
         before, after = miss(old["twin"], old["band"]), miss(now["twin"], now["band"])
         if after > before + TOLERANCE[old["unit"]]:
-            out.append(f"{key}: {now['twin']} misses its band {now['band']} by {after:.3g} {old['unit']} "
-                       f"(committed {old['twin']}, {before:.3g})")
+            out.append(
+                f"{key}: {now['twin']} misses its band {now['band']} by {after:.3g} {old['unit']} "
+                f"(committed {old['twin']}, {before:.3g})"
+            )
     for key, what in (("passed", "checks passed"), ("true_passed", "true-speed checks passed")):
         if new.get(key, 0) < committed.get(key, 0):
             out.append(f"{what}: {new[key]} < {committed[key]} committed")

@@ -39,11 +39,13 @@ class Chapter5Spec:
         try:
             numbers = [int(v) for v in self.runs.split(",")]
         except ValueError:
-            raise ValueError(f"--runs {self.runs!r}: expected run numbers 1..8 separated by "
-                             "commas") from None
+            raise ValueError(
+                f"--runs {self.runs!r}: expected run numbers 1..8 separated by commas"
+            ) from None
         if not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
-            raise ValueError(f"--runs {self.runs!r}: run numbers must lie in "
-                             f"1..{len(chapter5.RUNS)}")
+            raise ValueError(
+                f"--runs {self.runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}"
+            )
         if len(set(numbers)) != len(numbers):  # run once, silently
             raise ValueError(f"--runs {self.runs!r}: a run is named twice")
         return numbers
@@ -66,36 +68,64 @@ class Chapter5Spec:
     def pass_s(self) -> float:
         """Simulated seconds of one pass over the runs."""
         numbers = self.numbers()
-        return sum(self.duration_s or r.duration_s for r in chapter5.RUNS
-                   if numbers is None or r.number in numbers)
+        return sum(
+            self.duration_s or r.duration_s
+            for r in chapter5.RUNS
+            if numbers is None or r.number in numbers
+        )
 
     def passes(self, samples: int = 0) -> int:
         """Passes over the runs: the runs, ``samples`` parameter draws, the reference firmware's
         two with avr, and the rolling-resistance study with every run at its own length (at most a
         pass)."""
-        return 1 + samples + (2 if self.firmware.startswith("avr") else 0) \
+        return (
+            1
+            + samples
+            + (2 if self.firmware.startswith("avr") else 0)
             + (1 if self.runs is None and self.duration_s is None else 0)
+        )
 
 
-def run(spec: Chapter5Spec, cfg: TwinConfig, out_dir: Path, *, jobs: int = 1,
-        progress: bool = False, record_dir: Path | None = None, mcap_dir: Path | None = None,
-        draws=None) -> Chapter5Metrics:
+def run(
+    spec: Chapter5Spec,
+    cfg: TwinConfig,
+    out_dir: Path,
+    *,
+    jobs: int = 1,
+    progress: bool = False,
+    record_dir: Path | None = None,
+    mcap_dir: Path | None = None,
+    draws=None,
+) -> Chapter5Metrics:
     """Validate ``spec``, simulate its runs (``jobs`` processes; with ``draws``, an
     :class:`amr_twin.calibration.uncertainty.Draws`, once more per draw), judge them and write
     ``out_dir``'s report with the recordings, all or nothing; the metrics."""
     numbers = spec.validate()
     reference = "faithful" if spec.firmware.startswith("avr") else None
     with all_or_nothing():
-        results = chapter5.run(cfg, jobs=jobs, firmware=spec.firmware, runs=numbers,
-                               duration_s=spec.duration_s, progress=progress,
-                               record_dir=record_dir, mcap_dir=mcap_dir,
-                               reference_firmware=reference)
+        results = chapter5.run(
+            cfg,
+            jobs=jobs,
+            firmware=spec.firmware,
+            runs=numbers,
+            duration_s=spec.duration_s,
+            progress=progress,
+            record_dir=record_dir,
+            mcap_dir=mcap_dir,
+            reference_firmware=reference,
+        )
         if numbers is None and spec.duration_s is None and spec.firmware == "faithful":
             results["attainable"] = attainable.committed(cfg)  # the runs the study judged
         if draws is not None:
-            results["spread"] = spread.run(cfg, draws, jobs=jobs, firmware=spec.firmware,
-                                           runs=numbers, duration_s=spec.duration_s,
-                                           progress=progress)
+            results["spread"] = spread.run(
+                cfg,
+                draws,
+                jobs=jobs,
+                firmware=spec.firmware,
+                runs=numbers,
+                duration_s=spec.duration_s,
+                progress=progress,
+            )
             results["spread_summary"] = spread.summarise(results, results["spread"])
         chapter5.plot(results, out_dir)
         return chapter5.report(results, out_dir)
@@ -121,8 +151,7 @@ class AttainableSpec:
             raise ValueError(f"--seed {self.seed}: must be >= 0")
 
 
-def run_attainable(spec: AttainableSpec, cfg: TwinConfig, *, jobs: int = 1,
-                   progress=None) -> dict:
+def run_attainable(spec: AttainableSpec, cfg: TwinConfig, *, jobs: int = 1, progress=None) -> dict:
     """Validate ``spec``, draw its plants and run the study (``progress(i, n)`` after each
     draw); the summary of :func:`amr_twin.experiments.chapter5.attainable.summary`."""
     spec.validate()
@@ -130,9 +159,23 @@ def run_attainable(spec: AttainableSpec, cfg: TwinConfig, *, jobs: int = 1,
     return attainable.summary(draws)
 
 
-EXPERIMENTS.register("chapter5", Experiment(
-    "chapter5", Chapter5Spec, run, Chapter5Metrics,
-    "thesis chapter 5's step experiments judged against its bands"))
-EXPERIMENTS.register("chapter5-attainable", Experiment(
-    "chapter5-attainable", AttainableSpec, run_attainable, dict,
-    "which chapter 5 findings a plant inside the sourced ranges meets"))
+EXPERIMENTS.register(
+    "chapter5",
+    Experiment(
+        "chapter5",
+        Chapter5Spec,
+        run,
+        Chapter5Metrics,
+        "thesis chapter 5's step experiments judged against its bands",
+    ),
+)
+EXPERIMENTS.register(
+    "chapter5-attainable",
+    Experiment(
+        "chapter5-attainable",
+        AttainableSpec,
+        run_attainable,
+        dict,
+        "which chapter 5 findings a plant inside the sourced ranges meets",
+    ),
+)

@@ -22,14 +22,26 @@ import numpy as np
 from amr_twin.calibration.uncertainty import LEVEL, interval, noise_level, rank_correlations
 from amr_twin.experiments.chapter5 import payload
 from amr_twin.experiments.chapter5.experiment import RUNS, _Job, analyse, simulate
-from amr_twin.experiments.chapter5.criteria import BANDS, compare_oscillation, count_checks, step_class
+from amr_twin.experiments.chapter5.criteria import (
+    BANDS,
+    compare_oscillation,
+    count_checks,
+    step_class,
+)
 
 TOP = 3  # parameters named per banded metric
 METRICS = ("delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error", "oscillation")
 
 
-def run(cfg, draws, jobs: int = 1, firmware: str = "faithful", runs: list[int] | None = None,
-        duration_s: float | None = None, progress: bool = True) -> dict:
+def run(
+    cfg,
+    draws,
+    jobs: int = 1,
+    firmware: str = "faithful",
+    runs: list[int] | None = None,
+    duration_s: float | None = None,
+    progress: bool = True,
+) -> dict:
     """Simulate the runs once per draw; return the per-draw measurements and the speed bands.
 
     Returns ``{"draws": Draws, "samples": {i: [analysed runs, no raw series]}, "duty": {i: [...]},
@@ -42,8 +54,11 @@ def run(cfg, draws, jobs: int = 1, firmware: str = "faithful", runs: list[int] |
     wall0 = time.perf_counter()
     specs = [s for s in RUNS if runs is None or s.number in runs]
     configs = [draws.config(cfg, i) for i in range(len(draws))]
-    todo = [_Job(spec, configs[i], firmware, duration_s or spec.duration_s, extra={"sample": i})
-            for i in range(len(draws)) for spec in specs]
+    todo = [
+        _Job(spec, configs[i], firmware, duration_s or spec.duration_s, extra={"sample": i})
+        for i in range(len(draws))
+        for spec in specs
+    ]
     done: dict[int, list[dict]] = {}
     traces: dict[int, dict[str, list]] = {}
     for job, raw in run_all(simulate, todo, jobs, f"chapter 5 runs x {len(draws)} draws", progress):
@@ -60,14 +75,29 @@ def run(cfg, draws, jobs: int = 1, firmware: str = "faithful", runs: list[int] |
     for number, t in traces.items():
         stack = np.array(t["true"])  # (draws, n, 2)
         q = np.quantile(stack, [(1 - LEVEL) / 2, 0.5, (1 + LEVEL) / 2], axis=0)
-        bands[number] = {"t_s": t["t_s"], **{w: {"low": q[0][:, i], "median": q[1][:, i], "high": q[2][:, i]}
-                                             for i, w in enumerate(("left", "right"))}}
-    return {"draws": draws, "samples": samples, "duty": duty, "bands": bands, "wall_s": time.perf_counter() - wall0}
+        bands[number] = {
+            "t_s": t["t_s"],
+            **{
+                w: {"low": q[0][:, i], "median": q[1][:, i], "high": q[2][:, i]}
+                for i, w in enumerate(("left", "right"))
+            },
+        }
+    return {
+        "draws": draws,
+        "samples": samples,
+        "duty": duty,
+        "bands": bands,
+        "wall_s": time.perf_counter() - wall0,
+    }
 
 
 def _thesis(metric: str, wheel: str, reference: float):
     for b in BANDS:
-        if b.metric == metric and b.step_class in ("any", step_class(reference)) and b.wheel in ("any", wheel):
+        if (
+            b.metric == metric
+            and b.step_class in ("any", step_class(reference))
+            and b.wheel in ("any", wheel)
+        ):
             return b
     return None
 
@@ -85,43 +115,99 @@ def summarise(nominal: dict, spread: dict) -> dict:
                 for key in METRICS:
                     values = []
                     for i in order:
-                        other = next(o for o in samples[i] if o["run"] == r["run"])["wheels"].get(wheel, {})
+                        other = next(o for o in samples[i] if o["run"] == r["run"])["wheels"].get(
+                            wheel, {}
+                        )
                         values.append((other.get(source) or {}).get(key))
-                    band = _thesis(key, wheel, w["reference_rpm"]) if source == "published" else None
-                    entry = {"run": r["run"], "wheel": wheel, "source": source, "metric": key,
-                             "nominal": (w[source] or {}).get(key), **interval(values)}
+                    band = (
+                        _thesis(key, wheel, w["reference_rpm"]) if source == "published" else None
+                    )
+                    entry = {
+                        "run": r["run"],
+                        "wheel": wheel,
+                        "source": source,
+                        "metric": key,
+                        "nominal": (w[source] or {}).get(key),
+                        **interval(values),
+                    }
                     if band is not None:
                         inside = [v is not None and band.low <= v <= band.high for v in values]
                         rho = rank_correlations(x, values)
-                        ranked = [j for j in np.argsort(-np.nan_to_num(np.abs(rho))) if np.isfinite(rho[j])]
-                        entry.update(thesis=band.thesis, band=[band.low, band.high], in_band=int(sum(inside)),
-                                     drivers=[{"parameter": draws.names[j], "rho": round(float(rho[j]), 3),
-                                               "notable": bool(abs(rho[j]) > limit)} for j in ranked[:TOP]])
+                        ranked = [
+                            j
+                            for j in np.argsort(-np.nan_to_num(np.abs(rho)))
+                            if np.isfinite(rho[j])
+                        ]
+                        entry.update(
+                            thesis=band.thesis,
+                            band=[band.low, band.high],
+                            in_band=int(sum(inside)),
+                            drivers=[
+                                {
+                                    "parameter": draws.names[j],
+                                    "rho": round(float(rho[j]), 3),
+                                    "notable": bool(abs(rho[j]) > limit),
+                                }
+                                for j in ranked[:TOP]
+                            ],
+                        )
                     metrics.append(entry)
     oscillation = [compare_oscillation(samples[i]) for i in order]
     keys = ("draw", "checks", "passed", "true_checks", "true_passed")
-    draw_checks = [dict(zip(keys, (i, *count_checks(samples[i], comps)))) for i, comps in zip(order, oscillation)]
+    draw_checks = [
+        dict(zip(keys, (i, *count_checks(samples[i], comps))))
+        for i, comps in zip(order, oscillation)
+    ]
     pairs = {}
     for comps in oscillation:
         for c in comps:
-            p = pairs.setdefault((c["loaded_run"], c["unloaded_run"], c["wheel"]), {"published": 0, "true": 0})
+            p = pairs.setdefault(
+                (c["loaded_run"], c["unloaded_run"], c["wheel"]), {"published": 0, "true": 0}
+            )
             p["published"] += c["verdict"] == "pass"
             p["true"] += c["true_verdict"] == "pass"
     raised = {}
     for i in order:
         for d in spread["duty"][i]:
             raised[(d["loaded_run"], d["unloaded_run"], d["wheel"])] = raised.get(
-                (d["loaded_run"], d["unloaded_run"], d["wheel"]), 0) + bool(d["raised"])
-    return {"samples": len(order), "wall_s": round(spread["wall_s"], 3), "seed": draws.seed, "sampler": draws.sampler, "level": LEVEL,
-            "parameters": list(draws.names), "clipped": draws.clipped, "noise_level_rho": limit,
-            "metrics": metrics, "draw_checks": draw_checks,
-            "checks_passed": {source: interval([d[key] for d in draw_checks], discrete=True)
-                              for source, key in (("published", "passed"), ("true", "true_passed"))},
-            "oscillation_more": [{"loaded_run": a, "unloaded_run": b, "wheel": w, "draws_published": v["published"],
-                                  "draws_true": v["true"]} for (a, b, w), v in pairs.items()],
-            "oscillation_all_hold": sum(all(c["verdict"] == "pass" for c in comps) and bool(comps)
-                                        for comps in oscillation),
-            "duty_raised": [{"loaded_run": a, "unloaded_run": b, "wheel": w, "draws": v}
-                            for (a, b, w), v in raised.items()],
-            "tyre_timestep_halved": [{"draw": i, "run": r["run"], **r["tyre_timestep"]} for i in order
-                                     for r in samples[i] if r.get("tyre_timestep")]}
+                (d["loaded_run"], d["unloaded_run"], d["wheel"]), 0
+            ) + bool(d["raised"])
+    return {
+        "samples": len(order),
+        "wall_s": round(spread["wall_s"], 3),
+        "seed": draws.seed,
+        "sampler": draws.sampler,
+        "level": LEVEL,
+        "parameters": list(draws.names),
+        "clipped": draws.clipped,
+        "noise_level_rho": limit,
+        "metrics": metrics,
+        "draw_checks": draw_checks,
+        "checks_passed": {
+            source: interval([d[key] for d in draw_checks], discrete=True)
+            for source, key in (("published", "passed"), ("true", "true_passed"))
+        },
+        "oscillation_more": [
+            {
+                "loaded_run": a,
+                "unloaded_run": b,
+                "wheel": w,
+                "draws_published": v["published"],
+                "draws_true": v["true"],
+            }
+            for (a, b, w), v in pairs.items()
+        ],
+        "oscillation_all_hold": sum(
+            all(c["verdict"] == "pass" for c in comps) and bool(comps) for comps in oscillation
+        ),
+        "duty_raised": [
+            {"loaded_run": a, "unloaded_run": b, "wheel": w, "draws": v}
+            for (a, b, w), v in raised.items()
+        ],
+        "tyre_timestep_halved": [
+            {"draw": i, "run": r["run"], **r["tyre_timestep"]}
+            for i in order
+            for r in samples[i]
+            if r.get("tyre_timestep")
+        ],
+    }

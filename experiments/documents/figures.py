@@ -27,21 +27,37 @@ from pathlib import Path
 
 from amr_twin.experiments.chapter5.scorecard import SCORECARD
 from amr_twin.experiments.chapter5.attainable import COMMITTED_JSON
-from amr_twin.experiments.documents.texts import (SUMMARY_FUSION, attainable_table, calibration_summary, chapter5_summary,
-                                            chapter5_table, faults_summary, fusion_table, payload_summary)
+from amr_twin.experiments.documents.texts import (
+    SUMMARY_FUSION,
+    attainable_table,
+    calibration_summary,
+    chapter5_summary,
+    chapter5_table,
+    faults_summary,
+    fusion_table,
+    payload_summary,
+)
 from amr_twin.model.paths import ROOT
 
 COMMAND = "python -m amr_twin.experiments.documents.figures"
 FAULTS_JSON = ROOT / "docs" / "faults.json"
 CALIBRATION = ROOT / "models" / "amr" / "calibration.yaml"
-DOCUMENTS = (ROOT / "docs" / "reference" / "results.md", ROOT / "docs" / "explanation" / "validation.md", ROOT / "docs" / "explanation" / "fusion.md")
+DOCUMENTS = (
+    ROOT / "docs" / "reference" / "results.md",
+    ROOT / "docs" / "explanation" / "validation.md",
+    ROOT / "docs" / "explanation" / "fusion.md",
+)
 """The documents with generated blocks (``docs/faults.md`` is generated whole; the README has none: it
 links to ``docs/reference/results.md``)."""
-_BLOCK = re.compile(r"(<!-- generated: (?P<name>[\w-]+) [^>]*-->\n)(?P<body>.*?)(<!-- end: (?P=name) -->)", re.S)
+_BLOCK = re.compile(
+    r"(<!-- generated: (?P<name>[\w-]+) [^>]*-->\n)(?P<body>.*?)(<!-- end: (?P=name) -->)", re.S
+)
 
-PAYLOAD_SWEEP = {"masses": [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
-                 "positions": ["center", "front", "rear", "front-left-corner"],
-                 "commands": ["linear:0.7", "angular:-60:-1"]}
+PAYLOAD_SWEEP = {
+    "masses": [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
+    "positions": ["center", "front", "rear", "front-left-corner"],
+    "commands": ["linear:0.7", "angular:-60:-1"],
+}
 """The payload sweep of ``docs/reference/results.md`` (``amr-twin sweep payload --masses 0:60:10 --positions
 center,front,rear,front-left-corner --commands linear:0.7,angular:-60:-1``), 8 s a point."""
 PAYLOAD_JSON = ROOT / "docs" / "payload_sweep.json"
@@ -52,17 +68,35 @@ def payload_figures(results: dict, improved: dict | None) -> dict:
     from amr_twin.experiments.payload.sweep_report import summarise
 
     summary = summarise(results)
-    for position, entry in (summarise(improved).items() if improved else ()):
+    for position, entry in summarise(improved).items() if improved else ():
         summary[position]["improved"] = entry
     rows = results["rows"]
-    low = min((r for r in rows if r.get("dyn_min_wheel_n") is not None), key=lambda r: r["dyn_min_wheel_n"])
-    energy = {f"{r['mass_kg']:g}": r["energy_j_per_m"] for r in rows
-              if r["position"] == "center" and r["command"] == "linear:0.7"}
-    return {"sweep": PAYLOAD_SWEEP, "points": len(rows), "positions": summary,
-            "lowest_wheel": {k: low.get(k) for k in ("mass_kg", "position", "command", "dyn_min_wheel_n",
-                                                     "dyn_min_wheel_mechanism")},
-            "max_tilt_deg": max(r["max_tilt_deg"] for r in rows if r.get("max_tilt_deg") is not None),
-            "center_energy_j_per_m": energy}
+    low = min(
+        (r for r in rows if r.get("dyn_min_wheel_n") is not None),
+        key=lambda r: r["dyn_min_wheel_n"],
+    )
+    energy = {
+        f"{r['mass_kg']:g}": r["energy_j_per_m"]
+        for r in rows
+        if r["position"] == "center" and r["command"] == "linear:0.7"
+    }
+    return {
+        "sweep": PAYLOAD_SWEEP,
+        "points": len(rows),
+        "positions": summary,
+        "lowest_wheel": {
+            k: low.get(k)
+            for k in (
+                "mass_kg",
+                "position",
+                "command",
+                "dyn_min_wheel_n",
+                "dyn_min_wheel_mechanism",
+            )
+        },
+        "max_tilt_deg": max(r["max_tilt_deg"] for r in rows if r.get("max_tilt_deg") is not None),
+        "center_energy_j_per_m": energy,
+    }
 
 
 FUSION_ROUTES = ("warehouse_60m", "corridor")
@@ -79,14 +113,24 @@ def blocks() -> dict[str, str]:
     import yaml
 
     card = json.loads(SCORECARD.read_text())
-    return {"chapter5-summary": chapter5_summary(card), "chapter5-checks": chapter5_table(card),
-            "faults-summary": faults_summary(json.loads(FAULTS_JSON.read_text())),
-            "payload-summary": payload_summary(json.loads(PAYLOAD_JSON.read_text())),
-            **{f"fusion-{r}-summary": fusion_table(json.loads(fusion_json(r).read_text()), SUMMARY_FUSION)
-               for r in FUSION_ROUTES},
-            **{f"fusion-{r}": fusion_table(json.loads(fusion_json(r).read_text())) for r in FUSION_ROUTES},
-            "calibration-summary": calibration_summary(yaml.safe_load(CALIBRATION.read_text())),
-            "chapter5-attainable": attainable_table(json.loads(COMMITTED_JSON.read_text()))}
+    return {
+        "chapter5-summary": chapter5_summary(card),
+        "chapter5-checks": chapter5_table(card),
+        "faults-summary": faults_summary(json.loads(FAULTS_JSON.read_text())),
+        "payload-summary": payload_summary(json.loads(PAYLOAD_JSON.read_text())),
+        **{
+            f"fusion-{r}-summary": fusion_table(
+                json.loads(fusion_json(r).read_text()), SUMMARY_FUSION
+            )
+            for r in FUSION_ROUTES
+        },
+        **{
+            f"fusion-{r}": fusion_table(json.loads(fusion_json(r).read_text()))
+            for r in FUSION_ROUTES
+        },
+        "calibration-summary": calibration_summary(yaml.safe_load(CALIBRATION.read_text())),
+        "chapter5-attainable": attainable_table(json.loads(COMMITTED_JSON.read_text())),
+    }
 
 
 def expected(path: Path, texts: dict[str, str] | None = None) -> str:
@@ -99,20 +143,29 @@ def expected(path: Path, texts: dict[str, str] | None = None) -> str:
     return _BLOCK.sub(fill, Path(path).read_text())
 
 
-def payload_figures_write(cfg) -> None:  # pragma: no cover - 56 points and the re-run, about a minute
+def payload_figures_write(
+    cfg,
+) -> None:  # pragma: no cover - 56 points and the re-run, about a minute
     """Run :data:`PAYLOAD_SWEEP`, write :data:`PAYLOAD_JSON` and ``docs/img/sweep_angular.png``."""
     import shutil
     import tempfile
 
-    from amr_twin.experiments.payload import sweep as payload_sweep, sweep_report as payload_sweep_report
+    from amr_twin.experiments.payload import (
+        sweep as payload_sweep,
+        sweep_report as payload_sweep_report,
+    )
     from amr_twin.experiments.runner.executor import write_json
 
     with tempfile.TemporaryDirectory() as tmp:
         sweep = PAYLOAD_SWEEP
-        results = payload_sweep.run(cfg, Path(tmp), sweep["masses"], sweep["positions"], sweep["commands"], jobs=2)
+        results = payload_sweep.run(
+            cfg, Path(tmp), sweep["masses"], sweep["positions"], sweep["commands"], jobs=2
+        )
         improved = payload_sweep.improved_beside(cfg, Path(tmp), results, jobs=2)
         payload_sweep_report.plot(results, Path(tmp), improved)
-        shutil.copyfile(Path(tmp) / "sweep_angular_-60_-1.png", ROOT / "docs" / "img" / "sweep_angular.png")
+        shutil.copyfile(
+            Path(tmp) / "sweep_angular_-60_-1.png", ROOT / "docs" / "img" / "sweep_angular.png"
+        )
     write_json(PAYLOAD_JSON, payload_figures(results, improved))
 
 
@@ -124,7 +177,9 @@ def fusion_write(cfg) -> None:  # pragma: no cover - 20 drives, minutes
     from amr_twin.experiments.runner.executor import write_json
 
     for route in FUSION_ROUTES:
-        results = fusion_seeds.run(cfg, ROOT / "experiments" / "routes" / f"{route}.yaml", FUSION_SEEDS, jobs=2)
+        results = fusion_seeds.run(
+            cfg, ROOT / "experiments" / "routes" / f"{route}.yaml", FUSION_SEEDS, jobs=2
+        )
         with tempfile.TemporaryDirectory() as tmp:
             data = fusion_seeds.write(results, Path(tmp))
         write_json(fusion_json(route), _without_wall_times(data))
@@ -140,7 +195,11 @@ def _without_wall_times(value):
 
 
 def main() -> None:  # pragma: no cover - rewrites the committed results and documents (minutes)
-    from amr_twin.experiments.chapter5 import experiment as chapter5, attainable as chapter5_attainable, scorecard as chapter5_scorecard
+    from amr_twin.experiments.chapter5 import (
+        experiment as chapter5,
+        attainable as chapter5_attainable,
+        scorecard as chapter5_scorecard,
+    )
     from amr_twin.experiments.faults import experiment as faults, report as faults_report
     from amr_twin.experiments.runner.executor import write_text
     from amr_twin.model.config import load_config
@@ -159,8 +218,10 @@ def main() -> None:  # pragma: no cover - rewrites the committed results and doc
     texts = blocks()
     for path in DOCUMENTS:
         write_text(path, expected(path, texts))
-    print(f"rewrote docs/faults.md, tests/chapter5_scorecard.json, docs/img/chapter5_run1.png and the generated "
-          f"blocks of {', '.join(str(p.relative_to(ROOT)) for p in DOCUMENTS)}")
+    print(
+        f"rewrote docs/faults.md, tests/chapter5_scorecard.json, docs/img/chapter5_run1.png and the generated "
+        f"blocks of {', '.join(str(p.relative_to(ROOT)) for p in DOCUMENTS)}"
+    )
 
 
 def parse_args(argv: list[str]) -> None:
@@ -169,13 +230,19 @@ def parse_args(argv: list[str]) -> None:
     import argparse
     import sys
 
-    parser = argparse.ArgumentParser(prog=COMMAND, description="Rewrite the figures the documents quote from fresh "
-                                     "runs (docs/faults.md, the payload sweep, fusion and chapter 5 results, the "
-                                     "generated blocks of README.md, docs/explanation/validation.md, docs/explanation/fusion.md); several "
-                                     "minutes.")
+    parser = argparse.ArgumentParser(
+        prog=COMMAND,
+        description="Rewrite the figures the documents quote from fresh "
+        "runs (docs/faults.md, the payload sweep, fusion and chapter 5 results, the "
+        "generated blocks of README.md, docs/explanation/validation.md, docs/explanation/fusion.md); several "
+        "minutes.",
+    )
     _, extra = parser.parse_known_args(argv)
     if extra:
-        print(f"error: {COMMAND}: takes no arguments (got {' '.join(extra)}); see --help", file=sys.stderr)
+        print(
+            f"error: {COMMAND}: takes no arguments (got {' '.join(extra)}); see --help",
+            file=sys.stderr,
+        )
         raise SystemExit(2)
 
 

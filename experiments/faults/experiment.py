@@ -27,8 +27,10 @@ FAULT_T_S = 5.0
 STOP_T_S = 9.0
 DURATION_S = 12.0
 WINDOW_S = 0.5
-SCENARIO = (f"empty world, linear {SPEED_M_S} m/s at 0 s (38.2 RPM per wheel), stop sent at {STOP_T_S:g} s, "
-            f"run of {DURATION_S:g} s, fault at {FAULT_T_S:g} s")
+SCENARIO = (
+    f"empty world, linear {SPEED_M_S} m/s at 0 s (38.2 RPM per wheel), stop sent at {STOP_T_S:g} s, "
+    f"run of {DURATION_S:g} s, fault at {FAULT_T_S:g} s"
+)
 
 CASES = (
     "hall-left-dead@5",
@@ -66,15 +68,31 @@ def simulate(case: Case) -> dict:
 
     faults = parse_faults([case.fault]) if case.fault else ()
     sensors = any(KINDS[f.kind].needs_sensors for f in faults)
-    options = TwinOptions(firmware=case.firmware, world="empty", seed=case.seed,
-                          sensors=("imu", "lidar") if sensors else (), faults=faults)
+    options = TwinOptions(
+        firmware=case.firmware,
+        world="empty",
+        seed=case.seed,
+        sensors=("imu", "lidar") if sensors else (),
+        faults=faults,
+    )
     steps = [(0.0, Command("linear", speed_m_s=SPEED_M_S)), (STOP_T_S, Command("stop"))]
     result = run_mission(case.cfg, steps, DURATION_S, options)
     s = result.series
-    return {"fault": case.fault, "firmware": case.firmware, "t_s": s.t_s, "true_rpm": s.true_rpm,
-            "published": s.published, "pose": s.pose, "pwm_counts": s.pwm_counts, "mode": s.mode,
-            "battery_v": s.battery_v, "commands": s.commands, "report": result.faults,
-            "collisions": result.collisions, "wall_s": result.wall_s}
+    return {
+        "fault": case.fault,
+        "firmware": case.firmware,
+        "t_s": s.t_s,
+        "true_rpm": s.true_rpm,
+        "published": s.published,
+        "pose": s.pose,
+        "pwm_counts": s.pwm_counts,
+        "mode": s.mode,
+        "battery_v": s.battery_v,
+        "commands": s.commands,
+        "report": result.faults,
+        "collisions": result.collisions,
+        "wall_s": result.wall_s,
+    }
 
 
 def _mean(t: np.ndarray, values: np.ndarray, t0: float, t1: float) -> float:
@@ -114,8 +132,11 @@ def measure(raw: dict, baseline: dict) -> dict:
     moving_end = bool(np.any(np.abs(rpm[-1]) > 1.0))
     effect = report.get("effect", {})
     return {
-        "fault": raw["fault"], "firmware": raw["firmware"], "wheels": wheels,
-        "end_offset_m": dxy, "end_heading_offset_deg": dyaw,
+        "fault": raw["fault"],
+        "firmware": raw["firmware"],
+        "wheels": wheels,
+        "end_offset_m": dxy,
+        "end_heading_offset_deg": dyaw,
         "moved_after_stop_m": _path_m(pose, t >= STOP_T_S + 0.5),
         "baseline_moved_after_stop_m": _path_m(base_pose, baseline["t_s"] >= STOP_T_S + 0.5),
         "stopped_at_end": not moving_end,
@@ -127,15 +148,27 @@ def measure(raw: dict, baseline: dict) -> dict:
     }
 
 
-def run(cfg: TwinConfig, jobs: int = 1, progress: bool = True, cases: tuple[str, ...] = CASES) -> dict:
+def run(
+    cfg: TwinConfig, jobs: int = 1, progress: bool = True, cases: tuple[str, ...] = CASES
+) -> dict:
     """Simulate every case under both firmwares and the baselines; return raw runs and measures."""
     import time
 
     from amr_twin.experiments.runner.executor import run_all
 
     wall0 = time.perf_counter()
-    todo = [Case(None, fw, cfg) for fw in FIRMWARES] + [Case(c, fw, cfg) for c in cases for fw in FIRMWARES]
-    raw = {(item.fault, item.firmware): out for item, out in run_all(simulate, todo, jobs, "fault runs", progress)}
+    todo = [Case(None, fw, cfg) for fw in FIRMWARES] + [
+        Case(c, fw, cfg) for c in cases for fw in FIRMWARES
+    ]
+    raw = {
+        (item.fault, item.firmware): out
+        for item, out in run_all(simulate, todo, jobs, "fault runs", progress)
+    }
     rows = [measure(raw[(c, fw)], raw[(None, fw)]) for c in cases for fw in FIRMWARES]
-    return {"scenario": SCENARIO, "cases": list(cases), "rows": rows, "raw": raw,
-            "wall_s": time.perf_counter() - wall0}
+    return {
+        "scenario": SCENARIO,
+        "cases": list(cases),
+        "rows": rows,
+        "raw": raw,
+        "wall_s": time.perf_counter() - wall0,
+    }

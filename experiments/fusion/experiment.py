@@ -47,9 +47,9 @@ from amr_twin.experiments.fusion.streams import Streams, odom_poses, relative_mo
 ROUTES_DIR = Path(__file__).resolve().parents[1] / "routes"
 DEFAULT_ROUTE = ROUTES_DIR / "warehouse_60m.yaml"
 ARCHITECTURES = ("odom", "odom+lidar", "odom+imu", "odom+uwb", "odom+uwb+imu")
-REST_S = 2.0           # standing still before the route: the IMU's rest calibration
-TAIL_S = 1.0           # standing still after the goal
-TIMEOUT_FACTOR = 3.0   # give up after this many times the route's length / max speed
+REST_S = 2.0  # standing still before the route: the IMU's rest calibration
+TAIL_S = 1.0  # standing still after the goal
+TIMEOUT_FACTOR = 3.0  # give up after this many times the route's length / max speed
 RPE_DELTA_M = 1.0
 
 
@@ -61,9 +61,13 @@ class Estimate:
     t_s: np.ndarray
     pose: np.ndarray
     errors: TrajectoryErrors | None = None
-    ate_aligned_m: float = float("nan")  # ATE after the least-squares SE(2) alignment onto the truth
+    ate_aligned_m: float = float(
+        "nan"
+    )  # ATE after the least-squares SE(2) alignment onto the truth
     wall_s: float = 0.0
-    beam_poses: list | None = None  # LiDAR odometry only: per scan, (n_beams, 3) laser poses in the map
+    beam_poses: list | None = (
+        None  # LiDAR odometry only: per scan, (n_beams, 3) laser poses in the map
+    )
 
 
 @dataclass
@@ -79,21 +83,29 @@ class FusionResults:
     estimates: dict[str, Estimate] = field(default_factory=dict)
     sim_s: float = 0.0
     drive_wall_s: float = 0.0
-    wall_s: float = 0.0                 # drive, estimators and map
+    wall_s: float = 0.0  # drive, estimators and map
     reached_goal: bool = False
     cross_track_rms_m: float = 0.0
-    boxes: Footprints | None = None     # the world at the LiDAR's height
-    grid: object = None                 # OccupancyGrid from the LiDAR odometry's poses
+    boxes: Footprints | None = None  # the world at the LiDAR's height
+    grid: object = None  # OccupancyGrid from the LiDAR odometry's poses
     anchors_xy_m: np.ndarray | None = None  # UWB anchors (K, 2), map frame
-    uwb_blocked: list | None = None     # per anchor: exchanges whose line a wall blocked
+    uwb_blocked: list | None = None  # per anchor: exchanges whose line a wall blocked
     uwb_exchanges: int = 0
     message_counts: dict | None = None  # messages per stream (kept when the streams are dropped)
-    robot: dict | None = None           # the robot's own errors of this seed (fusion_robot), IMU's included
+    robot: dict | None = None  # the robot's own errors of this seed (fusion_robot), IMU's included
 
 
-def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "improved", progress: bool = True,
-          rrd_path: Path | None = None, mcap_path: Path | None = None,
-          robot: RobotErrors = NOMINAL) -> tuple[Twin, Streams, bool]:
+def drive(
+    cfg: TwinConfig,
+    route: Route,
+    *,
+    seed: int = 0,
+    firmware: str = "improved",
+    progress: bool = True,
+    rrd_path: Path | None = None,
+    mcap_path: Path | None = None,
+    robot: RobotErrors = NOMINAL,
+) -> tuple[Twin, Streams, bool]:
     """Drive ``route`` in its world with IMU, LiDAR and UWB on; return the twin and the recorded streams.
 
     ``robot``: the robot's own errors (its true wheel geometry and hall sensors; the odometry
@@ -101,15 +113,25 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
     drive as a Rerun / MCAP recording.
     """
     recording = rrd_path is not None or mcap_path is not None
-    twin = Twin(robot.config(cfg), TwinOptions(firmware=firmware, world=route.world, seed=seed,
-                                               start_xy_yaw=route.start_xy_yaw, sensors=("imu", "lidar"), visuals=recording,
-                                               **robot.twin_options()))
+    twin = Twin(
+        robot.config(cfg),
+        TwinOptions(
+            firmware=firmware,
+            world=route.world,
+            seed=seed,
+            start_xy_yaw=route.start_xy_yaw,
+            sensors=("imu", "lidar"),
+            visuals=recording,
+            **robot.twin_options(),
+        ),
+    )
     twin.add_sensor("uwb")
     attach_recorder(twin)
     streams = Streams()
     twin.on_message(streams.tap)
     if recording:
         from amr_twin.recording.rerun_capture import attach
+
         attach(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)
     twin.advance(REST_S)
@@ -135,6 +157,7 @@ def drive(cfg: TwinConfig, route: Route, *, seed: int = 0, firmware: str = "impr
         bar[0].stop()
     if rrd_path is not None or mcap_path is not None:
         from amr_twin.recording.rerun_log import record_run
+
         record_run(twin, rrd_path=rrd_path, mcap_path=mcap_path)
     return twin, streams, bool(follower.done)
 
@@ -145,8 +168,13 @@ def _progress_bar(enabled: bool, total_m: float):
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    bar = Progress(TextColumn("fusion drive"), BarColumn(), TextColumn("{task.completed:.0f}/{task.total:.0f} m"),
-                   TimeElapsedColumn(), console=Console(stderr=True))
+    bar = Progress(
+        TextColumn("fusion drive"),
+        BarColumn(),
+        TextColumn("{task.completed:.0f}/{task.total:.0f} m"),
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+    )
     bar.start()
     return bar, bar.add_task("drive", total=total_m)
 
@@ -157,10 +185,24 @@ def estimate_odom(streams: Streams, start: tuple[float, float, float]) -> Estima
     return Estimate("odom", t_s, se2.compose(np.asarray(start), pose))
 
 
-def estimate_ekf(cfg: TwinConfig, streams: Streams, start: tuple[float, float, float], *,
-                 use_imu: bool, use_uwb: bool) -> Estimate:
+def estimate_ekf(
+    cfg: TwinConfig,
+    streams: Streams,
+    start: tuple[float, float, float],
+    *,
+    use_imu: bool,
+    use_uwb: bool,
+) -> Estimate:
     """Replay the streams in stamp order into an :class:`EkfNode`."""
-    node = EkfNode(cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_odom=True, use_imu=use_imu, use_uwb=use_uwb, uwb=cfg.uwb, initial_pose=start)
+    node = EkfNode(
+        cfg.ekf,
+        wheel_separation_m=cfg.wheel.separation_m,
+        use_odom=True,
+        use_imu=use_imu,
+        use_uwb=use_uwb,
+        uwb=cfg.uwb,
+        initial_pose=start,
+    )
     handlers = {"odom": node.on_odom, "imu": node.on_imu, "uwb": node.on_range}
     kinds = ("odom",) + (("imu",) if use_imu else ()) + (("uwb",) if use_uwb else ())
     for kind, msg in streams.merged(kinds):
@@ -170,8 +212,9 @@ def estimate_ekf(cfg: TwinConfig, streams: Streams, start: tuple[float, float, f
     return Estimate(name, np.asarray(t_s, float), np.asarray(pose, float))
 
 
-def estimate_lidar(cfg: TwinConfig, streams: Streams,
-                   start: tuple[float, float, float]) -> Estimate:
+def estimate_lidar(
+    cfg: TwinConfig, streams: Streams, start: tuple[float, float, float]
+) -> Estimate:
     """kiss-icp on every scan, with the wheel odometry's motion over each scan as the prior.
 
     kiss-icp deskews a scan to its last beam, so each pose holds at the scan's end
@@ -180,8 +223,13 @@ def estimate_lidar(cfg: TwinConfig, streams: Streams,
     with the laser pose at each beam's instant, per scan, in ``beam_poses`` (for the map).
     """
     lc = cfg.lidar_odometry
-    lo = LidarOdometry(voxel_size_m=lc.voxel_size_m, max_range_m=lc.max_range_m, min_range_m=lc.min_range_m,
-                       laser_in_base_xy_yaw=laser_in_base(cfg), deskew=lc.deskew)
+    lo = LidarOdometry(
+        voxel_size_m=lc.voxel_size_m,
+        max_range_m=lc.max_range_m,
+        min_range_m=lc.min_range_m,
+        laser_in_base_xy_yaw=laser_in_base(cfg),
+        deskew=lc.deskew,
+    )
     t_odom, pose_odom = odom_poses(streams.odom)
     for scan in streams.scan:
         t0, t1 = lo.prior_interval_s(scan)
@@ -190,7 +238,9 @@ def estimate_lidar(cfg: TwinConfig, streams: Streams,
     if len(t_s) == 0:
         return Estimate("odom+lidar", np.zeros(0), np.zeros((0, 3)), beam_poses=[])
     # the first pose is the origin of kiss-icp's frame: the start moved by the (rest) odometry up to it
-    origin = se2.compose(np.asarray(start, float), np.asarray(relative_motion(t_odom, pose_odom, 0.0, t_s[0])))
+    origin = se2.compose(
+        np.asarray(start, float), np.asarray(relative_motion(t_odom, pose_odom, 0.0, t_s[0]))
+    )
     origin = tuple(float(v) for v in origin)
     _, pose = lo.poses(origin_xy_yaw=origin)
     beam_poses = [lo.beam_laser_poses(scan, origin_xy_yaw=origin) for scan in streams.scan]
@@ -217,9 +267,11 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
 
     bound = drive_bound_s(route)
     if bound > MAX_RUN_S:
-        raise RouteError(f"route {route.name}: {route_length_m(route):.0f} m at up to {route.max_speed_m_s:g} m/s "
-                         f"may take {bound:.0f} s of simulation ({TIMEOUT_FACTOR:g} x length / speed before it gives "
-                         f"up); at most {MAX_RUN_S:g} s: a shorter route or a higher max_speed_m_s")
+        raise RouteError(
+            f"route {route.name}: {route_length_m(route):.0f} m at up to {route.max_speed_m_s:g} m/s "
+            f"may take {bound:.0f} s of simulation ({TIMEOUT_FACTOR:g} x length / speed before it gives "
+            f"up); at most {MAX_RUN_S:g} s: a shorter route or a higher max_speed_m_s"
+        )
     model = world_model(cfg, route.world)
     top_m = float(cfg.components.lidar.pos_m[2])  # the robot's highest part
     slices = [scan_plane_boxes(model, z) for z in [*np.arange(0.02, top_m, 0.05), top_m]]
@@ -227,9 +279,12 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
     for cut in slices:  # every geom the robot's height meets, once
         for i, name in enumerate(cut.names):
             keep.setdefault(name, (cut.centre_xy_m[i], cut.half_xy_m[i], cut.yaw_rad[i]))
-    boxes = Footprints(np.array([v[0] for v in keep.values()]).reshape(-1, 2),
-                       np.array([v[1] for v in keep.values()]).reshape(-1, 2),
-                       np.array([v[2] for v in keep.values()]), tuple(keep))
+    boxes = Footprints(
+        np.array([v[0] for v in keep.values()]).reshape(-1, 2),
+        np.array([v[1] for v in keep.values()]).reshape(-1, 2),
+        np.array([v[2] for v in keep.values()]),
+        tuple(keep),
+    )
     check_in_free_space(route, boxes, cfg.half_width_m, world=route.world)
 
 
@@ -255,14 +310,26 @@ def site_config(cfg: TwinConfig, route: Route) -> TwinConfig:
     anchors = uwb_anchors_xy_m(route.world)
     if anchors is None:
         return cfg
-    uwb = cfg.uwb.model_copy(update={"anchors_x_m": tuple(float(v) for v in anchors[:, 0]),
-                                     "anchors_y_m": tuple(float(v) for v in anchors[:, 1])})
+    uwb = cfg.uwb.model_copy(
+        update={
+            "anchors_x_m": tuple(float(v) for v in anchors[:, 0]),
+            "anchors_y_m": tuple(float(v) for v in anchors[:, 1]),
+        }
+    )
     return cfg.model_copy(update={"uwb": uwb})
 
 
-def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 0, firmware: str = "improved",
-        progress: bool = True, rrd_path: Path | None = None, mcap_path: Path | None = None,
-        robot_errors: bool = True) -> FusionResults:
+def run(
+    cfg: TwinConfig,
+    route_path: Path | str = DEFAULT_ROUTE,
+    *,
+    seed: int = 0,
+    firmware: str = "improved",
+    progress: bool = True,
+    rrd_path: Path | None = None,
+    mcap_path: Path | None = None,
+    robot_errors: bool = True,
+) -> FusionResults:
     """Drive the route, run the five architectures and score them against the truth.
 
     ``robot_errors``: the seed also draws the robot's own errors (:mod:`.robot`);
@@ -273,18 +340,41 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
     cfg = site_config(cfg, route)
     robot = draw(cfg, seed) if robot_errors else NOMINAL
     t0 = time.perf_counter()
-    twin, streams, reached = drive(cfg, route, seed=seed, firmware=firmware, progress=progress,
-                                   rrd_path=rrd_path, mcap_path=mcap_path, robot=robot)
+    twin, streams, reached = drive(
+        cfg,
+        route,
+        seed=seed,
+        firmware=firmware,
+        progress=progress,
+        rrd_path=rrd_path,
+        mcap_path=mcap_path,
+        robot=robot,
+    )
     series = recorder_of(twin).series()
-    res = FusionResults(route=route, seed=seed, firmware=firmware, t_true_s=series.t_s, pose_true=series.pose,
-                        streams=streams, sim_s=twin.t_s, drive_wall_s=time.perf_counter() - t0,
-                        reached_goal=reached, message_counts=streams.counts())
-    res.cross_track_rms_m = float(np.sqrt(np.mean(distance_to_path_m(route, series.pose[:, :2]) ** 2)))
+    res = FusionResults(
+        route=route,
+        seed=seed,
+        firmware=firmware,
+        t_true_s=series.t_s,
+        pose_true=series.pose,
+        streams=streams,
+        sim_s=twin.t_s,
+        drive_wall_s=time.perf_counter() - t0,
+        reached_goal=reached,
+        message_counts=streams.counts(),
+    )
+    res.cross_track_rms_m = float(
+        np.sqrt(np.mean(distance_to_path_m(route, series.pose[:, :2]) ** 2))
+    )
     uwb = twin.sensors["uwb"]
     res.uwb_blocked = uwb.blocked.tolist()
     res.uwb_exchanges = int(uwb.exchanges)
     gyro = twin.sensors["imu"].models["gyro"]
-    res.robot = {**robot.as_dict(cfg), "drawn": bool(robot_errors), "gyro_scale_z": float(gyro.scale[2])}
+    res.robot = {
+        **robot.as_dict(cfg),
+        "drawn": bool(robot_errors),
+        "gyro_scale_z": float(gyro.scale[2]),
+    }
     start = route.start_xy_yaw
     jobs = (  # in the order of ARCHITECTURES
         lambda: estimate_odom(streams, start),
@@ -299,13 +389,21 @@ def run(cfg: TwinConfig, route_path: Path | str = DEFAULT_ROUTE, *, seed: int = 
         est.wall_s = time.perf_counter() - t1
         est.t_s, est.pose = last_per_stamp(est.t_s, est.pose)
         est.errors = errors(est.t_s, est.pose, series.t_s, series.pose, rpe_delta_m=RPE_DELTA_M)
-        est.ate_aligned_m = errors(est.t_s, est.pose, series.t_s, series.pose, rpe_delta_m=RPE_DELTA_M,
-                                   align=True).ate_m
+        est.ate_aligned_m = errors(
+            est.t_s, est.pose, series.t_s, series.pose, rpe_delta_m=RPE_DELTA_M, align=True
+        ).ate_m
         res.estimates[est.name] = est
     res.anchors_xy_m = np.asarray(cfg.uwb.anchors_xy_m, float).reshape(-1, 2)
-    res.boxes = scan_plane_boxes(twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2]))
-    res.grid = build_map(streams.scan, res.estimates["odom+lidar"].beam_poses, res.boxes, cfg.mapping.resolution_m,
-                         cfg.mapping.margin_m)
+    res.boxes = scan_plane_boxes(
+        twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2])
+    )
+    res.grid = build_map(
+        streams.scan,
+        res.estimates["odom+lidar"].beam_poses,
+        res.boxes,
+        cfg.mapping.resolution_m,
+        cfg.mapping.margin_m,
+    )
     res.wall_s = time.perf_counter() - t0
     return res
 

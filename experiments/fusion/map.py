@@ -28,22 +28,29 @@ class MapAgreement:
     """How well a map's walls lie on the world's walls."""
 
     occupied_cells: int
-    within_tolerance_frac: float   # occupied cells within TOLERANCE_CELLS of a world footprint
+    within_tolerance_frac: float  # occupied cells within TOLERANCE_CELLS of a world footprint
     p95_distance_cells: float
     max_distance_cells: float
-    outline_seen_frac: float       # world outline samples (inside the map) with an occupied cell nearby
+    outline_seen_frac: float  # world outline samples (inside the map) with an occupied cell nearby
 
 
-def build_map(scans: list, beam_poses: list, boxes: Footprints, resolution_m: float,
-              margin_m: float) -> OccupancyGrid:
+def build_map(
+    scans: list, beam_poses: list, boxes: Footprints, resolution_m: float, margin_m: float
+) -> OccupancyGrid:
     """Insert ``scans`` into a new grid, each beam at its own laser pose (``beam_poses[i]`` (n_beams, 3), map)."""
     c, s = np.abs(np.cos(boxes.yaw_rad)), np.abs(np.sin(boxes.yaw_rad))
     hx, hy = boxes.half_xy_m[:, 0], boxes.half_xy_m[:, 1]
-    half_world = np.column_stack([c * hx + s * hy, s * hx + c * hy])  # axis-aligned bounds of each box
+    half_world = np.column_stack(
+        [c * hx + s * hy, s * hx + c * hy]
+    )  # axis-aligned bounds of each box
     lo = (boxes.centre_xy_m - half_world).min(0) - margin_m
     hi = (boxes.centre_xy_m + half_world).max(0) + margin_m
-    grid = OccupancyGrid(resolution_m=resolution_m, width_m=float(hi[0] - lo[0]), height_m=float(hi[1] - lo[1]),
-                         origin_xy_m=(float(lo[0]), float(lo[1])))
+    grid = OccupancyGrid(
+        resolution_m=resolution_m,
+        width_m=float(hi[0] - lo[0]),
+        height_m=float(hi[1] - lo[1]),
+        origin_xy_m=(float(lo[0]), float(lo[1])),
+    )
     for scan, poses in zip(scans, beam_poses):
         grid.insert_scan(None, scan, beam_poses=poses)
     return grid
@@ -59,7 +66,9 @@ def occupied_centres_m(grid: OccupancyMap) -> np.ndarray:
     return np.column_stack([ox + c * mx - s * my, oy + s * mx + c * my])
 
 
-def agreement(yaml_path: Path, boxes: Footprints, observed_xy_m: np.ndarray | None = None) -> MapAgreement:
+def agreement(
+    yaml_path: Path, boxes: Footprints, observed_xy_m: np.ndarray | None = None
+) -> MapAgreement:
     """Judge the saved map ``yaml_path`` against the world's footprints ``boxes``.
 
     ``observed_xy_m`` (M, 2), optional: outline samples to count in ``outline_seen_frac``
@@ -71,7 +80,9 @@ def agreement(yaml_path: Path, boxes: Footprints, observed_xy_m: np.ndarray | No
     if len(cells) == 0:
         return MapAgreement(0, 0.0, float("inf"), float("inf"), 0.0)
     dist_cells = distance_to_boxes_m(cells, boxes) / res
-    outline = surface_samples_m(boxes, res) if observed_xy_m is None else np.asarray(observed_xy_m, float)
+    outline = (
+        surface_samples_m(boxes, res) if observed_xy_m is None else np.asarray(observed_xy_m, float)
+    )
     if len(outline):
         from scipy.spatial import cKDTree
 
@@ -79,7 +90,10 @@ def agreement(yaml_path: Path, boxes: Footprints, observed_xy_m: np.ndarray | No
         seen = float(np.mean(d_out <= (TOLERANCE_CELLS + 0.5) * res))
     else:
         seen = 0.0
-    return MapAgreement(occupied_cells=int(len(cells)),
-                        within_tolerance_frac=float(np.mean(dist_cells <= TOLERANCE_CELLS + 0.5)),
-                        p95_distance_cells=float(np.percentile(dist_cells, 95)),
-                        max_distance_cells=float(dist_cells.max()), outline_seen_frac=seen)
+    return MapAgreement(
+        occupied_cells=int(len(cells)),
+        within_tolerance_frac=float(np.mean(dist_cells <= TOLERANCE_CELLS + 0.5)),
+        p95_distance_cells=float(np.percentile(dist_cells, 95)),
+        max_distance_cells=float(dist_cells.max()),
+        outline_seen_frac=seen,
+    )

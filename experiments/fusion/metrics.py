@@ -15,7 +15,7 @@ from amr_twin.analysis.trajectory import TrajectoryErrors
 from amr_twin.experiments.fusion.experiment import ARCHITECTURES, RPE_DELTA_M, FusionResults
 from amr_twin.experiments.fusion.map import TOLERANCE_CELLS, MapAgreement
 
-LIDAR_ATE_MAX_M = 0.10   # the fusion acceptance
+LIDAR_ATE_MAX_M = 0.10  # the fusion acceptance
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,12 @@ class ArchitectureMetrics:
     tum: str
 
     def as_json(self) -> dict:
-        return {**asdict(self.errors), "ate_aligned_m": self.ate_aligned_m, "wall_s": self.wall_s, "tum": self.tum}
+        return {
+            **asdict(self.errors),
+            "ate_aligned_m": self.ate_aligned_m,
+            "wall_s": self.wall_s,
+            "tum": self.tum,
+        }
 
 
 @dataclass(frozen=True)
@@ -90,12 +95,21 @@ class FusionMetrics:
     summary: FusionVerdicts
 
     def as_json(self) -> dict:
-        return {"route": asdict(self.route), "seed": self.seed, "firmware": self.firmware, "sim_s": self.sim_s,
-                "drive_wall_s": self.drive_wall_s, "wall_s": self.wall_s, "messages": self.messages,
-                "uwb": asdict(self.uwb), "robot": self.robot, "rpe_delta_m": self.rpe_delta_m,
-                "architectures": {name: a.as_json() for name, a in self.architectures.items()},
-                "map": {"tolerance_cells": TOLERANCE_CELLS, **asdict(self.map_check)},
-                "summary": asdict(self.summary)}
+        return {
+            "route": asdict(self.route),
+            "seed": self.seed,
+            "firmware": self.firmware,
+            "sim_s": self.sim_s,
+            "drive_wall_s": self.drive_wall_s,
+            "wall_s": self.wall_s,
+            "messages": self.messages,
+            "uwb": asdict(self.uwb),
+            "robot": self.robot,
+            "rpe_delta_m": self.rpe_delta_m,
+            "architectures": {name: a.as_json() for name, a in self.architectures.items()},
+            "map": {"tolerance_cells": TOLERANCE_CELLS, **asdict(self.map_check)},
+            "summary": asdict(self.summary),
+        }
 
 
 def verdicts(results: FusionResults, map_check: MapAgreement) -> FusionVerdicts:
@@ -106,19 +120,40 @@ def verdicts(results: FusionResults, map_check: MapAgreement) -> FusionVerdicts:
         odom_drift_pct_of_length=100.0 * e["odom"].final_pos_err_m / max(e["odom"].length_m, 1e-9),
         imu_beats_odom_on_heading=e["odom+imu"].rms_yaw_err_deg < e["odom"].rms_yaw_err_deg,
         lidar_ate_under_0_10_m=e["odom+lidar"].ate_m < LIDAR_ATE_MAX_M,
-        map_walls_within_2_cells_frac=map_check.within_tolerance_frac, reached_goal=results.reached_goal)
+        map_walls_within_2_cells_frac=map_check.within_tolerance_frac,
+        reached_goal=results.reached_goal,
+    )
 
 
-def metrics(results: FusionResults, map_check: MapAgreement, files: dict[str, str]) -> FusionMetrics:
+def metrics(
+    results: FusionResults, map_check: MapAgreement, files: dict[str, str]
+) -> FusionMetrics:
     """The typed metrics of one drive; ``files``: each architecture's TUM file name."""
     est = results.estimates
     return FusionMetrics(
-        route=RouteOutcome(results.route.name, results.route.world, est["odom"].errors.length_m,
-                           results.route.max_speed_m_s, results.reached_goal, results.cross_track_rms_m),
-        seed=results.seed, firmware=results.firmware, sim_s=results.sim_s, drive_wall_s=results.drive_wall_s,
-        wall_s=results.wall_s, messages=results.message_counts,
+        route=RouteOutcome(
+            results.route.name,
+            results.route.world,
+            est["odom"].errors.length_m,
+            results.route.max_speed_m_s,
+            results.reached_goal,
+            results.cross_track_rms_m,
+        ),
+        seed=results.seed,
+        firmware=results.firmware,
+        sim_s=results.sim_s,
+        drive_wall_s=results.drive_wall_s,
+        wall_s=results.wall_s,
+        messages=results.message_counts,
         uwb=UwbOutcome(results.anchors_xy_m.tolist(), results.uwb_exchanges, results.uwb_blocked),
-        robot=results.robot, rpe_delta_m=RPE_DELTA_M,
-        architectures={name: ArchitectureMetrics(est[name].errors, est[name].ate_aligned_m, est[name].wall_s,
-                                                 files[name]) for name in ARCHITECTURES},
-        map_check=map_check, summary=verdicts(results, map_check))
+        robot=results.robot,
+        rpe_delta_m=RPE_DELTA_M,
+        architectures={
+            name: ArchitectureMetrics(
+                est[name].errors, est[name].ate_aligned_m, est[name].wall_s, files[name]
+            )
+            for name in ARCHITECTURES
+        },
+        map_check=map_check,
+        summary=verdicts(results, map_check),
+    )

@@ -20,8 +20,13 @@ from amr_twin.experiments.fusion.map import agreement
 from amr_twin.analysis import se2, tum
 from amr_twin.base import atomic_file
 
-COLOURS = {"odom": "tab:red", "odom+lidar": "tab:green", "odom+imu": "tab:orange", "odom+uwb": "tab:purple",
-           "odom+uwb+imu": "tab:blue"}
+COLOURS = {
+    "odom": "tab:red",
+    "odom+lidar": "tab:green",
+    "odom+imu": "tab:orange",
+    "odom+uwb": "tab:purple",
+    "odom+uwb+imu": "tab:blue",
+}
 
 
 def _draw_world(ax, results: FusionResults) -> None:
@@ -38,6 +43,7 @@ def _draw_world(ax, results: FusionResults) -> None:
 def plot(results: FusionResults, out: Path) -> list[Path]:
     """Write ``trajectories.png`` and ``errors.png`` into ``out``; return their paths."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -45,22 +51,32 @@ def plot(results: FusionResults, out: Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(14, 7.5), layout="constrained")
     _draw_world(ax, results)
-    route = np.vstack([np.asarray(results.route.start_xy_yaw[:2])[None], results.route.waypoints_xy_m])
+    route = np.vstack(
+        [np.asarray(results.route.start_xy_yaw[:2])[None], results.route.waypoints_xy_m]
+    )
     ax.plot(route[:, 0], route[:, 1], ":", color="0.4", lw=1, label="route")
     ax.plot(results.pose_true[:, 0], results.pose_true[:, 1], "k-", lw=2.2, label="true path")
     for name in ARCHITECTURES:
         est = results.estimates[name]
         e = est.errors
-        ax.plot(est.pose[:, 0], est.pose[:, 1], "-", lw=1.1, color=COLOURS[name],
-                label=f"{name}: ATE {e.ate_m:.3f} m, final {e.final_pos_err_m:.2f} m")
+        ax.plot(
+            est.pose[:, 0],
+            est.pose[:, 1],
+            "-",
+            lw=1.1,
+            color=COLOURS[name],
+            label=f"{name}: ATE {e.ate_m:.3f} m, final {e.final_pos_err_m:.2f} m",
+        )
     anchors = results.anchors_xy_m
     if anchors is not None and len(anchors):
         ax.plot(anchors[:, 0], anchors[:, 1], "^", color="tab:purple", ms=9, label="UWB anchors")
     ax.set_aspect("equal")
     ax.set_xlabel("x, m (map)")
     ax.set_ylabel("y, m (map)")
-    ax.set_title(f"Fusion architectures on the {results.estimates['odom'].errors.length_m:.0f} m route "
-                 f"`{results.route.name}` (seed {results.seed}; grey: the world at LiDAR height)")
+    ax.set_title(
+        f"Fusion architectures on the {results.estimates['odom'].errors.length_m:.0f} m route "
+        f"`{results.route.name}` (seed {results.seed}; grey: the world at LiDAR height)"
+    )
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
     paths = [out / "trajectories.png"]
     save_figure(fig, paths[0])
@@ -84,8 +100,11 @@ def plot(results: FusionResults, out: Path) -> list[Path]:
 
 def _errors_in_time(results: FusionResults, est) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     truth = se2.interpolate(results.t_true_s, results.pose_true, est.t_s).reshape(-1, 3)
-    return (est.t_s, np.hypot(*(est.pose[:, :2] - truth[:, :2]).T),
-            se2.wrap_rad(est.pose[:, 2] - truth[:, 2]))
+    return (
+        est.t_s,
+        np.hypot(*(est.pose[:, :2] - truth[:, :2]).T),
+        se2.wrap_rad(est.pose[:, 2] - truth[:, 2]),
+    )
 
 
 def _save_map(results: FusionResults, out: Path):
@@ -130,9 +149,12 @@ def write_trajectories(results: FusionResults, out: Path) -> dict[str, str]:
 def evo_commands(folder: str = "DIR", name: str = "odom_uwb_imu.tum") -> list[str]:
     """The evo commands that reproduce an architecture's ATE (plain, aligned) and RPE from the TUM files."""
     ref, est = f"{folder}/truth.tum", f"{folder}/{name}"
-    return [f"evo_ape tum {ref} {est}", f"evo_ape tum {ref} {est} --align",
-            f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference",
-            f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference -r angle_deg"]
+    return [
+        f"evo_ape tum {ref} {est}",
+        f"evo_ape tum {ref} {est} --align",
+        f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference",
+        f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference -r angle_deg",
+    ]
 
 
 DEFINITIONS = [
@@ -169,54 +191,79 @@ def report(results: FusionResults, out: Path, figures: bool = True) -> FusionMet
 
 def _yaw(data: dict, name: str) -> str:
     e = data["architectures"][name]
-    return (f"RMS {e['rms_yaw_err_deg']:.2f} deg, max {e['max_yaw_err_deg']:.2f} deg, "
-            f"final {e['final_yaw_err_deg']:.2f} deg")
+    return (
+        f"RMS {e['rms_yaw_err_deg']:.2f} deg, max {e['max_yaw_err_deg']:.2f} deg, "
+        f"final {e['final_yaw_err_deg']:.2f} deg"
+    )
 
 
 def robot_line(robot: dict | None) -> str:
     """One sentence on the robot's own errors of this seed (``FusionResults.robot``)."""
     if not robot:
         return ""
-    what = "drawn for this seed" if robot["drawn"] else "none: the robot is exactly as its odometry assumes"
-    return (f"The robot's own errors ({what}): tyre radii {1e3 * robot['radius_error_left_m']:+.2f} mm left, "
-            f"{1e3 * robot['radius_error_right_m']:+.2f} mm right, track {1e3 * robot['separation_error_m']:+.2f} mm "
-            f"(the odometry assumes the nominal geometry: distance {100 * robot['odom_distance_error']:+.2f} %, "
-            f"heading drift {robot['odom_heading_drift_deg_per_m']:+.3f} deg per metre of straight, turns "
-            f"{100 * robot['odom_turn_error']:+.2f} %); hall sensors off by up to "
-            f"{max(abs(v) for row in robot['hall_misalignment_deg'] for v in row):.2f} deg, edge jitter "
-            f"{robot['hall_jitter_us']:.1f} us; gyro scale error {100 * robot['gyro_scale_z']:+.2f} %.")
+    what = (
+        "drawn for this seed"
+        if robot["drawn"]
+        else "none: the robot is exactly as its odometry assumes"
+    )
+    return (
+        f"The robot's own errors ({what}): tyre radii {1e3 * robot['radius_error_left_m']:+.2f} mm left, "
+        f"{1e3 * robot['radius_error_right_m']:+.2f} mm right, track {1e3 * robot['separation_error_m']:+.2f} mm "
+        f"(the odometry assumes the nominal geometry: distance {100 * robot['odom_distance_error']:+.2f} %, "
+        f"heading drift {robot['odom_heading_drift_deg_per_m']:+.3f} deg per metre of straight, turns "
+        f"{100 * robot['odom_turn_error']:+.2f} %); hall sensors off by up to "
+        f"{max(abs(v) for row in robot['hall_misalignment_deg'] for v in row):.2f} deg, edge jitter "
+        f"{robot['hall_jitter_us']:.1f} us; gyro scale error {100 * robot['gyro_scale_z']:+.2f} %."
+    )
 
 
 def markdown(data: dict, figures: bool = True) -> str:
     """``report.md`` from the metrics (``figures``: link ``trajectories.png`` and ``errors.png``)."""
     r, s, m, u = data["route"], data["summary"], data["map"], data["uwb"]
-    blocked = ", ".join(f"{100 * b / max(u['exchanges'] / len(u['blocked_per_anchor']), 1):.0f} %"
-                        for b in u["blocked_per_anchor"])
+    blocked = ", ".join(
+        f"{100 * b / max(u['exchanges'] / len(u['blocked_per_anchor']), 1):.0f} %"
+        for b in u["blocked_per_anchor"]
+    )
     lines = [
-        "# Chapter 6 in the twin: localisation architectures compared (fig. 6.8)", "",
+        "# Chapter 6 in the twin: localisation architectures compared (fig. 6.8)",
+        "",
         f"Route `{r['name']}` in world `{r['world']}`: {r['length_m']:.1f} m driven at up to "
         f"{r['max_speed_m_s']:.1f} m/s in {data['sim_s']:.1f} simulated s (wall time {data['drive_wall_s']:.1f} s "
         f"for the drive, {data['wall_s']:.1f} s in all); goal reached: {'yes' if r['reached_goal'] else 'NO'}; "
         f"cross-track RMS {r['cross_track_rms_m']:.3f} m. Firmware `{data['firmware']}`, seed {data['seed']}. "
-        "Messages: " + ", ".join(f"{k} {v}" for k, v in data["messages"].items()) + ". UWB exchanges with a "
-        f"wall in the line, per anchor: {blocked}.", "", robot_line(data["robot"]), "",
+        "Messages: "
+        + ", ".join(f"{k} {v}" for k, v in data["messages"].items())
+        + ". UWB exchanges with a "
+        f"wall in the line, per anchor: {blocked}.",
+        "",
+        robot_line(data["robot"]),
+        "",
         "| architecture | ATE m | ATE aligned m | RPE m / 1 m | RPE deg / 1 m | final position error m "
         "| final heading error deg | RMS heading error deg | max heading error deg | compute s |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, e in data["architectures"].items():
-        lines.append(f"| {name} | {e['ate_m']:.3f} | {e['ate_aligned_m']:.3f} | {e['rpe_trans_m']:.3f} | "
-                     f"{e['rpe_rot_deg']:.2f} | {e['final_pos_err_m']:.3f} | {e['final_yaw_err_deg']:.2f} | "
-                     f"{e['rms_yaw_err_deg']:.2f} | {e['max_yaw_err_deg']:.2f} | {e['wall_s']:.2f} |")
-    lines += ["", *DEFINITIONS, "",
-              "Trajectories (TUM: `timestamp tx ty tz qx qy qz qw`, map frame): `truth.tum` and "
-              + ", ".join(f"`{e['tum']}`" for e in data["architectures"].values())
-              + ". Reproduce a row with [evo](https://github.com/MichaelGrupp/evo), e.g. for odom+uwb+imu: "
-              + "; ".join(f"`{c}`" for c in evo_commands(".")) + ".", ""]
+        lines.append(
+            f"| {name} | {e['ate_m']:.3f} | {e['ate_aligned_m']:.3f} | {e['rpe_trans_m']:.3f} | "
+            f"{e['rpe_rot_deg']:.2f} | {e['final_pos_err_m']:.3f} | {e['final_yaw_err_deg']:.2f} | "
+            f"{e['rms_yaw_err_deg']:.2f} | {e['max_yaw_err_deg']:.2f} | {e['wall_s']:.2f} |"
+        )
+    lines += [
+        "",
+        *DEFINITIONS,
+        "",
+        "Trajectories (TUM: `timestamp tx ty tz qx qy qz qw`, map frame): `truth.tum` and "
+        + ", ".join(f"`{e['tum']}`" for e in data["architectures"].values())
+        + ". Reproduce a row with [evo](https://github.com/MichaelGrupp/evo), e.g. for odom+uwb+imu: "
+        + "; ".join(f"`{c}`" for c in evo_commands("."))
+        + ".",
+        "",
+    ]
     if figures:
         lines += ["![trajectories](trajectories.png)", "", "![errors](errors.png)", ""]
     lines += [
-        "## Checks", "",
+        "## Checks",
+        "",
         f"- Raw odometry drift: {s['odom_drift_final_m']:.3f} m at the end of the route "
         f"({s['odom_drift_pct_of_length']:.2f} % of the distance).",
         f"- Odometry + IMU against odometry alone on heading: {_yaw(data, 'odom+imu')} against {_yaw(data, 'odom')}.",
@@ -225,8 +272,11 @@ def markdown(data: dict, figures: bool = True) -> str:
         f"- Map: {m['occupied_cells']} occupied cells, {100 * m['within_tolerance_frac']:.1f} % within "
         f"{m['tolerance_cells']} cells of the world's walls (95th percentile {m['p95_distance_cells']:.2f} cells, "
         f"max {m['max_distance_cells']:.1f}); {100 * m['outline_seen_frac']:.0f} % of the world's outline at "
-        "LiDAR height is mapped (racks' far sides are never seen).", "",
-        "![map](map.png)", "",
-        "The map is a map_server YAML + PGM (`map.yaml`): `amr-twin run --world map.yaml` drives in it.", "",
+        "LiDAR height is mapped (racks' far sides are never seen).",
+        "",
+        "![map](map.png)",
+        "",
+        "The map is a map_server YAML + PGM (`map.yaml`): `amr-twin run --world map.yaml` drives in it.",
+        "",
     ]
     return "\n".join(lines)

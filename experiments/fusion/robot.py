@@ -36,20 +36,28 @@ class RobotErrors:
     radius_error_left_m: float = 0.0
     radius_error_right_m: float = 0.0
     separation_error_m: float = 0.0
-    hall_misalignment_deg: tuple = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))  # (left, right) x (Ha, Hb, Hc)
+    hall_misalignment_deg: tuple = (
+        (0.0, 0.0, 0.0),
+        (0.0, 0.0, 0.0),
+    )  # (left, right) x (Ha, Hb, Hc)
     hall_jitter_us: float = 0.0
 
     def config(self, cfg: TwinConfig) -> TwinConfig:
         """``cfg`` with this robot's true wheel geometry (validated)."""
         wheel = cfg.wheel.model_dump()
-        wheel.update(radius_error_left_m=self.radius_error_left_m, radius_error_right_m=self.radius_error_right_m,
-                     separation_error_m=self.separation_error_m)
+        wheel.update(
+            radius_error_left_m=self.radius_error_left_m,
+            radius_error_right_m=self.radius_error_right_m,
+            separation_error_m=self.separation_error_m,
+        )
         return cfg.model_copy(update={"wheel": type(cfg.wheel).model_validate(wheel)})
 
     def twin_options(self) -> dict:
         """The :class:`~amr_twin.assembly.twin.TwinOptions` fields of the hall sensors."""
-        return {"hall_misalignment_deg": np.asarray(self.hall_misalignment_deg, float),
-                "hall_jitter_us": self.hall_jitter_us}
+        return {
+            "hall_misalignment_deg": np.asarray(self.hall_misalignment_deg, float),
+            "hall_jitter_us": self.hall_jitter_us,
+        }
 
     def as_dict(self, cfg: TwinConfig) -> dict:
         """JSON-ready values, and what they do to the nominal odometry (``cfg``: the nominal geometry).
@@ -63,7 +71,9 @@ class RobotErrors:
         d = asdict(self)
         d["hall_misalignment_deg"] = [list(row) for row in self.hall_misalignment_deg]
         d["odom_distance_error"] = r / (r + 0.5 * (el + er)) - 1.0
-        d["odom_heading_drift_deg_per_m"] = float(np.degrees(r * (1.0 / (r + er) - 1.0 / (r + el)) / b))
+        d["odom_heading_drift_deg_per_m"] = float(
+            np.degrees(r * (1.0 / (r + er) - 1.0 / (r + el)) / b)
+        )
         d["odom_turn_error"] = (b + self.separation_error_m) / b - 1.0
         return d
 
@@ -83,6 +93,10 @@ def draw(cfg: TwinConfig, seed: int) -> RobotErrors:
     left, right = (float(v) for v in _normal(rng, w.radius_tolerance_m, 2))
     separation = float(_normal(rng, w.separation_tolerance_m))
     hall = _normal(rng, w.hall_misalignment_sigma_deg, (2, 3))
-    return RobotErrors(radius_error_left_m=left, radius_error_right_m=right, separation_error_m=separation,
-                       hall_misalignment_deg=tuple(tuple(float(v) for v in row) for row in hall),
-                       hall_jitter_us=float(w.hall_jitter_us))
+    return RobotErrors(
+        radius_error_left_m=left,
+        radius_error_right_m=right,
+        separation_error_m=separation,
+        hall_misalignment_deg=tuple(tuple(float(v) for v in row) for row in hall),
+        hall_jitter_us=float(w.hall_jitter_us),
+    )

@@ -18,7 +18,7 @@ from amr_twin.model.build import BuildError
 from amr_twin.model.config import TwinConfig
 from amr_twin.base.atomic_file import all_or_nothing
 
-SEED_LIMIT = 2 ** 32
+SEED_LIMIT = 2**32
 """Seeds are whole numbers in [0, 2^32), as the CLI takes them."""
 
 
@@ -66,8 +66,9 @@ class FusionSpec:
             if path.exists() or self.route is None:
                 raise ValueError(f"--route {self.route}: {exc}") from None
             known = ", ".join(fusion.route_names())
-            raise ValueError(f"--route {self.route}: no such route file, nor a route of the twin "
-                             f"({known})") from None
+            raise ValueError(
+                f"--route {self.route}: no such route file, nor a route of the twin ({known})"
+            ) from None
 
     def check_route(self, cfg: TwinConfig, route: Route) -> None:
         """The drive's simulated time bounded, each point in its world's free space (ValueError)."""
@@ -95,28 +96,58 @@ def run(spec: FusionSpec, cfg: TwinConfig, out_dir: Path, **options) -> FusionMe
     return drive(spec, cfg, out_dir, seeds, **options)
 
 
-def drive(spec: FusionSpec, cfg: TwinConfig, out_dir: Path, seeds: list[int], *, jobs: int = 1,
-          client=None, progress: bool = False, record: Path | None = None,
-          mcap: Path | None = None) -> FusionMetrics | dict:
+def drive(
+    spec: FusionSpec,
+    cfg: TwinConfig,
+    out_dir: Path,
+    seeds: list[int],
+    *,
+    jobs: int = 1,
+    client=None,
+    progress: bool = False,
+    record: Path | None = None,
+    mcap: Path | None = None,
+) -> FusionMetrics | dict:
     """Drive the validated ``spec``'s ``seeds`` and write ``out_dir``'s report: one seed's
     :class:`FusionMetrics` (with its optional Rerun / MCAP recording), or, with many seeds
     (``jobs`` workers or a Dask ``client``), the summary of
     :func:`amr_twin.experiments.fusion.seeds.write`."""
     route_path = spec.route_path()
     if len(seeds) > 1:
-        results = fusion_seeds.run(cfg, route_path, seeds, firmware=spec.firmware,
-                                   robot_errors=spec.robot_errors, jobs=jobs, client=client,
-                                   progress=progress)
+        results = fusion_seeds.run(
+            cfg,
+            route_path,
+            seeds,
+            firmware=spec.firmware,
+            robot_errors=spec.robot_errors,
+            jobs=jobs,
+            client=client,
+            progress=progress,
+        )
         with all_or_nothing():
             return fusion_seeds.write(results, out_dir)
-    results = fusion.run(cfg, route_path, seed=seeds[0], firmware=spec.firmware,
-                         progress=progress, rrd_path=record, mcap_path=mcap,
-                         robot_errors=spec.robot_errors)
+    results = fusion.run(
+        cfg,
+        route_path,
+        seed=seeds[0],
+        firmware=spec.firmware,
+        progress=progress,
+        rrd_path=record,
+        mcap_path=mcap,
+        robot_errors=spec.robot_errors,
+    )
     with all_or_nothing():
         fusion_report.plot(results, out_dir)
         return fusion_report.report(results, out_dir)
 
 
-EXPERIMENTS.register("fusion", Experiment(
-    "fusion", FusionSpec, run, FusionMetrics,
-    "raw odometry against chapter 6's four fusion architectures on a route"))
+EXPERIMENTS.register(
+    "fusion",
+    Experiment(
+        "fusion",
+        FusionSpec,
+        run,
+        FusionMetrics,
+        "raw odometry against chapter 6's four fusion architectures on a route",
+    ),
+)

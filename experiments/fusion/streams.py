@@ -41,22 +41,33 @@ class Streams:
 
     def merged(self, kinds: tuple[str, ...]) -> Iterator[tuple[str, Any]]:
         """``(kind, msg)`` of the streams ``kinds`` merged by header stamp."""
+
         def keyed(kind: str):
             for i, msg in enumerate(getattr(self, kind)):
                 yield msg.header.stamp.to_us(), i, kind, msg
-        for _t, _i, kind, msg in heapq.merge(*(keyed(k) for k in kinds), key=lambda e: (e[0], e[1])):
+
+        for _t, _i, kind, msg in heapq.merge(
+            *(keyed(k) for k in kinds), key=lambda e: (e[0], e[1])
+        ):
             yield kind, msg
 
 
 def odom_poses(msgs: list) -> tuple[np.ndarray, np.ndarray]:
     """Stamps (N,) s and poses (N, 3) of ``nav_msgs/Odometry`` messages."""
     t_s = np.array([m.header.stamp.to_sec() for m in msgs], dtype=float)
-    pose = np.array([(m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.orientation.yaw_rad())
-                     for m in msgs], dtype=float).reshape(-1, 3)
+    pose = np.array(
+        [
+            (m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.orientation.yaw_rad())
+            for m in msgs
+        ],
+        dtype=float,
+    ).reshape(-1, 3)
     return t_s, pose
 
 
-def relative_motion(t_s: np.ndarray, pose: np.ndarray, t0_s: float, t1_s: float) -> tuple[float, float, float]:
+def relative_motion(
+    t_s: np.ndarray, pose: np.ndarray, t0_s: float, t1_s: float
+) -> tuple[float, float, float]:
     """Motion of the body between ``t0_s`` and ``t1_s`` in its own frame at ``t0_s``: dx_m, dy_m, dyaw_rad."""
     if len(t_s) == 0:
         return 0.0, 0.0, 0.0

@@ -33,7 +33,7 @@ class Episode:
     scenario: str
     obstacle: Obstacle | None
     actor: object = None  # amr_twin.model.actors.Actor of a walking person
-    doors: tuple = ()     # the doorways of a generated hall its reference plan crosses (a door trip)
+    doors: tuple = ()  # the doorways of a generated hall its reference plan crosses (a door trip)
 
 
 def free_cells(costmap) -> np.ndarray:
@@ -48,8 +48,16 @@ STOP_WITHIN_M = 0.6
 """A walking person halts while the robot is this close ahead of them (people give way), m."""
 
 
-def place(rng, scenario: str, plan, costmap, start, goal, people: str = "walking",
-           clear_m: tuple[float, float] = (0.9, 1.1)):
+def place(
+    rng,
+    scenario: str,
+    plan,
+    costmap,
+    start,
+    goal,
+    people: str = "walking",
+    clear_m: tuple[float, float] = (0.9, 1.1),
+):
     """An obstacle (or a walking person: an Actor; ``people`` ``crossing``: one who does not give way) in an
     aisle on the planned way, at least 3 m from start and goal, its point ``clear_m`` from the map's obstacles
     (the middle of a 2 m aisle); None if no room."""
@@ -57,7 +65,9 @@ def place(rng, scenario: str, plan, costmap, start, goal, people: str = "walking
     s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
     d = costmap.static_distance_at(xy)
     ok = (s > 3.0) & (s < s[-1] - 3.0) & (d >= clear_m[0]) & (d <= clear_m[1])
-    ok &= (np.hypot(*(xy - np.asarray(start[:2])).T) > 3.0) & (np.hypot(*(xy - np.asarray(goal[:2])).T) > 3.0)
+    ok &= (np.hypot(*(xy - np.asarray(start[:2])).T) > 3.0) & (
+        np.hypot(*(xy - np.asarray(goal[:2])).T) > 3.0
+    )
     if not ok.any():
         return None
     i = int(rng.choice(np.flatnonzero(ok)))
@@ -70,8 +80,13 @@ def place(rng, scenario: str, plan, costmap, start, goal, people: str = "walking
         n = np.array([-math.sin(yaw), math.cos(yaw)]) * side
         a, b = xy[i] - CROSS_HALF_M * n, xy[i] + CROSS_HALF_M * n
         start_s = max(0.0, REST_S + (s[i] - 3.0) / ROBOT_SPEED_M_S)
-        return Actor("person", ((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))), 1.3, start_s=start_s,
-                     stop_within_m=STOP_WITHIN_M if people == "walking" else 0.0)
+        return Actor(
+            "person",
+            ((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))),
+            1.3,
+            start_s=start_s,
+            stop_within_m=STOP_WITHIN_M if people == "walking" else 0.0,
+        )
     if scenario == "person":
         size, offset = PERSON_SIZE_M, float(rng.choice([-1.0, 1.0]) * rng.uniform(0.35, 0.6))
     else:

@@ -9,8 +9,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amr_twin.experiments.navigation.episodes import (MAX_APART_M, MIN_APART_M, SCENARIOS, SHARES, Episode,
-                                                       free_cells, place)
+from amr_twin.experiments.navigation.episodes import (
+    MAX_APART_M,
+    MIN_APART_M,
+    SCENARIOS,
+    SHARES,
+    Episode,
+    free_cells,
+    place,
+)
 from amr_twin.model.worlds import Obstacle
 
 MAPS = ("true", "slam")
@@ -26,6 +33,7 @@ def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") ->
 
     if is_generated(world):
         from amr_twin.experiments.navigation.generated import episodes as hall_episodes
+
         return hall_episodes(cfg, world, n, seed, people)
     costmap = make_costmap(true_map(cfg, world), robot_footprint(cfg), cfg.navigation)
     planner = GlobalPlanner(costmap)
@@ -43,15 +51,25 @@ def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") ->
                 continue
             start = (float(a[0]), float(a[1]), float(rng.uniform(-math.pi, math.pi)))
             goal = (float(b[0]), float(b[1]), float(rng.uniform(-math.pi, math.pi)))
-            placed = None if scenario == "clear" else place(rng, scenario, plan, costmap, start, goal, people)
+            placed = (
+                None
+                if scenario == "clear"
+                else place(rng, scenario, plan, costmap, start, goal, people)
+            )
             if scenario != "clear" and placed is None:
                 continue
             actor = placed if placed is not None and not isinstance(placed, Obstacle) else None
-            out.append(Episode(i, seed, start, goal, scenario, None if actor is not None else placed, actor))
+            out.append(
+                Episode(
+                    i, seed, start, goal, scenario, None if actor is not None else placed, actor
+                )
+            )
             break
         else:
-            raise ValueError(f"episode {i}: no start/goal pair {MIN_APART_M:g}-{MAX_APART_M:g} m apart found in "
-                             f"world {world}")
+            raise ValueError(
+                f"episode {i}: no start/goal pair {MIN_APART_M:g}-{MAX_APART_M:g} m apart found in "
+                f"world {world}"
+            )
     return out
 
 
@@ -79,16 +97,27 @@ def run_episode(item: EpisodeRun) -> dict:
 
     ep = item.episode
     obstacles = () if ep.obstacle is None else (ep.obstacle,)
-    twin_options = TwinOptions(firmware=item.firmware, world=item.world, seed=ep.seed * 100_003 + ep.index,
-                               start_xy_yaw=ep.start, visuals=False, obstacles=obstacles,
-                               actors=() if ep.actor is None else (ep.actor,))
-    options = NavigationOptions(goals=(ep.goal,), map_yaml=item.slam_yaml if item.map_kind == "slam" else None,
-                                localisation=item.localisation, controller=item.controller,
-                                seed=ep.seed * 100_003 + ep.index)
+    twin_options = TwinOptions(
+        firmware=item.firmware,
+        world=item.world,
+        seed=ep.seed * 100_003 + ep.index,
+        start_xy_yaw=ep.start,
+        visuals=False,
+        obstacles=obstacles,
+        actors=() if ep.actor is None else (ep.actor,),
+    )
+    options = NavigationOptions(
+        goals=(ep.goal,),
+        map_yaml=item.slam_yaml if item.map_kind == "slam" else None,
+        localisation=item.localisation,
+        controller=item.controller,
+        seed=ep.seed * 100_003 + ep.index,
+    )
     run = navigate(item.cfg, twin_options, options)
     row = measure(item.cfg, item.world, ep, item.map_kind, run)
     if is_generated(item.world):
         from amr_twin.experiments.navigation.generated import door_metrics
+
         row.update(world=item.world, **door_metrics(item.cfg, item.world, ep, run))
     return row
 
@@ -102,9 +131,23 @@ def _timed_episode(item: EpisodeRun) -> dict:
     return row
 
 
-def run(cfg, world: str, n: int, *, seed: int = 0, maps: tuple = MAPS, slam_yaml: str | None = None,
-        slam_stem=None, localisation: str = "ekf", controller: str = "mppi", firmware: str = "improved",
-        jobs: int = 1, client=None, progress: bool = True, people: str = "walking") -> dict:
+def run(
+    cfg,
+    world: str,
+    n: int,
+    *,
+    seed: int = 0,
+    maps: tuple = MAPS,
+    slam_yaml: str | None = None,
+    slam_stem=None,
+    localisation: str = "ekf",
+    controller: str = "mppi",
+    firmware: str = "improved",
+    jobs: int = 1,
+    client=None,
+    progress: bool = True,
+    people: str = "walking",
+) -> dict:
     """Every episode on every map (building the SLAM map at ``slam_stem`` first when ``slam_yaml`` is None)."""
     import time
 
@@ -122,55 +165,133 @@ def run(cfg, world: str, n: int, *, seed: int = 0, maps: tuple = MAPS, slam_yaml
         else:
             slam = {"yaml": str(slam_yaml), "route": "given (--slam-map)"}
     eps = episodes(cfg, world, n, seed, people)
-    items = [EpisodeRun(cfg, world, ep, kind, slam_yaml, localisation, controller, firmware)
-             for ep in eps for kind in maps]
-    rows = [row for _item, row in run_all(_timed_episode, items, jobs=jobs, client=client,
-                                          description="navigation episodes", progress=progress)]
+    items = [
+        EpisodeRun(cfg, world, ep, kind, slam_yaml, localisation, controller, firmware)
+        for ep in eps
+        for kind in maps
+    ]
+    rows = [
+        row
+        for _item, row in run_all(
+            _timed_episode,
+            items,
+            jobs=jobs,
+            client=client,
+            description="navigation episodes",
+            progress=progress,
+        )
+    ]
     rows.sort(key=lambda r: (r["index"], MAPS.index(r["map"])))
-    static_maps = {kind: load_static_map(cfg, world, slam_yaml if kind == "slam" else None) for kind in maps}
-    return {"world": world, "episodes": n, "seed": seed, "people": people, "maps": list(maps),
-            "localisation": localisation,
-            "controller": controller, "firmware": firmware, "slam_map": slam,
-            "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
-                       "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
-            "summary": summary(rows), "rows": rows, "static_maps": static_maps, "jobs": jobs,
-            "wall_s": time.perf_counter() - wall0,
-            "cpu_s": time.process_time() - cpu0 + sum(r["cpu_s"] for r in rows) * (jobs > 1 or client is not None)}
+    static_maps = {
+        kind: load_static_map(cfg, world, slam_yaml if kind == "slam" else None) for kind in maps
+    }
+    return {
+        "world": world,
+        "episodes": n,
+        "seed": seed,
+        "people": people,
+        "maps": list(maps),
+        "localisation": localisation,
+        "controller": controller,
+        "firmware": firmware,
+        "slam_map": slam,
+        "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
+        "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
+        "summary": summary(rows),
+        "rows": rows,
+        "static_maps": static_maps,
+        "jobs": jobs,
+        "wall_s": time.perf_counter() - wall0,
+        "cpu_s": time.process_time()
+        - cpu0
+        + sum(r["cpu_s"] for r in rows) * (jobs > 1 or client is not None),
+    }
 
 
-def run_halls(cfg, worlds: list[str], tuning: list[str], n: int, *, seed: int = 0, localisation: str = "ekf",
-              controller: str = "mppi", firmware: str = "improved", jobs: int = 1, client=None, progress: bool = True,
-              people: str = "walking") -> dict:
+def run_halls(
+    cfg,
+    worlds: list[str],
+    tuning: list[str],
+    n: int,
+    *,
+    seed: int = 0,
+    localisation: str = "ekf",
+    controller: str = "mppi",
+    firmware: str = "improved",
+    jobs: int = 1,
+    client=None,
+    progress: bool = True,
+    people: str = "walking",
+) -> dict:
     """``n`` episodes on the true map of each generated hall of ``worlds``, summed up for the ``tuning`` halls and
     for the others (held out) apart (:mod:`.generated`); each with a walking person also run without
     them, for the time the people cost (``people`` of each group's summary, ``rows_without_people``)."""
     import time
 
     from amr_twin.experiments.runner.executor import run_all
-    from amr_twin.experiments.navigation.generated import WITHOUT_PEOPLE, door_summary, people_penalty, without_people
+    from amr_twin.experiments.navigation.generated import (
+        WITHOUT_PEOPLE,
+        door_summary,
+        people_penalty,
+        without_people,
+    )
     from amr_twin.experiments.navigation.metrics import summary
     from amr_twin.navigation.stack import true_map
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    items = [EpisodeRun(cfg, world, ep, "true", None, localisation, controller, firmware)
-             for world in worlds for ep in episodes(cfg, world, n, seed, people)]
-    done = [row for _item, row in run_all(_timed_episode, items + without_people(items), jobs=jobs, client=client,
-                                          description="navigation episodes", progress=progress)]
+    items = [
+        EpisodeRun(cfg, world, ep, "true", None, localisation, controller, firmware)
+        for world in worlds
+        for ep in episodes(cfg, world, n, seed, people)
+    ]
+    done = [
+        row
+        for _item, row in run_all(
+            _timed_episode,
+            items + without_people(items),
+            jobs=jobs,
+            client=client,
+            description="navigation episodes",
+            progress=progress,
+        )
+    ]
     done.sort(key=lambda r: (worlds.index(r["world"]), r["index"]))
     rows = [r for r in done if r["scenario"] != WITHOUT_PEOPLE]
     bare = [r for r in done if r["scenario"] == WITHOUT_PEOPLE]
-    groups = {"tuning": [w for w in worlds if w in tuning], "held_out": [w for w in worlds if w not in tuning]}
+    groups = {
+        "tuning": [w for w in worlds if w in tuning],
+        "held_out": [w for w in worlds if w not in tuning],
+    }
     summaries = {}
     for group, members in groups.items():
         sel = [r for r in rows if r["world"] in members]
         if sel:
-            summaries[group] = {"worlds": members, "episodes": summary(sel), "doors": door_summary(sel),
-                                "people": people_penalty(sel, [r for r in bare if r["world"] in members])}
-    return {"worlds": worlds, "groups": groups, "episodes": n, "seed": seed, "people": people, "maps": ["true"],
-            "localisation": localisation, "controller": controller, "firmware": firmware,
-            "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
-                       "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
-            "summary": summaries, "by_world": {w: door_summary([r for r in rows if r["world"] == w]) for w in worlds},
-            "rows": rows, "rows_without_people": bare, "static_maps": {w: true_map(cfg, w) for w in worlds},
-            "jobs": jobs, "wall_s": time.perf_counter() - wall0,
-            "cpu_s": time.process_time() - cpu0 + sum(r["cpu_s"] for r in done) * (jobs > 1 or client is not None)}
+            summaries[group] = {
+                "worlds": members,
+                "episodes": summary(sel),
+                "doors": door_summary(sel),
+                "people": people_penalty(sel, [r for r in bare if r["world"] in members]),
+            }
+    return {
+        "worlds": worlds,
+        "groups": groups,
+        "episodes": n,
+        "seed": seed,
+        "people": people,
+        "maps": ["true"],
+        "localisation": localisation,
+        "controller": controller,
+        "firmware": firmware,
+        "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
+        "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
+        "summary": summaries,
+        "by_world": {w: door_summary([r for r in rows if r["world"] == w]) for w in worlds},
+        "rows": rows,
+        "rows_without_people": bare,
+        "static_maps": {w: true_map(cfg, w) for w in worlds},
+        "jobs": jobs,
+        "wall_s": time.perf_counter() - wall0,
+        "cpu_s": time.process_time()
+        - cpu0
+        + sum(r["cpu_s"] for r in done) * (jobs > 1 or client is not None),
+    }

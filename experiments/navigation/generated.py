@@ -43,7 +43,9 @@ def _crossed(hall, xy: np.ndarray) -> tuple[str, ...]:
     """The doorways a path (n, 2) goes through."""
     out = []
     for d in hall.doors:
-        near = (np.abs(xy[:, 1] - d.y_m) <= d.width_m / 2) & (np.abs(xy[:, 0] - d.x_m) <= DOOR_ZONE_M)
+        near = (np.abs(xy[:, 1] - d.y_m) <= d.width_m / 2) & (
+            np.abs(xy[:, 0] - d.x_m) <= DOOR_ZONE_M
+        )
         side = np.sign(xy[near, 0] - d.x_m)
         if near.any() and side.min() < 0 < side.max():
             out.append(d.name)
@@ -70,9 +72,16 @@ def _passable(cfg, world: str, obstacle: Obstacle, start, goal) -> bool:
     o = obstacle
     centre = np.array([b.centre_m[:2] for b in boxes] + [[o.x_m, o.y_m]])
     half = np.array([b.half_m[:2] for b in boxes] + [[o.size_m[0] / 2, o.size_m[1] / 2]])
-    fp = Footprints(centre, half, np.r_[np.zeros(len(boxes)), o.yaw_rad], tuple(b.name for b in boxes) + (o.name,))
+    fp = Footprints(
+        centre,
+        half,
+        np.r_[np.zeros(len(boxes)), o.yaw_rad],
+        tuple(b.name for b in boxes) + (o.name,),
+    )
     lo, hi = centre.min(0) - 2.0, centre.max(0) + 2.0
-    graph = VisibilityGraph(fp, robot_footprint(cfg).inscribed_radius_m, (lo[0], lo[1], hi[0], hi[1]))
+    graph = VisibilityGraph(
+        fp, robot_footprint(cfg).inscribed_radius_m, (lo[0], lo[1], hi[0], hi[1])
+    )
     return math.isfinite(graph.length_m(start[:2], goal[:2]))
 
 
@@ -112,18 +121,34 @@ def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") ->
                 continue
             start = (float(a[0]), float(a[1]), float(rng.uniform(-math.pi, math.pi)))
             goal = (float(b[0]), float(b[1]), float(rng.uniform(-math.pi, math.pi)))
-            placed = None if scenario == "clear" else place(rng, scenario, plan, costmap, start, goal, people,
-                                                            PLACE_CLEAR_M)
+            placed = (
+                None
+                if scenario == "clear"
+                else place(rng, scenario, plan, costmap, start, goal, people, PLACE_CLEAR_M)
+            )
             if scenario != "clear" and placed is None:
                 continue
             if isinstance(placed, Obstacle) and not _passable(cfg, world, placed, start, goal):
                 continue
             actor = placed if placed is not None and not isinstance(placed, Obstacle) else None
-            out.append(Episode(i, seed, start, goal, scenario, None if actor is not None else placed, actor, doors))
+            out.append(
+                Episode(
+                    i,
+                    seed,
+                    start,
+                    goal,
+                    scenario,
+                    None if actor is not None else placed,
+                    actor,
+                    doors,
+                )
+            )
             break
         else:
-            raise ValueError(f"episode {i}: no {'door trip' if door_trip else 'start/goal pair'} "
-                             f"{MIN_APART_M:g}-{MAX_APART_M:g} m apart found in world {world}")
+            raise ValueError(
+                f"episode {i}: no {'door trip' if door_trip else 'start/goal pair'} "
+                f"{MIN_APART_M:g}-{MAX_APART_M:g} m apart found in world {world}"
+            )
     return out
 
 
@@ -144,22 +169,33 @@ def door_metrics(cfg, world: str, episode: Episode, run) -> dict:
     for d in hall.doors:
         if d.name not in crossed:
             continue
-        near = (np.abs(pose[:, 0] - d.x_m) <= DOOR_ZONE_M) & (np.abs(pose[:, 1] - d.y_m) <= d.width_m / 2 + DOOR_ZONE_M)
+        near = (np.abs(pose[:, 0] - d.x_m) <= DOOR_ZONE_M) & (
+            np.abs(pose[:, 1] - d.y_m) <= d.width_m / 2 + DOOR_ZONE_M
+        )
         sides = {}
         for side, jamb in zip(("south_m", "north_m"), d.jambs):
             b = boxes[jamb]
-            fp = Footprints(np.array([b.centre_m[:2]]), np.array([b.half_m[:2]]), np.zeros(1), (jamb,))
+            fp = Footprints(
+                np.array([b.centre_m[:2]]), np.array([b.half_m[:2]]), np.zeros(1), (jamb,)
+            )
             sides[side] = float(footprint_clearance_m(pose[near], footprint, fp).min())
         clearance[d.name] = {"width_m": d.width_m, **sides}
-    return {"door_trip": bool(episode.doors), "doors_planned": list(episode.doors), "doors_crossed": list(crossed),
-            "door_clearance": clearance}
+    return {
+        "door_trip": bool(episode.doors),
+        "doors_planned": list(episode.doors),
+        "doors_crossed": list(crossed),
+        "door_clearance": clearance,
+    }
 
 
 def without_people(items: list) -> list:
     """The items (``EpisodeRun``) of ``items`` whose episode has a walking person, that person left out (scenario
     ``WITHOUT_PEOPLE``): the same start, goal, hall and seeds."""
-    return [replace(it, episode=replace(it.episode, actor=None, scenario=WITHOUT_PEOPLE))
-            for it in items if it.episode.actor is not None]
+    return [
+        replace(it, episode=replace(it.episode, actor=None, scenario=WITHOUT_PEOPLE))
+        for it in items
+        if it.episode.actor is not None
+    ]
 
 
 def people_penalty(rows: list[dict], bare: list[dict]) -> dict:
@@ -169,31 +205,53 @@ def people_penalty(rows: list[dict], bare: list[dict]) -> dict:
     robot touched a person (``person_contact_episodes``)."""
     ref = {(r["world"], r["index"]): r for r in bare}
     people = [r for r in rows if r.get("actor")]
-    pairs = [(r["world"], r["index"], r["time_s"] - ref[(r["world"], r["index"])]["time_s"]) for r in people
-             if (r["world"], r["index"]) in ref and r["success"] and ref[(r["world"], r["index"])]["success"]]
+    pairs = [
+        (r["world"], r["index"], r["time_s"] - ref[(r["world"], r["index"])]["time_s"])
+        for r in people
+        if (r["world"], r["index"]) in ref
+        and r["success"]
+        and ref[(r["world"], r["index"])]["success"]
+    ]
     extra = [e for _w, _i, e in pairs]
-    return {"person_episodes": len(people), "person_success": int(sum(r["success"] for r in people)),
-            "person_contact_episodes": int(sum(any(n.startswith("person") for n in r["collided_with"]) for r in rows)),
-            "without_people_success": int(sum(r["success"] for r in bare)), "pairs": len(pairs),
-            "extra_s_median": float(np.median(extra)) if extra else None, "extra_s_max": max(extra) if extra else None,
-            "extra_s": [[w, i, e] for w, i, e in pairs]}
+    return {
+        "person_episodes": len(people),
+        "person_success": int(sum(r["success"] for r in people)),
+        "person_contact_episodes": int(
+            sum(any(n.startswith("person") for n in r["collided_with"]) for r in rows)
+        ),
+        "without_people_success": int(sum(r["success"] for r in bare)),
+        "pairs": len(pairs),
+        "extra_s_median": float(np.median(extra)) if extra else None,
+        "extra_s_max": max(extra) if extra else None,
+        "extra_s": [[w, i, e] for w, i, e in pairs],
+    }
 
 
 def door_summary(rows: list[dict]) -> dict:
     """Door trips against the others: episodes, success, collisions, the least jamb clearance, true final error."""
     out = {}
-    for group, sel in (("door_trips", [r for r in rows if r.get("door_trip")]),
-                       ("other", [r for r in rows if not r.get("door_trip")])):
+    for group, sel in (
+        ("door_trips", [r for r in rows if r.get("door_trip")]),
+        ("other", [r for r in rows if not r.get("door_trip")]),
+    ):
         if not sel:
             continue
-        gaps = [min(c["south_m"], c["north_m"]) for r in sel for c in r.get("door_clearance", {}).values()]
+        gaps = [
+            min(c["south_m"], c["north_m"])
+            for r in sel
+            for c in r.get("door_clearance", {}).values()
+        ]
         errors = [r["final_error_true_m"] for r in sel if r.get("final_error_true_m") is not None]
-        out[group] = {"episodes": len(sel), "success": int(sum(r["success"] for r in sel)),
-                      "collisions": int(sum(r["collisions"] for r in sel)),
-                      "door_passages": len(gaps), "door_clearance_min_m": min(gaps) if gaps else None,
-                      "door_clearance_median_m": float(np.median(gaps)) if gaps else None,
-                      "final_error_true_m_median": float(np.median(errors)) if errors else None,
-                      "final_error_true_m_max": max(errors) if errors else None}
+        out[group] = {
+            "episodes": len(sel),
+            "success": int(sum(r["success"] for r in sel)),
+            "collisions": int(sum(r["collisions"] for r in sel)),
+            "door_passages": len(gaps),
+            "door_clearance_min_m": min(gaps) if gaps else None,
+            "door_clearance_median_m": float(np.median(gaps)) if gaps else None,
+            "final_error_true_m_median": float(np.median(errors)) if errors else None,
+            "final_error_true_m_max": max(errors) if errors else None,
+        }
     return out
 
 
@@ -213,8 +271,14 @@ def write_world(cfg, world: str, folder: Path) -> list[Path]:
     write_text(folder / f"{stem}.xml", mjcf(world))
     with replacing(folder / f"{stem}.pgm") as tmp:
         write_pgm(tmp, np.where(sm.occupied, 0, 254).astype(np.uint8)[::-1])
-    meta = {"image": f"{stem}.pgm", "resolution": sm.resolution_m,
-            "origin": [float(sm.origin_xy_m[0]), float(sm.origin_xy_m[1]), 0.0], "occupied_thresh": 0.65,
-            "free_thresh": 0.196, "negate": 0, "mode": "trinary"}
+    meta = {
+        "image": f"{stem}.pgm",
+        "resolution": sm.resolution_m,
+        "origin": [float(sm.origin_xy_m[0]), float(sm.origin_xy_m[1]), 0.0],
+        "occupied_thresh": 0.65,
+        "free_thresh": 0.196,
+        "negate": 0,
+        "mode": "trinary",
+    }
     write_text(folder / f"{stem}.yaml", yaml.safe_dump(meta, sort_keys=True))
     return [folder / f"{stem}.{ext}" for ext in ("xml", "yaml", "pgm")]

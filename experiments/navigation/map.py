@@ -32,7 +32,9 @@ def mapping_route(world: str) -> Path:
     """The route that maps ``world`` (a file of experiments/routes/); ValueError naming it if there is none."""
     path = ROUTES_DIR / MAPPING_ROUTE.format(world=world)
     if not path.is_file():
-        raise ValueError(f"world {world}: no mapping route ({path.name} in experiments/routes/); give --slam-map")
+        raise ValueError(
+            f"world {world}: no mapping route ({path.name} in experiments/routes/); give --slam-map"
+        )
     return path
 
 
@@ -41,7 +43,13 @@ def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = 
     save ``<stem>.yaml/.pgm/.png``; its figures."""
     from amr_twin.estimation.pose_graph import smooth
     from amr_twin.controllers.route import load_route
-    from amr_twin.experiments.fusion.experiment import drive, estimate_ekf, estimate_lidar, last_per_stamp, site_config
+    from amr_twin.experiments.fusion.experiment import (
+        drive,
+        estimate_ekf,
+        estimate_lidar,
+        last_per_stamp,
+        site_config,
+    )
     from amr_twin.experiments.fusion.streams import odom_poses
     from amr_twin.model.world_geometry import scan_plane_boxes
 
@@ -52,17 +60,42 @@ def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = 
     lidar_t, lidar_pose = last_per_stamp(lidar.t_s, lidar.pose)
     odom_t, odom_pose = odom_poses(streams.odom)
     tag = cfg.uwb.tag_pos_m
-    smoothed = smooth(lidar_t, lidar_pose, odom_t, odom_pose, streams.uwb, cfg.uwb.anchors_xy_m,
-                      tag[:2], cfg.uwb.anchor_z_m - tag[2], lidar_pose[0], cfg.ekf.uwb_range_sigma_m,
-                      cfg.mapping.pose_graph)
+    smoothed = smooth(
+        lidar_t,
+        lidar_pose,
+        odom_t,
+        odom_pose,
+        streams.uwb,
+        cfg.uwb.anchors_xy_m,
+        tag[:2],
+        cfg.uwb.anchor_z_m - tag[2],
+        lidar_pose[0],
+        cfg.ekf.uwb_range_sigma_m,
+        cfg.mapping.pose_graph,
+    )
     ekf = estimate_ekf(cfg, streams, route.start_xy_yaw, use_imu=True, use_uwb=True)
-    boxes = scan_plane_boxes(twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2]))
-    return save_slam_map(streams.scan, beam_poses(cfg, streams.scan, smoothed.t_s, smoothed.pose), boxes, cfg, stem,
-                         ekf_beam_poses=beam_poses(cfg, streams.scan, ekf.t_s, ekf.pose)) | {
-        "route": route.name, "reached": bool(reached), "drive_sim_s": twin.t_s,
-        "pose_graph": {"ranges_used": smoothed.ranges_used, "ranges_left_out": smoothed.ranges_left_out,
-                       "iterations": smoothed.iterations, "error_before": smoothed.error_before,
-                       "error_after": smoothed.error_after}}
+    boxes = scan_plane_boxes(
+        twin.physics.model, float(twin.physics.site_position_m("amr/laser")[2])
+    )
+    return save_slam_map(
+        streams.scan,
+        beam_poses(cfg, streams.scan, smoothed.t_s, smoothed.pose),
+        boxes,
+        cfg,
+        stem,
+        ekf_beam_poses=beam_poses(cfg, streams.scan, ekf.t_s, ekf.pose),
+    ) | {
+        "route": route.name,
+        "reached": bool(reached),
+        "drive_sim_s": twin.t_s,
+        "pose_graph": {
+            "ranges_used": smoothed.ranges_used,
+            "ranges_left_out": smoothed.ranges_left_out,
+            "iterations": smoothed.iterations,
+            "error_before": smoothed.error_before,
+            "error_after": smoothed.error_after,
+        },
+    }
 
 
 def beam_poses(cfg, scans: list, t_s: np.ndarray, pose: np.ndarray) -> list:
@@ -74,10 +107,15 @@ def beam_poses(cfg, scans: list, t_s: np.ndarray, pose: np.ndarray) -> list:
 
     t_s, pose = last_per_stamp(t_s, pose)
     laser = np.asarray(laser_in_base(cfg))
-    return [se2.compose(se2.interpolate(t_s, pose, beam_times_s(scan)).reshape(-1, 3), laser) for scan in scans]
+    return [
+        se2.compose(se2.interpolate(t_s, pose, beam_times_s(scan)).reshape(-1, 3), laser)
+        for scan in scans
+    ]
 
 
-def save_slam_map(scans: list, beam_poses: list, boxes, cfg, stem: Path, ekf_beam_poses: list | None = None) -> dict:
+def save_slam_map(
+    scans: list, beam_poses: list, boxes, cfg, stem: Path, ekf_beam_poses: list | None = None
+) -> dict:
     """The map of ``scans`` at ``beam_poses`` after scan-to-map matching (:mod:`.scan_match`),
     saved at ``stem``; its agreement with the world (``boxes``), and that of the maps the poses make
     unmatched (``unmatched_*``) and the EKF's poses make (``ekf_only_*``, when given; neither saved)."""
@@ -86,14 +124,21 @@ def save_slam_map(scans: list, beam_poses: list, boxes, cfg, stem: Path, ekf_bea
 
     res, margin = cfg.mapping.resolution_m, cfg.mapping.margin_m
     plain = build_map(scans, beam_poses, boxes, res, margin)
-    matched, corrections = match_scans(scans, beam_poses, plain.origin_xy_m, (plain.n_rows, plain.n_cols), res)
+    matched, corrections = match_scans(
+        scans, beam_poses, plain.origin_xy_m, (plain.n_rows, plain.n_cols), res
+    )
     grid = build_map(scans, matched, boxes, res, margin)
     yaml_path, _, png = grid.save(stem)
     check = agreement(yaml_path, boxes)
-    out = {"yaml": str(yaml_path), "png": str(png), "scans": len(scans),
-           "walls_within_2_cells_frac": check.within_tolerance_frac, "outline_seen_frac": check.outline_seen_frac,
-           "p95_distance_cells": check.p95_distance_cells,
-           "correction_p95": [float(v) for v in np.percentile(np.abs(corrections), 95, axis=0)]}
+    out = {
+        "yaml": str(yaml_path),
+        "png": str(png),
+        "scans": len(scans),
+        "walls_within_2_cells_frac": check.within_tolerance_frac,
+        "outline_seen_frac": check.outline_seen_frac,
+        "p95_distance_cells": check.p95_distance_cells,
+        "correction_p95": [float(v) for v in np.percentile(np.abs(corrections), 95, axis=0)],
+    }
     others = {"unmatched": plain}
     if ekf_beam_poses is not None:
         others["ekf_only"] = build_map(scans, ekf_beam_poses, boxes, res, margin)
@@ -102,6 +147,8 @@ def save_slam_map(scans: list, beam_poses: list, boxes, cfg, stem: Path, ekf_bea
         a = agreement(other_yaml, boxes)
         for suffix in (".yaml", ".pgm", ".png"):
             other_yaml.with_suffix(suffix).unlink(missing_ok=True)
-        out |= {f"{name}_walls_within_2_cells_frac": a.within_tolerance_frac,
-                f"{name}_p95_distance_cells": a.p95_distance_cells}
+        out |= {
+            f"{name}_walls_within_2_cells_frac": a.within_tolerance_frac,
+            f"{name}_p95_distance_cells": a.p95_distance_cells,
+        }
     return out

@@ -31,14 +31,20 @@ class VisibilityGraph:
         polys = []
         for (cx, cy), (hx, hy), a in zip(boxes.centre_xy_m, boxes.half_xy_m, boxes.yaw_rad):
             c, s = math.cos(a), math.sin(a)
-            corners = [(cx + c * x - s * y, cy + s * x + c * y) for x, y in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))]
+            corners = [
+                (cx + c * x - s * y, cy + s * x + c * y)
+                for x, y in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
+            ]
             polys.append(shapely.Polygon(corners))
         grown = shapely.union_all([p.buffer(radius_m, quad_segs=QUAD_SEGS) for p in polys])
         self.free = shapely.box(*bounds_xy_m).difference(grown)
         # the segments are checked against obstacles grown 1 mm less: a segment tangent to a corner
         # touches it at a vertex, and rounding would otherwise put it a hair inside
         self._room = shapely.box(*bounds_xy_m).difference(
-            shapely.union_all([p.buffer(radius_m - TOLERANCE_M, quad_segs=QUAD_SEGS) for p in polys]))
+            shapely.union_all(
+                [p.buffer(radius_m - TOLERANCE_M, quad_segs=QUAD_SEGS) for p in polys]
+            )
+        )
         shapely.prepare(self._room)
 
     def _component(self, xy):
@@ -53,15 +59,21 @@ class VisibilityGraph:
         comp = self._component(start_xy)
         if comp is None or not comp.covers(shapely.Point(goal_xy)):
             return math.inf
-        comp = shapely.orient_polygons(comp)  # exterior counter-clockwise, holes clockwise: free space on the left
+        comp = shapely.orient_polygons(
+            comp
+        )  # exterior counter-clockwise, holes clockwise: free space on the left
         verts = []
         for ring in [comp.exterior, *comp.interiors]:
             v = np.asarray(ring.coords)[:-1]
             e_in, e_out = v - np.roll(v, 1, axis=0), np.roll(v, -1, axis=0) - v
             turn = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
-            verts.append(v[turn < 0])  # a shortest path bends only where the boundary turns into the free space
+            verts.append(
+                v[turn < 0]
+            )  # a shortest path bends only where the boundary turns into the free space
         verts = np.vstack(verts)
-        pts = np.vstack([np.asarray(start_xy, float)[None], np.asarray(goal_xy, float)[None], verts])
+        pts = np.vstack(
+            [np.asarray(start_xy, float)[None], np.asarray(goal_xy, float)[None], verts]
+        )
         n = len(pts)
         i, j = np.triu_indices(n, 1)
         a, b = pts[i], pts[j]

@@ -16,13 +16,20 @@ def _end_points(scan, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     with np.errstate(invalid="ignore"):
         hit = np.flatnonzero(np.isfinite(r) & (r >= scan.range_min) & (r < scan.range_max))
     theta = poses[hit, 2] + scan.angle_min + scan.angle_increment * hit
-    return np.column_stack([poses[hit, 0] + r[hit] * np.cos(theta), poses[hit, 1] + r[hit] * np.sin(theta)]), hit
+    return np.column_stack(
+        [poses[hit, 0] + r[hit] * np.cos(theta), poses[hit, 1] + r[hit] * np.sin(theta)]
+    ), hit
 
 
 def _apply(delta, centre: np.ndarray, xy: np.ndarray) -> np.ndarray:
     c, s = math.cos(delta[2]), math.sin(delta[2])
     d = xy - centre
-    return np.column_stack([centre[0] + c * d[:, 0] - s * d[:, 1] + delta[0], centre[1] + s * d[:, 0] + c * d[:, 1] + delta[1]])
+    return np.column_stack(
+        [
+            centre[0] + c * d[:, 0] - s * d[:, 1] + delta[0],
+            centre[1] + s * d[:, 0] + c * d[:, 1] + delta[1],
+        ]
+    )
 
 
 class _HitMap:
@@ -40,26 +47,38 @@ class _HitMap:
     def field(self, centre_xy: np.ndarray, half_m: float):
         """Distance to the nearest hit (m) on a window about ``centre_xy``, its gradient, and the window's corner cell."""
         n = int(half_m / self.res)
-        r0, c0 = (np.floor((centre_xy[::-1] - self.origin[::-1]) / self.res).astype(int) - n)
+        r0, c0 = np.floor((centre_xy[::-1] - self.origin[::-1]) / self.res).astype(int) - n
         r0, c0 = max(r0, 0), max(c0, 0)
-        win = self.hits[r0:r0 + 2 * n, c0:c0 + 2 * n]
+        win = self.hits[r0 : r0 + 2 * n, c0 : c0 + 2 * n]
         if not win.any():
             return None
         d = distance_transform_edt(~win) * self.res
         return d, np.gradient(d, self.res), (r0, c0)
 
 
-def match_scans(scans: list, beam_poses: list, origin_xy_m, shape: tuple[int, int], resolution_m: float, *,
-                warmup: int = 20, window_m: float = 7.0, inlier_m: float = 0.3, prior_m: float = 0.05,
-                prior_rad: float = 0.01, ekf_m: float = 0.1, ekf_rad: float = 0.02,
-                iterations: int = 6) -> tuple[list, np.ndarray]:
+def match_scans(
+    scans: list,
+    beam_poses: list,
+    origin_xy_m,
+    shape: tuple[int, int],
+    resolution_m: float,
+    *,
+    warmup: int = 20,
+    window_m: float = 7.0,
+    inlier_m: float = 0.3,
+    prior_m: float = 0.05,
+    prior_rad: float = 0.01,
+    ekf_m: float = 0.1,
+    ekf_rad: float = 0.02,
+    iterations: int = 6,
+) -> tuple[list, np.ndarray]:
     """Beam poses (each (n_beams, 3)) corrected by scan-to-map matching (module docstring), and the
     corrections (n_scans, 3): dx_m, dy_m, dyaw_rad."""
     hit_map = _HitMap(origin_xy_m, shape, resolution_m)
     delta = np.zeros(3)
     out, corrections = [], np.zeros((len(scans), 3))
-    prior = np.diag([1.0 / prior_m ** 2, 1.0 / prior_m ** 2, 1.0 / prior_rad ** 2])
-    anchor = np.diag([1.0 / ekf_m ** 2, 1.0 / ekf_m ** 2, 1.0 / ekf_rad ** 2])
+    prior = np.diag([1.0 / prior_m**2, 1.0 / prior_m**2, 1.0 / prior_rad**2])
+    anchor = np.diag([1.0 / ekf_m**2, 1.0 / ekf_m**2, 1.0 / ekf_rad**2])
     for k, (scan, poses) in enumerate(zip(scans, beam_poses)):
         poses = np.asarray(poses, float)
         xy, _beams = _end_points(scan, poses)
@@ -70,17 +89,31 @@ def match_scans(scans: list, beam_poses: list, origin_xy_m, shape: tuple[int, in
             last = delta.copy()
             for _ in range(iterations):
                 p = _apply(delta, centre, xy)
-                rc = np.vstack([(p[:, 1] - hit_map.origin[1]) / resolution_m - 0.5 - r0,
-                                (p[:, 0] - hit_map.origin[0]) / resolution_m - 0.5 - c0])
+                rc = np.vstack(
+                    [
+                        (p[:, 1] - hit_map.origin[1]) / resolution_m - 0.5 - r0,
+                        (p[:, 0] - hit_map.origin[0]) / resolution_m - 0.5 - c0,
+                    ]
+                )
                 dist = map_coordinates(d, rc, order=1, mode="nearest")
-                inside = (rc >= 0).all(0) & (rc[0] < d.shape[0] - 1) & (rc[1] < d.shape[1] - 1) & (dist < inlier_m)
+                inside = (
+                    (rc >= 0).all(0)
+                    & (rc[0] < d.shape[0] - 1)
+                    & (rc[1] < d.shape[1] - 1)
+                    & (dist < inlier_m)
+                )
                 if inside.sum() < 20:
                     break
-                g = np.column_stack([map_coordinates(gx, rc[:, inside], order=1), map_coordinates(gy, rc[:, inside], order=1)])
+                g = np.column_stack(
+                    [
+                        map_coordinates(gx, rc[:, inside], order=1),
+                        map_coordinates(gy, rc[:, inside], order=1),
+                    ]
+                )
                 q = p[inside] - centre - delta[:2]
                 J = np.column_stack([g[:, 0], g[:, 1], -g[:, 0] * q[:, 1] + g[:, 1] * q[:, 0]])
-                H = J.T @ J / inlier_m ** 2 + prior + anchor
-                b = J.T @ dist[inside] / inlier_m ** 2 + prior @ (delta - last) + anchor @ delta
+                H = J.T @ J / inlier_m**2 + prior + anchor
+                b = J.T @ dist[inside] / inlier_m**2 + prior @ (delta - last) + anchor @ delta
                 step = np.linalg.solve(H, -b)
                 delta = delta + step
                 if abs(step[0]) + abs(step[1]) < 1e-4 and abs(step[2]) < 1e-5:

@@ -19,11 +19,19 @@ from dataclasses import dataclass
 from amr_twin.model.config import TwinConfig, with_values
 from amr_twin.assembly.command import Command
 
-POSITIONS = {"center": (0, 0), "front": (1, 0), "rear": (-1, 0), "left": (0, 1), "right": (0, -1),
-             "front-left-corner": (1, 1), "front-right-corner": (1, -1),
-             "rear-left-corner": (-1, 1), "rear-right-corner": (-1, -1)}
-MAX_MASSES = 1000          # masses per sweep: each is a simulation per position and command
-ROWS = 6                   # what a row means (in the fingerprint): 6 = with the true speed's steady error; 5 = ball speed as sqrt(ux^2 + uy^2) (C and Python alike); 4 = sampled on the loop's record grid in one call; 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
+POSITIONS = {
+    "center": (0, 0),
+    "front": (1, 0),
+    "rear": (-1, 0),
+    "left": (0, 1),
+    "right": (0, -1),
+    "front-left-corner": (1, 1),
+    "front-right-corner": (1, -1),
+    "rear-left-corner": (-1, 1),
+    "rear-right-corner": (-1, -1),
+}
+MAX_MASSES = 1000  # masses per sweep: each is a simulation per position and command
+ROWS = 6  # what a row means (in the fingerprint): 6 = with the true speed's steady error; 5 = ball speed as sqrt(ux^2 + uy^2) (C and Python alike); 4 = sampled on the loop's record grid in one call; 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
 
 
 def parse_masses(text: str) -> list[float]:
@@ -34,19 +42,25 @@ def parse_masses(text: str) -> list[float]:
         else:
             masses = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise ValueError(f"--masses {text!r}: expected START:STOP:STEP or M1,M2,... in kg") from None
+        raise ValueError(
+            f"--masses {text!r}: expected START:STOP:STEP or M1,M2,... in kg"
+        ) from None
     if ":" in text:
         if not all(math.isfinite(v) for v in (start, stop, step)):
             raise ValueError(f"--masses {text!r}: START, STOP and STEP must be finite numbers (kg)")
         if stop < start:
-            raise ValueError(f"--masses {text!r}: STOP {stop:g} kg is below START {start:g} kg: give START <= STOP "
-                             f"(e.g. {stop:g}:{start:g}:{abs(step):g})")
+            raise ValueError(
+                f"--masses {text!r}: STOP {stop:g} kg is below START {start:g} kg: give START <= STOP "
+                f"(e.g. {stop:g}:{start:g}:{abs(step):g})"
+            )
         if step <= 0:
             raise ValueError(f"--masses {text!r}: STEP {step:g} kg must be > 0")
         count = math.floor((stop - start) / step + 1e-9) + 1
         if count > MAX_MASSES:
-            raise ValueError(f"--masses {text!r}: {count if count < 1e6 else f'{count:.3g}'} masses; at most {MAX_MASSES} per sweep "
-                             "(each is one simulation per position and command)")
+            raise ValueError(
+                f"--masses {text!r}: {count if count < 1e6 else f'{count:.3g}'} masses; at most {MAX_MASSES} per sweep "
+                "(each is one simulation per position and command)"
+            )
         masses = [round(start + i * step, 6) for i in range(count)]
     if not masses:
         raise ValueError(f"--masses {text!r}: names no mass (START:STOP:STEP or M1,M2,... in kg)")
@@ -67,12 +81,17 @@ def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:
     if name in POSITIONS:
         dx, dy = POSITIONS[name]
         sx, sy = cfg.payload.size_m[0] / 2, cfg.payload.size_m[1] / 2
-        inside = [_micrometres_inside(v) for v in (cfg.chassis.length_m / 2 - sx, cfg.chassis.width_m / 2 - sy)]
+        inside = [
+            _micrometres_inside(v)
+            for v in (cfg.chassis.length_m / 2 - sx, cfg.chassis.width_m / 2 - sy)
+        ]
         return dx * inside[0] + 0.0, dy * inside[1] + 0.0  # + 0.0: no -0.0
     try:
         x, y = (float(v) for v in name.split(":"))
     except ValueError:
-        raise ValueError(f"--positions {name!r}: not one of {', '.join(POSITIONS)} nor X:Y in metres") from None
+        raise ValueError(
+            f"--positions {name!r}: not one of {', '.join(POSITIONS)} nor X:Y in metres"
+        ) from None
     if not (math.isfinite(x) and math.isfinite(y)):
         raise ValueError(f"--positions {name!r}: X and Y must be finite numbers (m)")
     return x, y
@@ -85,8 +104,10 @@ def check_on_deck(cfg: TwinConfig, name: str) -> None:
     hx = cfg.chassis.length_m / 2 - cfg.payload.size_m[0] / 2
     hy = cfg.chassis.width_m / 2 - cfg.payload.size_m[1] / 2
     if abs(x) > hx + 1e-9 or abs(y) > hy + 1e-9:
-        raise ValueError(f"--positions {name!r}: the payload box ({cfg.payload.size_m[0]:g} x "
-                         f"{cfg.payload.size_m[1]:g} m) leaves the deck: |X| <= {hx:.3f} m and |Y| <= {hy:.3f} m")
+        raise ValueError(
+            f"--positions {name!r}: the payload box ({cfg.payload.size_m[0]:g} x "
+            f"{cfg.payload.size_m[1]:g} m) leaves the deck: |X| <= {hx:.3f} m and |Y| <= {hy:.3f} m"
+        )
 
 
 def check_masses(text: str, masses: list[float]) -> None:
@@ -97,8 +118,10 @@ def check_masses(text: str, masses: list[float]) -> None:
     low, high, unit = field_range(TwinConfig, ["payload", "mass_kg"])
     over = [m for m in masses if m > high]
     if over:
-        raise ValueError(f"--masses {text!r}: {over[0]:g} {unit} is above payload.mass_kg's allowed "
-                         f"[{low}, {high}] {unit}")
+        raise ValueError(
+            f"--masses {text!r}: {over[0]:g} {unit} is above payload.mass_kg's allowed "
+            f"[{low}, {high}] {unit}"
+        )
 
 
 def check_accepted(cfg: TwinConfig, text: str) -> None:
@@ -130,20 +153,31 @@ class Point:
     duration_s: float
     firmware: str
     cfg: TwinConfig
-    rrd_path: str | None = None   # write the point's Rerun recording here (not part of the fingerprint)
+    rrd_path: str | None = (
+        None  # write the point's Rerun recording here (not part of the fingerprint)
+    )
     mcap_path: str | None = None  # write the point's ROS 2 topics here
-    sample: int | None = None     # index of the drawn configuration ``cfg`` (None: the nominal one)
-    sample_id: str = ""           # hash of the sample's drawn values (amr_twin.calibration.uncertainty.Draws.sample_id)
+    sample: int | None = None  # index of the drawn configuration ``cfg`` (None: the nominal one)
+    sample_id: str = (
+        ""  # hash of the sample's drawn values (amr_twin.calibration.uncertainty.Draws.sample_id)
+    )
 
     @property
     def key(self) -> str:
-        key = f"m{self.mass_kg:g}kg_{self.position}_{self.command}".replace(":", "_").replace("/", "_")
+        key = f"m{self.mass_kg:g}kg_{self.position}_{self.command}".replace(":", "_").replace(
+            "/", "_"
+        )
         return key if self.sample is None else f"{key}_s{self.sample}_{self.sample_id}"
 
     @property
     def fingerprint(self) -> str:
-        from amr_twin.controllers.firmware import firmware_identity  # avr: the sketch's sources count too
+        from amr_twin.controllers.firmware import (
+            firmware_identity,
+        )  # avr: the sketch's sources count too
 
-        text = (self.cfg.model_dump_json() + f"|{firmware_identity(self.firmware)}|{self.duration_s}"
-                + f"|rows {ROWS}")
+        text = (
+            self.cfg.model_dump_json()
+            + f"|{firmware_identity(self.firmware)}|{self.duration_s}"
+            + f"|rows {ROWS}"
+        )
         return hashlib.sha256(text.encode()).hexdigest()[:16]

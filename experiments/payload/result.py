@@ -30,9 +30,13 @@ class Statics:
     loads_n: dict[str, float]
 
     def row(self) -> dict:
-        return {"total_mass_kg": self.total_mass_kg, "static_tip_margin_m": self.tip_margin_m,
-                "static_min_caster_n": self.min_caster_n, "static_lifted": self.lifted,
-                **{f"static_{k}_n": v for k, v in self.loads_n.items()}}
+        return {
+            "total_mass_kg": self.total_mass_kg,
+            "static_tip_margin_m": self.tip_margin_m,
+            "static_min_caster_n": self.min_caster_n,
+            "static_lifted": self.lifted,
+            **{f"static_{k}_n": v for k, v in self.loads_n.items()},
+        }
 
 
 @dataclass(frozen=True)
@@ -47,7 +51,9 @@ class MinWheel:
     mechanism: str
 
     def row(self) -> dict:
-        return {f"dyn_min_wheel{'' if k == 'wheel' else '_' + k}": v for k, v in asdict(self).items()}
+        return {
+            f"dyn_min_wheel{'' if k == 'wheel' else '_' + k}": v for k, v in asdict(self).items()
+        }
 
 
 @dataclass(frozen=True)
@@ -62,9 +68,14 @@ class Electrics:
     energy_j_per_m: Optional[float]
 
     def row(self) -> dict:
-        return {"left_steady_current_a": self.steady_current_a[0], "right_steady_current_a": self.steady_current_a[1],
-                "battery_steady_a": self.battery_steady_a, "energy_j": self.energy_j, "distance_m": self.distance_m,
-                "energy_j_per_m": self.energy_j_per_m}
+        return {
+            "left_steady_current_a": self.steady_current_a[0],
+            "right_steady_current_a": self.steady_current_a[1],
+            "battery_steady_a": self.battery_steady_a,
+            "energy_j": self.energy_j,
+            "distance_m": self.distance_m,
+            "energy_j_per_m": self.energy_j_per_m,
+        }
 
 
 @dataclass(frozen=True)
@@ -81,7 +92,10 @@ class WheelRun:
     steady: Optional[dict[str, float]] = None
 
     def row(self) -> dict:
-        out = {f"{self.name}_reference_rpm": self.reference_rpm, f"{self.name}_max_slip_m_s": self.max_slip_m_s}
+        out = {
+            f"{self.name}_reference_rpm": self.reference_rpm,
+            f"{self.name}_max_slip_m_s": self.max_slip_m_s,
+        }
         for part in (self.step, self.steady):
             out.update({f"{self.name}_{k}": v for k, v in (part or {}).items()})
         return out
@@ -104,13 +118,21 @@ class Dynamics:
     wheel_lift_off: bool
     wheels: tuple[WheelRun, ...]
     tracks: bool
-    tyre_timestep_s: Optional[float] = None  # the physics timestep when the tyres' guard halved it, s
+    tyre_timestep_s: Optional[float] = (
+        None  # the physics timestep when the tyres' guard halved it, s
+    )
 
     def row(self) -> dict:
-        out = {"max_tilt_deg": self.max_tilt_deg, "dyn_min_wheel_n": self.min_wheel_n,
-               "dyn_min_caster_n": self.min_caster_n, "dyn_lifted": self.lifted,
-               "dyn_min_wheel_contact_n": self.min_wheel_contact_n, **self.min_wheel.row(), **self.electrics.row(),
-               "wheel_lift_off": self.wheel_lift_off}
+        out = {
+            "max_tilt_deg": self.max_tilt_deg,
+            "dyn_min_wheel_n": self.min_wheel_n,
+            "dyn_min_caster_n": self.min_caster_n,
+            "dyn_lifted": self.lifted,
+            "dyn_min_wheel_contact_n": self.min_wheel_contact_n,
+            **self.min_wheel.row(),
+            **self.electrics.row(),
+            "wheel_lift_off": self.wheel_lift_off,
+        }
         for wheel in self.wheels:
             out.update(wheel.row())
         out["tracks"] = self.tracks
@@ -146,8 +168,15 @@ class PointResult:
 
     def as_json(self) -> dict:
         """The flat row (JSON-ready: non-finite numbers as None)."""
-        row = {"key": self.key, "fingerprint": self.fingerprint, "mass_kg": self.mass_kg, "position": self.position,
-               "command": self.command, "valid": self.valid, "error": self.error}
+        row = {
+            "key": self.key,
+            "fingerprint": self.fingerprint,
+            "mass_kg": self.mass_kg,
+            "position": self.position,
+            "command": self.command,
+            "valid": self.valid,
+            "error": self.error,
+        }
         if self.sample is not None:
             row.update(sample=self.sample, sample_id=self.sample_id)
         if self.xy_m is not None:
@@ -160,4 +189,7 @@ class PointResult:
         row["safe"] = self.safe
         if self.wall_s is not None:
             row["wall_s"] = self.wall_s
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+        return {
+            k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+            for k, v in row.items()
+        }

@@ -26,12 +26,19 @@ from amr_twin.model.config import ConfigError, TwinConfig
 from amr_twin.analysis.metrics import step_info
 from amr_twin.experiments.chapter5.criteria import TRANSIENT_WINDOW_S, WHEELS, settling_band_rpm
 from amr_twin.experiments.payload.point import Point, parse_command, position_xy_m, with_payload
-from amr_twin.experiments.payload.result import Dynamics, Electrics, MinWheel, PointResult, Statics, WheelRun
+from amr_twin.experiments.payload.result import (
+    Dynamics,
+    Electrics,
+    MinWheel,
+    PointResult,
+    Statics,
+    WheelRun,
+)
 
-SAMPLE_S = 0.02           # period of the support-load and tilt samples, s
-TIP_MARGIN_MIN_M = 0.02   # static tip margin below which a point is unsafe, m
-TILT_LIMIT_DEG = 3.0      # base tilt above which a point is unsafe, deg
-MAX_VEL_RPM = 1054.0      # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
+SAMPLE_S = 0.02  # period of the support-load and tilt samples, s
+TIP_MARGIN_MIN_M = 0.02  # static tip margin below which a point is unsafe, m
+TILT_LIMIT_DEG = 3.0  # base tilt above which a point is unsafe, deg
+MAX_VEL_RPM = 1054.0  # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
 RUNAWAY_RPM = TRACK_TOLERANCE_RPM + MAX_VEL_RPM / 255.0
 """A wheel whose true speed ends further than this from its reference has left it (RPM): beyond the
@@ -90,8 +97,13 @@ def _electrics(s, duration_s: float) -> Electrics:
     energy = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(s.t_s)))
     distance = float(np.sum(np.hypot(*np.diff(s.pose[:, :2], axis=0).T)))
     currents = tuple(float(np.mean(np.abs(s.current_a[tail, w]))) for w in range(len(WHEELS)))
-    return Electrics(currents, float(np.mean(s.battery_a[tail])), energy, distance,
-                     energy / distance if distance > 0.05 else None)
+    return Electrics(
+        currents,
+        float(np.mean(s.battery_a[tail])),
+        energy,
+        distance,
+        energy / distance if distance > 0.05 else None,
+    )
 
 
 def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
@@ -103,7 +115,10 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     recording = point.rrd_path is not None or point.mcap_path is not None
     # nothing here reads the wheel odometry or draws the robot: without them a point is the same to the bit,
     # ~12 % and ~15 % cheaper
-    twin = Twin(cfg, TwinOptions(firmware=point.firmware, world="empty", odometry=recording, visuals=recording))
+    twin = Twin(
+        cfg,
+        TwinOptions(firmware=point.firmware, world="empty", odometry=recording, visuals=recording),
+    )
     recorder = attach_recorder(twin)
     if recording:
         from amr_twin.recording.rerun_capture import attach
@@ -130,8 +145,14 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
         from amr_twin.recording.rerun_log import record_run
         from amr_twin.recording.run import RunResult
 
-        result = RunResult(commands=[(0.0, command)], codes=[code], wheel_command=None, series=s,
-                           sim_s=point.duration_s, wall_s=0.0)
+        result = RunResult(
+            commands=[(0.0, command)],
+            codes=[code],
+            wheel_command=None,
+            series=s,
+            sim_s=point.duration_s,
+            wall_s=0.0,
+        )
         record_run(twin, rrd_path=point.rrd_path, mcap_path=point.mcap_path, result=result)
     names = list(twin.physics.support_geoms)
     min_load = dict(zip(names, loads.min(axis=0).tolist()))
@@ -139,20 +160,34 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     slip = _slip(s, cfg)
     tail = s.t_s >= 0.75 * point.duration_s
     cmd = [req.motionL, req.speedL, req.motionR, req.speedR]
-    wheels = tuple(_wheel_run(w, float(cmd[2 * w]) * float(cmd[2 * w + 1]), s, slip, tail, cfg)
-                   for w in range(len(WHEELS)))
+    wheels = tuple(
+        _wheel_run(w, float(cmd[2 * w]) * float(cmd[2 * w + 1]), s, slip, tail, cfg)
+        for w in range(len(WHEELS))
+    )
     errors = [(w.step or {}).get("steady_error_rpm") for w in wheels if w.reference_rpm]
-    return Dynamics(
-        max_tilt_deg=math.degrees(math.acos(max(-1.0, min(1.0, float(up_z.min()))))),  # acos falls: the largest tilt
-        min_wheel_n=min_wheel_n, min_caster_n=min(v for n, v in min_load.items() if n.startswith("caster")),
-        lifted=";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
-        min_wheel_contact_n=float(np.min(contact[:, :2])), min_wheel=_min_wheel_mechanism(cfg, loads, vel, s),
-        electrics=_electrics(s, point.duration_s), wheel_lift_off=min_wheel_n < CONTACT_MIN_N, wheels=wheels,
-        tracks=all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors),
-        tyre_timestep_s=twin.tyre_timestep.timestep_s if twin.tyre_timestep.halvings else None), ""
+    return (
+        Dynamics(
+            max_tilt_deg=math.degrees(
+                math.acos(max(-1.0, min(1.0, float(up_z.min()))))
+            ),  # acos falls: the largest tilt
+            min_wheel_n=min_wheel_n,
+            min_caster_n=min(v for n, v in min_load.items() if n.startswith("caster")),
+            lifted=";".join(n for n, v in min_load.items() if v < CONTACT_MIN_N),
+            min_wheel_contact_n=float(np.min(contact[:, :2])),
+            min_wheel=_min_wheel_mechanism(cfg, loads, vel, s),
+            electrics=_electrics(s, point.duration_s),
+            wheel_lift_off=min_wheel_n < CONTACT_MIN_N,
+            wheels=wheels,
+            tracks=all(e is not None and abs(e) <= TRACK_TOLERANCE_RPM for e in errors),
+            tyre_timestep_s=twin.tyre_timestep.timestep_s if twin.tyre_timestep.halvings else None,
+        ),
+        "",
+    )
 
 
-def _wheel_run(w: int, ref: float, s, slip: np.ndarray, tail: np.ndarray, cfg: TwinConfig) -> WheelRun:
+def _wheel_run(
+    w: int, ref: float, s, slip: np.ndarray, tail: np.ndarray, cfg: TwinConfig
+) -> WheelRun:
     """Wheel ``w`` of the run, its signed reference ``ref`` RPM: the step of its published speed and its
     steady state (over ``tail``, the last quarter)."""
     name, max_slip = WHEELS[w], float(np.max(np.abs(slip[:, w])))
@@ -160,15 +195,25 @@ def _wheel_run(w: int, ref: float, s, slip: np.ndarray, tail: np.ndarray, cfg: T
         return WheelRun(name, ref, max_slip)
     pub, step = s.published[w], None
     if len(pub) >= 1:
-        info = step_info(pub[:, 0], pub[:, 1], abs(ref), settling_band=settling_band_rpm(ref),
-                         oscillation_window_s=TRANSIENT_WINDOW_S).as_dict()
+        info = step_info(
+            pub[:, 0],
+            pub[:, 1],
+            abs(ref),
+            settling_band=settling_band_rpm(ref),
+            oscillation_window_s=TRANSIENT_WINDOW_S,
+        ).as_dict()
         step = {k: info[k] for k in ("delay_s", "rise_s", "peak_s", "settling_s")}
         step.update({f"{k}_rpm": info[k] for k in ("overshoot", "steady_error", "oscillation")})
-    sign = 1.0 if ref > 0 else -1.0  # the true speed's offset along the reference, as the published one's
+    sign = (
+        1.0 if ref > 0 else -1.0
+    )  # the true speed's offset along the reference, as the published one's
     surface = np.abs(s.true_rpm[tail, w]) * (2 * math.pi / 60) * cfg.wheel.radius_m
-    steady = {"true_steady_error_rpm": float(sign * np.mean(s.true_rpm[tail, w]) - abs(ref)),
-              "steady_duty": float(np.mean(s.pwm_counts[tail, w]) / 255.0), "open_loop_duty": abs(ref) / MAX_VEL_RPM,
-              "steady_slip_ratio": float(np.mean(np.abs(slip[tail, w])) / max(np.mean(surface), 1e-6))}
+    steady = {
+        "true_steady_error_rpm": float(sign * np.mean(s.true_rpm[tail, w]) - abs(ref)),
+        "steady_duty": float(np.mean(s.pwm_counts[tail, w]) / 255.0),
+        "open_loop_duty": abs(ref) / MAX_VEL_RPM,
+        "steady_slip_ratio": float(np.mean(np.abs(slip[tail, w])) / max(np.mean(surface), 1e-6)),
+    }
     return WheelRun(name, ref, max_slip, step, steady)
 
 
@@ -179,8 +224,15 @@ def simulate_point(point: Point) -> PointResult:
     from amr_twin.model.statics import CONTACT_MIN_N, describe
 
     wall0 = time.perf_counter()
-    res = PointResult(point.key, point.fingerprint, point.mass_kg, point.position, point.command,
-                      sample=point.sample, sample_id=point.sample_id if point.sample is not None else None)
+    res = PointResult(
+        point.key,
+        point.fingerprint,
+        point.mass_kg,
+        point.position,
+        point.command,
+        sample=point.sample,
+        sample_id=point.sample_id if point.sample is not None else None,
+    )
     try:
         res.xy_m = position_xy_m(point.cfg, point.position)
         cfg = with_payload(point.cfg, point.mass_kg, res.xy_m)
@@ -190,19 +242,31 @@ def simulate_point(point: Point) -> PointResult:
     try:
         static = describe(cfg)
         loads = static["static_load_n"]
-        res.statics = Statics(static["total_mass_kg"], static["tip_margin_m"],
-                              min(v for k, v in loads.items() if k.startswith("caster")),
-                              ";".join(k for k, v in loads.items() if v < CONTACT_MIN_N), dict(loads))
+        res.statics = Statics(
+            static["total_mass_kg"],
+            static["tip_margin_m"],
+            min(v for k, v in loads.items() if k.startswith("caster")),
+            ";".join(k for k, v in loads.items() if v < CONTACT_MIN_N),
+            dict(loads),
+        )
         res.dynamics, res.error = _dynamics(point, cfg)
     except (BuildError, DivergenceError) as exc:
         res.error = str(exc).splitlines()[0]
     currents = res.dynamics.electrics.steady_current_a if res.dynamics is not None else ()
-    res.current_limit_a = cfg.driver.continuous_current_a  # the rating this row is judged by (a draw may move it)
+    res.current_limit_a = (
+        cfg.driver.continuous_current_a
+    )  # the rating this row is judged by (a draw may move it)
     res.motor_overload = any(i > cfg.driver.continuous_current_a for i in currents)
     d = res.dynamics
-    res.safe = (not res.error and res.statics is not None and res.statics.tip_margin_m >= TIP_MARGIN_MIN_M
-                and d is not None and not d.wheel_lift_off and d.max_tilt_deg <= TILT_LIMIT_DEG
-                and not res.motor_overload)
+    res.safe = (
+        not res.error
+        and res.statics is not None
+        and res.statics.tip_margin_m >= TIP_MARGIN_MIN_M
+        and d is not None
+        and not d.wheel_lift_off
+        and d.max_tilt_deg <= TILT_LIMIT_DEG
+        and not res.motor_overload
+    )
     res.wall_s = round(time.perf_counter() - wall0, 3)
     return res
 

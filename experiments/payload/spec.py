@@ -86,11 +86,16 @@ class PayloadSweepSpec:
         """ValueError when the sweep has more than :data:`MAX_SWEEP_POINTS` runs."""
         runs = self.runs(grid)
         if runs > MAX_SWEEP_POINTS:
-            what = (f" x (--samples + 1): {runs} runs" if self.samples > 1
-                    else f": {grid.points} points")
-            raise ValueError(f"--masses x --positions x --commands{what}; at most "
-                             f"{MAX_SWEEP_POINTS} per sweep (each is a simulation of "
-                             f"{self.duration_s:g} s and a file in runs/): split the sweep")
+            what = (
+                f" x (--samples + 1): {runs} runs"
+                if self.samples > 1
+                else f": {grid.points} points"
+            )
+            raise ValueError(
+                f"--masses x --positions x --commands{what}; at most "
+                f"{MAX_SWEEP_POINTS} per sweep (each is a simulation of "
+                f"{self.duration_s:g} s and a file in runs/): split the sweep"
+            )
 
     def validate(self, cfg: TwinConfig) -> SweepGrid:
         """Every check against ``cfg`` (ValueError, one line naming the field); the grid."""
@@ -106,8 +111,15 @@ def run(spec: PayloadSweepSpec, cfg: TwinConfig, out_dir: Path, **options) -> di
     from amr_twin.experiments.payload import sweep
 
     grid = spec.validate(cfg)
-    return sweep.run(cfg, out_dir, grid.masses, grid.positions, grid.commands,
-                     duration_s=spec.duration_s, **options)
+    return sweep.run(
+        cfg,
+        out_dir,
+        grid.masses,
+        grid.positions,
+        grid.commands,
+        duration_s=spec.duration_s,
+        **options,
+    )
 
 
 def _unique(items: list, key) -> tuple[list, list]:
@@ -120,6 +132,13 @@ def _unique(items: list, key) -> tuple[list, list]:
     return kept, dropped
 
 
-EXPERIMENTS.register("payload", Experiment(
-    "payload", PayloadSweepSpec, run, PointResult,
-    "step response, duty, support loads, tilt and slip against payload mass and position"))
+EXPERIMENTS.register(
+    "payload",
+    Experiment(
+        "payload",
+        PayloadSweepSpec,
+        run,
+        PointResult,
+        "step response, duty, support loads, tilt and slip against payload mass and position",
+    ),
+)

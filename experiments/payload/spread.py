@@ -30,17 +30,22 @@ from amr_twin.experiments.chapter5.criteria import WHEELS
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 from amr_twin.experiments.payload.sweep_report import PANELS, _value, summarise
 
-CURRENT_RATIO = "steady_current_ratio"  # the larger motor's steady current over the driver's rating (derived)
+CURRENT_RATIO = (
+    "steady_current_ratio"  # the larger motor's steady current over the driver's rating (derived)
+)
 CROSSINGS = (  # answer: (column, limit, direction: +1 when the answer is the mass where it exceeds the limit)
     ("lift_off_kg", "dyn_min_wheel_n", CONTACT_MIN_N, -1),
     ("tilt_limit_kg", "max_tilt_deg", TILT_LIMIT_DEG, +1),
     ("tip_margin_kg", "static_tip_margin_m", TIP_MARGIN_MIN_M, -1),
     ("overload_kg", CURRENT_RATIO, 1.0, +1),
 )
-ANSWER_TEXT = {"highest_safe_kg": "highest safe payload", "lift_off_kg": "a drive wheel lifts off from",
-               "tilt_limit_kg": f"tilt above {TILT_LIMIT_DEG:g} deg from",
-               "tip_margin_kg": f"static tip margin below {TIP_MARGIN_MIN_M * 100:g} cm from",
-               "overload_kg": "a motor over the driver's continuous rating from"}
+ANSWER_TEXT = {
+    "highest_safe_kg": "highest safe payload",
+    "lift_off_kg": "a drive wheel lifts off from",
+    "tilt_limit_kg": f"tilt above {TILT_LIMIT_DEG:g} deg from",
+    "tip_margin_kg": f"static tip margin below {TIP_MARGIN_MIN_M * 100:g} cm from",
+    "overload_kg": "a motor over the driver's continuous rating from",
+}
 TOP = 3  # parameters listed per answer
 
 
@@ -71,10 +76,20 @@ def intervals(results: dict) -> list[dict]:
         for column, label in PANELS:
             v0 = _value(r0, column)
             stats = interval([_value(r, column) for r in rows if r.get("valid", True)])
-            out.append({"mass_kg": r0["mass_kg"], "position": r0["position"], "command": r0["command"],
-                        "metric": column.lstrip("~"), "label": label,
-                        "nominal": None if not math.isfinite(v0) else v0, **stats,
-                        "unsafe_fraction": (sum(not r.get("safe") for r in rows) / len(rows)) if rows else None})
+            out.append(
+                {
+                    "mass_kg": r0["mass_kg"],
+                    "position": r0["position"],
+                    "command": r0["command"],
+                    "metric": column.lstrip("~"),
+                    "label": label,
+                    "nominal": None if not math.isfinite(v0) else v0,
+                    **stats,
+                    "unsafe_fraction": (sum(not r.get("safe") for r in rows) / len(rows))
+                    if rows
+                    else None,
+                }
+            )
     return out
 
 
@@ -118,16 +133,24 @@ def answers(results: dict) -> dict:
     base = summarise({"rows": nominal})
     per_sample = {s: summarise({"rows": samples[s]}) for s in order}
     for position in base:
+
         def safe(summary: dict) -> float:
             v = summary[position]["highest_safe_kg"]
             return -math.inf if v is None else float(v)
 
         draws = [safe(per_sample[s]) for s in order]
         top = max(r["mass_kg"] for r in nominal)
-        entry = {"highest_safe_kg": {"nominal": safe(base), "draws": draws, **interval(draws, discrete=True),
-                                     "within": sum(v < top for v in draws)},
-                 "commands": {}}
+        entry = {
+            "highest_safe_kg": {
+                "nominal": safe(base),
+                "draws": draws,
+                **interval(draws, discrete=True),
+                "within": sum(v < top for v in draws),
+            },
+            "commands": {},
+        }
         for command in dict.fromkeys(r["command"] for r in nominal):
+
             def mine(rows: list[dict]) -> list[dict]:
                 return [r for r in rows if r["position"] == position and r["command"] == command]
 
@@ -135,8 +158,11 @@ def answers(results: dict) -> dict:
             for name, column, limit, direction in CROSSINGS:
                 values = [crossing_kg(mine(samples[s]), column, limit, direction) for s in order]
                 entry["commands"][command][name] = {
-                    "nominal": crossing_kg(mine(nominal), column, limit, direction), "draws": values,
-                    **interval(values, discrete=True), "within": sum(math.isfinite(v) for v in values)}
+                    "nominal": crossing_kg(mine(nominal), column, limit, direction),
+                    "draws": values,
+                    **interval(values, discrete=True),
+                    "within": sum(math.isfinite(v) for v in values),
+                }
         out[position] = entry
     return out
 
@@ -159,9 +185,16 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
         rho = rank_correlations(x, values)
         ranked = sorted(range(len(rho)), key=lambda j: -abs(rho[j]) if np.isfinite(rho[j]) else 0.0)
         for j in ranked:
-            rows.append({"position": position, "command": command, "answer": answer, "parameter": draws.names[j],
-                         "rho": None if not np.isfinite(rho[j]) else round(float(rho[j]), 4),
-                         "notable": bool(np.isfinite(rho[j]) and abs(rho[j]) > limit)})
+            rows.append(
+                {
+                    "position": position,
+                    "command": command,
+                    "answer": answer,
+                    "parameter": draws.names[j],
+                    "rho": None if not np.isfinite(rho[j]) else round(float(rho[j]), 4),
+                    "notable": bool(np.isfinite(rho[j]) and abs(rho[j]) > limit),
+                }
+            )
 
     for position, entry in found.items():
         add(position, "", "highest_safe_kg", entry["highest_safe_kg"]["draws"])
@@ -171,7 +204,13 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
     return rows
 
 
-def drivers(sens: list[dict], position: str, command: str, answer: str, top: int = TOP) -> list[dict]:
+def drivers(
+    sens: list[dict], position: str, command: str, answer: str, top: int = TOP
+) -> list[dict]:
     """The ``top`` parameters of one answer by |rho| (``notable`` marks those beyond chance)."""
-    return [r for r in sens if (r["position"], r["command"], r["answer"]) == (position, command, answer)
-            and r["rho"] is not None][:top]
+    return [
+        r
+        for r in sens
+        if (r["position"], r["command"], r["answer"]) == (position, command, answer)
+        and r["rho"] is not None
+    ][:top]

@@ -30,8 +30,16 @@ def _kg(v) -> str:
 
 def _span(a: dict, top: float) -> str:
     """``median (low – high)`` of an answer; ``> top`` for draws beyond the sweep."""
+
     def one(v):
-        return f"> {top:g}" if v == math.inf else _kg(v) if v == -math.inf else ("—" if v is None else f"{v:.3g}")
+        return (
+            f"> {top:g}"
+            if v == math.inf
+            else _kg(v)
+            if v == -math.inf
+            else ("—" if v is None else f"{v:.3g}")
+        )
+
     if a["n"] == 0:
         return "—"
     return f"{one(a['median'])} ({one(a['low'])} – {one(a['high'])})"
@@ -73,23 +81,51 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
         for ax, (column, label) in zip(axes.flat, PANELS):
             for n, position in enumerate(dict.fromkeys(r["position"] for r in nominal)):
                 colour = f"C{n}"
-                mine = [r for r in nominal if r["command"] == command and r["position"] == position
-                        and r.get("valid", True)]
+                mine = [
+                    r
+                    for r in nominal
+                    if r["command"] == command
+                    and r["position"] == position
+                    and r.get("valid", True)
+                ]
                 masses = sorted({r["mass_kg"] for r in mine})
                 if not masses:
                     continue
                 band = [_band(samples, m, position, command, column) for m in masses]
-                ax.fill_between(masses, [b[0] for b in band], [b[2] for b in band], color=colour, alpha=0.2, lw=0)
-                ax.plot(masses, [b[1] for b in band], "-", color=colour, lw=1.2, label=f"{position} median")
-                ax.plot(masses, [_value(next(r for r in mine if r["mass_kg"] == m), column) for m in masses], "o--",
-                        color=colour, ms=3, lw=0.8, label=f"{position} nominal")
+                ax.fill_between(
+                    masses,
+                    [b[0] for b in band],
+                    [b[2] for b in band],
+                    color=colour,
+                    alpha=0.2,
+                    lw=0,
+                )
+                ax.plot(
+                    masses,
+                    [b[1] for b in band],
+                    "-",
+                    color=colour,
+                    lw=1.2,
+                    label=f"{position} median",
+                )
+                ax.plot(
+                    masses,
+                    [_value(next(r for r in mine if r["mass_kg"] == m), column) for m in masses],
+                    "o--",
+                    color=colour,
+                    ms=3,
+                    lw=0.8,
+                    label=f"{position} nominal",
+                )
             ax.set_ylabel(label, fontsize=8)
             ax.grid(alpha=0.3)
         for ax in axes[-1]:
             ax.set_xlabel("payload (kg)")
         axes.flat[0].legend(fontsize=6)
-        fig.suptitle(f"payload sweep, command {command}: nominal (dashed), median and {LEVEL:.0%} band over "
-                     f"{len(samples)} parameter draws (per-wheel panels: worse driven wheel)")
+        fig.suptitle(
+            f"payload sweep, command {command}: nominal (dashed), median and {LEVEL:.0%} band over "
+            f"{len(samples)} parameter draws (per-wheel panels: worse driven wheel)"
+        )
         fig.tight_layout()
         path = Path(out_dir) / f"sweep_{command.replace(':', '_')}.png"
         save_figure(fig, path)
@@ -103,8 +139,13 @@ def _band(samples: dict, mass, position, command, column) -> tuple[float, float,
 
     from amr_twin.calibration.uncertainty import interval
 
-    values = [_value(r, column) for rows in samples.values() for r in rows
-              if (r["mass_kg"], r["position"], r["command"]) == (mass, position, command) and r.get("valid", True)]
+    values = [
+        _value(r, column)
+        for rows in samples.values()
+        for r in rows
+        if (r["mass_kg"], r["position"], r["command"]) == (mass, position, command)
+        and r.get("valid", True)
+    ]
     i = interval(values)
     return tuple(np.nan if i[k] is None else i[k] for k in ("low", "median", "high"))
 
@@ -113,27 +154,43 @@ def _plot_sensitivity(results: dict, out_dir: Path, plt) -> Path:
     from amr_twin.experiments.runner.executor import save_figure
 
     sens = results["sensitivity"]
-    groups = list(dict.fromkeys((r["position"], r["command"], r["answer"]) for r in sens
-                                if r["rho"] is not None))
+    groups = list(
+        dict.fromkeys(
+            (r["position"], r["command"], r["answer"]) for r in sens if r["rho"] is not None
+        )
+    )
     n = max(1, len(groups))
     cols = min(4, n)
-    fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(4.5 * cols, 2.6 * ((n + cols - 1) // cols)),
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        (n + cols - 1) // cols,
+        cols,
+        figsize=(4.5 * cols, 2.6 * ((n + cols - 1) // cols)),
+        squeeze=False,
+    )
     limit = noise_level(len(results["draws"]), len(results["draws"].names))
     for ax, (position, command, answer) in zip(axes.flat, groups):
-        rows = [r for r in sens if (r["position"], r["command"], r["answer"]) == (position, command, answer)
-                and r["rho"] is not None][:6][::-1]
-        ax.barh([r["parameter"] for r in rows], [r["rho"] for r in rows],
-                color=["tab:red" if r["rho"] < 0 else "tab:blue" for r in rows])
+        rows = [
+            r
+            for r in sens
+            if (r["position"], r["command"], r["answer"]) == (position, command, answer)
+            and r["rho"] is not None
+        ][:6][::-1]
+        ax.barh(
+            [r["parameter"] for r in rows],
+            [r["rho"] for r in rows],
+            color=["tab:red" if r["rho"] < 0 else "tab:blue" for r in rows],
+        )
         for x in (-limit, limit):
             ax.axvline(x, color="grey", ls=":", lw=0.8)
         ax.set_xlim(-1, 1)
         ax.tick_params(labelsize=6)
         ax.set_title(f"{position} {command} {spread.ANSWER_TEXT[answer]}".strip(), fontsize=7)
-    for ax in list(axes.flat)[len(groups):]:
+    for ax in list(axes.flat)[len(groups) :]:
         ax.axis("off")
-    fig.suptitle(f"rank correlation with each answer ({len(results['draws'])} draws; dotted: chance level)",
-                 fontsize=9)
+    fig.suptitle(
+        f"rank correlation with each answer ({len(results['draws'])} draws; dotted: chance level)",
+        fontsize=9,
+    )
     fig.tight_layout()
     path = Path(out_dir) / "sensitivity.png"
     save_figure(fig, path)
@@ -161,13 +218,26 @@ def report(results: dict, out_dir: Path) -> dict:
     write_text(out_dir / "intervals.csv", _table_csv(results["intervals"]))
     write_text(out_dir / "sensitivity.csv", _table_csv(sens))
     base = summarise({"rows": nominal})
-    summary = {"positions": base, "answers": _json_ready(found), "points": len(nominal),
-               "runs": len(results["rows"]), "simulated": results["simulated"], "reused": results["reused"],
-               "wall_s": round(results["wall_s"], 3), "duration_s": results["duration_s"],
-               "firmware": results["firmware"],
-               "samples": {"n": len(draws), "seed": draws.seed, "sampler": draws.sampler, "level": LEVEL,
-                           "parameters": list(draws.names), "clipped": draws.clipped,
-                           "noise_level_rho": round(noise_level(len(draws), len(draws.names)), 4)}}
+    summary = {
+        "positions": base,
+        "answers": _json_ready(found),
+        "points": len(nominal),
+        "runs": len(results["rows"]),
+        "simulated": results["simulated"],
+        "reused": results["reused"],
+        "wall_s": round(results["wall_s"], 3),
+        "duration_s": results["duration_s"],
+        "firmware": results["firmware"],
+        "samples": {
+            "n": len(draws),
+            "seed": draws.seed,
+            "sampler": draws.sampler,
+            "level": LEVEL,
+            "parameters": list(draws.names),
+            "clipped": draws.clipped,
+            "noise_level_rho": round(noise_level(len(draws), len(draws.names)), 4),
+        },
+    }
     write_json(out_dir / "summary.json", summary)
     write_text(out_dir / "summary.md", _markdown(results, base, found, sens, top, len(samples)))
     return summary
@@ -175,52 +245,92 @@ def report(results: dict, out_dir: Path) -> dict:
 
 def _who(sens, position, command, answer) -> str:
     rows = spread.drivers(sens, position, command, answer)
-    return ", ".join(("**`{}` {:+.2f}**" if r["notable"] else "`{}` {:+.2f}").format(r["parameter"], r["rho"])
-                     for r in rows) or "—"
+    return (
+        ", ".join(
+            ("**`{}` {:+.2f}**" if r["notable"] else "`{}` {:+.2f}").format(
+                r["parameter"], r["rho"]
+            )
+            for r in rows
+        )
+        or "—"
+    )
 
 
 def _markdown(results, base, found, sens, top, n) -> str:
     draws = results["draws"]
-    lines = ["# Payload sweep with parameter uncertainty", "",
-             f"{len(base)} positions; {len(results['rows'])} runs "
-             f"({results['simulated']} simulated, {results['reused']} reused) in {results['wall_s']:.1f} s wall time; "
-             f"{results['duration_s']} s per run, firmware {results['firmware']}. Each point was run with the "
-             f"nominal parameters and with {n} configurations drawn from the parameters' spreads "
-             f"({draws.sampler}, seed {draws.seed}, {len(draws.names)} parameters varied: `samples.csv`; spreads in "
-             "`models/amr/README.md`).", "",
-             f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
-             f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current (the draw's "
-             "rating), for every command and every lighter payload. Intervals: "
-             f"median ({LEVEL:.0%} interval) over the draws. What moves it: the {spread.TOP} parameters of largest "
-             f"Spearman rank correlation with the answer over the draws; **bold** beyond chance (|rho| > "
-             f"{noise_level(n, len(draws.names)):.2f}: the largest of {len(draws.names)} unrelated parameters reaches "
-             f"it about one time in 20 with {n} draws; the others are candidates, not findings).", "",
-             "## Highest safe payload per position", "",
-             f"| position | nominal kg | over the draws kg | draws unsafe within {top:g} kg | unsafe first (nominal) | "
-             "what moves it |", "|---|---|---|---|---|---|"]
+    lines = [
+        "# Payload sweep with parameter uncertainty",
+        "",
+        f"{len(base)} positions; {len(results['rows'])} runs "
+        f"({results['simulated']} simulated, {results['reused']} reused) in {results['wall_s']:.1f} s wall time; "
+        f"{results['duration_s']} s per run, firmware {results['firmware']}. Each point was run with the "
+        f"nominal parameters and with {n} configurations drawn from the parameters' spreads "
+        f"({draws.sampler}, seed {draws.seed}, {len(draws.names)} parameters varied: `samples.csv`; spreads in "
+        "`models/amr/README.md`).",
+        "",
+        f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
+        f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current (the draw's "
+        "rating), for every command and every lighter payload. Intervals: "
+        f"median ({LEVEL:.0%} interval) over the draws. What moves it: the {spread.TOP} parameters of largest "
+        f"Spearman rank correlation with the answer over the draws; **bold** beyond chance (|rho| > "
+        f"{noise_level(n, len(draws.names)):.2f}: the largest of {len(draws.names)} unrelated parameters reaches "
+        f"it about one time in 20 with {n} draws; the others are candidates, not findings).",
+        "",
+        "## Highest safe payload per position",
+        "",
+        f"| position | nominal kg | over the draws kg | draws unsafe within {top:g} kg | unsafe first (nominal) | "
+        "what moves it |",
+        "|---|---|---|---|---|---|",
+    ]
     for position, b in base.items():
         a = found[position]["highest_safe_kg"]
-        first = f"{b['first_unsafe_kg']:g} kg: {b['reason']}" if b["first_unsafe_kg"] is not None else "—"
-        lines.append(f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {a['within']} of {a['n']} | {first} | "
-                     f"{_who(sens, position, '', 'highest_safe_kg')} |")
-    lines += ["", "## Lift-off, tilt, tip margin and motor overload per position and command", "",
-              "Payload (kg) from which it happens, interpolated between the swept masses; "
-              f"`> {top:g}`: not within the sweep.", "",
-              f"| position | command | answer | nominal kg | over the draws kg | draws within {top:g} kg | what moves it |",
-              "|---|---|---|---|---|---|---|"]
+        first = (
+            f"{b['first_unsafe_kg']:g} kg: {b['reason']}"
+            if b["first_unsafe_kg"] is not None
+            else "—"
+        )
+        lines.append(
+            f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {a['within']} of {a['n']} | {first} | "
+            f"{_who(sens, position, '', 'highest_safe_kg')} |"
+        )
+    lines += [
+        "",
+        "## Lift-off, tilt, tip margin and motor overload per position and command",
+        "",
+        "Payload (kg) from which it happens, interpolated between the swept masses; "
+        f"`> {top:g}`: not within the sweep.",
+        "",
+        f"| position | command | answer | nominal kg | over the draws kg | draws within {top:g} kg | what moves it |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for position, entry in found.items():
         for command, per in entry["commands"].items():
             for answer, a in per.items():
-                nominal = _span({"n": 1, "median": a["nominal"], "low": None, "high": None}, top).split(" (")[0]
-                lines.append(f"| {position} | {command} | {spread.ANSWER_TEXT[answer]} | {nominal} | "
-                             f"{_span(a, top)} | {a['within']} of {a['n']} | {_who(sens, position, command, answer)} |")
+                nominal = _span(
+                    {"n": 1, "median": a["nominal"], "low": None, "high": None}, top
+                ).split(" (")[0]
+                lines.append(
+                    f"| {position} | {command} | {spread.ANSWER_TEXT[answer]} | {nominal} | "
+                    f"{_span(a, top)} | {a['within']} of {a['n']} | {_who(sens, position, command, answer)} |"
+                )
     if draws.clipped:
-        lines += ["", "Draws clipped to a bound (schema or calibration): "
-                  + ", ".join(f"`{k}` {v} of {len(draws)}" for k, v in draws.clipped.items()) + "."]
-    lines += ["", *_lowest_wheel_loads(spread.split(results)[0]), "",
-              "`intervals.csv`: every metric per point (nominal, median, interval); `sensitivity.csv`: every "
-              "parameter's rank correlation with every answer.", ""]
+        lines += [
+            "",
+            "Draws clipped to a bound (schema or calibration): "
+            + ", ".join(f"`{k}` {v} of {len(draws)}" for k, v in draws.clipped.items())
+            + ".",
+        ]
+    lines += [
+        "",
+        *_lowest_wheel_loads(spread.split(results)[0]),
+        "",
+        "`intervals.csv`: every metric per point (nominal, median, interval); `sensitivity.csv`: every "
+        "parameter's rank correlation with every answer.",
+        "",
+    ]
     commands = dict.fromkeys(r["command"] for r in spread.split(results)[0])
-    lines += [f"![{name}]({name})" for name in (f"sweep_{c.replace(':', '_')}.png" for c in commands)]
+    lines += [
+        f"![{name}]({name})" for name in (f"sweep_{c.replace(':', '_')}.png" for c in commands)
+    ]
     lines += ["![sensitivity](sensitivity.png)"]
     return "\n".join(lines) + "\n"

@@ -26,10 +26,22 @@ from amr_twin.experiments.payload.point import Point, parse_command
 from amr_twin.experiments.payload.simulation import simulate_points
 
 
-def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str], commands: list[str],
-        duration_s: float = 8.0, jobs: int = 1, firmware: str = "faithful", progress: bool = True,
-        client=None, record_dir: Path | None = None, mcap_dir: Path | None = None, draws=None,
-        before=None) -> dict:
+def run(
+    cfg: TwinConfig,
+    out_dir: Path,
+    masses: list[float],
+    positions: list[str],
+    commands: list[str],
+    duration_s: float = 8.0,
+    jobs: int = 1,
+    firmware: str = "faithful",
+    progress: bool = True,
+    client=None,
+    record_dir: Path | None = None,
+    mcap_dir: Path | None = None,
+    draws=None,
+    before=None,
+) -> dict:
     """Simulate the missing points of the sweep (one file each) and return all rows.
 
     The points run in this process (``jobs=1``), in ``jobs`` local worker
@@ -59,8 +71,11 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     runs_dir = Path(out_dir) / "runs"
     from amr_twin.recording.rerun_capture import recording_folder
 
-    folders = {kind: recording_folder(folder) for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
-               if folder is not None}
+    folders = {
+        kind: recording_folder(folder)
+        for kind, folder in (("rrd", record_dir), ("mcap", mcap_dir))
+        if folder is not None
+    }
 
     def make_point(m: float, p: str, c: str, sample: int | None = None) -> Point:
         extra = {} if sample is None else {"sample": sample, "sample_id": draws.sample_id(sample)}
@@ -70,8 +85,13 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
         return Point(m, p, c, duration_s, firmware, point_cfg, **paths, **extra)
 
     configs = [draws.config(cfg, i) for i in range(len(draws))] if draws is not None else []
-    points = [make_point(m, p, c, sample) for sample in [None, *range(len(configs))]
-              for m in masses for p in positions for c in commands]
+    points = [
+        make_point(m, p, c, sample)
+        for sample in [None, *range(len(configs))]
+        for m in masses
+        for p in positions
+        for c in commands
+    ]
     rows, todo = {}, []
     for point in points:
         path = runs_dir / f"{point.key}.json"
@@ -88,16 +108,26 @@ def run(cfg: TwinConfig, out_dir: Path, masses: list[float], positions: list[str
     wall0 = time.perf_counter()
     done = set()
     work = [(p,) for p in todo] if client is not None else by_payload(todo, jobs)
-    for group, group_rows in run_all(simulate_points, work, jobs, "payload sweep", progress, client=client,
-                                     size=len):
+    for group, group_rows in run_all(
+        simulate_points, work, jobs, "payload sweep", progress, client=client, size=len
+    ):
         for item, row in zip(group, group_rows):
             write_json(runs_dir / f"{item.key}.json", row)
             rows[item.key] = row
             done.add(item.key)
-    recorded = sum(any((folder / f"{key}.{kind}").exists() for kind, folder in folders.items()) for key in done)
-    return {"rows": [rows[p.key] for p in points], "simulated": len(todo), "reused": len(points) - len(todo),
-            "recorded": recorded, "wall_s": time.perf_counter() - wall0, "duration_s": duration_s,
-            "firmware": firmware, **({"draws": draws} if draws is not None else {})}
+    recorded = sum(
+        any((folder / f"{key}.{kind}").exists() for kind, folder in folders.items()) for key in done
+    )
+    return {
+        "rows": [rows[p.key] for p in points],
+        "simulated": len(todo),
+        "reused": len(points) - len(todo),
+        "recorded": recorded,
+        "wall_s": time.perf_counter() - wall0,
+        "duration_s": duration_s,
+        "firmware": firmware,
+        **({"draws": draws} if draws is not None else {}),
+    }
 
 
 def by_payload(points: list[Point], jobs: int = 1) -> list[tuple[Point, ...]]:
@@ -112,8 +142,12 @@ def by_payload(points: list[Point], jobs: int = 1) -> list[tuple[Point, ...]]:
     groups: list[list[Point]] = []
     for point in points:
         last = groups[-1][-1] if groups else None
-        if last is not None and last.cfg is point.cfg and (last.mass_kg, last.position, last.sample) == \
-                (point.mass_kg, point.position, point.sample):
+        if (
+            last is not None
+            and last.cfg is point.cfg
+            and (last.mass_kg, last.position, last.sample)
+            == (point.mass_kg, point.position, point.sample)
+        ):
             groups[-1].append(point)
         else:
             groups.append([point])
@@ -122,8 +156,9 @@ def by_payload(points: list[Point], jobs: int = 1) -> list[tuple[Point, ...]]:
     return [tuple(g) for g in groups]
 
 
-def improved_beside(cfg: TwinConfig, out_dir: Path, results: dict, jobs: int = 1, progress: bool = True,
-                    client=None) -> dict | None:
+def improved_beside(
+    cfg: TwinConfig, out_dir: Path, results: dict, jobs: int = 1, progress: bool = True, client=None
+) -> dict | None:
     """The positions of a faithful-firmware sweep whose limit is a runaway (the firmware's: the
     wheels leave their references and the motor current follows;
     :func:`.sweep_report.limit_causes`), run again with the improved firmware on the same
@@ -139,5 +174,15 @@ def improved_beside(cfg: TwinConfig, out_dir: Path, results: dict, jobs: int = 1
         return None
     masses = sorted({r["mass_kg"] for r in rows if r["position"] in positions})
     commands = list(dict.fromkeys(r["command"] for r in rows))
-    return run(cfg, Path(out_dir) / "improved", masses, positions, commands, duration_s=results["duration_s"],
-               jobs=jobs, firmware="improved", progress=progress, client=client)
+    return run(
+        cfg,
+        Path(out_dir) / "improved",
+        masses,
+        positions,
+        commands,
+        duration_s=results["duration_s"],
+        jobs=jobs,
+        firmware="improved",
+        progress=progress,
+        client=client,
+    )

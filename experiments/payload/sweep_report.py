@@ -9,16 +9,29 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.experiments.chapter5.criteria import WHEELS
-from amr_twin.experiments.payload.simulation import RUNAWAY_RPM, TILT_LIMIT_DEG, TIP_MARGIN_MIN_M, TRACK_TOLERANCE_RPM
+from amr_twin.experiments.payload.simulation import (
+    RUNAWAY_RPM,
+    TILT_LIMIT_DEG,
+    TIP_MARGIN_MIN_M,
+    TRACK_TOLERANCE_RPM,
+)
 
 PANELS = (  # (column or per-wheel suffix, label); per-wheel ones plot the worse driven wheel
-    ("~delay_s", "delay (s)"), ("~settling_s", "settling (s)"), ("~overshoot_rpm", "overshoot (RPM)"),
-    ("~steady_error_rpm", "steady error (RPM)"), ("~oscillation_rpm", "oscillation (RPM)"),
-    ("~steady_duty", "steady duty (-)"), ("dyn_min_wheel_n", "min wheel load (N)"),
-    ("dyn_min_caster_n", "min caster load (N)"), ("max_tilt_deg", "max tilt (deg)"),
-    ("static_tip_margin_m", "static tip margin (m)"), ("~max_slip_m_s", "max slip (m/s)"),
-    ("~steady_slip_ratio", "steady slip ratio (-)"), ("~steady_current_a", "motor current (A)"),
-    ("battery_steady_a", "battery current (A)"), ("energy_j_per_m", "energy per metre (J/m)"),
+    ("~delay_s", "delay (s)"),
+    ("~settling_s", "settling (s)"),
+    ("~overshoot_rpm", "overshoot (RPM)"),
+    ("~steady_error_rpm", "steady error (RPM)"),
+    ("~oscillation_rpm", "oscillation (RPM)"),
+    ("~steady_duty", "steady duty (-)"),
+    ("dyn_min_wheel_n", "min wheel load (N)"),
+    ("dyn_min_caster_n", "min caster load (N)"),
+    ("max_tilt_deg", "max tilt (deg)"),
+    ("static_tip_margin_m", "static tip margin (m)"),
+    ("~max_slip_m_s", "max slip (m/s)"),
+    ("~steady_slip_ratio", "steady slip ratio (-)"),
+    ("~steady_current_a", "motor current (A)"),
+    ("battery_steady_a", "battery current (A)"),
+    ("energy_j_per_m", "energy per metre (J/m)"),
 )
 LOWEST_ROWS = 10  # rows of the lowest drive-wheel loads in summary.md
 
@@ -55,7 +68,9 @@ def limit_causes(row: dict) -> list[tuple[str, str]]:
     if not row.get("valid", True):
         return [("invalid", row["error"])]
     if row.get("error"):
-        return [("refused" if row["error"].startswith("command refused") else "failed", row["error"])]
+        return [
+            ("refused" if row["error"].startswith("command refused") else "failed", row["error"])
+        ]
     out = []
     if row.get("motor_overload"):
         worst = max(row.get(f"{w}_steady_current_a") or 0.0 for w in WHEELS)
@@ -71,19 +86,30 @@ def limit_causes(row: dict) -> list[tuple[str, str]]:
     if row.get("wheel_lift_off", True):
         out.append(("lift-off", f"min load {row.get('dyn_min_wheel_n', float('nan')):.1f} N"))
     if row.get("max_tilt_deg", 90) > TILT_LIMIT_DEG:
-        out.append(("tilt", f"{row.get('max_tilt_deg', float('nan')):.2f} deg > {TILT_LIMIT_DEG} deg"))
+        out.append(
+            ("tilt", f"{row.get('max_tilt_deg', float('nan')):.2f} deg > {TILT_LIMIT_DEG} deg")
+        )
     return out
 
 
 def _farthest(row: dict) -> str | None:
     """The driven wheel whose true speed (the run's last quarter) left its reference by more than
     :data:`~amr_twin.experiments.payload.simulation.RUNAWAY_RPM`, in words; None if none did."""
-    off = max(((abs(e), w) for w in WHEELS if row.get(f"{w}_reference_rpm")
-               and (e := row.get(f"{w}_true_steady_error_rpm")) is not None), default=(0.0, ""))
+    off = max(
+        (
+            (abs(e), w)
+            for w in WHEELS
+            if row.get(f"{w}_reference_rpm")
+            and (e := row.get(f"{w}_true_steady_error_rpm")) is not None
+        ),
+        default=(0.0, ""),
+    )
     if off[0] <= RUNAWAY_RPM:
         return None
     ref = abs(row[f"{off[1]}_reference_rpm"])
-    speed = ref + row[f"{off[1]}_true_steady_error_rpm"]  # along the reference: < 0 turning backward
+    speed = (
+        ref + row[f"{off[1]}_true_steady_error_rpm"]
+    )  # along the reference: < 0 turning backward
     return f"{off[1]} wheel at {speed:.0f} RPM against {ref:.1f}"
 
 
@@ -112,13 +138,20 @@ def summarise(results: dict) -> dict:
         tracking = [r["mass_kg"] for r in mine if r.get("tracks")]
         left = [(r["mass_kg"], r["command"], _farthest(r)) for r in mine if _farthest(r)]
         leaves = min(left, key=lambda m: m[0]) if left else None
-        entry = {"highest_safe_kg": highest, "first_unsafe_kg": first_unsafe, "reason": reason,
-                 "causes": causes, "lightest_kg": masses[0], "heaviest_kg": masses[-1],
-                 "beyond_grid": first_unsafe is None, "below_grid": highest is None,
-                 "invalid_kg": sorted({r["mass_kg"] for r in mine if not r.get("valid", True)}),
-                 "heaviest_tracking_kg": max(tracking) if tracking else None,
-                 "leaves_reference_kg": leaves[0] if leaves else None,
-                 "leaves_reference": f"in {leaves[1]}: {leaves[2]}" if leaves else ""}
+        entry = {
+            "highest_safe_kg": highest,
+            "first_unsafe_kg": first_unsafe,
+            "reason": reason,
+            "causes": causes,
+            "lightest_kg": masses[0],
+            "heaviest_kg": masses[-1],
+            "beyond_grid": first_unsafe is None,
+            "below_grid": highest is None,
+            "invalid_kg": sorted({r["mass_kg"] for r in mine if not r.get("valid", True)}),
+            "heaviest_tracking_kg": max(tracking) if tracking else None,
+            "leaves_reference_kg": leaves[0] if leaves else None,
+            "leaves_reference": f"in {leaves[1]}: {leaves[2]}" if leaves else "",
+        }
         entry["answer"] = answer(entry)
         out[position] = entry
     return out
@@ -128,16 +161,25 @@ def answer(s: dict) -> str:
     """One sentence for a position's entry of :func:`summarise`: never "None kg". A wheel that left its
     reference at a mass the criteria call safe is said too."""
     left = s["leaves_reference_kg"]
-    early = "" if left is None else f"from {left:g} kg a wheel leaves its reference {s['leaves_reference']}"
+    early = (
+        ""
+        if left is None
+        else f"from {left:g} kg a wheel leaves its reference {s['leaves_reference']}"
+    )
     if s["beyond_grid"]:
         only = s["heaviest_kg"] == s["lightest_kg"]
-        text = (f"safe at {s['heaviest_kg']:g} kg, the only mass swept: the limit lies beyond it" if only else
-                f"safe up to {s['heaviest_kg']:g} kg, the heaviest swept: the limit lies beyond the masses swept")
+        text = (
+            f"safe at {s['heaviest_kg']:g} kg, the only mass swept: the limit lies beyond it"
+            if only
+            else f"safe up to {s['heaviest_kg']:g} kg, the heaviest swept: the limit lies beyond the masses swept"
+        )
         return text + (f" (yet {early})" if early else "")
     if s["below_grid"]:
         lighter = "unloaded" if s["lightest_kg"] == 0 else "no lighter payload was swept"
-        return (f"no safe payload among the masses swept: unsafe already at {s['first_unsafe_kg']:g} kg, the "
-                f"lightest ({lighter}), {s['reason']}")
+        return (
+            f"no safe payload among the masses swept: unsafe already at {s['first_unsafe_kg']:g} kg, the "
+            f"lightest ({lighter}), {s['reason']}"
+        )
     early = f" (by the criteria; yet {early})" if early and left < s["first_unsafe_kg"] else ""
     return f"highest safe {s['highest_safe_kg']:g} kg{early}; unsafe at {s['first_unsafe_kg']:g} kg {s['reason']}"
 
@@ -158,10 +200,16 @@ def _limit(column: str, rows: list[dict]) -> tuple[float, str] | None:
     """The line a panel's values are judged against (a point's safety or tracking), if any."""
     from amr_twin.model.statics import CONTACT_MIN_N
 
-    rating = next((r["current_limit_a"] for r in rows if r.get("current_limit_a") is not None), None)
-    limits = {"~steady_current_a": (rating, "driver's continuous rating"), "max_tilt_deg": (TILT_LIMIT_DEG, "tilt"),
-              "static_tip_margin_m": (TIP_MARGIN_MIN_M, "tip margin"), "dyn_min_wheel_n": (CONTACT_MIN_N, "lift-off"),
-              "~steady_error_rpm": (TRACK_TOLERANCE_RPM, "tracking (the PI's dead zone)")}
+    rating = next(
+        (r["current_limit_a"] for r in rows if r.get("current_limit_a") is not None), None
+    )
+    limits = {
+        "~steady_current_a": (rating, "driver's continuous rating"),
+        "max_tilt_deg": (TILT_LIMIT_DEG, "tilt"),
+        "static_tip_margin_m": (TIP_MARGIN_MIN_M, "tip margin"),
+        "dyn_min_wheel_n": (CONTACT_MIN_N, "lift-off"),
+        "~steady_error_rpm": (TRACK_TOLERANCE_RPM, "tracking (the PI's dead zone)"),
+    }
     value, name = limits.get(column, (None, ""))
     return None if value is None else (float(value), name)
 
@@ -178,25 +226,52 @@ def plot(results: dict, out_dir: Path, improved: dict | None = None) -> list[Pat
     from amr_twin.experiments.runner.executor import save_figure
 
     rows, paths = results["rows"], []
-    lines = [(results["firmware"], rows, "o-")] + ([("improved", improved["rows"], "s--")] if improved else [])
+    lines = [(results["firmware"], rows, "o-")] + (
+        [("improved", improved["rows"], "s--")] if improved else []
+    )
     for command in _plotted(rows)[0]:
         fig, axes = plt.subplots(3, 5, figsize=(18, 9), sharex=True)
         for ax, (column, label) in zip(axes.flat, PANELS):
             for firmware, some, style in lines:
                 for position in dict.fromkeys(r["position"] for r in some):
-                    pts = sorted((r["mass_kg"], v) for r in some if r["command"] == command
-                                 and r["position"] == position and r.get("valid", True) and not r.get("error")
-                                 and np.isfinite(v := _value(r, column)))
+                    pts = sorted(
+                        (r["mass_kg"], v)
+                        for r in some
+                        if r["command"] == command
+                        and r["position"] == position
+                        and r.get("valid", True)
+                        and not r.get("error")
+                        and np.isfinite(v := _value(r, column))
+                    )
                     if pts:
-                        name = position if firmware == results["firmware"] else f"{position}, {firmware}"
+                        name = (
+                            position
+                            if firmware == results["firmware"]
+                            else f"{position}, {firmware}"
+                        )
                         ax.plot(*zip(*pts), style, ms=3, lw=1, label=name)
             limit = _limit(column, rows)
             if ax.lines and limit is not None:
                 ax.axhline(limit[0], color="k", ls=":", lw=1, label=f"limit: {limit[1]}")
-                ax.text(0.01, limit[0], limit[1], transform=ax.get_yaxis_transform(), fontsize=6, va="bottom")
+                ax.text(
+                    0.01,
+                    limit[0],
+                    limit[1],
+                    transform=ax.get_yaxis_transform(),
+                    fontsize=6,
+                    va="bottom",
+                )
             if not ax.lines:
-                ax.text(0.5, 0.5, "no value for any point\n(not defined for this command)", transform=ax.transAxes,
-                        ha="center", va="center", fontsize=8, color="0.4")
+                ax.text(
+                    0.5,
+                    0.5,
+                    "no value for any point\n(not defined for this command)",
+                    transform=ax.transAxes,
+                    ha="center",
+                    va="center",
+                    fontsize=8,
+                    color="0.4",
+                )
             ax.set_ylabel(label, fontsize=8)
             ax.grid(alpha=0.3)
         for ax in axes[-1]:
@@ -204,8 +279,10 @@ def plot(results: dict, out_dir: Path, improved: dict | None = None) -> list[Pat
         handles = next((ax for ax in axes.flat if ax.lines), None)
         if handles is not None:
             axes.flat[0].legend(*handles.get_legend_handles_labels(), fontsize=6)
-        fig.suptitle(f"payload sweep, command {command}, firmware {results['firmware']} "
-                     "(per-wheel panels: worse driven wheel)")
+        fig.suptitle(
+            f"payload sweep, command {command}, firmware {results['firmware']} "
+            "(per-wheel panels: worse driven wheel)"
+        )
         fig.tight_layout()
         path = Path(out_dir) / f"sweep_{command.replace(':', '_')}.png"
         save_figure(fig, path)
@@ -225,17 +302,25 @@ def _csv(rows: list[dict]) -> str:
 def _lowest_wheel_loads(rows: list[dict]) -> list[str]:
     """The points whose drive wheel came closest to lifting, with the mechanism and the
     quasi-static load of the accelerations at that instant (a hand check of the dynamics)."""
-    done = sorted((r for r in rows if r.get("dyn_min_wheel_n") is not None), key=lambda r: r["dyn_min_wheel_n"])
+    done = sorted(
+        (r for r in rows if r.get("dyn_min_wheel_n") is not None),
+        key=lambda r: r["dyn_min_wheel_n"],
+    )
     if not done:
         return []
-    lines = ["## Lowest drive-wheel loads", "",
-             "| mass kg | position | command | wheel | min load N | at s | quasi-static N | mechanism |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "## Lowest drive-wheel loads",
+        "",
+        "| mass kg | position | command | wheel | min load N | at s | quasi-static N | mechanism |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in done[:LOWEST_ROWS]:
         q = r.get("dyn_min_wheel_quasi_static_n")
-        lines.append(f"| {r['mass_kg']:g} | {r['position']} | {r['command']} | {r.get('dyn_min_wheel', '—')} | "
-                     f"{r['dyn_min_wheel_n']:.1f} | {r.get('dyn_min_wheel_t_s', float('nan')):.2f} | "
-                     f"{'—' if q is None else f'{q:.1f}'} | {r.get('dyn_min_wheel_mechanism', '—')} |")
+        lines.append(
+            f"| {r['mass_kg']:g} | {r['position']} | {r['command']} | {r.get('dyn_min_wheel', '—')} | "
+            f"{r['dyn_min_wheel_n']:.1f} | {r.get('dyn_min_wheel_t_s', float('nan')):.2f} | "
+            f"{'—' if q is None else f'{q:.1f}'} | {r.get('dyn_min_wheel_mechanism', '—')} |"
+        )
     return lines
 
 
@@ -250,36 +335,66 @@ def report(results: dict, out_dir: Path, improved: dict | None = None) -> dict:
         for position, entry in summarise(improved).items():
             summary[position]["improved"] = entry
     write_text(out_dir / "sweep.csv", _csv(results["rows"]))
-    write_json(out_dir / "summary.json", {"positions": summary, "points": len(results["rows"]),
-                                          "simulated": results["simulated"], "reused": results["reused"],
-                                          "wall_s": round(results["wall_s"], 3), "duration_s": results["duration_s"],
-                                          "firmware": results["firmware"]})
+    write_json(
+        out_dir / "summary.json",
+        {
+            "positions": summary,
+            "points": len(results["rows"]),
+            "simulated": results["simulated"],
+            "reused": results["reused"],
+            "wall_s": round(results["wall_s"], 3),
+            "duration_s": results["duration_s"],
+            "firmware": results["firmware"],
+        },
+    )
     shown, why = _plotted(results["rows"])
-    lines = ["# Payload sweep", "",
-             f"{len(results['rows'])} points ({results['simulated']} simulated, {results['reused']} reused) in "
-             f"{results['wall_s']:.1f} s wall time; {results['duration_s']} s per run, firmware {results['firmware']}"
-             + (f"; the positions limited by a runaway run again with the improved firmware "
-                f"({len(improved['rows'])} points, `improved/runs/`)" if improved else "") + ".",
-             "", f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
-             f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current, for every "
-             "command and every lighter payload. What limits it, by cause: "
-             + "; ".join(f"**{c}**: {CAUSES[c]}" for c in CAUSES) + ". A runaway is a limit of the speed "
-             "control, not of the motors' rating at what the payload demands: with the payload behind the axle "
-             "the robot oversteers in a turn, and a firmware that does not hold the wheel speeds (the faithful "
-             "one acts once a revolution, not within 4 RPM; the improved one integrates only within 8 RPM) lets it "
-             "pivot; the current drawn then is the runaway's.", "",
-             "| position | answer | heaviest tracking kg | invalid at kg |", "|---|---|---|---|"]
+    lines = [
+        "# Payload sweep",
+        "",
+        f"{len(results['rows'])} points ({results['simulated']} simulated, {results['reused']} reused) in "
+        f"{results['wall_s']:.1f} s wall time; {results['duration_s']} s per run, firmware {results['firmware']}"
+        + (
+            f"; the positions limited by a runaway run again with the improved firmware "
+            f"({len(improved['rows'])} points, `improved/runs/`)"
+            if improved
+            else ""
+        )
+        + ".",
+        "",
+        f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
+        f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current, for every "
+        "command and every lighter payload. What limits it, by cause: "
+        + "; ".join(f"**{c}**: {CAUSES[c]}" for c in CAUSES)
+        + ". A runaway is a limit of the speed "
+        "control, not of the motors' rating at what the payload demands: with the payload behind the axle "
+        "the robot oversteers in a turn, and a firmware that does not hold the wheel speeds (the faithful "
+        "one acts once a revolution, not within 4 RPM; the improved one integrates only within 8 RPM) lets it "
+        "pivot; the current drawn then is the runaway's.",
+        "",
+        "| position | answer | heaviest tracking kg | invalid at kg |",
+        "|---|---|---|---|",
+    ]
     for position, s in summary.items():
-        lines.append(f"| {position} | {s['answer']} | {_kg(s['heaviest_tracking_kg'])} | "
-                     f"{', '.join(f'{m:g}' for m in s['invalid_kg']) or '—'} |")
+        lines.append(
+            f"| {position} | {s['answer']} | {_kg(s['heaviest_tracking_kg'])} | "
+            f"{', '.join(f'{m:g}' for m in s['invalid_kg']) or '—'} |"
+        )
     beside = [(p, s["improved"]) for p, s in summary.items() if "improved" in s]
     if beside:
-        lines += ["", f"## The same positions with the improved firmware (beside the {results['firmware']} one)", "",
-                  f"| position | {results['firmware']} | improved |", "|---|---|---|"]
+        lines += [
+            "",
+            f"## The same positions with the improved firmware (beside the {results['firmware']} one)",
+            "",
+            f"| position | {results['firmware']} | improved |",
+            "|---|---|---|",
+        ]
         lines += [f"| {p} | {summary[p]['answer']} | {s['answer']} |" for p, s in beside]
     lines += ["", *_lowest_wheel_loads(results["rows"])]
     lines += ["", *[f"- no plot for {c}: {text}" for c, text in why.items()]]
-    lines += ["", *[f"![sweep_{c.replace(':', '_')}.png](sweep_{c.replace(':', '_')}.png)" for c in shown]]
+    lines += [
+        "",
+        *[f"![sweep_{c.replace(':', '_')}.png](sweep_{c.replace(':', '_')}.png)" for c in shown],
+    ]
     write_text(out_dir / "summary.md", "\n".join(lines) + "\n")
     return summary
 

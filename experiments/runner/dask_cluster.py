@@ -37,8 +37,10 @@ def connect_dask(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S):
     try:
         from distributed import Client
     except ImportError:
-        raise ExecutorError("--executor dask: dask.distributed is not installed "
-                            "(pip install 'amr-twin[dask]'), or use --executor local") from None
+        raise ExecutorError(
+            "--executor dask: dask.distributed is not installed "
+            "(pip install 'amr-twin[dask]'), or use --executor local"
+        ) from None
     _probe_scheduler(address, timeout_s)
     client = Client.__new__(Client)
     try:
@@ -46,8 +48,10 @@ def connect_dask(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S):
     except Exception as exc:  # noqa: BLE001 - whatever the far end did, one line
         _discard(client)
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ExecutorError(f"--scheduler {address!r}: no Dask scheduler answered there within "
-                            f"{timeout_s:g} s ({type(exc).__name__}: {detail[:100]})") from None
+        raise ExecutorError(
+            f"--scheduler {address!r}: no Dask scheduler answered there within "
+            f"{timeout_s:g} s ({type(exc).__name__}: {detail[:100]})"
+        ) from None
     return client
 
 
@@ -78,14 +82,22 @@ def _probe_scheduler(address: str, timeout_s: float) -> None:
             return
         host, port = parse_host_port(location)
     except (ValueError, TypeError) as exc:
-        raise ExecutorError(f"--scheduler {address!r}: not a scheduler address, e.g. tcp://10.0.0.5:8786 "
-                            f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})") from None
+        raise ExecutorError(
+            f"--scheduler {address!r}: not a scheduler address, e.g. tcp://10.0.0.5:8786 "
+            f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})"
+        ) from None
     try:
         socket.create_connection((host, int(port)), timeout=timeout_s).close()
     except OSError as exc:
-        reason = "timed out" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc) or type(exc).__name__)
-        raise ExecutorError(f"--scheduler {address!r}: cannot reach the Dask scheduler within "
-                            f"{timeout_s:g} s ({reason})") from None
+        reason = (
+            "timed out"
+            if isinstance(exc, TimeoutError)
+            else (exc.strerror or str(exc) or type(exc).__name__)
+        )
+        raise ExecutorError(
+            f"--scheduler {address!r}: cannot reach the Dask scheduler within "
+            f"{timeout_s:g} s ({reason})"
+        ) from None
 
 
 def cluster_results(client, func: Callable[[Any], Any], items: list) -> Iterator[tuple[Any, Any]]:
@@ -102,4 +114,3 @@ def cluster_results(client, func: Callable[[Any], Any], items: list) -> Iterator
             yield item_of[future.key], future.result()
     finally:  # interrupted, or a run raised: the cluster drops what is left
         client.cancel([f for f in futures if not f.done()])
-

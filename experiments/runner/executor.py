@@ -25,9 +25,15 @@ from amr_twin.experiments.runner.dask_cluster import cluster_results
 EXECUTORS = ("local", "dask")
 
 
-def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
-            description: str = "runs", progress: bool = True, client=None,
-            size: Callable[[Any], int] | None = None) -> Iterator[tuple[Any, Any]]:
+def run_all(
+    func: Callable[[Any], Any],
+    items: Iterable[Any],
+    jobs: int = 1,
+    description: str = "runs",
+    progress: bool = True,
+    client=None,
+    size: Callable[[Any], int] | None = None,
+) -> Iterator[tuple[Any, Any]]:
     """Yield ``(item, func(item))`` as each completes (in order when ``jobs == 1`` and no client).
 
     Parameters
@@ -59,7 +65,9 @@ def run_all(func: Callable[[Any], Any], items: Iterable[Any], jobs: int = 1,
                 bar.advance(task, size(item))
                 yield item, result
             return
-        from amr_twin.recording.run import warm_up  # the twin, imported by the workers as they start
+        from amr_twin.recording.run import (
+            warm_up,
+        )  # the twin, imported by the workers as they start
 
         for item, result in pool_results(func, items, min(jobs, len(items)) - 1, warm_up):
             bar.advance(task, size(item))
@@ -89,8 +97,14 @@ def _progress_bar(progress: bool):
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    console=Console(stderr=True), transient=False)
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+        transient=False,
+    )
 
 
 def write_text(path: Path, text: str) -> None:

@@ -53,11 +53,17 @@ def cluster(direction: str, errors: list[tuple[float, float]]) -> Cluster:
     x = sum(e[0] for e in errors) / n
     y = sum(e[1] for e in errors) / n
     d = [math.hypot(e[0] - x, e[1] - y) for e in errors]
-    return Cluster(direction, n, x, y, math.hypot(x, y), math.sqrt(sum(v * v for v in d) / n), max(d))
+    return Cluster(
+        direction, n, x, y, math.hypot(x, y), math.sqrt(sum(v * v for v in d) / n), max(d)
+    )
 
 
-def umbmark(cw: list[tuple[float, float]], ccw: list[tuple[float, float]], side_m: float,
-            separation_m: float) -> Umbmark:
+def umbmark(
+    cw: list[tuple[float, float]],
+    ccw: list[tuple[float, float]],
+    side_m: float,
+    separation_m: float,
+) -> Umbmark:
     """UMBmark of the clockwise and counter-clockwise runs' return errors (m) on a square of
     ``side_m``, for a robot of nominal wheelbase ``separation_m``."""
     a, b = cluster("cw", cw), cluster("ccw", ccw)
@@ -70,13 +76,28 @@ def umbmark(cw: list[tuple[float, float]], ccw: list[tuple[float, float]], side_
         radius = (side_m / 2.0) / math.sin(beta / 2.0)
         e_d = (radius + separation_m / 2.0) / (radius - separation_m / 2.0)
     e_b = 90.0 / (90.0 + math.degrees(alpha))
-    return Umbmark(side_m, a, b, max(a.r_cg_m, b.r_cg_m), max(a.spread_rms_m, b.spread_rms_m), alpha, beta,
-                   e_d, e_b)
+    return Umbmark(
+        side_m,
+        a,
+        b,
+        max(a.r_cg_m, b.r_cg_m),
+        max(a.spread_rms_m, b.spread_rms_m),
+        alpha,
+        beta,
+        e_d,
+        e_b,
+    )
 
 
-def calibration(result: Umbmark, base: OdometryCalibration, source: str = "") -> OdometryCalibration:
+def calibration(
+    result: Umbmark, base: OdometryCalibration, source: str = ""
+) -> OdometryCalibration:
     """The odometry's geometry corrected by ``result`` (``base``: the geometry the runs were driven with)."""
     c_l = 2.0 / (result.e_d + 1.0)
     c_r = 2.0 / (1.0 / result.e_d + 1.0)
-    return OdometryCalibration(base.left_wheel_radius_m * c_l, base.right_wheel_radius_m * c_r,
-                               base.wheel_separation_m * result.e_b, source)
+    return OdometryCalibration(
+        base.left_wheel_radius_m * c_l,
+        base.right_wheel_radius_m * c_r,
+        base.wheel_separation_m * result.e_b,
+        source,
+    )

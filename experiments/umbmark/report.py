@@ -29,9 +29,12 @@ from amr_twin.experiments.umbmark.seeds import Phase, SeedResult
 
 MAX_PANELS = 12
 """Seeds drawn in the Borenstein plot (the first ones; every seed is in the tables)."""
-PARTS = (("node", "odometry node (UMBmark's error)"),
-         ("wheels", "geometry + slip (true wheel angles, the odometry's geometry)"),
-         ("slip", "tyre slip (true wheel angles, true geometry)"), ("sampling", "the odometry's sampling of the speeds"))
+PARTS = (
+    ("node", "odometry node (UMBmark's error)"),
+    ("wheels", "geometry + slip (true wheel angles, the odometry's geometry)"),
+    ("slip", "tyre slip (true wheel angles, true geometry)"),
+    ("sampling", "the odometry's sampling of the speeds"),
+)
 
 
 def _umbmark(u: Umbmark) -> dict:
@@ -41,39 +44,61 @@ def _umbmark(u: Umbmark) -> dict:
 
 
 def _phase(p: Phase) -> dict:
-    runs = [{**asdict(r), "error_m": r.error_m, "wheels_error_m": r.wheels_error_m, "slip_error_m": r.slip_error_m}
-            for r in p.runs]
+    runs = [
+        {
+            **asdict(r),
+            "error_m": r.error_m,
+            "wheels_error_m": r.wheels_error_m,
+            "slip_error_m": r.slip_error_m,
+        }
+        for r in p.runs
+    ]
     return {**{name: _umbmark(getattr(p, name)) for name, _ in PARTS}, "runs": runs}
 
 
 def seed_data(r: SeedResult, cfg) -> dict:
     """One seed's JSON-ready figures."""
-    return {"seed": r.seed, "tyres": r.tyres, "robot": r.robot.as_dict(cfg), "cpu_s": r.cpu_s,
-            "before": _phase(r.before), "calibration": None if r.calibration is None else asdict(r.calibration),
-            "after": None if r.after is None else _phase(r.after), "reduction": r.reduction}
+    return {
+        "seed": r.seed,
+        "tyres": r.tyres,
+        "robot": r.robot.as_dict(cfg),
+        "cpu_s": r.cpu_s,
+        "before": _phase(r.before),
+        "calibration": None if r.calibration is None else asdict(r.calibration),
+        "after": None if r.after is None else _phase(r.after),
+        "reduction": r.reduction,
+    }
 
 
 def summary(results: list[SeedResult], rigid: list[SeedResult] | None) -> dict:
     """Reductions and spreads over the seeds (:func:`~.fusion.seeds.spread`: mean, sd, min, max)."""
     before = [r.before.node.e_max_syst_m for r in results]
-    out = {"e_max_syst_before_m": spread(before),
-           "spread_before_m": spread([r.before.node.e_nonsyst_rms_m for r in results]),
-           "slip_spread_before_m": spread([r.before.slip.e_nonsyst_rms_m for r in results]),
-           "sampling_spread_before_m": spread([r.before.sampling.e_nonsyst_rms_m for r in results]),
-           "sampling_e_max_syst_m": spread([r.before.sampling.e_max_syst_m for r in results]),
-           "slip_e_max_syst_m": spread([r.before.slip.e_max_syst_m for r in results]),
-           "geometry_and_slip_e_max_syst_m": spread([r.before.wheels.e_max_syst_m for r in results])}
+    out = {
+        "e_max_syst_before_m": spread(before),
+        "spread_before_m": spread([r.before.node.e_nonsyst_rms_m for r in results]),
+        "slip_spread_before_m": spread([r.before.slip.e_nonsyst_rms_m for r in results]),
+        "sampling_spread_before_m": spread([r.before.sampling.e_nonsyst_rms_m for r in results]),
+        "sampling_e_max_syst_m": spread([r.before.sampling.e_max_syst_m for r in results]),
+        "slip_e_max_syst_m": spread([r.before.slip.e_max_syst_m for r in results]),
+        "geometry_and_slip_e_max_syst_m": spread([r.before.wheels.e_max_syst_m for r in results]),
+    }
     if results[0].after is not None:
         after = [r.after.node.e_max_syst_m for r in results]
         factors = [r.reduction for r in results]
-        out.update(e_max_syst_after_m=spread(after), spread_after_m=spread([r.after.node.e_nonsyst_rms_m for r in results]),
-                   reduction=spread(factors), reduction_median=float(np.median(factors)),
-                   reduction_of_means=float(np.mean(before) / np.mean(after)),
-                   seeds_reduced=sum(1 for f in factors if f > 1.0))
+        out.update(
+            e_max_syst_after_m=spread(after),
+            spread_after_m=spread([r.after.node.e_nonsyst_rms_m for r in results]),
+            reduction=spread(factors),
+            reduction_median=float(np.median(factors)),
+            reduction_of_means=float(np.mean(before) / np.mean(after)),
+            seeds_reduced=sum(1 for f in factors if f > 1.0),
+        )
     if rigid:
         out["rigid_spread_before_m"] = spread([r.before.node.e_nonsyst_rms_m for r in rigid])
         out["rigid_slip_spread_before_m"] = spread([r.before.slip.e_nonsyst_rms_m for r in rigid])
-        out["rigid_sampling_spread_before_m"] = spread([r.before.sampling.e_nonsyst_rms_m for r in rigid])
+        out["rigid_sampling_spread_before_m"] = spread(
+            [r.before.sampling.e_nonsyst_rms_m for r in rigid]
+        )
         out["rigid_e_max_syst_before_m"] = spread([r.before.node.e_max_syst_m for r in rigid])
     return out
 
@@ -82,51 +107,84 @@ def markdown(data: dict) -> str:
     """The report's text."""
     s, m = data["summary"], data["meta"]
     mm = lambda v: f"{1e3 * v:.1f}"  # noqa: E731
-    lines = [f"# UMBmark on the twin: seeds {seed_text(m['seeds'])}", "",
-             f"{m['runs']} squares of {m['side_m']:g} m clockwise and {m['runs']} counter-clockwise per seed and phase; "
-             f"brush tyres {'on' if m['tyres'] else 'off (rigid contact)'}, the floor's friction field "
-             f"{('on' if m['floor_field'] else 'off') if m['tyres'] else 'without effect (rigid contact)'}, "
-             "improved firmware; each square driven to its corners and headings by the robot's odometry; "
-             "each seed the robot the fusion experiment "
-             "draws (tyre radii, track, hall sensors). E_max,syst: the larger distance of the two centres of "
-             "gravity of the return errors from the origin; spread: the RMS distance of a direction's runs from "
-             "its centre of gravity (the larger direction). All in mm.", "",
-             f"- E_max,syst before calibration: {_mm_cell(s['e_max_syst_before_m'])}"]
+    lines = [
+        f"# UMBmark on the twin: seeds {seed_text(m['seeds'])}",
+        "",
+        f"{m['runs']} squares of {m['side_m']:g} m clockwise and {m['runs']} counter-clockwise per seed and phase; "
+        f"brush tyres {'on' if m['tyres'] else 'off (rigid contact)'}, the floor's friction field "
+        f"{('on' if m['floor_field'] else 'off') if m['tyres'] else 'without effect (rigid contact)'}, "
+        "improved firmware; each square driven to its corners and headings by the robot's odometry; "
+        "each seed the robot the fusion experiment "
+        "draws (tyre radii, track, hall sensors). E_max,syst: the larger distance of the two centres of "
+        "gravity of the return errors from the origin; spread: the RMS distance of a direction's runs from "
+        "its centre of gravity (the larger direction). All in mm.",
+        "",
+        f"- E_max,syst before calibration: {_mm_cell(s['e_max_syst_before_m'])}",
+    ]
     if "e_max_syst_after_m" in s:
-        lines += [f"- E_max,syst after: {_mm_cell(s['e_max_syst_after_m'])}; reduction per seed "
-                  f"{cell(s['reduction'], 1)}, median {s['reduction_median']:.1f}, of the means "
-                  f"{s['reduction_of_means']:.1f}; reduced on {s['seeds_reduced']} of {len(m['seeds'])} seeds "
-                  "(Borenstein and Feng report about an order of magnitude on real robots)"]
+        lines += [
+            f"- E_max,syst after: {_mm_cell(s['e_max_syst_after_m'])}; reduction per seed "
+            f"{cell(s['reduction'], 1)}, median {s['reduction_median']:.1f}, of the means "
+            f"{s['reduction_of_means']:.1f}; reduced on {s['seeds_reduced']} of {len(m['seeds'])} seeds "
+            "(Borenstein and Feng report about an order of magnitude on real robots)"
+        ]
     rigid = "rigid_spread_before_m" in s
-    lines.append(f"- non-systematic spread (the wheels on the floor: the tyres' slip) before: "
-                 f"{_mm_cell(s['slip_spread_before_m'], 3)}"
-                 + (f"; with the tyre model off (rigid contact, the same robots and run seeds): "
-                    f"{_mm_cell(s['rigid_slip_spread_before_m'], 3)}" if rigid else ""))
-    lines.append(f"- the odometry's sampling part (the 90-edge encoder's resolution and the 10 Hz samples: "
-                 f"systematic sources in Borenstein and Feng's list, not removed by the calibration): "
-                 f"{_mm_cell(s['sampling_spread_before_m'])}"
-                 + (f"; rigid contact: {_mm_cell(s['rigid_sampling_spread_before_m'])}" if rigid else ""))
-    lines.append(f"- scatter of the return errors (all parts) before: {_mm_cell(s['spread_before_m'])}"
-                 + (f"; after: {_mm_cell(s['spread_after_m'])}" if "spread_after_m" in s else "")
-                 + (f"; rigid contact: {_mm_cell(s['rigid_spread_before_m'])}, E_max,syst "
-                    f"{_mm_cell(s['rigid_e_max_syst_before_m'])}" if rigid else ""))
-    lines += [f"- parts of E_max,syst before (UMBmark of each part's return errors): geometry + slip "
-              f"{_mm_cell(s['geometry_and_slip_e_max_syst_m'])}, of which tyre slip {_mm_cell(s['slip_e_max_syst_m'])}; "
-              f"the odometry's sampling {_mm_cell(s['sampling_e_max_syst_m'])}", "",
-              "| seed | radii L, R mm | track mm | E_max,syst before | after | reduction | E_d | E_b | scatter before | "
-              "after | sampling part | slip part |", "|---|" + "---|" * 11]
+    lines.append(
+        f"- non-systematic spread (the wheels on the floor: the tyres' slip) before: "
+        f"{_mm_cell(s['slip_spread_before_m'], 3)}"
+        + (
+            f"; with the tyre model off (rigid contact, the same robots and run seeds): "
+            f"{_mm_cell(s['rigid_slip_spread_before_m'], 3)}"
+            if rigid
+            else ""
+        )
+    )
+    lines.append(
+        f"- the odometry's sampling part (the 90-edge encoder's resolution and the 10 Hz samples: "
+        f"systematic sources in Borenstein and Feng's list, not removed by the calibration): "
+        f"{_mm_cell(s['sampling_spread_before_m'])}"
+        + (f"; rigid contact: {_mm_cell(s['rigid_sampling_spread_before_m'])}" if rigid else "")
+    )
+    lines.append(
+        f"- scatter of the return errors (all parts) before: {_mm_cell(s['spread_before_m'])}"
+        + (f"; after: {_mm_cell(s['spread_after_m'])}" if "spread_after_m" in s else "")
+        + (
+            f"; rigid contact: {_mm_cell(s['rigid_spread_before_m'])}, E_max,syst "
+            f"{_mm_cell(s['rigid_e_max_syst_before_m'])}"
+            if rigid
+            else ""
+        )
+    )
+    lines += [
+        f"- parts of E_max,syst before (UMBmark of each part's return errors): geometry + slip "
+        f"{_mm_cell(s['geometry_and_slip_e_max_syst_m'])}, of which tyre slip {_mm_cell(s['slip_e_max_syst_m'])}; "
+        f"the odometry's sampling {_mm_cell(s['sampling_e_max_syst_m'])}",
+        "",
+        "| seed | radii L, R mm | track mm | E_max,syst before | after | reduction | E_d | E_b | scatter before | "
+        "after | sampling part | slip part |",
+        "|---|" + "---|" * 11,
+    ]
     for d in data["per_seed"]:
         rb, b, a = d["robot"], d["before"], d["after"]
-        lines.append(f"| {d['seed']} | {1e3 * rb['radius_error_left_m']:+.2f}, {1e3 * rb['radius_error_right_m']:+.2f} "
-                     f"| {1e3 * rb['separation_error_m']:+.2f} | {mm(b['node']['e_max_syst_m'])} | "
-                     + (f"{mm(a['node']['e_max_syst_m'])} | {d['reduction']:.1f} | " if a else "- | - | ")
-                     + f"{b['node']['e_d']:.6f} | {b['node']['e_b']:.5f} | {mm(b['node']['e_nonsyst_rms_m'])} | "
-                     + (f"{mm(a['node']['e_nonsyst_rms_m'])} | " if a else "- | ")
-                     + f"{mm(b['sampling']['e_max_syst_m'])} | {mm(b['slip']['e_max_syst_m'])} |")
-    lines += ["", "E_d and E_b are Borenstein's correction factors (the right over the left wheel's effective "
-              "diameter; the effective over the nominal wheelbase); `calibration/seed<N>.yaml` holds the radii "
-              "and wheelbase the odometry node used for the second squares (`amr-twin run --odometry FILE`).",
-              "", "![Borenstein plot](borenstein.png)", "", "![E_max,syst per seed](emax.png)", ""]
+        lines.append(
+            f"| {d['seed']} | {1e3 * rb['radius_error_left_m']:+.2f}, {1e3 * rb['radius_error_right_m']:+.2f} "
+            f"| {1e3 * rb['separation_error_m']:+.2f} | {mm(b['node']['e_max_syst_m'])} | "
+            + (f"{mm(a['node']['e_max_syst_m'])} | {d['reduction']:.1f} | " if a else "- | - | ")
+            + f"{b['node']['e_d']:.6f} | {b['node']['e_b']:.5f} | {mm(b['node']['e_nonsyst_rms_m'])} | "
+            + (f"{mm(a['node']['e_nonsyst_rms_m'])} | " if a else "- | ")
+            + f"{mm(b['sampling']['e_max_syst_m'])} | {mm(b['slip']['e_max_syst_m'])} |"
+        )
+    lines += [
+        "",
+        "E_d and E_b are Borenstein's correction factors (the right over the left wheel's effective "
+        "diameter; the effective over the nominal wheelbase); `calibration/seed<N>.yaml` holds the radii "
+        "and wheelbase the odometry node used for the second squares (`amr-twin run --odometry FILE`).",
+        "",
+        "![Borenstein plot](borenstein.png)",
+        "",
+        "![E_max,syst per seed](emax.png)",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -138,14 +196,20 @@ def plot_borenstein(data: dict, path: Path) -> None:
     """A panel per seed: every run's return error (mm), CW and CCW, before (hollow) and after (filled),
     and the four centres of gravity (crosses, joined to the origin)."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     seeds = data["per_seed"][:MAX_PANELS]
     cols = min(len(seeds), 4)
     rows = math.ceil(len(seeds) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols + 0.5, 3.6 * rows + 0.6), squeeze=False,
-                             layout="constrained")
+    fig, axes = plt.subplots(
+        rows,
+        cols,
+        figsize=(3.6 * cols + 0.5, 3.6 * rows + 0.6),
+        squeeze=False,
+        layout="constrained",
+    )
     colours = {"cw": "tab:blue", "ccw": "tab:red"}
     for ax, d in zip(axes.ravel(), seeds):
         for phase, filled in (("before", False), ("after", True)):
@@ -154,29 +218,51 @@ def plot_borenstein(data: dict, path: Path) -> None:
                 continue
             for direction, c in colours.items():
                 e = np.array([r["error_m"] for r in p["runs"] if r["direction"] == direction]) * 1e3
-                ax.plot(e[:, 0], e[:, 1], "o", ms=4, color=c, mfc=c if filled else "none",
-                        label=f"{direction.upper()} {phase}")
+                ax.plot(
+                    e[:, 0],
+                    e[:, 1],
+                    "o",
+                    ms=4,
+                    color=c,
+                    mfc=c if filled else "none",
+                    label=f"{direction.upper()} {phase}",
+                )
                 cg = p["node"][direction]
-                ax.plot([0, 1e3 * cg["x_cg_m"]], [0, 1e3 * cg["y_cg_m"]], "-", color=c, lw=0.8,
-                        alpha=1.0 if filled else 0.5)
+                ax.plot(
+                    [0, 1e3 * cg["x_cg_m"]],
+                    [0, 1e3 * cg["y_cg_m"]],
+                    "-",
+                    color=c,
+                    lw=0.8,
+                    alpha=1.0 if filled else 0.5,
+                )
                 ax.plot(1e3 * cg["x_cg_m"], 1e3 * cg["y_cg_m"], "x", color=c, ms=9, mew=2)
         ax.axhline(0, color="0.7", lw=0.5)
         ax.axvline(0, color="0.7", lw=0.5)
         ax.set_aspect("equal", adjustable="datalim")
         after = f", after {1e3 * d['after']['node']['e_max_syst_m']:.0f}" if d["after"] else ""
-        ax.set_title(f"seed {d['seed']}: E_max,syst {1e3 * d['before']['node']['e_max_syst_m']:.0f}{after} mm",
-                     fontsize=9)
+        ax.set_title(
+            f"seed {d['seed']}: E_max,syst {1e3 * d['before']['node']['e_max_syst_m']:.0f}{after} mm",
+            fontsize=9,
+        )
         ax.grid(alpha=0.3)
-    for ax in axes.ravel()[len(seeds):]:
+    for ax in axes.ravel()[len(seeds) :]:
         ax.set_visible(False)
     axes[0, 0].legend(fontsize=7, loc="best")
     for ax in axes[:, 0]:
         ax.set_ylabel("y error, mm")
     for ax in axes[-1, :]:
         ax.set_xlabel("x error, mm")
-    shown = "" if len(data["per_seed"]) <= MAX_PANELS else f" (first {MAX_PANELS} of {len(data['per_seed'])} seeds)"
-    fig.suptitle("UMBmark return errors (true - odometry)\nruns (o), centres of gravity (x); hollow before, "
-                 f"filled after the calibration{shown}", fontsize=9)
+    shown = (
+        ""
+        if len(data["per_seed"]) <= MAX_PANELS
+        else f" (first {MAX_PANELS} of {len(data['per_seed'])} seeds)"
+    )
+    fig.suptitle(
+        "UMBmark return errors (true - odometry)\nruns (o), centres of gravity (x); hollow before, "
+        f"filled after the calibration{shown}",
+        fontsize=9,
+    )
     save_figure(fig, path)
 
 
@@ -184,6 +270,7 @@ def plot_emax(data: dict, path: Path) -> None:
     """E_max,syst per seed before and after (log scale), and each seed's scatter as the floor of what a
     calibration can reach."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -193,10 +280,21 @@ def plot_emax(data: dict, path: Path) -> None:
     before = [1e3 * d["before"]["node"]["e_max_syst_m"] for d in per]
     ax.plot(x, before, "o", color="tab:red", label="E_max,syst before")
     if per[0]["after"] is not None:
-        ax.plot(x, [1e3 * d["after"]["node"]["e_max_syst_m"] for d in per], "o", color="tab:green",
-                label="E_max,syst after the calibration")
-    ax.plot(x, [1e3 * d["before"]["node"]["e_nonsyst_rms_m"] for d in per], "_", color="k", ms=14,
-            label="scatter of the return errors (RMS), before")
+        ax.plot(
+            x,
+            [1e3 * d["after"]["node"]["e_max_syst_m"] for d in per],
+            "o",
+            color="tab:green",
+            label="E_max,syst after the calibration",
+        )
+    ax.plot(
+        x,
+        [1e3 * d["before"]["node"]["e_nonsyst_rms_m"] for d in per],
+        "_",
+        color="k",
+        ms=14,
+        label="scatter of the return errors (RMS), before",
+    )
     ax.set_yscale("log")
     ax.set_xticks(x, [str(d["seed"]) for d in per])
     ax.set_xlabel("seed (robot)")
@@ -207,18 +305,29 @@ def plot_emax(data: dict, path: Path) -> None:
     save_figure(fig, path)
 
 
-def write(results: list[SeedResult], rigid: list[SeedResult] | None, cfg, meta: dict, out: Path) -> dict:
+def write(
+    results: list[SeedResult], rigid: list[SeedResult] | None, cfg, meta: dict, out: Path
+) -> dict:
     """Write the report files into ``out``; return the JSON data."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    data = {"meta": meta, "summary": summary(results, rigid), "per_seed": [seed_data(r, cfg) for r in results],
-            "rigid_per_seed": [seed_data(r, cfg) for r in rigid] if rigid else None}
+    data = {
+        "meta": meta,
+        "summary": summary(results, rigid),
+        "per_seed": [seed_data(r, cfg) for r in results],
+        "rigid_per_seed": [seed_data(r, cfg) for r in rigid] if rigid else None,
+    }
     write_json(out / "metrics.json", data)
     for r in results:
         if r.calibration is not None:
             (out / "calibration").mkdir(exist_ok=True)
-            write_text(out / "calibration" / f"seed{r.seed}.yaml", calibration_text(
-                r.calibration, "The wheel odometry's calibration from UMBmark (amr-twin run --odometry FILE)."))
+            write_text(
+                out / "calibration" / f"seed{r.seed}.yaml",
+                calibration_text(
+                    r.calibration,
+                    "The wheel odometry's calibration from UMBmark (amr-twin run --odometry FILE).",
+                ),
+            )
     plot_borenstein(data, out / "borenstein.png")
     plot_emax(data, out / "emax.png")
     write_text(out / "report.md", markdown(data))

@@ -93,28 +93,48 @@ def run_seed_of(seed: int, phase: int, direction: str, run: int) -> int:
     return int(np.random.SeedSequence(entropy).generate_state(1)[0])
 
 
-def _phase(cfg: TwinConfig, robot: fusion_robot.RobotErrors, job: SeedJob, phase: int,
-           odometry: OdometryCalibration | None) -> Phase:
+def _phase(
+    cfg: TwinConfig,
+    robot: fusion_robot.RobotErrors,
+    job: SeedJob,
+    phase: int,
+    odometry: OdometryCalibration | None,
+) -> Phase:
     from amr_twin.assembly.twin import Twin, TwinOptions
 
     runs = []
     for direction in DIRECTIONS:
         for k in range(job.runs):
-            options = TwinOptions(firmware="improved", world="empty", seed=run_seed_of(job.seed, phase, direction, k),
-                                  visuals=False, odometry_calibration=odometry, **robot.twin_options())
+            options = TwinOptions(
+                firmware="improved",
+                world="empty",
+                seed=run_seed_of(job.seed, phase, direction, k),
+                visuals=False,
+                odometry_calibration=odometry,
+                **robot.twin_options(),
+            )
             runs.append(drive_square(Twin(cfg, options), direction, job.profile, run=k))
     w = cfg.wheel
     side, b = job.profile.side_m, w.separation_m
 
     def of(error) -> Umbmark:
-        return umbmark([error(r) for r in runs if r.direction == "cw"],
-                       [error(r) for r in runs if r.direction == "ccw"], side, b)
+        return umbmark(
+            [error(r) for r in runs if r.direction == "cw"],
+            [error(r) for r in runs if r.direction == "ccw"],
+            side,
+            b,
+        )
 
     def sampling(r: SquareRun) -> tuple[float, float]:
         return (r.error_m[0] - r.wheels_error_m[0], r.error_m[1] - r.wheels_error_m[1])
 
-    return Phase(tuple(runs), of(lambda r: r.error_m), of(lambda r: r.wheels_error_m),
-                 of(lambda r: r.slip_error_m), of(sampling))
+    return Phase(
+        tuple(runs),
+        of(lambda r: r.error_m),
+        of(lambda r: r.wheels_error_m),
+        of(lambda r: r.slip_error_m),
+        of(sampling),
+    )
 
 
 def run_seed(job: SeedJob) -> SeedResult:
@@ -128,16 +148,34 @@ def run_seed(job: SeedJob) -> SeedResult:
     if job.calibrate:
         nominal = OdometryCalibration(w.radius_m, w.radius_m, w.separation_m)
         u = before.node
-        cal = calibration(u, nominal, source=f"amr-twin experiment umbmark, seed {job.seed}, {job.runs} runs a "
-                          f"direction (E_d {u.e_d:.6f}, E_b {u.e_b:.6f})")
+        cal = calibration(
+            u,
+            nominal,
+            source=f"amr-twin experiment umbmark, seed {job.seed}, {job.runs} runs a "
+            f"direction (E_d {u.e_d:.6f}, E_b {u.e_b:.6f})",
+        )
         after = _phase(cfg, robot, job, 1, cal)
-    return SeedResult(job.seed, robot, bool(w.tyre_slip), before, cal, after, time.process_time() - t0)
+    return SeedResult(
+        job.seed, robot, bool(w.tyre_slip), before, cal, after, time.process_time() - t0
+    )
 
 
-def run(jobs_list: list[SeedJob], jobs: int = 1, progress: bool = True, description: str = "umbmark squares"
-        ) -> list[SeedResult]:
+def run(
+    jobs_list: list[SeedJob],
+    jobs: int = 1,
+    progress: bool = True,
+    description: str = "umbmark squares",
+) -> list[SeedResult]:
     """Run every seed's job (``jobs`` local workers); results in the order given."""
-    done = {(j.seed, j.calibrate, j.cfg.wheel.tyre_slip): r for j, r in
-            run_all(run_seed, jobs_list, jobs=jobs, description=description, progress=progress,
-                    size=lambda j: j.squares)}
+    done = {
+        (j.seed, j.calibrate, j.cfg.wheel.tyre_slip): r
+        for j, r in run_all(
+            run_seed,
+            jobs_list,
+            jobs=jobs,
+            description=description,
+            progress=progress,
+            size=lambda j: j.squares,
+        )
+    }
     return [done[(j.seed, j.calibrate, j.cfg.wheel.tyre_slip)] for j in jobs_list]

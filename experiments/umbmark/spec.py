@@ -45,8 +45,10 @@ class UmbmarkSpec:
         and the ``params`` file may not set what the spec chooses (:data:`RESERVED`)."""
         seed_list = parse_seeds(self.seeds)
         if not 1 <= self.runs <= MAX_RUNS:
-            raise ValueError(f"--runs {self.runs}: must be in 1..{MAX_RUNS} (squares per direction "
-                             "and phase, ~1 s of CPU each)")
+            raise ValueError(
+                f"--runs {self.runs}: must be in 1..{MAX_RUNS} (squares per direction "
+                "and phase, ~1 s of CPU each)"
+            )
         for item in sets:
             key = item.partition("=")[0].strip()
             if key in RESERVED:
@@ -73,8 +75,9 @@ def _check_params(params: Path) -> None:
             raise ValueError(f"--params {params}: {key} is {_CHOSEN}")
 
 
-def run(spec: UmbmarkSpec, cfg: TwinConfig, out_dir: Path, jobs: int = 1,
-        progress: bool = False) -> dict:
+def run(
+    spec: UmbmarkSpec, cfg: TwinConfig, out_dir: Path, jobs: int = 1, progress: bool = False
+) -> dict:
     """Validate ``spec``, drive every robot's squares before and after its calibration (``jobs``
     worker processes) and write ``out_dir``'s report
     (:func:`amr_twin.experiments.umbmark.report.write`); its data."""
@@ -83,15 +86,28 @@ def run(spec: UmbmarkSpec, cfg: TwinConfig, out_dir: Path, jobs: int = 1,
         cfg = with_values(cfg, spec.values())
     profile = Profile()
     main = [seeds.SeedJob(cfg, s, spec.runs, profile) for s in seed_list]
-    rigid = [seeds.SeedJob(with_values(cfg, {"wheel.tyre_slip": False}), s, spec.runs, profile,
-                           calibrate=False) for s in seed_list] if spec.tyres else []
-    meta = {"seeds": seed_list, "runs": spec.runs, "tyres": spec.tyres,
-            "floor_field": spec.floor_field, "side_m": profile.side_m,
-            "profile": {k: getattr(profile, k) for k in profile.__dataclass_fields__},
-            "firmware": "improved"}
+    rigid = (
+        [
+            seeds.SeedJob(
+                with_values(cfg, {"wheel.tyre_slip": False}), s, spec.runs, profile, calibrate=False
+            )
+            for s in seed_list
+        ]
+        if spec.tyres
+        else []
+    )
+    meta = {
+        "seeds": seed_list,
+        "runs": spec.runs,
+        "tyres": spec.tyres,
+        "floor_field": spec.floor_field,
+        "side_m": profile.side_m,
+        "profile": {k: getattr(profile, k) for k in profile.__dataclass_fields__},
+        "firmware": "improved",
+    }
     done = seeds.run(main + rigid, jobs=jobs, progress=progress)
     with all_or_nothing():
-        return report.write(done[:len(main)], done[len(main):] or None, cfg, meta, out_dir)
+        return report.write(done[: len(main)], done[len(main) :] or None, cfg, meta, out_dir)
 
 
 def _value(cfg: TwinConfig, key: str):
@@ -99,6 +115,13 @@ def _value(cfg: TwinConfig, key: str):
     return getattr(getattr(cfg, section), name)
 
 
-EXPERIMENTS.register("umbmark", Experiment(
-    "umbmark", UmbmarkSpec, run, dict,
-    "UMBmark's return errors per robot, its odometry calibration and the squares again"))
+EXPERIMENTS.register(
+    "umbmark",
+    Experiment(
+        "umbmark",
+        UmbmarkSpec,
+        run,
+        dict,
+        "UMBmark's return errors per robot, its odometry calibration and the squares again",
+    ),
+)

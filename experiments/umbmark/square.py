@@ -64,8 +64,10 @@ class SquareRun:
     @property
     def slip_error_m(self) -> tuple[float, float]:
         """``true - wheels(true geometry)``: what the tyres do on the floor, m."""
-        return (self.true_xy_m[0] - self.wheels_true_geometry_xy_m[0],
-                self.true_xy_m[1] - self.wheels_true_geometry_xy_m[1])
+        return (
+            self.true_xy_m[0] - self.wheels_true_geometry_xy_m[0],
+            self.true_xy_m[1] - self.wheels_true_geometry_xy_m[1],
+        )
 
 
 class SquareDriver:
@@ -91,7 +93,11 @@ class SquareDriver:
         """What is left of the motion by the odometry, m of rim (a leg: along its line to the corner)."""
         odo = self.odometry
         if task["turn"]:
-            return task["sign"] * math.remainder(task["yaw"] - odo.yaw_rad, 2 * math.pi) * self.half_separation_m
+            return (
+                task["sign"]
+                * math.remainder(task["yaw"] - odo.yaw_rad, 2 * math.pi)
+                * self.half_separation_m
+            )
         ux, uy = math.cos(task["yaw"]), math.sin(task["yaw"])
         return (task["x"] - odo.x_m) * ux + (task["y"] - odo.y_m) * uy
 
@@ -120,8 +126,10 @@ class SquareDriver:
             self.client.stop()
             self._task = None
             return
-        approach = remaining - p.stop_speed_m_s * (p.crawl_s + p.brake_lead_s)  # the crawl, then the brake
-        reach = math.sqrt(p.stop_speed_m_s ** 2 + 2.0 * p.accel_m_s2 * max(approach, 0.0))
+        approach = remaining - p.stop_speed_m_s * (
+            p.crawl_s + p.brake_lead_s
+        )  # the crawl, then the brake
+        reach = math.sqrt(p.stop_speed_m_s**2 + 2.0 * p.accel_m_s2 * max(approach, 0.0))
         command = max(min(task["cruise"], command + p.accel_m_s2 * period, reach), p.stop_speed_m_s)
         task["command"] = command
         if task["turn"]:
@@ -135,19 +143,25 @@ class SquareDriver:
         else:
             self.client.linear(command)
 
-    def _motion(self, turn: bool, x_m: float, y_m: float, yaw_rad: float, sign: float = 1.0) -> None:
+    def _motion(
+        self, turn: bool, x_m: float, y_m: float, yaw_rad: float, sign: float = 1.0
+    ) -> None:
         """One leg to the corner ``(x_m, y_m)`` along heading ``yaw_rad``, or a turn in place to
         ``yaw_rad`` (``sign`` +1 left), by the odometry; then the rest."""
         p, twin = self.profile, self.twin
         cruise = math.radians(p.turn_deg_s) * self.half_separation_m if turn else p.speed_m_s
-        self._task = dict(turn=turn, x=x_m, y=y_m, yaw=yaw_rad, sign=sign, cruise=cruise, command=0.0, delta=0.0)
+        self._task = dict(
+            turn=turn, x=x_m, y=y_m, yaw=yaw_rad, sign=sign, cruise=cruise, command=0.0, delta=0.0
+        )
         t_end = twin.t_s + MAX_MOTION_S
         while self._task is not None:
             if twin.t_s > t_end:
                 self._task = None
                 self.client.stop()
-                raise RuntimeError(f"UMBmark square: a {'turn' if turn else 'leg'} did not end within "
-                                   f"{MAX_MOTION_S:g} s")
+                raise RuntimeError(
+                    f"UMBmark square: a {'turn' if turn else 'leg'} did not end within "
+                    f"{MAX_MOTION_S:g} s"
+                )
             twin.advance(POLL_S)
         twin.advance(p.rest_s)
 
@@ -171,8 +185,9 @@ class SquareDriver:
         self._sub.unregister()
 
 
-def wheel_pose(angles_rad: np.ndarray, left_radius_m: float, right_radius_m: float,
-               separation_m: float) -> tuple[float, float, float]:
+def wheel_pose(
+    angles_rad: np.ndarray, left_radius_m: float, right_radius_m: float, separation_m: float
+) -> tuple[float, float, float]:
     """Pose ``(x_m, y_m, yaw_rad)`` from the start of an ideal encoder odometry: (n, 2) wheel angles
     [left, right], rad, each increment integrated as an arc."""
     d = np.diff(np.asarray(angles_rad, float), axis=0)
@@ -200,8 +215,21 @@ def drive_square(twin, direction: str, profile: Profile = Profile(), run: int = 
     angles = recorder.series().wheel_angle_rad
     w, odo = twin.cfg.wheel, twin.odometry
     assumed = wheel_pose(angles, odo.left_radius_m, odo.right_radius_m, odo.separation_m)
-    exact = wheel_pose(angles, w.radius_m + w.radius_error_left_m, w.radius_m + w.radius_error_right_m,
-                       w.separation_m + w.separation_error_m)
-    return SquareRun(direction, run, twin.options.seed, (odo.x_m, odo.y_m), assumed[:2], exact[:2], true_xy,
-                     math.degrees(odo.yaw_rad), math.degrees(math.remainder(end.yaw_rad - start.yaw_rad, 2 * math.pi)),
-                     twin.t_s)
+    exact = wheel_pose(
+        angles,
+        w.radius_m + w.radius_error_left_m,
+        w.radius_m + w.radius_error_right_m,
+        w.separation_m + w.separation_error_m,
+    )
+    return SquareRun(
+        direction,
+        run,
+        twin.options.seed,
+        (odo.x_m, odo.y_m),
+        assumed[:2],
+        exact[:2],
+        true_xy,
+        math.degrees(odo.yaw_rad),
+        math.degrees(math.remainder(end.yaw_rad - start.yaw_rad, 2 * math.pi)),
+        twin.t_s,
+    )

@@ -93,7 +93,9 @@ def test_a_permanent_offset_is_a_steady_error_not_an_overshoot():
     y = first_order(T, k=105.17, tau=0.5)
     info = step_info(T, y, 99.20, settling_band=4.96)
     assert info.overshoot == 0.0 and info.overshoot_pct == 0.0
-    assert math.isnan(info.peak_s) and math.isnan(info.peak_value) and info.as_dict()["peak_s"] is None
+    assert (
+        math.isnan(info.peak_s) and math.isnan(info.peak_value) and info.as_dict()["peak_s"] is None
+    )
     assert info.steady_error == pytest.approx(5.97, abs=1e-3)
     # settled about its own final value: 4.96 RPM is 4.72 % of the step, exp(-t/tau) = 0.0472
     assert info.settling_s == pytest.approx(-0.5 * math.log(4.96 / 105.17), abs=1e-3)
@@ -149,14 +151,16 @@ def test_peak_time_is_the_first_peak_of_a_rippled_plateau():
     overshoot the highest one; a ripple inside the tolerance is not a peak of its own."""
     t = np.round(np.arange(0.0, 12.0, 0.01), 2)
     y = np.where(t < 1.0, 99.0 * t, 99.0) + np.where(t < 6.0, 0.0, -4.0 * np.minimum(t - 6.0, 1.0))
-    y = y + 0.4 * np.exp(-((t - 1.2) / 0.05) ** 2) + 1.1 * np.exp(-((t - 4.2) / 0.05) ** 2)
+    y = y + 0.4 * np.exp(-(((t - 1.2) / 0.05) ** 2)) + 1.1 * np.exp(-(((t - 4.2) / 0.05) ** 2))
     info = step_info(t, y, 95.0)
     assert info.peak_s == pytest.approx(1.2)
     assert info.peak_value == pytest.approx(100.1, abs=1e-6)
     assert info.overshoot == pytest.approx(5.1, abs=1e-6)
     # the first ripple shrunk to 0.05 RPM, below the tolerance (0.095 RPM): the first peak is the later one
-    low = np.where(t < 1.0, 99.0 * t, 99.0) + np.where(t < 6.0, 0.0, -4.0 * np.minimum(t - 6.0, 1.0))
-    low = low + 0.05 * np.exp(-((t - 1.2) / 0.05) ** 2) + 1.1 * np.exp(-((t - 4.2) / 0.05) ** 2)
+    low = np.where(t < 1.0, 99.0 * t, 99.0) + np.where(
+        t < 6.0, 0.0, -4.0 * np.minimum(t - 6.0, 1.0)
+    )
+    low = low + 0.05 * np.exp(-(((t - 1.2) / 0.05) ** 2)) + 1.1 * np.exp(-(((t - 4.2) / 0.05) ** 2))
     assert step_info(t, low, 95.0).peak_s == pytest.approx(4.2)
     # a first ripple that does not come back down by the tolerance before rising further is no peak
     stair = np.where(t < 1.0, 99.0 * t, 99.0 + 0.2 * np.minimum(np.maximum(t - 1.2, 0.0), 3.0))

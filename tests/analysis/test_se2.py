@@ -17,8 +17,9 @@ def test_compose_then_between_is_identity():
 
 def test_compose_known_case():
     # a point 1 m ahead of a robot at (2, 3) facing +y is at (2, 4)
-    np.testing.assert_allclose(se2.compose([2.0, 3.0, math.pi / 2], [1.0, 0.0, 0.0]), [2.0, 4.0, math.pi / 2],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        se2.compose([2.0, 3.0, math.pi / 2], [1.0, 0.0, 0.0]), [2.0, 4.0, math.pi / 2], atol=1e-12
+    )
 
 
 def test_wrap_and_interpolation_across_pi():
@@ -31,13 +32,15 @@ def test_wrap_and_interpolation_across_pi():
 
 
 def test_compose_and_relative_pose_are_inverse():
-    a = np.array([1.0, -2.0, 3.0])          # near +pi: the yaw sum must wrap
+    a = np.array([1.0, -2.0, 3.0])  # near +pi: the yaw sum must wrap
     b = np.array([[0.5, 0.25, 0.5], [-1.0, 2.0, -2.0]])
     ab = se2.compose(a, b)
     assert np.all(np.abs(ab[:, 2]) <= math.pi)
     np.testing.assert_allclose(se2.between(a, ab), b, atol=1e-12)
     # 0.30 m ahead of a base turned 90 deg left is 0.30 m along +y
-    np.testing.assert_allclose(se2.compose([0.0, 0.0, math.pi / 2], (0.30, 0.0, 0.0)), [0.0, 0.30, math.pi / 2], atol=1e-12)
+    np.testing.assert_allclose(
+        se2.compose([0.0, 0.0, math.pi / 2], (0.30, 0.0, 0.0)), [0.0, 0.30, math.pi / 2], atol=1e-12
+    )
 
 
 def test_interpolate_pose_across_the_yaw_wrap():
@@ -52,8 +55,11 @@ def test_interpolate_pose_across_the_yaw_wrap():
 def test_matrix_round_trip():
     pose = (1.5, -0.25, 2.9)
     assert se2.from_matrix(se2.matrix(*pose)) == pytest.approx(pose)
-    np.testing.assert_allclose(se2.matrix(*pose) @ se2.matrix(*pose)[:, [3]],
-                               se2.matrix(*se2.compose(pose, pose))[:, [3]], atol=1e-12)
+    np.testing.assert_allclose(
+        se2.matrix(*pose) @ se2.matrix(*pose)[:, [3]],
+        se2.matrix(*se2.compose(pose, pose))[:, [3]],
+        atol=1e-12,
+    )
 
 
 def test_inverse_undoes_a_pose_on_either_side():
@@ -61,4 +67,6 @@ def test_inverse_undoes_a_pose_on_either_side():
     a = np.column_stack([rng.uniform(-5, 5, (20, 2)), rng.uniform(-math.pi, math.pi, 20)])
     for left, right in ((a, se2.inverse(a)), (se2.inverse(a), a)):
         np.testing.assert_allclose(se2.compose(left, right), np.zeros_like(a), atol=1e-12)
-    np.testing.assert_allclose(se2.inverse([1.0, 0.0, math.pi / 2]), [0.0, 1.0, -math.pi / 2], atol=1e-12)
+    np.testing.assert_allclose(
+        se2.inverse([1.0, 0.0, math.pi / 2]), [0.0, 1.0, -math.pi / 2], atol=1e-12
+    )

@@ -27,7 +27,9 @@ def test_identical_trajectories_have_zero_errors():
     e = errors(t, pose, t, pose)
     assert isinstance(e, TrajectoryErrors)
     assert e.ate_m == pytest.approx(0.0, abs=1e-12)
-    assert e.rpe_trans_m == pytest.approx(0.0, abs=1e-12) and e.rpe_rot_deg == pytest.approx(0.0, abs=1e-9)
+    assert e.rpe_trans_m == pytest.approx(0.0, abs=1e-12) and e.rpe_rot_deg == pytest.approx(
+        0.0, abs=1e-9
+    )
     assert e.max_yaw_err_deg == pytest.approx(0.0, abs=1e-9)
     assert e.length_m == pytest.approx(3.0 * 0.3 * t[-1], rel=1e-3)  # arc length r * angle
 
@@ -47,10 +49,14 @@ def test_rigidly_moved_trajectory_aligns_back_and_rpe_ignores_the_move():
     t, pose = _circle()
     theta, shift = 0.7, np.array([2.0, -1.0])
     c, s = math.cos(theta), math.sin(theta)
-    est = np.column_stack([pose[:, :2] @ np.array([[c, s], [-s, c]]) + shift, se2.wrap_rad(pose[:, 2] + theta)])
+    est = np.column_stack(
+        [pose[:, :2] @ np.array([[c, s], [-s, c]]) + shift, se2.wrap_rad(pose[:, 2] + theta)]
+    )
     raw = errors(t, est, t, pose)
     assert raw.ate_m > 1.0 and raw.rms_yaw_err_deg == pytest.approx(math.degrees(theta))
-    assert raw.rpe_trans_m == pytest.approx(0.0, abs=1e-9) and raw.rpe_rot_deg == pytest.approx(0.0, abs=1e-9)
+    assert raw.rpe_trans_m == pytest.approx(0.0, abs=1e-9) and raw.rpe_rot_deg == pytest.approx(
+        0.0, abs=1e-9
+    )
     aligned = errors(t, est, t, pose, align=True)
     assert aligned.ate_m == pytest.approx(0.0, abs=1e-9)
     assert aligned.max_yaw_err_deg == pytest.approx(0.0, abs=1e-7)
@@ -98,7 +104,9 @@ def test_heading_error_across_plus_minus_pi_is_small():
 
 def test_truth_yaw_is_interpolated_through_the_wrap():
     t_ref = np.array([0.0, 1.0])
-    ref = np.array([[0.0, 0.0, math.pi - 0.1], [1.0, 0.0, -math.pi + 0.1]])  # turning +0.2 rad through pi
+    ref = np.array(
+        [[0.0, 0.0, math.pi - 0.1], [1.0, 0.0, -math.pi + 0.1]]
+    )  # turning +0.2 rad through pi
     mid = se2.interpolate(t_ref, ref, np.array([0.5]))
     assert abs(se2.wrap_rad(mid[0, 2] - math.pi)) == pytest.approx(0.0, abs=1e-12)
     assert mid[0, 0] == pytest.approx(0.5)
@@ -127,15 +135,18 @@ def test_short_path_has_nan_rpe():
     assert e.ate_m == 0.0
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"pose_est": np.zeros((10, 2))}, "pose_est"),
-    ({"t_est_s": np.arange(9.0)}, "pose_est"),
-    ({"pose_true": np.full((10, 3), np.nan)}, "pose_true"),
-    ({"t_true_s": np.array([0, 1, 2, 3, 4, 5, 6, 7, 9, 8.0])}, "t_true_s"),
-    ({"t_est_s": np.array([0, 1, 2, np.inf, 4, 5, 6, 7, 8, 9.0])}, "t_est_s"),
-    ({"rpe_delta_m": 0.0}, "rpe_delta_m"),
-    ({"t_est_s": np.arange(10.0) + 100.0}, "t_est_s"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"pose_est": np.zeros((10, 2))}, "pose_est"),
+        ({"t_est_s": np.arange(9.0)}, "pose_est"),
+        ({"pose_true": np.full((10, 3), np.nan)}, "pose_true"),
+        ({"t_true_s": np.array([0, 1, 2, 3, 4, 5, 6, 7, 9, 8.0])}, "t_true_s"),
+        ({"t_est_s": np.array([0, 1, 2, np.inf, 4, 5, 6, 7, 8, 9.0])}, "t_est_s"),
+        ({"rpe_delta_m": 0.0}, "rpe_delta_m"),
+        ({"t_est_s": np.arange(10.0) + 100.0}, "t_est_s"),
+    ],
+)
 def test_bad_input_raises_one_line_value_error_naming_the_argument(kwargs, name):
     t, pose = _straight(n=10)
     args = {"t_est_s": t, "pose_est": pose, "t_true_s": t, "pose_true": pose, **kwargs}
@@ -155,9 +166,13 @@ def test_planar_alignment_never_mirrors_the_trajectory():
 
     def traj(p):
         xyz = np.column_stack([p[:, :2], np.zeros(len(p))])
-        quat = np.column_stack([np.cos(p[:, 2] / 2), np.zeros((len(p), 2)), np.sin(p[:, 2] / 2)])  # w x y z
+        quat = np.column_stack(
+            [np.cos(p[:, 2] / 2), np.zeros((len(p), 2)), np.sin(p[:, 2] / 2)]
+        )  # w x y z
         return PoseTrajectory3D(xyz, quat, t)
 
     est = traj(mirrored)
     est.align(traj(pose), correct_scale=False)
-    assert np.abs(est.positions_xyz[:, :2] - pose[:, :2]).max() < 1e-6, evo.__name__  # evo: mirrored onto truth
+    assert np.abs(est.positions_xyz[:, :2] - pose[:, :2]).max() < 1e-6, (
+        evo.__name__
+    )  # evo: mirrored onto truth

@@ -34,13 +34,17 @@ def _run(cfg, subscribe: bool, duration_s: float = 1.5):
 def test_subscribers_force_sync_points_but_the_run_is_bit_identical(cfg):
     free, free_taps, free_chunks = _run(cfg, subscribe=False)
     synced, synced_taps, synced_chunks = _run(cfg, subscribe=True)
-    assert len(free_chunks) < len(synced_chunks) / 3  # odometry, IMU, LiDAR did not stop the physics
+    assert (
+        len(free_chunks) < len(synced_chunks) / 3
+    )  # odometry, IMU, LiDAR did not stop the physics
     a, b = recorder_of(free).series(), recorder_of(synced).series()
     for name in ("t_s", "true_rpm", "pose", "pwm_counts", "odom"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert [(t, u) for t, u, _ in free_taps] == [(t, u) for t, u, _ in synced_taps]
     scans = [(m.ranges.tobytes(), m.header.stamp.to_us()) for t, _, m in free_taps if t == "scan"]
-    assert scans == [(m.ranges.tobytes(), m.header.stamp.to_us()) for t, _, m in synced_taps if t == "scan"]
+    assert scans == [
+        (m.ranges.tobytes(), m.header.stamp.to_us()) for t, _, m in synced_taps if t == "scan"
+    ]
     imu = [m.angular_velocity.z for t, _, m in free_taps if t == "imu/data_raw"]
     assert imu == [m.angular_velocity.z for t, _, m in synced_taps if t == "imu/data_raw"]
 
@@ -52,7 +56,9 @@ def test_sensor_messages_are_delivered_at_their_instants(cfg):
     scans = [(t_us, m.header.stamp.to_us()) for topic, t_us, m in taps if topic == "scan"]
     lidar = twin.sensors["lidar"]
     # stamp = first beam; delivered at the first 20 ms pose sample at or after the last beam
-    last_beam = lidar.scan_us - lidar.beam_dt_us  # stamped at the rotation's last beam (the A1 spins clockwise)
+    last_beam = (
+        lidar.scan_us - lidar.beam_dt_us
+    )  # stamped at the rotation's last beam (the A1 spins clockwise)
     assert scans == [(200_000, last_beam), (380_000, lidar.scan_us + last_beam)]
 
 
@@ -60,9 +66,11 @@ def test_a_subscriber_acting_on_odometry_acts_at_its_time(cfg):
     def reacting():
         twin = Twin(cfg, TwinOptions(world="empty"))
         attach_recorder(twin)
+
         def on_odom(msg):
             if msg.header.stamp.to_us() == 1_060_000:  # between firmware timer ticks
                 twin.client.linear(0.3)
+
         twin.bus.subscribe("odom", on_odom)
         twin.advance(2.0)
         return recorder_of(twin).series()
@@ -116,8 +124,10 @@ def test_without_the_robot_visuals_the_run_is_the_same_to_the_bit(cfg):
 
     twins = {}
     for visuals in (True, False):
-        twin = Twin(load_config(overrides={"payload.mass_kg": 30.0}),
-                    TwinOptions(world="warehouse", start_xy_yaw=(-8.0, 0.5, 0.5), visuals=visuals))
+        twin = Twin(
+            load_config(overrides={"payload.mass_kg": 30.0}),
+            TwinOptions(world="warehouse", start_xy_yaw=(-8.0, 0.5, 0.5), visuals=visuals),
+        )
         attach_recorder(twin)
         twin.client.linear(0.7)
         twin.advance(1.5)
@@ -128,8 +138,11 @@ def test_without_the_robot_visuals_the_run_is_the_same_to_the_bit(cfg):
     assert off.physics.model.ngeom < on.physics.model.ngeom - 30
     assert on.physics.data.ncon == off.physics.data.ncon >= 6
     for name in ("pose", "true_rpm", "pwm_counts", "current_a", "battery_v"):
-        np.testing.assert_array_equal(getattr(recorder_of(on).series(), name), getattr(recorder_of(off).series(), name),
-                                      err_msg=name)
+        np.testing.assert_array_equal(
+            getattr(recorder_of(on).series(), name),
+            getattr(recorder_of(off).series(), name),
+            err_msg=name,
+        )
     np.testing.assert_array_equal(on.physics.data.qvel, off.physics.data.qvel)
     attach(on)
     with pytest.raises(ValueError, match="visuals=True"):
@@ -158,4 +171,6 @@ def test_without_island_discovery_the_run_is_the_same_to_the_bit():
         twin.advance(0.5)
         series[islands] = recorder_of(twin).series()
     for name in ("pose", "true_rpm", "current_a"):
-        np.testing.assert_array_equal(getattr(series[False], name), getattr(series[True], name), err_msg=name)
+        np.testing.assert_array_equal(
+            getattr(series[False], name), getattr(series[True], name), err_msg=name
+        )

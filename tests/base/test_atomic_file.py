@@ -40,4 +40,6 @@ def test_a_failed_batch_removes_the_folders_it_made(tmp_path):
         with all_or_nothing():
             write_text(tmp_path / "kept" / "new" / "a.csv", "text")
             raise KeyboardInterrupt
-    assert [p.name for p in tmp_path.iterdir()] == ["kept"] and list((tmp_path / "kept").iterdir()) == []
+    assert [p.name for p in tmp_path.iterdir()] == ["kept"] and list(
+        (tmp_path / "kept").iterdir()
+    ) == []

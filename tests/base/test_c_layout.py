@@ -12,18 +12,32 @@ from amr_twin.sim import battery
 from amr_twin.base import c_layout, native_build
 from amr_twin.assembly.twin import Twin, TwinOptions
 
-pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+pytestmark = pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
 
-WRAPPERS = ("amr_twin.sim.actors", "amr_twin.sim.battery", "amr_twin.sim.collisions", "amr_twin.sim.grid_steps",
-            "amr_twin.sim.rolling_resistance", "amr_twin.sim.tyres", "amr_twin.sensors.hall_edges",
-            "amr_twin.sensors.imu_errors", "amr_twin.sensors.lidar_kernels")
+WRAPPERS = (
+    "amr_twin.sim.actors",
+    "amr_twin.sim.battery",
+    "amr_twin.sim.collisions",
+    "amr_twin.sim.grid_steps",
+    "amr_twin.sim.rolling_resistance",
+    "amr_twin.sim.tyres",
+    "amr_twin.sensors.hall_edges",
+    "amr_twin.sensors.imu_errors",
+    "amr_twin.sensors.lidar_kernels",
+)
 """Every module that opens a C helper (its ``C_SOURCE``)."""
 
 
 def test_every_helper_loads_and_every_struct_of_its_table_is_registered():
     sources = {Path(importlib.import_module(m).C_SOURCE).resolve() for m in WRAPPERS}
     package = Path(native_build.__file__).resolve().parents[2]
-    on_disk = {p.resolve() for folder in ("amr_twin/sim", "sensors") for p in (package / folder).glob("*.c")}
+    on_disk = {
+        p.resolve()
+        for folder in ("amr_twin/sim", "sensors")
+        for p in (package / folder).glob("*.c")
+    }
     assert sources == on_disk, "a C helper without its wrapper in WRAPPERS"
     with_structs = 0
     for source in sources:
@@ -44,7 +58,11 @@ def _copy(tmp_path: Path, name: str, edit=lambda text: text) -> Path:
 class _WithExtra(ctypes.Structure):
     """battery's _State with one more int after ``mode``."""
 
-    _fields_ = [*battery._State._fields_[:13], ("extra", ctypes.c_int), *battery._State._fields_[13:]]
+    _fields_ = [
+        *battery._State._fields_[:13],
+        ("extra", ctypes.c_int),
+        *battery._State._fields_[13:],
+    ]
 
 
 def _status(source: Path, struct=battery._State) -> str:
@@ -60,8 +78,10 @@ def test_a_field_added_on_the_python_side_is_found(tmp_path):
     assert battery._State._fields_[12][0] == "mode"
     with pytest.warns(RuntimeWarning, match="the Python twin runs instead"):
         status = _status(_copy(tmp_path, "py_extra.c"), _WithExtra)
-    assert status == ("Python (py_extra.c: battery_state lacks the field 'extra' of its ctypes twin "
-                      "(_WithExtra in Python))")
+    assert status == (
+        "Python (py_extra.c: battery_state lacks the field 'extra' of its ctypes twin "
+        "(_WithExtra in Python))"
+    )
 
 
 def _add_c_field(text: str, listed: bool = True) -> str:
@@ -85,13 +105,21 @@ def test_a_field_added_in_c_but_not_in_its_table_is_found_by_the_offsets(tmp_pat
 
 def test_a_retyped_field_is_found(tmp_path):
     with pytest.warns(RuntimeWarning):
-        status = _status(_copy(tmp_path, "c_long.c", lambda t: t.replace("    int mode[2];", "    long mode[2];")))
+        status = _status(
+            _copy(
+                tmp_path, "c_long.c", lambda t: t.replace("    int mode[2];", "    long mode[2];")
+            )
+        )
     assert "field 'mode' at byte 104 of 16 in C, at 104 of 8 in ctypes" in status
 
 
 def test_a_helper_without_its_table_is_not_used(tmp_path):
     with pytest.warns(RuntimeWarning):
-        status = _status(_copy(tmp_path, "no_table.c", lambda t: t.replace("AMR_LAYOUT(", "#define NO(...)\nNO(")))
+        status = _status(
+            _copy(
+                tmp_path, "no_table.c", lambda t: t.replace("AMR_LAYOUT(", "#define NO(...)\nNO(")
+            )
+        )
     assert status == "Python (no_table.c exports no amr_layout table for battery_state)"
 
 
@@ -99,7 +127,9 @@ def test_the_battery_falls_back_to_its_python_twin_on_a_mismatch(tmp_path, monke
     source = _copy(tmp_path, "battery_mismatch.c", _add_c_field)
     c_layout.register(source, battery_state=battery._State)
     monkeypatch.setattr(battery, "C_SOURCE", source)
-    with pytest.warns(RuntimeWarning, match="battery_mismatch.c: battery_state has a field 'extra'"):
+    with pytest.warns(
+        RuntimeWarning, match="battery_mismatch.c: battery_state has a field 'extra'"
+    ):
         twin = Twin(load_config(), TwinOptions(world="empty"))
     pack = twin.plant.battery
     assert pack.engine.startswith("Python (battery_mismatch.c: battery_state has a field 'extra'")
@@ -110,5 +140,11 @@ def test_the_battery_falls_back_to_its_python_twin_on_a_mismatch(tmp_path, monke
 
 def test_a_field_appended_in_c_but_not_in_its_table_is_found_by_the_size(tmp_path):
     with pytest.warns(RuntimeWarning):
-        status = _status(_copy(tmp_path, "c_tail.c", lambda t: t.replace("int dof[2];", "int dof[2]; double extra;")))
+        status = _status(
+            _copy(
+                tmp_path,
+                "c_tail.c",
+                lambda t: t.replace("int dof[2];", "int dof[2]; double extra;"),
+            )
+        )
     assert "battery_state is 200 bytes in C, 192 in ctypes" in status

@@ -183,7 +183,9 @@ def test_the_benchmark_scenario_touches_nothing_but_the_floor():
     twin = twin_run(load_config(), 16.0, sensors=True).twin
     assert twin.collisions.collisions == []
     assert twin.physics.pose().x_m - (-8.0) > 10.0  # it drove the whole 11 m down the aisle
-    assert (twin.sensors["lidar"].last_hit_geom >= 0).mean() > 0.95  # walls and racks in range of the LiDAR
+    assert (
+        twin.sensors["lidar"].last_hit_geom >= 0
+    ).mean() > 0.95  # walls and racks in range of the LiDAR
 
 
 def test_the_actors_benchmark_touches_nothing_and_its_actors_move_in_the_lidars_view():
@@ -192,7 +194,11 @@ def test_the_actors_benchmark_touches_nothing_and_its_actors_move_in_the_lidars_
     twin = actors_run(load_config(), 16.0).twin
     assert twin.collisions.collisions == []
     assert twin.actors.progress_s() == [16.0, 15.5, 16.0, 16.0]  # none waited
-    hit = {int(twin.physics.model.geom_bodyid[g]) for g in twin.sensors["lidar"].last_hit_geom if g >= 0}
+    hit = {
+        int(twin.physics.model.geom_bodyid[g])
+        for g in twin.sensors["lidar"].last_hit_geom
+        if g >= 0
+    }
     bodies = {twin.physics.model.body(f"{a.kind}_{i}").id for i, a in enumerate(twin.actors.actors)}
     # the person crossing the aisle ahead is in sight of the last scan (the side aisles' actors come
     # and go behind the racks as the faithful firmware's dead zone lets the heading drift 5-15 deg)

@@ -32,12 +32,18 @@ def _write_log(path, gain):
 def test_fit_recovers_driver_gain_from_a_log(tmp_path):
     log = tmp_path / "real.csv"
     n = _write_log(log, gain=1.45)
-    fit = calibrate(str(log), base=load_config(sets=["driver_left.gain=1.9"]), max_evaluations=14,
-                    parameters={"driver_left.gain": (1.0, 3.0)})
+    fit = calibrate(
+        str(log),
+        base=load_config(sets=["driver_left.gain=1.9"]),
+        max_evaluations=14,
+        parameters={"driver_left.gain": (1.0, 3.0)},
+    )
     assert abs(fit.values["driver_left.gain"] - 1.45) < abs(1.9 - 1.45) / 3
     assert fit.residual < 4.0 * n  # RMS under 2 RPM, half the firmware's 4 RPM dead band
     assert 0 < fit.sigma["driver_left.gain"] < 0.2
-    assert fit.evaluations <= 14  # the budget holds (scipy's max_nfev counts steps, not evaluations)
+    assert (
+        fit.evaluations <= 14
+    )  # the budget holds (scipy's max_nfev counts steps, not evaluations)
     out = tmp_path / "params.yaml"
     write_params(fit, out)
     cfg = load_config(override_file=out)
@@ -48,12 +54,21 @@ def test_shipped_plant_gives_the_residual_amr_yaml_records():
     """The chi^2 written where the calibrated parameters' sources lead (their section of
     models/amr/sources.md) is what the shipped values give."""
     tree = yaml.safe_load((MODEL_DIR / "amr.yaml").read_text())
-    sources = {tree[s][k]["source"] for s, k in (("driver_left", "gain"), ("driver_right", "gain"),
-                                                  ("motor_left", "ke_v_s_rad"), ("motor_right", "friction_nm"))}
+    sources = {
+        tree[s][k]["source"]
+        for s, k in (
+            ("driver_left", "gain"),
+            ("driver_right", "gain"),
+            ("motor_left", "ke_v_s_rad"),
+            ("motor_right", "friction_nm"),
+        )
+    }
     assert len(sources) == 1  # one fit, one section
     anchor = re.search(r"sources\.md#([\w-]+)", sources.pop()).group(1)
     text = (MODEL_DIR / "sources.md").read_text()
-    heading = next(h for h in re.findall(r"^#+ (.*)$", text, re.M) if h.lower().replace(" ", "-") == anchor)
+    heading = next(
+        h for h in re.findall(r"^#+ (.*)$", text, re.M) if h.lower().replace(" ", "-") == anchor
+    )
     section = text.split(heading, 1)[1].split("\n#", 1)[0]
     recorded = {float(v) for v in re.findall(r"chi\^2 ([0-9.]+)", section)}
     assert len(recorded) == 1
@@ -74,10 +89,14 @@ def test_a_scaled_motor_no_longer_fits():
     timings and the bench point must tell them apart (19.4 against 19.9)."""
     cfg = load_config()
     base = thesis_residual(cfg)
-    scaled = load_config(sets=[f"driver_left.gain={cfg.driver_left.gain * 1.1}",
-                               f"driver_right.gain={cfg.driver_right.gain * 1.1}",
-                               f"motor_left.ke_v_s_rad={cfg.motor_left.ke_v_s_rad * 1.1}",
-                               f"motor_right.ke_v_s_rad={cfg.motor_right.ke_v_s_rad * 1.1}"])
+    scaled = load_config(
+        sets=[
+            f"driver_left.gain={cfg.driver_left.gain * 1.1}",
+            f"driver_right.gain={cfg.driver_right.gain * 1.1}",
+            f"motor_left.ke_v_s_rad={cfg.motor_left.ke_v_s_rad * 1.1}",
+            f"motor_right.ke_v_s_rad={cfg.motor_right.ke_v_s_rad * 1.1}",
+        ]
+    )
     assert thesis_residual(scaled) > base + 2.0
 
 
@@ -113,7 +132,9 @@ def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
     short = tmp_path / "short.csv"
     short.write_text("t_s,wheel,rpm,command\n0.5,left,10,linear:0.7\n2.0,left,50,linear:0.7\n")
     out = tmp_path / "params.yaml"
-    res = CliRunner().invoke(app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "7"])
+    res = CliRunner().invoke(
+        app, ["calibrate", "--target", str(short), "--out", str(out), "--max-evaluations", "7"]
+    )
     assert res.exit_code == 2 and "the log must be longer" in res.stderr and not out.exists()
     assert len(res.stderr.strip().splitlines()) == 1
 
@@ -125,8 +146,12 @@ def test_the_fit_never_exceeds_its_evaluation_budget(tmp_path, budget):
     log = tmp_path / "real.csv"
     _write_log(log, gain=1.45)
     calls = []
-    fit = calibrate(str(log), base=load_config(sets=["driver_left.gain=1.9"]), max_evaluations=budget,
-                    progress=lambda i, n: calls.append(i))
+    fit = calibrate(
+        str(log),
+        base=load_config(sets=["driver_left.gain=1.9"]),
+        max_evaluations=budget,
+        progress=lambda i, n: calls.append(i),
+    )
     assert fit.evaluations == len(calls) and 7 <= fit.evaluations <= budget
     with pytest.raises(ValueError, match="max_evaluations 6: at least 7"):
         calibrate(str(log), base=load_config(), max_evaluations=6)
@@ -146,8 +171,10 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
 
     series = run_command(load_config(), Command("linear", speed_m_s=0.7), 4.0).series
     log = tmp_path / "log.csv"
-    log.write_text("t_s,wheel,rpm,command\n" + "".join(
-        f"{t},{w},{rpm},linear:0.7\n" for w in (0, 1) for t, rpm in series.published[w]))
+    log.write_text(
+        "t_s,wheel,rpm,command\n"
+        + "".join(f"{t},{w},{rpm},linear:0.7\n" for w in (0, 1) for t, rpm in series.published[w])
+    )
     args = ["calibrate", "--target", str(log), "--max-evaluations", "7", "--jobs", "1"]
     text = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a.yaml")])
     assert text.exit_code == 0, text.output
@@ -161,21 +188,49 @@ def test_calibrate_prints_a_readable_summary_and_json_on_request(tmp_path):
     machine = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "b.yaml"), "--json"])
     (line,) = machine.stdout.strip().splitlines()
     data = json.loads(line)
-    assert set(data["values"]) == set(data["sigma"]) >= {"driver_left.gain"} and data["out"] == str(tmp_path / "b.yaml")
+    assert set(data["values"]) == set(data["sigma"]) >= {"driver_left.gain"} and data["out"] == str(
+        tmp_path / "b.yaml"
+    )
 
 
 def test_the_summary_lists_each_feature_against_its_target():
     from amr_twin.calibration.fit import Fit
 
-    fit = Fit(values={"driver_left.gain": 1.61}, sigma={"driver_left.gain": 0.14}, correlation={"driver_left.gain": {"driver_left.gain": 1}},
-              residual=19.05, evaluations=40, target="the thesis",
-              features=[{"name": "run2.right.overshoot", "twin": 1.45, "target": 4.0, "sigma": 1.0, "unit": "RPM",
-                         "weighted": -2.55},
-                        {"name": "run3.left.true_delay", "twin": None, "target": 0.2, "sigma": 0.15, "unit": "s",
-                         "weighted": 10.0}])
+    fit = Fit(
+        values={"driver_left.gain": 1.61},
+        sigma={"driver_left.gain": 0.14},
+        correlation={"driver_left.gain": {"driver_left.gain": 1}},
+        residual=19.05,
+        evaluations=40,
+        target="the thesis",
+        features=[
+            {
+                "name": "run2.right.overshoot",
+                "twin": 1.45,
+                "target": 4.0,
+                "sigma": 1.0,
+                "unit": "RPM",
+                "weighted": -2.55,
+            },
+            {
+                "name": "run3.left.true_delay",
+                "twin": None,
+                "target": 0.2,
+                "sigma": 0.15,
+                "unit": "s",
+                "weighted": 10.0,
+            },
+        ],
+    )
     lines = fit.text_lines()
     assert lines[0] == "calibrated against the thesis: chi^2 19.05 over 2 targets, 40 evaluations"
     assert next(x for x in lines if x.startswith("run2.right.overshoot")).split() == [
-        "run2.right.overshoot", "1.45", "4", "1", "RPM", "-2.55"]
+        "run2.right.overshoot",
+        "1.45",
+        "4",
+        "1",
+        "RPM",
+        "-2.55",
+    ]
     assert next(x for x in lines if x.startswith("run3.left.true_delay")).split()[1] == "missing"
     assert "correlated (|r| >= 0.9): none" in lines

@@ -30,7 +30,9 @@ def test_the_shipped_report_describes_the_shipped_values(report, tmp_path):
     for key, value in zip(report.held_keys, report.held_values):
         section, name = key.split(".")
         assert getattr(getattr(cfg, section), name) == pytest.approx(value, rel=1e-6), key
-    assert np.allclose(report.correlation, report.correlation.T) and np.all(np.linalg.eigvalsh(report.covariance) > -1e-12)
+    assert np.allclose(report.correlation, report.correlation.T) and np.all(
+        np.linalg.eigvalsh(report.covariance) > -1e-12
+    )
     copy = tmp_path / "copy.yaml"
     cr.write(report, copy)
     again = cr.read(copy)
@@ -41,8 +43,10 @@ def test_damping_and_friction_trade_at_the_bench_speed(report):
     """The bench point pins friction + damping x w at 71.5 RPM: d friction / d damping = -w."""
     w = BENCH_RPM * 2 * math.pi / 60
     for side in ("left", "right"):
-        d = report.follow[report.keys.index(f"motor_{side}.friction_nm"),
-                          report.held_keys.index(f"motor_{side}.damping_nm_s_rad")]
+        d = report.follow[
+            report.keys.index(f"motor_{side}.friction_nm"),
+            report.held_keys.index(f"motor_{side}.damping_nm_s_rad"),
+        ]
         assert d == pytest.approx(-w, rel=0.1), side
 
 
@@ -56,7 +60,10 @@ def test_following_the_held_resistance_keeps_the_plant_on_the_fit(report):
         change = {"motor_left.resistance_ohm": ohm, "motor_right.resistance_ohm": ohm}
         dev = np.array([change.get(k, v) - v for k, v in zip(report.held_keys, report.held_values)])
         shifted = dict(zip(report.keys, (report.values + report.follow @ dev).tolist()))
-        gains.append(thesis_residual(_with(base, change)) - thesis_residual(_with(base, {**change, **shifted})))
+        gains.append(
+            thesis_residual(_with(base, change))
+            - thesis_residual(_with(base, {**change, **shifted}))
+        )
     assert sum(g > 0 for g in gains) >= 3 and np.mean(gains) > 2.0
 
 
@@ -64,7 +71,9 @@ def test_evaluate_linearises_a_small_problem():
     """Fit only the driver gain, hold the state of charge: the gain must follow the pack's
     voltage, d gain / d soc = -gain x (dV/dsoc) / V (speed per duty = gain V / Ke held)."""
     cfg = load_config()
-    rep = cr.evaluate(cfg, parameters={"driver_left.gain": (0.8, 4.0)}, held={"battery.soc_initial": 0.1}, jobs=2)
+    rep = cr.evaluate(
+        cfg, parameters={"driver_left.gain": (0.8, 4.0)}, held={"battery.soc_initial": 0.1}, jobs=2
+    )
     b = cfg.battery
     volts = b.v_nominal_v + (b.v_full_v - b.v_nominal_v) * (b.soc_initial - 0.5) / 0.5
     expected = -cfg.driver_left.gain * ((b.v_full_v - b.v_nominal_v) / 0.5) / volts
@@ -85,8 +94,12 @@ def test_a_parameter_the_log_does_not_see_is_left_out(tmp_path):
 
     log = tmp_path / "left.csv"
     _write_log(log, gain=1.5)
-    rep = cr.evaluate(load_config(), str(log), parameters={"driver_left.gain": (0.8, 4.0),
-                                                           "motor_right.ke_v_s_rad": (0.35, 0.7)}, held={})
+    rep = cr.evaluate(
+        load_config(),
+        str(log),
+        parameters={"driver_left.gain": (0.8, 4.0), "motor_right.ke_v_s_rad": (0.35, 0.7)},
+        held={},
+    )
     assert rep.keys == ("driver_left.gain",) and rep.undetermined == ("motor_right.ke_v_s_rad",)
     assert 0 < rep.sigma[0] < 0.5
     again = cr.CalibrationReport.from_dict(rep.as_dict())

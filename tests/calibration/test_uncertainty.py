@@ -13,8 +13,14 @@ import yaml
 from amr_twin.model.config import ConfigError
 from amr_twin.model.paths import MODEL_DIR
 from amr_twin.model.statics import solve
-from amr_twin.calibration.uncertainty import (ParameterSpace, interval, noise_level, rank_correlations, unit_samples,
-                                  with_values)
+from amr_twin.calibration.uncertainty import (
+    ParameterSpace,
+    interval,
+    noise_level,
+    rank_correlations,
+    unit_samples,
+    with_values,
+)
 
 
 @pytest.fixture(scope="module")
@@ -23,9 +29,13 @@ def space():
 
 
 def _draw_json(seed: int) -> str:
-    code = ("import json; from amr_twin.calibration.uncertainty import ParameterSpace; "
-            f"d = ParameterSpace.load().draw(6, seed={seed}); print(json.dumps(d.overrides))")
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    code = (
+        "import json; from amr_twin.calibration.uncertainty import ParameterSpace; "
+        f"d = ParameterSpace.load().draw(6, seed={seed}); print(json.dumps(d.overrides))"
+    )
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
 
 
 def test_same_seed_same_bytes_in_another_process(space):
@@ -33,7 +43,9 @@ def test_same_seed_same_bytes_in_another_process(space):
     assert _draw_json(7).strip() == json.dumps(here.overrides)
     other = space.draw(6, seed=8)
     assert other.overrides != here.overrides
-    assert [here.sample_id(i) for i in range(6)] == [space.draw(6, seed=7).sample_id(i) for i in range(6)]
+    assert [here.sample_id(i) for i in range(6)] == [
+        space.draw(6, seed=7).sample_id(i) for i in range(6)
+    ]
 
 
 def test_a_setting_no_draw_reads_leaves_the_draws_as_they_are(space):
@@ -51,16 +63,23 @@ def test_latin_hypercube_puts_one_draw_in_each_stratum(space):
     d = space.draw(n, seed=3, include=("caster.drop_m", "wheel.tyre_stiffness_n_m"))
     for name in d.names:
         s = space.spreads[name]
-        strata = np.floor(n * (d.values[:, d.names.index(name)] - s.low) / (s.high - s.low)).astype(int)
+        strata = np.floor(n * (d.values[:, d.names.index(name)] - s.low) / (s.high - s.low)).astype(
+            int
+        )
         assert sorted(np.clip(strata, 0, n - 1)) == list(range(n)), name
 
 
 def test_calibrated_parameters_are_drawn_jointly(space):
     """Gain and Ke keep their 0.99 correlation and the report's sigma: drawn one by one they would not."""
     rep = space.calibration
-    d = space.draw(400, seed=1, include=("driver_left.gain",))  # the whole fit comes along; no held parameter drawn
+    d = space.draw(
+        400, seed=1, include=("driver_left.gain",)
+    )  # the whole fit comes along; no held parameter drawn
     assert set(d.names) == set(rep.keys)
-    gain, ke = d.values[:, d.names.index("driver_left.gain")], d.values[:, d.names.index("motor_left.ke_v_s_rad")]
+    gain, ke = (
+        d.values[:, d.names.index("driver_left.gain")],
+        d.values[:, d.names.index("motor_left.ke_v_s_rad")],
+    )
     assert np.corrcoef(gain, ke)[0, 1] > 0.95
     assert np.std(gain) == pytest.approx(rep.sigma[0], rel=0.15)
     assert np.mean(gain) == pytest.approx(rep.values[0], abs=0.03)
@@ -76,17 +95,27 @@ def test_the_fit_follows_a_drawn_held_parameter(space):
     r_left = np.array([o["motor_left.resistance_ohm"] for o in d.overrides])
     r_right = np.array([o["motor_right.resistance_ohm"] for o in d.overrides])
     assert np.allclose(r_right, r_left, rtol=1e-5)  # follows, same nominal 0.3
-    j = [rep.held_keys.index(k) for k in ("motor_left.resistance_ohm", "motor_right.resistance_ohm")]
+    j = [
+        rep.held_keys.index(k) for k in ("motor_left.resistance_ohm", "motor_right.resistance_ohm")
+    ]
     for key in ("driver_left.gain", "motor_left.ke_v_s_rad"):
         slope = rep.follow[rep.keys.index(key), j].sum()
         got = np.array([o[key] for o in d.overrides])
-        assert np.allclose(got, rep.values[rep.keys.index(key)] + slope * (r_left - 0.3), atol=2e-5 * abs(got).max()), key
+        assert np.allclose(
+            got,
+            rep.values[rep.keys.index(key)] + slope * (r_left - 0.3),
+            atol=2e-5 * abs(got).max(),
+        ), key
 
 
 def test_a_set_calibrated_value_conditions_the_rest():
     free = ParameterSpace.load().draw(200, seed=4, include=("driver_left.gain",))
-    fixed = ParameterSpace.load(sets=["driver_left.gain=1.75"]).draw(200, seed=4, include=("motor_left.ke_v_s_rad",))
-    assert "driver_left.gain" not in fixed.names and all("driver_left.gain" not in o for o in fixed.overrides)
+    fixed = ParameterSpace.load(sets=["driver_left.gain=1.75"]).draw(
+        200, seed=4, include=("motor_left.ke_v_s_rad",)
+    )
+    assert "driver_left.gain" not in fixed.names and all(
+        "driver_left.gain" not in o for o in fixed.overrides
+    )
     ke_free = free.values[:, free.names.index("motor_left.ke_v_s_rad")]
     ke_fixed = fixed.values[:, fixed.names.index("motor_left.ke_v_s_rad")]
     report = yaml.safe_load((MODEL_DIR / "calibration.yaml").read_text())
@@ -94,14 +123,18 @@ def test_a_set_calibrated_value_conditions_the_rest():
     r = report["correlation"][keys.index("driver_left.gain")][keys.index("motor_left.ke_v_s_rad")]
     # the conditional spread of a joint normal: sqrt(1 - r^2) of the free one (0.28 at r = 0.96)
     assert np.std(ke_fixed) / np.std(ke_free) == pytest.approx(np.sqrt(1 - r * r), rel=0.2)
-    assert np.mean(ke_fixed) > np.mean(ke_free) + 0.01  # a higher gain needs a higher Ke for the same speed
+    assert (
+        np.mean(ke_fixed) > np.mean(ke_free) + 0.01
+    )  # a higher gain needs a higher Ke for the same speed
 
 
 def test_followers_and_vectors(space):
     d = space.draw(16, seed=5)
     for o in d.overrides:
         assert o["wheel.friction"] == pytest.approx(o["sim.floor_friction"], rel=1e-5)
-        assert o["components.battery.pos_m"][2] == space.spreads["components.battery.pos_m"].value[2]
+        assert (
+            o["components.battery.pos_m"][2] == space.spreads["components.battery.pos_m"].value[2]
+        )
     xs = [o["components.battery.pos_m"][0] for o in d.overrides]
     assert np.std(xs) > 0.01
 
@@ -112,13 +145,21 @@ def test_hundreds_of_draws_are_valid_robots(space):
     for i in (0, 100, 511):
         cfg = d.config(space.cfg, i)
         assert cfg.chassis.width_m / 2 < cfg.wheel.separation_m / 2 - cfg.wheel.width_m / 2
-    assert set(d.clipped) <= {"motor_left.friction_nm", "motor_right.friction_nm", "motor_left.ke_v_s_rad",
-                              "motor_right.ke_v_s_rad", "driver_left.gain", "driver_right.gain"}
+    assert set(d.clipped) <= {
+        "motor_left.friction_nm",
+        "motor_right.friction_nm",
+        "motor_left.ke_v_s_rad",
+        "motor_right.ke_v_s_rad",
+        "driver_left.gain",
+        "driver_right.gain",
+    }
 
 
 def test_a_draw_the_schema_refuses_names_its_sample(tmp_path):
     mine = tmp_path / "mine.yaml"
-    mine.write_text("chassis:\n  width_m: {value: 0.40, range: [0.38, 0.46], reason: too wide, source: estimate}\n")
+    mine.write_text(
+        "chassis:\n  width_m: {value: 0.40, range: [0.38, 0.46], reason: too wide, source: estimate}\n"
+    )
     with pytest.raises(ConfigError, match=r"sample \d+ of seed 0: chassis.width_m: must be <"):
         ParameterSpace.load(override_file=mine).draw(32, seed=0)
 
@@ -141,7 +182,12 @@ def test_rank_correlations_and_intervals():
     assert rank_correlations(x, censored)[1] > 0.9
     assert np.isnan(rank_correlations(x, np.ones(40))).all()
     i = interval(list(range(101)))
-    assert (i["median"], i["low"], i["high"], i["n"]) == (50.0, pytest.approx(5.0), pytest.approx(95.0), 101)
+    assert (i["median"], i["low"], i["high"], i["n"]) == (
+        50.0,
+        pytest.approx(5.0),
+        pytest.approx(95.0),
+        101,
+    )
     d = interval([0, 10, 20, float("inf"), None], discrete=True)
     assert d["n"] == 4 and d["high"] == float("inf") and d["median"] in (10.0, 20.0)
     assert interval([None, float("nan")])["median"] is None
@@ -156,8 +202,12 @@ def test_the_caster_set_up_drives_the_static_load_split(space):
     loads = []
     for i in range(len(d)):
         cfg = d.config(space.cfg, i)
-        loaded = with_values(cfg, {"payload.mass_kg": 20.0, "payload.xy_m": list(position_xy_m(cfg, "rear"))})
+        loaded = with_values(
+            cfg, {"payload.mass_kg": 20.0, "payload.xy_m": list(position_xy_m(cfg, "rear"))}
+        )
         loads.append(solve(loaded).loads_n["caster_front_left"])
     rho = rank_correlations(d.values, loads)
     order = np.argsort(-np.abs(rho))
-    assert d.names[order[0]] == "caster.drop_m" and rho[order[0]] > 0.6  # balls lower (drop > 0) take more load
+    assert (
+        d.names[order[0]] == "caster.drop_m" and rho[order[0]] > 0.6
+    )  # balls lower (drop > 0) take more load

@@ -58,9 +58,26 @@ def cfg():
 def chapter5_cli(tmp_path_factory):
     """Chapter 5 runs 1 and 3 through the CLI, two worker processes, both recordings into one folder."""
     base = tmp_path_factory.mktemp("ch5rec")
-    res = CliRunner().invoke(app, ["experiment", "chapter5", "--out", str(base / "out"), "--runs", "1,3",
-                                   "--duration-s", str(CH5_DURATION_S), "--jobs", "2", "--record",
-                                   str(base / "rec"), "--mcap", str(base / "rec"), "--no-progress"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "experiment",
+            "chapter5",
+            "--out",
+            str(base / "out"),
+            "--runs",
+            "1,3",
+            "--duration-s",
+            str(CH5_DURATION_S),
+            "--jobs",
+            "2",
+            "--record",
+            str(base / "rec"),
+            "--mcap",
+            str(base / "rec"),
+            "--no-progress",
+        ],
+    )
     assert res.exit_code == 0, res.output
     return base, res
 
@@ -68,11 +85,20 @@ def chapter5_cli(tmp_path_factory):
 def test_chapter5_one_recording_per_run(chapter5_cli):
     base, res = chapter5_cli
     rec = base / "rec"
-    assert sorted(p.name for p in rec.iterdir()) == ["run1.mcap", "run1.rrd", "run3.mcap", "run3.rrd"]
+    assert sorted(p.name for p in rec.iterdir()) == [
+        "run1.mcap",
+        "run1.rrd",
+        "run3.mcap",
+        "run3.rrd",
+    ]
     for n in CH5_RUNS:
         rows, last_ns = rrd_summary(rec / f"run{n}.rrd")
-        assert last_ns == pytest.approx(CH5_DURATION_S * 1e9, abs=1e6)  # the whole run on the timeline
-        assert rows["/wheels/left/true_rpm"] == CH5_DURATION_S * 100 + 1  # 100 Hz recorder rows, t = 0 included
+        assert last_ns == pytest.approx(
+            CH5_DURATION_S * 1e9, abs=1e6
+        )  # the whole run on the timeline
+        assert (
+            rows["/wheels/left/true_rpm"] == CH5_DURATION_S * 100 + 1
+        )  # 100 Hz recorder rows, t = 0 included
         assert "/world/bodies/amr/base_link" in rows and "/commands" in rows
         counts = mcap_counts(rec / f"run{n}.mcap")
         assert abs(counts["/odom"] - 50 * CH5_DURATION_S) <= 1
@@ -93,7 +119,7 @@ def test_chapter5_terminal_opens_with_the_findings_then_the_counts(chapter5_cli)
     out = res.output.splitlines()
     expected = lines(found)
     assert out[0].startswith("chapter 5 findings (faithful firmware; details in ")
-    assert out[1:1 + len(expected)] == ["  " + line for line in expected] and len(expected) == 7
+    assert out[1 : 1 + len(expected)] == ["  " + line for line in expected] and len(expected) == 7
     assert out[1 + len(expected)].startswith(f"  why: {VALIDATION_DOC}")
     assert out[2 + len(expected)].startswith("published checks passed by metric: delay_s ")
     assert "MISS" not in res.output
@@ -101,8 +127,9 @@ def test_chapter5_terminal_opens_with_the_findings_then_the_counts(chapter5_cli)
 
 def test_chapter5_results_identical_with_and_without_recording(cfg, chapter5_cli):
     base, _res = chapter5_cli
-    plain = chapter5.report(chapter5.run(cfg, runs=CH5_RUNS, duration_s=CH5_DURATION_S, progress=False),
-                            base / "plain").as_json()
+    plain = chapter5.report(
+        chapter5.run(cfg, runs=CH5_RUNS, duration_s=CH5_DURATION_S, progress=False), base / "plain"
+    ).as_json()
     recorded = json.loads((base / "out" / "metrics.json").read_text())
     assert _without_wall(recorded["runs"]) == _without_wall(json.loads(json.dumps(plain["runs"])))
     assert recorded["summary"] == plain["summary"]
@@ -110,7 +137,9 @@ def test_chapter5_results_identical_with_and_without_recording(cfg, chapter5_cli
 
 def test_chapter5_recording_in_process_same_series(cfg, tmp_path):
     plain = chapter5.run(cfg, runs=[3], duration_s=2.0, progress=False)["runs"][0]["raw"]
-    recorded = chapter5.run(cfg, runs=[3], duration_s=2.0, progress=False, record_dir=tmp_path)["runs"][0]["raw"]
+    recorded = chapter5.run(cfg, runs=[3], duration_s=2.0, progress=False, record_dir=tmp_path)[
+        "runs"
+    ][0]["raw"]
     for key in ("t_s", "true_rpm", "pwm_counts"):
         assert np.array_equal(plain[key], recorded[key]), key
     assert len(plain["published"][0]) >= 1
@@ -119,12 +148,22 @@ def test_chapter5_recording_in_process_same_series(cfg, tmp_path):
 
 
 def test_record_option_takes_a_folder(tmp_path):
-    res = CliRunner().invoke(app, ["experiment", "chapter5", "--out", str(tmp_path / "o"), "--record",
-                                   str(tmp_path / "run.rrd")])
+    res = CliRunner().invoke(
+        app,
+        [
+            "experiment",
+            "chapter5",
+            "--out",
+            str(tmp_path / "o"),
+            "--record",
+            str(tmp_path / "run.rrd"),
+        ],
+    )
     assert res.exit_code == 2 and "--record" in res.output and "folder" in res.output
     (tmp_path / "file").write_text("x")
-    res = CliRunner().invoke(app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--mcap",
-                                   str(tmp_path / "file")])
+    res = CliRunner().invoke(
+        app, ["sweep", "payload", "--out", str(tmp_path / "s"), "--mcap", str(tmp_path / "file")]
+    )
     assert res.exit_code == 2 and "--mcap" in res.output and "not a folder" in res.output
     assert not (tmp_path / "o").exists() and not (tmp_path / "s").exists()
 

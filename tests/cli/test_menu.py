@@ -12,8 +12,13 @@ AMR_TWIN = Path(sys.executable).with_name("amr-twin")
 
 def _client(*args: str, columns: int = 120):
     """``amr-twin client ARGS`` under a pseudo-terminal, plain text."""
-    return pexpect.spawn(str(AMR_TWIN), ["client", *args], encoding="utf-8", timeout=30,
-                         env={"TERM": "dumb", "NO_COLOR": "1", "COLUMNS": str(columns), "PATH": "/usr/bin:/bin"})
+    return pexpect.spawn(
+        str(AMR_TWIN),
+        ["client", *args],
+        encoding="utf-8",
+        timeout=30,
+        env={"TERM": "dumb", "NO_COLOR": "1", "COLUMNS": str(columns), "PATH": "/usr/bin:/bin"},
+    )
 
 
 def _quit(child) -> None:
@@ -56,11 +61,20 @@ def test_menu_live_foxglove_client_drives_and_menu_stops():
     from foxglove_client import FoxgloveClient
 
     ts = get_typestore(Stores.ROS2_HUMBLE)
-    twist = ts.serialize_cdr(ts.types["geometry_msgs/msg/Twist"](
-        linear=ts.types["geometry_msgs/msg/Vector3"](0.5, 0.0, 0.0),
-        angular=ts.types["geometry_msgs/msg/Vector3"](0.0, 0.0, 0.0)), "geometry_msgs/msg/Twist")
-    child = pexpect.spawn(str(AMR_TWIN), ["client", "--live", "--port", "0"], encoding="utf-8", timeout=30,
-                          env={"TERM": "dumb", "NO_COLOR": "1", "COLUMNS": "200", "PATH": "/usr/bin:/bin"})
+    twist = ts.serialize_cdr(
+        ts.types["geometry_msgs/msg/Twist"](
+            linear=ts.types["geometry_msgs/msg/Vector3"](0.5, 0.0, 0.0),
+            angular=ts.types["geometry_msgs/msg/Vector3"](0.0, 0.0, 0.0),
+        ),
+        "geometry_msgs/msg/Twist",
+    )
+    child = pexpect.spawn(
+        str(AMR_TWIN),
+        ["client", "--live", "--port", "0"],
+        encoding="utf-8",
+        timeout=30,
+        env={"TERM": "dumb", "NO_COLOR": "1", "COLUMNS": "200", "PATH": "/usr/bin:/bin"},
+    )
     try:
         child.expect(r"(ws://127\.0\.0\.1:\d+)")
         url = child.match.group(1)
@@ -75,8 +89,13 @@ def test_menu_live_foxglove_client_drives_and_menu_stops():
             child.sendline("3")  # the menu's stop, on the same twin
             child.expect(r"sent wheel_Command \[0, 0\.00000, 0, 0\.00000\]")
             client.pump(1.0, got)
-        commands = [list(ts.deserialize_cdr(d, "std_msgs/msg/Float64MultiArray").data) for _w, _n, _t, d in got]
-        assert commands[0] == pytest.approx([1, 38.19719, 1, 38.19719], abs=1e-4)  # the Twist, via the diff drive
+        commands = [
+            list(ts.deserialize_cdr(d, "std_msgs/msg/Float64MultiArray").data)
+            for _w, _n, _t, d in got
+        ]
+        assert commands[0] == pytest.approx(
+            [1, 38.19719, 1, 38.19719], abs=1e-4
+        )  # the Twist, via the diff drive
         assert [0, 0, 0, 0] in commands[1:]  # the watchdog's stop (0.5 s later), then the menu's
         child.sendline("0")
         child.expect(r"exit at t=(\d+\.\d+) s")
@@ -98,13 +117,26 @@ def test_the_menu_reads_bounded_lines_from_a_pipe_or_a_file(tmp_path):
     zeros = tmp_path / "zeros"
     zeros.write_bytes(bytes(20 * MAX_LINE))  # /dev/zero, bounded so that the unfixed menu ends too
     with open(zeros, "rb") as stdin:
-        res = subprocess.run([str(AMR_TWIN), "client", "--rate", "20"], stdin=stdin, capture_output=True, text=True,
-                             timeout=60)
+        res = subprocess.run(
+            [str(AMR_TWIN), "client", "--rate", "20"],
+            stdin=stdin,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
     assert res.returncode == 2 and res.stderr.strip().splitlines() == [
-        f"error: standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)"]
-    res = subprocess.run([str(AMR_TWIN), "client", "--rate", "20"], input="1\n0.5\n3\n0\n", capture_output=True,
-                         text=True, timeout=60)
-    assert res.returncode == 0 and "sent wheel_Command [1, 38.19719, 1, 38.19719]" in res.stdout, res.stderr
+        f"error: standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)"
+    ]
+    res = subprocess.run(
+        [str(AMR_TWIN), "client", "--rate", "20"],
+        input="1\n0.5\n3\n0\n",
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert res.returncode == 0 and "sent wheel_Command [1, 38.19719, 1, 38.19719]" in res.stdout, (
+        res.stderr
+    )
 
 
 def test_the_client_takes_a_world_as_the_run_commands_do():

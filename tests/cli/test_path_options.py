@@ -33,9 +33,15 @@ def _options(command):
 
 
 COMMANDS = list(_commands())
-OUTPUT_CASES = [(path, p.opts[0]) for path, c in COMMANDS for p in _options(c) if role(p) == "output"]
-INPUT_CASES = [(path, p.opts[0]) for path, c in COMMANDS for p in _options(c)
-               if role(p) == "input" and any(role(q) == "output" for q in _options(c))]
+OUTPUT_CASES = [
+    (path, p.opts[0]) for path, c in COMMANDS for p in _options(c) if role(p) == "output"
+]
+INPUT_CASES = [
+    (path, p.opts[0])
+    for path, c in COMMANDS
+    for p in _options(c)
+    if role(p) == "input" and any(role(q) == "output" for q in _options(c))
+]
 
 
 def _required(command, skip: str, tmp_path: Path) -> list[str]:
@@ -52,8 +58,10 @@ def _command(path):
 
 
 def _listing(folder: Path) -> dict:
-    return {p.relative_to(folder): (p.stat().st_mtime_ns, p.stat().st_size) if p.is_file() else None
-            for p in sorted(folder.rglob("*"))}
+    return {
+        p.relative_to(folder): (p.stat().st_mtime_ns, p.stat().st_size) if p.is_file() else None
+        for p in sorted(folder.rglob("*"))
+    }
 
 
 def _refused(args, tmp_path, *names):
@@ -68,32 +76,78 @@ def _refused(args, tmp_path, *names):
 
 def test_the_walk_sees_every_command_and_its_outputs():
     paths = {" ".join(p) for p, _ in COMMANDS}
-    assert {"model", "calibrate", "run", "run linear", "run stop", "experiment chapter5", "experiment fusion",
-            "experiment faults", "sweep payload", "client", "bench"} <= paths
-    assert {("calibrate", "--out"), ("calibrate", "--report"), ("model", "--export-urdf"), ("run", "--csv"),
-            ("run linear", "--mcap"), ("experiment chapter5", "--record"), ("sweep payload", "--out")} \
-        <= set((" ".join(p), f) for p, f in OUTPUT_CASES)
+    assert {
+        "model",
+        "calibrate",
+        "run",
+        "run linear",
+        "run stop",
+        "experiment chapter5",
+        "experiment fusion",
+        "experiment faults",
+        "sweep payload",
+        "client",
+        "bench",
+    } <= paths
+    assert {
+        ("calibrate", "--out"),
+        ("calibrate", "--report"),
+        ("model", "--export-urdf"),
+        ("run", "--csv"),
+        ("run linear", "--mcap"),
+        ("experiment chapter5", "--record"),
+        ("sweep payload", "--out"),
+    } <= set((" ".join(p), f) for p, f in OUTPUT_CASES)
 
 
 def test_every_path_option_is_declared_an_input_or_an_output():
-    undeclared = sorted({(" ".join(path), p.opts[0]) for path, c in COMMANDS for p in _options(c)
-                         if is_path_option(p) and p.opts[0] not in INPUTS and p.opts[0] not in OUTPUTS})
-    assert not undeclared, f"declare these in amr_twin/cli/path_options.py (INPUTS or OUTPUTS): {undeclared}"
+    undeclared = sorted(
+        {
+            (" ".join(path), p.opts[0])
+            for path, c in COMMANDS
+            for p in _options(c)
+            if is_path_option(p) and p.opts[0] not in INPUTS and p.opts[0] not in OUTPUTS
+        }
+    )
+    assert not undeclared, (
+        f"declare these in amr_twin/cli/path_options.py (INPUTS or OUTPUTS): {undeclared}"
+    )
     used = {p.opts[0] for _, c in COMMANDS for p in _options(c)}
-    awaited = {"--map", "--slam-map"}  # the navigation commands' (branch nav), declared before they merge
+    awaited = {
+        "--map",
+        "--slam-map",
+    }  # the navigation commands' (branch nav), declared before they merge
     assert set(INPUTS) | set(OUTPUTS) <= used | awaited, "a declared option no command has"
 
 
-@pytest.mark.parametrize("path, flag", OUTPUT_CASES, ids=[f"{' '.join(p)} {f}" for p, f in OUTPUT_CASES])
+@pytest.mark.parametrize(
+    "path, flag", OUTPUT_CASES, ids=[f"{' '.join(p)} {f}" for p, f in OUTPUT_CASES]
+)
 def test_an_output_that_is_the_parameter_file_is_refused(path, flag, tmp_path):
     cfg = tmp_path / "c.yaml"
     shutil.copy(ROOT / "models" / "amr" / "amr.yaml", cfg)
     os.link(cfg, tmp_path / "hard.yaml")
     (tmp_path / "soft.yaml").symlink_to(cfg.name)
     extra = _required(_command(path), flag, tmp_path)
-    for given in (cfg, tmp_path / "hard.yaml", tmp_path / "soft.yaml", tmp_path / "sub" / ".." / "c.yaml"):
-        _refused([*path, flag, str(given), "--config", str(cfg), *extra], tmp_path, flag, "--config", "is the input")
-    _refused([*path, flag, str(tmp_path), "--config", str(cfg), *extra], tmp_path, flag, "holds the input")
+    for given in (
+        cfg,
+        tmp_path / "hard.yaml",
+        tmp_path / "soft.yaml",
+        tmp_path / "sub" / ".." / "c.yaml",
+    ):
+        _refused(
+            [*path, flag, str(given), "--config", str(cfg), *extra],
+            tmp_path,
+            flag,
+            "--config",
+            "is the input",
+        )
+    _refused(
+        [*path, flag, str(tmp_path), "--config", str(cfg), *extra],
+        tmp_path,
+        flag,
+        "holds the input",
+    )
     if path == ("calibrate",) and flag == "--out":  # the parameter file read by default
         default = ROOT / "models" / "amr" / "amr.yaml"
         _refused([*path, flag, str(default)], tmp_path, "--config (default)")
@@ -101,16 +155,20 @@ def test_an_output_that_is_the_parameter_file_is_refused(path, flag, tmp_path):
 
 def _input_file(flag: str, tmp_path: Path) -> Path:
     """A file (a folder for --sketch) the input option ``flag`` accepts."""
-    sources = {"--world": ROOT / "models" / "worlds" / "empty.xml",
-               "--route": ROOT / "experiments" / "routes" / "warehouse_60m.yaml",
-               "--sketch": ROOT / "controllers" / "arduino" / "motor_control"}
+    sources = {
+        "--world": ROOT / "models" / "worlds" / "empty.xml",
+        "--route": ROOT / "experiments" / "routes" / "warehouse_60m.yaml",
+        "--sketch": ROOT / "controllers" / "arduino" / "motor_control",
+    }
     source = sources.get(flag, ROOT / "models" / "amr" / "amr.yaml")
     target = tmp_path / f"input{source.suffix}"
     (shutil.copytree if source.is_dir() else shutil.copy)(source, target)
     return target
 
 
-@pytest.mark.parametrize("path, flag", INPUT_CASES, ids=[f"{' '.join(p)} {f}" for p, f in INPUT_CASES])
+@pytest.mark.parametrize(
+    "path, flag", INPUT_CASES, ids=[f"{' '.join(p)} {f}" for p, f in INPUT_CASES]
+)
 def test_every_input_is_protected_from_every_output(path, flag, tmp_path):
     given = _input_file(flag, tmp_path)
     command = _command(path)
@@ -122,22 +180,44 @@ def test_every_input_is_protected_from_every_output(path, flag, tmp_path):
 def test_an_option_given_to_the_group_is_compared_with_the_command_s(tmp_path):
     cfg = tmp_path / "c.yaml"
     shutil.copy(ROOT / "models" / "amr" / "amr.yaml", cfg)
-    _refused(["run", "--config", str(cfg), "stop", "--csv", str(cfg)], tmp_path, "--csv", "--config")
-    _refused(["run", "--csv", str(cfg), "linear", "--config", str(cfg)], tmp_path, "--csv", "--config")
+    _refused(
+        ["run", "--config", str(cfg), "stop", "--csv", str(cfg)], tmp_path, "--csv", "--config"
+    )
+    _refused(
+        ["run", "--csv", str(cfg), "linear", "--config", str(cfg)], tmp_path, "--csv", "--config"
+    )
     mission = tmp_path / "m.yaml"
     mission.write_text("duration_s: 1\nsteps:\n  - {t_s: 0, stop: {}}\n")
-    _refused(["run", "--mission", str(mission), "--mcap", str(mission)], tmp_path, "--mcap", "--mission")
+    _refused(
+        ["run", "--mission", str(mission), "--mcap", str(mission)], tmp_path, "--mcap", "--mission"
+    )
     # a map world's image is read too
     (tmp_path / "room.pgm").write_bytes(b"P5 2 2 255\n" + bytes(4))
     (tmp_path / "room.yaml").write_text("image: room.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
-    _refused(["run", "stop", "--world", str(tmp_path / "room.yaml"), "--csv", str(tmp_path / "room.pgm")],
-             tmp_path, "--csv", "--world")
+    _refused(
+        [
+            "run",
+            "stop",
+            "--world",
+            str(tmp_path / "room.yaml"),
+            "--csv",
+            str(tmp_path / "room.pgm"),
+        ],
+        tmp_path,
+        "--csv",
+        "--world",
+    )
     # so is a navigation mission's map (beside the mission), YAML and image (both were overwritten, exit 0)
     goals = tmp_path / "goals.yaml"
     goals.write_text("goals:\n  - [1.0, 0.5]\nmap: room.yaml\n")
     for victim in ("room.yaml", "room.pgm"):
-        _refused(["run", "--mission", str(goals), "--world", "empty", "--csv", str(tmp_path / victim)],
-                 tmp_path, "--csv", "--mission", victim)
+        _refused(
+            ["run", "--mission", str(goals), "--world", "empty", "--csv", str(tmp_path / victim)],
+            tmp_path,
+            "--csv",
+            "--mission",
+            victim,
+        )
 
 
 def test_a_given_input_is_not_confused_with_the_default(tmp_path):
@@ -146,11 +226,16 @@ def test_a_given_input_is_not_confused_with_the_default(tmp_path):
     shutil.copy(ROOT / "models" / "amr" / "amr.yaml", cfg)
     from amr_twin.cli.path_options import paths_of
 
-    with typer.main.get_command(app).make_context("amr-twin", ["run", "--config", str(cfg), "stop"]) as ctx:
+    with typer.main.get_command(app).make_context(
+        "amr-twin", ["run", "--config", str(cfg), "stop"]
+    ) as ctx:
         group = ctx.command.commands["run"]
         with group.make_context("run", ["--config", str(cfg), "stop"], parent=ctx) as run_ctx:
-            with group.commands["stop"].make_context("stop", ["--csv", "x.csv"], parent=run_ctx) as leaf:
+            with group.commands["stop"].make_context(
+                "stop", ["--csv", "x.csv"], parent=run_ctx
+            ) as leaf:
                 outputs, inputs = paths_of(leaf)
     assert outputs == [("--csv", Path("x.csv"))]
-    assert ("--config", cfg) in inputs and not any(label.endswith("(default)") and "config" in label
-                                                   for label, _ in inputs)
+    assert ("--config", cfg) in inputs and not any(
+        label.endswith("(default)") and "config" in label for label, _ in inputs
+    )

@@ -1,7 +1,5 @@
 """Emulated Arduino runtime: pins, timer, interrupt flags and masking, delay() in main context."""
 
-
-
 from amr_twin.base.clock import VirtualClock
 from amr_twin.base.pins import HIGH, LOW
 from amr_twin.controllers.arduino import ArduinoRuntime
@@ -130,7 +128,19 @@ def test_delay_blocks_main_context_but_not_interrupts():
     assert rt.main_blocked
     clock.run_until(250_000)
     assert [e for e in log if e[1] != "tick"] == [
-        (0, "a", "start"), (100_000, "a", "end"), (100_000, "b", "start"), (200_000, "b", "end")]
-    assert [e[0] for e in log if e[1] == "tick"] == [30_000, 60_000, 90_000, 120_000, 150_000,
-                                                     180_000, 210_000, 240_000]
+        (0, "a", "start"),
+        (100_000, "a", "end"),
+        (100_000, "b", "start"),
+        (200_000, "b", "end"),
+    ]
+    assert [e[0] for e in log if e[1] == "tick"] == [
+        30_000,
+        60_000,
+        90_000,
+        120_000,
+        150_000,
+        180_000,
+        210_000,
+        240_000,
+    ]
     assert not rt.main_blocked

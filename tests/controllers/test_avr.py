@@ -51,19 +51,50 @@ def _sketch_copy(tmp_path: Path, old: str, new: str) -> Path:
 
 
 def test_sketch_option_needs_the_avr_firmware():
-    result = runner.invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--duration-s", "0.1",
-                                 "--sketch", str(DEFAULT_SKETCH)])
+    result = runner.invoke(
+        app,
+        [
+            "run",
+            "linear",
+            "--speed-m-s",
+            "0.5",
+            "--duration-s",
+            "0.1",
+            "--sketch",
+            str(DEFAULT_SKETCH),
+        ],
+    )
     assert result.exit_code == 2
     assert "--sketch is used with --firmware avr only" in result.output
-    result = runner.invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--firmware", "avr", "--sketch", "/no/such"])
-    assert result.exit_code == 2 and result.output.count("\n") == 1 and "--sketch /no/such: not a folder" in result.output
+    result = runner.invoke(
+        app, ["run", "linear", "--speed-m-s", "0.5", "--firmware", "avr", "--sketch", "/no/such"]
+    )
+    assert (
+        result.exit_code == 2
+        and result.output.count("\n") == 1
+        and "--sketch /no/such: not a folder" in result.output
+    )
 
 
 @needs_avr
 def test_emulated_board_matches_the_faithful_port_sample_by_sample(tmp_path):
     # chapter 5 run 1 (left wheel 76.39 RPM) through the CLI, which also runs faithful and compares
-    result = runner.invoke(app, ["experiment", "chapter5", "--firmware", "avr", "--runs", "1", "--duration-s", "5",
-                                 "--out", str(tmp_path), "--no-progress"])
+    result = runner.invoke(
+        app,
+        [
+            "experiment",
+            "chapter5",
+            "--firmware",
+            "avr",
+            "--runs",
+            "1",
+            "--duration-s",
+            "5",
+            "--out",
+            str(tmp_path),
+            "--no-progress",
+        ],
+    )
     assert result.exit_code == 0, result.output
     comp = json.loads((tmp_path / "metrics.json").read_text())["firmware_comparison"]
     (row,) = comp["rows"]
@@ -96,14 +127,18 @@ def test_changing_ki_in_the_sketch_changes_the_result(cfg, tmp_path):
     first_pi = np.argmax(np.any(base.pwm_counts != faithful.pwm_counts, axis=1) | (base.t_s > 1.6))
     assert np.array_equal(base.pwm_counts[:first_pi], changed.pwm_counts[:first_pi])
     assert not np.array_equal(base.pwm_counts, changed.pwm_counts)
-    assert changed.pwm_counts[-1, 0] > base.pwm_counts[-1, 0]  # a larger integral gain adds more duty
+    assert (
+        changed.pwm_counts[-1, 0] > base.pwm_counts[-1, 0]
+    )  # a larger integral gain adds more duty
     assert abs(base.published[0][1, 1] - changed.published[0][1, 1]) > 0.5
 
 
 @needs_avr
 def test_idle_sleep_of_spin_once_changes_nothing_observable(cfg):
     sleeping = _run(cfg, "avr", 2.5, Command("motor", wheel="left", speed_m_s=1.0))
-    busy = _run(cfg, "avr", 2.5, Command("motor", wheel="left", speed_m_s=1.0), AvrParams(idle_sleep=False))
+    busy = _run(
+        cfg, "avr", 2.5, Command("motor", wheel="left", speed_m_s=1.0), AvrParams(idle_sleep=False)
+    )
     assert len(sleeping.published[0]) == len(busy.published[0]) >= 1
     # the sleeping loop and the busy one wait in delay() with different instructions, so a ramp step can
     # end a few cycles apart and cross a 1 ms physics step in one and not the other: the samples
@@ -130,7 +165,9 @@ def test_a_corrupted_command_frame_is_refused_by_the_boards_checksum(cfg):
     LINEAR.send(twin)
     twin.advance(1.0)
     assert twin.link.frames_lost[PC_TO_ARDUINO] == 1
-    assert all(p.pwm_counts == 0 and p.brake_level == 1 for p in twin.firmware.pins)  # as setup() left them
+    assert all(
+        p.pwm_counts == 0 and p.brake_level == 1 for p in twin.firmware.pins
+    )  # as setup() left them
     ok = Twin(cfg, TwinOptions(firmware="avr", world="empty"))
     LINEAR.send(ok)
     ok.advance(1.0)
@@ -144,9 +181,11 @@ def test_the_sketch_announces_its_topics_as_rosserial_does():
     pubs, subs = topic_table(str(build_sketch()))
     assert [(p.topic_id, p.topic_name, p.message_type, p.md5sum) for p in pubs] == [
         (125, "wheel0_Vel", "std_msgs/Float64", MD5SUM["std_msgs/Float64"]),
-        (126, "wheel1_Vel", "std_msgs/Float64", MD5SUM["std_msgs/Float64"])]
+        (126, "wheel1_Vel", "std_msgs/Float64", MD5SUM["std_msgs/Float64"]),
+    ]
     assert [(s.topic_id, s.topic_name, s.message_type) for s in subs] == [
-        (100, "wheel_Command", "std_msgs/Float64MultiArray")]
+        (100, "wheel_Command", "std_msgs/Float64MultiArray")
+    ]
 
 
 @needs_avr
@@ -163,21 +202,39 @@ def test_a_sketch_that_does_not_compile_is_one_line_naming_the_file(tmp_path):
     sketch = _sketch_copy(tmp_path, "void loop()", "void loop() oops")
     with pytest.raises(SketchError, match=r"motor_control\.ino:\d+:\d+: error"):
         build_sketch(sketch)
-    result = runner.invoke(app, ["run", "linear", "--speed-m-s", "0.7", "--firmware", "avr", "--sketch", str(sketch)])
+    result = runner.invoke(
+        app, ["run", "linear", "--speed-m-s", "0.7", "--firmware", "avr", "--sketch", str(sketch)]
+    )
     assert result.exit_code == 2
     assert result.output.count("\n") == 1 and "motor_control.ino" in result.output
 
 
 @needs_avr
 def test_cli_run_with_the_emulated_board(cfg):
-    result = runner.invoke(app, ["run", "linear", "--speed-m-s", "0.7", "--duration-s", "3", "--world", "empty",
-                                 "--firmware", "avr", "--json"])
+    result = runner.invoke(
+        app,
+        [
+            "run",
+            "linear",
+            "--speed-m-s",
+            "0.7",
+            "--duration-s",
+            "3",
+            "--world",
+            "empty",
+            "--firmware",
+            "avr",
+            "--json",
+        ],
+    )
     assert result.exit_code == 0, result.output
     info = json.loads(result.stdout)
     faithful = _run(cfg, "faithful", 3.0)
     for w, name in enumerate(("left", "right")):
         assert info["wheels"][name]["samples"] == len(faithful.published[w]) >= 1
-        assert info["wheels"][name]["final_rpm"] == pytest.approx(faithful.published[w][-1, 1], abs=0.05)
+        assert info["wheels"][name]["final_rpm"] == pytest.approx(
+            faithful.published[w][-1, 1], abs=0.05
+        )
 
 
 def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
@@ -218,7 +275,9 @@ def test_a_command_queued_during_a_ramp_waits_for_the_ramp_on_the_board_as_in_th
     late = [(t, c) for t, c in board if t > 2_900_000]
     assert [c for _, c in late] == [c for t, c in port if t > 2_900_000] == [32, 36, 33, 11]
     for (tb, _), (tp, _) in zip(late, [x for x in port if x[0] > 2_900_000]):
-        assert 0 <= tb - tp < 10_000  # each step a few ms later on the board (its ramp's arithmetic)
+        assert (
+            0 <= tb - tp < 10_000
+        )  # each step a few ms later on the board (its ramp's arithmetic)
 
 
 @needs_avr
@@ -236,7 +295,9 @@ def test_the_board_asks_the_time_every_5_s_and_keeps_publishing_while_answered(c
         return twin.firmware.time_requests, recorder_of(twin).series().published[0][:, 0]
 
     requests, t_s = run(True)
-    assert requests == 3  # at 5, 10 and 15 s (ros_lib's SYNC_PERIOD_MS), each answered with the sim time
+    assert (
+        requests == 3
+    )  # at 5, 10 and 15 s (ros_lib's SYNC_PERIOD_MS), each answered with the sim time
     assert t_s[-1] > 17.0
     # unanswered, the board takes the host for gone after 15 s (SYNC_TIMEOUT_MS) and stops publishing
     requests, t_s = run(False)

@@ -17,7 +17,9 @@ WHEEL = load_config().wheel
 
 def _client(bus):
     """The thesis geometry (the config's: 0.125 m radius, 0.24 m half separation) the figures below use."""
-    return WheelCommandClient(bus, wheel_radius_m=WHEEL.radius_m, half_separation_m=WHEEL.separation_m / 2)
+    return WheelCommandClient(
+        bus, wheel_radius_m=WHEEL.radius_m, half_separation_m=WHEEL.separation_m / 2
+    )
 
 
 @pytest.fixture
@@ -26,8 +28,11 @@ def rig():
     bus = Bus(clock)
     WheelCommandService(bus)
     sent = []
-    bus.add_tap(lambda topic, msg, t_us: sent.append((t_us, list(msg.data)))
-                if topic == "wheel_Command" else None)
+    bus.add_tap(
+        lambda topic, msg, t_us: (
+            sent.append((t_us, list(msg.data))) if topic == "wheel_Command" else None
+        )
+    )
     node = DiffDriveNode(bus, clock, _client(bus))
     return clock, bus, node, sent
 

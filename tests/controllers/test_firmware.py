@@ -36,7 +36,9 @@ def test_the_built_in_kinds_are_registered_in_order():
 
 
 def test_an_unknown_kind_is_refused_in_one_line_naming_the_choices():
-    with pytest.raises(ValueError, match=r"^--firmware 'avx': must be one of faithful, improved or avr"):
+    with pytest.raises(
+        ValueError, match=r"^--firmware 'avx': must be one of faithful, improved or avr"
+    ):
         firmware_kind("avx")
     with pytest.raises(ValueError, match=r"^--firmware 'avx': must be one of"):
         make_firmware("avx", VirtualClock(), lambda *_: None, edges_per_rev=90)

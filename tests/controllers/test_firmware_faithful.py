@@ -21,8 +21,13 @@ LOG = FaithfulParams(board=BoardParams(record_pin_log=True, latch_int_flag_while
 def make(params=LOG):
     clock = VirtualClock()
     pubs = []
-    fw = make_firmware("faithful", clock, lambda topic, v: pubs.append((clock.now_us, topic, v)),
-                       params, edges_per_rev=WHEEL.sc_edges_per_rev)
+    fw = make_firmware(
+        "faithful",
+        clock,
+        lambda topic, v: pubs.append((clock.now_us, topic, v)),
+        params,
+        edges_per_rev=WHEEL.sc_edges_per_rev,
+    )
     fw.start()
     if fw.rt.pin_log is not None:
         fw.rt.pin_log.clear()  # drop setup()'s writes
@@ -33,8 +38,11 @@ def feed_edges(clock, fw, rpm, t_end_us, wheels=(0,), phase_us=137):
     """Synthetic SC edges at a steady ``rpm`` on ``wheels`` until ``t_end_us``."""
     period_us = 60e6 / (90 * rpm)
     k0 = math.ceil((clock.now_us - phase_us) / period_us) + 1
-    t_edges = [int(round(phase_us + k * period_us)) for k in range(k0, k0 + 10**6)
-               if phase_us + k * period_us <= t_end_us]
+    t_edges = [
+        int(round(phase_us + k * period_us))
+        for k in range(k0, k0 + 10**6)
+        if phase_us + k * period_us <= t_end_us
+    ]
     for t in t_edges:
         clock.run_until(t - 1)
         clock.set_time(t)
@@ -173,8 +181,9 @@ def test_pi_raises_duty_when_the_wheel_is_slow():
     pi = writes(fw, 0, after_us=600_000)
     # one action per sample cycle (1.2 s at 60 RPM); the integral grows by 16.39 each time:
     # controlSpeed = sp + kp*e + ki*T*(k*e) - sp/10
-    expected = [int((76.39 + 0.001 * 16.39 + 0.03 * k * 16.39 - 7.639) / 1054 * 255)
-                for k in range(1, 5)]
+    expected = [
+        int((76.39 + 0.001 * 16.39 + 0.03 * k * 16.39 - 7.639) / 1054 * 255) for k in range(1, 5)
+    ]
     assert [t for t, _ in pi] == [1_400_000, 2_600_000, 3_800_000, 5_000_000]
     assert [c for _, c in pi] == expected and expected[-1] > expected[0]
 

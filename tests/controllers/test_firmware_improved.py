@@ -19,8 +19,13 @@ LOG = ImprovedParams(board=BoardParams(record_pin_log=True))
 def make(kind="improved", params=LOG):
     clock = VirtualClock()
     pubs = []
-    fw = make_firmware(kind, clock, lambda topic, v: pubs.append((clock.now_us, topic, v)), params,
-                       edges_per_rev=WHEEL.sc_edges_per_rev)
+    fw = make_firmware(
+        kind,
+        clock,
+        lambda topic, v: pubs.append((clock.now_us, topic, v)),
+        params,
+        edges_per_rev=WHEEL.sc_edges_per_rev,
+    )
     fw.start()
     return clock, fw, pubs
 
@@ -37,8 +42,6 @@ def feed_edges(clock, fw, rpm, t_end_us, wheels=(0,), phase_us=137):
             fw.on_sc_edge(w)
         k += 1
     clock.run_until(t_end_us)
-
-
 
 
 def published(pubs, topic="wheel0_Vel"):
@@ -78,8 +81,13 @@ def test_published_means_count_every_edge():
     wheel odometry (which takes a sample for the mean since the previous one) counts every edge.
     (tests/experiments/umbmark/test_square.py: what the odometry lost without it.)"""
     clock, fw, pubs = make()
-    for rpm, t_end in ((5.0, 600_000), (30.0, 1_300_000), (80.0, 2_100_000), (12.0, 2_800_000),
-                       (3.0, 3_500_000)):
+    for rpm, t_end in (
+        (5.0, 600_000),
+        (30.0, 1_300_000),
+        (80.0, 2_100_000),
+        (12.0, 2_800_000),
+        (3.0, 3_500_000),
+    ):
         feed_edges(clock, fw, rpm, t_end, phase_us=clock.now_us + 137)
     clock.run_until(4_500_000)  # stopped: the last edges' sample and zeros
     assert fw._count[0] > 140 and edges_published(pubs) == pytest.approx(fw._count[0], abs=1e-9)
@@ -95,7 +103,9 @@ def test_zero_speed_timeout_and_fixed_publish_rate():
     assert samples[-1][1] == 0.0 and samples[9][1] == pytest.approx(60.0, rel=0.005)
     # stopped dead from 60 RPM (no wheel can): the part of an edge extrapolated stays counted, less than one
     assert fw.speed_rpm[0] == 0.0 and 0.0 <= edges_published(pubs) - fw._count[0] < 1.0
-    assert [v for t, v in samples if 1_000_000 < t] == [0.0] * 5  # nothing rolled after the last edge
+    assert [v for t, v in samples if 1_000_000 < t] == [
+        0.0
+    ] * 5  # nothing rolled after the last edge
 
 
 def test_deceleration_ramps_in_both_directions():
@@ -153,7 +163,10 @@ def test_anti_windup_stops_integrating_where_the_output_saturates():
     fw.on_wheel_command([1, 64.0, 1, 0])
     feed_edges(clock, fw, 60.0, 5_000_000)
     assert 0.0 < fw.integral_rpm[0] <= 0.4 + 0.24 + 1e-9
-    assert fw.pins[0].pwm_counts in (int(60 / 1054 * 255), int(60 / 1054 * 255) + 1)  # dithered about 14.5
+    assert fw.pins[0].pwm_counts in (
+        int(60 / 1054 * 255),
+        int(60 / 1054 * 255) + 1,
+    )  # dithered about 14.5
     clock, fw, pubs = make()
     fw.on_wheel_command([1, 10.0, 1, 0])
     feed_edges(clock, fw, 16.0, 5_000_000)
@@ -170,10 +183,17 @@ def test_left_wheel_76_rpm_both_modes_settle_and_improved_is_faster():
         samples = published(pubs)
         late = [v for t, v in samples if t > 4_000_000]
         assert all(abs(v - sp) <= band for v in late)
-        result[kind] = (settling_s(samples, sp, band, t_cmd), settling_s(samples, sp, 1.0, t_cmd),
-                        late[-1], speed[0], len(samples))
+        result[kind] = (
+            settling_s(samples, sp, band, t_cmd),
+            settling_s(samples, sp, 1.0, t_cmd),
+            late[-1],
+            speed[0],
+            len(samples),
+        )
     for kind, (s4, s1, last, true, n) in result.items():
-        print(f"\n{kind}: settle +-4 RPM {s4:.2f} s, +-1 RPM {s1:.2f} s, "
-              f"last published {last:.2f} RPM, true {true:.2f} RPM, {n} samples")
+        print(
+            f"\n{kind}: settle +-4 RPM {s4:.2f} s, +-1 RPM {s1:.2f} s, "
+            f"last published {last:.2f} RPM, true {true:.2f} RPM, {n} samples"
+        )
     assert result["improved"][0] < result["faithful"][0]
     assert abs(result["improved"][3] - sp) < 0.5 < abs(result["faithful"][3] - sp)

@@ -19,8 +19,14 @@ WHEEL = load_config().wheel
 GEOMETRY = {"wheel_radius_m": WHEEL.radius_m, "wheel_separation_m": WHEEL.separation_m}
 RPM_PER_M_S = 60.0 / (math.pi * 2 * WHEEL.radius_m)
 CIRCUMFERENCE_M = 2 * math.pi * WHEEL.radius_m
-HELD = {"sample_gap_s": math.inf}  # a sample holds until the next (no silence bound): one sample, long arcs
-EXACT = {"max_wheel_accel_m_s2": math.inf, **HELD, **GEOMETRY}  # speeds in force at once: analytic arcs
+HELD = {
+    "sample_gap_s": math.inf
+}  # a sample holds until the next (no silence bound): one sample, long arcs
+EXACT = {
+    "max_wheel_accel_m_s2": math.inf,
+    **HELD,
+    **GEOMETRY,
+}  # speeds in force at once: analytic arcs
 
 
 @pytest.fixture
@@ -41,9 +47,20 @@ def _firmware(bus, motion_l, rpm_l, motion_r, rpm_r):
 
 def _poses(msgs):
     """(n, 7): t_s, x, y, yaw, vx, vy, w of odometry messages."""
-    return np.array([(m.header.stamp.to_sec(), m.pose.pose.position.x, m.pose.pose.position.y,
-                      m.pose.pose.orientation.yaw_rad(), m.twist.twist.linear.x, m.twist.twist.linear.y,
-                      m.twist.twist.angular.z) for m in msgs])
+    return np.array(
+        [
+            (
+                m.header.stamp.to_sec(),
+                m.pose.pose.position.x,
+                m.pose.pose.position.y,
+                m.pose.pose.orientation.yaw_rad(),
+                m.twist.twist.linear.x,
+                m.twist.twist.linear.y,
+                m.twist.twist.angular.z,
+            )
+            for m in msgs
+        ]
+    )
 
 
 def test_constant_arc_matches_the_analytic_pose(rig):
@@ -128,8 +145,14 @@ def test_signed_input(rig):
 
 def test_calibration_multipliers(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, wheel_radius_multiplier=1.1, right_radius_multiplier=1.02,
-                        wheel_separation_multiplier=1.05, **EXACT)
+    odo = WheelOdometry(
+        bus,
+        clock,
+        wheel_radius_multiplier=1.1,
+        right_radius_multiplier=1.02,
+        wheel_separation_multiplier=1.05,
+        **EXACT,
+    )
     odo.set_wheel_speeds_rpm(RPM_PER_M_S, RPM_PER_M_S)
     v, w = odo.body_velocity()
     assert v == pytest.approx(1.1 * (1 + 1.02) / 2)
@@ -138,8 +161,14 @@ def test_calibration_multipliers(rig):
 
 def test_rate_covariances_and_sequence(rig):
     clock, bus, odom_msgs = rig
-    WheelOdometry(bus, clock, **GEOMETRY, publish_rate_hz=20.0, pose_covariance_diagonal=[1, 2, 3, 4, 5, 6],
-                  twist_covariance_diagonal=[0.1] * 6)
+    WheelOdometry(
+        bus,
+        clock,
+        **GEOMETRY,
+        publish_rate_hz=20.0,
+        pose_covariance_diagonal=[1, 2, 3, 4, 5, 6],
+        twist_covariance_diagonal=[0.1] * 6,
+    )
     clock.run_until(1_000_000)
     assert len(odom_msgs) == 21  # the first at the start: tf covers the sensors' first stamps
     assert [m.header.stamp.to_us() for m in odom_msgs[:3]] == [0, 50_000, 100_000]
@@ -181,10 +210,14 @@ def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
     bus.publish("wheel1_Vel", Float64(60.0))
     # the wheels stood until the window 1.5-2.5 s at 60 RPM: one revolution, in hindsight
     assert odo.smoothed_pose()[0] == pytest.approx(CIRCUMFERENCE_M, rel=1e-9)
-    assert odo.x_m == pytest.approx(1.25 * CIRCUMFERENCE_M, rel=1e-9)  # the published pose does not jump
+    assert odo.x_m == pytest.approx(
+        1.25 * CIRCUMFERENCE_M, rel=1e-9
+    )  # the published pose does not jump
     clock.run_until(3_000_000)
     assert odo.smoothed_pose()[0] == pytest.approx(1.5 * CIRCUMFERENCE_M, rel=1e-9)  # held after it
-    assert odo.smoothed_pose()[0] < odo.x_m < 1.75 * CIRCUMFERENCE_M  # slower than the wheels: made up
+    assert (
+        odo.smoothed_pose()[0] < odo.x_m < 1.75 * CIRCUMFERENCE_M
+    )  # slower than the wheels: made up
     clock.run_until(6_000_000)  # made up by then, no overshoot
     assert odo.x_m == pytest.approx(odo.smoothed_pose()[0], abs=1e-3)
     assert odo.x_m == pytest.approx(4.5 * CIRCUMFERENCE_M, abs=1e-3)
@@ -196,7 +229,9 @@ def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
 def test_published_pose_is_continuous_and_its_twist_integrates_to_it(rig):
     """REP-105: no step larger than the wheels' motion allows (plus the bounded correction),
     and the published twist is the one the pose moves with."""
-    clock, bus, odom_msgs, odo = _start_one_revolution_late(rig, command_rpm=30.0)  # faster than commanded
+    clock, bus, odom_msgs, odo = _start_one_revolution_late(
+        rig, command_rpm=30.0
+    )  # faster than commanded
     bus.publish("wheel0_Vel", Float64(60.0))
     bus.publish("wheel1_Vel", Float64(62.0))  # the right wheel a little faster: a turn to make up
     clock.run_until(7_000_000)
@@ -205,8 +240,10 @@ def test_published_pose_is_continuous_and_its_twist_integrates_to_it(rig):
     step_m = np.hypot(np.diff(a[:, 1]), np.diff(a[:, 2]))
     rim_m = 62.0 / RPM_PER_M_S * 0.02  # the faster wheel's travel in one period
     assert step_m.max() <= (1 + odo.catchup_max_fraction) * rim_m + CATCHUP_FLOOR_M_S * 0.02 + 1e-9
-    assert (np.abs(np.diff(a[:, 3])).max()
-            <= (1 + odo.catchup_max_fraction) * 2 * rim_m / 0.48 + CATCHUP_FLOOR_RAD_S * 0.02 + 1e-9)
+    assert (
+        np.abs(np.diff(a[:, 3])).max()
+        <= (1 + odo.catchup_max_fraction) * 2 * rim_m / 0.48 + CATCHUP_FLOOR_RAD_S * 0.02 + 1e-9
+    )
     assert step_m.max() > rim_m  # it did make up something
     # integrate the published twists (held over each period) with the SE(2) exponential
     from amr_twin.estimation.dead_reckoning import twist_step
@@ -249,7 +286,9 @@ def test_windows_are_clipped_at_the_previous_sample(rig):
 
 def test_a_sample_supersedes_the_assumed_brake_ramp(rig):
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, brake_stop_s=0.5, brake_friction_rpm_s=0.0, signed_input=False, **EXACT)
+    odo = WheelOdometry(
+        bus, clock, brake_stop_s=0.5, brake_friction_rpm_s=0.0, signed_input=False, **EXACT
+    )
     _firmware(bus, 1, RPM_PER_M_S, 1, RPM_PER_M_S)
     clock.run_until(1_000_000)
     bus.publish("wheel_Command", Float64MultiArray(data=[0.0, 0.0, 0.0, 0.0]))
@@ -260,7 +299,9 @@ def test_a_sample_supersedes_the_assumed_brake_ramp(rig):
     bus.publish("wheel1_Vel", Float64(0.0))
     assert odo.smoothed_pose()[0] == pytest.approx(1.0)
     xs = []
-    for k in range(1, 101):  # standing wheels: the published pose settles at the floor rate, no jump
+    for k in range(
+        1, 101
+    ):  # standing wheels: the published pose settles at the floor rate, no jump
         clock.run_until(1_100_000 + 20_000 * k)
         xs.append(odo.x_m)
     assert np.all(np.diff(xs) <= 0) and -np.diff(xs).max() <= CATCHUP_FLOOR_M_S * 0.02 + 1e-12
@@ -269,8 +310,12 @@ def test_a_sample_supersedes_the_assumed_brake_ramp(rig):
 
 def test_bad_options_are_refused(rig):
     clock, bus, _ = rig
-    for bad in ({"catchup_time_s": 0.0}, {"catchup_max_fraction": -0.1}, {"max_wheel_accel_m_s2": 0.0},
-                {"publish_rate_hz": 0.0}):
+    for bad in (
+        {"catchup_time_s": 0.0},
+        {"catchup_max_fraction": -0.1},
+        {"max_wheel_accel_m_s2": 0.0},
+        {"publish_rate_hz": 0.0},
+    ):
         with pytest.raises(ValueError, match=next(iter(bad))):
             WheelOdometry(bus, clock, **GEOMETRY, **bad)
 
@@ -280,10 +325,15 @@ def test_a_wheel_that_stops_without_a_brake_reads_at_rest_after_the_silence_boun
     the wheel's speed falls under 60 / (time since the sample - gaps) RPM, and it is at rest
     once that bound falls below rest_rpm."""
     clock, bus, _ = rig
-    odo = WheelOdometry(bus, clock, max_wheel_accel_m_s2=math.inf, sample_gap_s=0.4, rest_rpm=10.0,
-                        **GEOMETRY)
+    odo = WheelOdometry(
+        bus, clock, max_wheel_accel_m_s2=math.inf, sample_gap_s=0.4, rest_rpm=10.0, **GEOMETRY
+    )
     bus.publish("wheel_Command", Float64MultiArray(data=[1.0, 60.0, 1.0, 60.0]))
-    for t_us in (1_000_000, 2_400_000, 3_800_000):  # a revolution at 60 RPM, then the firmware's gap
+    for t_us in (
+        1_000_000,
+        2_400_000,
+        3_800_000,
+    ):  # a revolution at 60 RPM, then the firmware's gap
         clock.run_until(t_us)
         bus.publish("wheel0_Vel", Float64(60.0))
         bus.publish("wheel1_Vel", Float64(60.0))
@@ -291,7 +341,9 @@ def test_a_wheel_that_stops_without_a_brake_reads_at_rest_after_the_silence_boun
     clock.run_until(5_100_000)  # the next sample is not due yet: the speed holds
     assert odo.body_velocity()[0] == pytest.approx(60.0 / RPM_PER_M_S)
     clock.run_until(7_000_000)  # overdue: under the bound 60 / (7.0 - 3.8 - 0.4) RPM
-    assert 0.0 < odo.body_velocity()[0] <= 1.03 * 60.0 / 2.8 / RPM_PER_M_S  # knots 1.25x apart in time
+    assert (
+        0.0 < odo.body_velocity()[0] <= 1.03 * 60.0 / 2.8 / RPM_PER_M_S
+    )  # knots 1.25x apart in time
     clock.run_until(10_300_000)  # 60 / (10.3 - 4.2) < 10 RPM: at rest
     assert odo.body_velocity() == (0.0, 0.0)
     x_rest = odo.smoothed_pose()[0]
@@ -307,6 +359,7 @@ def _stop_and_restart(bus, clock, gaps_s=(0.25, 0.4), until_s=17.0):
     10.5 s). Each wheel publishes one revolution, then counts the next after its gap (as the thesis
     firmware does): the revolution across the stop is published after the restart.
     Returns the true distance, m."""
+
     def rpm(t):
         if t < 5.0:
             return 60.0
@@ -316,7 +369,11 @@ def _stop_and_restart(bus, clock, gaps_s=(0.25, 0.4), until_s=17.0):
 
     dt = 0.001
     revs, count_from = 0.0, [(0.0, None), (0.0, None)]  # (count start, revs at it)
-    commands = {0: [1.0, 60.0, 1.0, 60.0], 5000: [0.0, 0.0, 0.0, 0.0], 10000: [1.0, 60.0, 1.0, 60.0]}
+    commands = {
+        0: [1.0, 60.0, 1.0, 60.0],
+        5000: [0.0, 0.0, 0.0, 0.0],
+        10000: [1.0, 60.0, 1.0, 60.0],
+    }
     for k in range(int(until_s / dt)):
         t = k * dt
         clock.run_until(int(round(t * 1e6)))
@@ -341,9 +398,10 @@ def test_a_restart_does_not_turn_when_the_wheels_do_not(rig):
     distance_m = _stop_and_restart(bus, clock)
     a = _poses(odom_msgs)
     assert np.degrees(np.abs(a[:, 3]).max()) < 5.0  # published: never more than 5 degrees off
-    assert abs(math.degrees(odo.smoothed_pose()[2])) < 4.0  # the rest: a sample during the brake ramp
+    assert (
+        abs(math.degrees(odo.smoothed_pose()[2])) < 4.0
+    )  # the rest: a sample during the brake ramp
     assert odo.smoothed_pose()[0] == pytest.approx(distance_m, rel=0.03)
     assert odo.x_m == pytest.approx(distance_m, rel=0.03)
     standing = (a[:, 0] > 6.0) & (a[:, 0] < 10.0)
     assert np.ptp(a[standing, 1]) < 0.02  # still while the wheels stand
-

@@ -20,19 +20,34 @@ def test_text_and_load_give_the_calibration_back(tmp_path):
     assert load(path) == GOOD
 
 
-@pytest.mark.parametrize("body, names", [
-    ("wheel_odometry: [1, 2]", "expected a 'wheel_odometry:' mapping"),
-    ("wheel_odometry:\n  left_wheel_radius_m: 0.125\n  right_wheel_radius_m: 0.125\n", "wheel_separation_m"),
-    ("wheel_odometry:\n  left_wheel_radius_m: 0.5\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
-     "left_wheel_radius_m: 0.5, expected a number in [0.05, 0.3]"),
-    ("wheel_odometry:\n  left_wheel_radius_m: .nan\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
-     "left_wheel_radius_m"),
-    ("wheel_odometry:\n  left_wheel_radius_m: true\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
-     "left_wheel_radius_m"),
-    ("wheel_odometry:\n  left_wheel_radius_m: 0.125\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n"
-     "  wheel_base: 1\n", "wheel_base: unknown key"),
-    ("{{{", "not valid YAML"),
-])
+@pytest.mark.parametrize(
+    "body, names",
+    [
+        ("wheel_odometry: [1, 2]", "expected a 'wheel_odometry:' mapping"),
+        (
+            "wheel_odometry:\n  left_wheel_radius_m: 0.125\n  right_wheel_radius_m: 0.125\n",
+            "wheel_separation_m",
+        ),
+        (
+            "wheel_odometry:\n  left_wheel_radius_m: 0.5\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
+            "left_wheel_radius_m: 0.5, expected a number in [0.05, 0.3]",
+        ),
+        (
+            "wheel_odometry:\n  left_wheel_radius_m: .nan\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
+            "left_wheel_radius_m",
+        ),
+        (
+            "wheel_odometry:\n  left_wheel_radius_m: true\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
+            "left_wheel_radius_m",
+        ),
+        (
+            "wheel_odometry:\n  left_wheel_radius_m: 0.125\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n"
+            "  wheel_base: 1\n",
+            "wheel_base: unknown key",
+        ),
+        ("{{{", "not valid YAML"),
+    ],
+)
 def test_a_bad_file_is_refused_naming_the_file_and_field(tmp_path, body, names):
     path = tmp_path / "odom.yaml"
     path.write_text(body)
@@ -44,8 +59,10 @@ def test_a_bad_file_is_refused_naming_the_file_and_field(tmp_path, body, names):
 
 def _drive(calibration, left_m_s: float, right_m_s: float):
     """The same drive each time (the odometry only watches it): its smoothed (hindsight) pose."""
-    twin = Twin(load_config(sets=["wheel.tyre_slip=false"]),
-                TwinOptions(world="empty", firmware="improved", odometry_calibration=calibration))
+    twin = Twin(
+        load_config(sets=["wheel.tyre_slip=false"]),
+        TwinOptions(world="empty", firmware="improved", odometry_calibration=calibration),
+    )
     twin.client.wheels(left_m_s, right_m_s)
     twin.advance(4.0)
     twin.client.stop()
@@ -74,18 +91,50 @@ def test_the_node_rolls_each_wheel_on_its_calibrated_radius():
 def test_amr_twin_run_takes_the_file_and_refuses_a_bad_one_in_one_line(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("wheel_odometry:\n  left_wheel_radius_m: 0.125\n")
-    res = CliRunner().invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--duration-s", "1", "--world", "empty",
-                                   "--odometry", str(bad)])
-    assert res.exit_code == 2 and len(res.output.strip().splitlines()) == 1 and "bad.yaml" in res.output
+    res = CliRunner().invoke(
+        app,
+        [
+            "run",
+            "linear",
+            "--speed-m-s",
+            "0.5",
+            "--duration-s",
+            "1",
+            "--world",
+            "empty",
+            "--odometry",
+            str(bad),
+        ],
+    )
+    assert (
+        res.exit_code == 2
+        and len(res.output.strip().splitlines()) == 1
+        and "bad.yaml" in res.output
+    )
     assert "right_wheel_radius_m" in res.output
     good = tmp_path / "good.yaml"
     good.write_text(text(OdometryCalibration(0.1300, 0.1300, 0.48)))
     outs = []
     for extra in ([], ["--odometry", str(good)]):
-        res = CliRunner().invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--duration-s", "3", "--world", "empty",
-                                       "--firmware", "improved", "--json", *extra])
+        res = CliRunner().invoke(
+            app,
+            [
+                "run",
+                "linear",
+                "--speed-m-s",
+                "0.5",
+                "--duration-s",
+                "3",
+                "--world",
+                "empty",
+                "--firmware",
+                "improved",
+                "--json",
+                *extra,
+            ],
+        )
         assert res.exit_code == 0, res.output
-        outs.append(json.loads(res.output[res.output.index("{"):]))
+        outs.append(json.loads(res.output[res.output.index("{") :]))
     assert _odom_x(outs[1]) == pytest.approx(_odom_x(outs[0]) * 0.1300 / 0.125, rel=2e-3)
 
 

@@ -17,18 +17,42 @@ from amr_twin.recording.run import run_mission
 def _mission(name):
     """(steps, duration_s) of a mission file in experiments/missions or of a named run."""
     if name.endswith(".yaml"):
-        mission = load_mission_file(str(Path(__file__).parents[2] / "experiments" / "missions" / name))
+        mission = load_mission_file(
+            str(Path(__file__).parents[2] / "experiments" / "missions" / name)
+        )
         return list(mission.steps), mission.duration_s
-    linear, angular, stop = (lambda v: Command("linear", speed_m_s=v),
-                             lambda w, icc: Command("angular", speed_deg_s=w, icc_m=icc), Command("stop"))
-    return {"fresh": ([(0, linear(0.4)), (5, stop), (9, linear(1.0)), (14, stop), (17, linear(-0.5)),
-                       (22, stop)], 32.0),
-            "slow": ([(0, linear(0.2)), (7, stop), (13, linear(0.3)), (20, stop)], 35.0),
-            "angular": ([(0, angular(-60, -1)), (8, stop), (14, angular(45, 0)), (20, stop)], 30.0)}[name]
+    linear, angular, stop = (
+        lambda v: Command("linear", speed_m_s=v),
+        lambda w, icc: Command("angular", speed_deg_s=w, icc_m=icc),
+        Command("stop"),
+    )
+    return {
+        "fresh": (
+            [
+                (0, linear(0.4)),
+                (5, stop),
+                (9, linear(1.0)),
+                (14, stop),
+                (17, linear(-0.5)),
+                (22, stop),
+            ],
+            32.0,
+        ),
+        "slow": ([(0, linear(0.2)), (7, stop), (13, linear(0.3)), (20, stop)], 35.0),
+        "angular": ([(0, angular(-60, -1)), (8, stop), (14, angular(45, 0)), (20, stop)], 30.0),
+    }[name]
 
 
-@pytest.mark.parametrize("name, heading_deg", [("stop_start.yaml", 5.0), ("fresh", 5.0), ("slow", 5.0),
-                                               ("angular", 5.0), ("stop_lengths.yaml", 6.0)])
+@pytest.mark.parametrize(
+    "name, heading_deg",
+    [
+        ("stop_start.yaml", 5.0),
+        ("fresh", 5.0),
+        ("slow", 5.0),
+        ("angular", 5.0),
+        ("stop_lengths.yaml", 6.0),
+    ],
+)
 def test_the_odometry_stands_with_the_robot_and_turns_with_it_over_a_restart(name, heading_deg):
     """Thesis firmware, empty world. While the robot stands (from 1 s after its stop) the odometry
     moves under 2 cm and 2 degrees; from a restart to the next stop its heading changes as the

@@ -11,7 +11,13 @@ import pytest
 from amr_twin.ros.bus import Bus
 from amr_twin.base.clock import VirtualClock
 from amr_twin.controllers.path_follower import PathFollowerNode, PurePursuit
-from amr_twin.controllers.route import Route, RouteError, distance_to_path_m, load_route, route_length_m
+from amr_twin.controllers.route import (
+    Route,
+    RouteError,
+    distance_to_path_m,
+    load_route,
+    route_length_m,
+)
 from amr_twin.ros.geometry_messages import Twist
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
@@ -24,8 +30,11 @@ CLEARANCE_M = 0.8
 def _world_boxes(path: Path = WAREHOUSE) -> list[tuple[str, float, float, float, float, float]]:
     """Box footprints of an MJCF world, default classes resolved: (name, x, y, half_x, half_y, yaw_rad)."""
     root = ET.parse(path).getroot()
-    defaults = {d.get("class"): d.find("geom").attrib for d in root.iter("default")
-                if d.get("class") and d.find("geom") is not None}
+    defaults = {
+        d.get("class"): d.find("geom").attrib
+        for d in root.iter("default")
+        if d.get("class") and d.find("geom") is not None
+    }
     boxes = []
     for g in root.find("worldbody").iter("geom"):
         a = {**defaults.get(g.get("class"), {}), **g.attrib}
@@ -46,17 +55,25 @@ def _clearance_m(xy: np.ndarray, boxes) -> np.ndarray:
         c, s = math.cos(yaw), math.sin(yaw)
         dx, dy = xy[:, 0] - cx, xy[:, 1] - cy
         lx, ly = c * dx + s * dy, -s * dx + c * dy
-        best = np.minimum(best, np.hypot(np.maximum(np.abs(lx) - hx, 0), np.maximum(np.abs(ly) - hy, 0)))
+        best = np.minimum(
+            best, np.hypot(np.maximum(np.abs(lx) - hx, 0), np.maximum(np.abs(ly) - hy, 0))
+        )
     return best
 
 
 def _densify(path: np.ndarray, step_m: float = 0.01) -> np.ndarray:
-    parts = [path[i] + np.linspace(0, 1, max(2, int(np.hypot(*(path[i + 1] - path[i])) / step_m)))[:, None]
-             * (path[i + 1] - path[i]) for i in range(len(path) - 1)]
+    parts = [
+        path[i]
+        + np.linspace(0, 1, max(2, int(np.hypot(*(path[i + 1] - path[i])) / step_m)))[:, None]
+        * (path[i + 1] - path[i])
+        for i in range(len(path) - 1)
+    ]
     return np.vstack(parts)
 
 
-def _drive_kinematic(route: Route, dt_s: float = 0.05, t_max_s: float = 200.0, pose=None, **pursuit):
+def _drive_kinematic(
+    route: Route, dt_s: float = 0.05, t_max_s: float = 200.0, pose=None, **pursuit
+):
     """Unicycle driven by PurePursuit: rows (t_s, x_m, y_m, yaw_rad, v, w, progress_m), done."""
     pp = PurePursuit(route, **pursuit)
     x, y, yaw = pose if pose is not None else route.start_xy_yaw
@@ -85,7 +102,12 @@ def test_default_route_is_about_60_m_in_the_warehouse():
 def test_default_route_keeps_clearance_from_every_world_geom():
     boxes = _world_boxes()
     names = {b[0] for b in boxes}
-    assert {"wall_north", "rack_n_beam_low", "rack_s_u0", "pallet_3"} <= names  # the parser saw the world
+    assert {
+        "wall_north",
+        "rack_n_beam_low",
+        "rack_s_u0",
+        "pallet_3",
+    } <= names  # the parser saw the world
     pts = _densify(load_route(DEFAULT_ROUTE).path_xy_m())
     clearance = _clearance_m(pts, boxes)
     assert clearance.min() >= CLEARANCE_M, f"{clearance.min():.3f} m at {pts[clearance.argmin()]}"
@@ -102,9 +124,9 @@ def test_corridor_route_keeps_clearance_and_runs_the_corridor():
     assert len(walls) == 3 and {"rack_s_u0", "pallet_3", "wall_east_n"} <= {b[0] for b in others}
     pts = _densify(route.path_xy_m())
     assert _clearance_m(pts, others).min() >= CLEARANCE_M
-    assert _clearance_m(pts, walls).min() >= 1.0   # the corridor is 2.2 m wide
+    assert _clearance_m(pts, walls).min() >= 1.0  # the corridor is 2.2 m wide
     in_corridor = pts[pts[:, 0] > 10.2]
-    assert np.ptp(in_corridor[:, 0]) > 30.0        # a long straight inside it (and back)
+    assert np.ptp(in_corridor[:, 0]) > 30.0  # a long straight inside it (and back)
     assert 100.0 < route_length_m(route) < 125.0
 
 
@@ -125,8 +147,8 @@ def test_slows_down_before_a_reversal_and_rounds_right_angles_at_speed():
     assert done
     turning = np.flatnonzero((rows[:, 4] == 0.0) & (rows[:, 5] != 0.0))
     first = turning[0]
-    assert rows[first, 1] > 9.0                    # the turn in place is at the reversal
-    assert rows[first - 1, 4] <= 0.15              # ... reached at a crawl, not at 1 m/s
+    assert rows[first, 1] > 9.0  # the turn in place is at the reversal
+    assert rows[first - 1, 4] <= 0.15  # ... reached at a crawl, not at 1 m/s
     assert rows[:first, 4].max() == pytest.approx(1.0)
     # a right angle is rounded at speed, no stop and no turn in place
     square = Route("l", (0.0, 0.0, 0.0), [[10.0, 0.0], [10.0, 10.0]])
@@ -138,21 +160,26 @@ def test_slows_down_before_a_reversal_and_rounds_right_angles_at_speed():
 def test_route_length_counts_the_start():
     route = Route("l", (0.0, 0.0, 0.0), np.array([[3.0, 4.0], [3.0, 0.0]]))
     assert route_length_m(route) == pytest.approx(9.0)
-    assert distance_to_path_m(route, np.array([[1.5, 2.0], [4.0, 2.0], [-1.0, 0.0]])) == pytest.approx([0.0, 1.0, 1.0])
+    assert distance_to_path_m(
+        route, np.array([[1.5, 2.0], [4.0, 2.0], [-1.0, 0.0]])
+    ) == pytest.approx([0.0, 1.0, 1.0])
 
 
-@pytest.mark.parametrize("edit, field", [
-    ({"max_speed_m_s": 1.5}, "max_speed_m_s"),
-    ({"max_speed_m_s": 0}, "max_speed_m_s"),
-    ({"lookahead_m": -1.0}, "lookahead_m"),
-    ({"goal_tolerance_m": ".nan"}, "goal_tolerance_m"),
-    ({"max_angular_rad_s": "fast"}, "max_angular_rad_s"),
-    ({"start_xy_yaw": [0.0, 1.0]}, "start_xy_yaw"),
-    ({"start_xy_yaw": "home"}, "start_xy_yaw"),
-    ({"waypoints_xy_m": [[1.0, 2.0, 3.0]]}, "waypoints_xy_m"),
-    ({"waypoints_xy_m": [[0.0, 0.0]]}, "waypoints_xy_m"),  # same as the start
-    ({"speed": 1.0}, "unknown key 'speed'"),
-])
+@pytest.mark.parametrize(
+    "edit, field",
+    [
+        ({"max_speed_m_s": 1.5}, "max_speed_m_s"),
+        ({"max_speed_m_s": 0}, "max_speed_m_s"),
+        ({"lookahead_m": -1.0}, "lookahead_m"),
+        ({"goal_tolerance_m": ".nan"}, "goal_tolerance_m"),
+        ({"max_angular_rad_s": "fast"}, "max_angular_rad_s"),
+        ({"start_xy_yaw": [0.0, 1.0]}, "start_xy_yaw"),
+        ({"start_xy_yaw": "home"}, "start_xy_yaw"),
+        ({"waypoints_xy_m": [[1.0, 2.0, 3.0]]}, "waypoints_xy_m"),
+        ({"waypoints_xy_m": [[0.0, 0.0]]}, "waypoints_xy_m"),  # same as the start
+        ({"speed": 1.0}, "unknown key 'speed'"),
+    ],
+)
 def test_bad_route_file_gives_one_line_error_naming_the_field(tmp_path, edit, field):
     tree = {"start_xy_yaw": [0.0, 0.0, 0.0], "waypoints_xy_m": [[2.0, 0.0]], **edit}
     text = "\n".join(f"{k}: {v}" for k, v in tree.items())
@@ -195,14 +222,20 @@ def test_non_finite_pose_is_refused():
 
 
 def test_facing_away_it_turns_in_place_toward_the_path():
-    v, w, done = PurePursuit(STRAIGHT).command(0.0, 0.0, math.radians(100))  # path is 100 deg to the right
+    v, w, done = PurePursuit(STRAIGHT).command(
+        0.0, 0.0, math.radians(100)
+    )  # path is 100 deg to the right
     assert v == 0.0 and w == pytest.approx(-1.0) and not done
 
 
 def test_speed_limited_by_yaw_rate_on_a_tight_bearing():
     route = replace(STRAIGHT, max_angular_rad_s=0.5)
-    v, w, _ = PurePursuit(route).command(0.0, 0.0, math.radians(-40))  # 40 deg bearing: curvature 1.6 /m
-    assert abs(w) == pytest.approx(0.5) and v == pytest.approx(0.5 / (2 * math.sin(math.radians(40)) / 0.8))
+    v, w, _ = PurePursuit(route).command(
+        0.0, 0.0, math.radians(-40)
+    )  # 40 deg bearing: curvature 1.6 /m
+    assert abs(w) == pytest.approx(0.5) and v == pytest.approx(
+        0.5 / (2 * math.sin(math.radians(40)) / 0.8)
+    )
 
 
 def test_slows_down_near_the_goal_then_stops_done():
@@ -222,8 +255,13 @@ def test_kinematic_robot_follows_the_default_route_within_limits():
     rows, done = _drive_kinematic(route)
     assert done
     v, w, progress = rows[:, 4], rows[:, 5], rows[:, 6]
-    assert v.max() <= route.max_speed_m_s + 1e-12 and np.abs(w).max() <= route.max_angular_rad_s + 1e-12
-    assert progress[-1] == pytest.approx(route_length_m(route), abs=route.lookahead_m + route.goal_tolerance_m)
+    assert (
+        v.max() <= route.max_speed_m_s + 1e-12
+        and np.abs(w).max() <= route.max_angular_rad_s + 1e-12
+    )
+    assert progress[-1] == pytest.approx(
+        route_length_m(route), abs=route.lookahead_m + route.goal_tolerance_m
+    )
     xte = distance_to_path_m(route, rows[:, 1:3])
     assert xte.max() < 0.35  # corner rounding by the lookahead
     assert _clearance_m(rows[:, 1:3], _world_boxes()).min() > 0.6
@@ -232,8 +270,12 @@ def test_kinematic_robot_follows_the_default_route_within_limits():
 
 def test_progress_is_not_captured_by_a_crossing_branch():
     # a figure-eight: the second diagonal crosses the first at (5, 0)
-    route = Route("eight", (0.0, -2.0, math.radians(22)),
-                  np.array([[10.0, 2.0], [10.0, -2.0], [0.0, 2.0], [0.0, -2.0]]), lookahead_m=0.8)
+    route = Route(
+        "eight",
+        (0.0, -2.0, math.radians(22)),
+        np.array([[10.0, 2.0], [10.0, -2.0], [0.0, 2.0], [0.0, -2.0]]),
+        lookahead_m=0.8,
+    )
     rows, done = _drive_kinematic(route)
     assert done
     progress = rows[:, 6]
@@ -284,9 +326,16 @@ def test_twin_rounds_the_first_rack_corners_without_touching_anything():
     from amr_twin.assembly.twin import Twin, TwinOptions
 
     full = load_route(DEFAULT_ROUTE)
-    route = replace(full, name="corner", start_xy_yaw=(3.0, 0.0, 0.0),
-                    waypoints_xy_m=np.vstack([full.waypoints_xy_m[:2], [[3.0, 5.5]]]))
-    twin = Twin(load_config(), TwinOptions(firmware="improved", world="warehouse", start_xy_yaw=route.start_xy_yaw))
+    route = replace(
+        full,
+        name="corner",
+        start_xy_yaw=(3.0, 0.0, 0.0),
+        waypoints_xy_m=np.vstack([full.waypoints_xy_m[:2], [[3.0, 5.5]]]),
+    )
+    twin = Twin(
+        load_config(),
+        TwinOptions(firmware="improved", world="warehouse", start_xy_yaw=route.start_xy_yaw),
+    )
     attach_recorder(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)
     m, d = twin.physics.model, twin.physics.data
@@ -308,7 +357,7 @@ def test_twin_rounds_the_first_rack_corners_without_touching_anything():
     assert node.done, f"not at the goal after {twin.t_s} s: {s.pose[-1]}"
     assert np.hypot(*(s.pose[-1, :2] - route.waypoints_xy_m[-1])) < 0.35
     xte = distance_to_path_m(route, s.pose[:, :2])
-    assert xte.max() < 0.3 and np.sqrt(np.mean(xte ** 2)) < 0.1
+    assert xte.max() < 0.3 and np.sqrt(np.mean(xte**2)) < 0.1
     assert not touches
     # the inside of both corners is the rack's corner (4.85, 4.15): base_link stays well away
     assert _clearance_m(s.pose[:, :2], _world_boxes()).min() > 1.0

@@ -8,9 +8,15 @@ import pytest
 
 from amr_twin.ros.bus import Bus
 from amr_twin.base.clock import VirtualClock
-from amr_twin.controllers.wheel_command import (MAX_RPM, MIN_RPM, WheelCommandClient,
-                                       WheelCommandRequest, WheelCommandService,
-                                       wheel_Command_Client, wheel_Command_Service)
+from amr_twin.controllers.wheel_command import (
+    MAX_RPM,
+    MIN_RPM,
+    WheelCommandClient,
+    WheelCommandRequest,
+    WheelCommandService,
+    wheel_Command_Client,
+    wheel_Command_Service,
+)
 from amr_twin.model.config import load_config
 
 WHEEL = load_config().wheel
@@ -131,11 +137,17 @@ def test_out_of_range_is_a_value_error(node, caplog):
     assert published == []
 
 
-@pytest.mark.parametrize("call", [lambda c: c.linear(math.nan), lambda c: c.linear(math.inf),
-                                  lambda c: c.angular(math.nan, 1.0),
-                                  lambda c: c.angular(60.0, -math.inf),
-                                  lambda c: c.motor("left", "forward", math.nan),
-                                  lambda c: c.wheels(0.1, math.nan)])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda c: c.linear(math.nan),
+        lambda c: c.linear(math.inf),
+        lambda c: c.angular(math.nan, 1.0),
+        lambda c: c.angular(60.0, -math.inf),
+        lambda c: c.motor("left", "forward", math.nan),
+        lambda c: c.wheels(0.1, math.nan),
+    ],
+)
 def test_non_finite_values_are_refused(node, call):
     client, published = node
     assert call(client) == 1
@@ -173,8 +185,9 @@ def test_constants_are_constructor_arguments():
     WheelCommandService(bus)
     published = []
     bus.subscribe("wheel_Command", lambda msg: published.append(list(msg.data)))
-    client = WheelCommandClient(bus, wheel_radius_m=0.1, half_separation_m=0.3,
-                                max_rpm=50.0, float32_request=False)
+    client = WheelCommandClient(
+        bus, wheel_radius_m=0.1, half_separation_m=0.3, max_rpm=50.0, float32_request=False
+    )
     assert client.linear(0.5) == 0
     assert published[0][1] == pytest.approx(0.5 * 60 / (math.pi * 0.2), rel=1e-12)
     assert client.angular(60.0, 1.0) == 1  # 1.3 * pi/3 m/s -> 65 RPM > 50

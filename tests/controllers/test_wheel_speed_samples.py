@@ -13,12 +13,25 @@ S = 1_000_000  # us per s
 
 def _samples(**options):
     """A WheelSpeedSamples on fresh profiles (twin defaults) and the profiles, left and right."""
-    published = PublishedPose(lambda left, right: (0.5 * (left + right), right - left), 10_000,
-                              (math.inf, math.inf), 0.1, 0.4)
+    published = PublishedPose(
+        lambda left, right: (0.5 * (left + right), right - left),
+        10_000,
+        (math.inf, math.inf),
+        0.1,
+        0.4,
+    )
     published.restart(0, (0.0, 0.0, 0.0), (0.0, 0.0))
-    kw = dict(signed_input=False, speed_samples="window", revolutions_per_sample=1.0, sample_latency_us=0,
-              brake_stop_us=620_000, brake_friction_rpm_s=13.0, start_us=500_000, sample_gap_us=450_000,
-              rest_rpm=10.0)
+    kw = dict(
+        signed_input=False,
+        speed_samples="window",
+        revolutions_per_sample=1.0,
+        sample_latency_us=0,
+        brake_stop_us=620_000,
+        brake_friction_rpm_s=13.0,
+        start_us=500_000,
+        sample_gap_us=450_000,
+        rest_rpm=10.0,
+    )
     return WheelSpeedSamples(published, 0, **{**kw, **options}), published.profiles
 
 
@@ -29,7 +42,11 @@ def _rpm(profile, t_s):
 def test_a_start_moves_at_the_commanded_speed_until_its_first_sample():
     samples, (left, right) = _samples()
     samples.command((1, 1), (30.0, 20.0), 0)
-    assert _rpm(left, 0.25) == pytest.approx(15.0) and _rpm(left, 1.0) == 30.0 and _rpm(right, 1.0) == 20.0
+    assert (
+        _rpm(left, 0.25) == pytest.approx(15.0)
+        and _rpm(left, 1.0) == 30.0
+        and _rpm(right, 1.0) == 20.0
+    )
     assert left.revolutions(0, 2 * S) == pytest.approx(30.0 * 1.75 / 60)  # 0.5 s ramp, then held
 
 
@@ -94,7 +111,9 @@ def test_a_restart_published_before_its_ramp_ends_goes_on_to_the_commanded_speed
     samples.sample(0, 60.0, 1 * S)
     samples.command((0, 0), (0.0, 0.0), int(1.9 * S))
     samples.command((1, 1), (60.0, 60.0), 5 * S)
-    samples.sample(0, 60.0 / 4.1, int(5.3 * S))  # one revolution from 1.2 s: a little of it after 5 s
+    samples.sample(
+        0, 60.0 / 4.1, int(5.3 * S)
+    )  # one revolution from 1.2 s: a little of it after 5 s
     after = left.revolutions(5 * S, 5.3 * S)
     assert 0.0 < after < 0.1
     assert _rpm(left, 5.3) == pytest.approx(2 * after * 60 / 0.3)  # a linear start from rest

@@ -6,11 +6,21 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.estimation.ekf_model import (N_STATE, W, YAW, predict_mean, process_noise, range_model,
-                                            transition_jacobian)
+from amr_twin.estimation.ekf_model import (
+    N_STATE,
+    W,
+    YAW,
+    predict_mean,
+    process_noise,
+    range_model,
+    transition_jacobian,
+)
 
-STATES = [np.array([1.0, -2.0, 0.3, 0.8, 0.5, 0.01]), np.array([-3.0, 4.0, 3.1, -0.4, -1.2, -0.02]),
-          np.array([0.0, 0.0, -1.5, 0.0, 0.0, 0.0])]
+STATES = [
+    np.array([1.0, -2.0, 0.3, 0.8, 0.5, 0.01]),
+    np.array([-3.0, 4.0, 3.1, -0.4, -1.2, -0.02]),
+    np.array([0.0, 0.0, -1.5, 0.0, 0.0, 0.0]),
+]
 
 
 def _predicted(x: np.ndarray, dt_s: float) -> np.ndarray:
@@ -23,17 +33,23 @@ def _predicted(x: np.ndarray, dt_s: float) -> np.ndarray:
 def test_transition_jacobian_matches_finite_differences(x):
     dt_s, eps = 0.02, 1e-6
     F = transition_jacobian(x, dt_s)
-    numeric = np.column_stack([(_predicted(x + eps * e, dt_s) - _predicted(x - eps * e, dt_s)) / (2 * eps)
-                               for e in np.eye(N_STATE)])
+    numeric = np.column_stack(
+        [
+            (_predicted(x + eps * e, dt_s) - _predicted(x - eps * e, dt_s)) / (2 * eps)
+            for e in np.eye(N_STATE)
+        ]
+    )
     np.testing.assert_allclose(F, numeric, atol=1e-8)
 
 
 def test_constant_turn_rate_arc():
-    x = np.array([0.0, 0.0, 0.0, 1.0, 0.5, 0.0])      # 1 m/s, 0.5 rad/s for 0.1 s
+    x = np.array([0.0, 0.0, 0.0, 1.0, 0.5, 0.0])  # 1 m/s, 0.5 rad/s for 0.1 s
     y = _predicted(x, 0.1)
     assert y[YAW] == pytest.approx(0.05)
-    assert y[0] == pytest.approx(0.1 * math.cos(0.025)) and y[1] == pytest.approx(0.1 * math.sin(0.025))
-    assert y[W] == 0.5                                   # velocities are held
+    assert y[0] == pytest.approx(0.1 * math.cos(0.025)) and y[1] == pytest.approx(
+        0.1 * math.sin(0.025)
+    )
+    assert y[W] == 0.5  # velocities are held
 
 
 @pytest.mark.parametrize("x", STATES)
@@ -44,8 +60,14 @@ def test_range_jacobian_matches_finite_differences(x):
     tag_world = x[:2] + np.array([c * tag[0] - s * tag[1], s * tag[0] + c * tag[1]])
     assert r == pytest.approx(math.sqrt(np.sum((anchor - tag_world) ** 2) + dz * dz))
     eps = 1e-6
-    numeric = [(range_model(x + eps * e, anchor, tag, dz)[0] - range_model(x - eps * e, anchor, tag, dz)[0])
-               / (2 * eps) for e in np.eye(N_STATE)]
+    numeric = [
+        (
+            range_model(x + eps * e, anchor, tag, dz)[0]
+            - range_model(x - eps * e, anchor, tag, dz)[0]
+        )
+        / (2 * eps)
+        for e in np.eye(N_STATE)
+    ]
     np.testing.assert_allclose(np.ravel(H), numeric, atol=1e-7)
 
 

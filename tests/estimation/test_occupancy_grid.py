@@ -28,9 +28,17 @@ def square_ranges(x_m, y_m, world_angle_rad):
 
 def make_scan(ranges) -> LaserScan:
     inc = 2 * math.pi / N_BEAMS
-    return LaserScan(header=Header(0, Time.from_sec(1.0), "laser"), angle_min=-math.pi,
-                     angle_max=-math.pi + inc * (N_BEAMS - 1), angle_increment=inc, time_increment=0.0005,
-                     scan_time=0.18, range_min=0.15, range_max=12.0, ranges=np.asarray(ranges, np.float32))
+    return LaserScan(
+        header=Header(0, Time.from_sec(1.0), "laser"),
+        angle_min=-math.pi,
+        angle_max=-math.pi + inc * (N_BEAMS - 1),
+        angle_increment=inc,
+        time_increment=0.0005,
+        scan_time=0.18,
+        range_min=0.15,
+        range_max=12.0,
+        ranges=np.asarray(ranges, np.float32),
+    )
 
 
 def room_scan(poses: np.ndarray) -> LaserScan:
@@ -55,14 +63,14 @@ def test_square_room_walls_free_inside_unknown_outside():
         grid.insert_scan(pose, room_scan(np.tile(pose, (N_BEAMS, 1))))
     assert grid.log_odds.shape == (120, 120)
     occ = grid.cell_centres_xy(grid.occupied())
-    assert len(occ) > 4 * 2 * HALF_M / RES_M * 0.9                    # the four walls, nearly every cell
-    assert wall_distance_m(occ).max() <= RES_M                          # each within one cell of a wall
+    assert len(occ) > 4 * 2 * HALF_M / RES_M * 0.9  # the four walls, nearly every cell
+    assert wall_distance_m(occ).max() <= RES_M  # each within one cell of a wall
     p = grid.probabilities()
     xy = grid.cell_centres_xy(np.ones_like(p, bool))
     inner = np.max(np.abs(xy), axis=1) < HALF_M - 2 * RES_M
     outer = np.max(np.abs(xy), axis=1) > HALF_M + 2 * RES_M
     assert np.all(p.reshape(-1)[inner] < FREE_THRESH)
-    assert np.all(grid.log_odds.reshape(-1)[outer] == 0.0)             # never seen: unknown
+    assert np.all(grid.log_odds.reshape(-1)[outer] == 0.0)  # never seen: unknown
 
 
 def test_each_scan_updates_a_cell_once_hits_win_and_log_odds_are_clamped():
@@ -89,7 +97,9 @@ def test_beams_without_return_mark_nothing_unless_asked():
     grid = new_grid(free_on_no_return=True)
     grid.insert_scan((0.0, 0.0, 0.0), make_scan(ranges))
     assert not grid.occupied().any()
-    assert (grid.log_odds < 0).sum() > 0.9 * math.pi * 3.0 ** 2 / RES_M ** 2  # the disc inside the 6 m grid
+    assert (
+        grid.log_odds < 0
+    ).sum() > 0.9 * math.pi * 3.0**2 / RES_M**2  # the disc inside the 6 m grid
 
 
 def test_beam_poses_of_a_moving_laser_straighten_the_walls():
@@ -128,18 +138,31 @@ def test_save_writes_map_server_files_that_the_world_loader_reads(tmp_path):
     for pose in ((0.0, 0.0, 0.0), (0.5, 0.5, 1.0)) * 2:  # 4 misses make a cell free (p < 0.196)
         grid.insert_scan(pose, room_scan(np.tile(pose, (N_BEAMS, 1))))
     yaml_path, pgm_path, png_path = grid.save(tmp_path / "maps" / "room.v1")
-    assert (yaml_path.name, pgm_path.name, png_path.name) == ("room.v1.yaml", "room.v1.pgm", "room.v1.png")
+    assert (yaml_path.name, pgm_path.name, png_path.name) == (
+        "room.v1.yaml",
+        "room.v1.pgm",
+        "room.v1.png",
+    )
     meta = yaml.safe_load(yaml_path.read_text())
-    assert meta == {"image": "room.v1.pgm", "resolution": RES_M, "origin": [-3.0, -3.0, 0.0],
-                    "mode": "trinary", "negate": 0,
-                    "occupied_thresh": 0.65, "free_thresh": 0.196}
+    assert meta == {
+        "image": "room.v1.pgm",
+        "resolution": RES_M,
+        "origin": [-3.0, -3.0, 0.0],
+        "mode": "trinary",
+        "negate": 0,
+        "occupied_thresh": 0.65,
+        "free_thresh": 0.196,
+    }
     image = read_pgm(pgm_path)
     assert set(np.unique(image).tolist()) == {0, 205, 254}
     loaded = load_map(yaml_path)
-    np.testing.assert_array_equal(loaded.occupied[::-1], grid.occupied())  # image top row = highest y
+    np.testing.assert_array_equal(
+        loaded.occupied[::-1], grid.occupied()
+    )  # image top row = highest y
     assert loaded.resolution_m == RES_M and loaded.origin_xyyaw == (-3.0, -3.0, 0.0)
     assert png_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     import matplotlib.image
+
     assert matplotlib.image.imread(png_path).shape[:2] == image.shape
 
 
@@ -152,7 +175,15 @@ def warehouse_scans():
     from amr_twin.model.world_geometry import scan_plane_boxes
 
     cfg = load_config()
-    twin = Twin(cfg, TwinOptions(sensors=("imu", "lidar"), firmware="improved", world="warehouse", start_xy_yaw=(5.5, 0.5, 0.0)))
+    twin = Twin(
+        cfg,
+        TwinOptions(
+            sensors=("imu", "lidar"),
+            firmware="improved",
+            world="warehouse",
+            start_xy_yaw=(5.5, 0.5, 0.0),
+        ),
+    )
     attach_recorder(twin)
     scans = []
     twin.bus.subscribe("scan", scans.append)
@@ -176,7 +207,9 @@ def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_pa
     grid = OccupancyGrid(RES_M, 21.0, 15.0, (-10.5, -7.5))
     ends = []
     for scan in scans:
-        beams = se2.compose(se2.interpolate(t_true, pose_true, beam_times_s(scan)), np.array(laser_xy_yaw))
+        beams = se2.compose(
+            se2.interpolate(t_true, pose_true, beam_times_s(scan)), np.array(laser_xy_yaw)
+        )
         grid.insert_scan(None, scan, beam_poses=beams)
         r = np.asarray(scan.ranges, float)
         ok = np.isfinite(r)
@@ -185,10 +218,10 @@ def test_map_from_true_poses_lies_on_the_warehouse_walls(warehouse_scans, tmp_pa
     assert len(scans) >= 55
     yaml_path, _, _ = grid.save(tmp_path / "warehouse")
     loaded = load_map(yaml_path)
-    occ = grid.cell_centres_xy(loaded.occupied[::-1])               # what map_server would load
+    occ = grid.cell_centres_xy(loaded.occupied[::-1])  # what map_server would load
     assert len(occ) > 1000
     dist_cells = distance_to_boxes_m(occ, boxes) / RES_M
-    assert np.mean(dist_cells <= 2.0) >= 0.99                        # walls within 2 cells
+    assert np.mean(dist_cells <= 2.0) >= 0.99  # walls within 2 cells
     # the surfaces seen are covered: every true beam end point has an occupied cell within 2 cells
     from scipy.spatial import cKDTree
 

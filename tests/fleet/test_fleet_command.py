@@ -11,23 +11,49 @@ import pytest
 CLI = [sys.executable, "-c", "from amr_twin.cli.main import main; main()", "fleet"]
 
 
-@pytest.mark.parametrize("args, says", [
-    (["--robots", "2"], "--robots 2: only 1 for now (the multi-robot world is not built yet)"),
-    (["--vda5050", "http://localhost:1883"], "--vda5050 'http://localhost:1883': expected mqtt://HOST:PORT"),
-    (["--interface", "u/agv"], "--interface 'u/agv': only letters, digits and _ . : - are allowed"),
-    (["--starts", "1,2"], "--starts '1,2': expected X_M,Y_M,YAW_DEG"),
-    (["--rate", "-1"], "--rate -1: must be a finite number in [0, 1000]"),
-])
+@pytest.mark.parametrize(
+    "args, says",
+    [
+        (["--robots", "2"], "--robots 2: only 1 for now (the multi-robot world is not built yet)"),
+        (
+            ["--vda5050", "http://localhost:1883"],
+            "--vda5050 'http://localhost:1883': expected mqtt://HOST:PORT",
+        ),
+        (
+            ["--interface", "u/agv"],
+            "--interface 'u/agv': only letters, digits and _ . : - are allowed",
+        ),
+        (["--starts", "1,2"], "--starts '1,2': expected X_M,Y_M,YAW_DEG"),
+        (["--rate", "-1"], "--rate -1: must be a finite number in [0, 1000]"),
+    ],
+)
 def test_bad_options_are_refused_in_one_line(args, says):
     done = subprocess.run(CLI + args, capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
-    assert done.stderr.strip().splitlines() == [f"error: {says}" + done.stderr.split(says, 1)[1].rstrip()]
+    assert done.stderr.strip().splitlines() == [
+        f"error: {says}" + done.stderr.split(says, 1)[1].rstrip()
+    ]
 
 
 def test_a_short_run_on_the_embedded_broker_reports_what_it_sent():
     pytest.importorskip("amqtt")
-    done = subprocess.run(CLI + ["--world", "warehouse", "--starts", "-6,0,0", "--duration-s", "2", "--rate", "0",
-                                 "--json"], capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        CLI
+        + [
+            "--world",
+            "warehouse",
+            "--starts",
+            "-6,0,0",
+            "--duration-s",
+            "2",
+            "--rate",
+            "0",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     out = json.loads(done.stdout)
     assert out["embedded_broker"] and out["serialNumber"] == "amr-1"

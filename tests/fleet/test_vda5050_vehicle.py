@@ -15,7 +15,7 @@ pytest.importorskip("paho.mqtt")
 from vda_master import Master, edge, instant, node, order, validate  # noqa: E402
 
 VEHICLE_TOPICS = ("state", "visualization", "connection", "factsheet")
-START = (-6.0, 0.0, 0.0)   # the warehouse's central aisle, its west end
+START = (-6.0, 0.0, 0.0)  # the warehouse's central aisle, its west end
 
 
 @pytest.fixture
@@ -24,9 +24,11 @@ def vehicle(request):
     from amr_twin.model.config import load_config
 
     seed = getattr(request, "param", 0)
-    session = FleetSession(load_config(), FleetOptions(world="warehouse", start_xy_yaw=START, rate=0, seed=seed))
+    session = FleetSession(
+        load_config(), FleetOptions(world="warehouse", start_xy_yaw=START, rate=0, seed=seed)
+    )
     master = Master(session.url)
-    session.run(2.5)   # the EKF's rest calibration, the vehicle localised
+    session.run(2.5)  # the EKF's rest calibration, the vehicle localised
     yield session, master
     master.close()
     session.close()
@@ -54,14 +56,18 @@ def last_state(session) -> dict:
 
 
 def settle_and_check_schemas(session, master) -> None:
-    time.sleep(0.3)   # the broker delivers what is in flight
+    time.sleep(0.3)  # the broker delivers what is in flight
     assert master.of("state") and master.of("visualization")
     for subtopic, msg in master.received:
         if subtopic in VEHICLE_TOPICS:
             validate(subtopic, msg)
 
 
-TWO_NODES = order("o1", [node("n0", 0, -6.0, 0.0), node("n1", 2, -3.0, 0.0, theta=0.0)], [edge("e1", 1, "n0", "n1")])
+TWO_NODES = order(
+    "o1",
+    [node("n0", 0, -6.0, 0.0), node("n1", 2, -3.0, 0.0, theta=0.0)],
+    [edge("e1", 1, "n0", "n1")],
+)
 
 
 @pytest.mark.parametrize("vehicle", [0, 1], indirect=True)
@@ -69,12 +75,20 @@ def test_a_two_node_order_ends_at_the_last_node_and_every_message_is_valid(vehic
     session, master = vehicle
     deliver(session, master, "order", TWO_NODES)
     deliver(session, master, "instantActions", instant("fs", "factsheetRequest"))
-    run_until(session, lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"], 40)
+    run_until(
+        session,
+        lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"],
+        40,
+    )
     x, y, _yaw = session.true_pose()
     assert math.hypot(x + 3.0, y) < 0.3, (x, y)
     state = last_state(session)
-    assert (state["orderId"], state["lastNodeSequenceId"], state["nodeStates"], state["edgeStates"]) == \
-        ("o1", 2, [], [])
+    assert (
+        state["orderId"],
+        state["lastNodeSequenceId"],
+        state["nodeStates"],
+        state["edgeStates"],
+    ) == ("o1", 2, [], [])
     assert state["errors"] == []
     settle_and_check_schemas(session, master)
     assert master.of("factsheet") and master.of("connection")[-1]["connectionState"] == "ONLINE"
@@ -84,7 +98,9 @@ def test_a_two_node_order_ends_at_the_last_node_and_every_message_is_valid(vehic
 
 def test_cancel_order_stops_the_robot_short_of_the_goal(vehicle):
     session, master = vehicle
-    far = order("o2", [node("n0", 0, -6.0, 0.0), node("n1", 2, 4.0, 0.0)], [edge("e1", 1, "n0", "n1")])
+    far = order(
+        "o2", [node("n0", 0, -6.0, 0.0), node("n1", 2, 4.0, 0.0)], [edge("e1", 1, "n0", "n1")]
+    )
     deliver(session, master, "order", far)
     run_until(session, lambda: session.true_pose()[0] > -5.0, 20)
     deliver(session, master, "instantActions", instant("c1", "cancelOrder"))
@@ -92,12 +108,14 @@ def test_cancel_order_stops_the_robot_short_of_the_goal(vehicle):
     state = last_state(session)
     x_stop = session.true_pose()[0]
     session.run(2.0)
-    assert abs(session.true_pose()[0] - x_stop) < 0.02          # it stands
-    assert x_stop < 1.0                                         # short of the goal 4 m on
+    assert abs(session.true_pose()[0] - x_stop) < 0.02  # it stands
+    assert x_stop < 1.0  # short of the goal 4 m on
     status = {a["actionId"]: a["actionStatus"] for a in state["actionStates"]}
     assert status["c1"] == "FINISHED" and not state["driving"]
     assert (state["orderId"], state["nodeStates"], state["edgeStates"]) == ("o2", [], [])
-    deliver(session, master, "instantActions", instant("c2", "cancelOrder"))   # nothing left to cancel
+    deliver(
+        session, master, "instantActions", instant("c2", "cancelOrder")
+    )  # nothing left to cancel
     state = last_state(session)
     assert {a["actionId"]: a["actionStatus"] for a in state["actionStates"]}["c2"] == "FAILED"
     assert [e["errorType"] for e in state["errors"]] == ["noOrderToCancel"]
@@ -114,7 +132,11 @@ def test_start_pause_holds_the_robot_and_stop_pause_resumes_the_order(vehicle):
     session.run(3.0)
     state = last_state(session)
     assert abs(session.true_pose()[0] - x_paused) < 0.02 and x_paused < -3.5
-    assert state["paused"] and not state["driving"] and [n["nodeId"] for n in state["nodeStates"]] == ["n1"]
+    assert (
+        state["paused"]
+        and not state["driving"]
+        and [n["nodeId"] for n in state["nodeStates"]] == ["n1"]
+    )
     assert {a["actionId"]: a["actionStatus"] for a in state["actionStates"]}["p1"] == "FINISHED"
     deliver(session, master, "instantActions", instant("p2", "stopPause"))
     run_until(session, lambda: last_state(session)["lastNodeId"] == "n1", 30)
@@ -125,39 +147,67 @@ def test_start_pause_holds_the_robot_and_stop_pause_resumes_the_order(vehicle):
 
 def test_bad_orders_are_answered_with_errors_in_the_state_and_a_good_one_is_still_driven(vehicle):
     session, master = vehicle
-    unknown = order("bad", [node("n0", 0, -6.0, 0.0), node("n1", 2, -3.0, 0.0)], [edge("e1", 1, "n0", "nX")])
+    unknown = order(
+        "bad", [node("n0", 0, -6.0, 0.0), node("n1", 2, -3.0, 0.0)], [edge("e1", 1, "n0", "nX")]
+    )
     deliver(session, master, "order", unknown, header_id=5)
     errors = last_state(session)["errors"]
     assert [e["errorType"] for e in errors] == ["validationError"]
     assert {"referenceKey": "endNodeId", "referenceValue": "nX"} in errors[0]["errorReferences"]
-    deliver(session, master, "order", TWO_NODES, header_id=3)       # older than the last order message
+    deliver(session, master, "order", TWO_NODES, header_id=3)  # older than the last order message
     errors = last_state(session)["errors"]
     assert [e["errorType"] for e in errors] == ["validationError"] * 2
     assert {"referenceKey": "headerId", "referenceValue": "3"} in errors[1]["errorReferences"]
     assert last_state(session)["orderId"] == "" and not session.adapter.nodes
     deliver(session, master, "order", TWO_NODES, header_id=6)
     assert last_state(session)["errors"] == [] and last_state(session)["orderId"] == "o1"
-    run_until(session, lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"], 40)
+    run_until(
+        session,
+        lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"],
+        40,
+    )
     assert math.hypot(session.true_pose()[0] + 3.0, session.true_pose()[1]) < 0.3
     settle_and_check_schemas(session, master)
 
 
 def test_the_horizon_waits_for_an_order_update_stitched_at_the_last_base_node(vehicle):
     session, master = vehicle
-    first = order("o3", [node("n0", 0, -6.0, 0.0), node("n1", 2, -4.0, 0.0), node("n2", 4, -2.0, 0.0, released=False)],
-                  [edge("e1", 1, "n0", "n1"), edge("e2", 3, "n1", "n2", released=False)])
+    first = order(
+        "o3",
+        [
+            node("n0", 0, -6.0, 0.0),
+            node("n1", 2, -4.0, 0.0),
+            node("n2", 4, -2.0, 0.0, released=False),
+        ],
+        [edge("e1", 1, "n0", "n1"), edge("e2", 3, "n1", "n2", released=False)],
+    )
     deliver(session, master, "order", first)
-    run_until(session, lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"], 30)
+    run_until(
+        session,
+        lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"],
+        30,
+    )
     session.run(2.0)
     state = last_state(session)
     assert state["newBaseRequest"] and [n["nodeId"] for n in state["nodeStates"]] == ["n2"]
-    assert math.hypot(session.true_pose()[0] + 4.0, session.true_pose()[1]) < 0.3   # waits at n1
-    wrong = order("o3", [node("n0", 0, -6.0, 0.0), node("n2", 2, -2.0, 0.0)], [edge("e2", 1, "n0", "n2")], 1)
+    assert math.hypot(session.true_pose()[0] + 4.0, session.true_pose()[1]) < 0.3  # waits at n1
+    wrong = order(
+        "o3", [node("n0", 0, -6.0, 0.0), node("n2", 2, -2.0, 0.0)], [edge("e2", 1, "n0", "n2")], 1
+    )
     deliver(session, master, "order", wrong)
     assert [e["errorType"] for e in last_state(session)["errors"]] == ["orderUpdateError"]
-    update = order("o3", [node("n1", 2, -4.0, 0.0), node("n2", 4, -2.0, 0.0, theta=0.0)], [edge("e2", 3, "n1", "n2")], 2)
+    update = order(
+        "o3",
+        [node("n1", 2, -4.0, 0.0), node("n2", 4, -2.0, 0.0, theta=0.0)],
+        [edge("e2", 3, "n1", "n2")],
+        2,
+    )
     deliver(session, master, "order", update)
-    run_until(session, lambda: last_state(session)["lastNodeId"] == "n2" and not last_state(session)["driving"], 30)
+    run_until(
+        session,
+        lambda: last_state(session)["lastNodeId"] == "n2" and not last_state(session)["driving"],
+        30,
+    )
     state = last_state(session)
     assert (state["orderUpdateId"], state["lastNodeSequenceId"], state["errors"]) == (2, 4, [])
     assert math.hypot(session.true_pose()[0] + 2.0, session.true_pose()[1]) < 0.3
@@ -166,7 +216,7 @@ def test_the_horizon_waits_for_an_order_update_stitched_at_the_last_base_node(ve
 
 def test_a_broken_connection_leaves_the_last_will(vehicle):
     session, master = vehicle
-    session.transport.client.socket().close()     # no DISCONNECT: the broker sends the will
+    session.transport.client.socket().close()  # no DISCONNECT: the broker sends the will
     deadline = time.monotonic() + 10
     while not any(m["connectionState"] == "CONNECTIONBROKEN" for m in master.of("connection")):
         assert time.monotonic() < deadline
@@ -188,17 +238,28 @@ def test_an_order_through_debians_mosquitto(tmp_path):
     if exe is None:
         pytest.skip("mosquitto is not installed (apt-get install mosquitto)")
     port = free_port()
-    broker = subprocess.Popen([exe, "-p", str(port)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    broker = subprocess.Popen(
+        [exe, "-p", str(port)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     try:
         time.sleep(0.5)
-        session = FleetSession(load_config(), FleetOptions(world="warehouse", start_xy_yaw=START, rate=0,
-                                                           url=f"mqtt://127.0.0.1:{port}"))
+        session = FleetSession(
+            load_config(),
+            FleetOptions(
+                world="warehouse", start_xy_yaw=START, rate=0, url=f"mqtt://127.0.0.1:{port}"
+            ),
+        )
         master = Master(session.url)
         try:
             session.run(2.5)
             deliver(session, master, "order", TWO_NODES)
-            run_until(session, lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"],
-                      40)
+            run_until(
+                session,
+                lambda: (
+                    last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"]
+                ),
+                40,
+            )
             assert math.hypot(session.true_pose()[0] + 3.0, session.true_pose()[1]) < 0.3
             settle_and_check_schemas(session, master)
         finally:

@@ -12,8 +12,13 @@ import jsonschema
 import paho.mqtt.client as mqtt
 
 SCHEMAS = Path(__file__).parent / "vda5050_schemas"
-FILES = {"state": "state.schema", "visualization": "visualization.schema", "connection": "connection.schema",
-         "order": "order.schema", "factsheet": "factsheet.json"}
+FILES = {
+    "state": "state.schema",
+    "visualization": "visualization.schema",
+    "connection": "connection.schema",
+    "order": "order.schema",
+    "factsheet": "factsheet.json",
+}
 BASE = "uagv/v2/amr-twin/amr-1/"
 
 
@@ -35,9 +40,12 @@ class Master:
         host, port = url.removeprefix("mqtt://").split(":")
         self.received: list[tuple[str, dict]] = []
         self._ids = {"order": 0, "instantActions": 0}
-        self.client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=f"master-{time.monotonic_ns()}")
-        self.client.on_message = lambda _c, _u, m: self.received.append((m.topic.rsplit("/", 1)[1],
-                                                                          json.loads(m.payload)))
+        self.client = mqtt.Client(
+            mqtt.CallbackAPIVersion.VERSION2, client_id=f"master-{time.monotonic_ns()}"
+        )
+        self.client.on_message = lambda _c, _u, m: self.received.append(
+            (m.topic.rsplit("/", 1)[1], json.loads(m.payload))
+        )
         self.client.connect(host, int(port))
         self.client.loop_start()
         self.client.subscribe(BASE + "#", qos=1)
@@ -47,8 +55,14 @@ class Master:
         """Publish ``body`` with a header (``header_id`` None: the next one of the topic)."""
         n = self._ids[subtopic] if header_id is None else header_id
         self._ids[subtopic] = max(self._ids[subtopic], n) + 1
-        msg = {"headerId": n, "timestamp": "2026-12-07T10:00:00.00Z", "version": "2.0.0",
-               "manufacturer": "amr-twin", "serialNumber": "amr-1", **body}
+        msg = {
+            "headerId": n,
+            "timestamp": "2026-12-07T10:00:00.00Z",
+            "version": "2.0.0",
+            "manufacturer": "amr-twin",
+            "serialNumber": "amr-1",
+            **body,
+        }
         self.client.publish(BASE + subtopic, json.dumps(msg), qos=1).wait_for_publish(5)
         return msg
 
@@ -60,15 +74,35 @@ class Master:
         self.client.loop_stop()
 
 
-def node(node_id: str, seq: int, x: float, y: float, theta=None, released: bool = True, map_id: str = "warehouse",
-         actions=()) -> dict:
+def node(
+    node_id: str,
+    seq: int,
+    x: float,
+    y: float,
+    theta=None,
+    released: bool = True,
+    map_id: str = "warehouse",
+    actions=(),
+) -> dict:
     pos = {"x": x, "y": y, "mapId": map_id, **({} if theta is None else {"theta": theta})}
-    return {"nodeId": node_id, "sequenceId": seq, "released": released, "nodePosition": pos, "actions": list(actions)}
+    return {
+        "nodeId": node_id,
+        "sequenceId": seq,
+        "released": released,
+        "nodePosition": pos,
+        "actions": list(actions),
+    }
 
 
 def edge(edge_id: str, seq: int, start: str, end: str, released: bool = True) -> dict:
-    return {"edgeId": edge_id, "sequenceId": seq, "released": released, "startNodeId": start, "endNodeId": end,
-            "actions": []}
+    return {
+        "edgeId": edge_id,
+        "sequenceId": seq,
+        "released": released,
+        "startNodeId": start,
+        "endNodeId": end,
+        "actions": [],
+    }
 
 
 def order(order_id: str, nodes: list, edges: list, update_id: int = 0) -> dict:

@@ -13,7 +13,10 @@ from amr_twin.recording.rerun_capture import attach
 from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
-STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
+STEPS = [
+    (0.0, Command("linear", speed_m_s=0.5)),
+    (2.5, Command("angular", speed_deg_s=-60.0, icc_m=-1.0)),
+]
 
 
 def _run(options, live: bool):
@@ -21,7 +24,9 @@ def _run(options, live: bool):
     twin = Twin(cfg, options)
     capture = attach(twin)
     session = None
-    if live:  # the whole live session: pacer (unpaced), Foxglove server and its samplers, diff-drive node
+    if (
+        live
+    ):  # the whole live session: pacer (unpaced), Foxglove server and its samplers, diff-drive node
         from amr_twin.live.session import LiveOptions, LiveSession
 
         session = LiveSession(twin, LiveOptions(port=0, rate=0.0), say=lambda _line: None)
@@ -32,9 +37,14 @@ def _run(options, live: bool):
     return result.series, capture
 
 
-@pytest.mark.parametrize("options", [TwinOptions(world="empty", sensors=("imu", "lidar")),
-                                     TwinOptions(world="empty", firmware="improved", seed=3)],
-                         ids=["faithful+sensors", "improved"])
+@pytest.mark.parametrize(
+    "options",
+    [
+        TwinOptions(world="empty", sensors=("imu", "lidar")),
+        TwinOptions(world="empty", firmware="improved", seed=3),
+    ],
+    ids=["faithful+sensors", "improved"],
+)
 def test_a_live_run_computes_what_a_plain_run_does(options):
     plain, plain_capture = _run(options, live=False)
     live, live_capture = _run(options, live=True)
@@ -65,7 +75,9 @@ def test_calls_run_at_ticks_in_the_twin_thread_and_cannot_stop_it(caplog):
     futures = []
 
     def other_thread():
-        futures.append(pacer.post(lambda: seen.append((threading.current_thread().name, twin.clock.now_us))))
+        futures.append(
+            pacer.post(lambda: seen.append((threading.current_thread().name, twin.clock.now_us)))
+        )
         futures.append(pacer.post(lambda: 1 / 0))
         futures.append(pacer.post(lambda: twin.client.linear(0.4)))
 
@@ -74,7 +86,9 @@ def test_calls_run_at_ticks_in_the_twin_thread_and_cannot_stop_it(caplog):
     worker.join()
     assert seen == []  # nothing runs before the twin reaches a tick
     twin.advance(0.05)
-    assert seen == [(threading.current_thread().name, 20_000)]  # the first tick, in the twin's thread
+    assert seen == [
+        (threading.current_thread().name, 20_000)
+    ]  # the first tick, in the twin's thread
     with pytest.raises(ZeroDivisionError):
         futures[1].result(timeout=0)
     assert futures[2].result(timeout=0) == 0 and "division by zero" in caplog.text

@@ -23,7 +23,9 @@ def _decoded(update):
     pool = descriptor_pool.DescriptorPool()
     for f in descriptor_pb2.FileDescriptorSet.FromString(bytes(schema.data)).file:
         pool.Add(f)
-    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema.name)).FromString(bytes(update.encode()))
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema.name)).FromString(
+        bytes(update.encode())
+    )
 
 
 def test_actors_are_drawn_at_their_poses_not_in_the_static_world():
@@ -34,13 +36,17 @@ def test_actors_are_drawn_at_their_poses_not_in_the_static_world():
     twin = Twin(CFG, TwinOptions(start_xy_yaw=(-6.0, 0.0, 0.0), actors=(walker,)))
     scene = SceneBuilder(twin.observables.model, twin.observables.named)
     world = _decoded(scene.static_update()).entities[0]
-    assert world.id == "world" and len(world.cylinders) == 0           # the warehouse has no cylinder: no legs
+    assert (
+        world.id == "world" and len(world.cylinders) == 0
+    )  # the warehouse has no cylinder: no legs
     (entity,) = _decoded(scene.actors_update(5, [(1.0, 0.5, math.pi / 2)])).entities
     assert entity.id == "actors" and entity.frame_id == "odom" and len(entity.cylinders) == 2
     legs = sorted((c.pose.position.x, c.pose.position.y) for c in entity.cylinders)
-    half = CFG.actors.person.leg_spacing_m / 2                     # across its heading (+y): along x
+    half = CFG.actors.person.leg_spacing_m / 2  # across its heading (+y): along x
     # odom is base_link at t = 0, (-6, 0) facing +x: the world point (x, y) is (x + 6, y) in odom
-    assert legs[0] == pytest.approx((7.0 - half, 0.5), abs=1e-3) and legs[1] == pytest.approx((7.0 + half, 0.5), abs=1e-3)
+    assert legs[0] == pytest.approx((7.0 - half, 0.5), abs=1e-3) and legs[1] == pytest.approx(
+        (7.0 + half, 0.5), abs=1e-3
+    )
     assert all(c.size.z == pytest.approx(CFG.actors.person.leg_length_m) for c in entity.cylinders)
     assert "/actors/poses" in live_topics(twin)
     assert "/actors/poses" not in live_topics(Twin(CFG, TwinOptions(start_xy_yaw=(-6.0, 0.0, 0.0))))

@@ -27,7 +27,9 @@ def _assert_same_model(committed: str, fresh: str, name: str) -> None:
     b_num, b_text = _numbers_and_text(fresh)
     assert a_text == b_text, f"models/amr/{name} is stale (its structure): {REGENERATE}"
     assert len(a_num) == len(b_num)
-    np.testing.assert_allclose(a_num, b_num, rtol=1e-9, atol=1e-12, err_msg=f"models/amr/{name} is stale: {REGENERATE}")
+    np.testing.assert_allclose(
+        a_num, b_num, rtol=1e-9, atol=1e-12, err_msg=f"models/amr/{name} is stale: {REGENERATE}"
+    )
 
 
 REGENERATE = "run amr-twin model --export-urdf models/amr/amr.urdf --export-mjcf models/amr/amr.xml"
@@ -57,7 +59,9 @@ def test_the_staleness_check_sees_a_parameter_change(tmp_path):
 
 def test_broken_xacro_gives_one_line_error(tmp_path):
     bad = tmp_path / "bad.urdf.xacro"
-    bad.write_text((MODEL_DIR / "amr.urdf.xacro").read_text().replace("p['wheel_width_m']", "p['no_such']"))
+    bad.write_text(
+        (MODEL_DIR / "amr.urdf.xacro").read_text().replace("p['wheel_width_m']", "p['no_such']")
+    )
     with pytest.raises(BuildError) as info:
         build(load_config(), xacro_file=bad)
     assert "\n" not in str(info.value) and "xacro" in str(info.value)
@@ -73,7 +77,13 @@ def test_a_model_without_visuals_or_imu_weighs_the_same():
     inertias, collision shapes, payload box (the LiDAR sees it) and loop sensors."""
     import numpy as np
 
-    from amr_twin.model.robot_spec import GROUP_COLLISION, GROUP_PAYLOAD, GROUP_VISUAL, IMU_SENSORS, LOOP_SENSOR_DIM
+    from amr_twin.model.robot_spec import (
+        GROUP_COLLISION,
+        GROUP_PAYLOAD,
+        GROUP_VISUAL,
+        IMU_SENSORS,
+        LOOP_SENSOR_DIM,
+    )
 
     cfg = load_config(overrides={"payload.mass_kg": 25.0})
     full = build(cfg, world="empty")
@@ -82,7 +92,14 @@ def test_a_model_without_visuals_or_imu_weighs_the_same():
     assert sum(a.geom_group == GROUP_VISUAL) >= 30 and GROUP_VISUAL not in b.geom_group
     assert sum(a.geom_group == GROUP_COLLISION) == sum(b.geom_group == GROUP_COLLISION) >= 9
     assert sum(a.geom_group == GROUP_PAYLOAD) == sum(b.geom_group == GROUP_PAYLOAD) == 1
-    for name in ("body_mass", "body_inertia", "body_ipos", "body_iquat", "body_subtreemass", "jnt_stiffness"):
+    for name in (
+        "body_mass",
+        "body_inertia",
+        "body_ipos",
+        "body_iquat",
+        "body_subtreemass",
+        "jnt_stiffness",
+    ):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
     assert a.body_subtreemass[1] > 25.0
     assert a.nsensordata == b.nsensordata + 9 and b.nsensordata == LOOP_SENSOR_DIM
@@ -108,8 +125,12 @@ def test_the_exported_mjcf_has_the_twins_options(tmp_path):
 
     mjcf = tmp_path / "amr.xml"
     twin = build_mod.export(load_config(), mjcf_path=mjcf).model.opt
-    assert twin.timestep == load_config().sim.timestep_s  # no tyre halving at the default parameters
+    assert (
+        twin.timestep == load_config().sim.timestep_s
+    )  # no tyre halving at the default parameters
     for path in (mjcf, MODEL_DIR / "amr.xml"):
         exported = mujoco.MjModel.from_xml_path(str(path)).opt
         for name in _option_fields(twin):
-            np.testing.assert_array_equal(getattr(exported, name), getattr(twin, name), err_msg=f"{path.name}: {name}")
+            np.testing.assert_array_equal(
+                getattr(exported, name), getattr(twin, name), err_msg=f"{path.name}: {name}"
+            )

@@ -15,8 +15,21 @@ def test_every_parameter_has_unit_and_source():
     for key, _value, unit, source in rows:
         assert unit, key
         assert len(source) > 8, f"{key}: source too short"
-        assert any(w in source for w in ("thesis", "estimate", "datasheet", "calibrated", "robot-facts", "set per run", "standard",
-                                     "nav2", "measured", "acceptance")), key
+        assert any(
+            w in source
+            for w in (
+                "thesis",
+                "estimate",
+                "datasheet",
+                "calibrated",
+                "robot-facts",
+                "set per run",
+                "standard",
+                "nav2",
+                "measured",
+                "acceptance",
+            )
+        ), key
 
 
 def test_thesis_geometry_loaded():
@@ -32,15 +45,22 @@ def test_config_is_frozen():
         cfg.wheel.radius_m = 0.2
 
 
-@pytest.mark.parametrize("assignment, field, words", [
-    ("payload.mass_kg=-1", "payload.mass_kg", "[0.0, 200.0]"),
-    ("wheel.foo=1", "wheel.foo", "is not a parameter"),
-    ("wheel.radius_m=.nan", "wheel.radius_m", "finite"),
-    ("chassis.width_m=0.9", "chassis.width_m", "[0.25, 0.46]"),
-    ("payload.xy_m=[0.3,0.0]", "payload.xy_m", "outside the deck"),
-    ("navigation.mppi.samples=5", "navigation.mppi.samples", "16"),
-    ("navigation.costmap.raytrace_range_m=2", "navigation.costmap.raytrace_range_m", "obstacle_range_m"),
-])
+@pytest.mark.parametrize(
+    "assignment, field, words",
+    [
+        ("payload.mass_kg=-1", "payload.mass_kg", "[0.0, 200.0]"),
+        ("wheel.foo=1", "wheel.foo", "is not a parameter"),
+        ("wheel.radius_m=.nan", "wheel.radius_m", "finite"),
+        ("chassis.width_m=0.9", "chassis.width_m", "[0.25, 0.46]"),
+        ("payload.xy_m=[0.3,0.0]", "payload.xy_m", "outside the deck"),
+        ("navigation.mppi.samples=5", "navigation.mppi.samples", "16"),
+        (
+            "navigation.costmap.raytrace_range_m=2",
+            "navigation.costmap.raytrace_range_m",
+            "obstacle_range_m",
+        ),
+    ],
+)
 def test_bad_values_give_one_line_naming_the_option_and_the_field(assignment, field, words):
     sets = [assignment]
     if assignment.startswith("payload.xy"):
@@ -55,7 +75,9 @@ def test_bad_values_give_one_line_naming_the_option_and_the_field(assignment, fi
 
 def test_override_file_and_set(tmp_path):
     extra = tmp_path / "mine.yaml"
-    extra.write_text(yaml.safe_dump({"payload": {"mass_kg": 12.5}, "wheel": {"radius_m": {"value": 0.13}}}))
+    extra.write_text(
+        yaml.safe_dump({"payload": {"mass_kg": 12.5}, "wheel": {"radius_m": {"value": 0.13}}})
+    )
     cfg = load_config(override_file=extra, sets=["payload.xy_m=[0.05,0.0]"])
     assert cfg.payload.mass_kg == 12.5
     assert cfg.wheel.radius_m == 0.13
@@ -88,6 +110,7 @@ def test_battery_voltages_must_be_ordered():
 
 def test_model_readme_lists_every_parameter():
     from amr_twin.model.paths import MODEL_DIR
+
     readme = (MODEL_DIR / "README.md").read_text()
     missing = [key for key, *_ in parameter_table() if f"`{key}`" not in readme]
     assert not missing, f"models/amr/README.md lacks {missing}"
@@ -96,8 +119,10 @@ def test_model_readme_lists_every_parameter():
 def test_model_readme_is_current():
     from amr_twin.calibration.parameter_doc import readme_text
     from amr_twin.model.paths import MODEL_DIR
-    assert (MODEL_DIR / "README.md").read_text() == readme_text(), \
+
+    assert (MODEL_DIR / "README.md").read_text() == readme_text(), (
         "models/amr/README.md is stale: run python -m amr_twin.calibration.parameter_doc"
+    )
 
 
 def test_a_parameter_file_that_is_a_folder_or_binary_is_named(tmp_path):
@@ -127,10 +152,12 @@ def test_with_values_replaces_and_validates_like_a_loaded_file():
     changes = {"payload.mass_kg": 30.0, "payload.xy_m": [-0.1, 0.05]}
     assert with_values(base, changes) == load_config(overrides={"wheel.radius_m": 0.081, **changes})
     assert with_values(base, changes).wheel.radius_m == 0.081
-    for bad, message in (({"payload.mass_kg": -1.0}, "payload.mass_kg: -1.0 is out of range"),
-                         ({"payload.mass_kg": float("nan")}, "payload.mass_kg: nan must be a finite number"),
-                         ({"payload.colour": 1}, "payload.colour: unknown key"),
-                         ({"payload.mass_kg": 5.0, "payload.xy_m": [0.5, 0.0]}, "outside the deck")):
+    for bad, message in (
+        ({"payload.mass_kg": -1.0}, "payload.mass_kg: -1.0 is out of range"),
+        ({"payload.mass_kg": float("nan")}, "payload.mass_kg: nan must be a finite number"),
+        ({"payload.colour": 1}, "payload.colour: unknown key"),
+        ({"payload.mass_kg": 5.0, "payload.xy_m": [0.5, 0.0]}, "outside the deck"),
+    ):
         with pytest.raises(ConfigError, match=message.replace(".", r"\.")) as info:
             with_values(base, bad)
         with pytest.raises(ConfigError) as loaded:

@@ -11,12 +11,16 @@ from amr_twin.model.config import load_config
 # 20 x 20 x 1.5 mm AISI304 tube at 7930 kg/m^3):
 #   rails: 3 floors x (2 sides x 0.70 + 3 cross rails x (0.40 - 2 x 0.02)) = 3 x 2.48 = 7.44 m
 #   posts: 4 x (0.42 - (0.10 - 0.02)) = 1.36 m; tube section 0.02^2 - 0.017^2 = 1.11e-4 m^2
-FRAME_KG = (7.44 + 1.36) * (0.02 ** 2 - 0.017 ** 2) * 7930  # 7.746 kg
-PLATES_KG = 2 * 0.70 * 0.40 * 0.001 * 7930 + 0.70 * 0.40 * 0.003 * 2700  # steel (a), (c); aluminium deck (b)
+FRAME_KG = (7.44 + 1.36) * (0.02**2 - 0.017**2) * 7930  # 7.746 kg
+PLATES_KG = (
+    2 * 0.70 * 0.40 * 0.001 * 7930 + 0.70 * 0.40 * 0.003 * 2700
+)  # steel (a), (c); aluminium deck (b)
 COMPONENTS_KG = 5.0 + 0.6 + 1.2 + 0.9 + 0.4 + 0.17 + 0.01  # battery ... imu
 STATORS_KG = 2 * 3.5 * (1 - 0.6)  # non-rotating share of the two hub motors
 UWB_TAG_KG = 0.02  # the DWM1000 tag board on its own link (uwb_tag)
-ROBOT_KG = FRAME_KG + PLATES_KG + COMPONENTS_KG + STATORS_KG + 2 * 3.5 * 0.6 + 4 * 0.15  # + rotors, casters
+ROBOT_KG = (
+    FRAME_KG + PLATES_KG + COMPONENTS_KG + STATORS_KG + 2 * 3.5 * 0.6 + 4 * 0.15
+)  # + rotors, casters
 
 
 def test_frame_mass_is_the_hand_figure():
@@ -26,9 +30,12 @@ def test_frame_mass_is_the_hand_figure():
 
 def test_chassis_and_robot_masses_are_the_hand_figures():
     cfg = load_config()
-    on_links_kg = 0.17 + 0.01  # the LiDAR and the IMU board ride on their own links (laser, imu_link)
+    on_links_kg = (
+        0.17 + 0.01
+    )  # the LiDAR and the IMU board ride on their own links (laser, imu_link)
     assert mass.chassis_inertial(cfg).mass_kg == pytest.approx(
-        FRAME_KG + PLATES_KG + COMPONENTS_KG - on_links_kg + STATORS_KG, rel=1e-9)
+        FRAME_KG + PLATES_KG + COMPONENTS_KG - on_links_kg + STATORS_KG, rel=1e-9
+    )
     assert mass.robot_mass_kg(cfg) == pytest.approx(ROBOT_KG + UWB_TAG_KG, rel=1e-9)
     assert ROBOT_KG + UWB_TAG_KG == pytest.approx(30.355, abs=1e-3)
 
@@ -40,7 +47,9 @@ def test_sensor_links_carry_their_own_mass():
     assert links["imu_link"].mass_kg == cfg.components.imu.mass_kg
     assert links["uwb_tag"].mass_kg == cfg.uwb.tag_mass_kg
     lidar = cfg.components.lidar
-    assert links["laser"].com_m[2] == pytest.approx(lidar.size_m[2] / 2 - 0.04)  # base 4 cm below the optics
+    assert links["laser"].com_m[2] == pytest.approx(
+        lidar.size_m[2] / 2 - 0.04
+    )  # base 4 cm below the optics
 
 
 def test_combine_parallel_axis():
@@ -56,7 +65,7 @@ def test_wheel_inertia_about_axle():
     cfg = load_config()
     w = mass.wheel_inertial(cfg)
     m = cfg.wheel.mass_kg * cfg.wheel.rotor_fraction
-    assert w.inertia_kg_m2[1, 1] == pytest.approx(0.5 * m * cfg.wheel.radius_m ** 2, rel=1e-3)
+    assert w.inertia_kg_m2[1, 1] == pytest.approx(0.5 * m * cfg.wheel.radius_m**2, rel=1e-3)
     assert w.inertia_kg_m2[0, 0] < w.inertia_kg_m2[1, 1]
 
 
@@ -72,11 +81,14 @@ def test_closed_forms_match_trimesh_meshes():
         np.testing.assert_allclose(part.inertia_kg_m2, mesh.moment_inertia, rtol=1e-12, atol=1e-18)
     cylinder = trimesh.creation.cylinder(radius=0.125, height=0.06, sections=4096)
     cylinder.density = 2.1 / cylinder.volume
-    np.testing.assert_allclose(mass.cylinder_inertia(0.125, 0.06, 2.1), cylinder.moment_inertia, rtol=1e-5,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        mass.cylinder_inertia(0.125, 0.06, 2.1), cylinder.moment_inertia, rtol=1e-5, atol=1e-12
+    )
     sphere = trimesh.creation.icosphere(subdivisions=5, radius=0.025)
     sphere.density = 0.15 / sphere.volume
-    np.testing.assert_allclose(mass.sphere_inertia(0.025, 0.15), sphere.moment_inertia, rtol=1e-3, atol=1e-12)
+    np.testing.assert_allclose(
+        mass.sphere_inertia(0.025, 0.15), sphere.moment_inertia, rtol=1e-3, atol=1e-12
+    )
 
 
 def test_chassis_inertia_against_trimesh_parts():
@@ -87,7 +99,9 @@ def test_chassis_inertia_against_trimesh_parts():
     def mesh_box(extents, center, mass_kg=None, density=None):
         mesh = trimesh.creation.box(extents=extents)
         mesh.density = density if density is not None else mass_kg / mesh.volume
-        return mass.Inertial(float(mesh.mass), np.asarray(center, float), np.asarray(mesh.moment_inertia))
+        return mass.Inertial(
+            float(mesh.mass), np.asarray(center, float), np.asarray(mesh.moment_inertia)
+        )
 
     cfg = load_config()
     closed = mass.chassis_inertial(cfg)
@@ -107,21 +121,26 @@ def test_mass_module_needs_no_mesh_library():
     import subprocess
     import sys
 
-    code = "import sys, amr_twin.model.build, amr_twin.model.statics; print('trimesh' in sys.modules)"
+    code = (
+        "import sys, amr_twin.model.build, amr_twin.model.statics; print('trimesh' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 
 
-@pytest.mark.parametrize("key, value, moves", [
-    ("components.battery.mass_kg", 9.0, "mass"),
-    ("deck.density_kg_m3", 2900.0, "mass"),
-    ("chassis.tube_wall_m", 0.002, "mass"),
-    ("wheel.radius_m", 0.14, "com"),
-    ("caster.drop_m", 0.004, "com"),
-    ("components.lidar.pos_m", [0.3, 0.0, 0.35], "com"),
-    ("uwb.tag_mass_kg", 0.05, "mass"),
-    ("payload.mass_kg", 20.0, "mass"),
-])
+@pytest.mark.parametrize(
+    "key, value, moves",
+    [
+        ("components.battery.mass_kg", 9.0, "mass"),
+        ("deck.density_kg_m3", 2900.0, "mass"),
+        ("chassis.tube_wall_m", 0.002, "mass"),
+        ("wheel.radius_m", 0.14, "com"),
+        ("caster.drop_m", 0.004, "com"),
+        ("components.lidar.pos_m", [0.3, 0.0, 0.35], "com"),
+        ("uwb.tag_mass_kg", 0.05, "mass"),
+        ("payload.mass_kg", 20.0, "mass"),
+    ],
+)
 def test_mass_and_com_follow_every_section_they_are_built_from(key, value, moves):
     """robot_mass_com keeps the robot per robot and payload: a change of any section it reads shows."""
     base_mass, base_com = mass.robot_mass_com(load_config())

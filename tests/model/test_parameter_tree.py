@@ -12,20 +12,31 @@ from amr_twin.model.parameter_tree import DEFAULT_CONFIG, read_yaml
 
 
 def _entries(folder):
-    return sorted(p.name for p in (folder / "yaml").glob("*.marshal")) if (folder / "yaml").exists() else []
+    return (
+        sorted(p.name for p in (folder / "yaml").glob("*.marshal"))
+        if (folder / "yaml").exists()
+        else []
+    )
 
 
 def test_cached_tree_equals_parsed_and_skips_pyyaml(tmp_path):
     env_dir = tmp_path / "cache"
-    code = ("import sys; from amr_twin.model.parameter_tree import read_yaml, DEFAULT_CONFIG; "
-            "import json; t = read_yaml(DEFAULT_CONFIG); print('yaml' in sys.modules); print(json.dumps(t, sort_keys=True))")
+    code = (
+        "import sys; from amr_twin.model.parameter_tree import read_yaml, DEFAULT_CONFIG; "
+        "import json; t = read_yaml(DEFAULT_CONFIG); print('yaml' in sys.modules); print(json.dumps(t, sort_keys=True))"
+    )
     env = {**__import__("os").environ, "AMR_TWIN_CACHE_DIR": str(env_dir)}
-    first = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
-    second = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
-    assert first.stdout.splitlines()[0] == "True"    # parsed: PyYAML imported
+    first = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    )
+    second = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    )
+    assert first.stdout.splitlines()[0] == "True"  # parsed: PyYAML imported
     assert second.stdout.splitlines()[0] == "False"  # from the cache: PyYAML not even imported
     assert first.stdout.splitlines()[1] == second.stdout.splitlines()[1]
     import json
+
     assert json.loads(second.stdout.splitlines()[1]) == yaml.safe_load(DEFAULT_CONFIG.read_text())
     assert len(_entries(env_dir)) == 1
 
@@ -52,7 +63,9 @@ def test_corrupt_entry_is_ignored_and_errors_still_name_the_file(tmp_path, monke
         read_yaml(bad)
     with pytest.raises(ConfigError, match="no such parameter file"):
         read_yaml(tmp_path / "missing.yaml")
-    assert not any(p.name.startswith(".") for p in (tmp_path / "cache" / "yaml").iterdir())  # no temporaries left
+    assert not any(
+        p.name.startswith(".") for p in (tmp_path / "cache" / "yaml").iterdir()
+    )  # no temporaries left
 
 
 def test_unwritable_or_disabled_cache_still_loads(tmp_path, monkeypatch):

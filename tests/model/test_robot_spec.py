@@ -24,19 +24,30 @@ def test_urdf_says_what_the_mjcf_has_as_far_as_urdf_can():
         body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/" + link.name)
         assert m.body_mass[body] == pytest.approx(link.inertial.mass, rel=1e-6), link.name
     assert sum(link.inertial.mass for link in robot.robot.links) == pytest.approx(
-        m.body_subtreemass[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link")], rel=1e-5)
+        m.body_subtreemass[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "amr/base_link")],
+        rel=1e-5,
+    )
     moving = [j for j in robot.robot.joints if j.type != "fixed"]
     assert len(moving) == 6
     for j in moving:
         k = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "amr/" + j.name)
         assert j.dynamics is not None and j.limit is not None and float(j.limit.effort) > 0, j.name
         assert float(j.dynamics.damping) == pytest.approx(m.dof_damping[m.jnt_dofadr[k]]), j.name
-        assert float(j.dynamics.friction) == pytest.approx(m.dof_frictionloss[m.jnt_dofadr[k]]), j.name
+        assert float(j.dynamics.friction) == pytest.approx(m.dof_frictionloss[m.jnt_dofadr[k]]), (
+            j.name
+        )
         if j.type == "prismatic":
-            assert (float(j.limit.lower), float(j.limit.upper)) == pytest.approx(tuple(m.jnt_range[k]))
-            assert float(j.limit.effort) == pytest.approx(cfg.caster.preload_n + cfg.caster.stiffness_n_m * cfg.caster.travel_m)
+            assert (float(j.limit.lower), float(j.limit.upper)) == pytest.approx(
+                tuple(m.jnt_range[k])
+            )
+            assert float(j.limit.effort) == pytest.approx(
+                cfg.caster.preload_n + cfg.caster.stiffness_n_m * cfg.caster.travel_m
+            )
     left = robot.joint_map["wheel_left_joint"].dynamics
-    assert (float(left.damping), float(left.friction)) == (cfg.motor_left.damping_nm_s_rad, cfg.motor_left.friction_nm)
+    assert (float(left.damping), float(left.friction)) == (
+        cfg.motor_left.damping_nm_s_rad,
+        cfg.motor_left.friction_nm,
+    )
     tag = robot.joint_map["uwb_tag_joint"]
     assert tuple(tag.origin[:3, 3]) == pytest.approx(cfg.uwb.tag_pos_m)
 
@@ -45,6 +56,7 @@ def test_spec_adds_what_urdf_cannot_carry():
     cfg = load_config(sets=["payload.mass_kg=20"])
     m = build(cfg).model
     import mujoco
+
     names = lambda kind, n: [mujoco.mj_id2name(m, kind, i) for i in range(n)]
     assert m.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
     assert names(mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu) == ["amr/motor_left", "amr/motor_right"]

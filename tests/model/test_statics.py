@@ -28,6 +28,7 @@ def _exported(cfg):
     if key not in _EXPORTS:
         import tempfile
         from pathlib import Path
+
         path = Path(tempfile.mkdtemp()) / "amr.xml"
         _EXPORTS[key] = path, export(cfg, mjcf_path=path).model
     return _EXPORTS[key]
@@ -54,8 +55,14 @@ def test_wheel_load_matches_the_hand_figure(payload):
     assert sum(st.loads_n.values()) == pytest.approx(weight, rel=1e-6)
 
 
-SUPPORT_GEOMS = {"wheel_left": "wheel_left_collision", "wheel_right": "wheel_right_collision",
-                 **{f"caster_{c}": f"caster_{c}_ball" for c in ("front_left", "front_right", "rear_left", "rear_right")}}
+SUPPORT_GEOMS = {
+    "wheel_left": "wheel_left_collision",
+    "wheel_right": "wheel_right_collision",
+    **{
+        f"caster_{c}": f"caster_{c}_ball"
+        for c in ("front_left", "front_right", "rear_left", "rear_right")
+    },
+}
 
 
 def _vertical_forces_n(m, d) -> dict:
@@ -72,8 +79,14 @@ def _vertical_forces_n(m, d) -> dict:
     return loads
 
 
-@pytest.mark.parametrize("payload", [[], ["payload.mass_kg=20", "payload.xy_m=[-0.2,0.0]"],
-                                     ["payload.mass_kg=40", "payload.xy_m=[0.1,0.05]"]])
+@pytest.mark.parametrize(
+    "payload",
+    [
+        [],
+        ["payload.mass_kg=20", "payload.xy_m=[-0.2,0.0]"],
+        ["payload.mass_kg=40", "payload.xy_m=[0.1,0.05]"],
+    ],
+)
 def test_exported_mjcf_settled_on_a_plane_agrees_within_one_percent(payload):
     """The exported robot MJCF as written (its own <option>, only a floor plane added: the export has
     none), settled for 2 s in plain MuJoCo, carries each support's vertical load within 1 % of
@@ -85,13 +98,23 @@ def test_exported_mjcf_settled_on_a_plane_agrees_within_one_percent(payload):
     assert not [g for g in spec.geoms if g.type == mujoco.mjtGeom.mjGEOM_PLANE]
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[5, 5, 0.1])
     m = spec.compile()
-    for name in ("timestep", "integrator", "cone", "solver", "iterations", "noslip_iterations", "disableflags",
-                 "enableflags"):
+    for name in (
+        "timestep",
+        "integrator",
+        "cone",
+        "solver",
+        "iterations",
+        "noslip_iterations",
+        "disableflags",
+        "enableflags",
+    ):
         assert getattr(m.opt, name) == getattr(twin.opt, name), name
     d = mujoco.MjData(m)
     steps, tail = round(2.0 / m.opt.timestep), round(0.1 / m.opt.timestep)
     mujoco.mj_step(m, d, steps - tail)  # motors at 0 V: their phases short, the robot comes to rest
-    assert set(info["support_regime"].values()) == {"sprung"}  # every load set by springs, none by a stop
+    assert set(info["support_regime"].values()) == {
+        "sprung"
+    }  # every load set by springs, none by a stop
     for _ in range(tail):
         mujoco.mj_step(m, d)
         settled = _vertical_forces_n(m, d)
@@ -138,7 +161,9 @@ def test_a_solution_asked_again_is_the_kept_one_and_the_callers_own(monkeypatch)
     monkeypatch.setattr(statics, "_solved", {})
     calls = []
     real = statics._solve
-    monkeypatch.setattr(statics, "_solve", lambda cfg, a: (calls.append((cfg.payload.mass_kg, a)), real(cfg, a))[1])
+    monkeypatch.setattr(
+        statics, "_solve", lambda cfg, a: (calls.append((cfg.payload.mass_kg, a)), real(cfg, a))[1]
+    )
     cfg, heavy = load_config(), load_config(sets=["payload.mass_kg=30"])
     first = solve(cfg)
     wheel = first.loads_n["wheel_left"]

@@ -22,7 +22,9 @@ def test_support_polygon_and_margin_agree_with_scipy_convex_hull(seed):
         pts = rng.uniform(-0.4, 0.4, (n, 2))
         hull = ConvexHull(pts)
         ours = support_polygon(pts)
-        assert sorted(map(tuple, ours.round(12))) == sorted(map(tuple, pts[hull.vertices].round(12)))
+        assert sorted(map(tuple, ours.round(12))) == sorted(
+            map(tuple, pts[hull.vertices].round(12))
+        )
         for com in rng.uniform(-0.6, 0.6, (20, 2)):
             qhull = float(np.min(-(hull.equations[:, :2] @ com + hull.equations[:, 2])))
             assert tip_margin_m(pts, com) == pytest.approx(qhull, abs=1e-12)

@@ -11,9 +11,18 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.model.tyre_stability import TyreTimestepError, rotating_mass_kg, stability_number, tyre_timestep
+from amr_twin.model.tyre_stability import (
+    TyreTimestepError,
+    rotating_mass_kg,
+    stability_number,
+    tyre_timestep,
+)
 
-STIFF = ["wheel.slip_stiffness_per_n=25", "wheel.relaxation_length_longitudinal_m=0.02", "wheel.tyre_loss_time_s=0.01"]
+STIFF = [
+    "wheel.slip_stiffness_per_n=25",
+    "wheel.relaxation_length_longitudinal_m=0.02",
+    "wheel.tyre_loss_time_s=0.01",
+]
 
 
 def test_nominal_tyre_keeps_the_timestep():
@@ -37,7 +46,12 @@ def test_stiff_corner_at_50kg_is_halved_twice():
 
 def test_stiff_corner_at_20kg_is_halved_once_and_an_explicit_fine_step_is_kept():
     assert tyre_timestep(load_config(sets=STIFF + ["payload.mass_kg=20"])).timestep_s == 0.0005
-    assert tyre_timestep(load_config(sets=STIFF + ["payload.mass_kg=50", "sim.timestep_s=0.00025"])).halvings == 0
+    assert (
+        tyre_timestep(
+            load_config(sets=STIFF + ["payload.mass_kg=50", "sim.timestep_s=0.00025"])
+        ).halvings
+        == 0
+    )
 
 
 def test_rigid_contact_is_not_guarded():
@@ -46,7 +60,9 @@ def test_rigid_contact_is_not_guarded():
 
 
 def test_a_timestep_halving_cannot_keep_on_whole_microseconds_is_refused():
-    with pytest.raises(TyreTimestepError, match=r"sim.timestep_s: 0.00125 .*slip_stiffness_per_n 25.*S = 4.7"):
+    with pytest.raises(
+        TyreTimestepError, match=r"sim.timestep_s: 0.00125 .*slip_stiffness_per_n 25.*S = 4.7"
+    ):
         tyre_timestep(load_config(sets=STIFF + ["payload.mass_kg=50", "sim.timestep_s=0.00125"]))
 
 
@@ -59,7 +75,9 @@ def test_the_linearised_update_is_stable_below_two_plus_a_half(tau_s):
     radius = []
     for k in stiffness:
         a, b = k * dt * dt / m, tau_s * k * dt / m
-        radius.append(np.max(np.abs(np.linalg.eigvals(np.array([[1.0, -dt], [dt * k / m, 1.0 - (a + b)]])))))
+        radius.append(
+            np.max(np.abs(np.linalg.eigvals(np.array([[1.0, -dt], [dt * k / m, 1.0 - (a + b)]]))))
+        )
     k = stiffness[np.argmax(np.array(radius) > 1.0 + 1e-9)]
     assert stability_number(k, tau_s, dt, m) == pytest.approx(2.0 + k * dt * dt / m / 2.0, rel=5e-3)
 

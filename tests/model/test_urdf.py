@@ -27,15 +27,17 @@ def test_urdf_is_valid_and_has_the_robot_structure():
     assert {"laser", "imu_link", "uwb_tag"} <= {link.name for link in robot.robot.links}
 
 
-
 def test_urdf_frame_tubes_match_the_mass_model():
     """The xacro draws the same tubes whose mass mass.py computes."""
     cfg = load_config()
     robot = yourdfpy.URDF.load(io.StringIO(urdf_string(cfg)), load_meshes=False)
     base = robot.link_map["base_link"]
     t = cfg.chassis.tube_outer_m
-    tubes = sorted(tuple(np.round(v.geometry.box.size, 6)) for v in base.visuals
-                   if v.geometry.box is not None and min(v.geometry.box.size) == pytest.approx(t))
+    tubes = sorted(
+        tuple(np.round(v.geometry.box.size, 6))
+        for v in base.visuals
+        if v.geometry.box is not None and min(v.geometry.box.size) == pytest.approx(t)
+    )
     expected = sorted(tuple(np.round(ext, 6)) for _, _, ext, _ in frame_members(cfg))
     assert tubes == expected
 
@@ -51,15 +53,21 @@ def test_urdf_is_made_and_checked_once_per_robot(monkeypatch, tmp_path):
     base = load_config()
     first = urdf_mod.robot_urdf(base)
     assert first == urdf_string(base) and len(calls) == 1
-    assert urdf_mod.robot_urdf(load_config(sets=["payload.mass_kg=30"])) == first and len(calls) == 1
+    assert (
+        urdf_mod.robot_urdf(load_config(sets=["payload.mass_kg=30"])) == first and len(calls) == 1
+    )
     bigger = load_config(sets=["wheel.radius_m=0.13"])
     assert urdf_mod.urdf_fingerprint(bigger) != urdf_mod.urdf_fingerprint(base)
     assert urdf_mod.robot_urdf(bigger) == urdf_string(bigger) and len(calls) == 2
     assert len(list((tmp_path / "urdf").glob("*.urdf"))) == 2
-    code = ("import amr_twin.model.urdf as b, sys; from amr_twin.model.config import load_config; "
-            "b.urdf_string = None; b.robot_urdf(load_config()); print('xacro' in sys.modules)")
+    code = (
+        "import amr_twin.model.urdf as b, sys; from amr_twin.model.config import load_config; "
+        "b.urdf_string = None; b.robot_urdf(load_config()); print('xacro' in sys.modules)"
+    )
     env = {**__import__("os").environ, "AMR_TWIN_CACHE_DIR": str(tmp_path)}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    )
     assert out.stdout.strip() == "False"  # from the disk: neither xacro nor yourdfpy
 
 
@@ -81,11 +89,16 @@ def test_derived_params_are_kept_per_robot_not_per_payload(monkeypatch):
     real = urdf_mod._derived_params
     monkeypatch.setattr(urdf_mod, "_derived_params", lambda cfg: (calls.append(1), real(cfg))[1])
     base = urdf_mod.derived_params(load_config())
-    assert urdf_mod.derived_params(load_config(sets=["payload.mass_kg=30", "payload.xy_m=[0.1,0.05]"])) == base
+    assert (
+        urdf_mod.derived_params(load_config(sets=["payload.mass_kg=30", "payload.xy_m=[0.1,0.05]"]))
+        == base
+    )
     assert len(calls) == 1
-    for change, key, value in (("wheel.radius_m=0.13", "wheel_radius_m", 0.13),
-                               ("chassis.length_m=0.72", "chassis_length_m", 0.72),
-                               ("motor_left.friction_nm=0.0215", "wheel_left_friction", 0.0215)):
+    for change, key, value in (
+        ("wheel.radius_m=0.13", "wheel_radius_m", 0.13),
+        ("chassis.length_m=0.72", "chassis_length_m", 0.72),
+        ("motor_left.friction_nm=0.0215", "wheel_left_friction", 0.0215),
+    ):
         assert urdf_mod.derived_params(load_config(sets=[change]))[key] == value != base[key]
     before = json.dumps(base, sort_keys=True)
     mine = urdf_mod.derived_params(load_config())
@@ -113,6 +126,10 @@ print("returned")
 def test_ctrl_c_while_trimesh_imports_is_not_swallowed():
     """trimesh (imported by yourdfpy) catches BaseException around ``from PIL import Image``: a Ctrl-C
     there was swallowed, and a run went on to its end. It is held back and raised after the check."""
-    out = subprocess.run([sys.executable, "-c", CTRL_C_IN_PIL], capture_output=True, text=True, timeout=120)
+    out = subprocess.run(
+        [sys.executable, "-c", CTRL_C_IN_PIL], capture_output=True, text=True, timeout=120
+    )
     assert out.returncode != 0 and "returned" not in out.stdout, out.stdout
-    assert out.stderr.strip().endswith("KeyboardInterrupt") and "in check_urdf" in out.stderr  # raised after it
+    assert (
+        out.stderr.strip().endswith("KeyboardInterrupt") and "in check_urdf" in out.stderr
+    )  # raised after it

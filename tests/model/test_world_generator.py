@@ -21,7 +21,9 @@ def test_the_same_seed_gives_the_same_bytes_in_another_process_and_other_seeds_d
     from amr_twin.experiments.navigation.generated import write_world
 
     code = "from amr_twin.model.generated_world import mjcf; import sys; sys.stdout.write(mjcf('generated:7?door=0.9'))"
-    other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    other = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
     assert other == gw.mjcf("generated:7?door=0.9")
     assert generate(7) == generate(7)
     texts = {gw.mjcf(f"generated:{s}") for s in range(12)}
@@ -34,6 +36,7 @@ def test_the_same_seed_gives_the_same_bytes_in_another_process_and_other_seeds_d
     assert a == b and a[0] == gw.mjcf("generated:7").encode()
     assert a[2] != c[2]  # the PGM maps differ
     from amr_twin.model.worlds import load_map
+
     grid = load_map(tmp_path / "a" / "generated_7.yaml")
     assert grid.occupied.any() and grid.free.sum() > grid.occupied.sum()
 
@@ -73,7 +76,10 @@ def _reach(seed):
     world = f"generated:{seed}"
     sm = true_map(cfg, world)
     res = sm.resolution_m
-    room = ndimage.distance_transform_edt(~sm.occupied) * res > robot_footprint(cfg).inscribed_radius_m + res
+    room = (
+        ndimage.distance_transform_edt(~sm.occupied) * res
+        > robot_footprint(cfg).inscribed_radius_m + res
+    )
     labels, _n = ndimage.label(room)
     rows, cols = np.indices(sm.shape)
     x = sm.origin_xy_m[0] + (cols + 0.5) * res
@@ -89,7 +95,9 @@ def test_every_free_area_of_the_hall_is_reachable_from_the_start_but_the_cage(se
     caged = np.zeros_like(inside)
     for x0, y0, x1, y1 in hall.cages:
         caged |= (x > x0) & (x < x1) & (y > y0) & (y < y1)
-    r, c = np.floor((np.array(hall.start_xy_yaw[1::-1]) - sm.origin_xy_m[::-1]) / sm.resolution_m).astype(int)
+    r, c = np.floor(
+        (np.array(hall.start_xy_yaw[1::-1]) - sm.origin_xy_m[::-1]) / sm.resolution_m
+    ).astype(int)
     start_label = labels[r, c]
     assert start_label > 0  # the default start has room for the robot
     free = (labels > 0) & inside
@@ -98,7 +106,9 @@ def test_every_free_area_of_the_hall_is_reachable_from_the_start_but_the_cage(se
     x0, y0, x1, y1 = hall.dead_end
     assert 7.0 - 2.0 <= x1 - x0 <= 10.0
     aisle = (x > x0) & (x < x1) & (y > y0) & (y < y1) & (labels > 0)
-    assert aisle.any() and (labels[aisle] == start_label).all()  # the dead end is reached from its open end
+    assert (
+        aisle.any() and (labels[aisle] == start_label).all()
+    )  # the dead end is reached from its open end
     west = (np.abs(x - (x0 - 0.3)) < 0.05) & (np.abs(y - (y0 + y1) / 2) < 0.05)
     assert sm.occupied[west].all()  # and closed at its other one
 
@@ -122,11 +132,24 @@ def test_start_and_anchors_come_from_the_world_file():
         assert default_start(f"generated:{seed}") == hall.start_xy_yaw
         anchors = uwb_anchors_xy_m(f"generated:{seed}")
         W, H = hall.size_m
-        assert anchors.shape == (6, 2) and (np.abs(anchors[:, 0]) < W / 2).all() and (np.abs(anchors[:, 1]) < H / 2).all()
+        assert (
+            anchors.shape == (6, 2)
+            and (np.abs(anchors[:, 0]) < W / 2).all()
+            and (np.abs(anchors[:, 1]) < H / 2).all()
+        )
 
 
-@pytest.mark.parametrize("name", ["generated:", "generated:x", "generated:-1", "generated:3?door=5",
-                                  "generated:3?width=0.9", "generated:3?door=abc"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "generated:",
+        "generated:x",
+        "generated:-1",
+        "generated:3?door=5",
+        "generated:3?width=0.9",
+        "generated:3?door=abc",
+    ],
+)
 def test_a_bad_generated_name_is_refused_in_one_line_saying_what_is_allowed(name):
     with pytest.raises(gw.GeneratedWorldError, match="expected generated:SEED") as err:
         gw.parse(name)

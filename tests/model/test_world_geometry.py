@@ -5,7 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from amr_twin.model.world_geometry import Footprints, distance_to_boxes_m, scan_plane_boxes, surface_samples_m
+from amr_twin.model.world_geometry import (
+    Footprints,
+    distance_to_boxes_m,
+    scan_plane_boxes,
+    surface_samples_m,
+)
 
 
 def _one_box(yaw: float) -> Footprints:

@@ -10,7 +10,8 @@ def _map(tmp_path, image, origin=(-1.0, -2.0, 0.0), negate=0, res=0.1):
     write_pgm(tmp_path / "m.pgm", image)
     (tmp_path / "m.yaml").write_text(
         f"image: m.pgm\nresolution: {res}\norigin: {list(origin)}\nnegate: {negate}\n"
-        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
     return tmp_path / "m.yaml"
 
 
@@ -29,7 +30,7 @@ def test_merged_boxes_cover_exactly_the_occupied_cells():
     cover = np.zeros(occ.shape, int)
     boxes = merge_boxes(occ)
     for r, c, nr, nc in boxes:
-        cover[r:r + nr, c:c + nc] += 1
+        cover[r : r + nr, c : c + nc] += 1
     assert np.array_equal(cover, occ.astype(int))  # exact cover, no overlap
     assert len(boxes) < occ.sum() / 2
     block = np.zeros((20, 20), bool)
@@ -39,11 +40,11 @@ def test_merged_boxes_cover_exactly_the_occupied_cells():
 
 def test_thresholds_negate_and_world_coordinates(tmp_path):
     img = np.full((10, 20), 254, np.uint8)
-    img[0, :] = 0      # top row: y from 0.9 to 1.0 above the origin
+    img[0, :] = 0  # top row: y from 0.9 to 1.0 above the origin
     img[5:7, 2] = 100  # p = 0.61 < 0.65: free
     grid = load_map(_map(tmp_path, img))
     assert grid.occupied.sum() == 20
-    (centre, half, yaw), = wall_boxes(grid, wall_height_m=2.0)
+    ((centre, half, yaw),) = wall_boxes(grid, wall_height_m=2.0)
     assert centre == pytest.approx([-1.0 + 1.0, -2.0 + 0.95, 1.0])
     assert half == pytest.approx([1.0, 0.05, 1.0]) and yaw == 0.0
     negated = load_map(_map(tmp_path, 255 - img, negate=1))
@@ -57,7 +58,12 @@ def test_map_modes(tmp_path):
     write_pgm(tmp_path / "m.pgm", image)
     base = "image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
     (tmp_path / "raw.yaml").write_text(base + "mode: raw\n")
-    assert load_map(tmp_path / "raw.yaml").occupied.sum(axis=1).tolist() == [4, 0, 0, 0]  # image rows
+    assert load_map(tmp_path / "raw.yaml").occupied.sum(axis=1).tolist() == [
+        4,
+        0,
+        0,
+        0,
+    ]  # image rows
     (tmp_path / "scale.yaml").write_text(base + "mode: scale\nnegate: 0\n")
     assert load_map(tmp_path / "scale.yaml").occupied.sum() == 8  # the black rows 2 and 3
     (tmp_path / "bad.yaml").write_text(base + "mode: fancy\n")
@@ -69,7 +75,7 @@ def test_rotated_origin_rotates_the_boxes(tmp_path):
     img = np.full((10, 10), 254, np.uint8)
     img[9, 0] = 0  # lower-left pixel: centre at (0.05, 0.05) in the map frame
     grid = load_map(_map(tmp_path, img, origin=(1.0, 0.0, np.pi / 2)))
-    (centre, _, yaw), = wall_boxes(grid)
+    ((centre, _, yaw),) = wall_boxes(grid)
     assert centre[:2] == pytest.approx([1.0 - 0.05, 0.05]) and yaw == pytest.approx(np.pi / 2)
     assert 'euler="0 0 90"' in world_xml(tmp_path / "m.yaml")
 
@@ -93,17 +99,36 @@ def _write_map(tmp_path, yaml_text, pgm=None):
     return tmp_path / "m.yaml"
 
 
-@pytest.mark.parametrize("yaml_text, pgm, text", [
-    ("image: gone.pgm\nresolution: 0.05\n", None, "m.yaml: image "),
-    ("image: m.pgm\norigin: [0, 0, 0]\n", b"P5\n2 2\n255\n\x00\x00\x00\x00", "m.yaml: resolution is missing"),
-    ("image: m.pgm\nresolution: -0.05\n", b"P5\n2 2\n255\n\x00\x00\x00\x00", "resolution: -0.05 must be in (0, 100]"),
-    ("image: m.pgm\nresolution: 0.05\norigin: [0, 0]\n", b"P5\n2 2\n255\n\x00\x00\x00\x00", "origin: [0, 0] must be"),
-    ("image: m.pgm\nresolution: 0.05\n", b"P5\n100 100\n255\nabc", "m.pgm: truncated PGM (3 of 10000"),
-    ("image: m.pgm\nresolution: 0.05\n", bytes(range(7, 200)), "m.pgm: not a PGM image"),
-    ("image: m.pgm\nresolution: 0.05\n", b"P5\n2", "m.pgm: not a PGM image (header ends"),
-    ("resolution: 0.05\n", None, "m.yaml: image is missing"),
-    ("- a list\n", None, "expected a map_server mapping"),
-])
+@pytest.mark.parametrize(
+    "yaml_text, pgm, text",
+    [
+        ("image: gone.pgm\nresolution: 0.05\n", None, "m.yaml: image "),
+        (
+            "image: m.pgm\norigin: [0, 0, 0]\n",
+            b"P5\n2 2\n255\n\x00\x00\x00\x00",
+            "m.yaml: resolution is missing",
+        ),
+        (
+            "image: m.pgm\nresolution: -0.05\n",
+            b"P5\n2 2\n255\n\x00\x00\x00\x00",
+            "resolution: -0.05 must be in (0, 100]",
+        ),
+        (
+            "image: m.pgm\nresolution: 0.05\norigin: [0, 0]\n",
+            b"P5\n2 2\n255\n\x00\x00\x00\x00",
+            "origin: [0, 0] must be",
+        ),
+        (
+            "image: m.pgm\nresolution: 0.05\n",
+            b"P5\n100 100\n255\nabc",
+            "m.pgm: truncated PGM (3 of 10000",
+        ),
+        ("image: m.pgm\nresolution: 0.05\n", bytes(range(7, 200)), "m.pgm: not a PGM image"),
+        ("image: m.pgm\nresolution: 0.05\n", b"P5\n2", "m.pgm: not a PGM image (header ends"),
+        ("resolution: 0.05\n", None, "m.yaml: image is missing"),
+        ("- a list\n", None, "expected a map_server mapping"),
+    ],
+)
 def test_map_errors_are_one_line_naming_the_file(tmp_path, yaml_text, pgm, text):
     from amr_twin.model.worlds import MapError
 
@@ -129,4 +154,8 @@ def test_worlds_declare_their_start_pose():
     from amr_twin.model.worlds import default_start
 
     assert default_start("warehouse") == (-6.0, 0.0, 0.0)
-    assert default_start("empty") == (0.0, 0.0, 0.0) and default_start("nowhere.xml") == (0.0, 0.0, 0.0)
+    assert default_start("empty") == (0.0, 0.0, 0.0) and default_start("nowhere.xml") == (
+        0.0,
+        0.0,
+        0.0,
+    )

@@ -35,9 +35,13 @@ def test_a_person_stepping_into_the_path_2_m_ahead_is_stopped_short_of_by_0_3_m(
 
 def test_racks_beside_the_robot_do_not_slow_it():
     mon = CollisionMonitor(FP, 0.8)
-    rack = np.column_stack([np.linspace(-3, 3, 60), np.full(60, 0.7)])  # a rack face 0.43 m from the side
+    rack = np.column_stack(
+        [np.linspace(-3, 3, 60), np.full(60, 0.7)]
+    )  # a rack face 0.43 m from the side
     assert mon.filter(0.8, 0.0, rack, np.zeros(60, bool)) == (0.8, 0.0)
-    assert mon.filter(0.8, 0.0, rack, np.ones(60, bool))[0] < 0.8  # were it unmapped (people): slowed
+    assert (
+        mon.filter(0.8, 0.0, rack, np.ones(60, bool))[0] < 0.8
+    )  # were it unmapped (people): slowed
 
 
 def test_a_return_inside_the_zone_stops_the_robot_unless_it_backs_away():
@@ -50,7 +54,9 @@ def test_a_return_inside_the_zone_stops_the_robot_unless_it_backs_away():
 
 def test_a_turn_in_place_beside_an_unmapped_obstacle_is_allowed():
     mon = CollisionMonitor(FP, 0.8)
-    jack = np.column_stack([np.full(20, -1.0), np.linspace(-0.5, 0.5, 20)])  # 0.65 m behind the rear
+    jack = np.column_stack(
+        [np.full(20, -1.0), np.linspace(-0.5, 0.5, 20)]
+    )  # 0.65 m behind the rear
     v, w = mon.filter(0.0, 0.5, jack, np.ones(20, bool))
     assert w == 0.5 and math.isclose(v, 0.0)
 
@@ -66,17 +72,28 @@ def test_a_person_walking_at_the_robots_side_is_stopped_for_before_they_meet():
     no_scan = np.zeros((0, 2)), np.zeros(0, bool)
     v, _w = mon.filter(0.8, 0.0, *no_scan, people_base=_people((0.9, 1.2), (0.0, -1.3)))
     assert v < 0.3 and mon.actions["people_approach"] == 1
-    v_away, _w = mon.filter(0.8, 0.0, *no_scan, people_base=_people((0.9, 1.2), (0.0, 1.3)))  # walking away
-    assert mon.actions["people_approach"] == 1 and v_away == 0.3  # only the speed near people (0.3 m/s)
-    assert mon.filter(0.8, 0.0, *no_scan, people_base=_people((-0.9, 1.2), (0.0, 1.3))) == (0.8, 0.0)  # behind
+    v_away, _w = mon.filter(
+        0.8, 0.0, *no_scan, people_base=_people((0.9, 1.2), (0.0, 1.3))
+    )  # walking away
+    assert (
+        mon.actions["people_approach"] == 1 and v_away == 0.3
+    )  # only the speed near people (0.3 m/s)
+    assert mon.filter(0.8, 0.0, *no_scan, people_base=_people((-0.9, 1.2), (0.0, 1.3))) == (
+        0.8,
+        0.0,
+    )  # behind
 
 
 def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_unless_it_moves_away():
     mon = CollisionMonitor(FP, 0.8)
     no_scan = np.zeros((0, 2)), np.zeros(0, bool)
-    beside = _people((-1.0, FP.half_width_m + 0.25 + 0.35), (0.0, 0.0))  # behind the axle: 0.35 m from the disc
+    beside = _people(
+        (-1.0, FP.half_width_m + 0.25 + 0.35), (0.0, 0.0)
+    )  # behind the axle: 0.35 m from the disc
     assert mon.filter(0.5, 0.0, *no_scan, people_base=beside) == (0.5, 0.0)
-    close = _people((0.5, 0.6), (0.0, 0.0))  # ahead on the left, 0.12 m from the disc: inside the 0.3 m zone
+    close = _people(
+        (0.5, 0.6), (0.0, 0.0)
+    )  # ahead on the left, 0.12 m from the disc: inside the 0.3 m zone
     assert mon.filter(0.5, 0.4, *no_scan, people_base=close) == (0.0, 0.0)  # towards them
     v, w = mon.filter(-0.2, 0.0, *no_scan, people_base=close)  # backing away: allowed
     assert v == -0.2 and mon.actions["people_escape"] == 1
@@ -86,7 +103,9 @@ def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_un
     # driving on away from one who walks up behind: at full speed (at the people speed towards them)
     behind = _people((-0.55, -0.45), (0.0, 1.3))
     assert mon.filter(0.6, 0.0, *no_scan, people_base=behind) == (0.6, 0.0)
-    assert mon.filter(0.6, 0.0, *no_scan, people_base=_people((0.55, -0.45), (1.3, 0.0)))[0] == 0.3  # ahead, walking on
+    assert (
+        mon.filter(0.6, 0.0, *no_scan, people_base=_people((0.55, -0.45), (1.3, 0.0)))[0] == 0.3
+    )  # ahead, walking on
 
 
 def test_the_people_gaps_of_all_steps_at_once_are_the_gaps_of_each_step():
@@ -96,7 +115,10 @@ def test_the_people_gaps_of_all_steps_at_once_are_the_gaps_of_each_step():
 
     mon, rng = CollisionMonitor(FP, 0.8), np.random.default_rng(4)
     for _ in range(20):
-        xy, vel = rng.uniform(-3.0, 3.0, (int(rng.integers(1, 5)), 2)), rng.uniform(-1.5, 1.5, (1, 2))
+        xy, vel = (
+            rng.uniform(-3.0, 3.0, (int(rng.integers(1, 5)), 2)),
+            rng.uniform(-1.5, 1.5, (1, 2)),
+        )
         vel = np.repeat(vel, len(xy), 0) + rng.uniform(-0.3, 0.3, xy.shape)
         v, w = float(rng.uniform(-0.8, 0.8)), float(rng.choice([0.0, rng.uniform(-1.5, 1.5)]))
         poses = arc_poses(0.0, 0.0, 0.0, v, w, mon.step_s, 40)
@@ -112,7 +134,9 @@ def test_the_people_zone_grows_by_the_distance_the_drive_rolls_after_a_stop():
     roll 0.3 x 0.15 + 0.3^2 / 2 = 0.09 m after a stop, so the robot is slowed (the zone 0.39 m); at
     0.05 m/s (0.009 m) it drives on; with no lag and a hard brake the zone stays 0.3 m."""
     no_scan = np.zeros((0, 2)), np.zeros(0, bool)
-    person = _people((0.8, FP.half_width_m + 0.25 + 0.36), (0.0, 0.0))  # the front passes it within 1.5 s
+    person = _people(
+        (0.8, FP.half_width_m + 0.25 + 0.36), (0.0, 0.0)
+    )  # the front passes it within 1.5 s
     mon = CollisionMonitor(FP, 0.8, decel_m_s2=1.0, people_stop_lag_s=0.15)
     assert mon.stopping_m(-0.3) == mon.stopping_m(0.3) == 0.3 * 0.15 + 0.09 / 2.0
     v, _w = mon.filter(0.3, 0.0, *no_scan, people_base=person)

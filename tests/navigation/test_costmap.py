@@ -77,7 +77,9 @@ def test_each_scan_leaves_the_layers_as_a_rebuild_from_scratch_would():
     cm = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
     rng = np.random.default_rng(4)
     for k in range(12):
-        people = [(float(x), float(y), 0.2) for x, y in rng.uniform([2.0, 2.0], [10.0, 6.0], (3, 2))]
+        people = [
+            (float(x), float(y), 0.2) for x, y in rng.uniform([2.0, 2.0], [10.0, 6.0], (3, 2))
+        ]
         cm.update_scan(*_scan((rng.uniform(1.0, 11.0), rng.uniform(1.0, 7.0)), people), 4.0, 5.0)
     full = np.minimum(distance_transform_edt(~(cm.static_lethal | cm.marked)) * 0.05, 1.05)
     assert cm.marked.any() and np.allclose(cm.dist_m, full, atol=1e-5)
@@ -85,7 +87,10 @@ def test_each_scan_leaves_the_layers_as_a_rebuild_from_scratch_would():
     origin = (6.0, 4.0)
     cm.update_scan(*_scan(origin, [(8.0, 4.0, 0.2)]), 4.0, 5.0)
     assert cm.version == version + 1
-    assert cm.update_scan(*_scan(origin, [(8.0, 4.0, 0.2)]), 4.0, 5.0) == 0 and cm.version == version + 1
+    assert (
+        cm.update_scan(*_scan(origin, [(8.0, 4.0, 0.2)]), 4.0, 5.0) == 0
+        and cm.version == version + 1
+    )
 
 
 def test_the_c_clearing_march_leaves_the_layers_of_its_numpy_twin():
@@ -93,18 +98,31 @@ def test_the_c_clearing_march_leaves_the_layers_of_its_numpy_twin():
     grid: the C march (costmap_rays.c) and its NumPy twin clear the same cells, so the two costmaps keep the
     same obstacle layer and distances scan after scan."""
     fast = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
-    slow = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0, native=False)
+    slow = Costmap(
+        room(),
+        inscribed_radius_m=0.265,
+        inflation_radius_m=1.0,
+        cost_scaling_per_m=3.0,
+        native=False,
+    )
     if fast.engine != "C":
         pytest.skip(f"the C march is not built here: {fast.engine}")
     rng, cleared = np.random.default_rng(2), 0
     for _ in range(25):
         origin = rng.uniform((0.5, 0.5), (11.5, 7.5))
-        people = [(*rng.uniform((0.5, 0.5), (11.5, 7.5)), 0.25) for _ in range(int(rng.integers(0, 4)))]
+        people = [
+            (*rng.uniform((0.5, 0.5), (11.5, 7.5)), 0.25) for _ in range(int(rng.integers(0, 4)))
+        ]
         o, e, hit = _scan(origin, people)
-        hit = hit & (rng.random(len(hit)) > 0.1)          # dropped returns: cleared to the raytrace range
-        e = np.where(rng.random((len(e), 1)) < 0.05, e + rng.uniform(-30, 30, e.shape), e)  # some far off the grid
+        hit = hit & (rng.random(len(hit)) > 0.1)  # dropped returns: cleared to the raytrace range
+        e = np.where(
+            rng.random((len(e), 1)) < 0.05, e + rng.uniform(-30, 30, e.shape), e
+        )  # some far off the grid
         before = fast.marked.sum()
-        changed = [cm.update_scan(o, e, hit, obstacle_range_m=4.0, raytrace_range_m=5.0) for cm in (fast, slow)]
+        changed = [
+            cm.update_scan(o, e, hit, obstacle_range_m=4.0, raytrace_range_m=5.0)
+            for cm in (fast, slow)
+        ]
         assert changed[0] == changed[1]
         assert np.array_equal(fast.marked, slow.marked) and np.array_equal(fast.dist_m, slow.dist_m)
         cleared += int(before > 0 and changed[0] > 0)
@@ -115,7 +133,13 @@ def test_the_c_march_crosses_the_cells_its_numpy_twin_crosses_on_a_dense_random_
     """Every sample counts on a layer a third marked: the same crossed cells, in the same order, from
     beams of random origins, directions and free lengths (none, zero, past the grid's edge)."""
     fast = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
-    slow = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0, native=False)
+    slow = Costmap(
+        room(),
+        inscribed_radius_m=0.265,
+        inflation_radius_m=1.0,
+        cost_scaling_per_m=3.0,
+        native=False,
+    )
     if fast.engine != "C":
         pytest.skip(f"the C march is not built here: {fast.engine}")
     rng = np.random.default_rng(6)

@@ -29,8 +29,14 @@ WALL_X, DOOR_Y, DOOR_M, WALL_T = 12.0, 7.0, 0.9, 0.2
 
 def door_hall(door_m: float = DOOR_M):
     lo, hi = DOOR_Y - door_m / 2, DOOR_Y + door_m / 2
-    return room(24.0, 14.0, walls=[(WALL_X - WALL_T / 2, 0.0, WALL_X + WALL_T / 2, lo),
-                                   (WALL_X - WALL_T / 2, hi, WALL_X + WALL_T / 2, 14.0)])
+    return room(
+        24.0,
+        14.0,
+        walls=[
+            (WALL_X - WALL_T / 2, 0.0, WALL_X + WALL_T / 2, lo),
+            (WALL_X - WALL_T / 2, hi, WALL_X + WALL_T / 2, 14.0),
+        ],
+    )
 
 
 def jamb_clearance_m(poses: np.ndarray, door_m: float = DOOR_M) -> tuple[float, float]:
@@ -53,7 +59,11 @@ def test_the_plan_runs_on_the_doors_centre_line_aligned_before_the_robot_enters(
     """Approached at 45 degrees from the south-west and left to the north-east: within the wall and for the
     footprint's half length (plus 0.1 m) either side the plan lies on the door's centre line, heading along it."""
     planner = make_planner(costmap, FP, CFG.navigation)
-    for start, goal in (((9.5, 4.5), (15.0, 10.0)), ((8.0, 10.5), (16.0, 3.0)), ((15.0, 9.0), (9.0, 5.0))):
+    for start, goal in (
+        ((9.5, 4.5), (15.0, 10.0)),
+        ((8.0, 10.5), (16.0, 3.0)),
+        ((15.0, 9.0), (9.0, 5.0)),
+    ):
         plan = planner.plan(np.array(start), np.array(goal))
         zone = np.abs(plan.xy_m[:, 0] - WALL_X) <= WALL_T / 2 + FP.x_max_m + 0.1
         assert zone.sum() >= 15
@@ -89,8 +99,16 @@ def test_the_critics_see_the_rectangle_in_the_door_not_circles(costmap, native):
 def test_the_speed_is_capped_where_the_plan_passes_a_narrow_passage(costmap):
     """Driving at 0.8 m/s towards the door with 1 m to go, the controller slows to narrow_v_m_s; on the same
     plan in the open hall it does not."""
-    mppi = Mppi(costmap, FP, Limits(), 0.05, seed=2, narrow_m=CFG.navigation.mppi.narrow_m,
-                narrow_v_m_s=CFG.navigation.mppi.narrow_v_m_s)
+    mppi = Mppi(
+        costmap,
+        FP,
+        Limits(),
+        0.05,
+        seed=2,
+        narrow_m=CFG.navigation.mppi.narrow_m,
+        narrow_v_m_s=CFG.navigation.mppi.narrow_v_m_s,
+    )
+
     def drive(x0, x1, y):
         xs = np.arange(x0, x1, 0.05)
         path = PathHandler(np.column_stack([xs, np.full(len(xs), y), np.zeros(len(xs))]))
@@ -99,9 +117,12 @@ def test_the_speed_is_capped_where_the_plan_passes_a_narrow_passage(costmap):
             path.update(pose[0], pose[1])
             cmd = mppi.command(pose, vel, path)
             vel = (cmd.v_m_s, cmd.w_rad_s)
-            pose = pose + 0.05 * np.array([vel[0] * math.cos(pose[2]), vel[0] * math.sin(pose[2]), vel[1]])
+            pose = pose + 0.05 * np.array(
+                [vel[0] * math.cos(pose[2]), vel[0] * math.sin(pose[2]), vel[1]]
+            )
             top.append(vel[0])
         return np.array(top)
+
     door = drive(WALL_X - 2.0, WALL_X + 3.0, DOOR_Y)
     assert door[-10:].max() <= CFG.navigation.mppi.narrow_v_m_s + 1e-6
     mppi.reset()
@@ -114,13 +135,20 @@ def test_the_collision_monitor_lets_the_robot_through_the_door_and_stops_it_at_a
     (the zones are the footprint's rectangle grown by pad_m; a circle about the robot would hold a jamb); a
     turn that swings a corner into a jamb within time_before_collision_s is slowed."""
     m = CFG.navigation.monitor
-    monitor = CollisionMonitor(FP, 0.8, pad_m=m.pad_m, time_before_collision_s=m.time_before_collision_s)
+    monitor = CollisionMonitor(
+        FP, 0.8, pad_m=m.pad_m, time_before_collision_s=m.time_before_collision_s
+    )
     ys = np.concatenate([np.arange(DOOR_M / 2, 1.5, 0.02), -np.arange(DOOR_M / 2, 1.5, 0.02)])
     xs = np.arange(-WALL_T / 2, WALL_T / 2 + 1e-9, 0.02)
-    jambs = np.array([[x, y] for x in xs for y in ys])  # in base_link, the robot on the centre line mid-door
+    jambs = np.array(
+        [[x, y] for x in xs for y in ys]
+    )  # in base_link, the robot on the centre line mid-door
     mapped = np.zeros(len(jambs), bool)
     assert monitor.filter(0.3, 0.0, jambs, mapped) == (0.3, 0.0)
-    assert monitor.filter(0.3, 0.0, jambs + [0.5, 0.0], mapped) == (0.3, 0.0)  # the door 0.5 m ahead
+    assert monitor.filter(0.3, 0.0, jambs + [0.5, 0.0], mapped) == (
+        0.3,
+        0.0,
+    )  # the door 0.5 m ahead
     v, w = monitor.filter(0.3, 1.0, jambs, mapped)
     assert abs(v) < 0.3 and abs(w) < 1.0
 
@@ -137,9 +165,17 @@ def door_trip(request, tmp_path_factory):
 
     world = write_map(tmp_path_factory.mktemp("door"), "door", door_hall())
     start, goal = TRIPS[request.param]
-    twin_options = TwinOptions(firmware="improved", world=str(world), start_xy_yaw=start, visuals=False, seed=0)
-    return world, start, goal, navigate(CFG, twin_options, NavigationOptions(goals=((*goal, None),),
-                                                                              localisation="ekf", seed=0))
+    twin_options = TwinOptions(
+        firmware="improved", world=str(world), start_xy_yaw=start, visuals=False, seed=0
+    )
+    return (
+        world,
+        start,
+        goal,
+        navigate(
+            CFG, twin_options, NavigationOptions(goals=((*goal, None),), localisation="ekf", seed=0)
+        ),
+    )
 
 
 def test_the_robot_drives_through_a_0_9_m_door_with_the_ekf_0_08_m_clear_of_each_jamb(door_trip):
@@ -154,9 +190,15 @@ def test_the_robot_drives_through_a_0_9_m_door_with_the_ekf_0_08_m_clear_of_each
     lo, hi = jamb_clearance_m(run.pose_true)
     assert min(lo, hi) >= 0.08, (lo, hi)
     walls = wall_boxes(load_map(world))
-    boxes = Footprints(np.array([w[0][:2] for w in walls]), np.array([w[1][:2] for w in walls]),
-                       np.array([w[2] for w in walls]), tuple(f"wall_{i}" for i in range(len(walls))))
-    optimal = VisibilityGraph(boxes, FP.inscribed_radius_m, (0.0, 0.0, 24.0, 14.0)).length_m(start[:2], goal)
+    boxes = Footprints(
+        np.array([w[0][:2] for w in walls]),
+        np.array([w[1][:2] for w in walls]),
+        np.array([w[2] for w in walls]),
+        tuple(f"wall_{i}" for i in range(len(walls))),
+    )
+    optimal = VisibilityGraph(boxes, FP.inscribed_radius_m, (0.0, 0.0, 24.0, 14.0)).length_m(
+        start[:2], goal
+    )
     moving = (run.t_s >= out.t_start_s) & (run.t_s <= out.t_end_s)
     travelled = float(np.hypot(*np.diff(run.pose_true[moving, :2], axis=0).T).sum())
     assert travelled / optimal <= 1.10, (travelled, optimal)

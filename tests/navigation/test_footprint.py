@@ -12,8 +12,12 @@ def test_the_footprint_is_the_chassis_with_the_wheels_sticking_out():
     cfg = load_config()
     fp = robot_footprint(cfg)
     assert fp.x_max_m == -fp.x_min_m == cfg.chassis.length_m / 2 == 0.35
-    assert math.isclose(fp.half_width_m, cfg.wheel.separation_m / 2 + cfg.wheel.width_m / 2)  # 0.265 m
-    assert math.isclose(fp.inscribed_radius_m, 0.265) and math.isclose(fp.circumscribed_radius_m, math.hypot(0.35, 0.265))
+    assert math.isclose(
+        fp.half_width_m, cfg.wheel.separation_m / 2 + cfg.wheel.width_m / 2
+    )  # 0.265 m
+    assert math.isclose(fp.inscribed_radius_m, 0.265) and math.isclose(
+        fp.circumscribed_radius_m, math.hypot(0.35, 0.265)
+    )
     wider = robot_footprint(load_config(sets=["wheel.separation_m=0.485"]))
     assert wider.half_width_m > fp.half_width_m
 

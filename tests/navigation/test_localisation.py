@@ -12,8 +12,11 @@ from amr_twin.base.clock import VirtualClock
 
 
 def _odom(t_s, x, y, yaw):
-    return Odometry(Header(0, Time.from_sec(t_s), "map"), "base_link",
-                    PoseWithCovariance(Pose(Point(x, y, 0.0), Quaternion.from_yaw(yaw))))
+    return Odometry(
+        Header(0, Time.from_sec(t_s), "map"),
+        "base_link",
+        PoseWithCovariance(Pose(Point(x, y, 0.0), Quaternion.from_yaw(yaw))),
+    )
 
 
 def test_a_jump_the_ekf_takes_in_leaves_every_corrected_pose_where_it_was():
@@ -28,9 +31,9 @@ def test_a_jump_the_ekf_takes_in_leaves_every_corrected_pose_where_it_was():
     t = np.linspace(0.05, 0.9, 7)
     before_hist, before_now = src.poses_at(t), src.pose()
     raw = src.raw_pose()
-    jumped = compose(raw, (0.03, -0.04, 0.02))            # the EKF's latest pose after the fusion, same stamp
+    jumped = compose(raw, (0.03, -0.04, 0.02))  # the EKF's latest pose after the fusion, same stamp
     bus.publish("odometry/filtered", _odom(0.9, *jumped))
-    assert np.hypot(*(src.pose()[:2] - before_now[:2])) > 0.04           # the jump shows before the rebase
+    assert np.hypot(*(src.pose()[:2] - before_now[:2])) > 0.04  # the jump shows before the rebase
     src.rebase(raw)
     assert src.pose() == pytest.approx(before_now, abs=1e-9)
     assert src.poses_at(t) == pytest.approx(before_hist, abs=1e-9)

@@ -28,8 +28,10 @@ def _room_scan(origin, n=360, discs=()):
     o = np.asarray(origin, float)
     dx = np.where(np.abs(d[:, 0]) > 1e-9, d[:, 0], 1e-9)
     dy = np.where(np.abs(d[:, 1]) > 1e-9, d[:, 1], 1e-9)
-    r = np.minimum(np.where(dx > 0, (11.9 - o[0]) / dx, (0.1 - o[0]) / dx),
-                   np.where(dy > 0, (7.9 - o[1]) / dy, (0.1 - o[1]) / dy))
+    r = np.minimum(
+        np.where(dx > 0, (11.9 - o[0]) / dx, (0.1 - o[0]) / dx),
+        np.where(dy > 0, (7.9 - o[1]) / dy, (0.1 - o[1]) / dy),
+    )
     for x, y, rad in discs:
         f = o - np.array([x, y])
         b = d @ f
@@ -42,8 +44,11 @@ def _room_scan(origin, n=360, discs=()):
 def _about(point, theta, shift):
     """The transform rotating by ``theta`` about ``point`` then shifting by ``shift``."""
     c, s = math.cos(theta), math.sin(theta)
-    return (point[0] - (c * point[0] - s * point[1]) + shift[0], point[1] - (s * point[0] + c * point[1]) + shift[1],
-            theta)
+    return (
+        point[0] - (c * point[0] - s * point[1]) + shift[0],
+        point[1] - (s * point[0] + c * point[1]) + shift[1],
+        theta,
+    )
 
 
 @pytest.fixture
@@ -63,7 +68,9 @@ def _drive(matcher, error, scans=12, discs=()):
     return float(np.hypot(*(apply(left, LASER[None])[0] - LASER))), abs(left[2])
 
 
-@pytest.mark.parametrize("theta, shift", [(0.06, (0.08, -0.05)), (-0.05, (-0.1, 0.04)), (0.0, (0.12, 0.1))])
+@pytest.mark.parametrize(
+    "theta, shift", [(0.06, (0.08, -0.05)), (-0.05, (-0.1, 0.04)), (0.0, (0.12, 0.1))]
+)
 def test_a_misplaced_scan_is_brought_back_onto_the_map(costmap, theta, shift):
     """The EKF's heading 3-4 degrees off and its position 5-12 cm (what the aisles' NLOS ranges do):
     within a dozen scans the correction leaves under 1.5 cm at the laser and 0.2 degrees of heading."""
@@ -82,7 +89,9 @@ def test_a_scan_with_too_few_returns_near_the_map_leaves_the_correction(costmap)
     """A scan far off the map (or of an open hall) is not matched: the correction stays, counted as skipped."""
     matcher = MapMatcher(costmap)
     ang = np.linspace(-np.pi, np.pi, 360, endpoint=False)
-    far = np.array([6.0, 4.0]) + 1.5 * np.column_stack([np.cos(ang), np.sin(ang)])  # 2.4 m and more off the walls
+    far = np.array([6.0, 4.0]) + 1.5 * np.column_stack(
+        [np.cos(ang), np.sin(ang)]
+    )  # 2.4 m and more off the walls
     assert matcher.update(np.array([6.0, 4.0]), far) == (0.0, 0.0, 0.0)
     assert matcher.correction == (0.0, 0.0, 0.0) and matcher.skipped == 1 and matcher.matches == 0
 
@@ -90,15 +99,20 @@ def test_a_scan_with_too_few_returns_near_the_map_leaves_the_correction(costmap)
 def test_the_prior_bounds_a_correction_the_map_cannot_fix(costmap):
     """In a long corridor (walls along x only) a shift along it is unobservable: the correction along the
     corridor stays within the prior's reach instead of sliding, while the cross shift is found."""
-    corridor = Costmap(room(40.0, 2.2), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
+    corridor = Costmap(
+        room(40.0, 2.2), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0
+    )
     matcher = MapMatcher(corridor, max_range_m=8.0)
     laser = np.array([20.0, 1.1])
     ang = np.linspace(-np.pi, np.pi, 360, endpoint=False)
     d = np.column_stack([np.cos(ang), np.sin(ang)])
-    r = np.where(np.abs(d[:, 1]) > 0.13, np.where(d[:, 1] > 0, 1.0 / np.maximum(d[:, 1], 1e-9),
-                                                   -1.0 / np.minimum(d[:, 1], -1e-9)), 20.0)
+    r = np.where(
+        np.abs(d[:, 1]) > 0.13,
+        np.where(d[:, 1] > 0, 1.0 / np.maximum(d[:, 1], 1e-9), -1.0 / np.minimum(d[:, 1], -1e-9)),
+        20.0,
+    )
     truth = laser + d * r[:, None]
-    error = (0.0, 0.08, 0.0)                      # 8 cm across the corridor
+    error = (0.0, 0.08, 0.0)  # 8 cm across the corridor
     for _ in range(12):
         placed = apply(compose(matcher.correction, error), truth)
         matcher.update(apply(compose(matcher.correction, error), laser[None])[0], placed)
@@ -116,9 +130,23 @@ def _ekf_errors(matching: bool):
     from amr_twin.assembly.twin import Twin, TwinOptions
 
     cfg = load_config(sets=[f"navigation.map_matching.enabled={str(matching).lower()}"])
-    twin = Twin(cfg, TwinOptions(firmware="improved", world="aisles", start_xy_yaw=None, visuals=False, sensors=("imu", "lidar")))
-    nav = attach(twin, cfg, true_map(cfg, "aisles"), NavigationOptions(goals=((10.0, -4.8, math.pi),)),
-                 publish=False)
+    twin = Twin(
+        cfg,
+        TwinOptions(
+            firmware="improved",
+            world="aisles",
+            start_xy_yaw=None,
+            visuals=False,
+            sensors=("imu", "lidar"),
+        ),
+    )
+    nav = attach(
+        twin,
+        cfg,
+        true_map(cfg, "aisles"),
+        NavigationOptions(goals=((10.0, -4.8, math.pi),)),
+        publish=False,
+    )
     twin.advance(REST_S)
     pos, yaw = [], []
     for _ in range(90):
@@ -143,7 +171,10 @@ def test_the_ekf_pose_is_held_to_the_map_in_the_aisles(ekf_runs):
     raw_pos_m, raw_yaw_rad, _ = ekf_runs[False]
     assert raw_pos_m > 0.08 and raw_pos_m > pos_m + 0.02, (raw_pos_m, raw_yaw_rad, pos_m)
     assert pos_m < 0.09 and yaw_rad < 0.03, (pos_m, yaw_rad)
-    assert nav.matcher.matches >= 40 and nav.matcher.skipped <= 2, (nav.matcher.matches, nav.matcher.skipped)
+    assert nav.matcher.matches >= 40 and nav.matcher.skipped <= 2, (
+        nav.matcher.matches,
+        nav.matcher.skipped,
+    )
 
 
 def test_each_step_and_the_whole_correction_are_bounded(costmap):
@@ -154,8 +185,10 @@ def test_each_step_and_the_whole_correction_are_bounded(costmap):
     truth = _room_scan(LASER)
     moved = []
     for _ in range(30):
-        step = matcher.update(apply(compose(matcher.correction, error), LASER[None])[0],
-                              apply(compose(matcher.correction, error), truth))
+        step = matcher.update(
+            apply(compose(matcher.correction, error), LASER[None])[0],
+            apply(compose(matcher.correction, error), truth),
+        )
         moved.append(math.hypot(step[0], step[1]))
     at_laser = apply(matcher.correction, LASER[None])[0] - LASER
     assert max(moved) <= 0.03 + 1e-9 and min(moved[:5]) > 0.029, moved[:5]
@@ -176,9 +209,20 @@ def _unseen_drive(feedback: bool, tmp_path, sim_s: float = 26.0):
     cfg = load_config(sets=[f"navigation.map_matching.feedback={str(feedback).lower()}"])
     world = str(write_map(tmp_path, "wh22", random_warehouse(22)))
     ep = episodes(cfg, world, 4, 22)[3]
-    twin = Twin(cfg, TwinOptions(firmware="improved", world=world, seed=ep.seed * 100_003 + ep.index,
-                                 start_xy_yaw=ep.start, visuals=False, sensors=("imu", "lidar")))
-    nav = attach(twin, cfg, true_map(cfg, world), NavigationOptions(goals=(ep.goal,)), publish=False)
+    twin = Twin(
+        cfg,
+        TwinOptions(
+            firmware="improved",
+            world=world,
+            seed=ep.seed * 100_003 + ep.index,
+            start_xy_yaw=ep.start,
+            visuals=False,
+            sensors=("imu", "lidar"),
+        ),
+    )
+    nav = attach(
+        twin, cfg, true_map(cfg, world), NavigationOptions(goals=(ep.goal,)), publish=False
+    )
     twin.advance(REST_S)
     err = []
     for _ in range(int(sim_s / 0.5)):
@@ -202,12 +246,16 @@ def test_the_ekf_takes_the_match_in_and_stays_on_an_unseen_map(unseen_runs):
     err_raw, status_raw, _ = unseen_runs[False]
     assert err_raw.max() > 0.6 and status_raw != "succeeded", (err_raw.max(), status_raw)
     assert err_fb.max() < 0.1 and status_fb == "succeeded", (err_fb.max(), status_fb)
-    assert nav.matcher.matches > 100 and max(abs(v) for v in nav.matcher.correction[:2]) < 0.1, nav.matcher.correction
+    assert nav.matcher.matches > 100 and max(abs(v) for v in nav.matcher.correction[:2]) < 0.1, (
+        nav.matcher.correction
+    )
 
 
 def _corridor_matcher(**kw):
     """A matcher fitted once in a 40 m corridor 2.2 m wide (walls along x), the laser at its middle."""
-    corridor = Costmap(room(40.0, 2.2), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
+    corridor = Costmap(
+        room(40.0, 2.2), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0
+    )
     matcher = MapMatcher(corridor, max_range_m=8.0, **kw)
     laser = np.array([20.0, 1.1])
     ang = np.linspace(-np.pi, np.pi, 360, endpoint=False)
@@ -222,14 +270,18 @@ def test_the_matched_pose_covariance_leaves_the_corridor_open():
     """What goes to the EKF: across the corridor the fit knows the pose to millimetres, along it not at all
     (its variance stays at the 1e6 m^2 regulariser's scale); a base 0.5 m ahead of the laser adds the heading's
     variance times 0.25 m^2 across; the inflation scales the fit and the floors add."""
-    bare, laser = _corridor_matcher(feedback_inflation=1.0, feedback_floor_m=1e-9, feedback_floor_rad=1e-9)
+    bare, laser = _corridor_matcher(
+        feedback_inflation=1.0, feedback_floor_m=1e-9, feedback_floor_rad=1e-9
+    )
     at = bare.pose_covariance(laser)
     assert at[0, 0] > 1e4 and at[1, 1] < 1e-4 and at[2, 2] < 1e-4, np.diag(at)
     ahead = bare.pose_covariance(laser + [0.5, 0.0])
     assert ahead[1, 1] == pytest.approx(at[1, 1] + 0.25 * at[2, 2] + at[1, 2], rel=1e-6)
     assert ahead[1, 1] > at[1, 1]
-    inflated, _ = _corridor_matcher(feedback_inflation=10.0, feedback_floor_m=0.05, feedback_floor_rad=0.01)
-    assert inflated.pose_covariance(laser)[1, 1] == pytest.approx(10 * at[1, 1] + 0.05 ** 2, rel=1e-6)
+    inflated, _ = _corridor_matcher(
+        feedback_inflation=10.0, feedback_floor_m=0.05, feedback_floor_rad=0.01
+    )
+    assert inflated.pose_covariance(laser)[1, 1] == pytest.approx(10 * at[1, 1] + 0.05**2, rel=1e-6)
     msg = inflated.pose_message((20.0, 1.1, 0.3), 2.5, 7)
     cov = msg.pose.covariance.reshape(6, 6)
     assert msg.header.frame_id == "map" and msg.header.stamp.to_sec() == 2.5
@@ -248,6 +300,10 @@ def test_the_pose_covariance_moves_from_the_laser_to_the_base_as_a_rigid_motion(
     d = rng.multivariate_normal(np.zeros(3), cov, 200_000)
     rel = base - m.centre_xy_m
     c, s = np.cos(d[:, 2]), np.sin(d[:, 2])
-    moved = m.centre_xy_m + np.column_stack([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]]) + d[:, :2]
+    moved = (
+        m.centre_xy_m
+        + np.column_stack([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
+        + d[:, :2]
+    )
     sampled = np.cov(np.column_stack([moved, d[:, 2]]).T)
     assert m.pose_covariance(base) == pytest.approx(sampled, rel=0.02, abs=2e-6)

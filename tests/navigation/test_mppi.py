@@ -26,8 +26,10 @@ def costmap():
 
 
 def _pair(costmap, **kw):
-    fast, slow = Mppi(costmap, FP, Limits(), 0.05, seed=3, **kw), Mppi(costmap, FP, Limits(), 0.05, seed=3,
-                                                                         native=False, **kw)
+    fast, slow = (
+        Mppi(costmap, FP, Limits(), 0.05, seed=3, **kw),
+        Mppi(costmap, FP, Limits(), 0.05, seed=3, native=False, **kw),
+    )
     if fast.engine != "C":
         pytest.skip(f"the C critics are not built here: {fast.engine}")
     return fast, slow
@@ -46,8 +48,17 @@ def _case(rng):
     if rng.random() < 0.3:  # near the goal: the goal critic instead of the path's
         goal = pose[:2] + rng.uniform(-0.4, 0.4, 2)
     n = int(rng.integers(0, 5))
-    people = People(float(rng.uniform(0, 5)), pose[:2] + rng.uniform(-3.0, 3.0, (n, 2)), rng.uniform(-1.2, 1.2, (n, 2)))
-    return pose, (float(rng.uniform(-0.2, 1.0)), float(rng.uniform(-1, 1))), _path(pose[:2], goal), people
+    people = People(
+        float(rng.uniform(0, 5)),
+        pose[:2] + rng.uniform(-3.0, 3.0, (n, 2)),
+        rng.uniform(-1.2, 1.2, (n, 2)),
+    )
+    return (
+        pose,
+        (float(rng.uniform(-0.2, 1.0)), float(rng.uniform(-1, 1))),
+        _path(pose[:2], goal),
+        people,
+    )
 
 
 def test_the_c_critics_give_the_numpy_costs_collisions_and_commands_on_random_rollouts(costmap):
@@ -55,8 +66,9 @@ def test_the_c_critics_give_the_numpy_costs_collisions_and_commands_on_random_ro
     rng, hits, crowded = np.random.default_rng(11), 0, 0
     for _ in range(30):
         pose, vel, path, people = _case(rng)
-        u = (fast.rng.standard_normal((fast.T, fast.K, 2), dtype=np.float32) * np.float32(0.6)
-             + np.float32(rng.uniform(-0.3, 1.0)))
+        u = fast.rng.standard_normal((fast.T, fast.K, 2), dtype=np.float32) * np.float32(
+            0.6
+        ) + np.float32(rng.uniform(-0.3, 1.0))
         u_fast = u_slow = slow._feasible(u, *vel)
         x, y, yaw = fast.rollout(pose, u_fast)
         for a, b in zip((x, y, yaw), slow.rollout(pose, u_slow)):
@@ -80,9 +92,15 @@ def test_the_c_and_numpy_controllers_give_the_same_commands_cycle_after_cycle(co
         for k in range(8):  # the nominal carries over: the same commands, cycle after cycle
             a = fast.command(pose, vel, path, people, people.t_s + 0.05 * k)
             b = slow.command(pose, vel, path, people, people.t_s + 0.05 * k)
-            assert abs(a.v_m_s - b.v_m_s) < 1e-4 and abs(a.w_rad_s - b.w_rad_s) < 1e-4 and a.blocked == b.blocked
+            assert (
+                abs(a.v_m_s - b.v_m_s) < 1e-4
+                and abs(a.w_rad_s - b.w_rad_s) < 1e-4
+                and a.blocked == b.blocked
+            )
             vel = (a.v_m_s, a.w_rad_s)
-            pose = pose + 0.05 * np.array([vel[0] * math.cos(pose[2]), vel[0] * math.sin(pose[2]), vel[1]])
+            pose = pose + 0.05 * np.array(
+                [vel[0] * math.cos(pose[2]), vel[0] * math.sin(pose[2]), vel[1]]
+            )
 
 
 def test_the_c_and_numpy_samples_are_the_same_bits(costmap):
@@ -94,5 +112,9 @@ def test_the_c_and_numpy_samples_are_the_same_bits(costmap):
         fast.nominal[:], slow.nominal[:] = nominal, nominal
         vel = (float(rng.uniform(-0.2, 1.0)), float(rng.uniform(-1.5, 1.5)))
         a, b = fast._sample(*vel), slow._sample(*vel)
-        assert np.array_equal(a, b)  # noise about the nominal, the nominal and braking samples, the ramps
-        assert np.ptp(a[-1, 2:, 0]) > 0.1  # the samples do spread (the first step is pinned by the ramps)
+        assert np.array_equal(
+            a, b
+        )  # noise about the nominal, the nominal and braking samples, the ramps
+        assert (
+            np.ptp(a[-1, 2:, 0]) > 0.1
+        )  # the samples do spread (the first step is pinned by the ramps)

@@ -33,22 +33,52 @@ def _boxes(world, obstacles=()):
     """The world's obstacles (an MJCF world's geoms, a ROS map's extruded walls) and ``obstacles``, as boxes."""
     if str(world).endswith(".yaml"):
         walls = wall_boxes(load_map(world))
-        b = Footprints(np.array([w[0][:2] for w in walls]), np.array([w[1][:2] for w in walls]),
-                  np.array([w[2] for w in walls]), tuple(f"wall_{i}" for i in range(len(walls))))
+        b = Footprints(
+            np.array([w[0][:2] for w in walls]),
+            np.array([w[1][:2] for w in walls]),
+            np.array([w[2] for w in walls]),
+            tuple(f"wall_{i}" for i in range(len(walls))),
+        )
     else:
-        b = obstacle_boxes(mujoco.MjModel.from_xml_path(str(world_path(world))), 0.005, robot_top_m(CFG))
-    extra = Footprints(np.array([[o.x_m, o.y_m] for o in obstacles]).reshape(-1, 2),
-                  np.array([[o.size_m[0] / 2, o.size_m[1] / 2] for o in obstacles]).reshape(-1, 2),
-                  np.array([o.yaw_rad for o in obstacles]), tuple(o.name for o in obstacles))
-    return Footprints(np.vstack([b.centre_xy_m, extra.centre_xy_m]), np.vstack([b.half_xy_m, extra.half_xy_m]),
-                 np.concatenate([b.yaw_rad, extra.yaw_rad]), b.names + extra.names)
+        b = obstacle_boxes(
+            mujoco.MjModel.from_xml_path(str(world_path(world))), 0.005, robot_top_m(CFG)
+        )
+    extra = Footprints(
+        np.array([[o.x_m, o.y_m] for o in obstacles]).reshape(-1, 2),
+        np.array([[o.size_m[0] / 2, o.size_m[1] / 2] for o in obstacles]).reshape(-1, 2),
+        np.array([o.yaw_rad for o in obstacles]),
+        tuple(o.name for o in obstacles),
+    )
+    return Footprints(
+        np.vstack([b.centre_xy_m, extra.centre_xy_m]),
+        np.vstack([b.half_xy_m, extra.half_xy_m]),
+        np.concatenate([b.yaw_rad, extra.yaw_rad]),
+        b.names + extra.names,
+    )
 
 
-def _go(world, start, goal, obstacles=(), localisation="truth", controller="mppi", map_yaml=None, seed=0):
-    twin_options = TwinOptions(firmware="improved", world=str(world), start_xy_yaw=start, visuals=False,
-                               obstacles=tuple(obstacles), seed=seed)
-    return navigate(CFG, twin_options, NavigationOptions(goals=(goal,), localisation=localisation,
-                                                         controller=controller, map_yaml=map_yaml, seed=seed))
+def _go(
+    world, start, goal, obstacles=(), localisation="truth", controller="mppi", map_yaml=None, seed=0
+):
+    twin_options = TwinOptions(
+        firmware="improved",
+        world=str(world),
+        start_xy_yaw=start,
+        visuals=False,
+        obstacles=tuple(obstacles),
+        seed=seed,
+    )
+    return navigate(
+        CFG,
+        twin_options,
+        NavigationOptions(
+            goals=(goal,),
+            localisation=localisation,
+            controller=controller,
+            map_yaml=map_yaml,
+            seed=seed,
+        ),
+    )
 
 
 @pytest.fixture(scope="module", params=["mppi", "rpp"])
@@ -62,7 +92,10 @@ def test_a_goal_behind_the_robot_in_a_2_m_aisle_is_reached_without_touching_a_ra
     assert out.status == "succeeded", out.reason
     assert behind.collisions == []
     x, y, yaw = behind.pose_true[-1]
-    assert math.hypot(x + 13.0, y + 4.8) <= 0.25 and abs(math.remainder(yaw - math.pi, 2 * math.pi)) <= 0.25
+    assert (
+        math.hypot(x + 13.0, y + 4.8) <= 0.25
+        and abs(math.remainder(yaw - math.pi, 2 * math.pi)) <= 0.25
+    )
     clearance = footprint_clearance_m(behind.pose_true[::10], FP, _boxes("aisles"))
     assert clearance.min() > 0.1  # the racks are 0.74 m from the sides in the middle of the aisle
 
@@ -76,7 +109,10 @@ def corridors(tmp_path_factory):
 @pytest.fixture(scope="module")
 def blocked(corridors):
     jack = Obstacle("pallet_jack", 6.2, 2.5, (0.6, 1.95, 1.3))  # across the south corridor
-    return [_go(corridors, (1.0, 2.5, 0.0), (11.0, 2.5, 0.0), obstacles=[jack], seed=s) for s in (0, 1, 2)], jack
+    return [
+        _go(corridors, (1.0, 2.5, 0.0), (11.0, 2.5, 0.0), obstacles=[jack], seed=s)
+        for s in (0, 1, 2)
+    ], jack
 
 
 def test_a_blocked_aisle_leads_to_a_replan_through_another(blocked, corridors):
@@ -87,8 +123,12 @@ def test_a_blocked_aisle_leads_to_a_replan_through_another(blocked, corridors):
         assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
         assert run.collisions == []
         went = run.pose_true[:, 1]
-        assert went.max() > 4.8  # round the middle wall, through the north corridor (y = 4.5 to 6.5)
-        assert footprint_clearance_m(run.pose_true[::10], FP, _boxes(corridors, [jack])).min() > 0.05  # round the wall end
+        assert (
+            went.max() > 4.8
+        )  # round the middle wall, through the north corridor (y = 4.5 to 6.5)
+        assert (
+            footprint_clearance_m(run.pose_true[::10], FP, _boxes(corridors, [jack])).min() > 0.05
+        )  # round the wall end
         assert len(run.outcomes[0].plan_cpu_s) >= 5  # replanned on the way, at 1 Hz
 
 
@@ -96,13 +136,35 @@ def test_the_stack_is_built_from_the_navigation_section_and_its_overrides(corrid
     from amr_twin.navigation.stack import attach, load_static_map
     from amr_twin.assembly.twin import Twin
 
-    cfg = load_config(sets=["navigation.mppi.samples=200", "navigation.monitor.people_stop_m=0.5",
-                            "navigation.people.range_m=3.0", "navigation.planner.planner_hz=2",
-                            "navigation.limits.max_v_m_s=0.6", "navigation.recoveries.wait_s=3"])
-    twin = Twin(cfg, TwinOptions(world=str(corridors), start_xy_yaw=(1.0, 2.5, 0.0), visuals=False, sensors=("imu", "lidar")))
-    nav = attach(twin, cfg, load_static_map(cfg, str(corridors), None),
-                 NavigationOptions(goals=((11.0, 2.5, 0.0),)), publish=False)
-    assert nav.controller.K == 200 and nav.monitor.people_stop_m == 0.5 and nav.tracker.range_m == 3.0
+    cfg = load_config(
+        sets=[
+            "navigation.mppi.samples=200",
+            "navigation.monitor.people_stop_m=0.5",
+            "navigation.people.range_m=3.0",
+            "navigation.planner.planner_hz=2",
+            "navigation.limits.max_v_m_s=0.6",
+            "navigation.recoveries.wait_s=3",
+        ]
+    )
+    twin = Twin(
+        cfg,
+        TwinOptions(
+            world=str(corridors),
+            start_xy_yaw=(1.0, 2.5, 0.0),
+            visuals=False,
+            sensors=("imu", "lidar"),
+        ),
+    )
+    nav = attach(
+        twin,
+        cfg,
+        load_static_map(cfg, str(corridors), None),
+        NavigationOptions(goals=((11.0, 2.5, 0.0),)),
+        publish=False,
+    )
+    assert (
+        nav.controller.K == 200 and nav.monitor.people_stop_m == 0.5 and nav.tracker.range_m == 3.0
+    )
     assert nav.p.planner_hz == 2.0 and nav.limits.max_v_m_s == 0.6 and nav.monitor.max_v_m_s == 0.6
     assert nav.recovery_settings["wait"] == {"duration_s": 3.0}
     assert nav.planner.people_m == pytest.approx(0.25 + 0.5 + FP.inscribed_radius_m + 0.05)
@@ -113,10 +175,19 @@ def stepping(corridors):
     """A person (an actor of the twin) steps into the south corridor about 2 m ahead of the robot at 0.8 m/s,
     crossing it diagonally towards the robot at 1.3 m/s, then stands at its north side."""
     person = Actor("person", ((6.0, 1.75), (4.5, 3.25)), 1.3, start_s=4.8)
-    twin_options = TwinOptions(firmware="improved", world=str(corridors), start_xy_yaw=(1.0, 2.5, 0.0), visuals=False,
-                               actors=(person,), seed=0)
-    return navigate(CFG, twin_options, NavigationOptions(goals=((11.0, 2.5, 0.0),), localisation="truth",
-                                                         controller="mppi"))
+    twin_options = TwinOptions(
+        firmware="improved",
+        world=str(corridors),
+        start_xy_yaw=(1.0, 2.5, 0.0),
+        visuals=False,
+        actors=(person,),
+        seed=0,
+    )
+    return navigate(
+        CFG,
+        twin_options,
+        NavigationOptions(goals=((11.0, 2.5, 0.0),), localisation="truth", controller="mppi"),
+    )
 
 
 def _person_clearance(run):
@@ -124,8 +195,20 @@ def _person_clearance(run):
     rows = []
     for t_a, poses in run.actor_poses:
         k = min(int(np.searchsorted(run.t_s, t_a)), len(run.t_s) - 1)
-        body = Footprints(np.array([poses[0][:2]]), np.array([PERSON_HALF_M]), np.array([poses[0][2]]), ("person",))
-        rows.append((t_a, float(footprint_clearance_m(run.pose_true[k:k + 1], FP, body)[0]), run.pose_true[k], poses[0]))
+        body = Footprints(
+            np.array([poses[0][:2]]),
+            np.array([PERSON_HALF_M]),
+            np.array([poses[0][2]]),
+            ("person",),
+        )
+        rows.append(
+            (
+                t_a,
+                float(footprint_clearance_m(run.pose_true[k : k + 1], FP, body)[0]),
+                run.pose_true[k],
+                poses[0],
+            )
+        )
     return rows
 
 
@@ -134,10 +217,16 @@ def test_a_person_stepping_into_the_path_2_m_ahead_stops_or_diverts_the_robot_0_
     assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
     assert run.collisions == []
     rows = _person_clearance(run)
-    t_in, _gap, robot, person = next(r for r in rows if r[3][1] + PERSON_HALF_M[1] >= 2.5 - FP.half_width_m)
+    t_in, _gap, robot, person = next(
+        r for r in rows if r[3][1] + PERSON_HALF_M[1] >= 2.5 - FP.half_width_m
+    )
     ahead = person[0] - PERSON_HALF_M[1] - (robot[0] + FP.x_max_m)
-    assert 1.5 <= ahead <= 2.5, ahead  # the scenario: they step into the robot's way about 2 m ahead of its front
-    assert min(r[1] for r in rows) >= 0.3  # their true body against the true footprint, all the way (0.64 m)
+    assert 1.5 <= ahead <= 2.5, (
+        ahead
+    )  # the scenario: they step into the robot's way about 2 m ahead of its front
+    assert (
+        min(r[1] for r in rows) >= 0.3
+    )  # their true body against the true footprint, all the way (0.64 m)
     speed = np.hypot(*np.diff(run.pose_true[:, :2], axis=0).T) / np.diff(run.t_s)
     crossing = (run.t_s[1:] > t_in) & (run.t_s[1:] < t_in + 2.0)
     diverted = np.abs(run.pose_true[:, 1] - 2.5).max() > 0.3
@@ -149,10 +238,19 @@ def standing(corridors):
     """A person standing at the south corridor's side, 0.65 m off the robot's line, who never walks: the
     robot drives past them (the experiment's people wait at an aisle's side so before they cross)."""
     person = Actor("person", ((6.0, 1.85),), 1.3)
-    twin_options = TwinOptions(firmware="improved", world=str(corridors), start_xy_yaw=(1.0, 2.5, 0.0), visuals=False,
-                               actors=(person,), seed=0)
-    return navigate(CFG, twin_options, NavigationOptions(goals=((11.0, 2.5, 0.0),), localisation="truth",
-                                                         controller="mppi"))
+    twin_options = TwinOptions(
+        firmware="improved",
+        world=str(corridors),
+        start_xy_yaw=(1.0, 2.5, 0.0),
+        visuals=False,
+        actors=(person,),
+        seed=0,
+    )
+    return navigate(
+        CFG,
+        twin_options,
+        NavigationOptions(goals=((11.0, 2.5, 0.0),), localisation="truth", controller="mppi"),
+    )
 
 
 def test_a_person_standing_still_beside_the_way_is_passed_0_3_m_away(standing):
@@ -175,6 +273,7 @@ def unseen(tmp_path_factory):
     rng = np.random.default_rng(3)
     free = np.argwhere(static.occupied == 0)
     from amr_twin.navigation.stack import make_costmap
+
     cm = make_costmap(yaml_map(path), FP, CFG.navigation)
     ok = cm.centres_xy_m(*np.nonzero(cm.static_dist_m >= 0.7))
     runs = []
@@ -194,7 +293,9 @@ def test_a_warehouse_the_code_has_never_seen_is_navigated(unseen):
     for run in runs:
         assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
         assert run.collisions == []
-        assert footprint_clearance_m(run.pose_true[::10], FP, _boxes(path)).min() > 0.02  # 0.08 m turning at a goal 0.7 m from a wall
+        assert (
+            footprint_clearance_m(run.pose_true[::10], FP, _boxes(path)).min() > 0.02
+        )  # 0.08 m turning at a goal 0.7 m from a wall
 
 
 class _TwoRoutes:
@@ -207,7 +308,10 @@ class _TwoRoutes:
         from amr_twin.navigation.planner import Plan
 
         line = lambda dx, n: np.column_stack([np.linspace(0, dx, n), np.zeros(n), np.zeros(n)])
-        self.east, self.west = Plan(line(37.0, 741), 37.0, 0.01), Plan(line(-60.0, 1201), 60.0, 0.01)
+        self.east, self.west = (
+            Plan(line(37.0, 741), 37.0, 0.01),
+            Plan(line(-60.0, 1201), 60.0, 0.01),
+        )
         self.calls, self.free = 0, True
 
     def plan(self, *a, **k):
@@ -231,20 +335,32 @@ def test_a_longer_plan_does_not_replace_a_free_path_the_robot_is_on():
     bus = Bus(VirtualClock())
     planner = _TwoRoutes()
     costmap = type("Costmap", (), {"version": 0})()
-    nav = Navigator(bus, bus.clock, PoseSource(bus, "ground_truth/odom"), costmap, planner, None, FP, Limits(),
-                    [(37.0, 0.0)])
+    nav = Navigator(
+        bus,
+        bus.clock,
+        PoseSource(bus, "ground_truth/odom"),
+        costmap,
+        planner,
+        None,
+        FP,
+        Limits(),
+        [(37.0, 0.0)],
+    )
     pose = np.zeros(3)
     assert nav._replan(pose) and nav.plan is planner.east
-    assert nav._replan(pose) and nav.plan is planner.east          # the west route (60 m) left aside
-    assert len(nav.outcomes[0].plan_cpu_s) == 2                     # both plans count in the planning times
+    assert nav._replan(pose) and nav.plan is planner.east  # the west route (60 m) left aside
+    assert len(nav.outcomes[0].plan_cpu_s) == 2  # both plans count in the planning times
     planner.free = False
     planner.calls = 1
-    assert nav._replan(pose) and nav.plan is planner.west          # the east path closed: the west one taken
+    assert (
+        nav._replan(pose) and nav.plan is planner.west
+    )  # the east path closed: the west one taken
     planner.free = True
-    assert nav._replan(pose) and nav.plan is planner.east          # shorter: taken at once
+    assert nav._replan(pose) and nav.plan is planner.east  # shorter: taken at once
 
 
 # -- the goal API: goals from outside while the navigator runs (a user, an action server) -------------------------
+
 
 class _Line:
     """A planner of straight lines from the pose to the goal (0.05 m apart)."""
@@ -288,10 +404,16 @@ class _Robot:
 
         v, w = self.cmd
         x, y, yaw = self.pose
-        self.pose = np.array([x + 0.01 * v * math.cos(yaw), y + 0.01 * v * math.sin(yaw), yaw + 0.01 * w])
+        self.pose = np.array(
+            [x + 0.01 * v * math.cos(yaw), y + 0.01 * v * math.sin(yaw), yaw + 0.01 * w]
+        )
         q = (math.cos(self.pose[2] / 2), 0.0, 0.0, math.sin(self.pose[2] / 2))
-        self.bus.publish("ground_truth/odom", ground_truth(self.bus.clock.now_us, (*self.pose[:2], 0.0), q,
-                                                          (v, 0.0, 0.0), (0.0, 0.0, w)))
+        self.bus.publish(
+            "ground_truth/odom",
+            ground_truth(
+                self.bus.clock.now_us, (*self.pose[:2], 0.0), q, (v, 0.0, 0.0), (0.0, 0.0, w)
+            ),
+        )
 
 
 def _navigator(goals=()):
@@ -305,8 +427,17 @@ def _navigator(goals=()):
     bus = Bus(VirtualClock())
     robot = _Robot(bus)
     costmap = type("Costmap", (), {"version": 0, "clear": lambda self: None})()
-    nav = Navigator(bus, bus.clock, PoseSource(bus, "ground_truth/odom"), costmap, _Line(), _Cruise(), FP, Limits(),
-                    list(goals))
+    nav = Navigator(
+        bus,
+        bus.clock,
+        PoseSource(bus, "ground_truth/odom"),
+        costmap,
+        _Line(),
+        _Cruise(),
+        FP,
+        Limits(),
+        list(goals),
+    )
     return nav, robot, bus.clock
 
 
@@ -318,17 +449,20 @@ def test_a_navigator_without_goals_idles_and_drives_to_a_goal_sent_later():
     nav, robot, clock = _navigator()
     _run(clock, 2.0)
     assert nav.done and nav.active is None and math.isnan(nav.distance_left_m)
-    assert robot.cmds == []                        # idle: nothing on cmd_vel
+    assert robot.cmds == []  # idle: nothing on cmd_vel
     out = nav.send_goal((3.0, 0.0, None))
     assert nav.active is out and out.status == "pending"
     _run(clock, 3.0)
-    assert 0.0 < nav.distance_left_m < 3.0         # the rest of the plan, as the robot drives it
+    assert 0.0 < nav.distance_left_m < 3.0  # the rest of the plan, as the robot drives it
     _run(clock, 20.0)
     assert out.status == "succeeded" and out.t_start_s >= 2.0
     assert abs(robot.pose[0] - 3.0) <= 0.25
     n = len(robot.cmds)
     _run(clock, 25.0)
-    assert len(robot.cmds) == n and robot.cmd == (0.0, 0.0)   # stopped, then silent until the next goal
+    assert len(robot.cmds) == n and robot.cmd == (
+        0.0,
+        0.0,
+    )  # stopped, then silent until the next goal
     assert out.pose_estimate_end is not None and abs(out.pose_estimate_end[0] - 3.0) <= 0.25
 
 
@@ -338,11 +472,15 @@ def test_a_new_goal_preempts_the_active_one_and_cancels_the_queued_ones():
     first, queued = nav.outcomes
     assert nav.active is first and 0.5 < robot.pose[0] < 1.5
     new = nav.send_goal((3.0, 0.0, None))
-    assert first.status == "preempted" and first.t_end_s == pytest.approx(2.0) and "new goal" in first.reason
+    assert (
+        first.status == "preempted"
+        and first.t_end_s == pytest.approx(2.0)
+        and "new goal" in first.reason
+    )
     assert queued.status == "canceled" and nav.active is new and nav.outcomes[-1] is new
     _run(clock, 20.0)
-    assert new.status == "succeeded" and abs(robot.pose[0] - 3.0) <= 0.25   # it went to the new goal
-    assert robot.pose[0] < 3.5                                              # and not on to the old one
+    assert new.status == "succeeded" and abs(robot.pose[0] - 3.0) <= 0.25  # it went to the new goal
+    assert robot.pose[0] < 3.5  # and not on to the old one
 
 
 def test_cancel_ends_the_goals_and_the_robot_ramps_to_a_stop():
@@ -352,20 +490,24 @@ def test_cancel_ends_the_goals_and_the_robot_ramps_to_a_stop():
     _run(clock, 3.0)
     assert robot.cmd[0] == pytest.approx(0.5)
     nav.cancel("canceled by the user")
-    assert [o.status for o in nav.outcomes] == ["canceled", "canceled"] and nav.done and nav.active is None
+    assert (
+        [o.status for o in nav.outcomes] == ["canceled", "canceled"]
+        and nav.done
+        and nav.active is None
+    )
     assert nav.outcomes[0].reason == "canceled by the user"
     _run(clock, 6.0)
     t, v = np.array([c[0] for c in robot.cmds]), np.array([c[1] for c in robot.cmds])
     after = t >= 3.0
     assert v[-1] == 0.0 and robot.cmd == (0.0, 0.0)
     decel = -np.diff(v[after]) / np.diff(t[after])
-    assert decel.max() <= Limits().decel_m_s2 + 1e-9      # a ramp, not a jump to zero
+    assert decel.max() <= Limits().decel_m_s2 + 1e-9  # a ramp, not a jump to zero
     stopped_at = t[after][np.argmax(v[after] == 0.0)]
     assert stopped_at - 3.0 >= 0.5 / Limits().decel_m_s2 - 0.06
     n = len(robot.cmds)
     _run(clock, 8.0)
-    assert len(robot.cmds) == n                           # silent once stopped
-    nav.cancel("again")                                   # nothing to cancel: no change
+    assert len(robot.cmds) == n  # silent once stopped
+    nav.cancel("again")  # nothing to cancel: no change
     assert nav.outcomes[0].reason == "canceled by the user"
 
 
@@ -375,7 +517,9 @@ def test_the_robot_drives_on_to_approach_m_of_the_goal_by_its_estimate_before_it
     nav, robot, clock = _navigator([(3.0, 0.0, None)])
     _run(clock, 20.0)
     assert nav.outcomes[0].status == "succeeded"
-    assert abs(robot.pose[0] - 3.0) <= nav.p.approach_m + 0.02   # the ramp to a stop from 0.1 m/s: 5 mm
+    assert (
+        abs(robot.pose[0] - 3.0) <= nav.p.approach_m + 0.02
+    )  # the ramp to a stop from 0.1 m/s: 5 mm
 
 
 class _DeadZoneRobot(_Robot):
@@ -400,9 +544,20 @@ def test_a_heading_inside_the_tolerance_that_the_drive_cannot_improve_ends_the_g
     bus = Bus(VirtualClock())
     robot = _DeadZoneRobot(bus)
     costmap = type("Costmap", (), {"version": 0, "clear": lambda self: None})()
-    nav = Navigator(bus, bus.clock, PoseSource(bus, "ground_truth/odom"), costmap, _Line(), _Cruise(), FP, Limits(),
-                    [(3.0, 0.0, 0.2)])
+    nav = Navigator(
+        bus,
+        bus.clock,
+        PoseSource(bus, "ground_truth/odom"),
+        costmap,
+        _Line(),
+        _Cruise(),
+        FP,
+        Limits(),
+        [(3.0, 0.0, 0.2)],
+    )
     _run(bus.clock, 40.0)
     out = nav.outcomes[0]
-    assert out.status == "succeeded" and abs(robot.pose[2]) < 0.01   # it could not turn, and the goal ended
+    assert (
+        out.status == "succeeded" and abs(robot.pose[2]) < 0.01
+    )  # it could not turn, and the goal ended
     assert out.t_end_s < 20.0

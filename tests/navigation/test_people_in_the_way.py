@@ -60,20 +60,33 @@ def _crossing(seed: int, tmp_path, sets=()):
     cfg = load_config(sets=list(sets)) if sets else CFG
     world = write_map(tmp_path, "hall", room(16.0, 6.0))
     start, goal = (2.0, AISLE_Y, 0.0), (13.0, AISLE_Y, None)
-    walker = Actor("person", (CROSS_FROM, CROSS_TO), 1.3, start_s=REST_S + SET_OFF_S, stop_within_m=0.0)
-    twin_options = TwinOptions(firmware="improved", world=str(world), start_xy_yaw=start, visuals=False, seed=seed,
-                               actors=(walker,))
-    return navigate(cfg, twin_options, NavigationOptions(goals=(goal,), localisation="ekf", seed=seed))
+    walker = Actor(
+        "person", (CROSS_FROM, CROSS_TO), 1.3, start_s=REST_S + SET_OFF_S, stop_within_m=0.0
+    )
+    twin_options = TwinOptions(
+        firmware="improved",
+        world=str(world),
+        start_xy_yaw=start,
+        visuals=False,
+        seed=seed,
+        actors=(walker,),
+    )
+    return navigate(
+        cfg, twin_options, NavigationOptions(goals=(goal,), localisation="ekf", seed=seed)
+    )
 
 
 def parked_in_lane_s(run) -> float:
     """Time (s) the robot stood with its true footprint in the part of the person's lane still ahead of them
     while they were within NEAR_M of the footprint."""
     person = _actor_at(run, run.t_s)
-    outline = to_map(run.pose_true, FP.outline_xy_m(0.02))                      # (n, k, 2)
+    outline = to_map(run.pose_true, FP.outline_xy_m(0.02))  # (n, k, 2)
     in_lane = np.abs(outline[..., 0] - LANE_X) <= LANE_HALF_M
-    ahead = outline[..., 1] < person[:, None, 1]                                # the person walks south
-    near = np.hypot(outline[..., 0] - person[:, None, 0], outline[..., 1] - person[:, None, 1]).min(1) <= NEAR_M
+    ahead = outline[..., 1] < person[:, None, 1]  # the person walks south
+    near = (
+        np.hypot(outline[..., 0] - person[:, None, 0], outline[..., 1] - person[:, None, 1]).min(1)
+        <= NEAR_M
+    )
     parked = (in_lane & ahead).any(1) & near & (_speed_m_s(run) < STANDING_M_S)
     return float(parked.sum() * np.median(np.diff(run.t_s)))
 
@@ -88,7 +101,7 @@ def test_a_person_who_does_not_give_way_crosses_the_robots_aisle_without_contact
     assert crossing.collisions == [], crossing.collisions
     assert out.status == "succeeded", out.reason
     person = _actor_at(crossing, crossing.t_s)
-    assert person[-1, 1] < AISLE_Y - 1.0                                       # the person got across
+    assert person[-1, 1] < AISLE_Y - 1.0  # the person got across
 
 
 def test_the_robot_never_stands_in_the_crossing_persons_lane(crossing):
@@ -102,19 +115,38 @@ WALL_X, DOOR_Y, DOOR_M, WALL_T = 8.0, 4.0, 0.9, 0.2
 
 def door_hall():
     lo, hi = DOOR_Y - DOOR_M / 2, DOOR_Y + DOOR_M / 2
-    return room(16.0, 8.0, walls=[(WALL_X - WALL_T / 2, 0.0, WALL_X + WALL_T / 2, lo),
-                                  (WALL_X - WALL_T / 2, hi, WALL_X + WALL_T / 2, 8.0)])
+    return room(
+        16.0,
+        8.0,
+        walls=[
+            (WALL_X - WALL_T / 2, 0.0, WALL_X + WALL_T / 2, lo),
+            (WALL_X - WALL_T / 2, hi, WALL_X + WALL_T / 2, 8.0),
+        ],
+    )
 
 
 def _door_meeting(seed: int, tmp_path):
     world = write_map(tmp_path, "door", door_hall())
     start, goal = (4.5, DOOR_Y, 0.0), (12.0, DOOR_Y, None)
     # the person sets off 3.5 m east of the door as the robot comes within about 2 m of it from the west
-    walker = Actor("person", ((WALL_X + 3.5, DOOR_Y), (WALL_X - 4.5, DOOR_Y)), 1.3,
-                   start_s=REST_S + (WALL_X - 2.0 - start[0]) / 0.55, stop_within_m=0.6)
-    twin_options = TwinOptions(firmware="improved", world=str(world), start_xy_yaw=start, visuals=False, seed=seed,
-                               actors=(walker,))
-    return navigate(CFG, twin_options, NavigationOptions(goals=(goal,), localisation="ekf", seed=seed))
+    walker = Actor(
+        "person",
+        ((WALL_X + 3.5, DOOR_Y), (WALL_X - 4.5, DOOR_Y)),
+        1.3,
+        start_s=REST_S + (WALL_X - 2.0 - start[0]) / 0.55,
+        stop_within_m=0.6,
+    )
+    twin_options = TwinOptions(
+        firmware="improved",
+        world=str(world),
+        start_xy_yaw=start,
+        visuals=False,
+        seed=seed,
+        actors=(walker,),
+    )
+    return navigate(
+        CFG, twin_options, NavigationOptions(goals=(goal,), localisation="ekf", seed=seed)
+    )
 
 
 def waits_s(run) -> tuple[float, float]:
@@ -134,13 +166,15 @@ def waits_s(run) -> tuple[float, float]:
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-def test_a_robot_and_a_person_meeting_at_a_0_9_m_door_both_get_through_within_seconds(seed, tmp_path):
+def test_a_robot_and_a_person_meeting_at_a_0_9_m_door_both_get_through_within_seconds(
+    seed, tmp_path
+):
     run = _door_meeting(seed, tmp_path)
     out = run.outcomes[0]
     assert out.status == "succeeded", out.reason
     assert run.collisions == [], run.collisions
     person_end = np.array(run.actor_poses[-1][1][0][:2])
-    assert person_end[0] < WALL_X - 4.0                                         # through the door, at their end
+    assert person_end[0] < WALL_X - 4.0  # through the door, at their end
     robot_wait, person_wait = waits_s(run)
     assert robot_wait < 10.0 and person_wait < 10.0, (robot_wait, person_wait)
     assert math.isfinite(out.t_end_s)

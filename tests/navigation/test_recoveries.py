@@ -35,8 +35,12 @@ def _costmap(walls=()):
 
 def test_spin_turns_a_quarter_turn_in_the_open_and_refuses_beside_a_wall():
     pose, step, _ = _run(Spin(_costmap(), FP, Limits(), 0.05), (6.0, 4.0, 0.0))
-    assert not step.failed and abs(pose[2] - math.pi / 2) < 0.08 and np.allclose(pose[:2], (6.0, 4.0))
-    tight = _costmap(walls=[(5.0, 4.32, 7.0, 5.0)])  # a wall 0.05 m beside the left side: turning sweeps a corner into it
+    assert (
+        not step.failed and abs(pose[2] - math.pi / 2) < 0.08 and np.allclose(pose[:2], (6.0, 4.0))
+    )
+    tight = _costmap(
+        walls=[(5.0, 4.32, 7.0, 5.0)]
+    )  # a wall 0.05 m beside the left side: turning sweeps a corner into it
     pose, step, _ = _run(Spin(tight, FP, Limits(), 0.05), (6.0, 4.0, 0.0))
     assert step.failed and abs(pose[2]) < 0.2
 
@@ -60,6 +64,8 @@ def test_wait_and_clear():
 
 def test_the_progress_checker_fails_after_10_s_within_0_5_m():
     pc = ProgressChecker(0.5, 10.0)
-    assert all(pc.check(t, 0.04 * t, 0.0) for t in np.arange(0.0, 9.9, 0.5))  # 0.4 m in 10 s: not yet 0.5 m
+    assert all(
+        pc.check(t, 0.04 * t, 0.0) for t in np.arange(0.0, 9.9, 0.5)
+    )  # 0.4 m in 10 s: not yet 0.5 m
     assert not pc.check(10.5, 0.42, 0.0)
     assert pc.check(10.6, 0.6, 0.0)  # moved on: a new reference

@@ -36,12 +36,18 @@ def test_a_robot_about_to_stop_in_a_walking_persons_lane_gets_out_of_it():
     y = _yielding()
     person = People(0.0, np.array([[0.0, 2.2]]), np.array([[0.0, -1.3]]))
     assert _least_gap(y, (0.0, 0.0), person) < 0.0
-    cmd = y.command(0.0, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), person, np.zeros((0, 2)))
+    cmd = y.command(
+        0.0, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), person, np.zeros((0, 2))
+    )
     assert cmd is not None and cmd != (0.0, 0.0)
     gap = _least_gap(y, cmd, person)
     assert gap > 0.05
-    assert all(gap >= min(_least_gap(y, c, person), NAV.monitor.people_stop_m + NAV.people.yielding.margin_m) - 1e-9
-               for c in y._grid)
+    assert all(
+        gap
+        >= min(_least_gap(y, c, person), NAV.monitor.people_stop_m + NAV.people.yielding.margin_m)
+        - 1e-9
+        for c in y._grid
+    )
 
 
 def test_the_way_out_keeps_clear_of_a_wall_the_scan_sees():
@@ -50,15 +56,25 @@ def test_the_way_out_keeps_clear_of_a_wall_the_scan_sees():
     person = People(0.0, np.array([[0.0, 1.6]]), np.array([[0.0, -1.3]]))
     wall = np.column_stack([np.full(41, FP.x_min_m - 0.2), np.linspace(-2.0, 2.0, 41)])
     cmd = y.command(0.0, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), person, wall)
-    assert cmd is not None and cmd[0] > 0.0                                  # through the lane, not back
+    assert cmd is not None and cmd[0] > 0.0  # through the lane, not back
 
 
 def test_no_person_in_the_way_leaves_the_command_alone():
     y = _yielding()
     behind = People(0.0, np.array([[-3.0, 1.0]]), np.array([[-1.3, 0.0]]))  # walking away behind it
-    assert y.command(0.0, (0.0, 0.0, 0.0), (0.3, 0.0), (0.3, 0.0), (0.3, 0.0), behind, np.zeros((0, 2))) is None
+    assert (
+        y.command(
+            0.0, (0.0, 0.0, 0.0), (0.3, 0.0), (0.3, 0.0), (0.3, 0.0), behind, np.zeros((0, 2))
+        )
+        is None
+    )
     nobody = People(0.0, np.zeros((0, 2)), np.zeros((0, 2)))
-    assert y.command(0.0, (0.0, 0.0, 0.0), (0.3, 0.0), (0.3, 0.0), (0.3, 0.0), nobody, np.zeros((0, 2))) is None
+    assert (
+        y.command(
+            0.0, (0.0, 0.0, 0.0), (0.3, 0.0), (0.3, 0.0), (0.3, 0.0), nobody, np.zeros((0, 2))
+        )
+        is None
+    )
 
 
 def test_a_standoff_with_a_person_standing_ahead_is_broken_by_backing_off():
@@ -68,11 +84,20 @@ def test_a_standoff_with_a_person_standing_ahead_is_broken_by_backing_off():
     ahead = People(0.0, np.array([[FP.x_max_m + 0.25 + 0.3, 0.0]]), np.zeros((1, 2)))
     t, cmds = 0.0, []
     while t < s.standoff_s + 1.0:
-        cmds.append((t, y.command(t, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), ahead, np.zeros((0, 2)))))
+        cmds.append(
+            (
+                t,
+                y.command(
+                    t, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), ahead, np.zeros((0, 2))
+                ),
+            )
+        )
         t += 0.05
     assert all(c is None for t, c in cmds if t < s.standoff_s - 0.05)
     backing = [c for t, c in cmds if c is not None]
-    assert backing and all(c[0] < 0.0 for c in backing) and math.isclose(backing[0][0], LIM.min_v_m_s)
+    assert (
+        backing and all(c[0] < 0.0 for c in backing) and math.isclose(backing[0][0], LIM.min_v_m_s)
+    )
 
 
 def test_a_person_who_stopped_for_the_robot_gets_their_lane_cleared_at_once():
@@ -82,12 +107,21 @@ def test_a_person_who_stopped_for_the_robot_gets_their_lane_cleared_at_once():
     y = _yielding()
     xy = np.array([[FP.x_max_m + 0.25 + 0.3, 0.0]])
     stopped = People(0.0, xy, np.zeros((1, 2)), np.array([[-1.3, 0.0]]))
-    cmd = y.command(0.0, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), stopped, np.zeros((0, 2)))
+    cmd = y.command(
+        0.0, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), stopped, np.zeros((0, 2))
+    )
     assert cmd is not None and cmd[1] != 0.0
     lane = People(0.0, xy, np.array([[-1.3, 0.0]]))
+
     def lane_gap(c):
-        return float(y._lane_gaps(y._rollout((0.0, 0.0, 0.0), (0.0, 0.0), np.array([c], float)), lane)[0])
-    assert lane_gap(cmd) > lane_gap((0.0, 0.0)) + 0.05 and lane_gap(cmd) > lane_gap((LIM.min_v_m_s, 0.0)) + 0.05
+        return float(
+            y._lane_gaps(y._rollout((0.0, 0.0, 0.0), (0.0, 0.0), np.array([c], float)), lane)[0]
+        )
+
+    assert (
+        lane_gap(cmd) > lane_gap((0.0, 0.0)) + 0.05
+        and lane_gap(cmd) > lane_gap((LIM.min_v_m_s, 0.0)) + 0.05
+    )
 
 
 def test_a_person_walking_at_the_robots_middle_is_worse_than_past_its_edge():
@@ -96,12 +130,16 @@ def test_a_person_walking_at_the_robots_middle_is_worse_than_past_its_edge():
     y = _yielding()
     head_on = People(0.0, np.array([[2.0, 0.0]]), np.array([[-1.3, 0.0]]))
     assert max(_least_gap(y, c, head_on) for c in y._grid) < 0.0
-    cmd = y.command(0.0, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), head_on, np.zeros((0, 2)))
+    cmd = y.command(
+        0.0, (0.0, 0.0, 0.0), (0.0, 0.0), (0.3, 0.0), (0.0, 0.0), head_on, np.zeros((0, 2))
+    )
     assert cmd is not None and cmd[1] != 0.0
     assert _least_gap(y, cmd, head_on) > _least_gap(y, (0.0, 0.0), head_on) + 0.1
 
 
-def _drive_past(person: People, speed_m_s: float, x0_m: float, t_end_s: float) -> list[tuple[float, float, float]]:
+def _drive_past(
+    person: People, speed_m_s: float, x0_m: float, t_end_s: float
+) -> list[tuple[float, float, float]]:
     """Drive along +x from ``(x0_m, 0)`` at the controller's ``speed_m_s`` past ``person`` (the navigator's way: the
     command Yielding returns, ramped by the limits, is the next cycle's ``vel``); ``(t_s, x_m, v_m_s)`` each cycle."""
     y, dt = _yielding(), 0.05
@@ -128,9 +166,14 @@ def test_the_robot_waits_before_passing_close_to_a_standing_person_then_passes()
     run = _drive_past(beside, 0.3, 0.0, s.courtesy_s + 3.0)
     stood = [t for t, x, v in run if v == 0.0]
     assert stood and stood[-1] - stood[0] >= s.courtesy_s - 0.1
-    assert run[-1][2] == 0.3 and run[-1][1] > 0.5                            # then it drives on past them
+    assert run[-1][2] == 0.3 and run[-1][1] > 0.5  # then it drives on past them
     far = People(0.0, np.array([[1.2, 2.0]]), np.zeros((1, 2)), np.zeros((1, 2)))
-    assert _yielding().command(0.0, (0.0, 0.0, 0.0), (0.3, 0.0), (0.3, 0.0), (0.3, 0.0), far, np.zeros((0, 2))) is None
+    assert (
+        _yielding().command(
+            0.0, (0.0, 0.0, 0.0), (0.3, 0.0), (0.3, 0.0), (0.3, 0.0), far, np.zeros((0, 2))
+        )
+        is None
+    )
 
 
 def test_the_wait_for_a_standing_person_is_kept_for_where_the_robot_would_pass_them():

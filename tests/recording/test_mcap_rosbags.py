@@ -23,20 +23,35 @@ from amr_twin.recording.run import run_mission
 from uwb_run import UWB_S, record_uwb_run
 
 DURATION_S = 4.0
-STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
+STEPS = [
+    (0.0, Command("linear", speed_m_s=0.5)),
+    (2.0, Command("angular", speed_deg_s=-60.0, icc_m=-1.0)),
+]
 TOPIC_TYPES = {
-    "/clock": "rosgraph_msgs/msg/Clock", "/robot_description": "std_msgs/msg/String",
+    "/clock": "rosgraph_msgs/msg/Clock",
+    "/robot_description": "std_msgs/msg/String",
     "/joint_states": "sensor_msgs/msg/JointState",
     "/wheel_Command_Service/request": "std_msgs/msg/Float64MultiArray",
-    "/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage", "/tf_static": "tf2_msgs/msg/TFMessage",
-    "/scan": "sensor_msgs/msg/LaserScan", "/imu/data_raw": "sensor_msgs/msg/Imu",
-    "/imu/mag": "sensor_msgs/msg/MagneticField", "/wheel0_Vel": "std_msgs/msg/Float64",
-    "/wheel1_Vel": "std_msgs/msg/Float64", "/wheel_Command": "std_msgs/msg/Float64MultiArray",
-    "/twin/true_rpm": "std_msgs/msg/Float64MultiArray", "/twin/pwm_counts": "std_msgs/msg/Float64MultiArray",
-    "/twin/ground_truth": "nav_msgs/msg/Odometry", "/twin/motor_current": "std_msgs/msg/Float64MultiArray",
-    "/battery_state": "sensor_msgs/msg/BatteryState", "/actors/poses": "geometry_msgs/msg/PoseArray",
+    "/odom": "nav_msgs/msg/Odometry",
+    "/tf": "tf2_msgs/msg/TFMessage",
+    "/tf_static": "tf2_msgs/msg/TFMessage",
+    "/scan": "sensor_msgs/msg/LaserScan",
+    "/imu/data_raw": "sensor_msgs/msg/Imu",
+    "/imu/mag": "sensor_msgs/msg/MagneticField",
+    "/wheel0_Vel": "std_msgs/msg/Float64",
+    "/wheel1_Vel": "std_msgs/msg/Float64",
+    "/wheel_Command": "std_msgs/msg/Float64MultiArray",
+    "/twin/true_rpm": "std_msgs/msg/Float64MultiArray",
+    "/twin/pwm_counts": "std_msgs/msg/Float64MultiArray",
+    "/twin/ground_truth": "nav_msgs/msg/Odometry",
+    "/twin/motor_current": "std_msgs/msg/Float64MultiArray",
+    "/battery_state": "sensor_msgs/msg/BatteryState",
+    "/actors/poses": "geometry_msgs/msg/PoseArray",
 }
-ACTORS = (Actor("person", ((2.0, -2.0), (2.0, 2.0)), 1.2, loop=True), Actor("pallet_jack", ((5.0, 1.0),), 1.0))
+ACTORS = (
+    Actor("person", ((2.0, -2.0), (2.0, 2.0)), 1.2, loop=True),
+    Actor("pallet_jack", ((5.0, 1.0),), 1.0),
+)
 
 
 @pytest.fixture(scope="module")
@@ -58,8 +73,11 @@ def bag(recorded):
     from rosbags.rosbag2 import Reader
 
     with Reader(recorded[3]) as reader:
-        info = {"message_count": reader.message_count, "start_ns": reader.start_time,
-                "end_ns": reader.end_time}
+        info = {
+            "message_count": reader.message_count,
+            "start_ns": reader.start_time,
+            "end_ns": reader.end_time,
+        }
         connections = list(reader.connections)
         raw = [(con.topic, con.msgtype, t_ns, data) for con, t_ns, data in reader.messages()]
     return info, connections, raw
@@ -88,7 +106,9 @@ def test_bare_mcap_opens_as_rosbag2_storage(bag):
     assert {c.topic: c.msgtype for c in connections} == TOPIC_TYPES
     for con in connections:
         assert con.ext.serialization_format == "cdr", con.topic
-        assert con.msgdef.format == MessageDefinitionFormat.MSG, con.topic  # schema encoding ros2msg
+        assert con.msgdef.format == MessageDefinitionFormat.MSG, (
+            con.topic
+        )  # schema encoding ros2msg
     counts = collections.Counter(topic for topic, *_ in raw)
     assert {c.topic: c.msgcount for c in connections} == dict(counts)  # summary statistics agree
     assert info["message_count"] == len(raw)
@@ -142,7 +162,9 @@ def test_counts_for_the_duration_and_rates(recorded, decoded):
     n = {topic: len(msgs) for topic, msgs in decoded.items()}
     assert n["/odom"] == len(capture.messages["odom"]) == len(capture.messages["tf"])
     assert abs(n["/odom"] - 50 * DURATION_S) <= 2
-    assert n["/tf"] == n["/odom"] + n["/joint_states"]  # odometry + the joints' links (robot_state_publisher)
+    assert (
+        n["/tf"] == n["/odom"] + n["/joint_states"]
+    )  # odometry + the joints' links (robot_state_publisher)
     assert abs(n["/joint_states"] - 50 * DURATION_S) <= 2
     assert n["/scan"] == len(capture.messages["scan"])
     assert abs(n["/scan"] - cfg.lidar.scan_rate_hz * DURATION_S) <= 2
@@ -152,7 +174,9 @@ def test_counts_for_the_duration_and_rates(recorded, decoded):
         assert n[f"/wheel{wheel}_Vel"] == len(result.series.published[wheel]) >= 2
     assert n["/wheel_Command"] == n["/wheel_Command_Service/request"] == len(STEPS)
     assert n["/twin/true_rpm"] == n["/twin/pwm_counts"] == len(result.series.t_s)
-    assert n["/twin/ground_truth"] == n["/clock"] == len(capture.state.t_us) == len(result.series.t_s)
+    assert (
+        n["/twin/ground_truth"] == n["/clock"] == len(capture.state.t_us) == len(result.series.t_s)
+    )
     assert n["/tf_static"] == n["/robot_description"] == 1
 
 
@@ -167,17 +191,25 @@ def test_values_against_the_simulation(recorded, decoded):
     assert (p.x, p.y) == pytest.approx(tuple(series.odom[-1, 1:3]), abs=1e-12)
     assert _yaw_rad(odom.pose.pose.orientation) == pytest.approx(series.odom[-1, 3], abs=1e-9)
     # /tf carries the same transform
-    tf = [m.transforms[0] for _t, m in decoded["/tf"] if m.transforms[0].child_frame_id == "base_link"][-1]
+    tf = [
+        m.transforms[0] for _t, m in decoded["/tf"] if m.transforms[0].child_frame_id == "base_link"
+    ][-1]
     assert (tf.header.frame_id, tf.child_frame_id) == ("odom", "base_link")
     assert tf.transform.translation.x == p.x
     # ground truth and true wheel speeds at every recorded row
-    truth = np.array([(m.pose.pose.position.x, m.pose.pose.position.y, _yaw_rad(m.pose.pose.orientation))
-                      for _t, m in decoded["/twin/ground_truth"]])
+    truth = np.array(
+        [
+            (m.pose.pose.position.x, m.pose.pose.position.y, _yaw_rad(m.pose.pose.orientation))
+            for _t, m in decoded["/twin/ground_truth"]
+        ]
+    )
     assert np.allclose(truth[:, :2], series.pose[:, :2], atol=1e-12)
     assert np.allclose(np.angle(np.exp(1j * (truth[:, 2] - series.pose[:, 2]))), 0.0, atol=1e-9)
     true_rpm = np.array([m.data for _t, m in decoded["/twin/true_rpm"]])
     assert np.array_equal(true_rpm, series.true_rpm)
-    assert [t for t, _m in decoded["/twin/true_rpm"]] == np.round(series.t_s * 1e9).astype(np.int64).tolist()
+    assert [t for t, _m in decoded["/twin/true_rpm"]] == np.round(series.t_s * 1e9).astype(
+        np.int64
+    ).tolist()
     pwm = np.array([m.data for _t, m in decoded["/twin/pwm_counts"]])
     assert np.array_equal(pwm, series.pwm_counts)
     # electrics: motor currents at every row, the pack at 10 Hz (ROS: current negative discharging)
@@ -186,7 +218,9 @@ def test_values_against_the_simulation(recorded, decoded):
     battery = [m for _t, m in decoded["/battery_state"]]
     assert len(battery) == len(series.t_s[::10])
     assert [b.voltage for b in battery] == pytest.approx(series.battery_v[::10].tolist(), rel=1e-6)
-    assert [b.current for b in battery] == pytest.approx((-series.battery_a[::10]).tolist(), rel=1e-6)
+    assert [b.current for b in battery] == pytest.approx(
+        (-series.battery_a[::10]).tolist(), rel=1e-6
+    )
     assert all(b.current < 0 for b in battery)  # the pack discharges
     assert battery[-1].percentage < battery[0].percentage == pytest.approx(_cfg.battery.soc_initial)
     # firmware topics: published RPM and the wheel commands
@@ -196,9 +230,13 @@ def test_values_against_the_simulation(recorded, decoded):
     commands = np.array([m.data for _t, m in decoded["/wheel_Command"]])
     assert np.array_equal(commands, np.array([c for _t, c in series.commands]))
     requests = [m for _t, m in decoded["/wheel_Command_Service/request"]]
-    assert np.array_equal([m.data for m in requests], commands)  # the calls, as the service got them
+    assert np.array_equal(
+        [m.data for m in requests], commands
+    )  # the calls, as the service got them
     assert requests[0].layout.dim[0].label == "motionL,speedL,motionR,speedR"
-    assert np.allclose(commands[-1], [1, 99.2, 1, 60.8], rtol=1e-6)  # the chapter 5 clockwise turn (float32)
+    assert np.allclose(
+        commands[-1], [1, 99.2, 1, 60.8], rtol=1e-6
+    )  # the chapter 5 clockwise turn (float32)
     # sensors: the last scan and IMU sample as published on the bus
     scan, src = decoded["/scan"][-1][1], capture.messages["scan"][-1][1]
     assert scan.header.frame_id == "laser"
@@ -218,15 +256,23 @@ def test_actor_poses_at_10_hz_in_the_map_frame_with_the_simulated_values(recorde
     cfg, capture, _result, _path = recorded
     msgs = decoded["/actors/poses"]
     src = capture.messages["actors/poses"]
-    assert [t for t, _m in msgs] == [int(round(0.1 * k * 1e9)) for k in range(int(DURATION_S * 10) + 1)]
+    assert [t for t, _m in msgs] == [
+        int(round(0.1 * k * 1e9)) for k in range(int(DURATION_S * 10) + 1)
+    ]
     assert len(src) == len(msgs)
     for (t_ns, msg), (_t_us, want) in zip(msgs, src):
-        assert msg.header.frame_id == "map" and msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec == t_ns
-        assert [(p.position.x, p.position.y, p.orientation.z, p.orientation.w) for p in msg.poses] == \
-            [(p.position.x, p.position.y, p.orientation.z, p.orientation.w) for p in want.poses]
+        assert (
+            msg.header.frame_id == "map"
+            and msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec == t_ns
+        )
+        assert [
+            (p.position.x, p.position.y, p.orientation.z, p.orientation.w) for p in msg.poses
+        ] == [(p.position.x, p.position.y, p.orientation.z, p.orientation.w) for p in want.poses]
     at_2s = msgs[20][1].poses
     assert (at_2s[0].position.x, at_2s[0].position.y) == pytest.approx((2.0, -2.0 + 1.2 * 2.0))
-    assert _yaw_rad(at_2s[0].orientation) == pytest.approx(math.pi / 2) and at_2s[1].position.x == 5.0
+    assert (
+        _yaw_rad(at_2s[0].orientation) == pytest.approx(math.pi / 2) and at_2s[1].position.x == 5.0
+    )
 
 
 def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
@@ -261,12 +307,18 @@ def test_uwb_range_topic_and_definition(uwb_bag):
     humble = get_typestore(Stores.ROS2_HUMBLE)
     con = connections["/uwb/range"]
     assert con.msgtype == "sensor_msgs/msg/Range" and con.ext.serialization_format == "cdr"
-    assert set(connections) == (set(TOPIC_TYPES) - {"/scan", "/imu/data_raw", "/imu/mag", "/actors/poses"}) | {"/uwb/range"}
+    assert set(connections) == (
+        set(TOPIC_TYPES) - {"/scan", "/imu/data_raw", "/imu/mag", "/actors/poses"}
+    ) | {"/uwb/range"}
     types = get_types_from_msg(con.msgdef.data, con.msgtype)
-    assert types["sensor_msgs/msg/Range"] == humble.fielddefs["sensor_msgs/msg/Range"]  # constants included
+    assert (
+        types["sensor_msgs/msg/Range"] == humble.fielddefs["sensor_msgs/msg/Range"]
+    )  # constants included
     embedded = get_typestore(Stores.EMPTY)
     embedded.register(types)
-    assert embedded.hash_rihs01("sensor_msgs/msg/Range") == humble.hash_rihs01("sensor_msgs/msg/Range")
+    assert embedded.hash_rihs01("sensor_msgs/msg/Range") == humble.hash_rihs01(
+        "sensor_msgs/msg/Range"
+    )
 
 
 def test_uwb_ranges_decode_byte_exact_with_the_simulated_values(uwb_bag):
@@ -285,7 +337,10 @@ def test_uwb_ranges_decode_byte_exact_with_the_simulated_values(uwb_bag):
         assert msg.header.frame_id == want.header.frame_id
         assert msg.radiation_type == msg.INFRARED == want.radiation_type
         assert msg.range == np.float32(want.range)
-        assert (msg.min_range, msg.max_range) == (np.float32(want.min_range), np.float32(want.max_range))
+        assert (msg.min_range, msg.max_range) == (
+            np.float32(want.min_range),
+            np.float32(want.max_range),
+        )
         assert msg.field_of_view == pytest.approx(2 * math.pi, rel=1e-6)
         frames.add(msg.header.frame_id)
     assert frames == {f"uwb_anchor_{i}" for i in range(len(cfg.uwb.anchors_x_m))}

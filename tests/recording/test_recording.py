@@ -22,7 +22,10 @@ from amr_twin.recording.recorder import attach_recorder, recorder_of
 from uwb_run import UWB_S, record_uwb_run
 
 DURATION_S = 4.0
-STEPS = [(0.0, Command("linear", speed_m_s=0.5)), (2.0, Command("angular", speed_deg_s=30.0, icc_m=0.0))]
+STEPS = [
+    (0.0, Command("linear", speed_m_s=0.5)),
+    (2.0, Command("angular", speed_deg_s=30.0, icc_m=0.0)),
+]
 WALKER = Actor("person", ((3.0, -2.0), (3.0, 2.0)), 1.2, loop=True)
 
 
@@ -59,8 +62,9 @@ def _mcap_messages(path):
     with open(path, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
         for schema, channel, message, decoded in reader.iter_decoded_messages():
-            out[channel.topic].append((message.log_time, schema.name, schema.encoding,
-                                       channel.message_encoding, decoded))
+            out[channel.topic].append(
+                (message.log_time, schema.name, schema.encoding, channel.message_encoding, decoded)
+            )
     return out
 
 
@@ -82,13 +86,28 @@ def test_rrd_entities_and_rates(recorded):
     _cfg, capture, result, _plain, paths = recorded
     rows, batches = _rrd_chunks(paths["rrd"])
     entities = set(rows)
-    for entity in ("/world/bodies/amr/base_link", "/world/bodies/amr/wheel_left_link",
-                   "/world/bodies/amr/caster_rear_right_link", "/world/bodies/world/geoms/boxes",
-                   "/world/bodies/amr/base_link/geoms/boxes", "/world/bodies/amr/wheel_left_link/geoms/cylinders",
-                   "/world/scan", "/world/bodies/amr/laser/scan", "/world/trajectory/true/0000",
-                   "/world/trajectory/odom/0000", "/wheels/left/true_rpm", "/wheels/right/published_rpm",
-                   "/wheels/left/reference_rpm", "/duty/left", "/imu/accel", "/imu/gyro", "/commands",
-                   "/electrics/left/current_a", "/electrics/battery/current_a", "/electrics/battery/voltage_v"):
+    for entity in (
+        "/world/bodies/amr/base_link",
+        "/world/bodies/amr/wheel_left_link",
+        "/world/bodies/amr/caster_rear_right_link",
+        "/world/bodies/world/geoms/boxes",
+        "/world/bodies/amr/base_link/geoms/boxes",
+        "/world/bodies/amr/wheel_left_link/geoms/cylinders",
+        "/world/scan",
+        "/world/bodies/amr/laser/scan",
+        "/world/trajectory/true/0000",
+        "/world/trajectory/odom/0000",
+        "/wheels/left/true_rpm",
+        "/wheels/right/published_rpm",
+        "/wheels/left/reference_rpm",
+        "/duty/left",
+        "/imu/accel",
+        "/imu/gyro",
+        "/commands",
+        "/electrics/left/current_a",
+        "/electrics/battery/current_a",
+        "/electrics/battery/voltage_v",
+    ):
         assert entity in entities, entity
     assert rows["/electrics/right/current_a"] == len(result.series.t_s)
     # body transforms at ~30 Hz (33.3 Hz on the 10 ms grid) over the run
@@ -105,16 +124,24 @@ def test_rrd_entities_and_rates(recorded):
     reader = RrdReader(str(paths["rrd"]))
     assert len(reader.recordings()) == 1 and len(reader.blueprints()) == 1
     views = {str(c.entity_path) for c in reader.stream(store=reader.blueprints()[0]).to_chunks()}
-    assert sum(v.startswith("/view/") and v.count("/") == 2 for v in views) >= 5  # 3D, text, 3-4 plots
+    assert (
+        sum(v.startswith("/view/") and v.count("/") == 2 for v in views) >= 5
+    )  # 3D, text, 3-4 plots
     # one value back: the last true RPM of the left wheel
     last = batches["/wheels/left/true_rpm"][-1]
     values = last.column("Scalars:scalars").to_pylist()
     assert values[-1][0] == pytest.approx(result.series.true_rpm[-1, 0])
     # the wheel turns: its transform's rotation changes over the run
-    quats = np.concatenate([np.array(b.column("Transform3D:quaternion").to_pylist(), dtype=object).ravel()
-                            for b in batches["/world/bodies/amr/wheel_left_link"]])
+    quats = np.concatenate(
+        [
+            np.array(b.column("Transform3D:quaternion").to_pylist(), dtype=object).ravel()
+            for b in batches["/world/bodies/amr/wheel_left_link"]
+        ]
+    )
     assert len({tuple(np.round(np.ravel(q), 3)) for q in quats}) > 10
-    assert not any(e.startswith(("/uwb", "/world/uwb")) for e in entities)  # no UWB sensor: no UWB ranges
+    assert not any(
+        e.startswith(("/uwb", "/world/uwb")) for e in entities
+    )  # no UWB sensor: no UWB ranges
 
 
 def test_rrd_actor_body_walks_its_path_with_its_geoms(recorded):
@@ -122,15 +149,35 @@ def test_rrd_actor_body_walks_its_path_with_its_geoms(recorded):
     path puts it (one grid instant, 10 ms, behind: MuJoCo moves a mocap body at the next step)."""
     cfg, capture, _result, _plain, paths = recorded
     rows, batches = _rrd_chunks(paths["rrd"])
-    assert "/world/bodies/person_0/geoms/cylinders" in rows and "/world/bodies/person_0/geoms/boxes" in rows
-    t = np.concatenate([b.column("sim_time").to_numpy() for b in batches["/world/bodies/person_0"]
-                        if "sim_time" in b.schema.names]).astype("timedelta64[ns]").astype(float) * 1e-9
-    xyz = np.concatenate([np.array(b.column("Transform3D:translation").to_pylist(), dtype=float).reshape(-1, 3)
-                          for b in batches["/world/bodies/person_0"] if "sim_time" in b.schema.names])
+    assert (
+        "/world/bodies/person_0/geoms/cylinders" in rows
+        and "/world/bodies/person_0/geoms/boxes" in rows
+    )
+    t = (
+        np.concatenate(
+            [
+                b.column("sim_time").to_numpy()
+                for b in batches["/world/bodies/person_0"]
+                if "sim_time" in b.schema.names
+            ]
+        )
+        .astype("timedelta64[ns]")
+        .astype(float)
+        * 1e-9
+    )
+    xyz = np.concatenate(
+        [
+            np.array(b.column("Transform3D:translation").to_pylist(), dtype=float).reshape(-1, 3)
+            for b in batches["/world/bodies/person_0"]
+            if "sim_time" in b.schema.names
+        ]
+    )
     path = actor_path(WALKER, cfg)
     want = np.array([path.pose_at(max(0.0, s - 0.01))[:2] for s in t])
-    assert len(t) >= DURATION_S * 30 - 2 and np.abs(xyz[:, :2] - want).max() < 1e-6   # float32 in the file
-    assert np.ptp(xyz[:, 1]) > 3.0                           # it walked
+    assert (
+        len(t) >= DURATION_S * 30 - 2 and np.abs(xyz[:, :2] - want).max() < 1e-6
+    )  # float32 in the file
+    assert np.ptp(xyz[:, 1]) > 3.0  # it walked
 
 
 def test_rrd_scans_are_the_scans_beams(recorded):
@@ -156,26 +203,39 @@ def test_rrd_scans_are_the_scans_beams(recorded):
         angles = (msg.angle_min + msg.angle_increment * np.arange(len(msg.ranges)))[ok]
         assert len(pts) == len(wpts) == ok.sum() > 100
         np.testing.assert_allclose(np.hypot(pts[:, 0], pts[:, 1]), msg.ranges[ok], rtol=1e-5)
-        np.testing.assert_allclose(np.arctan2(pts[:, 1], pts[:, 0]), np.angle(np.exp(1j * angles)), atol=1e-5)
+        np.testing.assert_allclose(
+            np.arctan2(pts[:, 1], pts[:, 0]), np.angle(np.exp(1j * angles)), atol=1e-5
+        )
         laser_z = wpts[0, 2]
-        assert np.allclose(wpts[:, 2], laser_z, atol=1e-3) and 0.1 < laser_z < 1.0  # the chassis pitches a little
+        assert (
+            np.allclose(wpts[:, 2], laser_z, atol=1e-3) and 0.1 < laser_z < 1.0
+        )  # the chassis pitches a little
         assert abs(times[k].total_seconds() - scan_end_time_s(msg)) < 1e-6
 
 
 def test_mcap_topics_rates_and_values(recorded):
     _cfg, capture, result, _plain, paths = recorded
     msgs = _mcap_messages(paths["mcap"])
-    expect = {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
-              "/tf_static": "tf2_msgs/msg/TFMessage", "/scan": "sensor_msgs/msg/LaserScan",
-              "/imu/data_raw": "sensor_msgs/msg/Imu", "/imu/mag": "sensor_msgs/msg/MagneticField",
-              "/wheel_Command": "std_msgs/msg/Float64MultiArray", "/wheel0_Vel": "std_msgs/msg/Float64",
-              "/twin/true_rpm": "std_msgs/msg/Float64MultiArray", "/twin/ground_truth": "nav_msgs/msg/Odometry"}
+    expect = {
+        "/odom": "nav_msgs/msg/Odometry",
+        "/tf": "tf2_msgs/msg/TFMessage",
+        "/tf_static": "tf2_msgs/msg/TFMessage",
+        "/scan": "sensor_msgs/msg/LaserScan",
+        "/imu/data_raw": "sensor_msgs/msg/Imu",
+        "/imu/mag": "sensor_msgs/msg/MagneticField",
+        "/wheel_Command": "std_msgs/msg/Float64MultiArray",
+        "/wheel0_Vel": "std_msgs/msg/Float64",
+        "/twin/true_rpm": "std_msgs/msg/Float64MultiArray",
+        "/twin/ground_truth": "nav_msgs/msg/Odometry",
+    }
     for topic, schema in expect.items():
         assert topic in msgs, topic
         assert {(m[1], m[2], m[3]) for m in msgs[topic]} == {(schema, "ros2msg", "cdr")}
     # rates: odom and tf at 50 Hz, IMU at its configured rate, scans at 5.5 Hz
     assert abs(len(msgs["/odom"]) - 50 * DURATION_S) <= 2
-    assert abs(len(msgs["/tf"]) - 2 * 50 * DURATION_S) <= 4  # odom -> base_link and the joints' links
+    assert (
+        abs(len(msgs["/tf"]) - 2 * 50 * DURATION_S) <= 4
+    )  # odom -> base_link and the joints' links
     cfg = recorded[0]
     assert abs(len(msgs["/imu/data_raw"]) - cfg.imu.rate_hz * DURATION_S) <= 2
     assert abs(len(msgs["/scan"]) - cfg.lidar.scan_rate_hz * DURATION_S) <= 2
@@ -191,7 +251,9 @@ def test_mcap_topics_rates_and_values(recorded):
     assert odom.pose.pose.position.y == pytest.approx(result.series.odom[-1, 2], abs=1e-12)
     scan = msgs["/scan"][-1][4]
     src = capture.messages["scan"][-1][1]
-    assert np.allclose(np.asarray(scan.ranges, np.float32), np.asarray(src.ranges, np.float32), equal_nan=True)
+    assert np.allclose(
+        np.asarray(scan.ranges, np.float32), np.asarray(src.ranges, np.float32), equal_nan=True
+    )
     imu, imu_src = msgs["/imu/data_raw"][-1][4], capture.messages["imu/data_raw"][-1][1]
     assert imu.linear_acceleration.z == imu_src.linear_acceleration.z
     assert imu.angular_velocity.z == imu_src.angular_velocity.z
@@ -205,16 +267,34 @@ def test_mcap_topics_rates_and_values(recorded):
 
 def test_cli_record_and_mcap(tmp_path):
     rrd, mcap = tmp_path / "cli.rrd", tmp_path / "cli.mcap"
-    res = CliRunner().invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--duration-s", "1",
-                                   "--record", str(rrd), "--mcap", str(mcap), "--json"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "run",
+            "linear",
+            "--speed-m-s",
+            "0.5",
+            "--duration-s",
+            "1",
+            "--record",
+            str(rrd),
+            "--mcap",
+            str(mcap),
+            "--json",
+        ],
+    )
     assert res.exit_code == 0, res.output
     info = json.loads(res.stdout)
     msgs = _mcap_messages(mcap)
     assert abs(len(msgs["/odom"]) - 50) <= 1
-    assert msgs["/odom"][-1][4].pose.pose.position.x == pytest.approx(info["final_odom_pose"]["x_m"])
+    assert msgs["/odom"][-1][4].pose.pose.position.x == pytest.approx(
+        info["final_odom_pose"]["x_m"]
+    )
     rows, _ = _rrd_chunks(rrd)
     assert "/world/bodies/amr/base_link" in rows and "/wheels/right/true_rpm" in rows
-    assert "/world/bodies/amr/base_link/geoms/boxes" in rows  # a recording run keeps the robot's visuals
+    assert (
+        "/world/bodies/amr/base_link/geoms/boxes" in rows
+    )  # a recording run keeps the robot's visuals
 
 
 def test_recording_does_not_change_a_run_advanced_in_small_steps():
@@ -233,10 +313,14 @@ def test_recording_does_not_change_a_run_advanced_in_small_steps():
 
     plain, _ = drive(False)
     recorded, capture = drive(True)
-    assert np.array_equal(plain.true_rpm, recorded.true_rpm) and np.array_equal(plain.pose, recorded.pose)
+    assert np.array_equal(plain.true_rpm, recorded.true_rpm) and np.array_equal(
+        plain.pose, recorded.pose
+    )
     t_s, pos, _quat = capture.body_poses()
     assert np.allclose(np.diff(t_s), capture.period_us / 1e6) and t_s[-1] > 0.95
-    base = int(np.nonzero(capture.body_ids == capture.twin.physics.model.body("amr/base_link").id)[0][0])
+    base = int(
+        np.nonzero(capture.body_ids == capture.twin.physics.model.body("amr/base_link").id)[0][0]
+    )
     assert pos[-1, base, 0] > pos[0, base, 0] + 0.1  # the robot drove forward
 
 
@@ -249,9 +333,11 @@ def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
     dead = subprocess.Popen(["true"])
     dead.wait()
     stale = [tmp_path / f".run1.rrd.{dead.pid}.tmp", tmp_path / f".p.mcap.{dead.pid}.tmp"]
-    keep = [tmp_path / f".run2.rrd.{os.getpid()}.tmp",   # a live writer's
-            tmp_path / ".sweep.csv.abc123.tmp",          # not a recording
-            tmp_path / "run3.rrd"]
+    keep = [
+        tmp_path / f".run2.rrd.{os.getpid()}.tmp",  # a live writer's
+        tmp_path / ".sweep.csv.abc123.tmp",  # not a recording
+        tmp_path / "run3.rrd",
+    ]
     for path in stale + keep:
         path.write_bytes(b"x")
     assert sorted(remove_stale_temporaries(tmp_path)) == sorted(stale)
@@ -272,13 +358,19 @@ def test_rrd_uwb_ranges_per_anchor(uwb_recorded):
     cfg, capture, paths = uwb_recorded
     msgs = capture.messages["uwb/range"]
     n_anchors = len(cfg.uwb.anchors_x_m)
-    assert 0.8 * cfg.uwb.rate_hz * n_anchors * UWB_S <= len(msgs) <= cfg.uwb.rate_hz * n_anchors * UWB_S + 1
+    assert (
+        0.8 * cfg.uwb.rate_hz * n_anchors * UWB_S
+        <= len(msgs)
+        <= cfg.uwb.rate_hz * n_anchors * UWB_S + 1
+    )
     rows, batches = _rrd_chunks(paths["rrd"])
     per_anchor = uwb_ranges(capture)
     assert sorted(per_anchor) == list(range(n_anchors))
     for i, (t_s, range_m) in per_anchor.items():
         assert rows[f"/uwb/anchor_{i}/range_m"] == len(t_s) >= 0.8 * cfg.uwb.rate_hz * UWB_S
-        assert rows[f"/world/uwb/anchor_{i}/ray"] == len(t_s) + 1  # one line per range + static style
+        assert (
+            rows[f"/world/uwb/anchor_{i}/ray"] == len(t_s) + 1
+        )  # one line per range + static style
         last = batches[f"/uwb/anchor_{i}/range_m"][-1].column("Scalars:scalars").to_pylist()[-1][0]
         assert last == pytest.approx(range_m[-1])
     # the last range to anchor 0 is the one published on the bus, and about the true distance
@@ -302,7 +394,9 @@ def test_mcap_uwb_range_decoded_by_mcap_ros2(uwb_recorded):
     msgs = _mcap_messages(paths["mcap"])
     src = capture.messages["uwb/range"]
     assert len(msgs["/uwb/range"]) == len(src)
-    assert {(m[1], m[2], m[3]) for m in msgs["/uwb/range"]} == {("sensor_msgs/msg/Range", "ros2msg", "cdr")}
+    assert {(m[1], m[2], m[3]) for m in msgs["/uwb/range"]} == {
+        ("sensor_msgs/msg/Range", "ros2msg", "cdr")
+    }
     (t_ns, *_rest, got), (t_us, want) = msgs["/uwb/range"][-1], src[-1]
     assert t_ns == t_us * 1000
     assert got.header.frame_id == want.header.frame_id and got.radiation_type == 1

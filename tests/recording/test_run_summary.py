@@ -17,7 +17,9 @@ START = (-6.0, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def backward():
     cfg = load_config()
-    result = run_command(cfg, Command("linear", speed_m_s=-0.5), 4.0, TwinOptions(world="empty", start_xy_yaw=START))
+    result = run_command(
+        cfg, Command("linear", speed_m_s=-0.5), 4.0, TwinOptions(world="empty", start_xy_yaw=START)
+    )
     return summary(result, True, START)
 
 
@@ -35,9 +37,24 @@ def test_the_json_is_strict_and_in_the_documented_order(backward):
     out = backward.as_json()
     text = json.dumps(out, allow_nan=False)  # no NaN: a step without overshoot has no peak
     assert out["wheels"]["left"]["peak_s"] is None
-    assert list(out) == ["command", "wheel_command", "code", "codes", "errors", "wheels", "final_pose",
-                         "final_odom_pose", "battery", "collisions", "stopped_by_collision", "faults", "sim_s",
-                         "wall_s", "start_pose", "from_start"]
+    assert list(out) == [
+        "command",
+        "wheel_command",
+        "code",
+        "codes",
+        "errors",
+        "wheels",
+        "final_pose",
+        "final_odom_pose",
+        "battery",
+        "collisions",
+        "stopped_by_collision",
+        "faults",
+        "sim_s",
+        "wall_s",
+        "start_pose",
+        "from_start",
+    ]
     assert json.loads(text)["final_pose"]["x_m"] == backward.final_pose.x_m
     assert out["start_pose"] == {"x_m": -6.0, "y_m": 0.0, "yaw_rad": 0.0}
 
@@ -53,6 +70,12 @@ def test_a_mission_has_no_step_metrics_and_no_start_pose_unless_given():
     steps = [(0.0, Command("linear", speed_m_s=0.3)), (1.0, Command("stop"))]
     s = summary(run_mission(cfg, steps, 2.0, TwinOptions(world="empty")), False)
     out = s.as_json()
-    assert [c["kind"] for c in out["command"]] == ["linear", "stop"] and out["command"][1]["t_s"] == 1.0
-    assert "delay_s" not in out["wheels"]["left"] and "start_pose" not in out and "from_start" not in out
+    assert [c["kind"] for c in out["command"]] == ["linear", "stop"] and out["command"][1][
+        "t_s"
+    ] == 1.0
+    assert (
+        "delay_s" not in out["wheels"]["left"]
+        and "start_pose" not in out
+        and "from_start" not in out
+    )
     assert math.isfinite(out["battery"]["energy_j"]) and out["battery"]["energy_j"] > 0.0

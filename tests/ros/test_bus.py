@@ -8,7 +8,14 @@ import pytest
 from amr_twin.ros.bus import Bus, ServiceCallError
 from amr_twin.ros.tf_buffer import TransformError
 from amr_twin.base.clock import VirtualClock
-from amr_twin.ros.geometry_messages import Quaternion, TFMessage, Transform, TransformStamped, Twist, Vector3
+from amr_twin.ros.geometry_messages import (
+    Quaternion,
+    TFMessage,
+    Transform,
+    TransformStamped,
+    Twist,
+    Vector3,
+)
 from amr_twin.ros.messages import Float64, Header
 
 
@@ -99,15 +106,27 @@ def test_a_tap_of_some_topics_sees_only_them_in_the_order_taps_were_added(bus, c
     log = []
     bus.add_tap(lambda topic, msg, t_us: log.append(("all", topic)))
     bus.publish("odom", Float64(0.0))  # before the others were added
-    bus.add_tap(lambda topic, msg, t_us: log.append(("odom", topic)), topics=("/odom", "stop/request"))
+    bus.add_tap(
+        lambda topic, msg, t_us: log.append(("odom", topic)), topics=("/odom", "stop/request")
+    )
     bus.add_tap(lambda topic, msg, t_us: log.append(("all2", topic)))
     bus.advertise_service("stop", lambda req: None)
     for topic in ("imu/data_raw", "odom", "scan"):
         bus.publish(topic, Float64(1.0))
     bus.call_service("stop", None)
-    assert log == [("all", "odom"), ("all", "imu/data_raw"), ("all2", "imu/data_raw"),
-                   ("all", "odom"), ("odom", "odom"), ("all2", "odom"), ("all", "scan"), ("all2", "scan"),
-                   ("all", "stop/request"), ("odom", "stop/request"), ("all2", "stop/request")]
+    assert log == [
+        ("all", "odom"),
+        ("all", "imu/data_raw"),
+        ("all2", "imu/data_raw"),
+        ("all", "odom"),
+        ("odom", "odom"),
+        ("all2", "odom"),
+        ("all", "scan"),
+        ("all2", "scan"),
+        ("all", "stop/request"),
+        ("odom", "stop/request"),
+        ("all2", "stop/request"),
+    ]
 
 
 def test_services(bus):
@@ -126,22 +145,26 @@ def test_services(bus):
 def test_failing_server_is_a_failed_call(bus):
     def broken(req):
         raise RuntimeError("boom")
+
     bus.advertise_service("broken", broken)
     with pytest.raises(ServiceCallError, match="boom"):
         bus.call_service("broken", None)
 
 
 def _ts(parent, child, x, y, yaw):
-    return TransformStamped(Header(frame_id=parent), child,
-                            Transform(Vector3(x, y, 0.0), Quaternion.from_yaw(yaw)))
+    return TransformStamped(
+        Header(frame_id=parent), child, Transform(Vector3(x, y, 0.0), Quaternion.from_yaw(yaw))
+    )
 
 
 def test_tf_chain_odom_base_laser(bus):
     published = []
     bus.subscribe("tf", published.append)
     bus.send_transform(_ts("odom", "base_link", 1.0, 2.0, math.pi / 2))
-    bus.send_transform([_ts("base_link", "laser", 0.2, 0.0, 0.0),
-                        _ts("base_link", "imu_link", 0.0, 0.1, 0.0)], static=True)
+    bus.send_transform(
+        [_ts("base_link", "laser", 0.2, 0.0, 0.0), _ts("base_link", "imu_link", 0.0, 0.1, 0.0)],
+        static=True,
+    )
     assert len(published) == 1 and isinstance(published[0], TFMessage)
     laser = bus.tf.lookup_transform("odom", "laser")
     assert (laser.translation.x, laser.translation.y) == pytest.approx((1.0, 2.2))
@@ -173,7 +196,9 @@ def test_static_tf_is_latched(bus, clock):
 def test_static_tf_carries_every_static_frame_sent_so_far(bus, clock):
     bus.send_transform(_ts("base_link", "laser", 0.2, 0.0, 0.0), static=True)
     bus.send_transform(_ts("map", "uwb_anchor_0", 9.5, 6.5, 0.0), static=True)
-    bus.send_transform(_ts("base_link", "laser", 0.3, 0.0, 0.0), static=True)  # replaces, as tf2 does
+    bus.send_transform(
+        _ts("base_link", "laser", 0.3, 0.0, 0.0), static=True
+    )  # replaces, as tf2 does
     seen = []
     bus.subscribe("tf_static", seen.append)
     clock.run_until(0)

@@ -20,9 +20,16 @@ def test_type_names_are_ros_names():
 
 def test_fixed_sizes():
     assert m.Float64().serialized_size() == 8
-    for cls, size in [(g.Vector3, 24), (g.Point, 24), (g.Quaternion, 32), (g.Pose, 56),
-                      (g.Twist, 48), (g.Transform, 56), (g.PoseWithCovariance, 344),
-                      (g.TwistWithCovariance, 336)]:
+    for cls, size in [
+        (g.Vector3, 24),
+        (g.Point, 24),
+        (g.Quaternion, 32),
+        (g.Pose, 56),
+        (g.Twist, 48),
+        (g.Transform, 56),
+        (g.PoseWithCovariance, 344),
+        (g.TwistWithCovariance, 336),
+    ]:
         assert cls().serialized_size() == size, cls
 
 
@@ -48,8 +55,11 @@ def test_variable_message_sizes():
     assert imu.serialized_size() == 24 + 32 + 72 + 24 + 72 + 24 + 72
     mag = s.MagneticField(header=m.Header(frame_id="imu_link"))
     assert mag.serialized_size() == 24 + 24 + 72
-    scan = s.LaserScan(header=m.Header(frame_id="laser"), ranges=np.ones(360, np.float32),
-                       intensities=np.ones(360, np.float32))
+    scan = s.LaserScan(
+        header=m.Header(frame_id="laser"),
+        ranges=np.ones(360, np.float32),
+        intensities=np.ones(360, np.float32),
+    )
     assert scan.serialized_size() == 21 + 7 * 4 + 4 + 360 * 4 + 4 + 360 * 4
     ts = g.TransformStamped(m.Header(frame_id="odom"), "base_link")
     assert ts.serialized_size() == 20 + 13 + 56
@@ -81,4 +91,4 @@ def test_time_from_microseconds_is_exact():
 def test_quaternion_yaw_round_trip(yaw):
     q = g.Quaternion.from_yaw(yaw)
     assert q.yaw_rad() == pytest.approx(yaw)
-    assert q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2 == pytest.approx(1.0)
+    assert q.x**2 + q.y**2 + q.z**2 + q.w**2 == pytest.approx(1.0)

@@ -47,24 +47,60 @@ def _yaw(q) -> float:
 @pytest.fixture(scope="module")
 def issue_bag(tmp_path_factory):
     path = tmp_path_factory.mktemp("issue13") / "r.mcap"
-    res = CliRunner().invoke(app, ["run", "linear", "--speed-m-s", "0.5", "--duration-s", str(RUN_S), "--sensors",
-                                   "--mcap", str(path), "--world", "empty", "--json"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "run",
+            "linear",
+            "--speed-m-s",
+            "0.5",
+            "--duration-s",
+            str(RUN_S),
+            "--sensors",
+            "--mcap",
+            str(path),
+            "--world",
+            "empty",
+            "--json",
+        ],
+    )
     assert res.exit_code == 0, res.output
     return _read(path)
 
 
 def _odom(bag) -> np.ndarray:
     """(n, 7): stamp s, x, y, yaw, vx, vy, w of /odom."""
-    return np.array([(_t(m.header.stamp), m.pose.pose.position.x, m.pose.pose.position.y,
-                      _yaw(m.pose.pose.orientation), m.twist.twist.linear.x, m.twist.twist.linear.y,
-                      m.twist.twist.angular.z) for _t_ns, m in bag["/odom"]])
+    return np.array(
+        [
+            (
+                _t(m.header.stamp),
+                m.pose.pose.position.x,
+                m.pose.pose.position.y,
+                _yaw(m.pose.pose.orientation),
+                m.twist.twist.linear.x,
+                m.twist.twist.linear.y,
+                m.twist.twist.angular.z,
+            )
+            for _t_ns, m in bag["/odom"]
+        ]
+    )
 
 
 def _truth(bag) -> np.ndarray:
     """(n, 6): stamp s, x, y, yaw, twist vx, wz of /twin/ground_truth."""
-    return np.array([(_t(m.header.stamp), m.pose.pose.position.x, m.pose.pose.position.y,
-                      _yaw(m.pose.pose.orientation), m.twist.twist.linear.x, m.twist.twist.angular.z)
-                     for _t_ns, m in bag["/twin/ground_truth"]])
+    return np.array(
+        [
+            (
+                _t(m.header.stamp),
+                m.pose.pose.position.x,
+                m.pose.pose.position.y,
+                _yaw(m.pose.pose.orientation),
+                m.twist.twist.linear.x,
+                m.twist.twist.angular.z,
+            )
+            for _t_ns, m in bag["/twin/ground_truth"]
+        ]
+    )
 
 
 def test_odometry_steps_no_more_than_the_true_motion_allows(issue_bag):
@@ -108,15 +144,30 @@ def _parents(bag) -> dict[str, set[str]]:
 def test_tf_frames_have_one_parent_and_odom_none(issue_bag):
     parents = _parents(issue_bag)
     assert all(len(p) == 1 for p in parents.values()), parents
-    assert "odom" not in parents and "world" not in parents and "world" not in set().union(*parents.values())
+    assert (
+        "odom" not in parents
+        and "world" not in parents
+        and "world" not in set().union(*parents.values())
+    )
     parent = {child: next(iter(p)) for child, p in parents.items()}
 
     def root(frame):
         while frame in parent:
             frame = parent[frame]
         return frame
-    expected = {"base_link", "laser", "imu_link", "uwb_tag", "wheel_left_link", "wheel_right_link",
-                "caster_front_left_link", "caster_front_right_link", "caster_rear_left_link", "caster_rear_right_link"}
+
+    expected = {
+        "base_link",
+        "laser",
+        "imu_link",
+        "uwb_tag",
+        "wheel_left_link",
+        "wheel_right_link",
+        "caster_front_left_link",
+        "caster_front_right_link",
+        "caster_rear_left_link",
+        "caster_rear_right_link",
+    }
     assert set(parent) == expected and parent["base_link"] == "odom"
     assert {root(f) for f in parent} == {"odom"}
     assert all(parent[f] == "base_link" for f in expected - {"base_link"})
@@ -129,30 +180,46 @@ def test_joint_states_name_every_moving_joint_of_the_bag_urdf_and_clock_runs(iss
     robot = yourdfpy.URDF.load(io.StringIO(urdf), load_meshes=False, build_scene_graph=False)
     moving = {j.name for j in robot.robot.joints if j.type != "fixed"}
     states = [m for _t_ns, m in issue_bag["/joint_states"]]
-    assert len(moving) == 6 and all(set(m.name) == moving and len(m.position) == len(m.velocity) == 6
-                                    for m in states)
+    assert len(moving) == 6 and all(
+        set(m.name) == moving and len(m.position) == len(m.velocity) == 6 for m in states
+    )
     # the wheels roll forward at the commanded 38.2 RPM at the end, within the faithful PI's 4 RPM dead zone
     # (listing 4.11: the calibrated plant ends at 41.7 on 9 duty counts); the casters sit within their stroke
     last = dict(zip(states[-1].name, states[-1].velocity))
     assert last["wheel_left_joint"] * 60 / (2 * math.pi) == pytest.approx(38.2, abs=4.0)
     travel = max(float(j.limit.upper) for j in robot.robot.joints if j.type == "prismatic")
-    assert all(-1e-3 <= p <= travel + 1e-3 for m in states for n, p in zip(m.name, m.position) if "caster" in n)
+    assert all(
+        -1e-3 <= p <= travel + 1e-3
+        for m in states
+        for n, p in zip(m.name, m.position)
+        if "caster" in n
+    )
     # every link a joint moves is placed by /tf at the joint state's stamps
-    tf_stamps = {_t(tr.header.stamp) for _t_ns, m in issue_bag["/tf"] for tr in m.transforms
-                 if tr.child_frame_id == "wheel_left_link"}
+    tf_stamps = {
+        _t(tr.header.stamp)
+        for _t_ns, m in issue_bag["/tf"]
+        for tr in m.transforms
+        if tr.child_frame_id == "wheel_left_link"
+    }
     assert {_t(m.header.stamp) for m in states} <= tf_stamps
     clock = [_t(m.clock) for _t_ns, m in issue_bag["/clock"]]
     assert clock[0] == 0.0 and clock[-1] == pytest.approx(RUN_S) and np.all(np.diff(clock) > 0)
 
 
 def test_no_sensor_stamp_before_the_first_odom_transform_and_all_covered(issue_bag):
-    base_tf = [_t(tr.header.stamp) for _t_ns, m in issue_bag["/tf"] for tr in m.transforms
-               if tr.child_frame_id == "base_link"]
+    base_tf = [
+        _t(tr.header.stamp)
+        for _t_ns, m in issue_bag["/tf"]
+        for tr in m.transforms
+        if tr.child_frame_id == "base_link"
+    ]
     first, last = min(base_tf), max(base_tf)
     scans = [m for _t_ns, m in issue_bag["/scan"]]
     imu = [_t(m.header.stamp) for _t_ns, m in issue_bag["/imu/data_raw"]]
     assert len(scans) > 30 and len(imu) > 700
-    beams = np.concatenate([_t(m.header.stamp) + m.time_increment * np.arange(len(m.ranges)) for m in scans])
+    beams = np.concatenate(
+        [_t(m.header.stamp) + m.time_increment * np.arange(len(m.ranges)) for m in scans]
+    )
     assert first <= beams.min() and beams.max() <= last
     assert first <= min(imu) and max(imu) <= last
     for topic in ("/scan", "/imu/data_raw", "/odom", "/joint_states", "/twin/ground_truth"):
@@ -172,7 +239,9 @@ def test_ground_truth_twist_is_the_true_motion(issue_bag):
     c, s = np.cos(g[:-1, 3]), np.sin(g[:-1, 3])
     v_fd = (c * np.diff(g[:, 1]) + s * np.diff(g[:, 2])) / dt  # forward speed by finite differences
     moving = g[:-1, 0] > 4.0
-    assert np.median(g[1:, 4][moving]) == pytest.approx(0.5, abs=0.055)  # 4 RPM of wheel speed: 0.052 m/s
+    assert np.median(g[1:, 4][moving]) == pytest.approx(
+        0.5, abs=0.055
+    )  # 4 RPM of wheel speed: 0.052 m/s
     assert np.allclose(0.5 * (g[:-1, 4] + g[1:, 4])[moving], v_fd[moving], atol=0.01)
     assert issue_bag["/twin/ground_truth"][0][1].header.frame_id == "world"
 
@@ -216,10 +285,13 @@ def test_cmd_vel_and_service_calls_are_in_the_bag(tmp_path):
     twin.bus.publish("cmd_vel", Twist(Vector3(0.4, 0.0, 0.0), Vector3(0.0, 0.0, 0.5)))
     twin.advance(1.0)  # the command times out: a stop call follows
     bag = _read(record_run(twin, mcap_path=tmp_path / "c.mcap")["mcap"])
-    (t_ns, cmd), = bag["/cmd_vel"]
+    ((t_ns, cmd),) = bag["/cmd_vel"]
     assert t_ns == 100_000_000 and (cmd.linear.x, cmd.angular.z) == (0.4, 0.5)
     calls = [m.data.tolist() for _t_ns, m in bag["/wheel_Command_Service/request"]]
-    left, right = (0.4 - 0.5 * 0.24) * 60 / (math.pi * 0.25), (0.4 + 0.5 * 0.24) * 60 / (math.pi * 0.25)
+    left, right = (
+        (0.4 - 0.5 * 0.24) * 60 / (math.pi * 0.25),
+        (0.4 + 0.5 * 0.24) * 60 / (math.pi * 0.25),
+    )
     assert len(calls) == 2 and calls[0] == pytest.approx([1, left, 1, right], rel=1e-6)
     assert calls[1] == [0.0, 0.0, 0.0, 0.0]
     assert [m.data.tolist() for _t_ns, m in bag["/wheel_Command"]] == calls
@@ -236,15 +308,21 @@ def test_the_state_samplers_c_form_keeps_the_python_forms_values_and_arrays_take
     assert native.sample.grid_native is not None and python.sample.grid_native is None
     twin.samplers += [native.sample, python.sample]
     twin.client.linear(0.5)
-    twin.advance(0.5)  # the loop's grid in Python (a sampler without a C form): both samplers called there
+    twin.advance(
+        0.5
+    )  # the loop's grid in Python (a sampler without a C form): both samplers called there
     twin.samplers.remove(python.sample)
     twin.advance(0.5)  # in C: the native one alone
     assert len(native) == 100 and np.array_equal(native.sample.rows[:50], python.sample.rows)
     assert native.t_us == list(range(10_000, 1_000_001, 10_000))
     moved = native.arrays()
-    assert np.ptp(moved["pos"][:, 0]) > 0.1 and np.ptp(moved["q"][:, 0]) > 1.0  # the robot drove, its wheels turned
+    assert (
+        np.ptp(moved["pos"][:, 0]) > 0.1 and np.ptp(moved["q"][:, 0]) > 1.0
+    )  # the robot drove, its wheels turned
     half = native.split(500_000)
-    assert half.t_us[-1] == 500_000 and native.t_us[0] == 510_000  # split takes the samples up to the instant
+    assert (
+        half.t_us[-1] == 500_000 and native.t_us[0] == 510_000
+    )  # split takes the samples up to the instant
     every = half.arrays(20_000, base=False)
     full = half.arrays()
     assert every["t_us"].tolist() == list(range(20_000, 500_001, 20_000)) and "pos" not in every

@@ -1,14 +1,18 @@
 """Frame timing, serialisation on the wire, extra latency and loss of amr_twin.ros.rosserial."""
 
-
 import pytest
 
 
 from amr_twin.ros.bus import Bus
 from amr_twin.base.clock import VirtualClock
 from amr_twin.ros.messages import Float64, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
-from amr_twin.ros.rosserial import (ARDUINO_TO_PC, PC_TO_ARDUINO, RosserialLink,
-                                frame_bytes, frame_time_us)
+from amr_twin.ros.rosserial import (
+    ARDUINO_TO_PC,
+    PC_TO_ARDUINO,
+    RosserialLink,
+    frame_bytes,
+    frame_time_us,
+)
 
 WHEEL_COMMAND = Float64MultiArray(data=[1.0, 38.19718551635742, 1.0, 38.19718551635742])
 
@@ -51,7 +55,10 @@ def test_frames_wait_for_the_previous_one_on_the_same_direction():
     link.send(PC_TO_ARDUINO, "wheel_Command", WHEEL_COMMAND, deliver)  # other wire: no wait
     clock.run_until(100_000)
     assert [(t, topic) for t, topic, _ in log] == [
-        (1389, "wheel0_Vel"), (2778, "wheel1_Vel"), (4514, "wheel_Command")]
+        (1389, "wheel0_Vel"),
+        (2778, "wheel1_Vel"),
+        (4514, "wheel_Command"),
+    ]
     assert link.bytes_sent[ARDUINO_TO_PC] == 32 and link.frames_sent[PC_TO_ARDUINO] == 1
 
 
@@ -92,16 +99,21 @@ def test_a_multi_array_is_delivered_as_sent(dims):
     if dims:
         msg.layout.dim[0].size = 9
     clock.run_until(10_000)
-    assert seen == [Float64MultiArray(MultiArrayLayout([MultiArrayDimension("wheels", 4, 4)] * dims, data_offset=1),
-                                      [1.0, 50.0, -1.0, 60.0])]
+    assert seen == [
+        Float64MultiArray(
+            MultiArrayLayout([MultiArrayDimension("wheels", 4, 4)] * dims, data_offset=1),
+            [1.0, 50.0, -1.0, 60.0],
+        )
+    ]
 
 
 def test_loss_is_seeded_and_still_occupies_the_wire():
     def run(seed):
         clock = VirtualClock()
         link, log = RosserialLink(clock, loss_prob=0.3, seed=seed), []
-        arrivals = [link.send(ARDUINO_TO_PC, "w", Float64(i), _recorder(clock, log))
-                    for i in range(2000)]
+        arrivals = [
+            link.send(ARDUINO_TO_PC, "w", Float64(i), _recorder(clock, log)) for i in range(2000)
+        ]
         clock.run_until(10**9)
         return link, arrivals, log
 

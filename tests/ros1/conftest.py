@@ -42,8 +42,13 @@ def ros_env(master):
 @pytest.fixture(scope="session")
 def catkin_setup(ros_env):
     """The devel space's setup.bash of the thesis' workspace (controllers/ros/build.sh)."""
-    out = subprocess.run(["bash", str(ros_folder() / "build.sh")], capture_output=True, text=True, env=ros_env,
-                         timeout=600)
+    out = subprocess.run(
+        ["bash", str(ros_folder() / "build.sh")],
+        capture_output=True,
+        text=True,
+        env=ros_env,
+        timeout=600,
+    )
     assert out.returncode == 0, out.stderr
     return out.stdout.strip()
 
@@ -67,6 +72,7 @@ def stop(proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
 # -- waiting for the graph, not for the clock ------------------------------------------------------------
 # A test that sleeps a fixed time for a process to start or to connect fails on a loaded machine; these
 # wait for the condition itself, with a bound, and say which one did not come.
+
 
 def wait_for(condition, what: str, timeout_s: float = 60.0):
     """``condition()``'s first true value, polled every 50 ms; fails naming ``what`` after ``timeout_s``."""
@@ -110,7 +116,11 @@ def connected_subscribers(env, node: str, topic: str) -> set[str]:
         _code, _msg, links = xmlrpc.client.ServerProxy(uri).getBusInfo("/test")
     except OSError:
         return set()
-    return {peer for _id, peer, direction, _transport, t, up, *_ in links if t == topic and direction == "o" and up}
+    return {
+        peer
+        for _id, peer, direction, _transport, t, up, *_ in links
+        if t == topic and direction == "o" and up
+    }
 
 
 def _child(pid: int) -> int:
@@ -158,7 +168,10 @@ def wait_until_recorded(rosbag_pid: int, timeout_s: float = 60.0) -> None:
     quiet = [0]
 
     def done():
-        drained = all(state != 8 and unread == 0 for state, unread in _socket_states(recorder))  # 8: CLOSE_WAIT
+        drained = all(
+            state != 8 and unread == 0 for state, unread in _socket_states(recorder)
+        )  # 8: CLOSE_WAIT
         quiet[0] = quiet[0] + 1 if drained and _asleep(recorder) else 0
         return quiet[0] >= 3
+
     wait_for(done, "rosbag record has read and handled every message", timeout_s)

@@ -28,6 +28,7 @@ def keep(name):
     def cb(msg):
         with lock:
             last.setdefault(name, []).append(msg)
+
     return cb
 
 
@@ -36,8 +37,10 @@ rospy.Subscriber(f"/{ns}/twin/ground_truth", Odometry, keep("gt"), queue_size=10
 rospy.Subscriber(f"/{ns}/odom", Odometry, keep("odom"), queue_size=1000)
 rospy.Subscriber(f"/{ns}/actors/poses", PoseArray, keep("actors"), queue_size=1000)
 set_pose = rospy.Publisher(f"/{ns}/{node}/set_pose", PoseStamped, queue_size=1, latch=True)
-call = {name: rospy.ServiceProxy(f"/{ns}/{node}/{name}", Empty)
-        for name in ("pause_physics", "unpause_physics", "reset_world", "reset_simulation")}
+call = {
+    name: rospy.ServiceProxy(f"/{ns}/{node}/{name}", Empty)
+    for name in ("pause_physics", "unpause_physics", "reset_world", "reset_simulation")
+}
 for proxy in call.values():
     proxy.wait_for_service(timeout=60)
 
@@ -63,7 +66,11 @@ def first_after(name, t_s, timeout_s=20.0):
 
 def pose(msg):
     p, q = msg.pose.pose.position, msg.pose.pose.orientation
-    return [p.x, p.y, math.degrees(math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z)))]
+    return [
+        p.x,
+        p.y,
+        math.degrees(math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))),
+    ]
 
 
 def speed(msg):
@@ -81,7 +88,10 @@ call["unpause_physics"]()
 out["resumed_hz"] = count_clock()
 now = clock[-1]
 out["before_reset"] = pose(first_after("gt", now))
-out["actor_before"] = [first_after("actors", now).poses[0].position.x, first_after("actors", now).poses[0].position.y]
+out["actor_before"] = [
+    first_after("actors", now).poses[0].position.x,
+    first_after("actors", now).poses[0].position.y,
+]
 call["reset_world"]()
 now = clock[-1]
 gt = first_after("gt", now)

@@ -17,14 +17,43 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import ROOT, connected_subscribers, needs_ros1, stop, subscribers, wait_for, wait_until_recorded
+from conftest import (
+    ROOT,
+    connected_subscribers,
+    needs_ros1,
+    stop,
+    subscribers,
+    wait_for,
+    wait_until_recorded,
+)
 
 AMR_TWIN = str(Path(sys.executable).with_name("amr-twin"))
 URDF = ROOT / "models" / "amr" / "amr.urdf"
-TOPICS = ["/clock", "/tf", "/tf_static", "/odom", "/joint_states", "/scan", "/imu/data_raw", "/imu/mag",
-          "/twin/ground_truth", "/wheel_Command", "/wheel0_Vel", "/wheel1_Vel", "/diagnostics", "/battery_state",
-          "/rsp_tf", "/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current"]
-ROWS = {"/twin/true_rpm": "true_rpm", "/twin/pwm_counts": "pwm_counts", "/twin/motor_current": "current_a"}
+TOPICS = [
+    "/clock",
+    "/tf",
+    "/tf_static",
+    "/odom",
+    "/joint_states",
+    "/scan",
+    "/imu/data_raw",
+    "/imu/mag",
+    "/twin/ground_truth",
+    "/wheel_Command",
+    "/wheel0_Vel",
+    "/wheel1_Vel",
+    "/diagnostics",
+    "/battery_state",
+    "/rsp_tf",
+    "/twin/true_rpm",
+    "/twin/pwm_counts",
+    "/twin/motor_current",
+]
+ROWS = {
+    "/twin/true_rpm": "true_rpm",
+    "/twin/pwm_counts": "pwm_counts",
+    "/twin/motor_current": "current_a",
+}
 """The row topics and their columns in the run's CSV."""
 RUN_S = 20.0
 
@@ -40,28 +69,74 @@ def bag(ros_env, tmp_path_factory):
     out = tmp_path_factory.mktemp("bag")
     _rosparam_set(ros_env, "/use_sim_time", True)
     _rosparam_set(ros_env, "/robot_description", URDF.read_text())
-    rec = subprocess.Popen(["rosbag", "record", "-O", str(out / "run.bag"), *TOPICS, "__name:=test_record"],
-                           env=ros_env, cwd=out, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    rsp = subprocess.Popen(["/usr/lib/robot_state_publisher/robot_state_publisher", "/tf:=/rsp_tf",
-                            "/tf_static:=/rsp_tf_static", "__name:=test_rsp", "_publish_frequency:=1000.0"], env=ros_env,
-                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    rec = subprocess.Popen(
+        ["rosbag", "record", "-O", str(out / "run.bag"), *TOPICS, "__name:=test_record"],
+        env=ros_env,
+        cwd=out,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    rsp = subprocess.Popen(
+        [
+            "/usr/lib/robot_state_publisher/robot_state_publisher",
+            "/tf:=/rsp_tf",
+            "/tf_static:=/rsp_tf_static",
+            "__name:=test_rsp",
+            "_publish_frequency:=1000.0",
+        ],
+        env=ros_env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         # both on the graph before the twin starts (it then connects to them before it runs: Ros1Session.settle),
         # and the recorder connected to robot_state_publisher's output
-        wait_for(lambda: all("/test_record" in subscribers(ros_env, t) for t in TOPICS)
-                 and "/test_rsp" in subscribers(ros_env, "/joint_states")
-                 and "/test_record" in connected_subscribers(ros_env, "/test_rsp", "/rsp_tf"),
-                 "rosbag record and robot_state_publisher on the graph")
-        run = subprocess.run([AMR_TWIN, "run", "linear", "--speed-m-s", "0.5", "--duration-s", str(RUN_S), "--world",
-                              "empty", "--sensors", "--ros1", "--rate", "5", "--json", "--csv", str(out / "run.csv")], env=ros_env, capture_output=True, text=True,
-                             timeout=120)
+        wait_for(
+            lambda: (
+                all("/test_record" in subscribers(ros_env, t) for t in TOPICS)
+                and "/test_rsp" in subscribers(ros_env, "/joint_states")
+                and "/test_record" in connected_subscribers(ros_env, "/test_rsp", "/rsp_tf")
+            ),
+            "rosbag record and robot_state_publisher on the graph",
+        )
+        run = subprocess.run(
+            [
+                AMR_TWIN,
+                "run",
+                "linear",
+                "--speed-m-s",
+                "0.5",
+                "--duration-s",
+                str(RUN_S),
+                "--world",
+                "empty",
+                "--sensors",
+                "--ros1",
+                "--rate",
+                "5",
+                "--json",
+                "--csv",
+                str(out / "run.csv"),
+            ],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert run.returncode == 0, run.stderr
         wait_until_recorded(rec.pid)  # the twin's last messages are in the recorder
     finally:
         stop(rsp)
         stop(rec)
-    info = yaml.safe_load(subprocess.run(["rosbag", "info", "--yaml", str(out / "run.bag")], capture_output=True,
-                                         text=True, env=ros_env, check=True).stdout)
+    info = yaml.safe_load(
+        subprocess.run(
+            ["rosbag", "info", "--yaml", str(out / "run.bag")],
+            capture_output=True,
+            text=True,
+            env=ros_env,
+            check=True,
+        ).stdout
+    )
     return out / "run.bag", info, run
 
 
@@ -73,16 +148,27 @@ def test_rosbag_info_shows_every_topic_at_its_rate_on_sim_time(bag):
     path, info, run = bag
     counts = _counts(info)
     # the node's rates: IMU 100 Hz, LiDAR 5.5 Hz, odometry and joint states 50 Hz, clock 100 Hz (t = 0..20 s)
-    for topic, hz in (("/imu/data_raw", 100), ("/imu/mag", 100), ("/odom", 50), ("/joint_states", 50),
-                      ("/clock", 100), ("/twin/ground_truth", 100), ("/battery_state", 10), ("/twin/true_rpm", 100),
-                      ("/twin/pwm_counts", 100), ("/twin/motor_current", 100)):
+    for topic, hz in (
+        ("/imu/data_raw", 100),
+        ("/imu/mag", 100),
+        ("/odom", 50),
+        ("/joint_states", 50),
+        ("/clock", 100),
+        ("/twin/ground_truth", 100),
+        ("/battery_state", 10),
+        ("/twin/true_rpm", 100),
+        ("/twin/pwm_counts", 100),
+        ("/twin/motor_current", 100),
+    ):
         assert counts[topic] == int(RUN_S * hz) + 1, topic
     assert abs(counts["/scan"] - RUN_S * 5.5) <= 1.5
     # odom -> base_link (odometry node) and the moving links, 50 Hz each; no map -> odom (no map in the empty world:
     # no localisation in map; test_tf_messages_by_frames tells them apart)
     assert counts["/tf"] == 2 * (int(RUN_S * 50) + 1)
     assert counts["/tf_static"] == 1 and counts["/wheel_Command"] == 1
-    assert counts["/wheel0_Vel"] >= 5 and counts["/diagnostics"] >= RUN_S  # the battery once a second
+    assert (
+        counts["/wheel0_Vel"] >= 5 and counts["/diagnostics"] >= RUN_S
+    )  # the battery once a second
     # robot_state_publisher: at most one transform message per joint state it takes; its subscriber keeps one
     # message (queue size 1), so how many of the 1001 it takes depends on the CPU it gets, not on the twin
     assert 1 <= counts["/rsp_tf"] <= counts["/joint_states"]
@@ -99,12 +185,24 @@ def test_the_rosbags_library_reads_the_same_counts_and_the_mcaps_types(bag):
     with AnyReader([path]) as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
         types = {c.topic: c.msgtype for c in reader.connections}
-        scans = [reader.deserialize(raw, c.msgtype) for c, _t, raw in
-                 reader.messages(connections=[c for c in reader.connections if c.topic == "/scan"])]
+        scans = [
+            reader.deserialize(raw, c.msgtype)
+            for c, _t, raw in reader.messages(
+                connections=[c for c in reader.connections if c.topic == "/scan"]
+            )
+        ]
     assert counts == _counts(info)
-    assert types["/scan"] == "sensor_msgs/msg/LaserScan" and types["/odom"] == "nav_msgs/msg/Odometry"
-    assert types["/imu/data_raw"] == "sensor_msgs/msg/Imu" and types["/clock"] == "rosgraph_msgs/msg/Clock"
-    assert types["/wheel0_Vel"] == "std_msgs/msg/Float64" and types["/diagnostics"] == "diagnostic_msgs/msg/DiagnosticArray"
+    assert (
+        types["/scan"] == "sensor_msgs/msg/LaserScan" and types["/odom"] == "nav_msgs/msg/Odometry"
+    )
+    assert (
+        types["/imu/data_raw"] == "sensor_msgs/msg/Imu"
+        and types["/clock"] == "rosgraph_msgs/msg/Clock"
+    )
+    assert (
+        types["/wheel0_Vel"] == "std_msgs/msg/Float64"
+        and types["/diagnostics"] == "diagnostic_msgs/msg/DiagnosticArray"
+    )
     assert scans[0].header.frame_id == "laser" and len(scans[0].ranges) > 300
     assert scans[0].time_increment < 0  # the A1 spins clockwise (the recordings' convention)
 
@@ -118,21 +216,32 @@ def test_every_instant_is_recorded_once_and_in_order_and_the_rows_are_the_csvs(b
     stamped = ("/clock", "/twin/ground_truth", "/joint_states", "/battery_state", "/imu/data_raw")
     stamps, rows = {topic: [] for topic in stamped}, {topic: [] for topic in ROWS}
     with AnyReader([path]) as reader:
-        for c, _t, raw in reader.messages(connections=[c for c in reader.connections if c.topic in (*stamped, *ROWS)]):
+        for c, _t, raw in reader.messages(
+            connections=[c for c in reader.connections if c.topic in (*stamped, *ROWS)]
+        ):
             msg = reader.deserialize(raw, c.msgtype)
             if c.topic in ROWS:
                 rows[c.topic].append(list(msg.data))
             else:
                 stamp = msg.clock if c.topic == "/clock" else msg.header.stamp
                 stamps[c.topic].append(stamp.sec * 1_000_000 + stamp.nanosec // 1000)
-    for topic, period_us in (("/clock", 10_000), ("/twin/ground_truth", 10_000), ("/imu/data_raw", 10_000),
-                             ("/joint_states", 20_000), ("/battery_state", 100_000)):
+    for topic, period_us in (
+        ("/clock", 10_000),
+        ("/twin/ground_truth", 10_000),
+        ("/imu/data_raw", 10_000),
+        ("/joint_states", 20_000),
+        ("/battery_state", 100_000),
+    ):
         assert stamps[topic] == list(range(0, int(RUN_S * 1e6) + 1, period_us)), topic
-    csv = np.genfromtxt(path.with_name("run.csv"), delimiter=",", names=True, skip_header=1)  # under the note
+    csv = np.genfromtxt(
+        path.with_name("run.csv"), delimiter=",", names=True, skip_header=1
+    )  # under the note
     assert len(csv) == int(RUN_S * 100) + 1
     for topic, column in ROWS.items():
         want = np.column_stack([csv[f"{column}_left"], csv[f"{column}_right"]])
-        np.testing.assert_allclose(np.array(rows[topic]), want, rtol=1e-8, atol=1e-12, err_msg=topic)
+        np.testing.assert_allclose(
+            np.array(rows[topic]), want, rtol=1e-8, atol=1e-12, err_msg=topic
+        )
 
 
 def _tf_buffer(path):
@@ -159,7 +268,10 @@ def _tf_buffer(path):
     return rospy, buf, scans, rsp
 
 
-pytestmark = [needs_ros1, pytest.mark.filterwarnings("ignore:(translation|rotation) should be of type")]
+pytestmark = [
+    needs_ros1,
+    pytest.mark.filterwarnings("ignore:(translation|rotation) should be of type"),
+]
 
 
 def test_tf_messages_by_frames(bag):
@@ -175,11 +287,16 @@ def test_tf_messages_by_frames(bag):
     with rosbag.Bag(str(path)) as b:
         for _topic, msg, _t in b.read_messages(topics=["/tf"]):
             pairs = {(ts.header.frame_id, ts.child_frame_id) for ts in msg.transforms}
-            key = ("odom", "base_link") if ("odom", "base_link") in pairs else (
-                ("map", "odom") if ("map", "odom") in pairs else "links")
+            key = (
+                ("odom", "base_link")
+                if ("odom", "base_link") in pairs
+                else (("map", "odom") if ("map", "odom") in pairs else "links")
+            )
             assert key == "links" or len(pairs) == 1, pairs
             kinds[key] = kinds.get(key, 0) + 1
-    assert kinds == {("odom", "base_link"): int(RUN_S * 50) + 1, "links": int(RUN_S * 50) + 1}, kinds
+    assert kinds == {("odom", "base_link"): int(RUN_S * 50) + 1, "links": int(RUN_S * 50) + 1}, (
+        kinds
+    )
 
 
 def test_a_tf2_buffer_from_the_bag_finds_every_urdf_frame_at_every_scan(bag):
@@ -189,7 +306,9 @@ def test_a_tf2_buffer_from_the_bag_finds_every_urdf_frame_at_every_scan(bag):
     assert len(links) == 10 and len(scans) >= 100
     for stamp in scans:
         for link in links:
-            t = buf.lookup_transform("odom", link, stamp)  # raises if a frame is missing at that instant
+            t = buf.lookup_transform(
+                "odom", link, stamp
+            )  # raises if a frame is missing at that instant
             assert t.header.stamp == stamp
     # the laser sits on the robot: above the floor, where the URDF puts it
     laser = buf.lookup_transform("base_link", "laser", scans[-1]).transform.translation
@@ -202,7 +321,9 @@ def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_trans
     import rosbag
 
     with rosbag.Bag(str(path)) as b:
-        joint_stamps = {msg.header.stamp for _topic, msg, _t in b.read_messages(topics=["/joint_states"])}
+        joint_stamps = {
+            msg.header.stamp for _topic, msg, _t in b.read_messages(topics=["/joint_states"])
+        }
     wheels = [t for t in rsp if t.child_frame_id == "wheel_left_link"]
     # robot_state_publisher keeps one joint state at a time (queue size 1): it takes as many of the 1001 as the
     # CPU it gets allows, each at that joint state's stamp; on any machine some, across the whole run
@@ -214,8 +335,12 @@ def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_trans
     for t in wheels:
         mine = buf.lookup_transform("base_link", "wheel_left_link", t.header.stamp).transform
         theirs = t.transform
-        offsets.append(np.subtract([theirs.translation.x, theirs.translation.y, theirs.translation.z],
-                                   [mine.translation.x, mine.translation.y, mine.translation.z]))
+        offsets.append(
+            np.subtract(
+                [theirs.translation.x, theirs.translation.y, theirs.translation.z],
+                [mine.translation.x, mine.translation.y, mine.translation.z],
+            )
+        )
         q1 = np.array([theirs.rotation.x, theirs.rotation.y, theirs.rotation.z, theirs.rotation.w])
         q2 = np.array([mine.rotation.x, mine.rotation.y, mine.rotation.z, mine.rotation.w])
         angles.append((2 * np.arccos(min(1.0, abs(q1 @ q2))), 2 * np.arccos(min(1.0, abs(q1[3])))))
@@ -246,28 +371,73 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
     from conftest import in_workspace
 
     _rosparam_set(ros_env, "/use_sim_time", True)
-    service = subprocess.Popen(in_workspace(catkin_setup, "rosrun amr_idea_control wheel_Command_Service"),
-                               env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    command = subprocess.Popen(["rostopic", "echo", "-n", "1", "--filter", "m.data[1] > 0", "/wheel_Command"],
-                               env=ros_env, stdout=subprocess.PIPE, text=True)  # not the twin's own stop at t = 0
+    service = subprocess.Popen(
+        in_workspace(catkin_setup, "rosrun amr_idea_control wheel_Command_Service"),
+        env=ros_env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    command = subprocess.Popen(
+        ["rostopic", "echo", "-n", "1", "--filter", "m.data[1] > 0", "/wheel_Command"],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        text=True,
+    )  # not the twin's own stop at t = 0
     # each speed the firmware publishes, with the simulated time it arrived (Debian's rospy; rostopic would not
     # subscribe before someone publishes the topic)
-    speeds = subprocess.Popen(["/usr/bin/python3", "-c", SPEEDS], env=ros_env, stdout=subprocess.PIPE, text=True)
+    speeds = subprocess.Popen(
+        ["/usr/bin/python3", "-c", SPEEDS], env=ros_env, stdout=subprocess.PIPE, text=True
+    )
     twin = client = None
     try:
         # everything on the graph and waiting before the twin starts: the service with the echo connected to its
         # wheel_Command, the speed echo subscribed (the twin connects to it before it runs), the client's menu
-        client = pexpect.spawn("bash", ["-c", f"source {catkin_setup} && rosrun amr_idea_control wheel_Command_Client"],
-                               env=ros_env, encoding="utf-8", timeout=60)
+        client = pexpect.spawn(
+            "bash",
+            ["-c", f"source {catkin_setup} && rosrun amr_idea_control wheel_Command_Client"],
+            env=ros_env,
+            encoding="utf-8",
+            timeout=60,
+        )
         client.expect("choice: ")
-        wait_for(lambda: any(n.startswith("/rostopic") for n in connected_subscribers(ros_env, "/wheel_Command_Service",
-                                                                                      "/wheel_Command"))
-                 and "/test_speeds" in subscribers(ros_env, "/wheel0_Vel"),
-                 "the service, the echo and the speed listener on the graph")
-        twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "40", "--world", "empty", "--ros1", "--rate",
-                                 "4", "--json"], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        wait_for(lambda: "/amr_twin" in connected_subscribers(ros_env, "/wheel_Command_Service", "/wheel_Command"),
-                 "the twin connected to the service's wheel_Command")
+        wait_for(
+            lambda: (
+                any(
+                    n.startswith("/rostopic")
+                    for n in connected_subscribers(
+                        ros_env, "/wheel_Command_Service", "/wheel_Command"
+                    )
+                )
+                and "/test_speeds" in subscribers(ros_env, "/wheel0_Vel")
+            ),
+            "the service, the echo and the speed listener on the graph",
+        )
+        twin = subprocess.Popen(
+            [
+                AMR_TWIN,
+                "run",
+                "stop",
+                "--duration-s",
+                "40",
+                "--world",
+                "empty",
+                "--ros1",
+                "--rate",
+                "4",
+                "--json",
+            ],
+            env=ros_env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        wait_for(
+            lambda: (
+                "/amr_twin"
+                in connected_subscribers(ros_env, "/wheel_Command_Service", "/wheel_Command")
+            ),
+            "the twin connected to the service's wheel_Command",
+        )
         client.sendline("1")
         client.expect(r"linear speed \[m/s\]: ")
         client.sendline("0.7")
@@ -321,14 +491,37 @@ def test_the_lidars_stop_motor_service_on_the_graph_stops_the_scans(ros_env, tmp
     _rosparam_set(ros_env, "/use_sim_time", True)
     mcap = tmp_path / "run.mcap"
     # the caller (Debian's rospy) is on the graph first, and calls 2 simulated s into the run
-    caller = subprocess.Popen(["/usr/bin/python3", "-c", STOP_MOTOR], env=ros_env, stdout=subprocess.PIPE, text=True)
+    caller = subprocess.Popen(
+        ["/usr/bin/python3", "-c", STOP_MOTOR], env=ros_env, stdout=subprocess.PIPE, text=True
+    )
     twin = None
     try:
         assert caller.stdout.readline().strip() == "ready"
-        wait_for(lambda: "/test_stop_motor" in subscribers(ros_env, "/clock"), "the caller subscribed to /clock")
-        twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "12", "--world", "empty", "--sensors",
-                                 "--ros1", "--rate", "2", "--mcap", str(mcap)], env=ros_env, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.PIPE, text=True)
+        wait_for(
+            lambda: "/test_stop_motor" in subscribers(ros_env, "/clock"),
+            "the caller subscribed to /clock",
+        )
+        twin = subprocess.Popen(
+            [
+                AMR_TWIN,
+                "run",
+                "stop",
+                "--duration-s",
+                "12",
+                "--world",
+                "empty",
+                "--sensors",
+                "--ros1",
+                "--rate",
+                "2",
+                "--mcap",
+                str(mcap),
+            ],
+            env=ros_env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         t0, t1 = map(float, caller.communicate(timeout=120)[0].split())
         _out, err = twin.communicate(timeout=120)
         assert twin.returncode == 0, err
@@ -337,8 +530,16 @@ def test_the_lidars_stop_motor_service_on_the_graph_stops_the_scans(ros_env, tmp
             if proc is not None and proc.poll() is None:
                 proc.kill()
     with AnyReader([mcap]) as reader:
-        stamps = np.array([t * 1e-9 for c, t, _raw in reader.messages(connections=[c for c in reader.connections
-                                                                                   if c.topic == "/scan"])])
-    assert 2.0 <= t0 <= t1 <= 10.0  # the call acted between t0 and t1, 2 s or more before the run's end (12 s)
+        stamps = np.array(
+            [
+                t * 1e-9
+                for c, t, _raw in reader.messages(
+                    connections=[c for c in reader.connections if c.topic == "/scan"]
+                )
+            ]
+        )
+    assert (
+        2.0 <= t0 <= t1 <= 10.0
+    )  # the call acted between t0 and t1, 2 s or more before the run's end (12 s)
     assert len(stamps) >= 5 and stamps.max() >= t0 - 0.2  # it scanned at 5.5 Hz until the call ...
     assert stamps.max() <= t1  # ... and not after it: no scan in the 2 s or more left

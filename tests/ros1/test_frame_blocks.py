@@ -40,11 +40,15 @@ def test_the_state_blocks_are_genpys_frames_of_ros_states_messages():
     pos, quat, v, w = (rng.normal(size=(m, n)) for n in (3, 4, 3, 3))
     t = TIMES.tolist()
     assert blocks.joint_states(TIMES, q, qd) == b"".join(
-        _genpy(conv, ros_state.joint_state(t[i], joints, q[i], qd[i])) for i in range(m))
+        _genpy(conv, ros_state.joint_state(t[i], joints, q[i], qd[i])) for i in range(m)
+    )
     assert blocks.link_transforms(TIMES, link_pos, link_quat) == b"".join(
-        _genpy(conv, ros_state.link_transforms(t[i], links, link_pos[i], link_quat[i])) for i in range(m))
+        _genpy(conv, ros_state.link_transforms(t[i], links, link_pos[i], link_quat[i]))
+        for i in range(m)
+    )
     assert blocks.ground_truth(TIMES, pos, quat, v, w) == b"".join(
-        _genpy(conv, ros_state.ground_truth(t[i], pos[i], quat[i], v[i], w[i])) for i in range(m))
+        _genpy(conv, ros_state.ground_truth(t[i], pos[i], quat[i], v[i], w[i])) for i in range(m)
+    )
 
 
 def test_the_clock_rows_and_battery_blocks_are_genpys_frames():
@@ -52,19 +56,37 @@ def test_the_clock_rows_and_battery_blocks_are_genpys_frames():
     rospy = conv.rospy
     t = TIMES.tolist()
     clock = conv.ros_class("rosgraph_msgs/Clock")
-    assert clock_block(TIMES) == b"".join(_genpy(conv, clock(rospy.Time(s // 1_000_000, s % 1_000_000 * 1000)))
-                                          for s in t)
+    assert clock_block(TIMES) == b"".join(
+        _genpy(conv, clock(rospy.Time(s // 1_000_000, s % 1_000_000 * 1000))) for s in t
+    )
     for width in (1, 2, 5):
         rows = rng.normal(size=(len(t), width))
-        assert float64_rows_block(rows) == b"".join(_genpy(conv, Float64MultiArray(data=list(r))) for r in rows)
-    assert float64_rows_block(np.array([[-255, 255], [3, 0]])) == b"".join(  # integer counts, as floats
-        _genpy(conv, Float64MultiArray(data=[float(x) for x in r])) for r in ([-255, 255], [3, 0]))
+        assert float64_rows_block(rows) == b"".join(
+            _genpy(conv, Float64MultiArray(data=list(r))) for r in rows
+        )
+    assert float64_rows_block(
+        np.array([[-255, 255], [3, 0]])
+    ) == b"".join(  # integer counts, as floats
+        _genpy(conv, Float64MultiArray(data=[float(x) for x in r])) for r in ([-255, 255], [3, 0])
+    )
     battery = conv.ros_class("sensor_msgs/BatteryState")
-    volts, amps, soc, cap = rng.uniform(22, 25, len(t)), rng.normal(size=len(t)), rng.uniform(0, 1, len(t)), 20.0
+    volts, amps, soc, cap = (
+        rng.uniform(22, 25, len(t)),
+        rng.normal(size=len(t)),
+        rng.uniform(0, 1, len(t)),
+        20.0,
+    )
     want = []
     for i, s in enumerate(t):
-        msg = battery(voltage=volts[i], current=amps[i], charge=soc[i] * cap, capacity=cap, design_capacity=cap,
-                      percentage=soc[i], present=True)
+        msg = battery(
+            voltage=volts[i],
+            current=amps[i],
+            charge=soc[i] * cap,
+            capacity=cap,
+            design_capacity=cap,
+            percentage=soc[i],
+            present=True,
+        )
         msg.header.stamp = rospy.Time(s // 1_000_000, s % 1_000_000 * 1000)
         want.append(_genpy(conv, msg))
     assert battery_block(TIMES, volts, amps, soc * cap, cap, soc) == b"".join(want)

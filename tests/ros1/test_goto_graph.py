@@ -44,11 +44,35 @@ print(json.dumps({"state": client.get_state(), "text": client.get_goal_status_te
 @needs_ros1
 def test_a_graph_goal_preempts_gotos_and_is_reached(ros_env):
     script = f"START, GRAPH = {START}, {GRAPH}\n" + CLIENT
-    client = subprocess.Popen(["/usr/bin/python3", "-c", script], env=ros_env, stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
-    twin = subprocess.Popen([AMR_TWIN, "run", "goto", "--world", "warehouse", f"--start={START[0]},{START[1]},0",
-                             "--goal", f"{GOTO[0]},{GOTO[1]}", "--localisation", "truth", "--ros1", "--rate", "4",
-                             "--json"], env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    client = subprocess.Popen(
+        ["/usr/bin/python3", "-c", script],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    twin = subprocess.Popen(
+        [
+            AMR_TWIN,
+            "run",
+            "goto",
+            "--world",
+            "warehouse",
+            f"--start={START[0]},{START[1]},0",
+            "--goal",
+            f"{GOTO[0]},{GOTO[1]}",
+            "--localisation",
+            "truth",
+            "--ros1",
+            "--rate",
+            "4",
+            "--json",
+        ],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         out, err = client.communicate(timeout=90)
         assert client.returncode == 0, err
@@ -64,5 +88,7 @@ def test_a_graph_goal_preempts_gotos_and_is_reached(ros_env):
     goals = [(tuple(g["goal"][:2]), g["status"]) for g in run["goals"]]
     assert goals == [(GOTO, "preempted"), (GRAPH, "succeeded")], goals
     x, y, _yaw = run["final_pose"]
-    assert math.hypot(x - GRAPH[0], y - GRAPH[1]) <= 0.25, run["final_pose"]  # navigation.navigator.xy_tolerance_m
+    assert math.hypot(x - GRAPH[0], y - GRAPH[1]) <= 0.25, run[
+        "final_pose"
+    ]  # navigation.navigator.xy_tolerance_m
     assert "move_base on /move_base" in twin_err

@@ -111,11 +111,33 @@ print(json.dumps(out), flush=True)
 @pytest.fixture(scope="module")
 def session(ros_env):
     script = (f"AHEAD, FAR, IN_RACK, SIMPLE = {AHEAD}, {FAR}, {IN_RACK}, {SIMPLE}\n") + CLIENT
-    client = subprocess.Popen(["/usr/bin/python3", "-c", script], env=ros_env, stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
-    twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--duration-s", "60", "--world", "warehouse", "--sensors",
-                             "--ros1", "--start=-6,0,0", "--rate", "4"], env=ros_env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    client = subprocess.Popen(
+        ["/usr/bin/python3", "-c", script],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    twin = subprocess.Popen(
+        [
+            AMR_TWIN,
+            "run",
+            "stop",
+            "--duration-s",
+            "60",
+            "--world",
+            "warehouse",
+            "--sensors",
+            "--ros1",
+            "--start=-6,0,0",
+            "--rate",
+            "4",
+        ],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         out, err = client.communicate(timeout=240)
         assert client.returncode == 0, err
@@ -138,11 +160,15 @@ def test_a_goal_ahead_ends_succeeded_with_the_true_pose_within_the_tolerance(ses
     got, _err = session
     ahead = got["ahead"]
     assert ahead["state"] == 3, ahead  # GoalStatus.SUCCEEDED
-    assert ahead["feedback"] == ["map"] and ahead["n_feedback"] >= 10  # the base pose, in map, at 10 Hz simulated
+    assert (
+        ahead["feedback"] == ["map"] and ahead["n_feedback"] >= 10
+    )  # the base pose, in map, at 10 Hz simulated
     truth = ahead["truth"]
     assert math.hypot(truth["x"] - AHEAD[0], truth["y"] - AHEAD[1]) <= _tolerance_m(), truth
     assert abs(truth["v"]) < 0.01, truth  # it stands there
-    print(f"time to goal: {ahead['sim_s']:.2f} s simulated ({ahead['wall_s']:.2f} s wall at --rate 4)")
+    print(
+        f"time to goal: {ahead['sim_s']:.2f} s simulated ({ahead['wall_s']:.2f} s wall at --rate 4)"
+    )
 
 
 @needs_ros1

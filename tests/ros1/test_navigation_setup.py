@@ -21,13 +21,18 @@ GOAL = (-3.0, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def run():
     cfg = load_config()
-    twin = Twin(cfg, TwinOptions(firmware="improved", sensors=("imu", "lidar"), world="warehouse", start_xy_yaw=START))
+    twin = Twin(
+        cfg,
+        TwinOptions(
+            firmware="improved", sensors=("imu", "lidar"), world="warehouse", start_xy_yaw=START
+        ),
+    )
     attach_recorder(twin)
     navigation = RunNavigation(cfg, true_map(cfg, "warehouse"))
     nav = navigation.attach(twin)
     DiffDriveNode(twin.bus, twin.clock, twin.client)  # the run's cmd_vel node (amr_twin/cli/run.py)
     lines = []
-    (_t, step), = navigation.yielding([(3.0, Command("linear", speed_m_s=0.5))], say=lines.append)
+    ((_t, step),) = navigation.yielding([(3.0, Command("linear", speed_m_s=0.5))], say=lines.append)
     outcome = nav.send_goal(GOAL)
     twin.advance(3.0)
     during = step.send(twin), twin.client.last_request
@@ -36,11 +41,23 @@ def run():
     twin.advance(2.0)
     after_goal = recorder_of(twin).series().pose[-1]
     code = step.send(twin)
-    return outcome, during, after_goal, code, twin.client.last_request, lines, _fields(step.command.dry_run(cfg).last_request)
+    return (
+        outcome,
+        during,
+        after_goal,
+        code,
+        twin.client.last_request,
+        lines,
+        _fields(step.command.dry_run(cfg).last_request),
+    )
 
 
 def _fields(request) -> tuple:
-    return None if request is None else (request.motionL, request.speedL, request.motionR, request.speedR)
+    return (
+        None
+        if request is None
+        else (request.motionL, request.speedL, request.motionR, request.speedR)
+    )
 
 
 def test_a_command_due_while_a_goal_is_active_is_not_sent_and_the_goal_is_reached(run):

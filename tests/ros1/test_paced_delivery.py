@@ -40,13 +40,38 @@ with lock:
 
 @needs_ros1
 def test_paced_messages_go_one_by_one_at_their_stamps_behind_the_clock(ros_env):
-    sub = subprocess.Popen(["/usr/bin/python3", "-c", SUBSCRIBER], env=ros_env, stdin=subprocess.PIPE,
-                           stdout=subprocess.PIPE, text=True)
+    sub = subprocess.Popen(
+        ["/usr/bin/python3", "-c", SUBSCRIBER],
+        env=ros_env,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert sub.stdout.readline().strip() == "ready"
-        wait_for(lambda: "/test_paced_delivery" in subscribers(ros_env, "/imu/data_raw"), "the subscriber on the graph")
-        run = subprocess.run([AMR_TWIN, "run", "stop", "--duration-s", "6", "--world", "empty", "--sensors", "--ros1",
-                              "--rate", "1"], env=ros_env, capture_output=True, text=True, timeout=60)
+        wait_for(
+            lambda: "/test_paced_delivery" in subscribers(ros_env, "/imu/data_raw"),
+            "the subscriber on the graph",
+        )
+        run = subprocess.run(
+            [
+                AMR_TWIN,
+                "run",
+                "stop",
+                "--duration-s",
+                "6",
+                "--world",
+                "empty",
+                "--sensors",
+                "--ros1",
+                "--rate",
+                "1",
+            ],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert run.returncode == 0, run.stderr
         got = json.loads(sub.communicate("", timeout=30)[0].splitlines()[-1])
     finally:
@@ -57,7 +82,9 @@ def test_paced_messages_go_one_by_one_at_their_stamps_behind_the_clock(ros_env):
     # per tick bursts (two IMU messages and two clocks in one write every 20 ms) kept half of each
     assert len(imus) >= 450, len(imus)
     assert len(clocks) >= 450, len(clocks)
-    hz = (len(clocks) - 1) / (clocks[-1][1] - clocks[0][1])  # as rostopic hz: arrivals over wall time
+    hz = (len(clocks) - 1) / (
+        clocks[-1][1] - clocks[0][1]
+    )  # as rostopic hz: arrivals over wall time
     assert 95.0 <= hz <= 105.0, hz
     # The twin writes each /clock before the messages of its instant (tests/ros1/test_outbox.py). The subscriber
     # reads each topic in a thread of its own, and on a busy machine its clock thread is sometimes woken after

@@ -16,8 +16,12 @@ def _vec(x=0.0, y=0.0, z=0.0):
 def test_a_wheel_command_from_the_graph_is_checked_as_a_request():
     cmd = wheel_command_from_ros(SimpleNamespace(data=[1.0, 53.476, -1.0, 20.0]))
     assert cmd.data == [1.0, 53.476, -1.0, 20.0]
-    for bad, field in (([2.0, 10.0, 1.0, 10.0], "motionL"), ([1.0, 2000.0, 1.0, 10.0], "speedL"),
-                       ([1.0, 10.0, 1.0, math.nan], "speedR"), ([1.0, 10.0, 1.0], "3 values")):
+    for bad, field in (
+        ([2.0, 10.0, 1.0, 10.0], "motionL"),
+        ([1.0, 2000.0, 1.0, 10.0], "speedL"),
+        ([1.0, 10.0, 1.0, math.nan], "speedR"),
+        ([1.0, 10.0, 1.0], "3 values"),
+    ):
         with pytest.raises(InputError, match=field):
             wheel_command_from_ros(SimpleNamespace(data=bad))
 
@@ -35,8 +39,11 @@ def test_the_generic_converter_fills_rospys_class_field_by_field():
     from amr_twin.ros1.messages import Ros1Messages
 
     conv = Ros1Messages()
-    odom = conv.to_ros(ros_state.ground_truth(1_500_000, [1.0, 2.0, 0.1], [1.0, 0.0, 0.0, 0.0], [0.4, 0.0, 0.0],
-                                              [0.0, 0.0, 0.2]))
+    odom = conv.to_ros(
+        ros_state.ground_truth(
+            1_500_000, [1.0, 2.0, 0.1], [1.0, 0.0, 0.0, 0.0], [0.4, 0.0, 0.0], [0.0, 0.0, 0.2]
+        )
+    )
     assert odom._type == "nav_msgs/Odometry" and odom.header.frame_id == "world"
     assert (odom.header.stamp.secs, odom.header.stamp.nsecs) == (1, 500_000_000)
     assert odom.pose.pose.position.y == 2.0 and odom.twist.twist.angular.z == 0.2

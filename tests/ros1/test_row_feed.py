@@ -17,8 +17,11 @@ def test_the_rows_are_the_recorders_series(piece_us):
     attach_recorder(twin)
     feed = RowFeed(twin)
     got = []
-    for t_us, command in ((0, Command("linear", speed_m_s=0.6)), (1_500_000, Command("stop")),
-                          (2_300_000, Command("angular", speed_deg_s=40.0))):
+    for t_us, command in (
+        (0, Command("linear", speed_m_s=0.6)),
+        (1_500_000, Command("stop")),
+        (2_300_000, Command("angular", speed_deg_s=40.0)),
+    ):
         while twin.clock.now_us < t_us:
             twin.advance(piece_us * 1e-6)
             got.append(feed.take(twin.clock.now_us))
@@ -30,10 +33,16 @@ def test_the_rows_are_the_recorders_series(piece_us):
     series = recorder_of(twin).series()
     k = np.searchsorted(np.round(series.t_s * 1e6).astype(np.int64), t_us)
     assert len(t_us) >= 300 and np.array_equal(np.round(series.t_s[k] * 1e6), t_us)
-    assert t_us[0] == 0 and np.array_equal(np.concatenate([g.index for g in got]), np.arange(len(t_us)))
+    assert t_us[0] == 0 and np.array_equal(
+        np.concatenate([g.index for g in got]), np.arange(len(t_us))
+    )
     for name in ("true_rpm", "pwm_counts", "current_a", "battery_v", "battery_a", "battery_soc"):
-        assert np.array_equal(np.concatenate([getattr(g, name) for g in got]), getattr(series, name)[k]), name
-    assert np.abs(series.current_a[k]).max() > 0.5 and np.ptp(series.pwm_counts[k]) > 0  # the drive changed
+        assert np.array_equal(
+            np.concatenate([getattr(g, name) for g in got]), getattr(series, name)[k]
+        ), name
+    assert (
+        np.abs(series.current_a[k]).max() > 0.5 and np.ptp(series.pwm_counts[k]) > 0
+    )  # the drive changed
 
 
 def test_the_grid_loop_stays_in_c():

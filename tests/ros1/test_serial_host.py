@@ -60,6 +60,7 @@ class _FakeRospy:
 def _topic_info(topic_id: int, name: str, typ: str, md5: str) -> bytes:
     def s(x):
         return struct.pack("<I", len(x)) + x.encode()
+
     return struct.pack("<H", topic_id) + s(name) + s(typ) + s(md5) + struct.pack("<i", 512)
 
 
@@ -129,26 +130,69 @@ while not rospy.is_shutdown():  # the board's speed, through the pseudo-terminal
 
 @needs_ros1
 @needs_avr
-def test_listing_4_1s_launch_on_the_twins_serial_port_moves_the_emulated_board(ros_env, catkin_setup, tmp_path):
+def test_listing_4_1s_launch_on_the_twins_serial_port_moves_the_emulated_board(
+    ros_env, catkin_setup, tmp_path
+):
     from conftest import connected_subscribers, services, wait_for
 
     pty = tmp_path / "ttyACM0"
     # the launch file first: its host waits for the port (as upstream's does); the twin then creates it
-    launch = subprocess.Popen(in_workspace(catkin_setup, f"roslaunch amr_idea_bringup amr_idea.launch port:={pty} "
-                                           "serial_pkg:=amr_idea_bringup serial_type:=rosserial_host"),
-                              env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    launch = subprocess.Popen(
+        in_workspace(
+            catkin_setup,
+            f"roslaunch amr_idea_bringup amr_idea.launch port:={pty} "
+            "serial_pkg:=amr_idea_bringup serial_type:=rosserial_host",
+        ),
+        env=ros_env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     drive = twin = None
     try:
         (tmp_path / "drive.py").write_text(DRIVE)
-        drive = subprocess.Popen(in_workspace(catkin_setup, f"/usr/bin/python3 {tmp_path / 'drive.py'}"), env=ros_env,
-                                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        drive = subprocess.Popen(
+            in_workspace(catkin_setup, f"/usr/bin/python3 {tmp_path / 'drive.py'}"),
+            env=ros_env,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         assert drive.stdout.readline().strip() == "ready"
-        wait_for(lambda: "/wheel_Command_Service" in services(ros_env), "the launch file's service on the graph")
-        twin = subprocess.Popen([AMR_TWIN, "run", "stop", "--firmware", "avr", "--serial-pty", str(pty), "--ros1",
-                                 "--rate", "4", "--duration-s", "30", "--world", "empty", "--json"], env=ros_env,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        wait_for(lambda: "/serial_node" in connected_subscribers(ros_env, "/wheel_Command_Service", "/wheel_Command"),
-                 "the host negotiated the board's topics and connected to the service")
+        wait_for(
+            lambda: "/wheel_Command_Service" in services(ros_env),
+            "the launch file's service on the graph",
+        )
+        twin = subprocess.Popen(
+            [
+                AMR_TWIN,
+                "run",
+                "stop",
+                "--firmware",
+                "avr",
+                "--serial-pty",
+                str(pty),
+                "--ros1",
+                "--rate",
+                "4",
+                "--duration-s",
+                "30",
+                "--world",
+                "empty",
+                "--json",
+            ],
+            env=ros_env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        wait_for(
+            lambda: (
+                "/serial_node"
+                in connected_subscribers(ros_env, "/wheel_Command_Service", "/wheel_Command")
+            ),
+            "the host negotiated the board's topics and connected to the service",
+        )
         speed, why = drive.communicate("go\n", timeout=120)
         assert speed and float(speed) > 20.0, why
         out, err = twin.communicate(timeout=120)

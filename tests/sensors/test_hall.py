@@ -1,6 +1,5 @@
 """Hall sensors and SC output: 90 changes per revolution, both directions, vectorised."""
 
-
 import shutil
 
 import numpy as np
@@ -44,7 +43,9 @@ def test_chunks_give_the_same_edges_as_one_call():
     t_us, angle = one_revolution(76.39, 1)
     whole = HallSensors(pole_pairs=POLE_PAIRS).edges(t_us, angle)
     hall = HallSensors(pole_pairs=POLE_PAIRS)
-    parts = [hall.edges(t_us[i:i + 101], angle[i:i + 101]) for i in range(0, len(t_us) - 1, 100)]
+    parts = [
+        hall.edges(t_us[i : i + 101], angle[i : i + 101]) for i in range(0, len(t_us) - 1, 100)
+    ]
     np.testing.assert_array_equal(whole[0], np.concatenate([p[0] for p in parts]))
     np.testing.assert_array_equal(whole[1], np.concatenate([p[1] for p in parts]))
 
@@ -98,8 +99,12 @@ def test_jitter_is_seeded_sorted_and_inside_the_chunk():
 
 def _hermite(q0, q1, m0, m1, s):
     """The cubic Hermite interpolant in its textbook basis form (not the solver's power form)."""
-    return ((2 * s**3 - 3 * s**2 + 1) * q0 + (s**3 - 2 * s**2 + s) * m0
-            + (-2 * s**3 + 3 * s**2) * q1 + (s**3 - s**2) * m1)
+    return (
+        (2 * s**3 - 3 * s**2 + 1) * q0
+        + (s**3 - 2 * s**2 + s) * m0
+        + (-2 * s**3 + 3 * s**2) * q1
+        + (s**3 - s**2) * m1
+    )
 
 
 def _bisect_edges(ts, rows, offsets, pitch):
@@ -113,7 +118,9 @@ def _bisect_edges(ts, rows, offsets, pitch):
                 h = (ts[i + 1] - ts[i]) * 1e-6
                 m0, m1 = rows[i][2 + w] * h, rows[i + 1][2 + w] * h
                 c0, c1 = np.floor((q0 - off) / pitch), np.floor((q1 - off) / pitch)
-                lattices = range(int(c0) + 1, int(c1) + 1) if c1 > c0 else range(int(c0), int(c1), -1)
+                lattices = (
+                    range(int(c0) + 1, int(c1) + 1) if c1 > c0 else range(int(c0), int(c1), -1)
+                )
                 for lat in lattices:
                     theta = off + pitch * lat
                     lo, hi = 0.0, 1.0
@@ -142,7 +149,9 @@ def test_edge_times_are_the_cubics_roots_to_the_microsecond(seed):
     n = 12
     ts = (np.arange(n + 1) * 10_000 + 1_000_000).tolist()
     speed = rng.uniform(2.0, 26.0, 2) * rng.choice([-1, 1], 2)  # rad/s, 20-250 RPM, either sign
-    accel = rng.uniform(-0.4, 0.4, 2) * np.abs(speed) / 0.12  # +-40 % over the chunk, no sign change
+    accel = (
+        rng.uniform(-0.4, 0.4, 2) * np.abs(speed) / 0.12
+    )  # +-40 % over the chunk, no sign change
     t_s = (np.array(ts) - ts[0]) * 1e-6
     q = rng.uniform(0, 6, 2) + speed * t_s[:, None] + 0.5 * accel * t_s[:, None] ** 2
     v = speed + accel * t_s[:, None]
@@ -154,14 +163,18 @@ def test_edge_times_are_the_cubics_roots_to_the_microsecond(seed):
     assert sorted(got) == want
 
 
-@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+@pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
 @pytest.mark.parametrize("seed, hysteresis_deg", [(0, 0.0), (1, 0.0), (2, 0.3), (3, 0.3)])
 def test_c_crossing_loop_gives_the_python_twins_edges_and_counts(seed, hysteresis_deg):
     """Random chunks (both directions, a speed changing sign, a stuck sensor, a long fast chunk)."""
     rng = np.random.default_rng(seed)
     mis = rng.uniform(-0.5, 0.5, (2, 3))
     c = HallSensors(pole_pairs=POLE_PAIRS, misalignment_deg=mis, hysteresis_deg=hysteresis_deg)
-    py = HallSensors(pole_pairs=POLE_PAIRS, misalignment_deg=mis, native=False, hysteresis_deg=hysteresis_deg)
+    py = HallSensors(
+        pole_pairs=POLE_PAIRS, misalignment_deg=mis, native=False, hysteresis_deg=hysteresis_deg
+    )
     assert c.engine == "C" and py.engine == "Python (native=False)"
     for chunk in range(30):
         n = int(rng.integers(1, 40))
@@ -169,7 +182,9 @@ def test_c_crossing_loop_gives_the_python_twins_edges_and_counts(seed, hysteresi
         t_s = (np.array(ts) - ts[0]) * 1e-6
         speed, accel = rng.uniform(-40.0, 40.0, 2), rng.uniform(-200.0, 200.0, 2)
         q = rng.uniform(-50, 50, 2) + speed * t_s[:, None] + 0.5 * accel * t_s[:, None] ** 2
-        rows = np.hstack([q, speed + accel * t_s[:, None], rng.normal(size=(n + 1, 3))]).tolist()  # extra columns
+        rows = np.hstack(
+            [q, speed + accel * t_s[:, None], rng.normal(size=(n + 1, 3))]
+        ).tolist()  # extra columns
         wheel, sensor = int(rng.integers(0, 2)), int(rng.integers(0, 3))
         for h in (c, py):
             h.reset(q[0])
@@ -184,13 +199,21 @@ def _spring_back(hall: HallSensors) -> list:
     0.15 deg, sampled every 10 ms (angle and speed: a cosine stop, then a cosine return)."""
     stop, back = np.radians(4.12), np.radians(0.15)
     t = np.arange(0, 0.400001, 0.01)
-    q = np.where(t < 0.2, stop - np.radians(2.0) * (1 + np.cos(np.pi * t / 0.2)) / 2,
-                 stop - back * (1 - np.cos(np.pi * (t - 0.2) / 0.2)) / 2)
-    v = np.where(t < 0.2, np.radians(2.0) * np.pi / 0.4 * np.sin(np.pi * t / 0.2),
-                 -back * np.pi / 0.4 * np.sin(np.pi * (t - 0.2) / 0.2))
+    q = np.where(
+        t < 0.2,
+        stop - np.radians(2.0) * (1 + np.cos(np.pi * t / 0.2)) / 2,
+        stop - back * (1 - np.cos(np.pi * (t - 0.2) / 0.2)) / 2,
+    )
+    v = np.where(
+        t < 0.2,
+        np.radians(2.0) * np.pi / 0.4 * np.sin(np.pi * t / 0.2),
+        -back * np.pi / 0.4 * np.sin(np.pi * (t - 0.2) / 0.2),
+    )
     q, v = np.column_stack([q, q]), np.column_stack([v, v])
     hall.reset(q[0])
-    return hall.edges_from_samples((t * 1e6).round().astype(int).tolist(), np.hstack([q, v]).tolist())
+    return hall.edges_from_samples(
+        (t * 1e6).round().astype(int).tolist(), np.hstack([q, v]).tolist()
+    )
 
 
 @pytest.mark.parametrize("native", [True, False])
@@ -199,7 +222,9 @@ def test_the_latches_hysteresis_keeps_a_wheel_springing_back_from_toggling_again
     without direction takes for two edges of travel); with a 0.2 deg band it toggled at 4.1 deg and
     the wheel, back to 3.97 deg, stays inside the band (one change each wheel)."""
     plain = _spring_back(HallSensors(pole_pairs=POLE_PAIRS, n_wheels=2, native=native))
-    latch = _spring_back(HallSensors(pole_pairs=POLE_PAIRS, n_wheels=2, native=native, hysteresis_deg=0.2))
+    latch = _spring_back(
+        HallSensors(pole_pairs=POLE_PAIRS, n_wheels=2, native=native, hysteresis_deg=0.2)
+    )
     assert len(plain) == 4 and len(latch) == 2 and {w for _, w in latch} == {0, 1}
 
 
@@ -225,7 +250,11 @@ def test_a_latch_remembers_its_state_from_one_chunk_to_the_next(native):
     hall = HallSensors(pole_pairs=POLE_PAIRS, n_wheels=1, native=native, hysteresis_deg=0.2)
     hall.reset([0.0])
     w = np.radians(2.0)  # rad/s
-    first = hall.edges_from_samples([0, 1_000_000, 2_025_000], [[0.0, w], [w, w], [np.radians(4.05), 0.0]])
-    second = hall.edges_from_samples([2_025_000, 3_000_000, 4_000_000],
-                                     [[np.radians(4.05), 0.0], [np.radians(4.3), w], [np.radians(4.5), 0.0]])
+    first = hall.edges_from_samples(
+        [0, 1_000_000, 2_025_000], [[0.0, w], [w, w], [np.radians(4.05), 0.0]]
+    )
+    second = hall.edges_from_samples(
+        [2_025_000, 3_000_000, 4_000_000],
+        [[np.radians(4.05), 0.0], [np.radians(4.3), w], [np.radians(4.5), 0.0]],
+    )
     assert first == [] and len(second) == 1

@@ -14,8 +14,14 @@ from amr_twin.sensors.imu_errors import AxisModel, axis_models, corrupt
 
 def test_corrupt_quantises_saturates_and_walks():
     rng = np.random.default_rng(0)
-    m = AxisModel(bias=np.zeros(3), scale=np.zeros(3), noise_sigma=0.0, walk_sigma=0.0,
-                  range_max=2.0, resolution=np.array([0.5, 0.5, 0.0]))
+    m = AxisModel(
+        bias=np.zeros(3),
+        scale=np.zeros(3),
+        noise_sigma=0.0,
+        walk_sigma=0.0,
+        range_max=2.0,
+        resolution=np.array([0.5, 0.5, 0.0]),
+    )
     assert corrupt(np.array([0.74, -5.0, 0.123]), m, rng, 0.01).tolist() == [0.5, -2.0, 0.123]
     m.walk_sigma = 1.0
     corrupt(np.zeros(3), m, rng, 0.01)
@@ -25,7 +31,9 @@ def test_corrupt_quantises_saturates_and_walks():
 def test_error_state_is_seeded():
     cfg = load_config().imu
     a, b, c = (axis_models(cfg, np.random.default_rng(s)) for s in (1, 1, 2))
-    assert np.array_equal(a["gyro"].bias, b["gyro"].bias) and not np.array_equal(a["gyro"].bias, c["gyro"].bias)
+    assert np.array_equal(a["gyro"].bias, b["gyro"].bias) and not np.array_equal(
+        a["gyro"].bias, c["gyro"].bias
+    )
     assert a["gyro"].noise_sigma == pytest.approx(cfg.gyro_noise_density_rad_s_sqrt_hz * 10.0)
 
 
@@ -55,14 +63,27 @@ class Rig:
             self.clock.set_time(self.clock.now_us + 1)
 
     def gyro(self):
-        return np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for m in self.imu_msgs])
+        return np.array(
+            [
+                [m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+                for m in self.imu_msgs
+            ]
+        )
 
     def accel(self):
-        return np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
-                         for m in self.imu_msgs])
+        return np.array(
+            [
+                [m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
+                for m in self.imu_msgs
+            ]
+        )
 
 
-NO_BIAS = {"imu.accel_bias_sigma_m_s2": 0.0, "imu.accel_scale_sigma": 0.0, "imu.accel_bias_walk_m_s2_sqrt_s": 0.0}
+NO_BIAS = {
+    "imu.accel_bias_sigma_m_s2": 0.0,
+    "imu.accel_scale_sigma": 0.0,
+    "imu.accel_bias_walk_m_s2_sqrt_s": 0.0,
+}
 
 
 def test_at_rest_the_acceleration_norm_is_g_within_noise():
@@ -72,7 +93,10 @@ def test_at_rest_the_acceleration_norm_is_g_within_noise():
     assert len(acc) == 200
     sigma = rig.imu.models["accel"].noise_sigma
     norms = np.linalg.norm(acc, axis=1)
-    assert abs(norms.mean() - 9.81) < 3 * sigma / math.sqrt(len(norms)) + rig.cfg.imu.accel_resolution_m_s2
+    assert (
+        abs(norms.mean() - 9.81)
+        < 3 * sigma / math.sqrt(len(norms)) + rig.cfg.imu.accel_resolution_m_s2
+    )
     assert np.abs(norms - 9.81).max() < 5 * sigma + rig.cfg.imu.accel_resolution_m_s2
     # with the datasheet's zero-g offsets the norm stays within their spread
     biased = Rig()
@@ -107,6 +131,7 @@ def test_same_seed_bit_identical_other_seed_different():
         rig = Rig(seed=seed)
         rig.run(0.3)
         return np.concatenate([rig.accel(), rig.gyro()]).tobytes()
+
     assert record(3) == record(3) and record(3) != record(4)
 
 
@@ -118,22 +143,37 @@ def test_messages_frames_and_covariances():
     assert [m.header.stamp.to_us() for m in rig.imu_msgs[:3]] == [0, 10_000, 20_000]
     assert imu.orientation_covariance[0] == -1.0
     cfg = rig.cfg.imu
-    gyro_var = (rig.imu.models["gyro"].noise_sigma ** 2 + cfg.gyro_bias_sigma_rad_s ** 2
-                + cfg.gyro_resolution_rad_s ** 2 / 12)
+    gyro_var = (
+        rig.imu.models["gyro"].noise_sigma ** 2
+        + cfg.gyro_bias_sigma_rad_s**2
+        + cfg.gyro_resolution_rad_s**2 / 12
+    )
     assert imu.angular_velocity_covariance.reshape(3, 3) == pytest.approx(np.diag([gyro_var] * 3))
-    assert imu.linear_acceleration_covariance[8] > cfg.accel_bias_sigma_m_s2 ** 2
+    assert imu.linear_acceleration_covariance[8] > cfg.accel_bias_sigma_m_s2**2
     field = np.array([mag.magnetic_field.x, mag.magnetic_field.y, mag.magnetic_field.z])
     assert 20e-6 < np.linalg.norm(field) < 80e-6  # the earth's field, T
 
 
 def test_a_batch_of_samples_draws_the_same_numbers_as_one_by_one():
     one, batch = Rig(seed=5), Rig(seed=5)
-    true = np.random.default_rng(0).normal(0.0, 1.0, (40, 9)) * [1, 1, 10, .1, .1, .1, 4e-5, 4e-5, 4e-5]
+    true = np.random.default_rng(0).normal(0.0, 1.0, (40, 9)) * [
+        1,
+        1,
+        10,
+        0.1,
+        0.1,
+        0.1,
+        4e-5,
+        4e-5,
+        4e-5,
+    ]
     single = np.array([one.imu.corrupt_batch(x[None, :])[0] for x in true])
     many = np.concatenate([batch.imu.corrupt_batch(true[:7]), batch.imu.corrupt_batch(true[7:])])
     assert single.tobytes() == many.tobytes()
     assert np.array_equal(one.imu.models["gyro"].bias, batch.imu.models["gyro"].bias)
-    assert not np.array_equal(one.imu.models["gyro"].bias, Rig(seed=5).imu.models["gyro"].bias)  # it walked
+    assert not np.array_equal(
+        one.imu.models["gyro"].bias, Rig(seed=5).imu.models["gyro"].bias
+    )  # it walked
 
 
 def test_fed_by_a_grid_the_messages_match_the_clock_event_ones():
@@ -147,7 +187,9 @@ def test_fed_by_a_grid_the_messages_match_the_clock_event_ones():
         rig.physics.set_motor(1, "drive", 2.0)
     evented.run(0.3)
     samplers[0](0)
-    for k in range(1, 30):  # the physics runs ahead; the messages go out at their instants afterwards
+    for k in range(
+        1, 30
+    ):  # the physics runs ahead; the messages go out at their instants afterwards
         fed.physics.step(10)
         samplers[0](k * 10_000)
     fed.clock.run_until(290_000)

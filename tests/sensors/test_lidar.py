@@ -54,12 +54,19 @@ class Rig:
         self.bus = Bus(self.clock)
         self.scans = []
         self.bus.subscribe("scan", self.scans.append)
-        self.lidar = Lidar(SimpleNamespace(model=self.m, data=self.d), self.clock, self.bus, self.cfg.lidar, seed=seed, autostart=False)
+        self.lidar = Lidar(
+            SimpleNamespace(model=self.m, data=self.d),
+            self.clock,
+            self.bus,
+            self.cfg.lidar,
+            seed=seed,
+            autostart=False,
+        )
 
     def pose(self, x, y, yaw, yaw_rate=0.0):
         q = self.d.qpos
-        q[self.adr:self.adr + 3] = [x, y, self.m.qpos0[self.adr + 2]]
-        q[self.adr + 3:self.adr + 7] = [math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
+        q[self.adr : self.adr + 3] = [x, y, self.m.qpos0[self.adr + 2]]
+        q[self.adr + 3 : self.adr + 7] = [math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
         self.d.qvel[:] = 0
         self.d.qvel[self.dof + 5] = yaw_rate  # body-frame angular velocity about z
         mujoco.mj_forward(self.m, self.d)
@@ -78,7 +85,10 @@ class Rig:
 
 
 def sigma(cfg, r):
-    return np.maximum(cfg.lidar.range_noise_floor_m, cfg.lidar.range_noise_frac * r) + cfg.lidar.range_resolution_m
+    return (
+        np.maximum(cfg.lidar.range_noise_floor_m, cfg.lidar.range_noise_frac * r)
+        + cfg.lidar.range_resolution_m
+    )
 
 
 def assert_matches(cfg, ranges, expected):
@@ -95,17 +105,25 @@ def test_static_scan_matches_the_room(room):
     scan = rig.scans[0]
     lid = rig.lidar
     assert lid.n_beams == 364 and scan.header.frame_id == "laser"
-    assert scan.angle_min == -math.pi and scan.angle_increment == pytest.approx(2 * math.pi / 364)  # CCW
+    assert scan.angle_min == -math.pi and scan.angle_increment == pytest.approx(
+        2 * math.pi / 364
+    )  # CCW
     # the A1 spins clockwise: the last index first, beam 0 last; the stamp is beam 0's instant
     assert scan.header.stamp.to_us() == 363 * 500 and scan.time_increment == pytest.approx(-5e-4)
     assert scan.scan_time == pytest.approx(0.182)
     assert (scan.range_min, scan.range_max) == (0.15, 12.0)
     x, y, yaw = POSE
-    p = np.array([x, y]) + np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]) @ off
+    p = (
+        np.array([x, y])
+        + np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]) @ off
+    )
     assert_matches(rig.cfg, scan.ranges, room_ranges(p, yaw + lid.angles_rad))
     assert np.array_equal(lid.last_beam_t_us, 500 * np.arange(363, -1, -1))
     from amr_twin.sensors.lidar_beams import beam_times_s
-    assert np.allclose(beam_times_s(scan), lid.last_beam_t_us * 1e-6, atol=2e-8)  # float32 increment
+
+    assert np.allclose(
+        beam_times_s(scan), lid.last_beam_t_us * 1e-6, atol=2e-8
+    )  # float32 increment
     assert np.all(beam_times_s(scan) >= lid.last_beam_t_us * 1e-6)  # never before the true instant
 
 
@@ -122,10 +140,14 @@ def test_scan_while_turning_is_distorted_as_computed(room):
     yaw = POSE[2] + omega * t_s  # base yaw at each beam's own instant
     rot = np.stack([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])  # (2, 2, n)
     p = np.array(POSE[:2])[:, None] + np.einsum("ijn,j->in", rot, off)
-    expected = np.array([room_ranges(p[:, i], yaw[i] + lid.angles_rad[i]) for i in range(lid.n_beams)])
+    expected = np.array(
+        [room_ranges(p[:, i], yaw[i] + lid.angles_rad[i]) for i in range(lid.n_beams)]
+    )
     assert_matches(moving.cfg, moving.scans[0].ranges, expected)
     # the distortion is real: much larger than the noise on many beams, and as predicted
-    rot0 = np.array([[math.cos(POSE[2]), -math.sin(POSE[2])], [math.sin(POSE[2]), math.cos(POSE[2])]])
+    rot0 = np.array(
+        [[math.cos(POSE[2]), -math.sin(POSE[2])], [math.sin(POSE[2]), math.cos(POSE[2])]]
+    )
     expected_static = room_ranges(np.array(POSE[:2]) + rot0 @ off, POSE[2] + lid.angles_rad)
     distortion = expected - expected_static
     big = np.abs(distortion) > 10 * sigma(moving.cfg, expected_static)
@@ -153,7 +175,9 @@ def test_own_wheels_and_casters_never_seen(room, world):
         rig.lidar.scan_now()
         hit = rig.lidar.hit_geom[rig.lidar.hit_geom >= 0]
         assert len(hit) > 300
-        assert np.all(rig.m.geom_bodyid[hit] == 0), [rig.m.geom(g).name for g in hit if rig.m.geom_bodyid[g]]
+        assert np.all(rig.m.geom_bodyid[hit] == 0), [
+            rig.m.geom(g).name for g in hit if rig.m.geom_bodyid[g]
+        ]
 
 
 def test_same_seed_same_scans_other_seed_different(room):
@@ -171,7 +195,10 @@ def test_motor_services_and_out_of_range(room):
     rig.bus.call_service("start_motor", None)
     rig.run(400_000)
     lid = rig.lidar
-    assert len(rig.scans) == 2 and rig.scans[1].header.stamp.to_us() == 2 * lid.scan_us - lid.beam_dt_us
+    assert (
+        len(rig.scans) == 2
+        and rig.scans[1].header.stamp.to_us() == 2 * lid.scan_us - lid.beam_dt_us
+    )
     rig.bus.call_service("stop_motor", None)
     rig.run(1_000_000)
     assert len(rig.scans) == 2
@@ -203,6 +230,7 @@ def test_twin_mode_scan_while_turning_and_driving_is_distorted_as_computed(room,
         t_s = (yaw - POSE[2]) / omega
         base_pose(x + speed_m_s * t_s, y, yaw, yaw_rate)
         rig.d.qvel[rig.dof] = speed_m_s
+
     rig.pose = moving_pose
     _run_on_grid(rig, rig.lidar.scan_us + 20_000, omega)
     lid = rig.lidar
@@ -212,9 +240,17 @@ def test_twin_mode_scan_while_turning_and_driving_is_distorted_as_computed(room,
     t_s = lid.last_beam_t_us * 1e-6
     yaw = POSE[2] + omega * t_s
     rot = np.stack([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
-    p = np.array(POSE[:2])[:, None] + np.array([speed_m_s, 0.0])[:, None] * t_s + np.einsum("ijn,j->in", rot, off)
-    expected = np.array([room_ranges(p[:, i], yaw[i] + lid.angles_rad[i]) for i in range(lid.n_beams)])
-    assert_matches(rig.cfg, rig.scans[0].ranges, expected)  # each beam from its own origin, corners too
+    p = (
+        np.array(POSE[:2])[:, None]
+        + np.array([speed_m_s, 0.0])[:, None] * t_s
+        + np.einsum("ijn,j->in", rot, off)
+    )
+    expected = np.array(
+        [room_ranges(p[:, i], yaw[i] + lid.angles_rad[i]) for i in range(lid.n_beams)]
+    )
+    assert_matches(
+        rig.cfg, rig.scans[0].ranges, expected
+    )  # each beam from its own origin, corners too
 
 
 def test_twin_mode_payload_moves_with_the_laser(room):
@@ -242,18 +278,27 @@ THIN_XML = """<mujoco model="thin"><worldbody>
 
 @pytest.fixture(scope="module")
 def thin(tmp_path_factory):
-    uprights = [(0.1 + 0.45 * i, -0.9 + (0.0 if i % 2 else 0.02), 0.05 if i % 2 else 0.02) for i in range(5)]
+    uprights = [
+        (0.1 + 0.45 * i, -0.9 + (0.0 if i % 2 else 0.02), 0.05 if i % 2 else 0.02) for i in range(5)
+    ]
     uprights += [(0.6 + 0.5 * i, 0.75, 0.05 if i % 2 else 0.02) for i in range(4)]
-    xml = THIN_XML.format(uprights="\n  ".join(
-        f'<geom name="upright_{k}" type="box" pos="{x:.3f} {y:.3f} 0.6" size="{h} {h} 0.6"/>'
-        for k, (x, y, h) in enumerate(uprights)))
+    xml = THIN_XML.format(
+        uprights="\n  ".join(
+            f'<geom name="upright_{k}" type="box" pos="{x:.3f} {y:.3f} 0.6" size="{h} {h} 0.6"/>'
+            for k, (x, y, h) in enumerate(uprights)
+        )
+    )
     path = tmp_path_factory.mktemp("thin") / "thin.xml"
     path.write_text(xml)
     return path
 
 
-@pytest.mark.parametrize("speed_m_s, omega_rad_s, seed", [(0.8, 0.6, 0), (0.5, -0.4, 1), (0.8, 1.2, 2)])
-def test_every_return_is_what_a_ray_from_its_own_laser_pose_hits(thin, speed_m_s, omega_rad_s, seed):
+@pytest.mark.parametrize(
+    "speed_m_s, omega_rad_s, seed", [(0.8, 0.6, 0), (0.5, -0.4, 1), (0.8, 1.2, 2)]
+)
+def test_every_return_is_what_a_ray_from_its_own_laser_pose_hits(
+    thin, speed_m_s, omega_rad_s, seed
+):
     """Driving and turning past thin uprights, braces and a post: each return is within the range noise of
     MuJoCo's own ``mj_ray`` cast from the laser pose at that beam's instant (linear between the pose
     samples every 20 ms, interpolated here with ``numpy.interp``) where that ray hits within the range
@@ -271,8 +316,13 @@ def test_every_return_is_what_a_ray_from_its_own_laser_pose_hits(thin, speed_m_s
         y = start[1] - speed_m_s * (math.cos(yaw) - math.cos(start[2])) / omega_rad_s
         Rig.pose(rig, x, y, yaw, omega_rad_s)
         s = rig.lidar.site_id
-        samples[t_us] = np.concatenate([rig.d.site_xpos[s], rig.d.site_xmat[s].reshape(3, 3)[:, 0],
-                                        rig.d.site_xmat[s].reshape(3, 3)[:, 1]])
+        samples[t_us] = np.concatenate(
+            [
+                rig.d.site_xpos[s],
+                rig.d.site_xmat[s].reshape(3, 3)[:, 0],
+                rig.d.site_xmat[s].reshape(3, 3)[:, 1],
+            ]
+        )
 
     grid_us, t_end_us = 10_000, 5 * rig.lidar.scan_us + 20_000
     samplers = []
@@ -302,7 +352,11 @@ def test_every_return_is_what_a_ray_from_its_own_laser_pose_hits(thin, speed_m_s
             if gid[0] < 0 or not cfg.range_min_m + 0.01 < ref < cfg.range_max_m - 0.01:
                 assert not np.isfinite(r) or gid[0] >= 0, (i, r, ref)
                 continue
-            tol = 5 * max(cfg.range_noise_floor_m, cfg.range_noise_frac * ref) + cfg.range_resolution_m + 0.002
+            tol = (
+                5 * max(cfg.range_noise_floor_m, cfg.range_noise_frac * ref)
+                + cfg.range_resolution_m
+                + 0.002
+            )
             assert abs(r - ref) <= tol, (i, t_us, r, ref, rig.m.geom(gid[0]).name)
             hits += 1
             thin_hits += rig.m.geom(gid[0]).name.startswith(("upright", "brace", "post"))

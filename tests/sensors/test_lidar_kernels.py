@@ -10,7 +10,9 @@ import pytest
 from amr_twin.model.config import load_config
 from amr_twin.sensors.lidar_kernels import beam_kernels
 
-pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+pytestmark = pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
 CFG = load_config().lidar
 WORLD_ONLY = np.array([1, 0, 0, 0, 0, 0], np.uint8)
 """Geom groups the test casts see: the world (group 0) alone."""
@@ -53,9 +55,9 @@ def test_directions_and_origins_are_the_same_bits(seed):
         assert u_c.tobytes() == u_py.tobytes() and org_c.tobytes() == org_py.tobytes()
         assert np.allclose(np.linalg.norm(u_c, axis=1), 1.0)
         # each origin lies on the segment between the samples around its instant (held outside them)
-        ts = poses.rows[:poses.n, 0]
+        ts = poses.rows[: poses.n, 0]
         for i in range(0, len(t_us), 17):
-            ref = [np.interp(t_us[i], ts, poses.rows[:poses.n, 1 + a]) for a in range(3)]
+            ref = [np.interp(t_us[i], ts, poses.rows[: poses.n, 1 + a]) for a in range(3)]
             assert np.allclose(org_c[i], ref, rtol=0, atol=1e-12)
 
 
@@ -79,7 +81,9 @@ def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch
     import amr_twin.sensors.lidar as lidar_mod
     from amr_twin.assembly.twin import Twin, TwinOptions
 
-    cfg = load_config(overrides={"payload.mass_kg": 20.0, "payload.xy_m": [-0.15, 0.0]})  # seen from the laser
+    cfg = load_config(
+        overrides={"payload.mass_kg": 20.0, "payload.xy_m": [-0.15, 0.0]}
+    )  # seen from the laser
     out = []
     for native in (True, False):
         monkeypatch.setattr(lidar_mod, "Lidar", functools.partial(lidar_mod.Lidar, native=native))
@@ -111,11 +115,20 @@ def _scene(rng, mesh: bool = False) -> str:
     """A random MJCF world: primitives of every kind turned any way, some unseen (group 3), some
     invisible, some doubled, a panel flush with a wall, one on a free body, a floor; a mesh box with
     ``mesh``."""
-    kinds = [("box", "0.4 0.2 0.6"), ("cylinder", "0.3 0.5"), ("capsule", "0.2 0.4"), ("sphere", "0.35"),
-             ("ellipsoid", "0.5 0.2 0.3"), ("box", "3.0 0.05 1.0")]
+    kinds = [
+        ("box", "0.4 0.2 0.6"),
+        ("cylinder", "0.3 0.5"),
+        ("capsule", "0.2 0.4"),
+        ("sphere", "0.35"),
+        ("ellipsoid", "0.5 0.2 0.3"),
+        ("box", "3.0 0.05 1.0"),
+    ]
     # a panel flush with the face of a long wall, listed first: rays hit both at the same distance,
     # the wall's bounding sphere is nearer, and the panel (the lower id) must win, as in mj_multiRay
-    geoms = ['<geom type="box" size="0.2 1.0 1.0" pos="3.0 0.0 0.5"/>', '<geom type="box" size="0.2 5.0 2.0" pos="3.0 0.0 0.5"/>']
+    geoms = [
+        '<geom type="box" size="0.2 1.0 1.0" pos="3.0 0.0 0.5"/>',
+        '<geom type="box" size="0.2 5.0 2.0" pos="3.0 0.0 0.5"/>',
+    ]
     for i in range(40):
         kind, size = kinds[i % len(kinds)]
         pos = " ".join(f"{v:.3f}" for v in rng.uniform([-6, -6, -0.5], [6, 6, 2.0]))
@@ -126,9 +139,12 @@ def _scene(rng, mesh: bool = False) -> str:
             geoms.append(geoms[-1])
     if mesh:
         geoms.append('<geom type="mesh" mesh="cube" pos="2 2 0.5"/>')
-    assets = ('<asset><mesh name="cube" vertex="0 0 0 1 0 0 0 1 0 1 1 0 0 0 1 1 0 1 0 1 1 1 1 1"/></asset>'
-              if mesh else "")
-    return f"""<mujoco>{assets}<worldbody><geom type="plane" size="0 0 1"/>{''.join(geoms)}
+    assets = (
+        '<asset><mesh name="cube" vertex="0 0 0 1 0 0 0 1 0 1 1 0 0 0 1 1 0 1 0 1 1 1 1 1"/></asset>'
+        if mesh
+        else ""
+    )
+    return f"""<mujoco>{assets}<worldbody><geom type="plane" size="0 0 1"/>{"".join(geoms)}
       <body name="crate" pos="1.5 -1 0.4"><freejoint/><geom type="box" size="0.3 0.3 0.3"/></body>
       <body name="laser" mocap="true"><site name="laser"/></body></worldbody></mujoco>"""
 
@@ -192,7 +208,9 @@ def test_each_beam_is_cast_from_its_own_origin(seed, mesh):
         d.mocap_pos[0] = end
         mujoco.mj_forward(m, d)
         poses = _poses(rng, 10)  # 10 samples 20 ms apart ending at the present origin
-        poses.rows[:, 1:4] = end + np.cumsum(rng.normal(0.0, 0.12, (10, 3)) * [1, 1, 0.05], axis=0)[::-1]
+        poses.rows[:, 1:4] = (
+            end + np.cumsum(rng.normal(0.0, 0.12, (10, 3)) * [1, 1, 0.05], axis=0)[::-1]
+        )
         poses.rows[:, 1:4] -= poses.rows[-1, 1:4] - end
         t_us, lx, ly = _rotation(rng, 364)
         out = []
@@ -222,7 +240,9 @@ def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
       <geom name="ball" type="sphere" size="0.1" pos="2.0 0 0.5"/>
       <geom name="wall" type="box" size="0.1 4.0 1.0" pos="2.4 0 1.0"/>""")
     groups = WORLD_ONLY
-    rows = np.array([[0.0, 0.5, 0.0, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
+    rows = np.array(
+        [[0.0, 0.5, 0.0, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]]
+    )
     t_us, lx, ly = np.array([0, 20_000], np.int64), np.ones((2, 1)), np.zeros((2, 1))
     for k in (c, py):
         k.bind(m, d, 0, groups)
@@ -245,8 +265,14 @@ def test_a_beam_from_beside_a_thin_post_sees_it():
     to_post = np.array([0.1, 0.0]) - o
     az = math.atan2(to_post[1], to_post[0])
     rows = np.array([[0.0, *o, 0.5, 1, 0, 0, 0, 1, 0], [20_000.0, 0.0, 0.0, 0.5, 1, 0, 0, 0, 1, 0]])
-    t_us, lx, ly = np.array([0], np.int64), np.full((1, 1), math.cos(az)), np.full((1, 1), math.sin(az))
-    assert az < -1.38  # outside the post's span seen from the present origin, widened by x (1 + x^2 / 4)
+    t_us, lx, ly = (
+        np.array([0], np.int64),
+        np.full((1, 1), math.cos(az)),
+        np.full((1, 1), math.sin(az)),
+    )
+    assert (
+        az < -1.38
+    )  # outside the post's span seen from the present origin, widened by x (1 + x^2 / 4)
     for k in (c, py):
         k.bind(m, d, 0, groups)
         dist, geomid = np.zeros(1), np.zeros(1, np.int32)

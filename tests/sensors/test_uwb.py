@@ -7,8 +7,14 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.ros.sensor_messages import Range
-from amr_twin.sensors.uwb import (anchor_frame, anchor_index, corrupt_range, corrupt_ranges, simulate_ranges,
-                                  tag_positions_m)
+from amr_twin.sensors.uwb import (
+    anchor_frame,
+    anchor_index,
+    corrupt_range,
+    corrupt_ranges,
+    simulate_ranges,
+    tag_positions_m,
+)
 
 
 def _cfg(**values):
@@ -32,14 +38,22 @@ def test_exact_ranges_without_errors():
 
 @pytest.mark.parametrize("walls", [False, True])
 def test_one_exchange_draws_as_a_batch_of_one(walls):
-    cfg = _cfg(range_noise_sigma_m=0.05, nlos_prob=0.3, nlos_bias_m=0.4, dropout_prob=0.2, blocked_bias_m=0.6,
-               blocked_dropout_prob=0.5)
+    cfg = _cfg(
+        range_noise_sigma_m=0.05,
+        nlos_prob=0.3,
+        nlos_bias_m=0.4,
+        dropout_prob=0.2,
+        blocked_bias_m=0.6,
+        blocked_dropout_prob=0.5,
+    )
     one, batch, rng_d = np.random.default_rng(3), np.random.default_rng(3), np.random.default_rng(4)
     seen = set()
     for _ in range(400):
         d, blocked = rng_d.uniform(0.0, 45.0), (bool(rng_d.random() < 0.5) if walls else None)
         r, ok = corrupt_range(d, cfg, one, blocked)
-        rb, okb = corrupt_ranges(np.array([d]), cfg, batch, None if blocked is None else np.array([blocked]))
+        rb, okb = corrupt_ranges(
+            np.array([d]), cfg, batch, None if blocked is None else np.array([blocked])
+        )
         assert (r, ok) == (rb[0], okb[0])
         seen.add(ok)
     assert seen == {True, False}
@@ -67,13 +81,18 @@ def test_simulated_ranges_match_the_3d_distance():
     anchors = cfg.anchors_xy_m
     t = np.arange(200) * 0.025
     tag = np.column_stack((np.linspace(-3, 3, 200), np.linspace(1, -1, 200)))
-    msgs = simulate_ranges(t, tag, anchors, cfg, np.random.default_rng(2), anchor=np.arange(200) % 4)
+    msgs = simulate_ranges(
+        t, tag, anchors, cfg, np.random.default_rng(2), anchor=np.arange(200) % 4
+    )
     assert len(msgs) == 200
     dz = cfg.anchor_z_m - cfg.tag_pos_m[2]
     err = []
     for k, m in enumerate(msgs):
         assert isinstance(m, Range) and m.radiation_type == Range.INFRARED
-        assert m.header.frame_id == f"uwb_anchor_{k % 4}" and m.header.stamp.to_sec() == pytest.approx(t[k])
+        assert (
+            m.header.frame_id == f"uwb_anchor_{k % 4}"
+            and m.header.stamp.to_sec() == pytest.approx(t[k])
+        )
         assert m.max_range == cfg.max_range_m and m.field_of_view == pytest.approx(2 * math.pi)
         ax, ay = anchors[k % 4]
         err.append(m.range - math.sqrt((tag[k, 0] - ax) ** 2 + (tag[k, 1] - ay) ** 2 + dz * dz))
@@ -82,8 +101,9 @@ def test_simulated_ranges_match_the_3d_distance():
 
 def test_every_anchor_at_every_time_by_default_and_dropouts_are_absent():
     cfg = _cfg(dropout_prob=0.5)
-    msgs = simulate_ranges(np.arange(100) * 0.1, np.zeros((100, 2)), cfg.anchors_xy_m, cfg,
-                           np.random.default_rng(3))
+    msgs = simulate_ranges(
+        np.arange(100) * 0.1, np.zeros((100, 2)), cfg.anchors_xy_m, cfg, np.random.default_rng(3)
+    )
     assert 150 < len(msgs) < 250  # 400 exchanges, half dropped
     stamps = [m.header.stamp.to_sec() for m in msgs]
     assert stamps == sorted(stamps)
@@ -92,7 +112,9 @@ def test_every_anchor_at_every_time_by_default_and_dropouts_are_absent():
 def test_same_seed_same_ranges():
     cfg = load_config().uwb
     t, tag = np.arange(50) * 0.1, np.ones((50, 2))
-    a, b, c = (simulate_ranges(t, tag, cfg.anchors_xy_m, cfg, np.random.default_rng(s)) for s in (7, 7, 8))
+    a, b, c = (
+        simulate_ranges(t, tag, cfg.anchors_xy_m, cfg, np.random.default_rng(s)) for s in (7, 7, 8)
+    )
     assert [m.range for m in a] == [m.range for m in b]
     assert [m.range for m in a] != [m.range for m in c]
 
@@ -112,10 +134,18 @@ def test_anchor_frames_round_trip_and_bad_frames_are_named():
 def test_bad_input_is_refused():
     cfg = load_config().uwb
     with pytest.raises(ValueError, match="tag_xy_m"):
-        simulate_ranges(np.zeros(3), np.zeros((2, 2)), cfg.anchors_xy_m, cfg, np.random.default_rng(0))
+        simulate_ranges(
+            np.zeros(3), np.zeros((2, 2)), cfg.anchors_xy_m, cfg, np.random.default_rng(0)
+        )
     with pytest.raises(ValueError, match="anchor"):
-        simulate_ranges(np.zeros(2), np.zeros((2, 2)), cfg.anchors_xy_m, cfg, np.random.default_rng(0),
-                        anchor=np.array([0, 4]))
+        simulate_ranges(
+            np.zeros(2),
+            np.zeros((2, 2)),
+            cfg.anchors_xy_m,
+            cfg,
+            np.random.default_rng(0),
+            anchor=np.array([0, 4]),
+        )
 
 
 def test_uwb_sensor_in_the_twin():
@@ -126,8 +156,9 @@ def test_uwb_sensor_in_the_twin():
     twin = Twin(cfg, TwinOptions(sensors=("imu", "lidar"), world="warehouse"))
     msgs = []
     twin.bus.subscribe("uwb/range", msgs.append)
-    uwb = UwbSensor(twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3],
-                    walls=False)  # line of sight everywhere: the racks' beams are in some lines here
+    uwb = UwbSensor(
+        twin.physics, twin.clock, twin.bus, cfg.uwb, seed=[0, 3], walls=False
+    )  # line of sight everywhere: the racks' beams are in some lines here
     twin.advance(1.0)
     # 10 Hz x 4 anchors, round-robin every 25 ms, 5 % dropped
     assert uwb.slot_us == 25_000 and uwb.exchanges in (40, 41)
@@ -138,7 +169,7 @@ def test_uwb_sensor_in_the_twin():
     assert tag[:2] == pytest.approx([-0.30, 0.0], abs=0.01) and abs(tag[2] - 0.45) < 0.03
     true = uwb.true_ranges_m()
     dz = cfg.uwb.anchor_z_m - tag[2]
-    assert true[0] == pytest.approx(math.sqrt(9.8 ** 2 + 6.5 ** 2 + dz ** 2), abs=0.01)
+    assert true[0] == pytest.approx(math.sqrt(9.8**2 + 6.5**2 + dz**2), abs=0.01)
     err = np.array([m.range - true[anchor_index(m.header.frame_id)] for m in msgs])
     assert np.all(np.abs(err) < 4 * cfg.uwb.range_noise_sigma_m)
     assert np.std(err) > 0.02  # noisy, not exact
@@ -163,7 +194,10 @@ def test_walls_block_the_bays_anchors_in_the_corridor():
     assert list(uwb.blocked[:4]) == list(per_anchor[:4]) and uwb.blocked[4] == 0
     per_anchor = per_anchor[0]
     true = uwb.true_ranges_m()
-    err = {i: np.array([m.range - true[i] for m in msgs if anchor_index(m.header.frame_id) == i]) for i in range(5)}
+    err = {
+        i: np.array([m.range - true[i] for m in msgs if anchor_index(m.header.frame_id) == i])
+        for i in range(5)
+    }
     assert np.all(np.abs(err[4]) < 4 * cfg.uwb.range_noise_sigma_m)  # the end anchor: line of sight
     hall = np.concatenate([err[i] for i in range(4)])
     assert 0.3 < np.mean(hall) < 1.0  # biased long by the walls (mean blocked_bias_m 0.6 m)

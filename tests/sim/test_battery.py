@@ -42,13 +42,19 @@ def test_at_rest_it_drains_the_quiescent_and_auxiliary_current(monkeypatch, nati
     b = twin.plant.battery
     soc0 = b.soc
     twin.advance(20.0)
-    r, q, p = cfg.battery.internal_resistance_ohm, 2 * cfg.driver.quiescent_current_a, cfg.battery.auxiliary_power_w
+    r, q, p = (
+        cfg.battery.internal_resistance_ohm,
+        2 * cfg.driver.quiescent_current_a,
+        cfg.battery.auxiliary_power_w,
+    )
     ocv = float(_ocv_v(cfg, b.soc))
     v = (ocv - r * q + np.sqrt((ocv - r * q) ** 2 - 4 * r * p)) / 2  # V^2 - (OCV - R q) V + R P = 0
     expected_a = q + p / v
     assert b.current_a == pytest.approx(expected_a, rel=1e-7)
     assert b.terminal_v() == pytest.approx(v, rel=1e-9)
-    assert soc0 - b.soc == pytest.approx(expected_a * 20.0 / (cfg.battery.capacity_ah * 3600), rel=1e-4)
+    assert soc0 - b.soc == pytest.approx(
+        expected_a * 20.0 / (cfg.battery.capacity_ah * 3600), rel=1e-4
+    )
 
 
 def test_battery_voltage_is_recorded_at_every_grid_instant(monkeypatch):
@@ -63,13 +69,17 @@ def test_battery_voltage_is_recorded_at_every_grid_instant(monkeypatch):
     twin.advance(3.0)
     s = recorder_of(twin).series()
     ocv = _ocv_v(cfg, s.battery_soc)
-    np.testing.assert_allclose(s.battery_v, ocv - cfg.battery.internal_resistance_ohm * s.battery_a, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(
+        s.battery_v, ocv - cfg.battery.internal_resistance_ohm * s.battery_a, rtol=0, atol=1e-9
+    )
     drained = -np.diff(s.battery_soc) * cfg.battery.capacity_ah * 3600  # A s per interval
     np.testing.assert_allclose(drained, s.battery_a[1:] * np.diff(s.t_s), rtol=1e-9, atol=1e-15)
     pins = np.column_stack([s.pwm_counts, s.direction, s.mode])
     same_pins = np.all(pins[1:] == pins[:-1], axis=1)
     moved = np.abs(np.diff(s.battery_v)) > 1e-6
-    assert np.count_nonzero(same_pins & moved) > 100  # the voltage moves with the current, pins or not
+    assert (
+        np.count_nonzero(same_pins & moved) > 100
+    )  # the voltage moves with the current, pins or not
     assert s.battery_v.max() - s.battery_v.min() > 0.1
 
 
@@ -100,8 +110,17 @@ def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch):
         twin.client.stop()
         twin.advance(2.0)
         s, b = recorder_of(twin).series(), twin.plant.battery
-        out.append((b.engine, b.soc, b.current_a, s.battery_v.tobytes(), s.battery_a.tobytes(),
-                    s.battery_soc.tobytes(), twin.physics.data.qpos.tobytes()))
+        out.append(
+            (
+                b.engine,
+                b.soc,
+                b.current_a,
+                s.battery_v.tobytes(),
+                s.battery_a.tobytes(),
+                s.battery_soc.tobytes(),
+                twin.physics.data.qpos.tobytes(),
+            )
+        )
     (c_engine, *c_state), (py_engine, *py_state) = out
     assert c_engine == "C" and py_engine == "Python (native=False)"
     assert c_state == py_state
@@ -124,7 +143,11 @@ def test_c_helper_and_python_twin_agree_on_every_branch():
     d = physics.data
     for _ in range(500):
         modes, volts = rng.integers(0, 3, 2), rng.uniform(-40.0, 40.0, 2)
-        speeds, soc, sag = rng.uniform(-60.0, 60.0, 2), rng.uniform(-0.2, 1.2), rng.choice([0.0, 5.0])
+        speeds, soc, sag = (
+            rng.uniform(-60.0, 60.0, 2),
+            rng.uniform(-0.2, 1.2),
+            rng.choice([0.0, 5.0]),
+        )
         d.qvel[list(physics.wheel_dof)] = speeds
         d.time += rng.uniform(0.0, 0.02)
         for b in (native, python):

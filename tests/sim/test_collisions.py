@@ -29,7 +29,9 @@ def _json(*args):
 
 
 def test_wheels_and_casters_on_the_floor_are_not_collisions():
-    result = run_command(CFG, Command("angular", speed_deg_s=90, icc_m=0), 4.0, TwinOptions(world="empty"))
+    result = run_command(
+        CFG, Command("angular", speed_deg_s=90, icc_m=0), 4.0, TwinOptions(world="empty")
+    )
     assert result.collisions == [] and not result.halted
 
 
@@ -37,7 +39,7 @@ def test_the_default_start_has_room_for_half_a_metre_per_second_for_20_s():
     res, info = _json("linear", "--speed-m-s", "0.5", "--duration-s", "20")
     assert res.exit_code == 0 and info["collisions"] == [] and "warning" not in res.stderr
     assert info["start_pose"] == {"x_m": -6.0, "y_m": 0.0, "yaw_rad": 0.0}
-    assert info["final_pose"]["x_m"] > 3.0                  # drove about 10 m down the aisle
+    assert info["final_pose"]["x_m"] > 3.0  # drove about 10 m down the aisle
 
 
 def test_a_veering_run_reports_the_rack_it_hits_with_time_and_place():
@@ -45,7 +47,9 @@ def test_a_veering_run_reports_the_rack_it_hits_with_time_and_place():
     assert res.exit_code == 0
     (hit,) = info["collisions"]
     assert hit["hit"] == "rack_s_beam_low" and "base_link" in hit["robot_parts"]
-    assert 6.0 < hit["t_s"] < 8.0 and hit["y_m"] == pytest.approx(-2.96, abs=0.02)   # the beam's north face
+    assert 6.0 < hit["t_s"] < 8.0 and hit["y_m"] == pytest.approx(
+        -2.96, abs=0.02
+    )  # the beam's north face
     assert hit["until_s"] > hit["t_s"] and hit["peak_force_n"] > 10.0
     assert "warning: collision at t = " in res.stderr and "rack_s_beam_low" in res.stderr
 
@@ -77,19 +81,37 @@ def test_collisions_and_faults_are_in_the_recordings(tmp_path):
     from rosbags.typesys import Stores, get_typestore
 
     mcap, rrd = tmp_path / "c.mcap", tmp_path / "c.rrd"
-    res, info = _json("linear", "--speed-m-s", "0.7", "--duration-s", "7.5", "--fault", "estop@7.3",
-                      "--mcap", str(mcap), "--record", str(rrd))
+    res, info = _json(
+        "linear",
+        "--speed-m-s",
+        "0.7",
+        "--duration-s",
+        "7.5",
+        "--fault",
+        "estop@7.3",
+        "--mcap",
+        str(mcap),
+        "--record",
+        str(rrd),
+    )
     assert res.exit_code == 0 and len(info["collisions"]) == 1
-    store = get_typestore(Stores.ROS2_HUMBLE)                # ROS 2's own definitions, not ours
+    store = get_typestore(Stores.ROS2_HUMBLE)  # ROS 2's own definitions, not ours
     seen = {}
     with Reader(mcap) as reader:
         for con, t_ns, raw in reader.messages():
             if con.topic in ("/twin/collisions", "/twin/faults"):
                 status = store.deserialize_cdr(raw, con.msgtype).status[0]
-                seen[con.topic] = (t_ns, status.level, status.message, {kv.key: kv.value for kv in status.values})
+                seen[con.topic] = (
+                    t_ns,
+                    status.level,
+                    status.message,
+                    {kv.key: kv.value for kv in status.values},
+                )
     t_ns, level, message, values = seen["/twin/collisions"]
     assert level == 2 and "rack_s_beam_low" in message
-    assert t_ns == round(info["collisions"][0]["t_s"] * 1e9) and float(values["y_m"]) == pytest.approx(-2.96, abs=0.02)
+    assert t_ns == round(info["collisions"][0]["t_s"] * 1e9) and float(
+        values["y_m"]
+    ) == pytest.approx(-2.96, abs=0.02)
     assert seen["/twin/faults"][0] == 7_300_000_000 and seen["/twin/faults"][1] == 1
     paths = {str(c.entity_path) for c in RrdReader(str(rrd)).stream().to_chunks()}
     assert {"/events/collisions", "/events/faults", "/world/collisions"} <= paths
@@ -107,7 +129,9 @@ def test_c_pair_check_and_python_give_the_same_episodes(monkeypatch):
         pytest.skip("no C compiler")
     out = []
     for native in (True, False):
-        monkeypatch.setattr(loop_mod, "CollisionMonitor", functools.partial(CollisionMonitor, native=native))
+        monkeypatch.setattr(
+            loop_mod, "CollisionMonitor", functools.partial(CollisionMonitor, native=native)
+        )
         twin = Twin(CFG, TwinOptions(start_xy_yaw=None))
         twin.client.linear(0.7)
         twin.advance(8.5)
@@ -148,9 +172,9 @@ def test_the_c_pair_check_sees_any_change_of_the_pairs():
         return out, d.contact.geom.tolist()
 
     assert changed(0.099, 1.0) == (1, [[0, 1]])  # nothing kept yet
-    assert changed(0.098, 1.0)[0] == 0           # the same pair
+    assert changed(0.098, 1.0)[0] == 0  # the same pair
     assert changed(1.0, 0.099) == (1, [[0, 2]])  # the same count and first geom, another ball
-    assert changed(0.099, 0.099)[0] == 1         # both
+    assert changed(0.099, 0.099)[0] == 1  # both
     assert changed(0.099, 0.099, valid=False)[0] == 0
-    assert changed(0.099, 0.099)[0] == 1         # invalidated by the monitor: classified again
+    assert changed(0.099, 0.099)[0] == 1  # invalidated by the monitor: classified again
     assert changed(1.0, 1.0)[0] == 1 and changed(1.0, 1.0)[0] == 0  # none, then none again

@@ -12,8 +12,9 @@ from amr_twin.base.pins import HIGH, LOW, DriverPins
 from amr_twin.sim.plant import Plant
 
 # the shipped right motor differs from the left (calibrated, §5.1.3); make them identical
-IDENTICAL = ([f"motor_right.{key}={value}" for key, value in load_config().motor_left.model_dump().items()]
-             + [f"driver_right.gain={load_config().driver_left.gain}"])
+IDENTICAL = [
+    f"motor_right.{key}={value}" for key, value in load_config().motor_left.model_dump().items()
+] + [f"driver_right.gain={load_config().driver_left.gain}"]
 
 
 def _robot(sets=(), payload_kg=0.0):
@@ -67,8 +68,14 @@ def test_random_duty_brake_coast_is_stable(payload_kg):
         pins = []
         for _w in range(2):
             kind = rng.choice(["drive", "drive", "brake", "coast"])
-            pins.append(DriverPins(int(rng.integers(0, 256)), int(rng.integers(0, 2)),
-                                   HIGH if kind == "brake" else LOW, LOW if kind == "coast" else HIGH))
+            pins.append(
+                DriverPins(
+                    int(rng.integers(0, 256)),
+                    int(rng.integers(0, 2)),
+                    HIGH if kind == "brake" else LOW,
+                    LOW if kind == "coast" else HIGH,
+                )
+            )
         plant.apply(tuple(pins))
         physics.step(500)
         physics.check()  # raises DivergenceError on NaN or any MuJoCo warning
@@ -84,19 +91,27 @@ def test_brake_is_the_shorted_motor():
     plant.apply((DriverPins(25, HIGH, LOW, HIGH), DriverPins(25, HIGH, LOW, HIGH)))
     physics.step(1500)
     w0 = physics.wheel_speeds_rad_s().copy()
-    assert 10.0 < w0.min() and w0.max() < 20.0  # spinning (rad/s), the short-circuit current under 40 A
-    plant.apply((DriverPins(0, HIGH, HIGH, HIGH), DriverPins(0, HIGH, LOW, LOW)))  # left brake, right coast
+    assert (
+        10.0 < w0.min() and w0.max() < 20.0
+    )  # spinning (rad/s), the short-circuit current under 40 A
+    plant.apply(
+        (DriverPins(0, HIGH, HIGH, HIGH), DriverPins(0, HIGH, LOW, LOW))
+    )  # left brake, right coast
     w = physics.wheel_speeds_rad_s().copy()
     physics.step(1)  # the actuator torque of this step is computed from the speeds before it
     torque = physics.data.actuator_force
     m = cfg.motor_left
-    assert torque[0] == pytest.approx(-m.ke_v_s_rad ** 2 / m.resistance_ohm * w[0], rel=0.01)
+    assert torque[0] == pytest.approx(-(m.ke_v_s_rad**2) / m.resistance_ohm * w[0], rel=0.01)
     assert torque[1] == 0.0
     w = physics.wheel_speeds_rad_s()
-    assert plant.motor_currents_a()[0] == pytest.approx(-m.ke_v_s_rad * w[0] / m.resistance_ohm, rel=1e-9)
+    assert plant.motor_currents_a()[0] == pytest.approx(
+        -m.ke_v_s_rad * w[0] / m.resistance_ohm, rel=1e-9
+    )
     physics.step(100)
     w = physics.wheel_speeds_rad_s()
-    assert w[0] < 0.05 * w0[0]  # the shorted motor stops its free wheel (time constant J R / Ke^2 ~ 20 ms)
+    assert (
+        w[0] < 0.05 * w0[0]
+    )  # the shorted motor stops its free wheel (time constant J R / Ke^2 ~ 20 ms)
     assert w[1] > 0.6 * w0[1]  # the coasting one runs on, slowed by its own friction only
 
 
@@ -119,9 +134,13 @@ def test_hard_stop_keeps_every_support_on_the_floor():
     # the shorted motors' torque fades with the speed: an exponential stop, time constant
     # (m + 2 J / r^2) / ((Ke_l^2 + Ke_r^2) / (R r^2)) (about 0.37 s; friction helps a little)
     r, j = cfg.wheel.radius_m, physics.model.body("amr/wheel_left_link").inertia[1]
-    ke2_over_r = sum(m.ke_v_s_rad ** 2 / m.resistance_ohm for m in (cfg.motor_left, cfg.motor_right))
-    tau = (physics.robot_mass_kg() + 2 * j / r ** 2) * r ** 2 / ke2_over_r
-    assert 0.5 * math.exp(-1.0 / tau) * v0 < abs(physics.base_velocity()[0]) < 1.1 * math.exp(-1.0 / tau) * v0
+    ke2_over_r = sum(m.ke_v_s_rad**2 / m.resistance_ohm for m in (cfg.motor_left, cfg.motor_right))
+    tau = (physics.robot_mass_kg() + 2 * j / r**2) * r**2 / ke2_over_r
+    assert (
+        0.5 * math.exp(-1.0 / tau) * v0
+        < abs(physics.base_velocity()[0])
+        < 1.1 * math.exp(-1.0 / tau) * v0
+    )
     assert lowest > 5.0
     assert tilt < math.radians(0.5)
 

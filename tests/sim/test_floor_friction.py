@@ -25,7 +25,9 @@ def test_the_same_seed_draws_the_same_field_and_another_seed_another():
     assert a.values.tobytes() == b.values.tobytes() and a.values.tobytes() != c.values.tobytes()
     assert a.values.shape == (FIELD_CELLS, FIELD_CELLS) and a.spacing_m == cfg.sim.floor_patch_m
     low, high = cfg.sim.floor_friction_low, cfg.wheel.friction
-    assert low <= a.values.min() < low + 0.05 and high - 0.05 < a.values.max() <= high  # spans its range
+    assert (
+        low <= a.values.min() < low + 0.05 and high - 0.05 < a.values.max() <= high
+    )  # spans its range
 
 
 def test_the_look_up_is_bilinear_in_x_then_y_and_repeats():
@@ -39,16 +41,23 @@ def test_the_look_up_is_bilinear_in_x_then_y_and_repeats():
     data = [float(n), h, *field.values.ravel().tolist()]
     rng = np.random.default_rng(0)
     for x, y in rng.uniform(-n * h * 0.99, n * h * 1.95, (200, 2)):
-        assert floor_friction.friction_at(data, x, y) == pytest.approx(float(reference((y, x))), abs=1e-12)
+        assert floor_friction.friction_at(data, x, y) == pytest.approx(
+            float(reference((y, x))), abs=1e-12
+        )
     assert floor_friction.friction_at(data, 0.0, 0.0) == field.values[0, 0]
-    assert floor_friction.friction_at(data, h, 0.0) == field.values[0, 1]  # one node along x: the next column
+    assert (
+        floor_friction.friction_at(data, h, 0.0) == field.values[0, 1]
+    )  # one node along x: the next column
 
 
 def _pivot(field_sets, native: bool, steps_s: float = 1.5):
     settled_physics.forget()
     assert tyres.install(native) == ("C" if native else "Python (native=False)")
     try:
-        twin = Twin(load_config(sets=FIELD_ON + field_sets), TwinOptions(world="empty", odometry=False, seed=7))
+        twin = Twin(
+            load_config(sets=FIELD_ON + field_sets),
+            TwinOptions(world="empty", odometry=False, seed=7),
+        )
         twin.client.angular(90.0, 0.2)
         twin.advance(steps_s)
         d = twin.physics.data
@@ -67,10 +76,15 @@ def test_c_helper_and_python_twin_look_the_field_up_to_the_same_bits():
 def test_the_field_is_in_the_tyres_data_and_acts_on_them():
     twin, state = _pivot([], True, 0.5)
     start = floor_friction._userdata_start(twin.physics.model) + FIELD_OFFSET
-    assert state[2][start] == FIELD_CELLS and state[2][start + 2:start + 2 + FIELD_CELLS ** 2].tolist() == \
-        twin.floor.values.ravel().tolist()
+    assert (
+        state[2][start] == FIELD_CELLS
+        and state[2][start + 2 : start + 2 + FIELD_CELLS**2].tolist()
+        == twin.floor.values.ravel().tolist()
+    )
     # the same run on a field of the clean floor everywhere is the run without a field, to the bit
-    flat = floor_friction.FrictionField(twin.floor.spacing_m, np.full((FIELD_CELLS, FIELD_CELLS), 0.8))
+    flat = floor_friction.FrictionField(
+        twin.floor.spacing_m, np.full((FIELD_CELLS, FIELD_CELLS), 0.8)
+    )
     runs = []
     for field in (None, flat):
         t = Twin(load_config(sets=FIELD_ON), TwinOptions(world="empty", odometry=False, seed=7))
@@ -85,7 +99,9 @@ def test_a_slippery_patch_limits_the_tyre_force_to_mu_n():
     """A 0.05 field (ice) under a robot asked to spin fast: each patch gives at most mu N of force."""
     cfg = load_config(sets=FIELD_ON)
     twin = Twin(cfg, TwinOptions(world="empty", odometry=False, seed=1))
-    twin.physics.set_floor_friction(floor_friction.FrictionField(0.5, np.full((FIELD_CELLS, FIELD_CELLS), 0.05)))
+    twin.physics.set_floor_friction(
+        floor_friction.FrictionField(0.5, np.full((FIELD_CELLS, FIELD_CELLS), 0.05))
+    )
     twin.client.angular(90.0, 0.0)
     worst = 0.0
     for _ in range(20):
@@ -96,7 +112,10 @@ def test_a_slippery_patch_limits_the_tyre_force_to_mu_n():
 
 
 def test_rigid_contact_has_no_field():
-    twin = Twin(load_config(sets=FIELD_ON + ["wheel.tyre_slip=false"]), TwinOptions(world="empty", odometry=False))
+    twin = Twin(
+        load_config(sets=FIELD_ON + ["wheel.tyre_slip=false"]),
+        TwinOptions(world="empty", odometry=False),
+    )
     assert twin.floor is None
     with pytest.raises(ValueError, match="no brush tyres"):
         twin.physics.set_floor_friction(floor_friction.draw(twin.cfg, 0))

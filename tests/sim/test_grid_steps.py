@@ -19,15 +19,18 @@ from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.base.native_build import address, mujoco_address
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
-pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None,
-                                reason="no C compiler")
+pytestmark = pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
 HEAVY_REAR = load_config(overrides={"payload.mass_kg": 40.0, "payload.xy_m": [-0.2, 0.05]})
 
 
 def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
     """The twin of ``options`` driven by ``script``, with a support sampler (50 Hz), its grid in C
     or in Python; what it ends with, and how often the C grid ran and handed an instant back."""
-    monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+    monkeypatch.setattr(
+        grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native)
+    )
     calls = {"runs": 0, "handoffs": 0}
     real = grid_steps.GridStepper.run
 
@@ -44,11 +47,25 @@ def _run(monkeypatch, native: bool, options: TwinOptions, script, cfg=None):
     twin.samplers.append(support)
     script(twin)
     d, s = twin.physics.data, recorder_of(twin).series()
-    state = {"qpos": d.qpos.copy(), "qvel": d.qvel.copy(), "time": d.time, "t_phys_us": twin.t_phys_us,
-             "halted": twin.halted, "soc": twin.plant.battery.soc, "t_s": s.t_s, "rows": support.take(),
-             "angle": s.wheel_angle_rad, "rpm": s.true_rpm, "pose": s.pose, "pwm": s.pwm_counts,
-             "current": s.current_a, "battery": (s.battery_v, s.battery_a, s.battery_soc), "published": [s.published[w] for w in sorted(s.published)],
-             "collisions": twin.collisions.as_dicts(), "friction": twin.physics.model.dof_frictionloss.copy()}
+    state = {
+        "qpos": d.qpos.copy(),
+        "qvel": d.qvel.copy(),
+        "time": d.time,
+        "t_phys_us": twin.t_phys_us,
+        "halted": twin.halted,
+        "soc": twin.plant.battery.soc,
+        "t_s": s.t_s,
+        "rows": support.take(),
+        "angle": s.wheel_angle_rad,
+        "rpm": s.true_rpm,
+        "pose": s.pose,
+        "pwm": s.pwm_counts,
+        "current": s.current_a,
+        "battery": (s.battery_v, s.battery_a, s.battery_soc),
+        "published": [s.published[w] for w in sorted(s.published)],
+        "collisions": twin.collisions.as_dicts(),
+        "friction": twin.physics.model.dof_frictionloss.copy(),
+    }
     return state, calls
 
 
@@ -57,7 +74,9 @@ def _same(a: dict, b: dict) -> None:
         if key in ("collisions", "halted"):
             assert a[key] == b[key], key
         elif key == "published":
-            assert len(a[key]) == len(b[key]) and all(np.array_equal(x, y) for x, y in zip(a[key], b[key])), key
+            assert len(a[key]) == len(b[key]) and all(
+                np.array_equal(x, y) for x, y in zip(a[key], b[key])
+            ), key
         else:
             assert np.array_equal(np.asarray(a[key]), np.asarray(b[key])), key
 
@@ -119,18 +138,31 @@ def test_rows_kept_in_c_are_the_python_rows():
     assert rows.shape == (200, 20) and np.array_equal(rows, python)
     assert rows[:, 0].tolist() == [30_000.0 * (i + 1) for i in range(200)]  # the instants first
     physics = twin.physics
-    last = [*twin.rolling.loads, *physics.support_normal_forces_n(), physics.base_up_z(),
-            *physics.base_velocity()]
+    last = [
+        *twin.rolling.loads,
+        *physics.support_normal_forces_n(),
+        physics.base_up_z(),
+        *physics.base_velocity(),
+    ]
     assert rows[-1, 1:].tolist() == last
-    assert rows[:, 13].min() < 1.0 and np.abs(rows[:, 14:20]).max() > 0.1 and rows[:, 7:13].max() > 50.0
+    assert (
+        rows[:, 13].min() < 1.0
+        and np.abs(rows[:, 14:20]).max() > 0.1
+        and rows[:, 7:13].max() > 50.0
+    )
 
 
 def test_a_mujoco_error_in_the_c_grid_is_raised_and_the_handler_restored():
     """A model whose stack overflows in mj_step: FatalError with MuJoCo's message, as the bindings
     raise it, and mju_user_error as it was."""
-    xml = ('<mujoco><size memory="16K"/><worldbody><geom type="plane" size="5 5 .1"/>'
-           + "".join(f'<body pos="{0.05 * i} 0 {0.1 + 0.01 * i}"><freejoint/><geom type="box" size=".1 .1 .1"/></body>'
-                     for i in range(20)) + "</worldbody></mujoco>")
+    xml = (
+        '<mujoco><size memory="16K"/><worldbody><geom type="plane" size="5 5 .1"/>'
+        + "".join(
+            f'<body pos="{0.05 * i} 0 {0.1 + 0.01 * i}"><freejoint/><geom type="box" size=".1 .1 .1"/></body>'
+            for i in range(20)
+        )
+        + "</worldbody></mujoco>"
+    )
     m = mujoco.MjModel.from_xml_string(xml)
     d = mujoco.MjData(m)
     handler = ctypes.c_void_p.from_address(mujoco_address("mju_user_error")).value
@@ -149,18 +181,32 @@ def test_with_the_imu_and_lidar_the_grid_in_c_gives_the_same_messages(monkeypatc
     magnetometer and scan messages and the state are those of the Python loop, to the bit."""
     out = []
     for native in (True, False):
-        monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        monkeypatch.setattr(
+            grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native)
+        )
         calls = []
         real = grid_steps.GridStepper.run
-        monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])
-        twin = Twin(HEAVY_REAR, TwinOptions(sensors=("imu", "lidar"), visuals=False, start_xy_yaw=None))
+        monkeypatch.setattr(
+            grid_steps.GridStepper,
+            "run",
+            lambda self, *a: calls.append(real(self, *a)) or calls[-1],
+        )
+        twin = Twin(
+            HEAVY_REAR, TwinOptions(sensors=("imu", "lidar"), visuals=False, start_xy_yaw=None)
+        )
         attach_recorder(twin)
         msgs = []
-        for topic, values in (("imu/data_raw", lambda m: (m.angular_velocity, m.linear_acceleration)),
-                              ("imu/mag", lambda m: (m.magnetic_field,)),
-                              ("scan", lambda m: (m.ranges.tobytes(),))):
-            twin.bus.subscribe(topic, lambda m, topic=topic, values=values:
-                               msgs.append((topic, m.header.stamp.to_us(), values(m))))
+        for topic, values in (
+            ("imu/data_raw", lambda m: (m.angular_velocity, m.linear_acceleration)),
+            ("imu/mag", lambda m: (m.magnetic_field,)),
+            ("scan", lambda m: (m.ranges.tobytes(),)),
+        ):
+            twin.bus.subscribe(
+                topic,
+                lambda m, topic=topic, values=values: msgs.append(
+                    (topic, m.header.stamp.to_us(), values(m))
+                ),
+            )
         twin.client.linear(0.5)
         twin.advance(2.0)
         twin.client.angular(-60.0, 0.0)
@@ -168,15 +214,23 @@ def test_with_the_imu_and_lidar_the_grid_in_c_gives_the_same_messages(monkeypatc
         out.append((msgs, twin.physics.data.qpos.copy(), calls))
     (c_msgs, c_qpos, c_calls), (py_msgs, py_qpos, py_calls) = out
     topics = [t for t, _s, _m in c_msgs]
-    handoffs = sum(h >= 0 for _r, h in c_calls)  # a cast each (~22 in 4 s), not a pose sample each (200)
-    assert py_calls == [] and len(c_calls) > 20 and topics.count("scan") <= handoffs <= 2 * topics.count("scan")
+    handoffs = sum(
+        h >= 0 for _r, h in c_calls
+    )  # a cast each (~22 in 4 s), not a pose sample each (200)
+    assert (
+        py_calls == []
+        and len(c_calls) > 20
+        and topics.count("scan") <= handoffs <= 2 * topics.count("scan")
+    )
     assert topics.count("imu/data_raw") == 401 and topics.count("scan") >= 20
     assert c_msgs == py_msgs and np.array_equal(c_qpos, py_qpos)
 
 
 def _empty_twin(monkeypatch, native: bool) -> Twin:
     """The default robot in the empty world, its grid in C (``native``) or in Python."""
-    monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+    monkeypatch.setattr(
+        grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native)
+    )
     return Twin(load_config(), TwinOptions(world="empty", visuals=False))
 
 
@@ -206,7 +260,9 @@ def test_a_row_keeper_hands_back_each_due_instant_once_with_its_row(monkeypatch)
             expected.append(t)
             due = t + 70_000
     assert c_seen == py_seen == expected and expected[:3] == [60_000, 140_000, 220_000]
-    assert c_rows[:, 0].tolist() == list(range(20_000, 1_000_001, 20_000)) and np.array_equal(c_rows, py_rows)
+    assert c_rows[:, 0].tolist() == list(range(20_000, 1_000_001, 20_000)) and np.array_equal(
+        c_rows, py_rows
+    )
     assert c_rows[-1, 1] > 0.3  # x driven at 0.5 m/s: the values, not zeros
 
 
@@ -302,32 +358,61 @@ def test_with_actors_the_grid_in_c_gives_the_python_loops_bits(monkeypatch):
     import amr_twin.sim.actors as actors_mod
     from amr_twin.model.actors import Actor
 
-    actors = (Actor("person", ((-2.5, 0.3), (-8.0, 0.3)), 1.3, stop_within_m=1.0),
-              Actor("person", ((-4.8, -2.0), (-4.8, 2.0)), 0.9, start_s=1.0),
-              Actor("pallet_jack", ((0.0, 1.5), (4.0, 1.5), (4.0, -1.5)), 1.2, loop=True))
+    actors = (
+        Actor("person", ((-2.5, 0.3), (-8.0, 0.3)), 1.3, stop_within_m=1.0),
+        Actor("person", ((-4.8, -2.0), (-4.8, 2.0)), 0.9, start_s=1.0),
+        Actor("pallet_jack", ((0.0, 1.5), (4.0, 1.5), (4.0, -1.5)), 1.2, loop=True),
+    )
     out = []
     real_open = actors_mod.open_helper
     for native in (True, False):
-        monkeypatch.setattr(actors_mod, "open_helper", lambda src, nat=True, native=native: real_open(src, native))
-        monkeypatch.setattr(grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native))
+        monkeypatch.setattr(
+            actors_mod, "open_helper", lambda src, nat=True, native=native: real_open(src, native)
+        )
+        monkeypatch.setattr(
+            grid_loop_mod, "grid_stepper", functools.partial(grid_stepper, native=native)
+        )
         calls = []
         real = grid_steps.GridStepper.run
-        monkeypatch.setattr(grid_steps.GridStepper, "run", lambda self, *a: calls.append(real(self, *a)) or calls[-1])
-        twin = Twin(load_config(), TwinOptions(sensors=("imu", "lidar"), visuals=False, start_xy_yaw=None, actors=actors))
+        monkeypatch.setattr(
+            grid_steps.GridStepper,
+            "run",
+            lambda self, *a: calls.append(real(self, *a)) or calls[-1],
+        )
+        twin = Twin(
+            load_config(),
+            TwinOptions(sensors=("imu", "lidar"), visuals=False, start_xy_yaw=None, actors=actors),
+        )
         attach_recorder(twin)
         assert twin.actors.engine == ("C" if native else "Python (native=False)")
         msgs = []
-        twin.bus.subscribe("actors/poses", lambda m: msgs.append([(p.position.x, p.position.y, p.orientation.z,
-                                                                   p.orientation.w) for p in m.poses]), queue_size=100)
+        twin.bus.subscribe(
+            "actors/poses",
+            lambda m: msgs.append(
+                [(p.position.x, p.position.y, p.orientation.z, p.orientation.w) for p in m.poses]
+            ),
+            queue_size=100,
+        )
         twin.bus.subscribe("scan", lambda m: msgs.append(m.ranges.tobytes()), queue_size=100)
         twin.client.linear(0.3)
         twin.advance(4.0)
         d = twin.physics.data
-        out.append((msgs, d.qpos.copy(), d.mocap_pos.copy(), d.mocap_quat.copy(), twin.collisions.as_dicts(),
-                    twin.actors.progress_s(), calls))
+        out.append(
+            (
+                msgs,
+                d.qpos.copy(),
+                d.mocap_pos.copy(),
+                d.mocap_quat.copy(),
+                twin.collisions.as_dicts(),
+                twin.actors.progress_s(),
+                calls,
+            )
+        )
     c, py = out
     assert py[-1] == [] and len(c[-1]) > 20
-    assert "person_1" in [h["hit"] for h in c[4]] and c[5][0] < 3.0       # one walked into it, one waited
+    assert (
+        "person_1" in [h["hit"] for h in c[4]] and c[5][0] < 3.0
+    )  # one walked into it, one waited
     assert c[0] == py[0] and len(c[0]) > 60
     for a, b in zip(c[1:6], py[1:6]):
         assert np.array_equal(np.asarray(a), np.asarray(b)) if not isinstance(a, list) else a == b

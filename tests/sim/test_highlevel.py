@@ -29,7 +29,9 @@ def cfg():
 @pytest.mark.parametrize("firmware", FIRMWARES)
 def test_linear_20_s_odometry_distance_within_2_percent(cfg, firmware):
     # the empty world: in the warehouse the aisle ends at x = 9.5 m, a wall the robot would push
-    result = run_command(cfg, Command("linear", speed_m_s=0.5), 20.0, TwinOptions(firmware=firmware, world="empty"))
+    result = run_command(
+        cfg, Command("linear", speed_m_s=0.5), 20.0, TwinOptions(firmware=firmware, world="empty")
+    )
     s = result.series
     # distance from the start at the end
     true_m = float(np.hypot(*(s.pose[-1, :2] - s.pose[0, :2])))
@@ -51,7 +53,9 @@ def test_three_turns_in_place_odometry_yaw(cfg, firmware, tolerance_deg):
     s = run_mission(cfg, steps, 20.0, TwinOptions(firmware=firmware)).series
     true_deg = math.degrees(np.unwrap(s.pose[:, 2])[-1] - s.pose[0, 2])
     odom_deg = math.degrees(np.unwrap(s.odom[:, 3])[-1])
-    assert true_deg > 750.0  # most of three turns (23 RPM wheels: the faithful PI leaves up to 4 RPM)
+    assert (
+        true_deg > 750.0
+    )  # most of three turns (23 RPM wheels: the faithful PI leaves up to 4 RPM)
     assert odom_deg == pytest.approx(true_deg, abs=tolerance_deg)
 
 

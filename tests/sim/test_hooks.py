@@ -15,16 +15,25 @@ from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 ROOT = Path(__file__).resolve().parents[2]
-CONSUMERS = ("amr_twin/recording", "amr_twin/live", "amr_twin/ros1", "amr_twin/sim/fault_injector.py")
+CONSUMERS = (
+    "amr_twin/recording",
+    "amr_twin/live",
+    "amr_twin/ros1",
+    "amr_twin/sim/fault_injector.py",
+)
 """What runs downstream of the loop and must hold to its hooks (the navigation stack's node sits on the bus)."""
-PARTS = frozenset({"firmware", "plant", "hall", "physics", "samplers", "link", "rolling", "collisions", "_grid"})
+PARTS = frozenset(
+    {"firmware", "plant", "hall", "physics", "samplers", "link", "rolling", "collisions", "_grid"}
+)
 """The twin's parts a consumer must not reach into (it has ``on_*`` hooks and ``observables``)."""
 TAPS = frozenset({"add_tap", "remove_tap"})
 """Bus methods a consumer reaches through ``twin.on_message`` / ``twin.unhook`` instead."""
 
 
 def _is_twin(node: ast.expr) -> bool:
-    return (isinstance(node, ast.Name) and node.id == "twin") or (isinstance(node, ast.Attribute) and node.attr == "twin")
+    return (isinstance(node, ast.Name) and node.id == "twin") or (
+        isinstance(node, ast.Attribute) and node.attr == "twin"
+    )
 
 
 def reaches(source: str) -> list[str]:
@@ -33,7 +42,9 @@ def reaches(source: str) -> list[str]:
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Attribute) and _is_twin(node.value) and node.attr in PARTS:
             found.append(f"{node.lineno}: {ast.unparse(node)}")
-        elif isinstance(node, ast.Attribute) and node.attr in TAPS:  # a bus' taps, whichever name it goes by
+        elif (
+            isinstance(node, ast.Attribute) and node.attr in TAPS
+        ):  # a bus' taps, whichever name it goes by
             found.append(f"{node.lineno}: {ast.unparse(node)}")
     return found
 
@@ -47,24 +58,31 @@ def _consumer_modules():
 def test_consumers_subscribe_to_hooks_instead_of_reaching_into_the_twin():
     offenders = {str(p.relative_to(ROOT)): reaches(p.read_text()) for p in _consumer_modules()}
     offenders = {k: v for k, v in offenders.items() if v}
-    assert not offenders, f"reach into the twin's parts instead of its hooks and observables: {offenders}"
+    assert not offenders, (
+        f"reach into the twin's parts instead of its hooks and observables: {offenders}"
+    )
 
 
-@pytest.mark.parametrize("source", [
-    "def f(twin):\n    return twin.physics.data\n",
-    "class C:\n    def g(self):\n        return self.twin.firmware.pins\n",
-    "def f(twin):\n    twin.samplers.append(print)\n",
-    "def f(twin):\n    twin.bus.add_tap(print)\n",
-    "def f(capture):\n    return capture.twin.plant.battery\n",
-    "class C:\n    def close(self):\n        self.bus.remove_tap(self._tap)\n",
-])
+@pytest.mark.parametrize(
+    "source",
+    [
+        "def f(twin):\n    return twin.physics.data\n",
+        "class C:\n    def g(self):\n        return self.twin.firmware.pins\n",
+        "def f(twin):\n    twin.samplers.append(print)\n",
+        "def f(twin):\n    twin.bus.add_tap(print)\n",
+        "def f(capture):\n    return capture.twin.plant.battery\n",
+        "class C:\n    def close(self):\n        self.bus.remove_tap(self._tap)\n",
+    ],
+)
 def test_the_walk_sees_a_reach(source):
     assert reaches(source)
 
 
 def test_the_walk_lets_hooks_through():
-    source = ("def f(twin):\n    twin.on_grid(print)\n    twin.on_message(print, topics=('odom',))\n"
-              "    twin.observables.drive()\n    twin.bus.publish('cmd_vel', None)\n")
+    source = (
+        "def f(twin):\n    twin.on_grid(print)\n    twin.on_message(print, topics=('odom',))\n"
+        "    twin.observables.drive()\n    twin.bus.publish('cmd_vel', None)\n"
+    )
     assert reaches(source) == []
 
 
@@ -75,10 +93,15 @@ def test_the_firmware_protocol_declares_what_the_loop_calls():
     used = set()
     for name in ("amr_twin/assembly/twin.py", "amr_twin/sim/actuation.py"):
         for node in ast.walk(ast.parse((ROOT / name).read_text())):
-            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Attribute) \
-                    and node.value.attr == "firmware":
+            if (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.value, ast.Attribute)
+                and node.value.attr == "firmware"
+            ):
                 used.add(node.attr)
-    assert used and used <= declared, f"the loop calls {sorted(used - declared)} not declared by Firmware"
+    assert used and used <= declared, (
+        f"the loop calls {sorted(used - declared)} not declared by Firmware"
+    )
     assert {"connect", "start", "on_sc_edge", "on_wheel_command", "pins"} <= declared
 
 
@@ -92,8 +115,12 @@ def hooked():
     twin.on_grid(lambda t_us: seen["on_grid"].append((t_us, twin.observables.loop_sensors())))
     twin.on_grid_rows(lambda t_us, rows: seen["on_grid_rows"].extend(zip(t_us, rows)))
     twin.on_event(lambda t_us: seen["on_event"].append(t_us))
-    twin.on_actuation(lambda t_us: seen["on_actuation"].append((t_us, list(twin.observables.drive()))))
-    twin.on_message(lambda topic, msg, t_us: seen["on_message"].append((topic, t_us)), topics=("odom",))
+    twin.on_actuation(
+        lambda t_us: seen["on_actuation"].append((t_us, list(twin.observables.drive())))
+    )
+    twin.on_message(
+        lambda topic, msg, t_us: seen["on_message"].append((topic, t_us)), topics=("odom",)
+    )
     twin.client.linear(0.5)
     twin.advance(0.6)
     twin.client.stop()
@@ -108,7 +135,9 @@ def test_grid_hooks_see_every_record_instant_with_the_recorder_rows(hooked):
     assert [t for t, _ in grid] == list(range(10_000, 1_200_001, 10_000))
     assert [t for t, _ in seen["on_grid_rows"]] == [t for t, _ in grid]
     rows = np.array([r for _, r in seen["on_grid_rows"]])
-    assert np.array_equal(rows, np.array([r for _, r in grid]))  # the observable at the instant = the row
+    assert np.array_equal(
+        rows, np.array([r for _, r in grid])
+    )  # the observable at the instant = the row
     assert np.array_equal(rows[:, 2:4] * RAD_S_TO_RPM, series.true_rpm[1:])
     assert rows[-1, 4] > 0.2  # the robot drove forward (x, m)
 
@@ -120,9 +149,13 @@ def test_actuation_hook_fires_when_the_drive_changes_and_matches_the_recorder(ho
     assert max(pwm) > 0 and pwm[-1] == 0  # drove, then stopped
     series = recorder_of(twin).series()
     act_t = np.array([t for t, _ in acts])
-    for i, t_s in enumerate(series.t_s):  # the recorder pairs each grid row with the drive in force then
+    for i, t_s in enumerate(
+        series.t_s
+    ):  # the recorder pairs each grid row with the drive in force then
         k = np.searchsorted(act_t, round(t_s * 1e6), side="left") - 1
-        if k < 0:  # before the first actuation after hooking (the twin's start is the recorder's alone)
+        if (
+            k < 0
+        ):  # before the first actuation after hooking (the twin's start is the recorder's alone)
             continue
         row = acts[k][1]
         assert list(series.pwm_counts[i]) == row[0:2] and list(series.voltage_v[i]) == row[6:8]
@@ -170,12 +203,14 @@ def test_collision_hook_tells_of_each_collision_once_at_its_first_contact():
     from amr_twin.model.worlds import Obstacle
 
     box = Obstacle("crate", 1.2, 0.0, (0.3, 1.0, 0.5))
-    twin = Twin(load_config(), TwinOptions(world="empty", odometry=False, visuals=False, obstacles=(box,)))
+    twin = Twin(
+        load_config(), TwinOptions(world="empty", odometry=False, visuals=False, obstacles=(box,))
+    )
     told = []
     twin.on_collision(lambda c: told.append((c.t_s, c.hit)))
     twin.client.linear(0.5)
     twin.advance(4.0)
     assert [hit for _, hit in told] == ["obstacle_crate"]  # one episode, told once
-    (t_s, _), = told
+    ((t_s, _),) = told
     assert t_s == twin.observables.collisions[0].t_s and 1.0 < t_s < 3.5
     assert round(t_s * 1e6) % twin.grid_us == 0  # at a grid instant, in the sampler

@@ -22,11 +22,15 @@ def physics():
 def test_names_select_the_rows_mujoco_gives_for_them(physics):
     named, d = physics.named, physics.data
     assert named.data.qpos["amr/wheel_left_joint"] == d.joint("amr/wheel_left_joint").qpos[0]
-    assert np.array_equal(named.data.qpos["amr/root"], d.joint("amr/root").qpos)  # free joint: 7 values
+    assert np.array_equal(
+        named.data.qpos["amr/root"], d.joint("amr/root").qpos
+    )  # free joint: 7 values
     assert np.array_equal(named.data.qvel["amr/root"], d.joint("amr/root").qvel)  # 6 dofs
     assert np.array_equal(named.data.xpos["amr/base_link"], d.body("amr/base_link").xpos)
     assert np.array_equal(named.data.sensordata["amr/imu_gyro"], d.sensor("amr/imu_gyro").data)
-    assert np.array_equal(named.data.geom_xpos["amr/wheel_right_collision"], d.geom("amr/wheel_right_collision").xpos)
+    assert np.array_equal(
+        named.data.geom_xpos["amr/wheel_right_collision"], d.geom("amr/wheel_right_collision").xpos
+    )
     assert named.model.body_mass["amr/base_link"] == physics.model.body("amr/base_link").mass[0]
     both = named.data.qpos[["amr/wheel_left_joint", "amr/wheel_right_joint"]]
     assert np.array_equal(both, physics.wheel_angles_rad())  # left, right in that order
@@ -54,8 +58,10 @@ def test_positional_keys_index_the_array_as_it_is(physics):
 @pytest.mark.parametrize("native", [True, False])
 def test_value_rows_keep_the_named_values_at_each_grid_instant(physics, native):
     d = physics.named.data
-    rows = NamedIndex.value_rows([(d.qpos, ["amr/wheel_left_joint", "amr/wheel_right_joint"]), (d.xpos, ["amr/base_link"])],
-                      native=native)
+    rows = NamedIndex.value_rows(
+        [(d.qpos, ["amr/wheel_left_joint", "amr/wheel_right_joint"]), (d.xpos, ["amr/base_link"])],
+        native=native,
+    )
     kept = []
     for t_us in (1000, 2000, 3000):
         physics.step(1)

@@ -28,14 +28,21 @@ MODEL_ONLY = frozenset({"mj_name2id", "mj_id2name", "mj_versionString", "mj_vers
 
 def _physics_layer(tree: ast.Module) -> bool:
     for node in tree.body:
-        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "PHYSICS_LAYER"
-                                                for t in node.targets):
+        if isinstance(node, ast.Assign) and any(
+            isinstance(t, ast.Name) and t.id == "PHYSICS_LAYER" for t in node.targets
+        ):
             return isinstance(node.value, ast.Constant) and node.value.value is True
     return False
 
 
 def _ends_with_physics(node: ast.expr) -> bool:
-    name = node.attr if isinstance(node, ast.Attribute) else node.id if isinstance(node, ast.Name) else ""
+    name = (
+        node.attr
+        if isinstance(node, ast.Attribute)
+        else node.id
+        if isinstance(node, ast.Name)
+        else ""
+    )
     return "physics" in name
 
 
@@ -73,8 +80,10 @@ def test_no_module_outside_the_physics_layer_touches_mjdata():
         places = touches(path.read_text())
         if places:
             offenders[str(path.relative_to(ROOT))] = places
-    assert not offenders, ("touch MjData outside the physics layer (go through Physics or the twin's observables, "
-                           f"or declare PHYSICS_LAYER = True with the reason): {offenders}")
+    assert not offenders, (
+        "touch MjData outside the physics layer (go through Physics or the twin's observables, "
+        f"or declare PHYSICS_LAYER = True with the reason): {offenders}"
+    )
 
 
 def test_the_physics_layer_says_why():
@@ -90,19 +99,24 @@ def test_the_physics_layer_says_why():
     assert not silent, f"PHYSICS_LAYER without a word on why in the module notes: {silent}"
 
 
-@pytest.mark.parametrize("source, what", [
-    ("import mujoco\nd = mujoco.MjData(m)\n", "mujoco.MjData"),
-    ("import mujoco\nmujoco.mj_step(m, d)\n", "mujoco.mj_step"),
-    ("x = twin.physics.data.qpos[0]\n", "twin.physics.data"),
-    ("def f(self):\n    return self.physics.data.xpos\n", "self.physics.data"),
-    ("p = data._address\n", "data._address"),
-])
+@pytest.mark.parametrize(
+    "source, what",
+    [
+        ("import mujoco\nd = mujoco.MjData(m)\n", "mujoco.MjData"),
+        ("import mujoco\nmujoco.mj_step(m, d)\n", "mujoco.mj_step"),
+        ("x = twin.physics.data.qpos[0]\n", "twin.physics.data"),
+        ("def f(self):\n    return self.physics.data.xpos\n", "self.physics.data"),
+        ("p = data._address\n", "data._address"),
+    ],
+)
 def test_the_walk_sees_each_kind_of_touch(source, what):
     assert any(what in place for place in touches(source))
     assert touches("PHYSICS_LAYER = True\n" + source) == []
 
 
 def test_the_walk_lets_the_doors_through():
-    source = ("import mujoco\ni = mujoco.mj_name2id(m, k, 'amr/base_link')\n"
-              "q = physics.named.data.qpos['amr/root']\nrow = twin.observables.loop_sensors()\nmsg.data\n")
+    source = (
+        "import mujoco\ni = mujoco.mj_name2id(m, k, 'amr/base_link')\n"
+        "q = physics.named.data.qpos['amr/root']\nrow = twin.observables.loop_sensors()\nmsg.data\n"
+    )
     assert touches(source) == []

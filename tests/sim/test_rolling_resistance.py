@@ -17,7 +17,9 @@ from amr_twin.sim.rolling_resistance import C_SOURCE, RollingResistance
 
 
 def _drive(monkeypatch, cfg, native: bool):
-    monkeypatch.setattr(loop_mod, "RollingResistance", functools.partial(RollingResistance, native=native))
+    monkeypatch.setattr(
+        loop_mod, "RollingResistance", functools.partial(RollingResistance, native=native)
+    )
     twin = Twin(cfg, TwinOptions(world="warehouse"))
     twin.client.linear(0.7)
     twin.advance(2.0)
@@ -26,10 +28,18 @@ def _drive(monkeypatch, cfg, native: bool):
     twin.client.stop()
     twin.advance(1.5)
     d = twin.physics.data
-    return twin.rolling.engine, d.qpos.copy(), d.qvel.copy(), twin.plant.battery.soc, twin.rolling.loads
+    return (
+        twin.rolling.engine,
+        d.qpos.copy(),
+        d.qvel.copy(),
+        twin.plant.battery.soc,
+        twin.rolling.loads,
+    )
 
 
-@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+@pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
 @pytest.mark.parametrize("payload_kg", [0.0, 40.0])
 def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch, payload_kg):
     cfg = load_config(overrides={"payload.mass_kg": payload_kg, "payload.xy_m": [-0.15, 0.05]})
@@ -41,7 +51,9 @@ def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch, payload_kg):
         assert np.array_equal(np.asarray(a), np.asarray(b))
 
 
-@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+@pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
 def test_contact_loads_of_the_helper_are_the_physics_contact_forces():
     """rr_contact_loads (a sweep point's 50 Hz sample) gives Physics.support_normal_forces_n's bits:
     the wheels' and balls' normal contact forces, each support on its own, through a turn with
@@ -62,8 +74,12 @@ def test_contact_loads_of_the_helper_are_the_physics_contact_forces():
     c, py = np.array([a for a, _ in seen]), np.array([b for _, b in seen])
     assert len(seen) >= 200 and np.array_equal(c, py)
     weight = cfg.payload.mass_kg * cfg.sim.gravity_m_s2
-    assert np.all(c[:, :2] > 50.0) and c.sum(axis=1).mean() > weight  # the robot and its load stand on them
-    assert c[:, 2:4].mean() < c[:, 4:].mean()  # rear payload: the rear casters carry more than the front
+    assert (
+        np.all(c[:, :2] > 50.0) and c.sum(axis=1).mean() > weight
+    )  # the robot and its load stand on them
+    assert (
+        c[:, 2:4].mean() < c[:, 4:].mean()
+    )  # rear payload: the rear casters carry more than the front
 
 
 def test_resistance_follows_the_loads(monkeypatch):
@@ -79,14 +95,18 @@ def test_resistance_follows_the_loads(monkeypatch):
     assert arm > 0 and min(loads[:2]) > 100  # 30 kg on board: both tyres carry well over 100 N
     for w, dof in enumerate(twin.physics.wheel_dof):
         motor = (cfg.motor_left, cfg.motor_right)[w]
-        assert m.dof_frictionloss[dof] == pytest.approx(motor.friction_nm + arm * loads[w], rel=1e-12)
+        assert m.dof_frictionloss[dof] == pytest.approx(
+            motor.friction_nm + arm * loads[w], rel=1e-12
+        )
     rr.update(0)
     # driving straight ahead (+x in the body frame): the balls pull back with Crr times their load
     fx_body = d.qfrc_applied[twin.physics.root_dof]
     yaw = twin.physics.pose().yaw_rad
     f_back = -(np.cos(yaw) * fx_body + np.sin(yaw) * d.qfrc_applied[twin.physics.root_dof + 1])
     assert f_back == pytest.approx(cfg.caster.rolling_resistance * sum(loads[2:]), rel=0.02)
-    assert sum(loads) == pytest.approx((twin.physics.model.body_subtreemass[1]) * cfg.sim.gravity_m_s2, rel=0.03)
+    assert sum(loads) == pytest.approx(
+        (twin.physics.model.body_subtreemass[1]) * cfg.sim.gravity_m_s2, rel=0.03
+    )
 
 
 def test_without_a_helper_the_python_twin_runs_and_says_why(tmp_path):
@@ -94,26 +114,39 @@ def test_without_a_helper_the_python_twin_runs_and_says_why(tmp_path):
     broken.write_text("this is not C\n")
     status = native_build.native_status(broken)
     assert status.startswith("Python (broken.c did not compile"), status
-    code = ("from amr_twin.model.config import load_config; from amr_twin.assembly.twin import Twin; "
-            "print(Twin(load_config()).rolling.engine)")
+    code = (
+        "from amr_twin.model.config import load_config; from amr_twin.assembly.twin import Twin; "
+        "print(Twin(load_config()).rolling.engine)"
+    )
     env = {**os.environ, "AMR_TWIN_NATIVE": "0"}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    )
     assert out.stdout.strip() == "Python (AMR_TWIN_NATIVE=0)"
     assert C_SOURCE.exists()
 
 
-@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+@pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
 def test_a_damaged_build_is_replaced(tmp_path):
     """A built helper that does not load is removed, so that the next process builds it again."""
     source = tmp_path / "helper.c"
     source.write_text("int answer(void) { return 42; }\n")
-    code = ("import sys; from pathlib import Path; from amr_twin.base import native_build as nb; "
-            "s = Path(sys.argv[1]); lib = nb.load_helper(s); print(nb.native_status(s), lib.answer() if lib else '-')")
+    code = (
+        "import sys; from pathlib import Path; from amr_twin.base import native_build as nb; "
+        "s = Path(sys.argv[1]); lib = nb.load_helper(s); print(nb.native_status(s), lib.answer() if lib else '-')"
+    )
     env = {**os.environ, "AMR_TWIN_CACHE_DIR": str(tmp_path / "cache")}
 
     def status():
-        out = subprocess.run([sys.executable, "-c", code, str(source)], capture_output=True, text=True, env=env,
-                             check=True)
+        out = subprocess.run(
+            [sys.executable, "-c", code, str(source)],
+            capture_output=True,
+            text=True,
+            env=env,
+            check=True,
+        )
         return out.stdout.strip()
 
     assert status() == "C 42"

@@ -22,8 +22,16 @@ START = (-6.0, 0.0, 0.0)  # the warehouse's: robot front at x = -5.65, laser at 
 
 
 def _twin(actors, sensors=False, **kw):
-    twin = Twin(CFG, TwinOptions(start_xy_yaw=START, sensors=("imu", "lidar") if sensors else (),
-                                 actors=tuple(actors), visuals=False, **kw))
+    twin = Twin(
+        CFG,
+        TwinOptions(
+            start_xy_yaw=START,
+            sensors=("imu", "lidar") if sensors else (),
+            actors=tuple(actors),
+            visuals=False,
+            **kw,
+        ),
+    )
     poses = []
     twin.bus.subscribe("actors/poses", poses.append, queue_size=1000)
     return twin, poses
@@ -40,13 +48,21 @@ def test_an_actor_walks_its_waypoints_at_its_speed_on_the_bus_and_in_mujoco():
     t = [m.header.stamp.to_sec() for m in poses]
     assert t == pytest.approx(np.arange(66) * 0.1) and {m.header.frame_id for m in poses} == {"map"}
     by_t = {round(m.header.stamp.to_sec(), 1): _xy_yaw(m)[0] for m in poses}
-    for t_s, y in ((0.0, 2.5), (1.0, 2.5), (2.0, 1.25), (3.0, 0.0), (4.6, -2.0), (5.0, -2.5), (6.5, -2.5)):
+    for t_s, y in (
+        (0.0, 2.5),
+        (1.0, 2.5),
+        (2.0, 1.25),
+        (3.0, 0.0),
+        (4.6, -2.0),
+        (5.0, -2.5),
+        (6.5, -2.5),
+    ):
         x_m, y_m, yaw = by_t[t_s]
         assert (x_m, y_m) == pytest.approx((-4.0, y), abs=1e-9), t_s
         assert yaw == pytest.approx(-math.pi / 2, abs=1e-12)
     d = twin.physics.data
     body = twin.physics.model.body("person_0").id
-    assert d.xpos[body][:2] == pytest.approx((-4.0, -2.5))     # MuJoCo's body went there too
+    assert d.xpos[body][:2] == pytest.approx((-4.0, -2.5))  # MuJoCo's body went there too
     assert twin.actors.engine == "C"
 
 
@@ -79,7 +95,7 @@ def test_the_lidar_sees_a_person_crossing_where_an_independent_ray_cast_puts_the
     twin.bus.subscribe("scan", scans.append, queue_size=100)
     twin.advance(3.2)
     path, r = actor_path(person, CFG), P.leg_radius_m
-    origin = twin.physics.site_position_m("amr/laser")[:2]      # the robot stands still
+    origin = twin.physics.site_position_m("amr/laser")[:2]  # the robot stands still
     yaw0 = twin.physics.pose().yaw_rad
     seen, checked = 0, 0
     for scan in scans:
@@ -87,8 +103,15 @@ def test_the_lidar_sees_a_person_crossing_where_an_independent_ray_cast_puts_the
         for i, rng in enumerate(ranges):
             t_beam = scan.header.stamp.to_sec() + i * scan.time_increment
             x, y, yaw = path.pose_at(max(0.0, t_beam - person.start_s))
-            legs = np.array([[x - s * math.sin(yaw) * P.leg_spacing_m / 2, y + s * math.cos(yaw) * P.leg_spacing_m / 2]
-                             for s in (1, -1)])
+            legs = np.array(
+                [
+                    [
+                        x - s * math.sin(yaw) * P.leg_spacing_m / 2,
+                        y + s * math.cos(yaw) * P.leg_spacing_m / 2,
+                    ]
+                    for s in (1, -1)
+                ]
+            )
             angle = yaw0 + scan.angle_min + i * scan.angle_increment
             want, grazing = _leg_hits(origin, angle, legs, r)
             if grazing:
@@ -107,11 +130,13 @@ def test_the_lidar_sees_a_person_crossing_where_an_independent_ray_cast_puts_the
 def test_the_lidar_sees_a_jacks_pump_not_its_forks(forks_first):
     """A jack 2.2 m ahead, standing: its pump toward the robot is seen at the pump's face; turned
     round (forks toward the robot, 0.085 m high) the beam passes over the forks to the pump behind."""
-    heading = -1.0 if forks_first else 1.0  # forks lead: its first segment's direction is where they point
+    heading = (
+        -1.0 if forks_first else 1.0
+    )  # forks lead: its first segment's direction is where they point
     jack = Actor("pallet_jack", ((-3.5, 0.0), (-3.5 + heading, 0.0)), 1.0, start_s=1e5)
     twin, _ = _twin([jack], sensors=True)
     ranges = twin.sensors["lidar"].scan_now()
-    ahead = twin.sensors["lidar"].n_beams // 2                          # angle 0: straight ahead
+    ahead = twin.sensors["lidar"].n_beams // 2  # angle 0: straight ahead
     assert twin.sensors["lidar"].angles_rad[ahead] == pytest.approx(0.0, abs=1e-12)
     laser_x = twin.physics.site_position_m("amr/laser")[0]
     pump_centre = -3.5 - heading * (J.length_m / 2 - J.pump_radius_m)
@@ -125,7 +150,9 @@ def test_driving_into_a_person_is_a_collision_naming_them():
     twin.advance(4.0)
     hits = twin.collisions.as_dicts()
     assert [h["hit"] for h in hits] == ["person_0"] and "base_link" in hits[0]["robot_parts"]
-    assert 1.5 < hits[0]["t_s"] < 3.0 and hits[0]["x_m"] == pytest.approx(-4.6 - P.leg_radius_m, abs=0.02)
+    assert 1.5 < hits[0]["t_s"] < 3.0 and hits[0]["x_m"] == pytest.approx(
+        -4.6 - P.leg_radius_m, abs=0.02
+    )
 
 
 def test_a_wheel_or_caster_on_a_jacks_fork_is_a_collision():
@@ -149,15 +176,19 @@ def test_a_person_told_to_wait_stops_short_of_the_robot_and_one_not_told_walks_i
     front = START[0] + CFG.chassis.length_m / 2
     if stop_m:
         assert twin.collisions.as_dicts() == []
-        assert stop_m - 1.3 * 0.01 - 1e-9 <= x_end - front <= stop_m    # it stops within one grid step of the line
-        assert twin.actors.progress_s()[0] < 4.0 - 1.0                          # it has been waiting
+        assert (
+            stop_m - 1.3 * 0.01 - 1e-9 <= x_end - front <= stop_m
+        )  # it stops within one grid step of the line
+        assert twin.actors.progress_s()[0] < 4.0 - 1.0  # it has been waiting
     else:
         assert [h["hit"] for h in twin.collisions.as_dicts()] == ["person_0"]
 
 
 @pytest.mark.parametrize("side", [1.0, -1.0])
 @pytest.mark.parametrize("angle_deg", [0.0, 40.0, 65.0, -65.0])
-def test_a_person_giving_way_beside_the_robot_keeps_their_body_0_3_m_from_its_footprint(side, angle_deg):
+def test_a_person_giving_way_beside_the_robot_keeps_their_body_0_3_m_from_its_footprint(
+    side, angle_deg
+):
     """The navigation's acceptance asks 0.3 m from a person's body (the navigation metric's 0.30 x 0.45 m box)
     to the robot's footprint (0.70 x 0.53 m: the wheels stick out of the 0.40 m chassis). A person
     walking at the robot's left or right side, square to it or at an angle (forwards or backwards;
@@ -172,19 +203,24 @@ def test_a_person_giving_way_beside_the_robot_keeps_their_body_0_3_m_from_its_fo
 
     stop_m = 0.6
     fp = robot_footprint(CFG)
-    heading = side * (math.radians(angle_deg) - math.pi / 2)            # towards the side, tilted
+    heading = side * (math.radians(angle_deg) - math.pi / 2)  # towards the side, tilted
     target = np.array([START[0] + 0.1, START[1] + side * fp.half_width_m])
     u = np.array([math.cos(heading), math.sin(heading)])
     a, b = target - 2.0 * u, target + 0.5 * u
     twin, poses = _twin([Actor("person", (tuple(a), tuple(b)), 1.3, stop_within_m=stop_m)])
     twin.advance(3.0)
-    (x, y, yaw), = _xy_yaw(poses[-1])
-    assert twin.collisions.as_dicts() == [] and twin.actors.progress_s()[0] < 3.0 - 1.0   # it waited
-    centre = np.array([x - START[0], y - START[1]])                     # in base_link (the robot faces +x)
+    ((x, y, yaw),) = _xy_yaw(poses[-1])
+    assert twin.collisions.as_dicts() == [] and twin.actors.progress_s()[0] < 3.0 - 1.0  # it waited
+    centre = np.array([x - START[0], y - START[1]])  # in base_link (the robot faces +x)
     assert stop_m - 1.3 * 0.01 - 1e-9 <= fp.distance_m(centre)[0] <= stop_m
     hx, hy = PERSON_HALF_M
     c, s = math.cos(yaw), math.sin(yaw)
-    body = Polygon([(x + c * px - s * py, y + s * px + c * py) for px, py in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))])
+    body = Polygon(
+        [
+            (x + c * px - s * py, y + s * px + c * py)
+            for px, py in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
+        ]
+    )
     robot = Polygon([(START[0] + px, START[1] + py) for px, py in fp.corners_xy_m()])
     assert 0.3 <= body.distance(robot) <= stop_m - hx + 1e-9
 
@@ -219,7 +255,9 @@ def test_a_wheel_touching_an_actor_is_always_a_collision_even_standing_on_it():
     twin, _ = _twin([Actor("pallet_jack", ((0.0, 1.5), (3.0, 1.5)), 1.0)])
     m, roles = twin.physics.model, GeomRoles(twin.physics)
     wheel = twin.physics.support_geoms["wheel_left"]
-    fork, rack, floor = (m.geom(n).id for n in ("pallet_jack_0/fork_left", "rack_n_beam_low", "floor"))
+    fork, rack, floor = (
+        m.geom(n).id for n in ("pallet_jack_0/fork_left", "rack_n_beam_low", "floor")
+    )
     assert roles.kind(wheel, fork) == _COLLIDE and roles.kind(fork, wheel) == _COLLIDE
     assert roles.kind(wheel, rack) == _BY_NORMAL and roles.kind(wheel, floor) == _IGNORE
     assert roles.world_name(fork) == "pallet_jack_0" and roles.world_name(rack) == "rack_n_beam_low"

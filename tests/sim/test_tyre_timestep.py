@@ -14,6 +14,7 @@ is unstable at 1 ms (run 3 ended at 85 RPM instead of 52): the guard halves the 
 (S = 3.70 -> 0.86), and run 3 at the configured 1 ms ends where the same draw configured at
 0.25 ms (which the guard leaves) does, within 0.05 RPM, on the same 10 ms record grid.
 """
+
 import dataclasses
 
 import numpy as np
@@ -22,9 +23,13 @@ import pytest
 from amr_twin.experiments.chapter5 import experiment as chapter5
 from amr_twin.model.config import load_config
 
-STIFF = ["wheel.slip_stiffness_per_n=25", "wheel.relaxation_length_longitudinal_m=0.02",
-         "wheel.cornering_stiffness_per_n=17", "wheel.relaxation_length_lateral_m=0.04",
-         "wheel.tyre_loss_time_s=0.01"]
+STIFF = [
+    "wheel.slip_stiffness_per_n=25",
+    "wheel.relaxation_length_longitudinal_m=0.02",
+    "wheel.cornering_stiffness_per_n=17",
+    "wheel.relaxation_length_lateral_m=0.04",
+    "wheel.tyre_loss_time_s=0.01",
+]
 
 
 def _true_rpm(timestep_s: float):
@@ -50,8 +55,11 @@ def test_stiff_tyres_converge_in_the_timestep(runs):
         assert abs(np.mean(y1[-50:, w]) - np.mean(y2[t2 >= t1[-50], w])) < 0.1
 
 
-LONGITUDINAL = ["wheel.slip_stiffness_per_n=25", "wheel.relaxation_length_longitudinal_m=0.02",
-                "wheel.tyre_loss_time_s=0.01"]
+LONGITUDINAL = [
+    "wheel.slip_stiffness_per_n=25",
+    "wheel.relaxation_length_longitudinal_m=0.02",
+    "wheel.tyre_loss_time_s=0.01",
+]
 
 
 def _run3_50kg(timestep_s: float):
@@ -63,13 +71,20 @@ def _run3_50kg(timestep_s: float):
 def test_guard_makes_the_unstable_corner_run_right_at_1ms():
     coarse, fine = _run3_50kg(0.001), _run3_50kg(0.00025)
     assert fine["tyre_timestep"] is None  # 0.25 ms is stable: the reference runs as configured
-    assert coarse["tyre_timestep"]["timestep_s"] == 0.00025 and coarse["tyre_timestep"]["halvings"] == 2
+    assert (
+        coarse["tyre_timestep"]["timestep_s"] == 0.00025
+        and coarse["tyre_timestep"]["halvings"] == 2
+    )
     t, y = np.asarray(coarse["t_s"]), np.asarray(coarse["true_rpm"])
-    assert len(t) == 1601 and t[1] == pytest.approx(0.01)  # the 10 ms grid kept (the reference's is 2.5 ms)
+    assert len(t) == 1601 and t[1] == pytest.approx(
+        0.01
+    )  # the 10 ms grid kept (the reference's is 2.5 ms)
     np.testing.assert_allclose(t, np.asarray(fine["t_s"])[::4], atol=1e-9)
     last = t >= 15.0
     final = np.mean(y[last], axis=0)
     reference = np.mean(np.asarray(fine["true_rpm"])[::4][last], axis=0)
     assert np.all(np.abs(final - reference) < 0.05)
-    assert np.all((final > 50.0) & (final < 55.0))  # run 3's 53.5 RPM reference; unguarded it ended at 85
+    assert np.all(
+        (final > 50.0) & (final < 55.0)
+    )  # run 3's 53.5 RPM reference; unguarded it ended at 85
     assert np.max(np.abs(y)) < 60.0

@@ -18,9 +18,14 @@ from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_command
 
-HAND_SIDE_SLIP_DEG = -1.32      # docs/explanation/tyres.md, steady turn (the axle slides outwards: to the right)
-HAND_UNDERSTEER = 0.00096       # 1 - yaw-rate gain, docs/explanation/tyres.md
-HAND_SCRUB_CURRENT_A = (0.0738, 0.0695)  # pivot: extra motor current, left and right, docs/explanation/tyres.md
+HAND_SIDE_SLIP_DEG = (
+    -1.32
+)  # docs/explanation/tyres.md, steady turn (the axle slides outwards: to the right)
+HAND_UNDERSTEER = 0.00096  # 1 - yaw-rate gain, docs/explanation/tyres.md
+HAND_SCRUB_CURRENT_A = (
+    0.0738,
+    0.0695,
+)  # pivot: extra motor current, left and right, docs/explanation/tyres.md
 RIGID = ["wheel.tyre_slip=false"]
 
 
@@ -37,15 +42,21 @@ def _steady(result, cfg, after_s: float = 8.0) -> dict:
     rim = s.true_rpm * 2 * math.pi / 60 * cfg.wheel.radius_m
     r_kin = (rim[:, 1] - rim[:, 0]) / cfg.wheel.separation_m
     r = np.gradient(yaw) / dt
-    return {"side_slip_deg": float(np.degrees(np.arctan2(lateral[sel], forward[sel])).mean()),
-            "gain": float(r[sel].mean() / r_kin[sel].mean()),
-            "current_a": s.current_a[sel].mean(axis=0)}
+    return {
+        "side_slip_deg": float(np.degrees(np.arctan2(lateral[sel], forward[sel])).mean()),
+        "gain": float(r[sel].mean() / r_kin[sel].mean()),
+        "current_a": s.current_a[sel].mean(axis=0),
+    }
 
 
 def _turn(sets, deg_s: float, icc_m: float) -> tuple:
     cfg = load_config(sets=sets)
-    res = run_command(cfg, Command("angular", speed_deg_s=deg_s, icc_m=icc_m), 12.0,
-                      TwinOptions(world="empty", firmware="improved", odometry=False))
+    res = run_command(
+        cfg,
+        Command("angular", speed_deg_s=deg_s, icc_m=icc_m),
+        12.0,
+        TwinOptions(world="empty", firmware="improved", odometry=False),
+    )
     return cfg, res
 
 
@@ -57,8 +68,13 @@ def turn():
 
 @pytest.fixture(scope="module")
 def pivots():
-    return {name: _steady(res, cfg) for name, (cfg, res) in
-            (("brush", _turn([], 60.0, 0.0)), ("rigid", _turn(RIGID, 60.0, 0.0)))}
+    return {
+        name: _steady(res, cfg)
+        for name, (cfg, res) in (
+            ("brush", _turn([], 60.0, 0.0)),
+            ("rigid", _turn(RIGID, 60.0, 0.0)),
+        )
+    }
 
 
 def test_steady_turn_side_slip_is_the_hand_calculation(turn):
@@ -84,8 +100,10 @@ def _drive(native: bool) -> tuple:
     settled_physics.forget()  # each engine settles its own copy
     assert tyres.install(native) == ("C" if native else "Python (native=False)")
     try:
-        twin = Twin(load_config(sets=["payload.mass_kg=20", "payload.xy_m=[0,0.07]"]),
-                    TwinOptions(world="empty", odometry=False))
+        twin = Twin(
+            load_config(sets=["payload.mass_kg=20", "payload.xy_m=[0,0.07]"]),
+            TwinOptions(world="empty", odometry=False),
+        )
         twin.client.angular(-60.0, -1.0)
         twin.advance(1.5)
         d = twin.physics.data
@@ -104,8 +122,10 @@ def test_c_helper_and_python_twin_give_the_same_bits():
 def test_each_tyre_carries_its_own_wheel_load():
     """A 20 kg payload 0.07 m to the left: the left tyre's load, read from its spring, is its own
     contact's normal force (MuJoCo's solver), not the right one's."""
-    twin = Twin(load_config(sets=["payload.mass_kg=20", "payload.xy_m=[0,0.07]"]),
-                TwinOptions(world="empty", odometry=False))
+    twin = Twin(
+        load_config(sets=["payload.mass_kg=20", "payload.xy_m=[0,0.07]"]),
+        TwinOptions(world="empty", odometry=False),
+    )
     twin.advance(0.3)
     left, right = tyres.contacts(twin.physics.model, twin.physics.data)
     solver = twin.physics.support_normal_forces_n()[:2]
@@ -114,15 +134,21 @@ def test_each_tyre_carries_its_own_wheel_load():
     before = twin.physics.pose()
     twin.advance(1.0)
     after = twin.physics.pose()
-    assert math.hypot(after.x_m - before.x_m, after.y_m - before.y_m) < 2e-4  # at rest it stays (no creep)
+    assert (
+        math.hypot(after.x_m - before.x_m, after.y_m - before.y_m) < 2e-4
+    )  # at rest it stays (no creep)
 
 
 def test_traction_makes_the_hub_lag_its_rim():
     """Driving forward against the casters' drag the tyres deflect backwards (u < 0... the ground
     pushes the wheel forward: fx > 0) and the robot covers less than its wheels roll."""
     cfg = load_config()
-    res = run_command(cfg, Command("linear", speed_m_s=0.7), 6.0,
-                      TwinOptions(world="empty", firmware="improved", odometry=False))
+    res = run_command(
+        cfg,
+        Command("linear", speed_m_s=0.7),
+        6.0,
+        TwinOptions(world="empty", firmware="improved", odometry=False),
+    )
     s = res.series
     rolled = np.diff(s.wheel_angle_rad[[0, -1]], axis=0).mean() * cfg.wheel.radius_m
     travelled = float(np.hypot(*(s.pose[-1, :2] - s.pose[0, :2])))

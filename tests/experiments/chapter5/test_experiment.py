@@ -26,8 +26,16 @@ def test_metrics_json_structure(short_run):
     out, results, data = short_run
     on_disk = json.loads((out / "metrics.json").read_text())
     assert on_disk == json.loads(json.dumps(data))
-    assert {"firmware", "wall_s", "sim_s", "bands", "runs", "comparisons", "summary",
-            "oscillation_verdict"} <= set(on_disk)
+    assert {
+        "firmware",
+        "wall_s",
+        "sim_s",
+        "bands",
+        "runs",
+        "comparisons",
+        "summary",
+        "oscillation_verdict",
+    } <= set(on_disk)
     assert on_disk["oscillation_verdict"]["comparisons"] == 0  # run 3 alone has no 20 kg twin
     assert "not judged" in (out / "report.md").read_text()
     (run,) = on_disk["runs"]
@@ -40,7 +48,14 @@ def test_metrics_json_structure(short_run):
         for check in wheel["checks"].values():
             assert set(check) == {"twin", "thesis", "band", "verdict"}
             assert check["verdict"] in ("pass", "fail")
-        assert set(wheel["published"]) >= {"delay_s", "rise_s", "peak_s", "overshoot", "settling_s", "oscillation"}
+        assert set(wheel["published"]) >= {
+            "delay_s",
+            "rise_s",
+            "peak_s",
+            "overshoot",
+            "settling_s",
+            "oscillation",
+        }
         assert wheel["true"]["reference"] == pytest.approx(53.47, abs=0.01)
     assert (out / "run3.png").stat().st_size > 1000
     assert "| 3 | left |" in (out / "report.md").read_text()
@@ -56,7 +71,9 @@ def test_rotation_commands_give_the_thesis_wheel_speeds():
 
 
 def test_cli_rejects_bad_jobs_and_writes_nothing(tmp_path):
-    result = CliRunner().invoke(app, ["experiment", "chapter5", "--out", str(tmp_path / "x"), "--jobs", "0"])
+    result = CliRunner().invoke(
+        app, ["experiment", "chapter5", "--out", str(tmp_path / "x"), "--jobs", "0"]
+    )
     assert result.exit_code == 2 and "--jobs" in result.output
     assert not (tmp_path / "x").exists()
 
@@ -71,8 +88,15 @@ def test_a_backward_run_has_one_sign_in_metrics_json_and_report_md(tmp_path):
         assert wheel["reference_rpm"] == pytest.approx(-91.67, abs=0.01)
         for source in ("published", "true"):
             m = wheel[source]
-            assert m["reference"] == pytest.approx(wheel["reference_rpm"]) and m["final_value"] < -80
+            assert (
+                m["reference"] == pytest.approx(wheel["reference_rpm"]) and m["final_value"] < -80
+            )
             assert m["steady_error"] == pytest.approx(m["final_value"] - m["reference"])
         assert f"| 4 | {name} | -91.67 |" in report
-    assert "| 4 | left | 91.67 |" not in report and "samples |" in report.split("## True wheel speed")[0]
-    assert "samples" not in report.split("## True wheel speed")[1].split("\n\n")[2]  # no repeated sample counts
+    assert (
+        "| 4 | left | 91.67 |" not in report
+        and "samples |" in report.split("## True wheel speed")[0]
+    )
+    assert (
+        "samples" not in report.split("## True wheel speed")[1].split("\n\n")[2]
+    )  # no repeated sample counts

@@ -30,9 +30,17 @@ def test_published_samples_are_markers_from_the_first_sample(run5_figure):
         pub = raw["published"][w]
         (markers,) = [ln for ln in ax.lines if ln.get_marker() == "o"]
         assert markers.get_linestyle() == "None"
-        assert list(markers.get_xdata()) == pytest.approx(pub[:, 0].tolist())  # the samples, nothing at t = 0
-        held = [ln for ln in ax.lines if ln.get_drawstyle() == "steps-post" and ln.get_color() == markers.get_color()]
-        assert held and min(held[0].get_xdata()) == pytest.approx(pub[0, 0])  # held from the first sample on
+        assert list(markers.get_xdata()) == pytest.approx(
+            pub[:, 0].tolist()
+        )  # the samples, nothing at t = 0
+        held = [
+            ln
+            for ln in ax.lines
+            if ln.get_drawstyle() == "steps-post" and ln.get_color() == markers.get_color()
+        ]
+        assert held and min(held[0].get_xdata()) == pytest.approx(
+            pub[0, 0]
+        )  # held from the first sample on
     assert raw["published"][1][0, 0] > 1.5  # the right wheel's first sample comes late
 
 
@@ -41,10 +49,17 @@ def test_the_thesis_bands_are_drawn_with_their_source(run5_figure):
     for ax in fig.axes:
         labels = ax.get_legend_handles_labels()[1]
         assert any(label.startswith("thesis bands (§5.1.3, fig. 5.3): delay") for label in labels)
-        assert any(label.startswith("peak ") and "over the final value" in label for label in labels)
+        assert any(
+            label.startswith("peak ") and "over the final value" in label for label in labels
+        )
         assert any(label.startswith("steady error -4 to +4 RPM") for label in labels)
-    left, right = (next(x for x in ax.get_legend_handles_labels()[1] if x.startswith("thesis")) for ax in fig.axes)
-    assert left.endswith("delay 0.3-0.7 s at 50 %") and right.endswith("delay 0.1-0.3 s at 50 %")  # 99.2, 60.8 RPM
+    left, right = (
+        next(x for x in ax.get_legend_handles_labels()[1] if x.startswith("thesis"))
+        for ax in fig.axes
+    )
+    assert left.endswith("delay 0.3-0.7 s at 50 %") and right.endswith(
+        "delay 0.1-0.3 s at 50 %"
+    )  # 99.2, 60.8 RPM
 
 
 def test_each_band_has_its_own_colour_and_the_earliest_first_sample_is_marked(run5_figure):
@@ -58,7 +73,9 @@ def test_each_band_has_its_own_colour_and_the_earliest_first_sample_is_marked(ru
     for ax, rpm in zip(fig.axes, (99.20, 60.80)):
         labels = ax.get_legend().get_texts()
         named = [t.get_text() for t in labels]
-        assert f"no published sample before {60 / rpm:.2f} s (one revolution, listing 4.12)" in named
+        assert (
+            f"no published sample before {60 / rpm:.2f} s (one revolution, listing 4.12)" in named
+        )
         assert any(p.get_hatch() == BAND_STYLE["first_sample"][1] for p in ax.patches)
         (line,) = [ln for ln in ax.lines if ln.get_linestyle() == "-."]
         assert line.get_xdata()[0] == pytest.approx(t0 + 60 / rpm)

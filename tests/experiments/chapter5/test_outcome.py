@@ -24,9 +24,11 @@ def suite():
 
 
 def test_the_header_counts_every_run_the_progress_bar_counts(suite):
-    """"8 runs, 132 simulated s" left out the 8 rolling-resistance study runs."""
+    """ "8 runs, 132 simulated s" left out the 8 rolling-resistance study runs."""
     assert (len(suite["runs"]), suite["study_runs"]) == (8, 8)
-    assert suite["sim_s"] == 132.0 and suite["study_sim_s"] == 128.0  # runs 3 and 7 (16 s) at four Crr
+    assert (
+        suite["sim_s"] == 132.0 and suite["study_sim_s"] == 128.0
+    )  # runs 3 and 7 (16 s) at four Crr
 
 
 def test_no_check_worse_than_the_committed_scorecard(suite):
@@ -44,24 +46,57 @@ def test_the_committed_scorecard_is_what_the_runs_give_now(suite):
     import math
 
     committed, now = json.loads(SCORECARD.read_text()), scorecard(suite)
-    drifted = [f"{k}: {c['twin']} committed, {now['checks'][k]['twin']} now" for k, c in committed["checks"].items()
-               if (c["twin"] is None) != (now["checks"][k]["twin"] is None) or c["twin"] is not None
-               and not math.isclose(c["twin"], now["checks"][k]["twin"], rel_tol=1e-3, abs_tol=1e-3)]
-    counts = ("passed", "checks_total", "true_passed", "true_checks_total", "oscillation_published_passed")
-    drifted += [f"{k}: {committed[k]} committed, {now[k]} now" for k in counts if committed[k] != now[k]]
-    assert not drifted, "run python -m amr_twin.experiments.documents.figures: " + "; ".join(drifted[:6])
+    drifted = [
+        f"{k}: {c['twin']} committed, {now['checks'][k]['twin']} now"
+        for k, c in committed["checks"].items()
+        if (c["twin"] is None) != (now["checks"][k]["twin"] is None)
+        or c["twin"] is not None
+        and not math.isclose(c["twin"], now["checks"][k]["twin"], rel_tol=1e-3, abs_tol=1e-3)
+    ]
+    counts = (
+        "passed",
+        "checks_total",
+        "true_passed",
+        "true_checks_total",
+        "oscillation_published_passed",
+    )
+    drifted += [
+        f"{k}: {committed[k]} committed, {now[k]} now" for k in counts if committed[k] != now[k]
+    ]
+    assert not drifted, "run python -m amr_twin.experiments.documents.figures: " + "; ".join(
+        drifted[:6]
+    )
 
 
 def test_worse_finds_a_check_that_leaves_its_band():
-    committed = {"passed": 2, "checks": {"a": {"twin": 0.5, "band": [0.3, 0.7], "unit": "s"},
-                                         "b": {"twin": 9.0, "band": [0.0, 3.0], "unit": "RPM"}}}
-    better = {"passed": 2, "checks": {"a": {"twin": 0.6, "band": [0.3, 0.7]}, "b": {"twin": 3.2, "band": [0.0, 3.0]}}}
+    committed = {
+        "passed": 2,
+        "checks": {
+            "a": {"twin": 0.5, "band": [0.3, 0.7], "unit": "s"},
+            "b": {"twin": 9.0, "band": [0.0, 3.0], "unit": "RPM"},
+        },
+    }
+    better = {
+        "passed": 2,
+        "checks": {"a": {"twin": 0.6, "band": [0.3, 0.7]}, "b": {"twin": 3.2, "band": [0.0, 3.0]}},
+    }
     assert worse(committed, better) == []
-    left_band = {"passed": 1, "checks": {"a": {"twin": 0.8, "band": [0.3, 0.7]}, "b": {"twin": 9.2, "band": [0.0, 3.0]}}}
+    left_band = {
+        "passed": 1,
+        "checks": {"a": {"twin": 0.8, "band": [0.3, 0.7]}, "b": {"twin": 9.2, "band": [0.0, 3.0]}},
+    }
     found = worse(committed, left_band)
     assert len(found) == 2 and found[0].startswith("a:") and "passed" in found[1]
-    assert worse(committed, {"passed": 2, "checks": {"a": {"twin": None, "band": [0.3, 0.7]},
-                                                     "b": {"twin": 9.0, "band": [0.0, 3.0]}}})
+    assert worse(
+        committed,
+        {
+            "passed": 2,
+            "checks": {
+                "a": {"twin": None, "band": [0.3, 0.7]},
+                "b": {"twin": 9.0, "band": [0.0, 3.0]},
+            },
+        },
+    )
 
 
 def test_right_wheel_tracks_worse_than_the_left(suite):
@@ -81,8 +116,12 @@ def test_right_wheel_tracks_worse_than_the_left(suite):
 def test_unloaded_wheels_end_in_the_dead_zone(suite):
     """§5.1.3's "almost perfect track": every wheel of runs 1-6 ends within listing 4.11's 4 RPM
     (the calibration's runs 4-6 targets; with one gain for both boards three ended outside)."""
-    errors = [w["published"]["steady_error"] for r in suite["runs"] if r["payload_kg"] == 0
-              for w in r["wheels"].values()]
+    errors = [
+        w["published"]["steady_error"]
+        for r in suite["runs"]
+        if r["payload_kg"] == 0
+        for w in r["wheels"].values()
+    ]
     assert len(errors) == 10 and max(abs(e) for e in errors) < 4.0
 
 
@@ -92,8 +131,12 @@ def test_motor_current_rises_with_payload():
     current = []
     for mass_kg in (0.0, 20.0, 40.0):
         cfg = load_config(sets=[f"payload.mass_kg={mass_kg}"])
-        s = run_command(cfg, Command("linear", speed_m_s=0.7), 16.0,
-                        TwinOptions(firmware="improved", world="empty")).series
+        s = run_command(
+            cfg,
+            Command("linear", speed_m_s=0.7),
+            16.0,
+            TwinOptions(firmware="improved", world="empty"),
+        ).series
         tail = s.t_s >= 12.0
         assert np.abs(s.true_rpm[tail].mean(axis=0) - 53.48).max() < 2.0  # it does track
         current.append(float(s.current_a[tail].mean()))

@@ -18,13 +18,20 @@ def test_each_reading_places_the_samples_and_the_clock():
     assert t0 == 1.0 and initial is None
     t, rpm, t0, initial = rd.samples_as_read(PUB, 0.0, "mid_revolution")
     assert t[0] == pytest.approx(1.0 - 30.0 / 40.0) and t[1] == pytest.approx(2.0 - 30.0 / 56.0)
-    with pytest.raises(ValueError, match="reading: 'rqt' must be one of command, first_sample, mid_revolution"):
+    with pytest.raises(
+        ValueError, match="reading: 'rqt' must be one of command, first_sample, mid_revolution"
+    ):
         rd.samples_as_read(PUB, 0.0, "rqt")
 
 
-@pytest.mark.parametrize("reading, delay_s", [("command", 0.5 * FINAL / 40.0),           # (0, 0) to (1, 40)
-                                              ("first_sample", (47.0 - 40.0) / 16.0),     # 40 -> 54 from t = 1
-                                              ("mid_revolution", 0.25 * 0.5 * FINAL / 40.0)])  # (0, 0) to (0.25, 40)
+@pytest.mark.parametrize(
+    "reading, delay_s",
+    [
+        ("command", 0.5 * FINAL / 40.0),  # (0, 0) to (1, 40)
+        ("first_sample", (47.0 - 40.0) / 16.0),  # 40 -> 54 from t = 1
+        ("mid_revolution", 0.25 * 0.5 * FINAL / 40.0),
+    ],
+)  # (0, 0) to (0.25, 40)
 def test_the_delay_follows_the_reading(reading, delay_s):
     checks = rd.timings(PUB, 0.0, 53.47, "left", reading)
     assert set(checks) == set(rd.TIMINGS)
@@ -38,8 +45,16 @@ def test_a_reading_reproduces_only_when_every_timing_check_passes():
 
 
 def test_the_section_lists_every_reading_beside_the_thesis():
-    rows = [{"reading": r, "passed": {m: 1 for m in rd.TIMINGS}, "checks": 2, "reproduces": False,
-             "median_s": {m: {"small": 0.4, "large": None} for m in rd.TIMINGS}} for r in rd.READINGS]
+    rows = [
+        {
+            "reading": r,
+            "passed": {m: 1 for m in rd.TIMINGS},
+            "checks": 2,
+            "reproduces": False,
+            "median_s": {m: {"small": 0.4, "large": None} for m in rd.TIMINGS},
+        }
+        for r in rd.READINGS
+    ]
     text = "\n".join(rd.markdown(rows))
     assert "thesis (≤ 75 / > 75 RPM) | 0.2/0.5" in text and "1/2 (0.40/—)" in text
     assert all(f"| {r} |" in text for r in rd.READINGS)
@@ -47,10 +62,19 @@ def test_the_section_lists_every_reading_beside_the_thesis():
 
 def test_the_conclusion_names_the_readings_that_hold():
     def row(name, small, large, ok):
-        return {"reading": name, "passed": {m: 1 for m in rd.TIMINGS}, "checks": 1, "reproduces": ok,
-                "median_s": {m: {"small": small, "large": large} for m in rd.TIMINGS}}
+        return {
+            "reading": name,
+            "passed": {m: 1 for m in rd.TIMINGS},
+            "checks": 1,
+            "reproduces": ok,
+            "median_s": {m: {"small": small, "large": large} for m in rd.TIMINGS},
+        }
 
-    text = "\n".join(rd.markdown([row("command", 1.2, 1.5, False), row("first_sample", 0.7, 0.4, True)]))
+    text = "\n".join(
+        rd.markdown([row("command", 1.2, 1.5, False), row("first_sample", 0.7, 0.4, True)])
+    )
     assert "Reproduces every timing: first_sample." in text
     assert "as §5.1.3 says (the ramp's order): command." in text
-    assert "Reproduces every timing: no reading." in "\n".join(rd.markdown([row("command", 1.2, 1.5, False)]))
+    assert "Reproduces every timing: no reading." in "\n".join(
+        rd.markdown([row("command", 1.2, 1.5, False)])
+    )

@@ -33,18 +33,29 @@ def test_the_chapter5_paragraph_says_what_the_scorecard_holds():
     assert f"**{card['passed']} of {card['checks_total']} checks pass**" in text
     assert f"passes {card['true_passed']} of {card['true_checks_total']}" in text
     more = copy.deepcopy(card)  # were the right wheel to overshoot 2 RPM more, the claim would turn
-    more["checks"]["run2.right.overshoot"]["twin"] = more["checks"]["run1.left.overshoot"]["twin"] + 2.0
-    assert "does not overshoot more" in text and "overshoots more than the left, as in §5.1.3" in \
-        doc_texts.chapter5_summary(more)
+    more["checks"]["run2.right.overshoot"]["twin"] = (
+        more["checks"]["run1.left.overshoot"]["twin"] + 2.0
+    )
+    assert (
+        "does not overshoot more" in text
+        and "overshoots more than the left, as in §5.1.3" in doc_texts.chapter5_summary(more)
+    )
     lines = doc_texts.chapter5_table(card).splitlines()
-    assert sum(line.startswith("| ") and line[2].isdigit() for line in lines) == 14  # one row per driven wheel
+    assert (
+        sum(line.startswith("| ") and line[2].isdigit() for line in lines) == 14
+    )  # one row per driven wheel
 
 
 def test_a_block_is_replaced_between_its_markers_only(tmp_path):
     doc = tmp_path / "d.md"
-    doc.write_text("before\n<!-- generated: faults-summary (cmd) -->\nold text\n<!-- end: faults-summary -->\nafter\n")
+    doc.write_text(
+        "before\n<!-- generated: faults-summary (cmd) -->\nold text\n<!-- end: faults-summary -->\nafter\n"
+    )
     out = doc_figures.expected(doc, {"faults-summary": "new text\n"})
-    assert out == "before\n<!-- generated: faults-summary (cmd) -->\nnew text\n<!-- end: faults-summary -->\nafter\n"
+    assert (
+        out
+        == "before\n<!-- generated: faults-summary (cmd) -->\nnew text\n<!-- end: faults-summary -->\nafter\n"
+    )
     with pytest.raises(KeyError):
         doc_figures.expected(doc, {})
 

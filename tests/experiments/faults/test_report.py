@@ -41,9 +41,14 @@ def test_the_committed_measures_are_what_the_experiment_gives_now():
     committed = _committed()
     assert fresh["cases"] == committed["cases"], REGENERATE
     now = json.loads(json.dumps(fresh["rows"], default=float))
-    diffs = [d for old, new in zip(committed["rows"], now) for d in
-             _differences(old, new, f"{old['fault']} {old['firmware']}")]
-    assert not diffs, f"{len(diffs)} figures of docs/faults.json changed ({REGENERATE}): " + "; ".join(diffs[:8])
+    diffs = [
+        d
+        for old, new in zip(committed["rows"], now)
+        for d in _differences(old, new, f"{old['fault']} {old['firmware']}")
+    ]
+    assert not diffs, (
+        f"{len(diffs)} figures of docs/faults.json changed ({REGENERATE}): " + "; ".join(diffs[:8])
+    )
 
 
 def test_the_comparison_tolerates_rounding_and_not_a_drift():

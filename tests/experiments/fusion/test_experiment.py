@@ -32,7 +32,9 @@ def test_the_route_is_driven_to_its_goal(default_run):
     results, data, _ = default_run
     assert results.reached_goal
     assert 55.0 < data["route"]["length_m"] < 65.0
-    assert np.max(np.hypot(*np.diff(results.pose_true[:, :2], axis=0).T)) < 0.05  # no jumps in the truth
+    assert (
+        np.max(np.hypot(*np.diff(results.pose_true[:, :2], axis=0).T)) < 0.05
+    )  # no jumps in the truth
     assert results.cross_track_rms_m < 0.10
     counts = data["messages"]
     assert counts["scan"] == pytest.approx(5.5 * results.sim_s, rel=0.05)
@@ -48,10 +50,13 @@ def test_the_committed_fusion_figures_are_what_seed_0_gives_now(default_run):
     _, data, _ = default_run
     committed = json.loads(fusion_json("warehouse_60m").read_text())
     (seed0,) = [d for d in committed["per_seed"] if d["seed"] == 0]
-    drifted = [f"{name}.{key}: {value} committed, {data['architectures'][name][key]} now"
-               for name, metrics in seed0["architectures"].items() for key, value in metrics.items()
-               if isinstance(value, float) and not math.isclose(value, data["architectures"][name][key],
-                                                                rel_tol=1e-3, abs_tol=1e-4)]
+    drifted = [
+        f"{name}.{key}: {value} committed, {data['architectures'][name][key]} now"
+        for name, metrics in seed0["architectures"].items()
+        for key, value in metrics.items()
+        if isinstance(value, float)
+        and not math.isclose(value, data["architectures"][name][key], rel_tol=1e-3, abs_tol=1e-4)
+    ]
     assert not drifted, f"run {COMMAND}: " + "; ".join(drifted[:6])
 
 
@@ -71,9 +76,13 @@ def test_acceptance_of_issue_8(default_run):
     # odometry prior, misses it) and beats the odometry; ranges and gyro together are best
     assert a["odom+lidar"]["ate_m"] < min(0.15, a["odom"]["ate_m"])
     assert a["odom+uwb+imu"]["ate_m"] == min(e["ate_m"] for e in a.values())
-    assert s["map_walls_within_2_cells_frac"] >= 0.90   # 93.5-99.8 % on seeds 0-9
+    assert s["map_walls_within_2_cells_frac"] >= 0.90  # 93.5-99.8 % on seeds 0-9
     robot = data["robot"]
-    assert robot["drawn"] and robot["radius_error_left_m"] != 0.0 and robot["separation_error_m"] != 0.0
+    assert (
+        robot["drawn"]
+        and robot["radius_error_left_m"] != 0.0
+        and robot["separation_error_m"] != 0.0
+    )
 
 
 def test_aligned_ate_forgives_a_constant_offset_only(default_run):
@@ -81,7 +90,10 @@ def test_aligned_ate_forgives_a_constant_offset_only(default_run):
     for name, e in data["architectures"].items():
         assert 0.0 < e["ate_aligned_m"] <= e["ate_m"] + 1e-12, name
     # the odometry's drift is not a constant offset: alignment leaves much of it
-    assert data["architectures"]["odom"]["ate_aligned_m"] > 0.2 * data["architectures"]["odom"]["ate_m"]
+    assert (
+        data["architectures"]["odom"]["ate_aligned_m"]
+        > 0.2 * data["architectures"]["odom"]["ate_m"]
+    )
 
 
 def _evo(out, name, with_rpe=True):
@@ -102,13 +114,30 @@ def _evo(out, name, with_rpe=True):
     aligned.align(ref, correct_scale=False)
     ape_al = metrics.APE(metrics.PoseRelation.translation_part)
     ape_al.process_data((ref, aligned))
-    rpe = {metrics.PoseRelation.translation_part: None, metrics.PoseRelation.rotation_angle_deg: None}
-    for rel in () if not with_rpe else (metrics.PoseRelation.translation_part, metrics.PoseRelation.rotation_angle_deg):
-        m = metrics.RPE(rel, delta=1.0, delta_unit=metrics.Unit.meters, all_pairs=True, pairs_from_reference=True)
+    rpe = {
+        metrics.PoseRelation.translation_part: None,
+        metrics.PoseRelation.rotation_angle_deg: None,
+    }
+    for rel in (
+        ()
+        if not with_rpe
+        else (metrics.PoseRelation.translation_part, metrics.PoseRelation.rotation_angle_deg)
+    ):
+        m = metrics.RPE(
+            rel,
+            delta=1.0,
+            delta_unit=metrics.Unit.meters,
+            all_pairs=True,
+            pairs_from_reference=True,
+        )
         m.process_data((ref, est))
         rpe[rel] = m.get_statistic(rmse)
-    return (ape.get_statistic(rmse), ape_al.get_statistic(rmse), rpe[metrics.PoseRelation.translation_part],
-            rpe[metrics.PoseRelation.rotation_angle_deg])
+    return (
+        ape.get_statistic(rmse),
+        ape_al.get_statistic(rmse),
+        rpe[metrics.PoseRelation.translation_part],
+        rpe[metrics.PoseRelation.rotation_angle_deg],
+    )
 
 
 def test_evo_reproduces_every_architectures_ate_and_rpe_from_the_tum_files(default_run):
@@ -119,7 +148,7 @@ def test_evo_reproduces_every_architectures_ate_and_rpe_from_the_tum_files(defau
     with_rpe = {"odom", "odom+lidar", "odom+uwb+imu"}
     for name, e in data["architectures"].items():
         ate, ate_al, rpe_m, rpe_deg = _evo(out, e["tum"], name in with_rpe)
-        assert ate == pytest.approx(e["ate_m"], rel=0.02), name          # within 2 %
+        assert ate == pytest.approx(e["ate_m"], rel=0.02), name  # within 2 %
         assert ate_al == pytest.approx(e["ate_aligned_m"], rel=0.02), name
         if name in with_rpe:
             assert rpe_m == pytest.approx(e["rpe_trans_m"], rel=0.02), name
@@ -136,24 +165,49 @@ def test_evo_ape_command_line_gives_the_reports_ate(default_run):
     for name in ("odom", "odom+uwb+imu"):
         e = data["architectures"][name]
         for extra, key in (([], "ate_m"), (["--align"], "ate_aligned_m")):
-            text = subprocess.run(["evo_ape", "tum", "truth.tum", e["tum"], *extra], cwd=out, capture_output=True,
-                                  text=True, check=True).stdout
-            rmse = float(next(line.split()[1] for line in text.splitlines() if line.strip().startswith("rmse")))
+            text = subprocess.run(
+                ["evo_ape", "tum", "truth.tum", e["tum"], *extra],
+                cwd=out,
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout
+            rmse = float(
+                next(
+                    line.split()[1] for line in text.splitlines() if line.strip().startswith("rmse")
+                )
+            )
             assert rmse == pytest.approx(e[key], rel=0.02), (name, extra)
 
 
 def test_files_of_the_report(default_run):
     results, data, out = default_run
-    for name in ("metrics.json", "report.md", "trajectories.png", "errors.png", "map.yaml", "map.pgm", "map.png",
-                 "truth.tum", "odom.tum", "odom_lidar.tum", "odom_imu.tum", "odom_uwb.tum", "odom_uwb_imu.tum"):
+    for name in (
+        "metrics.json",
+        "report.md",
+        "trajectories.png",
+        "errors.png",
+        "map.yaml",
+        "map.pgm",
+        "map.png",
+        "truth.tum",
+        "odom.tum",
+        "odom_lidar.tum",
+        "odom_imu.tum",
+        "odom_uwb.tum",
+        "odom_uwb_imu.tum",
+    ):
         assert (out / name).stat().st_size > 0, name
     on_disk = json.loads((out / "metrics.json").read_text())
     assert on_disk["architectures"]["odom+lidar"]["ate_m"] == pytest.approx(
-        results.estimates["odom+lidar"].errors.ate_m)
+        results.estimates["odom+lidar"].errors.ate_m
+    )
     text = (out / "report.md").read_text()
     lidar = data["architectures"]["odom+lidar"]
     assert f"| odom+lidar | {lidar['ate_m']:.3f} | {lidar['ate_aligned_m']:.3f} |" in text
-    assert "without alignment" in text and "evo_ape tum ./truth.tum ./odom_uwb_imu.tum --align" in text
+    assert (
+        "without alignment" in text and "evo_ape tum ./truth.tum ./odom_uwb_imu.tum --align" in text
+    )
     # the TUM files hold the estimates as scored: one pose per stamp, stamps kept to the microsecond
     from amr_twin.analysis import tum
 
@@ -162,7 +216,9 @@ def test_files_of_the_report(default_run):
     assert np.allclose(t, est.t_s, rtol=0, atol=1e-7) and np.all(np.diff(t) > 0)
     assert np.allclose(pose[:, :2], est.pose[:, :2], atol=1e-6)
     t_truth, _ = tum.read(out / "truth.tum")
-    assert np.isin(np.round(t * 1e6), np.round(t_truth * 1e6)).all()  # every estimate stamp has its true pose
+    assert np.isin(
+        np.round(t * 1e6), np.round(t_truth * 1e6)
+    ).all()  # every estimate stamp has its true pose
     assert not list(out.glob(".map-*")) and not list(out.glob("*.tmp"))
 
 
@@ -178,7 +234,10 @@ def _short(tmp_path, seed: int, robot_errors: bool = True):
     route = tmp_path / "short.yaml"
     route.write_text(SHORT_ROUTE)
     res = fusion.run(load_config(), route, seed=seed, progress=False, robot_errors=robot_errors)
-    return {name: (e.errors.ate_m, e.errors.final_yaw_err_deg, len(e.t_s)) for name, e in res.estimates.items()}
+    return {
+        name: (e.errors.ate_m, e.errors.final_yaw_err_deg, len(e.t_s))
+        for name, e in res.estimates.items()
+    }
 
 
 def test_same_seed_same_numbers_other_seed_others(tmp_path):
@@ -200,7 +259,9 @@ def test_cli_rejects_a_broken_route(tmp_path):
 
     bad = tmp_path / "bad.yaml"
     bad.write_text(SHORT_ROUTE.replace("max_speed_m_s: 1.0", "max_speed_m_s: 3.0"))
-    res = CliRunner().invoke(app, ["experiment", "fusion", "--route", str(bad), "--out", str(tmp_path / "o")])
+    res = CliRunner().invoke(
+        app, ["experiment", "fusion", "--route", str(bad), "--out", str(tmp_path / "o")]
+    )
     assert res.exit_code == 2
     assert "max_speed_m_s" in res.output and len(res.output.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
@@ -227,8 +288,22 @@ def corridor_seeds(tmp_path_factory):
     route = tmp / "corridor_short.yaml"
     route.write_text(CORRIDOR_SHORT)
     out = tmp / "out"
-    res = CliRunner().invoke(app, ["experiment", "fusion", "--route", str(route), "--seeds", "0:1", "--jobs", "2",
-                                   "--out", str(out), "--no-progress"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "experiment",
+            "fusion",
+            "--route",
+            str(route),
+            "--seeds",
+            "0:1",
+            "--jobs",
+            "2",
+            "--out",
+            str(out),
+            "--no-progress",
+        ],
+    )
     assert res.exit_code == 0, res.output
     return json.loads((out / "metrics.json").read_text()), out, res.stdout
 
@@ -239,10 +314,14 @@ def test_seeds_report_mean_sd_and_range_of_every_metric(corridor_seeds):
     for name in fusion.ARCHITECTURES:
         per = [d["architectures"][name]["ate_m"] for d in data["per_seed"]]
         s = data["architectures"][name]["ate_m"]
-        assert s["mean"] == pytest.approx(np.mean(per)) and s["sd"] == pytest.approx(np.std(per, ddof=1))
+        assert s["mean"] == pytest.approx(np.mean(per)) and s["sd"] == pytest.approx(
+            np.std(per, ddof=1)
+        )
         assert (s["min"], s["max"]) == (pytest.approx(min(per)), pytest.approx(max(per)))
     odom = [d["architectures"]["odom"]["ate_m"] for d in data["per_seed"]]
-    assert odom[0] != odom[1]  # the wheel odometry differs between seeds (each seed is another robot)
+    assert (
+        odom[0] != odom[1]
+    )  # the wheel odometry differs between seeds (each seed is another robot)
     for seed in (0, 1):
         assert (out / f"seed{seed}" / "truth.tum").stat().st_size > 0
         assert (out / f"seed{seed}" / "odom_uwb_imu.tum").stat().st_size > 0
@@ -258,11 +337,13 @@ def test_in_the_corridor_scan_matching_slides_and_uwb_loses_the_bays_anchors(cor
     for d in data["per_seed"]:
         seed = json.loads((out / f"seed{d['seed']}" / "metrics.json").read_text())
         blocked, per_anchor = seed["uwb"]["blocked_per_anchor"], seed["uwb"]["exchanges"] / 5
-        assert min(blocked[:4]) > 0.9 * per_anchor and blocked[4] == 0   # the NLOS zone, by the walls
+        assert (
+            min(blocked[:4]) > 0.9 * per_anchor and blocked[4] == 0
+        )  # the NLOS zone, by the walls
         a = d["architectures"]
         # two parallel walls and no end in range: kiss-icp slides along the corridor
         assert a["odom+lidar"]["final_pos_err_m"] > 1.0 > 0.3 > a["odom+imu"]["final_pos_err_m"]
-        assert a["odom+uwb"]["ate_m"] > 0.15   # one anchor in sight (0.04 m in the warehouse)
+        assert a["odom+uwb"]["ate_m"] > 0.15  # one anchor in sight (0.04 m in the warehouse)
         assert a["odom+uwb+imu"]["ate_m"] < a["odom+uwb"]["ate_m"]
 
 
@@ -271,11 +352,14 @@ def test_cli_refuses_bad_seed_options_before_the_work(tmp_path):
 
     from amr_twin.cli.main import app
 
-    for args, words in ((["--seed", "1", "--seeds", "0:2"], "--seed and --seeds"),
-                        (["--seeds", "5:2"], "--seeds"), (["--seeds", "1,x"], "--seeds"),
-                        (["--seeds", "0:1", "--record", str(tmp_path / "r.rrd")], "--record"),
-                        (["--route", "nowhere"], "corridor, warehouse_60m"),
-                        (["--executor", "dask"], "--scheduler")):
+    for args, words in (
+        (["--seed", "1", "--seeds", "0:2"], "--seed and --seeds"),
+        (["--seeds", "5:2"], "--seeds"),
+        (["--seeds", "1,x"], "--seeds"),
+        (["--seeds", "0:1", "--record", str(tmp_path / "r.rrd")], "--record"),
+        (["--route", "nowhere"], "corridor, warehouse_60m"),
+        (["--executor", "dask"], "--scheduler"),
+    ):
         res = CliRunner().invoke(app, ["experiment", "fusion", "--out", str(tmp_path / "o"), *args])
         assert res.exit_code == 2, (args, res.output)
         assert words in res.output and len(res.output.strip().splitlines()) == 1, (args, res.output)
@@ -292,7 +376,9 @@ def test_seeds_on_a_dask_cluster_give_the_local_numbers(tmp_path):
     route.write_text(SHORT_ROUTE)
     cfg = load_config()
     local = fusion_seeds.run(cfg, route, [8], progress=False)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+    ) as c:
         client = dask_cluster.connect_dask(c.scheduler_address, timeout_s=10.0)
         try:
             remote = fusion_seeds.run(cfg, route, [7, 8], client=client, progress=False)

@@ -15,12 +15,17 @@ def test_the_default_spec_drives_seed_0_on_the_warehouse_route():
     assert FusionSpec(seed=7).seed_list() == [7]
 
 
-@pytest.mark.parametrize("spec, named", [
-    (FusionSpec(seed=1, seeds="0:2"), "--seed and --seeds: give one of them"),
-    (FusionSpec(seed=-1), "--seed -1: must be a whole number in [0, 2^32)"),
-    (FusionSpec(seeds="0:1000000000000"),
-     "--seeds '0:1000000000000': 1000000000001 seeds; at most"),
-])
+@pytest.mark.parametrize(
+    "spec, named",
+    [
+        (FusionSpec(seed=1, seeds="0:2"), "--seed and --seeds: give one of them"),
+        (FusionSpec(seed=-1), "--seed -1: must be a whole number in [0, 2^32)"),
+        (
+            FusionSpec(seeds="0:1000000000000"),
+            "--seeds '0:1000000000000': 1000000000001 seeds; at most",
+        ),
+    ],
+)
 def test_bad_seeds_are_refused_in_one_line_naming_the_field(spec, named):
     with pytest.raises(ValueError) as refused:
         spec.seed_list()

@@ -19,7 +19,9 @@ def _odom(t_us: int, x: float, y: float, yaw: float) -> Odometry:
 
 def test_relative_motion_in_body_frame():
     t = np.array([0.0, 1.0])
-    pose = np.array([[1.0, 1.0, math.pi / 2], [1.0, 2.0, math.pi / 2]])  # 1 m along its own x (world +y)
+    pose = np.array(
+        [[1.0, 1.0, math.pi / 2], [1.0, 2.0, math.pi / 2]]
+    )  # 1 m along its own x (world +y)
     dx, dy, dyaw = relative_motion(t, pose, 0.0, 1.0)
     assert (dx, dy, dyaw) == pytest.approx((1.0, 0.0, 0.0), abs=1e-12)
 
@@ -27,8 +29,8 @@ def test_relative_motion_in_body_frame():
 def test_tap_keeps_topics_and_merged_is_stamp_ordered():
     s = Streams()
     s.tap("odom", _odom(30_000, 0, 0, 0), 30_000)
-    s.tap("odom", _odom(10_000, 0, 0, 0), 31_000)   # published late, stamped early
-    s.tap("wheel0_Vel", object(), 0)                 # not a recorded topic
+    s.tap("odom", _odom(10_000, 0, 0, 0), 31_000)  # published late, stamped early
+    s.tap("wheel0_Vel", object(), 0)  # not a recorded topic
     imu_like = _odom(20_000, 0, 0, 0)
     s.tap("imu/data_raw", imu_like, 20_000)
     assert s.counts() == {"odom": 2, "imu": 1, "uwb": 0, "scan": 0}

@@ -48,7 +48,9 @@ def _box(cx, cy, hx, hy):
 
 def test_the_visibility_graph_finds_the_shortest_way_round_a_box():
     vg = VisibilityGraph(_box(5.0, 0.0, 1.0, 1.0), 0.002, (-5.0, -5.0, 15.0, 5.0))
-    expected = 2 * math.hypot(4.0, 1.0) + 2.0  # (0,0) -> (4,1) -> (6,1) -> (10,0): round a corner of the box
+    expected = (
+        2 * math.hypot(4.0, 1.0) + 2.0
+    )  # (0,0) -> (4,1) -> (6,1) -> (10,0): round a corner of the box
     assert vg.length_m((0.0, 0.0), (10.0, 0.0)) == pytest.approx(expected, abs=0.01)
     assert vg.length_m((0.0, 2.0), (10.0, 2.0)) == pytest.approx(10.0, abs=1e-9)  # a clear line
     assert vg.length_m((0.0, 0.0), (5.0, 0.0)) == math.inf  # a goal inside the box
@@ -74,12 +76,33 @@ def test_sign_changes_of_the_yaw_rate_ignore_the_deadband():
 
 
 def test_the_summary_counts_success_collisions_and_people_clearance():
-    row = {"map": "true", "scenario": "person", "success": True, "collisions": 0, "time_s": 10.0, "barn_score": 0.4,
-           "travelled_over_optimal": 1.05, "min_clearance_m": 0.3, "min_person_m": 0.35, "plan_ms": [10.0],
-           "controller_ms": [2.0], "recoveries": [], "travelled_m": 20.0, "w_sign_changes_last_m": 1}
-    rows = [row, {**row, "success": False, "collisions": 1, "min_person_m": 0.2, "recoveries": ["spin"]},
-            {**row, "scenario": "clear", "min_person_m": None}]
+    row = {
+        "map": "true",
+        "scenario": "person",
+        "success": True,
+        "collisions": 0,
+        "time_s": 10.0,
+        "barn_score": 0.4,
+        "travelled_over_optimal": 1.05,
+        "min_clearance_m": 0.3,
+        "min_person_m": 0.35,
+        "plan_ms": [10.0],
+        "controller_ms": [2.0],
+        "recoveries": [],
+        "travelled_m": 20.0,
+        "w_sign_changes_last_m": 1,
+    }
+    rows = [
+        row,
+        {**row, "success": False, "collisions": 1, "min_person_m": 0.2, "recoveries": ["spin"]},
+        {**row, "scenario": "clear", "min_person_m": None},
+    ]
     s = summary(rows)
-    assert s["true/all"]["success_rate"] == pytest.approx(2 / 3) and s["true/all"]["collisions"] == 1
-    assert s["true/person"]["person_crossings"] == 2 and s["true/person"]["person_clearance_ge_0_3_share"] == 0.5
+    assert (
+        s["true/all"]["success_rate"] == pytest.approx(2 / 3) and s["true/all"]["collisions"] == 1
+    )
+    assert (
+        s["true/person"]["person_crossings"] == 2
+        and s["true/person"]["person_clearance_ge_0_3_share"] == 0.5
+    )
     assert s["true/all"]["recoveries_per_100m"] == pytest.approx(100 / 60)

@@ -35,7 +35,10 @@ def test_the_slam_map_lies_on_the_world_where_the_ekf_poses_would_not(short_rout
     assert out["pose_graph"]["ranges_used"] > 4000
     grid = load_map(tmp_path / "slam_map.yaml")
     assert grid.resolution_m == pytest.approx(0.05)
-    assert not (tmp_path / "slam_map_unmatched.yaml").exists() and not (tmp_path / "slam_map_ekf_only.yaml").exists()
+    assert (
+        not (tmp_path / "slam_map_unmatched.yaml").exists()
+        and not (tmp_path / "slam_map_ekf_only.yaml").exists()
+    )
 
 
 def test_a_world_without_a_mapping_route_is_refused_in_one_line():

@@ -34,9 +34,15 @@ def test_a_points_fingerprint_covers_what_its_result_depends_on(cfg):
     """A resumed sweep reuses a point's file only when its fingerprint matches (one that
     ignored the duration would have reused a point simulated for another duration)."""
     base = pp.Point(20.0, "rear", "linear:0.7", 8.0, "faithful", cfg)
-    same = pp.Point(20.0, "rear", "linear:0.7", 8.0, "faithful", cfg, rrd_path="x.rrd", mcap_path="x.mcap")
+    same = pp.Point(
+        20.0, "rear", "linear:0.7", 8.0, "faithful", cfg, rrd_path="x.rrd", mcap_path="x.mcap"
+    )
     assert same.fingerprint == base.fingerprint  # where it is recorded does not change it
-    others = [pp.Point(20.0, "rear", "linear:0.7", 4.0, "faithful", cfg),
-              pp.Point(20.0, "rear", "linear:0.7", 8.0, "improved", cfg),
-              pp.Point(20.0, "rear", "linear:0.7", 8.0, "faithful", pp.with_payload(cfg, 1.0, (0.0, 0.0)))]
+    others = [
+        pp.Point(20.0, "rear", "linear:0.7", 4.0, "faithful", cfg),
+        pp.Point(20.0, "rear", "linear:0.7", 8.0, "improved", cfg),
+        pp.Point(
+            20.0, "rear", "linear:0.7", 8.0, "faithful", pp.with_payload(cfg, 1.0, (0.0, 0.0))
+        ),
+    ]
     assert len({base.fingerprint, *(o.fingerprint for o in others)}) == 4

@@ -27,9 +27,13 @@ def test_a_motor_over_the_drivers_continuous_rating_is_unsafe():
     from amr_twin.experiments.payload.sweep_report import unsafe_reason
 
     low = load_config(sets=["driver.continuous_current_a=0.6"])
-    ok = simulate_point(Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", load_config())).as_json()
+    ok = simulate_point(
+        Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", load_config())
+    ).as_json()
     over = simulate_point(Point(0.0, "center", "linear:0.7", DURATION_S, "faithful", low)).as_json()
     assert ok["safe"] and not ok["motor_overload"]
     assert 0.6 < max(over["left_steady_current_a"], over["right_steady_current_a"]) < 11.1
     assert not over["safe"] and over["motor_overload"]
-    assert unsafe_reason(over).startswith("motor current rating (wheels tracking)")  # not a runaway: it tracks
+    assert unsafe_reason(over).startswith(
+        "motor current rating (wheels tracking)"
+    )  # not a runaway: it tracks

@@ -25,20 +25,25 @@ def test_a_sweep_over_the_most_runs_is_refused_naming_its_fields(cfg):
     spec = PayloadSweepSpec(masses="0:99:1", **one)
     with pytest.raises(ValueError) as refused:
         spec.validate(cfg)
-    assert str(refused.value).startswith("--masses x --positions x --commands x (--samples + 1): "
-                                         f"10100 runs; at most {MAX_SWEEP_POINTS} per sweep")
+    assert str(refused.value).startswith(
+        "--masses x --positions x --commands x (--samples + 1): "
+        f"10100 runs; at most {MAX_SWEEP_POINTS} per sweep"
+    )
     assert "\n" not in str(refused.value)
     PayloadSweepSpec(masses="0:98:1", **one).validate(cfg)  # 9999 runs
 
 
-@pytest.mark.parametrize("field, value, named", [
-    ("duration_s", math.nan, "--duration-s nan: must be a finite number"),
-    ("duration_s", 7200.0, "--duration-s 7200: must be in"),
-    ("masses", "0:60:0", "--masses '0:60:0'"),
-    ("positions", "5:5", "--positions '5:5': the payload box"),
-    ("commands", "spin:3", "--commands"),
-    ("positions", " , ", "--positions and --commands must name at least one item each"),
-])
+@pytest.mark.parametrize(
+    "field, value, named",
+    [
+        ("duration_s", math.nan, "--duration-s nan: must be a finite number"),
+        ("duration_s", 7200.0, "--duration-s 7200: must be in"),
+        ("masses", "0:60:0", "--masses '0:60:0'"),
+        ("positions", "5:5", "--positions '5:5': the payload box"),
+        ("commands", "spin:3", "--commands"),
+        ("positions", " , ", "--positions and --commands must name at least one item each"),
+    ],
+)
 def test_each_bad_field_is_refused_in_one_line_naming_it(cfg, field, value, named):
     with pytest.raises(ValueError) as refused:
         PayloadSweepSpec(**{field: value}).validate(cfg)

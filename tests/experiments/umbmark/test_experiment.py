@@ -52,7 +52,9 @@ def test_a_hand_case():
     assert res.e_d == pytest.approx(1.000240, abs=2e-7)
     assert res.e_b == pytest.approx(0.993674, abs=2e-6)
     assert res.e_max_syst_m == pytest.approx(math.hypot(0.096, 0.096))
-    assert res.ccw.r_cg_m == pytest.approx(0.135765, abs=1e-6) and res.cw.r_cg_m == pytest.approx(0.090510, abs=1e-6)
+    assert res.ccw.r_cg_m == pytest.approx(0.135765, abs=1e-6) and res.cw.r_cg_m == pytest.approx(
+        0.090510, abs=1e-6
+    )
     assert res.e_nonsyst_rms_m == 0.0
 
 
@@ -63,8 +65,10 @@ def test_the_spread_is_the_distance_from_the_centre_of_gravity():
     assert c.spread_rms_m == pytest.approx(math.sqrt((2 * (0.01 + 0.01) + 0.04) / 3))
 
 
-@pytest.mark.parametrize("r_left, r_right, b_true", [(0.1249, 0.1251, 0.48), (0.125, 0.125, 0.486),
-                                                    (0.1252, 0.1249, 0.475)])
+@pytest.mark.parametrize(
+    "r_left, r_right, b_true",
+    [(0.1249, 0.1251, 0.48), (0.125, 0.125, 0.486), (0.1252, 0.1249, 0.475)],
+)
 def test_the_calibration_recovers_the_true_geometry(r_left, r_right, b_true):
     cw = _square(r_left, r_right, b_true, ccw=False)
     ccw = _square(r_left, r_right, b_true, ccw=True)

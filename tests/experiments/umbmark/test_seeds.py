@@ -21,13 +21,18 @@ def phases():
 @pytest.fixture(scope="module")
 def rigid_seeds(phases):
     """Seed 0's rigid runs and seed 3's (the largest systematic errors of seeds 0-9: track +7.6 mm)."""
-    return [phases[1], run_seed(SeedJob(load_config(sets=["wheel.tyre_slip=false"]), 3, 2, calibrate=False))]
+    return [
+        phases[1],
+        run_seed(SeedJob(load_config(sets=["wheel.tyre_slip=false"]), 3, 2, calibrate=False)),
+    ]
 
 
 def test_the_tyres_slip_spread_collapses_with_the_rigid_contact(phases):
     tyres, rigid = phases
     assert tyres.tyres and not rigid.tyres and tyres.after is None and tyres.calibration is None
-    assert tyres.before.slip.e_nonsyst_rms_m > 0.00015  # the floor's patches and the tyres: 0.3-0.6 mm
+    assert (
+        tyres.before.slip.e_nonsyst_rms_m > 0.00015
+    )  # the floor's patches and the tyres: 0.3-0.6 mm
     assert rigid.before.slip.e_nonsyst_rms_m < 0.00005  # nothing slips: 0.003-0.008 mm
     assert 0.03 < tyres.before.slip.e_max_syst_m < 0.06 and rigid.before.slip.e_max_syst_m < 0.003
 
@@ -55,4 +60,6 @@ def test_the_driver_adds_nothing_to_the_spread(phases, rigid_seeds):
     sampling part 4 mm). Two robots, the rigid contact; seed 0 with the tyres."""
     for result in [*rigid_seeds, phases[0]]:
         b = result.before
-        assert b.node.e_nonsyst_rms_m < b.sampling.e_nonsyst_rms_m + b.slip.e_nonsyst_rms_m + 0.0015, result.seed
+        assert (
+            b.node.e_nonsyst_rms_m < b.sampling.e_nonsyst_rms_m + b.slip.e_nonsyst_rms_m + 0.0015
+        ), result.seed

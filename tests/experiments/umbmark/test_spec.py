@@ -15,13 +15,19 @@ def test_the_default_spec_names_ten_robots_and_its_squares():
     assert spec.values() == {"wheel.tyre_slip": True, "sim.floor_friction_field": True}
 
 
-@pytest.mark.parametrize("spec, sets, named", [
-    (UmbmarkSpec(seeds="3:1"), [], "--seeds '3:1': names no seed"),
-    (UmbmarkSpec(runs=0), [], f"--runs 0: must be in 1..{MAX_RUNS}"),
-    (UmbmarkSpec(runs=MAX_RUNS + 1), [], f"--runs {MAX_RUNS + 1}: must be in 1..{MAX_RUNS}"),
-    (UmbmarkSpec(), ["wheel.tyre_slip=false"],
-     "--set wheel.tyre_slip: chosen by this command's --tyres"),
-])
+@pytest.mark.parametrize(
+    "spec, sets, named",
+    [
+        (UmbmarkSpec(seeds="3:1"), [], "--seeds '3:1': names no seed"),
+        (UmbmarkSpec(runs=0), [], f"--runs 0: must be in 1..{MAX_RUNS}"),
+        (UmbmarkSpec(runs=MAX_RUNS + 1), [], f"--runs {MAX_RUNS + 1}: must be in 1..{MAX_RUNS}"),
+        (
+            UmbmarkSpec(),
+            ["wheel.tyre_slip=false"],
+            "--set wheel.tyre_slip: chosen by this command's --tyres",
+        ),
+    ],
+)
 def test_each_bad_field_is_refused_in_one_line_naming_it(spec, sets, named):
     with pytest.raises(ValueError) as refused:
         spec.validate(sets)

@@ -20,15 +20,26 @@ RIGID = ["wheel.tyre_slip=false"]
 
 
 def _square(sets, direction="cw", firmware_params=None):
-    twin = Twin(load_config(sets=sets), TwinOptions(world="empty", firmware="improved", visuals=False, seed=3,
-                                                   firmware_params=firmware_params))
+    twin = Twin(
+        load_config(sets=sets),
+        TwinOptions(
+            world="empty",
+            firmware="improved",
+            visuals=False,
+            seed=3,
+            firmware_params=firmware_params,
+        ),
+    )
     return drive_square(twin, direction, Profile())
 
 
 @pytest.fixture(scope="module")
 def squares():
-    return {"rigid": _square(RIGID), "tyres": _square([], "ccw"),
-            "estimate": _square(RIGID, firmware_params=replace(ImprovedParams(), publish_mean=False))}
+    return {
+        "rigid": _square(RIGID),
+        "tyres": _square([], "ccw"),
+        "estimate": _square(RIGID, firmware_params=replace(ImprovedParams(), publish_mean=False)),
+    }
 
 
 def test_rigid_contact_the_odometry_counts_every_edge(squares):
@@ -37,7 +48,9 @@ def test_rigid_contact_the_odometry_counts_every_edge(squares):
     r = squares["rigid"]
     assert math.hypot(*r.wheels_error_m) < 0.002 and r.wheels_error_m == r.slip_error_m
     assert math.hypot(*r.error_m) < 0.012
-    assert math.hypot(*r.true_xy_m) < 0.4 and abs(r.true_yaw_deg) < 8.0  # it came back round, turns within 2 deg
+    assert (
+        math.hypot(*r.true_xy_m) < 0.4 and abs(r.true_yaw_deg) < 8.0
+    )  # it came back round, turns within 2 deg
 
 
 def test_the_pi_estimate_published_loses_heading_at_every_start_and_stop(squares):
@@ -68,6 +81,8 @@ def test_wheel_pose_integrates_arcs():
 
 
 def test_a_bad_direction_is_refused():
-    twin = Twin(load_config(sets=RIGID), TwinOptions(world="empty", firmware="improved", visuals=False))
+    twin = Twin(
+        load_config(sets=RIGID), TwinOptions(world="empty", firmware="improved", visuals=False)
+    )
     with pytest.raises(ValueError, match="direction"):
         drive_square(twin, "left", Profile())

@@ -29,8 +29,8 @@ _WHERE = {
     "LOCALISATIONS": "amr_twin.navigation.registries",
     "EXPERIMENTS": "amr_twin.experiments.catalogue:experiments()",
 }
-"""Each public name and where it lives: ``module``, ``module:attribute`` or ``module:function()`` (the
-experiments' registry with the built-ins registered)."""
+"""Each public name and where it lives: ``module``, ``module:attribute`` or ``module:function()``
+(the experiments' registry with the built-ins registered)."""
 
 __all__ = list(_WHERE)
 

@@ -1,4 +1,5 @@
-"""The firmware as the board runs it: an Arduino sketch compiled with avr-gcc on an emulated ATmega2560.
+"""The firmware as the board runs it: an Arduino sketch compiled with avr-gcc on an emulated
+ATmega2560.
 
 Reasons and measurements: docs/firmware.md#amr_twincontrollersavr."""
 
@@ -107,7 +108,8 @@ class AvrFirmware:
         if b.latch_int_flag_while_detached or b.record_pin_log:
             raise ValueError(
                 "AvrParams.board: latch_int_flag_while_detached and record_pin_log belong to the "
-                "Python ports' board; simavr decides the first, and the emulated board keeps no pin log"
+                "Python ports' board; simavr decides the first, and the emulated board keeps no "
+                "pin log"
             )
         sketch = DEFAULT_SKETCH if p.sketch_dir is None else p.sketch_dir
         self.elf = str(build_sketch(sketch, sketch_defines(p)))
@@ -153,7 +155,8 @@ class AvrFirmware:
     # -- wiring into the twin ---------------------------------------------------------
     def connect(self, bus, link) -> bool:
         """Carry the sketch's topics between ``bus`` and the UART, with ``link``'s latency and loss
-        (True: it speaks rosserial itself, :meth:`amr_twin.controllers.firmware_params.Firmware.connect`)."""
+        (True: it speaks rosserial itself,
+        :meth:`amr_twin.controllers.firmware_params.Firmware.connect`)."""
         self._bus, self._link = bus, link
         if self.serial is None:  # else the board's serial port is the host's
             for name, info in self.subscribers.items():
@@ -162,7 +165,8 @@ class AvrFirmware:
 
     # -- Firmware protocol --------------------------------------------------------------
     def start(self) -> None:
-        """Power up: run the board to now (setup() runs in its first microseconds) and keep it in step."""
+        """Power up: run the board to now (setup() runs in its first microseconds) and keep it in
+        step."""
         self._sync()
         self.clock.schedule_in(self.p.sync_period_us, self._tick)
 
@@ -187,7 +191,8 @@ class AvrFirmware:
             self._serve()
 
     def _serve(self) -> None:
-        """Pseudo-terminal: pace to the wall clock, take the host's bytes, send the board's that left the wire."""
+        """Pseudo-terminal: pace to the wall clock, take the host's bytes, send the board's that
+        left the wire."""
         now = self.clock.now_us
         self.pacer.sleep_until(now)
         data = self.serial.read()
@@ -296,7 +301,8 @@ class AvrFirmware:
         self._send_frame(frame(info.topic_id, payload))
 
     def _send_frame(self, data: bytes) -> None:
-        """A frame from the twin's PC side on the PC -> board wire, from now (plus the link's latency, or lost)."""
+        """A frame from the twin's PC side on the PC -> board wire, from now (plus the link's
+        latency, or lost)."""
         start_us = self.clock.now_us
         if self._link is not None:
             start_us += self._link.extra_latency_us

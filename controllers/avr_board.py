@@ -72,7 +72,8 @@ CPU_DONE, CPU_CRASHED = 6, 7
 
 @dataclass(frozen=True)
 class PinInfo:
-    """Where an Arduino pin lives: port letter, bit, and PWM timer channel (e.g. ``"4A"``) or None."""
+    """Where an Arduino pin lives: port letter, bit, and PWM timer channel (e.g. ``"4A"``) or
+    None."""
 
     port: str
     bit: int
@@ -253,7 +254,8 @@ class AvrBoard:
         return self.outputs() != before
 
     def run_to_symbol(self, address: int, max_cycle: int) -> bool:
-        """Execute until the program counter reaches ``address`` (bytes); False if not by ``max_cycle``."""
+        """Execute until the program counter reaches ``address`` (bytes); False if not by
+        ``max_cycle``."""
         state = self._lib.cosim_run_to_pc(self._s, address, max_cycle)
         if state > 1:
             raise BoardError(f"the AVR stopped (state {state}) before reaching 0x{address:x}")

@@ -44,7 +44,8 @@ def pty_problem(path: str) -> str | None:
 @dataclass
 class WallPacer:
     """Pace simulated time to the wall clock: :meth:`sleep_until` returns once the wall clock has
-    reached simulated ``t_us`` (``rate`` simulated s per wall s). The first call fixes the reference; a lag beyond
+    reached simulated ``t_us`` (``rate`` simulated s per wall s). The first call fixes the
+    reference; a lag beyond
     :data:`MAX_LAG_S` moves it up (:attr:`lag_resets` counts it).
     """
 
@@ -71,7 +72,8 @@ class WallPacer:
 
 
 class PtySerialPort:
-    """A pseudo-terminal pair in raw mode, its host side linked at ``path``; non-blocking I/O on the twin's side.
+    """A pseudo-terminal pair in raw mode, its host side linked at ``path``; non-blocking I/O on the
+    twin's side.
 
     Raises ValueError (one line) when ``path`` cannot be made (:func:`pty_problem`).
     """
@@ -122,7 +124,8 @@ class PtySerialPort:
         return count[0]
 
     def write(self, data: bytes) -> None:
-        """Send ``data`` to the host; what the pseudo-terminal cannot take now is dropped and counted."""
+        """Send ``data`` to the host; what the pseudo-terminal cannot take now is dropped and
+        counted."""
         try:
             n = os.write(self._master, data)
         except (BlockingIOError, OSError):

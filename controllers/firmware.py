@@ -1,4 +1,5 @@
-"""The firmware factory: a firmware of a kind on the loop's clock (interface and parameters in firmware_params).
+"""The firmware factory: a firmware of a kind on the loop's clock (interface and parameters in
+firmware_params).
 
 Three firmwares implement :class:`Firmware`: ``faithful`` (a port of the thesis
 listings 4.7-4.12, quirks included behind named switches) and ``improved`` run on
@@ -48,8 +49,9 @@ __all__ = [
 
 
 class FirmwareFactory(Protocol):
-    """Builds a firmware on ``clock`` publishing through ``publish``: ``params`` (None: its defaults),
-    ``edges_per_rev`` SC changes per wheel revolution, ``sketch`` the text after ``KIND:`` (None without)."""
+    """Builds a firmware on ``clock`` publishing through ``publish``: ``params`` (None: its
+    defaults), ``edges_per_rev`` SC changes per wheel revolution, ``sketch`` the text after
+    ``KIND:`` (None without)."""
 
     def __call__(
         self,
@@ -64,7 +66,8 @@ class FirmwareFactory(Protocol):
 
 FIRMWARES: Registry[FirmwareFactory] = Registry("--firmware")
 """Firmware kinds by name (``faithful``, ``improved``, ``avr``); a third party registers its own
-:class:`FirmwareFactory`. ``avr:DIR`` names a sketch folder for ``avr`` (see :func:`firmware_kind`)."""
+:class:`FirmwareFactory`. ``avr:DIR`` names a sketch folder for ``avr`` (see
+:func:`firmware_kind`)."""
 
 
 def firmware_kind(firmware: str, sketch: str | None = None) -> str:
@@ -97,8 +100,8 @@ def firmware_identity(firmware: str) -> str:
 
 
 def check_avr(firmware: str, params: AvrParams | None = None) -> None:
-    """For an ``avr`` firmware: the toolchain is there and the sketch builds as ``params`` run it (else
-    ValueError, one line)."""
+    """For an ``avr`` firmware: the toolchain is there and the sketch builds as ``params`` run it
+    (else ValueError, one line)."""
     if not firmware.startswith("avr"):
         return
     from amr_twin.controllers.avr import sketch_defines, topic_table
@@ -126,7 +129,8 @@ def check_avr(firmware: str, params: AvrParams | None = None) -> None:
 
 
 SKETCH_EDGES_PER_REV = 90
-"""SC changes per revolution the thesis sketch counts (``counter[index] == 90``, motor_control.ino)."""
+"""SC changes per revolution the thesis sketch counts (``counter[index] == 90``,
+motor_control.ino)."""
 
 
 def make_firmware(
@@ -137,10 +141,10 @@ def make_firmware(
     *,
     edges_per_rev: int,
 ) -> Firmware:
-    """Build a firmware of ``kind`` (a name of :data:`FIRMWARES`, or ``avr:SKETCH_DIR``) on ``clock``
-    (shared, us) publishing through ``publish(topic, rpm)`` (``wheel0_Vel`` / ``wheel1_Vel``); ``params``
-    defaults to the thesis values; ``edges_per_rev``: SC changes per wheel revolution
-    (``wheel.sc_edges_per_rev``). ValueError (one line) for an unknown kind."""
+    """Build a firmware of ``kind`` (a name of :data:`FIRMWARES`, or ``avr:SKETCH_DIR``) on
+    ``clock`` (shared, us) publishing through ``publish(topic, rpm)`` (``wheel0_Vel`` /
+    ``wheel1_Vel``); ``params`` defaults to the thesis values; ``edges_per_rev``: SC changes per
+    wheel revolution (``wheel.sc_edges_per_rev``). ValueError (one line) for an unknown kind."""
     name, _, sketch = kind.partition(":")
     return FIRMWARES.get(name)(
         clock, publish, params, edges_per_rev=edges_per_rev, sketch=sketch or None
@@ -156,7 +160,8 @@ def _faithful(
     edges_per_rev: int,
     sketch: str | None,
 ) -> Firmware:
-    """The port of the thesis listings 4.7-4.12, quirks included (:mod:`~amr_twin.controllers.faithful`)."""
+    """The port of the thesis listings 4.7-4.12, quirks included
+    (:mod:`~amr_twin.controllers.faithful`)."""
     from amr_twin.controllers.faithful import FaithfulFirmware
 
     return FaithfulFirmware(clock, publish, edges_per_rev, params or FaithfulParams())
@@ -186,8 +191,9 @@ def _avr(
     edges_per_rev: int,
     sketch: str | None,
 ) -> Firmware:
-    """The sketch (``sketch``, else the thesis' own) compiled with avr-gcc on an emulated ATmega2560; the
-    thesis sketch has its count compiled in (:data:`SKETCH_EDGES_PER_REV`) and refuses any other."""
+    """The sketch (``sketch``, else the thesis' own) compiled with avr-gcc on an emulated
+    ATmega2560; the thesis sketch has its count compiled in (:data:`SKETCH_EDGES_PER_REV`) and
+    refuses any other."""
     from amr_twin.controllers.avr import AvrFirmware
 
     if sketch is None and edges_per_rev != SKETCH_EDGES_PER_REV:

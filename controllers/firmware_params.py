@@ -23,8 +23,8 @@ class Firmware(Protocol):
     pins: tuple[DriverPins, DriverPins]
 
     def connect(self, bus, link) -> bool:
-        """Attach to the PC side: True if the firmware speaks rosserial on its own (emulated) UART over
-        ``link`` with ``bus`` (the loop then bridges nothing), False if the loop should bridge
+        """Attach to the PC side: True if the firmware speaks rosserial on its own (emulated) UART
+        over ``link`` with ``bus`` (the loop then bridges nothing), False if the loop should bridge
         ``wheel_Command`` to :meth:`on_wheel_command` and the published speeds itself."""
 
     def start(self) -> None:
@@ -100,13 +100,14 @@ class ImprovedParams:
     publish_mean: bool = (
         True  # wheelN_Vel is the mean speed since the previous sample (edges counted);
     )
-    # False: the PI's sliding-window estimate at that instant (the former default; the odometry then loses
-    # about an edge per wheel at each start and stop, docs/explanation/umbmark.md)
+    # False: the PI's sliding-window estimate at that instant (the former default; the odometry then
+    # loses about an edge per wheel at each start and stop, docs/explanation/umbmark.md)
     extrapolate_above_rpm: float = (
         15.0  # the mean counts the part of an edge rolled since the last edge
     )
-    # at this per-edge speed or more: braked from 15 RPM a wheel of the twin rolls 43 mm (5 edges) on, so
-    # the edge is sure to come; below, whole edges only (a sample then resolves one edge, 6.7 RPM at 10 Hz)
+    # at this per-edge speed or more: braked from 15 RPM a wheel of the twin rolls 43 mm (5 edges)
+    # on, so the edge is sure to come; below, whole edges only (a sample then resolves one edge, 6.7
+    # RPM at 10 Hz)
     kp: float = 0.5  # proportional gain, RPM of command per RPM of error
     ki: float = 3.0  # integral gain, RPM of command per RPM*s of error, 1/s
     feedforward_gain: float = 0.9  # open-loop command = gain * reference (listing 4.11's bias)
@@ -128,10 +129,12 @@ class AvrParams:
     idle_sleep: bool = (
         True  # rosserial spinOnce() sleeps until the next interrupt when it finds nothing
     )
-    # to read (ros_lib/ArduinoHardware.h); False: busy loop as rosserial_arduino (same results, ~3x slower)
+    # to read (ros_lib/ArduinoHardware.h); False: busy loop as rosserial_arduino (same results, ~3x
+    # slower)
     sync_period_us: int = 1000  # the board is brought up to the loop's time at least this often, us
     board: BoardParams = field(default_factory=BoardParams)  # pins the sketch must use (its wiring)
     serial_pty: str | None = (
         None  # serve USART0 on a pseudo-terminal linked at this path, paced to wall
     )
-    # time, for a rosserial host (controllers/avr_serial_port.py); None: the twin's own PC side is the host
+    # time, for a rosserial host (controllers/avr_serial_port.py); None: the twin's own PC side is
+    # the host

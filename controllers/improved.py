@@ -121,7 +121,8 @@ class ImprovedFirmware:
 
     # -- speed -------------------------------------------------------------------------
     def _edge(self, i: int) -> None:
-        """SC change of wheel ``i`` (ISR): timestamped for the speed, counted for the published mean."""
+        """SC change of wheel ``i`` (ISR): timestamped for the speed, counted for the published
+        mean."""
         self._edges[i].append(self.rt.micros())
         self._count[i] += 1
 

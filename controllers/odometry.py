@@ -1,8 +1,9 @@
 """Wheel odometry node: ``wheel0_Vel``/``wheel1_Vel`` to ``nav_msgs/Odometry`` on ``odom``.
 
 Each wheel's speed estimate is built from the firmware's samples, signed by the ``wheel_Command``
-motion codes (:mod:`amr_twin.controllers.wheel_speed_samples`: what a sample means, ``speed_samples``).
-With ``signed_input=True`` the wheel topics are read as signed RPM and ``wheel_Command`` is ignored;
+motion codes (:mod:`amr_twin.controllers.wheel_speed_samples`: what a sample means,
+``speed_samples``). With ``signed_input=True`` the wheel topics are read as signed RPM and
+``wheel_Command`` is ignored;
 :meth:`WheelOdometry.set_wheel_speeds_rpm` feeds signed speeds directly.
 
 Two poses (REP-105: ``odom -> base_link`` must be continuous): the *smoothed* pose corrects the past
@@ -52,7 +53,8 @@ def _covariance(diagonal: Sequence[float]) -> np.ndarray:
 class WheelOdometry:
     """Dead reckoning from the wheel speeds, published on ``odom`` and tf.
 
-    Args (SI units unless named; in full: docs/explanation/fusion.md#amr_twincontrollersodometrywheelodometry):
+    Args (SI units unless named; in full:
+    docs/explanation/fusion.md#amr_twincontrollersodometrywheelodometry):
         bus, clock: the shared bus and clock.
         wheel_radius_m, wheel_separation_m: nominal geometry (thesis 0.125, listing 4.2's 0.48).
         wheel_radius_multiplier, left_radius_multiplier, right_radius_multiplier,
@@ -243,7 +245,8 @@ class WheelOdometry:
         return vx, w
 
     def update(self) -> None:
-        """Integrate the published pose forward to ``clock.now_us`` (:meth:`PublishedPose.advance`)."""
+        """Integrate the published pose forward to ``clock.now_us``
+        (:meth:`PublishedPose.advance`)."""
         self.published.advance(self.clock.now_us)
 
     def smoothed_pose(self) -> tuple[float, float, float]:
@@ -255,8 +258,8 @@ class WheelOdometry:
     def reset(
         self, x_m: float = 0.0, y_m: float = 0.0, yaw_rad: float = 0.0, standing: bool = False
     ) -> None:
-        """Set the pose in ``odom``: the speeds in force are kept, or, ``standing``, the node starts afresh
-        (both wheels at rest, every earlier sample and command forgotten: a robot reset)."""
+        """Set the pose in ``odom``: the speeds in force are kept, or, ``standing``, the node starts
+        afresh (both wheels at rest, every earlier sample and command forgotten: a robot reset)."""
         self.update()
         now = self.clock.now_us
         rpm = (0.0, 0.0) if standing else self.published.smoothed.speeds_rpm(now)

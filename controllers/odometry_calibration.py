@@ -1,10 +1,10 @@
 """The wheel odometry's calibration file: per-wheel effective radii and the effective wheelbase.
 
 What a UMBmark calibration (Borenstein and Feng, IEEE Trans. Robot. Autom. 12(6), 1996;
-``amr-twin experiment umbmark``) gives the odometry node (:class:`~amr_twin.controllers.odometry.WheelOdometry`):
-the radii it integrates each wheel's speed with and the wheelbase it turns the difference into a
-yaw rate with, in place of the nominal geometry. The YAML (names in the manner of ROS'
-diff_drive_controller, SI units)::
+``amr-twin experiment umbmark``) gives the odometry node
+(:class:`~amr_twin.controllers.odometry.WheelOdometry`): the radii it integrates each wheel's speed
+with and the wheelbase it turns the difference into a yaw rate with, in place of the nominal
+geometry. The YAML (names in the manner of ROS' diff_drive_controller, SI units)::
 
     wheel_odometry:
       left_wheel_radius_m: 0.12493
@@ -12,9 +12,9 @@ diff_drive_controller, SI units)::
       wheel_separation_m: 0.4861
       source: "amr-twin experiment umbmark, seed 0 (E_d 1.00112, E_b 1.0127)"
 
-``amr-twin run --odometry FILE`` and :class:`~amr_twin.assembly.twin.TwinOptions` (``odometry_calibration``)
-take it; :func:`load` refuses a bad file in one line (ValueError), :func:`text` writes one.
-"""
+``amr-twin run --odometry FILE`` and :class:`~amr_twin.assembly.twin.TwinOptions`
+(``odometry_calibration``) take it; :func:`load` refuses a bad file in one line (ValueError),
+:func:`text` writes one."""
 
 from __future__ import annotations
 
@@ -30,7 +30,8 @@ BOUNDS = {
     "right_wheel_radius_m": (0.05, 0.3),
     "wheel_separation_m": (0.2, 1.0),
 }
-"""Allowed values, m (those of ``wheel.radius_m`` and ``wheel.separation_m`` in the parameter schema)."""
+"""Allowed values, m (those of ``wheel.radius_m`` and ``wheel.separation_m`` in the parameter
+schema)."""
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,8 @@ class OdometryCalibration:
     source: str = ""
 
     def multipliers(self, radius_m: float, separation_m: float) -> dict:
-        """The node's keyword arguments that turn the nominal ``radius_m`` / ``separation_m`` into these."""
+        """The node's keyword arguments that turn the nominal ``radius_m`` / ``separation_m`` into
+        these."""
         return {
             "left_radius_multiplier": self.left_wheel_radius_m / radius_m,
             "right_radius_multiplier": self.right_wheel_radius_m / radius_m,
@@ -69,7 +71,8 @@ def load(path: Path | str) -> OdometryCalibration:
     unknown = set(node) - set(FIELDS) - {"source"}
     if unknown:
         raise ValueError(
-            f"--odometry {path}: {KEY}.{sorted(unknown)[0]}: unknown key (allowed: {', '.join(FIELDS)}, source)"
+            f"--odometry {path}: {KEY}.{sorted(unknown)[0]}: unknown key (allowed: "
+            f"{', '.join(FIELDS)}, source)"
         )
     values = {}
     for name in FIELDS:

@@ -82,7 +82,8 @@ class PurePursuit:
         return self.path[i] + self._seg[i] * ((s - self._s0[i]) / self._seg_len[i])
 
     def _project(self, xy: np.ndarray) -> tuple[float, float]:
-        """Arc length and distance of the nearest path point in ``[progress, progress + search]``."""
+        """Arc length and distance of the nearest path point in ``[progress, progress +
+        search]``."""
         lo, hi = self.progress_m, self.progress_m + self.search_m
         n = len(self._seg)
         first = min(max(int(np.searchsorted(self._s0, lo, side="right")) - 1, 0), n - 1)
@@ -104,7 +105,8 @@ class PurePursuit:
         return float(s0[k] + u[k] * length[k]), float(dist[k])
 
     def command(self, x_m: float, y_m: float, yaw_rad: float) -> tuple[float, float, bool]:
-        """Twist for the robot at ``(x_m, y_m, yaw_rad)`` in ``map``: ``(linear_m_s, angular_rad_s, done)``."""
+        """Twist for the robot at ``(x_m, y_m, yaw_rad)`` in ``map``: ``(linear_m_s, angular_rad_s,
+        done)``."""
         if not all(math.isfinite(v) for v in (x_m, y_m, yaw_rad)):
             raise ValueError(f"pose: ({x_m}, {y_m}, {yaw_rad}) must be finite (x_m, y_m, yaw_rad)")
         if self.done:
@@ -204,7 +206,8 @@ class PathFollowerNode:
         self._pub.publish(Twist(Vector3(v, 0.0, 0.0), Vector3(0.0, 0.0, w)))
 
     def history(self) -> dict[str, np.ndarray]:
-        """Commands so far: ``t_s``, ``linear_m_s``, ``angular_rad_s``, ``cross_track_m``, ``progress_m`` (each (K,))."""
+        """Commands so far: ``t_s``, ``linear_m_s``, ``angular_rad_s``, ``cross_track_m``,
+        ``progress_m`` (each (K,))."""
         rows = np.array(self._rows, dtype=float).reshape(-1, 5)
         return dict(
             zip(("t_s", "linear_m_s", "angular_rad_s", "cross_track_m", "progress_m"), rows.T)

@@ -4,7 +4,8 @@ A route is a polyline in the ``map`` frame: the start pose's position, then the
 waypoints. Route files (YAML)::
 
     name: warehouse_60m
-    world: warehouse                     # optional: a world of models/worlds/, or a file beside the route
+    # optional: a world of models/worlds/, or a file beside the route
+    world: warehouse
     start_xy_yaw: [-7.5, 0.0, 0.0]      # x_m, y_m, yaw_rad of base_link at the start
     waypoints_xy_m: [[6.2, 0.0], [6.2, 5.5]]
     max_speed_m_s: 1.0                   # (0, 1]
@@ -148,7 +149,8 @@ def load_route(path: str | Path) -> Route:
 
 
 def _world_of(world: str, route_path: Path) -> str:
-    """A route's ``world``: a name of ``models/worlds/`` as it is, a file resolved beside the route; must exist."""
+    """A route's ``world``: a name of ``models/worlds/`` as it is, a file resolved beside the route;
+    must exist."""
     from amr_twin.model.worlds import world_path
 
     path = world_path(world)
@@ -156,7 +158,8 @@ def _world_of(world: str, route_path: Path) -> str:
         path = path if path.is_absolute() else (route_path.parent / path)
     if not path.is_file():
         raise RouteError(
-            f"route {route_path.name}: world: {world!r} is not a world of models/worlds/ nor a file "
+            f"route {route_path.name}: world: {world!r} is not a world of models/worlds/ nor a "
+            f"file "
             f"({path} does not exist)"
         )
     return world if not Path(world).suffix else str(path)
@@ -168,7 +171,8 @@ def route_length_m(route: Route) -> float:
 
 
 def distance_to_path_m(route: Route, xy_m: np.ndarray) -> np.ndarray:
-    """Distance ``(K,)`` from each point of ``xy_m (K, 2)`` to the nearest point of the route polyline, m."""
+    """Distance ``(K,)`` from each point of ``xy_m (K, 2)`` to the nearest point of the route
+    polyline, m."""
     p = np.atleast_2d(np.asarray(xy_m, dtype=float))[:, None, :]
     path = route.path_xy_m()
     a, ab = path[:-1], np.diff(path, axis=0)
@@ -177,11 +181,11 @@ def distance_to_path_m(route: Route, xy_m: np.ndarray) -> np.ndarray:
 
 
 def check_in_free_space(route: Route, boxes, half_width_m: float, world: str = "") -> None:
-    """Refuse a route the robot cannot drive in its world: a start or waypoint outside the world's extent
-    (the box hull of its geoms at the robot's height), a point where the robot's footprint
+    """Refuse a route the robot cannot drive in its world: a start or waypoint outside the world's
+    extent (the box hull of its geoms at the robot's height), a point where the robot's footprint
     (``half_width_m``) meets a geom, or a path crossing one. ``boxes``: the world's
-    :class:`~amr_twin.model.world_geometry.Footprints`; a world without any (``empty``) has no extent.
-    Raises :class:`RouteError` naming the route, the point and the world.
+    :class:`~amr_twin.model.world_geometry.Footprints`; a world without any (``empty``) has no
+    extent. Raises :class:`RouteError` naming the route, the point and the world.
     """
     from amr_twin.model.world_geometry import distance_to_boxes_m
 
@@ -198,7 +202,8 @@ def check_in_free_space(route: Route, boxes, half_width_m: float, world: str = "
     for name, (x, y) in zip(names, route.path_xy_m()):
         if not (lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1]):
             raise RouteError(
-                f"route {route.name}: {name} ({x:g}, {y:g}) lies outside the world{where}: its walls "
+                f"route {route.name}: {name} ({x:g}, {y:g}) lies outside the world{where}: its "
+                f"walls "
                 f"span x {lo[0]:.1f} to {hi[0]:.1f} m, y {lo[1]:.1f} to {hi[1]:.1f} m"
             )
         gaps = [
@@ -208,7 +213,8 @@ def check_in_free_space(route: Route, boxes, half_width_m: float, world: str = "
         k = int(np.argmin(gaps))
         if gaps[k] < half_width_m:
             raise RouteError(
-                f"route {route.name}: {name} ({x:g}, {y:g}) is {gaps[k]:.2f} m from {boxes.names[k]}"
+                f"route {route.name}: {name} ({x:g}, {y:g}) is {gaps[k]:.2f} m from "
+                f"{boxes.names[k]}"
                 f"{where}; the robot needs {half_width_m:.2f} m (its half width)"
             )
     path = route.path_xy_m()

@@ -1,4 +1,5 @@
-"""High-level wheel commands: ``wheel_Command_Service`` and ``wheel_Command_Client`` (§3.2.2, §4.2.1).
+"""High-level wheel commands: ``wheel_Command_Service`` and ``wheel_Command_Client`` (§3.2.2,
+§4.2.1).
 
 The client converts user-format data (m/s, deg/s, ICC in m) to service-format
 data (motion code and RPM per wheel) as listings 4.4-4.6 do, checks each speed

@@ -1,4 +1,5 @@
-"""Each wheel's speed estimate from the firmware's samples and the node's commands (no bus, no clock).
+"""Each wheel's speed estimate from the firmware's samples and the node's commands (no bus, no
+clock).
 
 A sample is a wheel's speed in RPM on the driver's SC output, which has no direction (§3.2.3): its
 sign is the wheel's last non-zero ``wheel_Command`` motion code. Under a brake (motion 0) the speed
@@ -18,7 +19,8 @@ SPEED_SAMPLES = ("window", "hold")
 SILENCE_KNOT_RATIO = 1.25
 """Ratio of the times since a sample of two knots of the silence bound."""
 SILENCE_KNOTS = 64
-"""Most knots of the silence bound (``rest_rpm`` 0: the bound then holds the last one, ~1e-6 of the speed)."""
+"""Most knots of the silence bound (``rest_rpm`` 0: the bound then holds the last one, ~1e-6 of the
+speed)."""
 
 
 class WheelSpeedSamples:
@@ -37,13 +39,13 @@ class WheelSpeedSamples:
     revolutions_per_sample : float
         Wheel revolutions one sample measures in ``"window"`` mode.
     sample_latency_us, brake_stop_us, start_us, sample_gap_us : int or inf
-        Receipt delay of a sample; time a fast braked wheel takes to stop (twice the time constant of
-        its shorted phases); time a wheel started from rest takes to reach its speed; longest wait of the
-        firmware before it times the next revolution (``inf``: none known, a sample holds until the next).
-        All us.
+        Receipt delay of a sample; time a fast braked wheel takes to stop (twice the time constant
+        of its shorted phases); time a wheel started from rest takes to reach its speed; longest
+        wait of the firmware before it times the next revolution (``inf``: none known, a sample
+        holds until the next). All us.
     brake_friction_rpm_s : float
-        Constant deceleration of a braked wheel besides its shorted phases, RPM/s (0: every ramp lasts
-        ``brake_stop_us``).
+        Constant deceleration of a braked wheel besides its shorted phases, RPM/s (0: every ramp
+        lasts ``brake_stop_us``).
     rest_rpm : float
         Slowest speed a silent wheel is believed to turn at, RPM.
     """
@@ -78,7 +80,8 @@ class WheelSpeedSamples:
         self.reset(now_us)
 
     def reset(self, now_us: int) -> None:
-        """Forget every sample and command: both wheels standing, never commanded, from ``now_us``."""
+        """Forget every sample and command: both wheels standing, never commanded, from
+        ``now_us``."""
         self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
         self._sample_us: list[int | None] = [
             None,
@@ -90,7 +93,8 @@ class WheelSpeedSamples:
         self._motion = [0, 0]
 
     def sample(self, wheel: int, value: float, now_us: int) -> None:
-        """A speed sample of ``wheel`` (0 left, 1 right) received at ``now_us``: RPM, signed or not."""
+        """A speed sample of ``wheel`` (0 left, 1 right) received at ``now_us``: RPM, signed or
+        not."""
         rpm = float(value) if self.signed_input else self._direction[wheel] * abs(float(value))
         profile = self.published.profiles[wheel]
         if profile.assumed_us is not None:  # its own sample replaces a stand-in
@@ -107,8 +111,9 @@ class WheelSpeedSamples:
         last_us = self._sample_us[wheel]
         done = abs(profile.revolutions(t0, known_us)) if rpm and t0 < known_us < t1 else 0.0
         if done > 0.0 if last_us is None else rpm and t0 < known_us < t1 and last_us <= t0:
-            # the revolution began before the node's last knowledge of the wheel (a command, a brake,
-            # the silence bound): keep its count (the SC output counts either way), place the rest after it
+            # the revolution began before the node's last knowledge of the wheel (a command, a
+            # brake, the silence bound): keep its count (the SC output counts either way), place the
+            # rest after it
             mean = min(
                 max(self.revolutions_per_sample - done, 0.0) * 60e6 / (t1 - known_us), MAX_RPM
             )
@@ -143,7 +148,8 @@ class WheelSpeedSamples:
         self._mirror(wheel, now_us)
 
     def command(self, motions: tuple[int, int], rpms: tuple[float, float], now_us: int) -> None:
-        """A ``wheel_Command`` at ``now_us``: both wheels' motion codes (1, -1, 0 brake) and speeds, RPM."""
+        """A ``wheel_Command`` at ``now_us``: both wheels' motion codes (1, -1, 0 brake) and speeds,
+        RPM."""
         self._command_rpm = [abs(float(rpms[0])), abs(float(rpms[1]))]
         started: list[int] = []  # at rest, now commanded to move
         for wheel, motion in enumerate(motions):
@@ -173,7 +179,8 @@ class WheelSpeedSamples:
 
     def brake_us(self, rpm: float) -> int:
         """Length of the linear ramp to rest of a wheel braked at ``rpm``, us: as far as its shorted
-        phases (a speed decaying with ``brake_stop_us / 2``) and ``brake_friction_rpm_s`` take it."""
+        phases (a speed decaying with ``brake_stop_us / 2``) and ``brake_friction_rpm_s`` take
+        it."""
         tau_s, speed, friction = 0.5e-6 * self.brake_stop_us, abs(rpm), self.brake_friction_rpm_s
         if speed == 0.0 or friction == 0.0 or tau_s == 0.0:
             return self.brake_stop_us
@@ -183,7 +190,8 @@ class WheelSpeedSamples:
         return int(round(2e6 * distance / speed))
 
     def restarted(self) -> None:
-        """The profiles were restarted (a pose reset): bound the silence of the moving wheels again."""
+        """The profiles were restarted (a pose reset): bound the silence of the moving wheels
+        again."""
         for wheel in (0, 1):
             if self._motion[wheel] != 0 or self.signed_input:
                 self._silence(wheel)
@@ -191,11 +199,11 @@ class WheelSpeedSamples:
     def _start(self, wheels: list[int], now_us: int) -> None:
         """Wheels at rest commanded to move at ``now_us``: a stand-in each until its next sample.
 
-        Each ramps up over ``start_us`` to its commanded speed, held until one of them has turned what
-        its open measurement window allows (a revolution since half the gap after its newest sample,
-        counted on the profile, or one since now), then ramps down over ``start_us``: no sample by then means
-        slower. The wheels keep the ratio of their commands (no yaw rate from two different bounds).
-        """
+        Each ramps up over ``start_us`` to its commanded speed, held until one of them has turned
+        what its open measurement window allows (a revolution since half the gap after its newest
+        sample, counted on the profile, or one since now), then ramps down over ``start_us``: no
+        sample by then means slower. The wheels keep the ratio of their commands (no yaw rate from
+        two different bounds)."""
         wheels = [w for w in wheels if self._command_rpm[w] > 0.0]
         if self.speed_samples != "window" or self.signed_input or not wheels:
             return
@@ -222,7 +230,8 @@ class WheelSpeedSamples:
             profile.assumed_us = now_us
 
     def _allowed(self, wheel: int, now_us: int) -> float:
-        """Revolutions ``wheel`` can turn from ``now_us`` before its open window must be published."""
+        """Revolutions ``wheel`` can turn from ``now_us`` before its open window must be
+        published."""
         last_us = self._sample_us[wheel]
         if not math.isfinite(self.sample_gap_us):
             return math.inf  # no silence bound: held until the sample
@@ -238,9 +247,9 @@ class WheelSpeedSamples:
         """The other wheel, not measured since this one's window, moves as this one, scaled.
 
         Not measured since its start: scaled by their commands (its first sample comes up to a
-        revolution later). Measured before: scaled by the ratio of their speeds at its newest sample.
-        The two estimates then change at the same instants (no yaw rate from one wheel measured against
-        one held or assumed at rest); its own sample replaces this stand-in.
+        revolution later). Measured before: scaled by the ratio of their speeds at its newest
+        sample. The two estimates then change at the same instants (no yaw rate from one wheel
+        measured against one held or assumed at rest); its own sample replaces this stand-in.
         """
         other = 1 - wheel
         src, dst = self.published.profiles[wheel], self.published.profiles[other]
@@ -291,8 +300,8 @@ class WheelSpeedSamples:
     def _start_ramp(self, wheel: int, t0_us: int, t1_us: int, mean_rpm: float) -> None:
         """The wheel stood at ``t0_us`` and averaged ``mean_rpm`` up to ``t1_us``: a linear start.
 
-        A ramp over ``start_us`` to the speed that gives this mean, held after; if the time is shorter than
-        the ramp, a ramp to twice the mean, on at that rate up to the commanded speed.
+        A ramp over ``start_us`` to the speed that gives this mean, held after; if the time is
+        shorter than the ramp, a ramp to twice the mean, on at that rate up to the commanded speed.
         """
         profile, duration_us = self.published.profiles[wheel], t1_us - t0_us
         profile.cut(t0_us)
@@ -313,11 +322,12 @@ class WheelSpeedSamples:
     def _silence(self, wheel: int) -> None:
         """Assume the wheel's speed after its newest knot from the time since its newest sample.
 
-        A firmware that publishes at least once every ``revolutions_per_sample`` revolutions, a gap of
-        up to ``sample_gap_us`` after each sample, has turned less than that since ``gap`` after its newest
-        sample if no other came: its mean speed since is below ``60 * revolutions_per_sample / (elapsed
-        - gap)`` RPM. The speed in force is held until the next sample is due at that speed, then kept
-        under this bound, and is 0 (at rest) once the bound falls below ``rest_rpm``.
+        A firmware that publishes at least once every ``revolutions_per_sample`` revolutions, a gap
+        of up to ``sample_gap_us`` after each sample, has turned less than that since ``gap`` after
+        its newest sample if no other came: its mean speed since is below ``60 *
+        revolutions_per_sample / (elapsed
+        - gap)`` RPM. The speed in force is held until the next sample is due at that speed, then
+        kept under this bound, and is 0 (at rest) once the bound falls below ``rest_rpm``.
         """
         profile, t_us = self.published.profiles[wheel], self._sample_us[wheel]
         held = profile.last_rpm

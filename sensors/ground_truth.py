@@ -26,7 +26,8 @@ TOPIC = "ground_truth/odom"
 
 
 class GroundTruth:
-    """Publish the true pose of ``physics`` (:class:`~amr_twin.sim.physics.Physics`) every ``1 / rate_hz`` s."""
+    """Publish the true pose of ``physics`` (:class:`~amr_twin.sim.physics.Physics`) every ``1 /
+    rate_hz`` s."""
 
     def __init__(self, physics, clock, bus, rate_hz: float = 50.0):
         if not (math.isfinite(rate_hz) and 0 < rate_hz <= 1000):

@@ -172,7 +172,8 @@ class HallSensors:
         return edge_t[order], wheel[order].astype(np.int64)
 
     def edges_from_samples(self, ts: list[int], rows: list[list[float]]) -> list[tuple[int, int]]:
-        """SC edges from sparse samples of angle and speed (cubic Hermite in between): sorted ``(t_us, wheel)`` edges.
+        """SC edges from sparse samples of angle and speed (cubic Hermite in between): sorted
+        ``(t_us, wheel)`` edges.
 
         Same edges as :meth:`edges` on the densely interpolated trajectory, but each crossing
         time is solved on the cubic directly, so the cost grows with the number of edges, not of
@@ -183,8 +184,8 @@ class HallSensors:
         A chunk holds a few samples and a few edges, where numpy's per-call cost
         would dominate (``min``/``max`` of two floats are written as conditional
         expressions: same results, a third of the cost); the crossing loop runs in C
-        when the helper is built (same edges), here otherwise or with jitter or glitches. Intervals where a wheel's
-        speed changes sign (it may cross a boundary twice) are first split into 8
+        when the helper is built (same edges), here otherwise or with jitter or glitches. Intervals
+        where a wheel's speed changes sign (it may cross a boundary twice) are first split into 8
         sub-intervals.
         """
         nw = self.n_wheels

@@ -1,4 +1,5 @@
-"""SC edge times inside a chunk of sampled wheel angles and speeds: the numerics of the hall sensors.
+"""SC edge times inside a chunk of sampled wheel angles and speeds: the numerics of the hall
+sensors.
 
 Between two samples the wheel angle follows the cubic Hermite curve through the
 angles and speeds; each lattice crossing is solved on it by Newton's method
@@ -26,7 +27,8 @@ MAX_EDGES = 4096
 
 
 class EdgeKernel:
-    """The C crossing loop for ``n_wheels`` wheels with hall ``offsets_rad`` (n_wheels, 3) and ``pitch_rad``."""
+    """The C crossing loop for ``n_wheels`` wheels with hall ``offsets_rad`` (n_wheels, 3) and
+    ``pitch_rad``."""
 
     def __init__(
         self, lib: ctypes.PyDLL, offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float
@@ -59,11 +61,13 @@ class EdgeKernel:
         self, ts: list[int], rows: list[list[float]], stuck: list[list[bool]], count: np.ndarray
     ) -> list[tuple[int, int]] | None:
         """``(t_us, wheel)`` edges in the order wheel, sensor, interval, crossing (not sorted), from
-        the toggle counts ``count`` (n_wheels, 3), the free sensors' final ones written back; None beyond
-        :data:`MAX_EDGES` edges. ``rows`` as :meth:`amr_twin.sensors.hall.HallSensors.edges_from_samples`
-        takes them; a chunk where a speed changes sign is resampled first (:func:`split_trajectory`),
-        as there. The samples go to C as flat arrays of the angles and speeds only (``array``:
-        a third of the cost of numpy's conversion of nested lists)."""
+        the toggle counts ``count`` (n_wheels, 3), the free sensors' final ones written back; None
+        beyond
+        :data:`MAX_EDGES` edges. ``rows`` as
+        :meth:`amr_twin.sensors.hall.HallSensors.edges_from_samples` takes them; a chunk where a
+        speed changes sign is resampled first (:func:`split_trajectory`), as there. The samples go
+        to C as flat arrays of the angles and speeds only (``array``: a third of the cost of numpy's
+        conversion of nested lists)."""
         nw = self.n_wheels
         ncol = 2 * nw
         t = array("q", ts)
@@ -112,7 +116,8 @@ class EdgeKernel:
 def edge_kernel(
     offsets_rad: np.ndarray, pitch_rad: float, half_band_rad: float = 0.0, native: bool = True
 ) -> tuple[EdgeKernel | None, str]:
-    """``(kernel, engine)``: the C crossing loop (None without the helper) and ``"C"`` or ``"Python (<why>)"``."""
+    """``(kernel, engine)``: the C crossing loop (None without the helper) and ``"C"`` or ``"Python
+    (<why>)"``."""
     lib, engine = open_helper(C_SOURCE, native)
     return (
         EdgeKernel(lib, offsets_rad, pitch_rad, half_band_rad) if lib is not None else None

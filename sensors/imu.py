@@ -182,7 +182,8 @@ class ImuSensor:
         return self.errors.corrupt_batch(true)
 
     def sample(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One corrupted sample (accel, gyro, mag) of ``MjData`` now, advancing the error state by one period."""
+        """One corrupted sample (accel, gyro, mag) of ``MjData`` now, advancing the error state by
+        one period."""
         y = self.corrupt_batch(self._true9()[None, :])[0]
         return y[0:3], y[3:6], y[6:9]
 
@@ -234,8 +235,9 @@ class ImuSensor:
         """Publish the readings ``a`` (accel, gyro, mag: 9 values) stamped now."""
         stamp = Time.from_us(self.clock.now_us)
         seq = self.seq = self.seq + 1
-        # positional fields (ROS order): header, orientation, covariances and vectors; the covariance
-        # arrays are shared, read-only (one tuple read: this runs at 100 Hz on cold caches)
+        # positional fields (ROS order): header, orientation, covariances and vectors; the
+        # covariance arrays are shared, read-only (one tuple read: this runs at 100 Hz on cold
+        # caches)
         publish, frame, orientation_cov, gyro_cov, accel_cov, mag_cov = self._fast
         publish(
             "imu/data_raw",

@@ -1,4 +1,5 @@
-"""Error model of the Adafruit 9-DOF's three sensors: turn-on bias, scale, random walk, noise, limits.
+"""Error model of the Adafruit 9-DOF's three sensors: turn-on bias, scale, random walk, noise,
+limits.
 
 Each axis is corrupted as (:func:`corrupt`, module :mod:`amr_twin.sensors.imu`)::
 
@@ -138,7 +139,8 @@ register(C_SOURCE, imu_axes=_Axes)
 
 
 class ErrorStream:
-    """The error state of the nine axes (accel, gyro, mag) and the corruption of consecutive samples.
+    """The error state of the nine axes (accel, gyro, mag) and the corruption of consecutive
+    samples.
 
     Parameters
     ----------
@@ -208,7 +210,8 @@ class ErrorStream:
         self.corrupt_batch = corrupt_c
 
     def corrupt_python(self, true: np.ndarray) -> np.ndarray:
-        """Readings (n, 9) of the true values ``true`` (n, 9) of ``n`` consecutive samples (SI units).
+        """Readings (n, 9) of the true values ``true`` (n, 9) of ``n`` consecutive samples (SI
+        units).
 
         Per sample the random walk, then noise, scale, clip and quantisation, as
         :func:`corrupt`; advances the error state by ``n`` periods.
@@ -219,7 +222,8 @@ class ErrorStream:
         return np.where(self._quantised, np.round(y * self._inv_res) * self._res, y)
 
     def _errors(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """The biases (n, 9) and white noise (n, 9) of the next ``n`` samples; advances :attr:`bias`.
+        """The biases (n, 9) and white noise (n, 9) of the next ``n`` samples; advances
+        :attr:`bias`.
 
         Drawn ahead, :data:`ERROR_BLOCK` samples at a time (18 standard normals per sample:
         9 for the walk, then 9 for the noise), the walk as a running sum from the bias of the

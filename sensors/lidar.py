@@ -245,7 +245,8 @@ class Lidar:
             self._poses.keep_from(int(self.beam_t_us[self.n_beams - 1 - self._next]))
 
     def cast(self, start: int, stop: int, at_own_instants: bool = True) -> None:
-        """Cast beams ``start:stop`` (one call of the kernels' cast, a second ``mj_multiRay`` with a payload).
+        """Cast beams ``start:stop`` (one call of the kernels' cast, a second ``mj_multiRay`` with a
+        payload).
 
         With ``at_own_instants`` each beam is cast from the laser position and
         along its direction at its own instant ``beam_t_us[i]`` (module docstring;

@@ -26,21 +26,24 @@ SEEN_GROUPS = (0, 4)
 
 
 def scan_timing(cfg: LidarCfg) -> tuple[int, int, int]:
-    """``(n_beams, beam_dt_us, scan_us)``: beams per rotation, time between beams and per rotation, us."""
+    """``(n_beams, beam_dt_us, scan_us)``: beams per rotation, time between beams and per rotation,
+    us."""
     n_beams = int(round(cfg.sample_rate_hz / cfg.scan_rate_hz))
     beam_dt_us = US // cfg.sample_rate_hz
     return n_beams, beam_dt_us, n_beams * beam_dt_us
 
 
 def beam_angles_rad(n_beams: int) -> tuple[float, float, np.ndarray]:
-    """``(angle_min, angle_increment, angles)`` of ``n_beams`` beams over a turn, rad; angles shape (n_beams,)."""
+    """``(angle_min, angle_increment, angles)`` of ``n_beams`` beams over a turn, rad; angles shape
+    (n_beams,)."""
     angle_increment = 2 * math.pi / n_beams
     angle_min = -math.pi
     return angle_min, angle_increment, angle_min + angle_increment * np.arange(n_beams)
 
 
 def beam_times_s(scan) -> np.ndarray:
-    """Acquisition time of every beam of a ``LaserScan``, s, shape (n,): ``stamp + i * time_increment``."""
+    """Acquisition time of every beam of a ``LaserScan``, s, shape (n,): ``stamp + i *
+    time_increment``."""
     return scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(scan.ranges))
 
 
@@ -88,7 +91,8 @@ def group_masks(
 
 
 class PoseSamples(GridRows):
-    """Laser pose samples: rows of ``t_us``, position (3, m), laser x axis and y axis in the world (3 + 3).
+    """Laser pose samples: rows of ``t_us``, position (3, m), laser x axis and y axis in the world
+    (3 + 3).
 
     A :class:`~amr_twin.sim.grid_steps.GridRows` of the laser site's ``site_xpos`` and
     ``site_xmat`` (``data``, ``site_id``) every ``period_us``: kept by the loop's grid (in C,
@@ -133,7 +137,8 @@ class PoseSamples(GridRows):
 
 
 def interpolate_poses(rows: np.ndarray, n: int, t_us: np.ndarray) -> np.ndarray:
-    """Poses (k, 9) at the instants ``t_us`` (k,) from the first ``n`` sample ``rows`` of :class:`PoseSamples`.
+    """Poses (k, 9) at the instants ``t_us`` (k,) from the first ``n`` sample ``rows`` of
+    :class:`PoseSamples`.
 
     Linear between the two samples around each instant, held outside them (the first
     row alone when ``n < 2``): position (m), laser x axis, laser y axis.
@@ -149,7 +154,8 @@ def interpolate_poses(rows: np.ndarray, n: int, t_us: np.ndarray) -> np.ndarray:
 
 
 def world_directions(pose: np.ndarray, lx: np.ndarray, ly: np.ndarray) -> np.ndarray:
-    """Unit beam directions in the world (k, 3) from laser poses (k, 9) and laser-frame components (k, 1) x 2."""
+    """Unit beam directions in the world (k, 3) from laser poses (k, 9) and laser-frame components
+    (k, 1) x 2."""
     u = pose[:, 3:6] * lx + pose[:, 6:9] * ly  # R l with l_z = 0
     u /= np.sqrt(u[:, 0] * u[:, 0] + u[:, 1] * u[:, 1] + u[:, 2] * u[:, 2])[
         :, None
@@ -184,7 +190,8 @@ def noisy_ranges(
 def quantised_ranges(
     dist: np.ndarray, geomid: np.ndarray, z: np.ndarray, cfg: LidarCfg
 ) -> np.ndarray:
-    """:func:`noisy_ranges` with the ``n`` standard normals ``z`` (n,) given: ranges (n,) float32, m."""
+    """:func:`noisy_ranges` with the ``n`` standard normals ``z`` (n,) given: ranges (n,) float32,
+    m."""
     sigma = np.maximum(cfg.range_noise_floor_m, cfg.range_noise_frac * dist)
     r = dist + sigma * z
     if cfg.range_resolution_m > 0:

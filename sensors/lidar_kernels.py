@@ -22,13 +22,15 @@ PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("lidar_beams.c")
 CUTOFF_M = 1e6
-"""Culling distance passed to ``mj_multiRay``: effectively none (ranges are clamped by the noise model)."""
+"""Culling distance passed to ``mj_multiRay``: effectively none (ranges are clamped by the noise
+model)."""
 
 _P = ctypes.c_void_p
 
 
 class PythonBeamKernels:
-    """The numpy twin of :class:`BeamKernels` (no compiler, ``AMR_TWIN_NATIVE=0``, ``native=False``)."""
+    """The numpy twin of :class:`BeamKernels` (no compiler, ``AMR_TWIN_NATIVE=0``,
+    ``native=False``)."""
 
     def __init__(self, n_beams: int, cfg: LidarCfg, why: str = "native=False"):
         self.cfg = cfg
@@ -50,8 +52,9 @@ class PythonBeamKernels:
     ) -> None:
         m, d, _site, groups = self._bound
         u, origin = self.geometry(t_us, lx, ly, rows, npose)
-        # one mj_multiRay per run of beams with the same origin (bit for bit: the laser stood still),
-        # mj_ray for a beam alone (~5 us in the aisles world against ~100 us for mj_multiRay of one ray)
+        # one mj_multiRay per run of beams with the same origin (bit for bit: the laser stood
+        # still), mj_ray for a beam alone (~5 us in the aisles world against ~100 us for mj_multiRay
+        # of one ray)
         change = np.flatnonzero(np.any(origin[1:] != origin[:-1], axis=1)) + 1
         normal = self._normal
         for a, b in zip([0, *change.tolist()], [*change.tolist(), len(u)]):
@@ -86,14 +89,15 @@ class PythonBeamKernels:
 
 
 class BeamKernels:
-    """The C helper, with its output buffers for up to ``n_beams`` beams (reused: copy what you keep).
+    """The C helper, with its output buffers for up to ``n_beams`` beams (reused: copy what you
+    keep).
 
     Use :func:`beam_kernels` to get this or, without the helper, its Python twin.
     """
 
     cull = True
-    """Cast through ``lb_rays`` (MuJoCo's ``mju_rayGeom`` behind the helper's cull); False: ``mj_multiRay``
-    (for comparisons: the same bits, slower)."""
+    """Cast through ``lb_rays`` (MuJoCo's ``mju_rayGeom`` behind the helper's cull); False:
+    ``mj_multiRay`` (for comparisons: the same bits, slower)."""
 
     def __init__(self, lib: ctypes.PyDLL, n_beams: int, cfg: LidarCfg):
         self.engine = "C"
@@ -121,7 +125,8 @@ class BeamKernels:
         )
 
     def bind(self, model, data, site: int, groups: np.ndarray) -> None:
-        """Cast in ``model`` and ``data`` from the laser ``site``, seeing the geom ``groups`` (6,) uint8."""
+        """Cast in ``model`` and ``data`` from the laser ``site``, seeing the geom ``groups`` (6,)
+        uint8."""
         self._groups = np.ascontiguousarray(groups, np.uint8)
         caster = self._caster = _Caster()
         caster.multiray = mujoco_address("mj_multiRay")
@@ -163,9 +168,9 @@ class BeamKernels:
     def rays(
         self, origin: np.ndarray, u: np.ndarray, dist: np.ndarray, geomid: np.ndarray
     ) -> np.ndarray:
-        """Cast unit directions ``u`` (k, 3) from ``origin`` (3,), m, as :meth:`cast` does (no instants,
-        no correction): ``dist`` (k,) m, -1 for none, and ``geomid`` (k,) written in place; returns
-        the hit normals (k, 3), a view of a reused buffer."""
+        """Cast unit directions ``u`` (k, 3) from ``origin`` (3,), m, as :meth:`cast` does (no
+        instants, no correction): ``dist`` (k,) m, -1 for none, and ``geomid`` (k,) written in
+        place; returns the hit normals (k, 3), a view of a reused buffer."""
         k = len(u)
         if k > len(self._normal):
             raise ValueError(f"{k} directions: at most n_beams = {len(self._normal)}")
@@ -206,7 +211,8 @@ class BeamKernels:
 
 
 def _check_outputs(dist: np.ndarray, geomid: np.ndarray, k: int) -> None:
-    """``dist`` and ``geomid``, written in place by the helper: C-contiguous float64 and int32 of length ``k``."""
+    """``dist`` and ``geomid``, written in place by the helper: C-contiguous float64 and int32 of
+    length ``k``."""
     if not (
         len(dist) == len(geomid) == k
         and dist.flags.c_contiguous
@@ -215,7 +221,8 @@ def _check_outputs(dist: np.ndarray, geomid: np.ndarray, k: int) -> None:
         and geomid.dtype == np.int32
     ):
         raise ValueError(
-            f"dist, geomid: C-contiguous float64 and int32 arrays of length {k} are written in place"
+            f"dist, geomid: C-contiguous float64 and int32 arrays of length {k} are written in "
+            f"place"
         )
 
 
@@ -242,7 +249,8 @@ register(C_SOURCE, lb_caster=_Caster)
 def beam_kernels(
     n_beams: int, cfg: LidarCfg, native: bool = True
 ) -> BeamKernels | PythonBeamKernels:
-    """The C helper when it builds and loads (and ``native``), else its Python twin; ``.engine`` says which."""
+    """The C helper when it builds and loads (and ``native``), else its Python twin; ``.engine``
+    says which."""
     lib, engine = open_helper(C_SOURCE, native)
     if lib is None:
         return PythonBeamKernels(n_beams, cfg, engine[len("Python (") : -1])

@@ -26,7 +26,8 @@ SUBPROTOCOL = "foxglove.sdk.v1"
 
 
 class FoxgloveClient:
-    """One connection; :attr:`channels` (topic -> advertised channel) and :attr:`services` (name -> service)."""
+    """One connection; :attr:`channels` (topic -> advertised channel) and :attr:`services` (name ->
+    service)."""
 
     def __init__(self, url: str, timeout_s: float = 20.0):
         from websockets.sync.client import connect
@@ -94,7 +95,8 @@ class FoxgloveClient:
             self._responses[call_id] = (frame[13 : 13 + n].decode(), bytes(frame[13 + n :]))
 
     def pump(self, duration_s: float, out: list | None = None, until=None) -> list:
-        """Read frames for ``duration_s`` (or until ``until()`` is true); data messages go to ``out``."""
+        """Read frames for ``duration_s`` (or until ``until()`` is true); data messages go to
+        ``out``."""
         from websockets.exceptions import ConnectionClosed
 
         out = [] if out is None else out
@@ -171,7 +173,8 @@ class FoxgloveClient:
 
 
 def start_cli(args: list[str], amr_twin: str) -> tuple[subprocess.Popen, str]:
-    """Start ``amr-twin ARGS`` (with ``--live --port 0``) and return it with the server's URL from stderr."""
+    """Start ``amr-twin ARGS`` (with ``--live --port 0``) and return it with the server's URL from
+    stderr."""
     proc = subprocess.Popen(
         [amr_twin, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )

@@ -8,8 +8,8 @@ RES = 0.05
 
 
 def room(width_m: float = 12.0, height_m: float = 8.0, walls=()) -> StaticMap:
-    """A closed room ``width_m`` x ``height_m`` (origin at its lower-left corner) with a 0.1 m wall around,
-    and extra walls ``(x0, y0, x1, y1)`` (m) drawn as filled rectangles."""
+    """A closed room ``width_m`` x ``height_m`` (origin at its lower-left corner) with a 0.1 m wall
+    around, and extra walls ``(x0, y0, x1, y1)`` (m) drawn as filled rectangles."""
     cols, rows = int(round(width_m / RES)), int(round(height_m / RES))
     occ = np.zeros((rows, cols), bool)
     occ[:2], occ[-2:], occ[:, :2], occ[:, -2:] = True, True, True, True
@@ -21,14 +21,16 @@ def room(width_m: float = 12.0, height_m: float = 8.0, walls=()) -> StaticMap:
 
 
 def two_corridors() -> StaticMap:
-    """A 12 x 8 m room split by a wall at y = 3.5..4.5 from x = 2 to 10: two 2 m wide corridors joined at both ends."""
+    """A 12 x 8 m room split by a wall at y = 3.5..4.5 from x = 2 to 10: two 2 m wide corridors
+    joined at both ends."""
     return room(
         12.0, 8.0, walls=[(2.0, 3.5, 10.0, 4.5), (2.0, 0.0, 10.0, 1.5), (2.0, 6.5, 10.0, 8.0)]
     )
 
 
 def write_map(folder, name: str, static: StaticMap):
-    """Save ``static`` as a map_server YAML + PGM (0 occupied, 254 free) in ``folder``; its YAML path."""
+    """Save ``static`` as a map_server YAML + PGM (0 occupied, 254 free) in ``folder``; its YAML
+    path."""
     import yaml
 
     from amr_twin.model.worlds import write_pgm
@@ -49,8 +51,9 @@ def write_map(folder, name: str, static: StaticMap):
 
 
 def random_warehouse(seed: int) -> StaticMap:
-    """A warehouse the code has never seen: a 20 x 14 m hall (origin at its centre) with rack rows of
-    random count, length and depth, aisles 2.0 to 2.6 m, cross aisles at both ends, drawn from ``seed``."""
+    """A warehouse the code has never seen: a 20 x 14 m hall (origin at its centre) with rack rows
+    of random count, length and depth, aisles 2.0 to 2.6 m, cross aisles at both ends, drawn from
+    ``seed``."""
     rng = np.random.default_rng(seed)
     walls = []
     n_rows = int(rng.integers(2, 4))

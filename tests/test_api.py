@@ -1,4 +1,5 @@
-"""The public API (amr_twin/__init__.py): at most 20 names, each there, none loaded before it is asked for."""
+"""The public API (amr_twin/__init__.py): at most 20 names, each there, none loaded before it is
+asked for."""
 
 import subprocess
 import sys

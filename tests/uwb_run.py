@@ -1,4 +1,5 @@
-"""The 2 s UWB run that the recording tests write and read back (tests/recording/test_recording.py, test_mcap_rosbags.py).
+"""The 2 s UWB run that the recording tests write and read back (tests/recording/test_recording.py,
+test_mcap_rosbags.py).
 
 The twin drives straight at 0.5 m/s in the empty world with the UWB tag of the
 default configuration (no IMU, no LiDAR), its capture attached, and writes the
@@ -19,7 +20,8 @@ UWB_S = 2.0
 
 
 def record_uwb_run(out_dir: Path, rrd: bool = True, mcap: bool = True):
-    """Run the twin with a UWB tag for :data:`UWB_S` and record it to ``out_dir``/uwb.rrd and uwb.mcap.
+    """Run the twin with a UWB tag for :data:`UWB_S` and record it to ``out_dir``/uwb.rrd and
+    uwb.mcap.
 
     Parameters
     ----------
@@ -31,8 +33,9 @@ def record_uwb_run(out_dir: Path, rrd: bool = True, mcap: bool = True):
     Returns
     -------
     tuple
-        ``(cfg, capture, paths)``: the configuration, the :class:`~amr_twin.recording.rerun_capture.Capture`
-        and ``{"rrd": path, "mcap": path}`` of the files written.
+        ``(cfg, capture, paths)``: the configuration, the
+        :class:`~amr_twin.recording.rerun_capture.Capture` and ``{"rrd": path, "mcap": path}`` of
+        the files written.
     """
     cfg = load_config()
     options = TwinOptions(world="empty")

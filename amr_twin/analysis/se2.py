@@ -18,7 +18,8 @@ def wrap_rad(angle_rad: np.ndarray | float) -> np.ndarray:
 
 
 def compose(a, b) -> np.ndarray:
-    """``a (+) b``: pose(s) ``b`` given in the frame of ``a``, returned in ``a``'s parent frame (broadcast)."""
+    """``a (+) b``: pose(s) ``b`` given in the frame of ``a``, returned in ``a``'s parent frame
+    (broadcast)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     return np.stack(
@@ -32,7 +33,8 @@ def compose(a, b) -> np.ndarray:
 
 
 def between(a, b) -> np.ndarray:
-    """``a^-1 (+) b``: pose(s) of ``b`` in the frame of ``a``, i.e. the motion from ``a`` to ``b`` (broadcast)."""
+    """``a^-1 (+) b``: pose(s) of ``b`` in the frame of ``a``, i.e. the motion from ``a`` to ``b``
+    (broadcast)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]

@@ -18,7 +18,8 @@ import numpy as np
 from amr_twin.analysis import se2
 
 RPE_REL_TOL = 0.1
-"""A pair is kept when its travelled distance is within this fraction of ``rpe_delta_m`` (evo's ``rel_delta_tol``)."""
+"""A pair is kept when its travelled distance is within this fraction of ``rpe_delta_m`` (evo's
+``rel_delta_tol``)."""
 
 
 @dataclass(frozen=True)
@@ -74,7 +75,8 @@ def _checked(name_t: str, t_s, name_pose: str, pose) -> tuple[np.ndarray, np.nda
 
 
 def align_se2(xy_est_m: np.ndarray, xy_true_m: np.ndarray) -> tuple[float, np.ndarray]:
-    """Rotation ``theta_rad`` and translation ``t_m (2,)`` minimising ``sum |R p_est + t - p_true|^2``.
+    """Rotation ``theta_rad`` and translation ``t_m (2,)`` minimising ``sum |R p_est + t -
+    p_true|^2``.
 
     Umeyama (1991) / Horn closed form in 2D, without scale. Inputs are (N, 2), m.
     """
@@ -98,7 +100,8 @@ def _relative(pose: np.ndarray, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarra
 def rpe_pairs(
     pose_true: np.ndarray, rpe_delta_m: float, rel_tol: float = RPE_REL_TOL
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Index pairs ``(i, j)`` of the RPE: for each ``i`` the later ``j`` travelled nearest ``rpe_delta_m``.
+    """Index pairs ``(i, j)`` of the RPE: for each ``i`` the later ``j`` travelled nearest
+    ``rpe_delta_m``.
 
     As ``evo.core.filters.filter_pairs_by_path(..., all_pairs=True)`` with ``tol =
     rel_tol * rpe_delta_m``, vectorised: the distance travelled is non-decreasing,
@@ -125,13 +128,15 @@ def rpe_pairs(
 
 
 def rpe(pose_est: np.ndarray, pose_true: np.ndarray, rpe_delta_m: float) -> tuple[float, float]:
-    """RPE ``(trans_m, rot_deg)`` RMSEs of time-matched ``(N, 3)`` poses (module docstring); NaN if no pair."""
+    """RPE ``(trans_m, rot_deg)`` RMSEs of time-matched ``(N, 3)`` poses (module docstring); NaN if
+    no pair."""
     i, j = rpe_pairs(pose_true, rpe_delta_m)
     if i.size == 0:
         return math.nan, math.nan
     t_true, r_true = _relative(pose_true, i, j)
     t_est, r_est = _relative(pose_est, i, j)
-    # E = rel_true^-1 rel_est has translation R_true^T (t_est - t_true): its norm is |t_est - t_true|
+    # E = rel_true^-1 rel_est has translation R_true^T (t_est - t_true): its norm is |t_est -
+    # t_true|
     err_t = np.hypot(*(t_est - t_true).T)
     err_r = np.abs(se2.wrap_rad(r_est - r_true))
     return float(np.sqrt(np.mean(err_t**2))), float(np.degrees(np.sqrt(np.mean(err_r**2))))

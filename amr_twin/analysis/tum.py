@@ -1,4 +1,5 @@
-"""Planar trajectories as TUM files, the format evo, rpg_trajectory_evaluation and the TUM RGB-D tools read.
+"""Planar trajectories as TUM files, the format evo, rpg_trajectory_evaluation and the TUM RGB-D
+tools read.
 
 A TUM trajectory is a text file with one pose per line::
 
@@ -31,7 +32,8 @@ HEADER = "# timestamp tx ty tz qx qy qz qw\n"
 
 
 def text(t_s: np.ndarray, pose: np.ndarray) -> str:
-    """TUM lines of stamps ``t_s (N,)`` s and planar poses ``pose (N, 3)`` (``[x_m, y_m, yaw_rad]``)."""
+    """TUM lines of stamps ``t_s (N,)`` s and planar poses ``pose (N, 3)`` (``[x_m, y_m,
+    yaw_rad]``)."""
     t = np.asarray(t_s, dtype=float).ravel()
     p = np.asarray(pose, dtype=float).reshape(-1, 3)
     if p.shape[0] != t.shape[0]:
@@ -64,7 +66,8 @@ def write(path: Path, t_s: np.ndarray, pose: np.ndarray) -> None:
 
 
 def read(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Stamps ``(N,)`` s and planar poses ``(N, 3)`` of a TUM file (yaw from the quaternion about z)."""
+    """Stamps ``(N,)`` s and planar poses ``(N, 3)`` of a TUM file (yaw from the quaternion about
+    z)."""
     rows = np.loadtxt(path, comments="#", ndmin=2)
     if rows.shape[1] != 8:
         raise ValueError(

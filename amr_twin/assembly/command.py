@@ -49,7 +49,8 @@ class Command:
 
     @classmethod
     def parse(cls, text: str, what: str = "command") -> "Command":
-        """``linear:V``, ``angular:DEG_S:ICC_M``, ``motor:WHEEL:V`` (signed), ``motor:WHEEL:DIR:V`` or ``stop``.
+        """``linear:V``, ``angular:DEG_S:ICC_M``, ``motor:WHEEL:V`` (signed), ``motor:WHEEL:DIR:V``
+        or ``stop``.
 
         The form used by ``amr-twin sweep --commands`` and the ``command`` column of a
         calibration log (m/s, deg/s, m). ``what`` names the input in the error message.
@@ -91,8 +92,8 @@ class Command:
         return client.stop()
 
     def dry_run(self, cfg: TwinConfig):
-        """Send the command to a client of its own, with no twin (its conversions and range checks only):
-        the client after the call (``last_request``, ``last_error``)."""
+        """Send the command to a client of its own, with no twin (its conversions and range checks
+        only): the client after the call (``last_request``, ``last_error``)."""
         from amr_twin.controllers.wheel_command import WheelCommandClient, WheelCommandService
         from amr_twin.ros.bus import Bus
         from amr_twin.base.clock import VirtualClock

@@ -79,8 +79,9 @@ def parse_step(index: int, step) -> tuple[float, Command]:
 
 @dataclass(frozen=True)
 class Mission:
-    """A validated mission: its length, its timed commands and its fault specifications; or its goals
-    ``(x_m, y_m, yaw_rad or None)`` with the navigation's ``map``, ``localisation`` and ``controller``."""
+    """A validated mission: its length, its timed commands and its fault specifications; or its
+    goals ``(x_m, y_m, yaw_rad or None)`` with the navigation's ``map``, ``localisation`` and
+    ``controller``."""
 
     duration_s: float | None
     steps: list[tuple[float, Command]]
@@ -94,7 +95,8 @@ NAV_KEYS = ("map", "localisation", "controller")
 
 
 def parse_goal(where: str, goal) -> tuple[float, float, float | None]:
-    """``[x_m, y_m]``, ``[x_m, y_m, yaw_deg]`` or ``{x_m, y_m, yaw_deg}`` to ``(x_m, y_m, yaw_rad or None)``."""
+    """``[x_m, y_m]``, ``[x_m, y_m, yaw_deg]`` or ``{x_m, y_m, yaw_deg}`` to ``(x_m, y_m, yaw_rad or
+    None)``."""
     if isinstance(goal, dict):
         unknown = [k for k in goal if k not in ("x_m", "y_m", "yaw_deg")]
         if unknown or "x_m" not in goal or "y_m" not in goal:
@@ -140,7 +142,8 @@ def _goals_plan(tree: dict) -> Mission:
 
 
 def parse_mission(tree) -> tuple[float, list[tuple[float, Command]]]:
-    """A loaded mission mapping to ``(duration_s, [(t_s, Command), ...])`` (see :func:`parse_mission_plan`)."""
+    """A loaded mission mapping to ``(duration_s, [(t_s, Command), ...])`` (see
+    :func:`parse_mission_plan`)."""
     plan = parse_mission_plan(tree)
     return plan.duration_s, plan.steps
 

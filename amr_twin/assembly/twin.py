@@ -1,4 +1,5 @@
-"""The twin assembled: the simulation loop with its physics, plant, hall sensors, firmware and PC-side nodes on one clock.
+"""The twin assembled: the simulation loop with its physics, plant, hall sensors, firmware and
+PC-side nodes on one clock.
 
 Reasons and measurements: docs/explanation/architecture.md#amr_twinassemblytwin."""
 
@@ -43,7 +44,8 @@ class TwinOptions:
         0.0,
         0.0,
     )  # x_m, y_m, yaw_rad; None: the world's
-    # own start (amr_twin.model.worlds.default_start: the warehouse's is the west end of its central aisle; the CLI's default)
+    # own start (amr_twin.model.worlds.default_start: the warehouse's is the west end of its central
+    # aisle; the CLI's default)
     settle_s: float = 0.5
     record_every_steps: int = (
         10  # time series at 100 Hz with 1 ms steps (steps of sim.timestep_s: twice as
@@ -66,12 +68,15 @@ class TwinOptions:
     )
     # point): it only publishes, so the drive is the same to the bit without it
     faults: tuple = ()  # amr_twin.sim.faults.Fault items, injected at their times
-    obstacles: tuple = ()  # amr_twin.model.worlds.Obstacle boxes added to the world (unmapped: no map holds them)
+    # amr_twin.model.worlds.Obstacle boxes added to the world (unmapped: no map holds them)
+    obstacles: tuple = ()
     visuals: bool = (
         True  # the robot's visual geoms in the model; off for runs nothing draws (no .rrd, no live
     )
-    # view): they collide with nothing and weigh nothing, so the dynamics are the same to the bit, ~15 % cheaper
-    actors: tuple = ()  # amr_twin.model.actors.Actor items: people and pallet jacks moved on the grid
+    # view): they collide with nothing and weigh nothing, so the dynamics are the same to the bit,
+    # ~15 % cheaper
+    # amr_twin.model.actors.Actor items: people and pallet jacks moved on the grid
+    actors: tuple = ()
     # (amr_twin.sim.actors), their true poses on actors/poses
     firmware_params: object = field(default=None, compare=False)
     odometry_calibration: object = (
@@ -87,8 +92,8 @@ class TwinOptions:
 
 
 PLACED_SIGMA = 1e-4
-"""Standard deviation of the pose a reset places the robot at, told to an EKF (m and rad): exact, but for the
-filter's conditioning."""
+"""Standard deviation of the pose a reset places the robot at, told to an EKF (m and rad): exact,
+but for the filter's conditioning."""
 
 
 class Twin(Hooks):
@@ -98,7 +103,8 @@ class Twin(Hooks):
     ``on_grid``, ``on_grid_rows``, ``on_event``, ``on_actuation``, ``on_message``) and reads
     :attr:`observables`; it does not reach into :attr:`physics`, :attr:`plant`, :attr:`hall`
     or :attr:`firmware` (tests/sim/test_hooks.py). The sensors named in ``options.sensors`` are
-    built from :data:`amr_twin.sensors.catalog.SENSORS` (:mod:`amr_twin.sim.component`): :attr:`sensors`."""
+    built from :data:`amr_twin.sensors.catalog.SENSORS` (:mod:`amr_twin.sim.component`):
+    :attr:`sensors`."""
 
     def __init__(self, cfg: TwinConfig, options: TwinOptions = TwinOptions()):
         from amr_twin.sensors.catalog import SENSORS
@@ -127,7 +133,8 @@ class Twin(Hooks):
             bool(options.actors),
         )
         self.sensors = {name: factory(self._mount, cfg) for name, factory in factories}
-        """The sensors built from ``options.sensors`` and by :meth:`add_sensor`, by name, in that order."""
+        """The sensors built from ``options.sensors`` and by :meth:`add_sensor`, by name, in that
+        order."""
         self._pending: list[tuple[int, int]] = []  # SC edges (t_us, wheel) not yet delivered
         self._next_check_us = int(options.check_every_s * US)
         for sampler in self.samplers:
@@ -153,7 +160,8 @@ class Twin(Hooks):
         self.actuation.apply(0)
 
     def _build_physics(self, cfg: TwinConfig, options: TwinOptions) -> None:
-        """The robot in its world at its start pose, settled; the floor's friction field; the timestep."""
+        """The robot in its world at its start pose, settled; the floor's friction field; the
+        timestep."""
         from amr_twin.model.worlds import default_start
 
         start = (
@@ -184,8 +192,8 @@ class Twin(Hooks):
             physics.positions()
         )  # the robot settled at its start: how it stands after a teleport
         self.floor = None
-        """The floor's friction field of this run (:mod:`amr_twin.sim.floor_friction`), drawn from the
-        seed with ``sim.floor_friction_field`` and the brush tyres; None otherwise."""
+        """The floor's friction field of this run (:mod:`amr_twin.sim.floor_friction`), drawn from
+        the seed with ``sim.floor_friction_field`` and the brush tyres; None otherwise."""
         if cfg.sim.floor_friction_field and physics.tyres_engine is not None:
             from amr_twin.sim.floor_friction import draw
 
@@ -194,15 +202,16 @@ class Twin(Hooks):
         self.urdf = urdf
         """The robot description as built (``/robot_description`` of a recording)."""
         self.tyre_timestep = tyre_timestep(cfg)
-        """The brush tyres' guard (:mod:`amr_twin.model.tyre_stability`): the timestep the model was built
-        with, halved from ``sim.timestep_s`` when the tyres' explicit states needed it (said on stderr)."""
+        """The brush tyres' guard (:mod:`amr_twin.model.tyre_stability`): the timestep the model was
+        built with, halved from ``sim.timestep_s`` when the tyres' explicit states needed it (said
+        on stderr)."""
         announce(self.tyre_timestep)
         self.dt_us = int(round(self.physics.timestep_s * US))
         self.t_phys_us = 0
 
     def _build_drive(self, cfg: TwinConfig, options: TwinOptions) -> None:
-        """The plant, its hall sensors, the firmware behind its rosserial link and the PC side: the wheel
-        command service and client, the odometry node."""
+        """The plant, its hall sensors, the firmware behind its rosserial link and the PC side: the
+        wheel command service and client, the odometry node."""
         self.link = RosserialLink(
             self.clock,
             extra_latency_us=options.rosserial_extra_latency_us,
@@ -253,14 +262,16 @@ class Twin(Hooks):
         )
 
     def _build_loop(self, cfg: TwinConfig, options: TwinOptions) -> None:
-        """The record grid and the loop's own grid samplers, in the order they run: the rolling resistance
-        from the present loads, the battery's accounting, the actors, the collision monitor (the sensors'
-        come after them: the ``on_grid`` hook, amr_twin/sim/hooks.py); the actuation and the observables."""
+        """The record grid and the loop's own grid samplers, in the order they run: the rolling
+        resistance from the present loads, the battery's accounting, the actors, the collision
+        monitor (the sensors' come after them: the ``on_grid`` hook, amr_twin/sim/hooks.py); the
+        actuation and the observables."""
         self.grid_every = (
             max(1, int(options.record_every_steps)) * self.tyre_timestep.steps_per_configured_step
         )
-        """Physics steps between two instants of the record grid (the ``on_grid`` hook's): ``record_every_steps``
-        of ``sim.timestep_s``, the same instants when the tyres' guard halved the timestep."""
+        """Physics steps between two instants of the record grid (the ``on_grid`` hook's):
+        ``record_every_steps`` of ``sim.timestep_s``, the same instants when the tyres' guard halved
+        the timestep."""
         self.grid_us = self.dt_us * self.grid_every
         self.rolling = RollingResistance(self.physics, cfg)
         self.on_grid(self.rolling.update)
@@ -273,10 +284,12 @@ class Twin(Hooks):
         self.observables = Observables(
             self.physics, self._grid, self.actuation, self.plant.battery, self.collisions
         )
-        """What the twin shows downstream of its loop (:class:`~amr_twin.sim.observables.Observables`)."""
+        """What the twin shows downstream of its loop
+        (:class:`~amr_twin.sim.observables.Observables`)."""
         self.halted = False
         self.stopped = False
-        """:meth:`stop` was called: :meth:`advance` returns at once (a run ended from outside, e.g. a signal)."""
+        """:meth:`stop` was called: :meth:`advance` returns at once (a run ended from outside, e.g.
+        a signal)."""
         self.actors = None
         """The actors' motion (:class:`amr_twin.sim.actors.ActorMotion`), None without actors."""
         if options.actors:
@@ -288,9 +301,9 @@ class Twin(Hooks):
         self.on_grid(self.collisions)
 
     def add_sensor(self, name: str):
-        """Build the sensor ``name`` of :data:`~amr_twin.sensors.catalog.SENSORS` on the twin as it is now; it
-        samples from the present instant on (its grid samplers run once now). Returns the sensor; ValueError
-        (one line) for an unknown name or one the twin has already."""
+        """Build the sensor ``name`` of :data:`~amr_twin.sensors.catalog.SENSORS` on the twin as it
+        is now; it samples from the present instant on (its grid samplers run once now). Returns the
+        sensor; ValueError (one line) for an unknown name or one the twin has already."""
         from amr_twin.sensors.catalog import SENSORS
 
         if name in self.sensors:
@@ -349,14 +362,15 @@ class Twin(Hooks):
                 fn(self.t_phys_us)
 
     def stop(self) -> None:
-        """End the run at the next event (safe from a signal handler): :meth:`advance` returns from then on."""
+        """End the run at the next event (safe from a signal handler): :meth:`advance` returns from
+        then on."""
         self.stopped = True
 
     # -- the simulator's interface (amr_twin/ros1/sim_services.py) --------------------------
     def set_robot_pose(self, x_m: float, y_m: float, yaw_rad: float) -> None:
         """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame) at rest
-        (:meth:`~amr_twin.sim.physics.Physics.place_robot`); ValueError (one line), the robot left where it
-        was, where it would overlap the world."""
+        (:meth:`~amr_twin.sim.physics.Physics.place_robot`); ValueError (one line), the robot left
+        where it was, where it would overlap the world."""
         from amr_twin.sim.start_pose import StartPoseError, check_start
 
         before = self.physics.place_robot(x_m, y_m, yaw_rad, self._rest)
@@ -373,9 +387,10 @@ class Twin(Hooks):
         self.set_robot_pose(*self.start_xy_yaw)
 
     def reset_simulation(self) -> None:
-        """:meth:`reset_world`, then the robot's own state: the wheels braked (a stop through the client, so the
-        firmware's loop is told as by the menu), the odometry at the origin of ``odom``, standing, and an EKF (the
-        navigation stack's) told on the bus that the robot is at its start pose. Time runs on."""
+        """:meth:`reset_world`, then the robot's own state: the wheels braked (a stop through the
+        client, so the firmware's loop is told as by the menu), the odometry at the origin of
+        ``odom``, standing, and an EKF (the navigation stack's) told on the bus that the robot is at
+        its start pose. Time runs on."""
         self.reset_world()
         self.client.stop()
         if self.odometry is not None:
@@ -384,7 +399,8 @@ class Twin(Hooks):
             self._publish_placed_pose()
 
     def _publish_placed_pose(self) -> None:
-        """The start pose, known to within :data:`PLACED_SIGMA`, on the EKF's pose input (``map_match/pose``)."""
+        """The start pose, known to within :data:`PLACED_SIGMA`, on the EKF's pose input
+        (``map_match/pose``)."""
         import numpy as np
 
         from amr_twin.estimation.ekf import POSE_TOPIC
@@ -411,7 +427,8 @@ class Twin(Hooks):
         )
 
     def _step_physics(self, nstep: int) -> None:
-        """Step ``nstep`` times, sampling the loop sensors on the record grid (:class:`~amr_twin.sim.grid_loop.GridLoop`).
+        """Step ``nstep`` times, sampling the loop sensors on the record grid
+        (:class:`~amr_twin.sim.grid_loop.GridLoop`).
 
         Hall edge times come from a cubic Hermite interpolation of the sampled
         wheel angles and speeds (exact for constant acceleration; the actuation
@@ -430,7 +447,8 @@ class Twin(Hooks):
             self._pending.extend(edges)
 
     def _deliver_edges(self, t_until_us: int) -> None:
-        """Deliver the pending SC edges up to ``t_until_us`` to the firmware's ISR, in time order."""
+        """Deliver the pending SC edges up to ``t_until_us`` to the firmware's ISR, in time
+        order."""
         pending = self._pending
         if not pending or pending[0][0] > t_until_us:
             return

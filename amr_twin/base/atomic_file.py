@@ -38,11 +38,13 @@ def temporary_name(path: str | Path) -> Path:
 
 
 class WriteError(OSError):
-    """Writing an output failed (disk full, read-only); ``filename`` is the target, not the temporary."""
+    """Writing an output failed (disk full, read-only); ``filename`` is the target, not the
+    temporary."""
 
 
 def _named(exc: OSError, path: Path) -> WriteError:
-    """The same error as a :class:`WriteError` naming ``path`` (the target); a file too large says the limit."""
+    """The same error as a :class:`WriteError` naming ``path`` (the target); a file too large says
+    the limit."""
     return WriteError(exc.errno, why(exc.errno, exc.strerror or str(exc)), str(path))
 
 

@@ -127,7 +127,10 @@ def _difference(c: Layout, py: Layout) -> str:
         return f"fields in another order: C {c_names}, ctypes {py_names}"
     for (field, c_off, c_len), (_, py_off, py_len) in zip(c_fields, py_fields):
         if (c_off, c_len) != (py_off, py_len):
-            return f"field {field!r} at byte {c_off} of {c_len} in C, at {py_off} of {py_len} in ctypes"
+            return (
+                f"field {field!r} at byte {c_off} of {c_len} in C, at {py_off} of {py_len} in "
+                f"ctypes"
+            )
     if c_size != py_size:
         return f"is {c_size} bytes in C, {py_size} in ctypes"
     return ""

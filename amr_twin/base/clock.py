@@ -137,7 +137,8 @@ class VirtualClock:
         callback: Callable[[], None],
         publishes: Sequence[str] | None = None,
     ) -> EventHandle:
-        """Run ``callback`` at ``first_us`` and then every ``period_us`` until the handle is cancelled.
+        """Run ``callback`` at ``first_us`` and then every ``period_us`` until the handle is
+        cancelled.
 
         Each occurrence is queued as the previous one fires, before its callback runs (see
         :meth:`schedule` for ``publishes``).

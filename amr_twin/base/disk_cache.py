@@ -19,7 +19,8 @@ CACHE_ENV = "AMR_TWIN_CACHE_DIR"
 
 
 def cache_dir(kind: str) -> Path | None:
-    """The folder of one kind of cache entry (``urdf``, ``yaml``), or None when the disk cache is off."""
+    """The folder of one kind of cache entry (``urdf``, ``yaml``), or None when the disk cache is
+    off."""
     configured = os.environ.get(CACHE_ENV)
     if configured is not None:
         return Path(configured) / kind if configured.strip() else None
@@ -38,7 +39,8 @@ def read_entry(path: Path | None) -> bytes | None:
 
 
 def store(path: Path, data: bytes) -> None:
-    """Write a cache entry whole (temporary file, then rename); one that cannot be written is skipped."""
+    """Write a cache entry whole (temporary file, then rename); one that cannot be written is
+    skipped."""
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

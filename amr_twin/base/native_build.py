@@ -60,8 +60,8 @@ def address(array) -> int:
 
 
 def c_array(array, dtype):
-    """``array`` as a C-contiguous numpy array of ``dtype`` for a helper: itself when it already is one
-    (no call into ``numpy.ascontiguousarray``: these run at the sensors' rates)."""
+    """``array`` as a C-contiguous numpy array of ``dtype`` for a helper: itself when it already is
+    one (no call into ``numpy.ascontiguousarray``: these run at the sensors' rates)."""
     if array.dtype == dtype and array.flags.c_contiguous:
         return array
     import numpy as np
@@ -93,7 +93,8 @@ def _mujoco_include() -> tuple[Path, str]:
 
 
 def load_helper(source: Path) -> ctypes.PyDLL | None:
-    """The compiled helper of ``source`` (built if not cached), or None (see :func:`native_status`)."""
+    """The compiled helper of ``source`` (built if not cached), or None (see
+    :func:`native_status`)."""
     name = str(source)
     if name in _loaded:
         return _loaded[name]

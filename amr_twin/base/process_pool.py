@@ -1,4 +1,5 @@
-"""A local pool of warm worker processes (used by :func:`amr_twin.experiments.runner.executor.run_all`).
+"""A local pool of warm worker processes (used by
+:func:`amr_twin.experiments.runner.executor.run_all`).
 
 Workers are spawned (MuJoCo and its threads are never forked), die with their
 parent even when it is killed outright, and run the caller's ``warm`` function as

@@ -6,8 +6,8 @@ part's time exclusive of the wrapped parts it calls, then runs the bench scenari
 (:mod:`amr_twin.bench.twin`) without and with sensors, each run followed by the floor
 (:mod:`amr_twin.bench.physics`). Prints per part the median over the rounds of its CPU ms per
 simulated second and its share of the floor. The wrappers replace methods of the classes for
-the rest of the process: run it in a process of its own. docs/reference/speed.md shows a table it made.
-"""
+the rest of the process: run it in a process of its own. docs/reference/speed.md shows a table it
+made."""
 
 from __future__ import annotations
 

@@ -28,7 +28,8 @@ SUBSCRIBED = (
     "/imu/data_raw",
     "/imu/mag",
 )
-"""The topics the bridge figure's recorder takes (each costs a socket write a message in the twin's process)."""
+"""The topics the bridge figure's recorder takes (each costs a socket write a message in the twin's
+process)."""
 COMMANDS = 40
 """wheel_Command frames written by the serial latency figure's host thread."""
 
@@ -151,8 +152,8 @@ def _bag_messages(path: str) -> int:
 
 
 def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
-    """The figures of the module notes; ``ros1_skipped`` says why when Debian's ROS 1 (or, for the serial
-    figure, the AVR toolchain) is absent."""
+    """The figures of the module notes; ``ros1_skipped`` says why when Debian's ROS 1 (or, for the
+    serial figure, the AVR toolchain) is absent."""
     from amr_twin.controllers.avr_build import missing_tools
     from amr_twin.ros1.installation import missing
     from amr_twin.ros1.master import start_roscore
@@ -198,7 +199,8 @@ def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
             ros1_bridge_us_per_message=statistics.median(
                 (b - p) / r["messages"] * 1e6 for b, p, r in zip(bridged, plain, runs)
             ),
-            ros1_scenario=f"chapter 5 run 3 with sensors, {SIM_S:g} s, full speed, rosbag record of "
+            ros1_scenario=f"chapter 5 run 3 with sensors, {SIM_S:g} s, full speed, rosbag record "
+            f"of "
             f"{' '.join(SUBSCRIBED)}",
         )
         say(f"ROS 1 bridge paced at --rate 1 for {PACED_S:g} s")

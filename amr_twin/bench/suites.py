@@ -16,7 +16,8 @@ except the fusion experiment (one run):
   a 240 s run with sensors (spinning in place in the warehouse), and their ratio;
 - ``fusion_wall_s``: the fusion experiment (wall), with the load average around it all.
 - ``ros1_*``: the ROS 1 path (:mod:`amr_twin.bench.ros1`): the bridge against the same twin
-  without it, the pacing at ``--rate 1`` over 60 s, a ``wheel_Command``'s delay through the board's pseudo-terminal.
+  without it, the pacing at ``--rate 1`` over 60 s, a ``wheel_Command``'s delay through the board's
+  pseudo-terminal.
 """
 
 from __future__ import annotations
@@ -88,7 +89,8 @@ def _child_wall_s(args: list[str], env: dict | None = None) -> float:
 
 
 def startup_figures(repeats: int = REPEATS) -> dict:
-    """``help_cpu_s`` and ``run_1s_cpu_s``: medians of interleaved fresh processes (after a warm-up)."""
+    """``help_cpu_s`` and ``run_1s_cpu_s``: medians of interleaved fresh processes (after a
+    warm-up)."""
     cli = _cli()
     help_args, run_args = (
         [cli, "--help"],
@@ -228,7 +230,8 @@ def rrd_figures(cfg: TwinConfig, repeats: int = REPEATS) -> dict:
 
 
 def ros1_stage(progress=None) -> dict:
-    """The ROS 1 figures (:mod:`amr_twin.bench.ros1`; rospy is imported in its child processes only)."""
+    """The ROS 1 figures (:mod:`amr_twin.bench.ros1`; rospy is imported in its child processes
+    only)."""
     from amr_twin.bench.ros1 import ros1_figures
 
     return ros1_figures(progress=progress)
@@ -258,7 +261,8 @@ def suite_figures(cfg: TwinConfig, jobs: int = 2, progress=None) -> dict:
     fus = fusion.run(cfg, progress=False)
     out.update(fusion_sim_s=round(fus.sim_s, 1), fusion_wall_s=round(time.perf_counter() - t0, 2))
     say(
-        "ROS 1: the bridge against no bridge, --rate 1 for 60 s, the serial port's latency (about 3 min)"
+        "ROS 1: the bridge against no bridge, --rate 1 for 60 s, the serial port's latency "
+        "(about 3 min)"
     )
     out.update(ros1_stage(progress=say))
     out.update(

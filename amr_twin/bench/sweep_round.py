@@ -1,4 +1,5 @@
-"""One round of the sweep figure, in a process of its own: ``python -m amr_twin.bench.sweep_round ROUND.pkl``.
+"""One round of the sweep figure, in a process of its own: ``python -m amr_twin.bench.sweep_round
+ROUND.pkl``.
 
 A user's sweep starts in a fresh process: the model memos of :mod:`amr_twin.model.urdf` and
 :mod:`amr_twin.model.mass` are empty (the disk caches are not), so a round timed in the bench's
@@ -34,7 +35,8 @@ SWEEP = {
 
 
 def sweep_round(cfg, spec: dict = SWEEP) -> dict:
-    """Time the sweep ``spec`` of ``cfg`` and then bare physics of one point of it, CPU s (module notes)."""
+    """Time the sweep ``spec`` of ``cfg`` and then bare physics of one point of it, CPU s (module
+    notes)."""
     from amr_twin.bench.physics import bare_steps_s, timer
     from amr_twin.experiments.payload import point as payload_point, sweep as payload_sweep
     from amr_twin.assembly.twin import Twin, TwinOptions

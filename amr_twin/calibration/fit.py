@@ -71,7 +71,8 @@ class Fit:
             tree.setdefault(section, {})[name] = {
                 "value": round(float(value), 5),
                 "unit": units[key],
-                "source": f"calibrated: against {self.target}, 1 sigma {self.sigma[key]:.2g}, residual "
+                "source": f"calibrated: against {self.target}, 1 sigma {self.sigma[key]:.2g}, "
+                f"residual "
                 f"{self.residual:.3g} ({self.evaluations} evaluations, amr-twin calibrate)",
             }
         return tree
@@ -94,10 +95,12 @@ class Fit:
 
     def text_lines(self, strong: float = 0.9) -> list[str]:
         """The summary a person reads (``amr-twin calibrate`` without ``--json``): chi^2, each value
-        with its 1 sigma, the correlations above ``strong`` in magnitude, each feature against its target."""
+        with its 1 sigma, the correlations above ``strong`` in magnitude, each feature against its
+        target."""
         over = f" over {len(self.features)} targets" if self.features else ""
         lines = [
-            f"calibrated against {self.target}: chi^2 {self.residual:.2f}{over}, {self.evaluations} evaluations",
+            f"calibrated against {self.target}: chi^2 {self.residual:.2f}{over}, "
+            f"{self.evaluations} evaluations",
             "",
             f"{'parameter':28s} {'value':>10s} {'1 sigma':>10s}",
         ]
@@ -119,10 +122,12 @@ class Fit:
         if self.features:
             lines += [
                 "",
-                f"{'feature':28s} {'twin':>10s} {'target':>10s} {'sigma':>8s} {'unit':5s} {'(twin-target)/sigma':>20s}",
+                f"{'feature':28s} {'twin':>10s} {'target':>10s} {'sigma':>8s} {'unit':5s} "
+                f"{'(twin-target)/sigma':>20s}",
             ]
             lines += [
-                f"{f['name']:28s} {_num(f['twin']):>10s} {f['target']:10.4g} {f['sigma']:8.3g} {f['unit']:5s} "
+                f"{f['name']:28s} {_num(f['twin']):>10s} {f['target']:10.4g} {f['sigma']:8.3g} "
+                f"{f['unit']:5s} "
                 f"{_num(f['weighted'], '+.2f'):>20s}"
                 for f in self.features
             ]
@@ -168,7 +173,8 @@ def calibrate(
     per_step = evaluations_per_step(parameters)
     if max_evaluations < per_step:
         raise ValueError(
-            f"max_evaluations {max_evaluations}: at least {per_step} (the starting point and one per "
+            f"max_evaluations {max_evaluations}: at least {per_step} (the starting point and one "
+            f"per "
             f"parameter for the Jacobian)"
         )
     lo, hi = np.array([parameters[k][0] for k in keys]), np.array([parameters[k][1] for k in keys])

@@ -15,7 +15,9 @@ import yaml
 
 from amr_twin.model.config import ConfigError, TwinConfig
 
-HELD = {  # held parameter: forward step of its derivative (a fair part of its spread, above the features' noise)
+# held parameter: forward step of its derivative (a fair part of its spread, above the features'
+# noise)
+HELD = {
     "motor_left.resistance_ohm": 0.03,
     "motor_right.resistance_ohm": 0.03,
     "motor_left.damping_nm_s_rad": 0.004,
@@ -199,9 +201,9 @@ def evaluate(
     ----------
     cfg : the configuration whose fitted values are reported (a fit's result, or the shipped file).
     target : "thesis" or the path of a log (as :func:`amr_twin.calibration.fit.calibrate`).
-    parameters : fitted parameters and their bounds (default :data:`amr_twin.calibration.fit.PARAMETERS`).
-    held : held parameters and their forward steps (default :data:`HELD`).
-    jobs : worker processes for a thesis evaluation's three runs.
+    parameters : fitted parameters and their bounds (default
+    :data:`amr_twin.calibration.fit.PARAMETERS`). held : held parameters and their forward steps
+    (default :data:`HELD`). jobs : worker processes for a thesis evaluation's three runs.
     progress : ``progress(i, n)`` after each evaluation.
     """
     from amr_twin.calibration import fit as cal

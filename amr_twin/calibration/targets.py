@@ -42,7 +42,8 @@ class _RunTargets:
     targets: tuple[Target, ...]
 
 
-THESIS_RUNS = (  # chapter 5 runs 1-6; §5.1.3: delay 0.5 s / rise 1 s above 75 RPM, 0.2 / 0.5 s below
+# chapter 5 runs 1-6; §5.1.3: delay 0.5 s / rise 1 s above 75 RPM, 0.2 / 0.5 s below
+THESIS_RUNS = (
     _RunTargets(
         Command("motor", wheel="left", speed_m_s=1.0),
         (0,),
@@ -180,7 +181,8 @@ def thesis_targets() -> list[Target]:
 
 
 def weighted_residuals(features: dict[str, float], targets: list[Target]) -> np.ndarray:
-    """(len(targets),) ``(twin - target) / sigma``; a missing feature costs :data:`MISSING_PENALTY`."""
+    """(len(targets),) ``(twin - target) / sigma``; a missing feature costs
+    :data:`MISSING_PENALTY`."""
     out = []
     for t in targets:
         v = features.get(t.name, math.nan)

@@ -164,17 +164,20 @@ class ParameterSpace:
                 where = (
                     f"the calibration report {self.calibration_path} does not cover it"
                     if self.calibration_path
-                    else "no calibration report (calibration.yaml beside the parameter file, or --calibration)"
+                    else "no calibration report (calibration.yaml beside the parameter file, or "
+                    "--calibration)"
                 )
                 raise ConfigError(
-                    f"{key}: calibrated, but {where}: amr-twin calibrate --report writes one; or give "
+                    f"{key}: calibrated, but {where}: amr-twin calibrate --report writes one; or "
+                    f"give "
                     "the leaf a range or sigma"
                 )
             fitted = float(self.calibration.values[self.calibration.keys.index(key)])
             if not math.isclose(fitted, s.value, rel_tol=1e-4, abs_tol=1e-9):
                 raise ConfigError(
                     f"{key}: {s.value:g} here but {fitted:g} in the calibration report "
-                    f"{self.calibration_path}: give the report of these values (--calibration FILE, "
+                    f"{self.calibration_path}: give the report of these values (--calibration "
+                    f"FILE, "
                     "from amr-twin calibrate --report) or a range or sigma on the leaf"
                 )
 
@@ -193,7 +196,8 @@ class ParameterSpace:
     def draw(
         self, n: int, seed: int = 0, include: Sequence[str] = PLANT, sampler: str = "lhs"
     ) -> Draws:
-        """``n`` configurations (see the module notes); raises ValueError or ConfigError naming the problem."""
+        """``n`` configurations (see the module notes); raises ValueError or ConfigError naming the
+        problem."""
         from scipy.stats import norm
 
         keys = self.drawn_keys(include)

@@ -1,5 +1,6 @@
-"""``--actor`` and ``--actors-random`` of ``amr-twin run`` (and of its goto and navigation missions):
-the people and pallet jacks that walk the world (amr_twin/model/actors.py), checked in one line each."""
+"""``--actor`` and ``--actors-random`` of ``amr-twin run`` (and of its goto and navigation
+missions): the people and pallet jacks that walk the world (amr_twin/model/actors.py), checked in
+one line each."""
 
 from __future__ import annotations
 
@@ -14,8 +15,8 @@ MAX_ACTORS = 50
 
 
 def checked_actors(opts: RunOptions, mission_actors: tuple, cfg, start) -> tuple:
-    """The mission's actors, ``--actor``'s and ``--actors-random``'s, in that order; a bad one refused
-    in one line (their paths are checked against the world when it is built)."""
+    """The mission's actors, ``--actor``'s and ``--actors-random``'s, in that order; a bad one
+    refused in one line (their paths are checked against the world when it is built)."""
     from amr_twin.model.actors import Actor, ActorError, check_speeds
 
     try:
@@ -28,7 +29,8 @@ def checked_actors(opts: RunOptions, mission_actors: tuple, cfg, start) -> tuple
                 or (flag and not flag.startswith("stop="))
             ):
                 fail(
-                    f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in 1..{MAX_ACTORS}"
+                    f"--actors-random {opts.actors_random!r}: expected N[/stop=M] with N in "
+                    f"1..{MAX_ACTORS}"
                 )
             stop = _stop_distance(opts.actors_random, flag[5:]) if flag else 0.0
             actors += list(_guard(lambda: _random_actors(cfg, opts, int(count), start, stop)))

@@ -1,7 +1,8 @@
-"""``amr-twin experiment chapter5-attainable``: which chapter 5 findings a plant inside its ranges meets.
+"""``amr-twin experiment chapter5-attainable``: which chapter 5 findings a plant inside its ranges
+meets.
 
-The study is :mod:`amr_twin.experiments.chapter5.attainable`; this module checks the options before the
-first simulation, shows progress on stderr and writes the JSON summary atomically.
+The study is :mod:`amr_twin.experiments.chapter5.attainable`; this module checks the options before
+the first simulation, shows progress on stderr and writes the JSON summary atomically.
 """
 
 from __future__ import annotations
@@ -34,7 +35,8 @@ def attainable(
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Draw plants inside the sourced ranges and count where each thesis finding of §5.1.3-5.1.4 holds."""
+    """Draw plants inside the sourced ranges and count where each thesis finding of §5.1.3-5.1.4
+    holds."""
     from amr_twin.experiments.chapter5 import attainable as study
     from amr_twin.experiments.chapter5.spec import AttainableSpec, run_attainable
 

@@ -3,8 +3,8 @@
 Numbers and folders are checked before any model is built: the firmware and
 ``--jobs`` (:func:`amr_twin.base.process_pool.check_jobs`), recording
 folders, every output (:mod:`amr_twin.recording.outputs`), the Dask scheduler. The experiments'
-own rules (durations, runs, seeds, routes, sweep sizes) live in their specs (``experiments/<name>/spec.py``).
-"""
+own rules (durations, runs, seeds, routes, sweep sizes) live in their specs
+(``experiments/<name>/spec.py``)."""
 
 from __future__ import annotations
 
@@ -32,14 +32,16 @@ CPU_S_PER_SIM_S = {
     "umbmark": 0.012,
     "navigation": 0.19,
 }
-"""CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table): a
-100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s on one
-job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark square (no
-sensors, the empty world): 0.73 s of CPU for its 60 simulated s (ten robots, 300 squares). Navigation
-(sensors, EKF + MPPI, the episodes' people and the SLAM map's build): 368 s of CPU for the 32 runs of about 59
-simulated s of ``experiment navigation --episodes 16 --seed 1`` (docs/explanation/navigation.md)."""
+"""CPU seconds per simulated second, as ``amr-twin bench --suites`` measured them (README's table):
+a 100-point sweep of 8 s points took 15.7 to 16.7 s of CPU; chapter 5's 132 simulated s 5.4 to 5.8 s
+on one job; the fusion experiment's 67 s drive, with its estimators, 9.8 to 10.4 s. The UMBmark
+square (no sensors, the empty world): 0.73 s of CPU for its 60 simulated s (ten robots, 300
+squares). Navigation (sensors, EKF + MPPI, the episodes' people and the SLAM map's build): 368 s of
+CPU for the 32 runs of about 59 simulated s of ``experiment navigation --episodes 16 --seed 1``
+(docs/explanation/navigation.md)."""
 AVR_COST = 4.0
-"""How much more the emulated ATmega2560 costs (the bench's avr_ratio, 5.5, against the loop's 1.3)."""
+"""How much more the emulated ATmega2560 costs (the bench's avr_ratio, 5.5, against the loop's
+1.3)."""
 CONFIRM_ABOVE_S = 600.0
 """A run estimated to take longer than this (wall s) starts only with --yes."""
 
@@ -56,8 +58,8 @@ def check_estimate(
     what: str, sim_s: float, kind: str, workers: int, firmware: str, yes: bool, fail
 ) -> float:
     """Estimate the wall time of ``sim_s`` simulated seconds on ``workers`` processes; above
-    :data:`CONFIRM_ABOVE_S` refuse (one line naming the estimate and --yes) unless ``yes``; say it on
-    stderr when above a minute. Returns the estimate, s."""
+    :data:`CONFIRM_ABOVE_S` refuse (one line naming the estimate and --yes) unless ``yes``; say it
+    on stderr when above a minute. Returns the estimate, s."""
     cost = CPU_S_PER_SIM_S[kind] * (AVR_COST if firmware.startswith("avr") else 1.0)
     wall_s = sim_s * cost / max(1, workers)
     text = (
@@ -98,9 +100,10 @@ def check_memory(
     what: str = "the run",
     rerun: bool = False,
 ) -> None:
-    """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`, one per
-    process) exceeds what the machine has available now, or, with the Rerun recording (``rerun``), the
-    address space it reserves, the process' limit (``ulimit -v``); nothing is refused where unknown."""
+    """Refuse (one line) runs whose estimated peak memory (:func:`amr_twin.sim.bounds.memory_mb`,
+    one per process) exceeds what the machine has available now, or, with the Rerun recording
+    (``rerun``), the address space it reserves, the process' limit (``ulimit -v``); nothing is
+    refused where unknown."""
     from amr_twin.sim.bounds import (
         RERUN_ADDRESS_SPACE_MB,
         address_space_mb,
@@ -112,8 +115,10 @@ def check_memory(
     space = memory_mb(duration_s, recorded, sensors) + (RERUN_ADDRESS_SPACE_MB if rerun else 0.0)
     if limit is not None and space > limit:
         fail(
-            f"--duration-s {duration_s:g}{' with --record' if rerun else ''}: {what} would need about "
-            f"{space / 1024:.1f} GB of address space{' (the Rerun recording reserves ~3 GB)' if rerun else ''}; "
+            f"--duration-s {duration_s:g}{' with --record' if rerun else ''}: {what} would need "
+            f"about "
+            f"{space / 1024:.1f} GB of address "
+            f"space{' (the Rerun recording reserves ~3 GB)' if rerun else ''}; "
             "the limit (ulimit -v) is "
             f"{limit / 1024:.1f} GB: raise it, or ask for less (a shorter run, no recording)"
         )
@@ -121,15 +126,18 @@ def check_memory(
     if have is not None and need > have:
         kept = "its messages until they are written" if recorded else "its 100 Hz series"
         fail(
-            f"--duration-s {duration_s:g}: {what} would need about {need / 1024:.1f} GB of memory (it keeps {kept}"
-            f"{f', {processes} processes' if processes > 1 else ''}); {have / 1024:.1f} GB are available: "
+            f"--duration-s {duration_s:g}: {what} would need about {need / 1024:.1f} GB of "
+            f"memory (it keeps {kept}"
+            f"{f', {processes} processes' if processes > 1 else ''}); {have / 1024:.1f} GB are "
+            f"available: "
             "ask for less (a shorter run, fewer --jobs, no recording)"
         )
 
 
 def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
-    """``--executor local|dask``, ``--scheduler`` and the command's ``--scheduler-timeout-s`` (read from its
-    context): dask needs an address, local takes neither (given with it, they were ignored)."""
+    """``--executor local|dask``, ``--scheduler`` and the command's ``--scheduler-timeout-s`` (read
+    from its context): dask needs an address, local takes neither (given with it, they were
+    ignored)."""
     import math
 
     from amr_twin.cli.path_options import get_current_context
@@ -155,7 +163,8 @@ def check_executor(executor: str, scheduler: Optional[str], fail) -> None:
 
 
 def check_record_folder(option: str, folder: Optional[Path], fail, name: str) -> None:
-    """A recording option of a multi-run command takes a folder (one file per run), not a file name."""
+    """A recording option of a multi-run command takes a folder (one file per run), not a file
+    name."""
     if folder is None or folder.is_dir():
         return
     if folder.exists():
@@ -164,7 +173,8 @@ def check_record_folder(option: str, folder: Optional[Path], fail, name: str) ->
         )
     if folder.suffix.lower() in (".rrd", ".mcap"):
         fail(
-            f"{option} {folder}: give a folder, not a file name (one {name} per run is written inside)"
+            f"{option} {folder}: give a folder, not a file name (one {name} per run is written "
+            f"inside)"
         )
 
 

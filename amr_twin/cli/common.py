@@ -1,5 +1,5 @@
-"""What every command group shares: the one-line failure, the parameter file from the options, the error guard,
-the garbage collector's start-up settings.
+"""What every command group shares: the one-line failure, the parameter file from the options, the
+error guard, the garbage collector's start-up settings.
 
 Each command module (main, run, experiment, fusion, menu) imports these from here, so
 that no command module imports another.
@@ -28,7 +28,8 @@ def start_up() -> None:
 def started() -> None:
     """The command's imports are done (its parameters are loaded): the start-up objects are frozen
     out of every later collection and the usual thresholds come back, so that a long sweep frees
-    each point's twin as before (with the start-up thresholds kept, 120 points grew from 78 to 156 MB)."""
+    each point's twin as before (with the start-up thresholds kept, 120 points grew from 78 to 156
+    MB)."""
     gc.freeze()
     gc.set_threshold(*_RUNTIME_GC_THRESHOLDS)
 
@@ -40,7 +41,8 @@ def fail(message: str, code: int = 2) -> None:
 
 
 def checked(check, *args):
-    """``check(*args)``'s value; its ValueError (an experiment spec's refusal) as :func:`fail`'s one line."""
+    """``check(*args)``'s value; its ValueError (an experiment spec's refusal) as :func:`fail`'s one
+    line."""
     try:
         return check(*args)
     except ValueError as exc:
@@ -50,8 +52,8 @@ def checked(check, *args):
 def _start_pose(
     text: Optional[str], option: str = "--start", hint: str = ", e.g. -7.5,0,0"
 ) -> Optional[tuple[float, float, float]]:
-    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error naming ``option``
-    otherwise (``hint`` after what is expected)."""
+    """``X_M,Y_M,YAW_DEG`` to ``(x_m, y_m, yaw_rad)``; None: the world's; a one-line error naming
+    ``option`` otherwise (``hint`` after what is expected)."""
     if text is None:
         return None
     try:
@@ -77,8 +79,9 @@ def _shown(value) -> str:
 
 
 def _check_set_against_options(sets: list[str], extra: dict) -> None:
-    """A ``--set`` of a parameter that a command option (:data:`OPTION_OF`) also sets, to another value:
-    one line naming both (the option won, the ``--set`` was ignored); the same value is accepted."""
+    """A ``--set`` of a parameter that a command option (:data:`OPTION_OF`) also sets, to another
+    value: one line naming both (the option won, the ``--set`` was ignored); the same value is
+    accepted."""
     from amr_twin.model.config_overrides import parse_assignment
 
     for text in sets:
@@ -96,7 +99,8 @@ def _check_set_against_options(sets: list[str], extra: dict) -> None:
             continue
         if not same:
             fail(
-                f"--set {text!r} and {OPTION_OF[key]} {_shown(given)} both set {key}, to different values: "
+                f"--set {text!r} and {OPTION_OF[key]} {_shown(given)} both set {key}, to "
+                f"different values: "
                 "give one of them"
             )
 

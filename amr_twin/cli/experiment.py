@@ -1,9 +1,9 @@
 """``amr-twin experiment``: the thesis' experiments, each a command of this typer sub-app.
 
 ``chapter5`` and ``faults`` are defined here; ``fusion``, ``navigation`` and ``umbmark`` in their
-own modules (:mod:`amr_twin.cli.fusion`, :mod:`amr_twin.cli.navigation`, :mod:`amr_twin.cli.umbmark`)
-and added to :data:`app` below. Each simulates first and writes afterwards, every file through a
-temporary file and a rename, the report and its plots together
+own modules (:mod:`amr_twin.cli.fusion`, :mod:`amr_twin.cli.navigation`,
+:mod:`amr_twin.cli.umbmark`) and added to :data:`app` below. Each simulates first and writes
+afterwards, every file through a temporary file and a rename, the report and its plots together
 (:func:`amr_twin.base.atomic_file.all_or_nothing`): a full disk leaves the previous report,
 not half of a new one. Every output folder is checked before the first simulation
 (:mod:`amr_twin.recording.outputs`).
@@ -47,7 +47,8 @@ def _rpm(value) -> str:
 
 
 app = typer.Typer(no_args_is_help=True, help="Reproduce the thesis experiments.")
-"""``amr-twin experiment``: chapter5 and faults (here), fusion, navigation and umbmark (their own modules)."""
+"""``amr-twin experiment``: chapter5 and faults (here), fusion, navigation and umbmark (their own
+modules)."""
 
 
 @app.command("chapter5")
@@ -74,7 +75,8 @@ def chapter5(
         None,
         "--record",
         metavar="DIR",
-        help="Folder: one Rerun recording per run, DIR/run<N>.rrd (open with `rerun DIR/run1.rrd`).",
+        help="Folder: one Rerun recording per run, DIR/run<N>.rrd (open with `rerun "
+        "DIR/run1.rrd`).",
     ),
     mcap: Optional[Path] = typer.Option(
         None, "--mcap", metavar="DIR", help="Folder: one ROS 2 recording per run, DIR/run<N>.mcap."
@@ -89,7 +91,8 @@ def chapter5(
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall time.
+    """Run the eight step experiments of chapter 5 and judge them against the thesis; print wall
+    time.
 
     With --samples N the runs are repeated with N parameter draws: each metric's median and
     90 % interval beside the thesis' value, and how many draws meet its band.
@@ -150,36 +153,45 @@ def chapter5(
     for line in finding_lines(written["findings"]):
         typer.echo(f"  {line}")
     typer.echo(
-        f'  why: {VALIDATION_DOC} (in the repository), section "{VALIDATION_SECTION}"; whether any plant '
-        f'inside the sourced ranges meets them: {ATTAINABLE_COMMAND}, section "{ATTAINABLE_SECTION}"'
+        f'  why: {VALIDATION_DOC} (in the repository), section "{VALIDATION_SECTION}"; whether '
+        f"any plant "
+        f"inside the sourced ranges meets them: {ATTAINABLE_COMMAND}, section "
+        f'"{ATTAINABLE_SECTION}"'
     )
     typer.echo(
         f"published checks passed by metric: {passed_by_metric(written, 'checks')}; oscillation "
-        f"{data.oscillation_verdict['published_passed']} / {data.oscillation_verdict['comparisons']}"
+        f"{data.oscillation_verdict['published_passed']} / "
+        f"{data.oscillation_verdict['comparisons']}"
     )
     s = data.summary
     if data.firmware_comparison is not None:
         fc, w = data.firmware_comparison, data.firmware_comparison["worst"]
         typer.echo(
-            f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample difference "
-            f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: {fc['verdict']}"
+            f"{fc['firmware']} against {fc['reference']}, sample by sample: worst last-sample "
+            f"difference "
+            f"{_rpm(w['final_drpm'])} RPM, first sample {w['first_dt_ms']:.1f} ms apart: "
+            f"{fc['verdict']}"
         )
     if data.spread is not None:
         sp = data.spread
         met = [m for m in sp["metrics"] if "thesis" in m]
         typer.echo(
             f"over {sp['samples']} parameter draws ({sp['wall_s']:.1f} s wall time): "
-            f"{sum(m['in_band'] for m in met)} of {len(met) * sp['samples']} banded metrics in their band "
+            f"{sum(m['in_band'] for m in met)} of {len(met) * sp['samples']} banded metrics in "
+            f"their band "
             "(report.md, spread section)"
         )
         cp = sp["checks_passed"]
         typer.echo(
             f"checks passed over the draws: median {cp['published']['median']:.0f} "
-            f"({cp['published']['low']:.0f}-{cp['published']['high']:.0f}) on the published samples, "
-            f"{cp['true']['median']:.0f} ({cp['true']['low']:.0f}-{cp['true']['high']:.0f}) on the true speed"
+            f"({cp['published']['low']:.0f}-{cp['published']['high']:.0f}) on the published "
+            f"samples, "
+            f"{cp['true']['median']:.0f} ({cp['true']['low']:.0f}-{cp['true']['high']:.0f}) on "
+            f"the true speed"
         )
     typer.echo(
-        f"all checks, attainable or not: {s.passed}/{s.checks} on the published samples (true speed "
+        f"all checks, attainable or not: {s.passed}/{s.checks} on the published samples (true "
+        f"speed "
         f"{s.true_passed}/{s.true_checks}); wrote {out}/metrics.json, report.md"
     )
     study = f" and {data.study_runs} rolling-resistance study runs" if data.study_runs else ""

@@ -1,9 +1,9 @@
 """``amr-twin fleet``: the twin as a VDA 5050 2.0 vehicle on an MQTT broker (docs/how-to/fleet.md).
 
-Every option is checked before the model is built; bad input is one line, exit 2. Without ``--vda5050`` an
-embedded broker (amqtt) serves on a free port of 127.0.0.1, printed at start. The run ends after
-``--duration-s`` simulated seconds, or at Ctrl-C (then the vehicle says OFFLINE and disconnects); ``--json``
-prints what it did as one JSON object.
+Every option is checked before the model is built; bad input is one line, exit 2. Without
+``--vda5050`` an embedded broker (amqtt) serves on a free port of 127.0.0.1, printed at start. The
+run ends after ``--duration-s`` simulated seconds, or at Ctrl-C (then the vehicle says OFFLINE and
+disconnects); ``--json`` prints what it did as one JSON object.
 """
 
 from __future__ import annotations
@@ -100,7 +100,8 @@ def fleet(
             ),
         )
         typer.echo(
-            f"vehicle amr-1 on {session.url}: {topic(interface, 'amr-1', '{order,instantActions,state,...}')}",
+            f"vehicle amr-1 on {session.url}: "
+            f"{topic(interface, 'amr-1', '{order,instantActions,state,...}')}",
             err=True,
         )
         try:

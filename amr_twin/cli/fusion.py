@@ -142,7 +142,8 @@ def _one(spec, cfg, seeds: list[int], progress: bool, record, mcap, out: Path, g
         )
     s, r = data.summary, data.route
     typer.echo(
-        f"route {r.name} {r.length_m:.1f} m, goal {'reached' if r.reached_goal else 'NOT reached'}; "
+        f"route {r.name} {r.length_m:.1f} m, goal "
+        f"{'reached' if r.reached_goal else 'NOT reached'}; "
         f"odometry drift {s.odom_drift_final_m:.3f} m; map walls within 2 cells: "
         f"{100 * s.map_walls_within_2_cells_frac:.1f} %"
     )
@@ -178,5 +179,6 @@ def _many(spec, cfg, seeds: list[int], jobs: int, client, progress: bool, out: P
     typer.echo(
         f"route {data['route']['name']}, {len(seeds)} seeds; goal "
         + ("reached in all" if not missed else f"NOT reached with seeds {missed}")
-        + f"; wall time {wall_s:.1f} s ({where}); wrote {out}/report.md, metrics.json, seeds.png, seed<N>/"
+        + f"; wall time {wall_s:.1f} s ({where}); wrote {out}/report.md, metrics.json, "
+        f"seeds.png, seed<N>/"
     )

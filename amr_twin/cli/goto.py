@@ -1,4 +1,5 @@
-"""``amr-twin run goto --goal X,Y[,YAW_DEG]`` and navigation missions (``goals:``): the robot sent to goals.
+"""``amr-twin run goto --goal X,Y[,YAW_DEG]`` and navigation missions (``goals:``): the robot sent
+to goals.
 
 Everything is checked before the model is built, each refusal one line and exit 2: the goal's
 numbers, the map (``--map``, a map_server YAML), the localisation and the controller, and each
@@ -32,10 +33,12 @@ EXIT_NOT_REACHED = 5
 EXIT_COLLISION = 4
 GOTO_DEFAULTS = {"xy_tolerance_m": 0.25, "yaw_tolerance_deg": 14.3, "inflation_radius_m": 1.0}
 """The parameter file's navigation.navigator.xy_tolerance_m, yaw_tolerance_rad (0.25 rad) and
-navigation.costmap.inflation_radius_m, as goto's help states them (a test holds them to the file)."""
+navigation.costmap.inflation_radius_m, as goto's help states them (a test holds them to the
+file)."""
 RUN_OVERRIDES = {
     "duration_s": {
-        "help": "Time limit of the goals, simulated s after the 2 s rest (default: 60 s + 4 s per metre of "
+        "help": "Time limit of the goals, simulated s after the 2 s rest (default: 60 s + 4 s "
+        "per metre of "
         "the goals' first plans), at most 3600."
     },
     "firmware": {
@@ -45,24 +48,29 @@ RUN_OVERRIDES = {
     },
     "sensors": {"help": "Always on with goto: the LiDAR and IMU feed the navigation."},
     "seed": {
-        "help": "Seed of the random draws: the sensors' noise, the MPPI's samples, --fault and --actors-random. "
+        "help": "Seed of the random draws: the sensors' noise, the MPPI's samples, --fault and "
+        "--actors-random. "
         "Same seed, same run."
     },
     "live": {
-        "help": "Serve the twin live while it runs, paced to --rate: foxglove (the default; publish a "
+        "help": "Serve the twin live while it runs, paced to --rate: foxglove (the default; "
+        "publish a "
         "geometry_msgs/msg/PoseStamped on /goal_pose, frame map or odom, for a new goal) or rerun."
     },
     "rate": {
-        "help": "With --live or --ros1: simulated seconds per wall second (default 1 with --live; --ros1 alone: "
+        "help": "With --live or --ros1: simulated seconds per wall second (default 1 with "
+        "--live; --ros1 alone: "
         "0, as fast as possible)."
     },
     "ros1": {
-        "help": "Join the ROS 1 graph at ROS_MASTER_URI (docs/how-to/ros1.md): the twin's topics, and the navigator as "
+        "help": "Join the ROS 1 graph at ROS_MASTER_URI (docs/how-to/ros1.md): the twin's "
+        "topics, and the navigator as "
         "move_base (a goal of the action or on move_base_simple/goal preempts --goal)."
     },
     "serial_pty": {"help": "Not with goto (refused)."},
 }
-"""The run options whose default or meaning differs for goto (:func:`amr_twin.cli.options.shared`)."""
+"""The run options whose default or meaning differs for goto
+(:func:`amr_twin.cli.options.shared`)."""
 
 
 def parse_goal(text: str, option: str = "--goal") -> tuple[float, float, float | None]:
@@ -104,7 +112,8 @@ def _checked(cfg, opts, goals, nav: dict):
     if not planner.costmap.cells(here[None])[2][0]:
         of = f"--map {nav['map']}" if nav.get("map") else f"--world {opts.world}"
         fail(
-            f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of {of}: give --start X_M,Y_M,YAW_DEG on it"
+            f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of {of}: give --start "
+            f"X_M,Y_M,YAW_DEG on it"
         )
     for x, y, yaw in goals:
         name = f"goal {x:g},{y:g}"
@@ -123,11 +132,12 @@ def run_goals(
     mission_actors: tuple = (),
     settings: dict | None = None,
 ) -> None:
-    """Check, navigate to ``goals`` in turn, print and write the outputs, exit as the module docstring says.
+    """Check, navigate to ``goals`` in turn, print and write the outputs, exit as the module
+    docstring says.
 
     ``mission_actors``: the mission's people and pallet jacks (``--actor`` and ``--actors-random``
-    add to them, :func:`amr_twin.cli.actor_options.checked_actors`); ``settings``: parameter file keys the
-    command's options set (goal tolerances, inflation)."""
+    add to them, :func:`amr_twin.cli.actor_options.checked_actors`); ``settings``: parameter file
+    keys the command's options set (goal tolerances, inflation)."""
     from dataclasses import replace
 
     from amr_twin.cli.options import checked_firmware
@@ -140,7 +150,8 @@ def run_goals(
         opts.serial_pty
     ):  # the board would be driven from ROS; here the navigation stack drives the twin
         fail(
-            "--serial-pty is not available with goals (run goto, a mission's goals:): use it with a command kind "
+            "--serial-pty is not available with goals (run goto, a mission's goals:): use it "
+            "with a command kind "
             "or a mission's steps"
         )
     if duration_s is not None and not (math.isfinite(duration_s) and 0.1 <= duration_s <= 3600):
@@ -272,7 +283,8 @@ def run_goals(
     report(run, opts.as_json, fault_report, clearance(cfg, opts.world, run))
     if run.collisions:
         typer.echo(
-            f"warning: {len(run.collisions)} collision(s), the first at t = {run.collisions[0]['t_s']:.2f} s "
+            f"warning: {len(run.collisions)} collision(s), the first at t = "
+            f"{run.collisions[0]['t_s']:.2f} s "
             f"with {run.collisions[0].get('world', '?')}",
             err=True,
         )
@@ -325,8 +337,9 @@ def goto(
         "navigation.costmap.inflation_radius_m).",
     ),
 ) -> None:
-    """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/, docs/explanation/navigation.md).
-    Success is judged by the true pose; Ctrl-C stops the robot and writes the outputs (exit 6)."""
+    """Navigate to a goal: plan on the map, follow, avoid, recover (amr_twin/navigation/,
+    docs/explanation/navigation.md). Success is judged by the true pose; Ctrl-C stops the robot and
+    writes the outputs (exit 6)."""
     if goal is None:
         fail("--goal is required (X_M,Y_M or X_M,Y_M,YAW_DEG)")
     settings = {}

@@ -1,10 +1,13 @@
-"""The console of a running ``run goto``: a progress line on stderr, and a Ctrl-C that stops the robot first.
+"""The console of a running ``run goto``: a progress line on stderr, and a Ctrl-C that stops the
+robot first.
 
-- The progress line: at most one every ``PERIOD_S`` wall seconds, the first after as long (a short run
-  prints none), on stderr (never in ``--json``'s stdout): simulated time, the active goal, the distance
-  left on its plan, the robot's speed (the localisation's), the recoveries so far and the time left at
-  the rate the distance left fell over the last ``RATE_WINDOW_S`` simulated seconds.
-- Ctrl-C: the first SIGINT cancels the goals (the navigator ramps the robot to a stop; the run's outputs
+- The progress line: at most one every ``PERIOD_S`` wall seconds, the first after as long (a short
+run
+  prints none), on stderr (never in ``--json``'s stdout): simulated time, the active goal, the
+  distance left on its plan, the robot's speed (the localisation's), the recoveries so far and the
+  time left at the rate the distance left fell over the last ``RATE_WINDOW_S`` simulated seconds.
+- Ctrl-C: the first SIGINT cancels the goals (the navigator ramps the robot to a stop; the run's
+outputs
   are written and the command exits :data:`EXIT_CANCELED`); a second one stops at once
   (KeyboardInterrupt: exit 130, nothing written).
 """
@@ -25,7 +28,8 @@ RATE_WINDOW_S = 10.0
 
 
 class GotoConsole:
-    """Progress lines to ``say`` and the Ctrl-C handling of one goto run (a context manager: it holds SIGINT).
+    """Progress lines to ``say`` and the Ctrl-C handling of one goto run (a context manager: it
+    holds SIGINT).
 
     Called as ``console(navigator, t_s)`` every simulated half second (``navigate``'s ``progress``).
     ``wall``: the wall clock, s (a test's own)."""
@@ -56,7 +60,8 @@ class GotoConsole:
         if self.interrupts > 1:
             raise KeyboardInterrupt
         self.say(
-            "goto: Ctrl-C: stopping the robot and writing the outputs (Ctrl-C again to quit at once, "
+            "goto: Ctrl-C: stopping the robot and writing the outputs (Ctrl-C again to quit at "
+            "once, "
             "writing nothing)"
         )
 
@@ -94,6 +99,7 @@ class GotoConsole:
             if rate > 0.05:
                 eta = f"about {left / rate:.0f} s left"
         return (
-            f"goto: t {t_s:.1f} s, goal {index + 1} of {len(nav.outcomes)} ({x:g}, {y:g}): {where}, "
+            f"goto: t {t_s:.1f} s, goal {index + 1} of {len(nav.outcomes)} ({x:g}, {y:g}): "
+            f"{where}, "
             f"{speed:.2f} m/s, {recoveries} recover{'y' if recoveries == 1 else 'ies'}, {eta}"
         )

@@ -1,5 +1,6 @@
-"""What ``run goto`` prints: each goal's outcome with the truth's and the estimate's final error, the least
-clearance to the world's obstacles, the faults; ``--json``: one object, never a NaN (JSON has none)."""
+"""What ``run goto`` prints: each goal's outcome with the truth's and the estimate's final error,
+the least clearance to the world's obstacles, the faults; ``--json``: one object, never a NaN (JSON
+has none)."""
 
 from __future__ import annotations
 
@@ -10,8 +11,8 @@ import typer
 
 
 def clearance(cfg, world: str, run) -> tuple[float | None, float | None]:
-    """The least clearance of the true footprint to the world's obstacles over the run (10 Hz), m, and its time, s;
-    ``(None, None)`` in a world without any."""
+    """The least clearance of the true footprint to the world's obstacles over the run (10 Hz), m,
+    and its time, s; ``(None, None)`` in a world without any."""
     import numpy as np
 
     from amr_twin.experiments.navigation.metrics import footprint_clearance_m, world_obstacle_boxes
@@ -27,7 +28,8 @@ def clearance(cfg, world: str, run) -> tuple[float | None, float | None]:
 
 
 def _finite(value):
-    """``value`` with every NaN or infinity (a goal with no plan: ``plan_length_m``) made None (JSON null)."""
+    """``value`` with every NaN or infinity (a goal with no plan: ``plan_length_m``) made None (JSON
+    null)."""
     if isinstance(value, float):
         return value if math.isfinite(value) else None
     if isinstance(value, dict):
@@ -38,9 +40,9 @@ def _finite(value):
 
 
 def report(run, as_json: bool, faults: list = (), clearance: tuple = (None, None)) -> None:
-    """Each goal's outcome with the truth's and the estimate's final error, the faults with their effects, the
-    distance, the least clearance and the final pose; ``--json``: one object, in which a number that is not
-    finite is null (JSON has no NaN)."""
+    """Each goal's outcome with the truth's and the estimate's final error, the faults with their
+    effects, the distance, the least clearance and the final pose; ``--json``: one object, in which
+    a number that is not finite is null (JSON has no NaN)."""
     import numpy as np
 
     from amr_twin.recording.run_report import fault_lines
@@ -86,7 +88,8 @@ def report(run, as_json: bool, faults: list = (), clearance: tuple = (None, None
             )
         else:
             typer.echo(
-                f"{where}: NOT reached ({g['status']}): {g['reason']}; {_errors_text(g['final_error'])}"
+                f"{where}: NOT reached ({g['status']}): {g['reason']}; "
+                f"{_errors_text(g['final_error'])}"
             )
     for line in fault_lines(info["faults"]):
         typer.echo(line)
@@ -96,7 +99,8 @@ def report(run, as_json: bool, faults: list = (), clearance: tuple = (None, None
         else f"; least clearance {clearance[0]:.2f} m at t = {clearance[1]:.1f} s"
     )
     typer.echo(
-        f"travelled {info['travelled_m']:.1f} m in {run.sim_s:.1f} simulated s ({run.wall_s:.1f} s wall){least}; "
+        f"travelled {info['travelled_m']:.1f} m in {run.sim_s:.1f} simulated s ({run.wall_s:.1f} "
+        f"s wall){least}; "
         f"final pose x {info['final_pose'][0]:.2f} m, y {info['final_pose'][1]:.2f} m, "
         f"yaw {math.degrees(info['final_pose'][2]):.0f} deg"
     )

@@ -23,16 +23,18 @@ from typing import Optional
 # Set before anything imports numpy, MuJoCo or pydantic (the values a user exported win):
 # headless: MuJoCo need not load its OpenGL bindings (glfw, ~0.1 s of start-up) unless asked to
 os.environ.setdefault("MUJOCO_GL", "disable")
-# no pydantic plugins in the command line's process (its entry-point scan is ~12 ms of every start-up);
-# PYDANTIC_DISABLE_PLUGINS= (empty) in the environment brings them back
+# no pydantic plugins in the command line's process (its entry-point scan is ~12 ms of every
+# start-up); PYDANTIC_DISABLE_PLUGINS= (empty) in the environment brings them back
 os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 # numpy's OpenBLAS on one thread: its worker threads spin-wait after start-up and after each call
 # (~0.11 s of CPU on `import numpy` on 2 cores, a sixth of a 1 s run), while the twin's matrices are
-# small (a 14 x 14 mass matrix, 3 x 3 covariances); the pool workers inherit it (on 2 cores they competed)
+# small (a 14 x 14 mass matrix, 3 x 3 covariances); the pool workers inherit it (on 2 cores they
+# competed)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-# matplotlib's own warnings are not the command's: one that cannot save its font cache (a full disk, a
-# file-size limit) would print a second line beside the command's one-line error, and the cache is only
-# a speed-up (it is rebuilt at the next start); a real failure to draw still raises and is reported
+# matplotlib's own warnings are not the command's: one that cannot save its font cache (a full disk,
+# a file-size limit) would print a second line beside the command's one-line error, and the cache is
+# only a speed-up (it is rebuilt at the next start); a real failure to draw still raises and is
+# reported
 logging.getLogger("matplotlib").setLevel(logging.ERROR)
 
 import typer  # noqa: E402
@@ -82,7 +84,8 @@ class _App(typer.Typer):
             where = exc.ctx.command_path if exc.ctx is not None else "amr-twin"
             hint = _misplaced(exc) or f" (see {where} --help)"
             typer.echo(
-                f"error: {where}: {_missing_command(exc) or _plain(' '.join(exc.format_message().split()))}{hint}",
+                f"error: {where}: "
+                f"{_missing_command(exc) or _plain(' '.join(exc.format_message().split()))}{hint}",
                 err=True,
             )
             sys.exit(2)
@@ -116,8 +119,10 @@ class _App(typer.Typer):
 
 
 _PARSER_WORDS = {
-    "Input should be a valid integer, unable to parse string as an integer": "expects a whole number",
-    "Input should be a valid integer, got a number with a fractional part": "expects a whole number",
+    "Input should be a valid integer, unable to parse string as an "
+    "integer": "expects a whole number",
+    "Input should be a valid integer, got a number with a fractional "
+    "part": "expects a whole number",
     "Input should be a valid number, unable to parse string as a number": "expects a number",
     "Input should be a valid boolean, unable to interpret input": "expects true or false",
 }
@@ -228,7 +233,8 @@ def model(
         xy is not None and cfg.payload.mass_kg == 0
     ):  # ignored (and not checked against the deck), exit 0
         fail(
-            f"--payload-xy {payload_xy}: there is no payload to place (payload.mass_kg is 0): give --payload-kg"
+            f"--payload-xy {payload_xy}: there is no payload to place (payload.mass_kg is 0): "
+            f"give --payload-kg"
         )
 
     def work():
@@ -239,7 +245,8 @@ def model(
             typer.echo(json.dumps(info))
         else:
             typer.echo(
-                f"total mass {info['total_mass_kg']:.2f} kg, tip margin {info['tip_margin_m']:.3f} m"
+                f"total mass {info['total_mass_kg']:.2f} kg, tip margin "
+                f"{info['tip_margin_m']:.3f} m"
             )
             for name, load in info["static_load_n"].items():
                 typer.echo(f"  {name:20s} {load:8.2f} N")
@@ -343,7 +350,8 @@ def calibrate(
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their uncertainty."""
+    """Fit the drive's unknowns (driver gain, motor Ke and friction per wheel) with their
+    uncertainty."""
     from rich.progress import Progress
 
     from amr_twin.calibration.fit import calibrate as fit_plant
@@ -359,8 +367,10 @@ def calibrate(
         fail("--no-fit needs --report FILE (without a fit, the report is the only result)")
     if not evaluations_per_step() <= max_evaluations <= MAX_EVALUATIONS:
         fail(
-            f"--max-evaluations {max_evaluations}: must be in {evaluations_per_step()}..{MAX_EVALUATIONS} (a fit "
-            f"evaluates the starting point and once more per fitted parameter, {len(PARAMETERS)}, for its Jacobian)"
+            f"--max-evaluations {max_evaluations}: must be in "
+            f"{evaluations_per_step()}..{MAX_EVALUATIONS} (a fit "
+            f"evaluates the starting point and once more per fitted parameter, "
+            f"{len(PARAMETERS)}, for its Jacobian)"
         )
     try:
         jobs = min(check_jobs(jobs), 3) if jobs is None else check_jobs(jobs)
@@ -434,7 +444,8 @@ def calibrate(
 
 
 MAX_EVALUATIONS = 2000
-"""Most twin evaluations of one calibration (each simulates the thesis' three runs or the whole log)."""
+"""Most twin evaluations of one calibration (each simulates the thesis' three runs or the whole
+log)."""
 
 
 def _check_log_comparable(base, log: dict, target: str) -> None:
@@ -466,8 +477,10 @@ def _check_log_comparable(base, log: dict, target: str) -> None:
         for w, samples in wheels.items():
             if len(series.published[w]) < 2:
                 raise ValueError(
-                    f"--target {target}: command {text}: in the log's {duration:g} s the twin publishes "
-                    f"{len(series.published[w])} speed(s) of the {('left', 'right')[w]} wheel, 2 are "
+                    f"--target {target}: command {text}: in the log's {duration:g} s the twin "
+                    f"publishes "
+                    f"{len(series.published[w])} speed(s) of the {('left', 'right')[w]} wheel, 2 "
+                    f"are "
                     "needed to compare: the log must be longer"
                 )
 

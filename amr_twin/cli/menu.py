@@ -73,7 +73,8 @@ class RealTimeTwin:
     """
 
     PIECE_S = 0.1
-    """Simulated seconds per ``advance`` call: a stop request waits at most this long (on the record grid)."""
+    """Simulated seconds per ``advance`` call: a stop request waits at most this long (on the record
+    grid)."""
 
     def __init__(self, twin, rate: float = 1.0, live=None, say=print, ros1=None):
         from dataclasses import replace
@@ -137,19 +138,22 @@ class RealTimeTwin:
 
 
 def escape(text: str) -> str:
-    """``rich.markup.escape``, imported when the menu runs (rich costs ~35 ms of every command's start-up)."""
+    """``rich.markup.escape``, imported when the menu runs (rich costs ~35 ms of every command's
+    start-up)."""
     from rich.markup import escape as rich_escape
 
     return rich_escape(text)
 
 
 MAX_LINE = 1024
-"""Longest line the menu reads from a file or a pipe, characters (``input()`` read /dev/zero whole: 9 GB in 48 s)."""
+"""Longest line the menu reads from a file or a pipe, characters (``input()`` read /dev/zero whole:
+9 GB in 48 s)."""
 
 
 def read_line(console: Console, prompt: str, stdin=None) -> str:
-    """One answer: from a terminal with its line editing; from a file or a pipe at most :data:`MAX_LINE`
-    characters, else a one-line refusal (exit 2). EOFError at the end of the input."""
+    """One answer: from a terminal with its line editing; from a file or a pipe at most
+    :data:`MAX_LINE` characters, else a one-line refusal (exit 2). EOFError at the end of the
+    input."""
     import sys
 
     stdin = sys.stdin if stdin is None else stdin
@@ -161,7 +165,8 @@ def read_line(console: Console, prompt: str, stdin=None) -> str:
         raise EOFError
     if len(line) > MAX_LINE or "\0" in line:
         fail(
-            f"standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)"
+            f"standard input: a line of the menu is at most {MAX_LINE} characters of text (a "
+            f"choice, a number)"
         )
     return line
 
@@ -244,8 +249,9 @@ def client(
     ros1: bool = _ROS1["ros1"][1],
     roscore: bool = _ROS1["roscore"][1],
 ) -> None:
-    """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time (--live: served to
-    Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel; --ros1: on a ROS 1 graph)."""
+    """Terminal menu of wheel_Command_Client (fig. 3.2) driving the twin in real time (--live:
+    served to Foxglove or Rerun as well, and driven by a Foxglove client's /cmd_vel; --ros1: on a
+    ROS 1 graph)."""
     from amr_twin.sim.faults import FaultError, parse_faults
     from amr_twin.assembly.twin import Twin, TwinOptions
 
@@ -289,7 +295,8 @@ def client(
     twin.on_collision(
         lambda c: console.print(
             escape(
-                f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m"
+                f"[collision] t={c.t_s:.2f} s: {', '.join(c.robot_parts)} hit {c.hit} at "
+                f"({c.x_m:.2f}, {c.y_m:.2f}) m"
             )
         )
     )

@@ -1,4 +1,5 @@
-"""``amr-twin experiment navigation``: seeded start/goal episodes on the true and the SLAM map (docs/explanation/navigation.md).
+"""``amr-twin experiment navigation``: seeded start/goal episodes on the true and the SLAM map
+(docs/explanation/navigation.md).
 
 Every option is checked before the first simulation: the counts, the world, the maps, the SLAM
 map file, the localisation and controller, the executor, the output folder.
@@ -26,8 +27,9 @@ from amr_twin.navigation.registries import CONTROLLERS, LOCALISATIONS
 
 MAX_EPISODES = 1000
 EPISODE_SIM_S = 70.0
-"""Simulated time of a typical episode, s: the median time to the goal of the 50 episodes in docs/explanation/navigation.md
-was 56-98 s by scenario (66 s on the true map, 74 s on the SLAM map)."""
+"""Simulated time of a typical episode, s: the median time to the goal of the 50 episodes in
+docs/explanation/navigation.md was 56-98 s by scenario (66 s on the true map, 74 s on the SLAM
+map)."""
 
 
 def navigation(
@@ -95,7 +97,8 @@ def navigation(
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Navigate seeded start/goal pairs, some with an unmapped person or pallet jack, on the true and SLAM maps."""
+    """Navigate seeded start/goal pairs, some with an unmapped person or pallet jack, on the true
+    and SLAM maps."""
     from amr_twin.model.worlds import world_path
 
     jobs, firmware = check_common(jobs, firmware, fail)
@@ -113,7 +116,8 @@ def navigation(
         fail(f"--people {people!r}: static, walking, crossing or none")
     if halls and kinds != ("true",):
         fail(
-            f"--maps {maps}: a generated hall has no mapping drive to build a SLAM map from: give --maps true"
+            f"--maps {maps}: a generated hall has no mapping drive to build a SLAM map from: "
+            f"give --maps true"
         )
     for registry, name in ((LOCALISATIONS, localisation), (CONTROLLERS, controller)):
         try:
@@ -232,7 +236,8 @@ def navigation(
         for group, s in data["summary"].items():
             for trips, d in s["doors"].items():
                 typer.echo(
-                    f"{group:9s} {trips:10s} {d['episodes']:4d} episodes: success {d['success']}, collisions "
+                    f"{group:9s} {trips:10s} {d['episodes']:4d} episodes: success "
+                    f"{d['success']}, collisions "
                     f"{d['collisions']}, least jamb clearance {_m(d['door_clearance_min_m'])}"
                 )
         typer.echo(
@@ -254,7 +259,8 @@ def navigation(
 
 
 def _halls(world: str, generated_seeds: str | None, tuning_seeds: str, door_m: float | None):
-    """The generated halls to run on (None: ``world`` is not one) and the tuning ones among the names."""
+    """The generated halls to run on (None: ``world`` is not one) and the tuning ones among the
+    names."""
     from amr_twin.model.generated_world import GeneratedWorldError, is_generated, name, parse
     from amr_twin.model.world_generator import FORCED_DOOR_RANGE_M
 
@@ -262,7 +268,8 @@ def _halls(world: str, generated_seeds: str | None, tuning_seeds: str, door_m: f
         fail("--door-m: only with --generated-seeds (one hall: --world generated:SEED?door=W)")
     if door_m is not None and not FORCED_DOOR_RANGE_M[0] <= door_m <= FORCED_DOOR_RANGE_M[1]:
         fail(
-            f"--door-m {door_m:g}: must be in [{FORCED_DOOR_RANGE_M[0]:g}, {FORCED_DOOR_RANGE_M[1]:g}] m"
+            f"--door-m {door_m:g}: must be in [{FORCED_DOOR_RANGE_M[0]:g}, "
+            f"{FORCED_DOOR_RANGE_M[1]:g}] m"
         )
     if generated_seeds is None and not is_generated(world):
         return None, []
@@ -288,7 +295,10 @@ def _seeds(option: str, text: str) -> list[int]:
     """``A-B`` or ``A,B,C`` (or ``none``) as a list of seeds; a one-line error otherwise."""
     from amr_twin.model.generated_world import MAX_SEED
 
-    usage = f"{option} {text}: expected A-B, A,B,C or none (integers in [0, {MAX_SEED}], at most {MAX_HALLS})"
+    usage = (
+        f"{option} {text}: expected A-B, A,B,C or none (integers in [0, {MAX_SEED}], at most "
+        f"{MAX_HALLS})"
+    )
     if text.strip() == "none":
         return []
     try:

@@ -32,7 +32,8 @@ SetOpt = typer.Option(None, "--set", help="Override one value: key=value (repeat
 
 
 def firmware_option(default: str = "faithful") -> typer.models.OptionInfo:
-    """``--firmware``: its choices are the firmware factory's (:data:`~amr_twin.controllers.firmware.FIRMWARES`)."""
+    """``--firmware``: its choices are the firmware factory's
+    (:data:`~amr_twin.controllers.firmware.FIRMWARES`)."""
     return typer.Option(
         default,
         "--firmware",
@@ -53,8 +54,8 @@ def sketch_option() -> typer.models.OptionInfo:
 
 
 def checked_firmware(firmware: str, sketch: Optional[Path], fail: Callable[[str], None]) -> str:
-    """``--firmware`` and ``--sketch`` as the firmware string (``avr:DIR`` with a sketch); for avr the
-    toolchain is checked and the sketch built now. A refusal is one line (``fail``)."""
+    """``--firmware`` and ``--sketch`` as the firmware string (``avr:DIR`` with a sketch); for avr
+    the toolchain is checked and the sketch built now. A refusal is one line (``fail``)."""
     from amr_twin.controllers.firmware import check_avr, firmware_kind
 
     try:
@@ -66,7 +67,8 @@ def checked_firmware(firmware: str, sketch: Optional[Path], fail: Callable[[str]
 
 
 SEED_LIMIT = 2**32
-"""Seeds are whole numbers in [0, 2^32) (numpy's SeedSequence takes any non-negative one; a bound keeps keys short)."""
+"""Seeds are whole numbers in [0, 2^32) (numpy's SeedSequence takes any non-negative one; a bound
+keeps keys short)."""
 
 
 def checked_seed(
@@ -79,9 +81,9 @@ def checked_seed(
 
 
 def live_option_args(args: list[str], commands=()) -> list[str]:
-    """``--live`` with its value optional: ``--live`` followed by nothing, an option or one of the group's
-    ``commands`` means ``--live foxglove``; any other word is its value (checked: ``--live bogus`` is refused
-    naming the modes).
+    """``--live`` with its value optional: ``--live`` followed by nothing, an option or one of the
+    group's ``commands`` means ``--live foxglove``; any other word is its value (checked: ``--live
+    bogus`` is refused naming the modes).
 
     (typer's parser has no options with an optional value: a bare ``--live`` is written out.)
     """
@@ -111,7 +113,8 @@ class LiveCommand(TyperCommand):
 
 
 def live_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
-    """``--live [foxglove|rerun]``, ``--host``, ``--port``, ``--web-port``, ``--rate`` (amr_twin.live.session)."""
+    """``--live [foxglove|rerun]``, ``--host``, ``--port``, ``--web-port``, ``--rate``
+    (amr_twin.live.session)."""
     return {
         "live": (
             Optional[str],
@@ -120,8 +123,10 @@ def live_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
                 "--live",
                 metavar="[foxglove|rerun]",
                 help="Serve the twin live "
-                "while it runs, paced to --rate: foxglove (the default; Foxglove WebSocket server, the .mcap's "
-                "channels, drive it with /cmd_vel) or rerun (the .rrd's streams over gRPC + a local web viewer).",
+                "while it runs, paced to --rate: foxglove (the default; Foxglove WebSocket "
+                "server, the .mcap's "
+                "channels, drive it with /cmd_vel) or rerun (the .rrd's streams over gRPC + a "
+                "local web viewer).",
             ),
         ),
         "host": (
@@ -155,7 +160,8 @@ def live_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
                 None,
                 "--rate",
                 help="With --live, --ros1 or --serial-pty: "
-                "simulated seconds per wall second (default 1; --ros1 alone: 0, as fast as possible).",
+                "simulated seconds per wall second (default 1; --ros1 alone: 0, as fast as "
+                "possible).",
             ),
         ),
     }
@@ -171,9 +177,9 @@ def checked_live(
     default_rate: float = 1.0,
     paced: bool = False,
 ):
-    """The :class:`~amr_twin.live.session.LiveOptions` of the live options, None without ``--live``; an option of
-    ``--live`` given without it, or a bad value, is refused in one line (``fail``); ``paced``: ``--rate`` serves
-    another option of the command (``--ros1``, ``--serial-pty``)."""
+    """The :class:`~amr_twin.live.session.LiveOptions` of the live options, None without ``--live``;
+    an option of ``--live`` given without it, or a bad value, is refused in one line (``fail``);
+    ``paced``: ``--rate`` serves another option of the command (``--ros1``, ``--serial-pty``)."""
     import math
 
     from amr_twin.live.session import LiveOptions
@@ -205,7 +211,8 @@ def checked_live(
 
 
 def ros1_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
-    """``--ros1``, ``--roscore``, ``--serial-pty PATH`` (amr_twin.ros1.session, controllers/avr_serial_port.py)."""
+    """``--ros1``, ``--roscore``, ``--serial-pty PATH`` (amr_twin.ros1.session,
+    controllers/avr_serial_port.py)."""
     return {
         "ros1": (
             bool,
@@ -213,8 +220,10 @@ def ros1_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
                 False,
                 "--ros1",
                 help="Join the ROS 1 graph at ROS_MASTER_URI (Debian's ROS 1) "
-                "and bridge the twin both ways: /clock (use_sim_time), /tf, /odom, /scan, /imu/*, /joint_states, "
-                "... out; /wheel_Command and /cmd_vel in (docs/how-to/ros1.md). As fast as possible unless --rate.",
+                "and bridge the twin both ways: /clock (use_sim_time), /tf, /odom, /scan, "
+                "/imu/*, /joint_states, "
+                "... out; /wheel_Command and /cmd_vel in (docs/how-to/ros1.md). As fast as "
+                "possible unless --rate.",
             ),
         ),
         "roscore": (
@@ -233,8 +242,10 @@ def ros1_options() -> dict[str, tuple[object, typer.models.OptionInfo]]:
                 "--serial-pty",
                 metavar="PATH",
                 help="With --firmware avr: "
-                "serve the emulated Mega's serial port on a pseudo-terminal linked at PATH (as /dev/ttyACM0 "
-                "on the robot) for a rosserial host, paced to real time; the board is driven from ROS, not "
+                "serve the emulated Mega's serial port on a pseudo-terminal linked at PATH (as "
+                "/dev/ttyACM0 "
+                "on the robot) for a rosserial host, paced to real time; the board is driven "
+                "from ROS, not "
                 "by the run's command (give `run stop`).",
             ),
         ),
@@ -250,9 +261,10 @@ def checked_ros1(
     rate: Optional[float],
     fail: Callable[[str], None],
 ):
-    """``(Ros1Options or None, AvrParams or None, rate)`` of the ROS 1 options, checked before the work: ROS 1
-    installed, the master answering, the pseudo-terminal's path free. ``rate`` is the pacing of a run that
-    is not served live: ``--rate``, else as fast as possible (0), or real time (1) with ``--serial-pty``."""
+    """``(Ros1Options or None, AvrParams or None, rate)`` of the ROS 1 options, checked before the
+    work: ROS 1 installed, the master answering, the pseudo-terminal's path free. ``rate`` is the
+    pacing of a run that is not served live: ``--rate``, else as fast as possible (0), or real time
+    (1) with ``--serial-pty``."""
     import math
 
     if roscore and not ros1:
@@ -261,13 +273,15 @@ def checked_ros1(
 
     if kept() and not ros1:
         fail(
-            f"ROS argument {kept()[0]!r} is for the twin's ROS 1 node: give --ros1 (or drop the NAME:=VALUE arguments)"
+            f"ROS argument {kept()[0]!r} is for the twin's ROS 1 node: give --ros1 (or drop the "
+            f"NAME:=VALUE arguments)"
         )
     params = None
     if serial_pty is not None:
         if not firmware.startswith("avr"):
             fail(
-                f"--serial-pty serves the emulated board's serial port: give --firmware avr (got {firmware})"
+                f"--serial-pty serves the emulated board's serial port: give --firmware avr (got "
+                f"{firmware})"
             )
         from amr_twin.controllers.avr_serial_port import pty_problem
         from amr_twin.controllers.firmware import AvrParams
@@ -278,7 +292,8 @@ def checked_ros1(
         params = AvrParams(serial_pty=serial_pty)
         if rate is not None and not (math.isfinite(rate) and 0 < rate <= 1000):
             fail(
-                f"--rate {rate}: with --serial-pty the board's serial port runs paced: give a rate in (0, 1000]"
+                f"--rate {rate}: with --serial-pty the board's serial port runs paced: give a "
+                f"rate in (0, 1000]"
             )
     if not live_given and rate is not None and not (math.isfinite(rate) and 0 <= rate <= 1000):
         fail(f"--rate {rate}: must be a finite number in [0, 1000] (0: as fast as possible)")
@@ -332,8 +347,9 @@ class RunOptions:
 def _run_option_infos(
     overrides: dict | None = None,
 ) -> dict[str, tuple[object, typer.models.OptionInfo]]:
-    """name -> (annotation, a fresh OptionInfo) for each field of :class:`RunOptions`; ``overrides``: name ->
-    ``{"default": ..., "help": ...}`` for a command that runs with other defaults (``run goto``)."""
+    """name -> (annotation, a fresh OptionInfo) for each field of :class:`RunOptions`;
+    ``overrides``: name -> ``{"default": ..., "help": ...}`` for a command that runs with other
+    defaults (``run goto``)."""
     infos = {
         "duration_s": (
             Optional[float],
@@ -341,7 +357,8 @@ def _run_option_infos(
                 None,
                 "--duration-s",
                 help="Simulated seconds (default 10; a "
-                "mission's own), at most 3600; inf with --ros1 or --live: until Ctrl-C or SIGTERM (the outputs "
+                "mission's own), at most 3600; inf with --ros1 or --live: until Ctrl-C or "
+                "SIGTERM (the outputs "
                 "are written then).",
             ),
         ),
@@ -393,7 +410,8 @@ def _run_option_infos(
                 None,
                 "--fault",
                 metavar="KIND@T[:ARGS]",
-                help="Inject a fault at T s (repeatable), e.g. hall-left-dead@3, rosserial-loss@2:0.3,for=5; "
+                help="Inject a fault at T s (repeatable), e.g. hall-left-dead@3, "
+                "rosserial-loss@2:0.3,for=5; "
                 "kinds and arguments in docs/faults.md.",
             ),
         ),
@@ -403,8 +421,10 @@ def _run_option_infos(
                 None,
                 "--actor",
                 metavar="KIND:X1,Y1;X2,Y2[@V][+T][/loop][/stop=M]",
-                help="A person or pallet_jack walking these waypoints (m, world frame) at V m/s from T s "
-                "(repeatable; /loop: round again; /stop=M: halts while the robot is within M m ahead); "
+                help="A person or pallet_jack walking these waypoints (m, world frame) at V m/s "
+                "from T s "
+                "(repeatable; /loop: round again; /stop=M: halts while the robot is within M m "
+                "ahead); "
                 "docs/explanation/actors.md.",
             ),
         ),
@@ -455,7 +475,8 @@ def _run_option_infos(
                 "--odometry",
                 metavar="FILE",
                 help="The wheel odometry "
-                "node's calibration (YAML: per-wheel radii and wheelbase, as amr-twin experiment umbmark "
+                "node's calibration (YAML: per-wheel radii and wheelbase, as amr-twin experiment "
+                "umbmark "
                 "writes it) instead of the nominal geometry.",
             ),
         ),
@@ -502,7 +523,8 @@ def merge(ctx: typer.Context, values: dict, fail: Callable[[str], None]) -> RunO
         if here and before and mine != theirs:
             flag = infos[name][1].param_decls[0]
             fail(
-                f"{flag} given before and after {ctx.info_name!r} with different values ({theirs} and {mine}); "
+                f"{flag} given before and after {ctx.info_name!r} with different values "
+                f"({theirs} and {mine}); "
                 "give it once"
             )
         out[name] = mine if here or not before else theirs

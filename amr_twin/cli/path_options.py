@@ -17,8 +17,8 @@ Refused, in one line naming both options, exit 2, before anything is read or wri
 - an output another command is writing (its lock, :mod:`amr_twin.recording.output_lock`, held for as
   long as the command runs): the holder's pid is named.
 
-A command interrupted (Ctrl-C) says so in one line, exit 130: its files are written together at the end.
-"""
+A command interrupted (Ctrl-C) says so in one line, exit 130: its files are written together at the
+end."""
 
 from __future__ import annotations
 
@@ -60,7 +60,8 @@ def _world_files(value) -> list[Path]:
 
 
 def _mission_files(value) -> list[Path]:
-    """The mission file and, for a navigation mission naming a ``map:``, that map's YAML and image."""
+    """The mission file and, for a navigation mission naming a ``map:``, that map's YAML and
+    image."""
     if value is None:
         return []
     from amr_twin.model.yaml_file import read_yaml
@@ -112,7 +113,8 @@ PATH_METAVARS = ("PATH", "FILE", "DIR")
 
 
 def is_path_option(param) -> bool:
-    """A command-line option whose value is a path: typer's ``Path`` annotation, or a metavar saying so."""
+    """A command-line option whose value is a path: typer's ``Path`` annotation, or a metavar saying
+    so."""
     descriptor = getattr(param, "type_descriptor", None)
     return getattr(param, "param_type_name", "") == "option" and bool(
         getattr(descriptor, "is_path", False)
@@ -122,7 +124,8 @@ def is_path_option(param) -> bool:
 
 
 def role(param) -> str | None:
-    """``input``, ``output`` or None (not a path) of an option; an undeclared path option is an output."""
+    """``input``, ``output`` or None (not a path) of an option; an undeclared path option is an
+    output."""
     flag = param.opts[0] if getattr(param, "param_type_name", "") == "option" else None
     if flag in INPUTS:
         return "input"
@@ -138,7 +141,8 @@ def _contexts(ctx) -> Iterator:
 
 
 def paths_of(ctx) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
-    """``(outputs, inputs)`` of a command's context and its groups' (``run --csv F linear``): ``(label, path)``.
+    """``(outputs, inputs)`` of a command's context and its groups' (``run --csv F linear``):
+    ``(label, path)``.
 
     A value given on the command line wins over a default of the same option at another level; an
     input the command reads by default is labelled ``FLAG (default)``.
@@ -170,8 +174,8 @@ def paths_of(ctx) -> tuple[list[tuple[str, Path]], list[tuple[str, Path]]]:
 
 
 def check_paths(ctx) -> list[tuple[str, Path]]:
-    """Refuse (one line, exit 2) an output of ``ctx``'s command that is, or holds, one of its inputs;
-    return the outputs."""
+    """Refuse (one line, exit 2) an output of ``ctx``'s command that is, or holds, one of its
+    inputs; return the outputs."""
     from amr_twin.cli.common import fail
     from amr_twin.recording.outputs import OutputError, check_not_inputs
 
@@ -184,7 +188,8 @@ def check_paths(ctx) -> list[tuple[str, Path]]:
 
 
 def _refuse_empty(param) -> None:
-    """An empty value of a path option is refused while parsing (typer would read it as the current folder)."""
+    """An empty value of a path option is refused while parsing (typer would read it as the current
+    folder)."""
     process = param.process_value
 
     def process_value(ctx, value):
@@ -199,7 +204,8 @@ def _refuse_empty(param) -> None:
 
 def _checked(callback):
     """``callback`` preceded by :func:`check_paths` and run holding its outputs' locks
-    (:mod:`amr_twin.recording.output_lock`); a group whose command follows leaves both to the command."""
+    (:mod:`amr_twin.recording.output_lock`); a group whose command follows leaves both to the
+    command."""
 
     @functools.wraps(callback)
     def checked(*args, **kwargs):
@@ -234,8 +240,9 @@ def _commands(command) -> Iterator:
 
 
 def _once(command) -> None:
-    """An option of one value given twice with different values (``--live foxglove --live rerun``) is a
-    usage error (exit 2) instead of the last one silently winning; a repeatable option is not touched."""
+    """An option of one value given twice with different values (``--live foxglove --live rerun``)
+    is a usage error (exit 2) instead of the last one silently winning; a repeatable option is not
+    touched."""
     make_parser = command.make_parser
 
     def checked_parser(ctx):
@@ -268,9 +275,10 @@ def _once(command) -> None:
 
 class CheckedGroup(TyperGroup):
     """The app's root group: each command below it checks its paths (:func:`check_paths`) before its
-    callback runs, and refuses an empty path and an option given twice (:func:`_once`) while parsing. A group given no command fails with a
-    usage error (``Missing command.``, one line naming its commands: :mod:`amr_twin.cli.main`) instead
-    of printing its help and an empty error."""
+    callback runs, and refuses an empty path and an option given twice (:func:`_once`) while
+    parsing. A group given no command fails with a usage error (``Missing command.``, one line
+    naming its commands: :mod:`amr_twin.cli.main`) instead of printing its help and an empty
+    error."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

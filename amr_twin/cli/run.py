@@ -62,11 +62,13 @@ def _duration(opts: RunOptions, default_s: float) -> float:
     if opts.duration_s == math.inf:  # until stopped: Ctrl-C, SIGTERM (roslaunch), _run_live
         if not (opts.ros1 or opts.live is not None):
             fail(
-                "--duration-s inf: a run until stopped is for the graph or a live view: give --ros1 or --live"
+                "--duration-s inf: a run until stopped is for the graph or a live view: give "
+                "--ros1 or --live"
             )
         if opts.record is not None or opts.mcap is not None:
             fail(
-                "--duration-s inf: --record and --mcap keep every message until the run ends: give a finite "
+                "--duration-s inf: --record and --mcap keep every message until the run ends: "
+                "give a finite "
                 "--duration-s"
             )
         return math.inf
@@ -121,7 +123,8 @@ def execute(
     if opts.serial_pty is not None:
         if not (single and len(steps) == 1 and steps[0][1].kind == "stop"):
             fail(
-                "--serial-pty: the board's serial port is your rosserial host's: drive it from ROS and give "
+                "--serial-pty: the board's serial port is your rosserial host's: drive it from "
+                "ROS and give "
                 "`run stop` (the board starts braked)"
             )
         from amr_twin.controllers.firmware import check_avr
@@ -152,7 +155,8 @@ def execute(
         )
     cfg = _config(opts.config, opts.params, opts.set_, extra)
     actors = checked_actors(opts, mission_actors, cfg, start)
-    navigation = None  # --ros1 --sensors: the navigation stack as move_base (amr_twin/ros1/navigation_setup.py)
+    # --ros1 --sensors: the navigation stack as move_base (amr_twin/ros1/navigation_setup.py)
+    navigation = None
     if ros1 is not None and opts.sensors and opts.serial_pty is None:
         from amr_twin.ros1.navigation_setup import RunNavigation
 
@@ -192,7 +196,8 @@ def execute(
         twin = Twin(cfg, options)
         if opts.serial_pty is not None:
             typer.echo(
-                f"serial-pty: the board's serial port is {opts.serial_pty} (-> {twin.firmware.serial.device}), "
+                f"serial-pty: the board's serial port is {opts.serial_pty} (-> "
+                f"{twin.firmware.serial.device}), "
                 f"paced at {rate:g}x real time",
                 err=True,
             )
@@ -220,8 +225,10 @@ def execute(
             if opts.serial_pty is not None:
                 fw = twin.firmware
                 typer.echo(
-                    f"serial-pty: the board answered {fw.negotiations} topic negotiation(s) and asked the "
-                    f"time {fw.time_requests} time(s); {fw.serial.bytes_in} bytes in, {fw.serial.bytes_out} out, "
+                    f"serial-pty: the board answered {fw.negotiations} topic negotiation(s) and "
+                    f"asked the "
+                    f"time {fw.time_requests} time(s); {fw.serial.bytes_in} bytes in, "
+                    f"{fw.serial.bytes_out} out, "
                     f"{fw.serial.bytes_dropped} dropped; {fw.pacer.lag_resets} lag reset(s)",
                     err=True,
                 )
@@ -256,10 +263,10 @@ def execute(
 
 
 def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
-    """``run()`` with ``twin`` served live (amr_twin.live.session) and/or on a ROS 1 graph (amr_twin.ros1.session),
-    with ``navigation`` (amr_twin.ros1.navigation_setup) as move_base there. SIGINT (Ctrl-C) or SIGTERM (roslaunch
-    sends both) ends the run at the twin's next event and the outputs are written; a second one ends it at once,
-    without them (exit 130)."""
+    """``run()`` with ``twin`` served live (amr_twin.live.session) and/or on a ROS 1 graph
+    (amr_twin.ros1.session), with ``navigation`` (amr_twin.ros1.navigation_setup) as move_base
+    there. SIGINT (Ctrl-C) or SIGTERM (roslaunch sends both) ends the run at the twin's next event
+    and the outputs are written; a second one ends it at once, without them (exit 130)."""
     import signal
 
     say = lambda line: typer.echo(line, err=True)  # noqa: E731
@@ -297,7 +304,8 @@ def _run_live(twin, live, run, ros1=None, rate: float = 1.0, navigation=None):
         result = run()
         if signals:
             say(
-                f"stopped by {signal.Signals(signals[0]).name} at t={twin.t_s:.2f} s simulated; writing the outputs"
+                f"stopped by {signal.Signals(signals[0]).name} at t={twin.t_s:.2f} s simulated; "
+                f"writing the outputs"
             )
         return result
     except KeyboardInterrupt:
@@ -342,7 +350,8 @@ app = typer.Typer(
     help="Run wheel commands on the twin, as wheel_Command_Client does. The options "
     "below go before or after the command kind.",
 )
-"""``amr-twin run``: linear, angular, motor, stop, goto (:func:`amr_twin.cli.goto.goto`) or --mission."""
+"""``amr-twin run``: linear, angular, motor, stop, goto (:func:`amr_twin.cli.goto.goto`) or
+--mission."""
 
 
 @app.callback(invoke_without_command=True)

@@ -86,8 +86,10 @@ def payload(
         None,
         "--record",
         metavar="DIR",
-        help="Folder: one Rerun recording per point simulated now, DIR/<key>.rrd (key as in runs/<key>.json). "
-        "A resumed sweep does not redo finished points to record them: delete runs/<key>.json for that. "
+        help="Folder: one Rerun recording per point simulated now, DIR/<key>.rrd (key as in "
+        "runs/<key>.json). "
+        "A resumed sweep does not redo finished points to record them: delete runs/<key>.json "
+        "for that. "
         "With --executor dask the workers write it: DIR must be on shared storage.",
     ),
     mcap: Optional[Path] = typer.Option(
@@ -209,7 +211,8 @@ def payload(
     where = f"dask {scheduler}" if client is not None else f"jobs {jobs}"
     what = "points" if draws is None else f"runs ({n_points} points x {samples} draws + nominal)"
     typer.echo(
-        f"{len(results['rows'])} {what}: {results['simulated']} simulated, {results['reused']} reused; "
+        f"{len(results['rows'])} {what}: {results['simulated']} simulated, {results['reused']} "
+        f"reused; "
         f"wall time {results['wall_s']:.2f} s ({where}); wrote {out}/sweep.csv, summary.md"
         + (", intervals.csv, sensitivity.csv" if draws is not None else "")
     )
@@ -218,7 +221,8 @@ def payload(
             f"recordings: {results['recorded']} points recorded in "
             + ", ".join(str(f) for f in (record, mcap) if f is not None)
             + (
-                f"; {results['reused']} points reused from {out}/runs are not re-simulated to be recorded "
+                f"; {results['reused']} points reused from {out}/runs are not re-simulated to be "
+                f"recorded "
                 "(delete runs/<key>.json to record one)"
                 if results["reused"]
                 else ""

@@ -50,7 +50,8 @@ def umbmark(
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """UMBmark (4 m squares both ways) per robot, its calibration of the odometry, and the squares again."""
+    """UMBmark (4 m squares both ways) per robot, its calibration of the odometry, and the squares
+    again."""
     from amr_twin.experiments.umbmark.seeds import SQUARE_S
     from amr_twin.experiments.umbmark.spec import UmbmarkSpec
 
@@ -87,7 +88,8 @@ def _run(spec, cfg, jobs: int, progress: bool, out: Path, guard) -> None:
     data, wall_s = guard(work)
     s = data["summary"]
     typer.echo(
-        f"{'seed':>4s} {'E_max,syst before mm':>21s} {'after mm':>9s} {'reduction':>9s} {'spread mm':>9s}"
+        f"{'seed':>4s} {'E_max,syst before mm':>21s} {'after mm':>9s} {'reduction':>9s} "
+        f"{'spread mm':>9s}"
     )
     for d in data["per_seed"]:
         typer.echo(
@@ -101,10 +103,12 @@ def _run(spec, cfg, jobs: int, progress: bool, out: Path, guard) -> None:
         else ""
     )
     typer.echo(
-        f"reduction: median {s['reduction_median']:.1f}, of the means {s['reduction_of_means']:.1f}; "
+        f"reduction: median {s['reduction_median']:.1f}, of the means "
+        f"{s['reduction_of_means']:.1f}; "
         f"spread {1e3 * s['spread_before_m']['mean']:.2f} mm{rigid_text}"
     )
     typer.echo(
-        f"wall time {wall_s:.1f} s (jobs {jobs}); wrote {out}/report.md, metrics.json, borenstein.png, "
+        f"wall time {wall_s:.1f} s (jobs {jobs}); wrote {out}/report.md, metrics.json, "
+        f"borenstein.png, "
         "emax.png, calibration/seed<N>.yaml"
     )

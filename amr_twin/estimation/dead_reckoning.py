@@ -92,7 +92,8 @@ class SpeedProfile:
         self.rpm = self.rpm[:i] + [value]
 
     def trim(self, t_us: int) -> None:
-        """Forget the knots before ``t_us``, keeping the speed in force from it (and their revolutions)."""
+        """Forget the knots before ``t_us``, keeping the speed in force from it (and their
+        revolutions)."""
         i = max(bisect_right(self.t_us, t_us) - 1, 0)
         value = self.at(t_us, self.segment(t_us))
         if t_us > self.t_us[0]:
@@ -109,8 +110,8 @@ class SpeedProfile:
         self.rpm = [value] + self.rpm[i + 1 :]
 
     def revolutions(self, t0_us: float, t1_us: float) -> float:
-        """Signed revolutions the profile implies over ``[t0_us, t1_us]`` (trimmed knots included, as far
-        back as :data:`PAST_KNOTS` of them reach; at rest before)."""
+        """Signed revolutions the profile implies over ``[t0_us, t1_us]`` (trimmed knots included,
+        as far back as :data:`PAST_KNOTS` of them reach; at rest before)."""
         return self._revolutions_at(t1_us) - self._revolutions_at(t0_us)
 
     def _revolutions_at(self, t_us: float) -> float:
@@ -272,8 +273,9 @@ class SmoothedPose:
         return [p.at(t_us, p.segment(t_us)) for p in self.profiles]
 
     def _steady(self, t_us: int) -> tuple[tuple[float, float] | None, float]:
-        """Body twist (m/s, rad/s) both speeds hold from ``t_us`` to the instant returned (us, ``inf``:
-        the last knot), with the speeds :func:`integrate` uses there; ``None`` if one varies."""
+        """Body twist (m/s, rad/s) both speeds hold from ``t_us`` to the instant returned (us,
+        ``inf``: the last knot), with the speeds :func:`integrate` uses there; ``None`` if one
+        varies."""
         until, rpm = math.inf, []
         for p in self.profiles:
             seg = p.segment(t_us)

@@ -260,7 +260,8 @@ class EkfNode:
             self._publish(msg.header.stamp)
 
     def range_model(self, x: np.ndarray, index: int) -> tuple[float, np.ndarray]:
-        """Predicted range to anchor ``index`` (m) and its Jacobian, shape (1, 6) (:func:`range_model`)."""
+        """Predicted range to anchor ``index`` (m) and its Jacobian, shape (1, 6)
+        (:func:`range_model`)."""
         return range_model(x, self.anchors_xy_m[index], self.tag_xy_m, self.dz_m)
 
     def on_range(self, msg: Range) -> None:
@@ -296,9 +297,10 @@ class EkfNode:
     def on_pose(self, msg: PoseWithCovarianceStamped) -> None:
         """Fuse a pose in ``map`` (x, y, yaw) with the message's covariance of them, then publish.
 
-        A pose of an instant the filter has passed (the navigator matched the pose it was given) is carried
-        to the filter's time by the filter's own motion since, and the result published at the pose's stamp,
-        carried back: the receiver sees the jump the fusion made at the instant it knows."""
+        A pose of an instant the filter has passed (the navigator matched the pose it was given) is
+        carried to the filter's time by the filter's own motion since, and the result published at
+        the pose's stamp, carried back: the receiver sees the jump the fusion made at the instant it
+        knows."""
         if msg.header.frame_id != MAP_FRAME:
             raise ValueError(
                 f"{POSE_TOPIC}: header.frame_id must be {MAP_FRAME!r}, got {msg.header.frame_id!r}"
@@ -343,8 +345,8 @@ class EkfNode:
         return t, pose
 
     def message(self, stamp, pose=None) -> Odometry:
-        """The current estimate as ``nav_msgs/Odometry`` (frame ``odom`` or ``map``, child ``base_link``);
-        ``pose`` (3,) in place of the state's x, y, yaw."""
+        """The current estimate as ``nav_msgs/Odometry`` (frame ``odom`` or ``map``, child
+        ``base_link``); ``pose`` (3,) in place of the state's x, y, yaw."""
         x = self.filter.x[:, 0]
         px, py, pyaw = (x[X], x[Y], x[YAW]) if pose is None else pose
         pose_cov, twist_cov = odometry_covariances(self.filter.P)

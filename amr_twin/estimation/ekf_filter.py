@@ -1,7 +1,8 @@
-"""The EKF's filter: filterpy's ExtendedKalmanFilter with the unicycle's prediction, without its bookkeeping.
+"""The EKF's filter: filterpy's ExtendedKalmanFilter with the unicycle's prediction, without its
+bookkeeping.
 
-Used by :class:`amr_twin.estimation.ekf.EkfNode`; the state and models are :mod:`amr_twin.estimation.ekf_model`'s.
-"""
+Used by :class:`amr_twin.estimation.ekf.EkfNode`; the state and models are
+:mod:`amr_twin.estimation.ekf_model`'s."""
 
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ from amr_twin.estimation.ekf_model import predict_mean
 
 
 class UnicycleEkf(ExtendedKalmanFilter):
-    """filterpy's EKF with the nonlinear constant-velocity prediction, minus its per-call bookkeeping.
+    """filterpy's EKF with the nonlinear constant-velocity prediction, minus its per-call
+    bookkeeping.
 
     ``predict`` and ``update`` override filterpy's with the same equations, the same
     NumPy products in the same order (so the same bits: ``tests/estimation/test_ekf.py``
@@ -40,7 +42,8 @@ class UnicycleEkf(ExtendedKalmanFilter):
         self.P = dot(self.F, self.P).dot(self.F.T) + self.Q
 
     def update(self, z, HJacobian, Hx, R=None, args=(), hx_args=(), residual=np.subtract) -> None:
-        """filterpy's ``update`` (Joseph form) for ``z`` of shape (dim_z, 1) and ``R`` an array or None."""
+        """filterpy's ``update`` (Joseph form) for ``z`` of shape (dim_z, 1) and ``R`` an array or
+        None."""
         R = self.R if R is None else R
         H = HJacobian(self.x, *args)
         PHT = dot(self.P, H.T)

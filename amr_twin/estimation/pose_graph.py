@@ -1,4 +1,5 @@
-"""Offline pose-graph smoothing of a drive: LiDAR and wheel odometry between scans, UWB ranges to the anchors.
+"""Offline pose-graph smoothing of a drive: LiDAR and wheel odometry between scans, UWB ranges to
+the anchors.
 
 Reasons and measurements: docs/explanation/fusion.md#amr_twinestimationpose_graph."""
 
@@ -40,8 +41,8 @@ def _pose2(p):
 def _range_factors(
     graph, t_s, odom_t_s, odom_pose, ranges, anchor, tag_xy_m, dz_m, sigma_m, cauchy_k
 ) -> int:
-    """Add a robust range factor per usable ``sensor_msgs/Range`` (module notes), ``anchor`` (M,) the index
-    of each one's anchor; how many were added."""
+    """Add a robust range factor per usable ``sensor_msgs/Range`` (module notes), ``anchor`` (M,)
+    the index of each one's anchor; how many were added."""
     import gtsam
 
     stamps = np.array([m.header.stamp.to_sec() for m in ranges], float)
@@ -97,8 +98,8 @@ def smooth(
     ``t_s`` (N,), ``lidar_pose`` (N, 3): kiss-icp's poses at the scans' ends, in the map frame;
     ``odom_t_s`` (M,), ``odom_pose`` (M, 3): the wheel odometry (any fixed frame); ``ranges``: the
     drive's ``sensor_msgs/Range`` messages (frame ``uwb_anchor_<i>``); ``anchors_xy_m`` (K, 2);
-    ``tag_xy_m``: the tag on the base, m; ``dz_m``: the anchors' height above the tag; ``start_pose``:
-    the prior of the first pose; ``range_sigma_m``: a line-of-sight range's sigma.
+    ``tag_xy_m``: the tag on the base, m; ``dz_m``: the anchors' height above the tag;
+    ``start_pose``: the prior of the first pose; ``range_sigma_m``: a line-of-sight range's sigma.
     """
     import gtsam
 

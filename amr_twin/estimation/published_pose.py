@@ -14,8 +14,8 @@ motion the wheels give (of the speed for x and y; for yaw, of the larger of the 
 either wheel's speed gives turning in place, so a heading seen late is made up before a stop) plus
 :data:`CATCHUP_FLOOR_M_S` and :data:`CATCHUP_FLOOR_RAD_S` (what is left at a stop settles at those
 rates). The published twist is the one the published pose moves with, correction included
-(``linear.y`` is non-zero only while a sideways difference is made up), so integrating it gives the pose.
-"""
+(``linear.y`` is non-zero only while a sideways difference is made up), so integrating it gives the
+pose."""
 
 from __future__ import annotations
 
@@ -27,8 +27,8 @@ from amr_twin.estimation.dead_reckoning import SmoothedPose, arc, twist_step
 DEADBAND_M, DEADBAND_RAD = 5e-4, 5e-4
 """A difference to the smoothed pose below both is left alone, m and rad (the correction ends)."""
 CATCHUP_FLOOR_M_S, CATCHUP_FLOOR_RAD_S = 0.05, 0.1
-"""Correction allowed beyond ``catchup_max_fraction`` of the wheels' motion (the rest after a stop), m/s,
-rad/s."""
+"""Correction allowed beyond ``catchup_max_fraction`` of the wheels' motion (the rest after a stop),
+m/s, rad/s."""
 
 
 class PublishedPose:
@@ -47,7 +47,8 @@ class PublishedPose:
     catchup_s : float
         Shortest time over which the difference to the smoothed pose is made up, s (> 0).
     catchup_max_fraction : float
-        Largest correction as a fraction of the wheels' speed and yaw rate (>= 0), beyond the floors.
+        Largest correction as a fraction of the wheels' speed and yaw rate (>= 0), beyond the
+        floors.
 
     Call :meth:`restart` before use.
     """
@@ -65,7 +66,8 @@ class PublishedPose:
         self.catchup_s, self.catchup_max_fraction = catchup_s, catchup_max_fraction
 
     def restart(self, t_us: int, pose: tuple[float, float, float], rpm: Sequence[float]) -> None:
-        """Both poses at ``pose`` (``x_m, y_m, yaw_rad``) at ``t_us``, the wheels at ``rpm`` (left, right)."""
+        """Both poses at ``pose`` (``x_m, y_m, yaw_rad``) at ``t_us``, the wheels at ``rpm`` (left,
+        right)."""
         self.smoothed = SmoothedPose(t_us, pose, rpm, self._body, self.max_substep_us)
         self.profiles = self.smoothed.profiles
         self.t_us = t_us  # the published pose is integrated up to here; never revised
@@ -81,7 +83,8 @@ class PublishedPose:
         self.retarget()
 
     def retarget(self) -> None:
-        """The correction twist from the difference between the smoothed and the published pose now."""
+        """The correction twist from the difference between the smoothed and the published pose
+        now."""
         x, y, yaw = self.pose
         hx, hy, hyaw = self.smoothed.pose_at(self.t_us)
         c, s = math.cos(yaw), math.sin(yaw)
@@ -93,7 +96,8 @@ class PublishedPose:
             return
         v, w = self._body(*self.used)
         k = self.catchup_max_fraction
-        # yaw: within the fraction of the yaw rate, or of the one the wheels' speed gives turning in place
+        # yaw: within the fraction of the yaw rate, or of the one the wheels' speed gives turning in
+        # place
         w_wheels = max(
             abs(w),
             abs(self._body(-self.used[0], self.used[0])[1]),
@@ -107,7 +111,8 @@ class PublishedPose:
         self.correction = (ex / t_s, ey / t_s, eyaw / t_s)
 
     def twist(self) -> tuple[float, float, float]:
-        """Body twist the published pose moves with at :attr:`t_us`: ``vx_m_s, vy_m_s, w_rad_s`` (CCW +)."""
+        """Body twist the published pose moves with at :attr:`t_us`: ``vx_m_s, vy_m_s, w_rad_s``
+        (CCW +)."""
         v, w = self._body(*self.used)
         cx, cy, cw = self.correction
         return v + cx, cy, w + cw

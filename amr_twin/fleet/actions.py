@@ -1,5 +1,6 @@
-"""The action states of one vehicle (the specification's section 6.11): each action received, in order, with its
-status WAITING, INITIALIZING, RUNNING, FINISHED or FAILED (the 2.0 schema has no PAUSED)."""
+"""The action states of one vehicle (the specification's section 6.11): each action received, in
+order, with its status WAITING, INITIALIZING, RUNNING, FINISHED or FAILED (the 2.0 schema has no
+PAUSED)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ INSTANT_ACTIONS = frozenset(
 )
 """The instant actions this vehicle performs."""
 NODE_ACTIONS: frozenset = frozenset()
-"""The node actions it performs (pick, drop and charging are not built yet: an order carrying them is refused)."""
+"""The node actions it performs (pick, drop and charging are not built yet: an order carrying them
+is refused)."""
 EDGE_ACTIONS: frozenset = frozenset()
 DONE = ("FINISHED", "FAILED")
 
@@ -38,7 +40,8 @@ class ActionState:
 
 
 class ActionStates:
-    """The actions of the present order and the instant actions since, by actionId (insertion order)."""
+    """The actions of the present order and the instant actions since, by actionId (insertion
+    order)."""
 
     def __init__(self):
         self._states: dict[str, ActionState] = {}

@@ -1,14 +1,15 @@
-"""One vehicle's VDA 5050 2.0 side: orders and instant actions in, state and visualization out, on the twin's clock.
+"""One vehicle's VDA 5050 2.0 side: orders and instant actions in, state and visualization out, on
+the twin's clock.
 
-:class:`VehicleAdapter` takes the messages of the ``order`` and ``instantActions`` topics (:meth:`handle`, in the
-twin's thread) and, every ``TICK_S`` of simulated time, follows the order: the next released node is sent to the
-vehicle as a goal (with its theta, if any); a node counts as traversed when the goal succeeds or, for a node
-the vehicle drives on from, when it passes within the node's allowed deviation (the vehicle's goal tolerance
-when 0). It stops at the last released node; unreleased ones (the horizon) wait for an order update, which is
-stitched at the last base node (:func:`~amr_twin.fleet.order.stitch`). The state goes out at every change and at
-least every ``STATE_PERIOD_S``; the visualization every tick. A refused order or action is answered with an
-error in the state (:class:`~amr_twin.fleet.order.Rejection`), never an exception.
-"""
+:class:`VehicleAdapter` takes the messages of the ``order`` and ``instantActions`` topics
+(:meth:`handle`, in the twin's thread) and, every ``TICK_S`` of simulated time, follows the order:
+the next released node is sent to the vehicle as a goal (with its theta, if any); a node counts as
+traversed when the goal succeeds or, for a node the vehicle drives on from, when it passes within
+the node's allowed deviation (the vehicle's goal tolerance when 0). It stops at the last released
+node; unreleased ones (the horizon) wait for an order update, which is stitched at the last base
+node (:func:`~amr_twin.fleet.order.stitch`). The state goes out at every change and at least every
+``STATE_PERIOD_S``; the visualization every tick. A refused order or action is answered with an
+error in the state (:class:`~amr_twin.fleet.order.Rejection`), never an exception."""
 
 from __future__ import annotations
 
@@ -25,9 +26,10 @@ DRIVING_M_S, DRIVING_RAD_S = 0.01, 0.02
 
 
 class VehicleAdapter:
-    """``vehicle`` (:class:`~amr_twin.fleet.vehicle.Vehicle`) behind VDA 5050; ``send(subtopic, message)`` publishes,
-    ``stamper`` (:class:`~amr_twin.fleet.protocol.Stamper`) heads each message, ``factsheet`` is the factsheet's
-    body; ``xy_tolerance_m``: the vehicle's own tolerance at a node (allowedDeviationXY 0)."""
+    """``vehicle`` (:class:`~amr_twin.fleet.vehicle.Vehicle`) behind VDA 5050; ``send(subtopic,
+    message)`` publishes, ``stamper`` (:class:`~amr_twin.fleet.protocol.Stamper`) heads each
+    message, ``factsheet`` is the factsheet's body; ``xy_tolerance_m``: the vehicle's own tolerance
+    at a node (allowedDeviationXY 0)."""
 
     def __init__(
         self, vehicle, clock, send, stamper, factsheet: dict, xy_tolerance_m: float = 0.25
@@ -51,7 +53,8 @@ class VehicleAdapter:
 
     # -- in ---------------------------------------------------------------------------------------
     def handle(self, subtopic: str, payload: bytes) -> None:
-        """A message of ``order`` or ``instantActions`` (raw JSON); a bad one becomes an error in the state."""
+        """A message of ``order`` or ``instantActions`` (raw JSON); a bad one becomes an error in
+        the state."""
         try:
             msg = json.loads(payload)
         except (ValueError, UnicodeDecodeError) as exc:
@@ -402,8 +405,8 @@ class VehicleAdapter:
         self._emit("factsheet", self.factsheet_body)
 
     def connection(self, state: str) -> dict:
-        """A ``connection`` message with ``state`` (ONLINE, OFFLINE, CONNECTIONBROKEN), not sent (the transport
-        sends it, or sets it as its last will)."""
+        """A ``connection`` message with ``state`` (ONLINE, OFFLINE, CONNECTIONBROKEN), not sent
+        (the transport sends it, or sets it as its last will)."""
         return {**self.stamper.header("connection", self.clock.now_s), "connectionState": state}
 
     def close(self) -> None:

@@ -1,4 +1,5 @@
-"""An embedded MQTT broker (amqtt, pure Python) on its own thread, for a run without ``--vda5050``."""
+"""An embedded MQTT broker (amqtt, pure Python) on its own thread, for a run without
+``--vda5050``."""
 
 from __future__ import annotations
 
@@ -16,7 +17,8 @@ def free_port(host: str = "127.0.0.1") -> int:
 
 
 class EmbeddedBroker:
-    """amqtt's broker listening on ``host:port`` (0: a free port), anonymous clients allowed; :meth:`stop` ends it."""
+    """amqtt's broker listening on ``host:port`` (0: a free port), anonymous clients allowed;
+    :meth:`stop` ends it."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0):
         self.host, self.port = host, port or free_port(host)
@@ -71,7 +73,8 @@ class EmbeddedBroker:
     def stop(self) -> None:
         """Shut the broker down and end its thread."""
         if self._broker is not None:
-            try:  # amqtt waits for its clients' sessions: a client that hangs on must not hold the run
+            # amqtt waits for its clients' sessions: a client that hangs on must not hold the run
+            try:
                 asyncio.run_coroutine_threadsafe(self._broker.shutdown(), self._loop).result(5.0)
             except TimeoutError:
                 pass

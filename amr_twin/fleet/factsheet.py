@@ -1,7 +1,8 @@
 """The vehicle's VDA 5050 2.0 factsheet (the specification's chapter 7) from the parameter file.
 
-Dimensions from the model (chassis length, the wheels' outer faces, the LiDAR's top), speeds and accelerations
-from ``navigation.limits``, the drive wheels and casters from ``wheel`` and ``caster``, the actions of
+Dimensions from the model (chassis length, the wheels' outer faces, the LiDAR's top), speeds and
+accelerations from ``navigation.limits``, the drive wheels and casters from ``wheel`` and
+``caster``, the actions of
 :mod:`amr_twin.fleet.actions`.
 """
 
@@ -11,7 +12,8 @@ from amr_twin.fleet.actions import EDGE_ACTIONS, INSTANT_ACTIONS, NODE_ACTIONS
 from amr_twin.fleet.adapter import STATE_PERIOD_S
 
 MAX_LOAD_KG = 50.0
-"""Load capacity, kg: the thesis' FEM check of the payload floor (fig. 2.30; ``payload.mass_kg``'s source)."""
+"""Load capacity, kg: the thesis' FEM check of the payload floor (fig. 2.30; ``payload.mass_kg``'s
+source)."""
 
 
 def factsheet(cfg) -> dict:

@@ -1,11 +1,11 @@
 """VDA 5050 2.0 orders: parsed, checked, stitched (the specification's sections 6.6 and 6.7).
 
-:func:`parse_order` turns an ``order`` message into an :class:`Order` or raises :class:`Rejection` with the
-error the state reports: ``validationError`` for a malformed order (a missing field, edges that do not join
-the nodes in sequence, sequence ids out of step, a released element after an unreleased one),
-``orderError`` for one this vehicle cannot carry out (no node position, another map, a trajectory, an action
-it does not have). :func:`stitch` appends an order update to the order being driven (section 6.6.2).
-"""
+:func:`parse_order` turns an ``order`` message into an :class:`Order` or raises :class:`Rejection`
+with the error the state reports: ``validationError`` for a malformed order (a missing field, edges
+that do not join the nodes in sequence, sequence ids out of step, a released element after an
+unreleased one), ``orderError`` for one this vehicle cannot carry out (no node position, another
+map, a trajectory, an action it does not have). :func:`stitch` appends an order update to the order
+being driven (section 6.6.2)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 
 
 class Rejection(Exception):
-    """An order or action refused: ``error_type``, a one-line description, ``references`` ((key, value), ...)."""
+    """An order or action refused: ``error_type``, a one-line description, ``references`` ((key,
+    value), ...)."""
 
     def __init__(self, error_type: str, description: str, references: tuple = ()):
         super().__init__(description)
@@ -38,8 +39,8 @@ class Rejection(Exception):
 
 @dataclass(frozen=True)
 class Node:
-    """One node: position on ``map_id`` (m, rad; theta None: any heading), allowed deviations (m, rad; 0: the
-    vehicle's own tolerance), whether released (base) or not (horizon)."""
+    """One node: position on ``map_id`` (m, rad; theta None: any heading), allowed deviations (m,
+    rad; 0: the vehicle's own tolerance), whether released (base) or not (horizon)."""
 
     node_id: str
     sequence_id: int
@@ -53,7 +54,8 @@ class Node:
     description: str | None = None
 
     def state(self) -> dict:
-        """The state's ``nodeStates`` entry (its position only with a theta: the schema requires one)."""
+        """The state's ``nodeStates`` entry (its position only with a theta: the schema requires
+        one)."""
         out = {"nodeId": self.node_id, "sequenceId": self.sequence_id, "released": self.released}
         if self.description is not None:
             out["nodeDescription"] = self.description
@@ -69,7 +71,8 @@ class Node:
 
 @dataclass(frozen=True)
 class Edge:
-    """One edge from ``start_node_id`` to ``end_node_id``; ``max_speed_m_s`` None: the vehicle's own limit."""
+    """One edge from ``start_node_id`` to ``end_node_id``; ``max_speed_m_s`` None: the vehicle's own
+    limit."""
 
     edge_id: str
     sequence_id: int
@@ -89,7 +92,8 @@ class Edge:
 
 @dataclass
 class Order:
-    """An accepted order: its ids, the ``headerId`` of its last message, its nodes and edges in sequence."""
+    """An accepted order: its ids, the ``headerId`` of its last message, its nodes and edges in
+    sequence."""
 
     order_id: str
     update_id: int
@@ -228,8 +232,8 @@ def parse_order(
     node_actions: frozenset = frozenset(),
     edge_actions: frozenset = frozenset(),
 ) -> Order:
-    """The :class:`Order` of an ``order`` message for a vehicle on ``map_id`` that performs ``node_actions`` and
-    ``edge_actions``; raises :class:`Rejection` (module docstring)."""
+    """The :class:`Order` of an ``order`` message for a vehicle on ``map_id`` that performs
+    ``node_actions`` and ``edge_actions``; raises :class:`Rejection` (module docstring)."""
     if not isinstance(msg, dict):
         raise Rejection("validationError", "the order is not a JSON object", (("topic", "order"),))
     refs: tuple = (("topic", "order"),)
@@ -300,10 +304,10 @@ def parse_order(
 def stitch(
     remaining_nodes: list, remaining_edges: list, last_base: Node, update: Order
 ) -> tuple[list, list]:
-    """The nodes and edges left to drive after ``update`` (an order update, or a new order continuing this one)
-    is stitched onto the base: ``update``'s first node must be ``last_base`` (nodeId and sequenceId), whose own
-    actions and position stay; what followed it before (the old horizon) is replaced. Raises :class:`Rejection`
-    (``orderUpdateError``)."""
+    """The nodes and edges left to drive after ``update`` (an order update, or a new order
+    continuing this one) is stitched onto the base: ``update``'s first node must be ``last_base``
+    (nodeId and sequenceId), whose own actions and position stay; what followed it before (the old
+    horizon) is replaced. Raises :class:`Rejection` (``orderUpdateError``)."""
     first = update.nodes[0]
     if (first.node_id, first.sequence_id) != (last_base.node_id, last_base.sequence_id):
         raise Rejection(

@@ -1,9 +1,10 @@
-"""VDA 5050 2.0 on MQTT: topic names, message headers and timestamps (the specification's sections 6.3, 6.4).
+"""VDA 5050 2.0 on MQTT: topic names, message headers and timestamps (the specification's sections
+6.3, 6.4).
 
-A topic is ``<interfaceName>/v2/<manufacturer>/<serialNumber>/<topic>``; every message starts with the header
-``headerId`` (counted per topic), ``timestamp`` (ISO 8601, UTC), ``version``, ``manufacturer``, ``serialNumber``.
-The twin's messages are stamped on its own clock: the wall time at the start of the run plus the simulated time.
-"""
+A topic is ``<interfaceName>/v2/<manufacturer>/<serialNumber>/<topic>``; every message starts with
+the header ``headerId`` (counted per topic), ``timestamp`` (ISO 8601, UTC), ``version``,
+``manufacturer``, ``serialNumber``. The twin's messages are stamped on its own clock: the wall time
+at the start of the run plus the simulated time."""
 
 from __future__ import annotations
 
@@ -23,12 +24,14 @@ QOS = {
     "connection": 1,
     "factsheet": 0,
 }
-"""Quality of service by subtopic: 0 for order, state and visualization, 1 for connection (section 6.2)."""
+"""Quality of service by subtopic: 0 for order, state and visualization, 1 for connection (section
+6.2)."""
 _NAME = re.compile(r"^[A-Za-z0-9_.:-]+$")
 
 
 def check_name(what: str, value: str) -> str:
-    """``value`` if it may stand as a topic level (A-Z a-z 0-9 _ . : -, section 6.3); ValueError naming ``what``."""
+    """``value`` if it may stand as a topic level (A-Z a-z 0-9 _ . : -, section 6.3); ValueError
+    naming ``what``."""
     if not _NAME.match(value):
         raise ValueError(
             f"{what} {value!r}: only letters, digits and _ . : - are allowed (VDA 5050 topic level)"
@@ -47,7 +50,8 @@ def serial_numbers(robots: int) -> list[str]:
 
 
 class Stamper:
-    """Headers of one vehicle's messages: ``headerId`` per topic from 0, the timestamp from the twin's clock."""
+    """Headers of one vehicle's messages: ``headerId`` per topic from 0, the timestamp from the
+    twin's clock."""
 
     def __init__(
         self, serial: str, epoch: datetime | None = None, manufacturer: str = MANUFACTURER

@@ -1,9 +1,10 @@
-"""One twin as a VDA 5050 vehicle on an MQTT broker: the twin with its navigation stack, the adapter, the
-transport, the embedded broker when no broker is given, paced in real time (``amr-twin fleet``).
+"""One twin as a VDA 5050 vehicle on an MQTT broker: the twin with its navigation stack, the
+adapter, the transport, the embedded broker when no broker is given, paced in real time (``amr-twin
+fleet``).
 
 Messages from the broker arrive in paho's thread and are handed to the twin's thread through the
-:class:`~amr_twin.live.pacer.Pacer` (they act at its next tick, 20 ms of simulated time); the adapter's
-messages go out from the twin's thread as they are made.
+:class:`~amr_twin.live.pacer.Pacer` (they act at its next tick, 20 ms of simulated time); the
+adapter's messages go out from the twin's thread as they are made.
 """
 
 from __future__ import annotations
@@ -21,8 +22,9 @@ from amr_twin.fleet.vehicle import TwinVehicle
 
 @dataclass(frozen=True)
 class FleetOptions:
-    """The run: ``world``, the robot's start (x_m, y_m, yaw_rad; None: the world's), the broker (None: an embedded
-    one), the interface name, ``rate`` (simulated seconds per wall second, 0: as fast as possible)."""
+    """The run: ``world``, the robot's start (x_m, y_m, yaw_rad; None: the world's), the broker
+    (None: an embedded one), the interface name, ``rate`` (simulated seconds per wall second, 0: as
+    fast as possible)."""
 
     world: str = "aisles"
     start_xy_yaw: tuple | None = None
@@ -41,7 +43,8 @@ def map_id(world: str) -> str:
 
 
 class FleetSession:
-    """The twin of ``cfg`` as vehicle ``serial`` (module docstring); :meth:`run`, then :meth:`close`."""
+    """The twin of ``cfg`` as vehicle ``serial`` (module docstring); :meth:`run`, then
+    :meth:`close`."""
 
     def __init__(self, cfg, options: FleetOptions, serial: str = "amr-1", epoch=None):
         from amr_twin.fleet.broker import EmbeddedBroker
@@ -133,7 +136,8 @@ class FleetSession:
         )
 
     def summary(self) -> dict:
-        """What the run did: the vehicle, the broker, the messages sent by topic, the last state, the true pose."""
+        """What the run did: the vehicle, the broker, the messages sent by topic, the last state,
+        the true pose."""
         counts: dict[str, int] = {}
         for _t, sub, _m in self.adapter.log:
             counts[sub] = counts.get(sub, 0) + 1

@@ -1,6 +1,6 @@
-"""MQTT for one vehicle (paho-mqtt): its ``order`` and ``instantActions`` topics in, its messages out, the
-``connection`` topic's last will (CONNECTIONBROKEN), ONLINE at connection and OFFLINE at a clean close, retained
-(the specification's sections 6.2 and 6.14)."""
+"""MQTT for one vehicle (paho-mqtt): its ``order`` and ``instantActions`` topics in, its messages
+out, the ``connection`` topic's last will (CONNECTIONBROKEN), ONLINE at connection and OFFLINE at a
+clean close, retained (the specification's sections 6.2 and 6.14)."""
 
 from __future__ import annotations
 
@@ -11,11 +11,13 @@ from urllib.parse import urlparse
 from amr_twin.fleet.protocol import QOS, topic
 
 KEEPALIVE_S = 15
-"""The MQTT heartbeat: the broker declares the connection broken after 1.5 times this without traffic (6.14)."""
+"""The MQTT heartbeat: the broker declares the connection broken after 1.5 times this without
+traffic (6.14)."""
 
 
 def broker_address(url: str) -> tuple[str, int]:
-    """``mqtt://HOST:PORT`` (port 1883 if left out) as (host, port); ValueError naming the option otherwise."""
+    """``mqtt://HOST:PORT`` (port 1883 if left out) as (host, port); ValueError naming the option
+    otherwise."""
     parsed = urlparse(url)
     try:
         port = parsed.port or 1883
@@ -32,7 +34,8 @@ def broker_address(url: str) -> tuple[str, int]:
 
 
 class MqttTransport:
-    """One vehicle's MQTT client. ``on_message(subtopic, payload)`` is called in paho's network thread."""
+    """One vehicle's MQTT client. ``on_message(subtopic, payload)`` is called in paho's network
+    thread."""
 
     def __init__(
         self, url: str, interface: str, serial: str, on_message, will: dict, manufacturer: str
@@ -69,7 +72,8 @@ class MqttTransport:
             self._on_message(sub, message.payload)
 
     def connect(self, timeout_s: float = 10.0) -> None:
-        """Connect and subscribe; OSError with one line if the broker does not answer in ``timeout_s``."""
+        """Connect and subscribe; OSError with one line if the broker does not answer in
+        ``timeout_s``."""
         try:
             self.client.connect(self.host, self.port, keepalive=KEEPALIVE_S)
         except OSError as exc:
@@ -80,12 +84,14 @@ class MqttTransport:
         if not self._connected.wait(timeout_s):
             self.client.loop_stop()
             raise OSError(
-                f"--vda5050 mqtt://{self.host}:{self.port}: the broker did not accept the connection "
+                f"--vda5050 mqtt://{self.host}:{self.port}: the broker did not accept the "
+                f"connection "
                 f"within {timeout_s:g} s"
             )
 
     def publish(self, subtopic: str, msg: dict) -> None:
-        """Send ``msg`` on the vehicle's ``subtopic`` (QoS of the specification; connection retained)."""
+        """Send ``msg`` on the vehicle's ``subtopic`` (QoS of the specification; connection
+        retained)."""
         self.client.publish(
             self._topic(subtopic),
             json.dumps(msg),

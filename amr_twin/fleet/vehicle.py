@@ -1,8 +1,8 @@
-"""What the VDA 5050 adapter needs of a vehicle (:class:`Vehicle`), and that of one twin with its navigation stack
-(:class:`TwinVehicle`).
+"""What the VDA 5050 adapter needs of a vehicle (:class:`Vehicle`), and that of one twin with its
+navigation stack (:class:`TwinVehicle`).
 
-The adapter reads the vehicle's pose, velocity, battery, load and safety state and sends it goals; it reaches no
-further, so that a world of N robots can hand it each of its robots the same way.
+The adapter reads the vehicle's pose, velocity, battery, load and safety state and sends it goals;
+it reaches no further, so that a world of N robots can hand it each of its robots the same way.
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ class Vehicle(Protocol):
     map_id: str
 
     def pose(self) -> tuple[float, float, float] | None:
-        """The vehicle's own estimate (x_m, y_m, yaw_rad) in the map, None before it is localised."""
+        """The vehicle's own estimate (x_m, y_m, yaw_rad) in the map, None before it is
+        localised."""
 
     def velocity(self) -> tuple[float, float]:
         """Forward speed m/s and yaw rate rad/s."""
@@ -38,15 +39,16 @@ class Vehicle(Protocol):
         """Whether a protective field stopped it since the last call."""
 
     def send_goal(self, x_m: float, y_m: float, yaw_rad: float | None):
-        """Drive to a pose (preempting any goal); returns an object with ``status`` (``pending``, ``succeeded``,
-        ``aborted``, ``canceled``, ``preempted``) and ``reason``."""
+        """Drive to a pose (preempting any goal); returns an object with ``status`` (``pending``,
+        ``succeeded``, ``aborted``, ``canceled``, ``preempted``) and ``reason``."""
 
     def cancel(self) -> None:
         """Stop driving (ramp to a stop)."""
 
 
 class TwinVehicle:
-    """One twin driven by its navigator (:func:`amr_twin.navigation.stack.attach`), as a :class:`Vehicle`."""
+    """One twin driven by its navigator (:func:`amr_twin.navigation.stack.attach`), as a
+    :class:`Vehicle`."""
 
     def __init__(self, twin, navigator, map_id: str, payload_kg: float = 0.0):
         self.twin, self.navigator, self.map_id = twin, navigator, map_id
@@ -94,8 +96,8 @@ class TwinVehicle:
 def within(
     pose, x_m: float, y_m: float, theta_rad: float | None, xy_m: float, theta_tol_rad: float
 ) -> bool:
-    """Whether ``pose`` lies within ``xy_m`` of (x_m, y_m) and, with a theta and ``theta_tol_rad`` > 0, within
-    that angle of it."""
+    """Whether ``pose`` lies within ``xy_m`` of (x_m, y_m) and, with a theta and ``theta_tol_rad`` >
+    0, within that angle of it."""
     if pose is None or math.hypot(pose[0] - x_m, pose[1] - y_m) > xy_m:
         return False
     if theta_rad is None or theta_tol_rad <= 0:

@@ -68,7 +68,8 @@ def live_topics(twin) -> dict[str, str]:
 
 
 def _listener(foxglove, sink: "FoxgloveSink"):
-    """A ``foxglove.ServerListener`` (its callbacks run in the server's threads) handing events to ``sink``."""
+    """A ``foxglove.ServerListener`` (its callbacks run in the server's threads) handing events to
+    ``sink``."""
 
     class Listener(foxglove.ServerListener):
         def on_subscribe(self, client, channel) -> None:
@@ -237,8 +238,8 @@ class FoxgloveSink:
         self.server.broadcast_time(t_ns)
 
     def _row_items(self, rows) -> list:
-        """/twin/true_rpm, /twin/pwm_counts, /twin/motor_current (100 Hz) and /battery_state (10 Hz), as
-        mcap_log writes them, for the channels someone subscribed to."""
+        """/twin/true_rpm, /twin/pwm_counts, /twin/motor_current (100 Hz) and /battery_state (10
+        Hz), as mcap_log writes them, for the channels someone subscribed to."""
         out = []
         t_ns = (rows.t_us * 1000).tolist()
         for name, column in (
@@ -359,7 +360,8 @@ class FoxgloveSink:
         self.accepted += 1
 
     def _goal(self, msg) -> None:
-        """A client's goal (the twin's thread): stamped now, on the bus' ``goal_pose``, echoed to the clients."""
+        """A client's goal (the twin's thread): stamped now, on the bus' ``goal_pose``, echoed to
+        the clients."""
         from amr_twin.ros.messages import Time
         from amr_twin.ros.nav_messages import encode_pose_stamped
 
@@ -368,7 +370,8 @@ class FoxgloveSink:
         self.goal_channel.log(encode_pose_stamped(msg), log_time=self.twin.clock.now_us * 1000)
 
     def _on_service_call(self, request) -> bytes:
-        """``/wheel_Command_Service`` (the server's thread): checked, then called at the next tick."""
+        """``/wheel_Command_Service`` (the server's thread): checked, then called at the next
+        tick."""
         try:
             req = live_inputs.decode_service_request(request.payload, request.encoding)
         except live_inputs.InputError as exc:

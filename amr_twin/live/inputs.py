@@ -54,7 +54,8 @@ MAX_BYTES = {
     "geometry_msgs/PoseStamped": 4096,
 }
 """Largest payload taken per type, bytes: a Twist is 52 in CDR (a few more with padding or JSON
-spacing would still fit 64 in CDR; JSON gets 4096 throughout); a request of 4 values is under 100."""
+spacing would still fit 64 in CDR; JSON gets 4096 throughout); a request of 4 values is under
+100."""
 """An empty ROS 2 message in CDR: the header and rosidl's one placeholder byte."""
 
 
@@ -125,8 +126,9 @@ def decode_twist(data: bytes, encoding: str) -> Twist:
 
 
 def decode_goal_pose(data: bytes, encoding: str) -> PoseStamped:
-    """A client's ``geometry_msgs/msg/PoseStamped`` goal: frame ``map`` (or empty) or ``odom``, a finite
-    position within +-10 km and a finite quaternion that is not zero (normalised; only its yaw counts)."""
+    """A client's ``geometry_msgs/msg/PoseStamped`` goal: frame ``map`` (or empty) or ``odom``, a
+    finite position within +-10 km and a finite quaternion that is not zero (normalised; only its
+    yaw counts)."""
     msg = _decode(data, encoding, "geometry_msgs/PoseStamped")
     frame = str(_field(_field(msg, "header", {}), "frame_id", "") or "map").lstrip("/")
     if frame not in GOAL_FRAMES:
@@ -135,7 +137,8 @@ def decode_goal_pose(data: bytes, encoding: str) -> PoseStamped:
     xyz = [_finite(_field(_field(pose, "position", {}), k), f"pose.position.{k}") for k in "xyz"]
     if max(abs(v) for v in xyz) > GOAL_LIMIT_M:
         raise InputError(
-            f"goal_pose at ({xyz[0]:g}, {xyz[1]:g}): each coordinate must be within +-{GOAL_LIMIT_M:g} m"
+            f"goal_pose at ({xyz[0]:g}, {xyz[1]:g}): each coordinate must be within "
+            f"+-{GOAL_LIMIT_M:g} m"
         )
     q = [
         _finite(
@@ -155,11 +158,13 @@ def decode_goal_pose(data: bytes, encoding: str) -> PoseStamped:
 
 
 def check_request(values) -> WheelCommandRequest:
-    """``[motionL, speedL, motionR, speedR]`` checked: motions -1, 0 or 1; speeds in [0, MAX_RPM] RPM."""
+    """``[motionL, speedL, motionR, speedR]`` checked: motions -1, 0 or 1; speeds in [0, MAX_RPM]
+    RPM."""
     values = list(values)
     if len(values) != 4:
         raise InputError(
-            f"wheel_Command request: {len(values)} values, expected 4 [motionL, speedL, motionR, speedR]"
+            f"wheel_Command request: {len(values)} values, expected 4 [motionL, speedL, motionR, "
+            f"speedR]"
         )
     motion_l, speed_l, motion_r, speed_r = (
         _finite(v, n) for v, n in zip(values, ("motionL", "speedL", "motionR", "speedR"))

@@ -22,7 +22,8 @@ TICK_US = 20_000
 MAX_LAG_S = 1.0
 """Wall seconds behind the paced schedule after which the reference is moved up."""
 PAUSED_POLL_S = 0.005
-"""How often a paused twin runs the calls queued meanwhile, wall s (a service call's latency while paused)."""
+"""How often a paused twin runs the calls queued meanwhile, wall s (a service call's latency while
+paused)."""
 
 
 class PacerClosed(RuntimeError):
@@ -47,7 +48,8 @@ class Pacer:
             raise ValueError(f"rate: {rate} must be a finite number >= 0 (0: as fast as possible)")
         if tick_us <= 0 or tick_us % twin.grid_us:
             raise ValueError(
-                f"tick_us: {tick_us} must be a positive multiple of the record grid ({twin.grid_us} us)"
+                f"tick_us: {tick_us} must be a positive multiple of the record grid "
+                f"({twin.grid_us} us)"
             )
         self.twin, self.rate, self.tick_us = twin, float(rate), int(tick_us)
         self.sinks: list = []
@@ -97,7 +99,8 @@ class Pacer:
 
     # -- pausing (any thread) ------------------------------------------------------------
     def pause(self) -> None:
-        """Hold the twin at the next tick (it keeps running the queued calls) until :meth:`resume`."""
+        """Hold the twin at the next tick (it keeps running the queued calls) until
+        :meth:`resume`."""
         self._paused.set()
 
     def resume(self) -> None:
@@ -105,7 +108,8 @@ class Pacer:
         self._paused.clear()
 
     def wait_until(self, t_us: int) -> None:
-        """Sleep until the wall time of simulated ``t_us`` (paced; the first call sets the reference)."""
+        """Sleep until the wall time of simulated ``t_us`` (paced; the first call sets the
+        reference)."""
         if self.rate == 0:
             return
         wall = time.perf_counter()
@@ -152,7 +156,8 @@ class Pacer:
         return self.post(func).result(timeout=timeout_s)
 
     def run_calls(self) -> int:
-        """Run the queued calls now (the twin's thread); a call that raises is logged and skipped."""
+        """Run the queued calls now (the twin's thread); a call that raises is logged and
+        skipped."""
         n = 0
         while True:
             try:

@@ -4,11 +4,12 @@ The Rerun recording of :mod:`amr_twin.recording.rerun_log`, streamed as the twin
 (``rerun+http://127.0.0.1:PORT/proxy``; it keeps what was sent for late viewers) and Rerun's
 web viewer served locally on ``WEB_PORT`` and connected to it; the native viewer connects
 with ``rerun rerun+http://127.0.0.1:PORT/proxy``. Same application id, entity paths,
-``sim_time`` timeline and default blueprint as the ``.rrd`` (:func:`amr_twin.recording.rerun_log._blueprint`; its time
-panel follows the newest data, and a viewer that connects late gets the newest data first),
-the streams logged by the same ``_log_<stream>`` functions (:mod:`amr_twin.recording.rerun_world`,
-:mod:`amr_twin.recording.rerun_streams`, :mod:`amr_twin.recording.event_log`), each flush handing them what the
-simulated clock has passed since the last one. Two differences with the file:
+``sim_time`` timeline and default blueprint as the ``.rrd``
+(:func:`amr_twin.recording.rerun_log._blueprint`; its time panel follows the newest data, and a
+viewer that connects late gets the newest data first), the streams logged by the same
+``_log_<stream>`` functions (:mod:`amr_twin.recording.rerun_world`,
+:mod:`amr_twin.recording.rerun_streams`, :mod:`amr_twin.recording.event_log`), each flush handing
+them what the simulated clock has passed since the last one. Two differences with the file:
 
 - ``world/trajectory/{true,odom}`` grow every 0.5 s from poses at 10 Hz (the file: 2 Hz
   from the 100 Hz series) and keep the last :data:`TRAIL_POINTS` points;
@@ -39,7 +40,8 @@ TOPICS = ("scan", "imu/data_raw", "imu/mag", "wheel0_Vel", "wheel1_Vel", "wheel_
 
 
 class _Window:
-    """What the ``.rrd`` writers read of a :class:`~amr_twin.recording.rerun_capture.Capture`, over a span of time."""
+    """What the ``.rrd`` writers read of a :class:`~amr_twin.recording.rerun_capture.Capture`, over
+    a span of time."""
 
     def __init__(self, twin, body_ids, t_s, pos, quat, messages):
         self.twin, self.body_ids, self.messages = twin, body_ids, messages
@@ -54,7 +56,8 @@ class _Window:
 
 
 class RerunSink:
-    """Stream ``twin`` to a Rerun gRPC server and a local web viewer; fed by ``pacer`` (its :meth:`flush`).
+    """Stream ``twin`` to a Rerun gRPC server and a local web viewer; fed by ``pacer`` (its
+    :meth:`flush`).
 
     Parameters
     ----------
@@ -127,7 +130,8 @@ class RerunSink:
         self._on_grid(twin.t_phys_us)
 
     def _layout(self):
-        """The file's blueprint, its time panel following the newest data (a live view, not a replay)."""
+        """The file's blueprint, its time panel following the newest data (a live view, not a
+        replay)."""
         import rerun.blueprint as rrb
 
         layout = self._blueprint(self._has_imu, self._has_uwb, self._has_events)
@@ -176,8 +180,8 @@ class RerunSink:
             self._sent_pose_us = new_poses[-1][0]
         self._scans += messages.pop("scan", [])
         if self._scans and self._poses:
-            # a scan's beams are placed on the poses around them: wait for a pose at or after its last beam
-            # (the physics runs ahead of the clock, so there usually is one)
+            # a scan's beams are placed on the poses around them: wait for a pose at or after its
+            # last beam (the physics runs ahead of the clock, so there usually is one)
             last_pose_s = self._poses[-1][0] * 1e-6
             ready = [it for it in self._scans if scan_end_time_s(it[1]) <= last_pose_s]
             self._scans = [it for it in self._scans if scan_end_time_s(it[1]) > last_pose_s]
@@ -215,8 +219,8 @@ class RerunSink:
         )
 
     def _series(self, rows, messages) -> SimpleNamespace:
-        """The rows as the series the ``.rrd`` writers read, with the wheel speeds published meanwhile and
-        every command so far (the references are held from them)."""
+        """The rows as the series the ``.rrd`` writers read, with the wheel speeds published
+        meanwhile and every command so far (the references are held from them)."""
         published = {
             w: np.array(
                 [(t * 1e-6, msg.data) for t, msg in messages.get(f"wheel{w}_Vel", [])], float
@@ -254,8 +258,8 @@ class RerunSink:
             self._trail[name].append((float(xy[0]), float(xy[1])))
 
     def close(self) -> None:
-        """Log what is left and flush the stream; the gRPC server stops with the recording stream (the
-        process' end)."""
+        """Log what is left and flush the stream; the gRPC server stops with the recording stream
+        (the process' end)."""
         self._flush(self._last_t_us)
         self.rec.flush()
 

@@ -1,4 +1,5 @@
-"""The 100 Hz rows of a live twin, as :meth:`amr_twin.recording.recorder.Recorder.series` gives them.
+"""The 100 Hz rows of a live twin, as :meth:`amr_twin.recording.recorder.Recorder.series` gives
+them.
 
 A grid sampler keeps, at each instant of the record grid, the loop's sensor row, the pin
 row the recorder will pair with it and the battery's state as its accounting left it (what
@@ -36,9 +37,10 @@ class LiveRows:
         self._rows.append((t_us, seen.loop_sensors(), seen.drive(), seen.battery()))
 
     def take(self, t_us: int) -> SimpleNamespace | None:
-        """The rows at or before ``t_us`` as series columns (None if there are none): ``t_us`` (n,) int,
-        ``t_s``, ``true_rpm`` (n, 2), ``pose`` (n, 3) x, y, yaw, ``pwm_counts`` (n, 2), ``current_a`` (n, 2),
-        ``battery_v``, ``battery_a``, ``battery_soc`` (n,), ``index`` (n,) the rows' places in the run."""
+        """The rows at or before ``t_us`` as series columns (None if there are none): ``t_us`` (n,)
+        int, ``t_s``, ``true_rpm`` (n, 2), ``pose`` (n, 3) x, y, yaw, ``pwm_counts`` (n, 2),
+        ``current_a`` (n, 2), ``battery_v``, ``battery_a``, ``battery_soc`` (n,), ``index`` (n,) the
+        rows' places in the run."""
         n = 0
         while n < len(self._rows) and self._rows[n][0] <= t_us:
             n += 1

@@ -55,7 +55,8 @@ def _inverse(p, q) -> tuple[np.ndarray, np.ndarray]:
 
 
 def planar_origin(pos, quat) -> tuple[np.ndarray, np.ndarray]:
-    """The odom frame's pose in the world for a base pose: its position and yaw only (odom is planar)."""
+    """The odom frame's pose in the world for a base pose: its position and yaw only (odom is
+    planar)."""
     w, x, y, z = quat
     yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
     return np.asarray(pos, float).copy(), np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
@@ -172,7 +173,8 @@ class SceneBuilder:
         )
 
     def static_update(self, t_ns: int = 0):
-        """The world (in ``odom``) and each robot link (in its own frame): sent once and to late subscribers."""
+        """The world (in ``odom``) and each robot link (in its own frame): sent once and to late
+        subscribers."""
         entities = [self._entity("world", "odom", self._world, t_ns)]
         entities += [
             self._entity(f"robot/{link}", link, geoms, t_ns, frame_locked=True)
@@ -181,7 +183,8 @@ class SceneBuilder:
         return self.fm.SceneUpdate(entities=entities)
 
     def ghost_update(self, t_ns: int, pos, quat):
-        """The robot at its true world pose ``pos`` (3,), ``quat`` (4,) w, x, y, z, drawn in ``odom``."""
+        """The robot at its true world pose ``pos`` (3,), ``quat`` (4,) w, x, y, z, drawn in
+        ``odom``."""
         odom_inv = _inverse(*self._odom_in_world)
         offset = _compose(*odom_inv, pos, quat)
         return self.fm.SceneUpdate(
@@ -189,8 +192,8 @@ class SceneBuilder:
         )
 
     def actors_update(self, t_ns: int, poses_world):
-        """The actors at their world poses ``poses_world`` ((x_m, y_m, yaw_rad) each, in the order of
-        ``actors/poses``), drawn in ``odom``."""
+        """The actors at their world poses ``poses_world`` ((x_m, y_m, yaw_rad) each, in the order
+        of ``actors/poses``), drawn in ``odom``."""
         odom_inv = _inverse(*self._odom_in_world)
         geoms = []
         for (x, y, yaw), parts in zip(poses_world, self._actors):
@@ -203,7 +206,8 @@ class SceneBuilder:
         return self.fm.SceneUpdate(entities=[self._entity("actors", "odom", geoms, t_ns)])
 
     def collisions_update(self, t_ns: int, points_world):
-        """Red spheres (0.1 m) at the collisions' first contacts (world points (n, 3), m), in ``odom``."""
+        """Red spheres (0.1 m) at the collisions' first contacts (world points (n, 3), m), in
+        ``odom``."""
         odom_inv = _inverse(*self._odom_in_world)
         unit = np.array([1.0, 0.0, 0.0, 0.0])
         geoms = [

@@ -30,8 +30,8 @@ CMD_TIMEOUT_S = 0.5
 
 @dataclass(frozen=True)
 class LiveOptions:
-    """How to serve a live twin: ``mode`` foxglove or rerun; ports (None: the mode's default; 0: a free
-    port); ``rate`` simulated s per wall s (0: as fast as possible)."""
+    """How to serve a live twin: ``mode`` foxglove or rerun; ports (None: the mode's default; 0: a
+    free port); ``rate`` simulated s per wall s (0: as fast as possible)."""
 
     mode: str = "foxglove"
     host: str = "127.0.0.1"
@@ -43,7 +43,8 @@ class LiveOptions:
         """Raise ValueError (one line naming the option) on a bad value."""
         if self.mode not in MODES:
             raise ValueError(
-                f"--live {self.mode!r}: must be one of {', '.join(MODES)} (a bare --live is foxglove)"
+                f"--live {self.mode!r}: must be one of {', '.join(MODES)} (a bare --live is "
+                f"foxglove)"
             )
         for flag, port in (("--port", self.port), ("--web-port", self.web_port)):
             if port is not None and not 0 <= port <= 65535:
@@ -85,7 +86,8 @@ class LiveOptions:
 
 
 def host_problem(host: str) -> str | None:
-    """Why a server could not listen on ``host`` (None: it can): no such address, or not one of this machine."""
+    """Why a server could not listen on ``host`` (None: it can): no such address, or not one of this
+    machine."""
     import socket
 
     try:
@@ -164,12 +166,14 @@ class LiveSession:
                 RERUN_WEB_PORT if options.web_port is None else options.web_port,
             )
             say(
-                f"live: Rerun gRPC stream {self.sink.uri}, web viewer {self.sink.web_url} (the twin runs {rate})"
+                f"live: Rerun gRPC stream {self.sink.uri}, web viewer {self.sink.web_url} (the "
+                f"twin runs {rate})"
             )
         self.pacer.sinks.append(self.sink)
 
     def call(self, func, timeout_s: float = 10.0):
-        """Run ``func()`` in the twin's thread at the next tick (a menu choice); returns its result."""
+        """Run ``func()`` in the twin's thread at the next tick (a menu choice); returns its
+        result."""
         return self.pacer.call(func, timeout_s)
 
     def close(self) -> None:

@@ -1,4 +1,5 @@
-"""Where actors may walk: the world's free space, checked along a path, and seeded random paths on it.
+"""Where actors may walk: the world's free space, checked along a path, and seeded random paths on
+it.
 
 An actor must not walk through the world: MuJoCo never makes a mocap body touch the world's
 static geoms, so a path through a rack would go unseen. :func:`check_paths` refuses, before a
@@ -42,7 +43,8 @@ ROBOT_CLEAR_M = 1.0
 
 
 def obstacle_boxes(model, z_top_m: float) -> Footprints:
-    """Plan-view boxes (oriented) of the static world geoms that stand in (0, ``z_top_m``] m of height."""
+    """Plan-view boxes (oriented) of the static world geoms that stand in (0, ``z_top_m``] m of
+    height."""
     import mujoco
 
     data = mujoco.MjData(model)
@@ -79,7 +81,8 @@ def obstacle_boxes(model, z_top_m: float) -> Footprints:
 
 
 def floor_bounds(model) -> tuple[float, float, float, float] | None:
-    """``(x_min, x_max, y_min, y_max)`` of the world's finite floor planes, m; None for an infinite one or none."""
+    """``(x_min, x_max, y_min, y_max)`` of the world's finite floor planes, m; None for an infinite
+    one or none."""
     import mujoco
 
     planes = [
@@ -165,7 +168,8 @@ def _height_m(kind: str, cfg) -> float:
 
 
 def check_paths(model, actors: tuple[Actor, ...], cfg) -> None:
-    """Raise :class:`~amr_twin.model.actors.ActorError` for an actor whose path leaves the world's free space."""
+    """Raise :class:`~amr_twin.model.actors.ActorError` for an actor whose path leaves the world's
+    free space."""
     bounds = floor_bounds(model)
     for i, actor in enumerate(actors):
         half = footprint_half_m(actor.kind, cfg)
@@ -179,8 +183,10 @@ def check_paths(model, actors: tuple[Actor, ...], cfg) -> None:
             x, y = poses[j, :2]
             what = f"runs into {boxes.names[hit[j]]}" if hit[j] >= 0 else "leaves the floor"
             raise ActorError(
-                f"actor {i} ({body_name(i, actor)}): its path {what} near ({x:.2f}, {y:.2f}) m; its "
-                f"{2 * half[0]:.2f} x {2 * half[1]:.2f} m footprint must stay in the world's free space"
+                f"actor {i} ({body_name(i, actor)}): its path {what} near ({x:.2f}, {y:.2f}) m; "
+                f"its "
+                f"{2 * half[0]:.2f} x {2 * half[1]:.2f} m footprint must stay in the world's "
+                f"free space"
             )
 
 

@@ -127,7 +127,8 @@ class Actor:
 
     @classmethod
     def from_mapping(cls, tree, where: str) -> "Actor":
-        """A mission's actor: ``{kind, waypoints_xy_m: [[x, y], ...], speed_m_s, start_s?, loop?, stop_within_m?}``."""
+        """A mission's actor: ``{kind, waypoints_xy_m: [[x, y], ...], speed_m_s, start_s?, loop?,
+        stop_within_m?}``."""
         fields = ("kind", "waypoints_xy_m", "speed_m_s", "start_s", "loop", "stop_within_m")
         if not isinstance(tree, dict):
             raise ActorError(f"{where}: expected a mapping with {', '.join(fields)}")
@@ -199,8 +200,8 @@ _RGBA = {
 
 
 PRIORITY = 2
-"""The actors' colliding geoms' contact priority: above the robot's wheels and casters (1), so that a touch
-takes the actor's compliance (``actors.<kind>.contact_timeconst_s``)."""
+"""The actors' colliding geoms' contact priority: above the robot's wheels and casters (1), so that
+a touch takes the actor's compliance (``actors.<kind>.contact_timeconst_s``)."""
 
 
 def _touching(k) -> dict:

@@ -31,8 +31,9 @@ STAND_HEIGHT_M = 0.10
 
 
 def world_file(world: str | Path) -> Path:
-    """The file of ``--world``: a world of ``models/worlds/``, an MJCF world (``.xml``) or a map_server map
-    (``.yaml``); anything else, a URDF above all (MuJoCo would load it as a world with no floor), is a
+    """The file of ``--world``: a world of ``models/worlds/``, an MJCF world (``.xml``) or a
+    map_server map (``.yaml``); anything else, a URDF above all (MuJoCo would load it as a world
+    with no floor), is a
     :class:`BuildError` saying what is allowed. ``generated:SEED[?door=W]``: a drawn hall
     (:mod:`amr_twin.model.generated_world`)."""
     from amr_twin.model.generated_world import is_generated, world_file as generated_file
@@ -60,7 +61,8 @@ def world_file(world: str | Path) -> Path:
 
 
 def _root_tag(path: Path) -> str | None:
-    """The root element's tag of an XML file (``robot``: a URDF, ``mujoco``: MJCF); None if not XML."""
+    """The root element's tag of an XML file (``robot``: a URDF, ``mujoco``: MJCF); None if not
+    XML."""
     import xml.etree.ElementTree as ET
 
     try:
@@ -72,7 +74,8 @@ def _root_tag(path: Path) -> str | None:
 
 
 def world_compile_error(world: str | Path, exc: Exception) -> BuildError:
-    """MuJoCo's error compiling the world ``world``, naming its file (MuJoCo's text names neither)."""
+    """MuJoCo's error compiling the world ``world``, naming its file (MuJoCo's text names
+    neither)."""
     first = " ".join(str(exc).split())[:200] or type(exc).__name__
     return BuildError(f"--world {world}: MuJoCo compile: {first}")
 
@@ -109,8 +112,9 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
 
 
 def world_model(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
-    """The world alone, compiled (no robot): where actors may walk (:mod:`amr_twin.model.actor_space`), where a
-    route may go (:func:`amr_twin.experiments.fusion.experiment.check_route`)."""
+    """The world alone, compiled (no robot): where actors may walk
+    (:mod:`amr_twin.model.actor_space`), where a route may go
+    (:func:`amr_twin.experiments.fusion.experiment.check_route`)."""
     try:
         return _world_spec(cfg, world).compile()
     except BuildError:
@@ -140,9 +144,9 @@ def _without_imu(robot: mujoco.MjSpec) -> mujoco.MjSpec:
 
 @contextlib.contextmanager
 def _compiling():
-    """No Python ``mjcb_passive`` while MuJoCo compiles: it calls the callback with models of its own,
-    which the bindings cannot hand to Python (the tyres' Python twin, :mod:`amr_twin.sim.tyres`;
-    their C helper needs no such care)."""
+    """No Python ``mjcb_passive`` while MuJoCo compiles: it calls the callback with models of its
+    own, which the bindings cannot hand to Python (the tyres' Python twin,
+    :mod:`amr_twin.sim.tyres`; their C helper needs no such care)."""
     callback = mujoco.get_mjcb_passive()
     if callback is None:
         yield
@@ -256,7 +260,8 @@ def robot_mjcf(result: Build) -> str:
     """The robot MJCF alone, with the physics options its twin model runs with.
 
     Args:
-        result: a :func:`build` result; every ``mjOption`` field of ``result.model.opt`` (timestep in s,
+        result: a :func:`build` result; every ``mjOption`` field of ``result.model.opt`` (timestep
+        in s,
             integrator, cone, solver and its iterations, noslip, flags, gravity in m/s^2, magnetic
             field in T, ...) is copied onto ``result.robot_spec``'s option.
 
@@ -272,9 +277,9 @@ def robot_mjcf(result: Build) -> str:
 
 
 def export(cfg: TwinConfig, urdf_path: Path | None = None, mjcf_path: Path | None = None) -> Build:
-    """Write the URDF and the robot MJCF (:func:`robot_mjcf`, with the twin's ``<option>``; the committed
-    files are made this way): both or neither (:func:`amr_twin.base.atomic_file.all_or_nothing`),
-    never half of one."""
+    """Write the URDF and the robot MJCF (:func:`robot_mjcf`, with the twin's ``<option>``; the
+    committed files are made this way): both or neither
+    (:func:`amr_twin.base.atomic_file.all_or_nothing`), never half of one."""
     from amr_twin.base.atomic_file import all_or_nothing, write_text
 
     result = build(cfg)

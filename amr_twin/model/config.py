@@ -64,7 +64,8 @@ from amr_twin.model.config_overrides import set_path as _set_path
 from amr_twin.model.parameter_tree import read_tree
 from amr_twin.model.parameter_tree import read_yaml as _read_yaml
 
-"""libyaml's safe loader when PyYAML has it (amr.yaml in ~3 ms instead of ~30 ms), else the Python one."""
+"""libyaml's safe loader when PyYAML has it (amr.yaml in ~3 ms instead of ~30 ms), else the Python
+one."""
 
 
 class TwinConfig(Section):
@@ -94,8 +95,9 @@ class TwinConfig(Section):
 
     @property
     def half_width_m(self) -> float:
-        """Half the robot's width across its drive wheels' outer faces (the chassis' if wider), m: the
-        footprint navigation, the people giving way and the route checks take for the robot (0.265)."""
+        """Half the robot's width across its drive wheels' outer faces (the chassis' if wider), m:
+        the footprint navigation, the people giving way and the route checks take for the robot
+        (0.265)."""
         return max(self.chassis.width_m / 2, self.wheel.separation_m / 2 + self.wheel.width_m / 2)
 
     @model_validator(mode="after")
@@ -109,7 +111,8 @@ class TwinConfig(Section):
             )
         if k.x_m > c.length_m / 2 or k.y_m > c.width_m / 2:
             raise ValueError(
-                f"caster.x_m, caster.y_m: must be within [0, {c.length_m / 2}] x [0, {c.width_m / 2}] m "
+                f"caster.x_m, caster.y_m: must be within [0, {c.length_m / 2}] x [0, "
+                f"{c.width_m / 2}] m "
                 "(the chassis footprint)"
             )
         if p.mass_kg > 0:
@@ -197,7 +200,10 @@ def _format_error(exc: ValidationError, model: type[BaseModel]) -> str:
             lo = ctx.get("ge", ctx.get("gt", lo))
             hi = ctx.get("le", ctx.get("lt", hi))
         left, right = _open_ends(model, loc, err["ctx"])
-        msg = f"{value!r} is out of range: allowed {'(' if left else '['}{lo}, {hi}{')' if right else ']'} {unit}".rstrip()
+        msg = (
+            f"{value!r} is out of range: allowed {'(' if left else '['}{lo}, "
+            f"{hi}{')' if right else ']'} {unit}"
+        ).rstrip()
     elif err["type"] == "finite_number":
         msg = f"{value!r}: must be a finite number"
     elif err["type"] in ("missing", "too_short", "too_long") and isinstance(value, (list, tuple)):
@@ -232,8 +238,8 @@ _KINDS = {
 
 
 def _open_ends(model: type[BaseModel], loc: list[str], ctx: dict) -> tuple[bool, bool]:
-    """Whether the range of the field at ``loc`` excludes its low and its high end (``gt``, ``lt``): an
-    exclusive bound was printed as ``[0.0, 3.0]`` for a refused 0."""
+    """Whether the range of the field at ``loc`` excludes its low and its high end (``gt``, ``lt``):
+    an exclusive bound was printed as ``[0.0, 3.0]`` for a refused 0."""
     field: Any = None
     for key in loc:
         fields = getattr(model, "model_fields", None) or {}

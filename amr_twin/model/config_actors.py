@@ -34,7 +34,8 @@ class _Moving(Section):
 
 
 class PersonCfg(_Moving):
-    """A walking adult: two legs (vertical cylinders, what a 0.45 m scan plane cuts), torso and head."""
+    """A walking adult: two legs (vertical cylinders, what a 0.45 m scan plane cuts), torso and
+    head."""
 
     height_m: float = P(unit="m", ge=1.0, le=2.2)
     leg_radius_m: float = P(unit="m", ge=0.02, le=0.12)
@@ -51,7 +52,8 @@ class PersonCfg(_Moving):
             )
         if self.leg_length_m > self.height_m - 0.3:
             raise ValueError(
-                "actors.person.leg_length_m: must leave at least 0.3 m of height_m for torso and head"
+                "actors.person.leg_length_m: must leave at least 0.3 m of height_m for torso and "
+                "head"
             )
         return self
 
@@ -80,7 +82,8 @@ class PalletJackCfg(_Moving):
             raise ValueError("actors.pallet_jack.fork_width_m: two forks must fit in width_m")
         if not self.fork_height_m < self.frame_height_m < self.pump_height_m < self.handle_height_m:
             raise ValueError(
-                "actors.pallet_jack: fork_height_m < frame_height_m < pump_height_m < handle_height_m "
+                "actors.pallet_jack: fork_height_m < frame_height_m < pump_height_m < "
+                "handle_height_m "
                 "must hold"
             )
         return self

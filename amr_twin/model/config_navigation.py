@@ -69,7 +69,8 @@ class NavPlannerCfg(_Settings):
 
 
 class NavNavigatorCfg(_Settings):
-    """The navigator's cycle, goal checker and failure handling (:class:`amr_twin.navigation.navigator.NavParams`)."""
+    """The navigator's cycle, goal checker and failure handling
+    (:class:`amr_twin.navigation.navigator.NavParams`)."""
 
     controller_hz: float = P(unit="Hz", ge=5.0, le=100.0)
     xy_tolerance_m: float = P(unit="m", gt=0.0, le=2.0)
@@ -98,7 +99,8 @@ class MppiWeightsCfg(_Settings):
 
 
 class NavMppiCfg(_Settings):
-    """The MPPI controller's samples, horizon, noise and critics (:class:`amr_twin.navigation.mppi.Mppi`)."""
+    """The MPPI controller's samples, horizon, noise and critics
+    (:class:`amr_twin.navigation.mppi.Mppi`)."""
 
     samples: int = P(unit="1", ge=16, le=4000)
     steps: int = P(unit="1", ge=5, le=100)
@@ -116,7 +118,8 @@ class NavMppiCfg(_Settings):
 
 
 class NavMonitorCfg(_Settings):
-    """The collision monitor's zones (:class:`amr_twin.navigation.collision_monitor.CollisionMonitor`)."""
+    """The collision monitor's zones
+    (:class:`amr_twin.navigation.collision_monitor.CollisionMonitor`)."""
 
     pad_m: float = P(unit="m", ge=0.0, le=1.0)
     people_pad_m: float = P(unit="m", ge=0.0, le=2.0)
@@ -151,8 +154,8 @@ class NavYieldingCfg(_Settings):
 
 
 class NavPeopleCfg(_Settings):
-    """The people tracker (:class:`amr_twin.navigation.people.PeopleTracker`), the person's disc, and the robot's
-    giving way to people (``yielding``)."""
+    """The people tracker (:class:`amr_twin.navigation.people.PeopleTracker`), the person's disc,
+    and the robot's giving way to people (``yielding``)."""
 
     person_radius_m: float = P(unit="m", gt=0.0, le=1.0)
     join_m: float = P(unit="m", gt=0.0, le=1.0)
@@ -171,7 +174,8 @@ class NavPeopleCfg(_Settings):
 
 
 class NavMapMatchingCfg(_Settings):
-    """The scan-to-map correction of the localisation (:class:`amr_twin.navigation.map_matching.MapMatcher`)."""
+    """The scan-to-map correction of the localisation
+    (:class:`amr_twin.navigation.map_matching.MapMatcher`)."""
 
     enabled: bool = P(unit="bool")
     inlier_m: float = P(unit="m", gt=0.0, le=2.0)

@@ -1,5 +1,5 @@
-"""Overrides of the parameter file (``--params FILE``, ``--set key=value``, a command's own options), each
-refusal naming who gave the value.
+"""Overrides of the parameter file (``--params FILE``, ``--set key=value``, a command's own
+options), each refusal naming who gave the value.
 
 :func:`parse_assignment` reads one ``--set``; :func:`check_assignment` refuses, before the schema
 sees it, a key that is no parameter (with the nearest names), a section given a value, and a value
@@ -75,10 +75,11 @@ def _kind(value: Any) -> str:
 
 
 def check_assignment(text: str, key: str, value: Any, meta: dict[str, dict], plain: dict) -> None:
-    """Refuse ``--set text`` unless ``key`` is a parameter (a key of ``meta``) and ``value`` is of its kind.
+    """Refuse ``--set text`` unless ``key`` is a parameter (a key of ``meta``) and ``value`` is of
+    its kind.
 
-    ``plain`` is the parameter file's tree of plain values (its value tells the kind, :func:`check_kind`).
-    """
+    ``plain`` is the parameter file's tree of plain values (its value tells the kind,
+    :func:`check_kind`)."""
     if key not in meta:
         inside = [k for k in meta if k.startswith(key + ".")]
         if inside:
@@ -104,8 +105,9 @@ def check_assignment(text: str, key: str, value: Any, meta: dict[str, dict], pla
 
 
 def check_kind(key: str, value: Any, meta: dict[str, dict], current: Any) -> None:
-    """Refuse ``value`` for parameter ``key`` unless it is of the kind of its ``current`` value (a number
-    for a number, a list of as many numbers for a vector, true/false for a switch, a word for a word)."""
+    """Refuse ``value`` for parameter ``key`` unless it is of the kind of its ``current`` value (a
+    number for a number, a list of as many numbers for a vector, true/false for a switch, a word for
+    a word)."""
     want, got = _kind(current), _kind(value)
     if want != got:
         unit = meta[key].get("unit")
@@ -127,9 +129,9 @@ class Blame:
         self.by[key] = who
 
     def message(self, text: str, file=None) -> str:
-        """``text`` (``key: reason``) led by who set ``key``, or, for a section's rule (``uwb: anchors_y_m:
-        ...``), who set the parameter of that section it names; when nobody did, by the parameter ``file``
-        (None: the robot's own, unnamed)."""
+        """``text`` (``key: reason``) led by who set ``key``, or, for a section's rule
+        (``uwb: anchors_y_m: ...``), who set the parameter of that section it names; when nobody
+        did, by the parameter ``file`` (None: the robot's own, unnamed)."""
         key = text.split(":", 1)[0].split(",")[0].strip()
         who = self.by.get(key) or next(
             (

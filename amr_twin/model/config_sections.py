@@ -144,7 +144,8 @@ class WheelCfg(Section):
 
     @property
     def sc_edges_per_rev(self) -> int:
-        """SC state changes per wheel revolution: three hall sensors, each toggling twice per pole pair."""
+        """SC state changes per wheel revolution: three hall sensors, each toggling twice per pole
+        pair."""
         return 6 * self.hall_pole_pairs
 
     def radius_of(self, side: str) -> float:
@@ -299,7 +300,8 @@ class UwbCfg(Section):
 
 
 class EkfCfg(Section):
-    """EKF of ``amr_twin/estimation/ekf.py`` (robot_localization ``ekf_node`` in two_d_mode), SI units.
+    """EKF of ``amr_twin/estimation/ekf.py`` (robot_localization ``ekf_node`` in two_d_mode), SI
+    units.
 
     Process noise is white acceleration; measurement sigmas are those the filter
     assumes (not the simulated sensors' own), the Mahalanobis gate is in sigmas.
@@ -343,7 +345,8 @@ class LidarOdometryCfg(Section):
 
 
 class PoseGraphCfg(Section):
-    """The mapping drive's smoother (``amr_twin/estimation/pose_graph.py``): sigmas of its factors."""
+    """The mapping drive's smoother (``amr_twin/estimation/pose_graph.py``): sigmas of its
+    factors."""
 
     SETTINGS: ClassVar[bool] = True
 
@@ -358,7 +361,8 @@ class PoseGraphCfg(Section):
 
 
 class MappingCfg(Section):
-    """Occupancy grid of ``amr_twin/estimation/occupancy_grid.py`` and the mapping drive's smoother."""
+    """Occupancy grid of ``amr_twin/estimation/occupancy_grid.py`` and the mapping drive's
+    smoother."""
 
     SETTINGS: ClassVar[bool] = True
 

@@ -1,4 +1,5 @@
-"""``--world generated:SEED[?door=W]``: a hall of :mod:`amr_twin.model.world_generator` as an MJCF world file.
+"""``--world generated:SEED[?door=W]``: a hall of :mod:`amr_twin.model.world_generator` as an MJCF
+world file.
 
 The name is parsed by :func:`parse` (``SEED`` a non-negative integer; ``door=W``: every doorway
 ``W`` m wide, in :data:`~amr_twin.model.world_generator.FORCED_DOOR_RANGE_M`). :func:`mjcf` writes
@@ -32,9 +33,11 @@ def is_generated(world) -> bool:
 
 
 def parse(world: str) -> tuple[int, float | None]:
-    """``(seed, door_width_m or None)`` of ``generated:SEED[?door=W]``; raises :class:`GeneratedWorldError`."""
+    """``(seed, door_width_m or None)`` of ``generated:SEED[?door=W]``; raises
+    :class:`GeneratedWorldError`."""
     usage = (
-        f"--world {world}: expected generated:SEED or generated:SEED?door=W (SEED an integer in [0, {MAX_SEED}], "
+        f"--world {world}: expected generated:SEED or generated:SEED?door=W (SEED an integer in "
+        f"[0, {MAX_SEED}], "
         f"W in [{FORCED_DOOR_RANGE_M[0]:g}, {FORCED_DOOR_RANGE_M[1]:g}] m)"
     )
     body = world[len(PREFIX) :]
@@ -79,11 +82,13 @@ def mjcf(world: str) -> str:
     )
     lines = [
         f"<!-- {world}: drawn by amr_twin.model.world_generator (docs/explanation/navigation.md). "
-        f"{W:g} x {H:g} m, {len(h.doors)} doorway(s) {', '.join(f'{d.width_m:g} m' for d in h.doors)}. -->",
+        f"{W:g} x {H:g} m, {len(h.doors)} doorway(s) "
+        f"{', '.join(f'{d.width_m:g} m' for d in h.doors)}. -->",
         f'<mujoco model="{name(*parse(world)).replace(":", "_").replace("?", "_")}">',
         "  <custom>",
         f'    <numeric name="start_xy_yaw" data="{_f(*h.start_xy_yaw)}"/>',
-        f'    <numeric name="uwb_anchors_xy_m" data="{_f(*(v for a in h.anchors_xy_m for v in a))}"/>',
+        f'    <numeric name="uwb_anchors_xy_m" '
+        f'data="{_f(*(v for a in h.anchors_xy_m for v in a))}"/>',
         doors,
         "  </custom>",
         '  <visual><headlight ambient="0.35 0.35 0.35" diffuse="0.5 0.5 0.5"/></visual>',
@@ -98,7 +103,8 @@ def mjcf(world: str) -> str:
         "  </asset>",
         "  <worldbody>",
         '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
-        f'    <geom name="floor" type="plane" size="{_f(W / 2 + 1, H / 2 + 1, 0.1)}" material="concrete"/>',
+        f'    <geom name="floor" type="plane" size="{_f(W / 2 + 1, H / 2 + 1, 0.1)}" '
+        f'material="concrete"/>',
     ]
     lines += [
         f'    <geom name="{b.name}" type="box" pos="{_f(*b.centre_m)}" size="{_f(*b.half_m)}" '
@@ -121,7 +127,8 @@ def _folder() -> Path:
 
 
 def world_file(world: str) -> Path:
-    """The MJCF file of a ``generated:`` world, written (whole, by one rename) unless it holds these bytes."""
+    """The MJCF file of a ``generated:`` world, written (whole, by one rename) unless it holds these
+    bytes."""
     from amr_twin.base.disk_cache import read_entry, store
 
     seed, door = parse(world)

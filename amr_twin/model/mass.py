@@ -28,7 +28,8 @@ from amr_twin.model.config import TwinConfig
 
 @dataclass(frozen=True)
 class Inertial:
-    """Mass properties of one link: mass (kg), centre of mass (m, (3,)), inertia about it (kg m^2, (3, 3))."""
+    """Mass properties of one link: mass (kg), centre of mass (m, (3,)), inertia about it (kg m^2,
+    (3, 3))."""
 
     mass_kg: float
     com_m: np.ndarray
@@ -153,7 +154,8 @@ def plates(
 SENSOR_LINKS = {"laser": "lidar", "imu_link": "imu"}
 """URDF link -> the component whose mass it carries (the UWB tag is not a component)."""
 LIDAR_BASE_BELOW_OPTICS_M = 0.04
-"""RPLIDAR A1: the ``laser`` frame (optical centre) is about 4 cm above the unit's base (datasheet drawing)."""
+"""RPLIDAR A1: the ``laser`` frame (optical centre) is about 4 cm above the unit's base (datasheet
+drawing)."""
 
 
 def sensor_link_inertials(cfg: TwinConfig) -> dict[str, Inertial]:
@@ -189,7 +191,8 @@ def sensor_inertials_in_base(cfg: TwinConfig) -> list[Inertial]:
 
 
 def chassis_inertial(cfg: TwinConfig) -> Inertial:
-    """Chassis link: frame, plates, the components without a link of their own and the two stators."""
+    """Chassis link: frame, plates, the components without a link of their own and the two
+    stators."""
     parts = [frame_inertial(cfg)]
     parts += [_box(ext, ctr, density=rho) for _, ctr, ext, rho in plates(cfg)]
     on_links = set(SENSOR_LINKS.values())
@@ -240,7 +243,8 @@ _unloaded_memo: dict[tuple, tuple] = {}
 
 
 def _robot_key(cfg: TwinConfig) -> tuple:
-    """The sections the unloaded robot's mass properties are built from (hashable: frozen models)."""
+    """The sections the unloaded robot's mass properties are built from (hashable: frozen
+    models)."""
     return cfg.chassis, cfg.deck, cfg.components, cfg.wheel, cfg.caster, cfg.uwb
 
 

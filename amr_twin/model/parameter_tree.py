@@ -25,7 +25,8 @@ TREE_CACHE_FORMAT = 1
 
 
 MAX_PARAMETER_FILE_BYTES = 16 * 1024 * 1024
-"""Largest parameter file read, bytes (amr.yaml is ~40 kB): a device or a huge file is refused, not read."""
+"""Largest parameter file read, bytes (amr.yaml is ~40 kB): a device or a huge file is refused, not
+read."""
 
 
 def _read_text(path: Path) -> bytes:
@@ -40,7 +41,8 @@ def _read_text(path: Path) -> bytes:
             raw = fh.read(MAX_PARAMETER_FILE_BYTES + 1)
         if len(raw) > MAX_PARAMETER_FILE_BYTES:
             raise ConfigError(
-                f"{path}: larger than {MAX_PARAMETER_FILE_BYTES // 1024 // 1024} MB, not a parameter "
+                f"{path}: larger than {MAX_PARAMETER_FILE_BYTES // 1024 // 1024} MB, not a "
+                f"parameter "
                 "file"
             )
         return raw

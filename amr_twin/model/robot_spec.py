@@ -26,7 +26,8 @@ WHEELS = ("left", "right")
 CASTERS = ("front_left", "front_right", "rear_left", "rear_right")
 LOOP_SENSOR_DIM = 11
 IMU_SENSORS = ("imu_accel", "imu_gyro", "imu_mag")
-"""The IMU's MuJoCo sensors, after the loop's; :func:`amr_twin.model.build.build` can leave them out."""
+"""The IMU's MuJoCo sensors, after the loop's; :func:`amr_twin.model.build.build` can leave them
+out."""
 
 
 def robot_spec(cfg: TwinConfig, urdf: str, visuals: bool = True) -> mujoco.MjSpec:
@@ -38,7 +39,10 @@ def robot_spec(cfg: TwinConfig, urdf: str, visuals: bool = True) -> mujoco.MjSpe
     # MuJoCo's URDF parser reads its options from a <mujoco> element in the URDF: keep the
     # visuals (it discards them by default, at parse time) and every link as a body.
     discard = "false" if visuals else "true"
-    options = f'<mujoco><compiler discardvisual="{discard}" fusestatic="false" strippath="true"/></mujoco>'
+    options = (
+        f'<mujoco><compiler discardvisual="{discard}" fusestatic="false" '
+        f'strippath="true"/></mujoco>'
+    )
     spec = mujoco.MjSpec.from_string(urdf.replace("</robot>", options + "</robot>", 1))
     spec.compiler.discardvisual = (
         False  # at compile it would drop every contype-0 geom, the payload's too

@@ -1,4 +1,5 @@
-"""The support polygon of the robot's contacts with the floor, and how far inside it the centre of mass is.
+"""The support polygon of the robot's contacts with the floor, and how far inside it the centre of
+mass is.
 
 Plain geometry on the handful of support points (two wheels, four casters), in the
 floor plane, m. Used by :mod:`amr_twin.model.statics` (the tip margin of ``amr-twin

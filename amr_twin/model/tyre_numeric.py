@@ -1,4 +1,5 @@
-"""Where the tyre model's parameters live in a compiled model: one numeric, and the state's user data.
+"""Where the tyre model's parameters live in a compiled model: one numeric, and the state's user
+data.
 
 The model build (:func:`amr_twin.model.build.build`) adds the numeric :data:`NUMERIC` with the
 values of :data:`NUMERIC_FIELDS` (the parameters from ``wheel.*``, then the ids of the joints,
@@ -39,7 +40,8 @@ NUMERIC_FIELDS = (
 STATE_FIELDS = ("u_m", "v_m", "psi_rad", "fx_n", "fy_n", "mz_nm", "load_n")
 """Per wheel in ``d.userdata`` after the time stamp: deflections (state), then the last output."""
 FIELD_CELLS = 32
-"""Nodes of the floor's friction field along x and along y (periodic: it repeats every 32 patches)."""
+"""Nodes of the floor's friction field along x and along y (periodic: it repeats every 32
+patches)."""
 FIELD_OFFSET = 1 + 2 * len(STATE_FIELDS)
 """Where the friction field starts in the tyres' user data: node count (0: no field, the numeric's
 ``mu`` everywhere), node spacing (m), then the (FIELD_CELLS, FIELD_CELLS) friction coefficients,
@@ -50,7 +52,8 @@ V_SIGN_M_S = 0.01
 
 
 def numeric_values(cfg, userdata_adr: int = 0) -> list[float]:
-    """The numeric :data:`NUMERIC` of ``cfg``'s tyres; the addresses are 0 until :func:`set_addresses`."""
+    """The numeric :data:`NUMERIC` of ``cfg``'s tyres; the addresses are 0 until
+    :func:`set_addresses`."""
     w = cfg.wheel
     values = dict(
         format=FORMAT,
@@ -70,8 +73,8 @@ def numeric_values(cfg, userdata_adr: int = 0) -> list[float]:
 
 
 def set_addresses(model, prefix: str) -> None:
-    """Write the ids the callback needs (joints, geoms, bodies of the robot named ``prefix...``) into
-    the compiled ``model``'s numeric."""
+    """Write the ids the callback needs (joints, geoms, bodies of the robot named ``prefix...``)
+    into the compiled ``model``'s numeric."""
     import mujoco
 
     def get(kind, name):

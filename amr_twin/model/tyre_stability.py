@@ -26,7 +26,8 @@ _announced: set = set()  # the messages this process has written to stderr
 
 class TyreTimestepError(BuildError):
     """The tyres need a timestep the loop cannot keep (one line: the parameters and S; a
-    :class:`~amr_twin.model.urdf.BuildError`, so the CLI exits 2 and a sweep records it on the point)."""
+    :class:`~amr_twin.model.urdf.BuildError`, so the CLI exits 2 and a sweep records it on the
+    point)."""
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,8 @@ class TyreTimestep:
         """One line for stderr."""
         return (
             f"tyres: stability number S = {max(self.s_configured):.2f} > {self.s_max:g} at "
-            f"sim.timestep_s = {self.configured_s * 1e3:g} ms (static tyre load {max(self.load_n):.0f} N "
+            f"sim.timestep_s = {self.configured_s * 1e3:g} ms (static tyre load "
+            f"{max(self.load_n):.0f} N "
             f"x {LOAD_MARGIN:g}); physics timestep halved to {self.timestep_s * 1e3:g} ms "
             f"(S = {max(self.s):.2f}; docs/explanation/tyres.md)"
         )
@@ -128,11 +130,15 @@ def tyre_timestep(cfg: TwinConfig) -> TyreTimestep:
         s = numbers(dt)
         if halvings > MAX_HALVINGS or abs(dt * 1e6 - round(dt * 1e6)) > 1e-6:
             raise TyreTimestepError(
-                f"sim.timestep_s: {dt0:g} s cannot be halved far enough for the tyres (wheel.slip_stiffness_per_n "
+                f"sim.timestep_s: {dt0:g} s cannot be halved far enough for the tyres "
+                f"(wheel.slip_stiffness_per_n "
                 f"{w.slip_stiffness_per_n:g}, wheel.relaxation_length_longitudinal_m "
-                f"{w.relaxation_length_longitudinal_m:g}, wheel.tyre_loss_time_s {w.tyre_loss_time_s:g}, static "
-                f"load {max(load):.0f} N: S = {max(first):.2f}, allowed < {S_MAX:g}) on whole microseconds; "
-                f"set sim.timestep_s to {_largest_stable_us(max(load) * LOAD_MARGIN, cfg, mass) / 1e6:g} or less"
+                f"{w.relaxation_length_longitudinal_m:g}, wheel.tyre_loss_time_s "
+                f"{w.tyre_loss_time_s:g}, static "
+                f"load {max(load):.0f} N: S = {max(first):.2f}, allowed < {S_MAX:g}) on whole "
+                f"microseconds; "
+                f"set sim.timestep_s to "
+                f"{_largest_stable_us(max(load) * LOAD_MARGIN, cfg, mass) / 1e6:g} or less"
             )
     return TyreTimestep(dt0, dt, halvings, load, first, s)
 

@@ -66,7 +66,8 @@ def _derived_params(cfg: TwinConfig) -> dict:
         "tube_outer_m": c.tube_outer_m,
         "sheet_thickness_m": c.sheet_thickness_m,
         "deck_thickness_m": cfg.deck.thickness_m,
-        # the true geometry: the nominal radius and separation plus the tyres' errors (wheel.*_error_*)
+        # the true geometry: the nominal radius and separation plus the tyres' errors
+        # (wheel.*_error_*)
         "wheel_radius_m": w.radius_m,
         "wheel_width_m": w.width_m,
         "wheel_separation_m": w.separation_m + w.separation_error_m,
@@ -82,7 +83,8 @@ def _derived_params(cfg: TwinConfig) -> dict:
         "caster_y_m": k.y_m,
         "caster_travel_m": k.travel_m,
         "caster_drop_m": k.drop_m,
-        # what URDF can say of the MJCF's joint dynamics (<dynamics>, <limit>): set again on the MjSpec (robot_spec)
+        # what URDF can say of the MJCF's joint dynamics (<dynamics>, <limit>): set again on the
+        # MjSpec (robot_spec)
         "wheel_left_damping": cfg.motor_left.damping_nm_s_rad,
         "wheel_left_friction": cfg.motor_left.friction_nm,
         "wheel_right_damping": cfg.motor_right.damping_nm_s_rad,
@@ -135,7 +137,8 @@ def urdf_string(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
 
 
 def urdf_cache_dir() -> Path | None:
-    """The URDF cache's folder (:data:`~amr_twin.base.disk_cache.CACHE_ENV`), or None when the disk cache is off."""
+    """The URDF cache's folder (:data:`~amr_twin.base.disk_cache.CACHE_ENV`), or None when the disk
+    cache is off."""
     return cache_dir("urdf")
 
 
@@ -189,11 +192,12 @@ def robot_urdf(cfg: TwinConfig, xacro_file: Path = XACRO_FILE) -> str:
 @contextlib.contextmanager
 def _ctrl_c_held():
     """Ctrl-C (SIGINT) held back in this block and raised again after it, to the handler in place
-    before (KeyboardInterrupt by default). trimesh, which yourdfpy imports, catches ``BaseException``
-    around its optional imports (PIL, ...): a Ctrl-C while they ran was swallowed (a command ran on to
-    its end) or left a module replaced by trimesh's ExceptionWrapper (a TypeError later). A handler that
-    only notes the signal, not a blocked mask: the native threads numpy's BLAS starts would take a
-    signal the main thread blocks. Python's handlers are the main thread's: elsewhere nothing is held."""
+    before (KeyboardInterrupt by default). trimesh, which yourdfpy imports, catches
+    ``BaseException`` around its optional imports (PIL, ...): a Ctrl-C while they ran was swallowed
+    (a command ran on to its end) or left a module replaced by trimesh's ExceptionWrapper (a
+    TypeError later). A handler that only notes the signal, not a blocked mask: the native threads
+    numpy's BLAS starts would take a signal the main thread blocks. Python's handlers are the main
+    thread's: elsewhere nothing is held."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -208,8 +212,8 @@ def _ctrl_c_held():
 
 
 def check_urdf(urdf: str) -> None:
-    """Load and validate the URDF with yourdfpy; raise BuildError if it is invalid (a Ctrl-C meanwhile
-    raises KeyboardInterrupt after it: :func:`_ctrl_c_held`)."""
+    """Load and validate the URDF with yourdfpy; raise BuildError if it is invalid (a Ctrl-C
+    meanwhile raises KeyboardInterrupt after it: :func:`_ctrl_c_held`)."""
     with _ctrl_c_held():
         import yourdfpy
 

@@ -5,7 +5,8 @@
 - a rack section in the west: three rack rows along x, 0.9-1.3 m deep, at uneven spacing
   (aisles 1.6-4.5 m), between a west cross aisle (2.0-2.8 m) and an east one (2.2-3.0 m);
 - a dead-end aisle (7-10 m): one aisle between two rows filled from the west, open at its east end;
-- an inner wall across the hall with one or two doorways (0.85-1.2 m drawn, or all ``door_width_m``);
+- an inner wall across the hall with one or two doorways (0.85-1.2 m drawn, or all
+``door_width_m``);
 - behind it, a room with a pillar field (0.3-0.5 m columns, 1.2 m or more apart from anything)
   and a closed cage in one of its corners (free inside, reached by nothing).
 
@@ -30,7 +31,8 @@ FORCED_DOOR_RANGE_M = (0.6, 2.0)
 WALL_T_M, WALL_H_M = 0.2, 2.5
 RACK_H_M, BEAM_Z_M = 2.5, (0.45, 1.5)
 PILLAR_GAP_M = 1.2
-"""Least gap between a pillar and any other obstacle, m: room to pass, no pocket the robot cannot reach."""
+"""Least gap between a pillar and any other obstacle, m: room to pass, no pocket the robot cannot
+reach."""
 
 
 @dataclass(frozen=True)
@@ -45,8 +47,8 @@ class Box:
 
 @dataclass(frozen=True)
 class Door:
-    """A doorway in the inner wall at ``x_m`` (the wall's centre line), centred at ``y_m``, ``width_m``
-    clear between its jambs, the wall pieces ``jambs`` (south, north)."""
+    """A doorway in the inner wall at ``x_m`` (the wall's centre line), centred at ``y_m``,
+    ``width_m`` clear between its jambs, the wall pieces ``jambs`` (south, north)."""
 
     name: str
     x_m: float
@@ -57,9 +59,9 @@ class Door:
 
 @dataclass(frozen=True)
 class GeneratedWorld:
-    """A drawn hall: ``boxes``, ``doors``, ``cages`` and ``dead_end`` as (x0, y0, x1, y1) m, the sides
-    of the inner wall (``west_x1_m``: its west face, ``east_x0_m``: its east face), the default start
-    (x_m, y_m, yaw_rad) and the UWB anchors (x, y) m."""
+    """A drawn hall: ``boxes``, ``doors``, ``cages`` and ``dead_end`` as (x0, y0, x1, y1) m, the
+    sides of the inner wall (``west_x1_m``: its west face, ``east_x0_m``: its east face), the
+    default start (x_m, y_m, yaw_rad) and the UWB anchors (x, y) m."""
 
     seed: int
     size_m: tuple[float, float]
@@ -88,7 +90,8 @@ def _box(
     z1: float,
     material: str,
 ):
-    """A box by its faces, rounded to the millimetre (centre and half sizes then hold them exactly)."""
+    """A box by its faces, rounded to the millimetre (centre and half sizes then hold them
+    exactly)."""
     lo, hi = (_r(x0), _r(y0), _r(z0)), (_r(x1), _r(y1), _r(z1))
     out.append(
         Box(
@@ -101,8 +104,8 @@ def _box(
 
 
 def _rack_row(out: list, name: str, x0: float, x1: float, y0: float, y1: float) -> None:
-    """Uprights every bay on both faces, braces across the depth, beams along both faces, pallets of goods
-    filling the floor level (no free cell inside a row)."""
+    """Uprights every bay on both faces, braces across the depth, beams along both faces, pallets of
+    goods filling the floor level (no free cell inside a row)."""
     bays = max(1, math.ceil((x1 - x0) / 2.7))
     u = 0.05
     _box(out, f"{name}_goods", x0 + 2 * u, y0 + 2 * u, x1 - 2 * u, y1 - 2 * u, 0.0, 1.2, "goods")
@@ -126,7 +129,8 @@ def _rack_row(out: list, name: str, x0: float, x1: float, y0: float, y1: float) 
 
 
 def _aisles(rng, inner_m: float) -> np.ndarray:
-    """Four uneven aisle widths (south side, two between rows, north side) summing to ``inner_m``."""
+    """Four uneven aisle widths (south side, two between rows, north side) summing to
+    ``inner_m``."""
     while True:
         a = rng.uniform(1.6, 3.2, 4)
         k = int(rng.integers(4))
@@ -136,8 +140,8 @@ def _aisles(rng, inner_m: float) -> np.ndarray:
 
 
 def _pillars(rng, x0, y0, x1, y1, keep_out) -> list[tuple[float, float, float]]:
-    """Pillar centres and half sizes on a jittered grid of the room, each at least PILLAR_GAP_M from the room's
-    walls, the rectangles of ``keep_out`` and each other."""
+    """Pillar centres and half sizes on a jittered grid of the room, each at least PILLAR_GAP_M from
+    the room's walls, the rectangles of ``keep_out`` and each other."""
     half = float(rng.uniform(0.15, 0.25))
     step = rng.uniform(2.0, 2.8, 2)
     jitter = 0.3
@@ -159,7 +163,8 @@ def _pillars(rng, x0, y0, x1, y1, keep_out) -> list[tuple[float, float, float]]:
 
 
 def generate(seed: int, door_width_m: float | None = None) -> GeneratedWorld:
-    """The hall of ``seed`` (module docstring); ``door_width_m``: every doorway this wide (else drawn)."""
+    """The hall of ``seed`` (module docstring); ``door_width_m``: every doorway this wide (else
+    drawn)."""
     rng = np.random.default_rng([7919, int(seed)])
     W, H = _r(rng.uniform(22.0, 26.0)), _r(rng.uniform(13.0, 15.0))
     hw, hh = W / 2, H / 2

@@ -24,7 +24,8 @@ WORLD_GROUP = 0
 
 @dataclass(frozen=True)
 class Footprints:
-    """Oriented rectangles in the plane: centres (K, 2) m, half sizes (K, 2) m, yaw (K,) rad, names."""
+    """Oriented rectangles in the plane: centres (K, 2) m, half sizes (K, 2) m, yaw (K,) rad,
+    names."""
 
     centre_xy_m: np.ndarray
     half_xy_m: np.ndarray
@@ -42,7 +43,8 @@ class Footprints:
 
 
 def scan_plane_boxes(model, z_m: float) -> Footprints:
-    """Footprints of the world's box geoms (group 0) of a compiled ``model`` that span height ``z_m``.
+    """Footprints of the world's box geoms (group 0) of a compiled ``model`` that span height
+    ``z_m``.
 
     The geometry is forwarded in a private ``MjData`` (world geoms do not move).
     """

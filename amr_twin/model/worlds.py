@@ -34,8 +34,9 @@ ANCHORS_NUMERIC = "uwb_anchors_xy_m"
 
 
 def world_path(world: str | Path) -> Path:
-    """The file of ``world``: a name of ``models/worlds/`` (``warehouse``, ``empty``), a path, or a generated
-    hall ``generated:SEED[?door=W]`` (:mod:`amr_twin.model.generated_world`, written on first use)."""
+    """The file of ``world``: a name of ``models/worlds/`` (``warehouse``, ``empty``), a path, or a
+    generated hall ``generated:SEED[?door=W]`` (:mod:`amr_twin.model.generated_world`, written on
+    first use)."""
     from amr_twin.model.generated_world import is_generated, world_file
 
     if is_generated(world):
@@ -45,7 +46,8 @@ def world_path(world: str | Path) -> Path:
 
 
 def world_files(world: str | Path) -> list[Path]:
-    """The files ``world`` reads: its MJCF file, or a map YAML and the image it names (when it names one)."""
+    """The files ``world`` reads: its MJCF file, or a map YAML and the image it names (when it names
+    one)."""
     try:
         path = world_path(world)
     except ValueError:  # a bad generated:SEED name: the model build says why
@@ -62,7 +64,8 @@ def world_files(world: str | Path) -> list[Path]:
 
 
 def _numeric(world: str | Path, name: str) -> list[float] | None:
-    """Values of the MJCF ``<custom><numeric name=NAME>`` of ``world``; None if absent or unreadable."""
+    """Values of the MJCF ``<custom><numeric name=NAME>`` of ``world``; None if absent or
+    unreadable."""
     path = world_path(world)
     if path.suffix.lower() != ".xml":
         return None
@@ -80,7 +83,8 @@ def _numeric(world: str | Path, name: str) -> list[float] | None:
 
 
 def default_start(world: str | Path) -> tuple[float, float, float]:
-    """The world's start pose ``(x_m, y_m, yaw_rad)``: its ``start_xy_yaw`` numeric, else the origin.
+    """The world's start pose ``(x_m, y_m, yaw_rad)``: its ``start_xy_yaw`` numeric, else the
+    origin.
 
     Only MJCF worlds can declare one (``<custom><numeric name="start_xy_yaw" data="x y yaw"/>``);
     a file that cannot be read gives the origin (the model build reports the error).
@@ -94,10 +98,11 @@ def default_start(world: str | Path) -> tuple[float, float, float]:
 
 
 def uwb_anchors_xy_m(world: str | Path) -> np.ndarray | None:
-    """The UWB anchors a world declares, ``(K, 2)`` m in its frame, or None (then ``uwb.anchors_*`` apply).
+    """The UWB anchors a world declares, ``(K, 2)`` m in its frame, or None (then ``uwb.anchors_*``
+    apply).
 
-    An MJCF world declares them as ``<custom><numeric name="uwb_anchors_xy_m" data="x0 y0 x1 y1 ..."/>``
-    (the anchors are part of the site, like its walls; their height is ``uwb.anchor_z_m``).
+    An MJCF world declares them as ``<custom><numeric name="uwb_anchors_xy_m" data="x0 y0 x1 y1
+    ..."/>`` (the anchors are part of the site, like its walls; their height is ``uwb.anchor_z_m``).
     Raises :class:`MapError` for an odd count or fewer than 3 anchors.
     """
     values = _numeric(world, ANCHORS_NUMERIC)
@@ -117,7 +122,8 @@ def uwb_anchors_xy_m(world: str | Path) -> np.ndarray | None:
 
 @dataclass(frozen=True)
 class Obstacle:
-    """A box standing on the floor that the world file does not hold (an unmapped pallet jack, a box).
+    """A box standing on the floor that the world file does not hold (an unmapped pallet jack, a
+    box).
 
     Added to the world when the twin is built (``TwinOptions.obstacles``): the LiDAR sees it if it
     reaches the scan plane, the robot can hit it, and no map of the world holds it. ``x_m, y_m``:
@@ -166,9 +172,11 @@ MAX_ORIGIN = 1e4
 floats lose their centimetres."""
 MAX_WALL_BOXES = 20_000
 """Most wall boxes (MuJoCo geoms) of a map's world: 4 times a SLAM map of the aisles world (4894);
-45,000 (a 300 x 300 checkerboard) took 9 s to build and check, a 1500 x 1500 one did not end in 60 s."""
+45,000 (a 300 x 300 checkerboard) took 9 s to build and check, a 1500 x 1500 one did not end in 60
+s."""
 MAX_WALL_RUNS = 1_000_000
-"""Most runs of occupied cells (along the rows) a map's walls are merged from (the merge loops over them)."""
+"""Most runs of occupied cells (along the rows) a map's walls are merged from (the merge loops over
+them)."""
 MAX_MAP_PIXELS = 25_000_000
 """Largest map image, pixels (5000 x 5000): every occupied run becomes a MuJoCo geom."""
 
@@ -224,7 +232,8 @@ def read_pgm(path: str | Path) -> np.ndarray:
         )
     if width * height > MAX_MAP_PIXELS:
         raise MapError(
-            f"{path}: {width} x {height} pixels; at most {MAX_MAP_PIXELS:,} (each wall run is a geom)"
+            f"{path}: {width} x {height} pixels; at most {MAX_MAP_PIXELS:,} (each wall run is a "
+            f"geom)"
         )
     if magic == b"P5":
         if len(data) < pos + 1 + width * height:
@@ -316,14 +325,16 @@ def load_map(yaml_path: str | Path) -> OccupancyMap:
         )
     if not all(abs(v) <= MAX_ORIGIN for v in origin):
         raise MapError(
-            f"{yaml_path}: origin: {origin!r}: each value must lie within +-{MAX_ORIGIN:g} (m, m, rad)"
+            f"{yaml_path}: origin: {origin!r}: each value must lie within +-{MAX_ORIGIN:g} (m, "
+            f"m, rad)"
         )
     origin = tuple(float(v) for v in origin)
     occupied = _map_number(yaml_path, meta, "occupied_thresh", 0.65, 0.0, 1.0)
     free = _map_number(yaml_path, meta, "free_thresh", 0.196, 0.0, 1.0)
     if free >= occupied:
         raise MapError(
-            f"{yaml_path}: free_thresh {free:g} must be below occupied_thresh {occupied:g} (map_server)"
+            f"{yaml_path}: free_thresh {free:g} must be below occupied_thresh {occupied:g} "
+            f"(map_server)"
         )
     negate = meta.get("negate", 0)
     if negate not in (0, 1, True, False):
@@ -402,7 +413,8 @@ def world_xml(yaml_path: str | Path, wall_height_m: float = WALL_HEIGHT_M) -> st
     if len(boxes) > MAX_WALL_BOXES:
         raise MapError(
             f"{yaml_path}: {len(boxes):,} wall boxes after merging its occupied cells; at most "
-            f"{MAX_WALL_BOXES:,} (each is a MuJoCo geom: 45,000 took 9 s to build; a SLAM map of the aisles "
+            f"{MAX_WALL_BOXES:,} (each is a MuJoCo geom: 45,000 took 9 s to build; a SLAM map of "
+            f"the aisles "
             "world has about 5,000)"
         )
     span = (
@@ -412,7 +424,8 @@ def world_xml(yaml_path: str | Path, wall_height_m: float = WALL_HEIGHT_M) -> st
         f'<mujoco model="{Path(yaml_path).stem}">',
         "  <worldbody>",
         '    <light name="sun" pos="0 0 8" dir="0 0 -1" directional="true"/>',
-        f'    <geom name="floor" type="plane" size="{span:.3f} {span:.3f} 0.1" rgba="0.55 0.55 0.55 1"/>',
+        f'    <geom name="floor" type="plane" size="{span:.3f} {span:.3f} 0.1" rgba="0.55 0.55 '
+        f'0.55 1"/>',
     ]
     for i, (centre, half, yaw) in enumerate(boxes):
         pos = " ".join(f"{v:.6g}" for v in centre)

@@ -31,14 +31,15 @@ Loader.add_implicit_resolver(
 
 
 MAX_YAML_BYTES = 16 * 1024 * 1024
-"""Largest YAML input read, bytes (a mission of a million steps is ~40 MB of YAML and a long parse)."""
+"""Largest YAML input read, bytes (a mission of a million steps is ~40 MB of YAML and a long
+parse)."""
 
 
 def read_bytes(
     path: str | Path, kind: str, error: type[Exception], limit: int = MAX_YAML_BYTES
 ) -> bytes:
-    """The bytes of a regular file of at most ``limit`` bytes; ``error(f"{kind} {path}: ...")`` otherwise
-    (``f"{path}: ..."`` with no ``kind``)."""
+    """The bytes of a regular file of at most ``limit`` bytes; ``error(f"{kind} {path}: ...")``
+    otherwise (``f"{path}: ..."`` with no ``kind``)."""
     path = Path(path)
     where = f"{kind} {path}" if kind else str(path)
     if path.is_dir():
@@ -70,7 +71,8 @@ def read_text(
 
 
 def read_yaml(path: str | Path, kind: str, error: type[Exception]) -> Any:
-    """The parsed content of ``path``; ``error(f"{kind} {path}: ...")`` if it cannot be read or parsed."""
+    """The parsed content of ``path``; ``error(f"{kind} {path}: ...")`` if it cannot be read or
+    parsed."""
     path = Path(path)
     text = read_text(path, kind, error)
     try:

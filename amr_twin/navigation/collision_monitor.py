@@ -14,7 +14,8 @@ from amr_twin.navigation.kinematics import arc_poses
 
 
 class CollisionMonitor:
-    """Scale or stop commands whose motion would bring the footprint to a scan return (module docstring)."""
+    """Scale or stop commands whose motion would bring the footprint to a scan return (module
+    docstring)."""
 
     def __init__(
         self,
@@ -41,7 +42,8 @@ class CollisionMonitor:
         self.footprint = footprint
         near = footprint.padded(pad_m)
         side = max(pad_m, 0.1)
-        # unmapped returns: the people pad ahead and behind (the way the robot drives), ``side`` around
+        # unmapped returns: the people pad ahead and behind (the way the robot drives), ``side``
+        # around
         self._people = {
             1: Footprint(
                 footprint.x_min_m - side,
@@ -81,7 +83,8 @@ class CollisionMonitor:
         y: float = 0.0,
         yaw: float = 0.0,
     ) -> int:
-        """How many points lie in their zone with the robot at ``(x, y, yaw)`` of the present ``base_link``."""
+        """How many points lie in their zone with the robot at ``(x, y, yaw)`` of the present
+        ``base_link``."""
         c, s = math.cos(yaw), math.sin(yaw)
         dx, dy = points[:, 0] - x, points[:, 1] - y
         local = np.column_stack([c * dx + s * dy, -s * dx + c * dy])
@@ -93,7 +96,8 @@ class CollisionMonitor:
     def _time_to_collision(
         self, points: np.ndarray, unmapped: np.ndarray, v: float, w: float
     ) -> float:
-        """First time (s) at which a zone, moving at (v, w) from the origin, holds a point of its kind."""
+        """First time (s) at which a zone, moving at (v, w) from the origin, holds a point of its
+        kind."""
         n = int(math.ceil(self.time_s / self.step_s))
         poses = arc_poses(0.0, 0.0, 0.0, v, w, self.step_s, n)
         c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
@@ -113,7 +117,8 @@ class CollisionMonitor:
     def _person_gap(
         self, xy: np.ndarray, x: float = 0.0, y: float = 0.0, yaw: float = 0.0
     ) -> np.ndarray:
-        """Clearance (N,) from the footprint at ``(x, y, yaw)`` of ``base_link`` to people at ``xy`` (N, 2), m."""
+        """Clearance (N,) from the footprint at ``(x, y, yaw)`` of ``base_link`` to people at ``xy``
+        (N, 2), m."""
         c, s = math.cos(yaw), math.sin(yaw)
         dx, dy = xy[:, 0] - x, xy[:, 1] - y
         return (
@@ -124,9 +129,10 @@ class CollisionMonitor:
     def _people_gaps(
         self, xy: np.ndarray, vel: np.ndarray, t_s: np.ndarray, poses: np.ndarray
     ) -> np.ndarray:
-        """Clearance (n, N) from the footprint at each of ``poses`` (n, 3) of ``base_link`` to the people at
-        ``xy`` (N, 2) walking on at ``vel`` (N, 2) for ``t_s`` (n,): :meth:`_person_gap` at every step at once
-        (the same operations, so the same values; cos and sin by ``math`` as there)."""
+        """Clearance (n, N) from the footprint at each of ``poses`` (n, 3) of ``base_link`` to the
+        people at ``xy`` (N, 2) walking on at ``vel`` (N, 2) for ``t_s`` (n,): :meth:`_person_gap`
+        at every step at once (the same operations, so the same values; cos and sin by ``math`` as
+        there)."""
         future = xy[None] + t_s[:, None, None] * vel[None]  # (n, N, 2)
         c = np.array([math.cos(a) for a in poses[:, 2]])[:, None]
         s = np.array([math.sin(a) for a in poses[:, 2]])[:, None]
@@ -137,7 +143,8 @@ class CollisionMonitor:
     def _people_zones(
         self, v: float, w: float, xy: np.ndarray, vel: np.ndarray
     ) -> tuple[float, float]:
-        """The people zones (module docstring) for people at ``xy`` (N, 2) walking at ``vel`` (N, 2), base_link."""
+        """The people zones (module docstring) for people at ``xy`` (N, 2) walking at ``vel`` (N,
+        2), base_link."""
         gap = self._person_gap(xy)
         inside = gap < self.people_stop_m
         if inside.any():
@@ -186,9 +193,10 @@ class CollisionMonitor:
         unmapped: np.ndarray,
         people_base: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> tuple[float, float]:
-        """The command ``(v, w)`` made safe against scan returns ``points_base`` (P, 2) in ``base_link``,
-        of which ``unmapped`` (P,) bool the map does not hold, and against the tracked people
-        ``people_base``: positions (N, 2) and velocities (N, 2) in the present ``base_link``."""
+        """The command ``(v, w)`` made safe against scan returns ``points_base`` (P, 2) in
+        ``base_link``, of which ``unmapped`` (P,) bool the map does not hold, and against the
+        tracked people ``people_base``: positions (N, 2) and velocities (N, 2) in the present
+        ``base_link``."""
         if v == 0.0 and w == 0.0:
             return v, w
         if people_base is not None and len(people_base[0]):
@@ -232,15 +240,16 @@ class CollisionMonitor:
         return v, w
 
     def stopping_m(self, v_m_s: float) -> float:
-        """How far the drive rolls after a stop at ``v_m_s``, m: ``|v| people_stop_lag_s + v^2 / (2 decel_m_s2)``
-        (the drive's lag, then the ramp): the approach zone about a person grows by it (a protective
-        field's stopping distance, ISO 3691-4), so that the robot stops ``people_stop_m`` from them."""
+        """How far the drive rolls after a stop at ``v_m_s``, m: ``|v| people_stop_lag_s + v^2 / (2
+        decel_m_s2)`` (the drive's lag, then the ramp): the approach zone about a person grows by it
+        (a protective field's stopping distance, ISO 3691-4), so that the robot stops
+        ``people_stop_m`` from them."""
         v = abs(v_m_s)
         return v * self.people_stop_lag_s + v * v / (2.0 * self.decel_m_s2)
 
     def _escape(self, v: float, w: float) -> tuple[float, float]:
-        """A move out of a zone: at most ``escape_m_s`` and ``escape_rad_s`` (a cap, not a scale: a scale
-        applied to every cycle's command would shrink the ramped command to nothing)."""
+        """A move out of a zone: at most ``escape_m_s`` and ``escape_rad_s`` (a cap, not a scale: a
+        scale applied to every cycle's command would shrink the ramped command to nothing)."""
         return (
             min(max(v, -self.escape_m_s), self.escape_m_s),
             min(max(w, -self.escape_rad_s), self.escape_rad_s),

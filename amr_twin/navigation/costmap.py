@@ -1,4 +1,5 @@
-"""A layered costmap as nav2's: static layer, obstacle layer with marking and ray-traced clearing, inflation.
+"""A layered costmap as nav2's: static layer, obstacle layer with marking and ray-traced clearing,
+inflation.
 
 Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationcostmap."""
 
@@ -47,7 +48,8 @@ class Costmap:
     static_tolerance_m : float
         Returns this close to a static obstacle are not marked, m.
     native : bool
-        False: the clearing march by NumPy rather than its C twin (``costmap_rays.c``; :attr:`engine` says which).
+        False: the clearing march by NumPy rather than its C twin (``costmap_rays.c``;
+        :attr:`engine` says which).
     """
 
     def __init__(
@@ -94,15 +96,18 @@ class Costmap:
             ]
             self._lib.costmap_crossed.restype = ctypes.c_int64
         self.dist_m = self.static_dist_m.copy()
-        """Distance from each cell to the nearest lethal cell of either layer, capped, m (float32)."""
+        """Distance from each cell to the nearest lethal cell of either layer, capped, m
+        (float32)."""
         self._cap = np.float32(self.inflation_radius_m + self.resolution_m)
         self.obstacle_dist_m = np.full(self.shape, self._cap, np.float32)
-        """Distance from each cell to the nearest cell of the obstacle layer alone, capped, m (float32)."""
+        """Distance from each cell to the nearest cell of the obstacle layer alone, capped, m
+        (float32)."""
         self.updates = 0
         self.version = 0
         """Counts the changes of the layers; :attr:`changes` keeps the last ones' windows."""
         self.changes: list[tuple[int, tuple[int, int, int, int] | None]] = []
-        """``(version, (r0, r1, c0, c1))`` of each change, rows r0..r1-1 and columns c0..c1-1 (None: all)."""
+        """``(version, (r0, r1, c0, c1))`` of each change, rows r0..r1-1 and columns c0..c1-1 (None:
+        all)."""
 
     def _distance(self, lethal: np.ndarray) -> np.ndarray:
         if not lethal.any():
@@ -131,14 +136,16 @@ class Costmap:
         return out
 
     def static_distance_at(self, xy_m: np.ndarray) -> np.ndarray:
-        """Distance to the nearest lethal cell of the static layer alone at points (K,), m; 0 off the grid."""
+        """Distance to the nearest lethal cell of the static layer alone at points (K,), m; 0 off
+        the grid."""
         row, col, inside = self.cells(xy_m)
         out = np.zeros(len(row), np.float32)
         out[inside] = self.static_dist_m[row[inside], col[inside]]
         return out
 
     def obstacle_distance_at(self, xy_m: np.ndarray) -> np.ndarray:
-        """Distance to the nearest cell of the obstacle layer (what the map does not hold) at points (K,), m."""
+        """Distance to the nearest cell of the obstacle layer (what the map does not hold) at points
+        (K,), m."""
         row, col, inside = self.cells(xy_m)
         out = np.full(len(row), self._cap, np.float32)
         out[inside] = self.obstacle_dist_m[row[inside], col[inside]]
@@ -193,8 +200,9 @@ class Costmap:
         return int(len(changed))
 
     def _crossed(self, o: np.ndarray, u: np.ndarray, free_len: np.ndarray) -> np.ndarray:
-        """Flat indices of the marked cells that beams from ``o`` (K, 2) along ``u`` (K, 2) cross, sampled every
-        0.75 cell out to ``free_len`` (K,) m (with repeats); the C helper's loop or its NumPy twin (the same cells)."""
+        """Flat indices of the marked cells that beams from ``o`` (K, 2) along ``u`` (K, 2) cross,
+        sampled every 0.75 cell out to ``free_len`` (K,) m (with repeats); the C helper's loop or
+        its NumPy twin (the same cells)."""
         step = 0.75 * self.resolution_m
         beams = np.flatnonzero(free_len > 0)
         counts = np.floor(free_len[beams] / step).astype(np.int64) + 1
@@ -222,7 +230,8 @@ class Costmap:
         return flat[self.marked.reshape(-1)[flat]]
 
     def _refresh(self, r0: int, r1: int, c0: int, c1: int) -> None:
-        """Recompute the distances of the cells within the inflation radius of rows r0..r1, cols c0..c1."""
+        """Recompute the distances of the cells within the inflation radius of rows r0..r1, cols
+        c0..c1."""
         p = self._pad
         R0, R1 = max(r0 - p, 0), min(r1 + p + 1, self.shape[0])
         C0, C1 = max(c0 - p, 0), min(c1 + p + 1, self.shape[1])

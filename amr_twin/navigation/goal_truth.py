@@ -1,4 +1,5 @@
-"""A goal judged by the truth: where the robot really ended against where the navigator thought it was.
+"""A goal judged by the truth: where the robot really ended against where the navigator thought it
+was.
 
 The navigator declares a goal reached from its own pose (the localisation's estimate); the twin
 knows the true pose. :func:`final_errors` gives both distances to the goal; :func:`judge` keeps a
@@ -15,8 +16,8 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class FinalErrors:
-    """Distance (m) and heading error (rad, None for a goal without a yaw) from the goal, by the truth and by
-    the navigator's estimate (None where the navigator had no pose)."""
+    """Distance (m) and heading error (rad, None for a goal without a yaw) from the goal, by the
+    truth and by the navigator's estimate (None where the navigator had no pose)."""
 
     true_xy_m: float
     true_yaw_rad: float | None
@@ -56,8 +57,9 @@ def final_errors(goal, pose_true, pose_estimate=None) -> FinalErrors:
 
 
 def judge(outcome, errors: FinalErrors, xy_tolerance_m: float, yaw_tolerance_rad: float) -> None:
-    """A ``succeeded`` ``outcome`` (:class:`~amr_twin.navigation.navigator.GoalOutcome`) whose true pose misses
-    the tolerances becomes ``aborted``, its reason saying by how much; other outcomes are left as they are."""
+    """A ``succeeded`` ``outcome`` (:class:`~amr_twin.navigation.navigator.GoalOutcome`) whose true
+    pose misses the tolerances becomes ``aborted``, its reason saying by how much; other outcomes
+    are left as they are."""
     if outcome.status != "succeeded" or errors.within(xy_tolerance_m, yaw_tolerance_rad):
         return
     if errors.true_xy_m > xy_tolerance_m:

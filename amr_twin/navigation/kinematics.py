@@ -28,7 +28,8 @@ class Limits:
     def ramp(
         self, v: float, w: float, v_prev: float, w_prev: float, dt_s: float
     ) -> tuple[float, float]:
-        """``(v, w)`` clipped to the limits and to the accelerations from ``(v_prev, w_prev)`` over ``dt_s``."""
+        """``(v, w)`` clipped to the limits and to the accelerations from ``(v_prev, w_prev)`` over
+        ``dt_s``."""
         v = min(max(v, self.min_v_m_s), self.max_v_m_s)
         w = min(max(w, -self.max_w_rad_s), self.max_w_rad_s)
         slowing = abs(v) < abs(v_prev) and v * v_prev >= 0.0
@@ -53,7 +54,8 @@ def rotation_rate(
     min_rate_rad_s: float = 0.15,
 ) -> float:
     """Yaw rate that turns in place through ``error_rad`` and stops there: proportional, at least
-    ``min_rate_rad_s`` (the drive cannot hold a crawl), at most what decelerates to rest at the target."""
+    ``min_rate_rad_s`` (the drive cannot hold a crawl), at most what decelerates to rest at the
+    target."""
     stop_rate = math.sqrt(2.0 * limits.angular_accel_rad_s2 * 0.8 * abs(error_rad))
     rate = min(max(gain_per_s * abs(error_rad), min_rate_rad_s), stop_rate, limits.max_w_rad_s)
     w = math.copysign(rate, error_rad)
@@ -64,7 +66,8 @@ def rotation_rate(
 def arc_poses(
     x_m: float, y_m: float, yaw_rad: float, v: float, w: float, dt_s: float, n: int
 ) -> np.ndarray:
-    """Poses (n, 3) after 1..n steps of ``dt_s`` at the constant twist ``(v, w)`` (exact unicycle)."""
+    """Poses (n, 3) after 1..n steps of ``dt_s`` at the constant twist ``(v, w)`` (exact
+    unicycle)."""
     t = dt_s * np.arange(1, n + 1)
     yaw = yaw_rad + w * t
     if abs(w) < 1e-9:

@@ -32,7 +32,8 @@ class PoseSource:
         self.velocity = (0.0, 0.0)
         """Forward speed and yaw rate of the last message (m/s, rad/s)."""
         self.correction = (0.0, 0.0, 0.0)
-        """``map`` from the topic's map: ``(tx_m, ty_m, theta_rad)``, the scan matcher's (:mod:`.map_matching`)."""
+        """``map`` from the topic's map: ``(tx_m, ty_m, theta_rad)``, the scan matcher's
+        (:mod:`.map_matching`)."""
         bus.subscribe(topic, self._on_odometry)
 
     def _on_odometry(self, msg) -> None:
@@ -83,8 +84,8 @@ class PoseSource:
 
     def rebase(self, before) -> None:
         """The topic's latest pose jumped from ``before`` (3,): the EKF took in the map match
-        (:mod:`.map_matching`). The jump ``delta = new o before^-1`` moves the earlier history with it and
-        comes out of :attr:`correction`, so that every corrected pose stays where it was."""
+        (:mod:`.map_matching`). The jump ``delta = new o before^-1`` moves the earlier history with
+        it and comes out of :attr:`correction`, so that every corrected pose stays where it was."""
         new = self.raw_pose()
         delta = se2.compose(new, se2.inverse(before))
         if not np.any(delta):
@@ -106,7 +107,8 @@ class PoseSource:
         return se2.compose(self.correction, poses) if any(self.correction) else poses
 
     def scan_in_map(self, scan, laser_xy_yaw, raytrace_range_m: float):
-        """Each beam of a ``LaserScan`` in ``map``: origins (K, 2), ends (K, 2) and returns (K,) bool.
+        """Each beam of a ``LaserScan`` in ``map``: origins (K, 2), ends (K, 2) and returns (K,)
+        bool.
 
         A beam without a return ends ``raytrace_range_m`` out; the laser frame sits at
         ``laser_xy_yaw`` in ``base_link``.

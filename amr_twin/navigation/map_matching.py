@@ -1,4 +1,5 @@
-"""The localisation's pose held to the map: each scan fitted to the static map (AMCL's role in nav2).
+"""The localisation's pose held to the map: each scan fitted to the static map (AMCL's role in
+nav2).
 
 Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationmap_matching."""
 
@@ -21,7 +22,8 @@ from amr_twin.ros.messages import Header, Time
 
 
 class MapMatcher:
-    """Fits each scan to the static map of ``costmap`` and keeps the correction (module docstring)."""
+    """Fits each scan to the static map of ``costmap`` and keeps the correction (module
+    docstring)."""
 
     def __init__(
         self,
@@ -61,16 +63,16 @@ class MapMatcher:
         self.correction = (0.0, 0.0, 0.0)
         """``map`` from the localisation's frame: ``(tx_m, ty_m, theta_rad)``."""
         self.information = np.zeros((3, 3))
-        """The last fit's information ``J' J / sigma^2`` (3, 3) in its increment ``(dx_m, dy_m, dyaw_rad)``
-        about the laser at :attr:`centre_xy_m`."""
+        """The last fit's information ``J' J / sigma^2`` (3, 3) in its increment ``(dx_m, dy_m,
+        dyaw_rad)`` about the laser at :attr:`centre_xy_m`."""
         self.centre_xy_m = np.zeros(2)
         self.matches = 0
         self.skipped = 0
 
     def _field(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distance to the static map's obstacles (K,) and its gradient (K, 2) at points ``q`` (K, 2), m:
-        the costmap's distance field (between cell centres) interpolated bilinearly, less half a cell, so
-        that a point on an obstacle's face reads 0; ``inf`` off the grid."""
+        """Distance to the static map's obstacles (K,) and its gradient (K, 2) at points ``q`` (K,
+        2), m: the costmap's distance field (between cell centres) interpolated bilinearly, less
+        half a cell, so that a point on an obstacle's face reads 0; ``inf`` off the grid."""
         cm = self.costmap
         D, res = cm.static_dist_m, cm.resolution_m
         u = (q[:, 0] - cm.origin_xy_m[0]) / res - 0.5
@@ -98,9 +100,9 @@ class MapMatcher:
         return np.where(inside, d, np.inf), g
 
     def update(self, laser_xy_m, points_xy_m: np.ndarray) -> tuple[float, float, float]:
-        """Fit one scan: its returns ``points_xy_m`` (P, 2) in ``map`` as the corrected poses place them,
-        seen from ``laser_xy_m`` (2,); returns the increment composed into :attr:`correction` (zero when
-        too few returns lie near the map)."""
+        """Fit one scan: its returns ``points_xy_m`` (P, 2) in ``map`` as the corrected poses place
+        them, seen from ``laser_xy_m`` (2,); returns the increment composed into :attr:`correction`
+        (zero when too few returns lie near the map)."""
         c = np.asarray(laser_xy_m, float)
         p = np.asarray(points_xy_m, float).reshape(-1, 2)
         p = p[np.hypot(*(p - c).T) <= self.max_range_m] - c
@@ -128,7 +130,8 @@ class MapMatcher:
             A = info + np.diag(w_step)
             b = -J.T @ d[inlier] / self.sigma_m**2 - w_step * x
             x = x + np.linalg.solve(A, b)
-        # bounds: the step of a scan, then the whole correction (a match slid along look-alike racks stops there)
+        # bounds: the step of a scan, then the whole correction (a match slid along look-alike racks
+        # stops there)
         x[:2] *= min(1.0, self.step_m / max(float(np.hypot(*x[:2])), 1e-12))
         x[2] = min(max(x[2], -self.step_rad), self.step_rad)
         new = total + x
@@ -148,18 +151,19 @@ class MapMatcher:
         return step
 
     def pose_covariance(self, base_xy_m) -> np.ndarray:
-        """Covariance (3, 3) of x_m, y_m, yaw_rad of ``base_link`` at ``base_xy_m`` (2,) after the last fit:
-        the fit's (the inverse of :attr:`information`, a direction the scan leaves open, an aisle's length,
-        stays open) moved from the laser to the base, times ``feedback_inflation`` (the returns are not
-        independent: neighbours fall in the same map cells), plus ``feedback_floor_*`` squared."""
+        """Covariance (3, 3) of x_m, y_m, yaw_rad of ``base_link`` at ``base_xy_m`` (2,) after the
+        last fit: the fit's (the inverse of :attr:`information`, a direction the scan leaves open,
+        an aisle's length, stays open) moved from the laser to the base, times
+        ``feedback_inflation`` (the returns are not independent: neighbours fall in the same map
+        cells), plus ``feedback_floor_*`` squared."""
         cov = np.linalg.inv(self.information + 1e-6 * np.eye(3))
         bx, by = np.asarray(base_xy_m, float) - self.centre_xy_m
         J = np.array([[1.0, 0.0, -by], [0.0, 1.0, bx], [0.0, 0.0, 1.0]])
         return self.feedback_inflation * (J @ cov @ J.T) + np.diag(self.feedback_floor)
 
     def pose_message(self, pose, stamp_s: float, seq: int) -> PoseWithCovarianceStamped:
-        """``pose`` (3,) of ``base_link`` in ``map`` at ``stamp_s`` (the corrected pose of the localisation's
-        message of that instant) with :meth:`pose_covariance`."""
+        """``pose`` (3,) of ``base_link`` in ``map`` at ``stamp_s`` (the corrected pose of the
+        localisation's message of that instant) with :meth:`pose_covariance`."""
         cov6 = np.zeros((6, 6))
         cov6[np.ix_([0, 1, 5], [0, 1, 5])] = self.pose_covariance(pose[:2])
         cov6[2, 2] = cov6[3, 3] = cov6[4, 4] = 1e6  # z, roll, pitch: not measured (two_d_mode)

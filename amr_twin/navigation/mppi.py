@@ -1,4 +1,5 @@
-"""A sampling MPC in the MPPI style (Williams et al. 2017, "Information theoretic MPC"; nav2's MPPI critics).
+"""A sampling MPC in the MPPI style (Williams et al. 2017, "Information theoretic MPC"; nav2's MPPI
+critics).
 
 Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationmppi."""
 
@@ -89,8 +90,9 @@ def _declare(lib) -> None:
 
 
 class Mppi(LocalController):
-    """MPPI local controller (module docstring). ``seed``: the noise stream (same seed, same commands).
-    ``native=False``: the NumPy critics rather than their C twin (:attr:`engine` says which run).
+    """MPPI local controller (module docstring). ``seed``: the noise stream (same seed, same
+    commands). ``native=False``: the NumPy critics rather than their C twin (:attr:`engine` says
+    which run).
 
     Arrays are time-major inside: controls (T, K, 2), trajectories (T, K), so that each step of the
     ramps' clipping works on contiguous memory.
@@ -140,7 +142,8 @@ class Mppi(LocalController):
         outline = footprint.outline_xy_m(costmap.resolution_m).astype(np.float32)
         self._ox, self._oy = outline[:, 0].copy(), outline[:, 1].copy()
         self.check_m = footprint.circumscribed_radius_m + margin_m + costmap.resolution_m
-        """Centres farther than this from an obstacle: the footprint's clearance is beyond ``margin_m``, m."""
+        """Centres farther than this from an obstacle: the footprint's clearance is beyond
+        ``margin_m``, m."""
         self.narrow_m, self.narrow_v_m_s = float(narrow_m), float(narrow_v_m_s)
         self.w = {
             "collision": 1e4,
@@ -207,7 +210,8 @@ class Mppi(LocalController):
         self.nominal[:] = 0.0
 
     def _feasible(self, u: np.ndarray, v0: float, w0: float) -> np.ndarray:
-        """``u`` (T, K, 2) clipped in place to the speed limits and, step by step from ``(v0, w0)``, to the ramps."""
+        """``u`` (T, K, 2) clipped in place to the speed limits and, step by step from ``(v0, w0)``,
+        to the ramps."""
         np.clip(u, self._u_min, self._u_max, out=u)
         prev = np.array([v0, w0], u.dtype)
         for t in range(self.T):
@@ -218,7 +222,8 @@ class Mppi(LocalController):
         return u
 
     def _sample(self, v0: float, w0: float) -> np.ndarray:
-        """Step 1 of the module docstring: the feasible control sequences (T, K, 2) of this cycle."""
+        """Step 1 of the module docstring: the feasible control sequences (T, K, 2) of this
+        cycle."""
         u = self.rng.standard_normal((self.T, self.K, 2), dtype=np.float32)
         if self._lib is not None:
             self._lib.mppi_sample(
@@ -302,7 +307,8 @@ class Mppi(LocalController):
     def costs(
         self, x, y, yaw, u, path: PathHandler, people=None, t_s: float = 0.0
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Critic cost (K,) of each trajectory (T, K) and whether it collides (K,) with what the costmap holds."""
+        """Critic cost (K,) of each trajectory (T, K) and whether it collides (K,) with what the
+        costmap holds."""
         w, T = self.w, x.shape[0]
         horizon = self.limits.max_v_m_s * self.T * self.step_s
         ref = path.ahead(horizon + 0.5)[::2, :2]
@@ -333,7 +339,8 @@ class Mppi(LocalController):
         return cost, any_hit
 
     def _footprint(self, x, y, c, s) -> tuple[np.ndarray, np.ndarray]:
-        """The footprint critic's clearance (T, K) (float32, m; ``margin_m`` where the centre is beyond
+        """The footprint critic's clearance (T, K) (float32, m; ``margin_m`` where the centre is
+        beyond
         :attr:`check_m`) and collisions (T, K) of poses at ``x, y`` heading ``c, s`` (cos, sin)."""
         cm = self.costmap
         d = cm.distance_at(np.column_stack([x.ravel(), y.ravel()])).reshape(x.shape)
@@ -350,7 +357,8 @@ class Mppi(LocalController):
     def _costs_c(
         self, x, y, yaw, u, ref, reach, follow, goal, people, t_s
     ) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`costs` by the C helper (the same critics; the headings enter as their cos and sin)."""
+        """:meth:`costs` by the C helper (the same critics; the headings enter as their cos and
+        sin)."""
         cm, (T, K) = self.costmap, x.shape
         p = self._params
         p[17:25] = (
@@ -402,8 +410,9 @@ class Mppi(LocalController):
         return cost, hit.view(bool)
 
     def command(self, pose, velocity, path: PathHandler, people=None, t_s: float = 0.0) -> Twist2D:
-        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w), at time
-        ``t_s`` with the tracked ``people`` (:class:`~amr_twin.navigation.people.People`) about."""
+        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w), at
+        time ``t_s`` with the tracked ``people`` (:class:`~amr_twin.navigation.people.People`)
+        about."""
         pose = np.asarray(pose, float)
         v0, w0 = (float(v) for v in velocity)
         ahead = path.ahead(1.0)[:, :2]
@@ -421,8 +430,8 @@ class Mppi(LocalController):
             return Twist2D(*self.limits.ramp(0.0, 0.0, v0, w0, self.dt_s), True)
         wgt = np.exp(-(cost - cost.min()) / self.temperature)
         wgt /= wgt.sum()
-        # a weighted mean of feasible sequences, and its 3-step moving average, are feasible (the limits
-        # and ramps are convex constraints): no second clipping
+        # a weighted mean of feasible sequences, and its 3-step moving average, are feasible (the
+        # limits and ramps are convex constraints): no second clipping
         new = np.tensordot(u, wgt.astype(u.dtype), axes=([1], [0])).astype(float)  # (T, 2)
         new[1:-1] = (new[:-2] + new[1:-1] + new[2:]) / 3.0
         v, w = self.limits.ramp(float(new[0, 0]), float(new[0, 1]), v0, w0, self.dt_s)

@@ -25,8 +25,9 @@ from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped, Twist, Vec
 
 @dataclass(frozen=True)
 class NavParams:
-    """Rates, tolerances and ranges of the navigator (``navigation.navigator``, ``.costmap`` and ``.planner`` of
-    the parameter file, where each has its source; the stack builds this from them)."""
+    """Rates, tolerances and ranges of the navigator (``navigation.navigator``, ``.costmap`` and
+    ``.planner`` of the parameter file, where each has its source; the stack builds this from
+    them)."""
 
     controller_hz: float = 20.0
     planner_hz: float = 1.0
@@ -46,8 +47,8 @@ class NavParams:
 
 @dataclass
 class GoalOutcome:
-    """What became of one goal: ``succeeded``, ``aborted`` (with the reason), ``preempted`` (a new goal replaced
-    it) or ``canceled``; times in s."""
+    """What became of one goal: ``succeeded``, ``aborted`` (with the reason), ``preempted`` (a new
+    goal replaced it) or ``canceled``; times in s."""
 
     goal: tuple
     status: str = "pending"
@@ -61,7 +62,8 @@ class GoalOutcome:
 
 
 class Navigator:
-    """Drive to each goal ``(x_m, y_m, yaw_rad or None)`` in turn (module docstring), from ``start_s``."""
+    """Drive to each goal ``(x_m, y_m, yaw_rad or None)`` in turn (module docstring), from
+    ``start_s``."""
 
     def __init__(
         self,
@@ -88,7 +90,8 @@ class Navigator:
     ):
         self.bus, self.clock, self.pose_source = bus, clock, pose_source
         self.yielding = yielding
-        """Keeps the robot out of people's predicted paths (:class:`~amr_twin.navigation.yielding.Yielding`), or None."""
+        """Keeps the robot out of people's predicted paths
+        (:class:`~amr_twin.navigation.yielding.Yielding`), or None."""
         self.matcher = matcher
         self.costmap, self.planner, self.controller = costmap, planner, controller
         self.footprint, self.limits, self.p = footprint, limits, params
@@ -140,8 +143,8 @@ class Navigator:
 
     # -- goals from outside (a user, an action server) ---------------------------------------
     def send_goal(self, goal) -> GoalOutcome:
-        """Drive to ``goal`` ``(x_m, y_m, yaw_rad or None)`` now: the active goal ends ``preempted`` and the
-        queued ones ``canceled``. Returns the new goal's outcome (filled in as it goes)."""
+        """Drive to ``goal`` ``(x_m, y_m, yaw_rad or None)`` now: the active goal ends ``preempted``
+        and the queued ones ``canceled``. Returns the new goal's outcome (filled in as it goes)."""
         self._end_all("preempted", "canceled", "replaced by a new goal")
         out = GoalOutcome(tuple(goal))
         self.outcomes.append(out)
@@ -170,7 +173,8 @@ class Navigator:
 
     @property
     def distance_left_m(self) -> float:
-        """Length of the rest of the present plan, m (NaN before the first plan of the active goal)."""
+        """Length of the rest of the present plan, m (NaN before the first plan of the active
+        goal)."""
         return math.nan if self.done or self._path is None else float(self._path.remaining_m)
 
     # -- state ----------------------------------------------------------------------------
@@ -226,8 +230,9 @@ class Navigator:
         self._cmd.publish(Twist(Vector3(float(v), 0.0, 0.0), Vector3(0.0, 0.0, float(w))))
 
     def _in_base(self, pose, people: bool = True) -> tuple:
-        """What the collision monitor takes, in the base frame: the scan's points (n, 2), which of them are
-        unmapped, and (``people``) the people's predicted positions and velocities (or None)."""
+        """What the collision monitor takes, in the base frame: the scan's points (n, 2), which of
+        them are unmapped, and (``people``) the people's predicted positions and velocities (or
+        None)."""
         c, s = math.cos(pose[2]), math.sin(pose[2])
         rot = np.array([[c, -s], [s, c]])  # map -> base: row vectors times this
         if people and len(self.people):
@@ -241,9 +246,9 @@ class Navigator:
         return (self._scan_points - pose[:2]) @ rot, self._unmapped, people
 
     def _yield(self, pose, wanted, filtered) -> tuple[float, float]:
-        """``filtered`` or, with a person about to walk into the robot where it would stand, the way out of their
-        path (:class:`~amr_twin.navigation.yielding.Yielding`), ramped, through the monitor's zones of returns
-        (not its people zones: they would stop the way out)."""
+        """``filtered`` or, with a person about to walk into the robot where it would stand, the way
+        out of their path (:class:`~amr_twin.navigation.yielding.Yielding`), ramped, through the
+        monitor's zones of returns (not its people zones: they would stop the way out)."""
         vel = self._velocity()
         out = self.yielding.command(
             self.clock.now_s, pose, vel, wanted, filtered, self.people, self._scan_points
@@ -302,8 +307,9 @@ class Navigator:
         self.controller.reset()
 
     def _plan_stale(self, pose) -> bool:
-        """Whether a new plan could differ: the costmap changed since the last one, or the robot left it by more
-        than ``off_path_m`` (a plan is optimal from each of its points on the same costmap)."""
+        """Whether a new plan could differ: the costmap changed since the last one, or the robot
+        left it by more than ``off_path_m`` (a plan is optimal from each of its points on the same
+        costmap)."""
         if self.costmap.version != self._plan_version:
             return True
         self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
@@ -335,9 +341,9 @@ class Navigator:
             and old.distance_to_path_m(pose[0], pose[1]) <= self.p.off_path_m
             and self.planner.path_free(old.poses[old.index :, :2], standing)
         ):
-            # nav2's replanning only if the path becomes invalid: a longer plan leaves a free path as it
-            # is (a tier's margin flickering with what the scans show of a pallet jack turned the robot
-            # back and forth between two routes, the path's heading each time)
+            # nav2's replanning only if the path becomes invalid: a longer plan leaves a free path
+            # as it is (a tier's margin flickering with what the scans show of a pallet jack turned
+            # the robot back and forth between two routes, the path's heading each time)
             return True
         if math.isnan(out.first_plan_length_m):
             out.first_plan_length_m = plan.length_m
@@ -368,12 +374,14 @@ class Navigator:
             self.outputs.cycle(now, pose, self.costmap)
 
     def _velocity(self) -> tuple[float, float]:
-        """The last command (what the drive is ramping to): a cleaner velocity than the estimate's."""
+        """The last command (what the drive is ramping to): a cleaner velocity than the
+        estimate's."""
         return (self.commands[-1][1], self.commands[-1][2]) if self.commands else (0.0, 0.0)
 
     def _arrived(self, now: float, pose, goal) -> bool:
-        """Time to stop and turn to the goal's yaw: within ``approach_m`` of the goal, or within ``xy_tolerance_m``
-        and no longer closing in (``approach_s`` inside it, or 2 cm past the closest approach)."""
+        """Time to stop and turn to the goal's yaw: within ``approach_m`` of the goal, or within
+        ``xy_tolerance_m`` and no longer closing in (``approach_s`` inside it, or 2 cm past the
+        closest approach)."""
         d = math.hypot(pose[0] - goal[0], pose[1] - goal[1])
         if d <= min(self.p.approach_m, self.p.xy_tolerance_m):
             return True
@@ -405,8 +413,9 @@ class Navigator:
                 self._yaw_inside_since = None
             elif self._yaw_inside_since is None:
                 self._yaw_inside_since = now
-            # inside the tolerance: on to half of it for at most approach_s (a drive that cannot turn slowly,
-            # as the thesis' firmware with its dead zone, would otherwise never end the goal)
+            # inside the tolerance: on to half of it for at most approach_s (a drive that cannot
+            # turn slowly, as the thesis' firmware with its dead zone, would otherwise never end the
+            # goal)
             settled = inside and (
                 abs(err) <= 0.5 * self.p.yaw_tolerance_rad
                 or now - self._yaw_inside_since >= self.p.approach_s

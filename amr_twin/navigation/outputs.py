@@ -1,4 +1,5 @@
-"""What the navigator shows the tools: the plan, the map, the local costmap and the footprint, as ROS messages.
+"""What the navigator shows the tools: the plan, the map, the local costmap and the footprint, as
+ROS messages.
 
 Published on the bus (the recordings and the live view take them from there, as a ROS graph's
 ``ros2 bag record`` would), frame ``map``:

@@ -1,4 +1,5 @@
-"""Narrow passages on a plan: a door is driven through on its centre line, aligned before the robot enters.
+"""Narrow passages on a plan: a door is driven through on its centre line, aligned before the robot
+enters.
 
 Where the robot cannot turn in place (its centre closer to an obstacle than the circumscribed radius
 plus ``clearance_m``), a grid path may cross a door diagonally and 5 cm off its middle (the 0.1 m
@@ -33,15 +34,16 @@ STEP_M = 0.01
 
 
 def footprint_clearance_m(costmap: Costmap, footprint: Footprint, poses: np.ndarray) -> np.ndarray:
-    """Least distance field value (n,) over the footprint's outline at each pose (n, 3), m (0: on a lethal cell)."""
+    """Least distance field value (n,) over the footprint's outline at each pose (n, 3), m (0: on a
+    lethal cell)."""
     outline = footprint.outline_xy_m(costmap.resolution_m)
     pts = to_map(np.asarray(poses, float).reshape(-1, 3), outline).reshape(-1, 2)
     return costmap.distance_at(pts).reshape(-1, len(outline)).min(1)
 
 
 def _widths(costmap: Costmap, p: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Distances (A, 2) from ``p`` to the first lethal cell along each direction of ``angles`` (A,) and its
-    opposite (inf: none within :data:`REACH_M`), and the directions (A, 2)."""
+    """Distances (A, 2) from ``p`` to the first lethal cell along each direction of ``angles`` (A,)
+    and its opposite (inf: none within :data:`REACH_M`), and the directions (A, 2)."""
     dirs = np.column_stack([np.cos(angles), np.sin(angles)])
     s = np.arange(STEP_M, REACH_M + 1e-9, STEP_M)
     out = np.full((len(angles), 2), np.inf)
@@ -53,8 +55,9 @@ def _widths(costmap: Costmap, p: np.ndarray, angles: np.ndarray) -> tuple[np.nda
 
 
 def throat(costmap: Costmap, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
-    """The passage through ``p`` (step 1 of the module docstring): the middle (2,) of its narrowest line, the
-    axis' direction (2,) and the width, m; None without obstacles on both sides within :data:`REACH_M`."""
+    """The passage through ``p`` (step 1 of the module docstring): the middle (2,) of its narrowest
+    line, the axis' direction (2,) and the width, m; None without obstacles on both sides within
+    :data:`REACH_M`."""
     coarse = np.arange(0.0, math.pi, math.radians(5.0))
     w, _ = _widths(costmap, p, coarse)
     best = float(coarse[np.argmin(w.sum(1))])
@@ -74,8 +77,8 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
 
 
 def _lead(costmap: Costmap, p: np.ndarray, u: np.ndarray, turn_m: float, lead_m: float) -> float:
-    """How far along ``u`` from ``p`` the axis goes on: to where the centre is ``turn_m`` from obstacles, plus
-    ``lead_m``, m (at most :data:`REACH_M`)."""
+    """How far along ``u`` from ``p`` the axis goes on: to where the centre is ``turn_m`` from
+    obstacles, plus ``lead_m``, m (at most :data:`REACH_M`)."""
     s = np.arange(0.0, REACH_M + 1e-9, 0.05)
     free = np.flatnonzero(costmap.distance_at(p + s[:, None] * u) >= turn_m)
     return float(min(s[free[0]] + lead_m, REACH_M)) if len(free) else REACH_M
@@ -84,8 +87,9 @@ def _lead(costmap: Costmap, p: np.ndarray, u: np.ndarray, turn_m: float, lead_m:
 def split(
     costmap: Costmap, footprint: Footprint, xy: np.ndarray, clearance_m: float, lead_m: float
 ) -> list[tuple[bool, np.ndarray]]:
-    """The grid path ``xy`` (N, 2) as pieces ``(fixed, points)``: a fixed piece is a passage's axis (two points,
-    driven straight), the others are to be shortened; consecutive pieces share their end points."""
+    """The grid path ``xy`` (N, 2) as pieces ``(fixed, points)``: a fixed piece is a passage's axis
+    (two points, driven straight), the others are to be shortened; consecutive pieces share their
+    end points."""
     turn_m = footprint.circumscribed_radius_m + clearance_m
     d = costmap.distance_at(xy)
     narrow = d < turn_m

@@ -1,4 +1,5 @@
-"""The plan as the local controllers see it: pruned behind the robot, cut at a horizon (nav2's PathHandler).
+"""The plan as the local controllers see it: pruned behind the robot, cut at a horizon (nav2's
+PathHandler).
 
 The robot's progress along the plan is the index of its nearest plan point, searched only ahead
 of the last one (at most ``search_m`` further): where a path passes close to itself the
@@ -24,7 +25,8 @@ class PathHandler:
         self.search_m = float(search_m)
 
     def update(self, x_m: float, y_m: float) -> int:
-        """Move the progress to the nearest point within ``search_m`` ahead of it; return its index."""
+        """Move the progress to the nearest point within ``search_m`` ahead of it; return its
+        index."""
         hi = int(np.searchsorted(self.s_m, self.s_m[self.index] + self.search_m, side="right"))
         window = self.poses[self.index : hi, :2]
         d = np.hypot(window[:, 0] - x_m, window[:, 1] - y_m)
@@ -37,7 +39,8 @@ class PathHandler:
         return float(np.hypot(p[:, 0] - x_m, p[:, 1] - y_m).min())
 
     def ahead(self, horizon_m: float) -> np.ndarray:
-        """Plan points (M, 3) from the progress out to ``horizon_m`` of arc length (at least one)."""
+        """Plan points (M, 3) from the progress out to ``horizon_m`` of arc length (at least
+        one)."""
         hi = int(np.searchsorted(self.s_m, self.s_m[self.index] + horizon_m, side="right"))
         return self.poses[self.index : max(hi, self.index + 1)]
 

@@ -1,4 +1,5 @@
-"""People in the scan: clusters of unmapped returns tracked from scan to scan, their motion predicted.
+"""People in the scan: clusters of unmapped returns tracked from scan to scan, their motion
+predicted.
 
 Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationpeople."""
 
@@ -13,8 +14,9 @@ from scipy.sparse.csgraph import connected_components
 
 @dataclass(frozen=True)
 class People:
-    """Confirmed tracks at ``t_s``: positions ``xy_m`` (N, 2) and velocities ``v_m_s`` (N, 2) in ``map``;
-    ``intent_m_s`` (N, 2) each one's last walking velocity (zero if never seen walking; None: unknown)."""
+    """Confirmed tracks at ``t_s``: positions ``xy_m`` (N, 2) and velocities ``v_m_s`` (N, 2) in
+    ``map``; ``intent_m_s`` (N, 2) each one's last walking velocity (zero if never seen walking;
+    None: unknown)."""
 
     t_s: float
     xy_m: np.ndarray
@@ -25,7 +27,8 @@ class People:
         return len(self.xy_m)
 
     def at(self, t_s: np.ndarray, horizon_s: float) -> np.ndarray:
-        """Positions (N, len(t_s), 2) at instants ``t_s`` (s), constant velocity for at most ``horizon_s``."""
+        """Positions (N, len(t_s), 2) at instants ``t_s`` (s), constant velocity for at most
+        ``horizon_s``."""
         dt = np.clip(np.asarray(t_s, float) - self.t_s, 0.0, horizon_s)
         return self.xy_m[:, None, :] + self.v_m_s[:, None, :] * dt[None, :, None]
 
@@ -75,7 +78,8 @@ class PeopleTracker:
         self.clear()
 
     def detect(self, points_xy_m: np.ndarray, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Person-sized clusters of ``points_xy_m`` (P, 2) seen at ``t_s`` (P,): centres (M, 2), times (M,)."""
+        """Person-sized clusters of ``points_xy_m`` (P, 2) seen at ``t_s`` (P,): centres (M, 2),
+        times (M,)."""
         labels = clusters(points_xy_m, self.join_m)
         if len(labels) == 0:
             return np.zeros((0, 2)), np.zeros(0)
@@ -95,9 +99,9 @@ class PeopleTracker:
     def update(
         self, points_xy_m: np.ndarray, t_s: np.ndarray, origin_xy_m, scan_end_s: float
     ) -> None:
-        """One scan's unmapped returns ``points_xy_m`` (P, 2) in ``map``, their instants ``t_s`` (P,), seen
-        from ``origin_xy_m`` (the laser, to keep those within ``range_m``) by the scan that ended at
-        ``scan_end_s`` (a track unseen since ``keep_s`` before it is dropped)."""
+        """One scan's unmapped returns ``points_xy_m`` (P, 2) in ``map``, their instants ``t_s``
+        (P,), seen from ``origin_xy_m`` (the laser, to keep those within ``range_m``) by the scan
+        that ended at ``scan_end_s`` (a track unseen since ``keep_s`` before it is dropped)."""
         p, t = np.asarray(points_xy_m, float).reshape(-1, 2), np.asarray(t_s, float)
         near = np.hypot(*(p - np.asarray(origin_xy_m, float)).T) <= self.range_m
         centre, t_c = self.detect(p[near], t[near])
@@ -137,7 +141,8 @@ class PeopleTracker:
         self._hits = np.concatenate([self._hits[alive], np.ones(k, int)])
 
     def people(self) -> People:
-        """The people: confirmed tracks that have moved (module docstring), those standing with zero velocity."""
+        """The people: confirmed tracks that have moved (module docstring), those standing with zero
+        velocity."""
         keep = (self._hits >= self.confirm) & self._moved
         if not keep.any():
             return NOBODY

@@ -1,4 +1,5 @@
-"""The global planner: Dijkstra on the costmap's 8-connected grid, line-of-sight shortening, a dense path.
+"""The global planner: Dijkstra on the costmap's 8-connected grid, line-of-sight shortening, a dense
+path.
 
 Reasons and measurements: docs/explanation/navigation.md#amr_twinnavigationplanner."""
 
@@ -19,7 +20,8 @@ from amr_twin.navigation.passages import split
 
 @dataclass(frozen=True)
 class Plan:
-    """A planned path: points (N, 3) ``x_m, y_m, yaw_rad`` in ``map``, its length and planning CPU time."""
+    """A planned path: points (N, 3) ``x_m, y_m, yaw_rad`` in ``map``, its length and planning CPU
+    time."""
 
     poses: np.ndarray
     length_m: float
@@ -64,8 +66,9 @@ class GlobalPlanner:
         self.last_error = ""
 
     def _pooled(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The coarse grids (worst cost, least distance, least distance to the obstacle layer), brought up
-        to date over the windows the costmap changed since the last plan (all of them the first time)."""
+        """The coarse grids (worst cost, least distance, least distance to the obstacle layer),
+        brought up to date over the windows the costmap changed since the last plan (all of them the
+        first time)."""
         k, cm = self.downsample, self.costmap
         rows, cols = cm.shape[0] // k * k, cm.shape[1] // k * k
         seen = self._seen
@@ -104,8 +107,8 @@ class GlobalPlanner:
         return self._coarse
 
     def _weights(self, keep_m: float, people_xy_m=None, pad_m: float = 0.0) -> np.ndarray:
-        """Coarse cell weights; cells closer than ``keep_m`` to an obstacle, or than ``people_m`` to a person
-        at ``people_xy_m`` (N, 2), blocked (inf)."""
+        """Coarse cell weights; cells closer than ``keep_m`` to an obstacle, or than ``people_m`` to
+        a person at ``people_xy_m`` (N, 2), blocked (inf)."""
         cm = self.costmap
         coarse, near, near_obstacle = self._pooled()
         w = 1.0 + self.cost_weight * coarse / 252.0
@@ -136,9 +139,9 @@ class GlobalPlanner:
     def plan(
         self, start_xy_m, goal_xy_m, goal_yaw_rad: float | None = None, people_xy_m=None
     ) -> Plan | None:
-        """A plan from ``start_xy_m`` to ``goal_xy_m`` (the last heading ``goal_yaw_rad`` if given) keeping the
-        robot's centre ``people_m`` from the people standing at ``people_xy_m`` (N, 2), or None
-        (:attr:`last_error` says why)."""
+        """A plan from ``start_xy_m`` to ``goal_xy_m`` (the last heading ``goal_yaw_rad`` if given)
+        keeping the robot's centre ``people_m`` from the people standing at ``people_xy_m`` (N, 2),
+        or None (:attr:`last_error` says why)."""
         t0 = time.process_time()
         problem = goal_problem(self.costmap, goal_xy_m)
         if problem:
@@ -184,9 +187,10 @@ class GlobalPlanner:
         return Plan(poses, length, time.process_time() - t0)
 
     def path_free(self, xy_m: np.ndarray, people_xy_m=None) -> bool:
-        """Whether a path's points ``xy_m`` (N, 2) still pass where the planner's second tier would (the
-        inscribed radius from obstacles, ``unmapped_pad_m`` more from the obstacle layer's, ``people_m`` from
-        people standing at ``people_xy_m``), the last point (the goal's cell) aside."""
+        """Whether a path's points ``xy_m`` (N, 2) still pass where the planner's second tier would
+        (the inscribed radius from obstacles, ``unmapped_pad_m`` more from the obstacle layer's,
+        ``people_m`` from people standing at ``people_xy_m``), the last point (the goal's cell)
+        aside."""
         cm, k = self.costmap, self.downsample
         w = self._weights(0.0, people_xy_m, self.unmapped_pad_m)
         r, c, inside = cm.cells(np.asarray(xy_m, float)[:-1])
@@ -197,8 +201,8 @@ class GlobalPlanner:
         )
 
     def _search(self, start_xy_m, goal_xy_m, keep_m: float, people_xy_m=None, pad_m: float = 0.0):
-        """Coarse cells of the cheapest path keeping ``keep_m`` from obstacles, ``pad_m`` more from those of the
-        obstacle layer (None: none; a str: why not)."""
+        """Coarse cells of the cheapest path keeping ``keep_m`` from obstacles, ``pad_m`` more from
+        those of the obstacle layer (None: none; a str: why not)."""
         cm, k = self.costmap, self.downsample
         w = self._weights(keep_m, people_xy_m, pad_m)
         cell = []
@@ -221,7 +225,8 @@ class GlobalPlanner:
     def _clearance(
         self, a: np.ndarray, b: np.ndarray, people_xy_m: np.ndarray
     ) -> tuple[float, float]:
-        """Least clearance along the segment a-b to an obstacle, and to a person less ``people_m`` (may be < 0)."""
+        """Least clearance along the segment a-b to an obstacle, and to a person less ``people_m``
+        (may be < 0)."""
         n = max(2, int(math.ceil(np.hypot(*(b - a)) / (0.5 * self.costmap.resolution_m))) + 1)
         pts = a + np.linspace(0.0, 1.0, n)[:, None] * (b - a)
         return float(self.costmap.distance_at(pts).min()), float(
@@ -229,7 +234,8 @@ class GlobalPlanner:
         )
 
     def _people_clearance(self, xy: np.ndarray, people_xy_m: np.ndarray) -> np.ndarray:
-        """Distance (K,) of points to the nearest person less ``people_m`` (inf without people), m."""
+        """Distance (K,) of points to the nearest person less ``people_m`` (inf without people),
+        m."""
         if len(people_xy_m) == 0:
             return np.full(len(xy), np.inf)
         return (
@@ -238,7 +244,8 @@ class GlobalPlanner:
         )
 
     def _shorten(self, xy: np.ndarray, people_xy_m: np.ndarray) -> np.ndarray:
-        """Line-of-sight shortening (module docstring, step 3), keeping as far from people as the grid path did."""
+        """Line-of-sight shortening (module docstring, step 3), keeping as far from people as the
+        grid path did."""
         d, dp = self.costmap.distance_at(xy), self._people_clearance(xy, people_xy_m)
         floor, half = self.costmap.inscribed_m, 0.5 * self.costmap.resolution_m
         keep, i, n = [0], 0, len(xy)
@@ -281,8 +288,9 @@ class GlobalPlanner:
 
 
 class GridGraph:
-    """The 8-connected graph of a ``shape`` grid, both directions of every move, in CSR order: built once,
-    its edge weights set per search (an infinite weight: no edge, as scipy's Dijkstra takes it)."""
+    """The 8-connected graph of a ``shape`` grid, both directions of every move, in CSR order: built
+    once, its edge weights set per search (an infinite weight: no edge, as scipy's Dijkstra takes
+    it)."""
 
     def __init__(self, shape: tuple[int, int]):
         h, wd = shape
@@ -308,8 +316,8 @@ class GridGraph:
     def shortest(
         self, w: np.ndarray, start: tuple[int, int], goal: tuple[int, int]
     ) -> np.ndarray | None:
-        """Cells (N, 2) row, col of the cheapest path on cell weights ``w`` (inf: blocked), or None; a move
-        costs its length times the mean of its two cells' weights."""
+        """Cells (N, 2) row, col of the cheapest path on cell weights ``w`` (inf: blocked), or None;
+        a move costs its length times the mean of its two cells' weights."""
         flat = w.ravel()
         graph = csr_matrix(
             (self.length * 0.5 * (flat[self.a] + flat[self.b]), self.b, self.indptr),
@@ -326,7 +334,8 @@ class GridGraph:
 
 
 def goal_problem(costmap: Costmap, goal_xy_m) -> str:
-    """Why a goal cannot be planned to, in one line ('' when it can): off the map, or too close to an obstacle."""
+    """Why a goal cannot be planned to, in one line ('' when it can): off the map, or too close to
+    an obstacle."""
     gx, gy = float(goal_xy_m[0]), float(goal_xy_m[1])
     r, c, inside = costmap.cells(np.array([[gx, gy]]))
     if not inside[0]:
@@ -341,7 +350,8 @@ def goal_problem(costmap: Costmap, goal_xy_m) -> str:
         return f"goal ({gx:.2f}, {gy:.2f}) lies inside an obstacle of the map"
     if d <= costmap.inscribed_m:
         return (
-            f"goal ({gx:.2f}, {gy:.2f}) lies {d:.2f} m from an obstacle of the map, closer than the "
+            f"goal ({gx:.2f}, {gy:.2f}) lies {d:.2f} m from an obstacle of the map, closer than "
+            f"the "
             f"robot's half width ({costmap.inscribed_m:.3f} m)"
         )
     return ""

@@ -1,6 +1,6 @@
-"""The progress checker (nav2's SimpleProgressChecker): the robot must move ``radius_m`` from where it
-last did within ``time_allowance_s``, or the controller has failed to make progress. (The goal checker is
-the navigator's ``_arrived``.)"""
+"""The progress checker (nav2's SimpleProgressChecker): the robot must move ``radius_m`` from where
+it last did within ``time_allowance_s``, or the controller has failed to make progress. (The goal
+checker is the navigator's ``_arrived``.)"""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ import math
 
 
 class ProgressChecker:
-    """Fails when the robot stays within ``radius_m`` of a reference pose for ``time_allowance_s``."""
+    """Fails when the robot stays within ``radius_m`` of a reference pose for
+    ``time_allowance_s``."""
 
     def __init__(self, radius_m: float = 0.5, time_allowance_s: float = 10.0):
         self.radius_m, self.time_allowance_s = radius_m, time_allowance_s

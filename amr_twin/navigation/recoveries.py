@@ -5,8 +5,8 @@ every control cycle for a twist until it reports done (or failed). Spin and back
 footprint against the costmap before each step (nav2 checks ``simulate_ahead_time`` ahead) and
 stop, failed, rather than hit something: a recovery must not be the cause of a collision. They are
 registered by name in :data:`~amr_twin.navigation.registries.RECOVERIES`, where
-:data:`~amr_twin.navigation.registries.ROUND_ROBIN` is the order nav2's ``RoundRobin`` node runs them in.
-"""
+:data:`~amr_twin.navigation.registries.ROUND_ROBIN` is the order nav2's ``RoundRobin`` node runs
+them in."""
 
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ class Recovery(RecoveryBehaviour):
     def __init__(
         self, costmap: Costmap, footprint: Footprint, limits: Limits, dt_s: float, **settings
     ):
-        """``settings``: the class's own (``angle_rad``, ``duration_s``, ``distance_m``, ``speed_m_s``) for this one."""
+        """``settings``: the class's own (``angle_rad``, ``duration_s``, ``distance_m``,
+        ``speed_m_s``) for this one."""
         for key, value in settings.items():
             if not hasattr(type(self), key):
                 raise TypeError(f"{type(self).__name__}: no setting {key!r}")
@@ -57,7 +58,8 @@ class ClearCostmaps(Recovery):
 
 
 class Spin(Recovery):
-    """nav2's Spin: turn in place by ``angle_rad`` (counter-clockwise), checking the footprint ahead."""
+    """nav2's Spin: turn in place by ``angle_rad`` (counter-clockwise), checking the footprint
+    ahead."""
 
     angle_rad = math.pi / 2
 

@@ -4,7 +4,8 @@ Reconstructed from the paper's description and nav2's parameter documentation, n
 
 - the carrot is the plan point ``lookahead`` of arc length ahead of the robot's progress, with
   ``lookahead = clamp(v * lookahead_time_s, min_lookahead_m, max_lookahead_m)`` (adaptive);
-- pure pursuit's curvature ``kappa = 2 y / d^2`` (carrot at ``(x, y)`` in ``base_link``, distance ``d``);
+- pure pursuit's curvature ``kappa = 2 y / d^2`` (carrot at ``(x, y)`` in ``base_link``, distance
+``d``);
 - the speed is regulated: by curvature (below ``min_radius_m`` the speed scales with the turn
   radius), by proximity (closer than ``cost_scaling_dist_m`` to an obstacle it scales with the
   distance), and on approach (within ``approach_dist_m`` of the goal it scales with the remaining
@@ -30,7 +31,8 @@ from amr_twin.navigation.path_handler import PathHandler
 
 
 class RegulatedPurePursuit(LocalController):
-    """nav2's Regulated Pure Pursuit (module docstring) on a :class:`Costmap`; it does not see people."""
+    """nav2's Regulated Pure Pursuit (module docstring) on a :class:`Costmap`; it does not see
+    people."""
 
     def __init__(
         self,
@@ -76,8 +78,8 @@ class RegulatedPurePursuit(LocalController):
         return bool((self.costmap.distance_at(pts) <= 0.0).any())
 
     def command(self, pose, velocity, path: PathHandler, people=None, t_s: float = 0.0) -> Twist2D:
-        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w); ``people``
-        and ``t_s`` are not used."""
+        """The twist for the robot at ``pose`` (x_m, y_m, yaw_rad) moving at ``velocity`` (v, w);
+        ``people`` and ``t_s`` are not used."""
         x, y, yaw = (float(v) for v in pose)
         v_prev, w_prev = (float(v) for v in velocity)
         lim = self.limits

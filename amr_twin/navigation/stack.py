@@ -36,22 +36,25 @@ from amr_twin.navigation.static_map import StaticMap, world_map, yaml_map
 from amr_twin.navigation.yielding import Yielding
 
 REST_S = 2.0
-"""Standing still before the first goal: the gyro's rest calibration of the EKF (ekf.imu_rest_calibration_s)."""
+"""Standing still before the first goal: the gyro's rest calibration of the EKF
+(ekf.imu_rest_calibration_s)."""
 RESOLUTION_M = 0.05
 LIMIT_BASE_S = 60.0
 LIMIT_S_PER_M = 4.0
-"""The default time limit of a run's goals, s: ``LIMIT_BASE_S`` + ``LIMIT_S_PER_M`` per metre of their first plans,
-counted from the end of the rest (:func:`time_limit_s`)."""
+"""The default time limit of a run's goals, s: ``LIMIT_BASE_S`` + ``LIMIT_S_PER_M`` per metre of
+their first plans, counted from the end of the rest (:func:`time_limit_s`)."""
 SETTLE_MAX_S = 5.0
-"""After the last goal ends, s: the navigator ramps the robot to a stop (0.8 s from 0.8 m/s at 1 m/s^2) within this."""
+"""After the last goal ends, s: the navigator ramps the robot to a stop (0.8 s from 0.8 m/s at 1
+m/s^2) within this."""
 STANDING_RAD_S = 0.05
 """A wheel slower than this stands, rad/s (6 mm/s at the rim)."""
 
 
 @dataclass(frozen=True)
 class NavigationOptions:
-    """Goals ``(x_m, y_m, yaw_rad or None)``, the map (None: the world's true map), and the plug-ins by their
-    names in :mod:`amr_twin.navigation.registries`: localisation, controller, planner, recoveries."""
+    """Goals ``(x_m, y_m, yaw_rad or None)``, the map (None: the world's true map), and the plug-ins
+    by their names in :mod:`amr_twin.navigation.registries`: localisation, controller, planner,
+    recoveries."""
 
     goals: tuple
     map_yaml: str | None = None
@@ -65,7 +68,8 @@ class NavigationOptions:
 
 @dataclass
 class NavigationRun:
-    """What :func:`navigate` returns: each goal's outcome, the true trajectory, the commands, the costs."""
+    """What :func:`navigate` returns: each goal's outcome, the true trajectory, the commands, the
+    costs."""
 
     outcomes: list[GoalOutcome]
     t_s: np.ndarray  # (n,) the recorder's 100 Hz grid
@@ -86,13 +90,15 @@ class NavigationRun:
 
 
 def robot_top_m(cfg) -> float:
-    """Height of the robot's highest part (the LiDAR's top), m: what stands lower than this can be hit."""
+    """Height of the robot's highest part (the LiDAR's top), m: what stands lower than this can be
+    hit."""
     lidar = cfg.components.lidar
     return float(lidar.pos_m[2] + lidar.size_m[2] / 2)
 
 
 def true_map(cfg, world: str) -> StaticMap:
-    """The world's true map: every world geom from the floor to the robot's top (:func:`world_map`)."""
+    """The world's true map: every world geom from the floor to the robot's top
+    (:func:`world_map`)."""
     import mujoco
 
     from amr_twin.model.build import world_compile_error, world_file
@@ -113,9 +119,9 @@ def load_static_map(cfg, world: str, map_yaml: str | None) -> StaticMap:
 
 
 def make_costmap(static: StaticMap, footprint: Footprint, nav) -> Costmap:
-    """The costmap of a map for the robot's footprint and the settings ``nav`` (``cfg.navigation``); unknown
-    cells are free to plan through (nav2's ``allow_unknown``, its default): a map built from scans leaves
-    cells unknown along the rack faces."""
+    """The costmap of a map for the robot's footprint and the settings ``nav`` (``cfg.navigation``);
+    unknown cells are free to plan through (nav2's ``allow_unknown``, its default): a map built from
+    scans leaves cells unknown along the rack faces."""
     c = nav.costmap
     return Costmap(
         static,
@@ -128,8 +134,8 @@ def make_costmap(static: StaticMap, footprint: Footprint, nav) -> Costmap:
 
 
 def make_planner(costmap: Costmap, footprint: Footprint, nav, name: str = "grid") -> Planner:
-    """The global planner ``name`` (:data:`~amr_twin.navigation.registries.PLANNERS`) on ``costmap`` with
-    ``nav``'s settings (``cfg.navigation``)."""
+    """The global planner ``name`` (:data:`~amr_twin.navigation.registries.PLANNERS`) on ``costmap``
+    with ``nav``'s settings (``cfg.navigation``)."""
     return PLANNERS.get(name)(costmap, footprint, nav)
 
 
@@ -141,9 +147,9 @@ def attach(
     publish: bool = True,
     drive: bool = True,
 ) -> Navigator:
-    """Put the diff-drive node (unless ``drive`` is False: a live session brings its own), the localisation
-    and the navigator on ``twin``'s bus (module docstring); ``publish``: the plan, map, costmap and footprint
-    messages (:mod:`amr_twin.navigation.outputs`) too."""
+    """Put the diff-drive node (unless ``drive`` is False: a live session brings its own), the
+    localisation and the navigator on ``twin``'s bus (module docstring); ``publish``: the plan, map,
+    costmap and footprint messages (:mod:`amr_twin.navigation.outputs`) too."""
     from amr_twin.controllers.diff_drive import DiffDriveNode
 
     source = LOCALISATIONS.get(options.localisation)()
@@ -223,7 +229,8 @@ def attach(
 def make_yielding(
     footprint: Footprint, limits: Limits, nav, dt_s: float, y: dict
 ) -> Yielding | None:
-    """The robot's giving way to people (``navigation.people.yielding`` as ``y``), None when disabled."""
+    """The robot's giving way to people (``navigation.people.yielding`` as ``y``), None when
+    disabled."""
     if not y.pop("enabled"):
         return None
     m, p = nav.monitor, nav.people
@@ -251,16 +258,16 @@ def make_matcher(costmap: Costmap, nav, source: LocalisationSource) -> MapMatche
 
 
 def time_limit_s(timeout_s: float | None, plan_lengths_m) -> float:
-    """The run's time limit after the rest, s: ``timeout_s``, or (None) ``LIMIT_BASE_S`` plus ``LIMIT_S_PER_M`` per
-    metre of the goals' first plans (NaN: no plan yet)."""
+    """The run's time limit after the rest, s: ``timeout_s``, or (None) ``LIMIT_BASE_S`` plus
+    ``LIMIT_S_PER_M`` per metre of the goals' first plans (NaN: no plan yet)."""
     if timeout_s is not None:
         return timeout_s
     return LIMIT_BASE_S + LIMIT_S_PER_M * sum(v for v in plan_lengths_m if not math.isnan(v))
 
 
 def _goal_pose_in_map(msg, start) -> tuple[float, float, float]:
-    """A ``geometry_msgs/PoseStamped`` goal in ``map`` (``odom``: placed by the start pose, where the wheel
-    odometry's frame starts)."""
+    """A ``geometry_msgs/PoseStamped`` goal in ``map`` (``odom``: placed by the start pose, where
+    the wheel odometry's frame starts)."""
     p, yaw = msg.pose.position, msg.pose.orientation.yaw_rad()
     if msg.header.frame_id.lstrip("/") != "odom":
         return float(p.x), float(p.y), float(yaw)
@@ -282,14 +289,15 @@ def navigate(
     publish: bool = False,
     drive: bool = True,
 ) -> NavigationRun:
-    """Build the twin (``twin_options``, sensors on), attach the stack, run until every goal has an outcome and
-    the robot stands; each goal the navigator reached is then judged by the true pose (:mod:`.goal_truth`).
+    """Build the twin (``twin_options``, sensors on), attach the stack, run until every goal has an
+    outcome and the robot stands; each goal the navigator reached is then judged by the true pose
+    (:mod:`.goal_truth`).
 
     ``on_twin(twin)`` is called once the twin is built (a recording's capture attaches there);
-    ``progress(navigator, t_s)`` every simulated half second (it may :meth:`Navigator.cancel` the goals);
-    ``publish``, ``drive``: as :func:`attach`. A ``geometry_msgs/PoseStamped`` on the bus' ``goal_pose``
-    (frame ``map``, or ``odom``) is a new goal that preempts the active one (nav2's ``/goal_pose``). Raises
-    nothing for a failed goal: its outcome says it.
+    ``progress(navigator, t_s)`` every simulated half second (it may :meth:`Navigator.cancel` the
+    goals); ``publish``, ``drive``: as :func:`attach`. A ``geometry_msgs/PoseStamped`` on the bus'
+    ``goal_pose`` (frame ``map``, or ``odom``) is a new goal that preempts the active one (nav2's
+    ``/goal_pose``). Raises nothing for a failed goal: its outcome says it.
     """
     from dataclasses import replace
 

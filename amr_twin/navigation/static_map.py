@@ -1,4 +1,5 @@
-"""The static layer's map: a world's obstacles rasterised, or a map_server map read as nav2's map_server does.
+"""The static layer's map: a world's obstacles rasterised, or a map_server map read as nav2's
+map_server does.
 
 Two sources, one :class:`StaticMap` (row 0 at the lowest y, as the ``map`` frame; cells of
 ``resolution_m``, cell ``(row, col)`` spanning ``origin + (col, row) * resolution_m`` to one
@@ -90,7 +91,8 @@ def obstacle_boxes(model, z_low_m: float, z_high_m: float) -> Footprints:
 def rasterise(
     boxes: Footprints, resolution_m: float, origin_xy_m: tuple[float, float], shape: tuple[int, int]
 ) -> np.ndarray:
-    """Cells (rows, cols) overlapped by any of ``boxes`` (a cell's centre within the box grown by half a cell)."""
+    """Cells (rows, cols) overlapped by any of ``boxes`` (a cell's centre within the box grown by
+    half a cell)."""
     occ = np.zeros(shape, bool)
     res = resolution_m
     for (cx, cy), (hx, hy), a in zip(boxes.centre_xy_m, boxes.half_xy_m, boxes.yaw_rad):
@@ -114,7 +116,8 @@ def rasterise(
 def world_map(
     model, resolution_m: float, z_low_m: float, z_high_m: float, source: str = "world"
 ) -> StaticMap:
-    """The true map of the world of a compiled ``model``: its obstacles in the robot's height range."""
+    """The true map of the world of a compiled ``model``: its obstacles in the robot's height
+    range."""
     boxes = obstacle_boxes(model, z_low_m, z_high_m)
     if not len(boxes.names):
         raise ValueError(f"{source}: no obstacle in the robot's height range to make a map of")
@@ -137,13 +140,15 @@ def world_map(
 
 
 def yaml_map(path: str | Path) -> StaticMap:
-    """A map_server map (YAML + PGM) as map_server reads it; raises MapError (one line) if it cannot be."""
+    """A map_server map (YAML + PGM) as map_server reads it; raises MapError (one line) if it cannot
+    be."""
     from amr_twin.model.worlds import MapError, load_map
 
     grid = load_map(path)
     if abs(grid.origin_xyyaw[2]) > 1e-9:
         raise MapError(
-            f"{path}: origin yaw {grid.origin_xyyaw[2]} must be 0 for navigation (as nav2's costmap)"
+            f"{path}: origin yaw {grid.origin_xyyaw[2]} must be 0 for navigation (as nav2's "
+            f"costmap)"
         )
     occ = grid.occupied[::-1].copy()
     unknown = ~(occ | grid.free[::-1])

@@ -1,10 +1,11 @@
-"""The robot gives way to people: it keeps out of their predicted paths, clears the lane of someone who stopped for
-it, and waits before passing close to someone standing beside its way (docs/explanation/actors.md, "The robot gives way").
+"""The robot gives way to people: it keeps out of their predicted paths, clears the lane of someone
+who stopped for it, and waits before passing close to someone standing beside its way
+(docs/explanation/actors.md, "The robot gives way").
 
-Social navigation's yield, reconstructed as a last word on ``cmd_vel`` after the collision monitor; the
-people are :class:`~amr_twin.navigation.people.People`, the footprint a
-:class:`~amr_twin.navigation.footprint.Footprint`, the limits :class:`~amr_twin.navigation.kinematics.Limits`.
-"""
+Social navigation's yield, reconstructed as a last word on ``cmd_vel`` after the collision monitor;
+the people are :class:`~amr_twin.navigation.people.People`, the footprint a
+:class:`~amr_twin.navigation.footprint.Footprint`, the limits
+:class:`~amr_twin.navigation.kinematics.Limits`."""
 
 from __future__ import annotations
 
@@ -18,8 +19,8 @@ from amr_twin.navigation.people import People
 
 @dataclass
 class CourtesyWait:
-    """A wait for someone standing beside the way: where they stand (m, ``map``), when the robot began to stop
-    for them and when it stood (s; None: not yet)."""
+    """A wait for someone standing beside the way: where they stand (m, ``map``), when the robot
+    began to stop for them and when it stood (s; None: not yet)."""
 
     xy_m: np.ndarray
     began_s: float
@@ -27,7 +28,8 @@ class CourtesyWait:
 
 
 class Yielding:
-    """Keeps the robot out of people's predicted paths: social navigation's yield, as a last word on ``cmd_vel``.
+    """Keeps the robot out of people's predicted paths: social navigation's yield, as a last word on
+    ``cmd_vel``.
 
     Each control cycle (:meth:`command`) the command about to be driven is rolled out over
     ``horizon_s`` with every tracked person walking on (:meth:`People.at`). If a walking person
@@ -75,15 +77,16 @@ class Yielding:
         )
         self.stop_lag_s = stop_lag_s
         self._courtesy: list[CourtesyWait] = []
-        """The waits for someone standing: ``courtesy_s`` after the robot stood it passes, ``courtesy_forget_s``
-        later the place is forgotten."""
+        """The waits for someone standing: ``courtesy_s`` after the robot stood it passes,
+        ``courtesy_forget_s`` later the place is forgotten."""
         self._standing_since: float | None = None
         self._back_until = -np.inf
         self.yields = 0
         """Control cycles whose command was replaced."""
 
     def _rollout(self, pose, vel, cmds: np.ndarray) -> np.ndarray:
-        """Poses (C, n, 3) in ``map`` of constant commands ``cmds`` (C, 2) from ``pose`` at ``vel``, ramped."""
+        """Poses (C, n, 3) in ``map`` of constant commands ``cmds`` (C, 2) from ``pose`` at ``vel``,
+        ramped."""
         lim, dt = self.limits, self.step_s
         c = len(cmds)
         v, w = np.full(c, float(vel[0])), np.full(c, float(vel[1]))
@@ -112,15 +115,17 @@ class Yielding:
         return np.stack([c * dx + s * dy, -s * dx + c * dy], axis=-1)
 
     def _gaps(self, poses: np.ndarray, people: People, now_s: float) -> np.ndarray:
-        """Least gap (C, n) from the footprint at each pose to the people walking on, m: negative inside it, the
-        deeper the centre the more (a person walking through the robot's middle is worse than past its edge)."""
+        """Least gap (C, n) from the footprint at each pose to the people walking on, m: negative
+        inside it, the deeper the centre the more (a person walking through the robot's middle is
+        worse than past its edge)."""
         t = now_s + self.step_s * np.arange(1, self.n + 1)
         future = people.at(t, self.n * self.step_s).transpose(1, 0, 2)  # (n, N, 2)
         local = self._local(poses, np.broadcast_to(future, poses.shape[:2] + future.shape[1:]))
         return self._signed_m(local).min(-1) - self.person_radius_m
 
     def _signed_m(self, local: np.ndarray) -> np.ndarray:
-        """Distance (...) of points ``local`` (..., 2) in ``base_link`` to the footprint, minus their depth inside."""
+        """Distance (...) of points ``local`` (..., 2) in ``base_link`` to the footprint, minus
+        their depth inside."""
         xy = local.reshape(-1, 2)
         fp = self.footprint
         depth = np.minimum(
@@ -130,8 +135,9 @@ class Yielding:
         return np.where(depth > 0.0, -depth, fp.distance_m(xy)).reshape(local.shape[:-1])
 
     def _lane_gaps(self, poses: np.ndarray, people: People) -> np.ndarray:
-        """Gap (C,) from the footprint at each roll-out's last pose (C, n, 3) to the lanes of ``people`` (their
-        way ahead over the horizon, 0.1 m apart), m: where someone waiting for the robot is about to walk."""
+        """Gap (C,) from the footprint at each roll-out's last pose (C, n, 3) to the lanes of
+        ``people`` (their way ahead over the horizon, 0.1 m apart), m: where someone waiting for the
+        robot is about to walk."""
         if len(people) == 0:
             return np.full(len(poses), np.inf)
         way = np.arange(0.0, self.n * self.step_s + 1e-9, 0.1)
@@ -143,8 +149,9 @@ class Yielding:
         return self._signed_m(local).min(-1)[:, 0] - self.person_radius_m
 
     def _waiting(self, pose, people: People) -> np.ndarray:
-        """Which of ``people`` (N,) stand within ``standoff_m`` of the footprint, their last walking velocity
-        pointing at the robot: someone who stopped for it and walks on once it is out of their way."""
+        """Which of ``people`` (N,) stand within ``standoff_m`` of the footprint, their last walking
+        velocity pointing at the robot: someone who stopped for it and walks on once it is out of
+        their way."""
         if people.intent_m_s is None:
             return np.zeros(len(people), bool)
         intent = people.intent_m_s
@@ -157,7 +164,8 @@ class Yielding:
         return standing & near & towards & (np.hypot(*intent.T) >= self.min_speed_m_s)
 
     def _blocked(self, poses: np.ndarray, points_xy_m: np.ndarray, people: People) -> np.ndarray:
-        """(C, n) bool: from this step on the footprint grown by ``pad_m`` has reached a return no person's."""
+        """(C, n) bool: from this step on the footprint grown by ``pad_m`` has reached a return no
+        person's."""
         if len(points_xy_m) and len(people):
             near = np.hypot(*(points_xy_m[:, None, :] - people.xy_m[None]).transpose(2, 0, 1)).min(
                 1
@@ -186,9 +194,9 @@ class Yielding:
     def command(
         self, now_s: float, pose, vel, wanted, filtered, people: People, points_xy_m: np.ndarray
     ):
-        """The command to drive instead of ``filtered`` (the monitor's ``(v, w)``; ``wanted`` the controller's),
-        or None to drive it: ``pose`` (x_m, y_m, yaw_rad) and returns ``points_xy_m`` (P, 2) in ``map``,
-        ``vel`` the last command."""
+        """The command to drive instead of ``filtered`` (the monitor's ``(v, w)``; ``wanted`` the
+        controller's), or None to drive it: ``pose`` (x_m, y_m, yaw_rad) and returns ``points_xy_m``
+        (P, 2) in ``map``, ``vel`` the last command."""
         if len(people) == 0:
             self._standing_since = None
             return None
@@ -241,10 +249,11 @@ class Yielding:
         return float(choice[0]), float(choice[1])
 
     def _courtesy_wait(self, now_s: float, pose, vel, filtered, people: People) -> bool:
-        """Whether to stand rather than pass within ``courtesy_m`` of a standing person's disc (they may step out
-        into the robot's way as it passes): the ``filtered`` command held over the horizon would, the robot is
-        still coming nearer, and it would cross that line within its stopping distance (else it drives on and
-        stops later, at the line); once stopping for someone there it stands until it has stood ``courtesy_s``."""
+        """Whether to stand rather than pass within ``courtesy_m`` of a standing person's disc (they
+        may step out into the robot's way as it passes): the ``filtered`` command held over the
+        horizon would, the robot is still coming nearer, and it would cross that line within its
+        stopping distance (else it drives on and stops later, at the line); once stopping for
+        someone there it stands until it has stood ``courtesy_s``."""
         poses = self._rollout(pose, vel, np.asarray(filtered, float)[None])
         xy = people.xy_m
         gaps = self._signed_m(self._local(poses, np.broadcast_to(xy, poses.shape[:2] + xy.shape)))[
@@ -283,7 +292,8 @@ class Yielding:
         return False
 
     def _standoff(self, now_s: float, pose, vel, people: People) -> bool:
-        """Whether the robot has stood ``standoff_s`` with a person standing within ``standoff_m`` ahead of it."""
+        """Whether the robot has stood ``standoff_s`` with a person standing within ``standoff_m``
+        ahead of it."""
         c, s = math.cos(pose[2]), math.sin(pose[2])
         d = people.xy_m - np.asarray(pose[:2], float)
         local = np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]])

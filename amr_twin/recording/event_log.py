@@ -11,8 +11,9 @@
     /twin/collisions  diagnostic_msgs/msg/DiagnosticArray  one status (ERROR) per collision, at its
                       first contact: name "twin/collision", message "<parts> hit <geom>", values
                       t_s, until_s, x_m, y_m, z_m, hit, robot_parts, peak_force_n, robot pose
-    /twin/faults      diagnostic_msgs/msg/DiagnosticArray  one status (WARN) when a fault starts, one
-                      (OK) when it clears: name "twin/fault/<kind>", values of its specification
+    /twin/faults      diagnostic_msgs/msg/DiagnosticArray  one status (WARN) when a fault starts,
+                      one (OK) when it clears: name "twin/fault/<kind>", values of its
+                      specification
 
 DiagnosticArray is what ``rqt_robot_monitor`` and Foxglove's diagnostics panels read.
 """
@@ -57,7 +58,8 @@ def _diagnostic(t_ns: int, level: int, name: str, message: str, values: dict) ->
 
 def statuses(twin) -> list[tuple[int, str, int, str, str, dict]]:
     """``(t_ns, topic, level, name, message, values)`` of the twin's collisions and faults, one
-    DiagnosticStatus each (see the module notes); the ROS 1 bridge publishes the same on /diagnostics."""
+    DiagnosticStatus each (see the module notes); the ROS 1 bridge publishes the same on
+    /diagnostics."""
     out = []
     for c in _collisions(twin):
         values = {k: v for k, v in c.as_dict().items() if k != "robot_pose"}
@@ -92,7 +94,8 @@ def statuses(twin) -> list[tuple[int, str, int, str, str, dict]]:
 
 
 def mcap_items(twin, order: int) -> list[tuple[int, int, str, str, bytes]]:
-    """``(t_ns, order, topic, type, CDR payload)`` of the twin's collisions and faults (see the module notes)."""
+    """``(t_ns, order, topic, type, CDR payload)`` of the twin's collisions and faults (see the
+    module notes)."""
     return [
         (t_ns, order + i, topic, DIAGNOSTIC_ARRAY, _diagnostic(t_ns, level, name, message, values))
         for i, (t_ns, topic, level, name, message, values) in enumerate(statuses(twin))
@@ -112,7 +115,8 @@ def log_events(rec, twin) -> None:
         rec.log(
             "events/collisions",
             rr.TextLog(
-                f"collision: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, {c.y_m:.2f}) m, "
+                f"collision: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, "
+                f"{c.y_m:.2f}) m, "
                 f"until {c.until_s:.2f} s, peak force {c.peak_force_n:.0f} N",
                 level="WARN",
             ),

@@ -105,7 +105,8 @@ BUS_TOPICS = {
 
 
 def _state_items(capture, k0: int) -> list[tuple[int, int, str, str, bytes]]:
-    """/clock, /twin/ground_truth, /joint_states and the joints' links on /tf from the capture's state samples."""
+    """/clock, /twin/ground_truth, /joint_states and the joints' links on /tf from the capture's
+    state samples."""
     st = capture.state
     a = {key: v.tolist() for key, v in st.arrays().items()}  # Python floats: cheaper per message
     items, k = [], k0
@@ -157,7 +158,8 @@ def _state_items(capture, k0: int) -> list[tuple[int, int, str, str, bytes]]:
 _QOS = (
     "- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n"
     "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n"
-    "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n  avoid_ros_namespace_conventions: false"
+    "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n  avoid_ros_namespace_conventions: "
+    "false"
 )
 
 
@@ -176,7 +178,8 @@ def qos_profile(topic: str) -> str:
 
 
 def write_mcap(capture, series, path: Path) -> Path:
-    """Write the capture's bus messages and ``series`` to ``path`` (.mcap), through a temporary file."""
+    """Write the capture's bus messages and ``series`` to ``path`` (.mcap), through a temporary
+    file."""
     from mcap.writer import Writer
 
     path = Path(path)

@@ -33,14 +33,16 @@ LOCK_DIR = Path(tempfile.gettempdir()) / f"amr-twin-locks-{os.getuid()}"
 
 
 def lock_path(path: Path | str) -> Path:
-    """The lock file of output ``path``: named after its resolved path (links followed as far as it exists)."""
+    """The lock file of output ``path``: named after its resolved path (links followed as far as it
+    exists)."""
     key = hashlib.sha256(str(Path(path).resolve()).encode()).hexdigest()[:32]
     return LOCK_DIR / f"{key}.lock"
 
 
 def remove_stale_locks() -> list[Path]:
-    """Delete the lock files nobody holds (those of killed commands); return them. A file is taken, then
-    removed: a command opening it meanwhile sees another inode than the path's and opens the path again."""
+    """Delete the lock files nobody holds (those of killed commands); return them. A file is taken,
+    then removed: a command opening it meanwhile sees another inode than the path's and opens the
+    path again."""
     removed = []
     for file in LOCK_DIR.glob("*.lock"):
         try:
@@ -68,8 +70,8 @@ class OutputLock:
         self.fd: int | None = None
 
     def acquire(self) -> bool:
-        """Take the lock; False when the lock file cannot be made (no temporary folder: the output is
-        then not locked), OutputBusy when another process holds it."""
+        """Take the lock; False when the lock file cannot be made (no temporary folder: the output
+        is then not locked), OutputBusy when another process holds it."""
         try:
             LOCK_DIR.mkdir(mode=0o700, exist_ok=True)
         except OSError:
@@ -88,7 +90,8 @@ class OutputLock:
                 pid = holder[0] if holder else "unknown"
                 since = f", since {holder[1]}" if len(holder) > 1 else ""
                 raise OutputBusy(
-                    f"{self.option} {self.path}: in use by another amr-twin command (pid {pid}{since}); "
+                    f"{self.option} {self.path}: in use by another amr-twin command (pid "
+                    f"{pid}{since}); "
                     "wait for it to end, or give another path"
                 ) from None
             try:
@@ -101,7 +104,8 @@ class OutputLock:
         os.ftruncate(fd, 0)
         os.write(
             fd,
-            f"{os.getpid()} {time.strftime('%Y-%m-%dT%H:%M:%S')} {Path(self.path).resolve()}\n".encode(),
+            f"{os.getpid()} {time.strftime('%Y-%m-%dT%H:%M:%S')} "
+            f"{Path(self.path).resolve()}\n".encode(),
         )
         self.fd = fd
         return True
@@ -120,7 +124,8 @@ class OutputLock:
 
 @contextmanager
 def holding(outputs: list[tuple[str, Path]]) -> Iterator[None]:
-    """Hold the locks of ``outputs`` (option, path) while the block runs; OutputBusy if one is in use.
+    """Hold the locks of ``outputs`` (option, path) while the block runs; OutputBusy if one is in
+    use.
 
     When the block fails, an output folder it made and left empty is removed (a sweep's recording
     folder, made before its first point failed to be written).

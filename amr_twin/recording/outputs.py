@@ -72,7 +72,8 @@ def check_file(option: str, path: Path | str) -> Path:
 
 
 def check_folder(option: str, path: Path | str) -> Path:
-    """A folder output (files written inside): writable, not a file; stale temporaries inside removed."""
+    """A folder output (files written inside): writable, not a file; stale temporaries inside
+    removed."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{option} {path}: exists and is not a folder")
@@ -124,8 +125,8 @@ def check_outputs(
 
 
 def same_file(a: Path | str, b: Path | str) -> bool:
-    """``a`` and ``b`` are one file: the same path once links are resolved, or (both existing) the same
-    inode on the same device, which catches hard links and bind mounts."""
+    """``a`` and ``b`` are one file: the same path once links are resolved, or (both existing) the
+    same inode on the same device, which catches hard links and bind mounts."""
     a, b = Path(a), Path(b)
     if a.resolve() == b.resolve():
         return True
@@ -137,7 +138,8 @@ def same_file(a: Path | str, b: Path | str) -> bool:
 
 
 def _holds(folder: Path, path: Path) -> bool:
-    """``path`` lies inside ``folder`` (links resolved; a folder that does not exist yet holds nothing)."""
+    """``path`` lies inside ``folder`` (links resolved; a folder that does not exist yet holds
+    nothing)."""
     if not folder.is_dir():
         return False
     folder, path = folder.resolve(), path.resolve()
@@ -152,11 +154,12 @@ def check_not_inputs(
     outputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]],
     inputs: dict[str, Path | str | None] | list[tuple[str, Path | str | None]],
 ) -> None:
-    """Refuse an output that is an input, or a folder output that holds one (its files could replace it).
+    """Refuse an output that is an input, or a folder output that holds one (its files could replace
+    it).
 
-    ``outputs`` and ``inputs``: option (``--csv``; ``--config (default)`` for an input the command reads
-    without being told) -> path, None = not given; or a list of such pairs (an option given twice).
-    Raises :class:`OutputError` naming both.
+    ``outputs`` and ``inputs``: option (``--csv``; ``--config (default)`` for an input the command
+    reads without being told) -> path, None = not given; or a list of such pairs (an option given
+    twice). Raises :class:`OutputError` naming both.
     """
     for o_label, o_path in _pairs(outputs):
         if o_path is None:
@@ -176,6 +179,7 @@ def check_not_inputs(
                 )
             if _holds(Path(o_path), Path(i_path)):
                 raise OutputError(
-                    f"{o_label} {o_path}: holds the input {i_label} {i_path}; the files written there "
+                    f"{o_label} {o_path}: holds the input {i_label} {i_path}; the files written "
+                    f"there "
                     f"could replace it: give {o_label} a folder of its own"
                 )

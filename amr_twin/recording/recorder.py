@@ -85,8 +85,9 @@ def recorder_of(twin) -> "Recorder | None":
 
 
 class Recorder:
-    """Collects a run's time series from the hooks of ``twin`` (a :class:`~amr_twin.assembly.twin.Twin`) from
-    the present instant on; use :func:`attach_recorder` (one recorder a twin)."""
+    """Collects a run's time series from the hooks of ``twin`` (a
+    :class:`~amr_twin.assembly.twin.Twin`) from the present instant on; use :func:`attach_recorder`
+    (one recorder a twin)."""
 
     def __init__(self, twin) -> None:
         self.twin = twin
@@ -99,8 +100,8 @@ class Recorder:
         self._odom: list[tuple[float, float, float, float]] = []
         self.commands: list[tuple[float, list[float]]] = []
         self.battery = twin.on_grid(twin.observables.battery_rows())
-        """Grid sampler (hooked after the battery's accounting): rows ``t_us, terminal_v, current_a, soc``
-        (:meth:`amr_twin.sim.observables.Observables.battery`)."""
+        """Grid sampler (hooked after the battery's accounting): rows ``t_us, terminal_v, current_a,
+        soc`` (:meth:`amr_twin.sim.observables.Observables.battery`)."""
         self._handlers = {
             "wheel0_Vel": self._on_wheel0,
             "wheel1_Vel": self._on_wheel1,
@@ -135,7 +136,8 @@ class Recorder:
         self._odom.append((t_s, msg.pose.pose.position.x, msg.pose.pose.position.y, yaw))
 
     def pins_changed(self, t_us: int) -> None:
-        """The plant took the pins at physics time ``t_us`` (``on_actuation``): keep the drive in force."""
+        """The plant took the pins at physics time ``t_us`` (``on_actuation``): keep the drive in
+        force."""
         row = np.array(self.twin.observables.drive())
         if self._pin_t and self._pin_t[-1] == t_us:
             self._pins[-1] = row

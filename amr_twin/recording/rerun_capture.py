@@ -74,7 +74,8 @@ class Capture:
         self._quat.append(self._xquat[ids].copy())
 
     def _on_grid(self, t_us: int) -> None:
-        """Grid sampler: the physics is at ``t_us``; keep the poses every ``period_us``, the state always."""
+        """Grid sampler: the physics is at ``t_us``; keep the poses every ``period_us``, the state
+        always."""
         self.state.sample(t_us)
         if t_us % self.period_us == 0 and t_us > self._t[-1]:
             self._sample(t_us)
@@ -120,7 +121,8 @@ def remove_stale_temporaries(folder: Path) -> list[Path]:
 
 
 def recording_folder(folder: Path) -> Path:
-    """``folder`` made absolute (worker processes may run elsewhere), created, stale temporaries removed."""
+    """``folder`` made absolute (worker processes may run elsewhere), created, stale temporaries
+    removed."""
     folder = Path(folder).resolve()
     folder.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(folder)

@@ -65,7 +65,8 @@ def _blueprint(has_imu: bool, has_uwb: bool = False, has_events: bool = False):
 
 
 ENCODE_TIMEOUT_S = 600.0
-"""Longest wait for Rerun to encode what was logged, s (no file is involved: it does not fail on a full disk)."""
+"""Longest wait for Rerun to encode what was logged, s (no file is involved: it does not fail on a
+full disk)."""
 
 
 def write_rrd(
@@ -76,11 +77,11 @@ def write_rrd(
     Rerun encodes the recording into a byte stream (:meth:`RecordingStream.binary_stream`) that this
     process writes in one piece once everything is logged: a full disk or a file-size limit is an
     ``OSError`` naming ``path`` (:func:`~amr_twin.base.atomic_file.replacing`) and no half file is
-    left. Rerun's own file writer (``RecordingStream.save``) writes from a thread of its own and, on such
-    an error, hangs in ``save`` or ``flush``, raises "File-writer thread shut down prematurely", or says
-    nothing and leaves a truncated file (rerun-sdk 0.41). The stream is read once: reading it in pieces
-    gives a file whose checksums fail. The encoded bytes (about 0.09 MB per simulated second with the
-    sensors) are held in memory until then, beside the capture.
+    left. Rerun's own file writer (``RecordingStream.save``) writes from a thread of its own and, on
+    such an error, hangs in ``save`` or ``flush``, raises "File-writer thread shut down
+    prematurely", or says nothing and leaves a truncated file (rerun-sdk 0.41). The stream is read
+    once: reading it in pieces gives a file whose checksums fail. The encoded bytes (about 0.09 MB
+    per simulated second with the sensors) are held in memory until then, beside the capture.
     """
     import rerun as rr
 
@@ -122,8 +123,8 @@ def record_run(twin_or_capture, rrd_path=None, mcap_path=None, result=None) -> d
     """Write the recordings of a finished run (its twin was :func:`attach`-ed before running).
 
     ``result`` (a :class:`~amr_twin.recording.run.RunResult`) adds the client calls; without it
-    the series is taken from the twin's recorder (:func:`~amr_twin.recording.recorder.attach_recorder`).
-    Returns {"rrd": path, "mcap": path}.
+    the series is taken from the twin's recorder
+    (:func:`~amr_twin.recording.recorder.attach_recorder`). Returns {"rrd": path, "mcap": path}.
     """
     capture = (
         twin_or_capture if isinstance(twin_or_capture, Capture) else capture_of(twin_or_capture)

@@ -1,11 +1,13 @@
-"""The navigation stack in a ``.rrd`` recording: the map, the plan, the local costmap, the footprint.
+"""The navigation stack in a ``.rrd`` recording: the map, the plan, the local costmap, the
+footprint.
 
 From the bus messages the capture kept (:mod:`amr_twin.navigation.outputs` publishes them), on the
 ``sim_time`` timeline, in the world frame (the navigation's ``map``)::
 
     world/navigation/map        static Points3D: the static map's occupied cells (z = 0.01 m)
     world/navigation/plan       LineStrips3D: each new plan (z = 0.03 m)
-    world/navigation/costmap    Points3D: the local costmap's cells with a cost, coloured by it (z = 0.02 m)
+    world/navigation/costmap    Points3D: the local costmap's cells with a cost, coloured by it
+                                (z = 0.02 m)
     world/navigation/footprint  LineStrips3D: the footprint at the estimated pose (z = 0.05 m)
 """
 
@@ -17,7 +19,8 @@ from amr_twin.recording.rerun_streams import TIMELINE
 
 
 def _cells(msg, keep) -> tuple[np.ndarray, np.ndarray]:
-    """Centres (K, 2) of the cells of an OccupancyGrid where ``keep(data)`` holds, and their values."""
+    """Centres (K, 2) of the cells of an OccupancyGrid where ``keep(data)`` holds, and their
+    values."""
     i = msg.info
     data = np.asarray(msg.data).reshape(i.height, i.width)
     rows, cols = np.nonzero(keep(data))

@@ -1,4 +1,5 @@
-"""The 3D entities of a ``.rrd`` recording, under ``world``, one ``_log_<stream>`` function per stream.
+"""The 3D entities of a ``.rrd`` recording, under ``world``, one ``_log_<stream>`` function per
+stream.
 
 Positions in m in the simulation's world frame (Z up), on the ``sim_time`` timeline::
 
@@ -29,7 +30,8 @@ VISUAL_GROUPS = (0, 1, 4)  # world, robot visuals, payload (2 is robot collision
 
 
 def body_entity(m: mujoco.MjModel, b: int) -> str:
-    """The entity path of body ``b``: ``world/bodies/<body name>`` (``world/bodies/world`` for body 0)."""
+    """The entity path of body ``b``: ``world/bodies/<body name>`` (``world/bodies/world`` for body
+    0)."""
     name = m.body(b).name or f"body{b}"
     return "world/bodies/" + ("world" if b == 0 else name)
 
@@ -180,7 +182,8 @@ def _interp_pose(track, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _body_pose_at(capture: Capture, m, body: str, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Position (n, 3), m, and yaw (n,), rad, of ``body`` at ``t_s``, interpolated from the body samples."""
+    """Position (n, 3), m, and yaw (n,), rad, of ``body`` at ``t_s``, interpolated from the body
+    samples."""
     return _interp_pose(_pose_track(capture, m, body), t_s)
 
 
@@ -237,8 +240,8 @@ def _log_scan(rec, m, capture: Capture) -> None:
 def uwb_geometry(twin) -> tuple[np.ndarray, np.ndarray]:
     """Anchor positions (K, 3) in the world and the tag position (3,) in ``base_link``, m.
 
-    From the twin's UWB sensor (``twin.sensors["uwb"]``) when it has one, else from ``twin.cfg.uwb``.
-    """
+    From the twin's UWB sensor (``twin.sensors["uwb"]``) when it has one, else from
+    ``twin.cfg.uwb``."""
     sensor = twin.sensors.get("uwb")
     if sensor is not None:
         return np.asarray(sensor.anchors_xyz_m, float), np.asarray(sensor.tag_pos_m, float)

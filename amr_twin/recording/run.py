@@ -52,9 +52,9 @@ def run_mission(
     options: TwinOptions = TwinOptions(),
     twin: Twin | None = None,
 ) -> RunResult:
-    """Send each command at its time (s from the start) and run for ``duration_s`` (``math.inf``: until
-    ``twin.stop()``, called from a hook, another thread's call or a signal handler; a stopped run's ``sim_s``
-    is where it stopped)."""
+    """Send each command at its time (s from the start) and run for ``duration_s`` (``math.inf``:
+    until ``twin.stop()``, called from a hook, another thread's call or a signal handler; a stopped
+    run's ``sim_s`` is where it stopped)."""
     if not (
         0 < duration_s <= MAX_RUN_S or duration_s == math.inf
     ):  # the commands check theirs first

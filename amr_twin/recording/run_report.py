@@ -1,4 +1,5 @@
-"""What ``amr-twin run`` prints and writes: the text lines, the ``--csv`` table (the ``--json`` summary:
+"""What ``amr-twin run`` prints and writes: the text lines, the ``--csv`` table (the ``--json``
+summary:
 :mod:`amr_twin.recording.run_summary`)."""
 
 from __future__ import annotations
@@ -44,8 +45,8 @@ CSV_COMMENT = (
     "motion x speed of wheel_Command, pub_rpm = |wheelN_Vel| x the commanded direction; "
     "x_m, y_m, yaw_rad in the world, odom_* in odom; current_a + driving forward"
 )
-"""First line of ``--csv``: ``pandas.read_csv(path, comment="#")``, ``numpy.genfromtxt(path, delimiter=",",
-names=True, skip_header=1)``."""
+"""First line of ``--csv``: ``pandas.read_csv(path, comment="#")``, ``numpy.genfromtxt(path,
+delimiter=",", names=True, skip_header=1)``."""
 
 
 def _held(
@@ -103,8 +104,8 @@ def text_lines(result, info: RunSummary) -> list[str]:
         lines.append(f"wheel_Command [{wc[0]:g}, {wc[1]:.5f}, {wc[2]:g}, {wc[3]:.5f}]")
     for name, entry in info.wheels.items():
         lines.append(
-            f"{name:5s} reference {entry.reference_rpm:8.3f} RPM, true {entry.true_final_rpm:8.3f} RPM, "
-            + _published(entry, result.sim_s)
+            f"{name:5s} reference {entry.reference_rpm:8.3f} RPM, true "
+            f"{entry.true_final_rpm:8.3f} RPM, " + _published(entry, result.sim_s)
         )
     lines.extend(fault_lines(info.faults))
     for c in info.collisions:
@@ -120,8 +121,10 @@ def text_lines(result, info: RunSummary) -> list[str]:
     step = info.tyre_timestep
     if step is not None:
         lines.append(
-            f"physics timestep {step['timestep_s'] * 1e3:g} ms instead of {step['configured_timestep_s'] * 1e3:g} "
-            f"ms: the tyres' stability number {max(step['stability_number_configured']):.2f} exceeded "
+            f"physics timestep {step['timestep_s'] * 1e3:g} ms instead of "
+            f"{step['configured_timestep_s'] * 1e3:g} "
+            f"ms: the tyres' stability number {max(step['stability_number_configured']):.2f} "
+            f"exceeded "
             f"{step['stability_limit']:g} (docs/explanation/tyres.md)"
         )
     moved = info.from_start
@@ -129,7 +132,8 @@ def text_lines(result, info: RunSummary) -> list[str]:
         moved is not None and len(result.commands) > 1
     ):  # a mission: where it ended against where it began
         lines.append(
-            f"ended {moved.distance_m:.2f} m from its start pose, heading {moved.heading_deg:+.1f} deg "
+            f"ended {moved.distance_m:.2f} m from its start pose, heading "
+            f"{moved.heading_deg:+.1f} deg "
             "from its start heading (a mission's commands are timed: nothing steers by the pose)"
         )
     return lines
@@ -164,7 +168,9 @@ def _fault_effect(fault: dict) -> str:
     parts = []
     for name, w in wheels.items():
         parts.append(
-            f"{name} true {w['true_rpm_before'] if w['true_rpm_before'] is not None else float('nan'):.1f} -> "
+            f"{name} true "
+            f"{w['true_rpm_before'] if w['true_rpm_before'] is not None else float('nan'):.1f} "
+            f"-> "
             f"{w['true_rpm_end'] if w['true_rpm_end'] is not None else float('nan'):.1f} RPM, "
             f"{w['published_after']} published after"
         )

@@ -98,8 +98,8 @@ class RunSummary:
     of the robot's body with the world (:meth:`amr_twin.sim.collisions.Collision.as_dict`);
     ``stopped_by_collision``: the run ended at the first one; ``faults``: each injected fault with
     its effect (:meth:`amr_twin.sim.fault_injector.FaultInjector.report`); ``sim_s`` and ``wall_s``:
-    simulated and wall-clock seconds; ``tyre_timestep``: the tyres' guard halved the physics timestep
-    (:meth:`amr_twin.model.tyre_stability.TyreTimestep.as_dict`; absent when it did not).
+    simulated and wall-clock seconds; ``tyre_timestep``: the tyres' guard halved the physics
+    timestep (:meth:`amr_twin.model.tyre_stability.TyreTimestep.as_dict`; absent when it did not).
     """
 
     command: Union[dict, list, None]
@@ -150,7 +150,8 @@ class RunSummary:
 
 
 def json_ready(value):
-    """``value`` with every non-finite float (NaN, inf) replaced by None, recursively (strict JSON)."""
+    """``value`` with every non-finite float (NaN, inf) replaced by None, recursively (strict
+    JSON)."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
@@ -161,8 +162,8 @@ def json_ready(value):
 
 
 def summary(result, single: bool, start_xy_yaw=None) -> RunSummary:
-    """Measure ``result`` (:class:`amr_twin.recording.run.RunResult`); ``single``: one command (its step
-    metrics are measured) rather than a mission; ``start_xy_yaw``: the start pose, if known."""
+    """Measure ``result`` (:class:`amr_twin.recording.run.RunResult`); ``single``: one command (its
+    step metrics are measured) rather than a mission; ``start_xy_yaw``: the start pose, if known."""
     import numpy as np
 
     from amr_twin.recording.recorder import signed_published

@@ -119,7 +119,8 @@ class Bus:
     def subscribe(
         self, topic: str, callback: Callable[[Any], None], queue_size: int = 10, latency_us: int = 0
     ) -> Subscription:
-        """Call ``callback(msg)`` for each message on ``topic``, ``latency_us`` after publication."""
+        """Call ``callback(msg)`` for each message on ``topic``, ``latency_us`` after
+        publication."""
         topic = _name(topic)
         sub = Subscription(self, topic, callback, queue_size, latency_us)
         self._subs.setdefault(topic, []).append(sub)

@@ -99,7 +99,8 @@ class PoseWithCovariance(_Fixed):
 
 @dataclass(slots=True, eq=False)
 class PoseWithCovarianceStamped:
-    """geometry_msgs/PoseWithCovarianceStamped: a pose estimate in ``header.frame_id`` (AMCL's ``amcl_pose``)."""
+    """geometry_msgs/PoseWithCovarianceStamped: a pose estimate in ``header.frame_id`` (AMCL's
+    ``amcl_pose``)."""
 
     _type: ClassVar[str] = "geometry_msgs/PoseWithCovarianceStamped"
     header: Header = field(default_factory=Header)

@@ -1,5 +1,6 @@
-"""nav_msgs and geometry_msgs types of the navigation stack (ROS names, plain slotted dataclasses), and
-their ROS 2 CDR payloads (XCDR1 little endian, as :mod:`amr_twin.ros.ros2_cdr` writes the others).
+"""nav_msgs and geometry_msgs types of the navigation stack (ROS names, plain slotted dataclasses),
+and their ROS 2 CDR payloads (XCDR1 little endian, as :mod:`amr_twin.ros.ros2_cdr` writes the
+others).
 
 ``nav_msgs/Path`` (the plan), ``nav_msgs/OccupancyGrid`` with its ``MapMetaData`` (the map and the
 costmaps: ``data`` int8, row-major from the origin cell, 0..100 occupancy or cost, -1 unknown) and

@@ -95,7 +95,8 @@ def _header(h) -> bytearray:
 
 
 def _pad(b: bytearray, n: int) -> bytes:
-    """Zero bytes that align the next primitive of size ``n`` (offsets count after the encapsulation)."""
+    """Zero bytes that align the next primitive of size ``n`` (offsets count after the
+    encapsulation)."""
     return bytes(-(len(b) - 4) % n)
 
 
@@ -115,7 +116,8 @@ def _hdr(c: Cdr, h) -> None:
 
 
 def encode_odometry(msg) -> bytes:
-    """The CDR payload of a ``nav_msgs/Odometry`` message (precompiled: struct layouts, cached strings)."""
+    """The CDR payload of a ``nav_msgs/Odometry`` message (precompiled: struct layouts, cached
+    strings)."""
     b = _header(msg.header)
     b += _pad(b, 4)
     b += _string(msg.child_frame_id)
@@ -253,7 +255,8 @@ def encode_float64_multi_array(values, labels: str | None = None) -> bytes:
 
 
 def encode_float64_multi_array_msg(msg) -> bytes:
-    """The CDR payload of a ``std_msgs/Float64MultiArray`` message (its first dimension's label kept)."""
+    """The CDR payload of a ``std_msgs/Float64MultiArray`` message (its first dimension's label
+    kept)."""
     dim = msg.layout.dim
     return encode_float64_multi_array(msg.data, dim[0].label if dim else None)
 

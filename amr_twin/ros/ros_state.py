@@ -1,4 +1,5 @@
-"""The robot's state as ROS messages: static frames, joint states, link transforms, ground truth, clock.
+"""The robot's state as ROS messages: static frames, joint states, link transforms, ground truth,
+clock.
 
 What ``robot_state_publisher``, a ``joint_state_broadcaster``, Gazebo's ``p3d``
 plugin and ``/clock`` would give a ROS user of the twin, built from MuJoCo's state
@@ -79,7 +80,8 @@ def _stamped(parent: str, child: str, xyz, wxyz, stamp: Time = Time()) -> Transf
 
 
 def robot_static_transforms(model) -> list[TransformStamped]:
-    """``base_link -> laser, imu_link, uwb_tag`` from the compiled model (the URDF's fixed joints)."""
+    """``base_link -> laser, imu_link, uwb_tag`` from the compiled model (the URDF's fixed
+    joints)."""
     import mujoco
 
     base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + BASE_FRAME)
@@ -102,7 +104,8 @@ def anchor_transforms(
 
 
 def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Quaternion products (..., 4) w, x, y, z (component by component: a few numpy calls on small batches)."""
+    """Quaternion products (..., 4) w, x, y, z (component by component: a few numpy calls on small
+    batches)."""
     aw, ax, ay, az = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
     bw, bx, by, bz = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
     out = np.empty(np.broadcast(aw, bw).shape + (4,))
@@ -114,7 +117,8 @@ def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.cross`` of (..., 3) vectors, the same operations (bit for bit) without its axis handling."""
+    """``np.cross`` of (..., 3) vectors, the same operations (bit for bit) without its axis
+    handling."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     out = np.empty(np.broadcast(a0, b0).shape + (3,))
@@ -135,9 +139,9 @@ class StateSampler:
     """The robot's joint, link and base state on the loop's record grid.
 
     :attr:`sample` is the grid sampler (``sample(t_us)``, the physics at ``t_us``): a
-    :class:`~amr_twin.sim.grid_steps.GridRows` of the 67 values of a row (joint positions and speeds,
-    the base's twist, the positions and orientations of base_link and the six moving links) read
-    through the physics' named views (their ``value_rows``): its C form
+    :class:`~amr_twin.sim.grid_steps.GridRows` of the 67 values of a row (joint positions and
+    speeds, the base's twist, the positions and orientations of base_link and the six moving links)
+    read through the physics' named views (their ``value_rows``): its C form
     gathers them where they lie, so that a twin keeping this state (a ROS 1 or Foxglove bridge)
     still runs its grid loop in C.
 
@@ -176,8 +180,9 @@ class StateSampler:
             ],
             native=native,
         )
-        """The grid sampler: ``sample(t_us)`` keeps the state now (the physics at ``t_us``). Where the loop's
-        grid runs in Python (a collision open) its row is the C form's too: one ctypes call (2 us against 8 us)."""
+        """The grid sampler: ``sample(t_us)`` keeps the state now (the physics at ``t_us``). Where
+        the loop's grid runs in Python (a collision open) its row is the C form's too: one ctypes
+        call (2 us against 8 us)."""
         self._taken: np.ndarray | None = None  # a split-off batch's rows (split)
 
     def _table(self) -> np.ndarray:
@@ -199,11 +204,11 @@ class StateSampler:
         return out
 
     def arrays(self, period_us: int = 0, base: bool = True) -> dict[str, np.ndarray]:
-        """``t_us`` (n,); joint ``q``, ``qd`` (n, 6); base ``v_world``, ``v_body``, ``w_body`` (n, 3),
-        ``pos`` (n, 3), ``quat`` (n, 4) w, x, y, z in the world; links' ``link_pos`` (n, 6, 3) and
-        ``link_quat`` (n, 6, 4) relative to ``base_link``. Only the instants that are multiples of
-        ``period_us`` (0: all), and without the base's keys unless ``base`` (numpy's work is per call: a
-        bridge taking 50 Hz joint states from 100 Hz samples saves most of it)."""
+        """``t_us`` (n,); joint ``q``, ``qd`` (n, 6); base ``v_world``, ``v_body``, ``w_body`` (n,
+        3), ``pos`` (n, 3), ``quat`` (n, 4) w, x, y, z in the world; links' ``link_pos`` (n, 6, 3)
+        and ``link_quat`` (n, 6, 4) relative to ``base_link``. Only the instants that are multiples
+        of ``period_us`` (0: all), and without the base's keys unless ``base`` (numpy's work is per
+        call: a bridge taking 50 Hz joint states from 100 Hz samples saves most of it)."""
         table = self._table()
         if period_us:
             table = table[table[:, 0] % period_us == 0]
@@ -234,7 +239,8 @@ class StateSampler:
 
 
 def joint_state(t_us: int, names, q, qd) -> JointState:
-    """``sensor_msgs/JointState`` of the moving joints: positions (rad, m) and velocities (rad/s, m/s)."""
+    """``sensor_msgs/JointState`` of the moving joints: positions (rad, m) and velocities (rad/s,
+    m/s)."""
     return JointState(
         Header(0, Time.from_us(t_us), ""),
         list(names),
@@ -245,7 +251,8 @@ def joint_state(t_us: int, names, q, qd) -> JointState:
 
 
 def link_transforms(t_us: int, children, link_pos, link_quat) -> TFMessage:
-    """``base_link -> <child>`` of the moving joints' links (what robot_state_publisher sends on /tf)."""
+    """``base_link -> <child>`` of the moving joints' links (what robot_state_publisher sends on
+    /tf)."""
     stamp = Time.from_us(t_us)
     return TFMessage(
         [_stamped(BASE_FRAME, c, p, q, stamp) for c, p, q in zip(children, link_pos, link_quat)]
@@ -253,7 +260,8 @@ def link_transforms(t_us: int, children, link_pos, link_quat) -> TFMessage:
 
 
 def ground_truth(t_us: int, pos, quat, v_body, w_body) -> Odometry:
-    """The true pose of ``base_link`` in ``world`` and its twist in ``base_link`` (``nav_msgs/Odometry``)."""
+    """The true pose of ``base_link`` in ``world`` and its twist in ``base_link``
+    (``nav_msgs/Odometry``)."""
     return Odometry(
         Header(0, Time.from_us(t_us), WORLD_FRAME),
         BASE_FRAME,

@@ -27,7 +27,8 @@ Deliver = Callable[[str, Any], None]
 
 
 def snapshot(msg: Any) -> Any:
-    """The values ``msg`` holds now, as the far end of the wire gets them (a message the sender may reuse).
+    """The values ``msg`` holds now, as the far end of the wire gets them (a message the sender may
+    reuse).
 
     The link's two messages are rebuilt from their fields (``std_msgs/Float64``, and
     ``Float64MultiArray`` with no layout dimensions, as ``wheel_Command`` is sent): a

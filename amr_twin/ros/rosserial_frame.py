@@ -65,7 +65,8 @@ def deserialize_float64(message: bytes) -> float:
 
 
 def serialize_float64_multiarray(data: Sequence[float], data_offset: int = 0) -> bytes:
-    """std_msgs/Float64MultiArray with an empty ``layout.dim`` (as the thesis sends it, fig. 3.3)."""
+    """std_msgs/Float64MultiArray with an empty ``layout.dim`` (as the thesis sends it, fig.
+    3.3)."""
     return struct.pack(f"<III{len(data)}d", 0, data_offset, len(data), *data)
 
 
@@ -103,7 +104,8 @@ class TopicInfo:
 
 @dataclass(frozen=True)
 class Frame:
-    """A received frame: topic id, message bytes, and the stream index of its first and last byte."""
+    """A received frame: topic id, message bytes, and the stream index of its first and last
+    byte."""
 
     topic_id: int
     message: bytes
@@ -122,7 +124,8 @@ class FrameParser:
 
     @property
     def pending(self) -> tuple[int, int | None]:
-        """Bytes of an unfinished frame received so far, and its total length once known (or None)."""
+        """Bytes of an unfinished frame received so far, and its total length once known (or
+        None)."""
         if len(self._buf) >= 5:
             return len(self._buf), 8 + (self._buf[2] | self._buf[3] << 8)
         return len(self._buf), None

@@ -77,7 +77,8 @@ class LaserScan:
 
 @dataclass(slots=True, eq=False)
 class JointState:
-    """sensor_msgs/JointState: per named joint, position (rad or m), velocity (rad/s or m/s), effort.
+    """sensor_msgs/JointState: per named joint, position (rad or m), velocity (rad/s or m/s),
+    effort.
 
     The arrays are float64, as long as ``name`` or empty.
     """

@@ -72,7 +72,8 @@ class Ros1Bridge:
         self.pubs["tf_static"] = pub("tf_static", "tf2_msgs/TFMessage", latch=True)
         self.tf = self.pubs["tf"]
         self.map_tf = MapTransform()
-        """``map -> odom`` on ``/tf`` from the localisation's pose in ``map`` (:mod:`amr_twin.ros1.map_transform`)."""
+        """``map -> odom`` on ``/tf`` from the localisation's pose in ``map``
+        (:mod:`amr_twin.ros1.map_transform`)."""
         self._fast = {
             bus: (p, WRITERS[BUS_TOPICS[bus][1]])
             for bus, p in self.pubs.items()
@@ -80,14 +81,16 @@ class Ros1Bridge:
             and BUS_TOPICS[bus][1] in WRITERS
             and bus != "wheel_Command_Service/request"
         }
-        """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to the outbox."""
+        """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to
+        the outbox."""
         self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
         self.state_pubs = {
             "/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
             "/joint_states": pub("joint_states", "sensor_msgs/JointState"),
         }
         self.status = StatusTopics(twin, conv, self.out, pub)
-        """``/twin/*`` rows, ``/battery_state``, ``/diagnostics`` (:mod:`amr_twin.ros1.status_topics`)."""
+        """``/twin/*`` rows, ``/battery_state``, ``/diagnostics``
+        (:mod:`amr_twin.ros1.status_topics`)."""
         self.description_pub = pub("robot_description", "std_msgs/String", latch=True)
         self.description_pub.publish(conv.ros_class("std_msgs/String")(data=twin.urdf))
         self.pubs["tf_static"].publish(conv.to_ros(TFMessage(self.bus.static_transforms())))
@@ -130,8 +133,8 @@ class Ros1Bridge:
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
     def start(self) -> None:
-        """The graph's subscribers have connected (before the run): keep the recorder's rows if one of their
-        topics is wanted (later, from the first flush that finds a subscriber)."""
+        """The graph's subscribers have connected (before the run): keep the recorder's rows if one
+        of their topics is wanted (later, from the first flush that finds a subscriber)."""
         self.status.collect(self.twin.clock.now_us)
 
     # -- out (the twin's thread) ------------------------------------------------------------
@@ -176,8 +179,8 @@ class Ros1Bridge:
             self.out.put_block(self.clock_pub, times, clock_block(times))
 
     def release(self, t_us: int, wait) -> None:
-        """Paced (the pacer's tick, before it sleeps): write what is due up to ``t_us`` at each clock
-        instant's wall time, ``wait(instant)`` (the pacer's sleep) before each."""
+        """Paced (the pacer's tick, before it sleeps): write what is due up to ``t_us`` at each
+        clock instant's wall time, ``wait(instant)`` (the pacer's sleep) before each."""
         self._collect(t_us)
         self.out.release(t_us, wait)
 

@@ -1,11 +1,12 @@
-"""A run of one topic's messages written at once, for the bridge's grid-sampled topics: :class:`StateBlocks`,
+"""A run of one topic's messages written at once, for the bridge's grid-sampled topics:
+:class:`StateBlocks`,
 :func:`clock_block`, :func:`float64_rows_block`.
 
-Each gives the TCPROS frames (a uint32 length, then the message in the ROS 1 format, the bytes genpy writes:
-``tests/ros1/test_frame_blocks.py``) of n messages of one type, one after the other, from a numpy record array
-filled column by column: no Python work a message. Every frame of a block has the same length
-(``len(block) // n``); :meth:`amr_twin.ros1.outbox.Outbox.put_block` files each under its instant.
-"""
+Each gives the TCPROS frames (a uint32 length, then the message in the ROS 1 format, the bytes genpy
+writes: ``tests/ros1/test_frame_blocks.py``) of n messages of one type, one after the other, from a
+numpy record array filled column by column: no Python work a message. Every frame of a block has the
+same length (``len(block) // n``); :meth:`amr_twin.ros1.outbox.Outbox.put_block` files each under
+its instant."""
 
 from __future__ import annotations
 
@@ -29,8 +30,8 @@ def _stamps(t_us) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _Layout:
-    """A frame's packed record dtype (``len``, then ``fields``) and a record with its constants filled in: the
-    frame's length after ``len`` and ``constants`` (field -> value)."""
+    """A frame's packed record dtype (``len``, then ``fields``) and a record with its constants
+    filled in: the frame's length after ``len`` and ``constants`` (field -> value)."""
 
     def __init__(self, fields: list, constants: dict | None = None):
         dtype = np.dtype([("len", _U4), *fields])
@@ -45,9 +46,10 @@ class _Layout:
 
 
 class StateBlocks:
-    """``sensor_msgs/JointState``, the moving links' ``tf2_msgs/TFMessage`` and the ground truth's ``nav_msgs/Odometry``
-    of grid samples (the arrays of :meth:`amr_twin.ros.ros_state.StateSampler.arrays`), a block each: the messages
-    of :func:`amr_twin.ros.ros_state.joint_state`, ``link_transforms`` and ``ground_truth``."""
+    """``sensor_msgs/JointState``, the moving links' ``tf2_msgs/TFMessage`` and the ground truth's
+    ``nav_msgs/Odometry`` of grid samples (the arrays of
+    :meth:`amr_twin.ros.ros_state.StateSampler.arrays`), a block each: the messages of
+    :func:`amr_twin.ros.ros_state.joint_state`, ``link_transforms`` and ``ground_truth``."""
 
     def __init__(self, joint_names, child_frames, parent: str, world: str = "world"):
         n = len(joint_names)
@@ -100,7 +102,8 @@ class StateBlocks:
         return rec.tobytes()
 
     def link_transforms(self, t_us, link_pos, link_quat) -> bytes:
-        """Each link's position (m, k, 3) and orientation (m, k, 4) w, x, y, z relative to the parent, at ``t_us``."""
+        """Each link's position (m, k, 3) and orientation (m, k, 4) w, x, y, z relative to the
+        parent, at ``t_us``."""
         rec = self._tf.records(len(t_us))
         sec, nsec = _stamps(t_us)
         pos, quat = np.asarray(link_pos, float), np.asarray(link_quat, float)
@@ -111,8 +114,9 @@ class StateBlocks:
         return rec.tobytes()
 
     def ground_truth(self, t_us, pos, quat, v_body, w_body) -> bytes:
-        """``nav_msgs/Odometry`` of the true pose, ``world -> base_link``: positions (m, 3), orientations (m, 4) w, x,
-        y, z, the twist in ``base_link`` (m, 3) and (m, 3), zero covariances, at ``t_us`` (m,)."""
+        """``nav_msgs/Odometry`` of the true pose, ``world -> base_link``: positions (m, 3),
+        orientations (m, 4) w, x, y, z, the twist in ``base_link`` (m, 3) and (m, 3), zero
+        covariances, at ``t_us`` (m,)."""
         rec = self._gt.records(len(t_us))
         rec["stamp"][:, 0], rec["stamp"][:, 1] = _stamps(t_us)
         quat = np.asarray(quat, float)
@@ -160,9 +164,10 @@ _BATTERY = _Layout(
 
 
 def battery_block(t_us, voltage_v, current_a, charge_ah, capacity_ah: float, soc) -> bytes:
-    """``sensor_msgs/BatteryState`` at each of the instants ``t_us`` (m,): voltage, current (negative discharging),
-    charge (m,) and ``soc`` (m,) as ``percentage`` (0 to 1); capacity and design capacity ``capacity_ah``; present,
-    no temperature (0), statuses unknown, no cells, location or serial number."""
+    """``sensor_msgs/BatteryState`` at each of the instants ``t_us`` (m,): voltage, current
+    (negative discharging), charge (m,) and ``soc`` (m,) as ``percentage`` (0 to 1); capacity and
+    design capacity ``capacity_ah``; present, no temperature (0), statuses unknown, no cells,
+    location or serial number."""
     rec = _BATTERY.records(len(t_us))
     rec["stamp"][:, 0], rec["stamp"][:, 1] = _stamps(t_us)
     values = rec["values"]

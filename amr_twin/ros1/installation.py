@@ -1,10 +1,11 @@
-"""Debian's ROS 1 for the ROS 1 path: the packages it needs, whether they are there, rospy's import path.
+"""Debian's ROS 1 for the ROS 1 path: the packages it needs, whether they are there, rospy's import
+path.
 
-rospy and the message packages live in ``/usr/lib/python3/dist-packages`` (Debian's Python 3.11). The
-project's venv reaches them by *appending* that folder to ``sys.path`` (:func:`import_rospy`), so that
-the venv's numpy and mujoco keep precedence; only the ROS 1 bridge calls it, so no command that does
-not use ROS 1 imports it. The package list is ``controllers/ros/debian-packages.txt``, which
-``controllers/ros/install.sh`` (and CI) install.
+rospy and the message packages live in ``/usr/lib/python3/dist-packages`` (Debian's Python 3.11).
+The project's venv reaches them by *appending* that folder to ``sys.path`` (:func:`import_rospy`),
+so that the venv's numpy and mujoco keep precedence; only the ROS 1 bridge calls it, so no command
+that does not use ROS 1 imports it. The package list is ``controllers/ros/debian-packages.txt``,
+which ``controllers/ros/install.sh`` (and CI) install.
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ def debian_packages() -> list[str]:
 
 
 def missing() -> str | None:
-    """One line naming what is missing of Debian's ROS 1 and how to install it; None when it is all there."""
+    """One line naming what is missing of Debian's ROS 1 and how to install it; None when it is all
+    there."""
     absent = [t for t in TOOLS if shutil.which(t) is None]
     absent += [m for m in PYTHON_MODULES if not (Path(DIST_PACKAGES) / m).is_dir()]
     if not absent:

@@ -1,16 +1,18 @@
-"""``map -> odom`` on ``/tf`` (REP-105) from the localisation's pose in ``map``: :class:`MapTransform`.
+"""``map -> odom`` on ``/tf`` (REP-105) from the localisation's pose in ``map``:
+:class:`MapTransform`.
 
-The wheel odometry gives ``odom -> base_link``; a localisation that knows the robot in ``map`` (the navigation
-stack's EKF of odometry, gyro and UWB on ``odometry/filtered``, or the ground truth on ``ground_truth/odom``, both
-in frame ``map``) gives ``map -> base_link``. What a ROS 1 localiser (amcl, robot_localization's map instance)
-publishes is the difference, ``map -> odom = (map -> base_link) * (odom -> base_link)^-1``, so that
-``map -> base_link`` resolves through the tree. The EKF publishes at the stamp of each odometry message, just
-after it (the bus hands the odometry to the bridge first), so both poses are of the same instant; the ground
-truth's is taken with the newest odometry at or before it (at 0.5 m/s, 10 ms off is 5 mm).
+The wheel odometry gives ``odom -> base_link``; a localisation that knows the robot in ``map`` (the
+navigation stack's EKF of odometry, gyro and UWB on ``odometry/filtered``, or the ground truth on
+``ground_truth/odom``, both in frame ``map``) gives ``map -> base_link``. What a ROS 1 localiser
+(amcl, robot_localization's map instance) publishes is the difference, ``map -> odom = (map ->
+base_link) * (odom -> base_link)^-1``, so that ``map -> base_link`` resolves through the tree. The
+EKF publishes at the stamp of each odometry message, just after it (the bus hands the odometry to
+the bridge first), so both poses are of the same instant; the ground truth's is taken with the
+newest odometry at or before it (at 0.5 m/s, 10 ms off is 5 mm).
 
 Written on the first map pose at or after each multiple of :data:`PERIOD_US` (25 Hz: amcl's default
-``transform_tolerance`` of 0.1 s is 2.5 periods), only while ``/tf`` has a subscriber; the first source to publish
-in ``map`` is kept.
+``transform_tolerance`` of 0.1 s is 2.5 periods), only while ``/tf`` has a subscriber; the first
+source to publish in ``map`` is kept.
 """
 
 from __future__ import annotations
@@ -22,10 +24,12 @@ from amr_twin.ros.ros_state import MAP_FRAME
 from amr_twin.ros.tf_buffer import ODOM_FRAME
 
 SOURCES = ("odometry/filtered", "ground_truth/odom")
-"""Bus topics of a pose in ``map`` (``nav_msgs/Odometry``): localisations of :mod:`amr_twin.navigation.localisation`."""
+"""Bus topics of a pose in ``map`` (``nav_msgs/Odometry``): localisations of
+:mod:`amr_twin.navigation.localisation`."""
 ODOM_TOPIC = "odom"
 PERIOD_US = 40_000
-"""Simulated time between two ``map -> odom`` messages, us (25 Hz: every other 50 Hz odometry message)."""
+"""Simulated time between two ``map -> odom`` messages, us (25 Hz: every other 50 Hz odometry
+message)."""
 
 
 def _string(text: str) -> bytes:
@@ -34,7 +38,8 @@ def _string(text: str) -> bytes:
 
 
 class MapTransform:
-    """Follows the odometry and the localisation's pose on the bus; :meth:`take` gives ``map -> odom`` when due.
+    """Follows the odometry and the localisation's pose on the bus; :meth:`take` gives ``map ->
+    odom`` when due.
 
     ``parent`` and ``child`` are the frames written (``map``, ``odom``)."""
 
@@ -54,8 +59,8 @@ class MapTransform:
         self._names = _string(parent) + _string(child)
 
     def take(self, topic: str, msg) -> tuple[int, bytes] | None:
-        """A message of ``topic`` (one of :attr:`TOPICS`): ``(stamp_us, tf2_msgs/TFMessage bytes)`` of ``map -> odom``
-        when one is due, else None."""
+        """A message of ``topic`` (one of :attr:`TOPICS`): ``(stamp_us, tf2_msgs/TFMessage bytes)``
+        of ``map -> odom`` when one is due, else None."""
         p = msg.pose.pose
         q = p.orientation
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))

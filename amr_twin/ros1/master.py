@@ -1,11 +1,12 @@
-"""The ROS 1 master the twin joins: the one at ``ROS_MASTER_URI``, or a private ``roscore`` on a free port.
+"""The ROS 1 master the twin joins: the one at ``ROS_MASTER_URI``, or a private ``roscore`` on a
+free port.
 
 :func:`master_problem` asks a master for its pid over XML-RPC (the master API's ``getPid``) with a
 timeout, without importing ROS: a twin told to join a master that does not answer stops before it
-simulates anything. :func:`start_roscore` starts ``roscore -p PORT`` on a free loopback port and waits
-until its master answers; the child is asked to stop (SIGINT, as Ctrl-C) when the twin closes it, and
-the kernel sends it SIGTERM if the twin dies first (``PR_SET_PDEATHSIG``), on which roslaunch stops
-the master and rosout it started: no orphan is left.
+simulates anything. :func:`start_roscore` starts ``roscore -p PORT`` on a free loopback port and
+waits until its master answers; the child is asked to stop (SIGINT, as Ctrl-C) when the twin closes
+it, and the kernel sends it SIGTERM if the twin dies first (``PR_SET_PDEATHSIG``), on which
+roslaunch stops the master and rosout it started: no orphan is left.
 """
 
 from __future__ import annotations
@@ -37,7 +38,8 @@ class _TimeoutTransport(xmlrpc.client.Transport):
 
 
 def master_problem(uri: str, timeout_s: float = 3.0) -> str | None:
-    """Why the master at ``uri`` cannot be joined now (None: it answers ``getPid`` within ``timeout_s``)."""
+    """Why the master at ``uri`` cannot be joined now (None: it answers ``getPid`` within
+    ``timeout_s``)."""
     parsed = urlparse(uri)
     if parsed.scheme != "http" or not parsed.hostname or parsed.port is None:
         return f"ROS_MASTER_URI={uri!r} is not of the form http://HOST:PORT"
@@ -53,8 +55,8 @@ def master_problem(uri: str, timeout_s: float = 3.0) -> str | None:
 
 
 def master_pid(uri: str, timeout_s: float = 1.0) -> int | None:
-    """The pid of the master answering at ``uri`` within ``timeout_s`` (None: none answers): a new pid is a new
-    master, which knows nothing of the nodes registered with the one before."""
+    """The pid of the master answering at ``uri`` within ``timeout_s`` (None: none answers): a new
+    pid is a new master, which knows nothing of the nodes registered with the one before."""
     try:
         code, _msg, pid = xmlrpc.client.ServerProxy(
             uri, transport=_TimeoutTransport(timeout_s)
@@ -84,7 +86,8 @@ class Master:
     process: subprocess.Popen | None = field(default=None, repr=False)
 
     def stop(self, timeout_s: float = 10.0) -> None:
-        """Stop the private roscore (SIGINT, then SIGKILL of its group after ``timeout_s``); nothing for a joined master."""
+        """Stop the private roscore (SIGINT, then SIGKILL of its group after ``timeout_s``); nothing
+        for a joined master."""
         proc, self.process = self.process, None
         if proc is None or proc.poll() is not None:
             return
@@ -99,8 +102,8 @@ class Master:
 def start_roscore(
     timeout_s: float = 30.0, log_dir: str | None = None, port: int | None = None
 ) -> Master:
-    """``roscore -p PORT`` on ``port`` (None: a free one), once its master answers (RuntimeError, one line, if it
-    does not)."""
+    """``roscore -p PORT`` on ``port`` (None: a free one), once its master answers (RuntimeError,
+    one line, if it does not)."""
     port = free_port() if port is None else port
     uri = f"http://127.0.0.1:{port}"
     env = dict(os.environ, ROS_MASTER_URI=uri, ROS_IP="127.0.0.1")

@@ -1,14 +1,14 @@
 """The twin's node across a master's loss and restart: :class:`MasterWatch`.
 
-ROS 1 client libraries register with the master once: after a master restart the new master knows none of
-the twin's topics, services and parameters, and a node started then finds none of them. The watch asks the
-master its pid every :data:`PERIOD_S` (``getPid``, bounded). When none answers it says so in one line and
-the twin simulates on (the connections already made are peer to peer: its subscribers keep receiving);
-when a master answers again (or one with another pid: a restart between two looks) it registers every
-publisher, subscriber and service of the node again (rospy's own lists, so also those of nodes sharing the
-process), hands each subscription the publishers the master lists, sets the parameters again
-(``/use_sim_time``, ``robot_description``) and says so in one line.
-"""
+ROS 1 client libraries register with the master once: after a master restart the new master knows
+none of the twin's topics, services and parameters, and a node started then finds none of them. The
+watch asks the master its pid every :data:`PERIOD_S` (``getPid``, bounded). When none answers it
+says so in one line and the twin simulates on (the connections already made are peer to peer: its
+subscribers keep receiving); when a master answers again (or one with another pid: a restart between
+two looks) it registers every publisher, subscriber and service of the node again (rospy's own
+lists, so also those of nodes sharing the process), hands each subscription the publishers the
+master lists, sets the parameters again (``/use_sim_time``, ``robot_description``) and says so in
+one line."""
 
 from __future__ import annotations
 
@@ -24,8 +24,8 @@ TIMEOUT_S = 2.0
 
 
 class MasterWatch:
-    """Watch the master at ``uri`` for the node rospy runs; ``params`` (resolved name -> value) are set again
-    with the registrations; ``say`` prints one line at a loss and at each registration."""
+    """Watch the master at ``uri`` for the node rospy runs; ``params`` (resolved name -> value) are
+    set again with the registrations; ``say`` prints one line at a loss and at each registration."""
 
     def __init__(self, uri: str, rospy, params: dict, say=print, period_s: float = PERIOD_S):
         self.uri, self.rospy, self.params, self.say, self.period_s = (
@@ -52,8 +52,10 @@ class MasterWatch:
                 if not self.lost:
                     self.lost, self.losses = True, self.losses + 1
                     self.say(
-                        f"ros1: the ROS master at {self.uri} does not answer: the twin simulates on (its "
-                        "subscribers stay connected) and registers again when a master answers there"
+                        f"ros1: the ROS master at {self.uri} does not answer: the twin simulates "
+                        f"on (its "
+                        "subscribers stay connected) and registers again when a master answers "
+                        "there"
                     )
                 continue
             if self.lost or pid != self.pid:
@@ -68,7 +70,8 @@ class MasterWatch:
                 )
 
     def register(self) -> tuple[int, int, int]:
-        """Register the node's publishers, subscribers and services and set the parameters; their counts."""
+        """Register the node's publishers, subscribers and services and set the parameters; their
+        counts."""
         from rospy.impl.registration import get_service_manager, get_topic_manager
 
         rospy = self.rospy

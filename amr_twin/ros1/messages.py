@@ -1,12 +1,13 @@
 """The twin's messages as rospy's, and back (the ROS 1 bridge's conversions).
 
 The twin's messages (:mod:`amr_twin.ros.messages`, ``geometry_messages``, ``sensor_messages``) carry
-the ROS 1 field names and their ``_type``; :class:`Ros1Messages` fills the rospy class of the same type
-field by field, following the class' ``_slot_types`` (a plan kept per class): ``time`` from the twin's
-``Time(sec, nanosec)``, arrays as plain lists (``rospy.numpy_msg`` fails with numpy >= 2.3), nested
-messages recursively (the bridge's low-rate and latched messages; the high-rate ones are written by
-:mod:`amr_twin.ros1.serialization`). Incoming ``cmd_vel`` and ``wheel_Command`` come back as the twin's messages,
-checked by :mod:`amr_twin.live.inputs` as any client's are.
+the ROS 1 field names and their ``_type``; :class:`Ros1Messages` fills the rospy class of the same
+type field by field, following the class' ``_slot_types`` (a plan kept per class): ``time`` from the
+twin's ``Time(sec, nanosec)``, arrays as plain lists (``rospy.numpy_msg`` fails with numpy >= 2.3),
+nested messages recursively (the bridge's low-rate and latched messages; the high-rate ones are
+written by
+:mod:`amr_twin.ros1.serialization`). Incoming ``cmd_vel`` and ``wheel_Command`` come back as the
+twin's messages, checked by :mod:`amr_twin.live.inputs` as any client's are.
 """
 
 from __future__ import annotations
@@ -75,7 +76,8 @@ class Ros1Messages:
 
 
 def twist_from_ros(msg) -> Twist:
-    """A rospy ``geometry_msgs/Twist`` as the twin's (m/s, rad/s); InputError if a value is not finite."""
+    """A rospy ``geometry_msgs/Twist`` as the twin's (m/s, rad/s); InputError if a value is not
+    finite."""
     return Twist(
         Vector3(*(_finite(getattr(msg.linear, a), f"linear.{a}") for a in "xyz")),
         Vector3(*(_finite(getattr(msg.angular, a), f"angular.{a}") for a in "xyz")),
@@ -83,8 +85,8 @@ def twist_from_ros(msg) -> Twist:
 
 
 def wheel_command_from_ros(msg) -> Float64MultiArray:
-    """A rospy ``std_msgs/Float64MultiArray`` on ``wheel_Command`` as the twin's, checked as a request
-    ``[motion, RPM, motion, RPM]`` (InputError naming the field otherwise)."""
+    """A rospy ``std_msgs/Float64MultiArray`` on ``wheel_Command`` as the twin's, checked as a
+    request ``[motion, RPM, motion, RPM]`` (InputError naming the field otherwise)."""
     req = check_request(list(msg.data))
     return Float64MultiArray(
         data=[float(req.motionL), float(req.speedL), float(req.motionR), float(req.speedR)]

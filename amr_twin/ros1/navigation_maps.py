@@ -1,11 +1,15 @@
-"""The navigator's maps on the ROS 1 graph, as map_server and move_base publish them: :class:`NavigationMaps`.
+"""The navigator's maps on the ROS 1 graph, as map_server and move_base publish them:
+:class:`NavigationMaps`.
 
 Relative names (under the twin's namespace), frame ``map``:
 
-- ``map`` (``nav_msgs/OccupancyGrid``, latched): the static map (100 occupied, 0 free, -1 unknown), as
+- ``map`` (``nav_msgs/OccupancyGrid``, latched): the static map (100 occupied, 0 free, -1 unknown),
+as
   map_server publishes it;
-- ``move_base/global_costmap/costmap`` (``nav_msgs/OccupancyGrid``): the whole costmap (static, what the
-  scans marked, inflation) in costmap_2d's values, every :data:`GLOBAL_PERIOD_US` while someone subscribes;
+- ``move_base/global_costmap/costmap`` (``nav_msgs/OccupancyGrid``): the whole costmap (static, what
+the
+  scans marked, inflation) in costmap_2d's values, every :data:`GLOBAL_PERIOD_US` while someone
+  subscribes;
 - ``move_base/local_costmap/costmap``: the navigator's window about the robot
   (:mod:`amr_twin.navigation.outputs`, 2 Hz while a goal is active).
 
@@ -24,7 +28,8 @@ from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.nav_messages import MapMetaData, OccupancyGrid
 
 GLOBAL_PERIOD_US = 1_000_000
-"""Period of the global costmap, simulated us (costmap_2d's ``publish_frequency`` 1 Hz of move_base's examples)."""
+"""Period of the global costmap, simulated us (costmap_2d's ``publish_frequency`` 1 Hz of
+move_base's examples)."""
 LOCAL_TOPIC = "local_costmap/costmap"
 MAP_FRAME = "map"
 

@@ -15,8 +15,8 @@ GLOBAL_FRAME = "map"
 ACTION = "move_base"
 SIMPLE_GOAL = "move_base_simple/goal"
 FEEDBACK_PERIOD_US = 100_000
-"""Period of the action's feedback, simulated us (move_base's: its controller's 20 Hz; 10 Hz is enough for a
-client that watches)."""
+"""Period of the action's feedback, simulated us (move_base's: its controller's 20 Hz; 10 Hz is
+enough for a client that watches)."""
 PYTHON_MODULES = ("actionlib", "actionlib_msgs", "move_base_msgs")
 DEBIAN_PACKAGES = ("python3-actionlib", "python3-move-base-msgs")
 
@@ -37,8 +37,9 @@ def missing() -> str | None:
 
 
 def pose_problem(pose_stamped) -> tuple[str, tuple | None]:
-    """Why a ``geometry_msgs/PoseStamped`` (rospy's) is not a goal in one line ('' if it is) and the goal
-    ``(x_m, y_m, yaw_rad)``; move_base's checks: its frame, finite numbers, a rotation about z alone."""
+    """Why a ``geometry_msgs/PoseStamped`` (rospy's) is not a goal in one line ('' if it is) and the
+    goal ``(x_m, y_m, yaw_rad)``; move_base's checks: its frame, finite numbers, a rotation about z
+    alone."""
     frame = pose_stamped.header.frame_id.lstrip("/")
     if frame != GLOBAL_FRAME:
         return (
@@ -65,11 +66,12 @@ def pose_problem(pose_stamped) -> tuple[str, tuple | None]:
 
 
 class NavigationServer:
-    """move_base's action, its simple goal and maps for ``navigator`` on ``twin``; a sink of ``pacer``.
+    """move_base's action, its simple goal and maps for ``navigator`` on ``twin``; a sink of
+    ``pacer``.
 
-    ``checker``: a :class:`~amr_twin.navigation.planner.GlobalPlanner` on the static map alone, for the
-    goals' checks. Built after the ROS 1 session has joined the graph; :meth:`close` at the end of the run.
-    """
+    ``checker``: a :class:`~amr_twin.navigation.planner.GlobalPlanner` on the static map alone, for
+    the goals' checks. Built after the ROS 1 session has joined the graph; :meth:`close` at the end
+    of the run."""
 
     def __init__(self, twin, pacer, navigator, checker, say=print):
         from amr_twin.ros1.installation import import_rospy
@@ -94,7 +96,8 @@ class NavigationServer:
         self._pose_cls = PoseStamped
         self._ids = actionlib.GoalIDGenerator()
         self._goals: list = []
-        """(goal handle, GoalOutcome) of the goals sent to the navigator and not reported yet (twin's thread)."""
+        """(goal handle, GoalOutcome) of the goals sent to the navigator and not reported yet
+        (twin's thread)."""
         self._next_feedback_us = 0
         self._closed = False
         self.set_time(twin.clock.now_us)
@@ -113,12 +116,14 @@ class NavigationServer:
         )
 
     def set_time(self, t_us: int) -> None:
-        """rospy's time in the twin's process: simulated ``t_us`` (the twin does not read its own ``/clock``)."""
+        """rospy's time in the twin's process: simulated ``t_us`` (the twin does not read its own
+        ``/clock``)."""
         import rospy.rostime
 
         rospy.rostime._set_rostime(self.rospy.Time(t_us // 1_000_000, t_us % 1_000_000 * 1000))
 
-    # -- rospy's threads: post to the twin's ------------------------------------------------------------
+    # -- rospy's threads: post to the twin's
+    # ------------------------------------------------------------
     def _on_goal(self, handle) -> None:
         handle.set_accepted()
         problem, goal = pose_problem(handle.get_goal().target_pose)
@@ -128,7 +133,8 @@ class NavigationServer:
         self._post(lambda: self._cancel(handle), handle)
 
     def _on_simple_goal(self, msg) -> None:
-        """As move_base: the pose becomes a goal of the action (its status and result on the graph)."""
+        """As move_base: the pose becomes a goal of the action (its status and result on the
+        graph)."""
         if self._closed:
             return
         action_goal = self._action_goal_cls()
@@ -143,7 +149,8 @@ class NavigationServer:
         except PacerClosed:
             handle.set_aborted(None, "the twin's run is over")
 
-    # -- the twin's thread ---------------------------------------------------------------------------------
+    # -- the twin's thread
+    # ---------------------------------------------------------------------------------
     def _start(self, handle, goal, problem: str) -> None:
         if not problem:
             here = (

@@ -1,14 +1,16 @@
-"""The navigation stack of a run on the ROS 1 graph: ``amr-twin run ... --sensors --ros1`` (:class:`RunNavigation`).
+"""The navigation stack of a run on the ROS 1 graph: ``amr-twin run ... --sensors --ros1``
+(:class:`RunNavigation`).
 
-Checked before the twin is built (:meth:`RunNavigation.checked`, one line each): the action server's Debian
-packages, the world's map (a world with no obstacle has none) and the start pose on it; the run goes on
-without the stack when one is missing, saying why. On the built twin, :meth:`RunNavigation.attach` puts
-the stack of ``run goto`` (:func:`amr_twin.navigation.stack.attach`: the EKF of odometry, gyro and UWB, the
-navigator idle until a goal, its plan, map and costmap messages) on the bus, without a diff-drive node of
-its own (the run brings one for ``cmd_vel``); :meth:`RunNavigation.serve` puts it on the graph
+Checked before the twin is built (:meth:`RunNavigation.checked`, one line each): the action server's
+Debian packages, the world's map (a world with no obstacle has none) and the start pose on it; the
+run goes on without the stack when one is missing, saying why. On the built twin,
+:meth:`RunNavigation.attach` puts the stack of ``run goto``
+(:func:`amr_twin.navigation.stack.attach`: the EKF of odometry, gyro and UWB, the navigator idle
+until a goal, its plan, map and costmap messages) on the bus, without a diff-drive node of its own
+(the run brings one for ``cmd_vel``); :meth:`RunNavigation.serve` puts it on the graph
 (:class:`~amr_twin.ros1.navigation_server.NavigationServer`). The run's own commands yield to it:
-:class:`YieldingCommand`. ``run goto ... --ros1`` and a mission's ``goals:`` with ``--ros1``, where the stack
-drives to the run's goals: :class:`GoalsOnGraph`.
+:class:`YieldingCommand`. ``run goto ... --ros1`` and a mission's ``goals:`` with ``--ros1``, where
+the stack drives to the run's goals: :class:`GoalsOnGraph`.
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ from dataclasses import dataclass, field
 
 @dataclass(frozen=True)
 class YieldingCommand:
-    """A run's command (:class:`amr_twin.assembly.command.Command`) that is not sent while the navigator drives to a goal.
+    """A run's command (:class:`amr_twin.assembly.command.Command`) that is not sent while the
+    navigator drives to a goal.
 
     ``say(line)`` tells of a command left out; ``send`` returns 0 then (nothing was refused)."""
 
@@ -30,7 +33,8 @@ class YieldingCommand:
         if self.navigator.active is None:
             return self.command.send(twin)
         self.say(
-            f"ros1: the run's {self.command.kind} command at t = {twin.t_s:.2f} s not sent: a move_base goal "
+            f"ros1: the run's {self.command.kind} command at t = {twin.t_s:.2f} s not sent: a "
+            f"move_base goal "
             "is active (the navigator drives)"
         )
         return 0
@@ -51,7 +55,8 @@ class RunNavigation:
 
     @classmethod
     def checked(cls, cfg, world: str, start) -> "RunNavigation":
-        """The world's map with ``start`` (None: the world's start) on it; ValueError (one line) otherwise."""
+        """The world's map with ``start`` (None: the world's start) on it; ValueError (one line)
+        otherwise."""
         import numpy as np
 
         from amr_twin.model.worlds import MapError, default_start
@@ -69,13 +74,15 @@ class RunNavigation:
         here = np.array((start or default_start(world))[:2], float)
         if not nav._checker().costmap.cells(here[None])[2][0]:
             raise ValueError(
-                f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of --world {world}: give "
+                f"the start ({here[0]:g}, {here[1]:g}) lies outside the map of --world {world}: "
+                f"give "
                 "--start X_M,Y_M,YAW_DEG on it"
             )
         return nav
 
     def _checker(self):
-        """A planner on the static map alone (the goals' check, as ``run goto`` checks its goals)."""
+        """A planner on the static map alone (the goals' check, as ``run goto`` checks its
+        goals)."""
         from amr_twin.navigation.footprint import robot_footprint
         from amr_twin.navigation.planner import GlobalPlanner
         from amr_twin.navigation.stack import make_costmap
@@ -113,12 +120,13 @@ class RunNavigation:
 
 class GoalsOnGraph:
     """``run goto ... --ros1`` and a mission's ``goals:`` with ``--ros1``: ``twin`` on the graph
-    (:class:`~amr_twin.ros1.session.Ros1Session`), and the navigator that drives it to the run's goals served as
-    move_base as soon as it is on the bus (at the run's first instant): a goal of the action or on
-    ``move_base_simple/goal`` preempts the run's own, as any new goal of the navigator does.
+    (:class:`~amr_twin.ros1.session.Ros1Session`), and the navigator that drives it to the run's
+    goals served as move_base as soon as it is on the bus (at the run's first instant): a goal of
+    the action or on ``move_base_simple/goal`` preempts the run's own, as any new goal of the
+    navigator does.
 
-    ``static``: the run's static map (the goals' checks); ``pacer``: a live session's, or None for one of its
-    own at ``rate`` (0: as fast as possible). :meth:`close` at the end of the run."""
+    ``static``: the run's static map (the goals' checks); ``pacer``: a live session's, or None for
+    one of its own at ``rate`` (0: as fast as possible). :meth:`close` at the end of the run."""
 
     def __init__(self, twin, cfg, static, options, rate: float = 0.0, pacer=None, say=print):
         from amr_twin.ros1.session import Ros1Session, pacer_tick_us

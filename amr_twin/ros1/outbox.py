@@ -4,15 +4,15 @@ rospy's ``Publisher.publish`` costs about 6 us of Python a message (its lock, ge
 round trip, the statistics) on top of one ``sendall`` a message and subscriber. The bridge writes
 its messages itself (:mod:`amr_twin.ros1.serialization`); the outbox keeps their TCPROS frames (a
 uint32 length, then the message's bytes: what rospy's publish writes) by simulated instant and
-publisher, and writes them through rospy's own transports (``write_data``): the bytes on the wire are
-rospy's, only the writes are fewer.
+publisher, and writes them through rospy's own transports (``write_data``): the bytes on the wire
+are rospy's, only the writes are fewer.
 
 :meth:`Outbox.release` writes them as a ROS node would, each when it is stamped: at each multiple of
 ``period_us`` (the ``/clock`` period), once ``wait`` has brought the wall clock to it, the ``lead``
 publisher's frames (``/clock``) first, then every other message of an instant up to it, one write a
 publisher and connection. No message is written before a ``/clock`` at or after its instant. Without
-``wait`` (a twin running as fast as it can) everything due goes at once, ``/clock`` first: one write a
-publisher and connection, however many instants. Within a publisher the instants' order is kept. A
+``wait`` (a twin running as fast as it can) everything due goes at once, ``/clock`` first: one write
+a publisher and connection, however many instants. Within a publisher the instants' order is kept. A
 connection whose write fails is closed, as rospy's publish closes it (rospy then drops it).
 """
 
@@ -24,13 +24,15 @@ import struct
 _LEN = struct.Struct("<I")
 NEVER_US = 1 << 62
 GAP_US = 1_000
-"""Simulated us between a ``/clock`` and the other messages of its instant, paced. A subscriber reads each
-topic in a thread of its own: an IMU message written right after its clock was handled before it ~11 % of
-the time here (queue_size=1, rospy), 1 ms later ~1.5 % (its clock thread woken late on a busy machine)."""
+"""Simulated us between a ``/clock`` and the other messages of its instant, paced. A subscriber
+reads each topic in a thread of its own: an IMU message written right after its clock was handled
+before it ~11 % of the time here (queue_size=1, rospy), 1 ms later ~1.5 % (its clock thread woken
+late on a busy machine)."""
 
 
 class _Queue:
-    """One publisher's frames waiting, with their instants (in put order; ``ordered`` while never decreasing)."""
+    """One publisher's frames waiting, with their instants (in put order; ``ordered`` while never
+    decreasing)."""
 
     __slots__ = ("times", "frames", "ordered")
 
@@ -40,8 +42,8 @@ class _Queue:
         self.ordered = True
 
     def take(self, until_us: int) -> tuple[int, list]:
-        """The first instant and the frames of the instants up to ``until_us`` (instant order, then put order),
-        removed."""
+        """The first instant and the frames of the instants up to ``until_us`` (instant order, then
+        put order), removed."""
         times, frames = self.times, self.frames
         if not self.ordered:
             order = sorted(
@@ -58,7 +60,8 @@ class _Queue:
 
 
 class Outbox:
-    """Frames waiting to be written, by rospy publisher, with their instants (see the module notes)."""
+    """Frames waiting to be written, by rospy publisher, with their instants (see the module
+    notes)."""
 
     def __init__(self, period_us: int = 10_000, lead=None, gap_us: int = GAP_US):
         self.period_us, self.gap_us = int(period_us), int(gap_us)
@@ -74,7 +77,8 @@ class Outbox:
 
     @staticmethod
     def wanted(pub) -> bool:
-        """Whether ``pub`` (a rospy Publisher) has a subscriber now (no lock: rospy replaces the list)."""
+        """Whether ``pub`` (a rospy Publisher) has a subscriber now (no lock: rospy replaces the
+        list)."""
         impl = pub.impl
         return impl is not None and bool(impl.connections)
 
@@ -88,7 +92,8 @@ class Outbox:
         return q
 
     def put(self, pub, payload: bytes, t_us: int = 0) -> None:
-        """Queue ``payload`` (a message serialised in the ROS 1 format, of simulated instant ``t_us``)."""
+        """Queue ``payload`` (a message serialised in the ROS 1 format, of simulated instant
+        ``t_us``)."""
         q = self._queues.get(
             pub.impl
         )  # _queue's work, inlined: the tap's path, a few thousand a second
@@ -101,8 +106,9 @@ class Outbox:
         q.frames.append(_LEN.pack(len(payload)) + payload)
 
     def put_block(self, pub, t_us: list, block: bytes) -> None:
-        """Queue the frames of ``block`` (TCPROS frames of equal lengths, one after the other: a length, then a
-        message), the i-th of simulated instant ``t_us[i]`` (never decreasing), as that many :meth:`put` would."""
+        """Queue the frames of ``block`` (TCPROS frames of equal lengths, one after the other: a
+        length, then a message), the i-th of simulated instant ``t_us[i]`` (never decreasing), as
+        that many :meth:`put` would."""
         n = len(t_us)
         if not n:
             return
@@ -141,8 +147,8 @@ class Outbox:
             self._send(frames, impl)
 
     def _take(self, until_us: int) -> dict:
-        """The frames of the instants up to ``until_us``, by publisher impl: the lead's first, then the others in
-        the order of their earliest instant."""
+        """The frames of the instants up to ``until_us``, by publisher impl: the lead's first, then
+        the others in the order of their earliest instant."""
         lead = getattr(self.lead, "impl", None)
         due = []
         for impl, q in self._queues.items():

@@ -1,13 +1,14 @@
-"""The 100 Hz rows the bridge puts on ``/twin/*`` and ``/battery_state``, kept as the recorder keeps them:
+"""The 100 Hz rows the bridge puts on ``/twin/*`` and ``/battery_state``, kept as the recorder keeps
+them:
 :class:`RowFeed`.
 
-The loop-sensor rows come from the ``on_grid_rows`` hook, the drive from ``on_actuation`` (the drive in force
-during the step that ends at a row: the last change before it) and the battery from a grid sampler with a C
-form (:meth:`amr_twin.sim.observables.Observables.battery_rows`; the last accounting at or before a row), so
-the twin's grid loop stays in C (:mod:`amr_twin.live.rows`' Python grid sampler sends it back to Python: ~25 %
-more CPU for a twin with sensors). The columns are :class:`amr_twin.recording.recorder.Recorder`'s, with its
-formulas, bit for bit (``tests/ros1/test_row_feed.py``).
-"""
+The loop-sensor rows come from the ``on_grid_rows`` hook, the drive from ``on_actuation`` (the drive
+in force during the step that ends at a row: the last change before it) and the battery from a grid
+sampler with a C form (:meth:`amr_twin.sim.observables.Observables.battery_rows`; the last
+accounting at or before a row), so the twin's grid loop stays in C (:mod:`amr_twin.live.rows`'
+Python grid sampler sends it back to Python: ~25 % more CPU for a twin with sensors). The columns
+are :class:`amr_twin.recording.recorder.Recorder`'s, with its formulas, bit for bit
+(``tests/ros1/test_row_feed.py``)."""
 
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ from amr_twin.sim.plant import motor_currents_a
 
 
 class RowFeed:
-    """The rows of ``twin`` from now on (its state now, then each grid instant's), kept until :meth:`take`."""
+    """The rows of ``twin`` from now on (its state now, then each grid instant's), kept until
+    :meth:`take`."""
 
     def __init__(self, twin):
         self.twin = twin
@@ -51,9 +53,10 @@ class RowFeed:
             self._pins.append(row)
 
     def take(self, t_us: int) -> SimpleNamespace | None:
-        """The rows at or before ``t_us`` (None if none): ``t_us`` (n,) int, ``true_rpm`` (n, 2), ``pwm_counts``
-        (n, 2), ``current_a`` (n, 2), ``battery_v``, ``battery_a``, ``battery_soc`` (n,), ``index`` (n,) the rows'
-        places in the run's series (one a grid instant from t = 0)."""
+        """The rows at or before ``t_us`` (None if none): ``t_us`` (n,) int, ``true_rpm`` (n, 2),
+        ``pwm_counts`` (n, 2), ``current_a`` (n, 2), ``battery_v``, ``battery_a``, ``battery_soc``
+        (n,), ``index`` (n,) the rows' places in the run's series (one a grid instant from t =
+        0)."""
         n = bisect.bisect_right(self._t, t_us)
         if n == 0:
             return None

@@ -25,7 +25,8 @@ from amr_twin.ros.rosserial_frame import (
 
 ID_LOG, ID_PARAMETER_REQUEST = 7, 6
 RETRY_S = 0.5
-"""Wait between two attempts to open a port that is not there, s (upstream's serial_node keeps trying too)."""
+"""Wait between two attempts to open a port that is not there, s (upstream's serial_node keeps
+trying too)."""
 
 
 def open_port(path: str, baud: int) -> int:

@@ -1,10 +1,12 @@
-"""The ROS 1 wire format of the twin's high-rate messages, written with ``struct`` (the bridge's fast path).
+"""The ROS 1 wire format of the twin's high-rate messages, written with ``struct`` (the bridge's
+fast path).
 
 Filling genpy's message objects field by field cost 26 us (``sensor_msgs/Imu``) to 38 us
-(``nav_msgs/Odometry``) a message, six times their serialisation; these writers produce the same bytes
-(``tests/ros1/test_serialization.py`` compares them with genpy's, type by type) in a few microseconds.
-The ROS 1 format: little-endian, no alignment; a string or a variable array is a uint32 count then its
-items; ``time`` is uint32 sec, uint32 nsec; ``std_msgs/Header`` is uint32 seq, time, string frame_id.
+(``nav_msgs/Odometry``) a message, six times their serialisation; these writers produce the same
+bytes (``tests/ros1/test_serialization.py`` compares them with genpy's, type by type) in a few
+microseconds. The ROS 1 format: little-endian, no alignment; a string or a variable array is a
+uint32 count then its items; ``time`` is uint32 sec, uint32 nsec; ``std_msgs/Header`` is uint32 seq,
+time, string frame_id.
 :data:`WRITERS` maps a type to its writer ``f(msg) -> bytes``; the rest go through genpy.
 """
 
@@ -36,8 +38,9 @@ def _header(h) -> bytes:
 
 @functools.lru_cache(maxsize=1024)
 def _framed(frames: tuple, tail: str) -> tuple[struct.Struct, bytes]:
-    """A ``Struct`` of a header's seq and stamp, then the strings ``frames`` (the header's frame_id, maybe a child
-    frame's), then ``tail``; and those strings' bytes (a message's fixed part in one ``pack``)."""
+    """A ``Struct`` of a header's seq and stamp, then the strings ``frames`` (the header's frame_id,
+    maybe a child frame's), then ``tail``; and those strings' bytes (a message's fixed part in one
+    ``pack``)."""
     blob = b"".join(_string(f) for f in frames)
     return struct.Struct(f"<III{len(blob)}s{tail}"), blob
 

@@ -1,16 +1,17 @@
-"""The twin joins a ROS 1 graph for a run: ``amr-twin run ... --ros1 [--roscore]``, ``amr-twin client --ros1``.
+"""The twin joins a ROS 1 graph for a run: ``amr-twin run ... --ros1 [--roscore]``, ``amr-twin
+client --ros1``.
 
-:class:`Ros1Options` is checked before anything is built: Debian's ROS 1 is there (else one line naming
-the packages) and, unless ``--roscore`` asks for a private master, the master at ``ROS_MASTER_URI``
-answers within 3 s (else one line naming it). :class:`Ros1Session` then starts the private ``roscore``
-(on a free port; its URI is printed), joins the master as the node ``/amr_twin``, sets
-``/use_sim_time`` and ``/robot_description``, and bridges the twin (:class:`~amr_twin.ros1.bridge.Ros1Bridge`),
-fed by a :class:`~amr_twin.live.pacer.Pacer` (as fast as possible, or ``--rate`` x real time). Before
-the twin runs it waits until the nodes already on the graph (a ``rosbag record``, a node waiting for
-``/scan``, the thesis' service publishing ``/wheel_Command``: those the master lists) are connected to
-it, at most :data:`SETTLE_MAX_S`: a twin far faster than real time would otherwise run past the first
-messages before they connect. :meth:`Ros1Session.close` stops the bridge,
-rospy and the private roscore.
+:class:`Ros1Options` is checked before anything is built: Debian's ROS 1 is there (else one line
+naming the packages) and, unless ``--roscore`` asks for a private master, the master at
+``ROS_MASTER_URI`` answers within 3 s (else one line naming it). :class:`Ros1Session` then starts
+the private ``roscore`` (on a free port; its URI is printed), joins the master as the node
+``/amr_twin``, sets ``/use_sim_time`` and ``/robot_description``, and bridges the twin
+(:class:`~amr_twin.ros1.bridge.Ros1Bridge`), fed by a :class:`~amr_twin.live.pacer.Pacer` (as fast
+as possible, or ``--rate`` x real time). Before the twin runs it waits until the nodes already on
+the graph (a ``rosbag record``, a node waiting for ``/scan``, the thesis' service publishing
+``/wheel_Command``: those the master lists) are connected to it, at most :data:`SETTLE_MAX_S`: a
+twin far faster than real time would otherwise run past the first messages before they connect.
+:meth:`Ros1Session.close` stops the bridge, rospy and the private roscore.
 """
 
 from __future__ import annotations
@@ -25,18 +26,20 @@ from amr_twin.ros1.master_watch import MasterWatch
 from amr_twin.ros1.sim_services import SimServices
 
 NODE_NAME = "amr_twin"
-"""The node's name (``__name:=`` renames it), in ``ROS_NAMESPACE`` (or ``__ns:=``) as every relative name."""
+"""The node's name (``__name:=`` renames it), in ``ROS_NAMESPACE`` (or ``__ns:=``) as every relative
+name."""
 _ABSENT = object()
 SETTLE_MAX_S = 10.0
-"""Longest wait for the graph's subscribers to connect before the twin runs, wall s (it ends as soon as they
-are: a few ms each; the bound only matters for a node the master lists that does not answer, or a machine so
-busy that connecting takes seconds, where 2 s was too short)."""
+"""Longest wait for the graph's subscribers to connect before the twin runs, wall s (it ends as soon
+as they are: a few ms each; the bound only matters for a node the master lists that does not answer,
+or a machine so busy that connecting takes seconds, where 2 s was too short)."""
 UNPACED_TICK_US = 400_000
-"""The pacer's tick when the twin runs unpaced on the graph, us. Each tick stops the physics' grid loop and
-costs numpy's work on the state samples and a write per topic and subscriber, whatever their number (20 ms
-ticks cost 12 % of the twin's CPU without a subscriber; per tick, ~0.5 ms of the bridge's CPU and a write per
-topic and subscriber: docs/how-to/ros1.md); unpaced, nothing waits on the wall clock. A message from the graph acts
-at the next tick (400 ms of simulated time, ~8 ms of wall time at full speed)."""
+"""The pacer's tick when the twin runs unpaced on the graph, us. Each tick stops the physics' grid
+loop and costs numpy's work on the state samples and a write per topic and subscriber, whatever
+their number (20 ms ticks cost 12 % of the twin's CPU without a subscriber; per tick, ~0.5 ms of the
+bridge's CPU and a write per topic and subscriber: docs/how-to/ros1.md); unpaced, nothing waits on
+the wall clock. A message from the graph acts at the next tick (400 ms of simulated time, ~8 ms of
+wall time at full speed)."""
 
 
 def pacer_tick_us(rate: float) -> int:
@@ -52,10 +55,10 @@ def master_uri() -> str:
 
 
 def _leave_own_clock(rospy) -> None:
-    """The twin is the graph's clock: where ``/use_sim_time`` was already set, rospy subscribed the node to
-    ``/clock`` when it joined, and every clock message the twin wrote came back to its own process to be
-    read and decoded by rospy's thread (~27 us of CPU each). Unsubscribe it; rospy's time in the twin's
-    process stays where it was (its own stamps come from the simulation)."""
+    """The twin is the graph's clock: where ``/use_sim_time`` was already set, rospy subscribed the
+    node to ``/clock`` when it joined, and every clock message the twin wrote came back to its own
+    process to be read and decoded by rospy's thread (~27 us of CPU each). Unsubscribe it; rospy's
+    time in the twin's process stays where it was (its own stamps come from the simulation)."""
     import rospy.impl.simtime as simtime
 
     sub = getattr(simtime, "_clock_sub", None)
@@ -66,14 +69,16 @@ def _leave_own_clock(rospy) -> None:
 
 @dataclass(frozen=True)
 class Ros1Options:
-    """``--ros1``: join the graph at ``ROS_MASTER_URI``, or a private roscore (``roscore``); ``firmware_topics``
-    False when the board's serial port is served to a rosserial host (it carries them)."""
+    """``--ros1``: join the graph at ``ROS_MASTER_URI``, or a private roscore (``roscore``);
+    ``firmware_topics`` False when the board's serial port is served to a rosserial host (it carries
+    them)."""
 
     roscore: bool = False
     firmware_topics: bool = True
 
     def check(self) -> None:
-        """Raise ValueError (one line) when ROS 1 is absent or the master does not answer within 3 s."""
+        """Raise ValueError (one line) when ROS 1 is absent or the master does not answer within 3
+        s."""
         from amr_twin.ros1.installation import missing
 
         problem = missing()
@@ -133,12 +138,14 @@ class Ros1Session:
         )
         say(
             f"ros1: the twin is {rospy.get_name()} on {where} (/use_sim_time, /clock; publish "
-            f"{rospy.resolve_name('wheel_Command')} or {rospy.resolve_name('cmd_vel')} to drive it; "
+            f"{rospy.resolve_name('wheel_Command')} or {rospy.resolve_name('cmd_vel')} to drive "
+            f"it; "
             f"{rospy.get_name()}/pause_physics, ...)"
         )
         if not self.settle():
             say(
-                f"ros1: not every node the master lists on the twin's topics connected within {SETTLE_MAX_S:g} s; "
+                f"ros1: not every node the master lists on the twin's topics connected within "
+                f"{SETTLE_MAX_S:g} s; "
                 "the run starts without them"
             )
         self.bridge.start()
@@ -154,8 +161,8 @@ class Ros1Session:
         ]
 
     def settle(self, max_s: float = SETTLE_MAX_S) -> bool:
-        """Wait until the twin is connected to each subscriber of its topics and each publisher of its inputs
-        that the master lists (at most ``max_s``); True if it is."""
+        """Wait until the twin is connected to each subscriber of its topics and each publisher of
+        its inputs that the master lists (at most ``max_s``); True if it is."""
         import rosgraph
 
         me = self.rospy.get_name()
@@ -177,8 +184,8 @@ class Ros1Session:
             time.sleep(0.02)
 
     def close(self) -> None:
-        """Stop the bridge (if the pacer has not) and the services, put ``/use_sim_time`` back as it was (deleted
-        if it was not set), stop rospy and the private roscore."""
+        """Stop the bridge (if the pacer has not) and the services, put ``/use_sim_time`` back as it
+        was (deleted if it was not set), stop rospy and the private roscore."""
         try:
             self.watch.close()
             self.services.close()

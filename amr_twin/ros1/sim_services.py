@@ -1,4 +1,5 @@
-"""The simulator's own interface on the graph, as gazebo_ros offers it, under the twin's node name: :class:`SimServices`.
+"""The simulator's own interface on the graph, as gazebo_ros offers it, under the twin's node name:
+:class:`SimServices`.
 
 Reasons and measurements: docs/how-to/ros1.md#amr_twinros1sim_services."""
 
@@ -15,7 +16,8 @@ POSE_FRAMES = ("map", "world", "")
 
 
 class SimServices:
-    """Serve :data:`SERVICES` and take ``~set_pose`` for ``twin`` through ``pacer``, on the graph rospy joined."""
+    """Serve :data:`SERVICES` and take ``~set_pose`` for ``twin`` through ``pacer``, on the graph
+    rospy joined."""
 
     def __init__(self, twin, pacer, rospy):
         from geometry_msgs.msg import PoseStamped
@@ -54,7 +56,8 @@ class SimServices:
         if frame not in POSE_FRAMES or not all(math.isfinite(v) for v in values):
             self.refused += 1
             LOG.warning(
-                "ros1: set_pose refused: frame %r (allowed: map, world or empty) with finite values",
+                "ros1: set_pose refused: frame %r (allowed: map, world or empty) with finite "
+                "values",
                 msg.header.frame_id,
             )
             return

@@ -1,12 +1,12 @@
 """The twin's 100 Hz rows and statuses on the graph, for the bridge: :class:`StatusTopics`.
 
-``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current`` (``std_msgs/Float64MultiArray``, 100 Hz, the
-recorder's columns: :class:`~amr_twin.ros1.row_feed.RowFeed`, kept from the first flush that finds one of these
-topics wanted), ``/battery_state`` (``sensor_msgs/BatteryState``, 10 Hz) and ``/diagnostics``
-(``diagnostic_msgs/DiagnosticArray``: each collision and fault as it happens, the ``.mcap``'s ``/twin/collisions``
-and ``/twin/faults`` statuses, and the battery once a second), written into the bridge's outbox with their
-simulated instants (the rows and the battery a block a topic and tick: :mod:`amr_twin.ros1.frame_blocks`;
-``/diagnostics`` with genpy).
+``/twin/true_rpm``, ``/twin/pwm_counts``, ``/twin/motor_current`` (``std_msgs/Float64MultiArray``,
+100 Hz, the recorder's columns: :class:`~amr_twin.ros1.row_feed.RowFeed`, kept from the first flush
+that finds one of these topics wanted), ``/battery_state`` (``sensor_msgs/BatteryState``, 10 Hz) and
+``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``: each collision and fault as it happens, the
+``.mcap``'s ``/twin/collisions`` and ``/twin/faults`` statuses, and the battery once a second),
+written into the bridge's outbox with their simulated instants (the rows and the battery a block a
+topic and tick: :mod:`amr_twin.ros1.frame_blocks`; ``/diagnostics`` with genpy).
 """
 
 from __future__ import annotations
@@ -27,8 +27,9 @@ DIAGNOSTICS_PERIOD_ROWS = 100
 
 
 class StatusTopics:
-    """The topics of the module notes for ``twin``: ``pub(name, type)`` makes a rospy publisher, ``conv`` is the
-    bridge's :class:`~amr_twin.ros1.messages.Ros1Messages`, ``out`` its :class:`~amr_twin.ros1.outbox.Outbox`."""
+    """The topics of the module notes for ``twin``: ``pub(name, type)`` makes a rospy publisher,
+    ``conv`` is the bridge's :class:`~amr_twin.ros1.messages.Ros1Messages`, ``out`` its
+    :class:`~amr_twin.ros1.outbox.Outbox`."""
 
     def __init__(self, twin, conv, out: Outbox, pub):
         self.twin, self.conv, self.out, self.rospy = twin, conv, out, conv.rospy

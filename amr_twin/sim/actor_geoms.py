@@ -1,12 +1,14 @@
 """The actors' and the robot's colliding geoms, and the gap between them at an actor's next pose.
 
-What :mod:`amr_twin.sim.actors` needs to stop an actor where it touches the robot (docs/explanation/actors.md): each
-actor's colliding geoms with their frames in the actor's (to place them at a pose it has not reached), the
-robot's, the reach of each set in the floor's plane (to skip the distances when far), and
-:func:`gap_after`, the Python twin of ``gap_after`` of ``actors.c`` (the same operations, so the same bits).
+What :mod:`amr_twin.sim.actors` needs to stop an actor where it touches the robot
+(docs/explanation/actors.md): each actor's colliding geoms with their frames in the actor's (to
+place them at a pose it has not reached), the robot's, the reach of each set in the floor's plane
+(to skip the distances when far), and
+:func:`gap_after`, the Python twin of ``gap_after`` of ``actors.c`` (the same operations, so the
+same bits).
 
-Part of the physics layer (``PHYSICS_LAYER``): reads MjData's geom poses and writes an actor's geoms'
-(its caller puts them back), calls ``mj_geomDistance``.
+Part of the physics layer (``PHYSICS_LAYER``): reads MjData's geom poses and writes an actor's
+geoms' (its caller puts them back), calls ``mj_geomDistance``.
 """
 
 from __future__ import annotations
@@ -31,8 +33,8 @@ def _radius_m(m, g: int) -> float:
 
 
 def actor_geoms(physics, body: str) -> tuple[np.ndarray, np.ndarray, float]:
-    """The colliding geoms (int32) of the actor ``body``, each one's position and rotation matrix in its
-    frame (n, 12), and their reach from its origin in the floor's plane, m."""
+    """The colliding geoms (int32) of the actor ``body``, each one's position and rotation matrix in
+    its frame (n, 12), and their reach from its origin in the floor's plane, m."""
     import mujoco
 
     m = physics.model
@@ -51,8 +53,8 @@ def actor_geoms(physics, body: str) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 def robot_geoms(physics) -> tuple[list[int], float]:
-    """The robot's colliding geoms and their farthest point from the base's origin in the floor's plane,
-    m, with 0.05 m for the wheels' turning and the casters' swivel."""
+    """The robot's colliding geoms and their farthest point from the base's origin in the floor's
+    plane, m, with 0.05 m for the wheels' turning and the casters' swivel."""
     m, d = physics.model, physics.data
     root = m.body_rootid[physics.base_body]
     geoms = [
@@ -68,20 +70,20 @@ def robot_geoms(physics) -> tuple[list[int], float]:
 
 
 def gap_after(physics, robot: np.ndarray, geoms: list, local: list, pose) -> float:
-    """The least signed distance (up to :data:`CUTOFF_M`) from an actor's ``geoms`` (their frames ``local``,
-    rows of 12) placed with the actor at ``pose`` (x_m, y_m, yaw_rad) to the ``robot``'s geoms, m; the
-    actor's geoms are left there in MjData."""
+    """The least signed distance (up to :data:`CUTOFF_M`) from an actor's ``geoms`` (their frames
+    ``local``, rows of 12) placed with the actor at ``pose`` (x_m, y_m, yaw_rad) to the ``robot``'s
+    geoms, m; the actor's geoms are left there in MjData."""
     import mujoco
 
     x, y, yaw = pose
     cs, sn = math.cos(yaw), math.sin(yaw)
     m, d = physics.model, physics.data
-    for g, l in zip(geoms, local):
-        d.geom_xpos[g] = (x + (cs * l[0] - sn * l[1]), y + (sn * l[0] + cs * l[1]), l[2])
+    for g, p in zip(geoms, local):
+        d.geom_xpos[g] = (x + (cs * p[0] - sn * p[1]), y + (sn * p[0] + cs * p[1]), p[2])
         d.geom_xmat[g] = (
-            [cs * l[3 + j] - sn * l[6 + j] for j in range(3)]
-            + [sn * l[3 + j] + cs * l[6 + j] for j in range(3)]
-            + [l[9 + j] for j in range(3)]
+            [cs * p[3 + j] - sn * p[6 + j] for j in range(3)]
+            + [sn * p[3 + j] + cs * p[6 + j] for j in range(3)]
+            + [p[9 + j] for j in range(3)]
         )
     gap = CUTOFF_M
     for g in geoms:

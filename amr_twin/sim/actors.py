@@ -25,7 +25,8 @@ PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("actors.c")
 ACTOR_GEOMS, BISECTIONS = 8, 12
-"""An actor's colliding geoms checked against the robot at most (more: never held); bisections of a step."""
+"""An actor's colliding geoms checked against the robot at most (more: never held); bisections of a
+step."""
 PUBLISH_PERIOD_US = 100_000
 """``actors/poses`` every 100 ms (10 Hz)."""
 TOPIC, FRAME = "actors/poses", "map"
@@ -165,8 +166,9 @@ class ActorMotion:
             physics.set_mocap_pose(s.mocap, x, y, yaw)
 
     def _step(self, s: _State, path, geoms: list, local: list, dt: int) -> int:
-        """``actor_step`` of actors.c: the walking time (us, at most ``dt``) that does not press the actor into
-        the robot by more than ``touch_m``; once touching it, none until a whole step is free."""
+        """``actor_step`` of actors.c: the walking time (us, at most ``dt``) that does not press the
+        actor into the robot by more than ``touch_m``; once touching it, none until a whole step is
+        free."""
         nx, ny, _ = path.pose_at((s.progress_us + dt) / 1e6)
         mx, my = nx - s.pose[0], ny - s.pose[1]
         d = self.physics.data
@@ -212,7 +214,8 @@ class ActorMotion:
         return step
 
     def _blocked(self, s: _State, base) -> bool:
-        """``actor_blocked`` of actors.c: the robot's footprint nearer than ``stop_m`` ahead of the actor."""
+        """``actor_blocked`` of actors.c: the robot's footprint nearer than ``stop_m`` ahead of the
+        actor."""
         stop = s.stop_m
         if stop <= 0.0:
             return False
@@ -233,7 +236,8 @@ class ActorMotion:
         return wx * math.cos(yaw) + wy * math.sin(yaw) > 0.0 or dist2 == 0.0
 
     def reset(self, t_us: int) -> None:
-        """Each actor back at the start of its path at grid instant ``t_us`` (a waited start is not waited again)."""
+        """Each actor back at the start of its path at grid instant ``t_us`` (a waited start is not
+        waited again)."""
         for s, path in zip(self._states, self.paths):
             s.progress_us, s.last_us = 0, t_us
             x, y, yaw = path.pose_at(0.0)
@@ -249,7 +253,8 @@ class ActorMotion:
         return [s.held_us / US for s in self._states[: len(self.actors)]]
 
     def progress_s(self) -> list[float]:
-        """Each actor's walking time so far, s (less than the time since its start when it waited)."""
+        """Each actor's walking time so far, s (less than the time since its start when it
+        waited)."""
         return [s.progress_us / US for s in self._states[: len(self.actors)]]
 
     def pose_rows(self, period_us: int = PUBLISH_PERIOD_US) -> GridRows:

@@ -15,7 +15,8 @@ from amr_twin.sim.plant import MODE_CODES
 
 
 class Actuation:
-    """The pins of ``firmware`` applied to ``plant``; ``hooks`` the ``on_actuation`` subscribers (a live list)."""
+    """The pins of ``firmware`` applied to ``plant``; ``hooks`` the ``on_actuation`` subscribers (a
+    live list)."""
 
     def __init__(self, plant, firmware, hooks: list):
         self.plant, self.firmware, self._hooks = plant, firmware, hooks
@@ -25,7 +26,8 @@ class Actuation:
         voltages L, R, V."""
 
     def levels(self) -> tuple:
-        """The firmware's pin levels now (PWM, DIR, BRAKE, STOP of each driver): equal keys, same drive."""
+        """The firmware's pin levels now (PWM, DIR, BRAKE, STOP of each driver): equal keys, same
+        drive."""
         p0, p1 = self.firmware.pins
         return (
             p0.pwm_counts,
@@ -39,7 +41,8 @@ class Actuation:
         )
 
     def apply(self, t_us: int) -> None:
-        """Set both motors from the firmware's pins now (physics time ``t_us``) and tell the subscribers."""
+        """Set both motors from the firmware's pins now (physics time ``t_us``) and tell the
+        subscribers."""
         pins, plant = self.firmware.pins, self.plant
         plant.apply(pins)
         self._changed(t_us)
@@ -61,7 +64,8 @@ class Actuation:
 
     # -- what a fault changes (amr_twin/sim/fault_injector.py) ---------------------------------
     def sag_battery(self, sag_v: float, t_us: int) -> None:
-        """Lower the battery's terminal voltage by ``sag_v`` V (at most to 1 V above nothing), 0 to clear."""
+        """Lower the battery's terminal voltage by ``sag_v`` V (at most to 1 V above nothing), 0 to
+        clear."""
         battery = self.plant.battery
         battery.sag_v = (
             min(float(sag_v), battery.ocv_v() - 1.0) if sag_v else 0.0

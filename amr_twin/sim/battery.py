@@ -109,7 +109,8 @@ class Battery:
         s.terminal_v = self.ocv_v()
         self._data = None
         self.account = self.account_python
-        """The grid sampler ``account(t_us)``: the C helper once :meth:`connect` found it, else the twin."""
+        """The grid sampler ``account(t_us)``: the C helper once :meth:`connect` found it, else the
+        twin."""
         self.engine = "Python (not connected)"
         self._native = native
 
@@ -168,11 +169,13 @@ class Battery:
             self.account = account
 
     def set_motor(self, wheel: int, mode: int, voltage_v: float) -> None:
-        """Motor ``wheel``'s mode (:data:`DRIVE`, :data:`COAST`, :data:`BRAKE`) and phase voltage, V."""
+        """Motor ``wheel``'s mode (:data:`DRIVE`, :data:`COAST`, :data:`BRAKE`) and phase voltage,
+        V."""
         self._s.mode[wheel], self._s.volt[wheel] = mode, voltage_v
 
     def account_python(self, t_us: int = 0) -> None:
-        """Drain the pack by the present current since the last call: the Python twin of battery.c."""
+        """Drain the pack by the present current since the last call: the Python twin of
+        battery.c."""
         b, d = self._s, self._data
         t = d.time
         dt = t - b.t_last_s
@@ -220,6 +223,7 @@ class Battery:
         return [s.terminal_v, s.current_a, s.soc]
 
     def grid_state_addresses(self) -> list[int]:
-        """Where the values of :meth:`grid_state` lie (for a C row keeper, ``grid_steps.gather``)."""
+        """Where the values of :meth:`grid_state` lie (for a C row keeper,
+        ``grid_steps.gather``)."""
         base = ctypes.addressof(self._s)
         return [base + getattr(_State, name).offset for name in ("terminal_v", "current_a", "soc")]

@@ -1,4 +1,5 @@
-"""How long one simulated run may be: the bounds every command that simulates checks before the work.
+"""How long one simulated run may be: the bounds every command that simulates checks before the
+work.
 
 A run keeps its 100 Hz series in memory (about 0.1 MB and 0.02 s of CPU per simulated second), so
 no run is longer than :data:`MAX_RUN_S`; longer studies are missions run in pieces. A run shorter
@@ -16,13 +17,13 @@ MIN_RUN_S = 0.1
 
 
 BASE_MB = 250.0
-"""A run's process before it runs: the interpreter, numpy, MuJoCo, the model (measured: 219 to 286 MB
-at 60 simulated s with recordings, 85 MB without)."""
+"""A run's process before it runs: the interpreter, numpy, MuJoCo, the model (measured: 219 to 286
+MB at 60 simulated s with recordings, 85 MB without)."""
 MB_PER_SIM_S = {"plain": 0.11, "recorded": 0.36, "recorded with sensors": 1.3}
 """Peak memory a run adds per simulated second, MB, measured by ``/usr/bin/time`` (maximum resident
-size) at 60, 300 and 1200 simulated s: the series alone (also with ``--sensors``: their messages are not
-kept); recorded (``--record``/``--mcap``: every message and pose kept until written); recorded with
-``--sensors`` (the LiDAR's scans and the IMU's samples kept as well)."""
+size) at 60, 300 and 1200 simulated s: the series alone (also with ``--sensors``: their messages are
+not kept); recorded (``--record``/``--mcap``: every message and pose kept until written); recorded
+with ``--sensors`` (the LiDAR's scans and the IMU's samples kept as well)."""
 
 
 RERUN_ADDRESS_SPACE_MB = 3000.0
@@ -33,10 +34,12 @@ backtrace)."""
 
 
 def duration_problem(duration_s: float) -> str | None:
-    """Why ``duration_s`` is no run's length (None: it is one): ``"must be in [0.1, 3600] s ..."``."""
+    """Why ``duration_s`` is no run's length (None: it is one): ``"must be in [0.1, 3600] s
+    ..."``."""
     if not MIN_RUN_S <= duration_s <= MAX_RUN_S:  # NaN fails too
         return (
-            f"must be in [{MIN_RUN_S:g}, {MAX_RUN_S:g}] s (a run keeps its 100 Hz series in memory, ~0.1 MB "
+            f"must be in [{MIN_RUN_S:g}, {MAX_RUN_S:g}] s (a run keeps its 100 Hz series in "
+            f"memory, ~0.1 MB "
             "per simulated second: run a longer study as several runs)"
         )
     return None
@@ -57,7 +60,8 @@ def address_space_mb() -> float | None:
 
 
 def available_mb() -> float | None:
-    """Memory the machine has available now, MB (``MemAvailable`` of /proc/meminfo); None where unknown."""
+    """Memory the machine has available now, MB (``MemAvailable`` of /proc/meminfo); None where
+    unknown."""
     try:
         with open("/proc/meminfo") as fh:
             for line in fh:

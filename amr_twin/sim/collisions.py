@@ -52,8 +52,8 @@ class Collision:
     """One contact episode between the robot and a world geom.
 
     ``t_s``/``x_m``/``y_m``/``z_m``: time and world position of the first contact
-    point; ``until_s``: last instant it was seen; ``hit``: the world geom's name (an actor's body name);
-    ``robot_parts``: the robot bodies that touched it; ``robot_pose``: base pose
+    point; ``until_s``: last instant it was seen; ``hit``: the world geom's name (an actor's body
+    name); ``robot_parts``: the robot bodies that touched it; ``robot_pose``: base pose
     (x_m, y_m, yaw_rad) at the first contact; ``peak_force_n``: largest normal
     contact force seen, N.
     """
@@ -124,7 +124,8 @@ class GeomRoles:
         return k
 
     def robot_part(self, g: int) -> str:
-        """The robot body of geom ``g``, without the ``amr/`` prefix (``base_link``, ``wheel_left_link``)."""
+        """The robot body of geom ``g``, without the ``amr/`` prefix (``base_link``,
+        ``wheel_left_link``)."""
         part = self._part.get(g)
         if part is None:
             m = self.model
@@ -135,7 +136,8 @@ class GeomRoles:
         return part
 
     def world_name(self, g: int) -> str:
-        """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed; an actor's body name."""
+        """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed; an actor's
+        body name."""
         name = self._world.get(g)
         if name is None:
             name = self._world[g] = self._world_name(g)
@@ -208,7 +210,8 @@ class CollisionMonitor:
     native : bool
         Compare the pairs in C when the helper builds (:attr:`engine` says which runs).
     listeners : list, optional
-        Callables ``f(collision)`` to tell of each new episode (a live list: the twin's ``on_collision`` hook's).
+        Callables ``f(collision)`` to tell of each new episode (a live list: the twin's
+        ``on_collision`` hook's).
     """
 
     def __init__(
@@ -219,7 +222,8 @@ class CollisionMonitor:
         self.roles = GeomRoles(physics)
         self.collisions: list[Collision] = []
         self.listeners: list = [] if listeners is None else listeners
-        """Callables ``f(collision)`` told of each new episode as it begins (the twin's ``on_collision`` hook)."""
+        """Callables ``f(collision)`` told of each new episode as it begins (the twin's
+        ``on_collision`` hook)."""
         self._open: dict[
             str, Collision
         ] = {}  # what was hit (a world geom's name, an actor's) -> its episode

@@ -1,4 +1,5 @@
-"""Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running :class:`~amr_twin.assembly.twin.Twin`.
+"""Inject parsed faults (:mod:`amr_twin.sim.faults`) into a running
+:class:`~amr_twin.assembly.twin.Twin`.
 
 Reasons and measurements: docs/explanation/architecture.md#amr_twinsimfault_injector."""
 

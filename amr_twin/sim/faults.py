@@ -130,7 +130,8 @@ KINDS: dict[str, KindSpec] = {
         "the e-stop is pressed: its relays open both motors' phases, the wheels coast",
     ),
 }
-"""Fault kinds. Per-wheel kinds are written with the wheel: ``hall-left-dead``, ``motor-right-stall``."""
+"""Fault kinds. Per-wheel kinds are written with the wheel: ``hall-left-dead``,
+``motor-right-stall``."""
 
 MAX_FAULTS = 64
 """Faults per run: more is a mistake (each is a clock event and a report entry)."""
@@ -279,7 +280,8 @@ def parse_faults(
     for f in faults:
         if duration_s is not None and f.t_s >= duration_s:
             raise FaultError(
-                f"{where} {f.text!r}: T={f.t_s:g} s is not before the end of the run ({duration_s:g} s)"
+                f"{where} {f.text!r}: T={f.t_s:g} s is not before the end of the run "
+                f"({duration_s:g} s)"
             )
         if KINDS[f.kind].needs_sensors and not sensors:
             raise FaultError(f"{where} {f.text!r}: {f.name} needs the sensors (add --sensors)")

@@ -76,8 +76,8 @@ def set_friction_field(model, data, spacing_m: float, values) -> None:
 
 
 def friction_at(field, x: float, y: float) -> float:
-    """The Python twin of ``friction_at`` (tyres.c; :func:`amr_twin.sim.tyres.tyre_forces` calls it):
-    the coefficient at (x, y), m, of ``field`` (the tyres' user data from
+    """The Python twin of ``friction_at`` (tyres.c; :func:`amr_twin.sim.tyres.tyre_forces` calls
+    it): the coefficient at (x, y), m, of ``field`` (the tyres' user data from
     :data:`~amr_twin.model.tyre_numeric.FIELD_OFFSET` on, a list): bilinear between the nodes,
     repeating every n nodes; the same operations in the same order as the C."""
     n = int(field[0])

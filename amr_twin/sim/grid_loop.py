@@ -1,4 +1,5 @@
-"""The physics stepped between two of the loop's events, sampled on the record grid: :class:`GridLoop`.
+"""The physics stepped between two of the loop's events, sampled on the record grid:
+:class:`GridLoop`.
 
 :meth:`amr_twin.assembly.twin.Twin.advance_to_us` brings the physics to each synced event with
 :meth:`GridLoop.run`: ``mj_step`` to each record-grid instant (every ``every`` steps, 10 ms),
@@ -47,17 +48,17 @@ class GridLoop:
         """The loop sensors' row where the last chunk ended (at the twin's start: the start's)."""
 
     def row(self) -> list[float]:
-        """The loop sensors' row now (LOOP_SENSOR_DIM values: wheel angles L, R rad; speeds L, R rad/s;
-        base position m; base quaternion w, x, y, z)."""
+        """The loop sensors' row now (LOOP_SENSOR_DIM values: wheel angles L, R rad; speeds L, R
+        rad/s; base position m; base quaternion w, x, y, z)."""
         return self._sensors.tolist()
 
     def run(self, k0: int, nstep: int) -> tuple[int, list, list, list, list]:
         """Step ``nstep`` times from step ``k0``, sampling on the record grid (module notes).
 
-        Returns ``(k, ts, rows, grid_t, grid_rows)``: the step reached (``k0 + nstep``, or the halting
-        instant's), the instants (us) and loop-sensor rows of the chunk's start, its grid instants and its
-        end (plain lists: the hall edges are solved between them), and those of the grid instants alone.
-        """
+        Returns ``(k, ts, rows, grid_t, grid_rows)``: the step reached (``k0 + nstep``, or the
+        halting instant's), the instants (us) and loop-sensor rows of the chunk's start, its grid
+        instants and its end (plain lists: the hall edges are solved between them), and those of the
+        grid instants alone."""
         dt = self.dt_us
         k_end = k0 + nstep
         grid_t, grid_rows = [], []
@@ -100,8 +101,8 @@ class GridLoop:
         return k
 
     def _grid_in_c(self, stepper, k: int, k_end: int, grid_t: list, grid_rows: list) -> int:
-        """:meth:`_grid_in_python` with the grid loop in C (:mod:`amr_twin.sim.grid_steps`): the same
-        steps, rows and sampler calls. An instant a sampler hands back runs the rest of its
+        """:meth:`_grid_in_python` with the grid loop in C (:mod:`amr_twin.sim.grid_steps`): the
+        same steps, rows and sampler calls. An instant a sampler hands back runs the rest of its
         samplers here; if one then has no C form (a collision opened) the chunk ends in Python."""
         dt, every = self.dt_us, self.every
         first = (k // every + 1) * every

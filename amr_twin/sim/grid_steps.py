@@ -1,10 +1,11 @@
-"""A chunk of the loop's physics in one C call: the grid loop of :meth:`amr_twin.assembly.twin.Twin._step_physics`.
+"""A chunk of the loop's physics in one C call: the grid loop of
+:meth:`amr_twin.assembly.twin.Twin._step_physics`.
 
 Between two events the loop steps the physics to each record-grid instant (every 10 ms),
 keeps the loop sensors' row there and runs the grid samplers. When every sampler of the
 twin has a C form (its ``grid_native``: a :class:`Sampler`; the rolling resistance, the
-battery, the actors' motion, the collision monitor while no collision is open, and :class:`GridRows` keepers:
-a sweep point's support loads, the IMU's true values, the LiDAR's laser poses),
+battery, the actors' motion, the collision monitor while no collision is open, and :class:`GridRows`
+keepers: a sweep point's support loads, the IMU's true values, the LiDAR's laser poses),
 :class:`GridStepper` runs that loop in ``grid_steps.c``: mj_step through a pointer into
 libmujoco, the row copied, the samplers' helpers called in order; one call a chunk against
 one Python round trip and three to five helper calls an instant (a sweep point's 800 instants
@@ -58,8 +59,8 @@ class Sampler(ctypes.Structure):
 
 def sampler(kind: int, function, *args, period_us: int = 1) -> Sampler:
     """A :class:`Sampler` calling the helper ``function`` (a ctypes function of a loaded helper)
-    with ``args`` (addresses, or ctypes structures and arrays: their addresses), at the grid instants that are
-    multiples of ``period_us``."""
+    with ``args`` (addresses, or ctypes structures and arrays: their addresses), at the grid
+    instants that are multiples of ``period_us``."""
     if int(period_us) < 1:
         raise ValueError(f"grid sampler: period_us {period_us} must be >= 1")
     s = Sampler(
@@ -126,7 +127,8 @@ class GridStepper:
         self._ctx_at = ctypes.addressof(c)
         self._keep = (m, d)  # the model and data outlive every call
         self.rows = np.zeros((0, ncol))
-        """(n, ncol) the rows of the last :meth:`run`, at the instants it reached (the first ``n`` valid)."""
+        """(n, ncol) the rows of the last :meth:`run`, at the instants it reached (the first ``n``
+        valid)."""
         self._sets: dict[tuple, tuple] = {}
         self.resume: list = []
         """Per sampler of the set in use, what runs in Python for an instant handed back."""
@@ -173,7 +175,8 @@ class GridStepper:
 def grid_stepper(
     physics, ncol: int, every: int, dt_us: int, native: bool = True
 ) -> GridStepper | None:
-    """The C grid loop for ``physics`` when its helper builds and loads (and ``native``), else None."""
+    """The C grid loop for ``physics`` when its helper builds and loads (and ``native``), else
+    None."""
     lib, _engine = open_helper(C_SOURCE, native)
     return GridStepper(lib, physics, ncol, every, dt_us) if lib is not None else None
 

@@ -1,4 +1,5 @@
-"""The simulation loop's hooks: where recorders, live views, bridges, navigation and experiments attach.
+"""The simulation loop's hooks: where recorders, live views, bridges, navigation and experiments
+attach.
 
 Reasons and measurements: docs/explanation/architecture.md#amr_twinsimhooks."""
 
@@ -28,12 +29,14 @@ class Hooks:
         return sampler
 
     def on_grid_rows(self, fn: Callable[[list, list], None]) -> Callable:
-        """Call ``fn(t_us, rows)`` after each chunk with its grid instants and loop-sensor rows; returns it."""
+        """Call ``fn(t_us, rows)`` after each chunk with its grid instants and loop-sensor rows;
+        returns it."""
         self._grid_row_hooks.append(fn)
         return fn
 
     def on_event(self, fn: Callable[[int], None]) -> Callable:
-        """Call ``fn(t_us)`` after the clock's events of each instant ran and the pins were applied; returns it."""
+        """Call ``fn(t_us)`` after the clock's events of each instant ran and the pins were applied;
+        returns it."""
         self._event_hooks.append(fn)
         return fn
 
@@ -45,7 +48,8 @@ class Hooks:
     def on_message(
         self, tap: Callable[[str, object, int], None], topics: tuple[str, ...] | None = None
     ) -> Callable:
-        """Call ``tap(topic, msg, t_us)`` for each message published on the bus (``topics`` only); returns it."""
+        """Call ``tap(topic, msg, t_us)`` for each message published on the bus (``topics`` only);
+        returns it."""
         self._bus.add_tap(tap, topics=topics)
         return tap
 

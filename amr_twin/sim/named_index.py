@@ -1,4 +1,5 @@
-"""Named views of a :class:`~amr_twin.sim.physics.Physics`' MjModel and MjData, after dm_control's ``physics.named``.
+"""Named views of a :class:`~amr_twin.sim.physics.Physics`' MjModel and MjData, after dm_control's
+``physics.named``.
 
 ``physics.named.data.qpos["amr/wheel_left_joint"]`` is the wheel's angle, rad;
 ``physics.named.data.xpos["amr/base_link"]`` the base's world position (3,), m;
@@ -13,8 +14,8 @@ anything else (an int, a slice, an index array) indexes the array as it is. A fi
 width 1 per name (a hinge's ``qpos``, a one-value sensor) gives a scalar.
 
 :meth:`NamedArray.addresses` gives where the selected values lie (a C row keeper's
-pointers, :func:`amr_twin.sim.grid_steps.gather`); :meth:`NamedIndex.value_rows` keeps a selection of
-them on the loop's grid.
+pointers, :func:`amr_twin.sim.grid_steps.gather`); :meth:`NamedIndex.value_rows` keeps a selection
+of them on the loop's grid.
 
 Part of the physics layer (``PHYSICS_LAYER``): this is the door through which the rest of
 the twin reads and writes MuJoCo's state by name.
@@ -81,7 +82,8 @@ _DOF_WIDTH = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL
 
 
 def _rows(model: mujoco.MjModel, field: str, in_data: bool):
-    """``index(name)`` of ``field``'s rows: an int, or a slice for a joint's or a sensor's several values."""
+    """``index(name)`` of ``field``'s rows: an int, or a slice for a joint's or a sensor's several
+    values."""
 
     def object_id(kind, name: str) -> int:
         i = mujoco.mj_name2id(model, kind, name)
@@ -128,7 +130,8 @@ def _rows(model: mujoco.MjModel, field: str, in_data: bool):
 
 
 class NamedArray:
-    """One field of MjModel or MjData, indexed by names (see the module notes); ``array`` is the field itself."""
+    """One field of MjModel or MjData, indexed by names (see the module notes); ``array`` is the
+    field itself."""
 
     __slots__ = ("array", "field", "_index")
 
@@ -136,7 +139,8 @@ class NamedArray:
         self.array, self.field, self._index = array, field, index
 
     def index(self, key):
-        """What ``key`` (a name, a list of names, or a positional index) selects in :attr:`array`."""
+        """What ``key`` (a name, a list of names, or a positional index) selects in
+        :attr:`array`."""
         if isinstance(key, str):
             if self._index is None:
                 raise KeyError(f"{self.field} has no names")
@@ -157,7 +161,8 @@ class NamedArray:
         self.array[self.index(key)] = value
 
     def addresses(self, key) -> list[int]:
-        """Where the values ``self[key]`` lie, in their order: byte addresses of float64s (a C row keeper's)."""
+        """Where the values ``self[key]`` lie, in their order: byte addresses of float64s (a C row
+        keeper's)."""
         if self.array.dtype != np.float64 or not self.array.flags.c_contiguous:
             raise TypeError(f"{self.field}: addresses of float64 C arrays only")
         flat = np.arange(self.array.size).reshape(self.array.shape)[self.index(key)]
@@ -166,7 +171,8 @@ class NamedArray:
 
 
 class _Struct:
-    """``named.data`` or ``named.model``: a :class:`NamedArray` per array field, made at first use."""
+    """``named.data`` or ``named.model``: a :class:`NamedArray` per array field, made at first
+    use."""
 
     def __init__(self, struct, model: mujoco.MjModel, in_data: bool):
         self._struct, self._model, self._in_data, self._fields = struct, model, in_data, {}
@@ -194,10 +200,10 @@ class NamedIndex:
 
     @staticmethod
     def value_rows(named_arrays: list[tuple[NamedArray, object]], native: bool = True) -> GridRows:
-        """A grid sampler (:class:`~amr_twin.sim.grid_steps.GridRows`) keeping at each grid instant the values
-        ``array[key]`` of each ``(array, key)`` in ``named_arrays``, in order: gathered in C where they lie
-        when the loop runs its grid there and (one ctypes call) in Python too, or read from the arrays
-        without the helper or with ``native=False``: the same values."""
+        """A grid sampler (:class:`~amr_twin.sim.grid_steps.GridRows`) keeping at each grid instant
+        the values ``array[key]`` of each ``(array, key)`` in ``named_arrays``, in order: gathered
+        in C where they lie when the loop runs its grid there and (one ctypes call) in Python too,
+        or read from the arrays without the helper or with ``native=False``: the same values."""
         pointers = [p for array, key in named_arrays for p in array.addresses(key)]
         c_row = gather(pointers) if native else None
         if c_row is not None:
@@ -212,7 +218,8 @@ class NamedIndex:
 
 
 def _calling(c_row: tuple, width: int):
-    """A Python row function calling the C form ``c_row`` (:func:`amr_twin.sim.grid_steps.gather`'s) itself."""
+    """A Python row function calling the C form ``c_row`` (:func:`amr_twin.sim.grid_steps.gather`'s)
+    itself."""
     import ctypes
 
     fn, *args = c_row

@@ -1,4 +1,5 @@
-"""What a running twin shows the code downstream of its loop: :class:`Observables` (``twin.observables``).
+"""What a running twin shows the code downstream of its loop: :class:`Observables`
+(``twin.observables``).
 
 After dm_control's observables: the recorder, the live views, the bridges and the experiments read
 the twin's state here (and subscribe to its hooks, :mod:`amr_twin.sim.hooks`) rather than reaching
@@ -12,7 +13,8 @@ from amr_twin.sim.grid_steps import GridRows, gather
 
 
 class Observables:
-    """Read-only views of one twin's state (module notes); built by :class:`~amr_twin.assembly.twin.Twin`."""
+    """Read-only views of one twin's state (module notes); built by
+    :class:`~amr_twin.assembly.twin.Twin`."""
 
     def __init__(self, physics, grid, actuation, battery, collisions):
         self._physics, self._grid, self._actuation = physics, grid, actuation
@@ -20,27 +22,31 @@ class Observables:
 
     @property
     def model(self):
-        """The compiled MjModel (names, geometry, meshes: what does not change while the twin runs)."""
+        """The compiled MjModel (names, geometry, meshes: what does not change while the twin
+        runs)."""
         return self._physics.model
 
     @property
     def named(self):
-        """The physics' named views (:class:`~amr_twin.sim.named_index.NamedIndex`): ``named.data.xpos["amr/base_link"]``.
-        Read them; writing MuJoCo's state is the physics layer's."""
+        """The physics' named views (:class:`~amr_twin.sim.named_index.NamedIndex`):
+        ``named.data.xpos["amr/base_link"]``. Read them; writing MuJoCo's state is the physics
+        layer's."""
         return self._physics.named
 
     def loop_sensors(self) -> list[float]:
-        """The loop sensors' row now (:data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM` values: wheel
-        angles L, R rad; wheel speeds L, R rad/s; base position x, y, z m; base quaternion w, x, y, z)."""
+        """The loop sensors' row now (:data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM` values:
+        wheel angles L, R rad; wheel speeds L, R rad/s; base position x, y, z m; base quaternion w,
+        x, y, z)."""
         return self._grid.row()
 
     def drive(self) -> list[float]:
-        """The drive in force (:attr:`amr_twin.sim.actuation.Actuation.row`): PWM counts L, R; DIR L, R
-        (+1/-1); mode codes L, R; phase voltages L, R, V."""
+        """The drive in force (:attr:`amr_twin.sim.actuation.Actuation.row`): PWM counts L, R; DIR
+        L, R (+1/-1); mode codes L, R; phase voltages L, R, V."""
         return self._actuation.row
 
     def battery(self) -> list[float]:
-        """``[terminal_v, current_a, soc]`` as the battery's last accounting (on the grid) left them (V, A, 1)."""
+        """``[terminal_v, current_a, soc]`` as the battery's last accounting (on the grid) left them
+        (V, A, 1)."""
         return self._battery.grid_state()
 
     def battery_rows(self) -> GridRows:
@@ -51,5 +57,6 @@ class Observables:
 
     @property
     def collisions(self) -> list:
-        """The collisions so far (:class:`~amr_twin.sim.collisions.Collision`, in order; a live list)."""
+        """The collisions so far (:class:`~amr_twin.sim.collisions.Collision`, in order; a live
+        list)."""
         return self._collisions.collisions

@@ -92,8 +92,8 @@ class Physics:
         self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
         self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
         self.tyres_engine = None
-        """What computes the brush tyres' forces (:mod:`amr_twin.sim.tyres`): ``"C"``, ``"Python (...)"``,
-        or None for the rigid contact (``wheel.tyre_slip`` off)."""
+        """What computes the brush tyres' forces (:mod:`amr_twin.sim.tyres`): ``"C"``, ``"Python
+        (...)"``, or None for the rigid contact (``wheel.tyre_slip`` off)."""
         if mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, TYRE_NUMERIC) >= 0:
             from amr_twin.sim import tyres
 
@@ -101,8 +101,9 @@ class Physics:
         mujoco.mj_forward(m, self.data)
 
     def set_floor_friction(self, field) -> None:
-        """Give the brush tyres the floor's friction field (:class:`~amr_twin.sim.floor_friction.FrictionField`,
-        or None for ``wheel.friction`` everywhere); ValueError with the rigid contact."""
+        """Give the brush tyres the floor's friction field
+        (:class:`~amr_twin.sim.floor_friction.FrictionField`, or None for ``wheel.friction``
+        everywhere); ValueError with the rigid contact."""
         from amr_twin.sim.floor_friction import set_friction_field
 
         set_friction_field(
@@ -122,14 +123,16 @@ class Physics:
 
     @property
     def named(self) -> NamedIndex:
-        """Named views of the model and data: ``named.data.qpos["amr/wheel_left_joint"]`` (:mod:`amr_twin.sim.named_index`)."""
+        """Named views of the model and data: ``named.data.qpos["amr/wheel_left_joint"]``
+        (:mod:`amr_twin.sim.named_index`)."""
         named = self.__dict__.get("_named")
         if named is None or named.data._struct is not self.data:  # a clone has data of its own
             named = self._named = NamedIndex(self.model, self.data)
         return named
 
     def forward(self) -> None:
-        """Recompute the derived quantities (positions, contacts, sensors) of the present state (``mj_forward``)."""
+        """Recompute the derived quantities (positions, contacts, sensors) of the present state
+        (``mj_forward``)."""
         mujoco.mj_forward(self.model, self.data)
 
     # -- time and stepping ----------------------------------------------------------
@@ -208,7 +211,8 @@ class Physics:
         return self.data.subtree_com[self.base_body].copy()
 
     def support_normal_forces_n(self) -> np.ndarray:
-        """(6,) normal contact force on the wheels L, R and casters fl, fr, rl, rr, N (0 when lifted).
+        """(6,) normal contact force on the wheels L, R and casters fl, fr, rl, rr, N (0 when
+        lifted).
 
         From the constraint forces of the last step (the first row of each contact is its
         normal force, for pyramidal-free elliptic cones and for frictionless contacts).
@@ -238,7 +242,8 @@ class Physics:
         return out
 
     def base_heading_xy(self) -> tuple[float, float, float, float]:
-        """Base origin x, y (m) and the world x, y of its x axis (unnormalised when tilted), plain floats."""
+        """Base origin x, y (m) and the world x, y of its x axis (unnormalised when tilted), plain
+        floats."""
         b, d = self.base_body, self.data
         return (
             d.xpos.item(3 * b),
@@ -270,10 +275,10 @@ class Physics:
         return self.data.qpos.copy()
 
     def place_robot(self, x_m: float, y_m: float, yaw_rad: float, rest: np.ndarray) -> np.ndarray:
-        """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame), standing as in ``rest``
-        (:meth:`positions` of it settled: its height, tilt, tyre and caster springs), every velocity zero;
-        the wheels keep their angles (their hall sensors see no jump). Returns the positions before, to
-        put back with :meth:`restore_positions`."""
+        """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame), standing as in
+        ``rest`` (:meth:`positions` of it settled: its height, tilt, tyre and caster springs), every
+        velocity zero; the wheels keep their angles (their hall sensors see no jump). Returns the
+        positions before, to put back with :meth:`restore_positions`."""
         d, a = self.data, self.root_qpos
         before = d.qpos.copy()
         wheels = d.qpos[self.wheel_qpos].copy()

@@ -72,13 +72,15 @@ class Plant:
         )
 
     def phase_voltage_v(self, pins: DriverPins, wheel: int) -> float:
-        """Signed phase voltage, V, that wheel ``wheel``'s driver (0 left, 1 right) applies for these pins."""
+        """Signed phase voltage, V, that wheel ``wheel``'s driver (0 left, 1 right) applies for
+        these pins."""
         db = self.driver.deadband_duty
         level = min(1.0, max(0.0, self.boards[wheel].gain * (pins.duty - db) / (1.0 - db)))
         return pins.direction * level * self.battery.terminal_v()
 
     def apply(self, pins: tuple[DriverPins, DriverPins]) -> None:
-        """Set both motors from the pins (phase voltage from the battery's present terminal voltage)."""
+        """Set both motors from the pins (phase voltage from the battery's present terminal
+        voltage)."""
         brake_limit_a = self.driver.brake_current_limit_a
         for w, p in enumerate(pins):
             if self.estop or self.supply_cut or not p.enabled:

@@ -119,12 +119,14 @@ class RollingResistance:
             self._ball_crr,
             self._root_dof,
         )
-        """Everything :meth:`__call__` reads, in one tuple (MjData's arrays are views: they stay put)."""
+        """Everything :meth:`__call__` reads, in one tuple (MjData's arrays are views: they stay
+        put)."""
         self.update = self.__call__
         """The grid sampler: the C helper when built, else :meth:`__call__`."""
         self.contact_loads = lambda: physics.support_normal_forces_n().tolist()
-        """``contact_loads()``: (6,) list, :meth:`amr_twin.sim.physics.Physics.support_normal_forces_n`
-        (the C helper's ``rr_contact_loads`` when built: the same bits, ~0.5 against ~10 us)."""
+        """``contact_loads()``: (6,) list,
+        :meth:`amr_twin.sim.physics.Physics.support_normal_forces_n` (the C helper's
+        ``rr_contact_loads`` when built: the same bits, ~0.5 against ~10 us)."""
         self._loads_c = None
         lib, self.engine = open_helper(C_SOURCE, native)
         """Which runs: ``"C"`` or ``"Python (<why>)"``."""

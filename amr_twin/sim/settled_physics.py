@@ -45,9 +45,9 @@ def settled_physics(
     actors: tuple = (),
     obstacles: tuple = (),
 ) -> tuple[Physics, str]:
-    """``(physics, urdf)``: the robot built in ``world`` at ``start_xy_yaw`` (x_m, y_m, yaw_rad) with
-    ``actors`` (:class:`~amr_twin.model.actors.Actor`, standing at their poses at t = 0) and ``obstacles``
-    (:class:`~amr_twin.model.worlds.Obstacle`, unmapped boxes),
+    """``(physics, urdf)``: the robot built in ``world`` at ``start_xy_yaw`` (x_m, y_m, yaw_rad)
+    with ``actors`` (:class:`~amr_twin.model.actors.Actor`, standing at their poses at t = 0) and
+    ``obstacles`` (:class:`~amr_twin.model.worlds.Obstacle`, unmapped boxes),
     checked clear of the world (``where`` names the start in the errors), settled for
     ``settle_s`` with its motors braked and its clock set back to 0; a copy of a kept one when
     the same was settled before."""

@@ -25,7 +25,8 @@ from amr_twin.base.native_build import mujoco_address, open_helper
 PHYSICS_LAYER = True
 
 C_SOURCE = Path(__file__).with_name("tyres.c")
-_installed: list = []  # [engine, helper, (global pointer, bindings' callback)]: what this process set
+# [engine, helper, (global pointer, bindings' callback)]: what this process set
+_installed: list = []
 
 
 def install(native: bool | None = None) -> str:
@@ -67,14 +68,15 @@ def install(native: bool | None = None) -> str:
 
 
 def engine() -> str | None:
-    """What computes the tyre forces in this process: ``"C"``, ``"Python (...)"`` or None (not installed)."""
+    """What computes the tyre forces in this process: ``"C"``, ``"Python (...)"`` or None (not
+    installed)."""
     return _installed[0] if _installed else None
 
 
 @dataclass(frozen=True)
 class WheelContact:
-    """One tyre's last contact state: deflections (m, m, rad), forces in its own axes (N, forward and
-    left of the wheel; spin moment N m about the vertical) and the load N."""
+    """One tyre's last contact state: deflections (m, m, rad), forces in its own axes (N, forward
+    and left of the wheel; spin moment N m about the vertical) and the load N."""
 
     u_m: float
     v_m: float
@@ -86,7 +88,8 @@ class WheelContact:
 
 
 def contacts(model, data) -> tuple[WheelContact, WheelContact] | None:
-    """(left, right) :class:`WheelContact` of the last ``mj_forward``; None for a model without tyres."""
+    """(left, right) :class:`WheelContact` of the last ``mj_forward``; None for a model without
+    tyres."""
     import mujoco
 
     n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)
@@ -105,7 +108,8 @@ def _cross(a, b):
 def tyre_forces(m, d) -> None:
     """The Python twin of ``tyres_passive`` (tyres.c): the same operations in the same order.
 
-    A MuJoCo passive callback ``(MjModel, MjData)``: adds the tyres' forces to ``d.qfrc_passive``."""
+    A MuJoCo passive callback ``(MjModel, MjData)``: adds the tyres' forces to
+    ``d.qfrc_passive``."""
     import mujoco
 
     n = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)

@@ -1,4 +1,5 @@
-"""Regenerate docs/img/actors_lidar.png: what the RPLIDAR at 0.45 m sees of a person and a pallet jack.
+"""Regenerate docs/img/actors_lidar.png: what the RPLIDAR at 0.45 m sees of a person and a pallet
+jack.
 
 One scan of the twin (standing at the warehouse's start, IMU and LiDAR on) with a person crossing
 2.2 m ahead at 1.2 m/s and a pallet jack standing forks-first 3 m ahead to the left: the scan's

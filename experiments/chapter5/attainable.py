@@ -1,12 +1,13 @@
-"""Which of the thesis' chapter 5 findings a plant inside the sourced ranges can meet, and which conflict.
+"""Which of the thesis' chapter 5 findings a plant inside the sourced ranges can meet, and which
+conflict.
 
-:func:`study` draws plants uniformly (seeded) over the parameters that could make one wheel overshoot
-more or a loaded wheel leave the PI's dead zone, each inside its range: the right board's gain against
-the left's (:data:`BOARD_TOLERANCE`), each motor's winding resistance, the tyres' and the balls' rolling
-resistance (their ``range`` in ``models/amr/amr.yaml``). Each draw runs the eight runs
-(:func:`.experiment.run`) and is judged by :func:`.findings.findings`. :func:`summary` gives, per
-finding, the draws where it holds and the best figure reached, and for each pair the draws where both
-hold: a finding no draw meets is out of reach; a pair no draw meets conflicts.
+:func:`study` draws plants uniformly (seeded) over the parameters that could make one wheel
+overshoot more or a loaded wheel leave the PI's dead zone, each inside its range: the right board's
+gain against the left's (:data:`BOARD_TOLERANCE`), each motor's winding resistance, the tyres' and
+the balls' rolling resistance (their ``range`` in ``models/amr/amr.yaml``). Each draw runs the eight
+runs (:func:`.experiment.run`) and is judged by :func:`.findings.findings`. :func:`summary` gives,
+per finding, the draws where it holds and the best figure reached, and for each pair the draws where
+both hold: a finding no draw meets is out of reach; a pair no draw meets conflicts.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ RANGED = ("motor_left.resistance_ohm", "wheel.rolling_resistance", "caster.rolli
 FINDINGS = ("overshoot_right", "tracking", "duty_raised", "oscillation")
 MAX_SAMPLES = 512
 COMMITTED_JSON = ROOT / "docs" / "chapter5_attainable.json"
-"""The study the documents and the chapter 5 report quote (``python -m amr_twin.experiments.documents.figures``)."""
+"""The study the documents and the chapter 5 report quote (``python -m
+amr_twin.experiments.documents.figures``)."""
 COMMITTED_SEEDS = (1, 2)
 COMMITTED_SAMPLES = 64
 HELD = (
@@ -36,8 +38,8 @@ HELD = (
     "motor_left.friction_nm",
     "motor_right.friction_nm",
 )
-"""The calibrated values the drawn plants keep, named in the committed study (the whole configuration but
-the drawn values is held to it by a hash)."""
+"""The calibrated values the drawn plants keep, named in the committed study (the whole
+configuration but the drawn values is held to it by a hash)."""
 
 
 @dataclass(frozen=True)
@@ -55,7 +57,8 @@ class Draw:
 
 
 def ranges(cfg: TwinConfig) -> dict[str, tuple[float, float]]:
-    """Each drawn parameter's bounds: the sourced ``range`` of :data:`RANGED`, the board tolerance."""
+    """Each drawn parameter's bounds: the sourced ``range`` of :data:`RANGED`, the board
+    tolerance."""
     _, meta = load_parameters()
     out = {key: tuple(meta[key]["range"]) for key in RANGED}
     out["motor_right.resistance_ohm"] = out[
@@ -114,7 +117,8 @@ def study(cfg: TwinConfig, samples: int, seed: int, jobs: int = 1, progress=None
 
 
 def summary(draws: list[Draw]) -> dict:
-    """Per finding: draws where it holds; per pair: draws where both hold; the best overshoot and duty."""
+    """Per finding: draws where it holds; per pair: draws where both hold; the best overshoot and
+    duty."""
     held = {k: sum(d.holds[k] for d in draws) for k in FINDINGS}
     pairs = {
         f"{a}+{b}": sum(d.holds[a] and d.holds[b] for d in draws)
@@ -140,9 +144,9 @@ UNUSED_SECTIONS = ("navigation", "actors")
 
 
 def plant(cfg: TwinConfig) -> dict:
-    """What a study's draws depend on besides the seed: a SHA-256 of the configuration without the drawn
-    values and without what chapter 5's runs do not use (:data:`UNUSED_SECTIONS`), the calibrated values kept
-    (:data:`HELD`) and the ranges drawn in."""
+    """What a study's draws depend on besides the seed: a SHA-256 of the configuration without the
+    drawn values and without what chapter 5's runs do not use (:data:`UNUSED_SECTIONS`), the
+    calibrated values kept (:data:`HELD`) and the ranges drawn in."""
     import hashlib
     import json
 
@@ -161,7 +165,8 @@ def plant(cfg: TwinConfig) -> dict:
 
 
 def committed(cfg: TwinConfig) -> dict | None:
-    """The committed study (:data:`COMMITTED_JSON`) when it was drawn around ``cfg``'s plant, else None."""
+    """The committed study (:data:`COMMITTED_JSON`) when it was drawn around ``cfg``'s plant, else
+    None."""
     import json
 
     if not COMMITTED_JSON.exists():
@@ -193,10 +198,13 @@ def lines(s: dict) -> list[str]:
     out = [f"{k}: holds in {v} of {n} draws" for k, v in s["held"].items()]
     out += [f"both {k.replace('+', ' and ')}: {v} of {n}" for k, v in s["pairs"].items()]
     out += [
-        f"all four: {s['all']} of {n}; best right-minus-left overshoot {s['best_right_minus_left_rpm']:.2f} "
-        f"RPM (right at most {s['best_right_overshoot_rpm']:.2f}); the PI raised the duty on at most "
+        f"all four: {s['all']} of {n}; best right-minus-left overshoot "
+        f"{s['best_right_minus_left_rpm']:.2f} "
+        f"RPM (right at most {s['best_right_overshoot_rpm']:.2f}); the PI raised the duty on at "
+        f"most "
         f"{s['most_raised_wheels']} of 4 loaded wheels; the 20 kg runs oscillated more in at most "
-        f"{s['most_oscillating_more']} of 4 comparisons on both the samples and the true speed; the best "
+        f"{s['most_oscillating_more']} of 4 comparisons on both the samples and the true speed; "
+        f"the best "
         f"draw's worst unloaded steady error {s['least_worst_steady_error_rpm']:.2f} RPM"
     ]
     return out

@@ -1,4 +1,5 @@
-"""Chapter 5's criteria: the thesis' bands for each metric (§5.1.3) and the 20 kg oscillation check (§5.1.4).
+"""Chapter 5's criteria: the thesis' bands for each metric (§5.1.3) and the 20 kg oscillation check
+(§5.1.4).
 
 The metrics (:mod:`amr_twin.analysis.metrics`: Ogata's definitions, which the thesis' fig. 5.3
 lists) are judged on the **published** samples (``wheel0_Vel``/``wheel1_Vel``, what the
@@ -63,10 +64,14 @@ SOURCES = {
 }
 """Where each band's thesis value is stated."""
 DEFINITIONS = (
-    "Ogata, Modern Control Engineering, 5th ed., §5-3 (the specifications of the thesis' fig. 5.3): "
-    "delay = first 50 % of the final value, rise = 10 → 90 % of the final value, peak time = first peak "
-    "when the response crosses its final value and comes back (each by more than 0.1 % of the step), "
-    "overshoot = maximum peak − final value (0 without a peak), settling = last entry into the band around the final value; steady error "
+    "Ogata, Modern Control Engineering, 5th ed., §5-3 (the specifications of the thesis' fig. "
+    "5.3): "
+    "delay = first 50 % of the final value, rise = 10 → 90 % of the final value, peak time = "
+    "first peak "
+    "when the response crosses its final value and comes back (each by more than 0.1 % of the "
+    "step), "
+    "overshoot = maximum peak − final value (0 without a peak), settling = last entry into the "
+    "band around the final value; steady error "
     "= final value − reference (§5-8), the final value the mean of the last 20 % of the record"
 )
 OSCILLATION_PAIRS = ((7, 3), (8, 5))  # (loaded, unloaded): "more oscillation" with 20 kg (§5.1.4)
@@ -116,7 +121,8 @@ def _more(loaded: float | None, unloaded: float | None) -> str:
 
 
 def compare_oscillation(results: list[dict]) -> list[dict]:
-    """Loaded against unloaded oscillation, per driven wheel of each pair of :data:`OSCILLATION_PAIRS`.
+    """Loaded against unloaded oscillation, per driven wheel of each pair of
+    :data:`OSCILLATION_PAIRS`.
 
     Returns
     -------
@@ -159,9 +165,9 @@ def oscillation_verdict(comparisons: list[dict]) -> dict:
 
     Returns
     -------
-    dict : ``{"measure", "definition", "published_passed", "true_passed", "comparisons", "verdict"}``
-    with ``verdict`` "pass" or "fail" (judged on the published samples; "fail" when there is no pair).
-    """
+    dict : ``{"measure", "definition", "published_passed", "true_passed", "comparisons",
+    "verdict"}`` with ``verdict`` "pass" or "fail" (judged on the published samples; "fail" when
+    there is no pair)."""
     n = len(comparisons)
     passed = sum(c["verdict"] == "pass" for c in comparisons)
     return {

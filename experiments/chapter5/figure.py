@@ -35,11 +35,13 @@ BAND_STYLE = {
     "steady_error": ("tab:brown", None),
     "first_sample": ("0.5", "xx"),
 }
-"""Colour and hatch of each thesis band, and of the time before the earliest first published sample."""
+"""Colour and hatch of each thesis band, and of the time before the earliest first published
+sample."""
 CAPTION = (
     "Grey hatching: listing 4.12 publishes one speed per wheel revolution, so no published sample "
     "comes before one revolution at the reference after the command (T = 60/|rpm| s). Whatever the "
-    "plant, the published peak comes no earlier than T, the delay (50 %) no earlier than T/2, and the "
+    "plant, the published peak comes no earlier than T, the delay (50 %) no earlier than T/2, "
+    "and the "
     "rise (10-90 %) takes at least 0.8 T (report.md; docs/explanation/validation.md)."
 )
 
@@ -180,8 +182,8 @@ def _panel(ax, run: dict, results: dict, w: int, name: str) -> None:
 
 
 def _first_sample(ax, t0: float, ref: float) -> None:
-    """Hatch the time before the earliest first published sample, one revolution at ``ref`` RPM after
-    the command at ``t0`` s (listing 4.12), and annotate it."""
+    """Hatch the time before the earliest first published sample, one revolution at ``ref`` RPM
+    after the command at ``t0`` s (listing 4.12), and annotate it."""
     colour, hatch = BAND_STYLE["first_sample"]
     earliest = t0 + 60.0 / ref
     ax.axvspan(

@@ -40,13 +40,14 @@ VALIDATION_DOC = "docs/explanation/validation.md"
 VALIDATION_SECTION = "What the chapter 5 report states first"
 ATTAINABLE_SECTION = "Can a plant inside the sourced ranges meet the findings?"
 ATTAINABLE_COMMAND = "amr-twin experiment chapter5-attainable"
-"""Whether any plant inside the parameters' sourced ranges meets the findings: the command, its section."""
+"""Whether any plant inside the parameters' sourced ranges meets the findings: the command, its
+section."""
 
 
 @dataclass(frozen=True)
 class Finding:
-    """One finding of the thesis: ``key``, the ``claim`` and its ``source``, ``verdict`` (reproduced,
-    not reproduced or not judged) and ``why``, one line with the figures."""
+    """One finding of the thesis: ``key``, the ``claim`` and its ``source``, ``verdict``
+    (reproduced, not reproduced or not judged) and ``why``, one line with the figures."""
 
     key: str
     claim: str
@@ -72,8 +73,9 @@ class TimingBound:
 
 @dataclass(frozen=True)
 class CheckSplit:
-    """The published checks (banded metrics and oscillation comparisons) split by the bound, each with
-    how many pass; ``true_timing``: the true speed's timing checks, which have no such bound."""
+    """The published checks (banded metrics and oscillation comparisons) split by the bound, each
+    with how many pass; ``true_timing``: the true speed's timing checks, which have no such
+    bound."""
 
     attainable: int
     attainable_passed: int
@@ -119,12 +121,12 @@ def _value(runs: dict, run: int, wheel: str, key: str, source: str = "published"
 def overshoot_finding(runs: dict) -> Finding:
     """§5.1.3: the right wheel overshoots about 4 RPM, the left less or not at all (runs 1-8)."""
     claim, source = "right wheel overshoots ≈4 RPM, left less (≈2)", "§5.1.3"
-    r, l = _value(runs, 2, "right", "overshoot"), _value(runs, 1, "left", "overshoot")
+    r, left = _value(runs, 2, "right", "overshoot"), _value(runs, 1, "left", "overshoot")
     rt, lt = (
         _value(runs, 2, "right", "overshoot", "true"),
         _value(runs, 1, "left", "overshoot", "true"),
     )
-    if r is None or l is None or rt is None or lt is None:
+    if r is None or left is None or rt is None or lt is None:
         return Finding(
             "overshoot_right", claim, source, NOT_JUDGED, "runs 1 and 2 not both measured"
         )
@@ -139,13 +141,13 @@ def overshoot_finding(runs: dict) -> Finding:
     needed = math.ceil(MIXED_RUNS_SHARE * len(mixed) - 1e-9)
     ok = (
         rlo <= r <= rhi
-        and llo <= l <= lhi
-        and r >= l + RIGHT_MARGIN_RPM
+        and llo <= left <= lhi
+        and r >= left + RIGHT_MARGIN_RPM
         and rt >= lt + RIGHT_MARGIN_RPM
         and len(more) >= needed
     )
     why = (
-        f"runs 2/1 published right {r:.2f} vs left {l:.2f} RPM (needs right {rlo:g}-{rhi:g}, "
+        f"runs 2/1 published right {r:.2f} vs left {left:.2f} RPM (needs right {rlo:g}-{rhi:g}, "
         f"left {llo:g}-{lhi:g}, right >= left + {RIGHT_MARGIN_RPM:g}); true {rt:.2f} vs {lt:.2f}; "
         f"runs 3-8: right above left in {len(more)} of {len(mixed)} (needs {needed})"
     )
@@ -167,7 +169,8 @@ def tracking_finding(runs: dict) -> Finding:
     inside = [e for e in errors if e[2] is not None and abs(e[2]) <= DEAD_ZONE_RPM]
     run, wheel, worst = max(errors, key=lambda e: math.inf if e[2] is None else abs(e[2]))
     why = (
-        f"{len(inside)} of {len(errors)} unloaded wheels end within ±{DEAD_ZONE_RPM:g} RPM (published); "
+        f"{len(inside)} of {len(errors)} unloaded wheels end within ±{DEAD_ZONE_RPM:g} RPM "
+        f"(published); "
         f"worst run {run} {wheel} {_num(worst, '+.2f')} RPM"
     )
     return Finding("tracking", claim, source, _verdict(len(inside) == len(errors)), why)
@@ -190,7 +193,8 @@ def duty_finding(payload_duty: list[dict]) -> Finding:
 
 
 def oscillation_finding(comparisons: list[dict]) -> Finding:
-    """§5.1.4: more oscillation during the transient with 20 kg, on the samples and on the true speed."""
+    """§5.1.4: more oscillation during the transient with 20 kg, on the samples and on the true
+    speed."""
     claim, source = "20 kg: more oscillation in the transient", "§5.1.4"
     n = len(comparisons)
     if not n:
@@ -201,7 +205,8 @@ def oscillation_finding(comparisons: list[dict]) -> Finding:
     pub = sum(c["verdict"] == "pass" for c in comparisons)
     true = sum(c.get("true_verdict") == "pass" for c in comparisons)
     why = (
-        f"20 kg oscillates more in {pub} of {n} comparisons on the published samples, {true} of {n} "
+        f"20 kg oscillates more in {pub} of {n} comparisons on the published samples, {true} of "
+        f"{n} "
         f"on the true speed (needs {needed} on each; excess total variation)"
     )
     return Finding("oscillation", claim, source, _verdict(pub >= needed and true >= needed), why)
@@ -239,8 +244,9 @@ def timing_bounds(runs: dict, per_revolution: bool = True) -> list[TimingBound]:
 
 
 def timing_finding(runs: dict, bounds: list[TimingBound]) -> Finding:
-    """§5.1.3's delay, rise, peak and settling times: reproduced when every published timing check the
-    bound leaves attainable passes; the unattainable ones and the true speed's are counted in ``why``."""
+    """§5.1.3's delay, rise, peak and settling times: reproduced when every published timing check
+    the bound leaves attainable passes; the unattainable ones and the true speed's are counted in
+    ``why``."""
     claim, source = "delay, rise, peak, settling times", "§5.1.3, fig. 5.3"
     if not bounds:
         return Finding("timings", claim, source, NOT_JUDGED, "no driven wheel")
@@ -262,7 +268,8 @@ def timing_finding(runs: dict, bounds: list[TimingBound]) -> Finding:
     true_passed = sum(c["verdict"] == "pass" for c in true)
     why = (
         f"{len(bounds) - len(reach)} of {len(bounds)} published timing checks out of reach under "
-        f"listing 4.12; attainable {passed} of {len(reach)} pass; true speed {true_passed} of {len(true)}"
+        f"listing 4.12; attainable {passed} of {len(reach)} pass; true speed {true_passed} of "
+        f"{len(true)}"
     )
     return Finding("timings", claim, source, _verdict(passed == len(reach)), why)
 
@@ -326,7 +333,7 @@ def lines(found: dict) -> list[str]:
         parts.append(f"T = {60.0 / ref:.2f} s at {ref:.2f} RPM (runs {runs}: {limits} s)")
     out.append(
         "unattainable under listing 4.12 (one speed per wheel revolution, the first >= T = "
-        f"60/|rpm| s after the command): {c['unattainable']} checks, {c['unattainable_passed']} pass"
-        + (f"; {'; '.join(parts)}" if parts else "")
+        f"60/|rpm| s after the command): {c['unattainable']} checks, {c['unattainable_passed']} "
+        f"pass" + (f"; {'; '.join(parts)}" if parts else "")
     )
     return out

@@ -1,8 +1,8 @@
 """Two firmwares on the same runs, sample by sample: the emulated board against the faithful port.
 
-:func:`compare` pairs the runs of two :func:`amr_twin.experiments.chapter5.experiment.run` results (same
-run numbers) and, per driven wheel, the k-th published sample of one with the k-th of the other
-(times and speeds), the true wheel speed and the PWM counts on the 100 Hz record grid.
+:func:`compare` pairs the runs of two :func:`amr_twin.experiments.chapter5.experiment.run` results
+(same run numbers) and, per driven wheel, the k-th published sample of one with the k-th of the
+other (times and speeds), the true wheel speed and the PWM counts on the 100 Hz record grid.
 :func:`markdown` renders the table of ``report.md``. Where the differences come from is
 explained in docs/firmware.md ("The emulated board against the faithful port").
 
@@ -31,7 +31,8 @@ PACE_US = 1000
 
 
 def pace(twin, period_us: int = PACE_US) -> None:
-    """Make ``twin``'s loop stop the physics every ``period_us`` (a synced event that does nothing)."""
+    """Make ``twin``'s loop stop the physics every ``period_us`` (a synced event that does
+    nothing)."""
     clock = twin.clock
 
     def tick() -> None:
@@ -41,7 +42,8 @@ def pace(twin, period_us: int = PACE_US) -> None:
 
 
 TIMELINE_COMMAND = (1.0, 99.2, 1.0, 60.8)
-"""wheel_Command of :func:`command_timeline`: chapter 5 run 5 (left ramps 10 x 150 ms, right 10 x 50 ms)."""
+"""wheel_Command of :func:`command_timeline`: chapter 5 run 5 (left ramps 10 x 150 ms, right 10 x 50
+ms)."""
 
 
 def _pin_state(pins) -> tuple:
@@ -225,8 +227,10 @@ def _n(value, digits: int = 2) -> str:
 def _row(r: dict) -> str:
     last = "—" if "final_rpm" not in r else f"{r['final_rpm'][0]:.3f} / {r['final_rpm'][1]:.3f}"
     return (
-        f"{r['samples'][0]} / {r['samples'][1]} | {_n(r.get('first_dt_ms'), 1)} | {_n(r.get('first_drpm'), 3)} | "
-        f"{_n(r.get('max_abs_dt_ms'), 1)} | {_n(r.get('max_abs_drpm'), 3)} | {last} | {_n(r.get('final_drpm'), 3)} | "
+        f"{r['samples'][0]} / {r['samples'][1]} | {_n(r.get('first_dt_ms'), 1)} | "
+        f"{_n(r.get('first_drpm'), 3)} | "
+        f"{_n(r.get('max_abs_dt_ms'), 1)} | {_n(r.get('max_abs_drpm'), 3)} | {last} | "
+        f"{_n(r.get('final_drpm'), 3)} | "
         f"{_n(r['true_rms_drpm'], 3)} | {r['pwm_differs_pct']:.1f} | {r['verdict']} |"
     )
 
@@ -234,11 +238,13 @@ def _row(r: dict) -> str:
 def markdown(comp: dict) -> list[str]:
     """The report section: one row per run and wheel (and the paced reference's table)."""
     lines = [
-        f"`{comp['firmware']}` against `{comp['reference']}` on the same runs, sample by sample (k-th "
+        f"`{comp['firmware']}` against `{comp['reference']}` on the same runs, sample by sample "
+        f"(k-th "
         "published sample against k-th; true speed and PWM counts on the 100 Hz grid). Δ = "
         f"{comp['firmware']} − {comp['reference']}. Accepted: last published speeds within "
         f"{comp['final_rpm_tolerance']:g} RPM, first published samples within "
-        f"{comp['first_sample_tolerance_s'] * 1e3:g} ms. Where the differences come from: docs/firmware.md, "
+        f"{comp['first_sample_tolerance_s'] * 1e3:g} ms. Where the differences come from: "
+        f"docs/firmware.md, "
         '"The emulated board against the faithful port".',
         "",
         "| run | wheel | ref RPM | samples | first sample Δt ms | first Δ RPM | max \\|Δt\\| ms | "
@@ -250,8 +256,10 @@ def markdown(comp: dict) -> list[str]:
     w = comp["worst"]
     lines += [
         "",
-        f"**Verdict: {comp['verdict']}** — worst first-sample Δt {_n(w['first_dt_ms'], 1)} ms, worst "
-        f"last-sample Δ {_n(w['final_drpm'], 3)} RPM, worst sample Δ {_n(w['max_abs_drpm'], 3)} RPM, "
+        f"**Verdict: {comp['verdict']}** — worst first-sample Δt {_n(w['first_dt_ms'], 1)} ms, "
+        f"worst "
+        f"last-sample Δ {_n(w['final_drpm'], 3)} RPM, worst sample Δ {_n(w['max_abs_drpm'], 3)} "
+        f"RPM, "
         f"worst sample Δt {_n(w['max_abs_dt_ms'], 1)} ms.",
     ]
     paced = [r["paced"] for r in comp["rows"] if "paced" in r]
@@ -263,20 +271,26 @@ def markdown(comp: dict) -> list[str]:
         same = sum(p.get("samples", [0])[0] == p.get("samples", [0, 1])[1] for p in paced)
         lines += [
             "",
-            f"Against `{comp['reference']}` *paced* (its loop stops the physics every {PACE_US} us, as "
+            f"Against `{comp['reference']}` *paced* (its loop stops the physics every {PACE_US} "
+            f"us, as "
             "the emulated board's does, so both sample the physics at the same instants): worst "
             f"first-sample Δt {_n(worst('first_dt_ms'), 1)} ms, worst last-sample Δ "
-            f"{_n(worst('final_drpm'), 3)} RPM, worst sample Δ {_n(worst('max_abs_drpm'), 3)} RPM, worst "
-            f"true-speed RMS Δ {_n(worst('true_rms_drpm'), 3)} RPM, equal sample counts in {same} of "
+            f"{_n(worst('final_drpm'), 3)} RPM, worst sample Δ {_n(worst('max_abs_drpm'), 3)} "
+            f"RPM, worst "
+            f"true-speed RMS Δ {_n(worst('true_rms_drpm'), 3)} RPM, equal sample counts in "
+            f"{same} of "
             f"{len(paced)} rows: what is left is the firmwares' own difference.",
         ]
     if "timeline" in comp:
         tl = comp["timeline"]
         lines += [
             "",
-            f"One wheel_Command {tl['command']} with the wheels at rest (no physics, so no sample and no "
-            "PI action): when each pin changes, the k-th change of each pin paired. The port acts when "
-            "the link's frame ends (115200 baud); the board's time is that of the instruction that wrote "
+            f"One wheel_Command {tl['command']} with the wheels at rest (no physics, so no "
+            f"sample and no "
+            "PI action): when each pin changes, the k-th change of each pin paired. The port "
+            "acts when "
+            "the link's frame ends (115200 baud); the board's time is that of the instruction "
+            "that wrote "
             "the pin (its UART runs at 117647 baud: UBRR 16 with U2X).",
             "",
             "| wheel | pin | k | value port / board | port ms | board ms | board − port us |",
@@ -285,7 +299,8 @@ def markdown(comp: dict) -> list[str]:
         for r in tl["rows"]:
             if r["k"] is None:
                 lines.append(
-                    f"| {r['wheel']} | {r['pin']} | — | changes {r['value'][0]} / {r['value'][1]} | | | |"
+                    f"| {r['wheel']} | {r['pin']} | — | changes {r['value'][0]} / "
+                    f"{r['value'][1]} | | | |"
                 )
             else:
                 lines.append(

@@ -113,14 +113,14 @@ class Chapter5Metrics:
     The texts (``judged_on``, ``definitions``, ``settling_band``, ``oscillation``) say how the runs
     are judged; ``bands`` the thesis' bands with their sources; ``crr``, ``payload_duty``,
     ``rolling_resistance_study`` and ``threshold_crr`` the §5.1.4 study
-    (:mod:`amr_twin.experiments.chapter5.payload`); ``findings`` the thesis' findings judged from the
-    rest (:mod:`amr_twin.experiments.chapter5.findings`; None only while it is built);
+    (:mod:`amr_twin.experiments.chapter5.payload`); ``findings`` the thesis' findings judged from
+    the rest (:mod:`amr_twin.experiments.chapter5.findings`; None only while it is built);
     ``firmware_comparison`` (another firmware run beside the reference,
     :mod:`amr_twin.experiments.chapter5.firmware_comparison`) and ``spread`` (with parameter draws,
     :mod:`amr_twin.experiments.chapter5.spread`) only when made; ``readings`` the published timings
-    under each reading of :mod:`amr_twin.experiments.chapter5.readings` (when the runs carry their series);
-    ``attainable`` the committed study of plants inside the sourced ranges, when it applies to this plant.
-    """
+    under each reading of :mod:`amr_twin.experiments.chapter5.readings` (when the runs carry their
+    series); ``attainable`` the committed study of plants inside the sourced ranges, when it applies
+    to this plant."""
 
     firmware: str
     jobs: int
@@ -206,7 +206,8 @@ def metrics(results: dict) -> Chapter5Metrics:
         judged_on="published samples, linear interpolation from rest at the command",
         definitions=DEFINITIONS,
         settling_band="max(5 % of the step, 4 RPM) around the final value",
-        oscillation=f"excess total variation from the first 90 % crossing to {TRANSIENT_WINDOW_S:g} s",
+        oscillation=f"excess total variation from the first 90 % crossing to "
+        f"{TRANSIENT_WINDOW_S:g} s",
         oscillation_verdict=oscillation_verdict(results["comparisons"]),
         bands=[dict(vars(b), source=SOURCES[b.metric]) for b in BANDS],
         runs=runs,

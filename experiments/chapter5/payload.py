@@ -110,24 +110,30 @@ def markdown(data: dict) -> list[str]:
         return "—" if v is None else f"{v:.{d}f}"
 
     lines = [
-        f"Steady values over the last {STEADY_FRACTION:.0%} of each run; rolling resistance as shipped "
+        f"Steady values over the last {STEADY_FRACTION:.0%} of each run; rolling resistance as "
+        f"shipped "
         f"(tyres {data['crr']['tyres']:g}, balls {data['crr']['balls']:g}).",
         "",
-        "| 20 kg run / unloaded | wheel | ref RPM | counts 20 kg / unloaded | current A 20 kg / unloaded | "
+        "| 20 kg run / unloaded | wheel | ref RPM | counts 20 kg / unloaded | current A 20 kg / "
+        "unloaded | "
         "published RPM 20 kg / unloaded | duty raised |",
         "|---|---|---|---|---|---|---|",
     ]
     for c in duty:
         a, b = c["loaded"], c["unloaded"]
         lines.append(
-            f"| {c['loaded_run']} / {c['unloaded_run']} | {c['wheel']} | {c['reference_rpm']:.2f} | "
-            f"{num(a['counts'], 1)} / {num(b['counts'], 1)} | {num(a['current_a'])} / {num(b['current_a'])} | "
-            f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | {'yes' if c['raised'] else 'no'} |"
+            f"| {c['loaded_run']} / {c['unloaded_run']} | {c['wheel']} | "
+            f"{c['reference_rpm']:.2f} | "
+            f"{num(a['counts'], 1)} / {num(b['counts'], 1)} | {num(a['current_a'])} / "
+            f"{num(b['current_a'])} | "
+            f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | "
+            f"{'yes' if c['raised'] else 'no'} |"
         )
     raised = all(c["raised"] for c in duty)
     lines += [
         "",
-        f"**With the shipped plant the faithful firmware {'raises' if raised else 'does not raise'} the "
+        f"**With the shipped plant the faithful firmware "
+        f"{'raises' if raised else 'does not raise'} the "
         f"duty with 20 kg** ({sum(c['raised'] for c in duty)} of {len(duty)} wheels).",
     ]
     if study:
@@ -143,7 +149,8 @@ def markdown(data: dict) -> list[str]:
             a, b = c["loaded"], c["unloaded"]
             lines.append(
                 f"| {c['crr']:g} | {c['wheel']} | {num(a['counts'], 1)} / {num(b['counts'], 1)} | "
-                f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | {'yes' if c['raised'] else 'no'} | "
+                f"{num(a['published_rpm'])} / {num(b['published_rpm'])} | "
+                f"{'yes' if c['raised'] else 'no'} | "
                 f"{num(a['first_count_change_s'])} |"
             )
         t = data.get("threshold_crr")
@@ -152,8 +159,10 @@ def markdown(data: dict) -> list[str]:
         lines += [
             "",
             (
-                f"The faithful PI raises the duty on both wheels of run 7 from **Crr = {t:g}**; the sourced "
-                f"ranges are {lo_t:g}-{hi_t:g} for the tyres and {lo_b:g}-{hi_b:g} for the balls, so this "
+                f"The faithful PI raises the duty on both wheels of run 7 from **Crr = {t:g}**; "
+                f"the sourced "
+                f"ranges are {lo_t:g}-{hi_t:g} for the tyres and {lo_b:g}-{hi_b:g} for the "
+                f"balls, so this "
                 f"is {'within' if t <= hi_t else 'beyond'} what the tyres make plausible."
             )
             if t is not None

@@ -2,8 +2,8 @@
 
 §5.1.3 gives delay, rise, peak and settling times read off rqt_plot's lines of ``wheel0_Vel`` /
 ``wheel1_Vel``, which listing 4.12 publishes once per wheel revolution. How the author timed them is
-not said. Each :data:`READINGS` entry is one explicit hypothesis, applied to the same published samples
-of every run and judged against the same bands (:func:`.criteria.judge`):
+not said. Each :data:`READINGS` entry is one explicit hypothesis, applied to the same published
+samples of every run and judged against the same bands (:func:`.criteria.judge`):
 
 - ``command``: the step at the command, the wheel at rest until the first sample, the samples joined
   by straight lines (the report's own reading);
@@ -82,7 +82,8 @@ def timings(
 
 
 def score(runs: list[dict], reading: str) -> ReadingScore:
-    """``reading`` over the analysed runs of :func:`.experiment.run` (each with its ``raw`` series)."""
+    """``reading`` over the analysed runs of :func:`.experiment.run` (each with its ``raw``
+    series)."""
     passed = {m: 0 for m in TIMINGS}
     values: dict[str, dict[str, list[float]]] = {m: {"small": [], "large": []} for m in TIMINGS}
     checks = 0
@@ -138,21 +139,24 @@ def markdown(rows: list[dict]) -> list[str]:
         )
     lines += [
         "",
-        "Each cell: checks passed of the driven wheels, then the median twin value for steps of at most "
+        "Each cell: checks passed of the driven wheels, then the median twin value for steps of "
+        "at most "
         "75 RPM / above. A reading is a hypothesis about how §5.1.3 was timed, not the score.",
         "",
     ]
     found = [row["reading"] for row in rows if row["reproduces"]]
     ordered = [row["reading"] for row in rows if slower_for_larger_steps(row)]
     lines.append(
-        f"Reproduces every timing: {', '.join(found) or 'no reading'}. Larger steps slower in delay, rise "
+        f"Reproduces every timing: {', '.join(found) or 'no reading'}. Larger steps slower in "
+        f"delay, rise "
         f"and peak, as §5.1.3 says (the ramp's order): {', '.join(ordered) or 'no reading'}."
     )
     return lines
 
 
 def slower_for_larger_steps(row: dict) -> bool:
-    """Whether the reading's medians order delay, rise and peak as §5.1.3 does: above 75 RPM slower."""
+    """Whether the reading's medians order delay, rise and peak as §5.1.3 does: above 75 RPM
+    slower."""
     med = row["median_s"]
     return all(
         med[m]["small"] is not None

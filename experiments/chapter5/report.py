@@ -1,4 +1,5 @@
-"""The chapter 5 report: one figure per run, and the markdown built from the ``metrics.json`` object."""
+"""The chapter 5 report: one figure per run, and the markdown built from the ``metrics.json``
+object."""
 
 from __future__ import annotations
 
@@ -100,19 +101,23 @@ def _misses(data: dict) -> list[str]:
         if c["verdict"] != "pass":
             lines.append(
                 f"- run {c['loaded_run']} (20 kg) {c['wheel']} wheel oscillates "
-                f"{_num(c['loaded'])} RPM, not more than run {c['unloaded_run']} ({_num(c['unloaded'])} RPM)"
+                f"{_num(c['loaded'])} RPM, not more than run {c['unloaded_run']} "
+                f"({_num(c['unloaded'])} RPM)"
             )
     return lines or ["- none"]
 
 
 def _oscillation(data: dict) -> list[str]:
-    """The oscillation section: the measure, its value per run and wheel, the 20 kg comparisons, the verdict."""
+    """The oscillation section: the measure, its value per run and wheel, the 20 kg comparisons, the
+    verdict."""
     v = data.get("oscillation_verdict")
     if v is None:
         return []
     lines = [
-        f"Named measure: **{v['measure']}**, the {v['definition']}. Judged on the published samples; "
-        "the true wheel speed is shown for reference. The analysis is in `docs/explanation/validation.md`.",
+        f"Named measure: **{v['measure']}**, the {v['definition']}. Judged on the published "
+        f"samples; "
+        "the true wheel speed is shown for reference. The analysis is in "
+        "`docs/explanation/validation.md`.",
         "",
         "| run | payload kg | wheel | ref RPM | published RPM | true RPM |",
         "|---|---|---|---|---|---|",
@@ -121,7 +126,8 @@ def _oscillation(data: dict) -> list[str]:
         for wheel, w in r["wheels"].items():
             pub = (w["published"] or {}).get("oscillation")
             lines.append(
-                f"| {r['run']} | {r['payload_kg']:g} | {wheel} | {w['reference_rpm']:.2f} | {_num(pub)} | "
+                f"| {r['run']} | {r['payload_kg']:g} | {wheel} | {w['reference_rpm']:.2f} | "
+                f"{_num(pub)} | "
                 f"{_num(w['true'].get('oscillation'))} |"
             )
     lines += [
@@ -144,15 +150,18 @@ def _oscillation(data: dict) -> list[str]:
     holds = "holds" if v["verdict"] == "pass" else "does not hold"
     lines += [
         "",
-        f'**Verdict: "the 20 kg runs oscillate more" {holds}** — the 20 kg wheel oscillates more in '
+        f'**Verdict: "the 20 kg runs oscillate more" {holds}** — the 20 kg wheel oscillates more '
+        f"in "
         f"{v['published_passed']} of {v['comparisons']} comparisons on the published samples "
-        f"({v['true_passed']} of {v['comparisons']} on the true speed); the claim needs all of them.",
+        f"({v['true_passed']} of {v['comparisons']} on the true speed); the claim needs all of "
+        f"them.",
     ]
     return lines
 
 
 def _findings(data: dict) -> list[str]:
-    """The block the report opens with: the findings, the attainable and unattainable checks, the link."""
+    """The block the report opens with: the findings, the attainable and unattainable checks, the
+    link."""
     found = data.get("findings")
     if found is None:
         return []
@@ -161,24 +170,31 @@ def _findings(data: dict) -> list[str]:
         "",
         *[f"- {line}" for line in lines(found)],
         "",
-        f"Why, and how the bound is derived: [{VALIDATION_DOC}]({VALIDATION_DOC}) (the path is relative "
-        f'to the amr-twin repository\'s root), section "{VALIDATION_SECTION}". Whether any plant inside the '
-        f"sourced ranges meets the findings not reproduced: `{ATTAINABLE_COMMAND}`, the same page, section "
+        f"Why, and how the bound is derived: [{VALIDATION_DOC}]({VALIDATION_DOC}) (the path is "
+        f"relative "
+        f'to the amr-twin repository\'s root), section "{VALIDATION_SECTION}". Whether any plant '
+        f"inside the "
+        f"sourced ranges meets the findings not reproduced: `{ATTAINABLE_COMMAND}`, the same "
+        f"page, section "
         f'"{ATTAINABLE_SECTION}".',
         "",
     ]
 
 
 def _attainable(data: dict) -> list[str]:
-    """The committed study of plants inside the sourced ranges, when it was drawn around this plant."""
+    """The committed study of plants inside the sourced ranges, when it was drawn around this
+    plant."""
     study = data.get("attainable")
     if study is None:
         return [
-            f"The committed study (`docs/chapter5_attainable.json`) was drawn around another plant, firmware or run "
-            f"set than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for this plant."
+            f"The committed study (`docs/chapter5_attainable.json`) was drawn around another "
+            f"plant, firmware or run "
+            f"set than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for "
+            f"this plant."
         ]
     return [
-        f"Plants drawn uniformly inside the sourced ranges around this plant (`{ATTAINABLE_COMMAND}`, "
+        f"Plants drawn uniformly inside the sourced ranges around this plant "
+        f"(`{ATTAINABLE_COMMAND}`, "
         f"{VALIDATION_DOC}): per finding, in how many it holds.",
         "",
         *attainable_table(study).splitlines(),
@@ -186,7 +202,8 @@ def _attainable(data: dict) -> list[str]:
 
 
 def _bound_table(data: dict) -> list[str]:
-    """Listing 4.12's bound on each published timing, per run and wheel, against the band's upper end."""
+    """Listing 4.12's bound on each published timing, per run and wheel, against the band's upper
+    end."""
     bounds = (data.get("findings") or {}).get("bounds")
     if not bounds:
         return []
@@ -223,7 +240,8 @@ def markdown(data: dict) -> str:
     study = data.get("study_runs", 0)
     runs = f"{len(data['runs'])} runs ({data['sim_s']:.0f} simulated s)" + (
         f" and {study} rolling-resistance study runs ({data['study_sim_s']:.0f} s), "
-        f"{len(data['runs']) + study} runs and {data['sim_s'] + data['study_sim_s']:.0f} simulated s in all,"
+        f"{len(data['runs']) + study} runs and {data['sim_s'] + data['study_sim_s']:.0f} "
+        f"simulated s in all,"
         if study
         else ""
     )
@@ -235,13 +253,17 @@ def markdown(data: dict) -> str:
         "",
         *_attainable(data),
         "",
-        f"Firmware: **{data['firmware']}**; {runs} in {data['wall_s']:.1f} s wall time with {data['jobs']} job(s). "
-        f"All checks on the published samples, attainable or not: {s['passed']} / {s['checks']}; the true "
+        f"Firmware: **{data['firmware']}**; {runs} in {data['wall_s']:.1f} s wall time with "
+        f"{data['jobs']} job(s). "
+        f"All checks on the published samples, attainable or not: {s['passed']} / {s['checks']}; "
+        f"the true "
         f"wheel speed against the same bands: {s['true_passed']} / {s['true_checks']}.",
         "",
         f"Judged on the {data['judged_on']}; settling band: {data['settling_band']}. Definitions: "
-        f"{data['definitions']}; oscillation = {data['oscillation']} after the command (0 for a monotone "
-        "approach). Signed values (reference, final value, steady error) carry the reference's sign: a wheel "
+        f"{data['definitions']}; oscillation = {data['oscillation']} after the command (0 for a "
+        f"monotone "
+        "approach). Signed values (reference, final value, steady error) carry the reference's "
+        "sign: a wheel "
         "commanded backward has a negative reference. ✓ inside the band, ✗ outside.",
         "",
         "## Bands (§5.1.3, §5.1.4)",
@@ -267,7 +289,8 @@ def markdown(data: dict) -> str:
         ),
         "## True wheel speed (100 Hz), against the same bands",
         "",
-        f"Not visible on the thesis' topics; shown because its timings are not limited by one sample per "
+        f"Not visible on the thesis' topics; shown because its timings are not limited by one "
+        f"sample per "
         f"revolution. Passed by metric: {passed_by_metric(data, 'true_checks')}.",
         "",
         *_table(data, "true", "true_checks"),

@@ -10,10 +10,10 @@ true speed, :func:`.criteria.count_checks`; a setting no draw reads, such as
 ``wheel.tyre_slip``, leaves the draws as they are, so two runs of one seed compare draw by draw);
 the §5.1.4 answers (the PI raises the duty with 20 kg; the 20 kg runs oscillate more) as the
 number of draws in which they hold; and the parameters whose rank
-correlation with each banded metric is largest; and each draw's run whose physics timestep the tyres'
-guard halved (``tyre_timestep_halved``, :mod:`amr_twin.model.tyre_stability`). ``chapter5_spread_report.markdown`` writes the report's
-section (:mod:`.spread_report`); the run plots get the 90 % band of the true wheel speed.
-"""
+correlation with each banded metric is largest; and each draw's run whose physics timestep the
+tyres' guard halved (``tyre_timestep_halved``, :mod:`amr_twin.model.tyre_stability`).
+``chapter5_spread_report.markdown`` writes the report's section (:mod:`.spread_report`); the run
+plots get the 90 % band of the true wheel speed."""
 
 from __future__ import annotations
 

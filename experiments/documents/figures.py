@@ -12,8 +12,8 @@ both routes (``docs/fusion_<route>.json``; most of the command's few minutes) an
 the chapter 5 attainability study (``docs/chapter5_attainable.json``, 128 plants: a few minutes),
 then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.texts`) from those
 committed files and the calibration's report (``models/amr/calibration.yaml``: after a new fit,
-``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text between
-``<!-- generated: NAME ... -->`` and ``<!-- end: NAME -->``;
+``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text
+between ``<!-- generated: NAME ... -->`` and ``<!-- end: NAME -->``;
 :func:`expected` gives a document as its blocks would be written now, which the tests hold every
 document to, and the tests hold the committed results to a fresh run (``test_faults_report``,
 ``test_chapter5_outcome``): the figures cannot drift from the code.
@@ -47,8 +47,8 @@ DOCUMENTS = (
     ROOT / "docs" / "explanation" / "validation.md",
     ROOT / "docs" / "explanation" / "fusion.md",
 )
-"""The documents with generated blocks (``docs/faults.md`` is generated whole; the README has none: it
-links to ``docs/reference/results.md``)."""
+"""The documents with generated blocks (``docs/faults.md`` is generated whole; the README has none:
+it links to ``docs/reference/results.md``)."""
 _BLOCK = re.compile(
     r"(<!-- generated: (?P<name>[\w-]+) [^>]*-->\n)(?P<body>.*?)(<!-- end: (?P=name) -->)", re.S
 )
@@ -58,13 +58,15 @@ PAYLOAD_SWEEP = {
     "positions": ["center", "front", "rear", "front-left-corner"],
     "commands": ["linear:0.7", "angular:-60:-1"],
 }
-"""The payload sweep of ``docs/reference/results.md`` (``amr-twin sweep payload --masses 0:60:10 --positions
-center,front,rear,front-left-corner --commands linear:0.7,angular:-60:-1``), 8 s a point."""
+"""The payload sweep of ``docs/reference/results.md`` (``amr-twin sweep payload --masses 0:60:10
+--positions center,front,rear,front-left-corner --commands linear:0.7,angular:-60:-1``), 8 s a
+point."""
 PAYLOAD_JSON = ROOT / "docs" / "payload_sweep.json"
 
 
 def payload_figures(results: dict, improved: dict | None) -> dict:
-    """What ``docs/reference/results.md`` quotes of the payload sweep (committed as :data:`PAYLOAD_JSON`)."""
+    """What ``docs/reference/results.md`` quotes of the payload sweep (committed as
+    :data:`PAYLOAD_JSON`)."""
     from amr_twin.experiments.payload.sweep_report import summarise
 
     summary = summarise(results)
@@ -104,7 +106,8 @@ FUSION_SEEDS = list(range(10))
 
 
 def fusion_json(route: str) -> Path:
-    """The committed summary of ``amr-twin experiment fusion --route ROUTE --seeds 0:9`` (no wall times)."""
+    """The committed summary of ``amr-twin experiment fusion --route ROUTE --seeds 0:9`` (no wall
+    times)."""
     return ROOT / "docs" / f"fusion_{route}.json"
 
 
@@ -134,7 +137,8 @@ def blocks() -> dict[str, str]:
 
 
 def expected(path: Path, texts: dict[str, str] | None = None) -> str:
-    """``path``'s text with each generated block as :func:`blocks` writes it (unknown names: an error)."""
+    """``path``'s text with each generated block as :func:`blocks` writes it (unknown names: an
+    error)."""
     texts = blocks() if texts is None else texts
 
     def fill(m: re.Match) -> str:
@@ -186,7 +190,8 @@ def fusion_write(cfg) -> None:  # pragma: no cover - 20 drives, minutes
 
 
 def _without_wall_times(value):
-    """``value`` without its ``wall_s`` entries (a measured time, not a result: the same code gives the same file)."""
+    """``value`` without its ``wall_s`` entries (a measured time, not a result: the same code gives
+    the same file)."""
     if isinstance(value, dict):
         return {k: _without_wall_times(v) for k, v in value.items() if k != "wall_s"}
     if isinstance(value, list):
@@ -219,14 +224,15 @@ def main() -> None:  # pragma: no cover - rewrites the committed results and doc
     for path in DOCUMENTS:
         write_text(path, expected(path, texts))
     print(
-        f"rewrote docs/faults.md, tests/chapter5_scorecard.json, docs/img/chapter5_run1.png and the generated "
+        f"rewrote docs/faults.md, tests/chapter5_scorecard.json, docs/img/chapter5_run1.png and "
+        f"the generated "
         f"blocks of {', '.join(str(p.relative_to(ROOT)) for p in DOCUMENTS)}"
     )
 
 
 def parse_args(argv: list[str]) -> None:
-    """The command takes no arguments: ``--help`` prints what it does; anything else is refused (exit 2)
-    before any work (it ignored them, and ``--help`` started the minutes of rewriting)."""
+    """The command takes no arguments: ``--help`` prints what it does; anything else is refused
+    (exit 2) before any work (it ignored them, and ``--help`` started the minutes of rewriting)."""
     import argparse
     import sys
 
@@ -234,7 +240,8 @@ def parse_args(argv: list[str]) -> None:
         prog=COMMAND,
         description="Rewrite the figures the documents quote from fresh "
         "runs (docs/faults.md, the payload sweep, fusion and chapter 5 results, the "
-        "generated blocks of README.md, docs/explanation/validation.md, docs/explanation/fusion.md); several "
+        "generated blocks of README.md, docs/explanation/validation.md, "
+        "docs/explanation/fusion.md); several "
         "minutes.",
     )
     _, extra = parser.parse_known_args(argv)

@@ -19,7 +19,8 @@ def _rpm(value: float) -> str:
 
 
 def _counts(checks: dict, prefix: str = "") -> dict[str, tuple[int, int]]:
-    """Per metric of :data:`BANDS`: (passed, checks) among ``checks`` whose metric part starts ``prefix``."""
+    """Per metric of :data:`BANDS`: (passed, checks) among ``checks`` whose metric part starts
+    ``prefix``."""
     out: dict[str, list[int]] = {}
     for key, c in checks.items():
         run, wheel, *rest = key.split(".")
@@ -57,7 +58,8 @@ def chapter5_summary(card: dict) -> str:
     times = (
         "none of the delay, rise, peak and settling times is met"
         if met == 0
-        else f"{met} of {sum(pub[m][1] for m in timing)} delay, rise, peak and settling times are met"
+        else f"{met} of {sum(pub[m][1] for m in timing)} delay, rise, peak and settling times "
+        f"are met"
     )
     where = "; ".join(
         f"run {rw[0][3:]} {rw[1]}: "
@@ -66,28 +68,44 @@ def chapter5_summary(card: dict) -> str:
         if any(_passes(c, f"{rw[0]}.{rw[1]}.true.{m}") for m in timing)
     )
     return (
-        f"Chapter 5 (`amr-twin experiment chapter5`, faithful firmware, calibrated plant), scored with the "
-        f"definitions of the thesis' fig. 5.3 (Ogata's: overshoot above the final value, the steady offset "
-        f"judged on its own; `docs/explanation/validation.md`): on the published samples **{card['passed']} of "
-        f"{card['checks_total']} checks pass**. The steady offset lies within the faithful PI's 4 RPM dead "
-        f"zone on {pub['steady_error'][0]} of {pub['steady_error'][1]} wheels (runs 1 and 2, 76.39 RPM: left "
-        f"{_rpm(c['run1.left.steady_error']['twin'])}, right {_rpm(c['run2.right.steady_error']['twin'])} RPM)"
+        f"Chapter 5 (`amr-twin experiment chapter5`, faithful firmware, calibrated plant), "
+        f"scored with the "
+        f"definitions of the thesis' fig. 5.3 (Ogata's: overshoot above the final value, the "
+        f"steady offset "
+        f"judged on its own; `docs/explanation/validation.md`): on the published samples "
+        f"**{card['passed']} of "
+        f"{card['checks_total']} checks pass**. The steady offset lies within the faithful PI's "
+        f"4 RPM dead "
+        f"zone on {pub['steady_error'][0]} of {pub['steady_error'][1]} wheels (runs 1 and 2, "
+        f"76.39 RPM: left "
+        f"{_rpm(c['run1.left.steady_error']['twin'])}, right "
+        f"{_rpm(c['run2.right.steady_error']['twin'])} RPM)"
         + (f", not on {missed}" if missed else "")
         + f"; the overshoot is in its band on {pub['overshoot'][0]} of "
-        f"{pub['overshoot'][1]}, and the right wheel {more} (runs 1 and 2: {left:.2f} left, {right:.2f} RPM "
-        f"right, against §5.1.3's 0-2 and 4 RPM); {times}: the firmware publishes once per wheel revolution, so "
-        f"its first sample comes a revolution after the command (0.8 s at 76 RPM, plus the ramp), which puts the "
-        f"delay, rise and peak of the steps up to 75 RPM out of any plant's reach (`docs/explanation/validation.md`) and "
-        f"leaves the rest to the ramp and the timer; and {card['oscillation_published_passed']} of the 4 oscillation "
-        f"comparisons holds. The true wheel speed (100 Hz, which the thesis could not see) against the same "
-        f"bands passes {card['true_passed']} of {card['true_checks_total']}, its timings {timed[0]} of {timed[1]} "
+        f"{pub['overshoot'][1]}, and the right wheel {more} (runs 1 and 2: {left:.2f} left, "
+        f"{right:.2f} RPM "
+        f"right, against §5.1.3's 0-2 and 4 RPM); {times}: the firmware publishes once per wheel "
+        f"revolution, so "
+        f"its first sample comes a revolution after the command (0.8 s at 76 RPM, plus the "
+        f"ramp), which puts the "
+        f"delay, rise and peak of the steps up to 75 RPM out of any plant's reach "
+        f"(`docs/explanation/validation.md`) and "
+        f"leaves the rest to the ramp and the timer; and {card['oscillation_published_passed']} "
+        f"of the 4 oscillation "
+        f"comparisons holds. The true wheel speed (100 Hz, which the thesis could not see) "
+        f"against the same "
+        f"bands passes {card['true_passed']} of {card['true_checks_total']}, its timings "
+        f"{timed[0]} of {timed[1]} "
         f"("
         + ", ".join(f"{m[:-2]} {true[m][0]}" for m in timing)
         + f" of 14 each; {where}). Run 1: delay "
-        f"{c['run1.left.true.delay_s']['twin']:.2f} s, rise {c['run1.left.true.rise_s']['twin']:.2f} s, peak "
-        f"{c['run1.left.true.peak_s']['twin']:.2f} s, settling {c['run1.left.true.settling_s']['twin']:.2f} s "
+        f"{c['run1.left.true.delay_s']['twin']:.2f} s, rise "
+        f"{c['run1.left.true.rise_s']['twin']:.2f} s, peak "
+        f"{c['run1.left.true.peak_s']['twin']:.2f} s, settling "
+        f"{c['run1.left.true.settling_s']['twin']:.2f} s "
         f"against 0.5, 1.0, 1.1 and at most 1.3 s. Every check's value is committed "
-        f"(`tests/chapter5_scorecard.json`), and a change that takes one further from the thesis fails the tests.\n"
+        f"(`tests/chapter5_scorecard.json`), and a change that takes one further from the thesis "
+        f"fails the tests.\n"
     )
 
 
@@ -106,15 +124,18 @@ def _runs(checks: dict) -> list[tuple[str, str]]:
 
 
 def chapter5_table(card: dict) -> str:
-    """docs/explanation/validation.md's table of every check: the twin's value, published and true, against its band."""
+    """docs/explanation/validation.md's table of every check: the twin's value, published and true,
+    against its band."""
     c = card["checks"]
     metrics = list(dict.fromkeys(b.metric for b in BANDS))
     rows = _runs(c)
     lines = [
         f"Checks passed: **{card['passed']} of {card['checks_total']}** on the published samples "
-        f"({card['checks_total'] - len(rows) * len(metrics)} of them the 20 kg oscillation comparisons, "
+        f"({card['checks_total'] - len(rows) * len(metrics)} of them the 20 kg oscillation "
+        f"comparisons, "
         f"{card['oscillation_published_passed']} passed); the true speed against the same bands "
-        f"{card['true_passed']} of {card['true_checks_total']}. Published / true, ✓ inside the band:",
+        f"{card['true_passed']} of {card['true_checks_total']}. Published / true, ✓ inside the "
+        f"band:",
         "",
         "| run | wheel | " + " | ".join(metrics) + " |",
         "|---|---|" + "---|" * len(metrics),
@@ -150,29 +171,39 @@ def faults_summary(data: dict) -> str:
 
     cut = "rosserial-loss@5"
     return (
-        f"Faults (`amr-twin experiment faults --out docs` regenerates `docs/faults.md`): each kind injected at "
-        f"{data['fault_t_s']:g} s into a 0.5 m/s run that is told to stop at {data['stop_t_s']:g} s, under both "
-        f"firmwares. Neither firmware has a watchdog: with the rosserial link cut the stop never arrives, and "
-        f"the robot drives {rows[(cut, 'faithful')]['moved_after_stop_m']:.2f} m past it (faithful; improved "
-        f"{rows[(cut, 'improved')]['moved_after_stop_m']:.2f} m), still moving at the end. A silent left hall "
-        f"signal goes unnoticed by the faithful firmware (the wheel runs open loop at its last duty while the "
+        f"Faults (`amr-twin experiment faults --out docs` regenerates `docs/faults.md`): each "
+        f"kind injected at "
+        f"{data['fault_t_s']:g} s into a 0.5 m/s run that is told to stop at "
+        f"{data['stop_t_s']:g} s, under both "
+        f"firmwares. Neither firmware has a watchdog: with the rosserial link cut the stop never "
+        f"arrives, and "
+        f"the robot drives {rows[(cut, 'faithful')]['moved_after_stop_m']:.2f} m past it "
+        f"(faithful; improved "
+        f"{rows[(cut, 'improved')]['moved_after_stop_m']:.2f} m), still moving at the end. A "
+        f"silent left hall "
+        f"signal goes unnoticed by the faithful firmware (the wheel runs open loop at its last "
+        f"duty while the "
         f"PC gets no speed) and makes the improved one run the wheel away to "
         f"{left('hall-left-dead@5', 'improved'):.1f} RPM (reference 38.2), turning the robot "
         f"{turn('hall-left-dead@5', 'improved'):.0f} degrees; chatter on the line slows it to "
-        f"{left('hall-left-chatter@5:200', 'improved'):.1f} RPM. A 12 V battery sag leaves the faithful "
-        f"firmware's wheels at {left('battery-sag@5:12', 'faithful'):.1f} RPM, the improved one holds "
+        f"{left('hall-left-chatter@5:200', 'improved'):.1f} RPM. A 12 V battery sag leaves the "
+        f"faithful "
+        f"firmware's wheels at {left('battery-sag@5:12', 'faithful'):.1f} RPM, the improved one "
+        f"holds "
         f"{left('battery-sag@5:12', 'improved'):.1f}. A jammed wheel pivots the robot "
         f"{turn('motor-left-stall@5:for=2', 'faithful'):.0f} (faithful) and "
-        f"{turn('motor-left-stall@5:for=2', 'improved'):.0f} degrees (improved); a wheel lifted for 2 s turns it "
+        f"{turn('motor-left-stall@5:for=2', 'improved'):.0f} degrees (improved); a wheel lifted "
+        f"for 2 s turns it "
         f"{turn('wheel-left-lifted@5:for=2', 'faithful'):.0f} and "
         f"{turn('wheel-left-lifted@5:for=2', 'improved'):.0f} degrees, unseen by either.\n"
     )
 
 
 def calibration_summary(report: dict) -> str:
-    """The calibration's figures (``models/amr/calibration.yaml``, ``amr-twin calibrate --no-fit --report``):
-    each fitted value with its 1 sigma, and how well the gain-to-Ke ratio (the speed a duty count gives)
-    is pinned: ``sqrt(a^2 + b^2 - 2 r a b)`` of the relative sigmas ``a``, ``b`` and their correlation ``r``."""
+    """The calibration's figures (``models/amr/calibration.yaml``, ``amr-twin calibrate --no-fit
+    --report``): each fitted value with its 1 sigma, and how well the gain-to-Ke ratio (the speed a
+    duty count gives) is pinned: ``sqrt(a^2 + b^2 - 2 r a b)`` of the relative sigmas ``a``, ``b``
+    and their correlation ``r``."""
     p, corr = report["parameters"], report["correlation"]
     keys = list(p)
 
@@ -189,15 +220,21 @@ def calibration_summary(report: dict) -> str:
         abs(corr[keys.index("driver_right.gain")][keys.index("motor_right.ke_v_s_rad")]),
     )
     return (
-        f"The calibration (`amr-twin calibrate --target thesis`: the bench point, the steady speeds, the "
-        f"overshoot and the true-speed timings; `models/amr/calibration.yaml`, chi^2 {report['chi2']:.1f}) "
-        f"reports each parameter with its uncertainty: driver gains {value('driver_left.gain', 2)} left and "
+        f"The calibration (`amr-twin calibrate --target thesis`: the bench point, the steady "
+        f"speeds, the "
+        f"overshoot and the true-speed timings; `models/amr/calibration.yaml`, chi^2 "
+        f"{report['chi2']:.1f}) "
+        f"reports each parameter with its uncertainty: driver gains "
+        f"{value('driver_left.gain', 2)} left and "
         f"{value('driver_right.gain', 2)} right, Ke "
-        f"{value('motor_left.ke_v_s_rad', 3)} and {value('motor_right.ke_v_s_rad', 3)} V s/rad, each wheel's "
-        f"gain and Ke correlated at {r:.2f} or more (their ratio, the speed per duty count, is pinned within "
+        f"{value('motor_left.ke_v_s_rad', 3)} and {value('motor_right.ke_v_s_rad', 3)} V s/rad, "
+        f"each wheel's "
+        f"gain and Ke correlated at {r:.2f} or more (their ratio, the speed per duty count, is "
+        f"pinned within "
         f"{ratio_pct('driver_left.gain', 'motor_left.ke_v_s_rad'):.1f} % left and "
         f"{ratio_pct('driver_right.gain', 'motor_right.ke_v_s_rad'):.1f} % "
-        f"right), dry friction {value('motor_left.friction_nm', 3)} and {value('motor_right.friction_nm', 3)} "
+        f"right), dry friction {value('motor_left.friction_nm', 3)} and "
+        f"{value('motor_right.friction_nm', 3)} "
         f"N m.\n"
     )
 
@@ -211,27 +248,38 @@ def payload_summary(data: dict) -> str:
         for p, s in data["positions"].items()
     )
     return (
-        f"Payload sweep (`amr-twin sweep payload --masses 0:60:10 --positions {','.join(data['sweep']['positions'])} "
-        f"--commands {','.join(data['sweep']['commands'])}`, {data['points']} points of 8 s; the positions "
+        f"Payload sweep (`amr-twin sweep payload --masses 0:60:10 --positions "
+        f"{','.join(data['sweep']['positions'])} "
+        f"--commands {','.join(data['sweep']['commands'])}`, {data['points']} points of 8 s; the "
+        f"positions "
         f"limited by a runaway are run again with the improved firmware): the base tilts at most "
-        f"{data['max_tilt_deg']:.1f} degrees, and the lowest drive-wheel load is {low['dyn_min_wheel_n']:.0f} N "
-        f"({low['mass_kg']:g} kg, {low['position']}, {low['command']}: {low['dyn_min_wheel_mechanism']}; each "
-        f"point's lowest load comes with its mechanism in `summary.md`). Each position's answer, the cause of "
-        f"its limit named: {answers}. A runaway is a limit of the speed control, not of the motors' rating at "
-        f"what the payload demands: with the load behind the axle the robot oversteers in the clockwise turn, "
-        f"and a firmware that does not hold the inner wheel's speed lets it pivot, the current rising with it "
-        f"(`docs/explanation/validation.md`). Energy per metre at 0.7 m/s, centre: {energy['0']:.0f} J/m empty, "
+        f"{data['max_tilt_deg']:.1f} degrees, and the lowest drive-wheel load is "
+        f"{low['dyn_min_wheel_n']:.0f} N "
+        f"({low['mass_kg']:g} kg, {low['position']}, {low['command']}: "
+        f"{low['dyn_min_wheel_mechanism']}; each "
+        f"point's lowest load comes with its mechanism in `summary.md`). Each position's answer, "
+        f"the cause of "
+        f"its limit named: {answers}. A runaway is a limit of the speed control, not of the "
+        f"motors' rating at "
+        f"what the payload demands: with the load behind the axle the robot oversteers in the "
+        f"clockwise turn, "
+        f"and a firmware that does not hold the inner wheel's speed lets it pivot, the current "
+        f"rising with it "
+        f"(`docs/explanation/validation.md`). Energy per metre at 0.7 m/s, centre: "
+        f"{energy['0']:.0f} J/m empty, "
         f"{energy['60']:.0f} J/m with 60 kg (pack and electronics).\n"
     )
 
 
 SUMMARY_FUSION = ("ate_m", "ate_aligned_m", "rpe_trans_m", "rpe_rot_deg", "rms_yaw_err_deg")
-"""The columns of ``docs/reference/results.md``'s fusion tables (``docs/explanation/fusion.md`` has them all)."""
+"""The columns of ``docs/reference/results.md``'s fusion tables (``docs/explanation/fusion.md`` has
+them all)."""
 
 
 def fusion_table(data: dict, keys: tuple[str, ...] | None = None) -> str:
-    """A route's table of architectures (mean ± sd (min-max) over the seeds), all metrics or ``keys``;
-    with all, the map and UWB line and every seed's ATE (``docs/explanation/fusion.md``)."""
+    """A route's table of architectures (mean ± sd (min-max) over the seeds), all metrics or
+    ``keys``; with all, the map and UWB line and every seed's ATE
+    (``docs/explanation/fusion.md``)."""
     from amr_twin.experiments.fusion.seeds_report import (
         METRICS,
         cell,
@@ -247,8 +295,10 @@ def fusion_table(data: dict, keys: tuple[str, ...] | None = None) -> str:
                     *table(data),
                     "",
                     f"Map from the LiDAR odometry, occupied cells within 2 cells of the "
-                    f"world's walls: {cell(percent(data['map_within_tolerance_frac']), 1)} %. UWB exchanges "
-                    f"with a wall in the tag-anchor line: {cell(percent(data['uwb_blocked_frac']), 1)} %.",
+                    f"world's walls: {cell(percent(data['map_within_tolerance_frac']), 1)} %. "
+                    f"UWB exchanges "
+                    f"with a wall in the tag-anchor line: "
+                    f"{cell(percent(data['uwb_blocked_frac']), 1)} %.",
                     "",
                     *per_seed_table(data),
                 ]
@@ -280,15 +330,17 @@ ATTAINABLE_ROWS = (
 
 
 def attainable_table(data: dict) -> str:
-    """The committed chapter 5 attainability study (``docs/chapter5_attainable.json``): per finding, the
-    plants of each seed where it holds, and the best figure reached over all of them."""
+    """The committed chapter 5 attainability study (``docs/chapter5_attainable.json``): per finding,
+    the plants of each seed where it holds, and the best figure reached over all of them."""
     seeds = data["seeds"]
     head = " | ".join(f"seed {k} ({v['samples']} plants)" for k, v in seeds.items())
     s = list(seeds.values())
     best = {
-        "overshoot_right": f"right at most {max(v['best_right_overshoot_rpm'] for v in s):.2f} RPM; right "
+        "overshoot_right": f"right at most {max(v['best_right_overshoot_rpm'] for v in s):.2f} "
+        f"RPM; right "
         f"minus left at most {max(v['best_right_minus_left_rpm'] for v in s):.2f}",
-        "tracking": f"worst unloaded error {min(v['least_worst_steady_error_rpm'] for v in s):.2f} RPM at best",
+        "tracking": f"worst unloaded error "
+        f"{min(v['least_worst_steady_error_rpm'] for v in s):.2f} RPM at best",
         "duty_raised": f"{max(v['most_raised_wheels'] for v in s)} of 4 wheels at most",
         "oscillation": f"{max(v['most_oscillating_more'] for v in s)} of 4 at most",
     }
@@ -301,7 +353,8 @@ def attainable_table(data: dict) -> str:
     pairs = sum(v["pairs"][p] for v in seeds.values() for p in v["pairs"])
     lines += [
         "",
-        f"Pairs of findings holding together: {pairs} over {sum(v['samples'] for v in seeds.values())} "
+        f"Pairs of findings holding together: {pairs} over "
+        f"{sum(v['samples'] for v in seeds.values())} "
         "plants.",
     ]
     return "\n".join(lines) + "\n"

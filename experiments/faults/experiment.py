@@ -28,7 +28,8 @@ STOP_T_S = 9.0
 DURATION_S = 12.0
 WINDOW_S = 0.5
 SCENARIO = (
-    f"empty world, linear {SPEED_M_S} m/s at 0 s (38.2 RPM per wheel), stop sent at {STOP_T_S:g} s, "
+    f"empty world, linear {SPEED_M_S} m/s at 0 s (38.2 RPM per wheel), stop sent at {STOP_T_S:g} "
+    f"s, "
     f"run of {DURATION_S:g} s, fault at {FAULT_T_S:g} s"
 )
 
@@ -63,7 +64,8 @@ class Case:
 
 
 def simulate(case: Case) -> dict:
-    """Run one case; its series and fault report as plain arrays (picklable, for worker processes)."""
+    """Run one case; its series and fault report as plain arrays (picklable, for worker
+    processes)."""
     from amr_twin.sim.faults import KINDS, parse_faults
 
     faults = parse_faults([case.fault]) if case.fault else ()

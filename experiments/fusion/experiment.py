@@ -55,7 +55,8 @@ RPE_DELTA_M = 1.0
 
 @dataclass
 class Estimate:
-    """One architecture's trajectory: stamps (N,) s and poses (N, 3) x_m, y_m, yaw_rad in the map frame."""
+    """One architecture's trajectory: stamps (N,) s and poses (N, 3) x_m, y_m, yaw_rad in the map
+    frame."""
 
     name: str
     t_s: np.ndarray
@@ -106,7 +107,8 @@ def drive(
     mcap_path: Path | None = None,
     robot: RobotErrors = NOMINAL,
 ) -> tuple[Twin, Streams, bool]:
-    """Drive ``route`` in its world with IMU, LiDAR and UWB on; return the twin and the recorded streams.
+    """Drive ``route`` in its world with IMU, LiDAR and UWB on; return the twin and the recorded
+    streams.
 
     ``robot``: the robot's own errors (its true wheel geometry and hall sensors; the odometry
     keeps the nominal geometry of ``cfg``). ``rrd_path`` / ``mcap_path``: also write the
@@ -237,7 +239,8 @@ def estimate_lidar(
     t_s, _ = lo.poses()
     if len(t_s) == 0:
         return Estimate("odom+lidar", np.zeros(0), np.zeros((0, 3)), beam_poses=[])
-    # the first pose is the origin of kiss-icp's frame: the start moved by the (rest) odometry up to it
+    # the first pose is the origin of kiss-icp's frame: the start moved by the (rest) odometry up to
+    # it
     origin = se2.compose(
         np.asarray(start, float), np.asarray(relative_motion(t_odom, pose_odom, 0.0, t_s[0]))
     )
@@ -254,13 +257,15 @@ def laser_in_base(cfg: TwinConfig) -> tuple[float, float, float]:
 
 
 def drive_bound_s(route: Route) -> float:
-    """Simulated seconds a drive of ``route`` takes at most: the rest, the give-up time and the tail."""
+    """Simulated seconds a drive of ``route`` takes at most: the rest, the give-up time and the
+    tail."""
     return REST_S + TIMEOUT_FACTOR * route_length_m(route) / route.max_speed_m_s + TAIL_S
 
 
 def check_route(cfg: TwinConfig, route: Route) -> None:
-    """Refuse, before any drive, a route whose drive could take more than ``MAX_RUN_S`` simulated s or that
-    leaves its world's free space (:func:`amr_twin.controllers.route.check_in_free_space`); RouteError."""
+    """Refuse, before any drive, a route whose drive could take more than ``MAX_RUN_S`` simulated s
+    or that leaves its world's free space (:func:`amr_twin.controllers.route.check_in_free_space`);
+    RouteError."""
     from amr_twin.controllers.route import RouteError, check_in_free_space
     from amr_twin.model.build import world_model
     from amr_twin.sim.bounds import MAX_RUN_S
@@ -268,8 +273,10 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
     bound = drive_bound_s(route)
     if bound > MAX_RUN_S:
         raise RouteError(
-            f"route {route.name}: {route_length_m(route):.0f} m at up to {route.max_speed_m_s:g} m/s "
-            f"may take {bound:.0f} s of simulation ({TIMEOUT_FACTOR:g} x length / speed before it gives "
+            f"route {route.name}: {route_length_m(route):.0f} m at up to {route.max_speed_m_s:g} "
+            f"m/s "
+            f"may take {bound:.0f} s of simulation ({TIMEOUT_FACTOR:g} x length / speed before "
+            f"it gives "
             f"up); at most {MAX_RUN_S:g} s: a shorter route or a higher max_speed_m_s"
         )
     model = world_model(cfg, route.world)
@@ -289,7 +296,8 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
 
 
 def route_file(route: str | Path | None) -> Path:
-    """The file of ``--route``: None is the default route, a bare name one of ``experiments/routes/``."""
+    """The file of ``--route``: None is the default route, a bare name one of
+    ``experiments/routes/``."""
     if route is None:
         return DEFAULT_ROUTE
     path = Path(route)
@@ -423,7 +431,8 @@ def last_per_stamp(t_s: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def slim(res: FusionResults) -> FusionResults:
-    """``res`` without the recorded messages and the per-beam laser poses (to send it between processes)."""
+    """``res`` without the recorded messages and the per-beam laser poses (to send it between
+    processes)."""
     res.streams = Streams()
     for est in res.estimates.values():
         est.beam_poses = None

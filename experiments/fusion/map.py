@@ -1,4 +1,5 @@
-"""The map of the fusion drive: scans inserted at the LiDAR odometry's poses, judged against the world.
+"""The map of the fusion drive: scans inserted at the LiDAR odometry's poses, judged against the
+world.
 
 The grid covers the world's footprints plus ``mapping.margin_m``; each beam goes in
 at the laser pose of its own instant (a scan moves ~0.15 m at 0.8 m/s). The map is read back
@@ -37,7 +38,8 @@ class MapAgreement:
 def build_map(
     scans: list, beam_poses: list, boxes: Footprints, resolution_m: float, margin_m: float
 ) -> OccupancyGrid:
-    """Insert ``scans`` into a new grid, each beam at its own laser pose (``beam_poses[i]`` (n_beams, 3), map)."""
+    """Insert ``scans`` into a new grid, each beam at its own laser pose (``beam_poses[i]``
+    (n_beams, 3), map)."""
     c, s = np.abs(np.cos(boxes.yaw_rad)), np.abs(np.sin(boxes.yaw_rad))
     hx, hy = boxes.half_xy_m[:, 0], boxes.half_xy_m[:, 1]
     half_world = np.column_stack(

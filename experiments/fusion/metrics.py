@@ -1,7 +1,7 @@
 """One fusion drive's metrics as typed records, and ``metrics.json`` written from them.
 
-:func:`metrics` gathers a :class:`~amr_twin.experiments.fusion.experiment.FusionResults` (the drive, each
-architecture's trajectory errors), the saved map's check and the TUM file names into a
+:func:`metrics` gathers a :class:`~amr_twin.experiments.fusion.experiment.FusionResults` (the drive,
+each architecture's trajectory errors), the saved map's check and the TUM file names into a
 :class:`FusionMetrics`; :meth:`FusionMetrics.as_json` is the ``metrics.json`` object. Distances in
 metres, angles in degrees, times in seconds.
 """
@@ -20,8 +20,8 @@ LIDAR_ATE_MAX_M = 0.10  # the fusion acceptance
 
 @dataclass(frozen=True)
 class RouteOutcome:
-    """The route driven: its name and world, its true length m, the speed limit m/s, whether the goal
-    was reached and the RMS cross-track error m of the true path against the route."""
+    """The route driven: its name and world, its true length m, the speed limit m/s, whether the
+    goal was reached and the RMS cross-track error m of the true path against the route."""
 
     name: str
     world: str
@@ -76,9 +76,9 @@ class FusionVerdicts:
 
 @dataclass(frozen=True)
 class FusionMetrics:
-    """Everything ``metrics.json`` holds: the route, the seed and firmware, simulated and wall seconds
-    (the drive's and in all), the messages per stream, the UWB, the robot's own errors of this seed,
-    the RPE distance m, each architecture, the map check and the verdicts."""
+    """Everything ``metrics.json`` holds: the route, the seed and firmware, simulated and wall
+    seconds (the drive's and in all), the messages per stream, the UWB, the robot's own errors of
+    this seed, the RPE distance m, each architecture, the map check and the verdicts."""
 
     route: RouteOutcome
     seed: int

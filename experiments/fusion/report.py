@@ -131,7 +131,8 @@ def tum_name(name: str) -> str:
 
 
 def write_trajectories(results: FusionResults, out: Path) -> dict[str, str]:
-    """Write ``truth.tum`` and one TUM file per architecture into ``out``; return {architecture: file name}.
+    """Write ``truth.tum`` and one TUM file per architecture into ``out``; return {architecture:
+    file name}.
 
     The truth is sampled at its 100 Hz record and at every estimate's stamps
     (:func:`amr_twin.analysis.tum.truth_at`), so that evo's nearest-stamp association pairs each
@@ -147,26 +148,34 @@ def write_trajectories(results: FusionResults, out: Path) -> dict[str, str]:
 
 
 def evo_commands(folder: str = "DIR", name: str = "odom_uwb_imu.tum") -> list[str]:
-    """The evo commands that reproduce an architecture's ATE (plain, aligned) and RPE from the TUM files."""
+    """The evo commands that reproduce an architecture's ATE (plain, aligned) and RPE from the TUM
+    files."""
     ref, est = f"{folder}/truth.tum", f"{folder}/{name}"
     return [
         f"evo_ape tum {ref} {est}",
         f"evo_ape tum {ref} {est} --align",
         f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference",
-        f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference -r angle_deg",
+        f"evo_rpe tum {ref} {est} --delta 1 --delta_unit m --all_pairs --pairs_from_reference "
+        f"-r angle_deg",
     ]
 
 
 DEFINITIONS = [
-    "- **ATE m**: RMS of the position error |p_est(t) - p_true(t)| over the estimate's samples, the truth "
-    "interpolated at each stamp, **without alignment** (every estimate starts from the known start pose, "
+    "- **ATE m**: RMS of the position error |p_est(t) - p_true(t)| over the estimate's samples, "
+    "the truth "
+    "interpolated at each stamp, **without alignment** (every estimate starts from the known "
+    "start pose, "
     "in the map frame); evo's `evo_ape` default (translation part, RMSE).",
-    "- **ATE aligned m**: the same after the least-squares SE(2) alignment of the estimate onto the truth "
+    "- **ATE aligned m**: the same after the least-squares SE(2) alignment of the estimate onto "
+    "the truth "
     "(Umeyama/Horn, no scale; `evo_ape --align`): what is left when a constant offset of the whole "
-    "trajectory is forgiven. It removes the effect of an early heading error and so favours drifting "
+    "trajectory is forgiven. It removes the effect of an early heading error and so favours "
+    "drifting "
     "estimates.",
-    "- **RPE m / 1 m, deg / 1 m**: RMS of the translation and rotation error of the relative motion over "
-    "every pair of samples about 1 m of true travel apart (the nearest, within 10 %; evo's `evo_rpe "
+    "- **RPE m / 1 m, deg / 1 m**: RMS of the translation and rotation error of the relative "
+    "motion over "
+    "every pair of samples about 1 m of true travel apart (the nearest, within 10 %; evo's "
+    "`evo_rpe "
     "--delta 1 --delta_unit m --all_pairs --pairs_from_reference`).",
     "- **final** errors at the estimate's last sample; **RMS / max heading** over all samples.",
 ]
@@ -207,18 +216,24 @@ def robot_line(robot: dict | None) -> str:
         else "none: the robot is exactly as its odometry assumes"
     )
     return (
-        f"The robot's own errors ({what}): tyre radii {1e3 * robot['radius_error_left_m']:+.2f} mm left, "
-        f"{1e3 * robot['radius_error_right_m']:+.2f} mm right, track {1e3 * robot['separation_error_m']:+.2f} mm "
-        f"(the odometry assumes the nominal geometry: distance {100 * robot['odom_distance_error']:+.2f} %, "
-        f"heading drift {robot['odom_heading_drift_deg_per_m']:+.3f} deg per metre of straight, turns "
+        f"The robot's own errors ({what}): tyre radii {1e3 * robot['radius_error_left_m']:+.2f} "
+        f"mm left, "
+        f"{1e3 * robot['radius_error_right_m']:+.2f} mm right, track "
+        f"{1e3 * robot['separation_error_m']:+.2f} mm "
+        f"(the odometry assumes the nominal geometry: distance "
+        f"{100 * robot['odom_distance_error']:+.2f} %, "
+        f"heading drift {robot['odom_heading_drift_deg_per_m']:+.3f} deg per metre of straight, "
+        f"turns "
         f"{100 * robot['odom_turn_error']:+.2f} %); hall sensors off by up to "
-        f"{max(abs(v) for row in robot['hall_misalignment_deg'] for v in row):.2f} deg, edge jitter "
+        f"{max(abs(v) for row in robot['hall_misalignment_deg'] for v in row):.2f} deg, edge "
+        f"jitter "
         f"{robot['hall_jitter_us']:.1f} us; gyro scale error {100 * robot['gyro_scale_z']:+.2f} %."
     )
 
 
 def markdown(data: dict, figures: bool = True) -> str:
-    """``report.md`` from the metrics (``figures``: link ``trajectories.png`` and ``errors.png``)."""
+    """``report.md`` from the metrics (``figures``: link ``trajectories.png`` and
+    ``errors.png``)."""
     r, s, m, u = data["route"], data["summary"], data["map"], data["uwb"]
     blocked = ", ".join(
         f"{100 * b / max(u['exchanges'] / len(u['blocked_per_anchor']), 1):.0f} %"
@@ -228,9 +243,12 @@ def markdown(data: dict, figures: bool = True) -> str:
         "# Chapter 6 in the twin: localisation architectures compared (fig. 6.8)",
         "",
         f"Route `{r['name']}` in world `{r['world']}`: {r['length_m']:.1f} m driven at up to "
-        f"{r['max_speed_m_s']:.1f} m/s in {data['sim_s']:.1f} simulated s (wall time {data['drive_wall_s']:.1f} s "
-        f"for the drive, {data['wall_s']:.1f} s in all); goal reached: {'yes' if r['reached_goal'] else 'NO'}; "
-        f"cross-track RMS {r['cross_track_rms_m']:.3f} m. Firmware `{data['firmware']}`, seed {data['seed']}. "
+        f"{r['max_speed_m_s']:.1f} m/s in {data['sim_s']:.1f} simulated s (wall time "
+        f"{data['drive_wall_s']:.1f} s "
+        f"for the drive, {data['wall_s']:.1f} s in all); goal reached: "
+        f"{'yes' if r['reached_goal'] else 'NO'}; "
+        f"cross-track RMS {r['cross_track_rms_m']:.3f} m. Firmware `{data['firmware']}`, seed "
+        f"{data['seed']}. "
         "Messages: "
         + ", ".join(f"{k} {v}" for k, v in data["messages"].items())
         + ". UWB exchanges with a "
@@ -238,7 +256,8 @@ def markdown(data: dict, figures: bool = True) -> str:
         "",
         robot_line(data["robot"]),
         "",
-        "| architecture | ATE m | ATE aligned m | RPE m / 1 m | RPE deg / 1 m | final position error m "
+        "| architecture | ATE m | ATE aligned m | RPE m / 1 m | RPE deg / 1 m | final position "
+        "error m "
         "| final heading error deg | RMS heading error deg | max heading error deg | compute s |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
@@ -254,9 +273,8 @@ def markdown(data: dict, figures: bool = True) -> str:
         "",
         "Trajectories (TUM: `timestamp tx ty tz qx qy qz qw`, map frame): `truth.tum` and "
         + ", ".join(f"`{e['tum']}`" for e in data["architectures"].values())
-        + ". Reproduce a row with [evo](https://github.com/MichaelGrupp/evo), e.g. for odom+uwb+imu: "
-        + "; ".join(f"`{c}`" for c in evo_commands("."))
-        + ".",
+        + ". Reproduce a row with [evo](https://github.com/MichaelGrupp/evo), e.g. for "
+        "odom+uwb+imu: " + "; ".join(f"`{c}`" for c in evo_commands(".")) + ".",
         "",
     ]
     if figures:
@@ -266,17 +284,23 @@ def markdown(data: dict, figures: bool = True) -> str:
         "",
         f"- Raw odometry drift: {s['odom_drift_final_m']:.3f} m at the end of the route "
         f"({s['odom_drift_pct_of_length']:.2f} % of the distance).",
-        f"- Odometry + IMU against odometry alone on heading: {_yaw(data, 'odom+imu')} against {_yaw(data, 'odom')}.",
-        f"- LiDAR odometry ATE under {LIDAR_ATE_MAX_M:.2f} m: {'yes' if s['lidar_ate_under_0_10_m'] else 'NO'} "
+        f"- Odometry + IMU against odometry alone on heading: {_yaw(data, 'odom+imu')} against "
+        f"{_yaw(data, 'odom')}.",
+        f"- LiDAR odometry ATE under {LIDAR_ATE_MAX_M:.2f} m: "
+        f"{'yes' if s['lidar_ate_under_0_10_m'] else 'NO'} "
         f"({data['architectures']['odom+lidar']['ate_m']:.3f} m).",
-        f"- Map: {m['occupied_cells']} occupied cells, {100 * m['within_tolerance_frac']:.1f} % within "
-        f"{m['tolerance_cells']} cells of the world's walls (95th percentile {m['p95_distance_cells']:.2f} cells, "
-        f"max {m['max_distance_cells']:.1f}); {100 * m['outline_seen_frac']:.0f} % of the world's outline at "
+        f"- Map: {m['occupied_cells']} occupied cells, {100 * m['within_tolerance_frac']:.1f} % "
+        f"within "
+        f"{m['tolerance_cells']} cells of the world's walls (95th percentile "
+        f"{m['p95_distance_cells']:.2f} cells, "
+        f"max {m['max_distance_cells']:.1f}); {100 * m['outline_seen_frac']:.0f} % of the "
+        f"world's outline at "
         "LiDAR height is mapped (racks' far sides are never seen).",
         "",
         "![map](map.png)",
         "",
-        "The map is a map_server YAML + PGM (`map.yaml`): `amr-twin run --world map.yaml` drives in it.",
+        "The map is a map_server YAML + PGM (`map.yaml`): `amr-twin run --world map.yaml` "
+        "drives in it.",
         "",
     ]
     return "\n".join(lines)

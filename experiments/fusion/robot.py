@@ -31,7 +31,8 @@ STREAM = 4
 
 @dataclass(frozen=True)
 class RobotErrors:
-    """One robot's errors: true minus nominal geometry, m; hall sensor offsets, deg of wheel angle."""
+    """One robot's errors: true minus nominal geometry, m; hall sensor offsets, deg of wheel
+    angle."""
 
     radius_error_left_m: float = 0.0
     radius_error_right_m: float = 0.0
@@ -60,7 +61,8 @@ class RobotErrors:
         }
 
     def as_dict(self, cfg: TwinConfig) -> dict:
-        """JSON-ready values, and what they do to the nominal odometry (``cfg``: the nominal geometry).
+        """JSON-ready values, and what they do to the nominal odometry (``cfg``: the nominal
+        geometry).
 
         ``odom_distance_error``: odometry distance / true distance - 1 on a straight;
         ``odom_heading_drift_deg_per_m``: the odometry's heading error per metre of a

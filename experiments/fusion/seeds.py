@@ -40,7 +40,8 @@ class SeedJob:
 
 
 def run_seed(job: SeedJob) -> fusion.FusionResults:
-    """Drive and score one seed; the recorded messages are dropped before the result travels back."""
+    """Drive and score one seed; the recorded messages are dropped before the result travels
+    back."""
     return fusion.slim(
         fusion.run(
             job.cfg,
@@ -54,7 +55,8 @@ def run_seed(job: SeedJob) -> fusion.FusionResults:
 
 
 def parse_seeds(text: str) -> list[int]:
-    """``--seeds``: ``A:B`` (both included), ``a,b,c`` or one seed; ValueError with a one-line reason."""
+    """``--seeds``: ``A:B`` (both included), ``a,b,c`` or one seed; ValueError with a one-line
+    reason."""
     text = text.strip()
     try:
         if ":" in text:
@@ -99,7 +101,8 @@ def run(
     client=None,
     progress: bool = True,
 ) -> list[fusion.FusionResults]:
-    """Run every seed (``jobs`` local workers, or the Dask ``client``); results in the order of ``seeds``."""
+    """Run every seed (``jobs`` local workers, or the Dask ``client``); results in the order of
+    ``seeds``."""
     items = [SeedJob(cfg, str(route_path), int(s), firmware, robot_errors) for s in seeds]
     done = {
         item.seed: res
@@ -111,7 +114,8 @@ def run(
 
 
 def spread(values) -> dict:
-    """``mean``, ``sd`` (n - 1; 0 for one value), ``min``, ``max`` of a list of numbers (NaN ignored)."""
+    """``mean``, ``sd`` (n - 1; 0 for one value), ``min``, ``max`` of a list of numbers (NaN
+    ignored)."""
     v = np.asarray([x for x in values if x is not None and math.isfinite(x)], dtype=float)
     if v.size == 0:
         return {"mean": None, "sd": None, "min": None, "max": None, "n": 0}
@@ -143,7 +147,8 @@ def summarise(per_seed: list[dict]) -> dict:
 
 
 def write(results: list[fusion.FusionResults], out: Path) -> dict:
-    """Write each seed's folder, the summary and ``seeds.png`` into ``out``; return the summary's data."""
+    """Write each seed's folder, the summary and ``seeds.png`` into ``out``; return the summary's
+    data."""
     from amr_twin.experiments.fusion import report as fusion_report
 
     out = Path(out)

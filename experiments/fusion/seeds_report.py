@@ -69,8 +69,10 @@ def per_seed_table(data: dict) -> list[str]:
         if robot:
             r = d["robot"] or {}
             row += (
-                f" | {1e3 * r.get('radius_error_left_m', 0):+.2f}, {1e3 * r.get('radius_error_right_m', 0):+.2f} "
-                f"| {1e3 * r.get('separation_error_m', 0):+.2f} | {100 * r.get('gyro_scale_z', 0):+.2f} |"
+                f" | {1e3 * r.get('radius_error_left_m', 0):+.2f}, "
+                f"{1e3 * r.get('radius_error_right_m', 0):+.2f} "
+                f"| {1e3 * r.get('separation_error_m', 0):+.2f} | "
+                f"{100 * r.get('gyro_scale_z', 0):+.2f} |"
             )
         else:
             row += " |"
@@ -86,10 +88,14 @@ def markdown(data: dict) -> str:
     lines = [
         "# Chapter 6 in the twin: localisation architectures over many seeds",
         "",
-        f"Route `{r['name']}` in world `{r['world']}`, firmware `{data['firmware']}`, seeds {seed_text(seeds)} "
-        f"({len(seeds)} drives; goal reached in {reached} of them). Route length {data['length_m']['mean']:.1f} m, "
-        f"{data['sim_s']['mean']:.1f} simulated s and {data['wall_s']['mean']:.1f} s of wall time per drive on "
-        "average. Each seed draws the sensors' noise and the robot's own errors; every seed is in the table "
+        f"Route `{r['name']}` in world `{r['world']}`, firmware `{data['firmware']}`, seeds "
+        f"{seed_text(seeds)} "
+        f"({len(seeds)} drives; goal reached in {reached} of them). Route length "
+        f"{data['length_m']['mean']:.1f} m, "
+        f"{data['sim_s']['mean']:.1f} simulated s and {data['wall_s']['mean']:.1f} s of wall "
+        f"time per drive on "
+        "average. Each seed draws the sensors' noise and the robot's own errors; every seed is "
+        "in the table "
         "and in the spread.",
         "",
         "Each cell: mean ± standard deviation (lowest-highest) over the seeds.",
@@ -97,7 +103,8 @@ def markdown(data: dict) -> str:
         *table(data),
         "",
         f"Map from the LiDAR odometry, occupied cells within 2 cells of the world's walls: "
-        f"{cell(percent(data['map_within_tolerance_frac']), 1)} %. UWB exchanges with a wall in the "
+        f"{cell(percent(data['map_within_tolerance_frac']), 1)} %. UWB exchanges with a wall in "
+        f"the "
         f"tag-anchor line: {cell(percent(data['uwb_blocked_frac']), 1)} %.",
         "",
         *DEFINITIONS,
@@ -108,7 +115,8 @@ def markdown(data: dict) -> str:
         "",
         "![ATE per seed](seeds.png)",
         "",
-        "`seed<N>/` holds each seed's report, `metrics.json`, map and TUM trajectories (`truth.tum`, "
+        "`seed<N>/` holds each seed's report, `metrics.json`, map and TUM trajectories "
+        "(`truth.tum`, "
         + ", ".join(f"`{tum_name(n)}`" for n in data["architectures"])
         + "); the figures of seed "
         f"{first} are in `seed{first}/`. Check any row with evo, e.g. "

@@ -68,7 +68,8 @@ def odom_poses(msgs: list) -> tuple[np.ndarray, np.ndarray]:
 def relative_motion(
     t_s: np.ndarray, pose: np.ndarray, t0_s: float, t1_s: float
 ) -> tuple[float, float, float]:
-    """Motion of the body between ``t0_s`` and ``t1_s`` in its own frame at ``t0_s``: dx_m, dy_m, dyaw_rad."""
+    """Motion of the body between ``t0_s`` and ``t1_s`` in its own frame at ``t0_s``: dx_m, dy_m,
+    dyaw_rad."""
     if len(t_s) == 0:
         return 0.0, 0.0, 0.0
     d = se2.between(se2.interpolate(t_s, pose, t0_s), se2.interpolate(t_s, pose, t1_s))

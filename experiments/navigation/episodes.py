@@ -1,8 +1,9 @@
-"""The episodes' pieces: an :class:`Episode`, the scenarios and where an unmapped obstacle or a person goes.
+"""The episodes' pieces: an :class:`Episode`, the scenarios and where an unmapped obstacle or a
+person goes.
 
-Shared by the drawing of the hand-made worlds' episodes (:func:`amr_twin.experiments.navigation.episodes`)
-and the generated halls' (:mod:`.generated`); docs/explanation/navigation.md describes the scenarios.
-"""
+Shared by the drawing of the hand-made worlds' episodes
+(:func:`amr_twin.experiments.navigation.episodes`) and the generated halls' (:mod:`.generated`);
+docs/explanation/navigation.md describes the scenarios."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ JACK_SIZE_M = (1.60, 0.75, 1.30)
 
 @dataclass(frozen=True)
 class Episode:
-    """One start/goal pair: poses ``(x_m, y_m, yaw_rad)``, its scenario, its unmapped obstacle (or None)."""
+    """One start/goal pair: poses ``(x_m, y_m, yaw_rad)``, its scenario, its unmapped obstacle (or
+    None)."""
 
     index: int
     seed: int
@@ -42,7 +44,8 @@ def free_cells(costmap) -> np.ndarray:
 
 
 ROBOT_SPEED_M_S = 0.55
-"""The robot's mean speed on its way (from the episodes' times), to time a walking person's crossing."""
+"""The robot's mean speed on its way (from the episodes' times), to time a walking person's
+crossing."""
 CROSS_HALF_M = 0.7
 STOP_WITHIN_M = 0.6
 """A walking person halts while the robot is this close ahead of them (people give way), m."""
@@ -58,9 +61,9 @@ def place(
     people: str = "walking",
     clear_m: tuple[float, float] = (0.9, 1.1),
 ):
-    """An obstacle (or a walking person: an Actor; ``people`` ``crossing``: one who does not give way) in an
-    aisle on the planned way, at least 3 m from start and goal, its point ``clear_m`` from the map's obstacles
-    (the middle of a 2 m aisle); None if no room."""
+    """An obstacle (or a walking person: an Actor; ``people`` ``crossing``: one who does not give
+    way) in an aisle on the planned way, at least 3 m from start and goal, its point ``clear_m``
+    from the map's obstacles (the middle of a 2 m aisle); None if no room."""
     xy = plan.xy_m
     s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
     d = costmap.static_distance_at(xy)

@@ -1,4 +1,5 @@
-"""``amr-twin experiment navigation``: seeded episodes of start/goal pairs in the warehouse, measured as nav2 is.
+"""``amr-twin experiment navigation``: seeded episodes of start/goal pairs in the warehouse,
+measured as nav2 is.
 
 Reasons and measurements: docs/explanation/navigation.md#amr_twinexperimentsnavigationexperiment."""
 
@@ -24,7 +25,8 @@ MAPS = ("true", "slam")
 
 
 def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") -> list[Episode]:
-    """``n`` episodes, episode ``i`` drawn from ``default_rng([seed, i])`` (module docstring; a generated hall's:
+    """``n`` episodes, episode ``i`` drawn from ``default_rng([seed, i])`` (module docstring; a
+    generated hall's:
     :func:`amr_twin.experiments.navigation.generated.episodes`)."""
     from amr_twin.model.generated_world import is_generated
     from amr_twin.navigation.footprint import robot_footprint
@@ -88,8 +90,9 @@ class EpisodeRun:
 
 
 def run_episode(item: EpisodeRun) -> dict:
-    """Drive one episode and measure it (:func:`amr_twin.experiments.navigation.metrics.measure`; in a generated
-    hall its doorways too, :func:`amr_twin.experiments.navigation.generated.door_metrics`)."""
+    """Drive one episode and measure it (:func:`amr_twin.experiments.navigation.metrics.measure`; in
+    a generated hall its doorways too,
+    :func:`amr_twin.experiments.navigation.generated.door_metrics`)."""
     from amr_twin.experiments.navigation.metrics import measure
     from amr_twin.model.generated_world import is_generated
     from amr_twin.navigation.stack import NavigationOptions, navigate
@@ -148,7 +151,8 @@ def run(
     progress: bool = True,
     people: str = "walking",
 ) -> dict:
-    """Every episode on every map (building the SLAM map at ``slam_stem`` first when ``slam_yaml`` is None)."""
+    """Every episode on every map (building the SLAM map at ``slam_stem`` first when ``slam_yaml``
+    is None)."""
     import time
 
     from amr_twin.experiments.runner.executor import run_all
@@ -195,7 +199,8 @@ def run(
         "controller": controller,
         "firmware": firmware,
         "slam_map": slam,
-        "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
+        "optimal": "shortest path of the robot's centre in the visibility graph of the true "
+        "world's obstacles "
         "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
         "summary": summary(rows),
         "rows": rows,
@@ -223,9 +228,10 @@ def run_halls(
     progress: bool = True,
     people: str = "walking",
 ) -> dict:
-    """``n`` episodes on the true map of each generated hall of ``worlds``, summed up for the ``tuning`` halls and
-    for the others (held out) apart (:mod:`.generated`); each with a walking person also run without
-    them, for the time the people cost (``people`` of each group's summary, ``rows_without_people``)."""
+    """``n`` episodes on the true map of each generated hall of ``worlds``, summed up for the
+    ``tuning`` halls and for the others (held out) apart (:mod:`.generated`); each with a walking
+    person also run without them, for the time the people cost (``people`` of each group's summary,
+    ``rows_without_people``)."""
     import time
 
     from amr_twin.experiments.runner.executor import run_all
@@ -282,7 +288,8 @@ def run_halls(
         "localisation": localisation,
         "controller": controller,
         "firmware": firmware,
-        "optimal": "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
+        "optimal": "shortest path of the robot's centre in the visibility graph of the true "
+        "world's obstacles "
         "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
         "summary": summaries,
         "by_world": {w: door_summary([r for r in rows if r["world"] == w]) for w in worlds},

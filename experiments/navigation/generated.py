@@ -1,19 +1,20 @@
-"""The navigation experiment on generated halls (``generated:SEED``): door trips, the doorways' clearance.
+"""The navigation experiment on generated halls (``generated:SEED``): door trips, the doorways'
+clearance.
 
-:func:`episodes` draws episode ``i`` from ``default_rng([seed, hall seed, i])``: half of them (``DOOR_SHARE``)
-are **door trips**, the start on one side of the inner wall and the goal on the other (which side
-first drawn too), the others keep to one side (the rack section or the room); start and goal
-``MIN_APART_M`` to ``MAX_APART_M`` apart, ``FREE_CLEARANCE_M`` from any obstacle, outside the
-cage, joined by the planner on the true map. The scenario is drawn as in the hand-made worlds
-(:mod:`.episodes`: clear, a person, a pallet jack), or ``clear`` only (``people`` ``none``);
+:func:`episodes` draws episode ``i`` from ``default_rng([seed, hall seed, i])``: half of them
+(``DOOR_SHARE``) are **door trips**, the start on one side of the inner wall and the goal on the
+other (which side first drawn too), the others keep to one side (the rack section or the room);
+start and goal ``MIN_APART_M`` to ``MAX_APART_M`` apart, ``FREE_CLEARANCE_M`` from any obstacle,
+outside the cage, joined by the planner on the true map. The scenario is drawn as in the hand-made
+worlds (:mod:`.episodes`: clear, a person, a pallet jack), or ``clear`` only (``people`` ``none``);
 a person or jack stands on the way where it is 0.9-1.6 m from the map's obstacles (aisles of
 uneven width), never in a doorway. ``crossing`` people walk across without giving way.
 
 :func:`door_metrics` measures each doorway the robot drove through: the least clearance of the
 true footprint (10 ms poses) to each jamb (the inner wall's pieces south and north of it) while
-its centre is within ``DOOR_ZONE_M`` of the doorway. :func:`without_people` gives the episodes with a walking person again without them, :func:`people_penalty`
-the extra time to the goal the people cost. :func:`write_world` writes a hall as MJCF and its true map as a
-map_server YAML + PGM.
+its centre is within ``DOOR_ZONE_M`` of the doorway. :func:`without_people` gives the episodes with
+a walking person again without them, :func:`people_penalty` the extra time to the goal the people
+cost. :func:`write_world` writes a hall as MJCF and its true map as a map_server YAML + PGM.
 """
 
 from __future__ import annotations
@@ -31,12 +32,15 @@ from amr_twin.model.worlds import Obstacle
 DOOR_SHARE = 0.5
 MIN_APART_M, MAX_APART_M = 5.0, 30.0
 WEST_SHARE = 0.6
-"""Share of the one-side episodes in the rack section (the rest in the room behind the inner wall)."""
+"""Share of the one-side episodes in the rack section (the rest in the room behind the inner
+wall)."""
 PLACE_CLEAR_M = (0.9, 1.6)
 DOOR_ZONE_M = 0.8
-"""A pose is in a doorway while its centre is this close to the wall's centre line and to the opening (m)."""
+"""A pose is in a doorway while its centre is this close to the wall's centre line and to the
+opening (m)."""
 WITHOUT_PEOPLE = "person_left_out"
-"""The scenario of an episode with a walking person run again without them (the reference of :func:`people_penalty`)."""
+"""The scenario of an episode with a walking person run again without them (the reference of
+:func:`people_penalty`)."""
 
 
 def _crossed(hall, xy: np.ndarray) -> tuple[str, ...]:
@@ -60,8 +64,8 @@ def _in_cage(hall, xy: np.ndarray) -> np.ndarray:
 
 
 def _passable(cfg, world: str, obstacle: Obstacle, start, goal) -> bool:
-    """Whether a path of the robot's inscribed disc joins start and goal past ``obstacle`` (the metrics' optimal
-    length is finite): a jack must not close the only doorway or the dead end."""
+    """Whether a path of the robot's inscribed disc joins start and goal past ``obstacle`` (the
+    metrics' optimal length is finite): a jack must not close the only doorway or the dead end."""
     from amr_twin.experiments.navigation.optimal import VisibilityGraph
     from amr_twin.model.generated_world import hall as drawn
     from amr_twin.model.world_geometry import Footprints
@@ -153,8 +157,8 @@ def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") ->
 
 
 def door_metrics(cfg, world: str, episode: Episode, run) -> dict:
-    """``door_trip``, the doorways crossed by the robot (``doors_crossed``) and, for each, the least clearance of
-    the true footprint to its south and north jambs, m (``door_clearance``)."""
+    """``door_trip``, the doorways crossed by the robot (``doors_crossed``) and, for each, the least
+    clearance of the true footprint to its south and north jambs, m (``door_clearance``)."""
     from amr_twin.experiments.navigation.metrics import footprint_clearance_m
     from amr_twin.model.generated_world import hall as drawn
     from amr_twin.model.world_geometry import Footprints
@@ -189,8 +193,8 @@ def door_metrics(cfg, world: str, episode: Episode, run) -> dict:
 
 
 def without_people(items: list) -> list:
-    """The items (``EpisodeRun``) of ``items`` whose episode has a walking person, that person left out (scenario
-    ``WITHOUT_PEOPLE``): the same start, goal, hall and seeds."""
+    """The items (``EpisodeRun``) of ``items`` whose episode has a walking person, that person left
+    out (scenario ``WITHOUT_PEOPLE``): the same start, goal, hall and seeds."""
     return [
         replace(it, episode=replace(it.episode, actor=None, scenario=WITHOUT_PEOPLE))
         for it in items
@@ -199,10 +203,11 @@ def without_people(items: list) -> list:
 
 
 def people_penalty(rows: list[dict], bare: list[dict]) -> dict:
-    """The people's cost in time: each episode of ``rows`` with a walking person against its run without them in
-    ``bare`` (matched by hall and index), both reached: ``pairs``, median and worst extra seconds to the goal,
-    and each pair's ``(world, index, extra_s)``; the person episodes, their successes, the episodes in which the
-    robot touched a person (``person_contact_episodes``)."""
+    """The people's cost in time: each episode of ``rows`` with a walking person against its run
+    without them in ``bare`` (matched by hall and index), both reached: ``pairs``, median and worst
+    extra seconds to the goal, and each pair's ``(world, index, extra_s)``; the person episodes,
+    their successes, the episodes in which the robot touched a person
+    (``person_contact_episodes``)."""
     ref = {(r["world"], r["index"]): r for r in bare}
     people = [r for r in rows if r.get("actor")]
     pairs = [
@@ -228,7 +233,8 @@ def people_penalty(rows: list[dict], bare: list[dict]) -> dict:
 
 
 def door_summary(rows: list[dict]) -> dict:
-    """Door trips against the others: episodes, success, collisions, the least jamb clearance, true final error."""
+    """Door trips against the others: episodes, success, collisions, the least jamb clearance, true
+    final error."""
     out = {}
     for group, sel in (
         ("door_trips", [r for r in rows if r.get("door_trip")]),
@@ -256,8 +262,9 @@ def door_summary(rows: list[dict]) -> dict:
 
 
 def write_world(cfg, world: str, folder: Path) -> list[Path]:
-    """Write the hall ``world`` as ``<stem>.xml`` (MJCF) and its true map as ``<stem>.yaml`` + ``<stem>.pgm``
-    (map_server: 0 occupied, 254 free, origin its lower-left corner) in ``folder``; the paths."""
+    """Write the hall ``world`` as ``<stem>.xml`` (MJCF) and its true map as ``<stem>.yaml`` +
+    ``<stem>.pgm`` (map_server: 0 occupied, 254 free, origin its lower-left corner) in ``folder``;
+    the paths."""
     import yaml
 
     from amr_twin.model.generated_world import mjcf, parse

@@ -1,5 +1,6 @@
-"""The outputs of the navigation experiment on generated halls: ``metrics.json``, ``report.md`` and, for each
-hall, a folder with the world (MJCF, map_server YAML + PGM) and the trajectories over its map."""
+"""The outputs of the navigation experiment on generated halls: ``metrics.json``, ``report.md`` and,
+for each hall, a folder with the world (MJCF, map_server YAML + PGM) and the trajectories over its
+map."""
 
 from __future__ import annotations
 
@@ -44,15 +45,18 @@ def _door_cells(d: dict) -> str:
 
 
 def _people_lines(data: dict) -> list[str]:
-    """The people table: person episodes, their successes and contacts, the time they cost against the same
-    episodes without them (:func:`~.generated.people_penalty`)."""
+    """The people table: person episodes, their successes and contacts, the time they cost against
+    the same episodes without them (:func:`~.generated.people_penalty`)."""
     lines = [
         "",
-        f"People (`{data['people']}`): each episode with a walking person also run without them (same hall, "
-        "start, goal and seeds); extra time to the goal over the pairs both reached. A contact: any touch of "
+        f"People (`{data['people']}`): each episode with a walking person also run without them "
+        f"(same hall, "
+        "start, goal and seeds); extra time to the goal over the pairs both reached. A contact: "
+        "any touch of "
         "person and robot (a reported collision naming the person).",
         "",
-        "| halls | person episodes | reached | episodes touching a person | pairs | extra s median | extra s worst |",
+        "| halls | person episodes | reached | episodes touching a person | pairs | extra s "
+        "median | extra s worst |",
         "|" + "---|" * 7,
     ]
     for group, s in data["summary"].items():
@@ -61,7 +65,8 @@ def _people_lines(data: dict) -> list[str]:
             continue
         lines.append(
             f"| {group.replace('_', '-')} | {p['person_episodes']} | "
-            f"{_share(p['person_success'], p['person_episodes'])} | {p['person_contact_episodes']} | {p['pairs']} | "
+            f"{_share(p['person_success'], p['person_episodes'])} | "
+            f"{p['person_contact_episodes']} | {p['pairs']} | "
             f"{_fmt(p['extra_s_median'], 1)} | {_fmt(p['extra_s_max'], 1)} |"
         )
     return lines
@@ -71,18 +76,24 @@ def report(data: dict, out: Path) -> None:
     """Write ``metrics.json`` and ``report.md``: the tuning halls and the held-out ones apart."""
     write_json(out / "metrics.json", data)
     head = (
-        "| halls | trips | episodes | success | collisions | doorway passages | least jamb clearance m "
+        "| halls | trips | episodes | success | collisions | doorway passages | least jamb "
+        "clearance m "
         "(min / median) | true final error m (median / max) |"
     )
     lines = [
-        f"# Navigation on generated halls: {data['episodes']} episodes x {len(data['worlds'])} halls",
+        f"# Navigation on generated halls: {data['episodes']} episodes x {len(data['worlds'])} "
+        f"halls",
         "",
-        f"Tuning halls (tuned on, not to be quoted as results): {', '.join(data['groups']['tuning']) or 'none'}. "
+        f"Tuning halls (tuned on, not to be quoted as results): "
+        f"{', '.join(data['groups']['tuning']) or 'none'}. "
         f"Held-out halls: {', '.join(data['groups']['held_out']) or 'none'}.",
         "",
-        f"Episode seed {data['seed']}, people `{data['people']}`, localisation `{data['localisation']}`, "
-        f"controller `{data['controller']}`, firmware `{data['firmware']}`, the true map. Success: the "
-        "metrics' rule (the true pose at the end within the goal checker's tolerances, no collision). "
+        f"Episode seed {data['seed']}, people `{data['people']}`, localisation "
+        f"`{data['localisation']}`, "
+        f"controller `{data['controller']}`, firmware `{data['firmware']}`, the true map. "
+        f"Success: the "
+        "metrics' rule (the true pose at the end within the goal checker's tolerances, no "
+        "collision). "
         "Jamb clearance: the true footprint to each side of the doorway while in it. "
         f"Optimal length: {data['optimal']}.",
         "",
@@ -92,7 +103,8 @@ def report(data: dict, out: Path) -> None:
     for group, s in data["summary"].items():
         for trips, d in s["doors"].items():
             lines.append(
-                f"| {group.replace('_', '-')} | {trips.replace('_', ' ')} | {d['episodes']} | {_door_cells(d)} |"
+                f"| {group.replace('_', '-')} | {trips.replace('_', ' ')} | {d['episodes']} | "
+                f"{_door_cells(d)} |"
             )
     lines += ["", "Per hall:", "", head.replace("| halls |", "| hall |"), "|" + "---|" * 8]
     for world, s in data["by_world"].items():
@@ -109,8 +121,10 @@ def report(data: dict, out: Path) -> None:
     for group, s in data["summary"].items():
         v = s["episodes"].get("true/all")
         lines.append(
-            f"| {group.replace('_', '-')} | {v['episodes']} | {_fmt(v['success_rate'], 1, 100, ' %')} | "
-            f"{_fmt(v['travelled_over_optimal_median'], 3)} ({_fmt(v['travelled_over_optimal_max'], 3)}) | "
+            f"| {group.replace('_', '-')} | {v['episodes']} | "
+            f"{_fmt(v['success_rate'], 1, 100, ' %')} | "
+            f"{_fmt(v['travelled_over_optimal_median'], 3)} "
+            f"({_fmt(v['travelled_over_optimal_max'], 3)}) | "
             f"{_fmt(v['min_clearance_m'], 3)} | "
             f"{_fmt(v['person_clearance_ge_0_3_share'], 0, 100, ' %')} of {v['person_crossings']} |"
         )
@@ -125,7 +139,8 @@ def report(data: dict, out: Path) -> None:
         lines.append(
             f"- `{r['world']}` episode {r['index']} ({r['scenario']}, "
             f"{'door trip' if r['door_trip'] else 'one side'}): {r['status']}"
-            f"{', ' + str(r['collisions']) + ' collision(s) with ' + ', '.join(r['collided_with']) if r['collisions'] else ''}"
+            f"{', ' + str(r['collisions']) + ' collision(s) with ' if r['collisions'] else ''}"
+            f"{', '.join(r['collided_with']) if r['collisions'] else ''}"
             f"{': ' + r['reason'] if r['reason'] else ''}; true final error "
             f"{_fmt(r.get('final_error_true_m'), 2)} m{'; ' + gaps if gaps else ''}"
         )
@@ -133,9 +148,11 @@ def report(data: dict, out: Path) -> None:
         lines.append("- none")
     lines += [
         "",
-        f"Wall time {data['wall_s']:.0f} s, CPU {data['cpu_s']:.0f} s (all processes), {data['jobs']} job(s).",
+        f"Wall time {data['wall_s']:.0f} s, CPU {data['cpu_s']:.0f} s (all processes), "
+        f"{data['jobs']} job(s).",
         "",
-        "Each hall's folder holds its world (`.xml`), its true map (`.yaml` + `.pgm`) and the trajectories:",
+        "Each hall's folder holds its world (`.xml`), its true map (`.yaml` + `.pgm`) and the "
+        "trajectories:",
         "",
     ]
     lines += [f"- [`{w}`]({world_folder(w)}/trajectories_true.png)" for w in data["worlds"]]

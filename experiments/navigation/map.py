@@ -1,15 +1,16 @@
-"""The SLAM map of the navigation experiment: the robot drives every aisle once, its scans make the map.
+"""The SLAM map of the navigation experiment: the robot drives every aisle once, its scans make the
+map.
 
-The fusion experiment's pipeline (:mod:`.fusion.experiment`): a pure-pursuit drive of a route through every
-aisle of the world (``experiments/routes/<world>_mapping.yaml``) with the LiDAR, IMU and UWB on,
-then the scans inserted into a log-odds grid (amr_twin/estimation/occupancy_grid.py), each beam at the
-laser pose of its own instant, saved as map_server YAML + PGM. The poses are smoothed over the
-whole drive (amr_twin/estimation/pose_graph.py, GTSAM): kiss-icp's and the wheel odometry's motion between
-scans and every UWB range, the ranges late behind racks weighed down. Neither a filter nor LiDAR
-odometry alone makes a straight map there: the EKF's heading wanders where the ranges are late
-(0.6-0.8 deg median, up to 7 deg), which drew rows twice and slanted, and kiss-icp slides 1-1.5 m
-along look-alike aisles. Each scan is then matched to the map of the scans before it
-(:mod:`.scan_match`, a SLAM front end's scan matcher) before the grid is made; a ROS user
+The fusion experiment's pipeline (:mod:`.fusion.experiment`): a pure-pursuit drive of a route
+through every aisle of the world (``experiments/routes/<world>_mapping.yaml``) with the LiDAR, IMU
+and UWB on, then the scans inserted into a log-odds grid (amr_twin/estimation/occupancy_grid.py),
+each beam at the laser pose of its own instant, saved as map_server YAML + PGM. The poses are
+smoothed over the whole drive (amr_twin/estimation/pose_graph.py, GTSAM): kiss-icp's and the wheel
+odometry's motion between scans and every UWB range, the ranges late behind racks weighed down.
+Neither a filter nor LiDAR odometry alone makes a straight map there: the EKF's heading wanders
+where the ranges are late (0.6-0.8 deg median, up to 7 deg), which drew rows twice and slanted, and
+kiss-icp slides 1-1.5 m along look-alike aisles. Each scan is then matched to the map of the scans
+before it (:mod:`.scan_match`, a SLAM front end's scan matcher) before the grid is made; a ROS user
 would get a comparable map from slam_toolbox with loop closures. What the map holds is what the
 scan plane (0.45 m) cuts: loose pallets lower than that are not on it (a collision risk the
 experiment reports, not one it hides). Its agreement with the world is measured as the fusion
@@ -29,7 +30,8 @@ MAPPING_ROUTE = "{world}_mapping.yaml"
 
 
 def mapping_route(world: str) -> Path:
-    """The route that maps ``world`` (a file of experiments/routes/); ValueError naming it if there is none."""
+    """The route that maps ``world`` (a file of experiments/routes/); ValueError naming it if there
+    is none."""
     path = ROUTES_DIR / MAPPING_ROUTE.format(world=world)
     if not path.is_file():
         raise ValueError(
@@ -39,8 +41,8 @@ def mapping_route(world: str) -> Path:
 
 
 def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = False) -> dict:
-    """Drive the mapping route, smooth its poses, build the map matched scan to map (:func:`save_slam_map`),
-    save ``<stem>.yaml/.pgm/.png``; its figures."""
+    """Drive the mapping route, smooth its poses, build the map matched scan to map
+    (:func:`save_slam_map`), save ``<stem>.yaml/.pgm/.png``; its figures."""
     from amr_twin.estimation.pose_graph import smooth
     from amr_twin.controllers.route import load_route
     from amr_twin.experiments.fusion.experiment import (
@@ -99,8 +101,8 @@ def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = 
 
 
 def beam_poses(cfg, scans: list, t_s: np.ndarray, pose: np.ndarray) -> list:
-    """Per scan, the laser pose (n_beams, 3) at each beam's instant, from base poses (N, 3) at ``t_s`` (N,)
-    (the last of equal stamps kept)."""
+    """Per scan, the laser pose (n_beams, 3) at each beam's instant, from base poses (N, 3) at
+    ``t_s`` (N,) (the last of equal stamps kept)."""
     from amr_twin.analysis import se2
     from amr_twin.estimation.lidar_odometry import beam_times_s
     from amr_twin.experiments.fusion.experiment import laser_in_base, last_per_stamp
@@ -118,7 +120,8 @@ def save_slam_map(
 ) -> dict:
     """The map of ``scans`` at ``beam_poses`` after scan-to-map matching (:mod:`.scan_match`),
     saved at ``stem``; its agreement with the world (``boxes``), and that of the maps the poses make
-    unmatched (``unmatched_*``) and the EKF's poses make (``ekf_only_*``, when given; neither saved)."""
+    unmatched (``unmatched_*``) and the EKF's poses make (``ekf_only_*``, when given; neither
+    saved)."""
     from amr_twin.experiments.fusion.map import agreement, build_map
     from amr_twin.experiments.navigation.scan_match import match_scans
 

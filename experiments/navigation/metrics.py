@@ -1,11 +1,13 @@
-"""The metrics of a navigation episode, as BARN, arena-bench and MRPB report them, and their summary.
+"""The metrics of a navigation episode, as BARN, arena-bench and MRPB report them, and their
+summary.
 
 Per episode (:func:`measure`):
 
-- ``success``: the goal reached without a collision, judged by the TRUE pose at the end: within the goal
+- ``success``: the goal reached without a collision, judged by the TRUE pose at the end: within the
+goal
   checker's tolerances (xy and yaw) of the goal, whatever the navigator's estimate said
-  (:mod:`amr_twin.navigation.goal_truth`); ``final_error_*``: the truth's and the estimate's distance and
-  heading error from the goal at the end;
+  (:mod:`amr_twin.navigation.goal_truth`); ``final_error_*``: the truth's and the estimate's
+  distance and heading error from the goal at the end;
 - ``collisions``: contacts of the robot's body with the world (amr_twin/sim/collisions.py);
 - ``time_s``: from the navigator's start to the goal (or to the end);
 - ``barn_score``: ``success * OT / clip(AT, 2 OT, 8 OT)`` with ``OT`` the optimal length over the
@@ -28,11 +30,13 @@ import numpy as np
 
 W_DEADBAND_RAD_S = 0.02
 PERSON_HALF_M = (0.15, 0.225)
-"""Half the depth and width of a walking person's body (amr.yaml's actors.person torso, 0.25 x 0.45 m, legs within)."""
+"""Half the depth and width of a walking person's body (amr.yaml's actors.person torso, 0.25 x 0.45
+m, legs within)."""
 
 
 def footprint_clearance_m(poses: np.ndarray, footprint, boxes) -> np.ndarray:
-    """Least distance (n,) from the footprint at each pose (n, 3) to ``boxes`` (their footprints), m."""
+    """Least distance (n,) from the footprint at each pose (n, 3) to ``boxes`` (their footprints),
+    m."""
     from amr_twin.model.world_geometry import Footprints, distance_to_boxes_m
     from amr_twin.navigation.kinematics import to_map
 
@@ -49,8 +53,8 @@ def footprint_clearance_m(poses: np.ndarray, footprint, boxes) -> np.ndarray:
 
 
 def world_obstacle_boxes(cfg, world: str):
-    """The footprints of the world's obstacles the robot can hit (floor to its top; a ROS map world's extruded
-    walls), as :func:`footprint_clearance_m` takes them."""
+    """The footprints of the world's obstacles the robot can hit (floor to its top; a ROS map
+    world's extruded walls), as :func:`footprint_clearance_m` takes them."""
     import mujoco
 
     from amr_twin.model.worlds import world_path, world_xml
@@ -78,7 +82,8 @@ def _sign_changes(w: np.ndarray) -> int:
 
 
 def measure(cfg, world: str, episode, map_kind: str, run) -> dict:
-    """The metrics of one finished episode (module docstring), with its trajectory at 5 Hz for the plots."""
+    """The metrics of one finished episode (module docstring), with its trajectory at 5 Hz for the
+    plots."""
     from amr_twin.experiments.navigation.optimal import VisibilityGraph
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.kinematics import Limits
@@ -221,7 +226,8 @@ def _pct(values, q):
 
 
 def summary(rows: list[dict]) -> dict:
-    """Each metric by map and scenario (``with_people`` pools the person and pallet-jack episodes)."""
+    """Each metric by map and scenario (``with_people`` pools the person and pallet-jack
+    episodes)."""
     out = {}
     for map_kind in sorted({r["map"] for r in rows}):
         for group, kinds in (

@@ -1,4 +1,5 @@
-"""The optimal path length of an episode: the shortest path of the robot's centre in a visibility graph.
+"""The optimal path length of an episode: the shortest path of the robot's centre in a visibility
+graph.
 
 The free space is the world's floor minus every obstacle of the robot's height range (the true
 world, unmapped obstacles included), each grown by the footprint's inscribed radius (shapely,
@@ -25,7 +26,8 @@ TOLERANCE_M = 1e-3
 
 
 class VisibilityGraph:
-    """The free space of ``boxes`` (:class:`~amr_twin.model.world_geometry.Footprints`) for a disc of ``radius_m``."""
+    """The free space of ``boxes`` (:class:`~amr_twin.model.world_geometry.Footprints`) for a disc
+    of ``radius_m``."""
 
     def __init__(self, boxes, radius_m: float, bounds_xy_m: tuple[float, float, float, float]):
         polys = []

@@ -1,4 +1,5 @@
-"""The navigation experiment's outputs: ``metrics.json``, ``report.md``, the trajectories over each map."""
+"""The navigation experiment's outputs: ``metrics.json``, ``report.md``, the trajectories over each
+map."""
 
 from __future__ import annotations
 
@@ -63,8 +64,10 @@ def plot(rows: list[dict], static_maps: dict, out: Path) -> list[Path]:
         n_ok = sum(r["success"] for r in sel)
         ax.set_title(
             f"{len(sel)} episodes on the {kind} map ({Path(sm.source).name}): {n_ok} succeeded\n"
-            "blue clear, green person, orange pallet jack (rectangles: the unmapped obstacles; walking "
-            "people: their crossing line), red failed; o start, x goal; dots: the true pose at 5 Hz",
+            "blue clear, green person, orange pallet jack (rectangles: the unmapped obstacles; "
+            "walking "
+            "people: their crossing line), red failed; o start, x goal; dots: the true pose at "
+            "5 Hz",
             fontsize=10,
         )
         ax.set_xlabel("x, m (map)")
@@ -89,22 +92,29 @@ def report(data: dict, out: Path) -> None:
     lines = [
         f"# Navigation experiment: {data['episodes']} episodes x {len(data['maps'])} maps",
         "",
-        f"World `{data['world']}`, seed {data['seed']}, people `{data.get('people', 'static')}`, localisation "
+        f"World `{data['world']}`, seed {data['seed']}, people `{data.get('people', 'static')}`, "
+        f"localisation "
         f"`{data['localisation']}`, controller "
-        f"`{data['controller']}`, firmware `{data['firmware']}`. Optimal length: {data['optimal']}.",
+        f"`{data['controller']}`, firmware `{data['firmware']}`. Optimal length: "
+        f"{data['optimal']}.",
         "",
-        "| map / scenario | episodes | success | collisions | time s | BARN | travelled/optimal median (max) "
-        "| min clearance m | person >= 0.3 m | plan ms p50/p95 | controller ms p50/p99 | recoveries /100 m "
+        "| map / scenario | episodes | success | collisions | time s | BARN | travelled/optimal "
+        "median (max) "
+        "| min clearance m | person >= 0.3 m | plan ms p50/p95 | controller ms p50/p99 | "
+        "recoveries /100 m "
         "| w sign changes last m |",
         "|" + "---|" * 13,
     ]
     for key, v in s.items():
         lines.append(
-            f"| {key} | {v['episodes']} | {_fmt(v['success_rate'], 1, 100, ' %')} | {v['collisions']} | "
+            f"| {key} | {v['episodes']} | {_fmt(v['success_rate'], 1, 100, ' %')} | "
+            f"{v['collisions']} | "
             f"{_fmt(v['time_s_mean'], 1)} | {_fmt(v['barn_score_mean'], 3)} | "
-            f"{_fmt(v['travelled_over_optimal_median'], 3)} ({_fmt(v['travelled_over_optimal_max'], 3)}) | "
+            f"{_fmt(v['travelled_over_optimal_median'], 3)} "
+            f"({_fmt(v['travelled_over_optimal_max'], 3)}) | "
             f"{_fmt(v['min_clearance_m'], 3)} | "
-            f"{_fmt(v['person_clearance_ge_0_3_share'], 0, 100, ' %')} of {v['person_crossings']} | "
+            f"{_fmt(v['person_clearance_ge_0_3_share'], 0, 100, ' %')} of "
+            f"{v['person_crossings']} | "
             f"{_fmt(v['plan_ms_p50'], 1)} / {_fmt(v['plan_ms_p95'], 1)} | "
             f"{_fmt(v['controller_ms_p50'], 2)} / {_fmt(v['controller_ms_p99'], 2)} | "
             f"{_fmt(v['recoveries_per_100m'], 2)} | {_fmt(v['w_sign_changes_last_m_mean'], 2)} |"
@@ -113,7 +123,8 @@ def report(data: dict, out: Path) -> None:
         "",
         "Final distance to the goal, p95 (success is judged by the truth): "
         + "; ".join(
-            f"{key} true {_fmt(v.get('final_error_true_m_p95'), 3)} m, estimate {_fmt(v.get('final_error_estimate_m_p95'), 3)} m"
+            f"{key} true {_fmt(v.get('final_error_true_m_p95'), 3)} m, estimate "
+            f"{_fmt(v.get('final_error_estimate_m_p95'), 3)} m"
             for key, v in s.items()
             if key.endswith("/all")
         )
@@ -123,7 +134,8 @@ def report(data: dict, out: Path) -> None:
     lines += ["", f"Failed episodes ({len(failed)}):", ""]
     lines += [
         f"- {r['map']} map, episode {r['index']} ({r['scenario']}): {r['status']}"
-        f"{', ' + str(r['collisions']) + ' collision(s) with ' + ', '.join(r['collided_with']) if r['collisions'] else ''}"
+        f"{', ' + str(r['collisions']) + ' collision(s) with ' if r['collisions'] else ''}"
+        f"{', '.join(r['collided_with']) if r['collisions'] else ''}"
         f"{': ' + r['reason'] if r['reason'] else ''}"
         for r in failed
     ] or ["- none"]
@@ -132,7 +144,8 @@ def report(data: dict, out: Path) -> None:
         lines += [
             "",
             f"SLAM map: `{m['yaml']}` ({m.get('route', 'given')}); "
-            f"walls within 2 cells of the world: {_fmt(m.get('walls_within_2_cells_frac'), 1, 100, ' %')}.",
+            f"walls within 2 cells of the world: "
+            f"{_fmt(m.get('walls_within_2_cells_frac'), 1, 100, ' %')}.",
         ]
     lines += [
         "",

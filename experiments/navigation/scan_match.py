@@ -33,7 +33,8 @@ def _apply(delta, centre: np.ndarray, xy: np.ndarray) -> np.ndarray:
 
 
 class _HitMap:
-    """Cells hit by the scans so far, on a grid of ``resolution_m`` from ``origin_xy_m`` (row 0 at the lowest y)."""
+    """Cells hit by the scans so far, on a grid of ``resolution_m`` from ``origin_xy_m`` (row 0 at
+    the lowest y)."""
 
     def __init__(self, origin_xy_m, shape: tuple[int, int], resolution_m: float):
         self.origin, self.res = np.asarray(origin_xy_m, float), float(resolution_m)
@@ -45,7 +46,8 @@ class _HitMap:
         self.hits[rc[ok, 0], rc[ok, 1]] = True
 
     def field(self, centre_xy: np.ndarray, half_m: float):
-        """Distance to the nearest hit (m) on a window about ``centre_xy``, its gradient, and the window's corner cell."""
+        """Distance to the nearest hit (m) on a window about ``centre_xy``, its gradient, and the
+        window's corner cell."""
         n = int(half_m / self.res)
         r0, c0 = np.floor((centre_xy[::-1] - self.origin[::-1]) / self.res).astype(int) - n
         r0, c0 = max(r0, 0), max(c0, 0)

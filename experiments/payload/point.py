@@ -31,11 +31,15 @@ POSITIONS = {
     "rear-right-corner": (-1, -1),
 }
 MAX_MASSES = 1000  # masses per sweep: each is a simulation per position and command
-ROWS = 6  # what a row means (in the fingerprint): 6 = with the true speed's steady error; 5 = ball speed as sqrt(ux^2 + uy^2) (C and Python alike); 4 = sampled on the loop's record grid in one call; 3 = with the rating judged by; 2 = support loads from the springs; 1: contact forces
+# what a row means (in the fingerprint): 6 = with the true speed's steady error; 5 = ball speed as
+# sqrt(ux^2 + uy^2) (C and Python alike); 4 = sampled on the loop's record grid in one call; 3 =
+# with the rating judged by; 2 = support loads from the springs; 1: contact forces
+ROWS = 6
 
 
 def parse_masses(text: str) -> list[float]:
-    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg; ValueError with one line."""
+    """``"0:60:5"`` (start:stop:step, stop included) or ``"0,20,40"``, kg; ValueError with one
+    line."""
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
@@ -50,7 +54,8 @@ def parse_masses(text: str) -> list[float]:
             raise ValueError(f"--masses {text!r}: START, STOP and STEP must be finite numbers (kg)")
         if stop < start:
             raise ValueError(
-                f"--masses {text!r}: STOP {stop:g} kg is below START {start:g} kg: give START <= STOP "
+                f"--masses {text!r}: STOP {stop:g} kg is below START {start:g} kg: give START <= "
+                f"STOP "
                 f"(e.g. {stop:g}:{start:g}:{abs(step):g})"
             )
         if step <= 0:
@@ -58,7 +63,8 @@ def parse_masses(text: str) -> list[float]:
         count = math.floor((stop - start) / step + 1e-9) + 1
         if count > MAX_MASSES:
             raise ValueError(
-                f"--masses {text!r}: {count if count < 1e6 else f'{count:.3g}'} masses; at most {MAX_MASSES} per sweep "
+                f"--masses {text!r}: {count if count < 1e6 else f'{count:.3g}'} masses; at most "
+                f"{MAX_MASSES} per sweep "
                 "(each is one simulation per position and command)"
             )
         masses = [round(start + i * step, 6) for i in range(count)]
@@ -98,8 +104,9 @@ def position_xy_m(cfg: TwinConfig, name: str) -> tuple[float, float]:
 
 
 def check_on_deck(cfg: TwinConfig, name: str) -> None:
-    """Refuse a position ``X:Y`` whose payload box leaves ``cfg``'s deck (ValueError naming the deck's bounds);
-    a drawn deck (``--samples``) may still be too small for it: that point is recorded invalid."""
+    """Refuse a position ``X:Y`` whose payload box leaves ``cfg``'s deck (ValueError naming the
+    deck's bounds); a drawn deck (``--samples``) may still be too small for it: that point is
+    recorded invalid."""
     x, y = position_xy_m(cfg, name)
     hx = cfg.chassis.length_m / 2 - cfg.payload.size_m[0] / 2
     hy = cfg.chassis.width_m / 2 - cfg.payload.size_m[1] / 2
@@ -111,8 +118,9 @@ def check_on_deck(cfg: TwinConfig, name: str) -> None:
 
 
 def check_masses(text: str, masses: list[float]) -> None:
-    """Refuse masses above the schema's payload range: every such point was simulated as "invalid" and the
-    answer read "unsafe already at 1000 kg" (ValueError naming ``--masses`` and the range)."""
+    """Refuse masses above the schema's payload range: every such point was simulated as "invalid"
+    and the answer read "unsafe already at 1000 kg" (ValueError naming ``--masses`` and the
+    range)."""
     from amr_twin.model.config_leaves import field_range
 
     low, high, unit = field_range(TwinConfig, ["payload", "mass_kg"])
@@ -125,7 +133,8 @@ def check_masses(text: str, masses: list[float]) -> None:
 
 
 def check_accepted(cfg: TwinConfig, text: str) -> None:
-    """Refuse a ``--commands`` entry the client refuses (its thesis ranges): every point would be refused."""
+    """Refuse a ``--commands`` entry the client refuses (its thesis ranges): every point would be
+    refused."""
     client = parse_command(text).dry_run(cfg)
     if client.last_error:
         raise ValueError(f"--commands {text!r}: the client refuses it ({client.last_error})")

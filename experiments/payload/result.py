@@ -105,8 +105,9 @@ class WheelRun:
 class Dynamics:
     """The run: the largest tilt deg, the least wheel and caster spring loads N, the supports that
     lost contact, the least wheel contact force N (chatter included), the least loaded moment, the
-    electrics, whether a wheel lifted, each wheel, whether every driven wheel tracked, and the physics
-    timestep s where the tyres' guard halved it (:mod:`amr_twin.model.tyre_stability`; else None, not written)."""
+    electrics, whether a wheel lifted, each wheel, whether every driven wheel tracked, and the
+    physics timestep s where the tyres' guard halved it (:mod:`amr_twin.model.tyre_stability`; else
+    None, not written)."""
 
     max_tilt_deg: float
     min_wheel_n: float
@@ -144,10 +145,11 @@ class Dynamics:
 @dataclass
 class PointResult:
     """One sweep point: its key and fingerprint (:class:`amr_twin.experiments.payload.point.Point`),
-    mass kg, position, command, whether the position is valid, the error that stopped it ("" without),
-    the parameter draw (``sample``, ``sample_id``; None for the nominal parameters), the payload's
-    position (x, y) m, the statics and the run (None where not reached), the driver's continuous
-    current rating A it is judged by, whether a motor exceeded it, the verdict and its wall time s."""
+    mass kg, position, command, whether the position is valid, the error that stopped it (""
+    without), the parameter draw (``sample``, ``sample_id``; None for the nominal parameters), the
+    payload's position (x, y) m, the statics and the run (None where not reached), the driver's
+    continuous current rating A it is judged by, whether a motor exceeded it, the verdict and its
+    wall time s."""
 
     key: str
     fingerprint: str

@@ -42,8 +42,8 @@ MAX_VEL_RPM = 1054.0  # firmware MAX_VEL: open-loop duty = rpm / MAX_VEL
 TRACK_TOLERANCE_RPM = 4.0  # |steady error| within the PI dead zone counts as tracking
 RUNAWAY_RPM = TRACK_TOLERANCE_RPM + MAX_VEL_RPM / 255.0
 """A wheel whose true speed ends further than this from its reference has left it (RPM): beyond the
-faithful PI's dead zone and one duty count (4.13 RPM), which is as well as the faithful firmware holds
-a wheel (chapter 5's 99.20 RPM wheels end +4.6 and +6.0 RPM off)."""
+faithful PI's dead zone and one duty count (4.13 RPM), which is as well as the faithful firmware
+holds a wheel (chapter 5's 99.20 RPM wheels end +4.6 and +6.0 RPM off)."""
 
 
 def _slip(series, cfg: TwinConfig) -> np.ndarray:
@@ -86,7 +86,10 @@ def _min_wheel_mechanism(cfg: TwinConfig, loads: np.ndarray, vel: np.ndarray, s)
     elif abs(lateral) >= abs(longitudinal):
         mechanism = f"lateral load transfer, {ay:+.2f} m/s^2 (turning)"
     else:
-        mechanism = f"longitudinal load transfer, {ax:+.2f} m/s^2 ({'braking' if ax * vel[i, 0] < 0 else 'accelerating'})"
+        mechanism = (
+            f"longitudinal load transfer, {ax:+.2f} m/s^2 "
+            f"({'braking' if ax * vel[i, 0] < 0 else 'accelerating'})"
+        )
     return MinWheel(wheel, float(t[i]), [float(ax), float(ay)], both, mechanism)
 
 
@@ -113,8 +116,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     from amr_twin.assembly.twin import Twin, TwinOptions
 
     recording = point.rrd_path is not None or point.mcap_path is not None
-    # nothing here reads the wheel odometry or draws the robot: without them a point is the same to the bit,
-    # ~12 % and ~15 % cheaper
+    # nothing here reads the wheel odometry or draws the robot: without them a point is the same to
+    # the bit, ~12 % and ~15 % cheaper
     twin = Twin(
         cfg,
         TwinOptions(firmware=point.firmware, world="empty", odometry=recording, visuals=recording),
@@ -188,8 +191,8 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
 def _wheel_run(
     w: int, ref: float, s, slip: np.ndarray, tail: np.ndarray, cfg: TwinConfig
 ) -> WheelRun:
-    """Wheel ``w`` of the run, its signed reference ``ref`` RPM: the step of its published speed and its
-    steady state (over ``tail``, the last quarter)."""
+    """Wheel ``w`` of the run, its signed reference ``ref`` RPM: the step of its published speed and
+    its steady state (over ``tail``, the last quarter)."""
     name, max_slip = WHEELS[w], float(np.max(np.abs(slip[:, w])))
     if ref == 0.0:
         return WheelRun(name, ref, max_slip)
@@ -218,7 +221,8 @@ def _wheel_run(
 
 
 def simulate_point(point: Point) -> PointResult:
-    """Statics and one run of a sweep point (:meth:`PointResult.as_json`: its flat JSON-ready row)."""
+    """Statics and one run of a sweep point (:meth:`PointResult.as_json`: its flat JSON-ready
+    row)."""
     from amr_twin.model.build import BuildError
     from amr_twin.sim.physics import DivergenceError
     from amr_twin.model.statics import CONTACT_MIN_N, describe
@@ -272,6 +276,6 @@ def simulate_point(point: Point) -> PointResult:
 
 
 def simulate_points(points: tuple[Point, ...]) -> list[dict]:
-    """The rows (:meth:`PointResult.as_json`) of :func:`simulate_point` of each point, in order, in this
-    process (a work item of the sweep)."""
+    """The rows (:meth:`PointResult.as_json`) of :func:`simulate_point` of each point, in order, in
+    this process (a work item of the sweep)."""
     return [simulate_point(point).as_json() for point in points]

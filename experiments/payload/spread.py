@@ -33,7 +33,8 @@ from amr_twin.experiments.payload.sweep_report import PANELS, _value, summarise
 CURRENT_RATIO = (
     "steady_current_ratio"  # the larger motor's steady current over the driver's rating (derived)
 )
-CROSSINGS = (  # answer: (column, limit, direction: +1 when the answer is the mass where it exceeds the limit)
+# answer: (column, limit, direction: +1 when the answer is the mass where it exceeds the limit)
+CROSSINGS = (
     ("lift_off_kg", "dyn_min_wheel_n", CONTACT_MIN_N, -1),
     ("tilt_limit_kg", "max_tilt_deg", TILT_LIMIT_DEG, +1),
     ("tip_margin_kg", "static_tip_margin_m", TIP_MARGIN_MIN_M, -1),
@@ -94,7 +95,8 @@ def intervals(results: dict) -> list[dict]:
 
 
 def _column(r: dict, column: str) -> float | None:
-    """A row's value; :data:`CURRENT_RATIO` from both motors' steady currents and the row's rating."""
+    """A row's value; :data:`CURRENT_RATIO` from both motors' steady currents and the row's
+    rating."""
     if column != CURRENT_RATIO:
         return r.get(column)
     currents = [r.get(f"{w}_steady_current_a") for w in WHEELS]
@@ -171,8 +173,8 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
     """Rank correlation of every drawn parameter with every answer of :func:`answers`.
 
     Returns one row per answer and parameter: ``position, command ('' for the highest safe
-    payload), answer, parameter, rho, notable`` (|rho| above :func:`~amr_twin.calibration.uncertainty.noise_level`
-    for all the drawn parameters),
+    payload), answer, parameter, rho, notable`` (|rho| above
+    :func:`~amr_twin.calibration.uncertainty.noise_level` for all the drawn parameters),
     sorted by answer, then |rho| descending.
     """
     draws = results["draws"]

@@ -1,4 +1,5 @@
-"""Outputs of a payload sweep with ``--samples N``: band plots, CSVs, ``summary.json`` and ``summary.md``.
+"""Outputs of a payload sweep with ``--samples N``: band plots, CSVs, ``summary.json`` and
+``summary.md``.
 
 ``sweep.csv`` (every run, ``sample`` empty for the nominal ones), ``samples.csv`` (each
 draw's parameter values), ``intervals.csv`` (per point and metric: nominal, median, 90 %
@@ -205,7 +206,8 @@ def analyse(results: dict) -> None:
 
 
 def report(results: dict, out_dir: Path) -> dict:
-    """Write the CSVs, ``summary.json`` and ``summary.md`` (after :func:`analyse`); return the summary."""
+    """Write the CSVs, ``summary.json`` and ``summary.md`` (after :func:`analyse`); return the
+    summary."""
     from amr_twin.experiments.runner.executor import write_json, write_text
     from amr_twin.experiments.payload.sweep_report import summarise
 
@@ -262,23 +264,32 @@ def _markdown(results, base, found, sens, top, n) -> str:
         "# Payload sweep with parameter uncertainty",
         "",
         f"{len(base)} positions; {len(results['rows'])} runs "
-        f"({results['simulated']} simulated, {results['reused']} reused) in {results['wall_s']:.1f} s wall time; "
-        f"{results['duration_s']} s per run, firmware {results['firmware']}. Each point was run with the "
+        f"({results['simulated']} simulated, {results['reused']} reused) in "
+        f"{results['wall_s']:.1f} s wall time; "
+        f"{results['duration_s']} s per run, firmware {results['firmware']}. Each point was run "
+        f"with the "
         f"nominal parameters and with {n} configurations drawn from the parameters' spreads "
-        f"({draws.sampler}, seed {draws.seed}, {len(draws.names)} parameters varied: `samples.csv`; spreads in "
+        f"({draws.sampler}, seed {draws.seed}, {len(draws.names)} parameters varied: "
+        f"`samples.csv`; spreads in "
         "`models/amr/README.md`).",
         "",
-        f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
-        f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current (the draw's "
+        f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no "
+        f"drive-wheel "
+        f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous "
+        f"current (the draw's "
         "rating), for every command and every lighter payload. Intervals: "
-        f"median ({LEVEL:.0%} interval) over the draws. What moves it: the {spread.TOP} parameters of largest "
-        f"Spearman rank correlation with the answer over the draws; **bold** beyond chance (|rho| > "
-        f"{noise_level(n, len(draws.names)):.2f}: the largest of {len(draws.names)} unrelated parameters reaches "
+        f"median ({LEVEL:.0%} interval) over the draws. What moves it: the {spread.TOP} "
+        f"parameters of largest "
+        f"Spearman rank correlation with the answer over the draws; **bold** beyond chance "
+        f"(|rho| > "
+        f"{noise_level(n, len(draws.names)):.2f}: the largest of {len(draws.names)} unrelated "
+        f"parameters reaches "
         f"it about one time in 20 with {n} draws; the others are candidates, not findings).",
         "",
         "## Highest safe payload per position",
         "",
-        f"| position | nominal kg | over the draws kg | draws unsafe within {top:g} kg | unsafe first (nominal) | "
+        f"| position | nominal kg | over the draws kg | draws unsafe within {top:g} kg | unsafe "
+        f"first (nominal) | "
         "what moves it |",
         "|---|---|---|---|---|---|",
     ]
@@ -290,7 +301,8 @@ def _markdown(results, base, found, sens, top, n) -> str:
             else "—"
         )
         lines.append(
-            f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {a['within']} of {a['n']} | {first} | "
+            f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {a['within']} of {a['n']} | "
+            f"{first} | "
             f"{_who(sens, position, '', 'highest_safe_kg')} |"
         )
     lines += [
@@ -300,7 +312,8 @@ def _markdown(results, base, found, sens, top, n) -> str:
         "Payload (kg) from which it happens, interpolated between the swept masses; "
         f"`> {top:g}`: not within the sweep.",
         "",
-        f"| position | command | answer | nominal kg | over the draws kg | draws within {top:g} kg | what moves it |",
+        f"| position | command | answer | nominal kg | over the draws kg | draws within {top:g} "
+        f"kg | what moves it |",
         "|---|---|---|---|---|---|---|",
     ]
     for position, entry in found.items():
@@ -311,7 +324,8 @@ def _markdown(results, base, found, sens, top, n) -> str:
                 ).split(" (")[0]
                 lines.append(
                     f"| {position} | {command} | {spread.ANSWER_TEXT[answer]} | {nominal} | "
-                    f"{_span(a, top)} | {a['within']} of {a['n']} | {_who(sens, position, command, answer)} |"
+                    f"{_span(a, top)} | {a['within']} of {a['n']} | "
+                    f"{_who(sens, position, command, answer)} |"
                 )
     if draws.clipped:
         lines += [
@@ -324,7 +338,8 @@ def _markdown(results, base, found, sens, top, n) -> str:
         "",
         *_lowest_wheel_loads(spread.split(results)[0]),
         "",
-        "`intervals.csv`: every metric per point (nominal, median, interval); `sensitivity.csv`: every "
+        "`intervals.csv`: every metric per point (nominal, median, interval); `sensitivity.csv`: "
+        "every "
         "parameter's rank correlation with every answer.",
         "",
     ]

@@ -1,4 +1,5 @@
-"""Payload sweep: step response, duty, support loads, tilt and slip against payload mass and position.
+"""Payload sweep: step response, duty, support loads, tilt and slip against payload mass and
+position.
 
 One simulation per (mass, position, command) point, in the empty world; each
 point's result is one JSON file ``runs/<key>.json`` written atomically, so a rerun
@@ -53,8 +54,8 @@ def run(
     recording per point simulated now (points reused from ``runs/`` are not
     re-simulated for a missing recording; see the module notes).
 
-    ``draws``: :class:`amr_twin.calibration.uncertainty.Draws` of ``cfg``'s parameters; each point is
-    also run with each drawn configuration (rows with ``sample`` and ``sample_id``, after
+    ``draws``: :class:`amr_twin.calibration.uncertainty.Draws` of ``cfg``'s parameters; each point
+    is also run with each drawn configuration (rows with ``sample`` and ``sample_id``, after
     the nominal rows).
 
     ``before(n)``: called with the number of points to simulate (those not done already), before

@@ -1,4 +1,5 @@
-"""Outputs of the payload sweep: ``sweep.csv``, one PNG per command, ``summary.json`` and ``summary.md``."""
+"""Outputs of the payload sweep: ``sweep.csv``, one PNG per command, ``summary.json`` and
+``summary.md``."""
 
 from __future__ import annotations
 
@@ -57,8 +58,9 @@ CAUSES = {
 }
 """What limits a payload, by the criteria a point fails (``limit_causes``). A motor over its
 rating while a wheel does not hold its reference (its true speed over the run's last quarter
-more than the PI's 4 RPM dead zone off) is a **runaway**: a limit of the speed control (a robot heavy at the rear oversteers in the
-turn and, its wheels not held, pivots), not the current the payload demands in a tracked turn."""
+more than the PI's 4 RPM dead zone off) is a **runaway**: a limit of the speed control (a robot
+heavy at the rear oversteers in the turn and, its wheels not held, pivots), not the current the
+payload demands in a tracked turn."""
 
 
 def limit_causes(row: dict) -> list[tuple[str, str]]:
@@ -158,8 +160,8 @@ def summarise(results: dict) -> dict:
 
 
 def answer(s: dict) -> str:
-    """One sentence for a position's entry of :func:`summarise`: never "None kg". A wheel that left its
-    reference at a mass the criteria call safe is said too."""
+    """One sentence for a position's entry of :func:`summarise`: never "None kg". A wheel that left
+    its reference at a mass the criteria call safe is said too."""
     left = s["leaves_reference_kg"]
     early = (
         ""
@@ -171,17 +173,22 @@ def answer(s: dict) -> str:
         text = (
             f"safe at {s['heaviest_kg']:g} kg, the only mass swept: the limit lies beyond it"
             if only
-            else f"safe up to {s['heaviest_kg']:g} kg, the heaviest swept: the limit lies beyond the masses swept"
+            else f"safe up to {s['heaviest_kg']:g} kg, the heaviest swept: the limit lies beyond "
+            f"the masses swept"
         )
         return text + (f" (yet {early})" if early else "")
     if s["below_grid"]:
         lighter = "unloaded" if s["lightest_kg"] == 0 else "no lighter payload was swept"
         return (
-            f"no safe payload among the masses swept: unsafe already at {s['first_unsafe_kg']:g} kg, the "
+            f"no safe payload among the masses swept: unsafe already at {s['first_unsafe_kg']:g} "
+            f"kg, the "
             f"lightest ({lighter}), {s['reason']}"
         )
     early = f" (by the criteria; yet {early})" if early and left < s["first_unsafe_kg"] else ""
-    return f"highest safe {s['highest_safe_kg']:g} kg{early}; unsafe at {s['first_unsafe_kg']:g} kg {s['reason']}"
+    return (
+        f"highest safe {s['highest_safe_kg']:g} kg{early}; unsafe at {s['first_unsafe_kg']:g} kg "
+        f"{s['reason']}"
+    )
 
 
 def _plotted(rows: list[dict]) -> tuple[list[str], dict[str, str]]:
@@ -216,8 +223,9 @@ def _limit(column: str, rows: list[dict]) -> tuple[float, str] | None:
 
 def plot(results: dict, out_dir: Path, improved: dict | None = None) -> list[Path]:
     """One PNG per command with a simulated point: each metric against payload mass, one line per
-    position (dashed: the improved firmware's points of :func:`amr_twin.experiments.payload.sweep.improved_beside`).
-    A command without one gets no PNG (:func:`report` says why); a panel without a value says so."""
+    position (dashed: the improved firmware's points of
+    :func:`amr_twin.experiments.payload.sweep.improved_beside`). A command without one gets no PNG
+    (:func:`report` says why); a panel without a value says so."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -317,7 +325,8 @@ def _lowest_wheel_loads(rows: list[dict]) -> list[str]:
     for r in done[:LOWEST_ROWS]:
         q = r.get("dyn_min_wheel_quasi_static_n")
         lines.append(
-            f"| {r['mass_kg']:g} | {r['position']} | {r['command']} | {r.get('dyn_min_wheel', '—')} | "
+            f"| {r['mass_kg']:g} | {r['position']} | {r['command']} | "
+            f"{r.get('dyn_min_wheel', '—')} | "
             f"{r['dyn_min_wheel_n']:.1f} | {r.get('dyn_min_wheel_t_s', float('nan')):.2f} | "
             f"{'—' if q is None else f'{q:.1f}'} | {r.get('dyn_min_wheel_mechanism', '—')} |"
         )
@@ -351,8 +360,10 @@ def report(results: dict, out_dir: Path, improved: dict | None = None) -> dict:
     lines = [
         "# Payload sweep",
         "",
-        f"{len(results['rows'])} points ({results['simulated']} simulated, {results['reused']} reused) in "
-        f"{results['wall_s']:.1f} s wall time; {results['duration_s']} s per run, firmware {results['firmware']}"
+        f"{len(results['rows'])} points ({results['simulated']} simulated, {results['reused']} "
+        f"reused) in "
+        f"{results['wall_s']:.1f} s wall time; {results['duration_s']} s per run, firmware "
+        f"{results['firmware']}"
         + (
             f"; the positions limited by a runaway run again with the improved firmware "
             f"({len(improved['rows'])} points, `improved/runs/`)"
@@ -361,14 +372,19 @@ def report(results: dict, out_dir: Path, improved: dict | None = None) -> dict:
         )
         + ".",
         "",
-        f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no drive-wheel "
-        f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous current, for every "
+        f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no "
+        f"drive-wheel "
+        f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous "
+        f"current, for every "
         "command and every lighter payload. What limits it, by cause: "
         + "; ".join(f"**{c}**: {CAUSES[c]}" for c in CAUSES)
         + ". A runaway is a limit of the speed "
-        "control, not of the motors' rating at what the payload demands: with the payload behind the axle "
-        "the robot oversteers in a turn, and a firmware that does not hold the wheel speeds (the faithful "
-        "one acts once a revolution, not within 4 RPM; the improved one integrates only within 8 RPM) lets it "
+        "control, not of the motors' rating at what the payload demands: with the payload behind "
+        "the axle "
+        "the robot oversteers in a turn, and a firmware that does not hold the wheel speeds (the "
+        "faithful "
+        "one acts once a revolution, not within 4 RPM; the improved one integrates only within 8 "
+        "RPM) lets it "
         "pivot; the current drawn then is the runaway's.",
         "",
         "| position | answer | heaviest tracking kg | invalid at kg |",
@@ -383,7 +399,8 @@ def report(results: dict, out_dir: Path, improved: dict | None = None) -> dict:
     if beside:
         lines += [
             "",
-            f"## The same positions with the improved firmware (beside the {results['firmware']} one)",
+            f"## The same positions with the improved firmware (beside the "
+            f"{results['firmware']} one)",
             "",
             f"| position | {results['firmware']} | improved |",
             "|---|---|---|",

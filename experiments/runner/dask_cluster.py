@@ -13,7 +13,8 @@ SCHEDULER_TIMEOUT_S = 5.0  # default time to reach a Dask scheduler, s
 
 
 class ExecutorError(RuntimeError):
-    """An executor that cannot be used (Dask not installed, scheduler unreachable); one-line message."""
+    """An executor that cannot be used (Dask not installed, scheduler unreachable); one-line
+    message."""
 
 
 def connect_dask(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S):
@@ -21,8 +22,8 @@ def connect_dask(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S):
 
     Parameters
     ----------
-    address : scheduler address, as printed by ``dask scheduler`` or ``LocalCluster.scheduler_address``.
-    timeout_s : give up connecting after this long, s (> 0).
+    address : scheduler address, as printed by ``dask scheduler`` or
+    ``LocalCluster.scheduler_address``. timeout_s : give up connecting after this long, s (> 0).
 
     Returns
     -------
@@ -30,8 +31,8 @@ def connect_dask(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S):
 
     Raises
     ------
-    ExecutorError : Dask's ``distributed`` is not installed, or the scheduler did not answer in time.
-    """
+    ExecutorError : Dask's ``distributed`` is not installed, or the scheduler did not answer in
+    time."""
     if not (timeout_s > 0 and timeout_s < 3600):
         raise ExecutorError(f"scheduler timeout: {timeout_s} s must be in (0, 3600) s")
     try:

@@ -9,8 +9,8 @@ the caller writes every file itself. The writers put a file in place with one
 file or none.
 
 The local pool is in :mod:`amr_twin.base.process_pool` (its workers warmed by
-:func:`amr_twin.recording.run.warm_up`), the Dask cluster in :mod:`.dask_cluster` (:func:`~.dask_cluster.connect_dask`).
-"""
+:func:`amr_twin.recording.run.warm_up`), the Dask cluster in :mod:`.dask_cluster`
+(:func:`~.dask_cluster.connect_dask`)."""
 
 from __future__ import annotations
 

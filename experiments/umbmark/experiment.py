@@ -92,7 +92,8 @@ def umbmark(
 def calibration(
     result: Umbmark, base: OdometryCalibration, source: str = ""
 ) -> OdometryCalibration:
-    """The odometry's geometry corrected by ``result`` (``base``: the geometry the runs were driven with)."""
+    """The odometry's geometry corrected by ``result`` (``base``: the geometry the runs were driven
+    with)."""
     c_l = 2.0 / (result.e_d + 1.0)
     c_r = 2.0 / (1.0 / result.e_d + 1.0)
     return OdometryCalibration(

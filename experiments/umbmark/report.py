@@ -1,14 +1,16 @@
 """What ``amr-twin experiment umbmark`` writes: ``metrics.json``, ``report.md``, the Borenstein plot
 ``borenstein.png`` (each run's return error, both clusters and their centres of gravity, before and
 after the calibration, a panel per seed), ``emax.png`` (E_max,syst per seed before and after) and
-``calibration/seed<N>.yaml`` (the odometry node's calibration, :mod:`amr_twin.controllers.odometry_calibration`).
+``calibration/seed<N>.yaml`` (the odometry node's calibration,
+:mod:`amr_twin.controllers.odometry_calibration`).
 
 Figures are in the UMBmark sense: a seed's *reduction* is E_max,syst before over after; a phase's
-*scatter* is the RMS distance of the runs from their cluster's centre of gravity (the larger of the two
-directions), and so is each part's. The *non-systematic spread* is the scatter of the part Borenstein
-and Feng's list of error sources calls non-systematic, what the wheels do on the floor (here the tyres'
-slip); the odometry's sampling part (the encoder's limited resolution and sampling rate, systematic
-sources in that list, which no calibration removes) is reported beside it. Data come from
+*scatter* is the RMS distance of the runs from their cluster's centre of gravity (the larger of the
+two directions), and so is each part's. The *non-systematic spread* is the scatter of the part
+Borenstein and Feng's list of error sources calls non-systematic, what the wheels do on the floor
+(here the tyres' slip); the odometry's sampling part (the encoder's limited resolution and sampling
+rate, systematic sources in that list, which no calibration removes) is reported beside it. Data
+come from
 :mod:`.seeds`.
 """
 
@@ -110,13 +112,18 @@ def markdown(data: dict) -> str:
     lines = [
         f"# UMBmark on the twin: seeds {seed_text(m['seeds'])}",
         "",
-        f"{m['runs']} squares of {m['side_m']:g} m clockwise and {m['runs']} counter-clockwise per seed and phase; "
+        f"{m['runs']} squares of {m['side_m']:g} m clockwise and {m['runs']} counter-clockwise "
+        f"per seed and phase; "
         f"brush tyres {'on' if m['tyres'] else 'off (rigid contact)'}, the floor's friction field "
-        f"{('on' if m['floor_field'] else 'off') if m['tyres'] else 'without effect (rigid contact)'}, "
-        "improved firmware; each square driven to its corners and headings by the robot's odometry; "
+        f"{('on' if m['floor_field'] else 'off') if m['tyres'] else ''}"
+        f"{'' if m['tyres'] else 'without effect (rigid contact)'}, "
+        "improved firmware; each square driven to its corners and headings by the robot's "
+        "odometry; "
         "each seed the robot the fusion experiment "
-        "draws (tyre radii, track, hall sensors). E_max,syst: the larger distance of the two centres of "
-        "gravity of the return errors from the origin; spread: the RMS distance of a direction's runs from "
+        "draws (tyre radii, track, hall sensors). E_max,syst: the larger distance of the two "
+        "centres of "
+        "gravity of the return errors from the origin; spread: the RMS distance of a direction's "
+        "runs from "
         "its centre of gravity (the larger direction). All in mm.",
         "",
         f"- E_max,syst before calibration: {_mm_cell(s['e_max_syst_before_m'])}",
@@ -125,7 +132,8 @@ def markdown(data: dict) -> str:
         lines += [
             f"- E_max,syst after: {_mm_cell(s['e_max_syst_after_m'])}; reduction per seed "
             f"{cell(s['reduction'], 1)}, median {s['reduction_median']:.1f}, of the means "
-            f"{s['reduction_of_means']:.1f}; reduced on {s['seeds_reduced']} of {len(m['seeds'])} seeds "
+            f"{s['reduction_of_means']:.1f}; reduced on {s['seeds_reduced']} of "
+            f"{len(m['seeds'])} seeds "
             "(Borenstein and Feng report about an order of magnitude on real robots)"
         ]
     rigid = "rigid_spread_before_m" in s
@@ -157,28 +165,35 @@ def markdown(data: dict) -> str:
     )
     lines += [
         f"- parts of E_max,syst before (UMBmark of each part's return errors): geometry + slip "
-        f"{_mm_cell(s['geometry_and_slip_e_max_syst_m'])}, of which tyre slip {_mm_cell(s['slip_e_max_syst_m'])}; "
+        f"{_mm_cell(s['geometry_and_slip_e_max_syst_m'])}, of which tyre slip "
+        f"{_mm_cell(s['slip_e_max_syst_m'])}; "
         f"the odometry's sampling {_mm_cell(s['sampling_e_max_syst_m'])}",
         "",
-        "| seed | radii L, R mm | track mm | E_max,syst before | after | reduction | E_d | E_b | scatter before | "
+        "| seed | radii L, R mm | track mm | E_max,syst before | after | reduction | E_d | E_b | "
+        "scatter before | "
         "after | sampling part | slip part |",
         "|---|" + "---|" * 11,
     ]
     for d in data["per_seed"]:
         rb, b, a = d["robot"], d["before"], d["after"]
         lines.append(
-            f"| {d['seed']} | {1e3 * rb['radius_error_left_m']:+.2f}, {1e3 * rb['radius_error_right_m']:+.2f} "
+            f"| {d['seed']} | {1e3 * rb['radius_error_left_m']:+.2f}, "
+            f"{1e3 * rb['radius_error_right_m']:+.2f} "
             f"| {1e3 * rb['separation_error_m']:+.2f} | {mm(b['node']['e_max_syst_m'])} | "
             + (f"{mm(a['node']['e_max_syst_m'])} | {d['reduction']:.1f} | " if a else "- | - | ")
-            + f"{b['node']['e_d']:.6f} | {b['node']['e_b']:.5f} | {mm(b['node']['e_nonsyst_rms_m'])} | "
+            + f"{b['node']['e_d']:.6f} | {b['node']['e_b']:.5f} | "
+            f"{mm(b['node']['e_nonsyst_rms_m'])} | "
             + (f"{mm(a['node']['e_nonsyst_rms_m'])} | " if a else "- | ")
             + f"{mm(b['sampling']['e_max_syst_m'])} | {mm(b['slip']['e_max_syst_m'])} |"
         )
     lines += [
         "",
-        "E_d and E_b are Borenstein's correction factors (the right over the left wheel's effective "
-        "diameter; the effective over the nominal wheelbase); `calibration/seed<N>.yaml` holds the radii "
-        "and wheelbase the odometry node used for the second squares (`amr-twin run --odometry FILE`).",
+        "E_d and E_b are Borenstein's correction factors (the right over the left wheel's "
+        "effective "
+        "diameter; the effective over the nominal wheelbase); `calibration/seed<N>.yaml` holds "
+        "the radii "
+        "and wheelbase the odometry node used for the second squares (`amr-twin run --odometry "
+        "FILE`).",
         "",
         "![Borenstein plot](borenstein.png)",
         "",
@@ -193,8 +208,8 @@ def _mm_cell(s: dict, decimals: int = 1) -> str:
 
 
 def plot_borenstein(data: dict, path: Path) -> None:
-    """A panel per seed: every run's return error (mm), CW and CCW, before (hollow) and after (filled),
-    and the four centres of gravity (crosses, joined to the origin)."""
+    """A panel per seed: every run's return error (mm), CW and CCW, before (hollow) and after
+    (filled), and the four centres of gravity (crosses, joined to the origin)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -242,7 +257,8 @@ def plot_borenstein(data: dict, path: Path) -> None:
         ax.set_aspect("equal", adjustable="datalim")
         after = f", after {1e3 * d['after']['node']['e_max_syst_m']:.0f}" if d["after"] else ""
         ax.set_title(
-            f"seed {d['seed']}: E_max,syst {1e3 * d['before']['node']['e_max_syst_m']:.0f}{after} mm",
+            f"seed {d['seed']}: E_max,syst "
+            f"{1e3 * d['before']['node']['e_max_syst_m']:.0f}{after} mm",
             fontsize=9,
         )
         ax.grid(alpha=0.3)
@@ -267,8 +283,8 @@ def plot_borenstein(data: dict, path: Path) -> None:
 
 
 def plot_emax(data: dict, path: Path) -> None:
-    """E_max,syst per seed before and after (log scale), and each seed's scatter as the floor of what a
-    calibration can reach."""
+    """E_max,syst per seed before and after (log scale), and each seed's scatter as the floor of
+    what a calibration can reach."""
     import matplotlib
 
     matplotlib.use("Agg")

@@ -5,15 +5,16 @@
 sourced tolerances), drives ``runs`` squares clockwise and ``runs`` counter-clockwise
 (:func:`~amr_twin.experiments.umbmark.square.drive_square`), each run a fresh twin at the origin
 with its own seed (the floor's friction field and the hall edges' jitter), computes UMBmark
-(:func:`~amr_twin.experiments.umbmark.experiment.umbmark`), writes the calibration the odometry node then
-uses (:func:`~amr_twin.experiments.umbmark.experiment.calibration`) and drives the squares again with it.
+(:func:`~amr_twin.experiments.umbmark.experiment.umbmark`), writes the calibration the odometry node
+then uses (:func:`~amr_twin.experiments.umbmark.experiment.calibration`) and drives the squares
+again with it.
 
 Besides the odometry node's return errors (what UMBmark measures on the robot), each phase keeps
 UMBmark of the parts of those errors (:class:`Phase`): the wheels' true angles integrated with the
-geometry the odometry assumes (geometry and tyre slip) and with the true one (the slip alone); the rest is
-the odometry's sampling of the speeds. The seeds run in the project's process pool
-(:func:`~amr_twin.experiments.runner.executor.run_all`); results come back in the order of the seeds.
-"""
+geometry the odometry assumes (geometry and tyre slip) and with the true one (the slip alone); the
+rest is the odometry's sampling of the speeds. The seeds run in the project's process pool
+(:func:`~amr_twin.experiments.runner.executor.run_all`); results come back in the order of the
+seeds."""
 
 from __future__ import annotations
 
@@ -32,17 +33,19 @@ from amr_twin.experiments.umbmark.square import DIRECTIONS, Profile, SquareRun, 
 MAX_RUNS = 50
 """Most squares per direction and phase (each ~1 s of CPU)."""
 SQUARE_S = 60.0
-"""Simulated time of one square, s (four legs of 4 m at up to 0.4 m/s, four turns, the rests: 59-61 s)."""
+"""Simulated time of one square, s (four legs of 4 m at up to 0.4 m/s, four turns, the rests: 59-61
+s)."""
 STREAM = 30
-"""First entry of every run's seed sequence (the squares): ``[STREAM, seed, phase, direction, run]``."""
+"""First entry of every run's seed sequence (the squares): ``[STREAM, seed, phase, direction,
+run]``."""
 
 
 @dataclass(frozen=True)
 class Phase:
     """One set of squares (before or after the calibration) and UMBmark of their return errors:
     the odometry node's (``node``), its geometry-and-slip part (``wheels``: the true wheel angles
-    with the geometry the odometry assumes), its slip part (``slip``: with the true geometry) and its sampling
-    part (``sampling``: the wheels' pose minus the node's)."""
+    with the geometry the odometry assumes), its slip part (``slip``: with the true geometry) and
+    its sampling part (``sampling``: the wheels' pose minus the node's)."""
 
     runs: tuple[SquareRun, ...]
     node: Umbmark

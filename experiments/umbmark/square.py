@@ -90,7 +90,8 @@ class SquareDriver:
         self._sub = twin.bus.subscribe("wheel1_Vel", self._on_sample)
 
     def _remaining_m(self, task: dict) -> float:
-        """What is left of the motion by the odometry, m of rim (a leg: along its line to the corner)."""
+        """What is left of the motion by the odometry, m of rim (a leg: along its line to the
+        corner)."""
         odo = self.odometry
         if task["turn"]:
             return (
@@ -102,8 +103,8 @@ class SquareDriver:
         return (task["x"] - odo.x_m) * ux + (task["y"] - odo.y_m) * uy
 
     def _curvature(self, task: dict, remaining_m: float) -> float:
-        """Pure pursuit onto the leg's line: the curvature (1/m, + left) of the arc through the point
-        ``lookahead_m`` further along the line than the robot, by the odometry, bounded."""
+        """Pure pursuit onto the leg's line: the curvature (1/m, + left) of the arc through the
+        point ``lookahead_m`` further along the line than the robot, by the odometry, bounded."""
         odo, p = self.odometry, self.profile
         ux, uy = math.cos(task["yaw"]), math.sin(task["yaw"])
         gx = task["x"] - (remaining_m - p.lookahead_m) * ux - odo.x_m
@@ -198,7 +199,8 @@ def wheel_pose(
 
 
 def drive_square(twin, direction: str, profile: Profile = Profile(), run: int = 0) -> SquareRun:
-    """Drive one square with ``twin`` (fresh: the recorder attached here starts with it) from where it stands."""
+    """Drive one square with ``twin`` (fresh: the recorder attached here starts with it) from where
+    it stands."""
     from amr_twin.recording.recorder import attach_recorder
 
     recorder = attach_recorder(twin)

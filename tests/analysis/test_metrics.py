@@ -156,7 +156,8 @@ def test_peak_time_is_the_first_peak_of_a_rippled_plateau():
     assert info.peak_s == pytest.approx(1.2)
     assert info.peak_value == pytest.approx(100.1, abs=1e-6)
     assert info.overshoot == pytest.approx(5.1, abs=1e-6)
-    # the first ripple shrunk to 0.05 RPM, below the tolerance (0.095 RPM): the first peak is the later one
+    # the first ripple shrunk to 0.05 RPM, below the tolerance (0.095 RPM): the first peak is the
+    # later one
     low = np.where(t < 1.0, 99.0 * t, 99.0) + np.where(
         t < 6.0, 0.0, -4.0 * np.minimum(t - 6.0, 1.0)
     )

@@ -72,8 +72,8 @@ def test_constant_yaw_rate_error_gives_rpe_rotation_of_rate_times_delta_time(del
     est = truth.copy()
     est[:, 2] += rate_rad_s * t  # heading drifts by 1 deg/s, positions exact
     e = errors(t, est, t, truth, rpe_delta_m=delta_m)
-    # evo's pairs: delta_m ahead, and near the end the last sample while it is within 10 % of delta_m
-    # (no sample lies on that bound here)
+    # evo's pairs: delta_m ahead, and near the end the last sample while it is within 10 % of
+    # delta_m (no sample lies on that bound here)
     travel = truth[-1, 0] - truth[:, 0]
     pair_m = np.minimum(travel, delta_m)[travel > 0.9 * delta_m]
     expected_deg = math.sqrt(np.mean((1.0 * pair_m / 0.4) ** 2))
@@ -157,7 +157,8 @@ def test_bad_input_raises_one_line_value_error_naming_the_argument(kwargs, name)
 
 def test_planar_alignment_never_mirrors_the_trajectory():
     # evo's --align (3D Umeyama) can rotate a planar trajectory 180 deg about an axis in the floor,
-    # i.e. mirror it, and so scores a mirrored estimate as perfect; a robot on the floor cannot do that
+    # i.e. mirror it, and so scores a mirrored estimate as perfect; a robot on the floor cannot do
+    # that
     t, pose = _circle()
     mirrored = np.column_stack([pose[:, 0], -pose[:, 1], -pose[:, 2]])
     assert errors(t, mirrored, t, pose, align=True).ate_m > 1.0

@@ -26,7 +26,8 @@ def test_an_error_keeps_the_old_file_and_removes_the_temporary(tmp_path):
 
 
 def test_a_failed_batch_removes_the_folders_it_made(tmp_path):
-    """Chapter 5's --out when its PNG cannot be written: no empty folder is left (nor its parents)."""
+    """Chapter 5's --out when its PNG cannot be written: no empty folder is left (nor its
+    parents)."""
     from amr_twin.base.atomic_file import all_or_nothing
 
     with pytest.raises(OSError):

@@ -1,4 +1,5 @@
-"""The warm worker pool: its workers leave Ctrl-C to the parent and run the caller's warm-up first."""
+"""The warm worker pool: its workers leave Ctrl-C to the parent and run the caller's warm-up
+first."""
 
 import os
 import signal

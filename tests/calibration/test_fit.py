@@ -142,7 +142,8 @@ def test_a_log_too_short_to_compare_is_refused_not_scored(tmp_path):
 @pytest.mark.parametrize("budget", [7, 15])
 def test_the_fit_never_exceeds_its_evaluation_budget(tmp_path, budget):
     """scipy's max_nfev counts steps, each with a Jacobian of one evaluation per parameter (a
-    budget of 2 once made 7): every evaluation is counted, and a budget below one step is refused."""
+    budget of 2 once made 7): every evaluation is counted, and a budget below one step is
+    refused."""
     log = tmp_path / "real.csv"
     _write_log(log, gain=1.45)
     calls = []

@@ -1,5 +1,6 @@
-"""The calibration's report: the shipped one describes the shipped values; its d fitted / d held keeps
-a drawn plant on the fit; evaluate() linearises a small problem as the hand calculation says."""
+"""The calibration's report: the shipped one describes the shipped values; its d fitted / d held
+keeps a drawn plant on the fit; evaluate() linearises a small problem as the hand calculation
+says."""
 
 import math
 
@@ -53,7 +54,8 @@ def test_damping_and_friction_trade_at_the_bench_speed(report):
 def test_following_the_held_resistance_keeps_the_plant_on_the_fit(report):
     """Both windings at -20, -10, +10 and +20 % of their sourced value: the calibrated parameters
     shifted by the report's follow fit the thesis better than left as they are, in at least 3 of the
-    4 and on average (the quantised steady errors make the linear follow a rough guide, not exact)."""
+    4 and on average (the quantised steady errors make the linear follow a rough guide, not
+    exact)."""
     base = load_config()
     gains = []
     for ohm in (0.24, 0.27, 0.33, 0.36):

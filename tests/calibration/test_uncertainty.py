@@ -1,6 +1,6 @@
-"""Drawn configurations: seeded bytes, Latin hypercube strata, the calibrated parameters drawn jointly
-and following the held ones, conditioning on a set value, followers, validity; rank correlations
-and intervals; the caster set-up drives the static load split (no mujoco)."""
+"""Drawn configurations: seeded bytes, Latin hypercube strata, the calibrated parameters drawn
+jointly and following the held ones, conditioning on a set value, followers, validity; rank
+correlations and intervals; the caster set-up drives the static load split (no mujoco)."""
 
 import json
 import subprocess
@@ -49,8 +49,8 @@ def test_same_seed_same_bytes_in_another_process(space):
 
 
 def test_a_setting_no_draw_reads_leaves_the_draws_as_they_are(space):
-    """The tyres on and off draw the same robots (chapter 5's paired comparison, docs/explanation/tyres.md);
-    a drawn parameter's value set by hand does change them."""
+    """The tyres on and off draw the same robots (chapter 5's paired comparison,
+    docs/explanation/tyres.md); a drawn parameter's value set by hand does change them."""
     here = space.draw(8, seed=3)
     rigid = ParameterSpace.load(sets=["wheel.tyre_slip=false"]).draw(8, seed=3)
     assert rigid.names == here.names and np.array_equal(rigid.values, here.values)
@@ -70,7 +70,8 @@ def test_latin_hypercube_puts_one_draw_in_each_stratum(space):
 
 
 def test_calibrated_parameters_are_drawn_jointly(space):
-    """Gain and Ke keep their 0.99 correlation and the report's sigma: drawn one by one they would not."""
+    """Gain and Ke keep their 0.99 correlation and the report's sigma: drawn one by one they would
+    not."""
     rep = space.calibration
     d = space.draw(
         400, seed=1, include=("driver_left.gain",)
@@ -158,7 +159,8 @@ def test_hundreds_of_draws_are_valid_robots(space):
 def test_a_draw_the_schema_refuses_names_its_sample(tmp_path):
     mine = tmp_path / "mine.yaml"
     mine.write_text(
-        "chassis:\n  width_m: {value: 0.40, range: [0.38, 0.46], reason: too wide, source: estimate}\n"
+        "chassis:\n  width_m: {value: 0.40, range: [0.38, 0.46], reason: too wide, source: "
+        "estimate}\n"
     )
     with pytest.raises(ConfigError, match=r"sample \d+ of seed 0: chassis.width_m: must be <"):
         ParameterSpace.load(override_file=mine).draw(32, seed=0)

@@ -10,7 +10,6 @@ output in use: tests/recording/test_output_lock.py.
 import gc
 import os
 import resource
-import shutil
 import subprocess
 import sys
 import threading
@@ -45,7 +44,8 @@ def _call(args) -> int:
 
 @pytest.fixture
 def refused(tmp_path, capsys):
-    """``refused(args, *words)``: exit 2, one line holding every word, ``tmp_path`` unchanged; the line."""
+    """``refused(args, *words)``: exit 2, one line holding every word, ``tmp_path`` unchanged; the
+    line."""
 
     def check(args, *words, code=2):
         before = _listing(tmp_path)
@@ -65,7 +65,8 @@ def _write(path: Path, text: str) -> Path:
     return path
 
 
-# ---------------------------------------------------------------------------------------------- bounds
+# ----------------------------------------------------------------------------------------------
+# bounds
 def test_calibrate_refuses_unbounded_logs_before_simulating(tmp_path, refused):
     out = tmp_path / "never.yaml"
     late = _write(tmp_path / "late.csv", "t_s,wheel,rpm,command\n1e6,left,3,linear:0.5\n")
@@ -146,7 +147,8 @@ def test_a_mission_s_duration_is_bounded_naming_the_file(tmp_path, refused):
 
 
 def test_a_long_sweep_needs_yes_and_says_its_estimate(tmp_path, refused, monkeypatch, capsys):
-    """201 masses x 9 positions x 5 commands: 9045 points of 8 s, ~13 min on 2 processes (7 on 4)."""
+    """201 masses x 9 positions x 5 commands: 9045 points of 8 s, ~13 min on 2 processes (7 on
+    4)."""
     args = [
         "sweep",
         "payload",
@@ -213,8 +215,8 @@ def test_a_run_larger_than_the_memory_available_is_refused(tmp_path, refused, mo
 
 
 def test_a_memory_limit_is_checked_before_and_one_line_after(tmp_path, refused, monkeypatch):
-    """``ulimit -v``: Rerun's recorder reserves ~3 GB of address space (it aborted the process with a Rust
-    backtrace below that), and a MemoryError while writing was a traceback of 116 lines."""
+    """``ulimit -v``: Rerun's recorder reserves ~3 GB of address space (it aborted the process with
+    a Rust backtrace below that), and a MemoryError while writing was a traceback of 116 lines."""
     monkeypatch.setattr("amr_twin.sim.bounds.address_space_mb", lambda: 1200.0)
     with monkeypatch.context() as guard:
         guard.setattr(
@@ -254,7 +256,8 @@ def test_the_client_stops_at_the_bound_of_a_run(monkeypatch):
 
 
 def test_the_command_line_starts_without_the_twin():
-    """The bounds and path checks are read at start-up: they must not import numpy, MuJoCo or pydantic."""
+    """The bounds and path checks are read at start-up: they must not import numpy, MuJoCo or
+    pydantic."""
     code = (
         "import sys, amr_twin.cli.main; "
         "print(sorted(m for m in ('numpy', 'mujoco', 'pydantic') if m in sys.modules))"
@@ -265,7 +268,8 @@ def test_the_command_line_starts_without_the_twin():
     assert out.stdout.strip() == "[]"
 
 
-# ------------------------------------------------------------------------------------------ error paths
+# ------------------------------------------------------------------------------------------ error
+# paths
 def test_malformed_calibration_logs_name_the_file(tmp_path, refused):
     out = tmp_path / "never.yaml"
     two = _write(tmp_path / "two.csv", "t_s,wheel,rpm,command\n0.1,left\n")
@@ -292,7 +296,8 @@ def test_malformed_calibration_logs_name_the_file(tmp_path, refused):
 
 
 def _unblock(fifo: Path) -> threading.Timer:
-    """Open ``fifo`` for writing in 5 s if someone reads it (a reader would wait forever otherwise)."""
+    """Open ``fifo`` for writing in 5 s if someone reads it (a reader would wait forever
+    otherwise)."""
 
     def poke():
         try:
@@ -323,8 +328,8 @@ def test_unreadable_input_files_name_the_file(tmp_path, refused):
 
 
 def test_unreadable_odometry_calibration_and_map_image_name_the_file(tmp_path, refused):
-    """These were read whole: /dev/zero filled the memory (MemoryError), a pipe waited for ever, and the
-    messages were Python's ("IsADirectoryError", "'utf-8' codec can't decode")."""
+    """These were read whole: /dev/zero filled the memory (MemoryError), a pipe waited for ever, and
+    the messages were Python's ("IsADirectoryError", "'utf-8' codec can't decode")."""
     binary = tmp_path / "bin.yaml"
     binary.write_bytes(b"\xff\xfe" * 100)
     for name in ("odometry.yaml", "image.pgm"):
@@ -365,7 +370,8 @@ def _checkerboard(path: Path, n: int) -> Path:
 
 
 def test_a_map_too_fragmented_to_build_is_refused_before_the_build(tmp_path, refused, monkeypatch):
-    """Every run of occupied cells became a MuJoCo geom: a 1500 x 1500 checkerboard did not build in 60 s."""
+    """Every run of occupied cells became a MuJoCo geom: a 1500 x 1500 checkerboard did not build in
+    60 s."""
     _checkerboard(tmp_path / "chk.pgm", 210)  # 22,050 boxes
     world = _write(
         tmp_path / "chk.yaml", "image: chk.pgm\nresolution: 0.05\norigin: [-5.25, -5.25, 0]\n"
@@ -403,7 +409,8 @@ def test_a_map_s_numbers_are_read_as_yaml_1_2_reads_them_and_bounded(tmp_path, r
 
 
 def _limited(args, limit_bytes: int, cwd: Path, env: dict | None = None):
-    """``amr-twin args`` in a process whose files may not grow beyond ``limit_bytes`` (``ulimit -f``)."""
+    """``amr-twin args`` in a process whose files may not grow beyond ``limit_bytes`` (``ulimit
+    -f``)."""
 
     def limit():
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, resource.RLIM_INFINITY))
@@ -420,8 +427,9 @@ def _limited(args, limit_bytes: int, cwd: Path, env: dict | None = None):
 
 
 def test_a_file_size_limit_is_one_line_and_leaves_nothing(tmp_path, tmp_path_factory):
-    """Each writer: the CSV, the .mcap, the .rrd (Rerun's file writer thread); then chapter 5's PNG, with
-    matplotlib's font cache not made yet (as on a new machine: it cannot be saved under the limit either)."""
+    """Each writer: the CSV, the .mcap, the .rrd (Rerun's file writer thread); then chapter 5's PNG,
+    with matplotlib's font cache not made yet (as on a new machine: it cannot be saved under the
+    limit either)."""
     run = ["run", "linear", "--speed-m-s", "0.5", "--duration-s", "3", "--world", "empty"]
     for option, name in (("--csv", "r.csv"), ("--mcap", "r.mcap"), ("--record", "r.rrd")):
         res = _limited([*run, option, tmp_path / name], 20_000, tmp_path)
@@ -495,7 +503,8 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
     assert ("a rerun resumes" in line) == (args[0] == "sweep")
 
 
-# ---------------------------------------------------------------------------------------------- messages
+# ----------------------------------------------------------------------------------------------
+# messages
 @pytest.mark.parametrize(
     "args, words",
     [
@@ -574,7 +583,8 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
         (["experiment", "chapter5", "--out", ""], ["'--out'", "an empty path"]),
         (["run", "stop", "--csv", ""], ["'--csv'", "an empty path"]),
         (["run", "stop", "--config", ""], ["'--config'", "an empty path"]),
-        # found by the hostile round of 26 Nov (each was a traceback, a library's words or an ignored option)
+        # found by the hostile round of 26 Nov (each was a traceback, a library's words or an
+        # ignored option)
         (
             ["bench", "--sim-s", "1e-300"],
             ["--sim-s 1e-300: must be in [0.1, 1000] s"],
@@ -715,8 +725,8 @@ def test_a_world_file_that_does_not_compile_is_named_and_a_urdf_is_not_a_world(t
 def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(
     tmp_path, refused, monkeypatch
 ):
-    """run goto ran with --serial-pty and --odometry ignored (exit 0), and with a time limit of 1e-9 s; --roscore is
-    an option of --ros1 (which goals take: tests/ros1/test_goto_graph.py)."""
+    """run goto ran with --serial-pty and --odometry ignored (exit 0), and with a time limit of 1e-9
+    s; --roscore is an option of --ros1 (which goals take: tests/ros1/test_goto_graph.py)."""
 
     class Started(Exception):
         pass
@@ -772,8 +782,8 @@ def test_a_params_file_s_bad_value_names_the_file(tmp_path, refused):
 
 
 def test_a_parameter_file_s_bad_leaf_is_named_in_the_project_s_words(tmp_path, refused):
-    """pydantic's "Field required" and "Input should be a valid dictionary or instance of WheelCfg" named
-    no file; a word as a ranged value was called a vector's range."""
+    """pydantic's "Field required" and "Input should be a valid dictionary or instance of WheelCfg"
+    named no file; a word as a ranged value was called a vector's range."""
     text = (ROOT / "models" / "amr" / "amr.yaml").read_text()
     radius = next(
         line for line in text.splitlines() if line.startswith("  radius_m: {value: 0.125,")

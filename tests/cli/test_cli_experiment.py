@@ -1,4 +1,5 @@
-"""``--record DIR`` / ``--mcap DIR`` on ``experiment chapter5`` (and ``sweep payload``'s refusal): one recording per run.
+"""``--record DIR`` / ``--mcap DIR`` on ``experiment chapter5`` (and ``sweep payload``'s refusal):
+one recording per run.
 
 The recordings are read back with the formats' own readers (rerun's ``RrdReader``,
 ``mcap``); the results must be the same with and without recording.
@@ -56,7 +57,8 @@ def cfg():
 
 @pytest.fixture(scope="module")
 def chapter5_cli(tmp_path_factory):
-    """Chapter 5 runs 1 and 3 through the CLI, two worker processes, both recordings into one folder."""
+    """Chapter 5 runs 1 and 3 through the CLI, two worker processes, both recordings into one
+    folder."""
     base = tmp_path_factory.mktemp("ch5rec")
     res = CliRunner().invoke(
         app,
@@ -110,8 +112,9 @@ def test_chapter5_one_recording_per_run(chapter5_cli):
 
 
 def test_chapter5_terminal_opens_with_the_findings_then_the_counts(chapter5_cli):
-    """The findings first, one line each as in report.md, the pointer to docs/explanation/validation.md, then one
-    line of passes per metric instead of a MISS line per run and wheel."""
+    """The findings first, one line each as in report.md, the pointer to
+    docs/explanation/validation.md, then one line of passes per metric instead of a MISS line per
+    run and wheel."""
     from amr_twin.experiments.chapter5.findings import VALIDATION_DOC, lines
 
     base, res = chapter5_cli

@@ -1,4 +1,5 @@
-"""``amr-twin run goto`` and navigation missions: refusals before the build, outcomes, recordings."""
+"""``amr-twin run goto`` and navigation missions: refusals before the build, outcomes,
+recordings."""
 
 import json
 import math
@@ -46,7 +47,8 @@ def test_a_goal_that_cannot_be_reached_is_refused_in_one_line_before_the_run(
 
 
 def test_a_start_off_the_map_is_named_as_the_start(tmp_path, monkeypatch):
-    """A map file covering 2 x 2 m at the origin; the aisles world's start (-23.5, 0) lies off it."""
+    """A map file covering 2 x 2 m at the origin; the aisles world's start (-23.5, 0) lies off
+    it."""
     import amr_twin.navigation.stack as stack
 
     monkeypatch.setattr(stack, "navigate", lambda *a, **k: pytest.fail("the run started"))
@@ -103,9 +105,9 @@ def test_goto_reaches_the_goal_and_reports_it(recorded):
     goal = info["goals"][0]
     assert goal["status"] == "succeeded" and info["collisions"] == []
     x, y, yaw = info["final_pose"]
-    # the goal checker latches within 0.25 m (nav2's stateful SimpleGoalChecker), then the robot brakes at
-    # decel_m_s2 and turns to the goal's heading: it stops up to a few cm further (0.240 m before the
-    # LiDAR's beams were cast from their own origins, 0.256 m since, on this drive)
+    # the goal checker latches within 0.25 m (nav2's stateful SimpleGoalChecker), then the robot
+    # brakes at decel_m_s2 and turns to the goal's heading: it stops up to a few cm further (0.240 m
+    # before the LiDAR's beams were cast from their own origins, 0.256 m since, on this drive)
     assert (
         math.hypot(x + 6.0, y) <= 0.30 and abs(math.remainder(yaw - math.pi, 2 * math.pi)) <= 0.25
     )
@@ -168,7 +170,8 @@ def test_the_rrd_holds_the_navigation_entities(recorded):
 def test_a_navigation_mission_visits_its_goals_in_turn(tmp_path):
     mission = tmp_path / "m.yaml"
     mission.write_text(
-        "goals:\n  - [-6, 0]\n  - {x_m: -8, y_m: 0, yaw_deg: 180}\nlocalisation: truth\ncontroller: rpp\n"
+        "goals:\n  - [-6, 0]\n  - {x_m: -8, y_m: 0, yaw_deg: 180}\nlocalisation: "
+        "truth\ncontroller: rpp\n"
     )
     res = RUN.invoke(app, ["run", "--mission", str(mission), "--start=-9,0,0", "--json"])
     assert res.exit_code == 0, res.output
@@ -199,10 +202,11 @@ def test_a_goal_not_reached_exits_5_with_its_reason(tmp_path):
 
 
 def test_the_mcap_holds_the_map_match_the_ekf_fused(tmp_path):
-    """With the EKF held to the map (the default localisation) the matched poses go into the MCAP as AMCL's
-    amcl_pose would: geometry_msgs/PoseWithCovarianceStamped in map, read by the mcap library's ROS 2
-    decoder, each near the EKF's pose of its stamp (across the aisle within 3 cm, along it within the match's
-    standard deviation), with the fit's covariance (a 2 m aisle: across it tighter than along it)."""
+    """With the EKF held to the map (the default localisation) the matched poses go into the MCAP as
+    AMCL's amcl_pose would: geometry_msgs/PoseWithCovarianceStamped in map, read by the mcap
+    library's ROS 2 decoder, each near the EKF's pose of its stamp (across the aisle within 3 cm,
+    along it within the match's standard deviation), with the fit's covariance (a 2 m aisle: across
+    it tighter than along it)."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
@@ -242,8 +246,8 @@ def test_the_mcap_holds_the_map_match_the_ekf_fused(tmp_path):
         ekf = filtered[
             stamp
         ].pose.pose.position  # the EKF's pose of that instant, after it took the match in
-        # across the aisle the match holds the EKF to a few cm; along it (the aisle's length, poorly held by a
-        # scan) within the match's own standard deviation
+        # across the aisle the match holds the EKF to a few cm; along it (the aisle's length, poorly
+        # held by a scan) within the match's own standard deviation
         assert abs(m.pose.pose.position.y - ekf.y) < 0.03
         assert abs(m.pose.pose.position.x - ekf.x) < math.sqrt(cov[0, 0])
 
@@ -285,9 +289,9 @@ def test_the_goto_json_writer_refuses_what_is_not_json(monkeypatch):
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_goal_the_estimate_reached_but_the_truth_missed_is_not_reached(tmp_path, seed):
-    """Wheel odometry that takes the 0.125 m tyres for 0.15 m ones (localisation odom): the navigator stops where
-    its estimate is within 0.25 m of the goal, the robot really 0.3-0.4 m short: not reached, exit 5, the
-    reason and the JSON give both errors."""
+    """Wheel odometry that takes the 0.125 m tyres for 0.15 m ones (localisation odom): the
+    navigator stops where its estimate is within 0.25 m of the goal, the robot really 0.3-0.4 m
+    short: not reached, exit 5, the reason and the JSON give both errors."""
     calibration = tmp_path / "odometry.yaml"
     calibration.write_text(
         "wheel_odometry:\n  left_wheel_radius_m: 0.15\n  right_wheel_radius_m: 0.15\n"
@@ -323,8 +327,9 @@ def test_a_goal_the_estimate_reached_but_the_truth_missed_is_not_reached(tmp_pat
 
 
 def test_goto_gives_the_least_clearance_and_both_final_errors(recorded):
-    """Down the warehouse's central aisle: the least clearance of the true footprint to the racks (0.60 m
-    measured), and the truth's final error is the final pose's, the one the success was judged by."""
+    """Down the warehouse's central aisle: the least clearance of the true footprint to the racks
+    (0.60 m measured), and the truth's final error is the final pose's, the one the success was
+    judged by."""
     res, _ = recorded
     info = json.loads(res.stdout)
     assert (
@@ -342,7 +347,8 @@ def test_goto_gives_the_least_clearance_and_both_final_errors(recorded):
 
 
 def test_goal_tolerance_options_set_what_the_navigator_judges_by(monkeypatch):
-    """--xy-tolerance-m, --yaw-tolerance-deg, --inflation-radius-m reach the stack as the parameter file's keys."""
+    """--xy-tolerance-m, --yaw-tolerance-deg, --inflation-radius-m reach the stack as the parameter
+    file's keys."""
     import amr_twin.navigation.stack as stack
 
     seen = {}

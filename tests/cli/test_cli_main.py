@@ -30,8 +30,9 @@ def _threads(code: str, **env) -> int:
     reason="counts the threads of a process in /proc on a machine with 2 cores or more",
 )
 def test_the_command_line_starts_no_blas_threads_unless_asked():
-    """numpy's OpenBLAS starts a worker per core that spin-waits (~0.1 s of CPU at import on 2 cores):
-    the command line's process runs it on its own thread, and a value the user exported wins."""
+    """numpy's OpenBLAS starts a worker per core that spin-waits (~0.1 s of CPU at import on 2
+    cores): the command line's process runs it on its own thread, and a value the user exported
+    wins."""
     assert _threads(COUNT_THREADS) > 1  # numpy alone: OpenBLAS's workers
     assert _threads("import amr_twin.cli.main; " + COUNT_THREADS) == 1
     assert _threads("import amr_twin.cli.main; " + COUNT_THREADS, OPENBLAS_NUM_THREADS="2") == 2
@@ -46,9 +47,11 @@ HEAVY = ("mujoco", "matplotlib", "rerun", "scipy", "numpy")
 )
 def test_help_imports_none_of_the_heavy_libraries(argv):
     """The command groups are module-level sub-apps imported at start-up: their modules keep the
-    twin, the plots and the recorders behind the commands (start-up time is a benchmarked figure)."""
+    twin, the plots and the recorders behind the commands (start-up time is a benchmarked
+    figure)."""
     code = (
-        "import sys\nfrom amr_twin.cli.main import app\ntry:\n    app(sys.argv[1:])\nexcept SystemExit:\n    pass\n"
+        "import sys\nfrom amr_twin.cli.main import app\ntry:\n    app(sys.argv[1:])\nexcept "
+        "SystemExit:\n    pass\n"
         f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))"
     )
     out = subprocess.run(

@@ -1,4 +1,5 @@
-"""`amr-twin experiment navigation` on a ROS map world: the generated warehouse runs from the command line."""
+"""`amr-twin experiment navigation` on a ROS map world: the generated warehouse runs from the
+command line."""
 
 import json
 
@@ -16,9 +17,9 @@ def _call(args) -> int:
 
 
 def test_a_ros_map_world_runs_on_its_true_map_and_asks_for_a_slam_map(tmp_path, capsys):
-    """A map the code has never seen (generated here), given as --world: one episode on its true map, written
-    as for an MJCF world; asking for the SLAM map too, without --slam-map, is refused in one line before any
-    episode (no mapping drive to build it from)."""
+    """A map the code has never seen (generated here), given as --world: one episode on its true
+    map, written as for an MJCF world; asking for the SLAM map too, without --slam-map, is refused
+    in one line before any episode (no mapping drive to build it from)."""
     world = write_map(tmp_path, "unseen", random_warehouse(31))
     assert (
         _call(

@@ -163,11 +163,14 @@ def test_only_the_invoked_group_is_built_and_the_app_is_restored():
 
 def test_start_up_gc_settings_end_when_the_parameters_are_loaded():
     """Rare collections only while a command starts: once its parameters are loaded the usual
-    thresholds are back (a long sweep frees each point's twin) and the start-up objects are frozen."""
+    thresholds are back (a long sweep frees each point's twin) and the start-up objects are
+    frozen."""
     code = (
-        "import gc; from amr_twin.cli import common; default = gc.get_threshold(); common.start_up(); "
+        "import gc; from amr_twin.cli import common; default = gc.get_threshold(); "
+        "common.start_up(); "
         "during = gc.get_threshold(); common._config(None, None, []); "
-        "print(default == gc.get_threshold(), during == common.START_UP_GC_THRESHOLDS, gc.get_freeze_count() > 10000)"
+        "print(default == gc.get_threshold(), during == common.START_UP_GC_THRESHOLDS, "
+        "gc.get_freeze_count() > 10000)"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True

@@ -127,7 +127,8 @@ def test_csv_and_json_agree_with_the_simulation(tmp_path):
 
 
 def test_one_sign_convention_in_json_and_csv(tmp_path):
-    """Backward at 1.2 m/s (ch. 5 run 4): every RPM negative in --json and --csv, as the true speed is."""
+    """Backward at 1.2 m/s (ch. 5 run 4): every RPM negative in --json and --csv, as the true speed
+    is."""
     out = tmp_path / "back.csv"
     info = _json(
         "linear", "--speed-m-s", "-1.2", "--duration-s", "4", "--world", "empty", "--csv", str(out)
@@ -179,8 +180,8 @@ def test_square_mission_says_where_it_ended_and_that_its_speeds_are_old():
     text = _run("--mission", square, "--world", "empty")
     assert text.exit_code == 0
     assert (
-        f"ended {moved['distance_m']:.2f} m from its start pose, heading {moved['heading_deg']:+.1f} deg"
-        in text.stdout
+        f"ended {moved['distance_m']:.2f} m from its start pose, heading "
+        f"{moved['heading_deg']:+.1f} deg" in text.stdout
     )
     for name, wheel in info["wheels"].items():
         assert (
@@ -257,7 +258,8 @@ def test_world_and_start_pose(tmp_path):
     assert 1.6 < pose["y_m"] < 2.1  # ~0.7 m driven along +y
     assert pose["yaw_rad"] == pytest.approx(math.pi / 2, abs=0.05)
     odom = data["final_odom_pose"]  # odometry starts at its own origin (REP-105)
-    # along its own x the distance driven (0.92 m; the node estimates the first revolution from the command)
+    # along its own x the distance driven (0.92 m; the node estimates the first revolution from the
+    # command)
     assert odom["x_m"] == pytest.approx(pose["y_m"] - 1.0, abs=0.1) and abs(odom["y_m"]) < 0.05
 
 
@@ -355,15 +357,16 @@ def test_a_mission_places_actors_and_the_person_waits_for_the_robot(tmp_path):
     assert info["collisions"] == [] and info["codes"] == [0, 0]
     bad = tmp_path / "bad.yaml"
     bad.write_text(
-        "duration_s: 5\nsteps: [{t_s: 0, stop: {}}]\nactors: [{kind: person, waypoints_xy_m: [[0, 0]]}]\n"
+        "duration_s: 5\nsteps: [{t_s: 0, stop: {}}]\nactors: [{kind: person, waypoints_xy_m: "
+        "[[0, 0]]}]\n"
     )
     result = _run("--mission", str(bad))
     assert result.exit_code == 2 and "actors[0].speed_m_s is missing" in result.stderr
 
 
 def test_random_actors_follow_the_seed(tmp_path):
-    """--actors-random N draws from --seed: the same poses on /actors/poses for the same seed, others
-    for another."""
+    """--actors-random N draws from --seed: the same poses on /actors/poses for the same seed,
+    others for another."""
     from mcap.reader import make_reader
 
     def poses(seed, name):

@@ -1,7 +1,8 @@
-"""``amr-twin sweep payload`` (amr_twin/cli/sweep.py): recordings per point, resuming, bounds, repeated values.
+"""``amr-twin sweep payload`` (amr_twin/cli/sweep.py): recordings per point, resuming, bounds,
+repeated values.
 
-The recordings are read back with rerun's own reader; the rows must be the same with and without recording.
-"""
+The recordings are read back with rerun's own reader; the rows must be the same with and without
+recording."""
 
 import json
 

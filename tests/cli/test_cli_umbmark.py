@@ -89,8 +89,8 @@ def test_the_files_agree(report):
 
 
 def test_the_rigid_contact_runs_are_the_same_robots(report):
-    """With the tyres on, the same seeds are driven with the rigid contact (the spread's comparison):
-    without the tyres' slip their E_max,syst is the wheels' geometry alone."""
+    """With the tyres on, the same seeds are driven with the rigid contact (the spread's
+    comparison): without the tyres' slip their E_max,syst is the wheels' geometry alone."""
     _, data, _ = report
     rigid = data["rigid_per_seed"]
     assert [d["seed"] for d in rigid] == SEEDS and all(

@@ -1,5 +1,5 @@
-"""``run goto`` as a user drives it: help that states what runs, a progress line on stderr, Ctrl-C that stops the
-robot and keeps the outputs."""
+"""``run goto`` as a user drives it: help that states what runs, a progress line on stderr, Ctrl-C
+that stops the robot and keeps the outputs."""
 
 import json
 import math
@@ -28,7 +28,8 @@ def _goto_params() -> dict:
 
 
 def _stated(param) -> str | None:
-    """The default an option's help states: its own text's 'default ...', else the [default: X] typer shows."""
+    """The default an option's help states: its own text's 'default ...', else the [default: X]
+    typer shows."""
     found = re.search(r"\bdefault:? ([^;,()]+?)(?:[;,()]|\.? *$)", param.help or "")
     if found:
         return found.group(1).strip()
@@ -43,8 +44,9 @@ def _stated(param) -> str | None:
 
 
 def test_every_default_goto_help_states_is_what_runs(monkeypatch):
-    """goto --help used to state the faithful firmware and 10 s while goto ran the improved one for 60 s + 4 s per
-    metre: each stated default is checked here against what reaches the navigation stack."""
+    """goto --help used to state the faithful firmware and 10 s while goto ran the improved one for
+    60 s + 4 s per metre: each stated default is checked here against what reaches the navigation
+    stack."""
     import amr_twin.cli.options as options
     import amr_twin.navigation.stack as stack
     from amr_twin.live.session import RERUN_WEB_PORT
@@ -188,7 +190,8 @@ LONG = [
     "--port",
     "0",
 ]
-"""35 m down an aisle, served live (paced): the robot is on its way when the first progress line comes."""
+"""35 m down an aisle, served live (paced): the robot is on its way when the first progress line
+comes."""
 
 
 @pytest.mark.parametrize("seed", [0, 1])

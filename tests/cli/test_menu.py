@@ -107,9 +107,9 @@ def test_menu_live_foxglove_client_drives_and_menu_stops():
 
 
 def test_the_menu_reads_bounded_lines_from_a_pipe_or_a_file(tmp_path):
-    """``amr-twin client < /dev/zero``: input() read the endless line whole (9 GB in 48 s). From a pipe or a
-    file a line is at most MAX_LINE characters: a longer one is refused in one line (exit 2); short
-    answers are read as from a terminal."""
+    """``amr-twin client < /dev/zero``: input() read the endless line whole (9 GB in 48 s). From a
+    pipe or a file a line is at most MAX_LINE characters: a longer one is refused in one line (exit
+    2); short answers are read as from a terminal."""
     import subprocess
 
     from amr_twin.cli.menu import MAX_LINE
@@ -125,7 +125,8 @@ def test_the_menu_reads_bounded_lines_from_a_pipe_or_a_file(tmp_path):
             timeout=60,
         )
     assert res.returncode == 2 and res.stderr.strip().splitlines() == [
-        f"error: standard input: a line of the menu is at most {MAX_LINE} characters of text (a choice, a number)"
+        f"error: standard input: a line of the menu is at most {MAX_LINE} characters of text (a "
+        f"choice, a number)"
     ]
     res = subprocess.run(
         [str(AMR_TWIN), "client", "--rate", "20"],
@@ -140,8 +141,8 @@ def test_the_menu_reads_bounded_lines_from_a_pipe_or_a_file(tmp_path):
 
 
 def test_the_client_takes_a_world_as_the_run_commands_do():
-    """``client`` had no ``--world``: the thesis' 0.7 m/s drove into the warehouse's south rack (at 7.3 s)
-    with no hint. In the empty world it drives on; the start line names the world."""
+    """``client`` had no ``--world``: the thesis' 0.7 m/s drove into the warehouse's south rack (at
+    7.3 s) with no hint. In the empty world it drives on; the start line names the world."""
     child = _client("--rate", "20", "--world", "empty", columns=200)
     try:
         child.expect(r"world empty \(start x 0 m")

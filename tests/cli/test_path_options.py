@@ -207,7 +207,8 @@ def test_an_option_given_to_the_group_is_compared_with_the_command_s(tmp_path):
         "--csv",
         "--world",
     )
-    # so is a navigation mission's map (beside the mission), YAML and image (both were overwritten, exit 0)
+    # so is a navigation mission's map (beside the mission), YAML and image (both were overwritten,
+    # exit 0)
     goals = tmp_path / "goals.yaml"
     goals.write_text("goals:\n  - [1.0, 0.5]\nmap: room.yaml\n")
     for victim in ("room.yaml", "room.pgm"):

@@ -140,9 +140,10 @@ def test_idle_sleep_of_spin_once_changes_nothing_observable(cfg):
         cfg, "avr", 2.5, Command("motor", wheel="left", speed_m_s=1.0), AvrParams(idle_sleep=False)
     )
     assert len(sleeping.published[0]) == len(busy.published[0]) >= 1
-    # the sleeping loop and the busy one wait in delay() with different instructions, so a ramp step can
-    # end a few cycles apart and cross a 1 ms physics step in one and not the other: the samples
-    # then differ by a few thousandths of an RPM (0.004 seen), their times by a tenth of a millisecond
+    # the sleeping loop and the busy one wait in delay() with different instructions, so a ramp step
+    # can end a few cycles apart and cross a 1 ms physics step in one and not the other: the samples
+    # then differ by a few thousandths of an RPM (0.004 seen), their times by a tenth of a
+    # millisecond
     np.testing.assert_allclose(sleeping.published[0][:, 1], busy.published[0][:, 1], atol=0.01)
     np.testing.assert_allclose(sleeping.published[0][:, 0], busy.published[0][:, 0], atol=3e-4)
     np.testing.assert_array_equal(sleeping.pwm_counts, busy.pwm_counts)
@@ -238,7 +239,8 @@ def test_cli_run_with_the_emulated_board(cfg):
 
 
 def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
-    """Left PWM counts, on a bare clock: left wheel at 20 RPM of SC edges; commands at 0, 1.0, 1.1 s."""
+    """Left PWM counts, on a bare clock: left wheel at 20 RPM of SC edges; commands at 0, 1.0, 1.1
+    s."""
     from amr_twin.base.clock import VirtualClock
     from amr_twin.controllers.firmware import SKETCH_EDGES_PER_REV, make_firmware
 
@@ -265,11 +267,11 @@ def _pwm_log(kind: str, until_us: int) -> list[tuple[int, int]]:
 
 @needs_avr
 def test_a_command_queued_during_a_ramp_waits_for_the_ramp_on_the_board_as_in_the_port():
-    # listing 4.12 calls node.spinOnce() inside speedChangeInt; ros_lib's spinOnce() does nothing inside
-    # an interrupt (no frame read or written there), so the third command, waiting in the serial
-    # buffer while loop() sits in the second's ramp, runs in main context when that ramp ends (3.5 s), as
-    # in the port; before, it ran inside the ISR at the next sample (~3.2 s) and its ramp to 300 RPM (72
-    # counts) collapsed into milliseconds (docs/firmware.md)
+    # listing 4.12 calls node.spinOnce() inside speedChangeInt; ros_lib's spinOnce() does nothing
+    # inside an interrupt (no frame read or written there), so the third command, waiting in the
+    # serial buffer while loop() sits in the second's ramp, runs in main context when that ramp ends
+    # (3.5 s), as in the port; before, it ran inside the ISR at the next sample (~3.2 s) and its
+    # ramp to 300 RPM (72 counts) collapsed into milliseconds (docs/firmware.md)
     board, port = _pwm_log("avr", 3_600_000), _pwm_log("faithful", 3_600_000)
     assert all(c < 60 for _, c in board) and all(c < 60 for _, c in port)
     late = [(t, c) for t, c in board if t > 2_900_000]
@@ -299,6 +301,7 @@ def test_the_board_asks_the_time_every_5_s_and_keeps_publishing_while_answered(c
         requests == 3
     )  # at 5, 10 and 15 s (ros_lib's SYNC_PERIOD_MS), each answered with the sim time
     assert t_s[-1] > 17.0
-    # unanswered, the board takes the host for gone after 15 s (SYNC_TIMEOUT_MS) and stops publishing
+    # unanswered, the board takes the host for gone after 15 s (SYNC_TIMEOUT_MS) and stops
+    # publishing
     requests, t_s = run(False)
     assert requests == 2 and 13.0 < t_s[-1] < 15.1  # the third request would be due as it gives up

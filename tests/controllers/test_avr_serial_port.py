@@ -1,5 +1,6 @@
-"""The emulated Mega's serial port on a pseudo-terminal, spoken to by a host written here from the rosserial
-protocol (no ROS needed): ros_lib's negotiation, time sync, TX_STOP, and no publishing before configured."""
+"""The emulated Mega's serial port on a pseudo-terminal, spoken to by a host written here from the
+rosserial protocol (no ROS needed): ros_lib's negotiation, time sync, TX_STOP, and no publishing
+before configured."""
 
 import os
 import select
@@ -52,7 +53,8 @@ def link(tmp_path_factory):
             select.select([fd], [], [], 0.01)
 
     def exchange(seconds: float, send: bytes = b"") -> list:
-        """Write ``send``, let the board see it, run ``seconds``, and read every byte the board wrote."""
+        """Write ``send``, let the board see it, run ``seconds``, and read every byte the board
+        wrote."""
         if send:
             os.write(fd, send)
             until(lambda: port.in_waiting >= len(send), "the host's bytes on the board's side")
@@ -109,8 +111,8 @@ def test_a_topic_request_is_answered_with_the_topics_and_a_time_request_then_spe
 
 
 def test_renegotiating_while_both_wheels_publish_corrupts_no_frame(link):
-    # a speed sample is published from the SC interrupt: ros_lib writes it from main context, so it never
-    # lands inside a negotiation's TopicInfo frames (which the same buffer once carried)
+    # a speed sample is published from the SC interrupt: ros_lib writes it from main context, so it
+    # never lands inside a negotiation's TopicInfo frames (which the same buffer once carried)
     twin, exchange, parser = link
     frames = []
     for _ in range(40):

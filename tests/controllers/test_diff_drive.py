@@ -16,7 +16,8 @@ WHEEL = load_config().wheel
 
 
 def _client(bus):
-    """The thesis geometry (the config's: 0.125 m radius, 0.24 m half separation) the figures below use."""
+    """The thesis geometry (the config's: 0.125 m radius, 0.24 m half separation) the figures below
+    use."""
     return WheelCommandClient(
         bus, wheel_radius_m=WHEEL.radius_m, half_separation_m=WHEEL.separation_m / 2
     )

@@ -12,7 +12,6 @@ import pytest
 from amr_twin.base.clock import VirtualClock
 from amr_twin.base.pins import HIGH, LOW
 from amr_twin.controllers.firmware import BoardParams, FaithfulParams, make_firmware
-from amr_twin.sensors.hall import HallSensors
 
 # as on the real board (stale INT flag latched), the case these unit tests were written for
 LOG = FaithfulParams(board=BoardParams(record_pin_log=True, latch_int_flag_while_detached=True))
@@ -190,8 +189,8 @@ def test_pi_raises_duty_when_the_wheel_is_slow():
 
 def test_integral_is_clamped_to_the_control_range():
     """Listing 4.11 clamps the integral (total_error) to [min_control, max_control] (a
-    removed clamp once survived the suite). A wheel 10 RPM faster than its set point (beyond the 4 RPM
-    dead zone) cannot wind it below min_control = 0, so every PI action writes the same duty,
+    removed clamp once survived the suite). A wheel 10 RPM faster than its set point (beyond the 4
+    RPM dead zone) cannot wind it below min_control = 0, so every PI action writes the same duty,
     sp + kp e - sp/10; a wheel far too slow winds it up only to max_control (here 40 RPM)."""
     clock, fw, pubs = make()
     fw.on_wheel_command([1, 60.0, 1, 0])

@@ -11,7 +11,6 @@ import pytest
 from amr_twin.base.clock import VirtualClock
 from amr_twin.base.pins import HIGH, LOW
 from amr_twin.controllers.firmware import BoardParams, ImprovedParams, make_firmware
-from amr_twin.sensors.hall import HallSensors
 
 LOG = ImprovedParams(board=BoardParams(record_pin_log=True))
 
@@ -72,7 +71,8 @@ def test_per_edge_speed_within_half_a_percent(rpm):
 
 
 def edges_published(pubs, topic="wheel0_Vel"):
-    """SC edges the published samples account for: each is the mean since the previous one (100 ms)."""
+    """SC edges the published samples account for: each is the mean since the previous one (100
+    ms)."""
     return sum(v * 0.1 * 90 / 60 for _, v in published(pubs, topic))
 
 
@@ -101,7 +101,8 @@ def test_zero_speed_timeout_and_fixed_publish_rate():
     samples = published(pubs)
     assert [t for t, _ in samples] == [100_000 * k for k in range(1, 16)]
     assert samples[-1][1] == 0.0 and samples[9][1] == pytest.approx(60.0, rel=0.005)
-    # stopped dead from 60 RPM (no wheel can): the part of an edge extrapolated stays counted, less than one
+    # stopped dead from 60 RPM (no wheel can): the part of an edge extrapolated stays counted, less
+    # than one
     assert fw.speed_rpm[0] == 0.0 and 0.0 <= edges_published(pubs) - fw._count[0] < 1.0
     assert [v for t, v in samples if 1_000_000 < t] == [
         0.0

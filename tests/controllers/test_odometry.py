@@ -190,8 +190,8 @@ def test_shutdown_stops_publishing(rig):
 
 
 def _start_one_revolution_late(rig, command_rpm=60.0, **options):
-    """At rest 1 s, commanded to ``command_rpm``; the wheels turn at 60 RPM from 1.5 s, and the first
-    sample (mean of that revolution) arrives at 2.5 s."""
+    """At rest 1 s, commanded to ``command_rpm``; the wheels turn at 60 RPM from 1.5 s, and the
+    first sample (mean of that revolution) arrives at 2.5 s."""
     clock, bus, odom_msgs = rig
     odo = WheelOdometry(bus, clock, **GEOMETRY, **{**HELD, **options})
     clock.run_until(1_000_000)
@@ -202,7 +202,8 @@ def _start_one_revolution_late(rig, command_rpm=60.0, **options):
 
 
 def test_a_sample_is_the_mean_over_the_revolution_before_it(rig):
-    """Faithful firmware: one sample per revolution, stamped at its end; the smoothed pose has it."""
+    """Faithful firmware: one sample per revolution, stamped at its end; the smoothed pose has
+    it."""
     clock, bus, odom_msgs, odo = _start_one_revolution_late(rig)
     # nothing measured yet: the commanded 60 RPM, reached over the 0.5 s start ramp from 1 s
     assert odo.x_m == pytest.approx(1.25 * CIRCUMFERENCE_M, rel=1e-9)
@@ -355,9 +356,9 @@ def test_a_wheel_that_stops_without_a_brake_reads_at_rest_after_the_silence_boun
 
 
 def _stop_and_restart(bus, clock, gaps_s=(0.25, 0.4), until_s=17.0):
-    """Both wheels alike, straight: 60 RPM, brake at 5 s (to rest by 5.5 s), start at 10 s (60 RPM by
-    10.5 s). Each wheel publishes one revolution, then counts the next after its gap (as the thesis
-    firmware does): the revolution across the stop is published after the restart.
+    """Both wheels alike, straight: 60 RPM, brake at 5 s (to rest by 5.5 s), start at 10 s (60 RPM
+    by 10.5 s). Each wheel publishes one revolution, then counts the next after its gap (as the
+    thesis firmware does): the revolution across the stop is published after the restart.
     Returns the true distance, m."""
 
     def rpm(t):

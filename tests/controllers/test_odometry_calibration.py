@@ -1,5 +1,6 @@
 """The wheel odometry's calibration file (controllers/odometry_calibration.py): read, refused in one
-line when bad, and applied by the odometry node (TwinOptions.odometry_calibration, amr-twin run --odometry)."""
+line when bad, and applied by the odometry node (TwinOptions.odometry_calibration, amr-twin run
+--odometry)."""
 
 import json
 
@@ -29,19 +30,23 @@ def test_text_and_load_give_the_calibration_back(tmp_path):
             "wheel_separation_m",
         ),
         (
-            "wheel_odometry:\n  left_wheel_radius_m: 0.5\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
+            "wheel_odometry:\n  left_wheel_radius_m: 0.5\n  right_wheel_radius_m: 0.125\n  "
+            "wheel_separation_m: 0.48\n",
             "left_wheel_radius_m: 0.5, expected a number in [0.05, 0.3]",
         ),
         (
-            "wheel_odometry:\n  left_wheel_radius_m: .nan\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
+            "wheel_odometry:\n  left_wheel_radius_m: .nan\n  right_wheel_radius_m: 0.125\n  "
+            "wheel_separation_m: 0.48\n",
             "left_wheel_radius_m",
         ),
         (
-            "wheel_odometry:\n  left_wheel_radius_m: true\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n",
+            "wheel_odometry:\n  left_wheel_radius_m: true\n  right_wheel_radius_m: 0.125\n  "
+            "wheel_separation_m: 0.48\n",
             "left_wheel_radius_m",
         ),
         (
-            "wheel_odometry:\n  left_wheel_radius_m: 0.125\n  right_wheel_radius_m: 0.125\n  wheel_separation_m: 0.48\n"
+            "wheel_odometry:\n  left_wheel_radius_m: 0.125\n  right_wheel_radius_m: 0.125\n  "
+            "wheel_separation_m: 0.48\n"
             "  wheel_base: 1\n",
             "wheel_base: unknown key",
         ),

@@ -28,7 +28,8 @@ CLEARANCE_M = 0.8
 
 
 def _world_boxes(path: Path = WAREHOUSE) -> list[tuple[str, float, float, float, float, float]]:
-    """Box footprints of an MJCF world, default classes resolved: (name, x, y, half_x, half_y, yaw_rad)."""
+    """Box footprints of an MJCF world, default classes resolved: (name, x, y, half_x, half_y,
+    yaw_rad)."""
     root = ET.parse(path).getroot()
     defaults = {
         d.get("class"): d.find("geom").attrib
@@ -241,7 +242,7 @@ def test_speed_limited_by_yaw_rate_on_a_tight_bearing():
 def test_slows_down_near_the_goal_then_stops_done():
     rows, done = _drive_kinematic(STRAIGHT)
     assert done
-    t, x, v = rows[:, 0], rows[:, 1], rows[:, 4]
+    x, v = rows[:, 1], rows[:, 4]
     assert v[x < 5.0].min() == pytest.approx(1.0)
     assert v[(x > 9.6) & (v > 0)].max() < 0.7  # decelerating for the goal
     assert x[-1] == pytest.approx(10.0, abs=STRAIGHT.goal_tolerance_m)
@@ -279,7 +280,8 @@ def test_progress_is_not_captured_by_a_crossing_branch():
     rows, done = _drive_kinematic(route)
     assert done
     progress = rows[:, 6]
-    # no jump to the other branch (at the crossing it would be about 10 m); cutting a sharp corner moves it up to ~0.5 m
+    # no jump to the other branch (at the crossing it would be about 10 m); cutting a sharp corner
+    # moves it up to ~0.5 m
     assert 0.0 <= np.diff(progress).min() and np.diff(progress).max() < 1.0
     # at the crossing, a robot 7 cm off the first branch lies exactly on the second one
     pp = PurePursuit(route)
@@ -319,7 +321,8 @@ def test_node_publishes_cmd_vel_at_its_rate_and_zero_when_done():
 
 # -- in the twin ----------------------------------------------------------------------
 def test_twin_rounds_the_first_rack_corners_without_touching_anything():
-    """The default route's two corners around the north rack's east end, improved firmware, true pose."""
+    """The default route's two corners around the north rack's east end, improved firmware, true
+    pose."""
     mujoco = pytest.importorskip("mujoco")
     from amr_twin.model.config import load_config
     from amr_twin.controllers.diff_drive import DiffDriveNode

@@ -21,7 +21,8 @@ from amr_twin.model.config import load_config
 
 WHEEL = load_config().wheel
 GEOMETRY = {"wheel_radius_m": WHEEL.radius_m, "half_separation_m": WHEEL.separation_m / 2}
-"""The configured geometry: the thesis' (0.125 m, 0.48 m), with which its printed figures were computed."""
+"""The configured geometry: the thesis' (0.125 m, 0.48 m), with which its printed figures were
+computed."""
 
 
 @pytest.fixture

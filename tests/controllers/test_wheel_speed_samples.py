@@ -1,5 +1,6 @@
-"""Wheel speed estimates from samples and commands (controllers/wheel_speed_samples.py): the stand-in
-of a start, its bound, the silence bound's knots as assumptions, revolutions across a stop, brake ramps."""
+"""Wheel speed estimates from samples and commands (controllers/wheel_speed_samples.py): the
+stand-in of a start, its bound, the silence bound's knots as assumptions, revolutions across a stop,
+brake ramps."""
 
 import math
 
@@ -58,7 +59,8 @@ def test_a_start_stands_once_its_window_must_have_been_published():
 
 
 def test_the_wheels_of_a_start_keep_the_ratio_of_their_commands():
-    """Their windows opened at different times before a stop: both stand-ins end together (no yaw)."""
+    """Their windows opened at different times before a stop: both stand-ins end together (no
+    yaw)."""
     samples, (left, right) = _samples()
     samples.command((1, 1), (60.0, 60.0), 0)
     samples.sample(0, 60.0, 1 * S)
@@ -93,7 +95,8 @@ def test_a_revolution_across_a_stop_keeps_its_count_if_its_wheel_stood_when_it_b
 
 
 def test_a_revolution_across_a_reversal_counts_the_turns_either_way():
-    """The SC output counts turns in both directions: those before the stop are done, backward after."""
+    """The SC output counts turns in both directions: those before the stop are done, backward
+    after."""
     samples, (left, _) = _samples()
     samples.command((1, 1), (60.0, 60.0), 0)
     samples.sample(0, 60.0, 1 * S)
@@ -138,8 +141,8 @@ def test_hold_mode_and_signed_input_have_no_stand_in():
 
 
 def test_a_wheel_measured_before_the_other_keeps_the_ratio_of_their_speeds():
-    """The right wheel's newer sample moves the left one as well (at their ratio at the left's sample):
-    no yaw from a fresh speed against a held one."""
+    """The right wheel's newer sample moves the left one as well (at their ratio at the left's
+    sample): no yaw from a fresh speed against a held one."""
     samples, (left, right) = _samples()
     samples.command((1, 1), (60.0, 60.0), 0)
     samples.sample(0, 54.0, int(1.5 * S))  # a revolution from 0.39 s

@@ -11,7 +11,8 @@ def _body(left_rpm: float, right_rpm: float) -> tuple[float, float]:
 def test_pose_between_knots_is_integrates_bit_for_bit():
     smoothed = SmoothedPose(0, (0.3, -0.2, 0.4), (50.0, 47.0), _body, 10_000)
     left, right = smoothed.profiles
-    # constant to a knot ahead of now (an assumed ramp to rest), then varying: the shortcut ends there
+    # constant to a knot ahead of now (an assumed ramp to rest), then varying: the shortcut ends
+    # there
     left.point(400_000, 50.0)
     left.point(900_000, 10.0)
     right.window(0, 300_000, 47.0)

@@ -1,4 +1,5 @@
-"""EKF on synthetic data: heading with the gyro, UWB bounding the drift, gating, seeds, bus (no mujoco)."""
+"""EKF on synthetic data: heading with the gyro, UWB bounding the drift, gating, seeds, bus (no
+mujoco)."""
 
 import math
 
@@ -227,8 +228,8 @@ def test_range_jacobian_matches_finite_differences():
 
 
 class _FilterpyEkf(ExtendedKalmanFilter):
-    """filterpy's EKF as it comes, with only the unicycle prediction of the state (the node's before its lean
-    ``predict``/``update``)."""
+    """filterpy's EKF as it comes, with only the unicycle prediction of the state (the node's before
+    its lean ``predict``/``update``)."""
 
     dt_s = 0.0
 
@@ -363,7 +364,8 @@ def _pose_msg(x, y, yaw, cov_xy_yaw, t_s, frame="map"):
 
 
 def _map_ekf(initial_pose):
-    """An EKF in ``map`` (UWB on) on a bus, and the list its ``odometry/filtered`` messages go to."""
+    """An EKF in ``map`` (UWB on) on a bus, and the list its ``odometry/filtered`` messages go
+    to."""
     bus = Bus(VirtualClock())
     out = []
     bus.subscribe("odometry/filtered", out.append)
@@ -380,9 +382,10 @@ def _map_ekf(initial_pose):
 
 
 def test_a_matched_pose_is_fused_by_its_own_covariance():
-    """The map match's pose (AMCL's amcl_pose as robot_localization's pose0): a tight one pulls the state onto
-    it, a direction its covariance leaves open (an aisle's length) is left to the rest; the yaw across +-pi
-    moves the short way; the node publishes after it; a pose not in ``map`` is refused."""
+    """The map match's pose (AMCL's amcl_pose as robot_localization's pose0): a tight one pulls the
+    state onto it, a direction its covariance leaves open (an aisle's length) is left to the rest;
+    the yaw across +-pi moves the short way; the node publishes after it; a pose not in ``map`` is
+    refused."""
     bus, node, out = _map_ekf((2.0, 3.0, 3.1))
     bus.publish("map_match/pose", _pose_msg(2.5, 3.4, -3.1, (1e4, 0.03**2, 0.01**2), 0.0))
     x, y, yaw = node.state[:3]
@@ -410,10 +413,11 @@ def test_a_matched_pose_is_fused_by_its_own_covariance():
 
 
 def test_a_pose_of_an_earlier_instant_is_carried_to_the_filters_time():
-    """The navigator matches the pose it was given, which the filter has since moved on from (odometry at
-    50 Hz, the match 0.1 s later): a pose equal to the filter's own of that instant must not move it (fused as
-    if current, it would pull the robot back by 0.08 m at 0.8 m/s, each match: the estimate lagged 1.5 m
-    behind along a 40 m aisle); the published pose is the corrected one of that instant, at its stamp."""
+    """The navigator matches the pose it was given, which the filter has since moved on from
+    (odometry at 50 Hz, the match 0.1 s later): a pose equal to the filter's own of that instant
+    must not move it (fused as if current, it would pull the robot back by 0.08 m at 0.8 m/s, each
+    match: the estimate lagged 1.5 m behind along a 40 m aisle); the published pose is the corrected
+    one of that instant, at its stamp."""
     bus, node, out = _map_ekf((2.0, 3.0, 0.5))
     for k in range(60):
         x = 2.0 + 0.8 * 0.02 * k

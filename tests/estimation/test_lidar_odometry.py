@@ -55,7 +55,8 @@ def room_scan(
 
 
 def drive_pose(t_s: float) -> np.ndarray:
-    """Base pose: 0.8 m/s along x for 3 s, then an arc at 0.6 rad/s (about 23 cm and 6 deg per scan)."""
+    """Base pose: 0.8 m/s along x for 3 s, then an arc at 0.6 rad/s (about 23 cm and 6 deg per
+    scan)."""
     if t_s <= 3.0:
         return np.array([-2.5 + 0.8 * t_s, -1.0, 0.0])
     dt = t_s - 3.0
@@ -66,7 +67,8 @@ def drive_pose(t_s: float) -> np.ndarray:
 
 
 def run_synthetic(deskew: bool, prior: bool, duration_s: float = 5.0, seed: int = 3):
-    """Register a synthetic drive; return the ATE (m) and the max yaw error (rad) against the truth."""
+    """Register a synthetic drive; return the ATE (m) and the max yaw error (rad) against the
+    truth."""
     rng = np.random.default_rng(seed)
     lo = LidarOdometry(voxel_size_m=0.15, deskew=deskew)
     t0 = 0.0
@@ -123,7 +125,10 @@ def test_bad_parameters_and_time_going_back_are_refused():
 def test_first_scan_is_the_origin_and_a_static_robot_stays_there():
     rng = np.random.default_rng(1)
     lo = LidarOdometry()
-    still = lambda t: np.array([0.3, 0.2, 0.4])
+
+    def still(t):
+        return np.array([0.3, 0.2, 0.4])
+
     assert lo.register(room_scan(still, 0.0, rng)) == pytest.approx((0.0, 0.0, 0.0), abs=1e-12)
     for k in range(1, 6):
         lo.register(room_scan(still, 0.182 * k, rng), (0.0, 0.0, 0.0))
@@ -147,7 +152,10 @@ def test_spin_in_place_keeps_base_link_still_not_the_laser():
     # the laser, 0.30 m ahead, sweeps a circle; base_link must stay at the origin. The
     # first scan is smeared by 12.5 deg too: without its deskew every pose is ~10 cm off.
     rng = np.random.default_rng(2)
-    spin = lambda t: np.array([0.5, -0.5, 1.2 * t])  # 1.2 rad/s: 12.5 deg per scan
+
+    def spin(t):  # 1.2 rad/s: 12.5 deg per scan
+        return np.array([0.5, -0.5, 1.2 * t])
+
     lo = LidarOdometry()
     for k in range(12):
         scan = room_scan(spin, 0.182 * k, rng)
@@ -177,7 +185,8 @@ def test_synthetic_drive_with_prior_and_deskew_is_accurate_and_deskew_matters():
 # -- twin scans ---------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def warehouse_drive():
-    """18 s in the warehouse: 0.8 m/s east along the south of the aisle, a U-turn of radius 1.5 m, back west."""
+    """18 s in the warehouse: 0.8 m/s east along the south of the aisle, a U-turn of radius 1.5 m,
+    back west."""
     from amr_twin.model.config import load_config
     from amr_twin.assembly.twin import Twin, TwinOptions
 

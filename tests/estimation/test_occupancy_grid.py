@@ -1,4 +1,5 @@
-"""Occupancy grid: a synthetic square room (no mujoco), map_server files, then the warehouse from twin scans."""
+"""Occupancy grid: a synthetic square room (no mujoco), map_server files, then the warehouse from
+twin scans."""
 
 import math
 
@@ -169,7 +170,8 @@ def test_save_writes_map_server_files_that_the_world_loader_reads(tmp_path):
 # -- twin scans ---------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def warehouse_scans():
-    """10 s near the east wall: 0.6 m/s east for 4 s, then one turn in place; scans and the true pose."""
+    """10 s near the east wall: 0.6 m/s east for 4 s, then one turn in place; scans and the true
+    pose."""
     from amr_twin.model.config import load_config
     from amr_twin.assembly.twin import Twin, TwinOptions
     from amr_twin.model.world_geometry import scan_plane_boxes

@@ -1,4 +1,5 @@
-"""The mapping drive's smoother (amr_twin/estimation/pose_graph.py) on synthetic drives with known truth.
+"""The mapping drive's smoother (amr_twin/estimation/pose_graph.py) on synthetic drives with known
+truth.
 
 A snake through a 24 x 12 m hall at 1 m/s; the wheel odometry with a 1 % scale and 0.5 deg/s of
 turn error in each U-turn; "LiDAR odometry" that slides along the legs (3 % of the distance) and
@@ -23,7 +24,8 @@ ANCHORS = np.array([[12.5, 6.5], [-12.5, 6.5], [-12.5, -6.5], [12.5, -6.5]])
 
 
 def _snake(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Truth: stamps, poses (N, 3), and the yaw rate (N,) of a snake of 20 m legs 3 m apart at 1 m/s."""
+    """Truth: stamps, poses (N, 3), and the yaw rate (N,) of a snake of 20 m legs 3 m apart at 1
+    m/s."""
     w_turn = 1.0 / 1.5  # a U-turn of radius 1.5 m at 1 m/s
     segments = []
     for leg in range(4):
@@ -123,7 +125,8 @@ def test_each_range_is_placed_at_its_own_instant(seed):
 
 
 def test_late_ranges_weigh_little():
-    """Without the Cauchy weighting (a huge k: every range quadratic) the late ranges pull the poses."""
+    """Without the Cauchy weighting (a huge k: every range quadratic) the late ranges pull the
+    poses."""
     cfg, uwb, true, odom, lidar, ranges = _drive(0)
     robust = _errors(*(lambda o: (o.t_s, o.pose))(_smooth(cfg, uwb, odom, lidar, ranges)), *true)[0]
     plain = _errors(

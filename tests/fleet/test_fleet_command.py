@@ -1,4 +1,5 @@
-"""``amr-twin fleet``: refusals in one line before the model is built, and a short run on the embedded broker."""
+"""``amr-twin fleet``: refusals in one line before the model is built, and a short run on the
+embedded broker."""
 
 from __future__ import annotations
 

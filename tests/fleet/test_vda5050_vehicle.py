@@ -1,6 +1,7 @@
-"""The twin as a VDA 5050 2.0 vehicle through the embedded broker, driven by a master written to the specification
-(vda_master.py): orders reach their last node, cancelOrder and startPause stop the robot, bad orders are
-answered in the state; every message the vehicle publishes is valid against the official 2.0.0 schemas."""
+"""The twin as a VDA 5050 2.0 vehicle through the embedded broker, driven by a master written to the
+specification (vda_master.py): orders reach their last node, cancelOrder and startPause stop the
+robot, bad orders are answered in the state; every message the vehicle publishes is valid against
+the official 2.0.0 schemas."""
 
 from __future__ import annotations
 
@@ -35,7 +36,8 @@ def vehicle(request):
 
 
 def deliver(session, master, subtopic: str, body: dict, header_id: int | None = None) -> None:
-    """Send and wait (wall time) until the vehicle's client has it; it acts at the twin's next tick."""
+    """Send and wait (wall time) until the vehicle's client has it; it acts at the twin's next
+    tick."""
     n = session.transport.messages_in
     master.send(subtopic, body, header_id)
     deadline = time.monotonic() + 10.0
@@ -226,7 +228,8 @@ def test_a_broken_connection_leaves_the_last_will(vehicle):
 
 
 def test_an_order_through_debians_mosquitto(tmp_path):
-    """The user's broker (--vda5050): Debian's mosquitto 2.0 (apt-get install mosquitto), else skipped."""
+    """The user's broker (--vda5050): Debian's mosquitto 2.0 (apt-get install mosquitto), else
+    skipped."""
     import shutil
     import subprocess
 

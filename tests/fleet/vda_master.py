@@ -1,6 +1,6 @@
-"""A stand-in for a VDA 5050 master control in the fleet tests: a paho client on the vehicle's topics that
-sends orders and instant actions with their headers and checks every message it receives against the official
-2.0.0 JSON schemas (vda5050_schemas/)."""
+"""A stand-in for a VDA 5050 master control in the fleet tests: a paho client on the vehicle's
+topics that sends orders and instant actions with their headers and checks every message it receives
+against the official 2.0.0 JSON schemas (vda5050_schemas/)."""
 
 from __future__ import annotations
 
@@ -23,8 +23,9 @@ BASE = "uagv/v2/amr-twin/amr-1/"
 
 
 def validate(subtopic: str, msg: dict) -> None:
-    """Raise jsonschema.ValidationError unless ``msg`` is a valid ``subtopic`` message. The 2.0.0 factsheet
-    schema keeps its objects' schemas beside ``properties``: each is checked on its own too."""
+    """Raise jsonschema.ValidationError unless ``msg`` is a valid ``subtopic`` message. The 2.0.0
+    factsheet schema keeps its objects' schemas beside ``properties``: each is checked on its own
+    too."""
     schema = json.loads((SCHEMAS / FILES[subtopic]).read_text())
     jsonschema.Draft202012Validator(schema, format_checker=jsonschema.FormatChecker()).validate(msg)
     if subtopic == "factsheet":
@@ -34,7 +35,8 @@ def validate(subtopic: str, msg: dict) -> None:
 
 
 class Master:
-    """Connected to ``url``; ``received`` holds (subtopic, message) of every vehicle message, in order."""
+    """Connected to ``url``; ``received`` holds (subtopic, message) of every vehicle message, in
+    order."""
 
     def __init__(self, url: str):
         host, port = url.removeprefix("mqtt://").split(":")

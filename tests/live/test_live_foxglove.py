@@ -29,7 +29,8 @@ def typestore():
 
 
 def _mcap_channels(path):
-    """topic -> (schema name, schema encoding, schema text, message encoding) and topic -> {(log time, payload)}."""
+    """topic -> (schema name, schema encoding, schema text, message encoding) and topic -> {(log
+    time, payload)}."""
     from mcap.reader import make_reader
 
     channels, messages = {}, {}

@@ -5,7 +5,6 @@ The decoders are checked on payloads made by rosbags' own CDR serializer; the se
 with the twin advanced by the test between the client's messages (rate 0: no sleeping).
 """
 
-import json
 import logging
 import math
 import struct

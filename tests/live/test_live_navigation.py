@@ -1,4 +1,5 @@
-"""``amr-twin run goto --live``: the plan, the map, the costmap and the footprint reach a Foxglove client."""
+"""``amr-twin run goto --live``: the plan, the map, the costmap and the footprint reach a Foxglove
+client."""
 
 import json
 import math
@@ -70,8 +71,9 @@ def _pose_stamped(frame: str, x: float, y: float, yaw: float) -> bytes:
 
 
 def test_a_goal_published_on_goal_pose_preempts_the_running_goal():
-    """Foxglove's publish tools: the server advertises /goal_pose (geometry_msgs/msg/PoseStamped); a client's goal in
-    the odom frame (the start pose: 4 m ahead, turned to 90 deg) replaces the goal 35 m away; the robot stops there."""
+    """Foxglove's publish tools: the server advertises /goal_pose (geometry_msgs/msg/PoseStamped); a
+    client's goal in the odom frame (the start pose: 4 m ahead, turned to 90 deg) replaces the goal
+    35 m away; the robot stops there."""
     proc, url = start_cli(
         [
             "run",

@@ -2,10 +2,10 @@
 
 The stream is read by Rerun's own viewer binary (``rerun URI --save FILE``: it connects to the
 gRPC server as any viewer does and writes what it receives), then compared with the ``.rrd``
-that :func:`amr_twin.recording.rerun_log.record_run` writes for the same run: same entities, same rows,
-same values, same default blueprint. ``rerun rrd verify`` checks the streamed file (the viewer's ``--save`` of a stream writes no
-footer, the optional index of a finished file: checked without it).
-"""
+that :func:`amr_twin.recording.rerun_log.record_run` writes for the same run: same entities, same
+rows, same values, same default blueprint. ``rerun rrd verify`` checks the streamed file (the
+viewer's ``--save`` of a stream writes no footer, the optional index of a finished file: checked
+without it)."""
 
 import signal
 import subprocess

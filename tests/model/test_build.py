@@ -20,9 +20,10 @@ def _numbers_and_text(text: str) -> tuple[list[float], str]:
 
 
 def _assert_same_model(committed: str, fresh: str, name: str) -> None:
-    """Same structure and names to the character, every number within 1e-9 relative (1e-12 absolute):
-    a float's last printed digit moves with numpy's and libm's versions, a parameter change does not
-    hide in it (the smallest one the parameter file can express moves an inertia by ~1e-6)."""
+    """Same structure and names to the character, every number within 1e-9 relative (1e-12
+    absolute): a float's last printed digit moves with numpy's and libm's versions, a parameter
+    change does not hide in it (the smallest one the parameter file can express moves an inertia by
+    ~1e-6)."""
     a_num, a_text = _numbers_and_text(committed)
     b_num, b_text = _numbers_and_text(fresh)
     assert a_text == b_text, f"models/amr/{name} is stale (its structure): {REGENERATE}"
@@ -36,8 +37,8 @@ REGENERATE = "run amr-twin model --export-urdf models/amr/amr.urdf --export-mjcf
 
 
 def test_committed_files_are_not_stale(tmp_path):
-    """The committed URDF/MJCF equal what the build makes now, to the last digit that does not depend on
-    the machine (regenerate with amr-twin model --export-*)."""
+    """The committed URDF/MJCF equal what the build makes now, to the last digit that does not
+    depend on the machine (regenerate with amr-twin model --export-*)."""
     urdf, mjcf = tmp_path / "amr.urdf", tmp_path / "amr.xml"
     build_mod.export(load_config(), urdf, mjcf)
     _assert_same_model((MODEL_DIR / "amr.urdf").read_text(), urdf.read_text(), "amr.urdf")
@@ -45,8 +46,8 @@ def test_committed_files_are_not_stale(tmp_path):
 
 
 def test_the_staleness_check_sees_a_parameter_change(tmp_path):
-    """A wheel 1 g heavier (the last digit the parameter file gives a mass) fails the check; a last-digit
-    wobble of a printed float does not."""
+    """A wheel 1 g heavier (the last digit the parameter file gives a mass) fails the check; a
+    last-digit wobble of a printed float does not."""
     urdf, mjcf = tmp_path / "amr.urdf", tmp_path / "amr.xml"
     build_mod.export(load_config(overrides={"wheel.mass_kg": 3.501}), urdf, mjcf)
     with pytest.raises(AssertionError, match="stale"):
@@ -107,7 +108,8 @@ def test_a_model_without_visuals_or_imu_weighs_the_same():
 
 
 def test_the_viewer_scene_has_the_twins_options():
-    """models/amr/scene.xml (for MuJoCo's viewer) loads and steps with the options the twin builds with."""
+    """models/amr/scene.xml (for MuJoCo's viewer) loads and steps with the options the twin builds
+    with."""
     import mujoco
 
     viewer = mujoco.MjModel.from_xml_path(str(MODEL_DIR / "scene.xml")).opt
@@ -117,8 +119,9 @@ def test_the_viewer_scene_has_the_twins_options():
 
 
 def test_the_exported_mjcf_has_the_twins_options(tmp_path):
-    """The robot MJCF, fresh and committed, loaded alone carries every mjOption field the twin's model
-    runs with (timestep, integrator, cone, solver, iterations, noslip, flags, gravity, magnetic)."""
+    """The robot MJCF, fresh and committed, loaded alone carries every mjOption field the twin's
+    model runs with (timestep, integrator, cone, solver, iterations, noslip, flags, gravity,
+    magnetic)."""
     import mujoco
 
     from amr_twin.model.build import _option_fields

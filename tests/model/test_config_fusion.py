@@ -1,4 +1,5 @@
-"""Parameter file, chapter 6 sections (uwb, ekf, lidar_odometry, mapping): values and one-line errors."""
+"""Parameter file, chapter 6 sections (uwb, ekf, lidar_odometry, mapping): values and one-line
+errors."""
 
 import numpy as np
 import pytest

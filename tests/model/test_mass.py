@@ -1,4 +1,5 @@
-"""Mass properties from the parametric geometry (closed forms, checked against trimesh; no mujoco)."""
+"""Mass properties from the parametric geometry (closed forms, checked against trimesh; no
+mujoco)."""
 
 import numpy as np
 import pytest
@@ -142,7 +143,8 @@ def test_mass_module_needs_no_mesh_library():
     ],
 )
 def test_mass_and_com_follow_every_section_they_are_built_from(key, value, moves):
-    """robot_mass_com keeps the robot per robot and payload: a change of any section it reads shows."""
+    """robot_mass_com keeps the robot per robot and payload: a change of any section it reads
+    shows."""
     base_mass, base_com = mass.robot_mass_com(load_config())
     mass_kg, com_m = mass.robot_mass_com(load_config(overrides={key: value}))
     if moves == "mass":

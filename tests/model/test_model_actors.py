@@ -1,6 +1,6 @@
-"""Actors as the model builds them: their paths in time (hand-computed poses), their bodies and geoms
-(what a 0.45 m scan plane cuts), the parsing of --actor and a mission's actors, the free-space check,
-and random actors drawn from a seed."""
+"""Actors as the model builds them: their paths in time (hand-computed poses), their bodies and
+geoms (what a 0.45 m scan plane cuts), the parsing of --actor and a mission's actors, the free-space
+check, and random actors drawn from a seed."""
 
 import math
 

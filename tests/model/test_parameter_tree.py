@@ -23,7 +23,8 @@ def test_cached_tree_equals_parsed_and_skips_pyyaml(tmp_path):
     env_dir = tmp_path / "cache"
     code = (
         "import sys; from amr_twin.model.parameter_tree import read_yaml, DEFAULT_CONFIG; "
-        "import json; t = read_yaml(DEFAULT_CONFIG); print('yaml' in sys.modules); print(json.dumps(t, sort_keys=True))"
+        "import json; t = read_yaml(DEFAULT_CONFIG); print('yaml' in sys.modules); "
+        "print(json.dumps(t, sort_keys=True))"
     )
     env = {**__import__("os").environ, "AMR_TWIN_CACHE_DIR": str(env_dir)}
     first = subprocess.run(

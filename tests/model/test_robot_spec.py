@@ -12,8 +12,9 @@ from amr_twin.model.urdf import urdf_string
 
 
 def test_urdf_says_what_the_mjcf_has_as_far_as_urdf_can():
-    """Every link has an inertial (no defaults for other tools to invent, e.g. PyBullet's 1 kg); wheel
-    and caster joints carry the MJCF's damping, friction and limits in <dynamics> and <limit>."""
+    """Every link has an inertial (no defaults for other tools to invent, e.g. PyBullet's 1 kg);
+    wheel and caster joints carry the MJCF's damping, friction and limits in <dynamics> and
+    <limit>."""
     import mujoco
 
     cfg = load_config()
@@ -57,7 +58,9 @@ def test_spec_adds_what_urdf_cannot_carry():
     m = build(cfg).model
     import mujoco
 
-    names = lambda kind, n: [mujoco.mj_id2name(m, kind, i) for i in range(n)]
+    def names(kind, n):
+        return [mujoco.mj_id2name(m, kind, i) for i in range(n)]
+
     assert m.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
     assert names(mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu) == ["amr/motor_left", "amr/motor_right"]
     casters = [i for i, n in enumerate(names(mujoco.mjtObj.mjOBJ_JOINT, m.njnt)) if "caster" in n]

@@ -88,8 +88,8 @@ def _vertical_forces_n(m, d) -> dict:
     ],
 )
 def test_exported_mjcf_settled_on_a_plane_agrees_within_one_percent(payload):
-    """The exported robot MJCF as written (its own <option>, only a floor plane added: the export has
-    none), settled for 2 s in plain MuJoCo, carries each support's vertical load within 1 % of
+    """The exported robot MJCF as written (its own <option>, only a floor plane added: the export
+    has none), settled for 2 s in plain MuJoCo, carries each support's vertical load within 1 % of
     ``amr-twin model --json`` (:func:`describe`) over the last 0.1 s; its options are the twin's."""
     cfg = load_config(sets=payload)
     info = describe(cfg)

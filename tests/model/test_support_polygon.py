@@ -15,7 +15,8 @@ def test_tip_margin_geometry():
 
 @pytest.mark.parametrize("seed", range(5))
 def test_support_polygon_and_margin_agree_with_scipy_convex_hull(seed):
-    """The hand-written hull against Qhull (scipy), on random point sets with the com inside and outside."""
+    """The hand-written hull against Qhull (scipy), on random point sets with the com inside and
+    outside."""
     ConvexHull = pytest.importorskip("scipy.spatial").ConvexHull
     rng = np.random.default_rng(seed)
     for n in (3, 4, 6, 9):

@@ -1,7 +1,8 @@
-"""The tyres' timestep guard (amr_twin/model/tyre_stability.py): S from the configuration, the halving.
+"""The tyres' timestep guard (amr_twin/model/tyre_stability.py): S from the configuration, the
+halving.
 
-Expectations by hand (docs/explanation/tyres.md): J / r^2 = 0.5 x 2.1 kg x 0.125^2 / 0.125^2 = 1.05 kg;
-nominal tyre at its static 65.6 N: k_x = 15 x 65.6 / 0.04 = 24 600 N/m,
+Expectations by hand (docs/explanation/tyres.md): J / r^2 = 0.5 x 2.1 kg x 0.125^2 / 0.125^2 = 1.05
+kg; nominal tyre at its static 65.6 N: k_x = 15 x 65.6 / 0.04 = 24 600 N/m,
 S = (24.6 + 123) 1e-3 / 1.05 = 0.141. Stiff longitudinal corner (slip stiffness 25, relaxation
 0.02 m, loss 10 ms) with 50 kg (static wheel load 217.4 N, x 1.3): k_x = 353 275 N/m,
 S(1 ms) = (353.3 + 3532.8) 1e-3 / 1.05 = 3.70, S(0.5 ms) = 1.77, S(0.25 ms) = 0.86.

@@ -124,8 +124,9 @@ print("returned")
 
 
 def test_ctrl_c_while_trimesh_imports_is_not_swallowed():
-    """trimesh (imported by yourdfpy) catches BaseException around ``from PIL import Image``: a Ctrl-C
-    there was swallowed, and a run went on to its end. It is held back and raised after the check."""
+    """trimesh (imported by yourdfpy) catches BaseException around ``from PIL import Image``: a
+    Ctrl-C there was swallowed, and a run went on to its end. It is held back and raised after the
+    check."""
     out = subprocess.run(
         [sys.executable, "-c", CTRL_C_IN_PIL], capture_output=True, text=True, timeout=120
     )

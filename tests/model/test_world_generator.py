@@ -1,4 +1,5 @@
-"""Generated halls (``--world generated:SEED``): seeded bytes, doorways, reachability, start, anchors, LiDAR height."""
+"""Generated halls (``--world generated:SEED``): seeded bytes, doorways, reachability, start,
+anchors, LiDAR height."""
 
 import subprocess
 import sys
@@ -20,7 +21,10 @@ SEEDS = (0, 3, 5, 8, 11, 17)  # tuning seeds 0-4 and held-out ones alike
 def test_the_same_seed_gives_the_same_bytes_in_another_process_and_other_seeds_differ(tmp_path):
     from amr_twin.experiments.navigation.generated import write_world
 
-    code = "from amr_twin.model.generated_world import mjcf; import sys; sys.stdout.write(mjcf('generated:7?door=0.9'))"
+    code = (
+        "from amr_twin.model.generated_world import mjcf; import sys; "
+        "sys.stdout.write(mjcf('generated:7?door=0.9'))"
+    )
     other = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout
@@ -67,8 +71,8 @@ def test_every_doorway_is_as_wide_as_drawn_or_forced_in_the_compiled_world():
 
 
 def _reach(seed):
-    """The true map's cells the robot's centre may take (farther than the inscribed radius from any obstacle),
-    labelled in 4-connected components (scipy), with the map and the hall."""
+    """The true map's cells the robot's centre may take (farther than the inscribed radius from any
+    obstacle), labelled in 4-connected components (scipy), with the map and the hall."""
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.stack import true_map
 

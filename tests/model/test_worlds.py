@@ -1,4 +1,5 @@
-"""Map worlds: PGM reading, run merging, world boxes (pure logic, no mujoco), and a build from a map."""
+"""Map worlds: PGM reading, run merging, world boxes (pure logic, no mujoco), and a build from a
+map."""
 
 import numpy as np
 import pytest
@@ -56,7 +57,10 @@ def test_map_modes(tmp_path):
     image[0, :] = 100  # raw: 100 % occupied
     image[1, :] = 255  # raw: unknown
     write_pgm(tmp_path / "m.pgm", image)
-    base = "image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    base = (
+        "image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\noccupied_thresh: 0.65\nfree_thresh: "
+        "0.196\n"
+    )
     (tmp_path / "raw.yaml").write_text(base + "mode: raw\n")
     assert load_map(tmp_path / "raw.yaml").occupied.sum(axis=1).tolist() == [
         4,

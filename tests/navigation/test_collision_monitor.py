@@ -1,4 +1,5 @@
-"""The collision monitor: a person stepping in ahead is stopped short of, the racks beside are not."""
+"""The collision monitor: a person stepping in ahead is stopped short of, the racks beside are
+not."""
 
 import math
 
@@ -18,7 +19,8 @@ def _person(x, y, r=0.2, n=12):
 
 def test_a_person_stepping_into_the_path_2_m_ahead_is_stopped_short_of_by_0_3_m():
     """Driving at the top speed, a person appears 2 m ahead of the front (a scan's worth late): the
-    monitor's commands, through the drive's ramps at 20 Hz, stop the robot 0.3 m or more from them."""
+    monitor's commands, through the drive's ramps at 20 Hz, stop the robot 0.3 m or more from
+    them."""
     lim, mon = Limits(), CollisionMonitor(FP, 0.8)
     x, v, dt = 0.0, 0.8, 0.05
     person_x = FP.x_max_m + 2.0 + 0.2  # the person's near side 2 m ahead of the front
@@ -84,7 +86,7 @@ def test_a_person_walking_at_the_robots_side_is_stopped_for_before_they_meet():
     )  # behind
 
 
-def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_unless_it_moves_away():
+def test_a_standing_person_beside_is_passed_one_too_close_stops_the_robot_unless_it_moves_away():
     mon = CollisionMonitor(FP, 0.8)
     no_scan = np.zeros((0, 2)), np.zeros(0, bool)
     beside = _people(
@@ -97,7 +99,8 @@ def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_un
     assert mon.filter(0.5, 0.4, *no_scan, people_base=close) == (0.0, 0.0)  # towards them
     v, w = mon.filter(-0.2, 0.0, *no_scan, people_base=close)  # backing away: allowed
     assert v == -0.2 and mon.actions["people_escape"] == 1
-    # a turn in place away from them (the disc's gap grows) is refused all the same: it swings the corners
+    # a turn in place away from them (the disc's gap grows) is refused all the same: it swings the
+    # corners
     assert mon.filter(0.0, -0.5, *no_scan, people_base=close) == (0.0, 0.0)
     assert mon.filter(0.0, 0.5, *no_scan, people_base=beside) == (0.0, 0.5)  # farther: turn freely
     # driving on away from one who walks up behind: at full speed (at the people speed towards them)
@@ -110,7 +113,8 @@ def test_a_standing_person_beside_is_passed_and_one_too_close_stops_the_robot_un
 
 def test_the_people_gaps_of_all_steps_at_once_are_the_gaps_of_each_step():
     """The approach model's clearances to people walking on, all its steps at once, are those of the
-    person gap at each step's pose (bit for bit: the monitor's decisions do not change), turning or not."""
+    person gap at each step's pose (bit for bit: the monitor's decisions do not change), turning or
+    not."""
     from amr_twin.navigation.kinematics import arc_poses
 
     mon, rng = CollisionMonitor(FP, 0.8), np.random.default_rng(4)
@@ -130,9 +134,9 @@ def test_the_people_gaps_of_all_steps_at_once_are_the_gaps_of_each_step():
 
 
 def test_the_people_zone_grows_by_the_distance_the_drive_rolls_after_a_stop():
-    """A person standing beside the path ahead, their disc 0.36 m from it: at 0.3 m/s the drive would
-    roll 0.3 x 0.15 + 0.3^2 / 2 = 0.09 m after a stop, so the robot is slowed (the zone 0.39 m); at
-    0.05 m/s (0.009 m) it drives on; with no lag and a hard brake the zone stays 0.3 m."""
+    """A person standing beside the path ahead, their disc 0.36 m from it: at 0.3 m/s the drive
+    would roll 0.3 x 0.15 + 0.3^2 / 2 = 0.09 m after a stop, so the robot is slowed (the zone 0.39
+    m); at 0.05 m/s (0.009 m) it drives on; with no lag and a hard brake the zone stays 0.3 m."""
     no_scan = np.zeros((0, 2)), np.zeros(0, bool)
     person = _people(
         (0.8, FP.half_width_m + 0.25 + 0.36), (0.0, 0.0)

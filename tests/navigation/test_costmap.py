@@ -9,8 +9,9 @@ from nav_grids import room
 
 
 def _scan(origin, targets, max_range=12.0, n=360):
-    """Beams from ``origin`` over a full turn; each hits the nearest of ``targets`` (discs (x, y, r)) or the
-    room's walls (12 x 8 m room), as a LiDAR would: origins (n, 2), ends (n, 2), hit (n,)."""
+    """Beams from ``origin`` over a full turn; each hits the nearest of ``targets`` (discs (x, y,
+    r)) or the room's walls (12 x 8 m room), as a LiDAR would: origins (n, 2), ends (n, 2), hit
+    (n,)."""
     ang = np.linspace(-np.pi, np.pi, n, endpoint=False)
     d = np.column_stack([np.cos(ang), np.sin(ang)])
     o = np.asarray(origin, float)
@@ -69,9 +70,9 @@ def test_inflation_costs_are_nav2s():
 
 
 def test_each_scan_leaves_the_layers_as_a_rebuild_from_scratch_would():
-    """The update touches only the cells that changed (and their inflation window): after people walk about,
-    the obstacle layer's distances equal a distance transform of the whole grid, and a scan that changes
-    nothing is no change (no new version: the planner skips its replan)."""
+    """The update touches only the cells that changed (and their inflation window): after people
+    walk about, the obstacle layer's distances equal a distance transform of the whole grid, and a
+    scan that changes nothing is no change (no new version: the planner skips its replan)."""
     from scipy.ndimage import distance_transform_edt
 
     cm = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
@@ -94,9 +95,9 @@ def test_each_scan_leaves_the_layers_as_a_rebuild_from_scratch_would():
 
 
 def test_the_c_clearing_march_leaves_the_layers_of_its_numpy_twin():
-    """Scans from random places with random people about, some beams without a return and some ends off the
-    grid: the C march (costmap_rays.c) and its NumPy twin clear the same cells, so the two costmaps keep the
-    same obstacle layer and distances scan after scan."""
+    """Scans from random places with random people about, some beams without a return and some ends
+    off the grid: the C march (costmap_rays.c) and its NumPy twin clear the same cells, so the two
+    costmaps keep the same obstacle layer and distances scan after scan."""
     fast = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
     slow = Costmap(
         room(),
@@ -130,8 +131,8 @@ def test_the_c_clearing_march_leaves_the_layers_of_its_numpy_twin():
 
 
 def test_the_c_march_crosses_the_cells_its_numpy_twin_crosses_on_a_dense_random_layer():
-    """Every sample counts on a layer a third marked: the same crossed cells, in the same order, from
-    beams of random origins, directions and free lengths (none, zero, past the grid's edge)."""
+    """Every sample counts on a layer a third marked: the same crossed cells, in the same order,
+    from beams of random origins, directions and free lengths (none, zero, past the grid's edge)."""
     fast = Costmap(room(), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0)
     slow = Costmap(
         room(),

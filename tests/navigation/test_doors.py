@@ -1,10 +1,11 @@
-"""Narrow passages: a 0.9 m door (0.185 m a side for the 0.53 m robot) planned through on its centre line, seen
-by the controller's critics and the collision monitor as the footprint sees it (a rectangle, not circles),
-crawled through, and driven through by the whole twin with the EKF, the true footprint kept 0.08 m or more
-from the true jambs on each side.
+"""Narrow passages: a 0.9 m door (0.185 m a side for the 0.53 m robot) planned through on its centre
+line, seen by the controller's critics and the collision monitor as the footprint sees it (a
+rectangle, not circles), crawled through, and driven through by the whole twin with the EKF, the
+true footprint kept 0.08 m or more from the true jambs on each side.
 
-The door world: a 24 x 14 m hall split by a 0.2 m wall at x = 12 m with one 0.9 m door centred at y = 7 m
-(tuning trips: ``tests/navigation/test_doors.py``'s seeds 0 and 1, west to east at an angle to the door)."""
+The door world: a 24 x 14 m hall split by a 0.2 m wall at x = 12 m with one 0.9 m door centred at y
+= 7 m (tuning trips: ``tests/navigation/test_doors.py``'s seeds 0 and 1, west to east at an angle to
+the door)."""
 
 import math
 
@@ -40,8 +41,8 @@ def door_hall(door_m: float = DOOR_M):
 
 
 def jamb_clearance_m(poses: np.ndarray, door_m: float = DOOR_M) -> tuple[float, float]:
-    """Least distance (south, north) from the true footprint at ``poses`` (n, 3) to the door's jambs, m: the
-    outline's points within the wall's thickness against the opening's edges."""
+    """Least distance (south, north) from the true footprint at ``poses`` (n, 3) to the door's
+    jambs, m: the outline's points within the wall's thickness against the opening's edges."""
     pts = to_map(np.asarray(poses, float), FP.outline_xy_m(0.005)).reshape(-1, 2)
     inside = np.abs(pts[:, 0] - WALL_X) <= WALL_T / 2
     y = pts[inside, 1]
@@ -56,8 +57,9 @@ def costmap():
 
 
 def test_the_plan_runs_on_the_doors_centre_line_aligned_before_the_robot_enters(costmap):
-    """Approached at 45 degrees from the south-west and left to the north-east: within the wall and for the
-    footprint's half length (plus 0.1 m) either side the plan lies on the door's centre line, heading along it."""
+    """Approached at 45 degrees from the south-west and left to the north-east: within the wall and
+    for the footprint's half length (plus 0.1 m) either side the plan lies on the door's centre
+    line, heading along it."""
     planner = make_planner(costmap, FP, CFG.navigation)
     for start, goal in (
         ((9.5, 4.5), (15.0, 10.0)),
@@ -80,8 +82,9 @@ def _critic(costmap, **kw):
 
 @pytest.mark.parametrize("native", [True, False])
 def test_the_critics_see_the_rectangle_in_the_door_not_circles(costmap, native):
-    """Poses in the door, heading through it, 0.17 m off the centre line (the wheels 1.5 cm from a jamb: free,
-    where circles covering the rectangle reach into the jamb) and 0.20 m off (the wheels in it: a collision)."""
+    """Poses in the door, heading through it, 0.17 m off the centre line (the wheels 1.5 cm from a
+    jamb: free, where circles covering the rectangle reach into the jamb) and 0.20 m off (the wheels
+    in it: a collision)."""
     mppi = _critic(costmap, native=native)
     offsets = np.array([0.0, 0.10, 0.17, -0.17, 0.20, -0.20], np.float32)
     x = np.full((3, len(offsets)), WALL_X, np.float32)  # three steps standing there
@@ -97,8 +100,8 @@ def test_the_critics_see_the_rectangle_in_the_door_not_circles(costmap, native):
 
 
 def test_the_speed_is_capped_where_the_plan_passes_a_narrow_passage(costmap):
-    """Driving at 0.8 m/s towards the door with 1 m to go, the controller slows to narrow_v_m_s; on the same
-    plan in the open hall it does not."""
+    """Driving at 0.8 m/s towards the door with 1 m to go, the controller slows to narrow_v_m_s; on
+    the same plan in the open hall it does not."""
     mppi = Mppi(
         costmap,
         FP,
@@ -131,9 +134,10 @@ def test_the_speed_is_capped_where_the_plan_passes_a_narrow_passage(costmap):
 
 
 def test_the_collision_monitor_lets_the_robot_through_the_door_and_stops_it_at_a_jamb():
-    """The jambs' returns 0.185 m from the wheels on each side: a straight command through passes untouched
-    (the zones are the footprint's rectangle grown by pad_m; a circle about the robot would hold a jamb); a
-    turn that swings a corner into a jamb within time_before_collision_s is slowed."""
+    """The jambs' returns 0.185 m from the wheels on each side: a straight command through passes
+    untouched (the zones are the footprint's rectangle grown by pad_m; a circle about the robot
+    would hold a jamb); a turn that swings a corner into a jamb within time_before_collision_s is
+    slowed."""
     m = CFG.navigation.monitor
     monitor = CollisionMonitor(
         FP, 0.8, pad_m=m.pad_m, time_before_collision_s=m.time_before_collision_s
@@ -154,8 +158,8 @@ def test_the_collision_monitor_lets_the_robot_through_the_door_and_stops_it_at_a
 
 
 TRIPS = (((8.01, 7.97, -1.33), (15.26, 11.74)), ((8.66, 5.59, 1.79), (18.55, 4.94)))
-"""West to east at an angle to the door: the tuning trips (both failed before the footprint critics, 0.5 m
-before the door: "failed to make progress (after 6 recoveries)")."""
+"""West to east at an angle to the door: the tuning trips (both failed before the footprint critics,
+0.5 m before the door: "failed to make progress (after 6 recoveries)")."""
 
 
 @pytest.fixture(scope="module", params=range(len(TRIPS)))

@@ -1,4 +1,5 @@
-"""Success judged by the truth: the navigator's estimate says reached, the twin's true pose says by how much."""
+"""Success judged by the truth: the navigator's estimate says reached, the twin's true pose says by
+how much."""
 
 import math
 from types import SimpleNamespace
@@ -52,8 +53,8 @@ def test_a_goal_without_yaw_is_judged_on_position_and_other_outcomes_are_kept():
 
 
 def test_the_experiment_counts_success_by_the_truth():
-    """An episode the navigator (and its outcome) calls succeeded but whose true pose ended 0.3 m off is a failure
-    in the experiment's metrics, with both final errors in its row."""
+    """An episode the navigator (and its outcome) calls succeeded but whose true pose ended 0.3 m
+    off is a failure in the experiment's metrics, with both final errors in its row."""
     from amr_twin.experiments.navigation.metrics import measure
 
     cfg = load_config()

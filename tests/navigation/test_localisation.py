@@ -1,4 +1,5 @@
-"""The navigator's pose source: the localisation's topic, its history and the map match's correction."""
+"""The navigator's pose source: the localisation's topic, its history and the map match's
+correction."""
 
 import numpy as np
 import pytest
@@ -20,9 +21,9 @@ def _odom(t_s, x, y, yaw):
 
 
 def test_a_jump_the_ekf_takes_in_leaves_every_corrected_pose_where_it_was():
-    """The EKF fuses the match and its pose jumps: the correction gives the jump back, so the navigator's pose
-    now and the poses a scan's beams are placed at (its history) stay put; without the rebase they would move
-    by the jump (5 cm and 0.02 rad here)."""
+    """The EKF fuses the match and its pose jumps: the correction gives the jump back, so the
+    navigator's pose now and the poses a scan's beams are placed at (its history) stay put; without
+    the rebase they would move by the jump (5 cm and 0.02 rad here)."""
     bus = Bus(VirtualClock())
     src = PoseSource(bus, "odometry/filtered")
     for k in range(10):

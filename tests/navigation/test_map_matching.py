@@ -1,4 +1,5 @@
-"""The scan-to-map correction: a misplaced scan is brought back onto the map, what the map lacks does not pull it."""
+"""The scan-to-map correction: a misplaced scan is brought back onto the map, what the map lacks
+does not pull it."""
 
 import math
 
@@ -21,8 +22,8 @@ def apply(correction, xy_m):
 
 
 def _room_scan(origin, n=360, discs=()):
-    """Returns (n, 2) of beams from ``origin`` over a full turn on the inner faces of the 12 x 8 m room's
-    walls (0.1 m thick), or on the nearest disc ``(x, y, r)`` in the way."""
+    """Returns (n, 2) of beams from ``origin`` over a full turn on the inner faces of the 12 x 8 m
+    room's walls (0.1 m thick), or on the nearest disc ``(x, y, r)`` in the way."""
     ang = np.linspace(-np.pi, np.pi, n, endpoint=False)
     d = np.column_stack([np.cos(ang), np.sin(ang)])
     o = np.asarray(origin, float)
@@ -57,8 +58,9 @@ def costmap():
 
 
 def _drive(matcher, error, scans=12, discs=()):
-    """Scans taken at LASER, placed by a localisation off by ``error``, corrected as PoseSource does;
-    returns what the final correction leaves of the error at the laser (m) and in heading (rad)."""
+    """Scans taken at LASER, placed by a localisation off by ``error``, corrected as PoseSource
+    does; returns what the final correction leaves of the error at the laser (m) and in heading
+    (rad)."""
     truth = _room_scan(LASER, discs=discs)
     for _ in range(scans):
         placed = apply(compose(matcher.correction, error), truth)
@@ -73,7 +75,8 @@ def _drive(matcher, error, scans=12, discs=()):
 )
 def test_a_misplaced_scan_is_brought_back_onto_the_map(costmap, theta, shift):
     """The EKF's heading 3-4 degrees off and its position 5-12 cm (what the aisles' NLOS ranges do):
-    within a dozen scans the correction leaves under 1.5 cm at the laser and 0.2 degrees of heading."""
+    within a dozen scans the correction leaves under 1.5 cm at the laser and 0.2 degrees of
+    heading."""
     off_m, off_rad = _drive(MapMatcher(costmap), _about(LASER, theta, shift))
     assert off_m < 0.015 and off_rad < math.radians(0.2), (off_m, off_rad)
 
@@ -86,7 +89,8 @@ def test_people_in_the_scan_do_not_pull_the_correction(costmap):
 
 
 def test_a_scan_with_too_few_returns_near_the_map_leaves_the_correction(costmap):
-    """A scan far off the map (or of an open hall) is not matched: the correction stays, counted as skipped."""
+    """A scan far off the map (or of an open hall) is not matched: the correction stays, counted as
+    skipped."""
     matcher = MapMatcher(costmap)
     ang = np.linspace(-np.pi, np.pi, 360, endpoint=False)
     far = np.array([6.0, 4.0]) + 1.5 * np.column_stack(
@@ -97,8 +101,9 @@ def test_a_scan_with_too_few_returns_near_the_map_leaves_the_correction(costmap)
 
 
 def test_the_prior_bounds_a_correction_the_map_cannot_fix(costmap):
-    """In a long corridor (walls along x only) a shift along it is unobservable: the correction along the
-    corridor stays within the prior's reach instead of sliding, while the cross shift is found."""
+    """In a long corridor (walls along x only) a shift along it is unobservable: the correction
+    along the corridor stays within the prior's reach instead of sliding, while the cross shift is
+    found."""
     corridor = Costmap(
         room(40.0, 2.2), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0
     )
@@ -121,9 +126,9 @@ def test_the_prior_bounds_a_correction_the_map_cannot_fix(costmap):
 
 
 def _ekf_errors(matching: bool):
-    """The navigator's pose against the truth, every 0.1 s of 9 s in the aisles world (EKF of odometry,
-    gyro and UWB; the bench's drive past a rack's end into the aisle at y = -1.5): max position error (m),
-    max heading error (rad)."""
+    """The navigator's pose against the truth, every 0.1 s of 9 s in the aisles world (EKF of
+    odometry, gyro and UWB; the bench's drive past a rack's end into the aisle at y = -1.5): max
+    position error (m), max heading error (rad)."""
     from amr_twin.model.config import load_config
     from amr_twin.navigation.kinematics import wrap
     from amr_twin.navigation.stack import REST_S, NavigationOptions, attach, true_map
@@ -163,10 +168,11 @@ def ekf_runs():
 
 
 def test_the_ekf_pose_is_held_to_the_map_in_the_aisles(ekf_runs):
-    """Beside a rack's end the UWB ranges come late through the racks and pull the EKF's pose off (0.09 m
-    and 0.026 rad on this drive; more than 0.05 rad on the drive the LiDAR's old ghost returns made,
-    docs/explanation/lidar.md); matched to the map the pose stays within 9 cm (along the aisle, where only the
-    uprights tell where it is) and 0.03 rad of the truth, every scan matched."""
+    """Beside a rack's end the UWB ranges come late through the racks and pull the EKF's pose off
+    (0.09 m and 0.026 rad on this drive; more than 0.05 rad on the drive the LiDAR's old ghost
+    returns made, docs/explanation/lidar.md); matched to the map the pose stays within 9 cm (along
+    the aisle, where only the uprights tell where it is) and 0.03 rad of the truth, every scan
+    matched."""
     pos_m, yaw_rad, nav = ekf_runs[True]
     raw_pos_m, raw_yaw_rad, _ = ekf_runs[False]
     assert raw_pos_m > 0.08 and raw_pos_m > pos_m + 0.02, (raw_pos_m, raw_yaw_rad, pos_m)
@@ -178,8 +184,9 @@ def test_the_ekf_pose_is_held_to_the_map_in_the_aisles(ekf_runs):
 
 
 def test_each_step_and_the_whole_correction_are_bounded(costmap):
-    """A scan the map would explain only 0.6 m away: each scan moves the pose at most step_m, and the whole
-    correction stops at total_m (unbounded, the matches slid 1-4 m along the SLAM map's look-alike racks)."""
+    """A scan the map would explain only 0.6 m away: each scan moves the pose at most step_m, and
+    the whole correction stops at total_m (unbounded, the matches slid 1-4 m along the SLAM map's
+    look-alike racks)."""
     matcher = MapMatcher(costmap, inlier_m=0.8, step_m=0.03, total_m=0.3)
     error = (0.6, 0.0, 0.0)
     truth = _room_scan(LASER)
@@ -196,9 +203,9 @@ def test_each_step_and_the_whole_correction_are_bounded(costmap):
 
 
 def _unseen_drive(feedback: bool, tmp_path, sim_s: float = 26.0):
-    """Episode 3 of seed 22 on the generated warehouse 22 (a map the code has never seen, extruded into a world;
-    its rows stand between the UWB anchors and the aisles): the navigator's pose against the truth every 0.5 s,
-    m, and the goal's outcome after ``sim_s``."""
+    """Episode 3 of seed 22 on the generated warehouse 22 (a map the code has never seen, extruded
+    into a world; its rows stand between the UWB anchors and the aisles): the navigator's pose
+    against the truth every 0.5 s, m, and the goal's outcome after ``sim_s``."""
     from amr_twin.experiments.navigation.experiment import episodes
     from amr_twin.model.config import load_config
     from amr_twin.navigation.stack import REST_S, NavigationOptions, attach, true_map
@@ -238,10 +245,10 @@ def unseen_runs(tmp_path_factory):
 
 
 def test_the_ekf_takes_the_match_in_and_stays_on_an_unseen_map(unseen_runs):
-    """Without the feedback the EKF drifts with the UWB ranges that come late through the rows, 1.0-1.2 m
-    within 25 s, beyond the correction's 0.3 m bound, and the goal is not reached (the experiment's
-    episode timed out); fusing the matched pose the navigator's pose stays within 0.1 m and the goal is
-    reached in 25 s (the unseen maps, docs/explanation/navigation.md)."""
+    """Without the feedback the EKF drifts with the UWB ranges that come late through the rows,
+    1.0-1.2 m within 25 s, beyond the correction's 0.3 m bound, and the goal is not reached (the
+    experiment's episode timed out); fusing the matched pose the navigator's pose stays within 0.1 m
+    and the goal is reached in 25 s (the unseen maps, docs/explanation/navigation.md)."""
     err_fb, status_fb, nav = unseen_runs[True]
     err_raw, status_raw, _ = unseen_runs[False]
     assert err_raw.max() > 0.6 and status_raw != "succeeded", (err_raw.max(), status_raw)
@@ -252,7 +259,8 @@ def test_the_ekf_takes_the_match_in_and_stays_on_an_unseen_map(unseen_runs):
 
 
 def _corridor_matcher(**kw):
-    """A matcher fitted once in a 40 m corridor 2.2 m wide (walls along x), the laser at its middle."""
+    """A matcher fitted once in a 40 m corridor 2.2 m wide (walls along x), the laser at its
+    middle."""
     corridor = Costmap(
         room(40.0, 2.2), inscribed_radius_m=0.265, inflation_radius_m=1.0, cost_scaling_per_m=3.0
     )
@@ -267,9 +275,10 @@ def _corridor_matcher(**kw):
 
 
 def test_the_matched_pose_covariance_leaves_the_corridor_open():
-    """What goes to the EKF: across the corridor the fit knows the pose to millimetres, along it not at all
-    (its variance stays at the 1e6 m^2 regulariser's scale); a base 0.5 m ahead of the laser adds the heading's
-    variance times 0.25 m^2 across; the inflation scales the fit and the floors add."""
+    """What goes to the EKF: across the corridor the fit knows the pose to millimetres, along it not
+    at all (its variance stays at the 1e6 m^2 regulariser's scale); a base 0.5 m ahead of the laser
+    adds the heading's variance times 0.25 m^2 across; the inflation scales the fit and the floors
+    add."""
     bare, laser = _corridor_matcher(
         feedback_inflation=1.0, feedback_floor_m=1e-9, feedback_floor_rad=1e-9
     )
@@ -289,9 +298,10 @@ def test_the_matched_pose_covariance_leaves_the_corridor_open():
 
 
 def test_the_pose_covariance_moves_from_the_laser_to_the_base_as_a_rigid_motion(costmap):
-    """Checked by sampling: increments (dx, dy, dyaw) about the laser drawn from the fit's covariance (one with
-    cross terms), each moving the base 0.4 m behind and 0.1 m beside the laser as the rigid motion does;
-    the samples' covariance is what the EKF is given (inflation 1, floors 1e-9)."""
+    """Checked by sampling: increments (dx, dy, dyaw) about the laser drawn from the fit's
+    covariance (one with cross terms), each moving the base 0.4 m behind and 0.1 m beside the laser
+    as the rigid motion does; the samples' covariance is what the EKF is given (inflation 1, floors
+    1e-9)."""
     m = MapMatcher(costmap, feedback_inflation=1.0, feedback_floor_m=1e-9, feedback_floor_rad=1e-9)
     cov = np.array([[4e-4, 1e-4, 2e-4], [1e-4, 9e-4, -3e-4], [2e-4, -3e-4, 6e-4]])
     m.information, m.centre_xy_m = np.linalg.inv(cov), np.array([3.0, 4.0])

@@ -1,6 +1,7 @@
-"""MPPI's C helper (amr_twin/navigation/mppi_critics.c) against its NumPy twin (``native=False``): the same
-samples and rollouts bit for bit, the same costs to float32 rounding (the same bits here), the same
-collisions and the same commands cycle after cycle, on random rollouts in a room with racks and people about."""
+"""MPPI's C helper (amr_twin/navigation/mppi_critics.c) against its NumPy twin (``native=False``):
+the same samples and rollouts bit for bit, the same costs to float32 rounding (the same bits here),
+the same collisions and the same commands cycle after cycle, on random rollouts in a room with racks
+and people about."""
 
 import math
 
@@ -42,7 +43,8 @@ def _path(start, goal, n=200):
 
 
 def _case(rng):
-    """A random pose in the aisle, random controls around a random nominal, a path, people (or none)."""
+    """A random pose in the aisle, random controls around a random nominal, a path, people (or
+    none)."""
     pose = np.array([rng.uniform(1.0, 11.0), rng.uniform(3.0, 5.0), rng.uniform(-math.pi, math.pi)])
     goal = np.array([rng.uniform(1.0, 11.0), rng.uniform(3.0, 5.0)])
     if rng.random() < 0.3:  # near the goal: the goal critic instead of the path's
@@ -104,7 +106,8 @@ def test_the_c_and_numpy_controllers_give_the_same_commands_cycle_after_cycle(co
 
 
 def test_the_c_and_numpy_samples_are_the_same_bits(costmap):
-    """The sampled control sequences of a cycle (noise scaled about the nominal, clipped to the ramps)."""
+    """The sampled control sequences of a cycle (noise scaled about the nominal, clipped to the
+    ramps)."""
     fast, slow = _pair(costmap)
     rng = np.random.default_rng(8)
     for _ in range(5):

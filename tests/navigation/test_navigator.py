@@ -30,7 +30,8 @@ FP = robot_footprint(CFG)
 
 
 def _boxes(world, obstacles=()):
-    """The world's obstacles (an MJCF world's geoms, a ROS map's extruded walls) and ``obstacles``, as boxes."""
+    """The world's obstacles (an MJCF world's geoms, a ROS map's extruded walls) and ``obstacles``,
+    as boxes."""
     if str(world).endswith(".yaml"):
         walls = wall_boxes(load_map(world))
         b = Footprints(
@@ -83,7 +84,8 @@ def _go(
 
 @pytest.fixture(scope="module", params=["mppi", "rpp"])
 def behind(request):
-    """In the aisles world's 2 m aisle at y = -4.8, facing east; the goal 3 m behind, facing west."""
+    """In the aisles world's 2 m aisle at y = -4.8, facing east; the goal 3 m behind, facing
+    west."""
     return _go("aisles", (-10.0, -4.8, 0.0), (-13.0, -4.8, math.pi), controller=request.param)
 
 
@@ -116,8 +118,8 @@ def blocked(corridors):
 
 
 def test_a_blocked_aisle_leads_to_a_replan_through_another(blocked, corridors):
-    """Three seeds (MPPI's samples, the sensors' noise), every one reaches the goal round the middle wall
-    (with the brush tyres, seeds 0-5 took 33-39 s of simulated time, no recovery)."""
+    """Three seeds (MPPI's samples, the sensors' noise), every one reaches the goal round the middle
+    wall (with the brush tyres, seeds 0-5 took 33-39 s of simulated time, no recovery)."""
     runs, jack = blocked
     for run in runs:
         assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
@@ -172,8 +174,8 @@ def test_the_stack_is_built_from_the_navigation_section_and_its_overrides(corrid
 
 @pytest.fixture(scope="module")
 def stepping(corridors):
-    """A person (an actor of the twin) steps into the south corridor about 2 m ahead of the robot at 0.8 m/s,
-    crossing it diagonally towards the robot at 1.3 m/s, then stands at its north side."""
+    """A person (an actor of the twin) steps into the south corridor about 2 m ahead of the robot at
+    0.8 m/s, crossing it diagonally towards the robot at 1.3 m/s, then stands at its north side."""
     person = Actor("person", ((6.0, 1.75), (4.5, 3.25)), 1.3, start_s=4.8)
     twin_options = TwinOptions(
         firmware="improved",
@@ -191,7 +193,8 @@ def stepping(corridors):
 
 
 def _person_clearance(run):
-    """(t_s, footprint clearance to the person's body, robot pose, person pose) at each ``actors/poses`` message."""
+    """(t_s, footprint clearance to the person's body, robot pose, person pose) at each
+    ``actors/poses`` message."""
     rows = []
     for t_a, poses in run.actor_poses:
         k = min(int(np.searchsorted(run.t_s, t_a)), len(run.t_s) - 1)
@@ -235,8 +238,9 @@ def test_a_person_stepping_into_the_path_2_m_ahead_stops_or_diverts_the_robot_0_
 
 @pytest.fixture(scope="module")
 def standing(corridors):
-    """A person standing at the south corridor's side, 0.65 m off the robot's line, who never walks: the
-    robot drives past them (the experiment's people wait at an aisle's side so before they cross)."""
+    """A person standing at the south corridor's side, 0.65 m off the robot's line, who never walks:
+    the robot drives past them (the experiment's people wait at an aisle's side so before they
+    cross)."""
     person = Actor("person", ((6.0, 1.85),), 1.3)
     twin_options = TwinOptions(
         firmware="improved",
@@ -254,8 +258,8 @@ def standing(corridors):
 
 
 def test_a_person_standing_still_beside_the_way_is_passed_0_3_m_away(standing):
-    """Never seen walking, they are a person all the same (navigation.people.moved_m 0): a robot that kept
-    only an obstacle's clearance from them (moved_m 0.5) passed 0.28 m from their body."""
+    """Never seen walking, they are a person all the same (navigation.people.moved_m 0): a robot
+    that kept only an obstacle's clearance from them (moved_m 0.5) passed 0.28 m from their body."""
     run = standing
     assert run.outcomes[0].status == "succeeded", run.outcomes[0].reason
     assert run.collisions == []
@@ -265,8 +269,8 @@ def test_a_person_standing_still_beside_the_way_is_passed_0_3_m_away(standing):
 
 @pytest.fixture(scope="module")
 def unseen(tmp_path_factory):
-    """Two seeded start/goal pairs on a warehouse generated here, localised by the EKF (UWB anchors of the
-    parameter file: the hall's corners), imported as a ROS map world."""
+    """Two seeded start/goal pairs on a warehouse generated here, localised by the EKF (UWB anchors
+    of the parameter file: the hall's corners), imported as a ROS map world."""
     folder = tmp_path_factory.mktemp("unseen")
     static = random_warehouse(11)
     path = write_map(folder, "unseen", static)
@@ -299,15 +303,18 @@ def test_a_warehouse_the_code_has_never_seen_is_navigated(unseen):
 
 
 class _TwoRoutes:
-    """A planner whose plans alternate between a short route east and a long one west (the tier's margin
-    flickering with a pallet jack's marked cells), with a switch for whether the present path is free."""
+    """A planner whose plans alternate between a short route east and a long one west (the tier's
+    margin flickering with a pallet jack's marked cells), with a switch for whether the present path
+    is free."""
 
     people_m, last_error = 0.865, ""
 
     def __init__(self):
         from amr_twin.navigation.planner import Plan
 
-        line = lambda dx, n: np.column_stack([np.linspace(0, dx, n), np.zeros(n), np.zeros(n)])
+        def line(dx, n):
+            return np.column_stack([np.linspace(0, dx, n), np.zeros(n), np.zeros(n)])
+
         self.east, self.west = (
             Plan(line(37.0, 741), 37.0, 0.01),
             Plan(line(-60.0, 1201), 60.0, 0.01),
@@ -323,9 +330,9 @@ class _TwoRoutes:
 
 
 def test_a_longer_plan_does_not_replace_a_free_path_the_robot_is_on():
-    """nav2's replanning only if the path becomes invalid: the long route west does not replace the short one
-    east while that is free (seed 0's SLAM episode 8 turned back and forth between them for 100 s); once it is
-    not, it does; a shorter plan always does."""
+    """nav2's replanning only if the path becomes invalid: the long route west does not replace the
+    short one east while that is free (seed 0's SLAM episode 8 turned back and forth between them
+    for 100 s); once it is not, it does; a shorter plan always does."""
     from amr_twin.navigation.kinematics import Limits
     from amr_twin.navigation.localisation import PoseSource
     from amr_twin.navigation.navigator import Navigator
@@ -359,7 +366,8 @@ def test_a_longer_plan_does_not_replace_a_free_path_the_robot_is_on():
     assert nav._replan(pose) and nav.plan is planner.east  # shorter: taken at once
 
 
-# -- the goal API: goals from outside while the navigator runs (a user, an action server) -------------------------
+# -- the goal API: goals from outside while the navigator runs (a user, an action server)
+# -------------------------
 
 
 class _Line:
@@ -388,7 +396,8 @@ class _Cruise(LocalController):
 
 
 class _Robot:
-    """A unicycle on the bus: integrates ``cmd_vel`` every 10 ms and publishes its pose on ``ground_truth/odom``."""
+    """A unicycle on the bus: integrates ``cmd_vel`` every 10 ms and publishes its pose on
+    ``ground_truth/odom``."""
 
     def __init__(self, bus):
         self.bus, self.pose, self.cmd, self.cmds = bus, np.zeros(3), (0.0, 0.0), []
@@ -417,7 +426,8 @@ class _Robot:
 
 
 def _navigator(goals=()):
-    """A navigator with a straight-line planner and a cruising controller on a bus with a unicycle robot."""
+    """A navigator with a straight-line planner and a cruising controller on a bus with a unicycle
+    robot."""
     from amr_twin.navigation.kinematics import Limits
     from amr_twin.navigation.localisation import PoseSource
     from amr_twin.navigation.navigator import Navigator
@@ -512,8 +522,8 @@ def test_cancel_ends_the_goals_and_the_robot_ramps_to_a_stop():
 
 
 def test_the_robot_drives_on_to_approach_m_of_the_goal_by_its_estimate_before_it_stops():
-    """Stopping as soon as the estimate is within the 0.25 m tolerance leaves no room for the localisation's
-    error: the robot drives on to ``approach_m`` (0.1 m) of the goal."""
+    """Stopping as soon as the estimate is within the 0.25 m tolerance leaves no room for the
+    localisation's error: the robot drives on to ``approach_m`` (0.1 m) of the goal."""
     nav, robot, clock = _navigator([(3.0, 0.0, None)])
     _run(clock, 20.0)
     assert nav.outcomes[0].status == "succeeded"
@@ -523,8 +533,8 @@ def test_the_robot_drives_on_to_approach_m_of_the_goal_by_its_estimate_before_it
 
 
 class _DeadZoneRobot(_Robot):
-    """A drive that cannot turn slowly: turn rates under 1 rad/s do not move it (the thesis' firmware's dead zone
-    on a turn in place)."""
+    """A drive that cannot turn slowly: turn rates under 1 rad/s do not move it (the thesis'
+    firmware's dead zone on a turn in place)."""
 
     def _step(self):
         if abs(self.cmd[1]) < 1.0:
@@ -533,8 +543,9 @@ class _DeadZoneRobot(_Robot):
 
 
 def test_a_heading_inside_the_tolerance_that_the_drive_cannot_improve_ends_the_goal():
-    """The goal's yaw 0.2 rad off the way the robot arrives (inside the 0.25 rad tolerance, outside half of it):
-    a drive that cannot turn that slowly still ends the goal, ``approach_s`` later, not never."""
+    """The goal's yaw 0.2 rad off the way the robot arrives (inside the 0.25 rad tolerance, outside
+    half of it): a drive that cannot turn that slowly still ends the goal, ``approach_s`` later, not
+    never."""
     from amr_twin.navigation.kinematics import Limits
     from amr_twin.navigation.localisation import PoseSource
     from amr_twin.navigation.navigator import Navigator

@@ -1,4 +1,5 @@
-"""The people tracker: leg clusters from scan to scan, their velocity, their predicted places (synthetic scans)."""
+"""The people tracker: leg clusters from scan to scan, their velocity, their predicted places
+(synthetic scans)."""
 
 import math
 
@@ -11,7 +12,8 @@ SCAN_S = 0.18  # one RPLIDAR rotation
 
 
 def _legs(x, y, heading_rad=0.0, spacing=0.2, r=0.06, n=6):
-    """The returns of two legs (circles of ``r``) ``spacing`` apart across ``heading_rad``, seen from -y."""
+    """The returns of two legs (circles of ``r``) ``spacing`` apart across ``heading_rad``, seen
+    from -y."""
     out = []
     for side in (-0.5, 0.5):
         cx, cy = (

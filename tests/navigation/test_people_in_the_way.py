@@ -1,8 +1,11 @@
-"""People in the robot's way, the whole twin (scan, tracker, controller, monitor, Yielding, the drive):
+"""People in the robot's way, the whole twin (scan, tracker, controller, monitor, Yielding, the
+drive):
 
-- a person who does not give way crosses the robot's aisle as it comes: no contact, and the robot is never
+- a person who does not give way crosses the robot's aisle as it comes: no contact, and the robot is
+never
   standing in the lane the person is about to sweep while they are within 2 m of it;
-- a person who gives way meets the robot at a 0.9 m doorway from the other side: both get through, neither
+- a person who gives way meets the robot at a 0.9 m doorway from the other side: both get through,
+neither
   waits 10 s (the deadlock of each waiting for the other is broken).
 
 Each runs on two seeds (the twin's noise and the MPPI's samples)."""
@@ -38,22 +41,26 @@ def _speed_m_s(run) -> np.ndarray:
 
 
 def _actor_at(run, t_s: np.ndarray) -> np.ndarray:
-    """The (only) actor's position (n, 2) at ``t_s`` from ``actors/poses`` (10 Hz, the pose last published)."""
+    """The (only) actor's position (n, 2) at ``t_s`` from ``actors/poses`` (10 Hz, the pose last
+    published)."""
     t = np.array([p[0] for p in run.actor_poses])
     xy = np.array([p[1][0][:2] for p in run.actor_poses])
     return xy[np.clip(np.searchsorted(t, t_s, side="right") - 1, 0, len(t) - 1)]
 
 
-# --- a person who does not give way crossing the robot's aisle ---------------------------------------------
+# --- a person who does not give way crossing the robot's aisle
+# ---------------------------------------------
 
 AISLE_Y, LANE_X = 3.0, 7.0
-"""A 16 x 6 m hall: the robot drives east along y = 3 m; the person crosses it at x = 7 m, north to south."""
+"""A 16 x 6 m hall: the robot drives east along y = 3 m; the person crosses it at x = 7 m, north to
+south."""
 CROSS_FROM, CROSS_TO = (LANE_X, 5.6), (LANE_X, 0.4)
 SET_OFF_S = 7.0
-"""The person sets off this long after the robot does: its front (at 0.7 m/s) is then in the lane, and the person,
-2.6 m away, reaches it in 1.8 s. Without Yielding the collision monitor stops the robot there and the person walks
-into it (both seeds); with it, it drives on through. At 6 s it is 0.4 m short of the lane at 0.73 m/s and can do
-neither (one seed of two at 6.5 s): that meeting is left to the courtesy wait for a standing person near the way."""
+"""The person sets off this long after the robot does: its front (at 0.7 m/s) is then in the lane,
+and the person, 2.6 m away, reaches it in 1.8 s. Without Yielding the collision monitor stops the
+robot there and the person walks into it (both seeds); with it, it drives on through. At 6 s it is
+0.4 m short of the lane at 0.73 m/s and can do neither (one seed of two at 6.5 s): that meeting is
+left to the courtesy wait for a standing person near the way."""
 
 
 def _crossing(seed: int, tmp_path, sets=()):
@@ -77,8 +84,8 @@ def _crossing(seed: int, tmp_path, sets=()):
 
 
 def parked_in_lane_s(run) -> float:
-    """Time (s) the robot stood with its true footprint in the part of the person's lane still ahead of them
-    while they were within NEAR_M of the footprint."""
+    """Time (s) the robot stood with its true footprint in the part of the person's lane still ahead
+    of them while they were within NEAR_M of the footprint."""
     person = _actor_at(run, run.t_s)
     outline = to_map(run.pose_true, FP.outline_xy_m(0.02))  # (n, k, 2)
     in_lane = np.abs(outline[..., 0] - LANE_X) <= LANE_HALF_M
@@ -108,7 +115,8 @@ def test_the_robot_never_stands_in_the_crossing_persons_lane(crossing):
     assert parked_in_lane_s(crossing) == 0.0
 
 
-# --- a person who gives way, met at a 0.9 m doorway from the other side -----------------------------------
+# --- a person who gives way, met at a 0.9 m doorway from the other side
+# -----------------------------------
 
 WALL_X, DOOR_Y, DOOR_M, WALL_T = 8.0, 4.0, 0.9, 0.2
 
@@ -128,7 +136,8 @@ def door_hall():
 def _door_meeting(seed: int, tmp_path):
     world = write_map(tmp_path, "door", door_hall())
     start, goal = (4.5, DOOR_Y, 0.0), (12.0, DOOR_Y, None)
-    # the person sets off 3.5 m east of the door as the robot comes within about 2 m of it from the west
+    # the person sets off 3.5 m east of the door as the robot comes within about 2 m of it from the
+    # west
     walker = Actor(
         "person",
         ((WALL_X + 3.5, DOOR_Y), (WALL_X - 4.5, DOOR_Y)),
@@ -150,8 +159,8 @@ def _door_meeting(seed: int, tmp_path):
 
 
 def waits_s(run) -> tuple[float, float]:
-    """Time (s) the robot and the person each stood within 3 m of the doorway while the person had not reached
-    their end (the robot: before reaching its goal)."""
+    """Time (s) the robot and the person each stood within 3 m of the doorway while the person had
+    not reached their end (the robot: before reaching its goal)."""
     dt = float(np.median(np.diff(run.t_s)))
     out = run.outcomes[0]
     t = np.array([p[0] for p in run.actor_poses])

@@ -1,4 +1,5 @@
-"""The global planner: shortest route on the grid, replanning around a blocked corridor, one-line refusals."""
+"""The global planner: shortest route on the grid, replanning around a blocked corridor, one-line
+refusals."""
 
 import math
 
@@ -61,8 +62,9 @@ def test_the_plan_keeps_to_the_middle_of_a_corridor():
 
 
 def test_in_the_aisles_hall_the_plan_takes_the_shortest_route():
-    """Between routes of as many grid moves, the one of fewest metres: diagonals cost sqrt 2. From the west
-    cross aisle to the east block's second aisle the visibility graph's shortest path is 34.1 m."""
+    """Between routes of as many grid moves, the one of fewest metres: diagonals cost sqrt 2. From
+    the west cross aisle to the east block's second aisle the visibility graph's shortest path is
+    34.1 m."""
     from amr_twin.model.config import load_config
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.stack import make_costmap, true_map
@@ -78,8 +80,9 @@ def test_in_the_aisles_hall_the_plan_takes_the_shortest_route():
 
 
 def test_diagonal_moves_cost_their_length():
-    """Through a gap behind a baffle (12.7 m) or over the end of a long wall (15.7 m): a search charging
-    a diagonal move like a straight one (pyastar2d's) finds the second as short as the first and took it."""
+    """Through a gap behind a baffle (12.7 m) or over the end of a long wall (15.7 m): a search
+    charging a diagonal move like a straight one (pyastar2d's) finds the second as short as the
+    first and took it."""
     static = room(
         14.0, 12.0, walls=[(6.8, 0.0, 7.2, 1.0), (6.8, 2.6, 7.2, 7.0), (4.8, 0.0, 5.2, 4.0)]
     )
@@ -105,9 +108,9 @@ def test_a_person_standing_in_the_way_is_kept_people_m_from_or_the_corridor_is_g
 
 
 def test_a_path_is_free_until_an_obstacle_or_a_person_closes_it():
-    """What the navigator asks before it keeps a plan: the south corridor's path is free; a pallet jack beside
-    it that leaves the robot room (the second tier: the inscribed radius, 0.45 m more from the jack) keeps it
-    free, one across it or a person standing on it does not."""
+    """What the navigator asks before it keeps a plan: the south corridor's path is free; a pallet
+    jack beside it that leaves the robot room (the second tier: the inscribed radius, 0.45 m more
+    from the jack) keeps it free, one across it or a person standing on it does not."""
     cm, p = _planner(two_corridors(), unmapped_pad_m=0.45, people_m=0.865)
     south = p.plan(np.array([1.0, 2.5]), np.array([11.0, 2.5]))
     assert p.path_free(south.xy_m)

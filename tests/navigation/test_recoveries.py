@@ -16,7 +16,8 @@ FP = Footprint(-0.35, 0.35, 0.265)
 
 
 def _run(rec, pose, dt=0.05, t_max=30.0):
-    """Integrate the recovery's twists (a unicycle); return the final pose, the last step and the time."""
+    """Integrate the recovery's twists (a unicycle); return the final pose, the last step and the
+    time."""
     pose, v, w, t = np.array(pose, float), 0.0, 0.0, 0.0
     rec.start(0.0, pose)
     while t < t_max:

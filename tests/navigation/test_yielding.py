@@ -1,6 +1,6 @@
-"""The robot gives way to people: it does not stand in a walking person's predicted path (it drives on through
-it when that clears it, backs off or steps aside when not), and it breaks a standoff with a person standing
-ahead of it by backing off."""
+"""The robot gives way to people: it does not stand in a walking person's predicted path (it drives
+on through it when that clears it, backs off or steps aside when not), and it breaks a standoff with
+a person standing ahead of it by backing off."""
 
 import math
 
@@ -30,9 +30,9 @@ def _least_gap(y: Yielding, cmd, people: People) -> float:
 
 
 def test_a_robot_about_to_stop_in_a_walking_persons_lane_gets_out_of_it():
-    """A person 2.2 m to the robot's left walking at 1.3 m/s across its middle: standing there (what the
-    monitor's approach model leaves it) they walk into it within 1.5 s; the command chosen keeps them clear
-    of the footprint, the best of the ways tried."""
+    """A person 2.2 m to the robot's left walking at 1.3 m/s across its middle: standing there (what
+    the monitor's approach model leaves it) they walk into it within 1.5 s; the command chosen keeps
+    them clear of the footprint, the best of the ways tried."""
     y = _yielding()
     person = People(0.0, np.array([[0.0, 2.2]]), np.array([[0.0, -1.3]]))
     assert _least_gap(y, (0.0, 0.0), person) < 0.0
@@ -101,9 +101,10 @@ def test_a_standoff_with_a_person_standing_ahead_is_broken_by_backing_off():
 
 
 def test_a_person_who_stopped_for_the_robot_gets_their_lane_cleared_at_once():
-    """A person walked at the robot and stopped 0.3 m from its front (they give way): standing still, their last
-    walking velocity says where they go once it is out of the way. The robot leaves that lane at once (not after
-    the standoff's 3 s), and not by backing straight along it, which never clears it."""
+    """A person walked at the robot and stopped 0.3 m from its front (they give way): standing
+    still, their last walking velocity says where they go once it is out of the way. The robot
+    leaves that lane at once (not after the standoff's 3 s), and not by backing straight along it,
+    which never clears it."""
     y = _yielding()
     xy = np.array([[FP.x_max_m + 0.25 + 0.3, 0.0]])
     stopped = People(0.0, xy, np.zeros((1, 2)), np.array([[-1.3, 0.0]]))
@@ -125,8 +126,9 @@ def test_a_person_who_stopped_for_the_robot_gets_their_lane_cleared_at_once():
 
 
 def test_a_person_walking_at_the_robots_middle_is_worse_than_past_its_edge():
-    """Head on at 1.3 m/s from 2 m: every way out is walked into within the horizon; the one they pass most off
-    the robot's middle is taken (a gap that stopped at the footprint's edge made them all alike: none taken)."""
+    """Head on at 1.3 m/s from 2 m: every way out is walked into within the horizon; the one they
+    pass most off the robot's middle is taken (a gap that stopped at the footprint's edge made them
+    all alike: none taken)."""
     y = _yielding()
     head_on = People(0.0, np.array([[2.0, 0.0]]), np.array([[-1.3, 0.0]]))
     assert max(_least_gap(y, c, head_on) for c in y._grid) < 0.0
@@ -140,8 +142,9 @@ def test_a_person_walking_at_the_robots_middle_is_worse_than_past_its_edge():
 def _drive_past(
     person: People, speed_m_s: float, x0_m: float, t_end_s: float
 ) -> list[tuple[float, float, float]]:
-    """Drive along +x from ``(x0_m, 0)`` at the controller's ``speed_m_s`` past ``person`` (the navigator's way: the
-    command Yielding returns, ramped by the limits, is the next cycle's ``vel``); ``(t_s, x_m, v_m_s)`` each cycle."""
+    """Drive along +x from ``(x0_m, 0)`` at the controller's ``speed_m_s`` past ``person`` (the
+    navigator's way: the command Yielding returns, ramped by the limits, is the next cycle's
+    ``vel``); ``(t_s, x_m, v_m_s)`` each cycle."""
     y, dt = _yielding(), 0.05
     t, x, vel, out = 0.0, x0_m, (0.0, 0.0), []
     while t < t_end_s:
@@ -159,8 +162,9 @@ def _gap_m(x_m: float, person: People) -> float:
 
 
 def test_the_robot_waits_before_passing_close_to_a_standing_person_then_passes():
-    """Driving at 0.3 m/s, a person standing 1.2 m ahead and 0.7 m beside its way (as the experiment's crossing
-    people wait): it stands for courtesy_s, then drives on; someone 2 m beside the way is passed without a stop."""
+    """Driving at 0.3 m/s, a person standing 1.2 m ahead and 0.7 m beside its way (as the
+    experiment's crossing people wait): it stands for courtesy_s, then drives on; someone 2 m beside
+    the way is passed without a stop."""
     s = NAV.people.yielding
     beside = People(0.0, np.array([[1.2, 0.7]]), np.zeros((1, 2)), np.zeros((1, 2)))
     run = _drive_past(beside, 0.3, 0.0, s.courtesy_s + 3.0)
@@ -177,10 +181,11 @@ def test_the_robot_waits_before_passing_close_to_a_standing_person_then_passes()
 
 
 def test_the_wait_for_a_standing_person_is_kept_for_where_the_robot_would_pass_them():
-    """Coming at 0.75 m/s from 4.5 m before a person standing 0.7 m beside its way: the robot drives on until its
-    stopping distance reaches the courtesy line and stands there, near the line rather than metres before it,
-    for courtesy_s counted from when it stands (a wait begun 2.5 s of driving away and timed from then ran out
-    while the robot was still slowing down, and it passed them 0.75 m off at 0.3 m/s: seed 0's episode 9)."""
+    """Coming at 0.75 m/s from 4.5 m before a person standing 0.7 m beside its way: the robot drives
+    on until its stopping distance reaches the courtesy line and stands there, near the line rather
+    than metres before it, for courtesy_s counted from when it stands (a wait begun 2.5 s of driving
+    away and timed from then ran out while the robot was still slowing down, and it passed them 0.75
+    m off at 0.3 m/s: seed 0's episode 9)."""
     s = NAV.people.yielding
     beside = People(0.0, np.array([[4.5, 0.7]]), np.zeros((1, 2)), np.zeros((1, 2)))
     run = _drive_past(beside, 0.75, 0.0, 12.0)

@@ -69,7 +69,8 @@ def recorded(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def bag(recorded):
-    """Connections, bag-level figures and every raw message, as rosbags' rosbag2 Reader gives them."""
+    """Connections, bag-level figures and every raw message, as rosbags' rosbag2 Reader gives
+    them."""
     from rosbags.rosbag2 import Reader
 
     with Reader(recorded[3]) as reader:
@@ -85,7 +86,8 @@ def bag(recorded):
 
 @pytest.fixture(scope="module")
 def decoded(bag):
-    """topic -> [(log time ns, message)], decoded by rosbags' CDR deserializer with ROS 2 Humble types."""
+    """topic -> [(log time ns, message)], decoded by rosbags' CDR deserializer with ROS 2 Humble
+    types."""
     from rosbags.typesys import Stores, get_typestore
 
     humble = get_typestore(Stores.ROS2_HUMBLE)
@@ -134,7 +136,8 @@ def test_embedded_definitions_are_the_ros2_humble_ones(bag):
 
 
 def test_every_payload_is_byte_exact_cdr(bag):
-    """rosbags decodes each message and encodes it back to the very same bytes (alignment, padding)."""
+    """rosbags decodes each message and encodes it back to the very same bytes (alignment,
+    padding)."""
     from rosbags.typesys import Stores, get_typestore
 
     humble = get_typestore(Stores.ROS2_HUMBLE)
@@ -276,7 +279,8 @@ def test_actor_poses_at_10_hz_in_the_map_frame_with_the_simulated_values(recorde
 
 
 def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
-    """The MCAP ros2 profile requires offered_qos_profiles; /tf_static must be transient-local for tf2."""
+    """The MCAP ros2 profile requires offered_qos_profiles; /tf_static must be transient-local for
+    tf2."""
     from rosbags.rosbag2 import Reader
 
     with Reader(recorded[3]) as reader:
@@ -290,7 +294,8 @@ def test_channels_offer_qos_profiles_tf_static_transient_local(recorded):
 
 @pytest.fixture(scope="module")
 def uwb_bag(tmp_path_factory):
-    """A 2 s run with the UWB tag only; its capture and its /uwb/range messages as rosbags reads them."""
+    """A 2 s run with the UWB tag only; its capture and its /uwb/range messages as rosbags reads
+    them."""
     from rosbags.rosbag2 import Reader
 
     cfg, capture, paths = record_uwb_run(tmp_path_factory.mktemp("rosbags_uwb"), rrd=False)

@@ -1,4 +1,5 @@
-"""An output in use is refused naming its holder; a killed holder's lock is taken over; nothing is left."""
+"""An output in use is refused naming its holder; a killed holder's lock is taken over; nothing is
+left."""
 
 import os
 import signal
@@ -91,7 +92,8 @@ def test_the_lock_is_released_and_nothing_is_made_for_it(tmp_path):
 
 
 def test_a_run_holds_its_outputs_until_it_ends(tmp_path):
-    """While a run writes run.csv, another command writing it is refused; after it ends, it is free."""
+    """While a run writes run.csv, another command writing it is refused; after it ends, it is
+    free."""
     csv = tmp_path / "run.csv"
     cli = [
         sys.executable,
@@ -122,8 +124,8 @@ def test_a_run_holds_its_outputs_until_it_ends(tmp_path):
 
 
 def test_a_failed_command_leaves_no_empty_output_folder(tmp_path):
-    """A sweep's recording folder made before its first point failed to be written is removed; a folder
-    that was there before, or that holds a file, is kept."""
+    """A sweep's recording folder made before its first point failed to be written is removed; a
+    folder that was there before, or that holds a file, is kept."""
     (tmp_path / "old").mkdir()
     with pytest.raises(OSError):
         with holding(

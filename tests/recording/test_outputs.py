@@ -1,4 +1,5 @@
-"""Output paths checked before the work, files written all together or not at all, stale temporaries removed."""
+"""Output paths checked before the work, files written all together or not at all, stale temporaries
+removed."""
 
 import errno
 import os

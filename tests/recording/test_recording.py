@@ -2,7 +2,6 @@
 
 import collections
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -145,8 +144,9 @@ def test_rrd_entities_and_rates(recorded):
 
 
 def test_rrd_actor_body_walks_its_path_with_its_geoms(recorded):
-    """The walker's body in the .rrd: its legs, torso and head, and its transform at ~30 Hz where its
-    path puts it (one grid instant, 10 ms, behind: MuJoCo moves a mocap body at the next step)."""
+    """The walker's body in the .rrd: its legs, torso and head, and its transform at ~30 Hz where
+    its path puts it (one grid instant, 10 ms, behind: MuJoCo moves a mocap body at the next
+    step)."""
     cfg, capture, _result, _plain, paths = recorded
     rows, batches = _rrd_chunks(paths["rrd"])
     assert (
@@ -298,7 +298,8 @@ def test_cli_record_and_mcap(tmp_path):
 
 
 def test_recording_does_not_change_a_run_advanced_in_small_steps():
-    """The capture samples on the loop's grid, not by clock events: a 20 ms advance loop is unchanged too."""
+    """The capture samples on the loop's grid, not by clock events: a 20 ms advance loop is
+    unchanged too."""
     cfg = load_config()
 
     def drive(record: bool):

@@ -1,4 +1,5 @@
-"""The typed summary of a run (amr_twin/recording/run_summary.py) and the ``--json`` object written from it."""
+"""The typed summary of a run (amr_twin/recording/run_summary.py) and the ``--json`` object written
+from it."""
 
 import json
 import math

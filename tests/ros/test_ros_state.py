@@ -104,7 +104,8 @@ def _truth(bag) -> np.ndarray:
 
 
 def test_odometry_steps_no_more_than_the_true_motion_allows(issue_bag):
-    """Between consecutive /odom messages: |dp| <= |v| dt + 1 cm, |dyaw| <= |w| dt + 0.01 rad (v, w true)."""
+    """Between consecutive /odom messages: |dp| <= |v| dt + 1 cm, |dyaw| <= |w| dt + 0.01 rad (v, w
+    true)."""
     o, g = _odom(issue_bag), _truth(issue_bag)
     assert len(o) == 50 * RUN_S + 1 and np.allclose(np.diff(o[:, 0]), 0.02)
     g_yaw = np.unwrap(g[:, 3])
@@ -183,8 +184,9 @@ def test_joint_states_name_every_moving_joint_of_the_bag_urdf_and_clock_runs(iss
     assert len(moving) == 6 and all(
         set(m.name) == moving and len(m.position) == len(m.velocity) == 6 for m in states
     )
-    # the wheels roll forward at the commanded 38.2 RPM at the end, within the faithful PI's 4 RPM dead zone
-    # (listing 4.11: the calibrated plant ends at 41.7 on 9 duty counts); the casters sit within their stroke
+    # the wheels roll forward at the commanded 38.2 RPM at the end, within the faithful PI's 4 RPM
+    # dead zone (listing 4.11: the calibrated plant ends at 41.7 on 9 duty counts); the casters sit
+    # within their stroke
     last = dict(zip(states[-1].name, states[-1].velocity))
     assert last["wheel_left_joint"] * 60 / (2 * math.pi) == pytest.approx(38.2, abs=4.0)
     travel = max(float(j.limit.upper) for j in robot.robot.joints if j.type == "prismatic")

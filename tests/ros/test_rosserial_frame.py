@@ -1,4 +1,5 @@
-"""rosserial frames: bytes checked against rosbags' ROS 1 serialiser and md5sums, checksums, parser resync."""
+"""rosserial frames: bytes checked against rosbags' ROS 1 serialiser and md5sums, checksums, parser
+resync."""
 
 import struct
 

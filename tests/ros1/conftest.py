@@ -1,7 +1,8 @@
-"""What the ROS 1 tests share: one private roscore for the folder's tests (a free port, stopped at the end),
-the environment that points a process at it, and the catkin workspace built once (cached by its sources'
-hash in the session's cache folder), and waits for conditions of the graph (bounded) in place of fixed
-sleeps. Without Debian's ROS 1 every test that needs it is skipped, saying which packages to install."""
+"""What the ROS 1 tests share: one private roscore for the folder's tests (a free port, stopped at
+the end), the environment that points a process at it, and the catkin workspace built once (cached
+by its sources' hash in the session's cache folder), and waits for conditions of the graph (bounded)
+in place of fixed sleeps. Without Debian's ROS 1 every test that needs it is skipped, saying which
+packages to install."""
 
 import os
 import subprocess
@@ -69,13 +70,15 @@ def stop(proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
             proc.wait()
 
 
-# -- waiting for the graph, not for the clock ------------------------------------------------------------
-# A test that sleeps a fixed time for a process to start or to connect fails on a loaded machine; these
-# wait for the condition itself, with a bound, and say which one did not come.
+# -- waiting for the graph, not for the clock
+# ------------------------------------------------------------ A test that sleeps a fixed time for a
+# process to start or to connect fails on a loaded machine; these wait for the condition itself,
+# with a bound, and say which one did not come.
 
 
 def wait_for(condition, what: str, timeout_s: float = 60.0):
-    """``condition()``'s first true value, polled every 50 ms; fails naming ``what`` after ``timeout_s``."""
+    """``condition()``'s first true value, polled every 50 ms; fails naming ``what`` after
+    ``timeout_s``."""
     deadline = time.monotonic() + timeout_s
     while True:
         value = condition()
@@ -105,8 +108,9 @@ def services(env) -> set[str]:
 
 
 def connected_subscribers(env, node: str, topic: str) -> set[str]:
-    """The subscribers ``node`` (a publisher of ``topic``) has a live connection to: its bus information
-    (the slave API's getBusInfo, which rospy and roscpp answer); empty while it is not on the graph."""
+    """The subscribers ``node`` (a publisher of ``topic``) has a live connection to: its bus
+    information (the slave API's getBusInfo, which rospy and roscpp answer); empty while it is not
+    on the graph."""
     import xmlrpc.client
 
     code, _msg, uri = _master(env).lookupNode("/test", node)
@@ -161,9 +165,10 @@ def _asleep(pid: int) -> bool:
 
 
 def wait_until_recorded(rosbag_pid: int, timeout_s: float = 60.0) -> None:
-    """After the twin has exited: wait until ``rosbag record`` has taken every byte the twin wrote. Its
-    recorder has read all of its sockets (none holds unread bytes or waits to be closed: CLOSE_WAIT, the
-    twin's end gone) and all its threads sleep, three times in a row 50 ms apart (its callbacks done)."""
+    """After the twin has exited: wait until ``rosbag record`` has taken every byte the twin wrote.
+    Its recorder has read all of its sockets (none holds unread bytes or waits to be closed:
+    CLOSE_WAIT, the twin's end gone) and all its threads sleep, three times in a row 50 ms apart
+    (its callbacks done)."""
     recorder = _child(rosbag_pid)
     quiet = [0]
 

@@ -1,9 +1,10 @@
-"""A rospy node (Debian's Python) that exercises a running twin's simulator interface and prints one JSON object.
+"""A rospy node (Debian's Python) that exercises a running twin's simulator interface and prints one
+JSON object.
 
-``python3 sim_probe.py NS NODE``: the twin is ``/NS/NODE``, driving (``run linear``) with one actor. It counts
-``/clock`` over wall windows before, during and after ``pause_physics``; reads the ground truth, the odometry
-and the actors' poses stamped after ``reset_world``, a ``set_pose`` and ``reset_simulation``; keeps every
-``/clock`` value it got (to check that time never goes back).
+``python3 sim_probe.py NS NODE``: the twin is ``/NS/NODE``, driving (``run linear``) with one actor.
+It counts ``/clock`` over wall windows before, during and after ``pause_physics``; reads the ground
+truth, the odometry and the actors' poses stamped after ``reset_world``, a ``set_pose`` and
+``reset_simulation``; keeps every ``/clock`` value it got (to check that time never goes back).
 """
 
 import json

@@ -1,12 +1,12 @@
-"""The twin on a real roscore, recorded by Debian's rosbag and read back with tools nobody here wrote:
-``rosbag info``, the ``rosbags`` library, a tf2_ros buffer, Debian's robot_state_publisher.
+"""The twin on a real roscore, recorded by Debian's rosbag and read back with tools nobody here
+wrote: ``rosbag info``, the ``rosbags`` library, a tf2_ros buffer, Debian's robot_state_publisher.
 
-One 20 s run with sensors (module fixture) at 5x real time, recorded while robot_state_publisher turns its
-/joint_states into transforms on /rsp_tf (remapped, so that they can be told from the twin's own). At full
-speed, and at 10x, rosbag record's subscriber queues (100 messages a topic) can overflow on a busy machine: it
-drops messages. At 5x it keeps every one (the counts below are exact), provided it is connected before the
-twin runs and has read every byte before it is stopped: the tests wait for both, never for a fixed time.
-"""
+One 20 s run with sensors (module fixture) at 5x real time, recorded while robot_state_publisher
+turns its /joint_states into transforms on /rsp_tf (remapped, so that they can be told from the
+twin's own). At full speed, and at 10x, rosbag record's subscriber queues (100 messages a topic) can
+overflow on a busy machine: it drops messages. At 5x it keeps every one (the counts below are
+exact), provided it is connected before the twin runs and has read every byte before it is stopped:
+the tests wait for both, never for a fixed time."""
 
 import subprocess
 import sys
@@ -89,8 +89,8 @@ def bag(ros_env, tmp_path_factory):
         stderr=subprocess.DEVNULL,
     )
     try:
-        # both on the graph before the twin starts (it then connects to them before it runs: Ros1Session.settle),
-        # and the recorder connected to robot_state_publisher's output
+        # both on the graph before the twin starts (it then connects to them before it runs:
+        # Ros1Session.settle), and the recorder connected to robot_state_publisher's output
         wait_for(
             lambda: (
                 all("/test_record" in subscribers(ros_env, t) for t in TOPICS)
@@ -147,7 +147,8 @@ def _counts(info) -> dict:
 def test_rosbag_info_shows_every_topic_at_its_rate_on_sim_time(bag):
     path, info, run = bag
     counts = _counts(info)
-    # the node's rates: IMU 100 Hz, LiDAR 5.5 Hz, odometry and joint states 50 Hz, clock 100 Hz (t = 0..20 s)
+    # the node's rates: IMU 100 Hz, LiDAR 5.5 Hz, odometry and joint states 50 Hz, clock 100 Hz (t =
+    # 0..20 s)
     for topic, hz in (
         ("/imu/data_raw", 100),
         ("/imu/mag", 100),
@@ -162,18 +163,20 @@ def test_rosbag_info_shows_every_topic_at_its_rate_on_sim_time(bag):
     ):
         assert counts[topic] == int(RUN_S * hz) + 1, topic
     assert abs(counts["/scan"] - RUN_S * 5.5) <= 1.5
-    # odom -> base_link (odometry node) and the moving links, 50 Hz each; no map -> odom (no map in the empty world:
-    # no localisation in map; test_tf_messages_by_frames tells them apart)
+    # odom -> base_link (odometry node) and the moving links, 50 Hz each; no map -> odom (no map in
+    # the empty world: no localisation in map; test_tf_messages_by_frames tells them apart)
     assert counts["/tf"] == 2 * (int(RUN_S * 50) + 1)
     assert counts["/tf_static"] == 1 and counts["/wheel_Command"] == 1
     assert (
         counts["/wheel0_Vel"] >= 5 and counts["/diagnostics"] >= RUN_S
     )  # the battery once a second
-    # robot_state_publisher: at most one transform message per joint state it takes; its subscriber keeps one
-    # message (queue size 1), so how many of the 1001 it takes depends on the CPU it gets, not on the twin
+    # robot_state_publisher: at most one transform message per joint state it takes; its subscriber
+    # keeps one message (queue size 1), so how many of the 1001 it takes depends on the CPU it gets,
+    # not on the twin
     assert 1 <= counts["/rsp_tf"] <= counts["/joint_states"]
     # the bag's time is the twin's simulated time (use_sim_time), not the wall clock's 2026
-    # (the recorder's clock reads 0 until its first /clock: the first instants' messages take their times then)
+    # (the recorder's clock reads 0 until its first /clock: the first instants' messages take their
+    # times then)
     assert 0.0 <= info["start"] < 0.2 and abs(info["end"] - RUN_S) < 0.05
     assert info["duration"] == pytest.approx(RUN_S, abs=0.2)
 
@@ -208,8 +211,8 @@ def test_the_rosbags_library_reads_the_same_counts_and_the_mcaps_types(bag):
 
 
 def test_every_instant_is_recorded_once_and_in_order_and_the_rows_are_the_csvs(bag):
-    """Stamped topics: one message an instant of their period from 0 to the end, in stamp order; the row topics
-    (no stamps): the run's CSV columns, row by row (read with the rosbags library)."""
+    """Stamped topics: one message an instant of their period from 0 to the end, in stamp order; the
+    row topics (no stamps): the run's CSV columns, row by row (read with the rosbags library)."""
     from rosbags.highlevel import AnyReader
 
     path, _info, _run = bag
@@ -275,8 +278,9 @@ pytestmark = [
 
 
 def test_tf_messages_by_frames(bag):
-    """/tf: one odom -> base_link message at each 50 Hz instant (the odometry node), one of the moving links (the
-    bridge's joint states), no map -> odom (the empty world has no map, so no localisation in map)."""
+    """/tf: one odom -> base_link message at each 50 Hz instant (the odometry node), one of the
+    moving links (the bridge's joint states), no map -> odom (the empty world has no map, so no
+    localisation in map)."""
     from amr_twin.ros1.installation import import_rospy
 
     import_rospy()
@@ -325,8 +329,9 @@ def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_trans
             msg.header.stamp for _topic, msg, _t in b.read_messages(topics=["/joint_states"])
         }
     wheels = [t for t in rsp if t.child_frame_id == "wheel_left_link"]
-    # robot_state_publisher keeps one joint state at a time (queue size 1): it takes as many of the 1001 as the
-    # CPU it gets allows, each at that joint state's stamp; on any machine some, across the whole run
+    # robot_state_publisher keeps one joint state at a time (queue size 1): it takes as many of the
+    # 1001 as the CPU it gets allows, each at that joint state's stamp; on any machine some, across
+    # the whole run
     assert len(wheels) >= 10 and all(t.header.frame_id == "base_link" for t in wheels)
     assert all(t.header.stamp in joint_stamps for t in wheels)
     seen = sorted(t.header.stamp.to_sec() for t in wheels)
@@ -345,9 +350,9 @@ def test_robot_state_publisher_turns_the_joint_states_into_the_twins_wheel_trans
         q2 = np.array([mine.rotation.x, mine.rotation.y, mine.rotation.z, mine.rotation.w])
         angles.append((2 * np.arccos(min(1.0, abs(q1 @ q2))), 2 * np.arccos(min(1.0, abs(q1[3])))))
     angles = np.array(angles)
-    # the same wheel angle, from /joint_states through the URDF, as the twin's own link transform, within the
-    # ~0.25 degree the twin's wheel tilts on its tyre spring (the left and right wheels' angles part by 0.4 rad
-    # over this run, so a swap or a sign would show)
+    # the same wheel angle, from /joint_states through the URDF, as the twin's own link transform,
+    # within the ~0.25 degree the twin's wheel tilts on its tyre spring (the left and right wheels'
+    # angles part by 0.4 rad over this run, so a swap or a sign would show)
     assert angles[:, 0].max() < 0.01, angles[:, 0].max()
     assert angles[:, 1].max() > 1.0  # and the wheel turns: not the identity all along
     # the URDF's axle where the twin's wheel sits on its tyre spring, ~1 mm off
@@ -358,7 +363,8 @@ SPEEDS = """
 import rospy
 from std_msgs.msg import Float64
 rospy.init_node("test_speeds")
-rospy.Subscriber("/wheel0_Vel", Float64, lambda m: print(rospy.get_rostime().to_sec(), m.data, flush=True))
+rospy.Subscriber("/wheel0_Vel", Float64,
+                 lambda m: print(rospy.get_rostime().to_sec(), m.data, flush=True))
 rospy.spin()
 """
 
@@ -383,15 +389,16 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
         stdout=subprocess.PIPE,
         text=True,
     )  # not the twin's own stop at t = 0
-    # each speed the firmware publishes, with the simulated time it arrived (Debian's rospy; rostopic would not
-    # subscribe before someone publishes the topic)
+    # each speed the firmware publishes, with the simulated time it arrived (Debian's rospy;
+    # rostopic would not subscribe before someone publishes the topic)
     speeds = subprocess.Popen(
         ["/usr/bin/python3", "-c", SPEEDS], env=ros_env, stdout=subprocess.PIPE, text=True
     )
     twin = client = None
     try:
-        # everything on the graph and waiting before the twin starts: the service with the echo connected to its
-        # wheel_Command, the speed echo subscribed (the twin connects to it before it runs), the client's menu
+        # everything on the graph and waiting before the twin starts: the service with the echo
+        # connected to its wheel_Command, the speed echo subscribed (the twin connects to it before
+        # it runs), the client's menu
         client = pexpect.spawn(
             "bash",
             ["-c", f"source {catkin_setup} && rosrun amr_idea_control wheel_Command_Client"],
@@ -447,7 +454,8 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
         client.sendline("0")
         client.expect(pexpect.EOF)
         sent = yaml.safe_load(command.communicate(timeout=60)[0].split("---")[0])
-        # listing 4.4: 0.7 m/s -> 0.7 * 60 / (0.25 pi) = 53.476 RPM, both wheels forward, float32 as the request
+        # listing 4.4: 0.7 m/s -> 0.7 * 60 / (0.25 pi) = 53.476 RPM, both wheels forward, float32 as
+        # the request
         assert sent["data"] == pytest.approx([1.0, 53.476, 1.0, 53.476], abs=1e-3)
         out, err = twin.communicate(timeout=120)
         assert twin.returncode == 0, err
@@ -461,8 +469,9 @@ def test_the_thesis_client_menu_drives_the_twin_through_the_real_service(ros_env
         stop(speeds)
     rows = [line.split() for line in speeds.communicate(timeout=30)[0].splitlines() if line.strip()]
     t_s, rpm = np.array([float(t) for t, _v in rows]), np.array([float(v) for _t, v in rows])
-    # the firmware publishes |RPM| once a revolution from the command on (t_s[0]); from 10 simulated s later the
-    # PI has settled: every speed it publishes is within its THRESHOLD_CONTROL (4 RPM) of 53.476
+    # the firmware publishes |RPM| once a revolution from the command on (t_s[0]); from 10 simulated
+    # s later the PI has settled: every speed it publishes is within its THRESHOLD_CONTROL (4 RPM)
+    # of 53.476
     settled = rpm[t_s > t_s[0] + 10.0]
     assert len(settled) >= 5, (t_s, rpm)
     assert np.all(np.abs(settled - 53.476) <= 4.0), settled

@@ -1,5 +1,5 @@
-"""A block of the bridge's grid-sampled topics is, frame by frame, what genpy (Debian's ROS 1) writes for each
-message: the length, then the message's bytes, in the instants' order."""
+"""A block of the bridge's grid-sampled topics is, frame by frame, what genpy (Debian's ROS 1)
+writes for each message: the length, then the message's bytes, in the instants' order."""
 
 import io
 import struct

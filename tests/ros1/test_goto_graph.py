@@ -1,7 +1,8 @@
-"""``amr-twin run goto ... --ros1`` on a real roscore (amr_twin/ros1/navigation_setup.py, ``GoalsOnGraph``): the
-twin's navigator drives to ``--goal`` and is served as move_base; Debian's ``actionlib.SimpleActionClient`` (a
-process of its own) sends a goal on the way, which preempts goto's: the run reports goto's goal PREEMPTED and the
-graph's reached (the true pose within the tolerance), the action's result SUCCEEDED, and exits 0."""
+"""``amr-twin run goto ... --ros1`` on a real roscore (amr_twin/ros1/navigation_setup.py,
+``GoalsOnGraph``): the twin's navigator drives to ``--goal`` and is served as move_base; Debian's
+``actionlib.SimpleActionClient`` (a process of its own) sends a goal on the way, which preempts
+goto's: the run reports goto's goal PREEMPTED and the graph's reached (the true pose within the
+tolerance), the action's result SUCCEEDED, and exits 0."""
 
 import json
 import math
@@ -24,7 +25,8 @@ rospy.set_param("/use_sim_time", True)
 rospy.init_node("test_goto_graph")
 truth = {}
 rospy.Subscriber("/twin/ground_truth", Odometry,
-                 lambda m: truth.update(x=m.pose.pose.position.x, v=m.twist.twist.linear.x), queue_size=1)
+                 lambda m: truth.update(x=m.pose.pose.position.x, v=m.twist.twist.linear.x),
+                 queue_size=1)
 client = actionlib.SimpleActionClient("move_base", MoveBaseAction)
 client.wait_for_server()
 end = time.monotonic() + 60
@@ -33,11 +35,13 @@ while not (truth.get("x", -99) > START[0] + 0.5 and truth["v"] > 0.2):  # goto's
     time.sleep(0.02)
 g = MoveBaseGoal()
 g.target_pose.header.frame_id, g.target_pose.header.stamp = "map", rospy.Time.now()
-g.target_pose.pose.position.x, g.target_pose.pose.position.y, g.target_pose.pose.orientation.w = GRAPH[0], GRAPH[1], 1.0
+g.target_pose.pose.position.x, g.target_pose.pose.position.y = GRAPH[0], GRAPH[1]
+g.target_pose.pose.orientation.w = 1.0
 sent_at = dict(truth)
 client.send_goal(g)
 client.wait_for_result()
-print(json.dumps({"state": client.get_state(), "text": client.get_goal_status_text(), "sent_at": sent_at}), flush=True)
+print(json.dumps({"state": client.get_state(), "text": client.get_goal_status_text(),
+                  "sent_at": sent_at}), flush=True)
 """
 
 

@@ -1,6 +1,7 @@
-"""``map -> odom`` from the localisation's pose in ``map`` and the odometry (amr_twin/ros1/map_transform.py): composed
-with ``odom -> base_link`` it gives the localisation's pose, at 25 Hz of stamps, in genpy's bytes. The graph's
-side (tf2_ros resolving ``map -> base_link`` on a real master) is in ``test_move_base.py``."""
+"""``map -> odom`` from the localisation's pose in ``map`` and the odometry
+(amr_twin/ros1/map_transform.py): composed with ``odom -> base_link`` it gives the localisation's
+pose, at 25 Hz of stamps, in genpy's bytes. The graph's side (tf2_ros resolving ``map -> base_link``
+on a real master) is in ``test_move_base.py``."""
 
 import io
 import math
@@ -67,8 +68,8 @@ def test_map_to_odom_composed_with_the_odometry_gives_the_map_pose(seed):
 
 
 def test_twenty_five_a_second_from_the_first_map_source_only():
-    """50 Hz EKF poses for 2 s: 50 messages; the ground truth (a second source), a pose in another frame and
-    a pose before any odometry give none."""
+    """50 Hz EKF poses for 2 s: 50 messages; the ground truth (a second source), a pose in another
+    frame and a pose before any odometry give none."""
     tf = MapTransform()
     assert (
         tf.take("odometry/filtered", _odometry(0, "map", 1.0, 2.0, 0.0)) is None

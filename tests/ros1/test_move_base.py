@@ -1,9 +1,10 @@
 """The navigator on a real ROS 1 graph as move_base (amr_twin/ros1/navigation_server.py): a standard
-``actionlib.SimpleActionClient('move_base', MoveBaseAction)`` (Debian's, a process of its own) drives
-``amr-twin run stop --world warehouse --sensors --ros1`` from ``--start=-6,0,0``. One run, in order: a goal
-in frame ``odom`` (refused), a goal 4 m ahead (reached: the twin's ground truth within the navigator's
-tolerance), a far goal canceled on the way (PREEMPTED, the robot stops), a goal inside a rack (ABORTED
-with the reason), a pose on ``move_base_simple/goal`` (reached, on the action's result topic)."""
+``actionlib.SimpleActionClient('move_base', MoveBaseAction)`` (Debian's, a process of its own)
+drives ``amr-twin run stop --world warehouse --sensors --ros1`` from ``--start=-6,0,0``. One run, in
+order: a goal in frame ``odom`` (refused), a goal 4 m ahead (reached: the twin's ground truth within
+the navigator's tolerance), a far goal canceled on the way (PREEMPTED, the robot stops), a goal
+inside a rack (ABORTED with the reason), a pose on ``move_base_simple/goal`` (reached, on the
+action's result topic)."""
 
 import json
 import math
@@ -46,7 +47,8 @@ def on_truth(m):
     truth.update(x=m.pose.pose.position.x, y=m.pose.pose.position.y, v=m.twist.twist.linear.x,
                  w=m.twist.twist.angular.z, t=m.header.stamp.to_sec())
 rospy.Subscriber("/twin/ground_truth", Odometry, on_truth, queue_size=1)
-rospy.Subscriber("/move_base/result", MoveBaseActionResult, lambda m: results.append((m.status.status, m.status.text)))
+rospy.Subscriber("/move_base/result", MoveBaseActionResult,
+                 lambda m: results.append((m.status.status, m.status.text)))
 simple = rospy.Publisher("/move_base_simple/goal", PoseStamped, queue_size=1)
 client = actionlib.SimpleActionClient("move_base", MoveBaseAction)
 client.wait_for_server()
@@ -54,7 +56,8 @@ out = {"server_t": rospy.get_time()}
 def goal(x, y, frame="map"):
     g = MoveBaseGoal()
     g.target_pose.header.frame_id, g.target_pose.header.stamp = frame, rospy.Time.now()
-    g.target_pose.pose.position.x, g.target_pose.pose.position.y, g.target_pose.pose.orientation.w = x, y, 1.0
+    g.target_pose.pose.position.x, g.target_pose.pose.position.y = x, y
+    g.target_pose.pose.orientation.w = 1.0
     return g
 def until(cond, wall_s=60.0):
     end = time.monotonic() + wall_s
@@ -67,10 +70,11 @@ client.send_goal(goal(*AHEAD, frame="odom"))
 client.wait_for_result()
 out["odom_frame"] = done()
 t0, wall0 = rospy.get_time(), time.monotonic()
-client.send_goal(goal(*AHEAD), feedback_cb=lambda f: feedback.append(f.base_position.header.frame_id))
+client.send_goal(goal(*AHEAD),
+                 feedback_cb=lambda f: feedback.append(f.base_position.header.frame_id))
 client.wait_for_result()
-out["ahead"] = dict(done(), sim_s=rospy.get_time() - t0, wall_s=time.monotonic() - wall0, feedback=feedback[:1],
-                    n_feedback=len(feedback))
+out["ahead"] = dict(done(), sim_s=rospy.get_time() - t0, wall_s=time.monotonic() - wall0,
+                    feedback=feedback[:1], n_feedback=len(feedback))
 rospy.sleep(1.0)
 out["ahead"]["truth"] = dict(truth)
 try:
@@ -78,7 +82,8 @@ try:
     out["ahead"]["tf"] = {"x": tr.transform.translation.x, "y": tr.transform.translation.y}
 except tf2_ros.TransformException as exc:
     out["ahead"]["tf"] = str(exc)
-out["map_odom"] = {"n": len(map_odom), "first": min(map_odom, default=0), "last": max(map_odom, default=0)}
+out["map_odom"] = {"n": len(map_odom), "first": min(map_odom, default=0),
+                   "last": max(map_odom, default=0)}
 client.send_goal(goal(*FAR))
 until(lambda: truth["x"] > AHEAD[0] + 1.0 and truth["v"] > 0.2)
 out["moving"] = dict(truth)
@@ -173,8 +178,9 @@ def test_a_goal_ahead_ends_succeeded_with_the_true_pose_within_the_tolerance(ses
 
 @needs_ros1
 def test_tf2_resolves_map_to_base_link_through_map_to_odom_at_25_hz(session):
-    """The EKF's map -> odom composed with the odometry's odom -> base_link (a tf2_ros buffer of the client) is
-    where the robot stands, within the EKF's error; map -> odom came at 25 Hz of simulated time."""
+    """The EKF's map -> odom composed with the odometry's odom -> base_link (a tf2_ros buffer of the
+    client) is where the robot stands, within the EKF's error; map -> odom came at 25 Hz of
+    simulated time."""
     got, _err = session
     tf, truth = got["ahead"]["tf"], got["ahead"]["truth"]
     assert isinstance(tf, dict), tf  # the lookup's error otherwise
@@ -193,7 +199,8 @@ def test_a_goal_in_another_frame_and_one_in_a_rack_end_aborted_saying_why(sessio
     rack = got["rack"]
     assert rack["state"] == 4, rack
     assert "(0.00, 3.00) lies inside an obstacle" in rack["text"]
-    # refused at once, from the map: the navigator's recoveries (spin, wait, back up) would take seconds
+    # refused at once, from the map: the navigator's recoveries (spin, wait, back up) would take
+    # seconds
     assert rack["sim_s"] <= 0.5 and rack["moved_m"] < 0.01, rack
 
 

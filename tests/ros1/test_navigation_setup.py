@@ -1,6 +1,7 @@
-"""The run's own commands yield to move_base's goals (amr_twin/ros1/navigation_setup.py), without a graph: the
-stack attached to a run's twin as ``run ... --sensors --ros1`` attaches it, a goal sent to its navigator as
-the action server sends it, and the run's next command (a mission's step) due while the goal is active."""
+"""The run's own commands yield to move_base's goals (amr_twin/ros1/navigation_setup.py), without a
+graph: the stack attached to a run's twin as ``run ... --sensors --ros1`` attaches it, a goal sent
+to its navigator as the action server sends it, and the run's next command (a mission's step) due
+while the goal is active."""
 
 import math
 

@@ -20,7 +20,8 @@ class _Connection:
         self.closed = True
 
 
-class _Impl:  # rospy's _PublisherImpl: its connections, whether it is closed (hashable, as rospy's objects)
+# rospy's _PublisherImpl: its connections, whether it is closed (hashable, as rospy's objects)
+class _Impl:
     def __init__(self, connections):
         self.connections, self.closed = connections, False
 
@@ -101,7 +102,8 @@ def test_paced_each_message_goes_at_its_clock_instant_after_that_clock_and_unpac
         (21_000, "scan", [b"s"]),
         (21_000, "imu", [b"i20000"]),
     ]  # in stamp order
-    # published at an instant already released (after the pacer's tick): written first at the next release
+    # published at an instant already released (after the pacer's tick): written first at the next
+    # release
     out.put(imu, b"late", 20_000)
     del log[1:]
     out.release(20_000, wait)

@@ -1,7 +1,8 @@
-"""Paced at real time, the twin writes each message when it is stamped, as a ROS node does: a queue_size=1
-rospy subscriber (Debian's rospy, a process of its own) gets nearly every IMU message and every /clock,
-/clock arrives at 100 Hz, and an IMU stamp is ahead of the latest /clock the subscriber had only when its
-clock thread handled that clock late (never by more than one clock period; see below)."""
+"""Paced at real time, the twin writes each message when it is stamped, as a ROS node does: a
+queue_size=1 rospy subscriber (Debian's rospy, a process of its own) gets nearly every IMU message
+and every /clock, /clock arrives at 100 Hz, and an IMU stamp is ahead of the latest /clock the
+subscriber had only when its clock thread handled that clock late (never by more than one clock
+period; see below)."""
 
 import json
 import subprocess
@@ -86,10 +87,11 @@ def test_paced_messages_go_one_by_one_at_their_stamps_behind_the_clock(ros_env):
         clocks[-1][1] - clocks[0][1]
     )  # as rostopic hz: arrivals over wall time
     assert 95.0 <= hz <= 105.0, hz
-    # The twin writes each /clock before the messages of its instant (tests/ros1/test_outbox.py). The subscriber
-    # reads each topic in a thread of its own, and on a busy machine its clock thread is sometimes woken after
-    # the IMU's (1 to 4 % of the messages here): that IMU message then sees the previous clock, one period
-    # (10 ms) back. Never more, and rarely; the burst per tick put 80 % of them ahead, by up to 20 ms.
+    # The twin writes each /clock before the messages of its instant (tests/ros1/test_outbox.py).
+    # The subscriber reads each topic in a thread of its own, and on a busy machine its clock thread
+    # is sometimes woken after the IMU's (1 to 4 % of the messages here): that IMU message then sees
+    # the previous clock, one period (10 ms) back. Never more, and rarely; the burst per tick put 80
+    # % of them ahead, by up to 20 ms.
     ahead = [lead for _s, lead in imus if lead > 1e-9]
     assert all(lead <= 0.010 + 1e-6 for lead in ahead), max(ahead)
     assert len(ahead) <= 0.1 * len(imus), len(ahead)

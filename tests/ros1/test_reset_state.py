@@ -1,6 +1,7 @@
-"""``reset_simulation`` (the graph's ``~reset_simulation``) starts the robot's estimators afresh: the wheel odometry
-forgets its wheel samples and commands, and the navigation stack's EKF is told the robot is at its start pose.
-In-process: the service only calls :meth:`amr_twin.assembly.twin.Twin.reset_simulation` at the pacer's tick."""
+"""``reset_simulation`` (the graph's ``~reset_simulation``) starts the robot's estimators afresh:
+the wheel odometry forgets its wheel samples and commands, and the navigation stack's EKF is told
+the robot is at its start pose. In-process: the service only calls
+:meth:`amr_twin.assembly.twin.Twin.reset_simulation` at the pacer's tick."""
 
 import math
 
@@ -16,8 +17,9 @@ DRIVE_S = 5.0
 
 @pytest.mark.parametrize("reset_at_s", [4.7, 6.1, 8.0])
 def test_odometry_after_reset_simulation_follows_the_drive_that_follows(reset_at_s):
-    """Driven, reset mid-revolution, driven 5 s again from rest: odom's x within 0.3 m of the distance driven
-    (a wheel's revolution is 0.79 m; the old samples made it 2.2 to 4.7 m for 1.32 m driven)."""
+    """Driven, reset mid-revolution, driven 5 s again from rest: odom's x within 0.3 m of the
+    distance driven (a wheel's revolution is 0.79 m; the old samples made it 2.2 to 4.7 m for 1.32 m
+    driven)."""
     twin = Twin(load_config(), TwinOptions(world="empty"))
     Command("linear", speed_m_s=SPEED_M_S).send(twin)
     twin.advance(reset_at_s)
@@ -32,8 +34,8 @@ def test_odometry_after_reset_simulation_follows_the_drive_that_follows(reset_at
 
 
 def test_ekf_after_reset_simulation_is_at_the_start_pose():
-    """The navigation stack's EKF (odometry, gyro, UWB) had the robot 1.5 m on; reset, it has it at the start
-    within 2 cm at once (UWB alone would take seconds to pull it back)."""
+    """The navigation stack's EKF (odometry, gyro, UWB) had the robot 1.5 m on; reset, it has it at
+    the start within 2 cm at once (UWB alone would take seconds to pull it back)."""
     from amr_twin.navigation.stack import true_map
     from amr_twin.ros1.navigation_setup import RunNavigation
 

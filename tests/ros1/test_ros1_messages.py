@@ -1,4 +1,5 @@
-"""What the bridge takes from the graph is checked as a live client's input; what it gives keeps the fields."""
+"""What the bridge takes from the graph is checked as a live client's input; what it gives keeps the
+fields."""
 
 import math
 from types import SimpleNamespace

@@ -1,5 +1,5 @@
-"""The bridge's 100 Hz rows (amr_twin/ros1/row_feed.py) are the recorder's series, bit for bit, taken in pieces, and
-keep the twin's grid loop in C (no ROS 1 needed)."""
+"""The bridge's 100 Hz rows (amr_twin/ros1/row_feed.py) are the recorder's series, bit for bit,
+taken in pieces, and keep the twin's grid loop in C (no ROS 1 needed)."""
 
 import numpy as np
 import pytest

@@ -1,5 +1,6 @@
-"""The project's rosserial host: unit checks of its protocol handling (a fake rospy on a pipe), then listing
-4.1's launch file on a real roscore pointed at the twin's pseudo-terminal (the emulated Mega)."""
+"""The project's rosserial host: unit checks of its protocol handling (a fake rospy on a pipe), then
+listing 4.1's launch file on a real roscore pointed at the twin's pseudo-terminal (the emulated
+Mega)."""
 
 import json
 import os
@@ -7,16 +8,14 @@ import re
 import struct
 import subprocess
 import sys
-import time
 from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
-import yaml
 
 from conftest import MISSING, in_workspace, needs_ros1, stop
 from amr_twin.controllers.avr_build import missing_tools
-from amr_twin.ros.rosserial_frame import ID_PUBLISHER, ID_TIME, FrameParser, frame
+from amr_twin.ros.rosserial_frame import ID_PUBLISHER, ID_TIME, FrameParser
 
 AMR_TWIN = str(Path(sys.executable).with_name("amr-twin"))
 needs_avr = pytest.mark.skipif(missing_tools() is not None, reason=missing_tools() or "")
@@ -118,9 +117,11 @@ from amr_idea_control.srv import RequestPacket
 from std_msgs.msg import Float64
 rospy.init_node("test_drive")
 print("ready", flush=True)
-sys.stdin.readline()  # the host has configured the board and is connected to the service's wheel_Command
+# the host has configured the board and is connected to the service's wheel_Command
+sys.stdin.readline()
 rospy.ServiceProxy("/wheel_Command_Service", RequestPacket)(1, 40.0, 1, 40.0)
-while not rospy.is_shutdown():  # the board's speed, through the pseudo-terminal and the host, on the graph
+# the board's speed, through the pseudo-terminal and the host, on the graph
+while not rospy.is_shutdown():
     speed = rospy.wait_for_message("/wheel0_Vel", Float64, timeout=120).data
     if speed > 20.0:
         print(speed, flush=True)
@@ -136,7 +137,8 @@ def test_listing_4_1s_launch_on_the_twins_serial_port_moves_the_emulated_board(
     from conftest import connected_subscribers, services, wait_for
 
     pty = tmp_path / "ttyACM0"
-    # the launch file first: its host waits for the port (as upstream's does); the twin then creates it
+    # the launch file first: its host waits for the port (as upstream's does); the twin then creates
+    # it
     launch = subprocess.Popen(
         in_workspace(
             catkin_setup,
@@ -205,7 +207,7 @@ def test_listing_4_1s_launch_on_the_twins_serial_port_moves_the_emulated_board(
     assert not pty.exists() and not pty.is_symlink()  # the link goes with the run
     wheels = json.loads(out)["wheels"]
     assert all(abs(wheels[w]["true_final_rpm"] - 40.0) < 4.0 for w in ("left", "right"))
-    # one negotiation in 30 simulated s: the board's time requests (every 5 s) kept serial_node's 15 s watchdog
-    # quiet, so the host never renegotiated
+    # one negotiation in 30 simulated s: the board's time requests (every 5 s) kept serial_node's 15
+    # s watchdog quiet, so the host never renegotiated
     found = re.search(r"answered (\d+) topic negotiation\(s\) and asked the time (\d+) time", err)
     assert found and int(found.group(1)) == 1 and int(found.group(2)) >= 4, err

@@ -1,4 +1,5 @@
-"""The bridge's ROS 1 writers give the bytes genpy (Debian's ROS 1) gives the same message, type by type."""
+"""The bridge's ROS 1 writers give the bytes genpy (Debian's ROS 1) gives the same message, type by
+type."""
 
 import io
 

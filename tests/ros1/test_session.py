@@ -1,4 +1,5 @@
-"""``--ros1``, ``--roscore``, ``--serial-pty``: refusals before anything is simulated, and no orphan process."""
+"""``--ros1``, ``--roscore``, ``--serial-pty``: refusals before anything is simulated, and no orphan
+process."""
 
 import os
 import signal
@@ -7,7 +8,6 @@ import sys
 import time
 from pathlib import Path
 
-import pytest
 from typer.testing import CliRunner
 
 from conftest import needs_ros1

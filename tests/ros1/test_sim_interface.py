@@ -1,6 +1,7 @@
-"""The simulator's interface a ROS engineer scripts against (docs/how-to/ros1.md, "The simulator's interface"): pause,
-reset and teleport services, namespaces, ROS command-line arguments, roslaunch, runs until stopped, /use_sim_time
-put back, and a master's restart. Each on a real master; skipped without Debian's ROS 1."""
+"""The simulator's interface a ROS engineer scripts against (docs/how-to/ros1.md, "The simulator's
+interface"): pause, reset and teleport services, namespaces, ROS command-line arguments, roslaunch,
+runs until stopped, /use_sim_time put back, and a master's restart. Each on a real master; skipped
+without Debian's ROS 1."""
 
 import json
 import os
@@ -10,7 +11,6 @@ import sys
 import xmlrpc.client
 from pathlib import Path
 
-import pytest
 
 from conftest import needs_ros1, services, stop, wait_for
 
@@ -52,7 +52,7 @@ def _end(proc, sig=signal.SIGTERM, timeout_s=60):
     return proc.returncode, out, err
 
 
-def test_two_twins_in_namespaces_share_one_clock_and_nothing_else_and_stop_on_sigterm_with_their_outputs(
+def test_two_twins_in_namespaces_share_only_one_clock_and_stop_on_sigterm_with_their_outputs(
     ros_env, tmp_path
 ):
     run = ["run", "stop", "--duration-s", "inf", "--world", "empty", "--ros1", "--rate", "1"]
@@ -178,7 +178,7 @@ def test_roslaunch_starts_the_twin_as_a_node_with_its_remaps_and_stops_it_with_i
     launch.write_text(f"""<launch>
   <group ns="r5">
     <node pkg="amr_twin" type="twin" name="sim" output="screen"
-          args="run stop --duration-s inf --world empty --ros1 --rate 1 --csv {tmp_path / "run.csv"}">
+          args="run stop --duration-s inf --world empty --ros1 --rate 1 --csv {tmp_path}/run.csv">
       <remap from="cmd_vel" to="teleop/cmd_vel"/>
     </node>
   </group>

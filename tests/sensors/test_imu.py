@@ -177,7 +177,8 @@ def test_a_batch_of_samples_draws_the_same_numbers_as_one_by_one():
 
 
 def test_fed_by_a_grid_the_messages_match_the_clock_event_ones():
-    """The twin's way (true values taken on the loop's grid, publishing events) against reading MjData."""
+    """The twin's way (true values taken on the loop's grid, publishing events) against reading
+    MjData."""
     evented, fed = Rig(seed=2), Rig(seed=2)
     samplers = []
     fed.imu.stop()

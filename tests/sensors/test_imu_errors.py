@@ -1,4 +1,5 @@
-"""The IMU's error stream: batches of any size give the per-sample numbers; C against numpy, to the bit."""
+"""The IMU's error stream: batches of any size give the per-sample numbers; C against numpy, to the
+bit."""
 
 import shutil
 

@@ -1,4 +1,5 @@
-"""RPLIDAR A1: ranges in a known room, payload, motion distortion, own-geom masking, seeds, services."""
+"""RPLIDAR A1: ranges in a known room, payload, motion distortion, own-geom masking, seeds,
+services."""
 
 import math
 from types import SimpleNamespace
@@ -207,7 +208,8 @@ def test_motor_services_and_out_of_range(room):
 
 
 def _run_on_grid(rig, t_end_us, yaw_rate, grid_us=10_000):
-    """The twin's way: the loop samples the pose on its grid (no clock event); scans go out by publishing events."""
+    """The twin's way: the loop samples the pose on its grid (no clock event); scans go out by
+    publishing events."""
     samplers = []
     rig.lidar.start_motor(grid_us=grid_us, samplers=samplers)
     for t in range(0, t_end_us + 1, grid_us):
@@ -263,7 +265,8 @@ def test_twin_mode_payload_moves_with_the_laser(room):
 
 
 # Thin things at the laser's height (0.45 m): uprights 0.1 m and 0.04 m wide, braces 0.04 m thick
-# at z 0.40-0.50 m between them (as the aisles world's racks), a round post, three walls (open at -y).
+# at z 0.40-0.50 m between them (as the aisles world's racks), a round post, three walls (open at
+# -y).
 THIN_XML = """<mujoco model="thin"><worldbody>
   <geom name="floor" type="plane" size="20 20 0.1"/>
   {uprights}
@@ -299,11 +302,11 @@ def thin(tmp_path_factory):
 def test_every_return_is_what_a_ray_from_its_own_laser_pose_hits(
     thin, speed_m_s, omega_rad_s, seed
 ):
-    """Driving and turning past thin uprights, braces and a post: each return is within the range noise of
-    MuJoCo's own ``mj_ray`` cast from the laser pose at that beam's instant (linear between the pose
-    samples every 20 ms, interpolated here with ``numpy.interp``) where that ray hits within the range
-    limits, and no return where it hits nothing: no return off every surface (the ghosts of the old
-    plane correction near thin and finite objects, 0.1-0.9 m off any geom)."""
+    """Driving and turning past thin uprights, braces and a post: each return is within the range
+    noise of MuJoCo's own ``mj_ray`` cast from the laser pose at that beam's instant (linear between
+    the pose samples every 20 ms, interpolated here with ``numpy.interp``) where that ray hits
+    within the range limits, and no return where it hits nothing: no return off every surface (the
+    ghosts of the old plane correction near thin and finite objects, 0.1-0.9 m off any geom)."""
     rig = Rig(thin, seed=seed)
     start = (-0.6, -0.05, 0.1)
     samples = {}  # t_us -> laser origin (3,), x axis (3,), y axis (3,)

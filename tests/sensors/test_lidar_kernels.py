@@ -75,7 +75,8 @@ def test_noise_is_the_same_bits(seed):
 
 
 def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch):
-    """Driving and spinning with a payload in the scan plane: every scan identical (C cast, numpy twin)."""
+    """Driving and spinning with a payload in the scan plane: every scan identical (C cast, numpy
+    twin)."""
     import functools
 
     import amr_twin.sensors.lidar as lidar_mod
@@ -101,11 +102,13 @@ def test_a_twins_scans_are_the_same_bits_with_and_without_the_helper(monkeypatch
 
 
 def _laser_scene(geoms: str):
-    """A model of ``geoms`` and a mocap ``laser`` site 0.5 m up at the origin, forwarded: (MjModel, MjData)."""
+    """A model of ``geoms`` and a mocap ``laser`` site 0.5 m up at the origin, forwarded: (MjModel,
+    MjData)."""
     import mujoco
 
     m = mujoco.MjModel.from_xml_string(f"""<mujoco><worldbody>{geoms}
-      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body></worldbody></mujoco>""")
+      <body name="laser" mocap="true" pos="0 0 0.5"><site name="laser"/></body>
+      </worldbody></mujoco>""")
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
     return m, d
@@ -140,7 +143,8 @@ def _scene(rng, mesh: bool = False) -> str:
     if mesh:
         geoms.append('<geom type="mesh" mesh="cube" pos="2 2 0.5"/>')
     assets = (
-        '<asset><mesh name="cube" vertex="0 0 0 1 0 0 0 1 0 1 1 0 0 0 1 1 0 1 0 1 1 1 1 1"/></asset>'
+        '<asset><mesh name="cube" vertex="0 0 0 1 0 0 0 1 0 1 1 0 0 0 1 1 0 1 0 1 1 1 1 '
+        '1"/></asset>'
         if mesh
         else ""
     )
@@ -152,9 +156,9 @@ def _scene(rng, mesh: bool = False) -> str:
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("mesh", [False, True])
 def test_the_culled_cast_hits_what_mj_multiray_and_mj_ray_hit(seed, mesh):
-    """lb_cast's own cull in front of mju_rayGeom against MuJoCo's mj_multiRay and a mj_ray per beam:
-    the same geom, distance and normal to the bit, from origins inside and outside the geoms' outlines,
-    along directions tilted up to 60 degrees (a mesh in view: mj_multiRay casts)."""
+    """lb_cast's own cull in front of mju_rayGeom against MuJoCo's mj_multiRay and a mj_ray per
+    beam: the same geom, distance and normal to the bit, from origins inside and outside the geoms'
+    outlines, along directions tilted up to 60 degrees (a mesh in view: mj_multiRay casts)."""
     import mujoco
 
     c = beam_kernels(500, CFG)
@@ -188,10 +192,10 @@ def test_the_culled_cast_hits_what_mj_multiray_and_mj_ray_hit(seed, mesh):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("mesh", [False, True])
 def test_each_beam_is_cast_from_its_own_origin(seed, mesh):
-    """lb_cast with the laser moving up to 0.6 m during the beams (its cull prepared once from the present
-    origin, each geom's span widened for the beam's own origin) and the numpy twin: for every beam, the
-    geom and distance of MuJoCo's ``mj_ray`` from that beam's own origin along its own direction, to the
-    bit (a mesh in view: mj_multiRay per beam)."""
+    """lb_cast with the laser moving up to 0.6 m during the beams (its cull prepared once from the
+    present origin, each geom's span widened for the beam's own origin) and the numpy twin: for
+    every beam, the geom and distance of MuJoCo's ``mj_ray`` from that beam's own origin along its
+    own direction, to the bit (a mesh in view: mj_multiRay per beam)."""
     import mujoco
 
     c, py = _kernels()
@@ -231,10 +235,10 @@ def test_each_beam_is_cast_from_its_own_origin(seed, mesh):
 
 
 def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
-    """The laser drove 0.5 m away from a small sphere during the rotation: a beam acquired then, cast from
-    there, hits the sphere at 1.4 m, not the wall behind it at 1.8 m, though the sphere's bounding sphere
-    is 1.9 m from the present origin, farther than that wall hit (the cull's early stop is loosened by
-    how far each beam's origin is from the present one)."""
+    """The laser drove 0.5 m away from a small sphere during the rotation: a beam acquired then,
+    cast from there, hits the sphere at 1.4 m, not the wall behind it at 1.8 m, though the sphere's
+    bounding sphere is 1.9 m from the present origin, farther than that wall hit (the cull's early
+    stop is loosened by how far each beam's origin is from the present one)."""
     c, py = _kernels()
     m, d = _laser_scene("""
       <geom name="ball" type="sphere" size="0.1" pos="2.0 0 0.5"/>
@@ -253,9 +257,10 @@ def test_a_beam_from_an_origin_nearer_a_small_geom_sees_it():
 
 
 def test_a_beam_from_beside_a_thin_post_sees_it():
-    """An 8 mm post 10 cm ahead of the present origin; a beam acquired 10 cm away, 3.5 cm from the post,
-    aimed at it 80 degrees off the post's azimuth seen from the present origin, hits it (an origin as far
-    off as the post's nearest corner: the post is tried by every such beam, no span widened)."""
+    """An 8 mm post 10 cm ahead of the present origin; a beam acquired 10 cm away, 3.5 cm from the
+    post, aimed at it 80 degrees off the post's azimuth seen from the present origin, hits it (an
+    origin as far off as the post's nearest corner: the post is tried by every such beam, no span
+    widened)."""
     c, py = _kernels()
     m, d = _laser_scene("""
       <geom name="post" type="cylinder" size="0.004 0.6" pos="0.1 0 0.6"/>

@@ -176,7 +176,8 @@ def test_uwb_sensor_in_the_twin():
 
 
 def test_walls_block_the_bays_anchors_in_the_corridor():
-    """Physical NLOS: deep in the corridor world only the end anchor is in sight; the others read long."""
+    """Physical NLOS: deep in the corridor world only the end anchor is in sight; the others read
+    long."""
     from amr_twin.experiments.fusion.experiment import site_config
     from amr_twin.controllers.route import Route
     from amr_twin.assembly.twin import Twin, TwinOptions

@@ -1,6 +1,6 @@
-"""Actors never walk through the robot: a person walking into a standing robot stops against it, the touch is
-a reported collision of a person's push (not a kinematic body's shove), and a person giving way walks on
-after ``give_way_s``."""
+"""Actors never walk through the robot: a person walking into a standing robot stops against it, the
+touch is a reported collision of a person's push (not a kinematic body's shove), and a person giving
+way walks on after ``give_way_s``."""
 
 import pytest
 
@@ -27,8 +27,8 @@ def _run(actor, seconds):
     ],
 )  # at a slant into its front corner
 def test_a_person_walking_into_a_standing_robot_stops_against_it_with_a_persons_push(path):
-    """Measured: 6-14 N peak; a kinematic body walked on through the robot (the old rule) shoves it aside
-    with kN and carries it along."""
+    """Measured: 6-14 N peak; a kinematic body walked on through the robot (the old rule) shoves it
+    aside with kN and carries it along."""
     twin = _run(Actor("person", path, 1.3), 6.0)
     hits = twin.collisions.as_dicts()
     assert [h["hit"] for h in hits] == ["person_0"]  # the touch is a collision
@@ -44,7 +44,8 @@ def test_a_person_giving_way_walks_on_after_give_way_s_and_stops_on_touching():
     give = CFG.actors.person.give_way_s
     twin = _run(Actor("person", ((-2.5, 0.0), (-8.0, 0.0)), 1.3, stop_within_m=1.0), 10.0)
     walked = twin.actors.progress_s()[0]
-    # 1.87 m to the 1 m line at 1.3 m/s, then the wait, then 1 m on to the robot's front (0.06 m legs)
+    # 1.87 m to the 1 m line at 1.3 m/s, then the wait, then 1 m on to the robot's front (0.06 m
+    # legs)
     to_line = (-2.5 - (START[0] + CFG.chassis.length_m / 2) - 1.0) / 1.3
     assert to_line + 0.5 < walked < 10.0 - give + 0.05
     hits = twin.collisions.as_dicts()

@@ -1,4 +1,5 @@
-"""The pins taken by the plant: the drive row in force and the ``on_actuation`` hook, the fault handles."""
+"""The pins taken by the plant: the drive row in force and the ``on_actuation`` hook, the fault
+handles."""
 
 from __future__ import annotations
 

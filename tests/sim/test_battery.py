@@ -84,7 +84,8 @@ def test_battery_voltage_is_recorded_at_every_grid_instant(monkeypatch):
 
 
 def test_driving_draws_the_motors_power_from_the_pack(monkeypatch):
-    """At 0.7 m/s the pack's current exceeds the rest current by the motors' electrical power over V."""
+    """At 0.7 m/s the pack's current exceeds the rest current by the motors' electrical power over
+    V."""
     cfg = load_config(overrides={"payload.mass_kg": 30.0})
     twin = _twin(monkeypatch, cfg, True)
     twin.client.linear(0.7)
@@ -99,7 +100,8 @@ def test_driving_draws_the_motors_power_from_the_pack(monkeypatch):
 
 @pytest.mark.skipif(not HAVE_CC, reason="no C compiler")
 def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch):
-    """Drive, brake, coast (a cut supply) and a sagging pack: the same charge and currents to the bit."""
+    """Drive, brake, coast (a cut supply) and a sagging pack: the same charge and currents to the
+    bit."""
     cfg = load_config(overrides={"payload.mass_kg": 20.0})
     faults = parse_faults(["battery-sag@1:drop_v=6,for=1.5", "battery-cut@3.5:for=0.5"])
     out = []

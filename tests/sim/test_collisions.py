@@ -155,7 +155,8 @@ def test_the_c_pair_check_sees_any_change_of_the_pairs():
 
     if shutil.which("cc") is None and shutil.which("gcc") is None:
         pytest.skip("no C compiler")
-    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody><geom name="floor" type="plane" size="5 5 .1"/>
+    m = mujoco.MjModel.from_xml_string("""<mujoco><worldbody>
+      <geom name="floor" type="plane" size="5 5 .1"/>
       <body><freejoint/><geom name="a" type="sphere" size=".1"/></body>
       <body><freejoint/><geom name="b" type="sphere" size=".1"/></body></worldbody></mujoco>""")
     d = mujoco.MjData(m)

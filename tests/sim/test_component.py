@@ -1,5 +1,5 @@
-"""A third party's sensor: defined here, registered by name through the public API (amr_twin), listed in the
-options, built by the loop."""
+"""A third party's sensor: defined here, registered by name through the public API (amr_twin),
+listed in the options, built by the loop."""
 
 from __future__ import annotations
 

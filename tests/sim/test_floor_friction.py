@@ -96,7 +96,8 @@ def test_the_field_is_in_the_tyres_data_and_acts_on_them():
 
 
 def test_a_slippery_patch_limits_the_tyre_force_to_mu_n():
-    """A 0.05 field (ice) under a robot asked to spin fast: each patch gives at most mu N of force."""
+    """A 0.05 field (ice) under a robot asked to spin fast: each patch gives at most mu N of
+    force."""
     cfg = load_config(sets=FIELD_ON)
     twin = Twin(cfg, TwinOptions(world="empty", odometry=False, seed=1))
     twin.physics.set_floor_friction(

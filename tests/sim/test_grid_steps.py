@@ -158,7 +158,8 @@ def test_a_mujoco_error_in_the_c_grid_is_raised_and_the_handler_restored():
     xml = (
         '<mujoco><size memory="16K"/><worldbody><geom type="plane" size="5 5 .1"/>'
         + "".join(
-            f'<body pos="{0.05 * i} 0 {0.1 + 0.01 * i}"><freejoint/><geom type="box" size=".1 .1 .1"/></body>'
+            f'<body pos="{0.05 * i} 0 {0.1 + 0.01 * i}"><freejoint/><geom type="box" size=".1 .1 '
+            f'.1"/></body>'
             for i in range(20)
         )
         + "</worldbody></mujoco>"

@@ -42,9 +42,9 @@ def test_linear_20_s_odometry_distance_within_2_percent(cfg, firmware):
 
 @pytest.mark.parametrize("firmware, tolerance_deg", [("faithful", 12.0), ("improved", 3.5)])
 def test_three_turns_in_place_odometry_yaw(cfg, firmware, tolerance_deg):
-    """The improved firmware publishes at 10 Hz: within 3.5 deg, the tyres' scrub in the pivot (0.3 % of
-    the turn with the calibrated motors, docs/explanation/tyres.md). The faithful one publishes one
-    speed per wheel revolution (2.6 s at 23 RPM, listing 4.12): the last, partial revolution
+    """The improved firmware publishes at 10 Hz: within 3.5 deg, the tyres' scrub in the pivot (0.3
+    % of the turn with the calibrated motors, docs/explanation/tyres.md). The faithful one publishes
+    one speed per wheel revolution (2.6 s at 23 RPM, listing 4.12): the last, partial revolution
     and the shorted motors' stop after the brake (about 0.3 s) are never published, and the
     first revolution arrives late: the published pose (forward only) makes it up at most 1.4 x
     the spin rate, hence three turns."""

@@ -1,4 +1,5 @@
-"""The loop's hooks and observables: what they hand over, and that consumers use them instead of reaching in."""
+"""The loop's hooks and observables: what they hand over, and that consumers use them instead of
+reaching in."""
 
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ CONSUMERS = (
     "amr_twin/ros1",
     "amr_twin/sim/fault_injector.py",
 )
-"""What runs downstream of the loop and must hold to its hooks (the navigation stack's node sits on the bus)."""
+"""What runs downstream of the loop and must hold to its hooks (the navigation stack's node sits on
+the bus)."""
 PARTS = frozenset(
     {"firmware", "plant", "hall", "physics", "samplers", "link", "rolling", "collisions", "_grid"}
 )
@@ -37,7 +39,8 @@ def _is_twin(node: ast.expr) -> bool:
 
 
 def reaches(source: str) -> list[str]:
-    """The places (``line: expression``) where ``source`` reaches into a twin's parts (module notes)."""
+    """The places (``line: expression``) where ``source`` reaches into a twin's parts (module
+    notes)."""
     found = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Attribute) and _is_twin(node.value) and node.attr in PARTS:
@@ -105,7 +108,8 @@ def test_the_firmware_protocol_declares_what_the_loop_calls():
     assert {"connect", "start", "on_sc_edge", "on_wheel_command", "pins"} <= declared
 
 
-# -- what the hooks hand over -------------------------------------------------------------------------
+# -- what the hooks hand over
+# -------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def hooked():
     """A 1.2 s run with a subscriber on each hook, and the twin (its recorder subscribed first)."""
@@ -165,7 +169,8 @@ def test_event_and_message_hooks(hooked):
     _, seen = hooked
     events = seen["on_event"]
     assert events == sorted(events)
-    # the synced instants: the firmware's 0.2 s timer, the divergence checks (0.5 s), the command's frame
+    # the synced instants: the firmware's 0.2 s timer, the divergence checks (0.5 s), the command's
+    # frame
     assert {200_000, 400_000, 500_000, 600_000, 800_000, 1_000_000, 1_200_000} <= set(events)
     assert 0 < events[0] < 200_000
     odom = seen["on_message"]

@@ -47,7 +47,8 @@ def _ends_with_physics(node: ast.expr) -> bool:
 
 
 def touches(source: str) -> list[str]:
-    """The places (``line: what``) where ``source`` touches MjData outside the physics layer (module notes)."""
+    """The places (``line: what``) where ``source`` touches MjData outside the physics layer (module
+    notes)."""
     tree = ast.parse(source)
     if _physics_layer(tree):
         return []

@@ -18,7 +18,8 @@ def _volts(sets: list[str]) -> tuple[float, float, int, int]:
 
 @pytest.mark.parametrize("left, right", [(1.6, 1.7), (1.75, 1.55)])
 def test_each_board_scales_its_own_wheel(left, right):
-    """The same counts on both pins; the phase voltages stand in the ratio of the two boards' gains."""
+    """The same counts on both pins; the phase voltages stand in the ratio of the two boards'
+    gains."""
     volt_l, volt_r, pwm_l, pwm_r = _volts(
         [f"driver_left.gain={left}", f"driver_right.gain={right}"]
     )

@@ -135,7 +135,8 @@ def test_a_damaged_build_is_replaced(tmp_path):
     source.write_text("int answer(void) { return 42; }\n")
     code = (
         "import sys; from pathlib import Path; from amr_twin.base import native_build as nb; "
-        "s = Path(sys.argv[1]); lib = nb.load_helper(s); print(nb.native_status(s), lib.answer() if lib else '-')"
+        "s = Path(sys.argv[1]); lib = nb.load_helper(s); print(nb.native_status(s), lib.answer() "
+        "if lib else '-')"
     )
     env = {**os.environ, "AMR_TWIN_CACHE_DIR": str(tmp_path / "cache")}
 

@@ -4,7 +4,6 @@ it, a person told to wait for the robot does, and a seed gives the same trajecto
 
 import math
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -69,8 +68,8 @@ def test_an_actor_walks_its_waypoints_at_its_speed_on_the_bus_and_in_mujoco():
 def _leg_hits(origin, angle, legs, r):
     """Nearest distance along the ray from ``origin`` at ``angle`` to the circles ``legs`` (k, 2) of
     radius ``r`` (inf: none), and whether the ray grazes one (passes within 0.3 r of its edge: which
-    leg it hits then depends on millimetres); a line-circle intersection in the plane, independent of
-    MuJoCo."""
+    leg it hits then depends on millimetres); a line-circle intersection in the plane, independent
+    of MuJoCo."""
     u = np.array([math.cos(angle), math.sin(angle)])
     best, grazing = math.inf, False
     for c in legs:
@@ -86,9 +85,9 @@ def _leg_hits(origin, angle, legs, r):
 
 
 def test_the_lidar_sees_a_person_crossing_where_an_independent_ray_cast_puts_them():
-    """A walker crossing 2.2 m ahead at 1.2 m/s: each beam against the two leg circles at the beam's own
-    instant. Where the cast says "leg", the scan's range agrees within 5 cm (noise and the 10-20 ms the
-    cast lags); where it says no leg, no return lies inside one (no ghost, no leg missed)."""
+    """A walker crossing 2.2 m ahead at 1.2 m/s: each beam against the two leg circles at the beam's
+    own instant. Where the cast says "leg", the scan's range agrees within 5 cm (noise and the 10-20
+    ms the cast lags); where it says no leg, no return lies inside one (no ghost, no leg missed)."""
     person = Actor("person", ((-3.5, 1.6), (-3.5, -1.6)), 1.2, start_s=0.3)
     twin, _ = _twin([person], sensors=True)
     scans = []
@@ -129,7 +128,8 @@ def test_the_lidar_sees_a_person_crossing_where_an_independent_ray_cast_puts_the
 @pytest.mark.parametrize("forks_first", [False, True])
 def test_the_lidar_sees_a_jacks_pump_not_its_forks(forks_first):
     """A jack 2.2 m ahead, standing: its pump toward the robot is seen at the pump's face; turned
-    round (forks toward the robot, 0.085 m high) the beam passes over the forks to the pump behind."""
+    round (forks toward the robot, 0.085 m high) the beam passes over the forks to the pump
+    behind."""
     heading = (
         -1.0 if forks_first else 1.0
     )  # forks lead: its first segment's direction is where they point
@@ -156,7 +156,8 @@ def test_driving_into_a_person_is_a_collision_naming_them():
 
 
 def test_a_wheel_or_caster_on_a_jacks_fork_is_a_collision():
-    """Forks toward the robot, 0.085 m high: under the chassis (0.1 m), into the casters and wheels."""
+    """Forks toward the robot, 0.085 m high: under the chassis (0.1 m), into the casters and
+    wheels."""
     jack = Actor("pallet_jack", ((-4.5, 0.0), (-5.5, 0.0)), 1.0, start_s=1e5)
     twin, _ = _twin([jack])
     twin.client.linear(0.3)
@@ -189,13 +190,13 @@ def test_a_person_told_to_wait_stops_short_of_the_robot_and_one_not_told_walks_i
 def test_a_person_giving_way_beside_the_robot_keeps_their_body_0_3_m_from_its_footprint(
     side, angle_deg
 ):
-    """The navigation's acceptance asks 0.3 m from a person's body (the navigation metric's 0.30 x 0.45 m box)
-    to the robot's footprint (0.70 x 0.53 m: the wheels stick out of the 0.40 m chassis). A person
-    walking at the robot's left or right side, square to it or at an angle (forwards or backwards;
-    65 deg is seed 0 episode 13's), waiting within 0.6 m: halted within one grid step of 0.6 m from
-    their centre to the footprint across the wheels, their body at least 0.6 - 0.27 - 0.013 m from it
-    (shapely's distance, not the twin's). Measured to the chassis, they stood 0.065 m nearer, their
-    body 0.275 m from the footprint at 65 deg."""
+    """The navigation's acceptance asks 0.3 m from a person's body (the navigation metric's 0.30 x
+    0.45 m box) to the robot's footprint (0.70 x 0.53 m: the wheels stick out of the 0.40 m
+    chassis). A person walking at the robot's left or right side, square to it or at an angle
+    (forwards or backwards; 65 deg is seed 0 episode 13's), waiting within 0.6 m: halted within one
+    grid step of 0.6 m from their centre to the footprint across the wheels, their body at least 0.6
+    - 0.27 - 0.013 m from it (shapely's distance, not the twin's). Measured to the chassis, they
+    stood 0.065 m nearer, their body 0.275 m from the footprint at 65 deg."""
     from shapely.geometry import Polygon
 
     from amr_twin.experiments.navigation.metrics import PERSON_HALF_M

@@ -39,7 +39,8 @@ def test_a_start_inside_a_rack_or_without_a_floor_is_refused(tmp_path):
 
 
 def test_a_start_overlapping_many_geoms_names_five_and_counts_the_rest(tmp_path):
-    """A map of many small walls under the robot: the refusal stays a short line (was every name)."""
+    """A map of many small walls under the robot: the refusal stays a short line (was every
+    name)."""
     boxes = "".join(
         f'<geom name="post_{i}" type="box" size="0.02 0.02 0.3" pos="{-0.3 + 0.06 * i:.2f} 0 0.3"/>'
         for i in range(9)

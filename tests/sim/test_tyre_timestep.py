@@ -2,12 +2,13 @@
 
 The tyre's deflection and its rubber damping are advanced explicitly (amr_twin/sim/tyres.py), so
 the carcass is stable only while ``(k_x dt + tau k_x) dt / (J / r^2)`` stays below about 2
-(docs/explanation/tyres.md, "Not found: convergence to the rigid contact"). Chapter 5's 20 kg turn (run 8)
-with every tyre parameter at the stiff end of its sourced range (slip stiffness 25, cornering 17
-/rad, relaxation lengths 0.02 and 0.04 m, loss time 10 ms): at 1 ms and at 0.5 ms the true wheel
-speeds agree within 0.5 RPM from 4.5 s on (the ramp's and the PI's events fall on other steps before), and their final values within 0.1 RPM.
-(With the tyres' guard, amr_twin/model/tyre_stability.py, the 1 ms configuration runs at 0.5 ms:
-S = 2.15 at 1.3 times the static 126 N; the 0.5 ms one stays: S = 1.03.)
+(docs/explanation/tyres.md, "Not found: convergence to the rigid contact"). Chapter 5's 20 kg turn
+(run 8) with every tyre parameter at the stiff end of its sourced range (slip stiffness 25,
+cornering 17 /rad, relaxation lengths 0.02 and 0.04 m, loss time 10 ms): at 1 ms and at 0.5 ms the
+true wheel speeds agree within 0.5 RPM from 4.5 s on (the ramp's and the PI's events fall on other
+steps before), and their final values within 0.1 RPM. (With the tyres' guard,
+amr_twin/model/tyre_stability.py, the 1 ms configuration runs at 0.5 ms: S = 2.15 at 1.3 times the
+static 126 N; the 0.5 ms one stays: S = 1.03.)
 
 With 50 kg the stiff longitudinal corner (slip stiffness 25, relaxation 0.02 m, loss time 10 ms)
 is unstable at 1 ms (run 3 ended at 85 RPM instead of 52): the guard halves the timestep twice

@@ -1,7 +1,8 @@
-"""The brush tyres (amr_twin/sim/tyres.py, tyres.c) against hand calculations (docs/explanation/tyres.md).
+"""The brush tyres (amr_twin/sim/tyres.py, tyres.c) against hand calculations
+(docs/explanation/tyres.md).
 
-The expected figures are the hand calculations of docs/explanation/tyres.md, written here as numbers (not
-computed with the code under test): a steady turn at 60 deg/s about an ICC 1 m to the left
+The expected figures are the hand calculations of docs/explanation/tyres.md, written here as numbers
+(not computed with the code under test): a steady turn at 60 deg/s about an ICC 1 m to the left
 side-slips the axle outwards by 1.32 deg and turns 0.096 % slower than its wheels say (a slight
 understeer); a pivot (ICC 0) needs 0.079 A (left) and 0.080 A (right) more motor current than the
 rigid contact, the two tyres' spin (scrub) torque of 0.069 N m each.

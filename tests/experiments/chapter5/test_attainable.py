@@ -1,4 +1,5 @@
-"""Which chapter 5 findings a plant inside the ranges meets: the draws, the verdicts, the pairs, the command."""
+"""Which chapter 5 findings a plant inside the ranges meets: the draws, the verdicts, the pairs, the
+command."""
 
 from __future__ import annotations
 
@@ -162,7 +163,8 @@ def test_the_plant_key_ignores_the_drawn_values_and_sees_any_other(cfg):
 
 
 def test_the_committed_study_is_of_the_shipped_plant_and_what_a_draw_gives_now(cfg):
-    """Regenerate with python -m amr_twin.experiments.documents.figures after a change of the plant."""
+    """Regenerate with python -m amr_twin.experiments.documents.figures after a change of the
+    plant."""
     data = att.committed(cfg)
     assert data is not None, (
         "docs/chapter5_attainable.json was drawn around another plant: run doc_figures"

@@ -113,8 +113,8 @@ def test_report_states_the_oscillation_measure_and_verdict():
     assert "2 runs (32 simulated s) in 1.0 s wall time" in text  # no study runs: none counted
     study = markdown({**data, "study_runs": 8, "study_sim_s": 128.0})
     assert (
-        "2 runs (32 simulated s) and 8 rolling-resistance study runs (128 s), 10 runs and 160 simulated s"
-        in study
+        "2 runs (32 simulated s) and 8 rolling-resistance study runs (128 s), 10 runs and 160 "
+        "simulated s" in study
     )
     assert "Named measure: **excess total variation**" in text
     assert "| 7 | 20 | right | 53.48 | 4.00 | 7.00 |" in text  # per run and wheel: published, true

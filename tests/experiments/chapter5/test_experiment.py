@@ -1,4 +1,5 @@
-"""Chapter 5 experiment machinery: one short run end to end, the rotation commands, the CLI's checks."""
+"""Chapter 5 experiment machinery: one short run end to end, the rotation commands, the CLI's
+checks."""
 
 import json
 

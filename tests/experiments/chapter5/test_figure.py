@@ -1,4 +1,5 @@
-"""The chapter 5 figures: published samples drawn as samples, the thesis' bands where they are scored."""
+"""The chapter 5 figures: published samples drawn as samples, the thesis' bands where they are
+scored."""
 
 import pytest
 

@@ -1,4 +1,5 @@
-"""The thesis' chapter 5 findings (experiments/chapter5/findings.py), judged on hand-built metrics objects.
+"""The thesis' chapter 5 findings (experiments/chapter5/findings.py), judged on hand-built metrics
+objects.
 
 Each finding is built once on the edge of its rule, reproduced, and then moved just across it, so a
 verdict that ignored the figure it is about, or compared the wrong way, fails.
@@ -45,10 +46,10 @@ def _wheel(name: str, ref: float, overshoot: float, steady: float, true_overshoo
 
 
 def _data(**over) -> dict:
-    """Metrics on which every finding is reproduced, each at the edge of its rule: runs 2/1 right 4.0
-    vs left 3.0 RPM (margin 1), runs 3-8 right above left in 4 of 6, unloaded wheels at +-3.9 RPM,
-    all four 20 kg wheels raised, 3 of 4 comparisons more on each signal, every attainable timing in
-    its band (the small steps' delay, rise and peak, out of reach, fail)."""
+    """Metrics on which every finding is reproduced, each at the edge of its rule: runs 2/1 right
+    4.0 vs left 3.0 RPM (margin 1), runs 3-8 right above left in 4 of 6, unloaded wheels at +-3.9
+    RPM, all four 20 kg wheels raised, 3 of 4 comparisons more on each signal, every attainable
+    timing in its band (the small steps' delay, rise and peak, out of reach, fail)."""
     overshoot = {(2, "right"): (4.0, 5.0), (1, "left"): (3.0, 4.0)}
     for n in (3, 4, 5, 6):
         overshoot[(n, "right")], overshoot[(n, "left")] = (2.0, 2.0), (1.0, 1.0)
@@ -175,7 +176,8 @@ def test_the_bound_is_one_revolution_at_the_reference_and_marks_the_small_steps_
     assert all(
         bounds[(4, "left", m)].attainable for m in found.TIMINGS
     )  # 91.67 RPM: 0.33, 0.52, 0.65 s
-    # the peak band of a small step ends at 0.8 s: one revolution at exactly 75 RPM reaches it, 74.9 does not
+    # the peak band of a small step ends at 0.8 s: one revolution at exactly 75 RPM reaches it, 74.9
+    # does not
     edge = found.timing_bounds({1: {"run": 1, "wheels": {"left": _wheel("left", 75.0, 0, 0, 0)}}})
     below = found.timing_bounds({1: {"run": 1, "wheels": {"left": _wheel("left", 74.9, 0, 0, 0)}}})
     assert [b.attainable for b in edge if b.metric == "peak_s"] == [True]

@@ -1,4 +1,5 @@
-"""The typed chapter 5 metrics (experiments/chapter5/metrics.py) and metrics.json written from them."""
+"""The typed chapter 5 metrics (experiments/chapter5/metrics.py) and metrics.json written from
+them."""
 
 import json
 
@@ -76,8 +77,8 @@ def test_the_json_is_written_from_the_records_in_their_order(typed):
 
 
 def test_a_run_whose_timestep_the_tyres_guard_halved_says_so_in_metrics_json():
-    """Stiff longitudinal tyre corner: run 8's 20 kg gives S = 2.15 at 1 ms (halved to 0.5 ms), run 3's
-    empty robot 1.12 (kept); only run 8 carries the record."""
+    """Stiff longitudinal tyre corner: run 8's 20 kg gives S = 2.15 at 1 ms (halved to 0.5 ms), run
+    3's empty robot 1.12 (kept); only run 8 carries the record."""
     cfg = load_config(
         sets=[
             "wheel.slip_stiffness_per_n=25",

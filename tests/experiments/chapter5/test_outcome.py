@@ -41,8 +41,8 @@ def test_no_check_worse_than_the_committed_scorecard(suite):
 
 
 def test_the_committed_scorecard_is_what_the_runs_give_now(suite):
-    """The documents quote the scorecard (experiments/documents/figures.py): its values may not drift from
-    the code's, better or worse. Within 1e-3: the runs are deterministic."""
+    """The documents quote the scorecard (experiments/documents/figures.py): its values may not
+    drift from the code's, better or worse. Within 1e-3: the runs are deterministic."""
     import math
 
     committed, now = json.loads(SCORECARD.read_text()), scorecard(suite)

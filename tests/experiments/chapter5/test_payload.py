@@ -1,5 +1,6 @@
-"""§5.1.4 on the plant: 20 kg moves run 7's wheels out of the PI's dead zone from a rolling resistance
-inside the sourced ranges, and the duty comparison and the study's threshold read the runs right."""
+"""§5.1.4 on the plant: 20 kg moves run 7's wheels out of the PI's dead zone from a rolling
+resistance inside the sourced ranges, and the duty comparison and the study's threshold read the
+runs right."""
 
 from __future__ import annotations
 
@@ -22,8 +23,9 @@ def runs_by_crr():
 
 
 def test_from_the_upper_half_of_the_ranges_20_kg_makes_the_pi_raise_the_duty(runs_by_crr):
-    """At 0.025 (tyres 0.010-0.025, balls 0.005-0.03) both loaded wheels of run 7 fall more than 4 RPM
-    below the reference on the unloaded duty, and the PI adds a count; unloaded, run 3 keeps its duty."""
+    """At 0.025 (tyres 0.010-0.025, balls 0.005-0.03) both loaded wheels of run 7 fall more than 4
+    RPM below the reference on the unloaded duty, and the PI adds a count; unloaded, run 3 keeps its
+    duty."""
     comps = payload.duty_comparison(runs_by_crr[0.025])
     assert [c["wheel"] for c in comps] == ["left", "right"]
     assert all(

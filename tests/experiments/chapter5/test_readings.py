@@ -1,4 +1,5 @@
-"""Readings of the published samples: where each puts the samples and the clock, and the timings it gives."""
+"""Readings of the published samples: where each puts the samples and the clock, and the timings it
+gives."""
 
 from __future__ import annotations
 

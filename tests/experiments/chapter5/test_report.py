@@ -1,4 +1,5 @@
-"""report.md of chapter 5 (experiments/chapter5/report.py): it opens with the findings, then the counts."""
+"""report.md of chapter 5 (experiments/chapter5/report.py): it opens with the findings, then the
+counts."""
 
 import json
 from pathlib import Path

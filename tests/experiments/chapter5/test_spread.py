@@ -1,5 +1,5 @@
-"""chapter5 --samples: the runs again over parameter draws, each banded metric beside the thesis with its
-spread, the true-speed band in the plots; the nominal results are those without samples."""
+"""chapter5 --samples: the runs again over parameter draws, each banded metric beside the thesis
+with its spread, the true-speed band in the plots; the nominal results are those without samples."""
 
 import json
 

@@ -1,4 +1,5 @@
-"""The spread section's markdown (experiments/chapter5/spread_report.py): the draws whose timestep the tyres' guard halved."""
+"""The spread section's markdown (experiments/chapter5/spread_report.py): the draws whose timestep
+the tyres' guard halved."""
 
 from amr_twin.experiments.chapter5.spread_report import markdown
 
@@ -25,7 +26,8 @@ def test_halved_draws_are_named_and_nothing_said_without():
         line for line in markdown({**BASE, "tyre_timestep_halved": halved}) if "halved" in line
     ]
     assert lines == [
-        "Physics timestep halved by the tyres' guard (stability number S > 1.5, docs/explanation/tyres.md) in "
+        "Physics timestep halved by the tyres' guard (stability number S > 1.5, "
+        "docs/explanation/tyres.md) in "
         "draw 1 run 8 (0.5 ms)."
     ]
 

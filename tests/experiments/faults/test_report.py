@@ -1,5 +1,6 @@
 """docs/faults.md is what `amr-twin experiment faults --out docs` writes now (its figures
-once drifted from the code's: 61.4 against 61.5 RPM, chatter 2.5 against 3.4 RPM, -88 against -89 deg)."""
+once drifted from the code's: 61.4 against 61.5 RPM, chatter 2.5 against 3.4 RPM, -88 against -89
+deg)."""
 
 import json
 import math
@@ -21,7 +22,8 @@ def _committed() -> dict:
 
 
 def _differences(old, new, where: str = "") -> list[str]:
-    """Where ``new`` differs from ``old``: floats beyond 1e-3 (relative, or absolute near 0), anything else at all."""
+    """Where ``new`` differs from ``old``: floats beyond 1e-3 (relative, or absolute near 0),
+    anything else at all."""
     if isinstance(old, dict) and isinstance(new, dict):
         keys = sorted(set(old) | set(new))
         return [d for k in keys for d in _differences(old.get(k), new.get(k), f"{where}.{k}")]

@@ -43,8 +43,9 @@ def test_the_route_is_driven_to_its_goal(default_run):
 
 
 def test_the_committed_fusion_figures_are_what_seed_0_gives_now(default_run):
-    """The README's and docs/explanation/fusion.md's fusion tables are written from docs/fusion_<route>.json
-    (experiments/documents/figures.py); its seed 0 on the default route is this drive, within 1e-3."""
+    """The README's and docs/explanation/fusion.md's fusion tables are written from
+    docs/fusion_<route>.json (experiments/documents/figures.py); its seed 0 on the default route is
+    this drive, within 1e-3."""
     from amr_twin.experiments.documents.figures import COMMAND, fusion_json
 
     _, data, _ = default_run
@@ -144,7 +145,8 @@ def test_evo_reproduces_every_architectures_ate_and_rpe_from_the_tum_files(defau
     pytest.importorskip("evo")
     _, data, out = default_run
     # evo's all-pairs RPE takes 5 s on the EKF's 7800 poses: checked on the three kinds of stamps
-    # (odometry at 50 Hz, scans at 5.5 Hz, the EKF's merged stamps); all 100 of README's tables agree
+    # (odometry at 50 Hz, scans at 5.5 Hz, the EKF's merged stamps); all 100 of README's tables
+    # agree
     with_rpe = {"odom", "odom+lidar", "odom+uwb+imu"}
     for name, e in data["architectures"].items():
         ate, ate_al, rpe_m, rpe_deg = _evo(out, e["tum"], name in with_rpe)
@@ -279,7 +281,8 @@ max_speed_m_s: 1.0
 
 @pytest.fixture(scope="module")
 def corridor_seeds(tmp_path_factory):
-    """22 m down the corridor world's featureless corridor, seeds 0 and 1 on two workers, from the CLI."""
+    """22 m down the corridor world's featureless corridor, seeds 0 and 1 on two workers, from the
+    CLI."""
     from typer.testing import CliRunner
 
     from amr_twin.cli.main import app

@@ -1,4 +1,5 @@
-"""One fusion drive's typed metrics (experiments/fusion/metrics.py): the verdicts and metrics.json's shape."""
+"""One fusion drive's typed metrics (experiments/fusion/metrics.py): the verdicts and metrics.json's
+shape."""
 
 import dataclasses
 import json

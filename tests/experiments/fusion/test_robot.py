@@ -1,4 +1,5 @@
-"""The robot's own errors (experiments/fusion/robot.py): drawn per seed, rolled on by the physics, not by the odometry."""
+"""The robot's own errors (experiments/fusion/robot.py): drawn per seed, rolled on by the physics,
+not by the odometry."""
 
 import math
 

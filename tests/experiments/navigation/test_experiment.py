@@ -1,4 +1,5 @@
-"""The navigation experiment's episodes, its optimal length and its metrics (the closed loops are in tests/navigation)."""
+"""The navigation experiment's episodes, its optimal length and its metrics (the closed loops are in
+tests/navigation)."""
 
 import math
 

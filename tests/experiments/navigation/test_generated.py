@@ -1,4 +1,5 @@
-"""The navigation experiment on generated halls: door trips drawn as said, the doorway's clearance, the report."""
+"""The navigation experiment on generated halls: door trips drawn as said, the doorway's clearance,
+the report."""
 
 import math
 import subprocess
@@ -59,7 +60,8 @@ def test_a_pallet_jack_closing_the_doorway_makes_a_door_trip_impassable():
 
 
 def _through(door, offset_m):
-    """A straight drive west to east through ``door``, ``offset_m`` north of its middle, 10 ms poses."""
+    """A straight drive west to east through ``door``, ``offset_m`` north of its middle, 10 ms
+    poses."""
     x = np.arange(door.x_m - 3.0, door.x_m + 3.0, 0.005)
     return np.column_stack([x, np.full_like(x, door.y_m + offset_m), np.zeros_like(x)])
 
@@ -164,14 +166,14 @@ def test_the_report_keeps_the_tuning_halls_apart_from_the_held_out_ones(tmp_path
     report(data, tmp_path)
     text = (tmp_path / "report.md").read_text()
     assert (
-        "Tuning halls (tuned on, not to be quoted as results): generated:1. Held-out halls: generated:9."
-        in text
+        "Tuning halls (tuned on, not to be quoted as results): generated:1. Held-out halls: "
+        "generated:9." in text
     )
     assert "| held-out | door trips | 2 | 1 of 2 (50 %) | 0 | 2 | 0.030 / 0.115 |" in text
     assert "| tuning | door trips | 1 | 1 of 1 (100 %) | 0 | 1 | 0.120 / 0.120 |" in text
     assert (
-        "`generated:9` episode 0 (clear, door trip): failed: stuck; true final error 3.00 m; door0 0.9 m"
-        in text
+        "`generated:9` episode 0 (clear, door trip): failed: stuck; true final error 3.00 m; "
+        "door0 0.9 m" in text
     )
 
 
@@ -206,8 +208,9 @@ def test_bad_hall_options_are_refused_in_one_line_before_any_run(tmp_path, args,
 
 
 def test_the_people_cost_is_measured_on_the_same_episodes_without_them(episodes, tmp_path):
-    """Each episode with a walking person runs again without them, the same start and goal; the extra time to the
-    goal counts only the pairs both reached; an episode whose robot touched a person counts as such."""
+    """Each episode with a walking person runs again without them, the same start and goal; the
+    extra time to the goal counts only the pairs both reached; an episode whose robot touched a
+    person counts as such."""
     from amr_twin.experiments.navigation.generated_report import _people_lines
 
     items = [nv.EpisodeRun(None, WORLD, e, "true", None) for e in episodes]

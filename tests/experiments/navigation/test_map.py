@@ -1,4 +1,5 @@
-"""The navigation experiment's SLAM map (experiments/navigation/map.py), from a shortened mapping drive.
+"""The navigation experiment's SLAM map (experiments/navigation/map.py), from a shortened mapping
+drive.
 
 The aisles' mapping route cut to its first four waypoints (108 m, the side aisle and the first
 aisle between rack rows, a U-turn): the drive, the pose graph, the scan matcher and the saved map,

@@ -1,4 +1,5 @@
-"""Payload sweep points: the named positions lie on the deck; the --masses and --commands parsers."""
+"""Payload sweep points: the named positions lie on the deck; the --masses and --commands
+parsers."""
 
 import pytest
 

@@ -1,4 +1,5 @@
-"""One payload sweep point simulated: an off-deck position is invalid, an overloaded motor unsafe."""
+"""One payload sweep point simulated: an off-deck position is invalid, an overloaded motor
+unsafe."""
 
 import pytest
 

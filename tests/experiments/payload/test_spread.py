@@ -1,5 +1,6 @@
-"""The sweep's answers over draws, from synthetic rows: crossings interpolated and censored, the highest
-safe payload per draw, and the parameter that decides it found by rank correlation (no simulation)."""
+"""The sweep's answers over draws, from synthetic rows: crossings interpolated and censored, the
+highest safe payload per draw, and the parameter that decides it found by rank correlation (no
+simulation)."""
 
 import math
 

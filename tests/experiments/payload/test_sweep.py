@@ -234,10 +234,10 @@ def test_sample_options_are_checked_before_the_work(tmp_path, extra, words):
 
 
 def test_lift_off_is_judged_on_the_springs_not_on_contact_chatter():
-    """The rigid contact (the brush tyres' normal-only contact does not chatter: 25 N at least here),
-    balls 1 mm low: the empty robot's inner wheel carries about 16 N in the clockwise turn and its
-    stiff contact chatters (0 N in some steps); the tyre stays compressed, so the wheel has not
-    lifted. Balls 2 mm low: the tyre spring goes slack, a real lift-off."""
+    """The rigid contact (the brush tyres' normal-only contact does not chatter: 25 N at least
+    here), balls 1 mm low: the empty robot's inner wheel carries about 16 N in the clockwise turn
+    and its stiff contact chatters (0 N in some steps); the tyre stays compressed, so the wheel has
+    not lifted. Balls 2 mm low: the tyre spring goes slack, a real lift-off."""
     rows = {}
     for drop in (0.001, 0.002):
         cfg = load_config(sets=[f"caster.drop_m={drop}", "wheel.tyre_slip=false"])

@@ -149,7 +149,8 @@ def test_the_improved_firmware_runs_beside_where_the_faithful_one_runs_away(rear
         in lines[rear]
     )
     assert "; unsafe at 40 kg in angular:-60:-1: runaway" in lines[rear]
-    # run again with the improved firmware: it holds the inner wheel better (24 against 0 RPM) but runs away too
+    # run again with the improved firmware: it holds the inner wheel better (24 against 0 RPM) but
+    # runs away too
     assert lines[rear + 1].strip().startswith("improved firmware: highest safe 30 kg")
     assert "unsafe at 40 kg in angular:-60:-1: runaway" in lines[rear + 1]
     center = next(line for line in lines if line.startswith("center"))

@@ -1,4 +1,5 @@
-"""Executors: the payload sweep on a Dask LocalCluster gives the local numbers and resumes; clear errors.
+"""Executors: the payload sweep on a Dask LocalCluster gives the local numbers and resumes; clear
+errors.
 
 The cluster runs its two workers as processes (``processes=True``), so the work
 items and the function really travel by pickle to other interpreters, as on a
@@ -72,7 +73,8 @@ def test_dask_sweep_equals_local_and_rerun_skips_finished(client, tmp_path):
 
 
 def test_dask_samples_equal_local_and_resume(client, tmp_path):
-    """With drawn parameters the cluster gives the local numbers too; the run keys carry the draws."""
+    """With drawn parameters the cluster gives the local numbers too; the run keys carry the
+    draws."""
     from amr_twin.calibration.uncertainty import ParameterSpace
 
     cfg = load_config()
@@ -355,7 +357,8 @@ def test_the_caller_and_a_warm_worker_share_the_items(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(tmp_path))
     import who_runs
 
-    process_pool._close_pools()  # workers spawned by earlier tests do not have tmp_path on their sys.path
+    # workers spawned by earlier tests do not have tmp_path on their sys.path
+    process_pool._close_pools()
 
     got = list(executor.run_all(who_runs.run, list(range(6)), jobs=2, progress=False))
     assert sorted(item for item, _ in got) == list(range(6))

@@ -1,4 +1,5 @@
-"""UMBmark's arithmetic (experiments/umbmark/experiment.py) against a hand case and an independent kinematic robot.
+"""UMBmark's arithmetic (experiments/umbmark/experiment.py) against a hand case and an independent
+kinematic robot.
 
 The kinematic robot below is written here, not taken from the code under test: a differential
 drive with true wheel radii and wheelbase, driven round a square by an odometry that assumes

@@ -1,4 +1,5 @@
-"""UMBmark's runs of one robot (experiments/umbmark/seeds.py): run seeds, phases, the parts' spreads.
+"""UMBmark's runs of one robot (experiments/umbmark/seeds.py): run seeds, phases, the parts'
+spreads.
 
 Two squares each way of seed 0's robot, with the brush tyres and the floor's friction field, and
 with the rigid contact: the run-to-run spread of the tyres' slip is the floor's and the tyres'
@@ -20,7 +21,8 @@ def phases():
 
 @pytest.fixture(scope="module")
 def rigid_seeds(phases):
-    """Seed 0's rigid runs and seed 3's (the largest systematic errors of seeds 0-9: track +7.6 mm)."""
+    """Seed 0's rigid runs and seed 3's (the largest systematic errors of seeds 0-9: track +7.6
+    mm)."""
     return [
         phases[1],
         run_seed(SeedJob(load_config(sets=["wheel.tyre_slip=false"]), 3, 2, calibrate=False)),
@@ -54,10 +56,10 @@ def test_every_square_has_its_own_seed_and_the_same_robot(phases):
 
 
 def test_the_driver_adds_nothing_to_the_spread(phases, rigid_seeds):
-    """The square is driven by the odometry (its corners and headings): every run's square is the same
-    by the odometry, so the node's spread is its parts' (the sampling, and the slip with the tyres),
-    not the turns' end errors bending the square (the driver before: 12 mm on seed 3 rigid, its
-    sampling part 4 mm). Two robots, the rigid contact; seed 0 with the tyres."""
+    """The square is driven by the odometry (its corners and headings): every run's square is the
+    same by the odometry, so the node's spread is its parts' (the sampling, and the slip with the
+    tyres), not the turns' end errors bending the square (the driver before: 12 mm on seed 3 rigid,
+    its sampling part 4 mm). Two robots, the rigid contact; seed 0 with the tyres."""
     for result in [*rigid_seeds, phases[0]]:
         b = result.before
         assert (

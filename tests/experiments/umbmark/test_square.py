@@ -1,4 +1,5 @@
-"""One UMBmark square (experiments/umbmark/square.py): the driver, and the parts of its return error.
+"""One UMBmark square (experiments/umbmark/square.py): the driver, and the parts of its return
+error.
 
 The nominal robot (its odometry's geometry is the true one): with the rigid contact the wheels do
 not slip, so the return error is the odometry's own, what it makes of the firmware's speed samples;
@@ -72,8 +73,8 @@ def test_with_the_tyres_the_slip_is_most_of_the_error(squares):
 
 
 def test_wheel_pose_integrates_arcs():
-    """Quarter circles of radius 1 m: 100 increments of the wheels' angles (left 0.76 m, right 1.24 m of
-    rim) turn the pose by 90 degrees to (1, 1)."""
+    """Quarter circles of radius 1 m: 100 increments of the wheels' angles (left 0.76 m, right 1.24
+    m of rim) turn the pose by 90 degrees to (1, 1)."""
     r, b = 0.125, 0.48
     steps = np.linspace(0, 1, 101)[:, None] * np.array([0.76 * math.pi / 2, 1.24 * math.pi / 2]) / r
     x, y, yaw = wheel_pose(steps, r, r, b)

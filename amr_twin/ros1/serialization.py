@@ -45,6 +45,15 @@ def _framed(frames: tuple, tail: str) -> tuple[struct.Struct, bytes]:
     return struct.Struct(f"<III{len(blob)}s{tail}"), blob
 
 
+def _stamped_pose(h, child_frame_id: str, x, q) -> bytes:
+    """A header, a child frame, a position and a quaternion: what an ``Odometry`` and
+    each ``TransformStamped`` of a ``TFMessage`` share, in one ``pack``."""
+    head, blob = _framed((h.frame_id, child_frame_id), "7d")
+    return head.pack(
+        h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z, q.w
+    )
+
+
 def _f64s(values, count: bool) -> bytes:
     if (
         type(values) is np.ndarray and values.dtype is _F8
@@ -83,24 +92,11 @@ def magnetic_field(m) -> bytes:
 
 
 def odometry(m) -> bytes:
-    h, p, t = m.header, m.pose.pose, m.twist.twist
-    x, q, lin, ang = p.position, p.orientation, t.linear, t.angular
-    head, blob = _framed((h.frame_id, m.child_frame_id), "7d")
+    p, t = m.pose.pose, m.twist.twist
+    lin, ang = t.linear, t.angular
     return b"".join(
         (
-            head.pack(
-                h.seq & 0xFFFFFFFF,
-                h.stamp.sec,
-                h.stamp.nanosec,
-                blob,
-                x.x,
-                x.y,
-                x.z,
-                q.x,
-                q.y,
-                q.z,
-                q.w,
-            ),
+            _stamped_pose(m.header, m.child_frame_id, p.position, p.orientation),
             _f64s(m.pose.covariance, False),
             _D6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z),
             _f64s(m.twist.covariance, False),
@@ -111,24 +107,8 @@ def odometry(m) -> bytes:
 def tf_message(m) -> bytes:
     parts = [_I.pack(len(m.transforms))]
     for ts in m.transforms:
-        h, tr = ts.header, ts.transform
-        x, q = tr.translation, tr.rotation
-        head, blob = _framed((h.frame_id, ts.child_frame_id), "7d")
-        parts.append(
-            head.pack(
-                h.seq & 0xFFFFFFFF,
-                h.stamp.sec,
-                h.stamp.nanosec,
-                blob,
-                x.x,
-                x.y,
-                x.z,
-                q.x,
-                q.y,
-                q.z,
-                q.w,
-            )
-        )
+        tr = ts.transform
+        parts.append(_stamped_pose(ts.header, ts.child_frame_id, tr.translation, tr.rotation))
     return b"".join(parts)
 
 

@@ -135,7 +135,12 @@ class VehicleAdapter:
                     "noRouteError",
                     f"order {order.order_id}: the first node {first.node_id} is not where "
                     "the vehicle stands (nor within its allowed deviation)",
-                    (("topic", "order"), ("orderId", order.order_id), ("nodeId", first.node_id)),
+                    (
+                        ("topic", "order"),
+                        ("orderId", order.order_id),
+                        ("orderUpdateId", order.update_id),
+                        ("nodeId", first.node_id),
+                    ),
                 )
             self.nodes, self.edges = list(order.nodes), list(order.edges)
         if current is None or order.order_id != current.order_id:
@@ -164,7 +169,8 @@ class VehicleAdapter:
         return released[-1] if released else self._last_node_obj
 
     def _on_instant_actions(self, msg) -> None:
-        actions = msg.get("actions") if isinstance(msg, dict) else None
+        # ``actions`` in the 2.0 schema and text; ``instantActions`` (1.1's name) from vda-5050-lib.
+        actions = msg.get("actions", msg.get("instantActions")) if isinstance(msg, dict) else None
         if not isinstance(actions, list):
             self._error(
                 Rejection(
@@ -307,7 +313,12 @@ class VehicleAdapter:
                 Rejection(
                     "navigationError",
                     f"node {node.node_id} not reached: {outcome.reason}",
-                    (("nodeId", node.node_id), ("sequenceId", node.sequence_id)),
+                    (
+                        ("orderId", self.order.order_id),
+                        ("orderUpdateId", self.order.update_id),
+                        ("nodeId", node.node_id),
+                        ("sequenceId", node.sequence_id),
+                    ),
                 )
             )
             self.nodes, self.edges, self._goal = [], [], None

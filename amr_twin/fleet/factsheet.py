@@ -88,7 +88,7 @@ def factsheet(cfg) -> dict:
                 {"parameter": "order.nodes.nodePosition", "support": "REQUIRED"},
                 {"parameter": "order.nodes.nodePosition.theta", "support": "SUPPORTED"},
                 {
-                    "parameter": "order.nodes.nodePosition.allowedDeviationXY",
+                    "parameter": "order.nodes.nodePosition.allowedDeviationXy",
                     "support": "SUPPORTED",
                 },
                 {

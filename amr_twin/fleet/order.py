@@ -172,7 +172,11 @@ def _node(n, i: int, map_id: str, refs: tuple, supported: frozenset) -> Node:
             raise Rejection(
                 "validationError", f"node {node_id}: theta {theta} is outside [-pi, pi]", refs
             )
-    dev = [pos.get(k, 0.0) for k in ("allowedDeviationXY", "allowedDeviationTheta")]
+    # The 2.0.0 schema spells allowedDeviationXy; the text (and 1.1) allowedDeviationXY: both read.
+    dev = [
+        pos.get("allowedDeviationXy", pos.get("allowedDeviationXY", 0.0)),
+        pos.get("allowedDeviationTheta", 0.0),
+    ]
     if not all(
         isinstance(d, (int, float)) and not isinstance(d, bool) and math.isfinite(d) and d >= 0
         for d in dev

@@ -92,8 +92,8 @@ def run_fleet_under_master(url: str) -> tuple[dict, dict, list]:
         twin.send_signal(signal.SIGINT)  # the twin says OFFLINE and prints its summary
         out, err = twin.communicate(timeout=60)
         listener.close()
-    assert twin.returncode == 0, err[-2000:]
     assert master.stdout.strip(), master.stderr[-2000:]
+    assert twin.returncode == 0, err[-2000:]
     return json.loads(master.stdout), json.loads(out), listener.received
 
 

@@ -41,8 +41,12 @@ def fleet_starts(poses) -> tuple[RobotStart, ...]:
     if not 1 <= len(poses) <= MAX_ROBOTS:
         raise ValueError(f"robots: {len(poses)} start poses; 1 to {MAX_ROBOTS} allowed")
     for i, pose in enumerate(poses, 1):
-        if len(pose) != 3 or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in pose):
-            raise ValueError(f"robots: start {i} is {pose!r}; three finite numbers x_m, y_m, yaw_rad")
+        if len(pose) != 3 or not all(
+            isinstance(v, (int, float)) and math.isfinite(v) for v in pose
+        ):
+            raise ValueError(
+                f"robots: start {i} is {pose!r}; three finite numbers x_m, y_m, yaw_rad"
+            )
     if len(poses) == 1:
         return (RobotStart(ROBOT_PREFIX, *map(float, poses[0])),)
     return tuple(RobotStart(f"amr-{i}/", *map(float, p)) for i, p in enumerate(poses, 1))

@@ -2,8 +2,9 @@
 
 It holds the compiled model and its data, resolves one robot's joints, actuators,
 geoms and sensors by name once (the robot named by its prefix: a world may hold several, each
-addressed by a Physics of its own sharing the one MjData, :meth:`Physics.robot`), offers named views of both (:attr:`Physics.named`,
-as dm_control's ``physics.named``) and what the rest of the twin needs:
+addressed by a Physics of its own sharing the one MjData, :meth:`Physics.robot`), offers named
+views of both (:attr:`Physics.named`, as dm_control's ``physics.named``) and what the rest of
+the twin needs:
 stepping in C, wheel angles and speeds, the base pose, contact loads per named
 geom, and the three motor modes (drive, coast, brake) set on the actuators'
 parameters between steps (the per-step torque stays in C). A braked motor is a
@@ -106,12 +107,16 @@ class Physics:
         }
         own = np.flatnonzero(m.body_rootid[m.jnt_bodyid] == m.body_rootid[self.base_body])
         self._own_qpos = np.concatenate(
-            [np.arange(m.jnt_qposadr[j], m.jnt_qposadr[j] + _QPOS_WIDTH.get(m.jnt_type[j], 1))
-             for j in own]
+            [
+                np.arange(m.jnt_qposadr[j], m.jnt_qposadr[j] + _QPOS_WIDTH.get(m.jnt_type[j], 1))
+                for j in own
+            ]
         )
         self._own_dof = np.concatenate(
-            [np.arange(m.jnt_dofadr[j], m.jnt_dofadr[j] + _DOF_WIDTH.get(m.jnt_type[j], 1))
-             for j in own]
+            [
+                np.arange(m.jnt_dofadr[j], m.jnt_dofadr[j] + _DOF_WIDTH.get(m.jnt_type[j], 1))
+                for j in own
+            ]
         )
         adr = int(m.sensor_adr[_id(m, mujoco.mjtObj.mjOBJ_SENSOR, "wheel_left_angle")])
         self.loop_columns = slice(adr, adr + LOOP_SENSOR_DIM)

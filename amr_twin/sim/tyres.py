@@ -89,9 +89,7 @@ class WheelContact:
     load_n: float
 
 
-def contacts(
-    model, data, prefix: str = ROBOT_PREFIX
-) -> tuple[WheelContact, WheelContact] | None:
+def contacts(model, data, prefix: str = ROBOT_PREFIX) -> tuple[WheelContact, WheelContact] | None:
     """(left, right) :class:`WheelContact` of the robot named ``prefix...`` at the last
     ``mj_forward``; None for a model without its tyres."""
     import mujoco

@@ -126,8 +126,8 @@ def test_overlapping_starts_are_refused_naming_the_robot():
 
     with pytest.raises(StartPoseError, match=r"^amr-1 start 0,0,0: the robot overlaps amr-2 "):
         _fleet([(0, 0, 0), (0.3, 0.1, 0)])
-    with pytest.raises(StartPoseError, match=r"^amr-2 start 0,0,0: .*overlaps"):
-        _fleet([(0, 3, 0), (0, 0, 0)], world="generated:3")  # not a world overlap: free start
+    with pytest.raises(StartPoseError, match=r"^amr-2 start -4,-3,0: the robot overlaps rack_s"):
+        _fleet([(-4, 0, 0), (-4, -3, 0)])  # robot 2 inside the south rack
     settled_mod.forget()
 
 

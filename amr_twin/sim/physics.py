@@ -29,11 +29,9 @@ from amr_twin.model.robot_spec import CASTERS, LOOP_SENSOR_DIM, WHEELS
 from amr_twin.model.robot_starts import ROBOT_PREFIX
 from amr_twin.model.tyre_numeric import numeric_name
 from amr_twin.sim.named_index import NamedIndex
+from amr_twin.sim.robot_bodies import robot_indices
 
 PHYSICS_LAYER = True
-
-_QPOS_WIDTH = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4}
-_DOF_WIDTH = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3}
 
 
 class DivergenceError(RuntimeError):
@@ -105,19 +103,7 @@ class Physics:
             g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
             for g in self.support_geoms.values()
         }
-        own = np.flatnonzero(m.body_rootid[m.jnt_bodyid] == m.body_rootid[self.base_body])
-        self._own_qpos = np.concatenate(
-            [
-                np.arange(m.jnt_qposadr[j], m.jnt_qposadr[j] + _QPOS_WIDTH.get(m.jnt_type[j], 1))
-                for j in own
-            ]
-        )
-        self._own_dof = np.concatenate(
-            [
-                np.arange(m.jnt_dofadr[j], m.jnt_dofadr[j] + _DOF_WIDTH.get(m.jnt_type[j], 1))
-                for j in own
-            ]
-        )
+        self._own_qpos, self._own_dof = robot_indices(m, self.base_body)
         adr = int(m.sensor_adr[_id(m, mujoco.mjtObj.mjOBJ_SENSOR, "wheel_left_angle")])
         self.loop_columns = slice(adr, adr + LOOP_SENSOR_DIM)
         """Where the robot's loop sensors lie in ``sensordata`` (and in a grid loop's rows that

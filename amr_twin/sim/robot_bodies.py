@@ -23,6 +23,8 @@ PHYSICS_LAYER = True
 ROOT_BODY = "base_link"
 HIDDEN_GROUP = 3
 """The group a robot's own visual geoms stand in while it casts: no ray mask holds it."""
+_QPOS_WIDTH = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4}
+_DOF_WIDTH = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3}
 
 
 def robot_roots(model: mujoco.MjModel) -> np.ndarray:
@@ -37,6 +39,21 @@ def robot_roots(model: mujoco.MjModel) -> np.ndarray:
             and model.jnt_type[model.body_jntadr[b]] == mujoco.mjtJoint.mjJNT_FREE
         )
     return out
+
+
+def robot_indices(model: mujoco.MjModel, body: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(qpos, dof)``: the indices of ``qpos`` and of the dof arrays (``qvel``, ...) that belong to
+    the joints of the robot (the kinematic tree) ``body`` is part of, in order."""
+    joints = np.flatnonzero(model.body_rootid[model.jnt_bodyid] == model.body_rootid[int(body)])
+    qpos = [
+        np.arange(a, a + _QPOS_WIDTH.get(int(t), 1))
+        for a, t in zip(model.jnt_qposadr[joints], model.jnt_type[joints])
+    ]
+    dof = [
+        np.arange(a, a + _DOF_WIDTH.get(int(t), 1))
+        for a, t in zip(model.jnt_dofadr[joints], model.jnt_type[joints])
+    ]
+    return np.concatenate(qpos), np.concatenate(dof)
 
 
 def robot_name(model: mujoco.MjModel, root: int) -> str:

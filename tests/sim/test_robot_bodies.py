@@ -7,7 +7,13 @@ from amr_twin.model.build import build
 from amr_twin.model.config import load_config
 from amr_twin.model.robot_spec import GROUP_VISUAL
 from amr_twin.model.robot_starts import fleet_starts
-from amr_twin.sim.robot_bodies import HIDDEN_GROUP, OwnGeoms, robot_name, robot_roots
+from amr_twin.sim.robot_bodies import (
+    HIDDEN_GROUP,
+    OwnGeoms,
+    robot_indices,
+    robot_name,
+    robot_roots,
+)
 
 CFG = load_config()
 
@@ -47,3 +53,13 @@ def test_own_geoms_are_hidden_inside_the_block_only_and_a_lone_robot_changes_not
         0,
     ]
     assert mujoco.mjNGROUP > HIDDEN_GROUP
+
+
+def test_each_robots_joints_are_its_own_slice_of_the_state():
+    m = build(CFG, "warehouse", robots=fleet_starts([(-4, 0, 0), (-2, 0, 0)])).model
+    (q1, v1), (q2, v2) = (robot_indices(m, m.body(f"amr-{i}/base_link").id) for i in (1, 2))
+    assert q1.tolist() == list(range(15)) and q2.tolist() == list(range(15, 30)) and m.nq == 30
+    assert v1.tolist() == list(range(14)) and v2.tolist() == list(range(14, 28)) and m.nv == 28
+    lone = build(CFG, "warehouse").model
+    q, v = robot_indices(lone, lone.body("amr/wheel_left_link").id)
+    assert q.tolist() == list(range(lone.nq)) and v.tolist() == list(range(lone.nv))

@@ -95,15 +95,12 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
     spec.option.timestep = cfg.sim.timestep_s
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC  # see robot_spec.robot_spec
-    # One robot, one kinematic tree: its contacts make at most one constraint island, so island
-    # discovery (on by default) costs ~2 us a step for nothing; the solution is the same to the bit.
+    # Island discovery off: ~2 us a step for nothing with one robot (one tree, one island), no
+    # gain measured with eight (docs/explanation/architecture.md#several-robots-in-one-model).
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     spec.option.gravity = [0.0, 0.0, -cfg.sim.gravity_m_s2]
-    spec.option.magnetic = [
-        0.0,
-        2.2e-5,
-        -4.3e-5,
-    ]  # ~48 uT, northern-Italy inclination (WMM estimate)
+    # ~48 uT, northern-Italy inclination (WMM estimate)
+    spec.option.magnetic = [0.0, 2.2e-5, -4.3e-5]
     for geom in spec.geoms:
         geom.group = GROUP_WORLD
         if geom.type == mujoco.mjtGeom.mjGEOM_PLANE:

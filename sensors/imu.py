@@ -32,7 +32,7 @@ from amr_twin.base.native_build import address
 PHYSICS_LAYER = True
 
 US = 1_000_000
-SENSOR_NAMES = ("amr/imu_accel", "amr/imu_gyro", "amr/imu_mag")
+SENSOR_NAMES = ("imu_accel", "imu_gyro", "imu_mag")
 """MuJoCo sensors read by the IMU: accelerometer, gyro, magnetometer (3 values each)."""
 
 
@@ -42,7 +42,7 @@ class ImuSensor:
     Parameters
     ----------
     physics : amr_twin.sim.physics.Physics
-        The compiled twin (sensors named as in :data:`SENSOR_NAMES`).
+        The compiled twin (its robot's sensors named as in :data:`SENSOR_NAMES`, after its prefix).
     clock : VirtualClock
         Shared clock; one event per sample.
     bus : Bus
@@ -70,7 +70,7 @@ class ImuSensor:
     ):
         model, data = physics.model, physics.data
         self.data, self.clock, self.bus, self.cfg, self.frame_id = data, clock, bus, cfg, frame_id
-        self._adr = [int(model.sensor(name).adr[0]) for name in SENSOR_NAMES]
+        self._adr = [int(model.sensor(physics.prefix + name).adr[0]) for name in SENSOR_NAMES]
         self.rng = np.random.default_rng(seed)
         self.models = axis_models(cfg, self.rng)
         self.period_us = int(round(US / cfg.rate_hz))

@@ -20,6 +20,7 @@ from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 
 from amr_twin.sim.grid_steps import NEVER_BEFORE
+from amr_twin.sim.robot_bodies import OwnGeoms
 from amr_twin.sensors.lidar_beams import (
     US,
     PoseSamples,
@@ -39,7 +40,7 @@ class Lidar:
     Parameters
     ----------
     physics : amr_twin.sim.physics.Physics
-        The compiled twin, with a site ``amr/laser``.
+        The compiled twin, with a site ``<prefix>laser`` (its robot's; ``site`` names another)
     clock : VirtualClock
         Shared clock.
     bus : Bus
@@ -70,7 +71,7 @@ class Lidar:
         seed: int | None = 0,
         group_us: int = 20000,
         frame_id: str = LASER_FRAME,
-        site: str = "amr/laser",
+        site: str | None = None,
         autostart: bool = True,
         loop_cast_us: int = 200000,
         native: bool = True,
@@ -80,7 +81,7 @@ class Lidar:
             raise ValueError(f"group_us {group_us}, loop_cast_us {loop_cast_us}: must be > 0")
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
         self.frame_id = frame_id
-        self.site_id = int(model.site(site).id)
+        self.site_id = int(model.site(physics.prefix + "laser" if site is None else site).id)
         self.rng = np.random.default_rng(seed)
         self.n_beams, self.beam_dt_us, self.scan_us = scan_timing(cfg)
         self.angle_min, self.angle_increment, self.angles_rad = beam_angles_rad(self.n_beams)
@@ -100,6 +101,11 @@ class Lidar:
         self.geomgroup, self._world_groups, self._payload_groups = group_masks(
             model.geom_group, moving
         )
+        self._own = OwnGeoms(model, int(model.site_bodyid[self.site_id]))
+        """Its robot's geoms, hidden while it casts: it sees the other robots, never its own."""
+        self.geomgroup = self._own.seeing_others(self.geomgroup)
+        if self._world_groups is not None:
+            self._world_groups = self._own.seeing_others(self._world_groups)
         self._kernels.bind(
             model,
             data,
@@ -255,10 +261,14 @@ class Lidar:
         Stores the true distances (m, -1 for no hit) in :attr:`dist_m` and the hit
         geoms in :attr:`hit_geom`; noise is added for the whole rotation at its end.
         """
-        m, d, s, k = self.model, self.data, self.site_id, stop - start
-        if k <= 0:
+        if stop - start <= 0:
             return
         geomid, dist = self.hit_geom[start:stop], self.dist_m[start:stop]
+        with self._own:
+            self._cast(start, stop, at_own_instants, geomid, dist)
+
+    def _cast(self, start: int, stop: int, at_own_instants: bool, geomid, dist) -> None:
+        m, d, s, k = self.model, self.data, self.site_id, stop - start
         poses = self._poses
         if at_own_instants and poses.n > 0:  # origins and directions at the beams' instants
             self._kernels.cast(

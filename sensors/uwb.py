@@ -23,6 +23,7 @@ from amr_twin.model.config_sections import UwbCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Range
 from amr_twin.ros.ros_state import anchor_transforms
+from amr_twin.sim.robot_bodies import OwnGeoms
 
 PHYSICS_LAYER = True
 
@@ -207,7 +208,7 @@ class UwbSensor:
     seed : int, sequence of int or None
         Seed of the ``numpy.random.Generator``.
     body : str
-        MuJoCo name of ``base_link``.
+        MuJoCo name of ``base_link`` (default: its robot's, ``<prefix>base_link``).
     autostart : bool
         Schedule the first exchange at the next slot of the time grid.
     walls : bool
@@ -224,7 +225,7 @@ class UwbSensor:
         bus: Bus,
         cfg: UwbCfg,
         seed=0,
-        body: str = "amr/base_link",
+        body: str | None = None,
         autostart: bool = True,
         walls: bool = True,
     ):
@@ -232,9 +233,11 @@ class UwbSensor:
         self.model, self.data, self.clock, self.bus, self.cfg = model, data, clock, bus, cfg
         self.walls = bool(walls)
         self._groups = np.zeros(6, dtype=np.uint8)
-        self._groups[0] = 1  # the world's geoms only: not the robot (1, 2), not a payload (4)
+        self._groups[0] = 1  # the world's geoms: not the robot (1, 2), not a payload (4)
         self._geomid = np.zeros(1, dtype=np.int32)
-        self.body_id = int(model.body(body).id)
+        self.body_id = int(model.body(physics.prefix + "base_link" if body is None else body).id)
+        self._own = OwnGeoms(model, self.body_id)  # other robots block the line, its own never
+        self._groups = self._own.seeing_others(self._groups)
         self.rng = np.random.default_rng(seed)
         self.anchors_xyz_m = np.column_stack(
             (cfg.anchors_xy_m, np.full(len(cfg.anchors_x_m), cfg.anchor_z_m))
@@ -282,7 +285,10 @@ class UwbSensor:
         d = np.linalg.norm(line)
         blocked = None
         if self.walls:
-            hit = mujoco.mj_ray(self.model, self.data, tag, line, self._groups, 1, -1, self._geomid)
+            with self._own:
+                hit = mujoco.mj_ray(
+                    self.model, self.data, tag, line, self._groups, 1, -1, self._geomid
+                )
             blocked = (
                 0.0 <= hit < 1.0
             )  # a surface between tag and anchor (hit in units of the line)

@@ -20,12 +20,12 @@ import mujoco
 from amr_twin.model.config import TwinConfig
 from amr_twin.model.paths import ROOT
 from amr_twin.model.robot_spec import GROUP_WORLD, IMU_SENSORS, robot_spec
+from amr_twin.model.robot_starts import ROBOT_PREFIX, RobotStart
 from amr_twin.model.urdf import XACRO_FILE, BuildError, robot_urdf
 from amr_twin.model import tyre_numeric as tyres
 from amr_twin.model.tyre_stability import tyre_timestep
 
 WORLD_DIR = ROOT / "models" / "worlds"
-ROBOT_PREFIX = "amr/"
 STAND_HEIGHT_M = 0.10
 """How high the ``stand`` world holds the chassis: wheels and casters clear of the floor."""
 
@@ -95,15 +95,12 @@ def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
     spec.option.timestep = cfg.sim.timestep_s
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC  # see robot_spec.robot_spec
-    # One robot, one kinematic tree: its contacts make at most one constraint island, so island
-    # discovery (on by default) costs ~2 us a step for nothing; the solution is the same to the bit.
+    # Island discovery off: ~2 us a step for nothing with one robot (one tree, one island), no
+    # gain measured with eight (docs/explanation/architecture.md#several-robots-in-one-model).
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     spec.option.gravity = [0.0, 0.0, -cfg.sim.gravity_m_s2]
-    spec.option.magnetic = [
-        0.0,
-        2.2e-5,
-        -4.3e-5,
-    ]  # ~48 uT, northern-Italy inclination (WMM estimate)
+    # ~48 uT, northern-Italy inclination (WMM estimate)
+    spec.option.magnetic = [0.0, 2.2e-5, -4.3e-5]
     for geom in spec.geoms:
         geom.group = GROUP_WORLD
         if geom.type == mujoco.mjtGeom.mjGEOM_PLANE:
@@ -125,12 +122,13 @@ def world_model(cfg: TwinConfig, world: str | Path) -> mujoco.MjModel:
 
 @dataclass
 class Build:
-    """Result of :func:`build`: the compiled model and the specs it came from."""
+    """Result of :func:`build`: the compiled model, the specs it came from and the robots in it."""
 
     model: mujoco.MjModel
     spec: mujoco.MjSpec
     robot_spec: mujoco.MjSpec
     urdf: str
+    robots: tuple[RobotStart, ...] = ()
 
 
 def _without_imu(robot: mujoco.MjSpec) -> mujoco.MjSpec:
@@ -158,16 +156,17 @@ def _compiling():
         mujoco.set_mjcb_passive(callback)
 
 
-def _tyre_contacts(scene: mujoco.MjSpec, cfg: TwinConfig) -> None:
+def _tyre_contacts(scene: mujoco.MjSpec, cfg: TwinConfig, prefix: str) -> None:
     """The tyres' floor forces by the brush model (:mod:`amr_twin.sim.tyres`): the wheels' contacts
     carry the normal force only (condim 1; their priority makes it win the mix), the model carries
     the tyre parameters (a numeric) and their deflection states (user data). The exported robot
     MJCF keeps the rigid contact: these forces need the twin's callback."""
     for side in ("left", "right"):
-        geom = scene.geom(f"{ROBOT_PREFIX}wheel_{side}_collision")
+        geom = scene.geom(f"{prefix}wheel_{side}_collision")
         geom.condim = 1
         geom.friction = [0.0, 0.0, 0.0]
-    scene.add_numeric(name=tyres.NUMERIC, data=tyres.numeric_values(cfg, scene.nuserdata))
+    name = tyres.numeric_name(prefix)
+    scene.add_numeric(name=name, data=tyres.numeric_values(cfg, scene.nuserdata))
     scene.nuserdata += tyres.USERDATA_SIZE
 
 
@@ -180,8 +179,13 @@ def build(
     imu: bool = True,
     actors: tuple = (),
     obstacles: tuple = (),
+    robots: tuple[RobotStart, ...] = (),
 ) -> Build:
     """Build the robot in a world and compile it (the URDF from :func:`robot_urdf`'s cache).
+
+    ``robots`` (:func:`~amr_twin.model.robot_starts.fleet_starts`): one copy of the robot per
+    start, named by its prefix, in order (the start pose ``start_xy_yaw`` is then unused); none:
+    the lone robot (``amr/``) at ``start_xy_yaw``.
 
     ``actors`` (:class:`~amr_twin.model.actors.Actor`) are added as mocap bodies at their poses at
     t = 0, after their speeds and paths are checked against their kinds' ranges and the world's
@@ -208,23 +212,13 @@ def build(
             quat=[math.cos(ob.yaw_rad / 2), 0, 0, math.sin(ob.yaw_rad / 2)],
             rgba=[0.9, 0.75, 0.1, 1],
         )
-    x, y, yaw = start_xy_yaw
+    robots = tuple(robots) or (RobotStart(ROBOT_PREFIX, *start_xy_yaw),)
     held = Path(world).stem == "stand"
-    z = STAND_HEIGHT_M if held else 0.0
-    frame = scene.worldbody.add_frame(
-        pos=[x, y, z], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
-    )
-    attached = mujoco.MjSpec.from_string(robot_xml)
-    scene.attach(attached if imu else _without_imu(attached), prefix=ROBOT_PREFIX, frame=frame)
-    if held:  # the work station of fig. 5.1: the chassis welded where it stands
-        scene.add_equality(
-            type=mujoco.mjtEq.mjEQ_WELD,
-            objtype=mujoco.mjtObj.mjOBJ_BODY,
-            name1=ROBOT_PREFIX + "base_link",
-            name="stand",
-        )
+    for robot_start in robots:
+        _attach(scene, robot_xml, robot_start, imu, held)
     if cfg.wheel.tyre_slip:
-        _tyre_contacts(scene, cfg)
+        for robot_start in robots:
+            _tyre_contacts(scene, cfg, robot_start.prefix)
     if actors:
         from amr_twin.model.actors import add_actors, check_speeds
 
@@ -241,12 +235,33 @@ def build(
             raise world_compile_error(world, exc) from None
         raise BuildError(f"MuJoCo compile: {str(exc).splitlines()[0]}") from None
     if cfg.wheel.tyre_slip:
-        tyres.set_addresses(model, ROBOT_PREFIX)
+        for robot_start in robots:
+            tyres.set_addresses(model, robot_start.prefix)
     if actors:
         from amr_twin.model.actor_space import check_paths
 
         check_paths(model, tuple(actors), cfg)
-    return Build(model=model, spec=scene, robot_spec=robot, urdf=urdf)
+    return Build(model=model, spec=scene, robot_spec=robot, urdf=urdf, robots=robots)
+
+
+def _attach(scene: mujoco.MjSpec, robot_xml: str, at: RobotStart, imu: bool, held: bool) -> None:
+    """Attach a copy of the robot (MJCF ``robot_xml``) to ``scene`` at ``at``'s pose, its names
+    prefixed; ``held``: welded where it stands (the ``stand`` world, the work station of fig.
+    5.1)."""
+    x, y, yaw = at.x_m, at.y_m, at.yaw_rad
+    z = STAND_HEIGHT_M if held else 0.0
+    frame = scene.worldbody.add_frame(
+        pos=[x, y, z], quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
+    )
+    attached = mujoco.MjSpec.from_string(robot_xml)
+    scene.attach(attached if imu else _without_imu(attached), prefix=at.prefix, frame=frame)
+    if held:
+        scene.add_equality(
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1=at.prefix + "base_link",
+            name="stand" if at.prefix == ROBOT_PREFIX else at.prefix + "stand",
+        )
 
 
 def _option_fields(opt) -> list[str]:

@@ -1,7 +1,8 @@
-"""Where the tyre model's parameters live in a compiled model: one numeric, and the state's user
-data.
+"""Where the tyre model's parameters live in a compiled model: one numeric per robot, and the
+state's user data.
 
-The model build (:func:`amr_twin.model.build.build`) adds the numeric :data:`NUMERIC` with the
+The model build (:func:`amr_twin.model.build.build`) adds, per robot, the numeric
+:func:`numeric_name` (:data:`NUMERIC` for the lone robot) with the
 values of :data:`NUMERIC_FIELDS` (the parameters from ``wheel.*``, then the ids of the joints,
 geoms and bodies the tyre callback reads, written after compiling by :func:`set_addresses`) and
 :data:`USERDATA_SIZE` values of ``d.userdata`` for the deflection states and the floor's friction
@@ -11,8 +12,11 @@ them is :mod:`amr_twin.sim.tyres` (and its C twin ``tyres.c``, whose enums follo
 
 from __future__ import annotations
 
+from amr_twin.model.robot_starts import ROBOT_PREFIX
+
 NUMERIC = "amr_tyres"
-"""Name of the model's numeric holding the tyre parameters and addresses."""
+"""Name of the lone robot's numeric holding the tyre parameters and addresses; a fleet robot's is
+``amr_tyres:<prefix>`` (:func:`numeric_name`)."""
 FORMAT = 1.0
 NUMERIC_FIELDS = (
     "format",
@@ -72,6 +76,17 @@ def numeric_values(cfg, userdata_adr: int = 0) -> list[float]:
     return [float(values.get(name, 0.0)) for name in NUMERIC_FIELDS]
 
 
+def numeric_name(prefix: str) -> str:
+    """The tyres' numeric of the robot whose names begin with ``prefix``."""
+    return NUMERIC if prefix == ROBOT_PREFIX else f"{NUMERIC}:{prefix}"
+
+
+def numeric_ids(model) -> list[int]:
+    """The ids of every robot's tyre numeric in ``model``, in id order (tyres.c walks the same)."""
+    names = [model.numeric(i).name for i in range(model.nnumeric)]
+    return [i for i, name in enumerate(names) if name.split(":")[0] == NUMERIC]
+
+
 def set_addresses(model, prefix: str) -> None:
     """Write the ids the callback needs (joints, geoms, bodies of the robot named ``prefix...``)
     into the compiled ``model``'s numeric."""
@@ -89,7 +104,7 @@ def set_addresses(model, prefix: str) -> None:
         ids[f"slide_{s}"] = get(J, f"wheel_{side}_tyre")
         ids[f"hinge_{s}"] = get(J, f"wheel_{side}_joint")
         ids[f"geom_{s}"] = get(G, f"wheel_{side}_collision")
-    n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)
+    n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, numeric_name(prefix))
     adr = int(model.numeric_adr[n])
     for name, value in ids.items():
         model.numeric_data[adr + NUMERIC_FIELDS.index(name)] = float(value)

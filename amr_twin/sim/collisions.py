@@ -6,7 +6,9 @@ field, or an upward-facing surface: contact normal within :data:`SUPPORT_TILT_DE
 of vertical). The chassis touching a rack, a wheel rubbing a wall and the robot
 lying on the floor after tipping over are collisions. Any contact with an actor (a
 person or pallet jack, :mod:`amr_twin.model.actors`: a mocap body) is one, a wheel on a
-jack's fork too; it is named by the actor's body (``person_0``), all its geoms one episode.
+jack's fork too; it is named by the actor's body (``person_0``), all its geoms one episode. In a
+world of several robots each robot has its own monitor, and any contact with another robot is a
+collision named by that robot (``amr-2``), the monitor's own robot in :attr:`Collision.robot`.
 
 Reasons and measurements: docs/explanation/actors.md#amr_twinsimcollisions.
 
@@ -25,6 +27,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.sim.grid_steps import CHANGED, sampler
+from amr_twin.sim.robot_bodies import robot_name, robot_roots
 from amr_twin.base.c_layout import register
 from amr_twin.base.native_build import open_helper
 
@@ -53,9 +56,10 @@ class Collision:
 
     ``t_s``/``x_m``/``y_m``/``z_m``: time and world position of the first contact
     point; ``until_s``: last instant it was seen; ``hit``: the world geom's name (an actor's body
-    name); ``robot_parts``: the robot bodies that touched it; ``robot_pose``: base pose
-    (x_m, y_m, yaw_rad) at the first contact; ``peak_force_n``: largest normal
-    contact force seen, N.
+    name, another robot's name); ``robot_parts``: the robot bodies that touched it;
+    ``robot_pose``: base pose (x_m, y_m, yaw_rad) at the first contact; ``peak_force_n``: largest
+    normal contact force seen, N; ``robot``: whose collision it is, a fleet robot's name (empty
+    for the lone robot).
     """
 
     t_s: float
@@ -67,12 +71,14 @@ class Collision:
     robot_pose: tuple[float, float, float]
     until_s: float = 0.0
     peak_force_n: float = 0.0
+    robot: str = ""
     _last_us: int = field(default=0, repr=False)
 
     def as_dict(self) -> dict:
-        """JSON-ready form (times s, positions m, force N)."""
+        """JSON-ready form (times s, positions m, force N; ``robot`` for a fleet robot's)."""
         x, y, yaw = self.robot_pose
         return {
+            **({"robot": self.robot} if self.robot else {}),
             "t_s": round(self.t_s, 4),
             "until_s": round(self.until_s, 4),
             "hit": self.hit,
@@ -94,14 +100,17 @@ class GeomRoles:
 
     def __init__(self, physics):
         m = self.model = physics.model
+        self.prefix = physics.prefix
         root = m.body_rootid[physics.base_body]
-        self.robot = m.body_rootid[m.geom_bodyid] == root  # (ngeom,) bool
+        roots = m.body_rootid[m.geom_bodyid]
+        self.robot = roots == root  # (ngeom,) bool
         self.support = np.zeros(m.ngeom, bool)
         self.support[list(physics.support_geoms.values())] = True
         self.floor = np.isin(m.geom_type, _FLOOR_TYPES) & ~self.robot
+        self.other_robot = robot_roots(m)[roots] & ~self.robot  # (ngeom,) bool: another robot's
         self.actor = (
-            m.body_mocapid[m.geom_bodyid] >= 0
-        ) & ~self.robot  # (ngeom,) bool: a person's, a jack's
+            (m.body_mocapid[m.geom_bodyid] >= 0) | self.other_robot
+        ) & ~self.robot  # (ngeom,) bool: a person's, a jack's, another robot's
         self._pair: dict[tuple[int, int], int] = {}
         self._part: dict[int, str] = {}
         self._world: dict[int, str] = {}
@@ -124,7 +133,7 @@ class GeomRoles:
         return k
 
     def robot_part(self, g: int) -> str:
-        """The robot body of geom ``g``, without the ``amr/`` prefix (``base_link``,
+        """The robot body of geom ``g``, without the robot's prefix (``base_link``,
         ``wheel_left_link``)."""
         part = self._part.get(g)
         if part is None:
@@ -132,12 +141,12 @@ class GeomRoles:
             body = int(m.geom_bodyid[g])
             part = self._part[g] = _name(
                 m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}"
-            ).removeprefix("amr/")
+            ).removeprefix(self.prefix)
         return part
 
     def world_name(self, g: int) -> str:
         """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed; an actor's
-        body name."""
+        body name; another robot's name."""
         name = self._world.get(g)
         if name is None:
             name = self._world[g] = self._world_name(g)
@@ -146,6 +155,8 @@ class GeomRoles:
     def _world_name(self, g: int) -> str:
         m = self.model
         body = m.geom_bodyid[g]
+        if self.other_robot[g]:
+            return robot_name(m, m.body_rootid[body])
         if self.actor[g]:
             return _name(m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}")
         name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)
@@ -220,6 +231,7 @@ class CollisionMonitor:
         self.physics, self.stop = physics, stop
         self._data = physics.data
         self.roles = GeomRoles(physics)
+        self._robot = "" if not self.roles.other_robot.any() else physics.prefix.rstrip("/")
         self.collisions: list[Collision] = []
         self.listeners: list = [] if listeners is None else listeners
         """Callables ``f(collision)`` told of each new episode as it begins (the twin's
@@ -313,6 +325,7 @@ class CollisionMonitor:
                 [part],
                 (pose.x_m, pose.y_m, pose.yaw_rad),
                 until_s=t_us * 1e-6,
+                robot=self._robot,
             )
             self._open[hit] = ep
             self.collisions.append(ep)

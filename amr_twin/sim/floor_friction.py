@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, NUMERIC
+from amr_twin.model.tyre_numeric import FIELD_CELLS, FIELD_OFFSET, numeric_ids
 
 PHYSICS_LAYER = True
 
@@ -51,28 +51,28 @@ def draw(cfg: TwinConfig, seed: int) -> FrictionField:
     return FrictionField(float(cfg.sim.floor_patch_m), values)
 
 
-def _userdata_start(model) -> int | None:
-    """Where the tyres' user data starts in ``model``'s MjData, or None (no brush tyres)."""
-    import mujoco
-
-    n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)
-    return None if n < 0 else int(model.numeric_data[int(model.numeric_adr[n]) + 1])
+def _userdata_starts(model) -> list[int]:
+    """Where each robot's tyre user data starts in ``model``'s MjData (none: no brush tyres)."""
+    return [int(model.numeric_data[int(model.numeric_adr[n]) + 1]) for n in numeric_ids(model)]
 
 
 def set_friction_field(model, data, spacing_m: float, values) -> None:
     """Put the floor's friction field in ``data``: ``values`` (FIELD_CELLS, FIELD_CELLS) friction
     coefficients at nodes ``spacing_m`` apart (row y, column x; repeating), or ``values=None`` for
-    none (the model's ``wheel.friction`` everywhere). ValueError for a model without tyres."""
-    start = _userdata_start(model)
-    if start is None:
+    none (the model's ``wheel.friction`` everywhere); every robot's tyres get the field. ValueError
+    for a model without tyres."""
+    starts = _userdata_starts(model)
+    if not starts:
         raise ValueError("friction field: the model has no brush tyres (wheel.tyre_slip is off)")
-    at = start + FIELD_OFFSET
-    if values is None:
-        data.userdata[at : at + 2 + FIELD_CELLS**2] = 0.0
-        return
-    data.userdata[at] = float(FIELD_CELLS)
-    data.userdata[at + 1] = float(spacing_m)
-    data.userdata[at + 2 : at + 2 + FIELD_CELLS**2] = [float(v) for row in values for v in row]
+    flat = None if values is None else [float(v) for row in values for v in row]
+    for start in starts:
+        at = start + FIELD_OFFSET
+        if flat is None:
+            data.userdata[at : at + 2 + FIELD_CELLS**2] = 0.0
+            continue
+        data.userdata[at] = float(FIELD_CELLS)
+        data.userdata[at + 1] = float(spacing_m)
+        data.userdata[at + 2 : at + 2 + FIELD_CELLS**2] = flat
 
 
 def friction_at(field, x: float, y: float) -> float:

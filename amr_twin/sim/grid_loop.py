@@ -11,7 +11,9 @@ sampler has a C form (:meth:`_grid_in_c`), else here (:meth:`_grid_in_python`, i
 twin: the same steps, rows and sampler calls, the same bits).
 
 A grid sampler that returns True ends the chunk at that instant and halts the loop
-(:attr:`GridLoop.halted`).
+(:attr:`GridLoop.halted`). In a world of several robots one loop steps them all and its row holds
+every robot's loop sensors (``width``: :attr:`amr_twin.sim.settled_physics.Fleet.loop_width`;
+each robot's columns: :attr:`amr_twin.sim.physics.Physics.loop_columns`).
 
 
 Part of the physics layer (``PHYSICS_LAYER``): it steps MjData and reads its sensor row.
@@ -31,25 +33,26 @@ PHYSICS_LAYER = True
 
 class GridLoop:
     """Chunks of ``physics`` (:class:`~amr_twin.sim.physics.Physics`) with ``samplers`` run every
-    ``every`` steps of ``dt_us``; the C grid loop unless its helper is missing."""
+    ``every`` steps of ``dt_us``, rows of the first ``width`` sensor values; the C grid loop unless
+    its helper is missing."""
 
-    def __init__(self, physics, samplers: list, every: int, dt_us: int):
+    def __init__(
+        self, physics, samplers: list, every: int, dt_us: int, width: int = LOOP_SENSOR_DIM
+    ):
         self.samplers = samplers
         self.every, self.dt_us = int(every), int(dt_us)
         self.halted = False
         """True once a grid sampler returned True (the loop steps no further)."""
         self._m, self._d = physics.model, physics.data
-        self._stepper = grid_stepper(physics, LOOP_SENSOR_DIM, self.every, self.dt_us)
+        self._stepper = grid_stepper(physics, width, self.every, self.dt_us)
         """The grid loop in C (:mod:`amr_twin.sim.grid_steps`), None without its helper."""
-        self._sensors = physics.data.sensordata[
-            :LOOP_SENSOR_DIM
-        ]  # a view: MjData's buffers stay put
+        self._sensors = physics.data.sensordata[:width]  # a view: MjData's buffers stay put
         self.last_row = self._sensors.tolist()
         """The loop sensors' row where the last chunk ended (at the twin's start: the start's)."""
 
     def row(self) -> list[float]:
-        """The loop sensors' row now (LOOP_SENSOR_DIM values: wheel angles L, R rad; speeds L, R
-        rad/s; base position m; base quaternion w, x, y, z)."""
+        """The loop sensors' row now (per robot LOOP_SENSOR_DIM values: wheel angles L, R rad;
+        speeds L, R rad/s; base position m; base quaternion w, x, y, z)."""
         return self._sensors.tolist()
 
     def run(self, k0: int, nstep: int) -> tuple[int, list, list, list, list]:

@@ -1,8 +1,10 @@
 """Physics wrapper: the door to ``MjData``, always by name.
 
-It owns the compiled model and its data, resolves the robot's joints, actuators,
-geoms and sensors by name once, offers named views of both (:attr:`Physics.named`,
-as dm_control's ``physics.named``) and what the rest of the twin needs:
+It holds the compiled model and its data, resolves one robot's joints, actuators,
+geoms and sensors by name once (the robot named by its prefix: a world may hold several, each
+addressed by a Physics of its own sharing the one MjData, :meth:`Physics.robot`), offers named
+views of both (:attr:`Physics.named`, as dm_control's ``physics.named``) and what the rest of
+the twin needs:
 stepping in C, wheel angles and speeds, the base pose, contact loads per named
 geom, and the three motor modes (drive, coast, brake) set on the actuators'
 parameters between steps (the per-step torque stays in C). A braked motor is a
@@ -23,10 +25,11 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from amr_twin.model.build import ROBOT_PREFIX
-from amr_twin.model.robot_spec import CASTERS, WHEELS
-from amr_twin.model.tyre_numeric import NUMERIC as TYRE_NUMERIC
+from amr_twin.model.robot_spec import CASTERS, LOOP_SENSOR_DIM, WHEELS
+from amr_twin.model.robot_starts import ROBOT_PREFIX
+from amr_twin.model.tyre_numeric import numeric_name
 from amr_twin.sim.named_index import NamedIndex
+from amr_twin.sim.robot_bodies import robot_indices
 
 PHYSICS_LAYER = True
 
@@ -48,19 +51,31 @@ class Pose2D:
     yaw_rad: float
 
 
-def _id(m: mujoco.MjModel, kind: mujoco.mjtObj, name: str) -> int:
-    i = mujoco.mj_name2id(m, kind, ROBOT_PREFIX + name)
-    if i < 0:
-        raise KeyError(f"model has no {kind.name[6:].lower()} named {ROBOT_PREFIX + name}")
-    return i
-
-
 class Physics:
-    """A compiled model with its data, addressed by the robot's names."""
+    """A compiled model with its data, addressed by the names of the robot ``prefix...``.
 
-    def __init__(self, model: mujoco.MjModel):
+    ``data``: the MjData of another robot's Physics in the same world (:meth:`robot`); None: a new
+    one, brought to its start (``mj_forward``). Stepping (:meth:`step`, :meth:`settle`,
+    :meth:`forward`) acts on the whole world: in a world of several robots one owner (the world)
+    steps it once, through any robot's Physics; the rest read and actuate their own robot."""
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        prefix: str = ROBOT_PREFIX,
+        data: mujoco.MjData | None = None,
+    ):
         m = self.model = model
-        self.data = mujoco.MjData(m)
+        self.prefix = prefix
+        """What the robot's names begin with (``amr/``, a fleet's ``amr-2/``)."""
+        self.data = mujoco.MjData(m) if data is None else data
+
+        def _id(m: mujoco.MjModel, kind: mujoco.mjtObj, name: str) -> int:
+            i = mujoco.mj_name2id(m, kind, prefix + name)
+            if i < 0:
+                raise KeyError(f"model has no {kind.name[6:].lower()} named {prefix + name}")
+            return i
+
         J = mujoco.mjtObj.mjOBJ_JOINT
         self.root_qpos = m.jnt_qposadr[_id(m, J, "root")]
         self.root_dof = m.jnt_dofadr[_id(m, J, "root")]
@@ -88,17 +103,27 @@ class Physics:
             g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
             for g in self.support_geoms.values()
         }
+        self._own_qpos, self._own_dof = robot_indices(m, self.base_body)
+        adr = int(m.sensor_adr[_id(m, mujoco.mjtObj.mjOBJ_SENSOR, "wheel_left_angle")])
+        self.loop_columns = slice(adr, adr + LOOP_SENSOR_DIM)
+        """Where the robot's loop sensors lie in ``sensordata`` (and in a grid loop's rows that
+        begin at its start: :class:`~amr_twin.sim.grid_loop.GridLoop`)."""
         self._drive_range = m.actuator_forcerange[self.actuator].copy()
         self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
         self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
         self.tyres_engine = None
         """What computes the brush tyres' forces (:mod:`amr_twin.sim.tyres`): ``"C"``, ``"Python
         (...)"``, or None for the rigid contact (``wheel.tyre_slip`` off)."""
-        if mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, TYRE_NUMERIC) >= 0:
+        if mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, numeric_name(prefix)) >= 0:
             from amr_twin.sim import tyres
 
             self.tyres_engine = tyres.install()
-        mujoco.mj_forward(m, self.data)
+        if data is None:
+            mujoco.mj_forward(m, self.data)
+
+    def robot(self, prefix: str) -> "Physics":
+        """The Physics of the robot ``prefix...`` of this world: the same model and data."""
+        return Physics(self.model, prefix, self.data)
 
     def set_floor_friction(self, field) -> None:
         """Give the brush tyres the floor's friction field
@@ -282,7 +307,7 @@ class Physics:
         d, a = self.data, self.root_qpos
         before = d.qpos.copy()
         wheels = d.qpos[self.wheel_qpos].copy()
-        d.qpos[:] = rest
+        d.qpos[self._own_qpos] = rest[self._own_qpos]  # this robot's joints; the others stay
         d.qpos[self.wheel_qpos] = wheels
         w, x, y, z = rest[a + 3 : a + 7]
         turn = 0.5 * (yaw_rad - math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
@@ -296,14 +321,14 @@ class Physics:
         return before
 
     def restore_positions(self, qpos: np.ndarray) -> None:
-        """Put back the positions :meth:`place_robot` returned, every velocity zero."""
+        """Put back the positions :meth:`place_robot` returned, the robot's velocities zero."""
         self.data.qpos[:] = qpos
         self._at_rest()
 
     def _at_rest(self) -> None:
         d = self.data
-        d.qvel[:] = 0.0
-        d.qacc_warmstart[:] = 0.0
+        d.qvel[self._own_dof] = 0.0
+        d.qacc_warmstart[self._own_dof] = 0.0
         mujoco.mj_forward(self.model, d)
 
     # -- actuation --------------------------------------------------------------------

@@ -76,7 +76,7 @@ class RollingResistance:
         w, k, g = cfg.wheel, cfg.caster, cfg.sim.gravity_m_s2
 
         def joint(name):
-            j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "amr/" + name)
+            j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, physics.prefix + name)
             return int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
 
         self._tyres = [joint(f"wheel_{s}_tyre") for s in ("left", "right")]

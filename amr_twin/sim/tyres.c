@@ -4,9 +4,10 @@
  * described there and in docs/explanation/tyres.md): the same operations in the same order on IEEE doubles
  * (compiled with -ffp-contract=off), so that both give the same bits; tests/sim/test_tyres.py runs
  * a twin with each. MuJoCo calls tyres_passive at the end of mj_passive in every mj_forward (so in
- * every mj_step); it acts only on a model that carries the numeric TYRE_NUMERIC written by
- * amr_twin/model/build.py (parameters and the addresses it needs), and keeps each wheel's contact
- * patch deflections in d->userdata (a copy of MjData carries them). The state advances only when
+ * every mj_step); it acts on each robot whose numeric (TYRE_NUMERIC, or TYRE_NUMERIC":<prefix>" in
+ * a fleet) amr_twin/model/build.py wrote (parameters and the addresses it needs), and keeps each
+ * wheel's contact patch deflections in the robot's block of d->userdata (a copy of MjData carries
+ * them). The state advances only when
  * d->time has moved on, so an extra mj_forward at the same instant changes nothing.
  * Built at first use against the installed MuJoCo's headers (amr_twin/base/native_build.py).
  */
@@ -35,13 +36,13 @@ static void cross(const double* a, const double* b, double* out) {
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* The numeric named TYRE_NUMERIC, or -1 (its names read directly: the helper is not linked to
- * libmujoco, whose symbols the bindings keep to themselves). */
-static int tyre_numeric(const mjModel* m) {
-    for (int i = 0; i < m->nnumeric; i++)
-        if (strcmp(m->names + m->name_numericadr[i], TYRE_NUMERIC) == 0)
-            return i;
-    return -1;
+/* Whether numeric i is a robot's tyres: named TYRE_NUMERIC or TYRE_NUMERIC":<prefix>" (its names
+ * read directly: the helper is not linked to libmujoco, whose symbols the bindings keep to
+ * themselves). */
+static int is_tyre_numeric(const mjModel* m, int i) {
+    const char* name = m->names + m->name_numericadr[i];
+    size_t n = strlen(TYRE_NUMERIC);
+    return strncmp(name, TYRE_NUMERIC, n) == 0 && (name[n] == '\0' || name[n] == ':');
 }
 
 /* The floor's friction coefficient at (x, y), m: bilinear between the field's nodes, which repeat
@@ -60,11 +61,17 @@ static double friction_at(const double* f, double x, double y) {
     return a + fy * (b - a);
 }
 
+static void robot_tyres(const mjModel* m, mjData* d, const double* p);
+
+/* The passive callback: each robot's tyres, in numeric order (each adds to its own dofs). */
 void tyres_passive(const mjModel* m, mjData* d) {
-    int id = tyre_numeric(m);
-    if (id < 0)
-        return;
-    const double* p = m->numeric_data + m->numeric_adr[id];
+    for (int i = 0; i < m->nnumeric; i++)
+        if (is_tyre_numeric(m, i))
+            robot_tyres(m, d, m->numeric_data + m->numeric_adr[i]);
+}
+
+/* One robot's two tyres, from its numeric p. */
+static void robot_tyres(const mjModel* m, mjData* d, const double* p) {
     if (p[N_FORMAT] != TYRE_FORMAT)
         return;
     double* st = d->userdata + (int)p[N_USERDATA];

@@ -11,13 +11,15 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from amr_twin.model.robot_starts import ROBOT_PREFIX
 from amr_twin.model.tyre_numeric import (
     FIELD_CELLS,
     FIELD_OFFSET,
     FORMAT,
-    NUMERIC,
     NUMERIC_FIELDS,
     STATE_FIELDS,
+    numeric_ids,
+    numeric_name,
 )
 from amr_twin.sim.floor_friction import friction_at
 from amr_twin.base.native_build import mujoco_address, open_helper
@@ -87,12 +89,12 @@ class WheelContact:
     load_n: float
 
 
-def contacts(model, data) -> tuple[WheelContact, WheelContact] | None:
-    """(left, right) :class:`WheelContact` of the last ``mj_forward``; None for a model without
-    tyres."""
+def contacts(model, data, prefix: str = ROBOT_PREFIX) -> tuple[WheelContact, WheelContact] | None:
+    """(left, right) :class:`WheelContact` of the robot named ``prefix...`` at the last
+    ``mj_forward``; None for a model without its tyres."""
     import mujoco
 
-    n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)
+    n = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, numeric_name(prefix))
     if n < 0:
         return None
     start = int(model.numeric_data[int(model.numeric_adr[n]) + 1]) + 1
@@ -108,14 +110,14 @@ def _cross(a, b):
 def tyre_forces(m, d) -> None:
     """The Python twin of ``tyres_passive`` (tyres.c): the same operations in the same order.
 
-    A MuJoCo passive callback ``(MjModel, MjData)``: adds the tyres' forces to
+    A MuJoCo passive callback ``(MjModel, MjData)``: adds every robot's tyre forces to
     ``d.qfrc_passive``."""
-    import mujoco
+    for n in numeric_ids(m):
+        _robot_tyres(m, d, int(m.numeric_adr[n]))
 
-    n = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, NUMERIC)
-    if n < 0:
-        return
-    adr = int(m.numeric_adr[n])
+
+def _robot_tyres(m, d, adr: int) -> None:
+    """One robot's tyres, from its numeric at ``numeric_data[adr]`` (``robot_tyres`` of tyres.c)."""
     p = m.numeric_data[adr : adr + len(NUMERIC_FIELDS)].tolist()
     if p[0] != FORMAT:
         return

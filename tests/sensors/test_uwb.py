@@ -203,3 +203,28 @@ def test_walls_block_the_bays_anchors_in_the_corridor():
     hall = np.concatenate([err[i] for i in range(4)])
     assert 0.3 < np.mean(hall) < 1.0  # biased long by the walls (mean blocked_bias_m 0.6 m)
     assert len(hall) < 0.85 * 4 * per_anchor  # and often lost (blocked_dropout_prob 0.3)
+
+
+@pytest.mark.parametrize("robot_2_y, blocked", [(0.0, [1, 0, 0]), (2.0, [0, 0, 0])])
+def test_another_robot_blocks_the_line_its_own_body_never(robot_2_y, blocked):
+    from amr_twin.base.clock import VirtualClock
+    from amr_twin.model.robot_starts import fleet_starts
+    from amr_twin.ros.bus import Bus
+    from amr_twin.sensors.uwb import UwbSensor
+    from amr_twin.sim.settled_physics import settled_fleet
+
+    # anchors at the tag's height: ahead down the aisle past robot 2, behind, and behind again
+    cfg = load_config(
+        overrides={
+            "uwb.anchors_x_m": [3.0, -6.5, -8.0],
+            "uwb.anchors_y_m": [0.0, 0.0, 0.0],
+            "uwb.anchor_z_m": 0.46,
+            "uwb.nlos_prob": 0.0,
+        }
+    )
+    starts = fleet_starts([(-4.0, 0.0, 0.0), (-2.0, robot_2_y, 0.0)])
+    fleet = settled_fleet(cfg, "warehouse", starts, True, False, 0.3)
+    clock = VirtualClock()
+    uwb = UwbSensor(fleet.robots[0], clock, Bus(clock), cfg.uwb, seed=[0, 3])
+    clock.run_until(uwb.slot_us * 5)  # two exchanges with each anchor
+    assert uwb.exchanges >= 6 and [int(b > 0) for b in uwb.blocked] == blocked

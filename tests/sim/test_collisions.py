@@ -179,3 +179,31 @@ def test_the_c_pair_check_sees_any_change_of_the_pairs():
     assert changed(0.099, 0.099, valid=False)[0] == 0
     assert changed(0.099, 0.099)[0] == 1  # invalidated by the monitor: classified again
     assert changed(1.0, 1.0)[0] == 1 and changed(1.0, 1.0)[0] == 0  # none, then none again
+
+
+def test_two_robots_driven_head_on_collide_and_each_monitor_names_the_other():
+    import math
+
+    from amr_twin.model.robot_starts import fleet_starts
+    from amr_twin.sim.collisions import CollisionMonitor
+    from amr_twin.sim.grid_loop import GridLoop
+    from amr_twin.sim.settled_physics import settled_fleet
+
+    starts = fleet_starts([(-4.0, 0.0, 0.0), (-1.0, 0.0, math.pi), (-4.0, 2.0, 0.0)])
+    fleet = settled_fleet(CFG, "warehouse", starts, False, False, 0.3)
+    monitors = [CollisionMonitor(physics) for physics in fleet.robots]
+    loop = GridLoop(fleet.world, monitors, 10, 1000, width=fleet.loop_width)
+    for physics in fleet.robots[:2]:  # robots 1 and 2 ahead at 6 V, robot 3 braked
+        for wheel in range(2):
+            physics.set_motor(wheel, "drive", 6.0)
+    loop.run(0, 3000)
+    (one,), (two,) = (m.as_dicts() for m in monitors[:2])
+    assert (one["robot"], one["hit"], two["robot"], two["hit"]) == (
+        "amr-1",
+        "amr-2",
+        "amr-2",
+        "amr-1",
+    )
+    assert 0.8 < one["t_s"] == two["t_s"] < 2.5 and one["peak_force_n"] > 10.0
+    assert -3.0 < one["x_m"] < -2.0  # where they met, half way
+    assert monitors[2].collisions == []

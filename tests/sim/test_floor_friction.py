@@ -75,7 +75,8 @@ def test_c_helper_and_python_twin_look_the_field_up_to_the_same_bits():
 
 def test_the_field_is_in_the_tyres_data_and_acts_on_them():
     twin, state = _pivot([], True, 0.5)
-    start = floor_friction._userdata_start(twin.physics.model) + FIELD_OFFSET
+    (start,) = floor_friction._userdata_starts(twin.physics.model)
+    start += FIELD_OFFSET
     assert (
         state[2][start] == FIELD_CELLS
         and state[2][start + 2 : start + 2 + FIELD_CELLS**2].tolist()

@@ -161,3 +161,28 @@ def test_the_rigid_model_has_no_tyre_state():
     assert twin.physics.tyres_engine is None
     assert tyres.contacts(twin.physics.model, twin.physics.data) is None
     assert twin.physics.model.geom_condim[twin.physics.support_geoms["wheel_left"]] == 3
+
+
+def test_every_robot_of_a_fleet_gets_its_tyres_the_c_helper_and_python_to_the_same_bits():
+    from amr_twin.model.robot_starts import fleet_starts
+
+    cfg = load_config()
+    starts = fleet_starts([(-4.0, 0.0, 0.0), (-4.0, 2.0, 0.0)])
+    runs = []
+    try:
+        for native in (True, False):
+            settled_physics.forget()
+            tyres.install(native)
+            fleet = settled_physics.settled_fleet(cfg, "warehouse", starts, False, False, 0.2)
+            for physics, (left, right) in zip(fleet.robots, ((5.0, 6.0), (-6.0, 6.0))):
+                physics.set_motor(0, "drive", left)
+                physics.set_motor(1, "drive", right)
+            fleet.world.step(300)
+            runs.append(fleet.world.data.qpos.copy())
+            contacts = [tyres.contacts(p.model, p.data, p.prefix) for p in fleet.robots]
+            assert all(c[0].load_n > 10.0 and abs(c[1].fx_n) > 0.1 for c in contacts)
+    finally:
+        tyres.install(True)
+        settled_physics.forget()
+    assert runs[0].tobytes() == runs[1].tobytes()
+    assert abs(fleet.robots[1].pose().yaw_rad) > 0.05  # robot 2 turned on its own tyres

@@ -207,7 +207,8 @@ def run_goals(
     console = GotoConsole(say)
 
     def work():
-        from amr_twin.navigation.stack import NavigationOptions, navigate
+        from amr_twin.navigation.navigation_run import navigate
+        from amr_twin.navigation.stack import NavigationOptions
         from amr_twin.base.atomic_file import all_or_nothing
 
         held = {}

@@ -95,7 +95,8 @@ def run_episode(item: EpisodeRun) -> dict:
     :func:`amr_twin.experiments.navigation.generated.door_metrics`)."""
     from amr_twin.experiments.navigation.metrics import measure
     from amr_twin.model.generated_world import is_generated
-    from amr_twin.navigation.stack import NavigationOptions, navigate
+    from amr_twin.navigation.navigation_run import navigate
+    from amr_twin.navigation.stack import NavigationOptions
     from amr_twin.assembly.twin import TwinOptions
 
     ep = item.episode

@@ -737,7 +737,7 @@ def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(
         seen["options"] = options
         raise Started
 
-    monkeypatch.setattr("amr_twin.navigation.stack.navigate", navigate)
+    monkeypatch.setattr("amr_twin.navigation.navigation_run.navigate", navigate)
     goto = ["run", "goto", "--world", "aisles", "--goal", "0,2.4", "--localisation", "truth"]
     refused([*goto, "--roscore"], "--roscore is an option of --ros1")
     refused(

@@ -26,7 +26,7 @@ from amr_twin.cli.actor_options import checked_actors
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.goto_console import EXIT_CANCELED, GotoConsole
 from amr_twin.cli.goto_report import clearance, report
-from amr_twin.cli.options import RunOptions, shared
+from amr_twin.cli.run_options import RunOptions, shared
 from amr_twin.navigation.registries import CONTROLLERS, LOCALISATIONS, help_text
 
 EXIT_NOT_REACHED = 5
@@ -70,7 +70,7 @@ RUN_OVERRIDES = {
     "serial_pty": {"help": "Not with goto (refused)."},
 }
 """The run options whose default or meaning differs for goto
-(:func:`amr_twin.cli.options.shared`)."""
+(:func:`amr_twin.cli.run_options.shared`)."""
 
 
 def parse_goal(text: str, option: str = "--goal") -> tuple[float, float, float | None]:
@@ -163,12 +163,12 @@ def run_goals(
         check_outputs(files={"--csv": opts.csv, "--record": opts.record, "--mcap": opts.mcap})
     except (FaultError, OutputError) as exc:
         fail(str(exc))
-    from amr_twin.cli.options import checked_live
+    from amr_twin.cli.live_options import checked_live
 
     live = checked_live(
         opts.live, opts.host, opts.port, opts.web_port, opts.rate, fail, paced=opts.ros1
     )
-    from amr_twin.cli.options import checked_ros1
+    from amr_twin.cli.ros1_options import checked_ros1
 
     ros1, _avr, rate = checked_ros1(
         opts.ros1, opts.roscore, None, firmware, live is not None, opts.rate, fail

@@ -50,7 +50,8 @@ from amr_twin.cli import sweep as sweep_group
 from amr_twin.cli.common import _config, _guard, fail, start_up
 from amr_twin.cli.fleet import fleet
 from amr_twin.cli.menu import client
-from amr_twin.cli.options import ConfigOpt, LiveCommand, ParamsOpt, SetOpt
+from amr_twin.cli.live_options import LiveCommand
+from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 from amr_twin.cli.path_options import CheckedGroup
 from amr_twin.ros1 import remapping
 

@@ -25,17 +25,10 @@ if TYPE_CHECKING:
 
 from amr_twin.cli.common import _config, _guard, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
-from amr_twin.cli.options import (
-    checked_firmware,
-    checked_live,
-    checked_ros1,
-    checked_seed,
-    firmware_option,
-    live_options,
-    ros1_options,
-    sketch_option,
-    _run_option_infos,
-)
+from amr_twin.cli.live_options import checked_live, live_options
+from amr_twin.cli.options import checked_firmware, checked_seed, firmware_option, sketch_option
+from amr_twin.cli.ros1_options import checked_ros1, ros1_options
+from amr_twin.cli.run_options import _run_option_infos
 
 _LIVE = live_options()
 _WORLD = _run_option_infos()["world"]  # as the run commands have it

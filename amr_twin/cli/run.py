@@ -3,7 +3,7 @@
 ``amr-twin run linear|angular|motor|stop`` sends one wheel_Command_Client call at
 t = 0 and runs the twin for ``--duration-s``; ``amr-twin run --mission FILE`` runs
 a timed list of them (format in :mod:`amr_twin.assembly.mission`). The shared options
-(:mod:`amr_twin.cli.options`) go before or after the command kind. ``--csv`` writes
+(:mod:`amr_twin.cli.run_options`) go before or after the command kind. ``--csv`` writes
 the time series, ``--json`` prints one summary object, ``--fault`` injects faults
 (:mod:`amr_twin.sim.faults`), ``--stop-on-collision`` ends the run at the first
 collision (:mod:`amr_twin.sim.collisions`).
@@ -30,16 +30,10 @@ import typer
 from amr_twin.cli.actor_options import checked_actors
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.goto import goto, run_goals
-from amr_twin.cli.options import (
-    LiveGroup,
-    RunOptions,
-    _given,
-    checked_firmware,
-    checked_live,
-    checked_ros1,
-    checked_seed,
-    shared,
-)
+from amr_twin.cli.live_options import LiveGroup, checked_live
+from amr_twin.cli.options import checked_firmware, checked_seed
+from amr_twin.cli.ros1_options import checked_ros1
+from amr_twin.cli.run_options import RunOptions, _given, shared
 from amr_twin.sim.bounds import duration_problem
 from amr_twin.recording.run_report import collision_warning, csv_text, text_lines
 from amr_twin.recording.run_summary import summary

@@ -240,7 +240,7 @@ def test_a_memory_limit_is_checked_before_and_one_line_after(tmp_path, refused, 
 
 
 def test_the_client_stops_at_the_bound_of_a_run(monkeypatch):
-    from amr_twin.cli.menu import RealTimeTwin
+    from amr_twin.cli.real_time_twin import RealTimeTwin
     from amr_twin.model.config import load_config
     from amr_twin.assembly.twin import Twin, TwinOptions
 

@@ -126,14 +126,14 @@ def navigation(
     cfg = _config(config, params, set_)
     client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
     try:
-        data = _guard(
+        result = _guard(
             lambda: drive(spec, plan, cfg, out, jobs=jobs, client=client, progress=progress)
         )
     finally:
         if client is not None:
             client.close()
     if plan.halls:
-        for group, s in data["summary"].items():
+        for group, s in result.summary.items():
             for trips, d in s["doors"].items():
                 typer.echo(
                     f"{group:9s} {trips:10s} {d['episodes']:4d} episodes: success "
@@ -141,11 +141,11 @@ def navigation(
                     f"{d['collisions']}, least jamb clearance {_m(d['door_clearance_min_m'])}"
                 )
         typer.echo(
-            f"wall time {data['wall_s']:.0f} s, CPU {data['cpu_s']:.0f} s; wrote {out}/report.md, "
+            f"wall time {result.wall_s:.0f} s, CPU {result.cpu_s:.0f} s; wrote {out}/report.md, "
             "metrics.json and a folder per hall"
         )
         return
-    for key, v in data["summary"].items():
+    for key, v in result.summary.items():
         ratio = v["travelled_over_optimal_median"]
         typer.echo(
             f"{key:22s} {v['episodes']:4d} episodes: success {100 * v['success_rate']:5.1f} %, "
@@ -153,7 +153,7 @@ def navigation(
             f"{'-' if ratio is None else f'{ratio:.3f}'}, BARN {v['barn_score_mean']:.3f}"
         )
     typer.echo(
-        f"wall time {data['wall_s']:.0f} s, CPU {data['cpu_s']:.0f} s; wrote {out}/report.md, "
+        f"wall time {result.wall_s:.0f} s, CPU {result.cpu_s:.0f} s; wrote {out}/report.md, "
         "metrics.json, trajectories_*.png"
     )
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from amr_twin.experiments.navigation.result import HallsResult, NavigationResult
 from amr_twin.experiments.registry import EXPERIMENTS, Experiment
 from amr_twin.model.config import TwinConfig
 
@@ -208,9 +209,9 @@ def run(
     jobs: int = 1,
     client=None,
     progress: bool = False,
-) -> dict:
+) -> NavigationResult | HallsResult:
     """Validate ``spec``, run its episodes (``jobs`` workers or a Dask ``client``) and write
-    ``out_dir``'s report, figures and maps; the data (without the static maps)."""
+    ``out_dir``'s report, figures and maps; the result."""
     return drive(spec, spec.validate(), cfg, out_dir, jobs=jobs, client=client, progress=progress)
 
 
@@ -223,10 +224,10 @@ def drive(
     jobs: int = 1,
     client=None,
     progress: bool = False,
-) -> dict:
+) -> NavigationResult | HallsResult:
     """Run the validated ``spec``'s ``plan`` and write ``out_dir``
     (:mod:`amr_twin.experiments.navigation.report`, or per hall
-    :mod:`amr_twin.experiments.navigation.generated_report`); the data."""
+    :mod:`amr_twin.experiments.navigation.generated_report`); the result."""
     from amr_twin.base.atomic_file import all_or_nothing
     from amr_twin.experiments.navigation import experiment as navigation
     from amr_twin.experiments.navigation import generated_report, report
@@ -243,13 +244,12 @@ def drive(
     )
     out_dir.mkdir(parents=True, exist_ok=True)
     if plan.halls:
-        data = navigation.run_halls(cfg, plan.halls, plan.tuning, spec.episodes, **common)
+        halls = navigation.run_halls(cfg, plan.halls, plan.tuning, spec.episodes, **common)
         with all_or_nothing():
-            generated_report.write_worlds(cfg, data, out_dir)
-            data.pop("static_maps")
-            generated_report.report(data, out_dir)
-        return data
-    data = navigation.run(
+            generated_report.write_worlds(cfg, halls, out_dir)
+            generated_report.report(halls.as_json(), out_dir)
+        return halls
+    result = navigation.run(
         cfg,
         spec.world,
         spec.episodes,
@@ -258,11 +258,10 @@ def drive(
         slam_stem=out_dir / "slam_map",
         **common,
     )
-    static_maps = data.pop("static_maps")
     with all_or_nothing():
-        report.plot(data["rows"], static_maps, out_dir)
-        report.report(data, out_dir)
-    return data
+        report.plot(result.rows, result.static_maps, out_dir)
+        report.report(result.as_json(), out_dir)
+    return result
 
 
 EXPERIMENTS.register(
@@ -271,7 +270,7 @@ EXPERIMENTS.register(
         "navigation",
         NavigationSpec,
         run,
-        dict,
+        NavigationResult,
         "seeded start/goal episodes on the true and the SLAM map, some with a person in the way",
     ),
 )

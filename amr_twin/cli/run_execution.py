@@ -39,7 +39,7 @@ def finite(name: str, value: Optional[float], required: bool = True) -> Optional
 
 
 def _duration(opts: RunOptions, default_s: float) -> float:
-    if opts.duration_s == math.inf:  # until stopped: Ctrl-C, SIGTERM (roslaunch), _run_live
+    if opts.duration_s == math.inf:  # until stopped: Ctrl-C, SIGTERM (roslaunch), run_live
         if not (opts.ros1 or opts.live is not None):
             fail(
                 "--duration-s inf: a run until stopped is for the graph or a live view: give "

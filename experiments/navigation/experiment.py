@@ -19,15 +19,10 @@ from amr_twin.experiments.navigation.episodes import (
     free_cells,
     place,
 )
-from amr_twin.experiments.navigation.result import HallsResult, NavigationResult
+from amr_twin.experiments.navigation.result import OPTIMAL, HallsResult, NavigationResult
 from amr_twin.model.worlds import Obstacle
 
 MAPS = ("true", "slam")
-OPTIMAL = (
-    "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
-    "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound"
-)
-"""What the rows' optimal length is (``optimal`` of ``metrics.json``)."""
 
 
 def episodes(cfg, world: str, n: int, seed: int = 0, people: str = "walking") -> list[Episode]:

@@ -10,6 +10,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 
+OPTIMAL = (
+    "shortest path of the robot's centre in the visibility graph of the true world's obstacles "
+    "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound"
+)
+"""What the rows' optimal length is (``optimal`` of ``metrics.json``)."""
+
 
 def _as_json(result) -> dict:
     """``result``'s fields in their order, the static maps left out."""

@@ -19,7 +19,7 @@ _WHERE = {
     "attach_recorder": "amr_twin.recording.recorder",
     "attach_capture": "amr_twin.recording.rerun_capture:attach",
     "record_run": "amr_twin.recording.rerun_log",
-    "navigate": "amr_twin.navigation.stack",
+    "navigate": "amr_twin.navigation.navigation_run",
     "NavigationOptions": "amr_twin.navigation.stack",
     "LocalController": "amr_twin.navigation.interfaces",
     "Twist2D": "amr_twin.navigation.interfaces",

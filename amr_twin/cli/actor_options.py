@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from amr_twin.cli.common import _guard, fail
-from amr_twin.cli.options import RunOptions
+from amr_twin.cli.run_options import RunOptions
 
 
 MAX_ACTORS = 50

@@ -257,3 +257,27 @@ class Costmap:
         self.dist_m[:] = self.static_dist_m
         self.obstacle_dist_m[:] = self._cap
         self._changed(None)
+
+
+def goal_problem(costmap: Costmap, goal_xy_m) -> str:
+    """Why a goal cannot be planned to, in one line ('' when it can): off the map, or too close to
+    an obstacle."""
+    gx, gy = float(goal_xy_m[0]), float(goal_xy_m[1])
+    r, c, inside = costmap.cells(np.array([[gx, gy]]))
+    if not inside[0]:
+        lo = costmap.origin_xy_m
+        hi = lo + np.array(costmap.shape[::-1]) * costmap.resolution_m
+        return (
+            f"goal ({gx:.2f}, {gy:.2f}) lies outside the map "
+            f"(x {lo[0]:.2f} to {hi[0]:.2f}, y {lo[1]:.2f} to {hi[1]:.2f} m)"
+        )
+    d = float(costmap.dist_m[r[0], c[0]])
+    if d <= 0.0:
+        return f"goal ({gx:.2f}, {gy:.2f}) lies inside an obstacle of the map"
+    if d <= costmap.inscribed_m:
+        return (
+            f"goal ({gx:.2f}, {gy:.2f}) lies {d:.2f} m from an obstacle of the map, closer than "
+            f"the "
+            f"robot's half width ({costmap.inscribed_m:.3f} m)"
+        )
+    return ""

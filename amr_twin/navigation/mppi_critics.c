@@ -1,5 +1,6 @@
 /* The MPPI controller's sampling, rollout sums and critics: the C twin of Mppi._sample (with _feasible),
- * Mppi.rollout (around NumPy's cos and sin) and Mppi.costs (with _people_costs) in amr_twin/navigation/mppi.py
+ * Mppi.rollout (around NumPy's cos and sin) in amr_twin/navigation/mppi.py and MppiCritics.costs (with
+ * _people_costs) in amr_twin/navigation/mppi_critics.py
  * (the critics, their symbols and their sources are described there). Arrays are time-major as there:
  * controls (T, K, 2), trajectories (T, K).
  *

@@ -13,14 +13,15 @@ import numpy as np
 from amr_twin.estimation.ekf import POSE_TOPIC
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.interfaces import LocalController, Planner
-from amr_twin.navigation.kinematics import Limits, rotation_rate, to_map, wrap
+from amr_twin.navigation.kinematics import Limits, rotation_rate, wrap
 from amr_twin.navigation.map_matching import MapMatcher
-from amr_twin.navigation.path_handler import PathHandler
 from amr_twin.navigation.people import NOBODY, PeopleTracker
+from amr_twin.navigation.perception import Perception
 from amr_twin.navigation.progress import ProgressChecker
 from amr_twin.navigation.registries import RECOVERIES, ROUND_ROBIN
+from amr_twin.navigation.replanning import Replanning
 from amr_twin.navigation.yielding import Yielding
-from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped, Twist, Vector3
+from amr_twin.ros.geometry_messages import PoseWithCovarianceStamped, Twist
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,7 @@ class GoalOutcome:
     pose_estimate_end: tuple | None = None  # the navigator's pose (x_m, y_m, yaw_rad) when it ended
 
 
-class Navigator:
+class Navigator(Perception, Replanning):
     """Drive to each goal ``(x_m, y_m, yaw_rad or None)`` in turn (module docstring), from
     ``start_s``."""
 
@@ -186,171 +187,6 @@ class Navigator:
     @property
     def plan(self):
         return self._plan
-
-    def _on_scan(self, scan) -> None:
-        if not self.pose_source.ready:
-            return
-        origin, end, hit = self.pose_source.scan_in_map(
-            scan, self.p.laser_xy_yaw, self.p.raytrace_range_m
-        )
-        if self.matcher is not None:
-            matches = self.matcher.matches
-            step = self.matcher.update(origin[len(origin) // 2], end[hit])
-            if step[2] or step[0] or step[1]:
-                origin, end = to_map(np.array([step]), origin)[0], to_map(np.array([step]), end)[0]
-                self.pose_source.correction = self.matcher.correction
-            if (
-                self._matched is not None and self.matcher.matches > matches
-            ):  # to the EKF, which takes it in
-                before = self.pose_source.raw_pose()
-                self._matched.publish(
-                    self.matcher.pose_message(
-                        self.pose_source.pose(), self.pose_source.stamp_s, self.matcher.matches
-                    )
-                )
-                self.pose_source.rebase(before)
-                self.matcher.correction = self.pose_source.correction
-        self.costmap.update_scan(origin, end, hit, self.p.obstacle_range_m, self.p.raytrace_range_m)
-        self._scan_points = end[hit]
-        self._unmapped = self.costmap.static_distance_at(self._scan_points) > self.p.unmapped_m
-        t = scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(hit))
-        self.tracker.update(
-            self._scan_points[self._unmapped], t[hit][self._unmapped], origin[0], t[-1]
-        )
-        self.people = self.tracker.people()
-
-    def _publish(self, v: float, w: float) -> None:
-        pose = self.pose_source.pose() if self.pose_source.ready else None
-        wanted = (v, w)
-        if pose is not None and len(self._scan_points) and (v or w):
-            v, w = self.monitor.filter(v, w, *self._in_base(pose))
-        if self.yielding is not None and pose is not None and not self.done:
-            v, w = self._yield(pose, wanted, (v, w))
-        self.commands.append((self.clock.now_s, v, w))
-        self._cmd.publish(Twist(Vector3(float(v), 0.0, 0.0), Vector3(0.0, 0.0, float(w))))
-
-    def _in_base(self, pose, people: bool = True) -> tuple:
-        """What the collision monitor takes, in the base frame: the scan's points (n, 2), which of
-        them are unmapped, and (``people``) the people's predicted positions and velocities (or
-        None)."""
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        rot = np.array([[c, -s], [s, c]])  # map -> base: row vectors times this
-        if people and len(self.people):
-            xy = (
-                self.people.at(np.array([self.clock.now_s]), self.tracker.horizon_s)[:, 0]
-                - pose[:2]
-            )
-            people = (xy @ rot, self.people.v_m_s @ rot)
-        else:
-            people = None
-        return (self._scan_points - pose[:2]) @ rot, self._unmapped, people
-
-    def _yield(self, pose, wanted, filtered) -> tuple[float, float]:
-        """``filtered`` or, with a person about to walk into the robot where it would stand, the way
-        out of their path (:class:`~amr_twin.navigation.yielding.Yielding`), ramped, through the
-        monitor's zones of returns (not its people zones: they would stop the way out)."""
-        vel = self._velocity()
-        out = self.yielding.command(
-            self.clock.now_s, pose, vel, wanted, filtered, self.people, self._scan_points
-        )
-        if out is None:
-            return filtered
-        v, w = self.limits.ramp(*out, *vel, self.dt_s)
-        if len(self._scan_points) and (v or w):
-            v, w = self.monitor.filter(v, w, *self._in_base(pose, people=False))
-        return v, w
-
-    def _finish(self, status: str, reason: str = "") -> None:
-        out = self.outcomes[self._goal_i]
-        out.status, out.reason, out.t_end_s = status, reason, self.clock.now_s
-        if self.pose_source.ready:
-            out.pose_estimate_end = tuple(float(v) for v in self.pose_source.pose())
-        self._goal_i += 1
-        self._path = self._plan = self._recovery = None
-        self._failures, self._blocked_since, self._rotating_to_goal = 0, None, False
-        self._inside_since = self._yaw_inside_since = None
-        self._next_plan_s = self.clock.now_s
-        self.progress.reset()
-        if status == "aborted":  # the goals after it are not attempted
-            for later in self.outcomes[self._goal_i :]:
-                later.status, later.reason = (
-                    "aborted",
-                    f"not attempted: an earlier goal failed ({reason})",
-                )
-            self._goal_i = len(self.outcomes)
-
-    def _fail(self, why: str) -> None:
-        """A failure of planning or control: the next recovery, or the goal aborted."""
-        self._failures += 1
-        out = self.outcomes[self._goal_i]
-        if self._failures > self.p.max_failures:
-            g = out.goal
-            self._finish(
-                "aborted",
-                f"goal ({g[0]:.2f}, {g[1]:.2f}) not reached: {why} "
-                f"(after {self.p.max_failures} recoveries)",
-            )
-            return
-        name, make = self.recoveries[self._rr % len(self.recoveries)]
-        self._rr += 1
-        self._recovery = make(
-            self.costmap,
-            self.footprint,
-            self.limits,
-            self.dt_s,
-            **self.recovery_settings.get(name, {}),
-        )
-        self._recovery.start(self.clock.now_s, self.pose_source.pose())
-        out.recoveries.append((self.clock.now_s, name, why))
-        self._blocked_since = None
-        self.progress.reset()
-        self.controller.reset()
-
-    def _plan_stale(self, pose) -> bool:
-        """Whether a new plan could differ: the costmap changed since the last one, or the robot
-        left it by more than ``off_path_m`` (a plan is optimal from each of its points on the same
-        costmap)."""
-        if self.costmap.version != self._plan_version:
-            return True
-        self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
-        return self._path.distance_to_path_m(pose[0], pose[1]) > self.p.off_path_m
-
-    def _replan(self, pose) -> bool:
-        out = self.outcomes[self._goal_i]
-        g = out.goal
-        self._plan_version = self.costmap.version
-        ppl = self.people
-        standing = ppl.xy_m[
-            (np.hypot(*ppl.v_m_s.T) == 0.0)
-            & (np.hypot(*(ppl.xy_m - pose[:2]).T) > self.planner.people_m + 0.1)
-        ]  # not those at the robot
-        plan = self.planner.plan(pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing)
-        if plan is None:  # nav2: clear the global costmap and try once more before failing
-            self.costmap.clear()
-            plan = self.planner.plan(
-                pose[:2], np.array(g[:2]), None if len(g) < 3 else g[2], standing
-            )
-        self._next_plan_s = self.clock.now_s + 1.0 / self.p.planner_hz
-        if plan is None:
-            return False
-        out.plan_cpu_s.append(plan.cpu_s)
-        old = self._path
-        if (
-            old is not None
-            and plan.length_m >= old.remaining_m
-            and old.distance_to_path_m(pose[0], pose[1]) <= self.p.off_path_m
-            and self.planner.path_free(old.poses[old.index :, :2], standing)
-        ):
-            # nav2's replanning only if the path becomes invalid: a longer plan leaves a free path
-            # as it is (a tier's margin flickering with what the scans show of a pallet jack turned
-            # the robot back and forth between two routes, the path's heading each time)
-            return True
-        if math.isnan(out.first_plan_length_m):
-            out.first_plan_length_m = plan.length_m
-        self._plan, self._path = plan, PathHandler(plan.poses)
-        if self.outputs is not None:
-            self.outputs.plan(plan)
-        return True
 
     # -- the control cycle ----------------------------------------------------------------------
     def _on_timer(self) -> None:

@@ -19,6 +19,7 @@ from amr_twin.experiments.navigation.episodes import (
     free_cells,
     place,
 )
+from amr_twin.experiments.navigation.result import OPTIMAL, HallsResult, NavigationResult
 from amr_twin.model.worlds import Obstacle
 
 MAPS = ("true", "slam")
@@ -95,7 +96,8 @@ def run_episode(item: EpisodeRun) -> dict:
     :func:`amr_twin.experiments.navigation.generated.door_metrics`)."""
     from amr_twin.experiments.navigation.metrics import measure
     from amr_twin.model.generated_world import is_generated
-    from amr_twin.navigation.stack import NavigationOptions, navigate
+    from amr_twin.navigation.navigation_run import navigate
+    from amr_twin.navigation.stack import NavigationOptions
     from amr_twin.assembly.twin import TwinOptions
 
     ep = item.episode
@@ -150,7 +152,7 @@ def run(
     client=None,
     progress: bool = True,
     people: str = "walking",
-) -> dict:
+) -> NavigationResult:
     """Every episode on every map (building the SLAM map at ``slam_stem`` first when ``slam_yaml``
     is None)."""
     import time
@@ -189,28 +191,26 @@ def run(
     static_maps = {
         kind: load_static_map(cfg, world, slam_yaml if kind == "slam" else None) for kind in maps
     }
-    return {
-        "world": world,
-        "episodes": n,
-        "seed": seed,
-        "people": people,
-        "maps": list(maps),
-        "localisation": localisation,
-        "controller": controller,
-        "firmware": firmware,
-        "slam_map": slam,
-        "optimal": "shortest path of the robot's centre in the visibility graph of the true "
-        "world's obstacles "
-        "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
-        "summary": summary(rows),
-        "rows": rows,
-        "static_maps": static_maps,
-        "jobs": jobs,
-        "wall_s": time.perf_counter() - wall0,
-        "cpu_s": time.process_time()
+    return NavigationResult(
+        world=world,
+        episodes=n,
+        seed=seed,
+        people=people,
+        maps=list(maps),
+        localisation=localisation,
+        controller=controller,
+        firmware=firmware,
+        slam_map=slam,
+        optimal=OPTIMAL,
+        summary=summary(rows),
+        rows=rows,
+        static_maps=static_maps,
+        jobs=jobs,
+        wall_s=time.perf_counter() - wall0,
+        cpu_s=time.process_time()
         - cpu0
         + sum(r["cpu_s"] for r in rows) * (jobs > 1 or client is not None),
-    }
+    )
 
 
 def run_halls(
@@ -227,7 +227,7 @@ def run_halls(
     client=None,
     progress: bool = True,
     people: str = "walking",
-) -> dict:
+) -> HallsResult:
     """``n`` episodes on the true map of each generated hall of ``worlds``, summed up for the
     ``tuning`` halls and for the others (held out) apart (:mod:`.generated`); each with a walking
     person also run without them, for the time the people cost (``people`` of each group's summary,
@@ -278,27 +278,25 @@ def run_halls(
                 "doors": door_summary(sel),
                 "people": people_penalty(sel, [r for r in bare if r["world"] in members]),
             }
-    return {
-        "worlds": worlds,
-        "groups": groups,
-        "episodes": n,
-        "seed": seed,
-        "people": people,
-        "maps": ["true"],
-        "localisation": localisation,
-        "controller": controller,
-        "firmware": firmware,
-        "optimal": "shortest path of the robot's centre in the visibility graph of the true "
-        "world's obstacles "
-        "(unmapped ones included) grown by the footprint's inscribed radius: a lower bound",
-        "summary": summaries,
-        "by_world": {w: door_summary([r for r in rows if r["world"] == w]) for w in worlds},
-        "rows": rows,
-        "rows_without_people": bare,
-        "static_maps": {w: true_map(cfg, w) for w in worlds},
-        "jobs": jobs,
-        "wall_s": time.perf_counter() - wall0,
-        "cpu_s": time.process_time()
+    return HallsResult(
+        worlds=worlds,
+        groups=groups,
+        episodes=n,
+        seed=seed,
+        people=people,
+        maps=["true"],
+        localisation=localisation,
+        controller=controller,
+        firmware=firmware,
+        optimal=OPTIMAL,
+        summary=summaries,
+        by_world={w: door_summary([r for r in rows if r["world"] == w]) for w in worlds},
+        rows=rows,
+        rows_without_people=bare,
+        static_maps={w: true_map(cfg, w) for w in worlds},
+        jobs=jobs,
+        wall_s=time.perf_counter() - wall0,
+        cpu_s=time.process_time()
         - cpu0
         + sum(r["cpu_s"] for r in done) * (jobs > 1 or client is not None),
-    }
+    )

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from amr_twin.experiments.runner.executor import write_json, write_text
 from amr_twin.experiments.navigation.report import _fmt, plot
+from amr_twin.experiments.navigation.result import HallsResult
 
 
 def world_folder(world: str) -> str:
@@ -18,16 +19,16 @@ def world_folder(world: str) -> str:
     return f"generated_{seed}" + ("" if door is None else f"_door{door:g}")
 
 
-def write_worlds(cfg, data: dict, out: Path) -> None:
+def write_worlds(cfg, result: HallsResult, out: Path) -> None:
     """Each hall's world files (:func:`~.generated.write_world`) and ``trajectories_true.png``."""
     from amr_twin.experiments.navigation.generated import write_world
 
-    for world in data["worlds"]:
+    for world in result.worlds:
         folder = out / world_folder(world)
         write_world(cfg, world, folder)
         plot(
-            [r for r in data["rows"] if r["world"] == world],
-            {"true": data["static_maps"][world]},
+            [r for r in result.rows if r["world"] == world],
+            {"true": result.static_maps[world]},
             folder,
         )
 

@@ -240,7 +240,7 @@ def test_a_memory_limit_is_checked_before_and_one_line_after(tmp_path, refused, 
 
 
 def test_the_client_stops_at_the_bound_of_a_run(monkeypatch):
-    from amr_twin.cli.menu import RealTimeTwin
+    from amr_twin.cli.real_time_twin import RealTimeTwin
     from amr_twin.model.config import load_config
     from amr_twin.assembly.twin import Twin, TwinOptions
 
@@ -737,7 +737,7 @@ def test_goals_refuse_the_options_they_would_ignore_and_use_the_odometry(
         seen["options"] = options
         raise Started
 
-    monkeypatch.setattr("amr_twin.navigation.stack.navigate", navigate)
+    monkeypatch.setattr("amr_twin.navigation.navigation_run.navigate", navigate)
     goto = ["run", "goto", "--world", "aisles", "--goal", "0,2.4", "--localisation", "truth"]
     refused([*goto, "--roscore"], "--roscore is an option of --ros1")
     refused(

@@ -38,9 +38,9 @@ RUN = CliRunner()
 def test_a_goal_that_cannot_be_reached_is_refused_in_one_line_before_the_run(
     args, text, monkeypatch
 ):
-    import amr_twin.navigation.stack as stack
+    import amr_twin.navigation.navigation_run as navigation_run
 
-    monkeypatch.setattr(stack, "navigate", lambda *a, **k: pytest.fail("the run started"))
+    monkeypatch.setattr(navigation_run, "navigate", lambda *a, **k: pytest.fail("the run started"))
     res = RUN.invoke(app, ["run", "goto", *args])
     assert res.exit_code == 2, res.output
     assert text in res.output and len(res.output.strip().splitlines()) == 1, res.output
@@ -49,9 +49,9 @@ def test_a_goal_that_cannot_be_reached_is_refused_in_one_line_before_the_run(
 def test_a_start_off_the_map_is_named_as_the_start(tmp_path, monkeypatch):
     """A map file covering 2 x 2 m at the origin; the aisles world's start (-23.5, 0) lies off
     it."""
-    import amr_twin.navigation.stack as stack
+    import amr_twin.navigation.navigation_run as navigation_run
 
-    monkeypatch.setattr(stack, "navigate", lambda *a, **k: pytest.fail("the run started"))
+    monkeypatch.setattr(navigation_run, "navigate", lambda *a, **k: pytest.fail("the run started"))
     (tmp_path / "m.pgm").write_bytes(b"P5\n40 40\n255\n" + bytes([254]) * 1600)
     (tmp_path / "m.yaml").write_text(
         "image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
@@ -349,7 +349,7 @@ def test_goto_gives_the_least_clearance_and_both_final_errors(recorded):
 def test_goal_tolerance_options_set_what_the_navigator_judges_by(monkeypatch):
     """--xy-tolerance-m, --yaw-tolerance-deg, --inflation-radius-m reach the stack as the parameter
     file's keys."""
-    import amr_twin.navigation.stack as stack
+    import amr_twin.navigation.navigation_run as navigation_run
 
     seen = {}
 
@@ -357,7 +357,7 @@ def test_goal_tolerance_options_set_what_the_navigator_judges_by(monkeypatch):
         seen["cfg"] = cfg
         raise SystemExit(0)
 
-    monkeypatch.setattr(stack, "navigate", fake)
+    monkeypatch.setattr(navigation_run, "navigate", fake)
     RUN.invoke(
         app,
         [
@@ -394,9 +394,9 @@ def test_goal_tolerance_options_set_what_the_navigator_judges_by(monkeypatch):
     ],
 )
 def test_bad_goal_options_are_refused_in_one_line(args, text, monkeypatch):
-    import amr_twin.navigation.stack as stack
+    import amr_twin.navigation.navigation_run as navigation_run
 
-    monkeypatch.setattr(stack, "navigate", lambda *a, **k: pytest.fail("the run started"))
+    monkeypatch.setattr(navigation_run, "navigate", lambda *a, **k: pytest.fail("the run started"))
     res = RUN.invoke(app, ["run", "goto", "--goal=-6,0", "--start=-9,0,0", *args])
     assert (
         res.exit_code == 2 and text in res.output and len(res.output.strip().splitlines()) == 1

@@ -47,13 +47,13 @@ def test_every_default_goto_help_states_is_what_runs(monkeypatch):
     """goto --help used to state the faithful firmware and 10 s while goto ran the improved one for
     60 s + 4 s per metre: each stated default is checked here against what reaches the navigation
     stack."""
-    import amr_twin.cli.options as options
-    import amr_twin.navigation.stack as stack
+    import amr_twin.cli.live_options as live_options
+    import amr_twin.navigation.navigation_run as navigation_run
     from amr_twin.live.session import RERUN_WEB_PORT
     from amr_twin.model.config import load_config
 
     seen = {}
-    real_live = options.checked_live
+    real_live = live_options.checked_live
 
     def live(*a, **k):
         seen["live"] = real_live(*a, **k)
@@ -63,8 +63,8 @@ def test_every_default_goto_help_states_is_what_runs(monkeypatch):
         seen.update(cfg=cfg, twin=twin_options, nav=nav_options)
         raise SystemExit(0)
 
-    monkeypatch.setattr(options, "checked_live", live)
-    monkeypatch.setattr(stack, "navigate", navigate)
+    monkeypatch.setattr(live_options, "checked_live", live)
+    monkeypatch.setattr(navigation_run, "navigate", navigate)
     res = RUN.invoke(app, ["run", "goto", "--goal=-6,0", "--live"])
     assert "cfg" in seen, res.output
     cfg, twin, nav, live_opts = seen["cfg"], seen["twin"], seen["nav"], seen["live"]
@@ -83,7 +83,7 @@ def test_every_default_goto_help_states_is_what_runs(monkeypatch):
             nav.timeout_s is None
             and limit is not None
             and (float(limit.group(1)), float(limit.group(2)))
-            == (stack.LIMIT_BASE_S, stack.LIMIT_S_PER_M)
+            == (navigation_run.LIMIT_BASE_S, navigation_run.LIMIT_S_PER_M)
         ),
         "--firmware": lambda d: d.split()[0] == twin.firmware,
         "--seed": lambda d: int(d) == twin.seed,

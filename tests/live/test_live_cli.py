@@ -7,7 +7,7 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
-from amr_twin.cli.options import live_option_args
+from amr_twin.cli.live_options import live_option_args
 
 pytest.importorskip("foxglove")
 runner = CliRunner()

@@ -164,7 +164,8 @@ TRIPS = (((8.01, 7.97, -1.33), (15.26, 11.74)), ((8.66, 5.59, 1.79), (18.55, 4.9
 
 @pytest.fixture(scope="module", params=range(len(TRIPS)))
 def door_trip(request, tmp_path_factory):
-    from amr_twin.navigation.stack import NavigationOptions, navigate
+    from amr_twin.navigation.navigation_run import navigate
+    from amr_twin.navigation.stack import NavigationOptions
     from amr_twin.assembly.twin import TwinOptions
 
     world = write_map(tmp_path_factory.mktemp("door"), "door", door_hall())

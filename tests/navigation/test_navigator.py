@@ -18,7 +18,8 @@ from amr_twin.model.config import load_config
 from amr_twin.model.worlds import Obstacle, load_map, wall_boxes, world_path
 from amr_twin.navigation.footprint import robot_footprint
 from amr_twin.navigation.interfaces import LocalController, Twist2D
-from amr_twin.navigation.stack import NavigationOptions, navigate, robot_top_m
+from amr_twin.navigation.navigation_run import navigate
+from amr_twin.navigation.stack import NavigationOptions, robot_top_m
 from amr_twin.model.world_geometry import Footprints
 from amr_twin.navigation.static_map import obstacle_boxes, yaml_map
 from amr_twin.assembly.twin import TwinOptions

@@ -19,7 +19,8 @@ from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
 from amr_twin.navigation.footprint import robot_footprint
 from amr_twin.navigation.kinematics import to_map
-from amr_twin.navigation.stack import REST_S, NavigationOptions, navigate
+from amr_twin.navigation.navigation_run import navigate
+from amr_twin.navigation.stack import REST_S, NavigationOptions
 from amr_twin.assembly.twin import TwinOptions
 
 from nav_grids import room, write_map

@@ -6,7 +6,8 @@ import math
 import numpy as np
 
 from amr_twin.navigation.costmap import Costmap
-from amr_twin.navigation.planner import GlobalPlanner, goal_problem
+from amr_twin.navigation.costmap import goal_problem
+from amr_twin.navigation.planner import GlobalPlanner
 
 from nav_grids import room, two_corridors
 

@@ -80,7 +80,7 @@ class Physics:
         b = self.base_body
         self._base_inertial = tuple(
             a[b].copy() for a in (m.body_mass, m.body_ipos, m.body_iquat, m.body_inertia)
-        ) + (m.stat.meaninertia,)
+        )
         G = mujoco.mjtObj.mjOBJ_GEOM
         self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
         self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
@@ -316,10 +316,10 @@ class Physics:
         in base_link, from the next step on: base_link's mass, centre of mass and inertia become
         those of the chassis with the box (parallel-axis theorem), the model's constants
         (subtree masses, inverse weights, the solver's mean inertia) those of the loaded robot at
-        qpos0 (``mj_setConst`` on scratch data); 0 puts back the values as built. In addition to
-        a payload body built into the model."""
+        qpos0 (``mj_setConst`` on scratch data); 0 puts back base_link as built. In addition to a
+        payload body built into the model."""
         m, b, scratch = self.model, self.base_body, mujoco.MjData(self.model)
-        m0, c0, q0, i0, mean = self._base_inertial
+        m0, c0, q0, i0 = self._base_inertial
         if mass_kg > 0:
             r0 = np.empty(9)
             mujoco.mju_quat2Mat(r0, q0)
@@ -335,11 +335,9 @@ class Physics:
             m0, c0, q0, i0 = total, com, quat, values
         m.body_mass[b], m.body_ipos[b], m.body_iquat[b], m.body_inertia[b] = m0, c0, q0, i0
         mujoco.mj_setConst(m, scratch)
-        if mass_kg > 0:  # MuJoCo's compiler: the mean of the mass matrix's diagonal at qpos0
-            full = np.zeros((m.nv, m.nv))
-            mujoco.mj_fullM(m, scratch, full)
-            mean = float(np.trace(full)) / m.nv
-        m.stat.meaninertia = mean
+        full = np.zeros((m.nv, m.nv))  # MuJoCo's compiler: the mass matrix's mean diagonal at qpos0
+        mujoco.mj_fullM(m, scratch, full)
+        m.stat.meaninertia = float(np.trace(full)) / m.nv
 
     # -- actuation --------------------------------------------------------------------
     def set_motor(

@@ -380,6 +380,18 @@ class Twin(Hooks):
             self.physics.restore_positions(before)
             raise ValueError(str(exc).split(";")[0]) from None
 
+    def set_payload_kg(self, mass_kg: float) -> None:
+        """Carry a load of ``mass_kg`` (0: none) from the next step on: a box of ``payload.size_m``
+        at ``payload.xy_m`` on the deck (:meth:`~amr_twin.sim.physics.Physics.set_payload_kg`)."""
+        from amr_twin.model.robot_spec import payload_centre_m
+
+        self.physics.set_payload_kg(mass_kg, payload_centre_m(self.cfg), self.cfg.payload.size_m)
+
+    def set_charger_a(self, current_a: float) -> None:
+        """Connect a charger of ``current_a`` (0: disconnect) to the pack
+        (:attr:`~amr_twin.sim.battery.Battery.charger_a`)."""
+        self.plant.battery.charger_a = current_a
+
     def reset_world(self) -> None:
         """The actors back at the start of their paths, the robot at its start pose, at rest."""
         if self.actors is not None:

@@ -7,14 +7,39 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 INSTANT_ACTIONS = frozenset(
-    {"cancelOrder", "startPause", "stopPause", "initPosition", "stateRequest", "factsheetRequest"}
+    {
+        "cancelOrder",
+        "startPause",
+        "stopPause",
+        "initPosition",
+        "stateRequest",
+        "factsheetRequest",
+        "startCharging",
+        "stopCharging",
+    }
 )
 """The instant actions this vehicle performs."""
-NODE_ACTIONS: frozenset = frozenset()
-"""The node actions it performs (pick, drop and charging are not built yet: an order carrying them
-is refused)."""
+NODE_ACTIONS = frozenset({"pick", "drop", "startCharging", "stopCharging"})
+"""The node actions it performs (:mod:`amr_twin.fleet.handling`)."""
 EDGE_ACTIONS: frozenset = frozenset()
+BLOCKING_TYPES = ("NONE", "SOFT", "HARD")
 DONE = ("FINISHED", "FAILED")
+
+
+@dataclass(frozen=True)
+class Action:
+    """An action of an order or an instant action: its id, type, ``blocking`` type (NONE, SOFT,
+    HARD) and ``parameters`` ((key, value), ... as sent)."""
+
+    action_id: str
+    action_type: str
+    blocking: str = "HARD"
+    parameters: tuple = ()
+
+    @property
+    def params(self) -> dict:
+        """The parameters by key."""
+        return dict(self.parameters)
 
 
 @dataclass

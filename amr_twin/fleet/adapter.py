@@ -7,7 +7,9 @@ the next released node is sent to the vehicle as a goal (with its theta, if any)
 traversed when the goal succeeds or, for a node the vehicle drives on from, when it passes within
 the node's allowed deviation (the vehicle's goal tolerance when 0). It stops at the last released
 node; unreleased ones (the horizon) wait for an order update, which is stitched at the last base
-node (:func:`~amr_twin.fleet.order.stitch`). The state goes out at every change and at least every
+node (:func:`~amr_twin.fleet.order.stitch`). A node with actions is stopped at; its actions run one
+after the other once the vehicle stands (:class:`~amr_twin.fleet.handling.Handling`), then it drives
+on; while charging it drives nowhere. The state goes out at every change and at least every
 ``STATE_PERIOD_S``; the visualization every tick. A refused order or action is answered with an
 error in the state (:class:`~amr_twin.fleet.order.Rejection`), never an exception."""
 
@@ -15,7 +17,7 @@ from __future__ import annotations
 
 import json
 
-from amr_twin.fleet.actions import EDGE_ACTIONS, INSTANT_ACTIONS, NODE_ACTIONS, ActionStates
+from amr_twin.fleet.actions import EDGE_ACTIONS, INSTANT_ACTIONS, NODE_ACTIONS, Action, ActionStates
 from amr_twin.fleet.order import Order, Rejection, parse_order, stitch
 from amr_twin.fleet.vehicle import within
 
@@ -29,13 +31,24 @@ class VehicleAdapter:
     """``vehicle`` (:class:`~amr_twin.fleet.vehicle.Vehicle`) behind VDA 5050; ``send(subtopic,
     message)`` publishes, ``stamper`` (:class:`~amr_twin.fleet.protocol.Stamper`) heads each
     message, ``factsheet`` is the factsheet's body; ``xy_tolerance_m``: the vehicle's own tolerance
-    at a node (allowedDeviationXY 0)."""
+    at a node (allowedDeviationXY 0); ``handling``: its load and charging actions
+    (:class:`~amr_twin.fleet.handling.Handling`)."""
 
     def __init__(
-        self, vehicle, clock, send, stamper, factsheet: dict, xy_tolerance_m: float = 0.25
+        self,
+        vehicle,
+        clock,
+        send,
+        stamper,
+        factsheet: dict,
+        xy_tolerance_m: float = 0.25,
+        *,
+        handling,
     ):
         self.vehicle, self.clock, self.send, self.stamper = vehicle, clock, send, stamper
         self.factsheet_body, self.xy_tolerance_m = factsheet, xy_tolerance_m
+        self.handling = handling
+        self._queue: list[Action] = []  # the actions of the node reached, still to start
         self.order: Order | None = None
         self.nodes: list = []  # node states left, in sequence
         self.edges: list = []
@@ -104,6 +117,18 @@ class VehicleAdapter:
 
     def _accept(self, order: Order) -> None:
         current = self.order
+        released = [n for n in order.nodes if n.released]
+        if (
+            self.handling.charging
+            and len(released) > 1
+            and "stopCharging" not in {a.action_type for a in order.nodes[0].actions}
+        ):
+            raise Rejection(
+                "orderError",
+                f"order {order.order_id}: the vehicle is charging and drives nowhere: "
+                "stopCharging first (an instant action, or on the order's first node)",
+                (("topic", "order"), ("orderId", order.order_id)),
+            )
         if current is not None and order.order_id == current.order_id:
             if order.update_id < current.update_id:
                 raise Rejection(
@@ -145,6 +170,9 @@ class VehicleAdapter:
             self.nodes, self.edges = list(order.nodes), list(order.edges)
         if current is None or order.order_id != current.order_id:
             self.actions.new_order()
+        for a in (a for n in self.nodes if n.released for a in n.actions):
+            if self.actions.get(a.action_id) is None:
+                self.actions.add(a.action_id, a.action_type, "WAITING", order=True)
         self.order = order
         self.errors = [
             e
@@ -156,6 +184,7 @@ class VehicleAdapter:
                 "orderUpdateError",
                 "noRouteError",
                 "navigationError",
+                "actionError",
             )
         ]
         if not stitched:  # the first node is where the vehicle stands: traversed now
@@ -217,7 +246,7 @@ class VehicleAdapter:
             )
 
     def _instant_cancelOrder(self, action_id: str, _params) -> None:
-        if not self.nodes and self._goal is None:
+        if not self.nodes and self._goal is None and not self._queue and not self.handling.busy:
             self.actions.set(action_id, "FAILED", "no order to cancel")
             self._error(
                 Rejection(
@@ -228,7 +257,8 @@ class VehicleAdapter:
             )
             return
         self.vehicle.cancel()
-        self.nodes, self.edges, self._goal = [], [], None
+        self.nodes, self.edges, self._goal, self._queue = [], [], None, []
+        self.handling.abort()
         self.actions.fail_order_actions("order cancelled")
         self.actions.set(action_id, "RUNNING")
 
@@ -278,23 +308,52 @@ class VehicleAdapter:
         self.publish_factsheet()
         self.actions.set(action_id, "FINISHED")
 
+    def _instant_startCharging(self, action_id: str, _params) -> None:
+        self._start(Action(action_id, "startCharging"))
+
+    def _instant_stopCharging(self, action_id: str, _params) -> None:
+        self._start(Action(action_id, "stopCharging"))
+
+    # -- the vehicle's own actions ------------------------------------------------------------
+    def _start(self, action: Action) -> None:
+        try:
+            status, result = self.handling.start(action, self.clock.now_s, not self._driving)
+        except Rejection as exc:
+            self.actions.set(action.action_id, "FAILED", exc.description)
+            self._error(exc)
+            return
+        self.actions.set(action.action_id, status, result)
+
+    def _do_actions(self) -> None:
+        """Finish the running pick or drop when its time is up; start the next action of the node
+        reached once the vehicle stands."""
+        done = self.handling.step(self.clock.now_s)
+        if done is not None:
+            self.actions.set(done[0].action_id, "FINISHED", done[1])
+        if not self.handling.busy and self._queue and not self._driving and not self.paused:
+            self._start(self._queue.pop(0))
+
     # -- the order ----------------------------------------------------------------------------
     def _traverse(self, node, first: bool = False) -> None:
         self.nodes.remove(node)
         if not first and self.edges:
             self.edges.pop(0)
         self.last_node, self._last_node_obj = (node.node_id, node.sequence_id), node
+        self._queue.extend(node.actions)
         self._goal = None
         self._changed = True
 
     def _follow(self) -> None:
-        if self.paused or not self.nodes or not self.nodes[0].released:
+        if self._queue or self.handling.busy:
+            self._do_actions()
+            return
+        if self.paused or self.handling.charging or not self.nodes or not self.nodes[0].released:
             return
         node = self.nodes[0]
         if self._goal is None or self._goal[0] is not node:
             self._goal = (node, self.vehicle.send_goal(node.x_m, node.y_m, node.theta_rad))
         outcome = self._goal[1]
-        drives_on = len(self.nodes) > 1 and self.nodes[1].released
+        drives_on = len(self.nodes) > 1 and self.nodes[1].released and not node.actions
         tol = max(node.deviation_xy_m, self.xy_tolerance_m)
         if outcome.status == "succeeded" or (
             drives_on
@@ -378,7 +437,6 @@ class VehicleAdapter:
     def _publish_state(self) -> None:
         volt, soc = self.vehicle.battery()
         violated = self.vehicle.field_violated()
-        load = self.vehicle.payload_kg()
         self._emit(
             "state",
             {
@@ -390,19 +448,19 @@ class VehicleAdapter:
                 "edgeStates": [e.state() for e in self.edges],
                 "agvPosition": self._position(),
                 "velocity": self._velocity(),
-                "loads": [{"weight": load}] if load > 0 else [],
+                "loads": self.handling.loads(),
                 "driving": self._driving,
                 "paused": self.paused,
                 "newBaseRequest": bool(self.nodes) and not self.nodes[0].released,
                 "actionStates": self.actions.messages(),
                 "batteryState": {
-                    "batteryCharge": 100.0 * soc,
+                    "batteryCharge": 100.0 * min(1.0, max(0.0, soc)),
                     "batteryVoltage": volt,
-                    "charging": False,
+                    "charging": self.handling.charging,
                 },
                 "operatingMode": "AUTOMATIC",
                 "errors": list(self.errors),
-                "information": [],
+                "information": self._information(),
                 "safetyState": {
                     "eStop": "MANUAL" if self.vehicle.estop_pressed() else "NONE",
                     "fieldViolation": violated,
@@ -410,6 +468,20 @@ class VehicleAdapter:
             },
         )
         self._changed, self.actions.changed, self._last_state_s = False, False, self.clock.now_s
+
+    def _information(self) -> list[dict]:
+        """The charging station the vehicle stands at, if any (INFO)."""
+        station = self.handling.station()
+        if station is None:
+            return []
+        return [
+            {
+                "infoType": "chargingStation",
+                "infoLevel": "INFO",
+                "infoDescription": f"at charging station {station.name}",
+                "infoReferences": [{"referenceKey": "stationName", "referenceValue": station.name}],
+            }
+        ]
 
     def publish_factsheet(self) -> None:
         """Send the factsheet (at connection and on factsheetRequest)."""

@@ -2,8 +2,8 @@
 
 Dimensions from the model (chassis length, the wheels' outer faces, the LiDAR's top), speeds and
 accelerations from ``navigation.limits``, the drive wheels and casters from ``wheel`` and
-``caster``, the actions of
-:mod:`amr_twin.fleet.actions`.
+``caster``, the load capacity from ``payload.max_mass_kg``, the actions of
+:mod:`amr_twin.fleet.actions` (the parameters of pick and drop: :data:`ACTION_DETAILS`).
 """
 
 from __future__ import annotations
@@ -11,9 +11,37 @@ from __future__ import annotations
 from amr_twin.fleet.actions import EDGE_ACTIONS, INSTANT_ACTIONS, NODE_ACTIONS
 from amr_twin.fleet.adapter import STATE_PERIOD_S
 
-MAX_LOAD_KG = 50.0
-"""Load capacity, kg: the thesis' FEM check of the payload floor (fig. 2.30; ``payload.mass_kg``'s
-source)."""
+
+def _parameter(key: str, kind: str, description: str, optional: bool = True) -> dict:
+    return {"key": key, "valueDataType": kind, "description": description, "isOptional": optional}
+
+
+_LOAD_ID = _parameter("loadId", "STRING", "the load's id, reported in state.loads")
+ACTION_DETAILS = {
+    "pick": {
+        "actionDescription": "a worker puts the load on the deck (no load handling device): the "
+        "vehicle stands for payload.handling_time_s, then carries its weight",
+        "actionParameters": [
+            _parameter("weight", "NUMBER", "the load's mass, kg (> 0, at most maxLoadMass)", False),
+            _LOAD_ID,
+            _parameter("loadType", "STRING", "reported in state.loads"),
+            _parameter("stationType", "STRING", "read, not used"),
+        ],
+        "resultDescription": "load on the deck",
+    },
+    "drop": {
+        "actionDescription": "a worker takes the load off the deck",
+        "actionParameters": [_parameter("loadId", "STRING", "if given, the load carried")],
+        "resultDescription": "deck empty",
+    },
+    "startCharging": {
+        "actionDescription": "connects the charger; only at a charging station of the map "
+        "(state.information chargingStation), the vehicle standing; it drives nowhere until "
+        "stopCharging",
+    },
+    "stopCharging": {"actionDescription": "disconnects the charger"},
+}
+"""What the factsheet says of the actions beyond their scopes."""
 
 
 def factsheet(cfg) -> dict:
@@ -61,7 +89,7 @@ def factsheet(cfg) -> dict:
             "seriesDescription": "the thesis' differential-drive warehouse AMR, as its MuJoCo twin",
             "agvKinematic": "DIFF",
             "agvClass": "CARRIER",
-            "maxLoadMass": MAX_LOAD_KG,
+            "maxLoadMass": cfg.payload.max_mass_kg,
             "localizationTypes": ["NATURAL"],
             "navigationTypes": ["AUTONOMOUS"],
         },
@@ -97,7 +125,7 @@ def factsheet(cfg) -> dict:
                 },
             ],
             "agvActions": [
-                {"actionType": name, "actionScopes": sorted(s)}
+                {"actionType": name, "actionScopes": sorted(s), **ACTION_DETAILS.get(name, {})}
                 for name, s in sorted(scopes.items())
             ],
         },

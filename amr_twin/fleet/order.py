@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from amr_twin.fleet.actions import BLOCKING_TYPES, Action
+
 
 class Rejection(Exception):
     """An order or action refused: ``error_type``, a one-line description, ``references`` ((key,
@@ -52,6 +54,8 @@ class Node:
     deviation_xy_m: float = 0.0
     deviation_theta_rad: float = 0.0
     description: str | None = None
+    actions: tuple = ()
+    """Its actions (:class:`~amr_twin.fleet.actions.Action`), in order."""
 
     def state(self) -> dict:
         """The state's ``nodeStates`` entry (its position only with a theta: the schema requires
@@ -120,10 +124,12 @@ def _get(msg: dict, key: str, kind, where: str, refs: tuple):
     return value
 
 
-def _actions(owner: dict, where: str, refs: tuple, supported: frozenset) -> None:
+def _actions(owner: dict, where: str, refs: tuple, supported: frozenset) -> tuple:
+    """The actions (:class:`~amr_twin.fleet.actions.Action`) of a node or an edge."""
     actions = owner.get("actions")
     if not isinstance(actions, list):
         raise Rejection("validationError", f"{where}: field actions missing or not an array", refs)
+    out = []
     for a in actions:
         if (
             not isinstance(a, dict)
@@ -133,12 +139,29 @@ def _actions(owner: dict, where: str, refs: tuple, supported: frozenset) -> None
             raise Rejection(
                 "validationError", f"{where}: an action without actionId or actionType", refs
             )
+        here = refs + (("actionId", a["actionId"]), ("actionType", a["actionType"]))
         if a["actionType"] not in supported:
             raise Rejection(
                 "orderError",
                 f"{where}: action {a['actionType']} is not one this vehicle performs",
-                refs + (("actionId", a["actionId"]), ("actionType", a["actionType"])),
+                here,
             )
+        blocking = a.get("blockingType", "HARD")
+        params = a.get("actionParameters") or []
+        if blocking not in BLOCKING_TYPES or not isinstance(params, list):
+            raise Rejection(
+                "validationError",
+                f"{where}: action {a['actionId']}: blockingType must be one of "
+                f"{', '.join(BLOCKING_TYPES)} and actionParameters an array",
+                here,
+            )
+        pairs = tuple(
+            (p.get("key"), p.get("value"))
+            for p in params
+            if isinstance(p, dict) and isinstance(p.get("key"), str)
+        )
+        out.append(Action(a["actionId"], a["actionType"], blocking, pairs))
+    return tuple(out)
 
 
 def _node(n, i: int, map_id: str, refs: tuple, supported: frozenset) -> Node:
@@ -148,7 +171,7 @@ def _node(n, i: int, map_id: str, refs: tuple, supported: frozenset) -> Node:
     refs = refs + (("nodeId", node_id),)
     seq = _get(n, "sequenceId", int, f"node {node_id}", refs)
     released = _get(n, "released", bool, f"node {node_id}", refs)
-    _actions(n, f"node {node_id}", refs, supported)
+    actions = _actions(n, f"node {node_id}", refs, supported)
     pos = n.get("nodePosition")
     if not isinstance(pos, dict):
         raise Rejection(
@@ -195,6 +218,7 @@ def _node(n, i: int, map_id: str, refs: tuple, supported: frozenset) -> Node:
         float(dev[0]),
         float(dev[1]),
         n.get("nodeDescription"),
+        actions,
     )
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from amr_twin.fleet.adapter import VehicleAdapter
 from amr_twin.fleet.factsheet import factsheet
+from amr_twin.fleet.handling import Handling, Load
 from amr_twin.fleet.protocol import INTERFACE, MANUFACTURER, Stamper, check_name
 from amr_twin.fleet.vehicle import TwinVehicle
 
@@ -44,7 +45,8 @@ def map_id(world: str) -> str:
 
 class FleetSession:
     """The twin of ``cfg`` as vehicle ``serial`` (module docstring); :meth:`run`, then
-    :meth:`close`."""
+    :meth:`close`. Built without its payload, which the physics carries from the start as a load
+    (:meth:`~amr_twin.assembly.twin.Twin.set_payload_kg`) so that a drop can take it off."""
 
     def __init__(self, cfg, options: FleetOptions, serial: str = "amr-1", epoch=None):
         from amr_twin.fleet.broker import EmbeddedBroker
@@ -52,13 +54,16 @@ class FleetSession:
         from amr_twin.live.pacer import Pacer
         from amr_twin.navigation.stack import NavigationOptions, attach, load_static_map
         from amr_twin.assembly.twin import Twin, TwinOptions
+        from amr_twin.model.config import with_values
+        from amr_twin.model.worlds import charging_stations
 
         check_name("--interface", options.interface)
         if options.url is not None:
             broker_address(options.url)
         self.options, self.serial = options, serial
+        stations = charging_stations(options.world)
         self.twin = Twin(
-            cfg,
+            with_values(cfg, {"payload.mass_kg": 0.0}),
             TwinOptions(
                 firmware=options.firmware,
                 world=options.world,
@@ -82,8 +87,13 @@ class FleetSession:
             publish=False,
         )
         self.vehicle = TwinVehicle(
-            self.twin, self.navigator, map_id(options.world), cfg.payload.mass_kg
+            self.twin, self.navigator, map_id(options.world), cfg.battery.charge_current_a
         )
+        load = None
+        if cfg.payload.mass_kg > 0:
+            self.vehicle.set_payload_kg(cfg.payload.mass_kg)
+            load = Load(cfg.payload.mass_kg)
+        nav = cfg.navigation.navigator
         self.transport = None
         self.adapter = VehicleAdapter(
             self.vehicle,
@@ -91,7 +101,16 @@ class FleetSession:
             self._send,
             Stamper(serial, epoch, MANUFACTURER),
             factsheet(cfg),
-            xy_tolerance_m=cfg.navigation.navigator.xy_tolerance_m,
+            xy_tolerance_m=nav.xy_tolerance_m,
+            handling=Handling(
+                self.vehicle,
+                cfg.payload.max_mass_kg,
+                cfg.payload.handling_time_s,
+                stations,
+                nav.xy_tolerance_m,
+                nav.yaw_tolerance_rad,
+                load,
+            ),
         )
         self.pacer = Pacer(self.twin, options.rate)
         self.broker = EmbeddedBroker().start() if options.url is None else None

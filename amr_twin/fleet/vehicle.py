@@ -1,8 +1,9 @@
 """What the VDA 5050 adapter needs of a vehicle (:class:`Vehicle`), and that of one twin with its
 navigation stack (:class:`TwinVehicle`).
 
-The adapter reads the vehicle's pose, velocity, battery, load and safety state and sends it goals;
-it reaches no further, so that a world of N robots can hand it each of its robots the same way.
+The adapter reads the vehicle's pose, velocity, battery and safety state, sends it goals, and puts a
+load on it or a charger to it; it reaches no further, so that a world of N robots can hand it each
+of its robots the same way.
 """
 
 from __future__ import annotations
@@ -29,8 +30,11 @@ class Vehicle(Protocol):
     def battery(self) -> tuple[float, float]:
         """Terminal voltage V and state of charge (0-1)."""
 
-    def payload_kg(self) -> float:
-        """Mass of the load it carries, kg."""
+    def set_payload_kg(self, mass_kg: float) -> None:
+        """Carry a load of ``mass_kg`` kg from now on (0: none)."""
+
+    def set_charging(self, on: bool) -> None:
+        """Connect its charger (at a charging station), or disconnect it."""
 
     def estop_pressed(self) -> bool:
         """Whether the e-stop is pressed."""
@@ -50,9 +54,9 @@ class TwinVehicle:
     """One twin driven by its navigator (:func:`amr_twin.navigation.stack.attach`), as a
     :class:`Vehicle`."""
 
-    def __init__(self, twin, navigator, map_id: str, payload_kg: float = 0.0):
+    def __init__(self, twin, navigator, map_id: str, charge_current_a: float):
         self.twin, self.navigator, self.map_id = twin, navigator, map_id
-        self._payload_kg = float(payload_kg)
+        self.charge_current_a = charge_current_a
         self._stops = self._stop_count()
         self._estops = [f for f in twin.options.faults if f.kind == "estop"]
 
@@ -72,8 +76,11 @@ class TwinVehicle:
         volt, _current, soc = self.twin.observables.battery()
         return float(volt), float(soc)
 
-    def payload_kg(self) -> float:
-        return self._payload_kg
+    def set_payload_kg(self, mass_kg: float) -> None:
+        self.twin.set_payload_kg(mass_kg)
+
+    def set_charging(self, on: bool) -> None:
+        self.twin.set_charger_a(self.charge_current_a if on else 0.0)
 
     def estop_pressed(self) -> bool:
         t = self.twin.t_s

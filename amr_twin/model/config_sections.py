@@ -175,6 +175,8 @@ class PayloadCfg(Section):
     mass_kg: float = P(unit="kg", ge=0.0, le=200.0)
     size_m: PosVec3 = P(unit="m")
     xy_m: tuple[float, float] = P(unit="m")
+    max_mass_kg: float = P(unit="kg", gt=0.0, le=200.0)
+    handling_time_s: float = P(unit="s", ge=0.0, le=600.0)
 
 
 class MotorCfg(Section):
@@ -208,6 +210,7 @@ class BatteryCfg(Section):
     internal_resistance_ohm: float = P(unit="ohm", ge=0.0, le=2.0)
     soc_initial: float = P(unit="1", ge=0.0, le=1.0)
     auxiliary_power_w: float = P(unit="W", ge=0.0, le=500.0)
+    charge_current_a: float = P(unit="A", gt=0.0, le=100.0)
 
     @model_validator(mode="after")
     def _voltages_ordered(self) -> "BatteryCfg":

@@ -170,12 +170,18 @@ def _add_casters(spec: mujoco.MjSpec, cfg: TwinConfig) -> None:
         joint.solref_limit = list(CONTACT_SOLREF)
 
 
+def payload_centre_m(cfg: TwinConfig) -> tuple[float, float, float]:
+    """Centre of the payload box in base_link, m: at ``payload.xy_m`` on floor (c)'s sheet."""
+    p = cfg.payload
+    z = cfg.chassis.floor_c_z_m + cfg.chassis.sheet_thickness_m + p.size_m[2] / 2
+    return (p.xy_m[0], p.xy_m[1], z)
+
+
 def _add_payload(spec: mujoco.MjSpec, base: mujoco.MjsBody, cfg: TwinConfig) -> None:
     p = cfg.payload
     if p.mass_kg <= 0:
         return
-    z = cfg.chassis.floor_c_z_m + cfg.chassis.sheet_thickness_m + p.size_m[2] / 2
-    body = base.add_body(name="payload", pos=[p.xy_m[0], p.xy_m[1], z])
+    body = base.add_body(name="payload", pos=list(payload_centre_m(cfg)))
     body.add_geom(
         name="payload_box",
         type=mujoco.mjtGeom.mjGEOM_BOX,

@@ -31,6 +31,9 @@ START_NUMERIC = "start_xy_yaw"
 """Name of an MJCF ``<custom><numeric>`` holding a world's default start pose: x_m y_m yaw_rad."""
 ANCHORS_NUMERIC = "uwb_anchors_xy_m"
 """Name of an MJCF ``<custom><numeric>`` holding a world's UWB anchors: x0 y0 x1 y1 ... (m)."""
+CHARGER_PREFIX = "charging_station:"
+"""Prefix of the MJCF ``<custom><numeric>`` names declaring a world's charging stations: the name
+after it is the station's, the data where a robot stands to charge: x_m y_m yaw_rad."""
 
 
 def world_path(world: str | Path) -> Path:
@@ -63,23 +66,30 @@ def world_files(world: str | Path) -> list[Path]:
     return [path] + ([path.parent / image] if isinstance(image, str) and image.strip() else [])
 
 
-def _numeric(world: str | Path, name: str) -> list[float] | None:
-    """Values of the MJCF ``<custom><numeric name=NAME>`` of ``world``; None if absent or
-    unreadable."""
+def _numerics(world: str | Path) -> dict[str, list[float] | None]:
+    """The MJCF ``<custom><numeric>`` values of ``world`` by name (None: not numbers); empty for a
+    map or an unreadable file."""
     path = world_path(world)
     if path.suffix.lower() != ".xml":
-        return None
+        return {}
     try:
         root = ET.parse(path).getroot()
     except (OSError, ET.ParseError):
-        return None
+        return {}
+    out: dict[str, list[float] | None] = {}
     for numeric in root.iter("numeric"):
-        if numeric.get("name") == name:
-            try:
-                return [float(v) for v in (numeric.get("data") or "").split()]
-            except ValueError:
-                return None
-    return None
+        try:
+            values = [float(v) for v in (numeric.get("data") or "").split()]
+        except ValueError:
+            values = None
+        out.setdefault(numeric.get("name") or "", values)
+    return out
+
+
+def _numeric(world: str | Path, name: str) -> list[float] | None:
+    """Values of the MJCF ``<custom><numeric name=NAME>`` of ``world``; None if absent or
+    unreadable."""
+    return _numerics(world).get(name)
 
 
 def default_start(world: str | Path) -> tuple[float, float, float]:
@@ -118,6 +128,34 @@ def uwb_anchors_xy_m(world: str | Path) -> np.ndarray | None:
             f"got {len(values)} values"
         )
     return np.asarray(values, dtype=float).reshape(-1, 2)
+
+
+@dataclass(frozen=True)
+class ChargingStation:
+    """Where a robot stands to charge: ``name``, ``x_m, y_m`` and heading ``yaw_rad`` in the world
+    frame."""
+
+    name: str
+    x_m: float
+    y_m: float
+    yaw_rad: float
+
+
+def charging_stations(world: str | Path) -> tuple[ChargingStation, ...]:
+    """The charging stations ``world`` declares (``<custom><numeric name="charging_station:NAME"
+    data="x_m y_m yaw_rad"/>``), by name; none for a map. Raises :class:`MapError` for one whose
+    data is not three finite numbers."""
+    out = []
+    for name, values in sorted(_numerics(world).items()):
+        if not name.startswith(CHARGER_PREFIX):
+            continue
+        if values is None or len(values) != 3 or not all(math.isfinite(v) for v in values):
+            raise MapError(
+                f"{world_path(world)}: numeric {name} must hold x_m y_m yaw_rad, three finite "
+                f"numbers, got {values}"
+            )
+        out.append(ChargingStation(name[len(CHARGER_PREFIX) :], *values))
+    return tuple(out)
 
 
 @dataclass(frozen=True)

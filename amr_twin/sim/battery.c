@@ -18,6 +18,7 @@ typedef struct {
     double ke[2], r_ohm_motor[2], limit_a[2];     /* V s/rad, ohm, A */
     double brake_limit_a, quiescent2_a, aux_w;    /* A, A (both drivers), W */
     int dof[2];                                   /* the wheel hinges' dof addresses */
+    double charger_a;                             /* a charger's current limit, A (0: none) */
 } battery_state;
 
 /* The layout of the structs above, checked against their ctypes twins at load (c_layout.h). */
@@ -30,10 +31,12 @@ AMR_LAYOUT(AMR_STRUCT(battery_state), AMR_FIELD(battery_state, soc), AMR_FIELD(b
            AMR_FIELD(battery_state, mode), AMR_FIELD(battery_state, ke),
            AMR_FIELD(battery_state, r_ohm_motor), AMR_FIELD(battery_state, limit_a),
            AMR_FIELD(battery_state, brake_limit_a), AMR_FIELD(battery_state, quiescent2_a),
-           AMR_FIELD(battery_state, aux_w), AMR_FIELD(battery_state, dof))
+           AMR_FIELD(battery_state, aux_w), AMR_FIELD(battery_state, dof),
+           AMR_FIELD(battery_state, charger_a))
 
-/* Drain the pack by the present current since the last call (d->time); keep the terminal
- * voltage that current leaves (the recorder's battery_v at this grid instant). */
+/* Drain the pack by the present current since the last call (d->time), less what a connected
+ * charger gives (up to charger_a, never above the full pack's voltage at the terminals); keep the
+ * terminal voltage that current leaves (the recorder's battery_v at this grid instant). */
 void battery_account(const mjData* d, battery_state* b) {
     double t = d->time;
     double dt = t - b->t_last_s;
@@ -59,6 +62,11 @@ void battery_account(const mjData* d, battery_state* b) {
         supply = w == 0 ? b->volt[w] * i : supply + b->volt[w] * i;
     }
     double current = supply / v_batt + b->quiescent2_a + b->aux_w / v_batt;
+    if (b->charger_a > 0.0) {  /* constant current, then the pack held at full: constant voltage */
+        double head = b->nominal_v + b->high_span_v - ocv, charge = b->charger_a;
+        if (b->r_ohm * (charge - current) > head) charge = head / b->r_ohm + current;
+        current = current - (charge > 0.0 ? charge : 0.0);
+    }
     b->current_a = current;
     b->soc = b->soc - current * dt / b->capacity_as;
     s = b->soc;

@@ -65,6 +65,7 @@ class _State(ctypes.Structure):
         ("quiescent2_a", ctypes.c_double),
         ("aux_w", ctypes.c_double),
         ("dof", _I2),
+        ("charger_a", ctypes.c_double),
     ]
 
 
@@ -94,6 +95,11 @@ class Battery:
     soc = _field("soc", "State of charge, 1 (0 empty, 1 full).")
     current_a = _field("current_a", "The pack's current at the last accounting, A (+ discharging).")
     sag_v = _field("sag_v", "A fault's extra terminal-voltage drop, V (0 without).")
+    charger_a = _field(
+        "charger_a",
+        "A connected charger's current limit, A (0: none): constant current, then constant "
+        "voltage at ``v_full_v``.",
+    )
 
     def __init__(self, cfg: BatteryCfg, native: bool = True):
         self.cfg = cfg
@@ -203,6 +209,11 @@ class Battery:
                 i = i if i > -limit else -limit
             supply = volt * i if w == 0 else supply + volt * i
         current = supply / v_batt + b.quiescent2_a + b.aux_w / v_batt
+        if b.charger_a > 0.0:
+            head, charge = b.nominal_v + b.high_span_v - ocv, b.charger_a
+            if b.r_ohm * (charge - current) > head:
+                charge = head / b.r_ohm + current
+            current = current - (charge if charge > 0.0 else 0.0)
         b.current_a = current
         b.soc = b.soc - current * dt / b.capacity_as
         s = b.soc

@@ -13,9 +13,19 @@ import pytest
 pytest.importorskip("amqtt")
 pytest.importorskip("paho.mqtt")
 
-from vda_master import Master, edge, instant, node, order, validate  # noqa: E402
+from vda_master import (  # noqa: E402
+    Master,
+    deliver,
+    edge,
+    instant,
+    last_state,
+    node,
+    order,
+    run_until,
+    settle_and_check_schemas,
+    validate,
+)
 
-VEHICLE_TOPICS = ("state", "visualization", "connection", "factsheet")
 START = (-6.0, 0.0, 0.0)  # the warehouse's central aisle, its west end
 
 
@@ -33,36 +43,6 @@ def vehicle(request):
     yield session, master
     master.close()
     session.close()
-
-
-def deliver(session, master, subtopic: str, body: dict, header_id: int | None = None) -> None:
-    """Send and wait (wall time) until the vehicle's client has it; it acts at the twin's next
-    tick."""
-    n = session.transport.messages_in
-    master.send(subtopic, body, header_id)
-    deadline = time.monotonic() + 10.0
-    while session.transport.messages_in == n:
-        assert time.monotonic() < deadline, f"the vehicle never received the {subtopic} message"
-        time.sleep(0.005)
-    session.run(0.1)
-
-
-def run_until(session, done, limit_s: float) -> None:
-    t_end = session.twin.t_s + limit_s
-    while not done() and session.twin.t_s < t_end:
-        session.run(0.2)
-
-
-def last_state(session) -> dict:
-    return [m for _t, s, m in session.adapter.log if s == "state"][-1]
-
-
-def settle_and_check_schemas(session, master) -> None:
-    time.sleep(0.3)  # the broker delivers what is in flight
-    assert master.of("state") and master.of("visualization")
-    for subtopic, msg in master.received:
-        if subtopic in VEHICLE_TOPICS:
-            validate(subtopic, msg)
 
 
 TWO_NODES = order(

@@ -20,6 +20,7 @@ FILES = {
     "factsheet": "factsheet.json",
 }
 BASE = "uagv/v2/amr-twin/amr-1/"
+VEHICLE_TOPICS = ("state", "visualization", "connection", "factsheet")
 
 
 def validate(subtopic: str, msg: dict) -> None:
@@ -111,5 +112,43 @@ def order(order_id: str, nodes: list, edges: list, update_id: int = 0) -> dict:
     return {"orderId": order_id, "orderUpdateId": update_id, "nodes": nodes, "edges": edges}
 
 
-def instant(action_id: str, action_type: str) -> dict:
-    return {"actions": [{"actionId": action_id, "actionType": action_type, "blockingType": "HARD"}]}
+def action(action_id: str, action_type: str, **parameters) -> dict:
+    """An action (blocking HARD) with ``parameters`` as its actionParameters."""
+    out = {"actionId": action_id, "actionType": action_type, "blockingType": "HARD"}
+    if parameters:
+        out["actionParameters"] = [{"key": k, "value": v} for k, v in parameters.items()]
+    return out
+
+
+def instant(action_id: str, action_type: str, **parameters) -> dict:
+    return {"actions": [action(action_id, action_type, **parameters)]}
+
+
+def deliver(session, master, subtopic: str, body: dict, header_id: int | None = None) -> None:
+    """Send and wait (wall time) until the vehicle's client has it; it acts at the twin's next
+    tick."""
+    n = session.transport.messages_in
+    master.send(subtopic, body, header_id)
+    deadline = time.monotonic() + 10.0
+    while session.transport.messages_in == n:
+        assert time.monotonic() < deadline, f"the vehicle never received the {subtopic} message"
+        time.sleep(0.005)
+    session.run(0.1)
+
+
+def run_until(session, done, limit_s: float) -> None:
+    t_end = session.twin.t_s + limit_s
+    while not done() and session.twin.t_s < t_end:
+        session.run(0.2)
+
+
+def last_state(session) -> dict:
+    return [m for _t, s, m in session.adapter.log if s == "state"][-1]
+
+
+def settle_and_check_schemas(session, master) -> None:
+    time.sleep(0.3)  # the broker delivers what is in flight
+    assert master.of("state") and master.of("visualization")
+    for subtopic, msg in master.received:
+        if subtopic in VEHICLE_TOPICS:
+            validate(subtopic, msg)

@@ -163,3 +163,20 @@ def test_worlds_declare_their_start_pose():
         0.0,
         0.0,
     )
+
+
+def test_charging_stations_as_the_world_declares_them(tmp_path):
+    from amr_twin.model.worlds import ChargingStation, MapError, charging_stations
+
+    assert charging_stations("warehouse") == (
+        ChargingStation("charger-1", -8.6, 6.2, 1.5707963),
+        ChargingStation("charger-2", -7.4, 6.2, 1.5707963),
+    )
+    assert [s.name for s in charging_stations("aisles")] == ["charger-1", "charger-2"]
+    assert charging_stations("corridor") == () and charging_stations("room_map.yaml") == ()
+    bad = tmp_path / "bad.xml"
+    bad.write_text(
+        '<mujoco><custom><numeric name="charging_station:x" data="1 2"/></custom></mujoco>'
+    )
+    with pytest.raises(MapError, match="charging_station:x must hold x_m y_m yaw_rad"):
+        charging_stations(bad)

@@ -130,7 +130,8 @@ def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch):
 
 @pytest.mark.skipif(not HAVE_CC, reason="no C compiler")
 def test_c_helper_and_python_twin_agree_on_every_branch():
-    """Random modes, voltages, wheel speeds past both current limits, charge outside 0-1, a sag."""
+    """Random modes, voltages, wheel speeds past both current limits, charge outside 0-1, a sag, a
+    charger (its constant-current and constant-voltage branches)."""
     from amr_twin.model.build import build
     from amr_twin.sim.physics import Physics
     from amr_twin.sim.plant import Plant
@@ -152,11 +153,38 @@ def test_c_helper_and_python_twin_agree_on_every_branch():
         )
         d.qvel[list(physics.wheel_dof)] = speeds
         d.time += rng.uniform(0.0, 0.02)
+        charger = rng.choice([0.0, 4.0, 10.0])
         for b in (native, python):
-            b.soc, b.sag_v = soc, sag
+            b.soc, b.sag_v, b.charger_a = soc, sag, charger
             for w in range(2):
                 b.set_motor(w, int(modes[w]), float(volts[w]))
         native_account()
         python_account()
         assert native.grid_state() == python.grid_state()  # terminal voltage, current, charge
     assert np.isfinite(native.soc)
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_charger_fills_the_pack_at_its_current_then_holds_it_at_full_voltage(monkeypatch, native):
+    """Standing, a 4 A charger: the pack takes 4 A less the rest current (the charger feeds the
+    auxiliary load too) and its charge rises by that over 10 s; near full the charger holds the
+    terminals at v_full_v (constant voltage) and the current tapers off."""
+    cfg = load_config()
+    twin = _twin(monkeypatch, cfg, native)
+    b = twin.plant.battery
+    twin.advance(1.0)
+    rest_a, soc0 = b.current_a, b.soc
+    twin.set_charger_a(cfg.battery.charge_current_a)
+    twin.advance(10.0)
+    rest_now = 2 * cfg.driver.quiescent_current_a + cfg.battery.auxiliary_power_w / b.terminal_v()
+    assert b.current_a == pytest.approx(rest_now - cfg.battery.charge_current_a, abs=1e-4)
+    assert b.soc - soc0 == pytest.approx(
+        (cfg.battery.charge_current_a - rest_a) * 10.0 / (cfg.battery.capacity_ah * 3600), rel=3e-3
+    )
+    b.soc = 0.9995
+    twin.advance(5.0)
+    assert b.terminal_v() == pytest.approx(cfg.battery.v_full_v, abs=1e-3)
+    assert -cfg.battery.charge_current_a < b.current_a < 0.0 and 0.9995 < b.soc < 1.0
+    twin.set_charger_a(0.0)
+    twin.advance(1.0)
+    assert b.current_a > 0.0 and b.terminal_v() < cfg.battery.v_full_v

@@ -175,8 +175,8 @@ class PayloadCfg(Section):
     mass_kg: float = P(unit="kg", ge=0.0, le=200.0)
     size_m: PosVec3 = P(unit="m")
     xy_m: tuple[float, float] = P(unit="m")
-    max_mass_kg: float = P(unit="kg", gt=0.0, le=200.0)
-    handling_time_s: float = P(unit="s", ge=0.0, le=600.0)
+    max_mass_kg: float = P(unit="kg", gt=0.0, le=200.0, setting=True)
+    handling_time_s: float = P(unit="s", ge=0.0, le=600.0, setting=True)
 
 
 class MotorCfg(Section):

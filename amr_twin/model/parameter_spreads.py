@@ -110,6 +110,8 @@ def spread_of(
     :func:`amr_twin.model.config.load_parameters`). ``calibrated``: 1 sigma of the calibration's
     parameters (their correlations are the report's)."""
     bounds = schema_bounds(key)
+    if _is_setting(key):
+        return Spread(key, EXACT, value, "a setting, not a property of the robot")
     if "range" in meta:
         return Spread(key, UNIFORM, value, meta["reason"], *meta["range"], bounds=bounds)
     if "sigma" in meta:
@@ -119,8 +121,6 @@ def spread_of(
         return Spread(key, FOLLOWS, value, meta["reason"], follows=meta["follows"], bounds=bounds)
     if "set_by" in meta:
         return Spread(key, EXACT, value, f"set by {meta['set_by']}")
-    if _is_setting(key):
-        return Spread(key, EXACT, value, "a setting, not a property of the robot")
     kind = source_kind(meta["source"])
     if kind == "calibrated":
         if calibrated is None or key not in calibrated:

@@ -14,7 +14,7 @@
  * MuJoCo's sensors are computed on the last step before each instant only (mjDSBL_SENSOR set on
  * the others, the model's flags restored after): the rows, the samplers and whatever reads
  * sensordata after the call see the same values, and no sensor feeds the dynamics, so the
- * state is the same to the bit; the IMU's accelerometer costs a few % of a step otherwise.
+ * state is the same to the bit (docs/reference/speed.md has the cost it saves).
  *
  * mj_step is called through a pointer into the libmujoco the bindings loaded. MuJoCo's errors
  * are caught as the bindings catch them: mju_user_error points to a handler that jumps back

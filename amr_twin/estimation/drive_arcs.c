@@ -136,17 +136,20 @@ static void twist_step(double* pose, double vx, double vy, double w, double dt_s
 static double py_max(double a, double b) { return b > a ? b : a; } /* Python's max(a, b) */
 static double py_min(double a, double b) { return b < a ? b : a; } /* Python's min(a, b) */
 
-/* The forward integration of PublishedPose.advance (amr_twin/estimation/published_pose.py) from
- * t_us to now_us: pose (x, y, yaw) and used (the left and right RPM it moves with) in and out;
- * accel: fastest change of each, RPM/us; corr: the correction twist (vx, vy, w). Profiles and
- * geometry as dr_integrate's. Returns the steps taken, or -1 as dr_integrate. */
-int pp_advance(const int64_t* tl, const double* rl, int nl, const int64_t* tr, const double* rr,
-               int nr, int64_t t_us, int64_t now_us, double* pose, double* used,
-               const double* accel, const double* corr, int64_t max_substep_us,
-               double left_radius_m, double right_radius_m, double separation_m) {
+/* The forward integration of PublishedPose.advance (amr_twin/estimation/published_pose.py) along
+ * the left (tl, rl) and right (tr, rr) profiles. ints: their knot counts, the start and end
+ * instant, us, and the longest substep, us; io (13 values): the pose (x, y, yaw) and the left and
+ * right RPM it moves with (both in and out), the fastest change of each speed, RPM/us, the
+ * correction twist (vx, vy, w) and the geometry as dr_integrate's. Returns the steps taken, or -1
+ * as dr_integrate. */
+int pp_advance(const int64_t* tl, const double* rl, const int64_t* tr, const double* rr,
+               const int64_t* ints, double* io) {
+    const int nl = (int)ints[0], nr = (int)ints[1];
+    const int64_t t_us = ints[2], now_us = ints[3], max_substep_us = ints[4];
+    double *pose = io, *used = io + 3;
+    const double *accel = io + 5, *corr = io + 7, *geom = io + 10;
     if (max_substep_us < 1 || nl < 1 || nr < 1)
         return -1;
-    const double geom[3] = {left_radius_m, right_radius_m, separation_m};
     const int steady = corr[0] == 0.0 && corr[1] == 0.0 && corr[2] == 0.0;
     int il = 0, ir = 0, steps = 0;
     int64_t t = t_us;

@@ -38,21 +38,16 @@ class DriveGeometry:
 
 
 class ArcKernel:
-    """``dr_integrate`` of a loaded ``drive_arcs.c`` (:func:`arc_kernel`)."""
+    """``dr_integrate`` and ``pp_advance`` of a loaded ``drive_arcs.c`` (:func:`arc_kernel`)."""
 
     def __init__(self, lib: ctypes.PyDLL):
         fn = self._fn = lib.dr_integrate
         p, i, q, d = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64, ctypes.c_double
         fn.restype, fn.argtypes = i, [p, p, i, p, p, i, q, p, q, q, d, d, d]
         fn = self._advance = lib.pp_advance
-        fn.restype, fn.argtypes = i, [p, p, i, p, p, i, q, q, p, p, p, p, q, d, d, d]
+        fn.restype, fn.argtypes = i, [p] * 6
         self._pose = (ctypes.c_double * 3)()
-        self._used = (ctypes.c_double * 2)()
-        self._accel = (ctypes.c_double * 2)()
-        self._correction = (ctypes.c_double * 3)()
-        self._at = [
-            ctypes.addressof(a) for a in (self._pose, self._used, self._accel, self._correction)
-        ]
+        self._pose_at = ctypes.addressof(self._pose)
 
     def integrate(
         self, profiles, start: tuple, t_end_us: int, max_substep_us: int, body: DriveGeometry
@@ -73,7 +68,7 @@ class ArcKernel:
             rr.buffer_info()[0],
             len(tr),
             start[0],
-            self._at[0],
+            self._pose_at,
             t_end_us,
             max_substep_us,
             body.left_radius_m,
@@ -104,34 +99,31 @@ class ArcKernel:
         left, right = profiles
         tl, rl = array("q", left.t_us), array("d", left.rpm)
         tr, rr = array("q", right.t_us), array("d", right.rpm)
-        p, u, a, c = self._pose, self._used, self._accel, self._correction
-        p[0], p[1], p[2] = pose
-        u[0], u[1] = used
-        a[0], a[1] = accel
-        c[0], c[1], c[2] = correction
-        at_pose, at_used, at_accel, at_correction = self._at
+        ints = array("q", (len(tl), len(tr), t_us, now_us, max_substep_us))
+        io = array(
+            "d",
+            (
+                *pose,
+                *used,
+                *accel,
+                *correction,
+                body.left_radius_m,
+                body.right_radius_m,
+                body.separation_m,
+            ),
+        )
         done = self._advance(
             tl.buffer_info()[0],
             rl.buffer_info()[0],
-            len(tl),
             tr.buffer_info()[0],
             rr.buffer_info()[0],
-            len(tr),
-            t_us,
-            now_us,
-            at_pose,
-            at_used,
-            at_accel,
-            at_correction,
-            max_substep_us,
-            body.left_radius_m,
-            body.right_radius_m,
-            body.separation_m,
+            ints.buffer_info()[0],
+            io.buffer_info()[0],
         )
         if done < 0:
             raise ValueError(f"advance: max_substep_us {max_substep_us} must be >= 1")
-        used[0], used[1] = u[0], u[1]
-        return p[0], p[1], p[2]
+        used[0], used[1] = io[3], io[4]
+        return io[0], io[1], io[2]
 
 
 _kernel: list = []

@@ -37,6 +37,7 @@ from amr_twin.ros.geometry_messages import (
 from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.base.clock import VirtualClock
+from amr_twin.estimation.drive_arcs import DriveGeometry
 from amr_twin.estimation.published_pose import PublishedPose
 from amr_twin.controllers.wheel_speed_samples import WheelSpeedSamples
 
@@ -142,8 +143,10 @@ class WheelOdometry:
         self._rim = tuple(
             2.0 * math.pi / 60.0 * r for r in (self.left_radius_m, self.right_radius_m)
         )
+        self.geometry = DriveGeometry(self.left_radius_m, self.right_radius_m, self.separation_m)
+        """Wheel speeds (RPM) to the body twist the pose moves with."""
         self.published = PublishedPose(
-            self._body,
+            self.geometry,
             self.max_substep_us,
             tuple(max_wheel_accel_m_s2 * 1e-6 / k for k in self._rim),
             float(catchup_time_s),
@@ -229,11 +232,6 @@ class WheelOdometry:
         self.published.changed()
 
     # -- state ------------------------------------------------------------------
-    def _body(self, left_rpm: float, right_rpm: float) -> tuple[float, float]:
-        v_left = left_rpm * 2.0 * math.pi / 60.0 * self.left_radius_m
-        v_right = right_rpm * 2.0 * math.pi / 60.0 * self.right_radius_m
-        return 0.5 * (v_left + v_right), (v_right - v_left) / self.separation_m
-
     def body_twist(self) -> tuple[float, float, float]:
         """Body twist the published pose moves with now: ``vx_m_s, vy_m_s, w_rad_s`` (CCW +)."""
         self.update()

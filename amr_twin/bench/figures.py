@@ -122,6 +122,7 @@ def run_benchmarks(
 def native_engines() -> dict[str, str]:
     """``"C"`` or ``"Python (<why>)"`` for every C helper, by name
     (:mod:`amr_twin.base.native_build`)."""
+    from amr_twin.estimation import drive_arcs
     from amr_twin.navigation import mppi
     from amr_twin.sensors import hall_edges, imu_errors, lidar_kernels
     from amr_twin.sim import actors, battery, collisions, grid_steps, rolling_resistance, tyres
@@ -138,6 +139,7 @@ def native_engines() -> dict[str, str]:
         lidar_kernels,
         tyres,
         mppi,
+        drive_arcs,
     )
     return {module.C_SOURCE.stem: native_status(module.C_SOURCE) for module in helpers}
 

@@ -57,7 +57,9 @@ class PartTimer:
 
 def instrument(parts: PartTimer) -> None:
     """Wrap the loop's parts (before any twin is built: clock events hold bound methods)."""
+    from amr_twin.controllers.arduino import ArduinoRuntime
     from amr_twin.controllers.odometry import WheelOdometry
+    from amr_twin.estimation.published_pose import PublishedPose
     from amr_twin.recording.recorder import Recorder
     from amr_twin.ros.bus import Bus
     from amr_twin.sensors.hall import HallSensors
@@ -77,10 +79,14 @@ def instrument(parts: PartTimer) -> None:
         (Twin, "_deliver_edges"),
         (Twin, "_step_physics"),
         (WheelOdometry, "publish"),
+        (PublishedPose, "advance"),
+        (PublishedPose, "retarget"),
+        (ArduinoRuntime, "external_edge"),
         (Actuation, "apply"),
         (Physics, "check"),
         (Bus, "publish"),
         (ImuSensor, "_publish_next"),
+        (ImuSensor, "_messages"),
         (Lidar, "_after_pose"),
         (Lidar, "_publish_next"),
         (Lidar, "cast"),

@@ -18,6 +18,8 @@ import math
 from bisect import bisect_right
 from typing import Callable, Sequence
 
+from amr_twin.estimation.drive_arcs import DriveGeometry, arc_kernel
+
 PAST_KNOTS = 256
 """Trimmed knots a :class:`SpeedProfile` keeps to count revolutions back in time (a window of the
 thesis firmware reaches one revolution back: some 10 knots at most)."""
@@ -168,6 +170,7 @@ def integrate(
     t_end_us: int,
     max_substep_us: int,
     body: Callable[[float, float], tuple[float, float]],
+    native: bool = True,
 ) -> tuple:
     """Pose ``(t_us, x_m, y_m, yaw_rad)`` at ``t_end_us`` from ``start`` along the speed profiles.
 
@@ -183,11 +186,16 @@ def integrate(
         Longest arc while a speed varies, us (> 0).
     body : callable ``(left_rpm, right_rpm) -> (v_m_s, w_rad_s)``
         Wheel speeds to the body twist (the drive geometry).
+    native : bool
+        With a :class:`~amr_twin.estimation.drive_arcs.DriveGeometry` body, run the C twin
+        (:mod:`amr_twin.estimation.drive_arcs`, same bits) when it builds.
 
     Returns
     -------
     (t_end_us, x_m, y_m, yaw_rad)
     """
+    if native and type(body) is DriveGeometry and (kernel := arc_kernel()) is not None:
+        return kernel.integrate(profiles, start, t_end_us, max_substep_us, body)
     t, pose = start[0], start[1:]
     knots = sorted({k for p in profiles for k in p.t_us if t < k < t_end_us})
     for t_next in knots + [t_end_us]:

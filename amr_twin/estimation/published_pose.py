@@ -23,6 +23,7 @@ import math
 from typing import Callable, Sequence
 
 from amr_twin.estimation.dead_reckoning import SmoothedPose, arc, twist_step
+from amr_twin.estimation.drive_arcs import DriveGeometry, arc_kernel
 
 DEADBAND_M, DEADBAND_RAD = 5e-4, 5e-4
 """A difference to the smoothed pose below both is left alone, m and rad (the correction ends)."""
@@ -49,6 +50,9 @@ class PublishedPose:
     catchup_max_fraction : float
         Largest correction as a fraction of the wheels' speed and yaw rate (>= 0), beyond the
         floors.
+    native : bool
+        With a :class:`~amr_twin.estimation.drive_arcs.DriveGeometry` body, integrate forward in
+        C (:mod:`amr_twin.estimation.drive_arcs`, same bits) when the helper builds.
 
     Call :meth:`restart` before use.
     """
@@ -60,8 +64,10 @@ class PublishedPose:
         accel_rpm_per_us: tuple[float, float],
         catchup_s: float,
         catchup_max_fraction: float,
+        native: bool = True,
     ):
         self._body, self.max_substep_us = body, max_substep_us
+        self._kernel = arc_kernel() if native and type(body) is DriveGeometry else None
         self.accel_rpm_per_us = accel_rpm_per_us
         self.catchup_s, self.catchup_max_fraction = catchup_s, catchup_max_fraction
 
@@ -130,6 +136,21 @@ class PublishedPose:
         if now <= t:
             return
         profiles, used, accel = self.profiles, self.used, self.accel_rpm_per_us
+        if self._kernel is not None:
+            self.pose = self._kernel.advance(
+                profiles,
+                t,
+                now,
+                self.pose,
+                used,
+                accel,
+                self.correction,
+                self.max_substep_us,
+                self._body,
+            )
+            self.t_us = now
+            self.retarget()
+            return
         cx, cy, cw = self.correction
         steady = cx == cy == cw == 0.0
         pose = self.pose

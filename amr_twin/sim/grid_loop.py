@@ -30,6 +30,10 @@ from amr_twin.sim.grid_steps import grid_stepper
 
 PHYSICS_LAYER = True
 
+SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+"""MuJoCo's flag that skips the sensors: set on the steps between grid instants (no one reads
+sensordata there; the state is the same to the bit)."""
+
 
 class GridLoop:
     """Chunks of ``physics`` (:class:`~amr_twin.sim.physics.Physics`) with ``samplers`` run every
@@ -87,8 +91,16 @@ class GridLoop:
         (the last instant's, or ``k``). A sampler returning True halts the loop at its instant."""
         m, d, dt, every = self._m, self._d, self.dt_us, self.every
         sensors, step, samplers = self._sensors, mujoco.mj_step, self.samplers
+        opt = m.opt
+        flags = opt.disableflags
         for mark in range((k // every + 1) * every, k_end + 1, every):
-            step(m, d, mark - k)
+            if mark - k > 1:  # MuJoCo's sensors on the last step only, as grid_steps.c
+                opt.disableflags = flags | SENSORS_OFF
+                try:
+                    step(m, d, mark - k - 1)
+                finally:
+                    opt.disableflags = flags
+            step(m, d, 1)
             k = mark
             t = k * dt
             row = sensors.tolist()

@@ -11,6 +11,11 @@
  * its rows are full or, after keeping one, when its owner has work due, as the LiDAR's cast);
  * the loop then runs that sampler's Python side and the samplers after it.
  *
+ * MuJoCo's sensors are computed on the last step before each instant only (mjDSBL_SENSOR set on
+ * the others, the model's flags restored after): the rows, the samplers and whatever reads
+ * sensordata after the call see the same values, and no sensor feeds the dynamics, so the
+ * state is the same to the bit (docs/reference/speed.md has the cost it saves).
+ *
  * mj_step is called through a pointer into the libmujoco the bindings loaded. MuJoCo's errors
  * are caught as the bindings catch them: mju_user_error points to a handler that jumps back
  * here for the length of the call (then restored); the call returns -1 with the message.
@@ -91,17 +96,23 @@ int gs_run(gs_ctx* c, int nfirst, int nmarks, int64_t t_first_us) {
     if (nmarks > c->rows_cap || nfirst < 1 || c->every < 1)
         return -2;
     void (*saved)(const char*) = *c->user_error;
+    mjModel* m = (mjModel*)c->m;  /* its sensor flag toggled, then restored */
+    const int flags = m->opt.disableflags;
     gs_current = c;
     *c->user_error = gs_on_error;
     if (setjmp(gs_jump)) {
+        m->opt.disableflags = flags;
         *c->user_error = saved;
         gs_current = NULL;
         return -1;
     }
     int n = nfirst, j = 0;
     for (; j < nmarks; j++) {
-        for (int i = 0; i < n; i++)
+        m->opt.disableflags = flags | mjDSBL_SENSOR;
+        for (int i = 1; i < n; i++)
             c->step(c->m, c->d);
+        m->opt.disableflags = flags;
+        c->step(c->m, c->d);
         n = c->every;
         memcpy(c->rows + (size_t)j * c->ncol, c->sensors, sizeof(double) * c->ncol);
         int64_t t = t_first_us + j * c->grid_us;

@@ -53,6 +53,7 @@ def test_one_floor_and_every_figure_a_ratio_against_it_with_its_spread():
         "lidar_beams",
         "tyres",
         "mppi_critics",
+        "drive_arcs",
     }
     assert all(e == "C" or e.startswith("Python (") for e in d["native_engines"].values())
     assert d["actors_engine"] == d["native_engines"]["actors"]

@@ -94,7 +94,7 @@ def test_the_firmware_protocol_declares_what_the_loop_calls():
 
     declared = set(Firmware.__annotations__) | {n for n in vars(Firmware) if not n.startswith("_")}
     used = set()
-    for name in ("amr_twin/assembly/twin.py", "amr_twin/sim/actuation.py"):
+    for name in ("amr_twin/assembly/robot.py", "amr_twin/sim/actuation.py"):
         for node in ast.walk(ast.parse((ROOT / name).read_text())):
             if (
                 isinstance(node, ast.Attribute)
@@ -179,7 +179,7 @@ def test_event_and_message_hooks(hooked):
 
 
 def test_unhook_removes_a_subscriber_from_its_hook():
-    twin = Twin(load_config(), TwinOptions(world="empty", odometry=False))
+    twin = Twin(load_config(), TwinOptions(world="empty", nodes=()))
     calls = []
     grid = twin.on_grid(lambda t_us: calls.append(("grid", t_us)))
     tap = twin.on_message(lambda topic, msg, t_us: calls.append((topic, t_us)))
@@ -209,7 +209,7 @@ def test_collision_hook_tells_of_each_collision_once_at_its_first_contact():
 
     box = Obstacle("crate", 1.2, 0.0, (0.3, 1.0, 0.5))
     twin = Twin(
-        load_config(), TwinOptions(world="empty", odometry=False, visuals=False, obstacles=(box,))
+        load_config(), TwinOptions(world="empty", nodes=(), visuals=False, obstacles=(box,))
     )
     told = []
     twin.on_collision(lambda c: told.append((c.t_s, c.hit)))

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 from amr_twin.assembly.nodes import NODES
 from amr_twin.controllers.firmware import make_firmware
@@ -30,9 +29,6 @@ from amr_twin.sim.component import Mount
 from amr_twin.sim.observables import Observables
 from amr_twin.sim.plant import Plant
 from amr_twin.sim.rolling_resistance import RollingResistance
-
-if TYPE_CHECKING:
-    from amr_twin.assembly.world import World
 
 PLACED_SIGMA = 1e-4
 """Standard deviation of the pose a reset places the robot at, told to an EKF (m and rad): exact,
@@ -76,10 +72,11 @@ class RobotSpec:
 
 
 class Robot:
-    """The robot of ``spec`` on ``world``'s loop (module notes). Built by
-    :class:`~amr_twin.assembly.world.World`: the body here, the sensors at :meth:`equip`."""
+    """The robot of ``spec`` on ``world``'s loop (module notes): ``world`` is the
+    :class:`~amr_twin.assembly.world.World` that builds it, the body here, the sensors at
+    :meth:`equip`."""
 
-    def __init__(self, world: World, spec: RobotSpec):
+    def __init__(self, world, spec: RobotSpec):
         self.spec, self.world = spec, world
         self._sensor_factories = [(name, SENSORS.get(name)) for name in spec.sensors]
         node_factories = [(name, NODES.get(name)) for name in spec.nodes]

@@ -33,8 +33,9 @@ TAPS = frozenset({"add_tap", "remove_tap"})
 
 
 def _is_twin(node: ast.expr) -> bool:
-    return (isinstance(node, ast.Name) and node.id == "twin") or (
-        isinstance(node, ast.Attribute) and node.attr == "twin"
+    """A twin, a world's robot or the twin's robot (``twin``, ``robot``, ``x.twin``, ``x.robot``)."""
+    return (isinstance(node, ast.Name) and node.id in ("twin", "robot")) or (
+        isinstance(node, ast.Attribute) and node.attr in ("twin", "robot")
     )
 
 
@@ -74,6 +75,7 @@ def test_consumers_subscribe_to_hooks_instead_of_reaching_into_the_twin():
         "def f(twin):\n    twin.samplers.append(print)\n",
         "def f(twin):\n    twin.bus.add_tap(print)\n",
         "def f(capture):\n    return capture.twin.plant.battery\n",
+        "def f(twin):\n    return twin.robot.hall\n",
         "class C:\n    def close(self):\n        self.bus.remove_tap(self._tap)\n",
     ],
 )

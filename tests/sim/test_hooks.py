@@ -33,7 +33,7 @@ TAPS = frozenset({"add_tap", "remove_tap"})
 
 
 def _is_twin(node: ast.expr) -> bool:
-    """A twin, a world's robot or the twin's robot (``twin``, ``robot``, ``x.twin``, ``x.robot``)."""
+    """A twin or a robot: ``twin``, ``robot``, ``x.twin``, ``x.robot``."""
     return (isinstance(node, ast.Name) and node.id in ("twin", "robot")) or (
         isinstance(node, ast.Attribute) and node.attr in ("twin", "robot")
     )

@@ -123,7 +123,14 @@ class Robot:
             loss_prob=spec.rosserial_loss_prob,
             seed=spec.seed,
         )
-        self.plant = Plant(spec.cfg, self.physics)
+        cfg = spec.cfg
+        self.plant = Plant(
+            self.physics,
+            cfg.driver,
+            (cfg.driver_left, cfg.driver_right),
+            (cfg.motor_left, cfg.motor_right),
+            cfg.battery,
+        )
         self.hall = HallSensors(
             2,
             pole_pairs=wheel.hall_pole_pairs,

@@ -68,7 +68,8 @@ def instrument(parts: PartTimer) -> None:
     from amr_twin.sim import grid_loop, grid_steps
     from amr_twin.sim.actuation import Actuation
     from amr_twin.base.clock import VirtualClock
-    from amr_twin.assembly.twin import Twin
+    from amr_twin.assembly.robot import Robot
+    from amr_twin.assembly.world import World
     from amr_twin.sim.physics import Physics
 
     parts.patch(grid_steps.GridStepper, "run", "C chunks: mj_step and the C grid samplers")
@@ -76,8 +77,8 @@ def instrument(parts: PartTimer) -> None:
     parts.patch(VirtualClock, "run_until", "clock events (firmware, rosserial, wheel topics)")
     for cls, method in (
         (HallSensors, "edges_from_samples"),
-        (Twin, "_deliver_edges"),
-        (Twin, "_step_physics"),
+        (Robot, "deliver_edges"),
+        (World, "_step_physics"),
         (WheelOdometry, "publish"),
         (PublishedPose, "advance"),
         (PublishedPose, "retarget"),

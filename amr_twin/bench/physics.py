@@ -114,7 +114,13 @@ def _driving(cfg) -> Physics:
 
     physics = Physics(build(cfg, world="warehouse", start_xy_yaw=TYRES_START).model)
     physics.settle(0.5)
-    Plant(cfg, physics).apply((DriverPins(8, 1, 0, 1), DriverPins(8, 1, 0, 1)))
+    Plant(
+        physics,
+        cfg.driver,
+        (cfg.driver_left, cfg.driver_right),
+        (cfg.motor_left, cfg.motor_right),
+        cfg.battery,
+    ).apply((DriverPins(8, 1, 0, 1), DriverPins(8, 1, 0, 1)))
     physics.step(1000)
     return physics
 

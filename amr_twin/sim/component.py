@@ -8,7 +8,8 @@ to) and kiss-icp (the configuration is unpacked where a part is built): a
 bus and hooks the loop's grid. It does not reach into the twin.
 
 Sensors are components named in :attr:`amr_twin.assembly.twin.TwinOptions.sensors` and registered
-in :data:`amr_twin.sensors.catalog.SENSORS`; a third party registers its own there.
+in :data:`amr_twin.sensors.catalog.SENSORS`, PC-side nodes in ``TwinOptions.nodes`` and
+:data:`amr_twin.assembly.nodes.NODES`; a third party registers its own there.
 """
 
 from __future__ import annotations
@@ -35,7 +36,8 @@ class Mount:
         physics: the robot's physics, to read by name (``model.sensor(name)``, ``pose()``,
             ``wheel_angles_rad()``); a component reads it and does not step it.
         clock: the loop's clock (us); a component schedules its events there.
-        bus: the robot's message bus; a component advertises and subscribes there.
+        bus: the message bus the robot's parts publish on (its world's); a component advertises
+            and subscribes there.
         hooks: the loop's hooks (``on_grid``, ``on_event``, ``on_actuation``, ...:
             :class:`~amr_twin.sim.hooks.Hooks`).
         grid_us: the record grid's period (the ``on_grid`` hook's instants), us.

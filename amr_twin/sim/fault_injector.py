@@ -27,7 +27,7 @@ class FaultTargets:
 
 class FaultInjector:
     """Schedules ``faults`` on ``clock`` and applies them to ``targets``; ``hooks`` the twin's
-    (:class:`~amr_twin.sim.hooks.Hooks`). Built by the twin when ``TwinOptions.faults`` is set."""
+    (:class:`~amr_twin.sim.hooks.Hooks`). Built by a robot with faults (``RobotSpec.faults``)."""
 
     def __init__(self, faults: tuple[Fault, ...], clock, hooks, targets: FaultTargets):
         self.targets = targets

@@ -13,8 +13,8 @@ from amr_twin.sim.grid_steps import GridRows, gather
 
 
 class Observables:
-    """Read-only views of one twin's state (module notes); built by
-    :class:`~amr_twin.assembly.twin.Twin`."""
+    """Read-only views of one robot's state in its world (module notes); built by
+    :class:`~amr_twin.assembly.robot.Robot`."""
 
     def __init__(self, physics, grid, actuation, battery, collisions):
         self._physics, self._grid, self._actuation = physics, grid, actuation

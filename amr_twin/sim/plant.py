@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.model.config_sections import DriverBoardCfg, DriverCfg, MotorCfg
+from amr_twin.model.config_sections import BatteryCfg, DriverBoardCfg, DriverCfg, MotorCfg
 from amr_twin.sim.battery import BRAKE, COAST, DRIVE, Battery
 from amr_twin.sim.physics import Physics
 from amr_twin.base.pins import DriverPins
@@ -42,14 +42,29 @@ def motor_currents_a(
 
 
 class Plant:
-    """Drivers, motors and battery of both wheels, applied to a :class:`Physics`."""
+    """Drivers, motors and battery of both wheels, applied to a :class:`Physics`.
 
-    def __init__(self, cfg: TwinConfig, physics: Physics):
-        self.cfg, self.physics = cfg, physics
-        self.driver: DriverCfg = cfg.driver
-        self.boards: tuple[DriverBoardCfg, DriverBoardCfg] = (cfg.driver_left, cfg.driver_right)
-        self.motors: tuple[MotorCfg, MotorCfg] = (cfg.motor_left, cfg.motor_right)
-        self.battery = Battery(cfg.battery)
+    Args:
+        physics: the robot's physics (its wheels' joints and actuators).
+        driver: the ZS-X11D1 drivers' common parameters (``driver:``).
+        boards: the left and right driver boards (``driver_left:``, ``driver_right:``).
+        motors: the left and right hub motors (``motor_left:``, ``motor_right:``).
+        battery: the battery (``battery:``).
+    """
+
+    def __init__(
+        self,
+        physics: Physics,
+        driver: DriverCfg,
+        boards: tuple[DriverBoardCfg, DriverBoardCfg],
+        motors: tuple[MotorCfg, MotorCfg],
+        battery: BatteryCfg,
+    ):
+        self.physics = physics
+        self.driver = driver
+        self.boards = tuple(boards)
+        self.motors = tuple(motors)
+        self.battery = Battery(battery)
         self.estop = False
         self.supply_cut = (
             False  # fault injection (amr_twin/sim/fault_injector.py): drivers unpowered, coast
@@ -61,7 +76,7 @@ class Plant:
             (m.ke_v_s_rad, m.resistance_ohm, m.current_limit_a) for m in self.motors
         ]
         self._quiescent2_a = 2 * self.driver.quiescent_current_a
-        self._aux_w = cfg.battery.auxiliary_power_w
+        self._aux_w = battery.auxiliary_power_w
         self.battery.connect(
             physics,
             physics.wheel_dof,

@@ -120,7 +120,12 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
     # the bit, ~12 % and ~15 % cheaper
     twin = Twin(
         cfg,
-        TwinOptions(firmware=point.firmware, world="empty", odometry=recording, visuals=recording),
+        TwinOptions(
+            firmware=point.firmware,
+            world="empty",
+            nodes=("odometry",) if recording else (),
+            visuals=recording,
+        ),
     )
     recorder = attach_recorder(twin)
     if recording:

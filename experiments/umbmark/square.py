@@ -82,7 +82,7 @@ class SquareDriver:
 
     def __init__(self, twin, profile: Profile):
         self.twin, self.profile = twin, profile
-        self.odometry, self.client = twin.odometry, twin.client
+        self.odometry, self.client = twin.nodes["odometry"], twin.client
         self.half_separation_m = 0.5 * twin.cfg.wheel.separation_m
         fw = twin.firmware.p
         self.period_s = fw.pi_period_us * fw.publish_every_ticks * 1e-6
@@ -215,7 +215,7 @@ def drive_square(twin, direction: str, profile: Profile = Profile(), run: int = 
     dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
     true_xy = (c * dx + s * dy, -s * dx + c * dy)
     angles = recorder.series().wheel_angle_rad
-    w, odo = twin.cfg.wheel, twin.odometry
+    w, odo = twin.cfg.wheel, twin.nodes["odometry"]
     assumed = wheel_pose(angles, odo.left_radius_m, odo.right_radius_m, odo.separation_m)
     exact = wheel_pose(
         angles,

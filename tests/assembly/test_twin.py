@@ -101,10 +101,13 @@ def test_a_synced_event_sees_the_physics_at_its_instant(cfg):
 
 @pytest.mark.parametrize("firmware", ["faithful", "improved"])
 def test_without_the_odometry_node_the_drive_is_the_same_to_the_bit(cfg, firmware):
-    """TwinOptions(odometry=False) (a sweep point) drops the odom/tf publisher and nothing else."""
+    """TwinOptions(nodes=()) (a sweep point) drops the odom/tf publisher and nothing else."""
     series = {}
     for odometry in (True, False):
-        twin = Twin(cfg, TwinOptions(world="empty", firmware=firmware, odometry=odometry))
+        twin = Twin(
+            cfg,
+            TwinOptions(world="empty", firmware=firmware, nodes=("odometry",) if odometry else ()),
+        )
         attach_recorder(twin)
         twin.client.angular(60.0, -1.0)
         twin.advance(2.0)

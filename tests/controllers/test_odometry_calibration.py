@@ -72,7 +72,7 @@ def _drive(calibration, left_m_s: float, right_m_s: float):
     twin.advance(4.0)
     twin.client.stop()
     twin.advance(1.0)
-    return twin.odometry.smoothed_pose()
+    return twin.nodes["odometry"].smoothed_pose()
 
 
 def test_the_node_turns_with_the_calibrated_wheelbase():

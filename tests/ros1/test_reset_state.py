@@ -24,13 +24,13 @@ def test_odometry_after_reset_simulation_follows_the_drive_that_follows(reset_at
     Command("linear", speed_m_s=SPEED_M_S).send(twin)
     twin.advance(reset_at_s)
     twin.reset_simulation()
-    assert math.hypot(twin.odometry.x_m, twin.odometry.y_m) < 1e-9
+    assert math.hypot(twin.nodes["odometry"].x_m, twin.nodes["odometry"].y_m) < 1e-9
     twin.advance(0.5)
     Command("linear", speed_m_s=SPEED_M_S).send(twin)
     twin.advance(DRIVE_S)
     true_x = twin.observables.loop_sensors()[4] - twin.start_xy_yaw[0]
     assert true_x > 1.0, true_x
-    assert abs(twin.odometry.x_m - true_x) < 0.3, (twin.odometry.x_m, true_x)
+    assert abs(twin.nodes["odometry"].x_m - true_x) < 0.3, (twin.nodes["odometry"].x_m, true_x)
 
 
 def test_ekf_after_reset_simulation_is_at_the_start_pose():

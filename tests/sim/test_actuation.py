@@ -12,7 +12,7 @@ from amr_twin.sim.plant import MODE_CODES
 
 @pytest.fixture()
 def driving():
-    twin = Twin(load_config(), TwinOptions(world="empty", odometry=False))
+    twin = Twin(load_config(), TwinOptions(world="empty", nodes=()))
     twin.client.linear(0.5)
     twin.advance(0.6)
     calls = []

@@ -138,7 +138,16 @@ def test_c_helper_and_python_twin_agree_on_every_branch():
 
     cfg = load_config()
     physics = Physics(build(cfg, world="empty").model)
-    plants = [Plant(cfg, physics), Plant(cfg, physics)]
+    plants = [
+        Plant(
+            physics,
+            cfg.driver,
+            (cfg.driver_left, cfg.driver_right),
+            (cfg.motor_left, cfg.motor_right),
+            cfg.battery,
+        )
+        for _ in range(2)
+    ]
     native, python = (p.battery for p in plants)
     native_account, python_account = native.account, python.account_python
     assert native.engine == "C"

@@ -122,7 +122,7 @@ def test_c_pair_check_and_python_give_the_same_episodes(monkeypatch):
     import functools
     import shutil
 
-    import amr_twin.assembly.twin as loop_mod
+    import amr_twin.assembly.world as loop_mod
     from amr_twin.sim.collisions import CollisionMonitor
 
     if shutil.which("cc") is None and shutil.which("gcc") is None:

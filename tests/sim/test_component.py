@@ -43,7 +43,7 @@ def registered():
 
 
 def test_a_registered_sensor_listed_in_the_options_publishes_what_it_measured(registered):
-    options = TwinOptions(world="empty", sensors=("wheel_angle",), odometry=False, visuals=False)
+    options = TwinOptions(world="empty", sensors=("wheel_angle",), nodes=(), visuals=False)
     twin = Twin(load_config(), options)
     recorder = attach_recorder(twin)
     got = []
@@ -71,7 +71,7 @@ def test_sensors_are_a_tuple_of_names():
 
 
 def test_a_sensor_added_to_a_built_twin_joins_its_sensors(registered):
-    twin = Twin(load_config(), TwinOptions(world="empty", odometry=False, visuals=False))
+    twin = Twin(load_config(), TwinOptions(world="empty", nodes=(), visuals=False))
     assert twin.sensors == {}
     sensor = twin.add_sensor("wheel_angle")
     twin.advance(0.1)

@@ -17,11 +17,22 @@ IDENTICAL = [
 ] + [f"driver_right.gain={load_config().driver_left.gain}"]
 
 
+def plant_of(cfg, physics) -> Plant:
+    """The plant of ``cfg``'s drivers, motors and battery on ``physics``."""
+    return Plant(
+        physics,
+        cfg.driver,
+        (cfg.driver_left, cfg.driver_right),
+        (cfg.motor_left, cfg.motor_right),
+        cfg.battery,
+    )
+
+
 def _robot(sets=(), payload_kg=0.0):
     cfg = load_config(sets=[*sets, f"payload.mass_kg={payload_kg}"])
     physics = Physics(build(cfg, world="empty").model)
     physics.settle(0.5)
-    return cfg, physics, Plant(cfg, physics)
+    return cfg, physics, plant_of(cfg, physics)
 
 
 def test_equal_duty_drives_straight():
@@ -87,7 +98,7 @@ def test_brake_is_the_shorted_motor():
     ~230 RPM), on a free wheel of the work station (fig. 5.1); coasting has no torque."""
     cfg = load_config()
     physics = Physics(build(cfg, world="stand").model)
-    plant = Plant(cfg, physics)
+    plant = plant_of(cfg, physics)
     plant.apply((DriverPins(25, HIGH, LOW, HIGH), DriverPins(25, HIGH, LOW, HIGH)))
     physics.step(1500)
     w0 = physics.wheel_speeds_rad_s().copy()

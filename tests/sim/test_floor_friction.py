@@ -56,7 +56,7 @@ def _pivot(field_sets, native: bool, steps_s: float = 1.5):
     try:
         twin = Twin(
             load_config(sets=FIELD_ON + field_sets),
-            TwinOptions(world="empty", odometry=False, seed=7),
+            TwinOptions(world="empty", nodes=(), seed=7),
         )
         twin.client.angular(90.0, 0.2)
         twin.advance(steps_s)
@@ -88,7 +88,7 @@ def test_the_field_is_in_the_tyres_data_and_acts_on_them():
     )
     runs = []
     for field in (None, flat):
-        t = Twin(load_config(sets=FIELD_ON), TwinOptions(world="empty", odometry=False, seed=7))
+        t = Twin(load_config(sets=FIELD_ON), TwinOptions(world="empty", nodes=(), seed=7))
         t.physics.set_floor_friction(field)
         t.client.angular(90.0, 0.2)
         t.advance(0.5)
@@ -100,7 +100,7 @@ def test_a_slippery_patch_limits_the_tyre_force_to_mu_n():
     """A 0.05 field (ice) under a robot asked to spin fast: each patch gives at most mu N of
     force."""
     cfg = load_config(sets=FIELD_ON)
-    twin = Twin(cfg, TwinOptions(world="empty", odometry=False, seed=1))
+    twin = Twin(cfg, TwinOptions(world="empty", nodes=(), seed=1))
     twin.physics.set_floor_friction(
         floor_friction.FrictionField(0.5, np.full((FIELD_CELLS, FIELD_CELLS), 0.05))
     )
@@ -116,7 +116,7 @@ def test_a_slippery_patch_limits_the_tyre_force_to_mu_n():
 def test_rigid_contact_has_no_field():
     twin = Twin(
         load_config(sets=FIELD_ON + ["wheel.tyre_slip=false"]),
-        TwinOptions(world="empty", odometry=False),
+        TwinOptions(world="empty", nodes=()),
     )
     assert twin.floor is None
     with pytest.raises(ValueError, match="no brush tyres"):

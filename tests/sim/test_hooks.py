@@ -33,8 +33,9 @@ TAPS = frozenset({"add_tap", "remove_tap"})
 
 
 def _is_twin(node: ast.expr) -> bool:
-    return (isinstance(node, ast.Name) and node.id == "twin") or (
-        isinstance(node, ast.Attribute) and node.attr == "twin"
+    """A twin or a robot: ``twin``, ``robot``, ``x.twin``, ``x.robot``."""
+    return (isinstance(node, ast.Name) and node.id in ("twin", "robot")) or (
+        isinstance(node, ast.Attribute) and node.attr in ("twin", "robot")
     )
 
 
@@ -74,6 +75,7 @@ def test_consumers_subscribe_to_hooks_instead_of_reaching_into_the_twin():
         "def f(twin):\n    twin.samplers.append(print)\n",
         "def f(twin):\n    twin.bus.add_tap(print)\n",
         "def f(capture):\n    return capture.twin.plant.battery\n",
+        "def f(twin):\n    return twin.robot.hall\n",
         "class C:\n    def close(self):\n        self.bus.remove_tap(self._tap)\n",
     ],
 )
@@ -94,7 +96,7 @@ def test_the_firmware_protocol_declares_what_the_loop_calls():
 
     declared = set(Firmware.__annotations__) | {n for n in vars(Firmware) if not n.startswith("_")}
     used = set()
-    for name in ("amr_twin/assembly/twin.py", "amr_twin/sim/actuation.py"):
+    for name in ("amr_twin/assembly/robot.py", "amr_twin/sim/actuation.py"):
         for node in ast.walk(ast.parse((ROOT / name).read_text())):
             if (
                 isinstance(node, ast.Attribute)
@@ -179,7 +181,7 @@ def test_event_and_message_hooks(hooked):
 
 
 def test_unhook_removes_a_subscriber_from_its_hook():
-    twin = Twin(load_config(), TwinOptions(world="empty", odometry=False))
+    twin = Twin(load_config(), TwinOptions(world="empty", nodes=()))
     calls = []
     grid = twin.on_grid(lambda t_us: calls.append(("grid", t_us)))
     tap = twin.on_message(lambda topic, msg, t_us: calls.append((topic, t_us)))
@@ -209,7 +211,7 @@ def test_collision_hook_tells_of_each_collision_once_at_its_first_contact():
 
     box = Obstacle("crate", 1.2, 0.0, (0.3, 1.0, 0.5))
     twin = Twin(
-        load_config(), TwinOptions(world="empty", odometry=False, visuals=False, obstacles=(box,))
+        load_config(), TwinOptions(world="empty", nodes=(), visuals=False, obstacles=(box,))
     )
     told = []
     twin.on_collision(lambda c: told.append((c.t_s, c.hit)))

@@ -9,7 +9,7 @@ from amr_twin.assembly.twin import Twin, TwinOptions
 
 
 def _volts(sets: list[str]) -> tuple[float, float, int, int]:
-    twin = Twin(load_config(sets=sets), TwinOptions(world="empty", odometry=False))
+    twin = Twin(load_config(sets=sets), TwinOptions(world="empty", nodes=()))
     twin.client.linear(0.5)
     twin.advance(0.8)
     pwm_l, pwm_r, _, _, _, _, volt_l, volt_r = twin.observables.drive()

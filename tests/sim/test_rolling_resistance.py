@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-import amr_twin.assembly.twin as loop_mod
+import amr_twin.assembly.robot as loop_mod
 from amr_twin.model.config import load_config
 from amr_twin.base import native_build
 from amr_twin.assembly.twin import Twin, TwinOptions

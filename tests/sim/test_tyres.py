@@ -56,7 +56,7 @@ def _turn(sets, deg_s: float, icc_m: float) -> tuple:
         cfg,
         Command("angular", speed_deg_s=deg_s, icc_m=icc_m),
         12.0,
-        TwinOptions(world="empty", firmware="improved", odometry=False),
+        TwinOptions(world="empty", firmware="improved", nodes=()),
     )
     return cfg, res
 
@@ -103,7 +103,7 @@ def _drive(native: bool) -> tuple:
     try:
         twin = Twin(
             load_config(sets=["payload.mass_kg=20", "payload.xy_m=[0,0.07]"]),
-            TwinOptions(world="empty", odometry=False),
+            TwinOptions(world="empty", nodes=()),
         )
         twin.client.angular(-60.0, -1.0)
         twin.advance(1.5)
@@ -125,7 +125,7 @@ def test_each_tyre_carries_its_own_wheel_load():
     contact's normal force (MuJoCo's solver), not the right one's."""
     twin = Twin(
         load_config(sets=["payload.mass_kg=20", "payload.xy_m=[0,0.07]"]),
-        TwinOptions(world="empty", odometry=False),
+        TwinOptions(world="empty", nodes=()),
     )
     twin.advance(0.3)
     left, right = tyres.contacts(twin.physics.model, twin.physics.data)
@@ -148,7 +148,7 @@ def test_traction_makes_the_hub_lag_its_rim():
         cfg,
         Command("linear", speed_m_s=0.7),
         6.0,
-        TwinOptions(world="empty", firmware="improved", odometry=False),
+        TwinOptions(world="empty", firmware="improved", nodes=()),
     )
     s = res.series
     rolled = np.diff(s.wheel_angle_rad[[0, -1]], axis=0).mean() * cfg.wheel.radius_m
@@ -157,7 +157,7 @@ def test_traction_makes_the_hub_lag_its_rim():
 
 
 def test_the_rigid_model_has_no_tyre_state():
-    twin = Twin(load_config(sets=RIGID), TwinOptions(world="empty", odometry=False))
+    twin = Twin(load_config(sets=RIGID), TwinOptions(world="empty", nodes=()))
     assert twin.physics.tyres_engine is None
     assert tyres.contacts(twin.physics.model, twin.physics.data) is None
     assert twin.physics.model.geom_condim[twin.physics.support_geoms["wheel_left"]] == 3

@@ -279,6 +279,7 @@ class Dispatcher:
         rest = v.task.reroute(self.roadmap, plan.route[plan.held], plan.held, others)
         if rest is not None:
             self.traffic.reroute(victim, rest)
+            v.task.waiting = bool(self.traffic.extend(victim).waits_for)
             self._update(v)
         self._event("deadlock", vehicles=list(cycle), rerouted=victim if rest else None)
 

@@ -4,9 +4,9 @@ builds (:func:`amr_twin.navigation.stack.load_static_map`).
 The free space's centre lines (:mod:`amr_twin.fleet_manager.skeleton`, cells where the robot turns
 in place with ``margin_m`` to spare) become a networkx graph: the largest connected piece is kept,
 chains through two-way points are joined, and each line between key points is cut into pieces of at
-most ``spacing_m``. Nodes are of three kinds: ``junction`` (three or more edges), ``end`` (one edge:
+most ``spacing_m`` along it. Nodes are of three kinds: ``junction`` (three or more edges), ``end`` (one edge:
 a dead end, used as a dock) and ``aisle`` (on a line between them: in front of a rack face). Each
-edge has its ``length_m`` along the centre line and its ``width_m``, the free width across it (twice
+edge has its ``length_m`` (the straight distance between its nodes) and its ``width_m``, the free width across it (twice
 the least clearance along it). Node ids are ``n0``, ``n1``, ... in order of position (x, then y).
 """
 
@@ -101,6 +101,8 @@ def build_roadmap(
     clear = clearance_m(static.occupied | static.unknown, res)
     skel = trace(thin(clear >= robot_radius_m + margin_m), res, SPUR_M)
     lines = nx.MultiGraph()
+    for k, key in enumerate(skel.keys):
+        lines.add_node(k, xy=origin + (key[::-1] + 0.5) * res)
     for k, br in enumerate(skel.branches):
         xy = origin + (br.cells[:, ::-1] + 0.5) * res
         width = 2.0 * float(clear[br.cells[:, 0], br.cells[:, 1]].min())
@@ -131,7 +133,7 @@ def _join_two_way(lines: nx.MultiGraph) -> None:
 def _cut(lines: nx.MultiGraph, spacing_m: float) -> nx.Graph:
     """The roadmap graph: every line cut into equal pieces of at most ``spacing_m``."""
     points: list[tuple[tuple[float, float], str]] = []
-    pieces: list[tuple[int, int, float, float]] = []
+    pieces: list[tuple[int, int, float]] = []
     index: dict = {}
 
     def node_at(xy, kind: str, key=None) -> int:
@@ -145,21 +147,23 @@ def _cut(lines: nx.MultiGraph, spacing_m: float) -> nx.Graph:
     for u, v, d in sorted(lines.edges(data=True), key=lambda e: tuple(e[2]["xy"][0])):
         xy, a = d["xy"], d["start"]
         b = v if a == u else u
+        xy = np.vstack([lines.nodes[a]["xy"], xy[1:-1], lines.nodes[b]["xy"]])
         s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
         parts = max(1, math.ceil(s[-1] / spacing_m))
-        ids = [node_at(xy[0], _kind(lines, a), a)]
+        ids = [node_at(lines.nodes[a]["xy"], _kind(lines, a), a)]
         for i in range(1, parts):
             at = s[-1] * i / parts
             ids.append(node_at([np.interp(at, s, xy[:, 0]), np.interp(at, s, xy[:, 1])], "aisle"))
-        ids.append(node_at(xy[-1], _kind(lines, b), b))
-        pieces += [(u, v, s[-1] / parts, d["width_m"]) for u, v in zip(ids, ids[1:]) if u != v]
+        ids.append(node_at(lines.nodes[b]["xy"], _kind(lines, b), b))
+        pieces += [(u, v, d["width_m"]) for u, v in zip(ids, ids[1:]) if u != v]
     order = sorted(range(len(points)), key=lambda i: points[i][0])
     name = {i: f"n{j}" for j, i in enumerate(order)}
     graph = nx.Graph()
     for i in order:
         xy, kind = points[i]
         graph.add_node(name[i], xy=xy, kind=kind)
-    for u, v, length, width in pieces:
+    for u, v, width in pieces:
+        length = math.dist(points[u][0], points[v][0])
         graph.add_edge(name[u], name[v], length_m=round(length, 3), width_m=round(width, 3))
     for n in graph.nodes:
         graph.nodes[n]["width_m"] = min(w for _, _, w in graph.edges(n, data="width_m"))

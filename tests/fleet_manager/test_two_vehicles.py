@@ -33,8 +33,8 @@ def test_two_twins_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
     from amr_twin.model.config import load_config
 
     roadmap = warehouse()
-    west, mid, east = (node_at(roadmap, x, 0.0) for x in (-2.4, 0.0, 2.3))
-    starts = {"amr-1": roadmap.xy(west), "amr-2": (4.665, -0.025)}
+    west, mid, east, far = (node_at(roadmap, x, 0.0) for x in (-2.7, -0.2, 2.2, 4.7))
+    starts = {"amr-1": roadmap.xy(west), "amr-2": roadmap.xy(far)}
     cfg = load_config()
     broker = EmbeddedBroker().start()
     sessions, manager = [], None

@@ -10,6 +10,7 @@ publishes the orders and instant actions it returns (QoS 0, the specification's 
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 import threading
 import time
 
@@ -130,3 +131,31 @@ class FleetManager:
     def close(self) -> None:
         self.client.disconnect()
         self.client.loop_stop()
+
+
+def start_manager(
+    cfg,
+    world: str,
+    url: str,
+    serials: list[str],
+    interface: str,
+    jobs: int,
+    seed: int,
+    options: ManagerOptions = ManagerOptions(),
+    start_xy: tuple[float, float] | None = None,
+) -> FleetManager:
+    """The manager of ``serials`` on ``world``'s roadmap with ``jobs`` seeded jobs queued
+    (:func:`~amr_twin.fleet_manager.jobs.job_stream`); without charging nodes in ``options``, the
+    dock nearest ``start_xy`` (the world's start) charges."""
+    from amr_twin.fleet_manager.jobs import job_stream
+    from amr_twin.fleet_manager.roadmap import world_roadmap
+    from amr_twin.model.worlds import default_start
+
+    roadmap = world_roadmap(cfg, world)
+    if not options.charging_nodes:
+        x, y = start_xy if start_xy is not None else default_start(world)[:2]
+        dock = roadmap.nearest_of("end", x, y)
+        options = replace(options, charging_nodes=(dock,) if dock else ())
+    manager = FleetManager(url, roadmap, serials, interface, options)
+    manager.submit(job_stream(roadmap, jobs, seed, exclude=set(options.charging_nodes)))
+    return manager

@@ -4,10 +4,11 @@ builds (:func:`amr_twin.navigation.stack.load_static_map`).
 The free space's centre lines (:mod:`amr_twin.fleet_manager.skeleton`, cells where the robot turns
 in place with ``margin_m`` to spare) become a networkx graph: the largest connected piece is kept,
 chains through two-way points are joined, and each line between key points is cut into pieces of at
-most ``spacing_m`` along it. Nodes are of three kinds: ``junction`` (three or more edges), ``end`` (one edge:
-a dead end, used as a dock) and ``aisle`` (on a line between them: in front of a rack face). Each
-edge has its ``length_m`` (the straight distance between its nodes) and its ``width_m``, the free width across it (twice
-the least clearance along it). Node ids are ``n0``, ``n1``, ... in order of position (x, then y).
+most ``spacing_m`` along it. Nodes are of three kinds: ``junction`` (three or more edges), ``end``
+(one edge: a dead end, used as a dock) and ``aisle`` (on a line between them: in front of a rack
+face). Each edge has its ``length_m`` (the straight distance between its nodes) and its
+``width_m``, the free width across it (twice the least clearance along it). Node ids are ``n0``,
+``n1``, ... in order of position (x, then y).
 """
 
 from __future__ import annotations
@@ -48,6 +49,11 @@ class Roadmap:
         """The nodes of ``kind`` (``junction``, ``end``, ``aisle``, ``home``), in id order."""
         return [n for n, k in self.graph.nodes(data="kind") if k == kind]
 
+    def nearest_of(self, kind: str, x: float, y: float) -> str | None:
+        """The node of ``kind`` nearest (x, y), or None."""
+        nodes = self.nodes_of(kind)
+        return min(nodes, key=lambda n: math.dist(self.xy(n), (x, y))) if nodes else None
+
     def nearest(self, x: float, y: float) -> tuple[str, float]:
         """The node nearest (x, y) and its distance, m."""
         best = min(self.graph.nodes, key=lambda n: math.dist(self.xy(n), (x, y)))
@@ -86,6 +92,17 @@ class Roadmap:
             "mapId": self.map_id,
             "allowedDeviationXY": self.deviation_m,
         }
+
+
+def world_roadmap(cfg, world: str, map_yaml: str | None = None) -> Roadmap:
+    """The roadmap of ``world`` (or of the map_server map ``map_yaml``) for the robot of ``cfg``,
+    on mapId the world's name (:func:`amr_twin.fleet.session.map_id`)."""
+    from amr_twin.fleet.session import map_id
+    from amr_twin.navigation.footprint import robot_footprint
+    from amr_twin.navigation.stack import load_static_map
+
+    static = load_static_map(cfg, world, map_yaml)
+    return build_roadmap(static, map_id(world), robot_footprint(cfg).circumscribed_radius_m)
 
 
 def build_roadmap(

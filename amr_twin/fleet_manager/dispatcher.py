@@ -8,8 +8,8 @@ MQTT here: :class:`~amr_twin.fleet_manager.manager.FleetManager` carries the mes
   control (:mod:`~amr_twin.fleet_manager.traffic`) reserves and extended by order updates as the
   vehicle's ``lastNodeId`` frees nodes behind it and others'.
 - An idle vehicle another one waits for is sent to the nearest free node off that one's way.
-- A deadlock (a cycle of waiting vehicles) is broken by rerouting the vehicle of the highest serial
-  number around the nodes the others hold; it is reported either way.
+- A deadlock (a cycle of waiting vehicles) is broken by a detour
+  (:mod:`~amr_twin.fleet_manager.detours`); it is reported either way.
 - An idle vehicle whose ``batteryState.batteryCharge`` is below ``charge_below`` % goes to a free
   charging node with ``startCharging``, and gets ``stopCharging`` at ``charge_until`` %.
 """
@@ -18,9 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import networkx as nx
-
 from amr_twin.fleet_manager import messages as vda
+from amr_twin.fleet_manager.detours import break_cycle, exit_way, free_spot, side_step
 from amr_twin.fleet_manager.jobs import Job, nearest_vehicle
 from amr_twin.fleet_manager.progress import Task, Vehicle, order_failed, task_finished
 from amr_twin.fleet_manager.traffic import Traffic
@@ -53,7 +52,10 @@ class Dispatcher:
         self.vehicles: dict[str, Vehicle] = {}
         self.pending: list[Job] = []
         self.events: list[dict] = []
+        self._evict: dict[str, set] = {}
+        """Idle vehicles to park once they can get out, and the nodes to keep clear."""
         self._deadlocks: set = set()
+        """The cycle last reported."""
         self._out: list = []
 
     def vehicle(self, serial: str) -> Vehicle:
@@ -116,7 +118,10 @@ class Dispatcher:
                 if plan.route[i // 2] == st.get("lastNodeId"):
                     self.traffic.advance(v.serial, i // 2)
         failed = order_failed(st, task)
-        if failed or task_finished(st, task, plan):
+        if not failed and task.resume and task_finished(st, task, plan, resumed=False):
+            if not task.yield_to & self._evict.keys() or v.serial in self._stuck():
+                self._resume(v)
+        elif failed or task_finished(st, task, plan):
             v.node = plan.route[plan.passed]
             self.traffic.place(v.serial, v.node)
             self._event(
@@ -142,6 +147,31 @@ class Dispatcher:
                             [vda.action(f"{task.order_id}-stop", "stopCharging")],
                         ),
                     )
+
+    def _resume(self, v: Vehicle) -> None:
+        """After a side-step: the way on from where ``v`` stands through its stops ahead, once it
+        crosses no way of the vehicles it let by (or another vehicle waits for it)."""
+        self._extend_all()  # the vehicles let by take what the side-step freed, first
+        plan, task = self.traffic.plans[v.serial], v.task
+        parked = {o.node for s, o in self._idle().items() if s != v.serial}
+        here = plan.route[plan.passed]
+        found = task.way_on(self.roadmap, here, plan.passed, parked)
+        found = found or task.way_on(self.roadmap, here, plan.passed, frozenset())
+        if found is None:
+            return
+        let_by = [  # those still driving on (not waiting, not standing aside themselves)
+            self.traffic.plans[o]
+            for o in task.yield_to
+            if self.vehicles[o].task
+            and not self.vehicles[o].task.resume
+            and o not in self.traffic.waiting
+        ]
+        crosses = any(set(found[0][1:]) & set(p.route[p.passed :]) for p in let_by)
+        waited = any(v.serial in others for others in self.traffic.waiting.values())
+        if crosses and not waited:
+            return
+        self.traffic.reroute(v.serial, task.take_up(found))
+        self._update(v)  # the new horizon; released by the next extension
 
     def _start(self, v: Vehicle, task: Task, avoid=frozenset()) -> bool:
         """Route ``task`` from where ``v`` stands, reserve, and send its order; False if no way."""
@@ -241,28 +271,50 @@ class Dispatcher:
         v.task.sent_held = self.traffic.plans[v.serial].held
 
     def _make_way(self) -> None:
+        """Idle vehicles in another's way sent off it; one boxed in by the vehicle waiting for it
+        (a dead end) is let out: that vehicle side-steps and waits until it is parked."""
+        charging = self.options.charging_nodes
         for serial, blockers in sorted(self.traffic.waiting.items()):
             plan = self.traffic.plans[serial]
             ahead = set(plan.route[plan.held :])
             for b in sorted(blockers):
                 v = self.vehicles[b]
                 if v.task is None and v.node is not None and v.node in ahead:
-                    spot = self._free_spot(v, ahead)
-                    if spot is not None:
-                        self._start(v, Task.park(f"{b}-park-{v.counter()}", spot))
+                    if not self._park(v, ahead) and side_step(
+                        self.roadmap,
+                        self.traffic,
+                        serial,
+                        self.vehicles[serial].task,
+                        [serial, b],
+                        charging,
+                        exit_way(self.roadmap, v.node),
+                    ):
+                        self._update(self.vehicles[serial])
+                        self._evict[b] = ahead
+                        self._event("side-step", vehicle=serial, lets_out=b)
+        for b, keep_clear in sorted(self._evict.items()):
+            v = self.vehicles[b]
+            if v.task is not None or self._park(v, keep_clear):
+                del self._evict[b]
 
-    def _free_spot(self, v: Vehicle, keep_clear: set) -> str | None:
-        """The nearest node ``v`` can reach through nodes no other vehicle holds, off
-        ``keep_clear`` and not a charging node."""
+    def _stuck(self) -> set:
+        """Vehicles standing aside for an idle vehicle that cannot be parked off their way."""
+        out = set()
+        for b, keep_clear in self._evict.items():
+            charging = self.options.charging_nodes
+            node = self.vehicles[b].node
+            if free_spot(self.roadmap, self.traffic, b, node, keep_clear, charging) is None:
+                out |= {s for s, v in self.vehicles.items() if v.task and b in v.task.yield_to}
+        return out
+
+    def _park(self, v: Vehicle, keep_clear: set) -> bool:
+        """Send idle ``v`` to the nearest free node off ``keep_clear``; False if there is none."""
+        charging = self.options.charging_nodes
+        spot = free_spot(self.roadmap, self.traffic, v.serial, v.node, keep_clear, charging)
         others = {n for n, s in self.traffic.holder.items() if s != v.serial}
-        graph = self.roadmap.graph.subgraph(n for n in self.roadmap.graph if n not in others)
-        dist = nx.single_source_dijkstra_path_length(graph, v.node, weight="length_m")
-        spots = [
-            (d, n)
-            for n, d in dist.items()
-            if n not in keep_clear and n not in self.options.charging_nodes
-        ]
-        return min(spots)[1] if spots else None
+        if spot is None:
+            return False
+        return self._start(v, Task.park(f"{v.serial}-park-{v.counter()}", spot), others)
 
     def _break_deadlock(self) -> None:
         cycle = self.traffic.deadlock()
@@ -270,18 +322,21 @@ class Dispatcher:
             self._deadlocks.clear()
             return
         key = tuple(sorted(cycle))
-        if key in self._deadlocks:
-            return
-        self._deadlocks.add(key)
-        victim = max(cycle)
-        v, plan = self.vehicles[victim], self.traffic.plans[victim]
-        others = {n for n, s in self.traffic.holder.items() if s != victim and s in cycle}
-        rest = v.task.reroute(self.roadmap, plan.route[plan.held], plan.held, others)
-        if rest is not None:
-            self.traffic.reroute(victim, rest)
-            v.task.waiting = bool(self.traffic.extend(victim).waits_for)
+        tasks = {s: self.vehicles[s].task for s in cycle}
+        detour = break_cycle(self.roadmap, self.traffic, tasks, cycle, self.options.charging_nodes)
+        if detour is not None:
+            v = self.vehicles[detour.serial]
+            v.task.waiting = bool(self.traffic.extend(detour.serial).waits_for)
             self._update(v)
-        self._event("deadlock", vehicles=list(cycle), rerouted=victim if rest else None)
+        if key in self._deadlocks and detour is None:
+            return  # reported, still no way out
+        self._deadlocks = {key}
+        self._event(
+            "deadlock",
+            vehicles=list(cycle),
+            rerouted=detour.serial if detour else None,
+            how=detour.kind if detour else None,
+        )
 
     # -- output ---------------------------------------------------------------------------------
     def _send(self, serial: str, subtopic: str, msg: dict) -> None:

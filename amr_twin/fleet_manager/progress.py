@@ -54,6 +54,12 @@ class Task:
     stop_at: list[int] = field(default_factory=list)
     waiting: bool = False
     stop_sent: bool = False
+    resume: list = field(default_factory=list)
+    """The stops still ahead after a side-step, taken up when the vehicle stands at its spot."""
+    yield_to: frozenset = frozenset()
+    """The vehicles a side-step lets by."""
+    detoured: int = -1
+    """The route index it stood at when last given a detour (none again before it moves on)."""
 
     @classmethod
     def job_task(cls, job: Job, node_actions: frozenset | None) -> Task:
@@ -93,6 +99,31 @@ class Task:
         self.stop_at = [i for i in self.stop_at if i <= index] + stop_at
         return way
 
+    def detour(self, roadmap, node: str, index: int, spot: str, avoid) -> list[str] | None:
+        """A way from ``node`` (route index ``index``) to ``spot`` alone, the stops ahead kept in
+        :attr:`resume`; None if there is none or no stop is ahead (then nothing changes)."""
+        ahead = [k for k, i in enumerate(self.stop_at) if i > index]
+        leg = roadmap.route(node, spot, avoid)
+        if leg is None or not ahead:
+            return None
+        self.resume = [self.stops[k] for k in ahead]
+        self.actions = {i: a for i, a in self.actions.items() if i <= index}
+        self.stop_at = [i for i in self.stop_at if i <= index]
+        return leg
+
+    def way_on(self, roadmap, node: str, index: int, avoid):
+        """The way on from ``node`` (route index ``index``) through :attr:`resume`, with its
+        actions and stop indices, or None (nothing changes: :meth:`take_up` takes it)."""
+        return self._through(roadmap, node, index, self.resume, avoid)
+
+    def take_up(self, found) -> list[str]:
+        """Take up the way :meth:`way_on` found; returns the way."""
+        way, actions, stop_at = found
+        self.actions.update(actions)
+        self.stop_at += stop_at
+        self.resume = []
+        return way
+
     @staticmethod
     def _through(roadmap, start: str, offset: int, stops, avoid):
         """(way from ``start``, its actions and stop indices counted from ``offset``) or None."""
@@ -119,11 +150,16 @@ def _status(state: dict) -> dict[str, str]:
     return {a.get("actionId"): a.get("actionStatus") for a in state.get("actionStates", [])}
 
 
-def task_finished(state: dict, task: Task, plan) -> bool:
-    """Whether ``state`` reports ``task`` done (module docstring)."""
+def task_finished(state: dict, task: Task, plan, resumed: bool = True) -> bool:
+    """Whether ``state`` reports ``task`` done (module docstring); ``resumed`` False: whether its
+    route is driven to the end, stops left after a side-step or not."""
     if not plan.done or state.get("orderId") != task.order_id:
         return False
     if state.get("nodeStates") or state.get("driving"):
+        return False
+    if not resumed:
+        return True
+    if task.resume:
         return False
     if task.kind == "charge" and not task.stop_sent:
         return False

@@ -20,7 +20,11 @@ class FakeVehicle:
             return
         first = msg["nodes"][0]
         if msg["orderId"] == self.order_id:  # an update: stitched at the last base node
-            assert (first["nodeId"], first["sequenceId"]) == self.base, (self.serial, msg, self.base)
+            assert (first["nodeId"], first["sequenceId"]) == self.base, (
+                self.serial,
+                msg,
+                self.base,
+            )
         else:  # a new order: from where the vehicle stands
             assert first["nodeId"] == self.node and not self.nodes, (self.serial, msg, self.node)
         self.base = max(

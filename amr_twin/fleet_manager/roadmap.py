@@ -14,7 +14,7 @@ face). Each edge has its ``length_m`` (the straight distance between its nodes) 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import networkx as nx
 import numpy as np
@@ -40,7 +40,6 @@ class Roadmap:
     graph: nx.Graph
     map_id: str
     deviation_m: float = DEVIATION_M
-    _home: dict = field(default_factory=dict)
 
     def xy(self, node: str) -> tuple[float, float]:
         return self.graph.nodes[node]["xy"]
@@ -81,6 +80,7 @@ class Roadmap:
             return None
 
     def length_m(self, path: list[str]) -> float:
+        """The length of ``path`` (node ids) along its edges, m."""
         return sum(self.graph.edges[a, b]["length_m"] for a, b in zip(path, path[1:]))
 
     def position(self, node: str) -> dict:

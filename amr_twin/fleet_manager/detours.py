@@ -25,15 +25,36 @@ class Detour:
     kind: str
 
 
-def free_spot(roadmap, traffic, serial: str, start: str, keep_clear: set, charging) -> str | None:
-    """The node nearest ``start`` for vehicle ``serial`` (module docstring), or None."""
+def free_spots(roadmap, traffic, serial: str, start: str, keep_clear: set, charging) -> list:
+    """The nodes vehicle ``serial`` can reach from ``start`` through nodes no other vehicle holds,
+    off ``keep_clear`` and the charging nodes, nearest first."""
     others = {n for n, s in traffic.holder.items() if s != serial}
     graph = roadmap.graph.subgraph(n for n in roadmap.graph if n not in others)
     dist = nx.single_source_dijkstra_path_length(graph, start, weight="length_m")
     spots = [
         (d, n) for n, d in dist.items() if n not in keep_clear and n not in charging and n != start
     ]
-    return min(spots)[1] if spots else None
+    return [n for _d, n in sorted(spots)]
+
+
+def free_spot(roadmap, traffic, serial: str, start: str, keep_clear: set, charging) -> str | None:
+    """The nearest of :func:`free_spots`, or None."""
+    spots = free_spots(roadmap, traffic, serial, start, keep_clear, charging)
+    return spots[0] if spots else None
+
+
+def lets_out(traffic, serial: str, spot: str, boxed, test) -> bool:
+    """Whether ``test()`` holds (the boxed vehicle ``boxed`` finds a spot) with vehicle ``serial``
+    standing at ``spot`` alone; the reservations are left as they were."""
+    saved = dict(traffic.holder)
+    for n in [n for n, s in traffic.holder.items() if s == serial]:
+        del traffic.holder[n]
+    traffic.holder[spot] = serial
+    try:
+        return test()
+    finally:
+        traffic.holder.clear()
+        traffic.holder.update(saved)
 
 
 def break_cycle(roadmap, traffic, tasks: dict, cycle: list[str], charging) -> Detour | None:
@@ -65,9 +86,12 @@ def exit_way(roadmap, node: str) -> set:
     return set(paths[min(reach)[1]]) if reach else {node}
 
 
-def side_step(roadmap, traffic, serial: str, task, cycle, charging, clear=frozenset()) -> bool:
+def side_step(
+    roadmap, traffic, serial: str, task, cycle, charging, clear=frozenset(), unbox=None
+) -> bool:
     """Send vehicle ``serial`` (doing ``task``) to a free spot off the ways of all other vehicles
-    (else off those of ``cycle``) and off ``clear``, to take up its stops later; False if there is
+    (else off those of ``cycle``) and off ``clear`` (and, with ``unbox`` = (a boxed vehicle, a test
+    that it can get out), one from which it can), to take up its stops later; False if there is
     none."""
     plan = traffic.plans[serial]
     start = plan.route[plan.held]
@@ -80,8 +104,11 @@ def side_step(roadmap, traffic, serial: str, task, cycle, charging, clear=frozen
             for n in traffic.plans[s].route[traffic.plans[s].passed :]
         }
 
-    spot = free_spot(roadmap, traffic, serial, start, ways(traffic.plans) | clear, charging)
-    spot = spot or free_spot(roadmap, traffic, serial, start, ways(cycle) | clear, charging)
+    spots = free_spots(roadmap, traffic, serial, start, ways(traffic.plans) | clear, charging)
+    spots = spots or free_spots(roadmap, traffic, serial, start, ways(cycle) | clear, charging)
+    if unbox is not None:  # only a spot from which the boxed vehicle can get out
+        spots = [n for n in spots[:12] if lets_out(traffic, serial, n, *unbox)]
+    spot = spots[0] if spots else None
     others = {n for n, s in traffic.holder.items() if s != serial}
     leg = None if spot is None else task.detour(roadmap, start, plan.held, spot, others)
     if leg is None:

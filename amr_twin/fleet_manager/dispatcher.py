@@ -210,6 +210,7 @@ class Dispatcher:
     # -- decisions ------------------------------------------------------------------------------
     def _decide(self) -> list:
         self._charge_or_assign()
+        self._clear_docks()
         self._extend_all()
         self._make_way()
         self._break_deadlock()
@@ -280,7 +281,16 @@ class Dispatcher:
             for b in sorted(blockers):
                 v = self.vehicles[b]
                 if v.task is None and v.node is not None and v.node in ahead:
-                    if not self._park(v, ahead) and side_step(
+                    if self._park(v, ahead):
+                        continue
+
+                    def gets_out(v=v, ahead=ahead) -> bool:
+                        traffic, node = self.traffic, v.node
+                        return bool(
+                            free_spot(self.roadmap, traffic, v.serial, node, ahead, charging)
+                        )
+
+                    if side_step(
                         self.roadmap,
                         self.traffic,
                         serial,
@@ -288,6 +298,7 @@ class Dispatcher:
                         [serial, b],
                         charging,
                         exit_way(self.roadmap, v.node),
+                        unbox=(b, gets_out),
                     ):
                         self._update(self.vehicles[serial])
                         self._evict[b] = ahead
@@ -307,10 +318,22 @@ class Dispatcher:
                 out |= {s for s, v in self.vehicles.items() if v.task and b in v.task.yield_to}
         return out
 
+    def _clear_docks(self) -> None:
+        """An idle vehicle at a dock (not a charging node) leaves its dead end for an aisle node off
+        the others' ways: docks are for loading, and a vehicle parked in one boxes itself in."""
+        docks = set(self.roadmap.nodes_of("end")) - set(self.options.charging_nodes)
+        keep = self.traffic.dead_end_nodes() | set(self.roadmap.nodes_of("junction"))
+        ways = {n for p in self.traffic.plans.values() for n in p.route[p.passed :]}
+        for v in self._idle().values():
+            if v.node in docks and not self._park(v, keep | ways):
+                self._park(v, keep)
+
     def _park(self, v: Vehicle, keep_clear: set) -> bool:
-        """Send idle ``v`` to the nearest free node off ``keep_clear``; False if there is none."""
-        charging = self.options.charging_nodes
-        spot = free_spot(self.roadmap, self.traffic, v.serial, v.node, keep_clear, charging)
+        """Send idle ``v`` to the nearest free node off ``keep_clear`` (and out of the dead ends if
+        it can); False if there is none."""
+        charging, spurs = self.options.charging_nodes, self.traffic.dead_end_nodes()
+        spot = free_spot(self.roadmap, self.traffic, v.serial, v.node, keep_clear | spurs, charging)
+        spot = spot or free_spot(self.roadmap, self.traffic, v.serial, v.node, keep_clear, charging)
         others = {n for n, s in self.traffic.holder.items() if s != v.serial}
         if spot is None:
             return False

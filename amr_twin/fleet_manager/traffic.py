@@ -9,6 +9,8 @@ the last one released to it):
   through it, to where its route leaves the corridor or ends, reserved at once. Two vehicles thus
   never drive one edge, nor meet head-on in a corridor (both would hold its nodes), and no vehicle
   stops inside a corridor waiting for one coming the other way.
+- A vehicle bound into a dead end (a dock) is released up to its mouth only with its way in: it
+  does not stand in the mouth while another comes out.
 - Nodes behind a vehicle are freed as it passes the next ones (its state's ``lastNodeId``).
 - A vehicle refused is *waiting* for the holders of the nodes it needs; a cycle of vehicles waiting
   for each other is a deadlock (:meth:`Traffic.deadlock`, networkx' ``find_cycle``), for the
@@ -80,6 +82,11 @@ class Traffic:
     def refresh(self) -> None:
         """Recount the corridors (after a node was added to the graph)."""
         self._corridor = corridors(self.graph)
+        self._dead_ends = {
+            cid
+            for edge, cid in self._corridor.items()
+            if any(self.graph.degree(n) == 1 for n in edge)
+        }
 
     def place(self, serial: str, node: str) -> bool:
         """The vehicle stands at ``node`` with no route: it holds that node alone. False if another
@@ -116,12 +123,22 @@ class Traffic:
             end += 1
         return end
 
+    def dead_end_nodes(self) -> set[str]:
+        """The nodes of the dead ends (corridors ending in a node with one edge: docks)."""
+        return {n for edge, cid in self._corridor.items() if cid in self._dead_ends for n in edge}
+
+    def _into_dead_end(self, route: list[str], index: int) -> bool:
+        return self._corridor[frozenset(route[index : index + 2])] in self._dead_ends
+
     def extend(self, serial: str) -> Grant:
-        """Reserve as many whole corridor runs ahead of the vehicle as are free."""
+        """Reserve as many whole corridor runs ahead of the vehicle as are free; a run ending at
+        the mouth of a dead end (a dock) only together with the run into it."""
         plan = self.plans[serial]
         blockers: set[str] = set()
         while plan.held < len(plan.route) - 1:
             end = self.run(plan.route, plan.held)
+            while end < len(plan.route) - 1 and self._into_dead_end(plan.route, end):
+                end = self.run(plan.route, end)
             need = plan.route[plan.held + 1 : end + 1]
             blockers = {self.holder[n] for n in need if self.holder.get(n, serial) != serial}
             if blockers:

@@ -7,9 +7,8 @@ MQTT here: :class:`~amr_twin.fleet_manager.manager.FleetManager` carries the mes
   pick and the drop node (node actions ``pick`` and ``drop``), released as far as the traffic
   control (:mod:`~amr_twin.fleet_manager.traffic`) reserves and extended by order updates as the
   vehicle's ``lastNodeId`` frees nodes behind it and others'.
-- An idle vehicle another one waits for is sent to the nearest free node off that one's way.
-- A deadlock (a cycle of waiting vehicles) is broken by a detour
-  (:mod:`~amr_twin.fleet_manager.detours`); it is reported either way.
+- Jams (an idle vehicle in the way or in a dock, a deadlock) are cleared by
+  :class:`~amr_twin.fleet_manager.jams.Jams`.
 - An idle vehicle whose ``batteryState.batteryCharge`` is below ``charge_below`` % goes to a free
   charging node with ``startCharging``, and gets ``stopCharging`` at ``charge_until`` %.
 """
@@ -19,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from amr_twin.fleet_manager import messages as vda
-from amr_twin.fleet_manager.detours import break_cycle, exit_way, free_spot, side_step
+from amr_twin.fleet_manager.jams import Jams
 from amr_twin.fleet_manager.jobs import Job, nearest_vehicle
 from amr_twin.fleet_manager.progress import Task, Vehicle, order_failed, task_finished
 from amr_twin.fleet_manager.traffic import Traffic
@@ -52,10 +51,7 @@ class Dispatcher:
         self.vehicles: dict[str, Vehicle] = {}
         self.pending: list[Job] = []
         self.events: list[dict] = []
-        self._evict: dict[str, set] = {}
-        """Idle vehicles to park once they can get out, and the nodes to keep clear."""
-        self._deadlocks: set = set()
-        """The cycle last reported."""
+        self.jams = Jams(self)
         self._out: list = []
 
     def vehicle(self, serial: str) -> Vehicle:
@@ -105,9 +101,9 @@ class Dispatcher:
         self.traffic.refresh()
         if self.traffic.place(v.serial, node):
             v.node = node
-            self._event("placed", vehicle=v.serial, node=node)
+            self.event("placed", vehicle=v.serial, node=node)
         else:
-            self._event("conflict", vehicle=v.serial, node=node, held_by=self.traffic.holder[node])
+            self.event("conflict", vehicle=v.serial, node=node, held_by=self.traffic.holder[node])
 
     def _follow(self, v: Vehicle) -> None:
         task, plan = v.task, self.traffic.plans[v.serial]
@@ -119,12 +115,12 @@ class Dispatcher:
                     self.traffic.advance(v.serial, i // 2)
         failed = order_failed(st, task)
         if not failed and task.resume and task_finished(st, task, plan, resumed=False):
-            if not task.yield_to & self._evict.keys() or v.serial in self._stuck():
-                self._resume(v)
+            if not task.yield_to & self.jams.evict.keys() or v.serial in self.jams.stuck():
+                self.jams.resume(v)
         elif failed or task_finished(st, task, plan):
             v.node = plan.route[plan.passed]
             self.traffic.place(v.serial, v.node)
-            self._event(
+            self.event(
                 "failed" if failed else "done",
                 vehicle=v.serial,
                 task=task.kind,
@@ -148,32 +144,7 @@ class Dispatcher:
                         ),
                     )
 
-    def _resume(self, v: Vehicle) -> None:
-        """After a side-step: the way on from where ``v`` stands through its stops ahead, once it
-        crosses no way of the vehicles it let by (or another vehicle waits for it)."""
-        self._extend_all()  # the vehicles let by take what the side-step freed, first
-        plan, task = self.traffic.plans[v.serial], v.task
-        parked = {o.node for s, o in self._idle().items() if s != v.serial}
-        here = plan.route[plan.passed]
-        found = task.way_on(self.roadmap, here, plan.passed, parked)
-        found = found or task.way_on(self.roadmap, here, plan.passed, frozenset())
-        if found is None:
-            return
-        let_by = [  # those still driving on (not waiting, not standing aside themselves)
-            self.traffic.plans[o]
-            for o in task.yield_to
-            if self.vehicles[o].task
-            and not self.vehicles[o].task.resume
-            and o not in self.traffic.waiting
-        ]
-        crosses = any(set(found[0][1:]) & set(p.route[p.passed :]) for p in let_by)
-        waited = any(v.serial in others for others in self.traffic.waiting.values())
-        if crosses and not waited:
-            return
-        self.traffic.reroute(v.serial, task.take_up(found))
-        self._update(v)  # the new horizon; released by the next extension
-
-    def _start(self, v: Vehicle, task: Task, avoid=frozenset()) -> bool:
+    def start(self, v: Vehicle, task: Task, avoid=frozenset()) -> bool:
         """Route ``task`` from where ``v`` stands, reserve, and send its order; False if no way."""
         way = task.route_from(self.roadmap, v.node, avoid)
         if way is None:
@@ -183,7 +154,7 @@ class Dispatcher:
         grant = self.traffic.extend(v.serial)
         task.sent_held = grant.held
         self._send(v.serial, "order", self._order(v.serial, task, 0))
-        self._event(
+        self.event(
             "assigned",
             vehicle=v.serial,
             task=task.kind,
@@ -210,13 +181,13 @@ class Dispatcher:
     # -- decisions ------------------------------------------------------------------------------
     def _decide(self) -> list:
         self._charge_or_assign()
-        self._clear_docks()
-        self._extend_all()
-        self._make_way()
-        self._break_deadlock()
+        self.jams.clear_docks()
+        self.extend_all()
+        self.jams.make_way()
+        self.jams.break_deadlock()
         return self._flush()
 
-    def _idle(self) -> dict[str, Vehicle]:
+    def idle(self) -> dict[str, Vehicle]:
         return {
             s: v
             for s, v in sorted(self.vehicles.items())
@@ -227,7 +198,7 @@ class Dispatcher:
         }
 
     def _charge_or_assign(self) -> None:
-        for v in self._idle().values():
+        for v in self.idle().values():
             charge = v.state.get("batteryState", {}).get("batteryCharge", 100.0)
             if charge < self.options.charge_below and v.can("startCharging"):
                 free = [
@@ -237,28 +208,28 @@ class Dispatcher:
                 ]
                 target = nearest_vehicle(self.roadmap.graph, {n: n for n in free}, v.node)
                 if target is not None:
-                    self._start(v, Task.charge(f"{v.serial}-charge-{v.counter()}", target))
+                    self.start(v, Task.charge(f"{v.serial}-charge-{v.counter()}", target))
         while self.pending:
-            idle = {s: v.node for s, v in self._idle().items()}
+            idle = {s: v.node for s, v in self.idle().items()}
             serial = nearest_vehicle(self.roadmap.graph, idle, self.pending[0].pick)
             if serial is None:
                 return
             v, job = self.vehicles[serial], self.pending.pop(0)
             task = Task.job_task(job, v.node_actions)
-            parked = {n for s, other in self._idle().items() if s != serial for n in [other.node]}
-            if not self._start(v, task, parked) and not self._start(v, task):
-                self._event("failed", vehicle=serial, job=job.job_id, reason="no way on the map")
+            parked = {n for s, other in self.idle().items() if s != serial for n in [other.node]}
+            if not self.start(v, task, parked) and not self.start(v, task):
+                self.event("failed", vehicle=serial, job=job.job_id, reason="no way on the map")
 
-    def _extend_all(self) -> None:
+    def extend_all(self) -> None:
         for serial, v in sorted(self.vehicles.items()):
             if v.task is None:
                 continue
             before = self.traffic.plans[serial].held
             grant = self.traffic.extend(serial)
             if grant.held > before:
-                self._update(v)
+                self.update(v)
             elif grant.waits_for and not v.task.waiting:
-                self._event(
+                self.event(
                     "wait",
                     vehicle=serial,
                     node=self.traffic.plans[serial].route[before],
@@ -266,100 +237,10 @@ class Dispatcher:
                 )
             v.task.waiting = bool(grant.waits_for)
 
-    def _update(self, v: Vehicle) -> None:
+    def update(self, v: Vehicle) -> None:
         v.task.update_id += 1
         self._send(v.serial, "order", self._order(v.serial, v.task, v.task.sent_held))
         v.task.sent_held = self.traffic.plans[v.serial].held
-
-    def _make_way(self) -> None:
-        """Idle vehicles in another's way sent off it; one boxed in by the vehicle waiting for it
-        (a dead end) is let out: that vehicle side-steps and waits until it is parked."""
-        charging = self.options.charging_nodes
-        for serial, blockers in sorted(self.traffic.waiting.items()):
-            plan = self.traffic.plans[serial]
-            ahead = set(plan.route[plan.held :])
-            for b in sorted(blockers):
-                v = self.vehicles[b]
-                if v.task is None and v.node is not None and v.node in ahead:
-                    if self._park(v, ahead):
-                        continue
-
-                    def gets_out(v=v, ahead=ahead) -> bool:
-                        traffic, node = self.traffic, v.node
-                        return bool(
-                            free_spot(self.roadmap, traffic, v.serial, node, ahead, charging)
-                        )
-
-                    if side_step(
-                        self.roadmap,
-                        self.traffic,
-                        serial,
-                        self.vehicles[serial].task,
-                        [serial, b],
-                        charging,
-                        exit_way(self.roadmap, v.node),
-                        unbox=(b, gets_out),
-                    ):
-                        self._update(self.vehicles[serial])
-                        self._evict[b] = ahead
-                        self._event("side-step", vehicle=serial, lets_out=b)
-        for b, keep_clear in sorted(self._evict.items()):
-            v = self.vehicles[b]
-            if v.task is not None or self._park(v, keep_clear):
-                del self._evict[b]
-
-    def _stuck(self) -> set:
-        """Vehicles standing aside for an idle vehicle that cannot be parked off their way."""
-        out = set()
-        for b, keep_clear in self._evict.items():
-            charging = self.options.charging_nodes
-            node = self.vehicles[b].node
-            if free_spot(self.roadmap, self.traffic, b, node, keep_clear, charging) is None:
-                out |= {s for s, v in self.vehicles.items() if v.task and b in v.task.yield_to}
-        return out
-
-    def _clear_docks(self) -> None:
-        """An idle vehicle at a dock (not a charging node) leaves its dead end for an aisle node off
-        the others' ways: docks are for loading, and a vehicle parked in one boxes itself in."""
-        docks = set(self.roadmap.nodes_of("end")) - set(self.options.charging_nodes)
-        keep = self.traffic.dead_end_nodes() | set(self.roadmap.nodes_of("junction"))
-        ways = {n for p in self.traffic.plans.values() for n in p.route[p.passed :]}
-        for v in self._idle().values():
-            if v.node in docks and not self._park(v, keep | ways):
-                self._park(v, keep)
-
-    def _park(self, v: Vehicle, keep_clear: set) -> bool:
-        """Send idle ``v`` to the nearest free node off ``keep_clear`` (and out of the dead ends if
-        it can); False if there is none."""
-        charging, spurs = self.options.charging_nodes, self.traffic.dead_end_nodes()
-        spot = free_spot(self.roadmap, self.traffic, v.serial, v.node, keep_clear | spurs, charging)
-        spot = spot or free_spot(self.roadmap, self.traffic, v.serial, v.node, keep_clear, charging)
-        others = {n for n, s in self.traffic.holder.items() if s != v.serial}
-        if spot is None:
-            return False
-        return self._start(v, Task.park(f"{v.serial}-park-{v.counter()}", spot), others)
-
-    def _break_deadlock(self) -> None:
-        cycle = self.traffic.deadlock()
-        if cycle is None:
-            self._deadlocks.clear()
-            return
-        key = tuple(sorted(cycle))
-        tasks = {s: self.vehicles[s].task for s in cycle}
-        detour = break_cycle(self.roadmap, self.traffic, tasks, cycle, self.options.charging_nodes)
-        if detour is not None:
-            v = self.vehicles[detour.serial]
-            v.task.waiting = bool(self.traffic.extend(detour.serial).waits_for)
-            self._update(v)
-        if key in self._deadlocks and detour is None:
-            return  # reported, still no way out
-        self._deadlocks = {key}
-        self._event(
-            "deadlock",
-            vehicles=list(cycle),
-            rerouted=detour.serial if detour else None,
-            how=detour.kind if detour else None,
-        )
 
     # -- output ---------------------------------------------------------------------------------
     def _send(self, serial: str, subtopic: str, msg: dict) -> None:
@@ -369,6 +250,6 @@ class Dispatcher:
         out, self._out = self._out, []
         return out
 
-    def _event(self, kind: str, **fields) -> None:
+    def event(self, kind: str, **fields) -> None:
         t = self.clock() if self.clock is not None else None
         self.events.append({"t_s": t, "event": kind, **fields})

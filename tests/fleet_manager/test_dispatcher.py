@@ -105,7 +105,7 @@ def test_a_deadlock_at_both_ends_of_the_aisle_is_broken_by_a_detour_and_reported
         ("amr-1", Job("j1", west, beyond_east, 5.0)),
         ("amr-2", Job("j2", east, beyond_west, 5.0)),
     ):
-        d._start(d.vehicles[serial], Task.job_task(job, None))
+        d.start(d.vehicles[serial], Task.job_task(job, None))
     out = d._decide()
     events = [e for e in d.events if e["event"] == "deadlock"]
     assert len(events) == 1 and sorted(events[0]["vehicles"]) == ["amr-1", "amr-2"]

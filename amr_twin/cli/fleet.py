@@ -3,7 +3,9 @@
 Every option is checked before the model is built; bad input is one line, exit 2. Without
 ``--vda5050`` an embedded broker (amqtt) serves on a free port of 127.0.0.1, printed at start. The
 run ends after ``--duration-s`` simulated seconds, or at Ctrl-C (then the vehicle says OFFLINE and
-disconnects); ``--json`` prints what it did as one JSON object.
+disconnects); ``--json`` prints what it did as one JSON object. ``--manager`` runs the project's
+fleet manager (:mod:`amr_twin.fleet_manager`) on the same broker with ``--jobs`` seeded jobs; then
+without ``--duration-s`` the run ends when they are done.
 """
 
 from __future__ import annotations
@@ -32,6 +34,27 @@ def _starts(text: Optional[str], robots: int) -> list:
     return out
 
 
+def _start_manager(session, cfg, world, interface, jobs, seed, charge_below):
+    """The project's fleet manager for the session's vehicle, its jobs queued."""
+    from amr_twin.fleet_manager.dispatcher import ManagerOptions
+    from amr_twin.fleet_manager.manager import start_manager
+
+    x, y, _yaw = session.true_pose()
+    master = start_manager(
+        cfg,
+        world,
+        session.url,
+        [session.serial],
+        interface,
+        4 if jobs is None else jobs,
+        seed,
+        ManagerOptions(charge_below=charge_below),
+        start_xy=(x, y),
+    )
+    typer.echo(f"fleet manager on {session.url}: {master.jobs_left()} jobs", err=True)
+    return master
+
+
 def fleet(
     robots: int = typer.Option(1, "--robots", help="How many robots (1 for now)."),
     world: str = typer.Option(
@@ -58,7 +81,18 @@ def fleet(
     as_json: bool = typer.Option(
         False, "--json", help="Print what the run did as one JSON object."
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed of the sensors' noise."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the sensors' noise and of the jobs."),
+    manager: bool = typer.Option(
+        False,
+        "--manager",
+        help="Run the project's fleet manager on the same broker too (docs/how-to/fleet.md).",
+    ),
+    jobs: Optional[int] = typer.Option(
+        None, "--jobs", help="With --manager: seeded transport jobs queued at the start (4)."
+    ),
+    charge_below: float = typer.Option(
+        20.0, "--charge-below", help="With --manager: send to charge below this batteryCharge, %."
+    ),
     config: Optional[Path] = ConfigOpt,
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
@@ -82,6 +116,12 @@ def fleet(
         fail(f"--rate {rate:g}: must be a finite number in [0, 1000] (0: as fast as possible)")
     if duration_s is not None and not (math.isfinite(duration_s) and 0 < duration_s <= 86400):
         fail(f"--duration-s {duration_s:g}: must be in (0, 86400] s")
+    if jobs is not None and not manager:
+        fail(f"--jobs {jobs}: only with --manager")
+    if jobs is not None and not 0 <= jobs <= 10000:
+        fail(f"--jobs {jobs}: must be in [0, 10000]")
+    if not (math.isfinite(charge_below) and 0 <= charge_below < 80):
+        fail(f"--charge-below {charge_below:g}: must be in [0, 80) % (charged up to 80 %)")
     cfg = _config(config, params, set_)
 
     def work() -> dict:
@@ -104,9 +144,12 @@ def fleet(
             f"{topic(interface, 'amr-1', '{order,instantActions,state,...}')}",
             err=True,
         )
+        master = None
         try:
+            if manager:
+                master = _start_manager(session, cfg, world, interface, jobs, seed, charge_below)
             left = math.inf if duration_s is None else duration_s
-            while left > 1e-9:
+            while left > 1e-9 and not (master and duration_s is None and not master.jobs_left()):
                 step = min(1.0, left)
                 session.run(step)
                 left -= step
@@ -114,6 +157,9 @@ def fleet(
             typer.echo("stopped", err=True)
         finally:
             out = session.summary()
+            if master is not None:
+                out["manager"] = master.summary()
+                master.close()
             session.close()
         return out
 

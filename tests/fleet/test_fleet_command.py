@@ -26,6 +26,8 @@ CLI = [sys.executable, "-c", "from amr_twin.cli.main import main; main()", "flee
         ),
         (["--starts", "1,2"], "--starts '1,2': expected X_M,Y_M,YAW_DEG"),
         (["--rate", "-1"], "--rate -1: must be a finite number in [0, 1000]"),
+        (["--jobs", "3"], "--jobs 3: only with --manager"),
+        (["--manager", "--charge-below", "90"], "--charge-below 90: must be in [0, 80) %"),
     ],
 )
 def test_bad_options_are_refused_in_one_line(args, says):
@@ -61,3 +63,20 @@ def test_a_short_run_on_the_embedded_broker_reports_what_it_sent():
     assert out["messages_sent"]["state"] >= 2 and out["messages_sent"]["visualization"] >= 19
     assert out["last_state"]["agvPosition"]["mapId"] == "warehouse"
     assert abs(out["true_pose"]["x_m"] + 6.0) < 0.05
+
+
+def test_the_fleet_manager_beside_the_vehicle_places_it_on_the_roadmap():
+    pytest.importorskip("amqtt")
+    done = subprocess.run(
+        CLI
+        + ["--world", "warehouse", "--manager", "--jobs", "0", "--duration-s", "2", "--rate", "0"]
+        + ["--json"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    manager = json.loads(done.stdout)["manager"]
+    assert manager["roadmap"]["nodes"] == 33 and manager["jobs_done"] == 0  # 32 and amr-1's home
+    assert [e["event"] for e in manager["events"]] == ["placed"]
+    assert manager["messages_sent"] == {"instantActions": 1}  # the factsheetRequest

@@ -74,19 +74,15 @@ class Ros1Bridge:
         self.map_tf = MapTransform()
         """``map -> odom`` on ``/tf`` from the localisation's pose in ``map``
         (:mod:`amr_twin.ros1.map_transform`)."""
-        self._held: dict = {}
-        """Publisher -> its messages since the last tick, ``(t_us, writer, message)`` in the order
-        tapped (``writer`` None: the message's bytes), serialised and queued at the tick."""
         self._fast = {
-            bus: (p, WRITERS[BUS_TOPICS[bus][1]], self._held.setdefault(p, []))
+            bus: (p, WRITERS[BUS_TOPICS[bus][1]])
             for bus, p in self.pubs.items()
             if bus in BUS_TOPICS
             and BUS_TOPICS[bus][1] in WRITERS
             and bus != "wheel_Command_Service/request"
         }
-        """Bus topic -> (publisher, writer, held): the twin's messages written as they are, held
-        until the tick (a tick's messages of a topic serialised in one loop cost a third of each
-        serialised as it is tapped, between the physics' steps)."""
+        """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to
+        the outbox."""
         self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
         self.state_pubs = {
             "/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
@@ -146,13 +142,13 @@ class Ros1Bridge:
         if topic in MapTransform.TOPICS and Outbox.wanted(self.tf):
             due = self.map_tf.take(topic, msg)
             if due is not None:
-                self._held.setdefault(self.tf, []).append((due[0], None, due[1]))
+                self.out.put(self.tf, due[1], due[0])
         fast = self._fast.get(topic)
         if fast is not None:  # the high-rate path: a few hundred messages a simulated second
-            pub, writer, held = fast
+            pub, writer = fast
             impl = pub.impl
             if impl is not None and impl.connections and topic != self._from_graph:
-                held.append((t_us, writer, msg))
+                self.out.put(pub, writer(msg), t_us)
             return
         pub = self.pubs.get(topic)
         if pub is None or topic == self._from_graph:
@@ -194,19 +190,10 @@ class Ros1Bridge:
         self.out.release(t_us)
 
     def _collect(self, t_us: int) -> None:
-        """The held messages, the clock, the grid samples and events up to ``t_us`` into the
-        outbox."""
-        self._put_held()
+        """The clock, the grid samples and events up to ``t_us`` into the outbox."""
         self._publish_clock(t_us)
         self._publish_state(t_us)
         self.status.collect(t_us)
-
-    def _put_held(self) -> None:
-        """Serialise the held messages into the outbox, a publisher's in one call."""
-        for pub, held in self._held.items():
-            if held:
-                self.out.put_many(pub, [(t, m if w is None else w(m)) for t, w, m in held])
-                held.clear()
 
     def _publish_state(self, t_us: int) -> None:
         batch = self._state.split(t_us)
@@ -275,7 +262,6 @@ class Ros1Bridge:
         if self._closed:
             return
         self._closed = True
-        self._put_held()
         self.out.flush()
         self.twin.unhook(self._tap)
         for sub in self._subs:

@@ -105,19 +105,6 @@ class Outbox:
         times.append(t_us)
         q.frames.append(_LEN.pack(len(payload)) + payload)
 
-    def put_many(self, pub, items: list) -> None:
-        """Queue ``items``, ``(t_us, payload)`` pairs in put order, as that many :meth:`put`
-        would."""
-        q = self._queue(pub.impl, items[0][0])
-        times, frames, pack = q.times, q.frames, _LEN.pack
-        last = times[-1] if times else items[0][0]
-        for t, payload in items:
-            if t < last:
-                q.ordered = False
-            last = t
-            times.append(t)
-            frames.append(pack(len(payload)) + payload)
-
     def put_block(self, pub, t_us: list, block: bytes) -> None:
         """Queue the frames of ``block`` (TCPROS frames of equal lengths, one after the other: a
         length, then a message), the i-th of simulated instant ``t_us[i]`` (never decreasing), as

@@ -173,22 +173,3 @@ def test_paced_a_blocks_messages_go_each_at_its_own_clock_instant():
         (21_000, "imu", [b"i20000"]),
     ]
     assert out.messages == 6
-
-
-def test_many_puts_at_once_are_filed_as_single_puts_even_out_of_instant_order():
-    items = [(10_000, b"a"), (20_000, b"b"), (10_000, b"c"), (30_000, b"d"), (20_000, b"e")]
-    written = []
-    for put_all in (True, False):
-        a = _Connection()
-        imu = _publisher(a)
-        out = Outbox()
-        out.put(imu, b"z", 0)
-        if put_all:
-            out.put_many(imu, items)
-        else:
-            for t, payload in items:
-                out.put(imu, payload, t)
-        out.release(20_000)
-        out.flush()
-        written.append([_frames(d) for d in a.data])
-    assert written[0] == written[1] == [[b"z", b"a", b"c", b"b", b"e"], [b"d"]]

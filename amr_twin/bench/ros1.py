@@ -30,6 +30,8 @@ SUBSCRIBED = (
 )
 """The topics the bridge figure's recorder takes (each costs a socket write a message in the twin's
 process)."""
+WARM_UPS = 5
+"""Short bridged runs at most before ``rosbag record -a`` subscribes to the twin's topics."""
 COMMANDS = 40
 """wheel_Command frames written by the serial latency figure's host thread."""
 
@@ -151,6 +153,42 @@ def _bag_messages(path: str) -> int:
         return sum(c.msgcount for c in reader.connections if c.topic not in ("/tf_static",))
 
 
+def _recorder(env: dict, folder: str, name: str, topics) -> subprocess.Popen:
+    """``rosbag record`` of ``topics`` (``-a``: every topic) into ``folder/name.bag``."""
+    return subprocess.Popen(
+        ["rosbag", "record", "-O", os.path.join(folder, f"{name}.bag"), *topics, f"__name:={name}"],
+        env=env,
+        cwd=folder,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+
+
+def _stop(rec: subprocess.Popen) -> None:
+    rec.send_signal(2)
+    rec.wait(20)
+
+
+def _recording_all(master_uri: str, name: str) -> bool:
+    """Whether the recorder ``name`` subscribes to the twin's ground truth (``-a`` subscribes to a
+    topic once the master lists it)."""
+    import xmlrpc.client
+
+    subs = xmlrpc.client.ServerProxy(master_uri).getSystemState("/bench")[2][1]
+    return any(t == "/twin/ground_truth" and f"/{name}" in nodes for t, nodes in subs)
+
+
+def _pairs(env: dict, repeats: int, say, what: str) -> tuple[list, list, list]:
+    """Interleaved plain and bridged children: their CPU times and the bridged ones' figures."""
+    plain, bridged, runs = [], [], []
+    for r in range(repeats):
+        say(f"ROS 1 bridge, {what}, repeat {r + 1} of {repeats}")
+        plain.append(_child("plain", SIM_S, env)["cpu_s"])
+        runs.append(_child("bridge", SIM_S, env))
+        bridged.append(runs[-1]["cpu_s"])
+    return plain, bridged, runs
+
+
 def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
     """The figures of the module notes; ``ros1_skipped`` says why when Debian's ROS 1 (or, for the
     serial figure, the AVR toolchain) is absent."""
@@ -167,28 +205,10 @@ def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
     env = dict(os.environ, ROS_MASTER_URI=master.uri, ROS_IP="127.0.0.1")
     out: dict = {}
     folder = tempfile.mkdtemp(prefix="amr-twin-bench-bag-")
-    rec = subprocess.Popen(
-        [
-            "rosbag",
-            "record",
-            "-O",
-            os.path.join(folder, "bench.bag"),
-            *SUBSCRIBED,
-            "__name:=bench_record",
-        ],
-        env=env,
-        cwd=folder,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
+    rec = _recorder(env, folder, "bench_record", SUBSCRIBED)
     try:
         time.sleep(1.0)
-        plain, bridged, runs = [], [], []
-        for r in range(repeats):
-            say(f"ROS 1 bridge, repeat {r + 1} of {repeats}")
-            plain.append(_child("plain", SIM_S, env)["cpu_s"])
-            runs.append(_child("bridge", SIM_S, env))
-            bridged.append(runs[-1]["cpu_s"])
+        plain, bridged, runs = _pairs(env, repeats, say, "recorder of its topics")
         messages = statistics.median(r["messages"] for r in runs)
         out.update(
             ros1_bridge_ratio=statistics.median(b / p for b, p in zip(bridged, plain)),
@@ -200,22 +220,37 @@ def ros1_figures(repeats: int = REPEATS, progress=None) -> dict:
                 (b - p) / r["messages"] * 1e6 for b, p, r in zip(bridged, plain, runs)
             ),
             ros1_scenario=f"chapter 5 run 3 with sensors, {SIM_S:g} s, full speed, rosbag record "
-            f"of "
-            f"{' '.join(SUBSCRIBED)}",
+            f"of {' '.join(SUBSCRIBED)}; ros1_bridge_all_*: rosbag record -a",
         )
         say(f"ROS 1 bridge paced at --rate 1 for {PACED_S:g} s")
         paced = _child("paced", PACED_S, env)
         out["ros1_paced_sim_per_wall"] = paced["sim_s"] / paced["wall_s"]
-        out["_paced_messages"] = paced["messages"]
+        _stop(rec)
+        kept = _bag_messages(os.path.join(folder, "bench_record.bag"))
+        out["ros1_bridge_recorded"] = (
+            f"{kept} of {sum(r['messages'] for r in runs) + paced['messages']}"
+        )
+        rec = _recorder(env, folder, "bench_record_all", ["-a"])
+        time.sleep(1.0)
+        for _ in range(WARM_UPS):  # the twin's topics listed, so that -a subscribes to them
+            _child("paced", 2.0, env)
+            if _recording_all(master.uri, "bench_record_all"):
+                break
+        else:
+            raise RuntimeError("bench ros1: rosbag record -a did not subscribe to the twin")
+        plain, bridged, runs = _pairs(env, repeats, say, "rosbag record -a")
+        out.update(
+            ros1_bridge_all_ratio=statistics.median(b / p for b, p in zip(bridged, plain)),
+            ros1_bridge_all_cpu_s=statistics.median(bridged),
+            ros1_bridge_all_plain_cpu_s=statistics.median(plain),
+            ros1_bridge_all_messages_per_sim_s=statistics.median(r["messages"] for r in runs)
+            / SIM_S,
+            ros1_bridge_all_writes_per_sim_s=statistics.median(r["writes"] for r in runs) / SIM_S,
+        )
     finally:
-        rec.send_signal(2)
-        rec.wait(10)
+        if rec.poll() is None:
+            _stop(rec)
         master.stop()
-    if "ros1_bridge_messages_per_sim_s" in out:
-        kept = _bag_messages(os.path.join(folder, "bench.bag"))
-        written = sum(r["messages"] for r in runs) + out.get("_paced_messages", 0)
-        out["ros1_bridge_recorded"] = f"{kept} of {written}"
-    out.pop("_paced_messages", None)
     avr = missing_tools()
     if avr:
         out["ros1_serial_skipped"] = avr

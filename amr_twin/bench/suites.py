@@ -16,8 +16,8 @@ except the fusion experiment (one run):
   a 240 s run with sensors (spinning in place in the warehouse), and their ratio;
 - ``fusion_wall_s``: the fusion experiment (wall), with the load average around it all.
 - ``ros1_*``: the ROS 1 path (:mod:`amr_twin.bench.ros1`): the bridge against the same twin
-  without it, the pacing at ``--rate 1`` over 60 s, a ``wheel_Command``'s delay through the board's
-  pseudo-terminal.
+  without it (a recorder of its topics, or ``-a``), the pacing at ``--rate 1`` over 60 s, a
+  ``wheel_Command``'s delay through the board's pty.
 """
 
 from __future__ import annotations

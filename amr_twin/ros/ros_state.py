@@ -103,29 +103,27 @@ def anchor_transforms(
     ]
 
 
+_QMUL_A = [np.array(i) for i in ([0, 0, 0, 0], [1, 1, 1, 1], [2, 2, 2, 2], [3, 3, 3, 3])]
+_QMUL_B = [np.array(i) for i in ([0, 1, 2, 3], [1, 0, 3, 2], [2, 3, 0, 1], [3, 2, 1, 0])]
+_QMUL_SIGN = [np.array(s, float) for s in ([-1, 1, -1, 1], [-1, 1, 1, -1], [-1, -1, 1, 1])]
+
+
 def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Quaternion products (..., 4) w, x, y, z (component by component: a few numpy calls on small
-    batches)."""
-    aw, ax, ay, az = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
-    bw, bx, by, bz = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
-    out = np.empty(np.broadcast(aw, bw).shape + (4,))
-    out[..., 0] = aw * bw - ax * bx - ay * by - az * bz
-    out[..., 1] = aw * bx + ax * bw + ay * bz - az * by
-    out[..., 2] = aw * by - ax * bz + ay * bw + az * bx
-    out[..., 3] = aw * bz + ax * by - ay * bx + az * bw
+    """Quaternion products (..., 4) w, x, y, z: each component the sum, left to right, of four
+    signed products (``aw bw - ax bx - ay by - az bz``, ...), the four components at once."""
+    out = a[..., _QMUL_A[0]] * b[..., _QMUL_B[0]]
+    for ia, ib, sign in zip(_QMUL_A[1:], _QMUL_B[1:], _QMUL_SIGN):
+        out += sign * (a[..., ia] * b[..., ib])
     return out
+
+
+_C1, _C2 = np.array([1, 2, 0]), np.array([2, 0, 1])
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.cross`` of (..., 3) vectors, the same operations (bit for bit) without its axis
     handling."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    out = np.empty(np.broadcast(a0, b0).shape + (3,))
-    out[..., 0] = a1 * b2 - a2 * b1
-    out[..., 1] = a2 * b0 - a0 * b2
-    out[..., 2] = a0 * b1 - a1 * b0
-    return out
+    return a[..., _C1] * b[..., _C2] - a[..., _C2] * b[..., _C1]
 
 
 def _rotate_inv(q: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -37,7 +37,9 @@ def motor_currents_a(
         limit = np.where(
             mode[:, w] == MODE_CODES["brake"], cfg.driver.brake_current_limit_a, m.current_limit_a
         )
-        out[:, w] = np.where(mode[:, w] == MODE_CODES["coast"], 0.0, np.clip(i, -limit, limit))
+        out[:, w] = np.where(
+            mode[:, w] == MODE_CODES["coast"], 0.0, np.minimum(np.maximum(i, -limit), limit)
+        )
     return out
 
 

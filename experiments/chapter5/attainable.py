@@ -142,17 +142,21 @@ def summary(draws: list[Draw]) -> dict:
 UNUSED_SECTIONS = ("navigation", "actors")
 """Sections of the parameter file no chapter 5 run reads (no navigation stack, no actors)."""
 
+UNUSED_KEYS = ("battery.charge_current_a", "payload.max_mass_kg", "payload.handling_time_s")
+"""Parameters no chapter 5 run reads: the charger, the deck's rating and the worker's handling
+time (a fleet's pick, drop and charging)."""
+
 
 def plant(cfg: TwinConfig) -> dict:
     """What a study's draws depend on besides the seed: a SHA-256 of the configuration without the
-    drawn values and without what chapter 5's runs do not use (:data:`UNUSED_SECTIONS`), the
-    calibrated values kept (:data:`HELD`) and the ranges drawn in."""
+    drawn values and without what chapter 5's runs do not use (:data:`UNUSED_SECTIONS`,
+    :data:`UNUSED_KEYS`), the calibrated values kept (:data:`HELD`) and the ranges drawn in."""
     import hashlib
     import json
 
     bounds = ranges(cfg)
     data = {k: v for k, v in cfg.model_dump().items() if k not in UNUSED_SECTIONS}
-    for key in bounds:
+    for key in (*bounds, *UNUSED_KEYS):
         section, name = key.split(".")
         del data[section][name]
     digest = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()

@@ -1,6 +1,7 @@
 """amr-twin's public API: build the twin, run it, record it, navigate, and add plug-ins.
 
-The names load on first use (PEP 562), so ``import amr_twin`` stays light. Reference: docs/api.md.
+The names load on first use (PEP 562), so ``import amr_twin`` stays light.
+Reference: docs/reference/api.md.
 """
 
 from __future__ import annotations

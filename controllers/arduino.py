@@ -6,7 +6,7 @@ for the external interrupts on the SC pins, ``noInterrupts()``/``interrupts()``,
 ``delay()`` in main context, 8-bit ``analogWrite`` and ``digitalWrite`` onto the
 :class:`~amr_twin.base.pins.DriverPins` of the two drivers.
 
-Reasons and measurements: docs/firmware.md#amr_twincontrollersarduino."""
+Reasons and measurements: docs/explanation/firmware.md#amr_twincontrollersarduino."""
 
 from __future__ import annotations
 

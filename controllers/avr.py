@@ -1,7 +1,7 @@
 """The firmware as the board runs it: an Arduino sketch compiled with avr-gcc on an emulated
 ATmega2560.
 
-Reasons and measurements: docs/firmware.md#amr_twincontrollersavr."""
+Reasons and measurements: docs/explanation/firmware.md#amr_twincontrollersavr."""
 
 from __future__ import annotations
 

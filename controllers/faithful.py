@@ -4,7 +4,7 @@ C names are kept where the listing prints them (``Motor.driveNoAcc``,
 ``PI_Control``, ``speedChangeInt``) so the port reads against the thesis.
 Reconstructed parts (not printed: ``computeSpeedFromSignal``, ``Motor.stop``/
 ``start``/``forward``/``backward``, the wheel_Command callback, ``PICallBack``,
-``setup``/``loop``) are explained in docs/firmware.md. Each quirk sits behind a
+``setup``/``loop``) are explained in docs/explanation/firmware.md. Each quirk sits behind a
 switch of :class:`~amr_twin.controllers.firmware_params.FaithfulParams`.
 
 Contexts as on the board: ``PICallBack`` and ``PI_Control`` run in the Timer1

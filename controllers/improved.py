@@ -1,6 +1,6 @@
 """Improved wheel firmware, same interface and pin semantics as the thesis port.
 
-Reasons and measurements: docs/firmware.md#amr_twincontrollersimproved."""
+Reasons and measurements: docs/explanation/firmware.md#amr_twincontrollersimproved."""
 
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ against ``[min_rpm, max_rpm]`` and calls the service; the service publishes
 
 Return codes (§4.2.1): 0 ok, 1 value error, -1 the service call failed.
 
-Reasons and measurements: docs/firmware.md#amr_twincontrollerswheel_command."""
+Reasons and measurements: docs/explanation/firmware.md#amr_twincontrollerswheel_command."""
 
 from __future__ import annotations
 

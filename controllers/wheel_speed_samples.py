@@ -6,7 +6,7 @@ sign is the wheel's last non-zero ``wheel_Command`` motion code. Under a brake (
 falls linearly to 0 over :meth:`WheelSpeedSamples.brake_us` (braked at 10 to 100 RPM, a hub wheel of
 the twin covers the distance of such a ramp of 0.29 to 0.55 s; the model 0.31 to 0.54 s).
 
-Reasons and measurements: docs/firmware.md#amr_twincontrollerswheel_speed_samples."""
+Reasons and measurements: docs/explanation/firmware.md#amr_twincontrollerswheel_speed_samples."""
 
 from __future__ import annotations
 

@@ -61,7 +61,7 @@ def chapter5(
         "faithful",
         "--firmware",
         help="faithful, improved or avr; default faithful "
-        "(docs/firmware.md; with avr the runs are also done with faithful and the "
+        "(firmware.md in docs/explanation/; with avr the runs are also done with faithful and the "
         "differences tabulated).",
     ),
     sketch: Optional[Path] = sketch_option(),
@@ -211,8 +211,8 @@ def faults_experiment(
     out: Path = typer.Option(
         ...,
         "--out",
-        help="Output folder: faults.md, faults.json, img/faults_*.png "
-        "(--out docs regenerates docs/faults.md).",
+        help="Output folder: faults.md, faults.json, img/faults_*.png (the committed page: "
+        "faults.md in docs/reference/).",
     ),
     jobs: Optional[int] = JobsOpt,
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
@@ -220,7 +220,8 @@ def faults_experiment(
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Inject each kind of fault under both firmwares and report what they do (docs/faults.md)."""
+    """Inject each kind of fault under both firmwares and report what they do (faults.md in
+    docs/reference/)."""
     from amr_twin.experiments.faults import experiment as faults, report as faults_report
 
     jobs, _ = check_common(jobs, "faithful", fail)

@@ -142,7 +142,7 @@ def client(
         None,
         "--fault",
         metavar="KIND@T[:ARGS]",
-        help="Inject a fault T s after the start (repeatable; docs/faults.md).",
+        help="Inject a fault T s after the start (repeatable; faults.md in docs/reference/).",
     ),
     world: str = _WORLD[1],
     config: Optional[Path] = ConfigOpt,

@@ -26,7 +26,8 @@ def firmware_option(default: str = "faithful") -> typer.models.OptionInfo:
         default,
         "--firmware",
         help=f"Arduino firmware: {FIRMWARES.choices()}; default {default} "
-        "(docs/firmware.md; avr: the sketch compiled with avr-gcc on an emulated ATmega2560).",
+        "(firmware.md in docs/explanation/; avr: the sketch compiled with avr-gcc on an "
+        "emulated ATmega2560).",
     )
 
 

@@ -128,7 +128,7 @@ def _run_option_infos(
                 metavar="KIND@T[:ARGS]",
                 help="Inject a fault at T s (repeatable), e.g. hall-left-dead@3, "
                 "rosserial-loss@2:0.3,for=5; "
-                "kinds and arguments in docs/faults.md.",
+                "kinds and arguments in faults.md in docs/reference/.",
             ),
         ),
         "actor": (

@@ -23,9 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 
-from amr_twin.model.actors import Actor  # noqa: E402
-from amr_twin.model.config import load_config  # noqa: E402
-from amr_twin.assembly.twin import Twin, TwinOptions  # noqa: E402
+from amr_twin import Actor, Twin, TwinOptions, load_config  # noqa: E402
 
 
 def _rect(x, y, yaw, x0, x1, y0, y1, **kw):

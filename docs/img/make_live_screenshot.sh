@@ -27,6 +27,7 @@ command -v chromium > /dev/null || { echo "chromium is not installed (apt-get in
 import base64
 import json
 import shutil
+import socket
 import subprocess
 import sys
 import tempfile
@@ -36,12 +37,16 @@ from pathlib import Path
 
 from websockets.sync.client import connect
 
-from amr_twin.config import load_config
-from amr_twin.live import LiveOptions, LiveSession
-from amr_twin.live_rerun import _free_port
-from amr_twin.loop import Twin, TwinOptions
-from amr_twin.mission import load_mission_file
-from amr_twin.run import run_mission
+from amr_twin import Twin, TwinOptions, load_config, run_mission
+from amr_twin.assembly.mission import load_mission_file
+from amr_twin.live.session import LiveOptions, LiveSession
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
 
 out, repo = Path(sys.argv[1]), Path(sys.argv[2])
 plan = load_mission_file(repo / "experiments/missions/square.yaml")
@@ -50,7 +55,7 @@ twin = Twin(cfg, options)
 session = LiveSession(twin, LiveOptions(mode="rerun", port=0, web_port=0, rate=2.0))
 
 profile = tempfile.mkdtemp()
-devtools = _free_port()
+devtools = free_port()
 chrome = subprocess.Popen(["chromium", "--headless=new", "--no-sandbox", "--enable-unsafe-swiftshader",
                            "--use-angle=swiftshader", "--window-size=1600,1000", f"--remote-debugging-port={devtools}",
                            f"--user-data-dir={profile}", "about:blank"],

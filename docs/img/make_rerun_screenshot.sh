@@ -34,15 +34,13 @@ from pathlib import Path
 import numpy as np
 import rerun.blueprint as rrb
 
-from amr_twin.config import load_config
-from amr_twin.loop import Twin, TwinOptions
-from amr_twin.rerun_log import attach, record_run
-from amr_twin.run import Command, run_mission
+from amr_twin import (Command, Twin, TwinOptions, attach_capture, load_config, record_run,
+                      run_mission)
 
 work = Path(sys.argv[1])
 cfg, options = load_config(), TwinOptions(sensors=("imu", "lidar"))
 twin = Twin(cfg, options)
-attach(twin)
+attach_capture(twin)
 steps = [(0.0, Command("linear", speed_m_s=0.5)),
          (5.0, Command("angular", speed_deg_s=-60.0, icc_m=-1.0))]
 result = run_mission(cfg, steps, 10.0, options, twin=twin)

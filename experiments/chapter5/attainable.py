@@ -26,7 +26,7 @@ regulator (78L05 class, +-5 %) and input divider resistors (1-5 %), which scale 
 RANGED = ("motor_left.resistance_ohm", "wheel.rolling_resistance", "caster.rolling_resistance")
 FINDINGS = ("overshoot_right", "tracking", "duty_raised", "oscillation")
 MAX_SAMPLES = 512
-COMMITTED_JSON = ROOT / "docs" / "chapter5_attainable.json"
+COMMITTED_JSON = ROOT / "experiments" / "chapter5" / "reference" / "attainable.json"
 """The study the documents and the chapter 5 report quote (``python -m
 amr_twin.experiments.documents.figures``)."""
 COMMITTED_SEEDS = (1, 2)

@@ -4,7 +4,7 @@
 (same run numbers) and, per driven wheel, the k-th published sample of one with the k-th of the
 other (times and speeds), the true wheel speed and the PWM counts on the 100 Hz record grid.
 :func:`markdown` renders the table of ``report.md``. Where the differences come from is
-explained in docs/firmware.md ("The emulated board against the faithful port").
+explained in docs/explanation/firmware.md ("The emulated board against the faithful port").
 
 Acceptance: the last published samples within :data:`FINAL_RPM_TOL` and the first
 published samples within :data:`FIRST_SAMPLE_TOL_S` of each other.
@@ -244,7 +244,7 @@ def markdown(comp: dict) -> list[str]:
         f"{comp['firmware']} − {comp['reference']}. Accepted: last published speeds within "
         f"{comp['final_rpm_tolerance']:g} RPM, first published samples within "
         f"{comp['first_sample_tolerance_s'] * 1e3:g} ms. Where the differences come from: "
-        f"docs/firmware.md, "
+        f"docs/explanation/firmware.md, "
         '"The emulated board against the faithful port".',
         "",
         "| run | wheel | ref RPM | samples | first sample Δt ms | first Δ RPM | max \\|Δt\\| ms | "

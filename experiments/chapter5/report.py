@@ -187,7 +187,8 @@ def _attainable(data: dict) -> list[str]:
     study = data.get("attainable")
     if study is None:
         return [
-            f"The committed study (`docs/chapter5_attainable.json`) was drawn around another "
+            f"The committed study (`experiments/chapter5/reference/attainable.json`) was drawn "
+            f"around another "
             f"plant, firmware or run "
             f"set than this report's: `{ATTAINABLE_COMMAND} --samples 64 --seed 1` draws it for "
             f"this plant."

@@ -4,12 +4,12 @@ After a change of the plant or the firmwares, one command regenerates them all:
 
     python -m amr_twin.experiments.documents.figures
 
-It runs the fault study into ``docs/`` (``amr-twin experiment faults --out docs``: ``faults.md``,
-``faults.json``, ``img/faults_*.png``), the payload sweep of ``docs/reference/results.md``
-(``docs/payload_sweep.json``, ``docs/img/sweep_angular.png``), the fusion experiment's ten seeds on
-both routes (``docs/fusion_<route>.json``; most of the command's few minutes) and the chapter 5 runs
-(``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture),
-the chapter 5 attainability study (``docs/chapter5_attainable.json``, 128 plants: a few minutes),
+It runs the fault study (``docs/reference/faults.md``, ``docs/img/faults_*.png``), the payload
+sweep of ``docs/reference/results.md`` (``docs/img/sweep_angular.png``), the fusion experiment's
+ten seeds on both routes (most of the command's few minutes) and the chapter 5 runs
+(``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture)
+and the chapter 5 attainability study (128 plants: a few minutes); each experiment's committed
+data goes to its ``experiments/<name>/reference/`` folder, not to docs/. It
 then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.texts`) from those
 committed files and the calibration's report (``models/amr/calibration.yaml``: after a new fit,
 ``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text
@@ -27,6 +27,7 @@ from pathlib import Path
 
 from amr_twin.experiments.chapter5.scorecard import SCORECARD
 from amr_twin.experiments.chapter5.attainable import COMMITTED_JSON
+from amr_twin.experiments.faults.report import COMMITTED_JSON as FAULTS_JSON, PAGE as FAULTS_PAGE
 from amr_twin.experiments.documents.texts import (
     SUMMARY_FUSION,
     attainable_table,
@@ -40,15 +41,14 @@ from amr_twin.experiments.documents.texts import (
 from amr_twin.model.paths import ROOT
 
 COMMAND = "python -m amr_twin.experiments.documents.figures"
-FAULTS_JSON = ROOT / "docs" / "faults.json"
 CALIBRATION = ROOT / "models" / "amr" / "calibration.yaml"
 DOCUMENTS = (
     ROOT / "docs" / "reference" / "results.md",
     ROOT / "docs" / "explanation" / "validation.md",
     ROOT / "docs" / "explanation" / "fusion.md",
 )
-"""The documents with generated blocks (``docs/faults.md`` is generated whole; the README has none:
-it links to ``docs/reference/results.md``)."""
+"""The documents with generated blocks (``docs/reference/faults.md`` is generated whole; the
+README has none: it links to ``docs/reference/results.md``)."""
 _BLOCK = re.compile(
     r"(<!-- generated: (?P<name>[\w-]+) [^>]*-->\n)(?P<body>.*?)(<!-- end: (?P=name) -->)", re.S
 )
@@ -61,7 +61,7 @@ PAYLOAD_SWEEP = {
 """The payload sweep of ``docs/reference/results.md`` (``amr-twin sweep payload --masses 0:60:10
 --positions center,front,rear,front-left-corner --commands linear:0.7,angular:-60:-1``), 8 s a
 point."""
-PAYLOAD_JSON = ROOT / "docs" / "payload_sweep.json"
+PAYLOAD_JSON = ROOT / "experiments" / "payload" / "reference" / "sweep.json"
 
 
 def payload_figures(results: dict, improved: dict | None) -> dict:
@@ -108,7 +108,7 @@ FUSION_SEEDS = list(range(10))
 def fusion_json(route: str) -> Path:
     """The committed summary of ``amr-twin experiment fusion --route ROUTE --seeds 0:9`` (no wall
     times)."""
-    return ROOT / "docs" / f"fusion_{route}.json"
+    return ROOT / "experiments" / "fusion" / "reference" / f"{route}.json"
 
 
 def blocks() -> dict[str, str]:
@@ -211,8 +211,7 @@ def main() -> None:  # pragma: no cover - rewrites the committed results and doc
 
     cfg = load_config()
     results = faults.run(cfg, jobs=2, progress=True)
-    faults_report.plot(results, ROOT / "docs")
-    faults_report.report(results, ROOT / "docs")
+    faults_report.committed_write(results)
     chapter5_scorecard.main()
     payload_figures_write(cfg)
     fusion_write(cfg)
@@ -224,8 +223,8 @@ def main() -> None:  # pragma: no cover - rewrites the committed results and doc
     for path in DOCUMENTS:
         write_text(path, expected(path, texts))
     print(
-        f"rewrote docs/faults.md, tests/chapter5_scorecard.json, docs/img/chapter5_run1.png and "
-        f"the generated "
+        f"rewrote {FAULTS_PAGE.relative_to(ROOT)}, tests/chapter5_scorecard.json, "
+        f"docs/img/chapter5_run1.png and the generated "
         f"blocks of {', '.join(str(p.relative_to(ROOT)) for p in DOCUMENTS)}"
     )
 
@@ -239,7 +238,7 @@ def parse_args(argv: list[str]) -> None:
     parser = argparse.ArgumentParser(
         prog=COMMAND,
         description="Rewrite the figures the documents quote from fresh "
-        "runs (docs/faults.md, the payload sweep, fusion and chapter 5 results, the "
+        "runs (docs/reference/faults.md, the payload sweep, fusion and chapter 5 results, the "
         "generated blocks of README.md, docs/explanation/validation.md, "
         "docs/explanation/fusion.md); several "
         "minutes.",

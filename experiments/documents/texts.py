@@ -1,10 +1,10 @@
 """The texts of the documents' generated blocks, each written from a committed result
 (:mod:`amr_twin.experiments.documents.figures` runs the experiments and rewrites the blocks).
 
-Each function takes the committed data (the chapter 5 scorecard, ``docs/faults.json``, the
-calibration's report, ``docs/payload_sweep.json``, ``docs/fusion_<route>.json``) and returns the
-block's markdown; a claim that depends on a number (the right wheel overshooting more, a timing
-met) is decided from it, so the text stays true when the number moves.
+Each function takes the committed data (the chapter 5 scorecard, the calibration's report, the
+fault study's, the payload sweep's and the fusion seeds' in ``experiments/<name>/reference/``)
+and returns the block's markdown; a claim that depends on a number (the right wheel overshooting
+more, a timing met) is decided from it, so the text stays true when the number moves.
 """
 
 from __future__ import annotations
@@ -160,7 +160,8 @@ def chapter5_table(card: dict) -> str:
 
 
 def faults_summary(data: dict) -> str:
-    """``docs/reference/results.md``'s fault paragraph, from docs/faults.json."""
+    """``docs/reference/results.md``'s fault paragraph, from the fault study's committed
+    measures."""
     rows = {(r["fault"], r["firmware"]): r for r in data["rows"]}
 
     def left(case: str, fw: str, key: str = "true_during_rpm") -> float:
@@ -171,7 +172,7 @@ def faults_summary(data: dict) -> str:
 
     cut = "rosserial-loss@5"
     return (
-        f"Faults (`amr-twin experiment faults --out docs` regenerates `docs/faults.md`): each "
+        f"Faults (`amr-twin experiment faults`; the page: `docs/reference/faults.md`): each "
         f"kind injected at "
         f"{data['fault_t_s']:g} s into a 0.5 m/s run that is told to stop at "
         f"{data['stop_t_s']:g} s, under both "
@@ -330,8 +331,9 @@ ATTAINABLE_ROWS = (
 
 
 def attainable_table(data: dict) -> str:
-    """The committed chapter 5 attainability study (``docs/chapter5_attainable.json``): per finding,
-    the plants of each seed where it holds, and the best figure reached over all of them."""
+    """The committed chapter 5 attainability study (``experiments/chapter5/reference``): per
+    finding, the plants of each seed where it holds, and the best figure reached over all of
+    them."""
     seeds = data["seeds"]
     head = " | ".join(f"seed {k} ({v['samples']} plants)" for k, v in seeds.items())
     s = list(seeds.values())

@@ -1,10 +1,9 @@
 """The fault study's outputs: ``faults.md`` (the document), ``faults.json`` and
 ``img/faults_<case>.png``.
 
-``amr-twin experiment faults --out docs`` regenerates ``docs/faults.md`` and its figures
-from a fresh simulation, so the document follows the plant and the firmwares. The
-outputs hold no wall time: the same code gives the same files, and a change of the
-plant shows as a diff.
+The committed page (:data:`PAGE`) and measures (:data:`COMMITTED_JSON`) are rewritten by
+``python -m amr_twin.experiments.documents.figures``. The outputs hold no wall time: the same
+code gives the same files, and a change of the plant shows as a diff.
 """
 
 from __future__ import annotations
@@ -19,8 +18,13 @@ from amr_twin.sim.faults import KINDS, kind_names, parse_fault
 from amr_twin.recording.run_summary import json_ready
 from amr_twin.experiments.runner.executor import save_figure, write_text
 from amr_twin.experiments.faults.experiment import FAULT_T_S, FIRMWARES, SCENARIO, STOP_T_S
+from amr_twin.model.paths import ROOT
 
 REFERENCE_RPM = 38.197  # linear 0.5 m/s: 0.5 / (2 pi 0.125) * 60
+COMMITTED_JSON = ROOT / "experiments" / "faults" / "reference" / "faults.json"
+"""The committed measures the documents quote."""
+PAGE = ROOT / "docs" / "reference" / "faults.md"
+"""The committed page, written from :data:`COMMITTED_JSON`; its figures are in ``docs/img/``."""
 
 
 def _slug(case: str) -> str:
@@ -260,9 +264,9 @@ def _reading(case: str, rows: dict) -> str:
     return ""
 
 
-def markdown(results: dict) -> str:
+def markdown(results: dict, images: str = "img") -> str:
     """``faults.md``: how to inject faults, the table of kinds, the study's table, plots and
-    readings."""
+    readings; ``images`` is the figures' folder relative to the page."""
     rows = {(r["fault"], r["firmware"]): r for r in results["rows"]}
     lines = [
         "# Fault injection",
@@ -307,8 +311,8 @@ def markdown(results: dict) -> str:
         "",
         "## What the firmwares do",
         "",
-        f"Scenario: {SCENARIO}. Regenerate this page and its figures with "
-        "`amr-twin experiment faults --out docs` (after any change of the plant or the firmwares). "
+        f"Scenario: {SCENARIO}. `python -m amr_twin.experiments.documents.figures` regenerates "
+        "the committed page and its figures (after any change of the plant or the firmwares). "
         f"Wheel speeds are true speeds in RPM (reference {REFERENCE_RPM:.1f}); *during* is the "
         f"mean over the "
         f"last 0.5 s of the fault (before the stop at {STOP_T_S:g} s); *offset* is the distance "
@@ -344,22 +348,40 @@ def markdown(results: dict) -> str:
             "",
             _reading(case, {fw: rows[(case, fw)] for fw in FIRMWARES}),
             "",
-            f"![{case}](img/faults_{_slug(case)}.png)",
+            f"![{case}]({images}/faults_{_slug(case)}.png)",
             "",
         ]
     return "\n".join(lines)
 
 
-def report(results: dict, out: Path) -> dict:
-    """Write ``faults.md`` and ``faults.json`` (the measures) in ``out``; return the measures."""
+def measures(results: dict) -> dict:
+    """What ``faults.json`` holds: the scenario, the fault and stop times (s) and the rows."""
     data = {
         "scenario": SCENARIO,
         "fault_t_s": FAULT_T_S,
         "stop_t_s": STOP_T_S,
         "rows": results["rows"],
     }
-    write_text(
-        Path(out) / "faults.json", json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n"
-    )
+    return data
+
+
+def _json_text(data: dict) -> str:
+    return json.dumps(json_ready(data), indent=2, allow_nan=False) + "\n"
+
+
+def report(results: dict, out: Path) -> dict:
+    """Write ``faults.md`` and ``faults.json`` (the measures) in ``out``; return the measures."""
+    data = measures(results)
+    write_text(Path(out) / "faults.json", _json_text(data))
     write_text(Path(out) / "faults.md", markdown(results))
+    return data
+
+
+def committed_write(results: dict) -> dict:
+    """Write :data:`COMMITTED_JSON`, :data:`PAGE` and the figures in ``docs/img/``; return the
+    measures."""
+    plot(results, ROOT / "docs")
+    data = measures(results)
+    write_text(COMMITTED_JSON, _json_text(data))
+    write_text(PAGE, markdown(results, images="../img"))
     return data

@@ -128,7 +128,7 @@ def test_each_commands_default_firmware_is_in_its_help(command, default):
     --help did not say so."""
     res = runner.invoke(app, [*command, "--help"], terminal_width=200)
     text = " ".join(res.output.replace("│", " ").split())
-    assert f"or avr; default {default} (docs/firmware.md" in text
+    assert f"or avr; default {default} (firmware.md in docs/explanation/" in text
 
 
 def test_parser_errors_and_misplaced_options_are_one_line():

@@ -271,7 +271,7 @@ def test_a_command_queued_during_a_ramp_waits_for_the_ramp_on_the_board_as_in_th
     # inside an interrupt (no frame read or written there), so the third command, waiting in the
     # serial buffer while loop() sits in the second's ramp, runs in main context when that ramp ends
     # (3.5 s), as in the port; before, it ran inside the ISR at the next sample (~3.2 s) and its
-    # ramp to 300 RPM (72 counts) collapsed into milliseconds (docs/firmware.md)
+    # ramp to 300 RPM (72 counts) collapsed into milliseconds (docs/explanation/firmware.md)
     board, port = _pwm_log("avr", 3_600_000), _pwm_log("faithful", 3_600_000)
     assert all(c < 60 for _, c in board) and all(c < 60 for _, c in port)
     late = [(t, c) for t, c in board if t > 2_900_000]

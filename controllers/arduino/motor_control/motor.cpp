@@ -1,5 +1,5 @@
 /* motor.cpp: drive, driveNoAcc and acceleration after the thesis' listing 4.10; the other
- * methods are not printed and are reconstructed (docs/firmware.md, "Reconstruction choices"). */
+ * methods are not printed and are reconstructed (docs/explanation/firmware.md, "Reconstruction choices"). */
 #include "motor.h"
 
 /* Reconstructed: keep the pins, make the driver pins outputs and the SC pin an input. */
@@ -99,7 +99,7 @@ void Motor::acceleration(double initialSpeed, double finalSpeed)
   else if (abs(deltaDuty) >= THRESHOLD_SMALL_ACC)
     delayTime = DELAY_SMALL_ACC;
 
-  if (deltaDuty >= THRESHOLD_SMALL_ACC)  // signed: a deceleration jumps (docs/firmware.md)
+  if (deltaDuty >= THRESHOLD_SMALL_ACC)  // signed: a deceleration jumps (docs/explanation/firmware.md)
   {
     for (int i = 1; i <= 10; i++)
     {

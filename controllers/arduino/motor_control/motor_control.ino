@@ -4,7 +4,7 @@
  *
  * Printed in the thesis and followed here: PI_Control (listing 4.11), speedChangeInt0/1 and
  * speedChangeInt (listing 4.12), the Motor class (listings 4.8, 4.10), the conversions (4.9).
- * Reconstructed (not printed; the same choices as controllers/faithful.py, see docs/firmware.md):
+ * Reconstructed (not printed; the same choices as controllers/faithful.py, see docs/explanation/firmware.md):
  * the pins, the declarations and initial values of the globals, min_control/max_control, T,
  * the wheel_Command callback, PICallBack, setup() and loop(). */
 #include <ros.h>
@@ -99,7 +99,7 @@ void PI_Control(double setPoint, double sensedOutput, int index)
       double error = setPoint - sensedOutput;
 
       if (abs(error) <= THRESHOLD_CONTROL)
-        return;  // as printed: returns without interrupts() (docs/firmware.md, quirks)
+        return;  // as printed: returns without interrupts() (docs/explanation/firmware.md, quirks)
 
       total_error[index] += error;  // integral term
       if (total_error[index] >= max_control) total_error[index] = max_control;

@@ -167,7 +167,7 @@ def test_the_committed_study_is_of_the_shipped_plant_and_what_a_draw_gives_now(c
     plant."""
     data = att.committed(cfg)
     assert data is not None, (
-        "docs/chapter5_attainable.json was drawn around another plant: run doc_figures"
+        f"{att.COMMITTED_JSON.name} was drawn around another plant: run doc_figures"
     )
     assert list(data["seeds"]) == [str(s) for s in att.COMMITTED_SEEDS]
     first = data["seeds"]["1"]["draws"][0]

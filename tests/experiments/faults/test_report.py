@@ -1,4 +1,4 @@
-"""docs/faults.md is what `amr-twin experiment faults --out docs` writes now (its figures
+"""docs/reference/faults.md is what the fault study writes now (its figures
 once drifted from the code's: 61.4 against 61.5 RPM, chatter 2.5 against 3.4 RPM, -88 against -89
 deg)."""
 
@@ -8,16 +8,14 @@ import math
 import pytest
 
 from amr_twin.experiments.faults import experiment as faults
-from amr_twin.experiments.faults.report import markdown
+from amr_twin.experiments.faults.report import COMMITTED_JSON, PAGE, markdown
 from amr_twin.model.config import load_config
-from amr_twin.model.paths import ROOT
 
-DOCS = ROOT / "docs"
-REGENERATE = "regenerate it: amr-twin experiment faults --out docs"
+REGENERATE = "regenerate it: python -m amr_twin.experiments.documents.figures"
 
 
 def _committed() -> dict:
-    data = json.loads((DOCS / "faults.json").read_text())
+    data = json.loads(COMMITTED_JSON.read_text())
     return {"cases": list(dict.fromkeys(r["fault"] for r in data["rows"])), "rows": data["rows"]}
 
 
@@ -35,7 +33,7 @@ def _differences(old, new, where: str = "") -> list[str]:
 
 def test_the_page_is_written_from_its_committed_measures():
     """The page's every figure comes from faults.json, through the report's own code."""
-    assert (DOCS / "faults.md").read_text() == markdown(_committed()), REGENERATE
+    assert PAGE.read_text() == markdown(_committed(), images="../img"), REGENERATE
 
 
 def test_the_committed_measures_are_what_the_experiment_gives_now():
@@ -49,7 +47,8 @@ def test_the_committed_measures_are_what_the_experiment_gives_now():
         for d in _differences(old, new, f"{old['fault']} {old['firmware']}")
     ]
     assert not diffs, (
-        f"{len(diffs)} figures of docs/faults.json changed ({REGENERATE}): " + "; ".join(diffs[:8])
+        f"{len(diffs)} figures of {COMMITTED_JSON.name} changed ({REGENERATE}): "
+        + "; ".join(diffs[:8])
     )
 
 

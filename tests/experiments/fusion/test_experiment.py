@@ -44,8 +44,8 @@ def test_the_route_is_driven_to_its_goal(default_run):
 
 def test_the_committed_fusion_figures_are_what_seed_0_gives_now(default_run):
     """The README's and docs/explanation/fusion.md's fusion tables are written from
-    docs/fusion_<route>.json (experiments/documents/figures.py); its seed 0 on the default route is
-    this drive, within 1e-3."""
+    experiments/fusion/reference/<route>.json (experiments/documents/figures.py); its seed 0 on
+    the default route is this drive, within 1e-3."""
     from amr_twin.experiments.documents.figures import COMMAND, fusion_json
 
     _, data, _ = default_run

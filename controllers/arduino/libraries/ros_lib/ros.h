@@ -8,7 +8,7 @@
  * the twin's PC side (amr_twin/ros/rosserial_frame.py) and its rosserial host
  * (amr_twin/ros1/serial_host.py) speak the same protocol.
  *
- * Differences from rosserial_arduino, all documented in docs/firmware.md:
+ * Differences from rosserial_arduino, all documented in docs/explanation/firmware.md:
  * - no parameters, logging or services;
  * - a publish() inside an interrupt is written later, from main context; spinOnce() inside an
  *   interrupt does nothing (ros/node_handle.h);

@@ -45,11 +45,11 @@ def test_two_twins_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
                     cfg,
                     FleetOptions(
                         world="warehouse",
-                        start_xy_yaw=(x, y, 0.0 if serial == "amr-1" else math.pi),
+                        starts=((x, y, 0.0 if serial == "amr-1" else math.pi),),
                         url=broker.url,
                         rate=0,
                     ),
-                    serial=serial,
+                    serials=(serial,),
                 )
             )
         manager = FleetManager(
@@ -64,11 +64,11 @@ def test_two_twins_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
             s.run(0.2)
         time.sleep(0.1)
         manager.submit([Job("job-2", east, west, 10.0)])  # amr-2: east to west, head-on
-        closest, t_end = math.inf, sessions[0].twin.t_s + 120.0
-        while manager.jobs_left() and sessions[0].twin.t_s < t_end:
+        closest, t_end = math.inf, sessions[0].world.t_s + 120.0
+        while manager.jobs_left() and sessions[0].world.t_s < t_end:
             for s in sessions:
                 s.run(0.1)
-            (x1, y1, _), (x2, y2, _) = (s.true_pose() for s in sessions)
+            (x1, y1, _), (x2, y2, _) = (s.vehicles[0].true_pose() for s in sessions)
             closest = min(closest, math.hypot(x1 - x2, y1 - y2))
         summary = manager.summary()
     finally:

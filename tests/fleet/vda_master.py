@@ -36,10 +36,10 @@ def validate(subtopic: str, msg: dict) -> None:
 
 
 class Master:
-    """Connected to ``url``; ``received`` holds (subtopic, message) of every vehicle message, in
-    order."""
+    """Connected to ``url``; ``received`` holds (subtopic, message) of every message of the
+    vehicles ``vehicles`` (serial numbers), in order; it sends to amr-1."""
 
-    def __init__(self, url: str):
+    def __init__(self, url: str, vehicles: tuple = ("amr-1",)):
         host, port = url.removeprefix("mqtt://").split(":")
         self.received: list[tuple[str, dict]] = []
         self._ids = {"order": 0, "instantActions": 0}
@@ -51,7 +51,8 @@ class Master:
         )
         self.client.connect(host, int(port))
         self.client.loop_start()
-        self.client.subscribe(BASE + "#", qos=1)
+        for serial in vehicles:
+            self.client.subscribe(BASE.replace("amr-1", serial) + "#", qos=1)
         time.sleep(0.3)
 
     def send(self, subtopic: str, body: dict, header_id: int | None = None) -> dict:

@@ -146,6 +146,16 @@ class World(Hooks):
             for fn in event_hooks:
                 fn(self.t_phys_us)
 
+    def on_message(self, tap, topics: tuple[str, ...] | None = None):
+        """The hook of :class:`~amr_twin.sim.hooks.Hooks` on the world's bus; ValueError (one line)
+        in a fleet, whose robots speak on buses of their own (recording a fleet is not built)."""
+        if len(self.robots) > 1:
+            raise ValueError(
+                "on_message: a fleet's robots speak on buses of their own (robot.bus); "
+                "recording or bridging a fleet is not supported"
+            )
+        return super().on_message(tap, topics)
+
     def _lookahead_us(self, topics: tuple[str, ...]) -> int:
         """The least :meth:`~amr_twin.ros.bus.Bus.lookahead_us` of ``topics`` over the robots'
         buses (a publishing event may be any robot's)."""

@@ -61,7 +61,10 @@ def overlapping_starts(poses, half_length_m: float, half_width_m: float) -> tupl
         c, s = math.cos(yaw), math.sin(yaw)
         axes = ((c, s), (-s, c))
         corners = [
-            (x + a * half_length_m * c - b * half_width_m * s, y + a * half_length_m * s + b * half_width_m * c)
+            (
+                x + a * half_length_m * c - b * half_width_m * s,
+                y + a * half_length_m * s + b * half_width_m * c,
+            )
             for a, b in ((1, 1), (1, -1), (-1, -1), (-1, 1))
         ]
         boxes.append((axes, corners))

@@ -32,6 +32,10 @@ def test_each_robot_moves_by_the_command_on_its_own_bus_only():
     assert ax > 0.5 and abs(ay) < 0.05 and abs(ayaw) < 0.1  # a drove ahead
     assert math.hypot(bx, by - 3.0) < 0.05 and abs(byaw) > 0.5  # b turned where it stood
     assert world.collision_records() == []
+    with pytest.raises(
+        ValueError, match="on_message: a fleet's robots speak on buses of their own"
+    ):
+        world.on_message(lambda *_: None)  # a recorder on the world's bus would hear nothing
 
 
 def test_two_robots_driven_head_on_collide_and_the_record_names_both():

@@ -73,7 +73,9 @@ def _trip(session, master, pick_kg: float | None) -> float:
         assert statuses(session)["p"] == "RUNNING"
         x0 = session.vehicles[0].true_pose()[0]
         run_until(session, lambda: statuses(session)["p"] == "FINISHED", 2 * HANDLING_S)
-        assert abs(session.vehicles[0].true_pose()[0] - x0) < 0.005  # it stood while the load was put on
+        assert (
+            abs(session.vehicles[0].true_pose()[0] - x0) < 0.005
+        )  # it stood while the load was put on
         assert last_state(session)["loads"] == [{"weight": pick_kg, "loadId": "box-1"}]
     soc0 = session.world.observables.battery()[2]
     run_until(session, lambda: last_state(session)["lastNodeId"] == "n1", 40)

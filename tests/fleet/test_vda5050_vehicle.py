@@ -122,7 +122,10 @@ def test_start_pause_holds_the_robot_and_stop_pause_resumes_the_order(vehicle):
     assert {a["actionId"]: a["actionStatus"] for a in state["actionStates"]}["p1"] == "FINISHED"
     deliver(session, master, "instantActions", instant("p2", "stopPause"))
     run_until(session, lambda: last_state(session)["lastNodeId"] == "n1", 30)
-    assert math.hypot(session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1]) < 0.3
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )
     assert not last_state(session)["paused"]
     settle_and_check_schemas(session, master)
 
@@ -148,7 +151,10 @@ def test_bad_orders_are_answered_with_errors_in_the_state_and_a_good_one_is_stil
         lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"],
         40,
     )
-    assert math.hypot(session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1]) < 0.3
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )
     settle_and_check_schemas(session, master)
 
 
@@ -172,7 +178,10 @@ def test_the_horizon_waits_for_an_order_update_stitched_at_the_last_base_node(ve
     session.run(2.0)
     state = last_state(session)
     assert state["newBaseRequest"] and [n["nodeId"] for n in state["nodeStates"]] == ["n2"]
-    assert math.hypot(session.vehicles[0].true_pose()[0] + 4.0, session.vehicles[0].true_pose()[1]) < 0.3  # waits at n1
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 4.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )  # waits at n1
     wrong = order(
         "o3", [node("n0", 0, -6.0, 0.0), node("n2", 2, -2.0, 0.0)], [edge("e2", 1, "n0", "n2")], 1
     )
@@ -192,13 +201,18 @@ def test_the_horizon_waits_for_an_order_update_stitched_at_the_last_base_node(ve
     )
     state = last_state(session)
     assert (state["orderUpdateId"], state["lastNodeSequenceId"], state["errors"]) == (2, 4, [])
-    assert math.hypot(session.vehicles[0].true_pose()[0] + 2.0, session.vehicles[0].true_pose()[1]) < 0.3
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 2.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )
     settle_and_check_schemas(session, master)
 
 
 def test_a_broken_connection_leaves_the_last_will(vehicle):
     session, master = vehicle
-    session.vehicles[0].transport.client.socket().close()  # no DISCONNECT: the broker sends the will
+    session.vehicles[
+        0
+    ].transport.client.socket().close()  # no DISCONNECT: the broker sends the will
     deadline = time.monotonic() + 10
     while not any(m["connectionState"] == "CONNECTIONBROKEN" for m in master.of("connection")):
         assert time.monotonic() < deadline
@@ -243,7 +257,12 @@ def test_an_order_through_debians_mosquitto(tmp_path):
                 ),
                 40,
             )
-            assert math.hypot(session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1]) < 0.3
+            assert (
+                math.hypot(
+                    session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1]
+                )
+                < 0.3
+            )
             settle_and_check_schemas(session, master)
         finally:
             master.close()

@@ -24,7 +24,7 @@ from vda_master import SCHEMAS, validate  # noqa: E402
 ROBOT_LENGTH_M = 0.70  # the factsheet's length
 
 
-def test_two_twins_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
+def test_two_robots_of_one_world_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
     from amr_twin.fleet.broker import EmbeddedBroker
     from amr_twin.fleet.session import FleetOptions, FleetSession
     from amr_twin.fleet_manager.dispatcher import ManagerOptions

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from pathlib import Path
 from typing import Optional
 
@@ -56,9 +57,16 @@ def _check_overlap(poses: list, cfg) -> None:
         )
 
 
-def _start_manager(session, cfg, world, interface, jobs, seed, charge_below):
-    """The project's fleet manager for the session's vehicles, its jobs queued."""
+PLACE_LIMIT_S = 30.0
+"""Simulated seconds the manager's jobs wait for every vehicle to be placed on the roadmap."""
+
+
+def _start_manager(session, cfg, world, interface, jobs, seed, charge_below, limit_s):
+    """The project's fleet manager for the session's vehicles; its seeded jobs queued once every
+    vehicle is placed on the roadmap (or after ``limit_s`` simulated s): a job routed before then
+    could lead through a node where a robot not yet placed stands."""
     from amr_twin.fleet_manager.dispatcher import ManagerOptions
+    from amr_twin.fleet_manager.jobs import job_stream
     from amr_twin.fleet_manager.manager import start_manager
 
     x, y, _yaw = session.vehicles[0].true_pose()
@@ -68,10 +76,22 @@ def _start_manager(session, cfg, world, interface, jobs, seed, charge_below):
         session.url,
         list(session.serials),
         interface,
-        4 if jobs is None else jobs,
+        0,
         seed,
         ManagerOptions(charge_below=charge_below),
         start_xy=(x, y),
+    )
+    t_end = session.world.t_s + limit_s
+    while session.world.t_s < t_end:
+        placed = {e["vehicle"] for e in master.summary()["events"] if e["event"] == "placed"}
+        if placed >= set(session.serials):
+            break
+        session.run(0.1)
+        time.sleep(0.005)  # the broker's and the manager's threads
+    dispatcher = master.dispatcher
+    exclude = set(dispatcher.options.charging_nodes)
+    master.submit(
+        job_stream(dispatcher.roadmap, 4 if jobs is None else jobs, seed, exclude=exclude)
     )
     typer.echo(f"fleet manager on {session.url}: {master.jobs_left()} jobs", err=True)
     return master
@@ -170,8 +190,11 @@ def fleet(
         master = None
         try:
             if manager:
-                master = _start_manager(session, cfg, world, interface, jobs, seed, charge_below)
-            left = math.inf if duration_s is None else duration_s
+                limit_s = PLACE_LIMIT_S if duration_s is None else min(PLACE_LIMIT_S, duration_s)
+                master = _start_manager(
+                    session, cfg, world, interface, jobs, seed, charge_below, limit_s
+                )
+            left = math.inf if duration_s is None else duration_s - session.world.t_s
             while left > 1e-9 and not (master and duration_s is None and not master.jobs_left()):
                 step = min(1.0, left)
                 session.run(step)

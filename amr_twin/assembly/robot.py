@@ -73,15 +73,18 @@ class RobotSpec:
 
 class Robot:
     """The robot of ``spec`` on ``world``'s loop (module notes): ``world`` is the
-    :class:`~amr_twin.assembly.world.World` that builds it, the body here, the sensors at
+    :class:`~amr_twin.assembly.world.World` that builds it, ``bus`` the bus its parts speak on
+    (the world's for a lone robot, its own in a fleet); the body here, the sensors at
     :meth:`equip`."""
 
-    def __init__(self, world, spec: RobotSpec):
+    def __init__(self, world, spec: RobotSpec, bus):
         self.spec, self.world = spec, world
         self._sensor_factories = [(name, SENSORS.get(name)) for name in spec.sensors]
         node_factories = [(name, NODES.get(name)) for name in spec.nodes]
         self.physics = physics = world.physics if spec.physics is None else spec.physics
-        self.clock, self.bus = world.clock, world.bus
+        self.clock, self.bus = world.clock, bus
+        self.name = physics.prefix.rstrip("/")
+        """The robot's name in the model (``amr`` alone, ``amr-2`` in a fleet)."""
         self.start_xy_yaw = tuple(float(v) for v in spec.start_xy_yaw)
         self._rest = physics.positions()  # settled at its start: how it stands after a teleport
         self.pending: list[tuple[int, int]] = []
@@ -154,11 +157,21 @@ class Robot:
         if not self.firmware.connect(bus, self.link):  # else it speaks rosserial on its own UART
             bus.subscribe("wheel_Command", self._to_arduino)
 
+    @property
+    def t_s(self) -> float:
+        """The world's clock time, s."""
+        return self.world.t_s
+
     def equip(self, grid, collisions) -> None:
         """The sensors of the spec (their grid samplers after the world's) and the observables on
-        the world's ``grid`` and ``collisions``."""
+        the world's ``grid`` and the robot's ``collisions`` monitor."""
+        self.collisions = collisions
+        columns = self.physics.loop_columns
+        self._columns = None if columns == slice(0, len(grid.last_row)) else columns
+        """The robot's columns of the grid loop's rows; None: the whole row (a lone robot)."""
+        """The robot's collision monitor (:class:`~amr_twin.sim.collisions.CollisionMonitor`)."""
         self.observables = Observables(
-            self.physics, grid, self.actuation, self.plant.battery, collisions
+            self.physics, grid, self.actuation, self.plant.battery, collisions, self._columns
         )
         """What the robot shows downstream of the loop
         (:class:`~amr_twin.sim.observables.Observables`)."""
@@ -198,7 +211,11 @@ class Robot:
     # -- the loop's calls ---------------------------------------------------------------
     def take_rows(self, ts: list, rows: list) -> None:
         """Solve the hall edges of a chunk from its instants ``ts`` (us) and this robot's loop
-        sensor ``rows`` (:meth:`~amr_twin.sensors.hall.HallSensors.edges_from_samples`)."""
+        sensor ``rows`` (:meth:`~amr_twin.sensors.hall.HallSensors.edges_from_samples`): its own
+        columns of them (:attr:`~amr_twin.sim.physics.Physics.loop_columns`)."""
+        columns = self._columns
+        if columns is not None:
+            rows = [row[columns] for row in rows]
         edges = self.hall.edges_from_samples(ts, rows)
         if edges:
             self.pending.extend(edges)

@@ -63,13 +63,22 @@ class World(Hooks):
         self.check_every_us = int(check_every_s * US)
         self.actors_move = bool(actors)
         """Actors move in the world (people, pallet jacks): a component may sample faster."""
-        self.robots: list[Robot] = [Robot(self, spec) for spec in robots]
+        lone = len(robots) == 1
+        self.robots: list[Robot] = [
+            Robot(self, spec, self.bus if lone else Bus(self.clock)) for spec in robots
+        ]
         """The robots, in the order of ``robots`` (their bodies hooked first, their sensors after
-        the world's own samplers)."""
-        self.collisions = CollisionMonitor(
-            physics, stop=stop_on_collision, listeners=self._collision_hooks
-        )
-        self._grid = GridLoop(physics, self.samplers, self.grid_every, self.dt_us)
+        the world's own samplers); with several, each on a bus of its own (one ROS namespace)."""
+        monitors = [
+            CollisionMonitor(r.physics, stop=stop_on_collision, listeners=self._collision_hooks)
+            for r in self.robots
+        ]
+        self.collisions = monitors[0] if lone else None
+        """The lone robot's collision monitor; None with several (each robot's
+        ``Robot.collisions``, all of them in :meth:`collision_records`)."""
+        self._buses = [self.bus] if lone else [r.bus for r in self.robots]
+        width = max(r.physics.loop_columns.stop for r in self.robots)
+        self._grid = GridLoop(physics, self.samplers, self.grid_every, self.dt_us, width=width)
         self.halted = False
         self.stopped = False
         """:meth:`stop` was called: :meth:`advance` returns at once (a run ended from outside, e.g.
@@ -82,9 +91,10 @@ class World(Hooks):
             self.actors = ActorMotion(physics, tuple(actors), actor_cfg)
             self.on_grid(self.actors.update)
             self._actor_poses = ActorPoses(self.actors, self.clock, self.bus, self.samplers)
-        self.on_grid(self.collisions)
-        for robot in self.robots:
-            robot.equip(self._grid, self.collisions)
+        for monitor in monitors:
+            self.on_grid(monitor)
+        for robot, monitor in zip(self.robots, monitors):
+            robot.equip(self._grid, monitor)
         self._next_check_us = self.check_every_us
         for sampler in self.samplers:
             sampler(0)
@@ -111,7 +121,7 @@ class World(Hooks):
         divergence check), the ``on_event`` hook called."""
         clock, robots, event_hooks = self.clock, self.robots, self._event_hooks
         deliver = robots[0].deliver_edges if len(robots) == 1 else self._deliver_edges
-        lookahead = self.bus.lookahead_us
+        lookahead = self.bus.lookahead_us if len(robots) == 1 else self._lookahead_us
         last_pins = [None] * len(robots)
         while clock.now_us < t_end_us and not self.halted and not self.stopped:
             t_evt = min(clock.next_synced_event_us(), t_end_us, self._next_check_us)
@@ -135,6 +145,27 @@ class World(Hooks):
                 self._next_check_us += self.check_every_us
             for fn in event_hooks:
                 fn(self.t_phys_us)
+
+    def on_message(self, tap, topics: tuple[str, ...] | None = None):
+        """The hook of :class:`~amr_twin.sim.hooks.Hooks` on the world's bus; ValueError (one line)
+        in a fleet, whose robots speak on buses of their own (recording a fleet is not built)."""
+        if len(self.robots) > 1:
+            raise ValueError(
+                "on_message: a fleet's robots speak on buses of their own (robot.bus); "
+                "recording or bridging a fleet is not supported"
+            )
+        return super().on_message(tap, topics)
+
+    def _lookahead_us(self, topics: tuple[str, ...]) -> int:
+        """The least :meth:`~amr_twin.ros.bus.Bus.lookahead_us` of ``topics`` over the robots'
+        buses (a publishing event may be any robot's)."""
+        return min(bus.lookahead_us(topics) for bus in self._buses)
+
+    def collision_records(self) -> list[dict]:
+        """Every robot's collisions (:meth:`~amr_twin.sim.collisions.Collision.as_dict`, tagged
+        with the robot in a fleet), in the order they began."""
+        hits = [c for robot in self.robots for c in robot.collisions.collisions]
+        return [c.as_dict() for c in sorted(hits, key=lambda c: c.t_s)]
 
     def stop(self) -> None:
         """End the run at the next event (safe from a signal handler): :meth:`advance` returns from

@@ -1,4 +1,5 @@
-"""``amr-twin fleet``: the twin as a VDA 5050 2.0 vehicle on an MQTT broker (docs/how-to/fleet.md).
+"""``amr-twin fleet``: N robots of one world as VDA 5050 2.0 vehicles on an MQTT broker
+(docs/how-to/fleet.md).
 
 Every option is checked before the model is built; bad input is one line, exit 2. Without
 ``--vda5050`` an embedded broker (amqtt) serves on a free port of 127.0.0.1, printed at start. The
@@ -12,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from pathlib import Path
 from typing import Optional
 
@@ -19,12 +21,18 @@ import typer
 
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
+from amr_twin.model.robot_starts import MAX_ROBOTS
 
 
 def _starts(text: Optional[str], robots: int) -> list:
-    """``X_M,Y_M,YAW_DEG[;...]`` as one (x_m, y_m, yaw_rad) a robot; None: the world's own start."""
+    """``X_M,Y_M,YAW_DEG[;...]`` as one (x_m, y_m, yaw_rad) a robot; None: the world's own start
+    (one robot only)."""
+    if not 1 <= robots <= MAX_ROBOTS:
+        fail(f"--robots {robots}: must be in 1..{MAX_ROBOTS}")
     if text is None:
-        return [None] * robots
+        if robots > 1:
+            fail(f"--starts: needed with --robots {robots} (X_M,Y_M,YAW_DEG a robot, ';' between)")
+        return [None]
     out = [
         _start_pose(part, "--starts", " for each robot (';' between robots)")
         for part in text.split(";")
@@ -34,29 +42,63 @@ def _starts(text: Optional[str], robots: int) -> list:
     return out
 
 
-def _start_manager(session, cfg, world, interface, jobs, seed, charge_below):
-    """The project's fleet manager for the session's vehicle, its jobs queued."""
+def _check_overlap(poses: list, cfg) -> None:
+    """Exit 2 (one line) when two robots' footprints at their starts overlap."""
+    from amr_twin.model.robot_starts import overlapping_starts
+
+    if len(poses) < 2:
+        return
+    pair = overlapping_starts(poses, cfg.chassis.length_m / 2, cfg.half_width_m)
+    if pair is not None:
+        i, j = pair
+        fail(
+            f"--starts: robots amr-{i + 1} and amr-{j + 1} overlap at their starts "
+            f"({cfg.chassis.length_m:g} x {2 * cfg.half_width_m:g} m each)"
+        )
+
+
+PLACE_LIMIT_S = 30.0
+"""Simulated seconds the manager's jobs wait for every vehicle to be placed on the roadmap."""
+
+
+def _start_manager(session, cfg, world, interface, jobs, seed, charge_below, limit_s):
+    """The project's fleet manager for the session's vehicles; its seeded jobs queued once every
+    vehicle is placed on the roadmap (or after ``limit_s`` simulated s): a job routed before then
+    could lead through a node where a robot not yet placed stands."""
     from amr_twin.fleet_manager.dispatcher import ManagerOptions
+    from amr_twin.fleet_manager.jobs import job_stream
     from amr_twin.fleet_manager.manager import start_manager
 
-    x, y, _yaw = session.true_pose()
+    x, y, _yaw = session.vehicles[0].true_pose()
     master = start_manager(
         cfg,
         world,
         session.url,
-        [session.serial],
+        list(session.serials),
         interface,
-        4 if jobs is None else jobs,
+        0,
         seed,
         ManagerOptions(charge_below=charge_below),
         start_xy=(x, y),
+    )
+    t_end = session.world.t_s + limit_s
+    while session.world.t_s < t_end:
+        placed = {e["vehicle"] for e in master.summary()["events"] if e["event"] == "placed"}
+        if placed >= set(session.serials):
+            break
+        session.run(0.1)
+        time.sleep(0.005)  # the broker's and the manager's threads
+    dispatcher = master.dispatcher
+    exclude = set(dispatcher.options.charging_nodes)
+    master.submit(
+        job_stream(dispatcher.roadmap, 4 if jobs is None else jobs, seed, exclude=exclude)
     )
     typer.echo(f"fleet manager on {session.url}: {master.jobs_left()} jobs", err=True)
     return master
 
 
 def fleet(
-    robots: int = typer.Option(1, "--robots", help="How many robots (1 for now)."),
+    robots: int = typer.Option(1, "--robots", help="How many robots, 1 to 20 (amr-1 ... amr-N)."),
     world: str = typer.Option(
         "aisles", "--world", help="The world (its name is the VDA 5050 mapId)."
     ),
@@ -97,12 +139,11 @@ def fleet(
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
 ) -> None:
-    """Serve the twin as VDA 5050 2.0 vehicle amr-1 (manufacturer amr-twin) on an MQTT broker."""
+    """Serve N robots of one world as VDA 5050 2.0 vehicles amr-1 ... amr-N (manufacturer
+    amr-twin) on an MQTT broker."""
     from amr_twin.fleet.protocol import check_name
     from amr_twin.fleet.transport import broker_address
 
-    if robots != 1:
-        fail(f"--robots {robots}: only 1 for now (the multi-robot world is not built yet)")
     poses = _starts(starts, robots)
     for check in (
         lambda: check_name("--interface", interface),
@@ -123,6 +164,7 @@ def fleet(
     if not (math.isfinite(charge_below) and 0 <= charge_below < 80):
         fail(f"--charge-below {charge_below:g}: must be in [0, 80) % (charged up to 80 %)")
     cfg = _config(config, params, set_)
+    _check_overlap(poses, cfg)
 
     def work() -> dict:
         from amr_twin.fleet.session import FleetOptions, FleetSession
@@ -132,23 +174,27 @@ def fleet(
             cfg,
             FleetOptions(
                 world=world,
-                start_xy_yaw=poses[0],
+                starts=tuple(poses),
                 url=vda5050,
                 interface=interface,
                 rate=rate,
                 seed=seed,
             ),
         )
-        typer.echo(
-            f"vehicle amr-1 on {session.url}: "
-            f"{topic(interface, 'amr-1', '{order,instantActions,state,...}')}",
-            err=True,
-        )
+        for serial in session.serials:
+            typer.echo(
+                f"vehicle {serial} on {session.url}: "
+                f"{topic(interface, serial, '{order,instantActions,state,...}')}",
+                err=True,
+            )
         master = None
         try:
             if manager:
-                master = _start_manager(session, cfg, world, interface, jobs, seed, charge_below)
-            left = math.inf if duration_s is None else duration_s
+                limit_s = PLACE_LIMIT_S if duration_s is None else min(PLACE_LIMIT_S, duration_s)
+                master = _start_manager(
+                    session, cfg, world, interface, jobs, seed, charge_below, limit_s
+                )
+            left = math.inf if duration_s is None else duration_s - session.world.t_s
             while left > 1e-9 and not (master and duration_s is None and not master.jobs_left()):
                 step = min(1.0, left)
                 session.run(step)

@@ -1,34 +1,35 @@
-"""One twin as a VDA 5050 vehicle on an MQTT broker: the twin with its navigation stack, the
-adapter, the transport, the embedded broker when no broker is given, paced in real time (``amr-twin
-fleet``).
+"""A world of robots as VDA 5050 vehicles on an MQTT broker: the world (one robot: the
+:class:`~amr_twin.assembly.twin.Twin`; several: :func:`~amr_twin.assembly.fleet_world.fleet_world`),
+each robot served with its navigation stack, adapter and transport
+(:class:`~amr_twin.fleet.served_robot.ServedRobot`), the embedded broker when no broker is given,
+paced in real time (``amr-twin fleet``).
 
-Messages from the broker arrive in paho's thread and are handed to the twin's thread through the
+Messages from the broker arrive in paho's thread and are handed to the world's thread through the
 :class:`~amr_twin.live.pacer.Pacer` (they act at its next tick, 20 ms of simulated time); the
-adapter's messages go out from the twin's thread as they are made.
+adapters' messages go out from the world's thread as they are made.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 
-from amr_twin.fleet.adapter import VehicleAdapter
-from amr_twin.fleet.factsheet import factsheet
-from amr_twin.fleet.handling import Handling, Load
-from amr_twin.fleet.protocol import INTERFACE, MANUFACTURER, Stamper, check_name
-from amr_twin.fleet.vehicle import TwinVehicle
+from amr_twin.fleet.protocol import INTERFACE, MANUFACTURER, check_name
+from amr_twin.fleet.served_robot import ServedRobot
+
+DISTANCE_EVERY_US = 100_000
+"""How often a fleet's least distance between robots is sampled, us of simulated time."""
 
 
 @dataclass(frozen=True)
 class FleetOptions:
-    """The run: ``world``, the robot's start (x_m, y_m, yaw_rad; None: the world's), the broker
-    (None: an embedded one), the interface name, ``rate`` (simulated seconds per wall second, 0: as
-    fast as possible)."""
+    """The run: ``world``, the robots' starts (one (x_m, y_m, yaw_rad) a robot; a lone robot's may
+    be None: the world's), the broker (None: an embedded one), the interface name, ``rate``
+    (simulated seconds per wall second, 0: as fast as possible)."""
 
     world: str = "aisles"
-    start_xy_yaw: tuple | None = None
+    starts: tuple = (None,)
     url: str | None = None
     interface: str = INTERFACE
     rate: float = 1.0
@@ -44,144 +45,121 @@ def map_id(world: str) -> str:
 
 
 class FleetSession:
-    """The twin of ``cfg`` as vehicle ``serial`` (module docstring); :meth:`run`, then
-    :meth:`close`. Built without its payload, which the physics carries from the start as a load
-    (:meth:`~amr_twin.assembly.twin.Twin.set_payload_kg`) so that a drop can take it off."""
+    """The robots of ``cfg`` at ``options.starts`` as vehicles ``serials`` (default amr-1 ...
+    amr-N; module docstring); :meth:`run`, then :meth:`close`. Built without their payload, which
+    the physics carries from the start as a load so that a drop can take it off. Robot ``i``
+    (0-based) navigates with seed ``options.seed + i``."""
 
-    def __init__(self, cfg, options: FleetOptions, serial: str = "amr-1", epoch=None):
-        from amr_twin.fleet.broker import EmbeddedBroker
-        from amr_twin.fleet.transport import MqttTransport, broker_address
-        from amr_twin.live.pacer import Pacer
-        from amr_twin.navigation.stack import NavigationOptions, attach, load_static_map
+    def __init__(self, cfg, options: FleetOptions, serials=None, epoch=None):
         from amr_twin.assembly.twin import Twin, TwinOptions
+        from amr_twin.fleet.broker import EmbeddedBroker
+        from amr_twin.fleet.transport import broker_address
+        from amr_twin.live.pacer import Pacer
         from amr_twin.model.config import with_values
         from amr_twin.model.worlds import charging_stations
+        from amr_twin.navigation.stack import NavigationOptions, load_static_map
 
         check_name("--interface", options.interface)
         if options.url is not None:
             broker_address(options.url)
-        self.options, self.serial = options, serial
+        n = len(options.starts)
+        serials = tuple(f"amr-{i}" for i in range(1, n + 1)) if serials is None else serials
+        if len(serials) != n:
+            raise ValueError(f"serials: {len(serials)} for {n} robots; one a robot")
+        self.options, self.serials = options, tuple(serials)
         stations = charging_stations(options.world)
-        self.twin = Twin(
-            with_values(cfg, {"payload.mass_kg": 0.0}),
-            TwinOptions(
-                firmware=options.firmware,
-                world=options.world,
-                seed=options.seed,
-                start_xy_yaw=options.start_xy_yaw,
-                sensors=("imu", "lidar"),
-                visuals=False,
-            ),
+        twin_options = TwinOptions(
+            firmware=options.firmware,
+            world=options.world,
+            seed=options.seed,
+            start_xy_yaw=options.starts[0],
+            sensors=("imu", "lidar"),
+            visuals=False,
         )
+        bare = with_values(cfg, {"payload.mass_kg": 0.0})
+        if n == 1:
+            self.world = Twin(bare, twin_options)
+        else:
+            from amr_twin.assembly.fleet_world import fleet_world
+
+            self.world = fleet_world(bare, twin_options, options.starts)
+        """The world (a :class:`~amr_twin.assembly.twin.Twin` for one robot)."""
         static = load_static_map(cfg, options.world, None)
-        self.navigator = attach(
-            self.twin,
-            cfg,
-            static,
-            NavigationOptions(
-                goals=(),
-                localisation=options.localisation,
-                controller=options.controller,
-                seed=options.seed,
-            ),
-            publish=False,
-        )
-        self.vehicle = TwinVehicle(
-            self.twin, self.navigator, map_id(options.world), cfg.battery.charge_current_a
-        )
-        load = None
-        if cfg.payload.mass_kg > 0:
-            self.vehicle.set_payload_kg(cfg.payload.mass_kg)
-            load = Load(cfg.payload.mass_kg)
-        nav = cfg.navigation.navigator
-        self.transport = None
-        self.adapter = VehicleAdapter(
-            self.vehicle,
-            self.twin.clock,
-            self._send,
-            Stamper(serial, epoch, MANUFACTURER),
-            factsheet(cfg),
-            xy_tolerance_m=nav.xy_tolerance_m,
-            handling=Handling(
-                self.vehicle,
-                cfg.payload.max_mass_kg,
-                cfg.payload.handling_time_s,
-                stations,
-                nav.xy_tolerance_m,
-                nav.yaw_tolerance_rad,
-                load,
-            ),
-        )
-        self.pacer = Pacer(self.twin, options.rate)
-        self.broker = EmbeddedBroker().start() if options.url is None else None
-        url = options.url if options.url is not None else self.broker.url
-        try:
-            transport = MqttTransport(
-                url,
-                options.interface,
+        self.vehicles = [
+            ServedRobot(
+                robot,
+                cfg,
+                static,
+                NavigationOptions(
+                    goals=(),
+                    localisation=options.localisation,
+                    controller=options.controller,
+                    seed=options.seed + i,
+                ),
                 serial,
-                self._received,
-                self.adapter.connection("CONNECTIONBROKEN"),
-                MANUFACTURER,
+                map_id(options.world),
+                stations,
+                epoch,
             )
-            transport.connect()
+            for i, (robot, serial) in enumerate(zip(self.world.robots, self.serials))
+        ]
+        """One :class:`~amr_twin.fleet.served_robot.ServedRobot` a robot, in order."""
+        self.least_distance_m = math.inf
+        """The least distance between two robots' centres so far (sampled every 0.1 s), m; inf
+        for one robot."""
+        if n > 1:
+            self.world.clock.schedule_every(
+                DISTANCE_EVERY_US, DISTANCE_EVERY_US, self._sample_distance
+            )
+        self.pacer = Pacer(self.world, options.rate)
+        self.broker = EmbeddedBroker().start() if options.url is None else None
+        self.url = options.url if options.url is not None else self.broker.url
+        try:
+            for served in self.vehicles:
+                served.connect(self.url, options.interface, self.pacer)
         except OSError:
+            for served in self.vehicles:
+                served.close()
             self._stop_broker()
             raise
-        self.transport = transport
-        self.url = url
-        transport.publish("connection", self.adapter.connection("ONLINE"))
-        self.adapter.publish_factsheet()
 
-    def _send(self, subtopic: str, msg: dict) -> None:
-        if self.transport is not None:
-            self.transport.publish(subtopic, msg)
-
-    def _received(self, subtopic: str, payload: bytes) -> None:
-        self.pacer.post(partial(self.adapter.handle, subtopic, payload))
+    def _sample_distance(self) -> None:
+        poses = [served.true_pose() for served in self.vehicles]
+        for i, (x1, y1, _) in enumerate(poses):
+            for x2, y2, _ in poses[i + 1 :]:
+                self.least_distance_m = min(self.least_distance_m, math.hypot(x1 - x2, y1 - y2))
 
     def run(self, duration_s: float) -> None:
-        """Run the twin ``duration_s`` simulated seconds, paced to the rate."""
-        self.twin.advance(duration_s)
-
-    def true_pose(self) -> tuple[float, float, float]:
-        """The robot's true pose now (x_m, y_m, yaw_rad), from the physics."""
-        row = self.twin.observables.loop_sensors()
-        w, x, y, z = row[7:11]
-        return (
-            float(row[4]),
-            float(row[5]),
-            math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
-        )
+        """Run the world ``duration_s`` simulated seconds, paced to the rate."""
+        self.world.advance(duration_s)
 
     def summary(self) -> dict:
-        """What the run did: the vehicle, the broker, the messages sent by topic, the last state,
-        the true pose."""
-        counts: dict[str, int] = {}
-        for _t, sub, _m in self.adapter.log:
-            counts[sub] = counts.get(sub, 0) + 1
-        states = [m for _t, sub, m in self.adapter.log if sub == "state"]
-        x, y, yaw = self.true_pose()
-        return {
-            "serialNumber": self.serial,
+        """What the run did: the broker, the simulated time; one robot: its vehicle's summary
+        (:meth:`~amr_twin.fleet.served_robot.ServedRobot.summary`) at the top level; several:
+        ``vehicles`` (one each), ``collisions`` (every robot's, tagged) and the least distance
+        between two robots' centres (m)."""
+        out = {
             "manufacturer": MANUFACTURER,
             "interfaceName": self.options.interface,
             "broker": self.url,
             "embedded_broker": self.broker is not None,
-            "sim_s": self.twin.t_s,
-            "messages_sent": counts,
-            "messages_received": self.transport.messages_in if self.transport else 0,
-            "true_pose": {"x_m": x, "y_m": y, "yaw_rad": yaw},
-            "last_state": states[-1] if states else None,
+            "sim_s": self.world.t_s,
+        }
+        if len(self.vehicles) == 1:
+            vehicle = self.vehicles[0].summary()
+            return {"serialNumber": vehicle.pop("serialNumber"), **out, **vehicle}
+        return {
+            **out,
+            "vehicles": [served.summary() for served in self.vehicles],
+            "collisions": self.world.collision_records(),
+            "least_distance_m": self.least_distance_m,
         }
 
     def close(self) -> None:
         """Say OFFLINE, disconnect, stop the pacer and the embedded broker."""
         self.pacer.close()
-        self.adapter.close()
-        if self.transport is not None:
-            self.transport.close(self.adapter.connection("OFFLINE"))
-            self.transport = None
+        for served in self.vehicles:
+            served.close()
         self._stop_broker()
 
     def _stop_broker(self) -> None:

@@ -51,14 +51,14 @@ class Vehicle(Protocol):
 
 
 class TwinVehicle:
-    """One twin driven by its navigator (:func:`amr_twin.navigation.stack.attach`), as a
-    :class:`Vehicle`."""
+    """One robot of a world (:class:`~amr_twin.assembly.robot.Robot`) driven by its navigator
+    (:func:`amr_twin.navigation.stack.attach`), as a :class:`Vehicle`."""
 
-    def __init__(self, twin, navigator, map_id: str, charge_current_a: float):
-        self.twin, self.navigator, self.map_id = twin, navigator, map_id
+    def __init__(self, robot, navigator, map_id: str, charge_current_a: float):
+        self.robot, self.navigator, self.map_id = robot, navigator, map_id
         self.charge_current_a = charge_current_a
         self._stops = self._stop_count()
-        self._estops = [f for f in twin.options.faults if f.kind == "estop"]
+        self._estops = [f for f in robot.spec.faults if f.kind == "estop"]
 
     def _stop_count(self) -> int:
         actions = self.navigator.monitor.actions
@@ -73,17 +73,17 @@ class TwinVehicle:
         return float(v), float(w)
 
     def battery(self):
-        volt, _current, soc = self.twin.observables.battery()
+        volt, _current, soc = self.robot.observables.battery()
         return float(volt), float(soc)
 
     def set_payload_kg(self, mass_kg: float) -> None:
-        self.twin.set_payload_kg(mass_kg)
+        self.robot.set_payload_kg(mass_kg)
 
     def set_charging(self, on: bool) -> None:
-        self.twin.set_charger_a(self.charge_current_a if on else 0.0)
+        self.robot.set_charger_a(self.charge_current_a if on else 0.0)
 
     def estop_pressed(self) -> bool:
-        t = self.twin.t_s
+        t = self.robot.t_s
         return any(f.t_s <= t and (f.until_s is None or t < f.until_s) for f in self._estops)
 
     def field_violated(self) -> bool:

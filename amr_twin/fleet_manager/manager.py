@@ -123,7 +123,7 @@ class FleetManager:
                 "roadmap": {"nodes": graph.number_of_nodes(), "edges": graph.number_of_edges()},
                 "messages_sent": dict(self.sent),
                 "jobs_done": sum(e["event"] == "done" and e.get("task") == "job" for e in events),
-                "jobs_failed": sum(e["event"] == "failed" and e.get("job") for e in events),
+                "jobs_failed": sum(e["event"] == "failed" and bool(e.get("job")) for e in events),
                 "deadlocks": [e for e in events if e["event"] == "deadlock"],
                 "events": events,
             }

@@ -50,3 +50,33 @@ def fleet_starts(poses) -> tuple[RobotStart, ...]:
     if len(poses) == 1:
         return (RobotStart(ROBOT_PREFIX, *map(float, poses[0])),)
     return tuple(RobotStart(f"amr-{i}/", *map(float, p)) for i, p in enumerate(poses, 1))
+
+
+def overlapping_starts(poses, half_length_m: float, half_width_m: float) -> tuple[int, int] | None:
+    """The first pair ``(i, j)`` (0-based, i < j) of ``poses`` (x_m, y_m, yaw_rad) whose robots'
+    footprints (rectangles of ``half_length_m`` by ``half_width_m`` about the base, m) overlap;
+    None when no two do. A separating-axis test on the four edge directions."""
+    boxes = []
+    for x, y, yaw in poses:
+        c, s = math.cos(yaw), math.sin(yaw)
+        axes = ((c, s), (-s, c))
+        corners = [
+            (
+                x + a * half_length_m * c - b * half_width_m * s,
+                y + a * half_length_m * s + b * half_width_m * c,
+            )
+            for a, b in ((1, 1), (1, -1), (-1, -1), (-1, 1))
+        ]
+        boxes.append((axes, corners))
+    for i, (axes_i, corners_i) in enumerate(boxes):
+        for j in range(i + 1, len(boxes)):
+            axes_j, corners_j = boxes[j]
+            if all(
+                min(ux * px + uy * py for px, py in corners_i)
+                < max(ux * px + uy * py for px, py in corners_j)
+                and min(ux * px + uy * py for px, py in corners_j)
+                < max(ux * px + uy * py for px, py in corners_i)
+                for ux, uy in axes_i + axes_j
+            ):
+                return i, j
+    return None

@@ -16,8 +16,9 @@ class Observables:
     """Read-only views of one robot's state in its world (module notes); built by
     :class:`~amr_twin.assembly.robot.Robot`."""
 
-    def __init__(self, physics, grid, actuation, battery, collisions):
+    def __init__(self, physics, grid, actuation, battery, collisions, columns=None):
         self._physics, self._grid, self._actuation = physics, grid, actuation
+        self._columns = columns  # the robot's columns of the grid's row; None: all of it
         self._battery, self._collisions = battery, collisions
 
     @property
@@ -37,7 +38,8 @@ class Observables:
         """The loop sensors' row now (:data:`~amr_twin.model.robot_spec.LOOP_SENSOR_DIM` values:
         wheel angles L, R rad; wheel speeds L, R rad/s; base position x, y, z m; base quaternion w,
         x, y, z)."""
-        return self._grid.row()
+        row = self._grid.row()
+        return row if self._columns is None else row[self._columns]
 
     def drive(self) -> list[float]:
         """The drive in force (:attr:`amr_twin.sim.actuation.Actuation.row`): PWM counts L, R; DIR

@@ -15,7 +15,14 @@ CLI = [sys.executable, "-c", "from amr_twin.cli.main import main; main()", "flee
 @pytest.mark.parametrize(
     "args, says",
     [
-        (["--robots", "2"], "--robots 2: only 1 for now (the multi-robot world is not built yet)"),
+        (["--robots", "21"], "--robots 21: must be in 1..20"),
+        (["--robots", "0"], "--robots 0: must be in 1..20"),
+        (["--robots", "2"], "--starts: needed with --robots 2"),
+        (["--robots", "2", "--starts", "0,0,0"], "--starts '0,0,0': 1 poses for --robots 2"),
+        (
+            ["--robots", "2", "--starts", "0,0,0;0.6,0.1,90"],
+            "--starts: robots amr-1 and amr-2 overlap at their starts",
+        ),
         (
             ["--vda5050", "http://localhost:1883"],
             "--vda5050 'http://localhost:1883': expected mqtt://HOST:PORT",

@@ -33,7 +33,7 @@ def _session(start):
     from amr_twin.model.config import load_config
 
     cfg = load_config(overrides={"payload.handling_time_s": HANDLING_S})
-    session = FleetSession(cfg, FleetOptions(world="warehouse", start_xy_yaw=start, rate=0))
+    session = FleetSession(cfg, FleetOptions(world="warehouse", starts=(start,), rate=0))
     master = Master(session.url)
     session.run(2.5)  # the EKF's rest calibration, the vehicle localised
     return session, master
@@ -71,15 +71,17 @@ def _trip(session, master, pick_kg: float | None) -> float:
     deliver(session, master, "order", trip)
     if pick_kg:
         assert statuses(session)["p"] == "RUNNING"
-        x0 = session.true_pose()[0]
+        x0 = session.vehicles[0].true_pose()[0]
         run_until(session, lambda: statuses(session)["p"] == "FINISHED", 2 * HANDLING_S)
-        assert abs(session.true_pose()[0] - x0) < 0.005  # it stood while the load was put on
+        assert (
+            abs(session.vehicles[0].true_pose()[0] - x0) < 0.005
+        )  # it stood while the load was put on
         assert last_state(session)["loads"] == [{"weight": pick_kg, "loadId": "box-1"}]
-    soc0 = session.twin.observables.battery()[2]
+    soc0 = session.world.observables.battery()[2]
     run_until(session, lambda: last_state(session)["lastNodeId"] == "n1", 40)
     run_until(session, lambda: not last_state(session)["driving"], 10)
     assert last_state(session)["lastNodeId"] == "n1" and last_state(session)["errors"] == []
-    return (soc0 - session.twin.observables.battery()[2]) * 20.0 * 3600.0
+    return (soc0 - session.world.observables.battery()[2]) * 20.0 * 3600.0
 
 
 def test_a_picked_load_makes_the_same_trip_cost_more_and_a_drop_takes_it_off(vehicle):
@@ -87,16 +89,16 @@ def test_a_picked_load_makes_the_same_trip_cost_more_and_a_drop_takes_it_off(veh
     seed): measured 3.37 A s empty, 3.82 A s with the load (+13 %). With the pick not reaching the
     physics (set_payload_kg a no-op): 3.37 and 3.37, and this fails."""
     session, master = vehicle
-    mass0 = session.twin.observables.model.body_subtreemass[1]
+    mass0 = session.world.observables.model.body_subtreemass[1]
     loaded_as = _trip(session, master, 20.0)
-    assert session.twin.observables.model.body_subtreemass[1] == pytest.approx(mass0 + 20.0)
+    assert session.world.observables.model.body_subtreemass[1] == pytest.approx(mass0 + 20.0)
     drop = order(
         "d", [node("n1", 0, -3.0, 0.0, actions=[action("d1", "drop", loadId="box-1")])], []
     )
     deliver(session, master, "order", drop)
     run_until(session, lambda: statuses(session)["d1"] == "FINISHED", 2 * HANDLING_S)
     assert last_state(session)["loads"] == []
-    assert session.twin.observables.model.body_subtreemass[1] == mass0
+    assert session.world.observables.model.body_subtreemass[1] == mass0
     settle_and_check_schemas(session, master)
     other, other_master = _session(START)
     try:
@@ -109,7 +111,7 @@ def test_a_picked_load_makes_the_same_trip_cost_more_and_a_drop_takes_it_off(veh
 
 def test_a_load_over_the_capacity_fails_and_the_deck_stays_empty(vehicle):
     session, master = vehicle
-    mass0 = session.twin.observables.model.body_subtreemass[1]
+    mass0 = session.world.observables.model.body_subtreemass[1]
     heavy = order("h", [node("n0", 0, -6.0, 0.0, actions=[action("p", "pick", weight=60.0)])], [])
     deliver(session, master, "order", heavy)
     session.run(0.5)
@@ -117,7 +119,7 @@ def test_a_load_over_the_capacity_fails_and_the_deck_stays_empty(vehicle):
     assert statuses(session)["p"] == "FAILED" and state["loads"] == []
     assert [e["errorType"] for e in state["errors"]] == ["actionError"]
     assert "at most the 50 kg" in state["errors"][0]["errorDescription"]
-    assert session.twin.observables.model.body_subtreemass[1] == mass0
+    assert session.world.observables.model.body_subtreemass[1] == mass0
     deliver(session, master, "instantActions", instant("d", "drop"))  # not an instant action
     assert statuses(session)["d"] == "FAILED"
     settle_and_check_schemas(session, master)
@@ -142,7 +144,7 @@ def test_charging_raises_the_charge_at_the_station_and_the_vehicle_drives_nowher
     deliver(session, master, "order", away)
     assert [e["errorType"] for e in last_state(session)["errors"]] == ["orderError"]
     session.run(3.0)
-    x, y, _ = session.true_pose()
+    x, y, _ = session.vehicles[0].true_pose()
     assert abs(x - CHARGER[0]) < 0.01 and abs(y - CHARGER[1]) < 0.01  # it stayed
     deliver(session, master, "instantActions", instant("s", "stopCharging"))
     assert (

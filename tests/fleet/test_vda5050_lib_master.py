@@ -68,13 +68,17 @@ def broker():
     proc.wait(10)
 
 
-def run_fleet_under_master(url: str) -> tuple[dict, dict, list]:
-    """The twin (one robot at the west end of the central aisle) and master.mjs on ``url``: the
-    master's report, the twin's ``--json`` summary, and every vehicle message a listener saw."""
-    listener = Master(url)
+def run_fleet_under_master(
+    url: str, starts: str = "-6,0,0", vehicles: tuple = ("amr-1",), timeout_s: int = 45
+) -> tuple[dict, dict, list]:
+    """The twin (its robots at ``starts``, one at the west end of the central aisle by default)
+    and master.mjs for ``vehicles`` on ``url``: the master's report, the twin's ``--json``
+    summary, and every vehicle message a listener saw."""
+    listener = Master(url, vehicles)
+    robots = str(len(vehicles))
     twin = subprocess.Popen(
         FLEET
-        + ["--robots", "1", "--world", "warehouse", "--starts", "-6,0,0", "--vda5050", url]
+        + ["--robots", robots, "--world", "warehouse", "--starts", starts, "--vda5050", url]
         + ["--rate", "10", "--duration-s", "300", "--json"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -82,10 +86,11 @@ def run_fleet_under_master(url: str) -> tuple[dict, dict, list]:
     )
     try:
         master = subprocess.run(
-            ["node", str(FOLDER / "master.mjs"), "--broker", url, "--timeout-s", "45"],
+            ["node", str(FOLDER / "master.mjs"), "--broker", url, "--timeout-s", str(timeout_s)]
+            + ["--vehicles", ",".join(vehicles)],
             capture_output=True,
             text=True,
-            timeout=60,
+            timeout=timeout_s + 15,
         )
         time.sleep(0.3)  # the listener gets what is in flight
     finally:
@@ -118,6 +123,30 @@ def test_vda_5050_lib_master_controller_drives_the_twin_along_the_central_aisle(
     assert {t for t, _m in sent} == set(VEHICLE_TOPICS)
     for subtopic, msg in sent:  # the official 2.0.0 schemas too
         validate(subtopic, msg)
+
+
+@needs_master
+def test_vda_5050_lib_master_controller_swaps_two_robots_head_on_along_the_central_aisle(broker):
+    report, twin, received = run_fleet_under_master(
+        broker, "-6,0,0;4,0,180", ("amr-1", "amr-2"), timeout_s=75
+    )
+    assert report["ok"], (report["failures"], report["rejected"])
+    assert report["rejected"] == []
+    assert twin["collisions"] == [], twin["collisions"]
+    ends = {"amr-1": (4, 0), "amr-2": (-6, 0)}  # each to the other's start
+    for served in twin["vehicles"]:
+        serial = served["serialNumber"]
+        vehicle = report["vehicles"][serial]
+        assert vehicle["processed"]["withError"] is None, vehicle["processed"]
+        assert vehicle["stateErrors"] == []
+        last, pose = vehicle["lastNode"], served["true_pose"]
+        assert (last["x"], last["y"]) == ends[serial]
+        deviation = math.hypot(pose["x_m"] - last["x"], pose["y_m"] - last["y"])
+        assert deviation <= last["allowedDeviationXy"], (serial, pose)
+    assert {m["serialNumber"] for t, m in received if t == "state"} == {"amr-1", "amr-2"}
+    for subtopic, msg in received:
+        if subtopic in VEHICLE_TOPICS:
+            validate(subtopic, msg)
 
 
 @pytest.mark.parametrize("key", ["allowedDeviationXy", "allowedDeviationXY"])

@@ -36,7 +36,7 @@ def vehicle(request):
 
     seed = getattr(request, "param", 0)
     session = FleetSession(
-        load_config(), FleetOptions(world="warehouse", start_xy_yaw=START, rate=0, seed=seed)
+        load_config(), FleetOptions(world="warehouse", starts=(START,), rate=0, seed=seed)
     )
     master = Master(session.url)
     session.run(2.5)  # the EKF's rest calibration, the vehicle localised
@@ -62,7 +62,7 @@ def test_a_two_node_order_ends_at_the_last_node_and_every_message_is_valid(vehic
         lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"],
         40,
     )
-    x, y, _yaw = session.true_pose()
+    x, y, _yaw = session.vehicles[0].true_pose()
     assert math.hypot(x + 3.0, y) < 0.3, (x, y)
     state = last_state(session)
     assert (
@@ -84,13 +84,13 @@ def test_cancel_order_stops_the_robot_short_of_the_goal(vehicle):
         "o2", [node("n0", 0, -6.0, 0.0), node("n1", 2, 4.0, 0.0)], [edge("e1", 1, "n0", "n1")]
     )
     deliver(session, master, "order", far)
-    run_until(session, lambda: session.true_pose()[0] > -5.0, 20)
+    run_until(session, lambda: session.vehicles[0].true_pose()[0] > -5.0, 20)
     deliver(session, master, "instantActions", instant("c1", "cancelOrder"))
     session.run(3.0)
     state = last_state(session)
-    x_stop = session.true_pose()[0]
+    x_stop = session.vehicles[0].true_pose()[0]
     session.run(2.0)
-    assert abs(session.true_pose()[0] - x_stop) < 0.02  # it stands
+    assert abs(session.vehicles[0].true_pose()[0] - x_stop) < 0.02  # it stands
     assert x_stop < 1.0  # short of the goal 4 m on
     status = {a["actionId"]: a["actionStatus"] for a in state["actionStates"]}
     assert status["c1"] == "FINISHED" and not state["driving"]
@@ -107,13 +107,13 @@ def test_cancel_order_stops_the_robot_short_of_the_goal(vehicle):
 def test_start_pause_holds_the_robot_and_stop_pause_resumes_the_order(vehicle):
     session, master = vehicle
     deliver(session, master, "order", TWO_NODES)
-    run_until(session, lambda: session.true_pose()[0] > -5.5, 20)
+    run_until(session, lambda: session.vehicles[0].true_pose()[0] > -5.5, 20)
     deliver(session, master, "instantActions", instant("p1", "startPause"))
     session.run(2.0)
-    x_paused = session.true_pose()[0]
+    x_paused = session.vehicles[0].true_pose()[0]
     session.run(3.0)
     state = last_state(session)
-    assert abs(session.true_pose()[0] - x_paused) < 0.02 and x_paused < -3.5
+    assert abs(session.vehicles[0].true_pose()[0] - x_paused) < 0.02 and x_paused < -3.5
     assert (
         state["paused"]
         and not state["driving"]
@@ -122,7 +122,10 @@ def test_start_pause_holds_the_robot_and_stop_pause_resumes_the_order(vehicle):
     assert {a["actionId"]: a["actionStatus"] for a in state["actionStates"]}["p1"] == "FINISHED"
     deliver(session, master, "instantActions", instant("p2", "stopPause"))
     run_until(session, lambda: last_state(session)["lastNodeId"] == "n1", 30)
-    assert math.hypot(session.true_pose()[0] + 3.0, session.true_pose()[1]) < 0.3
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )
     assert not last_state(session)["paused"]
     settle_and_check_schemas(session, master)
 
@@ -140,7 +143,7 @@ def test_bad_orders_are_answered_with_errors_in_the_state_and_a_good_one_is_stil
     errors = last_state(session)["errors"]
     assert [e["errorType"] for e in errors] == ["validationError"] * 2
     assert {"referenceKey": "headerId", "referenceValue": "3"} in errors[1]["errorReferences"]
-    assert last_state(session)["orderId"] == "" and not session.adapter.nodes
+    assert last_state(session)["orderId"] == "" and not session.vehicles[0].adapter.nodes
     deliver(session, master, "order", TWO_NODES, header_id=6)
     assert last_state(session)["errors"] == [] and last_state(session)["orderId"] == "o1"
     run_until(
@@ -148,7 +151,10 @@ def test_bad_orders_are_answered_with_errors_in_the_state_and_a_good_one_is_stil
         lambda: last_state(session)["lastNodeId"] == "n1" and not last_state(session)["driving"],
         40,
     )
-    assert math.hypot(session.true_pose()[0] + 3.0, session.true_pose()[1]) < 0.3
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )
     settle_and_check_schemas(session, master)
 
 
@@ -172,7 +178,10 @@ def test_the_horizon_waits_for_an_order_update_stitched_at_the_last_base_node(ve
     session.run(2.0)
     state = last_state(session)
     assert state["newBaseRequest"] and [n["nodeId"] for n in state["nodeStates"]] == ["n2"]
-    assert math.hypot(session.true_pose()[0] + 4.0, session.true_pose()[1]) < 0.3  # waits at n1
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 4.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )  # waits at n1
     wrong = order(
         "o3", [node("n0", 0, -6.0, 0.0), node("n2", 2, -2.0, 0.0)], [edge("e2", 1, "n0", "n2")], 1
     )
@@ -192,13 +201,18 @@ def test_the_horizon_waits_for_an_order_update_stitched_at_the_last_base_node(ve
     )
     state = last_state(session)
     assert (state["orderUpdateId"], state["lastNodeSequenceId"], state["errors"]) == (2, 4, [])
-    assert math.hypot(session.true_pose()[0] + 2.0, session.true_pose()[1]) < 0.3
+    assert (
+        math.hypot(session.vehicles[0].true_pose()[0] + 2.0, session.vehicles[0].true_pose()[1])
+        < 0.3
+    )
     settle_and_check_schemas(session, master)
 
 
 def test_a_broken_connection_leaves_the_last_will(vehicle):
     session, master = vehicle
-    session.transport.client.socket().close()  # no DISCONNECT: the broker sends the will
+    session.vehicles[
+        0
+    ].transport.client.socket().close()  # no DISCONNECT: the broker sends the will
     deadline = time.monotonic() + 10
     while not any(m["connectionState"] == "CONNECTIONBROKEN" for m in master.of("connection")):
         assert time.monotonic() < deadline
@@ -229,7 +243,7 @@ def test_an_order_through_debians_mosquitto(tmp_path):
         session = FleetSession(
             load_config(),
             FleetOptions(
-                world="warehouse", start_xy_yaw=START, rate=0, url=f"mqtt://127.0.0.1:{port}"
+                world="warehouse", starts=(START,), rate=0, url=f"mqtt://127.0.0.1:{port}"
             ),
         )
         master = Master(session.url)
@@ -243,7 +257,12 @@ def test_an_order_through_debians_mosquitto(tmp_path):
                 ),
                 40,
             )
-            assert math.hypot(session.true_pose()[0] + 3.0, session.true_pose()[1]) < 0.3
+            assert (
+                math.hypot(
+                    session.vehicles[0].true_pose()[0] + 3.0, session.vehicles[0].true_pose()[1]
+                )
+                < 0.3
+            )
             settle_and_check_schemas(session, master)
         finally:
             master.close()

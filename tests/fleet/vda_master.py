@@ -36,10 +36,10 @@ def validate(subtopic: str, msg: dict) -> None:
 
 
 class Master:
-    """Connected to ``url``; ``received`` holds (subtopic, message) of every vehicle message, in
-    order."""
+    """Connected to ``url``; ``received`` holds (subtopic, message) of every message of the
+    vehicles ``vehicles`` (serial numbers), in order; it sends to amr-1."""
 
-    def __init__(self, url: str):
+    def __init__(self, url: str, vehicles: tuple = ("amr-1",)):
         host, port = url.removeprefix("mqtt://").split(":")
         self.received: list[tuple[str, dict]] = []
         self._ids = {"order": 0, "instantActions": 0}
@@ -51,7 +51,8 @@ class Master:
         )
         self.client.connect(host, int(port))
         self.client.loop_start()
-        self.client.subscribe(BASE + "#", qos=1)
+        for serial in vehicles:
+            self.client.subscribe(BASE.replace("amr-1", serial) + "#", qos=1)
         time.sleep(0.3)
 
     def send(self, subtopic: str, body: dict, header_id: int | None = None) -> dict:
@@ -127,23 +128,23 @@ def instant(action_id: str, action_type: str, **parameters) -> dict:
 def deliver(session, master, subtopic: str, body: dict, header_id: int | None = None) -> None:
     """Send and wait (wall time) until the vehicle's client has it; it acts at the twin's next
     tick."""
-    n = session.transport.messages_in
+    n = session.vehicles[0].transport.messages_in
     master.send(subtopic, body, header_id)
     deadline = time.monotonic() + 10.0
-    while session.transport.messages_in == n:
+    while session.vehicles[0].transport.messages_in == n:
         assert time.monotonic() < deadline, f"the vehicle never received the {subtopic} message"
         time.sleep(0.005)
     session.run(0.1)
 
 
 def run_until(session, done, limit_s: float) -> None:
-    t_end = session.twin.t_s + limit_s
-    while not done() and session.twin.t_s < t_end:
+    t_end = session.world.t_s + limit_s
+    while not done() and session.world.t_s < t_end:
         session.run(0.2)
 
 
 def last_state(session) -> dict:
-    return [m for _t, s, m in session.adapter.log if s == "state"][-1]
+    return [m for _t, s, m in session.vehicles[0].adapter.log if s == "state"][-1]
 
 
 def settle_and_check_schemas(session, master) -> None:

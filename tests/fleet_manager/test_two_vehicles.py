@@ -1,7 +1,7 @@
-"""The fleet manager through the embedded broker drives two twins (each its own physics in the
-warehouse world, serial numbers amr-1 and amr-2) head-on along the central aisle: its reservations
-keep them apart (they do not see each other), both jobs finish, and every message it sends is
-valid against the VDA 5050 2.0.0 schemas."""
+"""The fleet manager through the embedded broker drives two robots of one warehouse world (serial
+numbers amr-1 and amr-2, each with its own navigation stack, seeing the other with its LiDAR)
+head-on along the central aisle: its reservations keep them apart, both jobs finish without a
+physical collision, and every message it sends is valid against the VDA 5050 2.0.0 schemas."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from vda_master import SCHEMAS, validate  # noqa: E402
 ROBOT_LENGTH_M = 0.70  # the factsheet's length
 
 
-def test_two_twins_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
+def test_two_robots_of_one_world_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
     from amr_twin.fleet.broker import EmbeddedBroker
     from amr_twin.fleet.session import FleetOptions, FleetSession
     from amr_twin.fleet_manager.dispatcher import ManagerOptions
@@ -37,50 +37,46 @@ def test_two_twins_head_on_in_one_aisle_are_kept_apart_and_both_jobs_finish():
     starts = {"amr-1": roadmap.xy(west), "amr-2": roadmap.xy(far)}
     cfg = load_config()
     broker = EmbeddedBroker().start()
-    sessions, manager = [], None
+    session, manager = None, None
     try:
-        for serial, (x, y) in starts.items():
-            sessions.append(
-                FleetSession(
-                    cfg,
-                    FleetOptions(
-                        world="warehouse",
-                        start_xy_yaw=(x, y, 0.0 if serial == "amr-1" else math.pi),
-                        url=broker.url,
-                        rate=0,
-                    ),
-                    serial=serial,
-                )
-            )
+        session = FleetSession(
+            cfg,
+            FleetOptions(
+                world="warehouse",
+                starts=((*starts["amr-1"], 0.0), (*starts["amr-2"], math.pi)),
+                url=broker.url,
+                rate=0,
+            ),
+        )
+        assert session.serials == ("amr-1", "amr-2")
         manager = FleetManager(
             broker.url, roadmap, list(starts), "uagv", ManagerOptions(charging_nodes=("n0",))
         )
         for _ in range(15):  # the EKF's rest calibration: the vehicles localised and placed
-            for s in sessions:
-                s.run(0.2)
+            session.run(0.2)
             time.sleep(0.02)
         manager.submit([Job("job-1", mid, east, 20.0)])  # amr-1 is nearer: west to east
-        for s in sessions:
-            s.run(0.2)
+        session.run(0.2)
         time.sleep(0.1)
         manager.submit([Job("job-2", east, west, 10.0)])  # amr-2: east to west, head-on
-        closest, t_end = math.inf, sessions[0].twin.t_s + 120.0
-        while manager.jobs_left() and sessions[0].twin.t_s < t_end:
-            for s in sessions:
-                s.run(0.1)
-            (x1, y1, _), (x2, y2, _) = (s.true_pose() for s in sessions)
-            closest = min(closest, math.hypot(x1 - x2, y1 - y2))
+        t_end = session.world.t_s + 120.0
+        while manager.jobs_left() and session.world.t_s < t_end:
+            session.run(0.1)
+        run = session.summary()
         summary = manager.summary()
     finally:
         if manager is not None:
             manager.close()
-        for s in sessions:
-            s.close()
+        if session is not None:
+            session.close()
         broker.stop()
     events = summary["events"]
+    closest = run["least_distance_m"]
     print(summary["messages_sent"], closest, [e for e in events if e["event"] != "placed"])
     assert summary["jobs_done"] == 2 and summary["jobs_failed"] == 0, events
-    assert closest >= ROBOT_LENGTH_M, closest
+    assert run["collisions"] == [], run["collisions"]
+    apart_m = math.dist(starts["amr-1"], starts["amr-2"])
+    assert ROBOT_LENGTH_M <= closest < apart_m - 1.0, closest  # apart, yet they met in the aisle
     waits = [e for e in events if e["event"] == "wait"]
     assert any(e["vehicle"] == "amr-2" and e["waits_for"] == ["amr-1"] for e in waits), waits
     for _serial, sub, msg in manager.log:

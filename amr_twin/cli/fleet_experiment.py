@@ -105,9 +105,7 @@ def fleet_experiment(
     workers = jobs if jobs is not None else max(1, len(os.sched_getaffinity(0)))
     client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
     try:
-        result = _guard(
-            lambda: run(spec, cfg, out, jobs=workers, client=client, progress=progress)
-        )
+        result = _guard(lambda: run(spec, cfg, out, jobs=workers, client=client, progress=progress))
     finally:
         if client is not None:
             client.close()

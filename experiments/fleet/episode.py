@@ -23,6 +23,9 @@ ROBOTS_TODAY = 1
 """The fleet sizes :func:`fleet_sessions` builds today: 1 (one twin, one physics)."""
 SAMPLE_TICKS = 5
 """Poses (distance driven, near misses, energy series) every this many 20 ms ticks."""
+MOVING_M = 0.005
+"""A robot that moved this far since the last sample (0.05 m/s) was driving: the energy drawn
+meanwhile counts as driving energy."""
 TRACK_TICKS = 25
 """A track point every this many ticks (0.5 s)."""
 
@@ -57,7 +60,10 @@ class _Meter:
         self.charging_s = [0.0] * len(sessions)
         self.soc0 = [s.twin.observables.battery()[2] for s in sessions]
         self.last_xy = [s.true_pose()[:2] for s in sessions]
-        self.series: list[list] = [[] for _ in sessions]  # [t_s, energy_j, charge_as, distance_m]
+        self.series: list[list] = [[] for _ in sessions]
+        """Per robot: (t_s, energy_j, charge_as, distance_m, driving_j), cumulative."""
+        self.driving_j = [0.0] * len(sessions)
+        self.sampled_j = [0.0] * len(sessions)
         self.distance_m = [0.0] * len(sessions)
         self.tracks: list[list] = [[] for _ in sessions]
         self.near = metrics.NearMisses(near_miss_m)
@@ -73,11 +79,17 @@ class _Meter:
             if not sample:
                 continue
             x, y, _yaw = s.true_pose()
-            self.distance_m[i] += float(np.hypot(x - self.last_xy[i][0], y - self.last_xy[i][1]))
+            step = float(np.hypot(x - self.last_xy[i][0], y - self.last_xy[i][1]))
+            self.distance_m[i] += step
+            if step >= MOVING_M:
+                self.driving_j[i] += self.energy_j[i] - self.sampled_j[i]
+            self.sampled_j[i] = self.energy_j[i]
             self.last_xy[i] = (x, y)
             positions[s.serial] = (x, y)
             charge = (self.soc0[i] - soc) * self.capacity_as
-            self.series[i].append((t_s, self.energy_j[i], charge, self.distance_m[i]))
+            self.series[i].append(
+                (t_s, self.energy_j[i], charge, self.distance_m[i], self.driving_j[i])
+            )
             if self.ticks % TRACK_TICKS == 0:
                 self.tracks[i].append([t_s, round(x, 3), round(y, 3)])
         if sample:
@@ -143,7 +155,7 @@ def run_episode(cfg, point: EpisodePoint) -> EpisodeResult:
 def _result(point, orders, summary, sessions, meter, wall0, cpu0) -> EpisodeResult:
     events, end = summary["events"], point.duration_s
     serials = [s.serial for s in sessions]
-    series = {s: np.array(meter.series[i]).reshape(-1, 4) for i, s in enumerate(serials)}
+    series = {s: np.array(meter.series[i]).reshape(-1, 5) for i, s in enumerate(serials)}
     seen: dict[str, dict] = {o.job.job_id: {} for o in orders}
     for e in events:
         job = e.get("job")
@@ -163,10 +175,9 @@ def _result(point, orders, summary, sessions, meter, wall0, cpu0) -> EpisodeResu
                 energy_wh=round(metrics.energy_between(arr[:, 0], arr[:, 1], a, done) / 3600, 4),
                 charge_as=round(metrics.energy_between(arr[:, 0], arr[:, 2], a, done), 3),
                 distance_m=round(metrics.energy_between(arr[:, 0], arr[:, 3], a, done), 3),
+                driving_wh=round(metrics.energy_between(arr[:, 0], arr[:, 4], a, done) / 3600, 4),
             )
-        jobs.append(
-            JobRecord(o.job.job_id, o.job.payload_kg, o.arrival_s, **{**rec, **drawn})
-        )
+        jobs.append(JobRecord(o.job.job_id, o.job.payload_kg, o.arrival_s, **{**rec, **drawn}))
     done_jobs = [j for j in jobs if j.done_s is not None and not j.failed]
     robots = []
     for i, s in enumerate(sessions):

@@ -103,7 +103,8 @@ class Lockstep:
             time.sleep(0.0002)
 
     def flush(self, t_us: int) -> None:
-        """The tick at ``t_us``: :meth:`settle`, ``on_tick`` (it may submit jobs), :meth:`settle`."""
+        """The tick at ``t_us``: :meth:`settle`, ``on_tick`` (it may submit jobs), again
+        :meth:`settle`."""
         self.settle()
         self.t_s = round(t_us * 1e-6, 3)
         self.on_tick(self.t_s)

@@ -90,19 +90,20 @@ def saturation(sizes: list[int], throughputs: list[float]) -> int | None:
 
 
 def payload_bins(jobs: list[dict], edges_kg: list[float]) -> list[dict]:
-    """The done jobs (``payload_kg``, ``energy_wh``, ``distance_m``) by payload bin
-    [edges[i], edges[i+1]): count, median energy per order (Wh) and per km driven (Wh/km)."""
+    """The done jobs (``payload_kg``, ``energy_wh``, ``driving_wh``, ``distance_m``) by payload
+    bin [edges[i], edges[i+1]): count, median energy per order (Wh), and the median driving
+    energy per km driven (Wh/km: the energy drawn while moving, over the distance)."""
     out = []
     for lo, hi in zip(edges_kg, edges_kg[1:]):
         last = hi == edges_kg[-1]
         inside = [j for j in jobs if lo <= j["payload_kg"] < hi or (last and j["payload_kg"] == hi)]
-        per_km = [1000 * j["energy_wh"] / j["distance_m"] for j in inside if j["distance_m"] > 1]
+        per_km = [1000 * j["driving_wh"] / j["distance_m"] for j in inside if j["distance_m"] > 1]
         out.append(
             {
                 "payload_kg": [lo, hi],
                 "orders": len(inside),
                 "energy_wh_median": percentiles([j["energy_wh"] for j in inside], (50,))[0],
-                "wh_per_km_median": percentiles(per_km, (50,))[0],
+                "driving_wh_per_km_median": percentiles(per_km, (50,))[0],
             }
         )
     return out

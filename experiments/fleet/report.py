@@ -62,7 +62,12 @@ class FleetResult:
                     }
                 )
             done = [
-                {"payload_kg": j.payload_kg, "energy_wh": j.energy_wh, "distance_m": j.distance_m}
+                {
+                    "payload_kg": j.payload_kg,
+                    "energy_wh": j.energy_wh,
+                    "driving_wh": j.driving_wh,
+                    "distance_m": j.distance_m,
+                }
                 for e in eps
                 for j in e.jobs
                 if j.energy_wh is not None
@@ -95,7 +100,7 @@ def write(result: FleetResult, cfg, out: Path) -> None:
     first = data["summary"][0]["payload_kg"] if data["summary"] else None
     shown = {}
     for e in data["episodes"]:
-        if e["point"]["payload_kg"] == first:
+        if list(e["point"]["payload_kg"]) == first:
             shown.setdefault(e["point"]["robots"], e)
     for n, e in shown.items():
         plot_tracks(cfg, e, out / f"tracks_{n}.png")
@@ -142,19 +147,29 @@ def markdown(data: dict) -> str:
         if len(sizes) < 2:
             lines += ["", f"Saturation: one fleet size ({sizes[0]}) only: not determined."]
         elif sat is None:
-            lines += ["", f"Saturation: none up to {max(sizes)} robots (every step adds >= {gain} %)."]
+            lines += [
+                "",
+                f"Saturation: none up to {max(sizes)} robots (every step adds >= {gain} %).",
+            ]
         else:
             lines += [
                 "",
                 f"Saturation: throughput saturates at {sat} robots: the next fleet size adds "
                 f"less than {gain} % orders per hour.",
             ]
-        lines += ["", "| payload kg | orders | Wh/order (median) | Wh/km (median) |", "|---|---|---|---|"]
+        lines += [
+            "",
+            "Energy per order by payload (Wh/order: from assignment to drop finished, standing "
+            "included; driving Wh/km: drawn while moving, over the distance driven):",
+            "",
+            "| payload kg | orders | Wh/order (median) | driving Wh/km (median) |",
+            "|---|---|---|---|",
+        ]
         for b in mix["energy_by_payload"]:
             a, z = b["payload_kg"]
             lines.append(
                 f"| {a:g}-{z:g} | {b['orders']} | {_f(b['energy_wh_median'], '.3f')} | "
-                f"{_f(b['wh_per_km_median'], '.2f')} |"
+                f"{_f(b['driving_wh_per_km_median'], '.2f')} |"
             )
         lines.append("")
     return "\n".join(lines) + "\n"
@@ -172,8 +187,12 @@ def plot_throughput(summary: list[dict], path: Path) -> None:
         label = "{:g}-{:g} kg".format(*mix["payload_kg"])
         rows = mix["by_fleet_size"]
         pts = [(r["robots"], q) for r in rows for q in r["orders_per_hour"]]
-        line = ax.plot([r["robots"] for r in rows], [r["orders_per_hour_median"] for r in rows],
-                       "-", label=f"{label} (median)")
+        line = ax.plot(
+            [r["robots"] for r in rows],
+            [r["orders_per_hour_median"] for r in rows],
+            "-",
+            label=f"{label} (median)",
+        )
         ax.plot([p[0] for p in pts], [p[1] for p in pts], "o", color=line[0].get_color(), ms=4)
         if mix["saturates_at_robots"] is not None:
             ax.axvline(mix["saturates_at_robots"], color=line[0].get_color(), ls=":")
@@ -200,8 +219,15 @@ def plot_tracks(cfg, episode: dict, path: Path) -> None:
     x0, y0 = sm.origin_xy_m
     extent = (x0, x0 + w * sm.resolution_m, y0, y0 + h * sm.resolution_m)
     fig, ax = plt.subplots(figsize=(10, 6))
-    ax.imshow(np.where(sm.occupied, 0.0, 1.0), origin="lower", extent=extent, cmap="gray",
-              vmin=0, vmax=1, interpolation="nearest")
+    ax.imshow(
+        np.where(sm.occupied, 0.0, 1.0),
+        origin="lower",
+        extent=extent,
+        cmap="gray",
+        vmin=0,
+        vmax=1,
+        interpolation="nearest",
+    )
     for r in episode["robots"]:
         xy = np.asarray([p[1:] for p in r["track"]], float).reshape(-1, 2)
         ax.plot(xy[:, 0], xy[:, 1], "-", lw=1.0, label=r["serial"])

@@ -26,7 +26,8 @@ class EpisodePoint:
 @dataclass(frozen=True)
 class JobRecord:
     """One order: arrival, assignment and drop finished (s; None: not reached), the robot, the
-    payload (kg), and what its robot drew and drove from assignment to drop (Wh, A s, m)."""
+    payload (kg), and what its robot drew and drove from assignment to drop (Wh, A s, m; of the
+    energy, ``driving_wh`` while it moved, the rest standing: handling, waiting, electronics)."""
 
     job_id: str
     payload_kg: float
@@ -38,6 +39,7 @@ class JobRecord:
     energy_wh: float | None = None
     charge_as: float | None = None
     distance_m: float | None = None
+    driving_wh: float | None = None
 
 
 @dataclass(frozen=True)

@@ -53,8 +53,10 @@ class FleetSpec:
         from amr_twin.model.worlds import world_path
 
         sizes = tuple(self.robots)
-        if not sizes or len(set(sizes)) != len(sizes) or not all(
-            isinstance(n, int) and 1 <= n <= MAX_ROBOTS for n in sizes
+        if (
+            not sizes
+            or len(set(sizes)) != len(sizes)
+            or not all(isinstance(n, int) and 1 <= n <= MAX_ROBOTS for n in sizes)
         ):
             raise ValueError(
                 f"--robots {_text(sizes)}: distinct whole numbers in [1, {MAX_ROBOTS}]"
@@ -66,8 +68,11 @@ class FleetSpec:
                     f"payload.max_mass_kg ({max_payload_kg:g} kg)"
                 )
         seeds = tuple(self.seeds)
-        if not seeds or len(seeds) > MAX_SEEDS or len(set(seeds)) != len(seeds) or not all(
-            isinstance(s, int) and 0 <= s < SEED_LIMIT for s in seeds
+        if (
+            not seeds
+            or len(seeds) > MAX_SEEDS
+            or len(set(seeds)) != len(seeds)
+            or not all(isinstance(s, int) and 0 <= s < SEED_LIMIT for s in seeds)
         ):
             raise ValueError(
                 f"--seeds {_text(seeds)}: at most {MAX_SEEDS} distinct whole numbers in [0, 2^32)"
@@ -85,8 +90,14 @@ class FleetSpec:
         supported(max(sizes))
         return [
             EpisodePoint(
-                n, (float(lo), float(hi)), s, float(self.duration_s), float(self.jobs_per_hour),
-                self.world, float(self.near_miss_m), float(self.charge_below),
+                n,
+                (float(lo), float(hi)),
+                s,
+                float(self.duration_s),
+                float(self.jobs_per_hour),
+                self.world,
+                float(self.near_miss_m),
+                float(self.charge_below),
             )
             for lo, hi in self.payload_kg
             for n in sorted(sizes)
@@ -117,7 +128,9 @@ def run(spec: FleetSpec, cfg, out_dir: Path, *, jobs: int = 1, client=None, prog
     points = spec.validate(cfg.payload.max_mass_kg)
     out_dir.mkdir(parents=True, exist_ok=True)
     items = [(cfg, p) for p in points]
-    episodes = [r for _item, r in run_all(_episode, items, jobs, "fleet episodes", progress, client)]
+    episodes = [
+        r for _item, r in run_all(_episode, items, jobs, "fleet episodes", progress, client)
+    ]
     order = {p: i for i, p in enumerate(points)}
     episodes.sort(key=lambda e: order[e.point])
     result = report.FleetResult(episodes)
@@ -133,6 +146,6 @@ EXPERIMENTS.register(
         FleetSpec,
         run,
         EpisodeResult,
-        "how many AMRs: orders per hour, lead times, utilisation and energy per order by fleet size",
+        "how many AMRs: orders per hour, lead times, utilisation, energy per order by fleet size",
     ),
 )

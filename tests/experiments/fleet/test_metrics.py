@@ -75,14 +75,14 @@ def test_energy_between_interpolates_a_cumulative_series():
 
 def test_payload_bins_split_orders_and_give_energy_per_order_and_per_km():
     jobs = [
-        {"payload_kg": 2.0, "energy_wh": 1.0, "distance_m": 40.0},
-        {"payload_kg": 8.0, "energy_wh": 3.0, "distance_m": 40.0},
-        {"payload_kg": 25.0, "energy_wh": 2.0, "distance_m": 20.0},
-        {"payload_kg": 30.0, "energy_wh": 4.0, "distance_m": 20.0},
+        {"payload_kg": 2.0, "energy_wh": 1.0, "driving_wh": 0.5, "distance_m": 40.0},
+        {"payload_kg": 8.0, "energy_wh": 3.0, "driving_wh": 1.5, "distance_m": 40.0},
+        {"payload_kg": 25.0, "energy_wh": 2.0, "driving_wh": 1.0, "distance_m": 20.0},
+        {"payload_kg": 30.0, "energy_wh": 4.0, "driving_wh": 2.0, "distance_m": 20.0},
     ]
     bins = metrics.payload_bins(jobs, metrics.bin_edges(0.0, 30.0))
     assert [b["orders"] for b in bins] == [2, 0, 2]  # 30 kg falls in the last bin
-    assert bins[0]["energy_wh_median"] == 2.0 and bins[0]["wh_per_km_median"] == 50.0
+    assert bins[0]["energy_wh_median"] == 2.0 and bins[0]["driving_wh_per_km_median"] == 25.0
     assert bins[1]["energy_wh_median"] is None
-    assert bins[2]["wh_per_km_median"] == 150.0
+    assert bins[2]["driving_wh_per_km_median"] == 75.0
     assert metrics.percentiles([]) == [None, None]

@@ -36,4 +36,6 @@ def test_a_fixed_payload_keeps_the_stream_of_places_and_times(roadmap):
     assert [(o.job.pick, o.job.drop, o.arrival_s) for o in light] == [
         (o.job.pick, o.job.drop, o.arrival_s) for o in heavy
     ]
-    assert {o.job.payload_kg for o in light} == {0.1} and {o.job.payload_kg for o in heavy} == {50.0}
+    assert {o.job.payload_kg for o in light} == {0.1} and {o.job.payload_kg for o in heavy} == {
+        50.0
+    }

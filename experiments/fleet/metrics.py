@@ -109,6 +109,25 @@ def payload_bins(jobs: list[dict], edges_kg: list[float]) -> list[dict]:
     return out
 
 
+def payload_slope(jobs: list[dict]) -> dict | None:
+    """A least-squares line through the done jobs' driving energy per km against payload:
+    ``wh_per_km_at_0kg`` and ``wh_per_km_per_10kg``; None with fewer than 3 jobs driven over 1 m
+    or payloads spanning less than 1 kg."""
+    pts = [
+        (j["payload_kg"], 1000 * j["driving_wh"] / j["distance_m"])
+        for j in jobs
+        if j["distance_m"] > 1
+    ]
+    if len(pts) < 3 or max(p[0] for p in pts) - min(p[0] for p in pts) < 1.0:
+        return None
+    slope, at0 = np.polyfit([p[0] for p in pts], [p[1] for p in pts], 1)
+    return {
+        "orders": len(pts),
+        "wh_per_km_at_0kg": round(float(at0), 3),
+        "wh_per_km_per_10kg": round(10 * float(slope), 3),
+    }
+
+
 def bin_edges(lo_kg: float, hi_kg: float, bins: int = 3) -> list[float]:
     """``bins`` equal payload bins over [lo_kg, hi_kg] (one when the range is a single value)."""
     if hi_kg <= lo_kg:

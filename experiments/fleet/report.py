@@ -80,6 +80,7 @@ class FleetResult:
                         sizes, [r["orders_per_hour_median"] for r in rows]
                     ),
                     "energy_by_payload": metrics.payload_bins(done, metrics.bin_edges(*mix)),
+                    "driving_energy_fit": metrics.payload_slope(done),
                 }
             )
         return out
@@ -171,6 +172,14 @@ def markdown(data: dict) -> str:
                 f"| {a:g}-{z:g} | {b['orders']} | {_f(b['energy_wh_median'], '.3f')} | "
                 f"{_f(b['driving_wh_per_km_median'], '.2f')} |"
             )
+        fit = mix["driving_energy_fit"]
+        if fit is not None:
+            lines += [
+                "",
+                f"Least-squares line through the {fit['orders']} orders: driving energy "
+                f"{fit['wh_per_km_at_0kg']:.2f} Wh/km unloaded, {fit['wh_per_km_per_10kg']:+.2f} "
+                "Wh/km per 10 kg of payload.",
+            ]
         lines.append("")
     return "\n".join(lines) + "\n"
 

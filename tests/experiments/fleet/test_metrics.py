@@ -86,3 +86,13 @@ def test_payload_bins_split_orders_and_give_energy_per_order_and_per_km():
     assert bins[1]["energy_wh_median"] is None
     assert bins[2]["driving_wh_per_km_median"] == 75.0
     assert metrics.percentiles([]) == [None, None]
+
+
+def test_the_payload_line_recovers_a_made_up_cost_per_kg():
+    jobs = [
+        {"payload_kg": kg, "driving_wh": (10.0 + 0.2 * kg) * d / 1000, "distance_m": d}
+        for kg, d in ((0.0, 30.0), (10.0, 45.0), (25.0, 20.0), (40.0, 36.0))
+    ]
+    fit = metrics.payload_slope(jobs)
+    assert fit == {"orders": 4, "wh_per_km_at_0kg": 10.0, "wh_per_km_per_10kg": 2.0}
+    assert metrics.payload_slope(jobs[:2]) is None

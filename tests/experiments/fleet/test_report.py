@@ -72,6 +72,8 @@ def test_the_report_says_where_throughput_saturates_and_tables_each_fleet_size()
     bins = summary["energy_by_payload"]
     assert [b["orders"] for b in bins] == [12, 12, 12]
     assert [round(b["energy_wh_median"], 2) for b in bins] == [0.52, 0.62, 0.75]
+    assert summary["driving_energy_fit"]["wh_per_km_per_10kg"] == 3.333  # 0.1 Wh per 30 m, 10 kg
+    assert "+3.33 Wh/km per 10 kg of payload" in text
 
 
 def test_write_puts_the_json_the_markdown_and_a_plot_per_fleet_size(tmp_path):

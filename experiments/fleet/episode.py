@@ -41,7 +41,9 @@ def supported(robots: int) -> None:
 
 def fleet_sessions(cfg, point: EpisodePoint) -> list:
     """The fleet's vehicles, amr-1..amr-N, on one embedded broker, as fast as possible (rate 0),
-    stamped from :data:`~.lockstep.EPOCH`: the seam where the N-robot world plugs in."""
+    stamped from :data:`~.lockstep.EPOCH`: the seam where the N-robot world plugs in. Each has
+    ``serial``, ``url``, ``twin`` (its battery, collisions), ``transport``, ``pacer``, ``adapter``,
+    ``true_pose()``, ``close()``; they share one clock, advanced by the first one's ``run``."""
     from amr_twin.fleet.session import FleetOptions, FleetSession
 
     supported(point.robots)
@@ -140,8 +142,8 @@ def run_episode(cfg, point: EpisodePoint) -> EpisodeResult:
 
         quiet(sessions, manager)
         lockstep = Lockstep(sessions, manager, on_tick)
-        for s in sessions:
-            s.pacer.sinks.append(lockstep)
+        for pacer in {id(s.pacer): s.pacer for s in sessions}.values():
+            pacer.sinks.append(lockstep)
         sessions[0].run(point.duration_s)
         summary = manager.summary()
     finally:

@@ -1,11 +1,14 @@
 """The twins and the fleet manager in lockstep through the broker, so that a run as fast as
 possible is reproducible: same seed, same messages at the same simulated instants.
 
-At every pacer tick (20 ms of simulated time) the twin's thread waits until every ``state``,
-``connection`` and ``factsheet`` a vehicle published has been handled by the manager and every
-``order`` and ``instantActions`` the manager sent has been queued on its vehicle's pacer (they act
-at the next tick). The manager's events are stamped with the simulated time of the message that
-caused them (its VDA 5050 ``timestamp`` on the twin's clock from :data:`EPOCH`), or of the tick.
+The manager's MQTT callback only collects the vehicles' ``state``, ``connection`` and
+``factsheet`` messages. At every pacer tick (20 ms of simulated time) the twin's thread waits until
+every one a vehicle published has arrived, hands them to the manager in a fixed order (by serial
+number, each vehicle's in the order it sent them: the same whatever order the broker delivered
+several vehicles' in), then waits until every ``order`` and ``instantActions`` the manager sent is
+queued on its vehicle's pacer (they act at the next tick). The manager's events are stamped with
+the simulated time of the message that caused them (its VDA 5050 ``timestamp`` on the twin's clock
+from :data:`EPOCH`), or of the tick.
 """
 
 from __future__ import annotations
@@ -29,33 +32,32 @@ def sim_seconds(timestamp: str) -> float:
 
 
 class Lockstep:
-    """Counts the messages each way between ``sessions`` (FleetSession-like: ``transport``,
-    ``pacer``) and ``manager`` (a FleetManager) and holds each tick until both sides have them;
-    ``on_tick(t_s)`` runs at every tick once the manager has handled all before it. Built once
-    both sides are quiet (:func:`quiet`); a pacer sink of every session's pacer."""
+    """Carries the messages between ``sessions`` (FleetSession-like: ``transport``, ``pacer``) and
+    ``manager`` (a FleetManager) tick by tick (module docstring); ``on_tick(t_s)`` runs at every
+    tick once the manager has handled all before it. Built once both sides are quiet
+    (:func:`quiet`); a sink of the sessions' pacer."""
 
     def __init__(self, sessions: list, manager, on_tick):
         self.sessions, self.manager, self.on_tick = sessions, manager, on_tick
         self.t_s = 0.0
         self._lock = threading.Lock()
         self._published = 0
+        self._arrived: list = []
         self._handled = 0
         self._queued = sum(manager.sent.values())
         for s in sessions:
             self._count_published(s.transport)
             self._count_queued(s.transport)
         manager.dispatcher.clock = lambda: self.t_s
-        handle = manager.client.on_message
+        self._handle = manager.client.on_message
 
-        def handled(client, userdata, message):
-            try:
-                self._stamp(message.payload)
-                handle(client, userdata, message)
-            finally:
-                with self._lock:
-                    self._handled += message.topic in manager._topics
+        def arrived(client, userdata, message):
+            if message.topic not in manager._topics:
+                return
+            with self._lock:
+                self._arrived.append((client, userdata, message))
 
-        manager.client.on_message = handled
+        manager.client.on_message = arrived
 
     def _stamp(self, payload: bytes) -> None:
         import json
@@ -86,21 +88,35 @@ class Lockstep:
 
         transport._on_message = counted
 
-    def settle(self) -> None:
-        """Wait until both sides have every message sent so far (RuntimeError after
-        :data:`WAIT_S`)."""
+    def _wait(self, done, what: str) -> None:
         deadline = time.monotonic() + WAIT_S
         while True:
             with self._lock:
-                sent = sum(self.manager.sent.values())
-                if self._handled >= self._published and self._queued >= sent:
+                if done():
                     return
             if time.monotonic() > deadline:
-                raise RuntimeError(
-                    f"the broker lost messages: {self._published} published by the vehicles, "
-                    f"{self._handled} handled; {sent} sent by the manager, {self._queued} queued"
-                )
+                raise RuntimeError(f"the broker lost messages: {what}")
             time.sleep(0.0002)
+
+    def settle(self) -> None:
+        """Wait for every vehicle's message, hand them to the manager (by serial number, each
+        vehicle's in order), wait until its answers are queued on the vehicles (RuntimeError
+        after :data:`WAIT_S`)."""
+        self._wait(
+            lambda: self._handled + len(self._arrived) >= self._published,
+            "the vehicles' messages did not all reach the fleet manager",
+        )
+        with self._lock:
+            batch, self._arrived = self._arrived, []
+        topics = self.manager._topics
+        for client, userdata, message in sorted(batch, key=lambda m: topics[m[2].topic][0]):
+            self._stamp(message.payload)
+            self._handle(client, userdata, message)
+            self._handled += 1
+        self._wait(
+            lambda: self._queued >= sum(self.manager.sent.values()),
+            "the fleet manager's orders did not all reach the vehicles",
+        )
 
     def flush(self, t_us: int) -> None:
         """The tick at ``t_us``: :meth:`settle`, ``on_tick`` (it may submit jobs), again

@@ -117,5 +117,16 @@ def fleet_experiment(
                 f"orders/h, lead p95 {r['lead_time_p95_s_median']} s, collisions "
                 f"{r['collisions']}, deadlocks {r['deadlocks']}, near misses {r['near_misses']}"
             )
-        typer.echo(f"{lo:g}-{hi:g} kg: saturates at {mix['saturates_at_robots']} robots")
+        sizes = [r["robots"] for r in mix["by_fleet_size"]]
+        sat = mix["saturates_at_robots"]
+        typer.echo(
+            f"{lo:g}-{hi:g} kg: "
+            + (
+                f"throughput saturates at {sat} robots"
+                if sat is not None
+                else "one fleet size: saturation not determined"
+                if len(sizes) < 2
+                else f"no saturation up to {max(sizes)} robots"
+            )
+        )
     typer.echo(f"wrote {out}/report.md, metrics.json, throughput.png, tracks_<N>.png")

@@ -27,3 +27,18 @@ def test_bad_input_exits_2_with_one_line(tmp_path, args, message):
     lines = [line for line in result.output.splitlines() if line.strip()]
     assert len(lines) == 1 and message in lines[0], result.output
     assert not out.exists()
+
+
+def test_a_short_run_writes_the_report_the_json_and_the_plots(tmp_path):
+    out = tmp_path / "out"
+    args = ["--robots", "1", "--seeds", "0", "--duration-s", "30", "--jobs", "1", "--no-progress"]
+    result = CliRunner().invoke(app, ["experiment", "fleet", "--out", str(out), *args])
+    assert result.exit_code == 0, result.output
+    assert "0-30 kg: one fleet size: saturation not determined" in result.output
+    assert sorted(p.name for p in out.iterdir()) == [
+        "metrics.json",
+        "report.md",
+        "throughput.png",
+        "tracks_1.png",
+    ]
+    assert "| 1 | 0.0 (0.0) |" in (out / "report.md").read_text()  # no order done in 30 s

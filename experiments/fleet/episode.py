@@ -161,8 +161,8 @@ def _result(point, orders, summary, sessions, meter, wall0, cpu0) -> EpisodeResu
     seen: dict[str, dict] = {o.job.job_id: {} for o in orders}
     for e in events:
         job = e.get("job")
-        if job in seen and e["event"] == "assigned":
-            seen[job].update(robot=e["vehicle"], assigned_s=e["t_s"])
+        if job in seen and e["event"] == "assigned" and "assigned_s" not in seen[job]:
+            seen[job].update(robot=e["vehicle"], assigned_s=e["t_s"])  # not a later detour
         elif job in seen and e["event"] in ("done", "failed"):
             seen[job].update(done_s=e["t_s"], failed=e["event"] == "failed")
     jobs = []

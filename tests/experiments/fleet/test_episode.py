@@ -54,7 +54,6 @@ def test_a_heavier_payload_costs_more_energy_on_the_same_order(heavy):
     assert b.distance_m == pytest.approx(a.distance_m, rel=0.1)  # the same route
     assert b.charge_as > 1.05 * a.charge_as and b.energy_wh > 1.05 * a.energy_wh
     assert b.driving_wh > 1.2 * a.driving_wh  # standing draws the same, loaded or not
-    print(f"light {a}\nheavy {b}")
 
 
 def test_the_same_seed_gives_the_same_json_even_with_a_slow_manager(monkeypatch):

@@ -62,6 +62,8 @@ def test_per_robot_measures_of_a_made_up_fleet(n):
             },
         )
     ]
+    detour = {"t_s": 6.0, "event": "assigned", "vehicle": "amr-1", "task": "job", "job": "job-1"}
+    events.insert(1, detour)  # a new way round a deadlock: the order still began at 2 s
     point = EpisodePoint(n, (0.0, 30.0), 0, 20.0, 300.0)
     r = _result(point, orders, {"events": events, "deadlocks": []}, vehicles, meter, 0.0, 0.0)
     assert [x.serial for x in r.robots] == [f"amr-{i + 1}" for i in range(n)]

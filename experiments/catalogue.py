@@ -10,6 +10,7 @@ def experiments() -> Registry[Experiment]:
     """The registry with the built-in experiments in it (and any a third party registered)."""
     # each spec module registers its experiment when imported
     from amr_twin.experiments.chapter5 import spec as chapter5  # noqa: F401
+    from amr_twin.experiments.fleet import spec as fleet  # noqa: F401
     from amr_twin.experiments.fusion import spec as fusion  # noqa: F401
     from amr_twin.experiments.navigation import spec as navigation  # noqa: F401
     from amr_twin.experiments.payload import spec as payload  # noqa: F401

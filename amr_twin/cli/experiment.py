@@ -37,6 +37,7 @@ from amr_twin.cli.checks import (
 from amr_twin.cli.common import _config, _guard, checked, fail
 from amr_twin.cli.attainable import attainable
 from amr_twin.cli.fusion import fusion
+from amr_twin.cli.fleet_experiment import fleet_experiment
 from amr_twin.cli.navigation import navigation
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt, sketch_option
 from amr_twin.cli.umbmark import umbmark
@@ -251,6 +252,7 @@ def faults_experiment(
 
 
 app.command("fusion")(fusion)
+app.command("fleet")(fleet_experiment)
 app.command("navigation")(navigation)
 app.command("umbmark")(umbmark)
 app.command("faults")(faults_experiment)

@@ -149,7 +149,7 @@ def summarise(per_seed: list[dict]) -> dict:
 def write(results: list[fusion.FusionResults], out: Path) -> dict:
     """Write each seed's folder, the summary and ``seeds.png`` into ``out``; return the summary's
     data."""
-    from amr_twin.experiments.fusion import report as fusion_report
+    from amr_twin.experiments.fusion import plot as fusion_plot, report as fusion_report
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -157,7 +157,7 @@ def write(results: list[fusion.FusionResults], out: Path) -> dict:
     for k, res in enumerate(results):
         folder = out / f"seed{res.seed}"
         if k == 0:
-            fusion_report.plot(res, folder)
+            fusion_plot.plot(res, folder)
         per_seed.append(fusion_report.report(res, folder, figures=k == 0).as_json())
     first = results[0]
     data = {
@@ -192,7 +192,7 @@ def _plot(data: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from amr_twin.experiments.fusion.report import COLOURS
+    from amr_twin.experiments.fusion.plot import COLOURS
 
     names = list(data["architectures"])
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained", sharey=True)

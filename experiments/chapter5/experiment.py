@@ -142,12 +142,8 @@ def run(
         "rolling_resistance_study": payload.rolling_resistance_study(analysed) if study else [],
     }
     if reference_firmware is not None:
-        from amr_twin.experiments.chapter5.firmware_comparison import (
-            PACE_US,
-            command_timeline,
-            compare,
-            timeline_table,
-        )
+        from amr_twin.experiments.chapter5.firmware_comparison import PACE_US, compare
+        from amr_twin.experiments.chapter5.pin_timeline import command_timeline, timeline_table
 
         ref = [
             RunJob(s, cfg, reference_firmware, duration_s or s.duration_s, extra=extra)

@@ -28,7 +28,8 @@ from amr_twin.model.statics import CONTACT_MIN_N
 from amr_twin.calibration.uncertainty import interval, noise_level, rank_correlations
 from amr_twin.experiments.chapter5.criteria import WHEELS
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
-from amr_twin.experiments.payload.sweep_report import PANELS, _value, summarise
+from amr_twin.experiments.payload.rows import PANELS, column_value
+from amr_twin.experiments.payload.sweep_report import summarise
 
 CURRENT_RATIO = (
     "steady_current_ratio"  # the larger motor's steady current over the driver's rating (derived)
@@ -75,8 +76,8 @@ def intervals(results: dict) -> list[dict]:
     for r0 in nominal:
         rows = by_point.get(_point(r0), [])
         for column, label in PANELS:
-            v0 = _value(r0, column)
-            stats = interval([_value(r, column) for r in rows if r.get("valid", True)])
+            v0 = column_value(r0, column)
+            stats = interval([column_value(r, column) for r in rows if r.get("valid", True)])
             out.append(
                 {
                     "mass_kg": r0["mass_kg"],

@@ -18,7 +18,7 @@ from pathlib import Path
 from amr_twin.calibration.uncertainty import LEVEL, noise_level
 from amr_twin.experiments.payload import spread
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
-from amr_twin.experiments.payload.sweep_report import PANELS, _csv, _lowest_wheel_loads, _value
+from amr_twin.experiments.payload.rows import PANELS, column_value, lowest_wheel_loads, rows_csv
 
 
 def _kg(v) -> str:
@@ -111,7 +111,10 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
                 )
                 ax.plot(
                     masses,
-                    [_value(next(r for r in mine if r["mass_kg"] == m), column) for m in masses],
+                    [
+                        column_value(next(r for r in mine if r["mass_kg"] == m), column)
+                        for m in masses
+                    ],
                     "o--",
                     color=colour,
                     ms=3,
@@ -141,7 +144,7 @@ def _band(samples: dict, mass, position, command, column) -> tuple[float, float,
     from amr_twin.calibration.uncertainty import interval
 
     values = [
-        _value(r, column)
+        column_value(r, column)
         for rows in samples.values()
         for r in rows
         if (r["mass_kg"], r["position"], r["command"]) == (mass, position, command)
@@ -215,7 +218,7 @@ def report(results: dict, out_dir: Path) -> dict:
     draws, found, sens = results["draws"], results["answers"], results["sensitivity"]
     nominal, samples = spread.split(results)
     top = max(r["mass_kg"] for r in nominal)
-    write_text(out_dir / "sweep.csv", _csv(results["rows"]))
+    write_text(out_dir / "sweep.csv", rows_csv(results["rows"]))
     write_text(out_dir / "samples.csv", _table_csv(draws.table()))
     write_text(out_dir / "intervals.csv", _table_csv(results["intervals"]))
     write_text(out_dir / "sensitivity.csv", _table_csv(sens))
@@ -336,7 +339,7 @@ def _markdown(results, base, found, sens, top, n) -> str:
         ]
     lines += [
         "",
-        *_lowest_wheel_loads(spread.split(results)[0]),
+        *lowest_wheel_loads(spread.split(results)[0]),
         "",
         "`intervals.csv`: every metric per point (nominal, median, interval); `sensitivity.csv`: "
         "every "

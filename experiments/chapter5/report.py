@@ -7,11 +7,11 @@ from __future__ import annotations
 from amr_twin.experiments.chapter5.findings import (
     ATTAINABLE_COMMAND,
     ATTAINABLE_SECTION,
-    TIMINGS,
     VALIDATION_DOC,
     VALIDATION_SECTION,
     lines,
 )
+from amr_twin.experiments.chapter5.timing_bound import TIMINGS
 from amr_twin.experiments.chapter5.payload import markdown as payload_markdown
 from amr_twin.experiments.documents.texts import attainable_table
 from amr_twin.experiments.chapter5.readings import markdown as readings_markdown

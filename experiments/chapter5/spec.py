@@ -95,7 +95,7 @@ def run(
     draws=None,
 ) -> Chapter5Metrics:
     """Validate ``spec``, simulate its runs (``jobs`` processes; with ``draws``, an
-    :class:`amr_twin.calibration.uncertainty.Draws`, once more per draw), judge them and write
+    :class:`amr_twin.calibration.draws.Draws`, once more per draw), judge them and write
     ``out_dir``'s report with the recordings, all or nothing; the metrics."""
     numbers = spec.validate()
     reference = "faithful" if spec.firmware.startswith("avr") else None

@@ -19,7 +19,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from amr_twin.calibration.uncertainty import LEVEL, interval, noise_level, rank_correlations
+from amr_twin.calibration.draw_statistics import (
+    LEVEL,
+    interval,
+    noise_level,
+    rank_correlations,
+)
 from amr_twin.experiments.chapter5 import payload
 from amr_twin.experiments.chapter5.runs import RUNS, RunJob, analyse, simulate
 from amr_twin.experiments.chapter5.criteria import (

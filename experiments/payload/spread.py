@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from amr_twin.model.statics import CONTACT_MIN_N
-from amr_twin.calibration.uncertainty import interval, noise_level, rank_correlations
+from amr_twin.calibration.draw_statistics import interval, noise_level, rank_correlations
 from amr_twin.experiments.chapter5.criteria import WHEELS
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 from amr_twin.experiments.payload.rows import PANELS, column_value
@@ -175,7 +175,7 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
 
     Returns one row per answer and parameter: ``position, command ('' for the highest safe
     payload), answer, parameter, rho, notable`` (|rho| above
-    :func:`~amr_twin.calibration.uncertainty.noise_level` for all the drawn parameters),
+    :func:`~amr_twin.calibration.draw_statistics.noise_level` for all the drawn parameters),
     sorted by answer, then |rho| descending.
     """
     draws = results["draws"]

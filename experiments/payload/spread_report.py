@@ -15,7 +15,7 @@ import io
 import math
 from pathlib import Path
 
-from amr_twin.calibration.uncertainty import LEVEL, noise_level
+from amr_twin.calibration.draw_statistics import LEVEL, noise_level
 from amr_twin.experiments.payload import spread
 from amr_twin.experiments.payload.rows import PANELS, column_value, rows_csv
 from amr_twin.experiments.payload.spread_summary import markdown
@@ -116,7 +116,7 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
 def _band(samples: dict, mass, position, command, column) -> tuple[float, float, float]:
     import numpy as np
 
-    from amr_twin.calibration.uncertainty import interval
+    from amr_twin.calibration.draw_statistics import interval
 
     values = [
         column_value(r, column)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from amr_twin.calibration.uncertainty import LEVEL, noise_level
+from amr_twin.calibration.draw_statistics import LEVEL, noise_level
 from amr_twin.experiments.payload import spread
 from amr_twin.experiments.payload.rows import lowest_wheel_loads
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M

@@ -54,7 +54,7 @@ def run(
     recording per point simulated now (points reused from ``runs/`` are not
     re-simulated for a missing recording; see the module notes).
 
-    ``draws``: :class:`amr_twin.calibration.uncertainty.Draws` of ``cfg``'s parameters; each point
+    ``draws``: :class:`amr_twin.calibration.draws.Draws` of ``cfg``'s parameters; each point
     is also run with each drawn configuration (rows with ``sample`` and ``sample_id``, after
     the nominal rows).
 

@@ -28,6 +28,7 @@ from typing import Any, Iterator
 
 from pydantic import BaseModel, ValidationError, model_validator
 
+from amr_twin.model.config_estimation import EkfCfg, LidarOdometryCfg, MappingCfg
 from amr_twin.model.config_sections import (
     BatteryCfg,
     CasterCfg,
@@ -36,18 +37,13 @@ from amr_twin.model.config_sections import (
     DeckCfg,
     DriverBoardCfg,
     DriverCfg,
-    EkfCfg,
-    ImuCfg,
-    LidarCfg,
-    LidarOdometryCfg,
-    MappingCfg,
     MotorCfg,
     PayloadCfg,
     Section,
     SimCfg,
-    UwbCfg,
     WheelCfg,
 )
+from amr_twin.model.config_sensors import ImuCfg, LidarCfg, UwbCfg
 from amr_twin.model.config_actors import ActorsCfg
 from amr_twin.model.config_navigation import NavigationCfg
 from amr_twin.model.config_leaves import ConfigError  # noqa: F401 - the parameter files' error, raised here too

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.analysis import se2
-from amr_twin.experiments.fusion.experiment import ARCHITECTURES, FusionResults
+from amr_twin.experiments.fusion.experiment import ARCHITECTURES
+from amr_twin.experiments.fusion.results import FusionResults
 from amr_twin.experiments.runner.executor import save_figure
 
 COLOURS = {

@@ -8,7 +8,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from amr_twin.experiments.runner.executor import write_json, write_text
-from amr_twin.experiments.fusion.experiment import ARCHITECTURES, FusionResults
+from amr_twin.experiments.fusion.experiment import ARCHITECTURES
+from amr_twin.experiments.fusion.results import FusionResults
 from amr_twin.experiments.fusion.metrics import LIDAR_ATE_MAX_M, FusionMetrics, metrics
 from amr_twin.experiments.fusion.map import agreement
 from amr_twin.analysis import tum

@@ -104,7 +104,7 @@ def check_avr(firmware: str, params: AvrParams | None = None) -> None:
     (else ValueError, one line)."""
     if not firmware.startswith("avr"):
         return
-    from amr_twin.controllers.avr import sketch_defines, topic_table
+    from amr_twin.controllers.avr_sketch import sketch_defines, topic_table
     from amr_twin.controllers.avr_build import (
         DEFAULT_SKETCH,
         SketchError,

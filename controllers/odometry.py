@@ -19,36 +19,22 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-import numpy as np
 
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.geometry_messages import (
     Odometry,
-    Point,
-    Pose,
-    PoseWithCovariance,
-    Quaternion,
-    Transform,
-    TransformStamped,
-    Twist,
-    TwistWithCovariance,
-    Vector3,
 )
-from amr_twin.ros.messages import Float64, Float64MultiArray, Header, Time
+from amr_twin.ros.messages import Float64, Float64MultiArray
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
 from amr_twin.base.clock import VirtualClock
 from amr_twin.estimation.drive_arcs import DriveGeometry
 from amr_twin.estimation.published_pose import PublishedPose
+from amr_twin.controllers.odometry_message import (
+    DEFAULT_COVARIANCE_DIAGONAL,
+    covariance,
+    odometry_message,
+)
 from amr_twin.controllers.wheel_speed_samples import WheelSpeedSamples
-
-DEFAULT_COVARIANCE_DIAGONAL = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e3)
-"""(x, y, z, roll, pitch, yaw) variances, the ros_controllers diff_drive example values."""
-
-
-def _covariance(diagonal: Sequence[float]) -> np.ndarray:
-    if len(diagonal) != 6:
-        raise ValueError(f"a covariance diagonal has 6 values, got {len(diagonal)}")
-    return np.diag(np.asarray(diagonal, dtype=np.float64)).ravel()
 
 
 class WheelOdometry:
@@ -132,8 +118,8 @@ class WheelOdometry:
         self.right_radius_m = radius_m * right_radius_multiplier
         self.separation_m = wheel_separation_m * wheel_separation_multiplier
         self.period_us = int(round(1e6 / publish_rate_hz))
-        self.pose_covariance = _covariance(pose_covariance_diagonal)
-        self.twist_covariance = _covariance(twist_covariance_diagonal)
+        self.pose_covariance = covariance(pose_covariance_diagonal)
+        self.twist_covariance = covariance(twist_covariance_diagonal)
         # shared by messages
         self.pose_covariance.flags.writeable = self.twist_covariance.flags.writeable = False
         self.signed_input, self.publish_tf = signed_input, publish_tf
@@ -272,40 +258,27 @@ class WheelOdometry:
         self.publish()
 
     def publish(self) -> Odometry:
-        """Integrate to now, publish ``odom`` (and tf) and return the message.
-
-        Messages built with positional fields (ROS order) and the bus's publish called
-        directly: this runs at 50 Hz on the loop's cold caches."""
+        """Integrate to now, publish ``odom`` (and tf) and return the message
+        (:func:`~amr_twin.controllers.odometry_message.odometry_message`; the bus's publish called
+        directly: this runs at 50 Hz on the loop's cold caches)."""
         now = self.clock.now_us
         published = self.published
-        published.advance(
-            now
-        )  # update(), once: body_twist() and the pose properties read its result
-        stamp = Time.from_us(now)
-        vx_m_s, vy_m_s, w_rad_s = published.twist()
-        x_m, y_m, yaw = published.pose
-        orientation = Quaternion.from_yaw(
-            math.atan2(math.sin(yaw), math.cos(yaw))
-        )  # yaw_rad: wrapped
-        frame, child = self.frame_id, self.child_frame_id
-        msg = Odometry(
-            Header(self._seq, stamp, frame),
-            child,
-            PoseWithCovariance(Pose(Point(x_m, y_m, 0.0), orientation), self.pose_covariance),
-            TwistWithCovariance(
-                Twist(Vector3(vx_m_s, vy_m_s, 0.0), Vector3(0.0, 0.0, w_rad_s)),
-                self.twist_covariance,
-            ),
+        # update(), once: body_twist() and the pose properties read its result
+        published.advance(now)
+        msg, transform = odometry_message(
+            self._seq,
+            now,
+            published.pose,
+            published.twist(),
+            (self.frame_id, self.child_frame_id),
+            (self.pose_covariance, self.twist_covariance),
+            self.publish_tf,
         )
         self._seq += 1
         bus = self.bus
         bus.publish("odom", msg)
-        if self.publish_tf:
-            bus.send_transform(
-                TransformStamped(
-                    Header(0, stamp, frame), child, Transform(Vector3(x_m, y_m, 0.0), orientation)
-                )
-            )
+        if transform is not None:
+            bus.send_transform(transform)
         return msg
 
     def shutdown(self) -> None:

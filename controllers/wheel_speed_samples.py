@@ -13,14 +13,10 @@ from __future__ import annotations
 import math
 
 from amr_twin.estimation.published_pose import PublishedPose
+from amr_twin.controllers.speed_bounds import silence_bound, start_ramp
 from amr_twin.controllers.wheel_command import MAX_RPM
 
 SPEED_SAMPLES = ("window", "hold")
-SILENCE_KNOT_RATIO = 1.25
-"""Ratio of the times since a sample of two knots of the silence bound."""
-SILENCE_KNOTS = 64
-"""Most knots of the silence bound (``rest_rpm`` 0: the bound then holds the last one, ~1e-6 of the
-speed)."""
 
 
 class WheelSpeedSamples:
@@ -70,11 +66,8 @@ class WheelSpeedSamples:
         self.published = published
         self.signed_input, self.speed_samples = signed_input, speed_samples
         self.revolutions_per_sample = float(revolutions_per_sample)
-        self.sample_latency_us, self.brake_stop_us, self.start_us = (
-            sample_latency_us,
-            brake_stop_us,
-            start_us,
-        )
+        self.sample_latency_us = sample_latency_us
+        self.brake_stop_us, self.start_us = brake_stop_us, start_us
         self.sample_gap_us, self.rest_rpm = sample_gap_us, float(rest_rpm)
         self.brake_friction_rpm_s = float(brake_friction_rpm_s)
         self.reset(now_us)
@@ -83,10 +76,8 @@ class WheelSpeedSamples:
         """Forget every sample and command: both wheels standing, never commanded, from
         ``now_us``."""
         self._direction = [1, 1]  # last non-zero motion: a braked wheel still turns that way
-        self._sample_us: list[int | None] = [
-            None,
-            None,
-        ]  # end of each wheel's newest measurement window
+        # the end of each wheel's newest measurement window
+        self._sample_us: list[int | None] = [None, None]
         self._command_rpm = [0.0, 0.0]  # each wheel's speed in the last wheel_Command, RPM
         self._brake_end_us = [0, 0]  # where each wheel's assumed brake ramp reaches 0
         self._motion_us = [now_us, now_us]  # each wheel's last change of motion code
@@ -118,14 +109,20 @@ class WheelSpeedSamples:
                 max(self.revolutions_per_sample - done, 0.0) * 60e6 / (t1 - known_us), MAX_RPM
             )
             if profile.at(known_us, profile.segment(known_us)) == 0.0 and mean > 0.0:
-                self._start_ramp(wheel, known_us, t1, math.copysign(mean, rpm))
+                start_ramp(
+                    profile,
+                    known_us,
+                    t1,
+                    math.copysign(mean, rpm),
+                    self.start_us,
+                    self._command_rpm[wheel],
+                )
                 self._sample_us[wheel] = t1
                 self._silence(wheel)
                 self._mirror(wheel, now_us)
                 return
-            braked = (
-                self._motion[wheel] == 0 and not self.signed_input
-            )  # slowing down: no faster after
+            # slowing down: no faster after
+            braked = self._motion[wheel] == 0 and not self.signed_input
             held = math.copysign(mean if braked else max(mean, abs(rpm)), rpm)
             rpm = math.copysign(mean, rpm)
         profile.cut(max(t0, known_us))
@@ -184,9 +181,8 @@ class WheelSpeedSamples:
         tau_s, speed, friction = 0.5e-6 * self.brake_stop_us, abs(rpm), self.brake_friction_rpm_s
         if speed == 0.0 or friction == 0.0 or tau_s == 0.0:
             return self.brake_stop_us
-        distance = tau_s * speed - friction * tau_s**2 * math.log1p(
-            speed / (friction * tau_s)
-        )  # RPM s
+        # RPM s
+        distance = tau_s * speed - friction * tau_s**2 * math.log1p(speed / (friction * tau_s))
         return int(round(2e6 * distance / speed))
 
     def restarted(self) -> None:
@@ -207,21 +203,17 @@ class WheelSpeedSamples:
         wheels = [w for w in wheels if self._command_rpm[w] > 0.0]
         if self.speed_samples != "window" or self.signed_input or not wheels:
             return
-        full_us = min(
-            self._allowed(w, now_us) * 60e6 / self._command_rpm[w] for w in wheels
-        )  # at full speed
+        # at full speed
+        full_us = min(self._allowed(w, now_us) * 60e6 / self._command_rpm[w] for w in wheels)
         if full_us <= 0.0:
             return
         ramp_us = self.start_us
-        fraction = (
-            min(1.0, full_us / ramp_us) if ramp_us > 0 else 1.0
-        )  # of the commanded speed reached
+        # of the commanded speed reached
+        fraction = min(1.0, full_us / ramp_us) if ramp_us > 0 else 1.0
         hold_us = max(full_us - ramp_us, 0.0)
         for wheel in wheels:
-            profile, peak = (
-                self.published.profiles[wheel],
-                self._direction[wheel] * self._command_rpm[wheel],
-            )
+            profile = self.published.profiles[wheel]
+            peak = self._direction[wheel] * self._command_rpm[wheel]
             profile.step(now_us, 0.0)
             profile.point(now_us + ramp_us, fraction * peak)
             if math.isfinite(full_us):
@@ -237,9 +229,8 @@ class WheelSpeedSamples:
             return math.inf  # no silence bound: held until the sample
         if last_us is None:
             return self.revolutions_per_sample
-        opened_us = min(
-            last_us + self.sample_gap_us // 2, now_us
-        )  # the window opened within the gap
+        # the window opened within the gap
+        opened_us = min(last_us + self.sample_gap_us // 2, now_us)
         done = abs(self.published.profiles[wheel].revolutions(opened_us, now_us))
         return max(self.revolutions_per_sample - done, 0.0)
 
@@ -259,12 +250,8 @@ class WheelSpeedSamples:
         if since_us is None or since_us < self._motion_us[other]:
             if self._command_rpm[wheel] <= 0.0:
                 return
-            scale = (
-                self._command_rpm[other]
-                / self._command_rpm[wheel]
-                * self._direction[other]
-                * self._direction[wheel]
-            )
+            ratio = self._command_rpm[other] / self._command_rpm[wheel]
+            scale = ratio * self._direction[other] * self._direction[wheel]
             start_us = self._motion_us[other]
         else:
             if (
@@ -297,63 +284,13 @@ class WheelSpeedSamples:
             dst.point(rest_us, dst.at(rest_us, dst.segment(rest_us)))
             dst.step(rest_us, 0.0)
 
-    def _start_ramp(self, wheel: int, t0_us: int, t1_us: int, mean_rpm: float) -> None:
-        """The wheel stood at ``t0_us`` and averaged ``mean_rpm`` up to ``t1_us``: a linear start.
-
-        A ramp over ``start_us`` to the speed that gives this mean, held after; if the time is
-        shorter than the ramp, a ramp to twice the mean, on at that rate up to the commanded speed.
-        """
-        profile, duration_us = self.published.profiles[wheel], t1_us - t0_us
-        profile.cut(t0_us)
-        profile.step(t0_us, 0.0)
-        if duration_us > self.start_us:
-            speed = mean_rpm * duration_us / (duration_us - 0.5 * self.start_us)
-            profile.point(t0_us + self.start_us, speed)
-            profile.point(t1_us, speed)
-            return
-        profile.point(t1_us, 2.0 * mean_rpm)
-        commanded = self._command_rpm[wheel]
-        if (
-            commanded > 2.0 * abs(mean_rpm) > 0.0
-        ):  # still starting: on at that rate to the commanded speed
-            reached_us = t0_us + duration_us * commanded / (2.0 * abs(mean_rpm))
-            profile.point(reached_us, math.copysign(commanded, mean_rpm))
-
     def _silence(self, wheel: int) -> None:
-        """Assume the wheel's speed after its newest knot from the time since its newest sample.
-
-        A firmware that publishes at least once every ``revolutions_per_sample`` revolutions, a gap
-        of up to ``sample_gap_us`` after each sample, has turned less than that since ``gap`` after
-        its newest sample if no other came: its mean speed since is below ``60 *
-        revolutions_per_sample / (elapsed
-        - gap)`` RPM. The speed in force is held until the next sample is due at that speed, then
-        kept under this bound, and is 0 (at rest) once the bound falls below ``rest_rpm``.
-        """
-        profile, t_us = self.published.profiles[wheel], self._sample_us[wheel]
-        held = profile.last_rpm
-        if (
-            self.speed_samples != "window"
-            or t_us is None
-            or held == 0.0
-            or not math.isfinite(self.sample_gap_us)
-        ):
-            return
-        if (
-            profile.assumed_us is None
-        ):  # what follows is assumed: a sample after its due time is not clipped
-            profile.assumed_us = profile.last_us
-        rev_us, start = self.revolutions_per_sample * 60e6, t_us + self.sample_gap_us
-        speed, sign = abs(held), math.copysign(1.0, held)
-        t = max(
-            start + rev_us / speed, profile.last_us
-        )  # the next sample at this speed is due by then
-        rest_us = start + rev_us / self.rest_rpm if self.rest_rpm > 0 else math.inf
-        for _ in range(SILENCE_KNOTS):
-            if t >= rest_us:
-                break
-            profile.point(t, sign * min(speed, rev_us / (t - start)))
-            t = start + SILENCE_KNOT_RATIO * (t - start)
-        if math.isfinite(rest_us):
-            rest_us = max(int(rest_us), profile.last_us)
-            profile.point(rest_us, sign * min(speed, self.rest_rpm))
-            profile.step(rest_us, 0.0)
+        """The silence bound (:func:`.speed_bounds.silence_bound`) after ``wheel``'s newest knot."""
+        if self.speed_samples == "window":
+            silence_bound(
+                self.published.profiles[wheel],
+                self._sample_us[wheel],
+                self.sample_gap_us,
+                self.revolutions_per_sample,
+                self.rest_rpm,
+            )

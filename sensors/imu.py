@@ -21,7 +21,7 @@ import numpy as np
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import IMU_FRAME
 from amr_twin.base.clock import VirtualClock
-from amr_twin.model.config_sections import ImuCfg
+from amr_twin.model.config_sensors import ImuCfg
 from amr_twin.ros.geometry_messages import Quaternion, Vector3
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Imu, MagneticField

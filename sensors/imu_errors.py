@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amr_twin.model.config_sections import ImuCfg
+from amr_twin.model.config_sensors import ImuCfg
 from amr_twin.base.c_layout import register
 from amr_twin.base.native_build import address, c_array, open_helper
 

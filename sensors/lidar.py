@@ -15,7 +15,7 @@ import numpy as np
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import LASER_FRAME
 from amr_twin.base.clock import VirtualClock
-from amr_twin.model.config_sections import LidarCfg
+from amr_twin.model.config_sensors import LidarCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from amr_twin.model.config_sections import LidarCfg
+from amr_twin.model.config_sensors import LidarCfg
 from amr_twin.sim.grid_steps import GridRows, gather
 from amr_twin.base.native_build import address
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from amr_twin.model.config_sections import LidarCfg
+from amr_twin.model.config_sensors import LidarCfg
 from amr_twin.base.c_layout import register
 from amr_twin.base.native_build import address, c_array, mujoco_address, open_helper
 from amr_twin.sensors.lidar_beams import interpolate_poses, quantised_ranges, world_directions

@@ -19,7 +19,7 @@ import numpy as np
 
 from amr_twin.ros.bus import Bus
 from amr_twin.base.clock import VirtualClock
-from amr_twin.model.config_sections import UwbCfg
+from amr_twin.model.config_sensors import UwbCfg
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Range
 from amr_twin.ros.ros_state import anchor_transforms

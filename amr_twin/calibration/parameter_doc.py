@@ -8,7 +8,8 @@ from __future__ import annotations
 
 from amr_twin.model import mass
 from amr_twin.model.config import load_config, parameter_table
-from amr_twin.model.statics import sensitivity, solve
+from amr_twin.model.statics import solve
+from amr_twin.model.statics_sensitivity import sensitivity
 from amr_twin.model.paths import MODEL_DIR
 
 HEADER = (

@@ -4,8 +4,6 @@ Reasons and measurements: docs/how-to/uncertainty.md#amr_twincalibrationuncertai
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,18 +11,18 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from amr_twin.calibration.draws import Draws
+from amr_twin.calibration.joint_draw import draw_calibrated
 from amr_twin.model.config import ConfigError, TwinConfig, load_parameters
 from amr_twin.model.parameter_tree import DEFAULT_CONFIG
 from amr_twin.model.config_leaves import value_at
 from amr_twin.model.parameter_spreads import (
     CALIBRATED,
-    EXACT,
     FOLLOWS,
     NORMAL,
     UNIFORM,
     Spread,
     spread_of,
-    with_values,
 )
 
 PLANT = (
@@ -44,45 +42,6 @@ PLANT = (
 """The robot's body and drive (not its sensors, nor the estimators)."""
 SAMPLERS = ("lhs", "sobol")
 MAX_SAMPLES = 4096
-LEVEL = 0.90  # the reported interval: 5 % to 95 %
-
-
-@dataclass(frozen=True)
-class Draws:
-    """Configurations drawn from a :class:`ParameterSpace`.
-
-    ``names``: the drawn dimensions (``key`` or ``key[i]`` for a vector element), ``values``
-    (n, d) their values; ``overrides[i]``: every parameter sample ``i`` changes (followers
-    and shifted calibrated parameters included), ``{dotted key: value}``; ``clipped``: per
-    name, how many draws were clipped to the bounds.
-    """
-
-    names: tuple[str, ...]
-    values: np.ndarray
-    overrides: tuple[dict, ...]
-    seed: int
-    sampler: str
-    clipped: dict[str, int]
-
-    def __len__(self) -> int:
-        return len(self.overrides)
-
-    def config(self, base: TwinConfig, i: int) -> TwinConfig:
-        """``base`` with sample ``i``'s values (validated; one-line :class:`ConfigError`)."""
-        return with_values(base, self.overrides[i])
-
-    def sample_id(self, i: int) -> str:
-        """10 hex digits naming sample ``i``'s values (part of a sweep's run keys)."""
-        return hashlib.sha256(json.dumps(self.overrides[i], sort_keys=True).encode()).hexdigest()[
-            :10
-        ]
-
-    def table(self) -> list[dict]:
-        """One row per sample: ``sample``, ``id`` and each drawn dimension's value."""
-        return [
-            {"sample": i, "id": self.sample_id(i), **dict(zip(self.names, row.tolist()))}
-            for i, row in enumerate(self.values)
-        ]
 
 
 def _selected(key: str, include: Sequence[str]) -> bool:
@@ -169,16 +128,14 @@ class ParameterSpace:
                 )
                 raise ConfigError(
                     f"{key}: calibrated, but {where}: amr-twin calibrate --report writes one; or "
-                    f"give "
-                    "the leaf a range or sigma"
+                    f"give the leaf a range or sigma"
                 )
             fitted = float(self.calibration.values[self.calibration.keys.index(key)])
             if not math.isclose(fitted, s.value, rel_tol=1e-4, abs_tol=1e-9):
                 raise ConfigError(
                     f"{key}: {s.value:g} here but {fitted:g} in the calibration report "
                     f"{self.calibration_path}: give the report of these values (--calibration "
-                    f"FILE, "
-                    "from amr-twin calibrate --report) or a range or sigma on the leaf"
+                    f"FILE, from amr-twin calibrate --report) or a range or sigma on the leaf"
                 )
 
     def drawn_keys(self, include: Sequence[str] = PLANT) -> list[str]:
@@ -241,8 +198,14 @@ class ParameterSpace:
                     values[r][key] = float(x[r, j])
         self._follow(values, keys)  # held parameters' followers first: the fit follows them too
         if self.calibration is not None:
-            self._calibrated(
-                values, block, norm.ppf(u[:, len(dims) - len(block) :]), x, len(dims) - len(block)
+            draw_calibrated(
+                self.calibration,
+                self.spreads,
+                values,
+                block,
+                norm.ppf(u[:, len(dims) - len(block) :]),
+                x,
+                len(dims) - len(block),
             )
             self._follow(values, keys)
         clipped = {}
@@ -294,97 +257,5 @@ class ParameterSpace:
             lo, hi = max(lo, b[0]), min(hi, b[1])
         return lo, hi
 
-    def _calibrated(
-        self, values: list[dict], block: list[str], z: np.ndarray, x: np.ndarray, col0: int
-    ) -> None:
-        """Fill the calibrated parameters of each sample: the fit's mean shifted by the held
-        parameters' deviations, conditioned on members fixed by the user, plus ``L z``."""
-        rep = self.calibration
-        keys = list(rep.keys)
-        held = [(j, k) for j, k in enumerate(rep.held_keys) if k in self.spreads]
-        fixed = [
-            i for i, k in enumerate(keys) if self.spreads.get(k) and self.spreads[k].kind == EXACT
-        ]
-        drawn = [keys.index(k) for k in block]
-        shifted = [
-            i
-            for i, k in enumerate(keys)
-            if self.spreads.get(k) and self.spreads[k].kind == CALIBRATED
-        ]
-        if not held and not drawn:
-            return
-        cov = rep.covariance
-        gain = np.zeros((len(drawn), len(fixed)))
-        cond = cov[np.ix_(drawn, drawn)]
-        if fixed and drawn:
-            inv = np.linalg.pinv(cov[np.ix_(fixed, fixed)])
-            gain = cov[np.ix_(drawn, fixed)] @ inv
-            cond = cond - gain @ cov[np.ix_(fixed, drawn)]
-        lam, vec = (
-            np.linalg.eigh(0.5 * (cond + cond.T)) if drawn else (np.zeros(0), np.zeros((0, 0)))
-        )
-        root = vec * np.sqrt(np.clip(lam, 0.0, None))
-        for r, sample in enumerate(values):
-            dev = np.array([self._value(sample, k) - rep.held_values[j] for j, k in held])
-            mean = rep.values + (rep.follow[:, [j for j, _ in held]] @ dev if held else 0.0)
-            out = mean.copy()
-            if drawn:
-                xf = np.array([self.spreads[keys[i]].value for i in fixed])
-                out[drawn] = (
-                    mean[drawn] + (gain @ (xf - mean[fixed]) if fixed else 0.0) + root @ z[r]
-                )
-            for i in shifted:
-                sample[keys[i]] = float(out[i])
-        for c, k in enumerate(block):
-            x[:, col0 + c] = [v[k] for v in values]
-
     def _value(self, sample: dict, key: str) -> float:
         return float(sample[key]) if key in sample else float(self.spreads[key].value)
-
-
-def interval(values: Sequence[float | None], level: float = LEVEL, discrete: bool = False) -> dict:
-    """``{"median", "low", "high", "n"}``: the median and the ``level`` interval's quantiles of
-    ``values`` (None and NaN left out; None for each when none is left).
-
-    ``discrete``: quantiles that are values of the sample (numpy's ``inverted_cdf``), for
-    answers on a grid or censored at ``±inf``, which are kept; otherwise linear
-    interpolation between the finite values.
-    """
-    v = np.array([x for x in values if x is not None and not math.isnan(x)], dtype=float)
-    if not discrete:
-        v = v[np.isfinite(v)]
-    if not len(v):
-        return {"median": None, "low": None, "high": None, "n": 0}
-    lo, med, hi = np.quantile(
-        v, [(1 - level) / 2, 0.5, (1 + level) / 2], method="inverted_cdf" if discrete else "linear"
-    )
-    return {"median": float(med), "low": float(lo), "high": float(hi), "n": int(len(v))}
-
-
-def rank_correlations(x: np.ndarray, y: Sequence[float | None]) -> np.ndarray:
-    """(d,) Spearman rank correlation of each column of ``x`` (n, d) with ``y`` (n,), over the
-    samples where ``y`` is a number (``±inf``, a censored answer, ranks last or first); NaN
-    for a constant column or fewer than 3 samples."""
-    from scipy.stats import rankdata
-
-    y = np.array([np.nan if v is None else float(v) for v in y])
-    ok = ~np.isnan(y)
-    out = np.full(x.shape[1], np.nan)
-    if ok.sum() < 3 or len(set(y[ok].tolist())) < 2:
-        return out
-    ry = rankdata(y[ok])
-    ry = (ry - ry.mean()) / np.linalg.norm(ry - ry.mean())
-    for j in range(x.shape[1]):
-        rx = rankdata(x[ok, j])
-        norm_x = np.linalg.norm(rx - rx.mean())
-        if norm_x > 0:
-            out[j] = float((rx - rx.mean()) @ ry / norm_x)
-    return out
-
-
-def noise_level(n: int, parameters: int = 1) -> float:
-    """|rho| that the largest of ``parameters`` unrelated ones exceeds in ``n`` samples about one
-    time in 20 (two-sided, Bonferroni: ``Phi^-1(1 - 0.025 / parameters) / sqrt(n - 1)``)."""
-    from scipy.stats import norm
-
-    return float(norm.ppf(1 - 0.025 / max(parameters, 1)) / math.sqrt(max(n - 1, 1)))

@@ -54,7 +54,7 @@ class ArcKernel:
     ) -> tuple:
         """:func:`~amr_twin.estimation.dead_reckoning.integrate` in C: ``(t_end_us, x_m, y_m,
         yaw_rad)`` from ``start`` (``t_us, x_m, y_m, yaw_rad``) along the two
-        :class:`~amr_twin.estimation.dead_reckoning.SpeedProfile` (left, right)."""
+        :class:`~amr_twin.estimation.speed_profile.SpeedProfile` (left, right)."""
         left, right = profiles
         tl, rl = array("q", left.t_us), array("d", left.rpm)
         tr, rr = array("q", right.t_us), array("d", right.rpm)

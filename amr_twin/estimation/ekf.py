@@ -16,7 +16,8 @@ import numpy as np
 from amr_twin.analysis import se2
 from amr_twin.ros.bus import Bus
 from amr_twin.ros.tf_buffer import BASE_FRAME, ODOM_FRAME
-from amr_twin.model.config_sections import EkfCfg, UwbCfg
+from amr_twin.model.config_estimation import EkfCfg
+from amr_twin.model.config_sensors import UwbCfg
 from amr_twin.ros.geometry_messages import (
     Odometry,
     Point,

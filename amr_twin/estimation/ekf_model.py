@@ -28,7 +28,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from amr_twin.model.config_sections import EkfCfg
+from amr_twin.model.config_estimation import EkfCfg
 
 X, Y, YAW, V, W, BG = range(6)
 N_STATE = 6

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from amr_twin.analysis import se2
-from amr_twin.model.config_sections import PoseGraphCfg
+from amr_twin.model.config_estimation import PoseGraphCfg
 from amr_twin.sensors.uwb import anchor_index
 
 ANCHOR_KEY = 10**7  # key of anchor 0; poses are keyed 0..N-1

@@ -4,13 +4,13 @@ Reasons and measurements: docs/how-to/live.md#amr_twinlivefoxglove."""
 
 from __future__ import annotations
 
-import logging
 from types import SimpleNamespace
 
 import numpy as np
 
 from amr_twin.live import inputs as live_inputs
 from amr_twin.recording.event_log import DIAGNOSTIC_ARRAY, has_events, mcap_items
+from amr_twin.live.foxglove_clients import SERVICE, FoxgloveClients
 from amr_twin.live.rows import LiveRows
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.geometry_messages import TFMessage
@@ -24,14 +24,11 @@ from amr_twin.ros.ros2_cdr import (
 from amr_twin.ros.ros2_schemas import msgdef, ros2_type
 from amr_twin.ros.ros_state import StateSampler
 
-LOG = logging.getLogger(__name__)
-
 SCENE_TOPIC = "/twin/scene"
 GOAL_TOPIC = "/goal_pose"
 GOAL_TYPE = "geometry_msgs/PoseStamped"
 GHOST_PERIOD_US = 100_000
 """Period of the scene's ground-truth robot, us (10 Hz)."""
-SERVICE = "/wheel_Command_Service"
 STATE_TOPICS = {
     "/clock": "rosgraph_msgs/Clock",
     "/twin/ground_truth": "nav_msgs/Odometry",
@@ -67,26 +64,6 @@ def live_topics(twin) -> dict[str, str]:
     return topics
 
 
-def _listener(foxglove, sink: "FoxgloveSink"):
-    """A ``foxglove.ServerListener`` (its callbacks run in the server's threads) handing events to
-    ``sink``."""
-
-    class Listener(foxglove.ServerListener):
-        def on_subscribe(self, client, channel) -> None:
-            sink._on_subscribe(channel.topic)
-
-        def on_client_advertise(self, client, channel) -> None:
-            sink._on_client_advertise(client.id, channel)
-
-        def on_client_unadvertise(self, client, client_channel_id: int) -> None:
-            sink._client_channels.pop((client.id, client_channel_id), None)
-
-        def on_message_data(self, client, client_channel_id: int, data: bytes) -> None:
-            sink._on_client_message(client.id, client_channel_id, data)
-
-    return Listener()
-
-
 class FoxgloveSink:
     """Serve ``twin`` live over the Foxglove WebSocket protocol, fed by ``pacer``.
 
@@ -107,9 +84,6 @@ class FoxgloveSink:
         from amr_twin.live.scene import SceneBuilder
 
         self.twin, self.pacer, self.bus = twin, pacer, twin.bus
-        self.dropped, self.accepted = 0, 0
-        """Client messages refused (each logged), and handed to the twin."""
-        self._client_channels: dict[tuple[int, int], tuple[str, str, object]] = {}
         self._ctx = foxglove.Context()
         self.channels = {}
         for topic, typ in live_topics(twin).items():
@@ -139,12 +113,13 @@ class FoxgloveSink:
         self._events_sent: set[tuple[str, int]] = set()
         self._collisions_sent = 0
         self._latched_due: set[str] = set(LATCHED)
+        self.clients = FoxgloveClients(twin, pacer, self.goal_channel, LATCHED, self._latched_due)
         twin.on_message(self._tap)
         twin.on_grid(self._on_grid)
         self._on_grid(twin.t_phys_us)
         self._capacity_ah = twin.cfg.battery.capacity_ah
         service = foxglove.Service(
-            SERVICE, schema=self._service_schema(foxglove), handler=self._on_service_call
+            SERVICE, schema=self._service_schema(foxglove), handler=self.clients.on_service_call
         )
         caps = foxglove.Capability
         try:
@@ -153,7 +128,7 @@ class FoxgloveSink:
                 host=host,
                 port=port,
                 context=self._ctx,
-                server_listener=_listener(foxglove, self),
+                server_listener=self.clients.listener(foxglove),
                 capabilities=[caps.ClientPublish, caps.Services, caps.Time],
                 supported_encodings=["cdr", "json"],
                 services=[service],
@@ -164,6 +139,11 @@ class FoxgloveSink:
             twin.unhook(self._rows._on_grid)
             raise OSError(f"--port {port}: cannot serve on {host}:{port}: {exc}") from None
         self.host, self.port = host, self.server.port
+
+    @property
+    def dropped(self) -> int:
+        """Client messages refused so far (each logged; :class:`FoxgloveClients`)."""
+        return self.clients.dropped
 
     @property
     def url(self) -> str:
@@ -307,76 +287,3 @@ class FoxgloveSink:
     def close(self) -> None:
         """Stop the server (clients are disconnected)."""
         self.server.stop()
-
-    # -- the clients' side (the server's threads) ------------------------------------------
-    def _on_subscribe(self, topic: str) -> None:
-        if topic in LATCHED:
-            try:
-                self.pacer.post(lambda: self._latched_due.add(topic))
-            except RuntimeError:  # the twin has stopped
-                pass
-
-    def _drop(self, client_id: int, what: str, reason: str) -> None:
-        self.dropped += 1
-        LOG.warning("live: dropped %s from client %d: %s", what, client_id, reason)
-
-    def _on_client_advertise(self, client_id: int, channel) -> None:
-        try:
-            decoder = live_inputs.input_for(channel.topic, channel.schema_name, channel.encoding)
-        except live_inputs.InputError as exc:
-            decoder = exc
-            LOG.warning(
-                "live: client %d advertises %s; its messages will be dropped: %s",
-                client_id,
-                channel.topic,
-                exc,
-            )
-        self._client_channels[(client_id, channel.id)] = (channel.topic, channel.encoding, decoder)
-
-    def _on_client_message(self, client_id: int, channel_id: int, data: bytes) -> None:
-        entry = self._client_channels.get((client_id, channel_id))
-        if entry is None:
-            return self._drop(
-                client_id, f"a message on channel {channel_id}", "the channel was not advertised"
-            )
-        topic, encoding, decoder = entry
-        if isinstance(decoder, Exception):
-            return self._drop(client_id, f"a message on {topic}", str(decoder))
-        try:
-            msg = decoder(data, encoding)
-        except live_inputs.InputError as exc:
-            return self._drop(client_id, f"a message on {topic}", str(exc))
-        name = topic.lstrip("/")
-        if name == "wheel_Command_Service/request":
-            action = lambda: live_inputs.call_service(self.bus, msg)  # noqa: E731
-        elif name == "goal_pose":
-            action = lambda: self._goal(msg)  # noqa: E731
-        else:
-            action = lambda: self.bus.publish(name, msg)  # noqa: E731
-        try:
-            self.pacer.post(action)
-        except RuntimeError as exc:
-            return self._drop(client_id, f"a message on {topic}", str(exc))
-        self.accepted += 1
-
-    def _goal(self, msg) -> None:
-        """A client's goal (the twin's thread): stamped now, on the bus' ``goal_pose``, echoed to
-        the clients."""
-        from amr_twin.ros.messages import Time
-        from amr_twin.ros.nav_messages import encode_pose_stamped
-
-        msg.header.stamp = Time.from_sec(self.twin.clock.now_s)
-        self.bus.publish("goal_pose", msg)
-        self.goal_channel.log(encode_pose_stamped(msg), log_time=self.twin.clock.now_us * 1000)
-
-    def _on_service_call(self, request) -> bytes:
-        """``/wheel_Command_Service`` (the server's thread): checked, then called at the next
-        tick."""
-        try:
-            req = live_inputs.decode_service_request(request.payload, request.encoding)
-        except live_inputs.InputError as exc:
-            self._drop(request.client_id, f"a call of {SERVICE}", str(exc))
-            raise
-        self.pacer.call(lambda: live_inputs.call_service(self.bus, req))
-        self.accepted += 1
-        return live_inputs.service_response(request.encoding)

@@ -11,7 +11,7 @@ LiDAR on ``laser``, the IMU board on ``imu_link``, the UWB tag on ``uwb_tag``:
 :func:`sensor_link_inertials`); the xacro draws the same members from
 :func:`frame_members`.
 
-Every part is a solid of uniform density with a textbook inertia: a box
+Every part is a solid of uniform density with a textbook inertia (:mod:`.inertia`): a box
 ``m (b^2 + c^2) / 12``..., a cylinder ``m r^2 / 2`` about its axis and ``m (3 r^2 + h^2) / 12``
 across, a sphere ``2 m r^2 / 5`` (tests/model/test_mass.py checks them against trimesh's
 meshes). No mesh library on the model build's path: this module costs microseconds.
@@ -19,49 +19,10 @@ meshes). No mesh library on the model build's path: this module costs microsecon
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-
-
-@dataclass(frozen=True)
-class Inertial:
-    """Mass properties of one link: mass (kg), centre of mass (m, (3,)), inertia about it (kg m^2,
-    (3, 3))."""
-
-    mass_kg: float
-    com_m: np.ndarray
-    inertia_kg_m2: np.ndarray
-
-    def diag(self) -> tuple[float, float, float, float, float, float]:
-        """(ixx, iyy, izz, ixy, ixz, iyz)."""
-        i = self.inertia_kg_m2
-        return (i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
-
-
-def box_inertia(extents, mass_kg: float) -> np.ndarray:
-    """(3, 3) inertia of a solid box of ``extents`` (a, b, c) m about its centre, kg m^2."""
-    a, b, c = (float(e) for e in extents)
-    return np.diag(
-        [
-            mass_kg * (b * b + c * c) / 12.0,
-            mass_kg * (a * a + c * c) / 12.0,
-            mass_kg * (a * a + b * b) / 12.0,
-        ]
-    )
-
-
-def cylinder_inertia(radius_m: float, height_m: float, mass_kg: float) -> np.ndarray:
-    """(3, 3) inertia of a solid cylinder about its centre, axis along z, kg m^2."""
-    across = mass_kg * (3.0 * radius_m**2 + height_m**2) / 12.0
-    return np.diag([across, across, 0.5 * mass_kg * radius_m**2])
-
-
-def sphere_inertia(radius_m: float, mass_kg: float) -> np.ndarray:
-    """(3, 3) inertia of a solid sphere about its centre, kg m^2."""
-    return np.eye(3) * (0.4 * mass_kg * radius_m**2)
+from amr_twin.model.inertia import Inertial, box_inertia, combine, cylinder_inertia, sphere_inertia
 
 
 def _box(extents, center, mass_kg: float | None = None, density: float | None = None) -> Inertial:
@@ -79,17 +40,6 @@ def _tube(extents, center, axis: int, wall_m: float, density: float) -> Inertial
     return Inertial(
         outer.mass_kg - bore.mass_kg, outer.com_m, outer.inertia_kg_m2 - bore.inertia_kg_m2
     )
-
-
-def combine(parts: list[Inertial]) -> Inertial:
-    """Sum of several rigid parts (parallel-axis theorem)."""
-    mass = sum(p.mass_kg for p in parts)
-    com = sum(p.mass_kg * p.com_m for p in parts) / mass
-    inertia = np.zeros((3, 3))
-    for p in parts:
-        d = p.com_m - com
-        inertia += p.inertia_kg_m2 + p.mass_kg * (d @ d * np.eye(3) - np.outer(d, d))
-    return Inertial(mass, com, inertia)
 
 
 def frame_members(

@@ -157,7 +157,7 @@ def with_values(base: TwinConfig, values: dict[str, Any]) -> TwinConfig:
     """``base`` with ``{dotted key: value}`` replaced, validated again."""
     from pydantic import ValidationError
 
-    from amr_twin.model.config import _format_error
+    from amr_twin.model.config_errors import validation_message
 
     data = base.model_dump()
     for key, value in values.items():
@@ -169,4 +169,4 @@ def with_values(base: TwinConfig, values: dict[str, Any]) -> TwinConfig:
     try:
         return TwinConfig.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(_format_error(exc, TwinConfig)) from None
+        raise ConfigError(validation_message(exc, TwinConfig)) from None

@@ -181,7 +181,7 @@ def oscillation_verdict(comparisons: list[dict]) -> dict:
 
 
 def count_checks(runs: list[dict], comparisons: list[dict]) -> tuple[int, int, int, int]:
-    """The scorecard's counts of analysed runs (:func:`.experiment.analyse`'s dicts) and their
+    """The scorecard's counts of analysed runs (:func:`.runs.analyse`'s dicts) and their
     oscillation comparisons (:func:`compare_oscillation`).
 
     Returns

@@ -4,16 +4,8 @@
 comparisons, payload_duty) and returns a :class:`Findings`: one :class:`Finding` per statement of
 §5.1.3/§5.1.4 with its verdict and a one-line why, the bound listing 4.12 puts on each published
 timing (:class:`TimingBound`), and the published checks split into attainable and unattainable
-(:class:`CheckSplit`). Speeds in RPM, times in seconds after the command.
-
-The bound: listing 4.12 publishes one speed per wheel revolution, the mean over that revolution,
-counted from after the command and from after the previous sample. A sample ``y`` therefore comes
-at least ``60 / y`` s after the one before, and the straight line the metrics join the samples
-with (from rest at the command) climbs at most ``y^2 / 60`` RPM/s. With samples no faster than
-the reference ``r`` before a level is crossed, with ``T = 60 / |r|`` (one revolution at the
-reference): delay (50 %) >= 0.5 T, rise (10-90 %) >= 0.8 T, settling >= (1 - band / |r|) T,
-and the peak, itself a sample, >= T. A band whose upper end lies below its bound cannot be met
-by any plant; the improved firmware, which publishes at 10 Hz, has no such bound.
+(:class:`CheckSplit`). Speeds in RPM, times in seconds after the command; the bound in
+:mod:`.timing_bound`.
 """
 
 from __future__ import annotations
@@ -22,19 +14,14 @@ import math
 from dataclasses import asdict, dataclass
 
 from amr_twin.controllers.firmware_params import FaithfulParams
-from amr_twin.experiments.chapter5.criteria import BANDS, settling_band_rpm
+from amr_twin.experiments.chapter5.criteria import BANDS
+from amr_twin.experiments.chapter5.timing_bound import TIMINGS, TimingBound, timing_bounds
 
 REPRODUCED, NOT_REPRODUCED, NOT_JUDGED = "reproduced", "not reproduced", "not judged"
 DEAD_ZONE_RPM = FaithfulParams.threshold_control_rpm  # listing 4.11's THRESHOLD_CONTROL
 RIGHT_MARGIN_RPM = 1.0  # "lower" left overshoot: at least this far below the right's
 MIXED_RUNS_SHARE = 4 / 6  # runs 3-8: the right wheel overshoots more in at least 4 of 6
 OSCILLATION_SHARE = 3 / 4  # 20 kg oscillates more in at least 3 of the 4 comparisons
-TIMINGS = {
-    "delay_s": 0.5,
-    "rise_s": 0.8,
-    "peak_s": 1.0,
-    "settling_s": None,
-}  # bound / T (settling: band)
 VALIDATION_DOC = "docs/explanation/validation.md"
 """Where the chapter 5 findings and the bound are explained, relative to the repository's root."""
 VALIDATION_SECTION = "What the chapter 5 report states first"
@@ -54,21 +41,6 @@ class Finding:
     source: str
     verdict: str
     why: str
-
-
-@dataclass(frozen=True)
-class TimingBound:
-    """Listing 4.12's lower bound on one published timing of one wheel, s (``bound_s``), against the
-    band's upper end (``band_high_s``) and the twin's value (``twin_s``, None: not measured)."""
-
-    run: int
-    wheel: str
-    reference_rpm: float
-    metric: str
-    bound_s: float
-    band_high_s: float
-    twin_s: float | None
-    attainable: bool
 
 
 @dataclass(frozen=True)
@@ -210,37 +182,6 @@ def oscillation_finding(comparisons: list[dict]) -> Finding:
         f"on the true speed (needs {needed} on each; excess total variation)"
     )
     return Finding("oscillation", claim, source, _verdict(pub >= needed and true >= needed), why)
-
-
-def timing_bounds(runs: dict, per_revolution: bool = True) -> list[TimingBound]:
-    """Listing 4.12's bound on each published timing check of each driven wheel (module docstring);
-    with ``per_revolution`` False (a firmware publishing per edge) every bound is 0."""
-    out = []
-    for r in runs.values():
-        for name, w in r["wheels"].items():
-            ref = abs(w["reference_rpm"])
-            rev_s = 60.0 / ref
-            for metric, share in TIMINGS.items():
-                check = w["checks"].get(metric)
-                if check is None:
-                    continue
-                if share is None:
-                    share = max(0.0, 1.0 - settling_band_rpm(ref) / ref)
-                bound = share * rev_s if per_revolution else 0.0
-                high = check["band"][1]
-                out.append(
-                    TimingBound(
-                        r["run"],
-                        name,
-                        w["reference_rpm"],
-                        metric,
-                        bound,
-                        high,
-                        check["twin"],
-                        bound <= high,
-                    )
-                )
-    return out
 
 
 def timing_finding(runs: dict, bounds: list[TimingBound]) -> Finding:

@@ -25,7 +25,7 @@ import numpy as np
 
 from amr_twin.analysis.metrics import step_info
 from amr_twin.experiments.chapter5.criteria import TRANSIENT_WINDOW_S, judge, settling_band_rpm
-from amr_twin.experiments.chapter5.findings import TIMINGS as TIMING_BOUNDS
+from amr_twin.experiments.chapter5.timing_bound import TIMINGS as TIMING_BOUNDS
 
 READINGS = ("command", "first_sample", "mid_revolution")
 TIMINGS = tuple(TIMING_BOUNDS)  # delay, rise, peak, settling: the timings listing 4.12 bounds

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amr_twin.experiments.chapter5 import attainable, experiment as chapter5, spread
+from amr_twin.experiments.chapter5.runs import RUNS
 from amr_twin.experiments.chapter5.metrics import Chapter5Metrics
 from amr_twin.experiments.registry import EXPERIMENTS, Experiment
 from amr_twin.model.config import TwinConfig
@@ -42,10 +43,8 @@ class Chapter5Spec:
             raise ValueError(
                 f"--runs {self.runs!r}: expected run numbers 1..8 separated by commas"
             ) from None
-        if not all(1 <= n <= len(chapter5.RUNS) for n in numbers):
-            raise ValueError(
-                f"--runs {self.runs!r}: run numbers must lie in 1..{len(chapter5.RUNS)}"
-            )
+        if not all(1 <= n <= len(RUNS) for n in numbers):
+            raise ValueError(f"--runs {self.runs!r}: run numbers must lie in 1..{len(RUNS)}")
         if len(set(numbers)) != len(numbers):  # run once, silently
             raise ValueError(f"--runs {self.runs!r}: a run is named twice")
         return numbers
@@ -63,15 +62,13 @@ class Chapter5Spec:
 
     def longest_run_s(self) -> float:
         """The longest run's simulated seconds (each run is one process' memory)."""
-        return self.duration_s or max(r.duration_s for r in chapter5.RUNS)
+        return self.duration_s or max(r.duration_s for r in RUNS)
 
     def pass_s(self) -> float:
         """Simulated seconds of one pass over the runs."""
         numbers = self.numbers()
         return sum(
-            self.duration_s or r.duration_s
-            for r in chapter5.RUNS
-            if numbers is None or r.number in numbers
+            self.duration_s or r.duration_s for r in RUNS if numbers is None or r.number in numbers
         )
 
     def passes(self, samples: int = 0) -> int:
@@ -98,7 +95,7 @@ def run(
     draws=None,
 ) -> Chapter5Metrics:
     """Validate ``spec``, simulate its runs (``jobs`` processes; with ``draws``, an
-    :class:`amr_twin.calibration.uncertainty.Draws`, once more per draw), judge them and write
+    :class:`amr_twin.calibration.draws.Draws`, once more per draw), judge them and write
     ``out_dir``'s report with the recordings, all or nothing; the metrics."""
     numbers = spec.validate()
     reference = "faithful" if spec.firmware.startswith("avr") else None

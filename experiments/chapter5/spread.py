@@ -2,7 +2,7 @@
 
 The eight runs (or those chosen) are simulated again with each configuration drawn by
 :meth:`amr_twin.calibration.uncertainty.ParameterSpace.draw`, and measured as the nominal runs are
-(:func:`.experiment.analyse`). :func:`summarise` gives, per run, wheel and metric (published
+(:func:`.runs.analyse`). :func:`summarise` gives, per run, wheel and metric (published
 samples and true speed), the nominal value, the median and 90 % interval over the draws,
 the thesis' value and band where §5.1.3 gives one, and in how many draws the metric lies in
 its band; each draw's scorecard (``draw_checks``: counted as the nominal run's, published and
@@ -19,9 +19,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from amr_twin.calibration.uncertainty import LEVEL, interval, noise_level, rank_correlations
+from amr_twin.calibration.draw_statistics import (
+    LEVEL,
+    interval,
+    noise_level,
+    rank_correlations,
+)
 from amr_twin.experiments.chapter5 import payload
-from amr_twin.experiments.chapter5.experiment import RUNS, _Job, analyse, simulate
+from amr_twin.experiments.chapter5.runs import RUNS, RunJob, analyse, simulate
 from amr_twin.experiments.chapter5.criteria import (
     BANDS,
     compare_oscillation,
@@ -55,7 +60,7 @@ def run(
     specs = [s for s in RUNS if runs is None or s.number in runs]
     configs = [draws.config(cfg, i) for i in range(len(draws))]
     todo = [
-        _Job(spec, configs[i], firmware, duration_s or spec.duration_s, extra={"sample": i})
+        RunJob(spec, configs[i], firmware, duration_s or spec.duration_s, extra={"sample": i})
         for i in range(len(draws))
         for spec in specs
     ]

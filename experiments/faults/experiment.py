@@ -23,6 +23,7 @@ from amr_twin.assembly.command import Command
 from amr_twin.recording.run import run_mission
 
 SPEED_M_S = 0.5
+REFERENCE_RPM = 38.197  # linear 0.5 m/s: 0.5 / (2 pi 0.125) * 60
 FAULT_T_S = 5.0
 STOP_T_S = 9.0
 DURATION_S = 12.0

@@ -16,15 +16,14 @@ not depend on any estimator and all five see one trajectory. The estimators then
 run offline on the recorded messages, replayed in stamp order: the numbers are
 those an online run would give, and one drive serves all five.
 
-:func:`run` drives and estimates, :func:`plot` and :func:`report` (in
-:mod:`.report`) write the twin's own fig. 6.8, the map and the tables.
+:func:`run` drives and estimates (its typed result in :mod:`.results`); :func:`.plot.plot` and
+:func:`.report.report` write the twin's own fig. 6.8, the map and the tables.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,9 +36,10 @@ from amr_twin.controllers.path_follower import PathFollowerNode
 from amr_twin.controllers.route import Route, distance_to_path_m, load_route, route_length_m
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 from amr_twin.assembly.twin import Twin, TwinOptions
-from amr_twin.analysis.trajectory import TrajectoryErrors, errors
+from amr_twin.analysis.trajectory import errors
 from amr_twin.model.world_geometry import Footprints, scan_plane_boxes
 from amr_twin.experiments.fusion.map import build_map
+from amr_twin.experiments.fusion.results import Estimate, FusionResults
 from amr_twin.experiments.fusion.robot import NOMINAL, RobotErrors, draw
 from amr_twin.analysis import se2
 from amr_twin.experiments.fusion.streams import Streams, odom_poses, relative_motion
@@ -51,49 +51,6 @@ REST_S = 2.0  # standing still before the route: the IMU's rest calibration
 TAIL_S = 1.0  # standing still after the goal
 TIMEOUT_FACTOR = 3.0  # give up after this many times the route's length / max speed
 RPE_DELTA_M = 1.0
-
-
-@dataclass
-class Estimate:
-    """One architecture's trajectory: stamps (N,) s and poses (N, 3) x_m, y_m, yaw_rad in the map
-    frame."""
-
-    name: str
-    t_s: np.ndarray
-    pose: np.ndarray
-    errors: TrajectoryErrors | None = None
-    ate_aligned_m: float = float(
-        "nan"
-    )  # ATE after the least-squares SE(2) alignment onto the truth
-    wall_s: float = 0.0
-    beam_poses: list | None = (
-        None  # LiDAR odometry only: per scan, (n_beams, 3) laser poses in the map
-    )
-
-
-@dataclass
-class FusionResults:
-    """What :func:`run` returns: the drive, the estimates and their errors."""
-
-    route: Route
-    seed: int
-    firmware: str
-    t_true_s: np.ndarray
-    pose_true: np.ndarray
-    streams: Streams
-    estimates: dict[str, Estimate] = field(default_factory=dict)
-    sim_s: float = 0.0
-    drive_wall_s: float = 0.0
-    wall_s: float = 0.0  # drive, estimators and map
-    reached_goal: bool = False
-    cross_track_rms_m: float = 0.0
-    boxes: Footprints | None = None  # the world at the LiDAR's height
-    grid: object = None  # OccupancyGrid from the LiDAR odometry's poses
-    anchors_xy_m: np.ndarray | None = None  # UWB anchors (K, 2), map frame
-    uwb_blocked: list | None = None  # per anchor: exchanges whose line a wall blocked
-    uwb_exchanges: int = 0
-    message_counts: dict | None = None  # messages per stream (kept when the streams are dropped)
-    robot: dict | None = None  # the robot's own errors of this seed (fusion_robot), IMU's included
 
 
 def drive(
@@ -428,12 +385,3 @@ def last_per_stamp(t_s: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.nd
         return t_s, pose
     keep = np.append(t_s[1:] != t_s[:-1], True)
     return t_s[keep], np.asarray(pose, float)[keep]
-
-
-def slim(res: FusionResults) -> FusionResults:
-    """``res`` without the recorded messages and the per-beam laser poses (to send it between
-    processes)."""
-    res.streams = Streams()
-    for est in res.estimates.values():
-        est.beam_poses = None
-    return res

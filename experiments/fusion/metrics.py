@@ -1,6 +1,6 @@
 """One fusion drive's metrics as typed records, and ``metrics.json`` written from them.
 
-:func:`metrics` gathers a :class:`~amr_twin.experiments.fusion.experiment.FusionResults` (the drive,
+:func:`metrics` gathers a :class:`~amr_twin.experiments.fusion.results.FusionResults` (the drive,
 each architecture's trajectory errors), the saved map's check and the TUM file names into a
 :class:`FusionMetrics`; :meth:`FusionMetrics.as_json` is the ``metrics.json`` object. Distances in
 metres, angles in degrees, times in seconds.
@@ -12,7 +12,8 @@ from dataclasses import asdict, dataclass
 from typing import Optional
 
 from amr_twin.analysis.trajectory import TrajectoryErrors
-from amr_twin.experiments.fusion.experiment import ARCHITECTURES, RPE_DELTA_M, FusionResults
+from amr_twin.experiments.fusion.experiment import ARCHITECTURES, RPE_DELTA_M
+from amr_twin.experiments.fusion.results import FusionResults
 from amr_twin.experiments.fusion.map import TOLERANCE_CELLS, MapAgreement
 
 LIDAR_ATE_MAX_M = 0.10  # the fusion acceptance

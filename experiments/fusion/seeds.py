@@ -7,7 +7,7 @@ architectures of each drive, and reports every metric as mean, standard deviatio
 and range over the seeds, next to the per-seed values. Nothing is left out: a seed whose
 drive missed its goal is reported as such and counted in the spread.
 
-:func:`run` returns the per-seed :class:`~.experiment.FusionResults` (without their recorded
+:func:`run` returns the per-seed :class:`~.results.FusionResults` (without their recorded
 messages); :func:`write` writes ``seed<N>/`` (that seed's report, metrics, map and TUM
 trajectories), the summary ``report.md`` and ``metrics.json``, and ``seeds.png``.
 """
@@ -22,6 +22,7 @@ import numpy as np
 
 from amr_twin.model.config import TwinConfig
 from amr_twin.experiments.fusion import experiment as fusion
+from amr_twin.experiments.fusion.results import FusionResults, slim
 from amr_twin.experiments.runner.executor import run_all, save_figure, write_json, write_text
 from amr_twin.experiments.fusion.seeds_report import METRICS, markdown, seed_text
 
@@ -39,10 +40,10 @@ class SeedJob:
     robot_errors: bool = True
 
 
-def run_seed(job: SeedJob) -> fusion.FusionResults:
+def run_seed(job: SeedJob) -> FusionResults:
     """Drive and score one seed; the recorded messages are dropped before the result travels
     back."""
-    return fusion.slim(
+    return slim(
         fusion.run(
             job.cfg,
             job.route_path,
@@ -100,7 +101,7 @@ def run(
     jobs: int = 1,
     client=None,
     progress: bool = True,
-) -> list[fusion.FusionResults]:
+) -> list[FusionResults]:
     """Run every seed (``jobs`` local workers, or the Dask ``client``); results in the order of
     ``seeds``."""
     items = [SeedJob(cfg, str(route_path), int(s), firmware, robot_errors) for s in seeds]
@@ -146,10 +147,10 @@ def summarise(per_seed: list[dict]) -> dict:
     return out
 
 
-def write(results: list[fusion.FusionResults], out: Path) -> dict:
+def write(results: list[FusionResults], out: Path) -> dict:
     """Write each seed's folder, the summary and ``seeds.png`` into ``out``; return the summary's
     data."""
-    from amr_twin.experiments.fusion import report as fusion_report
+    from amr_twin.experiments.fusion import plot as fusion_plot, report as fusion_report
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -157,7 +158,7 @@ def write(results: list[fusion.FusionResults], out: Path) -> dict:
     for k, res in enumerate(results):
         folder = out / f"seed{res.seed}"
         if k == 0:
-            fusion_report.plot(res, folder)
+            fusion_plot.plot(res, folder)
         per_seed.append(fusion_report.report(res, folder, figures=k == 0).as_json())
     first = results[0]
     data = {
@@ -192,7 +193,7 @@ def _plot(data: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from amr_twin.experiments.fusion.report import COLOURS
+    from amr_twin.experiments.fusion.plot import COLOURS
 
     names = list(data["architectures"])
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained", sharey=True)

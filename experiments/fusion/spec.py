@@ -11,7 +11,11 @@ from pathlib import Path
 
 from amr_twin.controllers.route import Route, RouteError, load_route
 from amr_twin.experiments.fusion import experiment as fusion
-from amr_twin.experiments.fusion import report as fusion_report, seeds as fusion_seeds
+from amr_twin.experiments.fusion import (
+    plot as fusion_plot,
+    report as fusion_report,
+    seeds as fusion_seeds,
+)
 from amr_twin.experiments.fusion.metrics import FusionMetrics
 from amr_twin.experiments.registry import EXPERIMENTS, Experiment
 from amr_twin.model.build import BuildError
@@ -137,7 +141,7 @@ def drive(
         robot_errors=spec.robot_errors,
     )
     with all_or_nothing():
-        fusion_report.plot(results, out_dir)
+        fusion_plot.plot(results, out_dir)
         return fusion_report.report(results, out_dir)
 
 

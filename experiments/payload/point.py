@@ -168,7 +168,7 @@ class Point:
     mcap_path: str | None = None  # write the point's ROS 2 topics here
     sample: int | None = None  # index of the drawn configuration ``cfg`` (None: the nominal one)
     sample_id: str = (
-        ""  # hash of the sample's drawn values (amr_twin.calibration.uncertainty.Draws.sample_id)
+        ""  # hash of the sample's drawn values (amr_twin.calibration.draws.Draws.sample_id)
     )
 
     @property

@@ -25,10 +25,11 @@ import math
 import numpy as np
 
 from amr_twin.model.statics import CONTACT_MIN_N
-from amr_twin.calibration.uncertainty import interval, noise_level, rank_correlations
+from amr_twin.calibration.draw_statistics import interval, noise_level, rank_correlations
 from amr_twin.experiments.chapter5.criteria import WHEELS
 from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
-from amr_twin.experiments.payload.sweep_report import PANELS, _value, summarise
+from amr_twin.experiments.payload.rows import PANELS, column_value
+from amr_twin.experiments.payload.sweep_report import summarise
 
 CURRENT_RATIO = (
     "steady_current_ratio"  # the larger motor's steady current over the driver's rating (derived)
@@ -75,8 +76,8 @@ def intervals(results: dict) -> list[dict]:
     for r0 in nominal:
         rows = by_point.get(_point(r0), [])
         for column, label in PANELS:
-            v0 = _value(r0, column)
-            stats = interval([_value(r, column) for r in rows if r.get("valid", True)])
+            v0 = column_value(r0, column)
+            stats = interval([column_value(r, column) for r in rows if r.get("valid", True)])
             out.append(
                 {
                     "mass_kg": r0["mass_kg"],
@@ -174,7 +175,7 @@ def sensitivity(results: dict, found: dict) -> list[dict]:
 
     Returns one row per answer and parameter: ``position, command ('' for the highest safe
     payload), answer, parameter, rho, notable`` (|rho| above
-    :func:`~amr_twin.calibration.uncertainty.noise_level` for all the drawn parameters),
+    :func:`~amr_twin.calibration.draw_statistics.noise_level` for all the drawn parameters),
     sorted by answer, then |rho| descending.
     """
     draws = results["draws"]

@@ -1,5 +1,5 @@
 """Outputs of a payload sweep with ``--samples N``: band plots, CSVs, ``summary.json`` and
-``summary.md``.
+``summary.md`` (its text from :mod:`.spread_summary`).
 
 ``sweep.csv`` (every run, ``sample`` empty for the nominal ones), ``samples.csv`` (each
 draw's parameter values), ``intervals.csv`` (per point and metric: nominal, median, 90 %
@@ -15,35 +15,10 @@ import io
 import math
 from pathlib import Path
 
-from amr_twin.calibration.uncertainty import LEVEL, noise_level
+from amr_twin.calibration.draw_statistics import LEVEL, noise_level
 from amr_twin.experiments.payload import spread
-from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
-from amr_twin.experiments.payload.sweep_report import PANELS, _csv, _lowest_wheel_loads, _value
-
-
-def _kg(v) -> str:
-    if v is None:
-        return "—"
-    if v == math.inf:
-        return "none in sweep"
-    return "none safe" if v == -math.inf else f"{v:g}"
-
-
-def _span(a: dict, top: float) -> str:
-    """``median (low – high)`` of an answer; ``> top`` for draws beyond the sweep."""
-
-    def one(v):
-        return (
-            f"> {top:g}"
-            if v == math.inf
-            else _kg(v)
-            if v == -math.inf
-            else ("—" if v is None else f"{v:.3g}")
-        )
-
-    if a["n"] == 0:
-        return "—"
-    return f"{one(a['median'])} ({one(a['low'])} – {one(a['high'])})"
+from amr_twin.experiments.payload.rows import PANELS, column_value, rows_csv
+from amr_twin.experiments.payload.spread_summary import markdown
 
 
 def _json_ready(obj):
@@ -111,7 +86,10 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
                 )
                 ax.plot(
                     masses,
-                    [_value(next(r for r in mine if r["mass_kg"] == m), column) for m in masses],
+                    [
+                        column_value(next(r for r in mine if r["mass_kg"] == m), column)
+                        for m in masses
+                    ],
                     "o--",
                     color=colour,
                     ms=3,
@@ -138,10 +116,10 @@ def plot(results: dict, out_dir: Path) -> list[Path]:
 def _band(samples: dict, mass, position, command, column) -> tuple[float, float, float]:
     import numpy as np
 
-    from amr_twin.calibration.uncertainty import interval
+    from amr_twin.calibration.draw_statistics import interval
 
     values = [
-        _value(r, column)
+        column_value(r, column)
         for rows in samples.values()
         for r in rows
         if (r["mass_kg"], r["position"], r["command"]) == (mass, position, command)
@@ -215,7 +193,7 @@ def report(results: dict, out_dir: Path) -> dict:
     draws, found, sens = results["draws"], results["answers"], results["sensitivity"]
     nominal, samples = spread.split(results)
     top = max(r["mass_kg"] for r in nominal)
-    write_text(out_dir / "sweep.csv", _csv(results["rows"]))
+    write_text(out_dir / "sweep.csv", rows_csv(results["rows"]))
     write_text(out_dir / "samples.csv", _table_csv(draws.table()))
     write_text(out_dir / "intervals.csv", _table_csv(results["intervals"]))
     write_text(out_dir / "sensitivity.csv", _table_csv(sens))
@@ -241,111 +219,5 @@ def report(results: dict, out_dir: Path) -> dict:
         },
     }
     write_json(out_dir / "summary.json", summary)
-    write_text(out_dir / "summary.md", _markdown(results, base, found, sens, top, len(samples)))
+    write_text(out_dir / "summary.md", markdown(results, base, found, sens, top, len(samples)))
     return summary
-
-
-def _who(sens, position, command, answer) -> str:
-    rows = spread.drivers(sens, position, command, answer)
-    return (
-        ", ".join(
-            ("**`{}` {:+.2f}**" if r["notable"] else "`{}` {:+.2f}").format(
-                r["parameter"], r["rho"]
-            )
-            for r in rows
-        )
-        or "—"
-    )
-
-
-def _markdown(results, base, found, sens, top, n) -> str:
-    draws = results["draws"]
-    lines = [
-        "# Payload sweep with parameter uncertainty",
-        "",
-        f"{len(base)} positions; {len(results['rows'])} runs "
-        f"({results['simulated']} simulated, {results['reused']} reused) in "
-        f"{results['wall_s']:.1f} s wall time; "
-        f"{results['duration_s']} s per run, firmware {results['firmware']}. Each point was run "
-        f"with the "
-        f"nominal parameters and with {n} configurations drawn from the parameters' spreads "
-        f"({draws.sampler}, seed {draws.seed}, {len(draws.names)} parameters varied: "
-        f"`samples.csv`; spreads in "
-        "`models/amr/README.md`).",
-        "",
-        f"Safe: valid position, simulation ran, static tip margin >= {TIP_MARGIN_MIN_M} m, no "
-        f"drive-wheel "
-        f"lift-off, base tilt <= {TILT_LIMIT_DEG} deg, no motor above the driver's continuous "
-        f"current (the draw's "
-        "rating), for every command and every lighter payload. Intervals: "
-        f"median ({LEVEL:.0%} interval) over the draws. What moves it: the {spread.TOP} "
-        f"parameters of largest "
-        f"Spearman rank correlation with the answer over the draws; **bold** beyond chance "
-        f"(|rho| > "
-        f"{noise_level(n, len(draws.names)):.2f}: the largest of {len(draws.names)} unrelated "
-        f"parameters reaches "
-        f"it about one time in 20 with {n} draws; the others are candidates, not findings).",
-        "",
-        "## Highest safe payload per position",
-        "",
-        f"| position | nominal kg | over the draws kg | draws unsafe within {top:g} kg | unsafe "
-        f"first (nominal) | "
-        "what moves it |",
-        "|---|---|---|---|---|---|",
-    ]
-    for position, b in base.items():
-        a = found[position]["highest_safe_kg"]
-        first = (
-            f"{b['first_unsafe_kg']:g} kg: {b['reason']}"
-            if b["first_unsafe_kg"] is not None
-            else "—"
-        )
-        lines.append(
-            f"| {position} | {_kg(a['nominal'])} | {_span(a, top)} | {a['within']} of {a['n']} | "
-            f"{first} | "
-            f"{_who(sens, position, '', 'highest_safe_kg')} |"
-        )
-    lines += [
-        "",
-        "## Lift-off, tilt, tip margin and motor overload per position and command",
-        "",
-        "Payload (kg) from which it happens, interpolated between the swept masses; "
-        f"`> {top:g}`: not within the sweep.",
-        "",
-        f"| position | command | answer | nominal kg | over the draws kg | draws within {top:g} "
-        f"kg | what moves it |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for position, entry in found.items():
-        for command, per in entry["commands"].items():
-            for answer, a in per.items():
-                nominal = _span(
-                    {"n": 1, "median": a["nominal"], "low": None, "high": None}, top
-                ).split(" (")[0]
-                lines.append(
-                    f"| {position} | {command} | {spread.ANSWER_TEXT[answer]} | {nominal} | "
-                    f"{_span(a, top)} | {a['within']} of {a['n']} | "
-                    f"{_who(sens, position, command, answer)} |"
-                )
-    if draws.clipped:
-        lines += [
-            "",
-            "Draws clipped to a bound (schema or calibration): "
-            + ", ".join(f"`{k}` {v} of {len(draws)}" for k, v in draws.clipped.items())
-            + ".",
-        ]
-    lines += [
-        "",
-        *_lowest_wheel_loads(spread.split(results)[0]),
-        "",
-        "`intervals.csv`: every metric per point (nominal, median, interval); `sensitivity.csv`: "
-        "every "
-        "parameter's rank correlation with every answer.",
-        "",
-    ]
-    commands = dict.fromkeys(r["command"] for r in spread.split(results)[0])
-    lines += [
-        f"![{name}]({name})" for name in (f"sweep_{c.replace(':', '_')}.png" for c in commands)
-    ]
-    lines += ["![sensitivity](sensitivity.png)"]
-    return "\n".join(lines) + "\n"

@@ -54,7 +54,7 @@ def run(
     recording per point simulated now (points reused from ``runs/`` are not
     re-simulated for a missing recording; see the module notes).
 
-    ``draws``: :class:`amr_twin.calibration.uncertainty.Draws` of ``cfg``'s parameters; each point
+    ``draws``: :class:`amr_twin.calibration.draws.Draws` of ``cfg``'s parameters; each point
     is also run with each drawn configuration (rows with ``sample`` and ``sample_id``, after
     the nominal rows).
 
@@ -162,7 +162,7 @@ def improved_beside(
 ) -> dict | None:
     """The positions of a faithful-firmware sweep whose limit is a runaway (the firmware's: the
     wheels leave their references and the motor current follows;
-    :func:`.sweep_report.limit_causes`), run again with the improved firmware on the same
+    :func:`.limits.limit_causes`), run again with the improved firmware on the same
     masses and commands, into ``out_dir/improved`` (resumed like any sweep); None when there is
     none, or the sweep ran another firmware."""
     from amr_twin.experiments.payload.sweep_report import summarise

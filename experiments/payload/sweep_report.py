@@ -3,121 +3,19 @@
 
 from __future__ import annotations
 
-import csv
-import io
 from pathlib import Path
 
 import numpy as np
 
-from amr_twin.experiments.chapter5.criteria import WHEELS
-from amr_twin.experiments.payload.simulation import (
-    RUNAWAY_RPM,
-    TILT_LIMIT_DEG,
-    TIP_MARGIN_MIN_M,
-    TRACK_TOLERANCE_RPM,
+from amr_twin.experiments.payload.limits import (
+    CAUSES,
+    column_limit,
+    limit_causes,
+    off_reference,
+    unsafe_reason,
 )
-
-PANELS = (  # (column or per-wheel suffix, label); per-wheel ones plot the worse driven wheel
-    ("~delay_s", "delay (s)"),
-    ("~settling_s", "settling (s)"),
-    ("~overshoot_rpm", "overshoot (RPM)"),
-    ("~steady_error_rpm", "steady error (RPM)"),
-    ("~oscillation_rpm", "oscillation (RPM)"),
-    ("~steady_duty", "steady duty (-)"),
-    ("dyn_min_wheel_n", "min wheel load (N)"),
-    ("dyn_min_caster_n", "min caster load (N)"),
-    ("max_tilt_deg", "max tilt (deg)"),
-    ("static_tip_margin_m", "static tip margin (m)"),
-    ("~max_slip_m_s", "max slip (m/s)"),
-    ("~steady_slip_ratio", "steady slip ratio (-)"),
-    ("~steady_current_a", "motor current (A)"),
-    ("battery_steady_a", "battery current (A)"),
-    ("energy_j_per_m", "energy per metre (J/m)"),
-)
-LOWEST_ROWS = 10  # rows of the lowest drive-wheel loads in summary.md
-
-
-def _value(row: dict, column: str) -> float:
-    if not column.startswith("~"):
-        v = row.get(column)
-        return np.nan if v is None or isinstance(v, str) else float(v)
-    values = [row.get(f"{w}_{column[1:]}") for w in WHEELS if row.get(f"{w}_reference_rpm")]
-    values = [abs(v) if "error" in column else v for v in values if v is not None]
-    return float(max(values)) if values else np.nan
-
-
-CAUSES = {
-    "invalid": "invalid payload",
-    "refused": "command refused",
-    "failed": "simulation failed",
-    "runaway": "runaway (the wheels leave their references; the motor current follows)",
-    "overload": "motor current rating (wheels tracking)",
-    "tipping": "tipping (static tip margin)",
-    "lift-off": "drive-wheel lift-off",
-    "tilt": "base tilt",
-}
-"""What limits a payload, by the criteria a point fails (``limit_causes``). A motor over its
-rating while a wheel does not hold its reference (its true speed over the run's last quarter
-more than the PI's 4 RPM dead zone off) is a **runaway**: a limit of the speed control (a robot
-heavy at the rear oversteers in the turn and, its wheels not held, pivots), not the current the
-payload demands in a tracked turn."""
-
-
-def limit_causes(row: dict) -> list[tuple[str, str]]:
-    """``[(cause, detail)]``: why a row is not safe (empty when it is); causes of :data:`CAUSES`."""
-    if row.get("safe"):
-        return []
-    if not row.get("valid", True):
-        return [("invalid", row["error"])]
-    if row.get("error"):
-        return [
-            ("refused" if row["error"].startswith("command refused") else "failed", row["error"])
-        ]
-    out = []
-    if row.get("motor_overload"):
-        worst = max(row.get(f"{w}_steady_current_a") or 0.0 for w in WHEELS)
-        rating = row.get("current_limit_a")
-        current = f"{worst:.1f} A steady" + (f" > {rating:.1f} A" if rating is not None else "")
-        off = _farthest(row)
-        if off is None:
-            out.append(("overload", current))
-        else:
-            out.append(("runaway", f"{off}, {current}"))
-    if row.get("static_tip_margin_m", -1) < TIP_MARGIN_MIN_M:
-        out.append(("tipping", f"{row.get('static_tip_margin_m')} m < {TIP_MARGIN_MIN_M} m"))
-    if row.get("wheel_lift_off", True):
-        out.append(("lift-off", f"min load {row.get('dyn_min_wheel_n', float('nan')):.1f} N"))
-    if row.get("max_tilt_deg", 90) > TILT_LIMIT_DEG:
-        out.append(
-            ("tilt", f"{row.get('max_tilt_deg', float('nan')):.2f} deg > {TILT_LIMIT_DEG} deg")
-        )
-    return out
-
-
-def _farthest(row: dict) -> str | None:
-    """The driven wheel whose true speed (the run's last quarter) left its reference by more than
-    :data:`~amr_twin.experiments.payload.simulation.RUNAWAY_RPM`, in words; None if none did."""
-    off = max(
-        (
-            (abs(e), w)
-            for w in WHEELS
-            if row.get(f"{w}_reference_rpm")
-            and (e := row.get(f"{w}_true_steady_error_rpm")) is not None
-        ),
-        default=(0.0, ""),
-    )
-    if off[0] <= RUNAWAY_RPM:
-        return None
-    ref = abs(row[f"{off[1]}_reference_rpm"])
-    speed = (
-        ref + row[f"{off[1]}_true_steady_error_rpm"]
-    )  # along the reference: < 0 turning backward
-    return f"{off[1]} wheel at {speed:.0f} RPM against {ref:.1f}"
-
-
-def unsafe_reason(row: dict) -> str:
-    """Why a row is not safe ('' when it is), in words."""
-    return "; ".join(f"{CAUSES[c]}: {d}" for c, d in limit_causes(row))
+from amr_twin.experiments.payload.rows import PANELS, column_value, lowest_wheel_loads, rows_csv
+from amr_twin.experiments.payload.simulation import TILT_LIMIT_DEG, TIP_MARGIN_MIN_M
 
 
 def summarise(results: dict) -> dict:
@@ -138,7 +36,7 @@ def summarise(results: dict) -> dict:
                 break
             highest = m
         tracking = [r["mass_kg"] for r in mine if r.get("tracks")]
-        left = [(r["mass_kg"], r["command"], _farthest(r)) for r in mine if _farthest(r)]
+        left = [(r["mass_kg"], r["command"], off_reference(r)) for r in mine if off_reference(r)]
         leaves = min(left, key=lambda m: m[0]) if left else None
         entry = {
             "highest_safe_kg": highest,
@@ -203,24 +101,6 @@ def _plotted(rows: list[dict]) -> tuple[list[str], dict[str, str]]:
     return shown, why
 
 
-def _limit(column: str, rows: list[dict]) -> tuple[float, str] | None:
-    """The line a panel's values are judged against (a point's safety or tracking), if any."""
-    from amr_twin.model.statics import CONTACT_MIN_N
-
-    rating = next(
-        (r["current_limit_a"] for r in rows if r.get("current_limit_a") is not None), None
-    )
-    limits = {
-        "~steady_current_a": (rating, "driver's continuous rating"),
-        "max_tilt_deg": (TILT_LIMIT_DEG, "tilt"),
-        "static_tip_margin_m": (TIP_MARGIN_MIN_M, "tip margin"),
-        "dyn_min_wheel_n": (CONTACT_MIN_N, "lift-off"),
-        "~steady_error_rpm": (TRACK_TOLERANCE_RPM, "tracking (the PI's dead zone)"),
-    }
-    value, name = limits.get(column, (None, ""))
-    return None if value is None else (float(value), name)
-
-
 def plot(results: dict, out_dir: Path, improved: dict | None = None) -> list[Path]:
     """One PNG per command with a simulated point: each metric against payload mass, one line per
     position (dashed: the improved firmware's points of
@@ -249,7 +129,7 @@ def plot(results: dict, out_dir: Path, improved: dict | None = None) -> list[Pat
                         and r["position"] == position
                         and r.get("valid", True)
                         and not r.get("error")
-                        and np.isfinite(v := _value(r, column))
+                        and np.isfinite(v := column_value(r, column))
                     )
                     if pts:
                         name = (
@@ -258,7 +138,7 @@ def plot(results: dict, out_dir: Path, improved: dict | None = None) -> list[Pat
                             else f"{position}, {firmware}"
                         )
                         ax.plot(*zip(*pts), style, ms=3, lw=1, label=name)
-            limit = _limit(column, rows)
+            limit = column_limit(column, rows)
             if ax.lines and limit is not None:
                 ax.axhline(limit[0], color="k", ls=":", lw=1, label=f"limit: {limit[1]}")
                 ax.text(
@@ -298,41 +178,6 @@ def plot(results: dict, out_dir: Path, improved: dict | None = None) -> list[Pat
     return paths
 
 
-def _csv(rows: list[dict]) -> str:
-    columns = list(dict.fromkeys(k for r in rows for k in r))
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return buffer.getvalue()
-
-
-def _lowest_wheel_loads(rows: list[dict]) -> list[str]:
-    """The points whose drive wheel came closest to lifting, with the mechanism and the
-    quasi-static load of the accelerations at that instant (a hand check of the dynamics)."""
-    done = sorted(
-        (r for r in rows if r.get("dyn_min_wheel_n") is not None),
-        key=lambda r: r["dyn_min_wheel_n"],
-    )
-    if not done:
-        return []
-    lines = [
-        "## Lowest drive-wheel loads",
-        "",
-        "| mass kg | position | command | wheel | min load N | at s | quasi-static N | mechanism |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for r in done[:LOWEST_ROWS]:
-        q = r.get("dyn_min_wheel_quasi_static_n")
-        lines.append(
-            f"| {r['mass_kg']:g} | {r['position']} | {r['command']} | "
-            f"{r.get('dyn_min_wheel', '—')} | "
-            f"{r['dyn_min_wheel_n']:.1f} | {r.get('dyn_min_wheel_t_s', float('nan')):.2f} | "
-            f"{'—' if q is None else f'{q:.1f}'} | {r.get('dyn_min_wheel_mechanism', '—')} |"
-        )
-    return lines
-
-
 def report(results: dict, out_dir: Path, improved: dict | None = None) -> dict:
     """Write ``sweep.csv``, ``summary.json`` and ``summary.md``; return the summary (with, per
     position run again with the improved firmware, its own entry under ``"improved"``)."""
@@ -343,7 +188,7 @@ def report(results: dict, out_dir: Path, improved: dict | None = None) -> dict:
     if improved:
         for position, entry in summarise(improved).items():
             summary[position]["improved"] = entry
-    write_text(out_dir / "sweep.csv", _csv(results["rows"]))
+    write_text(out_dir / "sweep.csv", rows_csv(results["rows"]))
     write_json(
         out_dir / "summary.json",
         {
@@ -406,7 +251,7 @@ def report(results: dict, out_dir: Path, improved: dict | None = None) -> dict:
             "|---|---|---|",
         ]
         lines += [f"| {p} | {summary[p]['answer']} | {s['answer']} |" for p, s in beside]
-    lines += ["", *_lowest_wheel_loads(results["rows"])]
+    lines += ["", *lowest_wheel_loads(results["rows"])]
     lines += ["", *[f"- no plot for {c}: {text}" for c, text in why.items()]]
     lines += [
         "",

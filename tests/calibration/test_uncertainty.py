@@ -13,14 +13,9 @@ import yaml
 from amr_twin.model.config import ConfigError
 from amr_twin.model.paths import MODEL_DIR
 from amr_twin.model.statics import solve
-from amr_twin.calibration.uncertainty import (
-    ParameterSpace,
-    interval,
-    noise_level,
-    rank_correlations,
-    unit_samples,
-    with_values,
-)
+from amr_twin.calibration.draw_statistics import interval, noise_level, rank_correlations
+from amr_twin.calibration.uncertainty import ParameterSpace, unit_samples
+from amr_twin.model.parameter_spreads import with_values
 
 
 @pytest.fixture(scope="module")

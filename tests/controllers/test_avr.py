@@ -177,7 +177,7 @@ def test_a_corrupted_command_frame_is_refused_by_the_boards_checksum(cfg):
 
 @needs_avr
 def test_the_sketch_announces_its_topics_as_rosserial_does():
-    from amr_twin.controllers.avr import topic_table
+    from amr_twin.controllers.avr_sketch import topic_table
 
     pubs, subs = topic_table(str(build_sketch()))
     assert [(p.topic_id, p.topic_name, p.message_type, p.md5sum) for p in pubs] == [

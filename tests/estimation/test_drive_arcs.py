@@ -4,9 +4,10 @@ import random
 
 import pytest
 
-from amr_twin.estimation.dead_reckoning import SpeedProfile, integrate
+from amr_twin.estimation.dead_reckoning import integrate
 from amr_twin.estimation.drive_arcs import DriveGeometry, arc_kernel
 from amr_twin.estimation.published_pose import PublishedPose
+from amr_twin.estimation.speed_profile import SpeedProfile
 
 GEOMETRY = DriveGeometry(0.1251, 0.1249, 0.4803)
 

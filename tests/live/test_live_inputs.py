@@ -128,8 +128,8 @@ def served():
 
 def _settle(client, sink, n, timeout_s=10.0):
     """Pump until the server has judged ``n`` client messages in all."""
-    client.pump(timeout_s, until=lambda: sink.accepted + sink.dropped >= n)
-    assert sink.accepted + sink.dropped >= n
+    client.pump(timeout_s, until=lambda: sink.clients.accepted + sink.dropped >= n)
+    assert sink.clients.accepted + sink.dropped >= n
 
 
 def test_malformed_and_unknown_messages_dropped_the_twin_runs_on(served, typestore, caplog):
@@ -137,7 +137,7 @@ def test_malformed_and_unknown_messages_dropped_the_twin_runs_on(served, typesto
     sink = session.sink
     with (
         FoxgloveClient(sink.url) as client,
-        caplog.at_level(logging.WARNING, logger="amr_twin.live.foxglove"),
+        caplog.at_level(logging.WARNING, logger="amr_twin.live.foxglove_clients"),
     ):
         client.wait_for_channels(["/odom"])
         good = client.advertise("/cmd_vel", "geometry_msgs/msg/Twist")
@@ -168,7 +168,7 @@ def test_malformed_and_unknown_messages_dropped_the_twin_runs_on(served, typesto
         client.pump(0.2, until=lambda: client.statuses)
         assert "999" in client.statuses[-1]["message"]
         twin.advance(0.5)
-        assert sink.dropped == len(bad) and sink.accepted == 0 and commands == []
+        assert sink.dropped == len(bad) and sink.clients.accepted == 0 and commands == []
         assert len(
             [r for r in caplog.records if r.getMessage().startswith("live: dropped")]
         ) == len(bad)
@@ -198,7 +198,7 @@ def test_malformed_and_unknown_messages_dropped_the_twin_runs_on(served, typesto
             c for _t, c in commands[2:]
         ]  # (with the watchdog's stop around it)
         assert refused is None and "expected 20" in client.failures[-1]["message"]
-    assert session.sink.accepted == 3 and session.sink.dropped == len(bad) + 1
+    assert session.sink.clients.accepted == 3 and session.sink.dropped == len(bad) + 1
 
 
 class _running:

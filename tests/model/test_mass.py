@@ -4,7 +4,7 @@ mujoco)."""
 import numpy as np
 import pytest
 
-from amr_twin.model import mass
+from amr_twin.model import inertia, mass
 from amr_twin.model.config import load_config
 
 
@@ -54,9 +54,9 @@ def test_sensor_links_carry_their_own_mass():
 
 
 def test_combine_parallel_axis():
-    a = mass.Inertial(1.0, np.array([1.0, 0, 0]), np.zeros((3, 3)))
-    b = mass.Inertial(1.0, np.array([-1.0, 0, 0]), np.zeros((3, 3)))
-    both = mass.combine([a, b])
+    a = inertia.Inertial(1.0, np.array([1.0, 0, 0]), np.zeros((3, 3)))
+    b = inertia.Inertial(1.0, np.array([-1.0, 0, 0]), np.zeros((3, 3)))
+    both = inertia.combine([a, b])
     assert both.com_m == pytest.approx([0, 0, 0])
     assert both.inertia_kg_m2[1, 1] == pytest.approx(2.0)
     assert both.inertia_kg_m2[0, 0] == pytest.approx(0.0)
@@ -83,12 +83,12 @@ def test_closed_forms_match_trimesh_meshes():
     cylinder = trimesh.creation.cylinder(radius=0.125, height=0.06, sections=4096)
     cylinder.density = 2.1 / cylinder.volume
     np.testing.assert_allclose(
-        mass.cylinder_inertia(0.125, 0.06, 2.1), cylinder.moment_inertia, rtol=1e-5, atol=1e-12
+        inertia.cylinder_inertia(0.125, 0.06, 2.1), cylinder.moment_inertia, rtol=1e-5, atol=1e-12
     )
     sphere = trimesh.creation.icosphere(subdivisions=5, radius=0.025)
     sphere.density = 0.15 / sphere.volume
     np.testing.assert_allclose(
-        mass.sphere_inertia(0.025, 0.15), sphere.moment_inertia, rtol=1e-3, atol=1e-12
+        inertia.sphere_inertia(0.025, 0.15), sphere.moment_inertia, rtol=1e-3, atol=1e-12
     )
 
 
@@ -100,7 +100,7 @@ def test_chassis_inertia_against_trimesh_parts():
     def mesh_box(extents, center, mass_kg=None, density=None):
         mesh = trimesh.creation.box(extents=extents)
         mesh.density = density if density is not None else mass_kg / mesh.volume
-        return mass.Inertial(
+        return inertia.Inertial(
             float(mesh.mass), np.asarray(center, float), np.asarray(mesh.moment_inertia)
         )
 

@@ -21,7 +21,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from amr_twin.experiments.chapter5 import experiment as chapter5
+from amr_twin.experiments.chapter5 import runs as chapter5
 from amr_twin.model.config import load_config
 
 STIFF = [
@@ -37,7 +37,7 @@ def _true_rpm(timestep_s: float):
     cfg = load_config(sets=STIFF + [f"sim.timestep_s={timestep_s}"])
     spec = chapter5.RUNS[7]
     assert spec.payload_kg == 20.0
-    raw = chapter5.simulate(chapter5._Job(spec, cfg, "faithful", 6.0))
+    raw = chapter5.simulate(chapter5.RunJob(spec, cfg, "faithful", 6.0))
     return np.asarray(raw["t_s"]), np.asarray(raw["true_rpm"])
 
 
@@ -66,7 +66,7 @@ LONGITUDINAL = [
 def _run3_50kg(timestep_s: float):
     cfg = load_config(sets=LONGITUDINAL + [f"sim.timestep_s={timestep_s}"])
     spec = dataclasses.replace(chapter5.RUNS[2], payload_kg=50.0)
-    return chapter5.simulate(chapter5._Job(spec, cfg, "faithful", spec.duration_s))
+    return chapter5.simulate(chapter5.RunJob(spec, cfg, "faithful", spec.duration_s))
 
 
 def test_guard_makes_the_unstable_corner_run_right_at_1ms():

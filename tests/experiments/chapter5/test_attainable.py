@@ -180,9 +180,9 @@ def test_the_committed_study_is_of_the_shipped_plant_and_what_a_draw_gives_now(c
 
 
 def test_the_report_quotes_the_study_or_says_it_does_not_apply():
-    from amr_twin.experiments.chapter5.report import _attainable
+    from amr_twin.experiments.chapter5.findings_section import attainable
 
-    assert "drawn around another plant" in _attainable({})[0]
+    assert "drawn around another plant" in attainable({})[0]
     study = {
         "seeds": {
             "1": {
@@ -198,7 +198,7 @@ def test_the_report_quotes_the_study_or_says_it_does_not_apply():
             }
         }
     }
-    text = "\n".join(_attainable({"attainable": study}))
+    text = "\n".join(attainable({"attainable": study}))
     assert (
         "| 20 kg: the PI raises the duty on all 4 wheels of runs 7, 8 | 0 | 3 of 4 wheels at most |"
         in text

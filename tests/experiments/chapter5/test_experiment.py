@@ -9,6 +9,7 @@ from typer.testing import CliRunner
 from amr_twin.cli.main import app
 from amr_twin.model.config import load_config
 from amr_twin.experiments.chapter5 import experiment as chapter5
+from amr_twin.experiments.chapter5.runs import RUNS
 from amr_twin.recording.run import run_command
 
 CHECKED = {"delay_s", "rise_s", "peak_s", "settling_s", "overshoot", "steady_error"}
@@ -65,8 +66,8 @@ def test_metrics_json_structure(short_run):
 
 def test_rotation_commands_give_the_thesis_wheel_speeds():
     cfg = load_config()
-    right = run_command(cfg, chapter5.RUNS[4].command, 0.05).wheel_command
-    left = run_command(cfg, chapter5.RUNS[5].command, 0.05).wheel_command
+    right = run_command(cfg, RUNS[4].command, 0.05).wheel_command
+    left = run_command(cfg, RUNS[5].command, 0.05).wheel_command
     assert right == pytest.approx([1, 99.20, 1, 60.80], abs=0.01)
     assert left == pytest.approx([1, 60.80, 1, 99.20], abs=0.01)
 

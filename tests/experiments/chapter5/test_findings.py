@@ -12,6 +12,7 @@ import pytest
 from amr_twin.controllers.firmware_params import FaithfulParams
 from amr_twin.experiments.chapter5 import criteria
 from amr_twin.experiments.chapter5 import findings as found
+from amr_twin.experiments.chapter5.timing_bound import TIMINGS, timing_bounds
 
 REFERENCES = {
     1: (76.39, 0.0),
@@ -167,19 +168,17 @@ def test_the_oscillation_finding_needs_three_of_four_on_both_signals(pub, true, 
 
 def test_the_bound_is_one_revolution_at_the_reference_and_marks_the_small_steps_unattainable():
     bounds = {(b.run, b.wheel, b.metric): b for b in found.findings(_data()).bounds}
-    run3 = {m: bounds[(3, "left", m)] for m in found.TIMINGS}
+    run3 = {m: bounds[(3, "left", m)] for m in TIMINGS}
     assert run3["delay_s"].bound_s == pytest.approx(30 / 53.48)
     assert run3["rise_s"].bound_s == pytest.approx(48 / 53.48)
     assert run3["peak_s"].bound_s == pytest.approx(60 / 53.48)
     assert run3["settling_s"].bound_s == pytest.approx((1 - 4 / 53.48) * 60 / 53.48)
-    assert [run3[m].attainable for m in found.TIMINGS] == [False, False, False, True]
-    assert all(
-        bounds[(4, "left", m)].attainable for m in found.TIMINGS
-    )  # 91.67 RPM: 0.33, 0.52, 0.65 s
+    assert [run3[m].attainable for m in TIMINGS] == [False, False, False, True]
+    assert all(bounds[(4, "left", m)].attainable for m in TIMINGS)  # 91.67 RPM: 0.33, 0.52, 0.65 s
     # the peak band of a small step ends at 0.8 s: one revolution at exactly 75 RPM reaches it, 74.9
     # does not
-    edge = found.timing_bounds({1: {"run": 1, "wheels": {"left": _wheel("left", 75.0, 0, 0, 0)}}})
-    below = found.timing_bounds({1: {"run": 1, "wheels": {"left": _wheel("left", 74.9, 0, 0, 0)}}})
+    edge = timing_bounds({1: {"run": 1, "wheels": {"left": _wheel("left", 75.0, 0, 0, 0)}}})
+    below = timing_bounds({1: {"run": 1, "wheels": {"left": _wheel("left", 74.9, 0, 0, 0)}}})
     assert [b.attainable for b in edge if b.metric == "peak_s"] == [True]
     assert [b.attainable for b in below if b.metric == "peak_s"] == [False]
 

@@ -7,7 +7,11 @@ import numpy as np
 import pytest
 
 from amr_twin.model.config import load_config
-from amr_twin.experiments.fusion import experiment as fusion, report as fusion_report
+from amr_twin.experiments.fusion import (
+    experiment as fusion,
+    plot as fusion_plot,
+    report as fusion_report,
+)
 
 SHORT_ROUTE = """\
 name: short
@@ -23,7 +27,7 @@ max_speed_m_s: 1.0
 def default_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("fusion")
     results = fusion.run(load_config(), progress=False)
-    fusion_report.plot(results, out)
+    fusion_plot.plot(results, out)
     data = fusion_report.report(results, out).as_json()
     return results, data, out
 

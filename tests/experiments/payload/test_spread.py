@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from amr_twin.experiments.payload import spread
-from amr_twin.calibration.uncertainty import Draws
+from amr_twin.calibration.draws import Draws
 
 
 def _row(mass, load, sample=None, tilt=0.5, position="rear", command="angular:-60:-1"):

@@ -86,7 +86,7 @@ def test_cli_dask_not_available(tmp_path):
 
 
 def test_per_wheel_panels_read_the_wheel_columns():
-    from amr_twin.experiments.payload.sweep_report import _value
+    from amr_twin.experiments.payload.rows import column_value
 
     row = {
         "left_reference_rpm": 53.5,
@@ -96,8 +96,8 @@ def test_per_wheel_panels_read_the_wheel_columns():
         "left_steady_error_rpm": -3.0,
         "right_steady_error_rpm": 1.0,
     }
-    assert _value(row, "~delay_s") == 1.2
-    assert _value(row, "~steady_error_rpm") == 3.0
+    assert column_value(row, "~delay_s") == 1.2
+    assert column_value(row, "~steady_error_rpm") == 3.0
 
 
 def _without_wall(text: str) -> str:
@@ -166,9 +166,9 @@ def test_samples_run_resume_and_report(cfg, tmp_path):
     assert len({round(v, 6) for v in loads}) == 3  # nominal and both draws differ
     again = ps.run(cfg, tmp_path, draws=draws, **args)
     assert (again["simulated"], again["reused"]) == (0, 6)
-    from amr_twin.experiments.payload.sweep_report import _csv
+    from amr_twin.experiments.payload.rows import rows_csv
 
-    assert _csv(again["rows"]) == _csv(
+    assert rows_csv(again["rows"]) == rows_csv(
         results["rows"]
     )  # read back from the files: the same CSV as fresh
     other = ps.run(cfg, tmp_path, draws=space.draw(2, seed=1), **args)

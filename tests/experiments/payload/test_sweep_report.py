@@ -8,7 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from amr_twin.cli.main import app
-from amr_twin.experiments.payload import sweep_report as report
+from amr_twin.experiments.payload import limits, sweep_report as report
 
 RATING_A = 11.1
 
@@ -95,8 +95,8 @@ def test_an_overload_while_a_wheel_leaves_its_reference_is_a_runaway():
         tracks=False,
         right_true_steady_error_rpm=-64.0,
     )
-    assert [c for c, _ in report.limit_causes(runaway)] == ["runaway"]
-    assert "right wheel at -3 RPM against 60.8, 12.3 A steady > 11.1 A" in report.unsafe_reason(
+    assert [c for c, _ in limits.limit_causes(runaway)] == ["runaway"]
+    assert "right wheel at -3 RPM against 60.8, 12.3 A steady > 11.1 A" in limits.unsafe_reason(
         runaway
     )
     tracked = _row(
@@ -106,9 +106,9 @@ def test_an_overload_while_a_wheel_leaves_its_reference_is_a_runaway():
         right_steady_current_a=12.3,
         right_true_steady_error_rpm=-8.0,
     )
-    assert [c for c, _ in report.limit_causes(tracked)] == ["overload"]
+    assert [c for c, _ in limits.limit_causes(tracked)] == ["overload"]
     tipping = _row(30.0, False, static_tip_margin_m=0.01, max_tilt_deg=4.0)
-    assert [c for c, _ in report.limit_causes(tipping)] == ["tipping", "tilt"]
+    assert [c for c, _ in limits.limit_causes(tipping)] == ["tipping", "tilt"]
 
 
 @pytest.fixture(scope="module")

@@ -107,12 +107,14 @@ def _navigating_world(
     return world
 
 
-def fleet_figures(cfg: TwinConfig, counts=(1, 4, 8), rounds: int = 3) -> dict:
+def fleet_figures(
+    cfg: TwinConfig, counts=(1, 4, 8), rounds: int = 3, sim_s: float = 5.0
+) -> dict:
     """``amr-twin bench --fleet``: :func:`fleet_navigation` (EKF + MPPI, shared poses) of
     ``counts`` as ``fleet_ms_per_robot_s`` (CPU ms per robot per simulated s by fleet size), each
     size's ratio to the first (``fleet_ratio_to_1``) and its real-time factor in CPU time
     (``fleet_rtf``: simulated s per CPU s of the whole world)."""
-    cost = fleet_navigation(cfg, counts, rounds=rounds)
+    cost = fleet_navigation(cfg, counts, sim_s=sim_s, rounds=rounds)
     return {
         "fleet_ms_per_robot_s": {n: round(c * 1e3, 1) for n, c in cost.items()},
         "fleet_ratio_to_1": {n: round(c / cost[counts[0]], 2) for n, c in cost.items()},

@@ -107,9 +107,7 @@ def _navigating_world(
     return world
 
 
-def fleet_figures(
-    cfg: TwinConfig, counts=(1, 4, 8), rounds: int = 3, sim_s: float = 5.0
-) -> dict:
+def fleet_figures(cfg: TwinConfig, counts=(1, 4, 8), rounds: int = 3, sim_s: float = 5.0) -> dict:
     """``amr-twin bench --fleet``: :func:`fleet_navigation` (EKF + MPPI, shared poses) of
     ``counts`` as ``fleet_ms_per_robot_s`` (CPU ms per robot per simulated s by fleet size), each
     size's ratio to the first (``fleet_ratio_to_1``) and its real-time factor in CPU time

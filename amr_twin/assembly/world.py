@@ -13,6 +13,7 @@ Reasons and measurements: docs/explanation/architecture.md#amr_twinassemblyworld
 from __future__ import annotations
 
 import math
+from operator import attrgetter
 from typing import Sequence
 
 from amr_twin.assembly.robot import Robot, RobotSpec
@@ -23,6 +24,7 @@ from amr_twin.sim.grid_loop import GridLoop
 from amr_twin.sim.hooks import Hooks
 
 US = 1_000_000
+_VERSION = attrgetter("version")
 
 
 class World(Hooks):
@@ -77,6 +79,8 @@ class World(Hooks):
         """The lone robot's collision monitor; None with several (each robot's
         ``Robot.collisions``, all of them in :meth:`collision_records`)."""
         self._buses = [self.bus] if lone else [r.bus for r in self.robots]
+        self._lookahead_memo: dict[tuple[str, ...], int] = {}
+        self._lookahead_stamp = -1
         width = max(r.physics.loop_columns.stop for r in self.robots)
         self._grid = GridLoop(physics, self.samplers, self.grid_every, self.dt_us, width=width)
         self.halted = False
@@ -159,7 +163,15 @@ class World(Hooks):
     def _lookahead_us(self, topics: tuple[str, ...]) -> int:
         """The least :meth:`~amr_twin.ros.bus.Bus.lookahead_us` of ``topics`` over the robots'
         buses (a publishing event may be any robot's)."""
-        return min(bus.lookahead_us(topics) for bus in self._buses)
+        stamp = sum(map(_VERSION, self._buses))
+        if stamp != self._lookahead_stamp:  # a subscription came or went
+            self._lookahead_memo.clear()
+            self._lookahead_stamp = stamp
+        best = self._lookahead_memo.get(topics)
+        if best is None:
+            best = min(bus.lookahead_us(topics) for bus in self._buses)
+            self._lookahead_memo[topics] = best
+        return best
 
     def collision_records(self) -> list[dict]:
         """Every robot's collisions (:meth:`~amr_twin.sim.collisions.Collision.as_dict`, tagged

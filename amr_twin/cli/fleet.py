@@ -135,6 +135,12 @@ def fleet(
     charge_below: float = typer.Option(
         20.0, "--charge-below", help="With --manager: send to charge below this batteryCharge, %."
     ),
+    shared_poses: bool = typer.Option(
+        True,
+        "--shared-poses/--no-shared-poses",
+        help="Robots share their pose estimates: each keeps the others as obstacles, not as "
+        "people to give way to (docs/how-to/fleet.md).",
+    ),
     config: Optional[Path] = ConfigOpt,
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
@@ -179,6 +185,7 @@ def fleet(
                 interface=interface,
                 rate=rate,
                 seed=seed,
+                shared_poses=shared_poses,
             ),
         )
         for serial in session.serials:

@@ -142,6 +142,12 @@ def bench(
     jobs: Optional[int] = typer.Option(
         None, "--jobs", help="Worker processes for --suites (default: the usable cores)."
     ),
+    with_fleet: bool = typer.Option(
+        False,
+        "--fleet",
+        help="Also time 1, 4 and 8 robots navigating in one world (EKF + MPPI): CPU ms per "
+        "robot-second, its ratio to one robot, the real-time factor (a few minutes).",
+    ),
     config: Optional[Path] = ConfigOpt,
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
@@ -169,6 +175,10 @@ def bench(
             from amr_twin.bench.suites import suite_figures
 
             figures["suites"] = suite_figures(cfg, jobs=jobs, progress=say)
+        if with_fleet:
+            from amr_twin.bench.fleet import fleet_figures
+
+            figures["fleet"] = fleet_figures(cfg)
         return figures
 
     result = _guard(measure)
@@ -177,7 +187,7 @@ def bench(
     else:
         for line in report_lines(result):
             typer.echo(line)
-        for key, value in result.get("suites", {}).items():
+        for key, value in {**result.get("suites", {}), **result.get("fleet", {})}.items():
             typer.echo(f"{key:32s} {value}")
 
 

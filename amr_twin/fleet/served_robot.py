@@ -21,13 +21,17 @@ class ServedRobot:
     navigation stack of ``nav_options`` (:func:`amr_twin.navigation.stack.attach`) on the robot's
     bus over ``static`` (the world's map), its vehicle and adapter on the world's clock; ``cfg``
     the robot's parameters (its payload carried from the start as a load), ``stations`` the
-    world's charging stations. :meth:`connect` it to a broker through ``pacer``."""
+    world's charging stations, ``fleet`` the fleet sharing its poses
+    (:func:`~amr_twin.navigation.stack.fleet_mates`) or None. :meth:`connect` it to a broker
+    through ``pacer``."""
 
-    def __init__(self, robot, cfg, static, nav_options, serial: str, map_id: str, stations, epoch):
+    def __init__(
+        self, robot, cfg, static, nav_options, serial: str, map_id: str, stations, epoch, fleet=None
+    ):
         from amr_twin.navigation.stack import attach
 
         self.robot, self.serial = robot, serial
-        self.navigator = attach(robot, cfg, static, nav_options, publish=False)
+        self.navigator = attach(robot, cfg, static, nav_options, publish=False, fleet=fleet)
         self.vehicle = TwinVehicle(robot, self.navigator, map_id, cfg.battery.charge_current_a)
         load = None
         if cfg.payload.mass_kg > 0:

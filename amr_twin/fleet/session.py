@@ -26,7 +26,9 @@ DISTANCE_EVERY_US = 100_000
 class FleetOptions:
     """The run: ``world``, the robots' starts (one (x_m, y_m, yaw_rad) a robot; a lone robot's may
     be None: the world's), the broker (None: an embedded one), the interface name, ``rate``
-    (simulated seconds per wall second, 0: as fast as possible)."""
+    (simulated seconds per wall second, 0: as fast as possible); ``shared_poses``: several robots
+    share their pose estimates (:func:`~amr_twin.navigation.stack.fleet_mates`), so each keeps
+    the others as obstacles but does not take them for people to give way to."""
 
     world: str = "aisles"
     starts: tuple = (None,)
@@ -37,6 +39,7 @@ class FleetOptions:
     localisation: str = "ekf"
     controller: str = "mppi"
     firmware: str = "improved"
+    shared_poses: bool = True
 
 
 def map_id(world: str) -> str:
@@ -57,7 +60,7 @@ class FleetSession:
         from amr_twin.live.pacer import Pacer
         from amr_twin.model.config import with_values
         from amr_twin.model.worlds import charging_stations
-        from amr_twin.navigation.stack import NavigationOptions, load_static_map
+        from amr_twin.navigation.stack import NavigationOptions, fleet_mates, load_static_map
 
         check_name("--interface", options.interface)
         if options.url is not None:
@@ -85,6 +88,7 @@ class FleetSession:
             self.world = fleet_world(bare, twin_options, options.starts)
         """The world (a :class:`~amr_twin.assembly.twin.Twin` for one robot)."""
         static = load_static_map(cfg, options.world, None)
+        fleet = fleet_mates(cfg) if options.shared_poses and n > 1 else None
         self.vehicles = [
             ServedRobot(
                 robot,
@@ -100,6 +104,7 @@ class FleetSession:
                 map_id(options.world),
                 stations,
                 epoch,
+                fleet,
             )
             for i, (robot, serial) in enumerate(zip(self.world.robots, self.serials))
         ]

@@ -170,6 +170,7 @@ class NavPeopleCfg(_Settings):
     min_speed_m_s: float = P(unit="m/s", ge=0.0, le=2.0)
     moved_m: float = P(unit="m", ge=0.0, le=5.0)
     horizon_s: float = P(unit="s", ge=0.0, le=10.0)
+    fleet_margin_m: float = P(unit="m", ge=0.0, le=1.0)
     yielding: NavYieldingCfg
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from amr_twin.estimation.ekf import POSE_TOPIC
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.interfaces import LocalController, Planner
+from amr_twin.navigation.fleet_mates import FleetMates
 from amr_twin.navigation.kinematics import Limits, rotation_rate, wrap
 from amr_twin.navigation.map_matching import MapMatcher
 from amr_twin.navigation.people import NOBODY, PeopleTracker
@@ -88,8 +89,13 @@ class Navigator(Perception, Replanning):
         matcher: MapMatcher | None = None,
         yielding: Yielding | None = None,
         recoveries: tuple = ROUND_ROBIN,
+        fleet: FleetMates | None = None,
     ):
         self.bus, self.clock, self.pose_source = bus, clock, pose_source
+        self.fleet = fleet
+        """The fleet this robot belongs to (:class:`~amr_twin.navigation.fleet_mates.FleetMates`):
+        its mates' returns are not tracked as people; None: a lone robot."""
+        self._fleet_index = fleet.join(pose_source) if fleet is not None else -1
         self.yielding = yielding
         """Keeps the robot out of people's predicted paths
         (:class:`~amr_twin.navigation.yielding.Yielding`), or None."""

@@ -44,9 +44,10 @@ class Perception:
         self._scan_points = end[hit]
         self._unmapped = self.costmap.static_distance_at(self._scan_points) > self.p.unmapped_m
         t = scan.header.stamp.to_sec() + scan.time_increment * np.arange(len(hit))
-        self.tracker.update(
-            self._scan_points[self._unmapped], t[hit][self._unmapped], origin[0], t[-1]
-        )
+        person = self._unmapped
+        if self.fleet is not None:  # a fleet mate's returns are not a person's
+            person = person & ~self.fleet.theirs(self._fleet_index, self._scan_points)
+        self.tracker.update(self._scan_points[person], t[hit][person], origin[0], t[-1])
         self.people = self.tracker.people()
 
     def _publish(self, v: float, w: float) -> None:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from amr_twin.navigation.collision_monitor import CollisionMonitor
 from amr_twin.navigation.costmap import Costmap
+from amr_twin.navigation.fleet_mates import FleetMates
 from amr_twin.navigation.footprint import Footprint, robot_footprint
 from amr_twin.navigation.kinematics import Limits
 from amr_twin.navigation.interfaces import LocalisationSource, Planner
@@ -111,10 +112,12 @@ def attach(
     options: NavigationOptions,
     publish: bool = True,
     drive: bool = True,
+    fleet: FleetMates | None = None,
 ) -> Navigator:
     """Put the diff-drive node (unless ``drive`` is False: a live session brings its own), the
     localisation and the navigator on ``twin``'s bus (module docstring); ``publish``: the plan, map,
-    costmap and footprint messages (:mod:`amr_twin.navigation.outputs`) too."""
+    costmap and footprint messages (:mod:`amr_twin.navigation.outputs`) too; ``fleet``: the fleet
+    whose members share their poses (:func:`fleet_mates`), None for a robot on its own."""
     from amr_twin.controllers.diff_drive import DiffDriveNode
 
     source = LOCALISATIONS.get(options.localisation)()
@@ -152,6 +155,7 @@ def attach(
     controller = make_controller(costmap, footprint, nav, options.seed)
     people = nav.people.model_dump()
     radius = people.pop("person_radius_m")
+    people.pop("fleet_margin_m")
     yielding = make_yielding(footprint, limits, nav, 1.0 / n.controller_hz, people.pop("yielding"))
     monitor = CollisionMonitor(
         footprint,
@@ -188,7 +192,16 @@ def attach(
         matcher=make_matcher(costmap, nav, source),
         yielding=yielding,
         recoveries=options.recoveries,
+        fleet=fleet,
     )
+
+
+def fleet_mates(cfg) -> FleetMates:
+    """A fleet whose robots share their pose estimates (pass it to :func:`attach` of each): a
+    return within a mate's circumscribed radius plus ``navigation.people.fleet_margin_m`` of its
+    estimate is not tracked as a person."""
+    margin = cfg.navigation.people.fleet_margin_m
+    return FleetMates(robot_footprint(cfg).circumscribed_radius_m + margin)
 
 
 def make_yielding(

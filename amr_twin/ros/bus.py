@@ -64,6 +64,7 @@ class Subscription:
         subs = self.bus._subs.get(self.topic, [])
         if self in subs:
             subs.remove(self)
+            self.bus.version += 1
 
 
 class Publisher:
@@ -89,6 +90,8 @@ class Bus:
     def __init__(self, clock: VirtualClock):
         self.clock = clock
         self._subs: dict[str, list[Subscription]] = {}
+        self.version = 0
+        """Counts the changes of the subscriptions (what :meth:`lookahead_us` reads)."""
         self._types: dict[str, type] = {}
         self._latched: dict[str, Any] = {}
         self._services: dict[str, Callable[[Any], Any]] = {}
@@ -124,6 +127,7 @@ class Bus:
         topic = _name(topic)
         sub = Subscription(self, topic, callback, queue_size, latency_us)
         self._subs.setdefault(topic, []).append(sub)
+        self.version += 1
         latched = self._latched.get(topic)
         if latched is not None:
 

@@ -187,6 +187,11 @@ class StateSampler:
         return self._taken if self._taken is not None else self.sample.rows
 
     @property
+    def table(self) -> np.ndarray:
+        """The samples kept, a row each: the instant (us), then :attr:`sample`'s 67 values."""
+        return self._table()
+
+    @property
     def t_us(self) -> list[int]:
         """The instants kept, us."""
         return self._table()[:, 0].astype(np.int64).tolist()

@@ -205,22 +205,13 @@ class Ros1Bridge:
         want_gt, want_js, want_tf = Outbox.wanted(gt), Outbox.wanted(js), Outbox.wanted(self.tf)
         if not (len(batch) and (want_gt or want_js or want_tf)):
             return
-        a = batch.arrays(0 if want_gt else JOINT_STATE_PERIOD_US, want_gt)
-        t = a["t_us"]
+        b = self._frames.blocks(batch, JOINT_STATE_PERIOD_US, want_gt, want_js, want_tf)
         if want_gt:
-            out.put_block(
-                gt,
-                t.tolist(),
-                self._frames.ground_truth(t, a["pos"], a["quat"], a["v_body"], a["w_body"]),
-            )
-            keep = t % JOINT_STATE_PERIOD_US == 0
-            t, a = t[keep], {key: a[key][keep] for key in ("q", "qd", "link_pos", "link_quat")}
+            out.put_block(gt, b.t_us, b.ground_truth)
         if want_js:
-            out.put_block(js, t.tolist(), self._frames.joint_states(t, a["q"], a["qd"]))
+            out.put_block(js, b.kept_us, b.joint_states)
         if want_tf:
-            out.put_block(
-                self.tf, t.tolist(), self._frames.link_transforms(t, a["link_pos"], a["link_quat"])
-            )
+            out.put_block(self.tf, b.kept_us, b.link_transforms)
 
     # -- in (rospy's threads) ------------------------------------------------------------------
     def _own(self, msg) -> bool:

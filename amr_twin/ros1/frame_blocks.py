@@ -1,6 +1,6 @@
 """A run of one topic's messages written at once, for the bridge's grid-sampled topics:
-:class:`StateBlocks`,
-:func:`clock_block`, :func:`float64_rows_block`.
+:class:`StateBlocks` (a tick's at once: :meth:`StateBlocks.blocks`, in C where its helper
+``frame_blocks.c`` builds), :func:`clock_block`, :func:`float64_rows_block`.
 
 Each gives the TCPROS frames (a uint32 length, then the message in the ROS 1 format, the bytes genpy
 writes: ``tests/ros1/test_frame_blocks.py``) of n messages of one type, one after the other, from a
@@ -10,9 +10,16 @@ its instant."""
 
 from __future__ import annotations
 
+import ctypes
 import struct
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+
+from amr_twin.base.native_build import address, c_array, open_helper
+
+C_SOURCE = Path(__file__).with_name("frame_blocks.c")
 
 _I = struct.Struct("<I")
 _U4, _F8 = "<u4", "<f8"
@@ -45,13 +52,28 @@ class _Layout:
         return np.repeat(self.template, n)
 
 
+@dataclass(frozen=True)
+class TickBlocks:
+    """A tick's state blocks (:meth:`StateBlocks.blocks`): the ground truths at ``t_us`` (every
+    sample), the joint states and link transforms at ``kept_us``; None where not asked for."""
+
+    t_us: list[int]
+    ground_truth: bytes | None
+    kept_us: list[int]
+    joint_states: bytes | None
+    link_transforms: bytes | None
+
+
 class StateBlocks:
     """``sensor_msgs/JointState``, the moving links' ``tf2_msgs/TFMessage`` and the ground truth's
     ``nav_msgs/Odometry`` of grid samples (the arrays of
     :meth:`amr_twin.ros.ros_state.StateSampler.arrays`), a block each: the messages of
-    :func:`amr_twin.ros.ros_state.joint_state`, ``link_transforms`` and ``ground_truth``."""
+    :func:`amr_twin.ros.ros_state.joint_state`, ``link_transforms`` and ``ground_truth``.
+    ``native=False``: :meth:`blocks` in Python only (the same bytes)."""
 
-    def __init__(self, joint_names, child_frames, parent: str, world: str = "world"):
+    def __init__(
+        self, joint_names, child_frames, parent: str, world: str = "world", native: bool = True
+    ):
         n = len(joint_names)
         names = b"".join(_string(name) for name in joint_names)
         head = np.void(
@@ -92,6 +114,70 @@ class StateBlocks:
                 ("twist_cov", _F8, (36,)),
             ],
             {"frames": frames},
+        )
+
+        self._nj, self._nb = n, 1 + self._k
+        lib, self.engine = open_helper(C_SOURCE, native)
+        """``"C"`` or ``"Python (<why>)"``: what :meth:`blocks` runs."""
+        self._fn = None
+        if lib is not None:
+            self._fn = fn = lib.fb_blocks
+            p, i, q = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64
+            fn.restype, fn.argtypes = i, [p, i, i, i, i, q, *[p, p, i, p] * 3, p]
+            offsets = {
+                "gt": ("stamp", "pose", "twist"),
+                "js": ("stamp", "q", "qd"),
+                "tf": [f"{f}{i}" for i in range(self._k) for f in ("stamp", "pose")],
+            }
+            self._c = {}  # layout -> (record size, template's and offsets' addresses)
+            self._keep = []  # the arrays those addresses are in
+            for key, names in offsets.items():
+                tmpl = getattr(self, "_" + key).template
+                fields = tmpl.dtype.fields
+                at = np.array([fields[name][1] for name in names], np.int32)
+                self._keep += [tmpl, at]
+                self._c[key] = (tmpl.dtype.itemsize, address(tmpl.view(np.uint8)), address(at))
+
+    def blocks(self, sampler, period_us: int, gt: bool, js: bool, tf: bool) -> TickBlocks:
+        """The blocks of ``sampler``'s samples (a :class:`~amr_twin.ros.ros_state.StateSampler`):
+        the ground truths of all if ``gt``, the joint states if ``js`` and link transforms if
+        ``tf`` of those at multiples of ``period_us``."""
+        table = sampler.table
+        width = 1 + 2 * self._nj + 6 + 7 * self._nb
+        if self._fn is None or not len(table) or table.shape[1] != width:
+            return self._blocks_python(sampler, period_us, gt, js, tf)
+        table = c_array(table, np.float64)
+        n, args, out = len(table), [], {}
+        for key, wanted in (("gt", gt), ("js", js), ("tf", tf)):
+            size, tmpl, at = self._c[key]
+            buf = out[key] = np.empty(n * size if wanted else 0, np.uint8)
+            args += [address(buf) if wanted else None, tmpl, size, at]
+        kept = np.empty(n, np.int64)
+        m = self._fn(address(table), n, width, self._nj, self._nb, period_us, *args, address(kept))
+        kept_us = kept[:m].tolist()
+        return TickBlocks(
+            table[:, 0].astype(np.int64).tolist() if gt else [],
+            out["gt"].tobytes() if gt else None,
+            kept_us,
+            out["js"][: m * self._c["js"][0]].tobytes() if js else None,
+            out["tf"][: m * self._c["tf"][0]].tobytes() if tf else None,
+        )
+
+    def _blocks_python(self, sampler, period_us: int, gt: bool, js: bool, tf: bool) -> TickBlocks:
+        a = sampler.arrays(0 if gt else period_us, gt)
+        t = a["t_us"]
+        gt_us, gt_block = [], None
+        if gt:
+            gt_us = t.tolist()
+            gt_block = self.ground_truth(t, a["pos"], a["quat"], a["v_body"], a["w_body"])
+            keep = t % period_us == 0
+            t, a = t[keep], {key: a[key][keep] for key in ("q", "qd", "link_pos", "link_quat")}
+        return TickBlocks(
+            gt_us,
+            gt_block,
+            t.tolist(),
+            self.joint_states(t, a["q"], a["qd"]) if js else None,
+            self.link_transforms(t, a["link_pos"], a["link_quat"]) if tf else None,
         )
 
     def joint_states(self, t_us, q, qd) -> bytes:

@@ -90,3 +90,35 @@ def test_the_clock_rows_and_battery_blocks_are_genpys_frames():
         msg.header.stamp = rospy.Time(s // 1_000_000, s % 1_000_000 * 1000)
         want.append(_genpy(conv, msg))
     assert battery_block(TIMES, volts, amps, soc * cap, cap, soc) == b"".join(want)
+
+
+def _sampler(table: np.ndarray) -> ros_state.StateSampler:
+    """A state sampler holding the sample rows ``table`` (no twin)."""
+    sampler = object.__new__(ros_state.StateSampler)
+    sampler.joint_names, sampler.child_frames = ros_state.MOVING_JOINTS, LINKS
+    sampler._taken = table
+    return sampler
+
+
+LINKS = tuple(j.replace("_joint", "_link") for j in ros_state.MOVING_JOINTS)
+
+
+def test_a_ticks_blocks_in_c_are_the_python_forms_bytes():
+    rows = 41
+    table = rng.normal(size=(rows, 1 + 12 + 6 + 7 * 7)) * rng.choice([1e-9, 1.0, 1e6], (rows, 68))
+    table[:, 0] = np.arange(rows) * 10_000 + 4_294_000_000_000
+    quat = table[:, 1 + 12 + 6 + 21 :].reshape(rows, 7, 4)
+    quat[:20] /= np.linalg.norm(quat[:20], axis=2, keepdims=True)  # unit ones too
+    table[3:6, 20:] = -0.0  # signed zeros through the rotations and products
+    native = StateBlocks(ros_state.MOVING_JOINTS, LINKS, "base_link", "world")
+    python = StateBlocks(ros_state.MOVING_JOINTS, LINKS, "base_link", "world", native=False)
+    assert native.engine == "C" and python.engine.startswith("Python")
+    for wanted in (
+        (True, True, True),
+        (False, True, True),
+        (False, False, True),
+        (True, False, False),
+    ):
+        c = native.blocks(_sampler(table), 20_000, *wanted)
+        assert c == python.blocks(_sampler(table), 20_000, *wanted)
+        assert len(c.kept_us) == 21 and (c.ground_truth is None) != wanted[0]

@@ -76,6 +76,7 @@ def test_each_command_group_is_a_module_level_sub_app_of_module_level_commands()
     assert {name for group, name in commands if group == "experiment"} == {
         "chapter5",
         "faults",
+        "fleet",
         "fusion",
         "navigation",
         "umbmark",

@@ -11,8 +11,9 @@ from __future__ import annotations
 import math
 
 
-def start_poses(roadmap, around_xy: tuple[float, float], robots: int, half_length_m: float,
-                half_width_m: float) -> tuple[tuple[float, float, float], ...]:
+def start_poses(
+    roadmap, around_xy: tuple[float, float], robots: int, half_length_m: float, half_width_m: float
+) -> tuple[tuple[float, float, float], ...]:
     """``robots`` start poses (x_m, y_m, yaw_rad) on distinct ``aisle`` nodes of ``roadmap`` (a
     :class:`~amr_twin.fleet_manager.roadmap.Roadmap`), nearest ``around_xy`` (m) first, ties by
     node id; a node whose robot (``half_length_m`` by ``half_width_m`` about its centre, m) would

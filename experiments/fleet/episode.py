@@ -1,11 +1,12 @@
-"""One episode of the fleet experiment: the fleet's vehicles on an embedded broker, the project's
-fleet manager giving them a seeded order stream as the orders arrive, as fast as possible and in
-lockstep (:mod:`.lockstep`), measured as it runs.
+"""One episode of the fleet experiment: a world of N robots (one physics: they see and can hit
+each other), each a VDA 5050 vehicle on an embedded broker, the project's fleet manager giving them
+a seeded order stream as the orders arrive, as fast as possible and in lockstep
+(:mod:`.lockstep`), measured as it runs.
 
-:func:`fleet_sessions` is the one place that builds the vehicles: today one twin (one physics,
-:class:`~amr_twin.fleet.session.FleetSession`); the world of N robots in one physics plugs in
-there. Everything else takes a list of sessions (``serial``, ``twin``, ``transport``, ``pacer``,
-``adapter``, ``true_pose()``).
+:func:`fleet_session` builds the world: one :class:`~amr_twin.fleet.session.FleetSession` whose
+robots start on rack-face nodes of the manager's roadmap (:mod:`.starts`). Everything else takes
+its ``vehicles`` (:class:`~amr_twin.fleet.served_robot.ServedRobot`: ``serial``, ``robot``,
+``transport``, ``adapter``, ``true_pose()``).
 """
 
 from __future__ import annotations
@@ -19,8 +20,6 @@ from amr_twin.experiments.fleet.lockstep import EPOCH, Lockstep, quiet
 from amr_twin.experiments.fleet.orders import order_stream
 from amr_twin.experiments.fleet.result import EpisodePoint, EpisodeResult, JobRecord, RobotRecord
 
-ROBOTS_TODAY = 1
-"""The fleet sizes :func:`fleet_sessions` builds today: 1 (one twin, one physics)."""
 SAMPLE_TICKS = 5
 """Poses (distance driven, near misses, energy series) every this many 20 ms ticks."""
 MOVING_M = 0.005
@@ -30,52 +29,50 @@ TRACK_TICKS = 25
 """A track point every this many ticks (0.5 s)."""
 
 
-def supported(robots: int) -> None:
-    """ValueError (one line) if :func:`fleet_sessions` cannot build ``robots`` vehicles yet."""
-    if robots > ROBOTS_TODAY:
-        raise ValueError(
-            f"--robots {robots}: this build runs one robot a physics; the world of N robots plugs "
-            "in at experiments/fleet/episode.py fleet_sessions()"
-        )
-
-
-def fleet_sessions(cfg, point: EpisodePoint) -> list:
-    """The fleet's vehicles, amr-1..amr-N, on one embedded broker, as fast as possible (rate 0),
-    stamped from :data:`~.lockstep.EPOCH`: the seam where the N-robot world plugs in. Each has
-    ``serial``, ``url``, ``twin`` (its battery, collisions), ``transport``, ``pacer``, ``adapter``,
-    ``true_pose()``, ``close()``; they share one clock, advanced by the first one's ``run``."""
+def fleet_session(cfg, point: EpisodePoint, roadmap):
+    """The world of ``point.robots`` robots, amr-1..amr-N, on one embedded broker, as fast as
+    possible (rate 0), stamped from :data:`~.lockstep.EPOCH`; robot i at the i-th start of
+    :func:`~.starts.start_poses` about the world's start on ``roadmap``."""
+    from amr_twin.experiments.fleet.starts import start_poses
     from amr_twin.fleet.session import FleetOptions, FleetSession
+    from amr_twin.model.worlds import default_start
 
-    supported(point.robots)
-    options = FleetOptions(world=point.world, rate=0.0, seed=point.seed)
-    return [FleetSession(cfg, options, serial="amr-1", epoch=EPOCH)]
+    starts = start_poses(
+        roadmap,
+        default_start(point.world)[:2],
+        point.robots,
+        cfg.chassis.length_m / 2,
+        cfg.half_width_m,
+    )
+    options = FleetOptions(world=point.world, starts=starts, rate=0.0, seed=point.seed)
+    return FleetSession(cfg, options, epoch=EPOCH)
 
 
 class _Meter:
     """Per robot, at every tick: energy drawn (V I dt), charge drawn (from the state of charge),
     time charging; every :data:`SAMPLE_TICKS`: the true position, distance driven, near misses."""
 
-    def __init__(self, sessions: list, capacity_ah: float, near_miss_m: float):
-        self.sessions, self.capacity_as = sessions, capacity_ah * 3600.0
+    def __init__(self, vehicles: list, capacity_ah: float, near_miss_m: float):
+        self.vehicles, self.capacity_as = vehicles, capacity_ah * 3600.0
         self.ticks = 0
-        self.energy_j = [0.0] * len(sessions)
-        self.charging_s = [0.0] * len(sessions)
-        self.soc0 = [s.twin.observables.battery()[2] for s in sessions]
-        self.last_xy = [s.true_pose()[:2] for s in sessions]
-        self.series: list[list] = [[] for _ in sessions]
+        self.energy_j = [0.0] * len(vehicles)
+        self.charging_s = [0.0] * len(vehicles)
+        self.soc0 = [s.robot.observables.battery()[2] for s in vehicles]
+        self.last_xy = [s.true_pose()[:2] for s in vehicles]
+        self.series: list[list] = [[] for _ in vehicles]
         """Per robot: (t_s, energy_j, charge_as, distance_m, driving_j), cumulative."""
-        self.driving_j = [0.0] * len(sessions)
-        self.sampled_j = [0.0] * len(sessions)
-        self.distance_m = [0.0] * len(sessions)
-        self.tracks: list[list] = [[] for _ in sessions]
+        self.driving_j = [0.0] * len(vehicles)
+        self.sampled_j = [0.0] * len(vehicles)
+        self.distance_m = [0.0] * len(vehicles)
+        self.tracks: list[list] = [[] for _ in vehicles]
         self.near = metrics.NearMisses(near_miss_m)
 
     def tick(self, t_s: float, dt_s: float) -> None:
         self.ticks += 1
         sample = self.ticks % SAMPLE_TICKS == 0
         positions = {}
-        for i, s in enumerate(self.sessions):
-            volt, amp, soc = s.twin.observables.battery()
+        for i, s in enumerate(self.vehicles):
+            volt, amp, soc = s.robot.observables.battery()
             self.energy_j[i] += volt * amp * dt_s
             self.charging_s[i] += dt_s if s.adapter.handling.charging else 0.0
             if not sample:
@@ -99,26 +96,29 @@ class _Meter:
 
 
 def run_episode(cfg, point: EpisodePoint) -> EpisodeResult:
-    """Run ``point`` (module docstring) and measure it."""
+    """Run ``point`` (module docstring) and measure it. Orders that arrive before the manager has
+    placed every vehicle on its roadmap wait until it has (their lead time counts from arrival)."""
     from amr_twin.fleet.protocol import INTERFACE
     from amr_twin.fleet_manager.dispatcher import ManagerOptions
     from amr_twin.fleet_manager.manager import start_manager
+    from amr_twin.fleet_manager.roadmap import world_roadmap
+    from amr_twin.model.worlds import default_start
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    sessions = fleet_sessions(cfg, point)
+    session = fleet_session(cfg, point, world_roadmap(cfg, point.world))
+    vehicles = session.vehicles
     manager = None
     try:
-        x, y, _yaw = sessions[0].true_pose()
         manager = start_manager(
             cfg,
             point.world,
-            sessions[0].url,
-            [s.serial for s in sessions],
+            session.url,
+            [v.serial for v in vehicles],
             INTERFACE,
             0,
             point.seed,
             ManagerOptions(charge_below=point.charge_below),
-            start_xy=(x, y),
+            start_xy=default_start(point.world)[:2],
         )
         orders = order_stream(
             manager.dispatcher.roadmap,
@@ -128,35 +128,39 @@ def run_episode(cfg, point: EpisodePoint) -> EpisodeResult:
             point.seed,
             exclude=set(manager.dispatcher.options.charging_nodes),
         )
-        meter = _Meter(sessions, cfg.battery.capacity_ah, point.near_miss_m)
+        meter = _Meter(vehicles, cfg.battery.capacity_ah, point.near_miss_m)
         due = list(orders)
-        tick_s = sessions[0].pacer.tick_us * 1e-6
+        tick_s = session.pacer.tick_us * 1e-6
+        placed = manager.dispatcher.vehicles, []
 
         def on_tick(t_s: float) -> None:
             meter.tick(t_s, tick_s)
+            if not placed[1]:
+                known = placed[0]
+                if not all(v.serial in known and known[v.serial].node for v in vehicles):
+                    return
+                placed[1].append(t_s)
             arrived = []
             while due and due[0].arrival_s <= t_s:
                 arrived.append(due.pop(0).job)
             if arrived:
                 manager.submit(arrived)
 
-        quiet(sessions, manager)
-        lockstep = Lockstep(sessions, manager, on_tick)
-        for pacer in {id(s.pacer): s.pacer for s in sessions}.values():
-            pacer.sinks.append(lockstep)
-        sessions[0].run(point.duration_s)
+        quiet(vehicles, manager)
+        lockstep = Lockstep(vehicles, manager, on_tick)
+        session.pacer.sinks.append(lockstep)
+        session.run(point.duration_s)
         summary = manager.summary()
     finally:
         if manager is not None:
             manager.close()
-        for s in sessions:
-            s.close()
-    return _result(point, orders, summary, sessions, meter, wall0, cpu0)
+        session.close()
+    return _result(point, orders, summary, vehicles, meter, wall0, cpu0)
 
 
-def _result(point, orders, summary, sessions, meter, wall0, cpu0) -> EpisodeResult:
+def _result(point, orders, summary, vehicles, meter, wall0, cpu0) -> EpisodeResult:
     events, end = summary["events"], point.duration_s
-    serials = [s.serial for s in sessions]
+    serials = [s.serial for s in vehicles]
     series = {s: np.array(meter.series[i]).reshape(-1, 5) for i, s in enumerate(serials)}
     seen: dict[str, dict] = {o.job.job_id: {} for o in orders}
     for e in events:
@@ -182,7 +186,7 @@ def _result(point, orders, summary, sessions, meter, wall0, cpu0) -> EpisodeResu
         jobs.append(JobRecord(o.job.job_id, o.job.payload_kg, o.arrival_s, **{**rec, **drawn}))
     done_jobs = [j for j in jobs if j.done_s is not None and not j.failed]
     robots = []
-    for i, s in enumerate(sessions):
+    for i, s in enumerate(vehicles):
         spans = metrics.busy_intervals(events, s.serial, end)
         busy = sum(b - a for a, b in spans)
         robots.append(
@@ -192,7 +196,7 @@ def _result(point, orders, summary, sessions, meter, wall0, cpu0) -> EpisodeResu
                 round(metrics.utilisation(spans, end), 4),
                 round(meter.charging_s[i], 3),
                 round(meter.energy_j[i] / 3600, 4),
-                [c.as_dict() for c in s.twin.observables.collisions],
+                [c.as_dict() for c in s.robot.observables.collisions],
                 meter.tracks[i],
             )
         )

@@ -49,7 +49,6 @@ class FleetSpec:
     def validate(self, max_payload_kg: float) -> list[EpisodePoint]:
         """Every check (ValueError, one line naming the field); the episodes, by payload mix,
         fleet size and seed."""
-        from amr_twin.experiments.fleet.episode import supported
         from amr_twin.model.worlds import world_path
 
         sizes = tuple(self.robots)
@@ -87,7 +86,6 @@ class FleetSpec:
             raise ValueError(f"--charge-below {self.charge_below:g}: must be in [0, 80) %")
         if not world_path(self.world).is_file():
             raise ValueError(f"--world {self.world}: not a world of models/worlds/ nor a file")
-        supported(max(sizes))
         return [
             EpisodePoint(
                 n,

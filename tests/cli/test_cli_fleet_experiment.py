@@ -15,7 +15,7 @@ from amr_twin.cli.main import app
         (["--payload-kg", "a-b"], "--payload-kg a-b: expected LOW-HIGH kg"),
         (["--seeds", "3-1"], "--seeds 3-1: expected A-B or A,B,C"),
         (["--duration-s", "-5"], "--duration-s -5: must be in (0, 86400] s"),
-        (["--robots", "1,2"], "--robots 2: this build runs one robot a physics"),
+        (["--robots", "0,2"], "--robots 0,2: distinct whole numbers in [1, 20]"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(tmp_path, args, message):

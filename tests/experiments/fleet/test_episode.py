@@ -14,8 +14,7 @@ from amr_twin.fleet_manager.dispatcher import Dispatcher
 from amr_twin.model.config import load_config
 
 HEAVY = EpisodePoint(1, (50.0, 50.0), 0, 145.0, 300.0)
-"""Seed 0 at 300 orders an hour: the first order arrives at 25.8 s and is dropped at 135 s (125 s
-with no load)."""
+"""Seed 0 at 300 orders an hour: the first order arrives at 25.8 s and is dropped before 145 s."""
 
 
 @pytest.fixture(scope="module")

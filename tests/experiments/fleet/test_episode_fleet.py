@@ -17,7 +17,7 @@ class _Vehicle:
     def __init__(self, serial, y_m, speed, amps, charging=False):
         self.serial, self.y_m, self.speed, self.t_s = serial, y_m, speed, 0.0
         battery = SimpleNamespace(battery=lambda: (40.0, amps, 1.0 - amps * self.t_s / 72000))
-        self.twin = SimpleNamespace(
+        self.robot = SimpleNamespace(
             observables=SimpleNamespace(battery=battery.battery, collisions=[])
         )
         self.adapter = SimpleNamespace(handling=SimpleNamespace(charging=charging))

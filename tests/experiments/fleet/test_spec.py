@@ -25,13 +25,17 @@ from amr_twin.experiments.fleet.spec import FleetSpec
         (dict(near_miss_m=0.0), r"^--near-miss-m 0: "),
         (dict(charge_below=80.0), r"^--charge-below 80: "),
         (dict(world="no_such_world"), r"^--world no_such_world: "),
-        (dict(robots=(1, 4)), r"^--robots 4: .*experiments/fleet/episode.py fleet_sessions\(\)$"),
     ],
 )
 def test_bad_input_is_one_line_naming_the_field(kwargs, message):
     spec = FleetSpec(**{"robots": (1,), **kwargs})
     with pytest.raises(ValueError, match=message):
         spec.validate(50.0)
+
+
+def test_fleets_of_1_to_20_robots_are_accepted():
+    points = FleetSpec(tuple(range(1, 21)), seeds=(0,)).validate(50.0)
+    assert [p.robots for p in points] == list(range(1, 21))
 
 
 def test_the_episodes_run_by_mix_fleet_size_and_seed():

@@ -577,7 +577,7 @@ def test_an_interrupted_command_says_so_in_one_line(args, target, tmp_path, refu
         (["sweep"], ["amr-twin sweep: give a command: payload"]),
         (
             ["experiment"],
-            ["amr-twin experiment: give a command: chapter5, fusion, fleet, navigation, umbmark, faults"],
+            ["amr-twin experiment: give a command: chapter5, fusion, fleet, navigation, umbmark"],
         ),
         ([], ["amr-twin: give a command: model, "]),
         (["experiment", "chapter5", "--out", ""], ["'--out'", "an empty path"]),

@@ -7,7 +7,7 @@ the next released node is sent to the vehicle as a goal (with its theta, if any)
 traversed when the goal succeeds or, for a node the vehicle drives on from, when it passes within
 the node's allowed deviation (the vehicle's goal tolerance when 0). It stops at the last released
 node; unreleased ones (the horizon) wait for an order update, which is stitched at the last base
-node (:func:`~amr_twin.fleet.order.stitch`). A node with actions is stopped at; its actions run one
+node (:func:`~amr_twin.fleet.order.admit`). A node with actions is stopped at; its actions run one
 after the other once the vehicle stands (:class:`~amr_twin.fleet.handling.Handling`), then it drives
 on; while charging it drives nowhere. The state goes out at every change and at least every
 ``STATE_PERIOD_S``; the visualization every tick. A refused order or action is answered with an
@@ -17,8 +17,17 @@ from __future__ import annotations
 
 import json
 
-from amr_twin.fleet.actions import EDGE_ACTIONS, INSTANT_ACTIONS, NODE_ACTIONS, Action, ActionStates
-from amr_twin.fleet.order import Order, Rejection, parse_order, stitch
+from amr_twin.fleet import state_message
+from amr_twin.fleet.actions import (
+    EDGE_ACTIONS,
+    INSTANT_ACTIONS,
+    NODE_ACTIONS,
+    Action,
+    ActionStates,
+    parse_instant_actions,
+)
+from amr_twin.fleet.order import Order, Rejection, admit
+from amr_twin.fleet.order_message import parse_order
 from amr_twin.fleet.vehicle import within
 
 TICK_S = 0.1
@@ -117,57 +126,19 @@ class VehicleAdapter:
 
     def _accept(self, order: Order) -> None:
         current = self.order
-        released = [n for n in order.nodes if n.released]
-        if (
-            self.handling.charging
-            and len(released) > 1
-            and "stopCharging" not in {a.action_type for a in order.nodes[0].actions}
-        ):
-            raise Rejection(
-                "orderError",
-                f"order {order.order_id}: the vehicle is charging and drives nowhere: "
-                "stopCharging first (an instant action, or on the order's first node)",
-                (("topic", "order"), ("orderId", order.order_id)),
-            )
-        if current is not None and order.order_id == current.order_id:
-            if order.update_id < current.update_id:
-                raise Rejection(
-                    "orderUpdateError",
-                    f"order {order.order_id}: orderUpdateId {order.update_id} is "
-                    f"lower than the present {current.update_id}",
-                    (
-                        ("topic", "order"),
-                        ("orderId", order.order_id),
-                        ("orderUpdateId", order.update_id),
-                    ),
-                )
-            if order.update_id == current.update_id:
-                return  # the same message again: ignored (section 6.6.4.3)
-        stitched = current is not None and (bool(self.nodes) or order.order_id == current.order_id)
-        if stitched:
-            self.nodes, self.edges = stitch(self.nodes, self.edges, self._last_base(), order)
-        else:
-            first = order.nodes[0]
-            if not within(
-                self.vehicle.pose(),
-                first.x_m,
-                first.y_m,
-                None,
-                max(first.deviation_xy_m, self.xy_tolerance_m),
-                0.0,
-            ):
-                raise Rejection(
-                    "noRouteError",
-                    f"order {order.order_id}: the first node {first.node_id} is not where "
-                    "the vehicle stands (nor within its allowed deviation)",
-                    (
-                        ("topic", "order"),
-                        ("orderId", order.order_id),
-                        ("orderUpdateId", order.update_id),
-                        ("nodeId", first.node_id),
-                    ),
-                )
-            self.nodes, self.edges = list(order.nodes), list(order.edges)
+        admitted = admit(
+            order,
+            current,
+            self.nodes,
+            self.edges,
+            self._last_base(),
+            charging=self.handling.charging,
+            pose=self.vehicle.pose(),
+            xy_tolerance_m=self.xy_tolerance_m,
+        )
+        if admitted is None:
+            return  # the same message again
+        self.nodes, self.edges, stitched = admitted
         if current is None or order.order_id != current.order_id:
             self.actions.new_order()
         for a in (a for n in self.nodes if n.released for a in n.actions):
@@ -198,52 +169,31 @@ class VehicleAdapter:
         return released[-1] if released else self._last_node_obj
 
     def _on_instant_actions(self, msg) -> None:
-        # ``actions`` in the 2.0 schema and text; ``instantActions`` (1.1's name) from vda-5050-lib.
-        actions = msg.get("actions", msg.get("instantActions")) if isinstance(msg, dict) else None
-        if not isinstance(actions, list):
-            self._error(
-                Rejection(
-                    "validationError",
-                    "instantActions: field actions missing or not an array",
-                    (("topic", "instantActions"),),
-                )
-            )
+        try:
+            parsed = parse_instant_actions(msg)
+        except Rejection as exc:
+            self._error(exc)
             return
-        for a in actions:
-            kind = a.get("actionType", a.get("actionName")) if isinstance(a, dict) else None
-            action_id = a.get("actionId") if isinstance(a, dict) else None
-            if not isinstance(kind, str) or not isinstance(action_id, str):
-                self._error(
-                    Rejection(
-                        "validationError",
-                        "instantActions: an action without actionId or actionType",
-                        (("topic", "instantActions"),),
-                    )
-                )
+        for a in parsed:
+            if isinstance(a, Rejection):
+                self._error(a)
                 continue
-            self.actions.add(action_id, kind, "INITIALIZING")
-            if kind not in INSTANT_ACTIONS:
-                self.actions.set(action_id, "FAILED", "not an instant action of this vehicle")
+            self.actions.add(a.action_id, a.action_type, "INITIALIZING")
+            if a.action_type not in INSTANT_ACTIONS:
+                self.actions.set(a.action_id, "FAILED", "not an instant action of this vehicle")
                 self._error(
                     Rejection(
                         "actionError",
-                        f"instant action {kind} is not one this vehicle performs",
+                        f"instant action {a.action_type} is not one this vehicle performs",
                         (
                             ("topic", "instantActions"),
-                            ("actionId", action_id),
-                            ("actionType", kind),
+                            ("actionId", a.action_id),
+                            ("actionType", a.action_type),
                         ),
                     )
                 )
                 continue
-            getattr(self, f"_instant_{kind}")(
-                action_id,
-                {
-                    p.get("key"): p.get("value")
-                    for p in a.get("actionParameters") or []
-                    if isinstance(p, dict)
-                },
-            )
+            getattr(self, f"_instant_{a.action_type}")(a.action_id, a.params)
 
     def _instant_cancelOrder(self, action_id: str, _params) -> None:
         if not self.nodes and self._goal is None and not self._queue and not self.handling.busy:
@@ -409,79 +359,24 @@ class VehicleAdapter:
         self.send(subtopic, msg)
         return msg
 
-    def _position(self) -> dict:
-        pose = self.vehicle.pose()
-        if pose is None:
-            return {
-                "x": 0.0,
-                "y": 0.0,
-                "theta": 0.0,
-                "mapId": self.vehicle.map_id,
-                "positionInitialized": False,
-            }
-        return {
-            "x": pose[0],
-            "y": pose[1],
-            "theta": float(((pose[2] + 3.141592653589793) % 6.283185307179586) - 3.141592653589793),
-            "mapId": self.vehicle.map_id,
-            "positionInitialized": True,
-        }
-
-    def _velocity(self) -> dict:
-        v, w = self.vehicle.velocity()
-        return {"vx": v, "vy": 0.0, "omega": w}
-
     def _publish_visualization(self) -> None:
-        self._emit("visualization", {"agvPosition": self._position(), "velocity": self._velocity()})
+        self._emit("visualization", state_message.visualization(self.vehicle))
 
     def _publish_state(self) -> None:
-        volt, soc = self.vehicle.battery()
-        violated = self.vehicle.field_violated()
-        self._emit(
-            "state",
-            {
-                "orderId": self.order.order_id if self.order else "",
-                "orderUpdateId": self.order.update_id if self.order else 0,
-                "lastNodeId": self.last_node[0],
-                "lastNodeSequenceId": self.last_node[1],
-                "nodeStates": [n.state() for n in self.nodes],
-                "edgeStates": [e.state() for e in self.edges],
-                "agvPosition": self._position(),
-                "velocity": self._velocity(),
-                "loads": self.handling.loads(),
-                "driving": self._driving,
-                "paused": self.paused,
-                "newBaseRequest": bool(self.nodes) and not self.nodes[0].released,
-                "actionStates": self.actions.messages(),
-                "batteryState": {
-                    "batteryCharge": 100.0 * min(1.0, max(0.0, soc)),
-                    "batteryVoltage": volt,
-                    "charging": self.handling.charging,
-                },
-                "operatingMode": "AUTOMATIC",
-                "errors": list(self.errors),
-                "information": self._information(),
-                "safetyState": {
-                    "eStop": "MANUAL" if self.vehicle.estop_pressed() else "NONE",
-                    "fieldViolation": violated,
-                },
-            },
+        body = state_message.state(
+            self.vehicle,
+            self.handling,
+            self.order,
+            self.last_node,
+            self.nodes,
+            self.edges,
+            self.actions,
+            self.errors,
+            driving=self._driving,
+            paused=self.paused,
         )
+        self._emit("state", body)
         self._changed, self.actions.changed, self._last_state_s = False, False, self.clock.now_s
-
-    def _information(self) -> list[dict]:
-        """The charging station the vehicle stands at, if any (INFO)."""
-        station = self.handling.station()
-        if station is None:
-            return []
-        return [
-            {
-                "infoType": "chargingStation",
-                "infoLevel": "INFO",
-                "infoDescription": f"at charging station {station.name}",
-                "infoReferences": [{"referenceKey": "stationName", "referenceValue": station.name}],
-            }
-        ]
 
     def publish_factsheet(self) -> None:
         """Send the factsheet (at connection and on factsheetRequest)."""

@@ -2,14 +2,10 @@
 the twin's clock.
 
 :class:`VehicleAdapter` takes the messages of the ``order`` and ``instantActions`` topics
-(:meth:`handle`, in the twin's thread) and, every ``TICK_S`` of simulated time, follows the order:
-the next released node is sent to the vehicle as a goal (with its theta, if any); a node counts as
-traversed when the goal succeeds or, for a node the vehicle drives on from, when it passes within
-the node's allowed deviation (the vehicle's goal tolerance when 0). It stops at the last released
-node; unreleased ones (the horizon) wait for an order update, which is stitched at the last base
-node (:func:`~amr_twin.fleet.order.admit`). A node with actions is stopped at; its actions run one
-after the other once the vehicle stands (:class:`~amr_twin.fleet.handling.Handling`), then it drives
-on; while charging it drives nowhere. The state goes out at every change and at least every
+(:meth:`handle`, in the twin's thread) and, every ``TICK_S`` of simulated time, follows the order
+(:class:`~amr_twin.fleet.route.Route`). A node with actions is stopped at; its actions run one after
+the other once the vehicle stands (:class:`~amr_twin.fleet.handling.Handling`), then it drives on;
+while charging it drives nowhere. The state goes out at every change and at least every
 ``STATE_PERIOD_S``; the visualization every tick. A refused order or action is answered with an
 error in the state (:class:`~amr_twin.fleet.order.Rejection`), never an exception."""
 
@@ -26,8 +22,9 @@ from amr_twin.fleet.actions import (
     ActionStates,
     parse_instant_actions,
 )
-from amr_twin.fleet.order import Order, Rejection, admit
-from amr_twin.fleet.order_message import parse_order
+from amr_twin.fleet.order import ORDER_ERRORS, Rejection
+from amr_twin.fleet.order_message import order_header, parse_order
+from amr_twin.fleet.route import Route
 from amr_twin.fleet.vehicle import within
 
 TICK_S = 0.1
@@ -57,16 +54,10 @@ class VehicleAdapter:
         self.vehicle, self.clock, self.send, self.stamper = vehicle, clock, send, stamper
         self.factsheet_body, self.xy_tolerance_m = factsheet, xy_tolerance_m
         self.handling = handling
-        self._queue: list[Action] = []  # the actions of the node reached, still to start
-        self.order: Order | None = None
-        self.nodes: list = []  # node states left, in sequence
-        self.edges: list = []
-        self.last_node = ("", 0)
-        self._last_node_obj = None
+        self.route = Route()
         self.actions = ActionStates()
         self.errors: list[dict] = []
         self.paused = False
-        self._goal = None  # (node, outcome) sent to the vehicle
         self._last_order_header: int | None = None
         self._changed, self._last_state_s, self._driving = True, -1e9, False
         self.log: list[tuple[float, str, dict]] = []
@@ -97,76 +88,25 @@ class VehicleAdapter:
         self._changed = True
 
     def _on_order(self, msg) -> None:
-        header = msg.get("headerId") if isinstance(msg, dict) else None
-        if (
-            isinstance(header, int)
-            and self._last_order_header is not None
-            and 0 < header <= self._last_order_header
-        ):
-            self._error(
-                Rejection(
-                    "validationError",
-                    f"order: headerId {header} is not after the last order's "
-                    f"{self._last_order_header} (a late or repeated message)",
-                    (("topic", "order"), ("headerId", header)),
-                )
-            )
-            return
-        if isinstance(header, int):
-            self._last_order_header = header
         try:
+            self._last_order_header = order_header(msg, self._last_order_header)
             order = parse_order(msg, self.vehicle.map_id, NODE_ACTIONS, EDGE_ACTIONS)
         except Rejection as exc:
             self._error(exc)
             return
         try:
-            self._accept(order)
+            accepted = self.route.accept(
+                order,
+                self.actions,
+                charging=self.handling.charging,
+                pose=self.vehicle.pose(),
+                xy_tolerance_m=self.xy_tolerance_m,
+            )
         except Rejection as exc:
             self._error(exc)
-
-    def _accept(self, order: Order) -> None:
-        current = self.order
-        admitted = admit(
-            order,
-            current,
-            self.nodes,
-            self.edges,
-            self._last_base(),
-            charging=self.handling.charging,
-            pose=self.vehicle.pose(),
-            xy_tolerance_m=self.xy_tolerance_m,
-        )
-        if admitted is None:
-            return  # the same message again
-        self.nodes, self.edges, stitched = admitted
-        if current is None or order.order_id != current.order_id:
-            self.actions.new_order()
-        for a in (a for n in self.nodes if n.released for a in n.actions):
-            if self.actions.get(a.action_id) is None:
-                self.actions.add(a.action_id, a.action_type, "WAITING", order=True)
-        self.order = order
-        self.errors = [
-            e
-            for e in self.errors
-            if e["errorType"]
-            not in (
-                "validationError",
-                "orderError",
-                "orderUpdateError",
-                "noRouteError",
-                "navigationError",
-                "actionError",
-            )
-        ]
-        if not stitched:  # the first node is where the vehicle stands: traversed now
-            self._traverse(self.nodes[0], first=True)
-        elif self._goal is not None and self._goal[0] not in self.nodes:
-            self._goal = None
-
-    def _last_base(self):
-        """The last released node of the order: still to drive, or the last one traversed."""
-        released = [n for n in self.nodes if n.released]
-        return released[-1] if released else self._last_node_obj
+            return
+        if accepted:
+            self.errors = [e for e in self.errors if e["errorType"] not in ORDER_ERRORS]
 
     def _on_instant_actions(self, msg) -> None:
         try:
@@ -196,7 +136,8 @@ class VehicleAdapter:
             getattr(self, f"_instant_{a.action_type}")(a.action_id, a.params)
 
     def _instant_cancelOrder(self, action_id: str, _params) -> None:
-        if not self.nodes and self._goal is None and not self._queue and not self.handling.busy:
+        route = self.route
+        if not route.nodes and route.goal is None and not route.queue and not self.handling.busy:
             self.actions.set(action_id, "FAILED", "no order to cancel")
             self._error(
                 Rejection(
@@ -207,15 +148,15 @@ class VehicleAdapter:
             )
             return
         self.vehicle.cancel()
-        self.nodes, self.edges, self._goal, self._queue = [], [], None, []
+        route.clear()
         self.handling.abort()
         self.actions.fail_order_actions("order cancelled")
         self.actions.set(action_id, "RUNNING")
 
     def _instant_startPause(self, action_id: str, _params) -> None:
-        if not self.paused and self._goal is not None:
+        if not self.paused and self.route.goal is not None:
             self.vehicle.cancel()
-            self._goal = None
+            self.route.goal = None
         self.paused = True
         self.actions.set(action_id, "RUNNING")
 
@@ -231,7 +172,8 @@ class VehicleAdapter:
             and params.get("mapId", self.vehicle.map_id) == self.vehicle.map_id
             and within(self.vehicle.pose(), x, y, theta, 2 * self.xy_tolerance_m, 0.35)
         ):
-            self.last_node = (str(params.get("lastNodeId", self.last_node[0])), self.last_node[1])
+            node_id, seq = self.route.last_node
+            self.route.last_node = (str(params.get("lastNodeId", node_id)), seq)
             self.actions.set(
                 action_id, "FINISHED", "the pose agrees with the vehicle's localisation"
             )
@@ -280,57 +222,22 @@ class VehicleAdapter:
         done = self.handling.step(self.clock.now_s)
         if done is not None:
             self.actions.set(done[0].action_id, "FINISHED", done[1])
-        if not self.handling.busy and self._queue and not self._driving and not self.paused:
-            self._start(self._queue.pop(0))
+        if not self.handling.busy and self.route.queue and not self._driving and not self.paused:
+            self._start(self.route.queue.pop(0))
 
     # -- the order ----------------------------------------------------------------------------
-    def _traverse(self, node, first: bool = False) -> None:
-        self.nodes.remove(node)
-        if not first and self.edges:
-            self.edges.pop(0)
-        self.last_node, self._last_node_obj = (node.node_id, node.sequence_id), node
-        self._queue.extend(node.actions)
-        self._goal = None
-        self._changed = True
-
     def _follow(self) -> None:
-        if self._queue or self.handling.busy:
+        route = self.route
+        if route.queue or self.handling.busy:
             self._do_actions()
             return
-        if self.paused or self.handling.charging or not self.nodes or not self.nodes[0].released:
+        if self.paused or self.handling.charging or not route.nodes or not route.nodes[0].released:
             return
-        node = self.nodes[0]
-        if self._goal is None or self._goal[0] is not node:
-            self._goal = (node, self.vehicle.send_goal(node.x_m, node.y_m, node.theta_rad))
-        outcome = self._goal[1]
-        drives_on = len(self.nodes) > 1 and self.nodes[1].released and not node.actions
-        tol = max(node.deviation_xy_m, self.xy_tolerance_m)
-        if outcome.status == "succeeded" or (
-            drives_on
-            and within(
-                self.vehicle.pose(),
-                node.x_m,
-                node.y_m,
-                node.theta_rad,
-                tol,
-                node.deviation_theta_rad,
-            )
-        ):
-            self._traverse(node)
-        elif outcome.status == "aborted":
-            self._error(
-                Rejection(
-                    "navigationError",
-                    f"node {node.node_id} not reached: {outcome.reason}",
-                    (
-                        ("orderId", self.order.order_id),
-                        ("orderUpdateId", self.order.update_id),
-                        ("nodeId", node.node_id),
-                        ("sequenceId", node.sequence_id),
-                    ),
-                )
-            )
-            self.nodes, self.edges, self._goal = [], [], None
+        traversed, error = route.drive(self.vehicle, self.xy_tolerance_m)
+        if traversed:
+            self._changed = True
+        elif error is not None:
+            self._error(error)
 
     def _tick(self) -> None:
         self._follow()
@@ -366,10 +273,10 @@ class VehicleAdapter:
         body = state_message.state(
             self.vehicle,
             self.handling,
-            self.order,
-            self.last_node,
-            self.nodes,
-            self.edges,
+            self.route.order,
+            self.route.last_node,
+            self.route.nodes,
+            self.route.edges,
             self.actions,
             self.errors,
             driving=self._driving,

@@ -34,6 +34,17 @@ class Rejection(Exception):
         }
 
 
+ORDER_ERRORS = (
+    "validationError",
+    "orderError",
+    "orderUpdateError",
+    "noRouteError",
+    "navigationError",
+    "actionError",
+)
+"""The state's error types an accepted order clears."""
+
+
 @dataclass(frozen=True)
 class Node:
     """One node: position on ``map_id`` (m, rad; theta None: any heading), allowed deviations (m,

@@ -236,3 +236,18 @@ def parse_order(
             "validationError", "order: a released node or edge after an unreleased one", refs
         )
     return Order(order_id, update_id, header_id, nodes, edges)
+
+
+def order_header(msg, last_header: int | None) -> int | None:
+    """The ``headerId`` to remember after an ``order`` message (``last_header`` when it has none);
+    raises :class:`~amr_twin.fleet.order.Rejection` for one not after ``last_header`` (a late or
+    repeated message)."""
+    header = msg.get("headerId") if isinstance(msg, dict) else None
+    if isinstance(header, int) and last_header is not None and 0 < header <= last_header:
+        raise Rejection(
+            "validationError",
+            f"order: headerId {header} is not after the last order's "
+            f"{last_header} (a late or repeated message)",
+            (("topic", "order"), ("headerId", header)),
+        )
+    return header if isinstance(header, int) else last_header

@@ -83,7 +83,7 @@ def world_compile_error(world: str | Path, exc: Exception) -> BuildError:
 def _world_spec(cfg: TwinConfig, world: str | Path) -> mujoco.MjSpec:
     path = world_file(world)
     if path.suffix in (".yaml", ".yml"):  # a ROS map_server map: walls extruded from the image
-        from amr_twin.model.worlds import world_xml
+        from amr_twin.model.occupancy_map import world_xml
 
         spec = mujoco.MjSpec.from_string(world_xml(path))
     else:

@@ -39,7 +39,7 @@ def test_the_same_seed_gives_the_same_bytes_in_another_process_and_other_seeds_d
     c = [p.read_bytes() for p in write_world(cfg, "generated:8", tmp_path / "c")]
     assert a == b and a[0] == gw.mjcf("generated:7").encode()
     assert a[2] != c[2]  # the PGM maps differ
-    from amr_twin.model.worlds import load_map
+    from amr_twin.model.occupancy_map import load_map
 
     grid = load_map(tmp_path / "a" / "generated_7.yaml")
     assert grid.occupied.any() and grid.free.sum() > grid.occupied.sum()

@@ -6,10 +6,7 @@ addressed by a Physics of its own sharing the one MjData, :meth:`Physics.robot`)
 views of both (:attr:`Physics.named`, as dm_control's ``physics.named``) and what the rest of
 the twin needs:
 stepping in C, wheel angles and speeds, the base pose, contact loads per named
-geom, and the three motor modes (drive, coast, brake) set on the actuators'
-parameters between steps (the per-step torque stays in C). A braked motor is a
-motor at zero phase voltage (phases shorted): torque ``-Kt Ke / R * omega``, within
-the brake's own current limit.
+geom, and the motors (:attr:`Physics.motors`, :class:`~amr_twin.sim.motors.Motors`).
 
 The physics layer is this module and those that declare ``PHYSICS_LAYER = True`` with the
 reason (C-speed callbacks and grid samplers, ray-casting sensors, the grid loop); no other
@@ -28,6 +25,7 @@ import numpy as np
 from amr_twin.model.robot_spec import CASTERS, LOOP_SENSOR_DIM, WHEELS
 from amr_twin.model.robot_starts import ROBOT_PREFIX
 from amr_twin.model.tyre_numeric import numeric_name
+from amr_twin.sim.motors import Motors
 from amr_twin.sim.named_index import NamedIndex
 from amr_twin.sim.robot_bodies import robot_indices
 
@@ -112,9 +110,8 @@ class Physics:
         self.loop_columns = slice(adr, adr + LOOP_SENSOR_DIM)
         """Where the robot's loop sensors lie in ``sensordata`` (and in a grid loop's rows that
         begin at its start: :class:`~amr_twin.sim.grid_loop.GridLoop`)."""
-        self._drive_range = m.actuator_forcerange[self.actuator].copy()
-        self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
-        self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
+        self.motors = Motors(m, self.data, self.actuator)
+        """The wheel motors' modes (:meth:`~amr_twin.sim.motors.Motors.set`)."""
         self.tyres_engine = None
         """What computes the brush tyres' forces (:mod:`amr_twin.sim.tyres`): ``"C"``, ``"Python
         (...)"``, or None for the rigid contact (``wheel.tyre_slip`` off)."""
@@ -148,6 +145,8 @@ class Physics:
         twin = copy.copy(self)
         twin.model = copy.copy(self.model)
         twin.data = copy.copy(self.data)
+        twin.motors = copy.copy(self.motors)
+        twin.motors.model, twin.motors.data = twin.model, twin.data
         return twin
 
     @property
@@ -262,14 +261,6 @@ class Physics:
         """Normal contact force on each wheel and caster ball, N (0 when lifted)."""
         return dict(zip(self.support_geoms, self.support_normal_forces_n().tolist()))
 
-    def support_points_xy(self) -> dict[str, np.ndarray]:
-        """World xy of the lowest point of each wheel and caster ball, m."""
-        out = {}
-        for name, g in self.support_geoms.items():
-            pos = self.data.geom_xpos[g]
-            out[name] = pos[:2].copy()
-        return out
-
     def base_heading_xy(self) -> tuple[float, float, float, float]:
         """Base origin x, y (m) and the world x, y of its x axis (unnormalised when tilted), plain
         floats."""
@@ -364,33 +355,6 @@ class Physics:
         mujoco.mj_fullM(m, scratch, full)
         m.stat.meaninertia = float(np.trace(full)) / m.nv
 
-    # -- actuation --------------------------------------------------------------------
-    def set_motor(
-        self, wheel: int, mode: str, voltage_v: float = 0.0, torque_limit_nm: float | None = None
-    ) -> None:
-        """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``.
-
-        ``torque_limit_nm`` bounds the torque (the driver's current limit times Kt; for
-        ``"brake"``, the shorted phases' own limit); default: the drive limit.
-        """
-        m, a = self.model, self.actuator[wheel]
-        limit = (
-            self._drive_range[wheel]
-            if torque_limit_nm is None
-            else (-torque_limit_nm, torque_limit_nm)
-        )
-        m.actuator_forcerange[a] = limit
-        if mode in ("drive", "brake"):  # brake: phases shorted, i.e. zero phase voltage
-            m.actuator_gainprm[a, 0] = self._drive_gain[wheel]
-            m.actuator_biasprm[a, 2] = self._drive_bias[wheel]
-            self.data.ctrl[a] = voltage_v if mode == "drive" else 0.0
-        elif mode == "coast":  # phases open: no current, no torque
-            m.actuator_gainprm[a, 0] = 0.0
-            m.actuator_biasprm[a, 2] = 0.0
-            self.data.ctrl[a] = 0.0
-        else:
-            raise ValueError(f"mode must be drive, coast or brake, got {mode!r}")
-
     # -- faults (amr_twin/sim/fault_injector.py) --------------------------------------------
     def jam_wheel(self, wheel: int, jammed: bool) -> None:
         """Block ``wheel`` where it is (a joint limit of +-1 mrad around its angle), or free it.
@@ -415,6 +379,6 @@ class Physics:
     def settle(self, duration_s: float = 1.0) -> None:
         """Let the robot come to rest on its wheels and casters (motors braked)."""
         for w in range(2):
-            self.set_motor(w, "brake")
+            self.motors.set(w, "brake")
         self.step(int(round(duration_s / self.timestep_s)))
         self.check()

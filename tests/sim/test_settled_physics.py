@@ -91,7 +91,7 @@ def _drive(fleet, volts, seconds):
     """Set each robot's motors to its (left, right) phase voltage, V, and step the world."""
     for physics, (left, right) in zip(fleet.robots, volts):
         for wheel, v in enumerate((left, right)):
-            physics.set_motor(wheel, "drive", v)
+            physics.motors.set(wheel, "drive", v)
     fleet.world.step(int(round(seconds / fleet.world.timestep_s)))
     fleet.world.check()
 
@@ -139,7 +139,7 @@ def test_the_grid_loop_gives_each_robot_its_own_loop_sensor_rows():
     loop = GridLoop(fleet.world, [], 10, 1000, width=fleet.loop_width)
     for physics, v in zip(fleet.robots, (2.0, 6.0)):
         for wheel in range(2):
-            physics.set_motor(wheel, "drive", v)
+            physics.motors.set(wheel, "drive", v)
     _k, _ts, rows, _grid_t, _grid_rows = loop.run(0, 250)
     for i, physics in enumerate(fleet.robots):
         own = fleet.robot_rows(rows, i)

@@ -175,8 +175,8 @@ def test_every_robot_of_a_fleet_gets_its_tyres_the_c_helper_and_python_to_the_sa
             tyres.install(native)
             fleet = settled_physics.settled_fleet(cfg, "warehouse", starts, False, False, 0.2)
             for physics, (left, right) in zip(fleet.robots, ((5.0, 6.0), (-6.0, 6.0))):
-                physics.set_motor(0, "drive", left)
-                physics.set_motor(1, "drive", right)
+                physics.motors.set(0, "drive", left)
+                physics.motors.set(1, "drive", right)
             fleet.world.step(300)
             runs.append(fleet.world.data.qpos.copy())
             contacts = [tyres.contacts(p.model, p.data, p.prefix) for p in fleet.robots]

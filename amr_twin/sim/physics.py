@@ -27,6 +27,8 @@ from amr_twin.model.robot_starts import ROBOT_PREFIX
 from amr_twin.model.tyre_numeric import numeric_name
 from amr_twin.sim.motors import Motors
 from amr_twin.sim.named_index import NamedIndex
+from amr_twin.sim.payload import Payload
+from amr_twin.sim.placement import Placement
 from amr_twin.sim.robot_bodies import robot_indices
 
 PHYSICS_LAYER = True
@@ -91,9 +93,8 @@ class Physics:
         )
         self.base_body = _id(m, mujoco.mjtObj.mjOBJ_BODY, "base_link")
         b = self.base_body
-        self._base_inertial = tuple(
-            a[b].copy() for a in (m.body_mass, m.body_ipos, m.body_iquat, m.body_inertia)
-        )
+        self.payload = Payload(m, b)
+        """A load on the deck (:meth:`~amr_twin.sim.payload.Payload.set_kg`)."""
         G = mujoco.mjtObj.mjOBJ_GEOM
         self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
         self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
@@ -105,7 +106,9 @@ class Physics:
             g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
             for g in self.support_geoms.values()
         }
-        self._own_qpos, self._own_dof = robot_indices(m, self.base_body)
+        own_qpos, own_dof = robot_indices(m, self.base_body)
+        self.placement = Placement(m, self.data, self.root_qpos, self.wheel_qpos, own_qpos, own_dof)
+        """Teleporting the robot (:meth:`~amr_twin.sim.placement.Placement.place`)."""
         adr = int(m.sensor_adr[_id(m, mujoco.mjtObj.mjOBJ_SENSOR, "wheel_left_angle")])
         self.loop_columns = slice(adr, adr + LOOP_SENSOR_DIM)
         """Where the robot's loop sensors lie in ``sensordata`` (and in a grid loop's rows that
@@ -145,8 +148,12 @@ class Physics:
         twin = copy.copy(self)
         twin.model = copy.copy(self.model)
         twin.data = copy.copy(self.data)
-        twin.motors = copy.copy(self.motors)
-        twin.motors.model, twin.motors.data = twin.model, twin.data
+        for part in ("motors", "payload", "placement"):  # its own, on the copies
+            own = copy.copy(getattr(self, part))
+            own.model = twin.model
+            if hasattr(own, "data"):
+                own.data = twin.data
+            setattr(twin, part, own)
         return twin
 
     @property
@@ -288,72 +295,6 @@ class Physics:
         h = 0.5 * yaw_rad
         self.data.mocap_pos[i] = (x_m, y_m, 0.0)
         self.data.mocap_quat[i] = (math.cos(h), 0.0, 0.0, math.sin(h))
-
-    # -- teleporting the robot (Twin.reset_world, Twin.set_robot_pose) ----------------------
-    def positions(self) -> np.ndarray:
-        """A copy of every joint position (``qpos``): a rest state for :meth:`place_robot`."""
-        return self.data.qpos.copy()
-
-    def place_robot(self, x_m: float, y_m: float, yaw_rad: float, rest: np.ndarray) -> np.ndarray:
-        """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame), standing as in
-        ``rest`` (:meth:`positions` of it settled: its height, tilt, tyre and caster springs), every
-        velocity zero; the wheels keep their angles (their hall sensors see no jump). Returns the
-        positions before, to put back with :meth:`restore_positions`."""
-        d, a = self.data, self.root_qpos
-        before = d.qpos.copy()
-        wheels = d.qpos[self.wheel_qpos].copy()
-        d.qpos[self._own_qpos] = rest[self._own_qpos]  # this robot's joints; the others stay
-        d.qpos[self.wheel_qpos] = wheels
-        w, x, y, z = rest[a + 3 : a + 7]
-        turn = 0.5 * (yaw_rad - math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-        quat = np.empty(4)
-        mujoco.mju_mulQuat(
-            quat, np.array([math.cos(turn), 0.0, 0.0, math.sin(turn)]), rest[a + 3 : a + 7]
-        )
-        d.qpos[a : a + 3] = (x_m, y_m, rest[a + 2])
-        d.qpos[a + 3 : a + 7] = quat
-        self._at_rest()
-        return before
-
-    def restore_positions(self, qpos: np.ndarray) -> None:
-        """Put back the positions :meth:`place_robot` returned, the robot's velocities zero."""
-        self.data.qpos[:] = qpos
-        self._at_rest()
-
-    def _at_rest(self) -> None:
-        d = self.data
-        d.qvel[self._own_dof] = 0.0
-        d.qacc_warmstart[self._own_dof] = 0.0
-        mujoco.mj_forward(self.model, d)
-
-    # -- a load on the deck (amr_twin/fleet: pick and drop) ----------------------------------
-    def set_payload_kg(self, mass_kg: float, centre_m, size_m) -> None:
-        """Carry a box of ``mass_kg`` (kg; 0: none) and ``size_m`` (3,) centred at ``centre_m`` (3,)
-        in base_link, from the next step on: base_link's mass, centre of mass and inertia become
-        those of the chassis with the box (parallel-axis theorem), the model's constants
-        (subtree masses, inverse weights, the solver's mean inertia) those of the loaded robot at
-        qpos0 (``mj_setConst`` on scratch data); 0 puts back base_link as built. In addition to a
-        payload body built into the model."""
-        m, b, scratch = self.model, self.base_body, mujoco.MjData(self.model)
-        m0, c0, q0, i0 = self._base_inertial
-        if mass_kg > 0:
-            r0 = np.empty(9)
-            mujoco.mju_quat2Mat(r0, q0)
-            r0 = r0.reshape(3, 3)
-            p, a = np.asarray(centre_m, float), np.asarray(size_m, float) ** 2
-            total = float(m0) + mass_kg
-            com = (m0 * c0 + mass_kg * p) / total
-            inertia = r0 @ np.diag(i0) @ r0.T + np.diag(mass_kg / 12 * (a.sum() - a))
-            for mass, at in ((m0, c0 - com), (mass_kg, p - com)):
-                inertia += mass * (at @ at * np.eye(3) - np.outer(at, at))
-            values, vectors, quat = np.empty(3), np.empty(9), np.empty(4)
-            mujoco.mju_eig3(values, vectors, quat, inertia.ravel())
-            m0, c0, q0, i0 = total, com, quat, values
-        m.body_mass[b], m.body_ipos[b], m.body_iquat[b], m.body_inertia[b] = m0, c0, q0, i0
-        mujoco.mj_setConst(m, scratch)
-        full = np.zeros((m.nv, m.nv))  # MuJoCo's compiler: the mass matrix's mean diagonal at qpos0
-        mujoco.mj_fullM(m, scratch, full)
-        m.stat.meaninertia = float(np.trace(full)) / m.nv
 
     # -- faults (amr_twin/sim/fault_injector.py) --------------------------------------------
     def jam_wheel(self, wheel: int, jammed: bool) -> None:

@@ -113,10 +113,10 @@ def test_each_robot_moves_by_its_own_command_only():
 def test_a_robot_placed_again_leaves_the_other_where_it_is():
     fleet = _fleet([(0, 0, 0), (0, 2, 0)])
     one, two = fleet.robots
-    rest = one.positions()
+    rest = one.placement.positions()
     _drive(fleet, [(0.0, 0.0), (6.0, 6.0)], 0.5)
     x2 = two.pose().x_m
-    one.place_robot(1.0, -1.0, 0.0, rest)
+    one.placement.place(1.0, -1.0, 0.0, rest)
     assert one.pose().x_m == pytest.approx(1.0) and two.pose().x_m == x2
     assert abs(two.base_velocity()[0]) > 0.1  # still rolling: its velocities untouched
 

@@ -105,7 +105,7 @@ class GeomRoles:
         roots = m.body_rootid[m.geom_bodyid]
         self.robot = roots == root  # (ngeom,) bool
         self.support = np.zeros(m.ngeom, bool)
-        self.support[list(physics.support_geoms.values())] = True
+        self.support[list(physics.support.geoms.values())] = True
         self.floor = np.isin(m.geom_type, _FLOOR_TYPES) & ~self.robot
         self.other_robot = robot_roots(m)[roots] & ~self.robot  # (ngeom,) bool: another robot's
         self.actor = (

@@ -5,8 +5,9 @@ geoms and sensors by name once (the robot named by its prefix: a world may hold 
 addressed by a Physics of its own sharing the one MjData, :meth:`Physics.robot`), offers named
 views of both (:attr:`Physics.named`, as dm_control's ``physics.named``) and what the rest of
 the twin needs:
-stepping in C, wheel angles and speeds, the base pose, contact loads per named
-geom, and the motors (:attr:`Physics.motors`, :class:`~amr_twin.sim.motors.Motors`).
+stepping in C, wheel angles and speeds, the base pose, and its components: the motors
+(:mod:`~amr_twin.sim.motors`), the support's contact loads (:mod:`~amr_twin.sim.support`), a load
+on the deck (:mod:`~amr_twin.sim.payload`), teleporting (:mod:`~amr_twin.sim.placement`).
 
 The physics layer is this module and those that declare ``PHYSICS_LAYER = True`` with the
 reason (C-speed callbacks and grid samplers, ray-casting sensors, the grid loop); no other
@@ -30,6 +31,7 @@ from amr_twin.sim.named_index import NamedIndex
 from amr_twin.sim.payload import Payload
 from amr_twin.sim.placement import Placement
 from amr_twin.sim.robot_bodies import robot_indices
+from amr_twin.sim.support import Support
 
 PHYSICS_LAYER = True
 
@@ -96,16 +98,10 @@ class Physics:
         self.payload = Payload(m, b)
         """A load on the deck (:meth:`~amr_twin.sim.payload.Payload.set_kg`)."""
         G = mujoco.mjtObj.mjOBJ_GEOM
-        self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
-        self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
-        self.support_of_geom = [-1] * m.ngeom
-        """(ngeom,) index of each geom in :attr:`support_geoms` (0-5), -1 for the others."""
-        for i, g in enumerate(self.support_geoms.values()):
-            self.support_of_geom[g] = i
-        self._support_contype = {
-            g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
-            for g in self.support_geoms.values()
-        }
+        geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
+        geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
+        self.support = Support(m, self.data, geoms)
+        """The wheels and caster balls on the ground (:class:`~amr_twin.sim.support.Support`)."""
         own_qpos, own_dof = robot_indices(m, self.base_body)
         self.placement = Placement(m, self.data, self.root_qpos, self.wheel_qpos, own_qpos, own_dof)
         """Teleporting the robot (:meth:`~amr_twin.sim.placement.Placement.place`)."""
@@ -148,7 +144,7 @@ class Physics:
         twin = copy.copy(self)
         twin.model = copy.copy(self.model)
         twin.data = copy.copy(self.data)
-        for part in ("motors", "payload", "placement"):  # its own, on the copies
+        for part in ("motors", "payload", "placement", "support"):  # its own, on the copies
             own = copy.copy(getattr(self, part))
             own.model = twin.model
             if hasattr(own, "data"):
@@ -245,29 +241,6 @@ class Physics:
         """(3,) centre of mass of the robot (with payload), world frame."""
         return self.data.subtree_com[self.base_body].copy()
 
-    def support_normal_forces_n(self) -> np.ndarray:
-        """(6,) normal contact force on the wheels L, R and casters fl, fr, rl, rr, N (0 when
-        lifted).
-
-        From the constraint forces of the last step (the first row of each contact is its
-        normal force, for pyramidal-free elliptic cones and for frictionless contacts).
-        """
-        d = self.data
-        out = [0.0] * len(self.support_geoms)
-        if (
-            d.ncon
-        ):  # a handful of contacts: plain Python, in contact order (~5 us against ~30 with numpy)
-            con, lut, force = d.contact, self.support_of_geom, d.efc_force
-            for (g1, g2), adr in zip(con.geom.tolist(), con.efc_address.tolist()):
-                k = max(lut[g1], lut[g2])
-                if k >= 0 and adr >= 0:  # -1: a contact not in the constraints
-                    out[k] += force.item(adr)
-        return np.array(out)
-
-    def support_loads_n(self) -> dict[str, float]:
-        """Normal contact force on each wheel and caster ball, N (0 when lifted)."""
-        return dict(zip(self.support_geoms, self.support_normal_forces_n().tolist()))
-
     def base_heading_xy(self) -> tuple[float, float, float, float]:
         """Base origin x, y (m) and the world x, y of its x axis (unnormalised when tilted), plain
         floats."""
@@ -310,12 +283,6 @@ class Physics:
         self.model.jnt_limited[j] = 1 if jammed else self._wheel_limited[wheel]
         if not jammed:
             self.model.jnt_range[j] = self._wheel_range[wheel]
-
-    def lift_wheel(self, wheel: int, lifted: bool) -> None:
-        """Take ``wheel`` off the ground (its tyre touches nothing), or put it back."""
-        g = self.support_geoms[f"wheel_{WHEELS[wheel]}"]
-        contype, conaffinity = (0, 0) if lifted else self._support_contype[g]
-        self.model.geom_contype[g], self.model.geom_conaffinity[g] = contype, conaffinity
 
     def settle(self, duration_s: float = 1.0) -> None:
         """Let the robot come to rest on its wheels and casters (motors braked)."""

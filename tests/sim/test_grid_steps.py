@@ -140,7 +140,7 @@ def test_rows_kept_in_c_are_the_python_rows():
     physics = twin.physics
     last = [
         *twin.rolling.loads,
-        *physics.support_normal_forces_n(),
+        *physics.support.normal_forces_n(),
         physics.base_up_z(),
         *physics.base_velocity(),
     ]

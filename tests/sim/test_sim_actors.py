@@ -255,7 +255,7 @@ def test_a_wheel_touching_an_actor_is_always_a_collision_even_standing_on_it():
 
     twin, _ = _twin([Actor("pallet_jack", ((0.0, 1.5), (3.0, 1.5)), 1.0)])
     m, roles = twin.physics.model, GeomRoles(twin.physics)
-    wheel = twin.physics.support_geoms["wheel_left"]
+    wheel = twin.physics.support.geoms["wheel_left"]
     fork, rack, floor = (
         m.geom(n).id for n in ("pallet_jack_0/fork_left", "rack_n_beam_low", "floor")
     )

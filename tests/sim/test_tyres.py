@@ -129,7 +129,7 @@ def test_each_tyre_carries_its_own_wheel_load():
     )
     twin.advance(0.3)
     left, right = tyres.contacts(twin.physics.model, twin.physics.data)
-    solver = twin.physics.support_normal_forces_n()[:2]
+    solver = twin.physics.support.normal_forces_n()[:2]
     assert left.load_n > right.load_n + 20.0
     assert (left.load_n, right.load_n) == pytest.approx(solver, rel=0.03)
     before = twin.physics.pose()
@@ -160,7 +160,7 @@ def test_the_rigid_model_has_no_tyre_state():
     twin = Twin(load_config(sets=RIGID), TwinOptions(world="empty", nodes=()))
     assert twin.physics.tyres_engine is None
     assert tyres.contacts(twin.physics.model, twin.physics.data) is None
-    assert twin.physics.model.geom_condim[twin.physics.support_geoms["wheel_left"]] == 3
+    assert twin.physics.model.geom_condim[twin.physics.support.geoms["wheel_left"]] == 3
 
 
 def test_every_robot_of_a_fleet_gets_its_tyres_the_c_helper_and_python_to_the_same_bits():

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import mujoco
 
-from amr_twin.sim.collisions import GeomRoles, collision_contacts
+from amr_twin.sim.geom_roles import GeomRoles, collision_contacts
 
 PHYSICS_LAYER = True
 

@@ -251,7 +251,7 @@ def test_the_same_seed_gives_the_same_trajectories_and_another_seed_others():
 def test_a_wheel_touching_an_actor_is_always_a_collision_even_standing_on_it():
     """A wheel on a rack's top face counts by the contact's normal (standing is not a collision); on
     an actor (a wheel up on a fork) it is one whatever the normal."""
-    from amr_twin.sim.collisions import _BY_NORMAL, _COLLIDE, _IGNORE, GeomRoles
+    from amr_twin.sim.geom_roles import BY_NORMAL, COLLIDE, IGNORE, GeomRoles
 
     twin, _ = _twin([Actor("pallet_jack", ((0.0, 1.5), (3.0, 1.5)), 1.0)])
     m, roles = twin.physics.model, GeomRoles(twin.physics)
@@ -259,6 +259,6 @@ def test_a_wheel_touching_an_actor_is_always_a_collision_even_standing_on_it():
     fork, rack, floor = (
         m.geom(n).id for n in ("pallet_jack_0/fork_left", "rack_n_beam_low", "floor")
     )
-    assert roles.kind(wheel, fork) == _COLLIDE and roles.kind(fork, wheel) == _COLLIDE
-    assert roles.kind(wheel, rack) == _BY_NORMAL and roles.kind(wheel, floor) == _IGNORE
+    assert roles.kind(wheel, fork) == COLLIDE and roles.kind(fork, wheel) == COLLIDE
+    assert roles.kind(wheel, rack) == BY_NORMAL and roles.kind(wheel, floor) == IGNORE
     assert roles.world_name(fork) == "pallet_jack_0" and roles.world_name(rack) == "rack_n_beam_low"

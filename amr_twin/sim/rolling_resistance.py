@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.grid_steps import CALL4, GridRows, sampler
+from amr_twin.sim.grid_rows import GridRows
+from amr_twin.sim.grid_steps import CALL4, sampler
 from amr_twin.base.c_layout import register
 from amr_twin.base.native_build import open_helper
 

@@ -10,7 +10,8 @@ import pytest
 from scipy import ndimage
 
 from amr_twin.model import generated_world as gw
-from amr_twin.model.build import BuildError, world_file
+from amr_twin.model.build import BuildError
+from amr_twin.model.world_spec import world_file
 from amr_twin.model.config import load_config
 from amr_twin.model.world_generator import DOOR_WIDTH_RANGE_M, generate
 from amr_twin.model.worlds import default_start, uwb_anchors_xy_m, world_path

@@ -10,7 +10,7 @@ import pytest
 from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actor_space import random_actors
 from amr_twin.model.actors import Actor
-from amr_twin.model.build import world_model
+from amr_twin.model.world_spec import world_model
 from amr_twin.model.config import load_config
 from amr_twin.assembly.twin import Twin, TwinOptions
 

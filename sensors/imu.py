@@ -26,7 +26,7 @@ from amr_twin.ros.geometry_messages import Quaternion, Vector3
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Imu, MagneticField
 from amr_twin.sensors.imu_errors import ErrorStream, axis_models, covariances
-from amr_twin.sim.grid_steps import GridRows, gather
+from amr_twin.sim.grid_rows import GridRows, gather
 from amr_twin.base.native_build import address
 
 PHYSICS_LAYER = True
@@ -120,7 +120,7 @@ class ImuSensor:
         grid_us : int, optional
             The simulation loop's sampling grid, us. With ``samplers``, when
             ``period_us`` is a multiple of it, the loop samples the true values
-            on its grid while it steps (a :class:`~amr_twin.sim.grid_steps.GridRows`,
+            on its grid while it steps (a :class:`~amr_twin.sim.grid_rows.GridRows`,
             in C when the loop runs its grid there) and the messages go out
             from *publishing* clock events at the sample instants: the physics
             is not stopped for them (:mod:`amr_twin.base.clock`). Otherwise each

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from amr_twin.model.config_sensors import LidarCfg
-from amr_twin.sim.grid_steps import GridRows, gather
+from amr_twin.sim.grid_rows import GridRows, gather
 from amr_twin.base.native_build import address
 
 PHYSICS_LAYER = True
@@ -94,7 +94,7 @@ class PoseSamples(GridRows):
     """Laser pose samples: rows of ``t_us``, position (3, m), laser x axis and y axis in the world
     (3 + 3).
 
-    A :class:`~amr_twin.sim.grid_steps.GridRows` of the laser site's ``site_xpos`` and
+    A :class:`~amr_twin.sim.grid_rows.GridRows` of the laser site's ``site_xpos`` and
     ``site_xmat`` (``data``, ``site_id``) every ``period_us``: kept by the loop's grid (in C,
     ``gs_gather``, when the loop runs its grid there) or by the sensor's clock events;
     ``after(t_us)`` runs after a sample at or after :attr:`due_us` (the casts). ``native=False``:

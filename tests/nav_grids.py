@@ -33,7 +33,7 @@ def write_map(folder, name: str, static: StaticMap):
     path."""
     import yaml
 
-    from amr_twin.model.worlds import write_pgm
+    from amr_twin.model.pgm import write_pgm
 
     image = np.where(static.occupied, 0, 254).astype(np.uint8)[::-1]
     write_pgm(folder / f"{name}.pgm", image)

@@ -86,7 +86,8 @@ class Robot:
         self.name = physics.prefix.rstrip("/")
         """The robot's name in the model (``amr`` alone, ``amr-2`` in a fleet)."""
         self.start_xy_yaw = tuple(float(v) for v in spec.start_xy_yaw)
-        self._rest = physics.positions()  # settled at its start: how it stands after a teleport
+        # settled at its start: how it stands after a teleport
+        self._rest = physics.placement.positions()
         self.pending: list[tuple[int, int]] = []
         """SC edges ``(t_us, wheel)`` solved from the rows and not yet delivered, in time order."""
         self.bus.send_transform(robot_static_transforms(physics.model), static=True)
@@ -251,24 +252,24 @@ class Robot:
     # -- teleport and reset ----------------------------------------------------------------
     def set_pose(self, x_m: float, y_m: float, yaw_rad: float) -> None:
         """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame) at rest
-        (:meth:`~amr_twin.sim.physics.Physics.place_robot`); ValueError (one line), the robot left
+        (:meth:`~amr_twin.sim.placement.Placement.place`); ValueError (one line), the robot left
         where it was, where it would overlap the world."""
         from amr_twin.sim.start_pose import StartPoseError, check_start
 
-        before = self.physics.place_robot(x_m, y_m, yaw_rad, self._rest)
+        before = self.physics.placement.place(x_m, y_m, yaw_rad, self._rest)
         try:
             check_start(self.physics, f"pose {x_m:g},{y_m:g},{math.degrees(yaw_rad):g}")
         except StartPoseError as exc:
-            self.physics.restore_positions(before)
+            self.physics.placement.restore(before)
             raise ValueError(str(exc).split(";")[0]) from None
 
     def set_payload_kg(self, mass_kg: float) -> None:
         """Carry a load of ``mass_kg`` (0: none) from the next step on: a box of ``payload.size_m``
-        at ``payload.xy_m`` on the deck (:meth:`~amr_twin.sim.physics.Physics.set_payload_kg`)."""
+        at ``payload.xy_m`` on the deck (:meth:`~amr_twin.sim.payload.Payload.set_kg`)."""
         from amr_twin.model.robot_spec import payload_centre_m
 
         cfg = self.spec.cfg
-        self.physics.set_payload_kg(mass_kg, payload_centre_m(cfg), cfg.payload.size_m)
+        self.physics.payload.set_kg(mass_kg, payload_centre_m(cfg), cfg.payload.size_m)
 
     def set_charger_a(self, current_a: float) -> None:
         """Connect a charger of ``current_a`` (0: disconnect) to the pack

@@ -40,7 +40,7 @@ def fleet_floor(
             fleet = settled_fleet(cfg, "warehouse", fleet_starts(LANES[:n]), True, False, 0.3)
             for physics in fleet.robots:
                 for wheel in range(2):
-                    physics.set_motor(wheel, "drive", DRIVE_V)
+                    physics.motors.set(wheel, "drive", DRIVE_V)
             steps = int(round(sim_s / fleet.world.timestep_s))
             t0 = timer()
             fleet.world.step(steps)

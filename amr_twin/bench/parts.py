@@ -65,7 +65,7 @@ def instrument(parts: PartTimer) -> None:
     from amr_twin.sensors.hall import HallSensors
     from amr_twin.sensors.imu import ImuSensor
     from amr_twin.sensors.lidar import Lidar
-    from amr_twin.sim import grid_loop, grid_steps
+    from amr_twin.sim import grid_loop, grid_rows, grid_steps
     from amr_twin.sim.actuation import Actuation
     from amr_twin.base.clock import VirtualClock
     from amr_twin.assembly.robot import Robot
@@ -92,7 +92,7 @@ def instrument(parts: PartTimer) -> None:
         (Lidar, "_publish_next"),
         (Lidar, "cast"),
         (Lidar, "_finish"),
-        (grid_steps.GridRows, "grid_resume"),
+        (grid_rows.GridRows, "grid_resume"),
     ):
         parts.patch(cls, method)
     for method in [m for m in dir(Recorder) if m.startswith("_on")]:

@@ -58,7 +58,7 @@ def _stop_distance(given: str, text: str) -> float:
 
 def _random_actors(cfg, opts: RunOptions, count: int, start, stop_m: float) -> tuple:
     from amr_twin.model.actor_space import random_actors
-    from amr_twin.model.build import world_model
+    from amr_twin.model.world_spec import world_model
     from amr_twin.model.worlds import default_start
 
     x, y, _yaw = start if start is not None else default_start(opts.world)

@@ -17,7 +17,7 @@ import numpy as np
 import yaml
 
 from amr_twin.ros.sensor_messages import LaserScan
-from amr_twin.model.worlds import write_pgm
+from amr_twin.model.pgm import write_pgm
 
 OCCUPIED_THRESH = 0.65
 FREE_THRESH = 0.196

@@ -1,10 +1,12 @@
 """The action states of one vehicle (the specification's section 6.11): each action received, in
 order, with its status WAITING, INITIALIZING, RUNNING, FINISHED or FAILED (the 2.0 schema has no
-PAUSED)."""
+PAUSED); the actions of an ``instantActions`` message (:func:`parse_instant_actions`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from amr_twin.fleet.order import Rejection
 
 INSTANT_ACTIONS = frozenset(
     {
@@ -110,3 +112,32 @@ class ActionStates:
 
     def messages(self) -> list[dict]:
         return [s.message() for s in self._states.values()]
+
+
+def parse_instant_actions(msg) -> list:
+    """The actions of an ``instantActions`` message in order: an :class:`Action` each, or a
+    :class:`~amr_twin.fleet.order.Rejection` for one without actionId or actionType; raises it when
+    the message has no ``actions`` array (``instantActions``, 1.1's name, read too)."""
+    actions = msg.get("actions", msg.get("instantActions")) if isinstance(msg, dict) else None
+    refs = (("topic", "instantActions"),)
+    if not isinstance(actions, list):
+        raise Rejection(
+            "validationError", "instantActions: field actions missing or not an array", refs
+        )
+    out: list = []
+    for a in actions:
+        kind = a.get("actionType", a.get("actionName")) if isinstance(a, dict) else None
+        action_id = a.get("actionId") if isinstance(a, dict) else None
+        if not isinstance(kind, str) or not isinstance(action_id, str):
+            out.append(
+                Rejection(
+                    "validationError",
+                    "instantActions: an action without actionId or actionType",
+                    refs,
+                )
+            )
+            continue
+        params = a.get("actionParameters") or []
+        pairs = tuple((p.get("key"), p.get("value")) for p in params if isinstance(p, dict))
+        out.append(Action(action_id, kind, parameters=pairs))
+    return out

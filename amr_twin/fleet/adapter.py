@@ -2,14 +2,10 @@
 the twin's clock.
 
 :class:`VehicleAdapter` takes the messages of the ``order`` and ``instantActions`` topics
-(:meth:`handle`, in the twin's thread) and, every ``TICK_S`` of simulated time, follows the order:
-the next released node is sent to the vehicle as a goal (with its theta, if any); a node counts as
-traversed when the goal succeeds or, for a node the vehicle drives on from, when it passes within
-the node's allowed deviation (the vehicle's goal tolerance when 0). It stops at the last released
-node; unreleased ones (the horizon) wait for an order update, which is stitched at the last base
-node (:func:`~amr_twin.fleet.order.stitch`). A node with actions is stopped at; its actions run one
-after the other once the vehicle stands (:class:`~amr_twin.fleet.handling.Handling`), then it drives
-on; while charging it drives nowhere. The state goes out at every change and at least every
+(:meth:`handle`, in the twin's thread) and, every ``TICK_S`` of simulated time, follows the order
+(:class:`~amr_twin.fleet.route.Route`). A node with actions is stopped at; its actions run one after
+the other once the vehicle stands (:class:`~amr_twin.fleet.handling.Handling`), then it drives on;
+while charging it drives nowhere. The state goes out at every change and at least every
 ``STATE_PERIOD_S``; the visualization every tick. A refused order or action is answered with an
 error in the state (:class:`~amr_twin.fleet.order.Rejection`), never an exception."""
 
@@ -17,8 +13,18 @@ from __future__ import annotations
 
 import json
 
-from amr_twin.fleet.actions import EDGE_ACTIONS, INSTANT_ACTIONS, NODE_ACTIONS, Action, ActionStates
-from amr_twin.fleet.order import Order, Rejection, parse_order, stitch
+from amr_twin.fleet import state_message
+from amr_twin.fleet.actions import (
+    EDGE_ACTIONS,
+    INSTANT_ACTIONS,
+    NODE_ACTIONS,
+    Action,
+    ActionStates,
+    parse_instant_actions,
+)
+from amr_twin.fleet.order import ORDER_ERRORS, Rejection
+from amr_twin.fleet.order_message import order_header, parse_order
+from amr_twin.fleet.route import Route
 from amr_twin.fleet.vehicle import within
 
 TICK_S = 0.1
@@ -48,16 +54,10 @@ class VehicleAdapter:
         self.vehicle, self.clock, self.send, self.stamper = vehicle, clock, send, stamper
         self.factsheet_body, self.xy_tolerance_m = factsheet, xy_tolerance_m
         self.handling = handling
-        self._queue: list[Action] = []  # the actions of the node reached, still to start
-        self.order: Order | None = None
-        self.nodes: list = []  # node states left, in sequence
-        self.edges: list = []
-        self.last_node = ("", 0)
-        self._last_node_obj = None
+        self.route = Route()
         self.actions = ActionStates()
         self.errors: list[dict] = []
         self.paused = False
-        self._goal = None  # (node, outcome) sent to the vehicle
         self._last_order_header: int | None = None
         self._changed, self._last_state_s, self._driving = True, -1e9, False
         self.log: list[tuple[float, str, dict]] = []
@@ -88,165 +88,56 @@ class VehicleAdapter:
         self._changed = True
 
     def _on_order(self, msg) -> None:
-        header = msg.get("headerId") if isinstance(msg, dict) else None
-        if (
-            isinstance(header, int)
-            and self._last_order_header is not None
-            and 0 < header <= self._last_order_header
-        ):
-            self._error(
-                Rejection(
-                    "validationError",
-                    f"order: headerId {header} is not after the last order's "
-                    f"{self._last_order_header} (a late or repeated message)",
-                    (("topic", "order"), ("headerId", header)),
-                )
-            )
-            return
-        if isinstance(header, int):
-            self._last_order_header = header
         try:
+            self._last_order_header = order_header(msg, self._last_order_header)
             order = parse_order(msg, self.vehicle.map_id, NODE_ACTIONS, EDGE_ACTIONS)
         except Rejection as exc:
             self._error(exc)
             return
         try:
-            self._accept(order)
+            accepted = self.route.accept(
+                order,
+                self.actions,
+                charging=self.handling.charging,
+                pose=self.vehicle.pose(),
+                xy_tolerance_m=self.xy_tolerance_m,
+            )
         except Rejection as exc:
             self._error(exc)
-
-    def _accept(self, order: Order) -> None:
-        current = self.order
-        released = [n for n in order.nodes if n.released]
-        if (
-            self.handling.charging
-            and len(released) > 1
-            and "stopCharging" not in {a.action_type for a in order.nodes[0].actions}
-        ):
-            raise Rejection(
-                "orderError",
-                f"order {order.order_id}: the vehicle is charging and drives nowhere: "
-                "stopCharging first (an instant action, or on the order's first node)",
-                (("topic", "order"), ("orderId", order.order_id)),
-            )
-        if current is not None and order.order_id == current.order_id:
-            if order.update_id < current.update_id:
-                raise Rejection(
-                    "orderUpdateError",
-                    f"order {order.order_id}: orderUpdateId {order.update_id} is "
-                    f"lower than the present {current.update_id}",
-                    (
-                        ("topic", "order"),
-                        ("orderId", order.order_id),
-                        ("orderUpdateId", order.update_id),
-                    ),
-                )
-            if order.update_id == current.update_id:
-                return  # the same message again: ignored (section 6.6.4.3)
-        stitched = current is not None and (bool(self.nodes) or order.order_id == current.order_id)
-        if stitched:
-            self.nodes, self.edges = stitch(self.nodes, self.edges, self._last_base(), order)
-        else:
-            first = order.nodes[0]
-            if not within(
-                self.vehicle.pose(),
-                first.x_m,
-                first.y_m,
-                None,
-                max(first.deviation_xy_m, self.xy_tolerance_m),
-                0.0,
-            ):
-                raise Rejection(
-                    "noRouteError",
-                    f"order {order.order_id}: the first node {first.node_id} is not where "
-                    "the vehicle stands (nor within its allowed deviation)",
-                    (
-                        ("topic", "order"),
-                        ("orderId", order.order_id),
-                        ("orderUpdateId", order.update_id),
-                        ("nodeId", first.node_id),
-                    ),
-                )
-            self.nodes, self.edges = list(order.nodes), list(order.edges)
-        if current is None or order.order_id != current.order_id:
-            self.actions.new_order()
-        for a in (a for n in self.nodes if n.released for a in n.actions):
-            if self.actions.get(a.action_id) is None:
-                self.actions.add(a.action_id, a.action_type, "WAITING", order=True)
-        self.order = order
-        self.errors = [
-            e
-            for e in self.errors
-            if e["errorType"]
-            not in (
-                "validationError",
-                "orderError",
-                "orderUpdateError",
-                "noRouteError",
-                "navigationError",
-                "actionError",
-            )
-        ]
-        if not stitched:  # the first node is where the vehicle stands: traversed now
-            self._traverse(self.nodes[0], first=True)
-        elif self._goal is not None and self._goal[0] not in self.nodes:
-            self._goal = None
-
-    def _last_base(self):
-        """The last released node of the order: still to drive, or the last one traversed."""
-        released = [n for n in self.nodes if n.released]
-        return released[-1] if released else self._last_node_obj
+            return
+        if accepted:
+            self.errors = [e for e in self.errors if e["errorType"] not in ORDER_ERRORS]
 
     def _on_instant_actions(self, msg) -> None:
-        # ``actions`` in the 2.0 schema and text; ``instantActions`` (1.1's name) from vda-5050-lib.
-        actions = msg.get("actions", msg.get("instantActions")) if isinstance(msg, dict) else None
-        if not isinstance(actions, list):
-            self._error(
-                Rejection(
-                    "validationError",
-                    "instantActions: field actions missing or not an array",
-                    (("topic", "instantActions"),),
-                )
-            )
+        try:
+            parsed = parse_instant_actions(msg)
+        except Rejection as exc:
+            self._error(exc)
             return
-        for a in actions:
-            kind = a.get("actionType", a.get("actionName")) if isinstance(a, dict) else None
-            action_id = a.get("actionId") if isinstance(a, dict) else None
-            if not isinstance(kind, str) or not isinstance(action_id, str):
-                self._error(
-                    Rejection(
-                        "validationError",
-                        "instantActions: an action without actionId or actionType",
-                        (("topic", "instantActions"),),
-                    )
-                )
+        for a in parsed:
+            if isinstance(a, Rejection):
+                self._error(a)
                 continue
-            self.actions.add(action_id, kind, "INITIALIZING")
-            if kind not in INSTANT_ACTIONS:
-                self.actions.set(action_id, "FAILED", "not an instant action of this vehicle")
+            self.actions.add(a.action_id, a.action_type, "INITIALIZING")
+            if a.action_type not in INSTANT_ACTIONS:
+                self.actions.set(a.action_id, "FAILED", "not an instant action of this vehicle")
                 self._error(
                     Rejection(
                         "actionError",
-                        f"instant action {kind} is not one this vehicle performs",
+                        f"instant action {a.action_type} is not one this vehicle performs",
                         (
                             ("topic", "instantActions"),
-                            ("actionId", action_id),
-                            ("actionType", kind),
+                            ("actionId", a.action_id),
+                            ("actionType", a.action_type),
                         ),
                     )
                 )
                 continue
-            getattr(self, f"_instant_{kind}")(
-                action_id,
-                {
-                    p.get("key"): p.get("value")
-                    for p in a.get("actionParameters") or []
-                    if isinstance(p, dict)
-                },
-            )
+            getattr(self, f"_instant_{a.action_type}")(a.action_id, a.params)
 
     def _instant_cancelOrder(self, action_id: str, _params) -> None:
-        if not self.nodes and self._goal is None and not self._queue and not self.handling.busy:
+        route = self.route
+        if not route.nodes and route.goal is None and not route.queue and not self.handling.busy:
             self.actions.set(action_id, "FAILED", "no order to cancel")
             self._error(
                 Rejection(
@@ -257,15 +148,15 @@ class VehicleAdapter:
             )
             return
         self.vehicle.cancel()
-        self.nodes, self.edges, self._goal, self._queue = [], [], None, []
+        route.clear()
         self.handling.abort()
         self.actions.fail_order_actions("order cancelled")
         self.actions.set(action_id, "RUNNING")
 
     def _instant_startPause(self, action_id: str, _params) -> None:
-        if not self.paused and self._goal is not None:
+        if not self.paused and self.route.goal is not None:
             self.vehicle.cancel()
-            self._goal = None
+            self.route.goal = None
         self.paused = True
         self.actions.set(action_id, "RUNNING")
 
@@ -281,7 +172,8 @@ class VehicleAdapter:
             and params.get("mapId", self.vehicle.map_id) == self.vehicle.map_id
             and within(self.vehicle.pose(), x, y, theta, 2 * self.xy_tolerance_m, 0.35)
         ):
-            self.last_node = (str(params.get("lastNodeId", self.last_node[0])), self.last_node[1])
+            node_id, seq = self.route.last_node
+            self.route.last_node = (str(params.get("lastNodeId", node_id)), seq)
             self.actions.set(
                 action_id, "FINISHED", "the pose agrees with the vehicle's localisation"
             )
@@ -330,57 +222,22 @@ class VehicleAdapter:
         done = self.handling.step(self.clock.now_s)
         if done is not None:
             self.actions.set(done[0].action_id, "FINISHED", done[1])
-        if not self.handling.busy and self._queue and not self._driving and not self.paused:
-            self._start(self._queue.pop(0))
+        if not self.handling.busy and self.route.queue and not self._driving and not self.paused:
+            self._start(self.route.queue.pop(0))
 
     # -- the order ----------------------------------------------------------------------------
-    def _traverse(self, node, first: bool = False) -> None:
-        self.nodes.remove(node)
-        if not first and self.edges:
-            self.edges.pop(0)
-        self.last_node, self._last_node_obj = (node.node_id, node.sequence_id), node
-        self._queue.extend(node.actions)
-        self._goal = None
-        self._changed = True
-
     def _follow(self) -> None:
-        if self._queue or self.handling.busy:
+        route = self.route
+        if route.queue or self.handling.busy:
             self._do_actions()
             return
-        if self.paused or self.handling.charging or not self.nodes or not self.nodes[0].released:
+        if self.paused or self.handling.charging or not route.nodes or not route.nodes[0].released:
             return
-        node = self.nodes[0]
-        if self._goal is None or self._goal[0] is not node:
-            self._goal = (node, self.vehicle.send_goal(node.x_m, node.y_m, node.theta_rad))
-        outcome = self._goal[1]
-        drives_on = len(self.nodes) > 1 and self.nodes[1].released and not node.actions
-        tol = max(node.deviation_xy_m, self.xy_tolerance_m)
-        if outcome.status == "succeeded" or (
-            drives_on
-            and within(
-                self.vehicle.pose(),
-                node.x_m,
-                node.y_m,
-                node.theta_rad,
-                tol,
-                node.deviation_theta_rad,
-            )
-        ):
-            self._traverse(node)
-        elif outcome.status == "aborted":
-            self._error(
-                Rejection(
-                    "navigationError",
-                    f"node {node.node_id} not reached: {outcome.reason}",
-                    (
-                        ("orderId", self.order.order_id),
-                        ("orderUpdateId", self.order.update_id),
-                        ("nodeId", node.node_id),
-                        ("sequenceId", node.sequence_id),
-                    ),
-                )
-            )
-            self.nodes, self.edges, self._goal = [], [], None
+        traversed, error = route.drive(self.vehicle, self.xy_tolerance_m)
+        if traversed:
+            self._changed = True
+        elif error is not None:
+            self._error(error)
 
     def _tick(self) -> None:
         self._follow()
@@ -409,79 +266,24 @@ class VehicleAdapter:
         self.send(subtopic, msg)
         return msg
 
-    def _position(self) -> dict:
-        pose = self.vehicle.pose()
-        if pose is None:
-            return {
-                "x": 0.0,
-                "y": 0.0,
-                "theta": 0.0,
-                "mapId": self.vehicle.map_id,
-                "positionInitialized": False,
-            }
-        return {
-            "x": pose[0],
-            "y": pose[1],
-            "theta": float(((pose[2] + 3.141592653589793) % 6.283185307179586) - 3.141592653589793),
-            "mapId": self.vehicle.map_id,
-            "positionInitialized": True,
-        }
-
-    def _velocity(self) -> dict:
-        v, w = self.vehicle.velocity()
-        return {"vx": v, "vy": 0.0, "omega": w}
-
     def _publish_visualization(self) -> None:
-        self._emit("visualization", {"agvPosition": self._position(), "velocity": self._velocity()})
+        self._emit("visualization", state_message.visualization(self.vehicle))
 
     def _publish_state(self) -> None:
-        volt, soc = self.vehicle.battery()
-        violated = self.vehicle.field_violated()
-        self._emit(
-            "state",
-            {
-                "orderId": self.order.order_id if self.order else "",
-                "orderUpdateId": self.order.update_id if self.order else 0,
-                "lastNodeId": self.last_node[0],
-                "lastNodeSequenceId": self.last_node[1],
-                "nodeStates": [n.state() for n in self.nodes],
-                "edgeStates": [e.state() for e in self.edges],
-                "agvPosition": self._position(),
-                "velocity": self._velocity(),
-                "loads": self.handling.loads(),
-                "driving": self._driving,
-                "paused": self.paused,
-                "newBaseRequest": bool(self.nodes) and not self.nodes[0].released,
-                "actionStates": self.actions.messages(),
-                "batteryState": {
-                    "batteryCharge": 100.0 * min(1.0, max(0.0, soc)),
-                    "batteryVoltage": volt,
-                    "charging": self.handling.charging,
-                },
-                "operatingMode": "AUTOMATIC",
-                "errors": list(self.errors),
-                "information": self._information(),
-                "safetyState": {
-                    "eStop": "MANUAL" if self.vehicle.estop_pressed() else "NONE",
-                    "fieldViolation": violated,
-                },
-            },
+        body = state_message.state(
+            self.vehicle,
+            self.handling,
+            self.route.order,
+            self.route.last_node,
+            self.route.nodes,
+            self.route.edges,
+            self.actions,
+            self.errors,
+            driving=self._driving,
+            paused=self.paused,
         )
+        self._emit("state", body)
         self._changed, self.actions.changed, self._last_state_s = False, False, self.clock.now_s
-
-    def _information(self) -> list[dict]:
-        """The charging station the vehicle stands at, if any (INFO)."""
-        station = self.handling.station()
-        if station is None:
-            return []
-        return [
-            {
-                "infoType": "chargingStation",
-                "infoLevel": "INFO",
-                "infoDescription": f"at charging station {station.name}",
-                "infoReferences": [{"referenceKey": "stationName", "referenceValue": station.name}],
-            }
-        ]
 
     def publish_factsheet(self) -> None:
         """Send the factsheet (at connection and on factsheetRequest)."""

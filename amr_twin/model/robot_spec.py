@@ -49,7 +49,7 @@ def robot_spec(cfg: TwinConfig, urdf: str, visuals: bool = True) -> mujoco.MjSpe
     )
     spec.modelname = "amr"
     # Elliptic friction cones: the contact's first constraint row is its normal force
-    # (read by Physics.support_normal_forces_n); exported with the robot.
+    # (read by Support.normal_forces_n); exported with the robot.
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     _tag_geoms(spec, cfg)
     base = spec.body("base_link")

@@ -67,7 +67,7 @@ def true_map(cfg, world: str) -> StaticMap:
     (:func:`world_map`)."""
     import mujoco
 
-    from amr_twin.model.build import world_compile_error, world_file
+    from amr_twin.model.world_spec import world_compile_error, world_file
 
     path = world_file(world)
     if path.suffix.lower() in (".yaml", ".yml"):

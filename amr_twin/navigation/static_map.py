@@ -142,7 +142,8 @@ def world_map(
 def yaml_map(path: str | Path) -> StaticMap:
     """A map_server map (YAML + PGM) as map_server reads it; raises MapError (one line) if it cannot
     be."""
-    from amr_twin.model.worlds import MapError, load_map
+    from amr_twin.model.occupancy_map import load_map
+    from amr_twin.model.worlds import MapError
 
     grid = load_map(path)
     if abs(grid.origin_xyyaw[2]) > 1e-9:

@@ -137,7 +137,7 @@ class StateSampler:
     """The robot's joint, link and base state on the loop's record grid.
 
     :attr:`sample` is the grid sampler (``sample(t_us)``, the physics at ``t_us``): a
-    :class:`~amr_twin.sim.grid_steps.GridRows` of the 67 values of a row (joint positions and
+    :class:`~amr_twin.sim.grid_rows.GridRows` of the 67 values of a row (joint positions and
     speeds, the base's twist, the positions and orientations of base_link and the six moving links)
     read through the physics' named views (their ``value_rows``): its C form
     gathers them where they lie, so that a twin keeping this state (a ROS 1 or Foxglove bridge)

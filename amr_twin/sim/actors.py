@@ -17,7 +17,8 @@ import numpy as np
 from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actors import Actor, body_name
 from amr_twin.sim.actor_geoms import actor_geoms, gap_after, robot_geoms
-from amr_twin.sim.grid_steps import TIMED, GridRows, sampler
+from amr_twin.sim.grid_rows import GridRows
+from amr_twin.sim.grid_steps import TIMED, sampler
 from amr_twin.base.c_layout import register
 from amr_twin.base.native_build import address, mujoco_address, open_helper
 

@@ -235,6 +235,6 @@ class Battery:
 
     def grid_state_addresses(self) -> list[int]:
         """Where the values of :meth:`grid_state` lie (for a C row keeper,
-        ``grid_steps.gather``)."""
+        ``grid_rows.gather``)."""
         base = ctypes.addressof(self._s)
         return [base + getattr(_State, name).offset for name in ("terminal_v", "current_a", "soc")]

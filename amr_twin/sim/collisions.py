@@ -2,7 +2,8 @@
 
 A *collision* is any contact between a geom of the robot and a geom of the world
 other than a wheel or a caster ball standing on the floor (a plane or height
-field, or an upward-facing surface: contact normal within :data:`SUPPORT_TILT_DEG`
+field, or an upward-facing surface: contact normal within
+:data:`~amr_twin.sim.geom_roles.SUPPORT_TILT_DEG`
 of vertical). The chassis touching a rack, a wheel rubbing a wall and the robot
 lying on the floor after tipping over are collisions. Any contact with an actor (a
 person or pallet jack, :mod:`amr_twin.model.actors`: a mocap body) is one, a wheel on a
@@ -19,22 +20,18 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from amr_twin.sim.geom_roles import GeomRoles, collision_contacts
 from amr_twin.sim.grid_steps import CHANGED, sampler
-from amr_twin.sim.robot_bodies import robot_name, robot_roots
 from amr_twin.base.c_layout import register
 from amr_twin.base.native_build import open_helper
 
 PHYSICS_LAYER = True
-
-SUPPORT_TILT_DEG = 30.0
-"""A wheel or caster contact whose normal is within this angle of vertical is standing, deg."""
 
 MERGE_GAP_S = 0.1
 """Contact with the same world geom lost for less than this continues the episode, s."""
@@ -42,12 +39,10 @@ MERGE_GAP_S = 0.1
 FORCE_EVERY_S = 0.1
 """While the same contacts persist, their normal forces are read this often (peak force), s."""
 
-_FLOOR_TYPES = (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD)
 FORCE_EVERY_US = int(FORCE_EVERY_S * 1_000_000)
 C_SOURCE = Path(__file__).with_name("collisions.c")
 MEMO_PAIRS = 256
 """Contact pairs the C helper keeps; with more in contact every instant is classified in Python."""
-_IGNORE, _COLLIDE, _BY_NORMAL = 0, 1, 2
 
 
 @dataclass
@@ -89,111 +84,6 @@ class Collision:
             "robot_pose": {"x_m": round(x, 4), "y_m": round(y, 4), "yaw_rad": round(yaw, 4)},
             "peak_force_n": round(self.peak_force_n, 2),
         }
-
-
-def _name(m: mujoco.MjModel, kind: mujoco.mjtObj, i: int, fallback: str) -> str:
-    return mujoco.mj_id2name(m, kind, i) or fallback
-
-
-class GeomRoles:
-    """Which geoms are the robot's, which support it, which are floors; names for reports."""
-
-    def __init__(self, physics):
-        m = self.model = physics.model
-        self.prefix = physics.prefix
-        root = m.body_rootid[physics.base_body]
-        roots = m.body_rootid[m.geom_bodyid]
-        self.robot = roots == root  # (ngeom,) bool
-        self.support = np.zeros(m.ngeom, bool)
-        self.support[list(physics.support_geoms.values())] = True
-        self.floor = np.isin(m.geom_type, _FLOOR_TYPES) & ~self.robot
-        self.other_robot = robot_roots(m)[roots] & ~self.robot  # (ngeom,) bool: another robot's
-        self.actor = (
-            (m.body_mocapid[m.geom_bodyid] >= 0) | self.other_robot
-        ) & ~self.robot  # (ngeom,) bool: a person's, a jack's, another robot's
-        self._pair: dict[tuple[int, int], int] = {}
-        self._part: dict[int, str] = {}
-        self._world: dict[int, str] = {}
-
-    def kind(self, g1: int, g2: int) -> int:
-        """_IGNORE, _COLLIDE or _BY_NORMAL (a support geom on a non-floor world geom)."""
-        key = (g1, g2)
-        k = self._pair.get(key)
-        if k is None:
-            r1, r2 = bool(self.robot[g1]), bool(self.robot[g2])
-            if r1 == r2:
-                k = _IGNORE  # world-world, or the robot with itself
-            else:
-                part, other = (g1, g2) if r1 else (g2, g1)
-                if self.support[part] and not self.actor[other]:
-                    k = _IGNORE if self.floor[other] else _BY_NORMAL
-                else:
-                    k = _COLLIDE
-            self._pair[key] = k
-        return k
-
-    def robot_part(self, g: int) -> str:
-        """The robot body of geom ``g``, without the robot's prefix (``base_link``,
-        ``wheel_left_link``)."""
-        part = self._part.get(g)
-        if part is None:
-            m = self.model
-            body = int(m.geom_bodyid[g])
-            part = self._part[g] = _name(
-                m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}"
-            ).removeprefix(self.prefix)
-        return part
-
-    def world_name(self, g: int) -> str:
-        """The world geom's name, or ``geom <id>`` (in body ``<name>``) when unnamed; an actor's
-        body name; another robot's name."""
-        name = self._world.get(g)
-        if name is None:
-            name = self._world[g] = self._world_name(g)
-        return name
-
-    def _world_name(self, g: int) -> str:
-        m = self.model
-        body = m.geom_bodyid[g]
-        if self.other_robot[g]:
-            return robot_name(m, m.body_rootid[body])
-        if self.actor[g]:
-            return _name(m, mujoco.mjtObj.mjOBJ_BODY, body, f"body {body}")
-        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g)
-        if name:
-            return name
-        return f"geom {g}" + (
-            f" of body {_name(m, mujoco.mjtObj.mjOBJ_BODY, body, str(body))}" if body else ""
-        )
-
-
-_COS_SUPPORT = math.cos(math.radians(SUPPORT_TILT_DEG))
-
-
-def collision_contacts(roles: GeomRoles, data: mujoco.MjData, pairs: list | None = None):
-    """Contacts of the last step that are collisions.
-
-    Returns ``(hits, by_normal)``: ``hits`` lists ``(contact index, robot geom, world
-    geom)``; ``by_normal`` is True when a wheel or caster stands on a world geom other
-    than a floor (its verdict depends on the contact normal, so it may change while
-    the pairs stay the same).
-    """
-    out, by_normal = [], False
-    if data.ncon == 0:
-        return out, by_normal
-    if pairs is None:
-        pairs = data.contact.geom.tolist()
-    for i, (g1, g2) in enumerate(pairs):
-        k = roles.kind(g1, g2)
-        if k == _IGNORE:
-            continue
-        if k == _BY_NORMAL:
-            by_normal = True
-            if abs(float(data.contact.frame[i][2])) >= _COS_SUPPORT:
-                continue
-        robot_g, world_g = (g1, g2) if roles.robot[g1] else (g2, g1)
-        out.append((i, robot_g, world_g))
-    return out, by_normal
 
 
 class _Memo(ctypes.Structure):

@@ -59,7 +59,7 @@ class Mount:
     @property
     def samplers(self) -> list:
         """The loop's grid samplers (the ``on_grid`` hook's list), for a part whose sampler
-        keeps its rows in C (:class:`~amr_twin.sim.grid_steps.GridRows`)."""
+        keeps its rows in C (:class:`~amr_twin.sim.grid_rows.GridRows`)."""
         return self.hooks.samplers
 
 

@@ -18,7 +18,7 @@ class FaultTargets:
     """What the faults act on, handed over by the twin that owns them."""
 
     hall: object  # sensors.hall.HallSensors
-    physics: object  # amr_twin.sim.physics.Physics: jam_wheel, lift_wheel, wheel_angles_rad
+    physics: object  # amr_twin.sim.physics.Physics: jam_wheel, support.lift_wheel, wheel_angles_rad
     link: object  # amr_twin.ros.rosserial.RosserialLink
     bus: object  # amr_twin.ros.bus.Bus: intercept
     actuation: object  # amr_twin.sim.actuation.Actuation
@@ -69,7 +69,7 @@ class FaultInjector:
         elif fault.kind == "motor-stall":
             to.physics.jam_wheel(w, on)
         elif fault.kind == "wheel-lifted":
-            to.physics.lift_wheel(w, on)
+            to.physics.support.lift_wheel(w, on)
         elif fault.kind == "rosserial-loss":
             self._swap(i, on, to.link, "loss_prob", float(fault.value))
         elif fault.kind == "rosserial-latency":

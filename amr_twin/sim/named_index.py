@@ -14,7 +14,7 @@ anything else (an int, a slice, an index array) indexes the array as it is. A fi
 width 1 per name (a hinge's ``qpos``, a one-value sensor) gives a scalar.
 
 :meth:`NamedArray.addresses` gives where the selected values lie (a C row keeper's
-pointers, :func:`amr_twin.sim.grid_steps.gather`); :meth:`NamedIndex.value_rows` keeps a selection
+pointers, :func:`amr_twin.sim.grid_rows.gather`); :meth:`NamedIndex.value_rows` keeps a selection
 of them on the loop's grid.
 
 Part of the physics layer (``PHYSICS_LAYER``): this is the door through which the rest of
@@ -26,7 +26,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from amr_twin.sim.grid_steps import GridRows, gather
+from amr_twin.sim.grid_rows import GridRows, gather
 from amr_twin.base.native_build import address
 
 PHYSICS_LAYER = True
@@ -200,7 +200,7 @@ class NamedIndex:
 
     @staticmethod
     def value_rows(named_arrays: list[tuple[NamedArray, object]], native: bool = True) -> GridRows:
-        """A grid sampler (:class:`~amr_twin.sim.grid_steps.GridRows`) keeping at each grid instant
+        """A grid sampler (:class:`~amr_twin.sim.grid_rows.GridRows`) keeping at each grid instant
         the values ``array[key]`` of each ``(array, key)`` in ``named_arrays``, in order: gathered
         in C where they lie when the loop runs its grid there and (one ctypes call) in Python too,
         or read from the arrays without the helper or with ``native=False``: the same values."""
@@ -218,7 +218,7 @@ class NamedIndex:
 
 
 def _calling(c_row: tuple, width: int):
-    """A Python row function calling the C form ``c_row`` (:func:`amr_twin.sim.grid_steps.gather`'s)
+    """A Python row function calling the C form ``c_row`` (:func:`amr_twin.sim.grid_rows.gather`'s)
     itself."""
     import ctypes
 

@@ -9,7 +9,7 @@ when it is called: in a grid sampler (``on_grid``), the physics at that grid ins
 
 from __future__ import annotations
 
-from amr_twin.sim.grid_steps import GridRows, gather
+from amr_twin.sim.grid_rows import GridRows, gather
 
 
 class Observables:

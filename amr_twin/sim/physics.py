@@ -5,11 +5,9 @@ geoms and sensors by name once (the robot named by its prefix: a world may hold 
 addressed by a Physics of its own sharing the one MjData, :meth:`Physics.robot`), offers named
 views of both (:attr:`Physics.named`, as dm_control's ``physics.named``) and what the rest of
 the twin needs:
-stepping in C, wheel angles and speeds, the base pose, contact loads per named
-geom, and the three motor modes (drive, coast, brake) set on the actuators'
-parameters between steps (the per-step torque stays in C). A braked motor is a
-motor at zero phase voltage (phases shorted): torque ``-Kt Ke / R * omega``, within
-the brake's own current limit.
+stepping in C, wheel angles and speeds, the base pose, and its components: the motors
+(:mod:`~amr_twin.sim.motors`), the support's contact loads (:mod:`~amr_twin.sim.support`), a load
+on the deck (:mod:`~amr_twin.sim.payload`), teleporting (:mod:`~amr_twin.sim.placement`).
 
 The physics layer is this module and those that declare ``PHYSICS_LAYER = True`` with the
 reason (C-speed callbacks and grid samplers, ray-casting sensors, the grid loop); no other
@@ -28,8 +26,12 @@ import numpy as np
 from amr_twin.model.robot_spec import CASTERS, LOOP_SENSOR_DIM, WHEELS
 from amr_twin.model.robot_starts import ROBOT_PREFIX
 from amr_twin.model.tyre_numeric import numeric_name
+from amr_twin.sim.motors import Motors
 from amr_twin.sim.named_index import NamedIndex
+from amr_twin.sim.payload import Payload
+from amr_twin.sim.placement import Placement
 from amr_twin.sim.robot_bodies import robot_indices
+from amr_twin.sim.support import Support
 
 PHYSICS_LAYER = True
 
@@ -93,28 +95,22 @@ class Physics:
         )
         self.base_body = _id(m, mujoco.mjtObj.mjOBJ_BODY, "base_link")
         b = self.base_body
-        self._base_inertial = tuple(
-            a[b].copy() for a in (m.body_mass, m.body_ipos, m.body_iquat, m.body_inertia)
-        )
+        self.payload = Payload(m, b)
+        """A load on the deck (:meth:`~amr_twin.sim.payload.Payload.set_kg`)."""
         G = mujoco.mjtObj.mjOBJ_GEOM
-        self.support_geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
-        self.support_geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
-        self.support_of_geom = [-1] * m.ngeom
-        """(ngeom,) index of each geom in :attr:`support_geoms` (0-5), -1 for the others."""
-        for i, g in enumerate(self.support_geoms.values()):
-            self.support_of_geom[g] = i
-        self._support_contype = {
-            g: (int(m.geom_contype[g]), int(m.geom_conaffinity[g]))
-            for g in self.support_geoms.values()
-        }
-        self._own_qpos, self._own_dof = robot_indices(m, self.base_body)
+        geoms = {f"wheel_{s}": _id(m, G, f"wheel_{s}_collision") for s in WHEELS}
+        geoms.update({f"caster_{c}": _id(m, G, f"caster_{c}_ball") for c in CASTERS})
+        self.support = Support(m, self.data, geoms)
+        """The wheels and caster balls on the ground (:class:`~amr_twin.sim.support.Support`)."""
+        own_qpos, own_dof = robot_indices(m, self.base_body)
+        self.placement = Placement(m, self.data, self.root_qpos, self.wheel_qpos, own_qpos, own_dof)
+        """Teleporting the robot (:meth:`~amr_twin.sim.placement.Placement.place`)."""
         adr = int(m.sensor_adr[_id(m, mujoco.mjtObj.mjOBJ_SENSOR, "wheel_left_angle")])
         self.loop_columns = slice(adr, adr + LOOP_SENSOR_DIM)
         """Where the robot's loop sensors lie in ``sensordata`` (and in a grid loop's rows that
         begin at its start: :class:`~amr_twin.sim.grid_loop.GridLoop`)."""
-        self._drive_range = m.actuator_forcerange[self.actuator].copy()
-        self._drive_gain = m.actuator_gainprm[self.actuator, 0].copy()
-        self._drive_bias = m.actuator_biasprm[self.actuator, 2].copy()
+        self.motors = Motors(m, self.data, self.actuator)
+        """The wheel motors' modes (:meth:`~amr_twin.sim.motors.Motors.set`)."""
         self.tyres_engine = None
         """What computes the brush tyres' forces (:mod:`amr_twin.sim.tyres`): ``"C"``, ``"Python
         (...)"``, or None for the rigid contact (``wheel.tyre_slip`` off)."""
@@ -148,6 +144,12 @@ class Physics:
         twin = copy.copy(self)
         twin.model = copy.copy(self.model)
         twin.data = copy.copy(self.data)
+        for part in ("motors", "payload", "placement", "support"):  # its own, on the copies
+            own = copy.copy(getattr(self, part))
+            own.model = twin.model
+            if hasattr(own, "data"):
+                own.data = twin.data
+            setattr(twin, part, own)
         return twin
 
     @property
@@ -239,37 +241,6 @@ class Physics:
         """(3,) centre of mass of the robot (with payload), world frame."""
         return self.data.subtree_com[self.base_body].copy()
 
-    def support_normal_forces_n(self) -> np.ndarray:
-        """(6,) normal contact force on the wheels L, R and casters fl, fr, rl, rr, N (0 when
-        lifted).
-
-        From the constraint forces of the last step (the first row of each contact is its
-        normal force, for pyramidal-free elliptic cones and for frictionless contacts).
-        """
-        d = self.data
-        out = [0.0] * len(self.support_geoms)
-        if (
-            d.ncon
-        ):  # a handful of contacts: plain Python, in contact order (~5 us against ~30 with numpy)
-            con, lut, force = d.contact, self.support_of_geom, d.efc_force
-            for (g1, g2), adr in zip(con.geom.tolist(), con.efc_address.tolist()):
-                k = max(lut[g1], lut[g2])
-                if k >= 0 and adr >= 0:  # -1: a contact not in the constraints
-                    out[k] += force.item(adr)
-        return np.array(out)
-
-    def support_loads_n(self) -> dict[str, float]:
-        """Normal contact force on each wheel and caster ball, N (0 when lifted)."""
-        return dict(zip(self.support_geoms, self.support_normal_forces_n().tolist()))
-
-    def support_points_xy(self) -> dict[str, np.ndarray]:
-        """World xy of the lowest point of each wheel and caster ball, m."""
-        out = {}
-        for name, g in self.support_geoms.items():
-            pos = self.data.geom_xpos[g]
-            out[name] = pos[:2].copy()
-        return out
-
     def base_heading_xy(self) -> tuple[float, float, float, float]:
         """Base origin x, y (m) and the world x, y of its x axis (unnormalised when tilted), plain
         floats."""
@@ -298,99 +269,6 @@ class Physics:
         self.data.mocap_pos[i] = (x_m, y_m, 0.0)
         self.data.mocap_quat[i] = (math.cos(h), 0.0, 0.0, math.sin(h))
 
-    # -- teleporting the robot (Twin.reset_world, Twin.set_robot_pose) ----------------------
-    def positions(self) -> np.ndarray:
-        """A copy of every joint position (``qpos``): a rest state for :meth:`place_robot`."""
-        return self.data.qpos.copy()
-
-    def place_robot(self, x_m: float, y_m: float, yaw_rad: float, rest: np.ndarray) -> np.ndarray:
-        """Teleport the robot to ``x_m, y_m`` heading ``yaw_rad`` (world frame), standing as in
-        ``rest`` (:meth:`positions` of it settled: its height, tilt, tyre and caster springs), every
-        velocity zero; the wheels keep their angles (their hall sensors see no jump). Returns the
-        positions before, to put back with :meth:`restore_positions`."""
-        d, a = self.data, self.root_qpos
-        before = d.qpos.copy()
-        wheels = d.qpos[self.wheel_qpos].copy()
-        d.qpos[self._own_qpos] = rest[self._own_qpos]  # this robot's joints; the others stay
-        d.qpos[self.wheel_qpos] = wheels
-        w, x, y, z = rest[a + 3 : a + 7]
-        turn = 0.5 * (yaw_rad - math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-        quat = np.empty(4)
-        mujoco.mju_mulQuat(
-            quat, np.array([math.cos(turn), 0.0, 0.0, math.sin(turn)]), rest[a + 3 : a + 7]
-        )
-        d.qpos[a : a + 3] = (x_m, y_m, rest[a + 2])
-        d.qpos[a + 3 : a + 7] = quat
-        self._at_rest()
-        return before
-
-    def restore_positions(self, qpos: np.ndarray) -> None:
-        """Put back the positions :meth:`place_robot` returned, the robot's velocities zero."""
-        self.data.qpos[:] = qpos
-        self._at_rest()
-
-    def _at_rest(self) -> None:
-        d = self.data
-        d.qvel[self._own_dof] = 0.0
-        d.qacc_warmstart[self._own_dof] = 0.0
-        mujoco.mj_forward(self.model, d)
-
-    # -- a load on the deck (amr_twin/fleet: pick and drop) ----------------------------------
-    def set_payload_kg(self, mass_kg: float, centre_m, size_m) -> None:
-        """Carry a box of ``mass_kg`` (kg; 0: none) and ``size_m`` (3,) centred at ``centre_m`` (3,)
-        in base_link, from the next step on: base_link's mass, centre of mass and inertia become
-        those of the chassis with the box (parallel-axis theorem), the model's constants
-        (subtree masses, inverse weights, the solver's mean inertia) those of the loaded robot at
-        qpos0 (``mj_setConst`` on scratch data); 0 puts back base_link as built. In addition to a
-        payload body built into the model."""
-        m, b, scratch = self.model, self.base_body, mujoco.MjData(self.model)
-        m0, c0, q0, i0 = self._base_inertial
-        if mass_kg > 0:
-            r0 = np.empty(9)
-            mujoco.mju_quat2Mat(r0, q0)
-            r0 = r0.reshape(3, 3)
-            p, a = np.asarray(centre_m, float), np.asarray(size_m, float) ** 2
-            total = float(m0) + mass_kg
-            com = (m0 * c0 + mass_kg * p) / total
-            inertia = r0 @ np.diag(i0) @ r0.T + np.diag(mass_kg / 12 * (a.sum() - a))
-            for mass, at in ((m0, c0 - com), (mass_kg, p - com)):
-                inertia += mass * (at @ at * np.eye(3) - np.outer(at, at))
-            values, vectors, quat = np.empty(3), np.empty(9), np.empty(4)
-            mujoco.mju_eig3(values, vectors, quat, inertia.ravel())
-            m0, c0, q0, i0 = total, com, quat, values
-        m.body_mass[b], m.body_ipos[b], m.body_iquat[b], m.body_inertia[b] = m0, c0, q0, i0
-        mujoco.mj_setConst(m, scratch)
-        full = np.zeros((m.nv, m.nv))  # MuJoCo's compiler: the mass matrix's mean diagonal at qpos0
-        mujoco.mj_fullM(m, scratch, full)
-        m.stat.meaninertia = float(np.trace(full)) / m.nv
-
-    # -- actuation --------------------------------------------------------------------
-    def set_motor(
-        self, wheel: int, mode: str, voltage_v: float = 0.0, torque_limit_nm: float | None = None
-    ) -> None:
-        """Set one motor's mode: ``"drive"`` at a phase voltage, ``"coast"`` or ``"brake"``.
-
-        ``torque_limit_nm`` bounds the torque (the driver's current limit times Kt; for
-        ``"brake"``, the shorted phases' own limit); default: the drive limit.
-        """
-        m, a = self.model, self.actuator[wheel]
-        limit = (
-            self._drive_range[wheel]
-            if torque_limit_nm is None
-            else (-torque_limit_nm, torque_limit_nm)
-        )
-        m.actuator_forcerange[a] = limit
-        if mode in ("drive", "brake"):  # brake: phases shorted, i.e. zero phase voltage
-            m.actuator_gainprm[a, 0] = self._drive_gain[wheel]
-            m.actuator_biasprm[a, 2] = self._drive_bias[wheel]
-            self.data.ctrl[a] = voltage_v if mode == "drive" else 0.0
-        elif mode == "coast":  # phases open: no current, no torque
-            m.actuator_gainprm[a, 0] = 0.0
-            m.actuator_biasprm[a, 2] = 0.0
-            self.data.ctrl[a] = 0.0
-        else:
-            raise ValueError(f"mode must be drive, coast or brake, got {mode!r}")
-
     # -- faults (amr_twin/sim/fault_injector.py) --------------------------------------------
     def jam_wheel(self, wheel: int, jammed: bool) -> None:
         """Block ``wheel`` where it is (a joint limit of +-1 mrad around its angle), or free it.
@@ -406,15 +284,9 @@ class Physics:
         if not jammed:
             self.model.jnt_range[j] = self._wheel_range[wheel]
 
-    def lift_wheel(self, wheel: int, lifted: bool) -> None:
-        """Take ``wheel`` off the ground (its tyre touches nothing), or put it back."""
-        g = self.support_geoms[f"wheel_{WHEELS[wheel]}"]
-        contype, conaffinity = (0, 0) if lifted else self._support_contype[g]
-        self.model.geom_contype[g], self.model.geom_conaffinity[g] = contype, conaffinity
-
     def settle(self, duration_s: float = 1.0) -> None:
         """Let the robot come to rest on its wheels and casters (motors braked)."""
         for w in range(2):
-            self.set_motor(w, "brake")
+            self.motors.set(w, "brake")
         self.step(int(round(duration_s / self.timestep_s)))
         self.check()

@@ -109,7 +109,7 @@ class Plant:
             self.mode[w], self.voltage_v[w] = mode, volt
             self.battery.set_motor(w, MODE_CODES[mode], volt)
             limit = self.motors[w].ke_v_s_rad * brake_limit_a if mode == "brake" else None
-            self.physics.set_motor(w, mode, volt, limit)
+            self.physics.motors.set(w, mode, volt, limit)
 
     def set_estop(self, pressed: bool, pins: tuple[DriverPins, DriverPins]) -> None:
         """The mushroom button: relays cut both motors' phases while pressed."""

@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from amr_twin.model.config import TwinConfig
-from amr_twin.sim.grid_steps import CALL4, GridRows, sampler
+from amr_twin.sim.grid_rows import GridRows
+from amr_twin.sim.grid_steps import CALL4, sampler
 from amr_twin.base.c_layout import register
 from amr_twin.base.native_build import open_helper
 
@@ -84,18 +85,17 @@ class RollingResistance:
         self._wheel_dof = [int(v) for v in physics.wheel_dof]
         self._motor_friction = [float(m.dof_frictionloss[v]) for v in self._wheel_dof]
         self._tyre_arm_m = w.rolling_resistance * w.radius_m
-        casters = [name for name in physics.support_geoms if name.startswith("caster_")]
+        casters = [name for name in physics.support.geoms if name.startswith("caster_")]
         self._casters = [joint(f"{name}_joint") for name in casters]
-        self._ball_body = [int(m.geom_bodyid[physics.support_geoms[name]]) for name in casters]
+        self._ball_body = [int(m.geom_bodyid[physics.support.geoms[name]]) for name in casters]
         ball_kg = float(m.body_mass[self._ball_body[0]])
         self._k_c, self._c_c = k.stiffness_n_m, k.damping_n_s_m
         self._f0_c = k.preload_n + ball_kg * g
         self._ball_crr = k.rolling_resistance
         self._base = physics.base_body
         self._root_dof = int(physics.root_dof)
-        self._support_of_geom = (
-            physics.support_of_geom
-        )  # support index (0-5) of every geom, -1 for the others
+        # support index (0-5) of every geom, -1 for the others
+        self._support_of_geom = physics.support.of_geom
         self._loads = [0.0] * 6
         self._fast = (
             d.qpos,
@@ -123,9 +123,9 @@ class RollingResistance:
         put)."""
         self.update = self.__call__
         """The grid sampler: the C helper when built, else :meth:`__call__`."""
-        self.contact_loads = lambda: physics.support_normal_forces_n().tolist()
+        self.contact_loads = lambda: physics.support.normal_forces_n().tolist()
         """``contact_loads()``: (6,) list,
-        :meth:`amr_twin.sim.physics.Physics.support_normal_forces_n` (the C helper's
+        :meth:`amr_twin.sim.support.Support.normal_forces_n` (the C helper's
         ``rr_contact_loads`` when built: the same bits, ~0.5 against ~10 us)."""
         self._loads_c = None
         lib, self.engine = open_helper(C_SOURCE, native)
@@ -251,7 +251,7 @@ class RollingResistance:
                 loads[i] = load if load > 0.0 else 0.0
             else:  # on its stop (or lifted): the contact force tells
                 if contact is None:
-                    contact = self.physics.support_normal_forces_n().tolist()  # as rr_contact_loads
+                    contact = self.physics.support.normal_forces_n().tolist()  # as rr_contact_loads
                 loads[i] = contact[i]
             i += 1
         fl[dof_l] = fric_l + arm * loads[0]

@@ -149,7 +149,7 @@ def _settled(cfg, world, starts, wheres, visuals, imu, settle_s, actors, obstacl
         check_start(physics, where)
     for physics in fleet.robots:  # the settling of Physics.settle, every robot braked
         for wheel in range(2):
-            physics.set_motor(wheel, "brake")
+            physics.motors.set(wheel, "brake")
     first.step(int(round(settle_s / first.timestep_s)))
     first.check()
     for physics, where in zip(fleet.robots, wheres):

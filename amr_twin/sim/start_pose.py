@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import mujoco
 
-from amr_twin.sim.collisions import GeomRoles, collision_contacts
+from amr_twin.sim.geom_roles import GeomRoles, collision_contacts
 
 PHYSICS_LAYER = True
 
@@ -60,7 +60,7 @@ def check_supported(physics, where: str) -> None:
     if held_by_fixture(physics):
         return
     d = physics.data
-    support = set(physics.support_geoms.values())
+    support = set(physics.support.geoms.values())
     touching = (
         any(g1 in support or g2 in support for g1, g2 in d.contact.geom.tolist())
         if d.ncon

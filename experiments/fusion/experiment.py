@@ -224,7 +224,7 @@ def check_route(cfg: TwinConfig, route: Route) -> None:
     or that leaves its world's free space (:func:`amr_twin.controllers.route.check_in_free_space`);
     RouteError."""
     from amr_twin.controllers.route import RouteError, check_in_free_space
-    from amr_twin.model.build import world_model
+    from amr_twin.model.world_spec import world_model
     from amr_twin.sim.bounds import MAX_RUN_S
 
     bound = drive_bound_s(route)

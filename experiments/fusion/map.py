@@ -19,7 +19,7 @@ import numpy as np
 
 from amr_twin.estimation.occupancy_grid import OccupancyGrid
 from amr_twin.model.world_geometry import Footprints, distance_to_boxes_m, surface_samples_m
-from amr_twin.model.worlds import OccupancyMap, load_map
+from amr_twin.model.occupancy_map import OccupancyMap, load_map
 
 TOLERANCE_CELLS = 2
 

@@ -268,7 +268,7 @@ def write_world(cfg, world: str, folder: Path) -> list[Path]:
     import yaml
 
     from amr_twin.model.generated_world import mjcf, parse
-    from amr_twin.model.worlds import write_pgm
+    from amr_twin.model.pgm import write_pgm
     from amr_twin.navigation.stack import true_map
     from amr_twin.base.atomic_file import replacing, write_text
 

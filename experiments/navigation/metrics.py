@@ -57,7 +57,8 @@ def world_obstacle_boxes(cfg, world: str):
     world's extruded walls), as :func:`footprint_clearance_m` takes them."""
     import mujoco
 
-    from amr_twin.model.worlds import world_path, world_xml
+    from amr_twin.model.occupancy_map import world_xml
+    from amr_twin.model.worlds import world_path
     from amr_twin.navigation.stack import robot_top_m
     from amr_twin.navigation.static_map import obstacle_boxes
 

@@ -113,7 +113,8 @@ class NavigationSpec:
         return self.episodes * plan.places() * EPISODE_SIM_S
 
     def _check_world(self, kinds: tuple[str, ...]) -> None:
-        from amr_twin.model.worlds import MapError, load_map, world_path
+        from amr_twin.model.occupancy_map import load_map
+        from amr_twin.model.worlds import MapError, world_path
 
         path = world_path(self.world)
         if not path.is_file() or path.suffix.lower() not in (".xml", ".yaml", ".yml"):
@@ -135,7 +136,8 @@ class NavigationSpec:
 
     def _check_slam_map(self, halls: list[str] | None, kinds: tuple[str, ...]) -> None:
         from amr_twin.experiments.navigation.map import mapping_route
-        from amr_twin.model.worlds import MapError, load_map
+        from amr_twin.model.occupancy_map import load_map
+        from amr_twin.model.worlds import MapError
 
         if self.slam_map is not None and halls:
             raise ValueError("--slam-map: a generated hall runs on its true map only")

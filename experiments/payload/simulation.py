@@ -162,7 +162,7 @@ def _dynamics(point: Point, cfg: TwinConfig) -> tuple[Dynamics | None, str]:
             wall_s=0.0,
         )
         record_run(twin, rrd_path=point.rrd_path, mcap_path=point.mcap_path, result=result)
-    names = list(twin.physics.support_geoms)
+    names = list(twin.physics.support.geoms)
     min_load = dict(zip(names, loads.min(axis=0).tolist()))
     min_wheel_n = min(v for n, v in min_load.items() if n.startswith("wheel"))
     slip = _slip(s, cfg)

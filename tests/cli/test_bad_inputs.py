@@ -382,7 +382,7 @@ def test_a_map_too_fragmented_to_build_is_refused_before_the_build(tmp_path, ref
         "at most 20,000",
     )
     monkeypatch.setattr(
-        "amr_twin.model.worlds.MAX_WALL_RUNS", 1000
+        "amr_twin.model.occupancy_map.MAX_WALL_RUNS", 1000
     )  # the bound on the runs, before merging
     refused(
         ["run", "stop", "--world", world, "--start", "20,20,0"],

@@ -264,7 +264,7 @@ def test_world_and_start_pose(tmp_path):
 
 
 def test_a_saved_ros_map_is_a_world(tmp_path):
-    from amr_twin.model.worlds import write_pgm
+    from amr_twin.model.pgm import write_pgm
     import numpy as np
 
     image = np.full((60, 60), 254, np.uint8)  # 3 m x 3 m room at 0.05 m, walls all round

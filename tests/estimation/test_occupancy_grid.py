@@ -10,7 +10,8 @@ import yaml
 from amr_twin.estimation.occupancy_grid import FREE_THRESH, OccupancyGrid
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
-from amr_twin.model.worlds import load_map, read_pgm
+from amr_twin.model.occupancy_map import load_map
+from amr_twin.model.pgm import read_pgm
 from amr_twin.recording.recorder import attach_recorder, recorder_of
 
 HALF_M = 2.0  # the room's inner faces at x, y = +-2 m

@@ -9,7 +9,8 @@ import pytest
 
 from amr_twin.fleet.actions import NODE_ACTIONS, Action
 from amr_twin.fleet.handling import Handling, Load
-from amr_twin.fleet.order import Rejection, parse_order
+from amr_twin.fleet.order import Rejection
+from amr_twin.fleet.order_message import parse_order
 from amr_twin.model.worlds import ChargingStation
 
 

@@ -151,7 +151,7 @@ def test_vda_5050_lib_master_controller_swaps_two_robots_head_on_along_the_centr
 
 @pytest.mark.parametrize("key", ["allowedDeviationXy", "allowedDeviationXY"])
 def test_the_schemas_and_the_texts_spelling_of_the_allowed_deviation_are_read(key):
-    from amr_twin.fleet.order import parse_order
+    from amr_twin.fleet.order_message import parse_order
     from vda_master import edge, node, order
 
     nodes = [node("n0", 0, -6.0, 0.0), node("n1", 2, -3.0, 0.0)]

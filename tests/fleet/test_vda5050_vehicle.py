@@ -143,7 +143,7 @@ def test_bad_orders_are_answered_with_errors_in_the_state_and_a_good_one_is_stil
     errors = last_state(session)["errors"]
     assert [e["errorType"] for e in errors] == ["validationError"] * 2
     assert {"referenceKey": "headerId", "referenceValue": "3"} in errors[1]["errorReferences"]
-    assert last_state(session)["orderId"] == "" and not session.vehicles[0].adapter.nodes
+    assert last_state(session)["orderId"] == "" and not session.vehicles[0].adapter.route.nodes
     deliver(session, master, "order", TWO_NODES, header_id=6)
     assert last_state(session)["errors"] == [] and last_state(session)["orderId"] == "o1"
     run_until(

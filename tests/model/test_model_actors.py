@@ -17,7 +17,8 @@ from amr_twin.model.actor_space import (
     random_actors,
 )
 from amr_twin.model.actors import Actor, ActorError, add_actors, check_speeds, footprint_half_m
-from amr_twin.model.build import build, world_model
+from amr_twin.model.build import build
+from amr_twin.model.world_spec import world_model
 from amr_twin.model.config import load_config
 
 CFG = load_config()

@@ -10,7 +10,8 @@ import pytest
 from scipy import ndimage
 
 from amr_twin.model import generated_world as gw
-from amr_twin.model.build import BuildError, world_file
+from amr_twin.model.build import BuildError
+from amr_twin.model.world_spec import world_file
 from amr_twin.model.config import load_config
 from amr_twin.model.world_generator import DOOR_WIDTH_RANGE_M, generate
 from amr_twin.model.worlds import default_start, uwb_anchors_xy_m, world_path
@@ -39,7 +40,7 @@ def test_the_same_seed_gives_the_same_bytes_in_another_process_and_other_seeds_d
     c = [p.read_bytes() for p in write_world(cfg, "generated:8", tmp_path / "c")]
     assert a == b and a[0] == gw.mjcf("generated:7").encode()
     assert a[2] != c[2]  # the PGM maps differ
-    from amr_twin.model.worlds import load_map
+    from amr_twin.model.occupancy_map import load_map
 
     grid = load_map(tmp_path / "a" / "generated_7.yaml")
     assert grid.occupied.any() and grid.free.sum() > grid.occupied.sum()

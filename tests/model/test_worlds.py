@@ -4,7 +4,8 @@ map."""
 import numpy as np
 import pytest
 
-from amr_twin.model.worlds import load_map, merge_boxes, read_pgm, wall_boxes, world_xml, write_pgm
+from amr_twin.model.occupancy_map import load_map, merge_boxes, wall_boxes, world_xml
+from amr_twin.model.pgm import read_pgm, write_pgm
 
 
 def _map(tmp_path, image, origin=(-1.0, -2.0, 0.0), negate=0, res=0.1):

@@ -186,7 +186,7 @@ def door_trip(request, tmp_path_factory):
 def test_the_robot_drives_through_a_0_9_m_door_with_the_ekf_0_08_m_clear_of_each_jamb(door_trip):
     from amr_twin.experiments.navigation.optimal import VisibilityGraph
     from amr_twin.model.world_geometry import Footprints
-    from amr_twin.model.worlds import load_map, wall_boxes
+    from amr_twin.model.occupancy_map import load_map, wall_boxes
 
     world, start, goal, run = door_trip
     out = run.outcomes[0]

@@ -15,7 +15,8 @@ import pytest
 from amr_twin.experiments.navigation.metrics import PERSON_HALF_M, footprint_clearance_m
 from amr_twin.model.actors import Actor
 from amr_twin.model.config import load_config
-from amr_twin.model.worlds import Obstacle, load_map, wall_boxes, world_path
+from amr_twin.model.occupancy_map import load_map, wall_boxes
+from amr_twin.model.worlds import Obstacle, world_path
 from amr_twin.navigation.footprint import robot_footprint
 from amr_twin.navigation.interfaces import LocalController, Twist2D
 from amr_twin.navigation.navigation_run import navigate

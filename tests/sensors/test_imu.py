@@ -111,12 +111,12 @@ def test_gyro_integrated_over_a_90_degree_turn():
     bias = rig.gyro().mean(axis=0)
     n_rest = len(rig.imu_msgs)
     yaw0 = rig.physics.pose().yaw_rad
-    rig.physics.set_motor(0, "drive", -1.0)
-    rig.physics.set_motor(1, "drive", 1.0)
+    rig.physics.motors.set(0, "drive", -1.0)
+    rig.physics.motors.set(1, "drive", 1.0)
     while abs(math.remainder(rig.physics.pose().yaw_rad - yaw0, 2 * math.pi)) < math.radians(85):
         rig.run(0.01)
     for w in range(2):
-        rig.physics.set_motor(w, "brake")
+        rig.physics.motors.set(w, "brake")
     rig.run(1.0)
     turned = math.remainder(rig.physics.pose().yaw_rad - yaw0, 2 * math.pi)
     assert 80 < math.degrees(turned) < 120  # the shorted motors stop it in about 0.3 s
@@ -184,8 +184,8 @@ def test_fed_by_a_grid_the_messages_match_the_clock_event_ones():
     fed.imu.stop()
     fed.imu.start(grid_us=10_000, samplers=samplers)
     for rig in (evented, fed):
-        rig.physics.set_motor(0, "drive", -2.0)
-        rig.physics.set_motor(1, "drive", 2.0)
+        rig.physics.motors.set(0, "drive", -2.0)
+        rig.physics.motors.set(1, "drive", 2.0)
     evented.run(0.3)
     samplers[0](0)
     for k in range(

@@ -195,7 +195,7 @@ def test_two_robots_driven_head_on_collide_and_each_monitor_names_the_other():
     loop = GridLoop(fleet.world, monitors, 10, 1000, width=fleet.loop_width)
     for physics in fleet.robots[:2]:  # robots 1 and 2 ahead at 6 V, robot 3 braked
         for wheel in range(2):
-            physics.set_motor(wheel, "drive", 6.0)
+            physics.motors.set(wheel, "drive", 6.0)
     loop.run(0, 3000)
     (one,), (two,) = (m.as_dicts() for m in monitors[:2])
     assert (one["robot"], one["hit"], two["robot"], two["hit"]) == (

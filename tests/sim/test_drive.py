@@ -140,7 +140,7 @@ def test_hard_stop_keeps_every_support_on_the_floor():
     lowest, tilt = np.inf, 0.0
     for _ in range(1000):
         physics.step(1)
-        lowest = min(lowest, physics.support_normal_forces_n().min())
+        lowest = min(lowest, physics.support.normal_forces_n().min())
         tilt = max(tilt, physics.base_tilt_rad())
     # the shorted motors' torque fades with the speed: an exponential stop, time constant
     # (m + 2 J / r^2) / ((Ke_l^2 + Ke_r^2) / (R r^2)) (about 0.37 s; friction helps a little)

@@ -135,10 +135,10 @@ def test_a_lifted_wheel_carries_no_load():
     )
     twin.client.linear(0.3)
     twin.advance(1.5)
-    loads = twin.physics.support_loads_n()
+    loads = twin.physics.support.loads_n()
     assert loads["wheel_right"] == 0.0 and loads["wheel_left"] > 50.0
     twin.advance(1.0)
-    assert twin.physics.support_loads_n()["wheel_right"] > 50.0
+    assert twin.physics.support.loads_n()["wheel_right"] > 50.0
 
 
 def test_a_cut_link_loses_the_stop_command():

@@ -14,7 +14,8 @@ import pytest
 import amr_twin.sim.grid_steps as grid_steps
 import amr_twin.sim.grid_loop as grid_loop_mod
 from amr_twin.model.config import load_config
-from amr_twin.sim.grid_steps import GridRows, gather, grid_stepper
+from amr_twin.sim.grid_rows import GridRows, gather
+from amr_twin.sim.grid_steps import grid_stepper
 from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.base.native_build import address, mujoco_address
 from amr_twin.recording.recorder import attach_recorder, recorder_of
@@ -140,7 +141,7 @@ def test_rows_kept_in_c_are_the_python_rows():
     physics = twin.physics
     last = [
         *twin.rolling.loads,
-        *physics.support_normal_forces_n(),
+        *physics.support.normal_forces_n(),
         physics.base_up_z(),
         *physics.base_velocity(),
     ]

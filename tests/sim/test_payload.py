@@ -1,4 +1,4 @@
-"""A load put on the deck at run time (Physics.set_payload_kg, Twin.set_payload_kg): the physics is
+"""A load put on the deck at run time (Payload.set_kg, Twin.set_payload_kg): the physics is
 that of a robot built with the same payload, a loaded drive costs more and accelerates less, and
 taking the load off restores the model as built."""
 
@@ -29,7 +29,7 @@ def test_a_load_set_at_run_time_weighs_as_the_payload_built_into_the_model():
     """20 kg put on at run time and 20 kg built in as the payload body: the same mass matrix (all
     14 dofs) at qpos0, the same total mass and the same solver scale (mean inertia)."""
     loaded = Physics(build(CFG, "empty").model)
-    loaded.set_payload_kg(20.0, payload_centre_m(CFG), CFG.payload.size_m)
+    loaded.payload.set_kg(20.0, payload_centre_m(CFG), CFG.payload.size_m)
     built = Physics(build(with_values(CFG, {"payload.mass_kg": 20.0}), "empty").model)
     assert loaded.robot_mass_kg() == pytest.approx(built.robot_mass_kg(), abs=1e-12)
     np.testing.assert_allclose(_mass_matrix(loaded), _mass_matrix(built), rtol=0, atol=1e-12)
@@ -40,9 +40,9 @@ def test_taking_the_load_off_restores_the_model_as_built():
     """Bit for bit but the solver's mean inertia (recomputed: the same to 1e-14)."""
     physics = Physics(build(CFG, "empty").model)
     before = copy.copy(physics.model)
-    physics.set_payload_kg(35.0, (0.1, -0.05, 0.5), (0.4, 0.3, 0.2))
+    physics.payload.set_kg(35.0, (0.1, -0.05, 0.5), (0.4, 0.3, 0.2))
     assert physics.robot_mass_kg() == pytest.approx(before.body_subtreemass[1] + 35.0)
-    physics.set_payload_kg(0.0, (0.1, -0.05, 0.5), (0.4, 0.3, 0.2))
+    physics.payload.set_kg(0.0, (0.1, -0.05, 0.5), (0.4, 0.3, 0.2))
     for name in ("body_mass", "body_ipos", "body_iquat", "body_inertia", "body_subtreemass"):
         np.testing.assert_array_equal(getattr(physics.model, name), getattr(before, name), name)
     np.testing.assert_array_equal(physics.model.dof_invweight0, before.dof_invweight0)

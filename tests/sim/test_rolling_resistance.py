@@ -55,7 +55,7 @@ def test_c_helper_and_python_twin_give_the_same_bits(monkeypatch, payload_kg):
     shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
 )
 def test_contact_loads_of_the_helper_are_the_physics_contact_forces():
-    """rr_contact_loads (a sweep point's 50 Hz sample) gives Physics.support_normal_forces_n's bits:
+    """rr_contact_loads (a sweep point's 50 Hz sample) gives Support.normal_forces_n's bits:
     the wheels' and balls' normal contact forces, each support on its own, through a turn with
     a payload at the rear that unloads the front casters."""
     cfg = load_config(overrides={"payload.mass_kg": 45.0, "payload.xy_m": [-0.2, 0.07]})
@@ -64,7 +64,7 @@ def test_contact_loads_of_the_helper_are_the_physics_contact_forces():
     seen = []
 
     def sample(t_us):
-        seen.append((twin.rolling.contact_loads(), twin.physics.support_normal_forces_n().tolist()))
+        seen.append((twin.rolling.contact_loads(), twin.physics.support.normal_forces_n().tolist()))
 
     twin.samplers.append(sample)
     twin.client.linear(0.7)

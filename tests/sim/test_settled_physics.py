@@ -91,7 +91,7 @@ def _drive(fleet, volts, seconds):
     """Set each robot's motors to its (left, right) phase voltage, V, and step the world."""
     for physics, (left, right) in zip(fleet.robots, volts):
         for wheel, v in enumerate((left, right)):
-            physics.set_motor(wheel, "drive", v)
+            physics.motors.set(wheel, "drive", v)
     fleet.world.step(int(round(seconds / fleet.world.timestep_s)))
     fleet.world.check()
 
@@ -113,10 +113,10 @@ def test_each_robot_moves_by_its_own_command_only():
 def test_a_robot_placed_again_leaves_the_other_where_it_is():
     fleet = _fleet([(0, 0, 0), (0, 2, 0)])
     one, two = fleet.robots
-    rest = one.positions()
+    rest = one.placement.positions()
     _drive(fleet, [(0.0, 0.0), (6.0, 6.0)], 0.5)
     x2 = two.pose().x_m
-    one.place_robot(1.0, -1.0, 0.0, rest)
+    one.placement.place(1.0, -1.0, 0.0, rest)
     assert one.pose().x_m == pytest.approx(1.0) and two.pose().x_m == x2
     assert abs(two.base_velocity()[0]) > 0.1  # still rolling: its velocities untouched
 
@@ -139,7 +139,7 @@ def test_the_grid_loop_gives_each_robot_its_own_loop_sensor_rows():
     loop = GridLoop(fleet.world, [], 10, 1000, width=fleet.loop_width)
     for physics, v in zip(fleet.robots, (2.0, 6.0)):
         for wheel in range(2):
-            physics.set_motor(wheel, "drive", v)
+            physics.motors.set(wheel, "drive", v)
     _k, _ts, rows, _grid_t, _grid_rows = loop.run(0, 250)
     for i, physics in enumerate(fleet.robots):
         own = fleet.robot_rows(rows, i)

@@ -10,7 +10,7 @@ import pytest
 from amr_twin.model.actor_paths import actor_path
 from amr_twin.model.actor_space import random_actors
 from amr_twin.model.actors import Actor
-from amr_twin.model.build import world_model
+from amr_twin.model.world_spec import world_model
 from amr_twin.model.config import load_config
 from amr_twin.assembly.twin import Twin, TwinOptions
 
@@ -251,14 +251,14 @@ def test_the_same_seed_gives_the_same_trajectories_and_another_seed_others():
 def test_a_wheel_touching_an_actor_is_always_a_collision_even_standing_on_it():
     """A wheel on a rack's top face counts by the contact's normal (standing is not a collision); on
     an actor (a wheel up on a fork) it is one whatever the normal."""
-    from amr_twin.sim.collisions import _BY_NORMAL, _COLLIDE, _IGNORE, GeomRoles
+    from amr_twin.sim.geom_roles import BY_NORMAL, COLLIDE, IGNORE, GeomRoles
 
     twin, _ = _twin([Actor("pallet_jack", ((0.0, 1.5), (3.0, 1.5)), 1.0)])
     m, roles = twin.physics.model, GeomRoles(twin.physics)
-    wheel = twin.physics.support_geoms["wheel_left"]
+    wheel = twin.physics.support.geoms["wheel_left"]
     fork, rack, floor = (
         m.geom(n).id for n in ("pallet_jack_0/fork_left", "rack_n_beam_low", "floor")
     )
-    assert roles.kind(wheel, fork) == _COLLIDE and roles.kind(fork, wheel) == _COLLIDE
-    assert roles.kind(wheel, rack) == _BY_NORMAL and roles.kind(wheel, floor) == _IGNORE
+    assert roles.kind(wheel, fork) == COLLIDE and roles.kind(fork, wheel) == COLLIDE
+    assert roles.kind(wheel, rack) == BY_NORMAL and roles.kind(wheel, floor) == IGNORE
     assert roles.world_name(fork) == "pallet_jack_0" and roles.world_name(rack) == "rack_n_beam_low"

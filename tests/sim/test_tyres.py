@@ -129,7 +129,7 @@ def test_each_tyre_carries_its_own_wheel_load():
     )
     twin.advance(0.3)
     left, right = tyres.contacts(twin.physics.model, twin.physics.data)
-    solver = twin.physics.support_normal_forces_n()[:2]
+    solver = twin.physics.support.normal_forces_n()[:2]
     assert left.load_n > right.load_n + 20.0
     assert (left.load_n, right.load_n) == pytest.approx(solver, rel=0.03)
     before = twin.physics.pose()
@@ -160,7 +160,7 @@ def test_the_rigid_model_has_no_tyre_state():
     twin = Twin(load_config(sets=RIGID), TwinOptions(world="empty", nodes=()))
     assert twin.physics.tyres_engine is None
     assert tyres.contacts(twin.physics.model, twin.physics.data) is None
-    assert twin.physics.model.geom_condim[twin.physics.support_geoms["wheel_left"]] == 3
+    assert twin.physics.model.geom_condim[twin.physics.support.geoms["wheel_left"]] == 3
 
 
 def test_every_robot_of_a_fleet_gets_its_tyres_the_c_helper_and_python_to_the_same_bits():
@@ -175,8 +175,8 @@ def test_every_robot_of_a_fleet_gets_its_tyres_the_c_helper_and_python_to_the_sa
             tyres.install(native)
             fleet = settled_physics.settled_fleet(cfg, "warehouse", starts, False, False, 0.2)
             for physics, (left, right) in zip(fleet.robots, ((5.0, 6.0), (-6.0, 6.0))):
-                physics.set_motor(0, "drive", left)
-                physics.set_motor(1, "drive", right)
+                physics.motors.set(0, "drive", left)
+                physics.motors.set(1, "drive", right)
             fleet.world.step(300)
             runs.append(fleet.world.data.qpos.copy())
             contacts = [tyres.contacts(p.model, p.data, p.prefix) for p in fleet.robots]

@@ -13,7 +13,7 @@ import yaml
 
 from amr_twin.experiments.navigation import map as navigation_map
 from amr_twin.model.config import load_config
-from amr_twin.model.worlds import load_map
+from amr_twin.model.occupancy_map import load_map
 
 
 @pytest.fixture

@@ -45,13 +45,8 @@ def build_slam_map(cfg, world: str, stem: Path, seed: int = 0, progress: bool = 
     (:func:`save_slam_map`), save ``<stem>.yaml/.pgm/.png``; its figures."""
     from amr_twin.estimation.pose_graph import smooth
     from amr_twin.controllers.route import load_route
-    from amr_twin.experiments.fusion.experiment import (
-        drive,
-        estimate_ekf,
-        estimate_lidar,
-        last_per_stamp,
-        site_config,
-    )
+    from amr_twin.experiments.fusion.estimators import estimate_ekf, estimate_lidar, last_per_stamp
+    from amr_twin.experiments.fusion.experiment import drive, site_config
     from amr_twin.experiments.fusion.streams import odom_poses
     from amr_twin.model.world_geometry import scan_plane_boxes
 
@@ -105,7 +100,7 @@ def beam_poses(cfg, scans: list, t_s: np.ndarray, pose: np.ndarray) -> list:
     ``t_s`` (N,) (the last of equal stamps kept)."""
     from amr_twin.analysis import se2
     from amr_twin.estimation.lidar_odometry import beam_times_s
-    from amr_twin.experiments.fusion.experiment import laser_in_base, last_per_stamp
+    from amr_twin.experiments.fusion.estimators import laser_in_base, last_per_stamp
 
     t_s, pose = last_per_stamp(t_s, pose)
     laser = np.asarray(laser_in_base(cfg))

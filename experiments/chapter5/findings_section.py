@@ -12,7 +12,7 @@ from amr_twin.experiments.chapter5.findings import (
     lines,
 )
 from amr_twin.experiments.chapter5.timing_bound import TIMINGS
-from amr_twin.experiments.documents.texts import attainable_table
+from amr_twin.experiments.documents.chapter5_texts import attainable_table
 
 
 def opening(data: dict) -> list[str]:

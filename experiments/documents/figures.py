@@ -10,7 +10,8 @@ ten seeds on both routes (most of the command's few minutes) and the chapter 5 r
 (``tests/chapter5_scorecard.json``, ``docs/img/chapter5_run1.png``: the README's first-run picture)
 and the chapter 5 attainability study (128 plants: a few minutes); each experiment's committed
 data goes to its ``experiments/<name>/reference/`` folder, not to docs/. It
-then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.texts`) from those
+then rewrites the generated blocks of :data:`DOCUMENTS` (their texts: :mod:`.texts`,
+:mod:`.chapter5_texts`) from those
 committed files and the calibration's report (``models/amr/calibration.yaml``: after a new fit,
 ``amr-twin calibrate --no-fit --report models/amr/calibration.yaml`` first). A block is the text
 between ``<!-- generated: NAME ... -->`` and ``<!-- end: NAME -->``;
@@ -28,12 +29,14 @@ from pathlib import Path
 from amr_twin.experiments.chapter5.scorecard import SCORECARD
 from amr_twin.experiments.chapter5.attainable import COMMITTED_JSON
 from amr_twin.experiments.faults.report import COMMITTED_JSON as FAULTS_JSON, PAGE as FAULTS_PAGE
-from amr_twin.experiments.documents.texts import (
-    SUMMARY_FUSION,
+from amr_twin.experiments.documents.chapter5_texts import (
     attainable_table,
-    calibration_summary,
     chapter5_summary,
     chapter5_table,
+)
+from amr_twin.experiments.documents.texts import (
+    SUMMARY_FUSION,
+    calibration_summary,
     faults_summary,
     fusion_table,
     payload_summary,

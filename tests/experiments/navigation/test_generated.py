@@ -10,6 +10,7 @@ import pytest
 
 from amr_twin.experiments.navigation import experiment as nv
 from amr_twin.experiments.navigation import generated as ng
+from amr_twin.experiments.navigation.episode_run import EpisodeRun
 from amr_twin.model.config import load_config
 from amr_twin.model.generated_world import hall
 
@@ -213,7 +214,7 @@ def test_the_people_cost_is_measured_on_the_same_episodes_without_them(episodes,
     person counts as such."""
     from amr_twin.experiments.navigation.generated_report import _people_lines
 
-    items = [nv.EpisodeRun(None, WORLD, e, "true", None) for e in episodes]
+    items = [EpisodeRun(None, WORLD, e, "true", None) for e in episodes]
     bare = ng.without_people(items)
     walking = [it for it in items if it.episode.actor is not None]
     assert walking and len(bare) == len(walking)

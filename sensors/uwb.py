@@ -24,6 +24,7 @@ from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import Range
 from amr_twin.ros.ros_state import anchor_transforms
 from amr_twin.sim.robot_bodies import OwnGeoms
+from amr_twin.sensors.uwb_errors import corrupt_range, corrupt_ranges
 
 PHYSICS_LAYER = True
 
@@ -66,69 +67,6 @@ def tag_positions_m(pose: np.ndarray, tag_pos_m) -> np.ndarray:
     return np.column_stack((pose[:, 0] + c * tx - s * ty, pose[:, 1] + s * tx + c * ty))
 
 
-def corrupt_ranges(
-    true_range_m: np.ndarray,
-    cfg: UwbCfg,
-    rng: np.random.Generator,
-    blocked: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Noise, NLOS bias and dropouts of a batch of exchanges.
-
-    Parameters
-    ----------
-    true_range_m : ndarray, shape (N,)
-        True tag-anchor distances, m.
-    cfg : UwbCfg
-        Error parameters.
-    rng : numpy.random.Generator
-        Draws, in this order: N uniforms (dropout), N uniforms (NLOS), N
-        exponentials (NLOS bias), N normals (noise); with ``blocked``, then N
-        exponentials (blocked bias) and N uniforms (blocked dropout).
-    blocked : ndarray of bool, shape (N,), optional
-        Exchanges whose direct path a wall blocks (``blocked_bias_m``, ``blocked_dropout_prob``).
-
-    Returns
-    -------
-    range_m : ndarray, shape (N,)
-        Measured ranges (>= 0), m.
-    received : ndarray of bool, shape (N,)
-        False for a dropped exchange or a distance beyond ``max_range_m``.
-    """
-    d = np.asarray(true_range_m, dtype=np.float64)
-    n = d.shape[0]
-    u_drop, u_nlos = rng.random(n), rng.random(n)
-    bias = rng.exponential(cfg.nlos_bias_m, n) if cfg.nlos_bias_m > 0 else np.zeros(n)
-    noise = cfg.range_noise_sigma_m * rng.standard_normal(n)
-    r = d + noise + np.where(u_nlos < cfg.nlos_prob, bias, 0.0)
-    received = (u_drop >= cfg.dropout_prob) & (d <= cfg.max_range_m)
-    if blocked is not None:
-        wall = rng.exponential(cfg.blocked_bias_m, n) if cfg.blocked_bias_m > 0 else np.zeros(n)
-        u_wall = rng.random(n)
-        blocked = np.asarray(blocked, dtype=bool)
-        r = r + np.where(blocked, wall, 0.0)
-        received &= ~(blocked & (u_wall < cfg.blocked_dropout_prob))
-    return np.maximum(r, 0.0), received
-
-
-def corrupt_range(
-    d_m: float, cfg: UwbCfg, rng: np.random.Generator, blocked: bool | None = None
-) -> tuple[float, bool]:
-    """One exchange of :func:`corrupt_ranges` (the same draws in the same order, the same sums): the
-    sensor's path at 60 Hz, where NumPy's per-call cost on arrays of one dominated. Returns
-    ``(range_m, received)``."""
-    u_drop, u_nlos = rng.random(), rng.random()
-    bias = rng.exponential(cfg.nlos_bias_m) if cfg.nlos_bias_m > 0 else 0.0
-    noise = cfg.range_noise_sigma_m * rng.standard_normal()
-    r = d_m + noise + (bias if u_nlos < cfg.nlos_prob else 0.0)
-    received = u_drop >= cfg.dropout_prob and d_m <= cfg.max_range_m
-    if blocked is not None:
-        wall = rng.exponential(cfg.blocked_bias_m) if cfg.blocked_bias_m > 0 else 0.0
-        u_wall = rng.random()
-        r = r + (wall if blocked else 0.0)
-        received = received and not (blocked and u_wall < cfg.blocked_dropout_prob)
-    return max(r, 0.0), bool(received)
-
-
 def _message(seq: int, stamp: Time, index: int, range_m: float, cfg: UwbCfg) -> Range:
     return Range(
         header=Header(seq, stamp, anchor_frame(index)),
@@ -162,7 +100,7 @@ def simulate_ranges(
     cfg : UwbCfg
         Error parameters.
     rng : numpy.random.Generator
-        Source of all draws (:func:`corrupt_ranges`).
+        Source of all draws (:func:`~amr_twin.sensors.uwb_errors.corrupt_ranges`).
     anchor : ndarray of int, shape (N,), optional
         The anchor ranged at each time (round-robin). Default: every anchor at every
         time, in anchor order.

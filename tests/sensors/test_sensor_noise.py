@@ -64,7 +64,7 @@ def test_lidar_range_noise_is_the_datasheets():
 
 
 def test_uwb_range_noise_is_the_datasheets():
-    from amr_twin.sensors.uwb import corrupt_ranges
+    from amr_twin.sensors.uwb_errors import corrupt_ranges
 
     data = load_config().uwb.model_dump()
     data.update(nlos_prob=0.0, dropout_prob=0.0)  # the line-of-sight noise alone

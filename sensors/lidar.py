@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from collections import deque
 
-import mujoco
 import numpy as np
 
 from amr_twin.ros.bus import Bus
@@ -20,16 +19,15 @@ from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.sensor_messages import LaserScan
 
 from amr_twin.sim.grid_steps import NEVER_BEFORE
-from amr_twin.sim.robot_bodies import OwnGeoms
 from amr_twin.sensors.lidar_beams import (
     US,
     PoseSamples,
     beam_angles_rad,
     beam_directions,
-    group_masks,
     scan_timing,
 )
-from amr_twin.sensors.lidar_kernels import CUTOFF_M, beam_kernels
+from amr_twin.sensors.lidar_caster import BeamCaster
+from amr_twin.sensors.lidar_kernels import beam_kernels
 
 PHYSICS_LAYER = True
 
@@ -97,21 +95,7 @@ class Lidar:
         self.group_us, self.loop_cast_us = int(group_us), int(loop_cast_us)
         self.cast_period_us = self.group_us  # pose sample period (the loop's grid in the twin)
         self.cast_every_us = self.group_us  # longest time between casts
-        moving = model.body_rootid[model.geom_bodyid] != 0  # cast what moves with the robot apart
-        self.geomgroup, self._world_groups, self._payload_groups = group_masks(
-            model.geom_group, moving
-        )
-        self._own = OwnGeoms(model, int(model.site_bodyid[self.site_id]))
-        """Its robot's geoms, hidden while it casts: it sees the other robots, never its own."""
-        self.geomgroup = self._own.seeing_others(self.geomgroup)
-        if self._world_groups is not None:
-            self._world_groups = self._own.seeing_others(self._world_groups)
-        self._kernels.bind(
-            model,
-            data,
-            self.site_id,
-            self.geomgroup if self._world_groups is None else self._world_groups,
-        )
+        self._caster = BeamCaster(model, data, self.site_id, self.local_dirs, self._kernels)
         self._no_dist, self._no_hit = (
             np.full(self.n_beams, -1.0),
             np.full(self.n_beams, -1, np.int32),
@@ -121,9 +105,6 @@ class Lidar:
         )
         self.dist_m = np.full(self.n_beams, -1.0)
         """True distances of the rotation in progress, m (-1: no hit)."""
-        self._normal = np.zeros(3 * self.n_beams)
-        self._pdist = np.zeros(self.n_beams)
-        self._pgeom = np.zeros(self.n_beams, np.int32)
         self.hit_geom = np.full(self.n_beams, -1, np.int32)
         """Geom id hit by each beam of the rotation in progress (-1: none)."""
         self.beam_t_us = np.zeros(self.n_beams, np.int64)
@@ -139,10 +120,6 @@ class Lidar:
         self._samplers: list | None = None  # the loop's grid samplers (in the twin)
         self._grid: tuple[int, list] | None = None
         self._poses = PoseSamples(data, self.site_id, self.cast_period_us, self._after_pose, native)
-        self._lx, self._ly = (
-            self.local_dirs[:, 0:1].copy(),
-            self.local_dirs[:, 1:2].copy(),
-        )  # (n, 1) each
         self._done: deque = deque()  # (t_us, scan, beam_t_us, hit_geom) cast, not yet published
         self.running = False
         self._new_rotation(clock.now_us)
@@ -251,72 +228,14 @@ class Lidar:
             self._poses.keep_from(int(self.beam_t_us[self.n_beams - 1 - self._next]))
 
     def cast(self, start: int, stop: int, at_own_instants: bool = True) -> None:
-        """Cast beams ``start:stop`` (one call of the kernels' cast, a second ``mj_multiRay`` with a
-        payload).
-
-        With ``at_own_instants`` each beam is cast from the laser position and
-        along its direction at its own instant ``beam_t_us[i]`` (module docstring;
-        needs the pose samples around the beams, the last one being the present
-        pose). Otherwise all from the pose now.
-        Stores the true distances (m, -1 for no hit) in :attr:`dist_m` and the hit
-        geoms in :attr:`hit_geom`; noise is added for the whole rotation at its end.
-        """
+        """Cast beams ``start:stop`` (:meth:`BeamCaster.cast
+        <amr_twin.sensors.lidar_caster.BeamCaster.cast>`: each at its own instant ``beam_t_us[i]``
+        with ``at_own_instants``, else all from the pose now) into :attr:`dist_m` (m, -1 for no
+        hit) and :attr:`hit_geom`; noise is added for the whole rotation at its end."""
         if stop - start <= 0:
             return
         geomid, dist = self.hit_geom[start:stop], self.dist_m[start:stop]
-        with self._own:
-            self._cast(start, stop, at_own_instants, geomid, dist)
-
-    def _cast(self, start: int, stop: int, at_own_instants: bool, geomid, dist) -> None:
-        m, d, s, k = self.model, self.data, self.site_id, stop - start
-        poses = self._poses
-        if at_own_instants and poses.n > 0:  # origins and directions at the beams' instants
-            self._kernels.cast(
-                self.beam_t_us[start:stop],
-                self._lx[start:stop],
-                self._ly[start:stop],
-                poses.rows,
-                poses.n,
-                dist,
-                geomid,
-            )
-        else:
-            u = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
-            groups = self.geomgroup if self._world_groups is None else self._world_groups
-            mujoco.mj_multiRay(
-                m,
-                d,
-                d.site_xpos[s],
-                u.ravel(),
-                groups,
-                1,
-                -1,
-                geomid,
-                dist,
-                self._normal[: 3 * k],
-                k,
-                CUTOFF_M,
-            )
-        if self._payload_groups is not None:
-            origin = d.site_xpos[s]  # what moves with the robot: the present frame
-            u_now = self.local_dirs[start:stop] @ d.site_xmat[s].reshape(3, 3).T
-            pgeom, pdist = self._pgeom[:k], self._pdist[:k]
-            mujoco.mj_multiRay(
-                m,
-                d,
-                origin,
-                u_now.ravel(),
-                self._payload_groups,
-                1,
-                -1,
-                pgeom,
-                pdist,
-                None,
-                k,
-                CUTOFF_M,
-            )
-            near = (pgeom >= 0) & ((geomid < 0) | (pdist < dist))
-            geomid[near], dist[near] = pgeom[near], pdist[near]
+        self._caster.cast(start, stop, self.beam_t_us, self._poses, at_own_instants, geomid, dist)
 
     def noisy_ranges(self, dist: np.ndarray, geomid: np.ndarray) -> np.ndarray:
         """Noisy ranges (n,) float32, m, inf where invalid, of true distances ``dist`` (n,) and hit

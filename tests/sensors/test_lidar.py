@@ -364,35 +364,3 @@ def test_every_return_is_what_a_ray_from_its_own_laser_pose_hits(
             hits += 1
             thin_hits += rig.m.geom(gid[0]).name.startswith(("upright", "brace", "post"))
     assert hits > 1000 and thin_hits > 200
-
-
-def test_a_robots_lidar_sees_the_other_robot_at_its_range_and_never_itself():
-    from amr_twin.model.robot_starts import fleet_starts
-    from amr_twin.sim.settled_physics import settled_fleet
-
-    cfg = load_config()
-    starts = fleet_starts([(-4.0, 0.0, 0.0), (-2.0, 0.0, 0.0)])  # robot 2 two metres ahead
-    fleet = settled_fleet(cfg, "warehouse", starts, True, False, 0.3)
-    one, two = fleet.robots
-    m, d = one.model, one.data
-    lidar = Lidar(one, VirtualClock(), Bus(VirtualClock()), cfg.lidar, autostart=False)
-    groups = m.geom_group.copy()
-    lidar.cast(0, lidar.n_beams, at_own_instants=False)
-    assert (m.geom_group == groups).all()  # its own geoms back in their group
-    roots = m.body_rootid[m.geom_bodyid]
-    hit = lidar.hit_geom[lidar.hit_geom >= 0]
-    assert not (roots[hit] == m.body_rootid[one.base_body]).any()  # never its own body
-    laser = d.site("amr-1/laser")
-    ahead = laser.xmat.reshape(3, 3).T @ np.array([1.0, 0.0, 0.0])  # world +x in the laser frame
-    beam = int(np.argmax(lidar.local_dirs @ ahead))
-    assert roots[lidar.hit_geom[beam]] == m.body_rootid[two.base_body]
-    # the range: an independent ray from just beyond robot 1's nose along the same direction
-    direction = laser.xmat.reshape(3, 3) @ lidar.local_dirs[beam]
-    start = laser.xpos + 0.2 * direction
-    seen = np.array([1, 1, 0, 0, 0, 0], np.uint8)
-    geom = np.zeros(1, np.int32)
-    expected = 0.2 + mujoco.mj_ray(m, d, start, direction, seen, 1, -1, geom)
-    assert geom[0] == lidar.hit_geom[beam] and lidar.dist_m[beam] == pytest.approx(
-        expected, abs=1e-9
-    )
-    assert 1.2 < lidar.dist_m[beam] < 1.7  # to robot 2's back, 2 m less two half lengths

@@ -31,11 +31,10 @@ from amr_twin.ros.geometry_messages import (
 )
 from amr_twin.ros.messages import Header
 from amr_twin.ros.sensor_messages import Imu, Range
-from amr_twin.sensors.uwb import anchor_index
 
-from amr_twin.estimation.ekf_filter import UnicycleEkf
+from amr_twin.estimation.ekf_filter import initial_filter
+from amr_twin.estimation.ekf_inputs import AnchorGeometry, GyroRestCalibration, OdometryTwist
 from amr_twin.estimation.ekf_model import (
-    BG,
     V,
     W,
     X,
@@ -44,9 +43,7 @@ from amr_twin.estimation.ekf_model import (
     gyro_model,
     linear_model,
     odometry_covariances,
-    pose_difference_twist,
     process_noise,
-    range_model,
     transition_jacobian,
 )
 
@@ -108,40 +105,16 @@ class EkfNode:
                 f"initial_pose: expected 3 finite numbers (x_m, y_m, yaw_rad), got {initial_pose!r}"
             )
         self.cfg, self.use_odom, self.use_imu, self.use_uwb = cfg, use_odom, use_imu, use_uwb
-        self.half_track_m = 0.5 * float(wheel_separation_m)
-        if anchors_xy_m is None and uwb is not None:
-            anchors_xy_m = uwb.anchors_xy_m
-        tag = (
-            tag_pos_m
-            if tag_pos_m is not None
-            else (uwb.tag_pos_m if uwb is not None else (0.0, 0.0, 0.0))
+        self.anchors = AnchorGeometry(
+            use_uwb=use_uwb,
+            anchors_xy_m=anchors_xy_m,
+            uwb=uwb,
+            anchor_z_m=anchor_z_m,
+            tag_pos_m=tag_pos_m,
         )
-        self.tag_xy_m = np.asarray(tag, dtype=np.float64)[:2]
-        z_anchor = (
-            anchor_z_m
-            if anchor_z_m is not None
-            else (uwb.anchor_z_m if uwb is not None else tag[2])
-        )
-        self.dz_m = float(z_anchor) - float(tag[2])
-        self.anchors_xy_m = None
-        if use_uwb:
-            if anchors_xy_m is None:
-                raise ValueError("anchors_xy_m: needed when use_uwb is True (or pass uwb=cfg.uwb)")
-            self.anchors_xy_m = np.asarray(anchors_xy_m, dtype=np.float64).reshape(-1, 2)
         self.frame_id = MAP_FRAME if use_uwb else ODOM_FRAME
 
-        f = self.filter = UnicycleEkf(dim_x=6, dim_z=1)
-        f.x = np.array([[pose[0]], [pose[1]], [pose[2]], [0.0], [0.0], [0.0]])
-        f.P = np.diag(
-            [
-                cfg.initial_xy_sigma_m**2,
-                cfg.initial_xy_sigma_m**2,
-                cfg.initial_yaw_sigma_rad**2,
-                cfg.initial_v_sigma_m_s**2,
-                cfg.initial_w_sigma_rad_s**2,
-                cfg.initial_gyro_bias_sigma_rad_s**2,
-            ]
-        )
+        self.filter = initial_filter(cfg, pose)
         self._odom_h = linear_model([V, W])
         self._odom_R = np.diag([cfg.odom_v_sigma_m_s**2, cfg.odom_w_sigma_rad_s**2])
         self._gyro_h = gyro_model()
@@ -153,10 +126,9 @@ class EkfNode:
         self._t_hist: list[float] = []
         self._pose_hist: list[tuple[float, float, float]] = []
         self._last_twist = (0.0, 0.0)
-        self._prev_odom: tuple[float, float, float, float] | None = None
-        self._calib_t0_s: float | None = None
-        self._calib: list[float] = []
-        self.calibrated = cfg.imu_rest_calibration_s <= 0.0
+        self._odom_twist = OdometryTwist(cfg.odom_differential)
+        self.gyro_rest = GyroRestCalibration(cfg, 0.5 * float(wheel_separation_m))
+        """The gyro bias' rest calibration (``half_track_m``: half the wheels' separation)."""
         self.late_messages = 0
         self.rejected_ranges = 0
         self.fused = {"odom": 0, "imu": 0, "uwb": 0, "pose": 0}
@@ -195,22 +167,9 @@ class EkfNode:
         self._pose_hist.append((float(x[X]), float(x[Y]), float(x[YAW])))
 
     # -- inputs -------------------------------------------------------------------------
-    def odom_twist(self, msg: Odometry) -> tuple[float, float] | None:
-        """(v_m_s, w_rad_s) that an odometry message gives: its twist, or, with
-        ``odom_differential``, its pose differentiated against the previous message's
-        (None for the first message and for a repeated stamp)."""
-        if not self.cfg.odom_differential:
-            return float(msg.twist.twist.linear.x), float(msg.twist.twist.angular.z)
-        t_s, p = msg.header.stamp.to_sec(), msg.pose.pose
-        now = (t_s, p.position.x, p.position.y, p.orientation.yaw_rad())
-        prev, self._prev_odom = self._prev_odom, now
-        if prev is None or now[0] <= prev[0]:
-            return None
-        return pose_difference_twist(prev, now)
-
     def on_odom(self, msg: Odometry) -> None:
         """Fuse the forward speed and yaw rate of a wheel odometry message."""
-        twist = self.odom_twist(msg)
+        twist = self._odom_twist(msg)
         if twist is None:
             return
         v, w = twist
@@ -224,34 +183,15 @@ class EkfNode:
         self._record()
         self._publish(msg.header.stamp)
 
-    def _at_rest(self) -> bool:
-        v, w = self._last_twist
-        return (
-            abs(v) <= self.cfg.rest_speed_m_s
-            and abs(w) * self.half_track_m <= self.cfg.rest_speed_m_s
-        )
-
-    def _finish_calibration(self) -> None:
-        f = self.filter
-        if self._calib:
-            f.x[BG, 0] = float(np.mean(self._calib))
-            f.P[BG, :] = 0.0
-            f.P[:, BG] = 0.0
-            f.P[BG, BG] = self.cfg.gyro_w_sigma_rad_s**2 / len(self._calib)
-        self.calibrated = True
-
     def on_imu(self, msg: Imu) -> None:
         """Fuse the gyro's z rate (after the rest calibration of its bias)."""
         if not self.use_imu:
             return
         t_s, gz = msg.header.stamp.to_sec(), float(msg.angular_velocity.z)
-        if not self.calibrated:
-            if self._calib_t0_s is None:
-                self._calib_t0_s = t_s
-            if t_s - self._calib_t0_s < self.cfg.imu_rest_calibration_s and self._at_rest():
-                self._calib.append(gz)
+        if not self.gyro_rest.done:
+            if self.gyro_rest.take(t_s, gz, self._last_twist):
                 return
-            self._finish_calibration()
+            self.gyro_rest.finish(self.filter)
         self._predict_to(t_s)
         HJ, Hx = self._gyro_h
         self.filter.update(np.array([[gz]]), HJ, Hx, R=self._gyro_R)
@@ -260,34 +200,25 @@ class EkfNode:
         if not self.use_odom:
             self._publish(msg.header.stamp)
 
-    def range_model(self, x: np.ndarray, index: int) -> tuple[float, np.ndarray]:
-        """Predicted range to anchor ``index`` (m) and its Jacobian, shape (1, 6)
-        (:func:`range_model`)."""
-        return range_model(x, self.anchors_xy_m[index], self.tag_xy_m, self.dz_m)
-
     def on_range(self, msg: Range) -> None:
         """Fuse one UWB range, unless its Mahalanobis distance exceeds the gate."""
         if not self.use_uwb:
             return
-        index = anchor_index(msg.header.frame_id)
-        if index >= self.anchors_xy_m.shape[0]:
-            raise ValueError(
-                f"header.frame_id: anchor {index} not in [0, {self.anchors_xy_m.shape[0] - 1}]"
-            )
+        index = self.anchors.index(msg.header.frame_id)
         z = float(msg.range)
         if not (msg.min_range <= z <= msg.max_range) or not math.isfinite(z):
             return
         self._predict_to(msg.header.stamp.to_sec())
         f = self.filter
-        r, H = self.range_model(f.x[:, 0], index)
+        r, H = self.anchors.model(f.x[:, 0], index)
         S = float((H @ f.P @ H.T)[0, 0]) + self._uwb_R[0, 0]
         if abs(z - r) > self.cfg.mahalanobis_gate * math.sqrt(S):
             self.rejected_ranges += 1
             return
         f.update(
             np.array([[z]]),
-            lambda x: self.range_model(x[:, 0], index)[1],
-            lambda x: np.array([[self.range_model(x[:, 0], index)[0]]]),
+            lambda x: self.anchors.model(x[:, 0], index)[1],
+            lambda x: np.array([[self.anchors.model(x[:, 0], index)[0]]]),
             R=self._uwb_R,
         )
         self.fused["uwb"] += 1

@@ -1,8 +1,8 @@
 """The EKF's filter: filterpy's ExtendedKalmanFilter with the unicycle's prediction, without its
 bookkeeping.
 
-Used by :class:`amr_twin.estimation.ekf.EkfNode`; the state and models are
-:mod:`amr_twin.estimation.ekf_model`'s."""
+Used by :class:`amr_twin.estimation.ekf.EkfNode`, which starts one with :func:`initial_filter`;
+the state and models are :mod:`amr_twin.estimation.ekf_model`'s."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from numpy import dot
 from scipy import linalg
 
 from amr_twin.estimation.ekf_model import predict_mean
+from amr_twin.model.config_estimation import EkfCfg
 
 
 class UnicycleEkf(ExtendedKalmanFilter):
@@ -56,3 +57,21 @@ class UnicycleEkf(ExtendedKalmanFilter):
         self.P = dot(I_KH, self.P).dot(I_KH.T) + dot(self.K, R).dot(self.K.T)
         self._log_likelihood = self._likelihood = self._mahalanobis = None
         self.z = z
+
+
+def initial_filter(cfg: EkfCfg, pose: np.ndarray) -> UnicycleEkf:
+    """A filter at ``pose`` (3,) ``[x_m, y_m, yaw_rad]`` at rest with no gyro bias, each state's
+    variance ``cfg``'s ``initial_*_sigma`` squared."""
+    f = UnicycleEkf(dim_x=6, dim_z=1)
+    f.x = np.array([[pose[0]], [pose[1]], [pose[2]], [0.0], [0.0], [0.0]])
+    f.P = np.diag(
+        [
+            cfg.initial_xy_sigma_m**2,
+            cfg.initial_xy_sigma_m**2,
+            cfg.initial_yaw_sigma_rad**2,
+            cfg.initial_v_sigma_m_s**2,
+            cfg.initial_w_sigma_rad_s**2,
+            cfg.initial_gyro_bias_sigma_rad_s**2,
+        ]
+    )
+    return f

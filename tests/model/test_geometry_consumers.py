@@ -98,6 +98,5 @@ def test_the_ekf_rest_check_uses_the_configured_track(other):
         node = EkfNode(
             cfg.ekf, wheel_separation_m=cfg.wheel.separation_m, use_imu=True, use_uwb=False
         )
-        node._last_twist = (0.0, w)
-        at_rest[name] = node._at_rest()
+        at_rest[name] = node.gyro_rest.at_rest((0.0, w))
     assert at_rest == {"thesis": True, "other": False}

@@ -2,7 +2,8 @@
 
 One home for the pose algebra the estimators, the trajectory metrics and the
 experiments share: composition, relative motion, angle wrapping and
-interpolation in time (yaw unwrapped). Yaw is wrapped to ``[-pi, pi)``.
+interpolation in time (yaw unwrapped), and the yaw of a 3D orientation. Yaw is wrapped to
+``[-pi, pi)``.
 """
 
 from __future__ import annotations
@@ -15,6 +16,19 @@ import numpy as np
 def wrap_rad(angle_rad: np.ndarray | float) -> np.ndarray:
     """Angles wrapped to ``[-pi, pi)``, rad (same shape as the input)."""
     return (np.asarray(angle_rad, dtype=float) + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def yaw_of_quaternion(w: float, x: float, y: float, z: float) -> float:
+    """Yaw of the unit quaternion ``(w, x, y, z)``, rad in (-pi, pi]: the heading of its x axis in
+    the plane, the z angle of its ZYX (yaw-pitch-roll) Euler angles (REP-103)."""
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def yaws_of_quaternions(q: np.ndarray) -> np.ndarray:
+    """:func:`yaw_of_quaternion` of quaternions ``q`` (N, 4) ``w, x, y, z`` (MuJoCo's order), rad
+    (N,)."""
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def compose(a, b) -> np.ndarray:

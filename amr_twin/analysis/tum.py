@@ -74,8 +74,7 @@ def read(path: Path) -> tuple[np.ndarray, np.ndarray]:
             f"{path}: {rows.shape[1]} columns per line, a TUM file has 8 "
             "(timestamp tx ty tz qx qy qz qw)"
         )
-    qx, qy, qz, qw = rows[:, 4], rows[:, 5], rows[:, 6], rows[:, 7]
-    yaw = np.arctan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    yaw = se2.yaws_of_quaternions(rows[:, [7, 4, 5, 6]])  # TUM's qx qy qz qw as w, x, y, z
     return rows[:, 0], np.column_stack([rows[:, 1], rows[:, 2], yaw])
 
 

@@ -15,6 +15,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from amr_twin.analysis.se2 import yaw_of_quaternion
 from amr_twin.ros.messages import Header, _Fixed, _string_size, _zeros
 
 
@@ -59,10 +60,7 @@ class Quaternion(_Fixed):
 
     def yaw_rad(self) -> float:
         """Heading about +z in (-pi, pi], radians."""
-        return math.atan2(
-            2.0 * (self.w * self.z + self.x * self.y),
-            1.0 - 2.0 * (self.y * self.y + self.z * self.z),
-        )
+        return yaw_of_quaternion(self.w, self.x, self.y, self.z)
 
 
 @dataclass(slots=True)

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from amr_twin.analysis.se2 import yaw_of_quaternion
 from amr_twin.model.robot_spec import CASTERS, LOOP_SENSOR_DIM, WHEELS
 from amr_twin.model.robot_starts import ROBOT_PREFIX
 from amr_twin.model.tyre_numeric import numeric_name
@@ -210,9 +211,7 @@ class Physics:
     def pose(self) -> Pose2D:
         """Base pose in the world plane."""
         q = self.data.qpos[self.root_qpos : self.root_qpos + 7]
-        w, x, y, z = q[3:7]
-        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-        return Pose2D(float(q[0]), float(q[1]), yaw)
+        return Pose2D(float(q[0]), float(q[1]), yaw_of_quaternion(*q[3:7]))
 
     def site_position_m(self, name: str) -> np.ndarray:
         """(3,) world position of the site ``name`` (e.g. ``amr/laser``), m."""

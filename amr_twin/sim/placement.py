@@ -11,6 +11,8 @@ import math
 import mujoco
 import numpy as np
 
+from amr_twin.analysis.se2 import yaw_of_quaternion
+
 PHYSICS_LAYER = True
 
 
@@ -37,8 +39,7 @@ class Placement:
         wheels = d.qpos[self.wheel_qpos].copy()
         d.qpos[self._own_qpos] = rest[self._own_qpos]  # this robot's joints; the others stay
         d.qpos[self.wheel_qpos] = wheels
-        w, x, y, z = rest[a + 3 : a + 7]
-        turn = 0.5 * (yaw_rad - math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+        turn = 0.5 * (yaw_rad - yaw_of_quaternion(*rest[a + 3 : a + 7]))
         quat = np.empty(4)
         mujoco.mju_mulQuat(
             quat, np.array([math.cos(turn), 0.0, 0.0, math.sin(turn)]), rest[a + 3 : a + 7]

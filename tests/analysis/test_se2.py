@@ -70,3 +70,33 @@ def test_inverse_undoes_a_pose_on_either_side():
     np.testing.assert_allclose(
         se2.inverse([1.0, 0.0, math.pi / 2]), [0.0, 1.0, -math.pi / 2], atol=1e-12
     )
+
+
+def _mul(a, b):
+    """Hamilton product of quaternions (w, x, y, z)."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    )
+
+
+def test_the_yaw_of_a_quaternion_is_its_zyx_heading_even_when_tilted():
+    """q = yaw about z, then pitch about y, then roll about x (ZYX): its yaw is the first angle."""
+    rng = np.random.default_rng(5)
+    qs, yaws = [], []
+    for yaw, pitch, roll in zip(
+        rng.uniform(-3.1, 3.1, 50), rng.uniform(-1.2, 1.2, 50), rng.uniform(-1.2, 1.2, 50)
+    ):
+        qz = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        qy = (math.cos(pitch / 2), 0.0, math.sin(pitch / 2), 0.0)
+        qx = (math.cos(roll / 2), math.sin(roll / 2), 0.0, 0.0)
+        q = _mul(_mul(qz, qy), qx)
+        assert se2.yaw_of_quaternion(*q) == pytest.approx(yaw, abs=1e-12)
+        qs.append(q)
+        yaws.append(yaw)
+    assert se2.yaws_of_quaternions(np.array(qs)) == pytest.approx(np.array(yaws), abs=1e-12)
+    assert se2.yaw_of_quaternion(0.0, 0.0, 0.0, 1.0) == pytest.approx(math.pi)  # half a turn

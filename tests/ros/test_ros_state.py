@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from amr_twin.analysis.se2 import yaw_of_quaternion
 from amr_twin.cli.main import app
 from amr_twin.estimation.dead_reckoning import twist_step
 
@@ -41,7 +42,7 @@ def _t(stamp) -> float:
 
 
 def _yaw(q) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    return yaw_of_quaternion(q.w, q.x, q.y, q.z)
 
 
 @pytest.fixture(scope="module")

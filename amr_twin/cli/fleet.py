@@ -6,7 +6,10 @@ Every option is checked before the model is built; bad input is one line, exit 2
 run ends after ``--duration-s`` simulated seconds, or at Ctrl-C (then the vehicle says OFFLINE and
 disconnects); ``--json`` prints what it did as one JSON object. ``--manager`` runs the project's
 fleet manager (:mod:`amr_twin.fleet_manager`) on the same broker with ``--jobs`` seeded jobs; then
-without ``--duration-s`` the run ends when they are done.
+without ``--duration-s`` the run ends when they are done. ``--record DIR`` writes ``DIR/fleet.mcap``
+and ``DIR/fleet.rrd`` of every robot at the end (:mod:`amr_twin.recording.fleet_mcap`,
+:mod:`amr_twin.recording.fleet_rrd`); ``--live`` serves every robot on Foxglove
+(:mod:`amr_twin.live.fleet_foxglove`).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
+from amr_twin.cli.live_options import checked_live
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 from amr_twin.model.robot_starts import MAX_ROBOTS
 
@@ -55,6 +59,41 @@ def _check_overlap(poses: list, cfg) -> None:
             f"--starts: robots amr-{i + 1} and amr-{j + 1} overlap at their starts "
             f"({cfg.chassis.length_m:g} x {2 * cfg.half_width_m:g} m each)"
         )
+
+
+RECORDINGS = ("fleet.mcap", "fleet.rrd")
+"""The files ``--record DIR`` writes in DIR."""
+
+
+def _outputs(record: Optional[Path], live, host, port, rate) -> object:
+    """Check ``--record`` (a folder, its two files writable) and the live options (Foxglove only,
+    ``--rate`` the fleet's own); returns the live options or None. Exit 2 (one line) on a bad
+    one."""
+    from amr_twin.recording.outputs import OutputError, check_folder, check_outputs
+
+    if record is not None:
+        try:
+            check_folder("--record", record)
+            check_outputs(files={f"--record ({n})": record / n for n in RECORDINGS})
+        except OutputError as exc:
+            fail(str(exc))
+    options = checked_live(live, host, port, None, rate, fail, paced=True)
+    if options is not None and options.mode != "foxglove":
+        fail(f"--live {options.mode}: a fleet is served live on Foxglove only (--live foxglove)")
+    return options
+
+
+def _record(session, captures, record: Path, cfg) -> None:
+    """Write ``fleet.mcap`` and ``fleet.rrd`` of the session's robots into ``record``."""
+    from amr_twin.model.urdf import robot_urdf
+    from amr_twin.recording.fleet_mcap import write_fleet_mcap
+    from amr_twin.recording.fleet_rrd import write_fleet_rrd
+
+    record.mkdir(parents=True, exist_ok=True)
+    write_fleet_mcap(captures, record / RECORDINGS[0], robot_urdf(cfg))
+    write_fleet_rrd(captures, record / RECORDINGS[1])
+    typer.echo(f"recorded {len(captures)} robots: {record / RECORDINGS[0]}, "
+               f"{record / RECORDINGS[1]}", err=True)
 
 
 PLACE_LIMIT_S = 30.0
@@ -141,6 +180,24 @@ def fleet(
         help="Robots share their pose estimates: each keeps the others as obstacles, not as "
         "people to give way to (docs/how-to/fleet.md).",
     ),
+    record: Optional[Path] = typer.Option(
+        None,
+        "--record",
+        help="Write fleet.mcap and fleet.rrd of every robot into this folder "
+        "(docs/reference/recordings.md).",
+    ),
+    live: Optional[str] = typer.Option(
+        None,
+        "--live",
+        metavar="[foxglove]",
+        help="Serve every robot live on a Foxglove WebSocket server (read-only).",
+    ),
+    host: str = typer.Option(
+        "127.0.0.1", "--host", help="With --live: the address to listen on."
+    ),
+    port: Optional[int] = typer.Option(
+        None, "--port", help="With --live: the server's port (8765; 0: a free one)."
+    ),
     config: Optional[Path] = ConfigOpt,
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
@@ -169,6 +226,7 @@ def fleet(
         fail(f"--jobs {jobs}: must be in [0, 10000]")
     if not (math.isfinite(charge_below) and 0 <= charge_below < 80):
         fail(f"--charge-below {charge_below:g}: must be in [0, 80) % (charged up to 80 %)")
+    live_options = _outputs(record, live, host, port, rate)
     cfg = _config(config, params, set_)
     _check_overlap(poses, cfg)
 
@@ -186,8 +244,29 @@ def fleet(
                 rate=rate,
                 seed=seed,
                 shared_poses=shared_poses,
+                visuals=record is not None or live_options is not None,
             ),
         )
+        captures = None
+        if record is not None:
+            from amr_twin.recording.fleet_capture import attach_fleet
+
+            captures = attach_fleet(session.world, names=session.serials)
+        if live_options is not None:
+            from amr_twin.live.fleet_foxglove import FleetFoxgloveSink
+            from amr_twin.live.session import FOXGLOVE_PORT
+            from amr_twin.model.urdf import robot_urdf
+
+            sink = FleetFoxgloveSink(
+                session.world,
+                session.pacer,
+                robot_urdf(cfg),
+                live_options.host,
+                FOXGLOVE_PORT if live_options.port is None else live_options.port,
+                names=session.serials,
+            )
+            session.pacer.sinks.append(sink)
+            typer.echo(f"live: Foxglove WebSocket server on {sink.url}", err=True)
         for serial in session.serials:
             typer.echo(
                 f"vehicle {serial} on {session.url}: "
@@ -214,6 +293,8 @@ def fleet(
                 out["manager"] = master.summary()
                 master.close()
             session.close()
+            if captures is not None:
+                _record(session, captures, record, cfg)
         return out
 
     out = _guard(work)

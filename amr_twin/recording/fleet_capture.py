@@ -21,12 +21,13 @@ from amr_twin.ros.robot_namespace import RobotNamespace
 class RobotView:
     """The robot ``robot`` of ``world`` (a :class:`~amr_twin.assembly.world.World`) with the hooks
     and attributes of a lone :class:`~amr_twin.assembly.twin.Twin` that the capture, the recorder,
-    the event log and the live rows read (module notes)."""
+    the event log and the live rows read (module notes); ``name`` its ROS namespace (None: its
+    name in the model)."""
 
-    def __init__(self, world, robot):
+    def __init__(self, world, robot, name: str | None = None):
         self.world, self.robot = world, robot
-        self.name = robot.name
-        """The robot's name (``amr-2``)."""
+        self.name = robot.name if name is None else name
+        """The robot's name, its namespace (``amr-2``)."""
         self.prefix = robot.physics.prefix
         """Its names' prefix in the model (``amr-2/``)."""
         self.cfg, self.bus = robot.spec.cfg, robot.bus
@@ -100,15 +101,17 @@ def moving_fixtures(model, prefixes) -> list[int]:
     ]
 
 
-def attach_fleet(world, body_hz: float = 30.0) -> list[RobotCapture]:
+def attach_fleet(world, body_hz: float = 30.0, names=None) -> list[RobotCapture]:
     """Start capturing every robot of ``world`` (before it runs): a :class:`RobotCapture` each, in
-    the world's order; the first robot's capture keeps the actors' poses too. The world must
-    draw its robots (a fleet's world always does)."""
+    the world's order, named ``names`` (None: their names in the model); the first robot's
+    capture keeps the actors' poses too. The world must draw its robots (a fleet's world always
+    does; a lone twin with ``visuals``)."""
     model = world.physics.model
     prefixes = tuple(r.physics.prefix for r in world.robots)
     out = []
+    names = [None] * len(world.robots) if names is None else list(names)
     for i, robot in enumerate(world.robots):
-        view = RobotView(world, robot)
+        view = RobotView(world, robot, names[i])
         bodies = robot_bodies(model, view.prefix)
         if i == 0:
             bodies += moving_fixtures(model, prefixes)

@@ -140,7 +140,7 @@ class FleetFoxgloveSink:
         items = []
         for i, r in enumerate(self.robots):
             items += [(t, 0, s, name, data) for t, s, name, data in r.bus_out]
-            r.bus_out = []
+            r.bus_out.clear()  # the tap holds this list
             batch = r.state.split(t_us)
             if i == 0 and channels["/clock"].has_sinks():
                 items += [(t * 1000, 1, 0, "/clock", encode_clock(clock(t))) for t in batch.t_us]

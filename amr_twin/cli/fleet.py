@@ -83,19 +83,6 @@ def _outputs(record: Optional[Path], live, host, port, rate) -> object:
     return options
 
 
-def _record(session, captures, record: Path, cfg) -> None:
-    """Write ``fleet.mcap`` and ``fleet.rrd`` of the session's robots into ``record``."""
-    from amr_twin.model.urdf import robot_urdf
-    from amr_twin.recording.fleet_mcap import write_fleet_mcap
-    from amr_twin.recording.fleet_rrd import write_fleet_rrd
-
-    record.mkdir(parents=True, exist_ok=True)
-    write_fleet_mcap(captures, record / RECORDINGS[0], robot_urdf(cfg))
-    write_fleet_rrd(captures, record / RECORDINGS[1])
-    typer.echo(f"recorded {len(captures)} robots: {record / RECORDINGS[0]}, "
-               f"{record / RECORDINGS[1]}", err=True)
-
-
 PLACE_LIMIT_S = 30.0
 """Simulated seconds the manager's jobs wait for every vehicle to be placed on the roadmap."""
 
@@ -294,7 +281,10 @@ def fleet(
                 master.close()
             session.close()
             if captures is not None:
-                _record(session, captures, record, cfg)
+                from amr_twin.recording.fleet_recording import write_fleet_recordings
+
+                paths = write_fleet_recordings(captures, record, "fleet", cfg)
+                typer.echo(f"recorded {len(captures)} robots: {paths[0]}, {paths[1]}", err=True)
         return out
 
     out = _guard(work)

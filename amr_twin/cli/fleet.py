@@ -260,13 +260,19 @@ def fleet(
                 f"{topic(interface, serial, '{order,instantActions,state,...}')}",
                 err=True,
             )
-        master = None
+        master = seen = None
         try:
             if manager:
                 limit_s = PLACE_LIMIT_S if duration_s is None else min(PLACE_LIMIT_S, duration_s)
                 master = _start_manager(
                     session, cfg, world, interface, jobs, seed, charge_below, limit_s
                 )
+                if captures is not None:
+                    from amr_twin.recording.fleet_capture import SeenEvents
+
+                    seen = SeenEvents(master.dispatcher.events)
+                    seen.flush(session.world.clock.now_us)  # placed before the jobs
+                    session.pacer.sinks.append(seen)
             left = math.inf if duration_s is None else duration_s - session.world.t_s
             while left > 1e-9 and not (master and duration_s is None and not master.jobs_left()):
                 step = min(1.0, left)
@@ -283,7 +289,8 @@ def fleet(
             if captures is not None:
                 from amr_twin.recording.fleet_recording import write_fleet_recordings
 
-                paths = write_fleet_recordings(captures, record, "fleet", cfg)
+                events = seen.stamped if seen is not None else ()
+                paths = write_fleet_recordings(captures, record, "fleet", cfg, events)
                 typer.echo(f"recorded {len(captures)} robots: {paths[0]}, {paths[1]}", err=True)
         return out
 

@@ -118,3 +118,22 @@ def attach_fleet(world, body_hz: float = 30.0, names=None) -> list[RobotCapture]
         capture = Capture(view, body_hz, prefix=view.prefix, bodies=sorted(bodies))
         out.append(RobotCapture(view, RobotNamespace(view.name), capture, Recorder(view)))
     return out
+
+
+class SeenEvents:
+    """Entries appended to ``events`` (a list another thread appends to: the fleet manager's
+    ``dispatcher.events``) stamped with the simulated time at which the world saw them: a pacer
+    sink (:meth:`flush` at each 20 ms tick). :attr:`stamped`: ``(t_us, entry)`` in order."""
+
+    def __init__(self, events: list):
+        self._events, self._seen = events, 0
+        self.stamped: list[tuple[int, dict]] = []
+
+    def flush(self, t_us: int) -> None:
+        """Stamp the entries appended since the last tick with ``t_us``."""
+        n = len(self._events)
+        self.stamped += [(t_us, e) for e in self._events[self._seen : n]]
+        self._seen = n
+
+    def close(self) -> None:
+        """Nothing to release."""

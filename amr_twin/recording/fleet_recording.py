@@ -11,11 +11,14 @@ from __future__ import annotations
 from pathlib import Path
 
 
-def write_fleet_recordings(captures, folder: Path, stem: str, cfg) -> tuple[Path, Path]:
+def write_fleet_recordings(
+    captures, folder: Path, stem: str, cfg, events=()
+) -> tuple[Path, Path]:
     """Write ``folder/<stem>.mcap`` and ``folder/<stem>.rrd`` of ``captures`` (the
     :func:`~amr_twin.recording.fleet_capture.attach_fleet` captures of a run that has ended;
-    ``cfg`` the robots' parameters, for their description); the folder is made. Returns the
-    two paths."""
+    ``cfg`` the robots' parameters, for their description) and the fleet manager's ``events``
+    (``(t_us, dict)``: :class:`~amr_twin.recording.fleet_capture.SeenEvents`); the folder is
+    made. Returns the two paths."""
     from amr_twin.model.urdf import robot_urdf
     from amr_twin.recording.fleet_mcap import write_fleet_mcap
     from amr_twin.recording.fleet_rrd import write_fleet_rrd
@@ -23,8 +26,8 @@ def write_fleet_recordings(captures, folder: Path, stem: str, cfg) -> tuple[Path
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     return (
-        write_fleet_mcap(captures, folder / f"{stem}.mcap", robot_urdf(cfg)),
-        write_fleet_rrd(captures, folder / f"{stem}.rrd"),
+        write_fleet_mcap(captures, folder / f"{stem}.mcap", robot_urdf(cfg), events),
+        write_fleet_rrd(captures, folder / f"{stem}.rrd", events),
     )
 
 

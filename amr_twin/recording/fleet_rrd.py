@@ -4,7 +4,8 @@ The streams of :mod:`amr_twin.recording.rerun_log`, each robot's under its name:
 ``world/bodies/amr-1/...`` (the model's names), its scans at ``world/amr-1/scan``, its true and
 odometry tracks at ``world/amr-1/trajectory/{true,odom}``, its plan and costmap at
 ``world/amr-1/navigation/...``, its plots at ``amr-1/{wheels,duty,electrics,imu,uwb}/...``, its
-collisions at ``amr-1/events/collisions``; the world's geoms once. Reasons:
+collisions at ``amr-1/events/collisions``; the world's geoms once; the fleet manager's events
+at ``fleet_manager/events``. Reasons:
 docs/reference/recordings.md#amr_twinrecordingfleet_rrd.
 """
 
@@ -17,6 +18,7 @@ from amr_twin.recording.event_log import log_events
 from amr_twin.recording.rerun_log import ENCODE_TIMEOUT_S
 from amr_twin.recording.rerun_navigation import _log_navigation
 from amr_twin.recording.rerun_streams import (
+    TIMELINE,
     _log_commands,
     _log_duty,
     _log_electrics,
@@ -40,7 +42,10 @@ def _blueprint(names: list[str]):
         rrb.Horizontal(
             rrb.Vertical(
                 rrb.Spatial3DView(origin="world", name="fleet"),
-                rrb.TextLogView(name="events", contents=[f"{n}/events/**" for n in names]),
+                rrb.TextLogView(
+                    name="events",
+                    contents=["fleet_manager/**", *(f"{n}/events/**" for n in names)],
+                ),
                 row_shares=[4, 1],
             ),
             rrb.Vertical(
@@ -52,10 +57,11 @@ def _blueprint(names: list[str]):
     )
 
 
-def write_fleet_rrd(robots, path: Path, application_id: str = "amr_twin") -> Path:
+def write_fleet_rrd(robots, path: Path, events=(), application_id: str = "amr_twin") -> Path:
     """Write every robot of ``robots`` (the
-    :func:`~amr_twin.recording.fleet_capture.attach_fleet` captures, in order) to ``path`` (.rrd)
-    in one piece, as :func:`~amr_twin.recording.rerun_log.write_rrd` does (module notes)."""
+    :func:`~amr_twin.recording.fleet_capture.attach_fleet` captures, in order) and the manager's
+    ``events`` (``(t_us, dict)``) to ``path`` (.rrd) in one piece, as
+    :func:`~amr_twin.recording.rerun_log.write_rrd` does (module notes)."""
     import rerun as rr
 
     path = Path(path)
@@ -81,6 +87,10 @@ def write_fleet_rrd(robots, path: Path, application_id: str = "amr_twin") -> Pat
         _log_trajectory(rec, series, root=root)
         _log_navigation(rec, capture, root)
         log_events(rec, r.view, root)
+    for t_us, event in events:
+        rec.set_time(TIMELINE, duration=t_us * 1e-6)
+        text = " ".join(f"{k}={v}" for k, v in event.items() if k != "t_s")
+        rec.log("fleet_manager/events", rr.TextLog(text, level="INFO"))
     rec.disconnect()
     data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
     write_bytes(path, data)

@@ -53,3 +53,30 @@ def test_the_recording_holds_every_robot(tmp_path, robots):
         assert {f"/amr-{i}/odom", f"/amr-{i}/scan", f"/amr-{i}/twin/ground_truth"} <= topics
     assert "/odom" not in topics and "/clock" in topics
     assert (out / "fleet.rrd").stat().st_size > 10_000
+
+
+def test_the_managers_events_are_recorded_on_the_worlds_clock(tmp_path):
+    pytest.importorskip("amqtt")
+    import json
+
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    done = subprocess.run(
+        CLI
+        + ["--robots", "2", "--world", "warehouse", "--starts", "-6,0,0;-3,0,0", "--manager"]
+        + ["--jobs", "1", "--duration-s", "2", "--rate", "0", "--record", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    with open(tmp_path / "fleet.mcap", "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        events = [
+            (m.log_time, json.loads(msg.data))
+            for _s, _c, m, msg in reader.iter_decoded_messages(topics=["/fleet_manager/events"])
+        ]
+    placed = {e["vehicle"] for _t, e in events if e["event"] == "placed"}
+    assert placed == {"amr-1", "amr-2"}
+    assert all(0 <= t <= 2.1e9 for t, _e in events)  # simulated ns, within the run

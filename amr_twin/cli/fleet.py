@@ -179,9 +179,7 @@ def fleet(
         metavar="[foxglove]",
         help="Serve every robot live on a Foxglove WebSocket server (read-only).",
     ),
-    host: str = typer.Option(
-        "127.0.0.1", "--host", help="With --live: the address to listen on."
-    ),
+    host: str = typer.Option("127.0.0.1", "--host", help="With --live: the address to listen on."),
     port: Optional[int] = typer.Option(
         None, "--port", help="With --live: the server's port (8765; 0: a free one)."
     ),

@@ -186,9 +186,7 @@ class FleetFoxgloveSink:
                     3,
                     i,
                     topic,
-                    encode_battery_state(
-                        t, volts[i], -amps[i], soc[i] * cap, cap, soc[i], frame
-                    ),
+                    encode_battery_state(t, volts[i], -amps[i], soc[i] * cap, cap, soc[i], frame),
                 )
                 for i, t in enumerate(t_ns)
                 if rows.index[i] % BATTERY_EVERY_ROWS == 0

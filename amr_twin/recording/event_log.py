@@ -124,7 +124,8 @@ def log_events(rec, twin, root: str = "") -> None:
         )
         points.append((c.x_m, c.y_m, c.z_m))
         rec.log(
-            f"world/{root}collisions", rr.Points3D(np.array(points), colors=[(230, 30, 30)], radii=[0.05])
+            f"world/{root}collisions",
+            rr.Points3D(np.array(points), colors=[(230, 30, 30)], radii=[0.05]),
         )
     for f in _faults(twin):
         for t_s, what in ((f.t_s, "injected"), (f.until_s, "cleared")):

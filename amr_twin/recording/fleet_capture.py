@@ -86,7 +86,9 @@ def robot_bodies(model, prefix: str) -> list[int]:
     """Ids of the bodies named ``prefix...`` (one robot's) in ``model``."""
     import mujoco
 
-    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(model.nbody)]
+    names = [
+        mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(model.nbody)
+    ]
     return [b for b, name in enumerate(names) if name.startswith(prefix)]
 
 

@@ -11,9 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 
-def write_fleet_recordings(
-    captures, folder: Path, stem: str, cfg, events=()
-) -> tuple[Path, Path]:
+def write_fleet_recordings(captures, folder: Path, stem: str, cfg, events=()) -> tuple[Path, Path]:
     """Write ``folder/<stem>.mcap`` and ``folder/<stem>.rrd`` of ``captures`` (the
     :func:`~amr_twin.recording.fleet_capture.attach_fleet` captures of a run that has ended;
     ``cfg`` the robots' parameters, for their description) and the fleet manager's ``events``

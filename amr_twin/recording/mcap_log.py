@@ -110,16 +110,22 @@ def _state_items(capture, k0: int, ns=None) -> list[tuple[int, int, str, str, by
     /clock, the robot's topics and frames."""
     st = capture.state
     a = {key: v.tolist() for key, v in st.arrays().items()}  # Python floats: cheaper per message
-    truth, joints = ("/twin/ground_truth", "/joint_states") if ns is None else (
-        ns.topic("/twin/ground_truth"),
-        ns.topic("/joint_states"),
+    truth, joints = (
+        ("/twin/ground_truth", "/joint_states")
+        if ns is None
+        else (
+            ns.topic("/twin/ground_truth"),
+            ns.topic("/joint_states"),
+        )
     )
     frames = ns.message if ns is not None else (lambda msg: msg)
     items, k = [], k0
     for i, t_us in enumerate(a["t_us"]):
         t = t_us * 1000
         if ns is None:
-            items.append((t, k, "/clock", "rosgraph_msgs/Clock", encode_clock(ros_state.clock(t_us))))
+            items.append(
+                (t, k, "/clock", "rosgraph_msgs/Clock", encode_clock(ros_state.clock(t_us)))
+            )
         items.append(
             (
                 t,
@@ -218,34 +224,17 @@ def run_items(capture, series, ns=None) -> list[tuple[int, int, str, str, bytes]
     names = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current", "/battery_state")
     rpm_t, pwm_t, current_t, battery_t = names if ns is None else map(ns.topic, names)
     frame = "base_link" if ns is None else ns.frame("base_link")
+    arrays, columns = (
+        "std_msgs/Float64MultiArray",
+        ((rpm_t, true_rpm), (pwm_t, pwm), (current_t, current)),
+    )
     for i, t in enumerate(t_ns):
-        items.append(
-            (t, k, rpm_t, "std_msgs/Float64MultiArray", encode_float64_multi_array(true_rpm[i]))
-        )
-        items.append(
-            (t, k + 1, pwm_t, "std_msgs/Float64MultiArray", encode_float64_multi_array(pwm[i]))
-        )
-        items.append(
-            (
-                t,
-                k + 2,
-                current_t,
-                "std_msgs/Float64MultiArray",
-                encode_float64_multi_array(current[i]),
-            )
-        )
+        for j, (topic, column) in enumerate(columns):
+            items.append((t, k + j, topic, arrays, encode_float64_multi_array(column[i])))
         if i % BATTERY_EVERY_ROWS == 0:
-            items.append(
-                (
-                    t,
-                    k + 3,
-                    battery_t,
-                    "sensor_msgs/BatteryState",
-                    encode_battery_state(
-                        t, volts[i], -amps[i], soc[i] * capacity, capacity, soc[i], frame
-                    ),
-                )
-            )
+            charge = soc[i] * capacity
+            state = encode_battery_state(t, volts[i], -amps[i], charge, capacity, soc[i], frame)
+            items.append((t, k + 3, battery_t, "sensor_msgs/BatteryState", state))
         k += 4
     return items + _state_items(capture, k, ns)
 

@@ -51,7 +51,10 @@ def _log_navigation(rec, capture, root: str = "") -> None:
     for t_us, m in msgs.get("plan", []):
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         pts = np.array([[p.pose.position.x, p.pose.position.y, 0.03] for p in m.poses])
-        rec.log(f"world/{root}navigation/plan", rr.LineStrips3D([pts], colors=(30, 120, 255), radii=0.015))
+        rec.log(
+            f"world/{root}navigation/plan",
+            rr.LineStrips3D([pts], colors=(30, 120, 255), radii=0.015),
+        )
     for t_us, m in msgs.get("local_costmap/costmap", []):
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         xy, v = _cells(m, lambda d: d > 0)
@@ -72,5 +75,6 @@ def _log_navigation(rec, capture, root: str = "") -> None:
             [[p.x, p.y, 0.05] for p in m.points] + [[m.points[0].x, m.points[0].y, 0.05]]
         )
         rec.log(
-            f"world/{root}navigation/footprint", rr.LineStrips3D([pts], colors=(0, 200, 200), radii=0.01)
+            f"world/{root}navigation/footprint",
+            rr.LineStrips3D([pts], colors=(0, 200, 200), radii=0.01),
         )

@@ -124,10 +124,10 @@ TRAJECTORY_BLOCK_S = 10.0
 def _log_trajectory(rec, series, rate_hz: float = 2.0, root: str = "") -> None:
     """True (world) and odometry (odom frame put on the start pose) paths, growing.
 
-    ``world/<root>trajectory/{true,odom}/<block>`` (``root``: ``amr-2/`` for a robot of a fleet): each block of :data:`TRAJECTORY_BLOCK_S` is a
-    line strip that grows at ``rate_hz`` from the end of the block before it and then stays
-    (the viewer keeps an entity's latest strip), so a run of any length costs a file that
-    grows linearly with it, not with its square.
+    ``world/<root>trajectory/{true,odom}/<block>`` (``root``: ``amr-2/`` for a robot of a
+    fleet): each block of :data:`TRAJECTORY_BLOCK_S` is a line strip that grows at ``rate_hz``
+    from the end of the block before it and then stays (the viewer keeps an entity's latest
+    strip), so a run of any length costs a file that grows linearly with it, not with its square.
     """
     import rerun as rr
 

@@ -261,7 +261,10 @@ def link_transforms(t_us: int, children, link_pos, link_quat) -> TFMessage:
     /tf)."""
     stamp = Time.from_us(t_us)
     return TFMessage(
-        [frame_transform(BASE_FRAME, c, p, q, stamp) for c, p, q in zip(children, link_pos, link_quat)]
+        [
+            frame_transform(BASE_FRAME, c, p, q, stamp)
+            for c, p, q in zip(children, link_pos, link_quat)
+        ]
     )
 
 

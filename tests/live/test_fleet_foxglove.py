@@ -65,7 +65,9 @@ def test_every_robot_live_under_its_namespace():
                 f"{name}/base_link",
             )
     statics = [
-        store.deserialize_cdr(d, "tf2_msgs/msg/TFMessage") for _w, t, _t, d in got if t == "/tf_static"
+        store.deserialize_cdr(d, "tf2_msgs/msg/TFMessage")
+        for _w, t, _t, d in got
+        if t == "/tf_static"
     ]
     assert statics, "no /tf_static for the late subscriber"
     frames = {tf.child_frame_id for tf in statics[0].transforms}

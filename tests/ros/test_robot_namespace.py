@@ -28,7 +28,10 @@ def test_topics_and_frames():
 def test_messages_copied_with_the_robots_frames():
     ns = RobotNamespace("amr-1")
     tf = TFMessage(
-        [frame_transform("odom", "base_link", (1, 2, 0), (1, 0, 0, 0)), frame_transform("map", "odom", (0, 0, 0), (1, 0, 0, 0))]
+        [
+            frame_transform("odom", "base_link", (1, 2, 0), (1, 0, 0, 0)),
+            frame_transform("map", "odom", (0, 0, 0), (1, 0, 0, 0)),
+        ]
     )
     out = ns.message(tf)
     assert [(t.header.frame_id, t.child_frame_id) for t in out.transforms] == [

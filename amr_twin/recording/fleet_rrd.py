@@ -73,13 +73,15 @@ def write_fleet_rrd(robots, path: Path, events=(), application_id: str = "amr_tw
     )
     rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     _log_geoms(rec, m)
+    anchors = True  # the UWB anchors once, with the first robot that ranged
     for r in robots:
         capture, prefix, root = r.capture, r.view.prefix, r.view.name + "/"
         series = r.recorder.series()
         _log_body_transforms(rec, m, capture)
         _log_scan(rec, m, capture, laser=prefix + "laser", root=root)
         _log_imu(rec, capture, root)
-        _log_uwb(rec, m, capture, base=prefix + "base_link", root=root)
+        ranged = _log_uwb(rec, m, capture, prefix + "base_link", root, anchors)
+        anchors = anchors and not ranged
         _log_wheel_speeds(rec, series, root)
         _log_duty(rec, series, root)
         _log_electrics(rec, series, root)

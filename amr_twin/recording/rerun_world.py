@@ -265,10 +265,13 @@ def uwb_ranges(capture: Capture) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     return {i: (np.array(t), np.array(r)) for i, (t, r) in sorted(per.items())}
 
 
-def _log_uwb(rec, m, capture: Capture, base: str = "amr/base_link", root: str = "") -> None:
-    """Ranges per anchor as scalars (``<root>uwb/anchor_<i>/range_m``), the anchors, and a line
-    from the tag to each anchor ranged (``world/<root>uwb/anchor_<i>/ray``; ``base``: the
-    robot's base body).
+def _log_uwb(
+    rec, m, capture: Capture, base: str = "amr/base_link", root: str = "", anchors: bool = True
+) -> bool:
+    """Ranges per anchor as scalars (``<root>uwb/anchor_<i>/range_m``), the anchors (unless
+    ``anchors`` is false: another robot's logged them), and a line from the tag to each anchor
+    ranged (``world/<root>uwb/anchor_<i>/ray``; ``base``: the robot's base body). Returns
+    whether there were ranges.
 
     The tag's world position at a range's stamp uses the base's interpolated
     position and yaw (the base's small tilt is left out of the line).
@@ -277,28 +280,31 @@ def _log_uwb(rec, m, capture: Capture, base: str = "amr/base_link", root: str = 
 
     ranges = uwb_ranges(capture)
     if not ranges:
-        return
-    anchors, tag = uwb_geometry(capture.twin)
-    rec.log(
-        "world/uwb/anchors",
-        rr.Points3D(
-            anchors,
-            radii=[0.08],
-            colors=[(200, 60, 200)],
-            labels=[f"anchor_{i}" for i in range(len(anchors))],
-        ),
-        static=True,
-    )
+        return False
+    anchors_xyz, tag = uwb_geometry(capture.twin)
+    if anchors:
+        rec.log(
+            "world/uwb/anchors",
+            rr.Points3D(
+                anchors_xyz,
+                radii=[0.08],
+                colors=[(200, 60, 200)],
+                labels=[f"anchor_{i}" for i in range(len(anchors_xyz))],
+            ),
+            static=True,
+        )
     for i, (t_s, range_m) in ranges.items():
         _scalars(rec, f"{root}uwb/anchor_{i}/range_m", t_s, range_m)
-        if i >= len(anchors):
+        if i >= len(anchors_xyz):
             continue
         p, yaw = _body_pose_at(capture, m, base, t_s)
         c, s = np.cos(yaw), np.sin(yaw)
         tag_w = np.column_stack(
             [p[:, 0] + c * tag[0] - s * tag[1], p[:, 1] + s * tag[0] + c * tag[1], p[:, 2] + tag[2]]
         )
-        strips = np.stack([tag_w, np.broadcast_to(anchors[i], tag_w.shape)], axis=1)  # (n, 2, 3)
+        strips = np.stack(
+            [tag_w, np.broadcast_to(anchors_xyz[i], tag_w.shape)], axis=1
+        )  # (n, 2, 3)
         rec.send_columns(
             f"world/{root}uwb/anchor_{i}/ray",
             indexes=_time(t_s),
@@ -309,3 +315,4 @@ def _log_uwb(rec, m, capture: Capture, base: str = "amr/base_link", root: str = 
             rr.LineStrips3D.from_fields(colors=[(200, 60, 200)], radii=[0.005]),
             static=True,
         )
+    return True

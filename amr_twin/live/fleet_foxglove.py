@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 from amr_twin.live.foxglove import live_topics
 from amr_twin.live.rows import LiveRows
-from amr_twin.recording.fleet_capture import RobotView
+from amr_twin.assembly.robot_view import RobotView
 from amr_twin.recording.fleet_mcap import static_transforms
 from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS, BUS_TOPICS, _state_items
 from amr_twin.ros.messages import String

@@ -37,7 +37,7 @@ def static_transforms(robots) -> TFMessage:
 
     out, seen = [], set()
     for r in robots:
-        x, y, yaw = r.view.robot.start_xy_yaw
+        x, y, yaw = r.view.start_xy_yaw
         q = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
         out.append(ros_state.frame_transform("map", r.namespace.frame("odom"), (x, y, 0.0), q))
         for tf in r.view.bus.static_transforms():

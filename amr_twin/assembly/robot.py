@@ -90,7 +90,7 @@ class Robot:
         self._rest = physics.placement.positions()
         self.pending: list[tuple[int, int]] = []
         """SC edges ``(t_us, wheel)`` solved from the rows and not yet delivered, in time order."""
-        self.bus.send_transform(robot_static_transforms(physics.model), static=True)
+        self.bus.send_transform(robot_static_transforms(physics.model, physics.prefix), static=True)
         self._build_drive(spec)
         self._mount = Mount(
             physics,

@@ -152,11 +152,12 @@ class World(Hooks):
 
     def on_message(self, tap, topics: tuple[str, ...] | None = None):
         """The hook of :class:`~amr_twin.sim.hooks.Hooks` on the world's bus; ValueError (one line)
-        in a fleet, whose robots speak on buses of their own (recording a fleet is not built)."""
+        in a fleet, whose robots speak on buses of their own (each robot's: a fleet's recording
+        taps them, :mod:`amr_twin.recording.fleet_capture`)."""
         if len(self.robots) > 1:
             raise ValueError(
                 "on_message: a fleet's robots speak on buses of their own (robot.bus); "
-                "recording or bridging a fleet is not supported"
+                "record a fleet with amr_twin.recording.fleet_capture.attach_fleet"
             )
         return super().on_message(tap, topics)
 

@@ -6,7 +6,10 @@ Every option is checked before the model is built; bad input is one line, exit 2
 run ends after ``--duration-s`` simulated seconds, or at Ctrl-C (then the vehicle says OFFLINE and
 disconnects); ``--json`` prints what it did as one JSON object. ``--manager`` runs the project's
 fleet manager (:mod:`amr_twin.fleet_manager`) on the same broker with ``--jobs`` seeded jobs; then
-without ``--duration-s`` the run ends when they are done.
+without ``--duration-s`` the run ends when they are done. ``--record DIR`` writes ``DIR/fleet.mcap``
+and ``DIR/fleet.rrd`` of every robot at the end (:mod:`amr_twin.recording.fleet_mcap`,
+:mod:`amr_twin.recording.fleet_rrd`); ``--live`` serves every robot on Foxglove
+(:mod:`amr_twin.live.fleet_foxglove`).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from typing import Optional
 import typer
 
 from amr_twin.cli.common import _config, _guard, _start_pose, fail
+from amr_twin.cli.live_options import checked_live
 from amr_twin.cli.options import ConfigOpt, ParamsOpt, SetOpt
 from amr_twin.model.robot_starts import MAX_ROBOTS
 
@@ -55,6 +59,28 @@ def _check_overlap(poses: list, cfg) -> None:
             f"--starts: robots amr-{i + 1} and amr-{j + 1} overlap at their starts "
             f"({cfg.chassis.length_m:g} x {2 * cfg.half_width_m:g} m each)"
         )
+
+
+RECORDINGS = ("fleet.mcap", "fleet.rrd")
+"""The files ``--record DIR`` writes in DIR."""
+
+
+def _outputs(record: Optional[Path], live, host, port, rate) -> object:
+    """Check ``--record`` (a folder, its two files writable) and the live options (Foxglove only,
+    ``--rate`` the fleet's own); returns the live options or None. Exit 2 (one line) on a bad
+    one."""
+    from amr_twin.recording.outputs import OutputError, check_folder, check_outputs
+
+    if record is not None:
+        try:
+            check_folder("--record", record)
+            check_outputs(files={f"--record ({n})": record / n for n in RECORDINGS})
+        except OutputError as exc:
+            fail(str(exc))
+    options = checked_live(live, host, port, None, rate, fail, paced=True)
+    if options is not None and options.mode != "foxglove":
+        fail(f"--live {options.mode}: a fleet is served live on Foxglove only (--live foxglove)")
+    return options
 
 
 PLACE_LIMIT_S = 30.0
@@ -141,6 +167,22 @@ def fleet(
         help="Robots share their pose estimates: each keeps the others as obstacles, not as "
         "people to give way to (docs/how-to/fleet.md).",
     ),
+    record: Optional[Path] = typer.Option(
+        None,
+        "--record",
+        help="Write fleet.mcap and fleet.rrd of every robot into this folder "
+        "(docs/reference/recordings.md).",
+    ),
+    live: Optional[str] = typer.Option(
+        None,
+        "--live",
+        metavar="[foxglove]",
+        help="Serve every robot live on a Foxglove WebSocket server (read-only).",
+    ),
+    host: str = typer.Option("127.0.0.1", "--host", help="With --live: the address to listen on."),
+    port: Optional[int] = typer.Option(
+        None, "--port", help="With --live: the server's port (8765; 0: a free one)."
+    ),
     config: Optional[Path] = ConfigOpt,
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
@@ -169,6 +211,7 @@ def fleet(
         fail(f"--jobs {jobs}: must be in [0, 10000]")
     if not (math.isfinite(charge_below) and 0 <= charge_below < 80):
         fail(f"--charge-below {charge_below:g}: must be in [0, 80) % (charged up to 80 %)")
+    live_options = _outputs(record, live, host, port, rate)
     cfg = _config(config, params, set_)
     _check_overlap(poses, cfg)
 
@@ -186,21 +229,48 @@ def fleet(
                 rate=rate,
                 seed=seed,
                 shared_poses=shared_poses,
+                visuals=record is not None or live_options is not None,
             ),
         )
+        captures = None
+        if record is not None:
+            from amr_twin.recording.fleet_capture import attach_fleet
+
+            captures = attach_fleet(session.world, names=session.serials)
+        if live_options is not None:
+            from amr_twin.live.fleet_foxglove import FleetFoxgloveSink
+            from amr_twin.live.session import FOXGLOVE_PORT
+            from amr_twin.model.urdf import robot_urdf
+
+            sink = FleetFoxgloveSink(
+                session.world,
+                session.pacer,
+                robot_urdf(cfg),
+                live_options.host,
+                FOXGLOVE_PORT if live_options.port is None else live_options.port,
+                names=session.serials,
+            )
+            session.pacer.sinks.append(sink)
+            typer.echo(f"live: Foxglove WebSocket server on {sink.url}", err=True)
         for serial in session.serials:
             typer.echo(
                 f"vehicle {serial} on {session.url}: "
                 f"{topic(interface, serial, '{order,instantActions,state,...}')}",
                 err=True,
             )
-        master = None
+        master = seen = None
         try:
             if manager:
                 limit_s = PLACE_LIMIT_S if duration_s is None else min(PLACE_LIMIT_S, duration_s)
                 master = _start_manager(
                     session, cfg, world, interface, jobs, seed, charge_below, limit_s
                 )
+                if captures is not None:
+                    from amr_twin.recording.fleet_capture import SeenEvents
+
+                    seen = SeenEvents(master.dispatcher.events)
+                    seen.flush(session.world.clock.now_us)  # placed before the jobs
+                    session.pacer.sinks.append(seen)
             left = math.inf if duration_s is None else duration_s - session.world.t_s
             while left > 1e-9 and not (master and duration_s is None and not master.jobs_left()):
                 step = min(1.0, left)
@@ -214,6 +284,12 @@ def fleet(
                 out["manager"] = master.summary()
                 master.close()
             session.close()
+            if captures is not None:
+                from amr_twin.recording.fleet_recording import write_fleet_recordings
+
+                events = seen.stamped if seen is not None else ()
+                paths = write_fleet_recordings(captures, record, "fleet", cfg, events)
+                typer.echo(f"recorded {len(captures)} robots: {paths[0]}, {paths[1]}", err=True)
         return out
 
     out = _guard(work)

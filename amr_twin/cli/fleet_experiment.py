@@ -74,6 +74,12 @@ def fleet_experiment(
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address."),
     scheduler_timeout_s: float = typer.Option(5.0, "--scheduler-timeout-s"),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Progress bar on stderr."),
+    record: Optional[Path] = typer.Option(
+        None,
+        "--record",
+        help="Write each episode's .mcap and .rrd (every robot) into this folder: "
+        "fleet_<N>r_<LOW>-<HIGH>kg_s<SEED>.{mcap,rrd}.",
+    ),
     config: Optional[Path] = ConfigOpt,
     params: Optional[Path] = ParamsOpt,
     set_: Optional[list[str]] = SetOpt,
@@ -101,11 +107,15 @@ def fleet_experiment(
     if jobs is not None and jobs < 1:
         fail(f"--jobs {jobs}: must be >= 1")
     check_executor(executor, scheduler, fail)
-    check_outputs(fail, folders={"--out": out})
+    check_outputs(fail, folders={"--out": out, "--record": record})
     workers = jobs if jobs is not None else max(1, len(os.sched_getaffinity(0)))
     client = dask_client(scheduler, scheduler_timeout_s, fail) if executor == "dask" else None
     try:
-        result = _guard(lambda: run(spec, cfg, out, jobs=workers, client=client, progress=progress))
+        result = _guard(
+            lambda: run(
+                spec, cfg, out, jobs=workers, client=client, progress=progress, record=record
+            )
+        )
     finally:
         if client is not None:
             client.close()

@@ -196,7 +196,7 @@ app.add_typer(run_group.app, name="run")
 app.add_typer(experiment_group.app, name="experiment")
 app.add_typer(sweep_group.app, name="sweep")
 app.command(name="client", cls=LiveCommand)(client)
-app.command(name="fleet")(fleet)
+app.command(name="fleet", cls=LiveCommand)(fleet)
 
 
 def main() -> None:  # pragma: no cover - console entry

@@ -28,7 +28,8 @@ class FleetOptions:
     be None: the world's), the broker (None: an embedded one), the interface name, ``rate``
     (simulated seconds per wall second, 0: as fast as possible); ``shared_poses``: several robots
     share their pose estimates (:func:`~amr_twin.navigation.stack.fleet_mates`), so each keeps
-    the others as obstacles but does not take them for people to give way to."""
+    the others as obstacles but does not take them for people to give way to; ``visuals``: a lone
+    robot's visual geoms (for a recording or a live view; a fleet's world always has them)."""
 
     world: str = "aisles"
     starts: tuple = (None,)
@@ -40,6 +41,7 @@ class FleetOptions:
     controller: str = "mppi"
     firmware: str = "improved"
     shared_poses: bool = True
+    visuals: bool = False
 
 
 def map_id(world: str) -> str:
@@ -77,7 +79,7 @@ class FleetSession:
             seed=options.seed,
             start_xy_yaw=options.starts[0],
             sensors=("imu", "lidar"),
-            visuals=False,
+            visuals=options.visuals,
         )
         bare = with_values(cfg, {"payload.mass_kg": 0.0})
         if n == 1:

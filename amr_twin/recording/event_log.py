@@ -102,8 +102,9 @@ def mcap_items(twin, order: int) -> list[tuple[int, int, str, str, bytes]]:
     ]
 
 
-def log_events(rec, twin) -> None:
-    """Collisions and faults into a Rerun recording stream (see the module notes)."""
+def log_events(rec, twin, root: str = "") -> None:
+    """Collisions and faults into a Rerun recording stream (see the module notes; a robot of a
+    fleet's under ``<root>events`` and ``world/<root>collisions``, ``root`` ``amr-2/``)."""
     import numpy as np
     import rerun as rr
 
@@ -113,7 +114,7 @@ def log_events(rec, twin) -> None:
     for c in _collisions(twin):
         rec.set_time(TIMELINE, duration=float(c.t_s))
         rec.log(
-            "events/collisions",
+            f"{root}events/collisions",
             rr.TextLog(
                 f"collision: {', '.join(c.robot_parts)} hit {c.hit} at ({c.x_m:.2f}, "
                 f"{c.y_m:.2f}) m, "
@@ -123,10 +124,11 @@ def log_events(rec, twin) -> None:
         )
         points.append((c.x_m, c.y_m, c.z_m))
         rec.log(
-            "world/collisions", rr.Points3D(np.array(points), colors=[(230, 30, 30)], radii=[0.05])
+            f"world/{root}collisions",
+            rr.Points3D(np.array(points), colors=[(230, 30, 30)], radii=[0.05]),
         )
     for f in _faults(twin):
         for t_s, what in ((f.t_s, "injected"), (f.until_s, "cleared")):
             if t_s is not None:
                 rec.set_time(TIMELINE, duration=float(t_s))
-                rec.log("events/faults", rr.TextLog(f"fault {f.text} {what}", level="WARN"))
+                rec.log(f"{root}events/faults", rr.TextLog(f"fault {f.text} {what}", level="WARN"))

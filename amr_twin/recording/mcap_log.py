@@ -104,24 +104,39 @@ BUS_TOPICS = {
 }
 
 
-def _state_items(capture, k0: int) -> list[tuple[int, int, str, str, bytes]]:
+def _state_items(capture, k0: int, ns=None) -> list[tuple[int, int, str, str, bytes]]:
     """/clock, /twin/ground_truth, /joint_states and the joints' links on /tf from the capture's
-    state samples."""
+    state samples; with ``ns`` (a :class:`~amr_twin.ros.robot_namespace.RobotNamespace`) no
+    /clock, the robot's topics and frames."""
     st = capture.state
     a = {key: v.tolist() for key, v in st.arrays().items()}  # Python floats: cheaper per message
+    truth, joints = (
+        ("/twin/ground_truth", "/joint_states")
+        if ns is None
+        else (
+            ns.topic("/twin/ground_truth"),
+            ns.topic("/joint_states"),
+        )
+    )
+    frames = ns.message if ns is not None else (lambda msg: msg)
     items, k = [], k0
     for i, t_us in enumerate(a["t_us"]):
         t = t_us * 1000
-        items.append((t, k, "/clock", "rosgraph_msgs/Clock", encode_clock(ros_state.clock(t_us))))
+        if ns is None:
+            items.append(
+                (t, k, "/clock", "rosgraph_msgs/Clock", encode_clock(ros_state.clock(t_us)))
+            )
         items.append(
             (
                 t,
                 k + 1,
-                "/twin/ground_truth",
+                truth,
                 "nav_msgs/Odometry",
                 encode_odometry(
-                    ros_state.ground_truth(
-                        t_us, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i]
+                    frames(
+                        ros_state.ground_truth(
+                            t_us, a["pos"][i], a["quat"][i], a["v_body"][i], a["w_body"][i]
+                        )
                     )
                 ),
             )
@@ -131,7 +146,7 @@ def _state_items(capture, k0: int) -> list[tuple[int, int, str, str, bytes]]:
                 (
                     t,
                     k + 2,
-                    "/joint_states",
+                    joints,
                     "sensor_msgs/JointState",
                     encode_joint_state(
                         ros_state.joint_state(t_us, st.joint_names, a["q"][i], a["qd"][i])
@@ -145,8 +160,10 @@ def _state_items(capture, k0: int) -> list[tuple[int, int, str, str, bytes]]:
                     "/tf",
                     "tf2_msgs/TFMessage",
                     encode_tf_message(
-                        ros_state.link_transforms(
-                            t_us, st.child_frames, a["link_pos"][i], a["link_quat"][i]
+                        frames(
+                            ros_state.link_transforms(
+                                t_us, st.child_frames, a["link_pos"][i], a["link_quat"][i]
+                            )
                         )
                     ),
                 )
@@ -170,23 +187,26 @@ def qos_profile(topic: str) -> str:
     reliable, durability 1 transient-local / 2 volatile). ``/tf_static`` and
     ``/robot_description`` are transient-local with depth 1, as tf2's static
     broadcaster and robot_state_publisher offer them, so that ``ros2 bag play``
-    re-publishes them in a way tf2's static listener and RViz accept.
+    re-publishes them in a way tf2's static listener and RViz accept (a robot's of a fleet,
+    ``/amr-1/robot_description``, as well).
     """
-    if topic in LATCHED:
+    if topic.endswith(LATCHED):  # a robot's own too: /amr-1/robot_description
         return _QOS.format(depth=1, durability=1)
     return _QOS.format(depth=10, durability=2)
 
 
-def write_mcap(capture, series, path: Path) -> Path:
-    """Write the capture's bus messages and ``series`` to ``path`` (.mcap), through a temporary
-    file."""
-    from mcap.writer import Writer
-
-    path = Path(path)
+def run_items(capture, series, ns=None) -> list[tuple[int, int, str, str, bytes]]:
+    """``(t_ns, order, topic, type, CDR payload)`` of a robot's bus messages, its ``series``
+    rows and its state samples (:func:`_state_items`); with ``ns`` (a
+    :class:`~amr_twin.ros.robot_namespace.RobotNamespace`) under the robot's topics and frames,
+    without /clock."""
     items: list[tuple[int, int, str, str, bytes]] = []  # t_ns, order, topic, type, CDR payload
     k = 0
     for bus_topic, (topic, typ, encode) in BUS_TOPICS.items():
-        for t_us, msg in capture.messages.get(bus_topic, []):
+        msgs = capture.messages.get(bus_topic, [])
+        if ns is not None:
+            topic, msgs = ns.topic(topic), [(t_us, ns.message(m)) for t_us, m in msgs]
+        for t_us, msg in msgs:
             items.append((int(t_us) * 1000, k, topic, typ, encode(msg)))
             k += 1
     t_ns = np.round(series.t_s * 1e9).astype(np.int64).tolist()
@@ -201,48 +221,28 @@ def write_mcap(capture, series, path: Path) -> Path:
         series.battery_soc.tolist(),
     )
     capacity = capture.twin.cfg.battery.capacity_ah
+    names = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current", "/battery_state")
+    rpm_t, pwm_t, current_t, battery_t = names if ns is None else map(ns.topic, names)
+    frame = "base_link" if ns is None else ns.frame("base_link")
+    arrays, columns = (
+        "std_msgs/Float64MultiArray",
+        ((rpm_t, true_rpm), (pwm_t, pwm), (current_t, current)),
+    )
     for i, t in enumerate(t_ns):
-        items.append(
-            (
-                t,
-                k,
-                "/twin/true_rpm",
-                "std_msgs/Float64MultiArray",
-                encode_float64_multi_array(true_rpm[i]),
-            )
-        )
-        items.append(
-            (
-                t,
-                k + 1,
-                "/twin/pwm_counts",
-                "std_msgs/Float64MultiArray",
-                encode_float64_multi_array(pwm[i]),
-            )
-        )
-        items.append(
-            (
-                t,
-                k + 2,
-                "/twin/motor_current",
-                "std_msgs/Float64MultiArray",
-                encode_float64_multi_array(current[i]),
-            )
-        )
+        for j, (topic, column) in enumerate(columns):
+            items.append((t, k + j, topic, arrays, encode_float64_multi_array(column[i])))
         if i % BATTERY_EVERY_ROWS == 0:
-            items.append(
-                (
-                    t,
-                    k + 3,
-                    "/battery_state",
-                    "sensor_msgs/BatteryState",
-                    encode_battery_state(
-                        t, volts[i], -amps[i], soc[i] * capacity, capacity, soc[i]
-                    ),
-                )
-            )
+            charge = soc[i] * capacity
+            state = encode_battery_state(t, volts[i], -amps[i], charge, capacity, soc[i], frame)
+            items.append((t, k + 3, battery_t, "sensor_msgs/BatteryState", state))
         k += 4
-    items += _state_items(capture, k)
+    return items + _state_items(capture, k, ns)
+
+
+def write_mcap(capture, series, path: Path) -> Path:
+    """Write the capture's bus messages and ``series`` to ``path`` (.mcap), through a temporary
+    file."""
+    items = run_items(capture, series)
     bus = capture.twin.bus
     items.append(
         (0, -2, "/robot_description", "std_msgs/String", encode_string(String(capture.twin.urdf)))
@@ -259,6 +259,15 @@ def write_mcap(capture, series, path: Path) -> Path:
     items += event_items(
         capture.twin, len(items)
     )  # /twin/collisions, /twin/faults (amr_twin/recording/event_log.py)
+    return write_items(items, path)
+
+
+def write_items(items: list[tuple[int, int, str, str, bytes]], path: Path) -> Path:
+    """Write ``(t_ns, order, topic, type, CDR payload)`` items to ``path`` (.mcap, profile
+    ``ros2``) in time order (ties: ``order``), through a temporary file."""
+    from mcap.writer import Writer
+
+    path = Path(path)
     items.sort(key=lambda it: (it[0], it[1]))
     with replacing(path) as tmp:
         with open(tmp, "wb") as f:

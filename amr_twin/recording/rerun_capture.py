@@ -37,11 +37,15 @@ class Capture:
     run whatever the caller's ``advance`` pattern (a sweep's 20 ms loop included).
     """
 
-    def __init__(self, twin, body_hz: float = 30.0):
+    def __init__(self, twin, body_hz: float = 30.0, prefix: str = "amr/", bodies=None):
+        """``prefix``: the robot's names in the model (``amr-2/`` in a fleet); ``bodies``: the
+        ids of the bodies whose poses to keep (None: every body but the world)."""
         self.twin = twin
         self.messages: dict[str, list[tuple[int, object]]] = {}
         m = twin.observables.model
-        self.body_ids = np.array([b for b in range(1, m.nbody)], dtype=int)
+        self.body_ids = np.array(
+            [b for b in range(1, m.nbody)] if bodies is None else list(bodies), dtype=int
+        )
         self._xpos, self._xquat = (
             twin.observables.named.data.xpos,
             twin.observables.named.data.xquat,
@@ -53,7 +57,7 @@ class Capture:
         self._quat: list[np.ndarray] = []
         from amr_twin.ros.ros_state import StateSampler
 
-        self.state = StateSampler(m, twin.observables.named)
+        self.state = StateSampler(m, twin.observables.named, prefix=prefix)
         """Joint and base state on every grid instant (:mod:`amr_twin.ros.ros_state`)."""
         twin.on_message(self._tap)
         self._sample(twin.t_phys_us)

@@ -33,14 +33,16 @@ def _cells(msg, keep) -> tuple[np.ndarray, np.ndarray]:
     return xy, data[rows, cols]
 
 
-def _log_navigation(rec, capture) -> None:
+def _log_navigation(rec, capture, root: str = "") -> None:
+    """The streams of the module notes (a robot of a fleet's under ``world/<root>navigation``:
+    ``root`` ``amr-2/``)."""
     import rerun as rr
 
     msgs = capture.messages
     for _t, m in msgs.get("map", [])[:1]:
         xy, _ = _cells(m, lambda d: d == 100)
         rec.log(
-            "world/navigation/map",
+            f"world/{root}navigation/map",
             rr.Points3D(
                 np.column_stack([xy, np.full(len(xy), 0.01)]), radii=0.025, colors=(60, 60, 60)
             ),
@@ -49,7 +51,10 @@ def _log_navigation(rec, capture) -> None:
     for t_us, m in msgs.get("plan", []):
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         pts = np.array([[p.pose.position.x, p.pose.position.y, 0.03] for p in m.poses])
-        rec.log("world/navigation/plan", rr.LineStrips3D([pts], colors=(30, 120, 255), radii=0.015))
+        rec.log(
+            f"world/{root}navigation/plan",
+            rr.LineStrips3D([pts], colors=(30, 120, 255), radii=0.015),
+        )
     for t_us, m in msgs.get("local_costmap/costmap", []):
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         xy, v = _cells(m, lambda d: d > 0)
@@ -57,7 +62,7 @@ def _log_navigation(rec, capture) -> None:
             [np.full(len(v), 255), 255 - 2.5 * np.clip(v, 0, 100), np.full(len(v), 40)]
         )
         rec.log(
-            "world/navigation/costmap",
+            f"world/{root}navigation/costmap",
             rr.Points3D(
                 np.column_stack([xy, np.full(len(xy), 0.02)]),
                 radii=0.025,
@@ -70,5 +75,6 @@ def _log_navigation(rec, capture) -> None:
             [[p.x, p.y, 0.05] for p in m.points] + [[m.points[0].x, m.points[0].y, 0.05]]
         )
         rec.log(
-            "world/navigation/footprint", rr.LineStrips3D([pts], colors=(0, 200, 200), radii=0.01)
+            f"world/{root}navigation/footprint",
+            rr.LineStrips3D([pts], colors=(0, 200, 200), radii=0.01),
         )

@@ -1,6 +1,7 @@
 """The time-series streams of a ``.rrd`` recording, one ``_log_<stream>`` function per stream.
 
-All on the ``sim_time`` timeline (:data:`TIMELINE`, durations in s)::
+All on the ``sim_time`` timeline (:data:`TIMELINE`, durations in s), a robot of a fleet's
+under its name (``amr-2/wheels/...``; the functions' ``root``)::
 
     wheels/{left,right}/{reference,published,true}_rpm   Scalars, RPM
     duty/{left,right}                   analogWrite counts
@@ -51,48 +52,48 @@ def reference_rpm(series) -> np.ndarray:
     return np.where((idx >= 0)[:, None], ref[np.clip(idx, 0, None)], 0.0)
 
 
-def _log_wheel_speeds(rec, series) -> None:
+def _log_wheel_speeds(rec, series, root: str = "") -> None:
     ref = reference_rpm(series)
     for w, name in enumerate(WHEELS):
-        _scalars(rec, f"wheels/{name}/reference_rpm", series.t_s, ref[:, w])
+        _scalars(rec, f"{root}wheels/{name}/reference_rpm", series.t_s, ref[:, w])
         pub = signed_published(series, w)  # signed like the reference and the true speed
-        _scalars(rec, f"wheels/{name}/published_rpm", pub[:, 0], pub[:, 1])
-        _scalars(rec, f"wheels/{name}/true_rpm", series.t_s, series.true_rpm[:, w])
+        _scalars(rec, f"{root}wheels/{name}/published_rpm", pub[:, 0], pub[:, 1])
+        _scalars(rec, f"{root}wheels/{name}/true_rpm", series.t_s, series.true_rpm[:, w])
 
 
-def _log_duty(rec, series) -> None:
+def _log_duty(rec, series, root: str = "") -> None:
     for w, name in enumerate(WHEELS):
-        _scalars(rec, f"duty/{name}", series.t_s, series.pwm_counts[:, w])
+        _scalars(rec, f"{root}duty/{name}", series.t_s, series.pwm_counts[:, w])
 
 
-def _log_electrics(rec, series) -> None:
+def _log_electrics(rec, series, root: str = "") -> None:
     for w, name in enumerate(WHEELS):
-        _scalars(rec, f"electrics/{name}/current_a", series.t_s, series.current_a[:, w])
-    _scalars(rec, "electrics/battery/current_a", series.t_s, series.battery_a)
-    _scalars(rec, "electrics/battery/voltage_v", series.t_s, series.battery_v)
+        _scalars(rec, f"{root}electrics/{name}/current_a", series.t_s, series.current_a[:, w])
+    _scalars(rec, f"{root}electrics/battery/current_a", series.t_s, series.battery_a)
+    _scalars(rec, f"{root}electrics/battery/voltage_v", series.t_s, series.battery_v)
 
 
-def _log_commands(rec, series, result=None) -> None:
+def _log_commands(rec, series, result=None, root: str = "") -> None:
     import rerun as rr
 
     for t_s, command in result.commands if result is not None else []:
         rec.set_time(TIMELINE, duration=float(t_s))
-        rec.log("commands", rr.TextLog(f"client {command.describe()}", level="INFO"))
+        rec.log(f"{root}commands", rr.TextLog(f"client {command.describe()}", level="INFO"))
     for t_s, data in series.commands:
         rec.set_time(TIMELINE, duration=float(t_s))
         rec.log(
-            "commands",
+            f"{root}commands",
             rr.TextLog("wheel_Command [" + ", ".join(f"{v:g}" for v in data) + "]", level="INFO"),
         )
 
 
-def _log_imu(rec, capture: Capture) -> None:
+def _log_imu(rec, capture: Capture, root: str = "") -> None:
     imu = capture.messages.get("imu/data_raw", [])
     if imu:
         t = [msg.header.stamp.to_sec() for _, msg in imu]
         _scalars(
             rec,
-            "imu/accel",
+            f"{root}imu/accel",
             t,
             [
                 (m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z)
@@ -101,7 +102,7 @@ def _log_imu(rec, capture: Capture) -> None:
         )
         _scalars(
             rec,
-            "imu/gyro",
+            f"{root}imu/gyro",
             t,
             [(m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z) for _, m in imu],
         )
@@ -110,7 +111,7 @@ def _log_imu(rec, capture: Capture) -> None:
         t = [msg.header.stamp.to_sec() for _, msg in mag]
         _scalars(
             rec,
-            "imu/mag",
+            f"{root}imu/mag",
             t,
             [(m.magnetic_field.x, m.magnetic_field.y, m.magnetic_field.z) for _, m in mag],
         )

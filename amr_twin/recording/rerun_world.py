@@ -121,13 +121,13 @@ TRAJECTORY_BLOCK_S = 10.0
 """The growing paths are logged in blocks of this many seconds, one entity each (linear size)."""
 
 
-def _log_trajectory(rec, series, rate_hz: float = 2.0) -> None:
+def _log_trajectory(rec, series, rate_hz: float = 2.0, root: str = "") -> None:
     """True (world) and odometry (odom frame put on the start pose) paths, growing.
 
-    ``world/trajectory/{true,odom}/<block>``: each block of :data:`TRAJECTORY_BLOCK_S` is a
-    line strip that grows at ``rate_hz`` from the end of the block before it and then stays
-    (the viewer keeps an entity's latest strip), so a run of any length costs a file that
-    grows linearly with it, not with its square.
+    ``world/<root>trajectory/{true,odom}/<block>`` (``root``: ``amr-2/`` for a robot of a
+    fleet): each block of :data:`TRAJECTORY_BLOCK_S` is a line strip that grows at ``rate_hz``
+    from the end of the block before it and then stays (the viewer keeps an entity's latest
+    strip), so a run of any length costs a file that grows linearly with it, not with its square.
     """
     import rerun as rr
 
@@ -155,7 +155,7 @@ def _log_trajectory(rec, series, rate_hz: float = 2.0) -> None:
                 pts = np.vstack([xy[first:n:5], xy[n - 1 : n]])
                 pts = np.column_stack([pts, np.full(len(pts), 0.01)])
                 rec.log(
-                    f"world/trajectory/{name}/{block:04d}",
+                    f"world/{root}trajectory/{name}/{block:04d}",
                     rr.LineStrips3D([pts], colors=[color], radii=[0.01]),
                 )
 
@@ -187,8 +187,9 @@ def _body_pose_at(capture: Capture, m, body: str, t_s: np.ndarray) -> tuple[np.n
     return _interp_pose(_pose_track(capture, m, body), t_s)
 
 
-def _log_scan(rec, m, capture: Capture) -> None:
-    """Every scan in the laser frame and in the world (each beam at its own instant's laser pose).
+def _log_scan(rec, m, capture: Capture, laser: str = "amr/laser", root: str = "") -> None:
+    """Every scan in the laser frame and in the world (each beam at its own instant's laser pose):
+    ``world/bodies/<laser>/scan`` and ``world/<root>scan`` (``laser``: the laser's body).
 
     The laser's pose track is made once and all beams of all scans are placed in one
     vectorised pass: the cost grows with the number of beams, not with their square.
@@ -211,7 +212,7 @@ def _log_scan(rec, m, capture: Capture) -> None:
     ok = np.isfinite(r)
     r = np.where(ok, r, 0.0)  # no return: inf; dropped below, kept out of the products
     local = np.column_stack([r * np.cos(ang), r * np.sin(ang), np.zeros_like(r)])
-    p, yaw = _interp_pose(_pose_track(capture, m, "amr/laser"), t_all)
+    p, yaw = _interp_pose(_pose_track(capture, m, laser), t_all)
     c, s = np.cos(yaw), np.sin(yaw)
     world = np.column_stack(
         [
@@ -224,8 +225,8 @@ def _log_scan(rec, m, capture: Capture) -> None:
     bounds = np.r_[0, np.cumsum(sizes)]
     kept = np.diff(np.r_[0, np.cumsum(ok)][bounds])  # beams with a return, per scan
     for entity, points, colour, radius in (
-        ("world/bodies/amr/laser/scan", local, (250, 200, 40), 0.01),
-        ("world/scan", world, (40, 120, 250), 0.015),
+        (f"world/bodies/{laser}/scan", local, (250, 200, 40), 0.01),
+        (f"world/{root}scan", world, (40, 120, 250), 0.015),
     ):
         style = rr.Points3D.columns(
             colors=np.tile(colour, (len(sizes), 1)), radii=np.full(len(sizes), radius)
@@ -264,8 +265,13 @@ def uwb_ranges(capture: Capture) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     return {i: (np.array(t), np.array(r)) for i, (t, r) in sorted(per.items())}
 
 
-def _log_uwb(rec, m, capture: Capture) -> None:
-    """Ranges per anchor as scalars, the anchors, and a line from the tag to each anchor ranged.
+def _log_uwb(
+    rec, m, capture: Capture, base: str = "amr/base_link", root: str = "", anchors: bool = True
+) -> bool:
+    """Ranges per anchor as scalars (``<root>uwb/anchor_<i>/range_m``), the anchors (unless
+    ``anchors`` is false: another robot's logged them), and a line from the tag to each anchor
+    ranged (``world/<root>uwb/anchor_<i>/ray``; ``base``: the robot's base body). Returns
+    whether there were ranges.
 
     The tag's world position at a range's stamp uses the base's interpolated
     position and yaw (the base's small tilt is left out of the line).
@@ -274,35 +280,39 @@ def _log_uwb(rec, m, capture: Capture) -> None:
 
     ranges = uwb_ranges(capture)
     if not ranges:
-        return
-    anchors, tag = uwb_geometry(capture.twin)
-    rec.log(
-        "world/uwb/anchors",
-        rr.Points3D(
-            anchors,
-            radii=[0.08],
-            colors=[(200, 60, 200)],
-            labels=[f"anchor_{i}" for i in range(len(anchors))],
-        ),
-        static=True,
-    )
+        return False
+    anchors_xyz, tag = uwb_geometry(capture.twin)
+    if anchors:
+        rec.log(
+            "world/uwb/anchors",
+            rr.Points3D(
+                anchors_xyz,
+                radii=[0.08],
+                colors=[(200, 60, 200)],
+                labels=[f"anchor_{i}" for i in range(len(anchors_xyz))],
+            ),
+            static=True,
+        )
     for i, (t_s, range_m) in ranges.items():
-        _scalars(rec, f"uwb/anchor_{i}/range_m", t_s, range_m)
-        if i >= len(anchors):
+        _scalars(rec, f"{root}uwb/anchor_{i}/range_m", t_s, range_m)
+        if i >= len(anchors_xyz):
             continue
-        p, yaw = _body_pose_at(capture, m, "amr/base_link", t_s)
+        p, yaw = _body_pose_at(capture, m, base, t_s)
         c, s = np.cos(yaw), np.sin(yaw)
         tag_w = np.column_stack(
             [p[:, 0] + c * tag[0] - s * tag[1], p[:, 1] + s * tag[0] + c * tag[1], p[:, 2] + tag[2]]
         )
-        strips = np.stack([tag_w, np.broadcast_to(anchors[i], tag_w.shape)], axis=1)  # (n, 2, 3)
+        strips = np.stack(
+            [tag_w, np.broadcast_to(anchors_xyz[i], tag_w.shape)], axis=1
+        )  # (n, 2, 3)
         rec.send_columns(
-            f"world/uwb/anchor_{i}/ray",
+            f"world/{root}uwb/anchor_{i}/ray",
             indexes=_time(t_s),
             columns=rr.LineStrips3D.columns(strips=strips),
         )
         rec.log(
-            f"world/uwb/anchor_{i}/ray",
+            f"world/{root}uwb/anchor_{i}/ray",
             rr.LineStrips3D.from_fields(colors=[(200, 60, 200)], radii=[0.005]),
             static=True,
         )
+    return True

@@ -205,14 +205,15 @@ def encode_battery_state(
     charge_ah: float,
     capacity_ah: float,
     percentage: float,
+    frame: str = "base_link",
 ) -> bytes:
-    """The CDR payload of a ``sensor_msgs/BatteryState`` of the lithium pack (frame ``base_link``).
+    """The CDR payload of a ``sensor_msgs/BatteryState`` of the lithium pack (in ``frame``).
 
     ``current_a`` as ROS states it: negative while discharging. Temperature and cell
     values are not modelled (NaN, empty); status discharging, health unknown, Li-ion.
     """
     c = Cdr()
-    c.header(t_ns // 1_000_000_000, t_ns % 1_000_000_000, "base_link")
+    c.header(t_ns // 1_000_000_000, t_ns % 1_000_000_000, frame)
     c.f32(voltage_v, float("nan"), current_a, charge_ah, capacity_ah, capacity_ah, percentage)
     c.u8(2)  # POWER_SUPPLY_STATUS_DISCHARGING
     c.u8(0)  # POWER_SUPPLY_HEALTH_UNKNOWN

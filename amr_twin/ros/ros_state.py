@@ -70,7 +70,8 @@ def _quat(wxyz) -> Quaternion:
     return Quaternion(float(x), float(y), float(z), float(w))
 
 
-def _stamped(parent: str, child: str, xyz, wxyz, stamp: Time = Time()) -> TransformStamped:
+def frame_transform(parent: str, child: str, xyz, wxyz, stamp: Time = Time()) -> TransformStamped:
+    """``parent -> child`` at ``xyz`` (m) turned by the quaternion ``wxyz``."""
     x, y, z = xyz
     return TransformStamped(
         Header(0, stamp, parent),
@@ -79,17 +80,17 @@ def _stamped(parent: str, child: str, xyz, wxyz, stamp: Time = Time()) -> Transf
     )
 
 
-def robot_static_transforms(model) -> list[TransformStamped]:
+def robot_static_transforms(model, prefix: str = ROBOT) -> list[TransformStamped]:
     """``base_link -> laser, imu_link, uwb_tag`` from the compiled model (the URDF's fixed
-    joints)."""
+    joints) of the robot named ``prefix...`` (``amr-2/`` in a fleet)."""
     import mujoco
 
-    base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + BASE_FRAME)
+    base = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, prefix + BASE_FRAME)
     out = []
     for link in FIXED_LINKS:
-        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, ROBOT + link)
+        b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, prefix + link)
         if b >= 0 and model.body_parentid[b] == base:
-            out.append(_stamped(BASE_FRAME, link, model.body_pos[b], model.body_quat[b]))
+            out.append(frame_transform(BASE_FRAME, link, model.body_pos[b], model.body_quat[b]))
     return out
 
 
@@ -98,7 +99,7 @@ def anchor_transforms(
 ) -> list[TransformStamped]:
     """``map -> uwb_anchor_<i>`` at the anchors' positions (K, 3), m, axes as the map's."""
     return [
-        _stamped(MAP_FRAME, frame.format(i), xyz, (1.0, 0.0, 0.0, 0.0))
+        frame_transform(MAP_FRAME, frame.format(i), xyz, (1.0, 0.0, 0.0, 0.0))
         for i, xyz in enumerate(np.asarray(anchors_xyz_m, float).reshape(-1, 3))
     ]
 
@@ -151,22 +152,24 @@ class StateSampler:
         Its named views: ``twin.observables.named``.
     native : bool
         Give the sampler its C form (False: Python only, the same values).
+    prefix : str
+        The robot's name prefix in the model (``amr-2/`` in a fleet).
     """
 
-    def __init__(self, model, named, native: bool = True):
+    def __init__(self, model, named, native: bool = True, prefix: str = ROBOT):
         import mujoco
 
         self.joint_names = MOVING_JOINTS
         joints = [
-            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, ROBOT + j) for j in MOVING_JOINTS
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, prefix + j) for j in MOVING_JOINTS
         ]
         self.child_frames = tuple(
-            mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])[len(ROBOT) :]
+            mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])[len(prefix) :]
             for j in joints
         )
-        joint_names = [ROBOT + j for j in MOVING_JOINTS]
-        bodies = [ROBOT + BASE_FRAME, *(ROBOT + f for f in self.child_frames)]
-        root = named.data.qvel.index(ROBOT + "root")  # the free joint's six dofs
+        joint_names = [prefix + j for j in MOVING_JOINTS]
+        bodies = [prefix + BASE_FRAME, *(prefix + f for f in self.child_frames)]
+        root = named.data.qvel.index(prefix + "root")  # the free joint's six dofs
         d = named.data
         self.sample = named.value_rows(
             [
@@ -258,7 +261,10 @@ def link_transforms(t_us: int, children, link_pos, link_quat) -> TFMessage:
     /tf)."""
     stamp = Time.from_us(t_us)
     return TFMessage(
-        [_stamped(BASE_FRAME, c, p, q, stamp) for c, p, q in zip(children, link_pos, link_quat)]
+        [
+            frame_transform(BASE_FRAME, c, p, q, stamp)
+            for c, p, q in zip(children, link_pos, link_quat)
+        ]
     )
 
 

@@ -29,10 +29,11 @@ TRACK_TICKS = 25
 """A track point every this many ticks (0.5 s)."""
 
 
-def fleet_session(cfg, point: EpisodePoint, roadmap):
+def fleet_session(cfg, point: EpisodePoint, roadmap, visuals: bool = False):
     """The world of ``point.robots`` robots, amr-1..amr-N, on one embedded broker, as fast as
     possible (rate 0), stamped from :data:`~.lockstep.EPOCH`; robot i at the i-th start of
-    :func:`~.starts.start_poses` about the world's start on ``roadmap``."""
+    :func:`~.starts.start_poses` about the world's start on ``roadmap`` (``visuals``: a lone
+    robot drawn, for a recording)."""
     from amr_twin.experiments.fleet.starts import start_poses
     from amr_twin.fleet.session import FleetOptions, FleetSession
     from amr_twin.model.worlds import default_start
@@ -44,7 +45,9 @@ def fleet_session(cfg, point: EpisodePoint, roadmap):
         cfg.chassis.length_m / 2,
         cfg.half_width_m,
     )
-    options = FleetOptions(world=point.world, starts=starts, rate=0.0, seed=point.seed)
+    options = FleetOptions(
+        world=point.world, starts=starts, rate=0.0, seed=point.seed, visuals=visuals
+    )
     return FleetSession(cfg, options, epoch=EPOCH)
 
 
@@ -95,9 +98,11 @@ class _Meter:
             self.near.update(t_s, positions)
 
 
-def run_episode(cfg, point: EpisodePoint) -> EpisodeResult:
+def run_episode(cfg, point: EpisodePoint, record=None) -> EpisodeResult:
     """Run ``point`` (module docstring) and measure it. Orders that arrive before the manager has
-    placed every vehicle on its roadmap wait until it has (their lead time counts from arrival)."""
+    placed every vehicle on its roadmap wait until it has (their lead time counts from arrival).
+    ``record``: a folder for the episode's ``.mcap`` and ``.rrd``
+    (:mod:`amr_twin.recording.fleet_recording`), None: none."""
     from amr_twin.fleet.protocol import INTERFACE
     from amr_twin.fleet_manager.dispatcher import ManagerOptions
     from amr_twin.fleet_manager.manager import start_manager
@@ -105,7 +110,12 @@ def run_episode(cfg, point: EpisodePoint) -> EpisodeResult:
     from amr_twin.model.worlds import default_start
 
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    session = fleet_session(cfg, point, world_roadmap(cfg, point.world))
+    session = fleet_session(cfg, point, world_roadmap(cfg, point.world), record is not None)
+    captures = None
+    if record is not None:
+        from amr_twin.recording.fleet_capture import attach_fleet
+
+        captures = attach_fleet(session.world, names=session.serials)
     vehicles = session.vehicles
     manager = None
     try:
@@ -155,6 +165,11 @@ def run_episode(cfg, point: EpisodePoint) -> EpisodeResult:
         if manager is not None:
             manager.close()
         session.close()
+    if captures is not None:
+        from amr_twin.recording.fleet_recording import episode_stem, write_fleet_recordings
+
+        stem = episode_stem(point.robots, point.payload_kg, point.seed)
+        write_fleet_recordings(captures, record, stem, cfg)
     return _result(point, orders, summary, vehicles, meter, wall0, cpu0)
 
 

@@ -108,24 +108,37 @@ def _text(values) -> str:
 
 
 def _episode(item) -> EpisodeResult:
-    """One episode in a worker: ``item`` is (cfg, point)."""
+    """One episode in a worker: ``item`` is (cfg, point, record folder or None)."""
     from amr_twin.experiments.fleet.episode import run_episode
 
-    cfg, point = item
-    return run_episode(cfg, point)
+    cfg, point, record = item
+    return run_episode(cfg, point, record)
 
 
-def run(spec: FleetSpec, cfg, out_dir: Path, *, jobs: int = 1, client=None, progress=False):
+def run(
+    spec: FleetSpec,
+    cfg,
+    out_dir: Path,
+    *,
+    jobs: int = 1,
+    client=None,
+    progress=False,
+    record: Path | None = None,
+):
     """Validate ``spec``, run its episodes (``jobs`` local workers or a Dask ``client``) and write
-    ``out_dir``'s report.md, metrics.json and plots; the
-    :class:`~amr_twin.experiments.fleet.report.FleetResult`."""
+    ``out_dir``'s report.md, metrics.json and plots; with ``record`` each episode's ``.mcap`` and
+    ``.rrd`` there; the :class:`~amr_twin.experiments.fleet.report.FleetResult`."""
     from amr_twin.base.atomic_file import all_or_nothing
     from amr_twin.experiments.fleet import report
     from amr_twin.experiments.runner.executor import run_all
 
     points = spec.validate(cfg.payload.max_mass_kg)
     out_dir.mkdir(parents=True, exist_ok=True)
-    items = [(cfg, p) for p in points]
+    if record is not None:
+        from amr_twin.recording.rerun_capture import recording_folder
+
+        record = recording_folder(record)  # absolute: a worker may run elsewhere
+    items = [(cfg, p, record) for p in points]
     episodes = [
         r for _item, r in run_all(_episode, items, jobs, "fleet episodes", progress, client)
     ]

@@ -23,6 +23,10 @@ TIMEOUT_S = 2.0
 """Bound on each call to the master, wall s."""
 
 
+class _Closed(Exception):
+    """The watch was closed while it registered the node again."""
+
+
 class MasterWatch:
     """Watch the master at ``uri`` for the node rospy runs; ``params`` (resolved name -> value) are
     set again with the registrations; ``say`` prints one line at a loss and at each registration."""
@@ -61,6 +65,8 @@ class MasterWatch:
             if self.lost or pid != self.pid:
                 try:
                     counts = self.register()
+                except _Closed:
+                    return
                 except (OSError, xmlrpc.client.Error):
                     continue  # the master is still starting: the next look tries again
                 self.pid, self.lost, self.registrations = pid, False, self.registrations + 1
@@ -79,6 +85,7 @@ class MasterWatch:
         me, api = rospy.get_name(), rospy.core.get_node_uri()
         node = xmlrpc.client.ServerProxy(api, transport=_TimeoutTransport(TIMEOUT_S))
         for key, value in self.params.items():
+            self._go_on()
             master.setParam(me, key, value)
         topics = get_topic_manager()
         pubs, subs, services = (
@@ -87,16 +94,25 @@ class MasterWatch:
             get_service_manager().get_services(),
         )
         for name, data_type in pubs:
+            self._go_on()
             master.registerPublisher(me, name, data_type, api)
         for name, data_type in subs:
+            self._go_on()
             code, _msg, uris = master.registerSubscriber(me, name, data_type, api)
             if code == 1 and uris:
+                self._go_on()
                 node.publisherUpdate("/master", name, uris)
         for name, service_api in services:
+            self._go_on()
             master.registerService(me, name, service_api, api)
         return len(pubs), len(subs), len(services)
 
+    def _go_on(self) -> None:
+        if self._done.is_set():
+            raise _Closed
+
     def close(self) -> None:
-        """Stop watching."""
+        """Stop watching: wait for the thread, at most one call to the master (``TIMEOUT_S``) and a
+        second."""
         self._done.set()
-        self._thread.join(timeout=TIMEOUT_S + self.period_s)
+        self._thread.join(timeout=TIMEOUT_S + 1.0)

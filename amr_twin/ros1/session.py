@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from amr_twin.ros1 import remapping
 from amr_twin.ros1.master import DEFAULT_MASTER_URI, Master, master_problem, start_roscore
 from amr_twin.ros1.master_watch import MasterWatch
+from amr_twin.ros1.node_shutdown import shut_down
 from amr_twin.ros1.sim_services import SimServices
 
 NODE_NAME = "amr_twin"
@@ -121,10 +122,11 @@ class Ros1Session:
             self.services = SimServices(twin, pacer, rospy)
         except BaseException:
             if rospy is not None:
-                rospy.signal_shutdown("the twin could not join the graph")
+                shut_down(rospy, "the twin could not join the graph")
             self.master.stop()
             raise
         pacer.sinks.append(self.bridge)
+        self._say = say
         self.watch = MasterWatch(
             self.master.uri,
             rospy,
@@ -184,8 +186,10 @@ class Ros1Session:
             time.sleep(0.02)
 
     def close(self) -> None:
-        """Stop the bridge (if the pacer has not) and the services, put ``/use_sim_time`` back as it
-        was (deleted if it was not set), stop rospy and the private roscore."""
+        """Stop the master's watch, the bridge (if the pacer has not) and the services, put
+        ``/use_sim_time`` back as it was (deleted if it was not set), stop rospy and wait for its
+        server threads (:func:`~amr_twin.ros1.node_shutdown.shut_down`), then the private
+        roscore."""
         try:
             self.watch.close()
             self.services.close()
@@ -193,7 +197,9 @@ class Ros1Session:
             if not self.watch.lost:
                 self._restore_sim_time()
         finally:
-            self.rospy.signal_shutdown("the twin's run is over")
+            left = shut_down(self.rospy, "the twin's run is over")
+            if left:
+                self._say(f"ros1: rospy's server threads {', '.join(left)} did not end")
             self.master.stop()
 
     def _restore_sim_time(self) -> None:

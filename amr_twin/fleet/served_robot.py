@@ -6,7 +6,6 @@ per robot).
 
 from __future__ import annotations
 
-import math
 from functools import partial
 
 from amr_twin.fleet.adapter import VehicleAdapter
@@ -14,6 +13,7 @@ from amr_twin.fleet.factsheet import factsheet
 from amr_twin.fleet.handling import Handling, Load
 from amr_twin.fleet.protocol import MANUFACTURER, Stamper
 from amr_twin.fleet.vehicle import TwinVehicle
+from amr_twin.analysis.se2 import yaw_of_quaternion
 
 
 class ServedRobot:
@@ -89,7 +89,7 @@ class ServedRobot:
         return (
             float(row[4]),
             float(row[5]),
-            math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
+            yaw_of_quaternion(w, x, y, z),
         )
 
     def summary(self) -> dict:

@@ -33,6 +33,7 @@ from amr_twin.ros.geometry_messages import Point, Pose, Quaternion, Twist, Vecto
 from amr_twin.ros.messages import Header, Time
 from amr_twin.ros.nav_messages import PoseStamped
 from amr_twin.ros.ros2_schemas import msgdef
+from amr_twin.analysis.se2 import yaw_of_quaternion
 
 TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/Twist")
 REQUEST_TYPES = ("std_msgs/msg/Float64MultiArray", "std_msgs/Float64MultiArray")
@@ -151,7 +152,7 @@ def decode_goal_pose(data: bytes, encoding: str) -> PoseStamped:
     if norm < 1e-6:
         raise InputError("goal_pose: pose.orientation is a zero quaternion")
     x, y, z, w = (v / norm for v in q)
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    yaw = yaw_of_quaternion(w, x, y, z)
     return PoseStamped(
         Header(0, Time(), frame), Pose(Point(xyz[0], xyz[1], 0.0), Quaternion.from_yaw(yaw))
     )

@@ -15,7 +15,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from amr_twin.sim.plant import motor_currents_a
-from amr_twin.recording.recorder import RAD_S_TO_RPM, yaw_from_quat
+from amr_twin.recording.recorder import RAD_S_TO_RPM
+from amr_twin.analysis.se2 import yaws_of_quaternions
 
 
 class LiveRows:
@@ -60,7 +61,9 @@ class LiveRows:
             t_us=t_us_arr,
             t_s=t,
             true_rpm=sensors[:, 2:4] * RAD_S_TO_RPM,
-            pose=np.column_stack([sensors[:, 4], sensors[:, 5], yaw_from_quat(sensors[:, 7:11])]),
+            pose=np.column_stack(
+                [sensors[:, 4], sensors[:, 5], yaws_of_quaternions(sensors[:, 7:11])]
+            ),
             pwm_counts=pins[:, 0:2].astype(int),
             current_a=current,
             battery_v=battery[:, 0],

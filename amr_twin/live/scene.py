@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 
 from amr_twin.ros.ros_state import ROBOT
+from amr_twin.analysis.se2 import yaw_of_quaternion
 
 VISUAL_GROUPS = (
     0,
@@ -58,7 +59,7 @@ def planar_origin(pos, quat) -> tuple[np.ndarray, np.ndarray]:
     """The odom frame's pose in the world for a base pose: its position and yaw only (odom is
     planar)."""
     w, x, y, z = quat
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    yaw = yaw_of_quaternion(w, x, y, z)
     return np.asarray(pos, float).copy(), np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
 
 

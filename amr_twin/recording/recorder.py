@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from amr_twin.sim.plant import motor_currents_a
+from amr_twin.analysis.se2 import yaw_of_quaternion, yaws_of_quaternions
 
 RAD_S_TO_RPM = 60.0 / (2.0 * math.pi)
 
@@ -62,12 +63,6 @@ def signed_published(series: RunSeries, wheel: int) -> np.ndarray:
             i += 1
         signs[k] = direction
     return np.column_stack([pub[:, 0], signs * np.abs(pub[:, 1])]) if len(pub) else pub
-
-
-def yaw_from_quat(q: np.ndarray) -> np.ndarray:
-    """Yaw of (n, 4) quaternions w, x, y, z, rad."""
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 _recorders: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -132,7 +127,7 @@ class Recorder:
 
     def _on_odom(self, msg, t_s: float) -> None:
         q = msg.pose.pose.orientation
-        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of_quaternion(q.w, q.x, q.y, q.z)
         self._odom.append((t_s, msg.pose.pose.position.x, msg.pose.pose.position.y, yaw))
 
     def pins_changed(self, t_us: int) -> None:
@@ -162,7 +157,7 @@ class Recorder:
         # pins in force during the step that ends at each row: the last change before it
         idx = np.searchsorted(np.array(self._pin_t), t_us, side="left") - 1
         pins = np.array(self._pins)[np.clip(idx, 0, None)]
-        pose = np.column_stack([rows[:, 4], rows[:, 5], yaw_from_quat(rows[:, 7:11])])
+        pose = np.column_stack([rows[:, 4], rows[:, 5], yaws_of_quaternions(rows[:, 7:11])])
         published = {w: np.array(v, float).reshape(-1, 2) for w, v in self._published.items()}
         mode, voltage = pins[:, 4:6].astype(int), pins[:, 6:8]
         current = motor_currents_a(self.twin.cfg, voltage, rows[:, 2:4], mode)

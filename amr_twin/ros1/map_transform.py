@@ -22,6 +22,7 @@ import struct
 
 from amr_twin.ros.ros_state import MAP_FRAME
 from amr_twin.ros.tf_buffer import ODOM_FRAME
+from amr_twin.analysis.se2 import yaw_of_quaternion
 
 SOURCES = ("odometry/filtered", "ground_truth/odom")
 """Bus topics of a pose in ``map`` (``nav_msgs/Odometry``): localisations of
@@ -63,7 +64,7 @@ class MapTransform:
         of ``map -> odom`` when one is due, else None."""
         p = msg.pose.pose
         q = p.orientation
-        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of_quaternion(q.w, q.x, q.y, q.z)
         if topic == ODOM_TOPIC:
             self._odom = (p.position.x, p.position.y, yaw)
             return None

@@ -8,6 +8,7 @@ import logging
 import math
 
 from amr_twin.live.pacer import PacerClosed
+from amr_twin.analysis.se2 import yaw_of_quaternion
 
 LOG = logging.getLogger(__name__)
 
@@ -61,7 +62,7 @@ def pose_problem(pose_stamped) -> tuple[str, tuple | None]:
     return "", (
         float(p.x),
         float(p.y),
-        math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)),
+        yaw_of_quaternion(w, x, y, z),
     )
 
 

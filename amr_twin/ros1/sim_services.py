@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import logging
 import math
+from amr_twin.analysis.se2 import yaw_of_quaternion
 
 LOG = logging.getLogger(__name__)
 
@@ -61,7 +62,7 @@ class SimServices:
                 msg.header.frame_id,
             )
             return
-        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of_quaternion(q.w, q.x, q.y, q.z)
         try:
             self.pacer.post(
                 lambda: self.twin.set_robot_pose(p.x, p.y, yaw)

@@ -28,6 +28,8 @@ class RobotView:
         self.cfg, self.bus = robot.spec.cfg, robot.bus
         self.observables, self.sensors = robot.observables, robot.sensors
         self.collisions, self.faults = robot.collisions, robot.faults
+        self.actors = None
+        """No actors of its own: the world's people are not one robot's topics."""
         self.grid_every, self.grid_us = world.grid_every, world.grid_us
         self._columns = robot.physics.loop_columns
 

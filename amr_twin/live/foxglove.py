@@ -55,7 +55,7 @@ def live_topics(twin) -> dict[str, str]:
     skip = set() if sensors else {"scan", "imu/data_raw", "imu/mag"}
     if "uwb" not in twin.sensors:
         skip.add("uwb/range")
-    if getattr(twin, "actors", None) is None:
+    if twin.actors is None:
         skip.add("actors/poses")
     topics = {
         topic: typ for bus_topic, (topic, typ, _enc) in BUS_TOPICS.items() if bus_topic not in skip

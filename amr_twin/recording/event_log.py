@@ -27,12 +27,12 @@ DIAGNOSTIC_ARRAY = "diagnostic_msgs/DiagnosticArray"
 
 
 def _collisions(twin) -> list:
-    monitor = getattr(twin, "collisions", None)
+    monitor = twin.collisions
     return list(monitor.collisions) if monitor is not None else []
 
 
 def _faults(twin) -> list:
-    injector = getattr(twin, "faults", None)
+    injector = twin.faults
     return list(injector.faults) if injector is not None else []
 
 

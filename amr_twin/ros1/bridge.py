@@ -22,6 +22,8 @@ from amr_twin.ros1.status_topics import StatusTopics
 LOG = logging.getLogger(__name__)
 
 FIRMWARE_TOPICS = ("wheel_Command", "wheel0_Vel", "wheel1_Vel")
+GRAPH_INPUTS = ("wheel_Command", "cmd_vel")
+"""Bus topics the bridge publishes on with the graph's messages (not written back to the graph)."""
 
 
 class Ros1Bridge:
@@ -83,6 +85,13 @@ class Ros1Bridge:
         }
         """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to
         the outbox."""
+        self._feeds = {
+            bus: self.out.feeder(p, writer)
+            for bus, (p, writer) in self._fast.items()
+            if bus not in MapTransform.TOPICS and bus not in GRAPH_INPUTS
+        }
+        """Bus topic -> its :meth:`Outbox.feeder`: the fast topics neither the map transform
+        reads nor the graph publishes on (one dict look-up and one call a message)."""
         self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
         self.state_pubs = {
             "/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
@@ -139,12 +148,16 @@ class Ros1Bridge:
 
     # -- out (the twin's thread) ------------------------------------------------------------
     def _tap(self, topic: str, msg, t_us: int) -> None:
+        feed = self._feeds.get(topic)
+        if feed is not None:  # the high-rate path: a few hundred messages a simulated second
+            feed(msg, t_us)
+            return
         if topic in MapTransform.TOPICS and Outbox.wanted(self.tf):
             due = self.map_tf.take(topic, msg)
             if due is not None:
                 self.out.put(self.tf, due[1], due[0])
         fast = self._fast.get(topic)
-        if fast is not None:  # the high-rate path: a few hundred messages a simulated second
+        if fast is not None:
             pub, writer = fast
             impl = pub.impl
             if impl is not None and impl.connections and topic != self._from_graph:

@@ -235,7 +235,7 @@ def float64_rows_block(rows) -> bytes:
     return rec.tobytes()
 
 
-_BATTERY = _Layout(
+BATTERY_RECORD = _Layout(
     [
         ("seq", _U4),
         ("stamp", _U4, (2,)),
@@ -254,7 +254,7 @@ def battery_block(t_us, voltage_v, current_a, charge_ah, capacity_ah: float, soc
     (negative discharging), charge (m,) and ``soc`` (m,) as ``percentage`` (0 to 1); capacity and
     design capacity ``capacity_ah``; present, no temperature (0), statuses unknown, no cells,
     location or serial number."""
-    rec = _BATTERY.records(len(t_us))
+    rec = BATTERY_RECORD.records(len(t_us))
     rec["stamp"][:, 0], rec["stamp"][:, 1] = _stamps(t_us)
     values = rec["values"]
     values[:, 0], values[:, 2], values[:, 3] = voltage_v, current_a, charge_ah

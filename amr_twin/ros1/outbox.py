@@ -105,6 +105,24 @@ class Outbox:
         times.append(t_us)
         q.frames.append(_LEN.pack(len(payload)) + payload)
 
+    def feeder(self, pub, writer):
+        """``feed(msg, t_us)``: while ``pub`` has a subscriber, queue ``writer(msg)`` (a message's
+        ROS 1 bytes) of simulated instant ``t_us``, as :meth:`put` would (the bus tap's path for a
+        high-rate topic: its queue looked up once, not at every message)."""
+        impl = pub.impl
+        q = self._queue(impl, 0)
+        times, frames, pack = q.times, q.frames, _LEN.pack
+
+        def feed(msg, t_us: int) -> None:
+            if impl.connections:
+                if times and t_us < times[-1]:
+                    q.ordered = False
+                payload = writer(msg)
+                times.append(t_us)
+                frames.append(pack(len(payload)) + payload)
+
+        return feed
+
     def put_block(self, pub, t_us: list, block: bytes) -> None:
         """Queue the frames of ``block`` (TCPROS frames of equal lengths, one after the other: a
         length, then a message), the i-th of simulated instant ``t_us[i]`` (never decreasing), as

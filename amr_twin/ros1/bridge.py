@@ -90,8 +90,8 @@ class Ros1Bridge:
             for bus, (p, writer) in self._fast.items()
             if bus not in MapTransform.TOPICS and bus not in GRAPH_INPUTS
         }
-        """Bus topic -> its :meth:`Outbox.feeder`: the fast topics neither the map transform
-        reads nor the graph publishes on (one dict look-up and one call a message)."""
+        """Bus topic -> its :meth:`Outbox.feeder`, a bus tap of that topic alone: the fast topics
+        neither the map transform reads nor the graph publishes on (one call a message)."""
         self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
         self.state_pubs = {
             "/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
@@ -138,7 +138,11 @@ class Ros1Bridge:
             ros_state.BASE_FRAME,
             ros_state.WORLD_FRAME,
         )
-        twin.on_message(self._tap)
+        for topic, feed in self._feeds.items():
+            twin.on_message(feed, topics=(topic,))
+        twin.on_message(
+            self._tap, topics=tuple((set(self.pubs) | MapTransform.TOPICS) - set(self._feeds))
+        )
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
     def start(self) -> None:
@@ -148,10 +152,6 @@ class Ros1Bridge:
 
     # -- out (the twin's thread) ------------------------------------------------------------
     def _tap(self, topic: str, msg, t_us: int) -> None:
-        feed = self._feeds.get(topic)
-        if feed is not None:  # the high-rate path: a few hundred messages a simulated second
-            feed(msg, t_us)
-            return
         if topic in MapTransform.TOPICS and Outbox.wanted(self.tf):
             due = self.map_tf.take(topic, msg)
             if due is not None:
@@ -267,7 +267,8 @@ class Ros1Bridge:
             return
         self._closed = True
         self.out.flush()
-        self.twin.unhook(self._tap)
+        for hooked in (self._tap, *self._feeds.values()):
+            self.twin.unhook(hooked)
         for sub in self._subs:
             sub.unregister()
         for srv in self._services:

@@ -1,6 +1,7 @@
 """A run of one topic's messages written at once, for the bridge's grid-sampled topics:
 :class:`StateBlocks` (a tick's at once: :meth:`StateBlocks.blocks`, in C where its helper
-``frame_blocks.c`` builds), :func:`clock_block`, :func:`float64_rows_block`.
+``frame_blocks.c`` builds), :func:`clock_block`, :func:`float64_rows_block`, :func:`battery_block`
+(a tick's rows in one call of the same helper: :meth:`amr_twin.ros1.row_feed.RowFeed.blocks`).
 
 Each gives the TCPROS frames (a uint32 length, then the message in the ROS 1 format, the bytes genpy
 writes: ``tests/ros1/test_frame_blocks.py``) of n messages of one type, one after the other, from a

@@ -106,14 +106,14 @@ class Outbox:
         q.frames.append(_LEN.pack(len(payload)) + payload)
 
     def feeder(self, pub, writer):
-        """``feed(msg, t_us)``: while ``pub`` has a subscriber, queue ``writer(msg)`` (a message's
-        ROS 1 bytes) of simulated instant ``t_us``, as :meth:`put` would (the bus tap's path for a
-        high-rate topic: its queue looked up once, not at every message)."""
+        """A bus tap ``feed(topic, msg, t_us)``: while ``pub`` has a subscriber, queue
+        ``writer(msg)`` (a message's ROS 1 bytes) of simulated instant ``t_us``, as :meth:`put`
+        would (a high-rate topic's path: its queue looked up once, not at every message)."""
         impl = pub.impl
         q = self._queue(impl, 0)
         times, frames, pack = q.times, q.frames, _LEN.pack
 
-        def feed(msg, t_us: int) -> None:
+        def feed(_topic: str, msg, t_us: int) -> None:
             if impl.connections:
                 if times and t_us < times[-1]:
                     q.ordered = False

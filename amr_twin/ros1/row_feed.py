@@ -8,7 +8,10 @@ sampler with a C form (:meth:`amr_twin.sim.observables.Observables.battery_rows`
 accounting at or before a row), so the twin's grid loop stays in C (:mod:`amr_twin.live.rows`'
 Python grid sampler sends it back to Python: ~25 % more CPU for a twin with sensors). The columns
 are :class:`amr_twin.recording.recorder.Recorder`'s, with its formulas, bit for bit
-(``tests/ros1/test_row_feed.py``)."""
+(``tests/ros1/test_row_feed.py``). :meth:`RowFeed.blocks` gives a tick's rows as the bridge writes
+them, in one call of ``frame_blocks.c`` (``fb_rows``: ~40 rows, the work of some 40 numpy calls),
+or from :meth:`RowFeed.take` in Python: the same bytes (the same test, random rows, signed
+zeros)."""
 
 from __future__ import annotations
 
@@ -61,7 +64,9 @@ class RowFeed:
         if self._fn is not None:
             self._fn.restype = ctypes.c_int
             row = np.frombuffer(float64_rows_block(np.zeros((1, 2))), np.uint8).copy()
-            bat = np.frombuffer(battery_block([0], [0.0], [0.0], [0.0], 0.0, [0.0]), np.uint8).copy()
+            bat = np.frombuffer(
+                battery_block([0], [0.0], [0.0], [0.0], 0.0, [0.0]), np.uint8
+            ).copy()
             fields = BATTERY_RECORD.template.dtype.fields
             bat_off = np.array([fields["stamp"][1], fields["values"][1]], np.int32)
             self._keep = (row, bat, bat_off)  # what the addresses point into
@@ -117,7 +122,13 @@ class RowFeed:
             bisect.bisect_left(self._pin_t, times[-1]) - 1, 0
         )
         del self._pin_t[:keep], self._pins[:keep]
-        return np.array(times, np.int64), np.array(rows, float), pin_t, pins, self._battery.take_until(t_us)
+        return (
+            np.array(times, np.int64),
+            np.array(rows, float),
+            pin_t,
+            pins,
+            self._battery.take_until(t_us),
+        )
 
     def take(self, t_us: int) -> SimpleNamespace | None:
         """The rows at or before ``t_us`` (None if none): ``t_us`` (n,) int, ``true_rpm`` (n, 2),
@@ -160,10 +171,10 @@ class RowFeed:
         out = [np.empty(n * row_size, np.uint8) for _ in range(3)]
         bat = np.empty(n * bat_size, np.uint8)
         bat_t, vas = np.empty(n, np.int64), np.empty((n, 3))
-        rows = c_array(rows, np.float64)
+        rows, pins, battery = (c_array(a, np.float64) for a in (rows, pins, battery))
         nbat = self._fn(
-            address(times), n, address(rows), rows.shape[1], address(pin_t), address(c_array(pins, np.float64)),
-            len(pin_t), pins.shape[1], address(c_array(battery, np.float64)), len(battery),
+            address(times), n, address(rows), rows.shape[1], address(pin_t), address(pins),
+            len(pin_t), pins.shape[1], address(battery), len(battery),
             self._grid_us, BATTERY_EVERY_ROWS, address(self._motors), MODE_CODES["brake"],
             MODE_CODES["coast"], cap, RAD_S_TO_RPM, *map(address, out), row_tmpl, row_size,
             row_off, address(bat), bat_tmpl, bat_size, address(bat_off), address(bat_t),

@@ -6,7 +6,7 @@ that finds one of these topics wanted), ``/battery_state`` (``sensor_msgs/Batter
 ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``: each collision and fault as it happens, the
 ``.mcap``'s ``/twin/collisions`` and ``/twin/faults`` statuses, and the battery once a second),
 written into the bridge's outbox with their simulated instants (the rows and the battery a block a
-topic and tick: :mod:`amr_twin.ros1.frame_blocks`; ``/diagnostics`` with genpy).
+topic and tick: :meth:`~amr_twin.ros1.row_feed.RowFeed.blocks`; ``/diagnostics`` with genpy).
 """
 
 from __future__ import annotations

@@ -77,7 +77,9 @@ def _random_raw(rng, grid_us=10_000):
     )
     pins[:, 6:8][rng.random((m, 2)) < 0.2] = -0.0
     bat_t = np.sort(rng.integers(times[0] - grid_us, times[-1] + 2, nb)).astype(float)
-    battery = np.column_stack([bat_t, rng.uniform(10, 13, nb), rng.normal(0, 3, nb), rng.random(nb)])
+    battery = np.column_stack(
+        [bat_t, rng.uniform(10, 13, nb), rng.normal(0, 3, nb), rng.random(nb)]
+    )
     battery[:, 2][rng.random(nb) < 0.2] = -0.0
     return times, rows, pin_t, pins, battery
 

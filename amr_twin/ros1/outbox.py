@@ -108,13 +108,18 @@ class Outbox:
     def feeder(self, pub, writer):
         """A bus tap ``feed(topic, msg, t_us)``: while ``pub`` has a subscriber, queue
         ``writer(msg)`` (a message's ROS 1 bytes) of simulated instant ``t_us``, as :meth:`put`
-        would (a high-rate topic's path: its queue looked up once, not at every message)."""
+        would (a high-rate topic's path: its queue looked up once, not at every message; made at
+        the first, so that the publishers' order in a write is put's)."""
         impl = pub.impl
-        q = self._queue(impl, 0)
-        times, frames, pack = q.times, q.frames, _LEN.pack
+        q = times = frames = None  # the queue, made at the first message as put makes it
+        pack = _LEN.pack
 
         def feed(_topic: str, msg, t_us: int) -> None:
+            nonlocal q, times, frames
             if impl.connections:
+                if q is None:
+                    q = self._queue(impl, t_us)
+                    times, frames = q.times, q.frames
                 if times and t_us < times[-1]:
                     q.ordered = False
                 payload = writer(msg)

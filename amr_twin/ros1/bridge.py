@@ -22,6 +22,8 @@ from amr_twin.ros1.status_topics import StatusTopics
 LOG = logging.getLogger(__name__)
 
 FIRMWARE_TOPICS = ("wheel_Command", "wheel0_Vel", "wheel1_Vel")
+GRAPH_INPUTS = ("wheel_Command", "cmd_vel")
+"""Bus topics the bridge publishes on with the graph's messages (not written back to the graph)."""
 
 
 class Ros1Bridge:
@@ -83,6 +85,13 @@ class Ros1Bridge:
         }
         """Bus topic -> (publisher, writer): the twin's messages written as they are, straight to
         the outbox."""
+        self._feeds = {
+            bus: self.out.feeder(p, writer)
+            for bus, (p, writer) in self._fast.items()
+            if bus not in MapTransform.TOPICS and bus not in GRAPH_INPUTS
+        }
+        """Bus topic -> its :meth:`Outbox.feeder`, a bus tap of that topic alone: the fast topics
+        neither the map transform reads nor the graph publishes on (one call a message)."""
         self.clock_pub = self.out.lead = pub("/clock", "rosgraph_msgs/Clock")
         self.state_pubs = {
             "/twin/ground_truth": pub("twin/ground_truth", "nav_msgs/Odometry"),
@@ -129,7 +138,11 @@ class Ros1Bridge:
             ros_state.BASE_FRAME,
             ros_state.WORLD_FRAME,
         )
-        twin.on_message(self._tap)
+        for topic, feed in self._feeds.items():
+            twin.on_message(feed, topics=(topic,))
+        twin.on_message(
+            self._tap, topics=tuple((set(self.pubs) | MapTransform.TOPICS) - set(self._feeds))
+        )
         self._next_clock_us = -(-twin.clock.now_us // self._clock_period_us) * self._clock_period_us
 
     def start(self) -> None:
@@ -144,7 +157,7 @@ class Ros1Bridge:
             if due is not None:
                 self.out.put(self.tf, due[1], due[0])
         fast = self._fast.get(topic)
-        if fast is not None:  # the high-rate path: a few hundred messages a simulated second
+        if fast is not None:
             pub, writer = fast
             impl = pub.impl
             if impl is not None and impl.connections and topic != self._from_graph:
@@ -254,7 +267,8 @@ class Ros1Bridge:
             return
         self._closed = True
         self.out.flush()
-        self.twin.unhook(self._tap)
+        for hooked in (self._tap, *self._feeds.values()):
+            self.twin.unhook(hooked)
         for sub in self._subs:
             sub.unregister()
         for srv in self._services:

@@ -113,3 +113,66 @@ int fb_blocks(const double* table, int n, int width, int nj, int nb, int64_t per
     }
     return m;
 }
+
+/* The row feed's n rows of a tick (amr_twin/ros1/row_feed.py, RowFeed.blocks; its Python twin is
+ * RowFeed.take and the record blocks of frame_blocks.py) into three std_msgs/Float64MultiArray
+ * blocks (wheel speeds in RPM, PWM counts, motor currents) and the sensor_msgs/BatteryState
+ * records of the rows whose grid index is a multiple of battery_every. rows: n x width, the wheel
+ * speeds (rad/s) at columns 2, 3; pins: m x pins_width drive rows (PWM L, R, DIR L, R, mode L, R,
+ * voltage L, R) in force after pin_t; bat: nb x 4 (t, V, A, soc). motors: ke, R, current limit
+ * of the left, then the right motor, then the brake's limit (plant.motor_currents_a's formula,
+ * numpy's maximum and minimum). vas: each row's battery V, A, soc. Returns the battery records
+ * written (-1 without a battery row). */
+int fb_rows(const int64_t* t, int n, const double* rows, int width, const int64_t* pin_t,
+            const double* pins, int m, int pins_width, const double* bat, int nb,
+            int64_t grid_us, int64_t battery_every, const double* motors, int64_t brake,
+            int64_t coast, double capacity_ah, double rpm_per_rad_s, uint8_t* rpm, uint8_t* pwm,
+            uint8_t* cur, const uint8_t* row_tmpl, int row_size, int row_off, uint8_t* battery,
+            const uint8_t* bat_tmpl, int bat_size, const int32_t* bat_off, int64_t* bat_t,
+            double* vas) {
+    int k = -1, j = -1, nbat = 0;
+    if (nb == 0 || m == 0)
+        return -1;
+    for (int r = 0; r < n; r++) {
+        const double* row = rows + (int64_t)r * width;
+        while (k + 1 < m && pin_t[k + 1] < t[r]) /* the last drive row before the instant */
+            k++;
+        while (j + 1 < nb && bat[4 * (j + 1)] <= t[r]) /* the last battery row at or before */
+            j++;
+        const double* pin = pins + (int64_t)(k < 0 ? 0 : k) * pins_width;
+        const double* b = bat + 4 * (j < 0 ? 0 : j);
+        double speed[2] = {row[2] * rpm_per_rad_s, row[3] * rpm_per_rad_s};
+        double counts[2] = {(double)(int64_t)pin[0], (double)(int64_t)pin[1]};
+        double amps[2];
+        for (int w = 0; w < 2; w++) {
+            const double* mo = motors + 3 * w;
+            int64_t mode = (int64_t)pin[4 + w];
+            double i = (pin[6 + w] - mo[0] * row[2 + w]) / mo[1];
+            double limit = mode == brake ? motors[6] : mo[2];
+            double lo = -limit;
+            double x = (i >= lo || i != i) ? i : lo;
+            double y = (x <= limit || x != x) ? x : limit;
+            amps[w] = mode == coast ? 0.0 : y;
+        }
+        uint8_t* out[3] = {rpm, pwm, cur};
+        const double* val[3] = {speed, counts, amps};
+        for (int c = 0; c < 3; c++) {
+            uint8_t* rec = out[c] + (int64_t)r * row_size;
+            memcpy(rec, row_tmpl, row_size);
+            memcpy(rec + row_off, val[c], 2 * sizeof(double));
+        }
+        vas[3 * r] = b[1];
+        vas[3 * r + 1] = b[2];
+        vas[3 * r + 2] = b[3];
+        if ((t[r] / grid_us) % battery_every == 0) {
+            uint8_t* rec = battery + (int64_t)nbat * bat_size;
+            float values[7] = {(float)b[1],        0.0f, (float)(-b[2]), (float)(b[3] * capacity_ah),
+                               (float)capacity_ah, (float)capacity_ah, (float)b[3]};
+            memcpy(rec, bat_tmpl, bat_size);
+            put_stamp(rec + bat_off[0], t[r]);
+            memcpy(rec + bat_off[1], values, sizeof values);
+            bat_t[nbat++] = t[r];
+        }
+    }
+    return nbat;
+}

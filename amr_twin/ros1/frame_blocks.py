@@ -1,6 +1,7 @@
 """A run of one topic's messages written at once, for the bridge's grid-sampled topics:
 :class:`StateBlocks` (a tick's at once: :meth:`StateBlocks.blocks`, in C where its helper
-``frame_blocks.c`` builds), :func:`clock_block`, :func:`float64_rows_block`.
+``frame_blocks.c`` builds), :func:`clock_block`, :func:`float64_rows_block`, :func:`battery_block`
+(a tick's rows in one call of the same helper: :meth:`amr_twin.ros1.row_feed.RowFeed.blocks`).
 
 Each gives the TCPROS frames (a uint32 length, then the message in the ROS 1 format, the bytes genpy
 writes: ``tests/ros1/test_frame_blocks.py``) of n messages of one type, one after the other, from a
@@ -235,7 +236,7 @@ def float64_rows_block(rows) -> bytes:
     return rec.tobytes()
 
 
-_BATTERY = _Layout(
+BATTERY_RECORD = _Layout(
     [
         ("seq", _U4),
         ("stamp", _U4, (2,)),
@@ -254,7 +255,7 @@ def battery_block(t_us, voltage_v, current_a, charge_ah, capacity_ah: float, soc
     (negative discharging), charge (m,) and ``soc`` (m,) as ``percentage`` (0 to 1); capacity and
     design capacity ``capacity_ah``; present, no temperature (0), statuses unknown, no cells,
     location or serial number."""
-    rec = _BATTERY.records(len(t_us))
+    rec = BATTERY_RECORD.records(len(t_us))
     rec["stamp"][:, 0], rec["stamp"][:, 1] = _stamps(t_us)
     values = rec["values"]
     values[:, 0], values[:, 2], values[:, 3] = voltage_v, current_a, charge_ah

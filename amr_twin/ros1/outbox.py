@@ -105,6 +105,29 @@ class Outbox:
         times.append(t_us)
         q.frames.append(_LEN.pack(len(payload)) + payload)
 
+    def feeder(self, pub, writer):
+        """A bus tap ``feed(topic, msg, t_us)``: while ``pub`` has a subscriber, queue
+        ``writer(msg)`` (a message's ROS 1 bytes) of simulated instant ``t_us``, as :meth:`put`
+        would (a high-rate topic's path: its queue looked up once, not at every message; made at
+        the first, so that the publishers' order in a write is put's)."""
+        impl = pub.impl
+        q = times = frames = None  # the queue, made at the first message as put makes it
+        pack = _LEN.pack
+
+        def feed(_topic: str, msg, t_us: int) -> None:
+            nonlocal q, times, frames
+            if impl.connections:
+                if q is None:
+                    q = self._queue(impl, t_us)
+                    times, frames = q.times, q.frames
+                if times and t_us < times[-1]:
+                    q.ordered = False
+                payload = writer(msg)
+                times.append(t_us)
+                frames.append(pack(len(payload)) + payload)
+
+        return feed
+
     def put_block(self, pub, t_us: list, block: bytes) -> None:
         """Queue the frames of ``block`` (TCPROS frames of equal lengths, one after the other: a
         length, then a message), the i-th of simulated instant ``t_us[i]`` (never decreasing), as

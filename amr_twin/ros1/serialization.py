@@ -20,7 +20,6 @@ import numpy as np
 
 _I = struct.Struct("<I")
 _HEAD = struct.Struct("<III")
-_D3, _D6 = struct.Struct("<3d"), struct.Struct("<6d")
 _F7 = struct.Struct("<7f")
 _F8 = np.dtype("<f8")
 
@@ -64,44 +63,45 @@ def _f64s(values, count: bool) -> bytes:
     return (_I.pack(len(data) // 8) + data) if count else data
 
 
-def _vec(v) -> bytes:
-    return _D3.pack(v.x, v.y, v.z)
+def _fixed(values, n: int) -> bytes:
+    """A ``float64[n]`` (a covariance)'s bytes (ValueError for another count)."""
+    if type(values) is np.ndarray and values.dtype is _F8 and values.size == n:
+        return values.tobytes()  # the twin's shared covariances: as they are
+    data = np.asarray(values, dtype=_F8).tobytes()
+    if len(data) != 8 * n:
+        raise ValueError(f"a covariance of {n} values has {len(data) // 8}")
+    return data
 
 
 def imu(m) -> bytes:
-    h, o = m.header, m.orientation
-    head, blob = _framed((h.frame_id,), "4d")
-    return b"".join(
-        (
-            head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, o.x, o.y, o.z, o.w),
-            _f64s(m.orientation_covariance, False),
-            _vec(m.angular_velocity),
-            _f64s(m.angular_velocity_covariance, False),
-            _vec(m.linear_acceleration),
-            _f64s(m.linear_acceleration_covariance, False),
-        )
-    )
+    h, o, g, a = m.header, m.orientation, m.angular_velocity, m.linear_acceleration
+    head, blob = _framed((h.frame_id,), "4d72s3d72s3d72s")
+    return head.pack(
+        h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, o.x, o.y, o.z, o.w,
+        _fixed(m.orientation_covariance, 9), g.x, g.y, g.z,
+        _fixed(m.angular_velocity_covariance, 9), a.x, a.y, a.z,
+        _fixed(m.linear_acceleration_covariance, 9),
+    )  # fmt: skip
 
 
 def magnetic_field(m) -> bytes:
     h, v = m.header, m.magnetic_field
-    head, blob = _framed((h.frame_id,), "3d")
-    return head.pack(h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, v.x, v.y, v.z) + _f64s(
-        m.magnetic_field_covariance, False
-    )
+    head, blob = _framed((h.frame_id,), "3d72s")
+    return head.pack(
+        h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, v.x, v.y, v.z,
+        _fixed(m.magnetic_field_covariance, 9),
+    )  # fmt: skip
 
 
 def odometry(m) -> bytes:
-    p, t = m.pose.pose, m.twist.twist
-    lin, ang = t.linear, t.angular
-    return b"".join(
-        (
-            _stamped_pose(m.header, m.child_frame_id, p.position, p.orientation),
-            _f64s(m.pose.covariance, False),
-            _D6.pack(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z),
-            _f64s(m.twist.covariance, False),
-        )
-    )
+    h, p, t = m.header, m.pose.pose, m.twist.twist
+    x, q, lin, ang = p.position, p.orientation, t.linear, t.angular
+    head, blob = _framed((h.frame_id, m.child_frame_id), "7d288s6d288s")
+    return head.pack(
+        h.seq & 0xFFFFFFFF, h.stamp.sec, h.stamp.nanosec, blob, x.x, x.y, x.z, q.x, q.y, q.z, q.w,
+        _fixed(m.pose.covariance, 36), lin.x, lin.y, lin.z, ang.x, ang.y, ang.z,
+        _fixed(m.twist.covariance, 36),
+    )  # fmt: skip
 
 
 def tf_message(m) -> bytes:

@@ -6,19 +6,15 @@ that finds one of these topics wanted), ``/battery_state`` (``sensor_msgs/Batter
 ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``: each collision and fault as it happens, the
 ``.mcap``'s ``/twin/collisions`` and ``/twin/faults`` statuses, and the battery once a second),
 written into the bridge's outbox with their simulated instants (the rows and the battery a block a
-topic and tick: :mod:`amr_twin.ros1.frame_blocks`; ``/diagnostics`` with genpy).
+topic and tick: :meth:`~amr_twin.ros1.row_feed.RowFeed.blocks`; ``/diagnostics`` with genpy).
 """
 
 from __future__ import annotations
 
 import io
 
-import numpy as np
-
-from amr_twin.recording.mcap_log import BATTERY_EVERY_ROWS
-from amr_twin.ros1.frame_blocks import battery_block, float64_rows_block
 from amr_twin.ros1.outbox import Outbox
-from amr_twin.ros1.row_feed import RowFeed
+from amr_twin.ros1.row_feed import RowBlocks, RowFeed
 from amr_twin.recording.event_log import statuses
 
 ROW_TOPICS = ("/twin/true_rpm", "/twin/pwm_counts", "/twin/motor_current")
@@ -49,37 +45,24 @@ class StatusTopics:
             if any(Outbox.wanted(p) for p in self.publishers):
                 self._rows = RowFeed(self.twin)
         else:
-            rows = self._rows.take(t_us)
+            rows = self._rows.blocks(t_us)
             if rows is not None:
                 self._publish_rows(rows)
         self._publish_events(t_us)
 
-    def _publish_rows(self, rows) -> None:
-        times = rows.t_us.tolist()
-        for topic, column in zip(ROW_TOPICS, (rows.true_rpm, rows.pwm_counts, rows.current_a)):
+    def _publish_rows(self, rows: RowBlocks) -> None:
+        for topic, block in zip(ROW_TOPICS, (rows.true_rpm, rows.pwm_counts, rows.current_a)):
             pub = self.row_pubs[topic]
             if Outbox.wanted(pub):
-                self.out.put_block(pub, times, float64_rows_block(column))
-        want_battery, want_diag = Outbox.wanted(self.battery_pub), Outbox.wanted(self.diag_pub)
-        if not (want_battery or want_diag):
-            return
-        cap = self.twin.cfg.battery.capacity_ah
-        if want_battery:
-            at = rows.index % BATTERY_EVERY_ROWS == 0
-            t, soc = rows.t_us[at], rows.battery_soc[at]
-            self.out.put_block(
-                self.battery_pub,
-                t.tolist(),
-                battery_block(t, rows.battery_v[at], -rows.battery_a[at], soc * cap, cap, soc),
-            )
-        if want_diag:
-            for i in np.flatnonzero(rows.index % DIAGNOSTICS_PERIOD_ROWS == 0).tolist():
-                t, volts, amps, soc = (
-                    int(rows.t_us[i]),
-                    float(rows.battery_v[i]),
-                    float(rows.battery_a[i]),
-                    float(rows.battery_soc[i]),
-                )
+                self.out.put_block(pub, rows.t_us, block)
+        if Outbox.wanted(self.battery_pub):
+            self.out.put_block(self.battery_pub, rows.battery_us, rows.battery)
+        if Outbox.wanted(self.diag_pub):
+            grid_us = self.twin.grid_us
+            for i, t in enumerate(rows.t_us):
+                if t // grid_us % DIAGNOSTICS_PERIOD_ROWS:
+                    continue
+                volts, amps, soc = rows.battery_rows[i].tolist()
                 stamp = self.rospy.Time(t // 1_000_000, t % 1_000_000 * 1000)
                 self._publish_status(
                     t,

@@ -173,3 +173,21 @@ def test_paced_a_blocks_messages_go_each_at_its_own_clock_instant():
         (21_000, "imu", [b"i20000"]),
     ]
     assert out.messages == 6
+
+
+def test_a_feeder_queues_as_put_does_and_keeps_puts_order_of_publishers():
+    conn = _Connection()
+    imu, odom, nobody = _publisher(conn), _publisher(conn), _publisher()
+    out = Outbox()
+    feed = out.feeder(imu, lambda msg: msg)  # made before odom's first put
+    quiet = out.feeder(nobody, lambda msg: 1 / 0)  # no subscriber: never written
+    out.put(odom, b"odom", 5)
+    feed("imu/data_raw", b"a", 5)
+    feed("imu/data_raw", b"c", 7)
+    feed("imu/data_raw", b"b", 6)  # behind the last: sorted at the take, as put's
+    quiet("imu/mag", b"x", 5)
+    out.flush()
+    # the same first instant: odom's frames first, its first message came first, whenever the
+    # feeder was made
+    assert [_frames(d) for d in conn.data] == [[b"odom"], [b"a", b"b", b"c"]]
+    assert out.messages == 4 and out.writes == 2

@@ -6,6 +6,7 @@ import pytest
 
 from amr_twin.model.config import load_config
 from amr_twin.ros1.row_feed import RowFeed
+from amr_twin.sim.plant import MODE_CODES
 from amr_twin.assembly.twin import Twin, TwinOptions
 from amr_twin.assembly.command import Command
 from amr_twin.recording.recorder import attach_recorder, recorder_of
@@ -54,3 +55,52 @@ def test_the_grid_loop_stays_in_c():
     assert grid._stepper.use(grid.samplers)
     RowFeed(twin)
     assert grid._stepper.use(grid.samplers)
+
+
+def _random_raw(rng, grid_us=10_000):
+    n, m, nb = int(rng.integers(1, 60)), int(rng.integers(1, 20)), int(rng.integers(1, 80))
+    times = np.sort(rng.choice(np.arange(0, 3_000) * grid_us, n, replace=False)).astype(np.int64)
+    times[rng.random(n) < 0.1] += 7  # off the grid
+    times.sort()
+    rows = rng.normal(0, 1, (n, 9)) * 10.0 ** rng.integers(-9, 6, (n, 9))
+    rows[rng.random((n, 9)) < 0.15] = 0.0
+    rows[rng.random((n, 9)) < 0.15] = -0.0
+    pin_t = np.sort(rng.integers(times[0] - grid_us, times[-1] + grid_us, m)).astype(np.int64)
+    pin_t[0] = min(pin_t[0], times[0])
+    pins = np.column_stack(
+        [
+            rng.uniform(-300, 300, (m, 2)),
+            rng.choice([-1.0, 1.0], (m, 2)),
+            rng.choice([float(c) for c in MODE_CODES.values()], (m, 2)),
+            rng.normal(0, 8, (m, 2)) * 10.0 ** rng.integers(-6, 3, (m, 2)),
+        ]
+    )
+    pins[:, 6:8][rng.random((m, 2)) < 0.2] = -0.0
+    bat_t = np.sort(rng.integers(times[0] - grid_us, times[-1] + 2, nb)).astype(float)
+    battery = np.column_stack(
+        [bat_t, rng.uniform(10, 13, nb), rng.normal(0, 3, nb), rng.random(nb)]
+    )
+    battery[:, 2][rng.random(nb) < 0.2] = -0.0
+    return times, rows, pin_t, pins, battery
+
+
+def test_the_c_blocks_are_the_python_twins_bytes():
+    twin = Twin(load_config(), TwinOptions(world="empty"))
+    c_feed, py_feed = RowFeed(twin), RowFeed(twin, native=False)
+    if c_feed.engine != "C":
+        pytest.skip(f"no C helper: {c_feed.engine}")
+    assert py_feed.engine.startswith("Python")
+    rng = np.random.default_rng(7)
+    fields = ("t_us", "true_rpm", "pwm_counts", "current_a", "battery_us", "battery")
+    for _ in range(200):
+        raw = _random_raw(rng)
+        got = c_feed._blocks_native(*raw)
+        want = py_feed._blocks_python(py_feed._columns(*raw))
+        assert [getattr(got, f) for f in fields] == [getattr(want, f) for f in fields]
+        assert np.array_equal(got.battery_rows, want.battery_rows)
+    Command("linear", speed_m_s=0.6).send(twin)  # and a run's rows, taken by both
+    for _ in range(10):
+        twin.advance(0.13)
+        got, want = c_feed.blocks(twin.clock.now_us), py_feed.blocks(twin.clock.now_us)
+        assert [getattr(got, f) for f in fields] == [getattr(want, f) for f in fields]
+        assert len(got.t_us) >= 13 and np.array_equal(got.battery_rows, want.battery_rows)

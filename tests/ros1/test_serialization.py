@@ -35,6 +35,15 @@ def _cases():
         Vector3(9.7, 0.1, -0.3),
         rng.normal(size=9),
     )
+    yield Imu(  # covariances as plain lists and a strided view; signed zeros
+        HEADER,
+        Quaternion(-0.0, 0.0, -1.0, 0.0),
+        [0.0, -0.0, *rng.normal(size=7).tolist()],
+        Vector3(-0.0, 1e300, -1e-300),
+        rng.normal(size=18)[1::2],
+        Vector3(9.7, 0.1, -0.3),
+        list(range(9)),
+    )
     yield MagneticField(HEADER, Vector3(2e-5, -3e-6, 4e-5), rng.normal(size=9))
     yield MagneticField(
         HEADER, Vector3(0, 0, 1e-5), np.arange(18.0)[::2]

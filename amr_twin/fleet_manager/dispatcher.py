@@ -4,9 +4,10 @@ MQTT here: :class:`~amr_twin.fleet_manager.manager.FleetManager` carries the mes
 - A vehicle is placed on the roadmap at its first state (its node, or a ``home`` node joined to the
   nearest one) and asked for its factsheet, which says whether it performs pick, drop and charging.
 - Jobs wait in order of arrival; each goes to the nearest idle vehicle (with pooled docks, its drop
-  to the dock with the shortest queue) as one order through the pick and the drop node (node actions ``pick`` and ``drop``), released as far as the traffic
-  control (:mod:`~amr_twin.fleet_manager.traffic`) reserves and extended by order updates as the
-  vehicle's ``lastNodeId`` frees nodes behind it and others'.
+  to the dock with the shortest queue) as one order through the pick and the drop node (node
+  actions ``pick`` and ``drop``), released as far as the traffic control
+  (:mod:`~amr_twin.fleet_manager.traffic`) reserves and extended by order updates as the vehicle's
+  ``lastNodeId`` frees nodes behind it and others'.
 - Jams (an idle vehicle in the way or in a dock, a deadlock) are cleared by
   :class:`~amr_twin.fleet_manager.jams.Jams`.
 - An idle vehicle whose ``batteryState.batteryCharge`` is below ``charge_below`` % goes to a free

@@ -9,13 +9,12 @@ the last one released to it):
   its way through it, to where its route leaves the corridor or ends, reserved at once. Two
   vehicles thus never drive one edge, nor meet head-on in a corridor (both would hold its nodes),
   and no vehicle stops inside a corridor waiting for one coming the other way.
-- On a directed roadmap (:mod:`~amr_twin.fleet_manager.lanes`) one-way edges (lanes) are reserved
-  node by node, at most :data:`LOOKAHEAD_NODES` ahead of the vehicle, so vehicles follow each
-  other; a junction only together with the node after it (no vehicle stops in a junction waiting
-  for a lane).
+- On a directed roadmap (:mod:`~amr_twin.fleet_manager.lanes`) one-way edges are reserved node by
+  node, :data:`LOOKAHEAD_NODES` ahead: vehicles follow each other; a junction only with the node
+  after it.
 - A vehicle bound into a dead end (a dock) is released up to its mouth only with its way in: it
   does not stand in the mouth while another comes out.
-- Nodes behind a vehicle are freed as it passes the next ones (its state's ``lastNodeId``).
+- Nodes behind a vehicle are freed as it passes the next ones (``lastNodeId``).
 - A vehicle refused is *waiting* for the holders of the nodes it needs; a cycle of vehicles waiting
   for each other is a deadlock (:meth:`Traffic.deadlock`, networkx' ``find_cycle``), for the
   manager to break by rerouting one of them or to report.
@@ -100,9 +99,11 @@ class Traffic:
         self._dead_ends = {
             cid for edge, cid in self._corridor.items() if any(roads.degree(n) == 1 for n in edge)
         }
-        self._boxes = {
-            n for n, kind in self.graph.nodes(data="kind") if kind == "junction"
-        } if self.graph.is_directed() else set()
+        self._boxes = (
+            {n for n, kind in self.graph.nodes(data="kind") if kind == "junction"}
+            if self.graph.is_directed()
+            else set()
+        )
         self._ahead = LOOKAHEAD_NODES if self.graph.is_directed() else None
 
     def place(self, serial: str, node: str) -> bool:

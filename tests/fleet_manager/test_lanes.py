@@ -30,7 +30,8 @@ def test_the_central_aisle_has_two_opposite_lanes_and_the_outer_aisles_run_one_w
         return [
             (u, v)
             for u, v in graph.edges
-            if abs(roadmap.xy(u)[1] - y) < 0.2 and abs(roadmap.xy(v)[1] - y) < 0.2
+            if abs(roadmap.xy(u)[1] - y) < 0.2
+            and abs(roadmap.xy(v)[1] - y) < 0.2
             and (kind is None or graph.nodes[u]["kind"] == kind)
         ]
 

@@ -83,7 +83,7 @@ def drive(roadmap, vehicles: int, jobs: int, seed: int, steps: int = 600, pool_d
     from amr_twin.fleet_manager.dispatcher import Dispatcher, ManagerOptions
     from amr_twin.fleet_manager.jobs import job_stream
 
-    charging = roadmap.nodes_of("end")[0]
+    charging = (roadmap.nodes_of("end") or roadmap.nodes_of("junction"))[0]
     d = Dispatcher(roadmap, ManagerOptions(charging_nodes=(charging,), pool_docks=pool_docks))
     faces = roadmap.nodes_of("aisle")
     starts = faces[:: len(faces) // vehicles][:vehicles]

@@ -3,10 +3,11 @@ MQTT here: :class:`~amr_twin.fleet_manager.manager.FleetManager` carries the mes
 
 - A vehicle is placed on the roadmap at its first state (its node, or a ``home`` node joined to the
   nearest one) and asked for its factsheet, which says whether it performs pick, drop and charging.
-- Jobs wait in order of arrival; each goes to the nearest idle vehicle as one order through the
-  pick and the drop node (node actions ``pick`` and ``drop``), released as far as the traffic
-  control (:mod:`~amr_twin.fleet_manager.traffic`) reserves and extended by order updates as the
-  vehicle's ``lastNodeId`` frees nodes behind it and others'.
+- Jobs wait in order of arrival; each goes to the nearest idle vehicle (with pooled docks, its drop
+  to the dock with the shortest queue) as one order through the pick and the drop node (node
+  actions ``pick`` and ``drop``), released as far as the traffic control
+  (:mod:`~amr_twin.fleet_manager.traffic`) reserves and extended by order updates as the vehicle's
+  ``lastNodeId`` frees nodes behind it and others'.
 - Jams (an idle vehicle in the way or in a dock, a deadlock) are cleared by
   :class:`~amr_twin.fleet_manager.jams.Jams`.
 - An idle vehicle whose ``batteryState.batteryCharge`` is below ``charge_below`` % goes to a free
@@ -15,7 +16,7 @@ MQTT here: :class:`~amr_twin.fleet_manager.manager.FleetManager` carries the mes
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from amr_twin.fleet_manager import messages as vda
 from amr_twin.fleet_manager.jams import Jams
@@ -29,11 +30,13 @@ FACTSHEET_WAIT_STATES = 5
 
 @dataclass(frozen=True)
 class ManagerOptions:
-    """Charging thresholds (batteryCharge, %) and the charging nodes (roadmap node ids)."""
+    """Charging thresholds (batteryCharge, %), the charging nodes (roadmap node ids), and whether a
+    job's drop at a dock may go to any dock (``pool_docks``: the one with the shortest queue)."""
 
     charge_below: float = 20.0
     charge_until: float = 80.0
     charging_nodes: tuple[str, ...] = ()
+    pool_docks: bool = False
 
 
 @dataclass
@@ -150,7 +153,7 @@ class Dispatcher:
         if way is None:
             return False
         self.traffic.assign(v.serial, way)
-        v.task, v.node = task, None
+        v.task, v.node, v.moved = task, None, True
         grant = self.traffic.extend(v.serial)
         task.sent_held = grant.held
         self._send(v.serial, "order", self._order(v.serial, task, 0))
@@ -215,10 +218,27 @@ class Dispatcher:
             if serial is None:
                 return
             v, job = self.vehicles[serial], self.pending.pop(0)
-            task = Task.job_task(job, v.node_actions)
+            task = Task.job_task(self._dock_for(job), v.node_actions)
             parked = {n for s, other in self.idle().items() if s != serial for n in [other.node]}
             if not self.start(v, task, parked) and not self.start(v, task):
                 self.event("failed", vehicle=serial, job=job.job_id, reason="no way on the map")
+
+    def _dock_for(self, job: Job) -> Job:
+        """``job`` with its drop at the dock with the fewest vehicles bound for it (ties: the
+        nearest to the pick), if docks are pooled and it drops at a dock."""
+        docks = [n for n in self.roadmap.nodes_of("end") if n not in self.options.charging_nodes]
+        if not self.options.pool_docks or job.drop not in docks:
+            return job
+        queue = dict.fromkeys(docks, 0)
+        for v in self.vehicles.values():
+            if v.task is not None and v.task.job is not None and v.task.job.drop in queue:
+                queue[v.task.job.drop] += 1
+
+        def length(dock: str) -> float:
+            way = self.roadmap.route(job.pick, dock)
+            return self.roadmap.length_m(way) if way else float("inf")
+
+        return replace(job, drop=min(docks, key=lambda n: (queue[n], length(n), n)))
 
     def extend_all(self) -> None:
         for serial, v in sorted(self.vehicles.items()):

@@ -100,19 +100,35 @@ class Jams:
 
     def clear_docks(self) -> None:
         """An idle vehicle at a dock (not a charging node) leaves its dead end for an aisle node off
-        the others' ways: docks are for loading, and a vehicle parked in one boxes itself in."""
+        the others' ways: docks are for loading, and a vehicle parked in one boxes itself in. One
+        idle elsewhere after a task, on a roadmap with lay-bys, goes to a free lay-by, off the
+        through lanes."""
         docks = set(self.d.roadmap.nodes_of("end")) - set(self.d.options.charging_nodes)
         keep = self.d.traffic.dead_end_nodes() | set(self.d.roadmap.nodes_of("junction"))
         ways = {n for p in self.d.traffic.plans.values() for n in p.route[p.passed :]}
+        bays = {n for n, bay in self.d.roadmap.graph.nodes(data="bay") if bay}
         for v in self.d.idle().values():
-            if v.node in docks and not self.park(v, keep | ways):
-                self.park(v, keep)
+            if v.node in docks:
+                if not self.park(v, keep | ways):
+                    self.park(v, keep)
+            elif v.moved and bays and v.node not in bays | set(self.d.options.charging_nodes):
+                self.park(v, keep | ways, bays_only=True)
 
-    def park(self, v: Vehicle, keep_clear: set) -> bool:
-        """Send idle ``v`` to the nearest free node off ``keep_clear`` (and out of the dead ends if
-        it can); False if there is none."""
+    def park(self, v: Vehicle, keep_clear: set, bays_only: bool = False) -> bool:
+        """Send idle ``v`` to the nearest free node off ``keep_clear``: a lay-by (a node with
+        ``bay`` true) if it can, else (unless ``bays_only``) one out of the dead ends if it can;
+        False if there is none."""
         charging, spurs = self.d.options.charging_nodes, self.d.traffic.dead_end_nodes()
-        spot = free_spot(
+        graph = self.d.roadmap.graph
+        off_bays = {n for n, bay in graph.nodes(data="bay") if not bay}
+        spot = None
+        if len(off_bays) < len(graph):  # lay-bys off the through lanes first
+            spot = free_spot(
+                self.d.roadmap, self.d.traffic, v.serial, v.node, keep_clear | off_bays, charging
+            )
+        if spot is None and bays_only:
+            return False
+        spot = spot or free_spot(
             self.d.roadmap, self.d.traffic, v.serial, v.node, keep_clear | spurs, charging
         )
         spot = spot or free_spot(

@@ -55,9 +55,10 @@ def job_stream(
 
 def nearest_vehicle(graph: nx.Graph, idle: dict[str, str], node: str) -> str | None:
     """Of the ``idle`` vehicles (serial number -> the node it stands at), the one with the shortest
-    way to ``node``; None if none can reach it."""
+    way to ``node`` (along the lanes of a directed graph); None if none can reach it."""
     if not idle:
         return None
-    dist = nx.single_source_dijkstra_path_length(graph, node, weight="length_m")
+    back = graph.reverse(copy=False) if graph.is_directed() else graph
+    dist = nx.single_source_dijkstra_path_length(back, node, weight="length_m")
     reach = [(dist[n], s) for s, n in idle.items() if n in dist]
     return min(reach)[1] if reach else None

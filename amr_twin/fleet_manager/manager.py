@@ -146,12 +146,14 @@ def start_manager(
 ) -> FleetManager:
     """The manager of ``serials`` on ``world``'s roadmap with ``jobs`` seeded jobs queued
     (:func:`~amr_twin.fleet_manager.jobs.job_stream`); without charging nodes in ``options``, the
-    dock nearest ``start_xy`` (the world's start) charges."""
+    dock nearest ``start_xy`` (the world's start) charges; on a roadmap with lanes the docks are
+    pooled (a drop goes to the dock with the shortest queue)."""
     from amr_twin.fleet_manager.jobs import job_stream
     from amr_twin.fleet_manager.roadmap import world_roadmap
     from amr_twin.model.worlds import default_start
 
     roadmap = world_roadmap(cfg, world)
+    options = replace(options, pool_docks=roadmap.graph.is_directed())
     if not options.charging_nodes:
         x, y = start_xy if start_xy is not None else default_start(world)[:2]
         dock = roadmap.nearest_of("end", x, y)

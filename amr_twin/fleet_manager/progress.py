@@ -30,6 +30,8 @@ class Vehicle:
     node_actions: frozenset | None = None
     task: Task | None = None
     tasks: int = 0
+    moved: bool = False
+    """Whether it was given a task (one just placed is left where it stands)."""
 
     def can(self, action_type: str) -> bool:
         """Whether it performs the node action (assumed until its factsheet says otherwise)."""

@@ -65,7 +65,10 @@ class Roadmap:
         if dist <= self.deviation_m or node == name:
             return node
         self.graph.add_node(name, xy=(float(x), float(y)), kind="home")
-        self.graph.add_edge(name, node, length_m=dist, width_m=self.graph.nodes[node]["width_m"])
+        width = self.graph.nodes[node]["width_m"]
+        self.graph.add_edge(name, node, length_m=dist, width_m=width)
+        if self.graph.is_directed():
+            self.graph.add_edge(node, name, length_m=dist, width_m=width)
         return name
 
     def route(self, start: str, goal: str, avoid=frozenset()) -> list[str] | None:
@@ -96,13 +99,16 @@ class Roadmap:
 
 def world_roadmap(cfg, world: str, map_yaml: str | None = None) -> Roadmap:
     """The roadmap of ``world`` (or of the map_server map ``map_yaml``) for the robot of ``cfg``,
-    on mapId the world's name (:func:`amr_twin.fleet.session.map_id`)."""
+    on mapId the world's name (:func:`amr_twin.fleet.session.map_id`), with directed lanes where
+    its corridors are wide enough (:func:`amr_twin.fleet_manager.lanes.lane_roadmap`)."""
     from amr_twin.fleet.session import map_id
+    from amr_twin.fleet_manager.lanes import lane_roadmap
     from amr_twin.navigation.footprint import robot_footprint
     from amr_twin.navigation.stack import load_static_map
 
     static = load_static_map(cfg, world, map_yaml)
-    return build_roadmap(static, map_id(world), robot_footprint(cfg).circumscribed_radius_m)
+    radius = robot_footprint(cfg).circumscribed_radius_m
+    return lane_roadmap(build_roadmap(static, map_id(world), radius), radius, MARGIN_M)
 
 
 def build_roadmap(

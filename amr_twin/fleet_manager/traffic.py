@@ -4,14 +4,17 @@ Rules (a vehicle's route is a list of node ids; it holds the nodes from the last
 the last one released to it):
 
 - A node is held by at most one vehicle: no two vehicles on one node.
-- The roadmap's *corridors* are its chains of edges between key nodes (junctions, ends: nodes with
-  other than two edges). A vehicle is released into a corridor only with every node of its way
-  through it, to where its route leaves the corridor or ends, reserved at once. Two vehicles thus
-  never drive one edge, nor meet head-on in a corridor (both would hold its nodes), and no vehicle
-  stops inside a corridor waiting for one coming the other way.
+- The roadmap's *corridors* are its chains of two-way edges between key nodes (junctions, ends:
+  nodes with other than two edges). A vehicle is released into a corridor only with every node of
+  its way through it, to where its route leaves the corridor or ends, reserved at once. Two
+  vehicles thus never drive one edge, nor meet head-on in a corridor (both would hold its nodes),
+  and no vehicle stops inside a corridor waiting for one coming the other way.
+- On a directed roadmap (:mod:`~amr_twin.fleet_manager.lanes`) one-way edges are reserved node by
+  node, :data:`LOOKAHEAD_NODES` ahead: vehicles follow each other; a junction only with the node
+  after it.
 - A vehicle bound into a dead end (a dock) is released up to its mouth only with its way in: it
   does not stand in the mouth while another comes out.
-- Nodes behind a vehicle are freed as it passes the next ones (its state's ``lastNodeId``).
+- Nodes behind a vehicle are freed as it passes the next ones (``lastNodeId``).
 - A vehicle refused is *waiting* for the holders of the nodes it needs; a cycle of vehicles waiting
   for each other is a deadlock (:meth:`Traffic.deadlock`, networkx' ``find_cycle``), for the
   manager to break by rerouting one of them or to report.
@@ -22,6 +25,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import networkx as nx
+
+
+LOOKAHEAD_NODES = 3
+"""On a directed roadmap, the nodes a vehicle holds ahead of the last one it passed (whole corridor
+runs and junction crossings may hold more): a manager setting, about 7 m at the roadmap's 2.7 m
+spacing, enough for an update to arrive before the vehicle slows for its last released node."""
 
 
 @dataclass
@@ -48,17 +57,21 @@ class Grant:
 
 
 def corridors(graph: nx.Graph) -> dict[frozenset, int]:
-    """The corridor of each edge (as a frozenset of its two nodes): edges chained through nodes with
-    exactly two edges share one; numbered in the order of the graph's edges."""
+    """The corridor of each two-way edge (as a frozenset of its two nodes; every edge of an
+    undirected graph, the edges without ``oneway`` of a directed one): edges chained through nodes
+    with exactly two neighbours share one; numbered in the order of the graph's edges."""
     out: dict[frozenset, int] = {}
+    oneway = {frozenset((u, v)) for u, v, one in graph.edges(data="oneway") if one}
+    if graph.is_directed():
+        graph = graph.to_undirected(as_view=True)
     for u, v in graph.edges:
-        if frozenset((u, v)) in out:
+        if frozenset((u, v)) in out or frozenset((u, v)) in oneway:
             continue
         cid, todo = max(out.values(), default=-1) + 1, [(u, v)]
         while todo:
             a, b = todo.pop()
             key = frozenset((a, b))
-            if key in out:
+            if key in out or key in oneway:
                 continue
             out[key] = cid
             for n in (a, b):
@@ -82,11 +95,16 @@ class Traffic:
     def refresh(self) -> None:
         """Recount the corridors (after a node was added to the graph)."""
         self._corridor = corridors(self.graph)
+        roads = self.graph.to_undirected(as_view=True) if self.graph.is_directed() else self.graph
         self._dead_ends = {
-            cid
-            for edge, cid in self._corridor.items()
-            if any(self.graph.degree(n) == 1 for n in edge)
+            cid for edge, cid in self._corridor.items() if any(roads.degree(n) == 1 for n in edge)
         }
+        self._boxes = (
+            {n for n, kind in self.graph.nodes(data="kind") if kind == "junction"}
+            if self.graph.is_directed()
+            else set()
+        )
+        self._ahead = LOOKAHEAD_NODES if self.graph.is_directed() else None
 
     def place(self, serial: str, node: str) -> bool:
         """The vehicle stands at ``node`` with no route: it holds that node alone. False if another
@@ -116,10 +134,13 @@ class Traffic:
         return plan
 
     def run(self, route: list[str], start: int) -> int:
-        """The index where the way from ``route[start]`` through the next edge's corridor ends."""
-        cid = self._corridor[frozenset(route[start : start + 2])]
+        """The index where the way from ``route[start]`` through the next edge's corridor ends (the
+        next node, on a one-way edge)."""
+        cid = self._corridor.get(frozenset(route[start : start + 2]))
         end = start + 1
-        while end + 1 < len(route) and self._corridor[frozenset(route[end : end + 2])] == cid:
+        if cid is None:
+            return end
+        while end + 1 < len(route) and self._corridor.get(frozenset(route[end : end + 2])) == cid:
             end += 1
         return end
 
@@ -128,16 +149,21 @@ class Traffic:
         return {n for edge, cid in self._corridor.items() if cid in self._dead_ends for n in edge}
 
     def _into_dead_end(self, route: list[str], index: int) -> bool:
-        return self._corridor[frozenset(route[index : index + 2])] in self._dead_ends
+        return self._corridor.get(frozenset(route[index : index + 2])) in self._dead_ends
 
     def extend(self, serial: str) -> Grant:
         """Reserve as many whole corridor runs ahead of the vehicle as are free; a run ending at
-        the mouth of a dead end (a dock) only together with the run into it."""
+        the mouth of a dead end (a dock) only together with the run into it, one ending in a
+        junction of a directed roadmap only with the next run."""
         plan = self.plans[serial]
         blockers: set[str] = set()
         while plan.held < len(plan.route) - 1:
+            if self._ahead is not None and plan.held - plan.passed >= self._ahead:
+                break
             end = self.run(plan.route, plan.held)
-            while end < len(plan.route) - 1 and self._into_dead_end(plan.route, end):
+            while end < len(plan.route) - 1 and (
+                self._into_dead_end(plan.route, end) or plan.route[end] in self._boxes
+            ):
                 end = self.run(plan.route, end)
             need = plan.route[plan.held + 1 : end + 1]
             blockers = {self.holder[n] for n in need if self.holder.get(n, serial) != serial}
@@ -168,9 +194,14 @@ class Traffic:
         return [n for n, s in self.holder.items() if s == serial]
 
     def deadlock(self) -> list[str] | None:
-        """A cycle of vehicles each waiting for the next (serial numbers), or None."""
+        """A cycle of vehicles each waiting for the next (serial numbers), or None. On a directed
+        roadmap only vehicles standing at their last released node count: one with nodes ahead
+        moves on and frees the node behind it."""
         waits = nx.DiGraph()
         for serial, others in sorted(self.waiting.items()):
+            plan = self.plans[serial]
+            if self._ahead is not None and plan.held > plan.passed:
+                continue
             waits.add_edges_from((serial, o) for o in sorted(others))
         try:
             return [u for u, _v in nx.find_cycle(waits)]

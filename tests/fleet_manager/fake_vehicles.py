@@ -66,3 +66,51 @@ class FakeVehicle:
             ],
             "errors": [],
         }
+
+
+FACTSHEET = {
+    "protocolFeatures": {
+        "agvActions": [{"actionType": t, "actionScopes": ["NODE"]} for t in ("pick", "drop")]
+    }
+}
+"""A factsheet listing pick and drop as node actions."""
+
+
+def drive(roadmap, vehicles: int, jobs: int, seed: int, steps: int = 600, pool_docks=False):
+    """Run ``vehicles`` fake vehicles (started on rack faces spread over the roadmap) under the
+    fleet manager on ``jobs`` seeded jobs until done or ``steps`` steps, asserting at every step
+    that no two stand on one node or drive one edge; returns (jobs done, steps taken, events)."""
+    from amr_twin.fleet_manager.dispatcher import Dispatcher, ManagerOptions
+    from amr_twin.fleet_manager.jobs import job_stream
+
+    charging = (roadmap.nodes_of("end") or roadmap.nodes_of("junction"))[0]
+    d = Dispatcher(roadmap, ManagerOptions(charging_nodes=(charging,), pool_docks=pool_docks))
+    faces = roadmap.nodes_of("aisle")
+    starts = faces[:: len(faces) // vehicles][:vehicles]
+    fleet = {f"amr-{i + 1}": FakeVehicle(f"amr-{i + 1}", roadmap, s) for i, s in enumerate(starts)}
+
+    def deliver(out):
+        for serial, sub, msg in out:
+            fleet[serial].receive(sub, msg)
+
+    for serial, v in fleet.items():
+        deliver(d.on_connection(serial, {"connectionState": "ONLINE"}))
+        deliver(d.on_factsheet(serial, FACTSHEET))
+        deliver(d.on_state(serial, v.state()))
+    deliver(d.submit(job_stream(roadmap, jobs, seed, exclude={charging})))
+    done, step = 0, 0
+    for step in range(1, steps + 1):
+        moves = {}
+        for serial, v in fleet.items():
+            before = v.node
+            v.step()
+            if v.node != before:
+                moves[serial] = frozenset((before, v.node))
+            deliver(d.on_state(serial, v.state()))
+        at = [v.node for v in fleet.values()]
+        assert len(set(at)) == len(at), at  # no two on one node
+        assert len(set(moves.values())) == len(moves), moves  # no two on one edge
+        done = sum(e["event"] == "done" and e.get("task") == "job" for e in d.events)
+        if done == jobs:
+            break
+    return done, step, d.events

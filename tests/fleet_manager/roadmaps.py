@@ -30,3 +30,19 @@ def node_at(roadmap, x: float, y: float) -> str:
     node, dist = roadmap.nearest(x, y)
     assert dist < 0.5, (x, y, node, dist)
     return node
+
+
+def warehouse_lanes():
+    """The roadmap of the warehouse world with lanes, as the fleet manager drives it (a copy)."""
+    from amr_twin.fleet_manager.lanes import lane_roadmap
+    from amr_twin.fleet_manager.roadmap import MARGIN_M
+
+    return lane_roadmap(warehouse(), _warehouse_radius(), MARGIN_M)
+
+
+@lru_cache(maxsize=1)
+def _warehouse_radius() -> float:
+    from amr_twin.model.config import load_config
+    from amr_twin.navigation.footprint import robot_footprint
+
+    return robot_footprint(load_config()).circumscribed_radius_m

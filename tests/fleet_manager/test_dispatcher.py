@@ -156,3 +156,22 @@ def test_a_seeded_job_stream_is_the_same_for_the_same_seed_and_picks_at_rack_fac
     assert {j.pick for j in jobs} <= set(roadmap.nodes_of("aisle"))
     assert {j.drop for j in jobs} <= set(roadmap.nodes_of("end")[1:])
     assert all(5.0 <= j.payload_kg <= 50.0 for j in jobs)
+
+
+def test_with_pooled_docks_a_drop_goes_to_the_dock_with_the_shorter_queue():
+    from amr_twin.fleet_manager.dispatcher import Dispatcher, ManagerOptions
+    from amr_twin.fleet_manager.jobs import Job
+    from roadmaps import warehouse_lanes
+
+    roadmap = warehouse_lanes()
+    charging, *docks = sorted(roadmap.nodes_of("end"), key=lambda n: roadmap.xy(n)[0])
+    d = Dispatcher(roadmap, ManagerOptions(charging_nodes=(charging,), pool_docks=True))
+    for serial, xy in (("amr-1", (-2.8, -2.4)), ("amr-2", (-0.2, -2.4))):  # two lay-bys
+        d.on_connection(serial, {"connectionState": "ONLINE"})
+        d.on_factsheet(serial, FACTSHEET)
+        d.on_state(serial, state(roadmap, node_at(roadmap, *xy)))
+    south_east = min(docks, key=lambda n: roadmap.xy(n)[1])
+    pick = node_at(roadmap, 2.2, -2.4)
+    d.submit([Job("j1", pick, south_east, 5.0), Job("j2", pick, south_east, 5.0)])
+    drops = {v.task.job.drop for v in d.vehicles.values()}
+    assert drops == set(docks)  # the second to the other dock: the first has one bound for it

@@ -13,8 +13,9 @@ from amr_twin.experiments.fleet.result import EpisodePoint
 from amr_twin.fleet_manager.dispatcher import Dispatcher
 from amr_twin.model.config import load_config
 
-HEAVY = EpisodePoint(1, (50.0, 50.0), 0, 145.0, 300.0)
-"""Seed 0 at 300 orders an hour: the first order arrives at 25.8 s and is dropped before 145 s."""
+HEAVY = EpisodePoint(1, (50.0, 50.0), 0, 280.0, 300.0)
+"""Seed 0 at 300 orders an hour: the first order (pick in the one-way south aisle, about 63 m round
+the south rack row from the start) arrives at 25.8 s and is dropped before 280 s."""
 
 
 @pytest.fixture(scope="module")
@@ -32,18 +33,18 @@ def test_an_order_is_picked_carried_and_dropped_and_measured(heavy):
     first = heavy.jobs[0]
     assert first.robot == "amr-1" and not first.failed and first.done_s is not None
     assert first.assigned_s == pytest.approx(first.arrival_s, abs=0.05)  # the robot was idle
-    assert 20.0 < first.distance_m < 60.0 and first.energy_wh > 0.1 and first.charge_as > 10.0
+    assert 40.0 < first.distance_m < 90.0 and first.energy_wh > 0.1 and first.charge_as > 10.0
     assert 0 < first.driving_wh < first.energy_wh
     assert heavy.lead_time_p50_s == pytest.approx(first.done_s - first.arrival_s, abs=1e-3)
     done = [j for j in heavy.jobs if j.done_s is not None]
-    assert heavy.orders_per_hour == pytest.approx(len(done) * 3600 / 145.0, abs=1e-3)
+    assert heavy.orders_per_hour == pytest.approx(len(done) * 3600 / 280.0, abs=1e-3)
     robot = heavy.robots[0]
-    busy = min(145.0, max(j.done_s or 145.0 for j in heavy.jobs if j.assigned_s)) - first.assigned_s
-    assert robot.utilisation == pytest.approx(busy / 145.0, abs=0.01)
+    busy = min(280.0, max(j.done_s or 280.0 for j in heavy.jobs if j.assigned_s)) - first.assigned_s
+    assert robot.utilisation == pytest.approx(busy / 280.0, abs=0.01)
     assert heavy.collisions == 0 and heavy.deadlocks == 0 and heavy.near_misses == []
     assert heavy.least_distance_m is None  # one robot: no pair
     xs = [p[1] for p in robot.track]
-    assert len(robot.track) == 290 and max(xs) - min(xs) > 5.0  # it drove, sampled every 0.5 s
+    assert len(robot.track) == 560 and max(xs) - min(xs) > 5.0  # it drove, sampled every 0.5 s
 
 
 def test_a_heavier_payload_costs_more_energy_on_the_same_order(heavy):

@@ -34,5 +34,5 @@ def test_twenty_robots_start_on_distinct_rack_faces_without_overlap(setup):
 
 def test_more_robots_than_rack_faces_is_one_line(setup):
     cfg, roadmap = setup
-    with pytest.raises(ValueError, match=r"^--robots 40: map 'warehouse' has 24 rack-face nodes"):
+    with pytest.raises(ValueError, match=r"^--robots 40: map 'warehouse' has 23 rack-face nodes"):
         start_poses(roadmap, (0.0, 0.0), 40, cfg.chassis.length_m / 2, cfg.half_width_m)

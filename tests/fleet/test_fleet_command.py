@@ -84,6 +84,6 @@ def test_the_fleet_manager_beside_the_vehicle_places_it_on_the_roadmap():
     )
     assert done.returncode == 0, done.stderr
     manager = json.loads(done.stdout)["manager"]
-    assert manager["roadmap"]["nodes"] == 50 and manager["jobs_done"] == 0  # 49 (lanes), amr-1's home
+    assert manager["roadmap"]["nodes"] == 50 and manager["jobs_done"] == 0  # 49 + home
     assert [e["event"] for e in manager["events"]] == ["placed"]
     assert manager["messages_sent"] == {"instantActions": 1}  # the factsheetRequest

@@ -30,8 +30,8 @@ from amr_twin.recording.rerun_world import (
     _log_geoms,
     _log_scan,
     _log_trajectory,
-    _log_uwb,
 )
+from amr_twin.recording.rerun_uwb import _log_uwb
 
 
 def _blueprint(names: list[str]):

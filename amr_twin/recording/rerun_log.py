@@ -24,8 +24,8 @@ from amr_twin.recording.rerun_world import (
     _log_geoms,
     _log_scan,
     _log_trajectory,
-    _log_uwb,
 )
+from amr_twin.recording.rerun_uwb import _log_uwb
 
 TRACKED = "world/bodies/amr/base_link"
 """The 3D view's camera follows the robot's base."""

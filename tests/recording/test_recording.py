@@ -354,7 +354,7 @@ def uwb_recorded(tmp_path_factory):
 
 
 def test_rrd_uwb_ranges_per_anchor(uwb_recorded):
-    from amr_twin.recording.rerun_world import uwb_ranges
+    from amr_twin.recording.rerun_uwb import uwb_ranges
 
     cfg, capture, paths = uwb_recorded
     msgs = capture.messages["uwb/range"]

@@ -27,8 +27,7 @@ DIAGNOSTIC_ARRAY = "diagnostic_msgs/DiagnosticArray"
 
 
 def _collisions(twin) -> list:
-    monitor = twin.collisions
-    return list(monitor.collisions) if monitor is not None else []
+    return list(twin.observables.collisions)
 
 
 def _faults(twin) -> list:

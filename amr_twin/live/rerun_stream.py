@@ -105,9 +105,9 @@ class RerunSink:
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         _log_geoms(self.rec, m)
         if twin.faults is not None:
-            from amr_twin.recording.event_log import log_events
+            from amr_twin.recording.event_log import faults_of, log_events
 
-            log_events(self.rec, SimpleNamespace(collisions=None, faults=twin.faults))
+            log_events(self.rec, [], faults_of(twin))
         self._poses: list[
             tuple[int, np.ndarray, np.ndarray]
         ] = []  # t_us, xpos (nb, 3), xquat (nb, 4)
@@ -208,8 +208,7 @@ class RerunSink:
             if not self._has_events:
                 self._has_events = True
                 rec.send_blueprint(self._layout(), make_active=False, make_default=True)
-            new = SimpleNamespace(collisions=collisions[self._collisions_sent :])
-            log_events(rec, SimpleNamespace(collisions=new, faults=None))
+            log_events(rec, list(collisions[self._collisions_sent :]), [])
             self._collisions_sent = len(collisions)
 
     def _window(self, poses, messages) -> _Window:

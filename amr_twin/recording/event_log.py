@@ -26,18 +26,20 @@ OK, WARN, ERROR = 0, 1, 2  # diagnostic_msgs/DiagnosticStatus levels
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/DiagnosticArray"
 
 
-def _collisions(twin) -> list:
+def collisions_of(twin) -> list:
+    """The twin's collisions so far (:class:`~amr_twin.sim.collisions.Collision`, in order)."""
     return list(twin.observables.collisions)
 
 
-def _faults(twin) -> list:
+def faults_of(twin) -> list:
+    """The twin's injected faults (:class:`~amr_twin.sim.fault_injector.FaultInjector`'s), or []."""
     injector = twin.faults
     return list(injector.faults) if injector is not None else []
 
 
 def has_events(twin) -> bool:
     """Whether the run had a collision or a fault to show."""
-    return bool(_collisions(twin) or _faults(twin))
+    return bool(collisions_of(twin) or faults_of(twin))
 
 
 def _diagnostic(t_ns: int, level: int, name: str, message: str, values: dict) -> bytes:
@@ -60,7 +62,7 @@ def statuses(twin) -> list[tuple[int, str, int, str, str, dict]]:
     DiagnosticStatus each (see the module notes); the ROS 1 bridge publishes the same on
     /diagnostics."""
     out = []
-    for c in _collisions(twin):
+    for c in collisions_of(twin):
         values = {k: v for k, v in c.as_dict().items() if k != "robot_pose"}
         values["robot_parts"] = ",".join(c.robot_parts)
         values.update({f"robot_{k}": v for k, v in c.as_dict()["robot_pose"].items()})
@@ -74,7 +76,7 @@ def statuses(twin) -> list[tuple[int, str, int, str, str, dict]]:
                 values,
             )
         )
-    for f in _faults(twin):
+    for f in faults_of(twin):
         d = f.describe()
         values = {k: v for k, v in d.items() if k != "description" and v is not None}
         for t_s, level, what in ((f.t_s, WARN, "injected"), (f.until_s, OK, "cleared")):
@@ -101,16 +103,17 @@ def mcap_items(twin, order: int) -> list[tuple[int, int, str, str, bytes]]:
     ]
 
 
-def log_events(rec, twin, root: str = "") -> None:
-    """Collisions and faults into a Rerun recording stream (see the module notes; a robot of a
-    fleet's under ``<root>events`` and ``world/<root>collisions``, ``root`` ``amr-2/``)."""
+def log_events(rec, collisions: list, faults: list, root: str = "") -> None:
+    """``collisions`` (:func:`collisions_of`) and ``faults`` (:func:`faults_of`) into a Rerun
+    recording stream (see the module notes; a robot of a fleet's under ``<root>events`` and
+    ``world/<root>collisions``, ``root`` ``amr-2/``)."""
     import numpy as np
     import rerun as rr
 
     from amr_twin.recording.rerun_streams import TIMELINE
 
     points = []
-    for c in _collisions(twin):
+    for c in collisions:
         rec.set_time(TIMELINE, duration=float(c.t_s))
         rec.log(
             f"{root}events/collisions",
@@ -126,7 +129,7 @@ def log_events(rec, twin, root: str = "") -> None:
             f"world/{root}collisions",
             rr.Points3D(np.array(points), colors=[(230, 30, 30)], radii=[0.05]),
         )
-    for f in _faults(twin):
+    for f in faults:
         for t_s, what in ((f.t_s, "injected"), (f.until_s, "cleared")):
             if t_s is not None:
                 rec.set_time(TIMELINE, duration=float(t_s))

@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from amr_twin.base.atomic_file import write_bytes
-from amr_twin.recording.event_log import log_events
+from amr_twin.recording.event_log import collisions_of, faults_of, log_events
 from amr_twin.recording.rerun_log import ENCODE_TIMEOUT_S
 from amr_twin.recording.rerun_navigation import _log_navigation
 from amr_twin.recording.rerun_streams import (
@@ -88,7 +88,7 @@ def write_fleet_rrd(robots, path: Path, events=(), application_id: str = "amr_tw
         _log_commands(rec, series, None, root)
         _log_trajectory(rec, series, root=root)
         _log_navigation(rec, capture, root)
-        log_events(rec, r.view, root)
+        log_events(rec, collisions_of(r.view), faults_of(r.view), root)
     for t_us, event in events:
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         text = " ".join(f"{k}={v}" for k, v in event.items() if k != "t_s")

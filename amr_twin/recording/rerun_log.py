@@ -8,7 +8,7 @@ from pathlib import Path
 
 from amr_twin.base.atomic_file import write_bytes
 from amr_twin.recording.rerun_navigation import _log_navigation
-from amr_twin.recording.event_log import has_events, log_events
+from amr_twin.recording.event_log import collisions_of, faults_of, has_events, log_events
 from amr_twin.recording.recorder import recorder_of
 from amr_twin.recording.rerun_capture import Capture, capture_of
 from amr_twin.recording.rerun_streams import (
@@ -112,7 +112,7 @@ def write_rrd(
     _log_navigation(
         rec, capture
     )  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
-    log_events(rec, capture.twin)  # collisions and faults (amr_twin/recording/event_log.py)
+    log_events(rec, collisions_of(capture.twin), faults_of(capture.twin))  # event_log.py
     rec.disconnect()
     data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
     write_bytes(path, data)

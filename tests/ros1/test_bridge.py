@@ -128,15 +128,17 @@ def bag(ros_env, tmp_path_factory):
     finally:
         stop(rsp)
         stop(rec)
-    info = yaml.safe_load(
-        subprocess.run(
-            ["rosbag", "info", "--yaml", str(out / "run.bag")],
-            capture_output=True,
-            text=True,
-            env=ros_env,
-            check=True,
-        ).stdout
+    done = subprocess.run(
+        ["rosbag", "info", "--yaml", str(out / "run.bag")],
+        capture_output=True,
+        text=True,
+        env=ros_env,
     )
+    assert done.returncode == 0, (
+        f"rosbag info: {done.stderr.strip()}; recorder exit {rec.returncode}; "
+        f"files {sorted(p.name for p in out.iterdir())}"
+    )
+    info = yaml.safe_load(done.stdout)
     return out / "run.bag", info, run
 
 

@@ -14,24 +14,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from amr_twin.base.atomic_file import write_bytes
-from amr_twin.recording.event_log import collisions_of, faults_of, log_events
-from amr_twin.recording.rerun_log import ENCODE_TIMEOUT_S
-from amr_twin.recording.rerun_navigation import _log_navigation
-from amr_twin.recording.rerun_streams import (
-    TIMELINE,
-    _log_commands,
-    _log_duty,
-    _log_electrics,
-    _log_imu,
-    _log_wheel_speeds,
-)
-from amr_twin.recording.rerun_world import (
-    _log_body_transforms,
-    _log_geoms,
-    _log_scan,
-    _log_trajectory,
-)
-from amr_twin.recording.rerun_uwb import _log_uwb
+from amr_twin.recording.rerun_log import ENCODE_TIMEOUT_S, log_robot
+from amr_twin.recording.rerun_streams import TIMELINE
+from amr_twin.recording.rerun_world import _log_geoms
 
 
 def _blueprint(names: list[str]):
@@ -75,20 +60,11 @@ def write_fleet_rrd(robots, path: Path, events=(), application_id: str = "amr_tw
     _log_geoms(rec, m)
     anchors = True  # the UWB anchors once, with the first robot that ranged
     for r in robots:
-        capture, prefix, root = r.capture, r.view.prefix, r.view.name + "/"
         series = r.recorder.series()
-        _log_body_transforms(rec, m, capture)
-        _log_scan(rec, m, capture, laser=prefix + "laser", root=root)
-        _log_imu(rec, capture, root)
-        ranged = _log_uwb(rec, m, capture, prefix + "base_link", root, anchors)
+        ranged = log_robot(
+            rec, m, r.capture, series, None, r.view.prefix, r.view.name + "/", anchors
+        )
         anchors = anchors and not ranged
-        _log_wheel_speeds(rec, series, root)
-        _log_duty(rec, series, root)
-        _log_electrics(rec, series, root)
-        _log_commands(rec, series, None, root)
-        _log_trajectory(rec, series, root=root)
-        _log_navigation(rec, capture, root)
-        log_events(rec, collisions_of(r.view), faults_of(r.view), root)
     for t_us, event in events:
         rec.set_time(TIMELINE, duration=t_us * 1e-6)
         text = " ".join(f"{k}={v}" for k, v in event.items() if k != "t_s")

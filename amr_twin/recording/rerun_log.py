@@ -69,6 +69,35 @@ ENCODE_TIMEOUT_S = 600.0
 full disk)."""
 
 
+def log_robot(
+    rec,
+    m,
+    capture: Capture,
+    series,
+    result=None,
+    prefix: str = "amr/",
+    root: str = "",
+    anchors: bool = True,
+) -> bool:
+    """One robot's streams into ``rec``: its bodies, scan, IMU, UWB, wheels, duty, electrics,
+    commands, trajectory, navigation (plan, map, costmap, footprint) and events; ``prefix``: its
+    names in the model (``amr-2/``), ``root``: its entities' (``amr-2/``); ``anchors``: log the
+    UWB anchors if it ranged. Returns whether it ranged."""
+    twin = capture.twin
+    _log_body_transforms(rec, m, capture)
+    _log_scan(rec, m, capture, laser=prefix + "laser", root=root)
+    _log_imu(rec, capture, root)
+    ranged = _log_uwb(rec, m, capture, prefix + "base_link", root, anchors)
+    _log_wheel_speeds(rec, series, root)
+    _log_duty(rec, series, root)
+    _log_electrics(rec, series, root)
+    _log_commands(rec, series, result, root)
+    _log_trajectory(rec, series, root=root)
+    _log_navigation(rec, capture, root)
+    log_events(rec, collisions_of(twin), faults_of(twin), root)
+    return ranged
+
+
 def write_rrd(
     capture: Capture, series, path: Path, result=None, application_id: str = "amr_twin"
 ) -> Path:
@@ -100,19 +129,7 @@ def write_rrd(
     )
     rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     _log_geoms(rec, m)
-    _log_body_transforms(rec, m, capture)
-    _log_scan(rec, m, capture)
-    _log_imu(rec, capture)
-    _log_uwb(rec, m, capture)
-    _log_wheel_speeds(rec, series)
-    _log_duty(rec, series)
-    _log_electrics(rec, series)
-    _log_commands(rec, series, result)
-    _log_trajectory(rec, series)
-    _log_navigation(
-        rec, capture
-    )  # plan, map, costmap, footprint (amr_twin/recording/rerun_navigation.py)
-    log_events(rec, collisions_of(capture.twin), faults_of(capture.twin))  # event_log.py
+    log_robot(rec, m, capture, series, result)
     rec.disconnect()
     data = stream.read(flush=True, flush_timeout_sec=ENCODE_TIMEOUT_S) or b""
     write_bytes(path, data)
